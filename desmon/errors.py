@@ -1,0 +1,62 @@
+"""The desmon exception tree.
+
+Every exception desmon raises on purpose derives from :class:`DesmonError`. Usage
+errors also derive from the builtin a caller would naturally catch::
+
+    DesmonError
+     ├── ModelError (ValueError)          a malformed platform, graph, spec or rule table
+     ├── ScenarioError (ValueError)       a scenario file that does not load or is inconsistent
+     ├── QueryError (LookupError)         a repository query for something that is not there
+     ├── SignalError (ValueError)         bad signal-model / detector parameters
+     ├── CheckerError                     the checker cannot run as asked
+     │    └── NondeterminismError         a replay did not reproduce a stored state
+     └── SimulationError                  the SimPy world reached an impossible state
+
+Messages name the offender and say what would fix it; the CLI prints them as one
+line, without a traceback.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "DesmonError",
+    "ModelError",
+    "ScenarioError",
+    "QueryError",
+    "SignalError",
+    "CheckerError",
+    "NondeterminismError",
+    "SimulationError",
+]
+
+
+class DesmonError(Exception):
+    """Root of every error desmon raises deliberately."""
+
+
+class ModelError(DesmonError, ValueError):
+    """A model (platform, device, perception graph, spec, rule) is malformed."""
+
+
+class ScenarioError(DesmonError, ValueError):
+    """A scenario file cannot be loaded or does not describe a usable scenario."""
+
+
+class QueryError(DesmonError, LookupError):
+    """A repository query names something the repository does not hold."""
+
+
+class SignalError(DesmonError, ValueError):
+    """Signal-model or detector parameters are out of range."""
+
+
+class CheckerError(DesmonError):
+    """The explicit-state checker cannot run as requested."""
+
+
+class NondeterminismError(CheckerError):
+    """Replaying a trace did not reproduce the state the search stored."""
+
+
+class SimulationError(DesmonError):
+    """The simulation reached a state its own bookkeeping forbids."""
