@@ -1,0 +1,129 @@
+"""The deployment core wired to ports: context monitor -> selector -> deployer.
+
+:class:`DeploymentCore` is what every engine drives. One environment event is one
+:meth:`~DeploymentCore.observe` (facts written, a :class:`Stimulus` returned) followed by
+one reaction (:meth:`~DeploymentCore.reaction`, a generator of commands) and one
+:meth:`~DeploymentCore.settle` (the standing errors updated). :func:`run_sync`
+executes a reaction instantly against a Control port; the SimPy world executes the
+same generator with start latencies.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterable
+
+from desmon.deployment.deployer import Deployer, get_deployer
+from desmon.deployment.invariants import SystemView, validly_active, view_of
+from desmon.deployment.monitor import InsertPort, Stimulus, observe
+from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop
+from desmon.model.events import Event
+from desmon.model.system import SystemModel
+
+__all__ = ["DeploymentCore", "StepLog", "run_sync", "standing_after"]
+
+
+def standing_after(
+    previous: frozenset[str],
+    raised: Iterable[str],
+    wanted: frozenset[str],
+    valid: frozenset[str],
+) -> frozenset[str]:
+    """Errors that stand after a reaction (DESIGN.md §5).
+
+    An error stands for a graph from the reaction that raises it until a later reaction
+    deploys that graph validly or the selector no longer wants it.
+    """
+    return frozenset(g for g in previous.union(raised) if g in wanted and g not in valid)
+
+
+@dataclass(slots=True)
+class StepLog:
+    """What one reaction did: commands with outcomes, and the errors it raised."""
+
+    commands: list[tuple[Command, bool | None]] = field(default_factory=list)
+
+    @property
+    def errors(self) -> list[RaiseError]:
+        return [c for c, _ in self.commands if isinstance(c, RaiseError)]
+
+    @property
+    def decisions(self) -> list[tuple[Command, bool | None]]:
+        return [(c, ok) for c, ok in self.commands if not isinstance(c, RaiseError)]
+
+
+def run_sync(reaction: Reaction, control: ControlPort, log: StepLog | None = None) -> StepLog:
+    """Drive ``reaction`` to completion, executing each command at once on ``control``."""
+    log = log if log is not None else StepLog()
+    outcome: bool | None = None
+    try:
+        while True:
+            cmd = reaction.send(outcome)
+            if isinstance(cmd, Start):
+                outcome = bool(control.start(cmd.graph, cmd.platform))
+            elif isinstance(cmd, Stop):
+                outcome = bool(control.stop(cmd.graph, cmd.platform))
+            else:
+                outcome = None
+            log.commands.append((cmd, outcome))
+    except StopIteration:
+        pass
+    return log
+
+
+class DeploymentCore:
+    """Context monitor + selector + deployer over a Query and an Insert port."""
+
+    def __init__(
+        self,
+        model: SystemModel,
+        query: QueryPort,
+        insert: InsertPort,
+        deployer: str | Deployer = "desmon",
+    ) -> None:
+        self.model = model
+        self.query = query
+        self.insert = insert
+        self.deployer = get_deployer(deployer)
+        self.standing: frozenset[str] = frozenset()
+
+    def observe(self, event: Event) -> Stimulus:
+        """The context monitor: write the facts ``event`` implies (Insert), return the Notify."""
+        return observe(event, self.insert)
+
+    def slots(self) -> tuple[tuple[str, ...], ...]:
+        """The selector: what the rule table wants in the current context."""
+        return self.model.rules.slots_for(self.query.context())
+
+    def reaction(self, stimulus: Stimulus) -> Reaction:
+        """The deployer's reaction to ``stimulus`` (a generator of commands)."""
+        return self.deployer.react(self.query, self.slots(), stimulus.changed_platforms, stimulus.context_changed)
+
+    def view(self, **extra: object) -> SystemView:
+        return view_of(self.query, self.model.specs, self.standing, self.slots(), **extra)  # type: ignore[arg-type]
+
+    def settle(self, raised: Iterable[str]) -> frozenset[str]:
+        """Update the standing errors after a reaction that raised errors for ``raised``."""
+        view = self.view()
+        wanted = frozenset(g for slot in view.slots for g in slot)
+        self.standing = standing_after(self.standing, raised, wanted, validly_active(view))
+        return self.standing
+
+    def step(self, event: Event, control: ControlPort, *, force: bool = False) -> tuple[Stimulus, StepLog]:
+        """Observe ``event`` and run the whole reaction at once (no latency)."""
+        stim = self.observe(event)
+        log = StepLog()
+        if not stim.empty or force:
+            if force and stim.empty:
+                stim = Stimulus(context_changed=True)
+            run_sync(self.reaction(stim), control, log)
+        self.settle(e.graph for e in log.errors)
+        return stim, log
+
+
+def stamp(error: RaiseError, time: float) -> ErrorRecord:
+    """The Error-port record of ``error`` raised at ``time``."""
+    return ErrorRecord(error.kind, error.graph, error.platform, time, error.detail)
+
+
+__all__ += ["stamp"]

@@ -1,0 +1,266 @@
+"""The deployer: Algorithm 1 (``deploy``) and Algorithm 2 (``check_deployment``).
+
+Two variants, selected by name through :data:`DEPLOYERS`:
+
+``paper``
+    The paper's Algorithms 1 and 2, transcribed line by line, early ``return``\\ s
+    included (line numbers in the comments refer to the paper).
+``desmon`` (default)
+    The corrected algorithm of DESIGN.md §4: every requested graph is handled,
+    Capacity is accounted across concurrent deployments (each start is visible to the
+    next check), a migration stops the old instance before starting the new one, every
+    deployment on a changed platform is re-checked, a still-valid deployment is kept,
+    and no invalid deployment is left without an error.
+
+Both are generators over :mod:`desmon.deployment.ports` commands and only read through
+the :class:`~desmon.deployment.ports.QueryPort`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Generator, Iterable
+
+from desmon.deployment.ports import (
+    DEPLOYMENT_FAILED,
+    DEPLOYMENT_INFORMATION_MISSING,
+    NO_ACCEPTABLE_PLATFORMS,
+    STOPPING_FAILED,
+    Command,
+    QueryPort,
+    RaiseError,
+    Reaction,
+    Start,
+    Stop,
+)
+from desmon.deployment.validity import check_validity, validity_for
+from desmon.errors import ModelError
+
+__all__ = ["Deployer", "PAPER", "DESMON", "DEPLOYERS", "get_deployer", "ensure_deployed", "Coverage"]
+
+#: Generator returning True when the graph ended up deployed.
+Placement = Generator[Command, "bool | None", bool]
+
+
+# ----------------------------------------------------------------------------------
+# paper: literal transcription
+# ----------------------------------------------------------------------------------
+def paper_deploy(graphs: Iterable[str], q: QueryPort) -> Reaction:
+    """Algorithm 1, literally: returns after the first graph it starts or fails on."""
+    for g in graphs:  # 2
+        d = q.deployment_information(g)  # 3
+        if d is not None:  # 4
+            fixed = q.fixed_platform(d)
+            if fixed is not None:  # 5
+                p = fixed  # 6
+                if (yield Start(g, p)):  # 7
+                    return  # 8 success
+                yield RaiseError(DEPLOYMENT_FAILED, g, p)  # 10
+                return  # 11
+            c = q.constraints(d)  # 13
+            validity = check_validity(c, q.platform_states(), g)  # 14
+            acceptable = validity.acceptable
+            if acceptable:  # 15
+                if not any(p in acceptable for p in q.deployed_on(g)):  # 16
+                    pk = acceptable[0]
+                    if (yield Start(g, pk)):  # 17
+                        return  # 18
+                    yield RaiseError(DEPLOYMENT_FAILED, g, pk)  # 20
+                    return  # 21
+                # already deployed on an acceptable platform: the loop goes on
+            else:
+                yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, None, validity.explain())  # 23
+                return  # 24
+        else:
+            yield RaiseError(DEPLOYMENT_INFORMATION_MISSING, g)  # 26
+            return  # 27
+
+
+def paper_check_deployment(p_i: str, q: QueryPort) -> Reaction:
+    """Algorithm 2, literally: returns after the first active deployment it decides on."""
+    for d in q.active_deployments(p_i):  # 2-3
+        g = q.perception_graph(d)  # 4
+        spec = q.deployment_information(g)
+        c = q.constraints(spec) if spec is not None else ()  # 5
+        validity = check_validity(c, q.platform_states(), g)  # 6
+        acceptable = validity.acceptable
+        if not acceptable:  # 7
+            yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, None, validity.explain())  # 8
+            if (yield Stop(g, p_i)):  # 9
+                return  # 10
+            yield RaiseError(STOPPING_FAILED, g, p_i)  # 12
+            return  # 13
+        if p_i in acceptable:  # 14
+            return  # 15
+        if acceptable and p_i not in acceptable:  # 16
+            pk = acceptable[0]
+            if (yield Start(g, pk)):  # 17
+                return  # 18
+            yield RaiseError(DEPLOYMENT_FAILED, g, pk)  # 20
+            return  # 21
+
+
+# ----------------------------------------------------------------------------------
+# desmon: corrected
+# ----------------------------------------------------------------------------------
+def ensure_deployed(g: str, q: QueryPort, *, make_before_break: bool = False) -> Placement:
+    """Leave exactly one instance of ``g`` on a valid platform, or raise an error.
+
+    Keeps a valid running instance (no needless migration), stops every other
+    instance first (break-before-make), then tries acceptable platforms in preference
+    order until a start succeeds. Returns True iff ``g`` ends up deployed validly.
+    ``make_before_break`` exists only for the seeded mutant of the checker's tests.
+    """
+    spec = q.deployment_information(g)
+    if spec is None:
+        yield RaiseError(DEPLOYMENT_INFORMATION_MISSING, g)
+        return False
+    fixed = q.fixed_platform(spec)
+    validity = validity_for(q, spec)
+    acceptable = validity.acceptable
+    current = q.deployed_on(g)
+    keep = next((p for p in current if p in acceptable), None)
+    stale = [p for p in current if p != keep]
+    if not make_before_break:
+        for p in stale:
+            if not (yield Stop(g, p)):
+                yield RaiseError(STOPPING_FAILED, g, p)
+                return False
+    if keep is not None:
+        return True
+    if not acceptable:
+        detail = validity.explain() if fixed is None else f"fixed platform {fixed}: " + validity.explain()
+        yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, fixed, detail)
+        return False
+    for pk in acceptable:
+        if (yield Start(g, pk)):
+            if make_before_break:
+                for p in stale:
+                    if not (yield Stop(g, p)):
+                        yield RaiseError(STOPPING_FAILED, g, p)
+            return True
+        yield RaiseError(DEPLOYMENT_FAILED, g, pk)
+    return False
+
+
+def desmon_deploy(graphs: Iterable[str], q: QueryPort) -> Reaction:
+    """Corrected Algorithm 1: every graph is placed or gets an error."""
+    for g in graphs:
+        yield from ensure_deployed(g, q)
+
+
+def desmon_check_deployment(p_i: str, q: QueryPort) -> Reaction:
+    """Corrected Algorithm 2: every active deployment on ``p_i`` is re-checked."""
+    for d in q.active_deployments(p_i):
+        yield from ensure_deployed(q.perception_graph(d), q)
+
+
+# ----------------------------------------------------------------------------------
+# the selector-facing reaction
+# ----------------------------------------------------------------------------------
+@dataclass(frozen=True, slots=True)
+class Coverage:
+    """The selector's request for the current context: slots of preference-ordered graphs."""
+
+    slots: tuple[tuple[str, ...], ...]
+
+    @property
+    def graphs(self) -> frozenset[str]:
+        return frozenset(g for slot in self.slots for g in slot)
+
+
+@dataclass(frozen=True, slots=True)
+class Deployer:
+    """A named deployer variant: how to react to a context change and to platform changes.
+
+    ``react(q, slots, changed, context_changed)`` returns the reaction generator. The
+    remaining fields describe the variant for reports and the mutant tests.
+    """
+
+    name: str
+    description: str
+    react: Callable[[QueryPort, tuple[tuple[str, ...], ...], tuple[str, ...], bool], Reaction]
+
+
+def _stop_graphs(graphs: Iterable[str], q: QueryPort) -> Reaction:
+    for g in graphs:
+        for p in q.deployed_on(g):
+            if not (yield Stop(g, p)):
+                yield RaiseError(STOPPING_FAILED, g, p)
+
+
+def _active_graphs(q: QueryPort) -> list[str]:
+    seen: list[str] = []
+    for state in q.platform_states():
+        for d in q.active_deployments(state.name):
+            g = q.perception_graph(d)
+            if g not in seen:
+                seen.append(g)
+    return sorted(seen)
+
+
+def _paper_react(
+    q: QueryPort, slots: tuple[tuple[str, ...], ...], changed: tuple[str, ...], context_changed: bool
+) -> Reaction:
+    # The paper's selector has no fallbacks: it requests the first graph of each slot.
+    wanted = [slot[0] for slot in slots]
+    if context_changed:
+        # "The selector requests the deployer to stop the current slip detector and to deploy ..."
+        yield from _stop_graphs([g for g in _active_graphs(q) if g not in wanted], q)
+        yield from paper_deploy(wanted, q)
+    for p in changed:
+        yield from paper_check_deployment(p, q)
+
+
+def make_desmon_react(
+    ensure: Callable[..., Placement] = ensure_deployed,
+    *,
+    recheck_changed: bool = True,
+    **ensure_kwargs: object,
+) -> Callable[[QueryPort, tuple[tuple[str, ...], ...], tuple[str, ...], bool], Reaction]:
+    """Build the corrected reaction (parameters exist for the checker's seeded mutants)."""
+
+    def react(
+        q: QueryPort, slots: tuple[tuple[str, ...], ...], changed: tuple[str, ...], context_changed: bool
+    ) -> Reaction:
+        placed: dict[str, bool] = {}  # each graph is decided once per reaction
+
+        def place(g: str) -> Placement:
+            if g not in placed:
+                placed[g] = yield from ensure(g, q, **ensure_kwargs)
+            return placed[g]
+
+        if recheck_changed:
+            for p in changed:
+                for d in q.active_deployments(p):
+                    yield from place(q.perception_graph(d))
+        wanted = {g for slot in slots for g in slot}
+        # Free what the context no longer wants first: its capacity may be needed.
+        yield from _stop_graphs([g for g in _active_graphs(q) if g not in wanted], q)
+        chosen: set[str] = set()
+        for slot in slots:
+            for g in slot:
+                if (yield from place(g)):
+                    chosen.add(g)
+                    break
+        # Fallbacks that are no longer needed (a better alternative is placed again).
+        yield from _stop_graphs([g for g in _active_graphs(q) if g in wanted and g not in chosen], q)
+
+    return react
+
+
+PAPER = Deployer("paper", "Algorithms 1 and 2 of the paper, transcribed literally", _paper_react)
+DESMON = Deployer("desmon", "the corrected deployer of DESIGN.md §4", make_desmon_react())
+
+#: Deployer variants selectable by name.
+DEPLOYERS: dict[str, Deployer] = {PAPER.name: PAPER, DESMON.name: DESMON}
+
+
+def get_deployer(name: str | Deployer) -> Deployer:
+    """The deployer variant called ``name``; a ModelError lists the valid names."""
+    if isinstance(name, Deployer):
+        return name
+    try:
+        return DEPLOYERS[name]
+    except KeyError:
+        raise ModelError(f"unknown deployer {name!r}: choose one of {', '.join(DEPLOYERS)}") from None

@@ -1,0 +1,178 @@
+"""The named invariants of DESIGN.md §5, defined once.
+
+The checker, the fuzzer and the simulation audit all evaluate these same functions on
+a :class:`SystemView`, built from whatever holds the state (the networkx repository
+or the checker's compact state) by :func:`view_of`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+from desmon.deployment.ports import QueryPort
+from desmon.deployment.validity import deployment_valid
+from desmon.errors import ModelError
+from desmon.model.requirements import DeploymentSpec
+from desmon.model.system import PlatformState
+
+__all__ = ["SystemView", "Invariant", "INVARIANTS", "view_of", "check_invariants", "get_invariants", "validly_active"]
+
+
+@dataclass(frozen=True, slots=True)
+class SystemView:
+    """Everything an invariant reads, after a reaction (a "stable" state).
+
+    ``running`` is the infrastructure's own list of instances and ``stops`` / ``history``
+    the number of stops it performed and of DEPLOYMENT_HISTORY edges; engines that
+    cannot observe one of them leave it ``None`` and the part of ``history`` that needs
+    it is skipped.
+    """
+
+    states: tuple[PlatformState, ...]
+    specs: tuple[DeploymentSpec, ...]
+    standing: frozenset[str]
+    slots: tuple[tuple[str, ...], ...]
+    running: tuple[tuple[str, str], ...] | None = None
+    stops: int | None = None
+    history: int | None = None
+
+    @property
+    def deployments(self) -> tuple[tuple[str, str], ...]:
+        return tuple(sorted((g, s.name) for s in self.states for g, _use in s.deployed))
+
+    def spec(self, graph: str) -> DeploymentSpec | None:
+        for s in self.specs:
+            if s.graph == graph:
+                return s
+        return None
+
+    def state(self, platform: str) -> PlatformState:
+        for s in self.states:
+            if s.name == platform:
+                return s
+        raise KeyError(platform)
+
+
+def view_of(
+    q: QueryPort,
+    specs: tuple[DeploymentSpec, ...],
+    standing: frozenset[str],
+    slots: tuple[tuple[str, ...], ...],
+    *,
+    running: tuple[tuple[str, str], ...] | None = None,
+    stops: int | None = None,
+    history: int | None = None,
+) -> SystemView:
+    return SystemView(q.platform_states(), specs, standing, slots, running, stops, history)
+
+
+def validly_active(view: SystemView) -> frozenset[str]:
+    """Graphs active on at least one platform where their deployment is valid."""
+    return frozenset(g for g, p in view.deployments if not deployment_valid(view.spec(g), view.state(p)))
+
+
+Check = Callable[[SystemView], str | None]
+
+
+@dataclass(frozen=True, slots=True)
+class Invariant:
+    """A named ``always`` property: ``check(view)`` returns None or what is wrong."""
+
+    name: str
+    description: str
+    check: Check
+
+
+def _valid_or_error(v: SystemView) -> str | None:
+    for g, p in v.deployments:
+        fails = deployment_valid(v.spec(g), v.state(p))
+        if fails and g not in v.standing:
+            return f"{g} is active on {p}, which is invalid ({'; '.join(f.requirement + ': ' + f.reason for f in fails)}), and no error stands for it"
+    return None
+
+
+def _no_overcommit(v: SystemView) -> str | None:
+    for s in v.states:
+        for res, cap in s.platform.capacities:
+            used = s.used_by(res)
+            total = sum(a for _g, a in used)
+            if total > cap:
+                who = ", ".join(f"{g} {a:g}" for g, a in used)
+                return f"{s.name}: deployments consume {total:g} {res} ({who}) but the capacity is {cap:g}"
+    return None
+
+
+def _single_instance(v: SystemView) -> str | None:
+    where: dict[str, list[str]] = {}
+    for g, p in v.deployments:
+        where.setdefault(g, []).append(p)
+    for g, ps in sorted(where.items()):
+        if len(ps) > 1:
+            return f"{g} is active on {len(ps)} platforms: {', '.join(ps)}"
+    return None
+
+
+def _coverage(v: SystemView) -> str | None:
+    valid = validly_active(v)
+    for slot in v.slots:
+        if any(g in valid for g in slot):
+            continue
+        if all(g in v.standing for g in slot):
+            continue
+        missing = [g for g in slot if g not in v.standing]
+        return f"the selector wants {' or '.join(slot)} but none is active on a valid platform and no error explains {', '.join(missing)}"
+    return None
+
+
+def _history(v: SystemView) -> str | None:
+    if v.running is not None and tuple(sorted(v.running)) != v.deployments:
+        extra = sorted(set(v.deployments) - set(v.running))
+        lost = sorted(set(v.running) - set(v.deployments))
+        return f"DEPLOYED_ON edges and running detectors disagree: edges without detector {extra}, detectors without edge {lost}"
+    if v.stops is not None and v.history is not None and v.stops != v.history:
+        return f"{v.stops} deployments were stopped but {v.history} DEPLOYMENT_HISTORY edges exist"
+    return None
+
+
+def _fixed(v: SystemView) -> str | None:
+    for g, p in v.deployments:
+        spec = v.spec(g)
+        if spec is not None and spec.fixed_platform is not None and spec.fixed_platform != p:
+            return f"{g} is fixed to {spec.fixed_platform} (EXECUTABLE_ON) but runs on {p}"
+    return None
+
+
+INVARIANTS: dict[str, Invariant] = {
+    inv.name: inv
+    for inv in (
+        Invariant("valid-or-error", "every active deployment runs on an up platform meeting all its requirements, or an error stands for its graph", _valid_or_error),
+        Invariant("no-overcommit", "on every platform the Capacity consumed by active deployments stays within the capacity", _no_overcommit),
+        Invariant("single-instance", "no perception graph is active on two platforms", _single_instance),
+        Invariant("coverage", "after each reaction every graph the selector wants is active on a valid platform, or an error explains why not", _coverage),
+        Invariant("history", "every stop leaves one DEPLOYMENT_HISTORY edge; every DEPLOYED_ON edge matches a running detector", _history),
+        Invariant("fixed", "a fixed deployment runs only on its EXECUTABLE_ON platform", _fixed),
+    )
+}
+
+
+def get_invariants(names: list[str] | tuple[str, ...] | None = None) -> tuple[Invariant, ...]:
+    """The invariants called ``names`` (all if None); a ModelError lists the valid names."""
+    if not names:
+        return tuple(INVARIANTS.values())
+    out = []
+    for n in names:
+        if n not in INVARIANTS:
+            raise ModelError(f"unknown invariant {n!r}: choose from {', '.join(INVARIANTS)}")
+        out.append(INVARIANTS[n])
+    return tuple(out)
+
+
+def check_invariants(view: SystemView, invariants: tuple[Invariant, ...] | None = None) -> list[tuple[str, str]]:
+    """(name, message) of every invariant violated by ``view``."""
+    out = []
+    for inv in invariants or tuple(INVARIANTS.values()):
+        msg = inv.check(view)
+        if msg is not None:
+            out.append((inv.name, msg))
+    return out

@@ -1,0 +1,88 @@
+"""The context monitor's interpretation: observations and events -> repository facts.
+
+Pure logic over an :class:`InsertPort` (implemented by the networkx repository adapter
+and by the checker's state store): it decides *what* to write and reports what changed
+as a :class:`Stimulus`, which is what wakes the selector and the deployer (Notify).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+from desmon.errors import ModelError
+from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
+from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+
+__all__ = ["GripperObservation", "interpret", "InsertPort", "Stimulus", "observe"]
+
+GRIPPER_STATES = ("open", "closing", "closed", "opening")
+
+
+@dataclass(frozen=True, slots=True)
+class GripperObservation:
+    """What the context monitor sees of gripper and base."""
+
+    gripper: str
+    base_moving: bool = False
+    holding: bool = True
+
+    def __post_init__(self) -> None:
+        if self.gripper not in GRIPPER_STATES:
+            raise ModelError(f"gripper state {self.gripper!r} unknown: use one of {', '.join(GRIPPER_STATES)}")
+
+
+def interpret(obs: GripperObservation) -> str:
+    """Action context from gripper and base (the paper's §4.1).
+
+    Fingers closing -> grasp; fingers opening -> release; fingers closed on an object
+    with the base moving -> move_base, base still -> hold; otherwise idle.
+    """
+    if obs.gripper == "closing":
+        return GRASP
+    if obs.gripper == "opening":
+        return RELEASE
+    if obs.gripper == "closed" and obs.holding:
+        return MOVE_BASE if obs.base_moving else HOLD
+    return IDLE
+
+
+class InsertPort(Protocol):
+    """The Insert facts the context monitor writes; each returns whether anything changed."""
+
+    def set_context(self, context: str) -> bool: ...
+
+    def set_device_working(self, device: str, working: bool) -> str | None:
+        """Returns the platform whose HAS_DEVICE edge changed, or None."""
+
+    def set_platform_up(self, platform: str, up: bool) -> bool: ...
+
+    def set_load(self, platform: str, resource: str, amount: float) -> bool: ...
+
+
+@dataclass(frozen=True, slots=True)
+class Stimulus:
+    """What a repository change means for the deployment core (the Notify payload)."""
+
+    changed_platforms: tuple[str, ...] = ()
+    context_changed: bool = False
+
+    @property
+    def empty(self) -> bool:
+        return not self.changed_platforms and not self.context_changed
+
+
+def observe(event: Event, store: InsertPort) -> Stimulus:
+    """Write the facts ``event`` implies and say what changed."""
+    if isinstance(event, ActionChange):
+        return Stimulus(context_changed=store.set_context(event.action))
+    if isinstance(event, (DeviceFail, DeviceRepair)):
+        platform = store.set_device_working(event.device, isinstance(event, DeviceRepair))
+        return Stimulus(changed_platforms=(platform,) if platform else ())
+    if isinstance(event, (PlatformDown, PlatformUp)):
+        changed = store.set_platform_up(event.platform, isinstance(event, PlatformUp))
+        return Stimulus(changed_platforms=(event.platform,) if changed else ())
+    if isinstance(event, LoadChange):
+        changed = store.set_load(event.platform, event.resource, event.amount)
+        return Stimulus(changed_platforms=(event.platform,) if changed else ())
+    raise ModelError(f"not an environment event: {event!r}")

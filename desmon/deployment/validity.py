@@ -1,0 +1,192 @@
+"""Requirement checking: the paper's ``checkValidity`` with reasons.
+
+The semantics of every requirement kind (DESIGN.md §3) lives here and nowhere else.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Iterable, Sequence
+
+from desmon.model.requirements import (
+    PLATFORM_HAS,
+    Attribute,
+    DeploymentSpec,
+    Capacity,
+    Maximum,
+    Minimum,
+    Option,
+    Quantity,
+    Requirement,
+    Selection,
+)
+from desmon.model.system import PlatformState
+
+if TYPE_CHECKING:
+    from desmon.deployment.ports import QueryPort
+
+__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid"]
+
+
+@dataclass(frozen=True, slots=True)
+class Failure:
+    """One requirement that one platform does not meet, and why."""
+
+    platform: str
+    requirement: str
+    reason: str
+
+    def __str__(self) -> str:
+        return f"{self.platform}: {self.requirement} fails: {self.reason}"
+
+
+@dataclass(frozen=True, slots=True)
+class Validity:
+    """Result of :func:`check_validity`: acceptable platforms (in preference order) and
+    every failure of every rejected platform."""
+
+    acceptable: tuple[str, ...]
+    rejected: tuple[tuple[str, tuple[Failure, ...]], ...]
+
+    def failures(self, platform: str) -> tuple[Failure, ...]:
+        for name, fails in self.rejected:
+            if name == platform:
+                return fails
+        return ()
+
+    def explain(self) -> str:
+        lines = [f"acceptable: {', '.join(self.acceptable) or '(none)'}"]
+        for _name, fails in self.rejected:
+            lines.extend(str(f) for f in fails)
+        return "\n".join(lines)
+
+
+def _option_holds(option: Option, state: PlatformState) -> bool:
+    if option.attribute is not None:
+        return str(state.platform.attribute(option.attribute)) == str(option.value)
+    return any(d.matches(option.device_kind or "", option.vendor) for d in state.devices)
+
+
+def _fmt(x: float) -> str:
+    return f"{x:g}"
+
+
+def requirement_holds(req: Requirement, state: PlatformState, graph: str | None) -> str | None:
+    """``None`` if ``req`` holds on ``state`` for ``graph``, else the reason it fails."""
+    if isinstance(req, Quantity):
+        have = sum(1 for d in state.devices if d.kind == req.device_kind)
+        if have >= req.count:
+            return None
+        return f"{have} working {req.device_kind} device(s), needs {req.count}"
+    if isinstance(req, Capacity):
+        cap = state.platform.capacity(req.resource)
+        if cap is None:
+            return f"has no {req.resource} capacity"
+        others = state.used_by(req.resource, excluding=graph)
+        load = state.load_of(req.resource)
+        free = cap - sum(a for _g, a in others) - load
+        if free >= req.amount:
+            return None
+        unit = " MB" if req.resource == "memory" else ""
+        parts = [f"capacity {_fmt(cap)}"]
+        parts += [f"used by {g} {_fmt(a)}" for g, a in others]
+        parts.append(f"load {_fmt(load)}")
+        return f"{_fmt(free)}{unit} free ({', '.join(parts)})"
+    if isinstance(req, Minimum):
+        value = state.platform.prop(req.prop)
+        if value is None:
+            return f"has no property {req.prop!r}"
+        return None if value >= req.value else f"{req.prop} is {_fmt(value)}"
+    if isinstance(req, Maximum):
+        value = state.platform.prop(req.prop)
+        if value is None:
+            return f"has no property {req.prop!r}"
+        return None if value <= req.value else f"{req.prop} is {_fmt(value)}"
+    if isinstance(req, Attribute):
+        if req.name == PLATFORM_HAS:
+            if any(d.kind == req.value for d in state.devices):
+                return None
+            return f"no working {req.value} attached"
+        actual = state.platform.attribute(req.name)
+        if actual is not None and str(actual) == str(req.value):
+            return None
+        return f"{req.name} is {actual!r}" if actual is not None else f"has no attribute {req.name!r}"
+    if isinstance(req, Selection):
+        have = [o.describe() for o in req.options if _option_holds(o, state)]
+        if len(have) >= req.at_least:
+            return None
+        return f"{len(have)} of the options available ({', '.join(have) or 'none'}), needs {req.at_least}"
+    raise TypeError(f"not a requirement: {req!r}")  # pragma: no cover - exhaustive over Requirement
+
+
+def check_platform(requirements: Iterable[Requirement], state: PlatformState, graph: str | None) -> tuple[Failure, ...]:
+    """Every requirement ``state`` fails for ``graph``; a down platform fails them all."""
+    if not state.up:
+        return (Failure(state.name, "platform up", "platform is down"),)
+    out = []
+    for req in requirements:
+        reason = requirement_holds(req, state, graph)
+        if reason is not None:
+            out.append(Failure(state.name, req.describe(), reason))
+    return tuple(out)
+
+
+def order_platforms(states: Sequence[PlatformState]) -> list[PlatformState]:
+    """Deterministic preference order: higher ``preference`` first, then declaration order."""
+    return sorted(states, key=lambda s: -s.platform.preference)  # sorted() is stable
+
+
+def check_validity(
+    requirements: Iterable[Requirement],
+    states: Sequence[PlatformState],
+    graph: str | None = None,
+) -> Validity:
+    """The platforms among ``states`` that meet every requirement, for deploying ``graph``.
+
+    ``graph`` matters for Capacity: its own share never counts against it. Acceptable
+    platforms come in preference order (see :func:`order_platforms`); rejected ones
+    carry every failing requirement with a readable reason.
+    """
+    reqs = tuple(requirements)
+    acceptable: list[str] = []
+    rejected: list[tuple[str, tuple[Failure, ...]]] = []
+    for state in order_platforms(states):
+        fails = check_platform(reqs, state, graph)
+        if fails:
+            rejected.append((state.name, fails))
+        else:
+            acceptable.append(state.name)
+    return Validity(tuple(acceptable), tuple(rejected))
+
+
+def validity_for(q: "QueryPort", spec: DeploymentSpec) -> Validity:
+    """check_validity for ``spec`` on the repository's current facts; a fixed deployment
+    considers only its EXECUTABLE_ON platform."""
+    states = q.platform_states()
+    fixed = q.fixed_platform(spec)
+    if fixed is not None:
+        states = tuple(s for s in states if s.name == fixed)
+    return check_validity(q.constraints(spec), states, spec.graph)
+
+
+def acceptable_platforms(q: "QueryPort", graph: str) -> Validity:
+    """The named query "acceptable platforms of ``graph``" with reasons (``desmon explain``)."""
+    from desmon.errors import QueryError
+
+    spec = q.deployment_information(graph)
+    if spec is None:
+        raise QueryError(f"no deployment information for perception graph {graph!r}: add a deployment specification")
+    return validity_for(q, spec)
+
+
+def deployment_valid(spec: DeploymentSpec | None, state: PlatformState) -> tuple[Failure, ...]:
+    """Why an active deployment of ``spec`` on ``state`` is invalid (empty if it is valid).
+
+    Used by the corrected deployer's bookkeeping and by the invariants alike: up, on its
+    EXECUTABLE_ON platform if fixed, every requirement met (own Capacity share excluded).
+    """
+    if spec is None:
+        return (Failure(state.name, "deployment information", "missing"),)
+    if spec.fixed_platform is not None and spec.fixed_platform != state.name:
+        return (Failure(state.name, f"EXECUTABLE_ON {spec.fixed_platform}", "runs on another platform"),)
+    return check_platform(spec.requirements, state, spec.graph)

@@ -1,0 +1,186 @@
+"""The RPSL / DepSL builder DSL, a Python internal DSL in the spirit of the paper's Fig. 3.
+
+::
+
+    robot = RobotBuilder("care-o-bot-3")
+    robot.platform("arm_pc", memory=512).device("lwr_wrench", kind="force_sensor", vendor="kuka")
+
+    with robot.rpsl.perception_graph("force_slip_detector") as g:
+        g.sensor("wrench", reads="force_sensor")
+        g.processing("tare", inputs=["wrench"])
+        g.processing("threshold", inputs=["tare"])
+
+    (robot.depsl.deployment_specification("force_slip_detector")
+        .add_constraint("attribute", "platform_has", "force_sensor"))
+
+    robot.rules({"release": "force_slip_detector"})
+    model = robot.build()          # a validated SystemModel
+
+A malformed graph is rejected when its ``with`` block ends; cross references (spec for
+an unknown graph, fixed platform that does not exist, rule naming an unknown graph)
+when :meth:`RobotBuilder.build` runs. Both raise :class:`~desmon.errors.ModelError`.
+"""
+
+from __future__ import annotations
+
+from types import TracebackType
+from typing import Iterable, Mapping
+
+from desmon.errors import ModelError
+from desmon.model.graph import Component, PerceptionGraph, ProcessingComponent, SensorComponent
+from desmon.model.platform import Device, Platform
+from desmon.model.requirements import DeploymentSpec, Requirement, make_requirement
+from desmon.model.system import RuleTable, SystemModel
+
+__all__ = ["RobotBuilder", "PlatformBuilder", "GraphBuilder", "SpecBuilder"]
+
+
+class PlatformBuilder:
+    """Returned by :meth:`RobotBuilder.platform`; attach devices with :meth:`device`."""
+
+    def __init__(self, robot: "RobotBuilder", name: str) -> None:
+        self._robot = robot
+        self.name = name
+
+    def device(self, name: str, *, kind: str, vendor: str = "generic", version: str = "1") -> "PlatformBuilder":
+        self._robot._devices.append(Device(name=name, kind=kind, platform=self.name, vendor=vendor, version=version))
+        return self
+
+    def devices(self, names: Iterable[str], *, kind: str, vendor: str = "generic", version: str = "1") -> "PlatformBuilder":
+        for n in names:
+            self.device(n, kind=kind, vendor=vendor, version=version)
+        return self
+
+
+class GraphBuilder:
+    """Context manager collecting the components of one perception graph (RPSL)."""
+
+    def __init__(self, robot: "RobotBuilder", name: str) -> None:
+        self._robot = robot
+        self.name = name
+        self._components: list[Component] = []
+
+    def sensor(self, name: str, *, reads: str) -> "GraphBuilder":
+        """A sensor component reading a device of kind ``reads``."""
+        self._components.append(SensorComponent(name, reads))
+        return self
+
+    def processing(self, name: str, *, inputs: Iterable[str]) -> "GraphBuilder":
+        """A processing component computing from the named ``inputs``."""
+        if isinstance(inputs, str):
+            inputs = (inputs,)
+        self._components.append(ProcessingComponent(name, tuple(inputs)))
+        return self
+
+    def __enter__(self) -> "GraphBuilder":
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        if exc_type is None:
+            self._robot._add_graph(PerceptionGraph(self.name, tuple(self._components)))
+
+
+class SpecBuilder:
+    """Chainable DepSL deployment specification for one perception graph."""
+
+    def __init__(self, graph: str) -> None:
+        self.graph = graph
+        self._requirements: list[Requirement] = []
+        self._fixed: str | None = None
+
+    def add_constraint(self, kind: str, *args: object, **kwargs: object) -> "SpecBuilder":
+        """``add_constraint("attribute", "platform_has", "force_sensor")``; kinds as in DepSL."""
+        self._requirements.append(make_requirement(kind, *args, **kwargs))
+        return self
+
+    def require(self, requirement: Requirement) -> "SpecBuilder":
+        """Add an already-built requirement object."""
+        self._requirements.append(requirement)
+        return self
+
+    def executable_on(self, platform: str) -> "SpecBuilder":
+        """Fix the deployment to ``platform`` (an EXECUTABLE_ON edge)."""
+        self._fixed = platform
+        return self
+
+    def build(self) -> DeploymentSpec:
+        return DeploymentSpec(self.graph, tuple(self._requirements), self._fixed)
+
+
+class _RPSL:
+    def __init__(self, robot: "RobotBuilder") -> None:
+        self._robot = robot
+
+    def perception_graph(self, name: str) -> GraphBuilder:
+        return GraphBuilder(self._robot, name)
+
+
+class _DepSL:
+    def __init__(self, robot: "RobotBuilder") -> None:
+        self._robot = robot
+
+    def deployment_specification(self, graph: str) -> SpecBuilder:
+        spec = SpecBuilder(graph)
+        self._robot._specs.append(spec)
+        return spec
+
+
+class RobotBuilder:
+    """Collects a robot's platforms, devices, perception graphs, specs and rules."""
+
+    def __init__(self, name: str = "robot") -> None:
+        self.name = name
+        self._platforms: list[Platform] = []
+        self._devices: list[Device] = []
+        self._graphs: list[PerceptionGraph] = []
+        self._specs: list[SpecBuilder] = []
+        self._rules = RuleTable(())
+        self.rpsl = _RPSL(self)
+        self.depsl = _DepSL(self)
+
+    def platform(
+        self,
+        name: str,
+        *,
+        memory: float | None = None,
+        capacities: Mapping[str, float] | None = None,
+        attributes: Mapping[str, object] | None = None,
+        properties: Mapping[str, float] | None = None,
+        preference: float = 0.0,
+    ) -> PlatformBuilder:
+        self._platforms.append(
+            Platform.make(
+                name,
+                memory=memory,
+                capacities=capacities,
+                attributes=attributes,
+                properties=properties,
+                preference=preference,
+            )
+        )
+        return PlatformBuilder(self, name)
+
+    def _add_graph(self, graph: PerceptionGraph) -> None:
+        if any(g.name == graph.name for g in self._graphs):
+            raise ModelError(f"perception graph {graph.name!r} is defined twice: rename one of them")
+        self._graphs.append(graph)
+
+    def rules(self, table: Mapping[str, object] | RuleTable) -> "RobotBuilder":
+        """Set the selector's rule table (see :meth:`RuleTable.from_mapping`)."""
+        self._rules = table if isinstance(table, RuleTable) else RuleTable.from_mapping(dict(table))
+        return self
+
+    def build(self) -> SystemModel:
+        return SystemModel(
+            platforms=tuple(self._platforms),
+            devices=tuple(self._devices),
+            graphs=tuple(self._graphs),
+            specs=tuple(s.build() for s in self._specs),
+            rules=self._rules,
+            robot=self.name,
+        )

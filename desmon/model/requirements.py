@@ -1,0 +1,250 @@
+"""DepSL requirements (the OMG deployment-specification kinds) and deployment specifications.
+
+The semantics of each kind (DESIGN.md §3) is implemented once, in
+:mod:`desmon.deployment.validity`; this module is pure vocabulary and validation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable
+
+from desmon.errors import ModelError
+from desmon.model.platform import check_amount, check_name
+
+__all__ = [
+    "Quantity",
+    "Capacity",
+    "Minimum",
+    "Maximum",
+    "Attribute",
+    "Selection",
+    "Option",
+    "Requirement",
+    "REQUIREMENT_KINDS",
+    "make_requirement",
+    "DeploymentSpec",
+    "PLATFORM_HAS",
+]
+
+#: The Attribute name that means "the platform has a working device of this kind" (R1).
+PLATFORM_HAS = "platform_has"
+
+
+@dataclass(frozen=True, slots=True)
+class Quantity:
+    """At least ``count`` working devices of ``device_kind`` on the platform (R2)."""
+
+    device_kind: str
+    count: int
+
+    def __post_init__(self) -> None:
+        check_name("Quantity device kind", self.device_kind)
+        check_amount(f"Quantity({self.device_kind}) count", self.count, integer=True)
+
+    def describe(self) -> str:
+        return f"Quantity({self.device_kind} >= {self.count:g})"
+
+
+@dataclass(frozen=True, slots=True)
+class Capacity:
+    """``amount`` of ``resource`` free on the platform; a deployed graph consumes it (R3)."""
+
+    resource: str
+    amount: float
+
+    def __post_init__(self) -> None:
+        check_name("Capacity resource", self.resource)
+        check_amount(f"Capacity({self.resource}) amount", self.amount)
+
+    def describe(self) -> str:
+        unit = " MB" if self.resource == "memory" else ""
+        return f"Capacity({self.resource} >= {self.amount:g}{unit})"
+
+
+@dataclass(frozen=True, slots=True)
+class Minimum:
+    """The platform's numeric ``prop`` is at least ``value``."""
+
+    prop: str
+    value: float
+
+    def __post_init__(self) -> None:
+        check_name("Minimum property", self.prop)
+        _check_number(f"Minimum({self.prop}) value", self.value)
+
+    def describe(self) -> str:
+        return f"Minimum({self.prop} >= {self.value:g})"
+
+
+@dataclass(frozen=True, slots=True)
+class Maximum:
+    """The platform's numeric ``prop`` is at most ``value`` (e.g. link latency)."""
+
+    prop: str
+    value: float
+
+    def __post_init__(self) -> None:
+        check_name("Maximum property", self.prop)
+        _check_number(f"Maximum({self.prop}) value", self.value)
+
+    def describe(self) -> str:
+        return f"Maximum({self.prop} <= {self.value:g})"
+
+
+@dataclass(frozen=True, slots=True)
+class Attribute:
+    """The platform has attribute ``name`` equal to ``value``.
+
+    ``Attribute("platform_has", kind)`` means: a working device of that kind is attached (R1).
+    """
+
+    name: str
+    value: str
+
+    def __post_init__(self) -> None:
+        check_name("Attribute name", self.name)
+        if not isinstance(self.value, (str, int, float)) or isinstance(self.value, bool):
+            raise ModelError(f"Attribute({self.name}) value {self.value!r} must be a string or number")
+
+    def describe(self) -> str:
+        if self.name == PLATFORM_HAS:
+            return f"Attribute(platform_has {self.value})"
+        return f"Attribute({self.name} = {self.value})"
+
+
+@dataclass(frozen=True, slots=True)
+class Option:
+    """One alternative of a Selection: a device (kind, optionally vendor) or an attribute value.
+
+    Parsed from ``"tactile_pad"``, ``"tactile_pad@weiss"`` or ``"os=linux"``.
+    """
+
+    device_kind: str | None = None
+    vendor: str | None = None
+    attribute: str | None = None
+    value: str | None = None
+
+    @classmethod
+    def parse(cls, text: str) -> "Option":
+        if not isinstance(text, str) or not text.strip():
+            raise ModelError(
+                f"Selection option {text!r} is not a non-empty string: write 'kind', 'kind@vendor' or 'attr=value'"
+            )
+        if "=" in text:
+            attr, _, value = text.partition("=")
+            return cls(attribute=check_name("Selection attribute", attr.strip()), value=value.strip())
+        kind, _, vendor = text.partition("@")
+        return cls(device_kind=check_name("Selection device kind", kind.strip()), vendor=vendor.strip() or None)
+
+    def describe(self) -> str:
+        if self.attribute is not None:
+            return f"{self.attribute}={self.value}"
+        return f"{self.device_kind}@{self.vendor}" if self.vendor else str(self.device_kind)
+
+
+@dataclass(frozen=True, slots=True)
+class Selection:
+    """At least ``at_least`` of the listed alternatives are available on the platform."""
+
+    options: tuple[Option, ...]
+    at_least: int = 1
+
+    def __post_init__(self) -> None:
+        if not self.options:
+            raise ModelError("Selection has no options: list at least one alternative, e.g. 'tactile_pad@weiss'")
+        check_amount("Selection at_least", self.at_least, integer=True)
+        if self.at_least < 1:
+            raise ModelError("Selection at_least = 0 always holds: give at_least >= 1 or drop the requirement")
+        if self.at_least > len(self.options):
+            raise ModelError(
+                f"Selection at_least = {self.at_least} but only {len(self.options)} options "
+                f"({', '.join(o.describe() for o in self.options)}): lower at_least or add options"
+            )
+
+    def describe(self) -> str:
+        return f"Selection({self.at_least} of {', '.join(o.describe() for o in self.options)})"
+
+
+Requirement = Quantity | Capacity | Minimum | Maximum | Attribute | Selection
+
+REQUIREMENT_KINDS = ("quantity", "capacity", "minimum", "maximum", "attribute", "selection")
+
+
+def _check_number(what: str, value: object) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
+        raise ModelError(f"{what} = {value!r} is not a number: give a number")
+
+
+def make_requirement(kind: str, *args: object, **kwargs: object) -> Requirement:
+    """Build a requirement from DepSL-style words: ``make_requirement("capacity", "memory", 250)``.
+
+    Kinds: quantity(kind, n), capacity(resource, amount), minimum(prop, v),
+    maximum(prop, v), attribute(name, value), selection(option, ..., at_least=1).
+    """
+    key = str(kind).lower().lstrip(":")
+    try:
+        if key == "quantity":
+            (dev, n) = args
+            return Quantity(str(dev), n)  # type: ignore[arg-type]
+        if key == "capacity":
+            (res, amount) = args
+            return Capacity(str(res), amount)  # type: ignore[arg-type]
+        if key == "minimum":
+            (prop, v) = args
+            return Minimum(str(prop), v)  # type: ignore[arg-type]
+        if key == "maximum":
+            (prop, v) = args
+            return Maximum(str(prop), v)  # type: ignore[arg-type]
+        if key == "attribute":
+            (name, value) = args
+            return Attribute(str(name).lstrip(":"), value)  # type: ignore[arg-type]
+        if key == "selection":
+            opts: Iterable[object] = args
+            if len(args) == 1 and isinstance(args[0], (list, tuple)):
+                opts = args[0]
+            at_least = kwargs.pop("at_least", 1)
+            return Selection(tuple(Option.parse(o) for o in opts), at_least)  # type: ignore[arg-type]
+    except ValueError as exc:
+        if isinstance(exc, ModelError):
+            raise
+        raise ModelError(f"requirement {kind!r} got arguments {args!r}: {_USAGE[key]}") from None
+    raise ModelError(
+        f"unknown requirement kind {kind!r}: use one of {', '.join(REQUIREMENT_KINDS)}"
+    )
+
+
+_USAGE = {
+    "quantity": "write ('quantity', device_kind, count)",
+    "capacity": "write ('capacity', resource, amount)",
+    "minimum": "write ('minimum', property, value)",
+    "maximum": "write ('maximum', property, value)",
+    "attribute": "write ('attribute', name, value)",
+    "selection": "write ('selection', option, option, ..., at_least=1)",
+}
+
+
+@dataclass(frozen=True, slots=True)
+class DeploymentSpec:
+    """DepSL: how the perception graph ``graph`` may be deployed.
+
+    ``fixed_platform`` is the EXECUTABLE_ON platform of a fixed deployment. The
+    Capacity requirements say both what must be free and what the deployed graph consumes.
+    """
+
+    graph: str
+    requirements: tuple[Requirement, ...] = ()
+    fixed_platform: str | None = None
+
+    def __post_init__(self) -> None:
+        check_name("deployment specification graph", self.graph)
+        if self.fixed_platform is not None:
+            check_name(f"fixed platform of {self.graph!r}", self.fixed_platform)
+
+    def consumption(self) -> tuple[tuple[str, float], ...]:
+        """What a deployment of this spec consumes, per resource (sum of its Capacity amounts)."""
+        use: dict[str, float] = {}
+        for req in self.requirements:
+            if isinstance(req, Capacity):
+                use[req.resource] = use.get(req.resource, 0.0) + req.amount
+        return tuple(sorted(use.items()))

@@ -1,0 +1,68 @@
+"""Scenarios: a model plus what happens to the robot, and the results it pins.
+
+A scenario file is a Python script that builds a :class:`Scenario` with the DSL and
+binds it to the module-level name ``scenario`` (see ``scenarios/coffee_handover.py``).
+Engines read the parts they need: the scripted replay reads ``timeline``; the SimPy
+world reads ``world`` (its own typed configuration); the checker reads ``checker``.
+``expected`` pins results as data, and the tests assert them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+from desmon.errors import ModelError
+from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+from desmon.model.system import SystemModel
+
+__all__ = ["TimedEvent", "Scenario"]
+
+
+@dataclass(frozen=True, slots=True)
+class TimedEvent:
+    """``event`` happens at ``time`` seconds; ``label`` names the moment (e.g. ``t1``)."""
+
+    time: float
+    event: Event
+    label: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class Scenario:
+    """A runnable scenario."""
+
+    name: str
+    model: SystemModel
+    timeline: tuple[TimedEvent, ...] = ()
+    #: Facts that hold before anything happens (background loads, broken devices); they
+    #: are written into the repository silently, before the first reaction.
+    initial: tuple[Event, ...] = ()
+    description: str = ""
+    world: Any = None
+    checker: Any = None
+    expected: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.model, SystemModel):
+            raise ModelError(f"scenario {self.name!r}: model must be a SystemModel (use RobotBuilder(...).build())")
+        last = float("-inf")
+        devices = {d.name for d in self.model.devices}
+        platforms = {p.name for p in self.model.platforms}
+        for ev in self.initial:
+            self._check_event(ev, devices, platforms)
+        for te in self.timeline:
+            self._check_event(te.event, devices, platforms)
+            if te.time < last:
+                raise ModelError(
+                    f"scenario {self.name!r}: timeline event {te.event} at t={te.time} comes before t={last}: sort the timeline"
+                )
+            last = te.time
+
+    def _check_event(self, ev: Event, devices: set[str], platforms: set[str]) -> None:
+        if not isinstance(ev, (ActionChange, DeviceFail, DeviceRepair, PlatformDown, PlatformUp, LoadChange)):
+            raise ModelError(f"scenario {self.name!r}: {ev!r} is not an environment event")
+        if isinstance(ev, (DeviceFail, DeviceRepair)) and ev.device not in devices:
+            raise ModelError(f"scenario {self.name!r}: names unknown device {ev.device!r} (known: {sorted(devices)})")
+        if isinstance(ev, (PlatformDown, PlatformUp, LoadChange)) and ev.platform not in platforms:
+            raise ModelError(f"scenario {self.name!r}: names unknown platform {ev.platform!r} (known: {sorted(platforms)})")

@@ -1,0 +1,204 @@
+"""The design-time model of a robot: platforms, devices, perception graphs, specs, rules.
+
+Plus :class:`PlatformState`, the run-time facts about one platform that requirement
+checking reads (whoever holds them: the networkx repository or the checker's state).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from desmon.errors import ModelError
+from desmon.model.actions import ACTIONS
+from desmon.model.graph import PerceptionGraph
+from desmon.model.platform import Device, Platform
+from desmon.model.requirements import Capacity, DeploymentSpec
+
+__all__ = ["Rule", "RuleTable", "SystemModel", "PlatformState"]
+
+
+@dataclass(frozen=True, slots=True)
+class Rule:
+    """Selector rule: in ``context``, deploy one graph of each slot.
+
+    Each slot is a preference-ordered tuple of alternatives: the first that can be
+    placed is deployed, the next ones are fallbacks.
+    """
+
+    context: str
+    slots: tuple[tuple[str, ...], ...]
+
+    def __post_init__(self) -> None:
+        for slot in self.slots:
+            if not slot:
+                raise ModelError(f"rule for context {self.context!r} has an empty slot: name at least one graph")
+
+    @property
+    def graphs(self) -> tuple[str, ...]:
+        return tuple(g for slot in self.slots for g in slot)
+
+
+@dataclass(frozen=True, slots=True)
+class RuleTable:
+    """Selection rules, action context -> perception graphs. Data a scenario can replace."""
+
+    rules: tuple[Rule, ...]
+
+    @classmethod
+    def from_mapping(cls, mapping: dict[str, object]) -> "RuleTable":
+        """``{"grasp": "combined", "move_base": ["tactile"], "release": [("combined", "force")]}``.
+
+        A string is one graph; a list holds several slots; a tuple inside a list is one
+        slot with fallbacks.
+        """
+        rules = []
+        for context, body in mapping.items():
+            if isinstance(body, str):
+                slots: tuple[tuple[str, ...], ...] = ((body,),)
+            elif isinstance(body, (list, tuple)):
+                slots = tuple((s,) if isinstance(s, str) else tuple(s) for s in body)
+            else:
+                raise ModelError(
+                    f"rule for context {context!r}: {body!r} is neither a graph name nor a list of them"
+                )
+            rules.append(Rule(context, slots))
+        return cls(tuple(rules))
+
+    def slots_for(self, context: str | None) -> tuple[tuple[str, ...], ...]:
+        for rule in self.rules:
+            if rule.context == context:
+                return rule.slots
+        return ()
+
+
+@dataclass(frozen=True, slots=True)
+class PlatformState:
+    """Run-time facts about one platform, as requirement checking sees them.
+
+    ``devices`` are the *working* devices attached (HAS_DEVICE edges); ``deployed``
+    lists the graphs active on it with what each consumes; ``load`` is the background
+    (non-monitor) consumption per resource.
+    """
+
+    platform: Platform
+    up: bool = True
+    devices: tuple[Device, ...] = ()
+    load: tuple[tuple[str, float], ...] = ()
+    deployed: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
+
+    @property
+    def name(self) -> str:
+        return self.platform.name
+
+    def load_of(self, resource: str) -> float:
+        for res, amount in self.load:
+            if res == resource:
+                return amount
+        return 0.0
+
+    def used_by(self, resource: str, *, excluding: str | None = None) -> list[tuple[str, float]]:
+        """(graph, amount) of ``resource`` consumed by deployed graphs, optionally without one graph."""
+        out = []
+        for graph, use in self.deployed:
+            if graph == excluding:
+                continue
+            for res, amount in use:
+                if res == resource and amount:
+                    out.append((graph, amount))
+        return out
+
+
+@dataclass(frozen=True, slots=True)
+class SystemModel:
+    """A validated design-time model. Construction rejects dangling references."""
+
+    platforms: tuple[Platform, ...]
+    devices: tuple[Device, ...] = ()
+    graphs: tuple[PerceptionGraph, ...] = ()
+    specs: tuple[DeploymentSpec, ...] = ()
+    rules: RuleTable = field(default_factory=lambda: RuleTable(()))
+    robot: str = "robot"
+
+    def __post_init__(self) -> None:
+        _unique("platform", [p.name for p in self.platforms])
+        _unique("device", [d.name for d in self.devices])
+        _unique("perception graph", [g.name for g in self.graphs])
+        _unique("deployment specification for graph", [s.graph for s in self.specs])
+        platforms = {p.name for p in self.platforms}
+        graphs = {g.name for g in self.graphs}
+        for dev in self.devices:
+            if dev.platform not in platforms:
+                raise ModelError(
+                    f"device {dev.name!r} is attached to unknown platform {dev.platform!r}: "
+                    f"declare it or use one of {sorted(platforms)}"
+                )
+        for spec in self.specs:
+            if spec.graph not in graphs:
+                raise ModelError(
+                    f"deployment specification for unknown perception graph {spec.graph!r}: "
+                    f"define the graph first (known: {sorted(graphs)})"
+                )
+            if spec.fixed_platform is not None and spec.fixed_platform not in platforms:
+                raise ModelError(
+                    f"deployment of {spec.graph!r} is fixed to unknown platform {spec.fixed_platform!r}: "
+                    f"use one of {sorted(platforms)}"
+                )
+            for req in spec.requirements:
+                if isinstance(req, Capacity) and not any(p.capacity(req.resource) is not None for p in self.platforms):
+                    raise ModelError(
+                        f"deployment of {spec.graph!r} needs {req.describe()} but no platform declares a "
+                        f"{req.resource!r} capacity: add it to the platforms"
+                    )
+        for rule in self.rules.rules:
+            if rule.context not in ACTIONS:
+                raise ModelError(
+                    f"rule for unknown action context {rule.context!r}: use one of {', '.join(ACTIONS)}"
+                )
+            for g in rule.graphs:
+                if g not in graphs:
+                    raise ModelError(
+                        f"rule for {rule.context!r} selects unknown perception graph {g!r}: "
+                        f"define it (known: {sorted(graphs)})"
+                    )
+
+    # -- lookups -------------------------------------------------------------------
+    def platform(self, name: str) -> Platform:
+        for p in self.platforms:
+            if p.name == name:
+                return p
+        raise ModelError(f"unknown platform {name!r}: known are {[p.name for p in self.platforms]}")
+
+    def device(self, name: str) -> Device:
+        for d in self.devices:
+            if d.name == name:
+                return d
+        raise ModelError(f"unknown device {name!r}: known are {[d.name for d in self.devices]}")
+
+    def graph(self, name: str) -> PerceptionGraph:
+        for g in self.graphs:
+            if g.name == name:
+                return g
+        raise ModelError(f"unknown perception graph {name!r}: known are {[g.name for g in self.graphs]}")
+
+    def spec(self, graph: str) -> DeploymentSpec | None:
+        for s in self.specs:
+            if s.graph == graph:
+                return s
+        return None
+
+    def devices_on(self, platform: str) -> tuple[Device, ...]:
+        return tuple(d for d in self.devices if d.platform == platform)
+
+    def platform_index(self, name: str) -> int:
+        for i, p in enumerate(self.platforms):
+            if p.name == name:
+                return i
+        raise ModelError(f"unknown platform {name!r}")
+
+
+def _unique(what: str, names: list[str]) -> None:
+    seen: set[str] = set()
+    for n in names:
+        if n in seen:
+            raise ModelError(f"{what} {n!r} is declared twice: names must be unique")
+        seen.add(n)

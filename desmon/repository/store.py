@@ -1,0 +1,297 @@
+"""The repository: a labelled property graph on a networkx ``MultiDiGraph``.
+
+Insert
+    ``add_node`` / ``update_node`` / ``add_edge`` / ``remove_edge`` / ``relabel_edge``.
+    Every change is applied to the live graph and appended to an append-only change
+    log with its time; :meth:`Repository.snapshot` replays the log up to a time.
+Notify
+    ``subscribe(callback, ops=..., labels=..., where=...)``: after each change the
+    matching subscribers receive the frozen :class:`Change` record.
+Query
+    The named queries the algorithms use live in :mod:`desmon.repository.query`.
+
+Node ids are ``"<Label>:<name>"``; unique edges use their label as key, history edges
+``DEPLOYMENT_HISTORY#<seq>``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from typing import Any, Callable, Iterable, Iterator
+
+import networkx as nx
+
+from desmon.errors import QueryError
+from desmon.repository import labels as L
+
+__all__ = ["Change", "Subscription", "Repository", "node_id", "graph_to_json", "graph_to_graphml"]
+
+ADD_NODE = "add_node"
+UPDATE_NODE = "update_node"
+ADD_EDGE = "add_edge"
+REMOVE_EDGE = "remove_edge"
+RELABEL_EDGE = "relabel_edge"
+OPS = (ADD_NODE, UPDATE_NODE, ADD_EDGE, REMOVE_EDGE, RELABEL_EDGE)
+
+
+def node_id(label: str, name: str) -> str:
+    """The repository id of the node ``name`` carrying ``label``."""
+    return f"{label}:{name}"
+
+
+@dataclass(frozen=True, slots=True)
+class Change:
+    """One entry of the change log (also what Notify delivers).
+
+    For node changes ``node`` is set; for edge changes ``source``, ``target`` and
+    ``key``. ``label`` is the node's or the edge's label (for a relabel: the new one,
+    ``old_label`` the previous one). ``attrs`` are the attributes written.
+    """
+
+    seq: int
+    time: float
+    op: str
+    label: str
+    node: str | None = None
+    source: str | None = None
+    target: str | None = None
+    key: str | None = None
+    old_label: str | None = None
+    attrs: tuple[tuple[str, Any], ...] = ()
+
+    def attr(self, name: str, default: Any = None) -> Any:
+        for k, v in self.attrs:
+            if k == name:
+                return v
+        return default
+
+    def describe(self) -> str:
+        if self.node is not None:
+            shown = ", ".join(f"{k}={v!r}" for k, v in self.attrs if k not in ("label", "requirement"))
+            return f"{self.op} {self.node}" + (f" ({shown})" if shown else "")
+        if self.op == RELABEL_EDGE:
+            return f"{self.source} -[{self.old_label} => {self.label}]-> {self.target}"
+        return f"{self.op} {self.source} -[{self.label}]-> {self.target}"
+
+
+@dataclass(slots=True)
+class Subscription:
+    """Handle returned by :meth:`Repository.subscribe`."""
+
+    callback: Callable[[Change], None]
+    ops: frozenset[str] | None
+    labels: frozenset[str] | None
+    where: Callable[[Change], bool] | None
+    active: bool = True
+
+    def matches(self, change: Change) -> bool:
+        if not self.active:
+            return False
+        if self.ops is not None and change.op not in self.ops:
+            return False
+        if self.labels is not None and change.label not in self.labels and change.old_label not in self.labels:
+            return False
+        return self.where is None or bool(self.where(change))
+
+    def cancel(self) -> None:
+        self.active = False
+
+
+def _apply(g: nx.MultiDiGraph, c: Change) -> None:
+    attrs = dict(c.attrs)
+    if c.op == ADD_NODE:
+        g.add_node(c.node, **attrs)
+    elif c.op == UPDATE_NODE:
+        g.nodes[c.node].update(attrs)
+    elif c.op == ADD_EDGE:
+        g.add_edge(c.source, c.target, key=c.key, **attrs)
+    elif c.op == REMOVE_EDGE:
+        g.remove_edge(c.source, c.target, key=c.key)
+    elif c.op == RELABEL_EDGE:
+        old = dict(g.edges[c.source, c.target, c.old_label])
+        g.remove_edge(c.source, c.target, key=c.old_label)
+        old.update(attrs)
+        g.add_edge(c.source, c.target, key=c.key, **old)
+    else:  # pragma: no cover - OPS is closed
+        raise ValueError(c.op)
+
+
+class Repository:
+    """Insert / Query / Notify over a labelled property graph, with a change log."""
+
+    def __init__(self, clock: Callable[[], float] | None = None) -> None:
+        self.graph: nx.MultiDiGraph = nx.MultiDiGraph()
+        self._log: list[Change] = []
+        self._subs: list[Subscription] = []
+        self._clock = clock or (lambda: 0.0)
+        self._order = 0
+
+    # -- clock and log ---------------------------------------------------------------
+    def set_clock(self, clock: Callable[[], float]) -> None:
+        self._clock = clock
+
+    @property
+    def now(self) -> float:
+        return float(self._clock())
+
+    @property
+    def log(self) -> tuple[Change, ...]:
+        """The append-only change log."""
+        return tuple(self._log)
+
+    def _record(self, op: str, label: str, **fields: Any) -> Change:
+        attrs = fields.pop("attrs", {})
+        change = Change(
+            seq=len(self._log),
+            time=self.now,
+            op=op,
+            label=label,
+            attrs=tuple(attrs.items()),
+            **fields,
+        )
+        _apply(self.graph, change)
+        self._log.append(change)
+        for sub in list(self._subs):
+            if sub.matches(change):
+                sub.callback(change)
+        return change
+
+    # -- Insert ------------------------------------------------------------------------
+    def add_node(self, label: str, name: str, **attrs: Any) -> str:
+        """Create node ``label:name`` (or overwrite its attributes if it exists)."""
+        nid = node_id(label, name)
+        if nid in self.graph:
+            self.update_node(nid, **attrs)
+            return nid
+        self._order += 1
+        self._record(ADD_NODE, label, node=nid, attrs={"label": label, "name": name, "order": self._order, **attrs})
+        return nid
+
+    def update_node(self, nid: str, **attrs: Any) -> None:
+        """Set attributes of an existing node."""
+        label = self.node_label(nid)
+        self._record(UPDATE_NODE, label, node=nid, attrs=attrs)
+
+    def add_edge(self, source: str, target: str, label: str, key: str | None = None, **attrs: Any) -> str:
+        """Create an edge ``source -[label]-> target``; unique labels use the label as key."""
+        for n in (source, target):
+            self.node_label(n)
+        key = key or label
+        if self.graph.has_edge(source, target, key):
+            return key
+        self._record(ADD_EDGE, label, source=source, target=target, key=key, attrs={"label": label, **attrs})
+        return key
+
+    def remove_edge(self, source: str, target: str, key: str) -> None:
+        if not self.graph.has_edge(source, target, key):
+            raise QueryError(f"no edge {source} -[{key}]-> {target} to remove")
+        label = self.graph.edges[source, target, key]["label"]
+        self._record(REMOVE_EDGE, label, source=source, target=target, key=key)
+
+    def relabel_edge(self, source: str, target: str, old: str, new: str, **attrs: Any) -> str:
+        """Relabel ``source -[old]-> target`` to ``new`` (a fresh unique key), adding ``attrs``."""
+        if not self.graph.has_edge(source, target, old):
+            raise QueryError(f"no edge {source} -[{old}]-> {target} to relabel")
+        key = f"{new}#{len(self._log)}"
+        self._record(RELABEL_EDGE, new, source=source, target=target, key=key, old_label=old, attrs={"label": new, **attrs})
+        return key
+
+    # -- Notify ------------------------------------------------------------------------
+    def subscribe(
+        self,
+        callback: Callable[[Change], None],
+        *,
+        ops: Iterable[str] | None = None,
+        labels: Iterable[str] | None = None,
+        where: Callable[[Change], bool] | None = None,
+    ) -> Subscription:
+        """Call ``callback(change)`` after every change matching all given filters."""
+        if ops is not None:
+            bad = set(ops) - set(OPS)
+            if bad:
+                raise QueryError(f"unknown change op(s) {sorted(bad)}: use {', '.join(OPS)}")
+        sub = Subscription(
+            callback,
+            frozenset(ops) if ops is not None else None,
+            frozenset(labels) if labels is not None else None,
+            where,
+        )
+        self._subs.append(sub)
+        return sub
+
+    # -- reading -----------------------------------------------------------------------
+    def node_label(self, nid: str) -> str:
+        try:
+            return str(self.graph.nodes[nid]["label"])
+        except KeyError:
+            raise QueryError(f"the repository has no node {nid!r}") from None
+
+    def nodes(self, label: str) -> Iterator[tuple[str, dict[str, Any]]]:
+        """(id, attributes) of every node with ``label``, in insertion order."""
+        for nid, data in self.graph.nodes(data=True):
+            if data.get("label") == label:
+                yield nid, data
+
+    def edges(self, label: str | None = None) -> Iterator[tuple[str, str, dict[str, Any]]]:
+        for s, t, data in self.graph.edges(data=True):
+            if label is None or data.get("label") == label:
+                yield s, t, data
+
+    def snapshot(self, at: float | None = None) -> nx.MultiDiGraph:
+        """The graph as it was at time ``at`` (all changes with time <= at); a copy."""
+        g = nx.MultiDiGraph()
+        for change in self._log:
+            if at is not None and change.time > at:
+                break
+            _apply(g, change)
+        return g
+
+
+# -- exports ---------------------------------------------------------------------------
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, (str, int, float, bool)) or value is None:
+        return value
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    describe = getattr(value, "describe", None)
+    if callable(describe):
+        return describe()
+    return str(value)
+
+
+#: Node attributes that hold the model objects themselves; exports show their flattened fields.
+OBJECT_ATTRS = frozenset({"platform", "device", "spec", "requirement"})
+
+
+def graph_to_json(g: nx.MultiDiGraph) -> dict[str, Any]:
+    """A stable JSON-able dict of a snapshot: nodes and edges sorted, attributes flattened."""
+    nodes = [
+        {"id": n, **{k: _jsonable(v) for k, v in sorted(d.items()) if k not in OBJECT_ATTRS}}
+        for n, d in sorted(g.nodes(data=True))
+    ]
+    edges = [
+        {"source": s, "target": t, "key": k, **{a: _jsonable(v) for a, v in sorted(d.items())}}
+        for s, t, k, d in sorted(g.edges(keys=True, data=True), key=lambda e: (e[0], e[1], str(e[2])))
+    ]
+    return {"nodes": nodes, "edges": edges}
+
+
+def graph_to_graphml(g: nx.MultiDiGraph, path: str) -> None:
+    """Write a snapshot as GraphML (non-scalar attributes as JSON strings)."""
+    out = nx.MultiDiGraph()
+
+    def scalar(v: Any) -> Any:
+        v = _jsonable(v)
+        return v if isinstance(v, (str, int, float, bool)) else json.dumps(v, sort_keys=True)
+
+    for n, d in g.nodes(data=True):
+        out.add_node(n, **{k: scalar(v) for k, v in d.items() if v is not None and k not in OBJECT_ATTRS})
+    for s, t, k, d in g.edges(keys=True, data=True):
+        out.add_edge(s, t, key=k, **{a: scalar(v) for a, v in d.items() if v is not None})
+    nx.write_graphml(out, path)
+
+
+__all__ += ["ADD_NODE", "UPDATE_NODE", "ADD_EDGE", "REMOVE_EDGE", "RELABEL_EDGE", "OPS"]

@@ -1,0 +1,132 @@
+"""Deterministic replay of a scenario's timeline, with no latency and no signals.
+
+The simplest engine: each timed event goes through the deployment core at once, on
+the networkx repository, and the named invariants are audited after every reaction.
+The paper's t0..t3 walk-through is this replay of ``scenarios/coffee_handover.py``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import networkx as nx
+
+from desmon.deployment.core import DeploymentCore, stamp
+from desmon.deployment.invariants import check_invariants
+from desmon.deployment.monitor import Stimulus
+from desmon.deployment.ports import Command, ErrorRecord
+from desmon.model.events import Event
+from desmon.model.scenario import Scenario
+from desmon.repository import labels as L
+from desmon.repository.facts import ImmediateControl, RepositoryInsert, load_model
+from desmon.repository.query import RepositoryQuery
+from desmon.repository.store import Repository
+
+__all__ = ["ReplayStep", "Replay", "replay", "deployment_edges", "format_replay"]
+
+
+@dataclass(frozen=True, slots=True)
+class ReplayStep:
+    """One timeline event and the system's complete reaction to it."""
+
+    time: float
+    label: str
+    event: Event
+    stimulus: Stimulus
+    commands: tuple[tuple[Command, bool | None], ...]
+    errors: tuple[ErrorRecord, ...]
+    deployments: tuple[tuple[str, str], ...]
+    standing: frozenset[str]
+    violations: tuple[tuple[str, str], ...]
+
+
+@dataclass
+class Replay:
+    scenario: Scenario
+    deployer: str
+    repo: Repository
+    control: ImmediateControl
+    steps: list[ReplayStep] = field(default_factory=list)
+
+    @property
+    def errors(self) -> list[ErrorRecord]:
+        return [e for s in self.steps for e in s.errors]
+
+    @property
+    def violations(self) -> list[tuple[float, str, str]]:
+        return [(s.time, n, m) for s in self.steps for n, m in s.violations]
+
+
+def deployment_edges(g: nx.MultiDiGraph) -> set[tuple[str, str, str]]:
+    """The deployment-related edges of a snapshot as (source, label, target) triples (Fig. 5)."""
+    return {(s, d["label"], t) for s, t, d in g.edges(data=True) if d["label"] in L.DEPLOYMENT_EDGES}
+
+
+def replay(
+    scenario: Scenario,
+    deployer: str = "desmon",
+    *,
+    start_fails: Callable[[str, str], bool] | None = None,
+) -> Replay:
+    """Run ``scenario.timeline`` through the deployment core; returns every step."""
+    now = [scenario.timeline[0].time if scenario.timeline else 0.0]
+    repo = Repository(clock=lambda: now[0])
+    load_model(repo, scenario.model)
+    query = RepositoryQuery(repo)
+    control = ImmediateControl(repo, start_fails)
+    core = DeploymentCore(scenario.model, query, RepositoryInsert(repo, scenario.model.robot), deployer)
+    for event in scenario.initial:
+        core.observe(event)
+    result = Replay(scenario, core.deployer.name, repo, control)
+    for te in scenario.timeline:
+        now[0] = te.time
+        stim, log = core.step(te.event, control)
+        history = sum(1 for _ in repo.edges(L.DEPLOYMENT_HISTORY))
+        view = core.view(running=tuple(sorted(control.running)), stops=control.stops, history=history)
+        result.steps.append(
+            ReplayStep(
+                time=te.time,
+                label=te.label,
+                event=te.event,
+                stimulus=stim,
+                commands=tuple(log.commands),
+                errors=tuple(stamp(e, te.time) for e in log.errors),
+                deployments=query.deployments(),
+                standing=core.standing,
+                violations=tuple(check_invariants(view)),
+            )
+        )
+    return result
+
+
+def format_replay(r: Replay) -> str:
+    """The replay as numbered steps: event, decisions, errors, deployment edges."""
+    lines = [f"{r.scenario.name} -- deployer {r.deployer}", ""]
+    for step in r.steps:
+        head = f"{step.label + ' ' if step.label else ''}t={step.time:g}s  {step.event}"
+        lines.append(head)
+        for cmd, ok in step.commands:
+            if ok is None:
+                continue
+            lines.append(f"    {cmd}: {'ok' if ok else 'FAILED'}")
+        for err in step.errors:
+            lines.append(f"    ERROR {err.kind}: {err.graph}" + (f" on {err.platform}" if err.platform else ""))
+            for reason in err.detail.splitlines():
+                lines.append(f"        {reason}")
+        snap = r.repo.snapshot(at=step.time)
+        for s, label, t in sorted(deployment_edges(snap), key=lambda e: (e[1], e[0], e[2])):
+            if label == L.HAS_DEVICE:
+                continue
+            lines.append(f"    {s} -[{label}]-> {t}")
+        devices = sorted(t for s, label, t in deployment_edges(snap) if label == L.HAS_DEVICE)
+        lines.append(f"    HAS_DEVICE: {len(devices)} edges" + (f" (no {', '.join(sorted(_missing(r, snap)))})" if _missing(r, snap) else ""))
+        for name, msg in step.violations:
+            lines.append(f"    INVARIANT VIOLATED {name}: {msg}")
+        lines.append("")
+    return "\n".join(lines).rstrip() + "\n"
+
+
+def _missing(r: Replay, snap: nx.MultiDiGraph) -> list[str]:
+    present = {t for _s, label, t in deployment_edges(snap) if label == L.HAS_DEVICE}
+    return [f"{L.DEVICE}:{d.name}" for d in r.scenario.model.devices if f"{L.DEVICE}:{d.name}" not in present]

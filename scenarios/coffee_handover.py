@@ -1,0 +1,110 @@
+"""The paper's case study: a Care-O-bot 3 carries a hot coffee mug and hands it over.
+
+Platforms (memory in MB, background load in brackets):
+
+* ``torso_pc``  1024 [600]: navigation and planning; no slip sensor attached.
+* ``arm_pc``     512 [300]: drives the KUKA LWR4, whose wrench estimate is the force sensor.
+* ``hand_pc``    384 [100]: connects the six SDH-2 tactile pads.
+
+Requirements (paper §2.2):
+
+* R1 force_slip_detector:    platform_has force_sensor; uses 50 MB.
+* R2 tactile_slip_detector:  all six tactile pads attached; uses 150 MB.
+* R3 combined_slip_detector: at least 250 MB of working memory (it reads both modalities
+  over the robot's network); with these loads only ``torso_pc`` has room.
+
+Rules (research note §6.1, R*): grasp -> combined, move_base -> tactile, release -> force.
+
+Timeline (paper §4.4, Fig. 5a-d): t0 the robot holds the mug in the kitchen; t1 it moves
+to the living room (tactile deployed); t2 it releases the mug (tactile stopped, force
+deployed); t3 the force sensor breaks (HAS_DEVICE removed, no platform left, force
+stopped, error raised).
+
+Run it: ``python scenarios/coffee_handover.py`` (the scripted t0..t3 replay).
+"""
+
+from __future__ import annotations
+
+from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
+from desmon.model.events import ActionChange, DeviceFail, LoadChange
+from desmon.model.scenario import Scenario, TimedEvent
+
+FORCE = "force_slip_detector"
+TACTILE = "tactile_slip_detector"
+COMBINED = "combined_slip_detector"
+PADS = ("thumb_prox", "thumb_dist", "f1_prox", "f1_dist", "f2_prox", "f2_dist")
+
+robot = RobotBuilder("care-o-bot-3")
+robot.platform("torso_pc", memory=1024, attributes={"os": "linux", "arch": "x86_64"}, properties={"link_latency_ms": 2.0})
+robot.platform("arm_pc", memory=512, attributes={"os": "linux", "arch": "x86_64"}, properties={"link_latency_ms": 1.0}).device(
+    "lwr_wrench", kind="force_sensor", vendor="kuka", version="lwr4"
+)
+robot.platform("hand_pc", memory=384, attributes={"os": "linux", "arch": "armv7"}, properties={"link_latency_ms": 1.0}).devices(
+    [f"pad_{p}" for p in PADS], kind="tactile_pad", vendor="weiss", version="dsa9205"
+)
+
+with robot.rpsl.perception_graph(FORCE) as g:
+    g.sensor("wrench", reads="force_sensor")
+    g.processing("to_grasp_frame", inputs=["wrench"])
+    g.processing("tare", inputs=["to_grasp_frame"])
+    g.processing("force_threshold", inputs=["tare"])
+
+with robot.rpsl.perception_graph(TACTILE) as g:
+    g.sensor("pads", reads="tactile_pad")
+    g.processing("centre_of_pressure", inputs=["pads"])
+    g.processing("tactile_flow", inputs=["centre_of_pressure"])
+    g.processing("tactile_threshold", inputs=["tactile_flow"])
+
+with robot.rpsl.perception_graph(COMBINED) as g:
+    g.sensor("wrench", reads="force_sensor")
+    g.sensor("pads", reads="tactile_pad")
+    g.processing("force_slip", inputs=["wrench"])
+    g.processing("tactile_slip", inputs=["pads"])
+    g.processing("fusion_rules", inputs=["force_slip", "tactile_slip"])
+
+robot.depsl.deployment_specification(FORCE).add_constraint("attribute", "platform_has", "force_sensor").add_constraint(
+    "capacity", "memory", 50
+)
+robot.depsl.deployment_specification(TACTILE).add_constraint("quantity", "tactile_pad", len(PADS)).add_constraint(
+    "capacity", "memory", 150
+)
+robot.depsl.deployment_specification(COMBINED).add_constraint("capacity", "memory", 250)
+
+robot.rules({GRASP: COMBINED, MOVE_BASE: TACTILE, RELEASE: FORCE})
+
+LOADS = {"torso_pc": 600, "arm_pc": 300, "hand_pc": 100}
+
+scenario = Scenario(
+    name="coffee_handover",
+    description="Care-O-bot 3 carries a hot coffee mug from the kitchen and hands it over (paper §4.4, Fig. 5a-d)",
+    model=robot.build(),
+    initial=tuple(LoadChange(p, mb) for p, mb in LOADS.items()),
+    timeline=(
+        TimedEvent(0.0, ActionChange(HOLD), "t0"),
+        TimedEvent(5.0, ActionChange(MOVE_BASE), "t1"),
+        TimedEvent(20.0, ActionChange(RELEASE), "t2"),
+        TimedEvent(23.0, DeviceFail("lwr_wrench"), "t3"),
+    ),
+    expected={
+        # The deployment edges of Fig. 5a-d (HAS_DEVICE edges other than the force sensor's omitted).
+        "t0": {"DEPLOYED_ON": [], "DEPLOYMENT_HISTORY": [], "force_sensor_attached": True},
+        "t1": {"DEPLOYED_ON": [(TACTILE, "hand_pc")], "DEPLOYMENT_HISTORY": [], "force_sensor_attached": True},
+        "t2": {"DEPLOYED_ON": [(FORCE, "arm_pc")], "DEPLOYMENT_HISTORY": [(TACTILE, "hand_pc")], "force_sensor_attached": True},
+        "t3": {
+            "DEPLOYED_ON": [],
+            "DEPLOYMENT_HISTORY": [(TACTILE, "hand_pc"), (FORCE, "arm_pc")],
+            "force_sensor_attached": False,
+            "errors": [("no_acceptable_platforms", FORCE)],
+        },
+    },
+)
+
+if __name__ == "__main__":
+    import sys
+
+    from desmon.sim.replay import format_replay, replay
+
+    deployer = sys.argv[1] if len(sys.argv) > 1 else "desmon"
+    result = replay(scenario, deployer)
+    print(format_replay(result), end="")
+    sys.exit(1 if result.violations else 0)
