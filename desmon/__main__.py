@@ -1,0 +1,5 @@
+import sys
+
+from desmon.cli import main
+
+sys.exit(main())

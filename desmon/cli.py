@@ -1,0 +1,153 @@
+"""The ``desmon`` command line: argument parsing and presentation only.
+
+Every subcommand's work lives in the engines; a handler here parses, calls, prints.
+Exit codes: 0 success / property holds, 1 a violation or failed check, 2 bad input,
+3 incomplete (checker limits reached). A :class:`~desmon.errors.DesmonError` is printed
+as one line ``desmon: error: ...`` without a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Callable, Sequence
+
+from desmon.errors import DesmonError
+
+__all__ = ["main", "build_parser"]
+
+EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
+
+
+def _deployer_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--deployer", default="desmon", choices=["desmon", "paper"], help="deployer variant (default: desmon)")
+
+
+def _cmd_replay(args: argparse.Namespace) -> int:
+    from desmon.loader import load_scenario
+    from desmon.sim.replay import format_replay, replay
+
+    scenario = load_scenario(args.scenario)
+    result = replay(scenario, args.deployer)
+    print(format_replay(result), end="")
+    return EXIT_VIOLATED if result.violations else EXIT_OK
+
+
+def _cmd_explain(args: argparse.Namespace) -> int:
+    from desmon.deployment.validity import acceptable_platforms
+    from desmon.errors import QueryError
+    from desmon.loader import load_scenario
+    from desmon.repository.query import RepositoryQuery
+    from desmon.sim.replay import replay
+
+    scenario = load_scenario(args.scenario)
+    if scenario.model.spec(args.graph) is None:
+        known = ", ".join(s.graph for s in scenario.model.specs)
+        raise QueryError(f"{args.scenario}: no deployment specification for {args.graph!r}; known: {known}")
+    at = args.at
+    timeline = tuple(te for te in scenario.timeline if at is None or te.time <= at)
+    from dataclasses import replace
+
+    result = replay(replace(scenario, timeline=timeline), args.deployer)
+    validity = acceptable_platforms(RepositoryQuery(result.repo), args.graph)
+    when = f"t={at:g}s" if at is not None else "the end of the timeline"
+    print(f"{args.graph} at {when} ({args.deployer} deployer):")
+    print(validity.explain())
+    return EXIT_OK
+
+
+def _cmd_evaluate(args: argparse.Namespace) -> int:
+    from desmon.detectors.evaluation import run_evaluate
+
+    return run_evaluate(
+        trials=args.trials, seed=args.seed, as_json=args.json, progress=not args.no_progress, out=sys.stdout
+    )
+
+
+def _lazy(module: str, func: str) -> Callable[[argparse.Namespace], int]:
+    def handler(args: argparse.Namespace) -> int:
+        import importlib
+
+        return int(getattr(importlib.import_module(module), func)(args))
+
+    return handler
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="desmon",
+        description="Simulate, exhaustively check and fuzz the adaptive deployment of safety monitors.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    p = sub.add_parser("replay", help="replay a scenario's scripted timeline through the deployment core (no signals)")
+    p.add_argument("scenario", help="scenario file, e.g. scenarios/coffee_handover.py")
+    _deployer_arg(p)
+    p.set_defaults(handler=_cmd_replay)
+
+    p = sub.add_parser("explain", help="why each platform is accepted or rejected for a perception graph")
+    p.add_argument("scenario")
+    p.add_argument("graph", help="perception graph, e.g. combined_slip_detector")
+    p.add_argument("--at", type=float, default=None, help="time in the scenario's timeline (default: its end)")
+    _deployer_arg(p)
+    p.set_defaults(handler=_cmd_explain)
+
+    p = sub.add_parser("evaluate", help="detector x action table against Sanchez et al. 2016, and mission-level strategies")
+    p.add_argument("--trials", type=int, default=300, help="trials per cell (default 300)")
+    p.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of tables")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(handler=_cmd_evaluate)
+
+    p = sub.add_parser("run", help="simulate a scenario in the SimPy world")
+    p.add_argument("scenario")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--until", type=float, default=None, help="simulated seconds (default: the scenario's horizon)")
+    _deployer_arg(p)
+    p.add_argument("--trace", default=None, help="write the JSON Lines trace to this file")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.add_argument("--no-progress", action="store_true")
+    p.set_defaults(handler=_lazy("desmon.sim.command", "run_command"))
+
+    p = sub.add_parser("verify", help="explore every interleaving of events and check the invariants")
+    p.add_argument("scenario")
+    _deployer_arg(p)
+    p.add_argument("--invariant", action="append", default=None, help="check only this invariant (repeatable)")
+    p.add_argument("--continue", dest="keep_going", action="store_true", help="collect the first counterexample of each invariant")
+    p.add_argument("--max-states", type=int, default=2_000_000)
+    p.add_argument("--max-depth", type=int, default=None)
+    p.add_argument("--timeout", type=float, default=None, help="seconds")
+    p.add_argument("--symmetry", action="store_true", help="canonicalise interchangeable platforms")
+    p.add_argument("--json", default=None, metavar="FILE", help="write the counterexample(s) as JSON states")
+    p.add_argument("--pytest", default=None, metavar="FILE", help="write a pytest replaying the counterexample")
+    p.add_argument("--no-progress", action="store_true")
+    p.set_defaults(handler=_lazy("desmon.verify.command", "verify_command"))
+
+    p = sub.add_parser("fuzz", help="hypothesis-generated failure sequences, shrunk on failure")
+    p.add_argument("scenario")
+    _deployer_arg(p)
+    p.add_argument("--examples", type=int, default=200)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--no-progress", action="store_true")
+    p.set_defaults(handler=_lazy("desmon.verify.command", "fuzz_command"))
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "handler", None):
+        parser.print_help()
+        return EXIT_USAGE
+    try:
+        return int(args.handler(args))
+    except DesmonError as exc:
+        print(f"desmon: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("desmon: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
