@@ -4,7 +4,7 @@ Platforms (memory in MB, background load in brackets):
 
 * ``torso_pc``  1024 [600]: navigation and planning; no slip sensor attached.
 * ``arm_pc``     512 [300]: drives the KUKA LWR4, whose wrench estimate is the force sensor.
-* ``hand_pc``    384 [100]: connects the six SDH-2 tactile pads.
+* ``hand_pc``    320 [100]: connects the six SDH-2 tactile pads.
 
 Requirements (paper §2.2):
 
@@ -39,7 +39,7 @@ robot.platform("torso_pc", memory=1024, attributes={"os": "linux", "arch": "x86_
 robot.platform("arm_pc", memory=512, attributes={"os": "linux", "arch": "x86_64"}, properties={"link_latency_ms": 1.0}).device(
     "lwr_wrench", kind="force_sensor", vendor="kuka", version="lwr4"
 )
-robot.platform("hand_pc", memory=384, attributes={"os": "linux", "arch": "armv7"}, properties={"link_latency_ms": 1.0}).devices(
+robot.platform("hand_pc", memory=320, attributes={"os": "linux", "arch": "armv7"}, properties={"link_latency_ms": 1.0}).devices(
     [f"pad_{p}" for p in PADS], kind="tactile_pad", vendor="weiss", version="dsa9205"
 )
 

@@ -1,0 +1,63 @@
+"""The command line as a user runs it: one-line errors, exit codes."""
+
+import subprocess
+import sys
+
+from desmon.cli import main
+
+
+def test_replay_prints_the_timeline_and_exits_zero(root, capsys):
+    assert main(["replay", str(root / "scenarios" / "coffee_handover.py")]) == 0
+    assert "t3 t=23s  device lwr_wrench fails" in capsys.readouterr().out
+
+
+def test_explain_gives_every_reason_a_platform_is_rejected(root, capsys):
+    assert main(["explain", str(root / "scenarios" / "coffee_handover.py"), "combined_slip_detector", "--at", "5"]) == 0
+    out = capsys.readouterr().out
+    assert "acceptable: torso_pc" in out
+    assert "hand_pc: Capacity(memory >= 250 MB) fails: 70 MB free (capacity 320, used by tactile_slip_detector 150, load 100)" in out
+
+
+def test_explain_for_an_unknown_graph_is_a_one_line_error(root, capsys):
+    assert main(["explain", str(root / "scenarios" / "coffee_handover.py"), "sonar"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("desmon: error:") and "'sonar'" in err and err.count("\n") == 1
+
+
+def test_a_missing_scenario_file_is_a_one_line_error_with_exit_2(capsys):
+    assert main(["replay", "no/such/file.py"]) == 2
+    assert "no such scenario file" in capsys.readouterr().err
+
+
+def test_a_scenario_with_a_syntax_error_names_file_and_line(tmp_path, capsys):
+    bad = tmp_path / "bad.py"
+    bad.write_text("x = (\n")
+    assert main(["replay", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert f"{bad}:1: syntax error" in err or f"{bad}:2: syntax error" in err
+
+
+def test_a_scenario_without_a_scenario_object_says_how_to_define_one(tmp_path, capsys):
+    empty = tmp_path / "empty.py"
+    empty.write_text("x = 1\n")
+    assert main(["replay", str(empty)]) == 2
+    assert "defines no Scenario" in capsys.readouterr().err
+
+
+def test_a_scenario_with_an_invalid_model_reports_the_model_error(tmp_path, capsys):
+    bad = tmp_path / "cyclic.py"
+    bad.write_text(
+        "from desmon.model import RobotBuilder\n"
+        "r = RobotBuilder()\n"
+        "with r.rpsl.perception_graph('g') as g:\n"
+        "    g.processing('a', inputs=['b'])\n"
+        "    g.processing('b', inputs=['a'])\n"
+    )
+    assert main(["replay", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "invalid scenario" in err and "cycle" in err and "Traceback" not in err
+
+
+def test_python_dash_m_desmon_works(root):
+    out = subprocess.run([sys.executable, "-m", "desmon", "--help"], capture_output=True, text=True, check=True).stdout
+    assert "verify" in out and "run" in out

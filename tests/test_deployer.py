@@ -1,0 +1,159 @@
+"""Specification of the deployer variants: where the paper's early returns bite, and the corrections."""
+
+import pytest
+
+from desmon.deployment import DeploymentCore, check_invariants, get_deployer
+from desmon.errors import ModelError
+from desmon.model import RobotBuilder
+from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown
+from desmon.repository import ImmediateControl, Repository, RepositoryInsert, RepositoryQuery, labels as L, load_model
+
+
+def build(rules, *, memories=(512, 512), a_mem=250, b_mem=250, fails=None):
+    robot = RobotBuilder("r")
+    for i, mem in enumerate(memories, start=1):
+        robot.platform(f"pc{i}", memory=mem)
+    for name, mem in (("A", a_mem), ("B", b_mem)):
+        with robot.rpsl.perception_graph(name) as g:
+            g.sensor("s", reads="force_sensor")
+        robot.depsl.deployment_specification(name).add_constraint("capacity", "memory", mem)
+    robot.rules(rules)
+    model = robot.build()
+    repo = Repository()
+    load_model(repo, model)
+    control = ImmediateControl(repo, fails)
+    return model, repo, control
+
+
+def core(model, repo, deployer):
+    return DeploymentCore(model, RepositoryQuery(repo), RepositoryInsert(repo, "r"), deployer)
+
+
+def violations(c, control, repo):
+    history = sum(1 for _ in repo.edges(L.DEPLOYMENT_HISTORY))
+    return {n for n, _m in check_invariants(c.view(running=tuple(sorted(control.running)), stops=control.stops, history=history))}
+
+
+def test_unknown_deployer_names_the_valid_ones():
+    with pytest.raises(ModelError, match="choose one of paper, desmon"):
+        get_deployer("fast")
+
+
+def test_paper_algorithm_1_returns_after_the_first_of_two_requested_graphs():
+    model, repo, control = build({"grasp": ["A", "B"]})
+    c = core(model, repo, "paper")
+    c.step(ActionChange("grasp"), control)
+    assert RepositoryQuery(repo).deployments() == (("A", "pc1"),)
+    assert "coverage" in violations(c, control, repo)
+
+
+def test_desmon_deploys_every_requested_graph_accounting_capacity_across_them():
+    model, repo, control = build({"grasp": ["A", "B"]}, memories=(400, 400))
+    c = core(model, repo, "desmon")
+    c.step(ActionChange("grasp"), control)
+    # 400 MB: A (250) fits on pc1, B (250) no longer does once A counts -> pc2
+    assert RepositoryQuery(repo).deployments() == (("A", "pc1"), ("B", "pc2"))
+    assert violations(c, control, repo) == set()
+
+
+def test_paper_algorithm_2_checks_only_the_first_deployment_on_a_changed_platform():
+    model, repo, control = build({"grasp": ["A", "B"]}, memories=(1024, 1024))
+    c = core(model, repo, "desmon")  # place both on pc1 first
+    c.step(ActionChange("grasp"), control)
+    assert RepositoryQuery(repo).deployments() == (("A", "pc1"), ("B", "pc1"))
+    paper = core(model, repo, "paper")
+    paper.step(LoadChange("pc1", 900), control)
+    deps = RepositoryQuery(repo).deployments()
+    # A was migrated (without stopping the old instance); B was never looked at
+    assert ("A", "pc2") in deps and ("A", "pc1") in deps and ("B", "pc1") in deps
+    assert {"single-instance", "valid-or-error"} <= violations(paper, control, repo)
+
+
+def test_desmon_rechecks_every_deployment_on_a_changed_platform_and_stops_before_starting():
+    model, repo, control = build({"grasp": ["A", "B"]}, memories=(1024, 1024))
+    c = core(model, repo, "desmon")
+    c.step(ActionChange("grasp"), control)
+    _stim, log = c.step(LoadChange("pc1", 900), control)
+    assert [str(cmd) for cmd, _ok in log.decisions] == [
+        "stop A on pc1", "start A on pc2", "stop B on pc1", "start B on pc2",
+    ]
+    assert RepositoryQuery(repo).deployments() == (("A", "pc2"), ("B", "pc2"))
+    assert violations(c, control, repo) == set()
+
+
+def test_desmon_keeps_a_valid_deployment_instead_of_migrating_needlessly():
+    model, repo, control = build({"grasp": "A"})
+    c = core(model, repo, "desmon")
+    c.step(LoadChange("pc1", 400), control)
+    c.step(ActionChange("grasp"), control)
+    assert RepositoryQuery(repo).deployments() == (("A", "pc2"),)
+    _s, log = c.step(LoadChange("pc1", 0), control)  # pc1 would now be first choice
+    assert log.commands == [] and RepositoryQuery(repo).deployments() == (("A", "pc2"),)
+
+
+def test_desmon_tries_the_next_acceptable_platform_when_a_start_fails():
+    model, repo, control = build({"grasp": "A"}, fails=lambda g, p: p == "pc1")
+    c = core(model, repo, "desmon")
+    _s, log = c.step(ActionChange("grasp"), control)
+    assert [e.kind for e in log.errors] == ["deployment_failed"]
+    assert RepositoryQuery(repo).deployments() == (("A", "pc2"),)
+    assert c.standing == frozenset()  # placed in the same reaction: no error stands
+
+
+def test_paper_gives_up_after_one_failed_start():
+    model, repo, control = build({"grasp": "A"}, fails=lambda g, p: p == "pc1")
+    c = core(model, repo, "paper")
+    c.step(ActionChange("grasp"), control)
+    assert RepositoryQuery(repo).deployments() == ()
+    assert c.standing == frozenset({"A"})
+
+
+def test_an_error_stands_until_the_graph_is_deployed_again_after_a_repair():
+    robot = RobotBuilder("r")
+    robot.platform("pc1", memory=512).device("ft", kind="force_sensor")
+    with robot.rpsl.perception_graph("F") as g:
+        g.sensor("s", reads="force_sensor")
+    robot.depsl.deployment_specification("F").add_constraint("attribute", "platform_has", "force_sensor")
+    robot.rules({"release": "F"})
+    model = robot.build()
+    for variant, redeployed in (("desmon", True), ("paper", False)):
+        repo = Repository()
+        load_model(repo, model)
+        control = ImmediateControl(repo)
+        c = core(model, repo, variant)
+        c.step(ActionChange("release"), control)
+        c.step(DeviceFail("ft"), control)
+        assert c.standing == frozenset({"F"})
+        c.step(DeviceRepair("ft"), control)
+        assert (RepositoryQuery(repo).deployments() == (("F", "pc1"),)) is redeployed
+        assert (c.standing == frozenset()) is redeployed
+
+
+def test_a_fallback_is_used_while_the_preferred_graph_cannot_be_placed_and_dropped_after():
+    model, repo, control = build({"grasp": [("A", "B")]}, memories=(300,), a_mem=250, b_mem=100)
+    c = core(model, repo, "desmon")
+    c.step(LoadChange("pc1", 100), control)
+    c.step(ActionChange("grasp"), control)
+    assert RepositoryQuery(repo).deployments() == (("B", "pc1"),)
+    assert violations(c, control, repo) == set()
+    c.step(LoadChange("pc1", 0), control)
+    # A fits once B's 100 MB are freed? 300 - 100 (B) = 200 < 250: stays on the fallback
+    assert RepositoryQuery(repo).deployments() == (("B", "pc1"),)
+
+
+def test_a_crash_makes_desmon_migrate_and_the_paper_leave_the_old_instance():
+    for variant, expected in (("desmon", (("A", "pc2"),)), ("paper", (("A", "pc1"), ("A", "pc2")))):
+        model, repo, control = build({"grasp": "A"})
+        c = core(model, repo, variant)
+        c.step(ActionChange("grasp"), control)
+        c.step(PlatformDown("pc1"), control)
+        assert RepositoryQuery(repo).deployments() == expected, variant
+
+
+def test_graphs_the_new_context_does_not_want_are_stopped_into_history():
+    model, repo, control = build({"grasp": "A", "release": "B"})
+    c = core(model, repo, "desmon")
+    c.step(ActionChange("grasp"), control)
+    c.step(ActionChange("release"), control)
+    assert RepositoryQuery(repo).deployments() == (("B", "pc1"),)
+    assert [h[:2] for h in RepositoryQuery(repo).history()] == [("A", "pc1")]

@@ -1,0 +1,145 @@
+"""Specification of the model layer: every malformed model is rejected when built."""
+
+import pytest
+
+from desmon.errors import DesmonError, ModelError
+from desmon.model import (
+    Attribute,
+    Capacity,
+    DeploymentSpec,
+    PerceptionGraph,
+    ProcessingComponent,
+    Quantity,
+    RobotBuilder,
+    SensorComponent,
+    make_requirement,
+)
+
+
+def small_robot() -> RobotBuilder:
+    robot = RobotBuilder("r")
+    robot.platform("pc1", memory=512).device("ft", kind="force_sensor")
+    with robot.rpsl.perception_graph("force") as g:
+        g.sensor("wrench", reads="force_sensor")
+        g.processing("threshold", inputs=["wrench"])
+    return robot
+
+
+def test_model_error_is_a_desmon_error_and_a_value_error():
+    assert issubclass(ModelError, DesmonError) and issubclass(ModelError, ValueError)
+
+
+def test_a_well_formed_model_builds_with_the_dsl():
+    robot = small_robot()
+    robot.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor")
+    robot.rules({"release": "force"})
+    model = robot.build()
+    assert model.spec("force").requirements == (Attribute("platform_has", "force_sensor"),)
+    assert model.graph("force").device_kinds == ("force_sensor",)
+    assert model.rules.slots_for("release") == (("force",),)
+
+
+def test_a_cycle_is_rejected_and_named():
+    with pytest.raises(ModelError, match=r"cycle a -> b -> a"):
+        PerceptionGraph("g", (SensorComponent("s", "k"), ProcessingComponent("a", ("s", "b")), ProcessingComponent("b", ("a",))))
+
+
+def test_an_unknown_input_is_rejected_with_the_component_and_input_named():
+    robot = RobotBuilder()
+    with pytest.raises(ModelError, match=r"'threshold' reads unknown input 'wrenc'"):
+        with robot.rpsl.perception_graph("g") as g:
+            g.sensor("wrench", reads="force_sensor")
+            g.processing("threshold", inputs=["wrenc"])
+
+
+def test_a_duplicate_component_name_is_rejected():
+    with pytest.raises(ModelError, match=r"defines component 'x' twice"):
+        PerceptionGraph("g", (SensorComponent("x", "k"), SensorComponent("x", "k")))
+
+
+def test_an_empty_graph_is_rejected():
+    with pytest.raises(ModelError, match="is empty"):
+        PerceptionGraph("g", ())
+
+
+def test_a_duplicate_graph_name_is_rejected():
+    robot = small_robot()
+    with pytest.raises(ModelError, match="defined twice"):
+        with robot.rpsl.perception_graph("force") as g:
+            g.sensor("w", reads="force_sensor")
+
+
+def test_an_unknown_requirement_kind_is_rejected_with_the_valid_kinds_listed():
+    with pytest.raises(ModelError, match=r"unknown requirement kind 'bandwidth': use one of quantity, capacity"):
+        make_requirement("bandwidth", "x", 1)
+
+
+@pytest.mark.parametrize("amount", [-1, "250", float("nan"), None, True])
+def test_a_negative_or_non_numeric_capacity_is_rejected(amount):
+    with pytest.raises(ModelError, match=r"Capacity\(memory\) amount"):
+        make_requirement("capacity", "memory", amount)
+
+
+def test_a_fractional_quantity_is_rejected():
+    with pytest.raises(ModelError, match="whole number"):
+        Quantity("tactile_pad", 2.5)
+
+
+def test_a_fixed_platform_that_does_not_exist_is_rejected_at_build():
+    robot = small_robot()
+    robot.depsl.deployment_specification("force").executable_on("pc9")
+    with pytest.raises(ModelError, match=r"fixed to unknown platform 'pc9': use one of \['pc1'\]"):
+        robot.build()
+
+
+def test_a_spec_for_an_unknown_graph_is_rejected_at_build():
+    robot = small_robot()
+    robot.depsl.deployment_specification("tactile")
+    with pytest.raises(ModelError, match=r"unknown perception graph 'tactile'"):
+        robot.build()
+
+
+def test_a_selection_with_no_options_is_rejected():
+    with pytest.raises(ModelError, match="Selection has no options"):
+        make_requirement("selection")
+
+
+def test_a_selection_needing_more_than_its_options_is_rejected():
+    with pytest.raises(ModelError, match=r"at_least = 3 but only 2 options"):
+        make_requirement("selection", "tactile_pad@weiss", "tactile_pad@schunk", at_least=3)
+
+
+def test_wrong_arity_names_the_expected_form():
+    with pytest.raises(ModelError, match=r"write \('capacity', resource, amount\)"):
+        make_requirement("capacity", 250)
+
+
+def test_a_device_on_an_unknown_platform_is_rejected():
+    robot = RobotBuilder()
+    robot.platform("pc1", memory=1)
+    robot._devices.append(__import__("desmon.model", fromlist=["Device"]).Device("d", "k", "pc2"))
+    with pytest.raises(ModelError, match="unknown platform 'pc2'"):
+        robot.build()
+
+
+def test_a_rule_naming_an_unknown_graph_or_context_is_rejected():
+    robot = small_robot()
+    robot.rules({"release": "tactile"})
+    with pytest.raises(ModelError, match="selects unknown perception graph 'tactile'"):
+        robot.build()
+    robot = small_robot()
+    robot.rules({"dance": "force"})
+    with pytest.raises(ModelError, match="unknown action context 'dance'"):
+        robot.build()
+
+
+def test_capacity_needing_a_resource_no_platform_has_is_rejected():
+    robot = small_robot()
+    robot.depsl.deployment_specification("force").add_constraint("capacity", "gpu", 1)
+    with pytest.raises(ModelError, match="no platform declares a 'gpu' capacity"):
+        robot.build()
+
+
+def test_a_spec_consumes_the_sum_of_its_capacity_amounts():
+    spec = DeploymentSpec("g", (Capacity("memory", 100), Capacity("memory", 50), Attribute("os", "linux")))
+    assert spec.consumption() == (("memory", 150),)

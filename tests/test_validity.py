@@ -1,0 +1,97 @@
+"""Specification of requirement semantics (DESIGN.md §3) as check_validity implements them."""
+
+from desmon.deployment.validity import check_validity, deployment_valid
+from desmon.model import Device, DeploymentSpec, Platform, PlatformState, make_requirement as req
+
+
+def state(name, memory=512, *, up=True, devices=(), load=0, deployed=(), attributes=None, properties=None, preference=0.0):
+    p = Platform.make(name, memory=memory, attributes=attributes, properties=properties, preference=preference)
+    return PlatformState(
+        p,
+        up=up,
+        devices=tuple(Device(f"{name}-{i}-{k}", k, name, vendor=v) for i, (k, v) in enumerate(devices)),
+        load=(("memory", load),),
+        deployed=tuple((g, (("memory", a),)) for g, a in deployed),
+    )
+
+
+def test_quantity_needs_that_many_working_devices_of_the_kind():
+    pads = [("tactile_pad", "weiss")] * 6
+    v = check_validity([req("quantity", "tactile_pad", 6)], [state("a", devices=pads), state("b", devices=pads[:5])])
+    assert v.acceptable == ("a",)
+    assert v.failures("b")[0].reason == "5 working tactile_pad device(s), needs 6"
+
+
+def test_capacity_counts_other_deployments_and_load_but_not_the_graphs_own_share():
+    s = state("pc2", memory=512, load=182, deployed=[("tactile", 150), ("combined", 250)])
+    v = check_validity([req("capacity", "memory", 250)], [s], graph="combined")
+    assert v.acceptable == ()
+    assert str(v.failures("pc2")[0]) == (
+        "pc2: Capacity(memory >= 250 MB) fails: 180 MB free (capacity 512, used by tactile 150, load 182)"
+    )
+    s2 = state("pc2", memory=512, load=100, deployed=[("tactile", 150), ("combined", 250)])
+    assert check_validity([req("capacity", "memory", 250)], [s2], graph="combined").acceptable == ("pc2",)
+
+
+def test_capacity_across_two_concurrent_deployments_rejects_the_second_that_does_not_fit():
+    one = state("pc", memory=400, deployed=[("a", 250)])
+    assert check_validity([req("capacity", "memory", 250)], [one], graph="b").acceptable == ()
+    assert check_validity([req("capacity", "memory", 150)], [one], graph="b").acceptable == ("pc",)
+
+
+def test_minimum_and_maximum_compare_numeric_properties():
+    fast = state("fast", properties={"link_latency_ms": 1.0, "cores": 4})
+    slow = state("slow", properties={"link_latency_ms": 9.0})
+    v = check_validity([req("maximum", "link_latency_ms", 2.0), req("minimum", "cores", 2)], [fast, slow])
+    assert v.acceptable == ("fast",)
+    reasons = [f.reason for f in v.failures("slow")]
+    assert reasons == ["link_latency_ms is 9", "has no property 'cores'"]
+
+
+def test_attribute_platform_has_means_a_working_device_of_that_kind():
+    v = check_validity([req("attribute", "platform_has", "force_sensor")], [state("a"), state("b", devices=[("force_sensor", "kuka")])])
+    assert v.acceptable == ("b",)
+    assert v.failures("a")[0].reason == "no working force_sensor attached"
+
+
+def test_attribute_compares_symbolic_platform_attributes():
+    v = check_validity([req("attribute", "os", "linux")], [state("a", attributes={"os": "qnx"}), state("b", attributes={"os": "linux"})])
+    assert v.acceptable == ("b",)
+    assert v.failures("a")[0].reason == "os is 'qnx'"
+
+
+def test_selection_accepts_any_listed_vendor_and_counts_at_least():
+    weiss = state("w", devices=[("tactile_array", "weiss")])
+    schunk = state("s", devices=[("tactile_array", "schunk")])
+    other = state("o", devices=[("tactile_array", "acme")])
+    one = req("selection", "tactile_array@weiss", "tactile_array@schunk")
+    assert check_validity([one], [weiss, schunk, other]).acceptable == ("w", "s")
+    both = req("selection", "tactile_array@weiss", "tactile_array@schunk", at_least=2)
+    assert check_validity([both], [weiss, schunk]).acceptable == ()
+
+
+def test_a_down_platform_satisfies_nothing():
+    v = check_validity([], [state("a", up=False)])
+    assert v.acceptable == ()
+    assert v.failures("a")[0].reason == "platform is down"
+
+
+def test_a_failed_device_no_longer_counts():
+    # a failed device is simply absent from the platform's working devices (HAS_DEVICE removed)
+    assert check_validity([req("attribute", "platform_has", "force_sensor")], [state("a", devices=[])]).acceptable == ()
+
+
+def test_every_failing_requirement_of_a_rejected_platform_is_reported():
+    v = check_validity([req("capacity", "memory", 600), req("attribute", "os", "linux"), req("quantity", "cam", 1)], [state("a")])
+    assert [f.requirement for f in v.failures("a")] == ["Capacity(memory >= 600 MB)", "Attribute(os = linux)", "Quantity(cam >= 1)"]
+
+
+def test_acceptable_platforms_come_by_preference_then_declaration_order():
+    v = check_validity([], [state("a"), state("b", preference=2.0), state("c")])
+    assert v.acceptable == ("b", "a", "c")
+
+
+def test_a_fixed_deployment_is_valid_only_on_its_executable_on_platform():
+    spec = DeploymentSpec("g", (), fixed_platform="a")
+    assert deployment_valid(spec, state("a")) == ()
+    assert deployment_valid(spec, state("b"))[0].reason == "runs on another platform"
