@@ -119,15 +119,23 @@ def requirement_holds(req: Requirement, state: PlatformState, graph: str | None)
     raise TypeError(f"not a requirement: {req!r}")  # pragma: no cover - exhaustive over Requirement
 
 
-def check_platform(requirements: Iterable[Requirement], state: PlatformState, graph: str | None) -> tuple[Failure, ...]:
-    """Every requirement ``state`` fails for ``graph``; a down platform fails them all."""
+_DOWN = "platform is down"
+
+
+def check_platform(
+    requirements: Iterable[Requirement], state: PlatformState, graph: str | None, *, first_only: bool = False
+) -> tuple[Failure, ...]:
+    """Every requirement ``state`` fails for ``graph`` (only the first if ``first_only``);
+    a down platform fails them all."""
     if not state.up:
-        return (Failure(state.name, "platform up", "platform is down"),)
+        return (Failure(state.name, "platform up", _DOWN),)
     out = []
     for req in requirements:
         reason = requirement_holds(req, state, graph)
         if reason is not None:
             out.append(Failure(state.name, req.describe(), reason))
+            if first_only:
+                break
     return tuple(out)
 
 
@@ -140,18 +148,21 @@ def check_validity(
     requirements: Iterable[Requirement],
     states: Sequence[PlatformState],
     graph: str | None = None,
+    *,
+    reasons: bool = True,
 ) -> Validity:
     """The platforms among ``states`` that meet every requirement, for deploying ``graph``.
 
     ``graph`` matters for Capacity: its own share never counts against it. Acceptable
     platforms come in preference order (see :func:`order_platforms`); rejected ones
-    carry every failing requirement with a readable reason.
+    carry every failing requirement with a readable reason (only the first one when
+    ``reasons`` is False, the fast path of the deployer).
     """
     reqs = tuple(requirements)
     acceptable: list[str] = []
     rejected: list[tuple[str, tuple[Failure, ...]]] = []
     for state in order_platforms(states):
-        fails = check_platform(reqs, state, graph)
+        fails = check_platform(reqs, state, graph, first_only=not reasons)
         if fails:
             rejected.append((state.name, fails))
         else:
