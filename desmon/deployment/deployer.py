@@ -116,7 +116,7 @@ def ensure_deployed(g: str, q: QueryPort, *, make_before_break: bool = False) ->
         yield RaiseError(DEPLOYMENT_INFORMATION_MISSING, g)
         return False
     fixed = q.fixed_platform(spec)
-    validity = validity_for(q, spec)
+    validity = validity_for(q, spec, reasons=False)
     acceptable = validity.acceptable
     current = q.deployed_on(g)
     keep = next((p for p in current if p in acceptable), None)
@@ -129,7 +129,8 @@ def ensure_deployed(g: str, q: QueryPort, *, make_before_break: bool = False) ->
     if keep is not None:
         return True
     if not acceptable:
-        detail = validity.explain() if fixed is None else f"fixed platform {fixed}: " + validity.explain()
+        explained = validity_for(q, spec).explain()
+        detail = explained if fixed is None else f"fixed platform {fixed}: {explained}"
         yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, fixed, detail)
         return False
     for pk in acceptable:

@@ -170,14 +170,14 @@ def check_validity(
     return Validity(tuple(acceptable), tuple(rejected))
 
 
-def validity_for(q: "QueryPort", spec: DeploymentSpec) -> Validity:
+def validity_for(q: "QueryPort", spec: DeploymentSpec, *, reasons: bool = True) -> Validity:
     """check_validity for ``spec`` on the repository's current facts; a fixed deployment
     considers only its EXECUTABLE_ON platform."""
     states = q.platform_states()
     fixed = q.fixed_platform(spec)
     if fixed is not None:
         states = tuple(s for s in states if s.name == fixed)
-    return check_validity(q.constraints(spec), states, spec.graph)
+    return check_validity(q.constraints(spec), states, spec.graph, reasons=reasons)
 
 
 def acceptable_platforms(q: "QueryPort", graph: str) -> Validity:
