@@ -1,0 +1,1 @@
+"""Slip detectors (L2): signal models, force / tactile / combined detectors, evaluation."""

@@ -1,0 +1,159 @@
+"""Combined slip detector: rule-based fusion of force and tactile on a fixed tick ([P1], [CODE]).
+
+At every tick ``t_act + m * tick`` (m = 0, 1, ...; default tick 30 ms) the detector
+takes the most recent sample of each stream (zero-order hold; a sample older than the
+stream's timeout counts as missing) and reports
+
+* ``up``   if ``S_T >= theta_T`` and ``S_F >= theta_F``
+* ``down`` if ``S_T >= theta_T`` and ``S_F <= -theta_F``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Final
+
+import numpy as np
+
+from desmon.detectors.base import INACTIVE_STATUS, Alarm, DetectorState, DetectorStatus, check_threshold
+from desmon.detectors.force import DEFAULT_THETA_F, ForceDetector
+from desmon.detectors.signals import DOWN, UP
+from desmon.detectors.tactile import DEFAULT_THETA_T, TactileDetector
+
+__all__ = ["CombinedDetector", "zoh", "DEFAULT_TICK"]
+
+DEFAULT_TICK: Final = 0.03
+Arr = np.ndarray
+
+
+def zoh(sample_t: Arr, values: Arr, valid: Arr, ticks: Arr, stale: float) -> tuple[Arr, Arr]:
+    """Zero-order hold of ``values`` at ``ticks`` (latest sample with time <= tick, per row).
+
+    ``sample_t``, ``values``, ``valid``: ``(n, K)`` with rows sorted in time; ``ticks``
+    ``(M,)``. Returns ``(value (n, M), valid (n, M))``; no sample yet, or one older than
+    ``stale``, is invalid.
+    """
+    n, k = sample_t.shape
+    m = ticks.size
+    if k == 0:
+        return np.zeros((n, m)), np.zeros((n, m), dtype=bool)
+    if n == 1:
+        off = np.zeros((1, 1))
+    else:
+        span = float(max(sample_t.max(), ticks.max() if m else 0.0) - min(sample_t.min(), ticks.min() if m else 0.0)) + 10.0
+        off = np.arange(n)[:, None] * span
+    flat = (sample_t + off).ravel()
+    q = (ticks[None, :] + off).ravel()
+    pos = np.searchsorted(flat, q, side="right") - 1
+    row = np.repeat(np.arange(n), m)
+    ok = pos >= row * k
+    pos = np.where(ok, pos, 0)
+    age = q - flat[pos]
+    good = ok & valid.ravel()[pos] & (age <= stale)
+    return np.where(good, values.ravel()[pos], 0.0).reshape(n, m), good.reshape(n, m)
+
+
+def combined_mask(s_t: Arr, t_ok: Arr, s_f: Arr, f_ok: Arr, theta_t: float, theta_f: float) -> tuple[Arr, Arr]:
+    """``(up, down)`` fusion masks at ticks."""
+    both = t_ok & f_ok & (s_t >= theta_t)
+    return both & (s_f >= theta_f), both & (s_f <= -theta_f)
+
+
+class CombinedDetector:
+    """Streaming combined detector (force + tactile fused every ``tick`` seconds).
+
+    ``process(wrench_times, wrench_values, tactile_times, tactile_samples, until)``:
+    the caller passes every sample with time <= ``until`` not passed before; ticks up to
+    ``until`` are evaluated. Warm-up and tare follow the inner detectors (WARMING until
+    both are OK); NO_INPUT if either input is missing.
+    """
+
+    def __init__(
+        self,
+        force_threshold: float = DEFAULT_THETA_F,
+        tactile_threshold: float = DEFAULT_THETA_T,
+        *,
+        tick: float = DEFAULT_TICK,
+        warmup_gating: bool = True,
+        tare_window: float = 0.5,
+        name: str = "combined",
+    ) -> None:
+        self.tick = check_threshold("tick", tick)
+        self.force = ForceDetector(force_threshold, tare_window=tare_window)
+        self.tactile = TactileDetector(tactile_threshold, warmup_gating=warmup_gating)
+        self.name = name
+        self._active = False
+        self._t_act = 0.0
+        self._next = 0
+        self._f = (-1e9, 0.0, False)
+        self._t = (-1e9, 0.0, False)
+        self.status: DetectorStatus = INACTIVE_STATUS
+
+    @property
+    def active(self) -> bool:
+        return self._active
+
+    def activate(self, t: float) -> None:
+        self._active = True
+        self._t_act = float(t)
+        self._next = 0
+        self._f = (-1e9, 0.0, False)
+        self._t = (-1e9, 0.0, False)
+        self.force.activate(t)
+        self.tactile.activate(t)
+        self.status = DetectorStatus(DetectorState.WARMING, "warm_up", float(t))
+
+    def deactivate(self) -> None:
+        self._active = False
+        self.force.deactivate()
+        self.tactile.deactivate()
+        self.status = INACTIVE_STATUS
+
+    def _stream(self, carry: tuple[float, float, bool], t: Arr, s: Arr, v: Arr) -> tuple[Arr, Arr, Arr]:
+        return (
+            np.concatenate([[carry[0]], t])[None],
+            np.concatenate([[carry[1]], np.nan_to_num(s)])[None],
+            np.concatenate([[carry[2]], v])[None],
+        )
+
+    def process(
+        self,
+        wrench_times: Arr,
+        wrench_values: Arr,
+        tactile_times: Arr,
+        tactile_samples: Arr,
+        until: float,
+    ) -> tuple[Alarm, ...]:
+        if not self._active:
+            return ()
+        ft, fs, fv = self.force.scores(wrench_times, wrench_values)
+        tt, ts, tv = self.tactile.scores(tactile_times, tactile_samples)
+        self.force.check_input(until)
+        self.tactile.check_input(until)
+        last = math.floor((until - self._t_act) / self.tick + 1e-9)
+        ticks = self._t_act + np.arange(self._next, last + 1) * self.tick
+        ticks = ticks[ticks <= until]
+        alarms: tuple[Alarm, ...] = ()
+        f_t, f_s, f_v = self._stream(self._f, ft, fs, fv)
+        t_t, t_s, t_v = self._stream(self._t, tt, ts, tv)
+        if ticks.size:
+            sf, okf = zoh(f_t, f_s, f_v, ticks, self.force.timeout)
+            st, okt = zoh(t_t, t_s, t_v, ticks, self.tactile.timeout)
+            up, down = combined_mask(st[0], okt[0], sf[0], okf[0], self.tactile.threshold, self.force.threshold)
+            hit = np.flatnonzero(up | down)
+            alarms = tuple(Alarm(float(ticks[i]), self.name, UP if up[i] else DOWN) for i in hit)
+            self._next += ticks.size
+        self._f = (float(f_t[0, -1]), float(f_s[0, -1]), bool(f_v[0, -1]))
+        self._t = (float(t_t[0, -1]), float(t_s[0, -1]), bool(t_v[0, -1]))
+        fst, tst = self.force.status, self.tactile.status
+        if fst.state is DetectorState.NO_INPUT or tst.state is DetectorState.NO_INPUT:
+            bad = fst if fst.state is DetectorState.NO_INPUT else tst
+            new = DetectorStatus(DetectorState.NO_INPUT, f"{'force' if bad is fst else 'tactile'}:{bad.reason}", bad.since)
+        elif fst.state is DetectorState.WARMING or tst.state is DetectorState.WARMING:
+            w = fst if fst.state is DetectorState.WARMING else tst
+            new = DetectorStatus(DetectorState.WARMING, w.reason, w.since)
+        else:
+            new = DetectorStatus(DetectorState.OK, "", max(fst.since, tst.since))
+        if new.state is not self.status.state or new.reason != self.status.reason:
+            self.status = new
+        return alarms

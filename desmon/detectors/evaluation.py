@@ -1,0 +1,656 @@
+"""Detector evaluation: the [P1] Tables 1-2 reproduction and the §6.3 mission comparison.
+
+Per action of [P1] (grasp, move_base, release, rotate_ccw, rotate_cw: no slip;
+slip_down, slip_up: pulled slips) ``n`` trials are rendered with the signal models
+(0.5 s pre-roll with the detectors running, tare and warm-up in it) and each
+detector's outcome is measured:
+
+* FP actions: the trial counts if the detector raises any alarm during the action;
+* slip actions: the trial counts if an alarm falls in ``[t_s - 0.3, t_s + 1.0]`` s
+  (``t_s`` = slip-motion onset); latency of the first such alarm relative to motion
+  onset and load onset; direction accuracy of that alarm (force, combined).
+
+Each cell is compared with the paper's count ``k/60`` by a two-sided exact binomial
+test at alpha = 0.01 whose null rate is the simulated rate, estimated as
+``(x + 0.5) / (n + 1)`` so that 0/n and n/n do not make the test degenerate. Wilson
+95 % bands are printed for both the paper and the simulation.
+
+Mission level (§6.3): grasp -> move_base -> release with at most one injected slip,
+for fixed tactile / force / combined, adaptive R* (grasp->combined,
+move_base->tactile, release->force) and R-alt (grasp->combined, move_base->combined,
+release->force), each with cold switching (a detector is activated at the start of its
+context: tare and warm-up are paid then) and R* with hot standby (all detectors run,
+only the output is switched), and an oracle (hot, per context the detector with the
+best TPR - FPR measured in the same run).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Callable, Final, Sequence, TextIO
+
+import numpy as np
+
+from desmon.detectors.combined import DEFAULT_TICK, combined_mask, zoh
+from desmon.detectors.force import DEFAULT_THETA_F, force_alarm_mask, tare_value
+from desmon.detectors.signals import (
+    DOWN,
+    PULLED,
+    UP,
+    Batch,
+    Segment,
+    SignalParams,
+    simulate_batch,
+)
+from desmon.detectors.tactile import DEFAULT_THETA_T, TactileState, tactile_scores
+from desmon.errors import SignalError
+from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE, ROTATE_CCW, ROTATE_CW
+
+__all__ = [
+    "DETECTORS",
+    "P1_ACTIONS",
+    "PAPER_COUNTS",
+    "CellResult",
+    "MissionResult",
+    "Evaluation",
+    "binomial_two_sided",
+    "wilson",
+    "evaluate_actions",
+    "evaluate_missions",
+    "evaluate",
+    "render_table",
+    "run_evaluate",
+]
+
+Arr = np.ndarray
+DETECTORS: Final = ("tactile", "force", "combined")
+SLIP_DOWN: Final = "slip_down"
+SLIP_UP: Final = "slip_up"
+P1_ACTIONS: Final = (GRASP, MOVE_BASE, RELEASE, ROTATE_CCW, ROTATE_CW, SLIP_DOWN, SLIP_UP)
+#: [P1] Tables 1-2: counts out of 60 (tactile, force, combined).
+PAPER_COUNTS: Final[dict[str, tuple[int, int, int]]] = {
+    GRASP: (60, 10, 0),
+    MOVE_BASE: (1, 51, 0),
+    RELEASE: (50, 1, 1),
+    ROTATE_CCW: (39, 6, 1),
+    ROTATE_CW: (50, 9, 4),
+    SLIP_DOWN: (53, 60, 49),
+    SLIP_UP: (50, 60, 47),
+}
+PAPER_N: Final = 60
+ALPHA: Final = 0.01
+PRE: Final = 0.5
+CHUNK: Final = 200
+TP_BEFORE: Final = 0.3
+TP_AFTER: Final = 1.0
+ACTION_DURATION: Final[dict[str, float]] = {
+    GRASP: 2.0,
+    MOVE_BASE: 3.7,
+    RELEASE: 1.2,
+    ROTATE_CCW: 1.5,
+    ROTATE_CW: 1.5,
+    SLIP_DOWN: 2.5,
+    SLIP_UP: 2.5,
+}
+SLIP_AT: Final = (1.6, 1.8)  # slip-motion onset in slip trials (s from trial start)
+
+
+# --------------------------------------------------------------------------- statistics
+
+
+def _log_pmf(i: int, n: int, p: float) -> float:
+    if p <= 0.0:
+        return 0.0 if i == 0 else -math.inf
+    if p >= 1.0:
+        return 0.0 if i == n else -math.inf
+    return math.lgamma(n + 1) - math.lgamma(i + 1) - math.lgamma(n - i + 1) + i * math.log(p) + (n - i) * math.log1p(-p)
+
+
+def binomial_two_sided(k: int, n: int, p: float) -> float:
+    """Exact two-sided binomial p-value of ``k`` successes in ``n`` under rate ``p``.
+
+    Sums the probabilities of every outcome no more likely than ``k`` (the usual
+    "minimum likelihood" definition), with a 1e-7 relative tolerance for ties.
+    """
+    if not (0 <= k <= n) or n < 1:
+        raise SignalError(f"binomial test: need 0 <= k <= n and n >= 1, got k={k}, n={n}")
+    if not 0.0 <= p <= 1.0:
+        raise SignalError(f"binomial test: rate {p!r} must lie in [0, 1]")
+    ref = _log_pmf(k, n, p)
+    total = 0.0
+    for i in range(n + 1):
+        lp = _log_pmf(i, n, p)
+        if lp <= ref + 1e-7:
+            total += math.exp(lp)
+    return min(1.0, total)
+
+
+def wilson(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+    """Wilson score interval for ``k`` successes out of ``n``."""
+    if n <= 0:
+        return (0.0, 1.0)
+    ph = k / n
+    den = 1 + z * z / n
+    c = (ph + z * z / (2 * n)) / den
+    h = z * math.sqrt(ph * (1 - ph) / n + z * z / (4 * n * n)) / den
+    return (max(0.0, c - h), min(1.0, c + h))
+
+
+def _quantiles(x: Arr) -> tuple[float | None, float | None]:
+    x = x[np.isfinite(x)]
+    if x.size == 0:
+        return None, None
+    return float(np.median(x)), float(np.quantile(x, 0.95))
+
+
+# --------------------------------------------------------------------------- detector runs on batches
+
+
+@dataclass(frozen=True, slots=True)
+class DetectorRun:
+    """Alarms of one detector over a batch: sample times ``(n, K)`` or ``(K,)``, alarm mask,
+    direction (+1/-1/0), and validity on the common tick grid ``(n, M)``."""
+
+    times: Arr
+    alarm: Arr
+    direction: Arr
+    ticks: Arr
+    tick_valid: Arr
+
+
+def run_detectors(
+    b: Batch,
+    t_act: float,
+    *,
+    theta_f: float = DEFAULT_THETA_F,
+    theta_t: float = DEFAULT_THETA_T,
+    gating: bool = True,
+    tare_window: float = 0.5,
+    tick: float = DEFAULT_TICK,
+) -> dict[str, DetectorRun]:
+    """Run the three detectors, activated at ``t_act``, over a batch with the streaming kernels."""
+    n = b.wrench.shape[0]
+    end = float(b.wrench_times[-1]) + 1.0 / 50.0
+    ticks = t_act + np.arange(0, int(math.floor((end - t_act) / tick + 1e-9)) + 1) * tick
+    ticks = ticks[ticks < end]
+    # force
+    tf = b.wrench_times
+    act = tf >= t_act
+    n_in = int(np.searchsorted(tf, t_act + tare_window, side="left"))
+    first = int(np.argmax(act)) if act.any() else tf.size
+    if n_in > first:
+        beta = tare_value(b.wrench[:, first:n_in])
+        start = n_in
+    else:
+        beta = b.wrench[:, first]
+        start = first + 1
+    s_f = b.wrench - beta[:, None]
+    f_valid = np.zeros(tf.shape, dtype=bool)
+    f_valid[start:] = True
+    up, down = force_alarm_mask(s_f, theta_f)
+    f_alarm = (up | down) & f_valid[None, :]
+    f_dir = np.where(up, 1, np.where(down, -1, 0))
+    fi = np.searchsorted(tf, ticks, side="right") - 1
+    f_tick_ok = (fi >= 0) & f_valid[np.maximum(fi, 0)] & (ticks - tf[np.maximum(fi, 0)] <= 0.1)
+    f_tick_ok = np.broadcast_to(f_tick_ok, (n, ticks.size))
+    f_tick_val = s_f[:, np.maximum(fi, 0)]
+    # tactile
+    tt = b.tactile_times
+    t_ok_frame = tt >= t_act
+    mom = np.where(t_ok_frame[..., None, None], b.moments, 0.0)
+    # frames before activation are not fed: run the kernel only from each row's first frame after t_act
+    k0 = np.argmax(t_ok_frame, axis=1)
+    if np.all(k0 == k0[0]):
+        s_t = np.zeros(tt.shape)
+        v_t = np.zeros(tt.shape, dtype=bool)
+        s_part, v_part, _ = tactile_scores(mom[:, k0[0]:], TactileState.initial(n), gating)
+        s_t[:, k0[0]:] = s_part
+        v_t[:, k0[0]:] = v_part
+    else:
+        s_t = np.zeros(tt.shape)
+        v_t = np.zeros(tt.shape, dtype=bool)
+        for k in np.unique(k0):
+            rows = np.flatnonzero(k0 == k)
+            s_part, v_part, _ = tactile_scores(mom[rows, k:], TactileState.initial(rows.size), gating)
+            s_t[rows, k:] = s_part
+            v_t[rows, k:] = v_part
+    t_alarm = v_t & (s_t >= theta_t)
+    st_tick, ok_t = zoh(tt, s_t, v_t, ticks, 0.25)
+    # combined
+    cup, cdown = combined_mask(st_tick, ok_t, f_tick_val, f_tick_ok, theta_t, theta_f)
+    return {
+        "force": DetectorRun(tf, f_alarm, f_dir, ticks, f_tick_ok),
+        "tactile": DetectorRun(tt, t_alarm, np.zeros(tt.shape, dtype=np.int8), ticks, ok_t),
+        "combined": DetectorRun(ticks, cup | cdown, np.where(cup, 1, np.where(cdown, -1, 0)), ticks, ok_t & f_tick_ok),
+    }
+
+
+def first_alarm(run: DetectorRun, lo: Arr | float, hi: Arr | float) -> tuple[Arr, Arr]:
+    """Time (inf if none) and direction of each trial's first alarm with ``lo <= t <= hi``."""
+    t = run.times if run.times.ndim == 2 else np.broadcast_to(run.times, run.alarm.shape)
+    lo_ = np.asarray(lo, dtype=float).reshape(-1, 1) if np.ndim(lo) else lo
+    hi_ = np.asarray(hi, dtype=float).reshape(-1, 1) if np.ndim(hi) else hi
+    m = run.alarm & (t >= lo_) & (t <= hi_)
+    idx = np.argmax(m, axis=1)
+    has = m[np.arange(m.shape[0]), idx]
+    rows = np.arange(m.shape[0])
+    return np.where(has, t[rows, idx], np.inf), np.where(has, run.direction[rows, idx], 0)
+
+
+# --------------------------------------------------------------------------- per-action table
+
+
+@dataclass(frozen=True, slots=True)
+class CellResult:
+    """One detector x action cell of Tables 1-2."""
+
+    action: str
+    detector: str
+    kind: str  # "FP" or "TP"
+    count: int
+    trials: int
+    rate: float
+    paper_count: int
+    paper_trials: int
+    p_value: float
+    passed: bool
+    wilson_sim: tuple[float, float]
+    wilson_paper: tuple[float, float]
+    latency_motion_median: float | None = None
+    latency_motion_p95: float | None = None
+    latency_load_median: float | None = None
+    latency_load_p95: float | None = None
+    direction_accuracy: float | None = None
+
+
+def _timeline(action: str) -> tuple[list[Segment], tuple[float, float] | None, str]:
+    dur = ACTION_DURATION[action]
+    if action == GRASP:
+        return [Segment(IDLE, 0.0, PRE), Segment(GRASP, PRE, dur)], None, DOWN
+    if action in (SLIP_DOWN, SLIP_UP):
+        return [Segment(HOLD, 0.0, PRE), Segment(HOLD, PRE, dur)], SLIP_AT, DOWN if action == SLIP_DOWN else UP
+    return [Segment(HOLD, 0.0, PRE), Segment(action, PRE, dur)], None, DOWN
+
+
+def _rng(seed: int, *key: int) -> np.random.Generator:
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, *key])))
+
+
+def evaluate_actions(
+    trials: int,
+    seed: int,
+    *,
+    params: SignalParams = SignalParams(),
+    theta_f: float = DEFAULT_THETA_F,
+    theta_t: float = DEFAULT_THETA_T,
+    gating: bool = True,
+    progress: Callable[[int], None] | None = None,
+) -> list[CellResult]:
+    """Tables 1-2: every detector x [P1] action over ``trials`` trials each."""
+    cells: list[CellResult] = []
+    for ai, action in enumerate(P1_ACTIONS):
+        timeline, slip_win, direction = _timeline(action)
+        slip = slip_win is not None
+        end = timeline[-1].end
+        hits = {d: [] for d in DETECTORS}
+        lat_m = {d: [] for d in DETECTORS}
+        lat_l = {d: [] for d in DETECTORS}
+        dir_ok = {d: [] for d in DETECTORS}
+        for ci, start in enumerate(range(0, trials, CHUNK)):
+            n = min(CHUNK, trials - start)
+            b = simulate_batch(
+                timeline, n, _rng(seed, 1, ai, ci), slip_window=slip_win, slip_direction=direction,
+                slip_kind=PULLED, params=params, first_trial=start,
+            )
+            runs = run_detectors(b, 0.0, theta_f=theta_f, theta_t=theta_t, gating=gating)
+            for d in DETECTORS:
+                if slip:
+                    t_first, dirn = first_alarm(runs[d], b.slip_onset - TP_BEFORE, b.slip_onset + TP_AFTER)
+                    hit = np.isfinite(t_first)
+                    lat_m[d].append(np.where(hit, t_first - b.slip_onset, np.nan))
+                    lat_l[d].append(np.where(hit, t_first - b.load_onset, np.nan))
+                    dir_ok[d].append(np.where(hit, (dirn == b.force_sign).astype(float), np.nan))
+                else:
+                    t_first, _ = first_alarm(runs[d], PRE, end)
+                    hit = np.isfinite(t_first)
+                hits[d].append(hit)
+            if progress is not None:
+                progress(n)
+        for di, d in enumerate(DETECTORS):
+            h = np.concatenate(hits[d])
+            k = int(h.sum())
+            paper_k = PAPER_COUNTS[action][di]
+            p_null = (k + 0.5) / (trials + 1)
+            pv = binomial_two_sided(paper_k, PAPER_N, p_null)
+            extra: dict[str, float | None] = {}
+            if slip:
+                lm = np.concatenate(lat_m[d])
+                ll = np.concatenate(lat_l[d])
+                extra["latency_motion_median"], extra["latency_motion_p95"] = _quantiles(lm)
+                extra["latency_load_median"], extra["latency_load_p95"] = _quantiles(ll)
+                if d != "tactile":
+                    do = np.concatenate(dir_ok[d])
+                    do = do[np.isfinite(do)]
+                    extra["direction_accuracy"] = float(do.mean()) if do.size else None
+            cells.append(
+                CellResult(
+                    action, d, "TP" if slip else "FP", k, trials, k / trials, paper_k, PAPER_N, pv, pv >= ALPHA,
+                    wilson(k, trials), wilson(paper_k, PAPER_N), **extra,  # type: ignore[arg-type]
+                )
+            )
+    return cells
+
+
+# --------------------------------------------------------------------------- missions
+
+
+MISSION_CONTEXTS: Final = (GRASP, MOVE_BASE, RELEASE)
+MISSION_TIMELINE: Final = (
+    Segment(IDLE, 0.0, PRE),
+    Segment(GRASP, PRE, 2.0),
+    Segment(MOVE_BASE, PRE + 2.0, 3.7),
+    Segment(RELEASE, PRE + 5.7, 1.5),
+)
+#: Slip-motion onset windows (absolute s) for a slip injected in each context.
+MISSION_SLIPS: Final[dict[str, tuple[tuple[float, float], str]]] = {
+    GRASP: ((PRE + 1.4, PRE + 1.8), DOWN),
+    MOVE_BASE: ((PRE + 3.0, PRE + 5.0), DOWN),
+    RELEASE: ((PRE + 5.7 + 0.55, PRE + 5.7 + 0.9), UP),
+}
+R_STAR: Final = {GRASP: "combined", MOVE_BASE: "tactile", RELEASE: "force"}
+R_ALT: Final = {GRASP: "combined", MOVE_BASE: "combined", RELEASE: "force"}
+
+
+@dataclass(frozen=True, slots=True)
+class MissionResult:
+    """One strategy over the mission batches."""
+
+    strategy: str
+    rules: dict[str, str]
+    switching: str  # "none", "cold", "hot"
+    fa_per_mission: float
+    p_any_fa: float
+    tpr: dict[str, float]
+    mean_tpr: float
+    miss_rate: float
+    latency_median: float | None
+    latency_p95: float | None
+    latency_load_median: float | None
+    switches: float
+    blind_time: float
+
+
+def _segments_of(rules: dict[str, str]) -> list[tuple[str, float, float, str]]:
+    out = []
+    for s in MISSION_TIMELINE[1:]:
+        out.append((s.context, s.start, s.end, rules[s.context]))
+    return out
+
+
+def _select(runs_by_act: dict[float, dict[str, DetectorRun]], plan: list[tuple[float, float, float, str]], n: int):
+    """Union of alarms (times, dirs) and validity of the selected detectors over the plan."""
+    parts = []
+    for t_act, lo, hi, det in plan:
+        r = runs_by_act[t_act][det]
+        t = r.times if r.times.ndim == 2 else np.broadcast_to(r.times, r.alarm.shape)
+        parts.append((t, r.alarm & (t >= lo) & (t < hi), r.direction))
+    ticks = next(iter(runs_by_act.values()))["force"].ticks
+    return parts, ticks
+
+
+def evaluate_missions(
+    trials: int,
+    seed: int,
+    *,
+    params: SignalParams = SignalParams(),
+    progress: Callable[[int], None] | None = None,
+) -> list[MissionResult]:
+    """§6.3: fixed, adaptive (cold / hot switching) and oracle strategies on grasp -> move_base -> release."""
+    end = MISSION_TIMELINE[-1].end
+    seg = {s.context: (s.start, s.end) for s in MISSION_TIMELINE[1:]}
+    acts = sorted({0.0} | {s.start for s in MISSION_TIMELINE[1:]})
+    batches: dict[str | None, list[tuple[Batch, dict[float, dict[str, DetectorRun]]]]] = {}
+    for bi, slip_ctx in enumerate((None,) + MISSION_CONTEXTS):
+        batches[slip_ctx] = []
+        for ci, start in enumerate(range(0, trials, CHUNK)):
+            n = min(CHUNK, trials - start)
+            win, direction = MISSION_SLIPS[slip_ctx] if slip_ctx else (None, DOWN)
+            b = simulate_batch(
+                list(MISSION_TIMELINE), n, _rng(seed, 2, bi, ci), slip_window=win, slip_direction=direction,
+                params=params, first_trial=start,
+            )
+            runs = {a: run_detectors(b, a) for a in acts}
+            batches[slip_ctx].append((b, runs))
+            if progress is not None:
+                progress(n)
+
+    def outcome(plan: list[tuple[float, float, float, str]]) -> dict[str, object]:
+        # false alarms in slip-free missions (debounced 0.5 s)
+        fa_counts = []
+        blind = []
+        for b, runs in batches[None]:
+            n = b.wrench.shape[0]
+            times_l, alarm_l = [], []
+            for t_act, lo, hi, det in plan:
+                r = runs[t_act][det]
+                t = r.times if r.times.ndim == 2 else np.broadcast_to(r.times, r.alarm.shape)
+                times_l.append(np.where(r.alarm & (t >= lo) & (t < hi), t, np.inf))
+            at = np.sort(np.concatenate(times_l, axis=1), axis=1)
+            fin = np.isfinite(at)
+            gaps = np.diff(np.concatenate([np.full((n, 1), -np.inf), at], axis=1), axis=1)
+            fa_counts.append(np.sum(fin & (gaps >= 0.5), axis=1))
+            bl = np.zeros(n)
+            for t_act, lo, hi, det in plan:
+                r = runs[t_act][det]
+                sel = (r.ticks >= lo) & (r.ticks < hi)
+                bl += (~r.tick_valid[:, sel]).sum(axis=1) * DEFAULT_TICK
+            blind.append(bl)
+        fa = np.concatenate(fa_counts)
+        tpr: dict[str, float] = {}
+        lat, lat_l = [], []
+        for ctx in MISSION_CONTEXTS:
+            hits = []
+            for b, runs in batches[ctx]:
+                first = np.full(b.wrench.shape[0], np.inf)
+                for t_act, lo, hi, det in plan:
+                    tf, _ = first_alarm(runs[t_act][det], np.maximum(b.slip_onset - TP_BEFORE, lo), np.minimum(b.slip_onset + TP_AFTER, hi - 1e-12))
+                    first = np.minimum(first, tf)
+                hit = np.isfinite(first)
+                hits.append(hit)
+                lat.append((first - b.slip_onset)[hit])
+                lat_l.append((first - b.load_onset)[hit])
+            tpr[ctx] = float(np.concatenate(hits).mean())
+        lm = _quantiles(np.concatenate(lat))
+        ll = _quantiles(np.concatenate(lat_l))
+        return {
+            "fa": float(fa.mean()), "pfa": float((fa > 0).mean()), "tpr": tpr, "lat": lm, "latl": ll,
+            "blind": float(np.concatenate(blind).mean()),
+        }
+
+    def plan_for(rules: dict[str, str], switching: str) -> list[tuple[float, float, float, str]]:
+        plan = []
+        for ctx, lo, hi, det in _segments_of(rules):
+            t_act = lo if switching == "cold" else 0.0
+            plan.append((t_act, lo, hi if ctx != RELEASE else end + 1.0, det))
+        # fixed / hot: all activated in the pre-roll; cold: each on its context start
+        return plan
+
+    results: list[MissionResult] = []
+
+    def add(name: str, rules: dict[str, str], switching: str) -> dict[str, object]:
+        o = outcome(plan_for(rules, switching))
+        sw = sum(1 for a, b_ in zip(MISSION_CONTEXTS, MISSION_CONTEXTS[1:]) if rules[a] != rules[b_])
+        tpr = o["tpr"]  # type: ignore[assignment]
+        mean_tpr = float(np.mean(list(tpr.values())))  # type: ignore[union-attr]
+        results.append(
+            MissionResult(
+                name, dict(rules), switching, o["fa"], o["pfa"], tpr, mean_tpr, 1.0 - mean_tpr,  # type: ignore[arg-type]
+                o["lat"][0], o["lat"][1], o["latl"][0], float(sw), o["blind"],  # type: ignore[index]
+            )
+        )
+        return o
+
+    for d in DETECTORS:
+        add(f"fixed {d}", {c: d for c in MISSION_CONTEXTS}, "none")
+    add("adaptive R*", R_STAR, "cold")
+    add("adaptive R* (hot)", R_STAR, "hot")
+    add("adaptive R-alt", R_ALT, "cold")
+    # oracle: per context the detector with the best TPR - FPR (hot standby), measured here
+    best: dict[str, str] = {}
+    for ctx in MISSION_CONTEXTS:
+        lo, hi = seg[ctx]
+        scores = {}
+        for d in DETECTORS:
+            plan = [(0.0, lo, hi if ctx != RELEASE else end + 1.0, d)]
+            fp = np.concatenate([np.isfinite(first_alarm(runs[0.0][d], lo, hi)[0]) for _, runs in batches[None]]).mean()
+            tp_hits = []
+            for b, runs in batches[ctx]:
+                tf, _ = first_alarm(runs[0.0][d], b.slip_onset - TP_BEFORE, b.slip_onset + TP_AFTER)
+                tp_hits.append(np.isfinite(tf))
+            scores[d] = float(np.concatenate(tp_hits).mean() - fp)
+            del plan
+        best[ctx] = max(DETECTORS, key=lambda d: (scores[d], -DETECTORS.index(d)))
+    add("oracle", best, "hot")
+    return results
+
+
+# --------------------------------------------------------------------------- whole evaluation, presentation
+
+
+@dataclass(frozen=True, slots=True)
+class Evaluation:
+    """Everything ``desmon evaluate`` reports."""
+
+    trials: int
+    seed: int
+    cells: tuple[CellResult, ...]
+    missions: tuple[MissionResult, ...]
+
+    @property
+    def all_pass(self) -> bool:
+        return all(c.passed for c in self.cells)
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "trials": self.trials,
+            "seed": self.seed,
+            "alpha": ALPHA,
+            "all_pass": self.all_pass,
+            "cells": [asdict(c) for c in self.cells],
+            "missions": [asdict(m) for m in self.missions],
+        }
+
+
+def _check_args(trials: object, seed: object) -> tuple[int, int]:
+    if isinstance(trials, bool) or not isinstance(trials, (int, np.integer)) or trials < 1:
+        raise SignalError(f"trials {trials!r} must be a positive integer; pass e.g. --trials 300")
+    if trials > 1_000_000:
+        raise SignalError(f"trials {trials!r} is more than 1,000,000; pass a smaller --trials (300 is enough)")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise SignalError(f"seed {seed!r} must be a non-negative integer; pass e.g. --seed 1")
+    return int(trials), int(seed)
+
+
+def evaluate(
+    trials: int,
+    seed: int,
+    *,
+    missions: bool = True,
+    mission_trials: int | None = None,
+    progress: Callable[[int], None] | None = None,
+    params: SignalParams = SignalParams(),
+) -> Evaluation:
+    """Run Tables 1-2 (``trials`` per action) and, optionally, the mission comparison."""
+    trials, seed = _check_args(trials, seed)
+    cells = evaluate_actions(trials, seed, params=params, progress=progress)
+    mt = trials if mission_trials is None else _check_args(mission_trials, seed)[0]
+    ms = evaluate_missions(mt, seed, params=params, progress=progress) if missions else []
+    return Evaluation(trials, seed, tuple(cells), tuple(ms))
+
+
+def _pct(x: float | None) -> str:
+    return "   -  " if x is None else f"{100 * x:5.1f}%"
+
+
+def _ms(x: float | None) -> str:
+    return "    -" if x is None else f"{1000 * x:+5.0f}"
+
+
+def render_table(ev: Evaluation) -> str:
+    """The readable report."""
+    lines = [
+        f"desmon evaluate: {ev.trials} trials per action, seed {ev.seed}; "
+        f"paper = Sanchez et al. 2016 Tables 1-2 (k/60); test: exact two-sided binomial, alpha {ALPHA}",
+        "",
+        f"{'action':<11}{'det':<9}{'':3}{'sim':>7}{'sim 95% Wilson':>17}{'paper':>8}{'paper 95% Wilson':>19}{'p':>8}  verdict"
+        f"{'lat med/p95 (ms, motion)':>27}{'load med':>10}{'dir ok':>8}",
+    ]
+    for c in ev.cells:
+        ws = f"[{100 * c.wilson_sim[0]:4.1f},{100 * c.wilson_sim[1]:5.1f}]"
+        wp = f"[{100 * c.wilson_paper[0]:4.1f},{100 * c.wilson_paper[1]:5.1f}]"
+        lat = "" if c.kind == "FP" else f"{_ms(c.latency_motion_median)} / {_ms(c.latency_motion_p95)}"
+        lines.append(
+            f"{c.action:<11}{c.detector:<9}{c.kind:<3}{_pct(c.rate):>7}{ws:>17}{f'{c.paper_count}/{c.paper_trials}':>8}"
+            f"{wp:>19}{c.p_value:8.3f}  {'pass' if c.passed else 'FAIL'}   {lat:>24}"
+            f"{'' if c.kind == 'FP' else _ms(c.latency_load_median):>10}"
+            f"{'' if c.direction_accuracy is None else _pct(c.direction_accuracy):>8}"
+        )
+    n_pass = sum(c.passed for c in ev.cells)
+    lines += ["", f"{n_pass}/{len(ev.cells)} cells pass" + ("" if ev.all_pass else "  (FAIL)")]
+    if ev.missions:
+        lines += [
+            "",
+            "Mission grasp -> move_base -> release (slip-free missions for false alarms; one pulled slip per slip mission)",
+            f"{'strategy':<20}{'switch':<7}{'FA/mission':>11}{'P(FA>=1)':>10}{'TPR g/b/r':>19}{'miss':>7}"
+            f"{'lat med':>9}{'p95':>7}{'load med':>9}{'switches':>9}{'blind s':>9}  rules",
+        ]
+        for m in ev.missions:
+            tp = "/".join(f"{100 * m.tpr[c]:.0f}" for c in MISSION_CONTEXTS)
+            rules = ", ".join(f"{c}->{m.rules[c]}" for c in MISSION_CONTEXTS)
+            lines.append(
+                f"{m.strategy:<20}{m.switching:<7}{m.fa_per_mission:11.3f}{_pct(m.p_any_fa):>10}{tp:>19}{_pct(m.miss_rate):>7}"
+                f"{_ms(m.latency_median):>9}{_ms(m.latency_p95):>7}{_ms(m.latency_load_median):>9}{m.switches:9.0f}{m.blind_time:9.2f}  {rules}"
+            )
+    return "\n".join(lines) + "\n"
+
+
+class _Progress:
+    def __init__(self, total: int, stream: TextIO) -> None:
+        self.total = total
+        self.done = 0
+        self.stream = stream
+        self.t0 = time.perf_counter()
+
+    def __call__(self, n: int) -> None:
+        self.done += n
+        frac = min(1.0, self.done / self.total)
+        bar = "#" * int(30 * frac)
+        rate = self.done / max(time.perf_counter() - self.t0, 1e-9)
+        self.stream.write(f"\r[{bar:<30}] {100 * frac:5.1f}%  {rate:7.0f} trials/s")
+        if self.done >= self.total:
+            self.stream.write("\n")
+        self.stream.flush()
+
+
+def run_evaluate(trials: int, seed: int, as_json: bool, progress: bool, out: TextIO) -> int:
+    """CLI entry: evaluate, write a table (or JSON) to ``out``, return 0 iff all 21 cells pass.
+
+    The progress bar goes to stderr when ``progress`` is true and stderr is a terminal
+    (or ``DESMON_PROGRESS=1`` forces it).
+    """
+    trials, seed = _check_args(trials, seed)
+    cb: Callable[[int], None] | None = None
+    if progress and (sys.stderr.isatty() or os.environ.get("DESMON_PROGRESS") == "1"):
+        cb = _Progress(trials * (len(P1_ACTIONS) + 1 + len(MISSION_CONTEXTS)), sys.stderr)
+    ev = evaluate(trials, seed, progress=cb)
+    if as_json:
+        json.dump(ev.to_json(), out, indent=2)
+        out.write("\n")
+    else:
+        out.write(render_table(ev))
+    return 0 if ev.all_pass else 1

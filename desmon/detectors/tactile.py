@@ -1,0 +1,229 @@
+"""Tactile slip detector: tactile flow from consecutive centres of pressure ([P1] eqs. 3-7, [CODE]).
+
+The Alcazar-Barajas slip index of a pad is the centroid of the full 2-D convolution
+of two consecutive frames, centred on the convolution grid. For non-negative frames
+that centroid is the sum of the two frames' centroids, so with the centred centre of
+pressure ``c[k] = (sum i P / sum P - (R-1)/2, sum j P / sum P - (C-1)/2)`` the index
+is ``I[k] = c[k-1] + c[k]`` (tests compare it with a brute-force convolution). Then
+
+* ``phi_n[k] = || I_n[k] - I_n[k-1] ||``            (flow magnitude, direction dropped)
+* ``S_T[k] = sum_n E[P_n] phi_n / sum_n E[P_n]``     (intensity-weighted, in cells)
+
+over the pads in contact whose flow is valid. A pad without contact has centre (0, 0)
+(as in [CODE]), so a pad *touching* makes its centre jump from 0 to the contact point:
+this contact-onset spike is why the tactile detector fires on every grasp ([P1]).
+With warm-up gating (default) flows are valid only from the 3rd frame received after
+activation (the index needs frames k-2..k); without it the history starts from zero
+centres at activation, which fires at activation during a hold.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+
+from desmon.detectors.base import INACTIVE_STATUS, Alarm, DetectorState, DetectorStatus, check_threshold
+from desmon.detectors.signals import N_PADS, PAD_COLS, PAD_ROWS
+from desmon.errors import SignalError
+
+__all__ = [
+    "TactileDetector",
+    "TactileState",
+    "centred_cop",
+    "slip_index",
+    "tactile_scores",
+    "DEFAULT_THETA_T",
+    "WARMUP_FRAMES",
+]
+
+DEFAULT_THETA_T: Final = 0.5
+WARMUP_FRAMES: Final = 3
+Arr = np.ndarray
+_ROWS = np.asarray(PAD_ROWS, dtype=float)
+_CELLS = _ROWS * PAD_COLS
+
+
+def centred_cop(moments: Arr) -> tuple[Arr, Arr]:
+    """Centred centre of pressure ``(..., 6, 2)`` (row, column) and contact mask ``(..., 6)``.
+
+    Pads without contact get centre (0, 0).
+    """
+    s = moments[..., 0]
+    contact = s > 0
+    safe = np.where(contact, s, 1.0)
+    cy = np.where(contact, moments[..., 1] / safe - (_ROWS - 1) / 2, 0.0)
+    cx = np.where(contact, moments[..., 2] / safe - (PAD_COLS - 1) / 2, 0.0)
+    return np.stack([cy, cx], axis=-1), contact
+
+
+def slip_index(prev_frame: Arr, frame: Arr) -> Arr:
+    """Slip index (row, column) of one pad from two consecutive frames ``(R, C)`` via the CoP identity."""
+    r, c = frame.shape
+    out = np.zeros(2)
+    for f in (prev_frame, frame):
+        f = np.asarray(f, dtype=float)
+        tot = f.sum()
+        if tot > 0:
+            out += [(f.sum(axis=1) @ np.arange(r)) / tot - (r - 1) / 2, (f.sum(axis=0) @ np.arange(c)) / tot - (c - 1) / 2]
+    return out
+
+
+@dataclass(frozen=True, slots=True)
+class TactileState:
+    """Carried state of the tactile flow per trial and pad: previous centre, previous index, contact run."""
+
+    cop: Arr  # (n, 6, 2)
+    index: Arr  # (n, 6, 2)
+    run: Arr  # (n,) frames received since activation
+
+    @staticmethod
+    def initial(n: int) -> "TactileState":
+        return TactileState(np.zeros((n, N_PADS, 2)), np.zeros((n, N_PADS, 2)), np.zeros(n, dtype=np.int64))
+
+
+def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tuple[Arr, Arr, TactileState]:
+    """Tactile slip signal ``S_T (n, K)`` and validity ``(n, K)`` of frames ``moments (n, K, 6, 3)``.
+
+    The returned state continues the stream: splitting ``K`` into chunks gives
+    bit-identical results.
+    """
+    cop, contact = centred_cop(moments)
+    cop_ext = np.concatenate([state.cop[:, None], cop], axis=1)
+    index = cop_ext[:, 1:] + cop_ext[:, :-1]
+    idx_ext = np.concatenate([state.index[:, None], index], axis=1)
+    d = idx_ext[:, 1:] - idx_ext[:, :-1]
+    phi = np.sqrt(d[..., 0] ** 2 + d[..., 1] ** 2)
+    k = contact.shape[1]
+    run = state.run[:, None] + np.arange(1, k + 1)[None, :]  # frames since activation, this one included
+    valid_pad = (contact & (run >= WARMUP_FRAMES)[..., None]) if gating else contact
+    w = np.where(valid_pad, moments[..., 0] / _CELLS, 0.0)
+    den = w.sum(axis=-1)
+    num = (w * phi).sum(axis=-1)
+    valid = den > 0
+    s_t = np.where(valid, num / np.where(valid, den, 1.0), 0.0)
+    if k:
+        new = TactileState(cop[:, -1].copy(), index[:, -1].copy(), np.minimum(run[:, -1], 1 << 30))
+    else:
+        new = state
+    return s_t, valid, new
+
+
+class TactileDetector:
+    """Streaming tactile slip detector (6 pads, moments or full frames as input).
+
+    Alarm (direction ``None``) at every frame with ``S_T >= threshold`` (default 0.5
+    cells). After :meth:`activate` the status is WARMING (``'warm_up'``) until some pad
+    has a valid flow. NO_INPUT reasons: ``'no_samples'`` (no frame for ``timeout`` s),
+    ``'stuck'`` (``stuck_frames`` identical non-zero frames), ``'no_contact'``
+    (``stuck_frames`` all-zero frames: a dead sensor or nothing in the hand; either
+    way no slip can be seen).
+    """
+
+    def __init__(
+        self,
+        threshold: float = DEFAULT_THETA_T,
+        *,
+        warmup_gating: bool = True,
+        timeout: float = 0.25,
+        stuck_frames: int = 5,
+        name: str = "tactile",
+    ) -> None:
+        self.threshold = check_threshold("tactile threshold", threshold)
+        self.warmup_gating = bool(warmup_gating)
+        self.timeout = check_threshold("timeout", timeout)
+        if int(stuck_frames) < 2:
+            raise SignalError(f"stuck_frames {stuck_frames!r} must be an integer >= 2")
+        self.stuck_frames = int(stuck_frames)
+        self.name = name
+        self._active = False
+        self.status: DetectorStatus = INACTIVE_STATUS
+        self._reset(0.0)
+
+    def _reset(self, t: float) -> None:
+        self._t_act = t
+        self._state = TactileState.initial(1)
+        self._last_t = t
+        self._last_m: Arr = np.full((N_PADS, 3), np.nan)
+        self._run = 0
+        self._seen_valid = False
+
+    @property
+    def active(self) -> bool:
+        return self._active
+
+    def activate(self, t: float) -> None:
+        """Start (or restart) at ``t``: forget the flow history (warm-up restarts)."""
+        self._active = True
+        self._reset(float(t))
+        self._set(DetectorState.WARMING, "warm_up", float(t))
+
+    def deactivate(self) -> None:
+        self._active = False
+        self.status = INACTIVE_STATUS
+
+    def _set(self, state: DetectorState, reason: str, t: float) -> None:
+        if self.status.state is not state or self.status.reason != reason:
+            self.status = DetectorStatus(state, reason, t)
+
+    @staticmethod
+    def _as_moments(samples: Arr) -> Arr:
+        a = np.asarray(samples, dtype=float)
+        if a.ndim >= 3 and a.shape[-3:] == (N_PADS, 14, PAD_COLS):
+            from desmon.detectors.signals import frame_moments
+
+            return frame_moments(a).reshape(-1, N_PADS, 3)
+        if a.shape[-2:] != (N_PADS, 3):
+            raise SignalError(
+                f"tactile samples of shape {a.shape}: pass moments (K, 6, 3) or frames (K, 6, 14, 6)"
+            )
+        return a.reshape(-1, N_PADS, 3)
+
+    def scores(self, times: Arr, samples: Arr) -> tuple[Arr, Arr, Arr]:
+        """Advance with new frames; return ``(times, S_T, valid)`` per frame."""
+        t = np.asarray(times, dtype=float).reshape(-1)
+        m = self._as_moments(samples)
+        if m.shape[0] != t.size:
+            raise SignalError(f"tactile samples: {t.size} times but {m.shape[0]} frames; pass one time per frame")
+        keep = t >= self._t_act
+        t, m = t[keep], m[keep]
+        if t.size == 0:
+            return t, np.zeros(0), np.zeros(0, dtype=bool)
+        prev = np.concatenate([self._last_m[None], m[:-1]])
+        same = np.all(m == prev, axis=(1, 2))
+        idx = np.arange(t.size)
+        brk = np.maximum.accumulate(np.where(~same, idx, -1))
+        run = np.where(brk >= 0, idx - brk + 1, self._run + idx + 1)
+        self._run = int(run[-1])
+        self._last_m = m[-1].copy()
+        self._last_t = float(t[-1])
+        s, valid, self._state = tactile_scores(m[None], self._state, self.warmup_gating)
+        s, valid = s[0], valid[0]
+        self._seen_valid = self._seen_valid or bool(valid.any())
+        if run[-1] >= self.stuck_frames:
+            reason = "no_contact" if not np.any(m[-1, :, 0] > 0) else "stuck"
+            first_bad = int(idx[-1] - (run[-1] - self.stuck_frames))
+            self._set(DetectorState.NO_INPUT, reason, float(t[max(first_bad, 0)]))
+        elif not valid[-1]:
+            self._set(DetectorState.WARMING, "warm_up", float(t[-1]))
+        else:
+            bad = np.flatnonzero(~valid)
+            self._set(DetectorState.OK, "", float(t[bad[-1] + 1] if bad.size else t[0]))
+        return t, s, valid
+
+    def check_input(self, until: float) -> None:
+        """Flag NO_INPUT ('no_samples') if no frame arrived within ``timeout`` before ``until``."""
+        if self._active and until - self._last_t > self.timeout and self.status.state is not DetectorState.NO_INPUT:
+            self._set(DetectorState.NO_INPUT, "no_samples", self._last_t + self.timeout)
+
+    def process(self, times: Arr, samples: Arr, until: float | None = None) -> tuple[Alarm, ...]:
+        """Consume tactile frames (moments ``(K, 6, 3)`` or frames ``(K, 6, 14, 6)``) and return alarms."""
+        if not self._active:
+            return ()
+        t, s, valid = self.scores(times, samples)
+        if until is not None:
+            self.check_input(float(until))
+        hit = np.flatnonzero(valid & (s >= self.threshold))
+        return tuple(Alarm(float(t[i]), self.name, None) for i in hit)
