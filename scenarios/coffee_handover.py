@@ -28,6 +28,7 @@ from __future__ import annotations
 from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
 from desmon.model.events import ActionChange, DeviceFail, LoadChange
 from desmon.model.scenario import Scenario, TimedEvent
+from desmon.verify.bounds import Bounds, levels
 
 FORCE = "force_slip_detector"
 TACTILE = "tactile_slip_detector"
@@ -84,6 +85,14 @@ scenario = Scenario(
         TimedEvent(5.0, ActionChange(MOVE_BASE), "t1"),
         TimedEvent(20.0, ActionChange(RELEASE), "t2"),
         TimedEvent(23.0, DeviceFail("lwr_wrench"), "t3"),
+    ),
+    checker=Bounds(
+        actions=(HOLD, GRASP, MOVE_BASE, RELEASE),
+        devices=("lwr_wrench", "pad_thumb_prox"),
+        platforms=("torso_pc", "arm_pc", "hand_pc"),
+        loads={"torso_pc": levels(600, 800, 100), "arm_pc": levels(300, 500, 100)},
+        start_failures=1,
+        max_failures=2,
     ),
     expected={
         # The deployment edges of Fig. 5a-d (HAS_DEVICE edges other than the force sensor's omitted).

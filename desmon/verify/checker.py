@@ -1,0 +1,438 @@
+"""The explicit-state checker: BFS over (environment event + complete reaction).
+
+A transition is one environment event (action change, device fail/repair, platform
+down/up, a load step) followed by the system's complete, deterministic reaction
+computed by the real :class:`~desmon.deployment.core.DeploymentCore` (context monitor,
+selector, deployer variant) over a :class:`~desmon.verify.state.StateStore`. The only
+other branching is Control.start failing, bounded per transition: the reaction is
+re-run with an outcome prefix, and every start beyond the prefix is a choice point.
+
+BFS keeps parent pointers labelled with (event, failed start indices), so every
+counterexample is a shortest one; traces are rebuilt by replaying the labels from the
+initial state, and a replay that does not reproduce the stored key is reported as
+nondeterminism of the system under test.
+"""
+
+from __future__ import annotations
+
+import resource
+import sys
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Callable, Iterable
+
+from desmon.deployment.core import DeploymentCore, run_sync
+from desmon.deployment.deployer import Deployer
+from desmon.deployment.invariants import Invariant, SystemView, check_invariants, get_invariants
+from desmon.deployment.monitor import Stimulus
+from desmon.deployment.ports import RaiseError, Start, Stop
+from desmon.errors import CheckerError, NondeterminismError
+from desmon.model.events import (
+    ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp, event_kind,
+)
+from desmon.model.scenario import Scenario
+from desmon.verify.bounds import Bounds, bounds_of
+from desmon.verify.state import Key, StateStore
+
+__all__ = ["Checker", "CheckResult", "Counterexample", "Step", "Label", "HOLDS", "VIOLATED", "INCOMPLETE", "EVENT_KINDS"]
+
+HOLDS, VIOLATED, INCOMPLETE = "HOLDS", "VIOLATED", "INCOMPLETE"
+EVENT_KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
+
+#: A transition label: the event and the indices of the Control.start calls that failed.
+Label = tuple[Event, tuple[int, ...]]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step of a counterexample: the label, what changed, and the state reached."""
+
+    index: int
+    event: Event | None
+    failed_starts: tuple[str, ...]
+    changes: tuple[str, ...]
+    key: Key
+    commands: tuple[str, ...] = ()
+    fail_indices: tuple[int, ...] = ()
+
+    def title(self) -> str:
+        if self.event is None:
+            return "initial"
+        extra = "".join(f" [{s} fails]" for s in self.failed_starts)
+        return f"{self.event}{extra}"
+
+
+@dataclass(frozen=True)
+class Counterexample:
+    invariant: str
+    message: str
+    steps: tuple[Step, ...]
+    during: str | None = None  # the command after which an instantaneous invariant broke
+
+    @property
+    def length(self) -> int:
+        """Number of events after the initial state."""
+        return len(self.steps) - 1
+
+    @property
+    def events(self) -> tuple[Label, ...]:
+        return tuple((s.event, s.fail_indices) for s in self.steps[1:])  # type: ignore[misc]
+
+
+@dataclass
+class CheckResult:
+    scenario: str
+    deployer: str
+    invariants: tuple[str, ...]
+    verdict: str
+    reason: str = ""
+    states: int = 0
+    transitions: int = 0
+    depth: int = 0
+    seconds: float = 0.0
+    peak_mb: float = 0.0
+    counterexamples: list[Counterexample] = field(default_factory=list)
+    enabled: Counter = field(default_factory=Counter)
+    new_states: Counter = field(default_factory=Counter)
+    changed: Counter = field(default_factory=Counter)
+    rules: Counter = field(default_factory=Counter)
+    branches: Counter = field(default_factory=Counter)
+    symmetry: bool = False
+
+    @property
+    def states_per_second(self) -> float:
+        return self.states / self.seconds if self.seconds > 0 else float("inf")
+
+    @property
+    def transitions_per_second(self) -> float:
+        return self.transitions / self.seconds if self.seconds > 0 else float("inf")
+
+    @property
+    def exit_code(self) -> int:
+        return {HOLDS: 0, VIOLATED: 1, INCOMPLETE: 3}[self.verdict]
+
+
+def _peak_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+class Checker:
+    """Exhaustive BFS over a scenario's bounded environment, driving the real core."""
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        deployer: str | Deployer = "desmon",
+        *,
+        invariants: Iterable[str] | None = None,
+        bounds: Bounds | None = None,
+        symmetry: bool = False,
+    ) -> None:
+        self.scenario = scenario
+        self.model = scenario.model
+        self.bounds = bounds if bounds is not None else bounds_of(scenario)
+        if bounds is not None:
+            bounds.validate(scenario)
+        self.invariants: tuple[Invariant, ...] = get_invariants(list(invariants) if invariants else None)
+        names = {i.name for i in self.invariants}
+        self.instant = tuple(i for i in get_invariants(list(self.bounds.instantaneous)) if i.name in names) if self.bounds.instantaneous else ()
+        self.store = StateStore(self.model)
+        self.core = DeploymentCore(self.model, self.store, self.store, deployer)
+        self.deployer_name = self.core.deployer.name
+        self.store.watch = self.instant
+        self.store.watch_view = lambda: SystemView(self.store.platform_states(), self.model.specs, self.core.standing, self.core.slots())
+        self._slots_cache: dict[str | None, tuple[tuple[str, ...], ...]] = {}
+        self.symmetry = None
+        if symmetry:
+            from desmon.verify.symmetry import Symmetry
+
+            self.symmetry = Symmetry(self)
+        self.branches: Counter = Counter()
+
+    # -- the transition relation ------------------------------------------------------------
+    def slots(self, context: str | None) -> tuple[tuple[str, ...], ...]:
+        s = self._slots_cache.get(context)
+        if s is None:
+            s = self._slots_cache[context] = self.model.rules.slots_for(context)
+        return s
+
+    def initial(self) -> Key:
+        """The scenario's initial facts, then the system's first reaction (no start fails)."""
+        st = self.store
+        st.load(Key(None, (), (), (), (), ()))
+        self.core.standing = frozenset()
+        for ev in self.scenario.initial:
+            self.core.observe(ev)
+        st.begin(())
+        act = self.bounds.start_action(self.scenario)
+        if act is not None:
+            self.core.step(ActionChange(act), st, force=True)
+        else:
+            log = run_sync(self.core.reaction(Stimulus(context_changed=True)), st)
+            self.core.settle(e.graph for e in log.errors)
+        return st.key(self.core.standing)
+
+    def enabled(self, key: Key) -> list[Event]:
+        b = self.bounds
+        out: list[Event] = [ActionChange(a) for a in b.action_moves(key.context)]
+        nfail = len(key.failed) + len(key.down)
+        can_fail = b.max_failures is None or nfail < b.max_failures
+        for d in b.devices:
+            if d in key.failed:
+                if b.repair:
+                    out.append(DeviceRepair(d))
+            elif can_fail:
+                out.append(DeviceFail(d))
+        for p in b.platforms:
+            if p in key.down:
+                if b.repair:
+                    out.append(PlatformUp(p))
+            elif can_fail:
+                out.append(PlatformDown(p))
+        if b.loads:
+            cur = {p: dict(items).get(b.load_resource, 0) for p, items in key.loads}
+            for p, lv in b.loads.items():
+                i = lv.index(cur.get(p, 0))
+                if i + 1 < len(lv):
+                    out.append(LoadChange(p, lv[i + 1], b.load_resource))
+                if i > 0:
+                    out.append(LoadChange(p, lv[i - 1], b.load_resource))
+        return out
+
+    def run_one(self, key: Key, event: Event, prefix: tuple[bool, ...]):  # type: ignore[no-untyped-def]
+        """Apply ``event`` and the complete reaction to ``key`` with start outcomes ``prefix``."""
+        st = self.store
+        st.load(key)
+        self.core.standing = frozenset(key.standing)
+        st.begin(prefix)
+        stim, log = self.core.step(event, st)
+        return st.key(self.core.standing), tuple(st.outcomes), log, st.instant
+
+    def successors(self, key: Key, event: Event) -> list[tuple[tuple[int, ...], Key, object, object]]:
+        """Every (failed start indices, next key, StepLog, instantaneous violation) of ``event``."""
+        out = []
+        bound = self.bounds.start_failures
+        pending: list[tuple[bool, ...]] = [()]
+        while pending:
+            prefix = pending.pop(0)
+            nkey, outcomes, log, instant = self.run_one(key, event, prefix)
+            fails = tuple(i for i, ok in enumerate(outcomes) if not ok)
+            if len(fails) < bound:
+                for i in range(len(prefix), len(outcomes)):
+                    pending.append(outcomes[:i] + (False,))
+            out.append((fails, nkey, log, instant))
+        return out
+
+    def violations(self, key: Key) -> list[tuple[str, str]]:
+        st = self.store
+        st.load(key)
+        view = SystemView(st.platform_states(), self.model.specs, frozenset(key.standing), self.slots(key.context))
+        return check_invariants(view, self.invariants)
+
+    # -- search -----------------------------------------------------------------------------
+    def run(
+        self,
+        *,
+        max_states: int | None = 2_000_000,
+        max_depth: int | None = None,
+        timeout: float | None = None,
+        keep_going: bool = False,
+        progress: bool = False,
+        out=sys.stderr,  # type: ignore[no-untyped-def]
+    ) -> CheckResult:
+        t0 = time.perf_counter()
+        res = CheckResult(self.scenario.name, self.deployer_name, tuple(i.name for i in self.invariants), HOLDS, symmetry=self.symmetry is not None)
+        canon = self.symmetry.canon if self.symmetry is not None else (lambda k: k)
+        init = canon(self.initial())
+        parents: dict[Key, tuple[Key | None, Label | None]] = {init: (None, None)}
+        found: dict[str, Counterexample] = {}
+        wanted = {i.name for i in self.invariants}
+        frontier = [init]
+        depth = 0
+        transitions = 0
+        last_progress = t0
+        incomplete = ""
+        rules = res.rules
+        branches = res.branches
+
+        def record(name: str, msg: str, key: Key, during: str | None = None, extra: Label | None = None) -> None:
+            if name in found:
+                return
+            found[name] = self._counterexample(parents, key, name, msg, during, extra)
+
+        def done() -> bool:
+            return (not keep_going and bool(found)) or wanted <= set(found)
+
+        for name, msg in self.violations(init):
+            record(name, msg, init)
+        expanded = 0
+        while frontier and not done() and not incomplete:
+            if max_depth is not None and depth >= max_depth:
+                incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
+                break
+            nxt: list[Key] = []
+            for key in frontier:
+                if done():
+                    break
+                expanded += 1
+                if (expanded & 255) == 0:
+                    now = time.perf_counter()
+                    if timeout is not None and now - t0 > timeout:
+                        incomplete = f"timeout {timeout:g}s"
+                        break
+                    if progress and now - t0 > 1.0 and now - last_progress > 0.5:
+                        last_progress = now
+                        rate = len(parents) / (now - t0)
+                        print(f"\r  {len(parents):,} states  {transitions:,} transitions  depth {depth}  {rate:,.0f} states/s ", end="", file=out, flush=True)
+                rules[key.context] += 1
+                for event in self.enabled(key):
+                    kind = event_kind(event)
+                    res.enabled[kind] += 1
+                    if self.symmetry is not None:
+                        self.symmetry.check(key, event)
+                    for fails, nkey, log, instant in self.successors(key, event):
+                        transitions += 1
+                        for cmd, ok in log.commands:  # type: ignore[attr-defined]
+                            if isinstance(cmd, Start):
+                                branches["start ok" if ok else "start failed"] += 1
+                            elif isinstance(cmd, Stop):
+                                branches["stop ok" if ok else "stop failed"] += 1
+                            else:
+                                branches[f"error {cmd.kind}"] += 1
+                        if not log.commands:  # type: ignore[attr-defined]
+                            branches["no command (kept)"] += 1
+                        if instant is not None and instant[0] not in found:
+                            record(instant[0], instant[1], key, instant[2], (event, fails))
+                            if done():
+                                break
+                        if nkey != key:
+                            res.changed[kind] += 1
+                        ckey = canon(nkey)
+                        if ckey in parents:
+                            continue
+                        parents[ckey] = (key, (event, fails))
+                        res.new_states[kind] += 1
+                        if max_states is not None and len(parents) >= max_states:
+                            incomplete = f"max states {max_states:,} reached"
+                        bad = self.violations(ckey)
+                        if bad:
+                            for name, msg in bad:
+                                record(name, msg, ckey)
+                            continue  # do not explore beyond a violation
+                        nxt.append(ckey)
+                    if done() or incomplete:
+                        break
+                if incomplete:
+                    break
+            if nxt:
+                depth += 1
+            frontier = nxt
+        if progress and time.perf_counter() - t0 > 1.0:
+            print("", file=out, flush=True)
+        res.states = len(parents)
+        res.transitions = transitions
+        res.depth = max([depth] + [c.length for c in found.values()])
+        res.seconds = time.perf_counter() - t0
+        res.peak_mb = _peak_mb()
+        res.counterexamples = [found[i.name] for i in self.invariants if i.name in found]
+        if res.counterexamples:
+            res.verdict = VIOLATED
+            res.reason = ", ".join(c.invariant for c in res.counterexamples)
+            if incomplete:
+                res.reason += f" (search incomplete: {incomplete})"
+        elif incomplete:
+            res.verdict, res.reason = INCOMPLETE, incomplete
+        return res
+
+    # -- traces ------------------------------------------------------------------------------
+    def _counterexample(self, parents, key: Key, name: str, msg: str, during: str | None, extra: Label | None) -> Counterexample:  # type: ignore[no-untyped-def]
+        labels: list[Label] = []
+        keys: list[Key] = []
+        k: Key | None = key
+        while k is not None:
+            parent, label = parents[k]
+            keys.append(k)
+            if label is not None:
+                labels.append(label)
+            k = parent
+        labels.reverse()
+        keys.reverse()
+        if extra is not None:
+            labels.append(extra)
+        steps = self.replay(labels, expect=keys)
+        return Counterexample(name, msg, tuple(steps), during)
+
+    def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]:
+        """Rebuild the states of ``labels`` from the initial state (the trace); checks determinism."""
+        key = self.initial()
+        if self.symmetry is not None:
+            return self.symmetry.replay(labels, expect)
+        if expect and key != expect[0]:
+            raise NondeterminismError(f"the initial reaction is not deterministic: got {key}, stored {expect[0]}")
+        steps = [Step(0, None, (), describe_state(key), key)]
+        for i, (event, fails) in enumerate(labels, 1):
+            prefix = tuple(j not in fails for j in range(max(fails) + 1)) if fails else ()
+            prev = key
+            key, _outcomes, log, _instant = self.run_one(prev, event, prefix)
+            if expect is not None and i < len(expect) and key != expect[i]:
+                raise NondeterminismError(
+                    f"replaying step {i} ({event}) did not reproduce the stored state: the system under test is nondeterministic\n"
+                    f"  stored:   {expect[i]}\n  replayed: {key}"
+                )
+            steps.append(self._step(i, prev, event, key, log, fails))
+        return steps
+
+    def _step(self, i: int, prev: Key, event: Event, key: Key, log, fails: tuple[int, ...] = ()) -> Step:  # type: ignore[no-untyped-def]
+        failed = tuple(str(c) for c, ok in log.commands if isinstance(c, Start) and ok is False)
+        cmds = tuple(f"{c}: {'ok' if ok else 'FAILED'}" if ok is not None else str(c).splitlines()[0] for c, ok in log.commands)
+        return Step(i, event, failed, diff(prev, key, log), key, cmds, tuple(fails))
+
+
+def describe_state(key: Key) -> tuple[str, ...]:
+    out = [f"context {key.context or '(none)'}"]
+    out.append("deployed: " + (", ".join(f"{g} on {p}" for g, p in key.deployments) or "nothing"))
+    if key.failed:
+        out.append("failed devices: " + ", ".join(key.failed))
+    if key.down:
+        out.append("platforms down: " + ", ".join(key.down))
+    loads = [f"{p} {r}={a:g}" for p, items in key.loads for r, a in items]
+    if loads:
+        out.append("loads: " + ", ".join(loads))
+    if key.standing:
+        out.append("errors standing for: " + ", ".join(key.standing))
+    return tuple(out)
+
+
+def diff(prev: Key, key: Key, log) -> tuple[str, ...]:  # type: ignore[no-untyped-def]
+    """What changed between two states, in repository terms."""
+    out: list[str] = []
+    if prev.context != key.context:
+        out.append(f"IN_CONTEXT {prev.context} => {key.context}")
+    for d in sorted(set(key.failed) - set(prev.failed)):
+        out.append(f"-HAS_DEVICE {d}")
+    for d in sorted(set(prev.failed) - set(key.failed)):
+        out.append(f"+HAS_DEVICE {d}")
+    for p in sorted(set(key.down) - set(prev.down)):
+        out.append(f"{p} down")
+    for p in sorted(set(prev.down) - set(key.down)):
+        out.append(f"{p} up")
+    if prev.loads != key.loads:
+        before = {(p, r): a for p, items in prev.loads for r, a in items}
+        for p, items in key.loads:
+            for r, a in items:
+                if before.get((p, r), 0) != a:
+                    out.append(f"load {p} {r} {before.get((p, r), 0):g} => {a:g}")
+    for c, ok in log.commands:
+        if isinstance(c, Start) and ok is False:
+            out.append(f"start {c.graph} on {c.platform} FAILED")
+    for g, p in sorted(set(prev.deployments) - set(key.deployments)):
+        out.append(f"{g} -[DEPLOYED_ON => DEPLOYMENT_HISTORY]-> {p}")
+    for g, p in sorted(set(key.deployments) - set(prev.deployments)):
+        out.append(f"+{g} -[DEPLOYED_ON]-> {p}")
+    for c, _ok in log.commands:
+        if isinstance(c, RaiseError):
+            out.append(f"error {c.kind}: {c.graph}" + (f" on {c.platform}" if c.platform else ""))
+    if prev.standing != key.standing:
+        out.append("standing errors: " + (", ".join(key.standing) or "none"))
+    return tuple(out) or ("nothing",)

@@ -1,0 +1,61 @@
+"""``desmon verify`` and ``desmon fuzz``: the CLI handlers (they return the exit code)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from desmon.errors import CheckerError, DesmonError
+
+__all__ = ["verify_command", "fuzz_command"]
+
+
+def _positive(name: str, value: float | int | None) -> None:
+    if value is not None and value <= 0:
+        raise CheckerError(f"--{name} must be positive, got {value}")
+
+
+def verify_command(args: argparse.Namespace) -> int:
+    from desmon.loader import load_scenario
+    from desmon.verify.checker import Checker
+    from desmon.verify.report import counterexample_pytest, format_result, result_to_json
+
+    _positive("max-states", args.max_states)
+    _positive("max-depth", args.max_depth)
+    _positive("timeout", args.timeout)
+    scenario = load_scenario(args.scenario)
+    checker = Checker(scenario, args.deployer, invariants=args.invariant, symmetry=bool(getattr(args, "symmetry", False)))
+    result = checker.run(
+        max_states=args.max_states,
+        max_depth=args.max_depth,
+        timeout=args.timeout,
+        keep_going=args.keep_going,
+        progress=not args.no_progress,
+    )
+    print(format_result(result), end="")
+    if args.json:
+        Path(args.json).write_text(json.dumps(result_to_json(result), indent=2) + "\n")
+        print(f"wrote {args.json}")
+    if args.pytest:
+        if result.counterexamples:
+            path = str(Path(args.scenario).resolve())
+            Path(args.pytest).write_text(counterexample_pytest(result, path, checker.bounds.start_action(scenario)))
+            print(f"wrote {args.pytest}")
+        else:
+            print(f"no counterexample: {args.pytest} not written")
+    return result.exit_code
+
+
+def fuzz_command(args: argparse.Namespace) -> int:
+    from desmon.verify.fuzz import fuzz
+
+    if args.examples <= 0:
+        raise CheckerError(f"--examples must be positive, got {args.examples}")
+    from desmon.loader import load_scenario
+
+    scenario = load_scenario(args.scenario)
+    outcome = fuzz(scenario, args.deployer, examples=args.examples, seed=args.seed, progress=not args.no_progress)
+    print(outcome.text, end="")
+    return outcome.exit_code

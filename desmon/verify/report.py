@@ -1,0 +1,252 @@
+"""Presenting checker results: text report, numbered traces, JSON (ITF-like), a pytest."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+from desmon.verify.checker import CheckResult, Counterexample, Step
+from desmon.verify.state import Key
+
+__all__ = ["format_result", "format_trace", "result_to_json", "counterexample_pytest", "event_to_json", "event_from_json", "key_to_json"]
+
+
+def format_trace(steps: tuple[Step, ...] | list[Step], *, indent: str = "  ") -> str:
+    """Numbered steps ``event -> what changed``."""
+    lines = []
+    for s in steps:
+        changes = "; ".join(s.changes)
+        lines.append(f"{indent}{s.index:>2}. {s.title()} -> {changes}")
+    return "\n".join(lines)
+
+
+def format_counterexample(c: Counterexample) -> str:
+    head = f"VIOLATED {c.invariant} after {c.length} step{'s' if c.length != 1 else ''} (shortest)"
+    if c.during:
+        head += f", during the reaction, right after `{c.during}`"
+    return f"{head}:\n{format_trace(c.steps)}\n  => {c.invariant}: {c.message}"
+
+
+def format_result(r: CheckResult) -> str:
+    lines = [f"{r.scenario} -- deployer {r.deployer} -- invariants: {', '.join(r.invariants)}" + (" -- symmetry reduction" if r.symmetry else "")]
+    for c in r.counterexamples:
+        lines.append("")
+        lines.append(format_counterexample(c))
+    lines.append("")
+    verdict = r.verdict + (f" ({r.reason})" if r.reason else "")
+    lines.append(f"verdict: {verdict}")
+    lines.append(
+        f"states: {r.states:,}  transitions: {r.transitions:,}  depth: {r.depth}  time: {r.seconds:.2f}s  "
+        f"{r.states_per_second:,.0f} states/s  {r.transitions_per_second:,.0f} transitions/s  peak memory: {r.peak_mb:.0f} MB"
+    )
+    kinds = sorted(set(r.enabled) | set(r.new_states))
+    if kinds:
+        lines.append("events (enabled / new states): " + ", ".join(f"{k} {r.enabled[k]:,}/{r.new_states[k]:,}" for k in kinds))
+        dead = [k for k in kinds if not r.changed[k]]
+        if dead and r.verdict == "HOLDS":
+            lines.append("  warning: dead event kinds (never changed the state; a scenario bug?): " + ", ".join(dead))
+    if r.rules:
+        lines.append("selector contexts exercised: " + ", ".join(f"{c or '(none)'} {n:,}" for c, n in sorted(r.rules.items(), key=lambda x: str(x[0]))))
+    if r.branches:
+        lines.append("deployer branches: " + ", ".join(f"{b} {n:,}" for b, n in sorted(r.branches.items())))
+    return "\n".join(lines) + "\n"
+
+
+# -- JSON ------------------------------------------------------------------------------------
+def event_to_json(e: Event | None) -> dict[str, Any] | None:
+    if e is None:
+        return None
+    if isinstance(e, ActionChange):
+        return {"kind": "action", "action": e.action}
+    if isinstance(e, (DeviceFail, DeviceRepair)):
+        return {"kind": "device_fail" if isinstance(e, DeviceFail) else "device_repair", "device": e.device}
+    if isinstance(e, (PlatformDown, PlatformUp)):
+        return {"kind": "platform_down" if isinstance(e, PlatformDown) else "platform_up", "platform": e.platform}
+    return {"kind": "load", "platform": e.platform, "amount": e.amount, "resource": e.resource}
+
+
+def event_from_json(d: dict[str, Any]) -> Event:
+    k = d["kind"]
+    if k == "action":
+        return ActionChange(d["action"])
+    if k == "device_fail":
+        return DeviceFail(d["device"])
+    if k == "device_repair":
+        return DeviceRepair(d["device"])
+    if k == "platform_down":
+        return PlatformDown(d["platform"])
+    if k == "platform_up":
+        return PlatformUp(d["platform"])
+    return LoadChange(d["platform"], d["amount"], d.get("resource", "memory"))
+
+
+def key_to_json(k: Key) -> dict[str, Any]:
+    return {
+        "context": k.context,
+        "failed_devices": list(k.failed),
+        "platforms_down": list(k.down),
+        "loads": {p: dict(items) for p, items in k.loads},
+        "deployments": [list(d) for d in k.deployments],
+        "standing_errors": list(k.standing),
+    }
+
+
+def counterexample_to_json(c: Counterexample) -> dict[str, Any]:
+    return {
+        "invariant": c.invariant,
+        "message": c.message,
+        "during": c.during,
+        "length": c.length,
+        "states": [
+            {"step": s.index, "event": event_to_json(s.event), "failed_starts": list(s.failed_starts), "changes": list(s.changes), "state": key_to_json(s.key)}
+            for s in c.steps
+        ],
+    }
+
+
+def result_to_json(r: CheckResult) -> dict[str, Any]:
+    return {
+        "scenario": r.scenario,
+        "deployer": r.deployer,
+        "verdict": r.verdict,
+        "reason": r.reason,
+        "states": r.states,
+        "transitions": r.transitions,
+        "depth": r.depth,
+        "seconds": round(r.seconds, 3),
+        "invariants": list(r.invariants),
+        "counterexamples": [counterexample_to_json(c) for c in r.counterexamples],
+    }
+
+
+# -- generated pytest -------------------------------------------------------------------------
+_PYTEST = '''"""Generated by `desmon verify`: replays the shortest counterexample(s) through the real core.
+
+Scenario {scenario_path!r}, deployer {deployer!r}. Each step is one environment event and
+the complete reaction of the DeploymentCore over the networkx repository; starts listed
+in FAILS fail. The test asserts the invariant is violated where the checker said.
+"""
+
+from desmon.deployment.core import DeploymentCore, run_sync
+from desmon.deployment.invariants import check_invariants, get_invariants
+from desmon.deployment.monitor import Stimulus
+from desmon.loader import load_scenario
+from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformUp
+from desmon.repository import labels as L
+from desmon.repository.facts import ImmediateControl, RepositoryInsert, load_model
+from desmon.repository.query import RepositoryQuery
+from desmon.repository.store import Repository
+
+SCENARIO = {scenario_path!r}
+DEPLOYER = {deployer!r}
+INITIAL_ACTION = {initial_action!r}
+
+
+class ScriptedControl(ImmediateControl):
+    """ImmediateControl whose real starts fail at the given indices of the current reaction."""
+
+    def __init__(self, repo):
+        super().__init__(repo)
+        self.fails, self.n = (), 0
+
+    def start(self, graph, platform):
+        if (graph, platform) in self.running:
+            return True
+        i, self.n = self.n, self.n + 1
+        if i in self.fails:
+            return False
+        return super().start(graph, platform)
+
+
+def replay(steps):
+    scenario = load_scenario(SCENARIO)
+    repo = Repository()
+    load_model(repo, scenario.model)
+    q = RepositoryQuery(repo)
+    control = ScriptedControl(repo)
+    core = DeploymentCore(scenario.model, q, RepositoryInsert(repo, scenario.model.robot), DEPLOYER)
+    for ev in scenario.initial:
+        core.observe(ev)
+    if INITIAL_ACTION is not None:
+        core.step(ActionChange(INITIAL_ACTION), control, force=True)
+    else:
+        log = run_sync(core.reaction(Stimulus(context_changed=True)), control)
+        core.settle(e.graph for e in log.errors)
+    views = []
+    for event, fails in steps:
+        control.fails, control.n = fails, 0
+        core.step(event, control)
+        views.append(core.view(running=tuple(sorted(control.running))))
+    return views
+'''
+
+_CASE = '''
+
+def test_{name}():
+    """{invariant} violated after {length} step(s){during}."""
+    steps = [
+{steps}
+    ]
+    views = replay(steps)
+    bad = check_invariants(views[-1], get_invariants([{invariant!r}]))
+    assert bad, "the counterexample no longer violates {invariant}"
+    for view in views[:-1]:
+        assert not check_invariants(view, get_invariants([{invariant!r}]))
+'''
+
+
+def counterexample_pytest(r: CheckResult, scenario_path: str, initial_action: str | None) -> str:
+    src = _PYTEST.format(scenario_path=scenario_path, deployer=r.deployer, initial_action=initial_action)
+    for c in r.counterexamples:
+        steps = []
+        for s in c.steps[1:]:
+            fails = _fail_indices(s)
+            steps.append(f"        ({s.event!r}, {fails!r}),")
+        during = f" (during the reaction, after {c.during})" if c.during else ""
+        if c.during:
+            # an instantaneous violation: the final stable state may have repaired it
+            src += _CASE_DURING.format(name=c.invariant.replace("-", "_"), invariant=c.invariant, length=c.length, during=during, steps="\n".join(steps))
+        else:
+            src += _CASE.format(name=c.invariant.replace("-", "_"), invariant=c.invariant, length=c.length, during=during, steps="\n".join(steps))
+    return src
+
+
+_CASE_DURING = '''
+
+def test_{name}():
+    """{invariant} violated after {length} step(s){during}: replayed with an audit after every command."""
+    steps = [
+{steps}
+    ]
+    from desmon.deployment.invariants import SystemView
+    bad = []
+    orig_start, orig_stop = ScriptedControl.start, ScriptedControl.stop
+
+    def audit(self):
+        scenario = load_scenario(SCENARIO)
+        q = RepositoryQuery(self.repo)
+        view = SystemView(q.platform_states(), scenario.model.specs, frozenset(), ())
+        bad.extend(check_invariants(view, get_invariants([{invariant!r}])))
+
+    def start(self, g, p):
+        ok = orig_start(self, g, p)
+        audit(self)
+        return ok
+
+    def stop(self, g, p):
+        ok = orig_stop(self, g, p)
+        audit(self)
+        return ok
+
+    ScriptedControl.start, ScriptedControl.stop = start, stop
+    try:
+        replay(steps)
+    finally:
+        ScriptedControl.start, ScriptedControl.stop = orig_start, orig_stop
+    assert bad, "the counterexample no longer violates {invariant}"
+'''
+
+
+def _fail_indices(s: Step) -> tuple[int, ...]:
+    return s.fail_indices
