@@ -28,6 +28,7 @@ from __future__ import annotations
 from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
 from desmon.model.events import ActionChange, DeviceFail, LoadChange
 from desmon.model.scenario import Scenario, TimedEvent
+from desmon.sim.world import Slip, Step, World
 from desmon.verify.bounds import Bounds, levels
 
 FORCE = "force_slip_detector"
@@ -85,6 +86,15 @@ scenario = Scenario(
         TimedEvent(5.0, ActionChange(MOVE_BASE), "t1"),
         TimedEvent(20.0, ActionChange(RELEASE), "t2"),
         TimedEvent(23.0, DeviceFail("lwr_wrench"), "t3"),
+    ),
+    world=World(  # the SimPy world (desmon run): same t0..t3, with latencies, signals and two slips
+        task=(Step(HOLD, 5.0), Step(MOVE_BASE, 15.0), Step(RELEASE, 8.0)),
+        horizon=28.0,
+        faults=(TimedEvent(23.0, DeviceFail("lwr_wrench"), "t3"),),
+        slips=(Slip(12.0, "down", "gravitational"), Slip(21.5, "up", "pulled")),
+        start_latency=0.25,
+        recognition_delay=0.1,
+        heartbeat_timeout=0.2,
     ),
     checker=Bounds(
         actions=(HOLD, GRASP, MOVE_BASE, RELEASE),

@@ -1,0 +1,153 @@
+"""``desmon run``: simulate a scenario in the SimPy world and print a readable summary.
+
+Exit codes: 0 every audit passed, 1 an invariant was violated, 2 bad input (raised as a
+one-line :class:`~desmon.errors.DesmonError`, printed by the CLI).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from typing import IO, Any
+
+from desmon.errors import ScenarioError
+from desmon.sim.engine import RunResult, SimWorld
+from desmon.sim.trace import Trace
+
+__all__ = ["run_command", "format_summary", "summary_json"]
+
+MAX_TIMELINE = 40
+
+
+def _fmt(v: Any) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.3f}".rstrip("0").rstrip(".") if v != int(v) else f"{v:g}"
+    if isinstance(v, dict):
+        return ", ".join(f"{k} {_fmt(x)}" for k, x in v.items()) or "-"
+    return str(v)
+
+
+def format_summary(r: RunResult, wall: float | None = None) -> str:
+    m = r.metrics
+    lines = [f"{r.scenario.name} -- SimPy world, deployer {r.deployer}, seed {r.seed}, {r.horizon:g} s simulated"]
+    if wall is not None:
+        lines[0] += f" in {wall:.2f} s wall"
+    lines += ["", "Deployment decisions:"]
+    shown = 0
+    rows: list[tuple[float, str]] = []
+    for d in r.decisions:
+        why = f" ({d['why']})" if d.get("why") else ""
+        rows.append((d["t"], f"  t={d['t']:>9.3f}s  {d['command']} {d['graph']} on {d['platform']}: {'ok' if d['ok'] else 'FAILED'}{why}"))
+    for e in r.errors:
+        rows.append((e.time, f"  t={e.time:>9.3f}s  ERROR {e.kind}: {e.graph}" + (f" on {e.platform}" if e.platform else "")))
+    rows.sort(key=lambda x: x[0])
+    for _t, line in rows:
+        if shown >= MAX_TIMELINE:
+            lines.append(f"  ... {len(rows) - shown} more (see --trace)")
+            break
+        lines.append(line)
+        shown += 1
+    if not rows:
+        lines.append("  (none)")
+    lines += ["", "Errors by kind:"]
+    lines += [f"  {k:<32} {n}" for k, n in m["errors"].items()] or ["  (none)"]
+    lines += ["", "Metrics:"]
+    order = [
+        ("unmonitored exposure (s)", "unmonitored_exposure_s"),
+        ("risky time (s)", "risky_time_s"),
+        ("switches", "switches"),
+        ("blind time per switch (s)", "blind_time_per_switch_s"),
+        ("blind time max (s)", "blind_time_max_s"),
+        ("starts / failed starts", None),
+        ("stops", "stops"),
+        ("migrations", "migrations"),
+        ("slips injected", "slips_injected"),
+        ("slips detected", "slips_detected"),
+        ("slips missed", "slips_missed"),
+        ("false alarms", "false_alarms"),
+        ("detection latency median (s)", "latency_median_s"),
+        ("detection latency p95 (s)", "latency_p95_s"),
+        ("memory peak (MB)", "memory_peak_mb"),
+        ("over capacity (s)", "overcommit_s"),
+        ("reactions / audits", None),
+    ]
+    for label, key in order:
+        if key is None:
+            if label.startswith("starts"):
+                val = f"{m['starts']} / {m['start_failures']}"
+            else:
+                val = f"{m['reactions']} / {m.get('audits', '-')}"
+        elif key not in m:
+            continue
+        else:
+            val = _fmt(m[key])
+        lines.append(f"  {label:<30} {val}")
+    lines.append("")
+    if r.violations:
+        lines.append(f"INVARIANTS VIOLATED ({len(r.violations)}):")
+        for t, name, msg in r.violations[:10]:
+            lines.append(f"  t={t:.3f}s {name}: {msg}")
+        if len(r.violations) > 10:
+            lines.append(f"  ... {len(r.violations) - 10} more")
+    else:
+        lines.append("Invariants: all held after every reaction.")
+    return "\n".join(lines) + "\n"
+
+
+def summary_json(r: RunResult, wall: float | None = None) -> dict[str, Any]:
+    return {
+        "scenario": r.scenario.name,
+        "deployer": r.deployer,
+        "seed": r.seed,
+        "horizon_s": r.horizon,
+        "wall_s": None if wall is None else round(wall, 3),
+        "decisions": r.decisions,
+        "errors": [e.to_json() for e in r.errors],
+        "violations": [{"t": t, "invariant": n, "message": m} for t, n, m in r.violations],
+        "metrics": r.metrics,
+    }
+
+
+def run_command(args: Any, out: IO[str] | None = None, err: IO[str] | None = None) -> int:
+    from desmon.loader import load_scenario
+
+    out = out or sys.stdout
+    err = err or sys.stderr
+    if args.until is not None and not args.until > 0:
+        raise ScenarioError(f"--until {args.until!r}: give a positive number of simulated seconds")
+    if args.seed is not None and args.seed < 0:
+        raise ScenarioError(f"--seed {args.seed!r}: give a non-negative integer")
+    scenario = load_scenario(args.scenario)
+    fh = None
+    if args.trace:
+        try:
+            fh = open(args.trace, "w", encoding="utf-8")
+        except OSError as exc:
+            raise ScenarioError(f"--trace {args.trace}: cannot write: {exc.strerror}") from None
+    progress = None
+    show = not getattr(args, "no_progress", False) and not args.json
+    t_wall = time.perf_counter()
+    if show:
+        def progress(now: float, horizon: float) -> None:
+            if time.perf_counter() - t_wall > 1.0:
+                print(f"desmon run: {100 * now / horizon:5.1f}%  t={now:.0f}/{horizon:.0f} s", file=err, flush=True)
+    try:
+        world = SimWorld(
+            scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=Trace(fh, keep=False), progress=progress
+        )
+        result = world.run()
+        result.metrics["audits"] = world.audits
+    finally:
+        if fh is not None:
+            fh.close()
+    wall = time.perf_counter() - t_wall
+    if args.json:
+        out.write(json.dumps(summary_json(result, wall), indent=2) + "\n")
+    else:
+        out.write(format_summary(result, wall))
+        if args.trace:
+            out.write(f"Trace: {args.trace} ({result.trace.count} records)\n")
+    return 1 if result.violations else 0

@@ -1,0 +1,566 @@
+"""The SimPy world: robot, sensors, platforms, fault injector, context monitor,
+infrastructure (the Control port) and the deployer's process, with the audit.
+
+Every process is a thin shell around the pure deployment core
+(:class:`desmon.deployment.core.DeploymentCore`): it waits, reads the clock and calls
+the core; no decision is made here.
+
+* **Robot** walks the task's ground-truth segments; each new action becomes a gripper /
+  base observation that the context monitor interprets (``deployment.monitor.interpret``)
+  after the recognition delay.
+* **Context monitor** inserts facts into the networkx repository through the core's
+  Insert port (context, HAS_DEVICE loss / repair noticed after the heartbeat timeout,
+  platform up / down, background load). The repository's Notify subscription wakes the
+  deployer process.
+* **Deployer process** drives ``core.reaction(stimulus)``: each ``Start`` waits the
+  platform's start latency and then succeeds or fails (platform up, enough free memory,
+  scripted or seeded random failure); a success starts the detector process and
+  ``record_start``\\ s the DEPLOYED_ON edge; ``Stop`` frees the memory and records the
+  DEPLOYMENT_HISTORY; ``RaiseError`` is stamped with ``env.now``. After every reaction
+  ``core.settle`` and, when no newer fact is pending, the named invariants are audited
+  on the live repository.
+* **Detector processes** wake once per ``world.block`` seconds and consume every sample
+  of their devices since the last wake-up, in one vectorised call.
+* **Fault injector** fails and repairs devices and platforms (script or MTTF / MTTR);
+  **load** processes change the background memory load (script or random walk).
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import simpy
+
+from desmon.deployment.core import DeploymentCore, stamp
+from desmon.deployment.invariants import check_invariants
+from desmon.deployment.monitor import GripperObservation, Stimulus, interpret
+from desmon.deployment.ports import ErrorRecord, RaiseError, Start, Stop
+from desmon.detectors.base import Alarm
+from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
+from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+from desmon.model.requirements import Capacity
+from desmon.model.scenario import Scenario
+from desmon.repository import labels as L
+from desmon.repository.facts import RepositoryInsert, load_model, record_start, record_stop
+from desmon.repository.query import RepositoryQuery
+from desmon.repository.store import ADD_EDGE, REMOVE_EDGE, RELABEL_EDGE, UPDATE_NODE, Repository
+from desmon.sim.metrics import Exposure, MemoryMeter, slip_metrics
+from desmon.sim.sensors import DetectorAdapter, SensorBank
+from desmon.sim.trace import Trace
+from desmon.sim.world import Segment, Slip, World, draw_slips, expand_task, world_of
+
+__all__ = ["SimWorld", "RunResult", "simulate", "OBSERVATION"]
+
+#: What the context monitor sees of gripper and base in each ground-truth action.
+OBSERVATION = {
+    GRASP: GripperObservation("closing"),
+    RELEASE: GripperObservation("opening"),
+    MOVE_BASE: GripperObservation("closed", base_moving=True),
+    HOLD: GripperObservation("closed"),
+    IDLE: GripperObservation("open", holding=False),
+}
+
+
+@dataclass
+class Instance:
+    """A running detector: a graph started on a platform by the infrastructure."""
+
+    graph: str
+    platform: str
+    memory: float
+    streams: dict[str, tuple[str, ...]]  # stream -> devices read
+    adapter: DetectorAdapter | None
+    started: float
+    valid_from: float = math.inf
+    fed: float = 0.0
+    halted: bool = False
+    proc: Any = None
+
+
+@dataclass
+class RunResult:
+    """Everything a run produced."""
+
+    scenario: Scenario
+    world: World
+    deployer: str
+    seed: int
+    horizon: float
+    trace: Trace
+    repo: Repository
+    metrics: dict[str, Any]
+    decisions: list[dict[str, Any]]
+    errors: list[ErrorRecord]
+    violations: list[tuple[float, str, str]]
+    slips: tuple[Slip, ...]
+    alarms: list[Alarm]
+    events: int = 0
+
+
+class SimWorld:
+    """One simulation of a scenario (see the module docstring)."""
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        *,
+        deployer: str = "desmon",
+        seed: int = 0,
+        until: float | None = None,
+        trace: Trace | None = None,
+        signals: bool | None = None,
+        progress: Callable[[float, float], None] | None = None,
+    ) -> None:
+        self.scenario = scenario
+        self.model = scenario.model
+        self.world = world_of(scenario)
+        self.seed = int(seed)
+        self.horizon = float(until if until is not None else self.world.horizon)
+        self.signals_on = self.world.signals if signals is None else bool(signals)
+        self.trace = trace if trace is not None else Trace()
+        self.progress = progress
+        self.env = simpy.Environment()
+        env = self.env
+        self.repo = Repository(clock=lambda: env.now)
+        load_model(self.repo, self.model)
+        self.query = RepositoryQuery(self.repo)
+        self.core = DeploymentCore(self.model, self.query, RepositoryInsert(self.repo, self.model.robot), deployer)
+        self.deployer_name = self.core.deployer.name
+        # physical state
+        self.up = {p.name: True for p in self.model.platforms}
+        self.load: dict[str, float] = {p.name: 0.0 for p in self.model.platforms}
+        self.dev_ok = {d.name: True for d in self.model.devices}
+        self.instances: dict[tuple[str, str], Instance] = {}
+        self.stops = 0
+        self.history_edges = 0
+        self.attempts: dict[tuple[str, str], int] = {}
+        self.rng_start = random.Random(f"{self.seed}:start")
+        # ground truth
+        self.segments: tuple[Segment, ...] = expand_task(self.world, self.horizon)
+        self.slips = draw_slips(self.world, self.segments, self.seed)
+        self.slips = tuple(s for s in self.slips if s.time < self.horizon)
+        devs = [(d, self.world.signal_of(d.kind)) for d in self.model.devices]
+        self.stream_of = {d.name: s for d, s in devs}
+        self.bank: SensorBank | None = None
+        if self.signals_on:
+            self.bank = SensorBank(self.segments, self.slips, self.seed, [(d, s) for d, s in devs if s is not None])
+        # metrics
+        self.exposure = Exposure(self._valid_from)
+        self.memory = MemoryMeter({p.name: p.capacity("memory") or math.inf for p in self.model.platforms})
+        self.alarms: list[Alarm] = []
+        self.decisions: list[dict[str, Any]] = []
+        self.errors: list[ErrorRecord] = []
+        self.violations: list[tuple[float, str, str]] = []
+        self.starts = self.start_failures = self.migrations = self.reactions = self.audits = 0
+        # initial facts, silently (before Notify is wired)
+        for ev in scenario.initial:
+            self._apply_physical(ev, 0.0)
+            self.core.observe(ev)
+        for p in self.up:
+            self.memory.set(p, 0.0, self._used(p))
+        # Notify: repository changes wake the deployer
+        self.pending_platforms: dict[str, None] = {}
+        self.pending_context = False
+        self.wake: simpy.Event | None = None
+        self.repo.subscribe(self._notify, ops=(ADD_EDGE, REMOVE_EDGE, UPDATE_NODE), labels=(L.IN_CONTEXT, L.HAS_DEVICE, L.PLATFORM))
+        self.repo.subscribe(self._count_history, ops=(RELABEL_EDGE,), labels=(L.DEPLOYMENT_HISTORY,))
+
+    # ------------------------------------------------------------------ physical state
+    def _apply_physical(self, ev: Event, t: float) -> None:
+        if isinstance(ev, LoadChange) and ev.resource == "memory":
+            self.load[ev.platform] = ev.amount
+        elif isinstance(ev, DeviceFail):
+            self.dev_ok[ev.device] = False
+            if self.bank is not None:
+                self.bank.fail(ev.device, t)
+        elif isinstance(ev, DeviceRepair):
+            self.dev_ok[ev.device] = True
+            if self.bank is not None:
+                self.bank.repair(ev.device, t)
+
+    def _used(self, p: str) -> float:
+        if not self.up[p]:
+            return 0.0
+        return self.load[p] + sum(i.memory for i in self.instances.values() if i.platform == p)
+
+    def _mem(self, p: str) -> None:
+        self.memory.set(p, self.env.now, self._used(p))
+
+    def _inputs_ok(self, inst: Instance) -> bool:
+        return all(any(self.dev_ok[d] for d in devs) for devs in inst.streams.values())
+
+    def _alive(self, inst: Instance) -> bool:
+        return self.up[inst.platform] and not inst.halted and self._inputs_ok(inst)
+
+    def _valid_from(self, graph: str) -> float:
+        best = math.inf
+        for inst in self.instances.values():
+            if inst.graph == graph and self._alive(inst):
+                best = min(best, inst.valid_from)
+        return best
+
+    # ------------------------------------------------------------------ Notify
+    def _notify(self, change: Any) -> None:
+        if change.label == L.IN_CONTEXT:
+            self.pending_context = True
+        elif change.label == L.HAS_DEVICE:
+            self.pending_platforms[self.repo.graph.nodes[change.source]["name"]] = None
+        elif change.label == L.PLATFORM and change.op == UPDATE_NODE:
+            self.pending_platforms[self.repo.graph.nodes[change.node]["name"]] = None
+        if self.wake is not None and not self.wake.triggered:
+            self.wake.succeed()
+
+    def _count_history(self, change: Any) -> None:
+        self.history_edges += 1
+
+    def _take_stimulus(self) -> Stimulus:
+        stim = Stimulus(tuple(self.pending_platforms), self.pending_context)
+        self.pending_platforms = {}
+        self.pending_context = False
+        return stim
+
+    # ------------------------------------------------------------------ processes
+    def _robot(self):  # type: ignore[no-untyped-def]
+        env = self.env
+        for seg in self.segments:
+            if seg.start > env.now:
+                yield env.timeout(seg.start - env.now)
+            wanted = frozenset(g for slot in self.model.rules.slots_for(seg.action) for g in slot)
+            self.exposure.set_wanted(env.now, wanted)
+            self.trace.emit(env.now, "action", action=seg.action, duration=seg.duration)
+            env.process(self._recognise(seg.action))
+
+    def _recognise(self, action: str):  # type: ignore[no-untyped-def]
+        if self.world.recognition_delay:
+            yield self.env.timeout(self.world.recognition_delay)
+        obs = OBSERVATION.get(action)
+        context = interpret(obs) if obs is not None else action
+        self._insert(ActionChange(context))
+
+    def _insert(self, ev: Event) -> None:
+        """The context monitor writes a fact (Insert); Notify does the rest."""
+        stim = self.core.observe(ev)
+        if not stim.empty:
+            self.trace.emit(self.env.now, "fact", fact=str(ev))
+
+    def _notice(self, ev: Event):  # type: ignore[no-untyped-def]
+        if self.world.heartbeat_timeout:
+            yield self.env.timeout(self.world.heartbeat_timeout)
+        self._insert(ev)
+
+    def _fault(self, ev: Event, source: str) -> None:
+        """The fault injector changes the physical world; the monitor notices later."""
+        env = self.env
+        now = env.now
+        if isinstance(ev, (DeviceFail, DeviceRepair)):
+            working = isinstance(ev, DeviceRepair)
+            if self.dev_ok[ev.device] == working:
+                return
+            self.exposure.advance(now)
+            affected = [i for i in self.instances.values() if any(ev.device in devs for devs in i.streams.values())]
+            before = {id(i): self._inputs_ok(i) for i in affected}
+            for inst in affected:
+                self._feed(inst, now)
+            self._apply_physical(ev, now)
+            for inst in affected:
+                if working and not before[id(inst)] and self._inputs_ok(inst) and self.up[inst.platform]:
+                    self._activate(inst, now)  # input back: re-tare / warm up
+        else:
+            up = isinstance(ev, PlatformUp)
+            if self.up[ev.platform] == up:
+                return
+            self.exposure.advance(now)
+            on = [i for i in self.instances.values() if i.platform == ev.platform]
+            for inst in on:
+                if up:
+                    inst.fed = now
+                    inst.halted = False
+                    self._activate(inst, now)  # the supervisor restarts it on reboot
+                else:
+                    self._feed(inst, now)
+                    inst.halted = True
+                    inst.valid_from = math.inf
+                    if inst.adapter is not None:
+                        inst.adapter.deactivate()
+            self.up[ev.platform] = up
+            self._mem(ev.platform)
+        self.trace.emit(now, "fault", event=str(ev), source=source)
+        env.process(self._notice(ev))
+
+    def _scripted_faults(self):  # type: ignore[no-untyped-def]
+        for te in self.world.faults:
+            if te.time >= self.horizon:
+                break
+            if te.time > self.env.now:
+                yield self.env.timeout(te.time - self.env.now)
+            self._fault(te.event, te.label or "script")
+
+    def _stochastic(self, component: str, mttf: float, mttr: float):  # type: ignore[no-untyped-def]
+        rng = random.Random(f"{self.seed}:fault:{component}")
+        is_dev = component in self.dev_ok
+        while True:
+            yield self.env.timeout(rng.expovariate(1.0 / mttf))
+            self._fault(DeviceFail(component) if is_dev else PlatformDown(component), "mttf")
+            yield self.env.timeout(rng.expovariate(1.0 / mttr))
+            self._fault(DeviceRepair(component) if is_dev else PlatformUp(component), "mttr")
+
+    def _set_load(self, ev: LoadChange) -> None:
+        self.load[ev.platform] = ev.amount
+        self._mem(ev.platform)
+        self.trace.emit(self.env.now, "load", platform=ev.platform, amount=ev.amount)
+        self._insert(ev)
+
+    def _scripted_loads(self):  # type: ignore[no-untyped-def]
+        for te in self.world.loads:
+            if te.time >= self.horizon:
+                break
+            if te.time > self.env.now:
+                yield self.env.timeout(te.time - self.env.now)
+            self._set_load(te.event)  # type: ignore[arg-type]
+
+    def _walk(self, i: int):  # type: ignore[no-untyped-def]
+        w = self.world.load_walks[i]
+        rng = random.Random(f"{self.seed}:load:{w.platform}:{i}")
+        x = w.start
+        self._set_load(LoadChange(w.platform, round(x, 1), w.resource))
+        while True:
+            yield self.env.timeout(w.interval)
+            x = min(w.high, max(w.low, x + w.drift + rng.gauss(0.0, w.sigma)))
+            self._set_load(LoadChange(w.platform, round(x, 1), w.resource))
+
+    def _progress(self):  # type: ignore[no-untyped-def]
+        step = self.horizon / 20
+        while True:
+            yield self.env.timeout(step)
+            if self.progress is not None:
+                self.progress(self.env.now, self.horizon)
+
+    # ------------------------------------------------------------------ infrastructure (Control)
+    def _devices_for(self, graph: str, platform: str) -> dict[str, tuple[str, ...]]:
+        out: dict[str, tuple[str, ...]] = {}
+        for kind in self.model.graph(graph).device_kinds:
+            local = tuple(d.name for d in self.model.devices if d.kind == kind and d.platform == platform)
+            devs = local or tuple(d.name for d in self.model.devices if d.kind == kind)
+            stream = self.world.signal_of(kind) or kind
+            out[stream] = out.get(stream, ()) + devs
+        return out
+
+    def _memory_of(self, graph: str) -> float:
+        spec = self.model.spec(graph)
+        if spec is None:
+            return 0.0
+        return sum(r.amount for r in spec.requirements if isinstance(r, Capacity) and r.resource == "memory")
+
+    def _activate(self, inst: Instance, now: float) -> None:
+        inst.fed = now
+        warm = inst.adapter.warmup if inst.adapter is not None else 0.0
+        inst.valid_from = now + warm
+        if inst.adapter is not None:
+            inst.adapter.activate(now)
+
+    def _start(self, graph: str, platform: str):  # type: ignore[no-untyped-def]
+        """Control.start: latency, then success or failure; returns the outcome."""
+        env = self.env
+        if (graph, platform) in self.instances:
+            return True
+        n = self.attempts[(graph, platform)] = self.attempts.get((graph, platform), 0) + 1
+        latency = self.world.latency(platform)
+        if latency:
+            yield env.timeout(latency)
+        need = self._memory_of(graph)
+        cap = self.model.platform(platform).capacity("memory")
+        reason = ""
+        if not self.up[platform]:
+            reason = "platform down"
+        elif (graph, platform, n) in self.world.start_failure.script:
+            reason = "scripted start failure"
+        elif self.world.start_failure.probability and self.rng_start.random() < self.world.start_failure.probability:
+            reason = "start failed"
+        elif cap is not None and self._used(platform) + need > cap:
+            reason = f"out of memory ({self._used(platform):g} of {cap:g} MB used, needs {need:g})"
+        if reason:
+            self.start_failures += 1
+            return reason
+        if (graph, platform) in self.instances:
+            return True
+        self.exposure.advance(env.now)
+        streams = self._devices_for(graph, platform)
+        adapter = DetectorAdapter(frozenset(streams), graph) if self.signals_on else None
+        inst = Instance(graph, platform, need, streams, adapter, env.now)
+        self._activate(inst, env.now)
+        self.instances[(graph, platform)] = inst
+        self.starts += 1
+        record_start(self.repo, graph, platform)
+        self._mem(platform)
+        if adapter is not None and adapter.det is not None:
+            inst.proc = env.process(self._detector(inst))
+        return True
+
+    def _stop(self, graph: str, platform: str) -> bool:
+        """Control.stop: free the memory, end the process, record DEPLOYMENT_HISTORY."""
+        inst = self.instances.get((graph, platform))
+        if inst is None:
+            return False
+        now = self.env.now
+        self.exposure.advance(now)
+        self._feed(inst, now)
+        del self.instances[(graph, platform)]
+        if inst.proc is not None and inst.proc.is_alive:
+            inst.proc.interrupt("stop")
+        if inst.adapter is not None:
+            inst.adapter.deactivate()
+        self.stops += 1
+        record_stop(self.repo, graph, platform)
+        self._mem(platform)
+        return True
+
+    def _detector(self, inst: Instance):  # type: ignore[no-untyped-def]
+        env = self.env
+        block = self.world.block
+        try:
+            while True:
+                nxt = (math.floor(env.now / block + 1e-9) + 1) * block
+                yield env.timeout(nxt - env.now)
+                self._feed(inst, env.now)
+        except simpy.Interrupt:
+            return
+
+    def _feed(self, inst: Instance, t1: float) -> None:
+        t0 = inst.fed
+        if t1 <= t0:
+            return
+        inst.fed = t1
+        if inst.halted or inst.adapter is None or self.bank is None or not self.up[inst.platform]:
+            return
+        alarms = inst.adapter.feed(self.bank, t0, t1, inst.streams.get("wrench", ()), inst.streams.get("tactile", ()))
+        for a in alarms:
+            self.alarms.append(a)
+            self.trace.emit(a.time, "alarm", detector=inst.graph, platform=inst.platform, direction=a.direction)
+
+    # ------------------------------------------------------------------ the deployer's process
+    def _deployer(self):  # type: ignore[no-untyped-def]
+        env = self.env
+        while True:
+            if not self.pending_platforms and not self.pending_context:
+                self.wake = env.event()
+                yield self.wake
+                self.wake = None
+            stim = self._take_stimulus()
+            self.reactions += 1
+            ctx = self.query.context()
+            self.trace.emit(env.now, "reaction", context=ctx, changed=list(stim.changed_platforms), context_changed=stim.context_changed)
+            reaction = self.core.reaction(stim)
+            raised: list[str] = []
+            stopped_here: dict[str, str] = {}
+            outcome: bool | None = None
+            while True:
+                try:
+                    cmd = reaction.send(outcome)
+                except StopIteration:
+                    break
+                issued = env.now
+                if isinstance(cmd, Start):
+                    res = yield from self._start(cmd.graph, cmd.platform)
+                    outcome = res is True
+                    elsewhere = [p for (g, p) in self.instances if g == cmd.graph and p != cmd.platform]
+                    if outcome and (elsewhere or stopped_here.get(cmd.graph, cmd.platform) != cmd.platform):
+                        self.migrations += 1
+                    self._decision("start", cmd.graph, cmd.platform, outcome, issued, "" if outcome else str(res))
+                elif isinstance(cmd, Stop):
+                    outcome = self._stop(cmd.graph, cmd.platform)
+                    if outcome:
+                        stopped_here[cmd.graph] = cmd.platform
+                    self._decision("stop", cmd.graph, cmd.platform, outcome, issued, "")
+                elif isinstance(cmd, RaiseError):
+                    outcome = None
+                    rec = stamp(cmd, env.now)
+                    self.errors.append(rec)
+                    raised.append(cmd.graph)
+                    self.trace.emit(env.now, "error", kind=rec.kind, graph=rec.graph, platform=rec.platform, detail=rec.detail)
+            self.core.settle(raised)
+            if not self.pending_platforms and not self.pending_context:
+                self._audit()
+
+    def _decision(self, what: str, graph: str, platform: str, ok: bool, issued: float, why: str) -> None:
+        rec = {"t": round(self.env.now, 6), "issued": round(issued, 6), "command": what, "graph": graph, "platform": platform, "ok": ok}
+        if why:
+            rec["why"] = why
+        self.decisions.append(rec)
+        self.trace.emit(self.env.now, "decision", command=what, graph=graph, platform=platform, ok=ok, issued=issued, why=why)
+
+    def _audit(self) -> None:
+        self.audits += 1
+        running = tuple(sorted(self.instances))
+        view = self.core.view(running=running, stops=self.stops, history=self.history_edges)
+        for name, msg in check_invariants(view):
+            self.violations.append((self.env.now, name, msg))
+            self.trace.emit(self.env.now, "violation", invariant=name, message=msg)
+
+    # ------------------------------------------------------------------ run
+    def run(self) -> RunResult:
+        env = self.env
+        self.trace.emit(0.0, "run", scenario=self.scenario.name, deployer=self.deployer_name, seed=self.seed, horizon=self.horizon, signals=self.signals_on)
+        for s in self.slips:
+            self.trace.emit(s.time, "slip", direction=s.direction, kind=s.kind)
+        env.process(self._robot())
+        env.process(self._deployer())
+        if self.world.faults:
+            env.process(self._scripted_faults())
+        for m in self.world.stochastic_faults:
+            env.process(self._stochastic(m.component, m.mttf, m.mttr))
+        if self.world.loads:
+            env.process(self._scripted_loads())
+        for i in range(len(self.world.load_walks)):
+            env.process(self._walk(i))
+        if self.progress is not None:
+            env.process(self._progress())
+        env.run(until=self.horizon)
+        now = self.horizon
+        for inst in list(self.instances.values()):
+            self._feed(inst, now)
+        self.exposure.advance(now)
+        self.memory.close(now)
+        metrics = self._metrics()
+        self.trace.emit(now, "end", **{k: v for k, v in metrics.items() if k != "latencies"})
+        return RunResult(
+            self.scenario, self.world, self.deployer_name, self.seed, self.horizon, self.trace, self.repo, metrics,
+            self.decisions, self.errors, self.violations, self.slips, self.alarms,
+        )
+
+    def _metrics(self) -> dict[str, Any]:
+        ex = self.exposure
+        by_kind: dict[str, int] = {}
+        for e in self.errors:
+            by_kind[e.kind] = by_kind.get(e.kind, 0) + 1
+        m: dict[str, Any] = {
+            "horizon_s": self.horizon,
+            "risky_time_s": round(ex.risky, 6),
+            "unmonitored_exposure_s": round(ex.exposure, 6),
+            "switches": ex.switches,
+            "blind_time_per_switch_s": round(sum(ex.blind) / len(ex.blind), 6) if ex.blind else 0.0,
+            "blind_time_max_s": round(max(ex.blind), 6) if ex.blind else 0.0,
+            "reactions": self.reactions,
+            "starts": self.starts,
+            "start_failures": self.start_failures,
+            "stops": self.stops,
+            "migrations": self.migrations,
+            "errors": dict(sorted(by_kind.items())),
+            "violations": len(self.violations),
+            "memory_peak_mb": {p: round(v, 3) for p, v in self.memory.peak.items()},
+            "overcommit_s": {p: round(v, 6) for p, v in sorted(self.memory.over.items()) if v > 0},
+            "alarms": len(self.alarms),
+        }
+        if self.signals_on:
+            m.update(slip_metrics(self.slips, self.alarms))
+            m["samples"] = dict(self.bank.samples) if self.bank is not None else {}
+        else:
+            m["slips_injected"] = len(self.slips)
+        return m
+
+
+def simulate(scenario: Scenario, deployer: str = "desmon", seed: int = 0, **kw: Any) -> RunResult:
+    """Run ``scenario`` in the SimPy world and return the result."""
+    return SimWorld(scenario, deployer=deployer, seed=seed, **kw).run()
