@@ -29,7 +29,6 @@ from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
 from desmon.model.events import ActionChange, DeviceFail, LoadChange
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.sim.world import Slip, Step, World
-from desmon.verify.bounds import Bounds, levels
 
 FORCE = "force_slip_detector"
 TACTILE = "tactile_slip_detector"
@@ -96,15 +95,20 @@ scenario = Scenario(
         recognition_delay=0.1,
         heartbeat_timeout=0.2,
     ),
-    checker=Bounds(
-        actions=(HOLD, GRASP, MOVE_BASE, RELEASE),
-        devices=("lwr_wrench", "pad_thumb_prox"),
-        platforms=("torso_pc", "arm_pc", "hand_pc"),
-        loads={"torso_pc": levels(600, 800, 100), "arm_pc": levels(300, 500, 100)},
-        start_failures=1,
-        max_failures=2,
-    ),
+    checker={  # desmon.verify.Bounds fields (desmon verify / desmon fuzz)
+        "actions": (HOLD, GRASP, MOVE_BASE, RELEASE),
+        "devices": ("lwr_wrench", "pad_thumb_prox"),
+        "platforms": ("torso_pc", "arm_pc", "hand_pc"),
+        "loads": {"torso_pc": (600, 700, 800), "arm_pc": (300, 400, 500)},
+        "start_failures": 1,
+        "max_failures": 2,
+    },
     expected={
+        # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
+        "verify": {
+            "desmon": {"verdict": "HOLDS", "states": 747, "counterexamples": {}},
+            "paper": {"verdict": "HOLDS", "states": 747, "counterexamples": {}},
+        },
         # The deployment edges of Fig. 5a-d (HAS_DEVICE edges other than the force sensor's omitted).
         "t0": {"DEPLOYED_ON": [], "DEPLOYMENT_HISTORY": [], "force_sensor_attached": True},
         "t1": {"DEPLOYED_ON": [(TACTILE, "hand_pc")], "DEPLOYMENT_HISTORY": [], "force_sensor_attached": True},

@@ -302,7 +302,8 @@ class Checker:
                                 branches[f"error {cmd.kind}"] += 1
                         if not log.commands:  # type: ignore[attr-defined]
                             branches["no command (kept)"] += 1
-                        if instant is not None and instant[0] not in found:
+                        if instant is not None and instant[0] not in found and instant[0] not in {n for n, _m in self.violations(nkey)}:
+                            # broken inside the reaction and repaired before quiescence
                             record(instant[0], instant[1], key, instant[2], (event, fails))
                             if done():
                                 break
