@@ -53,6 +53,23 @@ def zoh(sample_t: Arr, values: Arr, valid: Arr, ticks: Arr, stale: float) -> tup
     return np.where(good, values.ravel()[pos], 0.0).reshape(n, m), good.reshape(n, m)
 
 
+def _zoh1(carry: tuple[float, float, bool], t: Arr, s: Arr, v: Arr, ticks: Arr, stale: float) -> tuple[Arr, Arr]:
+    """One-stream zero-order hold with a carried last sample (the streaming case of :func:`zoh`)."""
+    pos = np.searchsorted(t, ticks, side="right") - 1
+    new = pos >= 0
+    p = np.maximum(pos, 0)
+    if t.size:
+        st = np.where(new, t[p], carry[0])
+        val = np.where(new, np.nan_to_num(s[p]), carry[1])
+        ok = np.where(new, v[p], carry[2])
+    else:
+        st = np.full(ticks.shape, carry[0])
+        val = np.full(ticks.shape, carry[1])
+        ok = np.full(ticks.shape, carry[2])
+    good = ok & (ticks - st <= stale)
+    return np.where(good, val, 0.0), good
+
+
 def combined_mask(s_t: Arr, t_ok: Arr, s_f: Arr, f_ok: Arr, theta_t: float, theta_f: float) -> tuple[Arr, Arr]:
     """``(up, down)`` fusion masks at ticks."""
     both = t_ok & f_ok & (s_t >= theta_t)
@@ -134,17 +151,17 @@ class CombinedDetector:
         ticks = self._t_act + np.arange(self._next, last + 1) * self.tick
         ticks = ticks[ticks <= until]
         alarms: tuple[Alarm, ...] = ()
-        f_t, f_s, f_v = self._stream(self._f, ft, fs, fv)
-        t_t, t_s, t_v = self._stream(self._t, tt, ts, tv)
         if ticks.size:
-            sf, okf = zoh(f_t, f_s, f_v, ticks, self.force.timeout)
-            st, okt = zoh(t_t, t_s, t_v, ticks, self.tactile.timeout)
-            up, down = combined_mask(st[0], okt[0], sf[0], okf[0], self.tactile.threshold, self.force.threshold)
+            sf, okf = _zoh1(self._f, ft, fs, fv, ticks, self.force.timeout)
+            st, okt = _zoh1(self._t, tt, ts, tv, ticks, self.tactile.timeout)
+            up, down = combined_mask(st, okt, sf, okf, self.tactile.threshold, self.force.threshold)
             hit = np.flatnonzero(up | down)
             alarms = tuple(Alarm(float(ticks[i]), self.name, UP if up[i] else DOWN) for i in hit)
             self._next += ticks.size
-        self._f = (float(f_t[0, -1]), float(f_s[0, -1]), bool(f_v[0, -1]))
-        self._t = (float(t_t[0, -1]), float(t_s[0, -1]), bool(t_v[0, -1]))
+        if ft.size:
+            self._f = (float(ft[-1]), float(np.nan_to_num(fs[-1])), bool(fv[-1]))
+        if tt.size:
+            self._t = (float(tt[-1]), float(ts[-1]), bool(tv[-1]))
         fst, tst = self.force.status, self.tactile.status
         if fst.state is DetectorState.NO_INPUT or tst.state is DetectorState.NO_INPUT:
             bad = fst if fst.state is DetectorState.NO_INPUT else tst

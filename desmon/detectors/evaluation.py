@@ -442,7 +442,8 @@ def evaluate_missions(
                 times_l.append(np.where(r.alarm & (t >= lo) & (t < hi), t, np.inf))
             at = np.sort(np.concatenate(times_l, axis=1), axis=1)
             fin = np.isfinite(at)
-            gaps = np.diff(np.concatenate([np.full((n, 1), -np.inf), at], axis=1), axis=1)
+            at = np.where(fin, at, 1e9)
+            gaps = np.diff(np.concatenate([np.full((n, 1), -1e9), at], axis=1), axis=1)
             fa_counts.append(np.sum(fin & (gaps >= 0.5), axis=1))
             bl = np.zeros(n)
             for t_act, lo, hi, det in plan:

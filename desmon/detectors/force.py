@@ -108,13 +108,20 @@ class ForceDetector:
         v = np.asarray(values, dtype=float).reshape(-1)
         if t.shape != v.shape:
             raise SignalError(f"force samples: {t.size} times but {v.size} values; pass equal-length arrays")
-        keep = t >= self._t_act
-        t, v = t[keep], v[keep]
+        if t.size and t[0] < self._t_act:
+            keep = t >= self._t_act
+            t, v = t[keep], v[keep]
         if t.size == 0:
             return t, v, np.zeros(0, dtype=bool)
-        same = v == np.concatenate(([self._last_v], v[:-1]))
-        run = _runs(same, self._run)
-        good = run < self.stuck_samples
+        same = np.empty(v.shape, dtype=bool)
+        same[0] = v[0] == self._last_v
+        np.equal(v[1:], v[:-1], out=same[1:])
+        if not same.any():
+            run = np.ones(v.shape, dtype=np.int64)
+            good = np.ones(v.shape, dtype=bool)
+        else:
+            run = _runs(same, self._run)
+            good = run < self.stuck_samples
         self._run = int(run[-1])
         self._last_v = float(v[-1])
         self._last_t = float(t[-1])

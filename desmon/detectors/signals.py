@@ -551,8 +551,8 @@ def frame_moments(frames: Arr) -> Arr:
 
 def wrench_indices(t0: float, t1: float, rate: float) -> Arr:
     """Indices ``k`` of the fixed-rate wrench grid ``t = k / rate`` with ``t0 <= t < t1``."""
-    k0 = max(0, math.ceil(t0 * rate - 1e-9))
-    k1 = max(k0, math.ceil(t1 * rate - 1e-9))
+    k0 = max(0, math.floor(t0 * rate) - 1)
+    k1 = max(k0, math.ceil(t1 * rate) + 1)
     k = np.arange(k0, k1, dtype=np.int64)
     tk = k / rate
     return k[(tk >= t0) & (tk < t1)]
@@ -774,6 +774,9 @@ class MissionSignals:
         out = np.empty(k.shape)
         if k.size == 0:
             return out
+        b0 = int(k[0]) // WRENCH_BLOCK
+        if k.ndim == 1 and int(k[-1]) // WRENCH_BLOCK == b0 and int(k.min()) // WRENCH_BLOCK == b0:
+            return self._wrench_block(b0)[k - b0 * WRENCH_BLOCK]
         blocks = k // WRENCH_BLOCK
         for b in np.unique(blocks):
             sel = blocks == b
@@ -806,9 +809,14 @@ class MissionSignals:
     # ------------------------------------------------------------------ tactile
     def _jitter(self, k: Arr) -> Arr:
         out = np.empty(k.shape)
-        blocks = k // JITTER_BLOCK
         p = self.params
-        for b in np.unique(blocks):
+        if k.size and k.ndim == 1 and int(k.min()) // JITTER_BLOCK == int(k.max()) // JITTER_BLOCK:
+            blocks = np.full(1, int(k[0]) // JITTER_BLOCK)
+            uniq = blocks
+        else:
+            blocks = k // JITTER_BLOCK
+            uniq = np.unique(blocks)
+        for b in uniq:
             arr = self._jcache.get(int(b))
             if arr is None:
                 g = _block_rng(self.seed, _TAG_JITTER, int(b))
@@ -816,6 +824,8 @@ class MissionSignals:
                 if len(self._jcache) > 8:
                     self._jcache.clear()
                 self._jcache[int(b)] = arr
+            if uniq.size == 1 and blocks.size == 1:
+                return arr[k - int(b) * JITTER_BLOCK]
             sel = blocks == b
             out[sel] = arr[k[sel] - b * JITTER_BLOCK]
         return out
@@ -874,6 +884,11 @@ class MissionSignals:
     def _tactile_clean(self, k: Arr, frames: bool) -> tuple[Arr, Arr, Arr | None]:
         t = np.empty(k.shape)
         mom = np.empty(k.shape + (N_PADS, 3))
+        if k.size and int(k.min()) // TACTILE_BLOCK == int(k.max()) // TACTILE_BLOCK:
+            b0 = int(k[0]) // TACTILE_BLOCK
+            bt, bm, bf = self._tactile_block(b0, frames)
+            j = k - b0 * TACTILE_BLOCK
+            return bt[j], bm[j], (bf[j] if bf is not None else None)
         fr = np.empty(k.shape + (N_PADS, MAX_ROWS, PAD_COLS), dtype=np.int16) if frames else None
         blocks = k // TACTILE_BLOCK
         for b in np.unique(blocks):

@@ -90,6 +90,13 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
     The returned state continues the stream: splitting ``K`` into chunks gives
     bit-identical results.
     """
+    if not moments[..., 0].any():  # no contact anywhere: nothing valid (same result as below, cheaper)
+        n, k = moments.shape[:2]
+        if k == 0:
+            return np.zeros((n, 0)), np.zeros((n, 0), dtype=bool), state
+        z = np.zeros((n, N_PADS, 2))
+        last_index = state.cop.copy() if k == 1 else z
+        return np.zeros((n, k)), np.zeros((n, k), dtype=bool), TactileState(z, last_index, state.run + k)
     cop, contact = centred_cop(moments)
     cop_ext = np.concatenate([state.cop[:, None], cop], axis=1)
     index = cop_ext[:, 1:] + cop_ext[:, :-1]

@@ -1,0 +1,133 @@
+"""Signal models: determinism, chunk invariance, layout, faults, input validation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from desmon.detectors.signals import (
+    MAX_ROWS,
+    PAD_ROWS,
+    MissionSignals,
+    Segment,
+    SensorFault,
+    SlipEvent,
+    frame_moments,
+)
+from desmon.errors import SignalError
+
+MISSION = [
+    ("idle", 0.0, 1.0),
+    ("grasp", 1.0, 2.0),
+    ("hold", 3.0, 2.0),
+    ("move_base", 5.0, 3.7),
+    ("rotate_cw", 8.7, 1.5),
+    ("release", 10.2, 1.2),
+    ("idle", 11.4, 2.0),
+]
+SLIPS = [SlipEvent(4.2, "down", "pulled"), SlipEvent(7.0, "down", "gravitational")]
+
+
+def _make(seed: int = 7, **kw: object) -> MissionSignals:
+    return MissionSignals(MISSION, SLIPS, seed=seed, **kw)  # type: ignore[arg-type]
+
+
+def test_chunked_generation_equals_one_shot_generation() -> None:
+    whole_w = _make().wrench(0.0, 13.4)
+    whole_t = _make().tactile(0.0, 13.4, frames=True)
+    ms = _make()
+    edges = [0.0, 0.013, 1.0, 1.5, 2.77, 4.2, 4.21, 9.0, 10.0, 13.4]
+    ws = [ms.wrench(a, b) for a, b in zip(edges, edges[1:])]
+    ts = [ms.tactile(a, b, frames=True) for a, b in zip(edges[::-1][1:], edges[::-1])][::-1]  # reverse order too
+    assert np.array_equal(np.concatenate([w.values for w in ws]), whole_w.values)
+    assert np.array_equal(np.concatenate([w.times for w in ws]), whole_w.times)
+    assert np.array_equal(np.concatenate([t.times for t in ts]), whole_t.times)
+    assert np.array_equal(np.concatenate([t.moments for t in ts]), whole_t.moments)
+    assert np.array_equal(np.concatenate([t.frames for t in ts]), whole_t.frames)  # type: ignore[misc]
+
+
+def test_same_seed_gives_identical_signals_and_another_seed_does_not() -> None:
+    a, b, c = _make(3), _make(3), _make(4)
+    assert np.array_equal(a.wrench(0, 13).values, b.wrench(0, 13).values)
+    assert np.array_equal(a.tactile(0, 13).moments, b.tactile(0, 13).moments)
+    assert not np.array_equal(a.wrench(0, 13).values, c.wrench(0, 13).values)
+
+
+def test_frames_use_the_documented_pad_layout_and_match_the_moments() -> None:
+    tb = _make().tactile(0.0, 13.4, frames=True)
+    assert tb.frames is not None and tb.frames.shape[1:] == (6, MAX_ROWS, 6)
+    for pad, rows in enumerate(PAD_ROWS):
+        if rows == 13:
+            assert not tb.frames[:, pad, 13, :].any()
+    assert tb.frames.max() <= 3500 and tb.frames.min() >= 0
+    assert np.array_equal(frame_moments(tb.frames), tb.moments)
+
+
+def test_hand_is_empty_in_idle_and_touched_while_holding() -> None:
+    ms = _make()
+    assert not ms.tactile(0.0, 1.0).moments.any()
+    assert not ms.tactile(12.0, 13.4).moments.any()
+    assert (ms.tactile(3.0, 4.0).moments[:, :, 0] > 0).sum(axis=1).min() >= 2
+
+
+def test_tactile_frames_come_at_about_30_hz_in_order() -> None:
+    t = _make().tactile(0.0, 13.4).times
+    d = np.diff(t)
+    assert d.min() > 0.015 and abs(np.median(d) - 1 / 30) < 0.003 and np.std(d) > 0.001
+
+
+def test_wrench_sample_grid_follows_the_rate() -> None:
+    assert _make().wrench(0.0, 1.0).times.size == 50
+    assert _make(wrench_source="wrist_ft", wrench_rate=500.0).wrench(0.0, 1.0).times.size == 500
+
+
+def test_silent_fault_removes_samples_and_zero_fault_outputs_zero() -> None:
+    ms = _make(faults=[SensorFault("wrench", 5.0, "silent", 6.0), SensorFault("tactile", 3.5, "zero")])
+    w = ms.wrench(4.0, 7.0)
+    assert not ((w.times >= 5.0) & (w.times < 6.0)).any() and w.times.size == 100
+    assert not ms.tactile(3.5, 5.0).moments.any()
+
+
+def test_stuck_fault_repeats_the_last_good_sample() -> None:
+    ms = _make(faults=[SensorFault("wrench", 6.0, "stuck"), SensorFault("tactile", 4.0, "stuck")])
+    v = ms.wrench(5.9, 7.0).values
+    assert np.all(v[5:] == v[4]) and v[4] != v[3]
+    m = ms.tactile(4.0, 5.0).moments
+    assert np.all(m == m[0]) and m[0, :, 0].any()
+
+
+def test_gravitational_slip_unloads_the_wrist_while_a_pulled_slip_down_loads_it() -> None:
+    base = [("grasp", 0.0, 2.0), ("hold", 2.0, 3.0)]
+    pulled = MissionSignals(base, [(3.0, "down", "pulled")], seed=2)
+    grav = MissionSignals(base, [(3.0, "down", "gravitational")], seed=2)
+    quiet = MissionSignals(base, [], seed=2)
+    q = quiet.wrench(2.9, 3.1).values
+    assert (pulled.wrench(2.9, 3.1).values - q).mean() < -0.5
+    assert (grav.wrench(2.9, 3.1).values - q)[5:].mean() > 0.2
+    assert pulled.slip_truth[0].force_sign == -1 and grav.slip_truth[0].force_sign == +1
+
+
+@pytest.mark.parametrize(
+    ("segments", "slips", "kw", "needle"),
+    [
+        ([("dance", 0.0, 1.0)], [], {}, "dance"),
+        ([("hold", 0.0, -1.0)], [], {}, "-1.0"),
+        ([("hold", 0.0, 2.0), ("grasp", 1.0, 2.0)], [], {}, "before the previous"),
+        ([("idle", 0.0, 2.0)], [(1.0, "down", "pulled")], {}, "no object"),
+        ([("hold", 0.0, 2.0)], [(1.0, "sideways", "pulled")], {}, "sideways"),
+        ([("hold", 0.0, 2.0)], [], {"wrench_source": "wrist_ft", "wrench_rate": 20.0}, "20.0"),
+        ([("hold", 0.0, 2.0)], [], {"wrench_source": "magic"}, "magic"),
+        ([("hold", 0.0, 2.0)], [], {"seed": -1}, "-1"),
+    ],
+)
+def test_bad_signal_parameters_raise_a_signal_error_naming_the_value(
+    segments: list, slips: list, kw: dict, needle: str
+) -> None:
+    with pytest.raises(SignalError, match=needle):
+        MissionSignals(segments, slips, **kw)
+
+
+def test_segments_accept_dataclasses_and_tuples_alike() -> None:
+    a = MissionSignals([Segment("hold", 0.0, 2.0)], [SlipEvent(1.0)], seed=1)
+    b = MissionSignals([("hold", 0.0, 2.0)], [(1.0, "down", "pulled")], seed=1)
+    assert np.array_equal(a.wrench(0, 2).values, b.wrench(0, 2).values)
