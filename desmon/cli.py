@@ -56,6 +56,76 @@ def _cmd_explain(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _resolve_times(scenario, spec: str | None) -> list[tuple[str, float]]:  # type: ignore[no-untyped-def]
+    from desmon.errors import ScenarioError
+
+    if spec is None:
+        end = scenario.timeline[-1].time if scenario.timeline else 0.0
+        return [(f"t={end:g}s", end)]
+    labels = {te.label: te.time for te in scenario.timeline if te.label}
+    out = []
+    for part in spec.split(","):
+        part = part.strip()
+        if part in labels:
+            out.append((f"{part} (t={labels[part]:g}s)", labels[part]))
+            continue
+        try:
+            t = float(part)
+        except ValueError:
+            raise ScenarioError(
+                f"--at {part!r} is neither a time in seconds nor a timeline label ({', '.join(labels) or 'none'})"
+            ) from None
+        out.append((f"t={t:g}s", t))
+    return out
+
+
+def _cmd_show(args: argparse.Namespace) -> int:
+    import json
+    from pathlib import Path
+
+    from desmon.errors import ScenarioError
+    from desmon.loader import load_scenario
+    from desmon.repository.export import graph_to_cypher, graph_to_dot
+    from desmon.repository.store import graph_to_graphml, graph_to_json
+    from desmon.sim.replay import replay
+
+    scenario = load_scenario(args.scenario)
+    moments = _resolve_times(scenario, args.at)
+    result = replay(scenario, args.deployer)
+    snaps = []
+    for title, t in moments:
+        snap = result.repo.snapshot(at=t)
+        ctx = [d["name"] for n, d in snap.nodes(data=True) if d.get("label") == "Context" and any(True for _ in snap.in_edges(n))]
+        snaps.append((f"{scenario.name} {title}" + (f"  context: {ctx[0]}" if ctx else ""), snap))
+    fmt = args.format
+    if fmt != "png" and len(snaps) > 1:
+        raise ScenarioError(f"--format {fmt} writes one snapshot: give one --at, or use --format png for side-by-side")
+    if fmt == "png":
+        from desmon.viz.snapshot import draw_snapshots
+
+        out = Path(args.output or f"{scenario.name}-snapshot.png")
+        draw_snapshots(snaps, out, full=result.repo.graph, columns=min(2, len(snaps)))
+        print(f"wrote {out}")
+        return EXIT_OK
+    title, snap = snaps[0]
+    if fmt == "graphml":
+        out = Path(args.output or f"{scenario.name}-snapshot.graphml")
+        graph_to_graphml(snap, str(out))
+        print(f"wrote {out}")
+        return EXIT_OK
+    text = {
+        "json": lambda: json.dumps(graph_to_json(snap), indent=2, sort_keys=True) + "\n",
+        "dot": lambda: graph_to_dot(snap, title),
+        "cypher": lambda: graph_to_cypher(snap),
+    }[fmt]()
+    if args.output:
+        Path(args.output).write_text(text)
+        print(f"wrote {args.output}")
+    else:
+        sys.stdout.write(text)
+    return EXIT_OK
+
+
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from desmon.detectors.evaluation import run_evaluate
 
@@ -91,6 +161,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--at", type=float, default=None, help="time in the scenario's timeline (default: its end)")
     _deployer_arg(p)
     p.set_defaults(handler=_cmd_explain)
+
+    p = sub.add_parser("show", help="the repository graph at a time, as png, dot, graphml, json or cypher")
+    p.add_argument("scenario")
+    p.add_argument("--at", default=None, help="seconds or timeline labels, comma-separated (e.g. t0,t1,t2,t3)")
+    p.add_argument("--format", default="png", choices=["png", "dot", "graphml", "json", "cypher"])
+    p.add_argument("-o", "--output", default=None, help="output file (text formats default to stdout)")
+    _deployer_arg(p)
+    p.set_defaults(handler=_cmd_show)
 
     p = sub.add_parser("evaluate", help="detector x action table against Sanchez et al. 2016, and mission-level strategies")
     p.add_argument("--trials", type=int, default=300, help="trials per cell (default 300)")

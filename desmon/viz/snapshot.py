@@ -1,0 +1,110 @@
+"""Repository snapshots drawn the way the paper's Fig. 5 shows them.
+
+Columns: requirements | deployment descriptions | platforms | devices. Positions come
+from the *complete* graph (every node that ever exists), so the snapshots of t0..t3 can
+be laid side by side and compared: only edges change.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Sequence
+
+import networkx as nx
+
+from desmon.viz.common import COLORS, require_matplotlib
+
+__all__ = ["layout", "draw_snapshot", "draw_snapshots"]
+
+COLUMNS = ("Requirement", "Deployment", "Platform", "Device")
+#: x of each column and the half width of its boxes (data units), so arrows end at box edges.
+COLUMN_X = {"Requirement": 0.0, "Deployment": 3.4, "Platform": 7.4, "Device": 10.2}
+HALF_WIDTH = {"Requirement": 1.45, "Deployment": 1.1, "Platform": 0.5, "Device": 0.8}
+SHOWN_EDGES = ("REQUIRES", "DEPLOYED_ON", "DEPLOYMENT_HISTORY", "EXECUTABLE_ON", "HAS_DEVICE")
+
+
+def layout(full: nx.MultiDiGraph) -> dict[str, tuple[float, float]]:
+    """Stable positions: one column per label, nodes in insertion order top to bottom."""
+    pos: dict[str, tuple[float, float]] = {}
+    for label in COLUMNS:
+        nodes = sorted((d.get("order", 0), n) for n, d in full.nodes(data=True) if d.get("label") == label)
+        count = len(nodes)
+        for i, (_o, n) in enumerate(nodes):
+            pos[n] = (COLUMN_X[label], (count - 1) / 2.0 - i)
+    return pos
+
+
+def _name(g: nx.MultiDiGraph, n: str) -> str:
+    d = g.nodes[n]
+    if d.get("label") == "Requirement":
+        return str(d.get("description", n))
+    return str(d.get("name", n))
+
+
+def _draw(ax, g: nx.MultiDiGraph, pos: dict[str, tuple[float, float]], title: str) -> None:  # type: ignore[no-untyped-def]
+    ax.set_title(title, fontsize=11, loc="left")
+    ax.axis("off")
+    xs = [p[0] for p in pos.values()]
+    ys = [p[1] for p in pos.values()]
+    ax.set_xlim(min(xs) - 1.6, max(xs) + 1.0)
+    ax.set_ylim(min(ys) - 1.0, max(ys) + 1.0)
+    for label in COLUMNS:
+        ax.text(COLUMN_X[label], max(ys) + 0.7, label, ha="center", fontsize=9, fontweight="bold", color="#444444")
+    for s, t, d in g.edges(data=True):
+        label = d.get("label")
+        if label not in SHOWN_EDGES or s not in pos or t not in pos:
+            continue
+        (x1, y1), (x2, y2) = pos[s], pos[t]
+        direction = 1.0 if x2 > x1 else -1.0
+        x1 += direction * HALF_WIDTH[g.nodes[s]["label"]]
+        x2 -= direction * HALF_WIDTH[g.nodes[t]["label"]]
+        style = "--" if label == "DEPLOYMENT_HISTORY" else "-"
+        width = 2.6 if label == "DEPLOYED_ON" else (1.6 if label in ("DEPLOYMENT_HISTORY", "EXECUTABLE_ON") else 0.9)
+        rad = 0.0
+        ax.annotate(
+            "",
+            xy=(x2, y2),
+            xytext=(x1, y1),
+            arrowprops=dict(arrowstyle="-|>", color=COLORS[label], lw=width, linestyle=style,
+                            shrinkA=0, shrinkB=2, connectionstyle=f"arc3,rad={rad}"),
+        )
+        if label in ("DEPLOYED_ON", "DEPLOYMENT_HISTORY", "EXECUTABLE_ON"):
+            times = "".join(f" {a}={d[a]:g}s" for a in ("start", "stop") if isinstance(d.get(a), (int, float)))
+            mx, my = (x1 + x2) / 2, (y1 + y2) / 2
+            ax.text(mx, my, f"{label}{times}", fontsize=7, color=COLORS[label], ha="center", va="center", zorder=5,
+                    bbox=dict(boxstyle="round,pad=0.2", fc="white", ec=COLORS[label], lw=0.5))
+    for n, (x, y) in pos.items():
+        if n not in g:
+            continue
+        label = g.nodes[n].get("label")
+        ax.text(x, y, _name(g, n), ha="center", va="center", fontsize=7.5,
+                bbox=dict(boxstyle="round,pad=0.35", fc=COLORS.get(label, "white"), ec="#555555", lw=0.8))
+
+
+def draw_snapshot(g: nx.MultiDiGraph, path: str | Path, *, full: nx.MultiDiGraph | None = None, title: str = "") -> Path:
+    """Draw one snapshot to a PNG file; ``full`` fixes the layout (defaults to ``g``)."""
+    return draw_snapshots([(title, g)], path, full=full, columns=1)
+
+
+def draw_snapshots(
+    panels: Sequence[tuple[str, nx.MultiDiGraph]],
+    path: str | Path,
+    *,
+    full: nx.MultiDiGraph | None = None,
+    columns: int = 2,
+) -> Path:
+    """Several snapshots side by side in one PNG (e.g. Fig. 5a-d), one shared layout."""
+    plt = require_matplotlib()
+    full = full if full is not None else panels[-1][1]
+    pos = layout(full)
+    rows = (len(panels) + columns - 1) // columns
+    fig, axes = plt.subplots(rows, columns, figsize=(8.5 * columns, 4.6 * rows), squeeze=False)
+    for ax in axes.flat:
+        ax.axis("off")
+    for ax, (title, g) in zip(axes.flat, panels):
+        _draw(ax, g, pos, title)
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
