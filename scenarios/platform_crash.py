@@ -1,0 +1,56 @@
+"""A platform crash while the combined detector runs.
+
+The robot grasps the mug for a long time (grasp -> combined_slip_detector, 250 MB). The
+combined detector starts on ``torso_pc`` (first acceptable platform); at t=8 s torso_pc
+crashes, at t=15 s it reboots.
+
+* ``desmon`` deployer: re-checks the deployment on the changed platform, stops the dead
+  instance and migrates the detector to ``hand_pc`` (284 MB free); every audit holds.
+* ``paper`` deployer (Algorithm 2 literally): starts a second instance on hand_pc and
+  never stops the old one on torso_pc -> the audit reports ``single-instance`` (and
+  ``desmon run --deployer paper`` exits 1).
+
+Run: ``desmon run scenarios/platform_crash.py [--deployer paper]``.
+"""
+
+from __future__ import annotations
+
+from desmon.model import GRASP
+from desmon.model.events import LoadChange, PlatformDown, PlatformUp
+from desmon.model.scenario import Scenario, TimedEvent
+from desmon.sim.cob3 import LOADS, care_o_bot
+from desmon.sim.world import Slip, Step, World
+
+scenario = Scenario(
+    name="platform_crash",
+    description="torso_pc crashes while the combined slip detector runs on it",
+    model=care_o_bot().build(),
+    initial=tuple(LoadChange(p, mb) for p, mb in LOADS.items()),
+    world=World(
+        task=(Step(GRASP, 25.0),),
+        horizon=25.0,
+        faults=(TimedEvent(8.0, PlatformDown("torso_pc"), "crash"), TimedEvent(15.0, PlatformUp("torso_pc"), "reboot")),
+        slips=(Slip(5.0, "down", "pulled"), Slip(20.0, "down", "pulled")),
+        start_latency=0.3,
+        platform_latency=(("hand_pc", 0.4),),
+        recognition_delay=0.1,
+        heartbeat_timeout=0.5,
+    ),
+    expected={
+        "desmon": {
+            "violations": 0,
+            "placements": [("combined_slip_detector", "torso_pc"), ("combined_slip_detector", "hand_pc")],
+        },
+        "paper": {"violated": ["single-instance"]},
+    },
+)
+
+if __name__ == "__main__":
+    import sys
+
+    from desmon.sim.command import format_summary
+    from desmon.sim.engine import simulate
+
+    r = simulate(scenario, sys.argv[1] if len(sys.argv) > 1 else "desmon")
+    print(format_summary(r), end="")
+    sys.exit(1 if r.violations else 0)

@@ -1,0 +1,58 @@
+"""A robot day: 8 hours of repeated coffee deliveries with stochastic faults.
+
+Each delivery: wait 20 s (idle), grasp 2 s, hold 3 s, move 30 s, hand over 2 s. Slips
+arrive as a Poisson process over the time the mug is in the hand (one per 10 min).
+Devices and platforms break and are repaired (exponential MTTF / MTTR), starts fail
+with probability 2 %, background loads of torso_pc and arm_pc random-walk. Signals and
+detectors run the whole day. The pinned metrics are for ``--seed 0``.
+
+Run: ``desmon run scenarios/robot_day.py`` (about 28,800 simulated seconds).
+"""
+
+from __future__ import annotations
+
+from desmon.model import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
+from desmon.model.events import LoadChange
+from desmon.model.scenario import Scenario
+from desmon.sim.cob3 import LOADS, care_o_bot
+from desmon.sim.world import MTTF, LoadWalk, StartFailure, Step, World
+
+scenario = Scenario(
+    name="robot_day",
+    description="8 h of coffee deliveries with stochastic device and platform faults",
+    model=care_o_bot().build(),
+    initial=tuple(LoadChange(p, mb) for p, mb in LOADS.items()),
+    world=World(
+        task=(Step(IDLE, 20.0), Step(GRASP, 2.0), Step(HOLD, 3.0), Step(MOVE_BASE, 30.0), Step(RELEASE, 2.0)),
+        repeat=True,
+        horizon=8 * 3600.0,
+        slip_rate=1.0 / 600.0,
+        stochastic_faults=(
+            MTTF("lwr_wrench", mttf=3600.0, mttr=120.0),
+            MTTF("pad_thumb_prox", mttf=7200.0, mttr=300.0),
+            MTTF("hand_pc", mttf=14400.0, mttr=60.0),
+            MTTF("torso_pc", mttf=28800.0, mttr=90.0),
+        ),
+        start_latency=0.3,
+        platform_latency=(("torso_pc", 0.4), ("arm_pc", 0.25)),
+        start_failure=StartFailure(probability=0.02),
+        load_walks=(
+            LoadWalk("torso_pc", start=600, sigma=20.0, interval=30.0, low=400, high=850),
+            LoadWalk("arm_pc", start=300, sigma=15.0, interval=30.0, low=200, high=450),
+        ),
+        recognition_delay=0.1,
+        heartbeat_timeout=0.5,
+        block=1.0,
+    ),
+    expected={},
+)
+
+if __name__ == "__main__":
+    import sys
+
+    from desmon.sim.command import format_summary
+    from desmon.sim.engine import simulate
+
+    r = simulate(scenario, sys.argv[1] if len(sys.argv) > 1 else "desmon")
+    print(format_summary(r), end="")
+    sys.exit(1 if r.violations else 0)
