@@ -1,0 +1,65 @@
+"""Seeded mutants of the corrected deployer: the checker must catch each one.
+
+Each is a :class:`~desmon.deployment.deployer.Deployer` built from the real corrected
+code (``make_desmon_react`` and ``ensure_deployed``), changed in one place:
+
+``no-recheck``
+    ignores platform changes: after a device loss (or a crash, or a load change) no
+    deployment is re-checked until the context changes;
+``capacity-blind``
+    checks Capacity without the consumption of already-deployed graphs (a QueryPort
+    wrapper that hides every platform's deployments from ``platform_states``);
+``make-before-break``
+    migrates by starting the new instance before stopping the old one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from desmon.deployment.deployer import DESMON, Deployer, make_desmon_react
+from desmon.deployment.ports import QueryPort, Reaction
+from desmon.model.system import PlatformState
+
+__all__ = ["MUTANTS", "HideConsumption", "get_mutant"]
+
+
+def _no_recheck(q: QueryPort, slots, changed, context_changed) -> Reaction:  # type: ignore[no-untyped-def]
+    if context_changed:
+        yield from DESMON.react(q, slots, (), True)
+
+
+class HideConsumption:
+    """A QueryPort that answers like ``inner`` but shows no deployed graph consuming capacity."""
+
+    def __init__(self, inner: QueryPort) -> None:
+        self.inner = inner
+
+    def platform_states(self) -> tuple[PlatformState, ...]:
+        return tuple(dataclasses.replace(s, deployed=()) for s in self.inner.platform_states())
+
+    def __getattr__(self, name: str):  # type: ignore[no-untyped-def]
+        return getattr(self.inner, name)
+
+
+def _capacity_blind(q: QueryPort, slots, changed, context_changed) -> Reaction:  # type: ignore[no-untyped-def]
+    yield from DESMON.react(HideConsumption(q), slots, changed, context_changed)  # type: ignore[arg-type]
+
+
+MUTANTS: dict[str, Deployer] = {
+    m.name: m
+    for m in (
+        Deployer("no-recheck", "mutant: no re-check after a device loss or any platform change", _no_recheck),
+        Deployer("capacity-blind", "mutant: Capacity checked without the load of already-deployed graphs", _capacity_blind),
+        Deployer("make-before-break", "mutant: migration starts the new instance before stopping the old", make_desmon_react(make_before_break=True)),
+    )
+}
+
+
+def get_mutant(name: str) -> Deployer:
+    from desmon.errors import ModelError
+
+    try:
+        return MUTANTS[name]
+    except KeyError:
+        raise ModelError(f"unknown mutant {name!r}: choose one of {', '.join(MUTANTS)}") from None
