@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/desmon replay scenarios/coffee_handover.py
+	$(BIN)/desmon run scenarios/coffee_handover.py
 
 test: $(STAMP)
 	$(BIN)/python -m pytest
