@@ -44,7 +44,18 @@ scenario = Scenario(
         heartbeat_timeout=0.5,
         block=1.0,
     ),
-    expected={},
+    expected={
+        # desmon deployer, seed 0, --until 1800 (asserted by tests/test_scenarios_sim.py)
+        "first_30_min": {
+            "switches": 95, "starts": 94, "stops": 93, "slips_injected": 2, "slips_detected": 2,
+            "errors": {"deployment_failed": 1, "no_acceptable_platforms": 1}, "unmonitored_exposure_s": 103.2,
+        },
+        # the full 8 h day, seed 0 (desmon run scenarios/robot_day.py)
+        "day": {
+            "switches": 1515, "starts": 1465, "slips_injected": 29, "slips_detected": 24, "false_alarms": 12,
+            "errors": {"deployment_failed": 34, "no_acceptable_platforms": 70}, "unmonitored_exposure_s": 2121.65,
+        },
+    },
 )
 
 if __name__ == "__main__":

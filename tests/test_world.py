@@ -1,0 +1,39 @@
+"""World configuration: validation, task expansion, slips, timeline-derived worlds."""
+
+from __future__ import annotations
+
+import pytest
+
+from desmon.errors import ScenarioError
+from desmon.model import GRASP, MOVE_BASE, RELEASE
+from desmon.sim.world import Slip, Step, World, draw_slips, expand_task, in_hand
+from desmon.sim.metrics import Exposure
+
+
+def test_bad_values_are_one_line_errors() -> None:
+    with pytest.raises(ScenarioError, match="task action"):
+        Step("fly", 1.0)
+    with pytest.raises(ScenarioError, match="horizon"):
+        World(task=(Step(GRASP, 1.0),), horizon=-1)
+    with pytest.raises(ScenarioError, match="empty"):
+        World(task=(), horizon=1)
+
+
+def test_repeat_and_slips_are_deterministic() -> None:
+    w = World(task=(Step("idle", 5), Step(GRASP, 2), Step(MOVE_BASE, 20), Step(RELEASE, 3)), horizon=300, repeat=True, slip_rate=0.05)
+    segs = expand_task(w, 300)
+    assert segs[0].start == 0 and segs[-1].start < 300 and len(segs) == 40
+    a, b = draw_slips(w, segs, 1), draw_slips(w, segs, 1)
+    assert a == b and a != draw_slips(w, segs, 2)
+    spans = in_hand(segs)
+    assert all(any(s <= x.time < e for s, e, _ in spans) for x in a)
+
+
+def test_exposure_accounts_warmup_between_updates() -> None:
+    vf = {"g": 2.5}
+    ex = Exposure(lambda g: vf.get(g, float("inf")))
+    ex.set_wanted(1.0, frozenset({"g"}))
+    ex.advance(4.0)
+    assert ex.exposure == pytest.approx(1.5) and ex.blind == [pytest.approx(1.5)]
+    ex.set_wanted(5.0, frozenset())
+    assert ex.risky == pytest.approx(4.0)
