@@ -148,13 +148,13 @@ class ScriptedControl(ImmediateControl):
 
     def __init__(self, repo):
         super().__init__(repo)
-        self.fails, self.n = (), 0
+        self.fail_at, self.n = (), 0
 
     def start(self, graph, platform):
         if (graph, platform) in self.running:
             return True
         i, self.n = self.n, self.n + 1
-        if i in self.fails:
+        if i in self.fail_at:
             return False
         return super().start(graph, platform)
 
@@ -175,7 +175,7 @@ def replay(steps):
         core.settle(e.graph for e in log.errors)
     views = []
     for event, fails in steps:
-        control.fails, control.n = fails, 0
+        control.fail_at, control.n = fails, 0
         core.step(event, control)
         views.append(core.view(running=tuple(sorted(control.running))))
     return views

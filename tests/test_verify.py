@@ -1,0 +1,151 @@
+"""The checker: pinned verdicts, the paper's bugs, traces, CLI behaviour."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from desmon.cli import main
+from desmon.errors import CheckerError, NondeterminismError
+from desmon.loader import load_scenario
+from desmon.model.events import ActionChange, DeviceFail, PlatformDown
+from desmon.verify import HOLDS, INCOMPLETE, VIOLATED, Bounds, Checker
+from desmon.verify.report import format_result
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENARIOS = ROOT / "scenarios"
+NAMES = ["coffee_handover", "two_detectors", "shared_platform", "migration"]
+
+
+@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("deployer", ["desmon", "paper"])
+def test_pinned_verdicts_and_state_counts(name, deployer):
+    scenario = load_scenario(SCENARIOS / f"{name}.py")
+    want = scenario.expected["verify"][deployer]
+    r = Checker(scenario, deployer).run(keep_going=True)
+    assert r.verdict == want["verdict"]
+    assert r.states == want["states"]
+    assert {c.invariant: c.length for c in r.counterexamples} == want["counterexamples"]
+
+
+def test_desmon_holds_on_coffee_from_cli(capsys):
+    assert main(["verify", str(SCENARIOS / "coffee_handover.py"), "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "verdict: HOLDS" in out and "states: 747" in out
+    assert "events (enabled / new states)" in out and "deployer branches" in out
+
+
+def _cex(name, invariant, deployer="paper"):
+    r = Checker(load_scenario(SCENARIOS / f"{name}.py"), deployer, invariants=[invariant]).run()
+    assert r.verdict == VIOLATED
+    return r.counterexamples[0]
+
+
+def test_algorithm1_returns_after_first_graph_coverage():
+    c = _cex("two_detectors", "coverage")
+    assert [str(s.event) for s in c.steps[1:]] == ["action grasp"]
+    assert "tactile_slip_detector" in c.message
+
+
+def test_algorithm2_migrates_without_stopping_single_instance():
+    c = _cex("migration", "single-instance")
+    assert [s.event for s in c.steps[1:]] == [DeviceFail("wrench_1")]
+    assert c.steps[-1].key.deployments == (("force_slip_detector", "pc1"), ("force_slip_detector", "pc2"))
+
+
+def test_algorithm1_fixed_start_without_check_no_overcommit():
+    c = _cex("migration", "no-overcommit")
+    # wrench_1 fails, the force detector is duplicated onto pc2, then the fixed tactile
+    # detector is started on pc2 without a capacity check.
+    assert c.length == 2
+    assert [s.event for s in c.steps[1:]] == [DeviceFail("wrench_1"), ActionChange("move_base")]
+
+
+def test_algorithm2_returns_after_first_deployment_valid_or_error():
+    c = _cex("shared_platform", "valid-or-error")
+    assert [s.event for s in c.steps[1:]] == [ActionChange("move_base"), PlatformDown("main_pc")]
+    assert "vision_slip_detector" in c.message
+
+
+def test_trace_format_numbered_steps():
+    c = _cex("two_detectors", "coverage")
+    text = format_result(Checker(load_scenario(SCENARIOS / "two_detectors.py"), "paper").run())
+    assert " 0. initial -> context hold" in text
+    assert " 1. action grasp -> IN_CONTEXT hold => grasp; +force_slip_detector -[DEPLOYED_ON]-> arm_pc" in text
+    assert c.length == 1
+
+
+def test_cli_paper_json_and_generated_pytest(tmp_path, capsys):
+    js, py = tmp_path / "cex.json", tmp_path / "test_cex.py"
+    rc = main(["verify", str(SCENARIOS / "migration.py"), "--deployer", "paper", "--continue", "--json", str(js), "--pytest", str(py), "--no-progress"])
+    assert rc == 1
+    data = json.loads(js.read_text())
+    assert data["verdict"] == "VIOLATED"
+    lengths = {c["invariant"]: c["length"] for c in data["counterexamples"]}
+    assert lengths["single-instance"] == 1
+    assert data["counterexamples"][0]["states"][0]["state"]["context"] == "hold"
+    res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(py)], capture_output=True, text=True, cwd=tmp_path)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "4 passed" in res.stdout
+
+
+def test_incomplete_and_limits(capsys):
+    path = str(SCENARIOS / "coffee_handover.py")
+    assert main(["verify", path, "--max-states", "50", "--no-progress"]) == 3
+    assert "INCOMPLETE (max states 50 reached)" in capsys.readouterr().out
+    assert main(["verify", path, "--max-depth", "2", "--no-progress"]) == 3
+    assert "max depth 2" in capsys.readouterr().out
+
+
+def test_invariant_selection_and_bad_input(capsys, tmp_path):
+    path = str(SCENARIOS / "migration.py")
+    assert main(["verify", path, "--deployer", "paper", "--invariant", "fixed", "--no-progress"]) == 0
+    assert main(["verify", path, "--invariant", "nope", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("desmon: error: unknown invariant 'nope'") and err.count("\n") == 1
+    assert main(["verify", str(tmp_path / "missing.py")]) == 2
+    bad = tmp_path / "bad.py"
+    bad.write_text("from desmon.model.scenario import Scenario\nfrom desmon.model import RobotBuilder\nr = RobotBuilder(); r.platform('p')\nscenario = Scenario(name='x', model=r.build())\n")
+    assert main(["verify", str(bad)]) == 2
+    assert "declares no checker bounds" in capsys.readouterr().err
+
+
+def test_bad_bounds_are_rejected():
+    scenario = load_scenario(SCENARIOS / "coffee_handover.py")
+    with pytest.raises(CheckerError, match="unknown device"):
+        Checker(scenario, bounds=Bounds(devices=("nope",)))
+    with pytest.raises(CheckerError, match="not one of its levels"):
+        Checker(scenario, bounds=Bounds(loads={"torso_pc": (0, 100)}))
+
+
+def test_nondeterminism_is_reported():
+    scenario = load_scenario(SCENARIOS / "two_detectors.py")
+    c = Checker(scenario)
+    init = c.initial()
+    k1, *_ = c.run_one(init, ActionChange("grasp"), ())
+    with pytest.raises(NondeterminismError):
+        c.replay([(ActionChange("grasp"), ())], expect=[init, init])
+    assert k1 != init
+
+
+def test_progress_goes_to_stderr(capsys):
+    r = Checker(load_scenario(SCENARIOS / "coffee_handover.py")).run(progress=True)
+    assert r.verdict == HOLDS
+    assert capsys.readouterr().out == ""
+
+
+def test_timeout_gives_incomplete():
+    r = Checker(load_scenario(SCENARIOS / "coffee_handover.py")).run(timeout=1e-9)
+    assert r.verdict in (INCOMPLETE, HOLDS)  # a tiny scenario may finish before the first check
+
+
+@pytest.mark.parametrize("name", ["two_detectors", "shared_platform", "migration"])
+def test_scenarios_run_as_scripts(name):
+    res = subprocess.run([sys.executable, str(SCENARIOS / f"{name}.py")], capture_output=True, text=True)
+    assert res.returncode == 0 and "verdict: HOLDS" in res.stdout
+    res = subprocess.run([sys.executable, str(SCENARIOS / f"{name}.py"), "paper"], capture_output=True, text=True)
+    assert res.returncode == 1 and "VIOLATED" in res.stdout

@@ -1,0 +1,42 @@
+"""Seeded mutants of the corrected deployer, each caught with a pinned shortest counterexample."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from desmon.loader import load_scenario
+from desmon.model.events import ActionChange, DeviceFail, PlatformDown
+from desmon.verify import VIOLATED, Checker
+from desmon.verify.mutants import MUTANTS
+
+SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+
+
+def _cex(name, mutant, invariant):
+    r = Checker(load_scenario(SCENARIOS / f"{name}.py"), MUTANTS[mutant], invariants=[invariant]).run()
+    assert r.verdict == VIOLATED
+    return r.counterexamples[0]
+
+
+def test_no_recheck_after_device_loss():
+    c = _cex("coffee_handover", "no-recheck", "valid-or-error")
+    # the combined detector stays on a crashed torso_pc: nothing re-checks it
+    assert [s.event for s in c.steps[1:]] == [ActionChange("grasp"), PlatformDown("torso_pc")]
+    assert "combined_slip_detector is active on torso_pc" in c.message
+
+
+def test_capacity_ignoring_deployed_graphs():
+    c = _cex("migration", "capacity-blind", "no-overcommit")
+    assert [s.event for s in c.steps[1:]] == [ActionChange("move_base"), DeviceFail("wrench_1")]
+    assert "450" in c.message
+
+
+def test_make_before_break_migration():
+    c = _cex("migration", "make-before-break", "single-instance")
+    assert c.length == 1 and c.steps[1].event == DeviceFail("wrench_1")
+    assert c.during == "start force_slip_detector on pc2"
+
+
+def test_unmutated_deployer_holds_on_the_same_scenarios():
+    for name in ("coffee_handover", "migration"):
+        assert Checker(load_scenario(SCENARIOS / f"{name}.py")).run().verdict == "HOLDS"
