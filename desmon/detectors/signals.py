@@ -765,8 +765,8 @@ class MissionSignals:
                 continue
             val = val + slip_force(t, t_s, sign, grav, sp)
         out = val[0]
-        if len(self._wcache) > 8:
-            self._wcache.clear()
+        if len(self._wcache) >= 8:
+            del self._wcache[next(iter(self._wcache))]
         self._wcache[b] = out
         return out
 
@@ -821,8 +821,8 @@ class MissionSignals:
             if arr is None:
                 g = _block_rng(self.seed, _TAG_JITTER, int(b))
                 arr = np.clip(g.normal(0.0, p.tactile_jitter, JITTER_BLOCK), -p.tactile_jitter_clip, p.tactile_jitter_clip)
-                if len(self._jcache) > 8:
-                    self._jcache.clear()
+                if len(self._jcache) >= 8:
+                    del self._jcache[next(iter(self._jcache))]
                 self._jcache[int(b)] = arr
             if uniq.size == 1 and blocks.size == 1:
                 return arr[k - int(b) * JITTER_BLOCK]
@@ -876,8 +876,8 @@ class MissionSignals:
                     cell = flat % cells
                     fr[fi, pad, cell // PAD_COLS, cell % PAD_COLS] = v.astype(np.int16)
         out = (t, mom, fr)
-        if len(self._tcache) > 4:
-            self._tcache.clear()
+        if len(self._tcache) >= 6:
+            del self._tcache[next(iter(self._tcache))]
         self._tcache[key] = out
         return out
 
