@@ -177,3 +177,20 @@ def test_the_current_context_is_the_single_in_context_edge(world):
     set_context(repo, "r", "release")
     assert q.context() == "release"
     assert len(list(repo.edges(L.IN_CONTEXT))) == 1
+
+
+def test_the_edge_index_agrees_with_the_graph_after_any_changes(world):
+    _m, repo, clock = world
+    control = ImmediateControl(repo)
+    for i in range(5):
+        clock[0] = float(i)
+        control.start("force", "pc1")
+        set_device_working(repo, "ft", i % 2 == 0)
+        control.stop("force", "pc1")
+    for nid in repo.graph.nodes:
+        for label in L.EDGE_LABELS:
+            out = sorted({t for _s, t, d in repo.graph.out_edges(nid, data=True) if d["label"] == label})
+            into = sorted({s for s, _t, d in repo.graph.in_edges(nid, data=True) if d["label"] == label})
+            assert sorted(repo.successors(nid, label)) == out
+            assert sorted(repo.predecessors(nid, label)) == into
+    assert len(RepositoryQuery(repo).history()) == 5

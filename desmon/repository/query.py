@@ -28,10 +28,10 @@ class RepositoryQuery:
         return self.repo.graph
 
     def _out(self, nid: str, label: str) -> list[str]:
-        return [t for _s, t, k, d in self._g.out_edges(nid, keys=True, data=True) if d.get("label") == label]
+        return self.repo.successors(nid, label)
 
     def _in(self, nid: str, label: str) -> list[str]:
-        return [s for s, _t, k, d in self._g.in_edges(nid, keys=True, data=True) if d.get("label") == label]
+        return self.repo.predecessors(nid, label)
 
     # -- the algorithms' queries ---------------------------------------------------------
     def deployment_information(self, graph: str) -> DeploymentSpec | None:

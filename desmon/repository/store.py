@@ -126,6 +126,10 @@ class Repository:
         self._subs: list[Subscription] = []
         self._clock = clock or (lambda: 0.0)
         self._order = 0
+        # (node, label) -> {neighbour: number of such edges}: keeps Query O(current edges)
+        # however many DEPLOYMENT_HISTORY edges a long run accumulates on a node.
+        self._out_index: dict[tuple[str, str], dict[str, int]] = {}
+        self._in_index: dict[tuple[str, str], dict[str, int]] = {}
 
     # -- clock and log ---------------------------------------------------------------
     def set_clock(self, clock: Callable[[], float]) -> None:
@@ -151,11 +155,35 @@ class Repository:
             **fields,
         )
         _apply(self.graph, change)
+        self._index(change)
         self._log.append(change)
         for sub in list(self._subs):
             if sub.matches(change):
                 sub.callback(change)
         return change
+
+    def _index(self, c: Change) -> None:
+        if c.source is None or c.target is None:
+            return
+        if c.op in (REMOVE_EDGE, RELABEL_EDGE):
+            old = c.old_label if c.op == RELABEL_EDGE else c.label
+            for index, a, b in ((self._out_index, c.source, c.target), (self._in_index, c.target, c.source)):
+                bucket = index[(a, old)]
+                bucket[b] -= 1
+                if not bucket[b]:
+                    del bucket[b]
+        if c.op in (ADD_EDGE, RELABEL_EDGE):
+            for index, a, b in ((self._out_index, c.source, c.target), (self._in_index, c.target, c.source)):
+                bucket = index.setdefault((a, c.label), {})
+                bucket[b] = bucket.get(b, 0) + 1
+
+    def successors(self, nid: str, label: str) -> list[str]:
+        """Targets of ``nid``'s out-edges labelled ``label`` (indexed: no scan of other edges)."""
+        return list(self._out_index.get((nid, label), ()))
+
+    def predecessors(self, nid: str, label: str) -> list[str]:
+        """Sources of ``nid``'s in-edges labelled ``label`` (indexed)."""
+        return list(self._in_index.get((nid, label), ()))
 
     # -- Insert ------------------------------------------------------------------------
     def add_node(self, label: str, name: str, **attrs: Any) -> str:

@@ -47,7 +47,6 @@ from desmon.repository import labels as L
 from desmon.repository.facts import RepositoryInsert, load_model, record_start, record_stop
 from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import ADD_EDGE, REMOVE_EDGE, RELABEL_EDGE, UPDATE_NODE, Repository
-from desmon.sim.query import IndexedQuery
 from desmon.sim.metrics import Exposure, MemoryMeter, slip_metrics
 from desmon.sim.sensors import DetectorAdapter, SensorBank
 from desmon.sim.trace import Trace
@@ -127,7 +126,7 @@ class SimWorld:
         env = self.env
         self.repo = Repository(clock=lambda: env.now)
         load_model(self.repo, self.model)
-        self.query = IndexedQuery(self.repo)
+        self.query = RepositoryQuery(self.repo)
         self.core = DeploymentCore(self.model, self.query, RepositoryInsert(self.repo, self.model.robot), deployer)
         self.deployer_name = self.core.deployer.name
         # physical state
