@@ -1,0 +1,136 @@
+"""Checker throughput: the real deployment core in the loop vs a plain tuple BFS.
+
+``python -m bench.bench_verify [--large-max-states N]`` builds a 4-platform, 3-detector
+scenario and a larger 6-platform one, runs the desmon checker on each, and in the same
+run a minimal plain-Python BFS over tuples exploring the same environment (context,
+failed devices, platforms down, loads) with a trivial hard-coded placement rule. The
+figure is the ratio of their states/s (and transitions/s); peak memory is the process
+maximum resident size.
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import time
+from collections import deque
+
+from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
+from desmon.model.events import ActionChange, LoadChange
+from desmon.model.scenario import Scenario, TimedEvent
+from desmon.verify import Bounds, Checker, levels
+
+
+def build(n_platforms: int, load_platforms: int, max_failures: int | None, start_failures: int = 1) -> Scenario:
+    r = RobotBuilder("bench")
+    devices, pads = [], []
+    for i in range(n_platforms):
+        pb = r.platform(f"pc{i}", memory=512)
+        if i % 2 == 0:
+            pb.device(f"wrench{i}", kind="force_sensor")
+            devices.append(f"wrench{i}")
+        else:
+            pb.devices([f"pad{i}a", f"pad{i}b"], kind="tactile_pad")
+            pads.append(f"pad{i}a")
+    for g, kind in (("force", "force_sensor"), ("tactile", "tactile_pad"), ("combined", None)):
+        with r.rpsl.perception_graph(g) as gb:
+            gb.sensor("s", reads=kind or "force_sensor")
+            gb.processing("p", inputs=["s"])
+    r.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor").add_constraint("capacity", "memory", 100)
+    r.depsl.deployment_specification("tactile").add_constraint("quantity", "tactile_pad", 2).add_constraint("capacity", "memory", 150)
+    r.depsl.deployment_specification("combined").add_constraint("capacity", "memory", 250)
+    r.rules({GRASP: ["force", "tactile"], MOVE_BASE: "tactile", RELEASE: "force", HOLD: "combined"})
+    plats = tuple(f"pc{i}" for i in range(n_platforms))
+    return Scenario(
+        name=f"bench_{n_platforms}p",
+        model=r.build(),
+        initial=tuple(LoadChange(p, 0) for p in plats[:load_platforms]),
+        timeline=(TimedEvent(0, ActionChange(HOLD)),),
+        checker=Bounds(
+            actions=(HOLD, GRASP, MOVE_BASE, RELEASE),
+            devices=tuple(devices[:2] + pads[:1]),
+            platforms=plats,
+            loads={p: levels(0, 300, 100) for p in plats[:load_platforms]},
+            start_failures=start_failures,
+            max_failures=max_failures,
+        ),
+    )
+
+
+def plain_bfs(scenario: Scenario, max_states: int | None = None) -> tuple[int, int, float]:
+    """A minimal BFS over tuples: same environment events, a trivial placement rule."""
+    b: Bounds = scenario.checker
+    plats = [p.name for p in scenario.model.platforms]
+    devs = list(b.devices)
+    lp = list(b.loads)
+    lv = [b.loads[p] for p in lp]
+    acts = list(b.actions)
+    wants = {HOLD: ("combined",), GRASP: ("force", "tactile"), MOVE_BASE: ("tactile",), RELEASE: ("force",)}
+
+    def place(ctx, failed, down, loads):  # type: ignore[no-untyped-def]
+        out = []
+        for g in wants[ctx]:
+            for i, p in enumerate(plats):
+                if not down[i] and (i >= len(loads) or loads[i] <= 200):
+                    out.append((g, p))
+                    break
+        return tuple(out)
+
+    init = (HOLD, tuple(False for _ in devs), tuple(False for _ in plats), tuple(0 for _ in lp))
+    init = init + (place(*init),)
+    seen = {init}
+    q = deque([init])
+    trans = 0
+    t0 = time.perf_counter()
+    while q:
+        s = q.popleft()
+        ctx, failed, down, loads, _dep = s
+        nf = sum(failed) + sum(down)
+        succ = []
+        for a in acts:
+            if a != ctx:
+                succ.append((a, failed, down, loads))
+        for i in range(len(devs)):
+            if failed[i] or b.max_failures is None or nf < b.max_failures:
+                succ.append((ctx, failed[:i] + (not failed[i],) + failed[i + 1 :], down, loads))
+        for i in range(len(plats)):
+            if down[i] or b.max_failures is None or nf < b.max_failures:
+                succ.append((ctx, failed, down[:i] + (not down[i],) + down[i + 1 :], loads))
+        for i, levs in enumerate(lv):
+            j = levs.index(loads[i])
+            for k in (j - 1, j + 1):
+                if 0 <= k < len(levs):
+                    succ.append((ctx, failed, down, loads[:i] + (levs[k],) + loads[i + 1 :]))
+        for n in succ:
+            for _ in range(1 + b.start_failures):  # the same branching factor for start failures
+                trans += 1
+                ns = n + (place(*n),)
+                if ns not in seen:
+                    seen.add(ns)
+                    q.append(ns)
+        if max_states is not None and len(seen) >= max_states:
+            break
+    return len(seen), trans, time.perf_counter() - t0
+
+
+def _row(label: str, states: int, trans: int, secs: float) -> str:
+    return f"  {label:<14} {states:>10,} states {trans:>11,} transitions {secs:8.2f}s {states / secs:>10,.0f} states/s {trans / secs:>11,.0f} transitions/s"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--large-max-states", type=int, default=30_000)
+    args = ap.parse_args(argv)
+    for scenario, cap in ((build(4, 2, 2), None), (build(6, 3, None), args.large_max_states)):
+        r = Checker(scenario, "desmon").run(max_states=cap, progress=True)
+        ps, pt, psec = plain_bfs(scenario, cap)
+        print(f"{scenario.name}: {len(scenario.model.platforms)} platforms, 3 detectors -- checker verdict {r.verdict} {r.reason}")
+        print(_row("desmon checker", r.states, r.transitions, r.seconds))
+        print(_row("plain tuples", ps, pt, psec))
+        print(f"  ratio (plain / checker): {(ps / psec) / (r.states / r.seconds):.1f}x states/s, {(pt / psec) / (r.transitions / r.seconds):.1f}x transitions/s")
+    print(f"peak memory (max RSS): {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
