@@ -134,6 +134,43 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     )
 
 
+def _draw_trace(trace: str, out: str, start: float | None, end: float | None) -> None:
+    from desmon.viz.timeline import build_timeline, plot_timeline, read_trace
+
+    plot_timeline(build_timeline(read_trace(trace), start, end), out)
+    print(f"wrote {out}", file=sys.stderr)
+
+
+def _cmd_plot(args: argparse.Namespace) -> int:
+    _draw_trace(args.trace, args.output, args.start, args.end)
+    return EXIT_OK
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    import importlib
+    import tempfile
+
+    from desmon.viz.common import require_matplotlib
+
+    if args.plot:
+        require_matplotlib()  # fail before a long run, not after it
+    tmp = None
+    if args.plot and not args.trace:
+        tmp = tempfile.NamedTemporaryFile(suffix=".jsonl", delete=False)
+        tmp.close()
+        args.trace = tmp.name
+    try:
+        code = int(importlib.import_module("desmon.sim.command").run_command(args))
+        if args.plot and code in (EXIT_OK, EXIT_VIOLATED):
+            _draw_trace(args.trace, args.plot, args.plot_from, args.plot_to)
+        return code
+    finally:
+        if tmp is not None:
+            import os
+
+            os.unlink(tmp.name)
+
+
 def _lazy(module: str, func: str) -> Callable[[argparse.Namespace], int]:
     def handler(args: argparse.Namespace) -> int:
         import importlib
@@ -185,7 +222,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--trace", default=None, help="write the JSON Lines trace to this file")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--no-progress", action="store_true")
-    p.set_defaults(handler=_lazy("desmon.sim.command", "run_command"))
+    p.add_argument("--plot", default=None, metavar="PNG", help="draw the timeline of the run to this PNG (needs desmon[plot])")
+    p.add_argument("--plot-from", type=float, default=None, metavar="T", help="timeline window start (s)")
+    p.add_argument("--plot-to", type=float, default=None, metavar="T", help="timeline window end (s)")
+    p.set_defaults(handler=_cmd_run)
+
+    p = sub.add_parser("plot", help="draw the timeline of a run's JSON Lines trace")
+    p.add_argument("trace", help="trace file written by desmon run --trace")
+    p.add_argument("-o", "--output", default="timeline.png", help="PNG file (default timeline.png)")
+    p.add_argument("--from", dest="start", type=float, default=None, metavar="T", help="window start (s)")
+    p.add_argument("--to", dest="end", type=float, default=None, metavar="T", help="window end (s)")
+    p.set_defaults(handler=_cmd_plot)
 
     p = sub.add_parser("verify", help="explore every interleaving of events and check the invariants")
     p.add_argument("scenario")

@@ -1,0 +1,270 @@
+"""Timeline plot of a ``desmon run`` trace (JSON Lines, schema in :mod:`desmon.sim.trace`).
+
+Lanes, top to bottom, on one time axis:
+
+* **context** — the robot's action segments; unmonitored exposure shaded red across all lanes;
+* **one lane per platform** — the detectors running there (solid once warmed up, hatched
+  while warming up, grey while they have no valid input), platform crashes in black;
+* **events** — device / platform faults, injected slips (triangles), alarms (ticks,
+  coloured by detector) and errors (red crosses);
+* **memory** — per platform, background load plus what running detectors consume,
+  against the capacity (dashed).
+
+Reads only the trace, so any run (or a trace from another machine) can be drawn.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+from desmon.errors import ScenarioError
+from desmon.viz.common import require_matplotlib
+
+__all__ = ["read_trace", "Timeline", "build_timeline", "plot_timeline"]
+
+ACTION_COLORS = {
+    "idle": "#f0f0f0",
+    "hold": "#d9d9d9",
+    "grasp": "#fdae6b",
+    "move_base": "#9ecae1",
+    "release": "#a1d99b",
+    "rotate_ccw": "#dadaeb",
+    "rotate_cw": "#bcbddc",
+}
+DETECTOR_COLORS = ["#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02"]
+
+
+def read_trace(path: str | Path) -> list[dict[str, Any]]:
+    """The records of a JSON Lines trace; a ScenarioError names a missing file or bad line."""
+    p = Path(path)
+    if not p.is_file():
+        raise ScenarioError(f"{path}: no such trace file; write one with: desmon run SCENARIO --trace {path}")
+    out = []
+    with p.open() as fh:
+        for n, line in enumerate(fh, start=1):
+            if not line.strip():
+                continue
+            try:
+                out.append(json.loads(line))
+            except json.JSONDecodeError as exc:
+                raise ScenarioError(f"{path}:{n}: not a JSON Lines trace record ({exc.msg})") from None
+    if not out or out[0].get("type") != "run":
+        raise ScenarioError(f"{path}: does not start with a 'run' record; is it a desmon run trace?")
+    return out
+
+
+@dataclass
+class Timeline:
+    """A trace digested into intervals and points, clipped to ``[start, end]``."""
+
+    scenario: str
+    deployer: str
+    start: float
+    end: float
+    actions: list[tuple[float, float, str]] = field(default_factory=list)
+    exposure: list[tuple[float, float]] = field(default_factory=list)
+    # platform -> [(t0, t1, graph, phase)] with phase "warming" | "valid" | "invalid"
+    runs: dict[str, list[tuple[float, float, str, str]]] = field(default_factory=dict)
+    down: dict[str, list[tuple[float, float]]] = field(default_factory=dict)
+    faults: list[tuple[float, str]] = field(default_factory=list)
+    slips: list[tuple[float, str]] = field(default_factory=list)
+    alarms: list[tuple[float, str]] = field(default_factory=list)
+    errors: list[tuple[float, str, str]] = field(default_factory=list)
+    memory: dict[str, list[tuple[float, float]]] = field(default_factory=dict)
+    capacity: dict[str, float] = field(default_factory=dict)
+    graphs: list[str] = field(default_factory=list)
+
+
+def _clip(intervals: Iterable[tuple[float, float]], start: float, end: float) -> list[tuple[float, float]]:
+    return [(max(a, start), min(b, end)) for a, b in intervals if b > start and a < end]
+
+
+def build_timeline(records: list[dict[str, Any]], start: float | None = None, end: float | None = None) -> Timeline:
+    """Digest trace records into a :class:`Timeline` (pure; no plotting)."""
+    head = records[0]
+    horizon = float(head.get("horizon") or max(r.get("t", 0.0) for r in records))
+    t0 = 0.0 if start is None else float(start)
+    t1 = horizon if end is None else float(end)
+    if t1 <= t0:
+        raise ScenarioError(f"empty time window [{t0:g}, {t1:g}]: --to must be after --from")
+    tl = Timeline(str(head.get("scenario", "?")), str(head.get("deployer", "?")), t0, t1)
+    platforms: list[str] = list((head.get("platforms") or {}).keys())
+    tl.capacity = {p: float(v.get("memory", 0)) for p, v in (head.get("platforms") or {}).items()}
+    consumption = {g: float(v.get("memory", 0)) for g, v in (head.get("graphs") or {}).items()}
+
+    running: dict[tuple[str, str], tuple[float, str]] = {}  # (graph, platform) -> (since, phase)
+    load: dict[str, float] = {}
+    used: dict[str, float] = {}
+    down_since: dict[str, float] = {}
+    exposure_since: float | None = None
+
+    def mem_point(p: str, t: float) -> None:
+        tl.memory.setdefault(p, []).append((t, load.get(p, 0.0) + used.get(p, 0.0)))
+
+    def phase_change(g: str, p: str, t: float, phase: str | None) -> None:
+        key = (g, p)
+        if key in running:
+            since, old = running.pop(key)
+            tl.runs.setdefault(p, []).append((since, t, g, old))
+        if phase is not None:
+            running[key] = (t, phase)
+
+    def seen(p: str | None) -> None:
+        if p and p not in platforms:
+            platforms.append(p)
+
+    for r in records[1:]:
+        t = float(r.get("t", 0.0))
+        kind = r.get("type")
+        if kind == "action":
+            tl.actions.append((t, t + float(r.get("duration", 0.0)), str(r.get("action"))))
+        elif kind == "decision" and r.get("ok"):
+            g, p = str(r["graph"]), str(r["platform"])
+            seen(p)
+            if g not in tl.graphs:
+                tl.graphs.append(g)
+            if r.get("command") == "start":
+                phase_change(g, p, t, "warming")
+                used[p] = used.get(p, 0.0) + consumption.get(g, 0.0)
+            elif r.get("command") == "stop":
+                phase_change(g, p, t, None)
+                used[p] = used.get(p, 0.0) - consumption.get(g, 0.0)
+            mem_point(p, t)
+        elif kind == "ready" and (r.get("graph"), r.get("platform")) in running:
+            phase_change(str(r["graph"]), str(r["platform"]), t, "valid")
+        elif kind == "invalid" and (r.get("graph"), r.get("platform")) in running:
+            phase_change(str(r["graph"]), str(r["platform"]), t, "invalid")
+        elif kind == "load":
+            p = str(r["platform"])
+            seen(p)
+            load[p] = float(r.get("amount", 0.0))
+            mem_point(p, t)
+        elif kind == "platform":
+            p = str(r["platform"])
+            if not r.get("up"):
+                down_since[p] = t
+            elif p in down_since:
+                tl.down.setdefault(p, []).append((down_since.pop(p), t))
+        elif kind == "fault":
+            tl.faults.append((t, str(r.get("event", ""))))
+        elif kind == "slip":
+            tl.slips.append((t, f"{r.get('kind', '')} {r.get('direction', '')}".strip()))
+        elif kind == "alarm":
+            tl.alarms.append((t, str(r.get("detector"))))
+        elif kind == "error":
+            tl.errors.append((t, str(r.get("kind")), str(r.get("graph"))))
+        elif kind == "exposure":
+            if r.get("state") == "start":
+                exposure_since = t
+            elif exposure_since is not None:
+                tl.exposure.append((exposure_since, t))
+                exposure_since = None
+    for (g, p), (since, phase) in running.items():
+        tl.runs.setdefault(p, []).append((since, horizon, g, phase))
+    for p, since in down_since.items():
+        tl.down.setdefault(p, []).append((since, horizon))
+    if exposure_since is not None:
+        tl.exposure.append((exposure_since, horizon))
+    for p in platforms:
+        tl.runs.setdefault(p, [])
+        if p in tl.memory:
+            tl.memory[p].append((horizon, tl.memory[p][-1][1]))
+
+    # clip to the window
+    tl.actions = [(max(a, t0), min(b, t1), n) for a, b, n in tl.actions if b > t0 and a < t1]
+    tl.exposure = _clip(tl.exposure, t0, t1)
+    tl.runs = {p: [(max(a, t0), min(b, t1), g, ph) for a, b, g, ph in v if b > t0 and a < t1] for p, v in tl.runs.items()}
+    tl.down = {p: _clip(v, t0, t1) for p, v in tl.down.items()}
+    tl.faults = [x for x in tl.faults if t0 <= x[0] <= t1]
+    tl.slips = [x for x in tl.slips if t0 <= x[0] <= t1]
+    tl.alarms = [x for x in tl.alarms if t0 <= x[0] <= t1]
+    tl.errors = [x for x in tl.errors if t0 <= x[0] <= t1]
+    return tl
+
+
+def plot_timeline(tl: Timeline, path: str | Path) -> Path:
+    """Draw ``tl`` to a PNG file."""
+    plt = require_matplotlib()
+    from matplotlib.patches import Patch
+
+    platforms = list(tl.runs)
+    color_of = {g: DETECTOR_COLORS[i % len(DETECTOR_COLORS)] for i, g in enumerate(tl.graphs)}
+    lanes = ["context", *platforms, "events"]
+    fig = plt.figure(figsize=(13, 1.0 + 0.55 * len(lanes) + 2.2))
+    grid = fig.add_gridspec(2, 1, height_ratios=[0.55 * len(lanes) + 0.4, 2.0], hspace=0.12)
+    ax = fig.add_subplot(grid[0])
+    axm = fig.add_subplot(grid[1], sharex=ax)
+    y = {name: len(lanes) - 1 - i for i, name in enumerate(lanes)}
+
+    for a, b in tl.exposure:
+        ax.axvspan(a, b, color="#e41a1c", alpha=0.13, lw=0)
+        axm.axvspan(a, b, color="#e41a1c", alpha=0.13, lw=0)
+    for a, b, name in tl.actions:
+        ax.barh(y["context"], b - a, left=a, height=0.7, color=ACTION_COLORS.get(name, "#cccccc"), edgecolor="#777777", lw=0.5)
+        if b - a > (tl.end - tl.start) * 0.04:
+            ax.text((a + b) / 2, y["context"], name, ha="center", va="center", fontsize=8)
+    for p in platforms:
+        for a, b in tl.down.get(p, []):
+            ax.barh(y[p], b - a, left=a, height=0.85, color="black", alpha=0.75)
+        for a, b, g, phase in tl.runs[p]:
+            color = color_of.get(g, "#999999")
+            if phase == "warming":
+                ax.barh(y[p], b - a, left=a, height=0.6, color="white", edgecolor=color, hatch="////", lw=0.8)
+            elif phase == "invalid":
+                ax.barh(y[p], b - a, left=a, height=0.6, color="#bbbbbb", edgecolor=color, lw=0.8)
+            else:
+                ax.barh(y[p], b - a, left=a, height=0.6, color=color, edgecolor=color, lw=0.5)
+    ev = y["events"]
+    for t, text in tl.faults:
+        ax.plot([t], [ev + 0.22], marker="v", color="black", ms=7)
+        if len(tl.faults) <= 12:
+            ax.text(t, ev + 0.42, text, fontsize=7, ha="center", va="bottom")
+    for t, _kind in tl.slips:
+        ax.plot([t], [ev - 0.05], marker="^", color="#e41a1c", ms=8, markeredgecolor="black", mew=0.5)
+    for t, g in tl.alarms:
+        ax.plot([t, t], [ev - 0.38, ev - 0.2], color=color_of.get(g, "#444444"), lw=1.0)
+    for t, kind, g in tl.errors:
+        ax.plot([t], [ev + 0.02], marker="X", color="#b2182b", ms=9, markeredgecolor="white", mew=0.5)
+        if len(tl.errors) <= 8:
+            ax.text(t, ev - 0.5, f"{kind}: {g}", fontsize=7, ha="left", va="top", color="#b2182b")
+    ax.set_yticks([y[n] for n in lanes], [n if n in ("context", "events") else f"{n}" for n in lanes])
+    ax.set_ylim(-0.8, len(lanes) - 0.3)
+    ax.set_xlim(tl.start, tl.end)
+    ax.tick_params(axis="x", labelbottom=False)
+    ax.set_title(f"{tl.scenario} — deployer {tl.deployer}", loc="left", fontsize=11)
+    ax.grid(axis="x", color="#eeeeee")
+    ax.set_axisbelow(True)
+    axm.set_axisbelow(True)
+
+    for i, (p, pts) in enumerate(sorted(tl.memory.items())):
+        xs = [a for a, _v in pts]
+        vs = [v for _a, v in pts]
+        line = axm.step(xs, vs, where="post", label=f"{p} used", lw=1.4)[0]
+        if p in tl.capacity:
+            axm.axhline(tl.capacity[p], color=line.get_color(), ls="--", lw=0.9, label=f"{p} capacity")
+    axm.set_ylabel("memory (MB)")
+    axm.set_ylim(bottom=0)
+    axm.set_xlabel("simulated time (s)")
+    axm.grid(color="#eeeeee")
+    if tl.memory:
+        axm.legend(fontsize=7, ncol=3, loc="upper left", framealpha=0.85)
+
+    handles = [Patch(facecolor=color_of[g], label=g) for g in tl.graphs]
+    handles += [
+        Patch(facecolor="white", edgecolor="#555555", hatch="////", label="warming up"),
+        Patch(facecolor="#bbbbbb", label="no valid input"),
+        Patch(facecolor="black", alpha=0.75, label="platform down"),
+        Patch(facecolor="#e41a1c", alpha=0.2, label="unmonitored exposure"),
+        plt.Line2D([], [], marker="^", color="#e41a1c", ls="", label="slip injected"),
+        plt.Line2D([], [], color="#444444", label="alarm"),
+        plt.Line2D([], [], marker="X", color="#b2182b", ls="", label="error"),
+        plt.Line2D([], [], marker="v", color="black", ls="", label="fault"),
+    ]
+    ax.legend(handles=handles, fontsize=7, ncol=6, loc="lower left", bbox_to_anchor=(0.0, 1.06), frameon=False)
+    out = Path(path)
+    fig.savefig(out, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return out
