@@ -104,6 +104,10 @@ class DeploymentCore:
 
     def settle(self, raised: Iterable[str]) -> frozenset[str]:
         """Update the standing errors after a reaction that raised errors for ``raised``."""
+        raised = tuple(raised)
+        if not raised and not self.standing:
+            # nothing can stand: standing_after(∅, ∅, ...) is ∅ whatever the view says
+            return self.standing
         view = self.view()
         wanted = frozenset(g for slot in view.slots for g in slot)
         self.standing = standing_after(self.standing, raised, wanted, validly_active(view))

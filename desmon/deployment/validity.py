@@ -25,7 +25,7 @@ from desmon.model.system import PlatformState
 if TYPE_CHECKING:
     from desmon.deployment.ports import QueryPort
 
-__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid"]
+__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -127,6 +127,20 @@ def check_platform(
 ) -> tuple[Failure, ...]:
     """Every requirement ``state`` fails for ``graph`` (only the first if ``first_only``);
     a down platform fails them all."""
+    reqs = requirements if type(requirements) is tuple else tuple(requirements)
+    memo = _memo_for(_PLATFORM_MEMO, reqs)
+    k = (state, graph, first_only)
+    out = memo.get(k)
+    if out is None:
+        out = _check_platform(reqs, state, graph, first_only)
+        _count()
+        memo[k] = out
+    return out
+
+
+def _check_platform(
+    requirements: tuple[Requirement, ...], state: PlatformState, graph: str | None, first_only: bool
+) -> tuple[Failure, ...]:
     if not state.up:
         return (Failure(state.name, "platform up", _DOWN),)
     out = []
@@ -137,6 +151,56 @@ def check_platform(
             if first_only:
                 break
     return tuple(out)
+
+
+# -- memos ----------------------------------------------------------------------------
+# check_platform and check_validity are pure functions of (requirements, platform
+# states, graph, flag); the deployer, the invariants and the checker call them again and
+# again on the same facts. Results are memoised per requirements tuple -- keyed by its
+# identity, the entry holding the tuple itself so the identity cannot be reused while
+# the entry lives -- then by (states, graph, flag); PlatformState caches its hash. The
+# memos are cleared when they hold more than _MEMO_LIMIT results (memory stays bounded
+# in long simulations; a clear only costs recomputation).
+_MEMO_LIMIT = 100_000
+_PLATFORM_MEMO: dict[int, tuple[tuple[Requirement, ...], dict]] = {}
+_VALIDITY_MEMO: dict[int, tuple[tuple[Requirement, ...], dict]] = {}
+_BY_VALUE: dict[int, dict[tuple[Requirement, ...], dict]] = {}
+_memo_size = [0]
+
+
+def _memo_for(table: dict[int, tuple[tuple[Requirement, ...], dict]], reqs: tuple[Requirement, ...]) -> dict:
+    entry = table.get(id(reqs))
+    if entry is None or entry[0] is not reqs:
+        # an equal tuple seen before (e.g. rebuilt by the repository's query) shares its memo
+        by_value = _BY_VALUE.setdefault(id(table), {})
+        memo = by_value.get(reqs)
+        if memo is None:
+            if len(by_value) > 4096:
+                clear_memos()
+                by_value = _BY_VALUE.setdefault(id(table), {})
+            memo = by_value[reqs] = {}
+        if len(table) > 4096:
+            table.clear()
+        entry = table[id(reqs)] = (reqs, memo)
+    return entry[1]
+
+
+def _count() -> None:
+    _memo_size[0] += 1
+    if _memo_size[0] > _MEMO_LIMIT:
+        # clear the inner dicts (callers hold a reference to one of them)
+        for by_value in _BY_VALUE.values():
+            for memo in by_value.values():
+                memo.clear()
+        _memo_size[0] = 0
+
+
+def clear_memos() -> None:
+    """Forget every memoised validity result (tests; memory)."""
+    _PLATFORM_MEMO.clear()
+    _VALIDITY_MEMO.clear()
+    _BY_VALUE.clear()
+    _memo_size[0] = 0
 
 
 def order_platforms(states: Sequence[PlatformState]) -> list[PlatformState]:
@@ -156,18 +220,25 @@ def check_validity(
     ``graph`` matters for Capacity: its own share never counts against it. Acceptable
     platforms come in preference order (see :func:`order_platforms`); rejected ones
     carry every failing requirement with a readable reason (only the first one when
-    ``reasons`` is False, the fast path of the deployer).
+    ``reasons`` is False, the fast path of the deployer). Results are memoised (pure).
     """
-    reqs = tuple(requirements)
-    acceptable: list[str] = []
-    rejected: list[tuple[str, tuple[Failure, ...]]] = []
-    for state in order_platforms(states):
-        fails = check_platform(reqs, state, graph, first_only=not reasons)
-        if fails:
-            rejected.append((state.name, fails))
-        else:
-            acceptable.append(state.name)
-    return Validity(tuple(acceptable), tuple(rejected))
+    reqs = requirements if type(requirements) is tuple else tuple(requirements)
+    memo = _memo_for(_VALIDITY_MEMO, reqs)
+    k = (states if type(states) is tuple else tuple(states), graph, reasons)
+    v = memo.get(k)
+    if v is None:
+        acceptable: list[str] = []
+        rejected: list[tuple[str, tuple[Failure, ...]]] = []
+        for state in order_platforms(states):
+            fails = check_platform(reqs, state, graph, first_only=not reasons)
+            if fails:
+                rejected.append((state.name, fails))
+            else:
+                acceptable.append(state.name)
+        v = Validity(tuple(acceptable), tuple(rejected))
+        _count()
+        memo[k] = v
+    return v
 
 
 def validity_for(q: "QueryPort", spec: DeploymentSpec, *, reasons: bool = True) -> Validity:

@@ -85,6 +85,20 @@ class PlatformState:
     devices: tuple[Device, ...] = ()
     load: tuple[tuple[str, float], ...] = ()
     deployed: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
+    # The hash, computed on first use (a performance cache: states are dictionary keys
+    # of the validity memo; no part of equality, repr or the constructor).
+    _hash: int = field(default=-1, init=False, repr=False, compare=False)
+
+    def __hash__(self) -> int:
+        h = self._hash
+        if h == -1:
+            h = hash((self.platform, self.up, self.devices, self.load, self.deployed))
+            object.__setattr__(self, "_hash", h)
+        return h
+
+    def __reduce__(self) -> tuple:
+        # never carry the cached hash across processes (string hashes are salted)
+        return (PlatformState, (self.platform, self.up, self.devices, self.load, self.deployed))
 
     @property
     def name(self) -> str:

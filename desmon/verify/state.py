@@ -7,18 +7,30 @@ sorted. :class:`StateStore` is loaded from a key, answers the QueryPort exactly 
 (``tests/test_state_equivalence.py`` shows it with hypothesis), takes the context
 monitor's Insert facts, and executes Control commands against an *outcome prefix*:
 a start beyond the prefix succeeds and marks a choice point the checker may branch on.
+
+Performance: the store holds the key's parts as the very (immutable, sorted) tuples
+of the key, so :meth:`StateStore.load` is a handful of attribute assignments and
+:meth:`StateStore.key` shares them. A mutation rebuilds one small tuple. Every answer
+derived from the parts is memoised on the parts themselves (pure functions of
+hashable tuples): the platform states of a (failed, down, loads, deployed) combination,
+and the per-graph / per-platform index of a deployment set. The memos are bounded
+(cleared when they grow past :data:`MEMO_LIMIT` entries), so memory stays flat on
+long runs; a cleared memo only costs recomputation.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
-from desmon.deployment.invariants import SystemView, check_invariants, Invariant
+from desmon.deployment.invariants import SystemView, Invariant
 from desmon.errors import QueryError
 from desmon.model.requirements import DeploymentSpec, Requirement
 from desmon.model.system import PlatformState, SystemModel
 
-__all__ = ["Key", "StateStore"]
+__all__ = ["Key", "StateStore", "MEMO_LIMIT"]
+
+#: Entries a store memo may hold before it is cleared.
+MEMO_LIMIT = 200_000
 
 
 class Key(NamedTuple):
@@ -32,12 +44,16 @@ class Key(NamedTuple):
     standing: tuple[str, ...]
 
 
+_EMPTY: dict = {}
+
+
 class StateStore:
-    """QueryPort + InsertPort + ControlPort over a mutable copy of one :class:`Key`."""
+    """QueryPort + InsertPort + ControlPort over the parts of one :class:`Key`."""
 
     def __init__(self, model: SystemModel) -> None:
         self.model = model
         self.platform_names = tuple(p.name for p in model.platforms)
+        self._order = {p: i for i, p in enumerate(self.platform_names)}
         self._platform = {p.name: p for p in model.platforms}
         self._device_platform = {d.name: d.platform for d in model.devices}
         self._devices_on = {p.name: tuple(d for d in model.devices if d.platform == p.name) for p in model.platforms}
@@ -45,38 +61,48 @@ class StateStore:
         self._graphs = {g.name for g in model.graphs}
         self._use = {s.graph: s.consumption() for s in model.specs}
         self._ps_cache: dict[tuple, PlatformState] = {}
-        # mutable state
+        self._states_memo: dict[tuple, tuple[PlatformState, ...]] = {}
+        self._index_memo: dict[tuple, tuple[dict, dict]] = {}
+        self._standing_memo: dict[frozenset[str], tuple[str, ...]] = {}
+        # mutable state: the key's parts, as sorted tuples
         self.ctx: str | None = None
-        self.failed: set[str] = set()
-        self.down: set[str] = set()
-        self.loads: dict[str, dict[str, float]] = {}
-        self.deployed: set[tuple[str, str]] = set()
+        self.failed: tuple[str, ...] = ()
+        self.down: tuple[str, ...] = ()
+        self.loads: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
+        self.deployed: tuple[tuple[str, str], ...] = ()
         self._states: tuple[PlatformState, ...] | None = None
+        self._index: tuple[dict, dict] | None = None
         # control
         self.prefix: tuple[bool, ...] = ()
         self.outcomes: list[bool] = []
         self.watch: tuple[Invariant, ...] = ()
-        self.watch_view: "object | None" = None  # callable () -> SystemView
+        #: ``() -> [(invariant, message)]`` for the instantaneous invariants (set by the checker)
+        self.watch_check: Callable[[], list[tuple[str, str]]] | None = None
+        self.watch_view: "Callable[[], SystemView] | None" = None  # fallback: a view to check self.watch on
         self.instant: tuple[str, str, str] | None = None  # (invariant, message, after command)
 
     # -- state --------------------------------------------------------------------------
     def load(self, key: Key) -> None:
         self.ctx = key.context
-        self.failed = set(key.failed)
-        self.down = set(key.down)
-        self.loads = {p: dict(items) for p, items in key.loads}
-        self.deployed = set(key.deployments)
+        self.failed = key.failed
+        self.down = key.down
+        self.loads = key.loads
+        self.deployed = key.deployments
         self._states = None
+        self._index = None
+
+    def facts(self) -> tuple:
+        """The parts every platform state derives from (a memo key)."""
+        return (self.failed, self.down, self.loads, self.deployed)
 
     def key(self, standing: frozenset[str] | tuple[str, ...] = ()) -> Key:
-        return Key(
-            self.ctx,
-            tuple(sorted(self.failed)),
-            tuple(sorted(self.down)),
-            tuple((p, tuple(sorted(self.loads[p].items()))) for p in self.platform_names if p in self.loads),
-            tuple(sorted(self.deployed)),
-            tuple(sorted(standing)),
-        )
+        if isinstance(standing, frozenset):
+            s = self._standing_memo.get(standing)
+            if s is None:
+                s = self._standing_memo[standing] = tuple(sorted(standing))
+        else:
+            s = tuple(sorted(standing))
+        return Key(self.ctx, self.failed, self.down, self.loads, self.deployed, s)
 
     def begin(self, prefix: tuple[bool, ...] = ()) -> None:
         """Start executing a reaction: starts follow ``prefix``, then succeed."""
@@ -96,35 +122,70 @@ class StateStore:
         s = self._spec.get(spec.graph)
         return s.requirements if s is not None else ()
 
+    def _load_of(self, platform: str) -> tuple[tuple[str, float], ...]:
+        for p, items in self.loads:
+            if p == platform:
+                return items
+        return ()
+
     def platform_state(self, platform: str) -> PlatformState:
         if platform not in self._platform:
             raise QueryError(f"unknown platform {platform!r}")
         failed = self.failed
         devices = tuple(d for d in self._devices_on[platform] if d.name not in failed)
-        load = tuple(sorted(self.loads[platform].items())) if platform in self.loads else ()
-        deployed = tuple(sorted((g, self._use.get(g, ())) for g, p in self.deployed if p == platform))
+        load = self._load_of(platform)
+        use = self._use
+        deployed = tuple(sorted((g, use.get(g, ())) for g, p in self.deployed if p == platform))
         up = platform not in self.down
         ck = (platform, up, devices, load, deployed)
         st = self._ps_cache.get(ck)
         if st is None:
+            if len(self._ps_cache) > MEMO_LIMIT:
+                self._ps_cache.clear()
             st = PlatformState(self._platform[platform], up, devices, load, deployed)
             self._ps_cache[ck] = st
         return st
 
     def platform_states(self) -> tuple[PlatformState, ...]:
-        if self._states is None:
-            self._states = tuple(self.platform_state(p) for p in self.platform_names)
-        return self._states
+        states = self._states
+        if states is None:
+            fk = (self.failed, self.down, self.loads, self.deployed)
+            states = self._states_memo.get(fk)
+            if states is None:
+                if len(self._states_memo) > MEMO_LIMIT:
+                    self._states_memo.clear()
+                states = self._states_memo[fk] = tuple(self.platform_state(p) for p in self.platform_names)
+            self._states = states
+        return states
+
+    def _deployment_index(self) -> tuple[dict, dict]:
+        idx = self._index
+        if idx is None:
+            idx = self._index_memo.get(self.deployed)
+            if idx is None:
+                by_graph: dict[str, list[str]] = {}
+                by_platform: dict[str, list[str]] = {}
+                for g, p in self.deployed:
+                    by_graph.setdefault(g, []).append(p)
+                    by_platform.setdefault(p, []).append(g)
+                if len(self._index_memo) > MEMO_LIMIT:
+                    self._index_memo.clear()
+                idx = self._index_memo[self.deployed] = (
+                    {g: tuple(sorted(ps)) for g, ps in by_graph.items()},
+                    {p: tuple(sorted(gs)) for p, gs in by_platform.items()},
+                )
+            self._index = idx
+        return idx
 
     def deployed_on(self, graph: str) -> tuple[str, ...]:
         if graph not in self._spec:
             return ()
-        return tuple(sorted(p for g, p in self.deployed if g == graph))
+        return self._deployment_index()[0].get(graph, ())
 
     def active_deployments(self, platform: str) -> tuple[str, ...]:
         if platform not in self._platform:
             raise QueryError(f"unknown platform {platform!r}")
-        return tuple(sorted(g for g, p in self.deployed if p == platform))
+        return self._deployment_index()[1].get(platform, ())
 
     def perception_graph(self, deployment: str) -> str:
         if deployment not in self._spec:
@@ -135,7 +196,7 @@ class StateStore:
         return self.ctx
 
     def deployments(self) -> tuple[tuple[str, str], ...]:
-        return tuple(sorted(self.deployed))
+        return self.deployed
 
     # -- InsertPort ---------------------------------------------------------------------
     def set_context(self, context: str) -> bool:
@@ -150,9 +211,9 @@ class StateStore:
         if (device not in self.failed) == working:
             return None
         if working:
-            self.failed.discard(device)
+            self.failed = tuple(d for d in self.failed if d != device)
         else:
-            self.failed.add(device)
+            self.failed = tuple(sorted(self.failed + (device,)))
         self._states = None
         return self._device_platform[device]
 
@@ -162,51 +223,63 @@ class StateStore:
         if (platform not in self.down) == up:
             return False
         if up:
-            self.down.discard(platform)
+            self.down = tuple(p for p in self.down if p != platform)
         else:
-            self.down.add(platform)
+            self.down = tuple(sorted(self.down + (platform,)))
         self._states = None
         return True
 
     def set_load(self, platform: str, resource: str, amount: float) -> bool:
         if platform not in self._platform:
             raise QueryError(f"unknown platform {platform!r}: it is not in the repository")
-        cur = self.loads.get(platform, {})
+        cur = dict(self._load_of(platform))
         if cur.get(resource, 0.0) == amount:
             return False
-        cur = dict(cur)
         cur[resource] = amount
-        self.loads[platform] = cur
+        loads = dict(self.loads)
+        loads[platform] = tuple(sorted(cur.items()))
+        self.loads = tuple((p, loads[p]) for p in self.platform_names if p in loads)
         self._states = None
         return True
 
     # -- ControlPort (ImmediateControl semantics, starts follow the outcome prefix) --------
     def start(self, graph: str, platform: str) -> bool:
-        if (graph, platform) in self.deployed:
+        pair = (graph, platform)
+        if pair in self.deployed:
             return True
         i = len(self.outcomes)
         ok = self.prefix[i] if i < len(self.prefix) else True
         self.outcomes.append(ok)
         if ok:
-            self.deployed.add((graph, platform))
+            self.deployed = tuple(sorted(self.deployed + (pair,)))
             self._states = None
-            self._watch(f"start {graph} on {platform}")
+            self._index = None
+            self._watch("start", pair)
         return ok
 
     def stop(self, graph: str, platform: str) -> bool:
-        if (graph, platform) not in self.deployed:
+        pair = (graph, platform)
+        if pair not in self.deployed:
             return False
-        self.deployed.discard((graph, platform))
+        self.deployed = tuple(d for d in self.deployed if d != pair)
         self._states = None
-        self._watch(f"stop {graph} on {platform}")
+        self._index = None
+        self._watch("stop", pair)
         return True
 
-    def _watch(self, after: str) -> None:
-        if not self.watch or self.instant is not None or self.watch_view is None:
+    def _watch(self, verb: str, pair: tuple[str, str]) -> None:
+        if not self.watch or self.instant is not None:
             return
-        bad = check_invariants(self.watch_view(), self.watch)  # type: ignore[operator]
+        if self.watch_check is not None:
+            bad = self.watch_check()
+        elif self.watch_view is not None:
+            from desmon.deployment.invariants import check_invariants
+
+            bad = check_invariants(self.watch_view(), self.watch)
+        else:
+            return
         if bad:
-            self.instant = (bad[0][0], bad[0][1], after)
+            self.instant = (bad[0][0], bad[0][1], f"{verb} {pair[0]} on {pair[1]}")
 
 
 def view_from(store: StateStore, standing: frozenset[str], slots: tuple[tuple[str, ...], ...]) -> SystemView:
