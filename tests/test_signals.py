@@ -131,3 +131,47 @@ def test_segments_accept_dataclasses_and_tuples_alike() -> None:
     a = MissionSignals([Segment("hold", 0.0, 2.0)], [SlipEvent(1.0)], seed=1)
     b = MissionSignals([("hold", 0.0, 2.0)], [(1.0, "down", "pulled")], seed=1)
     assert np.array_equal(a.wrench(0, 2).values, b.wrench(0, 2).values)
+
+
+def _reference_block(ms: MissionSignals, b: int) -> np.ndarray:
+    """Block ``b``'s moments rendered the original way: episode by episode, pad by pad."""
+    from desmon.detectors.signals import TACTILE_BLOCK, _TAG_TACTILE, _block_rng, episode_pad_state, render_pad_moments
+
+    k = np.arange(b * TACTILE_BLOCK, (b + 1) * TACTILE_BLOCK)
+    t = ms.tactile_times(k)
+    mom = np.zeros((TACTILE_BLOCK, 6, 3))
+    g = _block_rng(ms.seed, _TAG_TACTILE, b)
+    for ep in ms._episodes:
+        sel = np.flatnonzero((t >= ep.start) & (t < ep.end))
+        if sel.size == 0:
+            continue
+        amp, yc, xc = episode_pad_state(t[sel][None, :], ep, ms.params)
+        for pad in range(6):
+            if not np.any(amp[:, :, pad] > 0):
+                continue
+            s, si, sj, _ = render_pad_moments(
+                amp[:, :, pad], yc[:, :, pad], xc[:, :, pad], ep.contact["sy"][:, pad], ep.contact["sx"][:, pad],
+                PAD_ROWS[pad], g.standard_normal, ms.params,
+            )
+            mom[sel, pad] = np.stack([s[0], si[0], sj[0]], axis=-1)
+    return mom
+
+
+def test_vectorised_rendering_is_bit_identical_to_the_pad_by_pad_reference() -> None:
+    # short episodes with several per block, slips, rotations: every code path of the renderer
+    segs = []
+    t = 0.0
+    for i in range(12):
+        for ctx, d in (("idle", 0.7 + 0.1 * i), ("grasp", 1.1), ("hold", 0.9), ("move_base", 2.3), ("rotate_ccw", 1.0), ("release", 0.8)):
+            segs.append((ctx, t, d))
+            t += d
+    slips = [SlipEvent(s + 0.3, "down", "pulled") for c, s, d in segs if c == "hold"][::2]
+    ms = MissionSignals(segs, slips, seed=11)
+    nblocks = int(t * 30) // 256 + 1
+    got = ms._render_blocks(list(range(nblocks)), False)  # all blocks in one pass
+    for b in range(nblocks):
+        ref = _reference_block(ms, b)
+        assert np.array_equal(got[b][1], ref), b
+    one = MissionSignals(segs, slips, seed=11)
+    for b in (nblocks - 1, 0, 2):  # one by one, out of order
+        assert np.array_equal(one._render_blocks([b], True)[0][1], got[b][1])

@@ -57,6 +57,7 @@ __all__ = [
     "frame_moments",
     "simulate_batch",
     "render_pad_moments",
+    "render_rows",
 ]
 
 N_PADS: Final = 6
@@ -87,6 +88,10 @@ _TAG_JITTER: Final = 3
 WRENCH_BLOCK: Final = 1024
 TACTILE_BLOCK: Final = 256
 JITTER_BLOCK: Final = 1024
+#: Rendered tactile blocks kept per mission (a sim detector's quiet chunk spans ~4).
+TACTILE_CACHE: Final = 16
+#: Seconds of an object-in-hand episode rendered ahead of a tactile request.
+PREFETCH_S: Final = 40.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -535,6 +540,61 @@ def render_pad_moments(
     return s_sum, s_i, s_j, extra
 
 
+_ROW_OK: Final = np.arange(MAX_ROWS)[None, :] < np.asarray(PAD_ROWS)[:, None]  # (6, 14) cells that exist
+_II: Final = np.arange(MAX_ROWS, dtype=float)
+_JJ: Final = np.arange(PAD_COLS, dtype=float)
+_CELL_ROW: Final = np.repeat(_II, PAD_COLS)  # flat cell -> row
+_CELL_COL: Final = np.tile(_JJ, MAX_ROWS)  # flat cell -> column
+
+
+def render_rows(
+    amp: Arr, yc: Arr, xc: Arr, pad: Arr, sy: Arr, sx: Arr, p: SignalParams = DEFAULT_PARAMS
+) -> tuple[Arr, Arr, Arr]:
+    """The cells above the dead-band of many pad frames (*rows*) at once, before noise.
+
+    Row ``r`` is pad ``pad[r]`` with amplitude ``amp[r] > 0``, centre ``(yc[r], xc[r])``
+    and spreads ``(sy[r], sx[r])``. Returns ``(count, cell, mu)``: ``count[r]`` cells of
+    row ``r`` reach the dead-band; ``cell`` (flat index ``i * 6 + j``) and their
+    noiseless values ``mu = amp * (ey_i * ex_j)`` follow row by row, cells ascending:
+    the order in which :func:`render_pad_moments` draws its normals when the rows are
+    laid out (pad, frame). The values are bit-identical to :func:`render_pad_moments`.
+
+    Consecutive rows with the same pad and centre share one template ``ey_i * ex_j``
+    (a hold, a move_base phase, a jerk of a slip), and only the template's cells that
+    can reach the dead-band at the run's peak amplitude are evaluated per frame.
+    """
+    n = amp.size
+    if n == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0)
+    change = np.empty(n, dtype=bool)
+    change[0] = True
+    np.not_equal(pad[1:], pad[:-1], out=change[1:])
+    change[1:] |= (yc[1:] != yc[:-1]) | (xc[1:] != xc[:-1]) | (sy[1:] != sy[:-1]) | (sx[1:] != sx[:-1])
+    starts = np.flatnonzero(change)
+    run = np.cumsum(change) - 1
+    ey = np.exp(-((_II - yc[starts][:, None]) ** 2) / (2.0 * sy[starts][:, None] ** 2))
+    ex = np.exp(-((_JJ - xc[starts][:, None]) ** 2) / (2.0 * sx[starts][:, None] ** 2))
+    ey *= _ROW_OK[pad[starts]]  # rows a distal pad does not have read nothing
+    tmpl = (ey[:, :, None] * ex[:, None, :]).reshape(-1)
+    # a cell below the dead-band at the run's peak amplitude is below it in every frame
+    peak = np.maximum.reduceat(amp, starts)
+    sup_flat = np.flatnonzero(tmpl * np.repeat(peak, MAX_ROWS * PAD_COLS) >= p.deadband)
+    sup_tmpl = tmpl[sup_flat]
+    sup_cell = sup_flat % (MAX_ROWS * PAD_COLS)
+    count = np.bincount(sup_flat // (MAX_ROWS * PAD_COLS), minlength=starts.size)
+    offset = np.cumsum(count) - count
+    per_row = count[run]
+    first = np.cumsum(per_row) - per_row
+    idx = np.arange(int(first[-1] + per_row[-1])) - np.repeat(first - offset[run], per_row)
+    mu = np.repeat(amp, per_row)
+    mu *= sup_tmpl[idx]
+    hit = mu >= p.deadband
+    keep = np.flatnonzero(hit)
+    # kept cells per row: positions of the row starts among the kept cells
+    kept = np.diff(np.searchsorted(keep, np.append(first, idx.size)))
+    return kept, sup_cell[idx[keep]], mu[keep]
+
+
 def frame_moments(frames: Arr) -> Arr:
     """Per-pad moments ``(..., 6, 3) = (sum P, sum i P, sum j P)`` of frames ``(..., 6, 14, 6)``."""
     f = np.asarray(frames, dtype=float)
@@ -836,49 +896,97 @@ class MissionSignals:
         return k / self.tactile_rate + self._jitter(k)
 
     def _tactile_block(self, b: int, frames: bool) -> tuple[Arr, Arr, Arr | None]:
-        key = (b, frames)
-        hit = self._tcache.get(key)
+        hit = self._tcache.get((b, frames))
         if hit is not None:
             return hit
-        k = np.arange(b * TACTILE_BLOCK, (b + 1) * TACTILE_BLOCK, dtype=np.int64)
-        t = self.tactile_times(k)
-        mom = np.zeros((TACTILE_BLOCK, N_PADS, 3))
-        fr = np.zeros((TACTILE_BLOCK, N_PADS, MAX_ROWS, PAD_COLS), dtype=np.int16) if frames else None
-        g: np.random.Generator | None = None
-        first = int(np.searchsorted(self._ep_starts, t[0], side="right")) - 1
-        for ei in range(max(first, 0), len(self._episodes)):
-            ep = self._episodes[ei]
-            if ep.start > t[-1]:
-                break
-            sel = np.flatnonzero((t >= ep.start) & (t < ep.end))
-            if sel.size == 0:
-                continue
-            if g is None:
-                g = _block_rng(self.seed, _TAG_TACTILE, b)
-            tt = t[sel][None, :]
-            amp, yc, xc = episode_pad_state(tt, ep, self.params)
-            for pad in range(N_PADS):
-                a = amp[:, :, pad]
-                if not np.any(a > 0):
-                    continue
-                rows = PAD_ROWS[pad]
-                s, si, sj, vals = render_pad_moments(
-                    a, yc[:, :, pad], xc[:, :, pad], ep.contact["sy"][:, pad], ep.contact["sx"][:, pad],
-                    rows, g.standard_normal, self.params, want_values=frames,
-                )
-                mom[sel, pad, 0] = s[0]
-                mom[sel, pad, 1] = si[0]
-                mom[sel, pad, 2] = sj[0]
-                if fr is not None and vals is not None:
-                    flat, v = vals
-                    cells = rows * PAD_COLS
-                    fi = sel[flat // cells]
-                    cell = flat % cells
-                    fr[fi, pad, cell // PAD_COLS, cell % PAD_COLS] = v.astype(np.int16)
-        out = (t, mom, fr)
-        if len(self._tcache) >= 6:
-            del self._tcache[next(iter(self._tcache))]
-        self._tcache[key] = out
+        return self._render_blocks([b], frames)[0]
+
+    def _render_blocks(self, blocks: Sequence[int], frames: bool) -> list[tuple[Arr, Arr, Arr | None]]:
+        """Render whole tactile blocks (``TACTILE_BLOCK`` frames each) in one vectorised pass.
+
+        Block ``b``'s frames depend only on the seed and ``b``: its normals come from
+        the generator keyed ``(seed, tactile, b)``, drawn per object-in-hand episode in
+        the block, pad by pad, frame by frame, cell by cell (as the per-pad reference
+        :func:`render_pad_moments` does), so rendering blocks together or one by one
+        gives the same bytes.
+        """
+        B = TACTILE_BLOCK
+        nb = len(blocks)
+        barr = np.asarray(blocks, dtype=np.int64)
+        t = self.tactile_times((barr[:, None] * B + np.arange(B, dtype=np.int64)[None, :]).reshape(-1))
+        nf = t.size
+        mom = np.zeros((nf, N_PADS, 3))
+        fr = np.zeros((nf, N_PADS, MAX_ROWS, PAD_COLS), dtype=np.int16) if frames else None
+        # units: (block, episode) frame ranges, in draw order
+        units: list[tuple[int, int]] = []
+        by_ep: dict[int, list[tuple[int, int]]] = {}
+        for i in range(nb):
+            tb = t[i * B : (i + 1) * B]
+            first = int(np.searchsorted(self._ep_starts, tb[0], side="right")) - 1
+            for ei in range(max(first, 0), len(self._episodes)):
+                ep = self._episodes[ei]
+                if ep.start > tb[-1]:
+                    break
+                lo = int(np.searchsorted(tb, ep.start, side="left"))
+                hi = int(np.searchsorted(tb, ep.end, side="left"))
+                if hi > lo:
+                    units.append((i * B + lo, i * B + hi))
+                    by_ep.setdefault(ei, []).append((i * B + lo, i * B + hi))
+        if units:
+            amp = np.zeros((nf, N_PADS))
+            yc = np.zeros((nf, N_PADS))
+            xc = np.zeros((nf, N_PADS))
+            sy = np.ones((nf, N_PADS))
+            sx = np.ones((nf, N_PADS))
+            for ei, ranges in by_ep.items():
+                ep = self._episodes[ei]
+                sel = np.concatenate([np.arange(lo, hi) for lo, hi in ranges])
+                a, y, x = episode_pad_state(t[sel][None, :], ep, self.params)
+                amp[sel], yc[sel], xc[sel] = a[0], y[0], x[0]
+                sy[sel] = ep.contact["sy"][0]
+                sx[sel] = ep.contact["sx"][0]
+            # rows (unit, pad, frame)
+            f0 = np.array([u[0] for u in units], dtype=np.int64)
+            ln = np.array([u[1] - u[0] for u in units], dtype=np.int64)
+            per = N_PADS * ln
+            o = np.arange(int(per.sum())) - np.repeat(np.cumsum(per) - per, per)
+            lr = np.repeat(ln, per)
+            pad = o // lr
+            frame = np.repeat(f0, per) + o % lr
+            a_r = amp[frame, pad]
+            on = np.flatnonzero(a_r > 0)
+            pad, frame = pad[on], frame[on]
+            count, cell, mu = render_rows(a_r[on], yc[frame, pad], xc[frame, pad], pad, sy[frame, pad], sx[frame, pad], self.params)
+            per_block = np.bincount(frame // B, weights=count, minlength=nb).astype(np.int64)
+            noise = np.empty(mu.size)
+            at = 0
+            for i in range(nb):
+                c = int(per_block[i])
+                if c:
+                    noise[at : at + c] = _block_rng(self.seed, _TAG_TACTILE, int(barr[i])).standard_normal(c)
+                    at += c
+            vals = noise
+            vals *= self.params.noise_counts
+            vals += mu
+            np.rint(vals, out=vals)
+            np.clip(vals, 0.0, FULL_SCALE, out=vals)
+            rows = np.flatnonzero(count)
+            if rows.size:
+                first = (np.cumsum(count) - count)[rows]
+                fr_, pd_ = frame[rows], pad[rows]
+                mom[fr_, pd_, 0] = np.add.reduceat(vals, first)
+                mom[fr_, pd_, 1] = np.add.reduceat(vals * _CELL_ROW[cell], first)
+                mom[fr_, pd_, 2] = np.add.reduceat(vals * _CELL_COL[cell], first)
+            if fr is not None:
+                rr = np.repeat(np.arange(count.size), count)
+                fr[frame[rr], pad[rr], cell // PAD_COLS, cell % PAD_COLS] = vals.astype(np.int16)
+        out = []
+        for i in range(nb):
+            res = (t[i * B : (i + 1) * B], mom[i * B : (i + 1) * B], fr[i * B : (i + 1) * B] if fr is not None else None)
+            if len(self._tcache) >= TACTILE_CACHE:
+                del self._tcache[next(iter(self._tcache))]
+            self._tcache[(int(barr[i]), frames)] = res
+            out.append(res)
         return out
 
     def _tactile_clean(self, k: Arr, frames: bool) -> tuple[Arr, Arr, Arr | None]:
@@ -891,9 +999,12 @@ class MissionSignals:
             return bt[j], bm[j], (bf[j] if bf is not None else None)
         fr = np.empty(k.shape + (N_PADS, MAX_ROWS, PAD_COLS), dtype=np.int16) if frames else None
         blocks = k // TACTILE_BLOCK
-        for b in np.unique(blocks):
+        uniq = [int(b) for b in np.unique(blocks)]
+        missing = [b for b in uniq if (b, frames) not in self._tcache]
+        rendered = dict(zip(missing, self._render_blocks(missing, frames))) if missing else {}
+        for b in uniq:
             sel = blocks == b
-            bt, bm, bf = self._tactile_block(int(b), frames)
+            bt, bm, bf = rendered[b] if b in rendered else self._tactile_block(b, frames)
             j = k[sel] - b * TACTILE_BLOCK
             t[sel] = bt[j]
             mom[sel] = bm[j]
@@ -929,9 +1040,32 @@ class MissionSignals:
                         fr[hit] = lf[0]
         return TactileBlock(k[keep], t[keep], mom[keep], fr[keep] if fr is not None else None)
 
+    def _prefetch(self, k0: int, k1: int, t1: float, frames: bool) -> None:
+        """Render the blocks of frames ``k0..k1`` if any is missing, together with the blocks
+        up to the end of the object-in-hand episode at ``t1`` (at most ``PREFETCH_S``
+        ahead): a consumer reading a mission in chunks then pays one vectorised render
+        per episode instead of one per chunk. Only *when* a block is rendered changes."""
+        B = TACTILE_BLOCK
+        b0, b1 = k0 // B, k1 // B
+        if all((b, frames) in self._tcache for b in range(b0, b1 + 1)):
+            return
+        b2 = b1
+        ei = int(np.searchsorted(self._ep_starts, t1, side="right")) - 1
+        if ei >= 0 and self._episodes[ei].end > t1:
+            end = min(self._episodes[ei].end, t1 + PREFETCH_S)
+            b2 = max(b1, int(math.ceil((end + self.params.tactile_jitter_clip) * self.tactile_rate)) // B)
+        if b2 - b0 + 1 > TACTILE_CACHE:
+            b2 = b1
+            if b2 - b0 + 1 > TACTILE_CACHE:
+                return  # a long request: _tactile_clean renders it without the cache
+        missing = [b for b in range(b0, b2 + 1) if (b, frames) not in self._tcache]
+        self._render_blocks(missing, frames)
+
     def tactile(self, t0: float, t1: float, frames: bool = False) -> TactileBlock:
         """All tactile frames with ``t0 <= t < t1`` (moments always; full frames if ``frames``)."""
         cand = tactile_nominal_indices(t0, t1, self.tactile_rate, self.params.tactile_jitter_clip)
+        if cand.size:
+            self._prefetch(int(cand[0]), int(cand[-1]), t1, frames)
         t = self.tactile_times(cand)
         return self.tactile_at(cand[(t >= t0) & (t < t1)], frames=frames)
 

@@ -19,14 +19,18 @@ the core; no decision is made here.
   DEPLOYMENT_HISTORY; ``RaiseError`` is stamped with ``env.now``. After every reaction
   ``core.settle`` and, when no newer fact is pending, the named invariants are audited
   on the live repository.
-* **Detector processes** wake once per ``world.block`` seconds and consume every sample
-  of their devices since the last wake-up, in one vectorised call.
+* **Detector processes** consume every sample of their devices since the last wake-up,
+  in one vectorised call. They wake on the ``world.block`` grid around ground-truth
+  slips (``SLIP_WINDOW``) and every ``world.quiet_block`` seconds (on the same grid)
+  elsewhere; the detectors are chunking-invariant and nothing in the world reads their
+  output back, so this changes only where an alarm record lands in the trace.
 * **Fault injector** fails and repairs devices and platforms (script or MTTF / MTTR);
   **load** processes change the background memory load (script or random walk).
 """
 
 from __future__ import annotations
 
+import bisect
 import math
 import random
 from dataclasses import dataclass, field
@@ -52,7 +56,12 @@ from desmon.sim.sensors import DetectorAdapter, SensorBank
 from desmon.sim.trace import Trace
 from desmon.sim.world import Segment, Slip, World, draw_slips, expand_task, world_of
 
-__all__ = ["SimWorld", "RunResult", "simulate", "OBSERVATION"]
+__all__ = ["SimWorld", "RunResult", "simulate", "OBSERVATION", "SLIP_WINDOW"]
+
+#: Around a ground-truth slip at t_s, detectors wake every ``world.block`` seconds in
+#: [t_s + lo, t_s + hi] (a pulled slip loads the wrist up to 1 s before motion onset;
+#: the detection window ends 1 s after it).
+SLIP_WINDOW = (-2.0, 2.0)
 
 #: What the context monitor sees of gripper and base in each ground-truth action.
 OBSERVATION = {
@@ -142,6 +151,7 @@ class SimWorld:
         self.segments: tuple[Segment, ...] = expand_task(self.world, self.horizon)
         self.slips = draw_slips(self.world, self.segments, self.seed)
         self.slips = tuple(s for s in self.slips if s.time < self.horizon)
+        self._busy = _merge_windows([(s.time + SLIP_WINDOW[0], s.time + SLIP_WINDOW[1]) for s in self.slips])
         devs = [(d, self.world.signal_of(d.kind)) for d in self.model.devices]
         self.stream_of = {d.name: s for d, s in devs}
         self.bank: SensorBank | None = None
@@ -417,13 +427,30 @@ class SimWorld:
         self._mem(platform)
         return True
 
+    def _next_wake(self, now: float) -> float:
+        """The next detector wake-up after ``now``: the next ``block`` grid point while a
+        slip window is near, else the grid point ``quiet_block`` ahead (or the grid point
+        that starts the next slip window, whichever comes first)."""
+        block = self.world.block
+        k = math.floor(now / block + 1e-9) + 1
+        nxt = k * block
+        quiet = self.world.quiet_block
+        if quiet <= block:
+            return nxt
+        far = max(nxt, math.floor((now + quiet) / block + 1e-9) * block)
+        lo, hi = self._busy
+        i = bisect.bisect_right(hi, now)
+        if i < len(lo) and lo[i] < far:
+            if lo[i] <= nxt:
+                return nxt
+            return max(nxt, math.floor(lo[i] / block + 1e-9) * block)
+        return far
+
     def _detector(self, inst: Instance):  # type: ignore[no-untyped-def]
         env = self.env
-        block = self.world.block
         try:
             while True:
-                nxt = (math.floor(env.now / block + 1e-9) + 1) * block
-                yield env.timeout(nxt - env.now)
+                yield env.timeout(self._next_wake(env.now) - env.now)
                 self._feed(inst, env.now)
         except simpy.Interrupt:
             return
@@ -559,6 +586,19 @@ class SimWorld:
         else:
             m["slips_injected"] = len(self.slips)
         return m
+
+
+def _merge_windows(ws: list[tuple[float, float]]) -> tuple[list[float], list[float]]:
+    """Sorted, merged windows as ``(starts, ends)``."""
+    lo: list[float] = []
+    hi: list[float] = []
+    for a, b in sorted(ws):
+        if hi and a <= hi[-1]:
+            hi[-1] = max(hi[-1], b)
+        else:
+            lo.append(a)
+            hi.append(b)
+    return lo, hi
 
 
 def simulate(scenario: Scenario, deployer: str = "desmon", seed: int = 0, **kw: Any) -> RunResult:

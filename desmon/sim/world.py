@@ -158,8 +158,12 @@ class World:
     heartbeat_timeout: float = 0.0
     #: simulate sensor signals and run the detectors on them
     signals: bool = True
-    #: sim seconds of samples a detector consumes per SimPy wake-up
+    #: sim seconds of samples a detector consumes per SimPy wake-up while a slip is under way
     block: float = 0.5
+    #: sim seconds per wake-up in quiet stretches (no ground-truth slip within
+    #: [-2, +2] s); detector output is chunking-invariant, so this only decides how late
+    #: a false alarm's record is written to the trace (``<= block`` disables it)
+    quiet_block: float = 30.0
     #: device kind -> signal stream ('wrench' or 'tactile'); unknown kinds are guessed from the name
     signal_kinds: tuple[tuple[str, str], ...] = (("force_sensor", "wrench"), ("tactile_pad", "tactile"), ("tactile_array", "tactile"))
     #: how the robot holds the object when it is handed over (slips in release are pulls)
@@ -175,6 +179,7 @@ class World:
         _pos("recognition delay", self.recognition_delay)
         _pos("heartbeat timeout", self.heartbeat_timeout)
         _pos("block", self.block, zero=False)
+        _pos("quiet block", self.quiet_block, zero=False)
         if self.slip_rate < 0:
             raise ScenarioError(f"world: slip_rate {self.slip_rate!r} must be >= 0")
         for te in self.faults:
