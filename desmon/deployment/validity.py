@@ -127,8 +127,12 @@ def check_platform(
 ) -> tuple[Failure, ...]:
     """Every requirement ``state`` fails for ``graph`` (only the first if ``first_only``);
     a down platform fails them all."""
-    reqs = requirements if type(requirements) is tuple else tuple(requirements)
-    memo = _memo_for(_PLATFORM_MEMO, reqs)
+    entry = _PLATFORM_MEMO.get(id(requirements))
+    if entry is not None and entry[0] is requirements:
+        memo, reqs = entry[1], requirements
+    else:
+        reqs = requirements if type(requirements) is tuple else tuple(requirements)  # type: ignore[assignment]
+        memo = _memo_for(_PLATFORM_MEMO, reqs)
     k = (state, graph, first_only)
     out = memo.get(k)
     if out is None:
@@ -222,8 +226,12 @@ def check_validity(
     carry every failing requirement with a readable reason (only the first one when
     ``reasons`` is False, the fast path of the deployer). Results are memoised (pure).
     """
-    reqs = requirements if type(requirements) is tuple else tuple(requirements)
-    memo = _memo_for(_VALIDITY_MEMO, reqs)
+    entry = _VALIDITY_MEMO.get(id(requirements))
+    if entry is not None and entry[0] is requirements:
+        memo, reqs = entry[1], requirements
+    else:
+        reqs = requirements if type(requirements) is tuple else tuple(requirements)  # type: ignore[assignment]
+        memo = _memo_for(_VALIDITY_MEMO, reqs)
     k = (states if type(states) is tuple else tuple(states), graph, reasons)
     v = memo.get(k)
     if v is None:

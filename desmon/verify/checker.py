@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import resource
 import sys
+from array import array
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -33,7 +34,7 @@ from desmon.model.events import (
 )
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds, bounds_of
-from desmon.verify.state import Key, StateStore
+from desmon.verify.state import MEMO_LIMIT, Key, StateStore
 
 __all__ = ["Checker", "CheckResult", "Counterexample", "Step", "Label", "HOLDS", "VIOLATED", "INCOMPLETE", "EVENT_KINDS"]
 
@@ -141,7 +142,10 @@ class Checker:
         self.core = DeploymentCore(self.model, self.store, self.store, deployer)
         self.deployer_name = self.core.deployer.name
         self.store.watch = self.instant
-        self.store.watch_view = lambda: SystemView(self.store.platform_states(), self.model.specs, self.core.standing, self.core.slots())
+        self.store.watch_check = self._instant_check
+        self._instant_memo: dict[tuple, list[tuple[str, str]]] = {}
+        self._enabled_memo: dict[tuple, tuple[tuple[Event, str], ...]] = {}
+        self._frozen: dict[tuple[str, ...], frozenset[str]] = {}
         self._slots_cache: dict[str | None, tuple[tuple[str, ...], ...]] = {}
         self.symmetry = None
         if symmetry:
@@ -174,6 +178,17 @@ class Checker:
         return st.key(self.core.standing)
 
     def enabled(self, key: Key) -> list[Event]:
+        return [e for e, _k in self._enabled(key)]
+
+    def _enabled(self, key: Key) -> tuple[tuple[Event, str], ...]:
+        """(event, kind) of every event enabled in ``key``; memoised on the parts it reads."""
+        mk = (key.context, key.failed, key.down, key.loads)
+        out = self._enabled_memo.get(mk)
+        if out is None:
+            out = self._enabled_memo[mk] = tuple((e, event_kind(e)) for e in self._compute_enabled(key))
+        return out
+
+    def _compute_enabled(self, key: Key) -> list[Event]:
         b = self.bounds
         out: list[Event] = [ActionChange(a) for a in b.action_moves(key.context)]
         nfail = len(key.failed) + len(key.down)
@@ -200,11 +215,30 @@ class Checker:
                     out.append(LoadChange(p, lv[i - 1], b.load_resource))
         return out
 
+    def _standing(self, standing: tuple[str, ...]) -> frozenset[str]:
+        f = self._frozen.get(standing)
+        if f is None:
+            f = self._frozen[standing] = frozenset(standing)
+        return f
+
+    def _instant_check(self) -> list[tuple[str, str]]:
+        """The instantaneous invariants on the store's current facts (memoised on them)."""
+        st = self.store
+        standing = self.core.standing
+        mk = (st.failed, st.down, st.loads, st.deployed, standing, st.ctx)
+        r = self._instant_memo.get(mk)
+        if r is None:
+            view = SystemView(st.platform_states(), self.model.specs, standing, self.slots(st.ctx))
+            if len(self._instant_memo) > MEMO_LIMIT:
+                self._instant_memo.clear()
+            r = self._instant_memo[mk] = check_invariants(view, self.instant)
+        return r
+
     def run_one(self, key: Key, event: Event, prefix: tuple[bool, ...]):  # type: ignore[no-untyped-def]
         """Apply ``event`` and the complete reaction to ``key`` with start outcomes ``prefix``."""
         st = self.store
         st.load(key)
-        self.core.standing = frozenset(key.standing)
+        self.core.standing = self._standing(key.standing)
         st.begin(prefix)
         stim, log = self.core.step(event, st)
         return st.key(self.core.standing), tuple(st.outcomes), log, st.instant
@@ -227,7 +261,7 @@ class Checker:
     def violations(self, key: Key) -> list[tuple[str, str]]:
         st = self.store
         st.load(key)
-        view = SystemView(st.platform_states(), self.model.specs, frozenset(key.standing), self.slots(key.context))
+        view = SystemView(st.platform_states(), self.model.specs, self._standing(key.standing), self.slots(key.context))
         return check_invariants(view, self.invariants)
 
     # -- search -----------------------------------------------------------------------------
@@ -243,38 +277,85 @@ class Checker:
     ) -> CheckResult:
         t0 = time.perf_counter()
         res = CheckResult(self.scenario.name, self.deployer_name, tuple(i.name for i in self.invariants), HOLDS, symmetry=self.symmetry is not None)
-        canon = self.symmetry.canon if self.symmetry is not None else (lambda k: k)
-        init = canon(self.initial())
-        parents: dict[Key, tuple[Key | None, Label | None]] = {init: (None, None)}
+        canon = self.symmetry.canon if self.symmetry is not None else None
+        init = self.initial()
+        if canon is not None:
+            init = canon(init)
+        # interned states: index[key] = i, keys[i] = key, parent[i] / label[i] as ints
+        index: dict[Key, int] = {init: 0}
+        keys: list[Key] = [init]
+        parent = array("l", [-1])
+        label = array("l", [-1])
+        labels: list[Label] = []
+        label_ids: dict[Label, int] = {}
+        parts: dict = {}  # interned key parts, shared by every state holding them
         found: dict[str, Counterexample] = {}
         wanted = {i.name for i in self.invariants}
-        frontier = [init]
+        frontier = [0]
         depth = 0
         transitions = 0
         last_progress = t0
         incomplete = ""
         rules = res.rules
         branches = res.branches
+        enabled_count = res.enabled
+        changed = res.changed
+        new_states = res.new_states
+        bound = self.bounds.start_failures
+        st = self.store
+        core = self.core
+        step = core.step
+        standing_of = self._standing
+        invariants = self.invariants
+        specs = self.model.specs
+        slots = self.slots
 
-        def record(name: str, msg: str, key: Key, during: str | None = None, extra: Label | None = None) -> None:
+        def path(i: int) -> tuple[list[Label], list[Key]]:
+            ls: list[Label] = []
+            ks: list[Key] = []
+            while i >= 0:
+                ks.append(keys[i])
+                if label[i] >= 0:
+                    ls.append(labels[label[i]])
+                i = parent[i]
+            ls.reverse()
+            ks.reverse()
+            return ls, ks
+
+        def record(name: str, msg: str, i: int, during: str | None = None, extra: Label | None = None) -> None:
             if name in found:
                 return
-            found[name] = self._counterexample(parents, key, name, msg, during, extra)
+            ls, ks = path(i)
+            if extra is not None:
+                ls.append(extra)
+            found[name] = Counterexample(name, msg, tuple(self.replay(ls, expect=ks)), during)
 
         def done() -> bool:
             return (not keep_going and bool(found)) or wanted <= set(found)
 
+        def intern(k: Key) -> Key:
+            return Key(
+                k.context,
+                parts.setdefault(k.failed, k.failed),
+                parts.setdefault(k.down, k.down),
+                parts.setdefault(k.loads, k.loads),
+                parts.setdefault(k.deployments, k.deployments),
+                parts.setdefault(k.standing, k.standing),
+            )
+
         for name, msg in self.violations(init):
-            record(name, msg, init)
+            record(name, msg, 0)
         expanded = 0
-        while frontier and not done() and not incomplete:
+        any_found = bool(found)
+        while frontier and not (any_found and done()) and not incomplete:
             if max_depth is not None and depth >= max_depth:
                 incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
                 break
-            nxt: list[Key] = []
-            for key in frontier:
-                if done():
+            nxt: list[int] = []
+            for ki in frontier:
+                if any_found and done():
                     break
+                key = keys[ki]
                 expanded += 1
                 if (expanded & 255) == 0:
                     now = time.perf_counter()
@@ -283,46 +364,78 @@ class Checker:
                         break
                     if progress and now - t0 > 1.0 and now - last_progress > 0.5:
                         last_progress = now
-                        rate = len(parents) / (now - t0)
-                        print(f"\r  {len(parents):,} states  {transitions:,} transitions  depth {depth}  {rate:,.0f} states/s ", end="", file=out, flush=True)
+                        rate = len(keys) / (now - t0)
+                        print(f"\r  {len(keys):,} states  {transitions:,} transitions  depth {depth}  {rate:,.0f} states/s ", end="", file=out, flush=True)
                 rules[key.context] += 1
-                for event in self.enabled(key):
-                    kind = event_kind(event)
-                    res.enabled[kind] += 1
+                kstanding = standing_of(key.standing)
+                for event, kind in self._enabled(key):
+                    enabled_count[kind] += 1
                     if self.symmetry is not None:
                         self.symmetry.check(key, event)
-                    for fails, nkey, log, instant in self.successors(key, event):
+                    pending: list[tuple[bool, ...]] = [()]
+                    while pending:
+                        prefix = pending.pop(0)
+                        # -- one transition: the event and the complete reaction (real core) --
+                        st.load(key)
+                        core.standing = kstanding
+                        st.begin(prefix)
+                        _stim, log = step(event, st)
+                        nkey = st.key(core.standing)
+                        outcomes = st.outcomes
+                        instant = st.instant
+                        fails = tuple(i for i, ok in enumerate(outcomes) if not ok) if False in outcomes else ()
+                        if len(fails) < bound:
+                            for i in range(len(prefix), len(outcomes)):
+                                pending.append(tuple(outcomes[:i]) + (False,))
                         transitions += 1
-                        for cmd, ok in log.commands:  # type: ignore[attr-defined]
-                            if isinstance(cmd, Start):
-                                branches["start ok" if ok else "start failed"] += 1
-                            elif isinstance(cmd, Stop):
-                                branches["stop ok" if ok else "stop failed"] += 1
-                            else:
-                                branches[f"error {cmd.kind}"] += 1
-                        if not log.commands:  # type: ignore[attr-defined]
+                        commands = log.commands
+                        if commands:
+                            for cmd, ok in commands:
+                                t = type(cmd)
+                                if t is Start:
+                                    branches["start ok" if ok else "start failed"] += 1
+                                elif t is Stop:
+                                    branches["stop ok" if ok else "stop failed"] += 1
+                                else:
+                                    branches[f"error {cmd.kind}"] += 1
+                        else:
                             branches["no command (kept)"] += 1
                         if instant is not None and instant[0] not in found and instant[0] not in {n for n, _m in self.violations(nkey)}:
                             # broken inside the reaction and repaired before quiescence
-                            record(instant[0], instant[1], key, instant[2], (event, fails))
+                            record(instant[0], instant[1], ki, instant[2], (event, fails))
+                            any_found = True
                             if done():
                                 break
                         if nkey != key:
-                            res.changed[kind] += 1
-                        ckey = canon(nkey)
-                        if ckey in parents:
+                            changed[kind] += 1
+                        ckey = canon(nkey) if canon is not None else nkey
+                        if ckey in index:
                             continue
-                        parents[ckey] = (key, (event, fails))
-                        res.new_states[kind] += 1
-                        if max_states is not None and len(parents) >= max_states:
+                        ni = len(keys)
+                        ckey = intern(ckey)
+                        index[ckey] = ni
+                        keys.append(ckey)
+                        parent.append(ki)
+                        lab = (event, fails)
+                        li = label_ids.get(lab)
+                        if li is None:
+                            li = label_ids[lab] = len(labels)
+                            labels.append(lab)
+                        label.append(li)
+                        new_states[kind] += 1
+                        if max_states is not None and len(keys) >= max_states:
                             incomplete = f"max states {max_states:,} reached"
-                        bad = self.violations(ckey)
+                        if canon is not None:
+                            st.load(ckey)
+                        view = SystemView(st.platform_states(), specs, standing_of(ckey.standing), slots(ckey.context))
+                        bad = check_invariants(view, invariants)
                         if bad:
                             for name, msg in bad:
-                                record(name, msg, ckey)
+                                record(name, msg, ni)
+                            any_found = True
                             continue  # do not explore beyond a violation
-                        nxt.append(ckey)
-                    if done() or incomplete:
+                        nxt.append(ni)
+                    if (any_found and done()) or incomplete:
                         break
                 if incomplete:
                     break
@@ -331,7 +444,7 @@ class Checker:
             frontier = nxt
         if progress and time.perf_counter() - t0 > 1.0:
             print("", file=out, flush=True)
-        res.states = len(parents)
+        res.states = len(keys)
         res.transitions = transitions
         res.depth = max([depth] + [c.length for c in found.values()])
         res.seconds = time.perf_counter() - t0
@@ -347,23 +460,6 @@ class Checker:
         return res
 
     # -- traces ------------------------------------------------------------------------------
-    def _counterexample(self, parents, key: Key, name: str, msg: str, during: str | None, extra: Label | None) -> Counterexample:  # type: ignore[no-untyped-def]
-        labels: list[Label] = []
-        keys: list[Key] = []
-        k: Key | None = key
-        while k is not None:
-            parent, label = parents[k]
-            keys.append(k)
-            if label is not None:
-                labels.append(label)
-            k = parent
-        labels.reverse()
-        keys.reverse()
-        if extra is not None:
-            labels.append(extra)
-        steps = self.replay(labels, expect=keys)
-        return Counterexample(name, msg, tuple(steps), during)
-
     def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]:
         """Rebuild the states of ``labels`` from the initial state (the trace); checks determinism."""
         key = self.initial()

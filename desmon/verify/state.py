@@ -44,7 +44,31 @@ class Key(NamedTuple):
     standing: tuple[str, ...]
 
 
-_EMPTY: dict = {}
+class _ByPlatform(dict):
+    """platform -> active graphs (every platform present); unknown platform: QueryError."""
+
+    __slots__ = ()
+
+    def __missing__(self, platform: str) -> tuple[str, ...]:
+        raise QueryError(f"unknown platform {platform!r}")
+
+
+class _ByGraph(dict):
+    """graph -> platforms it is active on; a graph without a specification: ()."""
+
+    __slots__ = ()
+
+    def __missing__(self, graph: str) -> tuple[str, ...]:
+        return ()
+
+
+class _Deployments(dict):
+    """deployment -> its perception graph (the identity); unknown deployment: QueryError."""
+
+    __slots__ = ()
+
+    def __missing__(self, deployment: str) -> str:
+        raise QueryError(f"unknown deployment {deployment!r}")
 
 
 class StateStore:
@@ -61,8 +85,9 @@ class StateStore:
         self._graphs = {g.name for g in model.graphs}
         self._use = {s.graph: s.consumption() for s in model.specs}
         self._ps_cache: dict[tuple, PlatformState] = {}
+        self._use_memo: dict[tuple[str, ...], tuple] = {}
         self._states_memo: dict[tuple, tuple[PlatformState, ...]] = {}
-        self._index_memo: dict[tuple, tuple[dict, dict]] = {}
+        self._index_memo: dict[tuple, tuple] = {}
         self._standing_memo: dict[frozenset[str], tuple[str, ...]] = {}
         # mutable state: the key's parts, as sorted tuples
         self.ctx: str | None = None
@@ -71,7 +96,9 @@ class StateStore:
         self.loads: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
         self.deployed: tuple[tuple[str, str], ...] = ()
         self._states: tuple[PlatformState, ...] | None = None
-        self._index: tuple[dict, dict] | None = None
+        self._touched: set[str] = set()
+        self.perception_graph = _Deployments({g: g for g in self._spec}).__getitem__  # type: ignore[method-assign]
+        self._set_index()
         # control
         self.prefix: tuple[bool, ...] = ()
         self.outcomes: list[bool] = []
@@ -88,8 +115,12 @@ class StateStore:
         self.down = key.down
         self.loads = key.loads
         self.deployed = key.deployments
-        self._states = None
-        self._index = None
+        # the key's platform states are usually memoised (the checker evaluated the
+        # invariants on it when it was new): take them now, so that the event's
+        # mutation only recomputes the platform it touches
+        self._states = self._states_memo.get((key.failed, key.down, key.loads, key.deployments))
+        self._touched.clear()
+        self._set_index()
 
     def facts(self) -> tuple:
         """The parts every platform state derives from (a memo key)."""
@@ -129,13 +160,16 @@ class StateStore:
         return ()
 
     def platform_state(self, platform: str) -> PlatformState:
-        if platform not in self._platform:
+        devs = self._devices_on.get(platform)
+        if devs is None:
             raise QueryError(f"unknown platform {platform!r}")
         failed = self.failed
-        devices = tuple(d for d in self._devices_on[platform] if d.name not in failed)
-        load = self._load_of(platform)
-        use = self._use
-        deployed = tuple(sorted((g, use.get(g, ())) for g, p in self.deployed if p == platform))
+        devices = tuple(d for d in devs if d.name not in failed) if failed else devs
+        load = self._load_of(platform) if self.loads else ()
+        graphs = self.active_deployments(platform)  # sorted by graph, as the repository's
+        deployed = self._use_memo.get(graphs)
+        if deployed is None:
+            deployed = self._use_memo[graphs] = tuple((g, self._use.get(g, ())) for g in graphs)
         up = platform not in self.down
         ck = (platform, up, devices, load, deployed)
         st = self._ps_cache.get(ck)
@@ -156,41 +190,51 @@ class StateStore:
                     self._states_memo.clear()
                 states = self._states_memo[fk] = tuple(self.platform_state(p) for p in self.platform_names)
             self._states = states
+        elif self._touched:
+            # a mutation changed only the touched platforms: recompute just those
+            lst = list(states)
+            for p in self._touched:
+                lst[self._order[p]] = self.platform_state(p)
+            self._touched.clear()
+            states = self._states = tuple(lst)
+            if len(self._states_memo) > MEMO_LIMIT:
+                self._states_memo.clear()
+            self._states_memo[(self.failed, self.down, self.loads, self.deployed)] = states
         return states
 
-    def _deployment_index(self) -> tuple[dict, dict]:
-        idx = self._index
+    def _touch(self, platform: str) -> None:
+        if self._states is not None:
+            self._touched.add(platform)
+
+    # deployed_on / active_deployments / perception_graph are, per deployment set, plain
+    # dictionary lookups: the instance attributes of the same names are rebound to the
+    # ``__getitem__`` of memoised index dicts whenever the deployment set changes (see
+    # :meth:`_set_index`); the methods below are the documented fallbacks.
+    def _set_index(self) -> None:
+        deployed = self.deployed
+        idx = self._index_memo.get(deployed)
         if idx is None:
-            idx = self._index_memo.get(self.deployed)
-            if idx is None:
-                by_graph: dict[str, list[str]] = {}
-                by_platform: dict[str, list[str]] = {}
-                for g, p in self.deployed:
-                    by_graph.setdefault(g, []).append(p)
-                    by_platform.setdefault(p, []).append(g)
-                if len(self._index_memo) > MEMO_LIMIT:
-                    self._index_memo.clear()
-                idx = self._index_memo[self.deployed] = (
-                    {g: tuple(sorted(ps)) for g, ps in by_graph.items()},
-                    {p: tuple(sorted(gs)) for p, gs in by_platform.items()},
-                )
-            self._index = idx
-        return idx
+            by_graph: dict[str, list[str]] = {}
+            by_platform: dict[str, list[str]] = {p: [] for p in self.platform_names}
+            for g, p in deployed:
+                by_graph.setdefault(g, []).append(p)
+                by_platform[p].append(g)
+            if len(self._index_memo) > MEMO_LIMIT:
+                self._index_memo.clear()
+            idx = self._index_memo[deployed] = (
+                _ByGraph({g: tuple(sorted(ps)) for g, ps in by_graph.items() if g in self._spec}).__getitem__,
+                _ByPlatform({p: tuple(sorted(gs)) for p, gs in by_platform.items()}).__getitem__,
+            )
+        self.deployed_on, self.active_deployments = idx  # type: ignore[method-assign]
 
-    def deployed_on(self, graph: str) -> tuple[str, ...]:
-        if graph not in self._spec:
-            return ()
-        return self._deployment_index()[0].get(graph, ())
+    def deployed_on(self, graph: str) -> tuple[str, ...]:  # rebound per deployment set
+        raise AssertionError("unreachable: rebound in _set_index")  # pragma: no cover
 
-    def active_deployments(self, platform: str) -> tuple[str, ...]:
-        if platform not in self._platform:
-            raise QueryError(f"unknown platform {platform!r}")
-        return self._deployment_index()[1].get(platform, ())
+    def active_deployments(self, platform: str) -> tuple[str, ...]:  # rebound per deployment set
+        raise AssertionError("unreachable: rebound in _set_index")  # pragma: no cover
 
-    def perception_graph(self, deployment: str) -> str:
-        if deployment not in self._spec:
-            raise QueryError(f"unknown deployment {deployment!r}")
-        return deployment
+    def perception_graph(self, deployment: str) -> str:  # rebound in __init__
+        raise AssertionError("unreachable: rebound in __init__")  # pragma: no cover
 
     def context(self) -> str | None:
         return self.ctx
@@ -214,8 +258,9 @@ class StateStore:
             self.failed = tuple(d for d in self.failed if d != device)
         else:
             self.failed = tuple(sorted(self.failed + (device,)))
-        self._states = None
-        return self._device_platform[device]
+        platform = self._device_platform[device]
+        self._touch(platform)
+        return platform
 
     def set_platform_up(self, platform: str, up: bool) -> bool:
         if platform not in self._platform:
@@ -226,7 +271,7 @@ class StateStore:
             self.down = tuple(p for p in self.down if p != platform)
         else:
             self.down = tuple(sorted(self.down + (platform,)))
-        self._states = None
+        self._touch(platform)
         return True
 
     def set_load(self, platform: str, resource: str, amount: float) -> bool:
@@ -239,7 +284,7 @@ class StateStore:
         loads = dict(self.loads)
         loads[platform] = tuple(sorted(cur.items()))
         self.loads = tuple((p, loads[p]) for p in self.platform_names if p in loads)
-        self._states = None
+        self._touch(platform)
         return True
 
     # -- ControlPort (ImmediateControl semantics, starts follow the outcome prefix) --------
@@ -252,8 +297,8 @@ class StateStore:
         self.outcomes.append(ok)
         if ok:
             self.deployed = tuple(sorted(self.deployed + (pair,)))
-            self._states = None
-            self._index = None
+            self._touch(platform)
+            self._set_index()
             self._watch("start", pair)
         return ok
 
@@ -262,8 +307,8 @@ class StateStore:
         if pair not in self.deployed:
             return False
         self.deployed = tuple(d for d in self.deployed if d != pair)
-        self._states = None
-        self._index = None
+        self._touch(platform)
+        self._set_index()
         self._watch("stop", pair)
         return True
 
