@@ -87,6 +87,7 @@ class Instance:
     fed: float = 0.0
     halted: bool = False
     proc: Any = None
+    gen: int = 0  # activations so far (a warm-up end of an older one is ignored)
 
 
 @dataclass
@@ -158,13 +159,14 @@ class SimWorld:
         if self.signals_on:
             self.bank = SensorBank(self.segments, self.slips, self.seed, [(d, s) for d, s in devs if s is not None])
         # metrics
-        self.exposure = Exposure(self._valid_from)
+        self.exposure = Exposure(self._valid_from, self._emit_exposure)
         self.memory = MemoryMeter({p.name: p.capacity("memory") or math.inf for p in self.model.platforms})
         self.alarms: list[Alarm] = []
         self.decisions: list[dict[str, Any]] = []
         self.errors: list[ErrorRecord] = []
         self.violations: list[tuple[float, str, str]] = []
         self.starts = self.start_failures = self.migrations = self.reactions = self.audits = 0
+        self._pending_ready: list[Instance] = []
         # initial facts, silently (before Notify is wired)
         for ev in scenario.initial:
             self._apply_physical(ev, 0.0)
@@ -223,6 +225,9 @@ class SimWorld:
         if self.wake is not None and not self.wake.triggered:
             self.wake.succeed()
 
+    def _emit_exposure(self, t: float, state: str, context: str) -> None:
+        self.trace.emit(t, "exposure", state=state, context=context)
+
     def _count_history(self, change: Any) -> None:
         self.history_edges += 1
 
@@ -239,8 +244,8 @@ class SimWorld:
             if seg.start > env.now:
                 yield env.timeout(seg.start - env.now)
             wanted = frozenset(g for slot in self.model.rules.slots_for(seg.action) for g in slot)
-            self.exposure.set_wanted(env.now, wanted)
             self.trace.emit(env.now, "action", action=seg.action, duration=seg.duration)
+            self.exposure.set_wanted(env.now, wanted, seg.action)
             env.process(self._recognise(seg.action))
 
     def _recognise(self, action: str):  # type: ignore[no-untyped-def]
@@ -269,19 +274,24 @@ class SimWorld:
             working = isinstance(ev, DeviceRepair)
             if self.dev_ok[ev.device] == working:
                 return
+            self.trace.emit(now, "fault", event=str(ev), source=source)
             self.exposure.advance(now)
             affected = [i for i in self.instances.values() if any(ev.device in devs for devs in i.streams.values())]
-            before = {id(i): self._inputs_ok(i) for i in affected}
+            before = {id(i): self._alive(i) for i in affected}
+            ok_before = {id(i): self._inputs_ok(i) for i in affected}
             for inst in affected:
                 self._feed(inst, now)
             self._apply_physical(ev, now)
             for inst in affected:
-                if working and not before[id(inst)] and self._inputs_ok(inst) and self.up[inst.platform]:
+                if working and not ok_before[id(inst)] and self._inputs_ok(inst) and self.up[inst.platform]:
                     self._activate(inst, now)  # input back: re-tare / warm up
+                elif before[id(inst)] and not self._alive(inst):
+                    self.trace.emit(now, "invalid", graph=inst.graph, platform=inst.platform, reason="sensor_failure")
         else:
             up = isinstance(ev, PlatformUp)
             if self.up[ev.platform] == up:
                 return
+            self.trace.emit(now, "fault", event=str(ev), source=source)
             self.exposure.advance(now)
             on = [i for i in self.instances.values() if i.platform == ev.platform]
             for inst in on:
@@ -290,14 +300,19 @@ class SimWorld:
                     inst.halted = False
                     self._activate(inst, now)  # the supervisor restarts it on reboot
                 else:
+                    alive = self._alive(inst)
                     self._feed(inst, now)
                     inst.halted = True
                     inst.valid_from = math.inf
                     if inst.adapter is not None:
                         inst.adapter.deactivate()
+                    if alive:
+                        self.trace.emit(now, "invalid", graph=inst.graph, platform=inst.platform, reason="platform_crash")
             self.up[ev.platform] = up
             self._mem(ev.platform)
-        self.trace.emit(now, "fault", event=str(ev), source=source)
+            self.trace.emit(now, "platform", platform=ev.platform, up=up)
+        self._flush_ready()
+        self.exposure.check(now)
         env.process(self._notice(ev))
 
     def _scripted_faults(self):  # type: ignore[no-untyped-def]
@@ -318,9 +333,10 @@ class SimWorld:
             self._fault(DeviceRepair(component) if is_dev else PlatformUp(component), "mttr")
 
     def _set_load(self, ev: LoadChange) -> None:
-        self.load[ev.platform] = ev.amount
-        self._mem(ev.platform)
-        self.trace.emit(self.env.now, "load", platform=ev.platform, amount=ev.amount)
+        if ev.resource == "memory":
+            self.load[ev.platform] = ev.amount
+            self._mem(ev.platform)
+        self.trace.emit(self.env.now, "load", platform=ev.platform, resource=ev.resource, amount=ev.amount)
         self._insert(ev)
 
     def _scripted_loads(self):  # type: ignore[no-untyped-def]
@@ -368,8 +384,26 @@ class SimWorld:
         inst.fed = now
         warm = inst.adapter.warmup if inst.adapter is not None else 0.0
         inst.valid_from = now + warm
+        inst.gen += 1
         if inst.adapter is not None:
             inst.adapter.activate(now)
+        if warm > 0:
+            gen = inst.gen
+            self.env.timeout(warm).callbacks.append(lambda _ev: self._warmed(inst, gen))
+        else:
+            self._pending_ready.append(inst)  # valid at once: reported once it is registered
+
+    def _warmed(self, inst: Instance, gen: int) -> None:
+        """A warm-up ended: report the instance ready if it is still that activation and alive."""
+        now = self.env.now
+        if inst.gen == gen and self.instances.get((inst.graph, inst.platform)) is inst and self._alive(inst):
+            self.trace.emit(now, "ready", graph=inst.graph, platform=inst.platform)
+        self.exposure.check(now)
+
+    def _flush_ready(self) -> None:
+        while self._pending_ready:
+            inst = self._pending_ready.pop(0)
+            self._warmed(inst, inst.gen)
 
     def _start(self, graph: str, platform: str):  # type: ignore[no-untyped-def]
         """Control.start: latency, then success or failure; returns the outcome."""
@@ -405,6 +439,8 @@ class SimWorld:
         self.starts += 1
         record_start(self.repo, graph, platform)
         self._mem(platform)
+        self._flush_ready()
+        self.exposure.check(env.now)
         if adapter is not None and adapter.det is not None:
             inst.proc = env.process(self._detector(inst))
         return True
@@ -425,6 +461,7 @@ class SimWorld:
         self.stops += 1
         record_stop(self.repo, graph, platform)
         self._mem(platform)
+        self.exposure.check(now)
         return True
 
     def _next_wake(self, now: float) -> float:
@@ -529,7 +566,14 @@ class SimWorld:
     # ------------------------------------------------------------------ run
     def run(self) -> RunResult:
         env = self.env
-        self.trace.emit(0.0, "run", scenario=self.scenario.name, deployer=self.deployer_name, seed=self.seed, horizon=self.horizon, signals=self.signals_on)
+        self.trace.emit(
+            0.0, "run", scenario=self.scenario.name, deployer=self.deployer_name, seed=self.seed, horizon=self.horizon,
+            signals=self.signals_on,
+            platforms={p.name: {"memory": p.capacity("memory")} for p in self.model.platforms},
+            graphs={g.name: {"memory": self._memory_of(g.name)} for g in self.model.graphs},
+        )
+        for p in self.model.platforms:
+            self.trace.emit(0.0, "load", platform=p.name, resource="memory", amount=self.load[p.name])
         for s in self.slips:
             self.trace.emit(s.time, "slip", direction=s.direction, kind=s.kind)
         env.process(self._robot())
@@ -548,7 +592,7 @@ class SimWorld:
         now = self.horizon
         for inst in list(self.instances.values()):
             self._feed(inst, now)
-        self.exposure.advance(now)
+        self.exposure.close(now)
         self.memory.close(now)
         metrics = self._metrics()
         self.trace.emit(now, "end", **{k: v for k, v in metrics.items() if k != "latencies"})

@@ -3,6 +3,8 @@
 * **Unmonitored exposure**: seconds in which the robot's *true* action context is one
   for which the selector wants a detector, and no instance of a selected graph is
   running on an up platform with its inputs and warmed up.
+  :class:`Exposure` also reports each interval it counts (for the trace's
+  ``exposure`` start / end records).
 * **Blind time per switch**: for every change of the true context that changes what
   the selector wants (a switch), the exposure between the change and the first moment
   a selected detector is valid (or the next switch).
@@ -36,17 +38,26 @@ class Exposure:
     not risky); ``valid_from(graph)`` returns the earliest time from which a running
     instance of ``graph`` is valid (``inf`` if none). State only changes at
     :meth:`advance` calls, but a warm-up ending between two calls is accounted exactly.
+
+    Intervals: the owner calls :meth:`check` after every change of state (and at every
+    warm-up end); each maximal interval of exposure in one true context is then
+    reported to ``emit(t, "start" | "end", context)`` when it opens and closes, and
+    kept in ``intervals``. Their lengths add up to ``exposure``.
     """
 
-    def __init__(self, valid_from: Callable[[str], float]) -> None:
+    def __init__(self, valid_from: Callable[[str], float], emit: Callable[[float, str, str], None] | None = None) -> None:
         self.valid_from = valid_from
+        self.emit = emit
         self.wanted: frozenset[str] = frozenset()
+        self.context = ""
         self.last = 0.0
         self.exposure = 0.0
         self.risky = 0.0
         self.switches = 0
         self.blind: list[float] = []
         self._open: int | None = None  # index into blind of the switch not yet covered
+        self.open_since: float | None = None
+        self.intervals: list[tuple[float, float, str]] = []
 
     def _vmin(self) -> float:
         return min((self.valid_from(g) for g in self.wanted), default=math.inf)
@@ -64,8 +75,11 @@ class Exposure:
                     self._open = None
         self.last = max(self.last, now)
 
-    def set_wanted(self, now: float, wanted: frozenset[str]) -> None:
+    def set_wanted(self, now: float, wanted: frozenset[str], context: str = "") -> None:
         self.advance(now)
+        if context != self.context and self.open_since is not None:
+            self._close(now)
+        self.context = context
         if wanted != self.wanted:
             if wanted:
                 self.switches += 1
@@ -74,6 +88,30 @@ class Exposure:
             else:
                 self._open = None
             self.wanted = wanted
+        self.check(now)
+
+    def check(self, now: float) -> None:
+        """Open or close the exposure interval after a change of state at ``now``."""
+        exposed = bool(self.wanted) and self._vmin() > now
+        if exposed and self.open_since is None:
+            self.open_since = now
+            if self.emit is not None:
+                self.emit(now, "start", self.context)
+        elif not exposed and self.open_since is not None:
+            self._close(now)
+
+    def _close(self, now: float) -> None:
+        assert self.open_since is not None
+        self.intervals.append((self.open_since, now, self.context))
+        self.open_since = None
+        if self.emit is not None:
+            self.emit(now, "end", self.context)
+
+    def close(self, now: float) -> None:
+        """End of the run: account up to ``now`` and close an open interval there."""
+        self.advance(now)
+        if self.open_since is not None:
+            self._close(now)
 
 
 @dataclass

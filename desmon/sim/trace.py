@@ -2,7 +2,49 @@
 
 Each record is one JSON object with the simulated time ``t`` (seconds, rounded to the
 microsecond) and a ``type``. Records are written in the order they happen, keys in a
-fixed order, so the same seed gives the same file byte for byte.
+fixed order, so the same seed gives the same file byte for byte. Two kinds are written
+ahead of or behind their ``t``: ``slip`` records (ground truth, all at the start) and
+``alarm`` records (when the detector consumes the samples: within ``world.block`` s
+around a slip, up to ``world.quiet_block`` s later elsewhere). Sort by ``t`` to plot.
+
+Schema (keys in this order after ``t`` and ``type``)
+----------------------------------------------------
+``run``        ``scenario, deployer, seed, horizon, signals`` (bool),
+               ``platforms: {name: {"memory": capacity_MB | null}}``,
+               ``graphs: {graph: {"memory": consumption_MB}}`` (the Capacity it declares;
+               0 without one). Always the first record, ``t`` 0.
+``load``       ``platform, resource, amount`` (MB): a platform's background load; one per
+               platform at ``t`` 0 (its initial value), then one at every change
+               (scripted or random walk; a walk may repeat the same amount).
+``slip``       ``direction`` (up/down), ``kind`` (pulled/gravitational): ground-truth slip
+               whose motion starts at ``t``.
+``action``     ``action, duration``: the robot's true action context from ``t``.
+``exposure``   ``state`` ("start" | "end"), ``context`` (the true action): bracket every
+               interval counted as unmonitored exposure -- the true context wants a
+               detector and no instance of a selected graph is running on an up platform
+               with its inputs and warmed up. Intervals never nest or overlap, an interval
+               never spans two contexts (a context change ends one and may start the
+               next at the same ``t``), and an open interval ends at the horizon. The
+               lengths add up to the ``end`` record's ``unmonitored_exposure_s``.
+``fact``       ``fact``: what the context monitor inserted into the repository.
+``reaction``   ``context, changed`` (platforms), ``context_changed``: a deployer reaction.
+``decision``   ``command`` (start/stop), ``graph, platform, ok, issued`` (time the command
+               was issued; ``t`` is when it completed), ``why`` (why a start failed).
+``error``      ``kind, graph, platform, detail``: a RaiseError of the deployer.
+``ready``      ``graph, platform``: a started detector finished warming up (tare / first
+               valid frames) and is valid from ``t``; again after every re-activation
+               (input repaired, platform rebooted). Not written if the instance stopped
+               or lost its input before.
+``invalid``    ``graph, platform, reason``: a running instance (warming or ready) lost
+               valid input at ``t``; ``reason`` is "sensor_failure" (no working device
+               left for one of its streams) or "platform_crash" (its platform went down).
+``platform``   ``platform, up`` (bool): the platform crashed (false) or came back (true).
+``fault``      ``event, source``: the fault injector changed a device or platform
+               (``source``: a script label, "script", "mttf" or "mttr").
+``alarm``      ``detector, platform, direction`` (up/down/null): at ``t`` (the sample time)
+               a running detector reported a slip.
+``violation``  ``invariant, message``: an audited invariant failed after a reaction.
+``end``        the metrics (DESIGN.md §6) at the horizon.
 """
 
 from __future__ import annotations
