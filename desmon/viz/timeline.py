@@ -168,8 +168,8 @@ def build_timeline(records: list[dict[str, Any]], start: float | None = None, en
         tl.down.setdefault(p, []).append((since, horizon))
     if exposure_since is not None:
         tl.exposure.append((exposure_since, horizon))
+    tl.runs = {p: tl.runs.get(p, []) for p in platforms + [q for q in tl.runs if q not in platforms]}
     for p in platforms:
-        tl.runs.setdefault(p, [])
         if p in tl.memory:
             tl.memory[p].append((horizon, tl.memory[p][-1][1]))
 
