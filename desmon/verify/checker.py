@@ -153,6 +153,7 @@ class Checker:
 
             self.symmetry = Symmetry(self)
         self.branches: Counter = Counter()
+        self.explored: list[Key] = []
 
     # -- the transition relation ------------------------------------------------------------
     def slots(self, context: str | None) -> tuple[tuple[str, ...], ...]:
@@ -444,6 +445,7 @@ class Checker:
             frontier = nxt
         if progress and time.perf_counter() - t0 > 1.0:
             print("", file=out, flush=True)
+        self.explored = keys  # the distinct (canonical) states of the last run, BFS order
         res.states = len(keys)
         res.transitions = transitions
         res.depth = max([depth] + [c.length for c in found.values()])

@@ -1,31 +1,236 @@
-"""Symmetry reduction (``--symmetry``): currently refuses, with the reason.
+"""Symmetry reduction (``--symmetry``) over platforms declared interchangeable.
 
-Permuting interchangeable platforms is sound only if the transition relation commutes
-with the permutation. Both deployers break ties among acceptable platforms by
-preference, then declaration order (DESIGN.md §4), so whenever two interchangeable
-platforms are acceptable at once the choice is *not* symmetric and the reduction would
-merge states with different futures. Until a permutation-checked reduction lands, the
-checker refuses rather than give a possibly wrong verdict.
+``Bounds(interchangeable=(("e1", "e2", "e3"),))`` lets the checker store one state per
+orbit: :meth:`Symmetry.canon` sorts the per-platform components (down?, failed devices
+by position, load, deployed graphs) of each group and gives them back to the group's
+platforms in declaration order, renaming devices with their platforms.
+
+Why this is sound here, although the deployer breaks ties by declaration order
+---------------------------------------------------------------------------------
+Symmetry reduction needs the quotient transition relation to be well defined: for
+every state ``s``, permutation ``pi`` of a group and event ``e``, the canonical
+successors of ``pi(s)`` under ``pi(e)`` must be those of ``s`` under ``e`` (with the
+start-failure branches in correspondence). The deployer is *not* equivariant: among
+acceptable platforms it takes the first in (preference, declaration) order, so on
+``pi(s)`` it may pick ``e1`` where on ``s`` it picked ``pi^-1(e1)``. Run the two
+reactions side by side and keep the invariant "state_B = pi_k(state_A) for some
+permutation pi_k of the group". Every read of the deployer is name-free except that
+tie-break (acceptability depends only on a platform's facts and its static data, which
+are identical inside a group; graph sets are sorted by graph name; at most one instance
+exists, so "keep the first current instance by name" never chooses). At a tie-break A
+picks ``a``, B picks ``b``; because the group is contiguous in the preference order,
+both are group members (or both the same outside platform). ``c = pi_k^-1(b)`` is
+acceptable in A. If ``a`` and ``c`` have *identical facts* in A, then
+``pi' = pi_k o (a c)`` still maps state_A to state_B and maps ``a`` to ``b``: the
+invariant survives the command, and by induction the two reactions issue
+corresponding commands (same start indices, so the same failure branches) and end in
+states of one orbit.
+
+So the reduction is sound whenever *two group platforms acceptable for the same graph
+at the same moment always have identical facts*. The static conditions below
+guarantee it, and :class:`Symmetry` refuses (exit 2, one line) where they fail:
+
+1. the group's platforms are identical (capacities, attributes, properties,
+   preference, device kinds/vendors/versions in order) and contiguous in declaration
+   order; no deployment is fixed (EXECUTABLE_ON) to one of them;
+2. the bounds treat them alike: all or none of them may go down; none of their devices
+   may fail; no background load is bounded or initially set on them (their only
+   changing facts are up/down and the deployments they host);
+3. each can host at most one graph at a time (every two graphs that could run on it
+   exceed one of its capacities together) -- so an acceptable group platform for ``g``
+   hosts nothing but possibly ``g`` itself;
+4. the deployer is ``desmon`` or its ``no-recheck`` mutant (both place through the
+   corrected ``ensure_deployed``: a graph is never active twice and a start happens only
+   when no instance is kept, so every acceptable group platform is up and empty: equal
+   facts). ``paper`` and the ``make-before-break`` mutant can run a graph on two
+   platforms and then prefer one by name; ``capacity-blind`` can put two graphs on one
+   box: both break the argument and are refused.
+
+The replay of a counterexample maps each stored event back through the permutation of
+the concrete state it applies to and checks that every step lands in the stored orbit;
+a mismatch would be a soundness bug and is reported as a refusal, not as a verdict.
 """
 
 from __future__ import annotations
 
+from itertools import combinations
 from typing import Any
 
+from desmon.deployment.validity import check_platform
 from desmon.errors import CheckerError
+from desmon.model.events import DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+from desmon.model.requirements import Capacity
+from desmon.model.system import PlatformState
+from desmon.verify.state import Key
 
-__all__ = ["Symmetry"]
+__all__ = ["Symmetry", "SYMMETRIC_DEPLOYERS"]
+
+#: Deployers built on the corrected ``ensure_deployed`` (break-before-make, keep the
+#: valid instance, start only when none is kept): a graph is never active twice, which
+#: condition (4) of the module docstring needs. ``no-recheck`` only skips re-checks.
+SYMMETRIC_DEPLOYERS = ("desmon", "no-recheck")
 
 
 class Symmetry:
     def __init__(self, checker: Any) -> None:
-        groups = checker.bounds.interchangeable
+        self.checker = checker
+        groups = tuple(tuple(g) for g in checker.bounds.interchangeable)
+        name = checker.scenario.name
         if not groups:
             raise CheckerError(
-                f"--symmetry: scenario {checker.scenario.name!r} declares no interchangeable platforms "
-                "(Bounds(interchangeable=((...),)))"
+                f"--symmetry: scenario {name!r} declares no interchangeable platforms (Bounds(interchangeable=((...),)))"
             )
-        raise CheckerError(
-            f"--symmetry refused for {', '.join('/'.join(g) for g in groups)}: the {checker.deployer_name} deployer breaks "
-            "ties by declaration order, which is not symmetric in these platforms; run without --symmetry"
+        self.groups = groups
+        self._refuse_unless_symmetric()
+        model = checker.model
+        self._devices = {p.name: tuple(d.name for d in model.devices if d.platform == p.name) for p in model.platforms}
+        self._device_platform = {d.name: (d.platform, self._devices[d.platform].index(d.name)) for d in model.devices}
+        self._order = {p.name: i for i, p in enumerate(model.platforms)}
+        self._members = {p for g in groups for p in g}
+
+    # -- refusal -------------------------------------------------------------------------
+    def _refuse(self, why: str) -> None:
+        raise CheckerError(f"--symmetry refused for {', '.join('/'.join(g) for g in self.groups)}: {why}; run without --symmetry")
+
+    def _refuse_unless_symmetric(self) -> None:
+        c = self.checker
+        model, b = c.model, c.bounds
+        if c.deployer_name not in SYMMETRIC_DEPLOYERS:
+            self._refuse(
+                f"the {c.deployer_name} deployer can run a graph on two platforms and keeps one by name, a tie-break that is not symmetric"
+            )
+        order = [p.name for p in model.platforms]
+        seen: set[str] = set()
+        for grp in self.groups:
+            if len(grp) < 2 or len(set(grp)) != len(grp):
+                self._refuse(f"group {'/'.join(grp)} needs at least two distinct platforms")
+            if seen & set(grp):
+                self._refuse("a platform is in two groups")
+            seen |= set(grp)
+            idx = sorted(order.index(p) for p in grp)
+            if idx != list(range(idx[0], idx[0] + len(grp))):
+                self._refuse(f"{'/'.join(grp)} are not declared one after the other, so declaration-order ties with other platforms differ")
+            plats = [model.platform(p) for p in grp]
+            sig = {(p.capacities, p.attributes, p.properties, p.preference) for p in plats}
+            if len(sig) != 1:
+                self._refuse(f"{'/'.join(grp)} differ in capacities, attributes, properties or preference")
+            devs = {tuple((d.kind, d.vendor, d.version) for d in model.devices_on(p)) for p in grp}
+            if len(devs) != 1:
+                self._refuse(f"{'/'.join(grp)} carry different devices")
+            for spec in model.specs:
+                if spec.fixed_platform in grp:
+                    self._refuse(f"{spec.graph} is fixed (EXECUTABLE_ON) to {spec.fixed_platform}")
+            inb = [p in b.platforms for p in grp]
+            if any(inb) and not all(inb):
+                self._refuse("the bounds let only some of them go down")
+            for p in grp:
+                for d in model.devices_on(p):
+                    if d.name in b.devices:
+                        self._refuse(f"device {d.name} of {p} may fail, so acceptable group platforms can differ in working devices")
+                if p in b.loads:
+                    self._refuse(f"the load of {p} varies, so acceptable group platforms can differ in load")
+            initial = {ev.platform: ev.amount for ev in c.scenario.initial if isinstance(ev, LoadChange) and ev.platform in grp and ev.amount}
+            if initial:
+                self._refuse(f"{', '.join(initial)} start with a background load")
+            # (3) at most one graph per group platform
+            p0 = plats[0]
+            empty = PlatformState(p0, True, model.devices_on(p0.name), (), ())
+            hostable = [s for s in model.specs if s.fixed_platform is None and not check_platform(s.requirements, empty, s.graph)]
+            for s1, s2 in combinations(hostable, 2):
+                if not _exceeds(s1, s2, p0):
+                    self._refuse(
+                        f"{s1.graph} and {s2.graph} fit on one of them together, so the first-by-declaration choice can pick "
+                        "between platforms hosting different graphs"
+                    )
+
+    # -- canonical form --------------------------------------------------------------------
+    def _component(self, key: Key, p: str) -> tuple:
+        devs = self._devices[p]
+        return (
+            p in key.down,
+            tuple(i for i, d in enumerate(devs) if d in key.failed),
+            next((items for q, items in key.loads if q == p), ()),
+            tuple(g for g, q in key.deployments if q == p),
         )
+
+    def permutation(self, key: Key) -> dict[str, str]:
+        """The renaming (platform -> platform) that takes ``key`` to its canonical form."""
+        perm: dict[str, str] = {}
+        for grp in self.groups:
+            comps = sorted((self._component(key, p), p) for p in grp)
+            for new, (_c, old) in zip(grp, comps):
+                if new != old:
+                    perm[old] = new
+        return perm
+
+    def rename(self, key: Key, perm: dict[str, str]) -> Key:
+        if not perm:
+            return key
+        P = lambda p: perm.get(p, p)  # noqa: E731
+
+        def D(d: str) -> str:
+            p, i = self._device_platform[d]
+            return self._devices[P(p)][i]
+
+        return Key(
+            key.context,
+            tuple(sorted(D(d) for d in key.failed)),
+            tuple(sorted(P(p) for p in key.down)),
+            tuple(sorted(((P(p), items) for p, items in key.loads), key=lambda x: self._order[x[0]])),
+            tuple(sorted((g, P(p)) for g, p in key.deployments)),
+            key.standing,
+        )
+
+    def canon(self, key: Key) -> Key:
+        return self.rename(key, self.permutation(key))
+
+    def rename_event(self, event: Event, perm: dict[str, str]) -> Event:
+        if not perm:
+            return event
+        if isinstance(event, (DeviceFail, DeviceRepair)):
+            p, i = self._device_platform[event.device]
+            return type(event)(self._devices[perm.get(p, p)][i])
+        if isinstance(event, (PlatformDown, PlatformUp)):
+            return type(event)(perm.get(event.platform, event.platform))
+        if isinstance(event, LoadChange):
+            return LoadChange(perm.get(event.platform, event.platform), event.amount, event.resource)
+        return event
+
+    def check(self, key: Key, event: Event) -> None:
+        """Per-transition hook (the static conditions make every transition admissible)."""
+
+    # -- traces ------------------------------------------------------------------------------
+    def replay(self, labels: list, expect: list[Key] | None = None) -> list:
+        """A *concrete* trace: each stored (canonical) label is mapped back through the
+        permutation of the concrete state it applies to; every step must land in the
+        stored orbit."""
+        from desmon.verify.checker import Step, describe_state
+
+        c = self.checker
+        key = c.initial()
+        if expect and self.canon(key) != expect[0]:
+            raise CheckerError(f"--symmetry: the initial state {key} is not in the stored orbit {expect[0]}")
+        steps = [Step(0, None, (), describe_state(key), key)]
+        for i, (event, fails) in enumerate(labels, 1):
+            perm = self.permutation(key)  # concrete -> canonical
+            back = {v: k for k, v in perm.items()}
+            concrete = self.rename_event(event, back)
+            prefix = tuple(j not in fails for j in range(max(fails) + 1)) if fails else ()
+            prev = key
+            key, _outcomes, log, _instant = c.run_one(prev, concrete, prefix)
+            if expect is not None and i < len(expect) and self.canon(key) != expect[i]:
+                raise CheckerError(
+                    f"--symmetry refused: replaying step {i} ({concrete}) left the stored orbit, the reduction is not sound for this scenario"
+                )
+            steps.append(c._step(i, prev, concrete, key, log, fails))
+        return steps
+
+
+def _exceeds(s1: Any, s2: Any, platform: Any) -> bool:
+    """True if ``s1`` and ``s2`` together exceed one of ``platform``'s capacities."""
+    use: dict[str, float] = {}
+    for s in (s1, s2):
+        for req in s.requirements:
+            if isinstance(req, Capacity):
+                use[req.resource] = use.get(req.resource, 0.0) + req.amount
+    return any((platform.capacity(r) or 0.0) < amount for r, amount in use.items())

@@ -1,0 +1,87 @@
+"""Symmetry reduction: accepted where the tie-break is symmetric, same verdicts, fewer states."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import pytest
+
+from desmon.cli import main
+from desmon.errors import CheckerError
+from desmon.loader import load_scenario
+from desmon.verify import HOLDS, VIOLATED, Checker
+from desmon.verify.mutants import get_mutant
+
+SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+SYM = load_scenario(SCENARIOS / "symmetric_platforms.py")
+
+
+@pytest.mark.parametrize("deployer", ["desmon", "no-recheck"])
+def test_same_verdicts_fewer_states_and_exactly_the_orbits(deployer):
+    dep = deployer if deployer == "desmon" else get_mutant(deployer)
+    full, red = Checker(SYM, dep), Checker(SYM, dep, symmetry=True)
+    a, b = full.run(keep_going=True), red.run(keep_going=True)
+    assert b.symmetry and not a.symmetry
+    assert a.verdict == b.verdict
+    assert {c.invariant: c.length for c in a.counterexamples} == {c.invariant: c.length for c in b.counterexamples}
+    assert b.states * 3 < a.states  # three interchangeable boxes: close to 3! orbits collapse
+    # the reduced state space is exactly the set of orbits of the full one
+    assert {red.symmetry.canon(k) for k in full.explored} == set(red.explored)
+    if deployer == "desmon":
+        want = SYM.expected["verify"]
+        assert (a.verdict, a.states) == (want["desmon"]["verdict"], want["desmon"]["states"])
+        assert (b.verdict, b.states) == (want["desmon --symmetry"]["verdict"], want["desmon --symmetry"]["states"])
+        assert a.verdict == HOLDS
+    else:
+        assert a.verdict == VIOLATED and {c.invariant for c in b.counterexamples} == {"valid-or-error", "coverage"}
+        # the reduced counterexample is replayed as a concrete run
+        c = b.counterexamples[0]
+        assert c.steps[-1].key == red.replay(list(c.events))[-1].key
+
+
+def test_canonical_form_renames_devices_with_platforms():
+    sym = Checker(SYM, symmetry=True).symmetry
+    k = Checker(SYM).initial()
+    a = k._replace(down=("e1",), deployments=(("vision_slip_detector", "e2"),))
+    b = k._replace(down=("e3",), deployments=(("vision_slip_detector", "e1"),))
+    assert sym.canon(a) == sym.canon(b)
+    # components sorted (up before down, empty before busy), given back in declaration order
+    assert sym.canon(a).deployments == (("vision_slip_detector", "e2"),) and sym.canon(a).down == ("e3",)
+    assert sym.canon(k._replace(failed=("cam_1",))).failed == ("cam_3",)
+
+
+@pytest.mark.parametrize(
+    "change, reason",
+    [
+        (lambda s: dataclasses.replace(s), "paper deployer"),
+        (lambda s: dataclasses.replace(s, checker=dataclasses.replace(s.checker, devices=("cam_1",))), "device cam_1 of e1 may fail"),
+        (lambda s: dataclasses.replace(s, checker=dataclasses.replace(s.checker, platforms=("e1",))), "only some of them go down"),
+        (lambda s: dataclasses.replace(s, checker=dataclasses.replace(s.checker, interchangeable=(("hand_pc", "e1"),))), "differ in capacities"),
+        (lambda s: dataclasses.replace(s, checker=dataclasses.replace(s.checker, interchangeable=(("e1", "e3"),))), "not declared one after the other"),
+    ],
+)
+def test_refusals(change, reason):
+    scenario = change(SYM)
+    deployer = "paper" if reason == "paper deployer" else "desmon"
+    with pytest.raises(CheckerError, match=reason.split()[0] if reason == "paper deployer" else reason):
+        Checker(scenario, deployer, symmetry=True)
+
+
+def test_capacity_sharing_is_refused():
+    mig = load_scenario(SCENARIOS / "migration.py")
+    with pytest.raises(CheckerError, match="declares no interchangeable"):
+        Checker(mig, symmetry=True)
+    both = dataclasses.replace(mig, checker=dataclasses.replace(mig.checker, interchangeable=(("pc1", "pc2"),)))
+    with pytest.raises(CheckerError, match="refused"):
+        Checker(both, symmetry=True)
+
+
+def test_cli_symmetry(capsys):
+    path = str(SCENARIOS / "symmetric_platforms.py")
+    assert main(["verify", path, "--symmetry", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "symmetry reduction" in out and "states: 728" in out
+    assert main(["verify", path, "--symmetry", "--deployer", "paper", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("desmon: error: --symmetry refused") and err.count("\n") == 1
