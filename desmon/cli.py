@@ -245,6 +245,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--symmetry", action="store_true", help="canonicalise interchangeable platforms")
     p.add_argument("--json", default=None, metavar="FILE", help="write the counterexample(s) as JSON states")
     p.add_argument("--pytest", default=None, metavar="FILE", help="write a pytest replaying the counterexample")
+    p.add_argument("--plot", default=None, metavar="FILE.png", help="draw the shortest counterexample as repository snapshots")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(handler=_lazy("desmon.verify.command", "verify_command"))
 

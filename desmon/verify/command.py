@@ -38,6 +38,15 @@ def verify_command(args: argparse.Namespace) -> int:
     if args.json:
         Path(args.json).write_text(json.dumps(result_to_json(result), indent=2) + "\n")
         print(f"wrote {args.json}")
+    if getattr(args, "plot", None):
+        if result.counterexamples:
+            from desmon.verify.plot import plot_counterexample
+
+            shortest = min(result.counterexamples, key=lambda c: c.length)
+            out = plot_counterexample(scenario, checker.core.deployer, checker.bounds, shortest, args.plot)
+            print(f"wrote {out} ({shortest.invariant}, {shortest.length} step{'s' if shortest.length != 1 else ''})")
+        else:
+            print(f"no counterexample: {args.plot} not written")
     if args.pytest:
         if result.counterexamples:
             path = str(Path(args.scenario).resolve())
