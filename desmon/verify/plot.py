@@ -6,14 +6,15 @@ networkx :class:`~desmon.repository.store.Repository` (the same
 and ``repo.snapshot()`` is taken after the initial reaction and after every step. A
 replay that does not reach the checker's state is refused (it would draw a different
 run). Panels are drawn by :func:`desmon.viz.snapshot.draw_snapshots` with one shared
-layout, so only edges move between panels.
+layout, so only edges move between panels (the CLI passes that function in: verify
+does not import the viz layer).
 """
 
 from __future__ import annotations
 
 import textwrap
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from desmon.errors import NondeterminismError
 from desmon.verify.checker import Counterexample, describe_state
@@ -54,9 +55,13 @@ def snapshot_panels(scenario: Any, deployer: Any, bounds: Any, c: Counterexample
     return panels, run.repo.graph
 
 
-def plot_counterexample(scenario: Any, deployer: Any, bounds: Any, c: Counterexample, path: str | Path) -> Path:
-    """Draw ``c`` as a sequence of repository snapshots into the PNG ``path``."""
-    from desmon.viz.snapshot import draw_snapshots
+def plot_counterexample(
+    scenario: Any, deployer: Any, bounds: Any, c: Counterexample, path: str | Path, *, draw: Callable[..., Path]
+) -> Path:
+    """Draw ``c`` as a sequence of repository snapshots into the PNG ``path``.
 
+    ``draw`` is :func:`desmon.viz.snapshot.draw_snapshots` (handed over by the CLI: the
+    verify layer does not import the viz layer).
+    """
     panels, full = snapshot_panels(scenario, deployer, bounds, c)
-    return draw_snapshots(panels, path, full=full, columns=2 if len(panels) > 1 else 1)
+    return draw(panels, path, full=full, columns=2 if len(panels) > 1 else 1)
