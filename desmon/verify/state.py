@@ -30,7 +30,7 @@ from desmon.model.system import PlatformState, SystemModel
 __all__ = ["Key", "StateStore", "MEMO_LIMIT"]
 
 #: Entries a store memo may hold before it is cleared.
-MEMO_LIMIT = 200_000
+MEMO_LIMIT = 50_000
 
 
 class Key(NamedTuple):
