@@ -36,9 +36,29 @@ def layout(full: nx.MultiDiGraph) -> dict[str, tuple[float, float]]:
 
 def _name(g: nx.MultiDiGraph, n: str) -> str:
     d = g.nodes[n]
-    if d.get("label") == "Requirement":
+    label = d.get("label")
+    if label == "Requirement":
         return str(d.get("description", n))
+    if label == "Platform":
+        mem = (d.get("capacities") or {}).get("memory")
+        load = (d.get("load") or {}).get("memory")
+        text = str(d.get("name", n))
+        if mem is not None:
+            text += f"\n{mem:g} MB" + (f", load {load:g}" if load else "")
+        return text + ("\n(down)" if d.get("up") is False else "")
+    if label == "Device" and d.get("working") is False:
+        return f"{d.get('name', n)} (failed)"
     return str(d.get("name", n))
+
+
+def _face(g: nx.MultiDiGraph, n: str) -> tuple[str, str]:
+    """(box colour, text colour): failed devices grey, crashed platforms dark."""
+    d = g.nodes[n]
+    if d.get("label") == "Device" and d.get("working") is False:
+        return "#e0e0e0", "#777777"
+    if d.get("label") == "Platform" and d.get("up") is False:
+        return "#444444", "white"
+    return COLORS.get(str(d.get("label")), "white"), "black"
 
 
 def _draw(ax, g: nx.MultiDiGraph, pos: dict[str, tuple[float, float]], title: str) -> None:  # type: ignore[no-untyped-def]
@@ -76,9 +96,9 @@ def _draw(ax, g: nx.MultiDiGraph, pos: dict[str, tuple[float, float]], title: st
     for n, (x, y) in pos.items():
         if n not in g:
             continue
-        label = g.nodes[n].get("label")
-        ax.text(x, y, _name(g, n), ha="center", va="center", fontsize=7.5,
-                bbox=dict(boxstyle="round,pad=0.35", fc=COLORS.get(label, "white"), ec="#555555", lw=0.8))
+        face, ink = _face(g, n)
+        ax.text(x, y, _name(g, n), ha="center", va="center", fontsize=7.5, color=ink, zorder=4,
+                bbox=dict(boxstyle="round,pad=0.35", fc=face, ec="#555555", lw=0.8))
 
 
 def draw_snapshot(g: nx.MultiDiGraph, path: str | Path, *, full: nx.MultiDiGraph | None = None, title: str = "") -> Path:

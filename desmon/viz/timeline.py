@@ -94,6 +94,7 @@ def build_timeline(records: list[dict[str, Any]], start: float | None = None, en
     platforms: list[str] = list((head.get("platforms") or {}).keys())
     tl.capacity = {p: float(v.get("memory", 0)) for p, v in (head.get("platforms") or {}).items()}
     consumption = {g: float(v.get("memory", 0)) for g, v in (head.get("graphs") or {}).items()}
+    tl.graphs = list(consumption)  # declaration order: the same detector keeps its colour across plots
 
     running: dict[tuple[str, str], tuple[float, str]] = {}  # (graph, platform) -> (since, phase)
     load: dict[str, float] = {}
@@ -252,7 +253,8 @@ def plot_timeline(tl: Timeline, path: str | Path) -> Path:
     if tl.memory:
         axm.legend(fontsize=7, ncol=3, loc="upper left", framealpha=0.85)
 
-    handles = [Patch(facecolor=color_of[g], label=g) for g in tl.graphs]
+    shown = {g for runs in tl.runs.values() for _a, _b, g, _ph in runs} | {g for _t, g in tl.alarms}
+    handles = [Patch(facecolor=color_of[g], label=g) for g in tl.graphs if g in shown]
     handles += [
         Patch(facecolor="white", edgecolor="#555555", hatch="////", label="warming up"),
         Patch(facecolor="#bbbbbb", label="no valid input"),
