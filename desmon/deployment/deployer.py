@@ -191,13 +191,8 @@ def _stop_graphs(graphs: Iterable[str], q: QueryPort) -> Reaction:
 
 
 def _active_graphs(q: QueryPort) -> list[str]:
-    seen: list[str] = []
-    for state in q.platform_states():
-        for d in q.active_deployments(state.name):
-            g = q.perception_graph(d)
-            if g not in seen:
-                seen.append(g)
-    return sorted(seen)
+    """The graphs active anywhere, sorted."""
+    return sorted({g for g, _p in q.deployments()})
 
 
 def _paper_react(

@@ -121,6 +121,9 @@ class QueryPort(Protocol):
     def active_deployments(self, platform: str) -> tuple[str, ...]:
         """D: deployments active on ``platform`` (getActiveDeployments), sorted."""
 
+    def deployments(self) -> tuple[tuple[str, str], ...]:
+        """Every active (graph, platform) pair, sorted (all DEPLOYED_ON edges)."""
+
     def perception_graph(self, deployment: str) -> str:
         """g_i: the perception graph a deployment resolves (getPerceptionGraph)."""
 
