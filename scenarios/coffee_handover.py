@@ -25,55 +25,15 @@ Run it: ``python scenarios/coffee_handover.py`` (the scripted t0..t3 replay).
 
 from __future__ import annotations
 
-from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
+from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE
+from desmon.model.cob3 import COMBINED, FORCE, LOADS, TACTILE, care_o_bot
 from desmon.model.events import ActionChange, DeviceFail, LoadChange
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.sim.world import Slip, Step, World
 
-FORCE = "force_slip_detector"
-TACTILE = "tactile_slip_detector"
-COMBINED = "combined_slip_detector"
-PADS = ("thumb_prox", "thumb_dist", "f1_prox", "f1_dist", "f2_prox", "f2_dist")
-
-robot = RobotBuilder("care-o-bot-3")
-robot.platform("torso_pc", memory=1024, attributes={"os": "linux", "arch": "x86_64"}, properties={"link_latency_ms": 2.0})
-robot.platform("arm_pc", memory=512, attributes={"os": "linux", "arch": "x86_64"}, properties={"link_latency_ms": 1.0}).device(
-    "lwr_wrench", kind="force_sensor", vendor="kuka", version="lwr4"
-)
-robot.platform("hand_pc", memory=320, attributes={"os": "linux", "arch": "armv7"}, properties={"link_latency_ms": 1.0}).devices(
-    [f"pad_{p}" for p in PADS], kind="tactile_pad", vendor="weiss", version="dsa9205"
-)
-
-with robot.rpsl.perception_graph(FORCE) as g:
-    g.sensor("wrench", reads="force_sensor")
-    g.processing("to_grasp_frame", inputs=["wrench"])
-    g.processing("tare", inputs=["to_grasp_frame"])
-    g.processing("force_threshold", inputs=["tare"])
-
-with robot.rpsl.perception_graph(TACTILE) as g:
-    g.sensor("pads", reads="tactile_pad")
-    g.processing("centre_of_pressure", inputs=["pads"])
-    g.processing("tactile_flow", inputs=["centre_of_pressure"])
-    g.processing("tactile_threshold", inputs=["tactile_flow"])
-
-with robot.rpsl.perception_graph(COMBINED) as g:
-    g.sensor("wrench", reads="force_sensor")
-    g.sensor("pads", reads="tactile_pad")
-    g.processing("force_slip", inputs=["wrench"])
-    g.processing("tactile_slip", inputs=["pads"])
-    g.processing("fusion_rules", inputs=["force_slip", "tactile_slip"])
-
-robot.depsl.deployment_specification(FORCE).add_constraint("attribute", "platform_has", "force_sensor").add_constraint(
-    "capacity", "memory", 50
-)
-robot.depsl.deployment_specification(TACTILE).add_constraint("quantity", "tactile_pad", len(PADS)).add_constraint(
-    "capacity", "memory", 150
-)
-robot.depsl.deployment_specification(COMBINED).add_constraint("capacity", "memory", 250)
-
-robot.rules({GRASP: COMBINED, MOVE_BASE: TACTILE, RELEASE: FORCE})
-
-LOADS = {"torso_pc": 600, "arm_pc": 300, "hand_pc": 100}
+# The robot, its perception graphs (RPSL), their deployment specifications (DepSL) and the
+# selection rules are written with the DSL in desmon/model/cob3.py.
+robot = care_o_bot()
 
 scenario = Scenario(
     name="coffee_handover",

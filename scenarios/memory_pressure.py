@@ -16,13 +16,13 @@ from __future__ import annotations
 from desmon.model import GRASP, MOVE_BASE
 from desmon.model.events import LoadChange
 from desmon.model.scenario import Scenario, TimedEvent
-from desmon.sim.cob3 import LOADS, care_o_bot
+from desmon.model.cob3 import LOADS, care_o_bot
 from desmon.sim.world import LoadWalk, Slip, Step, World
 
 scenario = Scenario(
     name="memory_pressure",
     description="background load rises on torso_pc, then on hand_pc, until Capacity fails",
-    model=care_o_bot().build(),
+    model=care_o_bot(hand_pc_memory=384).build(),  # hand_pc can host the combined detector too
     initial=tuple(LoadChange(p, mb) for p, mb in LOADS.items()),
     world=World(
         task=(Step(GRASP, 40.0), Step(MOVE_BASE, 40.0)),

@@ -18,13 +18,13 @@ from __future__ import annotations
 from desmon.model import GRASP
 from desmon.model.events import LoadChange, PlatformDown, PlatformUp
 from desmon.model.scenario import Scenario, TimedEvent
-from desmon.sim.cob3 import LOADS, care_o_bot
+from desmon.model.cob3 import LOADS, care_o_bot
 from desmon.sim.world import Slip, Step, World
 
 scenario = Scenario(
     name="platform_crash",
     description="torso_pc crashes while the combined slip detector runs on it",
-    model=care_o_bot().build(),
+    model=care_o_bot(hand_pc_memory=384).build(),  # hand_pc can host the combined detector too
     initial=tuple(LoadChange(p, mb) for p, mb in LOADS.items()),
     world=World(
         task=(Step(GRASP, 25.0),),

@@ -14,13 +14,13 @@ from __future__ import annotations
 from desmon.model import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
 from desmon.model.events import LoadChange
 from desmon.model.scenario import Scenario
-from desmon.sim.cob3 import LOADS, care_o_bot
+from desmon.model.cob3 import LOADS, care_o_bot
 from desmon.sim.world import MTTF, LoadWalk, StartFailure, Step, World
 
 scenario = Scenario(
     name="robot_day",
     description="8 h of coffee deliveries with stochastic device and platform faults",
-    model=care_o_bot().build(),
+    model=care_o_bot(hand_pc_memory=384).build(),  # hand_pc can host the combined detector too
     initial=tuple(LoadChange(p, mb) for p, mb in LOADS.items()),
     world=World(
         task=(Step(IDLE, 20.0), Step(GRASP, 2.0), Step(HOLD, 3.0), Step(MOVE_BASE, 30.0), Step(RELEASE, 2.0)),

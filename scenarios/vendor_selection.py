@@ -15,7 +15,7 @@ from __future__ import annotations
 from desmon.model import GRASP, MOVE_BASE, RELEASE, RobotBuilder
 from desmon.model.events import DeviceFail, DeviceRepair, LoadChange
 from desmon.model.scenario import Scenario, TimedEvent
-from desmon.sim.cob3 import COMBINED, FORCE, TACTILE, graphs
+from desmon.model.cob3 import COMBINED, FORCE, TACTILE, graphs
 from desmon.sim.world import Slip, Step, World
 
 robot = RobotBuilder("care-o-bot-3")

@@ -39,14 +39,21 @@ def graphs(robot: RobotBuilder, tactile_kind: str = "tactile_pad") -> None:
         g.processing("fusion_rules", inputs=["force_slip", "tactile_slip"])
 
 
-def care_o_bot(*, specs: bool = True, rules: bool = True) -> RobotBuilder:
-    """The coffee scenario's robot (platforms, devices, graphs, specs R1-R3, rules R*)."""
+def care_o_bot(*, specs: bool = True, rules: bool = True, hand_pc_memory: float = 320) -> RobotBuilder:
+    """The coffee scenario's robot (platforms, devices, graphs, specs R1-R3, rules R*).
+
+    Platforms (memory in MB; the scenarios add background loads, ``LOADS``): ``torso_pc``
+    1024, navigation and planning; ``arm_pc`` 512, drives the KUKA LWR4 whose wrench
+    estimate is the force sensor; ``hand_pc`` connects the six SDH-2 tactile pads. With
+    the default 320 MB and 100 MB of load the combined detector (R3, 250 MB) fits only on
+    ``torso_pc``; scenarios that need a second home for it pass ``hand_pc_memory=384``.
+    """
     robot = RobotBuilder("care-o-bot-3")
     robot.platform("torso_pc", memory=1024, attributes={"os": "linux", "arch": "x86_64"}, properties={"link_latency_ms": 2.0})
     robot.platform("arm_pc", memory=512, attributes={"os": "linux", "arch": "x86_64"}, properties={"link_latency_ms": 1.0}).device(
         "lwr_wrench", kind="force_sensor", vendor="kuka", version="lwr4"
     )
-    robot.platform("hand_pc", memory=384, attributes={"os": "linux", "arch": "armv7"}, properties={"link_latency_ms": 1.0}).devices(
+    robot.platform("hand_pc", memory=hand_pc_memory, attributes={"os": "linux", "arch": "armv7"}, properties={"link_latency_ms": 1.0}).devices(
         [f"pad_{p}" for p in PADS], kind="tactile_pad", vendor="weiss", version="dsa9205"
     )
     graphs(robot)
