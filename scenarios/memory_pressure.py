@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from desmon.model import GRASP, MOVE_BASE
 from desmon.model.events import LoadChange
+from desmon.verify.bounds import Bounds, levels
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.model.cob3 import LOADS, care_o_bot
 from desmon.sim.world import LoadWalk, Slip, Step, World
@@ -41,7 +42,21 @@ scenario = Scenario(
         recognition_delay=0.1,
         heartbeat_timeout=0.2,
     ),
-    expected={"violations": 0, "errors": {"no_acceptable_platforms": 1}, "migrations": 1},
+    checker=Bounds(  # desmon verify: background load on the two big platforms moving in 100 MB steps
+        actions=(GRASP, MOVE_BASE),
+        loads={"torso_pc": levels(600, 900, 100), "hand_pc": levels(100, 300, 100)},
+        start_failures=1,
+    ),
+    expected={
+        "violations": 0,
+        "errors": {"no_acceptable_platforms": 1},
+        "migrations": 1,
+        "verify": {
+            # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
+            "desmon": {"verdict": "HOLDS", "states": 52, "counterexamples": {}},
+            "paper": {"verdict": "VIOLATED", "states": 74, "counterexamples": {"valid-or-error": 3, "single-instance": 3}},
+        },
+    },
 )
 
 if __name__ == "__main__":

@@ -15,8 +15,9 @@ Run: ``desmon run scenarios/platform_crash.py [--deployer paper]``.
 
 from __future__ import annotations
 
-from desmon.model import GRASP
+from desmon.model import GRASP, MOVE_BASE, RELEASE
 from desmon.model.events import LoadChange, PlatformDown, PlatformUp
+from desmon.verify.bounds import Bounds, levels
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.model.cob3 import LOADS, care_o_bot
 from desmon.sim.world import Slip, Step, World
@@ -36,7 +37,19 @@ scenario = Scenario(
         recognition_delay=0.1,
         heartbeat_timeout=0.5,
     ),
+    checker=Bounds(  # desmon verify: any crash/reboot of the two platforms that can host the combined detector
+        actions=(GRASP, MOVE_BASE, RELEASE),
+        devices=("lwr_wrench",),
+        platforms=("torso_pc", "hand_pc"),
+        start_failures=1,
+        max_failures=2,
+    ),
     expected={
+        "verify": {
+            # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
+            "desmon": {"verdict": "HOLDS", "states": 42, "counterexamples": {}},
+            "paper": {"verdict": "VIOLATED", "states": 54, "counterexamples": {"valid-or-error": 2, "single-instance": 2}},
+        },
         "desmon": {
             "violations": 0,
             "placements": [("combined_slip_detector", "torso_pc"), ("combined_slip_detector", "hand_pc")],

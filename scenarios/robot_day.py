@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from desmon.model import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
 from desmon.model.events import LoadChange
+from desmon.verify.bounds import Bounds, levels
 from desmon.model.scenario import Scenario
 from desmon.model.cob3 import LOADS, care_o_bot
 from desmon.sim.world import MTTF, LoadWalk, StartFailure, Step, World
@@ -44,7 +45,21 @@ scenario = Scenario(
         heartbeat_timeout=0.5,
         block=1.0,
     ),
+    checker=Bounds(  # desmon verify: the day's fault kinds, one step at a time, at most two at once
+        task={IDLE: (GRASP,), GRASP: (HOLD,), HOLD: (MOVE_BASE, RELEASE), MOVE_BASE: (HOLD,), RELEASE: (IDLE,)},
+        initial_action=IDLE,
+        devices=("lwr_wrench", "pad_thumb_prox"),
+        platforms=("torso_pc", "arm_pc", "hand_pc"),
+        loads={"torso_pc": levels(600, 800, 100)},
+        start_failures=1,
+        max_failures=2,
+    ),
     expected={
+        "verify": {
+            # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
+            "desmon": {"verdict": "HOLDS", "states": 323, "counterexamples": {}},
+            "paper": {"verdict": "VIOLATED", "states": 405, "counterexamples": {"valid-or-error": 2, "single-instance": 2}},
+        },
         # desmon deployer, seed 0, --until 1800 (asserted by tests/test_scenarios_sim.py)
         "first_30_min": {
             "switches": 95, "starts": 94, "stops": 93, "slips_injected": 2, "slips_detected": 2,

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from desmon.model import GRASP, MOVE_BASE, RELEASE, RobotBuilder
 from desmon.model.events import DeviceFail, DeviceRepair, LoadChange
+from desmon.verify.bounds import Bounds, levels
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.model.cob3 import COMBINED, FORCE, TACTILE, graphs
 from desmon.sim.world import Slip, Step, World
@@ -45,7 +46,19 @@ scenario = Scenario(
         recognition_delay=0.1,
         heartbeat_timeout=0.3,
     ),
+    checker=Bounds(  # desmon verify: either tactile array may fail and be repaired
+        actions=(GRASP, MOVE_BASE, RELEASE),
+        devices=("weiss_array", "pps_array"),
+        platforms=("hand_pc",),
+        start_failures=1,
+        max_failures=2,
+    ),
     expected={
+        "verify": {
+            # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
+            "desmon": {"verdict": "HOLDS", "states": 47, "counterexamples": {}},
+            "paper": {"verdict": "VIOLATED", "states": 60, "counterexamples": {"valid-or-error": 2, "single-instance": 2}},
+        },
         "violations": 0,
         "placements": [(TACTILE, "hand_pc"), (TACTILE, "wrist_pc")],
         "migrations": 1,

@@ -18,7 +18,10 @@ from desmon.verify.report import format_result
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIOS = ROOT / "scenarios"
-NAMES = ["coffee_handover", "two_detectors", "shared_platform", "migration"]
+NAMES = [
+    "coffee_handover", "two_detectors", "shared_platform", "migration",
+    "platform_crash", "memory_pressure", "vendor_selection", "robot_day",
+]
 
 
 @pytest.mark.parametrize("name", NAMES)
