@@ -6,6 +6,7 @@ The semantics of every requirement kind (DESIGN.md §3) lives here and nowhere e
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import TYPE_CHECKING, Iterable, Sequence
 
 from desmon.model.requirements import (
@@ -24,6 +25,9 @@ from desmon.model.system import PlatformState
 
 if TYPE_CHECKING:
     from desmon.deployment.ports import QueryPort
+
+#: Results kept by the memoised pure checks (bounded, so long simulations stay flat).
+_MEMO_SIZE = 1 << 16
 
 __all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos"]
 
@@ -126,22 +130,13 @@ def check_platform(
     requirements: Iterable[Requirement], state: PlatformState, graph: str | None, *, first_only: bool = False
 ) -> tuple[Failure, ...]:
     """Every requirement ``state`` fails for ``graph`` (only the first if ``first_only``);
-    a down platform fails them all."""
-    entry = _PLATFORM_MEMO.get(id(requirements))
-    if entry is not None and entry[0] is requirements:
-        memo, reqs = entry[1], requirements
-    else:
-        reqs = requirements if type(requirements) is tuple else tuple(requirements)  # type: ignore[assignment]
-        memo = _memo_for(_PLATFORM_MEMO, reqs)
-    k = (state, graph, first_only)
-    out = memo.get(k)
-    if out is None:
-        out = _check_platform(reqs, state, graph, first_only)
-        _count()
-        memo[k] = out
-    return out
+    a down platform fails them all. Memoised: it is pure and the deployer, the invariants
+    and the checker ask it again and again about the same facts."""
+    reqs = requirements if type(requirements) is tuple else tuple(requirements)
+    return _check_platform(reqs, state, graph, first_only)  # type: ignore[arg-type]
 
 
+@lru_cache(maxsize=_MEMO_SIZE)
 def _check_platform(
     requirements: tuple[Requirement, ...], state: PlatformState, graph: str | None, first_only: bool
 ) -> tuple[Failure, ...]:
@@ -157,54 +152,10 @@ def _check_platform(
     return tuple(out)
 
 
-# -- memos ----------------------------------------------------------------------------
-# check_platform and check_validity are pure functions of (requirements, platform
-# states, graph, flag); the deployer, the invariants and the checker call them again and
-# again on the same facts. Results are memoised per requirements tuple -- keyed by its
-# identity, the entry holding the tuple itself so the identity cannot be reused while
-# the entry lives -- then by (states, graph, flag); PlatformState caches its hash. The
-# memos are cleared when they hold more than _MEMO_LIMIT results (memory stays bounded
-# in long simulations; a clear only costs recomputation).
-_MEMO_LIMIT = 100_000
-_PLATFORM_MEMO: dict[int, tuple[tuple[Requirement, ...], dict]] = {}
-_VALIDITY_MEMO: dict[int, tuple[tuple[Requirement, ...], dict]] = {}
-_BY_VALUE: dict[int, dict[tuple[Requirement, ...], dict]] = {}
-_memo_size = [0]
-
-
-def _memo_for(table: dict[int, tuple[tuple[Requirement, ...], dict]], reqs: tuple[Requirement, ...]) -> dict:
-    entry = table.get(id(reqs))
-    if entry is None or entry[0] is not reqs:
-        # an equal tuple seen before (e.g. rebuilt by the repository's query) shares its memo
-        by_value = _BY_VALUE.setdefault(id(table), {})
-        memo = by_value.get(reqs)
-        if memo is None:
-            if len(by_value) > 4096:
-                clear_memos()
-                by_value = _BY_VALUE.setdefault(id(table), {})
-            memo = by_value[reqs] = {}
-        if len(table) > 4096:
-            table.clear()
-        entry = table[id(reqs)] = (reqs, memo)
-    return entry[1]
-
-
-def _count() -> None:
-    _memo_size[0] += 1
-    if _memo_size[0] > _MEMO_LIMIT:
-        # clear the inner dicts (callers hold a reference to one of them)
-        for by_value in _BY_VALUE.values():
-            for memo in by_value.values():
-                memo.clear()
-        _memo_size[0] = 0
-
-
 def clear_memos() -> None:
     """Forget every memoised validity result (tests; memory)."""
-    _PLATFORM_MEMO.clear()
-    _VALIDITY_MEMO.clear()
-    _BY_VALUE.clear()
-    _memo_size[0] = 0
+    _check_platform.cache_clear()
+    _check_validity.cache_clear()
 
 
 def order_platforms(states: Sequence[PlatformState]) -> list[PlatformState]:
@@ -226,27 +177,23 @@ def check_validity(
     carry every failing requirement with a readable reason (only the first one when
     ``reasons`` is False, the fast path of the deployer). Results are memoised (pure).
     """
-    entry = _VALIDITY_MEMO.get(id(requirements))
-    if entry is not None and entry[0] is requirements:
-        memo, reqs = entry[1], requirements
-    else:
-        reqs = requirements if type(requirements) is tuple else tuple(requirements)  # type: ignore[assignment]
-        memo = _memo_for(_VALIDITY_MEMO, reqs)
-    k = (states if type(states) is tuple else tuple(states), graph, reasons)
-    v = memo.get(k)
-    if v is None:
-        acceptable: list[str] = []
-        rejected: list[tuple[str, tuple[Failure, ...]]] = []
-        for state in order_platforms(states):
-            fails = check_platform(reqs, state, graph, first_only=not reasons)
-            if fails:
-                rejected.append((state.name, fails))
-            else:
-                acceptable.append(state.name)
-        v = Validity(tuple(acceptable), tuple(rejected))
-        _count()
-        memo[k] = v
-    return v
+    reqs = requirements if type(requirements) is tuple else tuple(requirements)
+    return _check_validity(reqs, states if type(states) is tuple else tuple(states), graph, reasons)  # type: ignore[arg-type]
+
+
+@lru_cache(maxsize=_MEMO_SIZE)
+def _check_validity(
+    reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: str | None, reasons: bool
+) -> Validity:
+    acceptable: list[str] = []
+    rejected: list[tuple[str, tuple[Failure, ...]]] = []
+    for state in order_platforms(states):
+        fails = _check_platform(reqs, state, graph, not reasons)
+        if fails:
+            rejected.append((state.name, fails))
+        else:
+            acceptable.append(state.name)
+    return Validity(tuple(acceptable), tuple(rejected))
 
 
 def validity_for(q: "QueryPort", spec: DeploymentSpec, *, reasons: bool = True) -> Validity:
