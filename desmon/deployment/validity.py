@@ -187,8 +187,9 @@ def _check_validity(
 ) -> Validity:
     acceptable: list[str] = []
     rejected: list[tuple[str, tuple[Failure, ...]]] = []
+    check = _check_platform.__wrapped__  # memoised as a whole here; per pair only in check_platform
     for state in order_platforms(states):
-        fails = _check_platform(reqs, state, graph, not reasons)
+        fails = check(reqs, state, graph, not reasons)
         if fails:
             rejected.append((state.name, fails))
         else:
