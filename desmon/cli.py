@@ -23,11 +23,24 @@ def _deployer_arg(p: argparse.ArgumentParser) -> None:
     p.add_argument("--deployer", default="desmon", choices=["desmon", "paper"], help="deployer variant (default: desmon)")
 
 
-def _cmd_replay(args: argparse.Namespace) -> int:
+def _load_scripted(path: str):  # type: ignore[no-untyped-def]
+    """A scenario for the timeline-based commands (replay, explain, show): it needs a scripted timeline."""
+    from desmon.errors import ScenarioError
     from desmon.loader import load_scenario
+
+    scenario = load_scenario(path)
+    if not scenario.timeline:
+        raise ScenarioError(
+            f"{path}: scenario {scenario.name!r} has no scripted timeline, so there is no moment to replay; "
+            f"simulate it with: desmon run {path} --trace run.jsonl (and desmon plot run.jsonl)"
+        )
+    return scenario
+
+
+def _cmd_replay(args: argparse.Namespace) -> int:
     from desmon.sim.replay import format_replay, replay
 
-    scenario = load_scenario(args.scenario)
+    scenario = _load_scripted(args.scenario)
     result = replay(scenario, args.deployer)
     print(format_replay(result), end="")
     return EXIT_VIOLATED if result.violations else EXIT_OK
@@ -36,11 +49,12 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 def _cmd_explain(args: argparse.Namespace) -> int:
     from desmon.deployment.validity import acceptable_platforms
     from desmon.errors import QueryError
-    from desmon.loader import load_scenario
     from desmon.repository.query import RepositoryQuery
     from desmon.sim.replay import replay
 
-    scenario = load_scenario(args.scenario)
+    scenario = _load_scripted(args.scenario)
+    if args.at is not None:
+        _resolve_times(scenario, f"{args.at!r}")  # validates the moment
     if scenario.model.spec(args.graph) is None:
         known = ", ".join(s.graph for s in scenario.model.specs)
         raise QueryError(f"{args.scenario}: no deployment specification for {args.graph!r}; known: {known}")
@@ -75,6 +89,9 @@ def _resolve_times(scenario, spec: str | None) -> list[tuple[str, float]]:  # ty
             raise ScenarioError(
                 f"--at {part!r} is neither a time in seconds nor a timeline label ({', '.join(labels) or 'none'})"
             ) from None
+        first = scenario.timeline[0].time
+        if t < first:
+            raise ScenarioError(f"--at {part}: the timeline starts at t={first:g}s; give a time at or after it")
         out.append((f"t={t:g}s", t))
     return out
 
@@ -84,12 +101,11 @@ def _cmd_show(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from desmon.errors import ScenarioError
-    from desmon.loader import load_scenario
     from desmon.repository.export import graph_to_cypher, graph_to_dot
     from desmon.repository.store import graph_to_graphml, graph_to_json
     from desmon.sim.replay import replay
 
-    scenario = load_scenario(args.scenario)
+    scenario = _load_scripted(args.scenario)
     moments = _resolve_times(scenario, args.at)
     result = replay(scenario, args.deployer)
     snaps = []
@@ -271,6 +287,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(args.handler(args))
     except DesmonError as exc:
         print(f"desmon: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except OSError as exc:  # an output file that cannot be written, a directory that does not exist
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"desmon: error: {where}cannot read or write: {exc.strerror or exc}; check the path", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         print("desmon: interrupted", file=sys.stderr)

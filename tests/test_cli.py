@@ -61,3 +61,21 @@ def test_a_scenario_with_an_invalid_model_reports_the_model_error(tmp_path, caps
 def test_python_dash_m_desmon_works(root):
     out = subprocess.run([sys.executable, "-m", "desmon", "--help"], capture_output=True, text=True, check=True).stdout
     assert "verify" in out and "run" in out
+
+
+def test_timeline_commands_refuse_a_scenario_without_a_scripted_timeline(root, capsys):
+    assert main(["explain", str(root / "scenarios" / "platform_crash.py"), "combined_slip_detector", "--at", "12"]) == 2
+    err = capsys.readouterr().err
+    assert "has no scripted timeline" in err and "desmon run" in err and err.count("\n") == 1
+
+
+def test_a_moment_before_the_timeline_is_refused(root, capsys):
+    assert main(["explain", str(root / "scenarios" / "coffee_handover.py"), "combined_slip_detector", "--at", "-3"]) == 2
+    assert "the timeline starts at t=0s" in capsys.readouterr().err
+
+
+def test_an_unwritable_output_path_is_a_one_line_error_with_exit_2(root, tmp_path, capsys):
+    out = tmp_path / "no" / "such" / "dir" / "x.json"
+    assert main(["show", str(root / "scenarios" / "coffee_handover.py"), "--format", "json", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"desmon: error: {out}: cannot read or write") and "Traceback" not in err
