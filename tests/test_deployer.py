@@ -129,16 +129,37 @@ def test_an_error_stands_until_the_graph_is_deployed_again_after_a_repair():
         assert (c.standing == frozenset()) is redeployed
 
 
-def test_a_fallback_is_used_while_the_preferred_graph_cannot_be_placed_and_dropped_after():
+def test_a_fallback_is_used_while_the_preferred_graph_cannot_be_placed():
+    model, repo, control = build({"grasp": [("A", "B")]}, memories=(300,), a_mem=250, b_mem=100)
+    c = core(model, repo, "desmon")
+    c.step(LoadChange("pc1", 100), control)
+    _s, log = c.step(ActionChange("grasp"), control)
+    assert RepositoryQuery(repo).deployments() == (("B", "pc1"),)
+    assert [e.kind for e in log.errors] == ["no_acceptable_platforms"]  # why A is not there
+    assert violations(c, control, repo) == set()
+
+
+def test_a_running_fallback_is_not_displaced_to_make_room_for_the_preferred_graph():
+    # conservative on purpose: stopping B first could leave the slot with nothing if A's start failed
     model, repo, control = build({"grasp": [("A", "B")]}, memories=(300,), a_mem=250, b_mem=100)
     c = core(model, repo, "desmon")
     c.step(LoadChange("pc1", 100), control)
     c.step(ActionChange("grasp"), control)
+    c.step(LoadChange("pc1", 0), control)  # 300 - 100 (B) = 200 < 250
     assert RepositoryQuery(repo).deployments() == (("B", "pc1"),)
-    assert violations(c, control, repo) == set()
-    c.step(LoadChange("pc1", 0), control)
-    # A fits once B's 100 MB are freed? 300 - 100 (B) = 200 < 250: stays on the fallback
+
+
+def test_the_fallback_is_stopped_once_the_preferred_graph_can_be_placed_again():
+    model, repo, control = build({"grasp": [("A", "B")]}, memories=(300, 300), a_mem=250, b_mem=100)
+    c = core(model, repo, "desmon")
+    c.step(LoadChange("pc1", 100), control)
+    c.step(LoadChange("pc2", 100), control)
+    c.step(ActionChange("grasp"), control)
     assert RepositoryQuery(repo).deployments() == (("B", "pc1"),)
+    _s, log = c.step(LoadChange("pc2", 0), control)
+    assert [str(cmd) for cmd, _ok in log.decisions] == ["start A on pc2", "stop B on pc1"]
+    assert RepositoryQuery(repo).deployments() == (("A", "pc2"),)
+    assert c.standing == frozenset() and violations(c, control, repo) == set()
 
 
 def test_a_crash_makes_desmon_migrate_and_the_paper_leave_the_old_instance():

@@ -36,7 +36,7 @@ from desmon.deployment.ports import (
 from desmon.deployment.validity import check_validity, validity_for
 from desmon.errors import ModelError
 
-__all__ = ["Deployer", "PAPER", "DESMON", "DEPLOYERS", "get_deployer", "ensure_deployed", "Coverage"]
+__all__ = ["Deployer", "PAPER", "DESMON", "DEPLOYERS", "get_deployer", "ensure_deployed", "make_desmon_react"]
 
 #: Generator returning True when the graph ended up deployed.
 Placement = Generator[Command, "bool | None", bool]
@@ -144,32 +144,9 @@ def ensure_deployed(g: str, q: QueryPort, *, make_before_break: bool = False) ->
     return False
 
 
-def desmon_deploy(graphs: Iterable[str], q: QueryPort) -> Reaction:
-    """Corrected Algorithm 1: every graph is placed or gets an error."""
-    for g in graphs:
-        yield from ensure_deployed(g, q)
-
-
-def desmon_check_deployment(p_i: str, q: QueryPort) -> Reaction:
-    """Corrected Algorithm 2: every active deployment on ``p_i`` is re-checked."""
-    for d in q.active_deployments(p_i):
-        yield from ensure_deployed(q.perception_graph(d), q)
-
-
 # ----------------------------------------------------------------------------------
 # the selector-facing reaction
 # ----------------------------------------------------------------------------------
-@dataclass(frozen=True, slots=True)
-class Coverage:
-    """The selector's request for the current context: slots of preference-ordered graphs."""
-
-    slots: tuple[tuple[str, ...], ...]
-
-    @property
-    def graphs(self) -> frozenset[str]:
-        return frozenset(g for slot in self.slots for g in slot)
-
-
 @dataclass(frozen=True, slots=True)
 class Deployer:
     """A named deployer variant: how to react to a context change and to platform changes.
@@ -209,12 +186,16 @@ def _paper_react(
 
 
 def make_desmon_react(
-    ensure: Callable[..., Placement] = ensure_deployed,
-    *,
-    recheck_changed: bool = True,
-    **ensure_kwargs: object,
+    *, make_before_break: bool = False
 ) -> Callable[[QueryPort, tuple[tuple[str, ...], ...], tuple[str, ...], bool], Reaction]:
-    """Build the corrected reaction (parameters exist for the checker's seeded mutants)."""
+    """Build the corrected reaction (``make_before_break`` exists for the checker's seeded mutant).
+
+    Corrected Algorithm 2 first: every deployment on a changed platform is re-checked
+    (kept if still valid, else migrated break-before-make, else stopped with an error);
+    then what the context no longer wants is stopped; then corrected Algorithm 1 places
+    one graph of every slot (the first alternative that can be placed), each graph
+    decided once per reaction; unneeded fallbacks are stopped last.
+    """
 
     def react(
         q: QueryPort, slots: tuple[tuple[str, ...], ...], changed: tuple[str, ...], context_changed: bool
@@ -223,13 +204,12 @@ def make_desmon_react(
 
         def place(g: str) -> Placement:
             if g not in placed:
-                placed[g] = yield from ensure(g, q, **ensure_kwargs)
+                placed[g] = yield from ensure_deployed(g, q, make_before_break=make_before_break)
             return placed[g]
 
-        if recheck_changed:
-            for p in changed:
-                for d in q.active_deployments(p):
-                    yield from place(q.perception_graph(d))
+        for p in changed:
+            for d in q.active_deployments(p):
+                yield from place(q.perception_graph(d))
         wanted = {g for slot in slots for g in slot}
         # Free what the context no longer wants first: its capacity may be needed.
         yield from _stop_graphs([g for g in _active_graphs(q) if g not in wanted], q)

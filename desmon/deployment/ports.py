@@ -4,7 +4,7 @@ The deployer never calls the infrastructure itself: a reaction is a generator th
 *yields* commands (:class:`Start`, :class:`Stop`, :class:`RaiseError`) and receives
 each command's outcome (``True``/``False`` for Start/Stop). The engines drive it:
 
-* :func:`desmon.deployment.reaction.run_sync` executes commands at once against a
+* :func:`desmon.deployment.core.run_sync` executes commands at once against a
   :class:`ControlPort` (scripted driver, checker, fuzzer);
 * the SimPy world executes them with start latency and failures.
 
