@@ -56,10 +56,10 @@ scenario = Scenario(
     expected={
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
-            "desmon": {"verdict": "HOLDS", "states": 72, "counterexamples": {}},
+            "desmon": {"verdict": "HOLDS", "states": 54, "counterexamples": {}},
             "paper": {
                 "verdict": "VIOLATED",
-                "states": 208,
+                "states": 156,
                 "counterexamples": {"valid-or-error": 1, "no-overcommit": 4, "single-instance": 1, "coverage": 2},
             },
         },

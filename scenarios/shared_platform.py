@@ -49,8 +49,8 @@ scenario = Scenario(
     expected={
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
-            "desmon": {"verdict": "HOLDS", "states": 35, "counterexamples": {}},
-            "paper": {"verdict": "VIOLATED", "states": 50, "counterexamples": {"valid-or-error": 2, "coverage": 2}},
+            "desmon": {"verdict": "HOLDS", "states": 26, "counterexamples": {}},
+            "paper": {"verdict": "VIOLATED", "states": 37, "counterexamples": {"valid-or-error": 2, "coverage": 2}},
         },
     },
 )

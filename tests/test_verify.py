@@ -136,14 +136,42 @@ def test_nondeterminism_is_reported():
 
 
 def test_progress_goes_to_stderr(capsys):
-    r = Checker(load_scenario(SCENARIOS / "coffee_handover.py")).run(progress=True)
+    # a zero threshold makes the short coffee run report progress (every 256 expansions)
+    r = Checker(load_scenario(SCENARIOS / "coffee_handover.py")).run(progress=True, progress_after=0.0, progress_every=0.0)
     assert r.verdict == HOLDS
-    assert capsys.readouterr().out == ""
+    cap = capsys.readouterr()
+    assert cap.out == ""
+    lines = [ln for ln in cap.err.split("\r") if "states/s" in ln]
+    assert lines, cap.err
+    assert "states" in lines[-1] and "transitions" in lines[-1] and "depth" in lines[-1]
+    assert cap.err.endswith("\n")  # the progress line is closed before the report
 
 
 def test_timeout_gives_incomplete():
+    # coffee needs > 256 expansions (the timeout is checked every 256): a 1 ns budget is spent by then
     r = Checker(load_scenario(SCENARIOS / "coffee_handover.py")).run(timeout=1e-9)
-    assert r.verdict in (INCOMPLETE, HOLDS)  # a tiny scenario may finish before the first check
+    assert r.verdict == INCOMPLETE
+    assert "timeout" in r.reason and r.states < 747
+
+
+def _normal(key):  # type: ignore[no-untyped-def]
+    """The state a key denotes, independent of how it is spelled (zero loads dropped, parts as sets)."""
+    loads = frozenset((p, r, a) for p, items in key.loads for r, a in items if a != 0)
+    return (key.context, frozenset(key.failed), frozenset(key.down), loads, frozenset(key.deployments), frozenset(key.standing))
+
+
+@pytest.mark.parametrize("name", NAMES + ["symmetric_platforms"])
+@pytest.mark.parametrize("deployer", ["desmon", "paper"])
+def test_explored_keys_are_canonical(name, deployer):
+    """No two explored keys denote the same state (e.g. a load back at 0 is no entry, as initially)."""
+    scenario = load_scenario(SCENARIOS / f"{name}.py")
+    c = Checker(scenario, deployer)
+    c.run(keep_going=True)
+    assert len({_normal(k) for k in c.explored}) == len(c.explored)
+    for k in c.explored:
+        assert all(items and all(a != 0 for _r, a in items) for _p, items in k.loads)
+        assert list(k.failed) == sorted(k.failed) and list(k.down) == sorted(k.down)
+        assert list(k.deployments) == sorted(k.deployments) and list(k.standing) == sorted(k.standing)
 
 
 @pytest.mark.parametrize("name", ["two_detectors", "shared_platform", "migration"])

@@ -125,7 +125,12 @@ def set_load(repo: Repository, platform: str, resource: str, amount: float) -> b
     load = dict(repo.graph.nodes[pid]["load"])
     if load.get(resource, 0.0) == amount:
         return False
-    load[resource] = amount
+    # canonical: a zero amount removes the entry (a platform with no load has an empty
+    # dict, as after load_model), the same rule as the checker's StateStore.set_load
+    if amount:
+        load[resource] = amount
+    else:
+        del load[resource]
     repo.update_node(pid, load=load)
     return True
 

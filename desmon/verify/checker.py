@@ -21,7 +21,7 @@ from array import array
 import time
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import Callable, Iterable
+from typing import Any, Iterable, Iterator
 
 from desmon.deployment.core import DeploymentCore, run_sync
 from desmon.deployment.deployer import Deployer
@@ -236,28 +236,38 @@ class Checker:
         return r
 
     def run_one(self, key: Key, event: Event, prefix: tuple[bool, ...]):  # type: ignore[no-untyped-def]
-        """Apply ``event`` and the complete reaction to ``key`` with start outcomes ``prefix``."""
+        """One transition: ``event`` and the complete reaction (the real core) applied to
+        ``key``, starts following ``prefix`` and succeeding beyond it.
+
+        Returns (next key, start outcomes, StepLog, instantaneous violation or None); the
+        store is left in the next state.
+        """
         st = self.store
         st.load(key)
-        self.core.standing = self._standing(key.standing)
+        core = self.core
+        core.standing = self._standing(key.standing)
         st.begin(prefix)
-        stim, log = self.core.step(event, st)
-        return st.key(self.core.standing), tuple(st.outcomes), log, st.instant
+        _stim, log = core.step(event, st)
+        return st.key(core.standing), tuple(st.outcomes), log, st.instant
 
-    def successors(self, key: Key, event: Event) -> list[tuple[tuple[int, ...], Key, object, object]]:
-        """Every (failed start indices, next key, StepLog, instantaneous violation) of ``event``."""
-        out = []
+    def successors(self, key: Key, event: Event) -> Iterator[tuple[tuple[int, ...], Key, Any, tuple[str, str, str] | None]]:
+        """Every (failed start indices, next key, StepLog, instantaneous violation) of ``event``.
+
+        The one implementation of a transition's branching: the reaction is first run with
+        every start succeeding; each start it issued beyond the current prefix is a choice
+        point, re-run with that start failing, while fewer than ``start_failures`` failed.
+        """
+        run_one = self.run_one
         bound = self.bounds.start_failures
         pending: list[tuple[bool, ...]] = [()]
         while pending:
             prefix = pending.pop(0)
-            nkey, outcomes, log, instant = self.run_one(key, event, prefix)
-            fails = tuple(i for i, ok in enumerate(outcomes) if not ok)
+            nkey, outcomes, log, instant = run_one(key, event, prefix)
+            fails = tuple(i for i, ok in enumerate(outcomes) if not ok) if False in outcomes else ()
             if len(fails) < bound:
                 for i in range(len(prefix), len(outcomes)):
                     pending.append(outcomes[:i] + (False,))
-            out.append((fails, nkey, log, instant))
-        return out
+            yield fails, nkey, log, instant
 
     def violations(self, key: Key) -> list[tuple[str, str]]:
         st = self.store
@@ -274,8 +284,19 @@ class Checker:
         timeout: float | None = None,
         keep_going: bool = False,
         progress: bool = False,
-        out=sys.stderr,  # type: ignore[no-untyped-def]
+        progress_after: float = 1.0,
+        progress_every: float = 0.5,
+        out=None,  # type: ignore[no-untyped-def]
     ) -> CheckResult:
+        """Breadth-first search from the initial state.
+
+        With ``progress``, a one-line status is rewritten on ``out`` (stderr) every
+        ``progress_every`` seconds once the run is ``progress_after`` seconds old, and
+        closed with a newline at the end (time is looked at every 256 expansions, as is
+        ``timeout``). ``out`` defaults to the *current* ``sys.stderr``.
+        """
+        if out is None:
+            out = sys.stderr
         t0 = time.perf_counter()
         res = CheckResult(self.scenario.name, self.deployer_name, tuple(i.name for i in self.invariants), HOLDS, symmetry=self.symmetry is not None)
         canon = self.symmetry.canon if self.symmetry is not None else None
@@ -296,16 +317,15 @@ class Checker:
         depth = 0
         transitions = 0
         last_progress = t0
+        printed = False
         incomplete = ""
         rules = res.rules
         branches = res.branches
         enabled_count = res.enabled
         changed = res.changed
         new_states = res.new_states
-        bound = self.bounds.start_failures
         st = self.store
-        core = self.core
-        step = core.step
+        successors = self.successors
         standing_of = self._standing
         invariants = self.invariants
         specs = self.model.specs
@@ -363,31 +383,15 @@ class Checker:
                     if timeout is not None and now - t0 > timeout:
                         incomplete = f"timeout {timeout:g}s"
                         break
-                    if progress and now - t0 > 1.0 and now - last_progress > 0.5:
+                    if progress and now - t0 >= progress_after and now - last_progress >= progress_every:
                         last_progress = now
+                        printed = True
                         rate = len(keys) / (now - t0)
                         print(f"\r  {len(keys):,} states  {transitions:,} transitions  depth {depth}  {rate:,.0f} states/s ", end="", file=out, flush=True)
                 rules[key.context] += 1
-                kstanding = standing_of(key.standing)
                 for event, kind in self._enabled(key):
                     enabled_count[kind] += 1
-                    if self.symmetry is not None:
-                        self.symmetry.check(key, event)
-                    pending: list[tuple[bool, ...]] = [()]
-                    while pending:
-                        prefix = pending.pop(0)
-                        # -- one transition: the event and the complete reaction (real core) --
-                        st.load(key)
-                        core.standing = kstanding
-                        st.begin(prefix)
-                        _stim, log = step(event, st)
-                        nkey = st.key(core.standing)
-                        outcomes = st.outcomes
-                        instant = st.instant
-                        fails = tuple(i for i, ok in enumerate(outcomes) if not ok) if False in outcomes else ()
-                        if len(fails) < bound:
-                            for i in range(len(prefix), len(outcomes)):
-                                pending.append(tuple(outcomes[:i]) + (False,))
+                    for fails, nkey, log, instant in successors(key, event):
                         transitions += 1
                         commands = log.commands
                         if commands:
@@ -443,7 +447,7 @@ class Checker:
             if nxt:
                 depth += 1
             frontier = nxt
-        if progress and time.perf_counter() - t0 > 1.0:
+        if printed:
             print("", file=out, flush=True)
         self.explored = keys  # the distinct (canonical) states of the last run, BFS order
         res.states = len(keys)
@@ -518,10 +522,11 @@ def diff(prev: Key, key: Key, log) -> tuple[str, ...]:  # type: ignore[no-untype
         out.append(f"{p} up")
     if prev.loads != key.loads:
         before = {(p, r): a for p, items in prev.loads for r, a in items}
-        for p, items in key.loads:
-            for r, a in items:
-                if before.get((p, r), 0) != a:
-                    out.append(f"load {p} {r} {before.get((p, r), 0):g} => {a:g}")
+        after = {(p, r): a for p, items in key.loads for r, a in items}
+        for p, r in sorted(set(before) | set(after)):
+            a, b = before.get((p, r), 0), after.get((p, r), 0)
+            if a != b:
+                out.append(f"load {p} {r} {a:g} => {b:g}")
     for c, ok in log.commands:
         if isinstance(c, Start) and ok is False:
             out.append(f"start {c.graph} on {c.platform} FAILED")

@@ -39,7 +39,9 @@ class Key(NamedTuple):
     context: str | None
     failed: tuple[str, ...]
     down: tuple[str, ...]
-    loads: tuple[tuple[str, tuple[tuple[str, float], ...]], ...]  # (platform, sorted (resource, amount)) for set loads
+    # (platform, sorted (resource, amount)) for nonzero loads only: a zero amount has no
+    # entry and a platform without load is absent, so one state has exactly one key
+    loads: tuple[tuple[str, tuple[tuple[str, float], ...]], ...]
     deployments: tuple[tuple[str, str], ...]  # sorted (graph, platform)
     standing: tuple[str, ...]
 
@@ -280,9 +282,17 @@ class StateStore:
         cur = dict(self._load_of(platform))
         if cur.get(resource, 0.0) == amount:
             return False
-        cur[resource] = amount
+        # canonical: a zero amount has no entry, a platform without load has no entry
+        # (as in the initial state and in facts.set_load), so equal states get equal keys
+        if amount:
+            cur[resource] = amount
+        else:
+            del cur[resource]
         loads = dict(self.loads)
-        loads[platform] = tuple(sorted(cur.items()))
+        if cur:
+            loads[platform] = tuple(sorted(cur.items()))
+        else:
+            del loads[platform]
         self.loads = tuple((p, loads[p]) for p in self.platform_names if p in loads)
         self._touch(platform)
         return True

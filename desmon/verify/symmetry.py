@@ -59,7 +59,6 @@ from typing import Any
 from desmon.deployment.validity import check_platform
 from desmon.errors import CheckerError
 from desmon.model.events import DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
-from desmon.model.requirements import Capacity
 from desmon.model.system import PlatformState
 from desmon.verify.state import Key
 
@@ -196,9 +195,6 @@ class Symmetry:
             return LoadChange(perm.get(event.platform, event.platform), event.amount, event.resource)
         return event
 
-    def check(self, key: Key, event: Event) -> None:
-        """Per-transition hook (the static conditions make every transition admissible)."""
-
     # -- traces ------------------------------------------------------------------------------
     def replay(self, labels: list, expect: list[Key] | None = None) -> list:
         """A *concrete* trace: each stored (canonical) label is mapped back through the
@@ -228,9 +224,7 @@ class Symmetry:
 
 def _exceeds(s1: Any, s2: Any, platform: Any) -> bool:
     """True if ``s1`` and ``s2`` together exceed one of ``platform``'s capacities."""
-    use: dict[str, float] = {}
-    for s in (s1, s2):
-        for req in s.requirements:
-            if isinstance(req, Capacity):
-                use[req.resource] = use.get(req.resource, 0.0) + req.amount
+    use: dict[str, float] = dict(s1.consumption())
+    for r, amount in s2.consumption():
+        use[r] = use.get(r, 0.0) + amount
     return any((platform.capacity(r) or 0.0) < amount for r, amount in use.items())
