@@ -175,6 +175,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         tmp = tempfile.NamedTemporaryFile(suffix=".jsonl", delete=False)
         tmp.close()
         args.trace = tmp.name
+        args.trace_is_temporary = True  # deleted below: the summary does not name it
     try:
         code = int(importlib.import_module("desmon.sim.command").run_command(args))
         if args.plot and code in (EXIT_OK, EXIT_VIOLATED):
@@ -262,8 +263,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", default=None, metavar="FILE", help="write the counterexample(s) as JSON states")
     p.add_argument("--pytest", default=None, metavar="FILE", help="write a pytest replaying the counterexample")
     p.add_argument("--plot", default=None, metavar="FILE.png", help="draw the shortest counterexample as repository snapshots")
-    # the drawing lives in the viz layer, which verify may not import: the CLI hands it over
-    p.set_defaults(draw_snapshots=lambda *a, **kw: __import__("desmon.viz.snapshot", fromlist=["draw_snapshots"]).draw_snapshots(*a, **kw))
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(handler=_lazy("desmon.verify.command", "verify_command"))
 

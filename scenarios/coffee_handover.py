@@ -79,6 +79,9 @@ scenario = Scenario(
             "force_sensor_attached": False,
             "errors": [("no_acceptable_platforms", FORCE)],
         },
+        # desmon run (SimPy world), seed 0, per deployer: asserted exactly by tests/test_scenarios_sim.py
+        "desmon": {"violated": [], "errors": {"no_acceptable_platforms": 1}, "unmonitored_exposure_s": 6.3, "switches": 2, "slips_detected": 2},
+        "paper": {"violated": [], "errors": {"no_acceptable_platforms": 1}, "unmonitored_exposure_s": 6.3, "switches": 2, "slips_detected": 2},
     },
 )
 

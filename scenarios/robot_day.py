@@ -64,11 +64,14 @@ scenario = Scenario(
         "first_30_min": {
             "switches": 95, "starts": 94, "stops": 93, "slips_injected": 2, "slips_detected": 2,
             "errors": {"deployment_failed": 1, "no_acceptable_platforms": 1}, "unmonitored_exposure_s": 103.2,
+            "violations": 0,
         },
         # the full 8 h day, seed 0 (desmon run scenarios/robot_day.py)
+        # (asserted by tests/test_scenarios_sim.py::test_robot_day_full_day_pinned)
         "day": {
             "switches": 1515, "starts": 1465, "slips_injected": 29, "slips_detected": 24, "false_alarms": 12,
-            "errors": {"deployment_failed": 34, "no_acceptable_platforms": 70}, "unmonitored_exposure_s": 2121.65,
+            "errors": {"deployment_failed": 34, "no_acceptable_platforms": 70}, "unmonitored_exposure_s": 2121.65048,
+            "violations": 0,
         },
     },
 )

@@ -8,6 +8,11 @@ The paper's Algorithm 1 returns after the first graph it starts (line 8), so in
 ``grasp`` the tactile detector is never deployed and no error says why: ``coverage``
 fails one step after the initial state. The corrected ``desmon`` deployer holds.
 
+On the SimPy world (``desmon run scenarios/two_detectors.py --deployer paper``) the
+same early return leaves the tactile slot uncovered for the whole grasp: the force slot
+being covered does not hide it, so all 5 s of risky time are unmonitored exposure and
+the audit reports ``coverage``.
+
 Run it: ``python scenarios/two_detectors.py [paper]`` (the checker, printed report).
 """
 
@@ -50,6 +55,9 @@ scenario = Scenario(
         max_failures=2,
     ),
     expected={
+        # desmon run (SimPy world), seed 0, per deployer: asserted exactly by tests/test_scenarios_sim.py
+        "desmon": {"violated": [], "errors": {}, "unmonitored_exposure_s": 0.0, "risky_time_s": 5.0},
+        "paper": {"violated": ["coverage"], "errors": {}, "unmonitored_exposure_s": 5.0, "risky_time_s": 5.0},
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
             "desmon": {"verdict": "HOLDS", "states": 40, "counterexamples": {}},

@@ -59,9 +59,9 @@ scenario = Scenario(
             "desmon": {"verdict": "HOLDS", "states": 47, "counterexamples": {}},
             "paper": {"verdict": "VIOLATED", "states": 60, "counterexamples": {"valid-or-error": 2, "single-instance": 2}},
         },
-        "violations": 0,
-        "placements": [(TACTILE, "hand_pc"), (TACTILE, "wrist_pc")],
-        "migrations": 1,
+        # desmon run (SimPy world), seed 0, per deployer: asserted exactly by tests/test_scenarios_sim.py
+        "desmon": {"violated": [], "errors": {}, "placements": [(TACTILE, "hand_pc"), (TACTILE, "wrist_pc")], "migrations": 1, "slips_detected": 3},
+        "paper": {"violated": ["single-instance", "valid-or-error"], "errors": {}, "placements": [(TACTILE, "hand_pc"), (TACTILE, "wrist_pc")]},
     },
 )
 

@@ -42,7 +42,11 @@ def intervals(recs: list[dict]) -> list[tuple[float, float, str]]:
 
 @pytest.mark.parametrize(
     "name,kw",
-    [("coffee_handover", {}), ("platform_crash", {}), ("memory_pressure", {}), ("vendor_selection", {}), ("robot_day", {"until": 1800.0})],
+    [
+        ("coffee_handover", {}), ("platform_crash", {}), ("memory_pressure", {}), ("vendor_selection", {}),
+        ("robot_day", {"until": 1800.0}),
+        ("two_detectors", {"deployer": "paper"}),  # the force slot covered, the tactile slot never
+    ],
 )
 def test_exposure_intervals_add_up_to_the_metric(name: str, kw: dict) -> None:
     w, r, recs = run(name, **kw)

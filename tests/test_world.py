@@ -32,8 +32,28 @@ def test_repeat_and_slips_are_deterministic() -> None:
 def test_exposure_accounts_warmup_between_updates() -> None:
     vf = {"g": 2.5}
     ex = Exposure(lambda g: vf.get(g, float("inf")))
-    ex.set_wanted(1.0, frozenset({"g"}))
+    ex.set_wanted(1.0, (("g",),))
     ex.advance(4.0)
     assert ex.exposure == pytest.approx(1.5) and ex.blind == [pytest.approx(1.5)]
-    ex.set_wanted(5.0, frozenset())
+    ex.set_wanted(5.0, ())
     assert ex.risky == pytest.approx(4.0)
+
+
+def test_exposure_keeps_the_slots_apart() -> None:
+    """One covered slot does not hide an uncovered one; alternatives within a slot do."""
+    vf = {"force": 0.0, "tactile": 3.0, "alt": 7.0}
+    ex = Exposure(lambda g: vf.get(g, float("inf")))
+    ex.set_wanted(1.0, (("force",), ("tactile",)), "grasp")  # force covered at once, tactile from 3
+    ex.advance(3.0)
+    ex.check(3.0)  # the owner checks at every warm-up end
+    ex.advance(5.0)
+    assert ex.exposure == pytest.approx(2.0) and ex.blind == [pytest.approx(2.0)]
+    ex.set_wanted(5.0, (("force",), ("missing", "alt")), "move")  # the slot's alternative is valid from 7
+    ex.advance(7.0)
+    ex.check(7.0)
+    ex.advance(8.0)
+    assert ex.exposure == pytest.approx(4.0) and ex.blind == [pytest.approx(2.0), pytest.approx(2.0)]
+    ex.set_wanted(8.0, (("force",), ("nothing",)), "stuck")  # never covered
+    ex.close(10.0)
+    assert ex.exposure == pytest.approx(6.0) and ex.risky == pytest.approx(9.0) and ex.switches == 3
+    assert [(a, b, c) for a, b, c in ex.intervals] == [(1.0, 3.0, "grasp"), (5.0, 7.0, "move"), (8.0, 10.0, "stuck")]

@@ -70,8 +70,8 @@ def format_summary(r: RunResult, wall: float | None = None) -> str:
         ("false alarms", "false_alarms"),
         ("detection latency median (s)", "latency_median_s"),
         ("detection latency p95 (s)", "latency_p95_s"),
-        ("memory peak (MB)", "memory_peak_mb"),
-        ("over capacity (s)", "overcommit_s"),
+        ("memory peak (MB) [1]", "memory_peak_mb"),
+        ("over capacity (s) [1]", "overcommit_s"),
         ("reactions / audits", None),
     ]
     for label, key in order:
@@ -85,7 +85,12 @@ def format_summary(r: RunResult, wall: float | None = None) -> str:
         else:
             val = _fmt(m[key])
         lines.append(f"  {label:<30} {val}")
-    lines.append("")
+    lines += [
+        "  [1] background load + running detectors. The load is not a deployment: the peak can pass",
+        "      the capacity for the instant (0 s) before the deployer reacts to a load rise, and the",
+        "      no-overcommit invariant counts deployments only.",
+        "",
+    ]
     if r.violations:
         lines.append(f"INVARIANTS VIOLATED ({len(r.violations)}):")
         for t, name, msg in r.violations[:10]:
@@ -148,6 +153,6 @@ def run_command(args: Any, out: IO[str] | None = None, err: IO[str] | None = Non
         out.write(json.dumps(summary_json(result, wall), indent=2) + "\n")
     else:
         out.write(format_summary(result, wall))
-        if args.trace:
+        if args.trace and not getattr(args, "trace_is_temporary", False):
             out.write(f"Trace: {args.trace} ({result.trace.count} records)\n")
     return 1 if result.violations else 0

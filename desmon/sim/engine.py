@@ -13,9 +13,12 @@ the core; no decision is made here.
   platform up / down, background load). The repository's Notify subscription wakes the
   deployer process.
 * **Deployer process** drives ``core.reaction(stimulus)``: each ``Start`` waits the
-  platform's start latency and then succeeds or fails (platform up, enough free memory,
-  scripted or seeded random failure); a success starts the detector process and
-  ``record_start``\\ s the DEPLOYED_ON edge; ``Stop`` frees the memory and records the
+  platform's start latency and then succeeds or fails by the world's failure model only
+  (platform down, scripted or seeded random failure). The infrastructure does *not*
+  check Capacity -- that is the core's decision: a start the deployer asks for on a
+  platform without room really over-commits it, and the audit (``no-overcommit``)
+  reports it. A success starts the detector process (consuming its spec's
+  ``consumption()``) and ``record_start``\\ s the DEPLOYED_ON edge; ``Stop`` frees the memory and records the
   DEPLOYMENT_HISTORY; ``RaiseError`` is stamped with ``env.now``. After every reaction
   ``core.settle`` and, when no newer fact is pending, the named invariants are audited
   on the live repository.
@@ -45,7 +48,6 @@ from desmon.deployment.ports import ErrorRecord, RaiseError, Start, Stop
 from desmon.detectors.base import Alarm
 from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
-from desmon.model.requirements import Capacity
 from desmon.model.scenario import Scenario
 from desmon.repository import labels as L
 from desmon.repository.facts import RepositoryInsert, load_model, record_start, record_stop
@@ -144,6 +146,8 @@ class SimWorld:
         self.load: dict[str, float] = {p.name: 0.0 for p in self.model.platforms}
         self.dev_ok = {d.name: True for d in self.model.devices}
         self.instances: dict[tuple[str, str], Instance] = {}
+        #: memory (MB) a running instance of each graph consumes: its spec's consumption()
+        self.consumes = {s.graph: dict(s.consumption()).get("memory", 0.0) for s in self.model.specs}
         self.stops = 0
         self.history_edges = 0
         self.attempts: dict[tuple[str, str], int] = {}
@@ -243,9 +247,11 @@ class SimWorld:
         for seg in self.segments:
             if seg.start > env.now:
                 yield env.timeout(seg.start - env.now)
-            wanted = frozenset(g for slot in self.model.rules.slots_for(seg.action) for g in slot)
+            # the selector's slots in the TRUE context, kept apart (one covered slot does
+            # not hide an uncovered one); the core's selector gives them for the recognised one
+            slots = self.model.rules.slots_for(seg.action)
             self.trace.emit(env.now, "action", action=seg.action, duration=seg.duration)
-            self.exposure.set_wanted(env.now, wanted, seg.action)
+            self.exposure.set_wanted(env.now, slots, seg.action)
             env.process(self._recognise(seg.action))
 
     def _recognise(self, action: str):  # type: ignore[no-untyped-def]
@@ -374,12 +380,6 @@ class SimWorld:
             out[stream] = out.get(stream, ()) + devs
         return out
 
-    def _memory_of(self, graph: str) -> float:
-        spec = self.model.spec(graph)
-        if spec is None:
-            return 0.0
-        return sum(r.amount for r in spec.requirements if isinstance(r, Capacity) and r.resource == "memory")
-
     def _activate(self, inst: Instance, now: float) -> None:
         inst.fed = now
         warm = inst.adapter.warmup if inst.adapter is not None else 0.0
@@ -414,8 +414,6 @@ class SimWorld:
         latency = self.world.latency(platform)
         if latency:
             yield env.timeout(latency)
-        need = self._memory_of(graph)
-        cap = self.model.platform(platform).capacity("memory")
         reason = ""
         if not self.up[platform]:
             reason = "platform down"
@@ -423,8 +421,6 @@ class SimWorld:
             reason = "scripted start failure"
         elif self.world.start_failure.probability and self.rng_start.random() < self.world.start_failure.probability:
             reason = "start failed"
-        elif cap is not None and self._used(platform) + need > cap:
-            reason = f"out of memory ({self._used(platform):g} of {cap:g} MB used, needs {need:g})"
         if reason:
             self.start_failures += 1
             return reason
@@ -433,7 +429,7 @@ class SimWorld:
         self.exposure.advance(env.now)
         streams = self._devices_for(graph, platform)
         adapter = DetectorAdapter(frozenset(streams), graph) if self.signals_on else None
-        inst = Instance(graph, platform, need, streams, adapter, env.now)
+        inst = Instance(graph, platform, self.consumes.get(graph, 0.0), streams, adapter, env.now)
         self._activate(inst, env.now)
         self.instances[(graph, platform)] = inst
         self.starts += 1
@@ -570,7 +566,7 @@ class SimWorld:
             0.0, "run", scenario=self.scenario.name, deployer=self.deployer_name, seed=self.seed, horizon=self.horizon,
             signals=self.signals_on,
             platforms={p.name: {"memory": p.capacity("memory")} for p in self.model.platforms},
-            graphs={g.name: {"memory": self._memory_of(g.name)} for g in self.model.graphs},
+            graphs={g.name: {"memory": self.consumes.get(g.name, 0.0)} for g in self.model.graphs},
         )
         for p in self.model.platforms:
             self.trace.emit(0.0, "load", platform=p.name, resource="memory", amount=self.load[p.name])

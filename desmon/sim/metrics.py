@@ -1,17 +1,23 @@
 """The metrics of DESIGN.md §6, accumulated while the world runs.
 
 * **Unmonitored exposure**: seconds in which the robot's *true* action context is one
-  for which the selector wants a detector, and no instance of a selected graph is
-  running on an up platform with its inputs and warmed up.
+  for which the selector wants detectors, and at least one of the selector's slots has
+  no member that is running on an up platform with its inputs and warmed up. The
+  slots are kept apart: a covered slot (say the force detector in ``grasp``) does not
+  hide an uncovered one (the tactile detector the same rule also wants).
   :class:`Exposure` also reports each interval it counts (for the trace's
   ``exposure`` start / end records).
 * **Blind time per switch**: for every change of the true context that changes what
   the selector wants (a switch), the exposure between the change and the first moment
-  a selected detector is valid (or the next switch).
+  every slot has a valid member (or the next switch).
 * Slips injected / detected / missed (an alarm of a running detector in
   ``[t_s - 0.3, t_s + 1.0]``), detection latency (first such alarm - t_s), false alarms
   (alarms outside every slip window, debounced 0.5 s), errors by kind, per-platform
-  memory peak and seconds over capacity.
+  memory peak and seconds over capacity. Both count background load + running
+  detectors, unlike the ``no-overcommit`` invariant, which counts deployments only (the
+  load is not a deployment): after the load rises the peak can pass the capacity for
+  the instant (0 s) before the deployer reacts, and a deployer that leaves a detector
+  on a loaded platform runs over capacity without violating ``no-overcommit``.
 """
 
 from __future__ import annotations
@@ -34,10 +40,12 @@ DETECT_AFTER = 1.0
 class Exposure:
     """Integrates unmonitored exposure and blind time per switch over piecewise-constant state.
 
-    ``wanted`` is the set of graphs the selector wants in the true context (empty when
-    not risky); ``valid_from(graph)`` returns the earliest time from which a running
-    instance of ``graph`` is valid (``inf`` if none). State only changes at
-    :meth:`advance` calls, but a warm-up ending between two calls is accounted exactly.
+    ``slots`` are the selector's slots in the true context (each a set of alternative
+    graphs, one of which must be valid; empty when not risky); ``valid_from(graph)``
+    returns the earliest time from which a running instance of ``graph`` is valid
+    (``inf`` if none). A moment is exposed when *any* slot has no valid member. State
+    only changes at :meth:`advance` calls, but a warm-up ending between two calls is
+    accounted exactly.
 
     Intervals: the owner calls :meth:`check` after every change of state (and at every
     warm-up end); each maximal interval of exposure in one true context is then
@@ -48,7 +56,7 @@ class Exposure:
     def __init__(self, valid_from: Callable[[str], float], emit: Callable[[float, str, str], None] | None = None) -> None:
         self.valid_from = valid_from
         self.emit = emit
-        self.wanted: frozenset[str] = frozenset()
+        self.slots: tuple[frozenset[str], ...] = ()
         self.context = ""
         self.last = 0.0
         self.exposure = 0.0
@@ -59,13 +67,15 @@ class Exposure:
         self.open_since: float | None = None
         self.intervals: list[tuple[float, float, str]] = []
 
-    def _vmin(self) -> float:
-        return min((self.valid_from(g) for g in self.wanted), default=math.inf)
+    def _covered_from(self) -> float:
+        """The earliest time from which every slot has a valid member (``inf`` if never)."""
+        vf = self.valid_from
+        return max(min((vf(g) for g in slot), default=math.inf) for slot in self.slots)
 
     def advance(self, now: float) -> None:
         a, b = self.last, now
-        if b > a and self.wanted:
-            v = self._vmin()
+        if b > a and self.slots:
+            v = self._covered_from()
             start_cov = min(b, max(a, v))
             self.exposure += start_cov - a
             self.risky += b - a
@@ -75,24 +85,27 @@ class Exposure:
                     self._open = None
         self.last = max(self.last, now)
 
-    def set_wanted(self, now: float, wanted: frozenset[str], context: str = "") -> None:
+    def set_wanted(self, now: float, slots: Iterable[Iterable[str] | str], context: str = "") -> None:
+        """The true context became ``context``, where the selector wants ``slots``
+        (as ``RuleTable.slots_for`` returns them; a bare graph name is a one-graph slot)."""
+        wanted = tuple(frozenset((slot,) if isinstance(slot, str) else slot) for slot in slots)
         self.advance(now)
         if context != self.context and self.open_since is not None:
             self._close(now)
         self.context = context
-        if wanted != self.wanted:
+        if wanted != self.slots:
             if wanted:
                 self.switches += 1
                 self.blind.append(0.0)
                 self._open = len(self.blind) - 1
             else:
                 self._open = None
-            self.wanted = wanted
+            self.slots = wanted
         self.check(now)
 
     def check(self, now: float) -> None:
         """Open or close the exposure interval after a change of state at ``now``."""
-        exposed = bool(self.wanted) and self._vmin() > now
+        exposed = bool(self.slots) and self._covered_from() > now
         if exposed and self.open_since is None:
             self.open_since = now
             if self.emit is not None:
