@@ -1,5 +1,7 @@
 """Hypothesis: random fault schedules against the SimPy world; the audit must always hold
-(desmon deployer), and the indexed Query port answers exactly as RepositoryQuery."""
+(desmon deployer), and after every reaction the repository's DEPLOYED_ON edges (read
+straight off the graph, not through the Query port the audit uses) are exactly the
+infrastructure's running instances, and every stop left one DEPLOYMENT_HISTORY edge."""
 
 from __future__ import annotations
 
@@ -11,7 +13,8 @@ from hypothesis import strategies as st
 from desmon.loader import load_scenario
 from desmon.model.events import DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformUp
 from desmon.model.scenario import Scenario, TimedEvent
-from desmon.repository.query import RepositoryQuery
+from desmon.deployment.invariants import INVARIANTS
+from desmon.repository import labels as L
 from desmon.sim.engine import SimWorld
 from desmon.sim.world import StartFailure, World
 
@@ -54,13 +57,36 @@ def test_random_fault_schedules_keep_the_invariants(faults, load_events, seed, p
     )
     sc = Scenario(name="fuzz", model=BASE.model, initial=BASE.initial, world=world)
     w = SimWorld(sc, deployer="desmon", seed=seed)
+    checked = _check_after_every_reaction(w)
     r = w.run()
     assert not r.violations, r.violations
-    ref = RepositoryQuery(w.repo)
-    assert ref.platform_states() == w.query.platform_states()
-    assert ref.deployments() == w.query.deployments()
-    for g in ("force_slip_detector", "tactile_slip_detector", "combined_slip_detector"):
-        assert ref.deployed_on(g) == w.query.deployed_on(g)
-    for p in PLATFORMS:
-        assert ref.active_deployments(p) == w.query.active_deployments(p)
-    assert sorted(w.instances) == list(ref.deployments())
+    assert checked and checked[0] == w.reactions  # every reaction was checked
+    _agree(w)  # and at the horizon
+
+
+def _edges(w: SimWorld, label: str) -> list[tuple[str, str]]:
+    g = w.repo.graph
+    return sorted((g.nodes[s]["name"], g.nodes[t]["name"]) for s, t, d in g.edges(data=True) if d["label"] == label)
+
+
+def _agree(w: SimWorld) -> None:
+    """The repository and the infrastructure tell the same story (the ``history`` invariant)."""
+    assert _edges(w, L.DEPLOYED_ON) == sorted(w.instances)
+    assert len(_edges(w, L.DEPLOYMENT_HISTORY)) == w.stops
+    view = w.core.view(running=tuple(sorted(w.instances)), stops=w.stops, history=w.history_edges)
+    assert INVARIANTS["history"].check(view) is None
+
+
+def _check_after_every_reaction(w: SimWorld) -> list[int]:
+    """Wrap ``core.settle`` (called once at the end of every reaction) with :func:`_agree`."""
+    count = [0]
+    settle = w.core.settle
+
+    def checked_settle(raised):  # type: ignore[no-untyped-def]
+        out = settle(raised)
+        _agree(w)
+        count[0] += 1
+        return out
+
+    w.core.settle = checked_settle  # type: ignore[method-assign]
+    return count
