@@ -263,8 +263,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", default=None, metavar="FILE", help="write the counterexample(s) as JSON states")
     p.add_argument("--pytest", default=None, metavar="FILE", help="write a pytest replaying the counterexample")
     p.add_argument("--plot", default=None, metavar="FILE.png", help="draw the shortest counterexample as repository snapshots")
-    # the drawing lives in the viz layer, which verify may not import: the CLI hands it over
-    p.set_defaults(draw_snapshots=lambda *a, **kw: __import__("desmon.viz.snapshot", fromlist=["draw_snapshots"]).draw_snapshots(*a, **kw))
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(handler=_lazy("desmon.verify.command", "verify_command"))
 

@@ -94,6 +94,27 @@ def test_cli_paper_json_and_generated_pytest(tmp_path, capsys):
     res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(py)], capture_output=True, text=True, cwd=tmp_path)
     assert res.returncode == 0, res.stdout + res.stderr
     assert "4 passed" in res.stdout
+    src = py.read_text()  # a replay through the networkx repository, not a copy of the bootstrap
+    assert "from desmon.verify import RepositoryRun" in src and "ScriptedControl" not in src and "run_sync" not in src
+
+
+def test_generated_pytest_replays_an_instantaneous_violation(tmp_path):
+    """The make-before-break mutant breaks single-instance only inside the reaction: the
+    generated test replays it through RepositoryRun with an audit after every command."""
+    from desmon.verify.mutants import get_mutant
+    from desmon.verify.report import counterexample_pytest
+
+    path = SCENARIOS / "migration.py"
+    scenario = load_scenario(path)
+    checker = Checker(scenario, get_mutant("make-before-break"), invariants=["single-instance"])
+    r = checker.run()
+    assert r.counterexamples[0].during == "start force_slip_detector on pc2"
+    src = counterexample_pytest(r, str(path), checker.bounds.start_action(scenario))
+    assert "from desmon.verify import RepositoryRun" in src and "class ScriptedControl" not in src
+    py = tmp_path / "test_cex_during.py"
+    py.write_text(src)
+    res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(py)], capture_output=True, text=True, cwd=tmp_path)
+    assert res.returncode == 0 and "1 passed" in res.stdout, res.stdout + res.stderr
 
 
 def test_incomplete_and_limits(capsys):
@@ -115,6 +136,25 @@ def test_invariant_selection_and_bad_input(capsys, tmp_path):
     bad.write_text("from desmon.model.scenario import Scenario\nfrom desmon.model import RobotBuilder\nr = RobotBuilder(); r.platform('p')\nscenario = Scenario(name='x', model=r.build())\n")
     assert main(["verify", str(bad)]) == 2
     assert "declares no checker bounds" in capsys.readouterr().err
+
+
+def test_history_is_left_to_the_audit_and_the_fuzzer(capsys):
+    """The checker's states have no running list / stops / history edges: it cannot fail there."""
+    path = str(SCENARIOS / "two_detectors.py")
+    assert main(["verify", path, "--no-progress"]) == 0
+    head = capsys.readouterr().out.splitlines()[0]
+    checked = head.split("invariants: ")[1].split(" (")[0].split(", ")
+    assert "history" not in checked and checked == ["valid-or-error", "no-overcommit", "single-instance", "coverage", "fixed"]
+    assert head.endswith("(not history: sim audit and fuzz only)")
+    assert main(["verify", path, "--invariant", "history", "--no-progress"]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err.count("\n") == 1
+    assert cap.err.startswith("desmon: error: --invariant history: the checker cannot evaluate it")
+    assert "desmon fuzz" in cap.err
+    with pytest.raises(CheckerError, match="cannot evaluate"):
+        Checker(load_scenario(path), invariants=["coverage", "history"])
+    r = Checker(load_scenario(path), invariants=["coverage"]).run()
+    assert r.invariants == ("coverage",) and r.not_checked == ()
 
 
 def test_bad_bounds_are_rejected():

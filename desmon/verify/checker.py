@@ -23,10 +23,9 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any, Iterable, Iterator
 
-from desmon.deployment.core import DeploymentCore, run_sync
+from desmon.deployment.core import DeploymentCore
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.invariants import Invariant, SystemView, check_invariants, get_invariants
-from desmon.deployment.monitor import Stimulus
 from desmon.deployment.ports import RaiseError, Start, Stop
 from desmon.errors import CheckerError, NondeterminismError
 from desmon.model.events import (
@@ -34,12 +33,19 @@ from desmon.model.events import (
 )
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds, bounds_of
+from desmon.verify.replay import initial_reaction
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore
 
-__all__ = ["Checker", "CheckResult", "Counterexample", "Step", "Label", "HOLDS", "VIOLATED", "INCOMPLETE", "EVENT_KINDS"]
+__all__ = ["Checker", "CheckResult", "Counterexample", "Step", "Label", "HOLDS", "VIOLATED", "INCOMPLETE", "EVENT_KINDS", "NOT_CHECKED"]
 
 HOLDS, VIOLATED, INCOMPLETE = "HOLDS", "VIOLATED", "INCOMPLETE"
 EVENT_KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
+
+#: Invariants the checker cannot evaluate, and where they are checked instead. Its states
+#: keep no infrastructure running list, stop count or DEPLOYMENT_HISTORY edges (the
+#: SystemView it builds leaves ``running`` / ``stops`` / ``history`` None), so ``history``
+#: could never fail here: it is left out of the checked set and refused by name.
+NOT_CHECKED = {"history": "sim audit and fuzz only"}
 
 #: A transition label: the event and the indices of the Control.start calls that failed.
 Label = tuple[Event, tuple[int, ...]]
@@ -100,6 +106,7 @@ class CheckResult:
     rules: Counter = field(default_factory=Counter)
     branches: Counter = field(default_factory=Counter)
     symmetry: bool = False
+    not_checked: tuple[str, ...] = ()  # invariants left to the sim audit and the fuzzer (NOT_CHECKED)
 
     @property
     def states_per_second(self) -> float:
@@ -135,7 +142,16 @@ class Checker:
         self.bounds = bounds if bounds is not None else bounds_of(scenario)
         if bounds is not None:
             bounds.validate(scenario)
-        self.invariants: tuple[Invariant, ...] = get_invariants(list(invariants) if invariants else None)
+        requested = get_invariants(list(invariants) if invariants else None)  # unknown names: ModelError
+        blind = [i.name for i in requested if i.name in NOT_CHECKED] if invariants else []
+        if blind:
+            raise CheckerError(
+                f"--invariant {blind[0]}: the checker cannot evaluate it (its states keep no running list, stop count or "
+                f"DEPLOYMENT_HISTORY edges); it is checked by the simulation audit (desmon run) and desmon fuzz"
+            )
+        self.invariants: tuple[Invariant, ...] = tuple(i for i in requested if i.name not in NOT_CHECKED)
+        #: the invariants of a default (all) run that the checker leaves to the audit and fuzzer
+        self.not_checked: tuple[str, ...] = () if invariants else tuple(n for n in NOT_CHECKED)
         names = {i.name for i in self.invariants}
         self.instant = tuple(i for i in get_invariants(list(self.bounds.instantaneous)) if i.name in names) if self.bounds.instantaneous else ()
         self.store = StateStore(self.model)
@@ -167,15 +183,8 @@ class Checker:
         st = self.store
         st.load(Key(None, (), (), (), (), ()))
         self.core.standing = frozenset()
-        for ev in self.scenario.initial:
-            self.core.observe(ev)
         st.begin(())
-        act = self.bounds.start_action(self.scenario)
-        if act is not None:
-            self.core.step(ActionChange(act), st, force=True)
-        else:
-            log = run_sync(self.core.reaction(Stimulus(context_changed=True)), st)
-            self.core.settle(e.graph for e in log.errors)
+        initial_reaction(self.core, self.scenario, self.bounds, st)  # the same as RepositoryRun's
         return st.key(self.core.standing)
 
     def enabled(self, key: Key) -> list[Event]:
@@ -298,7 +307,10 @@ class Checker:
         if out is None:
             out = sys.stderr
         t0 = time.perf_counter()
-        res = CheckResult(self.scenario.name, self.deployer_name, tuple(i.name for i in self.invariants), HOLDS, symmetry=self.symmetry is not None)
+        res = CheckResult(
+            self.scenario.name, self.deployer_name, tuple(i.name for i in self.invariants), HOLDS,
+            symmetry=self.symmetry is not None, not_checked=self.not_checked,
+        )
         canon = self.symmetry.canon if self.symmetry is not None else None
         init = self.initial()
         if canon is not None:

@@ -43,7 +43,7 @@ def verify_command(args: argparse.Namespace) -> int:
             from desmon.verify.plot import plot_counterexample
 
             shortest = min(result.counterexamples, key=lambda c: c.length)
-            out = plot_counterexample(scenario, checker.core.deployer, checker.bounds, shortest, args.plot, draw=args.draw_snapshots)
+            out = plot_counterexample(scenario, checker.core.deployer, checker.bounds, shortest, args.plot)
             print(f"wrote {out} ({shortest.invariant}, {shortest.length} step{'s' if shortest.length != 1 else ''})")
         else:
             print(f"no counterexample: {args.plot} not written")

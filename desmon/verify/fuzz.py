@@ -1,7 +1,7 @@
 """``desmon fuzz``: hypothesis failure sequences through the core on the networkx repository.
 
 A sequence (:func:`desmon.verify.strategies.choices`) is run event by event through a
-:class:`~desmon.verify.machine.RepositoryRun`; after each reaction the named invariants
+:class:`~desmon.verify.replay.RepositoryRun`; after each reaction the named invariants
 are checked. hypothesis searches (``--examples``, ``--seed``: same seed, same output)
 and shrinks the first failing sequence, which is printed in the checker's trace format;
 when it is short, the checker re-derives the shortest counterexample for that invariant.
@@ -20,7 +20,7 @@ from desmon.deployment.deployer import Deployer
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import bounds_of
 from desmon.verify.checker import Checker, Label
-from desmon.verify.machine import RepositoryRun
+from desmon.verify.replay import RepositoryRun
 from desmon.verify.report import format_counterexample, format_trace
 from desmon.verify.strategies import Choice, choices
 

@@ -2,22 +2,23 @@
 
 The counterexample's events are replayed through the real deployment core on the
 networkx :class:`~desmon.repository.store.Repository` (the same
-:class:`~desmon.verify.machine.RepositoryRun` the fuzzer and the generated pytest use),
+:class:`~desmon.verify.replay.RepositoryRun` the fuzzer and the generated pytest use),
 and ``repo.snapshot()`` is taken after the initial reaction and after every step. A
 replay that does not reach the checker's state is refused (it would draw a different
 run). Panels are drawn by :func:`desmon.viz.snapshot.draw_snapshots` with one shared
-layout, so only edges move between panels (the CLI passes that function in: verify
-does not import the viz layer).
+layout, so only edges move between panels.
 """
 
 from __future__ import annotations
 
 import textwrap
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from desmon.errors import NondeterminismError
 from desmon.verify.checker import Counterexample, describe_state
+from desmon.verify.replay import RepositoryRun
+from desmon.viz.snapshot import draw_snapshots
 
 __all__ = ["plot_counterexample", "snapshot_panels"]
 
@@ -33,8 +34,6 @@ def _title(head: str, lines: tuple[str, ...] | list[str], width: int = 78, max_l
 
 def snapshot_panels(scenario: Any, deployer: Any, bounds: Any, c: Counterexample) -> tuple[list[tuple[str, Any]], Any]:
     """(title, snapshot) after the initial state and after each step; and the final graph."""
-    from desmon.verify.machine import RepositoryRun
-
     run = RepositoryRun(scenario, deployer, bounds)
     if run.key() != c.steps[0].key:
         raise NondeterminismError(f"--plot: the repository's initial state {run.key()} is not the checker's {c.steps[0].key}")
@@ -55,13 +54,7 @@ def snapshot_panels(scenario: Any, deployer: Any, bounds: Any, c: Counterexample
     return panels, run.repo.graph
 
 
-def plot_counterexample(
-    scenario: Any, deployer: Any, bounds: Any, c: Counterexample, path: str | Path, *, draw: Callable[..., Path]
-) -> Path:
-    """Draw ``c`` as a sequence of repository snapshots into the PNG ``path``.
-
-    ``draw`` is :func:`desmon.viz.snapshot.draw_snapshots` (handed over by the CLI: the
-    verify layer does not import the viz layer).
-    """
+def plot_counterexample(scenario: Any, deployer: Any, bounds: Any, c: Counterexample, path: str | Path) -> Path:
+    """Draw ``c`` as a sequence of repository snapshots into the PNG ``path``."""
     panels, full = snapshot_panels(scenario, deployer, bounds, c)
-    return draw(panels, path, full=full, columns=2 if len(panels) > 1 else 1)
+    return draw_snapshots(panels, path, full=full, columns=2 if len(panels) > 1 else 1)
