@@ -193,3 +193,19 @@ def test_alarms_are_frozen_slotted_records_and_debounce_merges_bursts() -> None:
         a.time = 2.0  # type: ignore[misc]
     burst = [Alarm(1.0, "f", "up"), Alarm(1.2, "f", "up"), Alarm(1.6, "f", "up"), Alarm(2.2, "f", "down")]
     assert [x.time for x in merge_alarms(burst)] == [1.0, 2.2]
+
+
+def test_force_and_tactile_share_one_activation_lifecycle() -> None:
+    from desmon.detectors.base import DetectorState, StreamingDetector
+    from desmon.detectors.force import ForceDetector
+    from desmon.detectors.tactile import TactileDetector
+
+    for cls, reason in ((ForceDetector, "tare"), (TactileDetector, "warm_up")):
+        assert issubclass(cls, StreamingDetector)
+        assert all(name not in cls.__dict__ for name in ("activate", "deactivate", "_set", "active"))
+        d = cls()
+        assert not d.active and d.status.state is DetectorState.INACTIVE
+        d.activate(2.0)
+        assert d.active and (d.status.state, d.status.reason, d.status.since) == (DetectorState.WARMING, reason, 2.0)
+        d.deactivate()
+        assert not d.active and d.status.state is DetectorState.INACTIVE

@@ -57,3 +57,12 @@ def test_exposure_keeps_the_slots_apart() -> None:
     ex.close(10.0)
     assert ex.exposure == pytest.approx(6.0) and ex.risky == pytest.approx(9.0) and ex.switches == 3
     assert [(a, b, c) for a, b, c in ex.intervals] == [(1.0, 3.0, "grasp"), (5.0, 7.0, "move"), (8.0, 10.0, "stuck")]
+
+
+def test_the_sim_uses_the_detectors_segment() -> None:
+    from desmon.detectors.signals import Segment
+    from desmon.sim import world
+
+    assert world.Segment is Segment
+    segs = expand_task(World(task=(Step(GRASP, 2), Step(MOVE_BASE, 3)), horizon=10), 10)
+    assert segs == (Segment(GRASP, 0.0, 2.0), Segment(MOVE_BASE, 2.0, 3.0))

@@ -5,13 +5,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import Final, Sequence
+from typing import ClassVar, Final, Sequence
 
 import numpy as np
 
 from desmon.errors import SignalError
 
-__all__ = ["Alarm", "DetectorState", "DetectorStatus", "merge_alarms", "check_threshold"]
+__all__ = ["Alarm", "DetectorState", "DetectorStatus", "StreamingDetector", "merge_alarms", "check_threshold"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -53,6 +53,43 @@ class DetectorStatus:
 
 
 INACTIVE_STATUS: Final = DetectorStatus(DetectorState.INACTIVE, "", 0.0)
+
+
+class StreamingDetector:
+    """Activation and status bookkeeping shared by the streaming force and tactile detectors.
+
+    A subclass sets ``_active`` / ``status`` in its ``__init__``, implements
+    :meth:`_reset` (forget the per-activation history) and names the reason of its
+    WARMING status after activation in ``WARMUP_REASON``.
+    """
+
+    #: the WARMING reason right after :meth:`activate`
+    WARMUP_REASON: ClassVar[str] = "warm_up"
+    _active: bool
+    status: DetectorStatus
+
+    def _reset(self, t: float) -> None:
+        raise NotImplementedError
+
+    @property
+    def active(self) -> bool:
+        return self._active
+
+    def activate(self, t: float) -> None:
+        """Start (or restart) at time ``t``: forget the history and warm up again (the
+        force detector re-takes its tare, the tactile one restarts its flow history)."""
+        self._active = True
+        self._reset(float(t))
+        self._set(DetectorState.WARMING, self.WARMUP_REASON, float(t))
+
+    def deactivate(self) -> None:
+        self._active = False
+        self.status = INACTIVE_STATUS
+
+    def _set(self, state: DetectorState, reason: str, t: float) -> None:
+        """Change the status; ``since`` moves only when the state or reason changes."""
+        if self.status.state is not state or self.status.reason != reason:
+            self.status = DetectorStatus(state, reason, t)
 
 
 def check_threshold(name: str, value: float) -> float:

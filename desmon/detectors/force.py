@@ -7,7 +7,7 @@ from typing import Final
 
 import numpy as np
 
-from desmon.detectors.base import INACTIVE_STATUS, Alarm, DetectorState, DetectorStatus, check_threshold
+from desmon.detectors.base import INACTIVE_STATUS, Alarm, DetectorState, DetectorStatus, StreamingDetector, check_threshold
 from desmon.detectors.signals import DOWN, UP
 from desmon.errors import SignalError
 
@@ -34,7 +34,7 @@ def _runs(same: Arr, run_prev: int) -> Arr:
     return np.where(start >= 0, idx - start + 1, run_prev + idx + 1)
 
 
-class ForceDetector:
+class ForceDetector(StreamingDetector):
     """Streaming force slip detector.
 
     After :meth:`activate` at ``t`` the detector averages the samples in
@@ -48,6 +48,8 @@ class ForceDetector:
     values (a stuck or zeroed sensor; real noise never repeats exactly) -> NO_INPUT
     ``'stuck'`` and those samples are ignored.
     """
+
+    WARMUP_REASON = "tare"
 
     def __init__(
         self,
@@ -80,27 +82,9 @@ class ForceDetector:
         self._run = 0
 
     @property
-    def active(self) -> bool:
-        return self._active
-
-    @property
     def tare(self) -> float | None:
         """The current tare β (None while taring)."""
         return self._tare
-
-    def activate(self, t: float) -> None:
-        """Start (or restart) at time ``t``: re-take the tare over the next ``tare_window`` s."""
-        self._active = True
-        self._reset(float(t))
-        self._set(DetectorState.WARMING, "tare", float(t))
-
-    def deactivate(self) -> None:
-        self._active = False
-        self.status = INACTIVE_STATUS
-
-    def _set(self, state: DetectorState, reason: str, t: float) -> None:
-        if self.status.state is not state or self.status.reason != reason:
-            self.status = DetectorStatus(state, reason, t)
 
     def scores(self, times: Arr, values: Arr) -> tuple[Arr, Arr, Arr]:
         """Advance the state with new samples; return ``(times, S_F, valid)`` per sample."""

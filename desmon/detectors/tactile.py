@@ -25,7 +25,7 @@ from typing import Final
 
 import numpy as np
 
-from desmon.detectors.base import INACTIVE_STATUS, Alarm, DetectorState, DetectorStatus, check_threshold
+from desmon.detectors.base import INACTIVE_STATUS, Alarm, DetectorState, DetectorStatus, StreamingDetector, check_threshold
 from desmon.detectors.signals import N_PADS, PAD_COLS, PAD_ROWS
 from desmon.errors import SignalError
 
@@ -118,7 +118,7 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
     return s_t, valid, new
 
 
-class TactileDetector:
+class TactileDetector(StreamingDetector):
     """Streaming tactile slip detector (6 pads, moments or full frames as input).
 
     Alarm (direction ``None``) at every frame with ``S_T >= threshold`` (default 0.5
@@ -156,24 +156,6 @@ class TactileDetector:
         self._last_m: Arr = np.full((N_PADS, 3), np.nan)
         self._run = 0
         self._seen_valid = False
-
-    @property
-    def active(self) -> bool:
-        return self._active
-
-    def activate(self, t: float) -> None:
-        """Start (or restart) at ``t``: forget the flow history (warm-up restarts)."""
-        self._active = True
-        self._reset(float(t))
-        self._set(DetectorState.WARMING, "warm_up", float(t))
-
-    def deactivate(self) -> None:
-        self._active = False
-        self.status = INACTIVE_STATUS
-
-    def _set(self, state: DetectorState, reason: str, t: float) -> None:
-        if self.status.state is not state or self.status.reason != reason:
-            self.status = DetectorStatus(state, reason, t)
 
     @staticmethod
     def _as_moments(samples: Arr) -> Arr:

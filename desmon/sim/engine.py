@@ -56,7 +56,8 @@ from desmon.repository.store import ADD_EDGE, REMOVE_EDGE, RELABEL_EDGE, UPDATE_
 from desmon.sim.metrics import Exposure, MemoryMeter, slip_metrics
 from desmon.sim.sensors import DetectorAdapter, SensorBank
 from desmon.sim.trace import Trace
-from desmon.sim.world import Segment, Slip, World, draw_slips, expand_task, world_of
+from desmon.detectors.signals import Segment
+from desmon.sim.world import Slip, World, draw_slips, expand_task, world_of
 
 __all__ = ["SimWorld", "RunResult", "simulate", "OBSERVATION", "SLIP_WINDOW"]
 
@@ -249,10 +250,10 @@ class SimWorld:
                 yield env.timeout(seg.start - env.now)
             # the selector's slots in the TRUE context, kept apart (one covered slot does
             # not hide an uncovered one); the core's selector gives them for the recognised one
-            slots = self.model.rules.slots_for(seg.action)
-            self.trace.emit(env.now, "action", action=seg.action, duration=seg.duration)
-            self.exposure.set_wanted(env.now, slots, seg.action)
-            env.process(self._recognise(seg.action))
+            slots = self.model.rules.slots_for(seg.context)
+            self.trace.emit(env.now, "action", action=seg.context, duration=seg.duration)
+            self.exposure.set_wanted(env.now, slots, seg.context)
+            env.process(self._recognise(seg.context))
 
     def _recognise(self, action: str):  # type: ignore[no-untyped-def]
         if self.world.recognition_delay:

@@ -19,9 +19,9 @@ from typing import Sequence
 import numpy as np
 
 from desmon.detectors.base import Alarm
-from desmon.detectors.signals import N_PADS, MissionSignals, SlipEvent
+from desmon.detectors.signals import N_PADS, MissionSignals, Segment, SlipEvent
 from desmon.model.platform import Device
-from desmon.sim.world import Segment, Slip
+from desmon.sim.world import Slip
 
 __all__ = ["SensorBank", "DetectorAdapter", "WARMUP"]
 
@@ -34,7 +34,7 @@ class SensorBank:
 
     def __init__(self, segments: Sequence[Segment], slips: Sequence[Slip], seed: int, devices: Sequence[tuple[Device, str]]) -> None:
         self.signals = MissionSignals(
-            [(s.action, s.start, s.duration) for s in segments],
+            segments,
             [SlipEvent(s.time, s.direction, s.kind) for s in slips],
             seed=seed,
         )

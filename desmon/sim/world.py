@@ -18,6 +18,7 @@ import random
 from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
+from desmon.detectors.signals import Segment  # the one ground-truth segment type (re-exported here)
 from desmon.errors import ScenarioError
 from desmon.model.actions import ACTIONS, GRASP, IDLE, MOVE_BASE, RELEASE
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformUp
@@ -120,19 +121,6 @@ class LoadWalk:
 
 
 @dataclass(frozen=True, slots=True)
-class Segment:
-    """A ground-truth action segment of the expanded task."""
-
-    action: str
-    start: float
-    duration: float
-
-    @property
-    def end(self) -> float:
-        return self.start + self.duration
-
-
-@dataclass(frozen=True, slots=True)
 class World:
     """The SimPy world's configuration (see the module docstring)."""
 
@@ -231,14 +219,15 @@ class World:
 
 
 def expand_task(world: World, horizon: float) -> tuple[Segment, ...]:
-    """The ground-truth segments up to ``horizon`` (the task once, or repeated)."""
+    """The ground-truth segments up to ``horizon`` (the task once, or repeated); each
+    segment's ``context`` is the step's action."""
     out: list[Segment] = []
     t = 0.0
     while t < horizon:
         for step in world.task:
             if t >= horizon:
                 break
-            out.append(Segment(step.action, t, step.duration))
+            out.append(Segment(step.action, float(t), float(step.duration)))
             t += step.duration
         if not world.repeat:
             break
@@ -253,13 +242,13 @@ def in_hand(segments: Sequence[Segment]) -> list[tuple[float, float, str]]:
     for s in segments:
         if s.start > prev_end + 1e-9:
             holding = False
-        if s.action == IDLE:
+        if s.context == IDLE:
             holding = False
-        elif s.action == GRASP or not holding:
+        elif s.context == GRASP or not holding:
             holding = True
-        if holding and s.action != IDLE:
-            out.append((s.start, s.end, s.action))
-        if s.action == RELEASE:
+        if holding and s.context != IDLE:
+            out.append((s.start, s.end, s.context))
+        if s.context == RELEASE:
             holding = False
         prev_end = s.end
     return out
