@@ -80,7 +80,9 @@ def _draw(ax, g: nx.MultiDiGraph, pos: dict[str, tuple[float, float]], title: st
         x2 -= direction * HALF_WIDTH[g.nodes[t]["label"]]
         style = "--" if label == "DEPLOYMENT_HISTORY" else "-"
         width = 2.6 if label == "DEPLOYED_ON" else (1.6 if label in ("DEPLOYMENT_HISTORY", "EXECUTABLE_ON") else 0.9)
-        rad = 0.0
+        # a fixed deployment's EXECUTABLE_ON edge bows upwards, so a DEPLOYED_ON edge between
+        # the same two boxes stays visible beside it
+        rad = -0.22 if label == "EXECUTABLE_ON" else 0.0
         ax.annotate(
             "",
             xy=(x2, y2),
@@ -90,7 +92,7 @@ def _draw(ax, g: nx.MultiDiGraph, pos: dict[str, tuple[float, float]], title: st
         )
         if label in ("DEPLOYED_ON", "DEPLOYMENT_HISTORY", "EXECUTABLE_ON"):
             times = "".join(f" {a}={d[a]:g}s" for a in ("start", "stop") if isinstance(d.get(a), (int, float)))
-            mx, my = (x1 + x2) / 2, (y1 + y2) / 2
+            mx, my = (x1 + x2) / 2, (y1 + y2) / 2 + (0.32 if label == "EXECUTABLE_ON" else 0.0)
             ax.text(mx, my, f"{label}{times}", fontsize=7, color=COLORS[label], ha="center", va="center", zorder=5,
                     bbox=dict(boxstyle="round,pad=0.2", fc="white", ec=COLORS[label], lw=0.5))
     for n, (x, y) in pos.items():
