@@ -29,8 +29,10 @@ event = st.one_of(
     st.builds(PlatformDown, st.sampled_from(PLATFORMS)),
     st.builds(PlatformUp, st.sampled_from(PLATFORMS)),
 )
-timed = st.tuples(st.floats(0.0, 40.0, allow_nan=False).map(lambda x: round(x, 2)), event)
-loads = st.tuples(st.floats(0.0, 40.0).map(lambda x: round(x, 2)), st.sampled_from(PLATFORMS), st.integers(0, 1000))
+# Faults stop 5 s before the 40 s horizon, so every reaction they cause completes inside
+# the run (a reaction still waiting for a start at the horizon is never settled).
+timed = st.tuples(st.floats(0.0, 35.0, allow_nan=False).map(lambda x: round(x, 2)), event)
+loads = st.tuples(st.floats(0.0, 35.0).map(lambda x: round(x, 2)), st.sampled_from(PLATFORMS), st.integers(0, 1000))
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
