@@ -178,3 +178,12 @@ def test_graphs_the_new_context_does_not_want_are_stopped_into_history():
     c.step(ActionChange("release"), control)
     assert RepositoryQuery(repo).deployments() == (("B", "pc1"),)
     assert [h[:2] for h in RepositoryQuery(repo).history()] == [("A", "pc1")]
+
+
+def test_the_paper_selector_is_asked_and_judged_for_the_first_alternative_only():
+    model, repo, control = build({"grasp": [("A", "B")]}, fails=lambda g, p: g == "A")
+    c = core(model, repo, "paper")
+    _s, log = c.step(ActionChange("grasp"), control)
+    assert c.slots() == (("A",),)
+    assert [e.kind for e in log.errors] == ["deployment_failed"] and c.standing == frozenset({"A"})
+    assert "coverage" not in violations(c, control, repo)  # it did what it was asked, and said why not

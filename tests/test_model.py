@@ -143,3 +143,24 @@ def test_capacity_needing_a_resource_no_platform_has_is_rejected():
 def test_a_spec_consumes_the_sum_of_its_capacity_amounts():
     spec = DeploymentSpec("g", (Capacity("memory", 100), Capacity("memory", 50), Attribute("os", "linux")))
     assert spec.consumption() == (("memory", 150),)
+
+
+def test_a_bare_tuple_rule_is_refused_as_ambiguous():
+    robot = small_robot()
+    with pytest.raises(ModelError, match=r"ambiguous; write \[\('force', 'force'\)\] for one graph with fallbacks"):
+        robot.rules({"release": ("force", "force")})
+
+
+def test_a_scenario_refuses_unknown_actions_negative_loads_and_times_and_repeated_labels():
+    from desmon.model.events import ActionChange, LoadChange
+    from desmon.model.scenario import Scenario, TimedEvent
+
+    model = small_robot().build()
+    with pytest.raises(ModelError, match="unknown action 'fly'"):
+        Scenario("s", model, timeline=(TimedEvent(0.0, ActionChange("fly")),))
+    with pytest.raises(ModelError, match="a load is a number >= 0"):
+        Scenario("s", model, initial=(LoadChange("pc1", -100),))
+    with pytest.raises(ModelError, match="times are seconds >= 0"):
+        Scenario("s", model, timeline=(TimedEvent(-1.0, ActionChange("hold")),))
+    with pytest.raises(ModelError, match="label 't0' is used twice"):
+        Scenario("s", model, timeline=(TimedEvent(0.0, ActionChange("hold"), "t0"), TimedEvent(1.0, ActionChange("grasp"), "t0")))

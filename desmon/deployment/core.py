@@ -93,7 +93,7 @@ class DeploymentCore:
 
     def slots(self) -> tuple[tuple[str, ...], ...]:
         """The selector: what the rule table wants in the current context."""
-        return self.model.rules.slots_for(self.query.context())
+        return self.deployer.requested(self.model.rules.slots_for(self.query.context()))
 
     def reaction(self, stimulus: Stimulus) -> Reaction:
         """The deployer's reaction to ``stimulus`` (a generator of commands)."""

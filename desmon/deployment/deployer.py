@@ -158,6 +158,13 @@ class Deployer:
     name: str
     description: str
     react: Callable[[QueryPort, tuple[tuple[str, ...], ...], tuple[str, ...], bool], Reaction]
+    #: False for a variant whose selector knows no fallbacks (the paper's): it is asked,
+    #: and judged by ``coverage``, for the first graph of each slot only.
+    fallbacks: bool = True
+
+    def requested(self, slots: tuple[tuple[str, ...], ...]) -> tuple[tuple[str, ...], ...]:
+        """The slots as this variant's selector requests them."""
+        return slots if self.fallbacks else tuple(slot[:1] for slot in slots)
 
 
 def _stop_graphs(graphs: Iterable[str], q: QueryPort) -> Reaction:
@@ -225,7 +232,7 @@ def make_desmon_react(
     return react
 
 
-PAPER = Deployer("paper", "Algorithms 1 and 2 of the paper, transcribed literally", _paper_react)
+PAPER = Deployer("paper", "Algorithms 1 and 2 of the paper, transcribed literally", _paper_react, fallbacks=False)
 DESMON = Deployer("desmon", "the corrected deployer of DESIGN.md §4", make_desmon_react())
 
 #: Deployer variants selectable by name.

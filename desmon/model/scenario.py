@@ -14,6 +14,7 @@ from typing import Any, Mapping
 
 from desmon.errors import ModelError
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+from desmon.model.actions import ACTIONS
 from desmon.model.system import SystemModel
 
 __all__ = ["TimedEvent", "Scenario"]
@@ -46,13 +47,20 @@ class Scenario:
     def __post_init__(self) -> None:
         if not isinstance(self.model, SystemModel):
             raise ModelError(f"scenario {self.name!r}: model must be a SystemModel (use RobotBuilder(...).build())")
-        last = float("-inf")
+        last = 0.0
+        labels: set[str] = set()
         devices = {d.name for d in self.model.devices}
         platforms = {p.name for p in self.model.platforms}
         for ev in self.initial:
             self._check_event(ev, devices, platforms)
         for te in self.timeline:
             self._check_event(te.event, devices, platforms)
+            if not isinstance(te.time, (int, float)) or te.time != te.time or te.time < 0:
+                raise ModelError(f"scenario {self.name!r}: timeline event {te.event} at t={te.time!r}: times are seconds >= 0")
+            if te.label:
+                if te.label in labels:
+                    raise ModelError(f"scenario {self.name!r}: timeline label {te.label!r} is used twice: labels name one moment each")
+                labels.add(te.label)
             if te.time < last:
                 raise ModelError(
                     f"scenario {self.name!r}: timeline event {te.event} at t={te.time} comes before t={last}: sort the timeline"
@@ -62,6 +70,12 @@ class Scenario:
     def _check_event(self, ev: Event, devices: set[str], platforms: set[str]) -> None:
         if not isinstance(ev, (ActionChange, DeviceFail, DeviceRepair, PlatformDown, PlatformUp, LoadChange)):
             raise ModelError(f"scenario {self.name!r}: {ev!r} is not an environment event")
+        if isinstance(ev, ActionChange) and ev.action not in ACTIONS:
+            raise ModelError(f"scenario {self.name!r}: unknown action {ev.action!r}; use one of {', '.join(ACTIONS)}")
+        if isinstance(ev, LoadChange) and (
+            isinstance(ev.amount, bool) or not isinstance(ev.amount, (int, float)) or not ev.amount >= 0
+        ):
+            raise ModelError(f"scenario {self.name!r}: load {ev.platform} {ev.resource}={ev.amount!r}: a load is a number >= 0")
         if isinstance(ev, (DeviceFail, DeviceRepair)) and ev.device not in devices:
             raise ModelError(f"scenario {self.name!r}: names unknown device {ev.device!r} (known: {sorted(devices)})")
         if isinstance(ev, (PlatformDown, PlatformUp, LoadChange)) and ev.platform not in platforms:

@@ -48,14 +48,20 @@ class RuleTable:
     def from_mapping(cls, mapping: dict[str, object]) -> "RuleTable":
         """``{"grasp": "combined", "move_base": ["tactile"], "release": [("combined", "force")]}``.
 
-        A string is one graph; a list holds several slots; a tuple inside a list is one
-        slot with fallbacks.
+        A string is one graph; a list holds several slots (all wanted); a tuple or list
+        inside the list is one slot, its first graph preferred and the next ones fallbacks.
+        A bare tuple is refused as ambiguous.
         """
         rules = []
         for context, body in mapping.items():
             if isinstance(body, str):
                 slots: tuple[tuple[str, ...], ...] = ((body,),)
-            elif isinstance(body, (list, tuple)):
+            elif isinstance(body, tuple):
+                raise ModelError(
+                    f"rule for context {context!r}: {body!r} is ambiguous; write {[body]!r} for one graph with "
+                    f"fallbacks, or {list(body)!r} for {len(body)} graphs all wanted at once"
+                )
+            elif isinstance(body, list):
                 slots = tuple((s,) if isinstance(s, str) else tuple(s) for s in body)
             else:
                 raise ModelError(

@@ -106,6 +106,13 @@ class Bounds:
                 raise CheckerError(f"{where}: unknown platform {p!r} (known: {', '.join(platforms)})")
         initial_load = {ev.platform: ev.amount for ev in scenario.initial if isinstance(ev, LoadChange) and ev.resource == self.load_resource}
         for p, lv in self.loads.items():
+            if isinstance(lv, (str, bytes)) or not isinstance(lv, (tuple, list)) or not all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) and x >= 0 for x in lv
+            ):
+                raise CheckerError(
+                    f"{where}: load levels of {p!r} must be a sequence of non-negative numbers, got {lv!r}; "
+                    "write e.g. levels(0, 300, 100)"
+                )
             if not lv:
                 raise CheckerError(f"{where}: platform {p!r} has no load levels")
             if initial_load.get(p, 0) not in lv:
@@ -132,7 +139,10 @@ def bounds_of(scenario: Scenario) -> Bounds:
         try:
             b = Bounds(**dict(b))
         except TypeError as exc:
-            raise CheckerError(f"scenario {scenario.name!r}: bad checker bounds: {exc}") from None
+            import dataclasses
+
+            fields = ", ".join(f.name for f in dataclasses.fields(Bounds))
+            raise CheckerError(f"scenario {scenario.name!r}: bad checker bounds: {exc}; the fields are {fields}") from None
     if not isinstance(b, Bounds):
         raise CheckerError(f"scenario {scenario.name!r}: checker must be a desmon.verify.Bounds, got {type(b).__name__}")
     b.validate(scenario)

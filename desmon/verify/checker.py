@@ -175,7 +175,7 @@ class Checker:
     def slots(self, context: str | None) -> tuple[tuple[str, ...], ...]:
         s = self._slots_cache.get(context)
         if s is None:
-            s = self._slots_cache[context] = self.model.rules.slots_for(context)
+            s = self._slots_cache[context] = self.core.deployer.requested(self.model.rules.slots_for(context))
         return s
 
     def initial(self) -> Key:
