@@ -53,19 +53,21 @@ def _cmd_explain(args: argparse.Namespace) -> int:
     from desmon.sim.replay import replay
 
     scenario = _load_scripted(args.scenario)
-    if args.at is not None:
-        _resolve_times(scenario, f"{args.at!r}")  # validates the moment
+    if "," in (args.at or ""):
+        raise QueryError(f"--at {args.at!r}: explain answers for one moment; give one time or label")
+    [(when, at)] = _resolve_times(scenario, args.at)
     if scenario.model.spec(args.graph) is None:
         known = ", ".join(s.graph for s in scenario.model.specs)
         raise QueryError(f"{args.scenario}: no deployment specification for {args.graph!r}; known: {known}")
-    at = args.at
-    timeline = tuple(te for te in scenario.timeline if at is None or te.time <= at)
+    timeline = tuple(te for te in scenario.timeline if te.time <= at)
     from dataclasses import replace
 
     result = replay(replace(scenario, timeline=timeline), args.deployer)
     validity = acceptable_platforms(RepositoryQuery(result.repo), args.graph)
-    when = f"t={at:g}s" if at is not None else "the end of the timeline"
+    fixed = scenario.model.spec(args.graph).fixed_platform  # type: ignore[union-attr]
     print(f"{args.graph} at {when} ({args.deployer} deployer):")
+    if fixed is not None:
+        print(f"fixed deployment: only its EXECUTABLE_ON platform {fixed} is considered")
     print(validity.explain())
     return EXIT_OK
 
@@ -212,7 +214,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("explain", help="why each platform is accepted or rejected for a perception graph")
     p.add_argument("scenario")
     p.add_argument("graph", help="perception graph, e.g. combined_slip_detector")
-    p.add_argument("--at", type=float, default=None, help="time in the scenario's timeline (default: its end)")
+    p.add_argument("--at", default=None, help="seconds or a timeline label such as t1 (default: the timeline's end)")
     _deployer_arg(p)
     p.set_defaults(handler=_cmd_explain)
 

@@ -73,3 +73,15 @@ def test_desmon_run_with_plot_draws_the_case_study(root, tmp_path):
     out = tmp_path / "coffee.png"
     assert main(["run", str(root / "scenarios" / "coffee_handover.py"), "--plot", str(out), "--no-progress"]) == 0
     assert out.read_bytes()[:4] == b"\x89PNG" and out.stat().st_size > 20_000
+
+
+def test_a_trace_with_wrongly_typed_fields_is_a_one_line_error(tmp_path, capsys):
+    bad = tmp_path / "h.jsonl"
+    bad.write_text('{"t": 0, "type": "run", "horizon": 10}\n{"t": "soon", "type": "fault"}\n')
+    assert main(["plot", str(bad), "-o", str(tmp_path / "x.png")]) == 2
+    assert "needs a numeric 't'" in capsys.readouterr().err
+
+
+def test_a_window_after_the_trace_is_refused():
+    with pytest.raises(ScenarioError, match="at or after the end of the trace"):
+        build_timeline(RECORDS, 100.0, 200.0)

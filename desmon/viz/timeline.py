@@ -83,13 +83,32 @@ def _clip(intervals: Iterable[tuple[float, float]], start: float, end: float) ->
 
 
 def build_timeline(records: list[dict[str, Any]], start: float | None = None, end: float | None = None) -> Timeline:
-    """Digest trace records into a :class:`Timeline` (pure; no plotting)."""
+    """Digest trace records into a :class:`Timeline` (pure; no plotting).
+
+    A record whose fields have the wrong type is a ScenarioError naming the record.
+    """
+    for n, r in enumerate(records, start=1):
+        t = r.get("t", 0.0) if isinstance(r, dict) else None
+        if not isinstance(r, dict) or isinstance(t, bool) or not isinstance(t, (int, float)):
+            raise ScenarioError(f"trace record {n} ({str(r)[:80]}): needs a numeric 't'; is this a desmon run trace?")
+    try:
+        return _build(records, start, end)
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise ScenarioError(f"trace does not follow the desmon run schema ({type(exc).__name__}: {exc}); "
+                            "write it with: desmon run SCENARIO --trace FILE") from None
+
+
+def _build(records: list[dict[str, Any]], start: float | None, end: float | None) -> Timeline:
     head = records[0]
     horizon = float(head.get("horizon") or max(r.get("t", 0.0) for r in records))
     t0 = 0.0 if start is None else float(start)
     t1 = horizon if end is None else float(end)
     if t1 <= t0:
+        if start is None and end is None:
+            raise ScenarioError(f"the trace covers no time (horizon {horizon:g} s): nothing to draw")
         raise ScenarioError(f"empty time window [{t0:g}, {t1:g}]: --to must be after --from")
+    if t0 >= horizon:
+        raise ScenarioError(f"--from {t0:g} is at or after the end of the trace ({horizon:g} s): nothing to draw")
     tl = Timeline(str(head.get("scenario", "?")), str(head.get("deployer", "?")), t0, t1)
     platforms: list[str] = list((head.get("platforms") or {}).keys())
     tl.capacity = {p: float(v.get("memory", 0)) for p, v in (head.get("platforms") or {}).items()}
