@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parent.parent
 SCENARIOS = ROOT / "scenarios"
 NAMES = [
     "coffee_handover", "two_detectors", "shared_platform", "migration",
-    "platform_crash", "memory_pressure", "vendor_selection", "robot_day",
+    "platform_crash", "memory_pressure", "vendor_selection", "robot_day", "fixed_platform",
 ]
 
 
