@@ -114,7 +114,9 @@ def _cmd_show(args: argparse.Namespace) -> int:
     for title, t in moments:
         snap = result.repo.snapshot(at=t)
         ctx = [d["name"] for n, d in snap.nodes(data=True) if d.get("label") == "Context" and any(True for _ in snap.in_edges(n))]
-        snaps.append((f"{scenario.name} {title}" + (f"  context: {ctx[0]}" if ctx else ""), snap))
+        errors = [f"{e.kind}: {e.graph}" for step in result.steps if step.time == t for e in step.errors]
+        head = f"{scenario.name} {title}" + (f"  context: {ctx[0]}" if ctx else "")
+        snaps.append((head + "".join(f"\nerror raised: {e}" for e in errors), snap))
     fmt = args.format
     if fmt != "png" and len(snaps) > 1:
         raise ScenarioError(f"--format {fmt} writes one snapshot: give one --at, or use --format png for side-by-side")
