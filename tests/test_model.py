@@ -164,3 +164,15 @@ def test_a_scenario_refuses_unknown_actions_negative_loads_and_times_and_repeate
         Scenario("s", model, timeline=(TimedEvent(-1.0, ActionChange("hold")),))
     with pytest.raises(ModelError, match="label 't0' is used twice"):
         Scenario("s", model, timeline=(TimedEvent(0.0, ActionChange("hold"), "t0"), TimedEvent(1.0, ActionChange("grasp"), "t0")))
+
+
+def test_a_device_kind_no_device_provides_is_refused_as_a_likely_typo():
+    robot = small_robot()
+    robot.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "forse_sensor")
+    with pytest.raises(ModelError, match=r"no device is of kind 'forse_sensor': fix the kind \(kinds: force_sensor\)"):
+        robot.build()
+    robot = small_robot()
+    with robot.rpsl.perception_graph("laser") as g:
+        g.sensor("scan", reads="laser")
+    with pytest.raises(ModelError, match="reads device kind 'laser', which no device provides"):
+        robot.build()

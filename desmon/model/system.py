@@ -12,7 +12,7 @@ from desmon.errors import ModelError
 from desmon.model.actions import ACTIONS
 from desmon.model.graph import PerceptionGraph
 from desmon.model.platform import Device, Platform
-from desmon.model.requirements import Capacity, DeploymentSpec
+from desmon.model.requirements import PLATFORM_HAS, Attribute, Capacity, DeploymentSpec, Quantity
 
 __all__ = ["Rule", "RuleTable", "SystemModel", "PlatformState"]
 
@@ -169,6 +169,26 @@ class SystemModel:
                         f"deployment of {spec.graph!r} needs {req.describe()} but no platform declares a "
                         f"{req.resource!r} capacity: add it to the platforms"
                     )
+        kinds = {d.kind for d in self.devices}
+        if self.devices:  # a model with no devices at all is a pure platform/requirement study
+            for g in self.graphs:
+                for kind in g.device_kinds:
+                    if kind not in kinds:
+                        raise ModelError(
+                            f"perception graph {g.name!r} reads device kind {kind!r}, which no device provides: "
+                            f"fix the kind or attach such a device (kinds: {', '.join(sorted(kinds))})"
+                        )
+            for spec in self.specs:
+                for req in spec.requirements:
+                    wanted = (
+                        req.value if isinstance(req, Attribute) and req.name == PLATFORM_HAS
+                        else req.device_kind if isinstance(req, Quantity) else None
+                    )
+                    if wanted is not None and wanted not in kinds:
+                        raise ModelError(
+                            f"deployment of {spec.graph!r} needs {req.describe()} but no device is of kind "
+                            f"{wanted!r}: fix the kind (kinds: {', '.join(sorted(kinds))})"
+                        )
         for rule in self.rules.rules:
             if rule.context not in ACTIONS:
                 raise ModelError(
