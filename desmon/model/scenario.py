@@ -31,7 +31,27 @@ class TimedEvent:
 
 @dataclass(frozen=True, slots=True)
 class Scenario:
-    """A runnable scenario."""
+    """A runnable scenario.
+
+    ``name``
+        used in reports and file names;
+    ``model``
+        the robot: ``RobotBuilder(...).build()`` (or ``desmon.model.cob3.care_o_bot()``);
+    ``initial``
+        facts true before the first reaction, e.g. ``LoadChange("arm_pc", 300)``;
+    ``timeline``
+        scripted ``TimedEvent(time, event, label)`` s for ``desmon replay / explain / show``
+        (times >= 0, sorted, labels unique);
+    ``world``
+        a ``desmon.sim.world.World`` for ``desmon run`` (task steps, slips, faults,
+        latencies, loads, horizon); without one, ``desmon run`` derives it from the timeline;
+    ``checker``
+        a ``desmon.verify.Bounds`` (or a dict of its fields) for ``desmon verify / fuzz``;
+    ``expected``
+        pinned results as data; the tests assert them.
+
+    ``scenarios/two_detectors.py`` is a short complete example with all of these.
+    """
 
     name: str
     model: SystemModel
