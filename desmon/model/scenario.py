@@ -50,7 +50,7 @@ class Scenario:
     ``expected``
         pinned results as data; the tests assert them.
 
-    ``scenarios/two_detectors.py`` is a short complete example with all of these.
+    ``scenarios/coffee_handover.py`` uses all of these.
     """
 
     name: str
