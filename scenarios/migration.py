@@ -67,11 +67,6 @@ scenario = Scenario(
 )
 
 if __name__ == "__main__":
-    import sys
+    from desmon.verify.report import run_script
 
-    from desmon.verify.checker import Checker
-    from desmon.verify.report import format_result
-
-    result = Checker(scenario, sys.argv[1] if len(sys.argv) > 1 else "desmon").run(keep_going=True)
-    print(format_result(result), end="")
-    sys.exit(result.exit_code)
+    raise SystemExit(run_script(scenario))

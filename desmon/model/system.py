@@ -14,7 +14,7 @@ from desmon.model.graph import PerceptionGraph
 from desmon.model.platform import Device, Platform
 from desmon.model.requirements import PLATFORM_HAS, Attribute, Capacity, DeploymentSpec, Quantity
 
-__all__ = ["Rule", "RuleTable", "SystemModel", "PlatformState"]
+__all__ = ["Rule", "RuleTable", "SystemModel", "PlatformState", "with_load"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -75,6 +75,22 @@ class RuleTable:
             if rule.context == context:
                 return rule.slots
         return ()
+
+
+def with_load(load: dict[str, float], resource: str, amount: float) -> dict[str, float] | None:
+    """``load`` with ``resource`` set to ``amount``, or None if nothing changes.
+
+    Canonical form shared by the repository and the checker's state store: a zero amount
+    has no entry, so equal facts always look equal.
+    """
+    if load.get(resource, 0.0) == amount:
+        return None
+    out = dict(load)
+    if amount:
+        out[resource] = amount
+    else:
+        out.pop(resource, None)
+    return out
 
 
 @dataclass(frozen=True, slots=True)

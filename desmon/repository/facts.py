@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Callable
 
 from desmon.errors import QueryError
-from desmon.model.system import SystemModel
+from desmon.model.system import SystemModel, with_load
 from desmon.repository import labels as L
 from desmon.repository.store import Repository, node_id
 
@@ -122,15 +122,9 @@ def set_platform_up(repo: Repository, platform: str, up: bool) -> bool:
 def set_load(repo: Repository, platform: str, resource: str, amount: float) -> bool:
     """Record the background (non-monitor) consumption of ``resource``; False if unchanged."""
     pid = _platform(repo, platform)
-    load = dict(repo.graph.nodes[pid]["load"])
-    if load.get(resource, 0.0) == amount:
+    load = with_load(repo.graph.nodes[pid]["load"], resource, amount)
+    if load is None:
         return False
-    # canonical: a zero amount removes the entry (a platform with no load has an empty
-    # dict, as after load_model), the same rule as the checker's StateStore.set_load
-    if amount:
-        load[resource] = amount
-    else:
-        del load[resource]
     repo.update_node(pid, load=load)
     return True
 

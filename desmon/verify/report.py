@@ -217,3 +217,16 @@ def test_{name}():
 
 def _fail_indices(s: Step) -> tuple[int, ...]:
     return s.fail_indices
+
+
+def run_script(scenario: "object", argv: "list[str] | None" = None) -> int:
+    """What ``python scenarios/<name>.py [paper]`` does: check every invariant with the
+    named deployer (default ``desmon``), print the report, return the exit code."""
+    import sys
+
+    from desmon.verify.checker import Checker
+
+    args = sys.argv[1:] if argv is None else argv
+    result = Checker(scenario, args[0] if args else "desmon").run(keep_going=True)  # type: ignore[arg-type]
+    print(format_result(result), end="")
+    return result.exit_code

@@ -25,7 +25,7 @@ from typing import Callable, NamedTuple
 from desmon.deployment.invariants import SystemView, Invariant
 from desmon.errors import QueryError
 from desmon.model.requirements import DeploymentSpec, Requirement
-from desmon.model.system import PlatformState, SystemModel
+from desmon.model.system import PlatformState, SystemModel, with_load
 
 __all__ = ["Key", "StateStore", "MEMO_LIMIT"]
 
@@ -279,15 +279,10 @@ class StateStore:
     def set_load(self, platform: str, resource: str, amount: float) -> bool:
         if platform not in self._platform:
             raise QueryError(f"unknown platform {platform!r}: it is not in the repository")
-        cur = dict(self._load_of(platform))
-        if cur.get(resource, 0.0) == amount:
+        cur = with_load(dict(self._load_of(platform)), resource, amount)
+        if cur is None:
             return False
-        # canonical: a zero amount has no entry, a platform without load has no entry
-        # (as in the initial state and in facts.set_load), so equal states get equal keys
-        if amount:
-            cur[resource] = amount
-        else:
-            del cur[resource]
+        # a platform without load has no entry either (as in the initial state)
         loads = dict(self.loads)
         if cur:
             loads[platform] = tuple(sorted(cur.items()))
