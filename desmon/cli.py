@@ -264,6 +264,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-depth", type=int, default=None)
     p.add_argument("--timeout", type=float, default=None, help="seconds")
     p.add_argument("--symmetry", action="store_true", help="canonicalise interchangeable platforms")
+    p.add_argument(
+        "--workers", type=int, default=1, metavar="N",
+        help="expand large BFS levels in N forked processes (same result for any N; default 1)",
+    )
     p.add_argument("--json", default=None, metavar="FILE", help="write the counterexample(s) as JSON states")
     p.add_argument("--pytest", default=None, metavar="FILE", help="write a pytest replaying the counterexample")
     p.add_argument("--plot", default=None, metavar="FILE.png", help="draw the shortest counterexample as repository snapshots")

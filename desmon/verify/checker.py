@@ -21,7 +21,7 @@ from array import array
 import time
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Iterator
+from typing import Any, Container, Iterable, Iterator
 
 from desmon.deployment.core import DeploymentCore
 from desmon.deployment.deployer import Deployer
@@ -36,7 +36,7 @@ from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.replay import initial_reaction
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore
 
-__all__ = ["Checker", "CheckResult", "Counterexample", "Step", "Label", "HOLDS", "VIOLATED", "INCOMPLETE", "EVENT_KINDS", "NOT_CHECKED"]
+__all__ = ["Checker", "CheckResult", "Counterexample", "Step", "Label", "Record", "HOLDS", "VIOLATED", "INCOMPLETE", "EVENT_KINDS", "NOT_CHECKED"]
 
 HOLDS, VIOLATED, INCOMPLETE = "HOLDS", "VIOLATED", "INCOMPLETE"
 EVENT_KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
@@ -49,6 +49,27 @@ NOT_CHECKED = {"history": "sim audit and fuzz only"}
 
 #: A transition label: the event and the indices of the Control.start calls that failed.
 Label = tuple[Event, tuple[int, ...]]
+
+#: One transition as :meth:`Checker.expand` reports it to the search loop: (failed start
+#: indices, the successor's canonical key or None if already known, whether the state
+#: moved, the reaction's branch names, an instantaneous violation repaired before
+#: quiescence or None, the invariants a new successor violates).
+Record = tuple[tuple[int, ...], "Key | None", bool, tuple[str, ...], "tuple[str, str, str] | None", tuple[tuple[str, str], ...]]
+
+#: BFS levels with at least this many states go to the worker processes (``workers`` > 1).
+PARALLEL_LEVEL = 256
+
+_KEPT = ("no command (kept)",)
+
+
+def _branch(cmd: Any, ok: bool | None) -> str:
+    """The deployer branch a command stands for, as the report counts them."""
+    t = type(cmd)
+    if t is Start:
+        return "start ok" if ok else "start failed"
+    if t is Stop:
+        return "stop ok" if ok else "stop failed"
+    return f"error {cmd.kind}"
 
 
 @dataclass(frozen=True)
@@ -107,6 +128,8 @@ class CheckResult:
     branches: Counter = field(default_factory=Counter)
     symmetry: bool = False
     not_checked: tuple[str, ...] = ()  # invariants left to the sim audit and the fuzzer (NOT_CHECKED)
+    workers: int = 1
+    peak_workers_mb: float = 0.0  # the largest worker process's peak resident size (workers > 1)
 
     @property
     def states_per_second(self) -> float:
@@ -285,6 +308,40 @@ class Checker:
         return check_invariants(view, self.invariants)
 
     # -- search -----------------------------------------------------------------------------
+    def expand(self, key: Key, known: "Container[Key]") -> list[list[Record]]:
+        """Every transition out of ``key``: per enabled event (in order), one :data:`Record`
+        per successor. A successor in ``known`` (or met earlier in this expansion) comes
+        back as ``None``; a new one with the invariants it violates. The search loop
+        (:meth:`run`) consumes these records, in-process or from worker processes alike.
+        """
+        st = self.store
+        canon = self.symmetry.canon if self.symmetry is not None else None
+        specs = self.model.specs
+        invariants = self.invariants
+        fresh: set[Key] = set()
+        out: list[list[Record]] = []
+        for event, _kind in self._enabled(key):
+            recs: list[Record] = []
+            for fails, nkey, log, instant in self.successors(key, event):
+                commands = log.commands
+                if commands:
+                    names = tuple(_branch(cmd, ok) for cmd, ok in commands)
+                else:
+                    names = _KEPT
+                repaired = None
+                if instant is not None and instant[0] not in {n for n, _m in self.violations(nkey)}:
+                    repaired = instant  # broken inside the reaction, repaired before quiescence
+                ckey = canon(nkey) if canon is not None else nkey
+                if ckey in known or ckey in fresh:
+                    recs.append((fails, None, nkey != key, names, repaired, ()))
+                    continue
+                fresh.add(ckey)
+                st.load(ckey)
+                view = SystemView(st.platform_states(), specs, self._standing(ckey.standing), self.slots(ckey.context))
+                recs.append((fails, ckey, nkey != key, names, repaired, tuple(check_invariants(view, invariants))))
+            out.append(recs)
+        return out
+
     def run(
         self,
         *,
@@ -295,6 +352,7 @@ class Checker:
         progress: bool = False,
         progress_after: float = 1.0,
         progress_every: float = 0.5,
+        workers: int = 1,
         out=None,  # type: ignore[no-untyped-def]
     ) -> CheckResult:
         """Breadth-first search from the initial state.
@@ -303,13 +361,20 @@ class Checker:
         ``progress_every`` seconds once the run is ``progress_after`` seconds old, and
         closed with a newline at the end (time is looked at every 256 expansions, as is
         ``timeout``). ``out`` defaults to the *current* ``sys.stderr``.
+
+        ``workers`` > 1 expands large BFS levels in that many forked worker processes
+        (:mod:`desmon.verify.parallel`); the records are consumed in frontier order, so
+        the result (states, transitions, counters, counterexamples) is the same for any
+        number of workers.
         """
         if out is None:
             out = sys.stderr
+        if workers < 1:
+            raise CheckerError(f"--workers must be at least 1, got {workers}")
         t0 = time.perf_counter()
         res = CheckResult(
             self.scenario.name, self.deployer_name, tuple(i.name for i in self.invariants), HOLDS,
-            symmetry=self.symmetry is not None, not_checked=self.not_checked,
+            symmetry=self.symmetry is not None, not_checked=self.not_checked, workers=workers,
         )
         canon = self.symmetry.canon if self.symmetry is not None else None
         init = self.initial()
@@ -336,12 +401,8 @@ class Checker:
         enabled_count = res.enabled
         changed = res.changed
         new_states = res.new_states
-        st = self.store
-        successors = self.successors
-        standing_of = self._standing
-        invariants = self.invariants
-        specs = self.model.specs
-        slots = self.slots
+        enabled_of = self._enabled
+        expand = self.expand
 
         def path(i: int) -> tuple[list[Label], list[Key]]:
             ls: list[Label] = []
@@ -380,85 +441,82 @@ class Checker:
             record(name, msg, 0)
         expanded = 0
         any_found = bool(found)
-        while frontier and not (any_found and done()) and not incomplete:
-            if max_depth is not None and depth >= max_depth:
-                incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
-                break
-            nxt: list[int] = []
-            for ki in frontier:
-                if any_found and done():
+        pool = None
+        try:
+            while frontier and not (any_found and done()) and not incomplete:
+                if max_depth is not None and depth >= max_depth:
+                    incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
                     break
-                key = keys[ki]
-                expanded += 1
-                if (expanded & 255) == 0:
-                    now = time.perf_counter()
-                    if timeout is not None and now - t0 > timeout:
-                        incomplete = f"timeout {timeout:g}s"
+                nxt: list[int] = []
+                if workers > 1 and len(frontier) >= PARALLEL_LEVEL:
+                    if pool is None:
+                        from desmon.verify.parallel import ExpansionPool
+
+                        pool = ExpansionPool(self, workers)
+                    expansions: Iterable[list[list[Record]]] = pool.expand([keys[ki] for ki in frontier])
+                else:
+                    expansions = (expand(keys[ki], index) for ki in frontier)
+                for ki, per_event in zip(frontier, expansions):
+                    if any_found and done():
                         break
-                    if progress and now - t0 >= progress_after and now - last_progress >= progress_every:
-                        last_progress = now
-                        printed = True
-                        rate = len(keys) / (now - t0)
-                        print(f"\r  {len(keys):,} states  {transitions:,} transitions  depth {depth}  {rate:,.0f} states/s ", end="", file=out, flush=True)
-                rules[key.context] += 1
-                for event, kind in self._enabled(key):
-                    enabled_count[kind] += 1
-                    for fails, nkey, log, instant in successors(key, event):
-                        transitions += 1
-                        commands = log.commands
-                        if commands:
-                            for cmd, ok in commands:
-                                t = type(cmd)
-                                if t is Start:
-                                    branches["start ok" if ok else "start failed"] += 1
-                                elif t is Stop:
-                                    branches["stop ok" if ok else "stop failed"] += 1
-                                else:
-                                    branches[f"error {cmd.kind}"] += 1
-                        else:
-                            branches["no command (kept)"] += 1
-                        if instant is not None and instant[0] not in found and instant[0] not in {n for n, _m in self.violations(nkey)}:
-                            # broken inside the reaction and repaired before quiescence
-                            record(instant[0], instant[1], ki, instant[2], (event, fails))
-                            any_found = True
-                            if done():
-                                break
-                        if nkey != key:
-                            changed[kind] += 1
-                        ckey = canon(nkey) if canon is not None else nkey
-                        if ckey in index:
-                            continue
-                        ni = len(keys)
-                        ckey = intern(ckey)
-                        index[ckey] = ni
-                        keys.append(ckey)
-                        parent.append(ki)
-                        lab = (event, fails)
-                        li = label_ids.get(lab)
-                        if li is None:
-                            li = label_ids[lab] = len(labels)
-                            labels.append(lab)
-                        label.append(li)
-                        new_states[kind] += 1
-                        if max_states is not None and len(keys) >= max_states:
-                            incomplete = f"max states {max_states:,} reached"
-                        if canon is not None:
-                            st.load(ckey)
-                        view = SystemView(st.platform_states(), specs, standing_of(ckey.standing), slots(ckey.context))
-                        bad = check_invariants(view, invariants)
-                        if bad:
-                            for name, msg in bad:
-                                record(name, msg, ni)
-                            any_found = True
-                            continue  # do not explore beyond a violation
-                        nxt.append(ni)
-                    if (any_found and done()) or incomplete:
+                    key = keys[ki]
+                    expanded += 1
+                    if (expanded & 255) == 0:
+                        now = time.perf_counter()
+                        if timeout is not None and now - t0 > timeout:
+                            incomplete = f"timeout {timeout:g}s"
+                            break
+                        if progress and now - t0 >= progress_after and now - last_progress >= progress_every:
+                            last_progress = now
+                            printed = True
+                            rate = len(keys) / (now - t0)
+                            print(f"\r  {len(keys):,} states  {transitions:,} transitions  depth {depth}  {rate:,.0f} states/s ", end="", file=out, flush=True)
+                    rules[key.context] += 1
+                    for (event, kind), recs in zip(enabled_of(key), per_event):
+                        enabled_count[kind] += 1
+                        for fails, ckey, moved, names, repaired, bad in recs:
+                            transitions += 1
+                            for name in names:
+                                branches[name] += 1
+                            if repaired is not None and repaired[0] not in found:
+                                record(repaired[0], repaired[1], ki, repaired[2], (event, fails))
+                                any_found = True
+                                if done():
+                                    break
+                            if moved:
+                                changed[kind] += 1
+                            if ckey is None or ckey in index:
+                                continue
+                            ni = len(keys)
+                            ckey = intern(ckey)
+                            index[ckey] = ni
+                            keys.append(ckey)
+                            parent.append(ki)
+                            lab = (event, fails)
+                            li = label_ids.get(lab)
+                            if li is None:
+                                li = label_ids[lab] = len(labels)
+                                labels.append(lab)
+                            label.append(li)
+                            new_states[kind] += 1
+                            if max_states is not None and len(keys) >= max_states:
+                                incomplete = f"max states {max_states:,} reached"
+                            if bad:
+                                for name, msg in bad:
+                                    record(name, msg, ni)
+                                any_found = True
+                                continue  # do not explore beyond a violation
+                            nxt.append(ni)
+                        if (any_found and done()) or incomplete:
+                            break
+                    if incomplete:
                         break
-                if incomplete:
-                    break
-            if nxt:
-                depth += 1
-            frontier = nxt
+                if nxt:
+                    depth += 1
+                frontier = nxt
+        finally:
+            if pool is not None:
+                res.peak_workers_mb = pool.close()
         if printed:
             print("", file=out, flush=True)
         self.explored = keys  # the distinct (canonical) states of the last run, BFS order

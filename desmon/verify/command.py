@@ -25,6 +25,7 @@ def verify_command(args: argparse.Namespace) -> int:
     _positive("max-states", args.max_states)
     _positive("max-depth", args.max_depth)
     _positive("timeout", args.timeout)
+    _positive("workers", getattr(args, "workers", 1))
     scenario = load_scenario(args.scenario)
     checker = Checker(scenario, args.deployer, invariants=args.invariant, symmetry=bool(getattr(args, "symmetry", False)))
     result = checker.run(
@@ -33,6 +34,7 @@ def verify_command(args: argparse.Namespace) -> int:
         timeout=args.timeout,
         keep_going=args.keep_going,
         progress=not args.no_progress,
+        workers=getattr(args, "workers", 1),
     )
     print(format_result(result), end="")
     if args.json:

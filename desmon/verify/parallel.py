@@ -1,0 +1,89 @@
+"""Expanding BFS levels in forked worker processes (``desmon verify --workers N``).
+
+The search stays level-synchronous and its bookkeeping stays in the parent: the parent
+cuts a level's frontier into chunks in BFS order, the workers run
+:meth:`~desmon.verify.checker.Checker.expand` on them (the same code, the same real
+deployment core, inherited through ``fork`` with its memos warm), and the parent
+consumes the records chunk by chunk *in frontier order*, exactly as it consumes its
+own expansions. Which state is new, its parent, its label, every counter and every
+counterexample are therefore the same for any number of workers.
+
+Each worker remembers the keys it has already sent or been given (a bounded set,
+cleared when it outgrows :data:`WORKER_MEMORY`) and sends those back as ``None``
+instead of the key. That is sound because the parent has consumed everything the
+worker sent before (a worker takes its chunks in increasing order and the parent
+consumes them in that order), so such a key is in the parent's index already; and it
+keeps the traffic to roughly the new states, since most transitions lead to states
+seen before.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import resource
+from typing import TYPE_CHECKING, Iterator
+
+from desmon.errors import CheckerError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from desmon.verify.checker import Checker, Record
+    from desmon.verify.state import Key
+
+__all__ = ["ExpansionPool", "WORKER_MEMORY"]
+
+#: Keys a worker remembers before it forgets them all (memory bound per worker).
+WORKER_MEMORY = 400_000
+
+_checker: "Checker | None" = None  # the worker's checker, inherited through fork
+_known: set = set()
+
+
+def _expand_chunk(chunk: "list[Key]") -> "list[list[list[Record]]]":
+    checker = _checker
+    assert checker is not None, "worker started without a checker"
+    known = _known
+    if len(known) > WORKER_MEMORY:
+        known.clear()
+    known.update(chunk)  # the states being expanded are in the parent's index
+    out = []
+    for key in chunk:
+        per_event = checker.expand(key, known)
+        for recs in per_event:
+            for rec in recs:
+                if rec[1] is not None:
+                    known.add(rec[1])
+        out.append(per_event)
+    return out
+
+
+class ExpansionPool:
+    """``workers`` forked processes expanding chunks of a BFS level in order."""
+
+    def __init__(self, checker: "Checker", workers: int) -> None:
+        global _checker
+        try:
+            ctx = multiprocessing.get_context("fork")
+        except ValueError:
+            raise CheckerError(
+                "--workers needs the 'fork' start method, which this platform lacks: run with --workers 1"
+            ) from None
+        self.workers = workers
+        _checker = checker  # inherited by the forked workers; never used in the parent
+        try:
+            self._pool = ctx.Pool(workers)
+        finally:
+            _checker = None
+
+    def expand(self, frontier: "list[Key]") -> Iterator["list[list[Record]]"]:
+        """The expansions of ``frontier``'s states, in frontier order."""
+        size = max(8, min(256, len(frontier) // (self.workers * 8)))
+        chunks = [frontier[i : i + size] for i in range(0, len(frontier), size)]
+        for result in self._pool.imap(_expand_chunk, chunks):
+            yield from result
+
+    def close(self) -> float:
+        """Stop the workers; returns the largest peak resident size (MB) of any child
+        process this process has waited for, the workers included."""
+        self._pool.terminate()
+        self._pool.join()
+        return resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
