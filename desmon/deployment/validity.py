@@ -199,12 +199,37 @@ def _check_validity(
 
 def validity_for(q: "QueryPort", spec: DeploymentSpec, *, reasons: bool = True) -> Validity:
     """check_validity for ``spec`` on the repository's current facts; a fixed deployment
-    considers only its EXECUTABLE_ON platform."""
+    considers only its EXECUTABLE_ON platform.
+
+    Fast path: a port whose :meth:`platform_states` hands out the *same* tuple object
+    for the same facts (the checker's :class:`~desmon.verify.state.StateStore`) may
+    carry a ``validity_memo`` dict. The answer is then memoised per port on the
+    identities of that states tuple and of ``spec``: the entry holds both objects, so
+    their ids cannot be reused while it exists, and a hit is confirmed with ``is``.
+    This skips hashing the states and requirements (Python-level ``__hash__`` calls)
+    that the :func:`check_validity` memo needs. The memo is cleared when it holds
+    more than :data:`_MEMO_SIZE` entries. A port without the attribute (the networkx
+    repository, whose states are rebuilt on every call) takes the plain path.
+    """
     states = q.platform_states()
+    memo: dict[tuple[int, int, bool], tuple[tuple[PlatformState, ...], DeploymentSpec, Validity]] | None = getattr(
+        q, "validity_memo", None
+    )
+    if memo is not None:
+        mk = (id(states), id(spec), reasons)
+        hit = memo.get(mk)
+        if hit is not None and hit[0] is states and hit[1] is spec:
+            return hit[2]
+    all_states = states
     fixed = q.fixed_platform(spec)
     if fixed is not None:
         states = tuple(s for s in states if s.name == fixed)
-    return check_validity(q.constraints(spec), states, spec.graph, reasons=reasons)
+    validity = check_validity(q.constraints(spec), states, spec.graph, reasons=reasons)
+    if memo is not None:
+        if len(memo) > _MEMO_SIZE:
+            memo.clear()
+        memo[mk] = (all_states, spec, validity)
+    return validity
 
 
 def acceptable_platforms(q: "QueryPort", graph: str) -> Validity:

@@ -91,6 +91,9 @@ class StateStore:
         self._states_memo: dict[tuple, tuple[PlatformState, ...]] = {}
         self._index_memo: dict[tuple, tuple] = {}
         self._standing_memo: dict[frozenset[str], tuple[str, ...]] = {}
+        #: per-store memo of :func:`~desmon.deployment.validity.validity_for` (see there):
+        #: sound because :meth:`platform_states` returns one tuple object per facts
+        self.validity_memo: dict = {}
         # mutable state: the key's parts, as sorted tuples
         self.ctx: str | None = None
         self.failed: tuple[str, ...] = ()
@@ -183,25 +186,36 @@ class StateStore:
         return st
 
     def platform_states(self) -> tuple[PlatformState, ...]:
+        """Every platform's state, in declaration order.
+
+        The tuple is memoised per facts, and the memo is consulted before any platform
+        is recomputed: the same facts always yield the very same tuple object, which is
+        what lets :func:`~desmon.deployment.validity.validity_for` memoise on its
+        identity (see :attr:`validity_memo`). On a miss after a mutation only the
+        touched platforms are recomputed.
+        """
         states = self._states
+        if states is not None and not self._touched:
+            return states
+        fk = (self.failed, self.down, self.loads, self.deployed)
+        memo = self._states_memo
+        known = memo.get(fk)
+        if known is not None:
+            self._touched.clear()
+            self._states = known
+            return known
         if states is None:
-            fk = (self.failed, self.down, self.loads, self.deployed)
-            states = self._states_memo.get(fk)
-            if states is None:
-                if len(self._states_memo) > MEMO_LIMIT:
-                    self._states_memo.clear()
-                states = self._states_memo[fk] = tuple(self.platform_state(p) for p in self.platform_names)
-            self._states = states
-        elif self._touched:
+            states = tuple(self.platform_state(p) for p in self.platform_names)
+        else:
             # a mutation changed only the touched platforms: recompute just those
             lst = list(states)
             for p in self._touched:
                 lst[self._order[p]] = self.platform_state(p)
             self._touched.clear()
-            states = self._states = tuple(lst)
-            if len(self._states_memo) > MEMO_LIMIT:
-                self._states_memo.clear()
-            self._states_memo[(self.failed, self.down, self.loads, self.deployed)] = states
+            states = tuple(lst)
+        if len(memo) > MEMO_LIMIT:
+            memo.clear()
+        memo[fk] = self._states = states
         return states
 
     def _touch(self, platform: str) -> None:
