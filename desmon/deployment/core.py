@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from typing import Iterable
 
 from desmon.deployment.deployer import Deployer, get_deployer
-from desmon.deployment.invariants import SystemView, validly_active, view_of
+from desmon.deployment.invariants import SystemView, validly_active_among, view_of
 from desmon.deployment.monitor import InsertPort, Stimulus, observe
 from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop
 from desmon.model.events import Event
@@ -86,6 +86,10 @@ class DeploymentCore:
         self.insert = insert
         self.deployer = get_deployer(deployer)
         self.standing: frozenset[str] = frozenset()
+        self._spec_of = {s.graph: s for s in model.specs}.get
+        # context -> (requested slots, the graphs they name); the rules and the deployer
+        # are immutable, so this is a pure memo (bounded by the contexts seen, see _selection)
+        self._selection_memo: dict[str | None, tuple[tuple[tuple[str, ...], ...], frozenset[str]]] = {}
 
     def observe(self, event: Event) -> Stimulus:
         """The context monitor: write the facts ``event`` implies (Insert), return the Notify."""
@@ -93,7 +97,18 @@ class DeploymentCore:
 
     def slots(self) -> tuple[tuple[str, ...], ...]:
         """The selector: what the rule table wants in the current context."""
-        return self.deployer.requested(self.model.rules.slots_for(self.query.context()))
+        return self._selection()[0]
+
+    def _selection(self) -> tuple[tuple[tuple[str, ...], ...], frozenset[str]]:
+        """(the selector's slots, every graph they name) in the current context, memoised."""
+        context = self.query.context()
+        sel = self._selection_memo.get(context)
+        if sel is None:
+            slots = self.deployer.requested(self.model.rules.slots_for(context))
+            if len(self._selection_memo) > 256:
+                self._selection_memo.clear()
+            sel = self._selection_memo[context] = (slots, frozenset(g for slot in slots for g in slot))
+        return sel
 
     def reaction(self, stimulus: Stimulus) -> Reaction:
         """The deployer's reaction to ``stimulus`` (a generator of commands)."""
@@ -108,9 +123,12 @@ class DeploymentCore:
         if not raised and not self.standing:
             # nothing can stand: standing_after(∅, ∅, ...) is ∅ whatever the view says
             return self.standing
-        view = self.view()
-        wanted = frozenset(g for slot in view.slots for g in slot)
-        self.standing = standing_after(self.standing, raised, wanted, validly_active(view))
+        _slots, wanted = self._selection()
+        # standing_after only asks whether the graphs of previous ∪ raised are validly
+        # active: test just their deployments, on the port's states, without a view
+        candidates = [g for g in self.standing.union(raised) if g in wanted]
+        valid = validly_active_among(self.query.platform_states(), self._spec_of, candidates) if candidates else frozenset()
+        self.standing = standing_after(self.standing, raised, wanted, valid)
         return self.standing
 
     def step(self, event: Event, control: ControlPort, *, force: bool = False) -> tuple[Stimulus, StepLog]:

@@ -8,7 +8,7 @@ or the checker's compact state) by :func:`view_of`.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Container
 
 from desmon.deployment.ports import QueryPort
 from desmon.deployment.validity import deployment_valid
@@ -16,7 +16,7 @@ from desmon.errors import ModelError
 from desmon.model.requirements import DeploymentSpec
 from desmon.model.system import PlatformState
 
-__all__ = ["SystemView", "Invariant", "INVARIANTS", "view_of", "check_invariants", "get_invariants", "validly_active"]
+__all__ = ["SystemView", "Invariant", "INVARIANTS", "view_of", "check_invariants", "get_invariants", "validly_active", "validly_active_among"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,7 +69,23 @@ def view_of(
 
 def validly_active(view: SystemView) -> frozenset[str]:
     """Graphs active on at least one platform where their deployment is valid."""
-    return frozenset(g for g, p in view.deployments if not deployment_valid(view.spec(g), view.state(p)))
+    return validly_active_among(view.states, view.spec)
+
+
+def validly_active_among(
+    states: tuple[PlatformState, ...],
+    spec: Callable[[str], DeploymentSpec | None],
+    graphs: Container[str] | None = None,
+) -> frozenset[str]:
+    """:func:`validly_active` on ``states`` (``spec`` maps a graph to its specification),
+    restricted to ``graphs`` when given: only their deployments are tested, which is all
+    :meth:`~desmon.deployment.core.DeploymentCore.settle` needs (no view is built)."""
+    return frozenset(
+        g
+        for s in states
+        for g, _use in s.deployed
+        if (graphs is None or g in graphs) and not deployment_valid(spec(g), s)
+    )
 
 
 Check = Callable[[SystemView], str | None]
