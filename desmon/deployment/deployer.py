@@ -35,6 +35,7 @@ from desmon.deployment.ports import (
 )
 from desmon.deployment.validity import check_validity, validity_for
 from desmon.errors import ModelError
+from desmon.model.requirements import DeploymentSpec
 
 __all__ = ["Deployer", "PAPER", "DESMON", "DEPLOYERS", "get_deployer", "ensure_deployed", "make_desmon_react"]
 
@@ -110,17 +111,48 @@ def ensure_deployed(g: str, q: QueryPort, *, make_before_break: bool = False) ->
     instance first (break-before-make), then tries acceptable platforms in preference
     order until a start succeeds. Returns True iff ``g`` ends up deployed validly.
     ``make_before_break`` exists only for the seeded mutant of the checker's tests.
+
+    It is :func:`_survey` (the reads) followed by :func:`_act_on` (the commands); the
+    corrected reaction calls the two halves itself so that a graph which is simply
+    kept costs no generator (see :func:`_kept`).
     """
+    return (yield from _act_on(g, q, _survey(g, q), make_before_break))
+
+
+#: What :func:`ensure_deployed` reads before it acts: the specification (None if
+#: missing), the acceptable platforms in preference order, the running instance to
+#: keep (None if no instance runs on an acceptable platform), the other instances.
+Survey = tuple[DeploymentSpec | None, tuple[str, ...], str | None, list[str]]
+
+
+def _survey(g: str, q: QueryPort) -> Survey:
+    """The facts :func:`ensure_deployed` decides on (reads only, no command)."""
     spec = q.deployment_information(g)
+    if spec is None:
+        return None, (), None, []
+    acceptable = validity_for(q, spec, reasons=False).acceptable
+    keep: str | None = None
+    stale: list[str] = []
+    for p in q.deployed_on(g):
+        if keep is None and p in acceptable:
+            keep = p  # the first running instance on an acceptable platform
+        elif p != keep:
+            stale.append(p)
+    return spec, acceptable, keep, stale
+
+
+def _kept(survey: Survey) -> bool:
+    """True when :func:`_act_on` would yield nothing and return True: a valid instance
+    runs and no other instance does (so there is nothing to stop or start)."""
+    return survey[2] is not None and not survey[3]
+
+
+def _act_on(g: str, q: QueryPort, survey: Survey, make_before_break: bool) -> Placement:
+    """The commands of :func:`ensure_deployed` for ``g``, given its :func:`_survey`."""
+    spec, acceptable, keep, stale = survey
     if spec is None:
         yield RaiseError(DEPLOYMENT_INFORMATION_MISSING, g)
         return False
-    fixed = q.fixed_platform(spec)
-    validity = validity_for(q, spec, reasons=False)
-    acceptable = validity.acceptable
-    current = q.deployed_on(g)
-    keep = next((p for p in current if p in acceptable), None)
-    stale = [p for p in current if p != keep]
     if not make_before_break:
         for p in stale:
             if not (yield Stop(g, p)):
@@ -129,6 +161,7 @@ def ensure_deployed(g: str, q: QueryPort, *, make_before_break: bool = False) ->
     if keep is not None:
         return True
     if not acceptable:
+        fixed = q.fixed_platform(spec)
         explained = validity_for(q, spec).explain()
         detail = explained if fixed is None else f"fixed platform {fixed}: {explained}"
         yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, fixed, detail)
@@ -176,7 +209,21 @@ def _stop_graphs(graphs: Iterable[str], q: QueryPort) -> Reaction:
 
 def _active_graphs(q: QueryPort) -> list[str]:
     """The graphs active anywhere, sorted."""
-    return sorted({g for g, _p in q.deployments()})
+    deployments = q.deployments()
+    return sorted({g for g, _p in deployments}) if deployments else []
+
+
+_WANTED: dict[tuple[tuple[str, ...], ...], frozenset[str]] = {}
+
+
+def _wanted_by(slots: tuple[tuple[str, ...], ...]) -> frozenset[str]:
+    """Every graph named in ``slots`` (memoised: slots are few and immutable)."""
+    wanted = _WANTED.get(slots)
+    if wanted is None:
+        if len(_WANTED) > 1024:
+            _WANTED.clear()
+        wanted = _WANTED[slots] = frozenset(g for slot in slots for g in slot)
+    return wanted
 
 
 def _paper_react(
@@ -208,26 +255,34 @@ def make_desmon_react(
         q: QueryPort, slots: tuple[tuple[str, ...], ...], changed: tuple[str, ...], context_changed: bool
     ) -> Reaction:
         placed: dict[str, bool] = {}  # each graph is decided once per reaction
-
-        def place(g: str) -> Placement:
-            if g not in placed:
-                placed[g] = yield from ensure_deployed(g, q, make_before_break=make_before_break)
-            return placed[g]
+        # Placing a graph is ensure_deployed, written out as its two halves so that a
+        # graph that is simply kept (the common case) creates no generator.
 
         for p in changed:
             for d in q.active_deployments(p):
-                yield from place(q.perception_graph(d))
-        wanted = {g for slot in slots for g in slot}
+                g = q.perception_graph(d)
+                if g not in placed:
+                    survey = _survey(g, q)
+                    placed[g] = True if _kept(survey) else (yield from _act_on(g, q, survey, make_before_break))
+        wanted = _wanted_by(slots)
         # Free what the context no longer wants first: its capacity may be needed.
-        yield from _stop_graphs([g for g in _active_graphs(q) if g not in wanted], q)
+        unwanted = [g for g in _active_graphs(q) if g not in wanted]
+        if unwanted:
+            yield from _stop_graphs(unwanted, q)
         chosen: set[str] = set()
         for slot in slots:
             for g in slot:
-                if (yield from place(g)):
+                ok = placed.get(g)
+                if ok is None:
+                    survey = _survey(g, q)
+                    ok = placed[g] = True if _kept(survey) else (yield from _act_on(g, q, survey, make_before_break))
+                if ok:
                     chosen.add(g)
                     break
         # Fallbacks that are no longer needed (a better alternative is placed again).
-        yield from _stop_graphs([g for g in _active_graphs(q) if g in wanted and g not in chosen], q)
+        unneeded = [g for g in _active_graphs(q) if g in wanted and g not in chosen]
+        if unneeded:
+            yield from _stop_graphs(unneeded, q)
 
     return react
 
