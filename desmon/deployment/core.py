@@ -139,7 +139,8 @@ class DeploymentCore:
             if force and stim.empty:
                 stim = Stimulus(context_changed=True)
             run_sync(self.reaction(stim), control, log)
-        self.settle(e.graph for e in log.errors)
+        # the graphs of the RaiseError commands (log.errors), without building the list
+        self.settle([c.graph for c, _ok in log.commands if isinstance(c, RaiseError)] if log.commands else ())
         return stim, log
 
 

@@ -72,17 +72,34 @@ class Stimulus:
         return not self.changed_platforms and not self.context_changed
 
 
+#: The stimuli observe returns, interned (they are immutable): nothing changed, the
+#: context changed, and one per changed platform (see :func:`_platform_changed`).
+_NOTHING = Stimulus()
+_CONTEXT_CHANGED = Stimulus(context_changed=True)
+_PLATFORM_CHANGED: dict[str, Stimulus] = {}
+
+
+def _platform_changed(platform: str) -> Stimulus:
+    """``Stimulus(changed_platforms=(platform,))``, interned (bounded: cleared past 1024)."""
+    stim = _PLATFORM_CHANGED.get(platform)
+    if stim is None:
+        if len(_PLATFORM_CHANGED) > 1024:
+            _PLATFORM_CHANGED.clear()
+        stim = _PLATFORM_CHANGED[platform] = Stimulus(changed_platforms=(platform,))
+    return stim
+
+
 def observe(event: Event, store: InsertPort) -> Stimulus:
     """Write the facts ``event`` implies and say what changed."""
     if isinstance(event, ActionChange):
-        return Stimulus(context_changed=store.set_context(event.action))
+        return _CONTEXT_CHANGED if store.set_context(event.action) else _NOTHING
     if isinstance(event, (DeviceFail, DeviceRepair)):
         platform = store.set_device_working(event.device, isinstance(event, DeviceRepair))
-        return Stimulus(changed_platforms=(platform,) if platform else ())
+        return _platform_changed(platform) if platform else _NOTHING
     if isinstance(event, (PlatformDown, PlatformUp)):
         changed = store.set_platform_up(event.platform, isinstance(event, PlatformUp))
-        return Stimulus(changed_platforms=(event.platform,) if changed else ())
+        return _platform_changed(event.platform) if changed else _NOTHING
     if isinstance(event, LoadChange):
         changed = store.set_load(event.platform, event.resource, event.amount)
-        return Stimulus(changed_platforms=(event.platform,) if changed else ())
+        return _platform_changed(event.platform) if changed else _NOTHING
     raise ModelError(f"not an environment event: {event!r}")
