@@ -7,7 +7,7 @@ or the checker's compact state) by :func:`view_of`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable, Container
 
 from desmon.deployment.ports import QueryPort
@@ -36,10 +36,18 @@ class SystemView:
     running: tuple[tuple[str, str], ...] | None = None
     stops: int | None = None
     history: int | None = None
+    # :attr:`deployments`, computed on first use (a performance cache: several
+    # invariants read it; no part of equality, repr or the constructor)
+    _deployments: tuple[tuple[str, str], ...] | None = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def deployments(self) -> tuple[tuple[str, str], ...]:
-        return tuple(sorted((g, s.name) for s in self.states for g, _use in s.deployed))
+        """Every active (graph, platform) pair, sorted (derived from ``states``)."""
+        d = self._deployments
+        if d is None:
+            d = tuple(sorted((g, s.name) for s in self.states for g, _use in s.deployed))
+            object.__setattr__(self, "_deployments", d)
+        return d
 
     def spec(self, graph: str) -> DeploymentSpec | None:
         for s in self.specs:
