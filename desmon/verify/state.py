@@ -46,6 +46,9 @@ class Key(NamedTuple):
     standing: tuple[str, ...]
 
 
+_new_tuple = tuple.__new__
+
+
 class _ByPlatform(dict):
     """platform -> active graphs (every platform present); unknown platform: QueryError."""
 
@@ -138,7 +141,9 @@ class StateStore:
                 s = self._standing_memo[standing] = tuple(sorted(standing))
         else:
             s = tuple(sorted(standing))
-        return Key(self.ctx, self.failed, self.down, self.loads, self.deployed, s)
+        # tuple.__new__ builds the same Key (fields in declaration order) without the
+        # NamedTuple's Python-level __new__: this runs once per checker transition
+        return _new_tuple(Key, (self.ctx, self.failed, self.down, self.loads, self.deployed, s))
 
     def begin(self, prefix: tuple[bool, ...] = ()) -> None:
         """Start executing a reaction: starts follow ``prefix``, then succeed."""
