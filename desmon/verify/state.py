@@ -13,7 +13,10 @@ of the key, so :meth:`StateStore.load` is a handful of attribute assignments and
 :meth:`StateStore.key` shares them. A mutation rebuilds one small tuple. Every answer
 derived from the parts is memoised on the parts themselves (pure functions of
 hashable tuples): the platform states of a (failed, down, loads, deployed) combination,
-and the per-graph / per-platform index of a deployment set. The memos are bounded
+and the per-graph / per-platform index of a deployment set. Because the same facts
+always give the very same platform-states tuple, the deployer's validity answers are
+memoised per store on that tuple's identity (:attr:`StateStore.validity_memo`, read by
+:func:`~desmon.deployment.validity.validity_for`). The memos are bounded
 (cleared when they grow past :data:`MEMO_LIMIT` entries), so memory stays flat on
 long runs; a cleared memo only costs recomputation.
 """
