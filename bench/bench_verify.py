@@ -126,16 +126,21 @@ def _row(label: str, states: int, trans: int, secs: float) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--large-max-states", type=int, default=30_000)
+    ap.add_argument("--workers", type=int, default=2, help="also run the checker with this many workers (1: skip)")
     args = ap.parse_args(argv)
     for scenario, cap in ((build(4, 2, 2), None), (build(6, 3, None), args.large_max_states)):
-        r = Checker(scenario, "desmon").run(max_states=cap, progress=True)
-        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         ps, pt, psec = plain_bfs(scenario, cap)
-        print(f"{scenario.name}: {len(scenario.model.platforms)} platforms, 3 detectors -- checker verdict {r.verdict} {r.reason}")
-        print(_row("desmon checker", r.states, r.transitions, r.seconds))
+        print(f"{scenario.name}: {len(scenario.model.platforms)} platforms, 3 detectors")
         print(_row("plain tuples", ps, pt, psec))
-        print(f"  ratio (plain / checker): {(ps / psec) / (r.states / r.seconds):.1f}x states/s, {(pt / psec) / (r.transitions / r.seconds):.1f}x transitions/s")
-        print(f"  checker wall time {r.seconds:.1f}s, peak memory so far {rss:.0f} MB")
+        for workers in sorted({1, args.workers}):
+            r = Checker(scenario, "desmon").run(max_states=cap, progress=True, workers=workers)
+            label = "desmon checker" if workers == 1 else f"  {workers} workers"
+            print(_row(label, r.states, r.transitions, r.seconds) + f"  {r.verdict} {r.reason}".rstrip())
+            print(
+                f"  {'':<14} ratio (plain / checker): {(ps / psec) / (r.states / r.seconds):.1f}x states/s, "
+                f"{(pt / psec) / (r.transitions / r.seconds):.1f}x transitions/s; peak memory {r.peak_mb:.0f} MB"
+                + (f" + {workers} workers of at most {r.peak_workers_mb:.0f} MB" if workers > 1 else "")
+            )
     print(f"peak memory (max RSS): {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
     return 0
 

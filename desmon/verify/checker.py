@@ -36,7 +36,7 @@ from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.replay import initial_reaction
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore
 
-__all__ = ["Checker", "CheckResult", "Counterexample", "Step", "Label", "Record", "HOLDS", "VIOLATED", "INCOMPLETE", "EVENT_KINDS", "NOT_CHECKED"]
+__all__ = ["Checker", "CheckResult", "Counterexample", "Step", "Label", "Record", "Segment", "HOLDS", "VIOLATED", "INCOMPLETE", "EVENT_KINDS", "NOT_CHECKED"]
 
 HOLDS, VIOLATED, INCOMPLETE = "HOLDS", "VIOLATED", "INCOMPLETE"
 EVENT_KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
@@ -56,10 +56,14 @@ Label = tuple[Event, tuple[int, ...]]
 #: quiescence or None, the invariants a new successor violates).
 Record = tuple[tuple[int, ...], "Key | None", bool, tuple[str, ...], "tuple[str, str, str] | None", tuple[tuple[str, str], ...]]
 
+#: A run of routine transitions (only counted: how many, how many moved the state, their
+#: branch names) followed by one :data:`Record`, or by None at the end of an event.
+Segment = tuple[int, int, tuple[str, ...], "Record | None"]
+
 #: BFS levels with at least this many states go to the worker processes (``workers`` > 1).
 PARALLEL_LEVEL = 256
 
-_KEPT = ("no command (kept)",)
+_KEPT = ["no command (kept)"]
 
 
 def _branch(cmd: Any, ok: bool | None) -> str:
@@ -308,38 +312,52 @@ class Checker:
         return check_invariants(view, self.invariants)
 
     # -- search -----------------------------------------------------------------------------
-    def expand(self, key: Key, known: "Container[Key]") -> list[list[Record]]:
-        """Every transition out of ``key``: per enabled event (in order), one :data:`Record`
-        per successor. A successor in ``known`` (or met earlier in this expansion) comes
-        back as ``None``; a new one with the invariants it violates. The search loop
-        (:meth:`run`) consumes these records, in-process or from worker processes alike.
+    def expand(self, key: Key, known: "Container[Key]") -> list[list[Segment]]:
+        """Every transition out of ``key``, per enabled event (in order), as a list of :data:`Segment` tuples.
+
+        A successor in ``known`` (or met earlier in this expansion) that broke nothing on
+        the way is *routine*: only counted. Every other transition (a new successor, with
+        the invariants it violates, or an instantaneous violation repaired before
+        quiescence) is a :data:`Record`, and closes a segment that also counts the
+        routine transitions before it. The search loop (:meth:`run`) consumes segments
+        in order, in-process or from worker processes alike; since it can only stop at
+        a record, it sees exactly the counts a transition-by-transition loop would.
         """
         st = self.store
         canon = self.symmetry.canon if self.symmetry is not None else None
         specs = self.model.specs
         invariants = self.invariants
         fresh: set[Key] = set()
-        out: list[list[Record]] = []
+        out: list[list[Segment]] = []
         for event, _kind in self._enabled(key):
-            recs: list[Record] = []
+            segments: list[Segment] = []
+            n = moved = 0
+            names: list[str] = []
             for fails, nkey, log, instant in self.successors(key, event):
                 commands = log.commands
-                if commands:
-                    names = tuple(_branch(cmd, ok) for cmd, ok in commands)
-                else:
-                    names = _KEPT
+                here = [_branch(cmd, ok) for cmd, ok in commands] if commands else _KEPT
                 repaired = None
-                if instant is not None and instant[0] not in {n for n, _m in self.violations(nkey)}:
+                if instant is not None and instant[0] not in {v for v, _m in self.violations(nkey)}:
                     repaired = instant  # broken inside the reaction, repaired before quiescence
                 ckey = canon(nkey) if canon is not None else nkey
                 if ckey in known or ckey in fresh:
-                    recs.append((fails, None, nkey != key, names, repaired, ()))
-                    continue
-                fresh.add(ckey)
-                st.load(ckey)
-                view = SystemView(st.platform_states(), specs, self._standing(ckey.standing), self.slots(ckey.context))
-                recs.append((fails, ckey, nkey != key, names, repaired, tuple(check_invariants(view, invariants))))
-            out.append(recs)
+                    if repaired is None:
+                        n += 1
+                        moved += nkey != key
+                        names += here
+                        continue
+                    rec: Record = (fails, None, nkey != key, tuple(here), repaired, ())
+                else:
+                    fresh.add(ckey)
+                    st.load(ckey)
+                    view = SystemView(st.platform_states(), specs, self._standing(ckey.standing), self.slots(ckey.context))
+                    rec = (fails, ckey, nkey != key, tuple(here), repaired, tuple(check_invariants(view, invariants)))
+                segments.append((n, moved, tuple(names), rec))
+                n = moved = 0
+                names = []
+            if n:
+                segments.append((n, moved, tuple(names), None))
+            out.append(segments)
         return out
 
     def run(
@@ -403,6 +421,7 @@ class Checker:
         new_states = res.new_states
         enabled_of = self._enabled
         expand = self.expand
+        count_names = branches.update
 
         def path(i: int) -> tuple[list[Label], list[Key]]:
             ls: list[Label] = []
@@ -427,14 +446,14 @@ class Checker:
         def done() -> bool:
             return (not keep_going and bool(found)) or wanted <= set(found)
 
-        def intern(k: Key) -> Key:
+        def intern(k: tuple) -> Key:  # a Key, or the plain tuple a worker sends for one
             return Key(
-                k.context,
-                parts.setdefault(k.failed, k.failed),
-                parts.setdefault(k.down, k.down),
-                parts.setdefault(k.loads, k.loads),
-                parts.setdefault(k.deployments, k.deployments),
-                parts.setdefault(k.standing, k.standing),
+                k[0],
+                parts.setdefault(k[1], k[1]),
+                parts.setdefault(k[2], k[2]),
+                parts.setdefault(k[3], k[3]),
+                parts.setdefault(k[4], k[4]),
+                parts.setdefault(k[5], k[5]),
             )
 
         for name, msg in self.violations(init):
@@ -453,7 +472,7 @@ class Checker:
                         from desmon.verify.parallel import ExpansionPool
 
                         pool = ExpansionPool(self, workers)
-                    expansions: Iterable[list[list[Record]]] = pool.expand([keys[ki] for ki in frontier])
+                    expansions: Iterable[list[list[Segment]]] = pool.expand([keys[ki] for ki in frontier])
                 else:
                     expansions = (expand(keys[ki], index) for ki in frontier)
                 for ki, per_event in zip(frontier, expansions):
@@ -472,12 +491,18 @@ class Checker:
                             rate = len(keys) / (now - t0)
                             print(f"\r  {len(keys):,} states  {transitions:,} transitions  depth {depth}  {rate:,.0f} states/s ", end="", file=out, flush=True)
                     rules[key.context] += 1
-                    for (event, kind), recs in zip(enabled_of(key), per_event):
+                    for (event, kind), segments in zip(enabled_of(key), per_event):
                         enabled_count[kind] += 1
-                        for fails, ckey, moved, names, repaired, bad in recs:
+                        for routine, routine_moved, routine_names, rec in segments:
+                            if routine:
+                                transitions += routine
+                                changed[kind] += routine_moved
+                                count_names(routine_names)
+                            if rec is None:
+                                continue
+                            fails, ckey, moved, names, repaired, bad = rec
                             transitions += 1
-                            for name in names:
-                                branches[name] += 1
+                            count_names(names)
                             if repaired is not None and repaired[0] not in found:
                                 record(repaired[0], repaired[1], ki, repaired[2], (event, fails))
                                 any_found = True

@@ -21,15 +21,20 @@ from __future__ import annotations
 
 import multiprocessing
 import resource
+from collections import deque
 from typing import TYPE_CHECKING, Iterator
 
 from desmon.errors import CheckerError
 
 if TYPE_CHECKING:  # pragma: no cover
-    from desmon.verify.checker import Checker, Record
+    from desmon.verify.checker import Checker, Segment
     from desmon.verify.state import Key
 
 __all__ = ["ExpansionPool", "WORKER_MEMORY"]
+
+#: States per chunk at most, and chunks in flight per worker.
+CHUNK = 64
+IN_FLIGHT = 3
 
 #: Keys a worker remembers before it forgets them all (memory bound per worker).
 WORKER_MEMORY = 400_000
@@ -38,7 +43,7 @@ _checker: "Checker | None" = None  # the worker's checker, inherited through for
 _known: set = set()
 
 
-def _expand_chunk(chunk: "list[Key]") -> "list[list[list[Record]]]":
+def _expand_chunk(chunk: "list[Key]") -> "list[list[list[Segment]]]":
     checker = _checker
     assert checker is not None, "worker started without a checker"
     known = _known
@@ -48,10 +53,13 @@ def _expand_chunk(chunk: "list[Key]") -> "list[list[list[Record]]]":
     out = []
     for key in chunk:
         per_event = checker.expand(key, known)
-        for recs in per_event:
-            for rec in recs:
-                if rec[1] is not None:
+        for segments in per_event:
+            for i, (n, moved, names, rec) in enumerate(segments):
+                if rec is not None and rec[1] is not None:
                     known.add(rec[1])
+                    # a plain tuple unpickles about 10x faster than a NamedTuple, and
+                    # equals and hashes like the Key (the parent re-creates the Key)
+                    segments[i] = (n, moved, names, (rec[0], tuple(rec[1]), *rec[2:]))
         out.append(per_event)
     return out
 
@@ -74,12 +82,22 @@ class ExpansionPool:
         finally:
             _checker = None
 
-    def expand(self, frontier: "list[Key]") -> Iterator["list[list[Record]]"]:
-        """The expansions of ``frontier``'s states, in frontier order."""
-        size = max(8, min(256, len(frontier) // (self.workers * 8)))
-        chunks = [frontier[i : i + size] for i in range(0, len(frontier), size)]
-        for result in self._pool.imap(_expand_chunk, chunks):
-            yield from result
+    def expand(self, frontier: "list[Key]") -> Iterator["list[list[Segment]]"]:
+        """The expansions of ``frontier``'s states, in frontier order.
+
+        Chunks are submitted as the parent consumes them, at most ``IN_FLIGHT`` per
+        worker ahead, so a search that stops early (a violation, ``max_states``) wastes
+        little speculative work.
+        """
+        size = max(1, min(CHUNK, len(frontier) // (self.workers * IN_FLIGHT)))
+        chunks = (frontier[i : i + size] for i in range(0, len(frontier), size))
+        window: deque = deque()
+        for chunk in chunks:
+            window.append(self._pool.apply_async(_expand_chunk, (chunk,)))
+            if len(window) >= self.workers * IN_FLIGHT:
+                yield from window.popleft().get()
+        while window:
+            yield from window.popleft().get()
 
     def close(self) -> float:
         """Stop the workers; returns the largest peak resident size (MB) of any child
