@@ -220,3 +220,24 @@ def test_scenarios_run_as_scripts(name):
     assert res.returncode == 0 and "verdict: HOLDS" in res.stdout
     res = subprocess.run([sys.executable, str(SCENARIOS / f"{name}.py"), "paper"], capture_output=True, text=True)
     assert res.returncode == 1 and "VIOLATED" in res.stdout
+
+
+@pytest.mark.parametrize("deployer", ["desmon", "paper"])
+def test_search_leaves_no_cyclic_garbage_so_pausing_the_collector_is_safe(deployer):
+    import gc
+
+    checker = Checker(load_scenario(SCENARIOS / "migration.py"), deployer)
+    checker.initial()  # the checker's own (long-lived) cycles exist before the search
+    gc.collect()
+    was = gc.get_debug()
+    gc.set_debug(gc.DEBUG_SAVEALL)  # whatever a collection finds is kept in gc.garbage
+    try:
+        r = checker.run(keep_going=True)
+        assert gc.isenabled(), "run() must give the collector back"
+        gc.collect()
+        garbage = len(gc.garbage)
+    finally:
+        gc.set_debug(was)
+        gc.garbage.clear()
+    assert r.states == checker.scenario.expected["verify"][deployer]["states"]
+    assert garbage == 0

@@ -19,6 +19,7 @@ seen before.
 
 from __future__ import annotations
 
+import gc
 import multiprocessing
 import resource
 from collections import deque
@@ -78,7 +79,8 @@ class ExpansionPool:
         self.workers = workers
         _checker = checker  # inherited by the forked workers; never used in the parent
         try:
-            self._pool = ctx.Pool(workers)
+            # the parent pauses its cyclic collector for the search; so do the workers
+            self._pool = ctx.Pool(workers, initializer=gc.disable)
         finally:
             _checker = None
 
