@@ -38,7 +38,7 @@ CHUNK = 64
 IN_FLIGHT = 3
 
 #: Keys a worker remembers before it forgets them all (memory bound per worker).
-WORKER_MEMORY = 400_000
+WORKER_MEMORY = 200_000
 
 _checker: "Checker | None" = None  # the worker's checker, inherited through fork
 _known: set = set()
