@@ -189,6 +189,7 @@ class Checker:
         self.store.watch_check = self._instant_check
         self._instant_memo: dict[tuple, list[tuple[str, str]]] = {}
         self._enabled_memo: dict[tuple, tuple[tuple[Event, str], ...]] = {}
+        self._event_pairs: dict[Event, tuple[Event, str]] = {}  # one (event, kind) object per event
         self._frozen: dict[tuple[str, ...], frozenset[str]] = {}
         self._slots_cache: dict[str | None, tuple[tuple[str, ...], ...]] = {}
         self.symmetry = None
@@ -223,7 +224,11 @@ class Checker:
         mk = (key.context, key.failed, key.down, key.loads)
         out = self._enabled_memo.get(mk)
         if out is None:
-            out = self._enabled_memo[mk] = tuple((e, event_kind(e)) for e in self._compute_enabled(key))
+            pairs = self._event_pairs
+            out = tuple(pairs.get(e) or pairs.setdefault(e, (e, event_kind(e))) for e in self._compute_enabled(key))
+            if len(self._enabled_memo) > MEMO_LIMIT:
+                self._enabled_memo.clear()  # bounded: there is one entry per environment combination
+            self._enabled_memo[mk] = out
         return out
 
     def _compute_enabled(self, key: Key) -> list[Event]:
