@@ -6,7 +6,8 @@
   tested, no view) and the definition ``standing_after(previous, raised, wanted,
   validly_active(view))``;
 * the corrected reaction (``ensure_deployed`` split into ``_survey`` / ``_act_on`` so a
-  kept graph costs no generator) and a reaction built on ``ensure_deployed`` itself.
+  kept graph costs no generator, validity answers memoised) and the reaction as it was
+  written before those fast paths (kept here as the reference).
 
 Every state the checker reaches in a few scenarios, every enabled event, every start
 outcome prefix of length <= 1.
@@ -19,7 +20,10 @@ from pathlib import Path
 import pytest
 
 from desmon.deployment.core import StepLog, run_sync, standing_after
-from desmon.deployment.deployer import Deployer, _stop_graphs, _active_graphs, ensure_deployed
+from desmon.deployment.deployer import Deployer, _stop_graphs, _active_graphs
+from desmon.deployment.ports import (
+    DEPLOYMENT_FAILED, DEPLOYMENT_INFORMATION_MISSING, NO_ACCEPTABLE_PLATFORMS, STOPPING_FAILED, RaiseError, Start, Stop,
+)
 from desmon.deployment.invariants import validly_active
 from desmon.deployment.validity import check_validity, validity_for
 from desmon.loader import load_scenario
@@ -29,13 +33,41 @@ SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 NAMES = ["coffee_handover", "memory_pressure", "fixed_platform", "vendor_selection", "platform_crash", "robot_day"]
 
 
+def _reference_ensure_deployed(g, q):  # type: ignore[no-untyped-def]
+    """ensure_deployed as it was before the _survey / _act_on split (break-before-make)."""
+    spec = q.deployment_information(g)
+    if spec is None:
+        yield RaiseError(DEPLOYMENT_INFORMATION_MISSING, g)
+        return False
+    fixed = q.fixed_platform(spec)
+    acceptable = check_validity(q.constraints(spec), [s for s in q.platform_states() if fixed is None or s.name == fixed], g).acceptable
+    current = q.deployed_on(g)
+    keep = next((p for p in current if p in acceptable), None)
+    for p in [p for p in current if p != keep]:
+        if not (yield Stop(g, p)):
+            yield RaiseError(STOPPING_FAILED, g, p)
+            return False
+    if keep is not None:
+        return True
+    if not acceptable:
+        explained = check_validity(q.constraints(spec), [s for s in q.platform_states() if fixed is None or s.name == fixed], g).explain()
+        yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, fixed, explained if fixed is None else f"fixed platform {fixed}: {explained}")
+        return False
+    for pk in acceptable:
+        if (yield Start(g, pk)):
+            return True
+        yield RaiseError(DEPLOYMENT_FAILED, g, pk)
+    return False
+
+
 def _reference_react(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
-    """The corrected reaction written on ensure_deployed as a whole (the pre-split form)."""
+    """The corrected reaction as it was before the fast paths: every graph placed by the
+    unsplit ensure_deployed (above), no memo of the validity answers."""
     placed: dict[str, bool] = {}
 
     def place(g):  # type: ignore[no-untyped-def]
         if g not in placed:
-            placed[g] = yield from ensure_deployed(g, q)
+            placed[g] = yield from _reference_ensure_deployed(g, q)
         return placed[g]
 
     for p in changed:

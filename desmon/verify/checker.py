@@ -135,6 +135,7 @@ class CheckResult:
     not_checked: tuple[str, ...] = ()  # invariants left to the sim audit and the fuzzer (NOT_CHECKED)
     workers: int = 1
     peak_workers_mb: float = 0.0  # the largest worker process's peak resident size (workers > 1)
+    worker_levels: int = 0  # BFS levels the workers expanded (levels under PARALLEL_LEVEL states stay in-process)
 
     @property
     def states_per_second(self) -> float:
@@ -343,6 +344,8 @@ class Checker:
                 commands = log.commands
                 here = [_branch(cmd, ok) for cmd, ok in commands] if commands else _KEPT
                 repaired = None
+                # (checked even when the search has already recorded this invariant:
+                # expand knows nothing of the search, and it costs only on violations)
                 if instant is not None and instant[0] not in {v for v, _m in self.violations(nkey)}:
                     repaired = instant  # broken inside the reaction, repaired before quiescence
                 ckey = canon(nkey) if canon is not None else nkey
@@ -502,7 +505,7 @@ class Checker:
                             rate = len(keys) / (now - t0)
                             print(f"\r  {len(keys):,} states  {transitions:,} transitions  depth {depth}  {rate:,.0f} states/s ", end="", file=out, flush=True)
                     rules[key.context] += 1
-                    for (event, kind), segments in zip(enabled_of(key), per_event):
+                    for (event, kind), segments in zip(enabled_of(key), per_event, strict=True):
                         enabled_count[kind] += 1
                         for routine, routine_moved, routine_names, rec in segments:
                             if routine:
@@ -553,6 +556,7 @@ class Checker:
         finally:
             if pool is not None:
                 res.peak_workers_mb = pool.close()
+                res.worker_levels = pool.levels
             if collecting:
                 gc.enable()
         if printed:

@@ -32,6 +32,10 @@ def _no_recheck(q: QueryPort, slots, changed, context_changed) -> Reaction:  # t
 class HideConsumption:
     """A QueryPort that answers like ``inner`` but shows no deployed graph consuming capacity."""
 
+    #: its platform states are rebuilt on every call, so the inner store's identity memo
+    #: of validity answers (see ``validity_for``) could never hit: do not offer it
+    validity_memo = None
+
     def __init__(self, inner: QueryPort) -> None:
         self.inner = inner
 

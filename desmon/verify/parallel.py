@@ -23,6 +23,8 @@ import gc
 import multiprocessing
 import resource
 from collections import deque
+from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from typing import TYPE_CHECKING, Iterator
 
 from desmon.errors import CheckerError
@@ -40,13 +42,24 @@ IN_FLIGHT = 3
 #: Keys a worker remembers before it forgets them all (memory bound per worker).
 WORKER_MEMORY = 200_000
 
-_checker: "Checker | None" = None  # the worker's checker, inherited through fork
+_checker: "Checker | None" = None  # set in each worker by _start_worker
 _known: set = set()
 
 
-def _expand_chunk(chunk: "list[Key]") -> "list[list[list[Segment]]]":
+def _start_worker(checker: "Checker") -> None:
+    """Worker initializer: the checker arrives through fork (never pickled); the parent
+    pauses its cyclic collector for the search, and so does the worker."""
+    global _checker
+    _checker = checker
+    _known.clear()
+    gc.disable()
+
+
+def _expand_chunk(chunk: "list[Key]") -> "tuple[list[list[list[Segment]]], float]":
+    """The expansions of ``chunk``'s states, and this worker's peak resident size (MB)."""
     checker = _checker
-    assert checker is not None, "worker started without a checker"
+    if checker is None:  # pragma: no cover - a worker not started by ExpansionPool
+        raise CheckerError("internal error: a checker worker started without its checker")
     known = _known
     if len(known) > WORKER_MEMORY:
         known.clear()
@@ -62,14 +75,17 @@ def _expand_chunk(chunk: "list[Key]") -> "list[list[list[Segment]]]":
                     # equals and hashes like the Key (the parent re-creates the Key)
                     segments[i] = (n, moved, names, (rec[0], tuple(rec[1]), *rec[2:]))
         out.append(per_event)
-    return out
+    return out, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
 class ExpansionPool:
-    """``workers`` forked processes expanding chunks of a BFS level in order."""
+    """``workers`` forked processes expanding chunks of a BFS level in order.
+
+    A worker that dies (killed, out of memory) or cannot be started ends the search
+    with a one-line :class:`~desmon.errors.CheckerError` instead of a hang.
+    """
 
     def __init__(self, checker: "Checker", workers: int) -> None:
-        global _checker
         try:
             ctx = multiprocessing.get_context("fork")
         except ValueError:
@@ -77,12 +93,9 @@ class ExpansionPool:
                 "--workers needs the 'fork' start method, which this platform lacks: run with --workers 1"
             ) from None
         self.workers = workers
-        _checker = checker  # inherited by the forked workers; never used in the parent
-        try:
-            # the parent pauses its cyclic collector for the search; so do the workers
-            self._pool = ctx.Pool(workers, initializer=gc.disable)
-        finally:
-            _checker = None
+        self.levels = 0  # BFS levels handed to the workers
+        self.peak_mb = 0.0  # the largest worker's peak resident size
+        self._pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_start_worker, initargs=(checker,))
 
     def expand(self, frontier: "list[Key]") -> Iterator["list[list[Segment]]"]:
         """The expansions of ``frontier``'s states, in frontier order.
@@ -91,19 +104,42 @@ class ExpansionPool:
         worker ahead, so a search that stops early (a violation, ``max_states``) wastes
         little speculative work.
         """
+        self.levels += 1
         size = max(1, min(CHUNK, len(frontier) // (self.workers * IN_FLIGHT)))
-        chunks = (frontier[i : i + size] for i in range(0, len(frontier), size))
-        window: deque = deque()
-        for chunk in chunks:
-            window.append(self._pool.apply_async(_expand_chunk, (chunk,)))
+        window: deque[Future] = deque()
+        for i in range(0, len(frontier), size):
+            window.append(self._submit(frontier[i : i + size]))
             if len(window) >= self.workers * IN_FLIGHT:
-                yield from window.popleft().get()
+                yield from self._result(window.popleft())
         while window:
-            yield from window.popleft().get()
+            yield from self._result(window.popleft())
+
+    def _submit(self, chunk: "list[Key]") -> Future:
+        try:
+            return self._pool.submit(_expand_chunk, chunk)
+        except BrokenProcessPool:
+            raise _died() from None
+        except OSError as exc:  # fork failed: too many processes, not enough memory
+            raise CheckerError(f"cannot start {self.workers} worker processes ({exc.strerror or exc}): use fewer --workers") from None
+
+    def _result(self, future: Future) -> "list[list[list[Segment]]]":
+        try:
+            out, peak = future.result()
+        except BrokenProcessPool:
+            raise _died() from None
+        if peak > self.peak_mb:
+            self.peak_mb = peak
+        return out
 
     def close(self) -> float:
-        """Stop the workers; returns the largest peak resident size (MB) of any child
-        process this process has waited for, the workers included."""
-        self._pool.terminate()
-        self._pool.join()
-        return resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
+        """Stop the workers (after the chunks they are on); returns the largest
+        worker's peak resident size in MB."""
+        self._pool.shutdown(wait=True, cancel_futures=True)
+        return self.peak_mb
+
+
+def _died() -> CheckerError:
+    return CheckerError(
+        "a checker worker process died (killed, or out of memory?): the search is incomplete; "
+        "run with fewer --workers or a lower --max-states"
+    )

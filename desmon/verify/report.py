@@ -39,7 +39,7 @@ def format_result(r: CheckResult) -> str:
     lines.append(
         f"states: {r.states:,}  transitions: {r.transitions:,}  depth: {r.depth}  time: {r.seconds:.2f}s  "
         f"{r.states_per_second:,.0f} states/s  {r.transitions_per_second:,.0f} transitions/s  peak memory: {r.peak_mb:.0f} MB"
-        + (f" (+ {r.workers} workers, each at most {r.peak_workers_mb:.0f} MB)" if r.workers > 1 and r.peak_workers_mb else "")
+        + (f" (+ {r.workers} workers, each at most {r.peak_workers_mb:.0f} MB)" if r.worker_levels else "")
     )
     kinds = sorted(set(r.enabled) | set(r.new_states))
     if kinds:
@@ -117,6 +117,7 @@ def result_to_json(r: CheckResult) -> dict[str, Any]:
         "depth": r.depth,
         "seconds": round(r.seconds, 3),
         "workers": r.workers,
+        "worker_levels": r.worker_levels,
         "invariants": list(r.invariants),
         "not_checked": {n: NOT_CHECKED.get(n, "") for n in r.not_checked},
         "counterexamples": [counterexample_to_json(c) for c in r.counterexamples],
