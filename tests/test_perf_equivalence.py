@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from desmon.deployment.core import StepLog, run_sync, standing_after
+from desmon.deployment.core import standing_after
 from desmon.deployment.deployer import Deployer, _stop_graphs, _active_graphs
 from desmon.deployment.ports import (
     DEPLOYMENT_FAILED, DEPLOYMENT_INFORMATION_MISSING, NO_ACCEPTABLE_PLATFORMS, STOPPING_FAILED, RaiseError, Start, Stop,

@@ -64,7 +64,7 @@ Segment = tuple[int, int, tuple[str, ...], "Record | None"]
 #: BFS levels with at least this many states go to the worker processes (``workers`` > 1).
 PARALLEL_LEVEL = 256
 
-_KEPT = ["no command (kept)"]
+_KEPT = ("no command (kept)",)
 
 
 def _branch(cmd: Any, ok: bool | None) -> str:
