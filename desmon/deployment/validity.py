@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import TYPE_CHECKING, Iterable, Sequence
+from typing import TYPE_CHECKING, Any, Iterable, Sequence
 
 from desmon.model.requirements import (
     PLATFORM_HAS,
@@ -28,6 +28,14 @@ if TYPE_CHECKING:
 
 #: Results kept by the memoised pure checks (bounded, so long simulations stay flat).
 _MEMO_SIZE = 1 << 16
+
+#: An observer of every requirement check, or None (always, outside the checker's table
+#: engine). While :mod:`desmon.verify.table` records one reaction it sets this to an
+#: object whose ``validity(reqs, states, graph, reasons)`` and ``platform(reqs, state,
+#: graph, first_only)`` answer :func:`check_validity` and :func:`check_platform` (with the
+#: unmemoised implementations below) and note which platforms were asked about: that is
+#: how the engine learns what a reaction observed of the platforms. Nothing else reads it.
+_observer: Any = None
 
 __all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos"]
 
@@ -133,6 +141,8 @@ def check_platform(
     a down platform fails them all. Memoised: it is pure and the deployer, the invariants
     and the checker ask it again and again about the same facts."""
     reqs = requirements if type(requirements) is tuple else tuple(requirements)
+    if _observer is not None:
+        return _observer.platform(reqs, state, graph, first_only)  # type: ignore[no-any-return]
     return _check_platform(reqs, state, graph, first_only)  # type: ignore[arg-type]
 
 
@@ -178,6 +188,8 @@ def check_validity(
     ``reasons`` is False, the fast path of the deployer). Results are memoised (pure).
     """
     reqs = requirements if type(requirements) is tuple else tuple(requirements)
+    if _observer is not None:
+        return _observer.validity(reqs, states if type(states) is tuple else tuple(states), graph, reasons)  # type: ignore[no-any-return]
     return _check_validity(reqs, states if type(states) is tuple else tuple(states), graph, reasons)  # type: ignore[arg-type]
 
 

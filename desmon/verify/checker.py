@@ -37,9 +37,11 @@ from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.replay import initial_reaction
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore
 
-__all__ = ["Checker", "CheckResult", "Counterexample", "Step", "Label", "Record", "Segment", "HOLDS", "VIOLATED", "INCOMPLETE", "EVENT_KINDS", "NOT_CHECKED"]
+__all__ = ["Checker", "CheckResult", "Counterexample", "Step", "Label", "Record", "Segment", "HOLDS", "VIOLATED", "INCOMPLETE", "EVENT_KINDS", "NOT_CHECKED", "ENGINES"]
 
 HOLDS, VIOLATED, INCOMPLETE = "HOLDS", "VIOLATED", "INCOMPLETE"
+#: How :meth:`Checker.run` computes transitions (see there).
+ENGINES = ("auto", "table", "direct")
 EVENT_KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
 
 #: Invariants the checker cannot evaluate, and where they are checked instead. Its states
@@ -136,6 +138,8 @@ class CheckResult:
     workers: int = 1
     peak_workers_mb: float = 0.0  # the largest worker process's peak resident size (workers > 1)
     worker_levels: int = 0  # BFS levels the workers expanded (levels under PARALLEL_LEVEL states stay in-process)
+    engine: str = "direct"  # "table" or "direct" (see Checker.run)
+    records: int = 0  # table engine: real runs of the core it recorded (reactions and invariant checks)
 
     @property
     def states_per_second(self) -> float:
@@ -380,9 +384,18 @@ class Checker:
         progress_after: float = 1.0,
         progress_every: float = 0.5,
         workers: int = 1,
+        engine: str = "auto",
         out=None,  # type: ignore[no-untyped-def]
     ) -> CheckResult:
         """Breadth-first search from the initial state.
+
+        ``engine`` picks how transitions are computed; the result is the same:
+        ``"table"`` runs the real core once per distinct reading of a reaction and
+        replays it elsewhere (:mod:`desmon.verify.table`, one process, numpy);
+        ``"direct"`` runs the real core on every transition (``workers`` > 1 applies to
+        it); ``"auto"`` (default) takes the table engine unless symmetry reduction or
+        ``workers`` > 1 is asked for, and falls back to the direct engine if the
+        deployer reads platform facts outside the requirement checks.
 
         With ``progress``, a one-line status is rewritten on ``out`` (stderr) every
         ``progress_every`` seconds once the run is ``progress_after`` seconds old, and
@@ -398,11 +411,44 @@ class Checker:
             out = sys.stderr
         if workers < 1:
             raise CheckerError(f"--workers must be at least 1, got {workers}")
+        if engine not in ENGINES:
+            raise CheckerError(f"unknown engine {engine!r}: choose one of {', '.join(ENGINES)}")
         t0 = time.perf_counter()
         res = CheckResult(
             self.scenario.name, self.deployer_name, tuple(i.name for i in self.invariants), HOLDS,
             symmetry=self.symmetry is not None, not_checked=self.not_checked, workers=workers,
         )
+        if engine != "direct":
+            from desmon.verify.table import TableEngine, UnobservedRead, table_unsupported
+
+            why = table_unsupported(self)
+            if engine == "table" and why:
+                raise CheckerError(f"--engine table: {why}; use --engine direct or auto")
+            if why is None and (engine == "table" or workers == 1):
+                res.engine, res.workers = "table", 1
+                collecting = gc.isenabled()
+                gc.disable()  # as below: the search makes no cycles
+                try:
+                    table = TableEngine(self)
+                    found, incomplete, depth = table.run(
+                        res, max_states=max_states, max_depth=max_depth, timeout=timeout, keep_going=keep_going,
+                        progress=progress, progress_after=progress_after, progress_every=progress_every, out=out, t0=t0,
+                    )
+                except UnobservedRead:
+                    if engine == "table":
+                        raise
+                    found = None  # type: ignore[assignment]
+                finally:
+                    if collecting:
+                        gc.enable()
+                if found is not None:
+                    self.explored = table.explored()  # type: ignore[assignment]
+                    res.records = table.records
+                    return self._finish(res, found, incomplete, depth, t0)
+                return self.run(
+                    max_states=max_states, max_depth=max_depth, timeout=timeout, keep_going=keep_going, progress=progress,
+                    progress_after=progress_after, progress_every=progress_every, workers=workers, engine="direct", out=out,
+                )
         canon = self.symmetry.canon if self.symmetry is not None else None
         init = self.initial()
         if canon is not None:
@@ -564,6 +610,10 @@ class Checker:
         self.explored = keys  # the distinct (canonical) states of the last run, BFS order
         res.states = len(keys)
         res.transitions = transitions
+        return self._finish(res, found, incomplete, depth, t0)
+
+    def _finish(self, res: CheckResult, found: dict[str, Counterexample], incomplete: str, depth: int, t0: float) -> CheckResult:
+        """Verdict, depth, time and memory of a finished search (either engine)."""
         res.depth = max([depth] + [c.length for c in found.values()])
         res.seconds = time.perf_counter() - t0
         res.peak_mb = _peak_mb()

@@ -82,6 +82,10 @@ class _Deployments(dict):
 class StateStore:
     """QueryPort + InsertPort + ControlPort over the parts of one :class:`Key`."""
 
+    #: the class of the platform states it hands out (the table engine's recording
+    #: store hands out a guarded subclass, see :mod:`desmon.verify.table`)
+    state_class: type[PlatformState] = PlatformState
+
     def __init__(self, model: SystemModel) -> None:
         self.model = model
         self.platform_names = tuple(p.name for p in model.platforms)
@@ -189,7 +193,7 @@ class StateStore:
         if st is None:
             if len(self._ps_cache) > MEMO_LIMIT:
                 self._ps_cache.clear()
-            st = PlatformState(self._platform[platform], up, devices, load, deployed)
+            st = self.state_class(self._platform[platform], up, devices, load, deployed)
             self._ps_cache[ck] = st
         return st
 

@@ -1,0 +1,899 @@
+"""The table engine: the checker's BFS with every distinct reaction run once.
+
+The direct engine (:meth:`Checker.run <desmon.verify.checker.Checker.run>` with
+``engine="direct"``) runs the real deployment core for each of the millions of
+transitions of a large scenario. Most of those runs repeat one another: a reaction reads
+the context, the deployments and the standing errors, and of the platforms only *which
+of them pass the requirement checks* it asks about. This engine runs the same real
+core, but only once per distinct reading, and replays what it did everywhere else.
+
+How a reaction is memoised
+    A state is an environment code (context, failed devices, platforms down, load
+    levels, one mixed-radix digit per platform) and an interned system part
+    (deployments, standing errors). A transition's *root* is (system part, context after
+    the event, what the event changed, failed-start prefix). The first time a root is
+    met, the real core runs on the real state while :mod:`desmon.deployment.validity`
+    reports every requirement check to an observer (``validity._observer``): which
+    platforms, with which deployments on them, were checked for which graph, and
+    which passed. The run becomes a path in a decision tree: one node per check, one
+    branch per answer, a leaf with what the reaction did (next system part, start
+    outcomes, deployer branches, an instantaneous violation). Other transitions with
+    the same root walk the tree: each check is answered from a table of per-platform
+    results (computed by the same requirement code on the same platform facts,
+    indexed by the platform's digit), and a leaf gives the successor. A transition
+    whose answers leave the tree runs the real core again, which extends the tree.
+    The invariants of each new state are memoised the same way, on (system part,
+    context). Walking the trees, the environment events and the duplicate detection
+    are numpy operations over a whole BFS level at once.
+
+Why it is sound
+    A reaction is a deterministic function of what it reads through the ports (the
+    checker already relies on that: a replay that disagrees is reported as
+    nondeterminism). The context, deployments and standing errors are in the root; the
+    platforms' facts can only be read through the requirement checks: while a reaction
+    is recorded, its platform states are guarded, and reading ``up``, ``devices`` or
+    ``load`` anywhere but in :mod:`desmon.deployment.validity` stops the run with a
+    clear :class:`UnobservedRead` (``--engine auto`` then falls back to the direct
+    engine). Every recorded check is verified to be about the platform facts of the
+    state (a port that rewrites them is refused), every recording re-checks the
+    environment code and the stimulus, and a recording that disagrees with the tree
+    already built is a :class:`~desmon.errors.NondeterminismError`. What is *not*
+    memoised exactly is the text of error details and violation messages (they may
+    quote loads): counterexamples are rebuilt by replaying their events through the
+    real core, as in the direct engine, so every message the user reads is the real one.
+
+The result (states and their order, transitions, every counter, counterexamples) is
+the direct engine's, for every scenario shipped (``tests/test_verify_table.py``).
+Symmetry reduction is left to the direct engine.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from array import array
+from collections import Counter
+from typing import Any, Callable, Iterator, Sequence
+
+import numpy as np
+
+from desmon.deployment import validity as _validity
+from desmon.deployment.core import DeploymentCore
+from desmon.errors import CheckerError, NondeterminismError
+from desmon.model.events import (
+    ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp, event_kind,
+)
+from desmon.model.system import PlatformState
+from desmon.verify.checker import _KEPT, Counterexample, _branch
+from desmon.verify.state import Key, StateStore
+
+__all__ = ["TableEngine", "UnobservedRead", "table_unsupported", "CHUNK_STATES"]
+
+#: bits of a state code that hold the interned system part (deployments, standing)
+SYS_BITS = 24
+_SYS_MASK = (1 << SYS_BITS) - 1
+#: frontier states expanded per numpy batch (bounds the memory of one batch)
+CHUNK_STATES = 16_384
+_KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
+_KIND_ID = {k: i for i, k in enumerate(_KINDS)}
+
+
+class UnobservedRead(CheckerError):
+    """A reaction read a platform fact outside the requirement checks: it cannot be memoised."""
+
+
+# ------------------------------------------------------------------------------------
+# recording: the observer of requirement checks and the guarded platform states
+# ------------------------------------------------------------------------------------
+_ENV_FIELDS = frozenset({"up", "devices", "load"})
+_ALLOWED_READERS = frozenset({"desmon.deployment.validity", "dataclasses"})
+
+
+class _Recorder:
+    """Observer of the requirement checks of one recorded run (see ``validity._observer``)."""
+
+    def __init__(self, engine: "TableEngine") -> None:
+        self.engine = engine
+        self.inside = 0
+        self.obs: list[tuple[tuple, int]] = []
+        self.store: StateStore | None = None
+
+    def validity(self, reqs: tuple, states: tuple[PlatformState, ...], graph: str | None, reasons: bool) -> Any:
+        self.inside += 1
+        try:
+            v = _validity._check_validity.__wrapped__(reqs, states, graph, reasons)
+            ok = set(v.acceptable)
+            self._note(reqs, graph, states, [s.platform.name in ok for s in states])
+        finally:
+            self.inside -= 1
+        return v
+
+    def platform(self, reqs: tuple, state: PlatformState, graph: str | None, first_only: bool) -> Any:
+        self.inside += 1
+        try:
+            fails = _validity._check_platform.__wrapped__(reqs, state, graph, first_only)
+            self._note(reqs, graph, (state,), [not fails])
+        finally:
+            self.inside -= 1
+        return fails
+
+    def _note(self, reqs: tuple, graph: str | None, states: tuple[PlatformState, ...], bits: list[bool]) -> None:
+        eng = self.engine
+        store = self.store
+        assert store is not None
+        parts = []
+        code = 0
+        for j, (s, bit) in enumerate(zip(states, bits)):
+            name = s.platform.name
+            canonical = store.platform_state(name)
+            if (s.up, s.devices, s.load) != (canonical.up, canonical.devices, canonical.load):
+                raise UnobservedRead(
+                    f"a requirement check saw platform {name} with facts that are not the state's own "
+                    f"(up={s.up}, devices={[d.name for d in s.devices]}, load={s.load}): the table engine cannot "
+                    "memoise a port that rewrites platform facts; run with --engine direct"
+                )
+            parts.append((eng.platform_index[name], eng.intern_deployed(s.deployed)))
+            code |= int(bit) << j
+        self.obs.append(((eng.intern_table(reqs, graph), tuple(parts)), code))
+
+
+class _Guarded(PlatformState):
+    """A platform state whose facts may only be read by the requirement checks (recording)."""
+
+    __slots__ = ()
+
+    def __getattribute__(self, name: str) -> Any:
+        if name in _ENV_FIELDS and not _RECORDING.inside:
+            caller = sys._getframe(1).f_globals.get("__name__")
+            if caller not in _ALLOWED_READERS:
+                p = object.__getattribute__(self, "platform").name
+                raise UnobservedRead(
+                    f"{caller} read `{name}` of platform {p} outside the requirement checks "
+                    "(desmon.deployment.validity): the table engine cannot memoise this reaction; "
+                    "run with --engine direct"
+                )
+        return object.__getattribute__(self, name)
+
+    __hash__ = object.__hash__
+
+    def __eq__(self, other: object) -> bool:
+        return self is other
+
+
+class _Idle:
+    inside = 1  # outside a recording nothing is guarded
+
+
+_RECORDING: Any = _Idle()
+
+
+class _GuardedStore(StateStore):
+    state_class = _Guarded
+
+
+class _NoMemo(dict):
+    """A memo that never remembers (a recorded run must perform every check it makes)."""
+
+    def __setitem__(self, key: Any, value: Any) -> None:
+        pass
+
+
+def table_unsupported(checker: Any) -> str | None:
+    """Why the table engine cannot run ``checker``'s search, or None."""
+    if checker.symmetry is not None:
+        return "symmetry reduction runs on the direct engine"
+    n = len(checker.model.platforms)
+    if n > 20:
+        return f"{n} platforms (the table engine answers checks on up to 20 at once)"
+    return None
+
+
+# ------------------------------------------------------------------------------------
+# the environment code
+# ------------------------------------------------------------------------------------
+class _Env:
+    """Environment facts <-> one int: a context digit, then one digit per platform."""
+
+    def __init__(self, checker: Any, init: Key) -> None:
+        model, b = checker.model, checker.bounds
+        self.plats = [p.name for p in model.platforms]
+        self.platform_of = {d.name: d.platform for d in model.devices}
+        P = len(self.plats)
+        ctxs: list[str | None] = [init.context]
+        for a in (*b.actions, *(b.task or {}), *(x for nxt in (b.task or {}).values() for x in nxt)):
+            if a not in ctxs:
+                ctxs.append(a)
+        self.ctxs = ctxs
+        self.C = len(ctxs)
+        self.res = b.load_resource
+        init_loads = dict(init.loads)
+        self.const_failed = tuple(d for d in init.failed if d not in b.devices)
+        self.const_down = tuple(p for p in init.down if p not in b.platforms)
+        self.vdev: list[list[str]] = []
+        self.U: list[int] = []
+        self.K: list[int] = []
+        self.levels: list[tuple[float, ...]] = []
+        self.R: list[int] = []
+        self.W: list[int] = []
+        self.decoded: list[list[tuple[bool, tuple[str, ...], tuple[tuple[str, float], ...]]]] = []
+        w = self.C
+        for name in self.plats:
+            vd = [d for d in b.devices if self.platform_of[d] == name]
+            loaded = name in b.loads
+            lv = tuple(b.loads[name]) if loaded else (0,)
+            const_items = tuple((r, a) for r, a in init_loads.get(name, ()) if not (loaded and r == self.res))
+            U = 2 if name in b.platforms else 1
+            R = U * (1 << len(vd)) * len(lv)
+            self.vdev.append(vd)
+            self.U.append(U)
+            self.K.append(len(vd))
+            self.levels.append(lv)
+            self.R.append(R)
+            self.W.append(w)
+            w *= R
+            table = []
+            for c in range(R):
+                down_bit, rest = c % U, c // U
+                mask, li = rest % (1 << len(vd)), rest // (1 << len(vd))
+                down = bool(down_bit) if U == 2 else name in init.down
+                failed = tuple(d for j, d in enumerate(vd) if mask >> j & 1)
+                items = dict(const_items)
+                if loaded and lv[li]:
+                    items[self.res] = lv[li]
+                table.append((down, failed, tuple(sorted(items.items()))))
+            self.decoded.append(table)
+        self.space = w
+        self.P = P
+        self.failcount = [
+            np.array([int(dn and self.U[p] == 2) + len(f) for dn, f, _l in self.decoded[p]], dtype=np.int64) for p in range(P)
+        ]
+        self.const_failures = len(self.const_failed) + len(self.const_down)
+
+    def encode(self, key: Key) -> int:
+        code = self.ctxs.index(key.context)
+        failed, down, loads = set(key.failed), set(key.down), dict(key.loads)
+        if any(d not in failed for d in self.const_failed) or any(p not in down for p in self.const_down):
+            raise CheckerError("table engine: a state left the encoded environment")  # pragma: no cover
+        for p, name in enumerate(self.plats):
+            want = (name in down, tuple(d for d in self.vdev[p] if d in failed), loads.get(name, ()))
+            try:
+                c = self.decoded[p].index(want)
+            except ValueError:
+                raise CheckerError(f"table engine: platform {name} facts {want} are outside its encoding") from None
+            code += c * self.W[p]
+        return code
+
+    def key(self, env: int, system: tuple) -> Key:
+        ctx = self.ctxs[env % self.C]
+        rest = env // self.C
+        failed = list(self.const_failed)
+        down = list(self.const_down)
+        loads = []
+        for p in range(self.P):
+            dn, f, items = self.decoded[p][rest % self.R[p]]
+            rest //= self.R[p]
+            if dn and self.U[p] == 2:
+                down.append(self.plats[p])
+            failed.extend(f)
+            if items:
+                loads.append((self.plats[p], items))
+        return Key(ctx, tuple(sorted(failed)), tuple(sorted(down)), tuple(loads), system[0], system[1])
+
+    def locals(self, envs: np.ndarray) -> np.ndarray:
+        out = np.empty((len(envs), self.P), dtype=np.int64)
+        rest = envs // self.C
+        for p in range(self.P):
+            out[:, p] = rest % self.R[p]
+            rest = rest // self.R[p]
+        return out
+
+
+# ------------------------------------------------------------------------------------
+# the engine
+# ------------------------------------------------------------------------------------
+class _Grow:
+    """A numpy array with amortised appends."""
+
+    def __init__(self, shape: tuple[int, ...], fill: int = 0) -> None:
+        self.a = np.full(shape, fill, dtype=np.int64)
+        self.n = 0
+        self.fill = fill
+
+    def append(self, row: Any) -> int:
+        if self.n == len(self.a):
+            more = np.full(self.a.shape, self.fill, dtype=np.int64)
+            self.a = np.concatenate([self.a, more])
+        self.a[self.n] = row
+        self.n += 1
+        return self.n - 1
+
+
+class TableEngine:
+    """The table engine for one :class:`~desmon.verify.checker.Checker` (see the module doc)."""
+
+    def __init__(self, checker: Any) -> None:
+        from desmon.verify.checker import Checker
+
+        self.checker = checker
+        self.model = checker.model
+        self.bounds = checker.bounds
+        self.platform_index = {p.name: i for i, p in enumerate(self.model.platforms)}
+        # the recording twin: the same scenario, deployer, invariants and bounds, on a
+        # store that hands out guarded platform states and remembers no validity answer
+        rc = Checker.__new__(Checker)
+        rc.__dict__.update(checker.__dict__)
+        rc.store = _GuardedStore(self.model)
+        rc.store.validity_memo = None  # type: ignore[assignment]
+        rc.core = DeploymentCore(self.model, rc.store, rc.store, checker.core.deployer)
+        rc.store.watch = checker.instant
+        rc.store.watch_check = rc._instant_check
+        rc._instant_memo = _NoMemo()
+        self.rc = rc
+        self.recorder = _Recorder(self)
+        self.recorder.store = rc.store
+        # interning
+        self._deployed_ids: dict[tuple, int] = {}
+        self._deployed: list[tuple] = []
+        self._tables: dict[tuple, int] = {}
+        self._table_args: list[tuple] = []
+        self.systems: list[tuple] = []
+        self._system_ids: dict[tuple, int] = {}
+        self.prefixes: list[tuple[bool, ...]] = [()]
+        self._prefix_ids: dict[tuple[bool, ...], int] = {(): 0}
+        # decision trees
+        P = len(self.model.platforms)
+        self.P = P
+        self.roots: dict[int, int] = {}
+        self.node_leaf = _Grow((1024,), -2)  # -2 open, -1 check node, >= 0 leaf id
+        self.node_desc: list[tuple | None] = []
+        self.node_base = _Grow((1024, P))
+        self.node_plat = _Grow((1024, P))
+        self.edges: dict[int, int] = {}
+        self._ekeys = np.zeros(0, dtype=np.int64)
+        self._echild = np.zeros(0, dtype=np.int64)
+        self._edges_dirty = False
+        self.leaves: list[tuple] = []
+        self._leaf_ids: dict[tuple, int] = {}
+        self._leaf_sys: list[int] = []  # a reaction leaf's next system part (-1: an invariants leaf)
+        self._leaf_inst: list[bool] = []  # a reaction leaf with an instantaneous violation
+        self.width = 1
+        self.ok = _Grow((4096,))
+        self._blocks: dict[tuple[int, int, int], int] = {}
+        self.records = 0  # real runs of the core (reactions and invariant checks)
+
+    # -- interning --------------------------------------------------------------------
+    def intern_deployed(self, deployed: tuple) -> int:
+        i = self._deployed_ids.get(deployed)
+        if i is None:
+            i = self._deployed_ids[deployed] = len(self._deployed)
+            self._deployed.append(deployed)
+        return i
+
+    def intern_table(self, reqs: tuple, graph: str | None) -> int:
+        k = (reqs, graph)
+        i = self._tables.get(k)
+        if i is None:
+            i = self._tables[k] = len(self._table_args)
+            self._table_args.append(k)
+        return i
+
+    def system(self, deployments: tuple, standing: tuple) -> int:
+        k = (deployments, standing)
+        i = self._system_ids.get(k)
+        if i is None:
+            i = self._system_ids[k] = len(self.systems)
+            if i > _SYS_MASK:
+                raise CheckerError(f"table engine: more than {_SYS_MASK:,} distinct deployment states; run with --engine direct")
+            self.systems.append(k)
+        return i
+
+    def prefix(self, p: tuple[bool, ...]) -> int:
+        i = self._prefix_ids.get(p)
+        if i is None:
+            i = self._prefix_ids[p] = len(self.prefixes)
+            if i >= 1 << 16:
+                raise CheckerError("table engine: too many failed-start prefixes; run with --engine direct")
+            self.prefixes.append(p)
+        return i
+
+    def _leaf(self, value: tuple) -> int:
+        i = self._leaf_ids.get(value)
+        if i is None:
+            i = self._leaf_ids[value] = len(self.leaves)
+            self.leaves.append(value)
+            self._leaf_sys.append(value[1] if value[0] == "r" else -1)
+            self._leaf_inst.append(value[0] == "r" and value[5] is not None)
+        return i
+
+    # -- per-platform answers -----------------------------------------------------------
+    def _block(self, table: int, p: int, dep: int) -> int:
+        """Offset of the answers of check ``table`` on platform ``p`` with deployments ``dep``, per platform digit."""
+        k = (table, p, dep)
+        off = self._blocks.get(k)
+        if off is not None:
+            return off
+        reqs, graph = self._table_args[table]
+        platform = self.model.platforms[p]
+        devices_on = tuple(d for d in self.model.devices if d.platform == platform.name)
+        deployed = self._deployed[dep]
+        check = _validity._check_platform.__wrapped__
+        off = self.ok.n
+        for down, failed, load in self.env.decoded[p]:
+            devices = tuple(d for d in devices_on if d.name not in failed) if failed else devices_on
+            state = PlatformState(platform, not down, devices, load, deployed)
+            self.ok.append(0 if check(reqs, state, graph, True) else 1)
+        self._blocks[k] = off
+        return off
+
+    # -- decision trees ---------------------------------------------------------------
+    def _node(self) -> int:
+        self.node_desc.append(None)
+        self.node_base.append(0)
+        self.node_plat.append(0)
+        return self.node_leaf.append(-2)
+
+    def _insert(self, root: int, obs: list[tuple[tuple, int]], leaf: int) -> None:
+        node = self.roots.get(root)
+        if node is None:
+            node = self.roots[root] = self._node()
+        for desc, code in obs:
+            state = self.node_leaf.a[node]
+            if state == -2:
+                table, parts = desc
+                self.node_leaf.a[node] = -1
+                self.node_desc[node] = desc
+                for j, (p, dep) in enumerate(parts):
+                    self.node_base.a[node, j] = self._block(table, p, dep)
+                    self.node_plat.a[node, j] = p
+                self.width = max(self.width, len(parts))
+            elif state != -1 or self.node_desc[node] != desc:
+                raise NondeterminismError(
+                    "the deployment core checked different requirements on a state with the same readings: "
+                    "it is not a function of what it reads through its ports"
+                )
+            ek = (node << 20) | code
+            child = self.edges.get(ek)
+            if child is None:
+                child = self.edges[ek] = self._node()
+                self._edges_dirty = True
+            node = child
+        state = self.node_leaf.a[node]
+        if state == -2:
+            self.node_leaf.a[node] = leaf
+        elif state != leaf:
+            raise NondeterminismError(
+                "the deployment core reacted differently to states with the same readings: "
+                "it is not a function of what it reads through its ports"
+            )
+
+    def _walk(self, roots: np.ndarray, rows: np.ndarray, loc: np.ndarray, record: Callable[[int], None]) -> np.ndarray:
+        """Leaf ids for units with root keys ``roots`` and platform digits ``loc[rows]``;
+        ``record(unit)`` runs the real core for a unit whose answers leave the trees."""
+        uk, first, inv = np.unique(roots, return_index=True, return_inverse=True)
+        top = np.empty(len(uk), dtype=np.int64)
+        for i, k in enumerate(uk.tolist()):
+            n = self.roots.get(k)
+            if n is None:
+                record(int(first[i]))
+                n = self.roots[k]
+            top[i] = n
+        node = top[inv]
+        active = np.flatnonzero(self.node_leaf.a[node] < 0)
+        retried: set[int] = set()
+        while active.size:
+            if self._edges_dirty:
+                ks = np.fromiter(self.edges.keys(), dtype=np.int64, count=len(self.edges))
+                vs = np.fromiter(self.edges.values(), dtype=np.int64, count=len(self.edges))
+                order = np.argsort(ks)
+                self._ekeys, self._echild = ks[order], vs[order]
+                self._edges_dirty = False
+            nd = node[active]
+            r = rows[active]
+            ok = self.ok.a
+            base, plat = self.node_base.a, self.node_plat.a
+            code = np.zeros(len(active), dtype=np.int64)
+            for j in range(self.width):
+                code |= ok[base[nd, j] + loc[r, plat[nd, j]]] << j
+            ek = (nd << 20) | code
+            pos = np.searchsorted(self._ekeys, ek)
+            np.minimum(pos, len(self._ekeys) - 1, out=pos)
+            hit = self._ekeys[pos] == ek if len(self._ekeys) else np.zeros(len(ek), dtype=bool)
+            if not hit.all():
+                missed = np.flatnonzero(~hit)
+                again, firsts = np.unique(ek[missed], return_index=True)
+                if retried.intersection(again.tolist()):
+                    raise CheckerError(  # pragma: no cover - a bug in the engine, not in the system under test
+                        "table engine: a per-platform answer disagrees with the real requirement check; run with --engine direct"
+                    )
+                retried.update(again.tolist())
+                for m in np.sort(firsts):
+                    record(int(active[missed[m]]))
+                continue  # the trees now hold every missed answer: walk this step again
+            node[active] = self._echild[pos]
+            active = active[self.node_leaf.a[node[active]] < 0]
+        return self.node_leaf.a[node]
+
+    # -- recording ----------------------------------------------------------------------
+    def _recording(self, run: Callable[[], Any]) -> tuple[Any, list[tuple[tuple, int]]]:
+        global _RECORDING
+        rec = self.recorder
+        rec.obs = []
+        rec.inside = 0
+        _RECORDING, _validity._observer = rec, rec
+        try:
+            out = run()
+        finally:
+            _RECORDING, _validity._observer = _Idle(), None
+        self.records += 1
+        return out, rec.obs
+
+    def record_reaction(self, key: Key, event: Event, prefix: tuple[bool, ...], root: int, env2: int, stim: int) -> None:
+        rc = self.rc
+
+        def run() -> tuple:
+            st = rc.store
+            st.load(key)
+            rc.core.standing = frozenset(key.standing)
+            st.begin(prefix)
+            stimulus, log = rc.core.step(event, st)
+            return stimulus, log, st.key(rc.core.standing), tuple(st.outcomes), st.instant
+
+        (stimulus, log, nkey, outcomes, instant), obs = self._recording(run)
+        got = 0 if stimulus.context_changed else (self.platform_index[stimulus.changed_platforms[0]] + 1 if stimulus.changed_platforms else self.P + 1)
+        expect = self.env.key(env2, (nkey.deployments, nkey.standing))
+        if got != stim or expect != nkey:
+            raise CheckerError(f"table engine: {event} on {key} gave {nkey} (stimulus {stimulus}), the encoding expected {expect}")  # pragma: no cover
+        fails = tuple(i for i, ok in enumerate(outcomes) if not ok)
+        names = tuple(_branch(c, ok) for c, ok in log.commands) if log.commands else _KEPT
+        inst = instant[0] if instant is not None else None
+        leaf = self._leaf(("r", self.system(nkey.deployments, nkey.standing), outcomes, fails, names, inst))
+        self._insert(root, obs, leaf)
+
+    def record_invariants(self, key: Key, root: int) -> None:
+        bad, obs = self._recording(lambda: self.rc.violations(key))
+        self._insert(root, obs, self._leaf(("v", tuple(n for n, _m in bad))))
+
+    # -- the search ---------------------------------------------------------------------
+    def run(self, res: Any, *, max_states: int | None, max_depth: int | None, timeout: float | None, keep_going: bool,
+            progress: bool, progress_after: float, progress_every: float, out: Any, t0: float) -> tuple[dict, str, int]:
+        ch = self.checker
+        b = self.bounds
+        init = ch.initial()
+        env = self.env = _Env(ch, init)
+        P, C = self.P, env.C
+        # the answers of unused check positions: a block of zeros as long as any platform's digit range
+        for _ in range(max(env.R)):
+            self.ok.append(0)
+        if C > 64:
+            raise CheckerError(f"table engine: {C} contexts (at most 64); run with --engine direct")
+        if env.space.bit_length() + SYS_BITS > 62:
+            raise CheckerError(f"table engine: the environment has {env.space:,} combinations, too many to encode; run with --engine direct")
+        STIM_INV = P + 2
+        # events: slots in the order of Checker._compute_enabled
+        events: list[Event] = []
+        event_ids: dict[Event, int] = {}
+
+        def eid(e: Event) -> int:
+            i = event_ids.get(e)
+            if i is None:
+                i = event_ids[e] = len(events)
+                events.append(e)
+            return i
+
+        moves = [b.action_moves(c) for c in env.ctxs]
+        kmax = max((len(m) for m in moves), default=0)
+        move_to = np.full((C, max(kmax, 1)), -1, dtype=np.int64)
+        move_ev = np.full((C, max(kmax, 1)), -1, dtype=np.int64)
+        for c, m in enumerate(moves):
+            for k, a in enumerate(m):
+                move_to[c, k] = env.ctxs.index(a)
+                move_ev[c, k] = eid(ActionChange(a))
+        slot_specs: list[tuple] = [("action", k) for k in range(kmax)]
+        for d in b.devices:
+            p = self.platform_index[env.platform_of[d]]
+            j = env.vdev[p].index(d)
+            slot_specs.append(("device", p, j, eid(DeviceFail(d)), eid(DeviceRepair(d))))
+        for name in b.platforms:
+            p = self.platform_index[name]
+            slot_specs.append(("platform", p, eid(PlatformDown(name)), eid(PlatformUp(name))))
+        for name, lv in b.loads.items():
+            p = self.platform_index[name]
+            ids = np.array([eid(LoadChange(name, x, b.load_resource)) for x in lv], dtype=np.int64)
+            slot_specs.append(("load", p, +1, ids))
+            slot_specs.append(("load", p, -1, ids))
+        kind_of = np.array([_KIND_ID[event_kind(e)] for e in events] or [0], dtype=np.int64)
+
+        # states: code = env << SYS_BITS | system
+        codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
+        parent = array("l", [-1])
+        label = array("l", [-1])
+        labels: list[tuple[Event, tuple[int, ...]]] = []
+        label_ids: dict[tuple[int, int], int] = {}
+        fails_of: list[tuple[int, ...]] = []
+        fails_ids: dict[tuple[int, ...], int] = {}
+        seen = {codes[0]}
+        found: dict[str, Any] = {}
+        wanted = {i.name for i in ch.invariants}
+
+        def key_of(i: int) -> Key:
+            c = codes[i]
+            return env.key(c >> SYS_BITS, self.systems[c & _SYS_MASK])
+
+        def record(name: str, msg: str, i: int, during: str | None = None, extra: tuple | None = None) -> None:
+            if name in found:
+                return
+            ls: list = []
+            ks: list = []
+            while i >= 0:
+                ks.append(key_of(i))
+                if label[i] >= 0:
+                    ls.append(labels[label[i]])
+                i = parent[i]
+            ls.reverse()
+            ks.reverse()
+            if extra is not None:
+                ls.append(extra)
+            found[name] = Counterexample(name, msg, tuple(ch.replay(ls, expect=ks)), during)
+
+        def done() -> bool:
+            return (not keep_going and bool(found)) or wanted <= set(found)
+
+        for name, msg in ch.violations(init):
+            record(name, msg, 0)
+        any_found = bool(found)
+        frontier = np.array([0], dtype=np.int64)
+        depth = 0
+        transitions = 0
+        incomplete = ""
+        last_progress = t0
+        printed = False
+        bound = b.start_failures
+
+        while len(frontier) and not (any_found and done()) and not incomplete:
+            if max_depth is not None and depth >= max_depth:
+                incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
+                break
+            nxt: list[int] = []
+            for lo in range(0, len(frontier), CHUNK_STATES):
+                now = time.perf_counter()
+                if timeout is not None and now - t0 > timeout:
+                    incomplete = f"timeout {timeout:g}s"
+                    break
+                if progress and now - t0 >= progress_after and now - last_progress >= progress_every:
+                    last_progress, printed = now, True
+                    print(f"\r  {len(codes):,} states  {transitions:,} transitions  depth {depth}  {len(codes) / (now - t0):,.0f} states/s ",
+                          end="", file=out, flush=True)
+                ids = frontier[lo: lo + CHUNK_STATES]
+                sc = np.frombuffer(codes, dtype=np.int64)[ids]
+                envs, syss = sc >> SYS_BITS, sc & _SYS_MASK
+                L = env.locals(envs)
+                ctx = envs % C
+                if b.max_failures is None:
+                    can_fail = np.ones(len(envs), dtype=bool)
+                else:
+                    nfail = np.full(len(envs), env.const_failures, dtype=np.int64)
+                    for p in range(P):
+                        nfail += env.failcount[p][L[:, p]]
+                    can_fail = nfail < b.max_failures
+                # every enabled (state, event) pair, state-major then in slot order
+                S, N = len(slot_specs), len(envs)
+                M = np.zeros((S, N), dtype=bool)
+                E2 = np.zeros((S, N), dtype=np.int64)
+                EV = np.zeros((S, N), dtype=np.int64)
+                ST = np.zeros((S, N), dtype=np.int64)
+                for s, spec in enumerate(slot_specs):
+                    kind = spec[0]
+                    if kind == "action":
+                        k = spec[1]
+                        tgt = move_to[ctx, k]
+                        M[s] = tgt >= 0
+                        E2[s] = envs - ctx + tgt
+                        EV[s] = move_ev[ctx, k]
+                        ST[s] = np.where(tgt == ctx, P + 1, 0)
+                    elif kind == "device":
+                        _k, p, j, ev_fail, ev_rep = spec
+                        unit = env.W[p] * env.U[p] * (1 << j)
+                        bit = (L[:, p] // env.U[p] >> j) & 1
+                        failed = bit.astype(bool)
+                        M[s] = np.where(failed, b.repair, can_fail)
+                        E2[s] = np.where(failed, envs - unit, envs + unit)
+                        EV[s] = np.where(failed, ev_rep, ev_fail)
+                        ST[s] = p + 1
+                    elif kind == "platform":
+                        _k, p, ev_down, ev_up = spec
+                        unit = env.W[p]
+                        down = (L[:, p] % 2).astype(bool)
+                        M[s] = np.where(down, b.repair, can_fail)
+                        E2[s] = np.where(down, envs - unit, envs + unit)
+                        EV[s] = np.where(down, ev_up, ev_down)
+                        ST[s] = p + 1
+                    else:
+                        _k, p, step, ids_lv = spec
+                        unit = env.W[p] * env.U[p] * (1 << env.K[p])
+                        li = L[:, p] // (env.U[p] << env.K[p])
+                        to = li + step
+                        M[s] = (to >= 0) & (to < len(ids_lv))
+                        E2[s] = envs + step * unit
+                        EV[s] = ids_lv[np.clip(to, 0, len(ids_lv) - 1)]
+                        ST[s] = p + 1
+                pos, slot = np.nonzero(M.T)
+                t_env2 = E2[slot, pos]
+                t_ev = EV[slot, pos]
+                t_stim = ST[slot, pos]
+                t_sys = syss[pos]
+                t_loc = env.locals(t_env2)
+                T = len(pos)
+                # units: (transition, failed-start prefix), generation by generation
+                u_t = np.arange(T, dtype=np.int64)
+                u_pre = np.zeros(T, dtype=np.int64)
+                u_gen = np.zeros(T, dtype=np.int64)
+                u_rank = np.zeros(T, dtype=np.int64)
+                all_t, all_gen, all_rank, all_pre, all_leaf = [], [], [], [], []
+                gen = 0
+                while len(u_t):
+                    roots = (t_sys[u_t] << 39) | ((t_env2[u_t] % C) << 33) | (t_stim[u_t] << 16) | u_pre
+
+                    def rec(u: int, u_t: np.ndarray = u_t, u_pre: np.ndarray = u_pre, roots: np.ndarray = roots) -> None:
+                        t = int(u_t[u])
+                        self.record_reaction(key_of(int(ids[pos[t]])), events[int(t_ev[t])], self.prefixes[int(u_pre[u])],
+                                             int(roots[u]), int(t_env2[t]), int(t_stim[t]))
+
+                    leaf = self._walk(roots, u_t, t_loc, rec)
+                    all_t.append(u_t)
+                    all_gen.append(u_gen)
+                    all_rank.append(u_rank)
+                    all_pre.append(u_pre)
+                    all_leaf.append(leaf)
+                    if not bound:
+                        break
+                    # the failed-start prefixes each unit's outcomes open (Checker.successors)
+                    pairs = u_pre * len(self.leaves) + leaf
+                    up, pinv = np.unique(pairs, return_inverse=True)
+                    kids: list[list[int]] = []
+                    for pv in up.tolist():
+                        pre, lf = self.prefixes[pv // len(self.leaves)], self.leaves[pv % len(self.leaves)]
+                        outcomes, fails = lf[2], lf[3]
+                        kids.append([self.prefix(outcomes[:i] + (False,)) for i in range(len(pre), len(outcomes))] if len(fails) < bound else [])
+                    counts = np.array([len(k) for k in kids], dtype=np.int64)[pinv]
+                    if not counts.any():
+                        break
+                    order = np.lexsort((u_rank, u_t))
+                    order = order[counts[order] > 0]
+                    flat = [kids[pinv[i]] for i in order.tolist()]
+                    n_t = np.repeat(u_t[order], counts[order])
+                    n_pre = np.array([x for k in flat for x in k], dtype=np.int64)
+                    starts = np.r_[0, np.flatnonzero(np.diff(n_t)) + 1]
+                    n_rank = np.arange(len(n_t)) - np.repeat(starts, np.diff(np.r_[starts, len(n_t)]))
+                    gen += 1
+                    u_t, u_pre, u_rank = n_t, n_pre, n_rank
+                    u_gen = np.full(len(u_t), gen, dtype=np.int64)
+                U_t = np.concatenate(all_t)
+                U_leaf = np.concatenate(all_leaf)
+                order = np.lexsort((np.concatenate(all_rank), np.concatenate(all_gen), U_t))
+                U_t, U_leaf = U_t[order], U_leaf[order]
+                U_pre = np.concatenate(all_pre)[order]
+                leaf_sys = np.array(self._leaf_sys, dtype=np.int64)
+                U_code = (t_env2[U_t] << SYS_BITS) | leaf_sys[U_leaf]
+                U_moved = U_code != sc[pos[U_t]]
+                # candidate new states: first occurrence in this batch, not seen before
+                uniq, first = np.unique(U_code, return_index=True)
+                fresh = np.fromiter((c not in seen for c in uniq.tolist()), dtype=bool, count=len(uniq))
+                cand = np.sort(first[fresh])
+                # the invariants each candidate violates (memoised like reactions)
+                if len(cand):
+                    ct = U_t[cand]
+                    csys = leaf_sys[U_leaf[cand]]
+                    iroots = (csys << 39) | ((t_env2[ct] % C) << 33) | (STIM_INV << 16)
+
+                    def irec(u: int, ct: np.ndarray = ct, csys: np.ndarray = csys, iroots: np.ndarray = iroots) -> None:
+                        t = int(ct[u])
+                        self.record_invariants(env.key(int(t_env2[t]), self.systems[int(csys[u])]), int(iroots[u]))
+
+                    bad_leaf = self._walk(iroots, ct, t_loc, irec)
+                else:
+                    bad_leaf = np.zeros(0, dtype=np.int64)
+                bad_of = dict(zip(cand.tolist(), bad_leaf.tolist()))
+                inst_units = np.flatnonzero(np.array(self._leaf_inst, dtype=bool)[U_leaf])
+                records = np.union1d(cand, inst_units)
+                # the records in order, as the direct engine's search loop meets them
+                cut_t, stop_unit = T, -1
+                for u in records.tolist():
+                    t = int(U_t[u])
+                    if t > cut_t:
+                        break
+                    lf = self.leaves[int(U_leaf[u])]
+                    if lf[5] is not None:
+                        nkey = env.key(int(t_env2[t]), self.systems[lf[1]])
+                        if lf[5] not in {v for v, _m in ch.violations(nkey)} and lf[5] not in found:
+                            # repaired before quiescence: the real run gives the message
+                            k0 = key_of(int(ids[pos[t]]))
+                            _n, _o, _log, instant = ch.run_one(k0, events[int(t_ev[t])], self.prefixes[int(U_pre[u])])
+                            record(instant[0], instant[1], int(ids[pos[t]]), instant[2], (events[int(t_ev[t])], lf[3]))
+                            any_found = True
+                            if done():
+                                cut_t, stop_unit = t, u
+                                break
+                    if u in bad_of:
+                        c = int(U_code[u])
+                        seen.add(c)
+                        ni = len(codes)
+                        codes.append(c)
+                        parent.append(int(ids[pos[t]]))
+                        lk = (int(t_ev[t]), lf[3])
+                        li = label_ids.get(lk)
+                        if li is None:
+                            li = label_ids[lk] = len(labels)
+                            labels.append((events[lk[0]], lf[3]))
+                        label.append(li)
+                        res.new_states[_KINDS[kind_of[t_ev[t]]]] += 1
+                        if max_states is not None and len(codes) >= max_states:
+                            incomplete = f"max states {max_states:,} reached"
+                        names = self.leaves[bad_of[u]][1]
+                        if names:
+                            for name, msg in ch.violations(key_of(ni)):
+                                record(name, msg, ni)
+                            any_found = True
+                        else:
+                            nxt.append(ni)
+                    if (any_found and done()) or incomplete:
+                        cut_t = t
+                # count what the direct engine counts up to the cut
+                if stop_unit >= 0:
+                    inc = np.arange(stop_unit + 1)
+                else:
+                    inc = np.flatnonzero(U_t <= cut_t)
+                transitions += len(inc)
+                leaf_counts = np.bincount(U_leaf[inc], minlength=len(self.leaves))
+                for lf_id in np.flatnonzero(leaf_counts).tolist():
+                    n = int(leaf_counts[lf_id])
+                    for name in self.leaves[lf_id][4]:
+                        res.branches[name] += n
+                moved_inc = inc[:-1] if stop_unit >= 0 else inc
+                kinds_units = kind_of[t_ev[U_t[moved_inc]]]
+                for k, n in enumerate(np.bincount(kinds_units[U_moved[moved_inc]], minlength=len(_KINDS)).tolist()):
+                    if n:
+                        res.changed[_KINDS[k]] += n
+                last_t = min(cut_t, T - 1)
+                entered = np.arange(last_t + 1) if T else np.zeros(0, dtype=np.int64)
+                for k, n in enumerate(np.bincount(kind_of[t_ev[entered]], minlength=len(_KINDS)).tolist()):
+                    if n:
+                        res.enabled[_KINDS[k]] += n
+                n_states = int(pos[last_t]) + 1 if (T and cut_t < T) else N
+                for c, n in enumerate(np.bincount(ctx[:n_states], minlength=C).tolist()):
+                    if n:
+                        res.rules[env.ctxs[c]] += n
+                if cut_t < T:
+                    break
+            if nxt:
+                depth += 1
+            frontier = np.array(nxt, dtype=np.int64)
+        if printed:
+            print("", file=out, flush=True)
+        self.codes = codes
+        res.transitions = transitions
+        res.states = len(codes)
+        return found, incomplete, depth
+
+    def explored(self) -> "_Explored":
+        return _Explored(self)
+
+
+class _Explored(Sequence[Key]):
+    """The distinct states of a table-engine run in BFS order, decoded on access."""
+
+    def __init__(self, engine: TableEngine) -> None:
+        self._e = engine
+
+    def __len__(self) -> int:
+        return len(self._e.codes)
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        c = self._e.codes[i]
+        return self._e.env.key(c >> SYS_BITS, self._e.systems[c & _SYS_MASK])
+
+    def __iter__(self) -> Iterator[Key]:
+        for i in range(len(self)):
+            yield self[i]
+
