@@ -419,7 +419,7 @@ class Checker:
             symmetry=self.symmetry is not None, not_checked=self.not_checked, workers=workers,
         )
         if engine != "direct":
-            from desmon.verify.table import TableEngine, UnobservedRead, table_unsupported
+            from desmon.verify.table import TableEngine, TableUnsupported, table_unsupported
 
             why = table_unsupported(self)
             if engine == "table" and why:
@@ -434,7 +434,7 @@ class Checker:
                         res, max_states=max_states, max_depth=max_depth, timeout=timeout, keep_going=keep_going,
                         progress=progress, progress_after=progress_after, progress_every=progress_every, out=out, t0=t0,
                     )
-                except UnobservedRead:
+                except TableUnsupported:
                     if engine == "table":
                         raise
                     found = None  # type: ignore[assignment]

@@ -67,7 +67,7 @@ from desmon.model.system import PlatformState
 from desmon.verify.checker import _KEPT, Counterexample, _branch
 from desmon.verify.state import Key, StateStore
 
-__all__ = ["TableEngine", "UnobservedRead", "table_unsupported", "CHUNK_STATES"]
+__all__ = ["TableEngine", "TableUnsupported", "UnobservedRead", "table_unsupported", "CHUNK_STATES"]
 
 #: bits of a state code that hold the interned system part (deployments, standing)
 SYS_BITS = 24
@@ -78,7 +78,11 @@ _KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_u
 _KIND_ID = {k: i for i, k in enumerate(_KINDS)}
 
 
-class UnobservedRead(CheckerError):
+class TableUnsupported(CheckerError):
+    """The table engine cannot run this search (``--engine auto`` falls back to the direct engine)."""
+
+
+class UnobservedRead(TableUnsupported):
     """A reaction read a platform fact outside the requirement checks: it cannot be memoised."""
 
 
@@ -90,7 +94,15 @@ _ALLOWED_READERS = frozenset({"desmon.deployment.validity", "dataclasses"})
 
 
 class _Recorder:
-    """Observer of the requirement checks of one recorded run (see ``validity._observer``)."""
+    """Observer of the requirement checks of one recorded run (see ``validity._observer``).
+
+    It answers each check with the real result, wrapped so that the run's *use* of it
+    is what gets recorded: asking whether one platform is acceptable observes that
+    platform's answer only, iterating the acceptable platforms observes them one by one
+    in preference order (up to where the iteration stops), and anything else (length,
+    indexing, comparing, the rejected platforms and their reasons) observes every
+    answer, down to the failure texts when those are read.
+    """
 
     def __init__(self, engine: "TableEngine") -> None:
         self.engine = engine
@@ -101,59 +113,199 @@ class _Recorder:
     def validity(self, reqs: tuple, states: tuple[PlatformState, ...], graph: str | None, reasons: bool) -> Any:
         self.inside += 1
         try:
-            v = _validity._check_validity.__wrapped__(reqs, states, graph, reasons)
-            ok = set(v.acceptable)
-            self._note(reqs, graph, states, [s.platform.name in ok for s in states])
+            parts = self._parts(states)
+            fails = [_validity._check_platform(reqs, st, graph, not reasons) for st in states]
+            real = _validity._check_validity(reqs, states, graph, reasons)
+            order = [states.index(st) for st in _validity.order_platforms(states)]
         finally:
             self.inside -= 1
-        return v
+        check = _Check(self, reqs, graph, not reasons, parts, fails, [st.platform.name for st in states])
+        return _validity.Validity(_Acceptable(check, real.acceptable, order), _Reasons(check, real.rejected))  # type: ignore[arg-type]
 
     def platform(self, reqs: tuple, state: PlatformState, graph: str | None, first_only: bool) -> Any:
         self.inside += 1
         try:
-            fails = _validity._check_platform.__wrapped__(reqs, state, graph, first_only)
-            self._note(reqs, graph, (state,), [not fails])
+            parts = self._parts((state,))
+            fails = _validity._check_platform(reqs, state, graph, first_only)
         finally:
             self.inside -= 1
-        return fails
+        return _Reasons(_Check(self, reqs, graph, first_only, parts, [fails], [state.platform.name]), fails, single=True)
 
-    def _note(self, reqs: tuple, graph: str | None, states: tuple[PlatformState, ...], bits: list[bool]) -> None:
+    def _parts(self, states: tuple[PlatformState, ...]) -> tuple[tuple[int, int], ...]:
+        """(platform index, interned deployments) of each state, after checking its facts are the state's own."""
         eng = self.engine
         store = self.store
         assert store is not None
+        own = store.platform_states()
+        index = eng.platform_index
         parts = []
-        code = 0
-        for j, (s, bit) in enumerate(zip(states, bits)):
+        for s in states:
             name = s.platform.name
-            canonical = store.platform_state(name)
-            if (s.up, s.devices, s.load) != (canonical.up, canonical.devices, canonical.load):
+            p = index[name]
+            canonical = own[p]
+            if s is not canonical and (s.up, s.devices, s.load) != (canonical.up, canonical.devices, canonical.load):
                 raise UnobservedRead(
                     f"a requirement check saw platform {name} with facts that are not the state's own "
                     f"(up={s.up}, devices={[d.name for d in s.devices]}, load={s.load}): the table engine cannot "
                     "memoise a port that rewrites platform facts; run with --engine direct"
                 )
-            parts.append((eng.platform_index[name], eng.intern_deployed(s.deployed)))
-            code |= int(bit) << j
-        self.obs.append(((eng.intern_table(reqs, graph), tuple(parts)), code))
+            parts.append((p, eng.intern_deployed(s.deployed)))
+        return tuple(parts)
+
+
+class _Check:
+    """One requirement check's real answers, and how to record observing them."""
+
+    __slots__ = ("rec", "table", "first_only", "parts", "fails", "names")
+
+    def __init__(self, rec: _Recorder, reqs: tuple, graph: str | None, first_only: bool,
+                 parts: tuple[tuple[int, int], ...], fails: list[tuple], names: list[str]) -> None:
+        self.rec = rec
+        self.table = rec.engine.intern_table(reqs, graph)
+        self.first_only = first_only
+        self.parts = parts
+        self.fails = fails
+        self.names = names
+
+    def ok(self, which: Sequence[int]) -> None:
+        """Observe whether the platforms at positions ``which`` pass."""
+        code = 0
+        for j, i in enumerate(which):
+            code |= (not self.fails[i]) << j
+        self.rec.obs.append((("ok", self.table, None, tuple(self.parts[i] for i in which)), code))
+
+    def why(self) -> None:
+        """Observe every platform's failures, reasons included."""
+        eng = self.rec.engine
+        code, mult = 0, 1
+        for (p, dep), f in zip(self.parts, self.fails):
+            value, radix = eng.failure_id(self.table, self.first_only, p, dep, f)
+            code += value * mult
+            mult *= radix
+        self.rec.obs.append((("why", self.table, self.first_only, self.parts), code))
+
+
+class _Observed:
+    """A read-only sequence whose every use is recorded (see :class:`_Recorder`)."""
+
+    __slots__ = ("_check", "_real")
+
+    def _all(self) -> tuple:
+        raise NotImplementedError  # pragma: no cover
+
+    def __len__(self) -> int:
+        return len(self._all())
+
+    def __bool__(self) -> bool:
+        return len(self) > 0
+
+    def __iter__(self) -> Iterator[Any]:
+        return iter(self._all())
+
+    def __getitem__(self, i: Any) -> Any:
+        return self._all()[i]
+
+    def __contains__(self, x: object) -> bool:
+        return x in self._all()
+
+    def __eq__(self, other: object) -> bool:
+        return self._all() == (other._all() if isinstance(other, _Observed) else other)
+
+    def __ne__(self, other: object) -> bool:
+        return not self == other
+
+    def __hash__(self) -> int:
+        return hash(self._all())
+
+    def __repr__(self) -> str:
+        return repr(self._all())
+
+    def __reversed__(self) -> Iterator[Any]:
+        return reversed(self._all())
+
+    def __add__(self, other: Any) -> Any:
+        return self._all() + other
+
+    def __radd__(self, other: Any) -> Any:
+        return other + self._all()
+
+    def index(self, *args: Any) -> int:
+        return self._all().index(*args)
+
+    def count(self, x: Any) -> int:
+        return self._all().count(x)
+
+
+class _Acceptable(_Observed):
+    """``Validity.acceptable`` of a recorded check: membership and iteration observe lazily."""
+
+    __slots__ = ("_order",)
+
+    def __init__(self, check: _Check, real: tuple[str, ...], order: list[int]) -> None:
+        self._check, self._real, self._order = check, real, order
+
+    def _all(self) -> tuple:
+        self._check.ok(range(len(self._check.parts)))
+        return self._real  # type: ignore[no-any-return]
+
+    def __contains__(self, x: object) -> bool:
+        names = self._check.names
+        if x not in names:
+            return False  # not a checked platform: the answer depends on no platform fact
+        i = names.index(x)  # type: ignore[arg-type]
+        self._check.ok((i,))
+        return not self._check.fails[i]
+
+    def __iter__(self) -> Iterator[str]:
+        check = self._check
+        for i in self._order:
+            check.ok((i,))
+            if not check.fails[i]:
+                yield check.names[i]
+
+
+class _Reasons(_Observed):
+    """``Validity.rejected`` or ``check_platform``'s failures: a length observes which
+    platforms fail, any content the failures themselves."""
+
+    __slots__ = ("_single",)
+
+    def __init__(self, check: _Check, real: tuple, single: bool = False) -> None:
+        self._check, self._real, self._single = check, real, single
+
+    def _all(self) -> tuple:
+        self._check.why()
+        return self._real  # type: ignore[no-any-return]
+
+    def __len__(self) -> int:
+        self._check.ok(range(len(self._check.parts)))
+        return len(self._real)
+
+
+def _guarded_field(name: str) -> property:
+    slot = getattr(PlatformState, name)  # the dataclass's slot descriptor
+
+    def read(self: PlatformState) -> Any:
+        if not _RECORDING.inside:
+            caller = sys._getframe(1).f_globals.get("__name__")
+            if caller not in _ALLOWED_READERS:
+                raise UnobservedRead(
+                    f"{caller} read `{name}` of platform {self.platform.name} outside the requirement checks "
+                    "(desmon.deployment.validity): the table engine cannot memoise this reaction; "
+                    "run with --engine direct"
+                )
+        return slot.__get__(self)
+
+    return property(read, slot.__set__)  # the constructor still sets the slot
 
 
 class _Guarded(PlatformState):
     """A platform state whose facts may only be read by the requirement checks (recording)."""
 
     __slots__ = ()
-
-    def __getattribute__(self, name: str) -> Any:
-        if name in _ENV_FIELDS and not _RECORDING.inside:
-            caller = sys._getframe(1).f_globals.get("__name__")
-            if caller not in _ALLOWED_READERS:
-                p = object.__getattribute__(self, "platform").name
-                raise UnobservedRead(
-                    f"{caller} read `{name}` of platform {p} outside the requirement checks "
-                    "(desmon.deployment.validity): the table engine cannot memoise this reaction; "
-                    "run with --engine direct"
-                )
-        return object.__getattribute__(self, name)
-
+    up = _guarded_field("up")  # type: ignore[assignment]
+    devices = _guarded_field("devices")  # type: ignore[assignment]
+    load = _guarded_field("load")  # type: ignore[assignment]
     __hash__ = object.__hash__
 
     def __eq__(self, other: object) -> bool:
@@ -348,17 +500,21 @@ class TableEngine:
         self.node_desc: list[tuple | None] = []
         self.node_base = _Grow((1024, P))
         self.node_plat = _Grow((1024, P))
+        self.node_mult = _Grow((1024, P))
+        self.node_len = _Grow((1024,))
         self.edges: dict[int, int] = {}
         self._ekeys = np.zeros(0, dtype=np.int64)
         self._echild = np.zeros(0, dtype=np.int64)
-        self._edges_dirty = False
+        self._new_edges: dict[int, int] = {}  # edges added since the arrays were last merged
         self.leaves: list[tuple] = []
         self._leaf_ids: dict[tuple, int] = {}
         self._leaf_sys: list[int] = []  # a reaction leaf's next system part (-1: an invariants leaf)
         self._leaf_inst: list[bool] = []  # a reaction leaf with an instantaneous violation
         self.width = 1
         self.ok = _Grow((4096,))
-        self._blocks: dict[tuple[int, int, int], int] = {}
+        self._blocks: dict[tuple, tuple[int, int]] = {}
+        self._fails: dict[tuple, list[tuple]] = {}
+        self._ids: dict[tuple, dict[tuple, int]] = {}
         self.records = 0  # real runs of the core (reactions and invariant checks)
 
     # -- interning --------------------------------------------------------------------
@@ -383,7 +539,7 @@ class TableEngine:
         if i is None:
             i = self._system_ids[k] = len(self.systems)
             if i > _SYS_MASK:
-                raise CheckerError(f"table engine: more than {_SYS_MASK:,} distinct deployment states; run with --engine direct")
+                raise TableUnsupported(f"table engine: more than {_SYS_MASK:,} distinct deployment states; run with --engine direct")
             self.systems.append(k)
         return i
 
@@ -392,7 +548,7 @@ class TableEngine:
         if i is None:
             i = self._prefix_ids[p] = len(self.prefixes)
             if i >= 1 << 16:
-                raise CheckerError("table engine: too many failed-start prefixes; run with --engine direct")
+                raise TableUnsupported("table engine: too many failed-start prefixes; run with --engine direct")
             self.prefixes.append(p)
         return i
 
@@ -406,31 +562,66 @@ class TableEngine:
         return i
 
     # -- per-platform answers -----------------------------------------------------------
-    def _block(self, table: int, p: int, dep: int) -> int:
-        """Offset of the answers of check ``table`` on platform ``p`` with deployments ``dep``, per platform digit."""
-        k = (table, p, dep)
-        off = self._blocks.get(k)
-        if off is not None:
-            return off
-        reqs, graph = self._table_args[table]
-        platform = self.model.platforms[p]
-        devices_on = tuple(d for d in self.model.devices if d.platform == platform.name)
-        deployed = self._deployed[dep]
-        check = _validity._check_platform.__wrapped__
+    def _failures(self, table: int, first_only: bool, p: int, dep: int) -> list[tuple]:
+        """The failures of check ``table`` on platform ``p`` with deployments ``dep``, per platform digit."""
+        k = (table, first_only, p, dep)
+        out = self._fails.get(k)
+        if out is None:
+            reqs, graph = self._table_args[table]
+            platform = self.model.platforms[p]
+            devices_on = tuple(d for d in self.model.devices if d.platform == platform.name)
+            deployed = self._deployed[dep]
+            check = _validity._check_platform.__wrapped__
+            out = []
+            for down, failed, load in self.env.decoded[p]:
+                devices = tuple(d for d in devices_on if d.name not in failed) if failed else devices_on
+                out.append(check(reqs, PlatformState(platform, not down, devices, load, deployed), graph, first_only))
+            self._fails[k] = out
+        return out
+
+    def _block(self, mode: str, table: int, first_only: bool | None, p: int, dep: int) -> tuple[int, int]:
+        """(offset, radix) of the answers of a check per platform digit: 1/0 for "ok", for
+        "why" the failures numbered in order of first appearance."""
+        k = (mode, table, first_only, p, dep)
+        hit = self._blocks.get(k)
+        if hit is not None:
+            return hit
+        fails = self._failures(table, bool(first_only), p, dep)
         off = self.ok.n
-        for down, failed, load in self.env.decoded[p]:
-            devices = tuple(d for d in devices_on if d.name not in failed) if failed else devices_on
-            state = PlatformState(platform, not down, devices, load, deployed)
-            self.ok.append(0 if check(reqs, state, graph, True) else 1)
-        self._blocks[k] = off
-        return off
+        if mode == "ok":
+            for f in fails:
+                self.ok.append(0 if f else 1)
+            radix = 2
+        else:
+            ids: dict[tuple, int] = {}
+            for f in fails:
+                self.ok.append(ids.setdefault(f, len(ids)))
+            self._ids[(table, bool(first_only), p, dep)] = ids
+            radix = len(ids)
+        self._blocks[k] = (off, radix)
+        return off, radix
+
+    def failure_id(self, table: int, first_only: bool, p: int, dep: int, fails: tuple) -> tuple[int, int]:
+        """(number, radix) of ``fails`` among the failures check ``table`` can give on ``p`` with ``dep``."""
+        self._block("why", table, first_only, p, dep)
+        ids = self._ids[(table, first_only, p, dep)]
+        if fails not in ids:
+            raise CheckerError(  # pragma: no cover - a bug in the engine, not in the system under test
+                f"table engine: a recorded requirement check on {self.model.platforms[p].name} is not among its per-digit answers"
+            )
+        return ids[fails], len(ids)
 
     # -- decision trees ---------------------------------------------------------------
     def _node(self) -> int:
         self.node_desc.append(None)
         self.node_base.append(0)
         self.node_plat.append(0)
-        return self.node_leaf.append(-2)
+        self.node_mult.append(0)
+        self.node_len.append(1)
+        n = self.node_leaf.append(-2)
+        if n >= 1 << 22:
+            raise TableUnsupported("table engine: more than 4 million decision nodes; run with --engine direct")
+        return n
 
     def _insert(self, root: int, obs: list[tuple[tuple, int]], leaf: int) -> None:
         node = self.roots.get(root)
@@ -439,23 +630,29 @@ class TableEngine:
         for desc, code in obs:
             state = self.node_leaf.a[node]
             if state == -2:
-                table, parts = desc
+                mode, table, first_only, parts = desc
                 self.node_leaf.a[node] = -1
                 self.node_desc[node] = desc
+                mult = 1
                 for j, (p, dep) in enumerate(parts):
-                    self.node_base.a[node, j] = self._block(table, p, dep)
+                    off, radix = self._block(mode, table, first_only, p, dep)
+                    self.node_base.a[node, j] = off
                     self.node_plat.a[node, j] = p
+                    self.node_mult.a[node, j] = mult
+                    mult *= radix
+                self.node_len.a[node] = len(parts)
+                if mult > 1 << 40:
+                    raise TableUnsupported("table engine: a requirement check with too many distinct answers; run with --engine direct")
                 self.width = max(self.width, len(parts))
             elif state != -1 or self.node_desc[node] != desc:
                 raise NondeterminismError(
                     "the deployment core checked different requirements on a state with the same readings: "
                     "it is not a function of what it reads through its ports"
                 )
-            ek = (node << 20) | code
+            ek = (node << 40) | code
             child = self.edges.get(ek)
             if child is None:
-                child = self.edges[ek] = self._node()
-                self._edges_dirty = True
+                child = self.edges[ek] = self._new_edges[ek] = self._node()
             node = child
         state = self.node_leaf.a[node]
         if state == -2:
@@ -479,39 +676,54 @@ class TableEngine:
             top[i] = n
         node = top[inv]
         active = np.flatnonzero(self.node_leaf.a[node] < 0)
-        retried: set[int] = set()
         while active.size:
-            if self._edges_dirty:
-                ks = np.fromiter(self.edges.keys(), dtype=np.int64, count=len(self.edges))
-                vs = np.fromiter(self.edges.values(), dtype=np.int64, count=len(self.edges))
-                order = np.argsort(ks)
-                self._ekeys, self._echild = ks[order], vs[order]
-                self._edges_dirty = False
             nd = node[active]
             r = rows[active]
             ok = self.ok.a
-            base, plat = self.node_base.a, self.node_plat.a
-            code = np.zeros(len(active), dtype=np.int64)
-            for j in range(self.width):
-                code |= ok[base[nd, j] + loc[r, plat[nd, j]]] << j
-            ek = (nd << 20) | code
-            pos = np.searchsorted(self._ekeys, ek)
-            np.minimum(pos, len(self._ekeys) - 1, out=pos)
-            hit = self._ekeys[pos] == ek if len(self._ekeys) else np.zeros(len(ek), dtype=bool)
-            if not hit.all():
-                missed = np.flatnonzero(~hit)
-                again, firsts = np.unique(ek[missed], return_index=True)
-                if retried.intersection(again.tolist()):
+            base, plat, mult = self.node_base.a, self.node_plat.a, self.node_mult.a
+            # the answer code of each unit's check: most checks ask about one platform,
+            # so position j is computed only for the units whose check has more
+            code = ok[base[nd, 0] + loc[r, plat[nd, 0]]] * mult[nd, 0]
+            if self.width > 1:
+                wide = np.flatnonzero(self.node_len.a[nd] > 1)
+                for j in range(1, self.width):
+                    if not wide.size:
+                        break
+                    w = nd[wide]
+                    code[wide] += ok[base[w, j] + loc[r[wide], plat[w, j]]] * mult[w, j]
+                    wide = wide[self.node_len.a[w] > j + 1]
+            ek = (nd << 40) | code
+            child = self._lookup(ek)
+            missed = np.flatnonzero(child < 0)
+            if missed.size:
+                _again, firsts = np.unique(ek[missed], return_index=True)
+                for m in np.sort(firsts):
+                    record(int(active[missed[m]]))
+                child[missed] = self._lookup(ek[missed])
+                if (child[missed] < 0).any():
                     raise CheckerError(  # pragma: no cover - a bug in the engine, not in the system under test
                         "table engine: a per-platform answer disagrees with the real requirement check; run with --engine direct"
                     )
-                retried.update(again.tolist())
-                for m in np.sort(firsts):
-                    record(int(active[missed[m]]))
-                continue  # the trees now hold every missed answer: walk this step again
-            node[active] = self._echild[pos]
-            active = active[self.node_leaf.a[node[active]] < 0]
+            node[active] = child
+            active = active[self.node_leaf.a[child] < 0]
         return self.node_leaf.a[node]
+
+    def _lookup(self, ek: np.ndarray) -> np.ndarray:
+        """The child node of each (node << 40 | answer code), -1 where the trees have none yet."""
+        if self._new_edges:
+            nk = np.array(sorted(self._new_edges), dtype=np.int64)
+            nv = np.array([self._new_edges[k] for k in nk.tolist()], dtype=np.int64)
+            at = np.searchsorted(self._ekeys, nk)
+            self._ekeys = np.insert(self._ekeys, at, nk)
+            self._echild = np.insert(self._echild, at, nv)
+            self._new_edges = {}
+        out = np.full(len(ek), -1, dtype=np.int64)
+        if len(self._ekeys):
+            pos = np.searchsorted(self._ekeys, ek)
+            np.minimum(pos, len(self._ekeys) - 1, out=pos)
+            hit = self._ekeys[pos] == ek
+            out[hit] = self._echild[pos[hit]]
+        return out
 
     # -- recording ----------------------------------------------------------------------
     def _recording(self, run: Callable[[], Any]) -> tuple[Any, list[tuple[tuple, int]]]:
@@ -565,9 +777,9 @@ class TableEngine:
         for _ in range(max(env.R)):
             self.ok.append(0)
         if C > 64:
-            raise CheckerError(f"table engine: {C} contexts (at most 64); run with --engine direct")
+            raise TableUnsupported(f"table engine: {C} contexts (at most 64); run with --engine direct")
         if env.space.bit_length() + SYS_BITS > 62:
-            raise CheckerError(f"table engine: the environment has {env.space:,} combinations, too many to encode; run with --engine direct")
+            raise TableUnsupported(f"table engine: the environment has {env.space:,} combinations, too many to encode; run with --engine direct")
         STIM_INV = P + 2
         # events: slots in the order of Checker._compute_enabled
         events: list[Event] = []
