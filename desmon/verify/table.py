@@ -263,6 +263,19 @@ class _Acceptable(_Observed):
             if not check.fails[i]:
                 yield check.names[i]
 
+    def __bool__(self) -> bool:
+        for _name in self:  # observes the platforms up to the first acceptable one
+            return True
+        return False
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, int) and i >= 0:
+            for k, name in enumerate(self):  # observes the platforms up to the i-th acceptable one
+                if k == i:
+                    return name
+            raise IndexError("tuple index out of range")
+        return self._all()[i]
+
 
 class _Reasons(_Observed):
     """``Validity.rejected`` or ``check_platform``'s failures: a length observes which
