@@ -268,6 +268,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--workers", type=int, default=1, metavar="N",
         help="expand large BFS levels in N forked processes (same result for any N; default 1)",
     )
+    p.add_argument(
+        "--engine", choices=("auto", "table", "direct"), default="auto",
+        help="table: run the real core once per distinct reading of a reaction and replay it (fast); "
+        "direct: run it on every transition; auto (default): table unless --symmetry or --workers (same result)",
+    )
     p.add_argument("--json", default=None, metavar="FILE", help="write the counterexample(s) as JSON states")
     p.add_argument("--pytest", default=None, metavar="FILE", help="write a pytest replaying the counterexample")
     p.add_argument("--plot", default=None, metavar="FILE.png", help="draw the shortest counterexample as repository snapshots")

@@ -140,6 +140,7 @@ class CheckResult:
     worker_levels: int = 0  # BFS levels the workers expanded (levels under PARALLEL_LEVEL states stay in-process)
     engine: str = "direct"  # "table" or "direct" (see Checker.run)
     records: int = 0  # table engine: real runs of the core it recorded (reactions and invariant checks)
+    engine_note: str = ""  # why engine "auto" ran the direct engine
 
     @property
     def states_per_second(self) -> float:
@@ -424,7 +425,11 @@ class Checker:
             why = table_unsupported(self)
             if engine == "table" and why:
                 raise CheckerError(f"--engine table: {why}; use --engine direct or auto")
-            if why is None and (engine == "table" or workers == 1):
+            if engine == "table" and workers > 1:
+                raise CheckerError("--workers runs the direct engine in several processes; the table engine runs in one: drop --workers or use --engine direct")
+            if why is None and workers > 1:
+                why = "--workers runs the direct engine"
+            if why is None:
                 res.engine, res.workers = "table", 1
                 collecting = gc.isenabled()
                 gc.disable()  # as below: the search makes no cycles
@@ -434,10 +439,11 @@ class Checker:
                         res, max_states=max_states, max_depth=max_depth, timeout=timeout, keep_going=keep_going,
                         progress=progress, progress_after=progress_after, progress_every=progress_every, out=out, t0=t0,
                     )
-                except TableUnsupported:
+                except TableUnsupported as exc:
                     if engine == "table":
                         raise
                     found = None  # type: ignore[assignment]
+                    why = str(exc)
                 finally:
                     if collecting:
                         gc.enable()
@@ -445,10 +451,13 @@ class Checker:
                     self.explored = table.explored()  # type: ignore[assignment]
                     res.records = table.records
                     return self._finish(res, found, incomplete, depth, t0)
-                return self.run(
+                res = self.run(
                     max_states=max_states, max_depth=max_depth, timeout=timeout, keep_going=keep_going, progress=progress,
                     progress_after=progress_after, progress_every=progress_every, workers=workers, engine="direct", out=out,
                 )
+                res.engine_note = why or ""
+                return res
+            res.engine_note = why or ""
         canon = self.symmetry.canon if self.symmetry is not None else None
         init = self.initial()
         if canon is not None:

@@ -35,6 +35,7 @@ def verify_command(args: argparse.Namespace) -> int:
         keep_going=args.keep_going,
         progress=not args.no_progress,
         workers=getattr(args, "workers", 1),
+        engine=getattr(args, "engine", "auto"),
     )
     print(format_result(result), end="")
     if args.json:

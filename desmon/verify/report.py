@@ -41,6 +41,10 @@ def format_result(r: CheckResult) -> str:
         f"{r.states_per_second:,.0f} states/s  {r.transitions_per_second:,.0f} transitions/s  peak memory: {r.peak_mb:.0f} MB"
         + (f" (+ {r.workers} workers, each at most {r.peak_workers_mb:.0f} MB)" if r.worker_levels else "")
     )
+    if r.engine == "table":
+        lines.append(f"engine: table ({r.records:,} real runs of the core recorded, replayed for the other transitions)")
+    else:
+        lines.append("engine: direct" + (f" ({r.engine_note})" if r.engine_note else ""))
     kinds = sorted(set(r.enabled) | set(r.new_states))
     if kinds:
         lines.append("events (enabled / new states): " + ", ".join(f"{k} {r.enabled[k]:,}/{r.new_states[k]:,}" for k in kinds))
@@ -118,6 +122,8 @@ def result_to_json(r: CheckResult) -> dict[str, Any]:
         "seconds": round(r.seconds, 3),
         "workers": r.workers,
         "worker_levels": r.worker_levels,
+        "engine": r.engine,
+        "records": r.records,
         "invariants": list(r.invariants),
         "not_checked": {n: NOT_CHECKED.get(n, "") for n in r.not_checked},
         "counterexamples": [counterexample_to_json(c) for c in r.counterexamples],

@@ -1,0 +1,156 @@
+"""The table engine: the real core run once per distinct reading, the direct engine's result."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import pytest
+
+from desmon.cli import main
+from desmon.deployment import validity
+from desmon.deployment.deployer import DESMON, Deployer
+from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, RaiseError
+from desmon.errors import CheckerError
+from desmon.loader import load_scenario
+from desmon.verify import Checker
+from desmon.verify.mutants import MUTANTS
+from desmon.verify.table import UnobservedRead
+
+SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+NAMES = sorted(p.stem for p in SCENARIOS.glob("*.py"))
+OPTIONS = ({}, {"keep_going": True}, {"max_states": 30}, {"max_depth": 3})
+
+
+def _everything(r, c):  # type: ignore[no-untyped-def]
+    """Every part of a result a user can see, counterexample steps included."""
+    return (
+        r.verdict, r.reason, r.states, r.transitions, r.depth,
+        dict(r.enabled), dict(r.new_states), dict(r.changed), dict(r.rules), dict(r.branches),
+        [(x.invariant, x.message, x.during, [(s.title(), s.changes, s.commands, s.key) for s in x.steps]) for x in r.counterexamples],
+        list(c.explored),
+    )
+
+
+def _both(scenario, deployer, **kw):  # type: ignore[no-untyped-def]
+    direct = Checker(scenario, deployer)
+    rd = direct.run(engine="direct", **kw)
+    table = Checker(scenario, deployer)
+    rt = table.run(engine="table", **kw)
+    assert (rd.engine, rt.engine) == ("direct", "table")
+    return _everything(rd, direct), _everything(rt, table), rt
+
+
+@pytest.mark.parametrize("deployer", ["desmon", "paper"])
+@pytest.mark.parametrize("name", NAMES)
+def test_table_engine_gives_the_direct_engines_result_on_every_scenario(name, deployer):
+    scenario = load_scenario(SCENARIOS / f"{name}.py")
+    for kw in OPTIONS:
+        d, t, _r = _both(scenario, deployer, **kw)
+        assert t == d, (name, deployer, kw)
+
+
+@pytest.mark.parametrize(
+    "name, mutant",
+    [("coffee_handover", "no-recheck"), ("migration", "capacity-blind"),
+     ("migration", "make-before-break"), ("robot_day", "make-before-break")],
+)
+def test_table_engine_catches_each_mutant_with_the_same_counterexamples(name, mutant):
+    scenario = load_scenario(SCENARIOS / f"{name}.py")
+    for kw in ({}, {"keep_going": True}):
+        d, t, r = _both(scenario, MUTANTS[mutant], **kw)
+        assert t == d
+        assert r.verdict == "VIOLATED"
+
+
+def test_the_real_core_runs_far_fewer_times_than_there_are_transitions():
+    r = Checker(load_scenario(SCENARIOS / "coffee_handover.py")).run(engine="table")
+    assert r.engine == "table" and r.verdict == "HOLDS"
+    assert 0 < r.records < r.transitions / 5
+
+
+def _peeking(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    # a deployer that reads background load directly, not through a requirement check
+    if sum(s.load_of("memory") for s in q.platform_states()) > 10**9:
+        return
+    yield from DESMON.react(q, slots, changed, context_changed)
+
+
+PEEKING = Deployer("peeking", "reads platform load outside validity", _peeking)
+
+
+def test_a_deployer_reading_platform_facts_directly_is_refused_by_the_table_engine():
+    with pytest.raises(UnobservedRead, match=r"read `load` of platform .* outside the requirement checks.*--engine direct"):
+        Checker(load_scenario(SCENARIOS / "coffee_handover.py"), PEEKING).run(engine="table")
+    assert validity._observer is None  # the observer never outlives a run
+
+
+def test_auto_falls_back_to_the_direct_engine_and_says_why():
+    scenario = load_scenario(SCENARIOS / "coffee_handover.py")
+    auto = Checker(scenario, PEEKING).run()
+    direct = Checker(scenario, PEEKING).run(engine="direct")
+    assert auto.engine == "direct" and "outside the requirement checks" in auto.engine_note
+    assert (auto.verdict, auto.states, auto.transitions) == (direct.verdict, direct.states, direct.transitions)
+
+
+class _AllUp:
+    """A port that shows every platform up (rewrites platform facts)."""
+
+    validity_memo = None
+
+    def __init__(self, inner):  # type: ignore[no-untyped-def]
+        self.inner = inner
+
+    def platform_states(self):  # type: ignore[no-untyped-def]
+        return tuple(dataclasses.replace(s, up=True) for s in self.inner.platform_states())
+
+    def __getattr__(self, name):  # type: ignore[no-untyped-def]
+        return getattr(self.inner, name)
+
+
+def _optimist(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    yield from DESMON.react(_AllUp(q), slots, changed, context_changed)
+
+
+def test_a_port_that_rewrites_platform_facts_is_refused_by_the_table_engine():
+    with pytest.raises(UnobservedRead, match="rewrites platform facts"):
+        Checker(load_scenario(SCENARIOS / "coffee_handover.py"), Deployer("optimist", "", _optimist)).run(engine="table")
+
+
+def _picky(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    # decides on the *text* of the rejection reasons: the table engine must observe them
+    for g in sorted({g for slot in slots for g in slot}):
+        spec = q.deployment_information(g)
+        if spec is not None and "load 300" in validity.validity_for(q, spec).explain():
+            yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, None, "picky")
+    yield from DESMON.react(q, slots, changed, context_changed)
+
+
+def test_decisions_on_the_text_of_rejection_reasons_are_replayed_exactly():
+    scenario = load_scenario(SCENARIOS / "coffee_handover.py")
+    d, t, r = _both(scenario, Deployer("picky", "", _picky), keep_going=True)
+    assert t == d
+    assert r.branches["error no_acceptable_platforms"] > 0
+
+
+def test_verify_reports_the_engine_and_direct_gives_the_same_counts(capsys, tmp_path):
+    path = str(SCENARIOS / "coffee_handover.py")
+    assert main(["verify", path, "--no-progress", "--json", str(tmp_path / "t.json")]) == 0
+    table = capsys.readouterr().out
+    assert main(["verify", path, "--no-progress", "--engine", "direct", "--json", str(tmp_path / "d.json")]) == 0
+    direct = capsys.readouterr().out
+    assert "engine: table (" in table and "engine: direct" in direct
+    t, d = json.loads((tmp_path / "t.json").read_text()), json.loads((tmp_path / "d.json").read_text())
+    assert (t["engine"], d["engine"]) == ("table", "direct")
+    assert (t["states"], t["transitions"], t["verdict"]) == (d["states"], d["transitions"], d["verdict"])
+
+
+def test_engine_table_with_symmetry_or_workers_is_a_one_line_usage_error(capsys):
+    path = str(SCENARIOS / "symmetric_platforms.py")
+    assert main(["verify", path, "--no-progress", "--engine", "table", "--symmetry"]) == 2
+    assert main(["verify", path, "--no-progress", "--engine", "table", "--workers", "2"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and "symmetry reduction runs on the direct engine" in err[0] and "--workers" in err[1]
+    with pytest.raises(CheckerError, match="unknown engine 'fast'"):
+        Checker(load_scenario(path)).run(engine="fast")
