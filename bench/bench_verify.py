@@ -1,18 +1,24 @@
 """Checker throughput: the real deployment core in the loop vs a plain tuple BFS.
 
-``python -m bench.bench_verify [--large-max-states N] [--workers W] [--huge N]`` builds
-a 4-platform, 3-detector scenario (bench_4p, 4,495 states) and a larger 6-platform one
-(bench_6p, 311,400 states when complete; the first 30,000 by default), runs the desmon
-checker on each with 1 and with W workers, and in the same run a minimal plain-Python
-BFS over tuples exploring the same environment (context, failed devices, platforms
-down, loads) with a trivial hard-coded placement rule. The figure is the ratio of
-their states/s (and transitions/s). Both searches run with the cyclic garbage collector
-paused, as the checker does. Peak memory is the maximum resident size of the process
-(and of the largest worker).
+``python -m bench.bench_verify [--large-max-states N] [--prefix N] [--workers W] [--huge N]``
+builds a 4-platform, 3-detector scenario (bench_4p, 4,495 states) and a larger
+6-platform one (bench_6p, 311,400 states, searched completely by default), and in the
+same run a minimal plain-Python BFS over tuples exploring the same environment
+(context, failed devices, platforms down, loads) with a trivial hard-coded placement
+rule. The figure is the ratio of their states/s (and transitions/s).
+
+The checker runs with its default engine (``table``: the real core once per distinct
+reading of a reaction, see :mod:`desmon.verify.table`) and, on bench_4p and on the
+first ``--prefix`` states of bench_6p, with ``engine="direct"`` (the real core on every
+transition; also with W workers), each against a plain BFS over the same number of
+states. Every search runs with the cyclic garbage collector paused, as the checker
+does. Peak memory is the maximum resident size of the process (and of the largest
+worker).
 
 ``--huge 1400000`` also runs the issue's 1.4-million-state budget on a 7-platform model
-with 4 loaded platforms (bench_7p), checker only (the plain BFS would need its own
-minutes). Figures and their discussion: docs/findings.md, "Checker throughput".
+with 4 loaded platforms (bench_7p) with the table engine, and the plain BFS on the
+same model up to as many states. Figures and their discussion: docs/findings.md,
+"Checker throughput".
 """
 
 from __future__ import annotations
@@ -26,7 +32,7 @@ from collections import deque
 from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
 from desmon.model.events import ActionChange, LoadChange
 from desmon.model.scenario import Scenario, TimedEvent
-from desmon.verify import Bounds, Checker, levels
+from desmon.verify import Bounds, Checker, CheckResult, levels
 
 
 def build(n_platforms: int, load_platforms: int, max_failures: int | None, start_failures: int = 1) -> Scenario:
@@ -132,35 +138,51 @@ def _plain_bfs(b, plats, devs, lp, lv, acts, wants, max_states):  # type: ignore
 
 
 def _row(label: str, states: int, trans: int, secs: float) -> str:
-    return f"  {label:<14} {states:>10,} states {trans:>11,} transitions {secs:8.2f}s {states / secs:>10,.0f} states/s {trans / secs:>11,.0f} transitions/s"
+    return f"  {label:<16} {states:>10,} states {trans:>11,} transitions {secs:8.2f}s {states / secs:>10,.0f} states/s {trans / secs:>11,.0f} transitions/s"
+
+
+def _ratio(plain: tuple[int, int, float], r: CheckResult) -> str:
+    ps, pt, psec = plain
+    return (
+        f"  {'':<16} ratio (plain / checker): {(ps / psec) / (r.states / r.seconds):.2f}x states/s, "
+        f"{(pt / psec) / (r.transitions / r.seconds):.2f}x transitions/s; peak memory {r.peak_mb:.0f} MB"
+        + (f" + {r.workers} workers of at most {r.peak_workers_mb:.0f} MB" if r.worker_levels else "")
+    )
+
+
+def _checker(label: str, scenario: Scenario, cap: int | None, plain: tuple[int, int, float], **kw: object) -> CheckResult:
+    r = Checker(scenario, "desmon").run(max_states=cap, progress=True, **kw)  # type: ignore[arg-type]
+    extra = f"  {r.verdict} {r.reason}".rstrip() + (f"  ({r.records:,} real runs of the core)" if r.engine == "table" else "")
+    print(_row(label, r.states, r.transitions, r.seconds) + extra)
+    print(_ratio(plain, r))
+    return r
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--large-max-states", type=int, default=30_000)
-    ap.add_argument("--workers", type=int, default=2, help="also run the checker with this many workers (1: skip)")
+    ap.add_argument("--large-max-states", type=int, default=None, metavar="N", help="cap the table-engine search of bench_6p (default: complete)")
+    ap.add_argument("--prefix", type=int, default=30_000, metavar="N", help="states of bench_6p the direct engine searches (default 30,000)")
+    ap.add_argument("--workers", type=int, default=2, help="also run the direct engine with this many workers (1: skip)")
     ap.add_argument("--huge", type=int, default=0, metavar="N", help="also run bench_7p up to N states (e.g. 1400000)")
     args = ap.parse_args(argv)
-    for scenario, cap in ((build(4, 2, 2), None), (build(6, 3, None), args.large_max_states)):
-        ps, pt, psec = plain_bfs(scenario, cap)
+    for scenario, cap, prefix in ((build(4, 2, 2), None, None), (build(6, 3, None), args.large_max_states, args.prefix)):
         print(f"{scenario.name}: {len(scenario.model.platforms)} platforms, 3 detectors")
-        print(_row("plain tuples", ps, pt, psec))
+        plain = plain_bfs(scenario, cap)
+        print(_row("plain tuples", *plain))
+        _checker("desmon (table)", scenario, cap, plain)
+        if prefix != cap:
+            plain = plain_bfs(scenario, prefix)
+            print(f"  first {prefix:,} states")
+            print(_row("plain tuples", *plain))
+            _checker("desmon (table)", scenario, prefix, plain)
         for workers in sorted({1, args.workers}):
-            r = Checker(scenario, "desmon").run(max_states=cap, progress=True, workers=workers)
-            label = "desmon checker" if workers == 1 else f"  {workers} workers"
-            print(_row(label, r.states, r.transitions, r.seconds) + f"  {r.verdict} {r.reason}".rstrip())
-            print(
-                f"  {'':<14} ratio (plain / checker): {(ps / psec) / (r.states / r.seconds):.1f}x states/s, "
-                f"{(pt / psec) / (r.transitions / r.seconds):.1f}x transitions/s; peak memory {r.peak_mb:.0f} MB"
-                + (f" + {workers} workers of at most {r.peak_workers_mb:.0f} MB" if workers > 1 else "")
-            )
+            _checker("desmon (direct)" if workers == 1 else f"  {workers} workers", scenario, prefix, plain, engine="direct", workers=workers)
     if args.huge:
         scenario = build(7, 4, None)
-        for workers in sorted({1, args.workers}):
-            r = Checker(scenario, "desmon").run(max_states=args.huge, progress=True, workers=workers)
-            label = scenario.name if workers == 1 else f"  {workers} workers"
-            print(_row(label, r.states, r.transitions, r.seconds) + f"  {r.verdict} {r.reason}".rstrip())
-            print(f"  {'':<14} peak memory {r.peak_mb:.0f} MB" + (f" + {workers} workers of at most {r.peak_workers_mb:.0f} MB" if workers > 1 else ""))
+        print(f"{scenario.name}: {len(scenario.model.platforms)} platforms, 3 detectors, up to {args.huge:,} states")
+        plain = plain_bfs(scenario, args.huge)
+        print(_row("plain tuples", *plain))
+        _checker("desmon (table)", scenario, args.huge, plain)
     print(f"peak memory (max RSS): {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
     return 0
 

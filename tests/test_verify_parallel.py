@@ -89,10 +89,10 @@ def test_fewer_than_one_worker_is_refused():
 
 def test_cli_workers_flag_prints_the_same_report_but_for_timings(capsys, monkeypatch):
     path = str(SCENARIOS / "two_detectors.py")
-    assert main(["verify", path, "--deployer", "paper", "--no-progress"]) == 1
+    assert main(["verify", path, "--deployer", "paper", "--no-progress", "--engine", "direct"]) == 1
     one = capsys.readouterr().out
     seen = pooled_levels(monkeypatch)
-    assert main(["verify", path, "--deployer", "paper", "--no-progress", "--workers", "2"]) == 1
+    assert main(["verify", path, "--deployer", "paper", "--no-progress", "--workers", "2", "--engine", "direct"]) == 1
     two = capsys.readouterr().out
     assert seen
     timings = re.compile(r"  time: .*$", re.M)  # wall time, rates and peak memory differ
