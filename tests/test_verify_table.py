@@ -154,3 +154,77 @@ def test_engine_table_with_symmetry_or_workers_is_a_one_line_usage_error(capsys)
     assert len(err) == 2 and "symmetry reduction runs on the direct engine" in err[0] and "--workers" in err[1]
     with pytest.raises(CheckerError, match="unknown engine 'fast'"):
         Checker(load_scenario(path)).run(engine="fast")
+
+
+# -- generated models: the encoding meets constant facts, task automata, loads, fixed graphs --
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as hst  # noqa: E402
+
+from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder  # noqa: E402
+from desmon.model.events import ActionChange, DeviceFail, LoadChange, PlatformDown  # noqa: E402
+from desmon.model.scenario import Scenario, TimedEvent  # noqa: E402
+from desmon.verify import Bounds  # noqa: E402
+
+ACTIONS = (HOLD, GRASP, MOVE_BASE, RELEASE)
+
+
+@hst.composite
+def generated_scenarios(draw):  # type: ignore[no-untyped-def]
+    n = draw(hst.integers(2, 4))
+    r = RobotBuilder("gen")
+    plats, devices = [f"pc{i}" for i in range(n)], []
+    for i, p in enumerate(plats):
+        pb = r.platform(p, memory=draw(hst.sampled_from((256, 400, 512))), preference=draw(hst.integers(0, 2)))
+        kind = ("force", "pads")[i] if i < 2 else draw(hst.sampled_from(("force", "pads", "none")))
+        if kind == "force":
+            pb.device(f"wrench{i}", kind="force_sensor")
+            devices.append(f"wrench{i}")
+        elif kind == "pads":
+            pb.devices([f"pad{i}a", f"pad{i}b"], kind="tactile_pad")
+            devices += [f"pad{i}a", f"pad{i}b"]
+    for g, reads in (("force", "force_sensor"), ("tactile", "tactile_pad"), ("combined", "force_sensor")):
+        with r.rpsl.perception_graph(g) as gb:
+            gb.sensor("s", reads=reads)
+            gb.processing("p", inputs=["s"])
+    r.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor").add_constraint(
+        "capacity", "memory", draw(hst.sampled_from((100, 200))))
+    r.depsl.deployment_specification("tactile").add_constraint("quantity", "tactile_pad", 2).add_constraint("capacity", "memory", 150)
+    combined = r.depsl.deployment_specification("combined").add_constraint("capacity", "memory", draw(hst.sampled_from((150, 250))))
+    if draw(hst.booleans()):
+        combined.executable_on(draw(hst.sampled_from(plats)))
+    graphs = ["force", "tactile", "combined"]
+    r.rules({a: draw(hst.lists(hst.sampled_from(graphs), min_size=1, max_size=2, unique=True)) for a in ACTIONS})
+    model = r.build()
+    actions = draw(hst.lists(hst.sampled_from(ACTIONS), min_size=2, max_size=4, unique=True))
+    task = None
+    if draw(hst.booleans()):
+        task = {a: tuple(draw(hst.lists(hst.sampled_from(actions), max_size=2, unique=True))) for a in actions}
+    moving = draw(hst.lists(hst.sampled_from(plats), max_size=n, unique=True))
+    loaded = draw(hst.lists(hst.sampled_from(plats), max_size=2, unique=True))
+    failing = draw(hst.lists(hst.sampled_from(devices), max_size=3, unique=True)) if devices else []
+    initial = [LoadChange(p, 0) for p in loaded]
+    # facts the environment never changes: a load on an unbounded platform, a failed
+    # device or a platform down that the bounds do not name
+    rest = [p for p in plats if p not in loaded]
+    if rest and draw(hst.booleans()):
+        initial.append(LoadChange(draw(hst.sampled_from(rest)), 100))
+    still = [d for d in devices if d not in failing]
+    if still and draw(hst.booleans()):
+        initial.append(DeviceFail(draw(hst.sampled_from(still))))
+    fixed_up = [p for p in plats if p not in moving]
+    if fixed_up and draw(hst.booleans()):
+        initial.append(PlatformDown(draw(hst.sampled_from(fixed_up))))
+    bounds = Bounds(
+        actions=tuple(actions), task=task, initial_action=actions[0], devices=tuple(failing),
+        repair=draw(hst.booleans()), platforms=tuple(moving),
+        loads={p: (0, 100, 200, 300)[: draw(hst.integers(2, 4))] for p in loaded},
+        start_failures=draw(hst.integers(0, 2)), max_failures=draw(hst.sampled_from((None, 1, 2))),
+    )
+    return Scenario(name="generated", model=model, initial=tuple(initial), timeline=(TimedEvent(0, ActionChange(actions[0])),), checker=bounds)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(generated_scenarios(), hst.sampled_from(["desmon", "paper", "make-before-break"]), hst.booleans())
+def test_table_engine_equals_direct_engine_on_generated_models(scenario, deployer, keep_going):
+    d, t, _r = _both(scenario, MUTANTS.get(deployer, deployer), keep_going=keep_going, max_states=400)
+    assert t == d

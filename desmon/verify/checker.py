@@ -565,7 +565,8 @@ class Checker:
                         for routine, routine_moved, routine_names, rec in segments:
                             if routine:
                                 transitions += routine
-                                changed[kind] += routine_moved
+                                if routine_moved:
+                                    changed[kind] += routine_moved
                                 count_names(routine_names)
                             if rec is None:
                                 continue

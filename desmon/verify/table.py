@@ -655,8 +655,10 @@ class TableEngine:
             deployed = self._deployed[dep]
             check = _validity._check_platform.__wrapped__
             out = []
+            always = self.env.const_failed
             for down, failed, load in self.env.decoded[p]:
-                devices = tuple(d for d in devices_on if d.name not in failed) if failed else devices_on
+                out_of_order = set(failed).union(always)
+                devices = tuple(d for d in devices_on if d.name not in out_of_order)
                 out.append(check(reqs, PlatformState(platform, not down, devices, load, deployed), graph, first_only))
             self._fails[k] = out
         return out
@@ -1011,6 +1013,11 @@ class TableEngine:
                         EV[s] = ids_lv[np.clip(to, 0, len(ids_lv) - 1)]
                         ST[s] = p + 1
                 pos, slot = np.nonzero(M.T)
+                if not len(pos):  # no state of this batch enables an event
+                    for c, n in enumerate(np.bincount(ctx, minlength=C).tolist()):
+                        if n:
+                            res.rules[env.ctxs[c]] += n
+                    continue
                 t_env2 = E2[slot, pos]
                 t_ev = EV[slot, pos]
                 t_stim = ST[slot, pos]
