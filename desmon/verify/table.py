@@ -9,38 +9,40 @@ core, but only once per distinct reading, and replays what it did everywhere els
 
 How a reaction is memoised
     A state is an environment code (context, failed devices, platforms down, load
-    levels, one mixed-radix digit per platform) and an interned system part
+    levels: one mixed-radix digit per platform) and an interned system part
     (deployments, standing errors). A transition's *root* is (system part, context after
     the event, what the event changed, failed-start prefix). The first time a root is
     met, the real core runs on the real state while :mod:`desmon.deployment.validity`
-    reports every requirement check to an observer (``validity._observer``): which
-    platforms, with which deployments on them, were checked for which graph, and
-    which passed. The run becomes a path in a decision tree: one node per check, one
-    branch per answer, a leaf with what the reaction did (next system part, start
-    outcomes, deployer branches, an instantaneous violation). Other transitions with
-    the same root walk the tree: each check is answered from a table of per-platform
-    results (computed by the same requirement code on the same platform facts,
-    indexed by the platform's digit), and a leaf gives the successor. A transition
-    whose answers leave the tree runs the real core again, which extends the tree.
-    The invariants of each new state are memoised the same way, on (system part,
-    context). Walking the trees, the environment events and the duplicate detection
-    are numpy operations over a whole BFS level at once.
+    hands every requirement check to an observer (``validity._observer``). The observer
+    answers with the real result, wrapped so that what the run *uses* of it is recorded:
+    whether one platform is acceptable, the acceptable platforms one by one in preference
+    order as far as the run iterates, or every answer down to the failure texts (see
+    :class:`_Recorder`). The run becomes a path in a decision tree: one node per
+    observation, one branch per answer, a leaf with what the reaction did (next system
+    part, start outcomes, deployer branches, an instantaneous violation). Other
+    transitions with the same root walk the tree; each observation is answered from a
+    table of per-platform results (computed by the same requirement code on the same
+    platform facts, indexed by the platform's digit), and a leaf gives the successor. A
+    transition whose answers leave the tree runs the real core again, which extends the
+    tree. The invariants of each new state are memoised the same way, on (system part,
+    context). Events, tree walks and duplicate detection are numpy operations over a
+    batch of a BFS level.
 
 Why it is sound
     A reaction is a deterministic function of what it reads through the ports (the
     checker already relies on that: a replay that disagrees is reported as
-    nondeterminism). The context, deployments and standing errors are in the root; the
-    platforms' facts can only be read through the requirement checks: while a reaction
-    is recorded, its platform states are guarded, and reading ``up``, ``devices`` or
-    ``load`` anywhere but in :mod:`desmon.deployment.validity` stops the run with a
-    clear :class:`UnobservedRead` (``--engine auto`` then falls back to the direct
-    engine). Every recorded check is verified to be about the platform facts of the
-    state (a port that rewrites them is refused), every recording re-checks the
-    environment code and the stimulus, and a recording that disagrees with the tree
-    already built is a :class:`~desmon.errors.NondeterminismError`. What is *not*
-    memoised exactly is the text of error details and violation messages (they may
-    quote loads): counterexamples are rebuilt by replaying their events through the
-    real core, as in the direct engine, so every message the user reads is the real one.
+    nondeterminism). The context, deployments and standing errors are in the root, the
+    requirement checks are observed, and the platforms' facts cannot be read any other
+    way: while a run is recorded its platform states are guarded, and reading ``up``,
+    ``devices`` or ``load`` anywhere but in :mod:`desmon.deployment.validity` stops the
+    run with :class:`UnobservedRead` (``--engine auto`` then falls back to the direct
+    engine). A check on facts that are not the state's own (a port that rewrites them)
+    is refused the same way. Every recording re-checks the environment code and the
+    stimulus, and a recording that contradicts the tree is a
+    :class:`~desmon.errors.NondeterminismError`. The one assumption beyond determinism:
+    a reaction does not branch on the *type* of a check's result (the wrappers are not
+    tuples or strings). Counterexamples are rebuilt by replaying their events through
+    the real core, as in the direct engine.
 
 The result (states and their order, transitions, every counter, counterexamples) is
 the direct engine's, for every scenario shipped (``tests/test_verify_table.py``).
