@@ -54,7 +54,6 @@ from __future__ import annotations
 import sys
 import time
 from array import array
-from collections import Counter
 from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
@@ -248,7 +247,7 @@ class _ObservedValidity(_validity.Validity):
         return _Text(lambda: _validity.Validity.explain(self))  # type: ignore[return-value]
 
 
-class _Text:
+class _Text(_Observed):
     """An explanation a recorded run has not read yet.
 
     A reaction usually only carries it into an error's detail, which decides nothing;
@@ -256,55 +255,25 @@ class _Text:
     computes it, and so observes the answers it is made of.
     """
 
-    __slots__ = ("_make",)
+    __slots__ = ()
 
     def __init__(self, make: Callable[[], str]) -> None:
-        self._make = make
+        self._check, self._real = None, make
+
+    def _all(self) -> Any:
+        return self._real()
 
     def __str__(self) -> str:
-        return self._make()
+        return self._all()  # type: ignore[no-any-return]
 
     def __format__(self, spec: str) -> str:
-        return format(self._make(), spec)
-
-    def __repr__(self) -> str:
-        return repr(self._make())
-
-    def __eq__(self, other: object) -> bool:
-        return self._make() == (str(other) if isinstance(other, _Text) else other)
-
-    def __ne__(self, other: object) -> bool:
-        return not self == other
-
-    def __hash__(self) -> int:
-        return hash(self._make())
-
-    def __len__(self) -> int:
-        return len(self._make())
-
-    def __bool__(self) -> bool:
-        return bool(self._make())
-
-    def __contains__(self, x: str) -> bool:
-        return x in self._make()
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._make())
-
-    def __getitem__(self, i: Any) -> str:
-        return self._make()[i]
-
-    def __add__(self, other: Any) -> Any:
-        return self._make() + other
-
-    def __radd__(self, other: Any) -> Any:
-        return other + self._make()
+        return format(self._all(), spec)
 
     def __mod__(self, other: Any) -> Any:
-        return self._make() % other
+        return self._all() % other
 
     def __getattr__(self, name: str) -> Any:
-        return getattr(self._make(), name)
+        return getattr(self._all(), name)
 
 
 class _Acceptable(_Observed):
@@ -907,8 +876,6 @@ class TableEngine:
         label = array("l", [-1])
         labels: list[tuple[Event, tuple[int, ...]]] = []
         label_ids: dict[tuple[int, int], int] = {}
-        fails_of: list[tuple[int, ...]] = []
-        fails_ids: dict[tuple[int, ...], int] = {}
         seen = {codes[0]}
         found: dict[str, Any] = {}
         wanted = {i.name for i in ch.invariants}
