@@ -81,9 +81,30 @@ PEEKING = Deployer("peeking", "reads platform load outside validity", _peeking)
 
 
 def test_a_deployer_reading_platform_facts_directly_is_refused_by_the_table_engine():
-    with pytest.raises(UnobservedRead, match=r"read `load` of platform .* outside the requirement checks.*--engine direct"):
+    with pytest.raises(UnobservedRead, match=r"test_verify_table read `load` of platform .* outside the requirement checks.*--engine direct"):
         Checker(load_scenario(SCENARIOS / "coffee_handover.py"), PEEKING).run(engine="table")
     assert validity._observer is None  # the observer never outlives a run
+
+
+def _store_peeking(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    if getattr(q, "failed", ()):  # the checker's store has it; the QueryPort does not
+        return
+    yield from DESMON.react(q, slots, changed, context_changed)
+
+
+def _dict_peeking(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    if any(dataclasses.asdict(s)["load"] for s in q.platform_states()):
+        return
+    yield from DESMON.react(q, slots, changed, context_changed)
+
+
+@pytest.mark.parametrize(
+    "react, message",
+    [(_store_peeking, "asked its Query port for `failed`"), (_dict_peeking, "dataclasses read `up` of platform")],
+)
+def test_reads_around_the_query_port_or_through_dataclass_helpers_are_refused(react, message):
+    with pytest.raises(UnobservedRead, match=message):
+        Checker(load_scenario(SCENARIOS / "coffee_handover.py"), Deployer("sly", "", react)).run(engine="table")
 
 
 def test_auto_falls_back_to_the_direct_engine_and_says_why():

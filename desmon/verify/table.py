@@ -90,8 +90,6 @@ class UnobservedRead(TableUnsupported):
 # ------------------------------------------------------------------------------------
 # recording: the observer of requirement checks and the guarded platform states
 # ------------------------------------------------------------------------------------
-_ENV_FIELDS = frozenset({"up", "devices", "load"})
-_ALLOWED_READERS = frozenset({"desmon.deployment.validity", "dataclasses"})
 
 
 class _Recorder:
@@ -335,25 +333,44 @@ class _Reasons(_Observed):
         return len(self._real)
 
 
+def _reader_allowed() -> bool:
+    """Whether the code reading a guarded fact may: the requirement checks, or
+    ``dataclasses.replace`` copying a state (the copy is guarded too)."""
+    if _RECORDING.inside:
+        return True
+    frame = sys._getframe(2)
+    module = frame.f_globals.get("__name__")
+    return module == "desmon.deployment.validity" or (module == "dataclasses" and frame.f_code.co_name == "replace")
+
+
+def _refuse(what: str, platform: str) -> UnobservedRead:
+    frame = sys._getframe(2)
+    while frame.f_back is not None and frame.f_globals.get("__name__") == "desmon.model.system":
+        frame = frame.f_back  # name the code that called a PlatformState helper, not the helper
+    caller = frame.f_globals.get("__name__")
+    return UnobservedRead(
+        f"{caller} read {what} of platform {platform} outside the requirement checks "
+        "(desmon.deployment.validity): the table engine cannot memoise this reaction; run with --engine direct"
+    )
+
+
 def _guarded_field(name: str) -> property:
     slot = getattr(PlatformState, name)  # the dataclass's slot descriptor
 
     def read(self: PlatformState) -> Any:
-        if not _RECORDING.inside:
-            caller = sys._getframe(1).f_globals.get("__name__")
-            if caller not in _ALLOWED_READERS:
-                raise UnobservedRead(
-                    f"{caller} read `{name}` of platform {self.platform.name} outside the requirement checks "
-                    "(desmon.deployment.validity): the table engine cannot memoise this reaction; "
-                    "run with --engine direct"
-                )
+        if not _reader_allowed():
+            raise _refuse(f"`{name}`", self.platform.name)
         return slot.__get__(self)
 
     return property(read, slot.__set__)  # the constructor still sets the slot
 
 
 class _Guarded(PlatformState):
-    """A platform state whose facts may only be read by the requirement checks (recording)."""
+    """A platform state whose facts may only be read by the requirement checks (recording).
+
+    It hashes by identity (the recording store hands out one object per facts), and
+    comparing two different ones reads their facts, so it is guarded like a field.
+    """
 
     __slots__ = ()
     up = _guarded_field("up")  # type: ignore[assignment]
@@ -362,7 +379,58 @@ class _Guarded(PlatformState):
     __hash__ = object.__hash__
 
     def __eq__(self, other: object) -> bool:
-        return self is other
+        if self is other:
+            return True
+        if not _reader_allowed():
+            raise _refuse("the facts (comparing states)", self.platform.name)
+        return PlatformState.__eq__(self, other)
+
+
+class _QueryOnly:
+    """The recording core's Query port: the store's QueryPort methods and nothing else.
+
+    Any other attribute (the store's fact tuples, its private helpers) would let a
+    reaction read platform facts unobserved: asking for one stops the recording.
+    """
+
+    __slots__ = ("_s",)
+    validity_memo = None  # a recorded run must perform every requirement check
+
+    def __init__(self, store: StateStore) -> None:
+        self._s = store
+
+    def deployment_information(self, graph: str) -> Any:
+        return self._s.deployment_information(graph)
+
+    def fixed_platform(self, spec: Any) -> Any:
+        return self._s.fixed_platform(spec)
+
+    def constraints(self, spec: Any) -> Any:
+        return self._s.constraints(spec)
+
+    def platform_states(self) -> Any:
+        return self._s.platform_states()
+
+    def deployed_on(self, graph: str) -> Any:
+        return self._s.deployed_on(graph)
+
+    def active_deployments(self, platform: str) -> Any:
+        return self._s.active_deployments(platform)
+
+    def deployments(self) -> Any:
+        return self._s.deployments()
+
+    def perception_graph(self, deployment: str) -> Any:
+        return self._s.perception_graph(deployment)
+
+    def context(self) -> Any:
+        return self._s.context()
+
+    def __getattr__(self, name: str) -> Any:
+        raise UnobservedRead(
+            f"the reaction asked its Query port for `{name}`, which is not a QueryPort method: the table engine "
+            "cannot know what it reads; run with --engine direct"
+        )
 
 
 class _Idle:
@@ -529,7 +597,7 @@ class TableEngine:
         rc.__dict__.update(checker.__dict__)
         rc.store = _GuardedStore(self.model)
         rc.store.validity_memo = None  # type: ignore[assignment]
-        rc.core = DeploymentCore(self.model, rc.store, rc.store, checker.core.deployer)
+        rc.core = DeploymentCore(self.model, _QueryOnly(rc.store), rc.store, checker.core.deployer)
         rc.store.watch = checker.instant
         rc.store.watch_check = rc._instant_check
         rc._instant_memo = _NoMemo()
