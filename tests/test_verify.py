@@ -163,6 +163,8 @@ def test_bad_bounds_are_rejected():
         Checker(scenario, bounds=Bounds(devices=("nope",)))
     with pytest.raises(CheckerError, match="not one of its levels"):
         Checker(scenario, bounds=Bounds(loads={"torso_pc": (0, 100)}))
+    with pytest.raises(CheckerError, match=r"load levels of 'torso_pc' repeat a level \(\[600, 700, 700, 800\]\)"):
+        Checker(scenario, bounds=Bounds(loads={"torso_pc": (600, 700, 700, 800)}))
 
 
 def test_nondeterminism_is_reported():

@@ -16,7 +16,7 @@ from desmon.errors import CheckerError
 from desmon.loader import load_scenario
 from desmon.verify import Checker
 from desmon.verify.mutants import MUTANTS
-from desmon.verify.table import UnobservedRead
+from desmon.verify.table import TableUnsupported, UnobservedRead
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 NAMES = sorted(p.stem for p in SCENARIOS.glob("*.py"))
@@ -105,6 +105,97 @@ def _dict_peeking(q, slots, changed, context_changed):  # type: ignore[no-untype
 def test_reads_around_the_query_port_or_through_dataclass_helpers_are_refused(react, message):
     with pytest.raises(UnobservedRead, match=message):
         Checker(load_scenario(SCENARIOS / "coffee_handover.py"), Deployer("sly", "", react)).run(engine="table")
+
+
+def _helper_peeking(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    # a public helper of the validity module, called outside a requirement check
+    spec = q.deployment_information("force_slip_detector")
+    if spec is not None and any(validity.requirement_holds(r, s, spec.graph) for s in q.platform_states() for r in spec.requirements):
+        yield RaiseError(NO_ACCEPTABLE_PLATFORMS, spec.graph, None, "peeked")
+    yield from DESMON.react(q, slots, changed, context_changed)
+
+
+def test_a_validity_helper_called_by_the_deployer_is_refused_like_any_read():
+    with pytest.raises(UnobservedRead, match=r"test_verify_table read `\w+` of platform"):
+        Checker(load_scenario(SCENARIOS / "coffee_handover.py"), Deployer("helper", "", _helper_peeking)).run(engine="table")
+
+
+def _counting(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    # decides on how many requirements one platform fails, not just whether it fails
+    for g in sorted({g for slot in slots for g in slot}):
+        spec = q.deployment_information(g)
+        if spec is not None and any(len(validity.check_platform(spec.requirements, s, g)) >= 2 for s in q.platform_states()):
+            yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, None, "badly broken")
+    yield from DESMON.react(q, slots, changed, context_changed)
+
+
+def test_decisions_on_how_many_requirements_fail_are_replayed_exactly():
+    d, t, r = _both(load_scenario(SCENARIOS / "memory_pressure.py"), Deployer("counting", "", _counting), keep_going=True)
+    assert t == d
+    assert r.branches["error no_acceptable_platforms"] > 0
+
+
+def _joining(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    # str.join needs real strings: the table engine's explanation is not one
+    for g in sorted({g for slot in slots for g in slot}):
+        spec = q.deployment_information(g)
+        if spec is not None and "load" in "\n".join([validity.validity_for(q, spec).explain()]):
+            yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, None, "loaded")
+    yield from DESMON.react(q, slots, changed, context_changed)
+
+
+def test_a_result_used_as_a_plain_str_or_tuple_makes_auto_run_the_direct_engine():
+    scenario = load_scenario(SCENARIOS / "memory_pressure.py")
+    joining = Deployer("joining", "", _joining)
+    with pytest.raises(TableUnsupported, match="cannot observe .*--engine direct"):
+        Checker(scenario, joining).run(engine="table")
+    auto, direct = Checker(scenario, joining).run(), Checker(scenario, joining).run(engine="direct")
+    assert auto.engine == "direct" and "cannot observe" in auto.engine_note
+    assert (auto.verdict, auto.states, auto.transitions) == (direct.verdict, direct.states, direct.transitions)
+
+
+class _Resized:
+    """A port that shows every platform with 100 MB less memory (rewrites the platform itself)."""
+
+    validity_memo = None
+
+    def __init__(self, inner):  # type: ignore[no-untyped-def]
+        self.inner = inner
+
+    def platform_states(self):  # type: ignore[no-untyped-def]
+        return tuple(
+            dataclasses.replace(s, platform=dataclasses.replace(s.platform, capacities=tuple((r, a - 100) for r, a in s.platform.capacities)))
+            for s in self.inner.platform_states()
+        )
+
+    def __getattr__(self, name):  # type: ignore[no-untyped-def]
+        return getattr(self.inner, name)
+
+
+def test_a_port_that_swaps_the_platform_itself_is_refused():
+    def react(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+        yield from DESMON.react(_Resized(q), slots, changed, context_changed)
+
+    with pytest.raises(UnobservedRead, match="rewrites platform facts"):
+        Checker(load_scenario(SCENARIOS / "memory_pressure.py"), Deployer("resized", "", react)).run(engine="table")
+
+
+def test_a_platform_with_too_many_fact_combinations_runs_on_the_direct_engine():
+    r = RobotBuilder("many")
+    r.platform("pc0", memory=512).devices([f"pad{i}" for i in range(14)], kind="tactile_pad")
+    with r.rpsl.perception_graph("tactile") as gb:
+        gb.sensor("s", reads="tactile_pad")
+        gb.processing("p", inputs=["s"])
+    r.depsl.deployment_specification("tactile").add_constraint("quantity", "tactile_pad", 2)
+    r.rules({HOLD: "tactile", GRASP: "tactile"})
+    scenario = Scenario(
+        name="many_pads", model=r.build(), timeline=(TimedEvent(0, ActionChange(HOLD)),),
+        checker=Bounds(actions=(HOLD, GRASP), devices=tuple(f"pad{i}" for i in range(13)), max_failures=1),
+    )
+    with pytest.raises(CheckerError, match=r"platform pc0 has 8,192 combinations of facts"):
+        Checker(scenario).run(engine="table")
+    auto = Checker(scenario).run()
+    assert auto.engine == "direct" and "8,192 combinations" in auto.engine_note and auto.verdict == "HOLDS"
 
 
 def test_auto_falls_back_to_the_direct_engine_and_says_why():

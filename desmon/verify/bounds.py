@@ -115,6 +115,8 @@ class Bounds:
                 )
             if not lv:
                 raise CheckerError(f"{where}: platform {p!r} has no load levels")
+            if len(set(lv)) != len(lv):
+                raise CheckerError(f"{where}: load levels of {p!r} repeat a level ({list(lv)}); list each level once, e.g. levels(0, 300, 100)")
             if initial_load.get(p, 0) not in lv:
                 raise CheckerError(
                     f"{where}: initial {self.load_resource} load {initial_load.get(p, 0):g} of {p!r} is not one of its levels {list(lv)}"

@@ -73,6 +73,8 @@ __all__ = ["TableEngine", "TableUnsupported", "UnobservedRead", "table_unsupport
 #: bits of a state code that hold the interned system part (deployments, standing)
 SYS_BITS = 24
 _SYS_MASK = (1 << SYS_BITS) - 1
+#: combinations of one platform's facts the engine tabulates answers for (beyond: direct engine)
+MAX_DIGITS = 4096
 #: frontier states expanded per numpy batch (bounds the memory of one batch)
 CHUNK_STATES = 16_384
 _KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
@@ -115,7 +117,8 @@ class _Recorder:
             parts = self._parts(states)
             fails = [_validity._check_platform(reqs, st, graph, not reasons) for st in states]
             real = _validity._check_validity(reqs, states, graph, reasons)
-            order = [states.index(st) for st in _validity.order_platforms(states)]
+            at = {id(st): i for i, st in enumerate(states)}
+            order = [at[id(st)] for st in _validity.order_platforms(states)]
         finally:
             self.inside -= 1
         check = _Check(self, reqs, graph, not reasons, parts, fails, [st.platform.name for st in states])
@@ -142,10 +145,10 @@ class _Recorder:
             name = s.platform.name
             p = index[name]
             canonical = own[p]
-            if s is not canonical and (s.up, s.devices, s.load) != (canonical.up, canonical.devices, canonical.load):
+            if s is not canonical and (s.platform, s.up, s.devices, s.load) != (canonical.platform, canonical.up, canonical.devices, canonical.load):
                 raise UnobservedRead(
                     f"a requirement check saw platform {name} with facts that are not the state's own "
-                    f"(up={s.up}, devices={[d.name for d in s.devices]}, load={s.load}): the table engine cannot "
+                    f"(platform={s.platform}, up={s.up}, devices={[d.name for d in s.devices]}, load={s.load}): the table engine cannot "
                     "memoise a port that rewrites platform facts; run with --engine direct"
                 )
             parts.append((p, eng.intern_deployed(s.deployed)))
@@ -227,6 +230,23 @@ class _Observed:
 
     def __radd__(self, other: Any) -> Any:
         return other + self._all()
+
+    def __mul__(self, n: Any) -> Any:
+        return self._all() * n
+
+    __rmul__ = __mul__
+
+    def __lt__(self, other: Any) -> bool:
+        return self._all() < (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
+
+    def __le__(self, other: Any) -> bool:
+        return self._all() <= (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
+
+    def __gt__(self, other: Any) -> bool:
+        return self._all() > (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
+
+    def __ge__(self, other: Any) -> bool:
+        return self._all() >= (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
 
     def index(self, *args: Any) -> int:
         return self._all().index(*args)
@@ -329,24 +349,27 @@ class _Reasons(_Observed):
         return self._real  # type: ignore[no-any-return]
 
     def __len__(self) -> int:
-        self._check.ok(range(len(self._check.parts)))
+        if self._single and not self._check.first_only:
+            return len(self._all())  # how many requirements one platform fails: the failures themselves
+        self._check.ok(range(len(self._check.parts)))  # how many platforms fail, or whether one does
         return len(self._real)
 
 
 def _reader_allowed() -> bool:
-    """Whether the code reading a guarded fact may: the requirement checks, or
-    ``dataclasses.replace`` copying a state (the copy is guarded too)."""
+    """Whether the code reading a guarded fact may: a requirement check the recorder is
+    answering (not any code of :mod:`desmon.deployment.validity`: its public helpers
+    such as ``requirement_holds`` would read unobserved), or ``dataclasses.replace``
+    copying a state (the copy is guarded too)."""
     if _RECORDING.inside:
         return True
     frame = sys._getframe(2)
-    module = frame.f_globals.get("__name__")
-    return module == "desmon.deployment.validity" or (module == "dataclasses" and frame.f_code.co_name == "replace")
+    return frame.f_globals.get("__name__") == "dataclasses" and frame.f_code.co_name == "replace"
 
 
 def _refuse(what: str, platform: str) -> UnobservedRead:
     frame = sys._getframe(2)
-    while frame.f_back is not None and frame.f_globals.get("__name__") == "desmon.model.system":
-        frame = frame.f_back  # name the code that called a PlatformState helper, not the helper
+    while frame.f_back is not None and frame.f_globals.get("__name__") in ("desmon.model.system", "desmon.deployment.validity"):
+        frame = frame.f_back  # name the code that called a PlatformState or validity helper, not the helper
     caller = frame.f_globals.get("__name__")
     return UnobservedRead(
         f"{caller} read {what} of platform {platform} outside the requirement checks "
@@ -386,51 +409,52 @@ class _Guarded(PlatformState):
         return PlatformState.__eq__(self, other)
 
 
-class _QueryOnly:
+def _query_only(store: StateStore) -> Any:
     """The recording core's Query port: the store's QueryPort methods and nothing else.
 
-    Any other attribute (the store's fact tuples, its private helpers) would let a
-    reaction read platform facts unobserved: asking for one stops the recording.
+    Any other attribute (the store's fact tuples, its helpers) would let a reaction read
+    platform facts unobserved: asking for one stops the recording. The store is held in
+    the methods' closure, not in an attribute.
     """
 
-    __slots__ = ("_s",)
-    validity_memo = None  # a recorded run must perform every requirement check
+    class QueryOnly:
+        __slots__ = ()
+        validity_memo = None  # a recorded run must perform every requirement check
 
-    def __init__(self, store: StateStore) -> None:
-        self._s = store
+        def deployment_information(self, graph: str) -> Any:
+            return store.deployment_information(graph)
 
-    def deployment_information(self, graph: str) -> Any:
-        return self._s.deployment_information(graph)
+        def fixed_platform(self, spec: Any) -> Any:
+            return store.fixed_platform(spec)
 
-    def fixed_platform(self, spec: Any) -> Any:
-        return self._s.fixed_platform(spec)
+        def constraints(self, spec: Any) -> Any:
+            return store.constraints(spec)
 
-    def constraints(self, spec: Any) -> Any:
-        return self._s.constraints(spec)
+        def platform_states(self) -> Any:
+            return store.platform_states()
 
-    def platform_states(self) -> Any:
-        return self._s.platform_states()
+        def deployed_on(self, graph: str) -> Any:
+            return store.deployed_on(graph)
 
-    def deployed_on(self, graph: str) -> Any:
-        return self._s.deployed_on(graph)
+        def active_deployments(self, platform: str) -> Any:
+            return store.active_deployments(platform)
 
-    def active_deployments(self, platform: str) -> Any:
-        return self._s.active_deployments(platform)
+        def deployments(self) -> Any:
+            return store.deployments()
 
-    def deployments(self) -> Any:
-        return self._s.deployments()
+        def perception_graph(self, deployment: str) -> Any:
+            return store.perception_graph(deployment)
 
-    def perception_graph(self, deployment: str) -> Any:
-        return self._s.perception_graph(deployment)
+        def context(self) -> Any:
+            return store.context()
 
-    def context(self) -> Any:
-        return self._s.context()
+        def __getattr__(self, name: str) -> Any:
+            raise UnobservedRead(
+                f"the reaction asked its Query port for `{name}`, which is not a QueryPort method: the table engine "
+                "cannot know what it reads; run with --engine direct"
+            )
 
-    def __getattr__(self, name: str) -> Any:
-        raise UnobservedRead(
-            f"the reaction asked its Query port for `{name}`, which is not a QueryPort method: the table engine "
-            "cannot know what it reads; run with --engine direct"
-        )
+    return QueryOnly()
 
 
 class _Idle:
@@ -458,6 +482,14 @@ def table_unsupported(checker: Any) -> str | None:
     n = len(checker.model.platforms)
     if n > 20:
         return f"{n} platforms (the table engine answers checks on up to 20 at once)"
+    b = checker.bounds
+    where = {d.name: d.platform for d in checker.model.devices}
+    for p in checker.model.platforms:
+        k = sum(1 for d in b.devices if where[d] == p.name)
+        digits = (2 if p.name in b.platforms else 1) * (1 << k) * len(b.loads.get(p.name, (0,)))
+        if digits > MAX_DIGITS:
+            return (f"platform {p.name} has {digits:,} combinations of facts (its bounded devices, up/down and load levels); "
+                    f"the table engine tabulates at most {MAX_DIGITS:,} per platform")
     return None
 
 
@@ -597,7 +629,7 @@ class TableEngine:
         rc.__dict__.update(checker.__dict__)
         rc.store = _GuardedStore(self.model)
         rc.store.validity_memo = None  # type: ignore[assignment]
-        rc.core = DeploymentCore(self.model, _QueryOnly(rc.store), rc.store, checker.core.deployer)
+        rc.core = DeploymentCore(self.model, _query_only(rc.store), rc.store, checker.core.deployer)
         rc.store.watch = checker.instant
         rc.store.watch_check = rc._instant_check
         rc._instant_memo = _NoMemo()
@@ -824,7 +856,7 @@ class TableEngine:
                     record(int(active[missed[m]]))
                 child[missed] = self._lookup(ek[missed])
                 if (child[missed] < 0).any():
-                    raise CheckerError(  # pragma: no cover - a bug in the engine, not in the system under test
+                    raise TableUnsupported(  # pragma: no cover - an unobserved rewrite of facts, or a bug in the engine
                         "table engine: a per-platform answer disagrees with the real requirement check; run with --engine direct"
                     )
             node[active] = child
@@ -857,6 +889,13 @@ class TableEngine:
         _RECORDING, _validity._observer = rec, rec
         try:
             out = run()
+        except (TypeError, AttributeError) as exc:
+            # a check's result used as what its wrapper is not (a str for str.join, a
+            # tuple for isinstance-based code...): let the direct engine run it as it is
+            raise TableUnsupported(
+                f"the reaction used a requirement check's result in a way the table engine cannot observe ({exc}); "
+                "run with --engine direct"
+            ) from exc
         finally:
             _RECORDING, _validity._observer = _Idle(), None
         self.records += 1
@@ -877,7 +916,7 @@ class TableEngine:
         got = 0 if stimulus.context_changed else (self.platform_index[stimulus.changed_platforms[0]] + 1 if stimulus.changed_platforms else self.P + 1)
         expect = self.env.key(env2, (nkey.deployments, nkey.standing))
         if got != stim or expect != nkey:
-            raise CheckerError(f"table engine: {event} on {key} gave {nkey} (stimulus {stimulus}), the encoding expected {expect}")  # pragma: no cover
+            raise TableUnsupported(f"table engine: {event} on {key} gave {nkey} (stimulus {stimulus}), the encoding expected {expect}")  # pragma: no cover
         fails = tuple(i for i, ok in enumerate(outcomes) if not ok)
         names = tuple(_branch(c, ok) for c, ok in log.commands) if log.commands else _KEPT
         inst = instant[0] if instant is not None else None
