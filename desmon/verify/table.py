@@ -33,16 +33,19 @@ Why it is sound
     checker already relies on that: a replay that disagrees is reported as
     nondeterminism). The context, deployments and standing errors are in the root, the
     requirement checks are observed, and the platforms' facts cannot be read any other
-    way: while a run is recorded its platform states are guarded, and reading ``up``,
-    ``devices`` or ``load`` anywhere but in :mod:`desmon.deployment.validity` stops the
-    run with :class:`UnobservedRead` (``--engine auto`` then falls back to the direct
-    engine). A check on facts that are not the state's own (a port that rewrites them)
-    is refused the same way. Every recording re-checks the environment code and the
-    stimulus, and a recording that contradicts the tree is a
-    :class:`~desmon.errors.NondeterminismError`. The one assumption beyond determinism:
-    a reaction does not branch on the *type* of a check's result (the wrappers are not
-    tuples or strings). Counterexamples are rebuilt by replaying their events through
-    the real core, as in the direct engine.
+    way: while a run is recorded the core's Query port offers only the QueryPort
+    methods, and its platform states are guarded: reading ``up``, ``devices`` or
+    ``load`` (or comparing two states) anywhere but inside a requirement check the
+    observer is answering stops the run with :class:`UnobservedRead` (``--engine auto``
+    then falls back to the direct engine). A check on facts that are not the state's
+    own (a port that rewrites them, or swaps the platform) is refused the same way, and
+    so is a check's result used as what its wrapper is not. Every recording re-checks
+    the environment code and the stimulus, and a recording that contradicts the tree is
+    a :class:`~desmon.errors.NondeterminismError`. Assumed beyond determinism: a
+    reaction does not branch on the *type* of a check's result (the wrappers are not
+    tuples or strings) and does not deliberately bypass the guard (e.g. through the
+    base class's slot descriptors). Counterexamples are rebuilt by replaying their
+    events through the real core, as in the direct engine.
 
 The result (states and their order, transitions, every counter, counterexamples) is
 the direct engine's, for every scenario shipped (``tests/test_verify_table.py``).
