@@ -57,7 +57,7 @@ from __future__ import annotations
 import sys
 import time
 from array import array
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any, Callable, Iterator, NamedTuple, Sequence
 
 import numpy as np
 
@@ -616,6 +616,111 @@ class _Grow:
         return self.n - 1
 
 
+class _Transitions(NamedTuple):
+    """The enabled (state, event) pairs of a batch, state-major then in event order."""
+
+    pos: np.ndarray  # the state's position in the batch
+    env2: np.ndarray  # the environment code after the event
+    ev: np.ndarray  # the event's number (:attr:`_Events.events`)
+    stim: np.ndarray  # what the event changed: 0 context, 1 + platform, P + 1 nothing
+    sys: np.ndarray  # the state's system part
+    loc: np.ndarray  # the platform digits after the event, one row per transition
+    ctx: np.ndarray  # the context digit of each state of the batch
+
+
+class _Events:
+    """The bounded environment's events as numpy operations on environment codes, in
+    the order of :meth:`Checker._compute_enabled <desmon.verify.checker.Checker._compute_enabled>`."""
+
+    def __init__(self, engine: "TableEngine", env: _Env) -> None:
+        b = engine.bounds
+        self.env, self.bounds, self.P = env, b, engine.P
+        self.events: list[Event] = []
+        self._ids: dict[Event, int] = {}
+        C = env.C
+        moves = [b.action_moves(c) for c in env.ctxs]
+        kmax = max((len(m) for m in moves), default=0)
+        self.move_to = np.full((C, max(kmax, 1)), -1, dtype=np.int64)
+        self.move_ev = np.full((C, max(kmax, 1)), -1, dtype=np.int64)
+        for c, m in enumerate(moves):
+            for k, a in enumerate(m):
+                self.move_to[c, k] = env.ctxs.index(a)
+                self.move_ev[c, k] = self._id(ActionChange(a))
+        self.slots: list[tuple] = [("action", k) for k in range(kmax)]
+        for d in b.devices:
+            p = engine.platform_index[env.platform_of[d]]
+            self.slots.append(("device", p, env.vdev[p].index(d), self._id(DeviceFail(d)), self._id(DeviceRepair(d))))
+        for name in b.platforms:
+            self.slots.append(("platform", engine.platform_index[name], self._id(PlatformDown(name)), self._id(PlatformUp(name))))
+        for name, lv in b.loads.items():
+            ids = np.array([self._id(LoadChange(name, x, b.load_resource)) for x in lv], dtype=np.int64)
+            self.slots.append(("load", engine.platform_index[name], +1, ids))
+            self.slots.append(("load", engine.platform_index[name], -1, ids))
+        self.kind_of = np.array([_KIND_ID[event_kind(e)] for e in self.events] or [0], dtype=np.int64)
+
+    def _id(self, e: Event) -> int:
+        i = self._ids.get(e)
+        if i is None:
+            i = self._ids[e] = len(self.events)
+            self.events.append(e)
+        return i
+
+    def enabled(self, codes: np.ndarray) -> _Transitions:
+        """The enabled transitions out of the states ``codes`` (env << SYS_BITS | system)."""
+        env, b, P = self.env, self.bounds, self.P
+        envs, syss = codes >> SYS_BITS, codes & _SYS_MASK
+        L = env.locals(envs)
+        ctx = envs % env.C
+        if b.max_failures is None:
+            can_fail = np.ones(len(envs), dtype=bool)
+        else:
+            nfail = np.full(len(envs), env.const_failures, dtype=np.int64)
+            for p in range(P):
+                nfail += env.failcount[p][L[:, p]]
+            can_fail = nfail < b.max_failures
+        S, N = len(self.slots), len(envs)
+        M = np.zeros((S, N), dtype=bool)
+        E2 = np.zeros((S, N), dtype=np.int64)
+        EV = np.zeros((S, N), dtype=np.int64)
+        ST = np.zeros((S, N), dtype=np.int64)
+        for s, spec in enumerate(self.slots):
+            kind = spec[0]
+            if kind == "action":
+                k = spec[1]
+                tgt = self.move_to[ctx, k]
+                M[s] = tgt >= 0
+                E2[s] = envs - ctx + tgt
+                EV[s] = self.move_ev[ctx, k]
+                ST[s] = np.where(tgt == ctx, P + 1, 0)
+            elif kind == "device":
+                _k, p, j, ev_fail, ev_rep = spec
+                unit = env.W[p] * env.U[p] * (1 << j)
+                failed = ((L[:, p] // env.U[p] >> j) & 1).astype(bool)
+                M[s] = np.where(failed, b.repair, can_fail)
+                E2[s] = np.where(failed, envs - unit, envs + unit)
+                EV[s] = np.where(failed, ev_rep, ev_fail)
+                ST[s] = p + 1
+            elif kind == "platform":
+                _k, p, ev_down, ev_up = spec
+                unit = env.W[p]
+                down = (L[:, p] % 2).astype(bool)
+                M[s] = np.where(down, b.repair, can_fail)
+                E2[s] = np.where(down, envs - unit, envs + unit)
+                EV[s] = np.where(down, ev_up, ev_down)
+                ST[s] = p + 1
+            else:
+                _k, p, step, ids_lv = spec
+                unit = env.W[p] * env.U[p] * (1 << env.K[p])
+                to = L[:, p] // (env.U[p] << env.K[p]) + step
+                M[s] = (to >= 0) & (to < len(ids_lv))
+                E2[s] = envs + step * unit
+                EV[s] = ids_lv[np.clip(to, 0, len(ids_lv) - 1)]
+                ST[s] = p + 1
+        pos, slot = np.nonzero(M.T)
+        env2 = E2[slot, pos]
+        return _Transitions(pos, env2, EV[slot, pos], ST[slot, pos], syss[pos], env.locals(env2), ctx)
+
+
 class TableEngine:
     """The table engine for one :class:`~desmon.verify.checker.Checker` (see the module doc)."""
 
@@ -931,68 +1036,98 @@ class TableEngine:
         self._insert(root, obs, self._leaf(("v", tuple(n for n, _m in bad))))
 
     # -- the search ---------------------------------------------------------------------
+    # -- the search ---------------------------------------------------------------------
+    def key_of(self, i: int) -> Key:
+        """The :class:`Key` of state number ``i``."""
+        c = self.codes[i]
+        return self.env.key(c >> SYS_BITS, self.systems[c & _SYS_MASK])
+
+    def _units(self, ids: np.ndarray, tr: "_Transitions") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every (transition, failed-start prefix) unit of a batch, resolved to its leaf, in the
+        direct engine's order: by transition, then generation by generation as
+        :meth:`Checker.successors <desmon.verify.checker.Checker.successors>` queues the
+        prefixes each run's start outcomes open. Returns (transition, prefix, leaf) arrays."""
+        C, bound = self.env.C, self.bounds.start_failures
+        T = len(tr.env2)
+        u_t = np.arange(T, dtype=np.int64)
+        u_pre = np.zeros(T, dtype=np.int64)
+        u_rank = np.zeros(T, dtype=np.int64)
+        parts: list[tuple[np.ndarray, ...]] = []
+        gen = 0
+        while len(u_t):
+            roots = (tr.sys[u_t] << 39) | ((tr.env2[u_t] % C) << 33) | (tr.stim[u_t] << 16) | u_pre
+
+            def record(u: int, u_t: np.ndarray = u_t, u_pre: np.ndarray = u_pre, roots: np.ndarray = roots) -> None:
+                t = int(u_t[u])
+                self.record_reaction(self.key_of(int(ids[tr.pos[t]])), self.events.events[int(tr.ev[t])],
+                                     self.prefixes[int(u_pre[u])], int(roots[u]), int(tr.env2[t]), int(tr.stim[t]))
+
+            leaf = self._walk(roots, u_t, tr.loc, record)
+            parts.append((u_t, np.full(len(u_t), gen, dtype=np.int64), u_rank, u_pre, leaf))
+            if not bound:
+                break
+            # the failed-start prefixes each unit's start outcomes open
+            n_leaves = len(self.leaves)
+            pairs = u_pre * n_leaves + leaf
+            up, pinv = np.unique(pairs, return_inverse=True)
+            kids: list[list[int]] = []
+            for pv in up.tolist():
+                pre, lf = self.prefixes[pv // n_leaves], self.leaves[pv % n_leaves]
+                outcomes, fails = lf[2], lf[3]
+                kids.append([self.prefix(outcomes[:i] + (False,)) for i in range(len(pre), len(outcomes))] if len(fails) < bound else [])
+            counts = np.array([len(k) for k in kids], dtype=np.int64)[pinv]
+            if not counts.any():
+                break
+            order = np.lexsort((u_rank, u_t))
+            order = order[counts[order] > 0]
+            n_t = np.repeat(u_t[order], counts[order])
+            n_pre = np.array([x for i in order.tolist() for x in kids[pinv[i]]], dtype=np.int64)
+            starts = np.r_[0, np.flatnonzero(np.diff(n_t)) + 1]
+            u_rank = np.arange(len(n_t)) - np.repeat(starts, np.diff(np.r_[starts, len(n_t)]))
+            u_t, u_pre = n_t, n_pre
+            gen += 1
+        U_t, U_gen, U_rank, U_pre, U_leaf = (np.concatenate(x) for x in zip(*parts))
+        order = np.lexsort((U_rank, U_gen, U_t))
+        return U_t[order], U_pre[order], U_leaf[order]
+
+    def _violated(self, cand_t: np.ndarray, cand_sys: np.ndarray, tr: "_Transitions") -> np.ndarray:
+        """The invariants leaf of each candidate new state (memoised like reactions)."""
+        if not len(cand_t):
+            return np.zeros(0, dtype=np.int64)
+        roots = (cand_sys << 39) | ((tr.env2[cand_t] % self.env.C) << 33) | ((self.P + 2) << 16)
+
+        def record(u: int) -> None:
+            t = int(cand_t[u])
+            self.record_invariants(self.env.key(int(tr.env2[t]), self.systems[int(cand_sys[u])]), int(roots[u]))
+
+        return self._walk(roots, cand_t, tr.loc, record)
+
     def run(self, res: Any, *, max_states: int | None, max_depth: int | None, timeout: float | None, keep_going: bool,
             progress: bool, progress_after: float, progress_every: float, out: Any, t0: float) -> tuple[dict, str, int]:
+        """The BFS of :meth:`Checker.run <desmon.verify.checker.Checker.run>`, counting into ``res``;
+        returns (counterexamples found, why incomplete or "", depth)."""
         ch = self.checker
-        b = self.bounds
         init = ch.initial()
         env = self.env = _Env(ch, init)
-        P, C = self.P, env.C
-        # the answers of unused check positions: a block of zeros as long as any platform's digit range
-        for _ in range(max(env.R)):
-            self.ok.append(0)
+        C = env.C
         if C > 64:
             raise TableUnsupported(f"table engine: {C} contexts (at most 64); run with --engine direct")
         if env.space.bit_length() + SYS_BITS > 62:
             raise TableUnsupported(f"table engine: the environment has {env.space:,} combinations, too many to encode; run with --engine direct")
-        STIM_INV = P + 2
-        # events: slots in the order of Checker._compute_enabled
-        events: list[Event] = []
-        event_ids: dict[Event, int] = {}
-
-        def eid(e: Event) -> int:
-            i = event_ids.get(e)
-            if i is None:
-                i = event_ids[e] = len(events)
-                events.append(e)
-            return i
-
-        moves = [b.action_moves(c) for c in env.ctxs]
-        kmax = max((len(m) for m in moves), default=0)
-        move_to = np.full((C, max(kmax, 1)), -1, dtype=np.int64)
-        move_ev = np.full((C, max(kmax, 1)), -1, dtype=np.int64)
-        for c, m in enumerate(moves):
-            for k, a in enumerate(m):
-                move_to[c, k] = env.ctxs.index(a)
-                move_ev[c, k] = eid(ActionChange(a))
-        slot_specs: list[tuple] = [("action", k) for k in range(kmax)]
-        for d in b.devices:
-            p = self.platform_index[env.platform_of[d]]
-            j = env.vdev[p].index(d)
-            slot_specs.append(("device", p, j, eid(DeviceFail(d)), eid(DeviceRepair(d))))
-        for name in b.platforms:
-            p = self.platform_index[name]
-            slot_specs.append(("platform", p, eid(PlatformDown(name)), eid(PlatformUp(name))))
-        for name, lv in b.loads.items():
-            p = self.platform_index[name]
-            ids = np.array([eid(LoadChange(name, x, b.load_resource)) for x in lv], dtype=np.int64)
-            slot_specs.append(("load", p, +1, ids))
-            slot_specs.append(("load", p, -1, ids))
-        kind_of = np.array([_KIND_ID[event_kind(e)] for e in events] or [0], dtype=np.int64)
-
+        # the answers of unused check positions: a block of zeros as long as any platform's digit range
+        for _ in range(max(env.R)):
+            self.ok.append(0)
+        ev = self.events = _Events(self, env)
         # states: code = env << SYS_BITS | system
-        codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
+        codes = self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
         parent = array("l", [-1])
         label = array("l", [-1])
         labels: list[tuple[Event, tuple[int, ...]]] = []
-        label_ids: dict[tuple[int, int], int] = {}
+        label_ids: dict[tuple[int, tuple[int, ...]], int] = {}
         seen = {codes[0]}
         found: dict[str, Any] = {}
         wanted = {i.name for i in ch.invariants}
-
-        def key_of(i: int) -> Key:
-            c = codes[i]
-            return env.key(c >> SYS_BITS, self.systems[c & _SYS_MASK])
+        key_of = self.key_of
 
         def record(name: str, msg: str, i: int, during: str | None = None, extra: tuple | None = None) -> None:
             if name in found:
@@ -1022,7 +1157,11 @@ class TableEngine:
         incomplete = ""
         last_progress = t0
         printed = False
-        bound = b.start_failures
+
+        def count(counter: Any, names: Sequence[Any], values: np.ndarray, size: int) -> None:
+            for k, n in enumerate(np.bincount(values, minlength=size).tolist()):
+                if n:
+                    counter[names[k]] += n
 
         while len(frontier) and not (any_found and done()) and not incomplete:
             if max_depth is not None and depth >= max_depth:
@@ -1040,155 +1179,37 @@ class TableEngine:
                           end="", file=out, flush=True)
                 ids = frontier[lo: lo + CHUNK_STATES]
                 sc = np.frombuffer(codes, dtype=np.int64)[ids]
-                envs, syss = sc >> SYS_BITS, sc & _SYS_MASK
-                L = env.locals(envs)
-                ctx = envs % C
-                if b.max_failures is None:
-                    can_fail = np.ones(len(envs), dtype=bool)
-                else:
-                    nfail = np.full(len(envs), env.const_failures, dtype=np.int64)
-                    for p in range(P):
-                        nfail += env.failcount[p][L[:, p]]
-                    can_fail = nfail < b.max_failures
-                # every enabled (state, event) pair, state-major then in slot order
-                S, N = len(slot_specs), len(envs)
-                M = np.zeros((S, N), dtype=bool)
-                E2 = np.zeros((S, N), dtype=np.int64)
-                EV = np.zeros((S, N), dtype=np.int64)
-                ST = np.zeros((S, N), dtype=np.int64)
-                for s, spec in enumerate(slot_specs):
-                    kind = spec[0]
-                    if kind == "action":
-                        k = spec[1]
-                        tgt = move_to[ctx, k]
-                        M[s] = tgt >= 0
-                        E2[s] = envs - ctx + tgt
-                        EV[s] = move_ev[ctx, k]
-                        ST[s] = np.where(tgt == ctx, P + 1, 0)
-                    elif kind == "device":
-                        _k, p, j, ev_fail, ev_rep = spec
-                        unit = env.W[p] * env.U[p] * (1 << j)
-                        bit = (L[:, p] // env.U[p] >> j) & 1
-                        failed = bit.astype(bool)
-                        M[s] = np.where(failed, b.repair, can_fail)
-                        E2[s] = np.where(failed, envs - unit, envs + unit)
-                        EV[s] = np.where(failed, ev_rep, ev_fail)
-                        ST[s] = p + 1
-                    elif kind == "platform":
-                        _k, p, ev_down, ev_up = spec
-                        unit = env.W[p]
-                        down = (L[:, p] % 2).astype(bool)
-                        M[s] = np.where(down, b.repair, can_fail)
-                        E2[s] = np.where(down, envs - unit, envs + unit)
-                        EV[s] = np.where(down, ev_up, ev_down)
-                        ST[s] = p + 1
-                    else:
-                        _k, p, step, ids_lv = spec
-                        unit = env.W[p] * env.U[p] * (1 << env.K[p])
-                        li = L[:, p] // (env.U[p] << env.K[p])
-                        to = li + step
-                        M[s] = (to >= 0) & (to < len(ids_lv))
-                        E2[s] = envs + step * unit
-                        EV[s] = ids_lv[np.clip(to, 0, len(ids_lv) - 1)]
-                        ST[s] = p + 1
-                pos, slot = np.nonzero(M.T)
-                if not len(pos):  # no state of this batch enables an event
-                    for c, n in enumerate(np.bincount(ctx, minlength=C).tolist()):
-                        if n:
-                            res.rules[env.ctxs[c]] += n
+                tr = ev.enabled(sc)
+                N, T = len(ids), len(tr.env2)
+                if not T:  # no state of this batch enables an event
+                    count(res.rules, env.ctxs, tr.ctx, C)
                     continue
-                t_env2 = E2[slot, pos]
-                t_ev = EV[slot, pos]
-                t_stim = ST[slot, pos]
-                t_sys = syss[pos]
-                t_loc = env.locals(t_env2)
-                T = len(pos)
-                # units: (transition, failed-start prefix), generation by generation
-                u_t = np.arange(T, dtype=np.int64)
-                u_pre = np.zeros(T, dtype=np.int64)
-                u_gen = np.zeros(T, dtype=np.int64)
-                u_rank = np.zeros(T, dtype=np.int64)
-                all_t, all_gen, all_rank, all_pre, all_leaf = [], [], [], [], []
-                gen = 0
-                while len(u_t):
-                    roots = (t_sys[u_t] << 39) | ((t_env2[u_t] % C) << 33) | (t_stim[u_t] << 16) | u_pre
-
-                    def rec(u: int, u_t: np.ndarray = u_t, u_pre: np.ndarray = u_pre, roots: np.ndarray = roots) -> None:
-                        t = int(u_t[u])
-                        self.record_reaction(key_of(int(ids[pos[t]])), events[int(t_ev[t])], self.prefixes[int(u_pre[u])],
-                                             int(roots[u]), int(t_env2[t]), int(t_stim[t]))
-
-                    leaf = self._walk(roots, u_t, t_loc, rec)
-                    all_t.append(u_t)
-                    all_gen.append(u_gen)
-                    all_rank.append(u_rank)
-                    all_pre.append(u_pre)
-                    all_leaf.append(leaf)
-                    if not bound:
-                        break
-                    # the failed-start prefixes each unit's outcomes open (Checker.successors)
-                    pairs = u_pre * len(self.leaves) + leaf
-                    up, pinv = np.unique(pairs, return_inverse=True)
-                    kids: list[list[int]] = []
-                    for pv in up.tolist():
-                        pre, lf = self.prefixes[pv // len(self.leaves)], self.leaves[pv % len(self.leaves)]
-                        outcomes, fails = lf[2], lf[3]
-                        kids.append([self.prefix(outcomes[:i] + (False,)) for i in range(len(pre), len(outcomes))] if len(fails) < bound else [])
-                    counts = np.array([len(k) for k in kids], dtype=np.int64)[pinv]
-                    if not counts.any():
-                        break
-                    order = np.lexsort((u_rank, u_t))
-                    order = order[counts[order] > 0]
-                    flat = [kids[pinv[i]] for i in order.tolist()]
-                    n_t = np.repeat(u_t[order], counts[order])
-                    n_pre = np.array([x for k in flat for x in k], dtype=np.int64)
-                    starts = np.r_[0, np.flatnonzero(np.diff(n_t)) + 1]
-                    n_rank = np.arange(len(n_t)) - np.repeat(starts, np.diff(np.r_[starts, len(n_t)]))
-                    gen += 1
-                    u_t, u_pre, u_rank = n_t, n_pre, n_rank
-                    u_gen = np.full(len(u_t), gen, dtype=np.int64)
-                U_t = np.concatenate(all_t)
-                U_leaf = np.concatenate(all_leaf)
-                order = np.lexsort((np.concatenate(all_rank), np.concatenate(all_gen), U_t))
-                U_t, U_leaf = U_t[order], U_leaf[order]
-                U_pre = np.concatenate(all_pre)[order]
+                U_t, U_pre, U_leaf = self._units(ids, tr)
                 leaf_sys = np.array(self._leaf_sys, dtype=np.int64)
-                U_code = (t_env2[U_t] << SYS_BITS) | leaf_sys[U_leaf]
-                U_moved = U_code != sc[pos[U_t]]
+                U_code = (tr.env2[U_t] << SYS_BITS) | leaf_sys[U_leaf]
                 # candidate new states: first occurrence in this batch, not seen before
                 uniq, first = np.unique(U_code, return_index=True)
                 fresh = np.fromiter((c not in seen for c in uniq.tolist()), dtype=bool, count=len(uniq))
                 cand = np.sort(first[fresh])
-                # the invariants each candidate violates (memoised like reactions)
-                if len(cand):
-                    ct = U_t[cand]
-                    csys = leaf_sys[U_leaf[cand]]
-                    iroots = (csys << 39) | ((t_env2[ct] % C) << 33) | (STIM_INV << 16)
-
-                    def irec(u: int, ct: np.ndarray = ct, csys: np.ndarray = csys, iroots: np.ndarray = iroots) -> None:
-                        t = int(ct[u])
-                        self.record_invariants(env.key(int(t_env2[t]), self.systems[int(csys[u])]), int(iroots[u]))
-
-                    bad_leaf = self._walk(iroots, ct, t_loc, irec)
-                else:
-                    bad_leaf = np.zeros(0, dtype=np.int64)
-                bad_of = dict(zip(cand.tolist(), bad_leaf.tolist()))
+                bad_of = dict(zip(cand.tolist(), self._violated(U_t[cand], leaf_sys[U_leaf[cand]], tr).tolist()))
                 inst_units = np.flatnonzero(np.array(self._leaf_inst, dtype=bool)[U_leaf])
-                records = np.union1d(cand, inst_units)
-                # the records in order, as the direct engine's search loop meets them
+                # the records in order, as the direct engine's search loop meets them: it
+                # stops after the event that found what it looked for or reached the cap,
+                # or at once when a repaired instantaneous violation completes the search
                 cut_t, stop_unit = T, -1
-                for u in records.tolist():
+                for u in np.union1d(cand, inst_units).tolist():
                     t = int(U_t[u])
                     if t > cut_t:
                         break
                     lf = self.leaves[int(U_leaf[u])]
-                    if lf[5] is not None:
-                        nkey = env.key(int(t_env2[t]), self.systems[lf[1]])
-                        if lf[5] not in {v for v, _m in ch.violations(nkey)} and lf[5] not in found:
+                    here = int(ids[tr.pos[t]])
+                    event = ev.events[int(tr.ev[t])]
+                    if lf[5] is not None and lf[5] not in found:
+                        nkey = env.key(int(tr.env2[t]), self.systems[lf[1]])
+                        if lf[5] not in {v for v, _m in ch.violations(nkey)}:
                             # repaired before quiescence: the real run gives the message
-                            k0 = key_of(int(ids[pos[t]]))
-                            _n, _o, _log, instant = ch.run_one(k0, events[int(t_ev[t])], self.prefixes[int(U_pre[u])])
-                            record(instant[0], instant[1], int(ids[pos[t]]), instant[2], (events[int(t_ev[t])], lf[3]))
+                            _n, _o, _log, instant = ch.run_one(key_of(here), event, self.prefixes[int(U_pre[u])])
+                            record(instant[0], instant[1], here, instant[2], (event, lf[3]))
                             any_found = True
                             if done():
                                 cut_t, stop_unit = t, u
@@ -1198,18 +1219,17 @@ class TableEngine:
                         seen.add(c)
                         ni = len(codes)
                         codes.append(c)
-                        parent.append(int(ids[pos[t]]))
-                        lk = (int(t_ev[t]), lf[3])
+                        parent.append(here)
+                        lk = (int(tr.ev[t]), lf[3])
                         li = label_ids.get(lk)
                         if li is None:
                             li = label_ids[lk] = len(labels)
-                            labels.append((events[lk[0]], lf[3]))
+                            labels.append((event, lf[3]))
                         label.append(li)
-                        res.new_states[_KINDS[kind_of[t_ev[t]]]] += 1
+                        res.new_states[_KINDS[ev.kind_of[tr.ev[t]]]] += 1
                         if max_states is not None and len(codes) >= max_states:
                             incomplete = f"max states {max_states:,} reached"
-                        names = self.leaves[bad_of[u]][1]
-                        if names:
+                        if self.leaves[bad_of[u]][1]:
                             for name, msg in ch.violations(key_of(ni)):
                                 record(name, msg, ni)
                             any_found = True
@@ -1218,30 +1238,20 @@ class TableEngine:
                     if (any_found and done()) or incomplete:
                         cut_t = t
                 # count what the direct engine counts up to the cut
-                if stop_unit >= 0:
-                    inc = np.arange(stop_unit + 1)
-                else:
-                    inc = np.flatnonzero(U_t <= cut_t)
+                inc = np.arange(stop_unit + 1) if stop_unit >= 0 else np.flatnonzero(U_t <= cut_t)
                 transitions += len(inc)
                 leaf_counts = np.bincount(U_leaf[inc], minlength=len(self.leaves))
                 for lf_id in np.flatnonzero(leaf_counts).tolist():
                     n = int(leaf_counts[lf_id])
                     for name in self.leaves[lf_id][4]:
                         res.branches[name] += n
-                moved_inc = inc[:-1] if stop_unit >= 0 else inc
-                kinds_units = kind_of[t_ev[U_t[moved_inc]]]
-                for k, n in enumerate(np.bincount(kinds_units[U_moved[moved_inc]], minlength=len(_KINDS)).tolist()):
-                    if n:
-                        res.changed[_KINDS[k]] += n
+                moved = inc[:-1] if stop_unit >= 0 else inc  # the stopping unit is not counted as a change
+                moved = moved[U_code[moved] != sc[tr.pos[U_t[moved]]]]
+                count(res.changed, _KINDS, ev.kind_of[tr.ev[U_t[moved]]], len(_KINDS))
                 last_t = min(cut_t, T - 1)
-                entered = np.arange(last_t + 1) if T else np.zeros(0, dtype=np.int64)
-                for k, n in enumerate(np.bincount(kind_of[t_ev[entered]], minlength=len(_KINDS)).tolist()):
-                    if n:
-                        res.enabled[_KINDS[k]] += n
-                n_states = int(pos[last_t]) + 1 if (T and cut_t < T) else N
-                for c, n in enumerate(np.bincount(ctx[:n_states], minlength=C).tolist()):
-                    if n:
-                        res.rules[env.ctxs[c]] += n
+                count(res.enabled, _KINDS, ev.kind_of[tr.ev[: last_t + 1]], len(_KINDS))
+                n_states = int(tr.pos[last_t]) + 1 if cut_t < T else N
+                count(res.rules, env.ctxs, tr.ctx[:n_states], C)
                 if cut_t < T:
                     break
             if nxt:
@@ -1249,7 +1259,6 @@ class TableEngine:
             frontier = np.array(nxt, dtype=np.int64)
         if printed:
             print("", file=out, flush=True)
-        self.codes = codes
         res.transitions = transitions
         res.states = len(codes)
         return found, incomplete, depth
