@@ -152,7 +152,7 @@ def _ratio(plain: tuple[int, int, float], r: CheckResult) -> str:
 
 def _checker(label: str, scenario: Scenario, cap: int | None, plain: tuple[int, int, float], **kw: object) -> CheckResult:
     r = Checker(scenario, "desmon").run(max_states=cap, progress=True, **kw)  # type: ignore[arg-type]
-    extra = f"  {r.verdict} {r.reason}".rstrip() + (f"  ({r.records:,} real runs of the core)" if r.engine == "table" else "")
+    extra = f"  {r.verdict} {r.reason}".rstrip() + (f"  ({r.records:,} recorded runs of the core and invariants)" if r.engine == "table" else "")
     print(_row(label, r.states, r.transitions, r.seconds) + extra)
     print(_ratio(plain, r))
     return r
@@ -184,7 +184,7 @@ def main(argv: list[str] | None = None) -> int:
         r = Checker(scenario, "desmon").run(max_states=args.huge, progress=True)
         plain = plain_bfs(scenario, args.huge)
         print(_row("plain tuples", *plain))
-        print(_row("desmon (table)", r.states, r.transitions, r.seconds) + f"  {r.verdict} {r.reason}  ({r.records:,} real runs of the core)")
+        print(_row("desmon (table)", r.states, r.transitions, r.seconds) + f"  {r.verdict} {r.reason}  ({r.records:,} recorded runs of the core and invariants)")
         print(_ratio(plain, r))
     print(f"peak memory (max RSS): {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
     return 0

@@ -42,7 +42,7 @@ def format_result(r: CheckResult) -> str:
         + (f" (+ {r.workers} workers, each at most {r.peak_workers_mb:.0f} MB)" if r.worker_levels else "")
     )
     if r.engine == "table":
-        lines.append(f"engine: table ({r.records:,} real runs of the core recorded, replayed for the other transitions)")
+        lines.append(f"engine: table ({r.records:,} real runs of the core and the invariants recorded, replayed for the other transitions)")
     else:
         lines.append("engine: direct" + (f" ({r.engine_note})" if r.engine_note else ""))
     kinds = sorted(set(r.enabled) | set(r.new_states))
