@@ -3,18 +3,25 @@
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
+import os
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as hst
 
 from desmon.cli import main
 from desmon.deployment import validity
 from desmon.deployment.deployer import DESMON, Deployer
 from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, RaiseError
-from desmon.errors import CheckerError
+from desmon.errors import CheckerError, NondeterminismError
 from desmon.loader import load_scenario
-from desmon.verify import Checker
+from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
+from desmon.model.events import ActionChange, DeviceFail, LoadChange, PlatformDown
+from desmon.model.scenario import Scenario, TimedEvent
+from desmon.verify import Bounds, Checker
 from desmon.verify.mutants import MUTANTS
 from desmon.verify.table import TableUnsupported, UnobservedRead
 
@@ -100,7 +107,7 @@ def _dict_peeking(q, slots, changed, context_changed):  # type: ignore[no-untype
 
 @pytest.mark.parametrize(
     "react, message",
-    [(_store_peeking, "asked its Query port for `failed`"), (_dict_peeking, "dataclasses read `up` of platform")],
+    [(_store_peeking, "asked its Query port for `failed`"), (_dict_peeking, "test_verify_table read `up` of platform")],
 )
 def test_reads_around_the_query_port_or_through_dataclass_helpers_are_refused(react, message):
     with pytest.raises(UnobservedRead, match=message):
@@ -144,7 +151,7 @@ def _joining(q, slots, changed, context_changed):  # type: ignore[no-untyped-def
     yield from DESMON.react(q, slots, changed, context_changed)
 
 
-def test_a_result_used_as_a_plain_str_or_tuple_makes_auto_run_the_direct_engine():
+def test_an_explanation_used_as_a_plain_str_makes_auto_run_the_direct_engine():
     scenario = load_scenario(SCENARIOS / "memory_pressure.py")
     joining = Deployer("joining", "", _joining)
     with pytest.raises(TableUnsupported, match="cannot observe .*--engine direct"):
@@ -152,6 +159,42 @@ def test_a_result_used_as_a_plain_str_or_tuple_makes_auto_run_the_direct_engine(
     auto, direct = Checker(scenario, joining).run(), Checker(scenario, joining).run(engine="direct")
     assert auto.engine == "direct" and "cannot observe" in auto.engine_note
     assert (auto.verdict, auto.states, auto.transitions) == (direct.verdict, direct.states, direct.transitions)
+
+
+def _comparing(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    states = q.platform_states()
+    if states[0] == states[-1]:  # equality of two states compares their facts
+        return
+    yield from DESMON.react(q, slots, changed, context_changed)
+
+
+def test_comparing_two_platform_states_is_a_read_of_their_facts():
+    with pytest.raises(UnobservedRead, match=r"test_verify_table read the facts \(comparing states\)"):
+        Checker(load_scenario(SCENARIOS / "coffee_handover.py"), Deployer("comparing", "", _comparing)).run(engine="table")
+
+
+def _buggy(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    if changed:
+        q.deployment_information("force_slip_detector").no_such_field  # the deployer's own bug
+    yield from DESMON.react(q, slots, changed, context_changed)
+
+
+def test_a_deployers_own_error_surfaces_as_it_is_not_as_an_engine_limit():
+    for engine in ("table", "auto", "direct"):
+        with pytest.raises(AttributeError, match="no_such_field"):
+            Checker(load_scenario(SCENARIOS / "coffee_handover.py"), Deployer("buggy", "", _buggy)).run(engine=engine)
+
+
+def test_a_deployer_that_is_not_a_function_of_its_readings_is_reported_as_nondeterministic():
+    calls = itertools.count()
+
+    def flaky(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+        if next(calls) % 7 == 3:  # state kept outside the ports
+            return
+        yield from DESMON.react(q, slots, changed, context_changed)
+
+    with pytest.raises(NondeterminismError, match="not a function of what it reads through its ports"):
+        Checker(load_scenario(SCENARIOS / "coffee_handover.py"), Deployer("flaky", "", flaky)).run(engine="table")
 
 
 class _Resized:
@@ -269,13 +312,6 @@ def test_engine_table_with_symmetry_or_workers_is_a_one_line_usage_error(capsys)
 
 
 # -- generated models: the encoding meets constant facts, task automata, loads, fixed graphs --
-from hypothesis import HealthCheck, given, settings  # noqa: E402
-from hypothesis import strategies as hst  # noqa: E402
-
-from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder  # noqa: E402
-from desmon.model.events import ActionChange, DeviceFail, LoadChange, PlatformDown  # noqa: E402
-from desmon.model.scenario import Scenario, TimedEvent  # noqa: E402
-from desmon.verify import Bounds  # noqa: E402
 
 ACTIONS = (HOLD, GRASP, MOVE_BASE, RELEASE)
 
@@ -335,8 +371,17 @@ def generated_scenarios(draw):  # type: ignore[no-untyped-def]
     return Scenario(name="generated", model=model, initial=tuple(initial), timeline=(TimedEvent(0, ActionChange(actions[0])),), checker=bounds)
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(generated_scenarios(), hst.sampled_from(["desmon", "paper", "make-before-break"]), hst.booleans())
-def test_table_engine_equals_direct_engine_on_generated_models(scenario, deployer, keep_going):
-    d, t, _r = _both(scenario, MUTANTS.get(deployer, deployer), keep_going=keep_going, max_states=400)
+#: examples of the generated-model comparison (CI: 40; DESMON_TABLE_EXAMPLES=300 for a longer run)
+EXAMPLES = int(os.environ.get("DESMON_TABLE_EXAMPLES", "40"))
+
+
+@settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    generated_scenarios(),
+    hst.sampled_from(["desmon", "paper", "make-before-break", "no-recheck", "capacity-blind"]),
+    hst.booleans(),
+    hst.sampled_from([60, 400, 1500]),
+)
+def test_table_engine_equals_direct_engine_on_generated_models(scenario, deployer, keep_going, cap):
+    d, t, _r = _both(scenario, MUTANTS.get(deployer, deployer), keep_going=keep_going, max_states=cap)
     assert t == d

@@ -22,7 +22,7 @@ from array import array
 import time
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import Any, Container, Iterable, Iterator
+from typing import Any, Container, Iterable, Iterator, Sequence
 
 from desmon.deployment.core import DeploymentCore
 from desmon.deployment.deployer import Deployer
@@ -66,10 +66,11 @@ Segment = tuple[int, int, tuple[str, ...], "Record | None"]
 #: BFS levels with at least this many states go to the worker processes (``workers`` > 1).
 PARALLEL_LEVEL = 256
 
-_KEPT = ("no command (kept)",)
+#: the branch name of a reaction that issued no command
+KEPT_BRANCH = ("no command (kept)",)
 
 
-def _branch(cmd: Any, ok: bool | None) -> str:
+def branch_name(cmd: Any, ok: bool | None) -> str:
     """The deployer branch a command stands for, as the report counts them."""
     t = type(cmd)
     if t is Start:
@@ -204,7 +205,8 @@ class Checker:
 
             self.symmetry = Symmetry(self)
         self.branches: Counter = Counter()
-        self.explored: list[Key] = []
+        #: the distinct (canonical) states of the last run, in BFS order
+        self.explored: Sequence[Key] = []
 
     # -- the transition relation ------------------------------------------------------------
     def slots(self, context: str | None) -> tuple[tuple[str, ...], ...]:
@@ -347,7 +349,7 @@ class Checker:
             names: list[str] = []
             for fails, nkey, log, instant in self.successors(key, event):
                 commands = log.commands
-                here = [_branch(cmd, ok) for cmd, ok in commands] if commands else _KEPT
+                here = [branch_name(cmd, ok) for cmd, ok in commands] if commands else KEPT_BRANCH
                 repaired = None
                 # (checked even when the search has already recorded this invariant:
                 # expand knows nothing of the search, and it costs only on violations)
@@ -395,8 +397,11 @@ class Checker:
         replays it elsewhere (:mod:`desmon.verify.table`, one process, numpy);
         ``"direct"`` runs the real core on every transition (``workers`` > 1 applies to
         it); ``"auto"`` (default) takes the table engine unless symmetry reduction or
-        ``workers`` > 1 is asked for, and falls back to the direct engine if the
-        deployer reads platform facts outside the requirement checks.
+        ``workers`` > 1 is asked for, and falls back to the direct engine (saying why in
+        :attr:`CheckResult.engine_note`) when the table engine cannot run the search: the
+        deployer reads platform facts outside the requirement checks, uses a check's
+        result as what it is not, or the model exceeds the engine's limits. The time of
+        an abandoned table attempt counts in the result's time.
 
         With ``progress``, a one-line status is rewritten on ``out`` (stderr) every
         ``progress_every`` seconds once the run is ``progress_after`` seconds old, and
@@ -448,13 +453,16 @@ class Checker:
                     if collecting:
                         gc.enable()
                 if found is not None:
-                    self.explored = table.explored()  # type: ignore[assignment]
+                    self.explored = table.explored()
                     res.records = table.records
                     return self._finish(res, found, incomplete, depth, t0)
+                abandoned = time.perf_counter() - t0
                 res = self.run(
-                    max_states=max_states, max_depth=max_depth, timeout=timeout, keep_going=keep_going, progress=progress,
-                    progress_after=progress_after, progress_every=progress_every, workers=workers, engine="direct", out=out,
+                    max_states=max_states, max_depth=max_depth, timeout=None if timeout is None else max(timeout - abandoned, 1e-9),
+                    keep_going=keep_going, progress=progress, progress_after=progress_after, progress_every=progress_every,
+                    workers=workers, engine="direct", out=out,
                 )
+                res.seconds += abandoned
                 res.engine_note = why or ""
                 return res
             res.engine_note = why or ""

@@ -42,7 +42,7 @@ def format_result(r: CheckResult) -> str:
         + (f" (+ {r.workers} workers, each at most {r.peak_workers_mb:.0f} MB)" if r.worker_levels else "")
     )
     if r.engine == "table":
-        lines.append(f"engine: table ({r.records:,} real runs of the core and the invariants recorded, replayed for the other transitions)")
+        lines.append(f"engine: table ({r.records:,} recorded runs of the core and the invariants, replayed for the rest)")
     else:
         lines.append("engine: direct" + (f" ({r.engine_note})" if r.engine_note else ""))
     kinds = sorted(set(r.enabled) | set(r.new_states))
@@ -123,6 +123,7 @@ def result_to_json(r: CheckResult) -> dict[str, Any]:
         "workers": r.workers,
         "worker_levels": r.worker_levels,
         "engine": r.engine,
+        "engine_note": r.engine_note,
         "records": r.records,
         "invariants": list(r.invariants),
         "not_checked": {n: NOT_CHECKED.get(n, "") for n in r.not_checked},

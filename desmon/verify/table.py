@@ -43,8 +43,9 @@ Why it is sound
     the environment code and the stimulus, and a recording that contradicts the tree is
     a :class:`~desmon.errors.NondeterminismError`. Assumed beyond determinism: a
     reaction does not branch on the *type* of a check's result (the wrappers are not
-    tuples or strings) and does not deliberately bypass the guard (e.g. through the
-    base class's slot descriptors). Counterexamples are rebuilt by replaying their
+    tuples or strings) or on a platform state's hash value (recorded states hash by
+    identity), and does not deliberately bypass the guard (e.g. through the base
+    class's slot descriptors). Counterexamples are rebuilt by replaying their
     events through the real core, as in the direct engine.
 
 The result (states and their order, transitions, every counter, counterexamples) is
@@ -57,7 +58,7 @@ from __future__ import annotations
 import sys
 import time
 from array import array
-from typing import Any, Callable, Iterator, NamedTuple, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterator, NamedTuple, Sequence, TextIO
 
 import numpy as np
 
@@ -68,14 +69,24 @@ from desmon.model.events import (
     ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp, event_kind,
 )
 from desmon.model.system import PlatformState
-from desmon.verify.checker import _KEPT, Counterexample, _branch
+from desmon.verify.checker import KEPT_BRANCH, Counterexample, branch_name
 from desmon.verify.state import Key, StateStore
+
+if TYPE_CHECKING:
+    from desmon.verify.checker import Checker, CheckResult
 
 __all__ = ["TableEngine", "TableUnsupported", "UnobservedRead", "table_unsupported", "CHUNK_STATES"]
 
 #: bits of a state code that hold the interned system part (deployments, standing)
 SYS_BITS = 24
 _SYS_MASK = (1 << SYS_BITS) - 1
+#: a decision tree's root key packs (system part, context digit, stimulus, prefix) into
+#: one int64: 24 + 6 + 17 + 16 bits (the limits are checked where the parts are made)
+_ROOT_CTX, _ROOT_STIM, _ROOT_PREFIX = 6, 17, 16
+
+
+def _root_key(system: np.ndarray, ctx: np.ndarray, stim: np.ndarray | int, prefix: np.ndarray | int) -> np.ndarray:
+    return (((system << _ROOT_CTX | ctx) << _ROOT_STIM | stim) << _ROOT_PREFIX) | prefix
 #: combinations of one platform's facts the engine tabulates answers for (beyond: direct engine)
 MAX_DIGITS = 4096
 #: frontier states expanded per numpy batch (bounds the memory of one batch)
@@ -358,6 +369,10 @@ class _Reasons(_Observed):
         return len(self._real)
 
 
+#: modules whose functions read a state on behalf of their caller (a refusal names the caller)
+_HELPERS = frozenset({"desmon.model.system", "desmon.deployment.validity", "dataclasses", "reprlib", "pprint", "copy", "copyreg", "logging"})
+
+
 def _reader_allowed() -> bool:
     """Whether the code reading a guarded fact may: a requirement check the recorder is
     answering (not any code of :mod:`desmon.deployment.validity`: its public helpers
@@ -366,13 +381,13 @@ def _reader_allowed() -> bool:
     if _RECORDING.inside:
         return True
     frame = sys._getframe(2)
-    return frame.f_globals.get("__name__") == "dataclasses" and frame.f_code.co_name == "replace"
+    return frame.f_globals.get("__name__") == "dataclasses" and frame.f_code.co_name in ("replace", "_replace")
 
 
 def _refuse(what: str, platform: str) -> UnobservedRead:
     frame = sys._getframe(2)
-    while frame.f_back is not None and frame.f_globals.get("__name__") in ("desmon.model.system", "desmon.deployment.validity"):
-        frame = frame.f_back  # name the code that called a PlatformState or validity helper, not the helper
+    while frame.f_back is not None and frame.f_globals.get("__name__") in _HELPERS:
+        frame = frame.f_back  # name the code that called a helper (repr, asdict, load_of...), not the helper
     caller = frame.f_globals.get("__name__")
     return UnobservedRead(
         f"{caller} read {what} of platform {platform} outside the requirement checks "
@@ -478,13 +493,10 @@ class _NoMemo(dict):
         pass
 
 
-def table_unsupported(checker: Any) -> str | None:
+def table_unsupported(checker: "Checker") -> str | None:
     """Why the table engine cannot run ``checker``'s search, or None."""
     if checker.symmetry is not None:
         return "symmetry reduction runs on the direct engine"
-    n = len(checker.model.platforms)
-    if n > 20:
-        return f"{n} platforms (the table engine answers checks on up to 20 at once)"
     b = checker.bounds
     where = {d.name: d.platform for d in checker.model.devices}
     for p in checker.model.platforms:
@@ -724,7 +736,7 @@ class _Events:
 class TableEngine:
     """The table engine for one :class:`~desmon.verify.checker.Checker` (see the module doc)."""
 
-    def __init__(self, checker: Any) -> None:
+    def __init__(self, checker: "Checker") -> None:
         from desmon.verify.checker import Checker
 
         self.checker = checker
@@ -808,7 +820,7 @@ class TableEngine:
         i = self._prefix_ids.get(p)
         if i is None:
             i = self._prefix_ids[p] = len(self.prefixes)
-            if i >= 1 << 16:
+            if i >= 1 << _ROOT_PREFIX:
                 raise TableUnsupported("table engine: too many failed-start prefixes; run with --engine direct")
             self.prefixes.append(p)
         return i
@@ -989,7 +1001,14 @@ class TableEngine:
         return out
 
     # -- recording ----------------------------------------------------------------------
-    def _recording(self, run: Callable[[], Any]) -> tuple[Any, list[tuple[tuple, int]]]:
+    def _recording(self, run: Callable[[], Any], plain: Callable[[], Any]) -> tuple[Any, list[tuple[tuple, int]]]:
+        """``run()`` with the observer installed: (its result, the observations).
+
+        A ``TypeError`` or ``AttributeError`` may be the deployer's own bug or a check's
+        result used as what its wrapper is not (a ``str`` for ``str.join``...): ``plain()``,
+        the same run on the direct engine's store, tells them apart. Its error is the
+        deployer's and is raised as it is; if it succeeds, the table engine bows out.
+        """
         global _RECORDING
         rec = self.recorder
         rec.obs = []
@@ -998,8 +1017,8 @@ class TableEngine:
         try:
             out = run()
         except (TypeError, AttributeError) as exc:
-            # a check's result used as what its wrapper is not (a str for str.join, a
-            # tuple for isinstance-based code...): let the direct engine run it as it is
+            _RECORDING, _validity._observer = _Idle(), None
+            plain()  # the deployer's own error: raised here, as the direct engine would
             raise TableUnsupported(
                 f"the reaction used a requirement check's result in a way the table engine cannot observe ({exc}); "
                 "run with --engine direct"
@@ -1020,22 +1039,21 @@ class TableEngine:
             stimulus, log = rc.core.step(event, st)
             return stimulus, log, st.key(rc.core.standing), tuple(st.outcomes), st.instant
 
-        (stimulus, log, nkey, outcomes, instant), obs = self._recording(run)
+        (stimulus, log, nkey, outcomes, instant), obs = self._recording(run, lambda: self.checker.run_one(key, event, prefix))
         got = 0 if stimulus.context_changed else (self.platform_index[stimulus.changed_platforms[0]] + 1 if stimulus.changed_platforms else self.P + 1)
         expect = self.env.key(env2, (nkey.deployments, nkey.standing))
         if got != stim or expect != nkey:
             raise TableUnsupported(f"table engine: {event} on {key} gave {nkey} (stimulus {stimulus}), the encoding expected {expect}")  # pragma: no cover
         fails = tuple(i for i, ok in enumerate(outcomes) if not ok)
-        names = tuple(_branch(c, ok) for c, ok in log.commands) if log.commands else _KEPT
+        names = tuple(branch_name(c, ok) for c, ok in log.commands) if log.commands else KEPT_BRANCH
         inst = instant[0] if instant is not None else None
         leaf = self._leaf(("r", self.system(nkey.deployments, nkey.standing), outcomes, fails, names, inst))
         self._insert(root, obs, leaf)
 
     def record_invariants(self, key: Key, root: int) -> None:
-        bad, obs = self._recording(lambda: self.rc.violations(key))
+        bad, obs = self._recording(lambda: self.rc.violations(key), lambda: self.checker.violations(key))
         self._insert(root, obs, self._leaf(("v", tuple(n for n, _m in bad))))
 
-    # -- the search ---------------------------------------------------------------------
     # -- the search ---------------------------------------------------------------------
     def key_of(self, i: int) -> Key:
         """The :class:`Key` of state number ``i``."""
@@ -1055,14 +1073,14 @@ class TableEngine:
         parts: list[tuple[np.ndarray, ...]] = []
         gen = 0
         while len(u_t):
-            roots = (tr.sys[u_t] << 39) | ((tr.env2[u_t] % C) << 33) | (tr.stim[u_t] << 16) | u_pre
+            roots = _root_key(tr.sys[u_t], tr.env2[u_t] % C, tr.stim[u_t], u_pre)
 
-            def record(u: int, u_t: np.ndarray = u_t, u_pre: np.ndarray = u_pre, roots: np.ndarray = roots) -> None:
+            def record_unit(u: int, u_t: np.ndarray = u_t, u_pre: np.ndarray = u_pre, roots: np.ndarray = roots) -> None:
                 t = int(u_t[u])
                 self.record_reaction(self.key_of(int(ids[tr.pos[t]])), self.events.events[int(tr.ev[t])],
                                      self.prefixes[int(u_pre[u])], int(roots[u]), int(tr.env2[t]), int(tr.stim[t]))
 
-            leaf = self._walk(roots, u_t, tr.loc, record)
+            leaf = self._walk(roots, u_t, tr.loc, record_unit)
             parts.append((u_t, np.full(len(u_t), gen, dtype=np.int64), u_rank, u_pre, leaf))
             if not bound:
                 break
@@ -1094,24 +1112,24 @@ class TableEngine:
         """The invariants leaf of each candidate new state (memoised like reactions)."""
         if not len(cand_t):
             return np.zeros(0, dtype=np.int64)
-        roots = (cand_sys << 39) | ((tr.env2[cand_t] % self.env.C) << 33) | ((self.P + 2) << 16)
+        roots = _root_key(cand_sys, tr.env2[cand_t] % self.env.C, self.P + 2, 0)
 
-        def record(u: int) -> None:
+        def record_state(u: int) -> None:
             t = int(cand_t[u])
             self.record_invariants(self.env.key(int(tr.env2[t]), self.systems[int(cand_sys[u])]), int(roots[u]))
 
-        return self._walk(roots, cand_t, tr.loc, record)
+        return self._walk(roots, cand_t, tr.loc, record_state)
 
-    def run(self, res: Any, *, max_states: int | None, max_depth: int | None, timeout: float | None, keep_going: bool,
-            progress: bool, progress_after: float, progress_every: float, out: Any, t0: float) -> tuple[dict, str, int]:
+    def run(self, res: "CheckResult", *, max_states: int | None, max_depth: int | None, timeout: float | None, keep_going: bool,
+            progress: bool, progress_after: float, progress_every: float, out: TextIO, t0: float) -> tuple[dict[str, Counterexample], str, int]:
         """The BFS of :meth:`Checker.run <desmon.verify.checker.Checker.run>`, counting into ``res``;
         returns (counterexamples found, why incomplete or "", depth)."""
         ch = self.checker
         init = ch.initial()
         env = self.env = _Env(ch, init)
         C = env.C
-        if C > 64:
-            raise TableUnsupported(f"table engine: {C} contexts (at most 64); run with --engine direct")
+        if C > 1 << _ROOT_CTX or self.P + 3 > 1 << _ROOT_STIM:
+            raise TableUnsupported(f"table engine: {C} contexts and {self.P} platforms do not fit its tree keys; run with --engine direct")
         if env.space.bit_length() + SYS_BITS > 62:
             raise TableUnsupported(f"table engine: the environment has {env.space:,} combinations, too many to encode; run with --engine direct")
         # the answers of unused check positions: a block of zeros as long as any platform's digit range
@@ -1279,8 +1297,7 @@ class _Explored(Sequence[Key]):
     def __getitem__(self, i: Any) -> Any:
         if isinstance(i, slice):
             return [self[j] for j in range(*i.indices(len(self)))]
-        c = self._e.codes[i]
-        return self._e.env.key(c >> SYS_BITS, self._e.systems[c & _SYS_MASK])
+        return self._e.key_of(i)
 
     def __iter__(self) -> Iterator[Key]:
         for i in range(len(self)):
