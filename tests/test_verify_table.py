@@ -241,6 +241,14 @@ def test_a_platform_with_too_many_fact_combinations_runs_on_the_direct_engine():
     assert auto.engine == "direct" and "8,192 combinations" in auto.engine_note and auto.verdict == "HOLDS"
 
 
+def test_the_recording_port_offers_exactly_the_query_port_methods():
+    from desmon.deployment.ports import QueryPort
+    from desmon.verify.table import _QUERY_METHODS
+
+    protocol = {n for n, v in vars(QueryPort).items() if callable(v) and not n.startswith("_")}
+    assert set(_QUERY_METHODS) == protocol
+
+
 def test_auto_falls_back_to_the_direct_engine_and_says_why():
     scenario = load_scenario(SCENARIOS / "coffee_handover.py")
     auto = Checker(scenario, PEEKING).run()

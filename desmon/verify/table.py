@@ -427,6 +427,11 @@ class _Guarded(PlatformState):
         return PlatformState.__eq__(self, other)
 
 
+#: the QueryPort's methods (desmon.deployment.ports.QueryPort)
+_QUERY_METHODS = ("deployment_information", "fixed_platform", "constraints", "platform_states", "deployed_on",
+                  "active_deployments", "deployments", "perception_graph", "context")
+
+
 def _query_only(store: StateStore) -> Any:
     """The recording core's Query port: the store's QueryPort methods and nothing else.
 
@@ -435,44 +440,22 @@ def _query_only(store: StateStore) -> Any:
     the methods' closure, not in an attribute.
     """
 
-    class QueryOnly:
-        __slots__ = ()
-        validity_memo = None  # a recorded run must perform every requirement check
+    def forward(name: str) -> Callable[..., Any]:
+        def method(self: Any, *args: Any) -> Any:
+            return getattr(store, name)(*args)  # looked up per call: the store rebinds some per deployment set
 
-        def deployment_information(self, graph: str) -> Any:
-            return store.deployment_information(graph)
+        method.__name__ = name
+        return method
 
-        def fixed_platform(self, spec: Any) -> Any:
-            return store.fixed_platform(spec)
+    def refuse(self: Any, name: str) -> Any:
+        raise UnobservedRead(
+            f"the reaction asked its Query port for `{name}`, which is not a QueryPort method: the table engine "
+            "cannot know what it reads; run with --engine direct"
+        )
 
-        def constraints(self, spec: Any) -> Any:
-            return store.constraints(spec)
-
-        def platform_states(self) -> Any:
-            return store.platform_states()
-
-        def deployed_on(self, graph: str) -> Any:
-            return store.deployed_on(graph)
-
-        def active_deployments(self, platform: str) -> Any:
-            return store.active_deployments(platform)
-
-        def deployments(self) -> Any:
-            return store.deployments()
-
-        def perception_graph(self, deployment: str) -> Any:
-            return store.perception_graph(deployment)
-
-        def context(self) -> Any:
-            return store.context()
-
-        def __getattr__(self, name: str) -> Any:
-            raise UnobservedRead(
-                f"the reaction asked its Query port for `{name}`, which is not a QueryPort method: the table engine "
-                "cannot know what it reads; run with --engine direct"
-            )
-
-    return QueryOnly()
+    namespace: dict[str, Any] = {name: forward(name) for name in _QUERY_METHODS}
+    namespace.update(__slots__=(), validity_memo=None, __getattr__=refuse)  # validity_memo: every check is performed
+    return type("QueryOnly", (), namespace)()
 
 
 class _Idle:
@@ -628,6 +611,25 @@ class _Grow:
         return self.n - 1
 
 
+class _Interned(list):
+    """Distinct values numbered in order of first appearance: ``numbers(x)`` is x's number,
+    ``numbers[i]`` the value numbered i. Past ``limit`` values the engine bows out."""
+
+    def __init__(self, limit: int | None = None, what: str = "values") -> None:
+        super().__init__()
+        self._ids: dict[Any, int] = {}
+        self._limit, self._what = limit, what
+
+    def __call__(self, value: Any) -> int:
+        i = self._ids.get(value)
+        if i is None:
+            i = self._ids[value] = len(self)
+            if self._limit is not None and i >= self._limit:
+                raise TableUnsupported(f"table engine: more than {self._limit:,} {self._what}; run with --engine direct")
+            self.append(value)
+        return i
+
+
 class _Transitions(NamedTuple):
     """The enabled (state, event) pairs of a batch, state-major then in event order."""
 
@@ -647,8 +649,7 @@ class _Events:
     def __init__(self, engine: "TableEngine", env: _Env) -> None:
         b = engine.bounds
         self.env, self.bounds, self.P = env, b, engine.P
-        self.events: list[Event] = []
-        self._ids: dict[Event, int] = {}
+        self.events: _Interned = _Interned()
         C = env.C
         moves = [b.action_moves(c) for c in env.ctxs]
         kmax = max((len(m) for m in moves), default=0)
@@ -671,11 +672,7 @@ class _Events:
         self.kind_of = np.array([_KIND_ID[event_kind(e)] for e in self.events] or [0], dtype=np.int64)
 
     def _id(self, e: Event) -> int:
-        i = self._ids.get(e)
-        if i is None:
-            i = self._ids[e] = len(self.events)
-            self.events.append(e)
-        return i
+        return self.events(e)
 
     def enabled(self, codes: np.ndarray) -> _Transitions:
         """The enabled transitions out of the states ``codes`` (env << SYS_BITS | system)."""
@@ -757,14 +754,11 @@ class TableEngine:
         self.recorder = _Recorder(self)
         self.recorder.store = rc.store
         # interning
-        self._deployed_ids: dict[tuple, int] = {}
-        self._deployed: list[tuple] = []
-        self._tables: dict[tuple, int] = {}
-        self._table_args: list[tuple] = []
-        self.systems: list[tuple] = []
-        self._system_ids: dict[tuple, int] = {}
-        self.prefixes: list[tuple[bool, ...]] = [()]
-        self._prefix_ids: dict[tuple[bool, ...], int] = {(): 0}
+        self._deployed = _Interned()  # deployments on one platform, as its states carry them
+        self._table_args = _Interned()  # (requirements, graph) of a requirement check
+        self.systems = _Interned(1 << SYS_BITS, "distinct deployment states")  # (deployments, standing)
+        self.prefixes = _Interned(1 << _ROOT_PREFIX, "failed-start prefixes")
+        self.prefixes(())
         # decision trees
         P = len(self.model.platforms)
         self.P = P
@@ -779,8 +773,7 @@ class TableEngine:
         self._ekeys = np.zeros(0, dtype=np.int64)
         self._echild = np.zeros(0, dtype=np.int64)
         self._new_edges: dict[int, int] = {}  # edges added since the arrays were last merged
-        self.leaves: list[tuple] = []
-        self._leaf_ids: dict[tuple, int] = {}
+        self.leaves = _Interned()
         self._leaf_sys: list[int] = []  # a reaction leaf's next system part (-1: an invariants leaf)
         self._leaf_inst: list[bool] = []  # a reaction leaf with an instantaneous violation
         self.width = 1
@@ -792,44 +785,21 @@ class TableEngine:
 
     # -- interning --------------------------------------------------------------------
     def intern_deployed(self, deployed: tuple) -> int:
-        i = self._deployed_ids.get(deployed)
-        if i is None:
-            i = self._deployed_ids[deployed] = len(self._deployed)
-            self._deployed.append(deployed)
-        return i
+        return self._deployed(deployed)
 
     def intern_table(self, reqs: tuple, graph: str | None) -> int:
-        k = (reqs, graph)
-        i = self._tables.get(k)
-        if i is None:
-            i = self._tables[k] = len(self._table_args)
-            self._table_args.append(k)
-        return i
+        return self._table_args((reqs, graph))
 
     def system(self, deployments: tuple, standing: tuple) -> int:
-        k = (deployments, standing)
-        i = self._system_ids.get(k)
-        if i is None:
-            i = self._system_ids[k] = len(self.systems)
-            if i > _SYS_MASK:
-                raise TableUnsupported(f"table engine: more than {_SYS_MASK:,} distinct deployment states; run with --engine direct")
-            self.systems.append(k)
-        return i
+        return self.systems((deployments, standing))
 
     def prefix(self, p: tuple[bool, ...]) -> int:
-        i = self._prefix_ids.get(p)
-        if i is None:
-            i = self._prefix_ids[p] = len(self.prefixes)
-            if i >= 1 << _ROOT_PREFIX:
-                raise TableUnsupported("table engine: too many failed-start prefixes; run with --engine direct")
-            self.prefixes.append(p)
-        return i
+        return self.prefixes(p)
 
     def _leaf(self, value: tuple) -> int:
-        i = self._leaf_ids.get(value)
-        if i is None:
-            i = self._leaf_ids[value] = len(self.leaves)
-            self.leaves.append(value)
+        n = len(self.leaves)
+        i = self.leaves(value)
+        if i == n:  # a new leaf
             self._leaf_sys.append(value[1] if value[0] == "r" else -1)
             self._leaf_inst.append(value[0] == "r" and value[5] is not None)
         return i
