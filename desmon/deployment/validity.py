@@ -33,8 +33,8 @@ _MEMO_SIZE = 1 << 16
 #: engine). While :mod:`desmon.verify.table` records one reaction it sets this to an
 #: object whose ``validity(reqs, states, graph, reasons)`` and ``platform(reqs, state,
 #: graph, first_only)`` answer :func:`check_validity` and :func:`check_platform` (with the
-#: unmemoised implementations below) and note which platforms were asked about: that is
-#: how the engine learns what a reaction observed of the platforms. Nothing else reads it.
+#: implementations below) and record what the reaction uses of the answers: that is how
+#: the engine learns what a reaction observed of the platforms. Nothing else reads it.
 _observer: Any = None
 
 __all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos"]

@@ -420,7 +420,7 @@ class Checker:
         if engine not in ENGINES:
             raise CheckerError(f"unknown engine {engine!r}: choose one of {', '.join(ENGINES)}")
         if engine != "direct":
-            from desmon.verify.table import TableEngine, TableUnsupported, table_unsupported  # numpy: not timed
+            from desmon.verify.table import table_unsupported  # imports numpy: before the clock starts
         t0 = time.perf_counter()
         res = CheckResult(
             self.scenario.name, self.deployer_name, tuple(i.name for i in self.invariants), HOLDS,
@@ -435,35 +435,20 @@ class Checker:
             if why is None and workers > 1:
                 why = "--workers runs the direct engine"
             if why is None:
-                res.engine, res.workers = "table", 1
-                collecting = gc.isenabled()
-                gc.disable()  # as below: the search makes no cycles
-                try:
-                    table = TableEngine(self)
-                    found, incomplete, depth = table.run(
-                        res, max_states=max_states, max_depth=max_depth, timeout=timeout, keep_going=keep_going,
-                        progress=progress, progress_after=progress_after, progress_every=progress_every, out=out, t0=t0,
-                    )
-                except TableUnsupported as exc:
-                    if engine == "table":
-                        raise
-                    found = None  # type: ignore[assignment]
-                    why = str(exc)
-                finally:
-                    if collecting:
-                        gc.enable()
-                if found is not None:
-                    self.explored = table.explored()
-                    res.records = table.records
-                    return self._finish(res, found, incomplete, depth, t0)
-                abandoned = time.perf_counter() - t0
+                outcome = self._run_table(
+                    res, t0, table_only=engine == "table", max_states=max_states, max_depth=max_depth, timeout=timeout,
+                    keep_going=keep_going, progress=progress, progress_after=progress_after, progress_every=progress_every, out=out,
+                )
+                if isinstance(outcome, CheckResult):
+                    return outcome
+                abandoned = time.perf_counter() - t0  # the table attempt's time counts in the result's
                 res = self.run(
                     max_states=max_states, max_depth=max_depth, timeout=None if timeout is None else max(timeout - abandoned, 1e-9),
                     keep_going=keep_going, progress=progress, progress_after=progress_after, progress_every=progress_every,
                     workers=workers, engine="direct", out=out,
                 )
                 res.seconds += abandoned
-                res.engine_note = why or ""
+                res.engine_note = outcome
                 return res
             res.engine_note = why or ""
         canon = self.symmetry.canon if self.symmetry is not None else None
@@ -628,6 +613,28 @@ class Checker:
         self.explored = keys  # the distinct (canonical) states of the last run, BFS order
         res.states = len(keys)
         res.transitions = transitions
+        return self._finish(res, found, incomplete, depth, t0)
+
+    def _run_table(self, res: CheckResult, t0: float, *, table_only: bool, **search: Any) -> "CheckResult | str":
+        """The search on the table engine: its result, or (``table_only`` False) why it
+        could not run it, for :meth:`run` to fall back on the direct engine."""
+        from desmon.verify.table import TableEngine, TableUnsupported
+
+        res.engine, res.workers = "table", 1
+        collecting = gc.isenabled()
+        gc.disable()  # as in the direct search: it makes no cycles
+        try:
+            table = TableEngine(self)
+            found, incomplete, depth = table.run(res, t0=t0, **search)
+        except TableUnsupported as exc:
+            if table_only:
+                raise
+            return str(exc)
+        finally:
+            if collecting:
+                gc.enable()
+        self.explored = table.explored()
+        res.records = table.records
         return self._finish(res, found, incomplete, depth, t0)
 
     def _finish(self, res: CheckResult, found: dict[str, Counterexample], incomplete: str, depth: int, t0: float) -> CheckResult:

@@ -81,18 +81,21 @@ __all__ = ["TableEngine", "TableUnsupported", "UnobservedRead", "table_unsupport
 SYS_BITS = 24
 _SYS_MASK = (1 << SYS_BITS) - 1
 #: a decision tree's root key packs (system part, context digit, stimulus, prefix) into
-#: one int64: 24 + 6 + 17 + 16 bits (the limits are checked where the parts are made)
+#: one int64: 24 + 6 + 17 + 16 bits (each limit is checked where its part is made)
 _ROOT_CTX, _ROOT_STIM, _ROOT_PREFIX = 6, 17, 16
 
 
-def _root_key(system: np.ndarray, ctx: np.ndarray, stim: np.ndarray | int, prefix: np.ndarray | int) -> np.ndarray:
-    return (((system << _ROOT_CTX | ctx) << _ROOT_STIM | stim) << _ROOT_PREFIX) | prefix
 #: combinations of one platform's facts the engine tabulates answers for (beyond: direct engine)
 MAX_DIGITS = 4096
 #: frontier states expanded per numpy batch (bounds the memory of one batch)
 CHUNK_STATES = 16_384
 _KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
 _KIND_ID = {k: i for i, k in enumerate(_KINDS)}
+
+
+def _root_key(system: np.ndarray, ctx: np.ndarray, stim: np.ndarray | int, prefix: np.ndarray | int) -> np.ndarray:
+    """The decision-tree root of each (system part, context digit, stimulus, prefix)."""
+    return (((system << _ROOT_CTX | ctx) << _ROOT_STIM | stim) << _ROOT_PREFIX) | prefix
 
 
 class TableUnsupported(CheckerError):
@@ -113,10 +116,11 @@ class _Recorder:
 
     It answers each check with the real result, wrapped so that the run's *use* of it
     is what gets recorded: asking whether one platform is acceptable observes that
-    platform's answer only, iterating the acceptable platforms observes them one by one
-    in preference order (up to where the iteration stops), and anything else (length,
-    indexing, comparing, the rejected platforms and their reasons) observes every
-    answer, down to the failure texts when those are read.
+    platform's answer only; iterating, truth-testing or indexing the acceptable
+    platforms observes them one by one in preference order (up to where the code
+    stops); anything else (length, slicing, comparing, the rejected platforms and their
+    reasons) observes every answer, down to the failure texts when those are read; an
+    explanation is observed only where its text is used.
     """
 
     def __init__(self, engine: "TableEngine") -> None:
