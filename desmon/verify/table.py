@@ -519,7 +519,6 @@ class _Env:
         self.vdev: list[list[str]] = []
         self.U: list[int] = []
         self.K: list[int] = []
-        self.levels: list[tuple[float, ...]] = []
         self.R: list[int] = []
         self.W: list[int] = []
         self.decoded: list[list[tuple[bool, tuple[str, ...], tuple[tuple[str, float], ...]]]] = []
@@ -534,7 +533,6 @@ class _Env:
             self.vdev.append(vd)
             self.U.append(U)
             self.K.append(len(vd))
-            self.levels.append(lv)
             self.R.append(R)
             self.W.append(w)
             w *= R
