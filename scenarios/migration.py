@@ -59,7 +59,7 @@ scenario = Scenario(
             "desmon": {"verdict": "HOLDS", "states": 54, "counterexamples": {}},
             "paper": {
                 "verdict": "VIOLATED",
-                "states": 156,
+                "states": 153,
                 "counterexamples": {"valid-or-error": 1, "no-overcommit": 4, "single-instance": 1, "coverage": 2},
             },
         },

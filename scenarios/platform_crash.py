@@ -47,8 +47,8 @@ scenario = Scenario(
     expected={
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
-            "desmon": {"verdict": "HOLDS", "states": 42, "counterexamples": {}},
-            "paper": {"verdict": "VIOLATED", "states": 54, "counterexamples": {"valid-or-error": 2, "single-instance": 2}},
+            "desmon": {"verdict": "HOLDS", "states": 43, "counterexamples": {}},
+            "paper": {"verdict": "VIOLATED", "states": 51, "counterexamples": {"valid-or-error": 2, "single-instance": 2}},
         },
         # desmon run (SimPy world), seed 0, per deployer: asserted exactly by tests/test_scenarios_sim.py
         "desmon": {

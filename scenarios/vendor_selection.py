@@ -56,7 +56,7 @@ scenario = Scenario(
     expected={
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
-            "desmon": {"verdict": "HOLDS", "states": 47, "counterexamples": {}},
+            "desmon": {"verdict": "HOLDS", "states": 49, "counterexamples": {}},
             "paper": {"verdict": "VIOLATED", "states": 60, "counterexamples": {"valid-or-error": 2, "single-instance": 2}},
         },
         # desmon run (SimPy world), seed 0, per deployer: asserted exactly by tests/test_scenarios_sim.py

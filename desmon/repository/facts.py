@@ -162,21 +162,37 @@ class RepositoryInsert:
 class ImmediateControl:
     """An infrastructure whose start/stop take no time: the scripted driver's Control port.
 
-    ``fails`` decides whether a start fails (``fails(graph, platform) -> bool``).
-    Starting an instance that already runs is a no-op success. It keeps its own list of
-    running instances (``running``) and a stop count, so the ``history`` invariant can
-    compare them with the repository's edges.
+    ``refuse(graph, platform)`` gives the reason the infrastructure refuses a start, or
+    None: the engines pass the one Control semantics of
+    :class:`desmon.deployment.control.ControlRules` (build it with
+    :func:`desmon.deployment.control.repository_control`); without it no start is refused.
+    ``fails`` decides whether a start that is not refused fails anyway
+    (``fails(graph, platform) -> bool``). Starting an instance that already runs is a
+    no-op success. It keeps its own list of running instances (``running``) and a stop
+    count, so the ``history`` invariant can compare them with the repository's edges.
     """
 
-    def __init__(self, repo: Repository, fails: Callable[[str, str], bool] | None = None) -> None:
+    def __init__(
+        self,
+        repo: Repository,
+        fails: Callable[[str, str], bool] | None = None,
+        refuse: Callable[[str, str], str | None] | None = None,
+    ) -> None:
         self.repo = repo
         self.fails = fails or (lambda g, p: False)
+        self.refuse = refuse
         self.running: set[tuple[str, str]] = set()
         self.stops = 0
+        #: why the last start was refused ("" when it was not)
+        self.refused = ""
 
     def start(self, graph: str, platform: str) -> bool:
         if (graph, platform) in self.running:
             return True
+        why = self.refuse(graph, platform) if self.refuse is not None else None
+        self.refused = why or ""
+        if why is not None:
+            return False
         if self.fails(graph, platform):
             return False
         self.running.add((graph, platform))

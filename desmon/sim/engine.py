@@ -41,6 +41,7 @@ from typing import Any, Callable
 
 import simpy
 
+from desmon.deployment.control import ControlRules
 from desmon.deployment.core import DeploymentCore, stamp
 from desmon.deployment.invariants import check_invariants
 from desmon.deployment.monitor import GripperObservation, Stimulus, interpret
@@ -49,6 +50,7 @@ from desmon.detectors.base import Alarm
 from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
 from desmon.model.scenario import Scenario
+from desmon.model.system import PlatformState
 from desmon.repository import labels as L
 from desmon.repository.facts import RepositoryInsert, load_model, record_start, record_stop
 from desmon.repository.query import RepositoryQuery
@@ -146,6 +148,10 @@ class SimWorld:
         self.up = {p.name: True for p in self.model.platforms}
         self.load: dict[str, float] = {p.name: 0.0 for p in self.model.platforms}
         self.dev_ok = {d.name: True for d in self.model.devices}
+        self.host = {d.name: d.platform for d in self.model.devices}
+        self._hosted = {p.name: self.model.devices_on(p.name) for p in self.model.platforms}
+        #: the one Control semantics (desmon.deployment.control), on the physical facts
+        self.rules = ControlRules(self.model)
         self.instances: dict[tuple[str, str], Instance] = {}
         #: memory (MB) a running instance of each graph consumes: its spec's consumption()
         self.consumes = {s.graph: dict(s.consumption()).get("memory", 0.0) for s in self.model.specs}
@@ -174,7 +180,10 @@ class SimWorld:
         self._pending_ready: list[Instance] = []
         # initial facts, silently (before Notify is wired)
         for ev in scenario.initial:
-            self._apply_physical(ev, 0.0)
+            if isinstance(ev, (PlatformDown, PlatformUp)):
+                self._platform_flip(ev.platform, isinstance(ev, PlatformUp), 0.0)
+            else:
+                self._apply_physical(ev, 0.0)
             self.core.observe(ev)
         for p in self.up:
             self.memory.set(p, 0.0, self._used(p))
@@ -191,11 +200,11 @@ class SimWorld:
             self.load[ev.platform] = ev.amount
         elif isinstance(ev, DeviceFail):
             self.dev_ok[ev.device] = False
-            if self.bank is not None:
+            if self.bank is not None and self.up[self.host[ev.device]]:  # else silent already
                 self.bank.fail(ev.device, t)
         elif isinstance(ev, DeviceRepair):
             self.dev_ok[ev.device] = True
-            if self.bank is not None:
+            if self.bank is not None and self.up[self.host[ev.device]]:  # else silent until it is up
                 self.bank.repair(ev.device, t)
 
     def _used(self, p: str) -> float:
@@ -206,8 +215,20 @@ class SimWorld:
     def _mem(self, p: str) -> None:
         self.memory.set(p, self.env.now, self._used(p))
 
+    def _readable(self, device: str) -> bool:
+        """A device's signal reaches a detector while it works and its platform is up."""
+        return self.dev_ok[device] and self.up[self.host[device]]
+
     def _inputs_ok(self, inst: Instance) -> bool:
-        return all(any(self.dev_ok[d] for d in devs) for devs in inst.streams.values())
+        return all(any(self._readable(d) for d in devs) for devs in inst.streams.values())
+
+    def _physical_state(self, platform: str) -> PlatformState:
+        """The physical facts of ``platform`` the Control rules read (up, working devices)."""
+        return PlatformState(
+            self.model.platform(platform),
+            self.up[platform],
+            tuple(d for d in self._hosted[platform] if self.dev_ok[d.name]),
+        )
 
     def _alive(self, inst: Instance) -> bool:
         return self.up[inst.platform] and not inst.halted and self._inputs_ok(inst)
@@ -278,49 +299,67 @@ class SimWorld:
         env = self.env
         now = env.now
         if isinstance(ev, (DeviceFail, DeviceRepair)):
-            working = isinstance(ev, DeviceRepair)
-            if self.dev_ok[ev.device] == working:
+            if self.dev_ok[ev.device] == isinstance(ev, DeviceRepair):
                 return
             self.trace.emit(now, "fault", event=str(ev), source=source)
             self.exposure.advance(now)
-            affected = [i for i in self.instances.values() if any(ev.device in devs for devs in i.streams.values())]
-            before = {id(i): self._alive(i) for i in affected}
-            ok_before = {id(i): self._inputs_ok(i) for i in affected}
-            for inst in affected:
-                self._feed(inst, now)
-            self._apply_physical(ev, now)
-            for inst in affected:
-                if working and not ok_before[id(inst)] and self._inputs_ok(inst) and self.up[inst.platform]:
-                    self._activate(inst, now)  # input back: re-tare / warm up
-                elif before[id(inst)] and not self._alive(inst):
-                    self.trace.emit(now, "invalid", graph=inst.graph, platform=inst.platform, reason="sensor_failure")
+            readers = [i for i in self.instances.values() if any(ev.device in devs for devs in i.streams.values())]
+            self._inputs_change(readers, now, lambda: self._apply_physical(ev, now))
         else:
             up = isinstance(ev, PlatformUp)
             if self.up[ev.platform] == up:
                 return
             self.trace.emit(now, "fault", event=str(ev), source=source)
             self.exposure.advance(now)
-            on = [i for i in self.instances.values() if i.platform == ev.platform]
-            for inst in on:
-                if up:
-                    inst.fed = now
-                    inst.halted = False
-                    self._activate(inst, now)  # the supervisor restarts it on reboot
-                else:
-                    alive = self._alive(inst)
-                    self._feed(inst, now)
-                    inst.halted = True
-                    inst.valid_from = math.inf
-                    if inst.adapter is not None:
-                        inst.adapter.deactivate()
-                    if alive:
-                        self.trace.emit(now, "invalid", graph=inst.graph, platform=inst.platform, reason="platform_crash")
-            self.up[ev.platform] = up
-            self._mem(ev.platform)
+            hosted = {d.name for d in self._hosted[ev.platform]}
+            readers = [
+                i for i in self.instances.values()
+                if i.platform != ev.platform and any(d in hosted for devs in i.streams.values() for d in devs)
+            ]
+            self._inputs_change(readers, now, lambda: self._platform_flip(ev.platform, up, now))
             self.trace.emit(now, "platform", platform=ev.platform, up=up)
         self._flush_ready()
         self.exposure.check(now)
         env.process(self._notice(ev))
+
+    def _inputs_change(self, readers: list[Instance], now: float, change: Callable[[], None]) -> None:
+        """Apply ``change`` to the physical world; instances on other platforms reading the
+        affected devices (``readers``) are fed up to ``now`` first, re-activated when their
+        inputs come back, and reported invalid when they lose them."""
+        before = {id(i): self._alive(i) for i in readers}
+        ok_before = {id(i): self._inputs_ok(i) for i in readers}
+        for inst in readers:
+            self._feed(inst, now)
+        change()
+        for inst in readers:
+            if not ok_before[id(inst)] and self._inputs_ok(inst) and self.up[inst.platform]:
+                self._activate(inst, now)  # input back: re-tare / warm up
+            elif before[id(inst)] and not self._alive(inst):
+                self.trace.emit(now, "invalid", graph=inst.graph, platform=inst.platform, reason="sensor_failure")
+
+    def _platform_flip(self, platform: str, up: bool, now: float) -> None:
+        """A platform goes down (its instances halt, its devices go silent) or comes back
+        (the supervisor restarts its instances, its working devices stream again)."""
+        for inst in [i for i in self.instances.values() if i.platform == platform]:
+            if up:
+                inst.fed = now
+                inst.halted = False
+                self._activate(inst, now)  # the supervisor restarts it on reboot
+            else:
+                alive = self._alive(inst)
+                self._feed(inst, now)
+                inst.halted = True
+                inst.valid_from = math.inf
+                if inst.adapter is not None:
+                    inst.adapter.deactivate()
+                if alive:
+                    self.trace.emit(now, "invalid", graph=inst.graph, platform=inst.platform, reason="platform_crash")
+        self.up[platform] = up
+        if self.bank is not None:
+            for d in self._hosted[platform]:
+                if self.dev_ok[d.name]:
+                    (self.bank.repair if up else self.bank.fail)(d.name, now)
+        self._mem(platform)
 
     def _scripted_faults(self):  # type: ignore[no-untyped-def]
         for te in self.world.faults:
@@ -374,9 +413,8 @@ class SimWorld:
     # ------------------------------------------------------------------ infrastructure (Control)
     def _devices_for(self, graph: str, platform: str) -> dict[str, tuple[str, ...]]:
         out: dict[str, tuple[str, ...]] = {}
-        for kind in self.model.graph(graph).device_kinds:
-            local = tuple(d.name for d in self.model.devices if d.kind == kind and d.platform == platform)
-            devs = local or tuple(d.name for d in self.model.devices if d.kind == kind)
+        for kind, devices in self.rules.input_devices(graph, platform):
+            devs = tuple(d.name for d in devices)
             stream = self.world.signal_of(kind) or kind
             out[stream] = out.get(stream, ()) + devs
         return out
@@ -415,9 +453,9 @@ class SimWorld:
         latency = self.world.latency(platform)
         if latency:
             yield env.timeout(latency)
-        reason = ""
-        if not self.up[platform]:
-            reason = "platform down"
+        reason = self.rules.start_refusal(graph, platform, self._physical_state) or ""
+        if reason:
+            pass
         elif (graph, platform, n) in self.world.start_failure.script:
             reason = "scripted start failure"
         elif self.world.start_failure.probability and self.rng_start.random() < self.world.start_failure.probability:

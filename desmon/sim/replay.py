@@ -12,6 +12,7 @@ from typing import Callable
 
 import networkx as nx
 
+from desmon.deployment.control import repository_control
 from desmon.deployment.core import DeploymentCore, stamp
 from desmon.deployment.invariants import check_invariants
 from desmon.deployment.monitor import Stimulus
@@ -74,7 +75,7 @@ def replay(
     repo = Repository(clock=lambda: now[0])
     load_model(repo, scenario.model)
     query = RepositoryQuery(repo)
-    control = ImmediateControl(repo, start_fails)
+    control = repository_control(repo, scenario.model, start_fails)
     core = DeploymentCore(scenario.model, query, RepositoryInsert(repo, scenario.model.robot), deployer)
     for event in scenario.initial:
         core.observe(event)

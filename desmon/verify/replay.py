@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from desmon.deployment.control import repository_refusal
 from desmon.deployment.core import DeploymentCore, run_sync
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.invariants import check_invariants
@@ -19,6 +20,7 @@ from desmon.deployment.monitor import Stimulus
 from desmon.deployment.ports import ControlPort
 from desmon.model.events import ActionChange, Event
 from desmon.model.scenario import Scenario
+from desmon.model.system import SystemModel
 from desmon.repository import labels as L
 from desmon.repository.facts import ImmediateControl, RepositoryInsert, load_model
 from desmon.repository.query import RepositoryQuery
@@ -42,23 +44,20 @@ def initial_reaction(core: DeploymentCore, scenario: Scenario, bounds: Bounds, c
 
 
 class ScriptedControl(ImmediateControl):
-    """ImmediateControl whose real starts (not the no-op restarts) fail at given indices."""
+    """The Control rules on the repository, where the real starts the rules do not refuse
+    (not the no-op restarts) fail at given indices, as the checker's outcome prefix says."""
 
-    def __init__(self, repo: Repository) -> None:
-        super().__init__(repo)
+    def __init__(self, repo: Repository, model: SystemModel) -> None:
+        super().__init__(repo, self._scripted_fail, repository_refusal(repo, model))
         self.fail_at: tuple[int, ...] = ()
         self.n = 0
 
     def arm(self, fails: tuple[int, ...]) -> None:
         self.fail_at, self.n = fails, 0
 
-    def start(self, graph: str, platform: str) -> bool:
-        if (graph, platform) in self.running:
-            return True
+    def _scripted_fail(self, graph: str, platform: str) -> bool:
         i, self.n = self.n, self.n + 1
-        if i in self.fail_at:
-            return False
-        return super().start(graph, platform)
+        return i in self.fail_at
 
 
 class RepositoryRun:
@@ -70,7 +69,7 @@ class RepositoryRun:
         self.repo = Repository()
         load_model(self.repo, scenario.model)
         self.query = RepositoryQuery(self.repo)
-        self.control = ScriptedControl(self.repo)
+        self.control = ScriptedControl(self.repo, scenario.model)
         self.core = DeploymentCore(scenario.model, self.query, RepositoryInsert(self.repo, scenario.model.robot), deployer)
         initial_reaction(self.core, scenario, self.bounds, self.control)
 

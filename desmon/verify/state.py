@@ -5,7 +5,8 @@ down, background loads, active deployments and standing errors, every unordered 
 sorted. :class:`StateStore` is loaded from a key, answers the QueryPort exactly as
 :class:`~desmon.repository.query.RepositoryQuery` over the networkx repository would
 (``tests/test_state_equivalence.py`` shows it with hypothesis), takes the context
-monitor's Insert facts, and executes Control commands against an *outcome prefix*:
+monitor's Insert facts, and executes Control commands by the one Control semantics of
+:mod:`desmon.deployment.control`; a start the rules allow follows an *outcome prefix*:
 a start beyond the prefix succeeds and marks a choice point the checker may branch on.
 
 Performance: the store holds the key's parts as the very (immutable, sorted) tuples
@@ -25,6 +26,7 @@ from __future__ import annotations
 
 from typing import Callable, NamedTuple
 
+from desmon.deployment.control import ControlRules
 from desmon.deployment.invariants import SystemView, Invariant
 from desmon.errors import QueryError
 from desmon.model.requirements import DeploymentSpec, Requirement
@@ -97,6 +99,9 @@ class StateStore:
         self._graphs = {g.name for g in model.graphs}
         self._use = {s.graph: s.consumption() for s in model.specs}
         self._ps_cache: dict[tuple, PlatformState] = {}
+        self.rules = ControlRules(model)
+        #: why the last start was refused by the Control rules ("" when it was not)
+        self.refused = ""
         self._use_memo: dict[tuple[str, ...], tuple] = {}
         self._states_memo: dict[tuple, tuple[PlatformState, ...]] = {}
         self._index_memo: dict[tuple, tuple] = {}
@@ -318,11 +323,17 @@ class StateStore:
         self._touch(platform)
         return True
 
-    # -- ControlPort (ImmediateControl semantics, starts follow the outcome prefix) --------
+    # -- ControlPort (the Control rules; starts they allow follow the outcome prefix) ------
     def start(self, graph: str, platform: str) -> bool:
         pair = (graph, platform)
         if pair in self.deployed:
             return True
+        # a start the rules refuse is no choice point: it fails in every branch, and does
+        # not take a position of the outcome prefix (desmon.deployment.control)
+        why = self.rules.start_refusal(graph, platform, self.platform_state)
+        if why is not None:
+            self.refused = why
+            return False
         i = len(self.outcomes)
         ok = self.prefix[i] if i < len(self.prefix) else True
         self.outcomes.append(ok)

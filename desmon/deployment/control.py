@@ -1,0 +1,117 @@
+"""The Control semantics: when the infrastructure refuses a start or a stop.
+
+Written once and used by every engine (``docs/design.md``, "Control semantics"):
+
+* the scripted replay and the checker's repository replay
+  (:func:`repository_control`),
+* the checker's state store (:class:`desmon.verify.state.StateStore`),
+* the SimPy infrastructure (``SimWorld._start``), on the *physical* facts at the moment
+  the start completes.
+
+Rules
+    A start of a graph on a platform it already runs on is a no-op success. Otherwise
+    the start is **refused** when
+
+    1. the platform is down, or
+    2. one of the device kinds the graph's sensor components read has no readable
+       device: the graph reads the platform's own devices of that kind if it has any,
+       else every device of that kind on the robot; a device is readable while it works
+       and its platform is up. (A kind no device of the model provides at all -- a
+       model without devices, for pure platform studies -- imposes no rule.)
+
+    A start that is not refused may still fail by the environment's failure model (the
+    checker's bounded ``start_failures`` choice points, the world's scripted or random
+    start failures). A stop succeeds exactly when the graph runs on the platform, down
+    or not (the infrastructure can always drop an instance it knows of).
+
+Both rules are evaluated with :func:`~desmon.deployment.validity.check_platform`, so
+the checker's table engine observes them like any requirement check.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Callable
+
+from desmon.deployment.validity import check_platform
+from desmon.repository.facts import ImmediateControl
+from desmon.repository.query import RepositoryQuery
+from desmon.repository.store import Repository
+from desmon.model.platform import Device
+from desmon.model.requirements import PLATFORM_HAS, Attribute
+from desmon.model.system import PlatformState, SystemModel
+
+__all__ = ["ControlRules", "repository_control", "repository_refusal", "stop_succeeds", "StateOf", "PLATFORM_DOWN"]
+
+#: ``platform name -> its PlatformState`` (the facts the rules read).
+StateOf = Callable[[str], PlatformState]
+
+#: The refusal reason of rule 1.
+PLATFORM_DOWN = "platform down"
+
+
+@lru_cache(maxsize=256)
+def _has(kind: str) -> tuple[Attribute, ...]:
+    return (Attribute(PLATFORM_HAS, kind),)
+
+
+class ControlRules:
+    """The start rules for one model (its input wiring memoised per graph and platform)."""
+
+    __slots__ = ("model", "_wiring")
+
+    def __init__(self, model: SystemModel) -> None:
+        self.model = model
+        self._wiring: dict[tuple[str, str], tuple[tuple[str, tuple[Device, ...]], ...]] = {}
+
+    def input_devices(self, graph: str, platform: str) -> tuple[tuple[str, tuple[Device, ...]], ...]:
+        """``(kind, devices)`` per device kind ``graph`` reads when it runs on ``platform``:
+        the platform's own devices of that kind if it has any, else every device of that
+        kind (in declaration order). The SimPy world wires a detector's inputs this way."""
+        key = (graph, platform)
+        found = self._wiring.get(key)
+        if found is None:
+            model = self.model
+            out = []
+            for kind in model.graph(graph).device_kinds:
+                local = tuple(d for d in model.devices if d.kind == kind and d.platform == platform)
+                out.append((kind, local or tuple(d for d in model.devices if d.kind == kind)))
+            found = self._wiring[key] = tuple(out)
+        return found
+
+    def start_refusal(self, graph: str, platform: str, state_of: StateOf) -> str | None:
+        """Why the infrastructure refuses to start ``graph`` on ``platform``, or None.
+
+        ``state_of`` gives a platform's current facts (only ``up`` and the working
+        devices are read, through :func:`check_platform`).
+        """
+        if check_platform((), state_of(platform), graph):
+            return PLATFORM_DOWN
+        for kind, devices in self.input_devices(graph, platform):
+            if not devices:
+                continue
+            hosts = tuple(dict.fromkeys(d.platform for d in devices))
+            if all(check_platform(_has(kind), state_of(h), graph) for h in hosts):
+                names = ", ".join(d.name for d in devices)
+                return f"no readable {kind} ({names}: failed or on a platform that is down)"
+        return None
+
+
+def stop_succeeds(running: bool) -> bool:
+    """A stop succeeds exactly when the instance runs (see the module docstring)."""
+    return running
+
+
+def repository_refusal(repo: Repository, model: SystemModel) -> Callable[[str, str], str | None]:
+    """``refuse(graph, platform)`` of the Control rules, reading the facts from ``repo``."""
+    rules = ControlRules(model)
+    state_of = RepositoryQuery(repo).platform_state
+    return lambda graph, platform: rules.start_refusal(graph, platform, state_of)
+
+
+def repository_control(
+    repo: Repository, model: SystemModel, fails: Callable[[str, str], bool] | None = None
+) -> ImmediateControl:
+    """An instant Control port on a networkx repository that follows the Control rules;
+    ``fails`` as in :class:`ImmediateControl`."""
+    return ImmediateControl(repo, fails, repository_refusal(repo, model))
