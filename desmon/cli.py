@@ -9,14 +9,54 @@ as one line ``desmon: error: ...`` without a traceback.
 from __future__ import annotations
 
 import argparse
+import math
+import re
 import sys
-from typing import Callable, Sequence
+from typing import Callable, NoReturn, Sequence
 
 from desmon.errors import DesmonError
+from desmon.options import (
+    add_input,
+    add_output,
+    add_window,
+    non_negative_int,
+    positive_int,
+    positive_seconds,
+    preflight,
+)
+from desmon.paths import SCENARIO_FILE, TRACE_FILE
 
 __all__ = ["main", "build_parser"]
 
 EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
+
+#: ``show --format`` -> the file suffixes it writes (the first is the usual one).
+SHOW_FORMATS = {"png": (".png",), "dot": (".dot", ".gv"), "graphml": (".graphml",), "json": (".json",), "cypher": (".cypher", ".cql")}
+RUN_WINDOW = ("--plot-from", "--plot-to")
+
+
+def _one_line(text: object) -> str:
+    """``text`` on one line (a message may quote a user's value holding a newline)."""
+    return " ".join(str(text).split())
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line: ``desmon: error: COMMAND: ...; see: desmon COMMAND --help``."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, _usage_error(self.prog, message))
+
+
+def _usage_error(prog: str, message: str) -> str:
+    """The one line for a usage error of ``prog`` ("desmon" or "desmon COMMAND")."""
+    command = prog.removeprefix("desmon").strip()
+    where = f"{command}: " if command else ""
+    message = re.sub(r"^argument (\S+): must ", r"\1 must ", _one_line(message))  # "--seed must be ..., got -1"
+    return f"desmon: error: {where}{message}; see: {prog} --help\n"
+
+
+def _scenario_arg(p: argparse.ArgumentParser, help: str = "scenario file, e.g. scenarios/coffee_handover.py") -> None:
+    add_input(p, "scenario", SCENARIO_FILE, help=help)
 
 
 def _deployer_arg(p: argparse.ArgumentParser) -> None:
@@ -91,6 +131,8 @@ def _resolve_times(scenario, spec: str | None) -> list[tuple[str, float]]:  # ty
             raise ScenarioError(
                 f"--at {part!r} is neither a time in seconds nor a timeline label ({', '.join(labels) or 'none'})"
             ) from None
+        if not math.isfinite(t):
+            raise ScenarioError(f"--at {part}: give a finite time in seconds or a timeline label ({', '.join(labels) or 'none'})")
         first = scenario.timeline[0].time
         if t < first:
             raise ScenarioError(f"--at {part}: the timeline starts at t={first:g}s; give a time at or after it")
@@ -100,9 +142,9 @@ def _resolve_times(scenario, spec: str | None) -> list[tuple[str, float]]:  # ty
 
 def _cmd_show(args: argparse.Namespace) -> int:
     import json
-    from pathlib import Path
 
     from desmon.errors import ScenarioError
+    from desmon.paths import check_output_file, replacing
     from desmon.repository.export import graph_to_cypher, graph_to_dot
     from desmon.repository.store import graph_to_graphml, graph_to_json
     from desmon.sim.replay import replay
@@ -117,19 +159,20 @@ def _cmd_show(args: argparse.Namespace) -> int:
         errors = [f"{e.kind}: {e.graph}" for step in result.steps if step.time == t for e in step.errors]
         head = f"{scenario.name} {title}" + (f"  context: {ctx[0]}" if ctx else "")
         snaps.append((head + "".join(f"\nerror raised: {e}" for e in errors), snap))
-    fmt = args.format
+    fmt = args.format  # preflight set it from -o when --format was not given
     if fmt != "png" and len(snaps) > 1:
         raise ScenarioError(f"--format {fmt} writes one snapshot: give one --at, or use --format png for side-by-side")
+    out = args.output
+    if out is None and fmt in ("png", "graphml"):  # binary formats go to a file named after the scenario
+        out = str(check_output_file(f"{scenario.name}-snapshot{SHOW_FORMATS[fmt][0]}", "-o", SHOW_FORMATS[fmt], [args.scenario]))
     if fmt == "png":
         from desmon.viz.snapshot import draw_snapshots
 
-        out = Path(args.output or f"{scenario.name}-snapshot.png")
         draw_snapshots(snaps, out, full=result.repo.graph, columns=min(2, len(snaps)))
         print(f"wrote {out}")
         return EXIT_OK
     title, snap = snaps[0]
     if fmt == "graphml":
-        out = Path(args.output or f"{scenario.name}-snapshot.graphml")
         graph_to_graphml(snap, str(out))
         print(f"wrote {out}")
         return EXIT_OK
@@ -138,9 +181,10 @@ def _cmd_show(args: argparse.Namespace) -> int:
         "dot": lambda: graph_to_dot(snap, title),
         "cypher": lambda: graph_to_cypher(snap),
     }[fmt]()
-    if args.output:
-        Path(args.output).write_text(text)
-        print(f"wrote {args.output}")
+    if out:
+        with replacing(out) as fh:
+            fh.write(text)
+        print(f"wrote {out}")
     else:
         sys.stdout.write(text)
     return EXIT_OK
@@ -154,10 +198,10 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     )
 
 
-def _draw_trace(trace: str, out: str, start: float | None, end: float | None) -> None:
+def _draw_trace(trace: str, out: str, start: float | None, end: float | None, flags: tuple[str, str] = ("--from", "--to")) -> None:
     from desmon.viz.timeline import build_timeline, plot_timeline, read_trace
 
-    plot_timeline(build_timeline(read_trace(trace), start, end), out)
+    plot_timeline(build_timeline(read_trace(trace), start, end, flags=flags), out)
     print(f"wrote {out}", file=sys.stderr)
 
 
@@ -168,28 +212,29 @@ def _cmd_plot(args: argparse.Namespace) -> int:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     import importlib
+    import os
     import tempfile
 
-    from desmon.viz.common import require_matplotlib
+    from desmon.viz.timeline import check_window
 
-    if args.plot:
-        require_matplotlib()  # fail before a long run, not after it
+    def window_fits(horizon: float) -> None:  # before simulating, once the horizon is known
+        check_window(args.plot_from, args.plot_to, horizon, flags=RUN_WINDOW)
+
     tmp = None
     if args.plot and not args.trace:
-        tmp = tempfile.NamedTemporaryFile(suffix=".jsonl", delete=False)
-        tmp.close()
-        args.trace = tmp.name
+        fd, tmp = tempfile.mkstemp(suffix=".jsonl")
+        os.close(fd)
+        args.trace = tmp
         args.trace_is_temporary = True  # deleted below: the summary does not name it
     try:
-        code = int(importlib.import_module("desmon.sim.command").run_command(args))
+        command = importlib.import_module("desmon.sim.command")
+        code = int(command.run_command(args, before_run=window_fits if args.plot else None))
         if args.plot and code in (EXIT_OK, EXIT_VIOLATED):
-            _draw_trace(args.trace, args.plot, args.plot_from, args.plot_to)
+            _draw_trace(args.trace, args.plot, args.plot_from, args.plot_to, RUN_WINDOW)
         return code
     finally:
-        if tmp is not None:
-            import os
-
-            os.unlink(tmp.name)
+        if tmp is not None and os.path.exists(tmp):
+            os.unlink(tmp)
 
 
 def _lazy(module: str, func: str) -> Callable[[argparse.Namespace], int]:
@@ -202,70 +247,77 @@ def _lazy(module: str, func: str) -> Callable[[argparse.Namespace], int]:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="desmon",
         description="Simulate, exhaustively check and fuzz the adaptive deployment of safety monitors.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
     p = sub.add_parser("replay", help="replay a scenario's scripted timeline through the deployment core (no signals)")
-    p.add_argument("scenario", help="scenario file, e.g. scenarios/coffee_handover.py")
+    _scenario_arg(p)
     _deployer_arg(p)
     p.set_defaults(handler=_cmd_replay)
 
     p = sub.add_parser("explain", help="why each platform is accepted or rejected for a perception graph")
-    p.add_argument("scenario")
+    _scenario_arg(p)
     p.add_argument("graph", help="perception graph, e.g. combined_slip_detector")
     p.add_argument("--at", default=None, help="seconds or a timeline label such as t1 (default: the timeline's end)")
     _deployer_arg(p)
     p.set_defaults(handler=_cmd_explain)
 
     p = sub.add_parser("show", help="the repository graph at a time, as png, dot, graphml, json or cypher")
-    p.add_argument("scenario")
+    _scenario_arg(p)
     p.add_argument("--at", default=None, help="seconds or timeline labels, comma-separated (e.g. t0,t1,t2,t3)")
-    p.add_argument("--format", default="png", choices=["png", "dot", "graphml", "json", "cypher"])
-    p.add_argument("-o", "--output", default=None, help="output file (text formats default to stdout)")
+    p.add_argument(
+        "--format", default=None, choices=list(SHOW_FORMATS),
+        help="default: the suffix of -o (.png .dot .graphml .json .cypher), else png",
+    )
+    add_output(
+        p, "-o", "--output", formats=SHOW_FORMATS, default_format="png", default=None,
+        help="output file, its suffix matching --format (text formats default to stdout)",
+    )
     _deployer_arg(p)
     p.set_defaults(handler=_cmd_show)
 
     p = sub.add_parser("evaluate", help="detector x action table against Sanchez et al. 2016, and mission-level strategies")
-    p.add_argument("--trials", type=int, default=300, help="trials per cell (default 300)")
-    p.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
+    p.add_argument("--trials", type=positive_int, default=300, help="trials per cell (default 300)")
+    p.add_argument("--seed", type=non_negative_int, default=1, help="random seed (default 1)")
     p.add_argument("--json", action="store_true", help="print JSON instead of tables")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(handler=_cmd_evaluate)
 
     p = sub.add_parser("run", help="simulate a scenario in the SimPy world")
-    p.add_argument("scenario")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--until", type=float, default=None, help="simulated seconds (default: the scenario's horizon)")
+    _scenario_arg(p)
+    p.add_argument("--seed", type=non_negative_int, default=0)
+    p.add_argument("--until", type=positive_seconds, default=None, help="simulated seconds (default: the scenario's horizon)")
     _deployer_arg(p)
-    p.add_argument("--trace", default=None, help="write the JSON Lines trace to this file")
+    add_output(p, "--trace", suffixes=(".jsonl",), default=None, metavar="FILE.jsonl", help="write the JSON Lines trace to this file")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--no-progress", action="store_true")
-    p.add_argument("--plot", default=None, metavar="PNG", help="draw the timeline of the run to this PNG (needs desmon[plot])")
-    p.add_argument("--plot-from", type=float, default=None, metavar="T", help="timeline window start (s)")
-    p.add_argument("--plot-to", type=float, default=None, metavar="T", help="timeline window end (s)")
+    add_output(
+        p, "--plot", suffixes=(".png",), default=None, metavar="FILE.png",
+        help="draw the timeline of the run to this PNG (needs desmon[plot])",
+    )
+    add_window(p, ("--plot-from", "plot_from"), ("--plot-to", "plot_to"), needs=("plot", "--plot"))
     p.set_defaults(handler=_cmd_run)
 
     p = sub.add_parser("plot", help="draw the timeline of a run's JSON Lines trace")
-    p.add_argument("trace", help="trace file written by desmon run --trace")
-    p.add_argument("-o", "--output", default="timeline.png", help="PNG file (default timeline.png)")
-    p.add_argument("--from", dest="start", type=float, default=None, metavar="T", help="window start (s)")
-    p.add_argument("--to", dest="end", type=float, default=None, metavar="T", help="window end (s)")
+    add_input(p, "trace", TRACE_FILE, help="trace file written by desmon run --trace")
+    add_output(p, "-o", "--output", suffixes=(".png",), default="timeline.png", metavar="FILE.png", help="PNG file (default timeline.png)")
+    add_window(p, ("--from", "start"), ("--to", "end"))
     p.set_defaults(handler=_cmd_plot)
 
     p = sub.add_parser("verify", help="explore every interleaving of events and check the invariants")
-    p.add_argument("scenario")
+    _scenario_arg(p)
     _deployer_arg(p)
     p.add_argument("--invariant", action="append", default=None, help="check only this invariant (repeatable)")
     p.add_argument("--continue", dest="keep_going", action="store_true", help="collect the first counterexample of each invariant")
-    p.add_argument("--max-states", type=int, default=2_000_000)
-    p.add_argument("--max-depth", type=int, default=None)
-    p.add_argument("--timeout", type=float, default=None, help="seconds")
+    p.add_argument("--max-states", type=positive_int, default=2_000_000)
+    p.add_argument("--max-depth", type=positive_int, default=None)
+    p.add_argument("--timeout", type=positive_seconds, default=None, help="seconds")
     p.add_argument("--symmetry", action="store_true", help="canonicalise interchangeable platforms")
     p.add_argument(
-        "--workers", type=int, default=1, metavar="N",
+        "--workers", type=positive_int, default=1, metavar="N",
         help="expand large BFS levels in N forked processes (same result for any N; default 1)",
     )
     p.add_argument(
@@ -273,36 +325,48 @@ def build_parser() -> argparse.ArgumentParser:
         help="table: run the real core once per distinct reading of a reaction and replay it (fast); "
         "direct: run it on every transition; auto (default): table unless --symmetry or --workers (same result)",
     )
-    p.add_argument("--json", default=None, metavar="FILE", help="write the counterexample(s) as JSON states")
-    p.add_argument("--pytest", default=None, metavar="FILE", help="write a pytest replaying the counterexample")
-    p.add_argument("--plot", default=None, metavar="FILE.png", help="draw the shortest counterexample as repository snapshots")
+    add_output(p, "--json", suffixes=(".json",), default=None, metavar="FILE.json", help="write the counterexample(s) as JSON states")
+    add_output(p, "--pytest", suffixes=(".py",), default=None, metavar="FILE.py", help="write a pytest replaying the counterexample")
+    add_output(
+        p, "--plot", suffixes=(".png",), default=None, metavar="FILE.png", help="draw the shortest counterexample as repository snapshots"
+    )
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(handler=_lazy("desmon.verify.command", "verify_command"))
 
     p = sub.add_parser("fuzz", help="hypothesis-generated failure sequences, shrunk on failure")
-    p.add_argument("scenario")
+    _scenario_arg(p)
     _deployer_arg(p)
-    p.add_argument("--examples", type=int, default=200)
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--examples", type=positive_int, default=200)
+    p.add_argument("--seed", type=non_negative_int, default=0)
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(handler=_lazy("desmon.verify.command", "fuzz_command"))
+    parser.set_defaults(commands=tuple(sub.choices))
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args, extra = parser.parse_known_args(argv)
+    except SystemExit as exc:  # --help (0) or a one-line usage error (2)
+        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    if extra:  # named with the command they were given to, unlike argparse's own message
+        prog = f"desmon {args.command}" if getattr(args, "command", None) else "desmon"
+        sys.stderr.write(_usage_error(prog, f"unrecognized arguments: {' '.join(extra)}"))
+        return EXIT_USAGE
     if not getattr(args, "handler", None):
         parser.print_help()
+        print(f"desmon: error: no command given; choose one of {', '.join(args.commands)} (desmon COMMAND --help)", file=sys.stderr)
         return EXIT_USAGE
     try:
+        preflight(args)  # inputs, numbers, windows and output paths, before any long work
         return int(args.handler(args))
     except DesmonError as exc:
-        print(f"desmon: error: {exc}", file=sys.stderr)
+        print(f"desmon: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
     except OSError as exc:  # an output file that cannot be written, a directory that does not exist
         where = f"{exc.filename}: " if exc.filename else ""
-        print(f"desmon: error: {where}cannot read or write: {exc.strerror or exc}; check the path", file=sys.stderr)
+        print(f"desmon: error: {_one_line(f'{where}cannot read or write: {exc.strerror or exc}; check the path')}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         print("desmon: interrupted", file=sys.stderr)

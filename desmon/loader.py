@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
+import signal
 import sys
 from pathlib import Path
+from typing import Any, Iterator
 
 from desmon.errors import DesmonError, ScenarioError
 from desmon.model.scenario import Scenario
+from desmon.paths import SCENARIO_FILE, PathError, check_input_file
 
 __all__ = ["load_scenario"]
 
@@ -16,25 +20,44 @@ def load_scenario(path: str | Path) -> Scenario:
     """Execute the scenario script at ``path`` and return its ``scenario``.
 
     Raises :class:`ScenarioError` (a ``ValueError``) if the file is missing, does not
-    compile or run, defines no Scenario, or builds an invalid model.
+    compile or run, defines no Scenario, or builds an invalid model. A script that exits
+    (``sys.exit``), raises ``KeyboardInterrupt`` itself or fails in any other way is such
+    an error too: only a real Ctrl-C while it runs propagates as ``KeyboardInterrupt``.
+    Whatever the script prints goes to stderr, so desmon's own output stays clean.
     """
-    p = Path(path)
-    if not p.is_file():
-        raise ScenarioError(f"{path}: no such scenario file; pass the path of a .py file such as scenarios/coffee_handover.py")
+    try:
+        p = check_input_file(path, *SCENARIO_FILE)
+    except PathError as exc:
+        raise ScenarioError(str(exc)) from None
     name = f"desmon_scenario_{abs(hash(str(p.resolve())))}"
     spec = importlib.util.spec_from_file_location(name, p)
     if spec is None or spec.loader is None:
         raise ScenarioError(f"{path}: cannot be loaded as a Python module; give it a .py extension")
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
+    failed = f"{path}: the script failed while building its scenario"
+    rerun = f"run python {path} to see where"
     try:
-        spec.loader.exec_module(module)
+        with _real_ctrl_c() as interrupted, contextlib.redirect_stdout(sys.stderr):
+            spec.loader.exec_module(module)
     except SyntaxError as exc:
         raise ScenarioError(f"{path}:{exc.lineno}: syntax error: {exc.msg}") from None
     except DesmonError as exc:
         raise ScenarioError(f"{path}: invalid scenario: {exc}") from None
-    except Exception as exc:  # a user's script may fail in any way; report it in one line
-        raise ScenarioError(f"{path}: the script failed while building its scenario: {type(exc).__name__}: {exc}") from None
+    except SystemExit as exc:
+        raise ScenarioError(
+            f"{path}: the script called sys.exit({'' if exc.code is None else repr(exc.code)}) while desmon loaded it; "
+            "a scenario file must define 'scenario' and end (put script-only code under if __name__ == '__main__':)"
+        ) from None
+    except KeyboardInterrupt:
+        if interrupted:
+            raise
+        raise ScenarioError(f"{failed}: it raised KeyboardInterrupt itself (no Ctrl-C was pressed); {rerun}") from None
+    except RecursionError:
+        raise ScenarioError(f"{failed}: RecursionError (infinite recursion?); {rerun}") from None
+    except BaseException as exc:  # a user's script may fail in any way; report it in one line
+        detail = " ".join(str(exc).split())[:300]
+        raise ScenarioError(f"{failed}: {type(exc).__name__}{': ' + detail if detail else ''}; {rerun}") from None
     finally:
         sys.modules.pop(name, None)
     found = getattr(module, "scenario", None)
@@ -47,3 +70,31 @@ def load_scenario(path: str | Path) -> Scenario:
             )
         found = candidates[0]
     return found
+
+
+@contextlib.contextmanager
+def _real_ctrl_c() -> Iterator[list[bool]]:
+    """Note whether SIGINT really arrives while the block runs (then it still interrupts).
+
+    Yields a list that is non-empty once a Ctrl-C was received. Outside the main thread
+    signals cannot be watched: every KeyboardInterrupt then counts as real.
+    """
+    seen: list[bool] = []
+    try:
+        previous = signal.getsignal(signal.SIGINT)
+
+        def note(signum: int, frame: Any) -> None:
+            seen.append(True)
+            if callable(previous):
+                previous(signum, frame)
+            elif previous != signal.SIG_IGN:
+                raise KeyboardInterrupt
+
+        signal.signal(signal.SIGINT, note)
+    except ValueError:  # not the main thread
+        yield [True]
+        return
+    try:
+        yield seen
+    finally:
+        signal.signal(signal.SIGINT, previous)

@@ -50,7 +50,8 @@ def test_a_scenario_with_an_invalid_model_reports_the_model_error(tmp_path, caps
         "from desmon.model import RobotBuilder\n"
         "r = RobotBuilder()\n"
         "with r.rpsl.perception_graph('g') as g:\n"
-        "    g.processing('a', inputs=['b'])\n"
+        "    g.sensor('s', reads='force_sensor')\n"
+        "    g.processing('a', inputs=['s', 'b'])\n"
         "    g.processing('b', inputs=['a'])\n"
     )
     assert main(["replay", str(bad)]) == 2
@@ -78,4 +79,63 @@ def test_an_unwritable_output_path_is_a_one_line_error_with_exit_2(root, tmp_pat
     out = tmp_path / "no" / "such" / "dir" / "x.json"
     assert main(["show", str(root / "scenarios" / "coffee_handover.py"), "--format", "json", "-o", str(out)]) == 2
     err = capsys.readouterr().err
-    assert err.startswith(f"desmon: error: {out}: cannot read or write") and "Traceback" not in err
+    assert err.startswith(f"desmon: error: -o {out}: directory {out.parent} does not exist") and "Traceback" not in err
+
+
+def test_what_a_scenario_script_prints_goes_to_stderr_so_stdout_stays_parseable(root, tmp_path, capsys):
+    chatty = tmp_path / "chatty.py"
+    chatty.write_text(
+        "import runpy\n"
+        "print('building the coffee scenario ...')\n"
+        f"scenario = runpy.run_path({str(root / 'scenarios' / 'coffee_handover.py')!r})['scenario']\n"
+    )
+    assert main(["show", str(chatty), "--at", "t1", "--format", "json"]) == 0
+    out, err = capsys.readouterr()
+    import json
+
+    assert json.loads(out)["edges"] and "building the coffee scenario" in err
+
+
+def test_a_real_ctrl_c_while_a_scenario_loads_still_interrupts(tmp_path, capsys):
+    slow = tmp_path / "slow.py"
+    slow.write_text("import os, signal, time\nos.kill(os.getpid(), signal.SIGINT)\ntime.sleep(5)\n")
+    assert main(["replay", str(slow)]) == 130
+    assert capsys.readouterr().err == "desmon: interrupted\n"
+
+
+def test_an_output_that_is_a_link_to_the_input_is_refused(tmp_path, capsys):
+    trace = tmp_path / "run.jsonl"
+    trace.write_text('{"t":0,"type":"run","horizon":10}\n')
+    (tmp_path / "run.png").symlink_to(trace)
+    assert main(["plot", str(trace), "-o", str(tmp_path / "run.png")]) == 2
+    assert "is the input file being read" in capsys.readouterr().err
+    assert trace.read_text() == '{"t":0,"type":"run","horizon":10}\n'
+
+
+def test_an_output_is_replaced_only_once_complete(tmp_path):
+    import pytest
+
+    from desmon.paths import replacing
+
+    old = tmp_path / "run.jsonl"
+    old.write_text("the previous run\n")
+    old.chmod(0o640)
+    with pytest.raises(RuntimeError):
+        with replacing(old) as fh:
+            fh.write("half a new run")
+            raise RuntimeError("the simulation failed")
+    assert old.read_text() == "the previous run\n" and list(tmp_path.iterdir()) == [old]
+    with replacing(old) as fh:
+        fh.write("the new run\n")
+    assert old.read_text() == "the new run\n" and old.stat().st_mode & 0o777 == 0o640
+
+
+def test_help_of_a_command_exits_zero(capsys):
+    assert main(["verify", "--help"]) == 0
+    assert "--max-states" in capsys.readouterr().out
+
+
+def test_no_command_prints_help_and_one_error_line(capsys):
+    assert main([]) == 2
+    out, err = capsys.readouterr()
+    assert "COMMAND" in out and err.startswith("desmon: error: no command given") and err.count("\n") == 1

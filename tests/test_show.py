@@ -73,3 +73,16 @@ def test_without_matplotlib_png_explains_how_to_install_it(coffee, tmp_path, cap
     monkeypatch.setattr(builtins, "__import__", no_mpl)
     assert main(["show", coffee, "-o", str(tmp_path / "x.png")]) == 2
     assert "pip install 'desmon[plot]'" in capsys.readouterr().err
+
+
+def test_the_suffix_of_o_picks_the_format_and_the_file_is_exactly_the_name_given(coffee, tmp_path, capsys):
+    out = tmp_path / "t1.json"
+    assert main(["show", coffee, "--at", "t1", "-o", str(out)]) == 0
+    assert json.loads(out.read_text())["edges"] and capsys.readouterr().out == f"wrote {out}\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t1.json"]
+
+
+def test_a_format_the_name_contradicts_is_refused_before_any_work(coffee, tmp_path, capsys):
+    assert main(["show", coffee, "--format", "png", "-o", str(tmp_path / "fig.dot")]) == 2
+    assert "names a dot file but --format is png" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []

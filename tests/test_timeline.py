@@ -45,7 +45,7 @@ def test_a_window_clips_every_lane():
     assert tl.actions == [(2.5, 5.0, "release")]
     assert tl.exposure == [(2.5, 2.8)]
     assert tl.slips == [(4.0, "pulled up")]
-    with pytest.raises(ScenarioError, match="empty time window"):
+    with pytest.raises(ScenarioError, match="an empty window"):
         build_timeline(RECORDS, 5.0, 5.0)
 
 
@@ -79,9 +79,9 @@ def test_a_trace_with_wrongly_typed_fields_is_a_one_line_error(tmp_path, capsys)
     bad = tmp_path / "h.jsonl"
     bad.write_text('{"t": 0, "type": "run", "horizon": 10}\n{"t": "soon", "type": "fault"}\n')
     assert main(["plot", str(bad), "-o", str(tmp_path / "x.png")]) == 2
-    assert "needs a numeric 't'" in capsys.readouterr().err
+    assert "needs a finite numeric 't'" in capsys.readouterr().err
 
 
 def test_a_window_after_the_trace_is_refused():
-    with pytest.raises(ScenarioError, match="at or after the end of the trace"):
+    with pytest.raises(ScenarioError, match="at or after the end of the run"):
         build_timeline(RECORDS, 100.0, 200.0)

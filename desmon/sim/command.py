@@ -6,12 +6,14 @@ one-line :class:`~desmon.errors.DesmonError`, printed by the CLI).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 import time
-from typing import IO, Any
+from typing import IO, Any, Callable
 
 from desmon.errors import ScenarioError
+from desmon.paths import replacing
 from desmon.sim.engine import RunResult, SimWorld
 from desmon.sim.trace import Trace
 
@@ -118,7 +120,10 @@ def summary_json(r: RunResult, wall: float | None = None) -> dict[str, Any]:
     }
 
 
-def run_command(args: Any, out: IO[str] | None = None, err: IO[str] | None = None) -> int:
+def run_command(
+    args: Any, out: IO[str] | None = None, err: IO[str] | None = None, before_run: Callable[[float], None] | None = None
+) -> int:
+    """Simulate ``args.scenario``; ``before_run(horizon)`` may refuse the run once the horizon is known."""
     from desmon.loader import load_scenario
 
     out = out or sys.stdout
@@ -134,12 +139,10 @@ def run_command(args: Any, out: IO[str] | None = None, err: IO[str] | None = Non
             f"--until {args.until:g}: the scenario's task ends at its horizon of {horizon:g} s; "
             "give --until at most that (past it the last action would go on forever)"
         )
-    fh = None
-    if args.trace:
-        try:
-            fh = open(args.trace, "w", encoding="utf-8")
-        except OSError as exc:
-            raise ScenarioError(f"--trace {args.trace}: cannot write: {exc.strerror}") from None
+    if before_run is not None:
+        from desmon.sim.world import world_of
+
+        before_run(float(args.until) if args.until is not None else float(world_of(scenario).horizon))
     progress = None
     show = not getattr(args, "no_progress", False) and not args.json
     t_wall = time.perf_counter()
@@ -147,15 +150,14 @@ def run_command(args: Any, out: IO[str] | None = None, err: IO[str] | None = Non
         def progress(now: float, horizon: float) -> None:
             if time.perf_counter() - t_wall > 1.0:
                 print(f"desmon run: {100 * now / horizon:5.1f}%  t={now:.0f}/{horizon:.0f} s", file=err, flush=True)
-    try:
+    with contextlib.ExitStack() as stack:
+        # the trace replaces an existing file only once the run is complete (nothing lost on an error)
+        fh = stack.enter_context(replacing(args.trace)) if args.trace else None
         world = SimWorld(
             scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=Trace(fh, keep=False), progress=progress
         )
         result = world.run()
         result.metrics["audits"] = world.audits
-    finally:
-        if fh is not None:
-            fh.close()
     wall = time.perf_counter() - t_wall
     if args.json:
         out.write(json.dumps(summary_json(result, wall), indent=2) + "\n")

@@ -127,6 +127,6 @@ def draw_snapshots(
         _draw(ax, g, pos, title)
     fig.tight_layout()
     out = Path(path)
-    fig.savefig(out, dpi=110)
+    fig.savefig(out, dpi=110, format="png")  # exactly this file, whatever its name
     plt.close(fig)
     return out

@@ -16,14 +16,16 @@ Reads only the trace, so any run (or a trace from another machine) can be drawn.
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable
 
 from desmon.errors import ScenarioError
+from desmon.paths import TRACE_FILE, check_input_file
 from desmon.viz.common import require_matplotlib
 
-__all__ = ["read_trace", "Timeline", "build_timeline", "plot_timeline"]
+__all__ = ["read_trace", "check_window", "Timeline", "build_timeline", "plot_timeline"]
 
 ACTION_COLORS = {
     "idle": "#f0f0f0",
@@ -37,23 +39,65 @@ ACTION_COLORS = {
 DETECTOR_COLORS = ["#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02"]
 
 
+_HOW = TRACE_FILE[1]
+
+
 def read_trace(path: str | Path) -> list[dict[str, Any]]:
     """The records of a JSON Lines trace; a ScenarioError names a missing file or bad line."""
-    p = Path(path)
-    if not p.is_file():
-        raise ScenarioError(f"{path}: no such trace file; write one with: desmon run SCENARIO --trace {path}")
-    out = []
-    with p.open() as fh:
-        for n, line in enumerate(fh, start=1):
+    p = check_input_file(path, *TRACE_FILE)
+    out: list[dict[str, Any]] = []
+    with p.open("rb") as fh:
+        head = fh.read(2)
+        if head == b"\x1f\x8b":
+            raise ScenarioError(f"{path}: gzip-compressed; decompress it first (gunzip -c {path} > run.jsonl)")
+        fh.seek(0)
+        n = 0
+        for n, raw in enumerate(fh, start=1):
+            try:
+                line = raw.decode("utf-8")
+            except UnicodeDecodeError:
+                raise ScenarioError(f"{path}:{n}: not UTF-8 text (a binary file?); desmon plot reads a JSON Lines trace: {_HOW}") from None
             if not line.strip():
                 continue
             try:
-                out.append(json.loads(line))
+                record = json.loads(line)
             except json.JSONDecodeError as exc:
-                raise ScenarioError(f"{path}:{n}: not a JSON Lines trace record ({exc.msg})") from None
-    if not out or out[0].get("type") != "run":
-        raise ScenarioError(f"{path}: does not start with a 'run' record; is it a desmon run trace?")
+                cut = " (the last line, cut off: is the file truncated?)" if not raw.endswith(b"\n") else ""
+                raise ScenarioError(f"{path}:{n}: not a JSON Lines trace record ({exc.msg}){cut}; {_HOW}") from None
+            if not isinstance(record, dict):
+                shape = "a JSON array" if isinstance(record, list) else f"a JSON {type(record).__name__}"
+                raise ScenarioError(
+                    f"{path}:{n}: {shape}, not a record; a trace holds one JSON object per line (JSON Lines): {_HOW}"
+                )
+            out.append(record)
+    if not out:
+        raise ScenarioError(f"{path}: is empty; {_HOW}")
+    if out[0].get("type") != "run":
+        raise ScenarioError(f"{path}: does not start with a 'run' record; is it a desmon run trace? {_HOW}")
     return out
+
+
+def check_window(
+    start: float | None, end: float | None, horizon: float | None = None, *, flags: tuple[str, str] = ("--from", "--to")
+) -> None:
+    """The rule for a timeline window ``[start, end]`` (either may be open) within ``[0, horizon]``.
+
+    ``flags`` name the bounds in the ScenarioError, as the user wrote them.
+    """
+    for flag, v in zip(flags, (start, end)):
+        if v is not None and not (_finite(v) and v >= 0):
+            raise ScenarioError(f"{flag} {v:g}: give a time in seconds, 0 or more" if _is_number(v) else f"{flag} {v!r}: give a time in seconds")
+    if start is not None and end is not None and start >= end:
+        raise ScenarioError(f"{flags[0]} {start:g} {flags[1]} {end:g}: an empty window; give {flags[1]} after {flags[0]}")
+    if horizon is not None:
+        if start is not None and start >= horizon:
+            raise ScenarioError(
+                f"{flags[0]} {start:g}: at or after the end of the run ({horizon:g} s), nothing to draw; give {flags[0]} below {horizon:g}"
+            )
+        if end is not None and end > horizon:
+            raise ScenarioError(
+                f"{flags[1]} {end:g}: past the end of the run ({horizon:g} s); give {flags[1]} at most {horizon:g}, or leave it out"
+            )
 
 
 @dataclass
@@ -82,37 +126,67 @@ def _clip(intervals: Iterable[tuple[float, float]], start: float, end: float) ->
     return [(max(a, start), min(b, end)) for a, b in intervals if b > start and a < end]
 
 
-def build_timeline(records: list[dict[str, Any]], start: float | None = None, end: float | None = None) -> Timeline:
+def _is_number(v: Any) -> bool:
+    return not isinstance(v, bool) and isinstance(v, (int, float))
+
+
+def _finite(v: Any) -> bool:
+    return _is_number(v) and math.isfinite(v)
+
+
+def build_timeline(
+    records: list[dict[str, Any]],
+    start: float | None = None,
+    end: float | None = None,
+    *,
+    flags: tuple[str, str] = ("--from", "--to"),
+) -> Timeline:
     """Digest trace records into a :class:`Timeline` (pure; no plotting).
 
-    A record whose fields have the wrong type is a ScenarioError naming the record.
+    A record whose fields have the wrong type is a ScenarioError naming the record; so is
+    a window outside the run (``flags`` name its bounds, see :func:`check_window`).
     """
+    if not records:
+        raise ScenarioError(f"the trace holds no records; {_HOW}")
     for n, r in enumerate(records, start=1):
-        t = r.get("t", 0.0) if isinstance(r, dict) else None
-        if not isinstance(r, dict) or isinstance(t, bool) or not isinstance(t, (int, float)):
-            raise ScenarioError(f"trace record {n} ({str(r)[:80]}): needs a numeric 't'; is this a desmon run trace?")
-    try:
-        return _build(records, start, end)
-    except (KeyError, TypeError, ValueError, AttributeError) as exc:
-        raise ScenarioError(f"trace does not follow the desmon run schema ({type(exc).__name__}: {exc}); "
-                            "write it with: desmon run SCENARIO --trace FILE") from None
-
-
-def _build(records: list[dict[str, Any]], start: float | None, end: float | None) -> Timeline:
+        if not isinstance(r, dict) or not _finite(r.get("t", 0.0)):
+            raise ScenarioError(f"trace record {n} ({str(r)[:80]}): needs a finite numeric 't'; is this a desmon run trace?")
     head = records[0]
-    horizon = float(head.get("horizon") or max(r.get("t", 0.0) for r in records))
+    horizon = head.get("horizon")
+    if horizon is None:
+        horizon = max(r.get("t", 0.0) for r in records)
+    if not _finite(horizon) or horizon <= 0:
+        raise ScenarioError(f"trace 'run' record: horizon {horizon!r} is not a positive number of seconds; nothing to draw")
+    check_window(start, end, float(horizon), flags=flags)
+    try:
+        return _build(records, float(horizon), start, end)
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise ScenarioError(f"trace 'run' record does not follow the desmon run schema ({type(exc).__name__}: {exc}); {_HOW}") from None
+
+
+def _non_negative(v: Any, where: str) -> float:
+    """``v`` as a finite number >= 0; a ValueError says ``where`` it was read."""
+    if not _finite(v) or v < 0:
+        raise ValueError(f"{where} {v!r} is not a finite number >= 0")
+    return float(v)
+
+
+def _amount(r: dict[str, Any], key: str) -> float:
+    return _non_negative(r.get(key, 0.0), key)
+
+
+def _mb(entry: dict[str, Any], name: str) -> float:
+    return _non_negative(entry.get("memory", 0), f"run record: memory of {name}")
+
+
+def _build(records: list[dict[str, Any]], horizon: float, start: float | None, end: float | None) -> Timeline:
+    head = records[0]
     t0 = 0.0 if start is None else float(start)
     t1 = horizon if end is None else float(end)
-    if t1 <= t0:
-        if start is None and end is None:
-            raise ScenarioError(f"the trace covers no time (horizon {horizon:g} s): nothing to draw")
-        raise ScenarioError(f"empty time window [{t0:g}, {t1:g}]: --to must be after --from")
-    if t0 >= horizon:
-        raise ScenarioError(f"--from {t0:g} is at or after the end of the trace ({horizon:g} s): nothing to draw")
     tl = Timeline(str(head.get("scenario", "?")), str(head.get("deployer", "?")), t0, t1)
     platforms: list[str] = list((head.get("platforms") or {}).keys())
-    tl.capacity = {p: float(v.get("memory", 0)) for p, v in (head.get("platforms") or {}).items()}
-    consumption = {g: float(v.get("memory", 0)) for g, v in (head.get("graphs") or {}).items()}
+    tl.capacity = {p: _mb(v, p) for p, v in (head.get("platforms") or {}).items() if v.get("memory") is not None}
+    consumption = {g: _mb(v, g) for g, v in (head.get("graphs") or {}).items()}
     tl.graphs = list(consumption)  # declaration order: the same detector keeps its colour across plots
 
     running: dict[tuple[str, str], tuple[float, str]] = {}  # (graph, platform) -> (since, phase)
@@ -136,52 +210,57 @@ def _build(records: list[dict[str, Any]], start: float | None, end: float | None
         if p and p not in platforms:
             platforms.append(p)
 
-    for r in records[1:]:
-        t = float(r.get("t", 0.0))
-        kind = r.get("type")
-        if kind == "action":
-            tl.actions.append((t, t + float(r.get("duration", 0.0)), str(r.get("action"))))
-        elif kind == "decision" and r.get("ok"):
-            g, p = str(r["graph"]), str(r["platform"])
-            seen(p)
-            if g not in tl.graphs:
-                tl.graphs.append(g)
-            if r.get("command") == "start":
-                phase_change(g, p, t, "warming")
-                used[p] = used.get(p, 0.0) + consumption.get(g, 0.0)
-            elif r.get("command") == "stop":
-                phase_change(g, p, t, None)
-                used[p] = used.get(p, 0.0) - consumption.get(g, 0.0)
-            mem_point(p, t)
-        elif kind == "ready" and (r.get("graph"), r.get("platform")) in running:
-            phase_change(str(r["graph"]), str(r["platform"]), t, "valid")
-        elif kind == "invalid" and (r.get("graph"), r.get("platform")) in running:
-            phase_change(str(r["graph"]), str(r["platform"]), t, "invalid")
-        elif kind == "load":
-            p = str(r["platform"])
-            seen(p)
-            load[p] = float(r.get("amount", 0.0))
-            mem_point(p, t)
-        elif kind == "platform":
-            p = str(r["platform"])
-            if not r.get("up"):
-                down_since[p] = t
-            elif p in down_since:
-                tl.down.setdefault(p, []).append((down_since.pop(p), t))
-        elif kind == "fault":
-            tl.faults.append((t, str(r.get("event", ""))))
-        elif kind == "slip":
-            tl.slips.append((t, f"{r.get('kind', '')} {r.get('direction', '')}".strip()))
-        elif kind == "alarm":
-            tl.alarms.append((t, str(r.get("detector"))))
-        elif kind == "error":
-            tl.errors.append((t, str(r.get("kind")), str(r.get("graph"))))
-        elif kind == "exposure":
-            if r.get("state") == "start":
-                exposure_since = t
-            elif exposure_since is not None:
-                tl.exposure.append((exposure_since, t))
-                exposure_since = None
+    for n, r in enumerate(records[1:], start=2):
+        try:
+            t = float(r.get("t", 0.0))
+            kind = r.get("type")
+            if kind == "action":
+                tl.actions.append((t, t + _amount(r, "duration"), str(r.get("action"))))
+            elif kind == "decision" and r.get("ok"):
+                g, p = str(r["graph"]), str(r["platform"])
+                seen(p)
+                if g not in tl.graphs:
+                    tl.graphs.append(g)
+                if r.get("command") == "start":
+                    phase_change(g, p, t, "warming")
+                    used[p] = used.get(p, 0.0) + consumption.get(g, 0.0)
+                elif r.get("command") == "stop":
+                    phase_change(g, p, t, None)
+                    used[p] = used.get(p, 0.0) - consumption.get(g, 0.0)
+                mem_point(p, t)
+            elif kind == "ready" and (r.get("graph"), r.get("platform")) in running:
+                phase_change(str(r["graph"]), str(r["platform"]), t, "valid")
+            elif kind == "invalid" and (r.get("graph"), r.get("platform")) in running:
+                phase_change(str(r["graph"]), str(r["platform"]), t, "invalid")
+            elif kind == "load":
+                p = str(r["platform"])
+                seen(p)
+                load[p] = _amount(r, "amount")
+                mem_point(p, t)
+            elif kind == "platform":
+                p = str(r["platform"])
+                if not r.get("up"):
+                    down_since[p] = t
+                elif p in down_since:
+                    tl.down.setdefault(p, []).append((down_since.pop(p), t))
+            elif kind == "fault":
+                tl.faults.append((t, str(r.get("event", ""))))
+            elif kind == "slip":
+                tl.slips.append((t, f"{r.get('kind', '')} {r.get('direction', '')}".strip()))
+            elif kind == "alarm":
+                tl.alarms.append((t, str(r.get("detector"))))
+            elif kind == "error":
+                tl.errors.append((t, str(r.get("kind")), str(r.get("graph"))))
+            elif kind == "exposure":
+                if r.get("state") == "start":
+                    exposure_since = t
+                elif exposure_since is not None:
+                    tl.exposure.append((exposure_since, t))
+                    exposure_since = None
+        except KeyError as exc:
+            raise ScenarioError(f"trace record {n} ({str(r)[:80]}): no field {exc}; {_HOW}") from None
+        except (TypeError, ValueError, AttributeError) as exc:
+            raise ScenarioError(f"trace record {n} ({str(r)[:80]}): {exc}; {_HOW}") from None
     for (g, p), (since, phase) in running.items():
         tl.runs.setdefault(p, []).append((since, horizon, g, phase))
     for p, since in down_since.items():
@@ -286,6 +365,6 @@ def plot_timeline(tl: Timeline, path: str | Path) -> Path:
     ]
     ax.legend(handles=handles, fontsize=7, ncol=6, loc="lower left", bbox_to_anchor=(0.0, 1.06), frameon=False)
     out = Path(path)
-    fig.savefig(out, dpi=110, bbox_inches="tight")
+    fig.savefig(out, dpi=110, bbox_inches="tight", format="png")  # exactly this file, whatever its name
     plt.close(fig)
     return out

@@ -1,0 +1,127 @@
+"""The rules for the files desmon reads and writes, each written once.
+
+* an input (scenario, trace) must be an existing regular file;
+* an output must name a file (not a directory) in an existing directory, end in the
+  suffix of what is written into it, and must not be one of the inputs being read;
+* an output is replaced only once it is complete (:func:`replacing`), so an error or an
+  interrupt half-way leaves the previous file as it was.
+
+Every refusal is a :class:`PathError` whose one-line message names the path and the fix.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+from typing import IO, Iterable, Iterator
+
+from desmon.errors import DesmonError
+
+__all__ = ["PathError", "SCENARIO_FILE", "TRACE_FILE", "check_input_file", "check_output_file", "same_file", "replacing"]
+
+#: (what, how to get a right one) of each kind of input, for :func:`check_input_file`.
+SCENARIO_FILE = ("scenario file", "pass the path of a .py file such as scenarios/coffee_handover.py")
+TRACE_FILE = ("trace file", "write one with: desmon run SCENARIO --trace run.jsonl")
+
+
+class PathError(DesmonError, ValueError):
+    """A path given for reading or writing cannot be used as asked."""
+
+
+def check_input_file(path: str | os.PathLike[str], what: str, example: str) -> Path:
+    """``path`` as an existing regular file, or a PathError saying what to pass instead.
+
+    ``what`` names the kind of file ("scenario file", "trace file"), ``example`` says how
+    to get or name a right one.
+    """
+    p = Path(path)
+    if p.is_dir():
+        raise PathError(f"{path}: is a directory, not a {what}; {example}")
+    if not p.exists():
+        raise PathError(f"{path}: no such {what}; {example}")
+    if not p.is_file():
+        raise PathError(f"{path}: not a regular file (a device or pipe), not a {what}; {example}")
+    return p
+
+
+def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """Whether ``a`` and ``b`` name the same file (through symlinks, hard links, ``..``)."""
+    pa, pb = Path(a), Path(b)
+    try:
+        if pa.exists() and pb.exists():
+            return os.path.samefile(pa, pb)
+    except OSError:
+        pass
+    return pa.resolve() == pb.resolve()
+
+
+def check_output_file(
+    path: str | os.PathLike[str],
+    flag: str,
+    suffixes: tuple[str, ...],
+    inputs: Iterable[str | os.PathLike[str]] = (),
+) -> Path:
+    """``path`` as a file desmon may write, or a PathError naming ``flag`` and the fix.
+
+    ``suffixes`` are the accepted endings (case-insensitive), the first the usual one.
+    The checks touch nothing on disk.
+    """
+    text = str(path)
+    p = Path(path)
+    if text.strip() == "" or text.endswith(("/", os.sep)):
+        raise PathError(f"{flag} {text!r}: give a file name, e.g. {flag} out{suffixes[0]}")
+    if not p.name.lower().endswith(tuple(s.lower() for s in suffixes)):
+        wanted = " or ".join(suffixes)
+        raise PathError(f"{flag} {text}: the file name must end in {wanted}, e.g. {flag} {_with_suffix(p, suffixes[0])}")
+    if p.is_dir():
+        raise PathError(f"{flag} {text}: is a directory; name a file inside it, e.g. {flag} {p / ('out' + suffixes[0])}")
+    for source in inputs:
+        if same_file(p, source):
+            raise PathError(f"{flag} {text}: is the input file being read and would be overwritten; name another file")
+    parent = p.parent
+    if not parent.exists():
+        raise PathError(f"{flag} {text}: directory {parent} does not exist; create it (mkdir -p {parent}) or name another path")
+    if not parent.is_dir():
+        raise PathError(f"{flag} {text}: {parent} is not a directory; name a path inside an existing directory")
+    if p.exists() and not p.is_file():
+        raise PathError(f"{flag} {text}: exists and is not a regular file; name another path")
+    if not os.access(parent, os.W_OK | os.X_OK) or (p.exists() and not os.access(p, os.W_OK)):
+        raise PathError(f"{flag} {text}: permission denied; name a path you can write")
+    return p
+
+
+def _with_suffix(p: Path, suffix: str) -> str:
+    """``p`` named with ``suffix`` instead of its own (x -> x.png, run.jsonl -> run.png)."""
+    return str(p.with_suffix(suffix)) if p.name and not p.name.startswith(".") else f"out{suffix}"
+
+
+def _mode_for(target: Path) -> int:
+    """The permissions ``target`` has, or a new file would get (mkstemp makes 0600)."""
+    if target.exists():
+        return target.stat().st_mode & 0o7777
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+@contextmanager
+def replacing(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:  # type: ignore[type-arg]
+    """Open a temporary file next to ``path``; it replaces ``path`` only if the block completes.
+
+    On an exception (or Ctrl-C) the temporary file is removed and ``path`` is untouched.
+    """
+    target = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent or ".")
+    try:
+        with os.fdopen(fd, mode, **({} if "b" in mode else {"encoding": "utf-8"})) as fh:
+            yield fh
+        os.chmod(tmp, _mode_for(target))
+        os.replace(tmp, target)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise

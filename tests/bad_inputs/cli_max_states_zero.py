@@ -1,0 +1,4 @@
+# args: verify {root}/scenarios/two_detectors.py --max-states 0
+# exit: 2
+# expect: --max-states must be positive (a whole number, 1 or more), got 0
+"""A bad-input case: see tests/test_bad_inputs.py."""

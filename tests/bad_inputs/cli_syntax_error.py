@@ -1,0 +1,4 @@
+# args: replay {case}
+# exit: 2
+# expect: syntax error
+x = (

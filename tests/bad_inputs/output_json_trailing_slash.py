@@ -1,0 +1,4 @@
+# args: verify {root}/scenarios/two_detectors.py --json {tmp}/out.json/ --no-progress
+# exit: 2
+# expect: give a file name
+"""A bad-input case: see tests/test_bad_inputs.py."""
