@@ -23,6 +23,7 @@ from desmon.options import (
     positive_int,
     positive_seconds,
     preflight,
+    worker_count,
 )
 from desmon.paths import SCENARIO_FILE, TRACE_FILE
 
@@ -317,7 +318,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--timeout", type=positive_seconds, default=None, help="seconds")
     p.add_argument("--symmetry", action="store_true", help="canonicalise interchangeable platforms")
     p.add_argument(
-        "--workers", type=positive_int, default=1, metavar="N",
+        "--workers", type=worker_count, default=1, metavar="N",
         help="expand large BFS levels in N forked processes (same result for any N; default 1)",
     )
     p.add_argument(

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 from dataclasses import dataclass
 from typing import Any, Mapping
 
@@ -18,6 +19,7 @@ from desmon.paths import PathError, check_input_file, check_output_file, same_fi
 __all__ = [
     "positive_int",
     "non_negative_int",
+    "worker_count",
     "positive_seconds",
     "window_time",
     "Input",
@@ -42,6 +44,15 @@ def positive_int(text: str) -> int:
     n = _integer(text)
     if n < 1:
         raise argparse.ArgumentTypeError(f"must be positive (a whole number, 1 or more), got {text}")
+    return n
+
+
+def worker_count(text: str) -> int:
+    """A number of forked processes: 1 up to 4 per CPU (more only thrash, and thousands would exhaust the machine)."""
+    n = positive_int(text)
+    cap = max(8, 4 * (os.cpu_count() or 1))
+    if n > cap:
+        raise argparse.ArgumentTypeError(f"must be at most {cap} (4 per CPU here), got {text}")
     return n
 
 

@@ -36,6 +36,8 @@ def check_input_file(path: str | os.PathLike[str], what: str, example: str) -> P
     ``what`` names the kind of file ("scenario file", "trace file"), ``example`` says how
     to get or name a right one.
     """
+    if "\x00" in str(path):
+        raise PathError(f"{str(path)!r}: a path cannot hold a NUL byte; {example}")
     p = Path(path)
     if p.is_dir():
         raise PathError(f"{path}: is a directory, not a {what}; {example}")
@@ -70,6 +72,8 @@ def check_output_file(
     """
     text = str(path)
     p = Path(path)
+    if "\x00" in text:
+        raise PathError(f"{flag} {text!r}: a path cannot hold a NUL byte; name another file")
     if text.strip() == "" or text.endswith(("/", os.sep)):
         raise PathError(f"{flag} {text!r}: give a file name, e.g. {flag} out{suffixes[0]}")
     if not p.name.lower().endswith(tuple(s.lower() for s in suffixes)):
