@@ -139,14 +139,55 @@ def test_a_fallback_is_used_while_the_preferred_graph_cannot_be_placed():
     assert violations(c, control, repo) == set()
 
 
-def test_a_running_fallback_is_not_displaced_to_make_room_for_the_preferred_graph():
-    # conservative on purpose: stopping B first could leave the slot with nothing if A's start failed
-    model, repo, control = build({"grasp": [("A", "B")]}, memories=(300,), a_mem=250, b_mem=100)
-    c = core(model, repo, "desmon")
+def _fallback_running(deployer, fails=None):  # type: ignore[no-untyped-def]
+    """pc1 (300 MB) serves the slot (A 250 MB preferred, B 100 MB fallback) with B."""
+    model, repo, control = build({"grasp": [("A", "B")]}, memories=(300,), a_mem=250, b_mem=100, fails=fails)
+    c = core(model, repo, deployer)
     c.step(LoadChange("pc1", 100), control)
     c.step(ActionChange("grasp"), control)
-    c.step(LoadChange("pc1", 0), control)  # 300 - 100 (B) = 200 < 250
     assert RepositoryQuery(repo).deployments() == (("B", "pc1"),)
+    return c, repo, control
+
+
+def test_the_error_for_the_preferred_graph_clears_once_the_fallback_serves_the_slot():
+    c, repo, control = _fallback_running("desmon")
+    assert c.standing == frozenset() and violations(c, control, repo) == set()
+
+
+def test_break_before_make_stops_the_fallback_when_only_its_room_keeps_the_preferred_graph_out():
+    c, repo, control = _fallback_running("desmon")
+    _s, log = c.step(LoadChange("pc1", 0), control)  # 300 - 100 (B) = 200 < 250, but 300 >= 250
+    assert [str(cmd) for cmd, _ok in log.decisions] == ["stop B on pc1", "start A on pc1"]
+    assert RepositoryQuery(repo).deployments() == (("A", "pc1"),)
+    assert c.standing == frozenset() and violations(c, control, repo) == set()
+
+
+def test_a_failed_upgrade_falls_back_to_the_fallback_again():
+    attempts = []
+
+    def fails(g, p):  # type: ignore[no-untyped-def]
+        attempts.append(g)
+        return g == "A"
+
+    c, repo, control = _fallback_running("desmon", fails)
+    _s, log = c.step(LoadChange("pc1", 0), control)
+    assert [str(cmd) for cmd, _ok in log.decisions] == ["stop B on pc1", "start A on pc1", "start B on pc1"]
+    assert RepositoryQuery(repo).deployments() == (("B", "pc1"),)
+    assert c.standing == frozenset()  # the slot is served: A's deployment_failed does not stand
+    assert violations(c, control, repo) == set()
+
+
+def test_keep_fallback_keeps_the_running_fallback_rather_than_go_blind():
+    c, repo, control = _fallback_running("desmon-keep-fallback")
+    _s, log = c.step(LoadChange("pc1", 0), control)
+    assert log.decisions == [] and RepositoryQuery(repo).deployments() == (("B", "pc1"),)
+    assert c.standing == frozenset() and violations(c, control, repo) == set()
+
+
+def test_the_upgrade_only_happens_when_freeing_the_fallback_is_enough():
+    c, repo, control = _fallback_running("desmon")
+    _s, log = c.step(LoadChange("pc1", 60), control)  # 300 - 60 = 240 < 250 even without B
+    assert log.decisions == [] and RepositoryQuery(repo).deployments() == (("B", "pc1"),)
 
 
 def test_the_fallback_is_stopped_once_the_preferred_graph_can_be_placed_again():

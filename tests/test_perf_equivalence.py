@@ -3,8 +3,8 @@
 * ``validity_for`` with the store's identity memo (``StateStore.validity_memo``) and
   without it (the plain ``check_validity`` path the repository takes);
 * ``DeploymentCore.settle`` (only the deployments of previous ∪ raised graphs are
-  tested, no view) and the definition ``standing_after(previous, raised, wanted,
-  validly_active(view))``;
+  tested, no view) and the definition ``standing_after(previous, raised, slots,
+  validly_active(view), active)``;
 * the corrected reaction (``ensure_deployed`` split into ``_survey`` / ``_act_on`` so a
   kept graph costs no generator, validity answers memoised) and the reaction as it was
   written before those fast paths (kept here as the reference).
@@ -114,8 +114,8 @@ def test_fast_paths_match_the_definitions(name):
                 st.load(nkey)
                 raised = [e.graph for e in log.errors]
                 view = core.view()
-                wanted = frozenset(g for slot in view.slots for g in slot)
-                expect = standing_after(frozenset(key.standing), raised, wanted, validly_active(view))
+                active = frozenset(g for g, _p in view.deployments)
+                expect = standing_after(frozenset(key.standing), raised, view.slots, validly_active(view), active)
                 assert frozenset(nkey.standing) == expect
                 # validity_for: memoised (twice, to hit the memo) and plain
                 for spec in scenario.model.specs:

@@ -127,6 +127,14 @@ def test_two_detectors_paper_exposure_counts_the_uncovered_slot() -> None:
     assert ok["unmonitored_exposure_s"] == 0.0 and ok["risky_time_s"] == 5.0
 
 
+@pytest.mark.parametrize("deployer", ["desmon", "desmon-keep-fallback"])
+def test_fallback_day_first_two_hours_pinned_per_upgrade_policy(deployer: str) -> None:
+    sc = load("fallbacks")
+    r = simulate(sc, deployer, until=7200.0)
+    want = sc.expected["first_2_h"][deployer]
+    assert {k: r.metrics[k] for k in want} == want
+
+
 def test_robot_day_first_hour_pinned() -> None:
     sc = load("robot_day")
     r = simulate(sc, "desmon", until=1800.0)

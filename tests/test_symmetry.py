@@ -81,7 +81,7 @@ def test_cli_symmetry(capsys):
     path = str(SCENARIOS / "symmetric_platforms.py")
     assert main(["verify", path, "--symmetry", "--no-progress"]) == 0
     out = capsys.readouterr().out
-    assert "symmetry reduction" in out and "states: 674" in out
+    assert "symmetry reduction" in out and "states: 649" in out
     assert main(["verify", path, "--symmetry", "--deployer", "paper", "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("desmon: error: --symmetry refused") and err.count("\n") == 1

@@ -20,12 +20,14 @@ ROOT = Path(__file__).resolve().parent.parent
 SCENARIOS = ROOT / "scenarios"
 NAMES = [
     "coffee_handover", "two_detectors", "shared_platform", "migration",
-    "platform_crash", "memory_pressure", "vendor_selection", "robot_day", "fixed_platform",
+    "platform_crash", "memory_pressure", "vendor_selection", "robot_day", "fixed_platform", "fallbacks",
 ]
 
 
-@pytest.mark.parametrize("name", NAMES)
-@pytest.mark.parametrize("deployer", ["desmon", "paper"])
+@pytest.mark.parametrize(
+    "name, deployer",
+    [(n, d) for n in NAMES for d in ("desmon", "paper")] + [("fallbacks", "desmon-keep-fallback")],
+)
 def test_pinned_verdicts_and_state_counts(name, deployer):
     scenario = load_scenario(SCENARIOS / f"{name}.py")
     want = scenario.expected["verify"][deployer]
@@ -144,7 +146,7 @@ def test_history_is_left_to_the_audit_and_the_fuzzer(capsys):
     assert main(["verify", path, "--no-progress"]) == 0
     head = capsys.readouterr().out.splitlines()[0]
     checked = head.split("invariants: ")[1].split(" (")[0].split(", ")
-    assert "history" not in checked and checked == ["valid-or-error", "no-overcommit", "single-instance", "coverage", "fixed"]
+    assert "history" not in checked and checked == ["valid-or-error", "no-overcommit", "single-instance", "coverage", "errors-current", "fixed"]
     assert head.endswith("(not history: sim audit and fuzz only)")
     assert main(["verify", path, "--invariant", "history", "--no-progress"]) == 2
     cap = capsys.readouterr()

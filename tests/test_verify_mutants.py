@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from desmon.loader import load_scenario
-from desmon.model.events import ActionChange, DeviceFail, PlatformDown
+from desmon.model.events import ActionChange, DeviceFail, LoadChange, PlatformDown
 from desmon.verify import VIOLATED, Checker
 from desmon.verify.mutants import MUTANTS
 
@@ -37,6 +37,29 @@ def test_make_before_break_migration():
     assert c.during == "start force_slip_detector on pc2"
 
 
+def test_stale_errors_keep_an_error_standing_while_a_fallback_serves_the_slot():
+    c = _cex("fallbacks", "stale-errors", "errors-current")
+    # one failed start of the combined detector: the force fallback serves, the error stays
+    assert c.length == 1 and c.steps[1].event == ActionChange("grasp") and c.steps[1].failed_starts
+    assert c.message == (
+        "an error stands for combined_slip_detector, but its slot is served by force_slip_detector "
+        "and combined_slip_detector is not active: the error is stale"
+    )
+
+
+def test_stale_errors_found_from_memory_pressure_alone():
+    from dataclasses import replace
+
+    scenario = load_scenario(SCENARIOS / "fallbacks.py")
+    no_failures = replace(scenario, checker=replace(scenario.checker, start_failures=0))
+    r = Checker(no_failures, MUTANTS["stale-errors"], invariants=["errors-current"]).run()
+    assert r.verdict == VIOLATED
+    # combined on torso_pc; the load climbs 600 -> 800 MB; force serves, combined's error stays
+    assert [s.event for s in r.counterexamples[0].steps[1:]] == [
+        ActionChange("grasp"), LoadChange("torso_pc", 700), LoadChange("torso_pc", 800),
+    ]
+
+
 def test_unmutated_deployer_holds_on_the_same_scenarios():
-    for name in ("coffee_handover", "migration"):
+    for name in ("coffee_handover", "migration", "fallbacks"):
         assert Checker(load_scenario(SCENARIOS / f"{name}.py")).run().verdict == "HOLDS"

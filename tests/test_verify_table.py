@@ -61,7 +61,7 @@ def test_table_engine_gives_the_direct_engines_result_on_every_scenario(name, de
 @pytest.mark.parametrize(
     "name, mutant",
     [("coffee_handover", "no-recheck"), ("migration", "capacity-blind"),
-     ("migration", "make-before-break"), ("robot_day", "make-before-break")],
+     ("migration", "make-before-break"), ("robot_day", "make-before-break"), ("fallbacks", "stale-errors")],
 )
 def test_table_engine_catches_each_mutant_with_the_same_counterexamples(name, mutant):
     scenario = load_scenario(SCENARIOS / f"{name}.py")
@@ -349,7 +349,12 @@ def generated_scenarios(draw):  # type: ignore[no-untyped-def]
     if draw(hst.booleans()):
         combined.executable_on(draw(hst.sampled_from(plats)))
     graphs = ["force", "tactile", "combined"]
-    r.rules({a: draw(hst.lists(hst.sampled_from(graphs), min_size=1, max_size=2, unique=True)) for a in ACTIONS})
+    # a context wants one or two graphs at once, or one slot of alternatives (fallbacks)
+    bodies = hst.one_of(
+        hst.lists(hst.sampled_from(graphs), min_size=1, max_size=2, unique=True),
+        hst.lists(hst.sampled_from(graphs), min_size=2, max_size=3, unique=True).map(lambda gs: [tuple(gs)]),
+    )
+    r.rules({a: draw(bodies) for a in ACTIONS})
     model = r.build()
     actions = draw(hst.lists(hst.sampled_from(ACTIONS), min_size=2, max_size=4, unique=True))
     task = None
@@ -386,7 +391,7 @@ EXAMPLES = int(os.environ.get("DESMON_TABLE_EXAMPLES", "40"))
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     generated_scenarios(),
-    hst.sampled_from(["desmon", "paper", "make-before-break", "no-recheck", "capacity-blind"]),
+    hst.sampled_from(["desmon", "paper", "desmon-keep-fallback", "make-before-break", "no-recheck", "capacity-blind", "stale-errors"]),
     hst.booleans(),
     hst.sampled_from([60, 400, 1500]),
 )

@@ -20,20 +20,49 @@ from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort
 from desmon.model.events import Event
 from desmon.model.system import SystemModel
 
-__all__ = ["DeploymentCore", "StepLog", "run_sync", "standing_after"]
+__all__ = ["DeploymentCore", "StepLog", "run_sync", "standing_after", "stale_standing_after"]
 
 
 def standing_after(
     previous: frozenset[str],
     raised: Iterable[str],
-    wanted: frozenset[str],
+    slots: tuple[tuple[str, ...], ...],
     valid: frozenset[str],
+    active: frozenset[str],
 ) -> frozenset[str]:
-    """Errors that stand after a reaction (DESIGN.md §5).
+    """Errors that stand after a reaction: an error describes the present.
 
-    An error stands for a graph from the reaction that raises it until a later reaction
-    deploys that graph validly or the selector no longer wants it.
+    An error raised for graph ``g`` (now, or standing from before) stands while ``g`` is
+    wanted (named in one of the selector's ``slots``), is not validly active (``valid``),
+    and either ``g`` itself is active on an invalid platform (``active``) or a slot that
+    names ``g`` is unserved: none of its alternatives is validly active. So an error for
+    a fallback clears as soon as another alternative serves the slot, and an error for
+    a graph the context does not want clears at once (docs/findings.md, "Errors that
+    describe the present"). The invariant ``errors-current`` checks exactly this.
     """
+    out = []
+    for g in previous.union(raised):
+        if g in valid:
+            continue
+        if g in active:
+            if any(g in slot for slot in slots):
+                out.append(g)
+        elif any(g in slot and not any(h in valid for h in slot) for slot in slots):
+            out.append(g)
+    return frozenset(out)
+
+
+def stale_standing_after(
+    previous: frozenset[str],
+    raised: Iterable[str],
+    slots: tuple[tuple[str, ...], ...],
+    valid: frozenset[str],
+    active: frozenset[str],
+) -> frozenset[str]:
+    """The earlier error semantics, kept for the ``stale-errors`` mutant: an error stands
+    for a graph while it is wanted and not validly active, even when another alternative
+    serves its slot."""
+    wanted = {g for slot in slots for g in slot}
     return frozenset(g for g in previous.union(raised) if g in wanted and g not in valid)
 
 
@@ -123,12 +152,20 @@ class DeploymentCore:
         if not raised and not self.standing:
             # nothing can stand: standing_after(∅, ∅, ...) is ∅ whatever the view says
             return self.standing
-        _slots, wanted = self._selection()
-        # standing_after only asks whether the graphs of previous ∪ raised are validly
-        # active: test just their deployments, on the port's states, without a view
+        slots, wanted = self._selection()
+        # standing_after asks whether the graphs of previous ∪ raised and the other
+        # alternatives of their slots are validly active, and whether they are active:
+        # test just those deployments, on the port's states, without a view
         candidates = [g for g in self.standing.union(raised) if g in wanted]
-        valid = validly_active_among(self.query.platform_states(), self._spec_of, candidates) if candidates else frozenset()
-        self.standing = standing_after(self.standing, raised, wanted, valid)
+        if not candidates:
+            self.standing = frozenset()
+            return self.standing
+        mates = {h for slot in slots if any(g in slot for g in candidates) for h in slot}
+        valid = validly_active_among(self.query.platform_states(), self._spec_of, mates)
+        deployed_on = self.query.deployed_on
+        active = frozenset(g for g in candidates if deployed_on(g))
+        rule = stale_standing_after if self.deployer.stale_errors else standing_after
+        self.standing = rule(self.standing, raised, slots, valid, active)
         return self.standing
 
     def step(self, event: Event, control: ControlPort, *, force: bool = False) -> tuple[Stimulus, StepLog]:

@@ -37,7 +37,10 @@ from desmon.deployment.validity import check_validity, validity_for
 from desmon.errors import ModelError
 from desmon.model.requirements import DeploymentSpec
 
-__all__ = ["Deployer", "PAPER", "DESMON", "DEPLOYERS", "get_deployer", "ensure_deployed", "make_desmon_react"]
+__all__ = [
+    "Deployer", "PAPER", "DESMON", "DESMON_KEEP_FALLBACK", "DEPLOYERS", "get_deployer", "ensure_deployed",
+    "make_desmon_react", "BREAK_BEFORE_MAKE", "KEEP_FALLBACK", "UPGRADE_POLICIES",
+]
 
 #: Generator returning True when the graph ended up deployed.
 Placement = Generator[Command, "bool | None", bool]
@@ -194,6 +197,10 @@ class Deployer:
     #: False for a variant whose selector knows no fallbacks (the paper's): it is asked,
     #: and judged by ``coverage``, for the first graph of each slot only.
     fallbacks: bool = True
+    #: True only for the seeded mutant that keeps the earlier error semantics: an error
+    #: stands for a graph while it is wanted and not validly active, even when another
+    #: alternative serves its slot (see :func:`desmon.deployment.core.standing_after`).
+    stale_errors: bool = False
 
     def requested(self, slots: tuple[tuple[str, ...], ...]) -> tuple[tuple[str, ...], ...]:
         """The slots as this variant's selector requests them."""
@@ -239,8 +246,24 @@ def _paper_react(
         yield from paper_check_deployment(p, q)
 
 
+#: Upgrade policies of the corrected deployer (see :func:`make_desmon_react`).
+BREAK_BEFORE_MAKE = "break-before-make"
+KEEP_FALLBACK = "keep-fallback"
+UPGRADE_POLICIES = (BREAK_BEFORE_MAKE, KEEP_FALLBACK)
+
+
+def _fits_if_freed(g: str, spec: DeploymentSpec, q: QueryPort, freed: list[str]) -> bool:
+    """Would ``g`` have an acceptable platform if the running ``freed`` graphs were
+    stopped? (Capacity is the only requirement their stop can change.)"""
+    states = q.platform_states()
+    fixed = q.fixed_platform(spec)
+    if fixed is not None:
+        states = tuple(s for s in states if s.name == fixed)
+    return bool(check_validity(q.constraints(spec), states, (g, *freed), reasons=False).acceptable)
+
+
 def make_desmon_react(
-    *, make_before_break: bool = False
+    *, make_before_break: bool = False, upgrade: str = BREAK_BEFORE_MAKE
 ) -> Callable[[QueryPort, tuple[tuple[str, ...], ...], tuple[str, ...], bool], Reaction]:
     """Build the corrected reaction (``make_before_break`` exists for the checker's seeded mutant).
 
@@ -249,7 +272,18 @@ def make_desmon_react(
     then what the context no longer wants is stopped; then corrected Algorithm 1 places
     one graph of every slot (the first alternative that can be placed), each graph
     decided once per reaction; unneeded fallbacks are stopped last.
+
+    ``upgrade`` says what happens when a slot is served by a fallback and its preferred
+    alternative has no acceptable platform only because the running fallbacks hold the
+    capacity: ``"break-before-make"`` (default) stops those fallbacks, then places the
+    preferred alternative, and places the fallback again if that fails (the robot is
+    blind from the stop until the preferred detector is warm); ``"keep-fallback"``
+    keeps the fallback running (no blind time, but the preferred detector never returns
+    while the fallback holds its room).
     """
+    if upgrade not in UPGRADE_POLICIES:
+        raise ModelError(f"unknown upgrade policy {upgrade!r}: choose one of {', '.join(UPGRADE_POLICIES)}")
+    upgrading = upgrade == BREAK_BEFORE_MAKE
 
     def react(
         q: QueryPort, slots: tuple[tuple[str, ...], ...], changed: tuple[str, ...], context_changed: bool
@@ -271,10 +305,18 @@ def make_desmon_react(
             yield from _stop_graphs(unwanted, q)
         chosen: set[str] = set()
         for slot in slots:
-            for g in slot:
+            for i, g in enumerate(slot):
                 ok = placed.get(g)
                 if ok is None:
                     survey = _survey(g, q)
+                    if upgrading and survey[0] is not None and not survey[1] and i + 1 < len(slot):
+                        # the upgrade: a running fallback of this slot may be all that blocks g
+                        freed = [f for f in slot[i + 1:] if q.deployed_on(f)]
+                        if freed and _fits_if_freed(g, survey[0], q, freed):
+                            yield from _stop_graphs(freed, q)  # break before make
+                            for f in freed:
+                                placed.pop(f, None)  # decided again below if g cannot be placed
+                            survey = _survey(g, q)
                     ok = placed[g] = True if _kept(survey) else (yield from _act_on(g, q, survey, make_before_break))
                 if ok:
                     chosen.add(g)
@@ -288,10 +330,15 @@ def make_desmon_react(
 
 
 PAPER = Deployer("paper", "Algorithms 1 and 2 of the paper, transcribed literally", _paper_react, fallbacks=False)
-DESMON = Deployer("desmon", "the corrected deployer of DESIGN.md §4", make_desmon_react())
+DESMON = Deployer("desmon", "the corrected deployer (docs/findings.md); upgrades to a preferred alternative break-before-make", make_desmon_react())
+DESMON_KEEP_FALLBACK = Deployer(
+    "desmon-keep-fallback",
+    "the corrected deployer with upgrade policy keep-fallback: a running fallback is kept even when the preferred alternative would fit without it",
+    make_desmon_react(upgrade=KEEP_FALLBACK),
+)
 
 #: Deployer variants selectable by name.
-DEPLOYERS: dict[str, Deployer] = {PAPER.name: PAPER, DESMON.name: DESMON}
+DEPLOYERS: dict[str, Deployer] = {d.name: d for d in (PAPER, DESMON, DESMON_KEEP_FALLBACK)}
 
 
 def get_deployer(name: str | Deployer) -> Deployer:

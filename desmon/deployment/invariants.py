@@ -149,6 +149,24 @@ def _coverage(v: SystemView) -> str | None:
     return None
 
 
+def _errors_current(v: SystemView) -> str | None:
+    if not v.standing:
+        return None
+    valid = validly_active(v)
+    active = {g for g, _p in v.deployments}
+    for g in sorted(v.standing):
+        slots = [slot for slot in v.slots if g in slot]
+        if not slots:
+            return f"an error stands for {g}, which the selector does not want in this context"
+        if g in valid:
+            where = ", ".join(p for h, p in v.deployments if h == g)
+            return f"an error stands for {g}, which runs validly on {where}"
+        if g not in active and all(any(h in valid for h in slot) for slot in slots):
+            served = ", ".join(next(h for h in slot if h in valid) for slot in slots)
+            return f"an error stands for {g}, but its slot is served by {served} and {g} is not active: the error is stale"
+    return None
+
+
 def _history(v: SystemView) -> str | None:
     if v.running is not None and tuple(sorted(v.running)) != v.deployments:
         extra = sorted(set(v.deployments) - set(v.running))
@@ -174,6 +192,7 @@ INVARIANTS: dict[str, Invariant] = {
         Invariant("no-overcommit", "on every platform the Capacity consumed by active deployments stays within the capacity", _no_overcommit),
         Invariant("single-instance", "no perception graph is active on two platforms", _single_instance),
         Invariant("coverage", "after each reaction every graph the selector wants is active on a valid platform, or an error explains why not", _coverage),
+        Invariant("errors-current", "a standing error describes the present: its graph is wanted, not validly active, and either active on an invalid platform or in a slot no alternative serves", _errors_current),
         Invariant("history", "every stop leaves one DEPLOYMENT_HISTORY edge; every DEPLOYED_ON edge matches a running detector", _history),
         Invariant("fixed", "a fixed deployment runs only on its EXECUTABLE_ON platform", _fixed),
     )

@@ -26,6 +26,10 @@ from desmon.model.system import PlatformState
 if TYPE_CHECKING:
     from desmon.deployment.ports import QueryPort
 
+#: The graph being placed, or a tuple (the graph, then graphs whose Capacity shares
+#: are to be treated as freed), or None (no graph: every deployed share counts).
+Placing = str | tuple[str, ...] | None
+
 #: Results kept by the memoised pure checks (bounded, so long simulations stay flat).
 _MEMO_SIZE = 1 << 16
 
@@ -83,7 +87,7 @@ def _fmt(x: float) -> str:
     return f"{x:g}"
 
 
-def requirement_holds(req: Requirement, state: PlatformState, graph: str | None) -> str | None:
+def requirement_holds(req: Requirement, state: PlatformState, graph: Placing) -> str | None:
     """``None`` if ``req`` holds on ``state`` for ``graph``, else the reason it fails."""
     if isinstance(req, Quantity):
         have = sum(1 for d in state.devices if d.kind == req.device_kind)
@@ -94,7 +98,10 @@ def requirement_holds(req: Requirement, state: PlatformState, graph: str | None)
         cap = state.platform.capacity(req.resource)
         if cap is None:
             return f"has no {req.resource} capacity"
-        others = state.used_by(req.resource, excluding=graph)
+        if graph is None or type(graph) is str:
+            others = state.used_by(req.resource, excluding=graph)
+        else:  # a tuple: the graph and the graphs an upgrade would free (see check_validity)
+            others = [(g, a) for g, a in state.used_by(req.resource) if g not in graph]
         load = state.load_of(req.resource)
         free = cap - sum(a for _g, a in others) - load
         if free >= req.amount:
@@ -135,7 +142,7 @@ _DOWN = "platform is down"
 
 
 def check_platform(
-    requirements: Iterable[Requirement], state: PlatformState, graph: str | None, *, first_only: bool = False
+    requirements: Iterable[Requirement], state: PlatformState, graph: Placing, *, first_only: bool = False
 ) -> tuple[Failure, ...]:
     """Every requirement ``state`` fails for ``graph`` (only the first if ``first_only``);
     a down platform fails them all. Memoised: it is pure and the deployer, the invariants
@@ -148,7 +155,7 @@ def check_platform(
 
 @lru_cache(maxsize=_MEMO_SIZE)
 def _check_platform(
-    requirements: tuple[Requirement, ...], state: PlatformState, graph: str | None, first_only: bool
+    requirements: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool
 ) -> tuple[Failure, ...]:
     if not state.up:
         return (Failure(state.name, "platform up", _DOWN),)
@@ -176,13 +183,16 @@ def order_platforms(states: Sequence[PlatformState]) -> list[PlatformState]:
 def check_validity(
     requirements: Iterable[Requirement],
     states: Sequence[PlatformState],
-    graph: str | None = None,
+    graph: Placing = None,
     *,
     reasons: bool = True,
 ) -> Validity:
     """The platforms among ``states`` that meet every requirement, for deploying ``graph``.
 
-    ``graph`` matters for Capacity: its own share never counts against it. Acceptable
+    ``graph`` matters for Capacity: its own share never counts against it. A tuple of
+    graph names asks the same for a placement that would first free the others (the
+    corrected deployer's upgrade back to a preferred alternative: "acceptable if the
+    running fallbacks were stopped"); none of their shares counts. Acceptable
     platforms come in preference order (see :func:`order_platforms`); rejected ones
     carry every failing requirement with a readable reason (only the first one when
     ``reasons`` is False, the fast path of the deployer). Results are memoised (pure).
@@ -195,7 +205,7 @@ def check_validity(
 
 @lru_cache(maxsize=_MEMO_SIZE)
 def _check_validity(
-    reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: str | None, reasons: bool
+    reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool
 ) -> Validity:
     acceptable: list[str] = []
     rejected: list[tuple[str, tuple[Failure, ...]]] = []

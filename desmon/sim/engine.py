@@ -177,6 +177,10 @@ class SimWorld:
         self.errors: list[ErrorRecord] = []
         self.violations: list[tuple[float, str, str]] = []
         self.starts = self.start_failures = self.migrations = self.reactions = self.audits = 0
+        #: upgrades back to a preferred alternative (break-before-make), failed ones, and
+        #: the seconds their slots went unserved (stop of the fallback -> ready)
+        self.upgrades = self.upgrades_failed = 0
+        self.upgrade_blind = 0.0
         self._pending_ready: list[Instance] = []
         # initial facts, silently (before Notify is wired)
         for ev in scenario.initial:
@@ -554,6 +558,8 @@ class SimWorld:
             reaction = self.core.reaction(stim)
             raised: list[str] = []
             stopped_here: dict[str, str] = {}
+            stopped_at: dict[str, float] = {}  # wanted slot members stopped in this reaction
+            tried: set[str] = set()  # graphs whose start failed in this reaction
             outcome: bool | None = None
             while True:
                 try:
@@ -567,11 +573,17 @@ class SimWorld:
                     elsewhere = [p for (g, p) in self.instances if g == cmd.graph and p != cmd.platform]
                     if outcome and (elsewhere or stopped_here.get(cmd.graph, cmd.platform) != cmd.platform):
                         self.migrations += 1
+                    if outcome and stopped_at:
+                        self._count_upgrade(cmd.graph, cmd.platform, stopped_at, tried)
+                    elif not outcome:
+                        tried.add(cmd.graph)
                     self._decision("start", cmd.graph, cmd.platform, outcome, issued, "" if outcome else str(res))
                 elif isinstance(cmd, Stop):
                     outcome = self._stop(cmd.graph, cmd.platform)
                     if outcome:
                         stopped_here[cmd.graph] = cmd.platform
+                        if any(cmd.graph in slot and len(slot) > 1 for slot in self.core.slots()):
+                            stopped_at[cmd.graph] = env.now
                     self._decision("stop", cmd.graph, cmd.platform, outcome, issued, "")
                 elif isinstance(cmd, RaiseError):
                     outcome = None
@@ -582,6 +594,32 @@ class SimWorld:
             self.core.settle(raised)
             if not self.pending_platforms and not self.pending_context:
                 self._audit()
+
+    def _count_upgrade(self, graph: str, platform: str, stopped_at: dict[str, float], tried: set[str]) -> None:
+        """``graph`` started in a reaction that stopped a wanted alternative of its slot:
+        an upgrade if ``graph`` is preferred to the stopped one; a failed upgrade if a
+        preferred alternative's start failed in between and a fallback is placed again.
+        Either way the slot went unserved from that stop until the started detector is
+        ready: the upgrade's blind time. (A fallback that simply migrates is neither.)"""
+        for slot in self.core.slots():
+            if graph not in slot:
+                continue
+            mine = slot.index(graph)
+            gone = [(slot.index(f), t) for f, t in stopped_at.items() if f in slot]
+            if not gone:
+                continue
+            if any(i > mine for i, _t in gone):
+                self.upgrades += 1
+            elif any(slot.index(h) < min(i for i, _t in gone) for h in tried if h in slot):
+                self.upgrades_failed += 1
+            else:
+                return
+            ready = self.instances[(graph, platform)].valid_from
+            if math.isfinite(ready):
+                self.upgrade_blind += ready - min(t for _i, t in gone)
+            for f in [f for f in stopped_at if f in slot]:
+                del stopped_at[f]
+            return
 
     def _decision(self, what: str, graph: str, platform: str, ok: bool, issued: float, why: str) -> None:
         rec = {"t": round(self.env.now, 6), "issued": round(issued, 6), "command": what, "graph": graph, "platform": platform, "ok": ok}
@@ -653,6 +691,9 @@ class SimWorld:
             "start_failures": self.start_failures,
             "stops": self.stops,
             "migrations": self.migrations,
+            "upgrades": self.upgrades,
+            "upgrades_failed": self.upgrades_failed,
+            "upgrade_blind_s": round(self.upgrade_blind, 6),
             "errors": dict(sorted(by_kind.items())),
             "violations": len(self.violations),
             "memory_peak_mb": {p: round(v, 3) for p, v in self.memory.peak.items()},

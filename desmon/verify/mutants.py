@@ -10,14 +10,19 @@ code (``make_desmon_react`` and ``ensure_deployed``), changed in one place:
     checks Capacity without the consumption of already-deployed graphs (a QueryPort
     wrapper that hides every platform's deployments from ``platform_states``);
 ``make-before-break``
-    migrates by starting the new instance before stopping the old one.
+    migrates by starting the new instance before stopping the old one;
+``stale-errors``
+    the corrected deployer as it was before errors described the present: an error
+    stands for a graph while it is wanted and not validly active even when another
+    alternative serves its slot, and a running fallback is never upgraded back to the
+    preferred alternative (``errors-current`` catches it).
 """
 
 from __future__ import annotations
 
 import dataclasses
 
-from desmon.deployment.deployer import DESMON, Deployer, make_desmon_react
+from desmon.deployment.deployer import DESMON, KEEP_FALLBACK, Deployer, make_desmon_react
 from desmon.deployment.ports import QueryPort, Reaction
 from desmon.model.system import PlatformState
 
@@ -56,6 +61,10 @@ MUTANTS: dict[str, Deployer] = {
         Deployer("no-recheck", "mutant: no re-check after a device loss or any platform change", _no_recheck),
         Deployer("capacity-blind", "mutant: Capacity checked without the load of already-deployed graphs", _capacity_blind),
         Deployer("make-before-break", "mutant: migration starts the new instance before stopping the old", make_desmon_react(make_before_break=True)),
+        Deployer(
+            "stale-errors", "mutant: errors stand per graph even when the slot is served; no upgrade back to the preferred alternative",
+            make_desmon_react(upgrade=KEEP_FALLBACK), stale_errors=True,
+        ),
     )
 }
 
