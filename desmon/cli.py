@@ -61,7 +61,13 @@ def _scenario_arg(p: argparse.ArgumentParser, help: str = "scenario file, e.g. s
 
 
 def _deployer_arg(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--deployer", default="desmon", choices=["desmon", "paper"], help="deployer variant (default: desmon)")
+    from desmon.deployment.deployer import DEPLOYERS
+
+    p.add_argument(
+        "--deployer", default="desmon", choices=list(DEPLOYERS),
+        help="deployer variant: desmon (corrected, upgrades to a preferred detector break-before-make), "
+        "desmon-keep-fallback (keeps a running fallback), paper (Algorithms 1 and 2 as published); default: desmon",
+    )
 
 
 def _load_scripted(path: str):  # type: ignore[no-untyped-def]
