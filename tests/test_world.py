@@ -6,8 +6,9 @@ import pytest
 
 from desmon.errors import ScenarioError
 from desmon.model import GRASP, MOVE_BASE, RELEASE
-from desmon.sim.world import Slip, Step, World, draw_slips, expand_task, in_hand
+from desmon.sim.world import Step, World, draw_slips, expand_task, in_hand
 from desmon.sim.metrics import Exposure
+from desmon.model.scenario import Scenario
 
 
 def test_bad_values_are_one_line_errors() -> None:
@@ -66,3 +67,55 @@ def test_the_sim_uses_the_detectors_segment() -> None:
     assert world.Segment is Segment
     segs = expand_task(World(task=(Step(GRASP, 2), Step(MOVE_BASE, 3)), horizon=10), 10)
     assert segs == (Segment(GRASP, 0.0, 2.0), Segment(MOVE_BASE, 2.0, 3.0))
+
+
+# ---------------------------------------------------------------- no signal model
+
+
+def _camera_scenario(**world_kw: object) -> Scenario:
+    from desmon.model import HOLD, RobotBuilder
+
+    r = RobotBuilder("r")
+    r.platform("pc", memory=512).device("cam", kind="camera").device("ft", kind="force_sensor")
+    with r.rpsl.perception_graph("vision") as g:
+        g.sensor("c", reads="camera")
+    r.depsl.deployment_specification("vision").add_constraint("capacity", "memory", 100)
+    r.rules({HOLD: "vision"})
+    w = World(task=(Step(HOLD, 10.0),), horizon=10.0, **world_kw)  # type: ignore[arg-type]
+    return Scenario("camera", r.build(), world=w)
+
+
+def test_a_graph_without_a_signal_model_never_counts_as_monitoring() -> None:
+    from desmon.sim.engine import simulate
+
+    r = simulate(_camera_scenario())
+    assert r.decisions[0]["ok"] and r.metrics["unmonitored_exposure_s"] == r.metrics["risky_time_s"] == 10.0
+
+
+def test_the_metrics_list_the_graphs_without_a_signal_model() -> None:
+    from desmon.sim.engine import simulate
+
+    assert simulate(_camera_scenario()).metrics["no_signal_model"] == {"vision": ["camera"]}
+
+
+def test_the_run_report_flags_a_graph_without_a_signal_model() -> None:
+    from desmon.sim.command import format_summary
+    from desmon.sim.engine import simulate
+
+    assert "NO SIGNAL MODEL: vision (reads camera)" in format_summary(simulate(_camera_scenario()))
+
+
+def test_a_kind_mapped_in_signal_kinds_is_monitored() -> None:
+    from desmon.sim.engine import simulate
+
+    r = simulate(_camera_scenario(signal_kinds={"camera": "wrench", "force_sensor": "wrench"}))
+    assert r.metrics["no_signal_model"] == {} and r.metrics["unmonitored_exposure_s"] == 0.5  # the warm-up only
+
+
+def test_a_run_without_signals_says_so_in_the_report(root) -> None:  # type: ignore[no-untyped-def]
+    from desmon.loader import load_scenario
+    from desmon.sim.command import format_summary
+    from desmon.sim.engine import simulate
+
+    r = simulate(load_scenario(root / "scenarios" / "shared_platform.py"))
+    assert r.metrics["signals"] is False and "Signals: off (the world is derived from the scripted timeline)" in format_summary(r)

@@ -27,9 +27,20 @@ from types import TracebackType
 from typing import Iterable, Mapping
 
 from desmon.errors import ModelError
+from desmon.model.checks import check_name, check_names, strict_call
 from desmon.model.graph import Component, PerceptionGraph, ProcessingComponent, SensorComponent
 from desmon.model.platform import Device, Platform
-from desmon.model.requirements import DeploymentSpec, Requirement, make_requirement
+from desmon.model.requirements import (
+    Attribute,
+    Capacity,
+    DeploymentSpec,
+    Maximum,
+    Minimum,
+    Quantity,
+    Requirement,
+    Selection,
+    make_requirement,
+)
 from desmon.model.system import RuleTable, SystemModel
 
 __all__ = ["RobotBuilder", "PlatformBuilder", "GraphBuilder", "SpecBuilder"]
@@ -42,12 +53,14 @@ class PlatformBuilder:
         self._robot = robot
         self.name = name
 
+    @strict_call(ModelError, "device(...)")
     def device(self, name: str, *, kind: str, vendor: str = "generic", version: str = "1") -> "PlatformBuilder":
         self._robot._devices.append(Device(name=name, kind=kind, platform=self.name, vendor=vendor, version=version))
         return self
 
+    @strict_call(ModelError, "devices(...)")
     def devices(self, names: Iterable[str], *, kind: str, vendor: str = "generic", version: str = "1") -> "PlatformBuilder":
-        for n in names:
+        for n in check_names(f"devices of platform {self.name!r}", names, each="device", example="['pad_1', 'pad_2']"):
             self.device(n, kind=kind, vendor=vendor, version=version)
         return self
 
@@ -60,16 +73,18 @@ class GraphBuilder:
         self.name = name
         self._components: list[Component] = []
 
+    @strict_call(ModelError, "sensor(...)")
     def sensor(self, name: str, *, reads: str) -> "GraphBuilder":
         """A sensor component reading a device of kind ``reads``."""
         self._components.append(SensorComponent(name, reads))
         return self
 
+    @strict_call(ModelError, "processing(...)")
     def processing(self, name: str, *, inputs: Iterable[str]) -> "GraphBuilder":
-        """A processing component computing from the named ``inputs``."""
+        """A processing component computing from the named ``inputs`` (one name may be a bare string)."""
         if isinstance(inputs, str):
             inputs = (inputs,)
-        self._components.append(ProcessingComponent(name, tuple(inputs)))
+        self._components.append(ProcessingComponent(name, inputs))  # type: ignore[arg-type]
         return self
 
     def __enter__(self) -> "GraphBuilder":
@@ -89,7 +104,7 @@ class SpecBuilder:
     """Chainable DepSL deployment specification for one perception graph."""
 
     def __init__(self, graph: str) -> None:
-        self.graph = graph
+        self.graph = check_name("deployment specification graph", graph)
         self._requirements: list[Requirement] = []
         self._fixed: str | None = None
 
@@ -98,13 +113,25 @@ class SpecBuilder:
         self._requirements.append(make_requirement(kind, *args, **kwargs))
         return self
 
+    @strict_call(ModelError, "require(...)")
     def require(self, requirement: Requirement) -> "SpecBuilder":
         """Add an already-built requirement object."""
+        if not isinstance(requirement, (Quantity, Capacity, Minimum, Maximum, Attribute, Selection)):
+            raise ModelError(
+                f"deployment specification of {self.graph!r}: require({requirement!r}) is not a requirement: "
+                "pass Capacity('memory', 150) and the like, or use add_constraint('capacity', 'memory', 150)"
+            )
         self._requirements.append(requirement)
         return self
 
+    @strict_call(ModelError, "executable_on(...)")
     def executable_on(self, platform: str) -> "SpecBuilder":
         """Fix the deployment to ``platform`` (an EXECUTABLE_ON edge)."""
+        check_name(f"fixed platform of {self.graph!r}", platform)
+        if self._fixed is not None and self._fixed != platform:
+            raise ModelError(
+                f"deployment of {self.graph!r} is fixed twice ({self._fixed!r} and {platform!r}): a fixed deployment has one platform"
+            )
         self._fixed = platform
         return self
 
@@ -116,14 +143,16 @@ class _RPSL:
     def __init__(self, robot: "RobotBuilder") -> None:
         self._robot = robot
 
+    @strict_call(ModelError, "perception_graph(...)")
     def perception_graph(self, name: str) -> GraphBuilder:
-        return GraphBuilder(self._robot, name)
+        return GraphBuilder(self._robot, check_name("perception graph", name))
 
 
 class _DepSL:
     def __init__(self, robot: "RobotBuilder") -> None:
         self._robot = robot
 
+    @strict_call(ModelError, "deployment_specification(...)")
     def deployment_specification(self, graph: str) -> SpecBuilder:
         spec = SpecBuilder(graph)
         self._robot._specs.append(spec)
@@ -133,16 +162,19 @@ class _DepSL:
 class RobotBuilder:
     """Collects a robot's platforms, devices, perception graphs, specs and rules."""
 
+    @strict_call(ModelError, "RobotBuilder(...)")
     def __init__(self, name: str = "robot") -> None:
-        self.name = name
+        self.name = check_name("robot", name)
         self._platforms: list[Platform] = []
         self._devices: list[Device] = []
         self._graphs: list[PerceptionGraph] = []
         self._specs: list[SpecBuilder] = []
         self._rules = RuleTable(())
+        self._rules_set = False
         self.rpsl = _RPSL(self)
         self.depsl = _DepSL(self)
 
+    @strict_call(ModelError, "platform(...)")
     def platform(
         self,
         name: str,
@@ -170,11 +202,19 @@ class RobotBuilder:
             raise ModelError(f"perception graph {graph.name!r} is defined twice: rename one of them")
         self._graphs.append(graph)
 
+    @strict_call(ModelError, "rules(...)")
     def rules(self, table: Mapping[str, object] | RuleTable) -> "RobotBuilder":
-        """Set the selector's rule table (see :meth:`RuleTable.from_mapping`)."""
-        self._rules = table if isinstance(table, RuleTable) else RuleTable.from_mapping(dict(table))
+        """Set the selector's rule table, once (see :meth:`RuleTable.from_mapping`)."""
+        if self._rules_set:
+            raise ModelError(
+                f"robot {self.name!r}: rules(...) is called twice; the second call would silently replace the first: "
+                "give every context in one rules({...})"
+            )
+        self._rules = table if isinstance(table, RuleTable) else RuleTable.from_mapping(table)
+        self._rules_set = True
         return self
 
+    @strict_call(ModelError, "build(...)")
     def build(self) -> SystemModel:
         return SystemModel(
             platforms=tuple(self._platforms),

@@ -5,11 +5,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from desmon.errors import ModelError
-from desmon.model.platform import check_name
+from desmon.model.checks import check_items, check_name, check_names, strict_init
 
 __all__ = ["SensorComponent", "ProcessingComponent", "Component", "PerceptionGraph"]
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class SensorComponent:
     """A source component that reads a device of ``device_kind``."""
@@ -17,22 +18,40 @@ class SensorComponent:
     name: str
     device_kind: str
 
+    def __post_init__(self) -> None:
+        check_name("sensor component", self.name)
+        check_name(f"sensor component {self.name!r} reads", self.device_kind)
+
     @property
     def inputs(self) -> tuple[str, ...]:
         return ()
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class ProcessingComponent:
-    """A component computing from the outputs of its ``inputs``."""
+    """A component computing from the outputs of its ``inputs`` (at least one)."""
 
     name: str
     inputs: tuple[str, ...]
+
+    def __post_init__(self) -> None:
+        check_name("processing component", self.name)
+        inputs = check_names(
+            f"processing component {self.name!r} inputs", self.inputs,
+            each=f"input of {self.name!r}", example="inputs=['wrench']",
+        )
+        if not inputs:
+            raise ModelError(
+                f"processing component {self.name!r} has no inputs: list the components it reads, e.g. inputs=['wrench']"
+            )
+        object.__setattr__(self, "inputs", inputs)
 
 
 Component = SensorComponent | ProcessingComponent
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class PerceptionGraph:
     """A deployable unit: a validated DAG of components (a safety monitor).
@@ -46,13 +65,22 @@ class PerceptionGraph:
 
     def __post_init__(self) -> None:
         check_name("perception graph", self.name)
+        components = check_items(
+            f"perception graph {self.name!r} components", self.components, (SensorComponent, ProcessingComponent),
+            example="(SensorComponent('wrench', 'force_sensor'), ProcessingComponent('tare', ('wrench',)))",
+        )
+        object.__setattr__(self, "components", components)
         if not self.components:
             raise ModelError(
                 f"perception graph {self.name!r} is empty: add at least one sensor component"
             )
+        if not any(isinstance(c, SensorComponent) for c in self.components):
+            raise ModelError(
+                f"perception graph {self.name!r} has no sensor component, so it reads nothing: "
+                "add one, e.g. g.sensor('wrench', reads='force_sensor')"
+            )
         seen: set[str] = set()
         for comp in self.components:
-            check_name(f"component of {self.name!r}", comp.name)
             if comp.name in seen:
                 raise ModelError(
                     f"perception graph {self.name!r} defines component {comp.name!r} twice: "

@@ -2,43 +2,22 @@
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Mapping
 
 from desmon.errors import ModelError
+from desmon.model.checks import check_amount, check_name, check_number, check_pairs, check_value, is_numeric_text, strict_call, strict_init
 
 __all__ = ["Device", "Platform", "check_name", "check_amount"]
 
 
-def check_name(what: str, name: object) -> str:
-    """Return ``name`` if it is a usable identifier-like string, else raise ModelError."""
-    if not isinstance(name, str) or not name.strip():
-        raise ModelError(f"{what} name {name!r} is not a non-empty string: give every {what} a name")
-    if any(ch in name for ch in "/\n\t"):
-        raise ModelError(f"{what} name {name!r} contains '/', a newline or a tab: use letters, digits, '_' or '-'")
-    return name
-
-
-def check_amount(what: str, value: object, *, integer: bool = False) -> float:
-    """Return ``value`` as a finite non-negative number, else raise ModelError naming ``what``."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ModelError(f"{what} = {value!r} is not a number: give a non-negative number")
-    if not math.isfinite(value) or value < 0:
-        raise ModelError(f"{what} = {value!r} is negative or not finite: give a non-negative number")
-    if integer and int(value) != value:
-        raise ModelError(f"{what} = {value!r} is not a whole number: give a count such as 1, 2, 6")
-    return value
-
-
-def _frozen_mapping(what: str, mapping: Mapping[str, object] | None) -> tuple[tuple[str, object], ...]:
-    if mapping is None:
+def _pairs(what: str, value: object, example: str) -> tuple[tuple[str, object], ...]:
+    if value is None:
         return ()
-    if not isinstance(mapping, Mapping):
-        raise ModelError(f"{what} must be a mapping of names to values, got {type(mapping).__name__}")
-    return tuple(sorted((check_name(what, k), v) for k, v in mapping.items()))
+    return check_pairs(what, value, example=example)  # type: ignore[return-value]
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Device:
     """A sensor attached to a platform: ``kind`` is what perception graphs read (e.g. ``force_sensor``)."""
@@ -53,6 +32,8 @@ class Device:
         check_name("device", self.name)
         check_name(f"device {self.name!r} kind", self.kind)
         check_name(f"device {self.name!r} platform", self.platform)
+        check_name(f"device {self.name!r} vendor", self.vendor)
+        check_name(f"device {self.name!r} version", self.version)
 
     def matches(self, kind: str, vendor: str | None = None, version: str | None = None) -> bool:
         """True if this device is of ``kind`` (and of ``vendor`` / ``version`` when given)."""
@@ -63,6 +44,7 @@ class Device:
         )
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Platform:
     """A computational platform of the robot.
@@ -82,16 +64,28 @@ class Platform:
 
     def __post_init__(self) -> None:
         check_name("platform", self.name)
-        for res, amount in self.capacities:
-            check_amount(f"platform {self.name!r} capacity {res!r}", amount)
-        for prop, value in self.properties:
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        where = f"platform {self.name!r}"
+        caps = _pairs(f"{where} capacities", self.capacities, "{'memory': 512}")
+        for res, amount in caps:
+            check_amount(f"{where} capacity {res!r}", amount)
+        attrs = _pairs(f"{where} attributes", self.attributes, "{'os': 'linux'}")
+        for key, value in attrs:
+            check_value(f"{where} attribute {key!r}", value)
+        props = _pairs(f"{where} properties", self.properties, "{'link_latency_ms': 2.0}")
+        for prop, value in props:
+            if isinstance(value, str) and not is_numeric_text(value):
                 raise ModelError(
-                    f"platform {self.name!r} property {prop!r} = {value!r} is not a finite number: "
+                    f"{where} property {prop!r} = {value!r} is not a number: "
                     "put symbolic facts in attributes, numbers in properties"
                 )
+            check_number(f"{where} property {prop!r}", value, low=None)
+        check_number(f"{where} preference", self.preference, low=None)
+        object.__setattr__(self, "capacities", caps)
+        object.__setattr__(self, "attributes", attrs)
+        object.__setattr__(self, "properties", props)
 
     @classmethod
+    @strict_call(ModelError, "platform(...)")
     def make(
         cls,
         name: str,
@@ -103,14 +97,19 @@ class Platform:
         preference: float = 0.0,
     ) -> "Platform":
         """Build a platform from keyword arguments (``memory`` is the ``memory`` capacity in MB)."""
-        caps = dict(capacities or {})
+        check_name("platform", name)
+        caps = _pairs(f"platform {name!r} capacities", capacities, "{'memory': 512}")
         if memory is not None:
-            caps["memory"] = memory
+            if any(res == "memory" for res, _ in caps):
+                raise ModelError(
+                    f"platform {name!r} gives memory twice (memory={memory!r} and capacities['memory']): give it once"
+                )
+            caps += (("memory", memory),)
         return cls(
             name=name,
-            capacities=_frozen_mapping(f"platform {name!r} capacity", caps),  # type: ignore[arg-type]
-            attributes=_frozen_mapping(f"platform {name!r} attribute", attributes),
-            properties=_frozen_mapping(f"platform {name!r} property", properties),  # type: ignore[arg-type]
+            capacities=tuple(sorted(caps)),  # type: ignore[arg-type]
+            attributes=tuple(sorted(_pairs(f"platform {name!r} attributes", attributes, "{'os': 'linux'}"))),
+            properties=tuple(sorted(_pairs(f"platform {name!r} properties", properties, "{'link_latency_ms': 2.0}"))),  # type: ignore[arg-type]
             preference=preference,
         )
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from typing import Iterable
 
 from desmon.errors import ModelError
-from desmon.model.platform import check_amount, check_name
+from desmon.model.checks import check_items, check_keywords, check_name, check_number, check_value, strict_init, suggest
 
 __all__ = [
     "Quantity",
@@ -31,6 +31,7 @@ __all__ = [
 PLATFORM_HAS = "platform_has"
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Quantity:
     """At least ``count`` working devices of ``device_kind`` on the platform (R2)."""
@@ -40,12 +41,15 @@ class Quantity:
 
     def __post_init__(self) -> None:
         check_name("Quantity device kind", self.device_kind)
-        check_amount(f"Quantity({self.device_kind}) count", self.count, integer=True)
+        check_number(f"Quantity({self.device_kind}) count", self.count, integer=True)
+        if self.count < 1:
+            raise ModelError(f"Quantity({self.device_kind}) count = {self.count!r} always holds: give a count >= 1 or drop the requirement")
 
     def describe(self) -> str:
         return f"Quantity({self.device_kind} >= {self.count:g})"
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Capacity:
     """``amount`` of ``resource`` free on the platform; a deployed graph consumes it (R3)."""
@@ -55,13 +59,14 @@ class Capacity:
 
     def __post_init__(self) -> None:
         check_name("Capacity resource", self.resource)
-        check_amount(f"Capacity({self.resource}) amount", self.amount)
+        check_number(f"Capacity({self.resource}) amount", self.amount)
 
     def describe(self) -> str:
         unit = " MB" if self.resource == "memory" else ""
         return f"Capacity({self.resource} >= {self.amount:g}{unit})"
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Minimum:
     """The platform's numeric ``prop`` is at least ``value``."""
@@ -71,12 +76,13 @@ class Minimum:
 
     def __post_init__(self) -> None:
         check_name("Minimum property", self.prop)
-        _check_number(f"Minimum({self.prop}) value", self.value)
+        check_number(f"Minimum({self.prop}) value", self.value, low=None)
 
     def describe(self) -> str:
         return f"Minimum({self.prop} >= {self.value:g})"
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Maximum:
     """The platform's numeric ``prop`` is at most ``value`` (e.g. link latency)."""
@@ -86,12 +92,13 @@ class Maximum:
 
     def __post_init__(self) -> None:
         check_name("Maximum property", self.prop)
-        _check_number(f"Maximum({self.prop}) value", self.value)
+        check_number(f"Maximum({self.prop}) value", self.value, low=None)
 
     def describe(self) -> str:
         return f"Maximum({self.prop} <= {self.value:g})"
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Attribute:
     """The platform has attribute ``name`` equal to ``value``.
@@ -104,8 +111,10 @@ class Attribute:
 
     def __post_init__(self) -> None:
         check_name("Attribute name", self.name)
-        if not isinstance(self.value, (str, int, float)) or isinstance(self.value, bool):
-            raise ModelError(f"Attribute({self.name}) value {self.value!r} must be a string or number")
+        if self.name == PLATFORM_HAS:
+            check_name("Attribute(platform_has) device kind", self.value)
+        else:
+            check_value(f"Attribute({self.name}) value", self.value)
 
     def describe(self) -> str:
         if self.name == PLATFORM_HAS:
@@ -113,6 +122,7 @@ class Attribute:
         return f"Attribute({self.name} = {self.value})"
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Option:
     """One alternative of a Selection: a device (kind, optionally vendor) or an attribute value.
@@ -125,6 +135,24 @@ class Option:
     attribute: str | None = None
     value: str | None = None
 
+    def __post_init__(self) -> None:
+        if (self.device_kind is None) == (self.attribute is None):
+            raise ModelError(
+                f"Selection option {self!r} must name either a device kind or an attribute: "
+                "write Option.parse('kind'), Option.parse('kind@vendor') or Option.parse('attr=value')"
+            )
+        if self.device_kind is not None:
+            check_name("Selection device kind", self.device_kind)
+            if self.vendor is not None:
+                check_name(f"Selection option {self.device_kind!r} vendor", self.vendor)
+            if self.value is not None:
+                raise ModelError(f"Selection option {self.device_kind!r} has a value {self.value!r} but no attribute: drop it")
+        else:
+            check_name("Selection attribute", self.attribute)
+            check_value(f"Selection option {self.attribute!r} value", self.value)
+            if self.vendor is not None:
+                raise ModelError(f"Selection option {self.attribute}={self.value} has a vendor {self.vendor!r}: vendors belong to devices")
+
     @classmethod
     def parse(cls, text: str) -> "Option":
         if not isinstance(text, str) or not text.strip():
@@ -133,8 +161,12 @@ class Option:
             )
         if "=" in text:
             attr, _, value = text.partition("=")
+            if not value.strip():
+                raise ModelError(f"Selection option {text!r} has no value after '=': write 'attr=value', e.g. 'os=linux'")
             return cls(attribute=check_name("Selection attribute", attr.strip()), value=value.strip())
         kind, _, vendor = text.partition("@")
+        if "@" in text and (not vendor.strip() or "@" in vendor):
+            raise ModelError(f"Selection option {text!r}: write 'kind@vendor' with one '@' and a vendor after it, or just 'kind'")
         return cls(device_kind=check_name("Selection device kind", kind.strip()), vendor=vendor.strip() or None)
 
     def describe(self) -> str:
@@ -143,6 +175,7 @@ class Option:
         return f"{self.device_kind}@{self.vendor}" if self.vendor else str(self.device_kind)
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Selection:
     """At least ``at_least`` of the listed alternatives are available on the platform."""
@@ -151,9 +184,11 @@ class Selection:
     at_least: int = 1
 
     def __post_init__(self) -> None:
+        options = check_items("Selection options", self.options, Option, example="(Option.parse('tactile_pad@weiss'), ...)")
+        object.__setattr__(self, "options", options)
         if not self.options:
             raise ModelError("Selection has no options: list at least one alternative, e.g. 'tactile_pad@weiss'")
-        check_amount("Selection at_least", self.at_least, integer=True)
+        check_number("Selection at_least", self.at_least, integer=True)
         if self.at_least < 1:
             raise ModelError("Selection at_least = 0 always holds: give at_least >= 1 or drop the requirement")
         if self.at_least > len(self.options):
@@ -169,11 +204,7 @@ class Selection:
 Requirement = Quantity | Capacity | Minimum | Maximum | Attribute | Selection
 
 REQUIREMENT_KINDS = ("quantity", "capacity", "minimum", "maximum", "attribute", "selection")
-
-
-def _check_number(what: str, value: object) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
-        raise ModelError(f"{what} = {value!r} is not a number: give a number")
+_REQUIREMENT_TYPES = (Quantity, Capacity, Minimum, Maximum, Attribute, Selection)
 
 
 def make_requirement(kind: str, *args: object, **kwargs: object) -> Requirement:
@@ -182,36 +213,30 @@ def make_requirement(kind: str, *args: object, **kwargs: object) -> Requirement:
     Kinds: quantity(kind, n), capacity(resource, amount), minimum(prop, v),
     maximum(prop, v), attribute(name, value), selection(option, ..., at_least=1).
     """
-    key = str(kind).lower().lstrip(":")
-    try:
-        if key == "quantity":
-            (dev, n) = args
-            return Quantity(str(dev), n)  # type: ignore[arg-type]
-        if key == "capacity":
-            (res, amount) = args
-            return Capacity(str(res), amount)  # type: ignore[arg-type]
-        if key == "minimum":
-            (prop, v) = args
-            return Minimum(str(prop), v)  # type: ignore[arg-type]
-        if key == "maximum":
-            (prop, v) = args
-            return Maximum(str(prop), v)  # type: ignore[arg-type]
-        if key == "attribute":
-            (name, value) = args
-            return Attribute(str(name).lstrip(":"), value)  # type: ignore[arg-type]
-        if key == "selection":
-            opts: Iterable[object] = args
-            if len(args) == 1 and isinstance(args[0], (list, tuple)):
-                opts = args[0]
-            at_least = kwargs.pop("at_least", 1)
-            return Selection(tuple(Option.parse(o) for o in opts), at_least)  # type: ignore[arg-type]
-    except ValueError as exc:
-        if isinstance(exc, ModelError):
-            raise
-        raise ModelError(f"requirement {kind!r} got arguments {args!r}: {_USAGE[key]}") from None
-    raise ModelError(
-        f"unknown requirement kind {kind!r}: use one of {', '.join(REQUIREMENT_KINDS)}"
-    )
+    if not isinstance(kind, str):
+        raise ModelError(f"requirement kind {kind!r} is not a string: use one of {', '.join(REQUIREMENT_KINDS)}")
+    key = kind.lower().lstrip(":")
+    if key not in _USAGE:
+        raise ModelError(f"unknown requirement kind {kind!r}{suggest(key, REQUIREMENT_KINDS)}: use one of {', '.join(REQUIREMENT_KINDS)}")
+    check_keywords(f"requirement {kind!r}", kwargs, ("at_least",) if key == "selection" else (), usage=_USAGE[key])
+    if key != "selection" and len(args) != 2:
+        shown = ", ".join(repr(a) for a in args) or "nothing"
+        raise ModelError(f"requirement {kind!r} got {len(args)} argument(s) ({shown}) but takes 2: {_USAGE[key]}")
+    if key == "quantity":
+        return Quantity(*args)  # type: ignore[arg-type]
+    if key == "capacity":
+        return Capacity(*args)  # type: ignore[arg-type]
+    if key == "minimum":
+        return Minimum(*args)  # type: ignore[arg-type]
+    if key == "maximum":
+        return Maximum(*args)  # type: ignore[arg-type]
+    if key == "attribute":
+        name, value = args
+        return Attribute(name.lstrip(":") if isinstance(name, str) else name, value)  # type: ignore[arg-type]
+    opts: Iterable[object] = args
+    if len(args) == 1 and isinstance(args[0], (list, tuple)):
+        opts = args[0]
+    return Selection(tuple(Option.parse(o) for o in opts), kwargs.get("at_least", 1))  # type: ignore[arg-type]
 
 
 _USAGE = {
@@ -224,6 +249,7 @@ _USAGE = {
 }
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class DeploymentSpec:
     """DepSL: how the perception graph ``graph`` may be deployed.
@@ -238,6 +264,11 @@ class DeploymentSpec:
 
     def __post_init__(self) -> None:
         check_name("deployment specification graph", self.graph)
+        reqs = check_items(
+            f"deployment specification of {self.graph!r} requirements", self.requirements, _REQUIREMENT_TYPES,
+            example="(Capacity('memory', 150),) or add_constraint('capacity', 'memory', 150)",
+        )
+        object.__setattr__(self, "requirements", reqs)
         if self.fixed_platform is not None:
             check_name(f"fixed platform of {self.graph!r}", self.fixed_platform)
 

@@ -13,13 +13,48 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 from desmon.errors import ModelError
-from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
 from desmon.model.actions import ACTIONS
+from desmon.model.checks import check_items, check_name, check_number, check_text, strict_init, suggest
+from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
 from desmon.model.system import SystemModel
 
-__all__ = ["TimedEvent", "Scenario"]
+__all__ = ["TimedEvent", "Scenario", "EVENT_TYPES", "event_problem"]
+
+#: Every environment event type.
+EVENT_TYPES = (ActionChange, DeviceFail, DeviceRepair, PlatformDown, PlatformUp, LoadChange)
 
 
+def event_problem(ev: Event, model: SystemModel) -> str | None:
+    """What ``ev`` names that ``model`` does not have (None if it names only known things).
+
+    One rule for every place an event is written: a scenario's ``initial`` and
+    ``timeline``, and the SimPy world's scripted faults and loads.
+    """
+    if isinstance(ev, ActionChange):
+        if ev.action not in ACTIONS:
+            return f"unknown action {ev.action!r}{suggest(ev.action, ACTIONS)}; use one of {', '.join(ACTIONS)}"
+        return None
+    devices = [d.name for d in model.devices]
+    platforms = [p.name for p in model.platforms]
+    if isinstance(ev, (DeviceFail, DeviceRepair)):
+        if ev.device not in devices:
+            other = f": {ev.device!r} is a platform (use PlatformDown / PlatformUp)" if ev.device in platforms else ""
+            return f"{ev} names unknown device {ev.device!r}{suggest(ev.device, devices)}{other} (devices: {', '.join(devices) or 'none'})"
+        return None
+    if ev.platform not in platforms:
+        other = f": {ev.platform!r} is a device (use DeviceFail / DeviceRepair)" if ev.platform in devices else ""
+        return f"{ev} names unknown platform {ev.platform!r}{suggest(ev.platform, platforms)}{other} (platforms: {', '.join(platforms)})"
+    if isinstance(ev, LoadChange):
+        caps = [r for r, _ in model.platform(ev.platform).capacities]
+        if ev.resource not in caps:
+            return (
+                f"{ev}: platform {ev.platform!r} has no {ev.resource!r} capacity{suggest(ev.resource, caps)}, so the load "
+                f"would change nothing: fix the resource or declare the capacity (capacities of {ev.platform!r}: {', '.join(caps) or 'none'})"
+            )
+    return None
+
+
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class TimedEvent:
     """``event`` happens at ``time`` seconds; ``label`` names the moment (e.g. ``t1``)."""
@@ -28,7 +63,16 @@ class TimedEvent:
     event: Event
     label: str = ""
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.event, EVENT_TYPES):
+            raise ModelError(
+                f"TimedEvent at t={self.time!r}: {self.event!r} is not an environment event: "
+                "write e.g. TimedEvent(1.0, ActionChange('grasp')) or TimedEvent(5.0, DeviceFail('lwr_wrench'))"
+            )
+        check_number(f"time of {self.event}", self.time, unit=" of seconds (times are seconds >= 0)")
+        check_text(f"label of {self.event} at t={self.time:g}", self.label)
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Scenario:
     """A runnable scenario.
@@ -50,7 +94,9 @@ class Scenario:
     ``expected``
         pinned results as data; the tests assert them.
 
-    ``scenarios/coffee_handover.py`` uses all of these.
+    ``scenarios/coffee_handover.py`` uses all of these. Every field is checked when the
+    scenario is built, and the world and the bounds are checked against the model then
+    (through their ``check_against(scenario)``).
     """
 
     name: str
@@ -65,38 +111,47 @@ class Scenario:
     expected: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        check_name("scenario", self.name)
+        where = f"scenario {self.name!r}"
         if not isinstance(self.model, SystemModel):
-            raise ModelError(f"scenario {self.name!r}: model must be a SystemModel (use RobotBuilder(...).build())")
+            raise ModelError(f"{where}: model must be a SystemModel (use RobotBuilder(...).build())")
+        initial = check_items(f"{where} initial", self.initial, EVENT_TYPES, example="initial=(LoadChange('arm_pc', 300),)")
+        timeline = check_items(
+            f"{where} timeline", self.timeline, TimedEvent, example="timeline=(TimedEvent(0.0, ActionChange('grasp'), 't0'),)"
+        )
+        object.__setattr__(self, "initial", initial)
+        object.__setattr__(self, "timeline", timeline)
+        check_text(f"{where} description", self.description)
+        if not isinstance(self.expected, Mapping):
+            raise ModelError(f"{where}: expected = {self.expected!r} is not a mapping: write expected={{'desmon': {{...}}}}")
+        for ev in initial:
+            self._check_event(ev)
         last = 0.0
         labels: set[str] = set()
-        devices = {d.name for d in self.model.devices}
-        platforms = {p.name for p in self.model.platforms}
-        for ev in self.initial:
-            self._check_event(ev, devices, platforms)
-        for te in self.timeline:
-            self._check_event(te.event, devices, platforms)
-            if not isinstance(te.time, (int, float)) or te.time != te.time or te.time < 0:
-                raise ModelError(f"scenario {self.name!r}: timeline event {te.event} at t={te.time!r}: times are seconds >= 0")
+        for te in timeline:
+            self._check_event(te.event)
             if te.label:
                 if te.label in labels:
-                    raise ModelError(f"scenario {self.name!r}: timeline label {te.label!r} is used twice: labels name one moment each")
+                    raise ModelError(f"{where}: timeline label {te.label!r} is used twice: labels name one moment each")
                 labels.add(te.label)
             if te.time < last:
-                raise ModelError(
-                    f"scenario {self.name!r}: timeline event {te.event} at t={te.time} comes before t={last}: sort the timeline"
-                )
+                raise ModelError(f"{where}: timeline event {te.event} at t={te.time} comes before t={last}: sort the timeline")
             last = te.time
-
-    def _check_event(self, ev: Event, devices: set[str], platforms: set[str]) -> None:
-        if not isinstance(ev, (ActionChange, DeviceFail, DeviceRepair, PlatformDown, PlatformUp, LoadChange)):
-            raise ModelError(f"scenario {self.name!r}: {ev!r} is not an environment event")
-        if isinstance(ev, ActionChange) and ev.action not in ACTIONS:
-            raise ModelError(f"scenario {self.name!r}: unknown action {ev.action!r}; use one of {', '.join(ACTIONS)}")
-        if isinstance(ev, LoadChange) and (
-            isinstance(ev.amount, bool) or not isinstance(ev.amount, (int, float)) or not ev.amount >= 0
+        # the world and the checker bounds are typed by the layers above; each checks
+        # itself against the model through ``check_against(scenario)`` when the scenario is built
+        for part, what, fix in (
+            ("world", "a desmon.sim.world.World", "World(task=..., horizon=...)"),
+            ("checker", "a desmon.verify.Bounds", "Bounds(actions=..., devices=...)"),
         ):
-            raise ModelError(f"scenario {self.name!r}: load {ev.platform} {ev.resource}={ev.amount!r}: a load is a number >= 0")
-        if isinstance(ev, (DeviceFail, DeviceRepair)) and ev.device not in devices:
-            raise ModelError(f"scenario {self.name!r}: names unknown device {ev.device!r} (known: {sorted(devices)})")
-        if isinstance(ev, (PlatformDown, PlatformUp, LoadChange)) and ev.platform not in platforms:
-            raise ModelError(f"scenario {self.name!r}: names unknown platform {ev.platform!r} (known: {sorted(platforms)})")
+            value = getattr(self, part)
+            if value is None or (part == "checker" and isinstance(value, Mapping)):
+                continue  # a dict of Bounds fields is built and checked by desmon.verify.bounds_of
+            check = getattr(value, "check_against", None)
+            if not callable(check):
+                raise ModelError(f"{where}: {part} is a {type(value).__name__}, not {what}: write {part}={fix}")
+            check(self)
+
+    def _check_event(self, ev: Event) -> None:
+        problem = event_problem(ev, self.model)
+        if problem is not None:
+            raise ModelError(f"scenario {self.name!r}: {problem}")

@@ -7,16 +7,29 @@ checking reads (whoever holds them: the networkx repository or the checker's sta
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Mapping
 
 from desmon.errors import ModelError
 from desmon.model.actions import ACTIONS
+from desmon.model.checks import check_items, check_name, check_names, strict_init, suggest
 from desmon.model.graph import PerceptionGraph
 from desmon.model.platform import Device, Platform
-from desmon.model.requirements import PLATFORM_HAS, Attribute, Capacity, DeploymentSpec, Quantity
+from desmon.model.requirements import (
+    PLATFORM_HAS,
+    Attribute,
+    Capacity,
+    DeploymentSpec,
+    Maximum,
+    Minimum,
+    Quantity,
+    Requirement,
+    Selection,
+)
 
 __all__ = ["Rule", "RuleTable", "SystemModel", "PlatformState", "with_load"]
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Rule:
     """Selector rule: in ``context``, deploy one graph of each slot.
@@ -29,31 +42,60 @@ class Rule:
     slots: tuple[tuple[str, ...], ...]
 
     def __post_init__(self) -> None:
+        check_name("rule context", self.context)
+        if isinstance(self.slots, (str, bytes)) or not isinstance(self.slots, (tuple, list)):
+            raise ModelError(
+                f"rule for context {self.context!r}: slots = {self.slots!r} is not a tuple of slots: write (('force',),)"
+            )
+        slots = []
+        seen: set[str] = set()
         for slot in self.slots:
-            if not slot:
+            names = check_names(f"rule for context {self.context!r} slot", slot, each=f"graph of the rule for {self.context!r}", example="('combined', 'force')")
+            if not names:
                 raise ModelError(f"rule for context {self.context!r} has an empty slot: name at least one graph")
+            for g in names:
+                if g in seen:
+                    raise ModelError(f"rule for context {self.context!r} names graph {g!r} twice: name each graph once")
+                seen.add(g)
+            slots.append(names)
+        object.__setattr__(self, "slots", tuple(slots))
 
     @property
     def graphs(self) -> tuple[str, ...]:
         return tuple(g for slot in self.slots for g in slot)
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class RuleTable:
     """Selection rules, action context -> perception graphs. Data a scenario can replace."""
 
     rules: tuple[Rule, ...]
 
+    def __post_init__(self) -> None:
+        rules = check_items("rule table rules", self.rules, Rule, example="(Rule('grasp', (('force',),)),) or RuleTable.from_mapping({...})")
+        contexts: set[str] = set()
+        for rule in rules:
+            if rule.context in contexts:
+                raise ModelError(f"rule table has two rules for context {rule.context!r}: merge them into one")
+            contexts.add(rule.context)
+        object.__setattr__(self, "rules", rules)
+
     @classmethod
-    def from_mapping(cls, mapping: dict[str, object]) -> "RuleTable":
+    def from_mapping(cls, mapping: Mapping[str, object]) -> "RuleTable":
         """``{"grasp": "combined", "move_base": ["tactile"], "release": [("combined", "force")]}``.
 
         A string is one graph; a list holds several slots (all wanted); a tuple or list
         inside the list is one slot, its first graph preferred and the next ones fallbacks.
         A bare tuple is refused as ambiguous.
         """
+        if not isinstance(mapping, Mapping):
+            raise ModelError(
+                f"rules {mapping!r} is not a mapping of action contexts to graphs: write rules({{'grasp': 'force_slip_detector'}})"
+            )
         rules = []
         for context, body in mapping.items():
+            check_name("rule context", context)
             if isinstance(body, str):
                 slots: tuple[tuple[str, ...], ...] = ((body,),)
             elif isinstance(body, tuple):
@@ -62,7 +104,7 @@ class RuleTable:
                     f"fallbacks, or {list(body)!r} for {len(body)} graphs all wanted at once"
                 )
             elif isinstance(body, list):
-                slots = tuple((s,) if isinstance(s, str) else tuple(s) for s in body)
+                slots = tuple((s,) if isinstance(s, str) else _slot(context, s) for s in body)
             else:
                 raise ModelError(
                     f"rule for context {context!r}: {body!r} is neither a graph name nor a list of them"
@@ -75,6 +117,15 @@ class RuleTable:
             if rule.context == context:
                 return rule.slots
         return ()
+
+
+def _slot(context: str, slot: object) -> tuple[str, ...]:
+    if not isinstance(slot, (tuple, list)):
+        raise ModelError(
+            f"rule for context {context!r}: {slot!r} is neither a graph name nor a tuple of alternatives: "
+            "write 'force' or ('combined', 'force')"
+        )
+    return tuple(slot)
 
 
 def with_load(load: dict[str, float], resource: str, amount: float) -> dict[str, float] | None:
@@ -144,6 +195,7 @@ class PlatformState:
         return out
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class SystemModel:
     """A validated design-time model. Construction rejects dangling references."""
@@ -156,6 +208,16 @@ class SystemModel:
     robot: str = "robot"
 
     def __post_init__(self) -> None:
+        check_name("robot", self.robot)
+        for fld, typ, example in (
+            ("platforms", Platform, "(Platform.make('pc', memory=512),)"),
+            ("devices", Device, "(Device('ft', 'force_sensor', 'pc'),)"),
+            ("graphs", PerceptionGraph, "(PerceptionGraph(...),)"),
+            ("specs", DeploymentSpec, "(DeploymentSpec('g', ...),)"),
+        ):
+            object.__setattr__(self, fld, check_items(f"system model {fld}", getattr(self, fld), typ, example=example))
+        if not isinstance(self.rules, RuleTable):
+            raise ModelError(f"system model rules = {self.rules!r} is not a RuleTable: write RuleTable.from_mapping({{...}})")
         _unique("platform", [p.name for p in self.platforms])
         _unique("device", [d.name for d in self.devices])
         _unique("perception graph", [g.name for g in self.graphs])
@@ -165,33 +227,31 @@ class SystemModel:
         for dev in self.devices:
             if dev.platform not in platforms:
                 raise ModelError(
-                    f"device {dev.name!r} is attached to unknown platform {dev.platform!r}: "
+                    f"device {dev.name!r} is attached to unknown platform {dev.platform!r}{suggest(dev.platform, platforms)}: "
                     f"declare it or use one of {sorted(platforms)}"
                 )
         for spec in self.specs:
             if spec.graph not in graphs:
                 raise ModelError(
-                    f"deployment specification for unknown perception graph {spec.graph!r}: "
+                    f"deployment specification for unknown perception graph {spec.graph!r}{suggest(spec.graph, graphs)}: "
                     f"define the graph first (known: {sorted(graphs)})"
                 )
             if spec.fixed_platform is not None and spec.fixed_platform not in platforms:
                 raise ModelError(
-                    f"deployment of {spec.graph!r} is fixed to unknown platform {spec.fixed_platform!r}: "
+                    f"deployment of {spec.graph!r} is fixed to unknown platform {spec.fixed_platform!r}{suggest(spec.fixed_platform, platforms)}: "
                     f"use one of {sorted(platforms)}"
                 )
             for req in spec.requirements:
-                if isinstance(req, Capacity) and not any(p.capacity(req.resource) is not None for p in self.platforms):
-                    raise ModelError(
-                        f"deployment of {spec.graph!r} needs {req.describe()} but no platform declares a "
-                        f"{req.resource!r} capacity: add it to the platforms"
-                    )
+                problem = _platform_fact_problem(req, self.platforms)
+                if problem is not None:
+                    raise ModelError(f"deployment of {spec.graph!r} needs {req.describe()} but {problem}")
         kinds = {d.kind for d in self.devices}
         if self.devices:  # a model with no devices at all is a pure platform/requirement study
             for g in self.graphs:
                 for kind in g.device_kinds:
                     if kind not in kinds:
                         raise ModelError(
-                            f"perception graph {g.name!r} reads device kind {kind!r}, which no device provides: "
+                            f"perception graph {g.name!r} reads device kind {kind!r}{suggest(kind, kinds)}, which no device provides: "
                             f"fix the kind or attach such a device (kinds: {', '.join(sorted(kinds))})"
                         )
             for spec in self.specs:
@@ -203,17 +263,20 @@ class SystemModel:
                     if wanted is not None and wanted not in kinds:
                         raise ModelError(
                             f"deployment of {spec.graph!r} needs {req.describe()} but no device is of kind "
-                            f"{wanted!r}: fix the kind (kinds: {', '.join(sorted(kinds))})"
+                            f"{wanted!r}{suggest(wanted, kinds)}: fix the kind (kinds: {', '.join(sorted(kinds))})"
                         )
+                    problem = _device_option_problem(req, self.devices)
+                    if problem is not None:
+                        raise ModelError(f"deployment of {spec.graph!r} needs {req.describe()} but {problem}")
         for rule in self.rules.rules:
             if rule.context not in ACTIONS:
                 raise ModelError(
-                    f"rule for unknown action context {rule.context!r}: use one of {', '.join(ACTIONS)}"
+                    f"rule for unknown action context {rule.context!r}{suggest(rule.context, ACTIONS)}: use one of {', '.join(ACTIONS)}"
                 )
             for g in rule.graphs:
                 if g not in graphs:
                     raise ModelError(
-                        f"rule for {rule.context!r} selects unknown perception graph {g!r}: "
+                        f"rule for {rule.context!r} selects unknown perception graph {g!r}{suggest(g, graphs)}: "
                         f"define it (known: {sorted(graphs)})"
                     )
 
@@ -250,6 +313,75 @@ class SystemModel:
             if p.name == name:
                 return i
         raise ModelError(f"unknown platform {name!r}")
+
+
+def _platform_fact_problem(req: Requirement, platforms: tuple[Platform, ...]) -> str | None:
+    """Why ``req`` names a platform fact (capacity, property, attribute, attribute value)
+    that no platform declares -- a requirement that can never hold, almost surely a typo."""
+    if isinstance(req, Capacity):
+        declared = sorted({r for p in platforms for r, _ in p.capacities})
+        if req.resource not in declared:
+            return (
+                f"no platform declares a {req.resource!r} capacity{suggest(req.resource, declared)}: "
+                f"add it to the platforms or fix the name (capacities: {', '.join(declared) or 'none'})"
+            )
+    elif isinstance(req, (Minimum, Maximum)):
+        declared = sorted({k for p in platforms for k, _ in p.properties})
+        if req.prop not in declared:
+            return (
+                f"no platform declares a property {req.prop!r}{suggest(req.prop, declared)}: "
+                f"add properties={{{req.prop!r}: ...}} to the platforms or fix the name (properties: {', '.join(declared) or 'none'})"
+            )
+    elif isinstance(req, Attribute) and req.name != PLATFORM_HAS:
+        return _attribute_problem(req.name, req.value, platforms)
+    elif isinstance(req, Selection):
+        for opt in req.options:
+            if opt.attribute is not None:
+                problem = _attribute_problem(opt.attribute, opt.value, platforms)
+                if problem is not None:
+                    return f"option {opt.describe()!r}: {problem}"
+    return None
+
+
+def _attribute_problem(name: str, value: object, platforms: tuple[Platform, ...]) -> str | None:
+    declared = sorted({k for p in platforms for k, _ in p.attributes})
+    if name not in declared:
+        return (
+            f"no platform declares an attribute {name!r}{suggest(name, declared)}: "
+            f"add attributes={{{name!r}: ...}} to the platforms or fix the name (attributes: {', '.join(declared) or 'none'})"
+        )
+    # attributes compare as text (deployment.validity); a value no platform has never holds
+    values = sorted({str(v) for p in platforms for k, v in p.attributes if k == name})
+    if str(value) not in values:
+        return (
+            f"no platform has {name} = {value!r}{suggest(str(value), values)}: fix the value "
+            f"(values of {name!r}: {', '.join(repr(v) for v in values)})"
+        )
+    return None
+
+
+def _device_option_problem(req: Requirement, devices: tuple[Device, ...]) -> str | None:
+    """Why a Selection option names a device kind or a kind@vendor no device is."""
+    if not isinstance(req, Selection):
+        return None
+    kinds = sorted({d.kind for d in devices})
+    for opt in req.options:
+        if opt.device_kind is None:
+            continue
+        if opt.device_kind not in kinds:
+            return (
+                f"option {opt.describe()!r}: no device is of kind {opt.device_kind!r}{suggest(opt.device_kind, kinds)}: "
+                f"fix the kind (kinds: {', '.join(kinds)})"
+            )
+        if opt.vendor is not None:
+            vendors = sorted({d.vendor for d in devices if d.kind == opt.device_kind})
+            if opt.vendor not in vendors:
+                return (
+                    f"option {opt.describe()!r}: no {opt.device_kind} device is made by {opt.vendor!r}"
+                    f"{suggest(opt.vendor, vendors)}, so it can never hold: fix the vendor "
+                    f"({opt.device_kind} vendors: {', '.join(vendors)})"
+                )
+    return None
 
 
 def _unique(what: str, names: list[str]) -> None:

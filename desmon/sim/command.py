@@ -37,6 +37,7 @@ def format_summary(r: RunResult, wall: float | None = None) -> str:
     lines = [f"{r.scenario.name} -- SimPy world, deployer {r.deployer}, seed {r.seed}, {r.horizon:g} s simulated"]
     if wall is not None:
         lines[0] += f" in {wall:.2f} s wall"
+    lines += _signal_status(r)
     lines += ["", "Deployment decisions:"]
     shown = 0
     rows: list[tuple[float, str]] = []
@@ -104,6 +105,26 @@ def format_summary(r: RunResult, wall: float | None = None) -> str:
     else:
         lines.append("Invariants: all held at every quiescent point (after each reaction with no further stimulus pending).")
     return "\n".join(lines) + "\n"
+
+
+def _signal_status(r: RunResult) -> list[str]:
+    """What the exposure figures mean in this run: signals off, or graphs without a signal model."""
+    m = r.metrics
+    if not m.get("signals", True):
+        why = " (the world is derived from the scripted timeline)" if r.scenario.world is None else ""
+        return [
+            f"Signals: off{why}: no detector is simulated; a running, warmed-up",
+            "  deployment counts as monitoring, and slips are injected but not detected.",
+        ]
+    missing = m.get("no_signal_model") or {}
+    if not missing:
+        return []
+    graphs = "; ".join(f"{g} (reads {', '.join(kinds)})" for g, kinds in missing.items())
+    return [
+        f"NO SIGNAL MODEL: {graphs}",
+        "  these run and use memory but can never alarm, so they never count as monitoring (their time",
+        "  is unmonitored exposure): map the kinds in World(signal_kinds=...) or set World(signals=False).",
+    ]
 
 
 def summary_json(r: RunResult, wall: float | None = None) -> dict[str, Any]:

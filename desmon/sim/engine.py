@@ -425,6 +425,13 @@ class SimWorld:
 
     def _activate(self, inst: Instance, now: float) -> None:
         inst.fed = now
+        if inst.adapter is not None and inst.adapter.det is None:
+            # signals on, but what the graph reads has no signal model (World.no_signal_model):
+            # it runs and uses memory, yet can never alarm, so it never becomes valid and
+            # never counts as monitoring (the run report lists it)
+            inst.valid_from = math.inf
+            inst.gen += 1
+            return
         warm = inst.adapter.warmup if inst.adapter is not None else 0.0
         inst.valid_from = now + warm
         inst.gen += 1
@@ -699,8 +706,11 @@ class SimWorld:
             "memory_peak_mb": {p: round(v, 3) for p, v in self.memory.peak.items()},
             "overcommit_s": {p: round(v, 6) for p, v in sorted(self.memory.over.items()) if v > 0},
             "alarms": len(self.alarms),
+            "signals": self.signals_on,
         }
         if self.signals_on:
+            # graphs that cannot alarm: never counted as monitoring (see _activate)
+            m["no_signal_model"] = {g: list(kinds) for g, kinds in self.world.no_signal_model(self.model.graphs).items()}
             m.update(slip_metrics(self.slips, self.alarms))
             m["samples"] = dict(self.bank.samples) if self.bank is not None else {}
         else:

@@ -4,7 +4,11 @@
   for which the selector wants detectors, and at least one of the selector's slots has
   no member that is running on an up platform with its inputs and warmed up. The
   slots are kept apart: a covered slot (say the force detector in ``grasp``) does not
-  hide an uncovered one (the tactile detector the same rule also wants).
+  hide an uncovered one (the tactile detector the same rule also wants). With signals
+  on, an instance of a graph that reads a device kind without a signal model
+  (``World.no_signal_model``, the ``no_signal_model`` metric) is never valid: it runs and
+  uses memory but cannot alarm, so it never counts as monitoring. With signals off no
+  detector is simulated and a running, warmed-up deployment counts.
   :class:`Exposure` also reports each interval it counts (for the trace's
   ``exposure`` start / end records).
 * **Blind time per switch**: for every change of the true context that changes what

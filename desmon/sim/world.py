@@ -16,13 +16,24 @@ from __future__ import annotations
 import math
 import random
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
+from typing import Iterable, Mapping, Sequence
 
 from desmon.detectors.signals import Segment  # the one ground-truth segment type (re-exported here)
 from desmon.errors import ScenarioError
 from desmon.model.actions import ACTIONS, GRASP, IDLE, MOVE_BASE, RELEASE
+from desmon.model.checks import (
+    check_flag,
+    check_items,
+    check_name,
+    check_number,
+    check_pairs,
+    check_text,
+    strict_init,
+    suggest,
+)
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformUp
-from desmon.model.scenario import Scenario, TimedEvent
+from desmon.model.graph import PerceptionGraph
+from desmon.model.scenario import Scenario, TimedEvent, event_problem
 
 __all__ = [
     "Step",
@@ -32,19 +43,27 @@ __all__ = [
     "LoadWalk",
     "World",
     "Segment",
+    "SIGNAL_STREAMS",
+    "SIGNAL_KINDS",
     "world_from_timeline",
     "world_of",
     "expand_task",
     "draw_slips",
 ]
 
+#: The signal streams desmon models (numpy signal models in :mod:`desmon.detectors.signals`).
+SIGNAL_STREAMS = ("wrench", "tactile")
+#: The default device kind -> signal stream mapping of ``World.signal_kinds``. A kind that
+#: is not mapped has no signal model: with signals on, a graph reading it runs but can
+#: never alarm, so it never counts as monitoring (the run report lists it).
+SIGNAL_KINDS: tuple[tuple[str, str], ...] = (("force_sensor", "wrench"), ("tactile_pad", "tactile"), ("tactile_array", "tactile"))
 
-def _pos(what: str, v: float, *, zero: bool = True) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0 or (not zero and v == 0):
-        raise ScenarioError(f"world: {what} = {v!r} must be a {'non-negative' if zero else 'positive'} finite number of seconds")
-    return float(v)
+
+def _seconds(what: str, v: object, *, zero: bool = True) -> float:
+    return float(check_number(f"world: {what}", v, error=ScenarioError, positive=not zero, unit=" of seconds"))
 
 
+@strict_init(ScenarioError)
 @dataclass(frozen=True, slots=True)
 class Step:
     """One action of the task: the robot is in context ``action`` for ``duration`` seconds."""
@@ -53,11 +72,14 @@ class Step:
     duration: float
 
     def __post_init__(self) -> None:
-        if self.action not in ACTIONS:
-            raise ScenarioError(f"world: task action {self.action!r} unknown: use one of {', '.join(ACTIONS)}")
-        _pos(f"duration of {self.action}", self.duration, zero=False)
+        if not isinstance(self.action, str) or self.action not in ACTIONS:
+            raise ScenarioError(
+                f"world: task action {self.action!r} unknown{suggest(self.action, ACTIONS)}: use one of {', '.join(ACTIONS)}"
+            )
+        _seconds(f"duration of {self.action}", self.duration, zero=False)
 
 
+@strict_init(ScenarioError)
 @dataclass(frozen=True, slots=True)
 class Slip:
     """A scripted slip: object motion starts at ``time``; ``direction`` up/down; ``kind`` pulled/gravitational."""
@@ -67,11 +89,15 @@ class Slip:
     kind: str = "pulled"
 
     def __post_init__(self) -> None:
-        _pos("slip time", self.time)
+        _seconds("slip time", self.time)
         if self.direction not in ("up", "down") or self.kind not in ("pulled", "gravitational"):
-            raise ScenarioError(f"world: slip at {self.time}: direction must be up/down and kind pulled/gravitational")
+            raise ScenarioError(
+                f"world: slip at {self.time}: direction {self.direction!r} / kind {self.kind!r}: "
+                "direction must be 'up' or 'down' and kind 'pulled' or 'gravitational'"
+            )
 
 
+@strict_init(ScenarioError)
 @dataclass(frozen=True, slots=True)
 class MTTF:
     """Stochastic breakdowns of ``component`` (a device or a platform): exponential
@@ -82,10 +108,12 @@ class MTTF:
     mttr: float
 
     def __post_init__(self) -> None:
-        _pos(f"mttf of {self.component}", self.mttf, zero=False)
-        _pos(f"mttr of {self.component}", self.mttr, zero=False)
+        check_name("world: MTTF component", self.component, error=ScenarioError)
+        _seconds(f"mttf of {self.component}", self.mttf, zero=False)
+        _seconds(f"mttr of {self.component}", self.mttr, zero=False)
 
 
+@strict_init(ScenarioError)
 @dataclass(frozen=True, slots=True)
 class StartFailure:
     """How ``start`` fails: with ``probability`` per attempt, and/or scripted: each
@@ -96,10 +124,25 @@ class StartFailure:
     script: tuple[tuple[str, str, int], ...] = ()
 
     def __post_init__(self) -> None:
-        if not 0.0 <= self.probability <= 1.0:
-            raise ScenarioError(f"world: start failure probability {self.probability!r} must be in [0, 1]")
+        check_number("world: start failure probability", self.probability, error=ScenarioError, high=1.0)
+        example = "script=(('force_slip_detector', 'arm_pc', 1),)"
+        entries = []
+        for entry in check_items("world: start failure script", self.script, (tuple, list), error=ScenarioError, example=example):
+            if len(entry) != 3:
+                raise ScenarioError(f"world: start failure script entry {entry!r} is not (graph, platform, n): write {example}")
+            graph, platform, n = entry
+            check_name("world: start failure script graph", graph, error=ScenarioError)
+            check_name("world: start failure script platform", platform, error=ScenarioError)
+            check_number(f"world: start failure script attempt n of {graph!r} on {platform!r}", n, error=ScenarioError, integer=True)
+            if n < 1:
+                raise ScenarioError(
+                    f"world: start failure script attempt n of {graph!r} on {platform!r} = {n!r}: attempts count from 1"
+                )
+            entries.append((graph, platform, int(n)))
+        object.__setattr__(self, "script", tuple(entries))
 
 
+@strict_init(ScenarioError)
 @dataclass(frozen=True, slots=True)
 class LoadWalk:
     """Background ``memory`` load of ``platform`` as a random walk: every ``interval`` s
@@ -115,14 +158,33 @@ class LoadWalk:
     resource: str = "memory"
 
     def __post_init__(self) -> None:
-        _pos(f"load walk interval of {self.platform}", self.interval, zero=False)
-        if self.sigma < 0 or self.low > self.high:
-            raise ScenarioError(f"world: load walk of {self.platform}: sigma must be >= 0 and low <= high")
+        check_name("world: load walk platform", self.platform, error=ScenarioError)
+        check_name(f"world: load walk of {self.platform!r} resource", self.resource, error=ScenarioError)
+        where = f"world: load walk of {self.platform}"
+        _seconds(f"load walk interval of {self.platform}", self.interval, zero=False)
+        check_number(f"{where}: sigma", self.sigma, error=ScenarioError)
+        check_number(f"{where}: low", self.low, error=ScenarioError)
+        check_number(f"{where}: high", self.high, error=ScenarioError, infinite=True)
+        check_number(f"{where}: drift", self.drift, error=ScenarioError, low=None)
+        check_number(f"{where}: start", self.start, error=ScenarioError)
+        if self.low > self.high:
+            raise ScenarioError(f"{where}: low {self.low:g} > high {self.high:g}: give low <= high")
+        if not self.low <= self.start <= self.high:
+            raise ScenarioError(
+                f"{where}: start {self.start:g} is outside [low, high] = [{self.low:g}, {self.high:g}]: "
+                "start inside the range (the walk would jump to it at the first step)"
+            )
 
 
+@strict_init(ScenarioError)
 @dataclass(frozen=True, slots=True)
 class World:
-    """The SimPy world's configuration (see the module docstring)."""
+    """The SimPy world's configuration (see the module docstring).
+
+    Every field is checked when the world is built (types, ranges, order; scripted
+    faults, loads and slips strictly before the horizon) and every name in it against
+    the model when the scenario is built (:meth:`check_against`).
+    """
 
     task: tuple[Step, ...]
     horizon: float
@@ -152,30 +214,102 @@ class World:
     #: [-2, +2] s); detector output is chunking-invariant, so this only decides how late
     #: a false alarm's record is written to the trace (``<= block`` disables it)
     quiet_block: float = 30.0
-    #: device kind -> signal stream ('wrench' or 'tactile'); unknown kinds are guessed from the name
-    signal_kinds: tuple[tuple[str, str], ...] = (("force_sensor", "wrench"), ("tactile_pad", "tactile"), ("tactile_array", "tactile"))
-    #: how the robot holds the object when it is handed over (slips in release are pulls)
+    #: device kind -> signal stream ('wrench' or 'tactile'), a tuple of pairs or a dict;
+    #: it replaces :data:`SIGNAL_KINDS`. A kind not listed has no signal model (nothing is
+    #: guessed from its name): with signals on, a graph reading it can never alarm and
+    #: never counts as monitoring.
+    signal_kinds: tuple[tuple[str, str], ...] = SIGNAL_KINDS
     description: str = ""
 
     def __post_init__(self) -> None:
-        if not self.task:
+        err = ScenarioError
+        task = check_items("world: task", self.task, Step, error=err, example="task=(Step('grasp', 2.0), Step('hold', 3.0))")
+        if not task:
             raise ScenarioError("world: the task is empty; give at least one Step(action, duration)")
-        _pos("horizon", self.horizon, zero=False)
-        _pos("start latency", self.start_latency)
-        for p, v in self.platform_latency:
-            _pos(f"start latency of {p}", v)
-        _pos("recognition delay", self.recognition_delay)
-        _pos("heartbeat timeout", self.heartbeat_timeout)
-        _pos("block", self.block, zero=False)
-        _pos("quiet block", self.quiet_block, zero=False)
-        if self.slip_rate < 0:
-            raise ScenarioError(f"world: slip_rate {self.slip_rate!r} must be >= 0")
-        for te in self.faults:
+        object.__setattr__(self, "task", task)
+        _seconds("horizon", self.horizon, zero=False)
+        check_flag("world: repeat", self.repeat, error=err)
+        check_flag("world: signals", self.signals, error=err)
+        check_text("world: description", self.description, error=err)
+        _seconds("start latency", self.start_latency)
+        latencies = check_pairs("world: platform_latency", self.platform_latency, error=err, example="{'torso_pc': 0.4}")
+        for p, v in latencies:
+            _seconds(f"start latency of {p}", v)
+        object.__setattr__(self, "platform_latency", latencies)
+        _seconds("recognition delay", self.recognition_delay)
+        _seconds("heartbeat timeout", self.heartbeat_timeout)
+        _seconds("block", self.block, zero=False)
+        _seconds("quiet block", self.quiet_block, zero=False)
+        check_number("world: slip_rate", self.slip_rate, error=err, unit=" of slips per second of object-in-hand time")
+        if not isinstance(self.start_failure, StartFailure):
+            raise ScenarioError(f"world: start_failure = {self.start_failure!r} is not a StartFailure: write StartFailure(probability=0.02)")
+        slips = check_items("world: slips", self.slips, Slip, error=err, example="slips=(Slip(10.0, 'down', 'pulled'),)")
+        for slip in slips:
+            self._before_horizon(f"slip at t={slip.time:g}", slip.time)
+        object.__setattr__(self, "slips", slips)
+        example = "faults=(TimedEvent(20.0, DeviceFail('lwr_wrench')),)"
+        faults = check_items("world: faults", self.faults, TimedEvent, error=err, example=example)
+        for te in faults:
             if not isinstance(te.event, (DeviceFail, DeviceRepair, PlatformDown, PlatformUp)):
-                raise ScenarioError(f"world: fault {te.event} is not a device or platform event")
-        for te in self.loads:
+                raise ScenarioError(
+                    f"world: fault {te.event} is not a device or platform event: faults are DeviceFail, DeviceRepair, "
+                    "PlatformDown, PlatformUp (loads go in loads=, actions in task=)"
+                )
+        self._timed("faults", faults)
+        object.__setattr__(self, "faults", faults)
+        loads = check_items("world: loads", self.loads, TimedEvent, error=err, example="loads=(TimedEvent(10.0, LoadChange('arm_pc', 450)),)")
+        for te in loads:
             if not isinstance(te.event, LoadChange):
-                raise ScenarioError(f"world: load event {te.event} is not a LoadChange")
+                raise ScenarioError(f"world: load event {te.event} is not a LoadChange: put it in faults= or the task")
+        self._timed("loads", loads)
+        object.__setattr__(self, "loads", loads)
+        mttfs = check_items("world: stochastic_faults", self.stochastic_faults, MTTF, error=err, example="(MTTF('lwr_wrench', mttf=3600, mttr=120),)")
+        seen: set[str] = set()
+        for m in mttfs:
+            if m.component in seen:
+                raise ScenarioError(f"world: two MTTF entries for {m.component!r}: give one per component")
+            seen.add(m.component)
+        object.__setattr__(self, "stochastic_faults", mttfs)
+        walks = check_items("world: load_walks", self.load_walks, LoadWalk, error=err, example="(LoadWalk('arm_pc', start=300, sigma=15, interval=30),)")
+        walked: set[tuple[str, str]] = set()
+        for w in walks:
+            if (w.platform, w.resource) in walked:
+                raise ScenarioError(f"world: two load walks of {w.platform!r} {w.resource}: give one per platform and resource")
+            walked.add((w.platform, w.resource))
+        object.__setattr__(self, "load_walks", walks)
+        kinds = check_pairs("world: signal_kinds", self.signal_kinds, error=err, example="{'force_sensor': 'wrench'}")
+        for kind, stream in kinds:
+            if stream not in SIGNAL_STREAMS:
+                raise ScenarioError(
+                    f"world: signal_kinds maps {kind!r} to {stream!r}{suggest(stream, SIGNAL_STREAMS)}, which is no signal "
+                    f"stream: use one of {', '.join(SIGNAL_STREAMS)}"
+                )
+        object.__setattr__(self, "signal_kinds", kinds)
+        if not self.repeat:
+            length = sum(s.duration for s in task)
+            if length > self.horizon + 1e-9:
+                raise ScenarioError(
+                    f"world: the task lasts {length:g} s but the horizon is {self.horizon:g} s, so its steps after "
+                    f"{self.horizon:g} s would never happen: raise the horizon to {length:g}, shorten the task, "
+                    "or use --until to stop a run early"
+                )
+
+    def _before_horizon(self, what: str, t: float) -> None:
+        if t >= self.horizon:
+            raise ScenarioError(
+                f"world: {what} is at or after the horizon {self.horizon:g} s, so it would never happen: "
+                "move it before the horizon or raise the horizon"
+            )
+
+    def _timed(self, field_: str, events: tuple[TimedEvent, ...]) -> None:
+        last = 0.0
+        for te in events:
+            self._before_horizon(f"{field_[:-1]} '{te.event}' at t={te.time:g}", te.time)
+            if te.time < last:
+                raise ScenarioError(
+                    f"world: {field_[:-1]} '{te.event}' at t={te.time:g} comes before t={last:g}: sort the {field_} by time"
+                )
+            last = te.time
 
     def latency(self, platform: str) -> float:
         for p, v in self.platform_latency:
@@ -184,38 +318,66 @@ class World:
         return self.start_latency
 
     def signal_of(self, kind: str) -> str | None:
+        """The signal stream of device ``kind`` (``signal_kinds``), or None: no signal model."""
         for k, s in self.signal_kinds:
             if k == kind:
                 return s
-        low = kind.lower()
-        if "force" in low or "wrench" in low:
-            return "wrench"
-        if "tactile" in low:
-            return "tactile"
         return None
 
+    def no_signal_model(self, graphs: Iterable[PerceptionGraph]) -> dict[str, tuple[str, ...]]:
+        """Graph -> the device kinds it reads that have no signal model (graphs with none left out)."""
+        out: dict[str, tuple[str, ...]] = {}
+        for g in graphs:
+            missing = tuple(k for k in g.device_kinds if self.signal_of(k) is None)
+            if missing:
+                out[g.name] = missing
+        return out
+
     def check_against(self, scenario: Scenario) -> None:
-        """Names in the world must exist in the model."""
+        """Every name in the world must exist in the scenario's model."""
         model = scenario.model
-        devices = {d.name for d in model.devices}
-        platforms = {p.name for p in model.platforms}
+        where = f"world of {scenario.name!r}"
+        devices = [d.name for d in model.devices]
+        platforms = [p.name for p in model.platforms]
+        graphs = [g.name for g in model.graphs]
         for te in self.faults + self.loads:
-            ev = te.event
-            name = getattr(ev, "device", None) or getattr(ev, "platform", None)
-            if name not in devices | platforms:
-                raise ScenarioError(f"world of {scenario.name!r}: {ev} names unknown component {name!r}")
+            problem = event_problem(te.event, model)
+            if problem is not None:
+                raise ScenarioError(f"{where}: at t={te.time:g}: {problem}")
         for m in self.stochastic_faults:
-            if m.component not in devices | platforms:
+            if m.component not in devices and m.component not in platforms:
                 raise ScenarioError(
-                    f"world of {scenario.name!r}: MTTF for unknown component {m.component!r} "
+                    f"{where}: MTTF for unknown component {m.component!r}{suggest(m.component, devices + platforms)} "
                     f"(devices {sorted(devices)}, platforms {sorted(platforms)})"
                 )
+            if m.component in devices and m.component in platforms:
+                raise ScenarioError(
+                    f"{where}: MTTF for {m.component!r} is ambiguous: it names both a device and a platform; rename one of them"
+                )
         for w in self.load_walks:
-            if w.platform not in platforms:
-                raise ScenarioError(f"world of {scenario.name!r}: load walk on unknown platform {w.platform!r}")
+            problem = event_problem(LoadChange(w.platform, w.low, w.resource), model)
+            if problem is not None:
+                raise ScenarioError(f"{where}: load walk: {problem}")
         for p, _v in self.platform_latency:
             if p not in platforms:
-                raise ScenarioError(f"world of {scenario.name!r}: start latency for unknown platform {p!r}")
+                raise ScenarioError(f"{where}: start latency for unknown platform {p!r}{suggest(p, platforms)} (platforms: {', '.join(platforms)})")
+        for graph, platform, n in self.start_failure.script:
+            if graph not in graphs:
+                raise ScenarioError(
+                    f"{where}: start failure script ({graph!r}, {platform!r}, {n}) names unknown perception graph "
+                    f"{graph!r}{suggest(graph, graphs)} (graphs: {', '.join(graphs)})"
+                )
+            if platform not in platforms:
+                raise ScenarioError(
+                    f"{where}: start failure script ({graph!r}, {platform!r}, {n}) names unknown platform "
+                    f"{platform!r}{suggest(platform, platforms)} (platforms: {', '.join(platforms)})"
+                )
+        kinds = sorted({d.kind for d in model.devices})
+        for kind, stream in self.signal_kinds:
+            if kind not in kinds and (kind, stream) not in SIGNAL_KINDS:
+                raise ScenarioError(
+                    f"{where}: signal_kinds maps {kind!r}, which no device is{suggest(kind, kinds)}: fix the kind (kinds: {', '.join(kinds)})"
+                )
 
 
 def expand_task(world: World, horizon: float) -> tuple[Segment, ...]:

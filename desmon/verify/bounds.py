@@ -12,6 +12,7 @@ from typing import Mapping
 
 from desmon.errors import CheckerError
 from desmon.model.actions import ACTIONS
+from desmon.model.checks import check_flag, check_items, check_name, check_names, check_number, strict_init, suggest
 from desmon.model.events import ActionChange, LoadChange
 from desmon.model.scenario import Scenario
 
@@ -24,6 +25,8 @@ INSTANT_INVARIANTS = ("single-instance", "no-overcommit", "fixed")
 
 def levels(low: float, high: float, step: float) -> tuple[float, ...]:
     """``levels(0, 300, 100) == (0, 100, 200, 300)``: load levels for :class:`Bounds`."""
+    for what, v in (("low", low), ("high", high), ("step", step)):
+        check_number(f"levels({low!r}, {high!r}, {step!r}) {what}", v, error=CheckerError)
     if step <= 0 or high < low:
         raise CheckerError(f"load levels {low}..{high} step {step}: need low <= high and a positive step")
     out, x = [], low
@@ -33,6 +36,7 @@ def levels(low: float, high: float, step: float) -> tuple[float, ...]:
     return tuple(out)
 
 
+@strict_init(CheckerError)
 @dataclass(frozen=True)
 class Bounds:
     """What the environment may do, per transition and in total.
@@ -72,6 +76,59 @@ class Bounds:
     interchangeable: tuple[tuple[str, ...], ...] = ()
     instantaneous: tuple[str, ...] = INSTANT_INVARIANTS
 
+    def __post_init__(self) -> None:
+        """Types and ranges; names are checked against a scenario by :meth:`validate`."""
+        err = CheckerError
+        w = "checker bounds"
+
+        def names(field_: str, each: str, example: str) -> None:
+            object.__setattr__(self, field_, check_names(f"{w} {field_}", getattr(self, field_), each=f"{w} {each}", error=err, example=example))
+
+        names("actions", "action", "actions=('grasp', 'hold')")
+        names("devices", "device", "devices=('lwr_wrench',)")
+        names("platforms", "platform", "platforms=('arm_pc',)")
+        names("instantaneous", "invariant", "instantaneous=('single-instance', 'no-overcommit')")
+        if self.task is not None:
+            if not isinstance(self.task, Mapping):
+                raise CheckerError(f"{w} task = {self.task!r} is not a mapping: write task={{'idle': ('grasp',), 'grasp': ('idle',)}}")
+            task = {}
+            for a, nxt in self.task.items():
+                check_name(f"{w} task action", a, error=err)
+                task[a] = check_names(
+                    f"{w} task successors of {a!r}", nxt, each=f"{w} task action", error=err, example=f"{{{a!r}: ('hold',)}}"
+                )
+            object.__setattr__(self, "task", task)
+        if self.initial_action is not None:
+            check_name(f"{w} initial_action", self.initial_action, error=err)
+        check_flag(f"{w} repair", self.repair, error=err)
+        check_name(f"{w} load_resource", self.load_resource, error=err)
+        if not isinstance(self.loads, Mapping):
+            raise CheckerError(f"{w} loads = {self.loads!r} is not a mapping: write loads={{'arm_pc': levels(0, 300, 100)}}")
+        loads = {}
+        for p, lv in self.loads.items():
+            check_name(f"{w} loads platform", p, error=err)
+            example = f"loads={{{p!r}: levels(0, 300, 100)}}"
+            if isinstance(lv, (str, bytes)) or not isinstance(lv, (tuple, list)):
+                raise CheckerError(f"{w}: load levels of {p!r} must be a sequence of non-negative numbers, got {lv!r}; write e.g. levels(0, 300, 100)")
+            for x in lv:
+                check_number(f"{w}: load level of {p!r}", x, error=err, unit=f" (write e.g. {example})")
+            if not lv:
+                raise CheckerError(f"{w}: platform {p!r} has no load levels: write e.g. {example}")
+            if len(set(lv)) != len(lv):
+                raise CheckerError(f"{w}: load levels of {p!r} repeat a level ({list(lv)}); list each level once, e.g. levels(0, 300, 100)")
+            loads[p] = tuple(lv)
+        object.__setattr__(self, "loads", loads)
+        check_number(f"{w} start_failures", self.start_failures, error=err, integer=True)
+        if self.max_failures is not None:
+            check_number(f"{w} max_failures", self.max_failures, error=err, integer=True)
+        groups = check_items(
+            f"{w} interchangeable", self.interchangeable, (tuple, list), error=err, example="interchangeable=(('e1', 'e2', 'e3'),)"
+        )
+        object.__setattr__(
+            self, "interchangeable",
+            tuple(check_names(f"{w} interchangeable group", g, each=f"{w} interchangeable platform", error=err, example="('e1', 'e2')") for g in groups),
+        )
+
     def action_moves(self, current: str | None) -> tuple[str, ...]:
         if self.task is not None:
             return tuple(self.task.get(current or "", ())) if current is not None else tuple(self.task)
@@ -86,6 +143,7 @@ class Bounds:
         return None
 
     def validate(self, scenario: Scenario) -> None:
+        """Every name must exist in the scenario's model (and the task must be closed)."""
         m = scenario.model
         where = f"scenario {scenario.name!r} checker bounds"
         acts = set(self.actions) | ({self.initial_action} if self.initial_action else set())
@@ -93,41 +151,52 @@ class Bounds:
             for a, nxt in self.task.items():
                 acts.add(a)
                 acts.update(nxt)
-        for a in acts:
+        for a in sorted(acts):
             if a not in ACTIONS:
-                raise CheckerError(f"{where}: unknown action {a!r}; use one of {', '.join(ACTIONS)}")
-        devices = {d.name for d in m.devices}
+                raise CheckerError(f"{where}: unknown action {a!r}{suggest(a, ACTIONS)}; use one of {', '.join(ACTIONS)}")
+        if self.task is not None:
+            for a, nxt in self.task.items():
+                for b in nxt:
+                    if b not in self.task:
+                        raise CheckerError(
+                            f"{where}: task moves from {a!r} to {b!r}, which has no entry, so the robot would stop there: "
+                            f"add {b!r}: (...) to the task ({b!r}: () to end it there)"
+                        )
+            if self.initial_action is not None and self.initial_action not in self.task:
+                raise CheckerError(
+                    f"{where}: initial_action {self.initial_action!r} has no entry in the task: add it or start from one of "
+                    f"{', '.join(self.task)}"
+                )
+        devices = [d.name for d in m.devices]
         for d in self.devices:
             if d not in devices:
-                raise CheckerError(f"{where}: unknown device {d!r} (known: {', '.join(sorted(devices))})")
+                raise CheckerError(f"{where}: unknown device {d!r}{suggest(d, devices)} (known: {', '.join(sorted(devices))})")
         platforms = [p.name for p in m.platforms]
         for p in (*self.platforms, *self.loads, *(q for grp in self.interchangeable for q in grp)):
             if p not in platforms:
-                raise CheckerError(f"{where}: unknown platform {p!r} (known: {', '.join(platforms)})")
+                raise CheckerError(f"{where}: unknown platform {p!r}{suggest(p, platforms)} (known: {', '.join(platforms)})")
+        for p in self.loads:
+            caps = [r for r, _ in m.platform(p).capacities]
+            if self.load_resource not in caps:
+                raise CheckerError(
+                    f"{where}: loads move {self.load_resource!r} on {p!r}, which has no such capacity"
+                    f"{suggest(self.load_resource, caps)}: fix load_resource or the platform (capacities of {p!r}: {', '.join(caps) or 'none'})"
+                )
         initial_load = {ev.platform: ev.amount for ev in scenario.initial if isinstance(ev, LoadChange) and ev.resource == self.load_resource}
         for p, lv in self.loads.items():
-            if isinstance(lv, (str, bytes)) or not isinstance(lv, (tuple, list)) or not all(
-                isinstance(x, (int, float)) and not isinstance(x, bool) and x >= 0 for x in lv
-            ):
-                raise CheckerError(
-                    f"{where}: load levels of {p!r} must be a sequence of non-negative numbers, got {lv!r}; "
-                    "write e.g. levels(0, 300, 100)"
-                )
-            if not lv:
-                raise CheckerError(f"{where}: platform {p!r} has no load levels")
-            if len(set(lv)) != len(lv):
-                raise CheckerError(f"{where}: load levels of {p!r} repeat a level ({list(lv)}); list each level once, e.g. levels(0, 300, 100)")
             if initial_load.get(p, 0) not in lv:
                 raise CheckerError(
                     f"{where}: initial {self.load_resource} load {initial_load.get(p, 0):g} of {p!r} is not one of its levels {list(lv)}"
                 )
-        if self.start_failures < 0 or (self.max_failures is not None and self.max_failures < 0):
-            raise CheckerError(f"{where}: start_failures and max_failures must be >= 0")
         from desmon.deployment.invariants import INVARIANTS
 
         for n in self.instantaneous:
             if n not in INVARIANTS:
-                raise CheckerError(f"{where}: unknown invariant {n!r} in instantaneous")
+                raise CheckerError(f"{where}: unknown invariant {n!r}{suggest(n, INVARIANTS)} in instantaneous (invariants: {', '.join(INVARIANTS)})")
+
+    def check_against(self, scenario: Scenario) -> None:
+        """What :class:`~desmon.model.scenario.Scenario` calls when it is built: :meth:`validate`."""
+        self.validate(scenario)
 
 
 def bounds_of(scenario: Scenario) -> Bounds:
@@ -140,11 +209,8 @@ def bounds_of(scenario: Scenario) -> Bounds:
     if isinstance(b, Mapping):
         try:
             b = Bounds(**dict(b))
-        except TypeError as exc:
-            import dataclasses
-
-            fields = ", ".join(f.name for f in dataclasses.fields(Bounds))
-            raise CheckerError(f"scenario {scenario.name!r}: bad checker bounds: {exc}; the fields are {fields}") from None
+        except CheckerError as exc:
+            raise CheckerError(f"scenario {scenario.name!r}: bad checker bounds: {exc}") from None
     if not isinstance(b, Bounds):
         raise CheckerError(f"scenario {scenario.name!r}: checker must be a desmon.verify.Bounds, got {type(b).__name__}")
     b.validate(scenario)

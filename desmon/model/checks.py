@@ -1,0 +1,313 @@
+"""Input checks shared by every layer that takes user input: one rule per fact.
+
+Each check raises the :class:`~desmon.errors.DesmonError` subclass its caller names
+(``ModelError`` for the model and DSL, ``ScenarioError`` for the SimPy world,
+``CheckerError`` for the checker bounds) with a one-line message that names the
+offender and says the fix. :func:`strict_call` and :func:`strict_init` turn a call
+with an unknown keyword, a missing or an extra argument into such a message (with a
+"did you mean" for a misspelt keyword) instead of Python's bare ``TypeError``.
+"""
+
+from __future__ import annotations
+
+import difflib
+import functools
+import inspect
+import math
+from typing import Any, Callable, Iterable, Mapping, Sequence, TypeVar
+
+from desmon.errors import DesmonError, ModelError
+
+__all__ = [
+    "suggest",
+    "check_name",
+    "check_number",
+    "check_amount",
+    "is_numeric_text",
+    "check_flag",
+    "check_text",
+    "check_value",
+    "check_items",
+    "check_names",
+    "check_pairs",
+    "check_keywords",
+    "call_problem",
+    "strict_call",
+    "strict_init",
+]
+
+T = TypeVar("T")
+F = TypeVar("F", bound=Callable[..., Any])
+C = TypeVar("C", bound=type)
+Error = type[DesmonError]
+
+
+def suggest(name: object, choices: Iterable[str]) -> str:
+    """`` (did you mean 'x'?)`` for the closest of ``choices`` to ``name``, else ``""``."""
+    if not isinstance(name, str):
+        return ""
+    close = difflib.get_close_matches(name, list(choices), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def check_name(what: str, name: object, *, error: Error = ModelError) -> str:
+    """Return ``name`` if it is a usable identifier-like string, else raise ``error``."""
+    if isinstance(name, (int, float)) and not isinstance(name, bool):
+        raise error(f"{what} {name!r} is a number, not a name: write it in quotes, {str(name)!r}")
+    if not isinstance(name, str) or not name.strip():
+        raise error(f"{what} {name!r} is not a name: give a non-empty string")
+    if any(ch in name for ch in "/\n\t"):
+        raise error(f"{what} {name!r} contains '/', a newline or a tab: use letters, digits, '_' or '-'")
+    return name
+
+
+def _wanted(*, low: float | None, high: float | None, positive: bool, integer: bool, unit: str) -> str:
+    noun = "whole number" if integer else "number"
+    if low is not None and high is not None:
+        return f"a {noun} in [{low:g}, {high:g}]{unit}"
+    if positive:
+        return f"a positive {noun}{unit}"
+    if low == 0:
+        return f"a non-negative {noun}{unit}"
+    if low is not None:
+        return f"a {noun} >= {low:g}{unit}"
+    return f"a finite {noun}{unit}"
+
+
+def check_number(
+    what: str,
+    value: object,
+    *,
+    error: Error = ModelError,
+    low: float | None = 0.0,
+    high: float | None = None,
+    positive: bool = False,
+    integer: bool = False,
+    infinite: bool = False,
+    unit: str = "",
+) -> float:
+    """Return ``value`` if it is a real number (not a bool, not a string) in range.
+
+    By default: finite and >= 0. ``low=None`` allows negatives, ``positive`` refuses 0,
+    ``high`` bounds it above, ``integer`` wants a whole number, ``infinite`` lets
+    ``+inf`` through (an unbounded limit). NaN is always refused.
+    """
+    def refuse(problem: str) -> DesmonError:
+        return error(f"{what} = {problem}: give {_wanted(low=low, high=high, positive=positive, integer=integer, unit=unit)}")
+
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if isinstance(value, str) and is_numeric_text(value):
+            raise error(f"{what} = {value!r} is a string, not a number: write {value.strip()} without quotes")
+        raise refuse(f"{value!r} is not a number")
+    if math.isnan(value):
+        raise refuse("nan is not a number")
+    if math.isinf(value) and not (infinite and value > 0):
+        raise refuse(f"{value!r} is not finite")
+    if positive and value <= 0:
+        raise refuse(f"{value!r} is not positive")
+    if low is not None and value < low:
+        raise refuse(f"{value!r} is {'negative' if low == 0 else f'below {low:g}'}")
+    if high is not None and value > high:
+        raise refuse(f"{value!r} is above {high:g}")
+    if integer and int(value) != value:
+        raise error(f"{what} = {value!r} is not a whole number: give a count such as 1, 2, 6")
+    return value
+
+
+def is_numeric_text(text: str) -> bool:
+    """True if ``text`` reads as a number (``"512"``, ``" 2.5"``): a number written in quotes."""
+    try:
+        return math.isfinite(float(text))
+    except ValueError:
+        return False
+
+
+def check_amount(what: str, value: object, *, integer: bool = False, error: Error = ModelError) -> float:
+    """Return ``value`` as a finite non-negative number, else raise ``error`` naming ``what``."""
+    return check_number(what, value, error=error, integer=integer)
+
+
+def check_flag(what: str, value: object, *, error: Error = ModelError) -> bool:
+    """Return ``value`` if it is ``True`` or ``False`` (not a string such as ``"no"``)."""
+    if not isinstance(value, bool):
+        raise error(f"{what} = {value!r} is not True or False: write {what.split()[-1]}=True or {what.split()[-1]}=False")
+    return value
+
+
+def check_text(what: str, value: object, *, error: Error = ModelError) -> str:
+    """Return ``value`` if it is a string (possibly empty): a description or a label."""
+    if not isinstance(value, str):
+        raise error(f"{what} = {value!r} is not a string: write it in quotes")
+    return value
+
+
+def check_value(what: str, value: object, *, error: Error = ModelError) -> str | float:
+    """Return ``value`` if it is a symbolic value: a non-empty string or a finite number.
+
+    Attributes compare as text (``str(value)``), so a bool, a list or NaN would never
+    match what a requirement means; they are refused.
+    """
+    if isinstance(value, bool):
+        raise error(f"{what} = {value!r} is a bool: write a word such as 'yes' / 'no' (attributes compare as text)")
+    if isinstance(value, str):
+        if not value.strip():
+            raise error(f"{what} = {value!r} is empty: give a value such as 'linux' or 4")
+        return value
+    if isinstance(value, (int, float)):
+        if not math.isfinite(value):
+            raise error(f"{what} = {value!r} is not finite: give a value such as 'linux' or 4")
+        return value
+    raise error(f"{what} = {value!r} is not a string or a number: give one value such as 'linux' or 4")
+
+
+def _sequence(what: str, value: object, error: Error, example: str) -> tuple[object, ...]:
+    if isinstance(value, (str, bytes)):
+        raise error(f"{what} = {value!r} is a single string, not a sequence (it would be read letter by letter): write ({value!r},)")
+    if isinstance(value, Mapping):
+        raise error(f"{what} is a mapping ({value!r}), not a sequence: write {example}")
+    if isinstance(value, (set, frozenset)):
+        raise error(f"{what} = {value!r} is a set (no order): write a tuple, e.g. {example}")
+    if not isinstance(value, (tuple, list)):
+        raise error(f"{what} = {value!r} is not a sequence: write {example} (a one-item tuple needs its trailing comma)")
+    return tuple(value)
+
+
+def check_items(what: str, value: object, item: type[T] | tuple[type, ...], *, error: Error = ModelError, example: str) -> tuple[T, ...]:
+    """``value`` as a tuple whose items are all ``item`` instances (a list is accepted).
+
+    A bare string, a mapping, a set, a single item without its trailing comma or any
+    other non-sequence is refused with ``example`` as the fix.
+    """
+    items = _sequence(what, value, error, example)
+    for x in items:
+        if not isinstance(x, item):
+            names = item.__name__ if isinstance(item, type) else " or ".join(t.__name__ for t in item)
+            raise error(f"{what}: {x!r} is not a {names}: write {example}")
+    return items  # type: ignore[return-value]
+
+
+def check_names(what: str, value: object, *, each: str, error: Error = ModelError, example: str = "('a', 'b')") -> tuple[str, ...]:
+    """``value`` as a tuple of names (a list is accepted; a bare string is refused);
+    ``each`` says what one name is (for the message)."""
+    items = _sequence(what, value, error, example)
+    for x in items:
+        check_name(each, x, error=error)
+    return items  # type: ignore[return-value]
+
+
+def check_pairs(what: str, value: object, *, error: Error = ModelError, example: str) -> tuple[tuple[object, object], ...]:
+    """``value`` as a tuple of ``(name, value)`` pairs; a mapping is accepted (sorted by name)."""
+    if isinstance(value, Mapping):
+        items: tuple[object, ...] = tuple(sorted(value.items(), key=lambda kv: str(kv[0])))
+    else:
+        items = _sequence(what, value, error, example)
+    seen: set[str] = set()
+    out = []
+    for pair in items:
+        if not isinstance(pair, (tuple, list)) or len(pair) != 2:
+            raise error(f"{what}: {pair!r} is not a (name, value) pair: write {example}")
+        name = check_name(what, pair[0], error=error)
+        if name in seen:
+            raise error(f"{what}: {name!r} is given twice: give each once")
+        seen.add(name)
+        out.append((name, pair[1]))
+    return tuple(out)
+
+
+def check_keywords(where: str, given: Iterable[str], allowed: Sequence[str], *, error: Error = ModelError, usage: str = "") -> None:
+    """Refuse keywords of ``given`` that are not ``allowed``, suggesting the closest one."""
+    for key in given:
+        if key not in allowed:
+            takes = f"it takes {', '.join(allowed)}" if allowed else "it takes no keywords"
+            raise error(f"{where}: unknown keyword {key!r}{suggest(key, allowed)}; {usage or takes}")
+
+
+_SELF = ("self", "cls")
+
+
+def _bare(sig: inspect.Signature, skip_self: bool) -> tuple[list[inspect.Parameter], str]:
+    params = list(sig.parameters.values())
+    if skip_self and params and params[0].name in _SELF:
+        params = params[1:]
+    clean = [p.replace(annotation=inspect.Parameter.empty) for p in params]
+    return params, str(inspect.Signature(clean)).replace("=<factory>", "=...")
+
+
+def call_problem(display: str, sig: inspect.Signature, args: tuple[object, ...], kwargs: Mapping[str, object], *, skip_self: bool = True) -> str | None:
+    """What is wrong with calling ``sig`` with ``args`` / ``kwargs`` (None if nothing is)."""
+    try:
+        sig.bind(*args, **kwargs)
+    except TypeError as exc:
+        reason = str(exc)
+    else:
+        return None
+    params, text = _bare(sig, skip_self)
+    given_pos = args[1:] if skip_self and sig.parameters and next(iter(sig.parameters)) in _SELF else args
+    P = inspect.Parameter
+    if not any(p.kind is P.VAR_KEYWORD for p in params):
+        names = [p.name for p in params if p.kind in (P.POSITIONAL_OR_KEYWORD, P.KEYWORD_ONLY)]
+        for key in kwargs:
+            if key not in names:
+                return f"{display}: unknown keyword {key!r}{suggest(key, names)}; it takes {text}"
+    positional = [p for p in params if p.kind in (P.POSITIONAL_ONLY, P.POSITIONAL_OR_KEYWORD)]
+    if not any(p.kind is P.VAR_POSITIONAL for p in params) and len(given_pos) > len(positional):
+        extra = ", ".join(repr(a) for a in given_pos[len(positional):])
+        keyword_only = [p.name for p in params if p.kind is P.KEYWORD_ONLY]
+        fix = f"pass {', '.join(k + '=...' for k in keyword_only)} by keyword" if keyword_only else "drop the extra ones"
+        return f"{display}: {len(given_pos)} positional arguments but it takes {len(positional)} ({extra} left over): {fix}; it takes {text}"
+    for i, p in enumerate(positional):
+        if i < len(given_pos) and p.name in kwargs:
+            return f"{display}: {p.name!r} is given twice (by position and by keyword): give it once; it takes {text}"
+    bound_names = {p.name for p in positional[: len(given_pos)]} | set(kwargs)
+    missing = [p.name for p in params if p.default is P.empty and p.kind not in (P.VAR_POSITIONAL, P.VAR_KEYWORD) and p.name not in bound_names]
+    if missing:
+        return f"{display}: missing {', '.join(repr(m) for m in missing)}: give {'it' if len(missing) == 1 else 'them'}; it takes {text}"
+    return f"{display}: {reason}; it takes {text}"
+
+
+def strict_call(error: Error, display: str) -> Callable[[F], F]:
+    """Decorate a DSL function so a bad call raises ``error`` in one line, naming the keyword."""
+
+    def deco(fn: F) -> F:
+        sig = inspect.signature(fn)
+
+        @functools.wraps(fn)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            problem = call_problem(display, sig, args, kwargs)
+            if problem is not None:
+                raise error(problem)
+            return fn(*args, **kwargs)
+
+        return wrapper  # type: ignore[return-value]
+
+    return deco
+
+
+def strict_init(error: Error) -> Callable[[C], C]:
+    """Class decorator (above ``@dataclass``): a bad constructor call raises ``error``.
+
+    The constructor runs as before; only when it raises ``TypeError`` is the call
+    re-bound to find an unknown keyword, a missing or an extra argument, which is then
+    reported as ``Step(...): unknown keyword 'durration' (did you mean 'duration'?)``.
+    A ``TypeError`` from inside the constructor is re-raised unchanged.
+    """
+
+    def deco(cls: C) -> C:
+        init = cls.__init__
+        sig = inspect.signature(init)
+        display = f"{cls.__name__}(...)"
+
+        def __init__(self: Any, *args: Any, **kwargs: Any) -> None:
+            try:
+                init(self, *args, **kwargs)
+            except TypeError:
+                problem = call_problem(display, sig, (self, *args), kwargs)
+                if problem is None:
+                    raise
+                raise error(problem) from None
+
+        functools.update_wrapper(__init__, init)
+        cls.__init__ = __init__  # type: ignore[misc]
+        return cls
+
+    return deco

@@ -1,0 +1,10 @@
+# args: run {case}
+# exit: 2
+# expect: the task lasts 40 s but the horizon is 10 s
+"""A bad-input case: see tests/test_bad_inputs.py. A horizon that silently cuts the task."""
+from desmon.model.cob3 import care_o_bot
+from desmon.model.scenario import Scenario
+from desmon.sim.world import LoadWalk, MTTF, Slip, StartFailure, Step, World
+from desmon.model.scenario import TimedEvent
+from desmon.model.events import DeviceFail, DeviceRepair, LoadChange, PlatformDown
+scenario = Scenario(name='bad', model=care_o_bot().build(), world=World(task=(Step('grasp', 10.0), Step('hold', 30.0)), horizon=10.0))
