@@ -15,6 +15,16 @@ states. Every search runs with the cyclic garbage collector paused, as the check
 does. Peak memory is the maximum resident size of the process (and of the largest
 worker).
 
+bench_fallbacks (``--fallbacks N`` states, default complete: about 925,000) is the
+fallback-heavy model: 6 platforms all with background load in 0-300 MB steps, three
+detectors whose slots all have a fallback (grasp and hold prefer combined over force,
+move_base tactile over force, release force over tactile), two wrenches and two pads
+that fail and are repaired, action changes and one failing start per reaction. It runs
+first, so that its peak memory is its own, against a plain tuple BFS with the same
+environment and the same slot semantics (first alternative that fits, else the next;
+an unserved slot carries its errors), and under the ``stale-errors`` mutant (the error
+semantics before issue 12) to count the states stale errors added.
+
 ``--huge 1400000`` also runs the issue's 1.4-million-state budget on a 7-platform model
 with 4 loaded platforms (bench_7p) with the table engine, and the plain BFS on the
 same model up to as many states. Figures and their discussion: docs/findings.md,
@@ -69,6 +79,116 @@ def build(n_platforms: int, load_platforms: int, max_failures: int | None, start
             max_failures=max_failures,
         ),
     )
+
+
+def build_fallbacks(n_platforms: int = 6, load_platforms: int = 6, pads_failing: int = 2) -> Scenario:
+    """The fallback-heavy model (see the module docstring)."""
+    r = RobotBuilder("bench")
+    wrenches, pads = [], []
+    for i in range(n_platforms):
+        pb = r.platform(f"pc{i}", memory=512)
+        if i % 2 == 0:
+            pb.device(f"wrench{i}", kind="force_sensor")
+            wrenches.append(f"wrench{i}")
+        else:
+            pb.devices([f"pad{i}a", f"pad{i}b"], kind="tactile_pad")
+            pads.append(f"pad{i}a")
+    for g, kinds in (("force", ("force_sensor",)), ("tactile", ("tactile_pad",)), ("combined", ("force_sensor", "tactile_pad"))):
+        with r.rpsl.perception_graph(g) as gb:
+            for j, kind in enumerate(kinds):
+                gb.sensor(f"s{j}", reads=kind)
+            gb.processing("p", inputs=[f"s{j}" for j in range(len(kinds))])
+    r.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor").add_constraint("capacity", "memory", 100)
+    r.depsl.deployment_specification("tactile").add_constraint("quantity", "tactile_pad", 2).add_constraint("capacity", "memory", 150)
+    r.depsl.deployment_specification("combined").add_constraint("capacity", "memory", 250)
+    r.rules({k: [v] for k, v in FALLBACK_SLOTS.items()})
+    plats = tuple(f"pc{i}" for i in range(n_platforms))
+    return Scenario(
+        name=f"bench_fallbacks_{n_platforms}p",
+        model=r.build(),
+        initial=tuple(LoadChange(p, 0) for p in plats[:load_platforms]),
+        timeline=(TimedEvent(0, ActionChange(HOLD)),),
+        checker=Bounds(
+            actions=(HOLD, GRASP, MOVE_BASE, RELEASE),
+            devices=tuple(wrenches[:2] + pads[:pads_failing]),
+            loads={p: levels(0, 300, 100) for p in plats[:load_platforms]},
+            start_failures=1,
+        ),
+    )
+
+
+#: the fallback model's slots: preferred alternative first
+FALLBACK_SLOTS = {HOLD: ("combined", "force"), GRASP: ("combined", "force"), MOVE_BASE: ("tactile", "force"), RELEASE: ("force", "tactile")}
+
+
+def plain_fallback_bfs(scenario: Scenario, max_states: int | None = None) -> tuple[int, int, float]:
+    """A minimal BFS over tuples with the fallback model's environment and slot
+    semantics, hard-coded: the first alternative with a platform that fits is placed
+    (memory 512 MB minus load; force needs a working wrench on it, tactile both pads,
+    combined any working wrench), else the next; an unserved slot keeps its errors."""
+    b: Bounds = scenario.checker
+    model = scenario.model
+    plats = [p.name for p in model.platforms]
+    devs = list(b.devices)
+    host = {d.name: d.platform for d in model.devices}
+    lp = [plats.index(p) for p in b.loads]
+    lv = [b.loads[p] for p in b.loads]
+    acts = list(b.actions)
+    need = {"force": 100, "tactile": 150, "combined": 250}
+    wrench_on = {i: [d.name for d in model.devices_on(p) if d.kind == "force_sensor"] for i, p in enumerate(plats)}
+    pads_on = {i: [d.name for d in model.devices_on(p) if d.kind == "tactile_pad"] for i, p in enumerate(plats)}
+
+    def place(ctx, failed, loads):  # type: ignore[no-untyped-def]
+        broken = {devs[i] for i, f in enumerate(failed) if f}
+        load = [0] * len(plats)
+        for i, x in zip(lp, loads):
+            load[i] = x
+        any_wrench = any(d not in broken for ws in wrench_on.values() for d in ws)
+        for g in FALLBACK_SLOTS[ctx]:
+            for i, p in enumerate(plats):
+                if 512 - load[i] < need[g]:
+                    continue
+                if g == "force" and not any(d not in broken for d in wrench_on[i]):
+                    continue
+                if g == "tactile" and (len(pads_on[i]) < 2 or any(d in broken for d in pads_on[i])):
+                    continue
+                if g == "combined" and not any_wrench:
+                    continue
+                return ((g, p),), ()
+        return (), FALLBACK_SLOTS[ctx]
+
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        init = (HOLD, tuple(False for _ in devs), tuple(0 for _ in lp))
+        init = init + place(*init)
+        seen = {init}
+        q = deque([init])
+        trans = 0
+        t0 = time.perf_counter()
+        while q:
+            ctx, failed, loads, _dep, _err = q.popleft()
+            succ = [(a, failed, loads) for a in acts if a != ctx]
+            for i in range(len(devs)):
+                succ.append((ctx, failed[:i] + (not failed[i],) + failed[i + 1 :], loads))
+            for i, levs in enumerate(lv):
+                j = levs.index(loads[i])
+                for k in (j - 1, j + 1):
+                    if 0 <= k < len(levs):
+                        succ.append((ctx, failed, loads[:i] + (levs[k],) + loads[i + 1 :]))
+            for n in succ:
+                for _ in range(1 + b.start_failures):  # the same branching factor for start failures
+                    trans += 1
+                    ns = n + place(*n)
+                    if ns not in seen:
+                        seen.add(ns)
+                        q.append(ns)
+            if max_states is not None and len(seen) >= max_states:
+                break
+        return len(seen), trans, time.perf_counter() - t0
+    finally:
+        if collecting:
+            gc.enable()
 
 
 def plain_bfs(scenario: Scenario, max_states: int | None = None) -> tuple[int, int, float]:
@@ -151,7 +271,9 @@ def _ratio(plain: tuple[int, int, float], r: CheckResult) -> str:
 
 
 def _checker(label: str, scenario: Scenario, cap: int | None, plain: tuple[int, int, float], **kw: object) -> CheckResult:
-    r = Checker(scenario, "desmon").run(max_states=cap, progress=True, **kw)  # type: ignore[arg-type]
+    deployer = kw.pop("deployer", "desmon")
+    invariants = kw.pop("invariants", None)
+    r = Checker(scenario, deployer, invariants=invariants).run(max_states=cap, progress=True, **kw)  # type: ignore[arg-type]
     extra = f"  {r.verdict} {r.reason}".rstrip() + (f"  ({r.records:,} recorded runs of the core and invariants)" if r.engine == "table" else "")
     print(_row(label, r.states, r.transitions, r.seconds) + extra)
     print(_ratio(plain, r))
@@ -164,12 +286,35 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--prefix", type=int, default=30_000, metavar="N", help="states of bench_6p the direct engine searches (default 30,000)")
     ap.add_argument("--workers", type=int, default=2, help="also run the direct engine with this many workers (1: skip)")
     ap.add_argument("--huge", type=int, default=0, metavar="N", help="also run bench_7p up to N states (e.g. 1400000)")
+    ap.add_argument("--fallbacks", type=int, default=None, metavar="N", help="cap the fallback model's search (default: complete, about 925,000 states)")
     args = ap.parse_args(argv)
+    result: dict[str, str] = {}
+    # the fallback-heavy model first: its peak memory (the process's maximum resident size) is its own
+    scenario = build_fallbacks()
+    print(f"{scenario.name}: {len(scenario.model.platforms)} platforms, 3 detectors, every slot with a fallback")
+    fb = Checker(scenario, "desmon").run(max_states=args.fallbacks, progress=True)
+    fb_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(_row("desmon (table)", fb.states, fb.transitions, fb.seconds) + f"  {fb.verdict} {fb.reason}".rstrip() + f"  ({fb.records:,} recorded runs)")
+    print(f"  {'':<16} peak memory (max RSS of the process so far): {fb_rss:.0f} MB")
+    plain = plain_fallback_bfs(scenario, fb.states if args.fallbacks else None)
+    print(_row("plain tuples", *plain))
+    print(_ratio(plain, fb))
+    from desmon.verify.mutants import MUTANTS
+
+    stale = _checker("stale-errors", scenario, args.fallbacks, plain, deployer=MUTANTS["stale-errors"], invariants=["valid-or-error"])
+    result.update(
+        fallback_states=str(fb.states), fallback_transitions=str(fb.transitions), fallback_seconds=f"{fb.seconds:.2f}",
+        fallback_peak_mb=f"{fb_rss:.0f}", fallback_ratio=f"{(plain[0] / plain[2]) / (fb.states / fb.seconds):.2f}",
+        stale_states=str(stale.states),
+    )
     for scenario, cap, prefix in ((build(4, 2, 2), None, None), (build(6, 3, None), args.large_max_states, args.prefix)):
         print(f"{scenario.name}: {len(scenario.model.platforms)} platforms, 3 detectors")
         plain = plain_bfs(scenario, cap)
         print(_row("plain tuples", *plain))
-        _checker("desmon (table)", scenario, cap, plain)
+        full = _checker("desmon (table)", scenario, cap, plain)
+        key = scenario.name.removeprefix("bench_")
+        result[f"{key}_states"] = str(full.states)
+        result[f"{key}_ratio"] = f"{(plain[0] / plain[2]) / (full.states / full.seconds):.2f}"
         if prefix != cap:
             plain = plain_bfs(scenario, prefix)
             print(f"  first {prefix:,} states")
@@ -177,6 +322,7 @@ def main(argv: list[str] | None = None) -> int:
             _checker("desmon (table)", scenario, prefix, plain)
         for workers in sorted({1, args.workers}):
             _checker("desmon (direct)" if workers == 1 else f"  {workers} workers", scenario, prefix, plain, engine="direct", workers=workers)
+
     if args.huge:
         scenario = build(7, 4, None)
         print(f"{scenario.name}: {len(scenario.model.platforms)} platforms, 3 detectors, up to {args.huge:,} states")
@@ -188,6 +334,7 @@ def main(argv: list[str] | None = None) -> int:
         print(_row("desmon (table)", r.states, r.transitions, r.seconds) + f"  {r.verdict} {r.reason}  ({r.records:,} recorded runs of the core and invariants)")
         print(_ratio(plain, r))
     print(f"peak memory (max RSS): {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
+    print("RESULT " + " ".join(f"{k}={v}" for k, v in result.items()))
     return 0
 
 
