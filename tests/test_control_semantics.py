@@ -41,7 +41,9 @@ def _model():  # type: ignore[no-untyped-def]
         g.sensor("t", reads="tactile_pad")
         g.processing("fuse", inputs=["w", "t"])
     for name in GRAPHS:
-        robot.depsl.deployment_specification(name).add_constraint("capacity", "memory", 10)
+        spec = robot.depsl.deployment_specification(name).add_constraint("capacity", "memory", 10)
+        if name == "tactile":
+            spec.add_constraint("quantity", "tactile_pad", 2)
     return robot.build()
 
 
@@ -116,10 +118,17 @@ def test_a_device_on_a_down_platform_cannot_feed_a_detector_elsewhere() -> None:
     assert e.deployments() == (("combined", "torso_pc"),)
 
 
-def test_one_working_device_of_a_kind_is_enough() -> None:
+def test_one_readable_device_of_a_kind_is_enough_to_read_it() -> None:
     e = _Engines()
     e.fact(DeviceFail("pad_1"))
-    assert e.start("tactile", "hand_pc") == (True, True, True)
+    assert e.start("combined", "torso_pc") == (True, True, True)
+
+
+def test_a_start_on_a_platform_whose_devices_no_longer_meet_the_spec_is_refused() -> None:
+    e = _Engines()
+    e.fact(DeviceFail("pad_1"))  # tactile needs Quantity(tactile_pad >= 2): one pad is left
+    assert e.start("tactile", "hand_pc") == (False, False, False)
+    assert e.store.refused == e.control.refused == "the devices of hand_pc no longer meet Quantity(tactile_pad >= 2)"
 
 
 def test_restarting_a_running_instance_is_a_no_op_success_and_stopping_a_missing_one_fails() -> None:

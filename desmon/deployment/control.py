@@ -13,7 +13,10 @@ Rules
     the start is **refused** when
 
     1. the platform is down, or
-    2. one of the device kinds the graph's sensor components read has no readable
+    2. the platform's working devices no longer meet the device requirements of the
+       graph's deployment specification (Quantity, ``Attribute(platform_has, kind)``, and
+       Selections whose options are all devices), or
+    3. one of the device kinds the graph's sensor components read has no readable
        device: the graph reads the platform's own devices of that kind if it has any,
        else every device of that kind on the robot; a device is readable while it works
        and its platform is up. (A kind no device of the model provides at all -- a
@@ -38,10 +41,10 @@ from desmon.repository.facts import ImmediateControl
 from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import Repository
 from desmon.model.platform import Device
-from desmon.model.requirements import PLATFORM_HAS, Attribute
+from desmon.model.requirements import PLATFORM_HAS, Attribute, Quantity, Requirement, Selection
 from desmon.model.system import PlatformState, SystemModel
 
-__all__ = ["ControlRules", "repository_control", "repository_refusal", "stop_succeeds", "StateOf", "PLATFORM_DOWN"]
+__all__ = ["ControlRules", "repository_control", "repository_refusal", "StateOf", "PLATFORM_DOWN", "device_requirements"]
 
 #: ``platform name -> its PlatformState`` (the facts the rules read).
 StateOf = Callable[[str], PlatformState]
@@ -55,14 +58,25 @@ def _has(kind: str) -> tuple[Attribute, ...]:
     return (Attribute(PLATFORM_HAS, kind),)
 
 
+def device_requirements(requirements: tuple[Requirement, ...]) -> tuple[Requirement, ...]:
+    """The requirements among ``requirements`` that only a platform's devices decide."""
+    return tuple(
+        r for r in requirements
+        if isinstance(r, Quantity)
+        or (isinstance(r, Attribute) and r.name == PLATFORM_HAS)
+        or (isinstance(r, Selection) and all(o.attribute is None for o in r.options))
+    )
+
+
 class ControlRules:
     """The start rules for one model (its input wiring memoised per graph and platform)."""
 
-    __slots__ = ("model", "_wiring")
+    __slots__ = ("model", "_wiring", "_device_reqs")
 
     def __init__(self, model: SystemModel) -> None:
         self.model = model
         self._wiring: dict[tuple[str, str], tuple[tuple[str, tuple[Device, ...]], ...]] = {}
+        self._device_reqs: dict[str, tuple[Requirement, ...]] = {}
 
     def input_devices(self, graph: str, platform: str) -> tuple[tuple[str, tuple[Device, ...]], ...]:
         """``(kind, devices)`` per device kind ``graph`` reads when it runs on ``platform``:
@@ -87,6 +101,12 @@ class ControlRules:
         """
         if check_platform((), state_of(platform), graph):
             return PLATFORM_DOWN
+        reqs = self._device_reqs.get(graph)
+        if reqs is None:
+            spec = self.model.spec(graph)
+            reqs = self._device_reqs[graph] = device_requirements(spec.requirements) if spec is not None else ()
+        if reqs and check_platform(reqs, state_of(platform), graph, first_only=True):
+            return f"the devices of {platform} no longer meet {', '.join(r.describe() for r in reqs)}"
         for kind, devices in self.input_devices(graph, platform):
             if not devices:
                 continue
@@ -95,11 +115,6 @@ class ControlRules:
                 names = ", ".join(d.name for d in devices)
                 return f"no readable {kind} ({names}: failed or on a platform that is down)"
         return None
-
-
-def stop_succeeds(running: bool) -> bool:
-    """A stop succeeds exactly when the instance runs (see the module docstring)."""
-    return running
 
 
 def repository_refusal(repo: Repository, model: SystemModel) -> Callable[[str, str], str | None]:
