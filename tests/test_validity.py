@@ -1,4 +1,4 @@
-"""Specification of requirement semantics (DESIGN.md §3) as check_validity implements them."""
+"""Specification of requirement semantics (docs/design.md §4) as check_validity implements them."""
 
 from desmon.deployment.validity import check_validity, deployment_valid
 from desmon.model import Device, DeploymentSpec, Platform, PlatformState, make_requirement as req

@@ -6,7 +6,7 @@ Two variants, selected by name through :data:`DEPLOYERS`:
     The paper's Algorithms 1 and 2, transcribed line by line, early ``return``\\ s
     included (line numbers in the comments refer to the paper).
 ``desmon`` (default)
-    The corrected algorithm of DESIGN.md §4: every requested graph is handled,
+    The corrected algorithm of docs/design.md §5: every requested graph is handled,
     Capacity is accounted across concurrent deployments (each start is visible to the
     next check), a migration stops the old instance before starting the new one, every
     deployment on a changed platform is re-checked, a still-valid deployment is kept,

@@ -1,4 +1,4 @@
-"""The named invariants of DESIGN.md §5, defined once.
+"""The named invariants of docs/design.md §9, defined once.
 
 The checker, the fuzzer and the simulation audit all evaluate these same functions on
 a :class:`SystemView`, built from whatever holds the state (the networkx repository

@@ -1,6 +1,6 @@
 """Requirement checking: the paper's ``checkValidity`` with reasons.
 
-The semantics of every requirement kind (DESIGN.md §3) lives here and nowhere else.
+The semantics of every requirement kind (docs/design.md §4) lives here and nowhere else.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Node and edge labels of the repository graph (DESIGN.md §3), used everywhere."""
+"""Node and edge labels of the repository graph (docs/design.md §3), used everywhere."""
 
 from typing import Final
 

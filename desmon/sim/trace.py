@@ -44,7 +44,7 @@ Schema (keys in this order after ``t`` and ``type``)
 ``alarm``      ``detector, platform, direction`` (up/down/null): at ``t`` (the sample time)
                a running detector reported a slip.
 ``violation``  ``invariant, message``: an audited invariant failed after a reaction.
-``end``        the metrics (DESIGN.md §6) at the horizon.
+``end``        the metrics (docs/design.md §10) at the horizon.
 """
 
 from __future__ import annotations

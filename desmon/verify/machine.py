@@ -2,7 +2,7 @@
 
 Its rules are the checker's events (action change, device fail/repair, platform
 down/up, load step, each with optional start failures), its invariants the named
-invariants of DESIGN.md §5 -- including ``history``, which here sees the
+invariants of docs/design.md §9 -- including ``history``, which here sees the
 infrastructure's running list, its stop count and the DEPLOYMENT_HISTORY edges. It
 drives the same :class:`~desmon.deployment.core.DeploymentCore` as the checker.
 
