@@ -499,3 +499,22 @@ def test_a_task_that_ends_explicitly_is_accepted() -> None:
 
 def test_levels_with_nan_are_refused() -> None:
     assert "high = nan is not a number" in refused(CheckerError, lambda: levels(0, math.nan, 100))
+
+
+def test_a_scripted_slip_while_nothing_is_in_the_hand_is_refused() -> None:
+    task = (Step("idle", 5.0), Step("grasp", 2.0), Step("hold", 3.0))
+    msg = refused(ScenarioError, lambda: world(task=task, slips=(Slip(3.0),)))
+    assert "slip at t=3 falls in 'idle', when no object is in the hand" in msg
+
+
+def test_a_scripted_slip_while_holding_is_accepted() -> None:
+    task = (Step("idle", 5.0), Step("grasp", 2.0), Step("hold", 3.0))
+    assert world(task=task, slips=(Slip(8.0),)).slips == (Slip(8.0),)
+
+
+def test_a_rule_that_selects_nothing_is_refused() -> None:
+    assert "rule for context 'grasp' selects nothing" in refused(ModelError, lambda: robot().rules({"grasp": []}))
+
+
+def test_bounds_listing_a_device_twice_are_refused() -> None:
+    assert "devices list 'ft' twice" in refused(CheckerError, lambda: Bounds(devices=("ft", "ft")))

@@ -47,6 +47,11 @@ class Rule:
             raise ModelError(
                 f"rule for context {self.context!r}: slots = {self.slots!r} is not a tuple of slots: write (('force',),)"
             )
+        if not self.slots:
+            raise ModelError(
+                f"rule for context {self.context!r} selects nothing: name at least one graph, or drop the rule "
+                "(a context without a rule wants no detector)"
+            )
         slots = []
         seen: set[str] = set()
         for slot in self.slots:

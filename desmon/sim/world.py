@@ -247,6 +247,17 @@ class World:
         for slip in slips:
             self._before_horizon(f"slip at t={slip.time:g}", slip.time)
         object.__setattr__(self, "slips", slips)
+        if slips:
+            # a slip needs an object in the hand (with signals off it would still count as injected)
+            segments = expand_task(self, self.horizon)
+            spans = in_hand(segments)
+            for slip in slips:
+                if not any(a <= slip.time < b for a, b, _ in spans):
+                    during = next((seg.context for seg in segments if seg.start <= slip.time < seg.end), "?")
+                    raise ScenarioError(
+                        f"world: slip at t={slip.time:g} falls in {during!r}, when no object is in the hand: "
+                        "place slips between a grasp and its release"
+                    )
         example = "faults=(TimedEvent(20.0, DeviceFail('lwr_wrench')),)"
         faults = check_items("world: faults", self.faults, TimedEvent, error=err, example=example)
         for te in faults:

@@ -82,7 +82,11 @@ class Bounds:
         w = "checker bounds"
 
         def names(field_: str, each: str, example: str) -> None:
-            object.__setattr__(self, field_, check_names(f"{w} {field_}", getattr(self, field_), each=f"{w} {each}", error=err, example=example))
+            given = check_names(f"{w} {field_}", getattr(self, field_), each=f"{w} {each}", error=err, example=example)
+            twice = sorted({n for n in given if given.count(n) > 1})
+            if twice:
+                raise CheckerError(f"{w} {field_} list {', '.join(repr(n) for n in twice)} twice: list each once")
+            object.__setattr__(self, field_, given)
 
         names("actions", "action", "actions=('grasp', 'hold')")
         names("devices", "device", "devices=('lwr_wrench',)")
