@@ -58,6 +58,10 @@ def _usage_error(prog: str, message: str) -> str:
 
 def _scenario_arg(p: argparse.ArgumentParser, help: str = "scenario file, e.g. scenarios/coffee_handover.py") -> None:
     add_input(p, "scenario", SCENARIO_FILE, help=help)
+    p.add_argument(
+        "-p", "--param", action="append", default=None, metavar="NAME=VALUE",
+        help="set a parameter the scenario declares with parameters(...), e.g. -p hand_memory=384 (repeatable)",
+    )
 
 
 def _deployer_arg(p: argparse.ArgumentParser) -> None:
@@ -70,12 +74,13 @@ def _deployer_arg(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _load_scripted(path: str):  # type: ignore[no-untyped-def]
+def _load_scripted(args: argparse.Namespace):  # type: ignore[no-untyped-def]
     """A scenario for the timeline-based commands (replay, explain, show): it needs a scripted timeline."""
     from desmon.errors import ScenarioError
-    from desmon.loader import load_scenario
+    from desmon.loader import load_from_args
 
-    scenario = load_scenario(path)
+    path = args.scenario
+    scenario = load_from_args(args)
     if not scenario.timeline:
         raise ScenarioError(
             f"{path}: scenario {scenario.name!r} has no scripted timeline, so there is no moment to replay; "
@@ -87,7 +92,7 @@ def _load_scripted(path: str):  # type: ignore[no-untyped-def]
 def _cmd_replay(args: argparse.Namespace) -> int:
     from desmon.sim.replay import format_replay, replay
 
-    scenario = _load_scripted(args.scenario)
+    scenario = _load_scripted(args)
     result = replay(scenario, args.deployer)
     print(format_replay(result), end="")
     return EXIT_VIOLATED if result.violations else EXIT_OK
@@ -99,7 +104,7 @@ def _cmd_explain(args: argparse.Namespace) -> int:
     from desmon.repository.query import RepositoryQuery
     from desmon.sim.replay import replay
 
-    scenario = _load_scripted(args.scenario)
+    scenario = _load_scripted(args)
     if "," in (args.at or ""):
         raise QueryError(f"--at {args.at!r}: explain answers for one moment; give one time or label")
     [(when, at)] = _resolve_times(scenario, args.at)
@@ -156,7 +161,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
     from desmon.repository.store import graph_to_graphml, graph_to_json
     from desmon.sim.replay import replay
 
-    scenario = _load_scripted(args.scenario)
+    scenario = _load_scripted(args)
     moments = _resolve_times(scenario, args.at)
     result = replay(scenario, args.deployer)
     snaps = []

@@ -7,17 +7,22 @@ import importlib.util
 import signal
 import sys
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Iterator, Mapping
 
 from desmon.errors import DesmonError, ScenarioError
+from desmon.model.params import overriding, parse_assignments
 from desmon.model.scenario import Scenario
 from desmon.paths import SCENARIO_FILE, PathError, check_input_file
 
-__all__ = ["load_scenario"]
+__all__ = ["load_scenario", "load_from_args"]
 
 
-def load_scenario(path: str | Path) -> Scenario:
+def load_scenario(path: str | Path, params: Mapping[str, str] | None = None) -> Scenario:
     """Execute the scenario script at ``path`` and return its ``scenario``.
+
+    ``params`` sets scenario parameters by name (text, as after ``-p NAME=``); the
+    script declares them with :func:`desmon.model.params.parameters`, which parses each
+    value as its default's type. A name the script does not declare is refused.
 
     Raises :class:`ScenarioError` (a ``ValueError``) if the file is missing, does not
     compile or run, defines no Scenario, or builds an invalid model. A script that exits
@@ -38,11 +43,13 @@ def load_scenario(path: str | Path) -> Scenario:
     failed = f"{path}: the script failed while building its scenario"
     rerun = f"run python {path} to see where"
     try:
-        with _real_ctrl_c() as interrupted, contextlib.redirect_stdout(sys.stderr):
+        with overriding(params or {}, str(path)), _real_ctrl_c() as interrupted, contextlib.redirect_stdout(sys.stderr):
             spec.loader.exec_module(module)
     except SyntaxError as exc:
         raise ScenarioError(f"{path}:{exc.lineno}: syntax error: {exc.msg}") from None
     except DesmonError as exc:
+        if str(exc).startswith(f"{path}: "):  # already names the file (an unknown parameter)
+            raise ScenarioError(str(exc)) from None
         raise ScenarioError(f"{path}: invalid scenario: {exc}") from None
     except SystemExit as exc:
         raise ScenarioError(
@@ -70,6 +77,12 @@ def load_scenario(path: str | Path) -> Scenario:
             )
         found = candidates[0]
     return found
+
+
+def load_from_args(args: Any) -> Scenario:
+    """The scenario a command line names: ``args.scenario`` with the ``-p NAME=VALUE``
+    parameters of ``args.param`` (every command that takes a scenario)."""
+    return load_scenario(args.scenario, parse_assignments(getattr(args, "param", None)))
 
 
 @contextlib.contextmanager

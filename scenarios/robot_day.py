@@ -7,29 +7,36 @@ with probability 2 %, background loads of torso_pc and arm_pc random-walk. Signa
 detectors run the whole day. The pinned metrics are for ``--seed 0``.
 
 Run: ``desmon run scenarios/robot_day.py`` (about 28,800 simulated seconds).
+
+Parameters (``-p NAME=VALUE`` on run / verify / fuzz): ``hand_memory`` (MB of hand_pc,
+default 384), ``wrench_mttf`` (mean seconds between wrench failures, default 3600),
+``hours`` (length of the day, default 8). The pinned figures are for the defaults.
 """
 
 from __future__ import annotations
 
 from desmon.model import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
 from desmon.model.events import LoadChange
+from desmon.model.params import parameters
 from desmon.verify.bounds import Bounds, levels
 from desmon.model.scenario import Scenario
 from desmon.model.cob3 import LOADS, care_o_bot
 from desmon.sim.world import MTTF, LoadWalk, StartFailure, Step, World
 
+p = parameters(hand_memory=384, wrench_mttf=3600.0, hours=8.0)
+
 scenario = Scenario(
     name="robot_day",
     description="8 h of coffee deliveries with stochastic device and platform faults",
-    model=care_o_bot(hand_pc_memory=384).build(),  # hand_pc can host the combined detector too
+    model=care_o_bot(hand_pc_memory=p.hand_memory).build(),  # at 384 MB hand_pc can host the combined detector too
     initial=tuple(LoadChange(p, mb) for p, mb in LOADS.items()),
     world=World(
         task=(Step(IDLE, 20.0), Step(GRASP, 2.0), Step(HOLD, 3.0), Step(MOVE_BASE, 30.0), Step(RELEASE, 2.0)),
         repeat=True,
-        horizon=8 * 3600.0,
+        horizon=p.hours * 3600.0,
         slip_rate=1.0 / 600.0,
         stochastic_faults=(
-            MTTF("lwr_wrench", mttf=3600.0, mttr=120.0),
+            MTTF("lwr_wrench", mttf=p.wrench_mttf, mttr=120.0),
             MTTF("pad_thumb_prox", mttf=7200.0, mttr=300.0),
             MTTF("hand_pc", mttf=14400.0, mttr=60.0),
             MTTF("torso_pc", mttf=28800.0, mttr=90.0),

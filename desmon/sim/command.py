@@ -145,7 +145,7 @@ def run_command(
     args: Any, out: IO[str] | None = None, err: IO[str] | None = None, before_run: Callable[[float], None] | None = None
 ) -> int:
     """Simulate ``args.scenario``; ``before_run(horizon)`` may refuse the run once the horizon is known."""
-    from desmon.loader import load_scenario
+    from desmon.loader import load_from_args
 
     out = out or sys.stdout
     err = err or sys.stderr
@@ -153,7 +153,7 @@ def run_command(
         raise ScenarioError(f"--until {args.until!r}: give a positive number of simulated seconds")
     if args.seed is not None and args.seed < 0:
         raise ScenarioError(f"--seed {args.seed!r}: give a non-negative integer")
-    scenario = load_scenario(args.scenario)
+    scenario = load_from_args(args)
     horizon = getattr(scenario.world, "horizon", None)
     if args.until is not None and horizon is not None and args.until > horizon:
         raise ScenarioError(

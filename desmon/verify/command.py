@@ -18,7 +18,7 @@ def _positive(name: str, value: float | int | None) -> None:
 
 
 def verify_command(args: argparse.Namespace) -> int:
-    from desmon.loader import load_scenario
+    from desmon.loader import load_from_args
     from desmon.verify.checker import Checker
     from desmon.verify.report import counterexample_pytest, format_result, result_to_json
 
@@ -26,7 +26,7 @@ def verify_command(args: argparse.Namespace) -> int:
     _positive("max-depth", args.max_depth)
     _positive("timeout", args.timeout)
     _positive("workers", getattr(args, "workers", 1))
-    scenario = load_scenario(args.scenario)
+    scenario = load_from_args(args)
     checker = Checker(scenario, args.deployer, invariants=args.invariant, symmetry=bool(getattr(args, "symmetry", False)))
     result = checker.run(
         max_states=args.max_states,
@@ -65,9 +65,9 @@ def fuzz_command(args: argparse.Namespace) -> int:
 
     if args.examples <= 0:
         raise CheckerError(f"--examples must be positive, got {args.examples}")
-    from desmon.loader import load_scenario
+    from desmon.loader import load_from_args
 
-    scenario = load_scenario(args.scenario)
+    scenario = load_from_args(args)
     outcome = fuzz(scenario, args.deployer, examples=args.examples, seed=args.seed, progress=not args.no_progress)
     print(outcome.text, end="")
     return outcome.exit_code
