@@ -206,7 +206,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from desmon.detectors.evaluation import run_evaluate
 
     return run_evaluate(
-        trials=args.trials, seed=args.seed, as_json=args.json, progress=not args.no_progress, out=sys.stdout
+        trials=args.trials, seed=args.seed, as_json=args.json, progress=not args.no_progress, out=sys.stdout,
+        seeds=args.seeds,
     )
 
 
@@ -293,7 +294,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("evaluate", help="detector x action table against Sanchez et al. 2016, and mission-level strategies")
     p.add_argument("--trials", type=positive_int, default=300, help="trials per cell (default 300)")
-    p.add_argument("--seed", type=non_negative_int, default=1, help="random seed (default 1)")
+    p.add_argument("--seed", type=non_negative_int, default=1, help="random seed (default 1); with --seeds, the first seed")
+    p.add_argument(
+        "--seeds", type=positive_int, default=None, metavar="N",
+        help="run seeds SEED..SEED+N-1: per cell how many seeds pass, mission figures as mean [min..max]",
+    )
     p.add_argument("--json", action="store_true", help="print JSON instead of tables")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(handler=_cmd_evaluate)

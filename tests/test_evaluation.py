@@ -1,20 +1,28 @@
-"""Evaluation: exact binomial test, Wilson bands, the bounded reproduction of Tables 1-2, the CLI entry."""
+"""Evaluation: Fisher's exact test, Wilson bands, the bounded reproduction of Tables 1-2, several seeds, the CLI entry."""
 
 from __future__ import annotations
 
 import io
 import json
 import math
+from fractions import Fraction
 
 import numpy as np
 import pytest
 
+from desmon.cli import main
 from desmon.detectors.combined import CombinedDetector
 from desmon.detectors.evaluation import (
+    ALPHA,
     P1_ACTIONS,
+    PAPER_N,
     Evaluation,
-    binomial_two_sided,
+    Spread,
+    Sweep,
     evaluate,
+    evaluate_seeds,
+    fisher_exact,
+    render_sweep,
     render_table,
     run_detectors,
     run_evaluate,
@@ -26,19 +34,58 @@ from desmon.detectors.tactile import TactileDetector
 from desmon.errors import SignalError
 
 
-def _brute_binomial(k: int, n: int, p: float) -> float:
-    pmf = [math.comb(n, i) * p**i * (1 - p) ** (n - i) for i in range(n + 1)]
-    return sum(x for x in pmf if x <= pmf[k] * (1 + 1e-7))
+def _brute_fisher(k1: int, n1: int, k2: int, n2: int) -> Fraction:
+    """Two-sided Fisher p in exact rational arithmetic: the tables no more likely than the observed one."""
+    total = k1 + k2
+    prob = {x: Fraction(math.comb(n1, x) * math.comb(n2, total - x), math.comb(n1 + n2, total))
+            for x in range(max(0, total - n2), min(n1, total) + 1)}
+    return sum((p for p in prob.values() if p <= prob[k1]), Fraction(0))
 
 
-@pytest.mark.parametrize(("k", "n", "p"), [(0, 60, 0.05), (1, 60, 0.002), (51, 60, 0.89), (60, 60, 0.997), (7, 20, 0.5)])
-def test_exact_binomial_test_matches_direct_summation(k: int, n: int, p: float) -> None:
-    assert binomial_two_sided(k, n, p) == pytest.approx(_brute_binomial(k, n, p), rel=1e-9)
+def test_fisher_reproduces_the_tea_tasting_table() -> None:
+    # Fisher's lady tasting tea: 3 of 4 milk-first cups named right, 1 of 4 tea-first named milk-first.
+    # Tables by first cell: 1, 16, 36, 16, 1 (of 70); p = (1 + 16 + 16 + 1) / 70 two-sided.
+    assert fisher_exact(3, 4, 1, 4) == pytest.approx(34 / 70, rel=1e-12)
+    assert round(fisher_exact(3, 4, 1, 4), 4) == 0.4857
 
 
-def test_binomial_test_of_an_impossible_count_is_zero_and_of_a_certain_one_is_one() -> None:
-    assert binomial_two_sided(1, 60, 0.0) == 0.0
-    assert binomial_two_sided(60, 60, 1.0) == 1.0
+def test_fisher_reproduces_a_textbook_table() -> None:
+    # [[1, 9], [11, 3]]: R's fisher.test reports p-value = 0.002759 (two-sided)
+    assert round(fisher_exact(1, 10, 11, 14), 6) == 0.002759
+
+
+@pytest.mark.parametrize(
+    ("k1", "n1", "k2", "n2"),
+    [(3, 4, 1, 4), (1, 10, 11, 14), (64, 300, 10, 60), (267, 300, 51, 60), (2, 300, 1, 60), (7, 20, 12, 25),
+     (150, 300, 39, 60), (299, 300, 60, 60), (5, 5, 0, 5)],
+)
+def test_fisher_matches_exact_rational_summation(k1: int, n1: int, k2: int, n2: int) -> None:
+    assert fisher_exact(k1, n1, k2, n2) == pytest.approx(float(_brute_fisher(k1, n1, k2, n2)), rel=1e-9)
+
+
+def test_fisher_edge_cases() -> None:
+    assert fisher_exact(0, 300, 0, 60) == 1.0  # nothing seen in either sample: no evidence of a difference
+    assert fisher_exact(300, 300, 60, 60) == 1.0
+    # 0/300 vs 1/60: the one success lands in the paper's sample with probability 60/360, the only
+    # table as unlikely; 1/6 does not reject (a 0/300 simulation cannot be told from a 1/60 paper)
+    assert fisher_exact(0, 300, 1, 60) == pytest.approx(1 / 6, rel=1e-9)
+    # 0/300 vs 5/60 does reject
+    assert fisher_exact(0, 300, 5, 60) < ALPHA
+    # the most extreme table: all 60 successes in the paper's sample
+    assert fisher_exact(0, 300, 60, 60) == pytest.approx(1 / math.comb(360, 60), rel=1e-6)
+
+
+def test_fisher_is_symmetric_in_samples_and_in_success_failure() -> None:
+    for k1, n1, k2, n2 in [(64, 300, 10, 60), (1, 10, 11, 14), (0, 300, 3, 60)]:
+        p = fisher_exact(k1, n1, k2, n2)
+        assert fisher_exact(k2, n2, k1, n1) == pytest.approx(p, rel=1e-9)
+        assert fisher_exact(n1 - k1, n1, n2 - k2, n2) == pytest.approx(p, rel=1e-9)
+
+
+@pytest.mark.parametrize("args", [(5, 4, 1, 60), (-1, 4, 1, 60), (1, 0, 0, 60), (1, 4, 1.0, 60), (True, 4, 1, 60)])
+def test_fisher_rejects_impossible_counts(args: tuple[int, int, int, int]) -> None:
+    with pytest.raises(SignalError, match="Fisher test"):
+        fisher_exact(*args)
 
 
 def test_wilson_band_reproduces_the_research_note_values() -> None:
@@ -56,6 +103,17 @@ def bounded() -> Evaluation:
 def test_bounded_evaluation_with_a_fixed_seed_passes_all_21_cells(bounded: Evaluation) -> None:
     assert len(bounded.cells) == 21 and {c.action for c in bounded.cells} == set(P1_ACTIONS)
     assert bounded.all_pass, [(c.action, c.detector, c.count) for c in bounded.cells if not c.passed]
+
+
+def test_each_cell_is_judged_by_fisher_on_both_samples_as_they_are(bounded: Evaluation) -> None:
+    for c in bounded.cells:
+        assert (c.trials, c.paper_trials) == (60, PAPER_N)
+        assert c.p_value == fisher_exact(c.count, c.trials, c.paper_count, c.paper_trials)
+        assert c.passed is (c.p_value >= ALPHA)
+    text = render_table(bounded)
+    assert "Fisher exact, two-sided" in text and "same Bernoulli rate" in text
+    grasp_force = next(c for c in bounded.cells if (c.action, c.detector) == ("grasp", "force"))
+    assert f"{grasp_force.count}/60" in text  # sim k/n is shown beside the paper's 10/60
 
 
 def test_adaptive_strategy_beats_each_fixed_single_modality_detector_on_false_alarms(bounded: Evaluation) -> None:
@@ -119,6 +177,81 @@ def test_run_evaluate_writes_a_readable_table() -> None:
 def test_run_evaluate_rejects_bad_input_naming_the_value(trials: object, seed: object, needle: str) -> None:
     with pytest.raises(SignalError, match=needle):
         run_evaluate(trials=trials, seed=seed, as_json=False, progress=False, out=io.StringIO())  # type: ignore[arg-type]
+
+
+# --------------------------------------------------------------------------- several seeds
+
+
+@pytest.fixture(scope="module")
+def sweep() -> Sweep:
+    return evaluate_seeds(20, 4, 2)
+
+
+def test_a_sweep_runs_consecutive_seeds_each_exactly_as_a_single_run(sweep: Sweep) -> None:
+    assert sweep.seeds == (4, 5) and [r.seed for r in sweep.runs] == [4, 5]
+    assert sweep.runs[1].to_json() == evaluate(20, 5).to_json()
+
+
+def test_a_sweep_counts_per_cell_the_seeds_that_pass(sweep: Sweep) -> None:
+    assert len(sweep.cells) == 21
+    for i, c in enumerate(sweep.cells):
+        per = [r.cells[i] for r in sweep.runs]
+        assert c.counts == tuple(x.count for x in per)
+        assert c.passes == sum(x.passed for x in per)
+        assert c.holds is (c.passes == 2)  # more than half of 2 seeds
+        assert c.rate == Spread(np.mean([x.rate for x in per]), min(x.rate for x in per), max(x.rate for x in per), 2)
+    assert sweep.all_hold is all(c.passes == 2 for c in sweep.cells)
+
+
+def test_a_sweep_gives_mission_figures_as_mean_and_range(sweep: Sweep) -> None:
+    for i, m in enumerate(sweep.missions):
+        per = [r.missions[i] for r in sweep.runs]
+        assert m.strategy == per[0].strategy
+        assert m.p_any_fa.min == min(x.p_any_fa for x in per) and m.p_any_fa.max == max(x.p_any_fa for x in per)
+        assert m.fa_per_mission.mean == pytest.approx(np.mean([x.fa_per_mission for x in per]))
+        assert m.miss_rate.mean == pytest.approx(1 - m.mean_tpr.mean)
+        assert sum(m.rule_picks.values()) == 2
+    oracle = next(m for m in sweep.missions if m.strategy == "oracle")
+    text = render_sweep(sweep)
+    assert "seeds 4..5 (2 seeds)" in text and "oracle's rules" in text
+    assert all(f"{rules}: {n}/2 seeds" in text for rules, n in oracle.rule_picks.items())
+
+
+def test_spread_skips_seeds_without_the_figure() -> None:
+    assert Spread.of([None, 0.2, 0.4]) == Spread(pytest.approx(0.3), 0.2, 0.4, 2)  # type: ignore[arg-type]
+    assert Spread.of([None, None]) is None
+
+
+def test_run_evaluate_with_seeds_writes_json_and_its_exit_status_says_whether_every_cell_holds() -> None:
+    out = io.StringIO()
+    rc = run_evaluate(trials=20, seed=4, as_json=True, progress=False, out=out, seeds=2)
+    data = json.loads(out.getvalue())
+    assert data["seeds"] == [4, 5] and data["test"] == "Fisher exact, two-sided" and data["alpha"] == ALPHA
+    assert len(data["per_seed"]) == 2 and len(data["cells"]) == 21
+    assert all(set(c) >= {"counts", "p_values", "passes", "seeds", "holds", "rate"} for c in data["cells"])
+    assert {"p_any_fa", "fa_per_mission", "mean_tpr", "miss_rate", "rule_picks"} <= set(data["missions"][0])
+    assert rc == (0 if data["all_hold"] else 1) and data["all_hold"] is all(c["holds"] for c in data["cells"])
+
+
+def test_same_seeds_give_the_same_sweep_report_byte_for_byte() -> None:
+    a, b = io.StringIO(), io.StringIO()
+    run_evaluate(trials=8, seed=2, as_json=False, progress=False, out=a, seeds=2)
+    run_evaluate(trials=8, seed=2, as_json=False, progress=False, out=b, seeds=2)
+    assert a.getvalue() == b.getvalue() and "passes" in a.getvalue()
+
+
+@pytest.mark.parametrize(("seeds", "needle"), [(0, "seeds 0"), (-2, "seeds -2"), (2.5, "seeds 2.5"), (True, "seeds True"),
+                                               (5000, "more than 1000")])
+def test_run_evaluate_rejects_a_bad_seed_count(seeds: object, needle: str) -> None:
+    with pytest.raises(SignalError, match=needle):
+        run_evaluate(trials=5, seed=1, as_json=False, progress=False, out=io.StringIO(), seeds=seeds)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "nan", "2.5", "ten"])
+def test_cli_refuses_a_bad_seeds_value_in_one_line_with_exit_2(value: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["evaluate", "--trials", "5", "--seeds", value]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1 and "--seeds" in captured.err
 
 
 @pytest.mark.slow

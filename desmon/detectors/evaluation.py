@@ -10,10 +10,12 @@ detector's outcome is measured:
   (``t_s`` = slip-motion onset); latency of the first such alarm relative to motion
   onset and load onset; direction accuracy of that alarm (force, combined).
 
-Each cell is compared with the paper's count ``k/60`` by a two-sided exact binomial
-test at alpha = 0.01 whose null rate is the simulated rate, estimated as
-``(x + 0.5) / (n + 1)`` so that 0/n and n/n do not make the test degenerate. Wilson
-95 % bands are printed for both the paper and the simulation.
+Each cell's simulated count ``k/n`` is compared with the paper's ``k/60`` by Fisher's
+exact test, two-sided, on the 2x2 table of the two samples (:func:`fisher_exact`): the
+null hypothesis is that both samples come from the same Bernoulli rate; the cell passes
+when p >= alpha = 0.01. Wilson 95 % bands are printed for both samples (descriptive
+only). :func:`evaluate_seeds` repeats the whole evaluation for several seeds and counts,
+per cell, the seeds that pass; mission figures become mean [min..max] over the seeds.
 
 Mission level (§6.3): grasp -> move_base -> release with at most one injected slip,
 for fixed tactile / force / combined, adaptive R* (grasp->combined,
@@ -58,12 +60,19 @@ __all__ = [
     "CellResult",
     "MissionResult",
     "Evaluation",
-    "binomial_two_sided",
+    "Spread",
+    "CellSweep",
+    "MissionSweep",
+    "Sweep",
+    "fisher_exact",
     "wilson",
     "evaluate_actions",
     "evaluate_missions",
     "evaluate",
+    "evaluate_seeds",
+    "sweep_of",
     "render_table",
+    "render_sweep",
     "run_evaluate",
 ]
 
@@ -84,6 +93,8 @@ PAPER_COUNTS: Final[dict[str, tuple[int, int, int]]] = {
 }
 PAPER_N: Final = 60
 ALPHA: Final = 0.01
+FISHER_REL_TOL: Final = 1e-7
+TEST_NAME: Final = "Fisher exact, two-sided"
 PRE: Final = 0.5
 CHUNK: Final = 200
 TP_BEFORE: Final = 0.3
@@ -103,31 +114,37 @@ SLIP_AT: Final = (1.6, 1.8)  # slip-motion onset in slip trials (s from trial st
 # --------------------------------------------------------------------------- statistics
 
 
-def _log_pmf(i: int, n: int, p: float) -> float:
-    if p <= 0.0:
-        return 0.0 if i == 0 else -math.inf
-    if p >= 1.0:
-        return 0.0 if i == n else -math.inf
-    return math.lgamma(n + 1) - math.lgamma(i + 1) - math.lgamma(n - i + 1) + i * math.log(p) + (n - i) * math.log1p(-p)
+def _log_choose(n: int, k: int) -> float:
+    return math.lgamma(n + 1) - math.lgamma(k + 1) - math.lgamma(n - k + 1)
 
 
-def binomial_two_sided(k: int, n: int, p: float) -> float:
-    """Exact two-sided binomial p-value of ``k`` successes in ``n`` under rate ``p``.
+def _check_count(name: str, k: object, n: object) -> tuple[int, int]:
+    ok = all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in (k, n))
+    if not ok or not 0 <= k <= n or n < 1:  # type: ignore[operator]
+        raise SignalError(f"Fisher test: {name} needs whole numbers 0 <= k <= n and n >= 1, got {k!r} of {n!r}")
+    return int(k), int(n)  # type: ignore[call-overload]
 
-    Sums the probabilities of every outcome no more likely than ``k`` (the usual
-    "minimum likelihood" definition), with a 1e-7 relative tolerance for ties.
+
+def fisher_exact(k1: int, n1: int, k2: int, n2: int) -> float:
+    """Two-sided Fisher exact p-value: are ``k1`` of ``n1`` and ``k2`` of ``n2`` one Bernoulli rate?
+
+    The 2x2 table ``[[k1, n1 - k1], [k2, n2 - k2]]`` is conditioned on its margins, so the
+    first cell follows the hypergeometric law ``C(n1, x) C(n2, K - x) / C(n1 + n2, K)``
+    with ``K = k1 + k2``. The p-value sums the probabilities of every table no more likely
+    than the observed one (the usual two-sided definition, as in R's ``fisher.test``),
+    with a relative tolerance of ``FISHER_REL_TOL`` so that tables tied with the observed
+    one in exact arithmetic are not lost to rounding.
     """
-    if not (0 <= k <= n) or n < 1:
-        raise SignalError(f"binomial test: need 0 <= k <= n and n >= 1, got k={k}, n={n}")
-    if not 0.0 <= p <= 1.0:
-        raise SignalError(f"binomial test: rate {p!r} must lie in [0, 1]")
-    ref = _log_pmf(k, n, p)
-    total = 0.0
-    for i in range(n + 1):
-        lp = _log_pmf(i, n, p)
-        if lp <= ref + 1e-7:
-            total += math.exp(lp)
-    return min(1.0, total)
+    k1, n1 = _check_count("the first sample", k1, n1)
+    k2, n2 = _check_count("the second sample", k2, n2)
+    total = k1 + k2
+    lo, hi = max(0, total - n2), min(n1, total)
+    logs = [_log_choose(n1, x) + _log_choose(n2, total - x) for x in range(lo, hi + 1)]
+    top = max(logs)
+    ref = logs[k1 - lo] + math.log1p(FISHER_REL_TOL)
+    weights = [math.exp(lp - top) for lp in logs]
+    kept = math.fsum(w for w, lp in zip(weights, logs) if lp <= ref)
+    return min(1.0, kept / math.fsum(weights))
 
 
 def wilson(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
@@ -325,8 +342,7 @@ def evaluate_actions(
             h = np.concatenate(hits[d])
             k = int(h.sum())
             paper_k = PAPER_COUNTS[action][di]
-            p_null = (k + 0.5) / (trials + 1)
-            pv = binomial_two_sided(paper_k, PAPER_N, p_null)
+            pv = fisher_exact(k, trials, paper_k, PAPER_N)
             extra: dict[str, float | None] = {}
             if slip:
                 lm = np.concatenate(lat_m[d])
@@ -523,9 +539,13 @@ def evaluate_missions(
 # --------------------------------------------------------------------------- whole evaluation, presentation
 
 
+NULL_HYPOTHESIS: Final = "the simulated and the published sample come from the same Bernoulli rate"
+MAX_SEEDS: Final = 1000
+
+
 @dataclass(frozen=True, slots=True)
 class Evaluation:
-    """Everything ``desmon evaluate`` reports."""
+    """Everything ``desmon evaluate`` reports for one seed."""
 
     trials: int
     seed: int
@@ -540,6 +560,8 @@ class Evaluation:
         return {
             "trials": self.trials,
             "seed": self.seed,
+            "test": TEST_NAME,
+            "null": NULL_HYPOTHESIS,
             "alpha": ALPHA,
             "all_pass": self.all_pass,
             "cells": [asdict(c) for c in self.cells],
@@ -555,6 +577,14 @@ def _check_args(trials: object, seed: object) -> tuple[int, int]:
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise SignalError(f"seed {seed!r} must be a non-negative integer; pass e.g. --seed 1")
     return int(trials), int(seed)
+
+
+def _check_seeds(seeds: object) -> int:
+    if isinstance(seeds, bool) or not isinstance(seeds, (int, np.integer)) or seeds < 1:
+        raise SignalError(f"seeds {seeds!r} must be a positive integer (how many seeds to run); pass e.g. --seeds 10")
+    if seeds > MAX_SEEDS:
+        raise SignalError(f"seeds {seeds!r} is more than {MAX_SEEDS}; pass a smaller --seeds (10 is enough)")
+    return int(seeds)
 
 
 def evaluate(
@@ -574,6 +604,180 @@ def evaluate(
     return Evaluation(trials, seed, tuple(cells), tuple(ms))
 
 
+# --------------------------------------------------------------------------- several seeds
+
+
+@dataclass(frozen=True, slots=True)
+class Spread:
+    """Mean, minimum and maximum of one figure over the seeds that have it (``seeds`` of them)."""
+
+    mean: float
+    min: float
+    max: float
+    seeds: int
+
+    @staticmethod
+    def of(values: Sequence[float | None]) -> Spread | None:
+        xs = [float(v) for v in values if v is not None]
+        if not xs:
+            return None
+        return Spread(math.fsum(xs) / len(xs), min(xs), max(xs), len(xs))
+
+
+def _spread(values: Sequence[float]) -> Spread:
+    s = Spread.of(values)
+    assert s is not None
+    return s
+
+
+@dataclass(frozen=True, slots=True)
+class CellSweep:
+    """One detector x action cell over several seeds: one Fisher test per seed."""
+
+    action: str
+    detector: str
+    kind: str
+    trials: int
+    counts: tuple[int, ...]  # simulated k per seed
+    paper_count: int
+    paper_trials: int
+    p_values: tuple[float, ...]
+    passes: int  # seeds whose test does not reject at ALPHA
+    rate: Spread
+    p_min: float
+    p_median: float
+
+    @property
+    def seeds(self) -> int:
+        return len(self.counts)
+
+    @property
+    def holds(self) -> bool:
+        """Passes on more than half of the seeds."""
+        return 2 * self.passes > self.seeds
+
+
+@dataclass(frozen=True, slots=True)
+class MissionSweep:
+    """One mission strategy over several seeds: mean [min..max] of each figure."""
+
+    strategy: str
+    switching: str
+    rule_picks: dict[str, int]  # "grasp->..., move_base->..., release->..." -> seeds that used those rules
+    p_any_fa: Spread
+    fa_per_mission: Spread
+    mean_tpr: Spread
+    miss_rate: Spread
+    tpr: dict[str, Spread]
+    latency_median: Spread | None
+    latency_p95: Spread | None
+    latency_load_median: Spread | None
+    switches: Spread
+    blind_time: Spread
+
+
+def _rules_text(rules: dict[str, str]) -> str:
+    return ", ".join(f"{c}->{rules[c]}" for c in MISSION_CONTEXTS)
+
+
+@dataclass(frozen=True, slots=True)
+class Sweep:
+    """Everything ``desmon evaluate --seeds N`` reports: each seed's run and the figures over the seeds."""
+
+    trials: int
+    seeds: tuple[int, ...]
+    runs: tuple[Evaluation, ...]
+    cells: tuple[CellSweep, ...]
+    missions: tuple[MissionSweep, ...]
+
+    @property
+    def all_hold(self) -> bool:
+        """Every cell passes on more than half of the seeds."""
+        return all(c.holds for c in self.cells)
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "trials": self.trials,
+            "seeds": list(self.seeds),
+            "test": TEST_NAME,
+            "null": NULL_HYPOTHESIS,
+            "alpha": ALPHA,
+            "all_hold": self.all_hold,
+            "cells": [{**asdict(c), "seeds": c.seeds, "holds": c.holds} for c in self.cells],
+            "missions": [asdict(m) for m in self.missions],
+            "per_seed": [ev.to_json() for ev in self.runs],
+        }
+
+
+def sweep_of(runs: Sequence[Evaluation]) -> Sweep:
+    """Combine per-seed evaluations (same trials, same cells and strategies) into a :class:`Sweep`."""
+    if not runs:
+        raise SignalError("a sweep needs at least one evaluated seed")
+    trials = runs[0].trials
+    if any(r.trials != trials for r in runs):
+        raise SignalError("a sweep combines runs of one trial count only")
+    cells = []
+    for i, c0 in enumerate(runs[0].cells):
+        per = [r.cells[i] for r in runs]
+        if any((c.action, c.detector) != (c0.action, c0.detector) for c in per):
+            raise SignalError("a sweep combines runs with the same cells only")
+        ps = [c.p_value for c in per]
+        cells.append(
+            CellSweep(
+                c0.action, c0.detector, c0.kind, trials, tuple(c.count for c in per), c0.paper_count, c0.paper_trials,
+                tuple(ps), sum(c.passed for c in per), _spread([c.rate for c in per]), min(ps), float(np.median(ps)),
+            )
+        )
+    missions = []
+    for i, m0 in enumerate(runs[0].missions):
+        per_m = [r.missions[i] for r in runs]
+        picks: dict[str, int] = {}
+        for m in per_m:
+            key = _rules_text(m.rules)
+            picks[key] = picks.get(key, 0) + 1
+        missions.append(
+            MissionSweep(
+                m0.strategy, m0.switching, dict(sorted(picks.items(), key=lambda kv: (-kv[1], kv[0]))),
+                _spread([m.p_any_fa for m in per_m]), _spread([m.fa_per_mission for m in per_m]),
+                _spread([m.mean_tpr for m in per_m]), _spread([m.miss_rate for m in per_m]),
+                {c: _spread([m.tpr[c] for m in per_m]) for c in MISSION_CONTEXTS},
+                Spread.of([m.latency_median for m in per_m]), Spread.of([m.latency_p95 for m in per_m]),
+                Spread.of([m.latency_load_median for m in per_m]),
+                _spread([m.switches for m in per_m]), _spread([m.blind_time for m in per_m]),
+            )
+        )
+    return Sweep(trials, tuple(r.seed for r in runs), tuple(runs), tuple(cells), tuple(missions))
+
+
+def evaluate_seeds(
+    trials: int,
+    seed: int,
+    seeds: int,
+    *,
+    missions: bool = True,
+    mission_trials: int | None = None,
+    progress: Callable[[int], None] | None = None,
+    on_seed: Callable[[int, int], None] | None = None,
+    params: SignalParams = SignalParams(),
+) -> Sweep:
+    """:func:`evaluate` for seeds ``seed .. seed + seeds - 1``, combined by :func:`sweep_of`.
+
+    ``on_seed(i, s)`` is called before the ``i``-th run (0-based), which uses seed ``s``.
+    Each run is exactly ``evaluate(trials, s)``: a seed's figures do not depend on the others.
+    """
+    trials, seed = _check_args(trials, seed)
+    seeds = _check_seeds(seeds)
+    runs = []
+    for i, s in enumerate(range(seed, seed + seeds)):
+        if on_seed is not None:
+            on_seed(i, s)
+        runs.append(evaluate(trials, s, missions=missions, mission_trials=mission_trials, progress=progress, params=params))
+    return sweep_of(runs)
+
+
+# --------------------------------------------------------------------------- presentation
+
+
 def _pct(x: float | None) -> str:
     return "   -  " if x is None else f"{100 * x:5.1f}%"
 
@@ -582,24 +786,29 @@ def _ms(x: float | None) -> str:
     return "    -" if x is None else f"{1000 * x:+5.0f}"
 
 
+def _test_line() -> str:
+    return (f"test per cell: {TEST_NAME}, on the 2x2 table sim k/n vs paper k/60; "
+            f"null: {NULL_HYPOTHESIS}; pass if p >= alpha = {ALPHA}")
+
+
 def render_table(ev: Evaluation) -> str:
-    """The readable report."""
+    """The readable report of one seed."""
     lines = [
-        f"desmon evaluate: {ev.trials} trials per action, seed {ev.seed}; "
-        f"paper = Sanchez et al. 2016 Tables 1-2 (k/60); test: exact two-sided binomial, alpha {ALPHA}",
+        f"desmon evaluate: {ev.trials} trials per action, seed {ev.seed}; paper = Sanchez et al. 2016 Tables 1-2 (k/60)",
+        _test_line(),
         "",
-        f"{'action':<11}{'det':<9}{'':3}{'sim':>7}{'sim 95% Wilson':>17}{'paper':>8}{'paper 95% Wilson':>19}{'p':>8}  verdict"
-        f"{'lat med/p95 (ms, motion)':>27}{'load med':>10}{'dir ok':>8}",
+        f"{'action':<11}{'det':<9}{'':3}{'sim k/n':>10}{'rate':>8}{'sim 95% Wilson':>16}{'paper':>8}{'paper 95% Wilson':>19}"
+        f"{'p':>8}  verdict{'lat med/p95 (ms, motion)':>27}{'load med':>10}{'dir ok':>8}",
     ]
     for c in ev.cells:
         ws = f"[{100 * c.wilson_sim[0]:4.1f},{100 * c.wilson_sim[1]:5.1f}]"
         wp = f"[{100 * c.wilson_paper[0]:4.1f},{100 * c.wilson_paper[1]:5.1f}]"
         lat = "" if c.kind == "FP" else f"{_ms(c.latency_motion_median)} / {_ms(c.latency_motion_p95)}"
         lines.append(
-            f"{c.action:<11}{c.detector:<9}{c.kind:<3}{_pct(c.rate):>7}{ws:>17}{f'{c.paper_count}/{c.paper_trials}':>8}"
-            f"{wp:>19}{c.p_value:8.3f}  {'pass' if c.passed else 'FAIL'}   {lat:>24}"
+            f"{c.action:<11}{c.detector:<9}{c.kind:<3}{f'{c.count}/{c.trials}':>10}{_pct(c.rate):>8}{ws:>16}"
+            f"{f'{c.paper_count}/{c.paper_trials}':>8}{wp:>19}{c.p_value:8.3f}  {'pass' if c.passed else 'FAIL'}   {lat:>24}"
             f"{'' if c.kind == 'FP' else _ms(c.latency_load_median):>10}"
-            f"{'' if c.direction_accuracy is None else _pct(c.direction_accuracy):>8}"
+            f"{'' if c.direction_accuracy is None else _pct(c.direction_accuracy):>8}".rstrip()
         )
     n_pass = sum(c.passed for c in ev.cells)
     lines += ["", f"{n_pass}/{len(ev.cells)} cells pass" + ("" if ev.all_pass else "  (FAIL)")]
@@ -612,11 +821,83 @@ def render_table(ev: Evaluation) -> str:
         ]
         for m in ev.missions:
             tp = "/".join(f"{100 * m.tpr[c]:.0f}" for c in MISSION_CONTEXTS)
-            rules = ", ".join(f"{c}->{m.rules[c]}" for c in MISSION_CONTEXTS)
             lines.append(
                 f"{m.strategy:<20}{m.switching:<7}{m.fa_per_mission:11.3f}{_pct(m.p_any_fa):>10}{tp:>19}{_pct(m.miss_rate):>7}"
-                f"{_ms(m.latency_median):>9}{_ms(m.latency_p95):>7}{_ms(m.latency_load_median):>9}{m.switches:9.0f}{m.blind_time:9.2f}  {rules}"
+                f"{_ms(m.latency_median):>9}{_ms(m.latency_p95):>7}{_ms(m.latency_load_median):>9}{m.switches:9.0f}"
+                f"{m.blind_time:9.2f}  {_rules_text(m.rules)}"
             )
+    return "\n".join(lines) + "\n"
+
+
+def _range(s: Spread | None, fmt: Callable[[float], str]) -> str:
+    """``mean [min..max]``."""
+    return "-" if s is None else f"{fmt(s.mean)} [{fmt(s.min)}..{fmt(s.max)}]"
+
+
+def _p1(x: float) -> str:
+    return f"{100 * x:.1f}"
+
+
+def _f3(x: float) -> str:
+    return f"{x:.3f}"
+
+
+def _f2(x: float) -> str:
+    return f"{x:.2f}"
+
+
+def _ms0(x: float) -> str:
+    return f"{1000 * x:+.0f}"
+
+
+def _seed_span(seeds: Sequence[int]) -> str:
+    return f"seed {seeds[0]}" if len(seeds) == 1 else f"seeds {seeds[0]}..{seeds[-1]} ({len(seeds)} seeds)"
+
+
+def render_sweep(sw: Sweep) -> str:
+    """The readable report over several seeds: per-cell pass counts, mission figures as mean [min..max]."""
+    n = len(sw.seeds)
+    lines = [
+        f"desmon evaluate: {sw.trials} trials per action, {_seed_span(sw.seeds)}; "
+        f"paper = Sanchez et al. 2016 Tables 1-2 (k/60)",
+        _test_line() + "; one test per seed",
+        "",
+        f"{'action':<11}{'det':<9}{'':4}{'paper':>6}  {'sim rate % mean [min..max]':<28}{'p min':>7}{'p median':>10}{'passes':>9}",
+    ]
+    for c in sw.cells:
+        lines.append(
+            f"{c.action:<11}{c.detector:<9}{c.kind:<4}{f'{c.paper_count}/{c.paper_trials}':>6}  {_range(c.rate, _p1):<28}"
+            f"{c.p_min:7.3f}{c.p_median:10.3f}{f'{c.passes}/{c.seeds}':>9}" + ("" if c.holds else "  FAILS on most seeds")
+        )
+    every = sum(c.passes == c.seeds for c in sw.cells)
+    most = sum(c.holds for c in sw.cells)
+    tests = sum(c.passes for c in sw.cells)
+    lines += [
+        "",
+        f"cells passing on every seed: {every}/{len(sw.cells)}; on more than half of the seeds: {most}/{len(sw.cells)}; "
+        f"tests passed: {tests}/{len(sw.cells) * n}" + ("" if sw.all_hold else "  (FAIL)"),
+    ]
+    if sw.missions:
+        lines += [
+            "",
+            "Mission grasp -> move_base -> release, each figure mean [min..max] over the seeds "
+            "(slip-free missions for false alarms; one pulled slip per slip mission)",
+            f"{'strategy':<20}{'switch':<7}{'P(FA>=1) %':<22}{'FA/mission':<24}{'slips caught %':<22}{'miss %':<22}"
+            f"{'TPR % g/b/r (means)':<21}{'lat med ms':<20}{'blind s':<20}rules",
+        ]
+        for m in sw.missions:
+            tp = "/".join(f"{100 * m.tpr[c].mean:.0f}" for c in MISSION_CONTEXTS)
+            top, count = next(iter(m.rule_picks.items()))
+            rules = top if count == n else f"{top} ({count}/{n} seeds)"
+            lines.append(
+                f"{m.strategy:<20}{m.switching:<7}{_range(m.p_any_fa, _p1):<22}{_range(m.fa_per_mission, _f3):<24}"
+                f"{_range(m.mean_tpr, _p1):<22}{_range(m.miss_rate, _p1):<22}{tp:<21}{_range(m.latency_median, _ms0):<20}"
+                f"{_range(m.blind_time, _f2):<20}{rules}"
+            )
+        oracle = next((m for m in sw.missions if m.strategy == "oracle"), None)
+        if oracle is not None:
+            lines += ["", "oracle's rules (per context the detector with the best TPR - FPR in that seed's run):"]
+            lines += [f"  {rules}: {count}/{n} seeds" for rules, count in oracle.rule_picks.items()]
     return "\n".join(lines) + "\n"
 
 
@@ -625,6 +906,7 @@ class _Progress:
         self.total = total
         self.done = 0
         self.stream = stream
+        self.label = ""
         self.t0 = time.perf_counter()
 
     def __call__(self, n: int) -> None:
@@ -632,26 +914,43 @@ class _Progress:
         frac = min(1.0, self.done / self.total)
         bar = "#" * int(30 * frac)
         rate = self.done / max(time.perf_counter() - self.t0, 1e-9)
-        self.stream.write(f"\r[{bar:<30}] {100 * frac:5.1f}%  {rate:7.0f} trials/s")
+        self.stream.write(f"\r[{bar:<30}] {100 * frac:5.1f}%  {rate:7.0f} trials/s{self.label}")
         if self.done >= self.total:
             self.stream.write("\n")
         self.stream.flush()
 
 
-def run_evaluate(trials: int, seed: int, as_json: bool, progress: bool, out: TextIO) -> int:
-    """CLI entry: evaluate, write a table (or JSON) to ``out``, return 0 iff all 21 cells pass.
+def run_evaluate(trials: int, seed: int, as_json: bool, progress: bool, out: TextIO, seeds: int | None = None) -> int:
+    """CLI entry: evaluate, write a table (or JSON) to ``out``.
 
+    ``seeds`` None: one run with ``seed``; exit status 0 iff all 21 cells pass.
+    ``seeds`` N: runs with seeds ``seed .. seed + N - 1`` (:func:`evaluate_seeds`); exit
+    status 0 iff every cell passes on more than half of the seeds.
     The progress bar goes to stderr when ``progress`` is true and stderr is a terminal
     (or ``DESMON_PROGRESS=1`` forces it).
     """
     trials, seed = _check_args(trials, seed)
-    cb: Callable[[int], None] | None = None
+    n_seeds = 1 if seeds is None else _check_seeds(seeds)
+    cb: _Progress | None = None
     if progress and (sys.stderr.isatty() or os.environ.get("DESMON_PROGRESS") == "1"):
-        cb = _Progress(trials * (len(P1_ACTIONS) + 1 + len(MISSION_CONTEXTS)), sys.stderr)
-    ev = evaluate(trials, seed, progress=cb)
+        cb = _Progress(trials * (len(P1_ACTIONS) + 1 + len(MISSION_CONTEXTS)) * n_seeds, sys.stderr)
+    if seeds is None:
+        ev = evaluate(trials, seed, progress=cb)
+        if as_json:
+            json.dump(ev.to_json(), out, indent=2)
+            out.write("\n")
+        else:
+            out.write(render_table(ev))
+        return 0 if ev.all_pass else 1
+
+    def on_seed(i: int, s: int) -> None:
+        if cb is not None:
+            cb.label = f"  seed {s} ({i + 1}/{n_seeds})"
+
+    sw = evaluate_seeds(trials, seed, n_seeds, progress=cb, on_seed=on_seed)
     if as_json:
-        json.dump(ev.to_json(), out, indent=2)
+        json.dump(sw.to_json(), out, indent=2)
         out.write("\n")
     else:
-        out.write(render_table(ev))
-    return 0 if ev.all_pass else 1
+        out.write(render_sweep(sw))
+    return 0 if sw.all_hold else 1

@@ -1,6 +1,6 @@
 """DepSL requirements (the OMG deployment-specification kinds) and deployment specifications.
 
-The semantics of each kind (DESIGN.md §3) is implemented once, in
+The semantics of each kind (docs/design.md §4) is implemented once, in
 :mod:`desmon.deployment.validity`; this module is pure vocabulary and validation.
 """
 

@@ -1,4 +1,4 @@
-"""The metrics of DESIGN.md §6, accumulated while the world runs.
+"""The metrics of docs/design.md §10, accumulated while the world runs.
 
 * **Unmonitored exposure**: seconds in which the robot's *true* action context is one
   for which the selector wants detectors, and at least one of the selector's slots has
