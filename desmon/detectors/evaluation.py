@@ -33,7 +33,7 @@ import math
 import os
 import sys
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from typing import Callable, Final, Sequence, TextIO
 
 import numpy as np
@@ -451,7 +451,7 @@ def evaluate_missions(
         blind = []
         for b, runs in batches[None]:
             n = b.wrench.shape[0]
-            times_l, alarm_l = [], []
+            times_l: list[Arr] = []
             for t_act, lo, hi, det in plan:
                 r = runs[t_act][det]
                 t = r.times if r.times.ndim == 2 else np.broadcast_to(r.times, r.alarm.shape)
