@@ -67,6 +67,8 @@ def format_summary(r: RunResult, wall: float | None = None) -> str:
         ("starts / failed starts", None),
         ("stops", "stops"),
         ("migrations", "migrations"),
+        ("upgrades / failed upgrades", None),
+        ("upgrade blind time (s)", "upgrade_blind_s"),
         ("slips injected", "slips_injected"),
         ("slips detected", "slips_detected"),
         ("slips missed", "slips_missed"),
@@ -81,6 +83,8 @@ def format_summary(r: RunResult, wall: float | None = None) -> str:
         if key is None:
             if label.startswith("starts"):
                 val = f"{m['starts']} / {m['start_failures']}"
+            elif label.startswith("upgrades"):
+                val = f"{m['upgrades']} / {m['upgrades_failed']}"
             else:
                 val = f"{m['reactions']} / {m.get('audits', '-')}"
         elif key not in m:
