@@ -158,23 +158,24 @@ def run_command(
     if args.seed is not None and args.seed < 0:
         raise ScenarioError(f"--seed {args.seed!r}: give a non-negative integer")
     scenario = load_from_args(args)
-    horizon = getattr(scenario.world, "horizon", None)
-    if args.until is not None and horizon is not None and args.until > horizon:
+    from desmon.sim.world import world_of
+
+    horizon = float(world_of(scenario).horizon)  # declared, or derived from the timeline
+    if args.until is not None and args.until > horizon:
         raise ScenarioError(
             f"--until {args.until:g}: the scenario's task ends at its horizon of {horizon:g} s; "
             "give --until at most that (past it the last action would go on forever)"
         )
     if before_run is not None:
-        from desmon.sim.world import world_of
-
-        before_run(float(args.until) if args.until is not None else float(world_of(scenario).horizon))
-    progress = None
-    show = not getattr(args, "no_progress", False) and not args.json
+        before_run(float(args.until) if args.until is not None else horizon)
     t_wall = time.perf_counter()
-    if show:
-        def progress(now: float, horizon: float) -> None:
-            if time.perf_counter() - t_wall > 1.0:
-                print(f"desmon run: {100 * now / horizon:5.1f}%  t={now:.0f}/{horizon:.0f} s", file=err, flush=True)
+
+    def report_progress(now: float, end: float) -> None:
+        if time.perf_counter() - t_wall > 1.0:
+            print(f"desmon run: {100 * now / end:5.1f}%  t={now:.0f}/{end:.0f} s", file=err, flush=True)
+
+    show = not getattr(args, "no_progress", False) and not args.json
+    progress = report_progress if show else None
     with contextlib.ExitStack() as stack:
         # the trace replaces an existing file only once the run is complete (nothing lost on an error)
         fh = stack.enter_context(replacing(args.trace)) if args.trace else None
