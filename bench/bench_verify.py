@@ -45,24 +45,33 @@ from desmon.model.scenario import Scenario, TimedEvent
 from desmon.verify import Bounds, Checker, CheckResult, levels
 
 
-def build(n_platforms: int, load_platforms: int, max_failures: int | None, start_failures: int = 1) -> Scenario:
+def _robot(n_platforms: int, combined_reads: tuple[str, ...]) -> tuple[RobotBuilder, list[str], list[str]]:
+    """The bench robot: n 512 MB platforms, a wrench on the even ones and two pads on the
+    odd ones; the three detectors and their specifications (the rules are the caller's).
+    Returns the builder, the wrenches and the first pad of each odd platform."""
     r = RobotBuilder("bench")
-    devices, pads = [], []
+    wrenches, pads = [], []
     for i in range(n_platforms):
         pb = r.platform(f"pc{i}", memory=512)
         if i % 2 == 0:
             pb.device(f"wrench{i}", kind="force_sensor")
-            devices.append(f"wrench{i}")
+            wrenches.append(f"wrench{i}")
         else:
             pb.devices([f"pad{i}a", f"pad{i}b"], kind="tactile_pad")
             pads.append(f"pad{i}a")
-    for g, kind in (("force", "force_sensor"), ("tactile", "tactile_pad"), ("combined", None)):
+    for g, kinds in (("force", ("force_sensor",)), ("tactile", ("tactile_pad",)), ("combined", combined_reads)):
         with r.rpsl.perception_graph(g) as gb:
-            gb.sensor("s", reads=kind or "force_sensor")
-            gb.processing("p", inputs=["s"])
+            for j, kind in enumerate(kinds):
+                gb.sensor(f"s{j}", reads=kind)
+            gb.processing("p", inputs=[f"s{j}" for j in range(len(kinds))])
     r.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor").add_constraint("capacity", "memory", 100)
     r.depsl.deployment_specification("tactile").add_constraint("quantity", "tactile_pad", 2).add_constraint("capacity", "memory", 150)
     r.depsl.deployment_specification("combined").add_constraint("capacity", "memory", 250)
+    return r, wrenches, pads
+
+
+def build(n_platforms: int, load_platforms: int, max_failures: int | None, start_failures: int = 1) -> Scenario:
+    r, devices, pads = _robot(n_platforms, ("force_sensor",))
     r.rules({GRASP: ["force", "tactile"], MOVE_BASE: "tactile", RELEASE: "force", HOLD: "combined"})
     plats = tuple(f"pc{i}" for i in range(n_platforms))
     return Scenario(
@@ -83,24 +92,7 @@ def build(n_platforms: int, load_platforms: int, max_failures: int | None, start
 
 def build_fallbacks(n_platforms: int = 6, load_platforms: int = 6, pads_failing: int = 2) -> Scenario:
     """The fallback-heavy model (see the module docstring)."""
-    r = RobotBuilder("bench")
-    wrenches, pads = [], []
-    for i in range(n_platforms):
-        pb = r.platform(f"pc{i}", memory=512)
-        if i % 2 == 0:
-            pb.device(f"wrench{i}", kind="force_sensor")
-            wrenches.append(f"wrench{i}")
-        else:
-            pb.devices([f"pad{i}a", f"pad{i}b"], kind="tactile_pad")
-            pads.append(f"pad{i}a")
-    for g, kinds in (("force", ("force_sensor",)), ("tactile", ("tactile_pad",)), ("combined", ("force_sensor", "tactile_pad"))):
-        with r.rpsl.perception_graph(g) as gb:
-            for j, kind in enumerate(kinds):
-                gb.sensor(f"s{j}", reads=kind)
-            gb.processing("p", inputs=[f"s{j}" for j in range(len(kinds))])
-    r.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor").add_constraint("capacity", "memory", 100)
-    r.depsl.deployment_specification("tactile").add_constraint("quantity", "tactile_pad", 2).add_constraint("capacity", "memory", 150)
-    r.depsl.deployment_specification("combined").add_constraint("capacity", "memory", 250)
+    r, wrenches, pads = _robot(n_platforms, ("force_sensor", "tactile_pad"))
     r.rules({k: [v] for k, v in FALLBACK_SLOTS.items()})
     plats = tuple(f"pc{i}" for i in range(n_platforms))
     return Scenario(
@@ -130,7 +122,6 @@ def plain_fallback_bfs(scenario: Scenario, max_states: int | None = None) -> tup
     model = scenario.model
     plats = [p.name for p in model.platforms]
     devs = list(b.devices)
-    host = {d.name: d.platform for d in model.devices}
     lp = [plats.index(p) for p in b.loads]
     lv = [b.loads[p] for p in b.loads]
     acts = list(b.actions)
