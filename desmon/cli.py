@@ -332,6 +332,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-states", type=positive_int, default=2_000_000)
     p.add_argument("--max-depth", type=positive_int, default=None)
     p.add_argument("--timeout", type=positive_seconds, default=None, help="seconds")
+    p.add_argument(
+        "--max-memory", type=float, default=None, metavar="MB",
+        help="memory budget: stop INCOMPLETE (exit 3) once the search's resident memory (workers included) exceeds it",
+    )
     p.add_argument("--symmetry", action="store_true", help="canonicalise interchangeable platforms")
     p.add_argument(
         "--workers", type=worker_count, default=1, metavar="N",

@@ -15,14 +15,19 @@ nondeterminism of the system under test.
 
 from __future__ import annotations
 
+import contextlib
 import gc
+import math
+import os
 import resource
+import signal
 import sys
-from array import array
+import threading
 import time
+from array import array
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import Any, Container, Iterable, Iterator, Sequence
+from typing import Any, Callable, Container, Iterable, Iterator, Sequence, TextIO
 
 from desmon.deployment.core import DeploymentCore
 from desmon.deployment.deployer import Deployer
@@ -37,9 +42,15 @@ from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.replay import initial_reaction
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore
 
-__all__ = ["Checker", "CheckResult", "Counterexample", "Step", "Label", "Record", "Segment", "HOLDS", "VIOLATED", "INCOMPLETE", "EVENT_KINDS", "NOT_CHECKED", "ENGINES"]
+__all__ = [
+    "Checker", "CheckResult", "Counterexample", "Step", "Label", "Record", "Segment", "Budget", "HOLDS", "VIOLATED", "INCOMPLETE",
+    "INTERRUPTED", "EVENT_KINDS", "NOT_CHECKED", "ENGINES", "EXIT_INTERRUPTED", "resident_mb",
+]
 
 HOLDS, VIOLATED, INCOMPLETE = "HOLDS", "VIOLATED", "INCOMPLETE"
+#: why a search stopped by Ctrl-C is incomplete (:attr:`CheckResult.incomplete`), and its exit
+#: code (128 + SIGINT, as a shell reports it)
+INTERRUPTED, EXIT_INTERRUPTED = "interrupted", 130
 #: How :meth:`Checker.run` computes transitions (see there).
 ENGINES = ("auto", "table", "direct")
 EVENT_KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
@@ -142,6 +153,9 @@ class CheckResult:
     engine: str = "direct"  # "table" or "direct" (see Checker.run)
     records: int = 0  # table engine: real runs of the core it recorded (reactions and invariant checks)
     engine_note: str = ""  # why engine "auto" ran the direct engine
+    incomplete: str = ""  # why the search stopped early ("" if it did not), whatever the verdict
+    timeout: float | None = None  # the time limit it ran under (seconds)
+    max_memory: float | None = None  # the memory budget it ran under (MB)
 
     @property
     def states_per_second(self) -> float:
@@ -152,12 +166,179 @@ class CheckResult:
         return self.transitions / self.seconds if self.seconds > 0 else float("inf")
 
     @property
+    def interrupted(self) -> bool:
+        """Whether Ctrl-C stopped the search (the report is what it explored until then)."""
+        return self.incomplete == INTERRUPTED
+
+    @property
     def exit_code(self) -> int:
+        if self.interrupted:
+            return EXIT_INTERRUPTED
         return {HOLDS: 0, VIOLATED: 1, INCOMPLETE: 3}[self.verdict]
 
 
 def _peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def _resume_gc() -> None:
+    """Turn the cyclic collector back on after a search that paused it.
+
+    Everything the search allocated is still in the youngest generation: the first
+    allocation after ``gc.enable()`` would walk it all (0.4 s after 10 s of the direct
+    engine on bench_7p, time past a ``--timeout``). Freezing and unfreezing first moves
+    every tracked object to the oldest generation in O(1); it is walked again only by a
+    full collection, when the heap has grown by a quarter.
+    """
+    gc.freeze()
+    gc.unfreeze()
+    gc.enable()
+
+
+#: How often (seconds) a search reads its resident memory (the budget and the progress line);
+#: with worker processes their proportional share is read too, less often.
+MEMORY_EVERY = 0.05
+MEMORY_EVERY_WORKERS = 0.25
+
+_PAGE_MB = (os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096) / 2**20
+
+
+def resident_mb(pid: int | str = "self") -> float | None:
+    """The resident memory of process ``pid`` in MB (``/proc/<pid>/statm``), None where unreadable."""
+    try:
+        with open(f"/proc/{pid}/statm", "rb") as fh:
+            return int(fh.read().split()[1]) * _PAGE_MB
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def proportional_mb(pid: int | str) -> float | None:
+    """Process ``pid``'s proportional share of resident memory in MB (Pss: pages shared with
+    forked siblings count once in a sum), None where unreadable."""
+    try:
+        with open(f"/proc/{pid}/smaps_rollup", "rb") as fh:
+            for line in fh:
+                if line.startswith(b"Pss:"):
+                    return int(line.split()[1]) / 1024.0
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+class Budget:
+    """What ends a search before its caps: the time limit, the memory budget and Ctrl-C.
+
+    Both engines call :meth:`spent` often: between two expansions (direct engine), between
+    two recorded runs of the core, two rounds of a tree walk and every few new states
+    (table engine). It reads the clock every time (tens of nanoseconds) and the resident
+    memory every :data:`MEMORY_EVERY` seconds, and it rewrites the progress line.
+    """
+
+    def __init__(
+        self,
+        t0: float,
+        *,
+        timeout: float | None = None,
+        timeout_spent: float = 0.0,
+        max_memory: float | None = None,
+        progress: bool = False,
+        progress_after: float = 1.0,
+        progress_every: float = 0.5,
+        out: TextIO | None = None,
+    ) -> None:
+        self.t0 = t0
+        self.timeout = timeout
+        self.before = timeout_spent  # seconds of the timeout spent before the search started
+        self.deadline = math.inf if timeout is None else t0 + timeout - timeout_spent
+        self.max_memory = max_memory
+        self.progress, self.progress_after, self.progress_every = progress, progress_after, progress_every
+        self.out = out if out is not None else sys.stderr
+        self.reason = ""  # why the search must stop ("" while it may go on)
+        self.interrupted = False  # set by the Ctrl-C handler of Checker.run
+        self.memory = 0.0  # the last resident memory read (MB; the workers' shares included)
+        #: the worker processes whose memory counts (set by the direct engine's pool)
+        self.pids: Callable[[], Iterable[int]] = tuple
+        #: (states, transitions, depth) of the search so far, for the progress line
+        self.status: Callable[[], tuple[int, int, int]] = lambda: (0, 0, 0)
+        self._next_look = t0
+        self._last_progress = -math.inf
+        self._printed = 0  # length of the progress line on screen (0: none)
+
+    def spent(self) -> str:
+        """Why the search must stop now, or "" to go on."""
+        if self.reason:
+            return self.reason
+        if self.interrupted:
+            self.reason = INTERRUPTED
+            return self.reason
+        now = time.perf_counter()
+        if now > self.deadline:
+            self.reason = f"timeout {self.timeout:g}s"
+        elif now >= self._next_look:
+            self._look(now)
+        return self.reason
+
+    def _look(self, now: float) -> None:
+        pids = list(self.pids())
+        self._next_look = now + (MEMORY_EVERY_WORKERS if pids else MEMORY_EVERY)
+        if self.max_memory is not None or self.progress:
+            self.memory = self.measure(pids)
+        if self.max_memory is not None and self.memory > self.max_memory:
+            self.reason = f"memory budget {self.max_memory:g} MB reached: {self.memory:,.0f} MB resident"
+        elif self.progress and now - self.t0 >= self.progress_after and now - self._last_progress >= self.progress_every:
+            self._last_progress = now
+            self.show(now)
+
+    @staticmethod
+    def measure(pids: Sequence[int] = ()) -> float:
+        """The search's resident memory in MB: this process's, plus its workers' (then every
+        process counts its proportional share, so memory they share is counted once); the
+        peak resident size where ``/proc`` is not readable."""
+        if pids:
+            shares = [proportional_mb(p) for p in ("self", *pids)]
+            if None not in shares:
+                return sum(shares)  # type: ignore[arg-type]
+            return sum(resident_mb(p) or 0.0 for p in ("self", *pids))
+        mb = resident_mb()
+        return _peak_mb() if mb is None else mb
+
+    def show(self, now: float) -> None:
+        """Rewrite the progress line: states, states/s, depth, transitions, memory and time, with their budgets."""
+        states, transitions, depth = self.status()
+        elapsed = now - self.t0
+        rate = states / elapsed if elapsed > 0 else 0.0
+        memory = f"{self.memory:,.0f} MB" + (f" of {self.max_memory:g}" if self.max_memory is not None else "")
+        clock = f"{elapsed + self.before:,.0f}s" + (f" of {self.timeout:g}s" if self.timeout is not None else "")
+        line = f"  {states:,} states  {rate:,.0f} states/s  depth {depth}  {transitions:,} transitions  memory {memory}  time {clock}"
+        print("\r" + line.ljust(self._printed), end="", file=self.out, flush=True)
+        self._printed = max(len(line), 1)
+
+    def close(self) -> None:
+        """End the progress line (if one was shown) before the report."""
+        if self._printed:
+            print("", file=self.out, flush=True)
+            self._printed = 0
+
+
+@contextlib.contextmanager
+def _ctrl_c(budget: Budget) -> Iterator[None]:
+    """While a search runs, a first Ctrl-C asks it to stop at its next check (and report
+    what it explored); a second one interrupts at once (``KeyboardInterrupt``, which the
+    engines also turn into an interrupted result). Only in the main thread, and only
+    where Python's own handler is installed (a program's own handler is left alone)."""
+    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield
+        return
+
+    def stop(signum: int, frame: Any) -> None:
+        budget.interrupted = True
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+    signal.signal(signal.SIGINT, stop)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 class Checker:
@@ -382,6 +563,8 @@ class Checker:
         max_states: int | None = 2_000_000,
         max_depth: int | None = None,
         timeout: float | None = None,
+        timeout_spent: float = 0.0,
+        max_memory: float | None = None,
         keep_going: bool = False,
         progress: bool = False,
         progress_after: float = 1.0,
@@ -403,10 +586,20 @@ class Checker:
         result as what it is not, or the model exceeds the engine's limits. The time of
         an abandoned table attempt counts in the result's time.
 
-        With ``progress``, a one-line status is rewritten on ``out`` (stderr) every
+        The search ends INCOMPLETE, with what it explored so far, at ``max_states``
+        states, at ``max_depth``, after ``timeout`` seconds (less ``timeout_spent``:
+        ``desmon verify`` counts its start-up in its ``--timeout``), when its resident memory
+        (with its workers' shares) exceeds ``max_memory`` MB, or on Ctrl-C (reason
+        ``"interrupted"``, :attr:`CheckResult.interrupted`; a second Ctrl-C interrupts
+        at once). The budgets are looked at between two expansions (direct engine) or
+        two recorded runs of the core, two rounds of a tree walk and every few new states
+        (table engine): a search overruns its time by a fraction of a second (see
+        :class:`Budget`).
+
+        With ``progress``, a one-line status (states, states/s, depth, transitions,
+        memory and time with their budgets) is rewritten on ``out`` (stderr) every
         ``progress_every`` seconds once the run is ``progress_after`` seconds old, and
-        closed with a newline at the end (time is looked at every 256 expansions, as is
-        ``timeout``). ``out`` defaults to the *current* ``sys.stderr``.
+        closed with a newline at the end. ``out`` defaults to the *current* ``sys.stderr``.
 
         ``workers`` > 1 expands large BFS levels in that many forked worker processes
         (:mod:`desmon.verify.parallel`); the records are consumed in frontier order, so
@@ -419,38 +612,52 @@ class Checker:
             raise CheckerError(f"--workers must be at least 1, got {workers}")
         if engine not in ENGINES:
             raise CheckerError(f"unknown engine {engine!r}: choose one of {', '.join(ENGINES)}")
+        for name, value in (("timeout", timeout), ("max-memory", max_memory)):
+            if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                unit = "seconds" if name == "timeout" else "MB"
+                raise CheckerError(f"--{name} {value!r}: give a finite number of {unit} above 0, or none for no limit")
         if engine != "direct":
             from desmon.verify.table import table_unsupported  # imports numpy: before the clock starts
+
+        def fresh() -> CheckResult:
+            return CheckResult(
+                self.scenario.name, self.deployer_name, tuple(i.name for i in self.invariants), HOLDS,
+                symmetry=self.symmetry is not None, not_checked=self.not_checked, workers=workers,
+                timeout=timeout, max_memory=max_memory,
+            )
+
         t0 = time.perf_counter()
-        res = CheckResult(
-            self.scenario.name, self.deployer_name, tuple(i.name for i in self.invariants), HOLDS,
-            symmetry=self.symmetry is not None, not_checked=self.not_checked, workers=workers,
+        res = fresh()
+        budget = Budget(
+            t0, timeout=timeout, timeout_spent=timeout_spent, max_memory=max_memory, progress=progress, progress_after=progress_after, progress_every=progress_every, out=out,
         )
-        if engine != "direct":
-            why = table_unsupported(self)
-            if engine == "table" and why:
-                raise CheckerError(f"--engine table: {why}; use --engine direct or auto")
-            if engine == "table" and workers > 1:
-                raise CheckerError("--workers runs the direct engine in several processes; the table engine runs in one: drop --workers or use --engine direct")
-            if why is None and workers > 1:
-                why = "--workers runs the direct engine"
-            if why is None:
-                outcome = self._run_table(
-                    res, t0, table_only=engine == "table", max_states=max_states, max_depth=max_depth, timeout=timeout,
-                    keep_going=keep_going, progress=progress, progress_after=progress_after, progress_every=progress_every, out=out,
-                )
-                if isinstance(outcome, CheckResult):
-                    return outcome
-                abandoned = time.perf_counter() - t0  # the table attempt's time counts in the result's
-                res = self.run(
-                    max_states=max_states, max_depth=max_depth, timeout=None if timeout is None else max(timeout - abandoned, 1e-9),
-                    keep_going=keep_going, progress=progress, progress_after=progress_after, progress_every=progress_every,
-                    workers=workers, engine="direct", out=out,
-                )
-                res.seconds += abandoned
-                res.engine_note = outcome
-                return res
-            res.engine_note = why or ""
+        search = dict(max_states=max_states, max_depth=max_depth, keep_going=keep_going, budget=budget)
+        try:
+            with _ctrl_c(budget):
+                if engine != "direct":
+                    why = table_unsupported(self)
+                    if engine == "table" and why:
+                        raise CheckerError(f"--engine table: {why}; use --engine direct or auto")
+                    if engine == "table" and workers > 1:
+                        raise CheckerError("--workers runs the direct engine in several processes; the table engine runs in one: drop --workers or use --engine direct")
+                    if why is None and workers > 1:
+                        why = "--workers runs the direct engine"
+                    if why is None:
+                        outcome = self._run_table(res, table_only=engine == "table", **search)
+                        if isinstance(outcome, CheckResult):
+                            return outcome
+                        # the table engine bowed out: the direct engine, under the same budget
+                        # (the abandoned attempt's time counts in the result's)
+                        res, why = fresh(), outcome
+                    res.engine_note = why or ""
+                return self._run_direct(res, workers=workers, **search)
+        finally:
+            budget.close()
+
+    def _run_direct(
+        self, res: CheckResult, *, max_states: int | None, max_depth: int | None, keep_going: bool, budget: Budget, workers: int,
+    ) -> CheckResult:
+        """The search on the direct engine (the real core on every transition)."""
         canon = self.symmetry.canon if self.symmetry is not None else None
         init = self.initial()
         if canon is not None:
@@ -468,9 +675,9 @@ class Checker:
         frontier = [0]
         depth = 0
         transitions = 0
-        last_progress = t0
-        printed = False
         incomplete = ""
+        spent = budget.spent
+        budget.status = lambda: (len(keys), transitions, depth)
         rules = res.rules
         branches = res.branches
         enabled_count = res.enabled
@@ -515,7 +722,6 @@ class Checker:
 
         for name, msg in self.violations(init):
             record(name, msg, 0)
-        expanded = 0
         any_found = bool(found)
         pool = None
         # The search makes no reference cycles (tests/test_verify.py checks it), but the
@@ -534,24 +740,17 @@ class Checker:
                         from desmon.verify.parallel import ExpansionPool
 
                         pool = ExpansionPool(self, workers)
+                        budget.pids = pool.pids  # their memory counts in the budget
                     expansions: Iterable[list[list[Segment]]] = pool.expand([keys[ki] for ki in frontier])
                 else:
                     expansions = (expand(keys[ki], index) for ki in frontier)
                 for ki, per_event in zip(frontier, expansions):
                     if any_found and done():
                         break
+                    if spent():  # time, memory, Ctrl-C: looked at between two expansions
+                        incomplete = budget.reason
+                        break
                     key = keys[ki]
-                    expanded += 1
-                    if (expanded & 255) == 0:
-                        now = time.perf_counter()
-                        if timeout is not None and now - t0 > timeout:
-                            incomplete = f"timeout {timeout:g}s"
-                            break
-                        if progress and now - t0 >= progress_after and now - last_progress >= progress_every:
-                            last_progress = now
-                            printed = True
-                            rate = len(keys) / (now - t0)
-                            print(f"\r  {len(keys):,} states  {transitions:,} transitions  depth {depth}  {rate:,.0f} states/s ", end="", file=out, flush=True)
                     rules[key.context] += 1
                     for (event, kind), segments in zip(enabled_of(key), per_event, strict=True):
                         enabled_count[kind] += 1
@@ -602,20 +801,23 @@ class Checker:
                 if nxt:
                     depth += 1
                 frontier = nxt
+        except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
+            incomplete = INTERRUPTED
+            n = min(len(keys), len(parent), len(label))  # a state half-added when it came
+            del keys[n:], parent[n:], label[n:]
         finally:
             if pool is not None:
                 res.peak_workers_mb = pool.close()
                 res.worker_levels = pool.levels
+                budget.pids = tuple
             if collecting:
-                gc.enable()
-        if printed:
-            print("", file=out, flush=True)
+                _resume_gc()
         self.explored = keys  # the distinct (canonical) states of the last run, BFS order
         res.states = len(keys)
         res.transitions = transitions
-        return self._finish(res, found, incomplete, depth, t0)
+        return self._finish(res, found, incomplete, depth, budget)
 
-    def _run_table(self, res: CheckResult, t0: float, *, table_only: bool, **search: Any) -> "CheckResult | str":
+    def _run_table(self, res: CheckResult, *, table_only: bool, budget: Budget, **search: Any) -> "CheckResult | str":
         """The search on the table engine: its result, or (``table_only`` False) why it
         could not run it, for :meth:`run` to fall back on the direct engine."""
         from desmon.verify.table import TableEngine, TableUnsupported
@@ -625,23 +827,24 @@ class Checker:
         gc.disable()  # as in the direct search: it makes no cycles
         try:
             table = TableEngine(self)
-            found, incomplete, depth = table.run(res, t0=t0, **search)
+            found, incomplete, depth = table.run(res, budget=budget, **search)
         except TableUnsupported as exc:
             if table_only:
                 raise
             return str(exc)
         finally:
             if collecting:
-                gc.enable()
+                _resume_gc()
         self.explored = table.explored()
         res.records = table.records
-        return self._finish(res, found, incomplete, depth, t0)
+        return self._finish(res, found, incomplete, depth, budget)
 
-    def _finish(self, res: CheckResult, found: dict[str, Counterexample], incomplete: str, depth: int, t0: float) -> CheckResult:
+    def _finish(self, res: CheckResult, found: dict[str, Counterexample], incomplete: str, depth: int, budget: Budget) -> CheckResult:
         """Verdict, depth, time and memory of a finished search (either engine)."""
         res.depth = max([depth] + [c.length for c in found.values()])
-        res.seconds = time.perf_counter() - t0
+        res.seconds = time.perf_counter() - budget.t0
         res.peak_mb = _peak_mb()
+        res.incomplete = incomplete
         res.counterexamples = [found[i.name] for i in self.invariants if i.name in found]
         if res.counterexamples:
             res.verdict = VIOLATED
@@ -651,6 +854,22 @@ class Checker:
         elif incomplete:
             res.verdict, res.reason = INCOMPLETE, incomplete
         return res
+
+    def release(self) -> None:
+        """Forget the last run's states and everything the searches memoised (here, in the
+        store and in :mod:`desmon.deployment.validity`): a process about to exit then does
+        not spend seconds in the cyclic garbage collector walking millions of memoised
+        tuples. The checker stays usable (its next search starts cold)."""
+        from desmon.deployment import validity
+
+        self.explored = []
+        self._instant_memo.clear()
+        self._enabled_memo.clear()
+        self.store = StateStore(self.model)
+        self.core = DeploymentCore(self.model, self.store, self.store, self.core.deployer)
+        self.store.watch = self.instant
+        self.store.watch_check = self._instant_check
+        validity.clear_memos()
 
     # -- traces ------------------------------------------------------------------------------
     def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]:

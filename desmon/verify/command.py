@@ -1,15 +1,21 @@
-"""``desmon verify`` and ``desmon fuzz``: the CLI handlers (they return the exit code)."""
+"""``desmon verify`` and ``desmon fuzz``: the CLI handlers (they return the exit code).
+
+Long work stops well: ``--timeout`` and ``--max-memory`` end a search INCOMPLETE (exit 3)
+with what it explored, and Ctrl-C ends either command with its partial result (verify
+still writes ``--json``), exit 130, without a traceback.
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
-import sys
+import math
+import time
 from pathlib import Path
 
-from desmon.errors import CheckerError, DesmonError
+from desmon.errors import CheckerError
 
-__all__ = ["verify_command", "fuzz_command"]
+__all__ = ["verify_command", "fuzz_command", "check_megabytes"]
 
 
 def _positive(name: str, value: float | int | None) -> None:
@@ -17,7 +23,14 @@ def _positive(name: str, value: float | int | None) -> None:
         raise CheckerError(f"--{name} must be positive, got {value}")
 
 
+def check_megabytes(flag: str, value: float | None) -> None:
+    """A memory budget: a finite number of MB above 0 (or None: no budget)."""
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise CheckerError(f"{flag} {value:g}: give the memory budget as a finite number of MB above 0, e.g. {flag} 2000")
+
+
 def verify_command(args: argparse.Namespace) -> int:
+    started = time.perf_counter()  # --timeout counts the imports and the scenario's loading too
     from desmon.loader import load_from_args
     from desmon.verify.checker import Checker
     from desmon.verify.report import counterexample_pytest, format_result, result_to_json
@@ -26,21 +39,28 @@ def verify_command(args: argparse.Namespace) -> int:
     _positive("max-depth", args.max_depth)
     _positive("timeout", args.timeout)
     _positive("workers", getattr(args, "workers", 1))
+    max_memory = getattr(args, "max_memory", None)
+    check_megabytes("--max-memory", max_memory)
     scenario = load_from_args(args)
     checker = Checker(scenario, args.deployer, invariants=args.invariant, symmetry=bool(getattr(args, "symmetry", False)))
     result = checker.run(
         max_states=args.max_states,
         max_depth=args.max_depth,
         timeout=args.timeout,
+        timeout_spent=time.perf_counter() - started,
+        max_memory=max_memory,
         keep_going=args.keep_going,
         progress=not args.no_progress,
         workers=getattr(args, "workers", 1),
         engine=getattr(args, "engine", "auto"),
     )
-    print(format_result(result), end="")
+    print(format_result(result), end="", flush=True)
     if args.json:
         Path(args.json).write_text(json.dumps(result_to_json(result), indent=2) + "\n")
         print(f"wrote {args.json}")
+    if result.interrupted:  # Ctrl-C: the partial result and its JSON, and nothing slower
+        checker.release()
+        return result.exit_code
     if getattr(args, "plot", None):
         if result.counterexamples:
             from desmon.verify.plot import plot_counterexample
@@ -57,6 +77,7 @@ def verify_command(args: argparse.Namespace) -> int:
             print(f"wrote {args.pytest}")
         else:
             print(f"no counterexample: {args.pytest} not written")
+    checker.release()  # the process exits next: free the memos now, not in a slow final collection
     return result.exit_code
 
 

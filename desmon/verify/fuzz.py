@@ -5,6 +5,9 @@ A sequence (:func:`desmon.verify.strategies.choices`) is run event by event thro
 are checked. hypothesis searches (``--examples``, ``--seed``: same seed, same output)
 and shrinks the first failing sequence, which is printed in the checker's trace format;
 when it is short, the checker re-derives the shortest counterexample for that invariant.
+
+Ctrl-C ends the run with what it found so far (exit 130): how many sequences passed, or
+the smallest failing sequence met while hypothesis was shrinking it.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from hypothesis.errors import NoSuchExample
 from desmon.deployment.deployer import Deployer
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import bounds_of
-from desmon.verify.checker import Checker, Label
+from desmon.verify.checker import EXIT_INTERRUPTED, Checker, Label
 from desmon.verify.replay import RepositoryRun
 from desmon.verify.report import format_counterexample, format_trace
 from desmon.verify.strategies import Choice, choices
@@ -34,6 +37,7 @@ class FuzzOutcome:
     passed: int
     labels: list[Label] | None = None
     invariant: str | None = None
+    interrupted: bool = False  # Ctrl-C ended it: the text is the partial result
 
 
 def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice], enabler: Checker):  # type: ignore[no-untyped-def]
@@ -69,13 +73,25 @@ def fuzz(
     bounds = bounds_of(scenario)
     enabler = Checker(scenario, deployer, bounds=bounds)
     name = enabler.deployer_name
+    head = f"{scenario.name} -- deployer {name} -- fuzz seed {seed}"
     calls = [0]
+    passed = [0]  # sequences run to their end without a violation
+    smallest: list[list[Choice]] = []  # the smallest failing sequence met so far (hypothesis shrinks it)
 
     def fails(seq: list[Choice]) -> bool:
         calls[0] += 1
         if progress and calls[0] % 50 == 0:
             print(f"\r  {calls[0]} sequences", end="", file=sys.stderr, flush=True)
-        return run_choices(scenario, deployer, seq, enabler)[1] is not None
+        failed = run_choices(scenario, deployer, seq, enabler)[1] is not None
+        if not failed:
+            passed[0] += 1
+        elif not smallest or len(seq) <= len(smallest[0]):
+            smallest[:] = [list(seq)]
+        return failed
+
+    def end_progress() -> None:
+        if progress and calls[0] >= 50:
+            print("", file=sys.stderr, flush=True)
 
     cfg = settings(
         max_examples=examples,
@@ -84,31 +100,47 @@ def fuzz(
         suppress_health_check=list(HealthCheck),
         phases=(Phase.generate, Phase.shrink),
     )
+    interrupted = False
     try:
         seq = find(choices(scenario, max_size=max_size, bounds=bounds), fails, settings=cfg, random=random.Random(seed))
     except NoSuchExample:
-        if progress and calls[0] >= 50:
-            print("", file=sys.stderr)
+        end_progress()
         return FuzzOutcome(
-            f"{scenario.name} -- deployer {name} -- fuzz seed {seed}\n"
-            f"passed: {calls[0]} sequences (up to {max_size} events each), no invariant violated\n",
+            f"{head}\npassed: {calls[0]} sequences (up to {max_size} events each), no invariant violated\n",
             0,
             calls[0],
         )
-    if progress and calls[0] >= 50:
-        print("", file=sys.stderr)
+    except KeyboardInterrupt:  # Ctrl-C: what was found so far
+        end_progress()
+        if not smallest:
+            return FuzzOutcome(
+                f"{head}\nverdict: INCOMPLETE (interrupted)\n"
+                f"passed: {passed[0]} sequences (up to {max_size} events each) before Ctrl-C, no invariant violated so far\n",
+                EXIT_INTERRUPTED,
+                passed[0],
+                interrupted=True,
+            )
+        seq, interrupted = smallest[0], True
+    else:
+        end_progress()
     labels, (inv, msg) = run_choices(scenario, deployer, seq, enabler)  # type: ignore[misc]
     steps = enabler.replay(labels)
+    how = "interrupted while hypothesis shrank it: maybe not the smallest" if interrupted else "shrunk by hypothesis"
     lines = [
-        f"{scenario.name} -- deployer {name} -- fuzz seed {seed}",
+        head,
         "",
-        f"VIOLATED {inv} after {len(labels)} step{'s' if len(labels) != 1 else ''} (shrunk by hypothesis, {calls[0]} sequences run):",
+        f"VIOLATED {inv} after {len(labels)} step{'s' if len(labels) != 1 else ''} ({how}, {calls[0]} sequences run):",
         format_trace(steps),
         f"  => {inv}: {msg}",
     ]
-    if len(labels) <= rederive_up_to and inv != "history":
+    if not interrupted and len(labels) <= rederive_up_to and inv != "history":
         res = Checker(scenario, deployer, bounds=bounds, invariants=[inv]).run(max_states=200_000, timeout=30)
         if res.counterexamples:
             c = res.counterexamples[0]
             lines += ["", f"the checker's shortest counterexample ({res.states:,} states explored):", format_counterexample(c)]
-    return FuzzOutcome("\n".join(lines) + "\n", 1, calls[0], labels, inv)
+        elif res.interrupted:
+            lines += ["", f"the checker's re-derivation was interrupted ({res.states:,} states explored)"]
+            interrupted = True
+    if interrupted:
+        lines += ["", "verdict: VIOLATED (interrupted)"]
+    return FuzzOutcome("\n".join(lines) + "\n", EXIT_INTERRUPTED if interrupted else 1, calls[0], labels, inv, interrupted)

@@ -22,6 +22,7 @@ from __future__ import annotations
 import gc
 import multiprocessing
 import resource
+import signal
 from collections import deque
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -48,8 +49,11 @@ _known: set = set()
 
 def _start_worker(checker: "Checker") -> None:
     """Worker initializer: the checker arrives through fork (never pickled); the parent
-    pauses its cyclic collector for the search, and so does the worker."""
+    pauses its cyclic collector for the search, and so does the worker. Ctrl-C reaches
+    every process of the terminal's group: a worker ignores it (no traceback of its own)
+    and finishes its chunk; the parent stops the search and reports it."""
     global _checker
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     _checker = checker
     _known.clear()
     gc.disable()
@@ -113,6 +117,10 @@ class ExpansionPool:
                 yield from self._result(window.popleft())
         while window:
             yield from self._result(window.popleft())
+
+    def pids(self) -> list[int]:
+        """The worker processes' ids (their memory counts in the search's budget)."""
+        return list(getattr(self._pool, "_processes", None) or ())
 
     def _submit(self, chunk: "list[Key]") -> Future:
         try:

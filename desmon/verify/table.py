@@ -56,9 +56,8 @@ Symmetry reduction is left to the direct engine.
 from __future__ import annotations
 
 import sys
-import time
 from array import array
-from typing import TYPE_CHECKING, Any, Callable, Iterator, NamedTuple, Sequence, TextIO
+from typing import TYPE_CHECKING, Any, Callable, Iterator, NamedTuple, Sequence
 
 import numpy as np
 
@@ -69,7 +68,7 @@ from desmon.model.events import (
     ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp, event_kind,
 )
 from desmon.model.system import PlatformState
-from desmon.verify.checker import KEPT_BRANCH, Counterexample, branch_name
+from desmon.verify.checker import INTERRUPTED, KEPT_BRANCH, Budget, Counterexample, branch_name
 from desmon.verify.state import Key, StateStore
 
 if TYPE_CHECKING:
@@ -89,6 +88,8 @@ _ROOT_CTX, _ROOT_STIM, _ROOT_PREFIX = 6, 17, 16
 MAX_DIGITS = 4096
 #: frontier states expanded per numpy batch (bounds the memory of one batch)
 CHUNK_STATES = 16_384
+#: new states added between two looks at the search's budget (time, memory, Ctrl-C)
+LOOK_EVERY = 64
 _KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
 _KIND_ID = {k: i for i, k in enumerate(_KINDS)}
 
@@ -104,6 +105,11 @@ class TableUnsupported(CheckerError):
 
 class UnobservedRead(TableUnsupported):
     """A reaction read a platform fact outside the requirement checks: it cannot be memoised."""
+
+
+class _Spent(Exception):
+    """The search's budget ran out inside a batch (between two recorded runs or walk rounds):
+    the batch is dropped, nothing of it having been counted yet."""
 
 
 # ------------------------------------------------------------------------------------
@@ -784,6 +790,12 @@ class TableEngine:
         self._fails: dict[tuple, list[tuple]] = {}
         self._ids: dict[tuple, dict[tuple, int]] = {}
         self.records = 0  # real runs of the core (reactions and invariant checks)
+        self.budget = Budget(0.0)  # the search's (set by run)
+
+    def _go_on(self) -> None:
+        """Raise :class:`_Spent` if the search must stop (time, memory, Ctrl-C)."""
+        if self.budget.spent():
+            raise _Spent
 
     # -- interning --------------------------------------------------------------------
     def intern_deployed(self, deployed: tuple) -> int:
@@ -913,17 +925,20 @@ class TableEngine:
     def _walk(self, roots: np.ndarray, rows: np.ndarray, loc: np.ndarray, record: Callable[[int], None]) -> np.ndarray:
         """Leaf ids for units with root keys ``roots`` and platform digits ``loc[rows]``;
         ``record(unit)`` runs the real core for a unit whose answers leave the trees."""
+        go_on = self._go_on  # the budget, between two recorded runs and two rounds
         uk, first, inv = np.unique(roots, return_index=True, return_inverse=True)
         top = np.empty(len(uk), dtype=np.int64)
         for i, k in enumerate(uk.tolist()):
             n = self.roots.get(k)
             if n is None:
+                go_on()
                 record(int(first[i]))
                 n = self.roots[k]
             top[i] = n
         node = top[inv]
         active = np.flatnonzero(self.node_leaf.a[node] < 0)
         while active.size:
+            go_on()
             nd = node[active]
             r = rows[active]
             ok = self.ok.a
@@ -945,6 +960,7 @@ class TableEngine:
             if missed.size:
                 _again, firsts = np.unique(ek[missed], return_index=True)
                 for m in np.sort(firsts):
+                    go_on()
                     record(int(active[missed[m]]))
                 child[missed] = self._lookup(ek[missed])
                 if (child[missed] < 0).any():
@@ -1092,10 +1108,17 @@ class TableEngine:
 
         return self._walk(roots, cand_t, tr.loc, record_state)
 
-    def run(self, res: "CheckResult", *, max_states: int | None, max_depth: int | None, timeout: float | None, keep_going: bool,
-            progress: bool, progress_after: float, progress_every: float, out: TextIO, t0: float) -> tuple[dict[str, Counterexample], str, int]:
+    def run(self, res: "CheckResult", *, max_states: int | None, max_depth: int | None, keep_going: bool,
+            budget: Budget) -> tuple[dict[str, Counterexample], str, int]:
         """The BFS of :meth:`Checker.run <desmon.verify.checker.Checker.run>`, counting into ``res``;
-        returns (counterexamples found, why incomplete or "", depth)."""
+        returns (counterexamples found, why incomplete or "", depth).
+
+        ``budget`` (time, memory, Ctrl-C) is looked at before each batch, between two
+        recorded runs of the core and two rounds of a tree walk (a batch that runs out
+        there is dropped whole: nothing of it is counted yet), and every
+        :data:`LOOK_EVERY` new states (the batch is then cut after the current
+        transition, as ``max_states`` cuts it)."""
+        self.budget = budget
         ch = self.checker
         init = ch.initial()
         env = self.env = _Env(ch, init)
@@ -1145,110 +1168,114 @@ class TableEngine:
         depth = 0
         transitions = 0
         incomplete = ""
-        last_progress = t0
-        printed = False
+        spent = budget.spent
+        budget.status = lambda: (len(codes), transitions, depth)
 
         def count(counter: Any, names: Sequence[Any], values: np.ndarray, size: int) -> None:
             for k, n in enumerate(np.bincount(values, minlength=size).tolist()):
                 if n:
                     counter[names[k]] += n
 
-        while len(frontier) and not (any_found and done()) and not incomplete:
-            if max_depth is not None and depth >= max_depth:
-                incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
-                break
-            nxt: list[int] = []
-            for lo in range(0, len(frontier), CHUNK_STATES):
-                now = time.perf_counter()
-                if timeout is not None and now - t0 > timeout:
-                    incomplete = f"timeout {timeout:g}s"
+        try:
+            while len(frontier) and not (any_found and done()) and not incomplete:
+                if max_depth is not None and depth >= max_depth:
+                    incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
                     break
-                if progress and now - t0 >= progress_after and now - last_progress >= progress_every:
-                    last_progress, printed = now, True
-                    print(f"\r  {len(codes):,} states  {transitions:,} transitions  depth {depth}  {len(codes) / (now - t0):,.0f} states/s ",
-                          end="", file=out, flush=True)
-                ids = frontier[lo: lo + CHUNK_STATES]
-                sc = np.frombuffer(codes, dtype=np.int64)[ids]
-                tr = ev.enabled(sc)
-                N, T = len(ids), len(tr.env2)
-                if not T:  # no state of this batch enables an event
-                    count(res.rules, env.ctxs, tr.ctx, C)
-                    continue
-                U_t, U_pre, U_leaf = self._units(ids, tr)
-                leaf_sys = np.array(self._leaf_sys, dtype=np.int64)
-                U_code = (tr.env2[U_t] << SYS_BITS) | leaf_sys[U_leaf]
-                # candidate new states: first occurrence in this batch, not seen before
-                uniq, first = np.unique(U_code, return_index=True)
-                fresh = np.fromiter((c not in seen for c in uniq.tolist()), dtype=bool, count=len(uniq))
-                cand = np.sort(first[fresh])
-                bad_of = dict(zip(cand.tolist(), self._violated(U_t[cand], leaf_sys[U_leaf[cand]], tr).tolist()))
-                inst_units = np.flatnonzero(np.array(self._leaf_inst, dtype=bool)[U_leaf])
-                # the records in order, as the direct engine's search loop meets them: it
-                # stops after the event that found what it looked for or reached the cap,
-                # or at once when a repaired instantaneous violation completes the search
-                cut_t, stop_unit = T, -1
-                for u in np.union1d(cand, inst_units).tolist():
-                    t = int(U_t[u])
-                    if t > cut_t:
+                nxt: list[int] = []
+                for lo in range(0, len(frontier), CHUNK_STATES):
+                    if spent():
+                        incomplete = budget.reason
                         break
-                    lf = self.leaves[int(U_leaf[u])]
-                    here = int(ids[tr.pos[t]])
-                    event = ev.events[int(tr.ev[t])]
-                    if lf[5] is not None and lf[5] not in found:
-                        nkey = env.key(int(tr.env2[t]), self.systems[lf[1]])
-                        if lf[5] not in {v for v, _m in ch.violations(nkey)}:
-                            # repaired before quiescence: the real run gives the message
-                            _n, _o, _log, instant = ch.run_one(key_of(here), event, self.prefixes[int(U_pre[u])])
-                            record(instant[0], instant[1], here, instant[2], (event, lf[3]))
-                            any_found = True
-                            if done():
-                                cut_t, stop_unit = t, u
-                                break
-                    if u in bad_of:
-                        c = int(U_code[u])
-                        seen.add(c)
-                        ni = len(codes)
-                        codes.append(c)
-                        parent.append(here)
-                        lk = (int(tr.ev[t]), lf[3])
-                        li = label_ids.get(lk)
-                        if li is None:
-                            li = label_ids[lk] = len(labels)
-                            labels.append((event, lf[3]))
-                        label.append(li)
-                        res.new_states[_KINDS[ev.kind_of[tr.ev[t]]]] += 1
-                        if max_states is not None and len(codes) >= max_states:
-                            incomplete = f"max states {max_states:,} reached"
-                        if self.leaves[bad_of[u]][1]:
-                            for name, msg in ch.violations(key_of(ni)):
-                                record(name, msg, ni)
-                            any_found = True
-                        else:
-                            nxt.append(ni)
-                    if (any_found and done()) or incomplete:
-                        cut_t = t
-                # count what the direct engine counts up to the cut
-                inc = np.arange(stop_unit + 1) if stop_unit >= 0 else np.flatnonzero(U_t <= cut_t)
-                transitions += len(inc)
-                leaf_counts = np.bincount(U_leaf[inc], minlength=len(self.leaves))
-                for lf_id in np.flatnonzero(leaf_counts).tolist():
-                    n = int(leaf_counts[lf_id])
-                    for name in self.leaves[lf_id][4]:
-                        res.branches[name] += n
-                moved = inc[:-1] if stop_unit >= 0 else inc  # the stopping unit is not counted as a change
-                moved = moved[U_code[moved] != sc[tr.pos[U_t[moved]]]]
-                count(res.changed, _KINDS, ev.kind_of[tr.ev[U_t[moved]]], len(_KINDS))
-                last_t = min(cut_t, T - 1)
-                count(res.enabled, _KINDS, ev.kind_of[tr.ev[: last_t + 1]], len(_KINDS))
-                n_states = int(tr.pos[last_t]) + 1 if cut_t < T else N
-                count(res.rules, env.ctxs, tr.ctx[:n_states], C)
-                if cut_t < T:
-                    break
-            if nxt:
-                depth += 1
-            frontier = np.array(nxt, dtype=np.int64)
-        if printed:
-            print("", file=out, flush=True)
+                    ids = frontier[lo: lo + CHUNK_STATES]
+                    sc = np.frombuffer(codes, dtype=np.int64)[ids]
+                    tr = ev.enabled(sc)
+                    N, T = len(ids), len(tr.env2)
+                    if not T:  # no state of this batch enables an event
+                        count(res.rules, env.ctxs, tr.ctx, C)
+                        continue
+                    try:
+                        U_t, U_pre, U_leaf = self._units(ids, tr)
+                        leaf_sys = np.array(self._leaf_sys, dtype=np.int64)
+                        U_code = (tr.env2[U_t] << SYS_BITS) | leaf_sys[U_leaf]
+                        # candidate new states: first occurrence in this batch, not seen before
+                        uniq, first = np.unique(U_code, return_index=True)
+                        fresh = np.fromiter((c not in seen for c in uniq.tolist()), dtype=bool, count=len(uniq))
+                        cand = np.sort(first[fresh])
+                        bad_of = dict(zip(cand.tolist(), self._violated(U_t[cand], leaf_sys[U_leaf[cand]], tr).tolist()))
+                    except _Spent:  # between two recorded runs or walk rounds: the batch is dropped
+                        incomplete = budget.reason
+                        break
+                    inst_units = np.flatnonzero(np.array(self._leaf_inst, dtype=bool)[U_leaf])
+                    # the records in order, as the direct engine's search loop meets them: it
+                    # stops after the event that found what it looked for or reached the cap,
+                    # or at once when a repaired instantaneous violation completes the search
+                    cut_t, stop_unit = T, -1
+                    for n_looked, u in enumerate(np.union1d(cand, inst_units).tolist(), 1):
+                        t = int(U_t[u])
+                        if t > cut_t:
+                            break
+                        if not n_looked % LOOK_EVERY and not incomplete and spent():
+                            incomplete, cut_t = budget.reason, t  # cut after this transition, as max_states does
+                        lf = self.leaves[int(U_leaf[u])]
+                        here = int(ids[tr.pos[t]])
+                        event = ev.events[int(tr.ev[t])]
+                        if lf[5] is not None and lf[5] not in found:
+                            nkey = env.key(int(tr.env2[t]), self.systems[lf[1]])
+                            if lf[5] not in {v for v, _m in ch.violations(nkey)}:
+                                # repaired before quiescence: the real run gives the message
+                                _n, _o, _log, instant = ch.run_one(key_of(here), event, self.prefixes[int(U_pre[u])])
+                                record(instant[0], instant[1], here, instant[2], (event, lf[3]))
+                                any_found = True
+                                if done():
+                                    cut_t, stop_unit = t, u
+                                    break
+                        if u in bad_of:
+                            c = int(U_code[u])
+                            seen.add(c)
+                            ni = len(codes)
+                            codes.append(c)
+                            parent.append(here)
+                            lk = (int(tr.ev[t]), lf[3])
+                            li = label_ids.get(lk)
+                            if li is None:
+                                li = label_ids[lk] = len(labels)
+                                labels.append((event, lf[3]))
+                            label.append(li)
+                            res.new_states[_KINDS[ev.kind_of[tr.ev[t]]]] += 1
+                            if max_states is not None and len(codes) >= max_states:
+                                incomplete = f"max states {max_states:,} reached"
+                            if self.leaves[bad_of[u]][1]:
+                                for name, msg in ch.violations(key_of(ni)):
+                                    record(name, msg, ni)
+                                any_found = True
+                            else:
+                                nxt.append(ni)
+                        if (any_found and done()) or incomplete:
+                            cut_t = t
+                    # count what the direct engine counts up to the cut
+                    inc = np.arange(stop_unit + 1) if stop_unit >= 0 else np.flatnonzero(U_t <= cut_t)
+                    transitions += len(inc)
+                    leaf_counts = np.bincount(U_leaf[inc], minlength=len(self.leaves))
+                    for lf_id in np.flatnonzero(leaf_counts).tolist():
+                        n = int(leaf_counts[lf_id])
+                        for name in self.leaves[lf_id][4]:
+                            res.branches[name] += n
+                    moved = inc[:-1] if stop_unit >= 0 else inc  # the stopping unit is not counted as a change
+                    moved = moved[U_code[moved] != sc[tr.pos[U_t[moved]]]]
+                    count(res.changed, _KINDS, ev.kind_of[tr.ev[U_t[moved]]], len(_KINDS))
+                    last_t = min(cut_t, T - 1)
+                    count(res.enabled, _KINDS, ev.kind_of[tr.ev[: last_t + 1]], len(_KINDS))
+                    n_states = int(tr.pos[last_t]) + 1 if cut_t < T else N
+                    count(res.rules, env.ctxs, tr.ctx[:n_states], C)
+                    if cut_t < T:
+                        break
+                if nxt:
+                    depth += 1
+                frontier = np.array(nxt, dtype=np.int64)
+        except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
+            incomplete = INTERRUPTED
+            n = min(len(codes), len(parent), len(label))  # a state half-added when it came
+            del codes[n:], parent[n:], label[n:]
         res.transitions = transitions
         res.states = len(codes)
         return found, incomplete, depth

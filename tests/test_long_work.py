@@ -1,0 +1,292 @@
+"""Long work stops well: --timeout, --max-memory and Ctrl-C end a search with what it explored.
+
+The model is bench_7p of bench/bench_verify.py (7 platforms, 4 of them loaded): either
+engine needs well over a minute to search it, so every limit here is what stops it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+import desmon.verify.checker as checker_module
+from desmon.cli import main
+from desmon.errors import CheckerError
+from desmon.loader import load_scenario
+from desmon.verify import Checker
+from desmon.verify.checker import EXIT_INTERRUPTED, HOLDS, INCOMPLETE, INTERRUPTED, Budget, resident_mb
+from desmon.verify.table import TableEngine
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENARIOS = ROOT / "scenarios"
+
+#: the scenario file of the big model (bench_7p), self-contained
+BIG = '''
+from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
+from desmon.model.events import ActionChange, LoadChange
+from desmon.model.scenario import Scenario, TimedEvent
+from desmon.verify import Bounds, levels
+
+r = RobotBuilder("big")
+devices, pads = [], []
+for i in range(7):
+    pb = r.platform(f"pc{i}", memory=512)
+    if i % 2 == 0:
+        pb.device(f"wrench{i}", kind="force_sensor")
+        devices.append(f"wrench{i}")
+    else:
+        pb.devices([f"pad{i}a", f"pad{i}b"], kind="tactile_pad")
+        pads.append(f"pad{i}a")
+for g, kind in (("force", "force_sensor"), ("tactile", "tactile_pad"), ("combined", None)):
+    with r.rpsl.perception_graph(g) as gb:
+        gb.sensor("s", reads=kind or "force_sensor")
+        gb.processing("p", inputs=["s"])
+r.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor").add_constraint("capacity", "memory", 100)
+r.depsl.deployment_specification("tactile").add_constraint("quantity", "tactile_pad", 2).add_constraint("capacity", "memory", 150)
+r.depsl.deployment_specification("combined").add_constraint("capacity", "memory", 250)
+r.rules({GRASP: ["force", "tactile"], MOVE_BASE: "tactile", RELEASE: "force", HOLD: "combined"})
+plats = tuple(f"pc{i}" for i in range(7))
+scenario = Scenario(
+    name="big",
+    model=r.build(),
+    initial=tuple(LoadChange(p, 0) for p in plats[:4]),
+    timeline=(TimedEvent(0, ActionChange(HOLD)),),
+    checker=Bounds(
+        actions=(HOLD, GRASP, MOVE_BASE, RELEASE),
+        devices=tuple(devices[:2] + pads[:1]),
+        platforms=plats,
+        loads={p: levels(0, 300, 100) for p in plats[:4]},
+        start_failures=1,
+    ),
+)
+'''
+
+
+@pytest.fixture(scope="module")
+def big_path(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("big") / "big.py"
+    path.write_text(BIG)
+    return path
+
+
+@pytest.fixture(scope="module")
+def big(big_path: Path):  # type: ignore[no-untyped-def]
+    return load_scenario(big_path)
+
+
+def _allowed(budget: float) -> float:
+    """The overrun the issue allows: 5 % of the budget or 2 s, whichever is larger."""
+    return max(0.05 * budget, 2.0)
+
+
+# -- --timeout ------------------------------------------------------------------------------
+@pytest.mark.parametrize("engine", ["table", "direct"])
+def test_a_timeout_stops_either_engine_within_its_allowance(big, engine):  # type: ignore[no-untyped-def]
+    timeout = 1.5
+    checker = Checker(big)
+    t = time.perf_counter()
+    r = checker.run(timeout=timeout, engine=engine, max_states=None)
+    wall = time.perf_counter() - t
+    assert (r.engine, r.verdict, r.reason, r.incomplete) == (engine, INCOMPLETE, "timeout 1.5s", "timeout 1.5s")
+    assert r.exit_code == 3 and not r.interrupted
+    assert timeout <= r.seconds <= wall <= timeout + _allowed(timeout), (r.seconds, wall)
+    assert r.states > 1 and len(checker.explored) == r.states  # what it explored so far
+
+
+def test_the_table_engine_looks_at_the_clock_inside_a_batch(big, monkeypatch):  # type: ignore[no-untyped-def]
+    # a budget that runs out while the first batches record reactions: the batch is
+    # dropped (nothing of it counted), the states before it are the result
+    calls = []
+    real = TableEngine.record_reaction
+
+    def slow(self, *args):  # type: ignore[no-untyped-def]
+        calls.append(1)
+        time.sleep(0.01)  # a reaction that takes long to run
+        return real(self, *args)
+
+    monkeypatch.setattr(TableEngine, "record_reaction", slow)
+    t = time.perf_counter()
+    r = Checker(big).run(timeout=0.3, engine="table")
+    wall = time.perf_counter() - t
+    assert r.verdict == INCOMPLETE and r.reason == "timeout 0.3s"
+    assert wall < 0.3 + 0.5, wall  # before: the whole batch (hundreds of recordings) ran first
+    assert len(calls) < 100
+
+
+def test_a_limit_not_reached_changes_nothing():
+    scenario = load_scenario(SCENARIOS / "coffee_handover.py")
+    plain = Checker(scenario).run()
+    for engine in ("table", "direct"):
+        r = Checker(scenario).run(timeout=600, max_memory=100_000, engine=engine)
+        assert (r.verdict, r.reason, r.incomplete, r.states, r.transitions, r.depth, dict(r.branches)) == (
+            HOLDS, "", "", plain.states, plain.transitions, plain.depth, dict(plain.branches)
+        )
+
+
+# -- --max-memory ---------------------------------------------------------------------------
+@pytest.mark.parametrize("engine", ["table", "direct"])
+def test_a_memory_budget_ends_the_search_incomplete(big, engine):  # type: ignore[no-untyped-def]
+    now = resident_mb()
+    assert now is not None and now > 10
+    budget = now + 15  # 15 MB more than this process holds already
+    checker = Checker(big)
+    r = checker.run(max_memory=budget, engine=engine, timeout=20, max_states=None)
+    assert r.verdict == INCOMPLETE and r.reason.startswith(f"memory budget {budget:g} MB reached: "), r.reason
+    assert r.exit_code == 3 and r.states > 1
+    assert resident_mb() < budget + 20  # it stopped near the budget, not long after
+
+
+def test_the_memory_of_workers_counts(big, monkeypatch):  # type: ignore[no-untyped-def]
+    seen: list[list[int]] = []
+    real = Budget.measure
+
+    def spy(pids=()):  # type: ignore[no-untyped-def]
+        seen.append(list(pids))
+        return real(pids)
+
+    monkeypatch.setattr(Budget, "measure", staticmethod(spy))
+    budget = resident_mb() + 20
+    r = Checker(big).run(max_memory=budget, workers=2, engine="direct", timeout=20, max_states=None)
+    assert r.verdict == INCOMPLETE and "memory budget" in r.reason and r.worker_levels >= 1
+    assert any(len(p) == 2 for p in seen), "the two workers were never measured"
+
+
+def test_a_bad_memory_budget_is_one_line(capsys, tmp_path):  # type: ignore[no-untyped-def]
+    path = str(SCENARIOS / "coffee_handover.py")
+    for bad in ("-5", "0", "nan", "inf"):
+        assert main(["verify", path, "--max-memory", bad, "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"--max-memory {bad}: give the memory budget" in err, err
+    assert main(["verify", path, "--max-memory", "lots", "--no-progress"]) == 2
+    assert "--max-memory" in capsys.readouterr().err
+    for bad in (-1, 0, float("nan"), float("inf")):
+        with pytest.raises(CheckerError, match="--max-memory"):
+            Checker(load_scenario(path)).run(max_memory=bad)
+
+
+def test_the_cli_reports_the_budget_and_exits_3(big_path, capsys, tmp_path):  # type: ignore[no-untyped-def]
+    out = tmp_path / "r.json"
+    assert main(["verify", str(big_path), "--timeout", "0.5", "--max-memory", "100000", "--no-progress", "--json", str(out)]) == 3
+    assert "verdict: INCOMPLETE (timeout 0.5s)" in capsys.readouterr().out
+    j = json.loads(out.read_text())
+    assert (j["verdict"], j["incomplete"], j["interrupted"], j["timeout"], j["max_memory_mb"]) == ("INCOMPLETE", "timeout 0.5s", False, 0.5, 100000)
+
+
+# -- the progress line ----------------------------------------------------------------------
+@pytest.mark.parametrize("engine", ["table", "direct"])
+def test_both_engines_show_the_same_progress_line(capsys, engine):  # type: ignore[no-untyped-def]
+    r = Checker(load_scenario(SCENARIOS / "coffee_handover.py")).run(
+        progress=True, progress_after=0.0, progress_every=0.0, timeout=30, max_memory=100_000, engine=engine
+    )
+    assert r.verdict == HOLDS
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.split("\r") if "states/s" in ln]
+    assert lines and err.endswith("\n")
+    for word in (" states ", " states/s ", " depth ", " transitions ", " memory ", " MB of 100000 ", " time ", " of 30s"):
+        assert word in lines[-1], (word, lines[-1])
+
+
+# -- Ctrl-C ---------------------------------------------------------------------------------
+@pytest.mark.parametrize("engine", ["table", "direct"])
+def test_a_keyboard_interrupt_in_the_search_gives_the_partial_result(big, engine, monkeypatch):  # type: ignore[no-untyped-def]
+    # what a second Ctrl-C does (the first only asks the search to stop at its next look)
+    calls = [0]
+    if engine == "table":
+        target, name = TableEngine, "record_reaction"
+    else:
+        target, name = Checker, "expand"
+    real = getattr(target, name)
+
+    def interrupting(self, *args):  # type: ignore[no-untyped-def]
+        calls[0] += 1
+        if calls[0] == 300:
+            raise KeyboardInterrupt
+        return real(self, *args)
+
+    monkeypatch.setattr(target, name, interrupting)
+    checker = Checker(big)
+    r = checker.run(engine=engine, max_states=None)
+    assert (r.verdict, r.reason, r.incomplete) == (INCOMPLETE, INTERRUPTED, INTERRUPTED)
+    assert r.interrupted and r.exit_code == EXIT_INTERRUPTED
+    assert r.states > 1 and len(checker.explored) == r.states
+    assert list(checker.explored[:1]) == [checker.initial()]
+
+
+def _interrupt(argv: list[str], ready: str, tmp_path: Path, *, timeout: float = 60) -> tuple[int, str, str, float]:
+    """Run ``desmon ARGV`` in its own process group, press Ctrl-C (SIGINT to the group, as a
+    terminal does) once ``ready`` shows on stderr; (exit code, stdout, stderr, seconds to exit).
+    A command that does not end is aborted with its stacks (faulthandler) in the failure."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen(
+        [sys.executable, "-X", "faulthandler", "-m", "desmon", *argv], cwd=tmp_path, env=env,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+    )
+    out: list[bytes] = []
+    err: list[bytes] = []
+    seen = threading.Event()
+
+    def read(stream, into: list[bytes], watch: bool) -> None:  # type: ignore[no-untyped-def]
+        while chunk := stream.read1(4096):
+            into.append(chunk)
+            if watch and ready.encode() in b"".join(into):
+                seen.set()
+        if watch:
+            seen.set()
+
+    readers = [threading.Thread(target=read, args=(proc.stdout, out, False), daemon=True),
+               threading.Thread(target=read, args=(proc.stderr, err, True), daemon=True)]
+    for r in readers:
+        r.start()
+    try:
+        assert seen.wait(timeout), "the command never got going"
+        assert proc.poll() is None, "the command ended before Ctrl-C"
+        sent = time.perf_counter()
+        os.killpg(proc.pid, signal.SIGINT)
+        try:
+            code = proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGABRT)  # faulthandler prints where it hangs
+            proc.wait(10)
+            for r in readers:
+                r.join(5)
+            pytest.fail(f"no exit {timeout}s after Ctrl-C:\n{b''.join(err).decode(errors='replace')[-6000:]}")
+        took = time.perf_counter() - sent
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    for r in readers:
+        r.join(5)
+    return code, b"".join(out).decode(), b"".join(err).decode(), took
+
+
+@pytest.mark.parametrize("extra", [[], ["--engine", "direct", "--workers", "2"]], ids=["table", "direct-2-workers"])
+def test_ctrl_c_during_verify_prints_the_partial_result_and_writes_json(big_path, tmp_path, extra):  # type: ignore[no-untyped-def]
+    js = tmp_path / "partial.json"
+    code, out, err, took = _interrupt(["verify", str(big_path), "--json", str(js), *extra], "states/s", tmp_path)
+    assert code == EXIT_INTERRUPTED, (out, err)
+    assert "verdict: INCOMPLETE (interrupted)" in out and f"wrote {js}" in out, out
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert took < 5, took
+    j = json.loads(js.read_text())
+    assert (j["verdict"], j["reason"], j["interrupted"]) == ("INCOMPLETE", "interrupted", True)
+    assert j["states"] > 1
+
+
+def test_ctrl_c_during_fuzz_prints_the_sequences_passed(tmp_path):  # type: ignore[no-untyped-def]
+    code, out, err, _took = _interrupt(
+        ["fuzz", str(SCENARIOS / "coffee_handover.py"), "--examples", "1000000"], "50 sequences", tmp_path
+    )
+    assert code == EXIT_INTERRUPTED, (out, err)
+    assert "verdict: INCOMPLETE (interrupted)" in out and "no invariant violated so far" in out, out
+    passed = int(out.split("passed: ")[1].split()[0])
+    assert passed >= 49  # the 50th was running when the progress line showed it
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
