@@ -6,14 +6,15 @@ STAMP := $(VENV)/.installed
 
 .PHONY: demo test bench clean
 
+# Silent (@, pip -qq): `make demo` prints the demo and nothing else; pip still prints errors.
 $(STAMP): pyproject.toml
-	test -x $(BIN)/python || $(PY) -m venv $(VENV)
-	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -e '.[test]'
-	touch $(STAMP)
+	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
+	@$(BIN)/python -m pip install -qq --upgrade pip
+	@$(BIN)/python -m pip install -qq -e '.[test]'
+	@touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/desmon run scenarios/coffee_handover.py
+	@$(BIN)/desmon run scenarios/coffee_handover.py
 
 test: $(STAMP)
 	$(BIN)/python -m pytest

@@ -12,12 +12,14 @@ import argparse
 import math
 import re
 import sys
-from typing import Callable, NoReturn, Sequence
+from typing import Any, Callable, NoReturn, Sequence
 
 from desmon.errors import DesmonError
 from desmon.options import (
+    HelpFormatter,
     add_input,
     add_output,
+    add_resolved,
     add_window,
     non_negative_int,
     positive_int,
@@ -42,7 +44,12 @@ def _one_line(text: object) -> str:
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse, but a usage error is one line: ``desmon: error: COMMAND: ...; see: desmon COMMAND --help``."""
+    """argparse, but a usage error is one line: ``desmon: error: COMMAND: ...; see: desmon COMMAND --help``,
+    and ``--help`` shows every option's default (:class:`~desmon.options.HelpFormatter`)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_USAGE, _usage_error(self.prog, message))
@@ -64,13 +71,22 @@ def _scenario_arg(p: argparse.ArgumentParser, help: str = "scenario file, e.g. s
     )
 
 
-def _deployer_arg(p: argparse.ArgumentParser) -> None:
-    from desmon.deployment.deployer import DEPLOYERS
+def _resolve_deployer(spec: str) -> object:
+    from desmon.verify.deployers import resolve_deployer
 
-    p.add_argument(
-        "--deployer", default="desmon", choices=list(DEPLOYERS),
-        help="deployer variant: desmon (corrected, upgrades to a preferred detector break-before-make), "
-        "desmon-keep-fallback (keeps a running fallback), paper (Algorithms 1 and 2 as published); default: desmon",
+    return resolve_deployer(spec)
+
+
+def _deployer_arg(p: argparse.ArgumentParser) -> None:
+    from desmon.verify.deployers import MUTANT_PREFIX
+    from desmon.verify.mutants import MUTANTS
+
+    add_resolved(
+        p, "--deployer", resolve=_resolve_deployer, default="desmon", metavar="SPEC",
+        help="desmon (corrected, upgrades to a preferred detector break-before-make), "
+        "desmon-keep-fallback (keeps a running fallback), paper (Algorithms 1 and 2 as published), "
+        f"{MUTANT_PREFIX}:NAME (a seeded bug: {', '.join(MUTANTS)}), "
+        "or your own: path/to/file.py:NAME or module:NAME (docs/deployers.md)",
     )
 
 
@@ -117,7 +133,7 @@ def _cmd_explain(args: argparse.Namespace) -> int:
     result = replay(replace(scenario, timeline=timeline), args.deployer)
     validity = acceptable_platforms(RepositoryQuery(result.repo), args.graph)
     fixed = scenario.model.spec(args.graph).fixed_platform  # type: ignore[union-attr]
-    print(f"{args.graph} at {when} ({args.deployer} deployer):")
+    print(f"{args.graph} at {when} ({args.deployer.name} deployer):")
     if fixed is not None:
         print(f"fixed deployment: only its EXECUTABLE_ON platform {fixed} is considered")
     print(validity.explain())
@@ -260,10 +276,13 @@ def _lazy(module: str, func: str) -> Callable[[argparse.Namespace], int]:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from desmon import __version__
+
     parser = _Parser(
         prog="desmon",
         description="Simulate, exhaustively check and fuzz the adaptive deployment of safety monitors.",
     )
+    parser.add_argument("--version", action="version", version=f"desmon {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
     p = sub.add_parser("replay", help="replay a scenario's scripted timeline through the deployment core (no signals)")
@@ -283,7 +302,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--at", default=None, help="seconds or timeline labels, comma-separated (e.g. t0,t1,t2,t3)")
     p.add_argument(
         "--format", default=None, choices=list(SHOW_FORMATS),
-        help="default: the suffix of -o (.png .dot .graphml .json .cypher), else png",
+        help="what to write; when not given: the suffix of -o (.png .dot .graphml .json .cypher), else png",
     )
     add_output(
         p, "-o", "--output", formats=SHOW_FORMATS, default_format="png", default=None,
@@ -293,8 +312,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(handler=_cmd_show)
 
     p = sub.add_parser("evaluate", help="detector x action table against Sanchez et al. 2016, and mission-level strategies")
-    p.add_argument("--trials", type=positive_int, default=300, help="trials per cell (default 300)")
-    p.add_argument("--seed", type=non_negative_int, default=1, help="random seed (default 1); with --seeds, the first seed")
+    p.add_argument("--trials", type=positive_int, default=300, help="trials per cell")
+    p.add_argument("--seed", type=non_negative_int, default=1, help="random seed; with --seeds, the first seed")
     p.add_argument(
         "--seeds", type=positive_int, default=None, metavar="N",
         help="run seeds SEED..SEED+N-1: per cell how many seeds pass, mission figures as mean [min..max]",
@@ -305,7 +324,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("run", help="simulate a scenario in the SimPy world")
     _scenario_arg(p)
-    p.add_argument("--seed", type=non_negative_int, default=0)
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed of the world (faults, slips, start failures)")
     p.add_argument("--until", type=positive_seconds, default=None, help="simulated seconds (default: the scenario's horizon)")
     _deployer_arg(p)
     add_output(p, "--trace", suffixes=(".jsonl",), default=None, metavar="FILE.jsonl", help="write the JSON Lines trace to this file")
@@ -320,7 +339,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("plot", help="draw the timeline of a run's JSON Lines trace")
     add_input(p, "trace", TRACE_FILE, help="trace file written by desmon run --trace")
-    add_output(p, "-o", "--output", suffixes=(".png",), default="timeline.png", metavar="FILE.png", help="PNG file (default timeline.png)")
+    add_output(p, "-o", "--output", suffixes=(".png",), default="timeline.png", metavar="FILE.png", help="PNG file")
     add_window(p, ("--from", "start"), ("--to", "end"))
     p.set_defaults(handler=_cmd_plot)
 
@@ -329,9 +348,9 @@ def build_parser() -> argparse.ArgumentParser:
     _deployer_arg(p)
     p.add_argument("--invariant", action="append", default=None, help="check only this invariant (repeatable)")
     p.add_argument("--continue", dest="keep_going", action="store_true", help="collect the first counterexample of each invariant")
-    p.add_argument("--max-states", type=positive_int, default=2_000_000)
-    p.add_argument("--max-depth", type=positive_int, default=None)
-    p.add_argument("--timeout", type=positive_seconds, default=None, help="seconds")
+    p.add_argument("--max-states", type=positive_int, default=2_000_000, help="stop INCOMPLETE (exit 3) after this many states")
+    p.add_argument("--max-depth", type=positive_int, default=None, help="explore at most this many events deep (default: no limit)")
+    p.add_argument("--timeout", type=positive_seconds, default=None, help="stop INCOMPLETE (exit 3) after this many seconds (default: no limit)")
     p.add_argument(
         "--max-memory", type=float, default=None, metavar="MB",
         help="memory budget: stop INCOMPLETE (exit 3) once the search's resident memory (workers included) exceeds it",
@@ -339,12 +358,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--symmetry", action="store_true", help="canonicalise interchangeable platforms")
     p.add_argument(
         "--workers", type=worker_count, default=1, metavar="N",
-        help="expand large BFS levels in N forked processes (same result for any N; default 1)",
+        help="direct engine only (--engine direct, --symmetry): expand its BFS levels of 256 states or more in N forked "
+        "processes, same result for any N; it can pay only on levels of thousands of states with N idle cores. "
+        "With --engine auto the table engine runs, in one process (faster on every model measured: docs/deployers.md), "
+        "and --workers is not used",
     )
     p.add_argument(
         "--engine", choices=("auto", "table", "direct"), default="auto",
         help="table: run the real core once per distinct reading of a reaction and replay it (fast); "
-        "direct: run it on every transition; auto (default): table unless --symmetry or --workers (same result)",
+        "direct: run it on every transition; auto: table unless --symmetry, else (or when the deployer reads platform "
+        "facts outside the requirement checks) direct; the result is the same",
     )
     add_output(p, "--json", suffixes=(".json",), default=None, metavar="FILE.json", help="write the counterexample(s) as JSON states")
     add_output(p, "--pytest", suffixes=(".py",), default=None, metavar="FILE.py", help="write a pytest replaying the counterexample")
@@ -357,8 +380,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("fuzz", help="hypothesis-generated failure sequences, shrunk on failure")
     _scenario_arg(p)
     _deployer_arg(p)
-    p.add_argument("--examples", type=positive_int, default=200)
-    p.add_argument("--seed", type=non_negative_int, default=0)
+    p.add_argument("--examples", type=positive_int, default=200, help="failure sequences to generate")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="hypothesis seed (the same seed draws the same sequences)")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(handler=_lazy("desmon.verify.command", "fuzz_command"))
     parser.set_defaults(commands=tuple(sub.choices))

@@ -1,9 +1,12 @@
-"""Command-line values checked before any work starts: numbers, inputs, outputs, windows.
+"""Command-line values checked before any work starts: numbers, inputs, outputs, windows,
+named objects.
 
 The parser declares each option once with what it means -- a count, seconds, an input
-file, an output file with its suffix, a time window -- and :func:`preflight` checks the
-parsed arguments against those declarations before a handler runs, so a bad value ends
-in one line (exit 2) before a long simulation or search, never after it.
+file, an output file with its suffix, a time window, a name to resolve (``--deployer``)
+-- and :func:`preflight` checks the parsed arguments against those declarations before a
+handler runs, so a bad value ends in one line (exit 2) before a long simulation or
+search, never after it. :class:`HelpFormatter` shows every option's default in
+``--help``, so no help text writes one by hand.
 """
 
 from __future__ import annotations
@@ -12,7 +15,7 @@ import argparse
 import math
 import os
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 from desmon.paths import PathError, check_input_file, check_output_file, same_file
 
@@ -25,7 +28,10 @@ __all__ = [
     "Input",
     "Output",
     "Window",
+    "Resolved",
+    "HelpFormatter",
     "add_input",
+    "add_resolved",
     "add_output",
     "add_window",
     "preflight",
@@ -126,6 +132,29 @@ class Window:
     needs: tuple[str, str] | None = None  # (dest, flag)
 
 
+@dataclass(frozen=True)
+class Resolved:
+    """An option whose text names an object (``--deployer``): ``resolve`` turns the text
+    into it before the command runs, raising a one-line DesmonError for a bad name."""
+
+    dest: str
+    resolve: Callable[[str], object]
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """argparse's formatter, with "(default: X)" after every option that has a default
+    (not None, False or suppressed)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if default is None or default is False or default is argparse.SUPPRESS or "%(default)" in text:
+            return text
+        if not action.option_strings and action.nargs not in (argparse.OPTIONAL, argparse.ZERO_OR_MORE):
+            return text  # a required positional argument has no default to show
+        return f"{text} (default: %(default)s)" if text else "(default: %(default)s)"
+
+
 def _declare(p: argparse.ArgumentParser, key: str, item: object) -> None:
     p.set_defaults(**{key: (*(p.get_default(key) or ()), item)})
 
@@ -145,6 +174,12 @@ def add_output(
 ) -> None:
     action = p.add_argument(*flags, **kwargs)
     _declare(p, "_outputs", Output(action.dest, flags[0], suffixes, formats, default_format=default_format))
+
+
+def add_resolved(p: argparse.ArgumentParser, *flags: str, resolve: Callable[[str], object], **kwargs: Any) -> None:
+    """An option naming an object; :func:`preflight` replaces its text by ``resolve(text)``."""
+    action = p.add_argument(*flags, **kwargs)
+    _declare(p, "_resolved", Resolved(action.dest, resolve))
 
 
 def add_window(
@@ -181,7 +216,8 @@ def _resolve_format(args: argparse.Namespace, o: Output, value: str | None) -> t
 
 
 def preflight(args: argparse.Namespace) -> None:
-    """Check the inputs, windows and outputs the parser declared for ``args``' command.
+    """Check the inputs, windows and outputs the parser declared for ``args``' command,
+    then resolve its named objects (a deployer's module may run the user's code: last).
 
     The window rule is :func:`desmon.viz.timeline.check_window`; the horizon is not known
     here, so it is checked again once the trace or scenario is read.
@@ -215,3 +251,7 @@ def preflight(args: argparse.Namespace) -> None:
             if same_file(value, other):
                 raise PathError(f"{o.flag} {value}: {flag} writes the same file; give each output its own name")
         written.append((o.flag, value))
+    for r in getattr(args, "_resolved", ()):
+        value = getattr(args, r.dest, None)
+        if isinstance(value, str):
+            setattr(args, r.dest, r.resolve(value))

@@ -139,3 +139,44 @@ def test_no_command_prints_help_and_one_error_line(capsys):
     assert main([]) == 2
     out, err = capsys.readouterr()
     assert "COMMAND" in out and err.startswith("desmon: error: no command given") and err.count("\n") == 1
+
+
+def test_version_is_the_installed_package_version(capsys):
+    from importlib.metadata import version
+
+    import desmon
+
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out == f"desmon {desmon.__version__}\n"
+    assert desmon.__version__ == version("desmon")  # pyproject.toml and the package agree
+
+
+def _subparsers():  # type: ignore[no-untyped-def]
+    import argparse
+
+    from desmon.cli import build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return sub.choices
+
+
+def test_every_help_shows_every_default_once():
+    """A default (not None/False) appears as "(default: X)", written by the formatter only."""
+    import argparse
+
+    for name, p in _subparsers().items():
+        text = " ".join(p.format_help().split())
+        for a in p._actions:
+            if not a.option_strings or a.default in (None, False, argparse.SUPPRESS):
+                continue
+            assert f"(default: {a.default})" in text, f"desmon {name} {a.option_strings[0]}"
+            assert "default" not in (a.help or ""), f"desmon {name} {a.option_strings[0]} writes its default by hand"
+
+
+def test_workers_under_the_auto_engine_runs_the_table_engine_with_a_note(root, capsys):
+    path = str(root / "scenarios" / "two_detectors.py")
+    assert main(["verify", path, "--workers", "2", "--no-progress"]) == 0
+    out, err = capsys.readouterr()
+    assert "engine: table" in out
+    assert err.count("\n") == 1 and "--workers 2 not used" in err and "--engine direct --workers 2" in err

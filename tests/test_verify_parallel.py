@@ -112,7 +112,7 @@ def test_a_worker_that_dies_ends_the_search_with_a_one_line_error(monkeypatch, c
         return real(self, key, known)
 
     monkeypatch.setattr(Checker, "expand", dies_in_a_worker)  # inherited by the forked workers
-    assert main(["verify", str(SCENARIOS / "symmetric_platforms.py"), "--workers", "2", "--no-progress"]) == 2
+    assert main(["verify", str(SCENARIOS / "symmetric_platforms.py"), "--engine", "direct", "--workers", "2", "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert "worker process died" in err and "Traceback" not in err
     assert gc.isenabled()

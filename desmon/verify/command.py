@@ -15,7 +15,7 @@ from pathlib import Path
 
 from desmon.errors import CheckerError
 
-__all__ = ["verify_command", "fuzz_command", "check_megabytes"]
+__all__ = ["verify_command", "fuzz_command", "check_megabytes", "workers_for"]
 
 
 def _positive(name: str, value: float | int | None) -> None:
@@ -27,6 +27,25 @@ def check_megabytes(flag: str, value: float | None) -> None:
     """A memory budget: a finite number of MB above 0 (or None: no budget)."""
     if value is not None and not (math.isfinite(value) and value > 0):
         raise CheckerError(f"{flag} {value:g}: give the memory budget as a finite number of MB above 0, e.g. {flag} 2000")
+
+
+def workers_for(args: argparse.Namespace) -> int:
+    """The worker processes the search gets: ``--workers`` runs the *direct* engine in
+    parallel, so under ``--engine auto`` without ``--symmetry`` (the table engine, one
+    process) it is not used and a one-line note says so: the table engine was faster than
+    the direct engine with 2 workers on every model measured (docs/deployers.md, "--workers")."""
+    workers = getattr(args, "workers", 1)
+    if workers > 1 and getattr(args, "engine", "auto") == "auto" and not getattr(args, "symmetry", False):
+        import sys
+
+        print(
+            f"desmon verify: note: --workers {workers} not used: --engine auto runs the table engine, in one process, which "
+            f"beat the direct engine in {workers} processes on every model measured; to run the direct engine in parallel "
+            f"anyway: --engine direct --workers {workers}",
+            file=sys.stderr,
+        )
+        return 1
+    return workers
 
 
 def verify_command(args: argparse.Namespace) -> int:
@@ -51,7 +70,7 @@ def verify_command(args: argparse.Namespace) -> int:
         max_memory=max_memory,
         keep_going=args.keep_going,
         progress=not args.no_progress,
-        workers=getattr(args, "workers", 1),
+        workers=workers_for(args),
         engine=getattr(args, "engine", "auto"),
     )
     print(format_result(result), end="", flush=True)

@@ -149,7 +149,7 @@ from desmon.deployment.invariants import SystemView, check_invariants, get_invar
 from desmon.loader import load_scenario
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformUp
 from desmon.verify import RepositoryRun
-from desmon.verify.mutants import MUTANTS
+from desmon.verify.deployers import resolve_deployer
 
 SCENARIO = {scenario_path!r}
 DEPLOYER = {deployer!r}
@@ -158,7 +158,7 @@ INITIAL_ACTION = {initial_action!r}
 
 def replay(steps, after_command=None):
     """The states after each step; ``after_command(run)`` is called after every Start/Stop."""
-    run = RepositoryRun(load_scenario(SCENARIO), MUTANTS.get(DEPLOYER, DEPLOYER))
+    run = RepositoryRun(load_scenario(SCENARIO), resolve_deployer(DEPLOYER))
     assert run.bounds.start_action(run.scenario) == INITIAL_ACTION, "not the checker's initial state"
     if after_command is not None:
         control, start, stop = run.control, run.control.start, run.control.stop
@@ -197,7 +197,9 @@ def test_{name}():
 
 
 def counterexample_pytest(r: CheckResult, scenario_path: str, initial_action: str | None) -> str:
-    src = _PYTEST.format(scenario_path=scenario_path, deployer=r.deployer, initial_action=initial_action)
+    from desmon.verify.deployers import portable_spec
+
+    src = _PYTEST.format(scenario_path=scenario_path, deployer=portable_spec(r.deployer), initial_action=initial_action)
     for c in r.counterexamples:
         steps = []
         for s in c.steps[1:]:

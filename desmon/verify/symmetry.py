@@ -67,7 +67,7 @@ __all__ = ["Symmetry", "SYMMETRIC_DEPLOYERS"]
 #: Deployers built on the corrected ``ensure_deployed`` (break-before-make, keep the
 #: valid instance, start only when none is kept): a graph is never active twice, which
 #: condition (4) of the module docstring needs. ``no-recheck`` only skips re-checks.
-SYMMETRIC_DEPLOYERS = ("desmon", "no-recheck")
+SYMMETRIC_DEPLOYERS = ("desmon", "no-recheck", "mutant:no-recheck")  # the last: as --deployer names it
 
 
 class Symmetry:

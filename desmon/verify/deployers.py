@@ -1,0 +1,212 @@
+"""Which deployer a command runs: ``--deployer SPEC``, resolved once for every command.
+
+:func:`resolve_deployer` is the one rule. ``SPEC`` is one of
+
+``desmon``, ``desmon-keep-fallback``, ``paper``
+    the built-in variants (:data:`desmon.deployment.deployer.DEPLOYERS`);
+``mutant:NAME``
+    a seeded mutant of the corrected deployer (:data:`desmon.verify.mutants.MUTANTS`);
+``path/to/file.py:NAME``
+    ``NAME`` in a Python file, executed as a module (told apart from the next form by
+    its ``.py`` ending or a ``/`` in the path);
+``module:NAME``
+    ``NAME`` in an importable module (the current directory is searched first, as
+    ``python -m`` does); ``NAME`` may be dotted (``module:obj.attr``).
+
+``NAME`` must be a :class:`~desmon.deployment.deployer.Deployer`, or a reaction
+function ``react(q, slots, changed, context_changed)`` (a generator function: it yields
+Start / Stop / RaiseError), which is wrapped into a Deployer with fallbacks. Either way
+the deployer returned is *named as the user wrote the spec* (``mutant:no-recheck``,
+``docs/examples/first_fit.py:FIRST_FIT``), so reports, JSON and traces say what was
+run. Every refusal is a :class:`~desmon.errors.ModelError` whose one line names the
+spec and the fix. docs/deployers.md is the guide to writing one.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import importlib
+import importlib.util
+import inspect
+import os
+import sys
+from pathlib import Path
+from types import ModuleType
+from typing import Any, Iterator
+
+from desmon.deployment.deployer import DEPLOYERS, Deployer
+from desmon.errors import ModelError
+from desmon.verify.mutants import MUTANTS
+
+__all__ = ["resolve_deployer", "portable_spec", "DEPLOYER_FORMS", "MUTANT_PREFIX"]
+
+MUTANT_PREFIX = "mutant"
+
+#: Every form ``--deployer`` takes, for help texts and refusals.
+DEPLOYER_FORMS = (
+    f"{', '.join(DEPLOYERS)}, {MUTANT_PREFIX}:NAME ({', '.join(MUTANTS)}), "
+    "path/to/file.py:NAME or module:NAME (a Deployer, or a reaction function react(q, slots, changed, context_changed))"
+)
+
+#: the signature a reaction function is called with
+_REACT_ARGS = ("q", "slots", "changed", "context_changed")
+
+
+def _refuse(spec: str, why: str) -> ModelError:
+    return ModelError(" ".join(f"--deployer {spec}: {why}".split()))
+
+
+def _is_file(source: str) -> bool:
+    return source.endswith(".py") or "/" in source or os.sep in source
+
+
+def resolve_deployer(spec: str | Deployer) -> Deployer:
+    """The deployer ``spec`` names (see the module docstring), named ``spec``.
+
+    A :class:`Deployer` is returned as it is. Raises :class:`ModelError` (one line) for
+    an unknown name, a missing file or module, a missing attribute, an object of the
+    wrong type, or a module that raises (anything, ``SystemExit`` included) while it
+    is imported.
+    """
+    if isinstance(spec, Deployer):
+        return spec
+    if spec in DEPLOYERS:
+        return DEPLOYERS[spec]
+    source, colon, name = spec.rpartition(":")
+    if not colon or not source:
+        hint = f" (to load one from {spec}, name it: {spec}:NAME)" if _is_file(spec) else ""
+        raise _refuse(spec, f"not a deployer{hint}; give one of {DEPLOYER_FORMS}")
+    if source == MUTANT_PREFIX:
+        if name not in MUTANTS:
+            raise _refuse(spec, f"no mutant {name!r}; the mutants are {', '.join(f'{MUTANT_PREFIX}:{m}' for m in MUTANTS)}")
+        return dataclasses.replace(MUTANTS[name], name=spec)
+    if not name:
+        raise _refuse(spec, f"name the deployer after the colon, e.g. {source}:DEPLOYER")
+    module = _load_file(spec, source) if _is_file(source) else _import(spec, source)
+    return _as_deployer(spec, module, source, name)
+
+
+def portable_spec(spec: str) -> str:
+    """``spec`` as it resolves from any working directory (a file's path made absolute),
+    for a generated test that replays a counterexample elsewhere. A mutant taken from
+    :data:`MUTANTS` in Python is named by its bare name: that becomes ``mutant:NAME``."""
+    if spec in MUTANTS and spec not in DEPLOYERS:
+        return f"{MUTANT_PREFIX}:{spec}"
+    source, colon, name = spec.rpartition(":")
+    if colon and source and source != MUTANT_PREFIX and _is_file(source):
+        return f"{Path(source).resolve()}:{name}"
+    return spec
+
+
+@contextlib.contextmanager
+def _loading(spec: str, source: str, rerun: str, module: str | None = None) -> Iterator[None]:
+    """Run a user's module: what it prints goes to stderr; whatever it raises is one line.
+    ``module``: the module being imported by name (its absence is "not found", not a failure)."""
+    try:
+        with contextlib.redirect_stdout(sys.stderr):
+            yield
+    except KeyboardInterrupt:
+        raise  # a real Ctrl-C (desmon reports it as interrupted)
+    except ModuleNotFoundError as exc:
+        if module is None or exc.name is None or not (module == exc.name or module.startswith(exc.name + ".")):
+            raise _refuse(spec, f"{source} raised ModuleNotFoundError: {exc} while imported; {rerun}") from None
+        raise _refuse(
+            spec, f"no module named {exc.name!r} (searched: the current directory and the installed packages); "
+            "give an importable module:NAME, or path/to/file.py:NAME"
+        ) from None
+    except SyntaxError as exc:
+        where = source if module is None else (exc.filename or source)  # a file as the user named it
+        raise _refuse(spec, f"{where}:{exc.lineno}: syntax error: {exc.msg}") from None
+    except SystemExit as exc:
+        code = "" if exc.code is None else repr(exc.code)
+        raise _refuse(
+            spec, f"{source} called sys.exit({code}) while desmon imported it; "
+            "put script-only code under if __name__ == '__main__':"
+        ) from None
+    except BaseException as exc:  # a user's module may fail in any way
+        detail = " ".join(str(exc).split())[:300]
+        raise _refuse(spec, f"{source} raised {type(exc).__name__}{': ' + detail if detail else ''} while imported; {rerun}") from None
+
+
+def _load_file(spec: str, source: str) -> ModuleType:
+    path = Path(source)
+    if "\x00" in source or not path.is_file():
+        what = f"{source} is a directory" if path.is_dir() else f"no such file {source}"
+        raise _refuse(spec, f"{what}; give the path of a .py file that defines the deployer (path/to/file.py:NAME)")
+    # named as the user wrote the path: what names a module (the table engine's note on a
+    # read it cannot record, a traceback) names the file; a ".py" or "/" in it keeps it
+    # apart from every importable module's name
+    module_name = source
+    loader_spec = importlib.util.spec_from_file_location(module_name, path.resolve())
+    if loader_spec is None or loader_spec.loader is None:
+        raise _refuse(spec, f"{source} cannot be loaded as a Python module; give it a .py extension")
+    module = importlib.util.module_from_spec(loader_spec)
+    sys.modules[module_name] = module  # kept: dataclasses and pickling look a module up by name
+    try:
+        with _loading(spec, source, f"run python {source} to see where"):
+            loader_spec.loader.exec_module(module)
+    except BaseException:
+        sys.modules.pop(module_name, None)
+        raise
+    return module
+
+
+def _import(spec: str, source: str) -> ModuleType:
+    if not all(part.isidentifier() for part in source.split(".")):
+        raise _refuse(spec, f"{source!r} is neither a module name nor a .py file; give module:NAME or path/to/file.py:NAME")
+    cwd = os.getcwd()
+    if cwd not in sys.path and "" not in sys.path:
+        sys.path.insert(0, cwd)  # module:NAME finds the user's own modules, as python -m does
+    with _loading(spec, source, f"run python -c 'import {source}' to see where", module=source):
+        module = importlib.import_module(source)
+    return module
+
+
+def _as_deployer(spec: str, module: ModuleType, source: str, name: str) -> Deployer:
+    found: Any = module
+    for part in name.split("."):
+        if not hasattr(found, part):
+            offered = sorted(k for k, v in vars(module).items() if not k.startswith("_") and _offers(v))
+            listing = f"it defines {', '.join(offered)}" if offered else "it defines no Deployer and no reaction function"
+            raise _refuse(spec, f"{source} has no {name!r}; {listing}")
+        found = getattr(found, part)
+    if isinstance(found, Deployer):
+        return dataclasses.replace(found, name=spec)
+    if callable(found) and not isinstance(found, type):
+        _check_reaction(spec, name, found)
+        doc = (inspect.getdoc(found) or "").strip().splitlines()
+        return Deployer(spec, doc[0] if doc else f"the reaction {name} of {source}", found)
+    kind = type(found).__name__
+    raise _refuse(
+        spec, f"{name} is {'an' if kind[0] in 'aeiouAEIOU' else 'a'} {kind}, not a desmon.deployment.deployer.Deployer "
+        "nor a reaction function react(q, slots, changed, context_changed)"
+    )
+
+
+def _offers(value: object) -> bool:
+    """Whether ``value`` could be named as a deployer (for the list a refusal shows)."""
+    if isinstance(value, Deployer):
+        return True
+    if not inspect.isgeneratorfunction(value):
+        return False
+    try:
+        inspect.signature(value).bind(*_REACT_ARGS)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+def _check_reaction(spec: str, name: str, react: Any) -> None:
+    """A reaction function takes (q, slots, changed, context_changed) and yields commands."""
+    try:
+        inspect.signature(react).bind(*_REACT_ARGS)
+    except TypeError:
+        raise _refuse(spec, f"{name} cannot be called as {name}({', '.join(_REACT_ARGS)}); a reaction takes exactly these four") from None
+    except ValueError:  # no signature to inspect (a builtin): it is called and judged then
+        return
+    if inspect.isfunction(react) and not inspect.isgeneratorfunction(react):
+        raise _refuse(
+            spec, f"{name} never yields: a reaction is a generator function that yields Start, Stop and RaiseError "
+            "commands (docs/deployers.md)"
+        )
