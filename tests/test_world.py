@@ -12,8 +12,12 @@ from desmon.model.scenario import Scenario
 
 
 def test_bad_values_are_one_line_errors() -> None:
+    from desmon.model.cob3 import care_o_bot
+
+    with pytest.raises(ScenarioError, match="unknown task action 'fly'"):  # actions are the model's: checked with it
+        Scenario("s", care_o_bot().build(), world=World(task=(Step("fly", 1.0),), horizon=1.0))
     with pytest.raises(ScenarioError, match="task action"):
-        Step("fly", 1.0)
+        Step("", 1.0)
     with pytest.raises(ScenarioError, match="horizon"):
         World(task=(Step(GRASP, 1.0),), horizon=-1)
     with pytest.raises(ScenarioError, match="empty"):

@@ -351,7 +351,7 @@ def draw_context(
         return {}
     if context == IDLE:
         return {}
-    raise SignalError(f"unknown action context {context!r}; use one of {', '.join(ACTIONS)}")
+    raise SignalError(_no_signal_model(context))
 
 
 def draw_slip(rng: np.random.Generator, n: int, p: SignalParams = DEFAULT_PARAMS) -> Params:
@@ -632,11 +632,20 @@ def _block_rng(seed: int, tag: int, block: int) -> np.random.Generator:
 # --------------------------------------------------------------------------- mission signals
 
 
+def _no_signal_model(context: str) -> str:
+    """The signal models exist for the built-in actions only; a model's own action is
+    rendered as the built-in it is declared like (``desmon.sim.world.like_segments``)."""
+    return (
+        f"unknown context {context!r}: signal models exist for the built-in actions ({', '.join(ACTIONS)}); "
+        "render a model's own action as the built-in it is like (SystemModel.like)"
+    )
+
+
 def _check_contexts(segments: Sequence[Segment]) -> None:
     prev_end = 0.0
     for i, s in enumerate(segments):
         if s.context not in ACTIONS:
-            raise SignalError(f"segment {i}: unknown context {s.context!r}; use one of {', '.join(ACTIONS)}")
+            raise SignalError(f"segment {i}: {_no_signal_model(s.context)}")
         if not (s.duration > 0 and math.isfinite(s.duration)):
             raise SignalError(f"segment {i} ({s.context}): duration {s.duration!r} must be a positive finite number")
         if s.start < prev_end - 1e-9 or s.start < 0:

@@ -1,10 +1,20 @@
-"""Action contexts of the robot: the vocabulary shared by context monitor, selector and detectors."""
+"""Action contexts of the robot: the vocabulary shared by context monitor, selector and detectors.
+
+The built-in actions below are the ones the Care-O-bot case study and the signal models
+know. A model adds its own with :class:`Action` (in the DSL: ``robot.action("pour",
+risky=True, like="hold")``); ``SystemModel.actions`` is then the built-ins plus the
+declared ones, and every layer checks names against it (``desmon.model.system.check_action``).
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Final
 
-__all__ = ["HOLD", "GRASP", "MOVE_BASE", "RELEASE", "ROTATE_CCW", "ROTATE_CW", "IDLE", "ACTIONS", "RISKY_ACTIONS"]
+from desmon.errors import ModelError
+from desmon.model.checks import check_flag, check_name, strict_init, suggest
+
+__all__ = ["HOLD", "GRASP", "MOVE_BASE", "RELEASE", "ROTATE_CCW", "ROTATE_CW", "IDLE", "ACTIONS", "RISKY_ACTIONS", "Action"]
 
 HOLD: Final = "hold"
 GRASP: Final = "grasp"
@@ -14,7 +24,54 @@ ROTATE_CCW: Final = "rotate_ccw"
 ROTATE_CW: Final = "rotate_cw"
 IDLE: Final = "idle"  # nothing in the hand: no slip can happen
 
-#: Every action context desmon knows, in a fixed order.
+#: Every built-in action context, in a fixed order.
 ACTIONS: Final = (IDLE, GRASP, HOLD, MOVE_BASE, RELEASE, ROTATE_CCW, ROTATE_CW)
-#: Contexts in which an object is in the hand, so a slip is possible.
+#: Built-in contexts in which an object is in the hand, so a slip is possible.
 RISKY_ACTIONS: Final = frozenset({GRASP, HOLD, MOVE_BASE, RELEASE, ROTATE_CCW, ROTATE_CW})
+
+
+@strict_init(ModelError)
+@dataclass(frozen=True, slots=True)
+class Action:
+    """An action a model declares beyond the built-in :data:`ACTIONS`.
+
+    ``name``
+        the context's name, as rules, task steps, bounds and ``ActionChange`` write it;
+        not a built-in name;
+    ``risky``
+        an object is in the hand while the robot does it: unmonitored exposure counts
+        it and slips may happen (default ``True``: an undeclared risk would hide
+        exposure);
+    ``like``
+        the built-in action whose sensor signals it has (the signal models exist for the
+        built-ins only): default ``"hold"`` when risky, ``"idle"`` when not. It must
+        agree with ``risky``: a risky action is like a risky built-in, a safe one like
+        ``idle``.
+    """
+
+    name: str
+    risky: bool = True
+    like: str | None = None
+
+    def __post_init__(self) -> None:
+        check_name("action", self.name)
+        if self.name in ACTIONS:
+            raise ModelError(
+                f"action {self.name!r} is built in: use it without declaring it, or give the new action another name "
+                f"(built-in: {', '.join(ACTIONS)})"
+            )
+        check_flag(f"action {self.name!r} risky", self.risky)
+        like = self.like if self.like is not None else (HOLD if self.risky else IDLE)
+        if not isinstance(like, str) or like not in ACTIONS:
+            raise ModelError(
+                f"action {self.name!r}: like={like!r} is not a built-in action{suggest(like, ACTIONS)}: name the built-in "
+                f"whose signals it has (signal models exist for the built-ins only), one of {', '.join(ACTIONS)}"
+            )
+        if self.risky != (like in RISKY_ACTIONS):
+            fix = "like='hold' (or another built-in with an object in the hand)" if self.risky else "like='idle'"
+            hand = "an object in the hand" if self.risky else "an empty hand"
+            raise ModelError(
+                f"action {self.name!r} is {'risky' if self.risky else 'not risky'} ({hand}) but like={like!r} has "
+                f"{'an empty hand' if self.risky else 'an object in the hand'}: write {fix}, or risky={not self.risky}"
+            )
+        object.__setattr__(self, "like", like)

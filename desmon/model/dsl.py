@@ -13,7 +13,8 @@
     (robot.depsl.deployment_specification("force_slip_detector")
         .add_constraint("attribute", "platform_has", "force_sensor"))
 
-    robot.rules({"release": "force_slip_detector"})
+    robot.action("pour", risky=True, like="hold")   # an action of this robot's own
+    robot.rules({"release": "force_slip_detector", "pour": "force_slip_detector"})
     model = robot.build()          # a validated SystemModel
 
 A malformed graph is rejected when its ``with`` block ends; cross references (spec for
@@ -27,6 +28,7 @@ from types import TracebackType
 from typing import Iterable, Mapping
 
 from desmon.errors import ModelError
+from desmon.model.actions import Action
 from desmon.model.checks import check_name, check_names, strict_call
 from desmon.model.graph import Component, PerceptionGraph, ProcessingComponent, SensorComponent
 from desmon.model.platform import Device, Platform
@@ -171,6 +173,7 @@ class RobotBuilder:
         self._specs: list[SpecBuilder] = []
         self._rules = RuleTable(())
         self._rules_set = False
+        self._actions: list[Action] = []
         self.rpsl = _RPSL(self)
         self.depsl = _DepSL(self)
 
@@ -196,6 +199,15 @@ class RobotBuilder:
             )
         )
         return PlatformBuilder(self, name)
+
+    @strict_call(ModelError, "action(...)")
+    def action(self, name: str, *, risky: bool = True, like: str | None = None) -> "RobotBuilder":
+        """Declare an action context of this robot beyond the built-in ones (see
+        :class:`~desmon.model.actions.Action`): ``risky`` means an object is in the hand
+        (exposure counts it, slips may happen); ``like`` names the built-in action whose
+        sensor signals it has (default ``hold`` when risky, ``idle`` when not)."""
+        self._actions.append(Action(name, risky, like))
+        return self
 
     def _add_graph(self, graph: PerceptionGraph) -> None:
         if any(g.name == graph.name for g in self._graphs):
@@ -223,4 +235,5 @@ class RobotBuilder:
             specs=tuple(s.build() for s in self._specs),
             rules=self._rules,
             robot=self.name,
+            declared_actions=tuple(self._actions),
         )

@@ -13,10 +13,9 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 from desmon.errors import ModelError
-from desmon.model.actions import ACTIONS
 from desmon.model.checks import check_items, check_name, check_number, check_text, strict_init, suggest
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
-from desmon.model.system import SystemModel
+from desmon.model.system import SystemModel, action_problem
 
 __all__ = ["TimedEvent", "Scenario", "EVENT_TYPES", "event_problem"]
 
@@ -31,9 +30,7 @@ def event_problem(ev: Event, model: SystemModel) -> str | None:
     ``timeline``, and the SimPy world's scripted faults and loads.
     """
     if isinstance(ev, ActionChange):
-        if ev.action not in ACTIONS:
-            return f"unknown action {ev.action!r}{suggest(ev.action, ACTIONS)}; use one of {', '.join(ACTIONS)}"
-        return None
+        return action_problem(model, ev.action)
     devices = [d.name for d in model.devices]
     platforms = [p.name for p in model.platforms]
     if isinstance(ev, (DeviceFail, DeviceRepair)):

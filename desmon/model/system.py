@@ -9,8 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Mapping
 
-from desmon.errors import ModelError
-from desmon.model.actions import ACTIONS
+from desmon.errors import DesmonError, ModelError
+from desmon.model.actions import ACTIONS, RISKY_ACTIONS, Action
 from desmon.model.checks import check_items, check_name, check_names, strict_init, suggest
 from desmon.model.graph import PerceptionGraph
 from desmon.model.platform import Device, Platform
@@ -26,7 +26,7 @@ from desmon.model.requirements import (
     Selection,
 )
 
-__all__ = ["Rule", "RuleTable", "SystemModel", "PlatformState", "with_load"]
+__all__ = ["Rule", "RuleTable", "SystemModel", "PlatformState", "with_load", "action_problem", "check_action"]
 
 
 @strict_init(ModelError)
@@ -203,7 +203,12 @@ class PlatformState:
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class SystemModel:
-    """A validated design-time model. Construction rejects dangling references."""
+    """A validated design-time model. Construction rejects dangling references.
+
+    ``declared_actions`` are the model's own actions beyond the built-in ones
+    (``RobotBuilder.action``); :attr:`actions` is the whole vocabulary every layer checks
+    names against (:func:`check_action`).
+    """
 
     platforms: tuple[Platform, ...]
     devices: tuple[Device, ...] = ()
@@ -211,6 +216,7 @@ class SystemModel:
     specs: tuple[DeploymentSpec, ...] = ()
     rules: RuleTable = field(default_factory=lambda: RuleTable(()))
     robot: str = "robot"
+    declared_actions: tuple[Action, ...] = ()
 
     def __post_init__(self) -> None:
         check_name("robot", self.robot)
@@ -219,6 +225,7 @@ class SystemModel:
             ("devices", Device, "(Device('ft', 'force_sensor', 'pc'),)"),
             ("graphs", PerceptionGraph, "(PerceptionGraph(...),)"),
             ("specs", DeploymentSpec, "(DeploymentSpec('g', ...),)"),
+            ("declared_actions", Action, "(Action('pour', risky=True, like='hold'),)"),
         ):
             object.__setattr__(self, fld, check_items(f"system model {fld}", getattr(self, fld), typ, example=example))
         if not isinstance(self.rules, RuleTable):
@@ -227,6 +234,7 @@ class SystemModel:
         _unique("device", [d.name for d in self.devices])
         _unique("perception graph", [g.name for g in self.graphs])
         _unique("deployment specification for graph", [s.graph for s in self.specs])
+        _unique("action", [a.name for a in self.declared_actions])
         platforms = {p.name for p in self.platforms}
         graphs = {g.name for g in self.graphs}
         for dev in self.devices:
@@ -274,16 +282,33 @@ class SystemModel:
                     if problem is not None:
                         raise ModelError(f"deployment of {spec.graph!r} needs {req.describe()} but {problem}")
         for rule in self.rules.rules:
-            if rule.context not in ACTIONS:
-                raise ModelError(
-                    f"rule for unknown action context {rule.context!r}{suggest(rule.context, ACTIONS)}: use one of {', '.join(ACTIONS)}"
-                )
+            check_action(self, rule.context, where="rules", what="action context")
             for g in rule.graphs:
                 if g not in graphs:
                     raise ModelError(
                         f"rule for {rule.context!r} selects unknown perception graph {g!r}{suggest(g, graphs)}: "
                         f"define it (known: {sorted(graphs)})"
                     )
+
+    # -- the action vocabulary -------------------------------------------------------
+    @property
+    def actions(self) -> tuple[str, ...]:
+        """Every action context of this model: the built-ins, then the declared ones."""
+        return ACTIONS + tuple(a.name for a in self.declared_actions)
+
+    @property
+    def risky_actions(self) -> frozenset[str]:
+        """The contexts with an object in the hand (exposure counts them; slips may happen)."""
+        return RISKY_ACTIONS | {a.name for a in self.declared_actions if a.risky}
+
+    def like(self, action: str) -> str:
+        """The built-in action whose signals ``action`` has (a built-in is like itself)."""
+        if action in ACTIONS:
+            return action
+        for a in self.declared_actions:
+            if a.name == action:
+                return a.like  # type: ignore[return-value]  # set by Action.__post_init__
+        return check_action(self, action, where=f"robot {self.robot!r}")
 
     # -- lookups -------------------------------------------------------------------
     def platform(self, name: str) -> Platform:
@@ -318,6 +343,25 @@ class SystemModel:
             if p.name == name:
                 return i
         raise ModelError(f"unknown platform {name!r}")
+
+
+def action_problem(model: SystemModel, name: object, *, what: str = "action") -> str | None:
+    """Why ``name`` is not an action of ``model`` (None if it is): the one rule every layer
+    uses for action names (rules, scenario events, world task steps, checker bounds)."""
+    known = model.actions
+    if isinstance(name, str) and name in known:
+        return None
+    declare = f"robot.action({name!r}, risky=True, like='hold')" if isinstance(name, str) and name.strip() else "robot.action('name', ...)"
+    return f"unknown {what} {name!r}{suggest(name, known)}: use one of {', '.join(known)}, or declare it with {declare}"
+
+
+def check_action(model: SystemModel, name: object, *, where: str, what: str = "action", error: type[DesmonError] = ModelError) -> str:
+    """Return ``name`` if ``model`` has that action, else raise ``error`` (one line, from
+    ``where``, with a "did you mean")."""
+    problem = action_problem(model, name, what=what)
+    if problem is not None:
+        raise error(f"{where}: {problem}")
+    return name  # type: ignore[return-value]
 
 
 def _platform_fact_problem(req: Requirement, platforms: tuple[Platform, ...]) -> str | None:

@@ -7,7 +7,9 @@ the core; no decision is made here.
 
 * **Robot** walks the task's ground-truth segments; each new action becomes a gripper /
   base observation that the context monitor interprets (``deployment.monitor.interpret``)
-  after the recognition delay.
+  after the recognition delay. An action the gripper does not show (``rotate_*``, a
+  model's own actions) is recognised directly, after the same delay. A model's own
+  action has the sensor signals of the built-in it is declared ``like``.
 * **Context monitor** inserts facts into the networkx repository through the core's
   Insert port (context, HAS_DEVICE loss / repair noticed after the heartbeat timeout,
   platform up / down, background load). The repository's Notify subscription wakes the
@@ -59,7 +61,7 @@ from desmon.sim.metrics import Exposure, MemoryMeter, slip_metrics
 from desmon.sim.sensors import DetectorAdapter, SensorBank
 from desmon.sim.trace import Trace
 from desmon.detectors.signals import Segment
-from desmon.sim.world import Slip, World, draw_slips, expand_task, world_of
+from desmon.sim.world import Slip, World, draw_slips, expand_task, like_segments, world_of
 
 __all__ = ["SimWorld", "RunResult", "simulate", "OBSERVATION", "SLIP_WINDOW"]
 
@@ -68,7 +70,8 @@ __all__ = ["SimWorld", "RunResult", "simulate", "OBSERVATION", "SLIP_WINDOW"]
 #: the detection window ends 1 s after it).
 SLIP_WINDOW = (-2.0, 2.0)
 
-#: What the context monitor sees of gripper and base in each ground-truth action.
+#: What the context monitor sees of gripper and base in each ground-truth action; an
+#: action not listed here (rotate_*, a model's own actions) is recognised directly.
 OBSERVATION = {
     GRASP: GripperObservation("closing"),
     RELEASE: GripperObservation("opening"),
@@ -161,14 +164,16 @@ class SimWorld:
         self.rng_start = random.Random(f"{self.seed}:start")
         # ground truth
         self.segments: tuple[Segment, ...] = expand_task(self.world, self.horizon)
-        self.slips = draw_slips(self.world, self.segments, self.seed)
+        #: the same segments as the signals see them: each action replaced by the built-in it is like
+        physical = like_segments(self.segments, self.model.like)
+        self.slips = draw_slips(self.world, physical, self.seed)
         self.slips = tuple(s for s in self.slips if s.time < self.horizon)
         self._busy = _merge_windows([(s.time + SLIP_WINDOW[0], s.time + SLIP_WINDOW[1]) for s in self.slips])
         devs = [(d, self.world.signal_of(d.kind)) for d in self.model.devices]
         self.stream_of = {d.name: s for d, s in devs}
         self.bank: SensorBank | None = None
         if self.signals_on:
-            self.bank = SensorBank(self.segments, self.slips, self.seed, [(d, s) for d, s in devs if s is not None])
+            self.bank = SensorBank(physical, self.slips, self.seed, [(d, s) for d, s in devs if s is not None])
         # metrics
         self.exposure = Exposure(self._valid_from, self._emit_exposure)
         self.memory = MemoryMeter({p.name: p.capacity("memory") or math.inf for p in self.model.platforms})
@@ -270,12 +275,14 @@ class SimWorld:
     # ------------------------------------------------------------------ processes
     def _robot(self):  # type: ignore[no-untyped-def]
         env = self.env
+        risky = self.model.risky_actions
         for seg in self.segments:
             if seg.start > env.now:
                 yield env.timeout(seg.start - env.now)
             # the selector's slots in the TRUE context, kept apart (one covered slot does
-            # not hide an uncovered one); the core's selector gives them for the recognised one
-            slots = self.model.rules.slots_for(seg.context)
+            # not hide an uncovered one); the core's selector gives them for the recognised
+            # one. Exposure counts risky contexts only (an object in the hand).
+            slots = self.model.rules.slots_for(seg.context) if seg.context in risky else ()
             self.trace.emit(env.now, "action", action=seg.context, duration=seg.duration)
             self.exposure.set_wanted(env.now, slots, seg.context)
             env.process(self._recognise(seg.context))

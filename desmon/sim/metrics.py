@@ -1,8 +1,9 @@
 """The metrics of docs/design.md §10, accumulated while the world runs.
 
-* **Unmonitored exposure**: seconds in which the robot's *true* action context is one
-  for which the selector wants detectors, and at least one of the selector's slots has
-  no member that is running on an up platform with its inputs and warmed up. The
+* **Unmonitored exposure**: seconds in which the robot's *true* action context is risky
+  (an object in the hand: ``SystemModel.risky_actions``, built-in or declared with
+  ``risky=True``), the selector wants detectors in it, and at least one of its slots
+  has no member that is running on an up platform with its inputs and warmed up. The
   slots are kept apart: a covered slot (say the force detector in ``grasp``) does not
   hide an uncovered one (the tactile detector the same rule also wants). With signals
   on, an instance of a graph that reads a device kind without a signal model

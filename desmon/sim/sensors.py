@@ -5,7 +5,9 @@ from one :class:`desmon.detectors.signals.MissionSignals` for the whole mission,
 sample depends only on the seed and its index. A device samples its stream at its own
 rate; a failed device produces no samples (a failed tactile pad reads zero while other
 pads still work; with every pad failed there are no frames). Signal generation is
-pulled: a stream nobody consumes is never rendered.
+pulled: a stream nobody consumes is never rendered. The segments it renders have
+built-in contexts only: the SimPy world maps a model's own actions to the built-in they
+are declared like (``desmon.sim.world.like_segments``).
 
 :class:`DetectorAdapter` gives the SimPy world one interface over the streaming
 detectors of :mod:`desmon.detectors` (force, tactile, combined).

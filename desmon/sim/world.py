@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 import random
 from dataclasses import dataclass, field
-from typing import Iterable, Mapping, Sequence
+from typing import Callable, Iterable, Mapping, Sequence
 
 from desmon.detectors.signals import Segment  # the one ground-truth segment type (re-exported here)
 from desmon.errors import ScenarioError
@@ -34,6 +34,7 @@ from desmon.model.checks import (
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformUp
 from desmon.model.graph import PerceptionGraph
 from desmon.model.scenario import Scenario, TimedEvent, event_problem
+from desmon.model.system import check_action
 
 __all__ = [
     "Step",
@@ -48,6 +49,8 @@ __all__ = [
     "world_from_timeline",
     "world_of",
     "expand_task",
+    "like_segments",
+    "in_hand",
     "draw_slips",
 ]
 
@@ -66,16 +69,17 @@ def _seconds(what: str, v: object, *, zero: bool = True) -> float:
 @strict_init(ScenarioError)
 @dataclass(frozen=True, slots=True)
 class Step:
-    """One action of the task: the robot is in context ``action`` for ``duration`` seconds."""
+    """One action of the task: the robot is in context ``action`` for ``duration`` seconds.
+
+    ``action`` is a built-in action or one the model declares; it is checked against the
+    model when the scenario is built (:meth:`World.check_against`).
+    """
 
     action: str
     duration: float
 
     def __post_init__(self) -> None:
-        if not isinstance(self.action, str) or self.action not in ACTIONS:
-            raise ScenarioError(
-                f"world: task action {self.action!r} unknown{suggest(self.action, ACTIONS)}: use one of {', '.join(ACTIONS)}"
-            )
+        check_name("world: task action", self.action, error=ScenarioError)
         _seconds(f"duration of {self.action}", self.duration, zero=False)
 
 
@@ -247,17 +251,9 @@ class World:
         for slip in slips:
             self._before_horizon(f"slip at t={slip.time:g}", slip.time)
         object.__setattr__(self, "slips", slips)
-        if slips:
-            # a slip needs an object in the hand (with signals off it would still count as injected)
-            segments = expand_task(self, self.horizon)
-            spans = in_hand(segments)
-            for slip in slips:
-                if not any(a <= slip.time < b for a, b, _ in spans):
-                    during = next((seg.context for seg in segments if seg.start <= slip.time < seg.end), "?")
-                    raise ScenarioError(
-                        f"world: slip at t={slip.time:g} falls in {during!r}, when no object is in the hand: "
-                        "place slips between a grasp and its release"
-                    )
+        if slips and all(step.action in ACTIONS for step in task):
+            # with a model's own actions in the task this waits for check_against (the model says what they are like)
+            self._check_slips(_builtin)
         example = "faults=(TimedEvent(20.0, DeviceFail('lwr_wrench')),)"
         faults = check_items("world: faults", self.faults, TimedEvent, error=err, example=example)
         for te in faults:
@@ -303,6 +299,19 @@ class World:
                     f"world: the task lasts {length:g} s but the horizon is {self.horizon:g} s, so its steps after "
                     f"{self.horizon:g} s would never happen: raise the horizon to {length:g}, shorten the task, "
                     "or use --until to stop a run early"
+                )
+
+    def _check_slips(self, like: Callable[[str], str]) -> None:
+        """A scripted slip needs an object in the hand (with signals off it would still
+        count as injected); ``like`` maps each task action to the built-in it is like."""
+        segments = expand_task(self, self.horizon)
+        spans = in_hand(like_segments(segments, like))
+        for slip in self.slips:
+            if not any(a <= slip.time < b for a, b, _ in spans):
+                during = next((seg.context for seg in segments if seg.start <= slip.time < seg.end), "?")
+                raise ScenarioError(
+                    f"world: slip at t={slip.time:g} falls in {during!r}, when no object is in the hand: "
+                    "place slips between a grasp and its release"
                 )
 
     def _before_horizon(self, what: str, t: float) -> None:
@@ -351,6 +360,10 @@ class World:
         devices = [d.name for d in model.devices]
         platforms = [p.name for p in model.platforms]
         graphs = [g.name for g in model.graphs]
+        for step in self.task:
+            check_action(model, step.action, where=where, what="task action", error=ScenarioError)
+        if self.slips:
+            self._check_slips(model.like)
         for te in self.faults + self.loads:
             problem = event_problem(te.event, model)
             if problem is not None:
@@ -407,8 +420,24 @@ def expand_task(world: World, horizon: float) -> tuple[Segment, ...]:
     return tuple(out)
 
 
+def _builtin(action: str) -> str:
+    return action
+
+
+def like_segments(segments: Sequence[Segment], like: Callable[[str], str]) -> tuple[Segment, ...]:
+    """``segments`` with each context replaced by the built-in action it is like
+    (``SystemModel.like``): what the signal models render, :func:`in_hand` and
+    :func:`draw_slips` read. A model's own action has the signals of its ``like``."""
+    out = []
+    for s in segments:
+        b = like(s.context)
+        out.append(s if b == s.context else Segment(b, s.start, s.duration))
+    return tuple(out)
+
+
 def in_hand(segments: Sequence[Segment]) -> list[tuple[float, float, str]]:
-    """Segments during which an object is in the hand (as MissionSignals renders episodes)."""
+    """Segments during which an object is in the hand (as MissionSignals renders episodes);
+    built-in contexts only (map a model's own actions with :func:`like_segments`)."""
     out = []
     holding = False
     prev_end = 0.0
@@ -428,7 +457,8 @@ def in_hand(segments: Sequence[Segment]) -> list[tuple[float, float, str]]:
 
 
 def draw_slips(world: World, segments: Sequence[Segment], seed: int) -> tuple[Slip, ...]:
-    """Scripted slips plus Poisson slips over in-hand time, from their own seeded stream."""
+    """Scripted slips plus Poisson slips over in-hand time, from their own seeded stream
+    (``segments`` with built-in contexts: :func:`like_segments`)."""
     slips = list(world.slips)
     if world.slip_rate > 0:
         rng = random.Random(f"{seed}:slips")

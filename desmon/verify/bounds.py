@@ -11,10 +11,10 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 from desmon.errors import CheckerError
-from desmon.model.actions import ACTIONS
 from desmon.model.checks import check_flag, check_items, check_name, check_names, check_number, strict_init, suggest
 from desmon.model.events import ActionChange, LoadChange
 from desmon.model.scenario import Scenario
+from desmon.model.system import check_action
 
 __all__ = ["Bounds", "levels", "bounds_of", "INSTANT_INVARIANTS"]
 
@@ -42,7 +42,8 @@ class Bounds:
     """What the environment may do, per transition and in total.
 
     ``actions``
-        contexts the robot may switch among, any to any (unless ``task`` is given);
+        contexts the robot may switch among, any to any (unless ``task`` is given):
+        built-in actions or the model's own (``robot.action``);
     ``task``
         a task automaton ``{action: (next actions...)}`` replacing any-to-any;
     ``initial_action``
@@ -50,9 +51,13 @@ class Bounds:
         scenario's timeline, else none);
     ``devices`` / ``platforms``
         devices that may fail (and be repaired), platforms that may go down (and up);
+    ``repair``
+        whether a failed device may be repaired and a platform that went down come up;
     ``loads``
         ``{platform: levels}`` background load of ``load_resource`` moving one level
         per event (e.g. ``levels(0, 300, 100)``);
+    ``load_resource``
+        the capacity the ``loads`` move (default ``memory``);
     ``start_failures``
         how many Control.start calls may fail within one transition;
     ``max_failures``
@@ -156,8 +161,7 @@ class Bounds:
                 acts.add(a)
                 acts.update(nxt)
         for a in sorted(acts):
-            if a not in ACTIONS:
-                raise CheckerError(f"{where}: unknown action {a!r}{suggest(a, ACTIONS)}; use one of {', '.join(ACTIONS)}")
+            check_action(m, a, where=where, error=CheckerError)
         if self.task is not None:
             for a, nxt in self.task.items():
                 for b in nxt:
