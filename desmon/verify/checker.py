@@ -606,6 +606,7 @@ class Checker:
         the result (states, transitions, counters, counterexamples) is the same for any
         number of workers.
         """
+        entered = time.perf_counter()
         if out is None:
             out = sys.stderr
         if workers < 1:
@@ -617,7 +618,7 @@ class Checker:
                 unit = "seconds" if name == "timeout" else "MB"
                 raise CheckerError(f"--{name} {value!r}: give a finite number of {unit} above 0, or none for no limit")
         if engine != "direct":
-            from desmon.verify.table import table_unsupported  # imports numpy: before the clock starts
+            from desmon.verify.table import table_unsupported  # imports numpy: before the search's clock starts
 
         def fresh() -> CheckResult:
             return CheckResult(
@@ -627,6 +628,7 @@ class Checker:
             )
 
         t0 = time.perf_counter()
+        timeout_spent += t0 - entered  # (the timeout's clock started earlier)
         res = fresh()
         budget = Budget(
             t0, timeout=timeout, timeout_spent=timeout_spent, max_memory=max_memory, progress=progress, progress_after=progress_after, progress_every=progress_every, out=out,
@@ -862,6 +864,9 @@ class Checker:
         tuples. The checker stays usable (its next search starts cold)."""
         from desmon.deployment import validity
 
+        drop = getattr(self.explored, "release", None)
+        if drop is not None:
+            drop()
         self.explored = []
         self._instant_memo.clear()
         self._enabled_memo.clear()

@@ -12,9 +12,13 @@ the smallest failing sequence met while hypothesis was shrinking it.
 
 from __future__ import annotations
 
+import contextlib
 import random
+import signal
 import sys
+import threading
 from dataclasses import dataclass
+from typing import Any, Iterator
 
 from hypothesis import HealthCheck, Phase, find, settings
 from hypothesis.errors import NoSuchExample
@@ -60,6 +64,29 @@ def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice],
     return labels, None
 
 
+@contextlib.contextmanager
+def _ctrl_c_noted() -> Iterator[list[bool]]:
+    """While hypothesis searches, the first Ctrl-C only sets a flag (``[True]``): the
+    search raises KeyboardInterrupt itself at its next sequence, from desmon's code, so
+    hypothesis's own machinery never sees (and can never swallow) the interrupt. A
+    second Ctrl-C interrupts at once."""
+    noted = [False]
+    if threading.current_thread() is not threading.main_thread():
+        yield noted
+        return
+
+    def note(signum: int, frame: Any) -> None:
+        if noted[0]:
+            raise KeyboardInterrupt
+        noted[0] = True
+
+    previous = signal.signal(signal.SIGINT, note)
+    try:
+        yield noted
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def fuzz(
     scenario: Scenario,
     deployer: str | Deployer = "desmon",
@@ -79,6 +106,8 @@ def fuzz(
     smallest: list[list[Choice]] = []  # the smallest failing sequence met so far (hypothesis shrinks it)
 
     def fails(seq: list[Choice]) -> bool:
+        if ctrl_c[0]:
+            raise KeyboardInterrupt
         calls[0] += 1
         if progress and calls[0] % 50 == 0:
             print(f"\r  {calls[0]} sequences", end="", file=sys.stderr, flush=True)
@@ -101,8 +130,12 @@ def fuzz(
         phases=(Phase.generate, Phase.shrink),
     )
     interrupted = False
+    ctrl_c = [False]
     try:
-        seq = find(choices(scenario, max_size=max_size, bounds=bounds), fails, settings=cfg, random=random.Random(seed))
+        with _ctrl_c_noted() as ctrl_c:
+            seq = find(choices(scenario, max_size=max_size, bounds=bounds), fails, settings=cfg, random=random.Random(seed))
+            if ctrl_c[0]:  # noted after the last sequence: the search ended on its own
+                raise KeyboardInterrupt
     except NoSuchExample:
         end_progress()
         return FuzzOutcome(

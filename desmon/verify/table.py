@@ -1283,12 +1283,21 @@ class TableEngine:
     def explored(self) -> "_Explored":
         return _Explored(self)
 
+    def release(self) -> None:
+        """Drop the trees, tables and states (see :meth:`Checker.release
+        <desmon.verify.checker.Checker.release>`): freed now by reference counting, not
+        by the cyclic collector (the recorder and the recording twin point back)."""
+        self.__dict__.clear()
+
 
 class _Explored(Sequence[Key]):
     """The distinct states of a table-engine run in BFS order, decoded on access."""
 
     def __init__(self, engine: TableEngine) -> None:
         self._e = engine
+
+    def release(self) -> None:
+        self._e.release()
 
     def __len__(self) -> int:
         return len(self._e.codes)
