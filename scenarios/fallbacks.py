@@ -78,16 +78,16 @@ scenario = Scenario(
     expected={
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
-            "desmon": {"verdict": "HOLDS", "states": 94, "counterexamples": {}},
+            "desmon": {"verdict": "HOLDS", "states": 96, "counterexamples": {}},
             "paper": {"verdict": "HOLDS", "states": 64, "counterexamples": {}},
             "desmon-keep-fallback": {"verdict": "HOLDS", "states": 96, "counterexamples": {}},
         },
         # desmon run --until 7200 --seed 0, per deployer (tests/test_scenarios_sim.py)
         "first_2_h": {
             "desmon": {
-                "switches": 378, "upgrades": 4, "upgrades_failed": 0, "upgrade_blind_s": 3.6,
-                "errors": {"deployment_failed": 46, "no_acceptable_platforms": 90},
-                "unmonitored_exposure_s": 306.619351, "violations": 0,
+                "switches": 378, "upgrades": 2, "upgrades_failed": 0, "upgrade_blind_s": 1.8,
+                "errors": {"deployment_failed": 46, "no_acceptable_platforms": 91},
+                "unmonitored_exposure_s": 292.419351, "violations": 0,
             },
             "desmon-keep-fallback": {
                 "switches": 378, "upgrades": 0, "upgrades_failed": 0, "upgrade_blind_s": 0.0,

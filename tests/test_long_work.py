@@ -228,6 +228,9 @@ def _interrupt(argv: list[str], ready: str, tmp_path: Path, *, timeout: float = 
     proc = subprocess.Popen(
         [sys.executable, "-X", "faulthandler", "-m", "desmon", *argv], cwd=tmp_path, env=env,
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+        # a test run started in the background (make test &, nohup, CI without job control)
+        # inherits SIGINT as ignored: give the command the terminal's default back
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     out: list[bytes] = []
     err: list[bytes] = []

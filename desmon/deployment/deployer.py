@@ -252,14 +252,14 @@ KEEP_FALLBACK = "keep-fallback"
 UPGRADE_POLICIES = (BREAK_BEFORE_MAKE, KEEP_FALLBACK)
 
 
-def _fits_if_freed(g: str, spec: DeploymentSpec, q: QueryPort, freed: list[str]) -> bool:
-    """Would ``g`` have an acceptable platform if the running ``freed`` graphs were
-    stopped? (Capacity is the only requirement their stop can change.)"""
+def _fits_if_freed(g: str, spec: DeploymentSpec, q: QueryPort, freed: list[str]) -> tuple[str, ...]:
+    """The platforms acceptable for ``g`` if the running ``freed`` graphs were stopped
+    (Capacity is the only requirement their stop can change)."""
     states = q.platform_states()
     fixed = q.fixed_platform(spec)
     if fixed is not None:
         states = tuple(s for s in states if s.name == fixed)
-    return bool(check_validity(q.constraints(spec), states, (g, *freed), reasons=False).acceptable)
+    return check_validity(q.constraints(spec), states, (g, *freed), reasons=False).acceptable
 
 
 def make_desmon_react(
@@ -279,7 +279,10 @@ def make_desmon_react(
     preferred alternative, and places the fallback again if that fails (the robot is
     blind from the stop until the preferred detector is warm); ``"keep-fallback"``
     keeps the fallback running (no blind time, but the preferred detector never returns
-    while the fallback holds its room).
+    while the fallback holds its room). An upgrade is attempted only in a reaction to a
+    change of a platform where the preferred alternative would then fit (its room is
+    what changed): a start the infrastructure keeps refusing there (an unreadable input,
+    docs/design.md §6) is retried at that platform's next change, not at every reaction.
     """
     if upgrade not in UPGRADE_POLICIES:
         raise ModelError(f"unknown upgrade policy {upgrade!r}: choose one of {', '.join(UPGRADE_POLICIES)}")
@@ -312,7 +315,7 @@ def make_desmon_react(
                     if upgrading and survey[0] is not None and not survey[1] and i + 1 < len(slot):
                         # the upgrade: a running fallback of this slot may be all that blocks g
                         freed = [f for f in slot[i + 1:] if q.deployed_on(f)]
-                        if freed and _fits_if_freed(g, survey[0], q, freed):
+                        if freed and changed and any(p in changed for p in _fits_if_freed(g, survey[0], q, freed)):
                             yield from _stop_graphs(freed, q)  # break before make
                             for f in freed:
                                 placed.pop(f, None)  # decided again below if g cannot be placed

@@ -569,6 +569,7 @@ class SimWorld:
             self.reactions += 1
             ctx = self.query.context()
             self.trace.emit(env.now, "reaction", context=ctx, changed=list(stim.changed_platforms), context_changed=stim.context_changed)
+            slots = self.core.slots()  # what this reaction serves, even if the context moves on meanwhile
             reaction = self.core.reaction(stim)
             raised: list[str] = []
             stopped_here: dict[str, str] = {}
@@ -588,7 +589,7 @@ class SimWorld:
                     if outcome and (elsewhere or stopped_here.get(cmd.graph, cmd.platform) != cmd.platform):
                         self.migrations += 1
                     if outcome and stopped_at:
-                        self._count_upgrade(cmd.graph, cmd.platform, stopped_at, tried)
+                        self._count_upgrade(cmd.graph, cmd.platform, slots, stopped_at, tried)
                     elif not outcome:
                         tried.add(cmd.graph)
                     self._decision("start", cmd.graph, cmd.platform, outcome, issued, "" if outcome else str(res))
@@ -596,7 +597,7 @@ class SimWorld:
                     outcome = self._stop(cmd.graph, cmd.platform)
                     if outcome:
                         stopped_here[cmd.graph] = cmd.platform
-                        if any(cmd.graph in slot and len(slot) > 1 for slot in self.core.slots()):
+                        if any(cmd.graph in slot and len(slot) > 1 for slot in slots):
                             stopped_at[cmd.graph] = env.now
                     self._decision("stop", cmd.graph, cmd.platform, outcome, issued, "")
                 elif isinstance(cmd, RaiseError):
@@ -609,13 +610,15 @@ class SimWorld:
             if not self.pending_platforms and not self.pending_context:
                 self._audit()
 
-    def _count_upgrade(self, graph: str, platform: str, stopped_at: dict[str, float], tried: set[str]) -> None:
+    def _count_upgrade(
+        self, graph: str, platform: str, slots: tuple[tuple[str, ...], ...], stopped_at: dict[str, float], tried: set[str]
+    ) -> None:
         """``graph`` started in a reaction that stopped a wanted alternative of its slot:
         an upgrade if ``graph`` is preferred to the stopped one; a failed upgrade if a
         preferred alternative's start failed in between and a fallback is placed again.
         Either way the slot went unserved from that stop until the started detector is
         ready: the upgrade's blind time. (A fallback that simply migrates is neither.)"""
-        for slot in self.core.slots():
+        for slot in slots:
             if graph not in slot:
                 continue
             mine = slot.index(graph)
