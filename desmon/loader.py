@@ -12,7 +12,7 @@ from typing import Any, Iterator, Mapping
 from desmon.errors import DesmonError, ScenarioError
 from desmon.model.params import overriding, parse_assignments
 from desmon.model.scenario import Scenario
-from desmon.paths import SCENARIO_FILE, PathError, check_input_file
+from desmon.paths import SCENARIO_FILE, PathError, check_input_file, script_folder_on_path
 
 __all__ = ["load_scenario", "load_from_args"]
 
@@ -40,6 +40,7 @@ def load_scenario(path: str | Path, params: Mapping[str, str] | None = None) -> 
         raise ScenarioError(f"{path}: cannot be loaded as a Python module; give it a .py extension")
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
+    script_folder_on_path(p)
     failed = f"{path}: the script failed while building its scenario"
     rerun = f"run python {path} to see where"
     try:

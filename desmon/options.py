@@ -230,6 +230,11 @@ def preflight(args: argparse.Namespace) -> None:
         if value is not None:
             check_input_file(value, *i.kind)
             inputs.append(value)
+    from desmon.verify.deployers import deployer_file
+
+    source = deployer_file(getattr(args, "deployer", None))
+    if source is not None:
+        inputs.append(source)  # --pytest must not overwrite the deployer being checked
     for w in getattr(args, "_windows", ()):
         start, end = getattr(args, w.start), getattr(args, w.end)
         if w.needs is not None and getattr(args, w.needs[0]) is None and (start is not None or end is not None):

@@ -12,6 +12,7 @@ Every refusal is a :class:`PathError` whose one-line message names the path and 
 from __future__ import annotations
 
 import os
+import sys
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -19,7 +20,10 @@ from typing import IO, Iterable, Iterator
 
 from desmon.errors import DesmonError
 
-__all__ = ["PathError", "SCENARIO_FILE", "TRACE_FILE", "check_input_file", "check_output_file", "same_file", "replacing"]
+__all__ = [
+    "PathError", "SCENARIO_FILE", "TRACE_FILE", "check_input_file", "check_output_file", "same_file", "replacing",
+    "script_folder_on_path",
+]
 
 #: (what, how to get a right one) of each kind of input, for :func:`check_input_file`.
 SCENARIO_FILE = ("scenario file", "pass the path of a .py file such as scenarios/coffee_handover.py")
@@ -129,3 +133,11 @@ def replacing(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:  #
         except FileNotFoundError:
             pass
         raise
+
+
+def script_folder_on_path(script: str | Path) -> None:
+    """Let a user's script import the modules beside it, as ``python SCRIPT`` does: its
+    folder goes first on ``sys.path`` (once; it stays, for imports its code makes later)."""
+    folder = str(Path(script).resolve().parent)
+    if folder not in sys.path:
+        sys.path.insert(0, folder)

@@ -90,8 +90,11 @@ def test_a_declared_action_is_accepted_in_a_world_step() -> None:
 
 
 def test_a_declared_action_is_accepted_in_the_bounds() -> None:
-    b = Bounds(actions=("pour", "wipe"), task={"wipe": ("pour",), "pour": ("wipe",)}, initial_action="wipe")
-    assert Scenario("s", model(), checker=b).checker is b
+    for b in (
+        Bounds(actions=("pour", "wipe"), initial_action="wipe"),
+        Bounds(task={"wipe": ("pour",), "pour": ("wipe",)}, initial_action="wipe"),
+    ):
+        assert Scenario("s", model(), checker=b).checker is b
 
 
 # --- an undeclared one is refused, in one line, with a "did you mean" -----------------------

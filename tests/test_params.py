@@ -72,3 +72,16 @@ def test_assignments_must_be_name_equals_value_once_each() -> None:
         parse_assignments(["4"])
     with pytest.raises(ModelError, match="given twice"):
         parse_assignments(["n=4", "n=5"])
+
+
+def test_the_generated_pytest_replays_the_counterexample_with_the_same_parameters(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    out = tmp_path / "test_cex.py"
+    args = ["verify", str(ROBOT_DAY), "--deployer", "paper", "-p", "hand_memory=384", "--pytest", str(out), "--no-progress"]
+    assert main(args) == 1
+    src = out.read_text()
+    assert "PARAMS = {'hand_memory': '384'}" in src and "load_scenario(SCENARIO, PARAMS)" in src
+    res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(out)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stdout + res.stderr

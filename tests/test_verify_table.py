@@ -376,7 +376,7 @@ def generated_scenarios(draw):  # type: ignore[no-untyped-def]
     if fixed_up and draw(hst.booleans()):
         initial.append(PlatformDown(draw(hst.sampled_from(fixed_up))))
     bounds = Bounds(
-        actions=tuple(actions), task=task, initial_action=actions[0], devices=tuple(failing),
+        actions=tuple(actions) if task is None else (), task=task, initial_action=actions[0], devices=tuple(failing),
         repair=draw(hst.booleans()), platforms=tuple(moving),
         loads={p: (0, 100, 200, 300)[: draw(hst.integers(2, 4))] for p in loaded},
         start_failures=draw(hst.integers(0, 2)), max_failures=draw(hst.sampled_from((None, 1, 2))),

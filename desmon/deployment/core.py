@@ -11,16 +11,18 @@ same generator with start latencies.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from types import GeneratorType
 from typing import Iterable
 
 from desmon.deployment.deployer import Deployer, get_deployer
 from desmon.deployment.invariants import SystemView, validly_active_among, view_of
 from desmon.deployment.monitor import InsertPort, Stimulus, observe
 from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop
+from desmon.errors import ModelError
 from desmon.model.events import Event
 from desmon.model.system import SystemModel
 
-__all__ = ["DeploymentCore", "StepLog", "run_sync", "standing_after", "stale_standing_after"]
+__all__ = ["DeploymentCore", "StepLog", "run_sync", "not_a_command", "standing_after", "stale_standing_after"]
 
 
 def standing_after(
@@ -81,6 +83,14 @@ class StepLog:
         return [(c, ok) for c, ok in self.commands if not isinstance(c, RaiseError)]
 
 
+def not_a_command(cmd: object) -> ModelError:
+    """The one-line error for a reaction that yields something that is not a command."""
+    return ModelError(
+        f"a deployer's reaction yielded {cmd!r} ({type(cmd).__name__}): yield only Start, Stop or RaiseError "
+        "(desmon.deployment.ports; docs/deployers.md)"
+    )
+
+
 def run_sync(reaction: Reaction, control: ControlPort, log: StepLog | None = None) -> StepLog:
     """Drive ``reaction`` to completion, executing each command at once on ``control``."""
     log = log if log is not None else StepLog()
@@ -92,8 +102,10 @@ def run_sync(reaction: Reaction, control: ControlPort, log: StepLog | None = Non
                 outcome = bool(control.start(cmd.graph, cmd.platform))
             elif isinstance(cmd, Stop):
                 outcome = bool(control.stop(cmd.graph, cmd.platform))
-            else:
+            elif isinstance(cmd, RaiseError):
                 outcome = None
+            else:
+                raise not_a_command(cmd)
             log.commands.append((cmd, outcome))
     except StopIteration:
         pass
@@ -141,7 +153,13 @@ class DeploymentCore:
 
     def reaction(self, stimulus: Stimulus) -> Reaction:
         """The deployer's reaction to ``stimulus`` (a generator of commands)."""
-        return self.deployer.react(self.query, self.slots(), stimulus.changed_platforms, stimulus.context_changed)
+        reaction = self.deployer.react(self.query, self.slots(), stimulus.changed_platforms, stimulus.context_changed)
+        if type(reaction) is not GeneratorType:
+            raise ModelError(
+                f"deployer {self.deployer.name}: its reaction returned {type(reaction).__name__}, not a generator; "
+                "write react(q, slots, changed, context_changed) with yield Start/Stop/RaiseError (docs/deployers.md)"
+            )
+        return reaction
 
     def view(self, **extra: object) -> SystemView:
         return view_of(self.query, self.model.specs, self.standing, self.slots(), **extra)  # type: ignore[arg-type]

@@ -52,6 +52,14 @@ def event_problem(ev: Event, model: SystemModel) -> str | None:
 
 
 @strict_init(ModelError)
+def _looks_like_time(label: str) -> bool:
+    try:
+        float(label)
+    except ValueError:
+        return False
+    return True
+
+
 @dataclass(frozen=True, slots=True)
 class TimedEvent:
     """``event`` happens at ``time`` seconds; ``label`` names the moment (e.g. ``t1``)."""
@@ -128,6 +136,11 @@ class Scenario:
         for te in timeline:
             self._check_event(te.event)
             if te.label:
+                if _looks_like_time(te.label):
+                    raise ModelError(
+                        f"{where}: timeline label {te.label!r} reads as a time: --at {te.label} would mean the label, "
+                        f"not t={te.label} s; name the moment with a letter first, e.g. t{te.label}"
+                    )
                 if te.label in labels:
                     raise ModelError(f"{where}: timeline label {te.label!r} is used twice: labels name one moment each")
                 labels.add(te.label)

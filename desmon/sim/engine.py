@@ -38,13 +38,13 @@ from __future__ import annotations
 import bisect
 import math
 import random
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable
 
 import simpy
 
 from desmon.deployment.control import ControlRules
-from desmon.deployment.core import DeploymentCore, stamp
+from desmon.deployment.core import DeploymentCore, not_a_command, stamp
 from desmon.deployment.invariants import check_invariants
 from desmon.deployment.monitor import GripperObservation, Stimulus, interpret
 from desmon.deployment.ports import ErrorRecord, RaiseError, Start, Stop
@@ -606,6 +606,8 @@ class SimWorld:
                     self.errors.append(rec)
                     raised.append(cmd.graph)
                     self.trace.emit(env.now, "error", kind=rec.kind, graph=rec.graph, platform=rec.platform, detail=rec.detail)
+                else:
+                    raise not_a_command(cmd)
             self.core.settle(raised)
             if not self.pending_platforms and not self.pending_context:
                 self._audit()

@@ -155,6 +155,11 @@ class Bounds:
         """Every name must exist in the scenario's model (and the task must be closed)."""
         m = scenario.model
         where = f"scenario {scenario.name!r} checker bounds"
+        if self.task is not None and self.actions:
+            raise CheckerError(
+                f"{where}: both actions={tuple(self.actions)!r} and task are given, and a task replaces any-to-any "
+                "moves (actions would be ignored): give one of them"
+            )
         acts = set(self.actions) | ({self.initial_action} if self.initial_action else set())
         if self.task is not None:
             for a, nxt in self.task.items():

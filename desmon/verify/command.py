@@ -51,6 +51,7 @@ def workers_for(args: argparse.Namespace) -> int:
 def verify_command(args: argparse.Namespace) -> int:
     started = time.perf_counter()  # --timeout counts the imports and the scenario's loading too
     from desmon.loader import load_from_args
+    from desmon.model.params import parse_assignments
     from desmon.verify.checker import Checker
     from desmon.verify.report import counterexample_pytest, format_result, result_to_json
 
@@ -92,7 +93,8 @@ def verify_command(args: argparse.Namespace) -> int:
     if args.pytest:
         if result.counterexamples:
             path = str(Path(args.scenario).resolve())
-            Path(args.pytest).write_text(counterexample_pytest(result, path, checker.bounds.start_action(scenario)))
+            params = parse_assignments(getattr(args, "param", None))
+            Path(args.pytest).write_text(counterexample_pytest(result, path, checker.bounds.start_action(scenario), params))
             print(f"wrote {args.pytest}")
         else:
             print(f"no counterexample: {args.pytest} not written")

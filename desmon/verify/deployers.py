@@ -37,9 +37,10 @@ from typing import Any, Iterator
 
 from desmon.deployment.deployer import DEPLOYERS, Deployer
 from desmon.errors import ModelError
+from desmon.paths import script_folder_on_path
 from desmon.verify.mutants import MUTANTS
 
-__all__ = ["resolve_deployer", "portable_spec", "DEPLOYER_FORMS", "MUTANT_PREFIX"]
+__all__ = ["resolve_deployer", "portable_spec", "deployer_file", "DEPLOYER_FORMS", "MUTANT_PREFIX"]
 
 MUTANT_PREFIX = "mutant"
 
@@ -85,6 +86,14 @@ def resolve_deployer(spec: str | Deployer) -> Deployer:
         raise _refuse(spec, f"name the deployer after the colon, e.g. {source}:DEPLOYER")
     module = _load_file(spec, source) if _is_file(source) else _import(spec, source)
     return _as_deployer(spec, module, source, name)
+
+
+def deployer_file(spec: object) -> str | None:
+    """The file a ``FILE.py:NAME`` spec loads (an input no output may overwrite), else None."""
+    if not isinstance(spec, str):
+        return None
+    source, colon, _name = spec.rpartition(":")
+    return source if colon and source and source != MUTANT_PREFIX and _is_file(source) else None
 
 
 def portable_spec(spec: str) -> str:
@@ -143,6 +152,7 @@ def _load_file(spec: str, source: str) -> ModuleType:
         raise _refuse(spec, f"{source} cannot be loaded as a Python module; give it a .py extension")
     module = importlib.util.module_from_spec(loader_spec)
     sys.modules[module_name] = module  # kept: dataclasses and pickling look a module up by name
+    script_folder_on_path(path)
     try:
         with _loading(spec, source, f"run python {source} to see where"):
             loader_spec.loader.exec_module(module)

@@ -152,13 +152,14 @@ from desmon.verify import RepositoryRun
 from desmon.verify.deployers import resolve_deployer
 
 SCENARIO = {scenario_path!r}
+PARAMS = {params!r}  # the -p NAME=VALUE parameters of the run that found it
 DEPLOYER = {deployer!r}
 INITIAL_ACTION = {initial_action!r}
 
 
 def replay(steps, after_command=None):
     """The states after each step; ``after_command(run)`` is called after every Start/Stop."""
-    run = RepositoryRun(load_scenario(SCENARIO), resolve_deployer(DEPLOYER))
+    run = RepositoryRun(load_scenario(SCENARIO, PARAMS), resolve_deployer(DEPLOYER))
     assert run.bounds.start_action(run.scenario) == INITIAL_ACTION, "not the checker's initial state"
     if after_command is not None:
         control, start, stop = run.control, run.control.start, run.control.stop
@@ -196,10 +197,14 @@ def test_{name}():
 '''
 
 
-def counterexample_pytest(r: CheckResult, scenario_path: str, initial_action: str | None) -> str:
+def counterexample_pytest(
+    r: CheckResult, scenario_path: str, initial_action: str | None, params: dict[str, str] | None = None
+) -> str:
     from desmon.verify.deployers import portable_spec
 
-    src = _PYTEST.format(scenario_path=scenario_path, deployer=portable_spec(r.deployer), initial_action=initial_action)
+    src = _PYTEST.format(
+        scenario_path=scenario_path, params=dict(params or {}), deployer=portable_spec(r.deployer), initial_action=initial_action
+    )
     for c in r.counterexamples:
         steps = []
         for s in c.steps[1:]:

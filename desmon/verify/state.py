@@ -331,8 +331,8 @@ class StateStore:
         # a start the rules refuse is no choice point: it fails in every branch, and does
         # not take a position of the outcome prefix (desmon.deployment.control)
         why = self.rules.start_refusal(graph, platform, self.platform_state)
+        self.refused = why or ""
         if why is not None:
-            self.refused = why
             return False
         i = len(self.outcomes)
         ok = self.prefix[i] if i < len(self.prefix) else True
