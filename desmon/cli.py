@@ -45,10 +45,12 @@ def _one_line(text: object) -> str:
 
 class _Parser(argparse.ArgumentParser):
     """argparse, but a usage error is one line: ``desmon: error: COMMAND: ...; see: desmon COMMAND --help``,
-    and ``--help`` shows every option's default (:class:`~desmon.options.HelpFormatter`)."""
+    ``--help`` shows every option's default (:class:`~desmon.options.HelpFormatter`), and an
+    option must be written in full (no abbreviations: a typo is refused, not guessed)."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("formatter_class", HelpFormatter)
+        kwargs.setdefault("allow_abbrev", False)  # --time is not silently --timeout
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
