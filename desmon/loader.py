@@ -77,6 +77,14 @@ def load_scenario(path: str | Path, params: Mapping[str, str] | None = None) -> 
                 "(scenario = Scenario(name=..., model=...))"
             )
         found = candidates[0]
+    if isinstance(found.checker, Mapping):  # bounds as a dict: checked now, as a Bounds is when built
+        from desmon.errors import CheckerError
+        from desmon.verify.bounds import bounds_of
+
+        try:
+            bounds_of(found)
+        except CheckerError as exc:
+            raise ScenarioError(f"{path}: invalid scenario: {exc}") from None
     return found
 
 

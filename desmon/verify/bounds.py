@@ -125,6 +125,11 @@ class Bounds:
                 raise CheckerError(f"{w}: platform {p!r} has no load levels: write e.g. {example}")
             if len(set(lv)) != len(lv):
                 raise CheckerError(f"{w}: load levels of {p!r} repeat a level ({list(lv)}); list each level once, e.g. levels(0, 300, 100)")
+            if list(lv) != sorted(lv):
+                raise CheckerError(
+                    f"{w}: load levels of {p!r} are not in rising order ({list(lv)}): the load steps between neighbours "
+                    f"in the list, so write them sorted, e.g. {sorted(lv)}"
+                )
             loads[p] = tuple(lv)
         object.__setattr__(self, "loads", loads)
         check_number(f"{w} start_failures", self.start_failures, error=err, integer=True)
