@@ -10,12 +10,13 @@ exposure only when it is risky.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import pytest
+from conftest import refused
 
 from desmon.cli import main
-from desmon.errors import CheckerError, DesmonError, ModelError, ScenarioError
+from desmon.errors import CheckerError, ModelError, ScenarioError
 from desmon.model import ACTIONS, RobotBuilder, SystemModel
 from desmon.model.actions import Action
 from desmon.model.events import ActionChange
@@ -43,14 +44,6 @@ def robot(*, rules: dict[str, object] | None = None) -> RobotBuilder:
 
 def model() -> SystemModel:
     return robot().build()
-
-
-def refused(error: type[DesmonError], build: Callable[[], object]) -> str:
-    with pytest.raises(error) as info:
-        build()
-    msg = str(info.value)
-    assert "\n" not in msg
-    return msg
 
 
 def one_step(action: str, **kw: Any) -> World:

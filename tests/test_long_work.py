@@ -17,7 +17,6 @@ from pathlib import Path
 
 import pytest
 
-import desmon.verify.checker as checker_module
 from desmon.cli import main
 from desmon.errors import CheckerError
 from desmon.loader import load_scenario
@@ -28,45 +27,14 @@ from desmon.verify.table import TableEngine
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIOS = ROOT / "scenarios"
 
-#: the scenario file of the big model (bench_7p), self-contained
-BIG = '''
-from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
-from desmon.model.events import ActionChange, LoadChange
-from desmon.model.scenario import Scenario, TimedEvent
-from desmon.verify import Bounds, levels
+#: the scenario file of the big model: the benchmark's bench_7p (7 platforms, 4 loaded)
+BIG = f'''
+import sys
 
-r = RobotBuilder("big")
-devices, pads = [], []
-for i in range(7):
-    pb = r.platform(f"pc{i}", memory=512)
-    if i % 2 == 0:
-        pb.device(f"wrench{i}", kind="force_sensor")
-        devices.append(f"wrench{i}")
-    else:
-        pb.devices([f"pad{i}a", f"pad{i}b"], kind="tactile_pad")
-        pads.append(f"pad{i}a")
-for g, kind in (("force", "force_sensor"), ("tactile", "tactile_pad"), ("combined", None)):
-    with r.rpsl.perception_graph(g) as gb:
-        gb.sensor("s", reads=kind or "force_sensor")
-        gb.processing("p", inputs=["s"])
-r.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor").add_constraint("capacity", "memory", 100)
-r.depsl.deployment_specification("tactile").add_constraint("quantity", "tactile_pad", 2).add_constraint("capacity", "memory", 150)
-r.depsl.deployment_specification("combined").add_constraint("capacity", "memory", 250)
-r.rules({GRASP: ["force", "tactile"], MOVE_BASE: "tactile", RELEASE: "force", HOLD: "combined"})
-plats = tuple(f"pc{i}" for i in range(7))
-scenario = Scenario(
-    name="big",
-    model=r.build(),
-    initial=tuple(LoadChange(p, 0) for p in plats[:4]),
-    timeline=(TimedEvent(0, ActionChange(HOLD)),),
-    checker=Bounds(
-        actions=(HOLD, GRASP, MOVE_BASE, RELEASE),
-        devices=tuple(devices[:2] + pads[:1]),
-        platforms=plats,
-        loads={p: levels(0, 300, 100) for p in plats[:4]},
-        start_failures=1,
-    ),
-)
+sys.path.insert(0, {str(ROOT)!r})
+from bench.bench_verify import build
+
+scenario = build(7, 4, None)
 '''
 
 

@@ -13,9 +13,10 @@ from pathlib import Path
 from typing import Any, Callable
 
 import pytest
+from conftest import refused
 
 from desmon.cli import main
-from desmon.errors import CheckerError, DesmonError, ModelError, ScenarioError
+from desmon.errors import CheckerError, ModelError, ScenarioError
 from desmon.model import Option, RobotBuilder, make_requirement
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange
 from desmon.model.scenario import Scenario, TimedEvent
@@ -50,14 +51,6 @@ def world(**kw: Any) -> World:
 
 def scenario(**kw: Any) -> Scenario:
     return Scenario("s", robot().build(), **kw)
-
-
-def refused(error: type[DesmonError], build: Callable[[], object]) -> str:
-    with pytest.raises(error) as info:
-        build()
-    msg = str(info.value)
-    assert "\n" not in msg
-    return msg
 
 
 # ---------------------------------------------------------------- keywords and arity

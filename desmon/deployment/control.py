@@ -71,11 +71,13 @@ def device_requirements(requirements: tuple[Requirement, ...]) -> tuple[Requirem
 class ControlRules:
     """The start rules for one model (its input wiring memoised per graph and platform)."""
 
-    __slots__ = ("model", "_wiring", "_device_reqs")
+    __slots__ = ("model", "_wiring", "_device_reqs", "_hosts")
 
     def __init__(self, model: SystemModel) -> None:
         self.model = model
         self._wiring: dict[tuple[str, str], tuple[tuple[str, tuple[Device, ...]], ...]] = {}
+        #: (graph, platform) -> (kind, hosting platforms, refusal text) per input kind with devices
+        self._hosts: dict[tuple[str, str], tuple[tuple[str, tuple[str, ...], str], ...]] = {}
         self._device_reqs: dict[str, tuple[Requirement, ...]] = {}
 
     def input_devices(self, graph: str, platform: str) -> tuple[tuple[str, tuple[Device, ...]], ...]:
@@ -107,13 +109,20 @@ class ControlRules:
             reqs = self._device_reqs[graph] = device_requirements(spec.requirements) if spec is not None else ()
         if reqs and check_platform(reqs, state_of(platform), graph, first_only=True):
             return f"the devices of {platform} no longer meet {', '.join(r.describe() for r in reqs)}"
-        for kind, devices in self.input_devices(graph, platform):
-            if not devices:
-                continue
-            hosts = tuple(dict.fromkeys(d.platform for d in devices))
+        inputs = self._hosts.get((graph, platform))
+        if inputs is None:
+            inputs = self._hosts[(graph, platform)] = tuple(
+                (
+                    kind,
+                    tuple(dict.fromkeys(d.platform for d in devices)),
+                    f"no readable {kind} ({', '.join(d.name for d in devices)}: failed or on a platform that is down)",
+                )
+                for kind, devices in self.input_devices(graph, platform)
+                if devices
+            )
+        for kind, hosts, why in inputs:
             if all(check_platform(_has(kind), state_of(h), graph) for h in hosts):
-                names = ", ".join(d.name for d in devices)
-                return f"no readable {kind} ({names}: failed or on a platform that is down)"
+                return why
         return None
 
 
