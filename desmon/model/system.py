@@ -220,16 +220,7 @@ class SystemModel:
 
     def __post_init__(self) -> None:
         check_name("robot", self.robot)
-        for fld, typ, example in (
-            ("platforms", Platform, "(Platform.make('pc', memory=512),)"),
-            ("devices", Device, "(Device('ft', 'force_sensor', 'pc'),)"),
-            ("graphs", PerceptionGraph, "(PerceptionGraph(...),)"),
-            ("specs", DeploymentSpec, "(DeploymentSpec('g', ...),)"),
-            ("declared_actions", Action, "(Action('pour', risky=True, like='hold'),)"),
-        ):
-            object.__setattr__(self, fld, check_items(f"system model {fld}", getattr(self, fld), typ, example=example))
-        if not isinstance(self.rules, RuleTable):
-            raise ModelError(f"system model rules = {self.rules!r} is not a RuleTable: write RuleTable.from_mapping({{...}})")
+        self._check_field_types()
         _unique("platform", [p.name for p in self.platforms])
         _unique("device", [d.name for d in self.devices])
         _unique("perception graph", [g.name for g in self.graphs])
@@ -244,43 +235,66 @@ class SystemModel:
                     f"declare it or use one of {sorted(platforms)}"
                 )
         for spec in self.specs:
-            if spec.graph not in graphs:
-                raise ModelError(
-                    f"deployment specification for unknown perception graph {spec.graph!r}{suggest(spec.graph, graphs)}: "
-                    f"define the graph first (known: {sorted(graphs)})"
-                )
-            if spec.fixed_platform is not None and spec.fixed_platform not in platforms:
-                raise ModelError(
-                    f"deployment of {spec.graph!r} is fixed to unknown platform {spec.fixed_platform!r}{suggest(spec.fixed_platform, platforms)}: "
-                    f"use one of {sorted(platforms)}"
-                )
+            self._check_spec_platforms(spec, platforms, graphs)
+        if self.devices:  # a model with no devices at all is a pure platform/requirement study
+            self._check_device_kinds()
+        self._check_rules(graphs)
+
+    def _check_field_types(self) -> None:
+        """Every tuple field holds items of its type (normalised to a tuple); rules is a RuleTable."""
+        for fld, typ, example in (
+            ("platforms", Platform, "(Platform.make('pc', memory=512),)"),
+            ("devices", Device, "(Device('ft', 'force_sensor', 'pc'),)"),
+            ("graphs", PerceptionGraph, "(PerceptionGraph(...),)"),
+            ("specs", DeploymentSpec, "(DeploymentSpec('g', ...),)"),
+            ("declared_actions", Action, "(Action('pour', risky=True, like='hold'),)"),
+        ):
+            object.__setattr__(self, fld, check_items(f"system model {fld}", getattr(self, fld), typ, example=example))
+        if not isinstance(self.rules, RuleTable):
+            raise ModelError(f"system model rules = {self.rules!r} is not a RuleTable: write RuleTable.from_mapping({{...}})")
+
+    def _check_spec_platforms(self, spec: DeploymentSpec, platforms: set[str], graphs: set[str]) -> None:
+        """``spec`` deploys a known graph, is fixed (if at all) to a known platform, and every
+        platform fact its requirements name is declared by some platform."""
+        if spec.graph not in graphs:
+            raise ModelError(
+                f"deployment specification for unknown perception graph {spec.graph!r}{suggest(spec.graph, graphs)}: "
+                f"define the graph first (known: {sorted(graphs)})"
+            )
+        if spec.fixed_platform is not None and spec.fixed_platform not in platforms:
+            raise ModelError(
+                f"deployment of {spec.graph!r} is fixed to unknown platform {spec.fixed_platform!r}{suggest(spec.fixed_platform, platforms)}: "
+                f"use one of {sorted(platforms)}"
+            )
+        for req in spec.requirements:
+            problem = _platform_fact_problem(req, self.platforms)
+            if problem is not None:
+                raise ModelError(f"deployment of {spec.graph!r} needs {req.describe()} but {problem}")
+
+    def _check_device_kinds(self) -> None:
+        """Every device kind a graph reads or a requirement names is provided by some device."""
+        kinds = {d.kind for d in self.devices}
+        for g in self.graphs:
+            for kind in g.device_kinds:
+                if kind not in kinds:
+                    raise ModelError(
+                        f"perception graph {g.name!r} reads device kind {kind!r}{suggest(kind, kinds)}, which no device provides: "
+                        f"fix the kind or attach such a device (kinds: {', '.join(sorted(kinds))})"
+                    )
+        for spec in self.specs:
             for req in spec.requirements:
-                problem = _platform_fact_problem(req, self.platforms)
+                wanted = _wanted_device_kind(req)
+                if wanted is not None and wanted not in kinds:
+                    raise ModelError(
+                        f"deployment of {spec.graph!r} needs {req.describe()} but no device is of kind "
+                        f"{wanted!r}{suggest(wanted, kinds)}: fix the kind (kinds: {', '.join(sorted(kinds))})"
+                    )
+                problem = _device_option_problem(req, self.devices)
                 if problem is not None:
                     raise ModelError(f"deployment of {spec.graph!r} needs {req.describe()} but {problem}")
-        kinds = {d.kind for d in self.devices}
-        if self.devices:  # a model with no devices at all is a pure platform/requirement study
-            for g in self.graphs:
-                for kind in g.device_kinds:
-                    if kind not in kinds:
-                        raise ModelError(
-                            f"perception graph {g.name!r} reads device kind {kind!r}{suggest(kind, kinds)}, which no device provides: "
-                            f"fix the kind or attach such a device (kinds: {', '.join(sorted(kinds))})"
-                        )
-            for spec in self.specs:
-                for req in spec.requirements:
-                    wanted = (
-                        req.value if isinstance(req, Attribute) and req.name == PLATFORM_HAS
-                        else req.device_kind if isinstance(req, Quantity) else None
-                    )
-                    if wanted is not None and wanted not in kinds:
-                        raise ModelError(
-                            f"deployment of {spec.graph!r} needs {req.describe()} but no device is of kind "
-                            f"{wanted!r}{suggest(wanted, kinds)}: fix the kind (kinds: {', '.join(sorted(kinds))})"
-                        )
-                    problem = _device_option_problem(req, self.devices)
-                    if problem is not None:
-                        raise ModelError(f"deployment of {spec.graph!r} needs {req.describe()} but {problem}")
+
+    def _check_rules(self, graphs: set[str]) -> None:
+        """Every rule's context is an action of this model and every graph it selects exists."""
         for rule in self.rules.rules:
             check_action(self, rule.context, where="rules", what="action context")
             for g in rule.graphs:
@@ -406,6 +420,15 @@ def _attribute_problem(name: str, value: object, platforms: tuple[Platform, ...]
             f"no platform has {name} = {value!r}{suggest(str(value), values)}: fix the value "
             f"(values of {name!r}: {', '.join(repr(v) for v in values)})"
         )
+    return None
+
+
+def _wanted_device_kind(req: Requirement) -> str | None:
+    """The device kind ``req`` asks for directly (a ``platform has`` attribute or a quantity), if any."""
+    if isinstance(req, Attribute) and req.name == PLATFORM_HAS:
+        return req.value
+    if isinstance(req, Quantity):
+        return req.device_kind
     return None
 
 

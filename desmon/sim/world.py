@@ -231,6 +231,29 @@ class World:
         if not task:
             raise ScenarioError("world: the task is empty; give at least one Step(action, duration)")
         object.__setattr__(self, "task", task)
+        self._check_scalars()
+        self._check_scripted()
+        self._check_stochastic()
+        kinds = check_pairs("world: signal_kinds", self.signal_kinds, error=err, example="{'force_sensor': 'wrench'}")
+        for kind, stream in kinds:
+            if stream not in SIGNAL_STREAMS:
+                raise ScenarioError(
+                    f"world: signal_kinds maps {kind!r} to {stream!r}{suggest(stream, SIGNAL_STREAMS)}, which is no signal "
+                    f"stream: use one of {', '.join(SIGNAL_STREAMS)}"
+                )
+        object.__setattr__(self, "signal_kinds", kinds)
+        if not self.repeat:
+            length = sum(s.duration for s in task)
+            if length > self.horizon + 1e-9:
+                raise ScenarioError(
+                    f"world: the task lasts {length:g} s but the horizon is {self.horizon:g} s, so its steps after "
+                    f"{self.horizon:g} s would never happen: raise the horizon to {length:g}, shorten the task, "
+                    "or use --until to stop a run early"
+                )
+
+    def _check_scalars(self) -> None:
+        """The horizon, flags, description, latencies, delays, blocks, slip rate and start failure."""
+        err = ScenarioError
         _seconds("horizon", self.horizon, zero=False)
         check_flag("world: repeat", self.repeat, error=err)
         check_flag("world: signals", self.signals, error=err)
@@ -247,11 +270,15 @@ class World:
         check_number("world: slip_rate", self.slip_rate, error=err, unit=" of slips per second of object-in-hand time")
         if not isinstance(self.start_failure, StartFailure):
             raise ScenarioError(f"world: start_failure = {self.start_failure!r} is not a StartFailure: write StartFailure(probability=0.02)")
+
+    def _check_scripted(self) -> None:
+        """Scripted slips, faults and loads: the right types, before the horizon, in time order."""
+        err = ScenarioError
         slips = check_items("world: slips", self.slips, Slip, error=err, example="slips=(Slip(10.0, 'down', 'pulled'),)")
         for slip in slips:
             self._before_horizon(f"slip at t={slip.time:g}", slip.time)
         object.__setattr__(self, "slips", slips)
-        if slips and all(step.action in ACTIONS for step in task):
+        if slips and all(step.action in ACTIONS for step in self.task):
             # with a model's own actions in the task this waits for check_against (the model says what they are like)
             self._check_slips(_builtin)
         example = "faults=(TimedEvent(20.0, DeviceFail('lwr_wrench')),)"
@@ -270,6 +297,10 @@ class World:
                 raise ScenarioError(f"world: load event {te.event} is not a LoadChange: put it in faults= or the task")
         self._timed("loads", loads)
         object.__setattr__(self, "loads", loads)
+
+    def _check_stochastic(self) -> None:
+        """MTTF entries (one per component) and load walks (one per platform and resource)."""
+        err = ScenarioError
         mttfs = check_items("world: stochastic_faults", self.stochastic_faults, MTTF, error=err, example="(MTTF('lwr_wrench', mttf=3600, mttr=120),)")
         seen: set[str] = set()
         for m in mttfs:
@@ -284,22 +315,6 @@ class World:
                 raise ScenarioError(f"world: two load walks of {w.platform!r} {w.resource}: give one per platform and resource")
             walked.add((w.platform, w.resource))
         object.__setattr__(self, "load_walks", walks)
-        kinds = check_pairs("world: signal_kinds", self.signal_kinds, error=err, example="{'force_sensor': 'wrench'}")
-        for kind, stream in kinds:
-            if stream not in SIGNAL_STREAMS:
-                raise ScenarioError(
-                    f"world: signal_kinds maps {kind!r} to {stream!r}{suggest(stream, SIGNAL_STREAMS)}, which is no signal "
-                    f"stream: use one of {', '.join(SIGNAL_STREAMS)}"
-                )
-        object.__setattr__(self, "signal_kinds", kinds)
-        if not self.repeat:
-            length = sum(s.duration for s in task)
-            if length > self.horizon + 1e-9:
-                raise ScenarioError(
-                    f"world: the task lasts {length:g} s but the horizon is {self.horizon:g} s, so its steps after "
-                    f"{self.horizon:g} s would never happen: raise the horizon to {length:g}, shorten the task, "
-                    "or use --until to stop a run early"
-                )
 
     def _check_slips(self, like: Callable[[str], str]) -> None:
         """A scripted slip needs an object in the hand (with signals off it would still
@@ -357,9 +372,6 @@ class World:
         """Every name in the world must exist in the scenario's model."""
         model = scenario.model
         where = f"world of {scenario.name!r}"
-        devices = [d.name for d in model.devices]
-        platforms = [p.name for p in model.platforms]
-        graphs = [g.name for g in model.graphs]
         for step in self.task:
             check_action(model, step.action, where=where, what="task action", error=ScenarioError)
         if self.slips:
@@ -368,6 +380,20 @@ class World:
             problem = event_problem(te.event, model)
             if problem is not None:
                 raise ScenarioError(f"{where}: at t={te.time:g}: {problem}")
+        self._check_components(scenario, where)
+        kinds = sorted({d.kind for d in model.devices})
+        for kind, stream in self.signal_kinds:
+            if kind not in kinds and (kind, stream) not in SIGNAL_KINDS:
+                raise ScenarioError(
+                    f"{where}: signal_kinds maps {kind!r}, which no device is{suggest(kind, kinds)}: fix the kind (kinds: {', '.join(kinds)})"
+                )
+
+    def _check_components(self, scenario: Scenario, where: str) -> None:
+        """The devices, platforms and graphs named by MTTFs, load walks, start latencies and
+        the start failure script exist in the scenario's model."""
+        model = scenario.model
+        devices = [d.name for d in model.devices]
+        platforms = [p.name for p in model.platforms]
         for m in self.stochastic_faults:
             if m.component not in devices and m.component not in platforms:
                 raise ScenarioError(
@@ -385,6 +411,10 @@ class World:
         for p, _v in self.platform_latency:
             if p not in platforms:
                 raise ScenarioError(f"{where}: start latency for unknown platform {p!r}{suggest(p, platforms)} (platforms: {', '.join(platforms)})")
+        self._check_start_script(where, [g.name for g in model.graphs], platforms)
+
+    def _check_start_script(self, where: str, graphs: list[str], platforms: list[str]) -> None:
+        """Each (graph, platform, n) of the start failure script names a known graph and platform."""
         for graph, platform, n in self.start_failure.script:
             if graph not in graphs:
                 raise ScenarioError(
@@ -395,12 +425,6 @@ class World:
                 raise ScenarioError(
                     f"{where}: start failure script ({graph!r}, {platform!r}, {n}) names unknown platform "
                     f"{platform!r}{suggest(platform, platforms)} (platforms: {', '.join(platforms)})"
-                )
-        kinds = sorted({d.kind for d in model.devices})
-        for kind, stream in self.signal_kinds:
-            if kind not in kinds and (kind, stream) not in SIGNAL_KINDS:
-                raise ScenarioError(
-                    f"{where}: signal_kinds maps {kind!r}, which no device is{suggest(kind, kinds)}: fix the kind (kinds: {', '.join(kinds)})"
                 )
 
 
