@@ -7,6 +7,7 @@ import importlib.util
 import signal
 import sys
 from pathlib import Path
+from types import ModuleType
 from typing import Any, Iterator, Mapping
 
 from desmon.errors import DesmonError, ScenarioError
@@ -34,49 +35,8 @@ def load_scenario(path: str | Path, params: Mapping[str, str] | None = None) -> 
         p = check_input_file(path, *SCENARIO_FILE)
     except PathError as exc:
         raise ScenarioError(str(exc)) from None
-    name = f"desmon_scenario_{abs(hash(str(p.resolve())))}"
-    spec = importlib.util.spec_from_file_location(name, p)
-    if spec is None or spec.loader is None:
-        raise ScenarioError(f"{path}: cannot be loaded as a Python module; give it a .py extension")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    script_folder_on_path(p)
-    failed = f"{path}: the script failed while building its scenario"
-    rerun = f"run python {path} to see where"
-    try:
-        with overriding(params or {}, str(path)), _real_ctrl_c() as interrupted, contextlib.redirect_stdout(sys.stderr):
-            spec.loader.exec_module(module)
-    except SyntaxError as exc:
-        raise ScenarioError(f"{path}:{exc.lineno}: syntax error: {exc.msg}") from None
-    except DesmonError as exc:
-        if str(exc).startswith(f"{path}: "):  # already names the file (an unknown parameter)
-            raise ScenarioError(str(exc)) from None
-        raise ScenarioError(f"{path}: invalid scenario: {exc}") from None
-    except SystemExit as exc:
-        raise ScenarioError(
-            f"{path}: the script called sys.exit({'' if exc.code is None else repr(exc.code)}) while desmon loaded it; "
-            "a scenario file must define 'scenario' and end (put script-only code under if __name__ == '__main__':)"
-        ) from None
-    except KeyboardInterrupt:
-        if interrupted:
-            raise
-        raise ScenarioError(f"{failed}: it raised KeyboardInterrupt itself (no Ctrl-C was pressed); {rerun}") from None
-    except RecursionError:
-        raise ScenarioError(f"{failed}: RecursionError (infinite recursion?); {rerun}") from None
-    except BaseException as exc:  # a user's script may fail in any way; report it in one line
-        detail = " ".join(str(exc).split())[:300]
-        raise ScenarioError(f"{failed}: {type(exc).__name__}{': ' + detail if detail else ''}; {rerun}") from None
-    finally:
-        sys.modules.pop(name, None)
-    found = getattr(module, "scenario", None)
-    if not isinstance(found, Scenario):
-        candidates = [v for v in vars(module).values() if isinstance(v, Scenario)]
-        if len(candidates) != 1:
-            raise ScenarioError(
-                f"{path}: defines no Scenario: bind one to the module-level name 'scenario' "
-                "(scenario = Scenario(name=..., model=...))"
-            )
-        found = candidates[0]
+    module = _run_script(path, p, params or {})
+    found = _scenario_of(path, module)
     if isinstance(found.checker, Mapping):  # bounds as a dict: checked now, as a Bounds is when built
         from desmon.errors import CheckerError
         from desmon.verify.bounds import bounds_of
@@ -86,6 +46,73 @@ def load_scenario(path: str | Path, params: Mapping[str, str] | None = None) -> 
         except CheckerError as exc:
             raise ScenarioError(f"{path}: invalid scenario: {exc}") from None
     return found
+
+
+def _run_script(path: str | Path, p: Path, params: Mapping[str, str]) -> ModuleType:
+    """Execute the script at ``p`` (stdout to stderr) as a throw-away module and return it;
+    any way it fails but a real Ctrl-C becomes one ScenarioError (:func:`_script_error`)."""
+    name = f"desmon_scenario_{abs(hash(str(p.resolve())))}"
+    spec = importlib.util.spec_from_file_location(name, p)
+    if spec is None or spec.loader is None:
+        raise ScenarioError(f"{path}: cannot be loaded as a Python module; give it a .py extension")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    script_folder_on_path(p)
+    try:
+        with overriding(params, str(path)), _real_ctrl_c() as interrupted, contextlib.redirect_stdout(sys.stderr):
+            spec.loader.exec_module(module)
+    except KeyboardInterrupt:
+        if interrupted:
+            raise
+        raise ScenarioError(
+            f"{_failed(path)}: it raised KeyboardInterrupt itself (no Ctrl-C was pressed); {_rerun(path)}"
+        ) from None
+    except BaseException as exc:  # a user's script may fail in any way; report it in one line
+        raise _script_error(path, exc) from None
+    finally:
+        sys.modules.pop(name, None)
+    return module
+
+
+def _failed(path: str | Path) -> str:
+    return f"{path}: the script failed while building its scenario"
+
+
+def _rerun(path: str | Path) -> str:
+    return f"run python {path} to see where"
+
+
+def _script_error(path: str | Path, exc: BaseException) -> ScenarioError:
+    """The one-line error for a scenario script that raised ``exc`` (not KeyboardInterrupt)."""
+    if isinstance(exc, SyntaxError):
+        return ScenarioError(f"{path}:{exc.lineno}: syntax error: {exc.msg}")
+    if isinstance(exc, DesmonError):
+        if str(exc).startswith(f"{path}: "):  # already names the file (an unknown parameter)
+            return ScenarioError(str(exc))
+        return ScenarioError(f"{path}: invalid scenario: {exc}")
+    if isinstance(exc, SystemExit):
+        return ScenarioError(
+            f"{path}: the script called sys.exit({'' if exc.code is None else repr(exc.code)}) while desmon loaded it; "
+            "a scenario file must define 'scenario' and end (put script-only code under if __name__ == '__main__':)"
+        )
+    if isinstance(exc, RecursionError):
+        return ScenarioError(f"{_failed(path)}: RecursionError (infinite recursion?); {_rerun(path)}")
+    detail = " ".join(str(exc).split())[:300]
+    return ScenarioError(f"{_failed(path)}: {type(exc).__name__}{': ' + detail if detail else ''}; {_rerun(path)}")
+
+
+def _scenario_of(path: str | Path, module: ModuleType) -> Scenario:
+    """The module's ``scenario``, or its only Scenario under another name."""
+    found = getattr(module, "scenario", None)
+    if isinstance(found, Scenario):
+        return found
+    candidates = [v for v in vars(module).values() if isinstance(v, Scenario)]
+    if len(candidates) != 1:
+        raise ScenarioError(
+            f"{path}: defines no Scenario: bind one to the module-level name 'scenario' "
+            "(scenario = Scenario(name=..., model=...))"
+        )
+    return candidates[0]
 
 
 def load_from_args(args: Any) -> Scenario:

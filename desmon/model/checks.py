@@ -223,6 +223,7 @@ def check_keywords(where: str, given: Iterable[str], allowed: Sequence[str], *, 
 
 
 _SELF = ("self", "cls")
+_P = inspect.Parameter
 
 
 def _bare(sig: inspect.Signature, skip_self: bool) -> tuple[list[inspect.Parameter], str]:
@@ -243,26 +244,53 @@ def call_problem(display: str, sig: inspect.Signature, args: tuple[object, ...],
         return None
     params, text = _bare(sig, skip_self)
     given_pos = args[1:] if skip_self and sig.parameters and next(iter(sig.parameters)) in _SELF else args
-    P = inspect.Parameter
-    if not any(p.kind is P.VAR_KEYWORD for p in params):
-        names = [p.name for p in params if p.kind in (P.POSITIONAL_OR_KEYWORD, P.KEYWORD_ONLY)]
-        for key in kwargs:
-            if key not in names:
-                return f"{display}: unknown keyword {key!r}{suggest(key, names)}; it takes {text}"
-    positional = [p for p in params if p.kind in (P.POSITIONAL_ONLY, P.POSITIONAL_OR_KEYWORD)]
-    if not any(p.kind is P.VAR_POSITIONAL for p in params) and len(given_pos) > len(positional):
-        extra = ", ".join(repr(a) for a in given_pos[len(positional):])
-        keyword_only = [p.name for p in params if p.kind is P.KEYWORD_ONLY]
-        fix = f"pass {', '.join(k + '=...' for k in keyword_only)} by keyword" if keyword_only else "drop the extra ones"
-        return f"{display}: {len(given_pos)} positional arguments but it takes {len(positional)} ({extra} left over): {fix}; it takes {text}"
+    positional = [p for p in params if p.kind in (_P.POSITIONAL_ONLY, _P.POSITIONAL_OR_KEYWORD)]
+    problem = (
+        _unknown_keyword(params, kwargs)
+        or _extra_positional(params, positional, given_pos)
+        or _given_twice(positional, given_pos, kwargs)
+        or _missing(params, positional, given_pos, kwargs)
+        or reason
+    )
+    return f"{display}: {problem}; it takes {text}"
+
+
+def _unknown_keyword(params: list[inspect.Parameter], kwargs: Mapping[str, object]) -> str | None:
+    """The first keyword the signature does not take (None if it takes ``**kwargs``)."""
+    if any(p.kind is _P.VAR_KEYWORD for p in params):
+        return None
+    names = [p.name for p in params if p.kind in (_P.POSITIONAL_OR_KEYWORD, _P.KEYWORD_ONLY)]
+    for key in kwargs:
+        if key not in names:
+            return f"unknown keyword {key!r}{suggest(key, names)}"
+    return None
+
+
+def _extra_positional(params: list[inspect.Parameter], positional: list[inspect.Parameter], given_pos: tuple[object, ...]) -> str | None:
+    """More positional arguments than the signature takes (None if it takes ``*args``)."""
+    if any(p.kind is _P.VAR_POSITIONAL for p in params) or len(given_pos) <= len(positional):
+        return None
+    extra = ", ".join(repr(a) for a in given_pos[len(positional):])
+    keyword_only = [p.name for p in params if p.kind is _P.KEYWORD_ONLY]
+    fix = f"pass {', '.join(k + '=...' for k in keyword_only)} by keyword" if keyword_only else "drop the extra ones"
+    return f"{len(given_pos)} positional arguments but it takes {len(positional)} ({extra} left over): {fix}"
+
+
+def _given_twice(positional: list[inspect.Parameter], given_pos: tuple[object, ...], kwargs: Mapping[str, object]) -> str | None:
+    """The first parameter given both by position and by keyword."""
     for i, p in enumerate(positional):
         if i < len(given_pos) and p.name in kwargs:
-            return f"{display}: {p.name!r} is given twice (by position and by keyword): give it once; it takes {text}"
+            return f"{p.name!r} is given twice (by position and by keyword): give it once"
+    return None
+
+
+def _missing(params: list[inspect.Parameter], positional: list[inspect.Parameter], given_pos: tuple[object, ...], kwargs: Mapping[str, object]) -> str | None:
+    """The required parameters neither position nor keyword gave."""
     bound_names = {p.name for p in positional[: len(given_pos)]} | set(kwargs)
-    missing = [p.name for p in params if p.default is P.empty and p.kind not in (P.VAR_POSITIONAL, P.VAR_KEYWORD) and p.name not in bound_names]
-    if missing:
-        return f"{display}: missing {', '.join(repr(m) for m in missing)}: give {'it' if len(missing) == 1 else 'them'}; it takes {text}"
-    return f"{display}: {reason}; it takes {text}"
+    missing = [p.name for p in params if p.default is _P.empty and p.kind not in (_P.VAR_POSITIONAL, _P.VAR_KEYWORD) and p.name not in bound_names]
+    if not missing:
+        return None
+    return f"missing {', '.join(repr(m) for m in missing)}: give {'it' if len(missing) == 1 else 'them'}"
 
 
 def strict_call(error: Error, display: str) -> Callable[[F], F]:
