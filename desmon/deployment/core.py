@@ -20,6 +20,7 @@ from desmon.deployment.monitor import InsertPort, Stimulus, observe
 from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop
 from desmon.errors import ModelError
 from desmon.model.events import Event
+from desmon.model.requirements import DeploymentSpec
 from desmon.model.system import SystemModel
 
 __all__ = ["DeploymentCore", "StepLog", "run_sync", "not_a_command", "standing_after", "stale_standing_after"]
@@ -127,7 +128,8 @@ class DeploymentCore:
         self.insert = insert
         self.deployer = get_deployer(deployer)
         self.standing: frozenset[str] = frozenset()
-        self._spec_of = {s.graph: s for s in model.specs}.get
+        # the current specifications come from the repository: requirements may change at run time
+        self._spec_of = query.deployment_information
         # context -> (requested slots, the graphs they name); the rules and the deployer
         # are immutable, so this is a pure memo (bounded by the contexts seen, see _selection)
         self._selection_memo: dict[str | None, tuple[tuple[tuple[str, ...], ...], frozenset[str]]] = {}
@@ -162,7 +164,11 @@ class DeploymentCore:
         return reaction
 
     def view(self, **extra: object) -> SystemView:
-        return view_of(self.query, self.model.specs, self.standing, self.slots(), **extra)  # type: ignore[arg-type]
+        return view_of(self.query, self.specs(), self.standing, self.slots(), **extra)  # type: ignore[arg-type]
+
+    def specs(self) -> tuple[DeploymentSpec, ...]:
+        """The current deployment specifications (as the repository holds them now)."""
+        return current_specs(self.model, self.query)
 
     def settle(self, raised: Iterable[str]) -> frozenset[str]:
         """Update the standing errors after a reaction that raised errors for ``raised``."""
@@ -199,9 +205,18 @@ class DeploymentCore:
         return stim, log
 
 
+def current_specs(model: SystemModel, q: QueryPort) -> tuple[DeploymentSpec, ...]:
+    """Every specification of ``model`` with the requirements ``q`` holds now."""
+    out = []
+    for declared in model.specs:
+        spec = q.deployment_information(declared.graph)
+        out.append(spec if spec is not None else declared)
+    return tuple(out)
+
+
 def stamp(error: RaiseError, time: float) -> ErrorRecord:
     """The Error-port record of ``error`` raised at ``time``."""
     return ErrorRecord(error.kind, error.graph, error.platform, time, error.detail)
 
 
-__all__ += ["stamp"]
+__all__ += ["stamp", "current_specs"]

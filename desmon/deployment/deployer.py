@@ -133,7 +133,8 @@ def _survey(g: str, q: QueryPort) -> Survey:
     spec = q.deployment_information(g)
     if spec is None:
         return None, (), None, []
-    acceptable = validity_for(q, spec, reasons=False).acceptable
+    validity = validity_for(q, spec, reasons=False)
+    acceptable = validity.acceptable
     keep: str | None = None
     stale: list[str] = []
     for p in q.deployed_on(g):
@@ -141,6 +142,11 @@ def _survey(g: str, q: QueryPort) -> Survey:
             keep = p  # the first running instance on an acceptable platform
         elif p != keep:
             stale.append(p)
+    if keep is not None and spec.rebalance is not None and validity.gain(keep) > spec.rebalance:
+        # rebalancing with hysteresis: a better platform beats this one by more than the
+        # threshold, so the instance moves (stopped first, then placed best-first)
+        stale.insert(0, keep)
+        keep = None
     return spec, acceptable, keep, stale
 
 

@@ -12,7 +12,18 @@ from typing import Protocol
 
 from desmon.errors import ModelError
 from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
-from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+from desmon.model.events import (
+    ActionChange,
+    DeviceFail,
+    DeviceRepair,
+    Event,
+    LoadChange,
+    PlatformDown,
+    PlatformJoin,
+    PlatformLeave,
+    PlatformUp,
+    RequirementChange,
+)
 
 __all__ = ["GripperObservation", "interpret", "InsertPort", "Stimulus", "observe"]
 
@@ -59,6 +70,10 @@ class InsertPort(Protocol):
 
     def set_load(self, platform: str, resource: str, amount: float) -> bool: ...
 
+    def change_requirements(self, change: RequirementChange) -> tuple[str, ...] | None:
+        """Apply a requirement change; returns the platforms its graph is deployed on, or
+        None if the requirements did not change."""
+
 
 @dataclass(frozen=True, slots=True)
 class Stimulus:
@@ -66,10 +81,13 @@ class Stimulus:
 
     changed_platforms: tuple[str, ...] = ()
     context_changed: bool = False
+    #: graphs whose deployment requirements changed (their platforms are in
+    #: ``changed_platforms``, so Algorithm 2 re-checks the deployments there)
+    specs_changed: tuple[str, ...] = ()
 
     @property
     def empty(self) -> bool:
-        return not self.changed_platforms and not self.context_changed
+        return not self.changed_platforms and not self.context_changed and not self.specs_changed
 
 
 #: The stimuli observe returns, interned (they are immutable): nothing changed, the
@@ -96,9 +114,12 @@ def observe(event: Event, store: InsertPort) -> Stimulus:
     if isinstance(event, (DeviceFail, DeviceRepair)):
         platform = store.set_device_working(event.device, isinstance(event, DeviceRepair))
         return _platform_changed(platform) if platform else _NOTHING
-    if isinstance(event, (PlatformDown, PlatformUp)):
-        changed = store.set_platform_up(event.platform, isinstance(event, PlatformUp))
+    if isinstance(event, (PlatformDown, PlatformUp, PlatformJoin, PlatformLeave)):
+        changed = store.set_platform_up(event.platform, isinstance(event, (PlatformUp, PlatformJoin)))
         return _platform_changed(event.platform) if changed else _NOTHING
+    if isinstance(event, RequirementChange):
+        hosts = store.change_requirements(event)
+        return _NOTHING if hosts is None else Stimulus(changed_platforms=hosts, specs_changed=(event.graph,))
     if isinstance(event, LoadChange):
         changed = store.set_load(event.platform, event.resource, event.amount)
         return _platform_changed(event.platform) if changed else _NOTHING

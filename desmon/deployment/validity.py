@@ -14,9 +14,11 @@ from desmon.model.requirements import (
     Attribute,
     DeploymentSpec,
     Capacity,
+    Constraint,
     Maximum,
     Minimum,
     Option,
+    Preference,
     Quantity,
     Requirement,
     Selection,
@@ -41,7 +43,7 @@ _MEMO_SIZE = 1 << 16
 #: the engine learns what a reaction observed of the platforms. Nothing else reads it.
 _observer: Any = None
 
-__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos"]
+__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -58,11 +60,18 @@ class Failure:
 
 @dataclass(frozen=True, slots=True)
 class Validity:
-    """Result of :func:`check_validity`: acceptable platforms (in preference order) and
-    every failure of every rejected platform."""
+    """Result of :func:`check_validity`: acceptable platforms (best first) and every
+    failure of every rejected platform.
+
+    With preferences, ``scores`` holds each acceptable platform's score (aligned with
+    ``acceptable``) and, when reasons were asked for, ``breakdown`` each one's weighted
+    terms per preference; both are empty without preferences.
+    """
 
     acceptable: tuple[str, ...]
     rejected: tuple[tuple[str, tuple[Failure, ...]], ...]
+    scores: tuple[float, ...] = ()
+    breakdown: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
 
     def failures(self, platform: str) -> tuple[Failure, ...]:
         for name, fails in self.rejected:
@@ -70,8 +79,23 @@ class Validity:
                 return fails
         return ()
 
+    def score(self, platform: str) -> float:
+        """The preference score of an acceptable ``platform`` (0 without preferences)."""
+        if not self.scores:
+            return 0.0
+        return self.scores[self.acceptable.index(platform)]
+
+    def gain(self, platform: str) -> float:
+        """How much the best acceptable platform scores above ``platform`` (0 if it is the best)."""
+        if not self.scores or not self.acceptable:
+            return 0.0
+        return self.scores[0] - self.score(platform)
+
     def explain(self) -> str:
         lines = [f"acceptable: {', '.join(self.acceptable) or '(none)'}"]
+        for name, terms in self.breakdown:
+            parts = " + ".join(f"{what} {value:.3g}" for what, value in terms)
+            lines.append(f"score {name}: {sum(v for _w, v in terms):.3g} = {parts}")
         for _name, fails in self.rejected:
             lines.extend(str(f) for f in fails)
         return "\n".join(lines)
@@ -87,58 +111,135 @@ def _fmt(x: float) -> str:
     return f"{x:g}"
 
 
-def requirement_holds(req: Requirement, state: PlatformState, graph: Placing) -> str | None:
-    """``None`` if ``req`` holds on ``state`` for ``graph``, else the reason it fails."""
-    if isinstance(req, Quantity):
-        have = sum(1 for d in state.devices if d.kind == req.device_kind)
-        if have >= req.count:
+def _quantity(req: Quantity, state: PlatformState, graph: Placing) -> str | None:
+    have = sum(1 for d in state.devices if d.kind == req.device_kind)
+    if have >= req.count:
+        return None
+    return f"{have} working {req.device_kind} device(s), needs {req.count}"
+
+
+def _others_using(resource: str, state: PlatformState, graph: Placing) -> list[tuple[str, float]]:
+    """Shares of ``resource`` held by graphs other than the one being placed (and, for a
+    tuple ``graph``, other than the graphs a placement would free)."""
+    if graph is None or type(graph) is str:
+        return state.used_by(resource, excluding=graph)  # type: ignore[arg-type]
+    return [(g, a) for g, a in state.used_by(resource) if g not in graph]
+
+
+def _capacity(req: Capacity, state: PlatformState, graph: Placing) -> str | None:
+    cap = state.platform.capacity(req.resource)
+    if cap is None:
+        return f"has no {req.resource} capacity"
+    others = _others_using(req.resource, state, graph)
+    load = state.load_of(req.resource)
+    free = cap - sum(a for _g, a in others) - load
+    if free >= req.amount:
+        return None
+    unit = " MB" if req.resource == "memory" else ""
+    parts = [f"capacity {_fmt(cap)}"]
+    parts += [f"used by {g} {_fmt(a)}" for g, a in others]
+    parts.append(f"load {_fmt(load)}")
+    return f"{_fmt(free)}{unit} free ({', '.join(parts)})"
+
+
+def _minimum(req: Minimum, state: PlatformState, graph: Placing) -> str | None:
+    value = state.platform.prop(req.prop)
+    if value is None:
+        return f"has no property {req.prop!r}"
+    return None if value >= req.value else f"{req.prop} is {_fmt(value)}"
+
+
+def _maximum(req: Maximum, state: PlatformState, graph: Placing) -> str | None:
+    value = state.platform.prop(req.prop)
+    if value is None:
+        return f"has no property {req.prop!r}"
+    return None if value <= req.value else f"{req.prop} is {_fmt(value)}"
+
+
+def _attribute(req: Attribute, state: PlatformState, graph: Placing) -> str | None:
+    if req.name == PLATFORM_HAS:
+        if any(d.kind == req.value for d in state.devices):
             return None
-        return f"{have} working {req.device_kind} device(s), needs {req.count}"
-    if isinstance(req, Capacity):
-        cap = state.platform.capacity(req.resource)
-        if cap is None:
-            return f"has no {req.resource} capacity"
-        if graph is None or type(graph) is str:
-            others = state.used_by(req.resource, excluding=graph)
-        else:  # a tuple: the graph and the graphs an upgrade would free (see check_validity)
-            others = [(g, a) for g, a in state.used_by(req.resource) if g not in graph]
-        load = state.load_of(req.resource)
-        free = cap - sum(a for _g, a in others) - load
-        if free >= req.amount:
-            return None
-        unit = " MB" if req.resource == "memory" else ""
-        parts = [f"capacity {_fmt(cap)}"]
-        parts += [f"used by {g} {_fmt(a)}" for g, a in others]
-        parts.append(f"load {_fmt(load)}")
-        return f"{_fmt(free)}{unit} free ({', '.join(parts)})"
-    if isinstance(req, Minimum):
-        value = state.platform.prop(req.prop)
-        if value is None:
-            return f"has no property {req.prop!r}"
-        return None if value >= req.value else f"{req.prop} is {_fmt(value)}"
-    if isinstance(req, Maximum):
-        value = state.platform.prop(req.prop)
-        if value is None:
-            return f"has no property {req.prop!r}"
-        return None if value <= req.value else f"{req.prop} is {_fmt(value)}"
-    if isinstance(req, Attribute):
-        if req.name == PLATFORM_HAS:
-            if any(d.kind == req.value for d in state.devices):
-                return None
-            return f"no working {req.value} attached"
-        actual = state.platform.attribute(req.name)
-        if actual is not None and str(actual) == str(req.value):
-            return None
-        return f"{req.name} is {actual!r}" if actual is not None else f"has no attribute {req.name!r}"
-    if isinstance(req, Selection):
-        have = [o.describe() for o in req.options if _option_holds(o, state)]
-        if len(have) >= req.at_least:
-            return None
-        return f"{len(have)} of the options available ({', '.join(have) or 'none'}), needs {req.at_least}"
-    raise TypeError(f"not a requirement: {req!r}")  # pragma: no cover - exhaustive over Requirement
+        return f"no working {req.value} attached"
+    actual = state.platform.attribute(req.name)
+    if actual is not None and str(actual) == str(req.value):
+        return None
+    return f"{req.name} is {actual!r}" if actual is not None else f"has no attribute {req.name!r}"
+
+
+def _selection(req: Selection, state: PlatformState, graph: Placing) -> str | None:
+    have = [o.describe() for o in req.options if _option_holds(o, state)]
+    if len(have) >= req.at_least:
+        return None
+    return f"{len(have)} of the options available ({', '.join(have) or 'none'}), needs {req.at_least}"
+
+
+def _soft(req: Preference, state: PlatformState, graph: Placing) -> str | None:
+    return None  # a preference never rejects a platform: it scores it (preference_term)
+
+
+#: The semantics of each requirement kind, one function per kind.
+_HOLDS: dict[type, Any] = {
+    Quantity: _quantity,
+    Capacity: _capacity,
+    Minimum: _minimum,
+    Maximum: _maximum,
+    Attribute: _attribute,
+    Selection: _selection,
+    Preference: _soft,
+}
+
+
+def requirement_holds(req: Constraint, state: PlatformState, graph: Placing) -> str | None:
+    """``None`` if ``req`` holds on ``state`` for ``graph``, else the reason it fails
+    (a preference always holds)."""
+    holds = _HOLDS.get(type(req))
+    if holds is None:
+        raise TypeError(f"not a requirement: {req!r}")
+    return holds(req, state, graph)  # type: ignore[no-any-return]
+
+
+def _free_fraction(resource: str, state: PlatformState, graph: Placing) -> float:
+    cap = state.platform.capacity(resource)
+    if not cap:
+        return 0.0
+    free = cap - sum(a for _g, a in _others_using(resource, state, graph)) - state.load_of(resource)
+    return min(1.0, max(0.0, free / cap))
+
+
+def preference_term(pref: Preference, state: PlatformState, graph: Placing) -> float:
+    """The term in [0, 1] that ``pref`` gives ``state`` for placing ``graph`` (see
+    :class:`~desmon.model.requirements.Preference`); the score adds ``weight`` times it."""
+    kind, args = pref.kind, pref.args
+    if kind == "vendor":
+        return 1.0 if any(d.matches(args[0], args[1]) for d in state.devices) else 0.0
+    if kind == "attribute":
+        actual = state.platform.attribute(args[0])
+        return 1.0 if actual is not None and str(actual) == args[1] else 0.0
+    if kind == "most_free":
+        return _free_fraction(args[0], state, graph)
+    if kind == "least_loaded":
+        cap = state.platform.capacity(args[0])
+        return min(1.0, max(0.0, 1.0 - state.load_of(args[0]) / cap)) if cap else 0.0
+    mine = graph if graph is None or type(graph) is str else graph[0]
+    others = [g for g, _use in state.deployed if g != mine]
+    if kind == "colocate":
+        return 1.0 if any(g in args for g in others) else 0.0
+    return 1.0 / (1 + len(others))  # spread
+
+
+def score_breakdown(reqs: Iterable[Constraint], state: PlatformState, graph: Placing) -> tuple[tuple[str, float], ...]:
+    """Each preference's weighted term for ``state`` (what ``desmon explain`` shows)."""
+    return tuple((p.describe(), p.weight * preference_term(p, state, graph)) for p in reqs if isinstance(p, Preference))
+
+
+def platform_score(reqs: Iterable[Constraint], state: PlatformState, graph: Placing) -> float:
+    """The preference score of ``state``: the sum of weight x term (0 without preferences)."""
+    return sum(p.weight * preference_term(p, state, graph) for p in reqs if isinstance(p, Preference))
 
 
 _DOWN = "platform is down"
+_ABSENT = "platform is not there (on demand: not joined, left, or down)"
 
 
 def check_platform(
@@ -158,7 +259,7 @@ def _check_platform(
     requirements: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool
 ) -> tuple[Failure, ...]:
     if not state.up:
-        return (Failure(state.name, "platform up", _DOWN),)
+        return (Failure(state.name, "platform up", _ABSENT if state.platform.on_demand else _DOWN),)
     out = []
     for req in requirements:
         reason = requirement_holds(req, state, graph)
@@ -207,7 +308,7 @@ def check_validity(
 def _check_validity(
     reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool
 ) -> Validity:
-    acceptable: list[str] = []
+    acceptable: list[PlatformState] = []
     rejected: list[tuple[str, tuple[Failure, ...]]] = []
     check = _check_platform.__wrapped__  # memoised as a whole here; per pair only in check_platform
     for state in order_platforms(states):
@@ -215,8 +316,12 @@ def _check_validity(
         if fails:
             rejected.append((state.name, fails))
         else:
-            acceptable.append(state.name)
-    return Validity(tuple(acceptable), tuple(rejected))
+            acceptable.append(state)
+    if not any(type(r) is Preference for r in reqs):
+        return Validity(tuple(s.name for s in acceptable), tuple(rejected))
+    scored = sorted(((platform_score(reqs, s, graph), s) for s in acceptable), key=lambda x: -x[0])  # stable
+    breakdown = tuple((s.name, score_breakdown(reqs, s, graph)) for _v, s in scored) if reasons else ()
+    return Validity(tuple(s.name for _v, s in scored), tuple(rejected), tuple(v for v, _s in scored), breakdown)
 
 
 def validity_for(q: "QueryPort", spec: DeploymentSpec, *, reasons: bool = True) -> Validity:

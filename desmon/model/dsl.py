@@ -37,10 +37,12 @@ from desmon.model.requirements import (
     Capacity,
     DeploymentSpec,
     Maximum,
+    Constraint,
     Minimum,
+    Preference,
     Quantity,
-    Requirement,
     Selection,
+    make_preference,
     make_requirement,
 )
 from desmon.model.system import RuleTable, SystemModel
@@ -107,18 +109,37 @@ class SpecBuilder:
 
     def __init__(self, graph: str) -> None:
         self.graph = check_name("deployment specification graph", graph)
-        self._requirements: list[Requirement] = []
+        self._requirements: list[Constraint] = []
         self._fixed: str | None = None
+        self._rebalance: float | None = None
 
     def add_constraint(self, kind: str, *args: object, **kwargs: object) -> "SpecBuilder":
         """``add_constraint("attribute", "platform_has", "force_sensor")``; kinds as in DepSL."""
         self._requirements.append(make_requirement(kind, *args, **kwargs))
         return self
 
+    def prefer(self, kind: str, *args: object, **kwargs: object) -> "SpecBuilder":
+        """A soft preference with a weight: ``prefer("vendor", "tactile_pad", "weiss", weight=2)``.
+
+        Kinds: vendor(kind, vendor), attribute(name, value), most_free(resource),
+        least_loaded(resource), colocate(graph, ...), spread() (see
+        :class:`~desmon.model.requirements.Preference`). Preferences never reject a
+        platform; they order the acceptable ones by score.
+        """
+        self._requirements.append(make_preference(kind, *args, **kwargs))
+        return self
+
+    @strict_call(ModelError, "rebalance(...)")
+    def rebalance(self, min_gain: float) -> "SpecBuilder":
+        """Let a valid deployment move to a better-scoring platform, but only when the
+        score gain exceeds ``min_gain`` (hysteresis: the deployer cannot flap)."""
+        self._rebalance = min_gain
+        return self
+
     @strict_call(ModelError, "require(...)")
-    def require(self, requirement: Requirement) -> "SpecBuilder":
-        """Add an already-built requirement object."""
-        if not isinstance(requirement, (Quantity, Capacity, Minimum, Maximum, Attribute, Selection)):
+    def require(self, requirement: Constraint) -> "SpecBuilder":
+        """Add an already-built requirement (or preference) object."""
+        if not isinstance(requirement, (Quantity, Capacity, Minimum, Maximum, Attribute, Selection, Preference)):
             raise ModelError(
                 f"deployment specification of {self.graph!r}: require({requirement!r}) is not a requirement: "
                 "pass Capacity('memory', 150) and the like, or use add_constraint('capacity', 'memory', 150)"
@@ -138,7 +159,12 @@ class SpecBuilder:
         return self
 
     def build(self) -> DeploymentSpec:
-        return DeploymentSpec(self.graph, tuple(self._requirements), self._fixed)
+        if self._rebalance is not None and not any(isinstance(r, Preference) for r in self._requirements):
+            raise ModelError(
+                f"deployment specification of {self.graph!r} rebalances (min_gain {self._rebalance:g}) but has no "
+                "preference to score platforms by: add prefer(...) or drop rebalance(...)"
+            )
+        return DeploymentSpec(self.graph, tuple(self._requirements), self._fixed, self._rebalance)
 
 
 class _RPSL:
@@ -187,6 +213,8 @@ class RobotBuilder:
         attributes: Mapping[str, object] | None = None,
         properties: Mapping[str, float] | None = None,
         preference: float = 0.0,
+        on_demand: bool = False,
+        startup_s: float = 0.0,
     ) -> PlatformBuilder:
         self._platforms.append(
             Platform.make(
@@ -196,6 +224,8 @@ class RobotBuilder:
                 attributes=attributes,
                 properties=properties,
                 preference=preference,
+                on_demand=on_demand,
+                startup_s=startup_s,
             )
         )
         return PlatformBuilder(self, name)

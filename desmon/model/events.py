@@ -9,9 +9,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from desmon.errors import ModelError
-from desmon.model.checks import check_name, check_number, strict_init
+from desmon.model.checks import check_items, check_name, check_number, strict_init
+from desmon.model.requirements import _CONSTRAINT_TYPES, Constraint
 
-__all__ = ["ActionChange", "DeviceFail", "DeviceRepair", "PlatformDown", "PlatformUp", "LoadChange", "Event", "event_kind"]
+__all__ = [
+    "ActionChange", "DeviceFail", "DeviceRepair", "PlatformDown", "PlatformUp", "LoadChange",
+    "RequirementChange", "PlatformJoin", "PlatformLeave", "Event", "event_kind",
+]
 
 
 @strict_init(ModelError)
@@ -94,11 +98,81 @@ class LoadChange:
         return f"load {self.platform} {self.resource}={self.amount:g}"
 
 
-Event = ActionChange | DeviceFail | DeviceRepair | PlatformDown | PlatformUp | LoadChange
+@strict_init(ModelError)
+@dataclass(frozen=True, slots=True)
+class RequirementChange:
+    """The deployment requirements of ``graph`` change at run time: ``remove`` these
+    requirements (or preferences), then ``add`` these. A change is a remove plus an add,
+    e.g. ``RequirementChange("combined", add=(Capacity("memory", 350),),
+    remove=(Capacity("memory", 250),))`` when the robot speeds up. ``label`` names the
+    change in reports (default: the change itself)."""
+
+    graph: str
+    add: tuple[Constraint, ...] = ()
+    remove: tuple[Constraint, ...] = ()
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        check_name("RequirementChange graph", self.graph)
+        example = "(Capacity('memory', 350),)"
+        add = check_items(f"RequirementChange({self.graph!r}) add", self.add, _CONSTRAINT_TYPES, example=example)
+        remove = check_items(f"RequirementChange({self.graph!r}) remove", self.remove, _CONSTRAINT_TYPES, example=example)
+        if not add and not remove:
+            raise ModelError(f"RequirementChange({self.graph!r}) adds and removes nothing: give add=(...) and/or remove=(...)")
+        both = [r.describe() for r in add if r in remove]
+        if both:
+            raise ModelError(f"RequirementChange({self.graph!r}) both adds and removes {', '.join(both)}: give it once")
+        if not isinstance(self.label, str) or "\n" in self.label:
+            raise ModelError(f"RequirementChange({self.graph!r}) label {self.label!r} is not one line of text")
+        object.__setattr__(self, "add", add)
+        object.__setattr__(self, "remove", remove)
+
+    def apply(self, requirements: tuple[Constraint, ...]) -> tuple[Constraint, ...]:
+        """The requirements after this change (removed ones dropped, added ones appended once)."""
+        kept = tuple(r for r in requirements if r not in self.remove)
+        return kept + tuple(r for r in self.add if r not in kept)
+
+    def __str__(self) -> str:
+        if self.label:
+            return f"requirements of {self.graph}: {self.label}"
+        parts = [f"-{r.describe()}" for r in self.remove] + [f"+{r.describe()}" for r in self.add]
+        return f"requirements of {self.graph}: {' '.join(parts)}"
+
+
+@strict_init(ModelError)
+@dataclass(frozen=True, slots=True)
+class PlatformJoin:
+    """An on-demand platform (a leased edge or cloud server) joins and can host graphs."""
+
+    platform: str
+
+    def __post_init__(self) -> None:
+        check_name("PlatformJoin platform", self.platform)
+
+    def __str__(self) -> str:
+        return f"platform {self.platform} joins"
+
+
+@strict_init(ModelError)
+@dataclass(frozen=True, slots=True)
+class PlatformLeave:
+    """An on-demand platform leaves (its lease ends): whatever ran on it is gone."""
+
+    platform: str
+
+    def __post_init__(self) -> None:
+        check_name("PlatformLeave platform", self.platform)
+
+    def __str__(self) -> str:
+        return f"platform {self.platform} leaves"
+
+
+Event = ActionChange | DeviceFail | DeviceRepair | PlatformDown | PlatformUp | LoadChange | RequirementChange | PlatformJoin | PlatformLeave
 
 
 def event_kind(event: Event) -> str:
-    """``action``, ``device_fail``, ``device_repair``, ``platform_down``, ``platform_up`` or ``load``."""
+    """``action``, ``device_fail``, ``device_repair``, ``platform_down``, ``platform_up``,
+    ``load``, ``requirements``, ``platform_join`` or ``platform_leave``."""
     return _KINDS[type(event)]
 
 
@@ -109,4 +183,7 @@ _KINDS = {
     PlatformDown: "platform_down",
     PlatformUp: "platform_up",
     LoadChange: "load",
+    RequirementChange: "requirements",
+    PlatformJoin: "platform_join",
+    PlatformLeave: "platform_leave",
 }

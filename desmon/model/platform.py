@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from typing import Mapping
 
 from desmon.errors import ModelError
-from desmon.model.checks import check_amount, check_name, check_number, check_pairs, check_value, is_numeric_text, strict_call, strict_init
+from desmon.model.checks import check_amount, check_flag, check_name, check_number, check_pairs, check_value, is_numeric_text, strict_call, strict_init
 
 __all__ = ["Device", "Platform", "check_name", "check_amount"]
 
@@ -54,6 +54,12 @@ class Platform:
     (``link_latency_ms``) that Minimum / Maximum requirements compare against;
     ``preference`` orders acceptable platforms (higher first) where a scenario wants
     something other than declaration order.
+
+    An ``on_demand`` platform (a leased edge or cloud server) is absent until a
+    :class:`~desmon.model.events.PlatformJoin` and gone again after a
+    :class:`~desmon.model.events.PlatformLeave`; ``startup_s`` is how long it takes to
+    join after it is requested (the SimPy world's lease). Its network latency is a
+    property like any other (e.g. ``latency_ms``), for Maximum requirements to limit.
     """
 
     name: str
@@ -61,6 +67,8 @@ class Platform:
     attributes: tuple[tuple[str, object], ...] = ()
     properties: tuple[tuple[str, float], ...] = ()
     preference: float = 0.0
+    on_demand: bool = False
+    startup_s: float = 0.0
 
     def __post_init__(self) -> None:
         check_name("platform", self.name)
@@ -80,6 +88,10 @@ class Platform:
                 )
             check_number(f"{where} property {prop!r}", value, low=None)
         check_number(f"{where} preference", self.preference, low=None)
+        check_flag(f"{where} on_demand", self.on_demand)
+        check_number(f"{where} startup_s", self.startup_s, unit=" of seconds")
+        if self.startup_s and not self.on_demand:
+            raise ModelError(f"{where} has startup_s = {self.startup_s:g} but is not on_demand: only a leased platform starts up; set on_demand=True or drop startup_s")
         object.__setattr__(self, "capacities", caps)
         object.__setattr__(self, "attributes", attrs)
         object.__setattr__(self, "properties", props)
@@ -95,6 +107,8 @@ class Platform:
         attributes: Mapping[str, object] | None = None,
         properties: Mapping[str, float] | None = None,
         preference: float = 0.0,
+        on_demand: bool = False,
+        startup_s: float = 0.0,
     ) -> "Platform":
         """Build a platform from keyword arguments (``memory`` is the ``memory`` capacity in MB)."""
         check_name("platform", name)
@@ -111,6 +125,8 @@ class Platform:
             attributes=tuple(sorted(_pairs(f"platform {name!r} attributes", attributes, "{'os': 'linux'}"))),
             properties=tuple(sorted(_pairs(f"platform {name!r} properties", properties, "{'link_latency_ms': 2.0}"))),  # type: ignore[arg-type]
             preference=preference,
+            on_demand=on_demand,
+            startup_s=startup_s,
         )
 
     def capacity(self, resource: str) -> float | None:

@@ -25,6 +25,10 @@ __all__ = [
     "make_requirement",
     "DeploymentSpec",
     "PLATFORM_HAS",
+    "Preference",
+    "PREFERENCE_KINDS",
+    "make_preference",
+    "Constraint",
 ]
 
 #: The Attribute name that means "the platform has a working device of this kind" (R1).
@@ -203,6 +207,93 @@ class Selection:
 
 Requirement = Quantity | Capacity | Minimum | Maximum | Attribute | Selection
 
+#: Soft preference kinds and their arguments (see :class:`Preference`).
+PREFERENCE_KINDS = ("vendor", "attribute", "most_free", "least_loaded", "colocate", "spread")
+_PREFERENCE_USAGE = {
+    "vendor": "write ('vendor', device_kind, vendor, weight=1)",
+    "attribute": "write ('attribute', name, value, weight=1)",
+    "most_free": "write ('most_free', resource, weight=1)",
+    "least_loaded": "write ('least_loaded', resource, weight=1)",
+    "colocate": "write ('colocate', graph, graph, ..., weight=1)",
+    "spread": "write ('spread', weight=1)",
+}
+_PREFERENCE_ARITY = {"vendor": (2, 2), "attribute": (2, 2), "most_free": (1, 1), "least_loaded": (1, 1), "colocate": (1, 64), "spread": (0, 0)}
+
+
+@strict_init(ModelError)
+@dataclass(frozen=True, slots=True)
+class Preference:
+    """A soft DepSL constraint: it never rejects a platform, it scores it.
+
+    Hard requirements decide which platforms are *acceptable*; the preferences of a
+    specification order them: each acceptable platform scores the sum over preferences
+    of ``weight`` times a term in [0, 1] (:func:`desmon.deployment.validity.preference_term`):
+
+    ``vendor(kind, vendor)``
+        1 if a working ``kind`` device of ``vendor`` is attached, else 0;
+    ``attribute(name, value)``
+        1 if the platform's attribute ``name`` equals ``value``, else 0;
+    ``most_free(resource)``
+        the free fraction of ``resource`` (the graph's own share counts as free);
+    ``least_loaded(resource)``
+        1 minus the background-load fraction of ``resource``;
+    ``colocate(graph, ...)``
+        1 if one of the named graphs is deployed on the platform, else 0;
+    ``spread()``
+        1 / (1 + number of other graphs deployed on the platform).
+
+    Higher scores come first; ties keep the platform ``preference`` then declaration
+    order, as without preferences.
+    """
+
+    kind: str
+    args: tuple[str, ...] = ()
+    weight: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.kind, str) or self.kind not in _PREFERENCE_USAGE:
+            raise ModelError(
+                f"unknown preference kind {self.kind!r}{suggest(self.kind, PREFERENCE_KINDS)}: use one of {', '.join(PREFERENCE_KINDS)}"
+            )
+        if isinstance(self.args, str) or not isinstance(self.args, (tuple, list)):
+            raise ModelError(f"preference {self.kind!r} args {self.args!r} is not a tuple of names: {_PREFERENCE_USAGE[self.kind]}")
+        args = tuple(self.args)
+        low, high = _PREFERENCE_ARITY[self.kind]
+        if not low <= len(args) <= high:
+            shown = ", ".join(repr(a) for a in args) or "nothing"
+            raise ModelError(f"preference {self.kind!r} got {len(args)} argument(s) ({shown}): {_PREFERENCE_USAGE[self.kind]}")
+        for i, a in enumerate(args):
+            if self.kind == "attribute" and i == 1:
+                check_value(f"preference attribute({args[0]!r}) value", a)
+            else:
+                check_name(f"preference {self.kind!r} argument", a)
+        object.__setattr__(self, "args", tuple(str(a) for a in args))
+        check_number(f"preference {self.kind!r} weight", self.weight, positive=True)
+
+    def describe(self) -> str:
+        inner = {
+            "vendor": lambda a: f"{a[0]}@{a[1]}",
+            "attribute": lambda a: f"{a[0]}={a[1]}",
+        }.get(self.kind, lambda a: ", ".join(a))(self.args)
+        return f"prefer {self.kind}({inner}) x{self.weight:g}"
+
+
+#: What a deployment specification lists: hard requirements and soft preferences.
+Constraint = Requirement | Preference
+
+
+def make_preference(kind: str, *args: object, weight: object = 1.0, **kwargs: object) -> Preference:
+    """Build a preference from DepSL-style words: ``make_preference("vendor", "tactile_pad", "weiss", weight=2)``."""
+    if not isinstance(kind, str):
+        raise ModelError(f"preference kind {kind!r} is not a string: use one of {', '.join(PREFERENCE_KINDS)}")
+    key = kind.lower().lstrip(":")
+    if key not in _PREFERENCE_USAGE:
+        raise ModelError(f"unknown preference kind {kind!r}{suggest(key, PREFERENCE_KINDS)}: use one of {', '.join(PREFERENCE_KINDS)}")
+    check_keywords(f"preference {kind!r}", kwargs, ("weight",), usage=_PREFERENCE_USAGE[key])
+    if key == "colocate" and len(args) == 1 and isinstance(args[0], (list, tuple)):
+        args = tuple(args[0])
+    return Preference(key, tuple(args), weight)  # type: ignore[arg-type]
+
 REQUIREMENT_KINDS = ("quantity", "capacity", "minimum", "maximum", "attribute", "selection")
 _REQUIREMENT_TYPES = (Quantity, Capacity, Minimum, Maximum, Attribute, Selection)
 
@@ -249,6 +340,9 @@ _USAGE = {
 }
 
 
+_CONSTRAINT_TYPES = (*_REQUIREMENT_TYPES, Preference)
+
+
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class DeploymentSpec:
@@ -259,18 +353,33 @@ class DeploymentSpec:
     """
 
     graph: str
-    requirements: tuple[Requirement, ...] = ()
+    requirements: tuple[Constraint, ...] = ()
     fixed_platform: str | None = None
+    #: The rebalancing threshold: a valid deployment moves to a better-scoring platform
+    #: only when the score gain exceeds it (hysteresis); None never moves a valid one.
+    rebalance: float | None = None
 
     def __post_init__(self) -> None:
         check_name("deployment specification graph", self.graph)
         reqs = check_items(
-            f"deployment specification of {self.graph!r} requirements", self.requirements, _REQUIREMENT_TYPES,
+            f"deployment specification of {self.graph!r} requirements", self.requirements, _CONSTRAINT_TYPES,
             example="(Capacity('memory', 150),) or add_constraint('capacity', 'memory', 150)",
         )
         object.__setattr__(self, "requirements", reqs)
         if self.fixed_platform is not None:
             check_name(f"fixed platform of {self.graph!r}", self.fixed_platform)
+        if self.rebalance is not None:
+            check_number(f"rebalance min_gain of {self.graph!r}", self.rebalance)
+
+    @property
+    def hard(self) -> tuple[Requirement, ...]:
+        """The hard requirements (what decides acceptable)."""
+        return tuple(r for r in self.requirements if not isinstance(r, Preference))
+
+    @property
+    def preferences(self) -> tuple[Preference, ...]:
+        """The soft preferences (what orders the acceptable platforms)."""
+        return tuple(r for r in self.requirements if isinstance(r, Preference))
 
     def consumption(self) -> tuple[tuple[str, float], ...]:
         """What a deployment of this spec consumes, per resource (sum of its Capacity amounts)."""

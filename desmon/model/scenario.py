@@ -10,27 +10,57 @@ world reads ``world`` (its own typed configuration); the checker reads ``checker
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any, Iterable, Mapping
 
 from desmon.errors import ModelError
 from desmon.model.checks import check_items, check_name, check_number, check_text, strict_init, suggest
-from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+
+from desmon.model.events import (
+    ActionChange,
+    DeviceFail,
+    DeviceRepair,
+    Event,
+    LoadChange,
+    PlatformDown,
+    PlatformJoin,
+    PlatformLeave,
+    PlatformUp,
+    RequirementChange,
+)
 from desmon.model.system import SystemModel, action_problem
 
 __all__ = ["TimedEvent", "Scenario", "EVENT_TYPES", "event_problem"]
 
 #: Every environment event type.
-EVENT_TYPES = (ActionChange, DeviceFail, DeviceRepair, PlatformDown, PlatformUp, LoadChange)
+EVENT_TYPES = (ActionChange, DeviceFail, DeviceRepair, PlatformDown, PlatformUp, LoadChange, RequirementChange, PlatformJoin, PlatformLeave)
 
 
-def event_problem(ev: Event, model: SystemModel) -> str | None:
+def _requirement_change_problem(ev: RequirementChange, model: SystemModel, others: Iterable[Event]) -> str | None:
+    spec = model.spec(ev.graph)
+    if spec is None:
+        known = [s.graph for s in model.specs]
+        return f"{ev} names graph {ev.graph!r} with no deployment specification{suggest(ev.graph, known)} (specifications: {', '.join(known) or 'none'})"
+    # a change may remove what the specification declares or what a change adds
+    removable = list(spec.requirements) + [r for o in others if isinstance(o, RequirementChange) and o.graph == ev.graph for r in o.add]
+    for r in ev.remove:
+        if r not in removable:
+            have = ", ".join(x.describe() for x in spec.requirements) or "none"
+            return f"{ev} removes {r.describe()}, which {ev.graph!r} never has (declared: {have}; nor does any change add it): remove a requirement it has"
+    return None
+
+
+def event_problem(ev: Event, model: SystemModel, others: Iterable[Event] = ()) -> str | None:
     """What ``ev`` names that ``model`` does not have (None if it names only known things).
 
     One rule for every place an event is written: a scenario's ``initial`` and
-    ``timeline``, and the SimPy world's scripted faults and loads.
+    ``timeline``, the SimPy world's scripted faults and loads, and the checker's bounds.
+    ``others`` are the other events written beside it (a requirement change may remove
+    what another change adds).
     """
     if isinstance(ev, ActionChange):
         return action_problem(model, ev.action)
+    if isinstance(ev, RequirementChange):
+        return _requirement_change_problem(ev, model, others)
     devices = [d.name for d in model.devices]
     platforms = [p.name for p in model.platforms]
     if isinstance(ev, (DeviceFail, DeviceRepair)):
@@ -41,6 +71,8 @@ def event_problem(ev: Event, model: SystemModel) -> str | None:
     if ev.platform not in platforms:
         other = f": {ev.platform!r} is a device (use DeviceFail / DeviceRepair)" if ev.platform in devices else ""
         return f"{ev} names unknown platform {ev.platform!r}{suggest(ev.platform, platforms)}{other} (platforms: {', '.join(platforms)})"
+    if isinstance(ev, (PlatformJoin, PlatformLeave)) and not model.platform(ev.platform).on_demand:
+        return f"{ev}: platform {ev.platform!r} is not on demand, so it cannot join or leave: declare it with on_demand=True, or use PlatformUp / PlatformDown"
     if isinstance(ev, LoadChange):
         caps = [r for r, _ in model.platform(ev.platform).capacities]
         if ev.resource not in caps:
@@ -129,12 +161,13 @@ class Scenario:
         check_text(f"{where} description", self.description)
         if not isinstance(self.expected, Mapping):
             raise ModelError(f"{where}: expected = {self.expected!r} is not a mapping: write expected={{'desmon': {{...}}}}")
+        events = list(initial) + [te.event for te in timeline]
         for ev in initial:
-            self._check_event(ev)
+            self._check_event(ev, events)
         last = 0.0
         labels: set[str] = set()
         for te in timeline:
-            self._check_event(te.event)
+            self._check_event(te.event, events)
             if te.label:
                 if _looks_like_time(te.label):
                     raise ModelError(
@@ -161,7 +194,7 @@ class Scenario:
                 raise ModelError(f"{where}: {part} is a {type(value).__name__}, not {what}: write {part}={fix}")
             check(self)
 
-    def _check_event(self, ev: Event) -> None:
-        problem = event_problem(ev, self.model)
+    def _check_event(self, ev: Event, others: Iterable[Event] = ()) -> None:
+        problem = event_problem(ev, self.model, others)
         if problem is not None:
             raise ModelError(f"scenario {self.name!r}: {problem}")

@@ -11,6 +11,8 @@ from __future__ import annotations
 from typing import Callable
 
 from desmon.errors import QueryError
+from desmon.model.events import RequirementChange
+from desmon.model.requirements import DeploymentSpec
 from desmon.model.system import SystemModel, with_load
 from desmon.repository import labels as L
 from desmon.repository.store import Repository, node_id
@@ -21,6 +23,7 @@ __all__ = [
     "set_device_working",
     "set_platform_up",
     "set_load",
+    "change_requirements",
     "record_start",
     "record_stop",
     "RepositoryInsert",
@@ -38,7 +41,7 @@ def load_model(repo: Repository, model: SystemModel) -> None:
             capacities=dict(p.capacities),
             attributes=dict(p.attributes),
             properties=dict(p.properties),
-            up=True,
+            up=not p.on_demand,  # an on-demand platform is absent until it joins
             load={},
         )
     for d in model.devices:
@@ -54,18 +57,43 @@ def load_model(repo: Repository, model: SystemModel) -> None:
     for spec in model.specs:
         dep = repo.add_node(L.DEPLOYMENT, spec.graph, spec=spec)
         repo.add_edge(dep, node_id(L.PERCEPTION_GRAPH, spec.graph), L.RESOLVES)
-        for i, req in enumerate(spec.requirements):
-            rid = repo.add_node(
-                L.REQUIREMENT,
-                f"{spec.graph}#{i}",
-                kind=type(req).__name__,
-                description=req.describe(),
-                requirement=req,
-            )
-            repo.add_edge(dep, rid, L.REQUIRES)
+        for req in spec.requirements:
+            _add_requirement(repo, dep, spec.graph, req)
         if spec.fixed_platform is not None:
             repo.add_edge(dep, node_id(L.PLATFORM, spec.fixed_platform), L.EXECUTABLE_ON)
     repo.add_node(L.ROBOT, model.robot)
+
+
+def _add_requirement(repo: Repository, dep: str, graph: str, req: object) -> None:
+    """A REQUIREMENT node ``graph#i`` (the first free i: removed requirements keep their
+    nodes, as history) and the REQUIRES edge to it."""
+    i = 0
+    while node_id(L.REQUIREMENT, f"{graph}#{i}") in repo.graph:
+        i += 1
+    rid = repo.add_node(L.REQUIREMENT, f"{graph}#{i}", kind=type(req).__name__, description=req.describe(), requirement=req)  # type: ignore[attr-defined]
+    repo.add_edge(dep, rid, L.REQUIRES)
+
+
+def change_requirements(repo: Repository, change: RequirementChange) -> tuple[str, ...] | None:
+    """Apply ``change`` to the deployment node of its graph: a removed requirement loses
+    its REQUIRES edge (the node stays, as history), an added one gets a new node. The
+    node's specification (what a deployment consumes) follows. Returns the platforms the
+    graph is deployed on (so they are re-checked), or None if nothing changed."""
+    dep = node_id(L.DEPLOYMENT, change.graph)
+    if dep not in repo.graph:
+        raise QueryError(f"{change}: no deployment specification for {change.graph!r} in the repository")
+    spec: DeploymentSpec = repo.graph.nodes[dep]["spec"]
+    new = change.apply(spec.requirements)
+    if new == spec.requirements:
+        return None
+    for rid in repo.successors(dep, L.REQUIRES):
+        if repo.graph.nodes[rid]["requirement"] in change.remove:
+            repo.remove_edge(dep, rid, L.REQUIRES)
+    for req in new:
+        if req not in spec.requirements:
+            _add_requirement(repo, dep, change.graph, req)
+    repo.update_node(dep, spec=DeploymentSpec(change.graph, new, spec.fixed_platform, spec.rebalance))
+    return tuple(repo.graph.nodes[p]["name"] for p in repo.successors(dep, L.DEPLOYED_ON))
 
 
 def set_context(repo: Repository, robot: str, context: str) -> bool:
@@ -157,6 +185,9 @@ class RepositoryInsert:
 
     def set_load(self, platform: str, resource: str, amount: float) -> bool:
         return set_load(self.repo, platform, resource, amount)
+
+    def change_requirements(self, change: RequirementChange) -> tuple[str, ...] | None:
+        return change_requirements(self.repo, change)
 
 
 class ImmediateControl:

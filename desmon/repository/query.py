@@ -47,7 +47,9 @@ class RepositoryQuery:
             self._g.nodes[r]["requirement"] for r in sorted(self._out(dep, L.REQUIRES), key=lambda r: self._g.nodes[r]["order"])
         )
         fixed = self._out(dep, L.EXECUTABLE_ON)
-        return DeploymentSpec(graph, reqs, self._g.nodes[fixed[0]]["name"] if fixed else None)
+        declared = self._g.nodes[dep].get("spec")
+        rebalance = declared.rebalance if declared is not None else None
+        return DeploymentSpec(graph, reqs, self._g.nodes[fixed[0]]["name"] if fixed else None, rebalance)
 
     def has_fixed_deployment(self, spec: DeploymentSpec) -> bool:
         return self.fixed_platform(spec) is not None
