@@ -184,95 +184,147 @@ def _build(records: list[dict[str, Any]], horizon: float, start: float | None, e
     t0 = 0.0 if start is None else float(start)
     t1 = horizon if end is None else float(end)
     tl = Timeline(str(head.get("scenario", "?")), str(head.get("deployer", "?")), t0, t1)
-    platforms: list[str] = list((head.get("platforms") or {}).keys())
-    tl.capacity = {p: _mb(v, p) for p, v in (head.get("platforms") or {}).items() if v.get("memory") is not None}
-    consumption = {g: _mb(v, g) for g, v in (head.get("graphs") or {}).items()}
-    tl.graphs = list(consumption)  # declaration order: the same detector keeps its colour across plots
-
-    running: dict[tuple[str, str], tuple[float, str]] = {}  # (graph, platform) -> (since, phase)
-    load: dict[str, float] = {}
-    used: dict[str, float] = {}
-    down_since: dict[str, float] = {}
-    exposure_since: float | None = None
-
-    def mem_point(p: str, t: float) -> None:
-        tl.memory.setdefault(p, []).append((t, load.get(p, 0.0) + used.get(p, 0.0)))
-
-    def phase_change(g: str, p: str, t: float, phase: str | None) -> None:
-        key = (g, p)
-        if key in running:
-            since, old = running.pop(key)
-            tl.runs.setdefault(p, []).append((since, t, g, old))
-        if phase is not None:
-            running[key] = (t, phase)
-
-    def seen(p: str | None) -> None:
-        if p and p not in platforms:
-            platforms.append(p)
-
+    reader = _Reader(tl, head)
     for n, r in enumerate(records[1:], start=2):
         try:
-            t = float(r.get("t", 0.0))
-            kind = r.get("type")
-            if kind == "action":
-                tl.actions.append((t, t + _amount(r, "duration"), str(r.get("action"))))
-            elif kind == "decision" and r.get("ok"):
-                g, p = str(r["graph"]), str(r["platform"])
-                seen(p)
-                if g not in tl.graphs:
-                    tl.graphs.append(g)
-                if r.get("command") == "start":
-                    phase_change(g, p, t, "warming")
-                    used[p] = used.get(p, 0.0) + consumption.get(g, 0.0)
-                elif r.get("command") == "stop":
-                    phase_change(g, p, t, None)
-                    used[p] = used.get(p, 0.0) - consumption.get(g, 0.0)
-                mem_point(p, t)
-            elif kind == "ready" and (r.get("graph"), r.get("platform")) in running:
-                phase_change(str(r["graph"]), str(r["platform"]), t, "valid")
-            elif kind == "invalid" and (r.get("graph"), r.get("platform")) in running:
-                phase_change(str(r["graph"]), str(r["platform"]), t, "invalid")
-            elif kind == "load":
-                p = str(r["platform"])
-                seen(p)
-                load[p] = _amount(r, "amount")
-                mem_point(p, t)
-            elif kind == "platform":
-                p = str(r["platform"])
-                if not r.get("up"):
-                    down_since[p] = t
-                elif p in down_since:
-                    tl.down.setdefault(p, []).append((down_since.pop(p), t))
-            elif kind == "fault":
-                tl.faults.append((t, str(r.get("event", ""))))
-            elif kind == "slip":
-                tl.slips.append((t, f"{r.get('kind', '')} {r.get('direction', '')}".strip()))
-            elif kind == "alarm":
-                tl.alarms.append((t, str(r.get("detector"))))
-            elif kind == "error":
-                tl.errors.append((t, str(r.get("kind")), str(r.get("graph"))))
-            elif kind == "exposure":
-                if r.get("state") == "start":
-                    exposure_since = t
-                elif exposure_since is not None:
-                    tl.exposure.append((exposure_since, t))
-                    exposure_since = None
+            reader.read(r)
         except KeyError as exc:
             raise ScenarioError(f"trace record {n} ({str(r)[:80]}): no field {exc}; {_HOW}") from None
         except (TypeError, ValueError, AttributeError) as exc:
             raise ScenarioError(f"trace record {n} ({str(r)[:80]}): {exc}; {_HOW}") from None
-    for (g, p), (since, phase) in running.items():
-        tl.runs.setdefault(p, []).append((since, horizon, g, phase))
-    for p, since in down_since.items():
-        tl.down.setdefault(p, []).append((since, horizon))
-    if exposure_since is not None:
-        tl.exposure.append((exposure_since, horizon))
-    tl.runs = {p: tl.runs.get(p, []) for p in platforms + [q for q in tl.runs if q not in platforms]}
-    for p in platforms:
-        if p in tl.memory:
-            tl.memory[p].append((horizon, tl.memory[p][-1][1]))
+    reader.close(horizon)
+    _clip_window(tl, t0, t1)
+    return tl
 
-    # clip to the window
+
+class _Reader:
+    """Digests trace records one by one into ``tl`` (intervals still open are kept here
+    until :meth:`close`); one method per record type."""
+
+    def __init__(self, tl: Timeline, head: dict[str, Any]) -> None:
+        self.tl = tl
+        self.platforms: list[str] = list((head.get("platforms") or {}).keys())
+        tl.capacity = {p: _mb(v, p) for p, v in (head.get("platforms") or {}).items() if v.get("memory") is not None}
+        self.consumption = {g: _mb(v, g) for g, v in (head.get("graphs") or {}).items()}
+        tl.graphs = list(self.consumption)  # declaration order: the same detector keeps its colour across plots
+        self.running: dict[tuple[str, str], tuple[float, str]] = {}  # (graph, platform) -> (since, phase)
+        self.load: dict[str, float] = {}
+        self.used: dict[str, float] = {}
+        self.down_since: dict[str, float] = {}
+        self.exposure_since: float | None = None
+        self.handlers = {
+            "action": self._action,
+            "decision": self._decision,
+            "ready": self._ready,
+            "invalid": self._invalid,
+            "load": self._load,
+            "platform": self._platform,
+            "fault": self._fault,
+            "slip": self._slip,
+            "alarm": self._alarm,
+            "error": self._error,
+            "exposure": self._exposure,
+        }
+
+    def read(self, r: dict[str, Any]) -> None:
+        t = float(r.get("t", 0.0))
+        kind = r.get("type")
+        handler = self.handlers.get(kind) if isinstance(kind, str) else None  # other types are skipped
+        if handler is not None:
+            handler(r, t)
+
+    # -- helpers ---------------------------------------------------------------------
+    def _mem_point(self, p: str, t: float) -> None:
+        self.tl.memory.setdefault(p, []).append((t, self.load.get(p, 0.0) + self.used.get(p, 0.0)))
+
+    def _phase_change(self, g: str, p: str, t: float, phase: str | None) -> None:
+        key = (g, p)
+        if key in self.running:
+            since, old = self.running.pop(key)
+            self.tl.runs.setdefault(p, []).append((since, t, g, old))
+        if phase is not None:
+            self.running[key] = (t, phase)
+
+    def _seen(self, p: str | None) -> None:
+        if p and p not in self.platforms:
+            self.platforms.append(p)
+
+    # -- one method per record type ------------------------------------------------------
+    def _action(self, r: dict[str, Any], t: float) -> None:
+        self.tl.actions.append((t, t + _amount(r, "duration"), str(r.get("action"))))
+
+    def _decision(self, r: dict[str, Any], t: float) -> None:
+        if not r.get("ok"):
+            return
+        g, p = str(r["graph"]), str(r["platform"])
+        self._seen(p)
+        if g not in self.tl.graphs:
+            self.tl.graphs.append(g)
+        if r.get("command") == "start":
+            self._phase_change(g, p, t, "warming")
+            self.used[p] = self.used.get(p, 0.0) + self.consumption.get(g, 0.0)
+        elif r.get("command") == "stop":
+            self._phase_change(g, p, t, None)
+            self.used[p] = self.used.get(p, 0.0) - self.consumption.get(g, 0.0)
+        self._mem_point(p, t)
+
+    def _ready(self, r: dict[str, Any], t: float) -> None:
+        if (r.get("graph"), r.get("platform")) in self.running:
+            self._phase_change(str(r["graph"]), str(r["platform"]), t, "valid")
+
+    def _invalid(self, r: dict[str, Any], t: float) -> None:
+        if (r.get("graph"), r.get("platform")) in self.running:
+            self._phase_change(str(r["graph"]), str(r["platform"]), t, "invalid")
+
+    def _load(self, r: dict[str, Any], t: float) -> None:
+        p = str(r["platform"])
+        self._seen(p)
+        self.load[p] = _amount(r, "amount")
+        self._mem_point(p, t)
+
+    def _platform(self, r: dict[str, Any], t: float) -> None:
+        p = str(r["platform"])
+        if not r.get("up"):
+            self.down_since[p] = t
+        elif p in self.down_since:
+            self.tl.down.setdefault(p, []).append((self.down_since.pop(p), t))
+
+    def _fault(self, r: dict[str, Any], t: float) -> None:
+        self.tl.faults.append((t, str(r.get("event", ""))))
+
+    def _slip(self, r: dict[str, Any], t: float) -> None:
+        self.tl.slips.append((t, f"{r.get('kind', '')} {r.get('direction', '')}".strip()))
+
+    def _alarm(self, r: dict[str, Any], t: float) -> None:
+        self.tl.alarms.append((t, str(r.get("detector"))))
+
+    def _error(self, r: dict[str, Any], t: float) -> None:
+        self.tl.errors.append((t, str(r.get("kind")), str(r.get("graph"))))
+
+    def _exposure(self, r: dict[str, Any], t: float) -> None:
+        if r.get("state") == "start":
+            self.exposure_since = t
+        elif self.exposure_since is not None:
+            self.tl.exposure.append((self.exposure_since, t))
+            self.exposure_since = None
+
+    def close(self, horizon: float) -> None:
+        """End every interval still open at ``horizon``; order the platform lanes."""
+        tl, platforms = self.tl, self.platforms
+        for (g, p), (since, phase) in self.running.items():
+            tl.runs.setdefault(p, []).append((since, horizon, g, phase))
+        for p, since in self.down_since.items():
+            tl.down.setdefault(p, []).append((since, horizon))
+        if self.exposure_since is not None:
+            tl.exposure.append((self.exposure_since, horizon))
+        tl.runs = {p: tl.runs.get(p, []) for p in platforms + [q for q in tl.runs if q not in platforms]}
+        for p in platforms:
+            if p in tl.memory:
+                tl.memory[p].append((horizon, tl.memory[p][-1][1]))
+
+
+def _clip_window(tl: Timeline, t0: float, t1: float) -> None:
+    """Keep what falls in ``[t0, t1]``, intervals cut at its ends."""
     tl.actions = [(max(a, t0), min(b, t1), n) for a, b, n in tl.actions if b > t0 and a < t1]
     tl.exposure = _clip(tl.exposure, t0, t1)
     tl.runs = {p: [(max(a, t0), min(b, t1), g, ph) for a, b, g, ph in v if b > t0 and a < t1] for p, v in tl.runs.items()}
@@ -281,13 +333,11 @@ def _build(records: list[dict[str, Any]], horizon: float, start: float | None, e
     tl.slips = [x for x in tl.slips if t0 <= x[0] <= t1]
     tl.alarms = [x for x in tl.alarms if t0 <= x[0] <= t1]
     tl.errors = [x for x in tl.errors if t0 <= x[0] <= t1]
-    return tl
 
 
 def plot_timeline(tl: Timeline, path: str | Path) -> Path:
     """Draw ``tl`` to a PNG file."""
     plt = require_matplotlib()
-    from matplotlib.patches import Patch
 
     platforms = list(tl.runs)
     color_of = {g: DETECTOR_COLORS[i % len(DETECTOR_COLORS)] for i, g in enumerate(tl.graphs)}
@@ -301,14 +351,34 @@ def plot_timeline(tl: Timeline, path: str | Path) -> Path:
     for a, b in tl.exposure:
         ax.axvspan(a, b, color="#e41a1c", alpha=0.13, lw=0)
         axm.axvspan(a, b, color="#e41a1c", alpha=0.13, lw=0)
+    _draw_lanes(ax, tl, y, color_of)
+    _draw_events(ax, tl, y["events"], color_of)
+    ax.set_yticks([y[n] for n in lanes], [n if n in ("context", "events") else f"{n}" for n in lanes])
+    ax.set_ylim(-0.8, len(lanes) - 0.3)
+    ax.set_xlim(tl.start, tl.end)
+    ax.tick_params(axis="x", labelbottom=False)
+    ax.set_title(f"{tl.scenario} — deployer {tl.deployer}", loc="left", fontsize=11)
+    ax.grid(axis="x", color="#eeeeee")
+    ax.set_axisbelow(True)
+    axm.set_axisbelow(True)
+    _draw_memory(axm, tl)
+    ax.legend(handles=_legend(plt, tl, color_of), fontsize=7, ncol=6, loc="lower left", bbox_to_anchor=(0.0, 1.06), frameon=False)
+    out = Path(path)
+    fig.savefig(out, dpi=110, bbox_inches="tight", format="png")  # exactly this file, whatever its name
+    plt.close(fig)
+    return out
+
+
+def _draw_lanes(ax: Any, tl: Timeline, y: dict[str, int], color_of: dict[str, str]) -> None:
+    """The context lane (action segments) and one lane per platform (crashes, detectors by phase)."""
     for a, b, name in tl.actions:
         ax.barh(y["context"], b - a, left=a, height=0.7, color=ACTION_COLORS.get(name, "#cccccc"), edgecolor="#777777", lw=0.5)
         if b - a > (tl.end - tl.start) * 0.04:
             ax.text((a + b) / 2, y["context"], name, ha="center", va="center", fontsize=8)
-    for p in platforms:
+    for p, runs in tl.runs.items():
         for a, b in tl.down.get(p, []):
             ax.barh(y[p], b - a, left=a, height=0.85, color="black", alpha=0.75)
-        for a, b, g, phase in tl.runs[p]:
+        for a, b, g, phase in runs:
             color = color_of.get(g, "#999999")
             if phase == "warming":
                 ax.barh(y[p], b - a, left=a, height=0.6, color="white", edgecolor=color, hatch="////", lw=0.8)
@@ -316,7 +386,10 @@ def plot_timeline(tl: Timeline, path: str | Path) -> Path:
                 ax.barh(y[p], b - a, left=a, height=0.6, color="#bbbbbb", edgecolor=color, lw=0.8)
             else:
                 ax.barh(y[p], b - a, left=a, height=0.6, color=color, edgecolor=color, lw=0.5)
-    ev = y["events"]
+
+
+def _draw_events(ax: Any, tl: Timeline, ev: int, color_of: dict[str, str]) -> None:
+    """The events lane: faults, injected slips, alarms and errors."""
     for t, text in tl.faults:
         ax.plot([t], [ev + 0.22], marker="v", color="black", ms=7)
         if len(tl.faults) <= 12:
@@ -329,16 +402,11 @@ def plot_timeline(tl: Timeline, path: str | Path) -> Path:
         ax.plot([t], [ev + 0.02], marker="X", color="#b2182b", ms=9, markeredgecolor="white", mew=0.5)
         if len(tl.errors) <= 8:
             ax.text(t, ev - 0.5, f"{kind}: {g}", fontsize=7, ha="left", va="top", color="#b2182b")
-    ax.set_yticks([y[n] for n in lanes], [n if n in ("context", "events") else f"{n}" for n in lanes])
-    ax.set_ylim(-0.8, len(lanes) - 0.3)
-    ax.set_xlim(tl.start, tl.end)
-    ax.tick_params(axis="x", labelbottom=False)
-    ax.set_title(f"{tl.scenario} — deployer {tl.deployer}", loc="left", fontsize=11)
-    ax.grid(axis="x", color="#eeeeee")
-    ax.set_axisbelow(True)
-    axm.set_axisbelow(True)
 
-    for i, (p, pts) in enumerate(sorted(tl.memory.items())):
+
+def _draw_memory(axm: Any, tl: Timeline) -> None:
+    """Per platform, memory used (steps) against its capacity (dashed)."""
+    for p, pts in sorted(tl.memory.items()):
         xs = [a for a, _v in pts]
         vs = [v for _a, v in pts]
         line = axm.step(xs, vs, where="post", label=f"{p} used", lw=1.4)[0]
@@ -351,8 +419,13 @@ def plot_timeline(tl: Timeline, path: str | Path) -> Path:
     if tl.memory:
         axm.legend(fontsize=7, ncol=3, loc="upper left", framealpha=0.85)
 
+
+def _legend(plt: Any, tl: Timeline, color_of: dict[str, str]) -> list[Any]:
+    """Legend handles: the detectors shown (in declaration order), then the fixed symbols."""
+    from matplotlib.patches import Patch
+
     shown = {g for runs in tl.runs.values() for _a, _b, g, _ph in runs} | {g for _t, g in tl.alarms}
-    handles = [Patch(facecolor=color_of[g], label=g) for g in tl.graphs if g in shown]
+    handles: list[Any] = [Patch(facecolor=color_of[g], label=g) for g in tl.graphs if g in shown]
     handles += [
         Patch(facecolor="white", edgecolor="#555555", hatch="////", label="warming up"),
         Patch(facecolor="#bbbbbb", label="no valid input"),
@@ -363,8 +436,4 @@ def plot_timeline(tl: Timeline, path: str | Path) -> Path:
         plt.Line2D([], [], marker="X", color="#b2182b", ls="", label="error"),
         plt.Line2D([], [], marker="v", color="black", ls="", label="fault"),
     ]
-    ax.legend(handles=handles, fontsize=7, ncol=6, loc="lower left", bbox_to_anchor=(0.0, 1.06), frameon=False)
-    out = Path(path)
-    fig.savefig(out, dpi=110, bbox_inches="tight", format="png")  # exactly this file, whatever its name
-    plt.close(fig)
-    return out
+    return handles
