@@ -12,7 +12,7 @@ import argparse
 import math
 import re
 import sys
-from typing import Any, Callable, NoReturn, Sequence
+from typing import Any, Callable, NoReturn, Sequence, TypeAlias
 
 from desmon.errors import DesmonError
 from desmon.options import (
@@ -277,6 +277,9 @@ def _lazy(module: str, func: str) -> Callable[[argparse.Namespace], int]:
     return handler
 
 
+_Subparsers: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
+
+
 def build_parser() -> argparse.ArgumentParser:
     from desmon import __version__
 
@@ -286,12 +289,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"desmon {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for add in (_add_replay, _add_explain, _add_show, _add_evaluate, _add_run, _add_plot, _add_verify, _add_fuzz):
+        add(sub)
+    parser.set_defaults(commands=tuple(sub.choices))
+    return parser
 
+
+def _add_replay(sub: _Subparsers) -> None:
     p = sub.add_parser("replay", help="replay a scenario's scripted timeline through the deployment core (no signals)")
     _scenario_arg(p)
     _deployer_arg(p)
     p.set_defaults(handler=_cmd_replay)
 
+
+def _add_explain(sub: _Subparsers) -> None:
     p = sub.add_parser("explain", help="why each platform is accepted or rejected for a perception graph")
     _scenario_arg(p)
     p.add_argument("graph", help="perception graph, e.g. combined_slip_detector")
@@ -299,6 +310,8 @@ def build_parser() -> argparse.ArgumentParser:
     _deployer_arg(p)
     p.set_defaults(handler=_cmd_explain)
 
+
+def _add_show(sub: _Subparsers) -> None:
     p = sub.add_parser("show", help="the repository graph at a time, as png, dot, graphml, json or cypher")
     _scenario_arg(p)
     p.add_argument("--at", default=None, help="seconds or timeline labels, comma-separated (e.g. t0,t1,t2,t3)")
@@ -313,6 +326,8 @@ def build_parser() -> argparse.ArgumentParser:
     _deployer_arg(p)
     p.set_defaults(handler=_cmd_show)
 
+
+def _add_evaluate(sub: _Subparsers) -> None:
     p = sub.add_parser("evaluate", help="detector x action table against Sanchez et al. 2016, and mission-level strategies")
     p.add_argument("--trials", type=positive_int, default=300, help="trials per cell")
     p.add_argument("--seed", type=non_negative_int, default=1, help="random seed; with --seeds, the first seed")
@@ -324,6 +339,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(handler=_cmd_evaluate)
 
+
+def _add_run(sub: _Subparsers) -> None:
     p = sub.add_parser("run", help="simulate a scenario in the SimPy world")
     _scenario_arg(p)
     p.add_argument("--seed", type=non_negative_int, default=0, help="random seed of the world (faults, slips, start failures)")
@@ -339,24 +356,22 @@ def build_parser() -> argparse.ArgumentParser:
     add_window(p, ("--plot-from", "plot_from"), ("--plot-to", "plot_to"), needs=("plot", "--plot"))
     p.set_defaults(handler=_cmd_run)
 
+
+def _add_plot(sub: _Subparsers) -> None:
     p = sub.add_parser("plot", help="draw the timeline of a run's JSON Lines trace")
     add_input(p, "trace", TRACE_FILE, help="trace file written by desmon run --trace")
     add_output(p, "-o", "--output", suffixes=(".png",), default="timeline.png", metavar="FILE.png", help="PNG file")
     add_window(p, ("--from", "start"), ("--to", "end"))
     p.set_defaults(handler=_cmd_plot)
 
+
+def _add_verify(sub: _Subparsers) -> None:
     p = sub.add_parser("verify", help="explore every interleaving of events and check the invariants")
     _scenario_arg(p)
     _deployer_arg(p)
     p.add_argument("--invariant", action="append", default=None, help="check only this invariant (repeatable)")
     p.add_argument("--continue", dest="keep_going", action="store_true", help="collect the first counterexample of each invariant")
-    p.add_argument("--max-states", type=positive_int, default=2_000_000, help="stop INCOMPLETE (exit 3) after this many states")
-    p.add_argument("--max-depth", type=positive_int, default=None, help="explore at most this many events deep (default: no limit)")
-    p.add_argument("--timeout", type=positive_seconds, default=None, help="stop INCOMPLETE (exit 3) after this many seconds (default: no limit)")
-    p.add_argument(
-        "--max-memory", type=float, default=None, metavar="MB",
-        help="memory budget: stop INCOMPLETE (exit 3) once the search's resident memory (workers included) exceeds it",
-    )
+    _add_verify_limits(p)
     p.add_argument("--symmetry", action="store_true", help="canonicalise interchangeable platforms")
     p.add_argument(
         "--workers", type=worker_count, default=1, metavar="N",
@@ -379,6 +394,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(handler=_lazy("desmon.verify.command", "verify_command"))
 
+
+def _add_verify_limits(p: argparse.ArgumentParser) -> None:
+    """The budgets after which ``desmon verify`` stops INCOMPLETE (exit 3)."""
+    p.add_argument("--max-states", type=positive_int, default=2_000_000, help="stop INCOMPLETE (exit 3) after this many states")
+    p.add_argument("--max-depth", type=positive_int, default=None, help="explore at most this many events deep (default: no limit)")
+    p.add_argument("--timeout", type=positive_seconds, default=None, help="stop INCOMPLETE (exit 3) after this many seconds (default: no limit)")
+    p.add_argument(
+        "--max-memory", type=float, default=None, metavar="MB",
+        help="memory budget: stop INCOMPLETE (exit 3) once the search's resident memory (workers included) exceeds it",
+    )
+
+
+def _add_fuzz(sub: _Subparsers) -> None:
     p = sub.add_parser("fuzz", help="hypothesis-generated failure sequences, shrunk on failure")
     _scenario_arg(p)
     _deployer_arg(p)
@@ -386,8 +414,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=non_negative_int, default=0, help="hypothesis seed (the same seed draws the same sequences)")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(handler=_lazy("desmon.verify.command", "fuzz_command"))
-    parser.set_defaults(commands=tuple(sub.choices))
-    return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:

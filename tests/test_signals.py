@@ -135,13 +135,14 @@ def test_segments_accept_dataclasses_and_tuples_alike() -> None:
 
 def _reference_block(ms: MissionSignals, b: int) -> np.ndarray:
     """Block ``b``'s moments rendered the original way: episode by episode, pad by pad."""
-    from desmon.detectors.signals import TACTILE_BLOCK, _TAG_TACTILE, _block_rng, episode_pad_state, render_pad_moments
+    from desmon.detectors.signals import TACTILE_BLOCK, block_rng, episode_pad_state, render_pad_moments
+    from desmon.detectors.signals.noise import STREAM_TACTILE
 
     k = np.arange(b * TACTILE_BLOCK, (b + 1) * TACTILE_BLOCK)
     t = ms.tactile_times(k)
     mom = np.zeros((TACTILE_BLOCK, 6, 3))
-    g = _block_rng(ms.seed, _TAG_TACTILE, b)
-    for ep in ms._episodes:
+    g = block_rng(ms.seed, STREAM_TACTILE, b)
+    for ep in ms.tactile_array.episodes:
         sel = np.flatnonzero((t >= ep.start) & (t < ep.end))
         if sel.size == 0:
             continue
@@ -168,10 +169,10 @@ def test_vectorised_rendering_is_bit_identical_to_the_pad_by_pad_reference() -> 
     slips = [SlipEvent(s + 0.3, "down", "pulled") for c, s, d in segs if c == "hold"][::2]
     ms = MissionSignals(segs, slips, seed=11)
     nblocks = int(t * 30) // 256 + 1
-    got = ms._render_blocks(list(range(nblocks)), False)  # all blocks in one pass
+    got = ms.tactile_array.render_blocks(list(range(nblocks)), False)  # all blocks in one pass
     for b in range(nblocks):
         ref = _reference_block(ms, b)
         assert np.array_equal(got[b][1], ref), b
     one = MissionSignals(segs, slips, seed=11)
     for b in (nblocks - 1, 0, 2):  # one by one, out of order
-        assert np.array_equal(one._render_blocks([b], True)[0][1], got[b][1])
+        assert np.array_equal(one.tactile_array.render_blocks([b], True)[0][1], got[b][1])

@@ -19,7 +19,6 @@ centres at activation, which fires at activation during a hold.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Final
 

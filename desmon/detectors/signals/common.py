@@ -1,0 +1,246 @@
+"""Shared vocabulary of the signal sources: pad layout, directions, model parameters, the
+facts a caller hands in (segments, slips, faults) or gets back (sample blocks, slip truth),
+the sample grids and the timeline check.
+
+Nothing here draws a random number; every source module builds on these names.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Final, Literal, Sequence
+
+import numpy as np
+
+from desmon.errors import SignalError
+from desmon.model.actions import ACTIONS
+
+N_PADS: Final = 6
+PAD_NAMES: Final = ("thumb_prox", "thumb_dist", "f1_prox", "f1_dist", "f2_prox", "f2_dist")
+PAD_ROWS: Final = (14, 13, 14, 13, 14, 13)
+PAD_COLS: Final = 6
+MAX_ROWS: Final = 14
+FULL_SCALE: Final = 3500
+CELL_PITCH_MM: Final = 3.4
+G_ACCEL: Final = 9.81
+
+UP: Final = "up"
+DOWN: Final = "down"
+PULLED: Final = "pulled"
+GRAVITATIONAL: Final = "gravitational"
+
+WrenchSource = Literal["lwr_estimate", "wrist_ft"]
+Arr = np.ndarray
+Params = dict[str, Arr]
+
+
+@dataclass(frozen=True, slots=True)
+class SignalParams:
+    """Model parameters (research note §4). Calibrated values are marked there [CALIB]."""
+
+    tactile_rate: float = 30.0
+    tactile_jitter: float = 0.002
+    tactile_jitter_clip: float = 0.008
+    noise_counts: float = 4.0
+    deadband: float = 5.0
+    peak_lo: float = 100.0
+    peak_hi: float = 600.0
+    sigma_lo: float = 0.5
+    sigma_hi: float = 1.0
+    force_noise_lwr: float = 0.3
+    force_noise_ft: float = 0.05
+    ft_coupling_scale: float = 0.2  # a wrist F/T does not misattribute arm inertia [ASSUME]
+    creep_max: float = 0.005
+    creep_tau: float = 10.0
+    # grasp
+    grasp_drift: float = 1.2
+    grasp_on: tuple[float, float] = (0.2, 0.6)
+    grasp_ramp: tuple[float, float] = (0.2, 0.6)
+    grasp_amp: float = 0.8
+    grasp_delay: tuple[float, float] = (0.05, 0.3)
+    grasp_bump: tuple[float, float] = (0.2, 0.5)
+    # release
+    release_drift: float = 1.6
+    release_off: tuple[float, float] = (0.2, 0.6)
+    release_ramp: tuple[float, float] = (0.05, 0.3)
+    release_amp: float = 0.45
+    release_start: tuple[float, float] = (0.1, 0.5)
+    release_bump: tuple[float, float] = (0.2, 0.5)
+    # rotate
+    rot_arc_ccw: tuple[float, float] = (0.7, 2.4)
+    rot_arc_cw: tuple[float, float] = (1.0, 3.0)
+    rot_amp_ccw: float = 0.6
+    rot_amp_cw: float = 0.7
+    rot_start: tuple[float, float] = (0.1, 0.3)
+    rot_dur: tuple[float, float] = (0.5, 1.0)
+    # move_base
+    base_leg: float = 0.2
+    base_start: tuple[float, float] = (0.1, 0.3)
+    base_pause: float = 0.5
+    base_amax: tuple[float, float] = (0.4, 1.0)
+    base_gain: tuple[float, float] = (0.5, 2.5)
+    base_kv: float = 2.0
+    base_fv: tuple[float, float] = (3.0, 12.0)
+    base_settle_p: float = 0.02
+    base_settle_jump: tuple[float, float] = (0.6, 1.0)
+    # slips
+    slip_dist_mm: tuple[float, float] = (3.0, 12.0)
+    slip_time: tuple[float, float] = (0.1, 0.4)
+    slip_jerks: int = 3
+    slip_rho: tuple[float, float] = (0.5, 1.0)
+    slip_fs: tuple[float, float] = (1.6, 5.0)
+    slip_rate: tuple[float, float] = (5.0, 30.0)
+    slip_k: tuple[float, float] = (0.5, 0.9)
+    slip_tau_d: tuple[float, float] = (0.05, 0.2)
+    slip_extra: tuple[float, float] = (0.0, 0.15)
+    object_mass: tuple[float, float] = (0.3, 0.6)
+
+
+DEFAULT_PARAMS: Final = SignalParams()
+
+
+@dataclass(frozen=True, slots=True)
+class Segment:
+    """One action context on the mission timeline: ``context`` from ``start`` for ``duration`` seconds."""
+
+    context: str
+    start: float
+    duration: float
+
+    @property
+    def end(self) -> float:
+        return self.start + self.duration
+
+
+@dataclass(frozen=True, slots=True)
+class SlipEvent:
+    """A slip: object *motion* starts at ``onset`` (s); ``direction`` up/down; ``kind`` pulled/gravitational."""
+
+    onset: float
+    direction: str = DOWN
+    kind: str = PULLED
+
+
+@dataclass(frozen=True, slots=True)
+class SensorFault:
+    """From ``start`` (until ``end``, default forever) ``sensor`` ('wrench'|'tactile') fails.
+
+    ``mode``: ``'silent'`` (no samples at all), ``'stuck'`` (repeats its last good sample)
+    or ``'zero'`` (outputs zeros).
+    """
+
+    sensor: str
+    start: float
+    mode: str = "silent"
+    end: float = math.inf
+
+
+@dataclass(frozen=True, slots=True)
+class SlipTruth:
+    """Ground truth of one slip as rendered: motion onset, load onset, direction, kind and
+    the sign the tared wrench takes (+1 up / -1 down)."""
+
+    motion_onset: float
+    load_onset: float
+    direction: str
+    kind: str
+    force_sign: int
+
+
+@dataclass(frozen=True, slots=True)
+class WrenchBlock:
+    """Wrench samples: ``index`` (grid index k, t = k / rate), ``times`` (s), ``values`` (N, + = up)."""
+
+    index: Arr
+    times: Arr
+    values: Arr
+
+
+@dataclass(frozen=True, slots=True)
+class TactileBlock:
+    """Tactile frames: ``index`` (frame number), ``times`` (s, jittered), ``moments`` ``(K, 6, 3)``
+    and, if requested, ``frames`` ``(K, 6, 14, 6)`` int16."""
+
+    index: Arr
+    times: Arr
+    moments: Arr
+    frames: Arr | None = None
+
+
+# --------------------------------------------------------------------------- shape helpers
+
+
+def uniform(rng: np.random.Generator, lohi: tuple[float, float], size: int | tuple[int, ...]) -> Arr:
+    """``rng.uniform(lo, hi, size)`` for a ``(lo, hi)`` parameter pair."""
+    return rng.uniform(lohi[0], lohi[1], size)
+
+
+def half_sine(t: Arr, t0: Arr, width: Arr) -> Arr:
+    """``sin(pi (t - t0) / width)`` on ``[t0, t0 + width]``, zero elsewhere (broadcasting)."""
+    u = (t - t0) / width
+    return np.where((u >= 0.0) & (u <= 1.0), np.sin(np.pi * np.clip(u, 0.0, 1.0)), 0.0)
+
+
+def jerky(t: Arr, t0: Arr, width: Arr, jerks: Arr | int) -> Arr:
+    """Progress in ``jerks`` discrete steps: ``floor(N u) / N`` with ``u = clip((t - t0)/width, 0, 1)``."""
+    u = np.clip((t - t0) / width, 0.0, 1.0)
+    return np.floor(jerks * u) / jerks
+
+
+# --------------------------------------------------------------------------- grids
+
+
+def wrench_indices(t0: float, t1: float, rate: float) -> Arr:
+    """Indices ``k`` of the fixed-rate wrench grid ``t = k / rate`` with ``t0 <= t < t1``."""
+    k0 = max(0, math.floor(t0 * rate) - 1)
+    k1 = max(k0, math.ceil(t1 * rate) + 1)
+    k = np.arange(k0, k1, dtype=np.int64)
+    tk = k / rate
+    return k[(tk >= t0) & (tk < t1)]
+
+
+def tactile_nominal_indices(t0: float, t1: float, rate: float, slack: float) -> Arr:
+    """Candidate frame numbers whose jittered time may fall in ``[t0, t1)`` (``slack`` = max |jitter|)."""
+    k0 = max(0, math.floor((t0 - slack) * rate))
+    k1 = max(k0, math.ceil((t1 + slack) * rate) + 1)
+    return np.arange(k0, k1, dtype=np.int64)
+
+
+# --------------------------------------------------------------------------- checks
+
+
+def no_signal_model(context: str) -> str:
+    """The signal models exist for the built-in actions only; a model's own action is
+    rendered as the built-in it is declared like (``desmon.sim.world.like_segments``)."""
+    return (
+        f"unknown context {context!r}: signal models exist for the built-in actions ({', '.join(ACTIONS)}); "
+        "render a model's own action as the built-in it is like (SystemModel.like)"
+    )
+
+
+def check_contexts(segments: Sequence[Segment]) -> None:
+    """Every segment has a built-in context, a positive finite duration, and starts at or after
+    the previous one's end (and at t >= 0)."""
+    prev_end = 0.0
+    for i, s in enumerate(segments):
+        if s.context not in ACTIONS:
+            raise SignalError(f"segment {i}: {no_signal_model(s.context)}")
+        if not (s.duration > 0 and math.isfinite(s.duration)):
+            raise SignalError(f"segment {i} ({s.context}): duration {s.duration!r} must be a positive finite number")
+        if s.start < prev_end - 1e-9 or s.start < 0:
+            raise SignalError(
+                f"segment {i} ({s.context}) starts at {s.start!r} before the previous one ends ({prev_end!r}); "
+                "give segments in time order without overlap, starting at t >= 0"
+            )
+        prev_end = s.end
+
+
+def check_faults(faults: Sequence[SensorFault]) -> tuple[SensorFault, ...]:
+    """The faults, each with a known sensor and mode and ``end > start``."""
+    for f in faults:
+        if f.sensor not in ("wrench", "tactile") or f.mode not in ("silent", "stuck", "zero") or not f.end > f.start:
+            raise SignalError(
+                f"fault {f!r}: sensor must be 'wrench' or 'tactile', mode 'silent', 'stuck' or 'zero', end > start"
+            )
+    return tuple(faults)

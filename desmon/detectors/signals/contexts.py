@@ -1,0 +1,186 @@
+"""Action contexts as a signal source: what grasping, releasing, rotating and driving the base
+do to the wrench (bumps, inertia, base vibration) and to the tactile pads (pressure ramps,
+contact drift, rotation arcs), research note §3.1–3.2 and §4.
+
+One function per context draws its random parameters (:func:`draw_context`); two kernels
+turn them into the wrench disturbance (:func:`context_force`) and the tactile pressure
+factor and centre offsets (:func:`context_tactile`). Hold adds a slow pressure creep
+(:func:`hold_creep`); idle adds nothing.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable
+
+import numpy as np
+
+from desmon.detectors.signals.common import DEFAULT_PARAMS, N_PADS, Arr, Params, SignalParams, half_sine, jerky, no_signal_model
+from desmon.detectors.signals.common import uniform as _u
+from desmon.errors import SignalError
+from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE, ROTATE_CCW, ROTATE_CW
+
+
+def base_profile(tau: Arr, a_max: Arr, leg: float, pause: float) -> tuple[Arr, Arr]:
+    """Base acceleration and speed for the back-and-forth drive: pulses +,-, pause, -,+.
+
+    ``tau`` is time since the drive started; each pulse lasts ``sqrt(leg / a_max)``.
+    """
+    ta = np.sqrt(leg / a_max)
+    t2 = tau - 2.0 * ta - pause
+    c1 = (tau >= 0) & (tau < ta)
+    c2 = (tau >= ta) & (tau < 2 * ta)
+    c3 = (t2 >= 0) & (t2 < ta)
+    c4 = (t2 >= ta) & (t2 < 2 * ta)
+    acc = np.select([c1, c2, c3, c4], [a_max, -a_max, -a_max, a_max], 0.0)
+    vel = np.select([c1, c2, c3, c4], [a_max * tau, a_max * (2 * ta - tau), -a_max * t2, -a_max * (2 * ta - t2)], 0.0)
+    return acc, vel
+
+
+def base_duration(a_max: float, p: SignalParams = DEFAULT_PARAMS) -> float:
+    """Length of the drive (from its start) for a given peak acceleration."""
+    return 4.0 * math.sqrt(p.base_leg / a_max) + p.base_pause
+
+
+# --------------------------------------------------------------------------- parameter draws
+
+
+def _draw_grasp(rng: np.random.Generator, n: int, contact: Arr | None, p: SignalParams) -> Params:
+    t_on = _u(rng, p.grasp_on, (n, N_PADS))
+    ramp = _u(rng, p.grasp_ramp, (n, N_PADS))
+    done = t_on + ramp
+    if contact is not None:
+        done = np.where(contact, done, 0.0)
+    return {
+        "t_on": t_on,
+        "ramp": ramp,
+        "dy": rng.normal(0.0, p.grasp_drift, (n, N_PADS)),
+        "dx": rng.normal(0.0, p.grasp_drift, (n, N_PADS)),
+        "amp": rng.normal(0.0, p.grasp_amp, n),
+        "b0": done.max(axis=1) + _u(rng, p.grasp_delay, n),
+        "bw": _u(rng, p.grasp_bump, n),
+    }
+
+
+def _draw_release(rng: np.random.Generator, n: int, contact: Arr | None, p: SignalParams) -> Params:
+    return {
+        "t_off": _u(rng, p.release_off, (n, N_PADS)),
+        "ramp": _u(rng, p.release_ramp, (n, N_PADS)),
+        "dy": rng.normal(0.0, p.release_drift, (n, N_PADS)),
+        "dx": rng.normal(0.0, p.release_drift, (n, N_PADS)),
+        "amp": rng.normal(0.0, p.release_amp, n),
+        "b0": _u(rng, p.release_start, n),
+        "bw": _u(rng, p.release_bump, n),
+    }
+
+
+def _draw_rotate(ccw: bool) -> Callable[[np.random.Generator, int, Arr | None, SignalParams], Params]:
+    def draw(rng: np.random.Generator, n: int, contact: Arr | None, p: SignalParams) -> Params:
+        return {
+            "t0": _u(rng, p.rot_start, n),
+            "dur": _u(rng, p.rot_dur, n),
+            "jerks": rng.integers(2, 5, n).astype(float),
+            "arc": _u(rng, p.rot_arc_ccw if ccw else p.rot_arc_cw, n),
+            "ydir": rng.normal(0.0, 0.5, n),
+            "xdir": np.full(n, 1.0 if ccw else -1.0),
+            "amp": rng.normal(0.0, p.rot_amp_ccw if ccw else p.rot_amp_cw, n),
+        }
+
+    return draw
+
+
+def _draw_move_base(rng: np.random.Generator, n: int, contact: Arr | None, p: SignalParams) -> Params:
+    a_max = _u(rng, p.base_amax, n)
+    start = _u(rng, p.base_start, n)
+    motion = 4.0 * np.sqrt(p.base_leg / a_max) + p.base_pause
+    return {
+        "start": start,
+        "a_max": a_max,
+        "gain": _u(rng, p.base_gain, n),
+        "fv": _u(rng, p.base_fv, n),
+        "phase": rng.uniform(0.0, 2 * math.pi, n),
+        "settle": (rng.random(n) < p.base_settle_p).astype(float),
+        "settle_t": start + rng.random(n) * motion,
+        "settle_jump": _u(rng, p.base_settle_jump, n) * rng.choice([-1.0, 1.0], n),
+    }
+
+
+def _draw_nothing(rng: np.random.Generator, n: int, contact: Arr | None, p: SignalParams) -> Params:
+    return {}
+
+
+#: Parameter draw per context; each draws from ``rng`` in a fixed order (part of the seed contract).
+_DRAWS: dict[str, Callable[[np.random.Generator, int, Arr | None, SignalParams], Params]] = {
+    GRASP: _draw_grasp,
+    RELEASE: _draw_release,
+    ROTATE_CCW: _draw_rotate(True),
+    ROTATE_CW: _draw_rotate(False),
+    MOVE_BASE: _draw_move_base,
+    HOLD: _draw_nothing,
+    IDLE: _draw_nothing,
+}
+
+
+def draw_context(
+    context: str, rng: np.random.Generator, n: int, contact: Arr | None, p: SignalParams = DEFAULT_PARAMS
+) -> Params:
+    """Random parameters of one action context for ``n`` trials (research note §3.1–3.2, §4).
+
+    ``contact`` (``(n, 6)`` bool, pads touched) lets the grasp bump follow the last pad's contact.
+    """
+    draw = _DRAWS.get(context)
+    if draw is None:
+        raise SignalError(no_signal_model(context))
+    return draw(rng, n, contact, p)
+
+
+# --------------------------------------------------------------------------- kernels
+
+
+def context_force(context: str, t_rel: Arr, cp: Params, p: SignalParams, coupling: float) -> Arr:
+    """Context disturbance ``d_ctx`` along the slip axis (N) at ``t_rel`` seconds into the action.
+
+    ``cp`` arrays have shape ``(n,)``; ``t_rel`` ``(n, K)``. Zero for hold / idle. The base
+    drive adds its inertia (scaled by the sensor's ``coupling``) and a speed-proportional vibration.
+    """
+    col = {k: (v[:, None] if v.ndim == 1 else v) for k, v in cp.items()}
+    if context == GRASP or context == RELEASE:
+        return col["amp"] * half_sine(t_rel, col["b0"], col["bw"])
+    if context in (ROTATE_CCW, ROTATE_CW):
+        return col["amp"] * half_sine(t_rel, col["t0"], col["dur"])
+    if context == MOVE_BASE:
+        acc, vel = base_profile(t_rel - col["start"], col["a_max"], p.base_leg, p.base_pause)
+        vib = p.base_kv * np.abs(vel) * np.sin(2 * math.pi * col["fv"] * t_rel + col["phase"])
+        return coupling * col["gain"] * acc + vib
+    return np.zeros(np.broadcast_shapes(t_rel.shape, (t_rel.shape[0], 1)))
+
+
+def context_tactile(context: str, t_rel: Arr, cp: Params, p: SignalParams) -> tuple[Arr, Arr, Arr]:
+    """Pressure factor and centre offsets (rows, columns) per pad, shapes broadcastable to ``(n, K, 6)``.
+
+    ``t_rel`` ``(n, K, 1)`` is clipped by the caller to ``[0, duration]`` so that the
+    state at the end of an action persists afterwards.
+    """
+    one = np.ones(1)
+    zero = np.zeros(1)
+    if context == GRASP:
+        g = np.clip((t_rel - cp["t_on"][:, None, :]) / cp["ramp"][:, None, :], 0.0, 1.0)
+        return g, cp["dy"][:, None, :] * (1 - g), cp["dx"][:, None, :] * (1 - g)
+    if context == RELEASE:
+        g = 1.0 - np.clip((t_rel - cp["t_off"][:, None, :]) / cp["ramp"][:, None, :], 0.0, 1.0)
+        return g, cp["dy"][:, None, :] * (1 - g), cp["dx"][:, None, :] * (1 - g)
+    if context in (ROTATE_CCW, ROTATE_CW):
+        q = jerky(t_rel, cp["t0"][:, None, None], cp["dur"][:, None, None], cp["jerks"][:, None, None])
+        arc = cp["arc"][:, None, None] * q
+        return one, arc * cp["ydir"][:, None, None], arc * cp["xdir"][:, None, None]
+    if context == MOVE_BASE:
+        acc, _ = base_profile(t_rel - cp["start"][:, None, None], cp["a_max"][:, None, None], p.base_leg, p.base_pause)
+        rel = acc / cp["a_max"][:, None, None]
+        jump = cp["settle"][:, None, None] * cp["settle_jump"][:, None, None] * (t_rel >= cp["settle_t"][:, None, None])
+        return 1.0 + 0.03 * rel, 0.05 * rel + jump, zero
+    return one, zero, zero
+
+
+def hold_creep(t_rel: Arr, kappa: Arr, p: SignalParams) -> Arr:
+    """Slow pressure creep while holding, saturating at ``1 + kappa * tau``."""
+    return 1.0 + kappa[:, None, None] * p.creep_tau * (1.0 - np.exp(-t_rel / p.creep_tau))

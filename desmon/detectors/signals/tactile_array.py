@@ -1,0 +1,428 @@
+"""The tactile array: six pads of pressure cells (``PAD_NAMES``; proximal pads 14 x 6 cells,
+distal pads 13 x 6), read at about 30 Hz with jittered frame times.
+
+Within an object-in-hand episode each touched pad sees a Gaussian pressure blob: its
+amplitude, centre and spread come from the grasp contact
+(:func:`desmon.detectors.signals.episodes.draw_contact`), are moved by the action
+contexts (:func:`desmon.detectors.signals.contexts.context_tactile`, hold creep) and by
+slips (:func:`desmon.detectors.signals.slips.slip_tactile`), see :func:`episode_pad_state`.
+Cells whose noiseless value reaches the dead-band read ``clip(rint(mu + noise), 0, 3500)``.
+
+:class:`TactileArray` renders a mission in blocks of ``TACTILE_BLOCK`` frames; block ``b``
+draws its cell noise from the generator keyed ``(seed, tactile, b)`` in a fixed order
+(episode by episode, pad by pad, frame by frame, cell by cell), so the bytes do not depend
+on which blocks are rendered together. :func:`render_pad_moments` is the per-pad
+reference of that order, :func:`render_rows` the vectorised form used for missions.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable, Final, Sequence
+
+import numpy as np
+
+from desmon.detectors.signals.common import (
+    DEFAULT_PARAMS,
+    FULL_SCALE,
+    MAX_ROWS,
+    N_PADS,
+    PAD_COLS,
+    PAD_ROWS,
+    Arr,
+    SensorFault,
+    SignalParams,
+    TactileBlock,
+    tactile_nominal_indices,
+)
+from desmon.detectors.signals.contexts import context_tactile, hold_creep
+from desmon.detectors.signals.episodes import Episode
+from desmon.detectors.signals.noise import Jitter, tactile_normals
+from desmon.detectors.signals.slips import slip_tactile
+from desmon.model.actions import HOLD, IDLE
+
+#: Frames per tactile render block.
+TACTILE_BLOCK: Final = 256
+#: Rendered tactile blocks kept per mission (a sim detector's quiet chunk spans ~4).
+TACTILE_CACHE: Final = 16
+#: Seconds of an object-in-hand episode rendered ahead of a tactile request.
+PREFETCH_S: Final = 40.0
+
+_ROW_OK: Final = np.arange(MAX_ROWS)[None, :] < np.asarray(PAD_ROWS)[:, None]  # (6, 14) cells that exist
+_II: Final = np.arange(MAX_ROWS, dtype=float)
+_JJ: Final = np.arange(PAD_COLS, dtype=float)
+_CELL_ROW: Final = np.repeat(_II, PAD_COLS)  # flat cell -> row
+_CELL_COL: Final = np.tile(_JJ, MAX_ROWS)  # flat cell -> column
+
+#: One rendered block: frame times ``(B,)``, moments ``(B, 6, 3)``, frames ``(B, 6, 14, 6)`` or None.
+Rendered = tuple[Arr, Arr, "Arr | None"]
+
+
+def episode_pad_state(t: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, Arr]:
+    """Amplitude, row centre and column centre of every pad, each ``(n, K, 6)``, at times ``t`` ``(n, K)``."""
+    c = ep.contact
+    amp = np.broadcast_to(c["A"][:, None, :], t.shape + (N_PADS,)).copy()
+    yc = np.broadcast_to(c["y"][:, None, :], amp.shape).copy()
+    xc = np.broadcast_to(c["x"][:, None, :], amp.shape).copy()
+    t3 = t[..., None]
+    for context, start, dur, cp in ep.segments:
+        tr = np.clip(t3 - start, 0.0, dur)
+        if context == HOLD:
+            amp *= hold_creep(tr, c["kappa"], p)
+            continue
+        if context == IDLE:
+            continue
+        fac, dy, dx = context_tactile(context, tr, cp, p)
+        amp *= fac
+        yc += dy
+        xc += dx
+    for t_s, sign, sp in ep.slips:
+        fac, dy = slip_tactile(t3, t_s, sign, sp, p)
+        amp *= fac
+        yc += dy
+    inside = ((t3 >= ep.start) & (t3 < ep.end))
+    return np.where(inside, amp, 0.0), yc, xc
+
+
+def render_pad_moments(
+    amp: Arr,
+    yc: Arr,
+    xc: Arr,
+    sy: Arr,
+    sx: Arr,
+    rows: int,
+    normals: Callable[[int], Arr],
+    p: SignalParams = DEFAULT_PARAMS,
+    want_values: bool = False,
+) -> tuple[Arr, Arr, Arr, tuple[Arr, Arr] | None]:
+    """Render one pad for frames ``(n, K)`` and return its moments ``(S, Si, Sj)`` (each ``(n, K)``).
+
+    Cells with noiseless value below the dead-band read 0; others read
+    ``clip(rint(mu + sigma * eps), 0, 3500)``. ``normals(m)`` supplies the ``m`` standard
+    normals for the cells above the dead-band, in C order over (frame, row, column).
+    If the contact centre does not move within the call, only the cells that can
+    exceed the dead-band are evaluated (the result is identical). With
+    ``want_values`` also returns ``(flat cell index into (n, K, rows, 6), value)``.
+    """
+    n, k = amp.shape
+    ii = np.arange(rows, dtype=float)
+    jj = np.arange(PAD_COLS, dtype=float)
+    cells = rows * PAD_COLS
+    static = bool(np.all(yc == yc[:, :1])) and bool(np.all(xc == xc[:, :1])) and n == 1
+    if static:
+        ey = np.exp(-((ii - yc[0, 0]) ** 2) / (2.0 * sy[0] ** 2))
+        ex = np.exp(-((jj - xc[0, 0]) ** 2) / (2.0 * sx[0] ** 2))
+        tmpl = (ey[:, None] * ex[None, :]).ravel()
+        sup = np.flatnonzero(tmpl * amp.max() >= p.deadband)
+        mu = amp[..., None] * tmpl[sup]  # (n, K, s)
+        mask = mu >= p.deadband
+        pos = np.flatnonzero(mask)
+        s = sup.size
+        frame = pos // s if s else pos
+        cell = sup[pos % s] if s else pos
+    else:
+        ey = np.exp(-((ii - yc[..., None]) ** 2) / (2.0 * sy[:, None, None] ** 2))
+        ex = np.exp(-((jj - xc[..., None]) ** 2) / (2.0 * sx[:, None, None] ** 2))
+        mu = amp[..., None, None] * (ey[..., :, None] * ex[..., None, :])
+        mask = mu >= p.deadband
+        pos = np.flatnonzero(mask)
+        frame = pos // cells
+        cell = pos % cells
+    mu_on = mu.reshape(-1)[pos]
+    vals = np.clip(np.rint(mu_on + p.noise_counts * normals(pos.size)), 0.0, FULL_SCALE)
+    nk = n * k
+    s_sum = np.bincount(frame, weights=vals, minlength=nk).reshape(n, k)
+    s_i = np.bincount(frame, weights=vals * (cell // PAD_COLS), minlength=nk).reshape(n, k)
+    s_j = np.bincount(frame, weights=vals * (cell % PAD_COLS), minlength=nk).reshape(n, k)
+    extra = (frame * cells + cell, vals) if want_values else None
+    return s_sum, s_i, s_j, extra
+
+
+def render_rows(
+    amp: Arr, yc: Arr, xc: Arr, pad: Arr, sy: Arr, sx: Arr, p: SignalParams = DEFAULT_PARAMS
+) -> tuple[Arr, Arr, Arr]:
+    """The cells above the dead-band of many pad frames (*rows*) at once, before noise.
+
+    Row ``r`` is pad ``pad[r]`` with amplitude ``amp[r] > 0``, centre ``(yc[r], xc[r])``
+    and spreads ``(sy[r], sx[r])``. Returns ``(count, cell, mu)``: ``count[r]`` cells of
+    row ``r`` reach the dead-band; ``cell`` (flat index ``i * 6 + j``) and their
+    noiseless values ``mu = amp * (ey_i * ex_j)`` follow row by row, cells ascending:
+    the order in which :func:`render_pad_moments` draws its normals when the rows are
+    laid out (pad, frame). The values are bit-identical to :func:`render_pad_moments`.
+
+    Consecutive rows with the same pad and centre share one template ``ey_i * ex_j``
+    (a hold, a move_base phase, a jerk of a slip), and only the template's cells that
+    can reach the dead-band at the run's peak amplitude are evaluated per frame.
+    """
+    n = amp.size
+    if n == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0)
+    change = np.empty(n, dtype=bool)
+    change[0] = True
+    np.not_equal(pad[1:], pad[:-1], out=change[1:])
+    change[1:] |= (yc[1:] != yc[:-1]) | (xc[1:] != xc[:-1]) | (sy[1:] != sy[:-1]) | (sx[1:] != sx[:-1])
+    starts = np.flatnonzero(change)
+    run = np.cumsum(change) - 1
+    ey = np.exp(-((_II - yc[starts][:, None]) ** 2) / (2.0 * sy[starts][:, None] ** 2))
+    ex = np.exp(-((_JJ - xc[starts][:, None]) ** 2) / (2.0 * sx[starts][:, None] ** 2))
+    ey *= _ROW_OK[pad[starts]]  # rows a distal pad does not have read nothing
+    tmpl = (ey[:, :, None] * ex[:, None, :]).reshape(-1)
+    # a cell below the dead-band at the run's peak amplitude is below it in every frame
+    peak = np.maximum.reduceat(amp, starts)
+    sup_flat = np.flatnonzero(tmpl * np.repeat(peak, MAX_ROWS * PAD_COLS) >= p.deadband)
+    sup_tmpl = tmpl[sup_flat]
+    sup_cell = sup_flat % (MAX_ROWS * PAD_COLS)
+    count = np.bincount(sup_flat // (MAX_ROWS * PAD_COLS), minlength=starts.size)
+    offset = np.cumsum(count) - count
+    per_row = count[run]
+    first = np.cumsum(per_row) - per_row
+    idx = np.arange(int(first[-1] + per_row[-1])) - np.repeat(first - offset[run], per_row)
+    mu = np.repeat(amp, per_row)
+    mu *= sup_tmpl[idx]
+    hit = mu >= p.deadband
+    keep = np.flatnonzero(hit)
+    # kept cells per row: positions of the row starts among the kept cells
+    kept = np.diff(np.searchsorted(keep, np.append(first, idx.size)))
+    return kept, sup_cell[idx[keep]], mu[keep]
+
+
+def frame_moments(frames: Arr) -> Arr:
+    """Per-pad moments ``(..., 6, 3) = (sum P, sum i P, sum j P)`` of frames ``(..., 6, 14, 6)``."""
+    f = np.asarray(frames, dtype=float)
+    ii = np.arange(MAX_ROWS, dtype=float)
+    jj = np.arange(PAD_COLS, dtype=float)
+    s = f.sum(axis=(-1, -2))
+    si = (f.sum(axis=-1) * ii).sum(axis=-1)
+    sj = (f.sum(axis=-2) * jj).sum(axis=-1)
+    return np.stack([s, si, sj], axis=-1)
+
+
+# --------------------------------------------------------------------------- block rendering
+
+
+@dataclass(frozen=True, slots=True)
+class _Rows:
+    """The pad frames (*rows*) with contact in a set of blocks, laid out (unit, pad, frame):
+    ``frame`` indexes the blocks' concatenated frames; the rest are per-row pad states."""
+
+    frame: Arr
+    pad: Arr
+    amp: Arr
+    yc: Arr
+    xc: Arr
+    sy: Arr
+    sx: Arr
+
+
+def _episode_units(t: Arr, nb: int, episodes: Sequence[Episode], ep_starts: Arr) -> tuple[list[tuple[int, int]], dict[int, list[tuple[int, int]]]]:
+    """The (block, episode) frame ranges of ``nb`` concatenated blocks of frame times ``t``, in
+    draw order, and the same ranges grouped by episode number."""
+    B = TACTILE_BLOCK
+    units: list[tuple[int, int]] = []
+    by_ep: dict[int, list[tuple[int, int]]] = {}
+    for i in range(nb):
+        tb = t[i * B : (i + 1) * B]
+        first = int(np.searchsorted(ep_starts, tb[0], side="right")) - 1
+        for ei in range(max(first, 0), len(episodes)):
+            ep = episodes[ei]
+            if ep.start > tb[-1]:
+                break
+            lo = int(np.searchsorted(tb, ep.start, side="left"))
+            hi = int(np.searchsorted(tb, ep.end, side="left"))
+            if hi > lo:
+                units.append((i * B + lo, i * B + hi))
+                by_ep.setdefault(ei, []).append((i * B + lo, i * B + hi))
+    return units, by_ep
+
+
+def _contact_rows(
+    t: Arr, units: list[tuple[int, int]], by_ep: dict[int, list[tuple[int, int]]], episodes: Sequence[Episode], p: SignalParams
+) -> _Rows:
+    """Pad states at every frame of the units, expanded to rows and kept where the pad is touched."""
+    nf = t.size
+    amp = np.zeros((nf, N_PADS))
+    yc = np.zeros((nf, N_PADS))
+    xc = np.zeros((nf, N_PADS))
+    sy = np.ones((nf, N_PADS))
+    sx = np.ones((nf, N_PADS))
+    for ei, ranges in by_ep.items():
+        ep = episodes[ei]
+        sel = np.concatenate([np.arange(lo, hi) for lo, hi in ranges])
+        a, y, x = episode_pad_state(t[sel][None, :], ep, p)
+        amp[sel], yc[sel], xc[sel] = a[0], y[0], x[0]
+        sy[sel] = ep.contact["sy"][0]
+        sx[sel] = ep.contact["sx"][0]
+    f0 = np.array([u[0] for u in units], dtype=np.int64)
+    ln = np.array([u[1] - u[0] for u in units], dtype=np.int64)
+    per = N_PADS * ln
+    o = np.arange(int(per.sum())) - np.repeat(np.cumsum(per) - per, per)
+    lr = np.repeat(ln, per)
+    pad = o // lr
+    frame = np.repeat(f0, per) + o % lr
+    a_r = amp[frame, pad]
+    on = np.flatnonzero(a_r > 0)
+    pad, frame = pad[on], frame[on]
+    return _Rows(frame, pad, a_r[on], yc[frame, pad], xc[frame, pad], sy[frame, pad], sx[frame, pad])
+
+
+class TactileArray:
+    """Deterministic tactile frames of one mission (see the module docstring)."""
+
+    def __init__(self, seed: int, episodes: Sequence[Episode], faults: Sequence[SensorFault], params: SignalParams) -> None:
+        self.seed = seed
+        self.episodes = tuple(episodes)
+        self.faults = tuple(f for f in faults if f.sensor == "tactile")
+        self.params = params
+        self.rate = params.tactile_rate
+        self.jitter = Jitter(seed, params)
+        self._ep_starts = np.array([ep.start for ep in self.episodes])
+        self._cache: dict[tuple[int, bool], Rendered] = {}
+
+    def times(self, index: Arr) -> Arr:
+        """Jittered time of each frame number."""
+        k = np.asarray(index, dtype=np.int64)
+        return k / self.rate + self.jitter(k)
+
+    def _block(self, b: int, frames: bool) -> Rendered:
+        hit = self._cache.get((b, frames))
+        if hit is not None:
+            return hit
+        return self.render_blocks([b], frames)[0]
+
+    def _noisy_values(self, rows: _Rows, count: Arr, mu: Arr, blocks: Arr) -> Arr:
+        """Cell readings ``clip(rint(mu + noise), 0, FULL_SCALE)``; each block's normals from its own generator."""
+        per_block = np.bincount(rows.frame // TACTILE_BLOCK, weights=count, minlength=blocks.size).astype(np.int64)
+        vals = np.empty(mu.size)
+        at = 0
+        for i in range(blocks.size):
+            c = int(per_block[i])
+            if c:
+                vals[at : at + c] = tactile_normals(self.seed, int(blocks[i]), c)
+                at += c
+        vals *= self.params.noise_counts
+        vals += mu
+        np.rint(vals, out=vals)
+        np.clip(vals, 0.0, FULL_SCALE, out=vals)
+        return vals
+
+    def render_blocks(self, blocks: Sequence[int], frames: bool) -> list[Rendered]:
+        """Render whole tactile blocks (``TACTILE_BLOCK`` frames each) in one vectorised pass.
+
+        Block ``b``'s frames depend only on the seed and ``b``: its normals come from
+        the generator keyed ``(seed, tactile, b)``, drawn per object-in-hand episode in
+        the block, pad by pad, frame by frame, cell by cell (as the per-pad reference
+        :func:`render_pad_moments` does), so rendering blocks together or one by one
+        gives the same bytes.
+        """
+        B = TACTILE_BLOCK
+        nb = len(blocks)
+        barr = np.asarray(blocks, dtype=np.int64)
+        t = self.times((barr[:, None] * B + np.arange(B, dtype=np.int64)[None, :]).reshape(-1))
+        mom = np.zeros((t.size, N_PADS, 3))
+        fr = np.zeros((t.size, N_PADS, MAX_ROWS, PAD_COLS), dtype=np.int16) if frames else None
+        units, by_ep = _episode_units(t, nb, self.episodes, self._ep_starts)
+        if units:
+            rows = _contact_rows(t, units, by_ep, self.episodes, self.params)
+            count, cell, mu = render_rows(rows.amp, rows.yc, rows.xc, rows.pad, rows.sy, rows.sx, self.params)
+            vals = self._noisy_values(rows, count, mu, barr)
+            hit = np.flatnonzero(count)
+            if hit.size:
+                first = (np.cumsum(count) - count)[hit]
+                fr_, pd_ = rows.frame[hit], rows.pad[hit]
+                mom[fr_, pd_, 0] = np.add.reduceat(vals, first)
+                mom[fr_, pd_, 1] = np.add.reduceat(vals * _CELL_ROW[cell], first)
+                mom[fr_, pd_, 2] = np.add.reduceat(vals * _CELL_COL[cell], first)
+            if fr is not None:
+                rr = np.repeat(np.arange(count.size), count)
+                fr[rows.frame[rr], rows.pad[rr], cell // PAD_COLS, cell % PAD_COLS] = vals.astype(np.int16)
+        out = []
+        for i in range(nb):
+            res = (t[i * B : (i + 1) * B], mom[i * B : (i + 1) * B], fr[i * B : (i + 1) * B] if fr is not None else None)
+            if len(self._cache) >= TACTILE_CACHE:
+                del self._cache[next(iter(self._cache))]
+            self._cache[(int(barr[i]), frames)] = res
+            out.append(res)
+        return out
+
+    def clean(self, k: Arr, frames: bool) -> Rendered:
+        """Fault-free frame times, moments and (if ``frames``) frames of frame numbers ``k``."""
+        if k.size and int(k.min()) // TACTILE_BLOCK == int(k.max()) // TACTILE_BLOCK:
+            b0 = int(k[0]) // TACTILE_BLOCK
+            bt, bm, bf = self._block(b0, frames)
+            j = k - b0 * TACTILE_BLOCK
+            return bt[j], bm[j], (bf[j] if bf is not None else None)
+        t = np.empty(k.shape)
+        mom = np.empty(k.shape + (N_PADS, 3))
+        fr = np.empty(k.shape + (N_PADS, MAX_ROWS, PAD_COLS), dtype=np.int16) if frames else None
+        blocks = k // TACTILE_BLOCK
+        uniq = [int(b) for b in np.unique(blocks)]
+        missing = [b for b in uniq if (b, frames) not in self._cache]
+        rendered = dict(zip(missing, self.render_blocks(missing, frames))) if missing else {}
+        for b in uniq:
+            sel = blocks == b
+            bt, bm, bf = rendered[b] if b in rendered else self._block(b, frames)
+            j = k[sel] - b * TACTILE_BLOCK
+            t[sel] = bt[j]
+            mom[sel] = bm[j]
+            if fr is not None and bf is not None:
+                fr[sel] = bf[j]
+        return t, mom, fr
+
+    def at(self, index: Arr, frames: bool = False) -> TactileBlock:
+        """Frames by frame number (int array, >= 0), faults applied."""
+        k = np.asarray(index, dtype=np.int64)
+        t, mom, fr = self.clean(k, frames)
+        keep = np.ones(k.shape, dtype=bool)
+        for f in self.faults:
+            hit = (t >= f.start) & (t < f.end)
+            if not hit.any():
+                continue
+            if f.mode == "silent":
+                keep &= ~hit
+            elif f.mode == "zero":
+                mom[hit] = 0.0
+                if fr is not None:
+                    fr[hit] = 0
+            else:
+                self._stick(f, hit, mom, fr, frames)
+        return TactileBlock(k[keep], t[keep], mom[keep], fr[keep] if fr is not None else None)
+
+    def _stick(self, f: SensorFault, hit: Arr, mom: Arr, fr: Arr | None, frames: bool) -> None:
+        """A stuck fault: the ``hit`` frames repeat the last good frame before ``f.start`` (if any)."""
+        cand = tactile_nominal_indices(f.start - 0.2, f.start, self.rate, self.params.tactile_jitter_clip)
+        before = cand[self.times(cand) < f.start]
+        if before.size:
+            _, lm, lf = self.clean(before[-1:], frames)
+            mom[hit] = lm[0]
+            if fr is not None and lf is not None:
+                fr[hit] = lf[0]
+
+    def _prefetch(self, k0: int, k1: int, t1: float, frames: bool) -> None:
+        """Render the blocks of frames ``k0..k1`` if any is missing, together with the blocks
+        up to the end of the object-in-hand episode at ``t1`` (at most ``PREFETCH_S``
+        ahead): a consumer reading a mission in chunks then pays one vectorised render
+        per episode instead of one per chunk. Only *when* a block is rendered changes."""
+        B = TACTILE_BLOCK
+        b0, b1 = k0 // B, k1 // B
+        if all((b, frames) in self._cache for b in range(b0, b1 + 1)):
+            return
+        b2 = b1
+        ei = int(np.searchsorted(self._ep_starts, t1, side="right")) - 1
+        if ei >= 0 and self.episodes[ei].end > t1:
+            end = min(self.episodes[ei].end, t1 + PREFETCH_S)
+            b2 = max(b1, int(math.ceil((end + self.params.tactile_jitter_clip) * self.rate)) // B)
+        if b2 - b0 + 1 > TACTILE_CACHE:
+            b2 = b1
+            if b2 - b0 + 1 > TACTILE_CACHE:
+                return  # a long request: clean() renders it without the cache
+        missing = [b for b in range(b0, b2 + 1) if (b, frames) not in self._cache]
+        self.render_blocks(missing, frames)
+
+    def between(self, t0: float, t1: float, frames: bool = False) -> TactileBlock:
+        """All frames with ``t0 <= t < t1`` (moments always; full frames if ``frames``)."""
+        cand = tactile_nominal_indices(t0, t1, self.rate, self.params.tactile_jitter_clip)
+        if cand.size:
+            self._prefetch(int(cand[0]), int(cand[-1]), t1, frames)
+        t = self.times(cand)
+        return self.at(cand[(t >= t0) & (t < t1)], frames=frames)

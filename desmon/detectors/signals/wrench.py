@@ -1,0 +1,142 @@
+"""The wrench sensor: the scalar force along the slip axis (N, positive = up), sampled on a
+fixed grid ``t = k / rate``.
+
+A sample is the sensor's white noise (:func:`desmon.detectors.signals.noise.wrench_noise`)
+plus the disturbance of the action context it falls in
+(:func:`desmon.detectors.signals.contexts.context_force`) plus the load of any slip near it
+(:func:`desmon.detectors.signals.slips.slip_force`). Two sources exist: the LWR's own
+estimate (50 Hz, sigma 0.3 N, base inertia leaks in) and a wrist F/T sensor (100–1000 Hz,
+sigma 0.05 N, weak coupling). Samples are rendered and cached in blocks of
+``WRENCH_BLOCK``; faults (silent / zero / stuck) are applied on the way out.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Final, Sequence
+
+import numpy as np
+
+from desmon.detectors.signals.common import Arr, Params, Segment, SensorFault, SignalParams, WrenchBlock, WrenchSource, wrench_indices
+from desmon.detectors.signals.contexts import context_force
+from desmon.detectors.signals.noise import WRENCH_BLOCK, wrench_noise
+from desmon.detectors.signals.slips import MissionSlip, slip_force
+from desmon.errors import SignalError
+from desmon.model.actions import HOLD, IDLE
+
+#: Rendered wrench blocks kept per mission.
+WRENCH_CACHE: Final = 8
+
+
+@dataclass(frozen=True, slots=True)
+class WrenchConfig:
+    """A wrench source's sample rate (Hz), noise sigma (N) and base-inertia coupling."""
+
+    source: str
+    rate: float
+    sigma: float
+    coupling: float
+
+
+def wrench_config(source: WrenchSource, rate: float | None, params: SignalParams) -> WrenchConfig:
+    """Rate, noise and coupling of ``source`` (``"lwr_estimate"`` or ``"wrist_ft"``), checked."""
+    if source == "lwr_estimate":
+        cfg = WrenchConfig(source, 50.0 if rate is None else float(rate), params.force_noise_lwr, 1.0)
+    elif source == "wrist_ft":
+        cfg = WrenchConfig(source, 500.0 if rate is None else float(rate), params.force_noise_ft, params.ft_coupling_scale)
+        if not 100.0 <= cfg.rate <= 1000.0:
+            raise SignalError(f"wrench_rate {cfg.rate!r} Hz: a wrist_ft streams at 100-1000 Hz; pick a rate in that range")
+    else:
+        raise SignalError(f"wrench_source {source!r}: use 'lwr_estimate' or 'wrist_ft'")
+    if not (cfg.rate > 0 and math.isfinite(cfg.rate)):
+        raise SignalError(f"wrench_rate {cfg.rate!r} must be a positive number of Hz")
+    return cfg
+
+
+class WrenchSensor:
+    """Deterministic wrench samples of one mission (see the module docstring)."""
+
+    def __init__(
+        self,
+        seed: int,
+        config: WrenchConfig,
+        segments: Sequence[Segment],
+        seg_params: Sequence[Params],
+        slips: Sequence[MissionSlip],
+        faults: Sequence[SensorFault],
+        params: SignalParams,
+    ) -> None:
+        self.seed = seed
+        self.config = config
+        self.rate = config.rate
+        self.segments = tuple(segments)
+        self.seg_params = tuple(seg_params)
+        self.slips = tuple(slips)
+        self.faults = tuple(f for f in faults if f.sensor == "wrench")
+        self.params = params
+        self._seg_starts = np.array([s.start for s in self.segments])
+        self._seg_ends = np.array([s.end for s in self.segments])
+        self._cache: dict[int, Arr] = {}
+
+    def _block(self, b: int) -> Arr:
+        hit = self._cache.get(b)
+        if hit is not None:
+            return hit
+        k = np.arange(b * WRENCH_BLOCK, (b + 1) * WRENCH_BLOCK, dtype=np.int64)
+        t = (k / self.rate)[None, :]
+        val = wrench_noise(self.seed, b, self.config.sigma)[None, :]
+        t_lo, t_hi = float(t[0, 0]), float(t[0, -1])
+        i0 = int(np.searchsorted(self._seg_ends, t_lo, side="right"))
+        i1 = int(np.searchsorted(self._seg_starts, t_hi, side="right"))
+        for i in range(i0, i1):
+            s = self.segments[i]
+            if s.context in (HOLD, IDLE):
+                continue
+            inside = (t >= s.start) & (t < s.end)
+            d = context_force(s.context, t - s.start, self.seg_params[i], self.params, self.config.coupling)
+            val = val + np.where(inside, d, 0.0)
+        for sl in self.slips:
+            if t_hi < float(sl.t_s[0]) - 1.5 or t_lo > float(sl.t_s[0]) + 2.0:
+                continue
+            val = val + slip_force(t, sl.t_s, sl.sign, sl.grav, sl.params)
+        out = val[0]
+        if len(self._cache) >= WRENCH_CACHE:
+            del self._cache[next(iter(self._cache))]
+        self._cache[b] = out
+        return out
+
+    def clean(self, k: Arr) -> Arr:
+        """Fault-free samples at grid indices ``k``."""
+        out = np.empty(k.shape)
+        if k.size == 0:
+            return out
+        b0 = int(k[0]) // WRENCH_BLOCK
+        if k.ndim == 1 and int(k[-1]) // WRENCH_BLOCK == b0 and int(k.min()) // WRENCH_BLOCK == b0:
+            return self._block(b0)[k - b0 * WRENCH_BLOCK]
+        blocks = k // WRENCH_BLOCK
+        for b in np.unique(blocks):
+            sel = blocks == b
+            out[sel] = self._block(int(b))[k[sel] - b * WRENCH_BLOCK]
+        return out
+
+    def at(self, index: Arr) -> WrenchBlock:
+        """Samples for grid indices ``index`` (int array, >= 0), faults applied."""
+        k = np.asarray(index, dtype=np.int64)
+        t = k / self.rate
+        v = self.clean(k)
+        keep = np.ones(k.shape, dtype=bool)
+        for f in self.faults:
+            hit = (t >= f.start) & (t < f.end)
+            if f.mode == "silent":
+                keep &= ~hit
+            elif f.mode == "zero":
+                v = np.where(hit, 0.0, v)
+            else:
+                k_last = max(0, math.ceil(f.start * self.rate - 1e-9) - 1)
+                v = np.where(hit, self.clean(np.array([k_last]))[0], v)
+        return WrenchBlock(k[keep], t[keep], v[keep])
+
+    def between(self, t0: float, t1: float) -> WrenchBlock:
+        """All samples with ``t0 <= t < t1``."""
+        return self.at(wrench_indices(t0, t1, self.rate))
