@@ -401,22 +401,119 @@ class MissionResult:
     blind_time: float
 
 
-def _segments_of(rules: dict[str, str]) -> list[tuple[str, float, float, str]]:
-    out = []
+#: A mission plan: per context, (activation time, from, until, detector).
+Plan = list[tuple[float, float, float, str]]
+#: Mission batches by injected slip context (None: slip-free), each chunk with its detector runs per activation time.
+MissionBatches = dict[str | None, list[tuple[Batch, dict[float, dict[str, DetectorRun]]]]]
+
+
+def _mission_batches(
+    trials: int, seed: int, params: SignalParams, progress: Callable[[int], None] | None
+) -> MissionBatches:
+    """Slip-free and one-slip-per-context mission batches, with the detectors run from every
+    activation time a strategy uses (pre-roll start and each context start)."""
+    acts = sorted({0.0} | {s.start for s in MISSION_TIMELINE[1:]})
+    batches: MissionBatches = {}
+    for bi, slip_ctx in enumerate((None,) + MISSION_CONTEXTS):
+        batches[slip_ctx] = []
+        for ci, start in enumerate(range(0, trials, CHUNK)):
+            n = min(CHUNK, trials - start)
+            win, direction = MISSION_SLIPS[slip_ctx] if slip_ctx else (None, DOWN)
+            b = simulate_batch(
+                list(MISSION_TIMELINE), n, _rng(seed, 2, bi, ci), slip_window=win, slip_direction=direction,
+                params=params, first_trial=start,
+            )
+            batches[slip_ctx].append((b, {a: run_detectors(b, a) for a in acts}))
+            if progress is not None:
+                progress(n)
+    return batches
+
+
+def _plan(rules: dict[str, str], switching: str) -> Plan:
+    """Fixed / hot: every detector activated in the pre-roll; cold: each on its context's start.
+    The release detector keeps watching after the mission's end (the object may still fall)."""
+    end = MISSION_TIMELINE[-1].end
+    plan = []
     for s in MISSION_TIMELINE[1:]:
-        out.append((s.context, s.start, s.end, rules[s.context]))
-    return out
+        t_act = s.start if switching == "cold" else 0.0
+        plan.append((t_act, s.start, s.end if s.context != RELEASE else end + 1.0, rules[s.context]))
+    return plan
 
 
-def _select(runs_by_act: dict[float, dict[str, DetectorRun]], plan: list[tuple[float, float, float, str]], n: int):
-    """Union of alarms (times, dirs) and validity of the selected detectors over the plan."""
-    parts = []
-    for t_act, lo, hi, det in plan:
-        r = runs_by_act[t_act][det]
-        t = r.times if r.times.ndim == 2 else np.broadcast_to(r.times, r.alarm.shape)
-        parts.append((t, r.alarm & (t >= lo) & (t < hi), r.direction))
-    ticks = next(iter(runs_by_act.values()))["force"].ticks
-    return parts, ticks
+def _false_alarms(batches: MissionBatches, plan: Plan) -> tuple[Arr, Arr]:
+    """Per slip-free mission: false alarms (debounced 0.5 s) and blind seconds of the plan."""
+    fa_counts = []
+    blind = []
+    for b, runs in batches[None]:
+        n = b.wrench.shape[0]
+        times_l: list[Arr] = []
+        for t_act, lo, hi, det in plan:
+            r = runs[t_act][det]
+            t = r.times if r.times.ndim == 2 else np.broadcast_to(r.times, r.alarm.shape)
+            times_l.append(np.where(r.alarm & (t >= lo) & (t < hi), t, np.inf))
+        at = np.sort(np.concatenate(times_l, axis=1), axis=1)
+        fin = np.isfinite(at)
+        at = np.where(fin, at, 1e9)
+        gaps = np.diff(np.concatenate([np.full((n, 1), -1e9), at], axis=1), axis=1)
+        fa_counts.append(np.sum(fin & (gaps >= 0.5), axis=1))
+        bl = np.zeros(n)
+        for t_act, lo, hi, det in plan:
+            r = runs[t_act][det]
+            sel = (r.ticks >= lo) & (r.ticks < hi)
+            bl += (~r.tick_valid[:, sel]).sum(axis=1) * DEFAULT_TICK
+        blind.append(bl)
+    return np.concatenate(fa_counts), np.concatenate(blind)
+
+
+def _slips_caught(batches: MissionBatches, plan: Plan) -> tuple[dict[str, float], Arr, Arr]:
+    """Per slip context the share of slips caught by the plan; latencies of the caught ones
+    from motion onset and from load onset (all contexts)."""
+    tpr: dict[str, float] = {}
+    lat, lat_l = [], []
+    for ctx in MISSION_CONTEXTS:
+        hits = []
+        for b, runs in batches[ctx]:
+            first = np.full(b.wrench.shape[0], np.inf)
+            for t_act, lo, hi, det in plan:
+                lo_ = np.maximum(b.slip_onset - TP_BEFORE, lo)
+                tf, _ = first_alarm(runs[t_act][det], lo_, np.minimum(b.slip_onset + TP_AFTER, hi - 1e-12))
+                first = np.minimum(first, tf)
+            hit = np.isfinite(first)
+            hits.append(hit)
+            lat.append((first - b.slip_onset)[hit])
+            lat_l.append((first - b.load_onset)[hit])
+        tpr[ctx] = float(np.concatenate(hits).mean())
+    return tpr, np.concatenate(lat), np.concatenate(lat_l)
+
+
+def _mission_result(name: str, rules: dict[str, str], switching: str, batches: MissionBatches) -> MissionResult:
+    """One strategy's figures over the mission batches."""
+    plan = _plan(rules, switching)
+    fa, blind = _false_alarms(batches, plan)
+    tpr, lat, lat_l = _slips_caught(batches, plan)
+    lm, ll = _quantiles(lat), _quantiles(lat_l)
+    sw = sum(1 for a, b_ in zip(MISSION_CONTEXTS, MISSION_CONTEXTS[1:]) if rules[a] != rules[b_])
+    mean_tpr = float(np.mean(list(tpr.values())))
+    return MissionResult(
+        name, dict(rules), switching, float(fa.mean()), float((fa > 0).mean()), tpr, mean_tpr, 1.0 - mean_tpr,
+        lm[0], lm[1], ll[0], float(sw), float(blind.mean()),
+    )
+
+
+def _oracle_rules(batches: MissionBatches) -> dict[str, str]:
+    """Per context the detector with the best TPR - FPR when running from the pre-roll (ties: DETECTORS order)."""
+    best: dict[str, str] = {}
+    for s in MISSION_TIMELINE[1:]:
+        scores = {}
+        for d in DETECTORS:
+            fp = np.concatenate([np.isfinite(first_alarm(runs[0.0][d], s.start, s.end)[0]) for _, runs in batches[None]]).mean()
+            tp_hits = []
+            for b, runs in batches[s.context]:
+                tf, _ = first_alarm(runs[0.0][d], b.slip_onset - TP_BEFORE, b.slip_onset + TP_AFTER)
+                tp_hits.append(np.isfinite(tf))
+            scores[d] = float(np.concatenate(tp_hits).mean() - fp)
+        best[s.context] = max(DETECTORS, key=lambda d: (scores[d], -DETECTORS.index(d)))
+    return best
 
 
 def evaluate_missions(
@@ -427,113 +524,17 @@ def evaluate_missions(
     progress: Callable[[int], None] | None = None,
 ) -> list[MissionResult]:
     """§6.3: fixed, adaptive (cold / hot switching) and oracle strategies on grasp -> move_base -> release."""
-    end = MISSION_TIMELINE[-1].end
-    seg = {s.context: (s.start, s.end) for s in MISSION_TIMELINE[1:]}
-    acts = sorted({0.0} | {s.start for s in MISSION_TIMELINE[1:]})
-    batches: dict[str | None, list[tuple[Batch, dict[float, dict[str, DetectorRun]]]]] = {}
-    for bi, slip_ctx in enumerate((None,) + MISSION_CONTEXTS):
-        batches[slip_ctx] = []
-        for ci, start in enumerate(range(0, trials, CHUNK)):
-            n = min(CHUNK, trials - start)
-            win, direction = MISSION_SLIPS[slip_ctx] if slip_ctx else (None, DOWN)
-            b = simulate_batch(
-                list(MISSION_TIMELINE), n, _rng(seed, 2, bi, ci), slip_window=win, slip_direction=direction,
-                params=params, first_trial=start,
-            )
-            runs = {a: run_detectors(b, a) for a in acts}
-            batches[slip_ctx].append((b, runs))
-            if progress is not None:
-                progress(n)
-
-    def outcome(plan: list[tuple[float, float, float, str]]) -> dict[str, object]:
-        # false alarms in slip-free missions (debounced 0.5 s)
-        fa_counts = []
-        blind = []
-        for b, runs in batches[None]:
-            n = b.wrench.shape[0]
-            times_l: list[Arr] = []
-            for t_act, lo, hi, det in plan:
-                r = runs[t_act][det]
-                t = r.times if r.times.ndim == 2 else np.broadcast_to(r.times, r.alarm.shape)
-                times_l.append(np.where(r.alarm & (t >= lo) & (t < hi), t, np.inf))
-            at = np.sort(np.concatenate(times_l, axis=1), axis=1)
-            fin = np.isfinite(at)
-            at = np.where(fin, at, 1e9)
-            gaps = np.diff(np.concatenate([np.full((n, 1), -1e9), at], axis=1), axis=1)
-            fa_counts.append(np.sum(fin & (gaps >= 0.5), axis=1))
-            bl = np.zeros(n)
-            for t_act, lo, hi, det in plan:
-                r = runs[t_act][det]
-                sel = (r.ticks >= lo) & (r.ticks < hi)
-                bl += (~r.tick_valid[:, sel]).sum(axis=1) * DEFAULT_TICK
-            blind.append(bl)
-        fa = np.concatenate(fa_counts)
-        tpr: dict[str, float] = {}
-        lat, lat_l = [], []
-        for ctx in MISSION_CONTEXTS:
-            hits = []
-            for b, runs in batches[ctx]:
-                first = np.full(b.wrench.shape[0], np.inf)
-                for t_act, lo, hi, det in plan:
-                    tf, _ = first_alarm(runs[t_act][det], np.maximum(b.slip_onset - TP_BEFORE, lo), np.minimum(b.slip_onset + TP_AFTER, hi - 1e-12))
-                    first = np.minimum(first, tf)
-                hit = np.isfinite(first)
-                hits.append(hit)
-                lat.append((first - b.slip_onset)[hit])
-                lat_l.append((first - b.load_onset)[hit])
-            tpr[ctx] = float(np.concatenate(hits).mean())
-        lm = _quantiles(np.concatenate(lat))
-        ll = _quantiles(np.concatenate(lat_l))
-        return {
-            "fa": float(fa.mean()), "pfa": float((fa > 0).mean()), "tpr": tpr, "lat": lm, "latl": ll,
-            "blind": float(np.concatenate(blind).mean()),
-        }
-
-    def plan_for(rules: dict[str, str], switching: str) -> list[tuple[float, float, float, str]]:
-        plan = []
-        for ctx, lo, hi, det in _segments_of(rules):
-            t_act = lo if switching == "cold" else 0.0
-            plan.append((t_act, lo, hi if ctx != RELEASE else end + 1.0, det))
-        # fixed / hot: all activated in the pre-roll; cold: each on its context start
-        return plan
-
-    results: list[MissionResult] = []
-
-    def add(name: str, rules: dict[str, str], switching: str) -> dict[str, object]:
-        o = outcome(plan_for(rules, switching))
-        sw = sum(1 for a, b_ in zip(MISSION_CONTEXTS, MISSION_CONTEXTS[1:]) if rules[a] != rules[b_])
-        tpr = o["tpr"]  # type: ignore[assignment]
-        mean_tpr = float(np.mean(list(tpr.values())))  # type: ignore[union-attr]
-        results.append(
-            MissionResult(
-                name, dict(rules), switching, o["fa"], o["pfa"], tpr, mean_tpr, 1.0 - mean_tpr,  # type: ignore[arg-type]
-                o["lat"][0], o["lat"][1], o["latl"][0], float(sw), o["blind"],  # type: ignore[index]
-            )
-        )
-        return o
-
-    for d in DETECTORS:
-        add(f"fixed {d}", {c: d for c in MISSION_CONTEXTS}, "none")
-    add("adaptive R*", R_STAR, "cold")
-    add("adaptive R* (hot)", R_STAR, "hot")
-    add("adaptive R-alt", R_ALT, "cold")
-    # oracle: per context the detector with the best TPR - FPR (hot standby), measured here
-    best: dict[str, str] = {}
-    for ctx in MISSION_CONTEXTS:
-        lo, hi = seg[ctx]
-        scores = {}
-        for d in DETECTORS:
-            plan = [(0.0, lo, hi if ctx != RELEASE else end + 1.0, d)]
-            fp = np.concatenate([np.isfinite(first_alarm(runs[0.0][d], lo, hi)[0]) for _, runs in batches[None]]).mean()
-            tp_hits = []
-            for b, runs in batches[ctx]:
-                tf, _ = first_alarm(runs[0.0][d], b.slip_onset - TP_BEFORE, b.slip_onset + TP_AFTER)
-                tp_hits.append(np.isfinite(tf))
-            scores[d] = float(np.concatenate(tp_hits).mean() - fp)
-            del plan
-        best[ctx] = max(DETECTORS, key=lambda d: (scores[d], -DETECTORS.index(d)))
-    add("oracle", best, "hot")
-    return results
+    batches = _mission_batches(trials, seed, params, progress)
+    strategies: list[tuple[str, dict[str, str], str]] = [
+        (f"fixed {d}", {c: d for c in MISSION_CONTEXTS}, "none") for d in DETECTORS
+    ]
+    strategies += [
+        ("adaptive R*", R_STAR, "cold"),
+        ("adaptive R* (hot)", R_STAR, "hot"),
+        ("adaptive R-alt", R_ALT, "cold"),
+        ("oracle", _oracle_rules(batches), "hot"),  # measured in this run, hot standby
+    ]
+    return [_mission_result(name, rules, switching, batches) for name, rules, switching in strategies]
 
 
 # --------------------------------------------------------------------------- whole evaluation, presentation
@@ -709,6 +710,44 @@ class Sweep:
         }
 
 
+def _cell_sweep(per: Sequence[CellResult], trials: int) -> CellSweep:
+    """One cell over the seeds (``per``: that cell of each seed's run)."""
+    c0 = per[0]
+    if any((c.action, c.detector) != (c0.action, c0.detector) for c in per):
+        raise SignalError("a sweep combines runs with the same cells only")
+    ps = [c.p_value for c in per]
+    return CellSweep(
+        c0.action, c0.detector, c0.kind, trials, tuple(c.count for c in per), c0.paper_count, c0.paper_trials,
+        tuple(ps), sum(c.passed for c in per), _spread([c.rate for c in per]), min(ps), float(np.median(ps)),
+    )
+
+
+def _rule_picks(per: Sequence[MissionResult]) -> dict[str, int]:
+    """How many seeds used each set of rules, most used first (ties by text)."""
+    picks: dict[str, int] = {}
+    for m in per:
+        key = _rules_text(m.rules)
+        picks[key] = picks.get(key, 0) + 1
+    return dict(sorted(picks.items(), key=lambda kv: (-kv[1], kv[0])))
+
+
+def _mission_sweep(per: Sequence[MissionResult]) -> MissionSweep:
+    """One strategy over the seeds (``per``: that strategy of each seed's run)."""
+
+    def every(field: str) -> Spread:
+        return _spread([getattr(m, field) for m in per])
+
+    def some(field: str) -> Spread | None:
+        return Spread.of([getattr(m, field) for m in per])
+
+    m0 = per[0]
+    return MissionSweep(
+        m0.strategy, m0.switching, _rule_picks(per), every("p_any_fa"), every("fa_per_mission"), every("mean_tpr"),
+        every("miss_rate"), {c: _spread([m.tpr[c] for m in per]) for c in MISSION_CONTEXTS},
+        some("latency_median"), some("latency_p95"), some("latency_load_median"), every("switches"), every("blind_time"),
+    )
+
+
 def sweep_of(runs: Sequence[Evaluation]) -> Sweep:
     """Combine per-seed evaluations (same trials, same cells and strategies) into a :class:`Sweep`."""
     if not runs:
@@ -716,36 +755,8 @@ def sweep_of(runs: Sequence[Evaluation]) -> Sweep:
     trials = runs[0].trials
     if any(r.trials != trials for r in runs):
         raise SignalError("a sweep combines runs of one trial count only")
-    cells = []
-    for i, c0 in enumerate(runs[0].cells):
-        per = [r.cells[i] for r in runs]
-        if any((c.action, c.detector) != (c0.action, c0.detector) for c in per):
-            raise SignalError("a sweep combines runs with the same cells only")
-        ps = [c.p_value for c in per]
-        cells.append(
-            CellSweep(
-                c0.action, c0.detector, c0.kind, trials, tuple(c.count for c in per), c0.paper_count, c0.paper_trials,
-                tuple(ps), sum(c.passed for c in per), _spread([c.rate for c in per]), min(ps), float(np.median(ps)),
-            )
-        )
-    missions = []
-    for i, m0 in enumerate(runs[0].missions):
-        per_m = [r.missions[i] for r in runs]
-        picks: dict[str, int] = {}
-        for m in per_m:
-            key = _rules_text(m.rules)
-            picks[key] = picks.get(key, 0) + 1
-        missions.append(
-            MissionSweep(
-                m0.strategy, m0.switching, dict(sorted(picks.items(), key=lambda kv: (-kv[1], kv[0]))),
-                _spread([m.p_any_fa for m in per_m]), _spread([m.fa_per_mission for m in per_m]),
-                _spread([m.mean_tpr for m in per_m]), _spread([m.miss_rate for m in per_m]),
-                {c: _spread([m.tpr[c] for m in per_m]) for c in MISSION_CONTEXTS},
-                Spread.of([m.latency_median for m in per_m]), Spread.of([m.latency_p95 for m in per_m]),
-                Spread.of([m.latency_load_median for m in per_m]),
-                _spread([m.switches for m in per_m]), _spread([m.blind_time for m in per_m]),
-            )
-        )
+    cells = [_cell_sweep([r.cells[i] for r in runs], trials) for i in range(len(runs[0].cells))]
+    missions = [_mission_sweep([r.missions[i] for r in runs]) for i in range(len(runs[0].missions))]
     return Sweep(trials, tuple(r.seed for r in runs), tuple(runs), tuple(cells), tuple(missions))
 
 
