@@ -291,6 +291,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for add in (_add_replay, _add_explain, _add_show, _add_evaluate, _add_run, _add_plot, _add_verify, _add_fuzz):
         add(sub)
+    from desmon.sweep.command import add_parsers as add_sweep_parsers  # sweep, sweep-plot (docs/sweeps.md)
+
+    add_sweep_parsers(sub)
     parser.set_defaults(commands=tuple(sub.choices))
     return parser
 

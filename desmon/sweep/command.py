@@ -1,0 +1,128 @@
+"""``desmon sweep`` and ``desmon sweep-plot``: their parsers and handlers.
+
+``desmon/cli.py`` calls :func:`add_parsers`; everything else about the two commands is
+here. Importing this module imports neither Dask nor pandas: a missing ``sweep`` extra
+is reported in one line when a command runs (exit 2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from desmon.options import add_input, add_output, non_negative_int, positive_int, positive_seconds, worker_count
+
+__all__ = ["add_parsers", "sweep_command", "sweep_plot_command", "TABLE_FILE"]
+
+TABLE_FILE = ("sweep table", "write one with: desmon sweep SCENARIO -p NAME=V1,V2 -o results.parquet")
+EXIT_OK, EXIT_FAILED_ROWS, EXIT_INTERRUPTED = 0, 1, 130
+_SETTING_FLAGS = {"until": "--until", "max_states": "--max-states", "examples": "--examples", "trials": "--trials"}
+_SETTING_DEFAULTS = {"until": None, "max_states": 2_000_000, "examples": 200, "trials": 100}
+
+
+def add_parsers(sub: Any) -> None:
+    """Add ``sweep`` and ``sweep-plot`` to the CLI's subparsers."""
+    from desmon.paths import SCENARIO_FILE
+    from desmon.sweep.jobs import JOBS
+
+    p = sub.add_parser("sweep", help="run a grid of parameters x seeds (run, verify, fuzz or evaluate) on Dask; one table row per run")
+    add_input(p, "scenario", SCENARIO_FILE, nargs="?", default=None,
+              help="scenario file, e.g. scenarios/robot_day.py (not with --job evaluate)")
+    p.add_argument(
+        "-p", "--param", action="append", default=None, metavar="NAME=V1,V2,...",
+        help="sweep a parameter the scenario declares over these values, e.g. -p hand_memory=256,384 (repeatable; "
+        "every combination is a point). With --job evaluate: a signal-model parameter, e.g. -p noise_counts=2,4,8",
+    )
+    p.add_argument("--job", choices=JOBS, default="run", help="what each run does: desmon run / verify / fuzz / evaluate")
+    p.add_argument("--seeds", type=positive_int, default=10, metavar="N", help="runs per point, each with its own derived seed")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="the sweep seed every run's seed is derived from")
+    p.add_argument("--deployer", default="desmon", metavar="SPEC", help="the deployer, as for desmon run (docs/deployers.md)")
+    p.add_argument("--until", type=positive_seconds, default=None, help="--job run: simulated seconds (default: each point's horizon)")
+    p.add_argument("--max-states", type=positive_int, default=None, help="--job verify: stop INCOMPLETE after this many states "
+                   f"(default: {_SETTING_DEFAULTS['max_states']:,})")
+    p.add_argument("--examples", type=positive_int, default=None, help=f"--job fuzz: sequences per run (default: {_SETTING_DEFAULTS['examples']})")
+    p.add_argument("--trials", type=positive_int, default=None, help=f"--job evaluate: trials per cell (default: {_SETTING_DEFAULTS['trials']})")
+    add_output(p, "-o", "--output", suffixes=(".parquet", ".csv"), required=True, metavar="FILE",
+               help="the table: FILE.parquet or FILE.csv (finished rows also go to FILE.journal.jsonl while it runs)")
+    p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                   help="run on this existing Dask cluster (default: a local cluster of worker processes on this machine)")
+    p.add_argument("--workers", type=worker_count, default=None, metavar="N", help="local cluster: worker processes (default: one per core)")
+    p.add_argument("--task-timeout", type=positive_seconds, default=None, metavar="S",
+                   help="a run taking longer becomes an error row (exit code 124) (default: no limit)")
+    p.add_argument("--retries", type=non_negative_int, default=3, metavar="N",
+                   help="run a task again when the worker running it dies, up to N times")
+    p.add_argument("--resume", action="store_true", help="keep the rows already in -o (and its journal); run only the others")
+    p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
+    p.set_defaults(handler=sweep_command)
+
+    p = sub.add_parser("sweep-plot", help="draw a sweep table: a figure vs a parameter (mean, min-max over seeds), or a Pareto front")
+    add_input(p, "table", TABLE_FILE, help="table written by desmon sweep (.parquet or .csv)")
+    p.add_argument("-x", default=None, metavar="COLUMN", help="the parameter on the x axis, e.g. hand_memory")
+    p.add_argument("-y", required=True, metavar="COLUMN", help="the figure on the y axis, e.g. exposure_s")
+    p.add_argument("--pareto", default=None, metavar="COST",
+                   help="instead of -x: each point's mean -y against this cost column (e.g. hand_memory), with the Pareto front")
+    add_output(p, "-o", "--output", suffixes=(".png",), default="sweep.png", metavar="FILE.png", help="PNG file")
+    p.set_defaults(handler=sweep_plot_command)
+
+
+def _setting(args: argparse.Namespace) -> Any:
+    """The value of the job's own setting; a setting of another job is refused."""
+    from desmon.sweep.core import SETTINGS
+    from desmon.sweep.grid import SweepError
+
+    mine = SETTINGS[args.job]
+    for name, flag in _SETTING_FLAGS.items():
+        if name != mine and getattr(args, name) is not None:
+            owner = next(j for j, s in SETTINGS.items() if s == name)
+            raise SweepError(f"{flag} applies to --job {owner}, not --job {args.job}; drop it")
+    value = getattr(args, mine)
+    return _SETTING_DEFAULTS[mine] if value is None else value
+
+
+def sweep_command(args: argparse.Namespace) -> int:
+    from desmon.paths import PathError, check_output_file
+    from desmon.sweep.grid import SweepError, parse_axes
+    from desmon.sweep.runner import check_scheduler_address, require_extra
+    from desmon.sweep.table import journal_path
+
+    require_extra("sweep")
+    if args.scheduler is not None:
+        check_scheduler_address(args.scheduler)
+        if args.workers is not None:
+            raise SweepError("--workers sets the size of the local cluster; with --scheduler the cluster has its own workers: drop it")
+    setting = _setting(args)
+    axes = parse_axes(args.param)
+    inputs = [args.scenario] if args.scenario else []
+    try:
+        check_output_file(journal_path(args.output), "-o", (".jsonl",), inputs)
+    except PathError as exc:
+        raise SweepError(f"-o {args.output}: its journal cannot be written ({exc})") from None
+    from desmon.sweep.core import run_sweep
+
+    result = run_sweep(
+        job=args.job, scenario=args.scenario, axes=axes, seeds=args.seeds, output=args.output, sweep_seed=args.seed,
+        deployer=args.deployer, setting=setting, task_timeout=args.task_timeout, scheduler=args.scheduler,
+        workers=args.workers, retries=args.retries, resume=args.resume, progress=not args.no_progress,
+    )
+    points = result.total // args.seeds
+    resumed = f", {result.resumed:,} kept from before" if result.resumed else ""
+    where = f"on {result.workers} worker{'s' if result.workers != 1 else ''}" if result.workers else "(nothing left to run)"
+    print(
+        f"wrote {result.output}: {result.rows:,} rows ({points:,} point{'s' if points != 1 else ''} x {args.seeds} seed"
+        f"{'s' if args.seeds != 1 else ''}{resumed}), {result.failed:,} failed, in {result.seconds:.1f} s {where}"
+    )
+    if result.failed:
+        print(f"desmon sweep: {result.failed} run(s) failed: see the error column of {result.output}", file=sys.stderr)
+    return EXIT_FAILED_ROWS if result.failed else EXIT_OK
+
+
+def sweep_plot_command(args: argparse.Namespace) -> int:
+    from desmon.sweep.plot import plot_sweep
+    from desmon.sweep.runner import require_extra
+
+    modules = ("pandas", "pyarrow") if args.table.lower().endswith(".parquet") else ("pandas",)
+    require_extra("sweep-plot", modules)
+    plot_sweep(args.table, args.output, x=args.x, y=args.y, pareto=args.pareto)
+    print(f"wrote {args.output}")
+    return EXIT_OK

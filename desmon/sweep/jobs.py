@@ -1,0 +1,306 @@
+"""What one run of a sweep does, in a worker: load the point's scenario, run the job, and
+return its row's figures -- never an exception.
+
+:func:`run_point` is the task a Dask worker executes. Whatever goes wrong inside it (a
+parameter value the scenario refuses, an exception in the engine, the per-run time limit)
+becomes figures with an ``exit_code`` and an ``error`` line, so a failing point never
+stops the sweep; only a worker that dies (killed, out of memory) fails the task, and
+Dask then runs it again on another worker.
+
+Exit codes of a row: the command's own (0 / 1, verify 3 INCOMPLETE), 2 a value the
+scenario refuses (a :class:`~desmon.errors.DesmonError`), 124 the ``--task-timeout``
+passed, 125 any other exception (a bug: the error names its type), 137 the workers
+running it died every time Dask tried it.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import dataclasses
+import os
+import threading
+import time
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from desmon.errors import DesmonError
+from desmon.sweep.grid import Axis, Run, SweepError
+
+__all__ = [
+    "JOBS", "JobSpec", "run_point", "check_values", "signal_parameters", "EXIT_TIMEOUT", "EXIT_CRASH", "EXIT_KILLED",
+    "EXIT_BAD_VALUE", "METRICS",
+]
+
+JOBS = ("run", "verify", "fuzz", "evaluate")
+EXIT_BAD_VALUE, EXIT_TIMEOUT, EXIT_CRASH, EXIT_KILLED = 2, 124, 125, 137
+
+#: each job's figures, in table order (run adds memory_peak_mb_<platform> and errors_<kind>)
+METRICS: dict[str, tuple[str, ...]] = {
+    "run": (
+        "exposure_s", "risky_time_s", "switches", "blind_time_per_switch_s", "blind_time_max_s", "starts", "start_failures",
+        "stops", "migrations", "upgrades", "upgrades_failed", "errors", "slips_injected", "slips_detected", "slips_missed",
+        "false_alarms", "latency_median_s", "latency_p95_s", "violations",
+    ),
+    "verify": ("verdict", "states", "transitions", "depth", "counterexamples", "violated"),
+    "fuzz": ("verdict", "sequences", "violated", "counterexample_steps"),
+    "evaluate": (
+        "cells_passed", "cells", "tp_rate_tactile", "tp_rate_force", "tp_rate_combined",
+        "fp_rate_tactile", "fp_rate_force", "fp_rate_combined",
+    ),
+}
+_RUN_RENAMED = {"exposure_s": "unmonitored_exposure_s"}
+
+
+@dataclass(frozen=True, slots=True)
+class JobSpec:
+    """What every run of a sweep shares (shipped to the workers with each task)."""
+
+    job: str
+    scenario: str | None  # absolute path (None for evaluate)
+    deployer: str = "desmon"
+    settings: tuple[tuple[str, Any], ...] = ()  # until / max_states / examples / trials
+    timeout: float | None = None
+
+    def setting(self, name: str, default: Any = None) -> Any:
+        return dict(self.settings).get(name, default)
+
+
+class _TimedOut(BaseException):
+    """Raised into a run's thread once its time is up (not an Exception: nothing swallows it)."""
+
+
+# ------------------------------------------------------------------- scenario, deployer caches
+
+_SCENARIOS: OrderedDict[tuple[Any, ...], Any] = OrderedDict()
+_CACHE_SIZE = 32
+_LOCK = threading.Lock()
+
+
+def _scenario(path: str, values: tuple[tuple[str, str], ...]) -> Any:
+    """The scenario at ``path`` with ``values``, loaded once per worker (it is immutable)."""
+    from desmon.loader import load_scenario
+
+    key = (path, os.stat(path).st_mtime_ns, values)
+    with _LOCK:
+        if key in _SCENARIOS:
+            _SCENARIOS.move_to_end(key)
+            return _SCENARIOS[key]
+    scenario = load_scenario(path, dict(values))
+    with _LOCK:
+        _SCENARIOS[key] = scenario
+        while len(_SCENARIOS) > _CACHE_SIZE:
+            _SCENARIOS.popitem(last=False)
+    return scenario
+
+
+def _deployer(spec: str) -> Any:
+    from desmon.verify.deployers import resolve_deployer
+
+    return resolve_deployer(spec)
+
+
+# ----------------------------------------------------------------------------- the four jobs
+
+
+def _job_run(spec: JobSpec, run: Run) -> dict[str, Any]:
+    from desmon.sim.engine import SimWorld
+
+    scenario = _scenario(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    result = SimWorld(scenario, deployer=_deployer(spec.deployer), seed=run.seed, until=spec.setting("until")).run()
+    m = result.metrics
+    row: dict[str, Any] = {k: m.get(_RUN_RENAMED.get(k, k)) for k in METRICS["run"] if k not in ("errors", "violations")}
+    errors = dict(m.get("errors") or {})
+    row["errors"] = sum(errors.values())
+    row["violations"] = len(result.violations)
+    for kind, n in errors.items():
+        row[f"errors_{kind}"] = n
+    for platform, mb in (m.get("memory_peak_mb") or {}).items():
+        row[f"memory_peak_mb_{platform}"] = mb
+    row["exit_code"] = 1 if result.violations else 0
+    return row
+
+
+def _job_verify(spec: JobSpec, run: Run) -> dict[str, Any]:
+    from desmon.verify import Checker
+
+    scenario = _scenario(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    checker = Checker(scenario, _deployer(spec.deployer))
+    try:
+        res = checker.run(max_states=spec.setting("max_states"), progress=False)
+    finally:
+        release = getattr(checker, "release", None)
+        if release is not None:
+            release()
+    return {
+        "verdict": res.verdict, "states": res.states, "transitions": res.transitions, "depth": res.depth,
+        "counterexamples": len(res.counterexamples),
+        "violated": ";".join(sorted({c.invariant for c in res.counterexamples})) or None,
+        "exit_code": res.exit_code,
+    }
+
+
+def _job_fuzz(spec: JobSpec, run: Run) -> dict[str, Any]:
+    from desmon.verify.fuzz import fuzz
+
+    scenario = _scenario(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    out = fuzz(scenario, _deployer(spec.deployer), examples=spec.setting("examples"), seed=run.seed)
+    return {
+        "verdict": "VIOLATED" if out.invariant else "HOLDS",
+        "sequences": out.passed + (1 if out.invariant else 0),
+        "violated": out.invariant,
+        "counterexample_steps": None if out.labels is None else len(out.labels),
+        "exit_code": out.exit_code,
+    }
+
+
+def signal_parameters() -> dict[str, object]:
+    """The signal model's numeric parameters (``--job evaluate``'s ``-p`` names) and defaults."""
+    from desmon.detectors.signals import SignalParams
+
+    defaults = SignalParams()
+    return {
+        f.name: getattr(defaults, f.name)
+        for f in dataclasses.fields(SignalParams)
+        if type(getattr(defaults, f.name)) in (int, float)
+    }
+
+
+def _signal_params(values: tuple[tuple[str, str], ...]) -> Any:
+    from desmon.detectors.signals import SignalParams
+
+    known = signal_parameters()
+    return SignalParams(**{n: type(known[n])(float(v) if type(known[n]) is float else int(v)) for n, v in values})
+
+
+def _job_evaluate(spec: JobSpec, run: Run) -> dict[str, Any]:
+    from desmon.detectors.evaluation import DETECTORS, evaluate
+
+    ev = evaluate(spec.setting("trials"), run.seed, missions=False, params=_signal_params(run.point.values))
+    row: dict[str, Any] = {"cells_passed": sum(c.passed for c in ev.cells), "cells": len(ev.cells)}
+    for kind, label in (("TP", "tp_rate"), ("FP", "fp_rate")):
+        for det in DETECTORS:
+            rates = [c.rate for c in ev.cells if c.kind == kind and c.detector == det]
+            row[f"{label}_{det}"] = round(sum(rates) / len(rates), 6) if rates else None
+    row["exit_code"] = 0 if ev.all_pass else 1
+    return row
+
+
+_JOBS: dict[str, Callable[[JobSpec, Run], dict[str, Any]]] = {
+    "run": _job_run, "verify": _job_verify, "fuzz": _job_fuzz, "evaluate": _job_evaluate,
+}
+
+
+# ---------------------------------------------------------------------------- one run, safely
+
+
+def _one_line(text: object, limit: int = 400) -> str:
+    return " ".join(str(text).split())[:limit]
+
+
+def _error_row(code: int, message: str) -> dict[str, Any]:
+    return {"exit_code": code, "error": message}
+
+
+def _guarded(spec: JobSpec, run: Run) -> dict[str, Any]:
+    try:
+        row = _JOBS[spec.job](spec, run)
+        row.setdefault("error", None)
+        return row
+    except DesmonError as exc:
+        return _error_row(EXIT_BAD_VALUE, _one_line(exc))
+    except _TimedOut:
+        raise
+    except RecursionError:
+        return _error_row(EXIT_CRASH, "RecursionError (infinite recursion?)")
+    except BaseException as exc:  # anything a user's scenario or deployer may raise, KeyboardInterrupt included
+        detail = _one_line(exc)
+        return _error_row(EXIT_CRASH, f"{type(exc).__name__}{': ' + detail if detail else ''}")
+
+
+def _stop_thread(thread: threading.Thread) -> None:
+    """Ask a run that overran its time to stop: raise :class:`_TimedOut` in its thread (at its
+    next Python instruction; a run inside one long C call stops after it)."""
+    if thread.ident is not None and thread.is_alive():
+        ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread.ident), ctypes.py_object(_TimedOut))
+
+
+def run_point(spec: JobSpec, run: Run) -> dict[str, Any]:
+    """Run ``spec.job`` for one (point, seed): the row's figures, ``exit_code``, ``error``
+    and ``wall_s``. Never raises (see the module docstring)."""
+    t0 = time.perf_counter()
+    if spec.timeout is None:
+        row = _guarded(spec, run)
+    else:
+        box: list[dict[str, Any]] = []
+
+        def target() -> None:
+            try:
+                box.append(_guarded(spec, run))
+            except _TimedOut:
+                pass
+
+        thread = threading.Thread(target=target, name=f"desmon-sweep-{run.point.index}-{run.seed_index}", daemon=True)
+        thread.start()
+        thread.join(spec.timeout)
+        if thread.is_alive() or not box:
+            _stop_thread(thread)
+            row = _error_row(EXIT_TIMEOUT, f"timed out after {spec.timeout:g} s (--task-timeout)")
+        else:
+            row = box[0]
+    row["wall_s"] = round(time.perf_counter() - t0, 3)
+    return row
+
+
+# ------------------------------------------------------------------ checking values up front
+
+
+def _is_value_error(message: str, name: str | None) -> bool:
+    """Whether a load error is about the -p values themselves (refused before any work)."""
+    if "unknown parameter" in message:
+        return True
+    return name is not None and f"-p {name}=" in message
+
+
+def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> None:
+    """Refuse, before any work, a ``-p`` name the job does not know or a value that does not
+    parse as its parameter's type (one line). A value that parses but makes the scenario
+    invalid (say ``hours=-1``) is not refused here: its points become error rows."""
+    if job == "evaluate":
+        known = signal_parameters()
+        for axis in axes:
+            if axis.name not in known:
+                import difflib
+
+                close = difflib.get_close_matches(axis.name, known, n=1)
+                hint = f"did you mean {close[0]}? " if close else ""
+                raise SweepError(
+                    f"-p {axis.name}: --job evaluate sweeps the signal model, which has no parameter {axis.name!r}; "
+                    f"{hint}its numeric parameters are {', '.join(known)}"
+                )
+            kind = type(known[axis.name])
+            for v in axis.values:
+                try:
+                    number = float(v) if kind is float else int(v)
+                except ValueError:
+                    what = "a number" if kind is float else "a whole number"
+                    raise SweepError(f"-p {axis.name}={v}: {axis.name} is {what} (default {known[axis.name]})") from None
+                if number < 0:
+                    raise SweepError(f"-p {axis.name}={v}: {axis.name} cannot be negative (default {known[axis.name]})")
+        return
+    from desmon.loader import load_scenario
+
+    assert scenario is not None
+    try:
+        load_scenario(scenario)
+    except DesmonError as exc:
+        raise SweepError(f"{_one_line(exc)} (with the scenario's defaults, before sweeping it)") from None
+    for axis in axes:
+        for v in axis.values:
+            try:
+                load_scenario(scenario, {axis.name: v})
+            except DesmonError as exc:
+                message = _one_line(exc)
+                if _is_value_error(message, axis.name):
+                    raise SweepError(message.removeprefix(f"{scenario}: invalid scenario: ")) from None
+                # a value that parses but the scenario refuses: its points become error rows

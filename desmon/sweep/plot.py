@@ -1,0 +1,128 @@
+"""``desmon sweep-plot``: a figure of a sweep table against a parameter, or a Pareto view.
+
+* ``-x PARAM -y FIGURE``: per value of ``PARAM`` the mean of ``FIGURE`` over the seeds
+  (a line) and its min-max band; one line per combination of the other parameters that
+  vary in the table.
+* ``--pareto COST -y FIGURE``: every point's mean ``FIGURE`` against its ``COST``
+  (say ``hand_memory``), min-max bars over the seeds, and the Pareto front: the points
+  no other point beats on both (lower cost and lower figure).
+
+Rows with an error are left out (the title says how many).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from desmon.sweep.grid import SweepError
+
+__all__ = ["plot_sweep", "pareto_front", "summarise"]
+
+_NOT_PARAMETERS = {
+    "point", "seed_index", "seed", "scenario", "job", "deployer", "until", "max_states", "examples", "trials", "exit_code", "error",
+}
+
+
+def _parameters(df: Any) -> list[str]:
+    """The swept parameters of a table: the columns between ``seed`` and ``scenario``."""
+    cols = list(df.columns)
+    if "seed" in cols and "scenario" in cols:
+        return cols[cols.index("seed") + 1 : cols.index("scenario")]
+    return []
+
+
+def _column(df: Any, flag: str, name: str, numeric: bool = True) -> None:
+    if name not in df.columns:
+        import difflib
+
+        close = difflib.get_close_matches(name, [str(c) for c in df.columns], n=1)
+        hint = f"did you mean {close[0]}? " if close else ""
+        shown = [c for c in df.columns if c not in ("point", "seed_index", "error")]
+        raise SweepError(f"{flag} {name}: the table has no such column; {hint}its columns are {', '.join(shown)}")
+    if numeric:
+        import pandas as pd
+
+        if not pd.api.types.is_numeric_dtype(df[name]) or pd.api.types.is_bool_dtype(df[name]):
+            raise SweepError(f"{flag} {name}: the column holds text or yes/no values, not numbers; plot a numeric column")
+
+
+def summarise(df: Any, by: list[str], y: str) -> Any:
+    """Mean, min, max and count of ``y`` over the seeds, per combination of ``by``."""
+    g = df.groupby(by, sort=True)[y]
+    return g.agg(["mean", "min", "max", "count"]).reset_index()
+
+
+def pareto_front(costs: list[float], values: list[float]) -> list[int]:
+    """Indices of the points no other point beats on both (cost and value no higher, one lower),
+    by rising cost."""
+    order = sorted(range(len(costs)), key=lambda i: (costs[i], values[i]))
+    front: list[int] = []
+    best = float("inf")
+    for i in order:
+        if values[i] < best:
+            front.append(i)
+            best = values[i]
+    return front
+
+
+def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None = None) -> None:
+    """Draw ``table`` to ``output`` (PNG): ``y`` against ``x``, or against ``pareto`` with the front."""
+    from desmon.sweep.table import read_table
+
+    if (x is None) == (pareto is None):
+        raise SweepError("give either -x PARAMETER (a figure against a parameter) or --pareto COST (the Pareto view), not "
+                         + ("both" if x is not None else "neither"))
+    df = read_table(table)
+    for required in ("seed", "error"):
+        if required not in df.columns:
+            raise SweepError(f"{table}: not a table written by desmon sweep (no {required} column)")
+    _column(df, "-y", y)
+    _column(df, "-x" if x is not None else "--pareto", x or pareto)  # type: ignore[arg-type]
+    failed = int(df["error"].notna().sum())
+    ok = df[df["error"].isna()]
+    ok = ok[ok[y].notna()]
+    if ok.empty:
+        raise SweepError(f"{table}: no run without an error has a value of {y}; nothing to draw")
+    params = _parameters(df)
+    from desmon.viz.common import require_matplotlib
+
+    require_matplotlib()
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.5, 4.8), dpi=120)
+    seeds = int(ok.groupby(params or ["job"])["seed"].count().max())
+    note = f"{len(ok)} runs" + (f", {failed} failed runs left out" if failed else "")
+    if x is not None:
+        others = [p for p in params if p != x and ok[p].nunique() > 1]
+        s = summarise(ok, [*others, x], y)
+        groups = s.groupby(others, sort=True) if others else [((), s)]
+        for label, part in groups:
+            label = label if isinstance(label, tuple) else (label,)
+            name = ", ".join(f"{k}={v}" for k, v in zip(others, label)) or y
+            line = ax.plot(part[x], part["mean"], marker="o", label=name)[0]
+            ax.fill_between(part[x], part["min"], part["max"], alpha=0.2, color=line.get_color())
+        ax.set_xlabel(x)
+        ax.set_title(f"{y} vs {x}: mean and min-max over up to {seeds} seeds ({note})", fontsize=9)
+    else:
+        assert pareto is not None
+        by = params or [pareto]
+        s = summarise(ok, by, y).join(ok.groupby(by, sort=True)[pareto].mean().rename("_cost"), on=by)
+        costs, means = [float(c) for c in s["_cost"]], [float(m) for m in s["mean"]]
+        front = pareto_front(costs, means)
+        ax.errorbar(costs, means, yerr=[[m - lo for m, lo in zip(means, s["min"])], [hi - m for m, hi in zip(means, s["max"])]],
+                    fmt="o", color="0.6", ecolor="0.8", capsize=3, label="point (mean, min-max over seeds)")
+        ax.step([costs[i] for i in front], [means[i] for i in front], where="post", color="C3", marker="o", label="Pareto front")
+        for i in front:
+            label = ", ".join(f"{p}={s.iloc[i][p]}" for p in by if p != pareto) or f"{pareto}={s.iloc[i][pareto]}"
+            ax.annotate(label, (costs[i], means[i]), textcoords="offset points", xytext=(4, 6), fontsize=7)
+        ax.set_xlabel(f"cost: {pareto}")
+        ax.set_title(f"{y} vs {pareto}: Pareto front of {len(s)} points ({note})", fontsize=9)
+    ax.set_ylabel(y)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(output)
+    plt.close(fig)
