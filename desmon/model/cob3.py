@@ -8,6 +8,8 @@ release -> force); a scenario may add platforms or devices before ``build()``.
 
 from __future__ import annotations
 
+from typing import Mapping
+
 from desmon.model import GRASP, MOVE_BASE, RELEASE, RobotBuilder
 
 __all__ = ["FORCE", "TACTILE", "COMBINED", "PADS", "LOADS", "care_o_bot", "graphs"]
@@ -39,7 +41,9 @@ def graphs(robot: RobotBuilder, tactile_kind: str = "tactile_pad") -> None:
         g.processing("fusion_rules", inputs=["force_slip", "tactile_slip"])
 
 
-def care_o_bot(*, specs: bool = True, rules: bool = True, hand_pc_memory: float = 320) -> RobotBuilder:
+def care_o_bot(
+    *, specs: bool = True, rules: bool = True, hand_pc_memory: float = 320, attributes: Mapping[str, object] | None = None
+) -> RobotBuilder:
     """The coffee scenario's robot (platforms, devices, graphs, specs R1-R3, rules R*).
 
     Platforms (memory in MB; the scenarios add background loads, ``LOADS``): ``torso_pc``

@@ -71,6 +71,8 @@ def event_problem(ev: Event, model: SystemModel, others: Iterable[Event] = ()) -
     if ev.platform not in platforms:
         other = f": {ev.platform!r} is a device (use DeviceFail / DeviceRepair)" if ev.platform in devices else ""
         return f"{ev} names unknown platform {ev.platform!r}{suggest(ev.platform, platforms)}{other} (platforms: {', '.join(platforms)})"
+    if isinstance(ev, (PlatformDown, PlatformUp)) and model.platform(ev.platform).on_demand:
+        return f"{ev}: platform {ev.platform!r} is on demand: it joins and leaves (PlatformJoin / PlatformLeave) instead of going up and down"
     if isinstance(ev, (PlatformJoin, PlatformLeave)) and not model.platform(ev.platform).on_demand:
         return f"{ev}: platform {ev.platform!r} is not on demand, so it cannot join or leave: declare it with on_demand=True, or use PlatformUp / PlatformDown"
     if isinstance(ev, LoadChange):

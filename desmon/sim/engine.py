@@ -50,7 +50,20 @@ from desmon.deployment.monitor import GripperObservation, Stimulus, interpret
 from desmon.deployment.ports import ErrorRecord, RaiseError, Start, Stop
 from desmon.detectors.base import Alarm
 from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
-from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+from desmon.deployment.lease import lease_choice
+from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS
+from desmon.model.events import (
+    ActionChange,
+    DeviceFail,
+    DeviceRepair,
+    Event,
+    LoadChange,
+    PlatformDown,
+    PlatformJoin,
+    PlatformLeave,
+    PlatformUp,
+    RequirementChange,
+)
 from desmon.model.scenario import Scenario
 from desmon.model.system import PlatformState
 from desmon.repository import labels as L
@@ -148,7 +161,7 @@ class SimWorld:
         self.core = DeploymentCore(self.model, self.query, RepositoryInsert(self.repo, self.model.robot), deployer)
         self.deployer_name = self.core.deployer.name
         # physical state
-        self.up = {p.name: True for p in self.model.platforms}
+        self.up = {p.name: not p.on_demand for p in self.model.platforms}  # on demand: absent until it joins
         self.load: dict[str, float] = {p.name: 0.0 for p in self.model.platforms}
         self.dev_ok = {d.name: True for d in self.model.devices}
         self.host = {d.name: d.platform for d in self.model.devices}
@@ -186,6 +199,12 @@ class SimWorld:
         #: the seconds their slots went unserved (stop of the fallback -> ready)
         self.upgrades = self.upgrades_failed = 0
         self.upgrade_blind = 0.0
+        #: run-time changes: requirement changes applied, leases (requested, joined), leased seconds
+        self.requirement_changes = self.leases = 0
+        self.leased_s = 0.0
+        self._leased: dict[str, float] = {}  # on-demand platform -> join time, while leased
+        self._lease_requested: set[str] = set()
+        self._last_busy: dict[str, float] = {}
         self._pending_ready: list[Instance] = []
         # initial facts, silently (before Notify is wired)
         for ev in scenario.initial:
@@ -199,6 +218,7 @@ class SimWorld:
         # Notify: repository changes wake the deployer
         self.pending_platforms: dict[str, None] = {}
         self.pending_context = False
+        self.pending_specs: dict[str, None] = {}
         self.wake: simpy.Event | None = None
         self.repo.subscribe(self._notify, ops=(ADD_EDGE, REMOVE_EDGE, UPDATE_NODE), labels=(L.IN_CONTEXT, L.HAS_DEVICE, L.PLATFORM))
         self.repo.subscribe(self._count_history, ops=(RELABEL_EDGE,), labels=(L.DEPLOYMENT_HISTORY,))
@@ -267,10 +287,14 @@ class SimWorld:
         self.history_edges += 1
 
     def _take_stimulus(self) -> Stimulus:
-        stim = Stimulus(tuple(self.pending_platforms), self.pending_context)
+        stim = Stimulus(tuple(self.pending_platforms), self.pending_context, tuple(self.pending_specs))
         self.pending_platforms = {}
         self.pending_context = False
+        self.pending_specs = {}
         return stim
+
+    def _pending(self) -> bool:
+        return bool(self.pending_platforms or self.pending_context or self.pending_specs)
 
     # ------------------------------------------------------------------ processes
     def _robot(self):  # type: ignore[no-untyped-def]
@@ -317,7 +341,7 @@ class SimWorld:
             readers = [i for i in self.instances.values() if any(ev.device in devs for devs in i.streams.values())]
             self._inputs_change(readers, now, lambda: self._apply_physical(ev, now))
         else:
-            up = isinstance(ev, PlatformUp)
+            up = isinstance(ev, (PlatformUp, PlatformJoin))
             if self.up[ev.platform] == up:
                 return
             self.trace.emit(now, "fault", event=str(ev), source=source)
@@ -414,6 +438,86 @@ class SimWorld:
             x = min(w.high, max(w.low, x + w.drift + rng.gauss(0.0, w.sigma)))
             self._set_load(LoadChange(w.platform, round(x, 1), w.resource))
 
+    # ------------------------------------------------------------------ run-time changes
+    def _change(self, ev: Event, source: str) -> None:
+        """A scripted or random run-time change: a requirement change is written by the
+        context monitor at once (it is a decision of the robot's software, not a fault to
+        be noticed); a platform joins or leaves like a platform that comes up or goes down."""
+        if not isinstance(ev, RequirementChange):
+            self._fault(ev, source)
+            if isinstance(ev, PlatformJoin):
+                self._leased.setdefault(ev.platform, self.env.now)
+            elif isinstance(ev, PlatformLeave) and ev.platform in self._leased:
+                self.leased_s += self.env.now - self._leased.pop(ev.platform)
+            return
+        now = self.env.now
+        self.trace.emit(now, "change", event=str(ev), source=source)
+        stim = self.core.observe(ev)
+        if stim.empty:
+            return
+        self.requirement_changes += 1
+        spec = self.query.deployment_information(ev.graph)
+        memory = dict(spec.consumption()).get("memory", 0.0) if spec is not None else 0.0
+        self.consumes[ev.graph] = memory
+        for inst in self.instances.values():
+            if inst.graph == ev.graph:  # a running instance now needs what its spec says
+                inst.memory = memory
+                self._mem(inst.platform)
+        self.trace.emit(now, "fact", fact=str(ev))
+        self.pending_platforms.update(dict.fromkeys(stim.changed_platforms))
+        self.pending_specs.update(dict.fromkeys(stim.specs_changed))
+        if self.wake is not None and not self.wake.triggered:
+            self.wake.succeed()
+
+    def _scripted_changes(self):  # type: ignore[no-untyped-def]
+        for te in self.world.changes:
+            if te.time >= self.horizon:
+                break
+            if te.time > self.env.now:
+                yield self.env.timeout(te.time - self.env.now)
+            self._change(te.event, te.label or "script")
+
+    def _random_changes(self):  # type: ignore[no-untyped-def]
+        spec = self.world.random_changes
+        assert spec is not None
+        rng = random.Random(f"{self.seed}:changes")
+        while True:
+            yield self.env.timeout(rng.expovariate(1.0 / spec.mean_interval))
+            self._change(rng.choice(spec.changes), "random")
+
+    def _maybe_lease(self, graph: str) -> None:
+        """No acceptable platform for ``graph``: lease an on-demand platform on which it
+        would be acceptable (:func:`desmon.deployment.lease.lease_choice`), unless one is
+        already on its way."""
+        lease = self.world.lease
+        assert lease is not None
+        allowed = lease.platforms or tuple(p.name for p in self.model.platforms if p.on_demand)
+        absent = [p for p in allowed if not self.up[p] and p not in self._lease_requested]
+        choice = lease_choice(self.query, graph, absent) if absent else None
+        if choice is None:
+            return
+        self._lease_requested.add(choice)
+        self.leases += 1
+        self.trace.emit(self.env.now, "lease", platform=choice, graph=graph)
+        self.env.process(self._lease(choice))
+
+    def _lease(self, platform: str):  # type: ignore[no-untyped-def]
+        """A leased platform joins after its start-up delay and leaves once it has hosted
+        nothing for the lease's ``idle_s``."""
+        env = self.env
+        idle = self.world.lease.idle_s  # type: ignore[union-attr]
+        yield env.timeout(self.model.platform(platform).startup_s)
+        self._change(PlatformJoin(platform), "lease")
+        self._last_busy[platform] = env.now
+        while True:
+            busy = any(p == platform for _g, p in self.instances)
+            wait = idle if busy else idle - (env.now - self._last_busy[platform])
+            if not busy and wait <= 0:
+                break
+            yield env.timeout(max(wait, 1e-6))
+        self._change(PlatformLeave(platform), "lease")
+        self._lease_requested.discard(platform)
+
     def _progress(self):  # type: ignore[no-untyped-def]
         step = self.horizon / 20
         while True:
@@ -489,6 +593,7 @@ class SimWorld:
         inst = Instance(graph, platform, self.consumes.get(graph, 0.0), streams, adapter, env.now)
         self._activate(inst, env.now)
         self.instances[(graph, platform)] = inst
+        self._last_busy[platform] = env.now
         self.starts += 1
         record_start(self.repo, graph, platform)
         self._mem(platform)
@@ -507,6 +612,7 @@ class SimWorld:
         self.exposure.advance(now)
         self._feed(inst, now)
         del self.instances[(graph, platform)]
+        self._last_busy[platform] = now
         if inst.proc is not None and inst.proc.is_alive:
             inst.proc.interrupt("stop")
         if inst.adapter is not None:
@@ -561,7 +667,7 @@ class SimWorld:
     def _deployer(self):  # type: ignore[no-untyped-def]
         env = self.env
         while True:
-            if not self.pending_platforms and not self.pending_context:
+            if not self._pending():
                 self.wake = env.event()
                 yield self.wake
                 self.wake = None
@@ -606,10 +712,12 @@ class SimWorld:
                     self.errors.append(rec)
                     raised.append(cmd.graph)
                     self.trace.emit(env.now, "error", kind=rec.kind, graph=rec.graph, platform=rec.platform, detail=rec.detail)
+                    if cmd.kind == NO_ACCEPTABLE_PLATFORMS and self.world.lease is not None:
+                        self._maybe_lease(cmd.graph)
                 else:
                     raise not_a_command(cmd)
             self.core.settle(raised)
-            if not self.pending_platforms and not self.pending_context:
+            if not self._pending():
                 self._audit()
 
     def _count_upgrade(
@@ -678,6 +786,10 @@ class SimWorld:
             env.process(self._scripted_loads())
         for i in range(len(self.world.load_walks)):
             env.process(self._walk(i))
+        if self.world.changes:
+            env.process(self._scripted_changes())
+        if self.world.random_changes is not None:
+            env.process(self._random_changes())
         if self.progress is not None:
             env.process(self._progress())
         env.run(until=self.horizon)
@@ -686,6 +798,8 @@ class SimWorld:
             self._feed(inst, now)
         self.exposure.close(now)
         self.memory.close(now)
+        for platform, since in self._leased.items():
+            self.leased_s += now - since
         metrics = self._metrics()
         self.trace.emit(now, "end", **{k: v for k, v in metrics.items() if k != "latencies"})
         return RunResult(
@@ -720,6 +834,10 @@ class SimWorld:
             "alarms": len(self.alarms),
             "signals": self.signals_on,
         }
+        if self.world.changes or self.world.random_changes is not None or self.world.lease is not None:
+            m["requirement_changes"] = self.requirement_changes
+            m["leases"] = self.leases
+            m["leased_s"] = round(self.leased_s, 6)
         if self.signals_on:
             # graphs that cannot alarm: never counted as monitoring (see _activate)
             m["no_signal_model"] = {g: list(kinds) for g, kinds in self.world.no_signal_model(self.model.graphs).items()}

@@ -25,16 +25,28 @@ from desmon.model.checks import (
     check_flag,
     check_items,
     check_name,
+    check_names,
     check_number,
     check_pairs,
     check_text,
     strict_init,
     suggest,
 )
-from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformUp
+from desmon.model.events import (
+    ActionChange,
+    DeviceFail,
+    DeviceRepair,
+    Event,
+    LoadChange,
+    PlatformDown,
+    PlatformJoin,
+    PlatformLeave,
+    PlatformUp,
+    RequirementChange,
+)
 from desmon.model.graph import PerceptionGraph
 from desmon.model.scenario import Scenario, TimedEvent, event_problem
-from desmon.model.system import check_action
+from desmon.model.system import SystemModel, check_action
 
 __all__ = [
     "Step",
@@ -42,6 +54,8 @@ __all__ = [
     "MTTF",
     "StartFailure",
     "LoadWalk",
+    "RandomChanges",
+    "Lease",
     "World",
     "Segment",
     "SIGNAL_STREAMS",
@@ -182,6 +196,42 @@ class LoadWalk:
 
 @strict_init(ScenarioError)
 @dataclass(frozen=True, slots=True)
+class RandomChanges:
+    """Random run-time requirement changes: after exponentially distributed gaps of mean
+    ``mean_interval`` seconds, one of ``changes`` (uniformly, from the run's seed) happens."""
+
+    changes: tuple[RequirementChange, ...]
+    mean_interval: float
+
+    def __post_init__(self) -> None:
+        changes = check_items(
+            "world: random changes", self.changes, RequirementChange, error=ScenarioError,
+            example="(RequirementChange('combined', add=(Capacity('memory', 350),), remove=(Capacity('memory', 250),)),)",
+        )
+        if not changes:
+            raise ScenarioError("world: random changes list no change: give at least one RequirementChange")
+        object.__setattr__(self, "changes", changes)
+        _seconds("random changes mean interval", self.mean_interval, zero=False)
+
+
+@strict_init(ScenarioError)
+@dataclass(frozen=True, slots=True)
+class Lease:
+    """On-demand capacity: when a wanted graph has no acceptable platform, the world
+    leases an on-demand platform (of ``platforms``; all of the model's when empty) on
+    which it would be acceptable; the platform joins after its ``startup_s`` and leaves
+    once it has hosted nothing for ``idle_s`` seconds."""
+
+    platforms: tuple[str, ...] = ()
+    idle_s: float = 60.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "platforms", check_names("world: lease platforms", self.platforms, each="platform", error=ScenarioError, example="('edge',)"))
+        _seconds("lease idle_s", self.idle_s, zero=False)
+
+
+@strict_init(ScenarioError)
+@dataclass(frozen=True, slots=True)
 class World:
     """The SimPy world's configuration (see the module docstring).
 
@@ -224,6 +274,12 @@ class World:
     #: never counts as monitoring.
     signal_kinds: tuple[tuple[str, str], ...] = SIGNAL_KINDS
     description: str = ""
+    #: scripted run-time changes: RequirementChange, PlatformJoin, PlatformLeave
+    changes: tuple[TimedEvent, ...] = ()
+    #: random requirement changes (Poisson), or None
+    random_changes: RandomChanges | None = None
+    #: leasing of on-demand platforms when nothing else fits, or None (never leased)
+    lease: Lease | None = None
 
     def __post_init__(self) -> None:
         err = ScenarioError
@@ -297,6 +353,20 @@ class World:
                 raise ScenarioError(f"world: load event {te.event} is not a LoadChange: put it in faults= or the task")
         self._timed("loads", loads)
         object.__setattr__(self, "loads", loads)
+        example = "changes=(TimedEvent(60.0, PlatformJoin('edge')),)"
+        changes = check_items("world: changes", self.changes, TimedEvent, error=err, example=example)
+        for te in changes:
+            if not isinstance(te.event, (RequirementChange, PlatformJoin, PlatformLeave)):
+                raise ScenarioError(
+                    f"world: change {te.event} is not a run-time change: changes are RequirementChange, PlatformJoin, "
+                    "PlatformLeave (faults go in faults=, loads in loads=)"
+                )
+        self._timed("changes", changes)
+        object.__setattr__(self, "changes", changes)
+        if self.random_changes is not None and not isinstance(self.random_changes, RandomChanges):
+            raise ScenarioError(f"world: random_changes = {self.random_changes!r} is not a RandomChanges: write RandomChanges(changes=(...), mean_interval=600)")
+        if self.lease is not None and not isinstance(self.lease, Lease):
+            raise ScenarioError(f"world: lease = {self.lease!r} is not a Lease: write Lease(idle_s=60)")
 
     def _check_stochastic(self) -> None:
         """MTTF entries (one per component) and load walks (one per platform and resource)."""
@@ -376,10 +446,12 @@ class World:
             check_action(model, step.action, where=where, what="task action", error=ScenarioError)
         if self.slips:
             self._check_slips(model.like)
-        for te in self.faults + self.loads:
-            problem = event_problem(te.event, model)
+        changes = [te.event for te in self.changes] + list(self.random_changes.changes if self.random_changes else ())
+        for te in self.faults + self.loads + self.changes:
+            problem = event_problem(te.event, model, changes)
             if problem is not None:
                 raise ScenarioError(f"{where}: at t={te.time:g}: {problem}")
+        self._check_runtime_changes(model, where, changes)
         self._check_components(scenario, where)
         kinds = sorted({d.kind for d in model.devices})
         for kind, stream in self.signal_kinds:
@@ -387,6 +459,21 @@ class World:
                 raise ScenarioError(
                     f"{where}: signal_kinds maps {kind!r}, which no device is{suggest(kind, kinds)}: fix the kind (kinds: {', '.join(kinds)})"
                 )
+
+    def _check_runtime_changes(self, model: SystemModel, where: str, changes: list[Event]) -> None:
+        """Random requirement changes and the lease name what the model has."""
+        for ev in self.random_changes.changes if self.random_changes else ():
+            problem = event_problem(ev, model, changes)
+            if problem is not None:
+                raise ScenarioError(f"{where}: random changes: {problem}")
+        if self.lease is None:
+            return
+        on_demand = [p.name for p in model.platforms if p.on_demand]
+        if not on_demand:
+            raise ScenarioError(f"{where}: lease given but no platform is on demand: declare one with on_demand=True or drop lease")
+        for p in self.lease.platforms:
+            if p not in on_demand:
+                raise ScenarioError(f"{where}: lease names {p!r}, which is no on-demand platform{suggest(p, on_demand)} (on demand: {', '.join(on_demand)})")
 
     def _check_components(self, scenario: Scenario, where: str) -> None:
         """The devices, platforms and graphs named by MTTFs, load walks, start latencies and
@@ -400,6 +487,8 @@ class World:
                     f"{where}: MTTF for unknown component {m.component!r}{suggest(m.component, devices + platforms)} "
                     f"(devices {sorted(devices)}, platforms {sorted(platforms)})"
                 )
+            if m.component in platforms and model.platform(m.component).on_demand:
+                raise ScenarioError(f"{where}: MTTF for on-demand platform {m.component!r}: it joins and leaves; script PlatformJoin / PlatformLeave in changes= instead")
             if m.component in devices and m.component in platforms:
                 raise ScenarioError(
                     f"{where}: MTTF for {m.component!r} is ambiguous: it names both a device and a platform; rename one of them"
