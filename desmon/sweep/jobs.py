@@ -272,7 +272,7 @@ def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> None
             if axis.name not in known:
                 import difflib
 
-                close = difflib.get_close_matches(axis.name, known, n=1)
+                close = [k for k in known if k.startswith(axis.name)] or difflib.get_close_matches(axis.name, known, n=1, cutoff=0.5)
                 hint = f"did you mean {close[0]}? " if close else ""
                 raise SweepError(
                     f"-p {axis.name}: --job evaluate sweeps the signal model, which has no parameter {axis.name!r}; "

@@ -95,6 +95,8 @@ def read_table(path: str | os.PathLike[str]) -> Any:
     """A table written by ``desmon sweep`` (Parquet or CSV) as a DataFrame, or a SweepError."""
     import pandas as pd
 
+    if not str(path).lower().endswith(TABLE_SUFFIXES):
+        raise SweepError(f"{path}: not a sweep table: desmon sweep writes .parquet or .csv files (-o results.parquet)")
     try:
         if str(path).lower().endswith(".parquet"):
             return pd.read_parquet(path)
