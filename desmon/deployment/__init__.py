@@ -9,6 +9,7 @@ from desmon.deployment.ports import (
     Command, ControlPort, ErrorPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop,
 )
 from desmon.deployment.validity import Failure, Validity, acceptable_platforms, check_platform, check_validity, deployment_valid, validity_for
+from desmon.deployment import placement as _placement  # noqa: F401  (registers the vectorised path, issue 16)
 
 __all__ = [
     "DeploymentCore", "StepLog", "run_sync", "stamp", "standing_after",

@@ -43,6 +43,11 @@ _MEMO_SIZE = 1 << 16
 #: the engine learns what a reaction observed of the platforms. Nothing else reads it.
 _observer: Any = None
 
+#: Issue 16: the vectorised placement path, registered by :mod:`desmon.deployment.placement`
+#: when it is imported: ``vector_validity(reqs, states, graph, reasons)`` answers what
+#: :func:`_check_validity` would (a Validity) or None to leave it to the loop below.
+_vector_path: Any = None
+
 __all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos"]
 
 
@@ -308,6 +313,10 @@ def check_validity(
 def _check_validity(
     reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool
 ) -> Validity:
+    if _vector_path is not None and _observer is None:  # issue 16: columns for large fleets
+        fast = _vector_path(reqs, states, graph, reasons)
+        if fast is not None:
+            return fast  # type: ignore[no-any-return]
     acceptable: list[PlatformState] = []
     rejected: list[tuple[str, tuple[Failure, ...]]] = []
     check = _check_platform.__wrapped__  # memoised as a whole here; per pair only in check_platform

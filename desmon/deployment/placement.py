@@ -1,0 +1,647 @@
+"""Vectorised placement: requirement checking over thousands of platforms at once.
+
+:func:`desmon.deployment.validity.check_validity` walks the platforms one by one in
+Python. At fleet scale (thousands of platforms) that loop dominates, so this module
+keeps the platform facts as *columns* -- numpy arrays with one row per platform --
+and evaluates each requirement kind over all rows at once:
+
+* ``up`` flags and ``preference`` values (the preference order is one stable argsort);
+* per resource: capacities (NaN where a platform has none), background loads, and
+  the deployed shares as a rows x slots matrix of amounts with the sharing graph's
+  code beside each, so a Capacity check can leave out the graph being placed (and,
+  for a tuple :data:`~desmon.deployment.validity.Placing`, the graphs it would free);
+* per numeric property: values (NaN where missing); per attribute: integer codes of
+  the value's text (attributes compare as text);
+* per device kind and per (kind, vendor): counts of working devices.
+
+**Exactness.** The answer is the same :class:`~desmon.deployment.validity.Validity`
+the scalar path gives: same acceptable tuple in the same order, same rejected tuple
+with equal :class:`~desmon.deployment.validity.Failure` objects. The masks replay the
+scalar arithmetic operation by operation (a Capacity's free amount is
+``capacity - (0 + share_1 + share_2 ...) - load`` in float64, as Python computes
+it); rows whose numbers float64 could not hold exactly (integers beyond 2**40) make
+the columns decline, and the caller takes the scalar path. Reason texts are never
+computed here: for the rejected rows only, the scalar
+:func:`~desmon.deployment.validity.requirement_holds` is asked about the requirements
+the masks say fail, so the texts cannot diverge.
+
+**Dispatch.** Importing this module registers :func:`vector_validity` with
+:mod:`desmon.deployment.validity`; ``check_validity`` then takes the columns for
+:data:`VECTOR_MIN_PLATFORMS` platforms or more, never while the checker's observer
+is set, and never for a requirement kind the columns do not cover (a soft
+preference, say): :func:`vector_validity` answers None and the scalar loop runs.
+
+**Incremental upkeep.** The last few column stores are kept. A new states tuple
+equal to a kept one costs one tuple comparison; one that differs in a few rows
+(what a repository event changes: one platform's up flag, load, devices or
+deployments) rewrites only those rows (:meth:`PlatformColumns.sync`,
+:meth:`PlatformColumns.update`). :class:`ChangeLogColumns` goes further and follows
+a repository's change log, so no platform's facts are re-read unless a change
+touched it.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
+
+import numpy as np
+
+from desmon.deployment import validity as _validity
+from desmon.errors import ModelError, QueryError
+from desmon.model.requirements import PLATFORM_HAS, Attribute, Capacity, Maximum, Minimum, Option, Quantity, Selection
+from desmon.model.system import PlatformState
+from desmon.repository import labels as _L
+from desmon.repository.store import ADD_NODE
+
+__all__ = [
+    "VECTOR_MIN_PLATFORMS",
+    "PlatformColumns",
+    "ChangeLogColumns",
+    "vector_validity",
+    "acceptable",
+    "supported",
+    "scalar_only",
+    "COUNTS",
+]
+
+#: ``check_validity`` takes the columns from this many platforms on. Measured with
+#: ``python -m bench.bench_validity --crossover``: below it the fixed cost of the numpy
+#: calls (some tens of microseconds per requirement) outweighs the per-platform loop.
+VECTOR_MIN_PLATFORMS = 64
+
+#: How many column stores are kept (each one platform list, most recently used first).
+_KEPT = 2
+
+#: Failures kept for reuse per column store (each a few hundred bytes); all dropped beyond.
+_REASONS_KEPT = 200_000
+
+#: Integers beyond this do not survive float64 sums exactly: such rows decline.
+_EXACT_INT = 2**40
+
+#: Python 3.12's ``sum`` adds floats with compensation; there, a Capacity sum of three
+#: or more shares is left to the scalar code (row by row) so the verdicts stay equal.
+_COMPENSATED_SUM = sys.version_info >= (3, 12)
+
+#: The hard requirement kinds the columns evaluate (exact types: a subclass declines).
+_HARD = frozenset({Quantity, Capacity, Minimum, Maximum, Attribute, Selection})
+
+#: How often each path ran: ``vector`` (answered by the columns), ``declined`` (a
+#: requirement or a number the columns do not cover: the scalar loop answered).
+#: Observability for tests and benchmarks; nothing reads it to decide.
+COUNTS: dict[str, int] = {"vector": 0, "declined": 0}
+
+_LOCK = threading.RLock()
+
+
+def _inexact(x: object) -> bool:
+    return type(x) is int and abs(x) > _EXACT_INT  # type: ignore[arg-type]
+
+
+def supported(requirements: Iterable[object]) -> bool:
+    """True if every requirement is a hard kind the columns evaluate exactly."""
+    for req in requirements:
+        if type(req) not in _HARD:
+            return False
+        if isinstance(req, Capacity) and _inexact(req.amount):
+            return False
+        if isinstance(req, (Minimum, Maximum)) and _inexact(req.value):
+            return False
+        if isinstance(req, Quantity) and _inexact(req.count):
+            return False
+    return True
+
+
+#: A rejected platform's entry of ``Validity.rejected``: its name and its failures.
+_Pair = tuple[str, tuple[Any, ...]]
+
+
+@dataclass(slots=True)
+class _Shares:
+    """One resource's deployed shares: rows x slots amounts and the graph codes (-1: empty)."""
+
+    amounts: np.ndarray
+    graphs: np.ndarray
+
+
+class PlatformColumns:
+    """The platform facts of one platform list as numpy columns (see the module doc).
+
+    Build it from the states (``PlatformColumns(states)``), keep it current with
+    :meth:`update` (rows by index) or :meth:`sync` (a whole new states tuple, only
+    the changed rows rewritten), and ask :meth:`validity` or :meth:`acceptable`.
+    """
+
+    def __init__(self, states: Sequence[PlatformState]) -> None:
+        states = tuple(states)
+        for i, s in enumerate(states):
+            if not isinstance(s, PlatformState):
+                raise ModelError(f"platform columns: item {i} = {s!r} is not a PlatformState: pass query.platform_states()")
+        self.states: tuple[PlatformState, ...] = states
+        self.n = len(states)
+        self._names = np.array([s.platform.name for s in states], dtype=object)
+        self._graph_code: dict[str, int] = {}
+        self._attr_code: dict[str, dict[str, int]] = {}
+        self._inexact_rows: set[int] = set()
+        self._order: np.ndarray | None = None
+        #: (requirement, graph) -> row -> (name, (its Failure,)), the scalar text; a
+        #: rewritten row drops its entries, as it does its "platform is down" pair
+        self._reasons: dict[tuple[str, _validity.Placing], dict[int, _Pair]] = {}
+        self._down: dict[int, _Pair] = {}
+        self._memoised = 0
+        self._build(states)
+
+    # -- building ------------------------------------------------------------------------
+    def _build(self, states: tuple[PlatformState, ...]) -> None:
+        n = self.n
+        self._up = np.fromiter((s.up for s in states), dtype=bool, count=n)
+        self._pref = np.fromiter((s.platform.preference for s in states), dtype=np.float64, count=n)
+        caps: dict[str, dict[int, float]] = {}
+        loads: dict[str, dict[int, float]] = {}
+        props: dict[str, dict[int, float]] = {}
+        attrs: dict[str, dict[int, int]] = {}
+        kinds: dict[str, dict[int, int]] = {}
+        vendors: dict[tuple[str, str], dict[int, int]] = {}
+        shares: dict[str, dict[int, list[tuple[int, float]]]] = {}
+        for i, s in enumerate(states):
+            facts = self._facts(i, s)
+            for table, row in zip((caps, loads, props, attrs, kinds, vendors, shares), facts):
+                for key, value in row.items():
+                    table.setdefault(key, {})[i] = value  # type: ignore[index]
+        self._caps = {k: self._column(v, np.nan, np.float64) for k, v in caps.items()}
+        self._loads = {k: self._column(v, 0.0, np.float64) for k, v in loads.items()}
+        self._props = {k: self._column(v, np.nan, np.float64) for k, v in props.items()}
+        self._attrs = {k: self._column(v, -1, np.int32) for k, v in attrs.items()}
+        self._kinds = {k: self._column(v, 0, np.int32) for k, v in kinds.items()}
+        self._vendors = {k: self._column(v, 0, np.int32) for k, v in vendors.items()}
+        self._shares = {k: self._share_matrix(v) for k, v in shares.items()}
+
+    def _column(self, values: dict[int, Any], default: Any, dtype: Any) -> np.ndarray:
+        col = np.full(self.n, default, dtype=dtype)
+        if values:
+            col[np.fromiter(values.keys(), dtype=np.intp, count=len(values))] = list(values.values())
+        return col
+
+    def _share_matrix(self, rows: dict[int, list[tuple[int, float]]]) -> _Shares:
+        width = max(len(r) for r in rows.values())
+        out = _Shares(np.zeros((self.n, width)), np.full((self.n, width), -1, dtype=np.int32))
+        for i, entries in rows.items():
+            for j, (code, amount) in enumerate(entries):
+                out.graphs[i, j] = code
+                out.amounts[i, j] = amount
+        return out
+
+    def _facts(self, i: int, s: PlatformState) -> tuple[dict, ...]:
+        """One platform's facts, keyed per column family (see :meth:`_build`)."""
+        p = s.platform
+        numbers = [v for _k, v in p.capacities] + [v for _k, v in s.load] + [v for _k, v in p.properties]
+        numbers += [a for _g, use in s.deployed for _r, a in use]
+        if _inexact(p.preference) or any(_inexact(v) for v in numbers):
+            self._inexact_rows.add(i)
+        else:
+            self._inexact_rows.discard(i)
+        attrs = {}
+        for key, value in p.attributes:
+            codes = self._attr_code.setdefault(key, {})
+            attrs[key] = codes.setdefault(str(value), len(codes))
+        kinds: dict[str, int] = {}
+        vendors: dict[tuple[str, str], int] = {}
+        for d in s.devices:
+            kinds[d.kind] = kinds.get(d.kind, 0) + 1
+            vendors[(d.kind, d.vendor)] = vendors.get((d.kind, d.vendor), 0) + 1
+        shares: dict[str, list[tuple[int, float]]] = {}
+        for g, use in s.deployed:  # the order of PlatformState.used_by: deployments, then their uses
+            code = self._graph_code.setdefault(g, len(self._graph_code))
+            for res, amount in use:
+                if amount:
+                    shares.setdefault(res, []).append((code, amount))
+        return dict(p.capacities), dict(s.load), dict(p.properties), attrs, kinds, vendors, shares
+
+    # -- incremental upkeep ----------------------------------------------------------------
+    def update(self, changes: Mapping[int, PlatformState] | Iterable[tuple[int, PlatformState]]) -> int:
+        """Rewrite the rows ``index -> new state`` (the same platform, new facts); returns
+        how many rows changed. A state for another platform than the row's is refused."""
+        items = changes.items() if isinstance(changes, Mapping) else changes
+        states = list(self.states)
+        count = 0
+        for i, s in items:
+            if type(i) is not int or not 0 <= i < self.n:
+                raise QueryError(f"platform columns: row {i!r} is not an index in 0..{self.n - 1}: pass the platform's position")
+            if not isinstance(s, PlatformState):
+                raise ModelError(f"platform columns: row {i} = {s!r} is not a PlatformState: pass the platform's new state")
+            if s.platform.name != self._names[i]:
+                raise QueryError(
+                    f"platform columns: row {i} holds platform {self._names[i]!r}, not {s.platform.name!r}: "
+                    "build new columns for a changed platform list"
+                )
+            self._rewrite(i, s)
+            states[i] = s
+            count += 1
+        self.states = tuple(states)
+        return count
+
+    def sync(self, states: tuple[PlatformState, ...]) -> bool:
+        """Make the columns hold ``states`` by rewriting the rows that differ; False (and
+        nothing changed) if ``states`` is another platform list (other names or length)."""
+        old = self.states
+        if old is states:
+            return True
+        if len(old) != len(states):
+            return False
+        if old == states:  # C-level; element identity first, so cheap for the same objects
+            self.states = states
+            return True
+        names = self._names
+        changed = [(i, s) for i, (a, s) in enumerate(zip(old, states)) if a is not s and a != s]
+        if any(s.platform.name != names[i] for i, s in changed):
+            return False
+        for i, s in changed:
+            self._rewrite(i, s)
+        self.states = states
+        return True
+
+    def _rewrite(self, i: int, s: PlatformState) -> None:
+        for memo in self._reasons.values():
+            memo.pop(i, None)
+        self._down.pop(i, None)
+        self._up[i] = s.up
+        if self._pref[i] != s.platform.preference:
+            self._pref[i] = s.platform.preference
+            self._order = None
+        caps, loads, props, attrs, kinds, vendors, shares = self._facts(i, s)
+        for table, row, default, dtype in (
+            (self._caps, caps, np.nan, np.float64),
+            (self._loads, loads, 0.0, np.float64),
+            (self._props, props, np.nan, np.float64),
+            (self._attrs, attrs, -1, np.int32),
+            (self._kinds, kinds, 0, np.int32),
+            (self._vendors, vendors, 0, np.int32),
+        ):
+            for key, col in table.items():
+                col[i] = row.get(key, default)
+            for key in row.keys() - table.keys():
+                table[key] = col = np.full(self.n, default, dtype=dtype)
+                col[i] = row[key]
+        for res, sh in self._shares.items():
+            sh.amounts[i] = 0.0
+            sh.graphs[i] = -1
+        for res, entries in shares.items():
+            sh = self._shares.get(res)
+            if sh is None or sh.amounts.shape[1] < len(entries):
+                sh = self._widen(res, len(entries))
+            for j, (code, amount) in enumerate(entries):
+                sh.graphs[i, j] = code
+                sh.amounts[i, j] = amount
+
+    def _widen(self, res: str, width: int) -> _Shares:
+        old = self._shares.get(res)
+        new = _Shares(np.zeros((self.n, width)), np.full((self.n, width), -1, dtype=np.int32))
+        if old is not None:
+            k = old.amounts.shape[1]
+            new.amounts[:, :k] = old.amounts
+            new.graphs[:, :k] = old.graphs
+        self._shares[res] = new
+        return new
+
+    # -- facts -------------------------------------------------------------------------------
+    @property
+    def exact(self) -> bool:
+        """False if some row holds a number float64 cannot be trusted with (see module doc)."""
+        return not self._inexact_rows
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes held by the numpy columns (the names and code books not counted)."""
+        arrays = [self._up, self._pref, *self._caps.values(), *self._loads.values(), *self._props.values()]
+        arrays += [*self._attrs.values(), *self._kinds.values(), *self._vendors.values()]
+        arrays += [a for sh in self._shares.values() for a in (sh.amounts, sh.graphs)]
+        return sum(a.nbytes for a in arrays)
+
+    def order(self) -> np.ndarray:
+        """Row indices in preference order (higher ``preference`` first, then declaration order)."""
+        if self._order is None:
+            self._order = np.argsort(-self._pref, kind="stable")
+        return self._order
+
+    # -- requirement kinds, vectorised -----------------------------------------------------------
+    def holds(self, req: object, graph: _validity.Placing) -> np.ndarray:
+        """Boolean row mask: where ``req`` holds for placing ``graph`` (up flags not applied)."""
+        t = type(req)
+        if t is Capacity:
+            return self._capacity(req, graph)  # type: ignore[arg-type]
+        if t is Quantity:
+            return self._count(req.device_kind) >= req.count  # type: ignore[union-attr]
+        if t is Minimum or t is Maximum:
+            col = self._props.get(req.prop)  # type: ignore[union-attr]
+            if col is None:
+                return np.zeros(self.n, dtype=bool)
+            return col >= req.value if t is Minimum else col <= req.value  # type: ignore[union-attr]
+        if t is Attribute:
+            if req.name == PLATFORM_HAS:  # type: ignore[union-attr]
+                return self._count(req.value) > 0  # type: ignore[union-attr]
+            return self._attr_is(req.name, req.value)  # type: ignore[union-attr]
+        if t is Selection:
+            have = np.zeros(self.n, dtype=np.int32)
+            for opt in req.options:  # type: ignore[union-attr]
+                have += self._option(opt)
+            return have >= req.at_least  # type: ignore[union-attr]
+        raise TypeError(f"platform columns cannot evaluate {req!r}: check supported() first")
+
+    def _count(self, kind: str, vendor: str | None = None) -> np.ndarray:
+        col = self._kinds.get(kind) if vendor is None else self._vendors.get((kind, vendor))
+        return col if col is not None else np.zeros(self.n, dtype=np.int32)
+
+    def _attr_is(self, name: str, value: object) -> np.ndarray:
+        col = self._attrs.get(name)
+        code = self._attr_code.get(name, {}).get(str(value))
+        if col is None or code is None:
+            return np.zeros(self.n, dtype=bool)
+        return col == code
+
+    def _option(self, opt: Option) -> np.ndarray:
+        if opt.attribute is not None:
+            return self._attr_is(opt.attribute, opt.value)
+        return self._count(opt.device_kind or "", opt.vendor) > 0
+
+    def _capacity(self, req: Capacity, graph: _validity.Placing) -> np.ndarray:
+        cap = self._caps.get(req.resource)
+        if cap is None:
+            return np.zeros(self.n, dtype=bool)
+        used = np.zeros(self.n)
+        sh = self._shares.get(req.resource)
+        excluded = self._excluded(graph)
+        counted = None
+        if sh is not None:
+            for j in range(sh.amounts.shape[1]):  # left to right, as Python's sum adds them
+                col = sh.amounts[:, j]
+                if excluded is not None:
+                    col = np.where(np.isin(sh.graphs[:, j], excluded), 0.0, col)
+                used = used + col
+            if _COMPENSATED_SUM:
+                counted = (sh.graphs >= 0) & ~np.isin(sh.graphs, excluded if excluded is not None else [])
+        load = self._loads.get(req.resource)
+        free = cap - used - (load if load is not None else 0.0)
+        ok = free >= req.amount
+        if counted is not None:
+            for i in np.flatnonzero(counted.sum(axis=1) >= 3).tolist():
+                ok[i] = _validity.requirement_holds(req, self.states[i], graph) is None
+        return ok
+
+    def _excluded(self, graph: _validity.Placing) -> np.ndarray | None:
+        names = () if graph is None else (graph,) if type(graph) is str else graph
+        codes = [self._graph_code[g] for g in names if g in self._graph_code]  # type: ignore[union-attr]
+        return np.array(codes, dtype=np.int32) if codes else None
+
+    # -- answers ---------------------------------------------------------------------------------
+    def masks(self, requirements: Sequence[object], graph: _validity.Placing) -> np.ndarray:
+        """requirements x rows: where each requirement holds (up flags not applied)."""
+        if not requirements:
+            return np.ones((0, self.n), dtype=bool)
+        return np.stack([self.holds(r, graph) for r in requirements])
+
+    def acceptable(self, requirements: Sequence[object], graph: _validity.Placing = None) -> tuple[str, ...]:
+        """The acceptable platforms in preference order (``check_validity(...).acceptable``)."""
+        good = self._up.copy()
+        for req in requirements:
+            good &= self.holds(req, graph)
+        order = self.order()
+        return tuple(self._names[order[good[order]]].tolist())
+
+    def validity(self, requirements: Sequence[object], graph: _validity.Placing = None, *, reasons: bool = True) -> _validity.Validity:
+        """What ``check_validity(requirements, self.states, graph, reasons=reasons)`` returns.
+
+        Rejected rows get their reasons from the scalar
+        :func:`~desmon.deployment.validity.requirement_holds`, asked only about the
+        requirements the masks say fail (only the first one unless ``reasons``).
+        """
+        reqs = tuple(requirements)
+        ok = self.masks(reqs, graph)
+        good = self._up & ok.all(axis=0)
+        order = self.order()
+        in_order = good[order]
+        acceptable = tuple(self._names[order[in_order]].tolist())
+        rejected_rows = order[~in_order]
+        if not len(rejected_rows):
+            return _validity.Validity(acceptable, ())
+        if not reasons:
+            return _validity.Validity(acceptable, self._first_failures(reqs, ok, rejected_rows, graph))
+        describe = [r.describe() for r in reqs]  # type: ignore[attr-defined]
+        memos = [self._memo(r, graph) for r in reqs]
+        names = self._names[rejected_rows].tolist()
+        up = self._up[rejected_rows].tolist()
+        fails_by_row = ok[:, rejected_rows].T.tolist()
+        rejected = []
+        for i, name, is_up, row_ok in zip(rejected_rows.tolist(), names, up, fails_by_row):
+            if not is_up:
+                rejected.append(self._down_pair(i, graph))
+                continue
+            out = []
+            for k, holds in enumerate(row_ok):
+                if not holds:
+                    pair = memos[k].get(i)
+                    out.append((pair if pair is not None else self._failure(reqs[k], describe[k], memos[k], i, graph))[1][0])
+            rejected.append((name, tuple(out)))
+        return _validity.Validity(acceptable, tuple(rejected))
+
+    def _first_failures(
+        self, reqs: tuple, ok: np.ndarray, rows: np.ndarray, graph: _validity.Placing
+    ) -> tuple[tuple[str, tuple[_validity.Failure, ...]], ...]:
+        """``(name, (first failure,))`` of each rejected row, in the order of ``rows``:
+        grouped by the first failing requirement, each looked up in that one's memo."""
+        out: list[Any] = [None] * len(rows)
+        up = self._up[rows]
+        # the first False of each up, rejected row (no requirement: only down rows are rejected)
+        first = np.argmin(ok[:, rows], axis=0) if len(reqs) else np.zeros(len(rows), dtype=np.intp)
+        for pos in np.flatnonzero(~up).tolist():
+            out[pos] = self._down_pair(int(rows[pos]), graph)
+        for k, req in enumerate(reqs):
+            where = np.flatnonzero(up & (first == k))
+            if not len(where):
+                continue
+            memo = self._memo(req, graph)
+            describe = None
+            for pos, i in zip(where.tolist(), rows[where].tolist()):
+                pair = memo.get(i)
+                if pair is None:
+                    describe = describe or req.describe()
+                    pair = self._failure(req, describe, memo, i, graph)
+                out[pos] = pair
+        return tuple(out)
+
+    def _down_pair(self, i: int, graph: _validity.Placing) -> tuple[str, tuple[_validity.Failure, ...]]:
+        """``(name, failures)`` of a down row: the scalar check's one "platform is down"."""
+        pair = self._down.get(i)
+        if pair is None:
+            state = self.states[i]
+            pair = self._down[i] = (state.platform.name, _validity.check_platform((), state, graph, first_only=True))
+        return pair
+
+    def _memo(self, req: object, graph: _validity.Placing) -> dict[int, _Pair]:
+        """Row -> ``(name, (failure,))`` of ``req`` for ``graph`` (kept until the row changes; all dropped
+        when more than :data:`_REASONS_KEPT` are held)."""
+        key = (repr(req), graph)  # repr: equal requirements may differ in a reason (2 vs 2.0)
+        memo = self._reasons.get(key)
+        if memo is None:
+            if self._memoised > _REASONS_KEPT:
+                self._reasons.clear()
+                self._memoised = 0
+            memo = self._reasons[key] = {}
+        return memo
+
+    def _failure(self, req: object, describe: str, memo: dict[int, _Pair], i: int, graph: _validity.Placing) -> _Pair:
+        """Row ``i``'s ``(name, (failure of req,))``, with the reason the scalar semantics give."""
+        state = self.states[i]
+        reason = _validity.requirement_holds(req, state, graph)  # type: ignore[arg-type]
+        if reason is None:  # the masks and the scalar semantics disagree: a bug here
+            raise AssertionError(f"placement columns: {describe} fails on {state.platform.name} but the scalar check holds")
+        pair = memo[i] = (state.platform.name, (_validity.Failure(state.platform.name, describe, reason),))
+        self._memoised += 1
+        return pair
+
+
+# -- the dispatch ----------------------------------------------------------------------------------
+_stores: list[PlatformColumns] = []
+
+
+def columns_for(states: tuple[PlatformState, ...]) -> PlatformColumns:
+    """Column store holding ``states``: a kept one (rewritten where rows changed) or a new one."""
+    with _LOCK:
+        for k, st in enumerate(_stores):
+            if st.states is states or (st.n == len(states) and st.states == states):
+                st.states = states
+                _stores.insert(0, _stores.pop(k))
+                return st
+        for k, st in enumerate(_stores):
+            if st.sync(states):
+                _stores.insert(0, _stores.pop(k))
+                return st
+        st = PlatformColumns(states)
+        _stores.insert(0, st)
+        del _stores[_KEPT:]
+        return st
+
+
+def vector_validity(
+    requirements: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool
+) -> _validity.Validity | None:
+    """The column answer of ``check_validity``, or None: fewer than
+    :data:`VECTOR_MIN_PLATFORMS` platforms, or something the columns do not cover."""
+    if len(states) < VECTOR_MIN_PLATFORMS:
+        return None
+    if not supported(requirements):
+        COUNTS["declined"] += 1
+        return None
+    with _LOCK:
+        st = columns_for(states)
+        if not st.exact:
+            COUNTS["declined"] += 1
+            return None
+        COUNTS["vector"] += 1
+        return st.validity(requirements, graph, reasons=reasons)
+
+
+def acceptable(requirements: Iterable[object], states: Sequence[PlatformState], graph: _validity.Placing = None) -> tuple[str, ...]:
+    """``check_validity(requirements, states, graph).acceptable`` without building the
+    rejected platforms' failures: the fast question of a deployer that only places."""
+    reqs = tuple(requirements)
+    states = tuple(states)
+    if len(states) >= VECTOR_MIN_PLATFORMS and _validity._observer is None and supported(reqs):
+        with _LOCK:
+            st = columns_for(states)
+            if st.exact:
+                COUNTS["vector"] += 1
+                return st.acceptable(reqs, graph)
+    return _validity.check_validity(reqs, states, graph, reasons=False).acceptable  # type: ignore[arg-type]
+
+
+@contextmanager
+def scalar_only() -> Iterator[None]:
+    """Within the block ``check_validity`` never takes the columns (benchmarks, tests)."""
+    global VECTOR_MIN_PLATFORMS
+    saved = VECTOR_MIN_PLATFORMS
+    VECTOR_MIN_PLATFORMS = sys.maxsize
+    try:
+        yield
+    finally:
+        VECTOR_MIN_PLATFORMS = saved
+
+
+# -- following a repository's change log ----------------------------------------------------------------
+class ChangeLogColumns:
+    """Columns kept current from a repository's change log (no re-read of untouched platforms).
+
+    ``ChangeLogColumns(repo, query)`` subscribes to ``repo`` (a
+    :class:`~desmon.repository.store.Repository`); each change that can alter a
+    platform's facts -- the platform node's ``up`` or ``load``, a HAS_DEVICE edge, a
+    DEPLOYED_ON edge added, removed or relabelled to history -- marks that platform.
+    :meth:`states` re-reads only the marked platforms through ``query.platform_state``
+    and :meth:`columns` rewrites only their rows. A new platform, or a change to a
+    deployment node (its consumption), rebuilds everything on the next call.
+    """
+
+    def __init__(self, repo: Any, query: Any) -> None:
+        self._query = query
+        self._dirty: set[str] = set()
+        self._rebuild = True
+        self._states: list[PlatformState] = []
+        self._index: dict[str, int] = {}
+        self._columns: PlatformColumns | None = None
+        self.reads = 0  #: platform states re-read so far (observability)
+        self._sub = repo.subscribe(self._on_change)
+
+    def close(self) -> None:
+        """Stop following the change log."""
+        self._sub.cancel()
+
+    def _on_change(self, change: Any) -> None:
+        L = _L
+        if change.node is not None:
+            if change.label == L.PLATFORM:
+                if change.op == ADD_NODE:
+                    self._rebuild = True
+                else:
+                    self._dirty.add(change.node.partition(":")[2])
+            elif change.label == L.DEPLOYMENT:
+                self._rebuild = True
+            return
+        if change.label == L.HAS_DEVICE:
+            self._dirty.add(change.source.partition(":")[2])
+        elif L.DEPLOYED_ON in (change.label, change.old_label):
+            self._dirty.add(change.target.partition(":")[2])
+
+    def states(self) -> tuple[PlatformState, ...]:
+        """Every platform's facts in declaration order, re-reading only marked platforms."""
+        if self._rebuild:
+            fresh = self._query.platform_states()
+            self.reads += len(fresh)
+            self._states = list(fresh)
+            self._index = {s.platform.name: i for i, s in enumerate(fresh)}
+            self._dirty.clear()
+            self._rebuild = False
+            self._columns = None
+        changes = {}
+        for name in sorted(self._dirty):
+            i = self._index[name]
+            self._states[i] = changes[i] = self._query.platform_state(name)
+            self.reads += 1
+        self._dirty.clear()
+        if changes and self._columns is not None:
+            self._columns.update(changes)
+        return tuple(self._states)
+
+    def columns(self) -> PlatformColumns:
+        """The column store of :meth:`states`, its changed rows rewritten."""
+        states = self.states()
+        if self._columns is None:
+            self._columns = PlatformColumns(states)
+        return self._columns
+
+
+def _register(hook: Callable[..., Any]) -> None:
+    _validity._vector_path = hook
+
+
+_register(vector_validity)
