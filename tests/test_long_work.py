@@ -21,7 +21,7 @@ from desmon.cli import main
 from desmon.errors import CheckerError
 from desmon.loader import load_scenario
 from desmon.verify import Checker
-from desmon.verify.checker import EXIT_INTERRUPTED, HOLDS, INCOMPLETE, INTERRUPTED, Budget, resident_mb
+from desmon.verify.search import EXIT_INTERRUPTED, HOLDS, INCOMPLETE, INTERRUPTED, Budget, resident_mb
 from desmon.verify.table import TableEngine
 
 ROOT = Path(__file__).resolve().parent.parent

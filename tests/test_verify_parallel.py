@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-import desmon.verify.checker as checker_module
+import desmon.verify.direct as direct_module
 import desmon.verify.parallel as parallel_module
 from desmon.cli import main
 from desmon.errors import CheckerError
@@ -22,7 +22,7 @@ SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 
 def pooled_levels(monkeypatch):  # type: ignore[no-untyped-def]
     """Send every level to the workers, and count the states they expanded."""
-    monkeypatch.setattr(checker_module, "PARALLEL_LEVEL", 1)
+    monkeypatch.setattr(direct_module, "PARALLEL_LEVEL", 1)
     seen = []
     real = parallel_module.ExpansionPool.expand
 
@@ -102,7 +102,7 @@ def test_cli_workers_flag_prints_the_same_report_but_for_timings(capsys, monkeyp
 
 
 def test_a_worker_that_dies_ends_the_search_with_a_one_line_error(monkeypatch, capsys):
-    monkeypatch.setattr(checker_module, "PARALLEL_LEVEL", 1)
+    monkeypatch.setattr(direct_module, "PARALLEL_LEVEL", 1)
     real = Checker.expand
     parent = os.getpid()
 

@@ -8,9 +8,11 @@ replays events through it on the networkx repository (fuzzer, ``--plot``, ``--py
 """
 
 from desmon.verify.bounds import INSTANT_INVARIANTS, Bounds, levels
-from desmon.verify.checker import HOLDS, INCOMPLETE, VIOLATED, Checker, CheckResult, Counterexample, Step
+from desmon.verify.checker import Checker
+from desmon.verify.search import HOLDS, INCOMPLETE, VIOLATED, CheckResult
 from desmon.verify.replay import RepositoryRun
 from desmon.verify.state import Key, StateStore
+from desmon.verify.trace import Counterexample, Step
 
 __all__ = [
     "Bounds", "levels", "INSTANT_INVARIANTS",

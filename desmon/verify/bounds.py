@@ -14,7 +14,7 @@ from desmon.errors import CheckerError
 from desmon.model.checks import check_flag, check_items, check_name, check_names, check_number, strict_init, suggest
 from desmon.model.events import ActionChange, LoadChange
 from desmon.model.scenario import Scenario
-from desmon.model.system import check_action
+from desmon.model.system import SystemModel, check_action
 
 __all__ = ["Bounds", "levels", "bounds_of", "INSTANT_INVARIANTS"]
 
@@ -160,31 +160,8 @@ class Bounds:
         """Every name must exist in the scenario's model (and the task must be closed)."""
         m = scenario.model
         where = f"scenario {scenario.name!r} checker bounds"
-        if self.task is not None and self.actions:
-            raise CheckerError(
-                f"{where}: both actions={tuple(self.actions)!r} and task are given, and a task replaces any-to-any "
-                "moves (actions would be ignored): give one of them"
-            )
-        acts = set(self.actions) | ({self.initial_action} if self.initial_action else set())
-        if self.task is not None:
-            for a, nxt in self.task.items():
-                acts.add(a)
-                acts.update(nxt)
-        for a in sorted(acts):
-            check_action(m, a, where=where, error=CheckerError)
-        if self.task is not None:
-            for a, nxt in self.task.items():
-                for b in nxt:
-                    if b not in self.task:
-                        raise CheckerError(
-                            f"{where}: task moves from {a!r} to {b!r}, which has no entry, so the robot would stop there: "
-                            f"add {b!r}: (...) to the task ({b!r}: () to end it there)"
-                        )
-            if self.initial_action is not None and self.initial_action not in self.task:
-                raise CheckerError(
-                    f"{where}: initial_action {self.initial_action!r} has no entry in the task: add it or start from one of "
-                    f"{', '.join(self.task)}"
-                )
+        self._validate_actions(where, m)
+        self._validate_task(where)
         devices = [d.name for d in m.devices]
         for d in self.devices:
             if d not in devices:
@@ -193,6 +170,47 @@ class Bounds:
         for p in (*self.platforms, *self.loads, *(q for grp in self.interchangeable for q in grp)):
             if p not in platforms:
                 raise CheckerError(f"{where}: unknown platform {p!r}{suggest(p, platforms)} (known: {', '.join(platforms)})")
+        self._validate_loads(where, scenario)
+        from desmon.deployment.invariants import INVARIANTS
+
+        for n in self.instantaneous:
+            if n not in INVARIANTS:
+                raise CheckerError(f"{where}: unknown invariant {n!r}{suggest(n, INVARIANTS)} in instantaneous (invariants: {', '.join(INVARIANTS)})")
+
+    def _validate_actions(self, where: str, m: SystemModel) -> None:
+        """Either actions or a task; every action they name is the model's."""
+        if self.task is not None and self.actions:
+            raise CheckerError(
+                f"{where}: both actions={tuple(self.actions)!r} and task are given, and a task replaces any-to-any "
+                "moves (actions would be ignored): give one of them"
+            )
+        acts = set(self.actions) | ({self.initial_action} if self.initial_action else set())
+        for a, nxt in (self.task or {}).items():
+            acts.add(a)
+            acts.update(nxt)
+        for a in sorted(acts):
+            check_action(m, a, where=where, error=CheckerError)
+
+    def _validate_task(self, where: str) -> None:
+        """A task is closed: every action it moves to (and the initial one) has an entry."""
+        if self.task is None:
+            return
+        for a, nxt in self.task.items():
+            for b in nxt:
+                if b not in self.task:
+                    raise CheckerError(
+                        f"{where}: task moves from {a!r} to {b!r}, which has no entry, so the robot would stop there: "
+                        f"add {b!r}: (...) to the task ({b!r}: () to end it there)"
+                    )
+        if self.initial_action is not None and self.initial_action not in self.task:
+            raise CheckerError(
+                f"{where}: initial_action {self.initial_action!r} has no entry in the task: add it or start from one of "
+                f"{', '.join(self.task)}"
+            )
+
+    def _validate_loads(self, where: str, scenario: Scenario) -> None:
+        """A loaded platform has the load's capacity, and its initial load is one of its levels."""
+        m = scenario.model
         for p in self.loads:
             caps = [r for r, _ in m.platform(p).capacities]
             if self.load_resource not in caps:
@@ -206,11 +224,6 @@ class Bounds:
                 raise CheckerError(
                     f"{where}: initial {self.load_resource} load {initial_load.get(p, 0):g} of {p!r} is not one of its levels {list(lv)}"
                 )
-        from desmon.deployment.invariants import INVARIANTS
-
-        for n in self.instantaneous:
-            if n not in INVARIANTS:
-                raise CheckerError(f"{where}: unknown invariant {n!r}{suggest(n, INVARIANTS)} in instantaneous (invariants: {', '.join(INVARIANTS)})")
 
     def check_against(self, scenario: Scenario) -> None:
         """What :class:`~desmon.model.scenario.Scenario` calls when it is built: :meth:`validate`."""

@@ -26,7 +26,9 @@ from hypothesis.errors import NoSuchExample
 from desmon.deployment.deployer import Deployer
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import bounds_of
-from desmon.verify.checker import EXIT_INTERRUPTED, Checker, Label
+from desmon.verify.checker import Checker
+from desmon.verify.search import EXIT_INTERRUPTED
+from desmon.verify.trace import Label
 from desmon.verify.replay import RepositoryRun
 from desmon.verify.report import format_counterexample, format_trace
 from desmon.verify.strategies import Choice, choices
@@ -156,13 +158,23 @@ def fuzz(
         seq, interrupted = smallest[0], True
     else:
         end_progress()
+    return _violation(scenario, deployer, enabler, seq, head=head, sequences=calls[0], interrupted=interrupted, rederive_up_to=rederive_up_to)
+
+
+def _violation(
+    scenario: Scenario, deployer: str | Deployer, enabler: Checker, seq: list[Choice], *, head: str, sequences: int,
+    interrupted: bool, rederive_up_to: int,
+) -> FuzzOutcome:
+    """The outcome of a failing sequence: its trace, and the checker's shortest
+    counterexample of the same invariant when the sequence is short enough."""
+    bounds = enabler.bounds
     labels, (inv, msg) = run_choices(scenario, deployer, seq, enabler)  # type: ignore[misc]
     steps = enabler.replay(labels)
     how = "interrupted while hypothesis shrank it: maybe not the smallest" if interrupted else "shrunk by hypothesis"
     lines = [
         head,
         "",
-        f"VIOLATED {inv} after {len(labels)} step{'s' if len(labels) != 1 else ''} ({how}, {calls[0]} sequences run):",
+        f"VIOLATED {inv} after {len(labels)} step{'s' if len(labels) != 1 else ''} ({how}, {sequences} sequences run):",
         format_trace(steps),
         f"  => {inv}: {msg}",
     ]
@@ -176,4 +188,4 @@ def fuzz(
             interrupted = True
     if interrupted:
         lines += ["", "verdict: VIOLATED (interrupted)"]
-    return FuzzOutcome("\n".join(lines) + "\n", EXIT_INTERRUPTED if interrupted else 1, calls[0], labels, inv, interrupted)
+    return FuzzOutcome("\n".join(lines) + "\n", EXIT_INTERRUPTED if interrupted else 1, sequences, labels, inv, interrupted)

@@ -2,7 +2,7 @@
 
 The search stays level-synchronous and its bookkeeping stays in the parent: the parent
 cuts a level's frontier into chunks in BFS order, the workers run
-:meth:`~desmon.verify.checker.Checker.expand` on them (the same code, the same real
+:meth:`~desmon.verify.system.TransitionSystem.expand` on them (the same code, the same real
 deployment core, inherited through ``fork`` with its memos warm), and the parent
 consumes the records chunk by chunk *in frontier order*, exactly as it consumes its
 own expansions. Which state is new, its parent, its label, every counter and every
@@ -31,8 +31,9 @@ from typing import TYPE_CHECKING, Iterator
 from desmon.errors import CheckerError
 
 if TYPE_CHECKING:  # pragma: no cover
-    from desmon.verify.checker import Checker, Segment
+    from desmon.verify.search import Segment
     from desmon.verify.state import Key
+    from desmon.verify.system import TransitionSystem
 
 __all__ = ["ExpansionPool", "WORKER_MEMORY"]
 
@@ -43,11 +44,11 @@ IN_FLIGHT = 3
 #: Keys a worker remembers before it forgets them all (memory bound per worker).
 WORKER_MEMORY = 200_000
 
-_checker: "Checker | None" = None  # set in each worker by _start_worker
+_checker: "TransitionSystem | None" = None  # set in each worker by _start_worker
 _known: set = set()
 
 
-def _start_worker(checker: "Checker") -> None:
+def _start_worker(checker: "TransitionSystem") -> None:
     """Worker initializer: the checker arrives through fork (never pickled); the parent
     pauses its cyclic collector for the search, and so does the worker. Ctrl-C reaches
     every process of the terminal's group: a worker ignores it (no traceback of its own)
@@ -89,7 +90,7 @@ class ExpansionPool:
     with a one-line :class:`~desmon.errors.CheckerError` instead of a hang.
     """
 
-    def __init__(self, checker: "Checker", workers: int) -> None:
+    def __init__(self, checker: "TransitionSystem", workers: int) -> None:
         try:
             ctx = multiprocessing.get_context("fork")
         except ValueError:

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from desmon.errors import NondeterminismError
-from desmon.verify.checker import Counterexample, describe_state
+from desmon.verify.trace import Counterexample, describe_state
 from desmon.verify.replay import RepositoryRun
 from desmon.viz.snapshot import draw_snapshots
 

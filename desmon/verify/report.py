@@ -5,7 +5,8 @@ from __future__ import annotations
 from typing import Any
 
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
-from desmon.verify.checker import NOT_CHECKED, CheckResult, Counterexample, Step
+from desmon.verify.search import NOT_CHECKED, CheckResult
+from desmon.verify.trace import Counterexample, Step
 from desmon.verify.state import Key
 
 __all__ = ["format_result", "format_trace", "result_to_json", "counterexample_pytest", "event_to_json", "event_from_json", "key_to_json"]

@@ -61,6 +61,8 @@ from desmon.errors import CheckerError
 from desmon.model.events import DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
 from desmon.model.system import PlatformState
 from desmon.verify.state import Key
+from desmon.verify.system import TransitionSystem
+from desmon.verify.trace import Label, Step, initial_step, make_step
 
 __all__ = ["Symmetry", "SYMMETRIC_DEPLOYERS"]
 
@@ -71,7 +73,7 @@ SYMMETRIC_DEPLOYERS = ("desmon", "no-recheck", "mutant:no-recheck")  # the last:
 
 
 class Symmetry:
-    def __init__(self, checker: Any) -> None:
+    def __init__(self, checker: TransitionSystem) -> None:
         self.checker = checker
         groups = tuple(tuple(g) for g in checker.bounds.interchangeable)
         name = checker.scenario.name
@@ -92,13 +94,13 @@ class Symmetry:
         raise CheckerError(f"--symmetry refused for {', '.join('/'.join(g) for g in self.groups)}: {why}; run without --symmetry")
 
     def _refuse_unless_symmetric(self) -> None:
+        """Refuse (:class:`CheckerError`) unless conditions (1)-(4) of the module docstring hold."""
         c = self.checker
-        model, b = c.model, c.bounds
         if c.deployer_name not in SYMMETRIC_DEPLOYERS:
             self._refuse(
                 f"the {c.deployer_name} deployer can run a graph on two platforms and keeps one by name, a tie-break that is not symmetric"
             )
-        order = [p.name for p in model.platforms]
+        order = [p.name for p in c.model.platforms]
         seen: set[str] = set()
         for grp in self.groups:
             if len(grp) < 2 or len(set(grp)) != len(grp):
@@ -109,38 +111,53 @@ class Symmetry:
             idx = sorted(order.index(p) for p in grp)
             if idx != list(range(idx[0], idx[0] + len(grp))):
                 self._refuse(f"{'/'.join(grp)} are not declared one after the other, so declaration-order ties with other platforms differ")
-            plats = [model.platform(p) for p in grp]
-            sig = {(p.capacities, p.attributes, p.properties, p.preference) for p in plats}
-            if len(sig) != 1:
-                self._refuse(f"{'/'.join(grp)} differ in capacities, attributes, properties or preference")
-            devs = {tuple((d.kind, d.vendor, d.version) for d in model.devices_on(p)) for p in grp}
-            if len(devs) != 1:
-                self._refuse(f"{'/'.join(grp)} carry different devices")
-            for spec in model.specs:
-                if spec.fixed_platform in grp:
-                    self._refuse(f"{spec.graph} is fixed (EXECUTABLE_ON) to {spec.fixed_platform}")
-            inb = [p in b.platforms for p in grp]
-            if any(inb) and not all(inb):
-                self._refuse("the bounds let only some of them go down")
-            for p in grp:
-                for d in model.devices_on(p):
-                    if d.name in b.devices:
-                        self._refuse(f"device {d.name} of {p} may fail, so acceptable group platforms can differ in working devices")
-                if p in b.loads:
-                    self._refuse(f"the load of {p} varies, so acceptable group platforms can differ in load")
-            initial = {ev.platform: ev.amount for ev in c.scenario.initial if isinstance(ev, LoadChange) and ev.platform in grp and ev.amount}
-            if initial:
-                self._refuse(f"{', '.join(initial)} start with a background load")
-            # (3) at most one graph per group platform
-            p0 = plats[0]
-            empty = PlatformState(p0, True, model.devices_on(p0.name), (), ())
-            hostable = [s for s in model.specs if s.fixed_platform is None and not check_platform(s.requirements, empty, s.graph)]
-            for s1, s2 in combinations(hostable, 2):
-                if not _exceeds(s1, s2, p0):
-                    self._refuse(
-                        f"{s1.graph} and {s2.graph} fit on one of them together, so the first-by-declaration choice can pick "
-                        "between platforms hosting different graphs"
-                    )
+            self._refuse_unless_identical(grp)
+            self._refuse_unless_alike_in_bounds(grp)
+            self._refuse_unless_one_graph_each(grp)
+
+    def _refuse_unless_identical(self, grp: tuple[str, ...]) -> None:
+        """(1) identical platforms and devices, no deployment fixed to one of them."""
+        model = self.checker.model
+        plats = [model.platform(p) for p in grp]
+        sig = {(p.capacities, p.attributes, p.properties, p.preference) for p in plats}
+        if len(sig) != 1:
+            self._refuse(f"{'/'.join(grp)} differ in capacities, attributes, properties or preference")
+        devs = {tuple((d.kind, d.vendor, d.version) for d in model.devices_on(p)) for p in grp}
+        if len(devs) != 1:
+            self._refuse(f"{'/'.join(grp)} carry different devices")
+        for spec in model.specs:
+            if spec.fixed_platform in grp:
+                self._refuse(f"{spec.graph} is fixed (EXECUTABLE_ON) to {spec.fixed_platform}")
+
+    def _refuse_unless_alike_in_bounds(self, grp: tuple[str, ...]) -> None:
+        """(2) all or none may go down, no device may fail, no load varies or is set at the start."""
+        c = self.checker
+        model, b = c.model, c.bounds
+        inb = [p in b.platforms for p in grp]
+        if any(inb) and not all(inb):
+            self._refuse("the bounds let only some of them go down")
+        for p in grp:
+            for d in model.devices_on(p):
+                if d.name in b.devices:
+                    self._refuse(f"device {d.name} of {p} may fail, so acceptable group platforms can differ in working devices")
+            if p in b.loads:
+                self._refuse(f"the load of {p} varies, so acceptable group platforms can differ in load")
+        initial = {ev.platform: ev.amount for ev in c.scenario.initial if isinstance(ev, LoadChange) and ev.platform in grp and ev.amount}
+        if initial:
+            self._refuse(f"{', '.join(initial)} start with a background load")
+
+    def _refuse_unless_one_graph_each(self, grp: tuple[str, ...]) -> None:
+        """(3) at most one graph per group platform."""
+        model = self.checker.model
+        p0 = model.platform(grp[0])
+        empty = PlatformState(p0, True, model.devices_on(p0.name), (), ())
+        hostable = [s for s in model.specs if s.fixed_platform is None and not check_platform(s.requirements, empty, s.graph)]
+        for s1, s2 in combinations(hostable, 2):
+            if not _exceeds(s1, s2, p0):
+                self._refuse(
+                    f"{s1.graph} and {s2.graph} fit on one of them together, so the first-by-declaration choice can pick "
+                    "between platforms hosting different graphs"
+                )
 
     # -- canonical form --------------------------------------------------------------------
     def _component(self, key: Key, p: str) -> tuple:
@@ -196,17 +213,15 @@ class Symmetry:
         return event
 
     # -- traces ------------------------------------------------------------------------------
-    def replay(self, labels: list, expect: list[Key] | None = None) -> list:
+    def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]:
         """A *concrete* trace: each stored (canonical) label is mapped back through the
         permutation of the concrete state it applies to; every step must land in the
         stored orbit."""
-        from desmon.verify.checker import Step, describe_state
-
         c = self.checker
         key = c.initial()
         if expect and self.canon(key) != expect[0]:
             raise CheckerError(f"--symmetry: the initial state {key} is not in the stored orbit {expect[0]}")
-        steps = [Step(0, None, (), describe_state(key), key)]
+        steps = [initial_step(key)]
         for i, (event, fails) in enumerate(labels, 1):
             perm = self.permutation(key)  # concrete -> canonical
             back = {v: k for k, v in perm.items()}
@@ -218,7 +233,7 @@ class Symmetry:
                 raise CheckerError(
                     f"--symmetry refused: replaying step {i} ({concrete}) left the stored orbit, the reduction is not sound for this scenario"
                 )
-            steps.append(c._step(i, prev, concrete, key, log, fails))
+            steps.append(make_step(i, prev, concrete, key, log, fails))
         return steps
 
 

@@ -1,7 +1,6 @@
 """The table engine: the checker's BFS with every distinct reaction run once.
 
-The direct engine (:meth:`Checker.run <desmon.verify.checker.Checker.run>` with
-``engine="direct"``) runs the real deployment core for each of the millions of
+The direct engine (:mod:`desmon.verify.direct`) runs the real deployment core for each of the millions of
 transitions of a large scenario. Most of those runs repeat one another: a reaction reads
 the context, the deployments and the standing errors, and of the platforms only *which
 of them pass the requirement checks* it asks about. This engine runs the same real
@@ -57,7 +56,7 @@ from __future__ import annotations
 
 import sys
 from array import array
-from typing import TYPE_CHECKING, Any, Callable, Iterator, NamedTuple, Sequence
+from typing import Any, Callable, Iterator, NamedTuple, Sequence
 
 import numpy as np
 
@@ -68,11 +67,11 @@ from desmon.model.events import (
     ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp, event_kind,
 )
 from desmon.model.system import PlatformState
-from desmon.verify.checker import INTERRUPTED, KEPT_BRANCH, Budget, Counterexample, branch_name
+from desmon.verify.environment import EVENT_KINDS
+from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Trail
 from desmon.verify.state import Key, StateStore
-
-if TYPE_CHECKING:
-    from desmon.verify.checker import Checker, CheckResult
+from desmon.verify.system import TransitionSystem
+from desmon.verify.trace import KEPT_BRANCH, Counterexample, branch_name
 
 __all__ = ["TableEngine", "TableUnsupported", "UnobservedRead", "table_unsupported", "CHUNK_STATES"]
 
@@ -90,8 +89,7 @@ MAX_DIGITS = 4096
 CHUNK_STATES = 16_384
 #: new states added between two looks at the search's budget (time, memory, Ctrl-C)
 LOOK_EVERY = 64
-_KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
-_KIND_ID = {k: i for i, k in enumerate(_KINDS)}
+_KIND_ID = {k: i for i, k in enumerate(EVENT_KINDS)}
 
 
 def _root_key(system: np.ndarray, ctx: np.ndarray, stim: np.ndarray | int, prefix: np.ndarray | int) -> np.ndarray:
@@ -105,6 +103,13 @@ class TableUnsupported(CheckerError):
 
 class UnobservedRead(TableUnsupported):
     """A reaction read a platform fact outside the requirement checks: it cannot be memoised."""
+
+
+def _count(counter: Any, names: Sequence[Any], values: np.ndarray, size: int) -> None:
+    """Add the occurrences of each number in ``values`` to ``counter`` under its name."""
+    for k, n in enumerate(np.bincount(values, minlength=size).tolist()):
+        if n:
+            counter[names[k]] += n
 
 
 class _Spent(Exception):
@@ -486,7 +491,7 @@ class _NoMemo(dict):
         pass
 
 
-def table_unsupported(checker: "Checker") -> str | None:
+def table_unsupported(checker: TransitionSystem) -> str | None:
     """Why the table engine cannot run ``checker``'s search, or None."""
     if checker.symmetry is not None:
         return "symmetry reduction runs on the direct engine"
@@ -504,6 +509,15 @@ def table_unsupported(checker: "Checker") -> str | None:
 # ------------------------------------------------------------------------------------
 # the environment code
 # ------------------------------------------------------------------------------------
+def _contexts(init: Key, b: Any) -> list[str | None]:
+    """The contexts a search from ``init`` can reach, numbered: the initial one, then the bounds' actions."""
+    ctxs: list[str | None] = [init.context]
+    for a in (*b.actions, *(b.task or {}), *(x for nxt in (b.task or {}).values() for x in nxt)):
+        if a not in ctxs:
+            ctxs.append(a)
+    return ctxs
+
+
 class _Env:
     """Environment facts <-> one int: a context digit, then one digit per platform."""
 
@@ -512,14 +526,9 @@ class _Env:
         self.plats = [p.name for p in model.platforms]
         self.platform_of = {d.name: d.platform for d in model.devices}
         P = len(self.plats)
-        ctxs: list[str | None] = [init.context]
-        for a in (*b.actions, *(b.task or {}), *(x for nxt in (b.task or {}).values() for x in nxt)):
-            if a not in ctxs:
-                ctxs.append(a)
-        self.ctxs = ctxs
-        self.C = len(ctxs)
+        self.ctxs = _contexts(init, b)
+        self.C = len(self.ctxs)
         self.res = b.load_resource
-        init_loads = dict(init.loads)
         self.const_failed = tuple(d for d in init.failed if d not in b.devices)
         self.const_down = tuple(p for p in init.down if p not in b.platforms)
         self.vdev: list[list[str]] = []
@@ -531,27 +540,14 @@ class _Env:
         w = self.C
         for name in self.plats:
             vd = [d for d in b.devices if self.platform_of[d] == name]
-            loaded = name in b.loads
-            lv = tuple(b.loads[name]) if loaded else (0,)
-            const_items = tuple((r, a) for r, a in init_loads.get(name, ()) if not (loaded and r == self.res))
             U = 2 if name in b.platforms else 1
-            R = U * (1 << len(vd)) * len(lv)
+            table = self._digits(name, vd, U, b, init)
             self.vdev.append(vd)
             self.U.append(U)
             self.K.append(len(vd))
-            self.R.append(R)
+            self.R.append(len(table))
             self.W.append(w)
-            w *= R
-            table = []
-            for c in range(R):
-                down_bit, rest = c % U, c // U
-                mask, li = rest % (1 << len(vd)), rest // (1 << len(vd))
-                down = bool(down_bit) if U == 2 else name in init.down
-                failed = tuple(d for j, d in enumerate(vd) if mask >> j & 1)
-                items = dict(const_items)
-                if loaded and lv[li]:
-                    items[self.res] = lv[li]
-                table.append((down, failed, tuple(sorted(items.items()))))
+            w *= len(table)
             self.decoded.append(table)
         self.space = w
         self.P = P
@@ -559,6 +555,24 @@ class _Env:
             np.array([int(dn and self.U[p] == 2) + len(f) for dn, f, _l in self.decoded[p]], dtype=np.int64) for p in range(P)
         ]
         self.const_failures = len(self.const_failed) + len(self.const_down)
+
+    def _digits(self, name: str, vd: list[str], U: int, b: Any, init: Key) -> list[tuple[bool, tuple[str, ...], tuple[tuple[str, float], ...]]]:
+        """Platform ``name``'s facts (down, failed devices, load items) for each value of its
+        digit: down bit (if it may go down), then one bit per bounded device, then the load level."""
+        loaded = name in b.loads
+        lv = tuple(b.loads[name]) if loaded else (0,)
+        const_items = tuple((r, a) for r, a in dict(init.loads).get(name, ()) if not (loaded and r == self.res))
+        table = []
+        for c in range(U * (1 << len(vd)) * len(lv)):
+            down_bit, rest = c % U, c // U
+            mask, li = rest % (1 << len(vd)), rest // (1 << len(vd))
+            down = bool(down_bit) if U == 2 else name in init.down
+            failed = tuple(d for j, d in enumerate(vd) if mask >> j & 1)
+            items = dict(const_items)
+            if loaded and lv[li]:
+                items[self.res] = lv[li]
+            table.append((down, failed, tuple(sorted(items.items()))))
+        return table
 
     def encode(self, key: Key) -> int:
         code = self.ctxs.index(key.context)
@@ -650,9 +664,20 @@ class _Transitions(NamedTuple):
     ctx: np.ndarray  # the context digit of each state of the batch
 
 
+class _Units(NamedTuple):
+    """A batch's (transition, failed-start prefix) units in the direct engine's order."""
+
+    ids: np.ndarray  # the batch's state numbers
+    tr: _Transitions  # its enabled transitions
+    t: np.ndarray  # each unit's transition
+    pre: np.ndarray  # its failed-start prefix
+    leaf: np.ndarray  # its reaction leaf
+    code: np.ndarray  # the state it reaches
+
+
 class _Events:
     """The bounded environment's events as numpy operations on environment codes, in
-    the order of :meth:`Checker._compute_enabled <desmon.verify.checker.Checker._compute_enabled>`."""
+    the order of :func:`desmon.verify.environment.enabled_events`."""
 
     def __init__(self, engine: "TableEngine", env: _Env) -> None:
         b = engine.bounds
@@ -739,18 +764,16 @@ class _Events:
 
 
 class TableEngine:
-    """The table engine for one :class:`~desmon.verify.checker.Checker` (see the module doc)."""
+    """The table engine for one :class:`~desmon.verify.system.TransitionSystem` (see the module doc)."""
 
-    def __init__(self, checker: "Checker") -> None:
-        from desmon.verify.checker import Checker
-
+    def __init__(self, checker: TransitionSystem) -> None:
         self.checker = checker
         self.model = checker.model
         self.bounds = checker.bounds
         self.platform_index = {p.name: i for i, p in enumerate(self.model.platforms)}
         # the recording twin: the same scenario, deployer, invariants and bounds, on a
         # store that hands out guarded platform states and remembers no validity answer
-        rc = Checker.__new__(Checker)
+        rc = type(checker).__new__(type(checker))
         rc.__dict__.update(checker.__dict__)
         rc.store = _GuardedStore(self.model)
         rc.store.validity_memo = None  # type: ignore[assignment]
@@ -1051,7 +1074,7 @@ class TableEngine:
     def _units(self, ids: np.ndarray, tr: "_Transitions") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Every (transition, failed-start prefix) unit of a batch, resolved to its leaf, in the
         direct engine's order: by transition, then generation by generation as
-        :meth:`Checker.successors <desmon.verify.checker.Checker.successors>` queues the
+        :meth:`TransitionSystem.successors <desmon.verify.system.TransitionSystem.successors>` queues the
         prefixes each run's start outcomes open. Returns (transition, prefix, leaf) arrays."""
         C, bound = self.env.C, self.bounds.start_failures
         T = len(tr.env2)
@@ -1110,7 +1133,7 @@ class TableEngine:
 
     def run(self, res: "CheckResult", *, max_states: int | None, max_depth: int | None, keep_going: bool,
             budget: Budget) -> tuple[dict[str, Counterexample], str, int]:
-        """The BFS of :meth:`Checker.run <desmon.verify.checker.Checker.run>`, counting into ``res``;
+        """The BFS of the direct engine (:mod:`desmon.verify.direct`), counting into ``res``;
         returns (counterexamples found, why incomplete or "", depth).
 
         ``budget`` (time, memory, Ctrl-C) is looked at before each batch, between two
@@ -1118,167 +1141,168 @@ class TableEngine:
         there is dropped whole: nothing of it is counted yet), and every
         :data:`LOOK_EVERY` new states (the batch is then cut after the current
         transition, as ``max_states`` cuts it)."""
-        self.budget = budget
+        self.budget, self.res, self.max_states = budget, res, max_states
         ch = self.checker
         init = ch.initial()
-        env = self.env = _Env(ch, init)
-        C = env.C
-        if C > 1 << _ROOT_CTX or self.P + 3 > 1 << _ROOT_STIM:
-            raise TableUnsupported(f"table engine: {C} contexts and {self.P} platforms do not fit its tree keys; run with --engine direct")
+        env = self._encode(init)
+        # states: code = env << SYS_BITS | system
+        codes = self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
+        trail = self.trail = Trail(ch, self.key_of, keep_going)
+        self.seen = {codes[0]}
+        for name, msg in ch.violations(init):
+            trail.record(name, msg, 0)
+        self.any_found = bool(trail.found)
+        self.depth = self.transitions = 0
+        self.incomplete = ""
+        budget.status = lambda: (len(codes), self.transitions, self.depth)
+        try:
+            frontier = np.array([0], dtype=np.int64)
+            while len(frontier) and not self._finished() and not self.incomplete:
+                if max_depth is not None and self.depth >= max_depth:
+                    self.incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
+                    break
+                nxt = self._level(frontier)
+                if nxt:
+                    self.depth += 1
+                frontier = np.array(nxt, dtype=np.int64)
+        except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
+            self.incomplete = INTERRUPTED
+            trail.truncate(codes)
+        res.transitions = self.transitions
+        res.states = len(codes)
+        return trail.found, self.incomplete, self.depth
+
+    def _encode(self, init: Key) -> _Env:
+        """The environment code and the events of the search from ``init`` (or why the engine cannot run it)."""
+        env = self.env = _Env(self.checker, init)
+        if env.C > 1 << _ROOT_CTX or self.P + 3 > 1 << _ROOT_STIM:
+            raise TableUnsupported(f"table engine: {env.C} contexts and {self.P} platforms do not fit its tree keys; run with --engine direct")
         if env.space.bit_length() + SYS_BITS > 62:
             raise TableUnsupported(f"table engine: the environment has {env.space:,} combinations, too many to encode; run with --engine direct")
         # the answers of unused check positions: a block of zeros as long as any platform's digit range
         for _ in range(max(env.R)):
             self.ok.append(0)
-        ev = self.events = _Events(self, env)
-        # states: code = env << SYS_BITS | system
-        codes = self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
-        parent = array("l", [-1])
-        label = array("l", [-1])
-        labels: list[tuple[Event, tuple[int, ...]]] = []
-        label_ids: dict[tuple[int, tuple[int, ...]], int] = {}
-        seen = {codes[0]}
-        found: dict[str, Any] = {}
-        wanted = {i.name for i in ch.invariants}
-        key_of = self.key_of
+        self.events = _Events(self, env)
+        return env
 
-        def record(name: str, msg: str, i: int, during: str | None = None, extra: tuple | None = None) -> None:
-            if name in found:
-                return
-            ls: list = []
-            ks: list = []
-            while i >= 0:
-                ks.append(key_of(i))
-                if label[i] >= 0:
-                    ls.append(labels[label[i]])
-                i = parent[i]
-            ls.reverse()
-            ks.reverse()
-            if extra is not None:
-                ls.append(extra)
-            found[name] = Counterexample(name, msg, tuple(ch.replay(ls, expect=ks)), during)
+    def _finished(self) -> bool:
+        return self.any_found and self.trail.done()
 
-        def done() -> bool:
-            return (not keep_going and bool(found)) or wanted <= set(found)
+    def _level(self, frontier: np.ndarray) -> list[int]:
+        """One BFS level, batch by batch; returns the next level."""
+        nxt: list[int] = []
+        for lo in range(0, len(frontier), CHUNK_STATES):
+            if self.budget.spent():
+                self.incomplete = self.budget.reason
+                break
+            if self._batch(frontier[lo: lo + CHUNK_STATES], nxt):
+                break
+        return nxt
 
-        for name, msg in ch.violations(init):
-            record(name, msg, 0)
-        any_found = bool(found)
-        frontier = np.array([0], dtype=np.int64)
-        depth = 0
-        transitions = 0
-        incomplete = ""
-        spent = budget.spent
-        budget.status = lambda: (len(codes), transitions, depth)
-
-        def count(counter: Any, names: Sequence[Any], values: np.ndarray, size: int) -> None:
-            for k, n in enumerate(np.bincount(values, minlength=size).tolist()):
-                if n:
-                    counter[names[k]] += n
-
+    def _batch(self, ids: np.ndarray, nxt: list[int]) -> bool:
+        """Expand the states ``ids`` (one numpy batch); True if the search stops in it."""
+        sc = np.frombuffer(self.codes, dtype=np.int64)[ids]
+        tr = self.events.enabled(sc)
+        if not len(tr.env2):  # no state of this batch enables an event
+            _count(self.res.rules, self.env.ctxs, tr.ctx, self.env.C)
+            return False
         try:
-            while len(frontier) and not (any_found and done()) and not incomplete:
-                if max_depth is not None and depth >= max_depth:
-                    incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
-                    break
-                nxt: list[int] = []
-                for lo in range(0, len(frontier), CHUNK_STATES):
-                    if spent():
-                        incomplete = budget.reason
-                        break
-                    ids = frontier[lo: lo + CHUNK_STATES]
-                    sc = np.frombuffer(codes, dtype=np.int64)[ids]
-                    tr = ev.enabled(sc)
-                    N, T = len(ids), len(tr.env2)
-                    if not T:  # no state of this batch enables an event
-                        count(res.rules, env.ctxs, tr.ctx, C)
-                        continue
-                    try:
-                        U_t, U_pre, U_leaf = self._units(ids, tr)
-                        leaf_sys = np.array(self._leaf_sys, dtype=np.int64)
-                        U_code = (tr.env2[U_t] << SYS_BITS) | leaf_sys[U_leaf]
-                        # candidate new states: first occurrence in this batch, not seen before
-                        uniq, first = np.unique(U_code, return_index=True)
-                        fresh = np.fromiter((c not in seen for c in uniq.tolist()), dtype=bool, count=len(uniq))
-                        cand = np.sort(first[fresh])
-                        bad_of = dict(zip(cand.tolist(), self._violated(U_t[cand], leaf_sys[U_leaf[cand]], tr).tolist()))
-                    except _Spent:  # between two recorded runs or walk rounds: the batch is dropped
-                        incomplete = budget.reason
-                        break
-                    inst_units = np.flatnonzero(np.array(self._leaf_inst, dtype=bool)[U_leaf])
-                    # the records in order, as the direct engine's search loop meets them: it
-                    # stops after the event that found what it looked for or reached the cap,
-                    # or at once when a repaired instantaneous violation completes the search
-                    cut_t, stop_unit = T, -1
-                    for n_looked, u in enumerate(np.union1d(cand, inst_units).tolist(), 1):
-                        t = int(U_t[u])
-                        if t > cut_t:
-                            break
-                        if not n_looked % LOOK_EVERY and not incomplete and spent():
-                            incomplete, cut_t = budget.reason, t  # cut after this transition, as max_states does
-                        lf = self.leaves[int(U_leaf[u])]
-                        here = int(ids[tr.pos[t]])
-                        event = ev.events[int(tr.ev[t])]
-                        if lf[5] is not None and lf[5] not in found:
-                            nkey = env.key(int(tr.env2[t]), self.systems[lf[1]])
-                            if lf[5] not in {v for v, _m in ch.violations(nkey)}:
-                                # repaired before quiescence: the real run gives the message
-                                _n, _o, _log, instant = ch.run_one(key_of(here), event, self.prefixes[int(U_pre[u])])
-                                record(instant[0], instant[1], here, instant[2], (event, lf[3]))
-                                any_found = True
-                                if done():
-                                    cut_t, stop_unit = t, u
-                                    break
-                        if u in bad_of:
-                            c = int(U_code[u])
-                            seen.add(c)
-                            ni = len(codes)
-                            codes.append(c)
-                            parent.append(here)
-                            lk = (int(tr.ev[t]), lf[3])
-                            li = label_ids.get(lk)
-                            if li is None:
-                                li = label_ids[lk] = len(labels)
-                                labels.append((event, lf[3]))
-                            label.append(li)
-                            res.new_states[_KINDS[ev.kind_of[tr.ev[t]]]] += 1
-                            if max_states is not None and len(codes) >= max_states:
-                                incomplete = f"max states {max_states:,} reached"
-                            if self.leaves[bad_of[u]][1]:
-                                for name, msg in ch.violations(key_of(ni)):
-                                    record(name, msg, ni)
-                                any_found = True
-                            else:
-                                nxt.append(ni)
-                        if (any_found and done()) or incomplete:
-                            cut_t = t
-                    # count what the direct engine counts up to the cut
-                    inc = np.arange(stop_unit + 1) if stop_unit >= 0 else np.flatnonzero(U_t <= cut_t)
-                    transitions += len(inc)
-                    leaf_counts = np.bincount(U_leaf[inc], minlength=len(self.leaves))
-                    for lf_id in np.flatnonzero(leaf_counts).tolist():
-                        n = int(leaf_counts[lf_id])
-                        for name in self.leaves[lf_id][4]:
-                            res.branches[name] += n
-                    moved = inc[:-1] if stop_unit >= 0 else inc  # the stopping unit is not counted as a change
-                    moved = moved[U_code[moved] != sc[tr.pos[U_t[moved]]]]
-                    count(res.changed, _KINDS, ev.kind_of[tr.ev[U_t[moved]]], len(_KINDS))
-                    last_t = min(cut_t, T - 1)
-                    count(res.enabled, _KINDS, ev.kind_of[tr.ev[: last_t + 1]], len(_KINDS))
-                    n_states = int(tr.pos[last_t]) + 1 if cut_t < T else N
-                    count(res.rules, env.ctxs, tr.ctx[:n_states], C)
-                    if cut_t < T:
-                        break
-                if nxt:
-                    depth += 1
-                frontier = np.array(nxt, dtype=np.int64)
-        except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
-            incomplete = INTERRUPTED
-            n = min(len(codes), len(parent), len(label))  # a state half-added when it came
-            del codes[n:], parent[n:], label[n:]
-        res.transitions = transitions
-        res.states = len(codes)
-        return found, incomplete, depth
+            U_t, U_pre, U_leaf = self._units(ids, tr)
+            leaf_sys = np.array(self._leaf_sys, dtype=np.int64)
+            U_code = (tr.env2[U_t] << SYS_BITS) | leaf_sys[U_leaf]
+            # candidate new states: first occurrence in this batch, not seen before
+            seen = self.seen
+            uniq, first = np.unique(U_code, return_index=True)
+            fresh = np.fromiter((c not in seen for c in uniq.tolist()), dtype=bool, count=len(uniq))
+            cand = np.sort(first[fresh])
+            bad_of = dict(zip(cand.tolist(), self._violated(U_t[cand], leaf_sys[U_leaf[cand]], tr).tolist()))
+        except _Spent:  # between two recorded runs or walk rounds: the batch is dropped
+            self.incomplete = self.budget.reason
+            return True
+        units = _Units(ids, tr, U_t, U_pre, U_leaf, U_code)
+        cut_t, stop_unit = self._consume(units, cand, bad_of, nxt)
+        self._count_batch(units, sc, cut_t, stop_unit)
+        return cut_t < len(tr.env2)
+
+    def _consume(self, units: "_Units", cand: np.ndarray, bad_of: dict[int, int], nxt: list[int]) -> tuple[int, int]:
+        """The records in order, as the direct engine's search loop meets them: it stops
+        after the event that found what it looked for or reached the cap, or at once when
+        a repaired instantaneous violation completes the search. Returns (the last
+        transition counted, the unit the search stopped at or -1)."""
+        U_t, U_leaf = units.t, units.leaf
+        inst_units = np.flatnonzero(np.array(self._leaf_inst, dtype=bool)[U_leaf])
+        cut_t, stop_unit = len(units.tr.env2), -1
+        spent = self.budget.spent
+        for n_looked, u in enumerate(np.union1d(cand, inst_units).tolist(), 1):
+            t = int(U_t[u])
+            if t > cut_t:
+                break
+            if not n_looked % LOOK_EVERY and not self.incomplete and spent():
+                self.incomplete, cut_t = self.budget.reason, t  # cut after this transition, as max_states does
+            lf = self.leaves[int(U_leaf[u])]
+            if lf[5] is not None and lf[5] not in self.trail.found and self._repaired(units, u, t, lf):
+                return t, u
+            if u in bad_of:
+                self._new_state(units, u, t, lf, self.leaves[bad_of[u]][1], nxt)
+            if self._finished() or self.incomplete:
+                cut_t = t
+        return cut_t, stop_unit
+
+    def _repaired(self, units: "_Units", u: int, t: int, lf: tuple) -> bool:
+        """Unit ``u`` broke instantaneous invariant ``lf[5]`` inside its reaction: if it was
+        repaired before quiescence, record it (the real run gives the message). True if
+        the search then has what it looks for."""
+        tr = units.tr
+        ch = self.checker
+        nkey = self.env.key(int(tr.env2[t]), self.systems[lf[1]])
+        if lf[5] in {v for v, _m in ch.violations(nkey)}:
+            return False
+        here = int(units.ids[tr.pos[t]])
+        event = self.events.events[int(tr.ev[t])]
+        _n, _o, _log, instant = ch.run_one(self.key_of(here), event, self.prefixes[int(units.pre[u])])
+        self.trail.record(instant[0], instant[1], here, instant[2], (event, lf[3]))
+        self.any_found = True
+        return self.trail.done()
+
+    def _new_state(self, units: "_Units", u: int, t: int, lf: tuple, bad: tuple, nxt: list[int]) -> None:
+        """Unit ``u`` reached a new state: number it, label it, and record what it violates."""
+        tr, ev = units.tr, self.events
+        c = int(units.code[u])
+        self.seen.add(c)
+        codes = self.codes
+        ni = len(codes)
+        codes.append(c)
+        e = int(tr.ev[t])
+        self.trail.add(int(units.ids[tr.pos[t]]), (e, lf[3]), (ev.events[e], lf[3]))
+        self.res.new_states[EVENT_KINDS[ev.kind_of[e]]] += 1
+        if self.max_states is not None and len(codes) >= self.max_states:
+            self.incomplete = f"max states {self.max_states:,} reached"
+        if bad:
+            for name, msg in self.checker.violations(self.key_of(ni)):
+                self.trail.record(name, msg, ni)
+            self.any_found = True
+        else:
+            nxt.append(ni)
+
+    def _count_batch(self, units: "_Units", sc: np.ndarray, cut_t: int, stop_unit: int) -> None:
+        """Count what the direct engine counts up to the cut."""
+        res, tr, ev, env = self.res, units.tr, self.events, self.env
+        U_t, U_leaf, U_code = units.t, units.leaf, units.code
+        T = len(tr.env2)
+        inc = np.arange(stop_unit + 1) if stop_unit >= 0 else np.flatnonzero(U_t <= cut_t)
+        self.transitions += len(inc)
+        leaf_counts = np.bincount(U_leaf[inc], minlength=len(self.leaves))
+        for lf_id in np.flatnonzero(leaf_counts).tolist():
+            n = int(leaf_counts[lf_id])
+            for name in self.leaves[lf_id][4]:
+                res.branches[name] += n
+        moved = inc[:-1] if stop_unit >= 0 else inc  # the stopping unit is not counted as a change
+        moved = moved[U_code[moved] != sc[tr.pos[U_t[moved]]]]
+        _count(res.changed, EVENT_KINDS, ev.kind_of[tr.ev[U_t[moved]]], len(EVENT_KINDS))
+        last_t = min(cut_t, T - 1)
+        _count(res.enabled, EVENT_KINDS, ev.kind_of[tr.ev[: last_t + 1]], len(EVENT_KINDS))
+        n_states = int(tr.pos[last_t]) + 1 if cut_t < T else len(units.ids)
+        _count(res.rules, env.ctxs, tr.ctx[:n_states], env.C)
 
     def explored(self) -> "_Explored":
         return _Explored(self)

@@ -1,0 +1,201 @@
+"""The direct engine: BFS running the real deployment core on every transition.
+
+Each frontier state is expanded by :meth:`TransitionSystem.expand
+<desmon.verify.system.TransitionSystem.expand>` (in this process, or for a large level
+in worker processes: a pool the engine choice hands in, :mod:`desmon.verify.parallel`),
+under a symmetry reduction when the system has one (:mod:`desmon.verify.symmetry`). The
+search loop consumes the expansions' segments in frontier order, so every counter,
+every state number and every counterexample is the same for any number of workers.
+BFS keeps parent pointers labelled with (event, failed start indices) in a
+:class:`~desmon.verify.search.Trail`, so every counterexample is a shortest one.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Iterable, Protocol
+
+from desmon.model.events import Event
+from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Record, Segment, Trail, paused_gc
+from desmon.verify.state import Key
+from desmon.verify.system import TransitionSystem
+from desmon.verify.trace import Counterexample
+
+__all__ = ["DirectSearch", "PARALLEL_LEVEL", "Pool"]
+
+#: BFS levels with at least this many states go to the worker processes (``workers`` > 1).
+PARALLEL_LEVEL = 256
+
+
+class Pool(Protocol):
+    """Worker processes expanding a BFS level, in frontier order (:class:`desmon.verify.parallel.ExpansionPool`)."""
+
+    levels: int
+
+    def expand(self, frontier: list[Key]) -> Iterable[list[list[Segment]]]: ...
+
+    def pids(self) -> list[int]: ...
+
+    def close(self) -> float: ...
+
+
+class DirectSearch:
+    """One search of ``system`` on the direct engine, counting into ``res``.
+
+    ``pool(system, workers)`` starts the worker processes the first time a level of
+    :data:`PARALLEL_LEVEL` states or more comes (with ``workers`` > 1).
+    """
+
+    def __init__(
+        self, system: TransitionSystem, res: CheckResult, *, max_states: int | None, max_depth: int | None, keep_going: bool,
+        budget: Budget, workers: int = 1, pool: Callable[[TransitionSystem, int], Pool] | None = None,
+    ) -> None:
+        self.system, self.res, self.budget = system, res, budget
+        self.max_states, self.max_depth = max_states, max_depth
+        self.workers, self._make_pool = workers, pool
+        self.pool: Pool | None = None
+        # interned states: index[key] = i, keys[i] = key; parents and labels in the trail
+        self.index: dict[Key, int] = {}
+        self.keys: list[Key] = []
+        self.trail = Trail(system, self.keys.__getitem__, keep_going)
+        self.parts: dict = {}  # interned key parts, shared by every state holding them
+        self.depth = self.transitions = 0
+        self.incomplete = ""
+        self.any_found = False
+        self.count_names = res.branches.update
+
+    def run(self) -> tuple[dict[str, Counterexample], str, int]:
+        """The search: (counterexamples found, why incomplete or "", depth)."""
+        system, trail = self.system, self.trail
+        init = system.initial()
+        if system.symmetry is not None:
+            init = system.symmetry.canon(init)
+        self.index[init] = 0
+        self.keys.append(init)
+        self.budget.status = lambda: (len(self.keys), self.transitions, self.depth)
+        for name, msg in system.violations(init):
+            trail.record(name, msg, 0)
+        self.any_found = bool(trail.found)
+        with paused_gc():
+            try:
+                self._levels([0])
+            except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
+                self.incomplete = INTERRUPTED
+                trail.truncate(self.keys)
+            finally:
+                self._close_pool()
+        system.explored = self.keys  # the distinct (canonical) states of the last run, BFS order
+        self.res.states = len(self.keys)
+        self.res.transitions = self.transitions
+        return trail.found, self.incomplete, self.depth
+
+    def _finished(self) -> bool:
+        return self.any_found and self.trail.done()
+
+    def _levels(self, frontier: list[int]) -> None:
+        max_depth = self.max_depth
+        while frontier and not self._finished() and not self.incomplete:
+            if max_depth is not None and self.depth >= max_depth:
+                self.incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
+                break
+            nxt = self._level(frontier)
+            if nxt:
+                self.depth += 1
+            frontier = nxt
+
+    def _expansions(self, frontier: list[int]) -> Iterable[list[list[Segment]]]:
+        keys = self.keys
+        if self.workers > 1 and len(frontier) >= PARALLEL_LEVEL and self._make_pool is not None:
+            if self.pool is None:
+                self.pool = self._make_pool(self.system, self.workers)
+                self.budget.pids = self.pool.pids  # their memory counts in the budget
+            return self.pool.expand([keys[ki] for ki in frontier])
+        expand, index = self.system.expand, self.index
+        return (expand(keys[ki], index) for ki in frontier)
+
+    def _close_pool(self) -> None:
+        if self.pool is not None:
+            self.res.peak_workers_mb = self.pool.close()
+            self.res.worker_levels = self.pool.levels
+            self.budget.pids = tuple
+
+    def _level(self, frontier: list[int]) -> list[int]:
+        """Consume one BFS level's expansions in frontier order; returns the next level."""
+        nxt: list[int] = []
+        spent = self.budget.spent
+        for ki, per_event in zip(frontier, self._expansions(frontier)):
+            if self._finished():
+                break
+            if spent():  # time, memory, Ctrl-C: looked at between two expansions
+                self.incomplete = self.budget.reason
+                break
+            self._state(ki, per_event, nxt)
+            if self.incomplete:
+                break
+        return nxt
+
+    def _state(self, ki: int, per_event: list[list[Segment]], nxt: list[int]) -> None:
+        """Consume the expansion of state ``ki``, event by event."""
+        res = self.res
+        key = self.keys[ki]
+        res.rules[key.context] += 1
+        enabled_count, changed, count_names = res.enabled, res.changed, self.count_names
+        for (event, kind), segments in zip(self.system._enabled(key), per_event, strict=True):
+            enabled_count[kind] += 1
+            for routine, routine_moved, routine_names, rec in segments:
+                if routine:
+                    self.transitions += routine
+                    if routine_moved:
+                        changed[kind] += routine_moved
+                    count_names(routine_names)
+                if rec is not None and self._record(ki, event, kind, rec, nxt):
+                    break
+            if self._finished() or self.incomplete:
+                break
+
+    def _record(self, ki: int, event: Event, kind: str, rec: Record, nxt: list[int]) -> bool:
+        """Consume one record of state ``ki``'s ``event``; True if the search has what it looks for."""
+        fails, ckey, moved, names, repaired, bad = rec
+        self.transitions += 1
+        self.count_names(names)
+        trail = self.trail
+        if repaired is not None and repaired[0] not in trail.found:
+            trail.record(repaired[0], repaired[1], ki, repaired[2], (event, fails))
+            self.any_found = True
+            if trail.done():
+                return True
+        if moved:
+            self.res.changed[kind] += 1
+        if ckey is None or ckey in self.index:
+            return False
+        ni = self._add(ckey, ki, (event, fails), kind)
+        if bad:
+            for name, msg in bad:
+                trail.record(name, msg, ni)
+            self.any_found = True  # do not explore beyond a violation
+        else:
+            nxt.append(ni)
+        return False
+
+    def _add(self, ckey: Any, parent: int, label: tuple[Event, tuple[int, ...]], kind: str) -> int:
+        """A new state (a Key, or the plain tuple a worker sends for one), its parent and label."""
+        keys = self.keys
+        ni = len(keys)
+        ckey = self._intern(ckey)
+        self.index[ckey] = ni
+        keys.append(ckey)
+        self.trail.add(parent, label, label)
+        self.res.new_states[kind] += 1
+        if self.max_states is not None and len(keys) >= self.max_states:
+            self.incomplete = f"max states {self.max_states:,} reached"
+        return ni
+
+    def _intern(self, k: tuple) -> Key:
+        parts = self.parts
+        return Key(
+            k[0],
+            parts.setdefault(k[1], k[1]),
+            parts.setdefault(k[2], k[2]),
+            parts.setdefault(k[3], k[3]),
+            parts.setdefault(k[4], k[4]),
+            parts.setdefault(k[5], k[5]),
+        )

@@ -1,0 +1,82 @@
+"""The checker's environment: its event alphabet, one place.
+
+A transition starts with one environment event, chosen among those the scenario's
+:class:`~desmon.verify.bounds.Bounds` enable in the current state; the system's
+reaction follows. :data:`EVENT_KINDS` names the kinds (the report counts per kind) and
+:func:`enabled_events` lists a state's events in the order every engine explores them
+(the order fixes which shortest counterexample a search reports).
+
+Adding an event kind (say a requirement change, or a platform joining) is local:
+a ``Bounds`` field that bounds it (:mod:`desmon.verify.bounds`, validated there), a
+name in :data:`EVENT_KINDS` (and in :func:`desmon.model.events.event_kind`), and one
+``_<kind>_events`` function called from :func:`enabled_events`. The direct engine and
+the symmetry reduction then explore it (:meth:`Symmetry.rename_event
+<desmon.verify.symmetry.Symmetry.rename_event>` must map it if it names a platform).
+The table engine encodes the environment as numbers (:class:`desmon.verify.table._Env`
+and ``_Events``, mirroring this order); until it encodes the new kind, make
+:func:`desmon.verify.table.table_unsupported` name the new bounds so ``--engine auto``
+falls back to the direct engine.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+from desmon.verify.state import Key
+
+if TYPE_CHECKING:  # pragma: no cover
+    from desmon.verify.bounds import Bounds
+
+__all__ = ["EVENT_KINDS", "enabled_events"]
+
+#: the kinds of environment events (:func:`desmon.model.events.event_kind`), in report order
+EVENT_KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
+
+
+def enabled_events(b: "Bounds", key: Key) -> list[Event]:
+    """Every environment event ``b`` enables in state ``key``, in exploration order:
+    action changes, device failures and repairs, platforms down and up, load steps."""
+    can_fail = b.max_failures is None or len(key.failed) + len(key.down) < b.max_failures
+    return [*_action_events(b, key), *_device_events(b, key, can_fail), *_platform_events(b, key, can_fail), *_load_events(b, key)]
+
+
+def _action_events(b: "Bounds", key: Key) -> list[Event]:
+    return [ActionChange(a) for a in b.action_moves(key.context)]
+
+
+def _device_events(b: "Bounds", key: Key, can_fail: bool) -> list[Event]:
+    out: list[Event] = []
+    for d in b.devices:
+        if d in key.failed:
+            if b.repair:
+                out.append(DeviceRepair(d))
+        elif can_fail:
+            out.append(DeviceFail(d))
+    return out
+
+
+def _platform_events(b: "Bounds", key: Key, can_fail: bool) -> list[Event]:
+    out: list[Event] = []
+    for p in b.platforms:
+        if p in key.down:
+            if b.repair:
+                out.append(PlatformUp(p))
+        elif can_fail:
+            out.append(PlatformDown(p))
+    return out
+
+
+def _load_events(b: "Bounds", key: Key) -> list[Event]:
+    """A load step up and down (to the neighbouring bounded levels) on each loaded platform."""
+    if not b.loads:
+        return []
+    out: list[Event] = []
+    cur = {p: dict(items).get(b.load_resource, 0) for p, items in key.loads}
+    for p, lv in b.loads.items():
+        i = lv.index(cur.get(p, 0))
+        if i + 1 < len(lv):
+            out.append(LoadChange(p, lv[i + 1], b.load_resource))
+        if i > 0:
+            out.append(LoadChange(p, lv[i - 1], b.load_resource))
+    return out

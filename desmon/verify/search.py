@@ -1,0 +1,383 @@
+"""Search core: what every checker engine shares.
+
+An engine (:mod:`~desmon.verify.direct`, :mod:`~desmon.verify.table`) explores the
+transition system of :mod:`desmon.verify.system` breadth-first; this module holds what
+a search is measured by and ends with, whichever engine runs it:
+
+* the result (:class:`CheckResult`, the verdicts, :func:`finish`);
+* the budgets and limits (:class:`Budget`: the time limit, the memory budget, Ctrl-C,
+  and the progress line it rewrites) and the search's surroundings (:func:`ctrl_c`,
+  :func:`paused_gc`);
+* the search tree (:class:`Trail`: parent pointers and transition labels of the
+  states, counterexamples rebuilt by replaying their labels through the real
+  deployment core, and when the search has found what it looks for);
+* what a transition reports to a search loop (:data:`Record`, :data:`Segment`).
+
+State keys are :class:`desmon.verify.state.Key`; counterexample steps are in
+:mod:`desmon.verify.trace`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gc
+import math
+import os
+import resource
+import signal
+import sys
+import threading
+import time
+from array import array
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence, TextIO
+
+from desmon.verify.state import Key
+from desmon.verify.trace import Counterexample, Label
+
+if TYPE_CHECKING:  # pragma: no cover
+    from desmon.verify.system import TransitionSystem
+
+__all__ = [
+    "HOLDS", "VIOLATED", "INCOMPLETE", "INTERRUPTED", "EXIT_INTERRUPTED", "NOT_CHECKED", "Record", "Segment",
+    "CheckResult", "Budget", "Trail", "finish", "ctrl_c", "paused_gc", "resident_mb", "proportional_mb", "peak_mb",
+    "MEMORY_EVERY", "MEMORY_EVERY_WORKERS",
+]
+
+HOLDS, VIOLATED, INCOMPLETE = "HOLDS", "VIOLATED", "INCOMPLETE"
+#: why a search stopped by Ctrl-C is incomplete (:attr:`CheckResult.incomplete`), and its exit
+#: code (128 + SIGINT, as a shell reports it)
+INTERRUPTED, EXIT_INTERRUPTED = "interrupted", 130
+
+#: Invariants the checker cannot evaluate, and where they are checked instead. Its states
+#: keep no infrastructure running list, stop count or DEPLOYMENT_HISTORY edges (the
+#: SystemView it builds leaves ``running`` / ``stops`` / ``history`` None), so ``history``
+#: could never fail here: it is left out of the checked set and refused by name.
+NOT_CHECKED = {"history": "sim audit and fuzz only"}
+
+#: One transition as :meth:`TransitionSystem.expand <desmon.verify.system.TransitionSystem.expand>`
+#: reports it to the search loop: (failed start indices, the successor's canonical key or
+#: None if already known, whether the state moved, the reaction's branch names, an
+#: instantaneous violation repaired before quiescence or None, the invariants a new
+#: successor violates).
+Record = tuple[tuple[int, ...], "Key | None", bool, tuple[str, ...], "tuple[str, str, str] | None", tuple[tuple[str, str], ...]]
+
+#: A run of routine transitions (only counted: how many, how many moved the state, their
+#: branch names) followed by one :data:`Record`, or by None at the end of an event.
+Segment = tuple[int, int, tuple[str, ...], "Record | None"]
+
+
+@dataclass
+class CheckResult:
+    scenario: str
+    deployer: str
+    invariants: tuple[str, ...]
+    verdict: str
+    reason: str = ""
+    states: int = 0
+    transitions: int = 0
+    depth: int = 0
+    seconds: float = 0.0
+    peak_mb: float = 0.0
+    counterexamples: list[Counterexample] = field(default_factory=list)
+    enabled: Counter = field(default_factory=Counter)
+    new_states: Counter = field(default_factory=Counter)
+    changed: Counter = field(default_factory=Counter)
+    rules: Counter = field(default_factory=Counter)
+    branches: Counter = field(default_factory=Counter)
+    symmetry: bool = False
+    not_checked: tuple[str, ...] = ()  # invariants left to the sim audit and the fuzzer (NOT_CHECKED)
+    workers: int = 1
+    peak_workers_mb: float = 0.0  # the largest worker process's peak resident size (workers > 1)
+    worker_levels: int = 0  # BFS levels the workers expanded (levels under PARALLEL_LEVEL states stay in-process)
+    engine: str = "direct"  # "table" or "direct" (see Checker.run)
+    records: int = 0  # table engine: real runs of the core it recorded (reactions and invariant checks)
+    engine_note: str = ""  # why engine "auto" ran the direct engine
+    incomplete: str = ""  # why the search stopped early ("" if it did not), whatever the verdict
+    timeout: float | None = None  # the time limit it ran under (seconds)
+    max_memory: float | None = None  # the memory budget it ran under (MB)
+
+    @property
+    def states_per_second(self) -> float:
+        return self.states / self.seconds if self.seconds > 0 else float("inf")
+
+    @property
+    def transitions_per_second(self) -> float:
+        return self.transitions / self.seconds if self.seconds > 0 else float("inf")
+
+    @property
+    def interrupted(self) -> bool:
+        """Whether Ctrl-C stopped the search (the report is what it explored until then)."""
+        return self.incomplete == INTERRUPTED
+
+    @property
+    def exit_code(self) -> int:
+        if self.interrupted:
+            return EXIT_INTERRUPTED
+        return {HOLDS: 0, VIOLATED: 1, INCOMPLETE: 3}[self.verdict]
+
+
+def peak_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def resume_gc() -> None:
+    """Turn the cyclic collector back on after a search that paused it.
+
+    Everything the search allocated is still in the youngest generation: the first
+    allocation after ``gc.enable()`` would walk it all (0.4 s after 10 s of the direct
+    engine on bench_7p, time past a ``--timeout``). Freezing and unfreezing first moves
+    every tracked object to the oldest generation in O(1); it is walked again only by a
+    full collection, when the heap has grown by a quarter.
+    """
+    gc.freeze()
+    gc.unfreeze()
+    gc.enable()
+
+
+#: How often (seconds) a search reads its resident memory (the budget and the progress line);
+#: with worker processes their proportional share is read too, less often.
+MEMORY_EVERY = 0.05
+MEMORY_EVERY_WORKERS = 0.25
+
+_PAGE_MB = (os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096) / 2**20
+
+
+def resident_mb(pid: int | str = "self") -> float | None:
+    """The resident memory of process ``pid`` in MB (``/proc/<pid>/statm``), None where unreadable."""
+    try:
+        with open(f"/proc/{pid}/statm", "rb") as fh:
+            return int(fh.read().split()[1]) * _PAGE_MB
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def proportional_mb(pid: int | str) -> float | None:
+    """Process ``pid``'s proportional share of resident memory in MB (Pss: pages shared with
+    forked siblings count once in a sum), None where unreadable."""
+    try:
+        with open(f"/proc/{pid}/smaps_rollup", "rb") as fh:
+            for line in fh:
+                if line.startswith(b"Pss:"):
+                    return int(line.split()[1]) / 1024.0
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+class Budget:
+    """What ends a search before its caps: the time limit, the memory budget and Ctrl-C.
+
+    Both engines call :meth:`spent` often: between two expansions (direct engine), between
+    two recorded runs of the core, two rounds of a tree walk and every few new states
+    (table engine). It reads the clock every time (tens of nanoseconds) and the resident
+    memory every :data:`MEMORY_EVERY` seconds, and it rewrites the progress line.
+    """
+
+    def __init__(
+        self,
+        t0: float,
+        *,
+        timeout: float | None = None,
+        timeout_spent: float = 0.0,
+        max_memory: float | None = None,
+        progress: bool = False,
+        progress_after: float = 1.0,
+        progress_every: float = 0.5,
+        out: TextIO | None = None,
+    ) -> None:
+        self.t0 = t0
+        self.timeout = timeout
+        self.before = timeout_spent  # seconds of the timeout spent before the search started
+        self.deadline = math.inf if timeout is None else t0 + timeout - timeout_spent
+        self.max_memory = max_memory
+        self.progress, self.progress_after, self.progress_every = progress, progress_after, progress_every
+        self.out = out if out is not None else sys.stderr
+        self.reason = ""  # why the search must stop ("" while it may go on)
+        self.interrupted = False  # set by the Ctrl-C handler of ctrl_c
+        self.memory = 0.0  # the last resident memory read (MB; the workers' shares included)
+        #: the worker processes whose memory counts (set by the direct engine's pool)
+        self.pids: Callable[[], Iterable[int]] = tuple
+        #: (states, transitions, depth) of the search so far, for the progress line
+        self.status: Callable[[], tuple[int, int, int]] = lambda: (0, 0, 0)
+        self._next_look = t0
+        self._last_progress = -math.inf
+        self._printed = 0  # length of the progress line on screen (0: none)
+
+    def spent(self) -> str:
+        """Why the search must stop now, or "" to go on."""
+        if self.reason:
+            return self.reason
+        if self.interrupted:
+            self.reason = INTERRUPTED
+            return self.reason
+        now = time.perf_counter()
+        if now > self.deadline:
+            self.reason = f"timeout {self.timeout:g}s"
+        elif now >= self._next_look:
+            self._look(now)
+        return self.reason
+
+    def _look(self, now: float) -> None:
+        pids = list(self.pids())
+        self._next_look = now + (MEMORY_EVERY_WORKERS if pids else MEMORY_EVERY)
+        if self.max_memory is not None or self.progress:
+            self.memory = self.measure(pids)
+        if self.max_memory is not None and self.memory > self.max_memory:
+            self.reason = f"memory budget {self.max_memory:g} MB reached: {self.memory:,.0f} MB resident"
+        elif self.progress and now - self.t0 >= self.progress_after and now - self._last_progress >= self.progress_every:
+            self._last_progress = now
+            self.show(now)
+
+    @staticmethod
+    def measure(pids: Sequence[int] = ()) -> float:
+        """The search's resident memory in MB: this process's, plus its workers' (then every
+        process counts its proportional share, so memory they share is counted once); the
+        peak resident size where ``/proc`` is not readable."""
+        if pids:
+            shares = [proportional_mb(p) for p in ("self", *pids)]
+            if None not in shares:
+                return sum(shares)  # type: ignore[arg-type]
+            return sum(resident_mb(p) or 0.0 for p in ("self", *pids))
+        mb = resident_mb()
+        return peak_mb() if mb is None else mb
+
+    def show(self, now: float) -> None:
+        """Rewrite the progress line: states, states/s, depth, transitions, memory and time, with their budgets."""
+        states, transitions, depth = self.status()
+        elapsed = now - self.t0
+        rate = states / elapsed if elapsed > 0 else 0.0
+        memory = f"{self.memory:,.0f} MB" + (f" of {self.max_memory:g}" if self.max_memory is not None else "")
+        clock = f"{elapsed + self.before:,.0f}s" + (f" of {self.timeout:g}s" if self.timeout is not None else "")
+        line = f"  {states:,} states  {rate:,.0f} states/s  depth {depth}  {transitions:,} transitions  memory {memory}  time {clock}"
+        print("\r" + line.ljust(self._printed), end="", file=self.out, flush=True)
+        self._printed = max(len(line), 1)
+
+    def close(self) -> None:
+        """End the progress line (if one was shown) before the report."""
+        if self._printed:
+            print("", file=self.out, flush=True)
+            self._printed = 0
+
+
+@contextlib.contextmanager
+def ctrl_c(budget: Budget) -> Iterator[None]:
+    """While a search runs, a first Ctrl-C asks it to stop at its next check (and report
+    what it explored); a second one interrupts at once (``KeyboardInterrupt``, which the
+    engines also turn into an interrupted result). Only in the main thread, and only
+    where Python's own handler is installed (a program's own handler is left alone)."""
+    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield
+        return
+
+    def stop(signum: int, frame: Any) -> None:
+        budget.interrupted = True
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+    signal.signal(signal.SIGINT, stop)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+@contextlib.contextmanager
+def paused_gc() -> Iterator[None]:
+    """The cyclic collector paused while a search runs (a search makes no reference cycles,
+    ``tests/test_verify.py`` checks it, but the collector would still walk the millions
+    of keys it holds again and again: a third of the time at 80,000 states), and resumed
+    cheaply after it (:func:`resume_gc`)."""
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if collecting:
+            resume_gc()
+
+
+class Trail:
+    """The search tree of a BFS: each state's parent and transition label, by state number,
+    and the counterexamples found so far, each rebuilt (once per invariant) by replaying
+    the labels on its path from the initial state through the real core, which also
+    checks that the replay lands on the stored states (determinism).
+
+    ``key_of(i)`` gives the key of state number ``i`` (the engines store states their
+    own way). A label is interned once: ``label_id(lookup, label)`` numbers ``label``
+    under the engine's ``lookup`` key for it.
+    """
+
+    def __init__(self, system: "TransitionSystem", key_of: Callable[[int], Key], keep_going: bool) -> None:
+        self.system = system
+        self.key_of = key_of
+        self.keep_going = keep_going
+        self.parent = array("l", [-1])
+        self.label = array("l", [-1])
+        self.labels: list[Label] = []
+        self._label_ids: dict[Any, int] = {}
+        self.found: dict[str, Counterexample] = {}
+        self.wanted = {i.name for i in system.invariants}
+
+    def label_id(self, lookup: Any, label: Label) -> int:
+        li = self._label_ids.get(lookup)
+        if li is None:
+            li = self._label_ids[lookup] = len(self.labels)
+            self.labels.append(label)
+        return li
+
+    def add(self, parent: int, lookup: Any, label: Label) -> None:
+        """The next state's parent and label."""
+        self.parent.append(parent)
+        self.label.append(self.label_id(lookup, label))
+
+    def path(self, i: int) -> tuple[list[Label], list[Key]]:
+        """The labels from the initial state to state ``i``, and the states on the way."""
+        ls: list[Label] = []
+        ks: list[Key] = []
+        parent, label, labels, key_of = self.parent, self.label, self.labels, self.key_of
+        while i >= 0:
+            ks.append(key_of(i))
+            if label[i] >= 0:
+                ls.append(labels[label[i]])
+            i = parent[i]
+        ls.reverse()
+        ks.reverse()
+        return ls, ks
+
+    def record(self, name: str, msg: str, i: int, during: str | None = None, extra: Label | None = None) -> None:
+        """A violation of ``name`` in state ``i`` (or, with ``extra``, during the transition
+        ``extra`` out of it): its counterexample, unless the invariant has one already."""
+        if name in self.found:
+            return
+        ls, ks = self.path(i)
+        if extra is not None:
+            ls.append(extra)
+        self.found[name] = Counterexample(name, msg, tuple(self.system.replay(ls, expect=ks)), during)
+
+    def done(self) -> bool:
+        """Whether the search has what it looks for: a counterexample (or one of each
+        invariant with ``keep_going``)."""
+        return (not self.keep_going and bool(self.found)) or self.wanted <= set(self.found)
+
+    def truncate(self, states: list | array) -> None:  # type: ignore[type-arg]
+        """Drop a state half-added when a second Ctrl-C came (``states``: the engine's list of them)."""
+        n = min(len(states), len(self.parent), len(self.label))
+        del states[n:], self.parent[n:], self.label[n:]
+
+
+def finish(res: CheckResult, system: "TransitionSystem", found: dict[str, Counterexample], incomplete: str, depth: int, budget: Budget) -> CheckResult:
+    """Verdict, depth, time and memory of a finished search (any engine)."""
+    res.depth = max([depth] + [c.length for c in found.values()])
+    res.seconds = time.perf_counter() - budget.t0
+    res.peak_mb = peak_mb()
+    res.incomplete = incomplete
+    res.counterexamples = [found[i.name] for i in system.invariants if i.name in found]
+    if res.counterexamples:
+        res.verdict = VIOLATED
+        res.reason = ", ".join(c.invariant for c in res.counterexamples)
+        if incomplete:
+            res.reason += f" (search incomplete: {incomplete})"
+    elif incomplete:
+        res.verdict, res.reason = INCOMPLETE, incomplete
+    return res

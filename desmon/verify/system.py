@@ -1,0 +1,270 @@
+"""The transition system every checker engine explores: one model, one notion of state.
+
+A state is a :class:`~desmon.verify.state.Key`. A transition is one environment event
+(:mod:`desmon.verify.environment`) followed by the system's complete, deterministic
+reaction computed by the real :class:`~desmon.deployment.core.DeploymentCore` (context
+monitor, selector, deployer variant) over a :class:`~desmon.verify.state.StateStore`.
+The only other branching is Control.start failing, bounded per transition: the
+reaction is re-run with an outcome prefix, and every start beyond the prefix is a
+choice point (:meth:`TransitionSystem.successors`). The invariants are evaluated on a
+state's :class:`~desmon.deployment.invariants.SystemView` (:meth:`TransitionSystem.violations`);
+the instantaneous ones are watched inside a reaction, after every command.
+
+Engines differ only in how they compute and store transitions; a counterexample is
+always rebuilt by :meth:`TransitionSystem.replay` through the real core, and a replay
+that does not reproduce the stored key is reported as nondeterminism of the system
+under test.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from typing import Any, Container, Iterable, Iterator, Protocol, Sequence
+
+from desmon.deployment.core import DeploymentCore
+from desmon.deployment.deployer import Deployer
+from desmon.deployment.invariants import Invariant, SystemView, check_invariants, get_invariants
+from desmon.errors import CheckerError, NondeterminismError
+from desmon.model.events import Event, event_kind
+from desmon.model.scenario import Scenario
+from desmon.verify.bounds import Bounds, bounds_of
+from desmon.verify.environment import enabled_events
+from desmon.verify.replay import initial_reaction
+from desmon.verify.search import NOT_CHECKED, Record, Segment
+from desmon.verify.state import MEMO_LIMIT, Key, StateStore
+from desmon.verify.trace import KEPT_BRANCH, Label, Step, branch_name, initial_step, make_step
+
+__all__ = ["TransitionSystem", "Reduction"]
+
+
+class Reduction(Protocol):
+    """A state-space reduction (symmetry): one canonical key per class of states, and the
+    replay of canonical labels as a concrete trace."""
+
+    def canon(self, key: Key) -> Key: ...
+
+    def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]: ...
+
+
+class TransitionSystem:
+    """A scenario's bounded environment and the real core's reactions, as states and transitions."""
+
+    #: the reduction the search stores states under (installed by the engine choice), or None
+    symmetry: Reduction | None = None
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        deployer: str | Deployer = "desmon",
+        *,
+        invariants: Iterable[str] | None = None,
+        bounds: Bounds | None = None,
+    ) -> None:
+        self.scenario = scenario
+        self.model = scenario.model
+        self.bounds = bounds if bounds is not None else bounds_of(scenario)
+        if bounds is not None:
+            bounds.validate(scenario)
+        self.invariants: tuple[Invariant, ...] = ()
+        self.not_checked: tuple[str, ...] = ()
+        self._choose_invariants(invariants)
+        names = {i.name for i in self.invariants}
+        self.instant = tuple(i for i in get_invariants(list(self.bounds.instantaneous)) if i.name in names) if self.bounds.instantaneous else ()
+        self.store = StateStore(self.model)
+        self.core = DeploymentCore(self.model, self.store, self.store, deployer)
+        self.deployer_name = self.core.deployer.name
+        self.store.watch = self.instant
+        self.store.watch_check = self._instant_check
+        self._instant_memo: dict[tuple, list[tuple[str, str]]] = {}
+        self._enabled_memo: dict[tuple, tuple[tuple[Event, str], ...]] = {}
+        self._event_pairs: dict[Event, tuple[Event, str]] = {}  # one (event, kind) object per event
+        self._frozen: dict[tuple[str, ...], frozenset[str]] = {}
+        self._slots_cache: dict[str | None, tuple[tuple[str, ...], ...]] = {}
+        self.branches: Counter = Counter()
+        #: the distinct (canonical) states of the last run, in BFS order
+        self.explored: Sequence[Key] = []
+
+    def _choose_invariants(self, invariants: Iterable[str] | None) -> None:
+        """The invariants to check: the named ones (unknown names: ModelError; one the checker
+        cannot evaluate: CheckerError), or all of them but :data:`NOT_CHECKED`."""
+        requested = get_invariants(list(invariants) if invariants else None)
+        blind = [i.name for i in requested if i.name in NOT_CHECKED] if invariants else []
+        if blind:
+            raise CheckerError(
+                f"--invariant {blind[0]}: the checker cannot evaluate it (its states keep no running list, stop count or "
+                f"DEPLOYMENT_HISTORY edges); it is checked by the simulation audit (desmon run) and desmon fuzz"
+            )
+        self.invariants = tuple(i for i in requested if i.name not in NOT_CHECKED)
+        #: the invariants of a default (all) run that the checker leaves to the audit and fuzzer
+        self.not_checked = () if invariants else tuple(n for n in NOT_CHECKED)
+
+    def forget(self) -> None:
+        """Drop every memo and start a fresh store and core (the next search starts cold)."""
+        self._instant_memo.clear()
+        self._enabled_memo.clear()
+        self.store = StateStore(self.model)
+        self.core = DeploymentCore(self.model, self.store, self.store, self.core.deployer)
+        self.store.watch = self.instant
+        self.store.watch_check = self._instant_check
+
+    # -- the transition relation ------------------------------------------------------------
+    def slots(self, context: str | None) -> tuple[tuple[str, ...], ...]:
+        s = self._slots_cache.get(context)
+        if s is None:
+            s = self._slots_cache[context] = self.core.deployer.requested(self.model.rules.slots_for(context))
+        return s
+
+    def initial(self) -> Key:
+        """The scenario's initial facts, then the system's first reaction (no start fails)."""
+        st = self.store
+        st.load(Key(None, (), (), (), (), ()))
+        self.core.standing = frozenset()
+        st.begin(())
+        initial_reaction(self.core, self.scenario, self.bounds, st)  # the same as RepositoryRun's
+        return st.key(self.core.standing)
+
+    def enabled(self, key: Key) -> list[Event]:
+        return [e for e, _k in self._enabled(key)]
+
+    def _enabled(self, key: Key) -> tuple[tuple[Event, str], ...]:
+        """(event, kind) of every event enabled in ``key``; memoised on the parts it reads."""
+        mk = (key.context, key.failed, key.down, key.loads)
+        out = self._enabled_memo.get(mk)
+        if out is None:
+            pairs = self._event_pairs
+            out = tuple(pairs.get(e) or pairs.setdefault(e, (e, event_kind(e))) for e in enabled_events(self.bounds, key))
+            if len(self._enabled_memo) > MEMO_LIMIT:
+                self._enabled_memo.clear()  # bounded: there is one entry per environment combination
+            self._enabled_memo[mk] = out
+        return out
+
+    def _standing(self, standing: tuple[str, ...]) -> frozenset[str]:
+        f = self._frozen.get(standing)
+        if f is None:
+            f = self._frozen[standing] = frozenset(standing)
+        return f
+
+    def _instant_check(self) -> list[tuple[str, str]]:
+        """The instantaneous invariants on the store's current facts (memoised on them)."""
+        st = self.store
+        standing = self.core.standing
+        mk = (st.failed, st.down, st.loads, st.deployed, standing, st.ctx)
+        r = self._instant_memo.get(mk)
+        if r is None:
+            view = SystemView(st.platform_states(), self.model.specs, standing, self.slots(st.ctx))
+            if len(self._instant_memo) > MEMO_LIMIT:
+                self._instant_memo.clear()
+            r = self._instant_memo[mk] = check_invariants(view, self.instant)
+        return r
+
+    def run_one(self, key: Key, event: Event, prefix: tuple[bool, ...]):  # type: ignore[no-untyped-def]
+        """One transition: ``event`` and the complete reaction (the real core) applied to
+        ``key``, starts following ``prefix`` and succeeding beyond it.
+
+        Returns (next key, start outcomes, StepLog, instantaneous violation or None); the
+        store is left in the next state.
+        """
+        st = self.store
+        st.load(key)
+        core = self.core
+        core.standing = self._standing(key.standing)
+        st.begin(prefix)
+        _stim, log = core.step(event, st)
+        return st.key(core.standing), tuple(st.outcomes), log, st.instant
+
+    def successors(self, key: Key, event: Event) -> Iterator[tuple[tuple[int, ...], Key, Any, tuple[str, str, str] | None]]:
+        """Every (failed start indices, next key, StepLog, instantaneous violation) of ``event``.
+
+        The one implementation of a transition's branching: the reaction is first run with
+        every start succeeding; each start it issued beyond the current prefix is a choice
+        point, re-run with that start failing, while fewer than ``start_failures`` failed.
+        """
+        run_one = self.run_one
+        bound = self.bounds.start_failures
+        pending: list[tuple[bool, ...]] = [()]
+        while pending:
+            prefix = pending.pop(0)
+            nkey, outcomes, log, instant = run_one(key, event, prefix)
+            fails = tuple(i for i, ok in enumerate(outcomes) if not ok) if False in outcomes else ()
+            if len(fails) < bound:
+                for i in range(len(prefix), len(outcomes)):
+                    pending.append(outcomes[:i] + (False,))
+            yield fails, nkey, log, instant
+
+    def violations(self, key: Key) -> list[tuple[str, str]]:
+        st = self.store
+        st.load(key)
+        view = SystemView(st.platform_states(), self.model.specs, self._standing(key.standing), self.slots(key.context))
+        return check_invariants(view, self.invariants)
+
+    # -- the transitions as a search loop consumes them ----------------------------------
+    def expand(self, key: Key, known: "Container[Key]") -> list[list[Segment]]:
+        """Every transition out of ``key``, per enabled event (in order), as a list of :data:`Segment` tuples.
+
+        A successor in ``known`` (or met earlier in this expansion) that broke nothing on
+        the way is *routine*: only counted. Every other transition (a new successor, with
+        the invariants it violates, or an instantaneous violation repaired before
+        quiescence) is a :data:`Record`, and closes a segment that also counts the
+        routine transitions before it. The direct engine's search loop consumes segments
+        in order, in-process or from worker processes alike; since it can only stop at
+        a record, it sees exactly the counts a transition-by-transition loop would.
+        """
+        st = self.store
+        canon = self.symmetry.canon if self.symmetry is not None else None
+        specs = self.model.specs
+        invariants = self.invariants
+        fresh: set[Key] = set()
+        out: list[list[Segment]] = []
+        for event, _kind in self._enabled(key):
+            segments: list[Segment] = []
+            n = moved = 0
+            names: list[str] = []
+            for fails, nkey, log, instant in self.successors(key, event):
+                commands = log.commands
+                here = [branch_name(cmd, ok) for cmd, ok in commands] if commands else KEPT_BRANCH
+                repaired = None
+                # (checked even when the search has already recorded this invariant:
+                # expand knows nothing of the search, and it costs only on violations)
+                if instant is not None and instant[0] not in {v for v, _m in self.violations(nkey)}:
+                    repaired = instant  # broken inside the reaction, repaired before quiescence
+                ckey = canon(nkey) if canon is not None else nkey
+                if ckey in known or ckey in fresh:
+                    if repaired is None:
+                        n += 1
+                        moved += nkey != key
+                        names += here
+                        continue
+                    rec: Record = (fails, None, nkey != key, tuple(here), repaired, ())
+                else:
+                    fresh.add(ckey)
+                    st.load(ckey)
+                    view = SystemView(st.platform_states(), specs, self._standing(ckey.standing), self.slots(ckey.context))
+                    rec = (fails, ckey, nkey != key, tuple(here), repaired, tuple(check_invariants(view, invariants)))
+                segments.append((n, moved, tuple(names), rec))
+                n = moved = 0
+                names = []
+            if n:
+                segments.append((n, moved, tuple(names), None))
+            out.append(segments)
+        return out
+
+    # -- traces ------------------------------------------------------------------------------
+    def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]:
+        """Rebuild the states of ``labels`` from the initial state (the trace); checks determinism."""
+        key = self.initial()
+        if self.symmetry is not None:
+            return self.symmetry.replay(labels, expect)
+        if expect and key != expect[0]:
+            raise NondeterminismError(f"the initial reaction is not deterministic: got {key}, stored {expect[0]}")
+        steps = [initial_step(key)]
+        for i, (event, fails) in enumerate(labels, 1):
+            prefix = tuple(j not in fails for j in range(max(fails) + 1)) if fails else ()
+            prev = key
+            key, _outcomes, log, _instant = self.run_one(prev, event, prefix)
+            if expect is not None and i < len(expect) and key != expect[i]:
+                raise NondeterminismError(
+                    f"replaying step {i} ({event}) did not reproduce the stored state: the system under test is nondeterministic\n"
+                    f"  stored:   {expect[i]}\n  replayed: {key}"
+                )
+            steps.append(make_step(i, prev, event, key, log, fails))
+        return steps

@@ -1,0 +1,142 @@
+"""Search core: what a counterexample is made of (steps, labels) and how a step reads.
+
+Every engine reports a violation the same way: the path of transition labels from the
+initial state, rebuilt into :class:`Step` objects by replaying the labels through the
+real deployment core (:meth:`TransitionSystem.replay
+<desmon.verify.system.TransitionSystem.replay>`). This module holds those facts and the
+repository-terms text of a step (:func:`describe_state`, :func:`diff`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from desmon.deployment.ports import RaiseError, Start, Stop
+from desmon.model.events import Event
+from desmon.verify.state import Key
+
+__all__ = ["Label", "Step", "Counterexample", "KEPT_BRANCH", "branch_name", "describe_state", "diff"]
+
+#: A transition label: the event and the indices of the Control.start calls that failed.
+Label = tuple[Event, tuple[int, ...]]
+
+#: the branch name of a reaction that issued no command
+KEPT_BRANCH = ("no command (kept)",)
+
+
+def branch_name(cmd: Any, ok: bool | None) -> str:
+    """The deployer branch a command stands for, as the report counts them."""
+    t = type(cmd)
+    if t is Start:
+        return "start ok" if ok else "start failed"
+    if t is Stop:
+        return "stop ok" if ok else "stop failed"
+    return f"error {cmd.kind}"
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step of a counterexample: the label, what changed, and the state reached."""
+
+    index: int
+    event: Event | None
+    failed_starts: tuple[str, ...]
+    changes: tuple[str, ...]
+    key: Key
+    commands: tuple[str, ...] = ()
+    fail_indices: tuple[int, ...] = ()
+
+    def title(self) -> str:
+        if self.event is None:
+            return "initial"
+        extra = "".join(f" [{s} fails]" for s in self.failed_starts)
+        return f"{self.event}{extra}"
+
+
+@dataclass(frozen=True)
+class Counterexample:
+    invariant: str
+    message: str
+    steps: tuple[Step, ...]
+    during: str | None = None  # the command after which an instantaneous invariant broke
+
+    @property
+    def length(self) -> int:
+        """Number of events after the initial state."""
+        return len(self.steps) - 1
+
+    @property
+    def events(self) -> tuple[Label, ...]:
+        return tuple((s.event, s.fail_indices) for s in self.steps[1:])  # type: ignore[misc]
+
+
+def make_step(i: int, prev: Key, event: Event, key: Key, log: Any, fails: tuple[int, ...] = ()) -> Step:
+    """Step ``i``: ``event`` (with the starts at ``fails`` failing) took ``prev`` to ``key``, issuing ``log``'s commands."""
+    failed = tuple(str(c) for c, ok in log.commands if isinstance(c, Start) and ok is False)
+    cmds = tuple(f"{c}: {'ok' if ok else 'FAILED'}" if ok is not None else str(c).splitlines()[0] for c, ok in log.commands)
+    return Step(i, event, failed, diff(prev, key, log), key, cmds, tuple(fails))
+
+
+def initial_step(key: Key) -> Step:
+    return Step(0, None, (), describe_state(key), key)
+
+
+def describe_state(key: Key) -> tuple[str, ...]:
+    out = [f"context {key.context or '(none)'}"]
+    out.append("deployed: " + (", ".join(f"{g} on {p}" for g, p in key.deployments) or "nothing"))
+    if key.failed:
+        out.append("failed devices: " + ", ".join(key.failed))
+    if key.down:
+        out.append("platforms down: " + ", ".join(key.down))
+    loads = [f"{p} {r}={a:g}" for p, items in key.loads for r, a in items]
+    if loads:
+        out.append("loads: " + ", ".join(loads))
+    if key.standing:
+        out.append("errors standing for: " + ", ".join(key.standing))
+    return tuple(out)
+
+
+def diff(prev: Key, key: Key, log: Any) -> tuple[str, ...]:
+    """What changed between two states, in repository terms."""
+    out = [*_environment_changes(prev, key), *_load_changes(prev, key), *_system_changes(prev, key, log)]
+    return tuple(out) or ("nothing",)
+
+
+def _environment_changes(prev: Key, key: Key) -> list[str]:
+    """The context, the devices and the platforms that changed."""
+    out: list[str] = []
+    if prev.context != key.context:
+        out.append(f"IN_CONTEXT {prev.context} => {key.context}")
+    out += [f"-HAS_DEVICE {d}" for d in sorted(set(key.failed) - set(prev.failed))]
+    out += [f"+HAS_DEVICE {d}" for d in sorted(set(prev.failed) - set(key.failed))]
+    out += [f"{p} down" for p in sorted(set(key.down) - set(prev.down))]
+    out += [f"{p} up" for p in sorted(set(prev.down) - set(key.down))]
+    return out
+
+
+def _load_changes(prev: Key, key: Key) -> list[str]:
+    if prev.loads == key.loads:
+        return []
+    before = {(p, r): a for p, items in prev.loads for r, a in items}
+    after = {(p, r): a for p, items in key.loads for r, a in items}
+    out = []
+    for p, r in sorted(set(before) | set(after)):
+        a, b = before.get((p, r), 0), after.get((p, r), 0)
+        if a != b:
+            out.append(f"load {p} {r} {a:g} => {b:g}")
+    return out
+
+
+def _system_changes(prev: Key, key: Key, log: Any) -> list[str]:
+    """The failed starts, the deployments that ended and began, the errors raised and standing."""
+    out = [f"start {c.graph} on {c.platform} FAILED" for c, ok in log.commands if isinstance(c, Start) and ok is False]
+    out += [f"{g} -[DEPLOYED_ON => DEPLOYMENT_HISTORY]-> {p}" for g, p in sorted(set(prev.deployments) - set(key.deployments))]
+    out += [f"+{g} -[DEPLOYED_ON]-> {p}" for g, p in sorted(set(key.deployments) - set(prev.deployments))]
+    out += [
+        f"error {c.kind}: {c.graph}" + (f" on {c.platform}" if c.platform else "")
+        for c, _ok in log.commands if isinstance(c, RaiseError)
+    ]
+    if prev.standing != key.standing:
+        out.append("standing errors: " + (", ".join(key.standing) or "none"))
+    return out

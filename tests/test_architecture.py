@@ -1,0 +1,123 @@
+"""The package's architecture: layers, no import circles, and the checker's engines as leaves.
+
+The import graph is built from the source with ``ast``: every ``import`` and
+``from ... import`` statement of every module of ``desmon/`` (function-level ones
+included; only the ``if TYPE_CHECKING:`` blocks, which never run, are left out), with
+``from package import name`` resolved to the submodule ``package.name`` when there is
+one. Importing a submodule also runs its package's ``__init__``, but that edge is
+implied by Python, not written by the code, and is left out.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import networkx as nx
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+PACKAGE = ROOT / "desmon"
+
+#: the checker's engines: each imports the search core and the layers below, never another engine
+ENGINES = ("desmon.verify.direct", "desmon.verify.table", "desmon.verify.parallel", "desmon.verify.symmetry")
+#: the one module that chooses among them
+CHOOSER = "desmon.verify.checker"
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _is_type_checking(test: ast.expr) -> bool:
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+def _imports(tree: ast.AST) -> list[ast.Import | ast.ImportFrom]:
+    """Every import statement that can run (the bodies of ``if TYPE_CHECKING:`` skipped)."""
+    out: list[ast.Import | ast.ImportFrom] = []
+    todo: list[ast.AST] = [tree]
+    while todo:
+        node = todo.pop()
+        if isinstance(node, ast.If) and _is_type_checking(node.test):
+            todo.extend(node.orelse)
+            continue
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            out.append(node)
+        todo.extend(ast.iter_child_nodes(node))
+    return out
+
+
+def import_graph() -> nx.DiGraph:
+    """desmon's modules and the imports between them (see the module docstring)."""
+    paths = {_module_name(p): p for p in PACKAGE.rglob("*.py")}
+    graph = nx.DiGraph()
+    graph.add_nodes_from(paths)
+    for name, path in paths.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        for node in _imports(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            else:
+                base = node.module or ""
+                if node.level:
+                    anchor = package.split(".")
+                    anchor = anchor[: len(anchor) - (node.level - 1)]
+                    base = ".".join(anchor + ([base] if base else []))
+                targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in paths else base for a in node.names]
+            for target in targets:
+                if target in paths and target != name:
+                    graph.add_edge(name, target)
+    return graph
+
+
+@pytest.fixture(scope="module")
+def graph() -> nx.DiGraph:
+    return import_graph()
+
+
+def test_the_import_graph_sees_function_level_and_submodule_imports(graph):
+    # the checker chooses the table engine with an import inside a function, and the
+    # package's __init__ imports the checker with "from desmon.verify.checker import ..."
+    assert graph.has_edge(CHOOSER, "desmon.verify.table")
+    assert graph.has_edge("desmon.verify", CHOOSER)
+
+
+def test_no_module_of_desmon_is_part_of_an_import_circle(graph):
+    cycles = sorted(nx.simple_cycles(graph))
+    assert not cycles, "import circles:\n" + "\n".join(" -> ".join([*c, c[0]]) for c in cycles)
+
+
+def test_lower_layers_never_import_upper_layers(graph):
+    order = {"errors": 0, "model": 1, "repository": 2, "detectors": 2, "deployment": 3, "sim": 4, "verify": 4, "viz": 3.5, "sweep": 4.5, "cli": 5}
+    bad = []
+    for a, b in graph.edges:
+        top_a, top_b = a.split(".")[1:2], b.split(".")[1:2]
+        if not top_a or not top_b or top_a[0] not in order or top_b[0] not in order or top_a == top_b:
+            continue
+        if order[top_b[0]] >= order[top_a[0]]:
+            bad.append(f"{a} imports {b}")
+    assert not bad, "\n".join(bad)
+
+
+def test_each_checker_engine_imports_nothing_of_another_engine(graph):
+    assert set(ENGINES) <= set(graph.nodes), "an engine module is missing"
+    bad = []
+    for engine in ENGINES:
+        reached = nx.descendants(graph, engine)
+        bad += [f"{engine} reaches {other}" for other in ENGINES if other in reached]
+        if CHOOSER in reached:
+            bad.append(f"{engine} reaches the engine choice {CHOOSER}")
+    assert not bad, "\n".join(bad)
+
+
+def test_only_the_checker_module_imports_the_table_and_parallel_engines(graph):
+    # the engine choice ("auto": table, else direct; --workers; --symmetry) lives in one place
+    for engine in ("desmon.verify.table", "desmon.verify.parallel", "desmon.verify.direct"):
+        importers = {a for a, _b in graph.in_edges(engine)}
+        assert importers <= {CHOOSER}, f"{engine} imported by {sorted(importers - {CHOOSER})}"
