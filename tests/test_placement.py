@@ -92,9 +92,13 @@ def test_columns_give_the_same_validity_as_check_validity(states, reqs, graph, r
 @given(fleets(), st.lists(requirements, min_size=1, max_size=3), placings)
 @settings(max_examples=40)
 def test_the_reasons_memo_answers_a_repeated_question_as_the_first_time(states, reqs, graph):
-    cols = PlatformColumns(states)
-    for reasons in (False, True, False, True):
-        assert cols.validity(reqs, graph, reasons=reasons) == scalar(reqs, states, graph, reasons)
+    for kept in (placement._REASONS_KEPT, 2):  # 2: the memo evicts all the time
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(placement, "_REASONS_KEPT", kept)
+            cols = PlatformColumns(states)
+            for reasons in (False, True, False, True):
+                assert cols.validity(reqs, graph, reasons=reasons) == scalar(reqs, states, graph, reasons)
+                assert cols.validity(reqs[:1], "g1", reasons=reasons) == scalar(reqs[:1], states, "g1", reasons)
 
 
 @given(fleets(min_size=3, max_size=8), st.data(), st.lists(requirements, min_size=1, max_size=3), placings)

@@ -76,8 +76,9 @@ VECTOR_MIN_PLATFORMS = 64
 #: How many column stores are kept (each one platform list, most recently used first).
 _KEPT = 2
 
-#: Failures kept for reuse per column store (each a few hundred bytes); all dropped beyond.
-_REASONS_KEPT = 200_000
+#: Failures kept for reuse per column store (a few hundred bytes each); beyond, the
+#: least recently asked requirements lose theirs.
+_REASONS_KEPT = 100_000
 
 #: Integers beyond this do not survive float64 sums exactly: such rows decline.
 _EXACT_INT = 2**40
@@ -265,7 +266,8 @@ class PlatformColumns:
 
     def _rewrite(self, i: int, s: PlatformState) -> None:
         for memo in self._reasons.values():
-            memo.pop(i, None)
+            if memo.pop(i, None) is not None:
+                self._memoised -= 1
         self._down.pop(i, None)
         self._up[i] = s.up
         if self._pref[i] != s.platform.preference:
@@ -480,15 +482,15 @@ class PlatformColumns:
         return pair
 
     def _memo(self, req: object, graph: _validity.Placing) -> dict[int, _Pair]:
-        """Row -> ``(name, (failure,))`` of ``req`` for ``graph`` (kept until the row changes; all dropped
-        when more than :data:`_REASONS_KEPT` are held)."""
+        """Row -> ``(name, (failure,))`` of ``req`` for ``graph``, kept until the row changes;
+        beyond :data:`_REASONS_KEPT` failures the least recently asked requirements lose theirs."""
         key = (repr(req), graph)  # repr: equal requirements may differ in a reason (2 vs 2.0)
-        memo = self._reasons.get(key)
+        memo = self._reasons.pop(key, None)
         if memo is None:
-            if self._memoised > _REASONS_KEPT:
-                self._reasons.clear()
-                self._memoised = 0
-            memo = self._reasons[key] = {}
+            memo = {}
+            while self._memoised > _REASONS_KEPT and self._reasons:  # least recently asked first
+                self._memoised -= len(self._reasons.pop(next(iter(self._reasons))))
+        self._reasons[key] = memo  # (re)inserted last: the most recently asked
         return memo
 
     def _failure(self, req: object, describe: str, memo: dict[int, _Pair], i: int, graph: _validity.Placing) -> _Pair:
