@@ -129,7 +129,7 @@ class DeploymentCore:
         self.deployer = get_deployer(deployer)
         self.standing: frozenset[str] = frozenset()
         # the current specifications come from the repository: requirements may change at run time
-        self._spec_of = query.deployment_information
+        self._specs_memo: tuple[object, tuple[DeploymentSpec, ...]] | None = None
         # context -> (requested slots, the graphs they name); the rules and the deployer
         # are immutable, so this is a pure memo (bounded by the contexts seen, see _selection)
         self._selection_memo: dict[str | None, tuple[tuple[tuple[str, ...], ...], frozenset[str]]] = {}
@@ -167,8 +167,25 @@ class DeploymentCore:
         return view_of(self.query, self.specs(), self.standing, self.slots(), **extra)  # type: ignore[arg-type]
 
     def specs(self) -> tuple[DeploymentSpec, ...]:
-        """The current deployment specifications (as the repository holds them now)."""
-        return current_specs(self.model, self.query)
+        """The current deployment specifications (as the repository holds them now).
+
+        A port with a ``specs_version`` (the networkx repository's query, whose specs are
+        rebuilt from the graph on every call) lets this be memoised per version."""
+        version = getattr(self.query, "specs_version", None)
+        if version is None:
+            return current_specs(self.model, self.query)
+        memo = self._specs_memo
+        if memo is None or memo[0] != version:
+            memo = self._specs_memo = (version, current_specs(self.model, self.query))
+        return memo[1]
+
+    def _spec_of(self, graph: str) -> DeploymentSpec | None:
+        if getattr(self.query, "specs_version", None) is None:
+            return self.query.deployment_information(graph)
+        for spec in self.specs():
+            if spec.graph == graph:
+                return spec
+        return None
 
     def settle(self, raised: Iterable[str]) -> frozenset[str]:
         """Update the standing errors after a reaction that raised errors for ``raised``."""

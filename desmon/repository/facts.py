@@ -93,6 +93,7 @@ def change_requirements(repo: Repository, change: RequirementChange) -> tuple[st
         if req not in spec.requirements:
             _add_requirement(repo, dep, change.graph, req)
     repo.update_node(dep, spec=DeploymentSpec(change.graph, new, spec.fixed_platform, spec.rebalance))
+    repo.specs_version += 1
     return tuple(repo.graph.nodes[p]["name"] for p in repo.successors(dep, L.DEPLOYED_ON))
 
 

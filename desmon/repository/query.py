@@ -33,6 +33,11 @@ class RepositoryQuery:
     def _in(self, nid: str, label: str) -> list[str]:
         return self.repo.predecessors(nid, label)
 
+    @property
+    def specs_version(self) -> int:
+        """Changes with every run-time requirement change (see ``DeploymentCore.specs``)."""
+        return self.repo.specs_version
+
     # -- the algorithms' queries ---------------------------------------------------------
     def deployment_information(self, graph: str) -> DeploymentSpec | None:
         """The deployment node RESOLVING ``graph`` as a spec, or None (Alg. 1 line 3)."""

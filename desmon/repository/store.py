@@ -126,6 +126,8 @@ class Repository:
         self._subs: list[Subscription] = []
         self._clock = clock or (lambda: 0.0)
         self._order = 0
+        #: bumped by every run-time requirement change (readers memoise specifications on it)
+        self.specs_version = 0
         # (node, label) -> {neighbour: number of such edges}: keeps Query O(current edges)
         # however many DEPLOYMENT_HISTORY edges a long run accumulates on a node.
         self._out_index: dict[tuple[str, str], dict[str, int]] = {}

@@ -38,7 +38,7 @@ from __future__ import annotations
 import bisect
 import math
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import simpy
@@ -160,8 +160,21 @@ class SimWorld:
         self.query = RepositoryQuery(self.repo)
         self.core = DeploymentCore(self.model, self.query, RepositoryInsert(self.repo, self.model.robot), deployer)
         self.deployer_name = self.core.deployer.name
-        # physical state
-        self.up = {p.name: not p.on_demand for p in self.model.platforms}  # on demand: absent until it joins
+        self._init_physical()
+        self._init_ground_truth()
+        self._init_metrics()
+        self._apply_initial(scenario)
+        # Notify: repository changes wake the deployer
+        self.pending_platforms: dict[str, None] = {}
+        self.pending_context = False
+        self.pending_specs: dict[str, None] = {}
+        self.wake: simpy.Event | None = None
+        self.repo.subscribe(self._notify, ops=(ADD_EDGE, REMOVE_EDGE, UPDATE_NODE), labels=(L.IN_CONTEXT, L.HAS_DEVICE, L.PLATFORM))
+        self.repo.subscribe(self._count_history, ops=(RELABEL_EDGE,), labels=(L.DEPLOYMENT_HISTORY,))
+
+    def _init_physical(self) -> None:
+        """Platforms up (an on-demand one absent until it joins), loads, devices, instances."""
+        self.up = {p.name: not p.on_demand for p in self.model.platforms}
         self.load: dict[str, float] = {p.name: 0.0 for p in self.model.platforms}
         self.dev_ok = {d.name: True for d in self.model.devices}
         self.host = {d.name: d.platform for d in self.model.devices}
@@ -175,7 +188,9 @@ class SimWorld:
         self.history_edges = 0
         self.attempts: dict[tuple[str, str], int] = {}
         self.rng_start = random.Random(f"{self.seed}:start")
-        # ground truth
+
+    def _init_ground_truth(self) -> None:
+        """Task segments, slips and (with signals on) the sensor bank."""
         self.segments: tuple[Segment, ...] = expand_task(self.world, self.horizon)
         #: the same segments as the signals see them: each action replaced by the built-in it is like
         physical = like_segments(self.segments, self.model.like)
@@ -187,7 +202,8 @@ class SimWorld:
         self.bank: SensorBank | None = None
         if self.signals_on:
             self.bank = SensorBank(physical, self.slips, self.seed, [(d, s) for d, s in devs if s is not None])
-        # metrics
+
+    def _init_metrics(self) -> None:
         self.exposure = Exposure(self._valid_from, self._emit_exposure)
         self.memory = MemoryMeter({p.name: p.capacity("memory") or math.inf for p in self.model.platforms})
         self.alarms: list[Alarm] = []
@@ -206,22 +222,19 @@ class SimWorld:
         self._lease_requested: set[str] = set()
         self._last_busy: dict[str, float] = {}
         self._pending_ready: list[Instance] = []
-        # initial facts, silently (before Notify is wired)
+
+    def _apply_initial(self, scenario: Scenario) -> None:
+        """The scenario's initial facts, silently (before Notify is wired)."""
         for ev in scenario.initial:
-            if isinstance(ev, (PlatformDown, PlatformUp)):
-                self._platform_flip(ev.platform, isinstance(ev, PlatformUp), 0.0)
+            if isinstance(ev, (PlatformDown, PlatformUp, PlatformJoin, PlatformLeave)):
+                self._platform_flip(ev.platform, isinstance(ev, (PlatformUp, PlatformJoin)), 0.0)
             else:
                 self._apply_physical(ev, 0.0)
             self.core.observe(ev)
+            if isinstance(ev, RequirementChange):
+                self._follow_consumption(ev.graph)
         for p in self.up:
             self.memory.set(p, 0.0, self._used(p))
-        # Notify: repository changes wake the deployer
-        self.pending_platforms: dict[str, None] = {}
-        self.pending_context = False
-        self.pending_specs: dict[str, None] = {}
-        self.wake: simpy.Event | None = None
-        self.repo.subscribe(self._notify, ops=(ADD_EDGE, REMOVE_EDGE, UPDATE_NODE), labels=(L.IN_CONTEXT, L.HAS_DEVICE, L.PLATFORM))
-        self.repo.subscribe(self._count_history, ops=(RELABEL_EDGE,), labels=(L.DEPLOYMENT_HISTORY,))
 
     # ------------------------------------------------------------------ physical state
     def _apply_physical(self, ev: Event, t: float) -> None:
@@ -456,18 +469,22 @@ class SimWorld:
         if stim.empty:
             return
         self.requirement_changes += 1
-        spec = self.query.deployment_information(ev.graph)
-        memory = dict(spec.consumption()).get("memory", 0.0) if spec is not None else 0.0
-        self.consumes[ev.graph] = memory
-        for inst in self.instances.values():
-            if inst.graph == ev.graph:  # a running instance now needs what its spec says
-                inst.memory = memory
-                self._mem(inst.platform)
+        self._follow_consumption(ev.graph)
         self.trace.emit(now, "fact", fact=str(ev))
         self.pending_platforms.update(dict.fromkeys(stim.changed_platforms))
         self.pending_specs.update(dict.fromkeys(stim.specs_changed))
         if self.wake is not None and not self.wake.triggered:
             self.wake.succeed()
+
+    def _follow_consumption(self, graph: str) -> None:
+        """What ``graph`` consumes follows its current specification, running instances included."""
+        spec = self.query.deployment_information(graph)
+        memory = dict(spec.consumption()).get("memory", 0.0) if spec is not None else 0.0
+        self.consumes[graph] = memory
+        for inst in self.instances.values():
+            if inst.graph == graph:  # a running instance now needs what its spec says
+                inst.memory = memory
+                self._mem(inst.platform)
 
     def _scripted_changes(self):  # type: ignore[no-untyped-def]
         for te in self.world.changes:
@@ -675,50 +692,59 @@ class SimWorld:
             self.reactions += 1
             ctx = self.query.context()
             self.trace.emit(env.now, "reaction", context=ctx, changed=list(stim.changed_platforms), context_changed=stim.context_changed)
-            slots = self.core.slots()  # what this reaction serves, even if the context moves on meanwhile
+            book = _Reaction(self.core.slots())  # what this reaction serves, even if the context moves on meanwhile
             reaction = self.core.reaction(stim)
-            raised: list[str] = []
-            stopped_here: dict[str, str] = {}
-            stopped_at: dict[str, float] = {}  # wanted slot members stopped in this reaction
-            tried: set[str] = set()  # graphs whose start failed in this reaction
             outcome: bool | None = None
             while True:
                 try:
                     cmd = reaction.send(outcome)
                 except StopIteration:
                     break
-                issued = env.now
                 if isinstance(cmd, Start):
-                    res = yield from self._start(cmd.graph, cmd.platform)
-                    outcome = res is True
-                    elsewhere = [p for (g, p) in self.instances if g == cmd.graph and p != cmd.platform]
-                    if outcome and (elsewhere or stopped_here.get(cmd.graph, cmd.platform) != cmd.platform):
-                        self.migrations += 1
-                    if outcome and stopped_at:
-                        self._count_upgrade(cmd.graph, cmd.platform, slots, stopped_at, tried)
-                    elif not outcome:
-                        tried.add(cmd.graph)
-                    self._decision("start", cmd.graph, cmd.platform, outcome, issued, "" if outcome else str(res))
+                    outcome = yield from self._command_start(cmd, book)
                 elif isinstance(cmd, Stop):
-                    outcome = self._stop(cmd.graph, cmd.platform)
-                    if outcome:
-                        stopped_here[cmd.graph] = cmd.platform
-                        if any(cmd.graph in slot and len(slot) > 1 for slot in slots):
-                            stopped_at[cmd.graph] = env.now
-                    self._decision("stop", cmd.graph, cmd.platform, outcome, issued, "")
+                    outcome = self._command_stop(cmd, book)
                 elif isinstance(cmd, RaiseError):
                     outcome = None
-                    rec = stamp(cmd, env.now)
-                    self.errors.append(rec)
-                    raised.append(cmd.graph)
-                    self.trace.emit(env.now, "error", kind=rec.kind, graph=rec.graph, platform=rec.platform, detail=rec.detail)
-                    if cmd.kind == NO_ACCEPTABLE_PLATFORMS and self.world.lease is not None:
-                        self._maybe_lease(cmd.graph)
+                    self._command_error(cmd, book)
                 else:
                     raise not_a_command(cmd)
-            self.core.settle(raised)
+            self.core.settle(book.raised)
             if not self._pending():
                 self._audit()
+
+    def _command_start(self, cmd: Start, book: "_Reaction"):  # type: ignore[no-untyped-def]
+        """Execute a Start of the reaction (latency, outcome) and count what it means."""
+        issued = self.env.now
+        res = yield from self._start(cmd.graph, cmd.platform)
+        outcome = res is True
+        elsewhere = [p for (g, p) in self.instances if g == cmd.graph and p != cmd.platform]
+        if outcome and (elsewhere or book.stopped_here.get(cmd.graph, cmd.platform) != cmd.platform):
+            self.migrations += 1
+        if outcome and book.stopped_at:
+            self._count_upgrade(cmd.graph, cmd.platform, book.slots, book.stopped_at, book.tried)
+        elif not outcome:
+            book.tried.add(cmd.graph)
+        self._decision("start", cmd.graph, cmd.platform, outcome, issued, "" if outcome else str(res))
+        return outcome
+
+    def _command_stop(self, cmd: Stop, book: "_Reaction") -> bool:
+        issued = self.env.now
+        outcome = self._stop(cmd.graph, cmd.platform)
+        if outcome:
+            book.stopped_here[cmd.graph] = cmd.platform
+            if any(cmd.graph in slot and len(slot) > 1 for slot in book.slots):
+                book.stopped_at[cmd.graph] = self.env.now
+        self._decision("stop", cmd.graph, cmd.platform, outcome, issued, "")
+        return outcome
+
+    def _command_error(self, cmd: RaiseError, book: "_Reaction") -> None:
+        rec = stamp(cmd, self.env.now)
+        self.errors.append(rec)
+        book.raised.append(cmd.graph)
+        self.trace.emit(self.env.now, "error", kind=rec.kind, graph=rec.graph, platform=rec.platform, detail=rec.detail)
+        if cmd.kind == NO_ACCEPTABLE_PLATFORMS and self.world.lease is not None:
+            self._maybe_lease(cmd.graph)
 
     def _count_upgrade(
         self, graph: str, platform: str, slots: tuple[tuple[str, ...], ...], stopped_at: dict[str, float], tried: set[str]
@@ -846,6 +872,17 @@ class SimWorld:
         else:
             m["slips_injected"] = len(self.slips)
         return m
+
+
+@dataclass
+class _Reaction:
+    """What the deployer process books during one reaction."""
+
+    slots: tuple[tuple[str, ...], ...]
+    raised: list[str] = field(default_factory=list)
+    stopped_here: dict[str, str] = field(default_factory=dict)
+    stopped_at: dict[str, float] = field(default_factory=dict)  # wanted slot members stopped in this reaction
+    tried: set[str] = field(default_factory=set)  # graphs whose start failed in this reaction
 
 
 def _merge_windows(ws: list[tuple[float, float]]) -> tuple[list[float], list[float]]:
