@@ -51,13 +51,15 @@ def care_o_bot(
     estimate is the force sensor; ``hand_pc`` connects the six SDH-2 tactile pads. With
     the default 320 MB and 100 MB of load the combined detector (R3, 250 MB) fits only on
     ``torso_pc``; scenarios that need a second home for it pass ``hand_pc_memory=384``.
+    ``attributes`` are added to every on-board platform's (e.g. ``{"onboard": "yes"}``).
     """
+    extra = dict(attributes or {})
     robot = RobotBuilder("care-o-bot-3")
-    robot.platform("torso_pc", memory=1024, attributes={"os": "linux", "arch": "x86_64"}, properties={"link_latency_ms": 2.0})
-    robot.platform("arm_pc", memory=512, attributes={"os": "linux", "arch": "x86_64"}, properties={"link_latency_ms": 1.0}).device(
+    robot.platform("torso_pc", memory=1024, attributes={"os": "linux", "arch": "x86_64", **extra}, properties={"link_latency_ms": 2.0})
+    robot.platform("arm_pc", memory=512, attributes={"os": "linux", "arch": "x86_64", **extra}, properties={"link_latency_ms": 1.0}).device(
         "lwr_wrench", kind="force_sensor", vendor="kuka", version="lwr4"
     )
-    robot.platform("hand_pc", memory=hand_pc_memory, attributes={"os": "linux", "arch": "armv7"}, properties={"link_latency_ms": 1.0}).devices(
+    robot.platform("hand_pc", memory=hand_pc_memory, attributes={"os": "linux", "arch": "armv7", **extra}, properties={"link_latency_ms": 1.0}).devices(
         [f"pad_{p}" for p in PADS], kind="tactile_pad", vendor="weiss", version="dsa9205"
     )
     graphs(robot)

@@ -119,6 +119,10 @@ class RequirementChange:
         remove = check_items(f"RequirementChange({self.graph!r}) remove", self.remove, _CONSTRAINT_TYPES, example=example)
         if not add and not remove:
             raise ModelError(f"RequirementChange({self.graph!r}) adds and removes nothing: give add=(...) and/or remove=(...)")
+        for what, items in (("adds", add), ("removes", remove)):
+            twice = [r.describe() for i, r in enumerate(items) if r in items[:i]]
+            if twice:
+                raise ModelError(f"RequirementChange({self.graph!r}) {what} {twice[0]} twice: give it once")
         both = [r.describe() for r in add if r in remove]
         if both:
             raise ModelError(f"RequirementChange({self.graph!r}) both adds and removes {', '.join(both)}: give it once")

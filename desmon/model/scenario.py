@@ -27,7 +27,7 @@ from desmon.model.events import (
     PlatformUp,
     RequirementChange,
 )
-from desmon.model.system import SystemModel, action_problem
+from desmon.model.system import SystemModel, action_problem, constraint_problem
 
 __all__ = ["TimedEvent", "Scenario", "EVENT_TYPES", "event_problem"]
 
@@ -46,6 +46,10 @@ def _requirement_change_problem(ev: RequirementChange, model: SystemModel, other
         if r not in removable:
             have = ", ".join(x.describe() for x in spec.requirements) or "none"
             return f"{ev} removes {r.describe()}, which {ev.graph!r} never has (declared: {have}; nor does any change add it): remove a requirement it has"
+    for r in ev.add:
+        problem = constraint_problem(model, ev.graph, r)
+        if problem is not None:
+            return f"{ev} adds {r.describe()} but {problem}"
     return None
 
 

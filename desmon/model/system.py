@@ -21,12 +21,13 @@ from desmon.model.requirements import (
     DeploymentSpec,
     Maximum,
     Minimum,
+    Preference,
     Quantity,
     Requirement,
     Selection,
 )
 
-__all__ = ["Rule", "RuleTable", "SystemModel", "PlatformState", "with_load", "action_problem", "check_action"]
+__all__ = ["Rule", "RuleTable", "SystemModel", "PlatformState", "with_load", "action_problem", "check_action", "preference_problem", "constraint_problem"]
 
 
 @strict_init(ModelError)
@@ -267,6 +268,11 @@ class SystemModel:
                 f"use one of {sorted(platforms)}"
             )
         for req in spec.requirements:
+            if isinstance(req, Preference):
+                problem = preference_problem(self, spec.graph, req)
+                if problem is not None:
+                    raise ModelError(f"deployment of {spec.graph!r} would {req.describe()} but {problem}")
+                continue
             problem = _platform_fact_problem(req, self.platforms)
             if problem is not None:
                 raise ModelError(f"deployment of {spec.graph!r} needs {req.describe()} but {problem}")
@@ -403,6 +409,52 @@ def _platform_fact_problem(req: Requirement, platforms: tuple[Platform, ...]) ->
                 problem = _attribute_problem(opt.attribute, opt.value, platforms)
                 if problem is not None:
                     return f"option {opt.describe()!r}: {problem}"
+    return None
+
+
+def constraint_problem(model: "SystemModel", graph: str, req: Requirement | Preference) -> str | None:
+    """Why a requirement or preference of ``graph`` names what ``model`` lacks (the rule
+    a declared specification obeys, for requirements added at run time), or None."""
+    if isinstance(req, Preference):
+        return preference_problem(model, graph, req)
+    problem = _platform_fact_problem(req, model.platforms)
+    if problem is None and model.devices:
+        kinds = sorted({d.kind for d in model.devices})
+        wanted = _wanted_device_kind(req)
+        if wanted is not None and wanted not in kinds:
+            return f"no device is of kind {wanted!r}{suggest(wanted, kinds)}: fix the kind (kinds: {', '.join(kinds)})"
+        problem = _device_option_problem(req, model.devices)
+    return problem
+
+
+def preference_problem(model: "SystemModel", graph: str, pref: Preference) -> str | None:
+    """Why ``pref`` (a preference of ``graph``'s specification) names a capacity, attribute,
+    device kind, vendor or graph that ``model`` lacks -- a preference that could never
+    score, almost surely a typo -- or None."""
+    kind, args = pref.kind, pref.args
+    if kind in ("most_free", "least_loaded"):
+        declared = sorted({r for p in model.platforms for r, _ in p.capacities})
+        if args[0] not in declared:
+            return (
+                f"no platform declares a {args[0]!r} capacity{suggest(args[0], declared)}: "
+                f"fix the name (capacities: {', '.join(declared) or 'none'})"
+            )
+    elif kind == "attribute":
+        return _attribute_problem(args[0], args[1], model.platforms)
+    elif kind == "vendor":
+        kinds = sorted({d.kind for d in model.devices})
+        if args[0] not in kinds:
+            return f"no device is of kind {args[0]!r}{suggest(args[0], kinds)}: fix the kind (kinds: {', '.join(kinds) or 'none'})"
+        vendors = sorted({d.vendor for d in model.devices if d.kind == args[0]})
+        if args[1] not in vendors:
+            return f"no {args[0]} device is made by {args[1]!r}{suggest(args[1], vendors)}: fix the vendor ({args[0]} vendors: {', '.join(vendors)})"
+    elif kind == "colocate":
+        graphs = [g.name for g in model.graphs]
+        for other in args:
+            if other == graph:
+                return f"it names its own graph {graph!r}: name the graphs to run beside it"
+            if other not in graphs:
+                return f"there is no perception graph {other!r}{suggest(other, graphs)}: fix the name (graphs: {', '.join(graphs)})"
     return None
 
 

@@ -226,7 +226,11 @@ class Lease:
     idle_s: float = 60.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "platforms", check_names("world: lease platforms", self.platforms, each="platform", error=ScenarioError, example="('edge',)"))
+        platforms = check_names("world: lease platforms", self.platforms, each="platform", error=ScenarioError, example="('edge',)")
+        twice = [p for i, p in enumerate(platforms) if p in platforms[:i]]
+        if twice:
+            raise ScenarioError(f"world: lease platforms name {twice[0]!r} twice: give each once")
+        object.__setattr__(self, "platforms", platforms)
         _seconds("lease idle_s", self.idle_s, zero=False)
 
 

@@ -1,0 +1,13 @@
+# args: run {case}
+# exit: 2
+# expect: random changes mean interval = 0 is not positive
+"""A bad-input case: see tests/test_bad_inputs.py. Random changes with no gap between them."""
+from desmon.model.cob3 import care_o_bot
+from desmon.model.scenario import Scenario, TimedEvent
+from desmon.model.events import RequirementChange
+from desmon.model.requirements import Capacity
+from desmon.sim.world import Lease, RandomChanges, Step, World
+robot = care_o_bot()
+robot.platform('edge', memory=2048, on_demand=True, startup_s=20)
+FAST = RequirementChange('combined_slip_detector', add=(Capacity('memory', 350),), remove=(Capacity('memory', 250),))
+scenario = Scenario(name='bad', model=robot.build(), world=World(task=(Step('grasp', 2.0),), horizon=10.0, random_changes=RandomChanges((FAST,), mean_interval=0)))

@@ -1,0 +1,306 @@
+"""Requirements that change at run time and on-demand platforms (issue 14): the deployer
+follows a RequirementChange like any fact, an on-demand platform is absent until it
+joins, and the SimPy world leases one when nothing else fits."""
+
+from __future__ import annotations
+
+import io
+
+import pytest
+
+from desmon.deployment.validity import validity_for
+from desmon.errors import DesmonError, ModelError, ScenarioError
+from desmon.loader import load_scenario
+from desmon.model import GRASP, HOLD, RobotBuilder
+from desmon.model.events import ActionChange, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp, RequirementChange
+from desmon.model.requirements import Capacity, Preference
+from desmon.model.scenario import Scenario, TimedEvent
+from desmon.repository import RepositoryQuery, labels as L
+from desmon.sim.engine import simulate
+from desmon.sim.replay import replay
+from desmon.sim.trace import Trace
+from desmon.sim.world import Lease, RandomChanges, Step, World
+
+SMALL, BIG, HUGE = Capacity("memory", 100), Capacity("memory", 600), Capacity("memory", 5000)
+
+
+def robot(*, on_demand: bool = False) -> RobotBuilder:
+    """pc1 (512 MB, the force sensor), pc2 (1024 MB) and, on demand, edge (2048 MB)."""
+    r = RobotBuilder("r")
+    r.platform("pc1", memory=512).device("ft", kind="force_sensor")
+    r.platform("pc2", memory=1024)
+    if on_demand:
+        r.platform("edge", memory=2048, on_demand=True, startup_s=5.0)
+    with r.rpsl.perception_graph("A") as g:
+        g.sensor("s", reads="force_sensor")
+    r.depsl.deployment_specification("A").require(SMALL)
+    r.rules({"grasp": ["A"]})
+    return r
+
+
+def timeline(*events) -> tuple[TimedEvent, ...]:
+    return tuple(TimedEvent(float(i + 1), ev, f"t{i + 1}") for i, ev in enumerate(events))
+
+
+def requirements(rep, graph: str = "A"):
+    return RepositoryQuery(rep.repo).deployment_information(graph).requirements
+
+
+# ---------------------------------------------------------------- the deployer follows the change
+
+
+def test_a_larger_requirement_migrates_the_deployment_stopping_before_starting():
+    grow = RequirementChange("A", add=(BIG,), remove=(SMALL,))
+    rep = replay(Scenario(name="grow", model=robot().build(), timeline=timeline(ActionChange(GRASP), grow)))
+    first, second = rep.steps
+    assert first.deployments == (("A", "pc1"),)
+    assert second.stimulus.specs_changed == ("A",)
+    assert [str(c) for c, _ok in second.commands] == ["stop A on pc1", "start A on pc2"]
+    assert second.deployments == (("A", "pc2"),)
+    assert rep.violations == []
+
+
+def test_after_a_change_the_repository_requires_the_new_requirement_and_consumption_follows():
+    grow = RequirementChange("A", add=(BIG,), remove=(SMALL,))
+    rep = replay(Scenario(name="grow", model=robot().build(), timeline=timeline(ActionChange(GRASP), grow)))
+    assert requirements(rep) == (BIG,)
+    pc2 = next(s for s in RepositoryQuery(rep.repo).platform_states() if s.name == "pc2")
+    assert pc2.used_by("memory") == [("A", 600.0)]
+    required = [t for s, t, d in rep.repo.graph.edges(data=True) if d["label"] == L.REQUIRES and s.endswith(":A")]
+    assert len(required) == 1
+
+
+def test_a_requirement_nothing_can_meet_stops_the_deployment_and_raises_an_error():
+    grow = RequirementChange("A", add=(HUGE,), remove=(SMALL,))
+    rep = replay(Scenario(name="huge", model=robot().build(), timeline=timeline(ActionChange(GRASP), grow)))
+    last = rep.steps[-1]
+    assert last.deployments == ()
+    assert [e.graph for e in last.errors] == ["A"]
+    assert "A" in last.standing
+
+
+def test_a_change_back_lets_the_graph_return():
+    grow = RequirementChange("A", add=(HUGE,), remove=(SMALL,))
+    shrink = RequirementChange("A", add=(SMALL,), remove=(HUGE,))
+    rep = replay(Scenario(name="back", model=robot().build(), timeline=timeline(ActionChange(GRASP), grow, shrink)))
+    assert rep.steps[-1].deployments == (("A", "pc1"),)
+    assert requirements(rep) == (SMALL,)
+    assert rep.steps[-1].standing == frozenset()
+
+
+def test_a_change_that_leaves_the_deployment_valid_starts_and_stops_nothing():
+    tweak = RequirementChange("A", add=(Capacity("memory", 200),), remove=(SMALL,))
+    rep = replay(Scenario(name="tweak", model=robot().build(), timeline=timeline(ActionChange(GRASP), tweak)))
+    assert [c for c, ok in rep.steps[-1].commands if ok is not None] == []
+    assert rep.steps[-1].deployments == (("A", "pc1"),)
+
+
+def test_adding_a_preference_with_a_change_reorders_where_the_graph_goes_next():
+    prefer_pc2 = RequirementChange("A", add=(Preference("most_free", ("memory",)),))
+    rep = replay(
+        Scenario(
+            name="pref",
+            model=robot().build(),
+            initial=(LoadChange("pc1", 256),),  # pc1 half free, pc2 all free
+            timeline=timeline(prefer_pc2, ActionChange(GRASP)),
+        )
+    )
+    assert rep.steps[-1].deployments == (("A", "pc2"),)  # without it: pc1, declared first
+
+
+# ---------------------------------------------------------------- a change is checked when the scenario is built
+
+
+def test_a_change_removing_a_requirement_never_declared_is_refused_naming_it():
+    bad = RequirementChange("A", remove=(BIG,))
+    with pytest.raises(ModelError) as info:
+        Scenario(name="bad", model=robot().build(), timeline=timeline(bad))
+    message = str(info.value)
+    assert "removes Capacity(memory >= 600 MB), which 'A' never has" in message
+    assert "\n" not in message
+
+
+def test_a_change_may_remove_what_another_change_adds():
+    add = RequirementChange("A", add=(BIG,))
+    drop = RequirementChange("A", remove=(BIG,))
+    rep = replay(Scenario(name="ok", model=robot().build(), timeline=timeline(ActionChange(GRASP), add, drop)))
+    assert requirements(rep) == (SMALL,)
+
+
+def test_a_change_naming_a_graph_without_specification_is_refused():
+    with pytest.raises(ModelError, match="names graph 'B' with no deployment specification"):
+        Scenario(name="bad", model=robot().build(), timeline=timeline(RequirementChange("B", add=(SMALL,))))
+
+
+def test_a_change_adding_a_requirement_on_an_unknown_resource_is_refused():
+    bad = RequirementChange("A", add=(Capacity("memroy", 10),))
+    with pytest.raises(ModelError, match="did you mean 'memory'"):
+        Scenario(name="bad", model=robot().build(), timeline=timeline(bad))
+
+
+@pytest.mark.parametrize(
+    "kwargs, fragment",
+    [
+        ({}, "adds and removes nothing"),
+        ({"add": (SMALL,), "remove": (SMALL,)}, "both adds and removes"),
+        ({"add": (SMALL, SMALL)}, "adds Capacity(memory >= 100 MB) twice"),
+        ({"add": SMALL}, "trailing comma"),
+        ({"add": ("capacity",)}, "is not a Quantity"),
+        ({"add": (SMALL,), "label": "a\nb"}, "not one line of text"),
+        ({"ad": (SMALL,)}, "did you mean 'add'"),
+    ],
+    ids=["nothing", "both", "twice", "no-tuple", "not-a-requirement", "label-newline", "keyword-typo"],
+)
+def test_a_malformed_requirement_change_is_refused_with_one_line(kwargs, fragment):
+    with pytest.raises(ModelError) as info:
+        RequirementChange("A", **kwargs)
+    assert fragment in str(info.value)
+    assert "\n" not in str(info.value)
+
+
+# ---------------------------------------------------------------- on-demand platforms
+
+
+def test_join_and_leave_are_refused_for_a_platform_that_is_not_on_demand():
+    for ev in (PlatformJoin("pc2"), PlatformLeave("pc2")):
+        with pytest.raises(ModelError, match="'pc2' is not on demand"):
+            Scenario(name="bad", model=robot().build(), timeline=timeline(ev))
+
+
+def test_up_and_down_are_refused_for_an_on_demand_platform():
+    for ev in (PlatformUp("edge"), PlatformDown("edge")):
+        with pytest.raises(ModelError, match="'edge' is on demand"):
+            Scenario(name="bad", model=robot(on_demand=True).build(), timeline=timeline(ev))
+
+
+def test_an_on_demand_platform_is_absent_until_it_joins_and_explain_says_so():
+    grow = RequirementChange("A", add=(Capacity("memory", 1500),), remove=(SMALL,))
+    scenario = Scenario(
+        name="join",
+        model=robot(on_demand=True).build(),
+        timeline=timeline(grow, ActionChange(GRASP), PlatformJoin("edge"), PlatformLeave("edge")),
+    )
+    rep = replay(scenario)
+    _grow, grasp, join, leave = rep.steps
+    assert grasp.deployments == () and [e.graph for e in grasp.errors] == ["A"]
+    assert join.deployments == (("A", "edge"),)
+    assert leave.deployments == ()
+    # after the leave the edge is gone again; the reason names it as absent, not as down
+    spec = RepositoryQuery(rep.repo).deployment_information("A")
+    why = validity_for(RepositoryQuery(rep.repo), spec).explain()
+    assert "edge: platform up fails: platform is not there (on demand" in why
+
+
+def test_startup_s_is_refused_on_a_platform_that_is_not_on_demand():
+    with pytest.raises(ModelError, match="startup_s = 5 but is not on_demand"):
+        RobotBuilder().platform("pc", memory=512, startup_s=5.0)
+
+
+def test_on_demand_must_be_true_or_false():
+    with pytest.raises(ModelError, match="on_demand = 'yes' is not True or False"):
+        RobotBuilder().platform("pc", memory=512, on_demand="yes")
+
+
+# ---------------------------------------------------------------- the SimPy world
+
+
+def _world_scenario(**world) -> Scenario:
+    base = dict(task=(Step(GRASP, 2.0), Step(HOLD, 8.0)), repeat=True, horizon=600.0, signals=False)
+    base.update(world)
+    return Scenario(name="rt", model=robot(on_demand=True).build(), world=World(**base))
+
+
+GROW = RequirementChange("A", add=(BIG,), remove=(SMALL,), label="grow")
+SHRINK = RequirementChange("A", add=(SMALL,), remove=(BIG,), label="shrink")
+
+
+def _trace_text(scenario: Scenario, seed: int) -> str:
+    out = io.StringIO()
+    simulate(scenario, seed=seed, trace=Trace(out, keep=False))
+    return out.getvalue()
+
+
+def test_random_changes_give_the_same_trace_bytes_for_the_same_seed():
+    scenario = _world_scenario(random_changes=RandomChanges((GROW, SHRINK), mean_interval=60.0))
+    assert _trace_text(scenario, 7) == _trace_text(scenario, 7)
+
+
+def test_random_changes_happen_at_other_times_with_another_seed():
+    scenario = _world_scenario(random_changes=RandomChanges((GROW, SHRINK), mean_interval=60.0))
+
+    def times(seed: int) -> list[float]:
+        return [r["t"] for r in simulate(scenario, seed=seed).trace.of("change")]
+
+    assert times(1) and times(1) != times(2)
+
+
+def test_scripted_changes_are_applied_and_counted():
+    r = simulate(_world_scenario(changes=(TimedEvent(100.0, GROW), TimedEvent(300.0, SHRINK))), seed=0)
+    assert r.metrics["requirement_changes"] == 2
+    assert [rec["event"] for rec in r.trace.of("change")] == [str(GROW), str(SHRINK)]
+    assert r.metrics["violations"] == 0
+
+
+def test_run_time_metrics_are_absent_from_a_world_that_uses_none_of_them():
+    m = simulate(_world_scenario(), seed=0).metrics
+    assert not {"requirement_changes", "leases", "leased_s"} & set(m)
+
+
+def test_the_world_leases_the_on_demand_platform_when_nothing_on_board_fits():
+    huge = RequirementChange("A", add=(Capacity("memory", 1500),), remove=(SMALL,))
+    scenario = _world_scenario(changes=(TimedEvent(50.0, huge),), lease=Lease(idle_s=30.0))
+    r = simulate(scenario, seed=0)
+    assert r.metrics["leases"] == 1
+    assert r.metrics["leased_s"] > 0
+    assert [rec["platform"] for rec in r.trace.of("lease")] == ["edge"]
+    assert any(d["command"] == "start" and d["platform"] == "edge" for d in r.trace.of("decision"))
+
+
+def test_without_a_lease_an_on_demand_platform_never_joins():
+    huge = RequirementChange("A", add=(Capacity("memory", 1500),), remove=(SMALL,))
+    r = simulate(_world_scenario(changes=(TimedEvent(50.0, huge),)), seed=0)
+    assert r.metrics["leases"] == 0 and r.metrics["leased_s"] == 0
+    assert not any(d["platform"] == "edge" for d in r.trace.of("decision"))
+
+
+def test_cloud_offload_exposure_with_the_lease_is_never_larger_than_without():
+    lowered = 0
+    for seed in range(4):
+        runs = {}
+        for lease in ("True", "False"):
+            sc = load_scenario("scenarios/cloud_offload.py", {"hours": "0.3", "lease": lease})
+            runs[lease] = simulate(sc, seed=seed, signals=False).metrics
+        assert runs["True"]["unmonitored_exposure_s"] <= runs["False"]["unmonitored_exposure_s"]
+        assert runs["False"]["leases"] == 0
+        lowered += runs["True"]["unmonitored_exposure_s"] < runs["False"]["unmonitored_exposure_s"]
+    assert lowered >= 1  # on some seed the torso fills up and the lease pays off
+
+
+@pytest.mark.parametrize(
+    "world, fragment",
+    [
+        ({"random_changes": RandomChanges((GROW,), mean_interval=60.0), "lease": Lease(platforms=("pc2",))}, "lease names 'pc2', which is no on-demand platform"),
+        ({"changes": (TimedEvent(10.0, PlatformJoin("pc2")),)}, "'pc2' is not on demand"),
+        ({"changes": (TimedEvent(10.0, PlatformDown("pc2")),)}, "is not a run-time change"),
+        ({"random_changes": RandomChanges((RequirementChange("B", add=(SMALL,)),), mean_interval=60.0)}, "names graph 'B' with no deployment specification"),
+    ],
+    ids=["lease-not-on-demand", "join-not-on-demand", "fault-in-changes", "random-unknown-graph"],
+)
+def test_a_world_naming_what_the_model_lacks_is_refused(world, fragment):
+    with pytest.raises(DesmonError) as info:
+        _world_scenario(**world)
+    assert fragment in str(info.value)
+
+
+def test_a_lease_is_refused_when_no_platform_is_on_demand():
+    with pytest.raises(ScenarioError, match="no platform is on demand"):
+        Scenario(
+            name="bad", model=robot().build(),
+            world=World(task=(Step(GRASP, 2.0),), horizon=10.0, lease=Lease()),
+        )
+
+
+@pytest.mark.parametrize("interval", [0, -1, float("nan"), float("inf")])
+def test_random_changes_need_a_positive_finite_mean_interval(interval):
+    with pytest.raises(ScenarioError, match="random changes mean interval"):
+        RandomChanges((GROW,), mean_interval=interval)
