@@ -268,6 +268,71 @@ def _fits_if_freed(g: str, spec: DeploymentSpec, q: QueryPort, freed: list[str])
     return check_validity(q.constraints(spec), states, (g, *freed), reasons=False).acceptable
 
 
+def _recheck(q: QueryPort, changed: tuple[str, ...], placed: dict[str, bool], make_before_break: bool) -> Reaction:
+    """Corrected Algorithm 2: every deployment on a ``changed`` platform is kept if still
+    valid, else migrated, else stopped with an error; each graph's outcome goes to ``placed``.
+
+    Placing a graph is ensure_deployed, written out as its two halves so that a graph
+    that is simply kept (the common case) creates no generator.
+    """
+    for p in changed:
+        for d in q.active_deployments(p):
+            g = q.perception_graph(d)
+            if g not in placed:
+                survey = _survey(g, q)
+                placed[g] = True if _kept(survey) else (yield from _act_on(g, q, survey, make_before_break))
+
+
+def _place_slots(
+    q: QueryPort,
+    slots: tuple[tuple[str, ...], ...],
+    changed: tuple[str, ...],
+    placed: dict[str, bool],
+    make_before_break: bool,
+    upgrading: bool,
+) -> Generator[Command, "bool | None", set[str]]:
+    """Corrected Algorithm 1: place one graph of every slot (the first alternative that
+    can be placed, each graph decided once per reaction); return the graphs chosen."""
+    chosen: set[str] = set()
+    for slot in slots:
+        for i, g in enumerate(slot):
+            ok = placed.get(g)
+            if ok is None:
+                survey = _survey(g, q)
+                spec = survey[0]
+                if upgrading and spec is not None and not survey[1] and i + 1 < len(slot):
+                    survey = yield from _upgrade(g, spec, slot[i + 1:], survey, q, changed, placed)
+                ok = placed[g] = True if _kept(survey) else (yield from _act_on(g, q, survey, make_before_break))
+            if ok:
+                chosen.add(g)
+                break
+    return chosen
+
+
+def _upgrade(
+    g: str,
+    spec: DeploymentSpec,
+    fallbacks: tuple[str, ...],
+    survey: Survey,
+    q: QueryPort,
+    changed: tuple[str, ...],
+    placed: dict[str, bool],
+) -> Generator[Command, "bool | None", Survey]:
+    """The upgrade: a running fallback of this slot may be all that blocks ``g``.
+
+    If stopping the running ``fallbacks`` would make ``g`` fit on a changed platform,
+    stop them (break before make), forget their decisions (they are decided again if
+    ``g`` cannot be placed) and return ``g``'s new survey; else return ``survey``.
+    """
+    freed = [f for f in fallbacks if q.deployed_on(f)]
+    if freed and changed and any(p in changed for p in _fits_if_freed(g, spec, q, freed)):
+        yield from _stop_graphs(freed, q)  # break before make
+        for f in freed:
+            placed.pop(f, None)
+        return _survey(g, q)
+    return survey
+
+
 def make_desmon_react(
     *, make_before_break: bool = False, upgrade: str = BREAK_BEFORE_MAKE
 ) -> Callable[[QueryPort, tuple[tuple[str, ...], ...], tuple[str, ...], bool], Reaction]:
@@ -298,38 +363,14 @@ def make_desmon_react(
         q: QueryPort, slots: tuple[tuple[str, ...], ...], changed: tuple[str, ...], context_changed: bool
     ) -> Reaction:
         placed: dict[str, bool] = {}  # each graph is decided once per reaction
-        # Placing a graph is ensure_deployed, written out as its two halves so that a
-        # graph that is simply kept (the common case) creates no generator.
-
-        for p in changed:
-            for d in q.active_deployments(p):
-                g = q.perception_graph(d)
-                if g not in placed:
-                    survey = _survey(g, q)
-                    placed[g] = True if _kept(survey) else (yield from _act_on(g, q, survey, make_before_break))
+        if changed:
+            yield from _recheck(q, changed, placed, make_before_break)
         wanted = _wanted_by(slots)
         # Free what the context no longer wants first: its capacity may be needed.
         unwanted = [g for g in _active_graphs(q) if g not in wanted]
         if unwanted:
             yield from _stop_graphs(unwanted, q)
-        chosen: set[str] = set()
-        for slot in slots:
-            for i, g in enumerate(slot):
-                ok = placed.get(g)
-                if ok is None:
-                    survey = _survey(g, q)
-                    if upgrading and survey[0] is not None and not survey[1] and i + 1 < len(slot):
-                        # the upgrade: a running fallback of this slot may be all that blocks g
-                        freed = [f for f in slot[i + 1:] if q.deployed_on(f)]
-                        if freed and changed and any(p in changed for p in _fits_if_freed(g, survey[0], q, freed)):
-                            yield from _stop_graphs(freed, q)  # break before make
-                            for f in freed:
-                                placed.pop(f, None)  # decided again below if g cannot be placed
-                            survey = _survey(g, q)
-                    ok = placed[g] = True if _kept(survey) else (yield from _act_on(g, q, survey, make_before_break))
-                if ok:
-                    chosen.add(g)
-                    break
+        chosen = yield from _place_slots(q, slots, changed, placed, make_before_break, upgrading)
         # Fallbacks that are no longer needed (a better alternative is placed again).
         unneeded = [g for g in _active_graphs(q) if g in wanted and g not in chosen]
         if unneeded:
