@@ -41,6 +41,7 @@ def platform_states(draw, name: str) -> PlatformState:
         attributes=tuple(sorted(draw(st.dictionaries(st.sampled_from(("os", "arch")), st.sampled_from(ATTR_VALUES), max_size=2)).items())),
         properties=tuple(sorted(draw(st.dictionaries(st.sampled_from(("lat", "cores")), st.sampled_from((-1, 0, 0.5, 1, 2, 4.0, 8)), max_size=2)).items())),
         preference=draw(st.sampled_from((0.0, 0.0, 1.0, -1.0, 2.5))),
+        on_demand=draw(st.booleans()),  # a down on-demand platform reads "not there"
     )
     devices = tuple(
         Device(f"{name}-d{j}", kind, name, vendor=vendor)

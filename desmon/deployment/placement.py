@@ -308,6 +308,12 @@ class PlatformColumns:
         self._shares[res] = new
         return new
 
+    def forget_reasons(self) -> None:
+        """Drop every memoised failure (memory; benchmarks timing a cold explanation)."""
+        self._reasons.clear()
+        self._down.clear()
+        self._memoised = 0
+
     # -- facts -------------------------------------------------------------------------------
     @property
     def exact(self) -> bool:
@@ -484,7 +490,9 @@ class PlatformColumns:
     def _memo(self, req: object, graph: _validity.Placing) -> dict[int, _Pair]:
         """Row -> ``(name, (failure,))`` of ``req`` for ``graph``, kept until the row changes;
         beyond :data:`_REASONS_KEPT` failures the least recently asked requirements lose theirs."""
-        key = (repr(req), graph)  # repr: equal requirements may differ in a reason (2 vs 2.0)
+        # repr: equal requirements may read differently (2 vs 2.0); only a Capacity's text
+        # depends on the graph placed (whose shares it leaves out)
+        key = (repr(req), graph if type(req) is Capacity else None)
         memo = self._reasons.pop(key, None)
         if memo is None:
             memo = {}
