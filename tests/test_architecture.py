@@ -121,3 +121,26 @@ def test_only_the_checker_module_imports_the_table_and_parallel_engines(graph):
     for engine in ("desmon.verify.table", "desmon.verify.parallel", "desmon.verify.direct"):
         importers = {a for a, _b in graph.in_edges(engine)}
         assert importers <= {CHOOSER}, f"{engine} imported by {sorted(importers - {CHOOSER})}"
+
+
+@pytest.mark.parametrize("name", ["robot_day", "fallbacks", "memory_pressure"])
+def test_the_table_engine_explores_exactly_the_events_of_the_environment_alphabet_in_its_order(name):
+    # the event alphabet has one definition (desmon.verify.environment); the table engine's
+    # numeric encoding of it must enable the same events, in the same order, in every state
+    import numpy as np
+
+    from desmon.loader import load_scenario
+    from desmon.verify import Checker
+    from desmon.verify.environment import enabled_events
+
+    checker = Checker(load_scenario(ROOT / "scenarios" / f"{name}.py"))
+    checker.run(engine="table", max_states=3000, keep_going=True)
+    engine = checker.explored._e  # the table engine of the run
+    states = list(checker.explored)
+    tr = engine.events.enabled(np.frombuffer(engine.codes, dtype=np.int64))
+    table = [[] for _ in states]
+    for pos, ev in zip(tr.pos.tolist(), tr.ev.tolist()):
+        table[pos].append(engine.events.events[ev])
+    assert len(states) > 50
+    for key, events in zip(states, table):
+        assert events == enabled_events(checker.bounds, key), key

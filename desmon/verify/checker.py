@@ -23,20 +23,11 @@ from desmon.deployment.deployer import Deployer
 from desmon.errors import CheckerError
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds
-from desmon.verify.direct import PARALLEL_LEVEL, DirectSearch, Pool
-from desmon.verify.environment import EVENT_KINDS
-from desmon.verify.search import (
-    EXIT_INTERRUPTED, HOLDS, INCOMPLETE, INTERRUPTED, NOT_CHECKED, VIOLATED, Budget, CheckResult, Record, Segment, ctrl_c, finish,
-    paused_gc, resident_mb,
-)
+from desmon.verify.direct import DirectSearch, Pool
+from desmon.verify.search import HOLDS, Budget, CheckResult, ctrl_c, finish, paused_gc
 from desmon.verify.system import TransitionSystem
-from desmon.verify.trace import Counterexample, Label, Step, describe_state, diff
 
-__all__ = [
-    "Checker", "CheckResult", "Counterexample", "Step", "Label", "Record", "Segment", "Budget", "HOLDS", "VIOLATED", "INCOMPLETE",
-    "INTERRUPTED", "EVENT_KINDS", "NOT_CHECKED", "ENGINES", "EXIT_INTERRUPTED", "PARALLEL_LEVEL", "resident_mb", "describe_state",
-    "diff",
-]
+__all__ = ["Checker", "ENGINES"]
 
 #: How :meth:`Checker.run` computes transitions (see there).
 ENGINES = ("auto", "table", "direct")

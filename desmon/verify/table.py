@@ -450,9 +450,10 @@ _QUERY_METHODS = ("deployment_information", "fixed_platform", "constraints", "pl
 def _query_only(store: StateStore) -> Any:
     """The recording core's Query port: the store's QueryPort methods and nothing else.
 
-    Any other attribute (the store's fact tuples, its helpers) would let a reaction read
-    platform facts unobserved: asking for one stops the recording. The store is held in
-    the methods' closure, not in an attribute.
+    Any other attribute of the store (its fact tuples, its helpers) would let a reaction
+    read platform facts unobserved: asking for one stops the recording. One the store
+    lacks raises AttributeError, as the store would. The store is held in the methods'
+    closure, not in an attribute.
     """
 
     def forward(name: str) -> Callable[..., Any]:
@@ -463,6 +464,8 @@ def _query_only(store: StateStore) -> Any:
         return method
 
     def refuse(self: Any, name: str) -> Any:
+        if not hasattr(store, name):  # what the store itself answers (``getattr(port, name, default)`` works alike)
+            raise AttributeError(f"{type(store).__name__!r} object has no attribute {name!r}")
         raise UnobservedRead(
             f"the reaction asked its Query port for `{name}`, which is not a QueryPort method: the table engine "
             "cannot know what it reads; run with --engine direct"
