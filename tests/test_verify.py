@@ -146,7 +146,7 @@ def test_history_is_left_to_the_audit_and_the_fuzzer(capsys):
     assert main(["verify", path, "--no-progress"]) == 0
     head = capsys.readouterr().out.splitlines()[0]
     checked = head.split("invariants: ")[1].split(" (")[0].split(", ")
-    assert "history" not in checked and checked == ["valid-or-error", "no-overcommit", "single-instance", "coverage", "errors-current", "fixed"]
+    assert "history" not in checked and checked == ["valid-or-error", "no-overcommit", "single-instance", "coverage", "errors-current", "fixed", "no-flapping"]
     assert head.endswith("(not history: sim audit and fuzz only)")
     assert main(["verify", path, "--invariant", "history", "--no-progress"]) == 2
     cap = capsys.readouterr()

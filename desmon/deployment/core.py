@@ -164,7 +164,7 @@ class DeploymentCore:
         return reaction
 
     def view(self, **extra: object) -> SystemView:
-        return view_of(self.query, self.specs(), self.standing, self.slots(), **extra)  # type: ignore[arg-type]
+        return view_of(self.query, self.specs(), self.standing, self.slots(), react=self.deployer.react, **extra)  # type: ignore[arg-type]
 
     def specs(self) -> tuple[DeploymentSpec, ...]:
         """The current deployment specifications (as the repository holds them now).

@@ -8,9 +8,9 @@ or the checker's compact state) by :func:`view_of`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Container
+from typing import Any, Callable, Container
 
-from desmon.deployment.ports import QueryPort
+from desmon.deployment.ports import QueryPort, Start, Stop
 from desmon.deployment.validity import deployment_valid
 from desmon.errors import ModelError
 from desmon.model.requirements import DeploymentSpec
@@ -36,6 +36,9 @@ class SystemView:
     running: tuple[tuple[str, str], ...] | None = None
     stops: int | None = None
     history: int | None = None
+    #: the deployer's reaction ``react(q, slots, changed, context_changed)``, for the
+    #: ``no-flapping`` property (which re-runs it on this view); None skips that property
+    react: Callable[..., Any] | None = None
     # :attr:`deployments`, computed on first use (a performance cache: several
     # invariants read it; no part of equality, repr or the constructor)
     _deployments: tuple[tuple[str, str], ...] | None = field(default=None, init=False, repr=False, compare=False)
@@ -71,8 +74,9 @@ def view_of(
     running: tuple[tuple[str, str], ...] | None = None,
     stops: int | None = None,
     history: int | None = None,
+    react: Callable[..., Any] | None = None,
 ) -> SystemView:
-    return SystemView(q.platform_states(), specs, standing, slots, running, stops, history)
+    return SystemView(q.platform_states(), specs, standing, slots, running, stops, history, react)
 
 
 def validly_active(view: SystemView) -> frozenset[str]:
@@ -185,6 +189,67 @@ def _fixed(v: SystemView) -> str | None:
     return None
 
 
+class _ViewQuery:
+    """The Query port over a :class:`SystemView` (read-only), for re-running a reaction."""
+
+    def __init__(self, view: SystemView) -> None:
+        self.view = view
+
+    def deployment_information(self, graph: str) -> DeploymentSpec | None:
+        return self.view.spec(graph)
+
+    def fixed_platform(self, spec: DeploymentSpec) -> str | None:
+        return spec.fixed_platform
+
+    def constraints(self, spec: DeploymentSpec) -> tuple:
+        return spec.requirements
+
+    def platform_states(self) -> tuple[PlatformState, ...]:
+        return self.view.states
+
+    def deployed_on(self, graph: str) -> tuple[str, ...]:
+        return tuple(p for g, p in self.view.deployments if g == graph)
+
+    def active_deployments(self, platform: str) -> tuple[str, ...]:
+        return tuple(sorted(g for g, _use in self.view.state(platform).deployed))
+
+    def deployments(self) -> tuple[tuple[str, str], ...]:
+        return self.view.deployments
+
+    def perception_graph(self, deployment: str) -> str:
+        return deployment
+
+    def context(self) -> str | None:
+        return None
+
+
+def _no_flapping(v: SystemView) -> str | None:
+    """Re-run the reaction with nothing changed, executing nothing (every Start answered
+    as failed, every Stop as done): it must stop no valid deployment of a graph that
+    rebalances. If it would, the deployment moves again although the environment is
+    unchanged -- it flaps (or keeps retrying a move that failed)."""
+    if v.react is None or not any(s.rebalance is not None for s in v.specs):
+        return None
+    wanted = {g for slot in v.slots for g in slot}
+    reaction = v.react(_ViewQuery(v), v.slots, (), False)
+    outcome: bool | None = None
+    for _ in range(10_000):  # a reaction is finite; the bound only guards a runaway user deployer
+        try:
+            cmd = reaction.send(outcome)
+        except StopIteration:
+            return None
+        outcome = False if isinstance(cmd, Start) else True if isinstance(cmd, Stop) else None
+        if not isinstance(cmd, Stop) or cmd.graph not in wanted or (cmd.graph, cmd.platform) not in v.deployments:
+            continue
+        spec = v.spec(cmd.graph)
+        if spec is not None and spec.rebalance is not None and not deployment_valid(spec, v.state(cmd.platform)):
+            return (
+                f"with nothing changed the deployer would move {cmd.graph} off {cmd.platform} again, where it runs validly "
+                f"(rebalance min_gain {spec.rebalance:g}): it flaps"
+            )
+    return None
+
+
 INVARIANTS: dict[str, Invariant] = {
     inv.name: inv
     for inv in (
@@ -195,6 +260,11 @@ INVARIANTS: dict[str, Invariant] = {
         Invariant("errors-current", "a standing error describes the present: its graph is wanted, not validly active, and either active on an invalid platform or in a slot no alternative serves", _errors_current),
         Invariant("history", "every stop leaves one DEPLOYMENT_HISTORY edge; every DEPLOYED_ON edge matches a running detector", _history),
         Invariant("fixed", "a fixed deployment runs only on its EXECUTABLE_ON platform", _fixed),
+        Invariant(
+            "no-flapping",
+            "with the environment unchanged no deployment moves again: re-running the reaction with nothing changed moves no valid deployment of a graph that rebalances",
+            _no_flapping,
+        ),
     )
 }
 
