@@ -37,9 +37,11 @@ import time
 import tracemalloc
 
 from desmon.deployment import placement
+from desmon.deployment.placement import ChangeLogColumns
 from desmon.deployment.validity import check_validity, clear_memos
 from desmon.errors import DesmonError
-from desmon.model import Device, Platform, PlatformState, make_requirement
+from desmon.model import Device, Platform, PlatformState, RobotBuilder, make_requirement
+from desmon.repository import Repository, RepositoryQuery, load_model, set_device_working, set_load, set_platform_up
 
 KINDS = ("force_sensor", "tactile_pad", "camera", "lidar", "imu")
 VENDORS = ("weiss", "schunk", "kuka", "acme")
@@ -175,6 +177,61 @@ def run(args: argparse.Namespace) -> tuple[float, float]:
     return vec, scalar / vec
 
 
+def changelog(args: argparse.Namespace) -> None:
+    """Per repository event: re-reading every platform vs following the change log."""
+    n = args.platforms
+    robot = RobotBuilder("fleet")
+    for i in range(n):
+        robot.platform(f"pc{i}", memory=(512, 1024)[i % 2]).device(f"ft{i}", kind="force_sensor")
+    with robot.rpsl.perception_graph("force") as g:
+        g.sensor("w", reads="force_sensor")
+    robot.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor").add_constraint("capacity", "memory", 600)
+    repo = Repository()
+    build, _ = _timed(load_model, repo, robot.build())
+    query = RepositoryQuery(repo)
+    reqs = query.constraints(query.deployment_information("force"))  # type: ignore[arg-type]
+    rng = random.Random(args.seed)
+
+    def event() -> None:
+        p = f"pc{rng.randrange(n)}"
+        pick = rng.randrange(3)
+        if pick == 0:
+            set_load(repo, p, "memory", float(rng.choice((0, 100, 300, 500))))
+        elif pick == 1:
+            set_platform_up(repo, p, rng.random() > 0.2)
+        else:
+            set_device_working(repo, f"ft{p[2:]}", rng.random() > 0.2)
+
+    rereads = max(1, args.events // 10)
+    _fresh()
+    t_full = 0.0
+    for _ in range(rereads):
+        event()
+        t0 = time.perf_counter()
+        placement.columns_for(query.platform_states()).acceptable(reqs, "force")
+        t_full += time.perf_counter() - t0
+    follower = ChangeLogColumns(repo, query)
+    follower.columns()
+    reads = follower.reads
+    _fresh()
+    tracemalloc.start()
+    t_log = 0.0
+    for _ in range(args.events):
+        event()
+        t0 = time.perf_counter()
+        got = follower.columns().acceptable(reqs, "force")
+        t_log += time.perf_counter() - t0
+    _size, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    with placement.scalar_only():
+        _check("acceptable set after the events", got, check_validity(reqs, query.platform_states(), "force", reasons=False).acceptable)
+    print(f"repository events: {n:,} platforms (loaded in {build:.1f} s), random load / up / device changes, placing one spec after each")
+    print(f"  re-read every platform  {t_full / rereads * 1e3:8.2f} ms per event (platform_states + column sync, {rereads} events)")
+    print(f"  follow the change log   {t_log / args.events * 1e3:8.2f} ms per event ({args.events} events, "
+          f"{(follower.reads - reads) / args.events:.2f} platforms re-read per event, tracemalloc peak {peak / 1e6:.2f} MB)")
+    follower.close()
+
+
 def crossover(args: argparse.Namespace) -> None:
     """check_validity per spec, columns vs scalar loop, for growing platform counts."""
     print("check_validity per specification, reasons=False (columns kept between calls), microseconds")
@@ -204,8 +261,11 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--scalar-specs", type=int, default=50, help="specs the scalar path runs on (extrapolated); default 50")
     ap.add_argument("--reason-specs", type=int, default=10, help="specs whose full reasons are timed; default 10")
     ap.add_argument("--full", action="store_true", help="run the scalar path on every spec (about 60-90 s)")
+    ap.add_argument("--events", type=int, default=200, help="repository events of the change-log section (0: skip it); default 200")
     ap.add_argument("--crossover", action="store_true", help="time both paths for growing platform counts instead")
     args = ap.parse_args(argv)
+    if args.events < 0:
+        ap.error(f"--events = {args.events} must be 0 (skip) or more")
     for name in ("platforms", "specs", "scalar_specs", "reason_specs"):
         if getattr(args, name) < 1:
             ap.error(f"--{name.replace('_', '-')} = {getattr(args, name)} must be at least 1")
@@ -213,6 +273,8 @@ def main(argv: list[str] | None = None) -> None:
         crossover(args)
         return
     seconds, ratio = run(args)
+    if args.events:
+        changelog(args)
     print(f"RESULT seconds={seconds:.3f} scalar_ratio={ratio:.1f}")
 
 

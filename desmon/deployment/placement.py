@@ -434,25 +434,30 @@ class PlatformColumns:
         rejected_rows = order[~in_order]
         if not len(rejected_rows):
             return _validity.Validity(acceptable, ())
-        if not reasons:
-            return _validity.Validity(acceptable, self._first_failures(reqs, ok, rejected_rows, graph))
-        describe = [r.describe() for r in reqs]  # type: ignore[attr-defined]
+        rejected = self._first_failures(reqs, ok, rejected_rows, graph)
+        if reasons:
+            rejected = self._all_failures(reqs, ok, rejected_rows, graph, rejected)
+        return _validity.Validity(acceptable, rejected)
+
+    def _all_failures(
+        self, reqs: tuple, ok: np.ndarray, rows: np.ndarray, graph: _validity.Placing, first: tuple[_Pair, ...]
+    ) -> tuple[_Pair, ...]:
+        """``first`` with every failure, not only the first, for the up rows failing more than one."""
+        failing = ~ok[:, rows]
+        multi = np.flatnonzero(self._up[rows] & (failing.sum(axis=0) > 1))
+        if not len(multi):
+            return first
+        out = list(first)
         memos = [self._memo(r, graph) for r in reqs]
-        names = self._names[rejected_rows].tolist()
-        up = self._up[rejected_rows].tolist()
-        fails_by_row = ok[:, rejected_rows].T.tolist()
-        rejected = []
-        for i, name, is_up, row_ok in zip(rejected_rows.tolist(), names, up, fails_by_row):
-            if not is_up:
-                rejected.append(self._down_pair(i, graph))
-                continue
-            out = []
-            for k, holds in enumerate(row_ok):
-                if not holds:
-                    pair = memos[k].get(i)
-                    out.append((pair if pair is not None else self._failure(reqs[k], describe[k], memos[k], i, graph))[1][0])
-            rejected.append((name, tuple(out)))
-        return _validity.Validity(acceptable, tuple(rejected))
+        describe = [r.describe() for r in reqs]  # type: ignore[attr-defined]
+        for pos, i, row_fails in zip(multi.tolist(), rows[multi].tolist(), failing[:, multi].T.tolist()):
+            fails = []
+            for k, fails_k in enumerate(row_fails):
+                if fails_k:
+                    pair = memos[k].get(i) or self._failure(reqs[k], describe[k], memos[k], i, graph)
+                    fails.append(pair[1][0])
+            out[pos] = (out[pos][0], tuple(fails))
+        return tuple(out)
 
     def _first_failures(
         self, reqs: tuple, ok: np.ndarray, rows: np.ndarray, graph: _validity.Placing
