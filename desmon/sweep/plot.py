@@ -114,9 +114,11 @@ def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | 
         front = pareto_front(costs, means)
         ax.errorbar(costs, means, yerr=[[m - lo for m, lo in zip(means, s["min"])], [hi - m for m, hi in zip(means, s["max"])]],
                     fmt="o", color="0.6", ecolor="0.8", capsize=3, label="point (mean, min-max over seeds)")
-        ax.step([costs[i] for i in front], [means[i] for i in front], where="post", color="C3", marker="o", label="Pareto front")
+        ax.step([costs[i] for i in front], [means[i] for i in front], where="post", color="C3", marker="o", zorder=3,
+                label="Pareto front")
+        varying = [p for p in by if p != pareto and ok[p].nunique() > 1]
         for i in front:
-            label = ", ".join(f"{p}={s.iloc[i][p]}" for p in by if p != pareto) or f"{pareto}={s.iloc[i][pareto]}"
+            label = ", ".join(f"{p}={s.iloc[i][p]}" for p in varying) or f"{pareto}={s.iloc[i][pareto]}"
             ax.annotate(label, (costs[i], means[i]), textcoords="offset points", xytext=(4, 6), fontsize=7)
         ax.set_xlabel(f"cost: {pareto}")
         ax.set_title(f"{y} vs {pareto}: Pareto front of {len(s)} points ({note})", fontsize=9)
