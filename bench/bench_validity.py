@@ -143,6 +143,7 @@ def run(args: argparse.Namespace) -> tuple[float, float]:
     vec_reasons = []
     for i in reason_specs:  # cold: no failure text memoised yet
         cols.forget_reasons()
+        gc.collect()
         vec_reasons.append(_timed(cols.validity, specs[i], _graph(i), reasons=True)[0])
     cols.forget_reasons()
 
@@ -152,7 +153,10 @@ def run(args: argparse.Namespace) -> tuple[float, float]:
     with placement.scalar_only():
         t_sample, scalar_answers = _timed(lambda: [check_validity(specs[i], states, _graph(i), reasons=False) for i in sample])
         _fresh()
-        sca = [_timed(check_validity, specs[i], states, _graph(i), reasons=True) for i in reason_specs]
+        sca = []
+        for i in reason_specs:
+            gc.collect()
+            sca.append(_timed(check_validity, specs[i], states, _graph(i), reasons=True))
     sca_reasons = [t for t, _v in sca]
     scalar = t_sample * len(specs) / len(sample)
     for i, answer in zip(sample, scalar_answers):
