@@ -43,8 +43,18 @@ class SweepResult:
         return self.rows == self.total
 
 
-def _previous(output: Path, journal: Path, grid: Grid, identity: dict[str, Any], settings: dict[str, Any]) -> dict[tuple[str, int], dict[str, Any]]:
-    """The rows ``--resume`` keeps: those of the output table and the journal, checked to be of this sweep."""
+def _previous(
+    output: Path, journal: Path, grid: Grid, identity: dict[str, Any], settings: dict[str, Any], resume: bool
+) -> dict[tuple[str, int], dict[str, Any]]:
+    """The rows ``--resume`` keeps: those of the output table and the journal, checked to be of this sweep.
+    Without ``resume``, a journal left by an interrupted sweep is refused, not overwritten."""
+    if not resume:
+        if journal.exists():
+            raise SweepError(
+                f"-o {output}: {journal} holds the rows of an interrupted sweep; pass --resume to finish it, "
+                "or delete the journal to start again"
+            )
+        return {}
     done: dict[tuple[str, int], dict[str, Any]] = {}
     if output.exists():
         df = read_table(output)
@@ -60,6 +70,60 @@ def _previous(output: Path, journal: Path, grid: Grid, identity: dict[str, Any],
                 )
         done.update(check_same_sweep(str(journal), rows, grid, identity, settings))
     return done
+
+
+def _checked(job: str, scenario: str | None, axes: tuple[Axis, ...], deployer: str) -> str:
+    """Refuse a bad request before any work; the deployer spec as the workers must read it."""
+    from desmon.verify.deployers import resolve_deployer
+
+    if job not in JOBS:
+        raise SweepError(f"--job {job!r}: choose one of {', '.join(JOBS)}")
+    if job == "evaluate" and scenario is not None:
+        raise SweepError(
+            "--job evaluate sweeps the detector evaluation (desmon evaluate), which reads no scenario: drop "
+            f"{scenario}; its -p names are the signal model's parameters (docs/sweeps.md)"
+        )
+    if job != "evaluate" and scenario is None:
+        raise SweepError(f"--job {job} needs a scenario file, e.g. desmon sweep scenarios/robot_day.py -p hours=1 -o results.parquet")
+    check_values(job, scenario, axes)
+    resolve_deployer(deployer)  # a bad --deployer: one line, before any work
+    source, colon, name = deployer.rpartition(":")
+    if colon and os.path.isfile(source):
+        return f"{os.path.abspath(source)}:{name}"  # the workers may run in another folder
+    return deployer
+
+
+class _Rows:
+    """The rows of a sweep as they arrive: kept, appended to the journal, counted on the progress line."""
+
+    def __init__(self, grid: Grid, kept: list[dict[str, Any]], fixed: dict[str, Any], journal: Journal, bar: Progress,
+                 on_row: Callable[[int], None] | None) -> None:
+        self.grid, self.kept, self.fixed, self.journal, self.bar, self.on_row = grid, kept, fixed, journal, bar, on_row
+        self.new = 0
+
+    def keep(self, run: Run, figures: dict[str, Any]) -> None:
+        row = {"point": run.point.index, "seed_index": run.seed_index, "seed": run.seed, **self.grid.typed(run.point),
+               **self.fixed, **figures}
+        self.kept.append(row)
+        self.journal.append(row)
+        self.bar.update(bool(row.get("error")))
+        self.new += 1
+        if self.on_row is not None:
+            self.on_row(self.new)
+
+
+def _finish(rows: _Rows, out: Path, journal: Path, total: int, axes: tuple[Axis, ...], job: str, settings: dict[str, Any],
+            interrupted: bool, err: IO[str]) -> None:
+    """Write the table of every finished row (also after Ctrl-C); drop the journal once complete."""
+    rows.bar.close()
+    rows.journal.close()
+    if rows.kept or interrupted:
+        write_table(frame(rows.kept, axes, job, list(settings)), out)
+    if len(rows.kept) == total:
+        journal.unlink(missing_ok=True)
+    if interrupted:
+        print(f"desmon sweep: interrupted: wrote {out} with the {len(rows.kept):,} of {total:,} runs finished; "
+              "pass --resume to run the rest", file=err)
 
 
 def run_sweep(
@@ -91,24 +155,8 @@ def run_sweep(
     """
     import sys
 
-    if job not in JOBS:
-        raise SweepError(f"--job {job!r}: choose one of {', '.join(JOBS)}")
-    if job == "evaluate" and scenario is not None:
-        raise SweepError(
-            "--job evaluate sweeps the detector evaluation (desmon evaluate), which reads no scenario: drop "
-            f"{scenario}; its -p names are the signal model's parameters (docs/sweeps.md)"
-        )
-    if job != "evaluate" and scenario is None:
-        raise SweepError(f"--job {job} needs a scenario file, e.g. desmon sweep scenarios/robot_day.py -p hours=1 -o results.parquet")
     grid = Grid(axes, seeds, sweep_seed)
-    check_values(job, scenario, axes)
-    from desmon.verify.deployers import resolve_deployer
-
-    resolve_deployer(deployer)  # a bad --deployer: one line, before any work
-    if deployer not in ("desmon", "desmon-keep-fallback", "paper") and ":" in deployer:
-        source, _, name = deployer.rpartition(":")
-        if os.path.isfile(source):
-            deployer = f"{os.path.abspath(source)}:{name}"  # the workers may run in another folder
+    deployer = _checked(job, scenario, axes, deployer)
     settings = {SETTINGS[job]: setting}
     identity = {
         "job": job, "scenario": scenario or "", "deployer": deployer, "sweep_seed": sweep_seed,
@@ -116,68 +164,33 @@ def run_sweep(
     }
     out = Path(output)
     journal = journal_path(out)
-    if resume:
-        done = _previous(out, journal, grid, identity, settings)
-    else:
-        if journal.exists():
-            raise SweepError(
-                f"-o {output}: {journal} holds the rows of an interrupted sweep; pass --resume to finish it, "
-                "or delete the journal to start again"
-            )
-        done = {}
-    spec = JobSpec(job, None if scenario is None else os.path.abspath(scenario), deployer, tuple(settings.items()), task_timeout)
-    err = err if err is not None else sys.stderr
+    done = _previous(out, journal, grid, identity, settings, resume)
+    spec = JobSpec(job, scenario and os.path.abspath(scenario), deployer, tuple(settings.items()), task_timeout)
     all_runs = list(grid.runs())
-    kept: list[dict[str, Any]] = []
-    for run in all_runs:  # earlier rows, renumbered by this grid (it may have grown)
-        row = done.get(run.key)
-        if row is not None:
-            kept.append({**row, "point": run.point.index})
+    # earlier rows, renumbered by this grid (it may have grown)
+    kept = [{**done[run.key], "point": run.point.index} for run in all_runs if run.key in done]
     todo = [r for r in all_runs if r.key not in done]
-    fixed = {"scenario": scenario or "", "job": job, "deployer": deployer, **settings}
+    err = err or sys.stderr
     bar = Progress(len(all_runs), done=len(kept), failed=sum(1 for r in kept if r.get("error")), enabled=progress, out=err)
     started = time.perf_counter()
-    log = Journal(journal, identity, kept)
-    new = 0
-    workers_seen = 0
+    fixed = {"scenario": scenario or "", "job": job, "deployer": deployer, **settings}
+    rows = _Rows(grid, kept, fixed, Journal(journal, identity, kept), bar, on_row)
     interrupted = False
-
-    def keep(run: Run, figures: dict[str, Any]) -> None:
-        nonlocal new
-        row = {"point": run.point.index, "seed_index": run.seed_index, "seed": run.seed, **grid.typed(run.point), **fixed, **figures}
-        kept.append(row)
-        log.append(row)
-        bar.update(bool(row.get("error")))
-        new += 1
-        if on_row is not None:
-            on_row(new)
-
+    workers_seen = 0
     try:
         if todo:
-            workers_seen = execute(spec, todo, keep, scheduler=scheduler, workers=workers, retries=retries, task=task)
+            workers_seen = execute(spec, todo, rows.keep, scheduler=scheduler, workers=workers, retries=retries, task=task)
     except KeyboardInterrupt:
         interrupted = True
         raise
     except BaseException:
-        if new == 0 and not resume:  # nothing ran (no scheduler answered, ...): leave no files behind
-            log.close()
+        if rows.new == 0 and not resume:  # nothing ran (no scheduler answered, ...): leave no files behind
+            rows.journal.close()
             journal.unlink(missing_ok=True)
-            bar.close()
-            kept = []
+            kept.clear()
         raise
     finally:
-        bar.close()
-        log.close()
-        if kept or interrupted:  # every finished row is kept, also on Ctrl-C or an error
-            write_table(frame(kept, axes, job, list(settings)), out)
-        if len(kept) == len(all_runs):
-            journal.unlink(missing_ok=True)
-        if interrupted:
-            print(
-                f"desmon sweep: interrupted: wrote {output} with the {len(kept):,} of {len(all_runs):,} runs finished; "
-                "pass --resume to run the rest",
-                file=err,
-            )
+        _finish(rows, out, journal, len(all_runs), axes, job, settings, interrupted, err)
     return SweepResult(
         output=str(output), rows=len(kept), total=len(all_runs), failed=sum(1 for r in kept if r.get("error")),
         resumed=len(done), workers=workers_seen, seconds=time.perf_counter() - started,

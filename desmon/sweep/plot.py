@@ -65,8 +65,8 @@ def pareto_front(costs: list[float], values: list[float]) -> list[int]:
     return front
 
 
-def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None = None) -> None:
-    """Draw ``table`` to ``output`` (PNG): ``y`` against ``x``, or against ``pareto`` with the front."""
+def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, int]:
+    """The rows to draw (runs without an error that have ``y``) and how many failed."""
     from desmon.sweep.table import read_table
 
     if (x is None) == (pareto is None):
@@ -78,12 +78,46 @@ def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | 
             raise SweepError(f"{table}: not a table written by desmon sweep (no {required} column)")
     _column(df, "-y", y)
     _column(df, "-x" if x is not None else "--pareto", x or pareto)  # type: ignore[arg-type]
-    failed = int(df["error"].notna().sum())
     ok = df[df["error"].isna()]
     ok = ok[ok[y].notna()]
     if ok.empty:
         raise SweepError(f"{table}: no run without an error has a value of {y}; nothing to draw")
-    params = _parameters(df)
+    return ok, int(df["error"].notna().sum())
+
+
+def _against(ax: Any, ok: Any, params: list[str], x: str, y: str) -> None:
+    others = [p for p in params if p != x and ok[p].nunique() > 1]
+    s = summarise(ok, [*others, x], y)
+    groups = s.groupby(others, sort=True) if others else [((), s)]
+    for label, part in groups:
+        label = label if isinstance(label, tuple) else (label,)
+        name = ", ".join(f"{k}={v}" for k, v in zip(others, label)) or y
+        line = ax.plot(part[x], part["mean"], marker="o", label=name)[0]
+        ax.fill_between(part[x], part["min"], part["max"], alpha=0.2, color=line.get_color())
+    ax.set_xlabel(x)
+
+
+def _pareto(ax: Any, ok: Any, params: list[str], pareto: str, y: str) -> int:
+    by = params or [pareto]
+    s = summarise(ok, by, y).join(ok.groupby(by, sort=True)[pareto].mean().rename("_cost"), on=by)
+    costs, means = [float(c) for c in s["_cost"]], [float(m) for m in s["mean"]]
+    front = pareto_front(costs, means)
+    ax.errorbar(costs, means, yerr=[[m - lo for m, lo in zip(means, s["min"])], [hi - m for m, hi in zip(means, s["max"])]],
+                fmt="o", color="0.6", ecolor="0.8", capsize=3, label="point (mean, min-max over seeds)")
+    ax.step([costs[i] for i in front], [means[i] for i in front], where="post", color="C3", marker="o", zorder=3,
+            label="Pareto front")
+    varying = [p for p in by if p != pareto and ok[p].nunique() > 1]
+    for i in front:
+        label = ", ".join(f"{p}={s.iloc[i][p]}" for p in varying) or f"{pareto}={s.iloc[i][pareto]}"
+        ax.annotate(label, (costs[i], means[i]), textcoords="offset points", xytext=(4, 6), fontsize=7)
+    ax.set_xlabel(f"cost: {pareto}")
+    return len(s)
+
+
+def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None = None) -> None:
+    """Draw ``table`` to ``output`` (PNG): ``y`` against ``x``, or against ``pareto`` with the front."""
+    ok, failed = _rows(table, x, y, pareto)
+    params = [p for p in _parameters(ok)]
     from desmon.viz.common import require_matplotlib
 
     require_matplotlib()
@@ -96,32 +130,12 @@ def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | 
     seeds = int(ok.groupby(params or ["job"])["seed"].count().max())
     note = f"{len(ok)} runs" + (f", {failed} failed runs left out" if failed else "")
     if x is not None:
-        others = [p for p in params if p != x and ok[p].nunique() > 1]
-        s = summarise(ok, [*others, x], y)
-        groups = s.groupby(others, sort=True) if others else [((), s)]
-        for label, part in groups:
-            label = label if isinstance(label, tuple) else (label,)
-            name = ", ".join(f"{k}={v}" for k, v in zip(others, label)) or y
-            line = ax.plot(part[x], part["mean"], marker="o", label=name)[0]
-            ax.fill_between(part[x], part["min"], part["max"], alpha=0.2, color=line.get_color())
-        ax.set_xlabel(x)
+        _against(ax, ok, params, x, y)
         ax.set_title(f"{y} vs {x}: mean and min-max over up to {seeds} seeds ({note})", fontsize=9)
     else:
         assert pareto is not None
-        by = params or [pareto]
-        s = summarise(ok, by, y).join(ok.groupby(by, sort=True)[pareto].mean().rename("_cost"), on=by)
-        costs, means = [float(c) for c in s["_cost"]], [float(m) for m in s["mean"]]
-        front = pareto_front(costs, means)
-        ax.errorbar(costs, means, yerr=[[m - lo for m, lo in zip(means, s["min"])], [hi - m for m, hi in zip(means, s["max"])]],
-                    fmt="o", color="0.6", ecolor="0.8", capsize=3, label="point (mean, min-max over seeds)")
-        ax.step([costs[i] for i in front], [means[i] for i in front], where="post", color="C3", marker="o", zorder=3,
-                label="Pareto front")
-        varying = [p for p in by if p != pareto and ok[p].nunique() > 1]
-        for i in front:
-            label = ", ".join(f"{p}={s.iloc[i][p]}" for p in varying) or f"{pareto}={s.iloc[i][pareto]}"
-            ax.annotate(label, (costs[i], means[i]), textcoords="offset points", xytext=(4, 6), fontsize=7)
-        ax.set_xlabel(f"cost: {pareto}")
-        ax.set_title(f"{y} vs {pareto}: Pareto front of {len(s)} points ({note})", fontsize=9)
+        points = _pareto(ax, ok, params, pareto, y)
+        ax.set_title(f"{y} vs {pareto}: Pareto front of {points} points ({note})", fontsize=9)
     ax.set_ylabel(y)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)

@@ -188,6 +188,43 @@ def key_of_row(row: dict[str, Any], axes: Sequence[Axis]) -> tuple[str, int]:
     return (text, int(row["seed_index"]))
 
 
+def _check_identity(where: str, row: dict[str, Any], names: set[str], grid: Grid, identity: dict[str, Any], settings: dict[str, Any]) -> None:
+    """A stored row was made with this sweep's parameters, job, deployer, scenario and settings."""
+    stored = {c for c in row if c in names}
+    if stored != names:
+        raise SweepError(f"--resume: {where} sweeps other parameters than -p {', '.join(grid.names) or '(none)'}; "
+                         "it is not this sweep: name another -o, or resume it with its own options")
+    for column in ("job", "deployer"):
+        if str(row.get(column)) != str(identity[column]):
+            raise SweepError(f"--resume: {where} was made with --{column} {row.get(column)}, not {identity[column]}: "
+                             "it is not this sweep; name another -o")
+    if identity["job"] != "evaluate" and Path(str(row.get("scenario"))).resolve() != Path(str(identity["scenario"])).resolve():
+        raise SweepError(f"--resume: {where} sweeps scenario {row.get('scenario')}, not {identity['scenario']}; name another -o")
+    for name, value in settings.items():
+        if not _same_setting(row.get(name), value):
+            raise SweepError(f"--resume: {where} was made with {name} {row.get(name)}, not {value}: it is not this sweep; "
+                             "name another -o")
+
+
+def _run_of(where: str, row: dict[str, Any], grid: Grid, runs: dict[tuple[str, int], Run]) -> tuple[str, int]:
+    """The key of a stored row, checked to be a run of this grid with the seed it derives."""
+    try:
+        key = key_of_row(row, grid.axes)
+    except (TypeError, ValueError):
+        raise SweepError(f"--resume: {where} holds a row whose parameters are not of this grid's types; name another -o") from None
+    run = runs.get(key)
+    if run is None:
+        if key[1] >= grid.seeds and any(k[0] == key[0] for k in runs):
+            raise SweepError(f"--resume: {where} holds seed index {key[1]} of {key[0] or 'the point'}, more than --seeds "
+                             f"{grid.seeds}: give --seeds {key[1] + 1} or more")
+        raise SweepError(f"--resume: {where} holds point {key[0]!r}, which is not in this grid: it is not this sweep "
+                         "(give every value it had, or name another -o)")
+    if int(row["seed"]) != run.seed:
+        raise SweepError(f"--resume: {where} was made with another --seed (its seeds differ): give the sweep's own --seed, "
+                         "or name another -o")
+    return key
+
+
 def check_same_sweep(
     where: str, rows: Sequence[dict[str, Any]], grid: Grid, identity: dict[str, Any], settings: dict[str, Any]
 ) -> dict[tuple[str, int], dict[str, Any]]:
@@ -198,33 +235,6 @@ def check_same_sweep(
     runs: dict[tuple[str, int], Run] = {r.key: r for r in grid.runs()}
     out: dict[tuple[str, int], dict[str, Any]] = {}
     for row in rows:
-        stored = {c for c in row if c in names}
-        if stored != names or any(n not in row for n in names):
-            raise SweepError(f"--resume: {where} sweeps other parameters than -p {', '.join(grid.names) or '(none)'}; "
-                             "it is not this sweep: name another -o, or resume it with its own options")
-        for column in ("job", "deployer"):
-            if str(row.get(column)) != str(identity[column]):
-                raise SweepError(f"--resume: {where} was made with --{column} {row.get(column)}, not {identity[column]}: "
-                                 "it is not this sweep; name another -o")
-        if Path(str(row.get("scenario"))).resolve() != Path(str(identity["scenario"])).resolve() and identity["job"] != "evaluate":
-            raise SweepError(f"--resume: {where} sweeps scenario {row.get('scenario')}, not {identity['scenario']}; name another -o")
-        for name, value in settings.items():
-            if not _same_setting(row.get(name), value):
-                raise SweepError(f"--resume: {where} was made with {name} {row.get(name)}, not {value}: it is not this sweep; "
-                                 "name another -o")
-        try:
-            key = key_of_row(row, grid.axes)
-        except (TypeError, ValueError):
-            raise SweepError(f"--resume: {where} holds a row whose parameters are not of this grid's types; name another -o") from None
-        run = runs.get(key)
-        if run is None:
-            if key[1] >= grid.seeds and any(k[0] == key[0] for k in runs):
-                raise SweepError(f"--resume: {where} holds seed index {key[1]} of {key[0] or 'the point'}, more than --seeds "
-                                 f"{grid.seeds}: give --seeds {key[1] + 1} or more")
-            raise SweepError(f"--resume: {where} holds point {key[0]!r}, which is not in this grid: it is not this sweep "
-                             "(give every value it had, or name another -o)")
-        if int(row["seed"]) != run.seed:
-            raise SweepError(f"--resume: {where} was made with another --seed (its seeds differ): give the sweep's own --seed, "
-                             "or name another -o")
-        out[key] = row
+        _check_identity(where, row, names, grid, identity, settings)
+        out[_run_of(where, row, grid, runs)] = row
     return out
