@@ -138,19 +138,23 @@ class DirectSearch:
         res = self.res
         key = self.keys[ki]
         res.rules[key.context] += 1
-        enabled_count, changed, count_names = res.enabled, res.changed, self.count_names
-        for (event, kind), segments in zip(self.system._enabled(key), per_event, strict=True):
-            enabled_count[kind] += 1
-            for routine, routine_moved, routine_names, rec in segments:
-                if routine:
-                    self.transitions += routine
-                    if routine_moved:
-                        changed[kind] += routine_moved
-                    count_names(routine_names)
-                if rec is not None and self._record(ki, event, kind, rec, nxt):
+        enabled_count, changed, count_names, record = res.enabled, res.changed, self.count_names, self._record
+        routines = 0  # routine transitions, added to the count at the end
+        try:
+            for (event, kind), segments in zip(self.system.enabled_kinds(key), per_event, strict=True):
+                enabled_count[kind] += 1
+                for routine, routine_moved, routine_names, rec in segments:
+                    if routine:
+                        routines += routine
+                        if routine_moved:
+                            changed[kind] += routine_moved
+                        count_names(routine_names)
+                    if rec is not None and record(ki, event, kind, rec, nxt):
+                        break
+                if (self.any_found and self.trail.done()) or self.incomplete:
                     break
-            if self._finished() or self.incomplete:
-                break
+        finally:
+            self.transitions += routines
 
     def _record(self, ki: int, event: Event, kind: str, rec: Record, nxt: list[int]) -> bool:
         """Consume one record of state ``ki``'s ``event``; True if the search has what it looks for."""

@@ -124,9 +124,9 @@ class TransitionSystem:
         return st.key(self.core.standing)
 
     def enabled(self, key: Key) -> list[Event]:
-        return [e for e, _k in self._enabled(key)]
+        return [e for e, _k in self.enabled_kinds(key)]
 
-    def _enabled(self, key: Key) -> tuple[tuple[Event, str], ...]:
+    def enabled_kinds(self, key: Key) -> tuple[tuple[Event, str], ...]:
         """(event, kind) of every event enabled in ``key``; memoised on the parts it reads."""
         mk = (key.context, key.failed, key.down, key.loads)
         out = self._enabled_memo.get(mk)
@@ -215,7 +215,7 @@ class TransitionSystem:
         invariants = self.invariants
         fresh: set[Key] = set()
         out: list[list[Segment]] = []
-        for event, _kind in self._enabled(key):
+        for event, _kind in self.enabled_kinds(key):
             segments: list[Segment] = []
             n = moved = 0
             names: list[str] = []
