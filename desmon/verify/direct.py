@@ -15,7 +15,7 @@ from __future__ import annotations
 from typing import Any, Callable, Iterable, Protocol
 
 from desmon.model.events import Event
-from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Record, Segment, Trail, paused_gc
+from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Record, Segment, Trail, final_status, paused_gc
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 from desmon.verify.trace import Counterexample
@@ -83,6 +83,8 @@ class DirectSearch:
                 trail.truncate(self.keys)
             finally:
                 self._close_pool()
+        # the status closure points back at this search: let it go (no reference cycle is left behind)
+        self.budget.status = final_status(len(self.keys), self.transitions, self.depth)
         system.explored = self.keys  # the distinct (canonical) states of the last run, BFS order
         self.res.states = len(self.keys)
         self.res.transitions = self.transitions

@@ -59,6 +59,7 @@ from array import array
 from typing import Any, Callable, Iterator, NamedTuple, Sequence
 
 import numpy as np
+import numpy.ma  # noqa: F401  (np.unique imports it on first use, leaving cyclic garbage: not during a search)
 
 from desmon.deployment import validity as _validity
 from desmon.deployment.core import DeploymentCore
@@ -68,7 +69,7 @@ from desmon.model.events import (
 )
 from desmon.model.system import PlatformState
 from desmon.verify.environment import EVENT_KINDS
-from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Trail
+from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Trail, final_status as _final_status
 from desmon.verify.state import Key, StateStore
 from desmon.verify.system import TransitionSystem
 from desmon.verify.trace import KEPT_BRANCH, Counterexample, branch_name
@@ -1173,6 +1174,7 @@ class TableEngine:
             trail.truncate(codes)
         res.transitions = self.transitions
         res.states = len(codes)
+        budget.status = _final_status(len(codes), self.transitions, self.depth)  # (the search's closure let go)
         return trail.found, self.incomplete, self.depth
 
     def _encode(self, init: Key) -> _Env:
