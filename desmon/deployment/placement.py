@@ -69,8 +69,10 @@ __all__ = [
 ]
 
 #: ``check_validity`` takes the columns from this many platforms on. Measured with
-#: ``python -m bench.bench_validity --crossover``: below it the fixed cost of the numpy
-#: calls (some tens of microseconds per requirement) outweighs the per-platform loop.
+#: ``python -m bench.bench_validity --crossover``: the fixed cost of the numpy calls
+#: (about 45 microseconds a specification) breaks even with the loop at about 32
+#: platforms when the columns are kept; twice that leaves room for the rows a changed
+#: platform list costs to rewrite.
 VECTOR_MIN_PLATFORMS = 64
 
 #: How many column stores are kept (each one platform list, most recently used first).
