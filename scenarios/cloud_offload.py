@@ -34,6 +34,7 @@ from desmon.model.requirements import Capacity
 from desmon.model.params import parameters
 from desmon.model.scenario import Scenario
 from desmon.sim.world import Lease, LoadWalk, RandomChanges, Step, World
+from desmon.verify.bounds import Bounds, levels
 
 p = parameters(lease=True, hours=2.0)
 
@@ -74,5 +75,14 @@ scenario = Scenario(
         block=1.0,
         lease=Lease(idle_s=120.0) if p.lease else None,
         random_changes=RandomChanges(changes=(FAST, SLOW), mean_interval=900.0),
+    ),
+    checker=Bounds(  # desmon verify: the delivery task, the torso load, the edge server and the speed changes in every order
+        task={IDLE: (GRASP,), GRASP: (HOLD,), HOLD: (MOVE_BASE, RELEASE), MOVE_BASE: (HOLD,), RELEASE: (IDLE,)},
+        initial_action=IDLE,
+        loads={"torso_pc": levels(600, 800, 200)},
+        joins=("edge",),
+        requirement_changes=(FAST, SLOW),
+        devices=("lwr_wrench",),
+        max_failures=1,
     ),
 )

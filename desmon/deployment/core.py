@@ -18,6 +18,7 @@ from desmon.deployment.deployer import Deployer, get_deployer
 from desmon.deployment.invariants import SystemView, validly_active_among, view_of
 from desmon.deployment.monitor import InsertPort, Stimulus, observe
 from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop
+from desmon.deployment.validity import deployment_valid, validity_for
 from desmon.errors import ModelError
 from desmon.model.events import Event
 from desmon.model.requirements import DeploymentSpec
@@ -130,6 +131,11 @@ class DeploymentCore:
         self.standing: frozenset[str] = frozenset()
         # the current specifications come from the repository: requirements may change at run time
         self._specs_memo: tuple[object, tuple[DeploymentSpec, ...]] | None = None
+        #: does any specification rebalance? Then every reaction is audited for moves
+        #: without a score gain above the threshold (see :meth:`_audit_moves`)
+        self._rebalancing = any(s.rebalance is not None for s in model.specs)
+        #: the last reaction's moves that broke ``no-flapping`` (what happened, one line each)
+        self.unjustified: list[str] = []
         # context -> (requested slots, the graphs they name); the rules and the deployer
         # are immutable, so this is a pure memo (bounded by the contexts seen, see _selection)
         self._selection_memo: dict[str | None, tuple[tuple[tuple[str, ...], ...], frozenset[str]]] = {}
@@ -161,7 +167,47 @@ class DeploymentCore:
                 f"deployer {self.deployer.name}: its reaction returned {type(reaction).__name__}, not a generator; "
                 "write react(q, slots, changed, context_changed) with yield Start/Stop/RaiseError (docs/deployers.md)"
             )
+        self.unjustified = []
+        if self._rebalancing:
+            return self._audit_moves(reaction)
         return reaction
+
+    def _audit_moves(self, reaction: Reaction) -> Reaction:
+        """``reaction``, passed through, noting every move of a valid deployment of a
+        rebalancing graph (stopped where it ran validly, started elsewhere in the same
+        reaction) whose score gain did not exceed the graph's ``min_gain``: the
+        transition half of the ``no-flapping`` property (:attr:`unjustified`)."""
+        moving: dict[str, tuple[str, float, float]] = {}
+        outcome: bool | None = None
+        while True:
+            try:
+                cmd = reaction.send(outcome)
+            except StopIteration:
+                return
+            note = self._move_note(cmd) if isinstance(cmd, Stop) else None
+            outcome = yield cmd
+            if note is not None and outcome:
+                moving[cmd.graph] = note
+            elif isinstance(cmd, Start) and outcome and cmd.graph in moving:
+                source, gain, min_gain = moving.pop(cmd.graph)
+                if cmd.platform != source and not gain > min_gain:
+                    self.unjustified.append(
+                        f"{cmd.graph} moved from {source}, where it ran validly, to {cmd.platform} with a score gain of "
+                        f"{gain:.3g}, not above its min_gain {min_gain:g}"
+                    )
+
+    def _move_note(self, cmd: Stop) -> tuple[str, float, float] | None:
+        """(platform, score gain of the best platform over it, min_gain) if ``cmd`` stops a
+        valid deployment of a graph that rebalances, else None."""
+        spec = self.query.deployment_information(cmd.graph)
+        if spec is None or spec.rebalance is None:
+            return None
+        state = next((s for s in self.query.platform_states() if s.name == cmd.platform), None)
+        if state is None or deployment_valid(spec, state):
+            return None
+        validity = validity_for(self.query, spec, reasons=False)
+        gain = validity.gain(cmd.platform) if cmd.platform in validity.acceptable else 0.0
+        return cmd.platform, gain, spec.rebalance
 
     def view(self, **extra: object) -> SystemView:
         return view_of(self.query, self.specs(), self.standing, self.slots(), react=self.deployer.react, **extra)  # type: ignore[arg-type]

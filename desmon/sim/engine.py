@@ -710,6 +710,9 @@ class SimWorld:
                 else:
                     raise not_a_command(cmd)
             self.core.settle(book.raised)
+            for msg in self.core.unjustified:  # no-flapping, its transition half
+                self.violations.append((env.now, "no-flapping", msg))
+                self.trace.emit(env.now, "violation", invariant="no-flapping", message=msg)
             if not self._pending():
                 self._audit()
 

@@ -12,8 +12,8 @@ from typing import Mapping
 
 from desmon.errors import CheckerError
 from desmon.model.checks import check_flag, check_items, check_name, check_names, check_number, strict_init, suggest
-from desmon.model.events import ActionChange, LoadChange
-from desmon.model.scenario import Scenario
+from desmon.model.events import ActionChange, LoadChange, RequirementChange
+from desmon.model.scenario import Scenario, event_problem
 from desmon.model.system import SystemModel, check_action
 
 __all__ = ["Bounds", "levels", "bounds_of", "INSTANT_INVARIANTS"]
@@ -64,6 +64,12 @@ class Bounds:
         bound on simultaneous failures (failed devices + platforms down);
     ``interchangeable``
         groups of platforms symmetry reduction may permute (``--symmetry``);
+    ``joins``
+        on-demand platforms that may join and leave (every on-demand platform of the
+        model must be listed: it starts absent); joins and leaves are not failures;
+    ``requirement_changes``
+        ``RequirementChange`` events the environment may apply, in any order and any
+        number of times (one that changes nothing is a no-op);
     ``instantaneous``
         invariants also checked after every command inside a reaction.
     """
@@ -80,6 +86,8 @@ class Bounds:
     max_failures: int | None = None
     interchangeable: tuple[tuple[str, ...], ...] = ()
     instantaneous: tuple[str, ...] = INSTANT_INVARIANTS
+    joins: tuple[str, ...] = ()
+    requirement_changes: tuple[RequirementChange, ...] = ()
 
     def __post_init__(self) -> None:
         """Types and ranges; names are checked against a scenario by :meth:`validate`."""
@@ -97,6 +105,14 @@ class Bounds:
         names("devices", "device", "devices=('lwr_wrench',)")
         names("platforms", "platform", "platforms=('arm_pc',)")
         names("instantaneous", "invariant", "instantaneous=('single-instance', 'no-overcommit')")
+        names("joins", "platform", "joins=('edge',)")
+        changes = check_items(
+            f"{w} requirement_changes", self.requirement_changes, RequirementChange, error=err,
+            example="requirement_changes=(RequirementChange('combined', add=(Capacity('memory', 350),), remove=(Capacity('memory', 250),)),)",
+        )
+        if len(set(changes)) != len(changes):
+            raise CheckerError(f"{w} requirement_changes list a change twice: list each once")
+        object.__setattr__(self, "requirement_changes", changes)
         if self.task is not None:
             if not isinstance(self.task, Mapping):
                 raise CheckerError(f"{w} task = {self.task!r} is not a mapping: write task={{'idle': ('grasp',), 'grasp': ('idle',)}}")
@@ -171,11 +187,32 @@ class Bounds:
             if p not in platforms:
                 raise CheckerError(f"{where}: unknown platform {p!r}{suggest(p, platforms)} (known: {', '.join(platforms)})")
         self._validate_loads(where, scenario)
+        self._validate_runtime_changes(where, m)
         from desmon.deployment.invariants import INVARIANTS
 
         for n in self.instantaneous:
             if n not in INVARIANTS:
                 raise CheckerError(f"{where}: unknown invariant {n!r}{suggest(n, INVARIANTS)} in instantaneous (invariants: {', '.join(INVARIANTS)})")
+
+    def _validate_runtime_changes(self, where: str, m: SystemModel) -> None:
+        """``joins`` are exactly the model's on-demand platforms; requirement changes name what the model has."""
+        on_demand = [p.name for p in m.platforms if p.on_demand]
+        for p in self.joins:
+            if p not in on_demand:
+                known = [q.name for q in m.platforms]
+                if p not in known:
+                    raise CheckerError(f"{where}: joins names unknown platform {p!r}{suggest(p, known)} (known: {', '.join(known)})")
+                raise CheckerError(f"{where}: joins names {p!r}, which is not on demand: list it in platforms= (down and up) instead")
+        missing = [p for p in on_demand if p not in self.joins]
+        if missing:
+            raise CheckerError(
+                f"{where}: on-demand platform {missing[0]!r} is not in joins: list it (joins={tuple(on_demand)!r}) so the checker "
+                "lets it join and leave, or drop it from the model"
+            )
+        for ev in self.requirement_changes:
+            problem = event_problem(ev, m, self.requirement_changes)
+            if problem is not None:
+                raise CheckerError(f"{where}: requirement_changes: {problem}")
 
     def _validate_actions(self, where: str, m: SystemModel) -> None:
         """Either actions or a task; every action they name is the model's."""

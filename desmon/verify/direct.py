@@ -204,4 +204,5 @@ class DirectSearch:
             parts.setdefault(k[3], k[3]),
             parts.setdefault(k[4], k[4]),
             parts.setdefault(k[5], k[5]),
+            parts.setdefault(k[6], k[6]) if len(k) > 6 else (),
         )

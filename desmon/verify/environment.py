@@ -22,7 +22,17 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+from desmon.model.events import (
+    ActionChange,
+    DeviceFail,
+    DeviceRepair,
+    Event,
+    LoadChange,
+    PlatformDown,
+    PlatformJoin,
+    PlatformLeave,
+    PlatformUp,
+)
 from desmon.verify.state import Key
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -31,14 +41,25 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["EVENT_KINDS", "enabled_events"]
 
 #: the kinds of environment events (:func:`desmon.model.events.event_kind`), in report order
-EVENT_KINDS = ("action", "device_fail", "device_repair", "platform_down", "platform_up", "load")
+EVENT_KINDS = (
+    "action", "device_fail", "device_repair", "platform_down", "platform_up", "load",
+    "platform_join", "platform_leave", "requirements",
+)
 
 
 def enabled_events(b: "Bounds", key: Key) -> list[Event]:
     """Every environment event ``b`` enables in state ``key``, in exploration order:
-    action changes, device failures and repairs, platforms down and up, load steps."""
-    can_fail = b.max_failures is None or len(key.failed) + len(key.down) < b.max_failures
-    return [*_action_events(b, key), *_device_events(b, key, can_fail), *_platform_events(b, key, can_fail), *_load_events(b, key)]
+    action changes, device failures and repairs, platforms down and up, load steps, then
+    on-demand platforms joining or leaving and requirement changes (absent on-demand
+    platforms are not failures)."""
+    down = len(key.down) - sum(1 for p in b.joins if p in key.down) if b.joins else len(key.down)
+    can_fail = b.max_failures is None or len(key.failed) + down < b.max_failures
+    out = [*_action_events(b, key), *_device_events(b, key, can_fail), *_platform_events(b, key, can_fail), *_load_events(b, key)]
+    if b.joins:
+        out += [PlatformJoin(p) if p in key.down else PlatformLeave(p) for p in b.joins]
+    if b.requirement_changes:
+        out += b.requirement_changes
+    return out
 
 
 def _action_events(b: "Bounds", key: Key) -> list[Event]:

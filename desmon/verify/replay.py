@@ -83,7 +83,9 @@ class RepositoryRun:
         failed = tuple(sorted(d["name"] for _n, d in self.repo.nodes(L.DEVICE) if not d["working"]))
         down = tuple(sorted(d["name"] for _n, d in self.repo.nodes(L.PLATFORM) if not d["up"]))
         loads = tuple((d["name"], tuple(sorted(d["load"].items()))) for _n, d in self.repo.nodes(L.PLATFORM) if d["load"])
-        return Key(self.query.context(), failed, down, loads, self.query.deployments(), tuple(sorted(self.core.standing)))
+        declared = {s.graph: s.requirements for s in self.scenario.model.specs}
+        specs = tuple(sorted((s.graph, s.requirements) for s in self.core.specs() if s.requirements != declared[s.graph]))
+        return Key(self.query.context(), failed, down, loads, self.query.deployments(), tuple(sorted(self.core.standing)), specs)
 
     def view(self) -> Any:
         """The SystemView of every invariant, ``history`` included (running list, stops, edges)."""
@@ -91,4 +93,10 @@ class RepositoryRun:
         return self.core.view(running=tuple(sorted(self.control.running)), stops=self.control.stops, history=history)
 
     def violations(self, invariants=None):  # type: ignore[no-untyped-def]
-        return check_invariants(self.view(), invariants)
+        """The invariants on the current view, plus the last reaction's moves that broke
+        ``no-flapping`` (its transition half, noted by the core)."""
+        out = check_invariants(self.view(), invariants)
+        if self.core.unjustified and (invariants is None or any(i.name == "no-flapping" for i in invariants)):
+            if not any(name == "no-flapping" for name, _m in out):
+                out.append(("no-flapping", self.core.unjustified[0]))
+        return out

@@ -29,6 +29,7 @@ from typing import Callable, NamedTuple
 from desmon.deployment.control import ControlRules
 from desmon.deployment.invariants import SystemView, Invariant
 from desmon.errors import QueryError
+from desmon.model.events import RequirementChange
 from desmon.model.requirements import DeploymentSpec, Requirement
 from desmon.model.system import PlatformState, SystemModel, with_load
 
@@ -49,6 +50,9 @@ class Key(NamedTuple):
     loads: tuple[tuple[str, tuple[tuple[str, float], ...]], ...]
     deployments: tuple[tuple[str, str], ...]  # sorted (graph, platform)
     standing: tuple[str, ...]
+    # (graph, current requirements) of every graph whose requirements a RequirementChange
+    # made differ from the declared ones, sorted by graph; () while none did
+    specs: tuple[tuple[str, tuple], ...] = ()
 
 
 _new_tuple = tuple.__new__
@@ -115,6 +119,10 @@ class StateStore:
         self.down: tuple[str, ...] = ()
         self.loads: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
         self.deployed: tuple[tuple[str, str], ...] = ()
+        #: the key's ``specs`` part: requirements changed at run time (see :meth:`change_requirements`)
+        self.specs_now: tuple[tuple[str, tuple], ...] = ()
+        self._spec_memo: dict[tuple[str, tuple], DeploymentSpec] = {}
+        self._specs_memo: dict[tuple, tuple[DeploymentSpec, ...]] = {}
         self._states: tuple[PlatformState, ...] | None = None
         self._touched: set[str] = set()
         self.perception_graph = _Deployments({g: g for g in self._spec}).__getitem__  # type: ignore[method-assign]
@@ -135,15 +143,20 @@ class StateStore:
         self.down = key.down
         self.loads = key.loads
         self.deployed = key.deployments
+        self.specs_now = key.specs
         # the key's platform states are usually memoised (the checker evaluated the
         # invariants on it when it was new): take them now, so that the event's
         # mutation only recomputes the platform it touches
-        self._states = self._states_memo.get((key.failed, key.down, key.loads, key.deployments))
+        self._states = self._states_memo.get(
+            (key.failed, key.down, key.loads, key.deployments, key.specs) if key.specs else (key.failed, key.down, key.loads, key.deployments)
+        )
         self._touched.clear()
         self._set_index()
 
     def facts(self) -> tuple:
         """The parts every platform state derives from (a memo key)."""
+        if self.specs_now:
+            return (self.failed, self.down, self.loads, self.deployed, self.specs_now)
         return (self.failed, self.down, self.loads, self.deployed)
 
     def key(self, standing: frozenset[str] | tuple[str, ...] = ()) -> Key:
@@ -155,7 +168,7 @@ class StateStore:
             s = tuple(sorted(standing))
         # tuple.__new__ builds the same Key (fields in declaration order) without the
         # NamedTuple's Python-level __new__: this runs once per checker transition
-        return _new_tuple(Key, (self.ctx, self.failed, self.down, self.loads, self.deployed, s))
+        return _new_tuple(Key, (self.ctx, self.failed, self.down, self.loads, self.deployed, s, self.specs_now))
 
     def begin(self, prefix: tuple[bool, ...] = ()) -> None:
         """Start executing a reaction: starts follow ``prefix``, then succeed."""
@@ -164,15 +177,37 @@ class StateStore:
         self.instant = None
 
     # -- QueryPort ----------------------------------------------------------------------
+    def _current(self, graph: str) -> DeploymentSpec | None:
+        """The specification of ``graph`` with its current requirements."""
+        declared = self._spec.get(graph)
+        if declared is None or not self.specs_now:
+            return declared
+        for g, reqs in self.specs_now:
+            if g == graph:
+                spec = self._spec_memo.get((g, reqs))
+                if spec is None:
+                    spec = self._spec_memo[(g, reqs)] = DeploymentSpec(g, reqs, declared.fixed_platform, declared.rebalance)
+                return spec
+        return declared
+
+    def current_specs(self) -> tuple[DeploymentSpec, ...]:
+        """Every specification of the model with its current requirements (memoised)."""
+        if not self.specs_now:
+            return self.model.specs
+        out = self._specs_memo.get(self.specs_now)
+        if out is None:
+            out = self._specs_memo[self.specs_now] = tuple(self._current(s.graph) or s for s in self.model.specs)
+        return out
+
     def deployment_information(self, graph: str) -> DeploymentSpec | None:
-        return self._spec.get(graph) if graph in self._graphs else None
+        return self._current(graph) if graph in self._graphs else None
 
     def fixed_platform(self, spec: DeploymentSpec) -> str | None:
         s = self._spec.get(spec.graph)
         return s.fixed_platform if s is not None else None
 
     def constraints(self, spec: DeploymentSpec) -> tuple[Requirement, ...]:
-        s = self._spec.get(spec.graph)
+        s = self._current(spec.graph)
         return s.requirements if s is not None else ()
 
     def _load_of(self, platform: str) -> tuple[tuple[str, float], ...]:
@@ -189,9 +224,12 @@ class StateStore:
         devices = tuple(d for d in devs if d.name not in failed) if failed else devs
         load = self._load_of(platform) if self.loads else ()
         graphs = self.active_deployments(platform)  # sorted by graph, as the repository's
-        deployed = self._use_memo.get(graphs)
-        if deployed is None:
-            deployed = self._use_memo[graphs] = tuple((g, self._use.get(g, ())) for g in graphs)
+        if self.specs_now:
+            deployed = tuple((g, self._consumption(g)) for g in graphs)
+        else:
+            deployed = self._use_memo.get(graphs)
+            if deployed is None:
+                deployed = self._use_memo[graphs] = tuple((g, self._use.get(g, ())) for g in graphs)
         up = platform not in self.down
         ck = (platform, up, devices, load, deployed)
         st = self._ps_cache.get(ck)
@@ -201,6 +239,10 @@ class StateStore:
             st = self.state_class(self._platform[platform], up, devices, load, deployed)
             self._ps_cache[ck] = st
         return st
+
+    def _consumption(self, graph: str) -> tuple:
+        spec = self._current(graph)
+        return spec.consumption() if spec is not None else ()
 
     def platform_states(self) -> tuple[PlatformState, ...]:
         """Every platform's state, in declaration order.
@@ -214,7 +256,7 @@ class StateStore:
         states = self._states
         if states is not None and not self._touched:
             return states
-        fk = (self.failed, self.down, self.loads, self.deployed)
+        fk = self.facts()
         memo = self._states_memo
         known = memo.get(fk)
         if known is not None:
@@ -323,6 +365,26 @@ class StateStore:
         self._touch(platform)
         return True
 
+    def change_requirements(self, change: RequirementChange) -> tuple[str, ...] | None:
+        """Apply a requirement change: the key's ``specs`` part follows (a graph whose
+        requirements are the declared ones again has no entry). Returns the platforms
+        the graph is deployed on (their states change with its consumption), or None."""
+        declared = self._spec.get(change.graph)
+        if declared is None:
+            raise QueryError(f"{change}: no deployment specification for {change.graph!r} in the repository")
+        current = self._current(change.graph)
+        assert current is not None
+        new = change.apply(current.requirements)
+        if new == current.requirements:
+            return None
+        others = tuple((g, r) for g, r in self.specs_now if g != change.graph)
+        mine = () if new == declared.requirements else ((change.graph, new),)
+        self.specs_now = tuple(sorted(others + mine))
+        hosts = self.deployed_on(change.graph)
+        for p in self.platform_names:  # every platform's deployed shares may read the graph's consumption
+            self._touch(p)
+        return hosts
+
     # -- ControlPort (the Control rules; starts they allow follow the outcome prefix) ------
     def start(self, graph: str, platform: str) -> bool:
         pair = (graph, platform)
@@ -370,4 +432,4 @@ class StateStore:
 
 
 def view_from(store: StateStore, standing: frozenset[str], slots: tuple[tuple[str, ...], ...]) -> SystemView:
-    return SystemView(store.platform_states(), store.model.specs, standing, slots)
+    return SystemView(store.platform_states(), store.current_specs(), standing, slots)

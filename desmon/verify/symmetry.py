@@ -100,6 +100,11 @@ class Symmetry:
             self._refuse(
                 f"the {c.deployer_name} deployer can run a graph on two platforms and keeps one by name, a tie-break that is not symmetric"
             )
+        if any(spec.preferences for spec in c.model.specs) or c.bounds.joins or c.bounds.requirement_changes:
+            self._refuse(
+                "the model has preferences, joining platforms or requirement changes; the soundness argument of the "
+                "reduction covers neither score ties nor platforms that come and go"
+            )
         order = [p.name for p in c.model.platforms]
         seen: set[str] = set()
         for grp in self.groups:
@@ -119,7 +124,7 @@ class Symmetry:
         """(1) identical platforms and devices, no deployment fixed to one of them."""
         model = self.checker.model
         plats = [model.platform(p) for p in grp]
-        sig = {(p.capacities, p.attributes, p.properties, p.preference) for p in plats}
+        sig = {(p.capacities, p.attributes, p.properties, p.preference, p.on_demand, p.startup_s) for p in plats}
         if len(sig) != 1:
             self._refuse(f"{'/'.join(grp)} differ in capacities, attributes, properties or preference")
         devs = {tuple((d.kind, d.vendor, d.version) for d in model.devices_on(p)) for p in grp}
@@ -195,6 +200,7 @@ class Symmetry:
             tuple(sorted(((P(p), items) for p, items in key.loads), key=lambda x: self._order[x[0]])),
             tuple(sorted((g, P(p)) for g, p in key.deployments)),
             key.standing,
+            key.specs,
         )
 
     def canon(self, key: Key) -> Key:

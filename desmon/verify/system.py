@@ -95,6 +95,7 @@ class TransitionSystem:
                 f"DEPLOYMENT_HISTORY edges); it is checked by the simulation audit (desmon run) and desmon fuzz"
             )
         self.invariants = tuple(i for i in requested if i.name not in NOT_CHECKED)
+        self._checked = frozenset(i.name for i in self.invariants)
         #: the invariants of a default (all) run that the checker leaves to the audit and fuzzer
         self.not_checked = () if invariants else tuple(n for n in NOT_CHECKED)
 
@@ -117,7 +118,8 @@ class TransitionSystem:
     def initial(self) -> Key:
         """The scenario's initial facts, then the system's first reaction (no start fails)."""
         st = self.store
-        st.load(Key(None, (), (), (), (), ()))
+        absent = tuple(sorted(p.name for p in self.model.platforms if p.on_demand))  # until they join
+        st.load(Key(None, (), absent, (), (), ()))
         self.core.standing = frozenset()
         st.begin(())
         initial_reaction(self.core, self.scenario, self.bounds, st)  # the same as RepositoryRun's
@@ -128,7 +130,7 @@ class TransitionSystem:
 
     def enabled_kinds(self, key: Key) -> tuple[tuple[Event, str], ...]:
         """(event, kind) of every event enabled in ``key``; memoised on the parts it reads."""
-        mk = (key.context, key.failed, key.down, key.loads)
+        mk = (key.context, key.failed, key.down, key.loads, key.specs)
         out = self._enabled_memo.get(mk)
         if out is None:
             pairs = self._event_pairs
@@ -148,10 +150,10 @@ class TransitionSystem:
         """The instantaneous invariants on the store's current facts (memoised on them)."""
         st = self.store
         standing = self.core.standing
-        mk = (st.failed, st.down, st.loads, st.deployed, standing, st.ctx)
+        mk = (st.failed, st.down, st.loads, st.deployed, standing, st.ctx, st.specs_now)
         r = self._instant_memo.get(mk)
         if r is None:
-            view = SystemView(st.platform_states(), self.model.specs, standing, self.slots(st.ctx))
+            view = self.view(standing, st.ctx)
             if len(self._instant_memo) > MEMO_LIMIT:
                 self._instant_memo.clear()
             r = self._instant_memo[mk] = check_invariants(view, self.instant)
@@ -170,6 +172,8 @@ class TransitionSystem:
         core.standing = self._standing(key.standing)
         st.begin(prefix)
         _stim, log = core.step(event, st)
+        if core.unjustified and st.instant is None and "no-flapping" in self._checked:
+            st.instant = ("no-flapping", core.unjustified[0], "the reaction")
         return st.key(core.standing), tuple(st.outcomes), log, st.instant
 
     def successors(self, key: Key, event: Event) -> Iterator[tuple[tuple[int, ...], Key, Any, tuple[str, str, str] | None]]:
@@ -191,11 +195,15 @@ class TransitionSystem:
                     pending.append(outcomes[:i] + (False,))
             yield fails, nkey, log, instant
 
-    def violations(self, key: Key) -> list[tuple[str, str]]:
+    def view(self, standing: frozenset[str], context: str | None) -> SystemView:
+        """The invariants' view of the store's current state (current specifications, and
+        the deployer's reaction for ``no-flapping``)."""
         st = self.store
-        st.load(key)
-        view = SystemView(st.platform_states(), self.model.specs, self._standing(key.standing), self.slots(key.context))
-        return check_invariants(view, self.invariants)
+        return SystemView(st.platform_states(), st.current_specs(), standing, self.slots(context), react=self.core.deployer.react)
+
+    def violations(self, key: Key) -> list[tuple[str, str]]:
+        self.store.load(key)
+        return check_invariants(self.view(self._standing(key.standing), key.context), self.invariants)
 
     # -- the transitions as a search loop consumes them ----------------------------------
     def expand(self, key: Key, known: "Container[Key]") -> list[list[Segment]]:
@@ -211,7 +219,6 @@ class TransitionSystem:
         """
         st = self.store
         canon = self.symmetry.canon if self.symmetry is not None else None
-        specs = self.model.specs
         invariants = self.invariants
         fresh: set[Key] = set()
         out: list[list[Segment]] = []
@@ -238,7 +245,7 @@ class TransitionSystem:
                 else:
                     fresh.add(ckey)
                     st.load(ckey)
-                    view = SystemView(st.platform_states(), specs, self._standing(ckey.standing), self.slots(ckey.context))
+                    view = self.view(self._standing(ckey.standing), ckey.context)
                     rec = (fails, ckey, nkey != key, tuple(here), repaired, tuple(check_invariants(view, invariants)))
                 segments.append((n, moved, tuple(names), rec))
                 n = moved = 0

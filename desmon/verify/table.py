@@ -500,6 +500,10 @@ def table_unsupported(checker: TransitionSystem) -> str | None:
     if checker.symmetry is not None:
         return "symmetry reduction runs on the direct engine"
     b = checker.bounds
+    if b.joins or b.requirement_changes:
+        return "the table engine does not encode platforms joining or requirement changes yet"
+    if any(spec.preferences or spec.rebalance is not None for spec in checker.model.specs):
+        return "the table engine does not replay preference scores yet"
     where = {d.name: d.platform for d in checker.model.devices}
     for p in checker.model.platforms:
         k = sum(1 for d in b.devices if where[d] == p.name)
