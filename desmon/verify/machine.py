@@ -72,6 +72,12 @@ def make_machine(scenario: Scenario, deployer: str | Deployer = "desmon", bounds
 
             self._do(data, (LoadChange,))
 
+        @rule(data=st.data())
+        def runtime_change(self, data) -> None:  # type: ignore[no-untyped-def]
+            from desmon.model.events import PlatformJoin, PlatformLeave, RequirementChange
+
+            self._do(data, (PlatformJoin, PlatformLeave, RequirementChange))
+
     def _make_inv(name: str):  # type: ignore[no-untyped-def]
         from desmon.deployment.invariants import INVARIANTS
 

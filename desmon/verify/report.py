@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+from desmon.model.events import (
+    ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp, RequirementChange,
+)
 from desmon.verify.search import NOT_CHECKED, CheckResult
 from desmon.verify.trace import Counterexample, Step
 from desmon.verify.state import Key
@@ -69,6 +71,13 @@ def event_to_json(e: Event | None) -> dict[str, Any] | None:
         return {"kind": "device_fail" if isinstance(e, DeviceFail) else "device_repair", "device": e.device}
     if isinstance(e, (PlatformDown, PlatformUp)):
         return {"kind": "platform_down" if isinstance(e, PlatformDown) else "platform_up", "platform": e.platform}
+    if isinstance(e, (PlatformJoin, PlatformLeave)):
+        return {"kind": "platform_join" if isinstance(e, PlatformJoin) else "platform_leave", "platform": e.platform}
+    if isinstance(e, RequirementChange):
+        return {
+            "kind": "requirements", "graph": e.graph, "label": e.label,
+            "add": [r.describe() for r in e.add], "remove": [r.describe() for r in e.remove],
+        }
     return {"kind": "load", "platform": e.platform, "amount": e.amount, "resource": e.resource}
 
 
@@ -84,6 +93,15 @@ def event_from_json(d: dict[str, Any]) -> Event:
         return PlatformDown(d["platform"])
     if k == "platform_up":
         return PlatformUp(d["platform"])
+    if k in ("platform_join", "platform_leave"):
+        return (PlatformJoin if k == "platform_join" else PlatformLeave)(d["platform"])
+    if k == "requirements":
+        from desmon.errors import CheckerError
+
+        raise CheckerError(
+            f"a requirement change of {d.get('graph')!r} is written in the JSON by its description only: take the event "
+            "from the scenario's Bounds.requirement_changes (the --pytest file replays it exactly)"
+        )
     return LoadChange(d["platform"], d["amount"], d.get("resource", "memory"))
 
 
@@ -95,6 +113,7 @@ def key_to_json(k: Key) -> dict[str, Any]:
         "loads": {p: dict(items) for p, items in k.loads},
         "deployments": [list(d) for d in k.deployments],
         "standing_errors": list(k.standing),
+        **({"changed_requirements": {g: [r.describe() for r in reqs] for g, reqs in k.specs}} if k.specs else {}),
     }
 
 
@@ -148,7 +167,10 @@ FAILS fail. The test asserts the invariant is violated where the checker said.
 
 from desmon.deployment.invariants import SystemView, check_invariants, get_invariants
 from desmon.loader import load_scenario
-from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformUp
+from desmon.model.events import (
+    ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp, RequirementChange,
+)
+from desmon.model.requirements import Attribute, Capacity, Maximum, Minimum, Option, Preference, Quantity, Selection
 from desmon.verify import RepositoryRun
 from desmon.verify.deployers import resolve_deployer
 
@@ -179,6 +201,8 @@ def replay(steps, after_command=None):
     views = []
     for event, fails in steps:
         run.step(event, fails)
+        if after_command is not None:
+            after_command(run)  # the reaction's moves are judged once it is complete, too
         views.append(run.view())
     return views
 '''
@@ -230,7 +254,10 @@ def test_{name}():
     bad = []
 
     def audit(run):
-        view = SystemView(run.query.platform_states(), run.scenario.model.specs, frozenset(), ())
+        if {invariant!r} == "no-flapping":
+            bad.extend(run.violations(get_invariants([{invariant!r}])))
+            return
+        view = SystemView(run.query.platform_states(), run.core.specs(), frozenset(), ())
         bad.extend(check_invariants(view, get_invariants([{invariant!r}])))
 
     replay(steps, after_command=audit)

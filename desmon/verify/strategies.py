@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from hypothesis import strategies as st
 
-from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformUp
+from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds, bounds_of
 
@@ -59,6 +59,10 @@ def events(scenario: Scenario, bounds: Bounds | None = None) -> st.SearchStrateg
         parts.append(
             st.sampled_from(sorted(b.loads)).flatmap(lambda p: st.sampled_from(b.loads[p]).map(lambda a, p=p: LoadChange(p, a, b.load_resource)))
         )
+    if b.joins:
+        parts.append(st.sampled_from(b.joins).flatmap(lambda p: st.sampled_from((PlatformJoin(p), PlatformLeave(p)))))
+    if b.requirement_changes:
+        parts.append(st.sampled_from(b.requirement_changes))
     if not parts:
         return st.nothing()
     return st.one_of(parts)

@@ -94,6 +94,8 @@ def describe_state(key: Key) -> tuple[str, ...]:
         out.append("loads: " + ", ".join(loads))
     if key.standing:
         out.append("errors standing for: " + ", ".join(key.standing))
+    for g, reqs in key.specs:
+        out.append(f"requirements of {g}: " + ", ".join(r.describe() for r in reqs))
     return tuple(out)
 
 
@@ -112,6 +114,11 @@ def _environment_changes(prev: Key, key: Key) -> list[str]:
     out += [f"+HAS_DEVICE {d}" for d in sorted(set(prev.failed) - set(key.failed))]
     out += [f"{p} down" for p in sorted(set(key.down) - set(prev.down))]
     out += [f"{p} up" for p in sorted(set(prev.down) - set(key.down))]
+    if prev.specs != key.specs:
+        now = dict(key.specs)
+        for g in sorted(set(now) | set(dict(prev.specs))):
+            if now.get(g) != dict(prev.specs).get(g):
+                out.append(f"REQUIRES of {g} changed" + (" (back to the declared ones)" if g not in now else ""))
     return out
 
 
