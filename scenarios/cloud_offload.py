@@ -20,6 +20,8 @@ deployer re-checks like any fact).
 Parameters: ``lease`` (lease the edge server when nothing fits, default True),
 ``hours`` (length of the shift, default 2).
 
+    desmon replay scenarios/cloud_offload.py              # the scripted walk-through, step by step
+    desmon explain scenarios/cloud_offload.py combined_slip_detector --at leased
     desmon run scenarios/cloud_offload.py                 # with the lease
     desmon run scenarios/cloud_offload.py -p lease=False  # without: exposure rises
     desmon verify scenarios/cloud_offload.py              # joins and leaves in every order: HOLDS
@@ -29,10 +31,10 @@ from __future__ import annotations
 
 from desmon.model import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
 from desmon.model.cob3 import COMBINED, FORCE, LOADS, PADS, TACTILE, care_o_bot
-from desmon.model.events import LoadChange, RequirementChange
+from desmon.model.events import ActionChange, LoadChange, PlatformJoin, PlatformLeave, RequirementChange
 from desmon.model.requirements import Capacity
 from desmon.model.params import parameters
-from desmon.model.scenario import Scenario
+from desmon.model.scenario import Scenario, TimedEvent
 from desmon.sim.world import Lease, LoadWalk, RandomChanges, Step, World
 from desmon.verify.bounds import Bounds, levels
 
@@ -63,6 +65,14 @@ scenario = Scenario(
     description="the Care-O-bot leases an edge server when its own PCs are full",
     model=robot.build(),
     initial=tuple(LoadChange(pc, mb) for pc, mb in LOADS.items()),
+    timeline=(  # desmon replay / explain: one grasp, the torso fills up, the edge server is leased, the torso empties
+        TimedEvent(0.0, ActionChange(GRASP), "t0"),
+        TimedEvent(5.0, LoadChange("torso_pc", 850), "full"),
+        TimedEvent(25.0, PlatformJoin("edge"), "leased"),
+        TimedEvent(60.0, LoadChange("torso_pc", 600), "room"),
+        TimedEvent(90.0, FAST, "fast"),
+        TimedEvent(200.0, PlatformLeave("edge"), "returned"),
+    ),
     world=World(
         task=(Step(IDLE, 20.0), Step(GRASP, 2.0), Step(HOLD, 3.0), Step(MOVE_BASE, 30.0), Step(RELEASE, 2.0)),
         repeat=True,
