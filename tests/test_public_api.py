@@ -33,25 +33,3 @@ def test_usage_errors_are_catchable_as_builtins():
 def test_the_package_ships_a_py_typed_marker(root):
     assert (root / "desmon" / "py.typed").exists()
 
-
-def test_lower_layers_never_import_upper_layers(root):
-    order = {"errors": 0, "model": 1, "repository": 2, "detectors": 2, "deployment": 3, "sim": 4, "verify": 4, "viz": 3.5, "sweep": 4.5, "cli": 5}
-    import ast
-
-    for path in (root / "desmon").rglob("*.py"):
-        rel = path.relative_to(root / "desmon")
-        top = rel.parts[0].removesuffix(".py")
-        if top not in order:
-            continue
-        tree = ast.parse(path.read_text())
-        for node in ast.walk(tree):
-            names = []
-            if isinstance(node, ast.ImportFrom) and node.module:
-                names = [node.module]
-            elif isinstance(node, ast.Import):
-                names = [a.name for a in node.names]
-            for n in names:
-                parts = n.split(".")
-                if parts[0] == "desmon" and len(parts) > 1 and parts[1] in order:
-                    dep = parts[1]
-                    assert order[dep] < order[top] or dep == top, f"{rel} imports {n}"

@@ -128,8 +128,15 @@ def ensure_deployed(g: str, q: QueryPort, *, make_before_break: bool = False) ->
 Survey = tuple[DeploymentSpec | None, tuple[str, ...], str | None, list[str]]
 
 
-def _survey(g: str, q: QueryPort) -> Survey:
-    """The facts :func:`ensure_deployed` decides on (reads only, no command)."""
+def _survey(g: str, q: QueryPort, triggers: frozenset[str] | None = None) -> Survey:
+    """The facts :func:`ensure_deployed` decides on (reads only, no command).
+
+    ``triggers`` are the platforms whose facts changed in this reaction (None: the
+    context changed, or no restriction). A valid deployment of a rebalancing graph moves
+    only when the best platform beats its own by more than ``min_gain`` *and* one of the
+    two is among the triggers: a move answers a change, so with nothing changed nothing
+    moves, and a move whose start failed is retried at the next change of either
+    platform, not at every reaction (the rule upgrades follow too)."""
     spec = q.deployment_information(g)
     if spec is None:
         return None, (), None, []
@@ -142,7 +149,12 @@ def _survey(g: str, q: QueryPort) -> Survey:
             keep = p  # the first running instance on an acceptable platform
         elif p != keep:
             stale.append(p)
-    if keep is not None and spec.rebalance is not None and validity.gain(keep) > spec.rebalance:
+    if (
+        keep is not None
+        and spec.rebalance is not None
+        and (triggers is None or keep in triggers or (acceptable and acceptable[0] in triggers))
+        and validity.gain(keep) > spec.rebalance
+    ):
         # rebalancing with hysteresis: a better platform beats this one by more than the
         # threshold, so the instance moves (stopped first, then placed best-first)
         stale.insert(0, keep)
@@ -268,7 +280,9 @@ def _fits_if_freed(g: str, spec: DeploymentSpec, q: QueryPort, freed: list[str])
     return check_validity(q.constraints(spec), states, (g, *freed), reasons=False).acceptable
 
 
-def _recheck(q: QueryPort, changed: tuple[str, ...], placed: dict[str, bool], make_before_break: bool) -> Reaction:
+def _recheck(
+    q: QueryPort, changed: tuple[str, ...], placed: dict[str, bool], make_before_break: bool, triggers: frozenset[str] | None = None
+) -> Reaction:
     """Corrected Algorithm 2: every deployment on a ``changed`` platform is kept if still
     valid, else migrated, else stopped with an error; each graph's outcome goes to ``placed``.
 
@@ -279,7 +293,7 @@ def _recheck(q: QueryPort, changed: tuple[str, ...], placed: dict[str, bool], ma
         for d in q.active_deployments(p):
             g = q.perception_graph(d)
             if g not in placed:
-                survey = _survey(g, q)
+                survey = _survey(g, q, triggers)
                 placed[g] = True if _kept(survey) else (yield from _act_on(g, q, survey, make_before_break))
 
 
@@ -290,6 +304,7 @@ def _place_slots(
     placed: dict[str, bool],
     make_before_break: bool,
     upgrading: bool,
+    triggers: frozenset[str] | None = None,
 ) -> Generator[Command, "bool | None", set[str]]:
     """Corrected Algorithm 1: place one graph of every slot (the first alternative that
     can be placed, each graph decided once per reaction); return the graphs chosen."""
@@ -298,7 +313,7 @@ def _place_slots(
         for i, g in enumerate(slot):
             ok = placed.get(g)
             if ok is None:
-                survey = _survey(g, q)
+                survey = _survey(g, q, triggers)
                 spec = survey[0]
                 if upgrading and spec is not None and not survey[1] and i + 1 < len(slot):
                     survey = yield from _upgrade(g, spec, slot[i + 1:], survey, q, changed, placed)
@@ -363,14 +378,15 @@ def make_desmon_react(
         q: QueryPort, slots: tuple[tuple[str, ...], ...], changed: tuple[str, ...], context_changed: bool
     ) -> Reaction:
         placed: dict[str, bool] = {}  # each graph is decided once per reaction
+        triggers = None if context_changed else frozenset(changed)  # what a rebalancing move may answer
         if changed:
-            yield from _recheck(q, changed, placed, make_before_break)
+            yield from _recheck(q, changed, placed, make_before_break, triggers)
         wanted = _wanted_by(slots)
         # Free what the context no longer wants first: its capacity may be needed.
         unwanted = [g for g in _active_graphs(q) if g not in wanted]
         if unwanted:
             yield from _stop_graphs(unwanted, q)
-        chosen = yield from _place_slots(q, slots, changed, placed, make_before_break, upgrading)
+        chosen = yield from _place_slots(q, slots, changed, placed, make_before_break, upgrading, triggers)
         # Fallbacks that are no longer needed (a better alternative is placed again).
         unneeded = [g for g in _active_graphs(q) if g in wanted and g not in chosen]
         if unneeded:
