@@ -24,6 +24,7 @@ import uuid
 from dataclasses import dataclass, field
 from typing import IO, Any, Callable, Iterator, Sequence
 
+from desmon.progress import StatusLine
 from desmon.sweep.grid import Run, SweepError
 from desmon.sweep.jobs import EXIT_KILLED, JobSpec, run_point
 
@@ -67,7 +68,7 @@ class Progress:
     every: float = 0.5
     t0: float = field(default_factory=time.perf_counter)
     _last: float = -math.inf
-    _printed: int = 0
+    _line: StatusLine | None = None
     _counted: int = 0  # runs done in this process (the rate and ETA are computed from them)
 
     def update(self, failed: bool) -> None:
@@ -89,13 +90,13 @@ class Progress:
 
     def show(self, now: float) -> None:
         line = self.line(now)
-        print("\r" + line.ljust(self._printed), end="", file=self.out, flush=True)
-        self._printed = max(len(line), 1)
+        if self._line is None:
+            self._line = StatusLine(self.out)
+        self._line.show(line)
 
     def close(self) -> None:
-        if self._printed:
-            print("", file=self.out, flush=True)
-            self._printed = 0
+        if self._line is not None:
+            self._line.close()
 
 
 def _clock(seconds: float) -> str:

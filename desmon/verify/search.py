@@ -33,6 +33,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence, TextIO
 
+from desmon.progress import StatusLine
 from desmon.verify.state import Key
 from desmon.verify.trace import Counterexample, Label
 
@@ -203,7 +204,7 @@ class Budget:
         self.status: Callable[[], tuple[int, int, int]] = lambda: (0, 0, 0)
         self._next_look = t0
         self._last_progress = -math.inf
-        self._printed = 0  # length of the progress line on screen (0: none)
+        self._line = StatusLine(self.out)
 
     def spent(self) -> str:
         """Why the search must stop now, or "" to go on."""
@@ -251,14 +252,11 @@ class Budget:
         memory = f"{self.memory:,.0f} MB" + (f" of {self.max_memory:g}" if self.max_memory is not None else "")
         clock = f"{elapsed + self.before:,.0f}s" + (f" of {self.timeout:g}s" if self.timeout is not None else "")
         line = f"  {states:,} states  {rate:,.0f} states/s  depth {depth}  {transitions:,} transitions  memory {memory}  time {clock}"
-        print("\r" + line.ljust(self._printed), end="", file=self.out, flush=True)
-        self._printed = max(len(line), 1)
+        self._line.show(line)
 
     def close(self) -> None:
         """End the progress line (if one was shown) before the report."""
-        if self._printed:
-            print("", file=self.out, flush=True)
-            self._printed = 0
+        self._line.close()
 
 
 @contextlib.contextmanager
