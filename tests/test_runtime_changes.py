@@ -304,3 +304,22 @@ def test_a_lease_is_refused_when_no_platform_is_on_demand():
 def test_random_changes_need_a_positive_finite_mean_interval(interval):
     with pytest.raises(ScenarioError, match="random changes mean interval"):
         RandomChanges((GROW,), mean_interval=interval)
+
+
+def test_the_control_rules_refuse_a_start_by_the_requirements_as_they_are_now():
+    """A change that adds a device requirement reaches the infrastructure too: the one
+    Control semantics reads the current specification, not the declared one."""
+    from desmon.deployment.control import repository_refusal
+    from desmon.model.requirements import Attribute
+    from desmon.repository import Repository
+    from desmon.repository.facts import change_requirements, load_model
+
+    model = robot().build()
+    repo = Repository()
+    load_model(repo, model)
+    refuse = repository_refusal(repo, model)
+    assert refuse("A", "pc2") is None  # A reads the force sensor on pc1 from anywhere
+    change_requirements(repo, RequirementChange("A", add=(Attribute("platform_has", "force_sensor"),)))
+    why = refuse("A", "pc2")
+    assert why is not None and "platform_has force_sensor" in why
+    assert refuse("A", "pc1") is None

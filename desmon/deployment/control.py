@@ -41,7 +41,7 @@ from desmon.repository.facts import ImmediateControl
 from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import Repository
 from desmon.model.platform import Device
-from desmon.model.requirements import PLATFORM_HAS, Attribute, Quantity, Requirement, Selection
+from desmon.model.requirements import PLATFORM_HAS, Attribute, DeploymentSpec, Quantity, Requirement, Selection
 from desmon.model.system import PlatformState, SystemModel
 
 __all__ = ["ControlRules", "repository_control", "repository_refusal", "StateOf", "PLATFORM_DOWN", "device_requirements"]
@@ -71,14 +71,17 @@ def device_requirements(requirements: tuple[Requirement, ...]) -> tuple[Requirem
 class ControlRules:
     """The start rules for one model (its input wiring memoised per graph and platform)."""
 
-    __slots__ = ("model", "_wiring", "_device_reqs", "_hosts")
+    __slots__ = ("model", "spec_of", "_wiring", "_device_reqs", "_hosts")
 
-    def __init__(self, model: SystemModel) -> None:
+    def __init__(self, model: SystemModel, spec_of: "Callable[[str], DeploymentSpec | None] | None" = None) -> None:
         self.model = model
+        #: the current specification of a graph (requirements may change at run time);
+        #: None reads the model's declared ones
+        self.spec_of = spec_of
         self._wiring: dict[tuple[str, str], tuple[tuple[str, tuple[Device, ...]], ...]] = {}
         #: (graph, platform) -> (kind, hosting platforms, refusal text) per input kind with devices
         self._hosts: dict[tuple[str, str], tuple[tuple[str, tuple[str, ...], str], ...]] = {}
-        self._device_reqs: dict[str, tuple[Requirement, ...]] = {}
+        self._device_reqs: dict[tuple, tuple[Requirement, ...]] = {}
 
     def input_devices(self, graph: str, platform: str) -> tuple[tuple[str, tuple[Device, ...]], ...]:
         """``(kind, devices)`` per device kind ``graph`` reads when it runs on ``platform``:
@@ -103,10 +106,11 @@ class ControlRules:
         """
         if check_platform((), state_of(platform), graph):
             return PLATFORM_DOWN
-        reqs = self._device_reqs.get(graph)
+        spec = self.spec_of(graph) if self.spec_of is not None else self.model.spec(graph)
+        declared = spec.requirements if spec is not None else ()
+        reqs = self._device_reqs.get(declared)
         if reqs is None:
-            spec = self.model.spec(graph)
-            reqs = self._device_reqs[graph] = device_requirements(spec.requirements) if spec is not None else ()
+            reqs = self._device_reqs[declared] = device_requirements(declared)
         if reqs and check_platform(reqs, state_of(platform), graph, first_only=True):
             return f"the devices of {platform} no longer meet {', '.join(r.describe() for r in reqs)}"
         inputs = self._hosts.get((graph, platform))
@@ -128,8 +132,9 @@ class ControlRules:
 
 def repository_refusal(repo: Repository, model: SystemModel) -> Callable[[str, str], str | None]:
     """``refuse(graph, platform)`` of the Control rules, reading the facts from ``repo``."""
-    rules = ControlRules(model)
-    state_of = RepositoryQuery(repo).platform_state
+    query = RepositoryQuery(repo)
+    rules = ControlRules(model, query.deployment_information)
+    state_of = query.platform_state
     return lambda graph, platform: rules.start_refusal(graph, platform, state_of)
 
 

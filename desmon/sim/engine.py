@@ -180,7 +180,7 @@ class SimWorld:
         self.host = {d.name: d.platform for d in self.model.devices}
         self._hosted = {p.name: self.model.devices_on(p.name) for p in self.model.platforms}
         #: the one Control semantics (desmon.deployment.control), on the physical facts
-        self.rules = ControlRules(self.model)
+        self.rules = ControlRules(self.model, self.query.deployment_information)
         self.instances: dict[tuple[str, str], Instance] = {}
         #: memory (MB) a running instance of each graph consumes: its spec's consumption()
         self.consumes = {s.graph: dict(s.consumption()).get("memory", 0.0) for s in self.model.specs}

@@ -103,7 +103,7 @@ class StateStore:
         self._graphs = {g.name for g in model.graphs}
         self._use = {s.graph: s.consumption() for s in model.specs}
         self._ps_cache: dict[tuple, PlatformState] = {}
-        self.rules = ControlRules(model)
+        self.rules = ControlRules(model, self._current)
         #: why the last start was refused by the Control rules ("" when it was not)
         self.refused = ""
         self._use_memo: dict[tuple[str, ...], tuple] = {}
