@@ -50,6 +50,8 @@ METRICS: dict[str, tuple[str, ...]] = {
     ),
 }
 _RUN_RENAMED = {"exposure_s": "unmonitored_exposure_s"}
+#: run metrics present only when the world has run-time changes or a lease
+_RUNTIME_CHANGES = ("requirement_changes", "leases", "leased_s")
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,6 +119,9 @@ def _job_run(spec: JobSpec, run: Run) -> dict[str, Any]:
         row[f"errors_{kind}"] = n
     for platform, mb in (m.get("memory_peak_mb") or {}).items():
         row[f"memory_peak_mb_{platform}"] = mb
+    for key in _RUNTIME_CHANGES:  # only worlds with run-time changes or a lease report them
+        if key in m:
+            row[key] = m[key]
     row["exit_code"] = 1 if result.violations else 0
     return row
 
