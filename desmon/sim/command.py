@@ -161,6 +161,12 @@ def run_command(
     if args.seed is not None and args.seed < 0:
         raise ScenarioError(f"--seed {args.seed!r}: give a non-negative integer")
     scenario = load_from_args(args)
+    from desmon.sim.fleet import is_fleet
+
+    if is_fleet(scenario):  # a fleet of robots sharing edge servers: desmon.sim.fleet
+        from desmon.sim.fleet import run_fleet_command
+
+        return run_fleet_command(args, scenario, out, err)
     from desmon.sim.world import world_of
 
     horizon = float(world_of(scenario).horizon)  # declared, or derived from the timeline

@@ -1,0 +1,764 @@
+"""A fleet in the SimPy world: many robots sharing edge servers, in one environment.
+
+One :class:`Fleet` (the ``world`` of a fleet scenario) lists its robots -- each a
+:class:`~desmon.model.scenario.Scenario` of its own (model, initial facts, World) whose
+platforms, devices and graphs carry the robot's prefix (``r017.arm_pc``) -- and the
+names of the edge servers every robot's model declares (the same Platform in each).
+
+:class:`FleetWorld` runs them in one SimPy environment over one shared networkx
+:class:`~desmon.repository.store.Repository`: every robot's platforms, devices, graphs
+and requirements, the shared edge servers and one Robot node per robot. Each robot is
+an ordinary :class:`~desmon.sim.engine.SimWorld` process set (robot, context monitor,
+deployer, faults, loads) whose deployment core reads the repository through its own
+:class:`RobotView`: its own context, its own PCs and the edge servers -- never another
+robot's PCs -- and only its own deployments to stop or re-check. An edge server's
+``deployed`` facts hold every robot's detectors, so one robot's deployment there takes
+capacity every other robot's deployer sees (and the ``no-overcommit`` audit checks).
+
+Signals are off in a fleet: exposure counts a running, warmed-up valid detector as
+monitoring (as ``World(signals=False)`` does) and slips are injected, not detected.
+Edge servers never fail and are never leased (they are always there).
+
+One subscription routes the repository's changes to the robots they concern (a
+robot's context to that robot, a platform change to its owner or, for an edge server,
+to every robot); platform states are cached and re-read only when a change marks them,
+so no event copies the repository.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+import resource
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import IO, Any, Callable, Iterable
+
+import simpy
+
+from desmon.deployment.core import DeploymentCore
+from desmon.deployment.invariants import SystemView, check_invariants
+from desmon.errors import ScenarioError
+from desmon.model.checks import check_items, check_name, check_names, strict_init
+from desmon.model.platform import Platform
+from desmon.model.scenario import Scenario
+from desmon.model.requirements import Capacity, DeploymentSpec, Requirement
+from desmon.model.system import PlatformState, Rule, RuleTable, SystemModel
+from desmon.repository import labels as L
+from desmon.repository.facts import RepositoryInsert, load_model
+from desmon.repository.query import RepositoryQuery
+from desmon.repository.store import ADD_EDGE, REMOVE_EDGE, RELABEL_EDGE, UPDATE_NODE, Change, Repository, node_id
+from desmon.sim.engine import SimWorld
+from desmon.sim.trace import Trace
+from desmon.sim.world import World
+
+__all__ = [
+    "Fleet", "FleetWorld", "FleetResult", "RobotView", "simulate_fleet", "merged_model", "format_fleet_summary", "fleet_json",
+    "is_fleet", "run_fleet_command", "robot_seed", "peak_rss_mb",
+]
+
+
+@strict_init(ScenarioError)
+@dataclass(frozen=True, slots=True)
+class Fleet:
+    """A fleet: ``robots`` (one Scenario each, with a World) sharing the ``edges``.
+
+    Every robot's model declares the edge servers (the same Platform objects); every
+    other platform, device and graph name belongs to exactly one robot. All robots
+    share one horizon. Signals must be off and no robot leases on-demand platforms.
+    """
+
+    robots: tuple[Scenario, ...]
+    edges: tuple[str, ...] = ()
+    description: str = ""
+    #: an edge server admits a start only if the detector still fits when the start
+    #: completes (its own capacity check); without it two robots that decide at the same
+    #: time can over-commit it (each start is in flight, invisible to the other deployer)
+    admission: bool = True
+
+    def __post_init__(self) -> None:
+        robots = check_items("fleet: robots", self.robots, Scenario, error=ScenarioError, example="robots=(Scenario(...), ...)")
+        if not robots:
+            raise ScenarioError("fleet: robots is empty: give at least one robot Scenario")
+        object.__setattr__(self, "robots", robots)
+        edges = check_names("fleet: edges", self.edges, each="edge server", error=ScenarioError, example="('edge00', 'edge01')")
+        twice = [e for i, e in enumerate(edges) if e in edges[:i]]
+        if twice:
+            raise ScenarioError(f"fleet: edges name {twice[0]!r} twice: give each edge server once")
+        object.__setattr__(self, "edges", edges)
+        if not isinstance(self.description, str):
+            raise ScenarioError(f"fleet: description {self.description!r} is not text: give a string")
+        if not isinstance(self.admission, bool):
+            raise ScenarioError(f"fleet: admission = {self.admission!r} is not True or False: give a bool")
+        self._check_robots()
+
+    def _check_robots(self) -> None:
+        first = self.robots[0]
+        shared: dict[str, Platform] = {}
+        for e in self.edges:
+            try:
+                shared[e] = first.model.platform(e)
+            except Exception:
+                raise ScenarioError(
+                    f"fleet: edge server {e!r} is not a platform of robot {first.model.robot!r}: declare it in every robot's model"
+                ) from None
+            if shared[e].on_demand:
+                raise ScenarioError(f"fleet: edge server {e!r} is on demand: a fleet's edge servers are always there; drop on_demand")
+        owner: dict[str, str] = {}
+        robots: set[str] = set()
+        horizon: float | None = None
+        for sc in self.robots:
+            m, name = sc.model, sc.model.robot
+            if name in robots:
+                raise ScenarioError(f"fleet: two robots are named {name!r}: give each robot model its own robot= name")
+            robots.add(name)
+            if not isinstance(sc.world, World):
+                raise ScenarioError(f"fleet: robot {name!r} has no World: give its Scenario world=World(...)")
+            if sc.world.signals:
+                raise ScenarioError(f"fleet: robot {name!r} simulates signals: a fleet runs with World(signals=False)")
+            if sc.world.lease is not None:
+                raise ScenarioError(f"fleet: robot {name!r} leases platforms: a fleet shares fixed edge servers; drop World(lease=...)")
+            if horizon is None:
+                horizon = sc.world.horizon
+            elif sc.world.horizon != horizon:
+                raise ScenarioError(
+                    f"fleet: robot {name!r} has horizon {sc.world.horizon:g} s, robot {first.model.robot!r} {horizon:g} s: give every robot the same horizon"
+                )
+            for e, plat in shared.items():
+                mine = next((p for p in m.platforms if p.name == e), None)
+                if mine != plat:
+                    why = "does not declare it" if mine is None else "declares it differently"
+                    raise ScenarioError(f"fleet: robot {name!r} {why} edge server {e!r}: every robot declares the same edge servers")
+            for what, names in (
+                ("platform", [p.name for p in m.platforms if p.name not in shared]),
+                ("device", [d.name for d in m.devices]),
+                ("graph", [g.name for g in m.graphs]),
+            ):
+                for n in names:
+                    key = f"{what}:{n}"
+                    if key in owner:
+                        raise ScenarioError(
+                            f"fleet: {what} {n!r} belongs to robots {owner[key]!r} and {name!r}: prefix each robot's names (e.g. '{name}.{n}')"
+                        )
+                    owner[key] = name
+
+    @property
+    def horizon(self) -> float:
+        return float(self.robots[0].world.horizon)
+
+    def check_against(self, scenario: Scenario) -> None:
+        """As a Scenario's ``world``: the scenario's model declares every edge server."""
+        names = {p.name for p in scenario.model.platforms}
+        missing = [e for e in self.edges if e not in names]
+        if missing:
+            raise ScenarioError(f"fleet: edge server {missing[0]!r} is not a platform of scenario {scenario.name!r}'s model")
+
+
+def is_fleet(scenario: Scenario) -> bool:
+    """Is ``scenario`` a fleet scenario (its world a :class:`Fleet`)?"""
+    return isinstance(scenario.world, Fleet)
+
+
+def merged_model(robots: Iterable[SystemModel], edges: Iterable[str], robot: str = "fleet") -> SystemModel:
+    """One SystemModel of several robot models that share ``edges`` and ONE context:
+    every platform (each edge once), device, graph and specification, and per context
+    the slots of every robot. What the checker verifies for a small fleet."""
+    models = list(robots)
+    edge_set = set(edges)
+    platforms: list[Platform] = []
+    seen: set[str] = set()
+    slots: dict[str, list[tuple[str, ...]]] = {}
+    for m in models:
+        for p in m.platforms:
+            if p.name in edge_set and p.name in seen:
+                continue
+            seen.add(p.name)
+            platforms.append(p)
+        for r in m.rules.rules:
+            slots.setdefault(r.context, []).extend(r.slots)
+    return SystemModel(
+        platforms=tuple(platforms),
+        devices=tuple(d for m in models for d in m.devices),
+        graphs=tuple(g for m in models for g in m.graphs),
+        specs=tuple(s for m in models for s in m.specs),
+        rules=RuleTable(tuple(Rule(c, tuple(s)) for c, s in slots.items())),
+        robot=robot,
+        declared_actions=models[0].declared_actions if models else (),
+    )
+
+
+class _StateCache:
+    """Platform states of the shared repository, re-read only when a change marks them."""
+
+    def __init__(self, repo: Repository) -> None:
+        self.query = RepositoryQuery(repo)
+        self.states: dict[str, PlatformState] = {}
+        self.watchers: dict[str, list[RobotView]] = {}
+        self.reads = 0
+
+    def watch(self, view: "RobotView", platforms: Iterable[str]) -> None:
+        for p in platforms:
+            self.watchers.setdefault(p, []).append(view)
+
+    def mark(self, platform: str) -> None:
+        self.states.pop(platform, None)
+        for view in self.watchers.get(platform, ()):
+            view.stale()
+
+    def mark_all(self) -> None:
+        self.states.clear()
+        for views in self.watchers.values():
+            for view in views:
+                view.stale()
+
+    def state(self, platform: str) -> PlatformState:
+        s = self.states.get(platform)
+        if s is None:
+            s = self.states[platform] = self.query.platform_state(platform)
+            self.reads += 1
+        return s
+
+
+class RobotView(RepositoryQuery):
+    """One robot's Query port on the shared repository.
+
+    Its context is its own Robot node's; its platforms are its own PCs and the edge
+    servers (in that order); the deployments it lists, stops or re-checks are its own
+    graphs'. A platform's ``deployed`` facts are everyone's: capacity is shared.
+    ``platform_states`` hands out the same tuple while none of its platforms changed
+    (so :func:`~desmon.deployment.validity.validity_for` memoises on it).
+    """
+
+    def __init__(self, repo: Repository, robot: str, platforms: tuple[str, ...], graphs: tuple[str, ...], cache: _StateCache) -> None:
+        super().__init__(repo)
+        self.robot = robot
+        self.platform_names = platforms
+        self.graph_names = graphs
+        self._own_graphs = frozenset(graphs)
+        self._own_platforms = frozenset(platforms)
+        self._robot_id = node_id(L.ROBOT, robot)
+        self._cache = cache
+        self._states: tuple[PlatformState, ...] | None = None  # None: one of its platforms changed
+        self._deployed: dict[str, tuple[str, ...]] = {}  # graph -> platforms, until a DEPLOYED_ON change
+        self._specs: dict[str, DeploymentSpec | None] = {}  # graph -> spec, for one specs_version
+        self._specs_at = -1
+        cache.watch(self, platforms)
+
+    def context(self) -> str | None:
+        ctx = self.repo.successors(self._robot_id, L.IN_CONTEXT)
+        return str(self.repo.graph.nodes[ctx[0]]["name"]) if ctx else None
+
+    def platform_state(self, platform: str) -> PlatformState:
+        if platform not in self._own_platforms:
+            from desmon.errors import QueryError
+
+            raise QueryError(f"robot {self.robot!r} cannot use platform {platform!r}: it is another robot's")
+        return self._cache.state(platform)
+
+    def platform_states(self) -> tuple[PlatformState, ...]:
+        states = self._states
+        if states is None:
+            state = self._cache.state
+            states = self._states = tuple(state(p) for p in self.platform_names)
+        return states
+
+    def stale(self) -> None:
+        """One of this robot's platforms changed: re-read the states on the next call."""
+        self._states = None
+
+    def forget_deployments(self) -> None:
+        """A DEPLOYED_ON edge of one of this robot's graphs changed."""
+        self._deployed.clear()
+
+    def deployed_on(self, graph: str) -> tuple[str, ...]:
+        on = self._deployed.get(graph)
+        if on is None:
+            on = self._deployed[graph] = super().deployed_on(graph)
+        return on
+
+    def deployment_information(self, graph: str) -> DeploymentSpec | None:
+        if self._specs_at != self.repo.specs_version:
+            self._specs.clear()
+            self._specs_at = self.repo.specs_version
+        if graph not in self._specs:
+            self._specs[graph] = super().deployment_information(graph)
+        return self._specs[graph]
+
+    def constraints(self, spec: DeploymentSpec) -> tuple[Requirement, ...]:
+        current = self.deployment_information(spec.graph)
+        return current.requirements if current is not None else super().constraints(spec)
+
+    def fixed_platform(self, spec: DeploymentSpec) -> str | None:
+        current = self.deployment_information(spec.graph)
+        return current.fixed_platform if current is not None else super().fixed_platform(spec)
+
+    def active_deployments(self, platform: str) -> tuple[str, ...]:
+        return tuple(g for g in super().active_deployments(platform) if g in self._own_graphs)
+
+    def deployments(self) -> tuple[tuple[str, str], ...]:
+        return tuple(sorted((g, p) for g in self.graph_names for p in self.deployed_on(g)))
+
+    def history(self) -> tuple[tuple[str, str, float, float], ...]:
+        return tuple(r for r in super().history() if r[0] in self._own_graphs)
+
+
+class _RobotTrace(Trace):
+    """A robot's trace records, tagged with the robot, written to the fleet's file (if any)."""
+
+    def __init__(self, out: IO[str] | None, robot: str) -> None:
+        super().__init__(out, keep=False)
+        self.robot = robot
+
+    def emit(self, t: float, type_: str, **fields: Any) -> None:
+        if self.out is None:
+            self.count += 1
+            return
+        super().emit(t, type_, robot=self.robot, **fields)
+
+
+#: why an edge server refuses a start (its admission control; the deployer sees a failed start)
+EDGE_FULL = "edge server full"
+
+
+class _Admission:
+    """The one Control semantics (:class:`~desmon.deployment.control.ControlRules`) plus
+    an edge server's admission control: a start there is refused when, at the moment it
+    would run, the detector's Capacity no longer fits beside what runs there already
+    (every robot's detectors and the background load)."""
+
+    __slots__ = ("rules", "view", "edges")
+
+    def __init__(self, rules: Any, view: RobotView, edges: frozenset[str]) -> None:
+        self.rules = rules
+        self.view = view
+        self.edges = edges
+
+    def input_devices(self, graph: str, platform: str) -> Any:
+        return self.rules.input_devices(graph, platform)
+
+    def start_refusal(self, graph: str, platform: str, state_of: Any) -> str | None:
+        why = self.rules.start_refusal(graph, platform, state_of)
+        if why is not None or platform not in self.edges:
+            return why
+        spec = self.view.deployment_information(graph)
+        if spec is None:
+            return None
+        state = self.view.platform_state(platform)
+        for req in spec.requirements:
+            if isinstance(req, Capacity):
+                cap = state.platform.capacity(req.resource)
+                if cap is None:
+                    continue
+                used = state.load_of(req.resource) + sum(a for _g, a in state.used_by(req.resource, excluding=graph))
+                if used + req.amount > cap + 1e-9:
+                    return f"{EDGE_FULL}: {cap - used:g} {req.resource} free, {graph} needs {req.amount:g}"
+        return None
+
+
+class _OwnView(SystemView):
+    """A robot's SystemView: the platforms' full facts (so ``no-overcommit`` counts
+    every robot's detectors on an edge server), but as *its* deployments only those of
+    graphs it specifies (another robot's detector is not its to judge)."""
+
+    __slots__ = ()
+
+    @property
+    def deployments(self) -> tuple[tuple[str, str], ...]:
+        mine = {s.graph for s in self.specs}
+        return tuple(d for d in SystemView.deployments.fget(self) if d[0] in mine)  # type: ignore[attr-defined]
+
+
+class _Member(SimWorld):
+    """One robot of the fleet: a SimWorld on the shared environment and repository."""
+
+    def __init__(
+        self, scenario: Scenario, *, env: simpy.Environment, repo: Repository, view: RobotView, deployer: str, seed: int,
+        horizon: float, trace: Trace, edges: tuple[str, ...] = (), admission: bool = True,
+    ) -> None:
+        self.scenario = scenario
+        self.model = scenario.model
+        self.world = scenario.world
+        self.seed = seed
+        self.horizon = horizon
+        self.signals_on = False
+        self.trace = trace
+        self.progress = None
+        self.env = env
+        self.repo = repo
+        self.query = view
+        self.core = DeploymentCore(self.model, view, RepositoryInsert(repo, self.model.robot), deployer)
+        self.deployer_name = self.core.deployer.name
+        self._init_physical()
+        if admission:
+            self.rules = _Admission(self.rules, view, frozenset(edges))  # type: ignore[assignment]
+        self._init_ground_truth()
+        self._init_metrics()
+        self.pending_platforms: dict[str, None] = {}
+        self.pending_context = False
+        self.pending_specs: dict[str, None] = {}
+        self.wake: simpy.Event | None = None
+
+    def start(self) -> None:
+        """Register the robot's processes (SimWorld.run without running the environment)."""
+        env = self.env
+        self._apply_initial(self.scenario)
+        env.process(self._robot())
+        env.process(self._deployer())
+        if self.world.faults:
+            env.process(self._scripted_faults())
+        for m in self.world.stochastic_faults:
+            env.process(self._stochastic(m.component, m.mttf, m.mttr))
+        if self.world.loads:
+            env.process(self._scripted_loads())
+        for i in range(len(self.world.load_walks)):
+            env.process(self._walk(i))
+        if self.world.changes:
+            env.process(self._scripted_changes())
+        if self.world.random_changes is not None:
+            env.process(self._random_changes())
+
+    def _audit(self) -> None:
+        """The named invariants on this robot's view: its own deployments, judged on the
+        platforms' full facts (an edge server's capacity with every robot's detectors)."""
+        self.audits += 1
+        core = self.core
+        view = _OwnView(
+            self.query.platform_states(), core.specs(), core.standing, core.slots(), tuple(sorted(self.instances)),
+            self.stops, self.history_edges, core.deployer.react,
+        )
+        for name, msg in check_invariants(view):
+            self.violations.append((self.env.now, name, msg))
+            self.trace.emit(self.env.now, "violation", invariant=name, message=msg)
+
+    def finish(self, now: float) -> dict[str, Any]:
+        self.exposure.close(now)
+        self.memory.close(now)
+        m = self._metrics()
+        m["audits"] = self.audits
+        return m
+
+
+class _EdgeMeter:
+    """Memory in use by detectors on each edge server, integrated over time."""
+
+    def __init__(self, capacity: dict[str, float]) -> None:
+        self.capacity = capacity
+        self.used = {e: 0.0 for e in capacity}
+        self.count = {e: 0 for e in capacity}
+        self.since = {e: 0.0 for e in capacity}
+        self.integral = {e: 0.0 for e in capacity}
+        self.busy = {e: 0.0 for e in capacity}
+        self.peak = {e: 0.0 for e in capacity}
+        self.starts = {e: 0 for e in capacity}
+
+    def change(self, edge: str, t: float, memory: float, delta: int) -> None:
+        dt = t - self.since[edge]
+        self.integral[edge] += self.used[edge] * dt
+        if self.count[edge]:
+            self.busy[edge] += dt
+        self.since[edge] = t
+        self.used[edge] += memory * delta
+        self.count[edge] += delta
+        self.peak[edge] = max(self.peak[edge], self.used[edge])
+        if delta > 0:
+            self.starts[edge] += 1
+
+    def close(self, t: float) -> None:
+        for e in self.capacity:
+            self.change(e, t, 0.0, 0)
+            self.starts[e] -= 0
+
+
+@dataclass
+class FleetResult:
+    """What a fleet run produced: per-robot metrics and the fleet's."""
+
+    scenario: Scenario
+    fleet: Fleet
+    deployer: str
+    seed: int
+    horizon: float
+    robots: dict[str, dict[str, Any]]
+    metrics: dict[str, Any]
+    violations: list[tuple[float, str, str, str]] = field(default_factory=list)  # (t, robot, invariant, message)
+    wall_s: float = 0.0
+
+
+def robot_seed(seed: int, robot: str) -> int:
+    """The seed of one robot of a run with ``seed``: derived from both, stable across runs."""
+    return random.Random(f"{seed}:{robot}").getrandbits(31)
+
+
+class FleetWorld:
+    """One simulation of a fleet scenario (see the module docstring)."""
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        *,
+        deployer: str = "desmon",
+        seed: int = 0,
+        until: float | None = None,
+        trace: IO[str] | None = None,
+        progress: Callable[[float, float], None] | None = None,
+    ) -> None:
+        if not is_fleet(scenario):
+            raise ScenarioError(f"scenario {scenario.name!r} is no fleet: its world is not a desmon.sim.fleet.Fleet")
+        self.scenario = scenario
+        self.fleet: Fleet = scenario.world
+        self.seed = int(seed)
+        self.horizon = float(until if until is not None else self.fleet.horizon)
+        self.progress = progress
+        self.trace_out = trace
+        self.env = simpy.Environment()
+        env = self.env
+        self.repo = Repository(clock=lambda: env.now)
+        self.cache = _StateCache(self.repo)
+        edges = self.fleet.edges
+        edge_set = set(edges)
+        #: platform -> the robots it concerns; deployment node -> its robot; robot node -> its robot
+        self._owners: dict[str, list[_Member]] = {}
+        self._graph_owner: dict[str, _Member] = {}
+        self._robot_of: dict[str, _Member] = {}
+        self.members: list[_Member] = []
+        for sc in self.fleet.robots:
+            load_model(self.repo, sc.model)  # an edge server already there is only updated (same facts)
+        for sc in self.fleet.robots:
+            m = sc.model
+            own = tuple(p.name for p in m.platforms if p.name not in edge_set)
+            view = RobotView(self.repo, m.robot, own + tuple(e for e in edges), tuple(g.name for g in m.graphs), self.cache)
+            member = _Member(
+                sc, env=env, repo=self.repo, view=view, deployer=deployer, seed=robot_seed(self.seed, m.robot),
+                horizon=self.horizon, trace=_RobotTrace(trace, m.robot), edges=edges, admission=self.fleet.admission,
+            )
+            self.members.append(member)
+            for p in own:
+                self._owners[p] = [member]
+            for g in m.graphs:
+                self._graph_owner[node_id(L.DEPLOYMENT, g.name)] = member
+            self._robot_of[node_id(L.ROBOT, m.robot)] = member
+        for e in edges:
+            self._owners[e] = list(self.members)
+        first = self.fleet.robots[0].model
+        self.edge_meter = _EdgeMeter({e: first.platform(e).capacity("memory") or math.inf for e in edges})
+        self._edge_ids = {node_id(L.PLATFORM, e): e for e in edges}
+        self._consumes = {g: mem for mb in self.members for g, mem in mb.consumes.items()}
+        self.deployer_name = self.members[0].deployer_name
+
+    # ------------------------------------------------------------------ Notify, routed
+    def _route(self, change: Change) -> None:
+        label = change.label
+        if label == L.IN_CONTEXT:
+            mb = self._robot_of.get(change.source)  # type: ignore[arg-type]
+            if mb is not None:
+                mb._notify(change)
+            return
+        if label == L.HAS_DEVICE:
+            name = change.source.partition(":")[2]  # type: ignore[union-attr]
+            self.cache.mark(name)
+            for mb in self._owners.get(name, ()):
+                mb._notify(change)
+            return
+        if label == L.PLATFORM:
+            if change.op == UPDATE_NODE:
+                name = change.node.partition(":")[2]  # type: ignore[union-attr]
+                self.cache.mark(name)
+                for mb in self._owners.get(name, ()):
+                    mb._notify(change)
+            return
+        if label == L.DEPLOYMENT:
+            if change.op == UPDATE_NODE:  # a requirement change: what deployments consume
+                self.cache.mark_all()
+                for mb in self.members:
+                    mb.query.forget_deployments()
+            return
+        if L.DEPLOYED_ON in (label, change.old_label):
+            name = change.target.partition(":")[2]  # type: ignore[union-attr]
+            self.cache.mark(name)
+            edge = self._edge_ids.get(change.target)  # type: ignore[arg-type]
+            if edge is not None:
+                graph = change.source.partition(":")[2]  # type: ignore[union-attr]
+                self.edge_meter.change(edge, self.env.now, self._consumes.get(graph, 0.0), 1 if change.op == ADD_EDGE else -1)
+            mb = self._graph_owner.get(change.source)  # type: ignore[arg-type]
+            if mb is not None:
+                mb.query.forget_deployments()
+                if label == L.DEPLOYMENT_HISTORY:
+                    mb._count_history(change)
+
+    def _progress(self):  # type: ignore[no-untyped-def]
+        step = max(self.horizon / 100.0, 1.0)
+        while True:
+            yield self.env.timeout(step)
+            if self.progress is not None:
+                self.progress(self.env.now, self.horizon)
+
+    # ------------------------------------------------------------------ run
+    def run(self) -> FleetResult:
+        t0 = time.perf_counter()
+        for mb in self.members:
+            mb.start()  # initial facts, silently: the router is not wired yet
+        self.cache.mark_all()
+        self.repo.subscribe(self._route)
+        if self.progress is not None:
+            self.env.process(self._progress())
+        self.env.run(until=self.horizon)
+        now = self.horizon
+        self.edge_meter.close(now)
+        robots = {mb.model.robot: mb.finish(now) for mb in self.members}
+        violations = [(t, mb.model.robot, name, msg) for mb in self.members for t, name, msg in mb.violations]
+        violations.sort(key=lambda v: (v[0], v[1]))
+        wall = time.perf_counter() - t0
+        metrics = self._metrics(robots, wall, len(violations))
+        return FleetResult(self.scenario, self.fleet, self.deployer_name, self.seed, self.horizon, robots, metrics, violations, wall)
+
+    def _metrics(self, robots: dict[str, dict[str, Any]], wall: float, violations: int) -> dict[str, Any]:
+        exposure = [m["unmonitored_exposure_s"] for m in robots.values()]
+        risky = [m["risky_time_s"] for m in robots.values()]
+        errors: dict[str, int] = {}
+        for m in robots.values():
+            for k, n in m["errors"].items():
+                errors[k] = errors.get(k, 0) + n
+        em = self.edge_meter
+        h = self.horizon
+        share = {e: (em.integral[e] / h / em.capacity[e] if math.isfinite(em.capacity[e]) else 0.0) for e in em.capacity}
+        peak = {e: (em.peak[e] / em.capacity[e] if math.isfinite(em.capacity[e]) else 0.0) for e in em.capacity}
+        total = lambda key: sum(m[key] for m in robots.values())  # noqa: E731
+        out: dict[str, Any] = {
+            "robots": len(robots),
+            "edges": len(em.capacity),
+            "horizon_s": h,
+            "exposure_per_robot_s": _spread(exposure),
+            "risky_time_per_robot_s": _spread(risky),
+            "edge_memory_share_mean": _spread(list(share.values())),
+            "edge_memory_share_peak": _spread(list(peak.values())),
+            "edge_busy_s": _spread(list(em.busy.values())),
+            "edge_starts": sum(em.starts.values()),
+            "errors": dict(sorted(errors.items())),
+            "violations": violations,
+            "reactions": total("reactions"),
+            "audits": total("audits"),
+            "starts": total("starts"),
+            "start_failures": total("start_failures"),
+            "stops": total("stops"),
+            "migrations": total("migrations"),
+            "slips_injected": total("slips_injected"),
+            "repository_changes": len(self.repo._log),
+            "state_reads": self.cache.reads,
+            "wall_s": round(wall, 3),
+            "realtime_ratio": round(h / wall, 1) if wall > 0 else math.inf,
+            "peak_rss_mb": round(peak_rss_mb(), 1),
+        }
+        return out
+
+
+def _spread(values: list[float]) -> dict[str, float]:
+    """mean, min and max of ``values`` (rounded), as the reports print them."""
+    if not values:
+        return {"mean": 0.0, "min": 0.0, "max": 0.0}
+    return {"mean": round(sum(values) / len(values), 6), "min": round(min(values), 6), "max": round(max(values), 6)}
+
+
+def peak_rss_mb() -> float:
+    """The process's peak resident memory so far, in MB (getrusage maxrss)."""
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return rss / (1024.0 * 1024.0) if sys.platform == "darwin" else rss / 1024.0
+
+
+def simulate_fleet(scenario: Scenario, deployer: str = "desmon", seed: int = 0, **kw: Any) -> FleetResult:
+    """Run the fleet ``scenario`` in the SimPy world and return the result."""
+    return FleetWorld(scenario, deployer=deployer, seed=seed, **kw).run()
+
+
+def _fmt_spread(s: dict[str, float], unit: str = "", scale: float = 1.0, digits: int = 1) -> str:
+    f = lambda v: f"{v * scale:.{digits}f}"  # noqa: E731
+    return f"{f(s['mean'])}{unit} [{f(s['min'])}-{f(s['max'])}]"
+
+
+def format_fleet_summary(r: FleetResult) -> str:
+    """The human-readable report of ``desmon run`` on a fleet scenario."""
+    m = r.metrics
+    lines = [
+        f"{r.scenario.name} -- SimPy fleet, {m['robots']} robots, {m['edges']} edge servers, deployer {r.deployer}, "
+        f"seed {r.seed}, {r.horizon:g} s simulated in {m['wall_s']:.2f} s wall ({m['realtime_ratio']:g}x real time)",
+        "Signals: off: no detector is simulated; a running, warmed-up valid deployment counts as monitoring.",
+        "",
+        "Per robot, mean [min-max] over the robots:",
+        f"  unmonitored exposure (s)       {_fmt_spread(m['exposure_per_robot_s'])}",
+        f"  risky time (s)                 {_fmt_spread(m['risky_time_per_robot_s'])}",
+        "Edge servers, mean [min-max] over the servers:",
+        f"  memory share, time average     {_fmt_spread(m['edge_memory_share_mean'], '%', 100.0)}",
+        f"  memory share, peak             {_fmt_spread(m['edge_memory_share_peak'], '%', 100.0)}",
+        f"  seconds with a detector        {_fmt_spread(m['edge_busy_s'], '', 1.0, 0)}",
+        f"  detector starts on edges       {m['edge_starts']}",
+        "Errors by kind (all robots):",
+    ]
+    lines += [f"  {k:<30} {n}" for k, n in m["errors"].items()] or ["  (none)"]
+    lines += [
+        "Fleet totals:",
+        f"  reactions / audits             {m['reactions']} / {m['audits']}",
+        f"  starts / failed starts / stops {m['starts']} / {m['start_failures']} / {m['stops']}",
+        f"  migrations                     {m['migrations']}",
+        f"  slips injected                 {m['slips_injected']}",
+        f"  repository changes             {m['repository_changes']}",
+        f"  peak memory (RSS, MB)          {m['peak_rss_mb']:g}",
+        "",
+    ]
+    if r.violations:
+        lines.append(f"INVARIANTS VIOLATED ({len(r.violations)}):")
+        for t, robot, name, msg in r.violations[:10]:
+            lines.append(f"  t={t:.3f}s {robot} {name}: {msg}")
+        if len(r.violations) > 10:
+            lines.append(f"  ... {len(r.violations) - 10} more")
+    else:
+        lines.append("Invariants: all held at every quiescent point of every robot (edge servers audited with every robot's load).")
+    return "\n".join(lines) + "\n"
+
+
+def fleet_json(r: FleetResult) -> dict[str, Any]:
+    """The ``desmon run --json`` summary of a fleet run."""
+    return {
+        "scenario": r.scenario.name,
+        "deployer": r.deployer,
+        "seed": r.seed,
+        "horizon_s": r.horizon,
+        "metrics": r.metrics,
+        "robots": r.robots,
+        "violations": [{"t": t, "robot": robot, "invariant": n, "message": m} for t, robot, n, m in r.violations],
+    }
+
+
+def run_fleet_command(args: Any, scenario: Scenario, out: IO[str], err: IO[str]) -> int:
+    """``desmon run`` on a fleet scenario: exit 0 if every audit held, 1 otherwise."""
+    import contextlib
+    import json
+
+    from desmon.paths import replacing
+
+    fleet: Fleet = scenario.world
+    if getattr(args, "plot", None):
+        raise ScenarioError(f"--plot draws one robot's timeline; {scenario.name!r} is a fleet of {len(fleet.robots)}: drop --plot")
+    if args.until is not None and args.until > fleet.horizon:
+        raise ScenarioError(
+            f"--until {args.until:g}: the fleet's shift ends at its horizon of {fleet.horizon:g} s; give --until at most that"
+        )
+    t_wall = time.perf_counter()
+
+    def report_progress(now: float, end: float) -> None:
+        if time.perf_counter() - t_wall > 1.0:
+            print(f"desmon run: {100 * now / end:5.1f}%  t={now:.0f}/{end:.0f} s", file=err, flush=True)
+
+    show = not getattr(args, "no_progress", False) and not args.json
+    with contextlib.ExitStack() as stack:
+        fh = stack.enter_context(replacing(args.trace)) if args.trace else None
+        result = FleetWorld(
+            scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=fh,
+            progress=report_progress if show else None,
+        ).run()
+    if args.json:
+        out.write(json.dumps(fleet_json(result), indent=2) + "\n")
+    else:
+        out.write(format_fleet_summary(result))
+        if args.trace:
+            out.write(f"Trace: {args.trace}\n")
+    return 1 if result.violations else 0

@@ -1,0 +1,201 @@
+"""The fleet world: robots sharing edge servers in one SimPy environment (desmon.sim.fleet)."""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import json
+from pathlib import Path
+
+import pytest
+
+from desmon.cli import main
+from desmon.errors import DesmonError, QueryError, ScenarioError
+from desmon.loader import load_scenario
+from desmon.model.scenario import Scenario
+from desmon.sim.fleet import EDGE_FULL, Fleet, FleetWorld, simulate_fleet
+from desmon.verify import Checker
+
+FLEET = Path(__file__).resolve().parent.parent / "scenarios" / "fleet.py"
+
+
+def fleet(robots: int = 3, edges: int = 2, hours: float = 0.25, edge_memory: float = 1024.0) -> Scenario:
+    return load_scenario(FLEET, {"robots": str(robots), "edges": str(edges), "hours": str(hours), "edge_memory": str(edge_memory)})
+
+
+def starts(text: str) -> list[dict]:
+    return [r for r in map(json.loads, text.splitlines()) if r["type"] == "decision" and r["command"] == "start" and r["ok"]]
+
+
+def traced(scenario: Scenario, seed: int = 0):  # type: ignore[no-untyped-def]
+    out = io.StringIO()
+    result = FleetWorld(scenario, seed=seed, trace=out).run()
+    return result, out.getvalue()
+
+
+@pytest.fixture(scope="module")
+def contended() -> tuple[Scenario, object, str]:
+    """Ten robots, one edge server with room for one combined detector (256 MB), one hour."""
+    scenario = fleet(10, 1, 1.0, edge_memory=256)
+    result, text = traced(scenario)
+    return scenario, result, text
+
+
+def test_a_robot_sees_its_own_pcs_and_the_edge_servers_only() -> None:
+    world = FleetWorld(fleet(3, 2))
+    view = world.members[1].query
+    assert [s.name for s in view.platform_states()] == ["r001.torso_pc", "r001.arm_pc", "r001.hand_pc", "edge00", "edge01"]
+    with pytest.raises(QueryError, match="another robot's"):
+        view.platform_state("r000.torso_pc")
+
+
+def test_a_robot_deploys_only_on_its_own_pcs_or_edge_servers(contended) -> None:  # type: ignore[no-untyped-def]
+    _scenario, _result, text = contended
+    placed = starts(text)
+    assert placed
+    for rec in placed:
+        assert rec["graph"].startswith(rec["robot"] + ".")
+        assert rec["platform"].startswith(rec["robot"] + ".") or rec["platform"].startswith("edge")
+
+
+def test_a_robot_stops_only_its_own_detectors(contended) -> None:  # type: ignore[no-untyped-def]
+    _scenario, _result, text = contended
+    stops = [r for r in map(json.loads, text.splitlines()) if r["type"] == "decision" and r["command"] == "stop"]
+    assert stops
+    assert all(r["graph"].startswith(r["robot"] + ".") for r in stops)
+
+
+def test_robots_share_an_edge_server_and_it_is_never_over_committed(contended) -> None:  # type: ignore[no-untyped-def]
+    _scenario, result, text = contended
+    on_edge = {r["robot"] for r in starts(text) if r["platform"] == "edge00"}
+    assert len(on_edge) >= 2  # the edge server is really shared
+    assert result.violations == []
+    assert result.metrics["edge_memory_share_peak"]["max"] <= 1.0
+
+
+def test_without_admission_concurrent_starts_over_commit_the_edge_and_the_audit_says_so(contended) -> None:  # type: ignore[no-untyped-def]
+    scenario, _result, _text = contended
+    racy = dataclasses.replace(scenario, world=dataclasses.replace(scenario.world, admission=False))
+    result = simulate_fleet(racy)
+    assert any(name == "no-overcommit" and "edge00" in msg for _t, _robot, name, msg in result.violations)
+    assert result.metrics["edge_memory_share_peak"]["max"] > 1.0
+
+
+def test_admission_refuses_a_start_that_no_longer_fits_on_the_edge(contended) -> None:  # type: ignore[no-untyped-def]
+    _scenario, _result, text = contended
+    refused = [r for r in map(json.loads, text.splitlines()) if r["type"] == "decision" and not r["ok"] and EDGE_FULL in r.get("why", "")]
+    assert refused and all(r["platform"] == "edge00" for r in refused)
+
+
+def test_latency_limits_keep_the_tactile_detector_on_board_while_the_combined_one_goes_to_the_edge(contended) -> None:  # type: ignore[no-untyped-def]
+    _scenario, _result, text = contended
+    placed = starts(text)
+    assert any(r["graph"].endswith("combined_slip_detector") and r["platform"] == "edge00" for r in placed)
+    assert not any(r["graph"].endswith("tactile_slip_detector") and r["platform"].startswith("edge") for r in placed)
+
+
+def test_an_edge_server_beyond_the_latency_limit_is_never_used() -> None:
+    # edge02 is 10.4 ms away: over the combined detector's 10 ms
+    result, text = traced(fleet(6, 3, 1.0))
+    assert result.violations == []
+    assert not any(r["platform"] == "edge02" for r in starts(text))
+    assert any(r["platform"] in ("edge00", "edge01") for r in starts(text))
+
+
+def test_the_same_seed_gives_the_same_metrics_and_trace_bytes() -> None:
+    scenario = fleet(3, 1, 0.5)
+    a, ta = traced(scenario, seed=4)
+    b, tb = traced(scenario, seed=4)
+    c, tc = traced(scenario, seed=5)
+    assert ta == tb and ta
+    strip = lambda m: {k: v for k, v in m.items() if k not in ("wall_s", "realtime_ratio", "peak_rss_mb")}  # noqa: E731
+    assert strip(a.metrics) == strip(b.metrics)
+    assert a.robots == b.robots
+    assert tc != ta
+
+
+def test_each_robot_draws_its_own_randomness() -> None:
+    result = simulate_fleet(fleet(3, 1, 0.5))
+    exposures = [m["unmonitored_exposure_s"] for m in result.robots.values()]
+    assert len(set(exposures)) == 3
+
+
+def test_the_small_fleet_verifies() -> None:
+    result = Checker(fleet(2, 1), "desmon").run(max_states=20_000)
+    assert result.verdict == "HOLDS"
+    assert result.states > 100
+
+
+def test_the_checker_still_finds_the_papers_deployer_wrong_on_the_small_fleet() -> None:
+    result = Checker(fleet(2, 1), "paper").run(max_states=20_000)
+    assert result.verdict == "VIOLATED"
+
+
+# ---------------------------------------------------------------- strict inputs
+def test_a_fleet_without_robots_is_refused() -> None:
+    with pytest.raises(ScenarioError, match="robots is empty"):
+        Fleet(robots=())
+
+
+def test_a_fleet_refuses_two_robots_with_one_name() -> None:
+    r = fleet(2, 1).world.robots[0]
+    with pytest.raises(ScenarioError, match="two robots are named 'r000'"):
+        Fleet(robots=(r, r), edges=("edge00",))
+
+
+def test_a_fleet_refuses_an_edge_server_the_robots_do_not_declare() -> None:
+    robots = fleet(2, 1).world.robots
+    with pytest.raises(ScenarioError, match="edge server 'edge07' is not a platform"):
+        Fleet(robots=robots, edges=("edge07",))
+
+
+def test_a_fleet_refuses_robots_that_simulate_signals() -> None:
+    robots = fleet(2, 1).world.robots
+    loud = dataclasses.replace(robots[1], world=dataclasses.replace(robots[1].world, signals=True))
+    with pytest.raises(ScenarioError, match="signals=False"):
+        Fleet(robots=(robots[0], loud), edges=("edge00",))
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [({"admission": "yes"}, "admission"), ({"edges": "edge00"}, "edges"), ({"edgez": ("edge00",)}, "unknown keyword 'edgez'")],
+)
+def test_a_fleet_refuses_bad_fields(kw: dict, match: str) -> None:
+    robots = fleet(2, 1).world.robots
+    with pytest.raises(DesmonError, match=match):
+        Fleet(robots=robots, **kw)
+
+
+@pytest.mark.parametrize("param, match", [("robots=0", "robots = 0"), ("edges=-1", "edges = -1"), ("robots=two", "robots")])
+def test_desmon_run_refuses_bad_fleet_parameters(param: str, match: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["run", str(FLEET), "-p", param]) == 2
+    err = capsys.readouterr().err
+    assert match in err and "Traceback" not in err
+
+
+def test_desmon_run_refuses_a_plot_of_a_fleet(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["run", str(FLEET), "-p", "robots=2", "-p", "edges=1", "-p", "hours=0.1", "--plot", str(tmp_path / "f.png")])
+    assert code == 2
+    assert "drop --plot" in capsys.readouterr().err
+
+
+def test_desmon_run_prints_the_fleet_metrics(capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["run", str(FLEET), "-p", "robots=2", "-p", "edges=1", "-p", "hours=0.2", "--no-progress"])
+    out = capsys.readouterr().out
+    assert code == 0
+    for what in ("2 robots, 1 edge servers", "unmonitored exposure (s)", "memory share, peak", "Errors by kind", "x real time", "peak memory"):
+        assert what in out
+
+
+def test_desmon_run_json_gives_every_robots_metrics(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["run", str(FLEET), "-p", "robots=2", "-p", "edges=1", "-p", "hours=0.2", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert sorted(doc["robots"]) == ["r000", "r001"]
+    assert doc["metrics"]["robots"] == 2
+
+
+@pytest.mark.slow
+def test_a_hundred_robots_share_twenty_edge_servers_for_an_hour_without_violations() -> None:
+    result = simulate_fleet(fleet(100, 20, 1.0))
+    assert result.violations == []
+    assert result.metrics["edge_starts"] > 0
