@@ -257,6 +257,7 @@ class DeploymentCore:
 
     def step(self, event: Event, control: ControlPort, *, force: bool = False) -> tuple[Stimulus, StepLog]:
         """Observe ``event`` and run the whole reaction at once (no latency)."""
+        self.unjustified = []  # this step's moves only (an event that changes nothing runs no reaction)
         stim = self.observe(event)
         log = StepLog()
         if not stim.empty or force:

@@ -15,7 +15,12 @@ code (``make_desmon_react`` and ``ensure_deployed``), changed in one place:
     the corrected deployer as it was before errors described the present: an error
     stands for a graph while it is wanted and not validly active even when another
     alternative serves its slot, and a running fallback is never upgraded back to the
-    preferred alternative (``errors-current`` catches it).
+    preferred alternative (``errors-current`` catches it);
+``no-hysteresis``
+    rebalances without hysteresis: a valid deployment of a graph that rebalances moves
+    to a better platform on any positive score gain, not only above the graph's
+    ``min_gain`` (a QueryPort wrapper that shows the deployer every ``rebalance``
+    threshold as 0; ``no-flapping`` catches the move).
 """
 
 from __future__ import annotations
@@ -24,9 +29,10 @@ import dataclasses
 
 from desmon.deployment.deployer import DESMON, KEEP_FALLBACK, Deployer, make_desmon_react
 from desmon.deployment.ports import QueryPort, Reaction
+from desmon.model.requirements import DeploymentSpec
 from desmon.model.system import PlatformState
 
-__all__ = ["MUTANTS", "HideConsumption", "get_mutant"]
+__all__ = ["MUTANTS", "HideConsumption", "NoHysteresis", "get_mutant"]
 
 
 def _no_recheck(q: QueryPort, slots, changed, context_changed) -> Reaction:  # type: ignore[no-untyped-def]
@@ -55,6 +61,36 @@ def _capacity_blind(q: QueryPort, slots, changed, context_changed) -> Reaction: 
     yield from DESMON.react(HideConsumption(q), slots, changed, context_changed)  # type: ignore[arg-type]
 
 
+#: spec -> the same spec with ``rebalance`` 0 (one object per spec, so validity memos on identity hit)
+_ZERO: dict[DeploymentSpec, DeploymentSpec] = {}
+
+
+class NoHysteresis:
+    """A QueryPort that answers like ``inner`` but shows every rebalancing specification
+    with a ``rebalance`` threshold (min_gain) of 0."""
+
+    def __init__(self, inner: QueryPort) -> None:
+        self.inner = inner
+
+    def deployment_information(self, graph: str) -> DeploymentSpec | None:
+        spec = self.inner.deployment_information(graph)
+        if spec is None or not spec.rebalance:
+            return spec
+        zero = _ZERO.get(spec)
+        if zero is None:
+            if len(_ZERO) > 1024:
+                _ZERO.clear()
+            zero = _ZERO[spec] = dataclasses.replace(spec, rebalance=0.0)
+        return zero
+
+    def __getattr__(self, name: str):  # type: ignore[no-untyped-def]
+        return getattr(self.inner, name)
+
+
+def _no_hysteresis(q: QueryPort, slots, changed, context_changed) -> Reaction:  # type: ignore[no-untyped-def]
+    yield from DESMON.react(NoHysteresis(q), slots, changed, context_changed)  # type: ignore[arg-type]
+
+
 MUTANTS: dict[str, Deployer] = {
     m.name: m
     for m in (
@@ -65,6 +101,7 @@ MUTANTS: dict[str, Deployer] = {
             "stale-errors", "mutant: errors stand per graph even when the slot is served; no upgrade back to the preferred alternative",
             make_desmon_react(upgrade=KEEP_FALLBACK), stale_errors=True,
         ),
+        Deployer("no-hysteresis", "mutant: a rebalancing graph moves on any positive score gain, ignoring its min_gain", _no_hysteresis),
     )
 }
 

@@ -7,16 +7,21 @@ of them pass the requirement checks* it asks about. This engine runs the same re
 core, but only once per distinct reading, and replays what it did everywhere else.
 
 How a reaction is memoised
-    A state is an environment code (context, failed devices, platforms down, load
-    levels: one mixed-radix digit per platform) and an interned system part
-    (deployments, standing errors). A transition's *root* is (system part, context after
-    the event, what the event changed, failed-start prefix). The first time a root is
+    A state is an environment code (context and the current requirements of each graph
+    that requirement changes reach, as one *global* digit; failed devices, platforms down
+    or absent (on demand), load levels: one mixed-radix digit per platform) and an
+    interned system part (deployments, standing errors). A transition's *root* is
+    (system part, global digit after the event, what the event changed, failed-start
+    prefix). The first time a root is
     met, the real core runs on the real state while :mod:`desmon.deployment.validity`
     hands every requirement check to an observer (``validity._observer``). The observer
     answers with the real result, wrapped so that what the run *uses* of it is recorded:
     whether one platform is acceptable, the acceptable platforms one by one in preference
     order as far as the run iterates, or every answer down to the failure texts (see
-    :class:`_Recorder`). The run becomes a path in a decision tree: one node per
+    :class:`_Recorder`). With preferences the order of the acceptable platforms, their
+    scores, gains and score breakdown derive from every platform's score: using them
+    observes each platform's *score key* (rejected, or the number of its (score,
+    breakdown) among those the platform's facts can give). The run becomes a path in a decision tree: one node per
     observation, one branch per answer, a leaf with what the reaction did (next system
     part, start outcomes, deployer branches, an instantaneous violation). Other
     transitions with the same root walk the tree; each observation is answered from a
@@ -65,8 +70,10 @@ from desmon.deployment import validity as _validity
 from desmon.deployment.core import DeploymentCore
 from desmon.errors import CheckerError, NondeterminismError
 from desmon.model.events import (
-    ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp, event_kind,
+    ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp,
+    RequirementChange, event_kind,
 )
+from desmon.model.requirements import Preference
 from desmon.model.system import PlatformState
 from desmon.verify.environment import EVENT_KINDS
 from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Trail, final_status as _final_status
@@ -80,8 +87,8 @@ __all__ = ["TableEngine", "TableUnsupported", "UnobservedRead", "table_unsupport
 SYS_BITS = 24
 _SYS_MASK = (1 << SYS_BITS) - 1
 #: a decision tree's root key packs (system part, context digit, stimulus, prefix) into
-#: one int64: 24 + 6 + 17 + 16 bits (each limit is checked where its part is made)
-_ROOT_CTX, _ROOT_STIM, _ROOT_PREFIX = 6, 17, 16
+#: one int64: 24 + 10 + 13 + 16 bits (each limit is checked where its part is made)
+_ROOT_CTX, _ROOT_STIM, _ROOT_PREFIX = 10, 13, 16
 
 
 #: combinations of one platform's facts the engine tabulates answers for (beyond: direct engine)
@@ -139,7 +146,16 @@ class _Recorder:
         self.engine = engine
         self.inside = 0
         self.obs: list[tuple[tuple, int]] = []
+        #: the observations of this run so far (an observation made again adds nothing)
+        self.made: set[tuple] = set()
         self.store: StateStore | None = None
+
+    def observe(self, desc: tuple, code: int) -> None:
+        """Record that the run observed answer ``code`` to ``desc`` (once per run: the same
+        question on the same path always has the same answer)."""
+        if desc not in self.made:
+            self.made.add(desc)
+            self.obs.append((desc, code))
 
     def validity(self, reqs: tuple, states: tuple[PlatformState, ...], graph: str | None, reasons: bool) -> Any:
         self.inside += 1
@@ -149,10 +165,18 @@ class _Recorder:
             real = _validity._check_validity(reqs, states, graph, reasons)
             at = {id(st): i for i, st in enumerate(states)}
             order = [at[id(st)] for st in _validity.order_platforms(states)]
+            ranked = any(type(r) is Preference for r in reqs)
+            scored = [None if f else _score_key(reqs, st, graph) for f, st in zip(fails, states)] if ranked else None
         finally:
             self.inside -= 1
-        check = _Check(self, reqs, graph, not reasons, parts, fails, [st.platform.name for st in states])
-        return _ObservedValidity(_Acceptable(check, real.acceptable, order), _Reasons(check, real.rejected))  # type: ignore[arg-type]
+        check = _Check(self, reqs, graph, not reasons, parts, fails, [st.platform.name for st in states], scored)
+        acceptable = _Acceptable(check, real.acceptable, order)
+        if not ranked:
+            return _ObservedValidity(acceptable, _Reasons(check, real.rejected))  # type: ignore[arg-type]
+        # with preferences the order of the acceptable platforms, their scores and the
+        # breakdown are observed as the scores of every platform ("rank")
+        breakdown = _Ranked(check, real.breakdown, acceptable) if real.breakdown else ()
+        return _ObservedValidity(acceptable, _Reasons(check, real.rejected), _Ranked(check, real.scores, acceptable), breakdown)  # type: ignore[arg-type]
 
     def platform(self, reqs: tuple, state: PlatformState, graph: str | None, first_only: bool) -> Any:
         self.inside += 1
@@ -185,26 +209,34 @@ class _Recorder:
         return tuple(parts)
 
 
+def _score_key(reqs: tuple, state: PlatformState, graph: Any) -> tuple:
+    """What the preferences make of one acceptable platform: its score and the weighted
+    terms it is the sum of (what ``Validity.breakdown`` shows)."""
+    return (_validity.platform_score(reqs, state, graph), _validity.score_breakdown(reqs, state, graph))
+
+
 class _Check:
     """One requirement check's real answers, and how to record observing them."""
 
-    __slots__ = ("rec", "table", "first_only", "parts", "fails", "names")
+    __slots__ = ("rec", "table", "first_only", "parts", "fails", "names", "scored")
 
     def __init__(self, rec: _Recorder, reqs: tuple, graph: str | None, first_only: bool,
-                 parts: tuple[tuple[int, int], ...], fails: list[tuple], names: list[str]) -> None:
+                 parts: tuple[tuple[int, int], ...], fails: list[tuple], names: list[str],
+                 scored: list[tuple | None] | None = None) -> None:
         self.rec = rec
         self.table = rec.engine.intern_table(reqs, graph)
         self.first_only = first_only
         self.parts = parts
         self.fails = fails
         self.names = names
+        self.scored = scored  # each platform's score key (None: rejected), with preferences
 
     def ok(self, which: Sequence[int]) -> None:
         """Observe whether the platforms at positions ``which`` pass."""
         code = 0
         for j, i in enumerate(which):
             code |= (not self.fails[i]) << j
-        self.rec.obs.append((("ok", self.table, None, tuple(self.parts[i] for i in which)), code))
+        self.rec.observe(("ok", self.table, None, tuple(self.parts[i] for i in which)), code)
 
     def why(self) -> None:
         """Observe every platform's failures, reasons included."""
@@ -214,7 +246,19 @@ class _Check:
             value, radix = eng.failure_id(self.table, self.first_only, p, dep, f)
             code += value * mult
             mult *= radix
-        self.rec.obs.append((("why", self.table, self.first_only, self.parts), code))
+        self.rec.observe(("why", self.table, self.first_only, self.parts), code)
+
+    def rank(self) -> None:
+        """Observe every platform's acceptability and score (with preferences: what the
+        order of the acceptable platforms, their scores and the breakdown derive from)."""
+        assert self.scored is not None
+        eng = self.rec.engine
+        code, mult = 0, 1
+        for (p, dep), key in zip(self.parts, self.scored):
+            value, radix = eng.score_id(self.table, p, dep, key)
+            code += value * mult
+            mult *= radix
+        self.rec.observe(("rank", self.table, None, self.parts), code)
 
 
 class _Observed:
@@ -325,7 +369,11 @@ class _Text(_Observed):
 
 
 class _Acceptable(_Observed):
-    """``Validity.acceptable`` of a recorded check: membership and iteration observe lazily."""
+    """``Validity.acceptable`` of a recorded check: membership and iteration observe lazily.
+
+    With preferences the order depends on every acceptable platform's score: iterating,
+    indexing or using the whole observes them all (:meth:`_Check.rank`); membership,
+    length and truth do not depend on the order and observe as without preferences."""
 
     __slots__ = ("_order",)
 
@@ -333,8 +381,16 @@ class _Acceptable(_Observed):
         self._check, self._real, self._order = check, real, order
 
     def _all(self) -> tuple:
-        self._check.ok(range(len(self._check.parts)))
+        check = self._check
+        if check.scored is not None:
+            check.rank()
+        else:
+            check.ok(range(len(check.parts)))
         return self._real  # type: ignore[no-any-return]
+
+    def __len__(self) -> int:
+        self._check.ok(range(len(self._check.parts)))
+        return len(self._real)
 
     def __contains__(self, x: object) -> bool:
         names = self._check.names
@@ -344,20 +400,26 @@ class _Acceptable(_Observed):
         self._check.ok((i,))
         return not self._check.fails[i]
 
-    def __iter__(self) -> Iterator[str]:
+    def _static(self) -> Iterator[str]:
+        """The acceptable platforms in the static order, observed one by one."""
         check = self._check
         for i in self._order:
             check.ok((i,))
             if not check.fails[i]:
                 yield check.names[i]
 
+    def __iter__(self) -> Iterator[str]:
+        if self._check.scored is not None:
+            return iter(self._all())
+        return self._static()
+
     def __bool__(self) -> bool:
-        for _name in self:  # observes the platforms up to the first acceptable one
+        for _name in self._static():  # observes the platforms up to the first acceptable one
             return True
         return False
 
     def __getitem__(self, i: Any) -> Any:
-        if isinstance(i, int) and i >= 0:
+        if isinstance(i, int) and i >= 0 and self._check.scored is None:
             for k, name in enumerate(self):  # observes the platforms up to the i-th acceptable one
                 if k == i:
                     return name
@@ -383,6 +445,31 @@ class _Reasons(_Observed):
             return len(self._all())  # how many requirements one platform fails: the failures themselves
         self._check.ok(range(len(self._check.parts)))  # how many platforms fail, or whether one does
         return len(self._real)
+
+    def __bool__(self) -> bool:
+        self._check.ok(range(len(self._check.parts)))  # whether any platform fails (a valid deployment: none)
+        return len(self._real) > 0
+
+
+class _Ranked(_Observed):
+    """``Validity.scores`` or ``.breakdown`` of a recorded check with preferences: any use
+    observes every platform's score (:meth:`_Check.rank`); their length and truth are the
+    acceptable platforms'."""
+
+    __slots__ = ("_acceptable",)
+
+    def __init__(self, check: _Check, real: tuple, acceptable: _Acceptable) -> None:
+        self._check, self._real, self._acceptable = check, real, acceptable
+
+    def _all(self) -> tuple:
+        self._check.rank()
+        return self._real  # type: ignore[no-any-return]
+
+    def __len__(self) -> int:
+        return len(self._acceptable)
+
+    def __bool__(self) -> bool:
+        return bool(self._acceptable)
 
 
 #: modules whose functions read a state on behalf of their caller (a refusal names the caller)
@@ -500,14 +587,10 @@ def table_unsupported(checker: TransitionSystem) -> str | None:
     if checker.symmetry is not None:
         return "symmetry reduction runs on the direct engine"
     b = checker.bounds
-    if b.joins or b.requirement_changes:
-        return "the table engine does not encode platforms joining or requirement changes yet"
-    if any(spec.preferences or spec.rebalance is not None for spec in checker.model.specs):
-        return "the table engine does not replay preference scores yet"
     where = {d.name: d.platform for d in checker.model.devices}
     for p in checker.model.platforms:
         k = sum(1 for d in b.devices if where[d] == p.name)
-        digits = (2 if p.name in b.platforms else 1) * (1 << k) * len(b.loads.get(p.name, (0,)))
+        digits = (2 if p.name in b.platforms or p.name in b.joins else 1) * (1 << k) * len(b.loads.get(p.name, (0,)))
         if digits > MAX_DIGITS:
             return (f"platform {p.name} has {digits:,} combinations of facts (its bounded devices, up/down and load levels); "
                     f"the table engine tabulates at most {MAX_DIGITS:,} per platform")
@@ -526,8 +609,32 @@ def _contexts(init: Key, b: Any) -> list[str | None]:
     return ctxs
 
 
+def _variants(model: Any, changes: Sequence[RequirementChange]) -> dict[str, list[tuple]]:
+    """The requirements each changed graph can have: the declared ones first, then every
+    variant the listed changes reach from them (in order of discovery)."""
+    out: dict[str, list[tuple]] = {}
+    for spec in model.specs:
+        mine = [c for c in changes if c.graph == spec.graph]
+        if not mine:
+            continue
+        found, i = [spec.requirements], 0
+        while i < len(found):
+            for c in mine:
+                nxt = c.apply(found[i])
+                if nxt not in found:
+                    found.append(nxt)
+                    if len(found) > 1 << _ROOT_CTX:
+                        raise TableUnsupported(f"table engine: the requirement changes give {spec.graph} too many variants to encode; run with --engine direct")
+            i += 1
+        out[spec.graph] = found
+    return out
+
+
 class _Env:
-    """Environment facts <-> one int: a context digit, then one digit per platform."""
+    """Environment facts <-> one int: a context digit, a digit per changed graph (its
+    current requirements), then one digit per platform (down or absent, failed devices,
+    load level). The context and requirement digits together are the *global* digit
+    (``env % G``): what a reaction may read besides the deployments and the platforms."""
 
     def __init__(self, checker: Any, init: Key) -> None:
         model, b = checker.model, checker.bounds
@@ -536,19 +643,30 @@ class _Env:
         P = len(self.plats)
         self.ctxs = _contexts(init, b)
         self.C = len(self.ctxs)
+        # requirement variants: digit g of the global digit is graph g's variant number
+        self.variants = _variants(model, b.requirement_changes)
+        self.vgraphs = sorted(self.variants)
+        self.declared = {s.graph: s.requirements for s in model.specs}
+        self.VW: list[int] = []  # the weight of each changed graph's digit in the env code
+        v = self.C
+        for g in self.vgraphs:
+            self.VW.append(v)
+            v *= len(self.variants[g])
+        self.G = v
         self.res = b.load_resource
+        self.joins = frozenset(b.joins)
         self.const_failed = tuple(d for d in init.failed if d not in b.devices)
-        self.const_down = tuple(p for p in init.down if p not in b.platforms)
+        self.const_down = tuple(p for p in init.down if p not in b.platforms and p not in self.joins)
         self.vdev: list[list[str]] = []
         self.U: list[int] = []
         self.K: list[int] = []
         self.R: list[int] = []
         self.W: list[int] = []
         self.decoded: list[list[tuple[bool, tuple[str, ...], tuple[tuple[str, float], ...]]]] = []
-        w = self.C
+        w = self.G
         for name in self.plats:
             vd = [d for d in b.devices if self.platform_of[d] == name]
-            U = 2 if name in b.platforms else 1
+            U = 2 if name in b.platforms or name in self.joins else 1
             table = self._digits(name, vd, U, b, init)
             self.vdev.append(vd)
             self.U.append(U)
@@ -559,8 +677,9 @@ class _Env:
             self.decoded.append(table)
         self.space = w
         self.P = P
-        self.failcount = [
-            np.array([int(dn and self.U[p] == 2) + len(f) for dn, f, _l in self.decoded[p]], dtype=np.int64) for p in range(P)
+        self.failcount = [  # an absent on-demand platform is no failure
+            np.array([int(dn and self.U[p] == 2 and self.plats[p] not in self.joins) + len(f) for dn, f, _l in self.decoded[p]], dtype=np.int64)
+            for p in range(P)
         ]
         self.const_failures = len(self.const_failed) + len(self.const_down)
 
@@ -584,6 +703,11 @@ class _Env:
 
     def encode(self, key: Key) -> int:
         code = self.ctxs.index(key.context)
+        changed = dict(key.specs)
+        if any(g not in self.variants for g in changed):
+            raise CheckerError("table engine: a state's requirements are outside the encoded variants")  # pragma: no cover
+        for g, vw in zip(self.vgraphs, self.VW):
+            code += self.variants[g].index(changed.get(g, self.declared[g])) * vw
         failed, down, loads = set(key.failed), set(key.down), dict(key.loads)
         if any(d not in failed for d in self.const_failed) or any(p not in down for p in self.const_down):
             raise CheckerError("table engine: a state left the encoded environment")  # pragma: no cover
@@ -596,9 +720,18 @@ class _Env:
             code += c * self.W[p]
         return code
 
+    def specs(self, env: int) -> tuple[tuple[str, tuple], ...]:
+        """The key's ``specs`` part of environment code ``env`` (changed graphs only, sorted)."""
+        out = []
+        for g, vw in zip(self.vgraphs, self.VW):
+            v = env // vw % len(self.variants[g])
+            if v:
+                out.append((g, self.variants[g][v]))
+        return tuple(out)
+
     def key(self, env: int, system: tuple) -> Key:
         ctx = self.ctxs[env % self.C]
-        rest = env // self.C
+        rest = env // self.G
         failed = list(self.const_failed)
         down = list(self.const_down)
         loads = []
@@ -610,11 +743,12 @@ class _Env:
             failed.extend(f)
             if items:
                 loads.append((self.plats[p], items))
-        return Key(ctx, tuple(sorted(failed)), tuple(sorted(down)), tuple(loads), system[0], system[1])
+        return Key(ctx, tuple(sorted(failed)), tuple(sorted(down)), tuple(loads), system[0], system[1],
+                   self.specs(env) if self.vgraphs else ())
 
     def locals(self, envs: np.ndarray) -> np.ndarray:
         out = np.empty((len(envs), self.P), dtype=np.int64)
-        rest = envs // self.C
+        rest = envs // self.G
         for p in range(self.P):
             out[:, p] = rest % self.R[p]
             rest = rest // self.R[p]
@@ -710,6 +844,13 @@ class _Events:
             ids = np.array([self._id(LoadChange(name, x, b.load_resource)) for x in lv], dtype=np.int64)
             self.slots.append(("load", engine.platform_index[name], +1, ids))
             self.slots.append(("load", engine.platform_index[name], -1, ids))
+        for name in b.joins:
+            self.slots.append(("join", engine.platform_index[name], self._id(PlatformJoin(name)), self._id(PlatformLeave(name))))
+        for change in b.requirement_changes:
+            g = env.vgraphs.index(change.graph)
+            vs = env.variants[change.graph]
+            to = np.array([vs.index(change.apply(r)) for r in vs], dtype=np.int64)
+            self.slots.append(("requirements", g, to, self._id(change)))
         self.kind_of = np.array([_KIND_ID[event_kind(e)] for e in self.events] or [0], dtype=np.int64)
 
     def _id(self, e: Event) -> int:
@@ -758,6 +899,23 @@ class _Events:
                 E2[s] = np.where(down, envs - unit, envs + unit)
                 EV[s] = np.where(down, ev_up, ev_down)
                 ST[s] = p + 1
+            elif kind == "join":  # always enabled: absent -> join, present -> leave
+                _k, p, ev_join, ev_leave = spec
+                unit = env.W[p]
+                down = (L[:, p] % 2).astype(bool)
+                M[s] = True
+                E2[s] = np.where(down, envs - unit, envs + unit)
+                EV[s] = np.where(down, ev_join, ev_leave)
+                ST[s] = p + 1
+            elif kind == "requirements":  # always enabled; a change that changes nothing is no stimulus
+                _k, g, to, ev_id = spec
+                vw = env.VW[g]
+                v = envs // vw % len(to)
+                w = to[v]
+                M[s] = True
+                E2[s] = envs + (w - v) * vw
+                EV[s] = ev_id
+                ST[s] = np.where(w != v, P + 3 + g, P + 1)
             else:
                 _k, p, step, ids_lv = spec
                 unit = env.W[p] * env.U[p] * (1 << env.K[p])
@@ -819,6 +977,7 @@ class TableEngine:
         self.ok = _Grow((4096,))
         self._blocks: dict[tuple, tuple[int, int]] = {}
         self._fails: dict[tuple, list[tuple]] = {}
+        self._plat_states: dict[tuple[int, int], list[PlatformState]] = {}
         self._ids: dict[tuple, dict[tuple, int]] = {}
         self.records = 0  # real runs of the core (reactions and invariant checks)
         self.budget = Budget(0.0)  # the search's (set by run)
@@ -850,24 +1009,38 @@ class TableEngine:
         return i
 
     # -- per-platform answers -----------------------------------------------------------
+    def _states(self, p: int, dep: int) -> list[PlatformState]:
+        """Platform ``p``'s state with deployments ``dep``, per platform digit."""
+        k = (p, dep)
+        out = self._plat_states.get(k)
+        if out is None:
+            platform = self.model.platforms[p]
+            devices_on = tuple(d for d in self.model.devices if d.platform == platform.name)
+            deployed = self._deployed[dep]
+            out = []
+            always = self.env.const_failed
+            for down, failed, load in self.env.decoded[p]:
+                out_of_order = set(failed).union(always)
+                devices = tuple(d for d in devices_on if d.name not in out_of_order)
+                out.append(PlatformState(platform, not down, devices, load, deployed))
+            self._plat_states[k] = out
+        return out
+
     def _failures(self, table: int, first_only: bool, p: int, dep: int) -> list[tuple]:
         """The failures of check ``table`` on platform ``p`` with deployments ``dep``, per platform digit."""
         k = (table, first_only, p, dep)
         out = self._fails.get(k)
         if out is None:
             reqs, graph = self._table_args[table]
-            platform = self.model.platforms[p]
-            devices_on = tuple(d for d in self.model.devices if d.platform == platform.name)
-            deployed = self._deployed[dep]
             check = _validity._check_platform.__wrapped__
-            out = []
-            always = self.env.const_failed
-            for down, failed, load in self.env.decoded[p]:
-                out_of_order = set(failed).union(always)
-                devices = tuple(d for d in devices_on if d.name not in out_of_order)
-                out.append(check(reqs, PlatformState(platform, not down, devices, load, deployed), graph, first_only))
-            self._fails[k] = out
+            out = self._fails[k] = [check(reqs, st, graph, first_only) for st in self._states(p, dep)]
         return out
+
+    def _score_keys(self, table: int, p: int, dep: int) -> list[tuple | None]:
+        """The score key (:func:`_score_key`) of check ``table`` on platform ``p`` with
+        deployments ``dep`` per platform digit, None where the platform is rejected."""
+        reqs, graph = self._table_args[table]
+        return [None if f else _score_key(reqs, st, graph) for f, st in zip(self._failures(table, True, p, dep), self._states(p, dep))]
 
     def _block(self, mode: str, table: int, first_only: bool | None, p: int, dep: int) -> tuple[int, int]:
         """(offset, radix) of the answers of a check per platform digit: 1/0 for "ok", for
@@ -876,14 +1049,21 @@ class TableEngine:
         hit = self._blocks.get(k)
         if hit is not None:
             return hit
-        fails = self._failures(table, bool(first_only), p, dep)
         off = self.ok.n
+        if mode == "rank":  # 0 rejected, else 1 + the score key's number
+            ids: dict[tuple | None, int] = {None: 0}
+            for sk in self._score_keys(table, p, dep):
+                self.ok.append(ids.setdefault(sk, len(ids)))
+            self._ids[("rank", table, p, dep)] = ids
+            self._blocks[k] = (off, len(ids))
+            return off, len(ids)
+        fails = self._failures(table, bool(first_only), p, dep)
         if mode == "ok":
             for f in fails:
                 self.ok.append(0 if f else 1)
             radix = 2
         else:
-            ids: dict[tuple, int] = {}
+            ids = {}
             for f in fails:
                 self.ok.append(ids.setdefault(f, len(ids)))
             self._ids[(table, bool(first_only), p, dep)] = ids
@@ -900,6 +1080,17 @@ class TableEngine:
                 f"table engine: a recorded requirement check on {self.model.platforms[p].name} is not among its per-digit answers"
             )
         return ids[fails], len(ids)
+
+    def score_id(self, table: int, p: int, dep: int, key: tuple | None) -> tuple[int, int]:
+        """(number, radix) of score key ``key`` (None: rejected) among those check ``table``
+        can give on ``p`` with ``dep``."""
+        self._block("rank", table, None, p, dep)
+        ids = self._ids[("rank", table, p, dep)]
+        if key not in ids:
+            raise CheckerError(  # pragma: no cover - a bug in the engine, not in the system under test
+                f"table engine: a recorded preference score on {self.model.platforms[p].name} is not among its per-digit answers"
+            )
+        return ids[key], len(ids)
 
     # -- decision trees ---------------------------------------------------------------
     def _node(self) -> int:
@@ -1031,6 +1222,7 @@ class TableEngine:
         global _RECORDING
         rec = self.recorder
         rec.obs = []
+        rec.made = set()
         rec.inside = 0
         _RECORDING, _validity._observer = rec, rec
         try:
@@ -1056,10 +1248,18 @@ class TableEngine:
             rc.core.standing = frozenset(key.standing)
             st.begin(prefix)
             stimulus, log = rc.core.step(event, st)
-            return stimulus, log, st.key(rc.core.standing), tuple(st.outcomes), st.instant
+            instant = st.instant
+            if rc.core.unjustified and instant is None and "no-flapping" in rc._checked:  # as TransitionSystem.run_one
+                instant = ("no-flapping", rc.core.unjustified[0], "the reaction")
+            return stimulus, log, st.key(rc.core.standing), tuple(st.outcomes), instant
 
         (stimulus, log, nkey, outcomes, instant), obs = self._recording(run, lambda: self.checker.run_one(key, event, prefix))
-        got = 0 if stimulus.context_changed else (self.platform_index[stimulus.changed_platforms[0]] + 1 if stimulus.changed_platforms else self.P + 1)
+        if stimulus.context_changed:
+            got = 0
+        elif stimulus.specs_changed:
+            got = self.P + 3 + self.env.vgraphs.index(stimulus.specs_changed[0])
+        else:
+            got = self.platform_index[stimulus.changed_platforms[0]] + 1 if stimulus.changed_platforms else self.P + 1
         expect = self.env.key(env2, (nkey.deployments, nkey.standing))
         if got != stim or expect != nkey:
             raise TableUnsupported(f"table engine: {event} on {key} gave {nkey} (stimulus {stimulus}), the encoding expected {expect}")  # pragma: no cover
@@ -1084,7 +1284,7 @@ class TableEngine:
         direct engine's order: by transition, then generation by generation as
         :meth:`TransitionSystem.successors <desmon.verify.system.TransitionSystem.successors>` queues the
         prefixes each run's start outcomes open. Returns (transition, prefix, leaf) arrays."""
-        C, bound = self.env.C, self.bounds.start_failures
+        G, bound = self.env.G, self.bounds.start_failures
         T = len(tr.env2)
         u_t = np.arange(T, dtype=np.int64)
         u_pre = np.zeros(T, dtype=np.int64)
@@ -1092,7 +1292,7 @@ class TableEngine:
         parts: list[tuple[np.ndarray, ...]] = []
         gen = 0
         while len(u_t):
-            roots = _root_key(tr.sys[u_t], tr.env2[u_t] % C, tr.stim[u_t], u_pre)
+            roots = _root_key(tr.sys[u_t], tr.env2[u_t] % G, tr.stim[u_t], u_pre)
 
             def record_unit(u: int, u_t: np.ndarray = u_t, u_pre: np.ndarray = u_pre, roots: np.ndarray = roots) -> None:
                 t = int(u_t[u])
@@ -1131,7 +1331,7 @@ class TableEngine:
         """The invariants leaf of each candidate new state (memoised like reactions)."""
         if not len(cand_t):
             return np.zeros(0, dtype=np.int64)
-        roots = _root_key(cand_sys, tr.env2[cand_t] % self.env.C, self.P + 2, 0)
+        roots = _root_key(cand_sys, tr.env2[cand_t] % self.env.G, self.P + 2, 0)
 
         def record_state(u: int) -> None:
             t = int(cand_t[u])
@@ -1184,8 +1384,11 @@ class TableEngine:
     def _encode(self, init: Key) -> _Env:
         """The environment code and the events of the search from ``init`` (or why the engine cannot run it)."""
         env = self.env = _Env(self.checker, init)
-        if env.C > 1 << _ROOT_CTX or self.P + 3 > 1 << _ROOT_STIM:
-            raise TableUnsupported(f"table engine: {env.C} contexts and {self.P} platforms do not fit its tree keys; run with --engine direct")
+        if env.G > 1 << _ROOT_CTX or self.P + 3 + len(env.vgraphs) > 1 << _ROOT_STIM:
+            raise TableUnsupported(
+                f"table engine: {env.C} contexts, {env.G // env.C} combinations of requirements and {self.P} platforms do not fit "
+                "its tree keys; run with --engine direct"
+            )
         if env.space.bit_length() + SYS_BITS > 62:
             raise TableUnsupported(f"table engine: the environment has {env.space:,} combinations, too many to encode; run with --engine direct")
         # the answers of unused check positions: a block of zeros as long as any platform's digit range
