@@ -63,7 +63,17 @@ def _score_reader(q, slots, changed, context_changed):  # type: ignore[no-untype
 
 
 SCORE_READER = Deployer("score-reader", "decides on scores, ranks and the breakdown", _score_reader)
-DEPLOYERS = {"score-reader": SCORE_READER, **MUTANTS}
+
+
+def _restless(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    # rebalances in every reaction, as if the context had changed (not only when the
+    # platforms concerned changed): after a failed move it would move again with nothing
+    # changed (the state half of no-flapping)
+    yield from DESMON.react(q, slots, changed, True)
+
+
+RESTLESS = Deployer("restless", "rebalances in every reaction", _restless)
+DEPLOYERS = {"score-reader": SCORE_READER, "restless": RESTLESS, **MUTANTS}
 
 
 # -- generated models ---------------------------------------------------------------
@@ -160,7 +170,7 @@ def preference_scenarios(draw):  # type: ignore[no-untyped-def]
 
 #: examples of the generated-model comparison (CI: 25; DESMON_TABLE14_EXAMPLES=300 for a longer run)
 EXAMPLES = int(os.environ.get("DESMON_TABLE14_EXAMPLES", "25"))
-DEPLOYER_NAMES = ["desmon", "paper", "desmon-keep-fallback", "no-hysteresis", "score-reader", "make-before-break", "stale-errors"]
+DEPLOYER_NAMES = ["desmon", "paper", "desmon-keep-fallback", "no-hysteresis", "restless", "score-reader", "make-before-break", "stale-errors"]
 
 
 def _compare(scenario, deployer, keep_going, cap):  # type: ignore[no-untyped-def]
@@ -203,7 +213,7 @@ def test_engine_table_verifies_cloud_offload_from_the_command_line(capsys):
 # -- no-hysteresis: the transition half of no-flapping --------------------------------
 
 
-def _two_pcs(rebalance: float) -> Scenario:
+def _two_pcs(rebalance: float, start_failures: int = 0) -> Scenario:
     """One graph preferring the most free memory on two equal PCs; pc0's load steps to
     250 MB, so pc1 beats pc0 by 0.25."""
     r = RobotBuilder("two_pcs")
@@ -216,7 +226,7 @@ def _two_pcs(rebalance: float) -> Scenario:
     r.rules({HOLD: "combined", GRASP: "combined"})
     return Scenario(
         name="two_pcs", model=r.build(), initial=(LoadChange("pc0", 0),), timeline=(TimedEvent(0, ActionChange(HOLD)),),
-        checker=Bounds(actions=(HOLD, GRASP), loads={"pc0": (0, 250)}),
+        checker=Bounds(actions=(HOLD, GRASP), loads={"pc0": (0, 250)}, start_failures=start_failures),
     )
 
 
@@ -229,6 +239,17 @@ def test_the_no_hysteresis_mutant_is_caught_by_no_flapping_with_the_same_counter
         assert "not above its min_gain 0.5" in r.counterexamples[0].message
     # the corrected deployer keeps the deployment: a gain of 0.25 is not above 0.5
     assert Checker(scenario).run(engine="table").verdict == "HOLDS"
+
+
+def test_a_deployer_that_would_move_again_with_nothing_changed_violates_no_flapping_on_both_engines():
+    # the move to pc1 fails, the detector is started on pc0 again, where it runs validly
+    # but scores 0.25 below pc1: every later reaction would retry the move
+    d, t, r = _both(_two_pcs(0.1, start_failures=1), RESTLESS)
+    assert t == d
+    assert r.verdict == "VIOLATED" and r.counterexamples[0].invariant == "no-flapping"
+    assert "with nothing changed the deployer would move combined off pc0" in r.counterexamples[0].message
+    # the corrected deployer moves only in answer to a change of the platforms concerned
+    assert Checker(_two_pcs(0.1, start_failures=1)).run(engine="table").verdict == "HOLDS"
 
 
 def test_a_gain_above_min_gain_moves_the_deployment_on_both_engines():
