@@ -26,7 +26,10 @@ robot's deployer sees.
 which all robots share one action context (the rule table maps one context to the
 slots of every robot); the fleet run gives each robot its own. See docs/fleet.md.
 
-Parameters: ``robots`` (default 100), ``edges`` (default 20), ``hours`` (default 8).
+Parameters: ``robots`` (default 100), ``edges`` (default 20), ``hours`` (default 8),
+``edge_memory`` (MB per edge server, default 1024), ``admission`` (the edge servers'
+admission control, default True; ``-p admission=False`` shows concurrent starts of
+different robots over-committing an edge server, which the audit reports).
 """
 
 from __future__ import annotations
@@ -42,12 +45,14 @@ from desmon.sim.fleet import Fleet, merged_model
 from desmon.sim.world import MTTF, LoadWalk, StartFailure, Step, World
 from desmon.verify.bounds import Bounds, levels
 
-p = parameters(robots=100, edges=20, hours=8.0, edge_memory=1024.0)
+p = parameters(robots=100, edges=20, hours=8.0, edge_memory=1024.0, admission=True)
 
 if not isinstance(p.robots, int) or not 1 <= p.robots <= 1000:
     raise ScenarioError(f"robots = {p.robots!r}: give a whole number of robots in [1, 1000]")
 if not isinstance(p.edges, int) or not 0 <= p.edges <= 200:
     raise ScenarioError(f"edges = {p.edges!r}: give a whole number of edge servers in [0, 200]")
+if not p.edge_memory > 0:
+    raise ScenarioError(f"edge_memory = {p.edge_memory!r}: give a positive number of MB")
 
 EDGE_MEMORY = p.edge_memory
 #: link latency (ms) of edge server i: 3 to 15 ms, about 60 % of them within 10 ms
@@ -130,7 +135,7 @@ def robot_scenario(i: int) -> Scenario:
 
 
 robots = tuple(robot_scenario(i) for i in range(p.robots))
-fleet = Fleet(robots=robots, edges=EDGES, description="Care-O-bots sharing edge servers")
+fleet = Fleet(robots=robots, edges=EDGES, description="Care-O-bots sharing edge servers", admission=p.admission)
 
 scenario = Scenario(
     name="fleet",

@@ -166,7 +166,10 @@ def test_a_fleet_refuses_bad_fields(kw: dict, match: str) -> None:
         Fleet(robots=robots, **kw)
 
 
-@pytest.mark.parametrize("param, match", [("robots=0", "robots = 0"), ("edges=-1", "edges = -1"), ("robots=two", "robots")])
+@pytest.mark.parametrize(
+    "param, match",
+    [("robots=0", "robots = 0"), ("edges=-1", "edges = -1"), ("robots=two", "robots"), ("edge_memory=-3", "edge_memory"), ("admission=maybe", "admission")],
+)
 def test_desmon_run_refuses_bad_fleet_parameters(param: str, match: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["run", str(FLEET), "-p", param]) == 2
     err = capsys.readouterr().err
