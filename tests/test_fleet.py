@@ -49,6 +49,13 @@ def test_a_robot_sees_its_own_pcs_and_the_edge_servers_only() -> None:
         view.platform_state("r000.torso_pc")
 
 
+def test_an_edge_server_too_far_for_every_detector_is_left_out_of_a_robots_view() -> None:
+    world = FleetWorld(fleet(2, 4))  # edge02 is 10.4 ms away, edge03 14.1 ms: over every limit (10 ms)
+    view = world.members[0].query
+    assert [s.name for s in view.platform_states()][3:] == ["edge00", "edge01"]
+    assert view.platform_state("edge03").name == "edge03"  # still a platform the robot may ask about
+
+
 def test_a_robot_deploys_only_on_its_own_pcs_or_edge_servers(contended) -> None:  # type: ignore[no-untyped-def]
     _scenario, _result, text = contended
     placed = starts(text)

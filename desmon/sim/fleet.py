@@ -45,7 +45,8 @@ from desmon.errors import ScenarioError
 from desmon.model.checks import check_items, check_name, check_names, strict_init
 from desmon.model.platform import Platform
 from desmon.model.scenario import Scenario
-from desmon.model.requirements import Capacity, DeploymentSpec, Requirement
+from desmon.deployment.validity import check_platform
+from desmon.model.requirements import PLATFORM_HAS, Attribute, Capacity, DeploymentSpec, Maximum, Minimum, Requirement, Selection
 from desmon.model.system import PlatformState, Rule, RuleTable, SystemModel
 from desmon.repository import labels as L
 from desmon.repository.facts import RepositoryInsert, load_model
@@ -232,23 +233,47 @@ class RobotView(RepositoryQuery):
     (so :func:`~desmon.deployment.validity.validity_for` memoises on it).
     """
 
-    def __init__(self, repo: Repository, robot: str, platforms: tuple[str, ...], graphs: tuple[str, ...], cache: _StateCache) -> None:
+    def __init__(
+        self, repo: Repository, robot: str, own: tuple[str, ...], edges: tuple[str, ...], graphs: tuple[str, ...], cache: _StateCache
+    ) -> None:
         super().__init__(repo)
         self.robot = robot
-        self.platform_names = platforms
+        self.own = own
+        self.edges = edges
         self.graph_names = graphs
         self._own_graphs = frozenset(graphs)
-        self._own_platforms = frozenset(platforms)
+        self._own_platforms = frozenset(own + edges)
         self._robot_id = node_id(L.ROBOT, robot)
         self._cache = cache
-        self._states: tuple[PlatformState, ...] | None = None  # None: one of its platforms changed
-        self._index = {p: i for i, p in enumerate(platforms)}
-        self._rows: list[PlatformState] = []  # filled on first use (every row dirty)
-        self._dirty: set[int] = set(range(len(platforms)))
         self._deployed: dict[str, tuple[str, ...]] = {}  # graph -> platforms, until a DEPLOYED_ON change
+        self._deployments: tuple[tuple[str, str], ...] | None = None
         self._specs: dict[str, DeploymentSpec | None] = {}  # graph -> spec, for one specs_version
         self._specs_at = -1
-        cache.watch(self, platforms)
+        self._usable_at = -1
+        self.platform_names: tuple[str, ...] = ()
+        self._select()
+        cache.watch(self, own + edges)
+
+    def _select(self) -> None:
+        """The platforms in the view: its own PCs, and the edge servers that one of its
+        graphs may use by their fixed facts (properties, attributes: a link too slow for
+        every detector rules a server out for good, until a requirement changes)."""
+        self._usable_at = self.repo.specs_version
+        reqs = [
+            tuple(r for r in spec.requirements if _static(r))
+            for spec in (self.deployment_information(g) for g in self.graph_names)
+            if spec is not None and spec.fixed_platform is None
+        ]
+        fixed = {spec.fixed_platform for spec in (self.deployment_information(g) for g in self.graph_names) if spec is not None}
+        usable = tuple(
+            e for e in self.edges
+            if e in fixed or any(not check_platform(r, PlatformState(self._cache.state(e).platform), None) for r in reqs)
+        )
+        self.platform_names = self.own + usable
+        self._index = {p: i for i, p in enumerate(self.platform_names)}
+        self._rows: list[PlatformState] = []  # filled on first use
+        self._dirty: set[int] = set()
+        self._states: tuple[PlatformState, ...] | None = None  # None: one of its platforms changed
 
     def context(self) -> str | None:
         ctx = self.repo.successors(self._robot_id, L.IN_CONTEXT)
@@ -262,6 +287,8 @@ class RobotView(RepositoryQuery):
         return self._cache.state(platform)
 
     def platform_states(self) -> tuple[PlatformState, ...]:
+        if self._usable_at != self.repo.specs_version:
+            self._select()
         states = self._states
         if states is None:
             state = self._cache.state
@@ -276,12 +303,15 @@ class RobotView(RepositoryQuery):
 
     def stale(self, platform: str) -> None:
         """``platform`` changed: re-read its state on the next call (the others are kept)."""
-        self._states = None
-        self._dirty.add(self._index[platform])
+        i = self._index.get(platform)
+        if i is not None:
+            self._states = None
+            self._dirty.add(i)
 
     def forget_deployments(self) -> None:
         """A DEPLOYED_ON edge of one of this robot's graphs changed."""
         self._deployed.clear()
+        self._deployments = None
 
     def deployed_on(self, graph: str) -> tuple[str, ...]:
         on = self._deployed.get(graph)
@@ -309,10 +339,24 @@ class RobotView(RepositoryQuery):
         return tuple(g for g in super().active_deployments(platform) if g in self._own_graphs)
 
     def deployments(self) -> tuple[tuple[str, str], ...]:
-        return tuple(sorted((g, p) for g in self.graph_names for p in self.deployed_on(g)))
+        d = self._deployments
+        if d is None:
+            d = self._deployments = tuple(sorted((g, p) for g in self.graph_names for p in self.deployed_on(g)))
+        return d
 
     def history(self) -> tuple[tuple[str, str, float, float], ...]:
         return tuple(r for r in super().history() if r[0] in self._own_graphs)
+
+
+def _static(req: Requirement) -> bool:
+    """Does ``req`` read only a platform's fixed facts (properties, attributes)?"""
+    if isinstance(req, (Maximum, Minimum)):
+        return True
+    if isinstance(req, Attribute):
+        return req.name != PLATFORM_HAS
+    if isinstance(req, Selection):
+        return all(o.attribute is not None for o in req.options)
+    return False
 
 
 class _RobotTrace(Trace):
@@ -553,7 +597,7 @@ class FleetWorld:
         for sc in self.fleet.robots:
             m = sc.model
             own = tuple(p.name for p in m.platforms if p.name not in edge_set)
-            view = RobotView(self.repo, m.robot, own + tuple(e for e in edges), tuple(g.name for g in m.graphs), self.cache)
+            view = RobotView(self.repo, m.robot, own, edges, tuple(g.name for g in m.graphs), self.cache)
             member = _Member(
                 sc, env=env, repo=self.repo, view=view, deployer=deployer, seed=robot_seed(self.seed, m.robot),
                 horizon=self.horizon, trace=_RobotTrace(trace, m.robot), edges=edges, admission=self.fleet.admission,
