@@ -156,6 +156,20 @@ def test_a_fleet_refuses_an_edge_server_the_robots_do_not_declare() -> None:
         Fleet(robots=robots, edges=("edge07",))
 
 
+def test_a_fleet_refuses_a_platform_two_robots_claim() -> None:
+    robots = fleet(2, 1).world.robots
+    twin = dataclasses.replace(robots[0], model=dataclasses.replace(robots[0].model, robot="r001"))
+    with pytest.raises(ScenarioError, match="platform 'r000.torso_pc' belongs to robots 'r000' and 'r001'"):
+        Fleet(robots=(robots[0], twin), edges=("edge00",))
+
+
+def test_a_fleet_refuses_robots_with_different_horizons() -> None:
+    robots = fleet(2, 1).world.robots
+    short = dataclasses.replace(robots[1], world=dataclasses.replace(robots[1].world, horizon=60.0))
+    with pytest.raises(ScenarioError, match="same horizon"):
+        Fleet(robots=(robots[0], short), edges=("edge00",))
+
+
 def test_a_fleet_refuses_robots_that_simulate_signals() -> None:
     robots = fleet(2, 1).world.robots
     loud = dataclasses.replace(robots[1], world=dataclasses.replace(robots[1].world, signals=True))
@@ -205,7 +219,7 @@ def test_desmon_run_json_gives_every_robots_metrics(capsys: pytest.CaptureFixtur
 
 
 @pytest.mark.slow
-def test_a_hundred_robots_share_twenty_edge_servers_for_an_hour_without_violations() -> None:
-    result = simulate_fleet(fleet(100, 20, 1.0))
+def test_a_hundred_robots_share_twenty_edge_servers_for_a_quarter_hour_without_violations() -> None:
+    result = simulate_fleet(fleet(100, 20, 0.25))
     assert result.violations == []
     assert result.metrics["edge_starts"] > 0

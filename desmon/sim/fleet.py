@@ -41,7 +41,7 @@ import simpy
 
 from desmon.deployment.core import DeploymentCore
 from desmon.deployment.invariants import SystemView, check_invariants
-from desmon.errors import ScenarioError
+from desmon.errors import QueryError, ScenarioError
 from desmon.model.checks import check_items, check_name, check_names, strict_init
 from desmon.model.platform import Platform
 from desmon.model.scenario import Scenario
@@ -97,54 +97,37 @@ class Fleet:
         self._check_robots()
 
     def _check_robots(self) -> None:
+        shared = self._shared_platforms()
         first = self.robots[0]
-        shared: dict[str, Platform] = {}
-        for e in self.edges:
-            try:
-                shared[e] = first.model.platform(e)
-            except Exception:
-                raise ScenarioError(
-                    f"fleet: edge server {e!r} is not a platform of robot {first.model.robot!r}: declare it in every robot's model"
-                ) from None
-            if shared[e].on_demand:
-                raise ScenarioError(f"fleet: edge server {e!r} is on demand: a fleet's edge servers are always there; drop on_demand")
         owner: dict[str, str] = {}
         robots: set[str] = set()
-        horizon: float | None = None
         for sc in self.robots:
-            m, name = sc.model, sc.model.robot
+            name = sc.model.robot
             if name in robots:
                 raise ScenarioError(f"fleet: two robots are named {name!r}: give each robot model its own robot= name")
             robots.add(name)
-            if not isinstance(sc.world, World):
-                raise ScenarioError(f"fleet: robot {name!r} has no World: give its Scenario world=World(...)")
-            if sc.world.signals:
-                raise ScenarioError(f"fleet: robot {name!r} simulates signals: a fleet runs with World(signals=False)")
-            if sc.world.lease is not None:
-                raise ScenarioError(f"fleet: robot {name!r} leases platforms: a fleet shares fixed edge servers; drop World(lease=...)")
-            if horizon is None:
-                horizon = sc.world.horizon
-            elif sc.world.horizon != horizon:
-                raise ScenarioError(
-                    f"fleet: robot {name!r} has horizon {sc.world.horizon:g} s, robot {first.model.robot!r} {horizon:g} s: give every robot the same horizon"
-                )
+            _check_robot_world(sc, first)
             for e, plat in shared.items():
-                mine = next((p for p in m.platforms if p.name == e), None)
+                mine = next((p for p in sc.model.platforms if p.name == e), None)
                 if mine != plat:
                     why = "does not declare it" if mine is None else "declares it differently"
                     raise ScenarioError(f"fleet: robot {name!r} {why} edge server {e!r}: every robot declares the same edge servers")
-            for what, names in (
-                ("platform", [p.name for p in m.platforms if p.name not in shared]),
-                ("device", [d.name for d in m.devices]),
-                ("graph", [g.name for g in m.graphs]),
-            ):
-                for n in names:
-                    key = f"{what}:{n}"
-                    if key in owner:
-                        raise ScenarioError(
-                            f"fleet: {what} {n!r} belongs to robots {owner[key]!r} and {name!r}: prefix each robot's names (e.g. '{name}.{n}')"
-                        )
-                    owner[key] = name
+            _claim_names(sc.model, shared, owner)
+
+    def _shared_platforms(self) -> dict[str, Platform]:
+        """The edge servers as the first robot declares them (always there, not on demand)."""
+        first = self.robots[0].model
+        shared: dict[str, Platform] = {}
+        for e in self.edges:
+            plat = next((p for p in first.platforms if p.name == e), None)
+            if plat is None:
+                raise ScenarioError(
+                    f"fleet: edge server {e!r} is not a platform of robot {first.robot!r}: declare it in every robot's model"
+                )
+            if plat.on_demand:
+                raise ScenarioError(f"fleet: edge server {e!r} is on demand: a fleet's edge servers are always there; drop on_demand")
+            shared[e] = plat
+        return shared
 
     @property
     def horizon(self) -> float:
@@ -156,6 +139,41 @@ class Fleet:
         missing = [e for e in self.edges if e not in names]
         if missing:
             raise ScenarioError(f"fleet: edge server {missing[0]!r} is not a platform of scenario {scenario.name!r}'s model")
+
+
+def _check_robot_world(sc: Scenario, first: Scenario) -> None:
+    """A robot of a fleet has a World with signals off, no lease, the first robot's horizon."""
+    name = sc.model.robot
+    if not isinstance(sc.world, World):
+        raise ScenarioError(f"fleet: robot {name!r} has no World: give its Scenario world=World(...)")
+    if sc.world.signals:
+        raise ScenarioError(f"fleet: robot {name!r} simulates signals: a fleet runs with World(signals=False)")
+    if sc.world.lease is not None:
+        raise ScenarioError(f"fleet: robot {name!r} leases platforms: a fleet shares fixed edge servers; drop World(lease=...)")
+    horizon = first.world.horizon if isinstance(first.world, World) else sc.world.horizon
+    if sc.world.horizon != horizon:
+        raise ScenarioError(
+            f"fleet: robot {name!r} has horizon {sc.world.horizon:g} s, robot {first.model.robot!r} {horizon:g} s: "
+            "give every robot the same horizon"
+        )
+
+
+def _claim_names(model: SystemModel, shared: dict[str, Platform], owner: dict[str, str]) -> None:
+    """Record ``model``'s platform (edge servers aside), device and graph names as its
+    robot's; a name another robot already owns is refused."""
+    name = model.robot
+    for what, names in (
+        ("platform", [p.name for p in model.platforms if p.name not in shared]),
+        ("device", [d.name for d in model.devices]),
+        ("graph", [g.name for g in model.graphs]),
+    ):
+        for n in names:
+            key = f"{what}:{n}"
+            if key in owner:
+                raise ScenarioError(
+                    f"fleet: {what} {n!r} belongs to robots {owner[key]!r} and {name!r}: prefix each robot's names (e.g. '{name}.{n}')"
+                )
+            owner[key] = name
 
 
 def is_fleet(scenario: Scenario) -> bool:
@@ -227,10 +245,12 @@ class RobotView(RepositoryQuery):
     """One robot's Query port on the shared repository.
 
     Its context is its own Robot node's; its platforms are its own PCs and the edge
-    servers (in that order); the deployments it lists, stops or re-checks are its own
-    graphs'. A platform's ``deployed`` facts are everyone's: capacity is shared.
-    ``platform_states`` hands out the same tuple while none of its platforms changed
-    (so :func:`~desmon.deployment.validity.validity_for` memoises on it).
+    servers one of its graphs may use by their fixed facts (in that order; see
+    :meth:`_select`); the deployments it lists, stops or re-checks are its own graphs'.
+    A platform's ``deployed`` facts are everyone's: capacity is shared. Another robot's
+    PC is not its to ask about (:class:`~desmon.errors.QueryError`).
+    ``platform_states`` hands out the same tuple while none of its platforms changed and
+    re-reads only the ones that did.
     """
 
     def __init__(
@@ -281,8 +301,6 @@ class RobotView(RepositoryQuery):
 
     def platform_state(self, platform: str) -> PlatformState:
         if platform not in self._own_platforms:
-            from desmon.errors import QueryError
-
             raise QueryError(f"robot {self.robot!r} cannot use platform {platform!r}: it is another robot's")
         return self._cache.state(platform)
 
@@ -537,7 +555,6 @@ class _EdgeMeter:
     def close(self, t: float) -> None:
         for e in self.capacity:
             self.change(e, t, 0.0, 0)
-            self.starts[e] -= 0
 
 
 @dataclass
