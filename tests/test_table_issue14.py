@@ -286,3 +286,21 @@ def test_requirement_changes_reaching_too_many_variants_run_on_the_direct_engine
     )
     auto = Checker(crowded).run(max_states=50)
     assert auto.engine == "direct" and "variants" in auto.engine_note
+
+
+def test_the_table_engine_enables_exactly_the_alphabets_joins_leaves_and_requirement_changes_in_its_order():
+    import numpy as np
+
+    from desmon.verify.environment import enabled_events
+
+    checker = Checker(load_scenario(SCENARIOS / "cloud_offload.py"))
+    checker.run(engine="table", keep_going=True)
+    engine = checker.explored._e  # the table engine of the run
+    states = list(checker.explored)
+    tr = engine.events.enabled(np.frombuffer(engine.codes, dtype=np.int64))
+    table: list[list] = [[] for _ in states]
+    for pos, ev in zip(tr.pos.tolist(), tr.ev.tolist()):
+        table[pos].append(engine.events.events[ev])
+    assert any(k.specs for k in states) and any("edge" not in k.down for k in states)
+    for key, events in zip(states, table):
+        assert events == enabled_events(checker.bounds, key), key
