@@ -226,23 +226,30 @@ def test_scenarios_run_as_scripts(name):
     assert res.returncode == 1 and "VIOLATED" in res.stdout
 
 
+_GARBAGE_PROBE = """
+import gc, sys
+from desmon.loader import load_scenario
+from desmon.verify import Checker
+scenario = load_scenario(sys.argv[1])
+checker = Checker(scenario, sys.argv[2])
+checker.initial()  # the checker's own (long-lived) cycles exist before the search
+Checker(scenario, sys.argv[2]).run(max_states=2)  # so do the modules a search imports (numpy's lazy ones too)
+gc.collect()
+gc.set_debug(gc.DEBUG_SAVEALL)  # whatever a collection finds is kept in gc.garbage
+r = checker.run(keep_going=True)
+assert gc.isenabled(), "run() must give the collector back"
+gc.collect()
+print(r.states, len(gc.garbage))
+"""
+
+
 @pytest.mark.parametrize("deployer", ["desmon", "paper"])
 def test_search_leaves_no_cyclic_garbage_so_pausing_the_collector_is_safe(deployer):
-    import gc
-
-    checker = Checker(load_scenario(SCENARIOS / "migration.py"), deployer)
-    checker.initial()  # the checker's own (long-lived) cycles exist before the search
-    Checker(checker.scenario, deployer).run(max_states=2)  # so do the modules a search imports (numpy's lazy ones too)
-    gc.collect()
-    was = gc.get_debug()
-    gc.set_debug(gc.DEBUG_SAVEALL)  # whatever a collection finds is kept in gc.garbage
-    try:
-        r = checker.run(keep_going=True)
-        assert gc.isenabled(), "run() must give the collector back"
-        gc.collect()
-        garbage = len(gc.garbage)
-    finally:
-        gc.set_debug(was)
-        gc.garbage.clear()
-    assert r.states == checker.scenario.expected["verify"][deployer]["states"]
+    """Run in a fresh interpreter: threads other tests leave behind (a Dask client's
+    event loop) make garbage of their own while the collector is paused."""
+    out = subprocess.run(
+        [sys.executable, "-c", _GARBAGE_PROBE, str(SCENARIOS / "migration.py"), deployer], capture_output=True, text=True, check=True
+    ).stdout.split()
+    states, garbage = int(out[0]), int(out[1])
+    assert states == load_scenario(SCENARIOS / "migration.py").expected["verify"][deployer]["states"]
     assert garbage == 0
