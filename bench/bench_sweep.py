@@ -43,9 +43,14 @@ def _dask(spec, runs, workers: int) -> tuple[float, float, dict]:  # type: ignor
     from desmon.sweep.jobs import run_point
     from desmon.sweep.runner import execute
 
+    import dask
+
+    from desmon.sweep.runner import dask_settings
+
     t0 = time.perf_counter()
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0",
-                           silence_logs=logging.CRITICAL)
+    with dask.config.set(dask_settings()):  # the configuration `desmon sweep` starts its cluster with
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0",
+                               silence_logs=logging.CRITICAL)
     try:
         with Client(cluster, set_as_default=False) as client:  # warm-up: one run on every worker
             addresses = list(client.scheduler_info()["workers"])

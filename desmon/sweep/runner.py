@@ -106,13 +106,28 @@ def _clock(seconds: float) -> str:
     return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
 
 
+def dask_settings(retries: int = 0) -> dict[str, Any]:
+    """The Dask configuration a sweep's local cluster runs under (``dask.config.set``)."""
+    return {
+        "distributed.scheduler.allowed-failures": retries,
+        "distributed.admin.tick.limit": "1h",
+        # The worker's statistical profiler samples the task thread every 10 ms: a
+        # dashboard feature a sweep does not show.
+        "distributed.worker.profile.enabled": False,
+        # Dask starts worker processes with MALLOC_TRIM_THRESHOLD_=65536 (to hand memory
+        # back to the system sooner); with it a simulation ran about 35 % slower in a
+        # worker than in this process (bench/bench_sweep.py). Keep the thread caps only.
+        "distributed.nanny.pre-spawn-environ": {"OMP_NUM_THREADS": 1, "MKL_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1},
+    }
+
+
 @contextlib.contextmanager
 def _client(scheduler: str | None, workers: int | None, retries: int) -> Iterator[Any]:
     """A Dask client: connected to ``scheduler``, or to a LocalCluster of ``workers`` processes."""
     import dask
     from distributed import Client, LocalCluster
 
-    quiet = {"distributed.scheduler.allowed-failures": retries, "distributed.admin.tick.limit": "1h"}
+    quiet = dask_settings(retries)
     for name in ("distributed", "distributed.nanny", "distributed.worker", "distributed.scheduler", "distributed.core"):
         logging.getLogger(name).setLevel(logging.CRITICAL)
     with dask.config.set(quiet):
