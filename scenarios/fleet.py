@@ -49,8 +49,8 @@ p = parameters(robots=100, edges=20, hours=8.0, edge_memory=1024.0, admission=Tr
 
 if not isinstance(p.robots, int) or not 1 <= p.robots <= 1000:
     raise ScenarioError(f"robots = {p.robots!r}: give a whole number of robots in [1, 1000]")
-if not isinstance(p.edges, int) or not 0 <= p.edges <= 200:
-    raise ScenarioError(f"edges = {p.edges!r}: give a whole number of edge servers in [0, 200]")
+if not isinstance(p.edges, int) or not 1 <= p.edges <= 200:
+    raise ScenarioError(f"edges = {p.edges!r}: give a whole number of edge servers in [1, 200] (the fleet shares edge servers)")
 if not p.edge_memory > 0:
     raise ScenarioError(f"edge_memory = {p.edge_memory!r}: give a positive number of MB")
 

@@ -368,3 +368,12 @@ def test_preferences_only_permute_the_acceptable_platforms_best_first(states, pr
                 assert plain.acceptable.index(a) < plain.acceptable.index(b)
     else:
         assert scored.acceptable == plain.acceptable
+
+
+def test_the_same_preference_twice_and_two_rebalance_thresholds_are_refused():
+    from desmon.model.dsl import SpecBuilder
+
+    with pytest.raises(ModelError, match="prefers spread\\(\\) twice"):
+        SpecBuilder("g").prefer("spread").prefer("spread", weight=2)
+    with pytest.raises(ModelError, match="rebalances twice"):
+        SpecBuilder("g").prefer("spread").rebalance(0.5).rebalance(0.7)

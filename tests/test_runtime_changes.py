@@ -323,3 +323,45 @@ def test_the_control_rules_refuse_a_start_by_the_requirements_as_they_are_now():
     why = refuse("A", "pc2")
     assert why is not None and "platform_has force_sensor" in why
     assert refuse("A", "pc1") is None
+
+
+def _cloud_with(**bounds):  # type: ignore[no-untyped-def]
+    import dataclasses
+    import importlib.util
+
+    from desmon.errors import CheckerError  # noqa: F401  (callers expect it)
+
+    spec = importlib.util.spec_from_file_location("cloud_offload_for_test", "scenarios/cloud_offload.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)  # type: ignore[union-attr]
+    base = mod.scenario
+    initial = base.initial + tuple(bounds.pop("initial", ()))
+    return mod, dataclasses.replace(
+        base, initial=initial, timeline=(), world=None, checker=dataclasses.replace(base.checker, **bounds)
+    )
+
+
+def test_a_change_in_the_initial_facts_may_be_reversed_by_the_bounds_and_both_engines_agree(monkeypatch, root):
+    from desmon.verify import Checker
+
+    monkeypatch.chdir(root)
+    mod, _ = _cloud_with()
+    _mod, scenario = _cloud_with(initial=(mod.FAST,), requirement_changes=(mod.SLOW,))
+    direct = Checker(scenario).run(engine="direct")
+    table = Checker(scenario).run(engine="table")
+    assert direct.verdict == table.verdict == "HOLDS"
+    assert (direct.states, direct.transitions) == (table.states, table.transitions)
+
+
+def test_bounds_refuse_an_on_demand_platform_among_the_platforms_that_go_down(monkeypatch, root):
+    from desmon.errors import CheckerError
+
+    monkeypatch.chdir(root)
+    with pytest.raises(CheckerError, match="'edge', which is on demand: it joins and leaves, so list it in joins="):
+        _cloud_with(platforms=("edge",))
+
+
+def test_random_changes_refuse_a_change_listed_twice():
+    change = RequirementChange("A", add=(BIG,), remove=(SMALL,))
+    with pytest.raises(ScenarioError, match="twice"):
+        RandomChanges(changes=(change, change), mean_interval=60.0)

@@ -131,9 +131,12 @@ def preference_scenarios(draw):  # type: ignore[no-untyped-def]
         declared[g] = draw(hst.sampled_from((100, 150, 250)))
         spec.add_constraint("capacity", "memory", declared[g])
         prefs = draw(hst.integers(0, 3))
+        seen: set[tuple] = set()
         for _ in range(prefs):
             pref = _preference(draw, g, graphs, vendors)
-            spec.prefer(pref.kind, *pref.args, weight=pref.weight)
+            if (pref.kind, pref.args) not in seen:  # the DSL refuses the same preference twice
+                seen.add((pref.kind, pref.args))
+                spec.prefer(pref.kind, *pref.args, weight=pref.weight)
         rebalance = draw(hst.sampled_from((None, 0.0, 0.1, 0.3, 0.6)))
         if rebalance is not None and prefs:
             spec.rebalance(rebalance)

@@ -126,13 +126,23 @@ class SpecBuilder:
         :class:`~desmon.model.requirements.Preference`). Preferences never reject a
         platform; they order the acceptable ones by score.
         """
-        self._requirements.append(make_preference(kind, *args, **kwargs))
+        pref = make_preference(kind, *args, **kwargs)
+        if any(isinstance(r, Preference) and (r.kind, r.args) == (pref.kind, pref.args) for r in self._requirements):
+            raise ModelError(
+                f"deployment specification of {self.graph!r} prefers {pref.kind}({', '.join(pref.args)}) twice: "
+                "give it once, with the weight you want"
+            )
+        self._requirements.append(pref)
         return self
 
     @strict_call(ModelError, "rebalance(...)")
     def rebalance(self, min_gain: float) -> "SpecBuilder":
         """Let a valid deployment move to a better-scoring platform, but only when the
         score gain exceeds ``min_gain`` (hysteresis: the deployer cannot flap)."""
+        if self._rebalance is not None:
+            raise ModelError(
+                f"deployment specification of {self.graph!r} rebalances twice ({self._rebalance!r} and {min_gain!r}): give one min_gain"
+            )
         self._rebalance = min_gain
         return self
 

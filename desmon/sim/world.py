@@ -210,6 +210,8 @@ class RandomChanges:
         )
         if not changes:
             raise ScenarioError("world: random changes list no change: give at least one RequirementChange")
+        if len(set(changes)) != len(changes):
+            raise ScenarioError("world: random changes list a change twice (it would be drawn twice as often): list each once")
         object.__setattr__(self, "changes", changes)
         _seconds("random changes mean interval", self.mean_interval, zero=False)
 

@@ -187,16 +187,21 @@ class Bounds:
             if p not in platforms:
                 raise CheckerError(f"{where}: unknown platform {p!r}{suggest(p, platforms)} (known: {', '.join(platforms)})")
         self._validate_loads(where, scenario)
-        self._validate_runtime_changes(where, m)
+        self._validate_runtime_changes(where, scenario)
         from desmon.deployment.invariants import INVARIANTS
 
         for n in self.instantaneous:
             if n not in INVARIANTS:
                 raise CheckerError(f"{where}: unknown invariant {n!r}{suggest(n, INVARIANTS)} in instantaneous (invariants: {', '.join(INVARIANTS)})")
 
-    def _validate_runtime_changes(self, where: str, m: SystemModel) -> None:
-        """``joins`` are exactly the model's on-demand platforms; requirement changes name what the model has."""
+    def _validate_runtime_changes(self, where: str, scenario: Scenario) -> None:
+        """``joins`` are exactly the model's on-demand platforms (which never go down and up);
+        requirement changes name what the model has."""
+        m = scenario.model
         on_demand = [p.name for p in m.platforms if p.on_demand]
+        for p in self.platforms:
+            if p in on_demand:
+                raise CheckerError(f"{where}: platforms names {p!r}, which is on demand: it joins and leaves, so list it in joins= instead")
         for p in self.joins:
             if p not in on_demand:
                 known = [q.name for q in m.platforms]
@@ -209,8 +214,10 @@ class Bounds:
                 f"{where}: on-demand platform {missing[0]!r} is not in joins: list it (joins={tuple(on_demand)!r}) so the checker "
                 "lets it join and leave, or drop it from the model"
             )
+        # a change may remove what another change adds, the scenario's initial ones included
+        others = (*self.requirement_changes, *(ev for ev in scenario.initial if isinstance(ev, RequirementChange)))
         for ev in self.requirement_changes:
-            problem = event_problem(ev, m, self.requirement_changes)
+            problem = event_problem(ev, m, others)
             if problem is not None:
                 raise CheckerError(f"{where}: requirement_changes: {problem}")
 

@@ -609,15 +609,19 @@ def _contexts(init: Key, b: Any) -> list[str | None]:
     return ctxs
 
 
-def _variants(model: Any, changes: Sequence[RequirementChange]) -> dict[str, list[tuple]]:
-    """The requirements each changed graph can have: the declared ones first, then every
-    variant the listed changes reach from them (in order of discovery)."""
+def _variants(model: Any, changes: Sequence[RequirementChange], init: Key) -> dict[str, list[tuple]]:
+    """The requirements each changed graph can have: the declared ones first, then the
+    initial state's (the scenario's initial facts may change them), then every variant the
+    listed changes reach from those (in order of discovery)."""
     out: dict[str, list[tuple]] = {}
+    initial = dict(init.specs)
     for spec in model.specs:
         mine = [c for c in changes if c.graph == spec.graph]
-        if not mine:
+        if not mine and spec.graph not in initial:
             continue
         found, i = [spec.requirements], 0
+        if initial.get(spec.graph, spec.requirements) not in found:
+            found.append(initial[spec.graph])
         while i < len(found):
             for c in mine:
                 nxt = c.apply(found[i])
@@ -644,7 +648,7 @@ class _Env:
         self.ctxs = _contexts(init, b)
         self.C = len(self.ctxs)
         # requirement variants: digit g of the global digit is graph g's variant number
-        self.variants = _variants(model, b.requirement_changes)
+        self.variants = _variants(model, b.requirement_changes, init)
         self.vgraphs = sorted(self.variants)
         self.declared = {s.graph: s.requirements for s in model.specs}
         self.VW: list[int] = []  # the weight of each changed graph's digit in the env code
@@ -705,7 +709,7 @@ class _Env:
         code = self.ctxs.index(key.context)
         changed = dict(key.specs)
         if any(g not in self.variants for g in changed):
-            raise CheckerError("table engine: a state's requirements are outside the encoded variants")  # pragma: no cover
+            raise TableUnsupported("table engine: a state's requirements are outside the encoded variants; run with --engine direct")  # pragma: no cover
         for g, vw in zip(self.vgraphs, self.VW):
             code += self.variants[g].index(changed.get(g, self.declared[g])) * vw
         failed, down, loads = set(key.failed), set(key.down), dict(key.loads)
