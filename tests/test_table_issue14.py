@@ -22,27 +22,9 @@ from desmon.model.requirements import Capacity, Preference
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.verify import Bounds, Checker
 from desmon.verify.mutants import MUTANTS
+from test_verify_table import _both  # everything a user sees of a result, engine against engine
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
-
-
-def _everything(r, c):  # type: ignore[no-untyped-def]
-    """Every part of a result a user can see, counterexample steps included."""
-    return (
-        r.verdict, r.reason, r.states, r.transitions, r.depth,
-        dict(r.enabled), dict(r.new_states), dict(r.changed), dict(r.rules), dict(r.branches),
-        [(x.invariant, x.message, x.during, len(x.steps), [(s.title(), s.changes, s.commands, s.key) for s in x.steps]) for x in r.counterexamples],
-        list(c.explored),
-    )
-
-
-def _both(scenario, deployer, **kw):  # type: ignore[no-untyped-def]
-    direct = Checker(scenario, deployer)
-    rd = direct.run(engine="direct", **kw)
-    table = Checker(scenario, deployer)
-    rt = table.run(engine="table", **kw)
-    assert (rd.engine, rt.engine) == ("direct", "table")
-    return _everything(rd, direct), _everything(rt, table), rt
 
 
 # -- deployers that use what preferences add to a Validity ------------------------------

@@ -164,13 +164,17 @@ class SimWorld:
         self._init_ground_truth()
         self._init_metrics()
         self._apply_initial(scenario)
+        self._init_pending()
         # Notify: repository changes wake the deployer
+        self.repo.subscribe(self._notify, ops=(ADD_EDGE, REMOVE_EDGE, UPDATE_NODE), labels=(L.IN_CONTEXT, L.HAS_DEVICE, L.PLATFORM))
+        self.repo.subscribe(self._count_history, ops=(RELABEL_EDGE,), labels=(L.DEPLOYMENT_HISTORY,))
+
+    def _init_pending(self) -> None:
+        """What the deployer process has yet to react to, and the event that wakes it."""
         self.pending_platforms: dict[str, None] = {}
         self.pending_context = False
         self.pending_specs: dict[str, None] = {}
         self.wake: simpy.Event | None = None
-        self.repo.subscribe(self._notify, ops=(ADD_EDGE, REMOVE_EDGE, UPDATE_NODE), labels=(L.IN_CONTEXT, L.HAS_DEVICE, L.PLATFORM))
-        self.repo.subscribe(self._count_history, ops=(RELABEL_EDGE,), labels=(L.DEPLOYMENT_HISTORY,))
 
     def _init_physical(self) -> None:
         """Platforms up (an on-demand one absent until it joins), loads, devices, instances."""
@@ -793,18 +797,9 @@ class SimWorld:
             self.trace.emit(self.env.now, "violation", invariant=name, message=msg)
 
     # ------------------------------------------------------------------ run
-    def run(self) -> RunResult:
+    def _start_processes(self) -> None:
+        """Register the robot, the deployer and the world's fault, load and change processes."""
         env = self.env
-        self.trace.emit(
-            0.0, "run", scenario=self.scenario.name, deployer=self.deployer_name, seed=self.seed, horizon=self.horizon,
-            signals=self.signals_on,
-            platforms={p.name: {"memory": p.capacity("memory")} for p in self.model.platforms},
-            graphs={g.name: {"memory": self.consumes.get(g.name, 0.0)} for g in self.model.graphs},
-        )
-        for p in self.model.platforms:
-            self.trace.emit(0.0, "load", platform=p.name, resource="memory", amount=self.load[p.name])
-        for s in self.slips:
-            self.trace.emit(s.time, "slip", direction=s.direction, kind=s.kind)
         env.process(self._robot())
         env.process(self._deployer())
         if self.world.faults:
@@ -819,6 +814,20 @@ class SimWorld:
             env.process(self._scripted_changes())
         if self.world.random_changes is not None:
             env.process(self._random_changes())
+
+    def run(self) -> RunResult:
+        env = self.env
+        self.trace.emit(
+            0.0, "run", scenario=self.scenario.name, deployer=self.deployer_name, seed=self.seed, horizon=self.horizon,
+            signals=self.signals_on,
+            platforms={p.name: {"memory": p.capacity("memory")} for p in self.model.platforms},
+            graphs={g.name: {"memory": self.consumes.get(g.name, 0.0)} for g in self.model.graphs},
+        )
+        for p in self.model.platforms:
+            self.trace.emit(0.0, "load", platform=p.name, resource="memory", amount=self.load[p.name])
+        for s in self.slips:
+            self.trace.emit(s.time, "slip", direction=s.direction, kind=s.kind)
+        self._start_processes()
         if self.progress is not None:
             env.process(self._progress())
         env.run(until=self.horizon)

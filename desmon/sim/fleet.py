@@ -469,29 +469,12 @@ class _Member(SimWorld):
             self.rules = _Admission(self.rules, view, frozenset(edges))  # type: ignore[assignment]
         self._init_ground_truth()
         self._init_metrics()
-        self.pending_platforms: dict[str, None] = {}
-        self.pending_context = False
-        self.pending_specs: dict[str, None] = {}
-        self.wake: simpy.Event | None = None
+        self._init_pending()
 
     def start(self) -> None:
         """Register the robot's processes (SimWorld.run without running the environment)."""
-        env = self.env
         self._apply_initial(self.scenario)
-        env.process(self._robot())
-        env.process(self._deployer())
-        if self.world.faults:
-            env.process(self._scripted_faults())
-        for m in self.world.stochastic_faults:
-            env.process(self._stochastic(m.component, m.mttf, m.mttr))
-        if self.world.loads:
-            env.process(self._scripted_loads())
-        for i in range(len(self.world.load_walks)):
-            env.process(self._walk(i))
-        if self.world.changes:
-            env.process(self._scripted_changes())
-        if self.world.random_changes is not None:
-            env.process(self._random_changes())
+        self._start_processes()
 
     def _audit(self) -> None:
         """The named invariants on this robot's view: its own deployments, judged on the
