@@ -45,6 +45,7 @@ from __future__ import annotations
 import sys
 import threading
 from contextlib import contextmanager
+from itertools import repeat
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
 
@@ -147,13 +148,15 @@ class PlatformColumns:
         self.n = len(states)
         self._names = np.array([s.platform.name for s in states], dtype=object)
         self._graph_code: dict[str, int] = {}
+        #: attribute -> repr(value) -> code (the reason text shows the repr), and
+        #: attribute -> str(value) -> its codes (attributes compare as text: 1 and "1" match)
         self._attr_code: dict[str, dict[str, int]] = {}
+        self._attr_text: dict[str, dict[str, list[int]]] = {}
         self._inexact_rows: set[int] = set()
         self._order: np.ndarray | None = None
-        #: (requirement, graph) -> row -> (name, (its Failure,)), the scalar text; a
-        #: rewritten row drops its entries, as it does its "platform is down" pair
-        self._reasons: dict[tuple[str, _validity.Placing], dict[int, _Pair]] = {}
-        self._down: dict[int, _Pair] = {}
+        #: (requirement, graph) -> row -> its Failure (the scalar text); a rewritten row
+        #: drops its entries
+        self._reasons: dict[tuple[str, _validity.Placing], dict[int, _validity.Failure]] = {}
         self._memoised = 0
         self._build(states)
 
@@ -161,6 +164,7 @@ class PlatformColumns:
     def _build(self, states: tuple[PlatformState, ...]) -> None:
         n = self.n
         self._up = np.fromiter((s.up for s in states), dtype=bool, count=n)
+        self._on_demand = np.fromiter((s.platform.on_demand for s in states), dtype=bool, count=n)
         self._pref = np.fromiter((s.platform.preference for s in states), dtype=np.float64, count=n)
         caps: dict[str, dict[int, float]] = {}
         loads: dict[str, dict[int, float]] = {}
@@ -209,7 +213,11 @@ class PlatformColumns:
         attrs = {}
         for key, value in p.attributes:
             codes = self._attr_code.setdefault(key, {})
-            attrs[key] = codes.setdefault(str(value), len(codes))
+            code = codes.get(repr(value))
+            if code is None:
+                code = codes[repr(value)] = len(codes)
+                self._attr_text.setdefault(key, {}).setdefault(str(value), []).append(code)
+            attrs[key] = code
         kinds: dict[str, int] = {}
         vendors: dict[tuple[str, str], int] = {}
         for d in s.devices:
@@ -270,8 +278,8 @@ class PlatformColumns:
         for memo in self._reasons.values():
             if memo.pop(i, None) is not None:
                 self._memoised -= 1
-        self._down.pop(i, None)
         self._up[i] = s.up
+        self._on_demand[i] = s.platform.on_demand
         if self._pref[i] != s.platform.preference:
             self._pref[i] = s.platform.preference
             self._order = None
@@ -313,7 +321,6 @@ class PlatformColumns:
     def forget_reasons(self) -> None:
         """Drop every memoised failure (memory; benchmarks timing a cold explanation)."""
         self._reasons.clear()
-        self._down.clear()
         self._memoised = 0
 
     # -- facts -------------------------------------------------------------------------------
@@ -325,7 +332,7 @@ class PlatformColumns:
     @property
     def nbytes(self) -> int:
         """Bytes held by the numpy columns (the names and code books not counted)."""
-        arrays = [self._up, self._pref, *self._caps.values(), *self._loads.values(), *self._props.values()]
+        arrays = [self._up, self._on_demand, self._pref, *self._caps.values(), *self._loads.values(), *self._props.values()]
         arrays += [*self._attrs.values(), *self._kinds.values(), *self._vendors.values()]
         arrays += [a for sh in self._shares.values() for a in (sh.amounts, sh.graphs)]
         return sum(a.nbytes for a in arrays)
@@ -366,10 +373,10 @@ class PlatformColumns:
 
     def _attr_is(self, name: str, value: object) -> np.ndarray:
         col = self._attrs.get(name)
-        code = self._attr_code.get(name, {}).get(str(value))
-        if col is None or code is None:
+        codes = self._attr_text.get(name, {}).get(str(value))
+        if col is None or not codes:
             return np.zeros(self.n, dtype=bool)
-        return col == code
+        return col == codes[0] if len(codes) == 1 else np.isin(col, codes)
 
     def _option(self, opt: Option) -> np.ndarray:
         if opt.attribute is not None:
@@ -425,7 +432,9 @@ class PlatformColumns:
 
         Rejected rows get their reasons from the scalar
         :func:`~desmon.deployment.validity.requirement_holds`, asked only about the
-        requirements the masks say fail (only the first one unless ``reasons``).
+        requirements the masks say fail (only the first one unless ``reasons``), and
+        only once per class of rows whose texts the columns show to be equal (see
+        :meth:`_text_keys`).
         """
         reqs = tuple(requirements)
         ok = self.masks(reqs, graph)
@@ -433,70 +442,138 @@ class PlatformColumns:
         order = self.order()
         in_order = good[order]
         acceptable = tuple(self._names[order[in_order]].tolist())
-        rejected_rows = order[~in_order]
-        if not len(rejected_rows):
+        rows = order[~in_order]
+        if not len(rows):
             return _validity.Validity(acceptable, ())
-        rejected = self._first_failures(reqs, ok, rejected_rows, graph)
-        if reasons:
-            rejected = self._all_failures(reqs, ok, rejected_rows, graph, rejected)
-        return _validity.Validity(acceptable, rejected)
+        return _validity.Validity(acceptable, self._rejected(reqs, ok[:, rows], rows, graph, reasons))
 
-    def _all_failures(
-        self, reqs: tuple, ok: np.ndarray, rows: np.ndarray, graph: _validity.Placing, first: tuple[_Pair, ...]
-    ) -> tuple[_Pair, ...]:
-        """``first`` with every failure, not only the first, for the up rows failing more than one."""
-        failing = ~ok[:, rows]
-        multi = np.flatnonzero(self._up[rows] & (failing.sum(axis=0) > 1))
-        if not len(multi):
-            return first
-        out = list(first)
-        memos = [self._memo(r, graph) for r in reqs]
-        describe = [r.describe() for r in reqs]  # type: ignore[attr-defined]
-        for pos, i, row_fails in zip(multi.tolist(), rows[multi].tolist(), failing[:, multi].T.tolist()):
-            fails = []
-            for k, fails_k in enumerate(row_fails):
-                if fails_k:
-                    pair = memos[k].get(i) or self._failure(reqs[k], describe[k], memos[k], i, graph)
-                    fails.append(pair[1][0])
-            out[pos] = (out[pos][0], tuple(fails))
-        return tuple(out)
+    def _rejected(self, reqs: tuple, ok: np.ndarray, rows: np.ndarray, graph: _validity.Placing, reasons: bool) -> tuple[_Pair, ...]:
+        """``(name, failures)`` of each rejected row, in the order of ``rows`` (``ok``: reqs x rows).
 
-    def _first_failures(
-        self, reqs: tuple, ok: np.ndarray, rows: np.ndarray, graph: _validity.Placing
-    ) -> tuple[tuple[str, tuple[_validity.Failure, ...]], ...]:
-        """``(name, (first failure,))`` of each rejected row, in the order of ``rows``:
-        grouped by the first failing requirement, each looked up in that one's memo."""
-        out: list[Any] = [None] * len(rows)
+        Each failing (requirement, row) cell gets its Failure first, one requirement at a
+        time; then the rows are grouped by which cells they fail, and each group's
+        failure tuples are zipped together from those cells."""
         up = self._up[rows]
-        # the first False of each up, rejected row (no requirement: only down rows are rejected)
-        first = np.argmin(ok[:, rows], axis=0) if len(reqs) else np.zeros(len(rows), dtype=np.intp)
-        for pos in np.flatnonzero(~up).tolist():
-            out[pos] = self._down_pair(int(rows[pos]), graph)
-        for k, req in enumerate(reqs):
-            where = np.flatnonzero(up & (first == k))
-            if not len(where):
-                continue
-            memo = self._memo(req, graph)
-            describe = None
-            for pos, i in zip(where.tolist(), rows[where].tolist()):
-                pair = memo.get(i)
-                if pair is None:
-                    describe = describe or req.describe()
-                    pair = self._failure(req, describe, memo, i, graph)
-                out[pos] = pair
-        return tuple(out)
+        failing = ~ok & up  # a down row fails only "platform up"
+        if not reasons and len(reqs):  # the first failure only
+            first = np.argmax(failing, axis=0)
+            failing = np.zeros_like(failing)
+            failing[first, np.arange(len(rows))] = up
+        table = np.vstack([~up, failing])  # (1 + reqs) x rows: which failures each row has
+        cells = [self._down_failures(rows, ~up, graph)]
+        cells += [self._failures(req, rows, fails, graph) if fails.any() else None for req, fails in zip(reqs, failing)]
+        _first, inv = _classes(table.T)
+        out: list[Any] = [None] * len(rows)
+        for pos in np.split(np.argsort(inv, kind="stable"), np.cumsum(np.bincount(inv))[:-1]):
+            columns = [cells[k][pos].tolist() for k in np.flatnonzero(table[:, pos[0]]).tolist()]  # type: ignore[index]
+            for p, fails in zip(pos.tolist(), zip(*columns)):
+                out[p] = fails
+        return tuple(zip(self._names[rows].tolist(), out))
 
-    def _down_pair(self, i: int, graph: _validity.Placing) -> tuple[str, tuple[_validity.Failure, ...]]:
-        """``(name, failures)`` of a down row: the scalar check's one "platform is down"."""
-        pair = self._down.get(i)
-        if pair is None:
-            state = self.states[i]
-            pair = self._down[i] = (state.platform.name, _validity.check_platform((), state, graph, first_only=True))
-        return pair
+    def _failures(self, req: Any, rows: np.ndarray, fails: np.ndarray, graph: _validity.Placing) -> np.ndarray:
+        """Object array over ``rows``: the Failure of ``req`` where ``fails`` (None elsewhere),
+        taken from the memo or made and kept there."""
+        where = rows[fails]
+        memo = self._memo(req, graph)
+        got: list[Any] = list(map(memo.get, where.tolist())) if memo else [None] * len(where)
+        missing = [j for j, f in enumerate(got) if f is None]
+        if missing:
+            new = where[missing] if len(missing) < len(where) else where
+            names = self._names[new].tolist()
+            made = list(map(_validity.Failure, names, repeat(req.describe()), self._texts(req, new, graph)))
+            memo.update(zip(new.tolist(), made))
+            self._memoised += len(made)
+            if len(missing) == len(got):
+                got = made
+            else:
+                for j, f in zip(missing, made):
+                    got[j] = f
+        out = np.empty(len(rows), dtype=object)
+        out[fails] = got
+        return out
 
-    def _memo(self, req: object, graph: _validity.Placing) -> dict[int, _Pair]:
-        """Row -> ``(name, (failure,))`` of ``req`` for ``graph``, kept until the row changes;
-        beyond :data:`_REASONS_KEPT` failures the least recently asked requirements lose theirs."""
+    def _down_failures(self, rows: np.ndarray, down: np.ndarray, graph: _validity.Placing) -> np.ndarray | None:
+        """Object array over ``rows``: a down row's one failure, as the scalar check gives it
+        (its text depends only on whether the platform is on demand)."""
+        if not down.any():
+            return None
+        where = rows[down]
+        scalar = self._shared(
+            where, self._on_demand[where][:, None], lambda i: _validity.check_platform((), self.states[i], graph, first_only=True)[0]
+        )
+        out = np.empty(len(rows), dtype=object)
+        out[down] = [_validity.Failure(name, f.requirement, f.reason) for name, f in zip(self._names[where].tolist(), scalar)]
+        return out
+
+    def _texts(self, req: Any, rows: np.ndarray, graph: _validity.Placing) -> list[str]:
+        """The reason ``req`` fails on each of ``rows`` (all failing): the scalar text, asked
+        once per class of rows with equal :meth:`_text_keys`."""
+        return self._shared(rows, self._text_keys(req, rows, graph), lambda i: self._reason(req, i, graph))
+
+    def _reason(self, req: Any, i: int, graph: _validity.Placing) -> str:
+        reason = _validity.requirement_holds(req, self.states[i], graph)
+        if reason is None:  # the masks and the scalar semantics disagree: a bug here
+            raise AssertionError(f"placement columns: {req.describe()} fails on {self._names[i]} but the scalar check holds")
+        return reason
+
+    @staticmethod
+    def _shared(rows: np.ndarray, keys: np.ndarray, ask: Callable[[int], Any]) -> list[Any]:
+        """``ask(row)`` for each of ``rows``, asked only of the first row of each class of
+        equal ``keys`` (rows x width) and shared with the rest of the class."""
+        first, inv = _classes(keys)
+        answers = np.empty(len(first), dtype=object)
+        answers[:] = [ask(i) for i in rows[first].tolist()]
+        return answers[inv].tolist()  # type: ignore[no-any-return]
+
+    def _text_keys(self, req: Any, rows: np.ndarray, graph: _validity.Placing) -> np.ndarray:
+        """rows x width integers such that rows with equal keys get byte-equal reason texts
+        from the scalar semantics for ``req``: the facts each text shows, read from the
+        columns (floats by their bits, so -0.0 and 0.0 differ; an int and the equal float
+        print alike with ``:g``). Keys may split rows whose texts are equal, never join
+        rows whose texts differ."""
+        t = type(req)
+        if t is Quantity:
+            key = self._count(req.device_kind)[rows]
+        elif t is Minimum or t is Maximum:
+            col = self._props.get(req.prop)
+            key = col[rows].view(np.int64) if col is not None else np.zeros(len(rows), dtype=np.int64)  # NaN: missing
+        elif t is Attribute and req.name != PLATFORM_HAS:
+            col = self._attrs.get(req.name)  # codes of repr(value), the text shows the repr; -1: missing
+            key = col[rows] if col is not None else np.zeros(len(rows), dtype=np.int32)
+        elif t is Selection:
+            return np.stack([self._option(o)[rows] for o in req.options], axis=1)  # which options hold
+        elif t is Capacity:
+            return self._capacity_keys(req, rows, graph)
+        else:  # platform_has: one text
+            key = np.zeros(len(rows), dtype=np.int8)
+        return key[:, None]
+
+    def _capacity_keys(self, req: Capacity, rows: np.ndarray, graph: _validity.Placing) -> np.ndarray:
+        """Capacity text keys: the capacity, the load and each share the text lists (graph
+        code and amount; a share of a graph left out is blanked)."""
+        cap = self._caps.get(req.resource)
+        if cap is None:
+            return np.zeros((len(rows), 1), dtype=np.int64)
+        parts = [cap[rows].view(np.int64)[:, None]]
+        load = self._loads.get(req.resource)
+        if load is not None:
+            parts.append(load[rows].view(np.int64)[:, None])
+        sh = self._shares.get(req.resource)
+        if sh is not None:
+            graphs, amounts = sh.graphs[rows].astype(np.int64), sh.amounts[rows]
+            excluded = self._excluded(graph)
+            if excluded is not None:
+                left_out = np.isin(graphs, excluded)
+                graphs[left_out] = -1
+                amounts[left_out] = 0.0
+            parts += [graphs, amounts.view(np.int64)]
+        keys = np.concatenate(parts, axis=1)
+        keys[np.isnan(cap[rows])] = 0  # "has no capacity": one text whatever the rest
+        return keys
+
+    def _memo(self, req: object, graph: _validity.Placing) -> dict[int, _validity.Failure]:
+        """Row -> the Failure of ``req`` for ``graph``, kept until the row changes; beyond
+        :data:`_REASONS_KEPT` failures the least recently asked requirements lose theirs."""
         # repr: equal requirements may read differently (2 vs 2.0); only a Capacity's text
         # depends on the graph placed (whose shares it leaves out)
         key = (repr(req), graph if type(req) is Capacity else None)
@@ -508,15 +585,16 @@ class PlatformColumns:
         self._reasons[key] = memo  # (re)inserted last: the most recently asked
         return memo
 
-    def _failure(self, req: object, describe: str, memo: dict[int, _Pair], i: int, graph: _validity.Placing) -> _Pair:
-        """Row ``i``'s ``(name, (failure of req,))``, with the reason the scalar semantics give."""
-        state = self.states[i]
-        reason = _validity.requirement_holds(req, state, graph)  # type: ignore[arg-type]
-        if reason is None:  # the masks and the scalar semantics disagree: a bug here
-            raise AssertionError(f"placement columns: {describe} fails on {state.platform.name} but the scalar check holds")
-        pair = memo[i] = (state.platform.name, (_validity.Failure(state.platform.name, describe, reason),))
-        self._memoised += 1
-        return pair
+
+def _classes(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of ``keys`` (rows x width) grouped by equal bytes: the first row of each class
+    and each row's class."""
+    keys = np.ascontiguousarray(keys)
+    if keys.shape[1] == 0:
+        return np.zeros(1, dtype=np.intp), np.zeros(len(keys), dtype=np.intp)
+    flat = keys.view(np.dtype((np.void, keys.dtype.itemsize * keys.shape[1]))).ravel()
+    _u, first, inv = np.unique(flat, return_index=True, return_inverse=True)
+    return first, inv.reshape(-1)
 
 
 # -- the dispatch ----------------------------------------------------------------------------------
