@@ -507,8 +507,56 @@ class PlatformColumns:
 
     def _texts(self, req: Any, rows: np.ndarray, graph: _validity.Placing) -> list[str]:
         """The reason ``req`` fails on each of ``rows`` (all failing): the scalar text, asked
-        once per class of rows with equal :meth:`_text_keys`."""
+        once per class of rows with equal :meth:`_text_keys` (a Capacity's text, which
+        differs on most rows, is formatted here instead: :meth:`_capacity_texts`)."""
+        if type(req) is Capacity and not _COMPENSATED_SUM:
+            texts = self._capacity_texts(req, rows, graph)
+            if texts is not None:
+                return texts
         return self._shared(rows, self._text_keys(req, rows, graph), lambda i: self._reason(req, i, graph))
+
+    def _capacity_texts(self, req: Capacity, rows: np.ndarray, graph: _validity.Placing) -> list[str] | None:
+        """Capacity reasons formatted from the columns, as the scalar formats them
+        ("<free>[ MB] free (capacity <c>, used by <graph> <amount>, ..., load <l>)", every
+        number with ``:g``; the free amount summed as :meth:`_capacity` sums it). Checked
+        against the scalar text on the first row and on a row listing the most shares:
+        None (ask the scalar) if either differs."""
+        cap = self._caps.get(req.resource)
+        if cap is None:
+            return None
+        out = np.empty(len(rows), dtype=object)
+        has = ~np.isnan(cap[rows])
+        if not has.all():  # "has no <resource> capacity": one text
+            out[~has] = self._reason(req, int(rows[~has][0]), graph)
+        where = rows[has]
+        c = cap[where]
+        load = self._loads.get(req.resource)
+        l = load[where] if load is not None else np.zeros(len(where))
+        used, shares, listed = np.zeros(len(where)), np.full(len(where), "", dtype=object), np.zeros(len(where), dtype=np.intp)
+        sh = self._shares.get(req.resource)
+        if sh is not None:
+            graphs, amounts = sh.graphs[where], sh.amounts[where]
+            excluded = self._excluded(graph)
+            if excluded is not None:
+                left_out = np.isin(graphs, excluded)
+                graphs[left_out] = -1
+                amounts[left_out] = 0.0
+            used_by = np.array([f", used by {g} " for g in self._graph_code], dtype=object)  # by code
+            for j in range(amounts.shape[1]):  # left to right, as Python's sum adds them
+                used = used + amounts[:, j]
+                on = graphs[:, j] >= 0
+                if on.any():
+                    piece = np.full(len(where), "", dtype=object)
+                    piece[on] = used_by[graphs[on, j]] + _g(amounts[on, j])
+                    shares = shares + piece
+                    listed += on
+        unit = " MB" if req.resource == "memory" else ""
+        texts = _g(c - used - l) + f"{unit} free (capacity " + _g(c) + shares + ", load " + _g(l) + ")"
+        for j in {0, int(np.argmax(listed))} if len(where) else ():
+            if _validity.requirement_holds(req, self.states[int(where[j])], graph) != texts[j]:
+                return None
+        out[has] = texts
+        return out.tolist()  # type: ignore[no-any-return]
 
     def _reason(self, req: Any, i: int, graph: _validity.Placing) -> str:
         reason = _validity.requirement_holds(req, self.states[i], graph)
@@ -584,6 +632,16 @@ class PlatformColumns:
                 self._memoised -= len(self._reasons.pop(next(iter(self._reasons))))
         self._reasons[key] = memo  # (re)inserted last: the most recently asked
         return memo
+
+
+def _g(values: np.ndarray) -> np.ndarray:
+    """Object array of ``f"{v:g}"`` for float64 ``values``, each distinct value formatted once
+    (told apart by their bits: -0.0 prints "-0"). An int prints as the equal float does."""
+    bits = np.ascontiguousarray(values, dtype=np.float64).view(np.int64)
+    distinct, inv = np.unique(bits, return_inverse=True)
+    texts = np.empty(len(distinct), dtype=object)
+    texts[:] = [f"{v:g}" for v in distinct.view(np.float64).tolist()]
+    return texts[inv.reshape(-1)]  # type: ignore[no-any-return]
 
 
 def _classes(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
