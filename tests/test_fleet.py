@@ -223,3 +223,14 @@ def test_a_hundred_robots_share_twenty_edge_servers_for_a_quarter_hour_without_v
     result = simulate_fleet(fleet(100, 20, 0.25))
     assert result.violations == []
     assert result.metrics["edge_starts"] > 0
+
+
+def test_a_fleet_run_leaves_nothing_in_the_validity_memos() -> None:
+    from desmon.deployment import validity as V
+
+    world = FleetWorld(fleet(3, 2, 0.05), seed=1)
+    V.clear_memos()
+    world.run()
+    assert V._check_validity.cache_info().currsize == 0
+    assert V._check_platform.cache_info().currsize == 0
+    assert V._memoise is True

@@ -95,3 +95,34 @@ def test_a_fixed_deployment_is_valid_only_on_its_executable_on_platform():
     spec = DeploymentSpec("g", (), fixed_platform="a")
     assert deployment_valid(spec, state("a")) == ()
     assert deployment_valid(spec, state("b"))[0].reason == "runs on another platform"
+
+
+def test_unmemoised_checks_give_the_same_answers_and_store_nothing_in_the_memos():
+    from desmon.deployment import validity as V
+
+    reqs = [req("capacity", "memory", 250), req("maximum", "link_latency_ms", 10)]
+    states = [
+        state("a", memory=1024, load=900, properties={"link_latency_ms": 2}),
+        state("b", memory=1024, deployed=[("x", 100)], properties={"link_latency_ms": 5}),
+        state("c", properties={"link_latency_ms": 20}),
+    ]
+    V.clear_memos()
+    with V.unmemoised():
+        inside = check_validity(reqs, states, "g")
+        one = V.check_platform(reqs, states[0], "g")
+        assert V._check_validity.cache_info().currsize == 0
+        assert V._check_platform.cache_info().currsize == 0
+    assert check_validity(reqs, states, "g") == inside
+    assert V.check_platform(reqs, states[0], "g") == one
+    assert V._check_validity.cache_info().currsize == 1  # memoised again once it ends
+
+
+def test_unmemoised_ends_even_when_its_block_raises():
+    from desmon.deployment import validity as V
+
+    try:
+        with V.unmemoised():
+            raise KeyError("boom")
+    except KeyError:
+        pass
+    assert V._memoise is True

@@ -5,9 +5,10 @@ The semantics of every requirement kind (docs/design.md §4) lives here and nowh
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any, Iterable, Sequence
+from typing import TYPE_CHECKING, Any, Iterable, Iterator, Sequence
 
 from desmon.model.requirements import (
     PLATFORM_HAS,
@@ -43,12 +44,16 @@ _MEMO_SIZE = 1 << 16
 #: the engine learns what a reaction observed of the platforms. Nothing else reads it.
 _observer: Any = None
 
+#: Are the memos of :func:`check_validity` and :func:`check_platform` used? (see
+#: :func:`unmemoised`: a fleet turns them off for its run)
+_memoise = True
+
 #: Issue 16: the vectorised placement path, registered by :mod:`desmon.deployment.placement`
 #: when it is imported: ``vector_validity(reqs, states, graph, reasons)`` answers what
 #: :func:`_check_validity` would (a Validity) or None to leave it to the loop below.
 _vector_path: Any = None
 
-__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos"]
+__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "unmemoised", "reads_fixed_facts"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,9 +178,10 @@ def _attribute(req: Attribute, state: PlatformState, graph: Placing) -> str | No
 
 
 def _selection(req: Selection, state: PlatformState, graph: Placing) -> str | None:
-    have = [o.describe() for o in req.options if _option_holds(o, state)]
-    if len(have) >= req.at_least:
+    held = [o for o in req.options if _option_holds(o, state)]
+    if len(held) >= req.at_least:
         return None
+    have = [o.describe() for o in held]
     return f"{len(have)} of the options available ({', '.join(have) or 'none'}), needs {req.at_least}"
 
 
@@ -256,6 +262,8 @@ def check_platform(
     reqs = requirements if type(requirements) is tuple else tuple(requirements)
     if _observer is not None:
         return _observer.platform(reqs, state, graph, first_only)  # type: ignore[no-any-return]
+    if not _memoise:
+        return _check_platform.__wrapped__(reqs, state, graph, first_only)  # type: ignore[arg-type]
     return _check_platform(reqs, state, graph, first_only)  # type: ignore[arg-type]
 
 
@@ -263,13 +271,49 @@ def check_platform(
 def _check_platform(
     requirements: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool
 ) -> tuple[Failure, ...]:
+    return _failures(_checks(requirements), state, graph, first_only, {})
+
+
+def reads_fixed_facts(req: Constraint) -> bool:
+    """Does ``req`` read only a platform's fixed facts (properties, attributes), never
+    its run-time ones (devices, load, deployments)? Its answer for a platform then
+    never changes."""
+    if isinstance(req, (Maximum, Minimum)):
+        return True
+    if isinstance(req, Attribute):
+        return req.name != PLATFORM_HAS
+    if isinstance(req, Selection):
+        return all(o.attribute is not None for o in req.options)
+    return False
+
+
+def _checks(requirements: tuple[Requirement, ...]) -> list[tuple[Any, Requirement]]:
+    """Each requirement with the function of its kind (:data:`_HOLDS`), looked up once."""
+    out = []
+    for req in requirements:
+        holds = _HOLDS.get(type(req))
+        if holds is None:
+            raise TypeError(f"not a requirement: {req!r}")
+        if holds is not _soft:  # a preference never rejects a platform
+            out.append((holds, req))
+    return out
+
+
+def _failures(
+    checks: list[tuple[Any, Requirement]], state: PlatformState, graph: Placing, first_only: bool, texts: dict[int, str]
+) -> tuple[Failure, ...]:
+    """What :func:`check_platform` answers, given :func:`_checks`; ``texts`` keeps each
+    requirement's description (by position) across the platforms of one question."""
     if not state.up:
         return (Failure(state.name, "platform up", _ABSENT if state.platform.on_demand else _DOWN),)
     out = []
-    for req in requirements:
-        reason = requirement_holds(req, state, graph)
+    for k, (holds, req) in enumerate(checks):
+        reason = holds(req, state, graph)
         if reason is not None:
-            out.append(Failure(state.name, req.describe(), reason))
+            text = texts.get(k)
+            if text is None:
+                text = texts[k] = req.describe()
+            out.append(Failure(state.name, text, reason))
             if first_only:
                 break
     return tuple(out)
@@ -279,6 +323,23 @@ def clear_memos() -> None:
     """Forget every memoised validity result (tests; memory)."""
     _check_platform.cache_clear()
     _check_validity.cache_clear()
+
+
+@contextmanager
+def unmemoised() -> Iterator[None]:
+    """Within it, :func:`check_validity` and :func:`check_platform` compute every answer
+    afresh (same answers, no memo). For runs whose facts seldom recur -- a fleet, where
+    some platform changed between almost any two questions (0.3 % of its answers were
+    memo hits) -- the memos cost hashing on every call and hold old platform states
+    alive: a third of the 8-hour fleet's peak memory. The checker keeps them (its
+    states recur by construction). Process-wide while it lasts; nests."""
+    global _memoise
+    before = _memoise
+    _memoise = False
+    try:
+        yield
+    finally:
+        _memoise = before
 
 
 def order_platforms(states: Sequence[PlatformState]) -> list[PlatformState]:
@@ -301,12 +362,14 @@ def check_validity(
     running fallbacks were stopped"); none of their shares counts. Acceptable
     platforms come in preference order (see :func:`order_platforms`); rejected ones
     carry every failing requirement with a readable reason (only the first one when
-    ``reasons`` is False, the fast path of the deployer). Results are memoised (pure).
+    ``reasons`` is False, the fast path of the deployer). Results are memoised (pure;
+    see :func:`unmemoised`).
     """
     reqs = requirements if type(requirements) is tuple else tuple(requirements)
     if _observer is not None:
         return _observer.validity(reqs, states if type(states) is tuple else tuple(states), graph, reasons)  # type: ignore[no-any-return]
-    return _check_validity(reqs, states if type(states) is tuple else tuple(states), graph, reasons)  # type: ignore[arg-type]
+    check = _check_validity if _memoise else _check_validity.__wrapped__
+    return check(reqs, states if type(states) is tuple else tuple(states), graph, reasons)  # type: ignore[arg-type,no-any-return]
 
 
 @lru_cache(maxsize=_MEMO_SIZE)
@@ -319,9 +382,11 @@ def _check_validity(
             return fast  # type: ignore[no-any-return]
     acceptable: list[PlatformState] = []
     rejected: list[tuple[str, tuple[Failure, ...]]] = []
-    check = _check_platform.__wrapped__  # memoised as a whole here; per pair only in check_platform
+    checks = _checks(reqs)  # memoised as a whole here; per pair only in check_platform
+    texts: dict[int, str] = {}
+    first_only = not reasons
     for state in order_platforms(states):
-        fails = check(reqs, state, graph, not reasons)
+        fails = _failures(checks, state, graph, first_only, texts)
         if fails:
             rejected.append((state.name, fails))
         else:

@@ -101,7 +101,7 @@ def set_context(repo: Repository, robot: str, context: str) -> bool:
     """Point the robot's IN_CONTEXT edge at ``context``; False if it already did."""
     rid = node_id(L.ROBOT, robot)
     cid = node_id(L.CONTEXT, context)
-    current = [t for _s, t, k in repo.graph.out_edges(rid, keys=True) if k == L.IN_CONTEXT]
+    current = repo.successors(rid, L.IN_CONTEXT)  # indexed: no scan of the robot's other edges
     if current == [cid]:
         return False
     if cid not in repo.graph:

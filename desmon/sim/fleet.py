@@ -42,16 +42,16 @@ import simpy
 from desmon.deployment.core import DeploymentCore
 from desmon.deployment.invariants import SystemView, check_invariants
 from desmon.errors import QueryError, ScenarioError
-from desmon.model.checks import check_items, check_name, check_names, strict_init
+from desmon.model.checks import check_items, check_names, strict_init
 from desmon.model.platform import Platform
 from desmon.model.scenario import Scenario
-from desmon.deployment.validity import check_platform
-from desmon.model.requirements import PLATFORM_HAS, Attribute, Capacity, DeploymentSpec, Maximum, Minimum, Requirement, Selection
+from desmon.deployment.validity import check_platform, reads_fixed_facts, unmemoised
+from desmon.model.requirements import Capacity, DeploymentSpec, Requirement
 from desmon.model.system import PlatformState, Rule, RuleTable, SystemModel
 from desmon.repository import labels as L
 from desmon.repository.facts import RepositoryInsert, load_model
 from desmon.repository.query import RepositoryQuery
-from desmon.repository.store import ADD_EDGE, REMOVE_EDGE, RELABEL_EDGE, UPDATE_NODE, Change, Repository, node_id
+from desmon.repository.store import ADD_EDGE, UPDATE_NODE, Change, Repository, node_id
 from desmon.sim.engine import SimWorld
 from desmon.sim.trace import Trace
 from desmon.sim.world import World
@@ -280,7 +280,7 @@ class RobotView(RepositoryQuery):
         every detector rules a server out for good, until a requirement changes)."""
         self._usable_at = self.repo.specs_version
         reqs = [
-            tuple(r for r in spec.requirements if _static(r))
+            tuple(r for r in spec.requirements if reads_fixed_facts(r))
             for spec in (self.deployment_information(g) for g in self.graph_names)
             if spec is not None and spec.fixed_platform is None
         ]
@@ -326,9 +326,12 @@ class RobotView(RepositoryQuery):
             self._states = None
             self._dirty.add(i)
 
-    def forget_deployments(self) -> None:
-        """A DEPLOYED_ON edge of one of this robot's graphs changed."""
-        self._deployed.clear()
+    def forget_deployments(self, graph: str | None = None) -> None:
+        """A DEPLOYED_ON edge of ``graph`` (None: of any of this robot's graphs) changed."""
+        if graph is None:
+            self._deployed.clear()
+        else:
+            self._deployed.pop(graph, None)
         self._deployments = None
 
     def deployed_on(self, graph: str) -> tuple[str, ...]:
@@ -364,17 +367,6 @@ class RobotView(RepositoryQuery):
 
     def history(self) -> tuple[tuple[str, str, float, float], ...]:
         return tuple(r for r in super().history() if r[0] in self._own_graphs)
-
-
-def _static(req: Requirement) -> bool:
-    """Does ``req`` read only a platform's fixed facts (properties, attributes)?"""
-    if isinstance(req, (Maximum, Minimum)):
-        return True
-    if isinstance(req, Attribute):
-        return req.name != PLATFORM_HAS
-    if isinstance(req, Selection):
-        return all(o.attribute is not None for o in req.options)
-    return False
 
 
 class _RobotTrace(Trace):
@@ -439,8 +431,12 @@ class _OwnView(SystemView):
 
     @property
     def deployments(self) -> tuple[tuple[str, str], ...]:
-        mine = {s.graph for s in self.specs}
-        return tuple(d for d in SystemView.deployments.fget(self) if d[0] in mine)  # type: ignore[attr-defined]
+        d = self._deployments
+        if d is None:  # computed once per view (several invariants read it)
+            mine = {s.graph for s in self.specs}
+            d = tuple(sorted((g, s.name) for s in self.states for g, _use in s.deployed if g in mine))
+            object.__setattr__(self, "_deployments", d)
+        return d
 
 
 class _Member(SimWorld):
@@ -464,6 +460,7 @@ class _Member(SimWorld):
         self.core = DeploymentCore(self.model, view, RepositoryInsert(repo, self.model.robot), deployer)
         self.deployer_name = self.core.deployer.name
         self._edges = frozenset(edges)
+        self._audit_memo: tuple[tuple[PlatformState, ...], frozenset[str], tuple[PlatformState, ...]] | None = None
         self._init_physical()
         if admission:
             self.rules = _Admission(self.rules, view, frozenset(edges))  # type: ignore[assignment]
@@ -495,8 +492,14 @@ class _Member(SimWorld):
         invariants judge, and it cannot be over-committed by a start of this robot: the
         robot whose start over-commits it audits it at its own next quiescent point."""
         edges = self._edges
-        mine = {p for (_g, p) in self.instances if p in edges}
-        return tuple(s for s in self.query.platform_states() if s.name not in edges or s.name in mine)
+        mine = frozenset(p for (_g, p) in self.instances if p in edges)
+        states = self.query.platform_states()
+        kept = self._audit_memo
+        if kept is not None and kept[0] is states and kept[1] == mine:
+            return kept[2]  # the same view tuple and edges as the last audit
+        audited = tuple(s for s in states if s.name not in edges or s.name in mine)
+        self._audit_memo = (states, mine, audited)
+        return audited
 
     def _decision(self, what: str, graph: str, platform: str, ok: bool, issued: float, why: str) -> None:
         """Counted in the trace only (a fleet keeps no per-robot decision list in memory)."""
@@ -652,7 +655,7 @@ class FleetWorld:
                 self.edge_meter.change(edge, self.env.now, self._consumes.get(graph, 0.0), 1 if change.op == ADD_EDGE else -1)
             mb = self._graph_owner.get(change.source)  # type: ignore[arg-type]
             if mb is not None:
-                mb.query.forget_deployments()
+                mb.query.forget_deployments(change.source.partition(":")[2])  # type: ignore[union-attr]
                 if label == L.DEPLOYMENT_HISTORY:
                     mb._count_history(change)
 
@@ -672,7 +675,7 @@ class FleetWorld:
         self.repo.subscribe(self._route)
         if self.progress is not None:
             self.env.process(self._progress())
-        with _collector_relaxed():
+        with _collector_relaxed(), unmemoised():  # a fleet's facts seldom recur: the memos only cost
             self.env.run(until=self.horizon)
         now = self.horizon
         self.edge_meter.close(now)
