@@ -2,16 +2,26 @@
 
 from __future__ import annotations
 
+from dataclasses import fields
 from typing import Any
 
+from desmon.errors import CheckerError, ModelError
+from desmon.model.checks import suggest
 from desmon.model.events import (
     ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp, RequirementChange,
+    event_kind,
+)
+from desmon.model.requirements import (
+    PREFERENCE_KINDS, REQUIREMENT_KINDS, Attribute, Capacity, Constraint, Maximum, Minimum, Option, Preference, Quantity, Selection,
 )
 from desmon.verify.search import NOT_CHECKED, CheckResult
-from desmon.verify.trace import Counterexample, Step
+from desmon.verify.trace import Counterexample, Label, Step
 from desmon.verify.state import Key
 
-__all__ = ["format_result", "format_trace", "result_to_json", "counterexample_pytest", "event_to_json", "event_from_json", "key_to_json"]
+__all__ = [
+    "format_result", "format_trace", "result_to_json", "counterexample_pytest", "event_to_json", "event_from_json",
+    "constraint_to_json", "constraint_from_json", "labels_from_json", "key_to_json",
+]
 
 
 def format_trace(steps: tuple[Step, ...] | list[Step], *, indent: str = "  ") -> str:
@@ -62,47 +72,167 @@ def format_result(r: CheckResult) -> str:
 
 
 # -- JSON ------------------------------------------------------------------------------------
+#: ``kind`` of an event in the JSON -> the keys it holds besides ``kind`` (required ones first)
+_EVENT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "action": (("action",), ()),
+    "device_fail": (("device",), ()),
+    "device_repair": (("device",), ()),
+    "platform_down": (("platform",), ()),
+    "platform_up": (("platform",), ()),
+    "platform_join": (("platform",), ()),
+    "platform_leave": (("platform",), ()),
+    "load": (("platform", "amount"), ("resource",)),
+    "requirements": (("graph",), ("label", "add", "remove")),
+}
+_SIMPLE_EVENTS: dict[str, Any] = {
+    "action": ActionChange, "device_fail": DeviceFail, "device_repair": DeviceRepair, "platform_down": PlatformDown,
+    "platform_up": PlatformUp, "platform_join": PlatformJoin, "platform_leave": PlatformLeave,
+}
+#: a hard requirement's ``requirement`` name in the JSON -> its class (fields written by name)
+_REQUIREMENT_CLASSES: dict[str, Any] = dict(zip(REQUIREMENT_KINDS, (Quantity, Capacity, Minimum, Maximum, Attribute, Selection)))
+_REQUIREMENT_NAMES: dict[type, str] = {cls: kind for kind, cls in _REQUIREMENT_CLASSES.items()}
+_OLD_FORMAT = (
+    "written by an older desmon, which kept a requirement change by its description only: "
+    "re-run desmon verify --json to write it in full"
+)
+
+
 def event_to_json(e: Event | None) -> dict[str, Any] | None:
+    """``e`` as JSON that :func:`event_from_json` rebuilds into an equal event (None for the initial state)."""
     if e is None:
         return None
-    if isinstance(e, ActionChange):
-        return {"kind": "action", "action": e.action}
-    if isinstance(e, (DeviceFail, DeviceRepair)):
-        return {"kind": "device_fail" if isinstance(e, DeviceFail) else "device_repair", "device": e.device}
-    if isinstance(e, (PlatformDown, PlatformUp)):
-        return {"kind": "platform_down" if isinstance(e, PlatformDown) else "platform_up", "platform": e.platform}
-    if isinstance(e, (PlatformJoin, PlatformLeave)):
-        return {"kind": "platform_join" if isinstance(e, PlatformJoin) else "platform_leave", "platform": e.platform}
+    kind = event_kind(e)
+    if isinstance(e, LoadChange):
+        return {"kind": kind, "platform": e.platform, "amount": e.amount, "resource": e.resource}
     if isinstance(e, RequirementChange):
         return {
-            "kind": "requirements", "graph": e.graph, "label": e.label,
-            "add": [r.describe() for r in e.add], "remove": [r.describe() for r in e.remove],
+            "kind": kind, "graph": e.graph, "label": e.label,
+            "add": [constraint_to_json(r) for r in e.add], "remove": [constraint_to_json(r) for r in e.remove],
         }
-    return {"kind": "load", "platform": e.platform, "amount": e.amount, "resource": e.resource}
+    (field,) = _EVENT_KEYS[kind][0]
+    return {"kind": kind, field: getattr(e, field)}
 
 
-def event_from_json(d: dict[str, Any]) -> Event:
-    k = d["kind"]
-    if k == "action":
-        return ActionChange(d["action"])
-    if k == "device_fail":
-        return DeviceFail(d["device"])
-    if k == "device_repair":
-        return DeviceRepair(d["device"])
-    if k == "platform_down":
-        return PlatformDown(d["platform"])
-    if k == "platform_up":
-        return PlatformUp(d["platform"])
-    if k in ("platform_join", "platform_leave"):
-        return (PlatformJoin if k == "platform_join" else PlatformLeave)(d["platform"])
-    if k == "requirements":
-        from desmon.errors import CheckerError
+def constraint_to_json(c: Constraint) -> dict[str, Any]:
+    """A requirement as ``{"requirement": KIND, FIELD: value, ...}`` (its dataclass fields by name),
+    a preference as ``{"preference": KIND, "args": [...], "weight": w}``."""
+    if isinstance(c, Preference):
+        return {"preference": c.kind, "args": list(c.args), "weight": c.weight}
+    if isinstance(c, Selection):
+        return {"requirement": "selection", "options": [_option_to_json(o) for o in c.options], "at_least": c.at_least}
+    return {"requirement": _REQUIREMENT_NAMES[type(c)], **{f.name: getattr(c, f.name) for f in fields(c)}}
 
+
+def _option_to_json(o: Option) -> dict[str, Any]:
+    return {f.name: getattr(o, f.name) for f in fields(o) if getattr(o, f.name) is not None}
+
+
+def event_from_json(data: object, *, where: str = "event") -> Event:
+    """The event :func:`event_to_json` wrote. Whatever is wrong in a (hand-edited) ``d`` is a
+    one-line :class:`~desmon.errors.CheckerError` naming ``where`` and the field; the
+    values pass the same checks as the event built in a scenario."""
+    d = _mapping(where, data, '{"kind": "action", "action": "grasp"}')
+    kind = d.get("kind")
+    if not isinstance(kind, str) or kind not in _EVENT_KEYS:
         raise CheckerError(
-            f"a requirement change of {d.get('graph')!r} is written in the JSON by its description only: take the event "
-            "from the scenario's Bounds.requirement_changes (the --pytest file replays it exactly)"
+            f"{where}.kind = {kind!r} is not an event kind{suggest(kind, _EVENT_KEYS)}: use one of {', '.join(_EVENT_KEYS)}"
         )
-    return LoadChange(d["platform"], d["amount"], d.get("resource", "memory"))
+    required, optional = _EVENT_KEYS[kind]
+    _check_keys(where, d, ("kind", *required), optional)
+    args = {k: d[k] for k in (*required, *optional) if k in d}
+    if kind == "requirements":
+        for side in ("add", "remove"):
+            if side in args:
+                items = args[side]
+                if not isinstance(items, list):
+                    raise CheckerError(f"{where}.{side} = {items!r} is not a list: write [] or a list of requirements")
+                if any(isinstance(x, str) for x in items):
+                    raise CheckerError(f"{where}: the requirement change of {d['graph']!r} is {_OLD_FORMAT}")
+                args[side] = tuple(constraint_from_json(x, where=f"{where}.{side}[{i}]") for i, x in enumerate(items))
+    cls = RequirementChange if kind == "requirements" else LoadChange if kind == "load" else _SIMPLE_EVENTS[kind]
+    return _build(where, cls, args)  # type: ignore[return-value]
+
+
+def constraint_from_json(data: object, *, where: str = "requirement") -> Constraint:
+    """The requirement or preference :func:`constraint_to_json` wrote, checked as when a scenario builds it."""
+    d = _mapping(where, data, '{"requirement": "capacity", "resource": "memory", "amount": 250}')
+    if ("requirement" in d) == ("preference" in d):
+        raise CheckerError(
+            f"{where} = {d!r} must name one kind, by \"requirement\" (one of {', '.join(REQUIREMENT_KINDS)}) "
+            f"or by \"preference\" (one of {', '.join(PREFERENCE_KINDS)})"
+        )
+    if "preference" in d:
+        _check_keys(where, d, ("preference", "args"), ("weight",))
+        args = d["args"]
+        if not isinstance(args, list):
+            raise CheckerError(f"{where}.args = {args!r} is not a list: write a list of names, e.g. [\"memory\"]")
+        weight = {"weight": d["weight"]} if "weight" in d else {}
+        return _build(where, Preference, {"kind": d["preference"], "args": tuple(args), **weight})  # type: ignore[return-value]
+    kind = d["requirement"]
+    if not isinstance(kind, str) or kind not in _REQUIREMENT_CLASSES:
+        raise CheckerError(
+            f"{where}.requirement = {kind!r} is not a requirement kind{suggest(kind, REQUIREMENT_KINDS)}: "
+            f"use one of {', '.join(REQUIREMENT_KINDS)}"
+        )
+    cls = _REQUIREMENT_CLASSES[kind]
+    args = {k: v for k, v in d.items() if k != "requirement"}
+    if kind == "selection" and "options" in args:
+        options = args["options"]
+        if not isinstance(options, list):
+            raise CheckerError(f"{where}.options = {options!r} is not a list: write [{{\"device_kind\": \"tactile_pad\"}}, ...]")
+        example = '{"device_kind": "tactile_pad", "vendor": "weiss"}'
+        args["options"] = tuple(
+            _build(f"{where}.options[{i}]", Option, _mapping(f"{where}.options[{i}]", o, example)) for i, o in enumerate(options)
+        )
+    return _build(where, cls, args)  # type: ignore[return-value]
+
+
+def _mapping(where: str, d: object, example: str) -> dict[str, Any]:
+    if not isinstance(d, dict):
+        raise CheckerError(f"{where} = {d!r} is not a JSON object: write e.g. {example}")
+    return d
+
+
+def _check_keys(where: str, d: dict[str, Any], required: tuple[str, ...], optional: tuple[str, ...]) -> None:
+    allowed = (*required, *optional)
+    for key in d:
+        if key not in allowed:
+            raise CheckerError(f"{where}: unknown key {key!r}{suggest(key, allowed)}; it holds {', '.join(allowed)}")
+    missing = [k for k in required if k not in d]
+    if missing:
+        raise CheckerError(f"{where}: missing {', '.join(repr(m) for m in missing)}; it holds {', '.join(allowed)}")
+
+
+def _build(where: str, cls: Any, args: dict[str, Any]) -> object:
+    """``cls(**args)``, its one-line ModelError re-raised as a CheckerError naming ``where``."""
+    try:
+        return cls(**args)
+    except ModelError as exc:
+        raise CheckerError(f"{where}: {exc}") from None
+
+
+def labels_from_json(counterexample: object, *, where: str = "counterexample") -> tuple[Label, ...]:
+    """The ``(event, failing start indices)`` of each step of a counterexample written by
+    ``desmon verify --json`` (one of its ``counterexamples``), after the initial state: what
+    :meth:`RepositoryRun.step <desmon.verify.replay.RepositoryRun.step>` replays."""
+    c = _mapping(where, counterexample, '{"states": [...]}')
+    states = c.get("states")
+    if not isinstance(states, list) or not states:
+        raise CheckerError(f"{where}.states = {states!r} is not a non-empty list of states: re-run desmon verify --json")
+    out: list[Label] = []
+    for i, state in enumerate(states[1:], start=1):
+        at = f"{where}.states[{i}]"
+        s = _mapping(at, state, '{"event": {...}, "fail_indices": []}')
+        event = event_from_json(s.get("event"), where=f"{at}.event")
+        fails = s.get("fail_indices")
+        if fails is None and not s.get("failed_starts"):
+            fails = []  # written before fail_indices, with no failing start: nothing is lost
+        if fails is None:
+            raise CheckerError(f"{at} lists failed starts but no fail_indices (written by an older desmon): re-run desmon verify --json")
+        if not isinstance(fails, list) or any(isinstance(x, bool) or not isinstance(x, int) or x < 0 for x in fails):
+            raise CheckerError(f"{at}.fail_indices = {fails!r} is not a list of non-negative integers (the failing Control.start calls)")
+        out.append((event, tuple(fails)))
+    return tuple(out)
 
 
 def key_to_json(k: Key) -> dict[str, Any]:
@@ -124,7 +254,10 @@ def counterexample_to_json(c: Counterexample) -> dict[str, Any]:
         "during": c.during,
         "length": c.length,
         "states": [
-            {"step": s.index, "event": event_to_json(s.event), "failed_starts": list(s.failed_starts), "changes": list(s.changes), "state": key_to_json(s.key)}
+            {
+                "step": s.index, "event": event_to_json(s.event), "failed_starts": list(s.failed_starts),
+                "fail_indices": list(s.fail_indices), "changes": list(s.changes), "state": key_to_json(s.key),
+            }
             for s in c.steps
         ],
     }
