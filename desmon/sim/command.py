@@ -7,19 +7,25 @@ one-line :class:`~desmon.errors.DesmonError`, printed by the CLI).
 from __future__ import annotations
 
 import contextlib
+import io
 import json
 import sys
 import time
-from typing import IO, Any, Callable
+from typing import IO, Any, Callable, Iterator
 
 from desmon.errors import ScenarioError
 from desmon.paths import replacing
+from desmon.progress import StatusLine
 from desmon.sim.engine import RunResult, SimWorld
 from desmon.sim.trace import Trace
 
 __all__ = ["run_command", "format_summary", "summary_json"]
 
 MAX_TIMELINE = 40
+#: wall seconds after which a run shows its progress line (a short run shows none)
+PROGRESS_AFTER = 1.0
+#: how the progress line of a run starts (a fleet run's line too)
+PROGRESS_PREFIX = "desmon run: "
 
 
 def _fmt(v: Any) -> str:
@@ -166,7 +172,11 @@ def run_command(
     if is_fleet(scenario):  # a fleet of robots sharing edge servers: desmon.sim.fleet
         from desmon.sim.fleet import run_fleet_command
 
-        return run_fleet_command(args, scenario, out, err)
+        summary = io.StringIO()  # written once the progress line is ended, as it was made
+        with _status_line(err) as line, _ProgressLines(line) as progress_err:
+            code = run_fleet_command(args, scenario, summary, progress_err)
+        out.write(summary.getvalue())
+        return code
     from desmon.sim.world import world_of
 
     horizon = float(world_of(scenario).horizon)  # declared, or derived from the timeline
@@ -178,14 +188,15 @@ def run_command(
     if before_run is not None:
         before_run(float(args.until) if args.until is not None else horizon)
     t_wall = time.perf_counter()
-
-    def report_progress(now: float, end: float) -> None:
-        if time.perf_counter() - t_wall > 1.0:
-            print(f"desmon run: {100 * now / end:5.1f}%  t={now:.0f}/{end:.0f} s", file=err, flush=True)
-
     show = not getattr(args, "no_progress", False) and not args.json
-    progress = report_progress if show else None
     with contextlib.ExitStack() as stack:
+        line = stack.enter_context(_status_line(err))  # ended before the summary, or before an error's message
+
+        def report_progress(now: float, end: float) -> None:
+            if time.perf_counter() - t_wall > PROGRESS_AFTER:
+                line.show(f"{PROGRESS_PREFIX}{100 * now / end:5.1f}%  t={now:.0f}/{end:.0f} s")
+
+        progress = report_progress if show else None
         # the trace replaces an existing file only once the run is complete (nothing lost on an error)
         fh = stack.enter_context(replacing(args.trace)) if args.trace else None
         world = SimWorld(
@@ -201,3 +212,52 @@ def run_command(
         if args.trace and not getattr(args, "trace_is_temporary", False):
             out.write(f"Trace: {args.trace} ({result.trace.count} records)\n")
     return 1 if result.violations else 0
+
+
+@contextlib.contextmanager
+def _status_line(err: IO[str]) -> Iterator[StatusLine]:
+    """A :class:`StatusLine` on ``err``, ended however the block ends."""
+    line = StatusLine(err)
+    try:
+        yield line
+    finally:
+        line.close()
+
+
+class _ProgressLines(io.TextIOBase):
+    """The stream a fleet run prints its progress to (one line per report): each progress
+    line is drawn on ``line``, rewriting it in place; any other text goes through to
+    ``line.out`` unchanged, on a fresh line."""
+
+    def __init__(self, line: StatusLine) -> None:
+        super().__init__()
+        self.line = line
+        self._pending = ""
+
+    def writable(self) -> bool:
+        return True
+
+    def write(self, text: str) -> int:
+        self._pending += text
+        while "\n" in self._pending:
+            one, _, self._pending = self._pending.partition("\n")
+            if one.startswith(PROGRESS_PREFIX):
+                self.line.show(one)
+            else:
+                self._through(one + "\n")
+        return len(text)
+
+    def _through(self, text: str) -> None:
+        self.line.close()
+        self.line.out.write(text)
+
+    def flush(self) -> None:
+        self.line.out.flush()
+
+    def close(self) -> None:
+        """Pass on what is left of an unfinished line (a progress line is whole)."""
+        if self._pending:
+            self._through(self._pending)
+            self._pending = ""
+            self.flush()
+        super().close()

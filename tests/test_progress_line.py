@@ -1,0 +1,112 @@
+"""``desmon run`` shows its progress as one status line on stderr, rewritten in place
+(``\\r``, as ``desmon verify`` and ``desmon sweep`` do), ended before anything else is
+printed; stdout (the summary, ``--json``) is the same with or without it."""
+
+from __future__ import annotations
+
+import io
+import itertools
+import re
+import types
+
+import pytest
+
+from desmon.cli import main
+from desmon.errors import SimulationError
+from desmon.sim import command
+from desmon.sim.command import PROGRESS_PREFIX, _ProgressLines, _status_line
+
+WALL = re.compile(r"in [0-9.]+ s wall( \([0-9.]+x real time\))?")
+
+
+def _without_wall(text: str) -> str:
+    return WALL.sub("in WALL", text)
+
+
+def _status_lines(err: str) -> list[str]:
+    """The lines drawn on the status line: every ``\\r``-separated piece, padding removed."""
+    assert err.startswith("\r") and err.endswith("\n"), repr(err[:80])
+    assert err.count("\n") == 1, "the progress was printed as separate lines"
+    return [piece.rstrip() for piece in err[1:-1].split("\r")]
+
+
+def _percent(line: str) -> float:
+    return float(line.removeprefix(PROGRESS_PREFIX).split("%")[0])
+
+
+def _run(capsys, *argv: str) -> tuple[int, str, str]:  # type: ignore[no-untyped-def]
+    code = main(["run", *argv])
+    cap = capsys.readouterr()
+    return code, cap.out, cap.err
+
+
+@pytest.fixture
+def at_once(monkeypatch):  # type: ignore[no-untyped-def]
+    """A run shows its progress from its first report (not only after a second of wall time)."""
+    monkeypatch.setattr(command, "PROGRESS_AFTER", -1.0)
+
+
+def test_a_run_rewrites_one_progress_line_in_place_and_ends_it(capsys, root, at_once):  # type: ignore[no-untyped-def]
+    code, out, err = _run(capsys, str(root / "scenarios" / "coffee_handover.py"))
+    assert code == 0
+    lines = _status_lines(err)
+    assert len(lines) > 1 and all(ln.startswith(PROGRESS_PREFIX) for ln in lines)
+    percents = [_percent(ln) for ln in lines]
+    assert percents == sorted(percents) and percents[-1] > 50
+
+
+def test_a_runs_summary_on_stdout_is_the_same_with_the_progress_line(capsys, root, at_once):  # type: ignore[no-untyped-def]
+    scenario = str(root / "scenarios" / "coffee_handover.py")
+    _code, shown, err = _run(capsys, scenario, "--seed", "2")
+    _code, quiet, quiet_err = _run(capsys, scenario, "--seed", "2", "--no-progress")
+    assert err and quiet_err == ""
+    assert _without_wall(shown) == _without_wall(quiet)
+
+
+def test_a_run_with_json_prints_no_progress_line(capsys, root, at_once):  # type: ignore[no-untyped-def]
+    _code, out, err = _run(capsys, str(root / "scenarios" / "coffee_handover.py"), "--json")
+    assert err == "" and out.startswith("{")
+
+
+def test_the_progress_line_is_ended_before_an_error_message(capsys, root, at_once, monkeypatch):  # type: ignore[no-untyped-def]
+    class Crashing(command.SimWorld):  # type: ignore[misc, valid-type]
+        def run(self):  # type: ignore[no-untyped-def]
+            self.progress(7.0, 28.0)
+            raise SimulationError("the world broke")
+
+    monkeypatch.setattr(command, "SimWorld", Crashing)
+    code, out, err = _run(capsys, str(root / "scenarios" / "coffee_handover.py"))
+    assert code == 2 and out == ""
+    assert err == f"\r{PROGRESS_PREFIX} 25.0%  t=7/28 s\ndesmon: error: the world broke\n"
+
+
+def _fleet_clock(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The fleet's wall clock runs 2 s per reading, so it reports its progress from the start."""
+    from desmon.sim import fleet
+
+    ticks = itertools.count(0.0, 2.0)
+    monkeypatch.setattr(fleet, "time", types.SimpleNamespace(perf_counter=lambda: next(ticks)))
+
+
+def test_a_fleet_run_rewrites_one_progress_line_in_place(capsys, root, monkeypatch):  # type: ignore[no-untyped-def]
+    _fleet_clock(monkeypatch)
+    fleet = [str(root / "scenarios" / "fleet.py"), "-p", "robots=2", "-p", "hours=0.2"]
+    code, shown, err = _run(capsys, *fleet)
+    assert code == 0
+    lines = _status_lines(err)
+    assert len(lines) > 1 and all(ln.startswith(PROGRESS_PREFIX) for ln in lines)
+    _code, quiet, quiet_err = _run(capsys, *fleet, "--no-progress")
+    assert quiet_err == ""
+    assert _without_wall(shown) == _without_wall(quiet)
+
+
+def test_text_a_fleet_prints_that_is_not_progress_goes_through_on_a_fresh_line():
+    err = io.StringIO()
+    with _status_line(err) as line, _ProgressLines(line) as stream:
+        print(f"{PROGRESS_PREFIX} 10.0%  t=1/10 s", file=stream, flush=True)
+        print("a warning", file=stream)
+        print(f"{PROGRESS_PREFIX} 20.0%  t=2/10 s", file=stream, flush=True)
+        stream.write("unfinished")
+    assert err.getvalue() == (
+        f"\r{PROGRESS_PREFIX} 10.0%  t=1/10 s\na warning\n\r{PROGRESS_PREFIX} 20.0%  t=2/10 s\nunfinished"
+    )
