@@ -1,4 +1,4 @@
-"""The one-line progress display of long work (the checker's search, a sweep).
+"""The one-line progress display of long work (the checker's search, a sweep, a simulation run).
 
 A :class:`StatusLine` rewrites one line of a terminal stream in place (``\\r``), padding
 over a longer previous line, and ends it with a newline before anything else is
