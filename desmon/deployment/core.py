@@ -174,9 +174,16 @@ class DeploymentCore:
 
     def _audit_moves(self, reaction: Reaction) -> Reaction:
         """``reaction``, passed through, noting every move of a valid deployment of a
-        rebalancing graph (stopped where it ran validly, started elsewhere in the same
-        reaction) whose score gain did not exceed the graph's ``min_gain``: the
-        transition half of the ``no-flapping`` property (:attr:`unjustified`)."""
+        rebalancing graph whose score gain did not exceed the graph's ``min_gain``: the
+        transition half of the ``no-flapping`` property (:attr:`unjustified`).
+
+        A move is one graph's relocation: its valid instance is stopped, then the same
+        graph is started elsewhere in the same reaction, with no start of another graph
+        attempted in between. A stop followed by another graph's start made room for
+        that graph (an upgrade to the slot's preferred alternative, break-before-make);
+        if that start fails and the stopped fallback is placed again, best-first, the
+        new platform is where the placement put it, not a rebalancing decision, so it
+        is not judged."""
         moving: dict[str, tuple[str, float, float]] = {}
         outcome: bool | None = None
         while True:
@@ -185,6 +192,9 @@ class DeploymentCore:
             except StopIteration:
                 return
             note = self._move_note(cmd) if isinstance(cmd, Stop) else None
+            if moving and isinstance(cmd, Start):
+                for other in [g for g in moving if g != cmd.graph]:
+                    del moving[other]  # its stop made room for cmd.graph: no move of its own
             outcome = yield cmd
             if note is not None and outcome:
                 moving[cmd.graph] = note
