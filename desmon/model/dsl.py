@@ -169,12 +169,11 @@ class SpecBuilder:
         return self
 
     def build(self) -> DeploymentSpec:
-        if self._rebalance is not None and not any(isinstance(r, Preference) for r in self._requirements):
-            raise ModelError(
-                f"deployment specification of {self.graph!r} rebalances (min_gain {self._rebalance:g}) but has no "
-                "preference to score platforms by: add prefer(...) or drop rebalance(...)"
-            )
-        return DeploymentSpec(self.graph, tuple(self._requirements), self._fixed, self._rebalance)
+        spec = DeploymentSpec(self.graph, tuple(self._requirements), self._fixed, self._rebalance)
+        problem = spec.rebalance_problem()  # the model's own rule (SystemModel), refused here already
+        if problem is not None:
+            raise ModelError(problem)
+        return spec
 
 
 class _RPSL:

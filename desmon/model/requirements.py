@@ -371,6 +371,24 @@ class DeploymentSpec:
         if self.rebalance is not None:
             check_number(f"rebalance min_gain of {self.graph!r}", self.rebalance)
 
+    def rebalance_problem(self) -> str | None:
+        """Why this specification's ``rebalance`` can never move anything (None if it can,
+        or if it does not rebalance): with no preference every platform scores 0.
+
+        The one rule the DSL (:meth:`~desmon.model.dsl.SpecBuilder.build`) and the model
+        (:class:`~desmon.model.system.SystemModel`) apply to a *declared* specification.
+        It is not checked here: the specification a run derives from a declared one after
+        a :class:`~desmon.model.events.RequirementChange` may lose its last preference
+        for a while (and get one back later), and then rebalancing rightly does nothing.
+        """
+        if self.rebalance is None or any(isinstance(r, Preference) for r in self.requirements):
+            return None
+        return (
+            f"deployment specification of {self.graph!r} rebalances (min_gain {self.rebalance:g}) but has no "
+            "preference to score platforms by, so it would never move anything: add a preference "
+            "(prefer(...) in the DSL, Preference(...) in requirements) or drop rebalance"
+        )
+
     @property
     def hard(self) -> tuple[Requirement, ...]:
         """The hard requirements (what decides acceptable)."""

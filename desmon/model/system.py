@@ -168,6 +168,23 @@ class PlatformState:
     # of the validity memo; no part of equality, repr or the constructor).
     _hash: int = field(default=-1, init=False, repr=False, compare=False)
 
+    def __post_init__(self) -> None:
+        # One entry per resource and per graph: a resource named twice in ``load`` would be
+        # read two ways (load_of takes the first entry, the placement columns the last).
+        # States are built very often, so the common cases (no or one entry) cost one len().
+        # The slots are read through their descriptors: the table engine's recording
+        # subclass guards the fields against reads by a reaction, and this is none.
+        load = _LOAD_SLOT(self)
+        if len(load) > 1 and len(dict(load)) != len(load):
+            raise ModelError(_named_twice(self.platform, "load", "resource", load))
+        deployed = _DEPLOYED_SLOT(self)
+        if deployed:
+            if len(deployed) > 1 and len(dict(deployed)) != len(deployed):
+                raise ModelError(_named_twice(self.platform, "deployed", "graph", deployed))
+            for graph, use in deployed:
+                if len(use) > 1 and len(dict(use)) != len(use):
+                    raise ModelError(_named_twice(self.platform, f"deployed consumption of {graph!r}", "resource", use))
+
     def __hash__(self) -> int:
         h = self._hash
         if h == -1:
@@ -199,6 +216,23 @@ class PlatformState:
                 if res == resource and amount:
                     out.append((graph, amount))
         return out
+
+
+#: readers of PlatformState's slots (what a subclass that guards a field cannot intercept)
+_LOAD_SLOT = PlatformState.load.__get__
+_DEPLOYED_SLOT = PlatformState.deployed.__get__
+
+
+def _named_twice(platform: object, field_: str, each: str, pairs: tuple[tuple[str, object], ...]) -> str:
+    """The message for a PlatformState ``field_`` that names one ``each`` twice."""
+    name = getattr(platform, "name", platform)
+    seen: dict[str, list[object]] = {}
+    for key, value in pairs:
+        seen.setdefault(key, []).append(value)
+    key, values = next((k, v) for k, v in seen.items() if len(v) > 1)
+    shown = " and ".join(repr(v) for v in values)
+    fix = "its total" if each == "resource" else "what it consumes"
+    return f"PlatformState of {name!r}: {field_} names {each} {key!r} {len(values)} times ({shown}): give each {each} once, with {fix}"
 
 
 @strict_init(ModelError)
@@ -255,8 +289,12 @@ class SystemModel:
             raise ModelError(f"system model rules = {self.rules!r} is not a RuleTable: write RuleTable.from_mapping({{...}})")
 
     def _check_spec_platforms(self, spec: DeploymentSpec, platforms: set[str], graphs: set[str]) -> None:
-        """``spec`` deploys a known graph, is fixed (if at all) to a known platform, and every
-        platform fact its requirements name is declared by some platform."""
+        """``spec`` deploys a known graph, is fixed (if at all) to a known platform, rebalances
+        only with a preference to score by, and every platform fact its requirements name is
+        declared by some platform."""
+        problem = spec.rebalance_problem()
+        if problem is not None:
+            raise ModelError(problem)
         if spec.graph not in graphs:
             raise ModelError(
                 f"deployment specification for unknown perception graph {spec.graph!r}{suggest(spec.graph, graphs)}: "

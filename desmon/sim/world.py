@@ -373,6 +373,26 @@ class World:
             raise ScenarioError(f"world: random_changes = {self.random_changes!r} is not a RandomChanges: write RandomChanges(changes=(...), mean_interval=600)")
         if self.lease is not None and not isinstance(self.lease, Lease):
             raise ScenarioError(f"world: lease = {self.lease!r} is not a Lease: write Lease(idle_s=60)")
+        self._check_one_master(changes)
+
+    def _check_one_master(self, changes: tuple[TimedEvent, ...]) -> None:
+        """A platform's presence has one master: the lease, or scripted joins and leaves.
+
+        Both at once give a run nobody can reason about (the script joins what the lease
+        would release, or leaves what the lease hosts on). A lease without platforms
+        leases every on-demand platform, and only on-demand platforms join and leave.
+        """
+        if self.lease is None:
+            return
+        for te in changes:
+            ev = te.event
+            if isinstance(ev, (PlatformJoin, PlatformLeave)) and (not self.lease.platforms or ev.platform in self.lease.platforms):
+                leased = f"lease=Lease(platforms={self.lease.platforms!r})" if self.lease.platforms else "lease=Lease() (every on-demand platform)"
+                raise ScenarioError(
+                    f"world: platform {ev.platform!r} has two masters of its presence: {leased} and the scripted "
+                    f"'{ev}' at t={te.time:g} in changes=: let the lease drive it, or script its joins, not both "
+                    "(drop lease=, name other platforms in Lease(platforms=...), or drop its PlatformJoin / PlatformLeave)"
+                )
 
     def _check_stochastic(self) -> None:
         """MTTF entries (one per component) and load walks (one per platform and resource)."""

@@ -160,6 +160,8 @@ def build_timeline(
     check_window(start, end, float(horizon), flags=flags)
     try:
         return _build(records, float(horizon), start, end)
+    except ScenarioError:
+        raise  # already names its record (a ScenarioError is a ValueError too): not wrapped again
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise ScenarioError(f"trace 'run' record does not follow the desmon run schema ({type(exc).__name__}: {exc}); {_HOW}") from None
 
