@@ -4,17 +4,14 @@ printed; stdout (the summary, ``--json``) is the same with or without it."""
 
 from __future__ import annotations
 
-import io
-import itertools
 import re
-import types
 
 import pytest
 
 from desmon.cli import main
 from desmon.errors import SimulationError
 from desmon.sim import command
-from desmon.sim.command import PROGRESS_PREFIX, _ProgressLines, _status_line
+from desmon.sim.command import PROGRESS_PREFIX
 
 WALL = re.compile(r"in [0-9.]+ s wall( \([0-9.]+x real time\))?")
 
@@ -80,16 +77,7 @@ def test_the_progress_line_is_ended_before_an_error_message(capsys, root, at_onc
     assert err == f"\r{PROGRESS_PREFIX} 25.0%  t=7/28 s\ndesmon: error: the world broke\n"
 
 
-def _fleet_clock(monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    """The fleet's wall clock runs 2 s per reading, so it reports its progress from the start."""
-    from desmon.sim import fleet
-
-    ticks = itertools.count(0.0, 2.0)
-    monkeypatch.setattr(fleet, "time", types.SimpleNamespace(perf_counter=lambda: next(ticks)))
-
-
-def test_a_fleet_run_rewrites_one_progress_line_in_place(capsys, root, monkeypatch):  # type: ignore[no-untyped-def]
-    _fleet_clock(monkeypatch)
+def test_a_fleet_run_rewrites_one_progress_line_in_place(capsys, root, at_once):  # type: ignore[no-untyped-def]
     fleet = [str(root / "scenarios" / "fleet.py"), "-p", "robots=2", "-p", "hours=0.2"]
     code, shown, err = _run(capsys, *fleet)
     assert code == 0
@@ -98,15 +86,3 @@ def test_a_fleet_run_rewrites_one_progress_line_in_place(capsys, root, monkeypat
     _code, quiet, quiet_err = _run(capsys, *fleet, "--no-progress")
     assert quiet_err == ""
     assert _without_wall(shown) == _without_wall(quiet)
-
-
-def test_text_a_fleet_prints_that_is_not_progress_goes_through_on_a_fresh_line():
-    err = io.StringIO()
-    with _status_line(err) as line, _ProgressLines(line) as stream:
-        print(f"{PROGRESS_PREFIX} 10.0%  t=1/10 s", file=stream, flush=True)
-        print("a warning", file=stream)
-        print(f"{PROGRESS_PREFIX} 20.0%  t=2/10 s", file=stream, flush=True)
-        stream.write("unfinished")
-    assert err.getvalue() == (
-        f"\r{PROGRESS_PREFIX} 10.0%  t=1/10 s\na warning\n\r{PROGRESS_PREFIX} 20.0%  t=2/10 s\nunfinished"
-    )

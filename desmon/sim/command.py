@@ -7,7 +7,6 @@ one-line :class:`~desmon.errors.DesmonError`, printed by the CLI).
 from __future__ import annotations
 
 import contextlib
-import io
 import json
 import sys
 import time
@@ -169,14 +168,13 @@ def run_command(
     scenario = load_from_args(args)
     from desmon.sim.fleet import is_fleet
 
+    show = not getattr(args, "no_progress", False) and not args.json
     if is_fleet(scenario):  # a fleet of robots sharing edge servers: desmon.sim.fleet
-        from desmon.sim.fleet import run_fleet_command
+        from desmon.sim.fleet import run_fleet_command, write_fleet_report
 
-        summary = io.StringIO()  # written once the progress line is ended, as it was made
-        with _status_line(err) as line, _ProgressLines(line) as progress_err:
-            code = run_fleet_command(args, scenario, summary, progress_err)
-        out.write(summary.getvalue())
-        return code
+        with _status_line(err) as line:  # ended before the summary, or before an error's message
+            fleet_result = run_fleet_command(args, scenario, _reporter(line, time.perf_counter()) if show else None)
+        return write_fleet_report(args, fleet_result, out)
     from desmon.sim.world import world_of
 
     horizon = float(world_of(scenario).horizon)  # declared, or derived from the timeline
@@ -188,15 +186,9 @@ def run_command(
     if before_run is not None:
         before_run(float(args.until) if args.until is not None else horizon)
     t_wall = time.perf_counter()
-    show = not getattr(args, "no_progress", False) and not args.json
     with contextlib.ExitStack() as stack:
         line = stack.enter_context(_status_line(err))  # ended before the summary, or before an error's message
-
-        def report_progress(now: float, end: float) -> None:
-            if time.perf_counter() - t_wall > PROGRESS_AFTER:
-                line.show(f"{PROGRESS_PREFIX}{100 * now / end:5.1f}%  t={now:.0f}/{end:.0f} s")
-
-        progress = report_progress if show else None
+        progress = _reporter(line, t_wall) if show else None
         # the trace replaces an existing file only once the run is complete (nothing lost on an error)
         fh = stack.enter_context(replacing(args.trace)) if args.trace else None
         world = SimWorld(
@@ -224,40 +216,12 @@ def _status_line(err: IO[str]) -> Iterator[StatusLine]:
         line.close()
 
 
-class _ProgressLines(io.TextIOBase):
-    """The stream a fleet run prints its progress to (one line per report): each progress
-    line is drawn on ``line``, rewriting it in place; any other text goes through to
-    ``line.out`` unchanged, on a fresh line."""
+def _reporter(line: StatusLine, t_wall: float) -> Callable[[float, float], None]:
+    """The progress callback of a run (one robot or a fleet): drawn on ``line`` once the
+    run has taken :data:`PROGRESS_AFTER` wall seconds."""
 
-    def __init__(self, line: StatusLine) -> None:
-        super().__init__()
-        self.line = line
-        self._pending = ""
+    def report_progress(now: float, end: float) -> None:
+        if time.perf_counter() - t_wall > PROGRESS_AFTER:
+            line.show(f"{PROGRESS_PREFIX}{100 * now / end:5.1f}%  t={now:.0f}/{end:.0f} s")
 
-    def writable(self) -> bool:
-        return True
-
-    def write(self, text: str) -> int:
-        self._pending += text
-        while "\n" in self._pending:
-            one, _, self._pending = self._pending.partition("\n")
-            if one.startswith(PROGRESS_PREFIX):
-                self.line.show(one)
-            else:
-                self._through(one + "\n")
-        return len(text)
-
-    def _through(self, text: str) -> None:
-        self.line.close()
-        self.line.out.write(text)
-
-    def flush(self) -> None:
-        self.line.out.flush()
-
-    def close(self) -> None:
-        """Pass on what is left of an unfinished line (a progress line is whole)."""
-        if self._pending:
-            self._through(self._pending)
-            self._pending = ""
-            self.flush()
-        super().close()
+    return report_progress

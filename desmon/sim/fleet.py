@@ -58,7 +58,7 @@ from desmon.sim.world import World
 
 __all__ = [
     "Fleet", "FleetWorld", "FleetResult", "RobotView", "simulate_fleet", "merged_model", "format_fleet_summary", "fleet_json",
-    "is_fleet", "run_fleet_command", "robot_seed", "peak_rss_mb",
+    "is_fleet", "run_fleet_command", "write_fleet_report", "robot_seed", "peak_rss_mb",
 ]
 
 
@@ -820,10 +820,9 @@ def fleet_json(r: FleetResult) -> dict[str, Any]:
     }
 
 
-def run_fleet_command(args: Any, scenario: Scenario, out: IO[str], err: IO[str]) -> int:
-    """``desmon run`` on a fleet scenario: exit 0 if every audit held, 1 otherwise."""
-    import json
-
+def run_fleet_command(args: Any, scenario: Scenario, progress: Callable[[float, float], None] | None = None) -> FleetResult:
+    """``desmon run`` on a fleet scenario: check the arguments, run the fleet (``progress``
+    as :class:`FleetWorld` takes it), write the trace; :func:`write_fleet_report` prints it."""
     from desmon.paths import replacing
 
     fleet: Fleet = scenario.world
@@ -833,19 +832,15 @@ def run_fleet_command(args: Any, scenario: Scenario, out: IO[str], err: IO[str])
         raise ScenarioError(
             f"--until {args.until:g}: the fleet's shift ends at its horizon of {fleet.horizon:g} s; give --until at most that"
         )
-    t_wall = time.perf_counter()
-
-    def report_progress(now: float, end: float) -> None:
-        if time.perf_counter() - t_wall > 1.0:
-            print(f"desmon run: {100 * now / end:5.1f}%  t={now:.0f}/{end:.0f} s", file=err, flush=True)
-
-    show = not getattr(args, "no_progress", False) and not args.json
     with contextlib.ExitStack() as stack:
         fh = stack.enter_context(replacing(args.trace)) if args.trace else None
-        result = FleetWorld(
-            scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=fh,
-            progress=report_progress if show else None,
-        ).run()
+        return FleetWorld(scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=fh, progress=progress).run()
+
+
+def write_fleet_report(args: Any, result: FleetResult, out: IO[str]) -> int:
+    """Print a fleet run's summary (or ``--json``): exit 0 if every audit held, 1 otherwise."""
+    import json
+
     if args.json:
         out.write(json.dumps(fleet_json(result), indent=2) + "\n")
     else:
