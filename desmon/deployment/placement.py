@@ -83,11 +83,11 @@ __all__ = [
 ]
 
 #: ``check_validity`` takes the columns from this many platforms on. Measured with
-#: ``python -m bench.bench_validity --crossover``: the fixed cost of the numpy calls
-#: (about 45 microseconds a specification) breaks even with the loop at about 32
-#: platforms when the columns are kept; twice that leaves room for the rows a changed
-#: platform list costs to rewrite.
-VECTOR_MIN_PLATFORMS = 64
+#: ``python -m bench.bench_validity --crossover`` (two runs): with the columns kept, the
+#: fixed cost of the numpy calls, the batched failure texts included (about 85
+#: microseconds a specification), breaks even with the loop at about 96 platforms; the
+#: columns are 1.3x faster at 128 and 2x at 256.
+VECTOR_MIN_PLATFORMS = 128
 
 #: How many column stores are kept (each one platform list, most recently used first).
 _KEPT = 2
