@@ -9,6 +9,7 @@ as one line ``desmon: error: ...`` without a traceback.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import re
 import sys
@@ -17,6 +18,7 @@ from typing import Any, Callable, NoReturn, Sequence, TypeAlias
 from desmon.errors import DesmonError
 from desmon.options import (
     HelpFormatter,
+    Input,
     add_input,
     add_output,
     add_resolved,
@@ -36,6 +38,15 @@ EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
 #: ``show --format`` -> the file suffixes it writes (the first is the usual one).
 SHOW_FORMATS = {"png": (".png",), "dot": (".dot", ".gv"), "graphml": (".graphml",), "json": (".json",), "cypher": (".cypher", ".cql")}
 RUN_WINDOW = ("--plot-from", "--plot-to")
+MAX_STATES = 2_000_000  # verify --max-states when not given
+CEX_FILE = ("counterexample file", "write one with: desmon verify SCENARIO --json cex.json")
+#: ``verify`` options of the search, meaningless with ``--replay``: dest -> (flag, its value when not given)
+SEARCH_OPTIONS = {
+    "invariant": ("--invariant", None), "keep_going": ("--continue", False), "max_states": ("--max-states", MAX_STATES),
+    "max_depth": ("--max-depth", None), "timeout": ("--timeout", None), "max_memory": ("--max-memory", None),
+    "symmetry": ("--symmetry", False), "workers": ("--workers", 1), "engine": ("--engine", "auto"),
+    "json": ("--json", None), "pytest": ("--pytest", None),
+}
 
 
 def _one_line(text: object) -> str:
@@ -268,6 +279,117 @@ def _cmd_run(args: argparse.Namespace) -> int:
             os.unlink(tmp)
 
 
+def _cmd_verify(args: argparse.Namespace) -> int:
+    from desmon.errors import CheckerError
+
+    if args.replay is not None:
+        return _cmd_verify_replay(args)
+    if args.counterexample is not None:
+        raise CheckerError("--counterexample N picks a counterexample of a saved file: also give --replay FILE.json")
+    return _lazy("desmon.verify.command", "verify_command")(args)
+
+
+def _cmd_verify_replay(args: argparse.Namespace) -> int:
+    """``verify --replay FILE``: one saved counterexample stepped through the real core on
+    the repository, each step printed as the text report prints it, then the invariants
+    on the final state. Exit 1 if it still violates its invariant or diverges from the
+    recorded states, 0 if it replays as recorded without the violation, 2 bad input."""
+    from desmon.deployment.invariants import get_invariants
+    from desmon.errors import CheckerError
+    from desmon.loader import load_from_args
+    from desmon.verify.replay import RepositoryRun
+    from desmon.verify.report import format_divergence, format_replay_head, format_replay_verdict, format_trace, key_to_json
+
+    for dest, (flag, unset) in SEARCH_OPTIONS.items():
+        if getattr(args, dest) != unset:
+            raise CheckerError(f"{flag} sets up a search, and --replay replays one saved counterexample instead: drop {flag}")
+    saved = _saved_counterexample(args)
+    scenario = load_from_args(args)
+    if scenario.name != saved.scenario:
+        raise CheckerError(
+            f"{saved.source} holds a counterexample of scenario {saved.scenario!r}, but {args.scenario} is scenario "
+            f"{scenario.name!r}: give the scenario file of {saved.scenario!r}"
+        )
+    run = RepositoryRun(scenario, args.deployer)
+    instant = get_invariants([n for n in run.bounds.instantaneous if n in saved.invariants])
+    print(format_replay_head(saved))
+    diverged, last, steps = None, None, []
+    trace = run.trace(saved.labels, instant, flapping="no-flapping" in saved.invariants)
+    for (step, last), recorded in zip(_stepping(trace, saved), saved.states):
+        print(format_trace([step]), flush=True)
+        steps.append(step)
+        replayed = json.loads(json.dumps(key_to_json(step.key)))
+        if diverged is None and replayed != recorded:
+            diverged = step.index
+            print(format_divergence(saved, step.index, replayed))
+    final = run.violations(get_invariants(list(saved.invariants)))
+    text, still = format_replay_verdict(saved, final, last, diverged)
+    print(text, end="")
+    if args.plot:
+        _plot_replay(args, scenario, run, saved, steps, final, last if still else None)
+    return EXIT_VIOLATED if still or diverged is not None else EXIT_OK
+
+
+def _saved_counterexample(args: argparse.Namespace):  # type: ignore[no-untyped-def]
+    """The counterexample ``--replay`` and ``--counterexample`` name, refused if it was
+    written with another deployer or other parameters than the command gives."""
+    from desmon.errors import CheckerError
+    from desmon.model.params import parse_assignments
+    from desmon.verify.deployers import portable_spec
+    from desmon.verify.report import read_counterexample
+
+    saved = read_counterexample(args.replay, args.counterexample)
+    given = args.deployer.name
+    if given != saved.deployer and portable_spec(given) != portable_spec(saved.deployer):
+        raise CheckerError(
+            f"{saved.source} was written with --deployer {saved.deployer}, this command replays with --deployer {given}: "
+            f"pass --deployer {saved.deployer} to replay it (to check {given} itself: desmon verify {args.scenario} --deployer {given})"
+        )
+    params = tuple(sorted(parse_assignments(args.param).items()))
+    if saved.params is not None and params != saved.params:
+        def shown(ps: tuple[tuple[str, str], ...]) -> str:
+            return " ".join(f"-p {k}={v}" for k, v in ps) or "no -p parameters"
+
+        raise CheckerError(
+            f"{saved.source} was written with {shown(saved.params)}, this command gives {shown(params)}: "
+            "pass the same -p NAME=VALUE to replay it"
+        )
+    return saved
+
+
+def _stepping(trace, saved):  # type: ignore[no-untyped-def]
+    """``trace``'s steps; an event the scenario no longer has is one line naming the step."""
+    from desmon.errors import CheckerError
+
+    i = 0
+    while True:
+        try:
+            item = next(trace)
+        except StopIteration:
+            return
+        except DesmonError as exc:
+            raise CheckerError(
+                f"{saved.source}: step {i} ({saved.labels[i - 1][0]}) cannot be replayed: {_one_line(exc)}; "
+                "the scenario changed since the file was written"
+            ) from None
+        yield item
+        i += 1
+
+
+def _plot_replay(args, scenario, run, saved, steps, final, instant) -> None:  # type: ignore[no-untyped-def]
+    """``--plot`` with ``--replay``: the replayed counterexample as repository snapshots, if it still violates."""
+    from desmon.verify.plot import plot_counterexample
+    from desmon.verify.trace import Counterexample
+
+    message = dict(final).get(saved.invariant) or (instant[1] if instant else None)
+    if message is None:
+        print(f"no violation: {args.plot} not written")
+        return
+    c = Counterexample(saved.invariant, message, tuple(steps), instant[2] if instant and saved.invariant not in dict(final) else None)
+    out = plot_counterexample(scenario, args.deployer, run.bounds, c, args.plot)
+    print(f"wrote {out} ({saved.invariant}, {c.length} step{'s' if c.length != 1 else ''}, replayed)")
+
+
 def _lazy(module: str, func: str) -> Callable[[argparse.Namespace], int]:
     def handler(args: argparse.Namespace) -> int:
         import importlib
@@ -392,15 +514,26 @@ def _add_verify(sub: _Subparsers) -> None:
     add_output(p, "--json", suffixes=(".json",), default=None, metavar="FILE.json", help="write the counterexample(s) as JSON states")
     add_output(p, "--pytest", suffixes=(".py",), default=None, metavar="FILE.py", help="write a pytest replaying the counterexample")
     add_output(
-        p, "--plot", suffixes=(".png",), default=None, metavar="FILE.png", help="draw the shortest counterexample as repository snapshots"
+        p, "--plot", suffixes=(".png",), default=None, metavar="FILE.png",
+        help="draw the shortest counterexample as repository snapshots (with --replay: the replayed one)",
     )
     p.add_argument("--no-progress", action="store_true")
-    p.set_defaults(handler=_lazy("desmon.verify.command", "verify_command"))
+    p.add_argument(
+        "--replay", default=None, metavar="FILE.json",
+        help="instead of a search, replay a counterexample saved by --json through the real core, step by step, and check "
+        "the invariants on its final state: exit 1 if it still violates its invariant (or diverges from the saved states), "
+        "0 if it no longer does; give the file's scenario, --deployer and -p parameters",
+    )
+    p.add_argument(
+        "--counterexample", type=positive_int, default=None, metavar="N",
+        help="with --replay: replay the file's N-th counterexample (default: the first)",
+    )
+    p.set_defaults(handler=_cmd_verify, _inputs=(*p.get_default("_inputs"), Input("replay", CEX_FILE)))
 
 
 def _add_verify_limits(p: argparse.ArgumentParser) -> None:
     """The budgets after which ``desmon verify`` stops INCOMPLETE (exit 3)."""
-    p.add_argument("--max-states", type=positive_int, default=2_000_000, help="stop INCOMPLETE (exit 3) after this many states")
+    p.add_argument("--max-states", type=positive_int, default=MAX_STATES, help="stop INCOMPLETE (exit 3) after this many states")
     p.add_argument("--max-depth", type=positive_int, default=None, help="explore at most this many events deep (default: no limit)")
     p.add_argument("--timeout", type=positive_seconds, default=None, help="stop INCOMPLETE (exit 3) after this many seconds (default: no limit)")
     p.add_argument(

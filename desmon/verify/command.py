@@ -76,7 +76,7 @@ def verify_command(args: argparse.Namespace) -> int:
     )
     print(format_result(result), end="", flush=True)
     if args.json:
-        Path(args.json).write_text(json.dumps(result_to_json(result), indent=2) + "\n")
+        Path(args.json).write_text(json.dumps(result_to_json(result, parse_assignments(getattr(args, "param", None))), indent=2) + "\n")
         print(f"wrote {args.json}")
     if result.interrupted:  # Ctrl-C: the partial result and its JSON, and nothing slower
         checker.release()

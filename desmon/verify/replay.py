@@ -4,18 +4,18 @@
 the scenario's initial facts, then the system's first reaction (the start action of the
 bounds, or a context reaction). :class:`Checker.initial <desmon.verify.checker.Checker>`
 runs it on the state store, :class:`RepositoryRun` on a fresh networkx repository; the
-fuzzer, ``--plot`` and the generated pytest of ``desmon verify --pytest`` step a
-:class:`RepositoryRun` event by event.
+fuzzer, ``--plot``, the generated pytest of ``desmon verify --pytest`` and ``desmon
+verify --replay`` (:meth:`RepositoryRun.trace`) step a :class:`RepositoryRun` event by event.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable, Iterator, Sequence
 
 from desmon.deployment.control import repository_refusal
 from desmon.deployment.core import DeploymentCore, run_sync
 from desmon.deployment.deployer import Deployer
-from desmon.deployment.invariants import check_invariants
+from desmon.deployment.invariants import Invariant, check_invariants
 from desmon.deployment.monitor import Stimulus
 from desmon.deployment.ports import ControlPort
 from desmon.model.events import ActionChange, Event
@@ -27,6 +27,7 @@ from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import Repository
 from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.state import Key
+from desmon.verify.trace import Label, Step, initial_step, make_step
 
 __all__ = ["initial_reaction", "ScriptedControl", "RepositoryRun"]
 
@@ -51,6 +52,8 @@ class ScriptedControl(ImmediateControl):
         super().__init__(repo, self._scripted_fail, repository_refusal(repo, model))
         self.fail_at: tuple[int, ...] = ()
         self.n = 0
+        #: called as ``after(verb, graph, platform)`` once a start or stop has succeeded (None: not watched)
+        self.after: Callable[[str, str, str], None] | None = None
 
     def arm(self, fails: tuple[int, ...]) -> None:
         self.fail_at, self.n = fails, 0
@@ -58,6 +61,18 @@ class ScriptedControl(ImmediateControl):
     def _scripted_fail(self, graph: str, platform: str) -> bool:
         i, self.n = self.n, self.n + 1
         return i in self.fail_at
+
+    def start(self, graph: str, platform: str) -> bool:
+        ok = super().start(graph, platform)
+        if ok and self.after is not None:
+            self.after("start", graph, platform)
+        return ok
+
+    def stop(self, graph: str, platform: str) -> bool:
+        ok = super().stop(graph, platform)
+        if ok and self.after is not None:
+            self.after("stop", graph, platform)
+        return ok
 
 
 class RepositoryRun:
@@ -100,3 +115,30 @@ class RepositoryRun:
             if not any(name == "no-flapping" for name, _m in out):
                 out.append(("no-flapping", self.core.unjustified[0]))
         return out
+
+    def trace(
+        self, labels: Sequence[Label], instant: tuple[Invariant, ...] = (), flapping: bool = False
+    ) -> Iterator[tuple[Step, tuple[str, str, str] | None]]:
+        """The current state as step 0, then each label stepped, as the checker's
+        counterexample shows it. With each step: the first violation of an ``instant``
+        invariant after a start or stop inside its reaction, or (``flapping``) the
+        reaction's move that broke ``no-flapping``, as ``(invariant, message, after what)``;
+        else None. The checker watches the same (:class:`~desmon.verify.bounds.Bounds`' ``instantaneous``)."""
+        yield initial_step(self.key()), None
+        for i, (event, fails) in enumerate(labels, start=1):
+            prev = self.key()
+            found: list[tuple[str, str, str]] = []
+
+            def audit(verb: str, graph: str, platform: str) -> None:
+                bad = [] if found else check_invariants(self.core.view(), instant)
+                if bad:
+                    found.append((bad[0][0], bad[0][1], f"{verb} {graph} on {platform}"))
+
+            self.control.after = audit if instant else None
+            try:
+                _stim, log = self.step(event, fails)
+            finally:
+                self.control.after = None
+            if not found and flapping and self.core.unjustified:
+                found.append(("no-flapping", self.core.unjustified[0], "the reaction"))
+            yield make_step(i, prev, event, self.key(), log, fails), (found[0] if found else None)

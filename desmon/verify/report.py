@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import fields
+import json
+from dataclasses import dataclass, fields
+from pathlib import Path
 from typing import Any
 
 from desmon.errors import CheckerError, ModelError
@@ -21,6 +23,7 @@ from desmon.verify.state import Key
 __all__ = [
     "format_result", "format_trace", "result_to_json", "counterexample_pytest", "event_to_json", "event_from_json",
     "constraint_to_json", "constraint_from_json", "labels_from_json", "key_to_json",
+    "SavedCounterexample", "read_counterexample", "format_replay_head", "format_divergence", "format_replay_verdict",
 ]
 
 
@@ -263,10 +266,13 @@ def counterexample_to_json(c: Counterexample) -> dict[str, Any]:
     }
 
 
-def result_to_json(r: CheckResult) -> dict[str, Any]:
+def result_to_json(r: CheckResult, params: dict[str, str] | None = None) -> dict[str, Any]:
+    """The result as ``desmon verify --json`` writes it; ``params``: the run's ``-p NAME=VALUE``
+    parameters (``desmon verify --replay`` refuses to replay it with other ones)."""
     return {
         "scenario": r.scenario,
         "deployer": r.deployer,
+        **({"params": dict(params)} if params is not None else {}),
         "verdict": r.verdict,
         "reason": r.reason,
         "states": r.states,
@@ -287,6 +293,153 @@ def result_to_json(r: CheckResult) -> dict[str, Any]:
         "not_checked": {n: NOT_CHECKED.get(n, "") for n in r.not_checked},
         "counterexamples": [counterexample_to_json(c) for c in r.counterexamples],
     }
+
+
+# -- reading a counterexample back (desmon verify --replay) ---------------------------------------
+_WRITE_ONE = "write one with: desmon verify SCENARIO --json cex.json"
+
+
+@dataclass(frozen=True, slots=True)
+class SavedCounterexample:
+    """One counterexample of a ``desmon verify --json`` file, read back and checked."""
+
+    source: str  # the file
+    number: int  # which one (1 = the first)
+    count: int  # how many the file holds
+    scenario: str  # the scenario's name
+    deployer: str  # the deployer's name (its --deployer spec)
+    params: tuple[tuple[str, str], ...] | None  # the -p NAME=VALUE of the run (None: the file predates them)
+    invariants: tuple[str, ...]  # the invariants the run checked
+    invariant: str
+    message: str
+    during: str | None
+    labels: tuple[Label, ...]  # the steps after the initial state
+    states: tuple[dict[str, Any], ...]  # the recorded key of each state (key_to_json), the initial one first
+
+
+def read_counterexample(path: str | Path, number: int | None = None) -> SavedCounterexample:
+    """Counterexample ``number`` (default: the first) of the JSON file ``path`` written by
+    ``desmon verify --json``. Whatever is wrong (not JSON, a field of the wrong type or a
+    bad value, a number out of range) is a one-line :class:`CheckerError` naming it."""
+    from desmon.deployment.invariants import get_invariants
+
+    src = str(path)
+    top = _mapping(src, _read_json(path), '{"scenario": ..., "deployer": ..., "counterexamples": [...]}')
+    scenario, deployer = (_field(src, top, k, str) for k in ("scenario", "deployer"))
+    params = top.get("params")
+    if params is not None and not (isinstance(params, dict) and all(isinstance(v, str) for v in params.values())):
+        raise CheckerError(f"{src}: params = {params!r} is not an object of NAME: VALUE texts, e.g. {{\"hand_memory\": \"256\"}}")
+    checked = tuple(map(str, _field(src, top, "invariants", list)))
+    try:
+        get_invariants(checked)
+    except ModelError as exc:
+        raise CheckerError(f"{src}: invariants: {exc}") from None
+    n, c = _pick(src, top, number)
+    where = f"{src}: counterexamples[{n - 1}]"
+    invariant = _field(where, c, "invariant", str)
+    if invariant not in checked:
+        raise CheckerError(f"{where}.invariant = {invariant!r} is not one of the invariants the run checked ({', '.join(checked)})")
+    during = c.get("during")
+    if during is not None and not isinstance(during, str):
+        raise CheckerError(f"{where}.during = {during!r} is neither null nor the command text it was violated after")
+    labels = labels_from_json(c, where=where)
+    states = tuple(
+        _field(f"{where}.states[{i}]", _mapping(f"{where}.states[{i}]", s, '{"event": ..., "state": {...}}'), "state", dict)
+        for i, s in enumerate(c["states"])
+    )
+    return SavedCounterexample(
+        src, n, len(top["counterexamples"]), scenario, deployer, None if params is None else tuple(sorted(params.items())),
+        checked, invariant, _field(where, c, "message", str), during, labels, states,
+    )
+
+
+def _read_json(path: str | Path) -> object:
+    try:
+        return json.loads(Path(path).read_bytes().decode("utf-8"))
+    except UnicodeDecodeError:
+        raise CheckerError(f"{path}: not a text file, so not the JSON desmon verify --json writes; {_WRITE_ONE}") from None
+    except json.JSONDecodeError as exc:
+        raise CheckerError(f"{path}: not JSON ({exc.msg} at line {exc.lineno} column {exc.colno}); {_WRITE_ONE}") from None
+
+
+def _pick(src: str, top: dict[str, Any], number: int | None) -> tuple[int, dict[str, Any]]:
+    """(number, counterexample) of the ``number``-th counterexample (1 = the first, the default)."""
+    found = _field(src, top, "counterexamples", list)
+    if not found:
+        raise CheckerError(
+            f"{src} holds no counterexample (verdict {top.get('verdict')}): nothing to replay; only the --json of a VIOLATED run holds some"
+        )
+    n = 1 if number is None else number
+    if not 1 <= n <= len(found):
+        names = ", ".join(str(c.get("invariant")) if isinstance(c, dict) else "?" for c in found)
+        give = "give --counterexample 1" if len(found) == 1 else f"give --counterexample 1 to {len(found)}"
+        plural = "counterexample" if len(found) == 1 else "counterexamples"
+        raise CheckerError(f"--counterexample {n}: {src} holds {len(found)} {plural} ({names}); {give}")
+    return n, _mapping(f"{src}: counterexamples[{n - 1}]", found[n - 1], '{"invariant": ..., "states": [...]}')
+
+
+def _field(where: str, d: dict[str, Any], key: str, kind: type) -> Any:
+    """``d[key]``, which must be a ``kind`` (a JSON string, list or object)."""
+    value = d.get(key)
+    if not isinstance(value, kind):
+        what = {str: "a string", list: "a list", dict: "a JSON object"}[kind]
+        shown = "missing" if key not in d else f"{value!r}"[:60]
+        raise CheckerError(f"{where}: {key} = {shown} is not {what}: give the file desmon verify --json wrote, unedited there")
+    return value
+
+
+def format_replay_head(saved: SavedCounterexample) -> str:
+    steps = len(saved.labels)
+    during = f", during the reaction, right after `{saved.during}`" if saved.during else ""
+    return (
+        f"replaying counterexample {saved.number} of {saved.count} of {saved.source}: {saved.invariant} violated after "
+        f"{steps} step{'s' if steps != 1 else ''}{during} -- {saved.scenario} -- deployer {saved.deployer}"
+    )
+
+
+def format_divergence(saved: SavedCounterexample, index: int, replayed: dict[str, Any]) -> str:
+    """One line: how state ``index`` of the replay differs from the one ``saved`` recorded."""
+    recorded = saved.states[index]
+    parts = [
+        f"{k} {json.dumps(recorded.get(k))} recorded, {json.dumps(replayed.get(k))} replayed"
+        for k in sorted(set(recorded) | set(replayed), key=str) if recorded.get(k) != replayed.get(k)
+    ]
+    return (
+        f"  ! step {index} diverges from {saved.source}: {'; '.join(parts)} -- the scenario, the deployer or desmon "
+        "changed since it was written"
+    )
+
+
+def format_replay_verdict(
+    saved: SavedCounterexample, final: list[tuple[str, str]], instant: tuple[str, str, str] | None, diverged: int | None
+) -> tuple[str, bool]:
+    """The invariants' verdicts on the replayed final state (``final``: the violated ones;
+    ``instant``: one violated inside the last reaction), and the verdict; with whether the
+    counterexample still violates its invariant."""
+    bad = dict(final)
+    lines = ["invariants after the replay (on its final state; an instantaneous one also inside its last reaction):"]
+    width = max(len(n) for n in saved.invariants)
+    for name in saved.invariants:
+        if name in bad:
+            lines.append(f"  {name:<{width}}  VIOLATED: {bad[name]}")
+        elif instant is not None and instant[0] == name:
+            lines.append(f"  {name:<{width}}  VIOLATED during the reaction, right after `{instant[2]}`: {instant[1]}")
+        else:
+            lines.append(f"  {name:<{width}}  holds")
+    x = saved.invariant
+    still = x in bad or (instant is not None and instant[0] == x)
+    changed = (
+        f"the replay diverged from the recorded run at step {diverged} (the scenario, the deployer or desmon changed since "
+        f"{saved.source} was written)" if diverged is not None else ""
+    )
+    if still:
+        verdict = f"VIOLATED {x}: the counterexample still holds" + (f", although {changed}" if changed else ", every state as recorded")
+    elif changed:
+        verdict = f"the counterexample no longer violates {x}: fixed? But {changed}: re-run desmon verify to check every state"
+    else:
+        verdict = f"the counterexample no longer violates {x}: fixed? (every state as recorded)"
+    lines.append(f"verdict: {verdict}")
+    return "\n".join(lines) + "\n", still
 
 
 # -- generated pytest -------------------------------------------------------------------------
