@@ -170,11 +170,7 @@ def run_command(
 
     show = not getattr(args, "no_progress", False) and not args.json
     if is_fleet(scenario):  # a fleet of robots sharing edge servers: desmon.sim.fleet
-        from desmon.sim.fleet import run_fleet_command, write_fleet_report
-
-        with _status_line(err) as line:  # ended before the summary, or before an error's message
-            fleet_result = run_fleet_command(args, scenario, _reporter(line, time.perf_counter()) if show else None)
-        return write_fleet_report(args, fleet_result, out)
+        return _run_fleet(args, scenario, out, err, show)
     from desmon.sim.world import world_of
 
     horizon = float(world_of(scenario).horizon)  # declared, or derived from the timeline
@@ -204,6 +200,15 @@ def run_command(
         if args.trace and not getattr(args, "trace_is_temporary", False):
             out.write(f"Trace: {args.trace} ({result.trace.count} records)\n")
     return 1 if result.violations else 0
+
+
+def _run_fleet(args: Any, scenario: Any, out: IO[str], err: IO[str], show: bool) -> int:
+    """``desmon run`` on a fleet scenario (:mod:`desmon.sim.fleet`), its progress on one line."""
+    from desmon.sim.fleet import run_fleet_command, write_fleet_report
+
+    with _status_line(err) as line:  # ended before the summary, or before an error's message
+        result = run_fleet_command(args, scenario, _reporter(line, time.perf_counter()) if show else None)
+    return write_fleet_report(args, result, out)
 
 
 @contextlib.contextmanager
