@@ -212,3 +212,15 @@ def test_plot_with_replay_draws_the_replayed_counterexample(saved, tmp_path, cap
     assert _replay(path, "--plot", str(png)) == 1
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert f"wrote {png}" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "text", ['{"scenario": "migration", "seconds": 1' + "0" * 5000 + "}", "[" * 100_000 + "]" * 100_000],
+    ids=["an integer of 5001 digits", "arrays nested 100,000 deep"],
+)
+def test_json_that_python_cannot_read_is_refused_on_one_line_not_a_traceback(tmp_path, capsys, text):
+    odd = tmp_path / "odd.json"
+    odd.write_text(text)
+    assert _replay(odd) == 2
+    err = _one_error_line(capsys)
+    assert str(odd) in err and "not JSON" in err

@@ -360,6 +360,9 @@ def _read_json(path: str | Path) -> object:
         raise CheckerError(f"{path}: not a text file, so not the JSON desmon verify --json writes; {_WRITE_ONE}") from None
     except json.JSONDecodeError as exc:
         raise CheckerError(f"{path}: not JSON ({exc.msg} at line {exc.lineno} column {exc.colno}); {_WRITE_ONE}") from None
+    except (ValueError, RecursionError) as exc:  # a number of over 4300 digits, nesting too deep for the parser
+        why = " ".join(str(exc).split(";")[0].split())
+        raise CheckerError(f"{path}: not JSON that desmon can read ({why}); {_WRITE_ONE}") from None
 
 
 def _pick(src: str, top: dict[str, Any], number: int | None) -> tuple[int, dict[str, Any]]:
