@@ -224,3 +224,12 @@ def test_json_that_python_cannot_read_is_refused_on_one_line_not_a_traceback(tmp
     assert _replay(odd) == 2
     err = _one_error_line(capsys)
     assert str(odd) in err and "not JSON" in err
+
+
+def test_an_integer_too_large_for_a_float_in_a_saved_event_is_refused_on_one_line_naming_the_field(saved, tmp_path, capsys):
+    def huge_load(data: dict[str, Any]) -> None:
+        data["counterexamples"][0]["states"][1]["event"] = {"kind": "load", "platform": "pc1", "amount": 10**400}
+
+    assert _replay(_edited(saved[0], tmp_path / "huge.json", huge_load)) == 2
+    err = _one_error_line(capsys)
+    assert "counterexamples[0].states[1].event" in err and "too large" in err

@@ -99,6 +99,11 @@ def check_number(
         if isinstance(value, str) and is_numeric_text(value):
             raise error(f"{what} = {value!r} is a string, not a number: write {value.strip()} without quotes")
         raise refuse(f"{value!r} is not a number")
+    if isinstance(value, int) and value.bit_length() > 1000:
+        try:
+            float(value)
+        except OverflowError:  # math.isnan would raise it, and repr fails past 4300 digits
+            raise refuse(f"an integer of about {int(value.bit_length() * 0.30103) + 1} digits is too large") from None
     if math.isnan(value):
         raise refuse("nan is not a number")
     if math.isinf(value) and not (infinite and value > 0):
