@@ -64,6 +64,8 @@ def read_trace(path: str | Path) -> list[dict[str, Any]]:
             except json.JSONDecodeError as exc:
                 cut = " (the last line, cut off: is the file truncated?)" if not raw.endswith(b"\n") else ""
                 raise ScenarioError(f"{path}:{n}: not a JSON Lines trace record ({exc.msg}){cut}; {_HOW}") from None
+            except (ValueError, RecursionError) as exc:  # a number of over 4300 digits, nesting too deep
+                raise ScenarioError(f"{path}:{n}: not a JSON Lines trace record ({str(exc).split(';')[0]}); {_HOW}") from None
             if not isinstance(record, dict):
                 shape = "a JSON array" if isinstance(record, list) else f"a JSON {type(record).__name__}"
                 raise ScenarioError(
