@@ -106,3 +106,42 @@ def test_the_corrected_deployers_never_flap_on_generated_models_with_fallbacks_a
     scenario = dataclasses.replace(scenario, checker=dataclasses.replace(scenario.checker, start_failures=failures))
     r = Checker(scenario, deployer).run(engine="direct", max_states=3000)
     assert not [c.message for c in r.counterexamples if c.invariant == "no-flapping"]
+
+
+def test_two_rebalancing_graphs_that_swap_platforms_without_gain_are_two_unjustified_moves():
+    """A deployer that stops both graphs of two slots, then starts each where the other ran:
+    the start of one between the other's stop and restart does not hide either move."""
+    from desmon.deployment.deployer import Deployer
+    from desmon.deployment.ports import Start, Stop
+
+    r = RobotBuilder("swap")
+    r.platform("pc0", memory=1000)
+    r.platform("pc1", memory=1000)
+    for g in ("a", "b"):
+        with r.rpsl.perception_graph(g) as gb:
+            gb.sensor("s", reads="force_sensor")
+            gb.processing("p", inputs=["s"])
+        r.depsl.deployment_specification(g).add_constraint("capacity", "memory", 100).prefer("most_free", "memory").rebalance(0.5)
+    r.rules({HOLD: [("a",), ("b",)]})
+    model = r.build()
+
+    def react(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+        on = dict(q.deployments())
+        if not on:
+            yield Start("a", "pc0")
+            yield Start("b", "pc1")
+            return
+        yield Stop("a", on["a"])
+        yield Stop("b", on["b"])
+        yield Start("a", on["b"])
+        yield Start("b", on["a"])
+
+    repo = Repository()
+    load_model(repo, model)
+    q = RepositoryQuery(repo)
+    core = DeploymentCore(model, q, RepositoryInsert(repo, model.robot), Deployer("swap", "stops both, then starts both", react))
+    control = ImmediateControl(repo, fails=lambda g, p: False)
+    core.step(ActionChange(HOLD), control)
+    core.step(LoadChange("pc0", 10), control)
+    assert dict(q.deployments()) == {"a": "pc1", "b": "pc0"}
+    assert [line.split()[0] for line in core.unjustified] == ["a", "b"]

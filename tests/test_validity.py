@@ -126,3 +126,15 @@ def test_unmemoised_ends_even_when_its_block_raises():
     except KeyError:
         pass
     assert V._memoise is True
+
+
+def test_unmemoised_blocks_that_overlap_bring_the_memos_back_only_when_the_last_one_ends():
+    from desmon.deployment import validity as V
+
+    first, second = V.unmemoised(), V.unmemoised()
+    first.__enter__()
+    second.__enter__()
+    first.__exit__(None, None, None)  # the first to start ends first (another thread's run)
+    assert V._memoise is False
+    second.__exit__(None, None, None)
+    assert V._memoise is True

@@ -139,6 +139,9 @@ def test_a_replay_that_leaves_the_recorded_states_names_the_step_on_one_line_and
         ("states", lambda c: c.update(states="none")),
         ("state", lambda c: c["states"][1].update(state=[1, 2])),
         ("invariant", lambda c: c.update(invariant="no-such-invariant")),
+        ("fail_indices", lambda c: c["states"][1].update(fail_indices=[10**30], failed_starts=[])),
+        ("fail_indices", lambda c: c["states"][1].update(fail_indices=[0, 0], failed_starts=["a", "b"])),
+        ("states[0].event", lambda c: c["states"][0].update(event=c["states"][1]["event"])),
     ],
 )
 def test_a_hand_edited_bad_field_is_refused_on_one_line_naming_the_field(saved, tmp_path, capsys, field, edit):
@@ -233,3 +236,15 @@ def test_an_integer_too_large_for_a_float_in_a_saved_event_is_refused_on_one_lin
     assert _replay(_edited(saved[0], tmp_path / "huge.json", huge_load)) == 2
     err = _one_error_line(capsys)
     assert "counterexamples[0].states[1].event" in err and "too large" in err
+
+
+def test_a_file_naming_an_invariant_twice_is_refused_on_one_line(saved, tmp_path, capsys):
+    path, _report = saved
+
+    def twice(d: dict[str, Any]) -> None:
+        d["invariants"] = d["invariants"] + d["invariants"][:1]
+
+    bad = _edited(path, tmp_path / "twice.json", twice)
+    assert _replay(bad) == 2
+    err = _one_error_line(capsys)
+    assert str(bad) in err and "twice" in err

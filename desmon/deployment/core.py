@@ -178,12 +178,17 @@ class DeploymentCore:
         transition half of the ``no-flapping`` property (:attr:`unjustified`).
 
         A move is one graph's relocation: its valid instance is stopped, then the same
-        graph is started elsewhere in the same reaction, with no start of another graph
-        attempted in between. A stop followed by another graph's start made room for
-        that graph (an upgrade to the slot's preferred alternative, break-before-make);
-        if that start fails and the stopped fallback is placed again, best-first, the
-        new platform is where the placement put it, not a rebalancing decision, so it
-        is not judged."""
+        graph is started elsewhere in the same reaction, with no start of another
+        alternative *of its slot* attempted in between. A stop followed by such a start
+        made room for the slot's other graph (an upgrade to the slot's preferred
+        alternative, break-before-make); if that start fails and the stopped fallback is
+        placed again, best-first, the new platform is where the placement put it, not a
+        rebalancing decision, so it is not judged. A start of a graph of another slot in
+        between changes nothing: two graphs that swap platforms are two moves."""
+        mates: dict[str, set[str]] = {}
+        for slot in self.slots():
+            for g in slot:
+                mates.setdefault(g, set()).update(slot)
         moving: dict[str, tuple[str, float, float]] = {}
         outcome: bool | None = None
         while True:
@@ -193,8 +198,8 @@ class DeploymentCore:
                 return
             note = self._move_note(cmd) if isinstance(cmd, Stop) else None
             if moving and isinstance(cmd, Start):
-                for other in [g for g in moving if g != cmd.graph]:
-                    del moving[other]  # its stop made room for cmd.graph: no move of its own
+                for other in [g for g in moving if g != cmd.graph and g in mates.get(cmd.graph, ())]:
+                    del moving[other]  # its stop made room for cmd.graph, its slot's other alternative
             outcome = yield cmd
             if note is not None and outcome:
                 moving[cmd.graph] = note

@@ -5,6 +5,7 @@ The semantics of every requirement kind (docs/design.md §4) lives here and nowh
 
 from __future__ import annotations
 
+import threading
 from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import lru_cache
@@ -44,9 +45,12 @@ _MEMO_SIZE = 1 << 16
 #: the engine learns what a reaction observed of the platforms. Nothing else reads it.
 _observer: Any = None
 
-#: Are the memos of :func:`check_validity` and :func:`check_platform` used? (see
-#: :func:`unmemoised`: a fleet turns them off for its run)
+#: Are the memos of :func:`check_validity` and :func:`check_platform` used? False while
+#: any :func:`unmemoised` block runs (a fleet turns them off for its run); ``_unmemoised``
+#: counts those blocks, under ``_MEMO_LOCK`` (blocks of several threads may overlap).
 _memoise = True
+_unmemoised = 0
+_MEMO_LOCK = threading.Lock()
 
 #: Issue 16: the vectorised placement path, registered by :mod:`desmon.deployment.placement`
 #: when it is imported: ``vector_validity(reqs, states, graph, reasons)`` answers what
@@ -329,17 +333,21 @@ def clear_memos() -> None:
 def unmemoised() -> Iterator[None]:
     """Within it, :func:`check_validity` and :func:`check_platform` compute every answer
     afresh (same answers, no memo). For runs whose facts seldom recur -- a fleet, where
-    some platform changed between almost any two questions (0.3 % of its answers were
-    memo hits) -- the memos cost hashing on every call and hold old platform states
+    some platform changed between almost any two questions, so almost no answer came
+    from a memo -- the memos cost hashing on every call and hold old platform states
     alive: a third of the 8-hour fleet's peak memory. The checker keeps them (its
-    states recur by construction). Process-wide while it lasts; nests."""
-    global _memoise
-    before = _memoise
-    _memoise = False
+    states recur by construction). Process-wide while any such block runs: blocks nest
+    and may overlap across threads (the memos come back when the last one ends)."""
+    global _memoise, _unmemoised
+    with _MEMO_LOCK:
+        _unmemoised += 1
+        _memoise = False
     try:
         yield
     finally:
-        _memoise = before
+        with _MEMO_LOCK:
+            _unmemoised -= 1
+            _memoise = _unmemoised == 0
 
 
 def order_platforms(states: Sequence[PlatformState]) -> list[PlatformState]:

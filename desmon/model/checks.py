@@ -95,16 +95,10 @@ def check_number(
     def refuse(problem: str) -> DesmonError:
         return error(f"{what} = {problem}: give {_wanted(low=low, high=high, positive=positive, integer=integer, unit=unit)}")
 
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        if isinstance(value, str) and is_numeric_text(value):
-            raise error(f"{what} = {value!r} is a string, not a number: write {value.strip()} without quotes")
-        raise refuse(f"{value!r} is not a number")
-    if isinstance(value, int) and value.bit_length() > 1000:
-        try:
-            float(value)
-        except OverflowError:  # math.isnan would raise it, and repr fails past 4300 digits
-            raise refuse(f"an integer of about {int(value.bit_length() * 0.30103) + 1} digits is too large") from None
-    if math.isnan(value):
+    problem = _not_a_float(what, value, error)
+    if problem is not None:
+        raise refuse(problem)
+    if math.isnan(value):  # type: ignore[arg-type]
         raise refuse("nan is not a number")
     if math.isinf(value) and not (infinite and value > 0):
         raise refuse(f"{value!r} is not finite")
@@ -117,6 +111,21 @@ def check_number(
     if integer and int(value) != value:
         raise error(f"{what} = {value!r} is not a whole number: give a count such as 1, 2, 6")
     return value
+
+
+def _not_a_float(what: str, value: object, error: Error) -> str | None:
+    """Why ``value`` is no real number a float can hold (None if it is one); a number
+    written as a string is ``error`` at once, with the fix."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if isinstance(value, str) and is_numeric_text(value):
+            raise error(f"{what} = {value!r} is a string, not a number: write {value.strip()} without quotes")
+        return f"{value!r} is not a number"
+    if isinstance(value, int) and value.bit_length() > 1000:
+        try:
+            float(value)
+        except OverflowError:  # math.isnan would raise it, and repr fails past 4300 digits
+            return f"an integer of about {int(value.bit_length() * 0.30103) + 1} digits is too large"
+    return None
 
 
 def is_numeric_text(text: str) -> bool:

@@ -222,6 +222,9 @@ def labels_from_json(counterexample: object, *, where: str = "counterexample") -
     states = c.get("states")
     if not isinstance(states, list) or not states:
         raise CheckerError(f"{where}.states = {states!r} is not a non-empty list of states: re-run desmon verify --json")
+    first = _mapping(f"{where}.states[0]", states[0], '{"event": null, ...}')
+    if first.get("event") is not None:
+        raise CheckerError(f"{where}.states[0].event = {first.get('event')!r}: the initial state has no event (null); re-run desmon verify --json")
     out: list[Label] = []
     for i, state in enumerate(states[1:], start=1):
         at = f"{where}.states[{i}]"
@@ -234,6 +237,14 @@ def labels_from_json(counterexample: object, *, where: str = "counterexample") -
             raise CheckerError(f"{at} lists failed starts but no fail_indices (written by an older desmon): re-run desmon verify --json")
         if not isinstance(fails, list) or any(isinstance(x, bool) or not isinstance(x, int) or x < 0 for x in fails):
             raise CheckerError(f"{at}.fail_indices = {fails!r} is not a list of non-negative integers (the failing Control.start calls)")
+        if fails != sorted(set(fails)):
+            raise CheckerError(f"{at}.fail_indices = {fails!r}: give each failing Control.start call once, in increasing order")
+        listed = s.get("failed_starts")
+        if isinstance(listed, list) and len(listed) != len(fails):
+            raise CheckerError(
+                f"{at}: fail_indices names {len(fails)} failing start(s) but failed_starts lists {len(listed)}: "
+                "a hand edit? re-run desmon verify --json"
+            )
         out.append((event, tuple(fails)))
     return tuple(out)
 
@@ -330,6 +341,9 @@ def read_counterexample(path: str | Path, number: int | None = None) -> SavedCou
     if params is not None and not (isinstance(params, dict) and all(isinstance(v, str) for v in params.values())):
         raise CheckerError(f"{src}: params = {params!r} is not an object of NAME: VALUE texts, e.g. {{\"hand_memory\": \"256\"}}")
     checked = tuple(map(str, _field(src, top, "invariants", list)))
+    twice = sorted({n for n in checked if checked.count(n) > 1})
+    if twice:
+        raise CheckerError(f"{src}: invariants names {', '.join(twice)} twice: list each checked invariant once")
     try:
         get_invariants(checked)
     except ModelError as exc:
