@@ -460,7 +460,6 @@ class _Member(SimWorld):
         self.core = DeploymentCore(self.model, view, RepositoryInsert(repo, self.model.robot), deployer)
         self.deployer_name = self.core.deployer.name
         self._edges = frozenset(edges)
-        self._audit_memo: tuple[tuple[PlatformState, ...], frozenset[str], tuple[PlatformState, ...]] | None = None
         self._init_physical()
         if admission:
             self.rules = _Admission(self.rules, view, frozenset(edges))  # type: ignore[assignment]
@@ -492,14 +491,8 @@ class _Member(SimWorld):
         invariants judge, and it cannot be over-committed by a start of this robot: the
         robot whose start over-commits it audits it at its own next quiescent point."""
         edges = self._edges
-        mine = frozenset(p for (_g, p) in self.instances if p in edges)
-        states = self.query.platform_states()
-        kept = self._audit_memo
-        if kept is not None and kept[0] is states and kept[1] == mine:
-            return kept[2]  # the same view tuple and edges as the last audit
-        audited = tuple(s for s in states if s.name not in edges or s.name in mine)
-        self._audit_memo = (states, mine, audited)
-        return audited
+        mine = {p for (_g, p) in self.instances if p in edges}
+        return tuple(s for s in self.query.platform_states() if s.name not in edges or s.name in mine)
 
     def _decision(self, what: str, graph: str, platform: str, ok: bool, issued: float, why: str) -> None:
         """Counted in the trace only (a fleet keeps no per-robot decision list in memory)."""
