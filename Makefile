@@ -6,18 +6,25 @@ STAMP := $(VENV)/.installed
 
 .PHONY: demo test bench clean
 
-# Silent (@, pip -qq): `make demo` prints the demo and nothing else; pip still prints errors.
+# The first run installs into .venv and shows pip's own output; later runs skip it.
 $(STAMP): pyproject.toml
-	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
-	@$(BIN)/python -m pip install -qq --upgrade pip
-	@$(BIN)/python -m pip install -qq -e '.[test,sweep]'
+	@test -x $(BIN)/python || { echo "==> creating $(VENV) with $$($(PY) --version)"; $(PY) -m venv $(VENV); }
+	@echo "==> installing desmon and its test and sweep extras into $(VENV) (first run only; pip's output follows)"
+	@$(BIN)/python -m pip install --upgrade pip
+	@$(BIN)/python -m pip install -e '.[test,sweep]'
 	@touch $(STAMP)
+	@echo "==> installed: $(BIN)/desmon"
 
 demo: $(STAMP)
+	@echo "==> running the coffee-mug case study in the SimPy world: $(BIN)/desmon run scenarios/coffee_handover.py"
 	@$(BIN)/desmon run scenarios/coffee_handover.py
+	@echo "==> done. To type plain 'desmon ...' in this shell: . $(BIN)/activate"
 
+# Fast tests first (one dot each), then the tests marked slow, each by name with its time.
 test: $(STAMP)
-	$(BIN)/python -m pytest
+	@echo "==> the whole test suite: the fast tests, then the slow ones by name (see the README for how long it takes)"
+	$(BIN)/python -m pytest -m "not slow"
+	$(BIN)/python -m pytest -m slow -v --durations=10
 
 bench: $(STAMP)
 	$(BIN)/python -m bench
