@@ -12,11 +12,12 @@ from typing import Callable
 
 import networkx as nx
 
+from desmon.deployment.guard import DeployerFault
 from desmon.deployment.control import repository_control
 from desmon.deployment.core import DeploymentCore, stamp
 from desmon.deployment.invariants import check_invariants
 from desmon.deployment.monitor import Stimulus
-from desmon.deployment.ports import Command, ErrorRecord
+from desmon.deployment.ports import Command, ErrorRecord, Start
 from desmon.model.events import Event
 from desmon.model.scenario import Scenario
 from desmon.repository import labels as L
@@ -40,6 +41,11 @@ class ReplayStep:
     deployments: tuple[tuple[str, str], ...]
     standing: frozenset[str]
     violations: tuple[tuple[str, str], ...]
+    #: the starts of ``commands`` the Control rules refused: ``(graph, platform) -> reason``
+    #: (every other failed start failed by ``start_fails``)
+    refused: tuple[tuple[tuple[str, str], str], ...] = ()
+    #: the errors standing before the step
+    standing_before: frozenset[str] = frozenset()
 
 
 @dataclass
@@ -82,7 +88,21 @@ def replay(
     result = Replay(scenario, core.deployer.name, repo, control)
     for te in scenario.timeline:
         now[0] = te.time
-        stim, log = core.step(te.event, control)
+        before = core.standing
+        try:
+            stim, log = core.step(te.event, control)
+        except DeployerFault as fault:  # its first reaction: the deployer cannot run at all (exit 2), else CRASHED
+            fault.initial = not result.steps
+            fault.args = (f"at t={te.time:g} s ({te.label or te.event}), {fault.args[0]}",)
+            raise
+        # the Control rules read facts a reaction does not change: asked after it, they give
+        # the reason each refused start of the reaction was refused for
+        refuse = control.refuse
+        refused = tuple(
+            ((c.graph, c.platform), why)
+            for c, ok in log.commands
+            if type(c) is Start and ok is False and refuse is not None and (why := refuse(c.graph, c.platform)) is not None
+        )
         history = sum(1 for _ in repo.edges(L.DEPLOYMENT_HISTORY))
         view = core.view(running=tuple(sorted(control.running)), stops=control.stops, history=history)
         result.steps.append(
@@ -96,13 +116,26 @@ def replay(
                 deployments=query.deployments(),
                 standing=core.standing,
                 violations=tuple(check_invariants(view)),
+                refused=refused,
+                standing_before=before,
             )
         )
     return result
 
 
+def _outcome(step: ReplayStep, cmd: Command, ok: bool) -> str:
+    if ok:
+        return "ok"
+    if type(cmd) is not Start:
+        return "FAILED"
+    why = dict(step.refused).get((cmd.graph, cmd.platform))
+    return f"REFUSED by the Control rules: {why}" if why is not None else "FAILED (a start failure of the environment)"
+
+
 def format_replay(r: Replay) -> str:
-    """The replay as numbered steps: event, decisions, errors, deployment edges."""
+    """The replay as numbered steps: event, decisions (a failed start refused by the
+    Control rules, with the rule's reason, or failed by the environment), the errors the
+    reaction raised, the errors standing after it, deployment edges."""
     lines = [f"{r.scenario.name} -- deployer {r.deployer}", ""]
     for step in r.steps:
         head = f"{step.label + ' ' if step.label else ''}t={step.time:g}s  {step.event}"
@@ -110,11 +143,13 @@ def format_replay(r: Replay) -> str:
         for cmd, ok in step.commands:
             if ok is None:
                 continue
-            lines.append(f"    {cmd}: {'ok' if ok else 'FAILED'}")
+            lines.append(f"    {cmd}: {_outcome(step, cmd, ok)}")
         for err in step.errors:
-            lines.append(f"    ERROR {err.kind}: {err.graph}" + (f" on {err.platform}" if err.platform else ""))
+            lines.append(f"    raised ERROR {err.kind}: {err.graph}" + (f" on {err.platform}" if err.platform else ""))
             for reason in err.detail.splitlines():
                 lines.append(f"        {reason}")
+        if step.errors or step.standing != step.standing_before:
+            lines.append("    standing errors: " + (", ".join(sorted(step.standing)) or "none"))
         snap = r.repo.snapshot(at=step.time)
         for s, label, t in sorted(deployment_edges(snap), key=lambda e: (e[1], e[0], e[2])):
             if label == L.HAS_DEVICE:

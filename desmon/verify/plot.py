@@ -23,13 +23,17 @@ from desmon.viz.snapshot import draw_snapshots
 __all__ = ["plot_counterexample", "snapshot_panels"]
 
 
-def _title(head: str, lines: tuple[str, ...] | list[str], width: int = 78, max_lines: int = 3) -> str:
+#: characters per title line of a panel (8.5 in wide, 11 pt): every line fits its panel
+TITLE_WIDTH = 84
+
+
+def _title(head: str, lines: tuple[str, ...] | list[str], width: int = TITLE_WIDTH) -> str:
+    """``head`` and ``lines``, each wrapped at ``width`` (continuations indented); nothing is
+    cut: the panel grows to hold every line (:func:`desmon.viz.snapshot.draw_snapshots`)."""
     body: list[str] = []
-    for line in lines:
-        body.extend(textwrap.wrap(line, width) or [""])
-    if len(body) > max_lines:
-        body = body[: max_lines - 1] + [body[max_lines - 1][: width - 4] + " ..."]
-    return "\n".join([head, *body])
+    for line in (head, *lines):
+        body.extend(textwrap.wrap(line, width, subsequent_indent="    ", break_on_hyphens=False) or [""])
+    return "\n".join(body)
 
 
 def snapshot_panels(scenario: Any, deployer: Any, bounds: Any, c: Counterexample) -> tuple[list[tuple[str, Any]], Any]:
@@ -48,7 +52,7 @@ def snapshot_panels(scenario: Any, deployer: Any, bounds: Any, c: Counterexample
         if s.index == c.length:
             where = f" (during the reaction, after `{c.during}`)" if c.during else ""
             lines = [*lines, f"=> {c.invariant} VIOLATED{where}: {c.message}"]
-            panels.append((_title(head, lines, max_lines=5), run.repo.snapshot()))
+            panels.append((_title(head, lines), run.repo.snapshot()))
             continue
         panels.append((_title(head, lines), run.repo.snapshot()))
     return panels, run.repo.graph

@@ -17,7 +17,7 @@ from desmon.model.requirements import (
     PREFERENCE_KINDS, REQUIREMENT_KINDS, Attribute, Capacity, Constraint, Maximum, Minimum, Option, Preference, Quantity, Selection,
 )
 from desmon.verify.search import NOT_CHECKED, CheckResult
-from desmon.verify.trace import Counterexample, Label, Step
+from desmon.verify.trace import Counterexample, Label, Step, rule_of
 from desmon.verify.state import Key
 
 __all__ = [
@@ -240,7 +240,9 @@ def labels_from_json(counterexample: object, *, where: str = "counterexample") -
         if fails != sorted(set(fails)):
             raise CheckerError(f"{at}.fail_indices = {fails!r}: give each failing Control.start call once, in increasing order")
         listed = s.get("failed_starts")
-        if isinstance(listed, list) and len(listed) != len(fails):
+        # before refused_starts, failed_starts listed the refused starts too: it may be longer
+        older = "refused_starts" not in s
+        if isinstance(listed, list) and (len(listed) < len(fails) if older else len(listed) != len(fails)):
             raise CheckerError(
                 f"{at}: fail_indices names {len(fails)} failing start(s) but failed_starts lists {len(listed)}: "
                 "a hand edit? re-run desmon verify --json"
@@ -270,7 +272,9 @@ def counterexample_to_json(c: Counterexample) -> dict[str, Any]:
         "states": [
             {
                 "step": s.index, "event": event_to_json(s.event), "failed_starts": list(s.failed_starts),
-                "fail_indices": list(s.fail_indices), "changes": list(s.changes), "state": key_to_json(s.key),
+                "fail_indices": list(s.fail_indices),
+                "refused_starts": [{"start": start, "rule": rule_of(why), "reason": why} for start, why in s.refused],
+                "raised_errors": list(s.raised), "changes": list(s.changes), "state": key_to_json(s.key),
             }
             for s in c.steps
         ],

@@ -239,7 +239,8 @@ class Symmetry:
                 raise CheckerError(
                     f"--symmetry refused: replaying step {i} ({concrete}) left the stored orbit, the reduction is not sound for this scenario"
                 )
-            steps.append(make_step(i, prev, concrete, key, log, fails))
+            st = c.store  # left in the step's next state: the Control rules' refusals there tell refused starts from chosen failures
+            steps.append(make_step(i, prev, concrete, key, log, fails, lambda g, p: st.rules.start_refusal(g, p, st.platform_state)))
         return steps
 
 

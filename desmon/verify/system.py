@@ -273,5 +273,6 @@ class TransitionSystem:
                     f"replaying step {i} ({event}) did not reproduce the stored state: the system under test is nondeterministic\n"
                     f"  stored:   {expect[i]}\n  replayed: {key}"
                 )
-            steps.append(make_step(i, prev, event, key, log, fails))
+            st = self.store  # left in the step's next state: the Control rules' refusals there tell refused starts from chosen failures
+            steps.append(make_step(i, prev, event, key, log, fails, lambda g, p: st.rules.start_refusal(g, p, st.platform_state)))
         return steps

@@ -10,19 +10,43 @@ repository-terms text of a step (:func:`describe_state`, :func:`diff`).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 from desmon.deployment.ports import RaiseError, Start, Stop
 from desmon.model.events import Event
 from desmon.verify.state import Key
 
-__all__ = ["Label", "Step", "Counterexample", "KEPT_BRANCH", "branch_name", "describe_state", "diff"]
+__all__ = [
+    "Label", "Step", "Counterexample", "KEPT_BRANCH", "CHOSEN", "branch_name", "describe_state", "diff", "failed_starts", "rule_of",
+]
 
 #: A transition label: the event and the indices of the Control.start calls that failed.
 Label = tuple[Event, tuple[int, ...]]
 
 #: the branch name of a reaction that issued no command
 KEPT_BRANCH = ("no command (kept)",)
+
+#: how a title marks a start that failed because the checker chose it to (a ``start_failures`` choice point)
+CHOSEN = "fails: the checker's choice"
+
+#: ``refuse(graph, platform)``: why the Control rules refuse that start in the state after a
+#: step's event, or None (the rules read only facts a reaction does not change)
+Refuse = Callable[[str, str], "str | None"]
+
+
+
+def rule_of(reason: str) -> str:
+    """The Control rule (``desmon/deployment/control.py``) behind a refusal ``reason``:
+    ``platform-down`` (rule 1), ``device-requirements`` (rule 2: the devices of the
+    platform no longer meet the specification's device requirements), else
+    ``unreadable-input`` (rule 3: an input kind with no readable device)."""
+    from desmon.deployment.control import PLATFORM_DOWN
+
+    if reason == PLATFORM_DOWN:
+        return "platform-down"
+    if reason.startswith("the devices of "):
+        return "device-requirements"
+    return "unreadable-input"
 
 
 def branch_name(cmd: Any, ok: bool | None) -> str:
@@ -37,7 +61,15 @@ def branch_name(cmd: Any, ok: bool | None) -> str:
 
 @dataclass(frozen=True)
 class Step:
-    """One step of a counterexample: the label, what changed, and the state reached."""
+    """One step of a counterexample: the label, what changed, and the state reached.
+
+    ``failed_starts`` are the starts that failed because the checker chose them to (its
+    bounded ``start_failures`` choice points, at ``fail_indices`` among the starts the
+    Control rules allowed); ``refused`` the starts the Control rules refused, each with
+    the rule's reason (they fail in every branch and are no choice). ``raised`` the
+    errors the reaction raised (``kind: graph[ on platform]``); the errors standing after
+    the step are ``key.standing``.
+    """
 
     index: int
     event: Event | None
@@ -46,11 +78,14 @@ class Step:
     key: Key
     commands: tuple[str, ...] = ()
     fail_indices: tuple[int, ...] = ()
+    refused: tuple[tuple[str, str], ...] = ()
+    raised: tuple[str, ...] = ()
 
     def title(self) -> str:
         if self.event is None:
             return "initial"
-        extra = "".join(f" [{s} fails]" for s in self.failed_starts)
+        extra = "".join(f" [{s} {CHOSEN}]" for s in self.failed_starts)
+        extra += "".join(f" [{s} refused: {why}]" for s, why in self.refused)
         return f"{self.event}{extra}"
 
 
@@ -71,11 +106,39 @@ class Counterexample:
         return tuple((s.event, s.fail_indices) for s in self.steps[1:])  # type: ignore[misc]
 
 
-def make_step(i: int, prev: Key, event: Event, key: Key, log: Any, fails: tuple[int, ...] = ()) -> Step:
-    """Step ``i``: ``event`` (with the starts at ``fails`` failing) took ``prev`` to ``key``, issuing ``log``'s commands."""
-    failed = tuple(str(c) for c, ok in log.commands if isinstance(c, Start) and ok is False)
+def failed_starts(log: Any, fails: tuple[int, ...], refuse: Refuse | None) -> tuple[tuple[str, ...], tuple[tuple[str, str], ...]]:
+    """(the starts of ``log`` that failed by the checker's choice, the refused ones with
+    their reasons). ``refuse`` gives the Control rules' reason after the step's event;
+    without it, the split follows from ``fails`` where it can (all chosen or all refused)."""
+    failed = [c for c, ok in log.commands if type(c) is Start and ok is False]
+    if not failed:
+        return (), ()
+    chosen: list[str] = []
+    refused: list[tuple[str, str]] = []
+    for c in failed:
+        why = refuse(c.graph, c.platform) if refuse is not None else None
+        if why is None and refuse is None and len(failed) != len(fails):
+            why = "refused by the Control rules" if not fails else None
+        if why is None:
+            chosen.append(str(c))
+        else:
+            refused.append((str(c), why))
+    return tuple(chosen), tuple(refused)
+
+
+def make_step(
+    i: int, prev: Key, event: Event, key: Key, log: Any, fails: tuple[int, ...] = (), refuse: Refuse | None = None
+) -> Step:
+    """Step ``i``: ``event`` (with the starts at ``fails`` failing) took ``prev`` to ``key``,
+    issuing ``log``'s commands; ``refuse`` tells the refused starts from the chosen failures."""
+    chosen, refused = failed_starts(log, fails, refuse)
     cmds = tuple(f"{c}: {'ok' if ok else 'FAILED'}" if ok is not None else str(c).splitlines()[0] for c, ok in log.commands)
-    return Step(i, event, failed, diff(prev, key, log), key, cmds, tuple(fails))
+    raised = tuple(_raised(c) for c, _ok in log.commands if type(c) is RaiseError)
+    return Step(i, event, chosen, diff(prev, key, log), key, cmds, tuple(fails), refused, raised)
+
+
+def _raised(c: RaiseError) -> str:
+    return f"{c.kind}: {c.graph}" + (f" on {c.platform}" if c.platform else "")
 
 
 def initial_step(key: Key) -> Step:
@@ -136,14 +199,13 @@ def _load_changes(prev: Key, key: Key) -> list[str]:
 
 
 def _system_changes(prev: Key, key: Key, log: Any) -> list[str]:
-    """The failed starts, the deployments that ended and began, the errors raised and standing."""
-    out = [f"start {c.graph} on {c.platform} FAILED" for c, ok in log.commands if isinstance(c, Start) and ok is False]
-    out += [f"{g} -[DEPLOYED_ON => DEPLOYMENT_HISTORY]-> {p}" for g, p in sorted(set(prev.deployments) - set(key.deployments))]
+    """The deployments that ended and began, the errors the reaction raised, and the errors
+    standing after it (whenever they changed or one was raised). The failed starts are in
+    the step's title, chosen and refused apart."""
+    out = [f"{g} -[DEPLOYED_ON => DEPLOYMENT_HISTORY]-> {p}" for g, p in sorted(set(prev.deployments) - set(key.deployments))]
     out += [f"+{g} -[DEPLOYED_ON]-> {p}" for g, p in sorted(set(key.deployments) - set(prev.deployments))]
-    out += [
-        f"error {c.kind}: {c.graph}" + (f" on {c.platform}" if c.platform else "")
-        for c, _ok in log.commands if isinstance(c, RaiseError)
-    ]
-    if prev.standing != key.standing:
+    raised = [f"raised {_raised(c)}" for c, _ok in log.commands if type(c) is RaiseError]
+    out += raised
+    if raised or prev.standing != key.standing:
         out.append("standing errors: " + (", ".join(key.standing) or "none"))
     return out

@@ -14,7 +14,7 @@ import networkx as nx
 
 from desmon.viz.common import COLORS, require_matplotlib
 
-__all__ = ["layout", "draw_snapshot", "draw_snapshots"]
+__all__ = ["layout", "draw_snapshot", "draw_snapshots", "snapshot_figure"]
 
 COLUMNS = ("Requirement", "Deployment", "Platform", "Device")
 #: x of each column and the half width of its boxes (data units), so arrows end at box edges.
@@ -117,16 +117,30 @@ def draw_snapshots(
 ) -> Path:
     """Several snapshots side by side in one PNG (e.g. Fig. 5a-d), one shared layout."""
     plt = require_matplotlib()
+    fig = snapshot_figure(panels, full=full, columns=columns)
+    out = Path(path)
+    fig.savefig(out, dpi=110, format="png")  # exactly this file, whatever its name
+    plt.close(fig)
+    return out
+
+
+def snapshot_figure(
+    panels: Sequence[tuple[str, nx.MultiDiGraph]], *, full: nx.MultiDiGraph | None = None, columns: int = 2
+):  # type: ignore[no-untyped-def]
+    """The matplotlib figure :func:`draw_snapshots` saves (the caller closes it)."""
+    plt = require_matplotlib()
     full = full if full is not None else panels[-1][1]
     pos = layout(full)
     rows = (len(panels) + columns - 1) // columns
-    fig, axes = plt.subplots(rows, columns, figsize=(8.5 * columns, 4.6 * rows), squeeze=False)
+    # each row as tall as its longest title needs, so no title is cut or runs into a panel
+    lines = [max(t.count("\n") + 1 for t, _g in panels[r * columns:(r + 1) * columns]) for r in range(rows)]
+    heights = [3.9 + 0.2 * n for n in lines]
+    fig, axes = plt.subplots(
+        rows, columns, figsize=(8.5 * columns, sum(heights)), squeeze=False, gridspec_kw={"height_ratios": heights}
+    )
     for ax in axes.flat:
         ax.axis("off")
     for ax, (title, g) in zip(axes.flat, panels):
         _draw(ax, g, pos, title)
     fig.tight_layout()
-    out = Path(path)
-    fig.savefig(out, dpi=110, format="png")  # exactly this file, whatever its name
-    plt.close(fig)
-    return out
+    return fig
