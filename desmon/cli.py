@@ -312,7 +312,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"desmon {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for add in (_add_replay, _add_explain, _add_show, _add_evaluate, _add_run, _add_plot, _add_verify, _add_fuzz):
+    for add in (_add_replay, _add_explain, _add_show, _add_evaluate, _add_run, _add_plot, _add_verify, _add_fuzz, _add_explore):
         add(sub)
     from desmon.sweep.command import add_parsers as add_sweep_parsers  # sweep, sweep-plot (docs/sweeps.md)
 
@@ -451,6 +451,26 @@ def _add_fuzz(sub: _Subparsers) -> None:
     p.add_argument("--seed", type=non_negative_int, default=0, help="hypothesis seed (the same seed draws the same sequences)")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(handler=_lazy("desmon.verify.command", "fuzz_command"))
+
+
+def _add_explore(sub: _Subparsers) -> None:
+    p = sub.add_parser(
+        "explore",
+        help="one self-contained HTML page to step through the scripted timeline or a counterexample (docs/tutorial.md)",
+    )
+    _scenario_arg(p)
+    _deployer_arg(p)
+    p.set_defaults(deployer=None)  # desmon, or the deployer a --from-json file was written with
+    deployer = next(a for a in p._actions if a.dest == "deployer")
+    deployer.help = f"{deployer.help} (default: desmon; with --from-json: the deployer the file was written with)"
+    add_output(p, "-o", "--output", suffixes=(".html", ".htm"), default="explore.html", metavar="FILE.html", help="the page to write")
+    p.add_argument("--verify", action="store_true", help="step through the shortest counterexample desmon verify finds instead of the timeline")
+    p.add_argument("--invariant", default=None, metavar="NAME", help="with --verify: the shortest counterexample of this invariant")
+    p.add_argument("--max-states", type=positive_int, default=None, metavar="N", help=f"with --verify: search at most N states (default: {MAX_STATES})")
+    p.add_argument("--from-json", default=None, metavar="FILE.json", help="step through a counterexample saved by desmon verify --json")
+    p.add_argument("--counterexample", type=positive_int, default=None, metavar="N", help="with --from-json: the file's N-th counterexample (default: the first)")
+    p.add_argument("--no-progress", action="store_true", help="with --verify: no progress line")
+    p.set_defaults(handler=_lazy("desmon.viz.explore_command", "explore_command"), _inputs=(*p.get_default("_inputs"), Input("from_json", CEX_FILE)))
 
 
 def main(argv: Sequence[str] | None = None) -> int:

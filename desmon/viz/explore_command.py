@@ -1,0 +1,297 @@
+"""``desmon explore``: one self-contained HTML page to step through a run, for teaching.
+
+Three sources of steps, one page (:func:`desmon.viz.explore.render_page`):
+
+* ``desmon explore SCENARIO`` -- the scenario's scripted timeline as ``desmon replay``
+  runs it (for ``scenarios/coffee_handover.py``: t0..t3 of the paper's Fig. 5);
+* ``desmon explore SCENARIO --verify [--invariant NAME]`` -- the shortest counterexample
+  ``desmon verify`` finds (of NAME, else of the first invariant it finds violated);
+* ``desmon explore SCENARIO --from-json cex.json [--counterexample N]`` -- a
+  counterexample saved by ``desmon verify --json``, replayed through the real core.
+
+Each step is taken on the live repository of that moment: its snapshot, and the reasons
+:func:`~desmon.deployment.validity.acceptable_platforms` gives for every perception graph
+(what ``desmon explain`` prints). The scripted replay is re-run up to each step (as
+``desmon explain --at`` does); a counterexample is stepped once through a
+:class:`~desmon.verify.replay.RepositoryRun`, as ``desmon verify --plot`` and ``--replay`` do.
+
+This module is a command (the layer of ``desmon.sim.command`` and ``desmon.verify.command``,
+above both engines: it reads sim's replay and verify's runs); it hands frames to
+:mod:`desmon.viz.explore`, which draws them and imports neither engine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+from dataclasses import replace
+from typing import Any
+
+from desmon.errors import CheckerError, DesmonError, NondeterminismError, ScenarioError
+
+__all__ = ["explore_command", "timeline_frames", "counterexample_frames"]
+
+
+def _standing(standing: frozenset[str], latest: dict[str, str]) -> tuple[tuple[str, str], ...]:
+    return tuple((g, latest.get(g, f"error standing for {g}")) for g in sorted(standing))
+
+
+def timeline_frames(scenario: Any, deployer: Any) -> list:  # type: ignore[type-arg]
+    """One frame per event of ``scenario``'s scripted timeline, as ``desmon replay`` runs it."""
+    from desmon.repository.query import RepositoryQuery
+    from desmon.sim.replay import replay
+    from desmon.viz.explore import Frame, capture_reasons
+
+    graphs = [s.graph for s in scenario.model.specs]
+    frames, latest = [], {}
+    for i in range(len(scenario.timeline)):
+        result = replay(replace(scenario, timeline=scenario.timeline[: i + 1]), deployer)
+        step = result.steps[-1]
+        raised = []
+        for e in step.errors:
+            head = f"{e.kind}: {e.graph}" + (f" on {e.platform}" if e.platform else "")
+            raised.append((head, e.detail))
+            latest[e.graph] = f"{head} (raised at {step.label + ' ' if step.label else ''}t={e.time:g}s)"
+        frames.append(
+            Frame(
+                key=step.label or str(i),
+                title=f"{step.label + ' ' if step.label else ''}t={step.time:g}s  {step.event}",
+                event=str(step.event),
+                time=step.time,
+                commands=tuple(f"{cmd}: {'ok' if ok else 'FAILED'}" for cmd, ok in step.commands if ok is not None),
+                raised=tuple(raised),
+                standing=_standing(step.standing, latest),
+                violations=tuple(step.violations),
+                notes=(),
+                graph=result.repo.snapshot(),
+                reasons=capture_reasons(RepositoryQuery(result.repo), graphs),
+            )
+        )
+    return frames
+
+
+def counterexample_frames(
+    scenario: Any,
+    deployer: Any,
+    labels: Any,
+    invariants: tuple[str, ...],
+    *,
+    keys: tuple[Any, ...] | None = None,
+    recorded: tuple[dict, ...] | None = None,  # type: ignore[type-arg]
+) -> tuple[list, list[tuple[str, str]], int | None]:  # type: ignore[type-arg]
+    """Frames of a counterexample: the initial state, then one per label (event and the
+    starts the checker made fail), stepped through the real core on the repository.
+
+    ``invariants`` are the checked ones (audited on every state; an instantaneous one
+    also inside each reaction). ``keys``: the checker's states, which the replay must
+    reach (else NondeterminismError); ``recorded``: a saved file's states, which it is
+    compared with. Returns the frames, the violations on the final state and the first
+    step whose state differs from ``recorded`` (None: none does)."""
+    from desmon.deployment.invariants import get_invariants
+    from desmon.verify.replay import RepositoryRun
+    from desmon.verify.report import key_to_json
+    from desmon.viz.explore import Frame, capture_reasons
+
+    graphs = [s.graph for s in scenario.model.specs]
+    run = RepositoryRun(scenario, deployer)
+    checked = get_invariants(list(invariants))
+    instant = get_invariants([n for n in run.bounds.instantaneous if n in invariants])
+    logs: list[Any] = []
+    inner = run.step
+
+    def step(event: Any, fails: tuple[int, ...] = ()) -> Any:  # the reaction's log, for its errors
+        out = inner(event, fails)
+        logs.append(out[1])
+        return out
+
+    run.step = step  # type: ignore[method-assign]
+    frames, latest, diverged = [], {}, None
+    final: list[tuple[str, str]] = []
+    for s, found in run.trace(labels, instant, flapping="no-flapping" in invariants):
+        if keys is not None and s.index < len(keys) and run.key() != keys[s.index]:
+            raise NondeterminismError(
+                f"explore: replaying step {s.index} ({s.title()}) on the repository gave {run.key()}, the checker had {keys[s.index]}"
+            )
+        notes = []
+        if recorded is not None and diverged is None and s.index < len(recorded):
+            import json
+
+            if json.loads(json.dumps(key_to_json(s.key))) != recorded[s.index]:
+                diverged = s.index
+                notes.append("the replay left the state the file recorded here: the scenario or deployer changed since it was written")
+        log = logs[-1] if s.index > 0 else None
+        raised = []
+        for cmd, ok in (log.commands if log is not None else ()):
+            if ok is None:
+                head = f"{cmd.kind}: {cmd.graph}" + (f" on {cmd.platform}" if cmd.platform else "")
+                raised.append((head, cmd.detail))
+                latest[cmd.graph] = f"{head} (raised at step {s.index})"
+        final = run.violations(checked)
+        violations = list(final)
+        if found is not None and found[0] not in dict(violations):
+            violations.append((found[0], f"{found[1]} (inside the reaction, after {found[2]})"))
+        notes += [f"the checker chose this failure: {f} fails" for f in s.failed_starts]
+        if s.index == 0:
+            notes.append("the scenario's initial facts and the system's first reaction")
+        frames.append(
+            Frame(
+                key=str(s.index),
+                title=f"{s.index}. {s.title()}",
+                event="initial state" if s.event is None else str(s.event),
+                time=None,
+                commands=tuple(f"{c}: {'ok' if ok else 'FAILED'}" for c, ok in (log.commands if log is not None else ()) if ok is not None),
+                raised=tuple(raised),
+                standing=_standing(run.core.standing, latest),
+                violations=tuple(violations),
+                notes=tuple(notes),
+                graph=run.repo.snapshot(),
+                reasons=capture_reasons(run.query, graphs),
+            )
+        )
+        if found is not None and s.index == len(labels):
+            final = [*final, (found[0], found[1])]
+    return frames, final, diverged
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    if args.verify and args.from_json is not None:
+        raise CheckerError("--verify searches for a counterexample and --from-json reads a saved one: give one of them")
+    if not args.verify:
+        for flag, value, unset in (("--invariant", args.invariant, None), ("--max-states", args.max_states, None)):
+            if value != unset:
+                raise CheckerError(f"{flag} sets up the search of --verify: also give --verify (or drop {flag})")
+    if args.from_json is None and args.counterexample is not None:
+        raise CheckerError("--counterexample N picks a counterexample of a saved file: also give --from-json FILE.json")
+
+
+def _command_line(args: argparse.Namespace) -> str:
+    """The command as the footer names it (without -o: the same page wherever it is written)."""
+    parts = ["desmon", "explore", args.scenario]
+    for p in args.param or ():
+        parts += ["-p", p]
+    if args.deployer is not None:
+        parts += ["--deployer", args.deployer.name]
+    if args.verify:
+        parts.append("--verify")
+        if args.invariant:
+            parts += ["--invariant", args.invariant]
+    if args.from_json is not None:
+        parts += ["--from-json", args.from_json]
+        if args.counterexample is not None:
+            parts += ["--counterexample", str(args.counterexample)]
+    return shlex.join(parts)
+
+
+def explore_command(args: argparse.Namespace) -> int:
+    """``desmon explore``: write the page; 0 once written, 2 on bad input."""
+    from desmon.loader import load_from_args
+    from desmon.paths import replacing
+    from desmon.verify.deployers import resolve_deployer
+    from desmon.viz.explore import render_page
+
+    _check_options(args)
+    scenario = load_from_args(args)
+    banner = ""
+    if args.from_json is not None:
+        frames, lines, banner = _saved(args, scenario)
+    elif args.verify:
+        frames, lines, banner = _searched(args, scenario)
+    else:
+        if not scenario.timeline:
+            raise ScenarioError(
+                f"{args.scenario}: scenario {scenario.name!r} has no scripted timeline to step through; explore the shortest "
+                f"counterexample instead: desmon explore {args.scenario} --verify (or simulate it: desmon run {args.scenario} --plot run.png)"
+            )
+        deployer = args.deployer if args.deployer is not None else resolve_deployer("desmon")
+        frames = timeline_frames(scenario, deployer)
+        lines = [f"the scripted timeline ({len(frames)} steps) as desmon replay runs it, deployer {deployer.name}"]
+        violated = sorted({name for f in frames for name, _m in f.violations})
+        if violated:
+            banner = f"invariants violated during the replay: {', '.join(violated)}"
+    if scenario.description:
+        lines = [scenario.description, *lines]
+    page = render_page(f"desmon explore: {scenario.name}", lines, frames, banner=banner, command=_command_line(args))
+    with replacing(args.output) as fh:
+        fh.write(page)
+    print(f"wrote {args.output} ({len(frames)} step{'s' if len(frames) != 1 else ''}; open it in a browser)")
+    return 0
+
+
+def _searched(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str], str]:  # type: ignore[type-arg]
+    """``--verify``: the shortest counterexample of the search."""
+    from desmon.verify.checker import Checker
+    from desmon.verify.deployers import resolve_deployer
+
+    deployer = args.deployer if args.deployer is not None else resolve_deployer("desmon")
+    invariants = [args.invariant] if args.invariant else None
+    checker = Checker(scenario, deployer, invariants=invariants)
+    result = checker.run(max_states=args.max_states or 2_000_000, progress=not args.no_progress)
+    if not result.counterexamples:
+        what = f"{result.verdict} in {result.states:,} states"
+        if result.incomplete:
+            what += f" ({result.incomplete})"
+        raise CheckerError(
+            f"{args.scenario} with deployer {deployer.name}: {what}, no counterexample to explore; "
+            f"step through its timeline with: desmon explore {args.scenario}"
+            + ("" if args.invariant else " (or try another --deployer, e.g. paper)")
+        )
+    c = min(result.counterexamples, key=lambda c: c.length)
+    frames, _final, _d = counterexample_frames(
+        scenario, deployer, c.events, tuple(result.invariants), keys=tuple(s.key for s in c.steps)
+    )
+    others = [x.invariant for x in result.counterexamples if x is not c]
+    lines = [
+        f"the shortest counterexample desmon verify found (deployer {deployer.name}, {result.states:,} states searched), "
+        f"stepped through the real deployment core on the repository",
+    ]
+    if others:
+        lines.append(f"also violated (explore with --invariant NAME): {', '.join(others)}")
+    where = f" (inside the reaction, after {c.during})" if c.during else ""
+    banner = f"{c.invariant} VIOLATED after {c.length} step{'s' if c.length != 1 else ''}{where}: {c.message}"
+    return frames, lines, banner
+
+
+def _saved(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str], str]:  # type: ignore[type-arg]
+    """``--from-json``: a counterexample of a ``desmon verify --json`` file."""
+    from desmon.model.params import parse_assignments
+    from desmon.verify.deployers import portable_spec, resolve_deployer
+    from desmon.verify.report import read_counterexample
+
+    saved = read_counterexample(args.from_json, args.counterexample)
+    if scenario.name != saved.scenario:
+        raise CheckerError(
+            f"{saved.source} holds a counterexample of scenario {saved.scenario!r}, but {args.scenario} is scenario "
+            f"{scenario.name!r}: give the scenario file of {saved.scenario!r}"
+        )
+    deployer = args.deployer
+    if deployer is None:
+        deployer = resolve_deployer(saved.deployer)
+    elif deployer.name != saved.deployer and portable_spec(deployer.name) != portable_spec(saved.deployer):
+        raise CheckerError(
+            f"{saved.source} was written with --deployer {saved.deployer}, not {deployer.name}: "
+            f"drop --deployer (or pass --deployer {saved.deployer})"
+        )
+    params = tuple(sorted(parse_assignments(args.param).items()))
+    if saved.params is not None and params != saved.params:
+        shown = " ".join(f"-p {k}={v}" for k, v in saved.params) or "no -p parameters"
+        raise CheckerError(f"{saved.source} was written with {shown}: pass the same -p NAME=VALUE to explore it")
+    try:
+        frames, final, diverged = counterexample_frames(
+            scenario, deployer, saved.labels, tuple(saved.invariants), recorded=tuple(saved.states)
+        )
+    except CheckerError:
+        raise
+    except DesmonError as exc:
+        raise CheckerError(f"{saved.source}: cannot be replayed: {' '.join(str(exc).split())}; the scenario changed since the file was written") from None
+    lines = [
+        f"counterexample {saved.number} of {saved.count} of {saved.source} (deployer {deployer.name}), "
+        "replayed through the real deployment core on the repository",
+    ]
+    still = dict(final).get(saved.invariant)
+    if still is not None:
+        banner = f"{saved.invariant} VIOLATED after {len(saved.labels)} steps: {still}"
+    else:
+        banner = f"{saved.invariant} no longer violated on the replay (the file said: {saved.message})"
+    if diverged is not None:
+        banner += f"; the replay left the recorded states at step {diverged}"
+    return frames, lines, banner
