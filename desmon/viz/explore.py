@@ -450,12 +450,43 @@ def _markers() -> str:
     return "".join(out)
 
 
-def _svg_frame(frame: Frame, prev: Frame | None, boxes: dict[str, _Box], heads: dict[str, float], width: float, height: float) -> str:
-    g = frame.graph
-    now = _edges(g)
+def _edge_layer(frame: Frame, prev: Frame | None, boxes: dict[str, _Box]) -> tuple[list[str], list[_Label]]:
+    """The edges of ``frame`` (those gone since ``prev`` drawn as removed, first), and their labels."""
+    now = _edges(frame.graph)
     before = _edges(prev.graph) if prev is not None else {}
-    active = {s for s, _l, _t, _st in now if _l == L.DEPLOYED_ON}
-    standing_graphs = {graph for graph, _text in frame.standing}
+    items = [(k, d, "removed") for k, d in sorted(before.items()) if k not in now]
+    items += [(k, d, "added" if prev is not None and k not in before else "kept") for k, d in sorted(now.items())]
+    pairs: dict[tuple[str, str], int] = {}  # history edges so far between two boxes: each bends further
+    out: list[str] = []
+    labels: list[_Label] = []
+    for key, d, change in items:
+        s, label, t, _start = key
+        if s not in boxes or t not in boxes:
+            continue
+        rank = pairs.get((s, t), 0) if label == L.DEPLOYMENT_HISTORY else 0
+        if label == L.DEPLOYMENT_HISTORY:
+            pairs[(s, t)] = rank + 1
+        edge, text = _svg_edge(boxes, key, d, change, rank)
+        out.append(edge)
+        if text is not None:
+            labels.append(text)
+    return out, labels
+
+
+def _node_layer(frame: Frame, prev: Frame | None, boxes: dict[str, _Box]) -> list[str]:
+    g = frame.graph
+    active = {s for s, label, _t, _st in _edges(g) if label == L.DEPLOYED_ON}
+    standing = {graph for graph, _text in frame.standing}
+    out = []
+    for n in sorted((n for n in g.nodes if n in boxes), key=lambda n: (boxes[n].y, boxes[n].x, n)):
+        changed = prev is not None and n in prev.graph and _node_state(g, n) != _node_state(prev.graph, n)
+        errored = g.nodes[n].get("label") == L.DEPLOYMENT and _name(g, n) in standing
+        out.append(_svg_node(g, n, boxes[n], changed, n in active, errored))
+    return out
+
+
+def _svg_frame(frame: Frame, prev: Frame | None, boxes: dict[str, _Box], heads: dict[str, float], width: float, height: float) -> str:
+    """The repository graph of one step: headings, edges, nodes, then the edge labels over them."""
     out = [
         f'<svg class="repo" xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {_n(width)} {_n(height)}" width="100%" style="max-width:{_n(width)}px" '
         f'font-family="DejaVu Sans, Arial, Helvetica, sans-serif" role="img" aria-label="repository graph at {_e(frame.title)}">',
@@ -463,30 +494,10 @@ def _svg_frame(frame: Frame, prev: Frame | None, boxes: dict[str, _Box], heads: 
     ]
     for label, x in heads.items():
         out.append(f'<text x="{_n(x)}" y="{COLUMN_TOP - 12}" font-size="12" font-weight="700" text-anchor="middle" fill="#555">{_e(label)}</text>')
-    # edges under the nodes: removed ones (from the step before) first, then the present ones
-    pairs: dict[tuple[str, str], int] = {}
-    labels: list[_Label] = []
-    items = [(k, d, "removed") for k, d in sorted(before.items()) if k not in now]
-    items += [(k, d, "kept" if k in before else ("added" if prev is not None else "kept")) for k, d in sorted(now.items())]
-    for key, d, change in items:
-        s, label, t, _start = key
-        if s not in boxes or t not in boxes:
-            continue
-        rank = 0
-        if label == L.DEPLOYMENT_HISTORY:
-            rank = pairs.get((s, t), 0)
-            pairs[(s, t)] = rank + 1
-        edge, text = _svg_edge(boxes, key, d, change, rank)
-        out.append(edge)
-        if text is not None:
-            labels.append(text)
-    for n in sorted(g.nodes, key=lambda n: (boxes[n].y, boxes[n].x, n) if n in boxes else (0, 0, n)):
-        if n not in boxes:
-            continue
-        changed = prev is not None and n in prev.graph and _node_state(g, n) != _node_state(prev.graph, n)
-        is_dep = g.nodes[n].get("label") == L.DEPLOYMENT
-        out.append(_svg_node(g, n, boxes[n], changed, n in active, is_dep and _name(g, n) in standing_graphs))
-    shown = [boxes[n] for n in sorted(g.nodes) if n in boxes]
+    edges, labels = _edge_layer(frame, prev, boxes)
+    out += edges
+    out += _node_layer(frame, prev, boxes)
+    shown = [boxes[n] for n in sorted(frame.graph.nodes) if n in boxes]
     shown += [_Box(x - _width(label, 12) / 2, COLUMN_TOP - 24, _width(label, 12), 16) for label, x in heads.items()]
     out.extend(_label_svg(lab, dy) for lab, dy in _place_labels(labels, shown))  # over the nodes, clear of them
     out.append("</svg>")

@@ -70,6 +70,53 @@ def timeline_frames(scenario: Any, deployer: Any) -> list:  # type: ignore[type-
     return frames
 
 
+class _Recorder:
+    """A RepositoryRun's ``step``, wrapped to keep each reaction's log (its raised errors)."""
+
+    def __init__(self, run: Any) -> None:
+        self.inner, self.logs = run.step, []  # type: ignore[var-annotated]
+        run.step = self
+
+    def __call__(self, event: Any, fails: tuple[int, ...] = ()) -> Any:
+        out = self.inner(event, fails)
+        self.logs.append(out[1])
+        return out
+
+
+def _raised(log: Any, index: int, latest: dict[str, str]) -> tuple[tuple[str, str], ...]:
+    """The errors a reaction's log raised, as (headline, detail); notes them in ``latest``."""
+    raised = []
+    for cmd, ok in (log.commands if log is not None else ()):
+        if ok is None:
+            head = f"{cmd.kind}: {cmd.graph}" + (f" on {cmd.platform}" if cmd.platform else "")
+            raised.append((head, cmd.detail))
+            latest[cmd.graph] = f"{head} (raised at step {index})"
+    return tuple(raised)
+
+
+def _outcomes(log: Any) -> tuple[str, ...]:
+    """The starts and stops of a reaction's log with their outcomes ("start x on p: ok")."""
+    return tuple(f"{c}: {'ok' if ok else 'FAILED'}" for c, ok in (log.commands if log is not None else ()) if ok is not None)
+
+
+def _with_instant(violations: list[tuple[str, str]], found: tuple[str, str, str] | None) -> tuple[tuple[str, str], ...]:
+    """The state's violations and, if not among them, one seen inside the reaction."""
+    if found is None or found[0] in dict(violations):
+        return tuple(violations)
+    return (*violations, (found[0], f"{found[1]} (inside the reaction, after {found[2]})"))
+
+
+def _differs(key: Any, recorded: tuple[dict, ...] | None, index: int) -> bool:  # type: ignore[type-arg]
+    """Whether the replayed state ``key`` of step ``index`` is not the one a saved file recorded."""
+    import json
+
+    from desmon.verify.report import key_to_json
+
+    if recorded is None or index >= len(recorded):
+        return False
+    return bool(json.loads(json.dumps(key_to_json(key))) != recorded[index])
+
+
 def counterexample_frames(
     scenario: Any,
     deployer: Any,
@@ -89,23 +136,14 @@ def counterexample_frames(
     step whose state differs from ``recorded`` (None: none does)."""
     from desmon.deployment.invariants import get_invariants
     from desmon.verify.replay import RepositoryRun
-    from desmon.verify.report import key_to_json
     from desmon.viz.explore import Frame, capture_reasons
 
     graphs = [s.graph for s in scenario.model.specs]
     run = RepositoryRun(scenario, deployer)
     checked = get_invariants(list(invariants))
     instant = get_invariants([n for n in run.bounds.instantaneous if n in invariants])
-    logs: list[Any] = []
-    inner = run.step
-
-    def step(event: Any, fails: tuple[int, ...] = ()) -> Any:  # the reaction's log, for its errors
-        out = inner(event, fails)
-        logs.append(out[1])
-        return out
-
-    run.step = step  # type: ignore[method-assign]
-    frames, latest, diverged = [], {}, None
+    recorder = _Recorder(run)
+    frames, latest, diverged = [], {}, None  # type: ignore[var-annotated]
     final: list[tuple[str, str]] = []
     for s, found in run.trace(labels, instant, flapping="no-flapping" in invariants):
         if keys is not None and s.index < len(keys) and run.key() != keys[s.index]:
@@ -113,23 +151,12 @@ def counterexample_frames(
                 f"explore: replaying step {s.index} ({s.title()}) on the repository gave {run.key()}, the checker had {keys[s.index]}"
             )
         notes = []
-        if recorded is not None and diverged is None and s.index < len(recorded):
-            import json
-
-            if json.loads(json.dumps(key_to_json(s.key))) != recorded[s.index]:
-                diverged = s.index
-                notes.append("the replay left the state the file recorded here: the scenario or deployer changed since it was written")
-        log = logs[-1] if s.index > 0 else None
-        raised = []
-        for cmd, ok in (log.commands if log is not None else ()):
-            if ok is None:
-                head = f"{cmd.kind}: {cmd.graph}" + (f" on {cmd.platform}" if cmd.platform else "")
-                raised.append((head, cmd.detail))
-                latest[cmd.graph] = f"{head} (raised at step {s.index})"
+        if diverged is None and _differs(s.key, recorded, s.index):
+            diverged = s.index
+            notes.append("the replay left the state the file recorded here: the scenario or deployer changed since it was written")
+        log = recorder.logs[-1] if s.index > 0 else None
         final = run.violations(checked)
-        violations = list(final)
-        if found is not None and found[0] not in dict(violations):
-            violations.append((found[0], f"{found[1]} (inside the reaction, after {found[2]})"))
+        violations = _with_instant(final, found)
         notes += [f"the checker chose this failure: {f} fails" for f in s.failed_starts]
         if s.index == 0:
             notes.append("the scenario's initial facts and the system's first reaction")
@@ -139,8 +166,8 @@ def counterexample_frames(
                 title=f"{s.index}. {s.title()}",
                 event="initial state" if s.event is None else str(s.event),
                 time=None,
-                commands=tuple(f"{c}: {'ok' if ok else 'FAILED'}" for c, ok in (log.commands if log is not None else ()) if ok is not None),
-                raised=tuple(raised),
+                commands=_outcomes(log),
+                raised=_raised(log, s.index, latest),
                 standing=_standing(run.core.standing, latest),
                 violations=tuple(violations),
                 notes=tuple(notes),
