@@ -359,8 +359,11 @@ def _label_svg(lab: _Label, shift: float) -> str:
     return "".join(out)
 
 
-def _svg_edge(boxes: dict[str, _Box], key: tuple[str, str, str, str], d: dict[str, Any], change: str, rank: int) -> tuple[str, "_Label | None"]:
-    """The edge's SVG and its label's (drawn over the nodes; may be empty)."""
+def _svg_edge(
+    boxes: dict[str, _Box], key: tuple[str, str, str, str], d: dict[str, Any], change: str, rank: int, timed: bool = True
+) -> tuple[str, "_Label | None"]:
+    """The edge's SVG and its label (drawn over the nodes; None for none). Without ``timed``
+    (a counterexample: its repository has no clock) the labels leave out start and stop."""
     s, label, t, _start = key
     a, b = boxes[s], boxes[t]
     x1, y1 = _anchor(a, b)
@@ -380,8 +383,8 @@ def _svg_edge(boxes: dict[str, _Box], key: tuple[str, str, str, str], d: dict[st
     if change == "removed":
         color, dash, width = "#d73027", ' stroke-dasharray="2 4"', 1.6
     marker = "removed" if change == "removed" else label
-    start, stop = (d.get(k) for k in ("start", "stop"))
-    times = "".join(f" {k}={d[k]:g}s" for k in ("start", "stop") if isinstance(d.get(k), (int, float)))
+    start, stop = (d.get(k) if timed else None for k in ("start", "stop"))
+    times = "".join(f" {k}={d[k]:g}s" for k in ("start", "stop") if timed and isinstance(d.get(k), (int, float)))
     title = f"{s} -[{label}]-> {t}{times}" + {"added": " (new at this step)", "removed": " (removed at this step)"}.get(change, "")
     path = f"M{_n(x1)},{_n(y1)} Q{_n(mx)},{_n(my)} {_n(x2)},{_n(y2)}"
     attrs = f'data-label="{_e(label)}" data-source="{_e(s)}" data-target="{_e(t)}" data-change="{change}"'
@@ -450,7 +453,7 @@ def _markers() -> str:
     return "".join(out)
 
 
-def _edge_layer(frame: Frame, prev: Frame | None, boxes: dict[str, _Box]) -> tuple[list[str], list[_Label]]:
+def _edge_layer(frame: Frame, prev: Frame | None, boxes: dict[str, _Box], timed: bool) -> tuple[list[str], list[_Label]]:
     """The edges of ``frame`` (those gone since ``prev`` drawn as removed, first), and their labels."""
     now = _edges(frame.graph)
     before = _edges(prev.graph) if prev is not None else {}
@@ -466,7 +469,7 @@ def _edge_layer(frame: Frame, prev: Frame | None, boxes: dict[str, _Box]) -> tup
         rank = pairs.get((s, t), 0) if label == L.DEPLOYMENT_HISTORY else 0
         if label == L.DEPLOYMENT_HISTORY:
             pairs[(s, t)] = rank + 1
-        edge, text = _svg_edge(boxes, key, d, change, rank)
+        edge, text = _svg_edge(boxes, key, d, change, rank, timed)
         out.append(edge)
         if text is not None:
             labels.append(text)
@@ -494,7 +497,7 @@ def _svg_frame(frame: Frame, prev: Frame | None, boxes: dict[str, _Box], heads: 
     ]
     for label, x in heads.items():
         out.append(f'<text x="{_n(x)}" y="{COLUMN_TOP - 12}" font-size="12" font-weight="700" text-anchor="middle" fill="#555">{_e(label)}</text>')
-    edges, labels = _edge_layer(frame, prev, boxes)
+    edges, labels = _edge_layer(frame, prev, boxes, frame.time is not None)
     out += edges
     out += _node_layer(frame, prev, boxes)
     shown = [boxes[n] for n in sorted(frame.graph.nodes) if n in boxes]

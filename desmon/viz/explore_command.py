@@ -257,10 +257,12 @@ def _searched(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str],
         what = f"{result.verdict} in {result.states:,} states"
         if result.incomplete:
             what += f" ({result.incomplete})"
+        hints = [f"step through its timeline with: desmon explore {args.scenario}"] if scenario.timeline else []
+        if not hints and deployer.name != "paper":
+            hints.append(f"look for the paper's bugs with: desmon explore {args.scenario} --verify --deployer paper")
         raise CheckerError(
-            f"{args.scenario} with deployer {deployer.name}: {what}, no counterexample to explore; "
-            f"step through its timeline with: desmon explore {args.scenario}"
-            + ("" if args.invariant else " (or try another --deployer, e.g. paper)")
+            f"{args.scenario} with deployer {deployer.name}: {what}, no counterexample to explore"
+            + (f"; {'; or '.join(hints)}" if hints else "")
         )
     c = min(result.counterexamples, key=lambda c: c.length)
     frames, _final, _d = counterexample_frames(
