@@ -145,10 +145,20 @@ def test_the_page_is_self_contained(coffee):
     assert page.count("<svg") == 1 + 4  # the timeline and one graph per step
 
 
-def test_the_same_input_writes_the_same_bytes(root, tmp_path, coffee):
+def test_the_same_input_writes_the_same_bytes_in_any_process(root, tmp_path, coffee):
+    import subprocess
+    import sys
+
     again = tmp_path / "again.html"
     assert main(["explore", str(root / "scenarios" / "coffee_handover.py"), "-o", str(again)]) == 0
     assert again.read_bytes() == coffee[0].read_bytes()
+    for seed in ("1", "2"):  # another process, another string hash seed: no set order leaks into the page
+        out = tmp_path / f"seed{seed}.html"
+        subprocess.run(
+            [sys.executable, "-m", "desmon", "explore", str(root / "scenarios" / "coffee_handover.py"), "-o", str(out)],
+            check=True, capture_output=True, env={**os.environ, "PYTHONHASHSEED": seed},
+        )
+        assert out.read_bytes() == coffee[0].read_bytes()
 
 
 def test_a_counterexample_found_by_verify_and_the_same_one_read_from_json(root, tmp_path, capsys):
