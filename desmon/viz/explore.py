@@ -273,9 +273,10 @@ def _edges(g: nx.MultiDiGraph) -> dict[tuple[str, str, str, str], dict[str, Any]
     return {_edge_id(s, t, d): d for s, t, d in g.edges(data=True) if d.get("label") in FIG5_EDGES}
 
 
-def _node_state(g: nx.MultiDiGraph, n: str) -> tuple:
-    d = g.nodes[n]
-    return (d.get("up"), d.get("working"), tuple(sorted((d.get("load") or {}).items())), tuple(sorted((d.get("capacities") or {}).items())))
+def _node_state(g: nx.MultiDiGraph, n: str) -> tuple:  # type: ignore[type-arg]
+    """What the node's box shows (a changed load, a failed device, new requirements ...)."""
+    title, lines, flags = _node_lines(g, n)
+    return title, tuple(lines), tuple(flags)
 
 
 def _anchor(b: _Box, other: _Box) -> tuple[float, float]:
