@@ -72,7 +72,7 @@ from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import ADD_EDGE, REMOVE_EDGE, RELABEL_EDGE, UPDATE_NODE, Repository
 from desmon.sim.metrics import Exposure, MemoryMeter, slip_metrics
 from desmon.sim.sensors import DetectorAdapter, SensorBank
-from desmon.sim.trace import Trace
+from desmon.sim.trace import Trace, declared_actions, graph_resources, initial_loads, platform_resources
 from desmon.detectors.signals import Segment
 from desmon.sim.world import Slip, World, draw_slips, expand_task, like_segments, world_of
 
@@ -474,6 +474,7 @@ class SimWorld:
             return
         self.requirement_changes += 1
         self._follow_consumption(ev.graph)
+        self.trace.emit(now, "consumption", graph=ev.graph, resources=graph_resources(self.query.deployment_information(ev.graph)))
         self.trace.emit(now, "fact", fact=str(ev))
         self.pending_platforms.update(dict.fromkeys(stim.changed_platforms))
         self.pending_specs.update(dict.fromkeys(stim.specs_changed))
@@ -563,6 +564,8 @@ class SimWorld:
             # never counts as monitoring (the run report lists it)
             inst.valid_from = math.inf
             inst.gen += 1
+            if self.instances.get((inst.graph, inst.platform)) is inst:  # its input is back: say so (no ready follows)
+                self.trace.emit(now, "no_signal", graph=inst.graph, platform=inst.platform)
             return
         warm = inst.adapter.warmup if inst.adapter is not None else 0.0
         inst.valid_from = now + warm
@@ -820,11 +823,17 @@ class SimWorld:
         self.trace.emit(
             0.0, "run", scenario=self.scenario.name, deployer=self.deployer_name, seed=self.seed, horizon=self.horizon,
             signals=self.signals_on,
-            platforms={p.name: {"memory": p.capacity("memory")} for p in self.model.platforms},
-            graphs={g.name: {"memory": self.consumes.get(g.name, 0.0)} for g in self.model.graphs},
+            platforms={p.name: platform_resources(p) for p in self.model.platforms},
+            graphs={
+                g.name: {**graph_resources(self.query.deployment_information(g.name)), "memory": self.consumes.get(g.name, 0.0)}
+                for g in self.model.graphs
+            },
+            actions=declared_actions(self.model),
         )
         for p in self.model.platforms:
             self.trace.emit(0.0, "load", platform=p.name, resource="memory", amount=self.load[p.name])
+        for p, resource, amount in initial_loads(self.model, self.scenario.initial):
+            self.trace.emit(0.0, "load", platform=p, resource=resource, amount=amount)
         for s in self.slips:
             self.trace.emit(s.time, "slip", direction=s.direction, kind=s.kind)
         self._start_processes()

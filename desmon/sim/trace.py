@@ -10,12 +10,18 @@ around a slip, up to ``world.quiet_block`` s later elsewhere). Sort by ``t`` to 
 Schema (keys in this order after ``t`` and ``type``)
 ----------------------------------------------------
 ``run``        ``scenario, deployer, seed, horizon, signals`` (bool),
-               ``platforms: {name: {"memory": capacity_MB | null}}``,
-               ``graphs: {graph: {"memory": consumption_MB}}`` (the Capacity it declares;
-               0 without one). Always the first record, ``t`` 0.
-``load``       ``platform, resource, amount`` (MB): a platform's background load; one per
-               platform at ``t`` 0 (its initial value), then one at every change
-               (scripted or random walk; a walk may repeat the same amount).
+               ``platforms: {name: {"memory": capacity_MB | null, RESOURCE: capacity, ...}}``
+               (memory first, then every other capacity the platform declares, by name),
+               ``graphs: {graph: {"memory": consumption_MB, RESOURCE: amount, ...}}`` (the
+               Capacity amounts its current specification declares; memory 0 without one),
+               ``actions: {action: {"risky": bool}}`` (every action of the model: the
+               built-ins, then the declared ones). Always the first record, ``t`` 0.
+``load``       ``platform, resource, amount``: a platform's background load of a resource
+               (memory in MB); one per platform at ``t`` 0 for memory and for every other
+               resource the platform declares (its initial value), then one at every
+               change (scripted or random walk; a walk may repeat the same amount).
+``consumption`` ``graph, resources`` (``{resource: amount}``): what a running instance of
+               ``graph`` consumes from ``t``, after a requirement change.
 ``slip``       ``direction`` (up/down), ``kind`` (pulled/gravitational): ground-truth slip
                whose motion starts at ``t``.
 ``action``     ``action, duration``: the robot's true action context from ``t``.
@@ -35,6 +41,10 @@ Schema (keys in this order after ``t`` and ``type``)
                valid frames) and is valid from ``t``; again after every re-activation
                (input repaired, platform rebooted). Not written if the instance stopped
                or lost its input before.
+``no_signal``  ``graph, platform``: a running instance whose inputs have no signal model
+               (``World.no_signal_model``) has valid input again at ``t`` (a device
+               repaired, a platform back up); it runs but cannot alarm, so no ``ready``
+               follows. Not written when such an instance starts.
 ``invalid``    ``graph, platform, reason``: a running instance (warming or ready) lost
                valid input at ``t``; ``reason`` is "sensor_failure" (no working device
                left for one of its streams) or "platform_crash" (its platform went down).
@@ -52,7 +62,33 @@ from __future__ import annotations
 import json
 from typing import IO, Any
 
-__all__ = ["Trace"]
+__all__ = ["Trace", "platform_resources", "graph_resources", "declared_actions", "initial_loads"]
+
+
+def platform_resources(platform: Any) -> dict[str, float | None]:
+    """The ``run`` record's entry of a platform: memory first (None when it declares none),
+    then every other capacity it declares."""
+    return {"memory": platform.capacity("memory"), **{r: c for r, c in platform.capacities if r != "memory"}}
+
+
+def graph_resources(spec: Any) -> dict[str, float]:
+    """What a running instance of a graph with DeploymentSpec ``spec`` (None: no
+    specification) consumes: memory first (0 without a Capacity), then the other resources."""
+    use = dict(spec.consumption()) if spec is not None else {}
+    return {"memory": use.pop("memory", 0.0), **use}
+
+
+def declared_actions(model: Any) -> dict[str, dict[str, bool]]:
+    """The ``run`` record's ``actions``: every action of ``model``, with whether it is risky."""
+    risky = model.risky_actions
+    return {a: {"risky": a in risky} for a in model.actions}
+
+
+def initial_loads(model: Any, initial: Any) -> list[tuple[str, str, float]]:
+    """``(platform, resource, amount)`` at ``t`` 0 for every capacity other than memory a
+    platform declares: the last LoadChange of ``initial`` for it, else 0."""
+    last = {(ev.platform, ev.resource): ev.amount for ev in initial if type(ev).__name__ == "LoadChange"}
+    return [(p.name, r, float(last.get((p.name, r), 0.0))) for p in model.platforms for r, _c in p.capacities if r != "memory"]
 
 
 def _clean(v: Any) -> Any:

@@ -1,14 +1,20 @@
 """Timeline plot of a ``desmon run`` trace (JSON Lines, schema in :mod:`desmon.sim.trace`).
 
-Lanes, top to bottom, on one time axis:
+Panels, top to bottom, on one time axis:
 
-* **context** — the robot's action segments; unmonitored exposure shaded red across all lanes;
-* **one lane per platform** — the detectors running there (solid once warmed up, hatched
-  while warming up, grey while they have no valid input), platform crashes in black;
-* **events** — device / platform faults, injected slips (triangles), alarms (ticks,
-  coloured by detector) and errors (red crosses);
-* **memory** — per platform, background load plus what running detectors consume,
-  against the capacity (dashed).
+* **context** -- the robot's action segments, one colour per action of the model (the
+  ``run`` record lists them); a risky action (an object in the hand) has a dark red
+  border; unmonitored exposure is shaded red across every panel;
+* **one lane per platform** -- the detectors running there (solid once warmed up, hatched
+  while warming up, grey while they have no valid input, white with crosses when their
+  inputs have no signal model: they run but can never alarm), platform crashes in black;
+* **events** -- device / platform faults (labelled above), errors (labelled below),
+  injected slips (triangles) and alarms (ticks, coloured by detector). Labels are packed
+  into rows so that none overlaps another; those that find no room are counted at the
+  row's right end;
+* **one panel per resource** the platforms declare (memory, GPU memory, ...) -- per
+  platform, background load plus what running detectors consume, against the capacity
+  (dashed).
 
 Reads only the trace, so any run (or a trace from another machine) can be drawn.
 """
@@ -25,8 +31,9 @@ from desmon.errors import ScenarioError
 from desmon.paths import TRACE_FILE, check_input_file
 from desmon.viz.common import require_matplotlib
 
-__all__ = ["read_trace", "check_window", "Timeline", "build_timeline", "plot_timeline"]
+__all__ = ["read_trace", "check_window", "Timeline", "build_timeline", "plot_timeline", "timeline_figure", "action_colors"]
 
+#: the built-in actions' colours (light, so labels and exposure stay readable on them)
 ACTION_COLORS = {
     "idle": "#f0f0f0",
     "hold": "#d9d9d9",
@@ -36,7 +43,19 @@ ACTION_COLORS = {
     "rotate_ccw": "#dadaeb",
     "rotate_cw": "#bcbddc",
 }
-DETECTOR_COLORS = ["#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02"]
+#: colours of the actions a model declares, in declaration order (light, distinct from the built-ins')
+EXTRA_ACTION_COLORS = [
+    "#fbb4ae", "#ccebc5", "#fed9a6", "#ffffcc", "#e5d8bd", "#fddaec", "#b3e2cd", "#fdcdac", "#cbd5e8", "#f4cae4",
+    "#e6f5c9", "#fff2ae", "#f1e2cc", "#8dd3c7", "#ffffb3", "#bebada", "#fb8072", "#80b1d3", "#b3de69", "#fccde5",
+]
+#: the built-in actions with an object in the hand (the model's own are named in the run record)
+_BUILTIN_RISKY = frozenset({"grasp", "hold", "move_base", "release", "rotate_ccw", "rotate_cw"})
+#: the border that marks a risky action
+RISKY_EDGE = "#8b0000"
+DETECTOR_COLORS = [
+    "#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d", "#1f78b4", "#b15928", "#6a3d9a",
+    "#33a02c", "#e31a1c",
+]
 
 
 _HOW = TRACE_FILE[1]
@@ -122,6 +141,14 @@ class Timeline:
     memory: dict[str, list[tuple[float, float]]] = field(default_factory=dict)
     capacity: dict[str, float] = field(default_factory=dict)
     graphs: list[str] = field(default_factory=list)
+    #: action -> whether it is risky (an object in the hand), in the model's order
+    risky: dict[str, bool] = field(default_factory=dict)
+    #: resource -> platform -> [(t, in use)] (``usage["memory"]`` is ``memory``)
+    usage: dict[str, dict[str, list[tuple[float, float]]]] = field(default_factory=dict)
+    #: resource -> platform -> capacity (``capacities["memory"]`` is ``capacity``)
+    capacities: dict[str, dict[str, float]] = field(default_factory=dict)
+    #: graphs whose inputs have no signal model (the run's ``no_signal_model``): they never warm up
+    no_signal: list[str] = field(default_factory=list)
 
 
 def _clip(intervals: Iterable[tuple[float, float]], start: float, end: float) -> list[tuple[float, float]]:
@@ -183,12 +210,24 @@ def _mb(entry: dict[str, Any], name: str) -> float:
     return _non_negative(entry.get("memory", 0), f"run record: memory of {name}")
 
 
+def _amounts(entry: Any, name: str) -> dict[str, float]:
+    """Every ``resource: amount`` of a run record entry (memory first, 0 when missing)."""
+    if not isinstance(entry, dict):
+        raise ValueError(f"run record: the entry of {name} is {entry!r}, not an object of resource amounts")
+    out = {"memory": _mb(entry, name)}
+    for r, v in entry.items():
+        if r != "memory" and v is not None:
+            out[str(r)] = _non_negative(v, f"run record: {r} of {name}")
+    return out
+
+
 def _build(records: list[dict[str, Any]], horizon: float, start: float | None, end: float | None) -> Timeline:
     head = records[0]
     t0 = 0.0 if start is None else float(start)
     t1 = horizon if end is None else float(end)
     tl = Timeline(str(head.get("scenario", "?")), str(head.get("deployer", "?")), t0, t1)
-    reader = _Reader(tl, head)
+    end = next((r for r in reversed(records) if r.get("type") == "end"), None)
+    reader = _Reader(tl, head, end)
     for n, r in enumerate(records[1:], start=2):
         try:
             reader.read(r)
@@ -205,15 +244,30 @@ class _Reader:
     """Digests trace records one by one into ``tl`` (intervals still open are kept here
     until :meth:`close`); one method per record type."""
 
-    def __init__(self, tl: Timeline, head: dict[str, Any]) -> None:
+    def __init__(self, tl: Timeline, head: dict[str, Any], end: dict[str, Any] | None = None) -> None:
         self.tl = tl
-        self.platforms: list[str] = list((head.get("platforms") or {}).keys())
-        tl.capacity = {p: _mb(v, p) for p, v in (head.get("platforms") or {}).items() if v.get("memory") is not None}
-        self.consumption = {g: _mb(v, g) for g, v in (head.get("graphs") or {}).items()}
+        platforms = head.get("platforms") or {}
+        self.platforms: list[str] = list(platforms.keys())
+        tl.capacity = {p: _mb(v, p) for p, v in platforms.items() if v.get("memory") is not None}
+        tl.capacities = {"memory": tl.capacity}
+        for p, v in platforms.items():
+            for r, cap in _amounts(v, p).items():
+                if r != "memory":
+                    tl.capacities.setdefault(r, {})[p] = cap
+        tl.usage = {r: {} for r in tl.capacities}
+        tl.memory = tl.usage["memory"]
+        #: graph -> {resource: amount} a running instance consumes
+        self.consumption = {g: _amounts(v, g) for g, v in (head.get("graphs") or {}).items()}
         tl.graphs = list(self.consumption)  # declaration order: the same detector keeps its colour across plots
+        actions = head.get("actions")
+        if isinstance(actions, dict):
+            tl.risky = {str(a): bool(v.get("risky")) if isinstance(v, dict) else True for a, v in actions.items()}
+        missing = (end or {}).get("no_signal_model") or {}
+        tl.no_signal = [str(g) for g in missing] if isinstance(missing, dict) else []
         self.running: dict[tuple[str, str], tuple[float, str]] = {}  # (graph, platform) -> (since, phase)
-        self.load: dict[str, float] = {}
-        self.used: dict[str, float] = {}
+        self.uses: dict[tuple[str, str], dict[str, float]] = {}  # (graph, platform) -> what that instance consumes
+        self.load: dict[tuple[str, str], float] = {}  # (platform, resource) -> background load
+        self.used: dict[tuple[str, str], float] = {}  # (platform, resource) -> consumed by running instances
         self.down_since: dict[str, float] = {}
         self.exposure_since: float | None = None
         self.handlers = {
@@ -228,6 +282,8 @@ class _Reader:
             "alarm": self._alarm,
             "error": self._error,
             "exposure": self._exposure,
+            "consumption": self._consumption,
+            "no_signal": self._no_signal,
         }
 
     def read(self, r: dict[str, Any]) -> None:
@@ -238,8 +294,15 @@ class _Reader:
             handler(r, t)
 
     # -- helpers ---------------------------------------------------------------------
-    def _mem_point(self, p: str, t: float) -> None:
-        self.tl.memory.setdefault(p, []).append((t, self.load.get(p, 0.0) + self.used.get(p, 0.0)))
+    def _point(self, p: str, r: str, t: float) -> None:
+        """What ``p`` has in use of resource ``r`` from ``t`` on."""
+        key = (p, r)
+        self.tl.usage.setdefault(r, {}).setdefault(p, []).append((t, self.load.get(key, 0.0) + self.used.get(key, 0.0)))
+
+    def _consume(self, p: str, use: dict[str, float], sign: float, t: float) -> None:
+        for r, amount in use.items():
+            self.used[(p, r)] = self.used.get((p, r), 0.0) + sign * amount
+            self._point(p, r, t)
 
     def _phase_change(self, g: str, p: str, t: float, phase: str | None) -> None:
         key = (g, p)
@@ -255,7 +318,10 @@ class _Reader:
 
     # -- one method per record type ------------------------------------------------------
     def _action(self, r: dict[str, Any], t: float) -> None:
-        self.tl.actions.append((t, t + _amount(r, "duration"), str(r.get("action"))))
+        name = str(r.get("action"))
+        self.tl.actions.append((t, t + _amount(r, "duration"), name))
+        if name not in self.tl.risky:  # a trace without the run record's actions
+            self.tl.risky[name] = name in _BUILTIN_RISKY or name not in ACTION_COLORS
 
     def _decision(self, r: dict[str, Any], t: float) -> None:
         if not r.get("ok"):
@@ -266,15 +332,30 @@ class _Reader:
             self.tl.graphs.append(g)
         if r.get("command") == "start":
             self._phase_change(g, p, t, "warming")
-            self.used[p] = self.used.get(p, 0.0) + self.consumption.get(g, 0.0)
+            self.uses[(g, p)] = use = dict(self.consumption.get(g, {"memory": 0.0}))
+            self._consume(p, use, 1.0, t)
         elif r.get("command") == "stop":
             self._phase_change(g, p, t, None)
-            self.used[p] = self.used.get(p, 0.0) - self.consumption.get(g, 0.0)
-        self._mem_point(p, t)
+            self._consume(p, self.uses.pop((g, p), self.consumption.get(g, {"memory": 0.0})), -1.0, t)
+
+    def _consumption(self, r: dict[str, Any], t: float) -> None:
+        """A requirement change: running instances of the graph consume the new amounts."""
+        g = str(r["graph"])
+        new = _amounts(r.get("resources") or {}, g)
+        self.consumption[g] = new
+        for (graph, p), old in list(self.uses.items()):
+            if graph == g:
+                delta = {res: new.get(res, 0.0) - old.get(res, 0.0) for res in set(new) | set(old)}
+                self._consume(p, {res: d for res, d in sorted(delta.items()) if d}, 1.0, t)
+                self.uses[(graph, p)] = dict(new)
 
     def _ready(self, r: dict[str, Any], t: float) -> None:
         if (r.get("graph"), r.get("platform")) in self.running:
             self._phase_change(str(r["graph"]), str(r["platform"]), t, "valid")
+
+    def _no_signal(self, r: dict[str, Any], t: float) -> None:
+        if (r.get("graph"), r.get("platform")) in self.running:
+            self._phase_change(str(r["graph"]), str(r["platform"]), t, "no_signal")
 
     def _invalid(self, r: dict[str, Any], t: float) -> None:
         if (r.get("graph"), r.get("platform")) in self.running:
@@ -282,9 +363,10 @@ class _Reader:
 
     def _load(self, r: dict[str, Any], t: float) -> None:
         p = str(r["platform"])
+        resource = str(r.get("resource") or "memory")
         self._seen(p)
-        self.load[p] = _amount(r, "amount")
-        self._mem_point(p, t)
+        self.load[(p, resource)] = _amount(r, "amount")
+        self._point(p, resource, t)
 
     def _platform(self, r: dict[str, Any], t: float) -> None:
         p = str(r["platform"])
@@ -313,7 +395,8 @@ class _Reader:
             self.exposure_since = None
 
     def close(self, horizon: float) -> None:
-        """End every interval still open at ``horizon``; order the platform lanes."""
+        """End every interval still open at ``horizon``; order the platform lanes; a
+        detector with no signal model never warms up: its warming phase is drawn as such."""
         tl, platforms = self.tl, self.platforms
         for (g, p), (since, phase) in self.running.items():
             tl.runs.setdefault(p, []).append((since, horizon, g, phase))
@@ -322,9 +405,14 @@ class _Reader:
         if self.exposure_since is not None:
             tl.exposure.append((self.exposure_since, horizon))
         tl.runs = {p: tl.runs.get(p, []) for p in platforms + [q for q in tl.runs if q not in platforms]}
-        for p in platforms:
-            if p in tl.memory:
-                tl.memory[p].append((horizon, tl.memory[p][-1][1]))
+        silent = set(tl.no_signal)
+        if silent:
+            tl.runs = {
+                p: [(a, b, g, "no_signal" if g in silent and ph == "warming" else ph) for a, b, g, ph in v] for p, v in tl.runs.items()
+            }
+        for series in tl.usage.values():
+            for p, pts in series.items():
+                pts.append((horizon, pts[-1][1]))
 
 
 def _clip_window(tl: Timeline, t0: float, t1: float) -> None:
@@ -337,47 +425,182 @@ def _clip_window(tl: Timeline, t0: float, t1: float) -> None:
     tl.slips = [x for x in tl.slips if t0 <= x[0] <= t1]
     tl.alarms = [x for x in tl.alarms if t0 <= x[0] <= t1]
     tl.errors = [x for x in tl.errors if t0 <= x[0] <= t1]
+    tl.usage = {r: {p: _clip_steps(v, t0, t1) for p, v in series.items()} for r, series in tl.usage.items()}
+    tl.memory = tl.usage.setdefault("memory", {})
+
+
+def _clip_steps(points: list[tuple[float, float]], t0: float, t1: float) -> list[tuple[float, float]]:
+    """A step series cut to ``[t0, t1]``: the value in force at ``t0``, the changes inside, the end."""
+    if not points or (t0 <= points[0][0] and points[-1][0] <= t1):
+        return points
+    before = [v for t, v in points if t <= t0]
+    out = [(t0, before[-1])] if before else []
+    out += [(t, v) for t, v in points if t0 < t < t1]
+    if out:
+        out.append((t1, out[-1][1]))
+    return out
+
+
+# -- drawing ----------------------------------------------------------------------------------
+DPI = 110
+WIDTH_IN = 13.0
+#: the axes span this fraction of the figure's width (the right margin holds the resource legends)
+LEFT, RIGHT = 0.085, 0.845
+LANE_IN = 0.55  # one context or platform lane
+ROW_IN = 0.2  # one row of the events panel (a row of labels, or of markers)
+RESOURCE_IN = 1.7  # one resource panel
+GAP_IN = 0.12  # between the panels
+LABEL_PT = 7  # event labels
+MAX_LABEL_ROWS = 4  # rows of fault labels (above their markers) and of error labels (below theirs)
+
+
+@dataclass
+class _Label:
+    """An event label placed in a row: its text, left end (data) and width (pixels)."""
+
+    text: str
+    x: float
+    row: int
+    color: str
+
+
+@dataclass
+class _Rows:
+    """Labels packed into rows (none overlaps another), and how many found no room."""
+
+    labels: list[_Label] = field(default_factory=list)
+    left_out: int = 0
+
+    @property
+    def rows(self) -> int:
+        return 1 + max((lb.row for lb in self.labels), default=-1)
+
+
+def _pack(items: list[tuple[float, str, str]], tl: Timeline, width_px: float, measure: Any) -> _Rows:
+    """Greedy row packing of ``(t, text, colour)`` labels, each centred on its ``t`` where
+    the axes allow: a label goes to the lowest row whose last label ends (with a gap)
+    before it starts; with every row taken it is left out (and counted)."""
+    span = tl.end - tl.start
+    px_per_s = width_px / span if span > 0 else 0.0
+    ends = [-math.inf] * MAX_LABEL_ROWS
+    out = _Rows()
+    gap = 6.0
+    for t, text, color in sorted(items, key=lambda x: x[0]):
+        w = measure(text)
+        left = (t - tl.start) * px_per_s - w / 2
+        left = max(0.0, min(left, width_px - w))
+        for row in range(MAX_LABEL_ROWS):
+            if left >= ends[row] + gap:
+                ends[row] = left + w
+                out.labels.append(_Label(text, tl.start + left / px_per_s if px_per_s else tl.start, row, color))
+                break
+        else:
+            out.left_out += 1
+    return out
+
+
+def _resources(tl: Timeline) -> list[str]:
+    """The resource panels: memory first, then every other resource declared or used, by name."""
+    names = [r for r in tl.usage if tl.usage[r] or tl.capacities.get(r)]
+    return sorted(names, key=lambda r: (r != "memory", r))
+
+
+def action_colors(tl: Timeline) -> dict[str, str]:
+    """One colour per action: a built-in keeps its own, the model's own actions take
+    :data:`EXTRA_ACTION_COLORS` in the order the run record lists them (then as they appear)."""
+    out: dict[str, str] = {}
+    extra = 0
+    for name in [*tl.risky, *(n for _a, _b, n in tl.actions)]:
+        if name in out:
+            continue
+        if name in ACTION_COLORS:
+            out[name] = ACTION_COLORS[name]
+        else:
+            out[name] = EXTRA_ACTION_COLORS[extra % len(EXTRA_ACTION_COLORS)]
+            extra += 1
+    return out
+
+
+def timeline_figure(tl: Timeline) -> Any:
+    """The matplotlib figure of ``tl`` (the caller saves and closes it)."""
+    plt = require_matplotlib()
+    from matplotlib.font_manager import FontProperties
+
+    fig = plt.figure(figsize=(WIDTH_IN, 4.0), dpi=DPI)
+    renderer = fig.canvas.get_renderer()
+    font = FontProperties(size=LABEL_PT)
+
+    def measure(text: str) -> float:
+        return renderer.get_text_width_height_descent(text, font, ismath=False)[0]
+
+    width_px = (RIGHT - LEFT) * WIDTH_IN * DPI
+    faults = _pack([(t, text, "black") for t, text in tl.faults], tl, width_px, measure)
+    errors = _pack([(t, f"{kind}: {g}", "#b2182b") for t, kind, g in tl.errors], tl, width_px, measure)
+    platforms = list(tl.runs)
+    lanes = ["context", *platforms]
+    resources = _resources(tl)
+    # the events panel, bottom up: slips and alarms, error labels, errors, faults, fault labels
+    ev_rows = 1.6 + errors.rows + 1 + 1 + faults.rows + 0.4
+    heights = [LANE_IN * len(lanes) + 0.3, ROW_IN * ev_rows] + [RESOURCE_IN] * len(resources)
+    total = sum(heights) + GAP_IN * (len(heights) - 1) + (0.45 if resources else 0.35)
+    fig.set_size_inches(WIDTH_IN, total)
+    axes = []
+    top = total
+    for i, h in enumerate(heights):
+        top -= h + (GAP_IN if i else 0.0)
+        ax = fig.add_axes((LEFT, top / total, RIGHT - LEFT, h / total), sharex=axes[0] if axes else None)
+        axes.append(ax)
+    ax, axe, res_axes = axes[0], axes[1], axes[2:]
+    color_of = {g: DETECTOR_COLORS[i % len(DETECTOR_COLORS)] for i, g in enumerate(tl.graphs)}
+    for a, b in tl.exposure:
+        for each in axes:
+            each.axvspan(a, b, color="#e41a1c", alpha=0.13, lw=0)
+    y = {name: len(lanes) - 1 - i for i, name in enumerate(lanes)}
+    colors = action_colors(tl)
+    _draw_lanes(ax, tl, y, color_of, colors, measure)
+    ax.set_yticks([y[n] for n in lanes], lanes)
+    ax.set_ylim(-0.6, len(lanes) - 0.4)
+    ax.set_xlim(tl.start, tl.end)
+    ys = _draw_events(axe, tl, color_of, faults, errors)
+    axe.set_ylim(0, ev_rows)
+    axe.set_yticks(list(ys.values()), list(ys.keys()))
+    for each in axes:
+        each.grid(axis="x", color="#eeeeee")
+        each.set_axisbelow(True)
+        if each is not axes[-1]:
+            each.tick_params(axis="x", labelbottom=False)
+    for r, axr in zip(resources, res_axes):
+        _draw_resource(axr, tl, r)
+    axes[-1].set_xlabel("simulated time (s)")
+    ax.legend(
+        handles=_legend(plt, tl, color_of, colors), fontsize=7, ncol=6, loc="lower left", bbox_to_anchor=(0.0, 1.02),
+        frameon=False, title=f"{tl.scenario} — deployer {tl.deployer}", title_fontsize=11, alignment="left",
+    )
+    return fig
 
 
 def plot_timeline(tl: Timeline, path: str | Path) -> Path:
     """Draw ``tl`` to a PNG file."""
     plt = require_matplotlib()
-
-    platforms = list(tl.runs)
-    color_of = {g: DETECTOR_COLORS[i % len(DETECTOR_COLORS)] for i, g in enumerate(tl.graphs)}
-    lanes = ["context", *platforms, "events"]
-    fig = plt.figure(figsize=(13, 1.0 + 0.55 * len(lanes) + 2.2))
-    grid = fig.add_gridspec(2, 1, height_ratios=[0.55 * len(lanes) + 0.4, 2.0], hspace=0.12)
-    ax = fig.add_subplot(grid[0])
-    axm = fig.add_subplot(grid[1], sharex=ax)
-    y = {name: len(lanes) - 1 - i for i, name in enumerate(lanes)}
-
-    for a, b in tl.exposure:
-        ax.axvspan(a, b, color="#e41a1c", alpha=0.13, lw=0)
-        axm.axvspan(a, b, color="#e41a1c", alpha=0.13, lw=0)
-    _draw_lanes(ax, tl, y, color_of)
-    _draw_events(ax, tl, y["events"], color_of)
-    ax.set_yticks([y[n] for n in lanes], [n if n in ("context", "events") else f"{n}" for n in lanes])
-    ax.set_ylim(-0.8, len(lanes) - 0.3)
-    ax.set_xlim(tl.start, tl.end)
-    ax.tick_params(axis="x", labelbottom=False)
-    ax.set_title(f"{tl.scenario} — deployer {tl.deployer}", loc="left", fontsize=11)
-    ax.grid(axis="x", color="#eeeeee")
-    ax.set_axisbelow(True)
-    axm.set_axisbelow(True)
-    _draw_memory(axm, tl)
-    ax.legend(handles=_legend(plt, tl, color_of), fontsize=7, ncol=6, loc="lower left", bbox_to_anchor=(0.0, 1.06), frameon=False)
+    fig = timeline_figure(tl)
     out = Path(path)
-    fig.savefig(out, dpi=110, bbox_inches="tight", format="png")  # exactly this file, whatever its name
+    fig.savefig(out, dpi=DPI, bbox_inches="tight", format="png")  # exactly this file, whatever its name
     plt.close(fig)
     return out
 
 
-def _draw_lanes(ax: Any, tl: Timeline, y: dict[str, int], color_of: dict[str, str]) -> None:
-    """The context lane (action segments) and one lane per platform (crashes, detectors by phase)."""
+def _draw_lanes(ax: Any, tl: Timeline, y: dict[str, int], color_of: dict[str, str], colors: dict[str, str], measure: Any) -> None:
+    """The context lane (action segments, named where the name fits) and one lane per
+    platform (crashes, detectors by phase)."""
+    span = tl.end - tl.start
+    px_per_s = (RIGHT - LEFT) * WIDTH_IN * DPI / span if span > 0 else 0.0
     for a, b, name in tl.actions:
-        ax.barh(y["context"], b - a, left=a, height=0.7, color=ACTION_COLORS.get(name, "#cccccc"), edgecolor="#777777", lw=0.5)
-        if b - a > (tl.end - tl.start) * 0.04:
+        risky = tl.risky.get(name, True)
+        ax.barh(
+            y["context"], b - a, left=a, height=0.7, color=colors[name],
+            edgecolor=RISKY_EDGE if risky else "#777777", lw=1.6 if risky else 0.5,
+        )
+        if measure(name) * 8 / LABEL_PT + 8 < (b - a) * px_per_s:  # drawn at 8 pt: only where it fits its segment
             ax.text((a + b) / 2, y["context"], name, ha="center", va="center", fontsize=8)
     for p, runs in tl.runs.items():
         for a, b in tl.down.get(p, []):
@@ -386,58 +609,91 @@ def _draw_lanes(ax: Any, tl: Timeline, y: dict[str, int], color_of: dict[str, st
             color = color_of.get(g, "#999999")
             if phase == "warming":
                 ax.barh(y[p], b - a, left=a, height=0.6, color="white", edgecolor=color, hatch="////", lw=0.8)
+            elif phase == "no_signal":
+                ax.barh(y[p], b - a, left=a, height=0.6, color="white", edgecolor=color, hatch="xx", lw=1.2, ls="--")
             elif phase == "invalid":
                 ax.barh(y[p], b - a, left=a, height=0.6, color="#bbbbbb", edgecolor=color, lw=0.8)
             else:
                 ax.barh(y[p], b - a, left=a, height=0.6, color=color, edgecolor=color, lw=0.5)
 
 
-def _draw_events(ax: Any, tl: Timeline, ev: int, color_of: dict[str, str]) -> None:
-    """The events lane: faults, injected slips, alarms and errors."""
-    for t, text in tl.faults:
-        ax.plot([t], [ev + 0.22], marker="v", color="black", ms=7)
-        if len(tl.faults) <= 12:
-            ax.text(t, ev + 0.42, text, fontsize=7, ha="center", va="bottom")
+def _draw_events(ax: Any, tl: Timeline, color_of: dict[str, str], faults: _Rows, errors: _Rows) -> dict[str, float]:
+    """The events panel: slips and alarms at the bottom, errors with their labels in rows
+    below them, faults with their labels in rows above them. Returns the rows' y by name."""
+    slips_y = 0.8
+    error_y = 1.6 + errors.rows + 0.5
+    fault_y = error_y + 1.0
     for t, _kind in tl.slips:
-        ax.plot([t], [ev - 0.05], marker="^", color="#e41a1c", ms=8, markeredgecolor="black", mew=0.5)
+        ax.plot([t], [slips_y], marker="^", color="#e41a1c", ms=8, markeredgecolor="black", mew=0.5)
     for t, g in tl.alarms:
-        ax.plot([t, t], [ev - 0.38, ev - 0.2], color=color_of.get(g, "#444444"), lw=1.0)
-    for t, kind, g in tl.errors:
-        ax.plot([t], [ev + 0.02], marker="X", color="#b2182b", ms=9, markeredgecolor="white", mew=0.5)
-        if len(tl.errors) <= 8:
-            ax.text(t, ev - 0.5, f"{kind}: {g}", fontsize=7, ha="left", va="top", color="#b2182b")
+        ax.plot([t, t], [slips_y - 0.45, slips_y + 0.45], color=color_of.get(g, "#444444"), lw=1.0)
+    for t, text in tl.faults:
+        repaired = text.endswith((" repaired", " up", " joins"))
+        ax.plot([t], [fault_y], marker="^" if repaired else "v", color="#2b8cbe" if repaired else "black", ms=7)
+    for t, _kind, _g in tl.errors:
+        ax.plot([t], [error_y], marker="X", color="#b2182b", ms=9, markeredgecolor="white", mew=0.5)
+    for lb in faults.labels:
+        ax.text(lb.x, fault_y + 1.0 + lb.row, lb.text, fontsize=LABEL_PT, ha="left", va="center", color=lb.color)
+    for lb in errors.labels:
+        ax.text(lb.x, error_y - 1.0 - lb.row, lb.text, fontsize=LABEL_PT, ha="left", va="center", color=lb.color)
+    for rows, y, what in ((faults, fault_y, "fault"), (errors, error_y, "error")):
+        if rows.left_out:
+            ax.text(
+                1.005, y, f"+{rows.left_out} {what} label{'s' if rows.left_out != 1 else ''} not shown",
+                transform=ax.get_yaxis_transform(), fontsize=LABEL_PT, ha="left", va="center", color="#555555",
+            )
+    return {"slips, alarms": slips_y, "errors": error_y, "faults": fault_y}
 
 
-def _draw_memory(axm: Any, tl: Timeline) -> None:
-    """Per platform, memory used (steps) against its capacity (dashed)."""
-    for p, pts in sorted(tl.memory.items()):
-        xs = [a for a, _v in pts]
-        vs = [v for _a, v in pts]
-        line = axm.step(xs, vs, where="post", label=f"{p} used", lw=1.4)[0]
-        if p in tl.capacity:
-            axm.axhline(tl.capacity[p], color=line.get_color(), ls="--", lw=0.9, label=f"{p} capacity")
-    axm.set_ylabel("memory (MB)")
-    axm.set_ylim(bottom=0)
-    axm.set_xlabel("simulated time (s)")
-    axm.grid(color="#eeeeee")
-    if tl.memory:
-        axm.legend(fontsize=7, ncol=3, loc="upper left", framealpha=0.85)
+def _draw_resource(axr: Any, tl: Timeline, resource: str) -> None:
+    """Per platform, what is in use of ``resource`` (steps) against its capacity (dashed)."""
+    series = tl.usage.get(resource, {})
+    caps = tl.capacities.get(resource, {})
+    every = [*tl.runs, *sorted(p for r in tl.usage.values() for p in r if p not in tl.runs)]
+    order = list(dict.fromkeys(every))  # a platform keeps its colour in every resource panel
+    names = [p for p in order if p in series or p in caps]
+    for p in names:
+        color = f"C{order.index(p) % 10}"
+        pts = series.get(p)
+        if pts:
+            axr.step([a for a, _v in pts], [v for _a, v in pts], where="post", label=f"{p} used", lw=1.4, color=color)
+        if p in caps and math.isfinite(caps[p]):
+            axr.axhline(caps[p], color=color, ls="--", lw=0.9, label=f"{p} capacity")
+    axr.set_ylabel("memory (MB)" if resource == "memory" else resource)
+    axr.set_ylim(bottom=0)
+    axr.grid(color="#eeeeee")
+    if names:
+        axr.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.005, 1.0), frameon=False)
 
 
-def _legend(plt: Any, tl: Timeline, color_of: dict[str, str]) -> list[Any]:
-    """Legend handles: the detectors shown (in declaration order), then the fixed symbols."""
+def _legend(plt: Any, tl: Timeline, color_of: dict[str, str], colors: dict[str, str]) -> list[Any]:
+    """Legend handles: the actions shown (risky ones bordered), the detectors shown (in
+    declaration order), then the symbols the picture uses."""
     from matplotlib.patches import Patch
 
-    shown = {g for runs in tl.runs.values() for _a, _b, g, _ph in runs} | {g for _t, g in tl.alarms}
-    handles: list[Any] = [Patch(facecolor=color_of[g], label=g) for g in tl.graphs if g in shown]
-    handles += [
-        Patch(facecolor="white", edgecolor="#555555", hatch="////", label="warming up"),
-        Patch(facecolor="#bbbbbb", label="no valid input"),
-        Patch(facecolor="black", alpha=0.75, label="platform down"),
-        Patch(facecolor="#e41a1c", alpha=0.2, label="unmonitored exposure"),
-        plt.Line2D([], [], marker="^", color="#e41a1c", ls="", label="slip injected"),
-        plt.Line2D([], [], color="#444444", label="alarm"),
-        plt.Line2D([], [], marker="X", color="#b2182b", ls="", label="error"),
-        plt.Line2D([], [], marker="v", color="black", ls="", label="fault"),
+    shown_actions = list(dict.fromkeys(n for _a, _b, n in tl.actions))
+    handles: list[Any] = [
+        Patch(facecolor=colors[n], edgecolor=RISKY_EDGE if tl.risky.get(n, True) else "#777777", lw=1.6 if tl.risky.get(n, True) else 0.5,
+              label=n + (" (risky)" if tl.risky.get(n, True) else ""))
+        for n in sorted(shown_actions, key=list(colors).index)
     ]
-    return handles
+    phases = {ph for runs in tl.runs.values() for _a, _b, _g, ph in runs}
+    shown = {g for runs in tl.runs.values() for _a, _b, g, _ph in runs} | {g for _t, g in tl.alarms}
+    silent = set(tl.no_signal)
+    handles += [
+        Patch(facecolor=color_of[g], label=g + (" (no signal model)" if g in silent else "")) for g in tl.graphs if g in shown
+    ]
+    symbols = [
+        ("warming" in phases, Patch(facecolor="white", edgecolor="#555555", hatch="////", label="warming up")),
+        ("no_signal" in phases, Patch(facecolor="white", edgecolor="#555555", hatch="xx", ls="--", label="no signal model: cannot alarm")),
+        ("invalid" in phases, Patch(facecolor="#bbbbbb", label="no valid input")),
+        (any(tl.down.values()), Patch(facecolor="black", alpha=0.75, label="platform down")),
+        (bool(tl.exposure), Patch(facecolor="#e41a1c", alpha=0.2, label="unmonitored exposure")),
+        (bool(tl.slips), plt.Line2D([], [], marker="^", color="#e41a1c", ls="", label="slip injected")),
+        (bool(tl.alarms), plt.Line2D([], [], color="#444444", label="alarm")),
+        (bool(tl.errors), plt.Line2D([], [], marker="X", color="#b2182b", ls="", label="error")),
+        (bool(tl.faults), plt.Line2D([], [], marker="v", color="black", ls="", label="fault")),
+        (any(t.endswith((" repaired", " up", " joins")) for _x, t in tl.faults),
+         plt.Line2D([], [], marker="^", color="#2b8cbe", ls="", label="repair / back up")),
+    ]
+    return handles + [h for present, h in symbols if present]

@@ -1,0 +1,154 @@
+"""The timeline of a home-made scenario (tests/data/busy_robot.py): one colour per action,
+risky ones bordered, every declared resource drawn, a detector without a signal model
+drawn as such, and no label overlapping another, with 42 faults."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from desmon.cli import main
+from desmon.viz.timeline import RISKY_EDGE, action_colors, build_timeline, read_trace
+
+pytest.importorskip("matplotlib")
+
+ROOT = Path(__file__).resolve().parent.parent
+BUSY = str(ROOT / "tests" / "data" / "busy_robot.py")
+
+
+@pytest.fixture(scope="module")
+def busy(tmp_path_factory):  # type: ignore[no-untyped-def]
+    """The busy robot's trace, its timeline and the figure ``desmon run --plot`` draws."""
+    import matplotlib.pyplot as plt
+
+    from desmon.viz.timeline import timeline_figure
+
+    d = tmp_path_factory.mktemp("busy")
+    trace, png = d / "busy.jsonl", d / "busy.png"
+    assert main(["run", BUSY, "--trace", str(trace), "--plot", str(png), "--no-progress"]) == 0
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    tl = build_timeline(read_trace(trace))
+    fig = timeline_figure(tl)
+    fig.canvas.draw()
+    yield tl, fig
+    plt.close(fig)
+
+
+def _context_bars(fig, tl):  # type: ignore[no-untyped-def]
+    """(action, face colour, edge colour, line width) of each bar of the context lane."""
+    from matplotlib.colors import to_hex
+
+    ax = fig.axes[0]
+    bars = [c.patches[0] for c in ax.containers if abs(c.patches[0].get_height() - 0.7) < 1e-9]
+    assert len(bars) == len(tl.actions)
+    return [(name, to_hex(b.get_facecolor()), to_hex(b.get_edgecolor()), b.get_linewidth()) for (_a, _b, name), b in zip(tl.actions, bars)]
+
+
+def test_each_action_has_one_colour_of_its_own_and_risky_ones_a_border(busy):
+    tl, fig = busy
+    bars = _context_bars(fig, tl)
+    colour: dict[str, set[str]] = {}
+    for name, face, _edge, _lw in bars:
+        colour.setdefault(name, set()).add(face)
+    assert set(colour) == {"grasp", "hold", "pour", "inspect", "wipe"}
+    assert all(len(c) == 1 for c in colour.values()), colour
+    faces = [next(iter(c)) for c in colour.values()]
+    assert len(set(faces)) == len(faces), "two actions share a colour"
+    for name, _face, edge, lw in bars:
+        risky = name != "wipe"  # the scenario declares wipe not risky
+        assert (edge == RISKY_EDGE and lw > 1.0) == risky, (name, edge, lw)
+
+
+def test_the_models_own_actions_get_distinct_colours_beside_the_built_ins():
+    names = ["hold", "grasp", *(f"task_{i}" for i in range(18))]
+    records = [
+        {"t": 0.0, "type": "run", "scenario": "s", "deployer": "d", "horizon": 20.0, "platforms": {}, "graphs": {},
+         "actions": {n: {"risky": True} for n in names}},
+        *({"t": float(i), "type": "action", "action": n, "duration": 1.0} for i, n in enumerate(names)),
+    ]
+    colors = action_colors(build_timeline(records))
+    assert len(set(colors[n] for n in names)) == len(names)
+
+
+def test_every_resource_the_platforms_declare_has_its_panel(busy):
+    tl, fig = busy
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert "memory (MB)" in labels and "gpu_memory" in labels
+    gpu = fig.axes[labels.index("gpu_memory")]
+    used = next(line for line in gpu.get_lines() if line.get_label() == "gpu_box used")
+    # 1000 of background load plus the spill detector's 3000 while it runs
+    assert max(used.get_ydata()) == 4000.0 and min(used.get_ydata()) == 1000.0
+    assert any(line.get_label() == "gpu_box capacity" and line.get_ydata()[0] == 8192 for line in gpu.get_lines())
+    assert max(v for _t, v in tl.usage["gpu_memory"]["gpu_box"]) == 4000.0
+
+
+def test_a_detector_without_a_signal_model_is_drawn_as_such_not_as_warming_up(busy):
+    tl, fig = busy
+    assert tl.no_signal == ["spill_detector"]
+    phases = {ph for _a, _b, g, ph in tl.runs["gpu_box"] if g == "spill_detector"}
+    assert "no_signal" in phases and "warming" not in phases and "valid" not in phases
+    # after the camera is repaired the running instance is back to "no signal model", not left as "no valid input"
+    runs = [(a, b, ph) for a, b, g, ph in tl.runs["gpu_box"] if g == "spill_detector"]
+    assert any(prev[2] == "invalid" and nxt[2] == "no_signal" and prev[1] == nxt[0] for prev, nxt in zip(runs, runs[1:]))
+    legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "spill_detector (no signal model)" in legend and "no signal model: cannot alarm" in legend
+
+
+def _centre(text, renderer):  # type: ignore[no-untyped-def]
+    box = text.get_window_extent(renderer)
+    return (box.x0 + box.x1) / 2, (box.y0 + box.y1) / 2
+
+
+def _texts(fig):  # type: ignore[no-untyped-def]
+    """Every visible, non-empty text of the figure with its box in pixels."""
+    renderer = fig.canvas.get_renderer()
+    found = []
+    for ax in fig.axes:
+        texts = [*ax.texts, ax.xaxis.label, ax.yaxis.label, ax.title]
+        legend = ax.get_legend()
+        if legend is not None:
+            texts += [*legend.get_texts(), legend.get_title()]
+        # tick labels matplotlib draws: those of ticks inside the axes
+        texts += [t for t in ax.get_xticklabels() if ax.bbox.x0 - 1 <= _centre(t, renderer)[0] <= ax.bbox.x1 + 1]
+        texts += [t for t in ax.get_yticklabels() if ax.bbox.y0 - 1 <= _centre(t, renderer)[1] <= ax.bbox.y1 + 1]
+        for t in texts:
+            if t.get_visible() and t.get_text().strip():
+                found.append((t.get_text(), t.get_window_extent(renderer)))
+    return found
+
+
+def test_no_label_overlaps_another_even_with_dozens_of_faults(busy):
+    tl, fig = busy
+    assert len(tl.faults) == 42
+    texts = _texts(fig)
+    fault_labels = [s for s, _b in texts if s.startswith(("device ", "platform "))]
+    assert len(fault_labels) >= 12, "the faults should be labelled where there is room"
+    clashes = [
+        (a, b) for i, (a, box_a) in enumerate(texts) for b, box_b in texts[i + 1:] if box_a.overlaps(box_b)
+    ]
+    assert clashes == []
+    assert any(s.endswith("not shown") for s, _b in texts)  # the rest are counted, not drawn on top of each other
+
+
+def test_labels_of_simultaneous_events_go_to_separate_rows():
+    records = [
+        {"t": 0.0, "type": "run", "scenario": "s", "deployer": "d", "horizon": 10.0, "platforms": {"pc": {"memory": 100}}, "graphs": {}},
+        *({"t": 5.0, "type": "fault", "event": f"device d{i} fails"} for i in range(6)),
+        *({"t": 5.0, "type": "error", "kind": "no_acceptable_platforms", "graph": f"g{i}"} for i in range(3)),
+    ]
+    import matplotlib.pyplot as plt
+
+    from desmon.viz.timeline import timeline_figure
+
+    fig = timeline_figure(build_timeline(records))
+    try:
+        fig.canvas.draw()
+        texts = _texts(fig)
+        assert [(a, b) for i, (a, x) in enumerate(texts) for b, y in texts[i + 1:] if x.overlaps(y)] == []
+        shown = [s for s, _b in texts if s.startswith("device d")]
+        assert len(shown) == 4  # four rows of fault labels; the other two are counted
+        assert "+2 fault labels not shown" in [s for s, _b in texts]
+        assert len([s for s, _b in texts if s.startswith("no_acceptable_platforms: g")]) == 3
+    finally:
+        plt.close(fig)
