@@ -19,7 +19,7 @@ import re
 from dataclasses import dataclass
 
 CUT = "…"
-EXIT = re.compile(r"#\s*exit\s+(\d+)\s*$")
+EXIT = re.compile(r"#.*\bexit\s+(\d+)\b")
 FENCE = re.compile(r"^```(\w*)\n(.*?)^```\n", re.M | re.S)
 
 
