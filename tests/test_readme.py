@@ -39,8 +39,11 @@ def test_the_setup_is_two_commands_that_the_makefile_and_ci_run(root):
     assert [c for c, _ in commands(sh[0])] == ["make demo", "make test"]
     makefile = (root / "Makefile").read_text()
     assert re.search(r"^demo:", makefile, re.M) and re.search(r"^test:", makefile, re.M)
-    ci = [line for line in (root / ".ci" / "run").read_text().splitlines() if line and not line.startswith(("#", "set ", "cd "))]
-    assert ci == ["make test"]
+    # CI may prepare the machine first (a browser for the explorer's test), then runs the
+    # README's test command and nothing else
+    ci = [line.strip() for line in (root / ".ci" / "run").read_text().splitlines() if line.strip() and not line.strip().startswith("#")]
+    assert ci[-1] == "make test"
+    assert not [line for line in ci[:-1] if "pytest" in line or line.startswith("make ")]
 
 
 def test_the_readme_activates_the_environment_before_any_desmon_command(root):
