@@ -36,28 +36,38 @@ def busy(tmp_path_factory):  # type: ignore[no-untyped-def]
 
 
 def _context_bars(fig, tl):  # type: ignore[no-untyped-def]
-    """(action, face colour, edge colour, line width) of each bar of the context lane."""
+    """(action, face colour) of each action bar of the context lane, and the risky strips as (start, end)."""
     from matplotlib.colors import to_hex
 
+    from desmon.viz.timeline import ACTION_HEIGHT, RISKY_HEIGHT
+
     ax = fig.axes[0]
-    bars = [c.patches[0] for c in ax.containers if abs(c.patches[0].get_height() - 0.7) < 1e-9]
+    first = [c.patches[0] for c in ax.containers]
+    bars = [b for b in first if abs(b.get_height() - ACTION_HEIGHT) < 1e-9]
+    strips = [b for b in first if abs(b.get_height() - RISKY_HEIGHT) < 1e-9]
     assert len(bars) == len(tl.actions)
-    return [(name, to_hex(b.get_facecolor()), to_hex(b.get_edgecolor()), b.get_linewidth()) for (_a, _b, name), b in zip(tl.actions, bars)]
+    named = [(name, to_hex(b.get_facecolor())) for (_a, _b, name), b in zip(tl.actions, bars)]
+    return named, [(b.get_x(), b.get_x() + b.get_width(), to_hex(b.get_facecolor())) for b in strips]
 
 
-def test_each_action_has_one_colour_of_its_own_and_risky_ones_a_border(busy):
+def test_each_action_has_one_colour_of_its_own_and_risky_time_is_marked(busy):
     tl, fig = busy
-    bars = _context_bars(fig, tl)
+    bars, strips = _context_bars(fig, tl)
     colour: dict[str, set[str]] = {}
-    for name, face, _edge, _lw in bars:
+    for name, face in bars:
         colour.setdefault(name, set()).add(face)
     assert set(colour) == {"grasp", "hold", "pour", "inspect", "wipe"}
     assert all(len(c) == 1 for c in colour.values()), colour
     faces = [next(iter(c)) for c in colour.values()]
     assert len(set(faces)) == len(faces), "two actions share a colour"
-    for name, _face, edge, lw in bars:
-        risky = name != "wipe"  # the scenario declares wipe not risky
-        assert (edge == RISKY_EDGE and lw > 1.0) == risky, (name, edge, lw)
+    # the strip covers exactly the time in risky actions (every action but wipe, which the scenario declares safe)
+    assert strips and all(c == RISKY_EDGE for _a, _b, c in strips)
+    for a, b, name in tl.actions:
+        middle = (a + b) / 2
+        marked = any(s <= middle <= e for s, e, _c in strips)
+        assert marked == (name != "wipe"), (name, a, b)
+    legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "pour (risky)" in legend and "wipe" in legend
 
 
 def test_the_models_own_actions_get_distinct_colours_beside_the_built_ins():
@@ -152,3 +162,19 @@ def test_labels_of_simultaneous_events_go_to_separate_rows():
         assert len([s for s, _b in texts if s.startswith("no_acceptable_platforms: g")]) == 3
     finally:
         plt.close(fig)
+
+
+def test_memory_follows_a_requirement_change_of_a_running_detector():
+    records = [
+        {"t": 0.0, "type": "run", "scenario": "s", "deployer": "d", "horizon": 10.0,
+         "platforms": {"pc": {"memory": 1000, "gpu_memory": 2000}}, "graphs": {"g": {"memory": 250.0, "gpu_memory": 100.0}}},
+        {"t": 0.0, "type": "load", "platform": "pc", "resource": "memory", "amount": 100},
+        {"t": 0.0, "type": "load", "platform": "pc", "resource": "gpu_memory", "amount": 50},
+        {"t": 1.0, "type": "decision", "command": "start", "graph": "g", "platform": "pc", "ok": True},
+        {"t": 5.0, "type": "consumption", "graph": "g", "resources": {"memory": 350.0, "gpu_memory": 100.0}},
+        {"t": 8.0, "type": "decision", "command": "stop", "graph": "g", "platform": "pc", "ok": True},
+    ]
+    tl = build_timeline(records)
+    assert tl.memory["pc"] == [(0.0, 100.0), (1.0, 350.0), (5.0, 450.0), (8.0, 100.0), (10.0, 100.0)]
+    assert tl.usage["gpu_memory"]["pc"] == [(0.0, 50.0), (1.0, 150.0), (8.0, 50.0), (10.0, 50.0)]
+    assert tl.capacities == {"memory": {"pc": 1000.0}, "gpu_memory": {"pc": 2000.0}}

@@ -3,8 +3,8 @@
 Panels, top to bottom, on one time axis:
 
 * **context** -- the robot's action segments, one colour per action of the model (the
-  ``run`` record lists them); a risky action (an object in the hand) has a dark red
-  border; unmonitored exposure is shaded red across every panel;
+  ``run`` record lists them); a dark red strip along the top marks the time in risky
+  actions (an object in the hand); unmonitored exposure is shaded red across every panel;
 * **one lane per platform** -- the detectors running there (solid once warmed up, hatched
   while warming up, grey while they have no valid input, white with crosses when their
   inputs have no signal model: they run but can never alarm), platform crashes in black;
@@ -50,8 +50,10 @@ EXTRA_ACTION_COLORS = [
 ]
 #: the built-in actions with an object in the hand (the model's own are named in the run record)
 _BUILTIN_RISKY = frozenset({"grasp", "hold", "move_base", "release", "rotate_ccw", "rotate_cw"})
-#: the border that marks a risky action
+#: the colour of the strip that marks the time spent in risky actions
 RISKY_EDGE = "#8b0000"
+#: heights (in lanes) of an action's bar and of the risky strip above it
+ACTION_HEIGHT, RISKY_HEIGHT = 0.58, 0.12
 DETECTOR_COLORS = [
     "#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d", "#1f78b4", "#b15928", "#6a3d9a",
     "#33a02c", "#e31a1c",
@@ -594,14 +596,15 @@ def _draw_lanes(ax: Any, tl: Timeline, y: dict[str, int], color_of: dict[str, st
     platform (crashes, detectors by phase)."""
     span = tl.end - tl.start
     px_per_s = (RIGHT - LEFT) * WIDTH_IN * DPI / span if span > 0 else 0.0
+    yc = y["context"]
     for a, b, name in tl.actions:
-        risky = tl.risky.get(name, True)
-        ax.barh(
-            y["context"], b - a, left=a, height=0.7, color=colors[name],
-            edgecolor=RISKY_EDGE if risky else "#777777", lw=1.6 if risky else 0.5,
-        )
+        wide = (b - a) * px_per_s > 4  # an outline only where it leaves the colour visible
+        ax.barh(yc - 0.06, b - a, left=a, height=ACTION_HEIGHT, color=colors[name], edgecolor="#777777", lw=0.4 if wide else 0.0)
         if measure(name) * 8 / LABEL_PT + 8 < (b - a) * px_per_s:  # drawn at 8 pt: only where it fits its segment
-            ax.text((a + b) / 2, y["context"], name, ha="center", va="center", fontsize=8)
+            ax.text((a + b) / 2, yc - 0.06, name, ha="center", va="center", fontsize=8)
+    # risky actions (an object in the hand): a dark red strip along the top of the lane
+    for a, b in _merged((a, b) for a, b, name in tl.actions if tl.risky.get(name, True)):
+        ax.barh(yc + 0.31, b - a, left=a, height=RISKY_HEIGHT, color=RISKY_EDGE, lw=0)
     for p, runs in tl.runs.items():
         for a, b in tl.down.get(p, []):
             ax.barh(y[p], b - a, left=a, height=0.85, color="black", alpha=0.75)
@@ -615,6 +618,17 @@ def _draw_lanes(ax: Any, tl: Timeline, y: dict[str, int], color_of: dict[str, st
                 ax.barh(y[p], b - a, left=a, height=0.6, color="#bbbbbb", edgecolor=color, lw=0.8)
             else:
                 ax.barh(y[p], b - a, left=a, height=0.6, color=color, edgecolor=color, lw=0.5)
+
+
+def _merged(intervals: Iterable[tuple[float, float]]) -> list[tuple[float, float]]:
+    """Touching or overlapping intervals joined (in time order)."""
+    out: list[tuple[float, float]] = []
+    for a, b in sorted(intervals):
+        if out and a <= out[-1][1] + 1e-9:
+            out[-1] = (out[-1][0], max(out[-1][1], b))
+        else:
+            out.append((a, b))
+    return out
 
 
 def _draw_events(ax: Any, tl: Timeline, color_of: dict[str, str], faults: _Rows, errors: _Rows) -> dict[str, float]:
@@ -672,11 +686,12 @@ def _legend(plt: Any, tl: Timeline, color_of: dict[str, str], colors: dict[str, 
     from matplotlib.patches import Patch
 
     shown_actions = list(dict.fromkeys(n for _a, _b, n in tl.actions))
+    order = sorted(shown_actions, key=list(colors).index)
     handles: list[Any] = [
-        Patch(facecolor=colors[n], edgecolor=RISKY_EDGE if tl.risky.get(n, True) else "#777777", lw=1.6 if tl.risky.get(n, True) else 0.5,
-              label=n + (" (risky)" if tl.risky.get(n, True) else ""))
-        for n in sorted(shown_actions, key=list(colors).index)
+        Patch(facecolor=colors[n], edgecolor="#777777", lw=0.4, label=n + (" (risky)" if tl.risky.get(n, True) else "")) for n in order
     ]
+    if any(tl.risky.get(n, True) for n in shown_actions):
+        handles.append(Patch(facecolor=RISKY_EDGE, label="in a risky action (object in hand)"))
     phases = {ph for runs in tl.runs.values() for _a, _b, _g, ph in runs}
     shown = {g for runs in tl.runs.values() for _a, _b, g, _ph in runs} | {g for _t, g in tl.alarms}
     silent = set(tl.no_signal)
