@@ -134,7 +134,7 @@ def snapshot_figure(
     rows = (len(panels) + columns - 1) // columns
     # each row as tall as its longest title needs, so no title is cut or runs into a panel
     lines = [max(t.count("\n") + 1 for t, _g in panels[r * columns:(r + 1) * columns]) for r in range(rows)]
-    heights = [3.9 + 0.2 * n for n in lines]
+    heights = [4.4 + 0.2 * n for n in lines]
     fig, axes = plt.subplots(
         rows, columns, figsize=(8.5 * columns, sum(heights)), squeeze=False, gridspec_kw={"height_ratios": heights}
     )
