@@ -79,9 +79,35 @@ def test_deployers_md_quotes_its_example_deployer_verbatim(root):
     text = (root / "docs" / "deployers.md").read_text()
     source = (root / "docs" / "examples" / "first_fit.py").read_text()
     blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
-    assert len(blocks) >= 3
+    assert len(blocks) >= 5
     for block in blocks:
         assert block in source, block[:200]
+
+
+def test_deployers_md_code_runs_as_written_and_its_deployer_holds(root):
+    """The page's python blocks, in order, are a complete module: they import everything
+    they use, and the deployer they define is one the checker runs and finds HOLDS."""
+    from desmon.deployment.deployer import Deployer
+    from desmon.loader import load_scenario
+    from desmon.verify import Checker
+
+    text = (root / "docs" / "deployers.md").read_text()
+    code = "\n\n".join(re.findall(r"```python\n(.*?)```", text, flags=re.S))
+    namespace: dict = {"__name__": "deployers_md"}
+    exec(compile(code, "docs/deployers.md", "exec"), namespace)  # a NameError here: a block uses what no block imports
+    assert isinstance(namespace["FIRST_FIT"], Deployer)
+    r = Checker(load_scenario(root / "scenarios" / "coffee_handover.py"), namespace["FIRST_FIT"]).run()
+    assert r.verdict == "HOLDS"
+
+
+def test_deployers_md_gives_the_deployer_signature_as_the_code_has_it(root):
+    import inspect
+
+    from desmon.deployment.deployer import Deployer
+
+    params = inspect.signature(Deployer).parameters.values()
+    written = ", ".join(p.name if p.default is inspect.Parameter.empty else f"{p.name}={p.default!r}" for p in params)
+    assert f"`Deployer({written})`" in (root / "docs" / "deployers.md").read_text()
 
 
 @pytest.mark.slow
@@ -90,10 +116,18 @@ def test_every_deployers_md_command_runs_and_prints_what_it_quotes(root, tmp_pat
     quotes is output of the commands: the counterexample, the engine line, the refusal."""
     ran = run_doc(root, tmp_path / "byo", "deployers.md")
     assert len(ran) >= 8
-    printed = "".join(p.stdout + p.stderr for p in ran.values())
-    text = (root / "docs" / "deployers.md").read_text()
-    quoted = re.findall(r"```text\n(.*?)```", text, flags=re.S)
-    assert len(quoted) >= 3
-    for block in quoted:
-        for line in block.splitlines():
-            assert line in printed, line
+    check_quotes(root, "deployers.md", ran, at_least=3)
+
+
+def check_quotes(root: Path, doc: str, ran: dict[str, subprocess.CompletedProcess[str]], at_least: int) -> None:
+    """Each output block of ``docs/<doc>`` is its command's output: exact, or an excerpt
+    marked as one (tests/docblocks.py has the rule)."""
+    from docblocks import bare_blocks, check_quote, quotes
+
+    text = (root / "docs" / doc).read_text()
+    assert bare_blocks(text) == [], "a block without a language: say sh, python or text"
+    quoted = quotes(text)
+    assert len(quoted) >= at_least
+    for q in quoted:
+        proc = ran[q.command.split("#")[0].strip()]
+        check_quote(q, proc.stdout + proc.stderr)
