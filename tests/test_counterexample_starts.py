@@ -74,6 +74,21 @@ def test_the_json_keeps_refused_starts_apart_from_chosen_failures_and_replays_as
     assert any("refused: " in line for line in _step_lines(out))
 
 
+def test_a_file_of_an_older_desmon_that_listed_refused_starts_as_failed_still_replays(tmp_path, capsys):
+    path = tmp_path / "cex.json"
+    assert main(["verify", REMOTE, "--deployer", STATIC, "--no-progress", "--json", str(path)]) == 1
+    data = json.loads(path.read_text())
+    for state in data["counterexamples"][0]["states"]:  # as desmon wrote it before refused_starts
+        state["failed_starts"] = [r["start"] for r in state.pop("refused_starts")]
+        del state["raised_errors"]
+    assert any(s["failed_starts"] and not s["fail_indices"] for s in data["counterexamples"][0]["states"])
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps(data))
+    capsys.readouterr()
+    assert main(["verify", REMOTE, "--deployer", STATIC, "--replay", str(old)]) == 1
+    assert "the counterexample still holds, every state as recorded" in capsys.readouterr().out
+
+
 def test_one_step_with_a_refused_start_and_a_chosen_failure_names_each(remote):
     scenario, deployer = remote
     labels = [(ActionChange("grasp"), (0,))]  # the first start the rules allow fails
