@@ -187,3 +187,24 @@ def test_plot_titles_hold_every_line_and_stay_inside_their_panel():
         import matplotlib.pyplot as plt
 
         plt.close(fig)
+
+
+def test_a_title_line_too_wide_for_its_panel_is_set_smaller_not_cut(remote):
+    pytest.importorskip("matplotlib")
+    import matplotlib.pyplot as plt
+
+    from desmon.viz.snapshot import snapshot_figure
+
+    scenario, deployer = remote
+    snap = RepositoryRun(scenario, deployer).repo.snapshot()
+    wide = "1. " + "DEPLOYMENT_HISTORY_" * 8  # no space to wrap at: a long name in capitals
+    fig = snapshot_figure([("0. initial", snap), (wide, snap)], full=snap, columns=2)
+    try:
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        right = fig.axes[1]
+        box = _title_artist(right).get_window_extent(renderer)
+        assert _title_artist(right).get_text() == wide
+        assert fig.bbox.width / 2 <= box.x0 and box.x1 <= fig.bbox.width
+    finally:
+        plt.close(fig)

@@ -61,8 +61,9 @@ def _face(g: nx.MultiDiGraph, n: str) -> tuple[str, str]:
     return COLORS.get(str(d.get("label")), "white"), "black"
 
 
-def _draw(ax, g: nx.MultiDiGraph, pos: dict[str, tuple[float, float]], title: str) -> None:  # type: ignore[no-untyped-def]
-    ax.set_title(title, fontsize=11, loc="left")
+def _draw(ax, g: nx.MultiDiGraph, pos: dict[str, tuple[float, float]], title: str):  # type: ignore[no-untyped-def]
+    """Draw snapshot ``g`` into ``ax``; returns the title's Text."""
+    head = ax.set_title(title, fontsize=11, loc="left")
     ax.axis("off")
     xs = [p[0] for p in pos.values()]
     ys = [p[1] for p in pos.values()]
@@ -101,6 +102,7 @@ def _draw(ax, g: nx.MultiDiGraph, pos: dict[str, tuple[float, float]], title: st
         face, ink = _face(g, n)
         ax.text(x, y, _name(g, n), ha="center", va="center", fontsize=7.5, color=ink, zorder=4,
                 bbox=dict(boxstyle="round,pad=0.35", fc=face, ec="#555555", lw=0.8))
+    return head
 
 
 def draw_snapshot(g: nx.MultiDiGraph, path: str | Path, *, full: nx.MultiDiGraph | None = None, title: str = "") -> Path:
@@ -140,7 +142,16 @@ def snapshot_figure(
     )
     for ax in axes.flat:
         ax.axis("off")
-    for ax, (title, g) in zip(axes.flat, panels):
-        _draw(ax, g, pos, title)
+    titles = [_draw(ax, g, pos, title) for ax, (title, g) in zip(axes.flat, panels)]
     fig.tight_layout()
+    # a title line wider than its panel (long names, capitals) is set smaller, never cut
+    renderer = fig.canvas.get_renderer()
+    column = fig.bbox.width / columns
+    for _round in range(2):  # the layout moves a little once a title shrinks
+        for i, t in enumerate(titles):
+            box = t.get_window_extent(renderer)
+            room = (i % columns + 1) * column - 8 - box.x0
+            if box.width > room:
+                t.set_fontsize(t.get_fontsize() * room / box.width * 0.98)
+        fig.tight_layout()
     return fig
