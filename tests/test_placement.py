@@ -81,6 +81,7 @@ placings = st.none() | st.sampled_from((*GRAPHS, "g9")) | st.lists(st.sampled_fr
 
 
 # -- exactness -------------------------------------------------------------------------------------
+@pytest.mark.slow
 @given(fleets(), st.lists(requirements, max_size=4), placings, st.booleans())
 @settings(max_examples=100)
 def test_columns_give_the_same_validity_as_check_validity(states, reqs, graph, reasons):
@@ -90,6 +91,7 @@ def test_columns_give_the_same_validity_as_check_validity(states, reqs, graph, r
     assert cols.acceptable(reqs, graph) == want.acceptable
 
 
+@pytest.mark.slow
 @given(fleets(), st.lists(requirements, min_size=1, max_size=3), placings)
 @settings(max_examples=40)
 def test_the_reasons_memo_answers_a_repeated_question_as_the_first_time(states, reqs, graph):
@@ -102,6 +104,7 @@ def test_the_reasons_memo_answers_a_repeated_question_as_the_first_time(states, 
                 assert cols.validity(reqs[:1], "g1", reasons=reasons) == scalar(reqs[:1], states, "g1", reasons)
 
 
+@pytest.mark.slow
 @given(fleets(min_size=3, max_size=8), st.data(), st.lists(requirements, min_size=1, max_size=3), placings)
 @settings(max_examples=40)
 def test_rewriting_changed_rows_answers_as_a_rebuild(before, data, reqs, graph):

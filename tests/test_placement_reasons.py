@@ -34,12 +34,14 @@ def assert_texts_are_scalar(states, reqs, graph) -> None:
             assert cols._texts(r, rows, graph) == scalar_texts(states, r, rows, graph), r
 
 
+@pytest.mark.slow
 @given(fleets(), st.lists(requirements, min_size=1, max_size=4), placings)
 @settings(max_examples=150)
 def test_every_batched_reason_text_equals_the_scalar_text_of_its_row(states, reqs, graph):
     assert_texts_are_scalar(states, reqs, graph)
 
 
+@pytest.mark.slow
 @given(fleets(), st.lists(st.builds(Capacity, st.sampled_from(("memory", "cpu")), st.sampled_from((0, 0.3, 100, 250, 600))), min_size=1, max_size=2), placings)
 @settings(max_examples=100)
 def test_capacity_texts_are_formatted_from_the_columns_not_asked_row_by_row(states, reqs, graph):

@@ -127,6 +127,7 @@ def test_two_detectors_paper_exposure_counts_the_uncovered_slot() -> None:
     assert ok["unmonitored_exposure_s"] == 0.0 and ok["risky_time_s"] == 5.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("deployer", ["desmon", "desmon-keep-fallback"])
 def test_fallback_day_first_two_hours_pinned_per_upgrade_policy(deployer: str) -> None:
     sc = load("fallbacks")
@@ -143,6 +144,7 @@ def test_robot_day_first_hour_pinned() -> None:
     assert {k: m[k] for k in want} == want
 
 
+@pytest.mark.slow
 def test_robot_day_full_day_pinned() -> None:
     sc = load("robot_day")
     r = simulate(sc, "desmon")
@@ -179,6 +181,7 @@ def _cli(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "desmon", *args], capture_output=True, text=True, cwd=ROOT, timeout=120)
 
 
+@pytest.mark.slow
 def test_cli_run_exit_codes_and_json(tmp_path: Path) -> None:
     ok = _cli("run", "scenarios/coffee_handover.py", "--json", "--trace", str(tmp_path / "t.jsonl"))
     assert ok.returncode == 0, ok.stderr
@@ -196,6 +199,7 @@ def test_cli_run_exit_codes_and_json(tmp_path: Path) -> None:
     assert r.returncode == 2 and "syntax error" in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_cli_run_names_only_a_trace_the_user_asked_for(tmp_path: Path) -> None:
     png = tmp_path / "timeline.png"
     plotted = _cli("run", "scenarios/coffee_handover.py", "--plot", str(png))

@@ -218,6 +218,7 @@ def test_ctrl_c_keeps_every_finished_row_and_resume_finishes_the_table(tmp_path,
     pd.testing.assert_frame_equal(pd.read_parquet(out).drop(columns="wall_s"), pd.read_parquet(whole).drop(columns="wall_s"))
 
 
+@pytest.mark.slow
 def test_a_sweep_runs_on_a_real_dask_scheduler_and_worker(tmp_path):
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

@@ -84,6 +84,7 @@ def test_trace_format_numbered_steps():
     assert c.length == 1
 
 
+@pytest.mark.slow
 def test_cli_paper_json_and_generated_pytest(tmp_path, capsys):
     js, py = tmp_path / "cex.json", tmp_path / "test_cex.py"
     rc = main(["verify", str(SCENARIOS / "migration.py"), "--deployer", "paper", "--continue", "--json", str(js), "--pytest", str(py), "--no-progress"])
@@ -100,6 +101,7 @@ def test_cli_paper_json_and_generated_pytest(tmp_path, capsys):
     assert "from desmon.verify import RepositoryRun" in src and "ScriptedControl" not in src and "run_sync" not in src
 
 
+@pytest.mark.slow
 def test_generated_pytest_replays_an_instantaneous_violation(tmp_path):
     """The make-before-break mutant breaks single-instance only inside the reaction: the
     generated test replays it through RepositoryRun with an audit after every command."""

@@ -72,6 +72,7 @@ def test_two_workers_give_the_same_result_as_one(monkeypatch, name, deployer, kw
         assert r1.counterexamples[0].during, "the case meant to cover instantaneous violations has none"
 
 
+@pytest.mark.slow
 def test_two_workers_with_symmetry_reduction_give_the_same_result(monkeypatch):
     scenario = load_scenario(SCENARIOS / "symmetric_platforms.py")
     c1 = Checker(scenario, "desmon", symmetry=True)

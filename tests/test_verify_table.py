@@ -49,6 +49,7 @@ def _both(scenario, deployer, **kw):  # type: ignore[no-untyped-def]
     return _everything(rd, direct), _everything(rt, table), rt
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("deployer", ["desmon", "paper"])
 @pytest.mark.parametrize("name", NAMES)
 def test_table_engine_gives_the_direct_engines_result_on_every_scenario(name, deployer):
