@@ -178,3 +178,23 @@ def test_memory_follows_a_requirement_change_of_a_running_detector():
     assert tl.memory["pc"] == [(0.0, 100.0), (1.0, 350.0), (5.0, 450.0), (8.0, 100.0), (10.0, 100.0)]
     assert tl.usage["gpu_memory"]["pc"] == [(0.0, 50.0), (1.0, 150.0), (8.0, 50.0), (10.0, 50.0)]
     assert tl.capacities == {"memory": {"pc": 1000.0}, "gpu_memory": {"pc": 2000.0}}
+
+
+def test_the_resource_legends_of_many_platforms_stay_beside_their_own_panel():
+    import matplotlib.pyplot as plt
+
+    from desmon.viz.timeline import timeline_figure
+
+    platforms = {f"pc{i}": {"memory": 1000 + i, "gpu_memory": 2000 + i} for i in range(12)}
+    records = [
+        {"t": 0.0, "type": "run", "scenario": "s", "deployer": "d", "horizon": 10.0, "platforms": platforms, "graphs": {}},
+        *({"t": 0.0, "type": "load", "platform": p, "resource": r, "amount": 10.0} for p in platforms for r in ("memory", "gpu_memory")),
+    ]
+    fig = timeline_figure(build_timeline(records))
+    try:
+        fig.canvas.draw()
+        texts = _texts(fig)
+        assert sum(s.endswith(" capacity") for s, _b in texts) == 24  # every platform, in both panels
+        assert [(a, b) for i, (a, x) in enumerate(texts) for b, y in texts[i + 1:] if x.overlaps(y)] == []
+    finally:
+        plt.close(fig)

@@ -677,7 +677,9 @@ def _draw_resource(axr: Any, tl: Timeline, resource: str) -> None:
     axr.set_ylim(bottom=0)
     axr.grid(color="#eeeeee")
     if names:
-        axr.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.005, 1.0), frameon=False)
+        entries = len(axr.get_legend_handles_labels()[1])
+        fits = max(1, int(RESOURCE_IN * DPI / 15.5))  # entries of 7 pt one column holds beside the panel
+        axr.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.005, 1.0), frameon=False, ncol=-(-entries // fits))
 
 
 def _legend(plt: Any, tl: Timeline, color_of: dict[str, str], colors: dict[str, str]) -> list[Any]:
