@@ -208,3 +208,12 @@ def test_a_title_line_too_wide_for_its_panel_is_set_smaller_not_cut(remote):
         assert fig.bbox.width / 2 <= box.x0 and box.x1 <= fig.bbox.width
     finally:
         plt.close(fig)
+
+
+def test_the_generated_pytest_comments_each_step_with_its_refused_and_chosen_starts(tmp_path, capsys):
+    refused, chosen = tmp_path / "test_refused.py", tmp_path / "test_chosen.py"
+    assert main(["verify", REMOTE, "--deployer", STATIC, "--no-progress", "--pytest", str(refused)]) == 1
+    assert main(["verify", MIGRATION, "--deployer", "paper", "--continue", "--no-progress", "--pytest", str(chosen)]) == 1
+    capsys.readouterr()
+    assert "()),  # start combined on torso_pc refused: " in refused.read_text()
+    assert ",)),  # start force_slip_detector on pc2 fails (chosen)" in chosen.read_text()

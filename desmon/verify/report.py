@@ -541,7 +541,7 @@ def counterexample_pytest(
         steps = []
         for s in c.steps[1:]:
             fails = _fail_indices(s)
-            steps.append(f"        ({s.event!r}, {fails!r}),")
+            steps.append(f"        ({s.event!r}, {fails!r}),{_step_comment(s)}")
         during = f" (during the reaction, after {c.during})" if c.during else ""
         if c.during:
             # an instantaneous violation: the final stable state may have repaired it
@@ -570,6 +570,12 @@ def test_{name}():
     replay(steps, after_command=audit)
     assert bad, "the counterexample no longer violates {invariant}"
 '''
+
+
+def _step_comment(s: Step) -> str:
+    """`` # ...`` naming the starts the checker chose to fail and the refused ones, or ""."""
+    said = [f"{start} fails (chosen)" for start in s.failed_starts] + [f"{start} refused: {why}" for start, why in s.refused]
+    return f"  # {'; '.join(said)}" if said else ""
 
 
 def _fail_indices(s: Step) -> tuple[int, ...]:
