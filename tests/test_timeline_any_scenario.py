@@ -18,17 +18,23 @@ BUSY = str(ROOT / "tests" / "data" / "busy_robot.py")
 
 
 @pytest.fixture(scope="module")
-def busy(tmp_path_factory):  # type: ignore[no-untyped-def]
-    """The busy robot's trace, its timeline and the figure ``desmon run --plot`` draws."""
-    import matplotlib.pyplot as plt
-
-    from desmon.viz.timeline import timeline_figure
-
+def busy_trace(tmp_path_factory):  # type: ignore[no-untyped-def]
+    """The trace of ``desmon run busy_robot.py --trace ... --plot ...``."""
     d = tmp_path_factory.mktemp("busy")
     trace, png = d / "busy.jsonl", d / "busy.png"
     assert main(["run", BUSY, "--trace", str(trace), "--plot", str(png), "--no-progress"]) == 0
     assert png.read_bytes()[:4] == b"\x89PNG"
-    tl = build_timeline(read_trace(trace))
+    return trace
+
+
+@pytest.fixture(scope="module")
+def busy(busy_trace):  # type: ignore[no-untyped-def]
+    """The busy robot's timeline and the figure ``desmon run --plot`` draws."""
+    import matplotlib.pyplot as plt
+
+    from desmon.viz.timeline import timeline_figure
+
+    tl = build_timeline(read_trace(busy_trace))
     fig = timeline_figure(tl)
     fig.canvas.draw()
     yield tl, fig
@@ -198,3 +204,19 @@ def test_the_resource_legends_of_many_platforms_stay_beside_their_own_panel():
         assert [(a, b) for i, (a, x) in enumerate(texts) for b, y in texts[i + 1:] if x.overlaps(y)] == []
     finally:
         plt.close(fig)
+
+
+def test_the_run_record_declares_every_capacity_consumption_and_action_and_each_record_type_is_documented(busy_trace):
+    import re
+
+    import desmon.sim.trace as schema
+
+    records = read_trace(busy_trace)
+    run = records[0]
+    assert run["platforms"]["gpu_box"] == {"memory": 4096, "gpu_memory": 8192}
+    assert run["graphs"]["spill_detector"] == {"memory": 1500.0, "gpu_memory": 3000.0}
+    assert run["actions"]["pour"] == {"risky": True} and run["actions"]["wipe"] == {"risky": False}
+    assert {"t": 0.0, "type": "load", "platform": "gpu_box", "resource": "gpu_memory", "amount": 1000.0} in records
+    documented = set(re.findall(r"^``(\w+)``", schema.__doc__ or "", flags=re.M))
+    assert {r["type"] for r in records} <= documented
+    assert {"consumption", "no_signal"} <= documented
