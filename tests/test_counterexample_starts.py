@@ -41,7 +41,7 @@ def remote():  # type: ignore[no-untyped-def]
 
 
 def test_verify_names_a_refused_start_with_the_rule_not_as_a_failure(capsys):
-    assert main(["verify", REMOTE, "--deployer", STATIC, "--no-progress"]) == 1
+    assert main(["verify", REMOTE, "--deployer", STATIC, "--invariant", "coverage", "--no-progress"]) == 1
     out = capsys.readouterr().out
     refused = [line for line in _step_lines(out) if "[start combined on torso_pc refused: " in line]
     assert refused, out
@@ -50,16 +50,16 @@ def test_verify_names_a_refused_start_with_the_rule_not_as_a_failure(capsys):
 
 
 def test_verify_names_a_start_the_checker_chose_to_fail(capsys):
-    assert main(["verify", MIGRATION, "--deployer", "paper", "--continue", "--no-progress"]) == 1
+    assert main(["verify", REMOTE, "-p", "arm_down=false", "--deployer", STATIC, "--invariant", "coverage", "--no-progress"]) == 1
     out = capsys.readouterr().out
-    chosen = [line for line in _step_lines(out) if f"[start force_slip_detector on pc2 {CHOSEN}]" in line]
+    chosen = [line for line in _step_lines(out) if f"[start combined on torso_pc {CHOSEN}]" in line]
     assert chosen, out
     assert all("refused" not in line for line in _step_lines(out))
 
 
 def test_the_json_keeps_refused_starts_apart_from_chosen_failures_and_replays_as_recorded(tmp_path, capsys):
     path = tmp_path / "cex.json"
-    assert main(["verify", REMOTE, "--deployer", STATIC, "--no-progress", "--json", str(path)]) == 1
+    assert main(["verify", REMOTE, "--deployer", STATIC, "--invariant", "coverage", "--no-progress", "--json", str(path)]) == 1
     states = json.loads(path.read_text())["counterexamples"][0]["states"]
     step = next(s for s in states if s["refused_starts"])
     assert step["failed_starts"] == [] and step["fail_indices"] == []
@@ -76,7 +76,7 @@ def test_the_json_keeps_refused_starts_apart_from_chosen_failures_and_replays_as
 
 def test_a_file_of_an_older_desmon_that_listed_refused_starts_as_failed_still_replays(tmp_path, capsys):
     path = tmp_path / "cex.json"
-    assert main(["verify", REMOTE, "--deployer", STATIC, "--no-progress", "--json", str(path)]) == 1
+    assert main(["verify", REMOTE, "--deployer", STATIC, "--invariant", "coverage", "--no-progress", "--json", str(path)]) == 1
     data = json.loads(path.read_text())
     for state in data["counterexamples"][0]["states"]:  # as desmon wrote it before refused_starts
         state["failed_starts"] = [r["start"] for r in state.pop("refused_starts")]
@@ -212,8 +212,9 @@ def test_a_title_line_too_wide_for_its_panel_is_set_smaller_not_cut(remote):
 
 def test_the_generated_pytest_comments_each_step_with_its_refused_and_chosen_starts(tmp_path, capsys):
     refused, chosen = tmp_path / "test_refused.py", tmp_path / "test_chosen.py"
-    assert main(["verify", REMOTE, "--deployer", STATIC, "--no-progress", "--pytest", str(refused)]) == 1
-    assert main(["verify", MIGRATION, "--deployer", "paper", "--continue", "--no-progress", "--pytest", str(chosen)]) == 1
+    base = ["verify", REMOTE, "--deployer", STATIC, "--invariant", "coverage", "--no-progress"]
+    assert main([*base, "--pytest", str(refused)]) == 1
+    assert main([*base, "-p", "arm_down=false", "--pytest", str(chosen)]) == 1
     capsys.readouterr()
     assert "()),  # start combined on torso_pc refused: " in refused.read_text()
-    assert ",)),  # start force_slip_detector on pc2 fails (chosen)" in chosen.read_text()
+    assert "(0,)),  # start combined on torso_pc fails (chosen)" in chosen.read_text()

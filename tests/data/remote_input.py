@@ -1,5 +1,6 @@
 """A test scenario where the Control rules refuse starts: a detector on the torso reads the
-arm's wrench, and the arm PC is down from the start.
+arm's wrench, and the arm PC is down from the start (``-p arm_down=false``: it is up, and
+only the checker's chosen start failures make starts fail).
 
 ``static`` is a deliberately naive deployer: it starts every wanted detector on a fixed
 platform and never raises an error, so any start that fails -- refused by the Control
@@ -11,9 +12,11 @@ from desmon.deployment.deployer import Deployer
 from desmon.deployment.ports import Start, Stop
 from desmon.model import GRASP, HOLD, RobotBuilder
 from desmon.model.events import ActionChange, PlatformDown
+from desmon.model.params import parameters
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.verify.bounds import Bounds
 
+p = parameters(arm_down=True)
 COMBINED, TACTILE = "combined", "tactile"
 HOME = {COMBINED: "torso_pc", TACTILE: "hand_pc"}
 
@@ -35,7 +38,7 @@ scenario = Scenario(
     name="remote_input",
     description="the combined detector on the torso reads the wrench of an arm PC that is down",
     model=robot.build(),
-    initial=(PlatformDown("arm_pc"),),
+    initial=(PlatformDown("arm_pc"),) if p.arm_down else (),
     timeline=(TimedEvent(0.0, ActionChange(HOLD), "t0"), TimedEvent(1.0, ActionChange(GRASP), "t1")),
     checker=Bounds(actions=(HOLD, GRASP), start_failures=1),
 )
