@@ -2,7 +2,8 @@
 
 Every subcommand's work lives in the engines; a handler here parses, calls, prints.
 Exit codes: 0 success / property holds, 1 a violation or failed check, 2 bad input,
-3 incomplete (checker limits reached). A :class:`~desmon.errors.DesmonError` is printed
+3 incomplete (checker limits reached), 4 the deployer crashed in a reachable state (it
+raised, yielded a wrong command or never ended: :mod:`desmon.deployment.guard`). A :class:`~desmon.errors.DesmonError` is printed
 as one line ``desmon: error: ...`` without a traceback.
 """
 
@@ -99,6 +100,11 @@ def _deployer_arg(p: argparse.ArgumentParser) -> None:
         "desmon-keep-fallback (keeps a running fallback), paper (Algorithms 1 and 2 as published), "
         f"{MUTANT_PREFIX}:NAME (a seeded bug: {', '.join(MUTANTS)}), "
         "or your own: path/to/file.py:NAME or module:NAME (docs/deployers.md)",
+    )
+    p.add_argument(
+        "--max-commands", type=positive_int, default=None, metavar="N",
+        help="the most commands one reaction of the deployer may issue; more is a reaction that never ends, "
+        "reported as the deployer's failure (default: 10000)",
     )
 
 
@@ -487,9 +493,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         print(f"desmon: error: no command given; choose one of {', '.join(args.commands)} (desmon COMMAND --help)", file=sys.stderr)
         return EXIT_USAGE
+    from desmon.deployment.guard import EXIT_CRASHED, MAX_COMMANDS, DeployerFault, commands_limit
+
     try:
+        commands_limit(getattr(args, "max_commands", None) or MAX_COMMANDS)  # this command's (a process may run several)
         preflight(args)  # inputs, numbers, windows and output paths, before any long work
         return int(args.handler(args))
+    except DeployerFault as exc:
+        # (SimPy re-raises a process's exception as a copy caused by the original)
+        if exc.initial or getattr(exc.__cause__, "initial", False):  # the deployer cannot run at all: bad input
+            print(f"desmon: error: {_one_line(exc)}", file=sys.stderr)
+            return EXIT_USAGE
+        print(f"desmon: CRASHED: {_one_line(exc)}", file=sys.stderr)  # it failed in a state the run reached
+        return EXIT_CRASHED
     except DesmonError as exc:
         print(f"desmon: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE

@@ -11,10 +11,10 @@ same generator with start latencies.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from types import GeneratorType
 from typing import Iterable
 
 from desmon.deployment.deployer import Deployer, get_deployer
+from desmon.deployment.guard import DeployerFault, describe_stimulus, guarded, uncallable
 from desmon.deployment.invariants import SystemView, validly_active_among, view_of
 from desmon.deployment.monitor import InsertPort, Stimulus, observe
 from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop
@@ -99,7 +99,11 @@ def run_sync(reaction: Reaction, control: ControlPort, log: StepLog | None = Non
     outcome: bool | None = None
     try:
         while True:
-            cmd = reaction.send(outcome)
+            try:
+                cmd = reaction.send(outcome)
+            except DeployerFault as fault:
+                fault.log = log  # the commands before the fault (a crash's counterexample shows them)
+                raise
             if isinstance(cmd, Start):
                 outcome = bool(control.start(cmd.graph, cmd.platform))
             elif isinstance(cmd, Stop):
@@ -139,6 +143,8 @@ class DeploymentCore:
         # context -> (requested slots, the graphs they name); the rules and the deployer
         # are immutable, so this is a pure memo (bounded by the contexts seen, see _selection)
         self._selection_memo: dict[str | None, tuple[tuple[tuple[str, ...], ...], frozenset[str]]] = {}
+        #: (the model's graph names, its platform names): what a command may name (the guard)
+        self._known: tuple[frozenset[str], frozenset[str]] | None = None
 
     def observe(self, event: Event) -> Stimulus:
         """The context monitor: write the facts ``event`` implies (Insert), return the Notify."""
@@ -159,14 +165,20 @@ class DeploymentCore:
             sel = self._selection_memo[context] = (slots, frozenset(g for slot in slots for g in slot))
         return sel
 
-    def reaction(self, stimulus: Stimulus) -> Reaction:
-        """The deployer's reaction to ``stimulus`` (a generator of commands)."""
-        reaction = self.deployer.react(self.query, self.slots(), stimulus.changed_platforms, stimulus.context_changed)
-        if type(reaction) is not GeneratorType:
-            raise ModelError(
-                f"deployer {self.deployer.name}: its reaction returned {type(reaction).__name__}, not a generator; "
-                "write react(q, slots, changed, context_changed) with yield Start/Stop/RaiseError (docs/deployers.md)"
-            )
+    def reaction(self, stimulus: Stimulus, cause: object = None) -> Reaction:
+        """The deployer's reaction to ``stimulus`` (a generator of commands), under guard
+        (:mod:`desmon.deployment.guard`: a fault is a one-line DeployerFault naming the
+        deployer and ``cause``, the event, or else the stimulus)."""
+        slots, react, query = self.slots(), self.deployer.react, self.query
+        if not callable(react):
+            raise uncallable(self.deployer.name, react)
+        if self._known is None:
+            self._known = (frozenset(g.name for g in self.model.graphs), frozenset(p.name for p in self.model.platforms))
+        reaction = guarded(
+            self.deployer.name,
+            lambda: react(query, slots, stimulus.changed_platforms, stimulus.context_changed),
+            stimulus, *self._known, lambda: describe_stimulus(stimulus, query.context(), cause),
+        )
         self.unjustified = []
         if self._rebalancing:
             return self._audit_moves(reaction)
@@ -278,7 +290,7 @@ class DeploymentCore:
         if not stim.empty or force:
             if force and stim.empty:
                 stim = Stimulus(context_changed=True)
-            run_sync(self.reaction(stim), control, log)
+            run_sync(self.reaction(stim, event), control, log)
         # the graphs of the RaiseError commands (log.errors), without building the list
         self.settle([c.graph for c, _ok in log.commands if isinstance(c, RaiseError)] if log.commands else ())
         return stim, log

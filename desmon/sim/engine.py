@@ -43,6 +43,7 @@ from typing import Any, Callable
 
 import simpy
 
+from desmon.deployment.guard import DeployerFault
 from desmon.deployment.control import ControlRules
 from desmon.deployment.core import DeploymentCore, not_a_command, stamp
 from desmon.deployment.invariants import check_invariants
@@ -707,6 +708,10 @@ class SimWorld:
                     cmd = reaction.send(outcome)
                 except StopIteration:
                     break
+                except DeployerFault as fault:  # where in the run: the first reaction means it cannot run at all
+                    fault.initial = self.reactions == 1
+                    fault.args = (f"at t={env.now:g} s, {fault.args[0]}",)
+                    raise
                 if isinstance(cmd, Start):
                     outcome = yield from self._command_start(cmd, book)
                 elif isinstance(cmd, Stop):

@@ -12,6 +12,7 @@ from typing import Callable
 
 import networkx as nx
 
+from desmon.deployment.guard import DeployerFault
 from desmon.deployment.control import repository_control
 from desmon.deployment.core import DeploymentCore, stamp
 from desmon.deployment.invariants import check_invariants
@@ -88,7 +89,12 @@ def replay(
     for te in scenario.timeline:
         now[0] = te.time
         before = core.standing
-        stim, log = core.step(te.event, control)
+        try:
+            stim, log = core.step(te.event, control)
+        except DeployerFault as fault:  # its first reaction: the deployer cannot run at all (exit 2), else CRASHED
+            fault.initial = not result.steps
+            fault.args = (f"at t={te.time:g} s ({te.label or te.event}), {fault.args[0]}",)
+            raise
         # the Control rules read facts a reaction does not change: asked after it, they give
         # the reason each refused start of the reaction was refused for
         refuse = control.refuse

@@ -20,6 +20,7 @@ from types import ModuleType
 from typing import Any, Iterable
 
 from desmon.deployment.deployer import Deployer
+from desmon.deployment.guard import ReactionStopped, watching
 from desmon.errors import CheckerError
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds
@@ -140,7 +141,7 @@ class Checker(TransitionSystem):
         )
         search = dict(max_states=max_states, max_depth=max_depth, keep_going=keep_going, budget=budget)
         try:
-            with ctrl_c(budget):
+            with ctrl_c(budget), watching(budget.spent, budget.urgent):
                 why = "" if table is None else self._table_refusal(table, engine, workers)
                 if why is None:
                     outcome = self._run_table(res, table_only=engine == "table", **search)
@@ -151,6 +152,8 @@ class Checker(TransitionSystem):
                     res, why = fresh(), outcome
                 res.engine_note = why
                 return self._run_direct(res, workers=workers, **search)
+        except ReactionStopped as stop:  # in the initial reaction, before the search loop
+            return finish(res, self, {}, budget.reason or str(stop), 0, budget)
         finally:
             budget.close()
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Iterable, Protocol
 
+from desmon.deployment.guard import ReactionStopped
 from desmon.model.events import Event
 from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Record, Segment, Trail, final_status, paused_gc
 from desmon.verify.state import Key
@@ -80,6 +81,9 @@ class DirectSearch:
                 self._levels([0])
             except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
                 self.incomplete = INTERRUPTED
+                trail.truncate(self.keys)
+            except ReactionStopped as stop:  # the budget ran out inside a deployer's reaction
+                self.incomplete = self.budget.reason or str(stop)
                 trail.truncate(self.keys)
             finally:
                 self._close_pool()

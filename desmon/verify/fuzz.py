@@ -23,11 +23,12 @@ from typing import Any, Iterator
 from hypothesis import HealthCheck, Phase, find, settings
 from hypothesis.errors import NoSuchExample
 
+from desmon.deployment.guard import CRASH, EXIT_CRASHED, DeployerFault, ReactionStopped, watching
 from desmon.deployment.deployer import Deployer
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import bounds_of
 from desmon.verify.checker import Checker
-from desmon.verify.search import EXIT_INTERRUPTED
+from desmon.verify.search import EXIT_INTERRUPTED, INTERRUPTED
 from desmon.verify.trace import Label
 from desmon.verify.replay import RepositoryRun
 from desmon.verify.report import format_counterexample, format_trace
@@ -58,7 +59,11 @@ def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice],
         if not enabled:
             break
         event = enabled[pick % len(enabled)]
-        run.step(event, fails)
+        try:
+            run.step(event, fails)
+        except DeployerFault as fault:  # the deployer failed in a reachable state: that is what was found
+            labels.append((event, tuple(i for i in fails if i < run.control.n)))
+            return labels, (CRASH, fault.what)
         labels.append((event, tuple(i for i in fails if i < run.control.n)))
         bad = run.violations()
         if bad:
@@ -113,7 +118,10 @@ def fuzz(
         calls[0] += 1
         if progress and calls[0] % 50 == 0:
             print(f"\r  {calls[0]} sequences", end="", file=sys.stderr, flush=True)
-        failed = run_choices(scenario, deployer, seq, enabler)[1] is not None
+        try:
+            failed = run_choices(scenario, deployer, seq, enabler)[1] is not None
+        except ReactionStopped:  # Ctrl-C while a reaction ran on without yielding
+            raise KeyboardInterrupt from None
         if not failed:
             passed[0] += 1
         elif not smallest or len(seq) <= len(smallest[0]):
@@ -134,7 +142,7 @@ def fuzz(
     interrupted = False
     ctrl_c = [False]
     try:
-        with _ctrl_c_noted() as ctrl_c:
+        with _ctrl_c_noted() as ctrl_c, watching(lambda: INTERRUPTED if ctrl_c[0] else ""):
             seq = find(choices(scenario, max_size=max_size, bounds=bounds), fails, settings=cfg, random=random.Random(seed))
             if ctrl_c[0]:  # noted after the last sequence: the search ended on its own
                 raise KeyboardInterrupt
@@ -171,21 +179,27 @@ def _violation(
     labels, (inv, msg) = run_choices(scenario, deployer, seq, enabler)  # type: ignore[misc]
     steps = enabler.replay(labels)
     how = "interrupted while hypothesis shrank it: maybe not the smallest" if interrupted else "shrunk by hypothesis"
+    crashed = inv == CRASH
     lines = [
         head,
         "",
-        f"VIOLATED {inv} after {len(labels)} step{'s' if len(labels) != 1 else ''} ({how}, {sequences} sequences run):",
+        (f"CRASHED in the reaction of step {len(labels)}" if crashed else f"VIOLATED {inv} after {len(labels)} step{'s' if len(labels) != 1 else ''}")
+        + f" ({how}, {sequences} sequences run):",
         format_trace(steps),
-        f"  => {inv}: {msg}",
+        f"  => the deployer {msg}" if crashed else f"  => {inv}: {msg}",
     ]
     if not interrupted and len(labels) <= rederive_up_to and inv != "history":
-        res = Checker(scenario, deployer, bounds=bounds, invariants=[inv]).run(max_states=200_000, timeout=30)
-        if res.counterexamples:
-            c = res.counterexamples[0]
+        res = Checker(scenario, deployer, bounds=bounds, invariants=None if crashed else [inv]).run(max_states=200_000, timeout=30)
+        found = [c for c in res.counterexamples if c.invariant == inv]
+        if found:
+            c = found[0]
             lines += ["", f"the checker's shortest counterexample ({res.states:,} states explored):", format_counterexample(c)]
         elif res.interrupted:
             lines += ["", f"the checker's re-derivation was interrupted ({res.states:,} states explored)"]
             interrupted = True
     if interrupted:
-        lines += ["", "verdict: VIOLATED (interrupted)"]
-    return FuzzOutcome("\n".join(lines) + "\n", EXIT_INTERRUPTED if interrupted else 1, sequences, labels, inv, interrupted)
+        lines += ["", f"verdict: {'CRASHED' if crashed else 'VIOLATED'} (interrupted)"]
+    elif crashed:
+        lines += ["", "verdict: CRASHED"]
+    code = EXIT_INTERRUPTED if interrupted else EXIT_CRASHED if crashed else 1
+    return FuzzOutcome("\n".join(lines) + "\n", code, sequences, labels, inv, interrupted)

@@ -14,6 +14,7 @@ from typing import Any, Callable, Iterator, Sequence
 
 from desmon.deployment.control import repository_refusal
 from desmon.deployment.core import DeploymentCore, run_sync
+from desmon.deployment.guard import DeployerFault
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.invariants import Invariant, check_invariants
 from desmon.deployment.monitor import Stimulus
@@ -29,7 +30,7 @@ from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.state import Key
 from desmon.verify.trace import Label, Step, initial_step, make_step
 
-__all__ = ["initial_reaction", "ScriptedControl", "RepositoryRun"]
+__all__ = ["initial_reaction", "first_reaction_fault", "ScriptedControl", "RepositoryRun"]
 
 
 def initial_reaction(core: DeploymentCore, scenario: Scenario, bounds: Bounds, control: ControlPort) -> None:
@@ -37,11 +38,23 @@ def initial_reaction(core: DeploymentCore, scenario: Scenario, bounds: Bounds, c
     for ev in scenario.initial:
         core.observe(ev)
     act = bounds.start_action(scenario)
-    if act is not None:
-        core.step(ActionChange(act), control, force=True)
-    else:
-        log = run_sync(core.reaction(Stimulus(context_changed=True)), control)
-        core.settle(e.graph for e in log.errors)
+    try:
+        if act is not None:
+            core.step(ActionChange(act), control, force=True)
+        else:
+            log = run_sync(core.reaction(Stimulus(context_changed=True)), control)
+            core.settle(e.graph for e in log.errors)
+    except DeployerFault as fault:  # no state to show a path to: the deployer cannot run at all (exit 2)
+        context = core.query.context()
+        raise first_reaction_fault(core.deployer.name, f"action {act}" if act is not None else f"context {context}", fault) from None
+
+
+def first_reaction_fault(name: str, where: str, fault: DeployerFault) -> DeployerFault:
+    """``fault`` of the initial reaction, said as what it means: the deployer cannot run at all."""
+    out = DeployerFault(f"deployer {name} cannot run at all: reacting to the initial state ({where}), it {fault.what or fault}")
+    out.stimulus, out.log, out.cause, out.what = fault.stimulus, fault.log, fault.cause, fault.what
+    out.initial = True
+    return out
 
 
 class ScriptedControl(ImmediateControl):

@@ -16,6 +16,7 @@ from desmon.model.events import (
 from desmon.model.requirements import (
     PREFERENCE_KINDS, REQUIREMENT_KINDS, Attribute, Capacity, Constraint, Maximum, Minimum, Option, Preference, Quantity, Selection,
 )
+from desmon.deployment.guard import CRASH
 from desmon.verify.search import NOT_CHECKED, CheckResult
 from desmon.verify.trace import Counterexample, Label, Step, rule_of
 from desmon.verify.state import Key
@@ -37,6 +38,10 @@ def format_trace(steps: tuple[Step, ...] | list[Step], *, indent: str = "  ") ->
 
 
 def format_counterexample(c: Counterexample) -> str:
+    if c.invariant == CRASH:  # the deployer's fault (desmon.deployment.guard): the path to the reaction that failed
+        where = f"right after `{c.during}`" if c.during else "before its first command"
+        head = f"CRASHED in the reaction of step {c.length} (the shortest path to it), {where}"
+        return f"{head}:\n{format_trace(c.steps)}\n  => the deployer {c.message}"
     head = f"VIOLATED {c.invariant} after {c.length} step{'s' if c.length != 1 else ''} (shortest)"
     if c.during:
         head += f", during the reaction, right after `{c.during}`"

@@ -33,6 +33,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence, TextIO
 
+from desmon.deployment.guard import CRASH, EXIT_CRASHED
 from desmon.progress import StatusLine
 from desmon.verify.state import Key
 from desmon.verify.trace import Counterexample, Label
@@ -41,12 +42,15 @@ if TYPE_CHECKING:  # pragma: no cover
     from desmon.verify.system import TransitionSystem
 
 __all__ = [
-    "HOLDS", "VIOLATED", "INCOMPLETE", "INTERRUPTED", "EXIT_INTERRUPTED", "NOT_CHECKED", "Record", "Segment",
+    "HOLDS", "VIOLATED", "INCOMPLETE", "CRASHED", "EXIT_CRASHED", "INTERRUPTED", "EXIT_INTERRUPTED", "NOT_CHECKED", "Record", "Segment",
     "CheckResult", "Budget", "Trail", "finish", "final_status", "ctrl_c", "paused_gc", "resident_mb", "proportional_mb", "peak_mb",
     "MEMORY_EVERY", "MEMORY_EVERY_WORKERS",
 ]
 
 HOLDS, VIOLATED, INCOMPLETE = "HOLDS", "VIOLATED", "INCOMPLETE"
+#: the deployer failed (raised, yielded a wrong command, never ended) in a reachable
+#: state: the counterexample is the shortest path to that reaction (exit 4)
+CRASHED = "CRASHED"
 #: why a search stopped by Ctrl-C is incomplete (:attr:`CheckResult.incomplete`), and its exit
 #: code (128 + SIGINT, as a shell reports it)
 INTERRUPTED, EXIT_INTERRUPTED = "interrupted", 130
@@ -116,7 +120,7 @@ class CheckResult:
     def exit_code(self) -> int:
         if self.interrupted:
             return EXIT_INTERRUPTED
-        return {HOLDS: 0, VIOLATED: 1, INCOMPLETE: 3}[self.verdict]
+        return {HOLDS: 0, VIOLATED: 1, INCOMPLETE: 3, CRASHED: EXIT_CRASHED}[self.verdict]
 
 
 def peak_mb() -> float:
@@ -218,6 +222,22 @@ class Budget:
             self.reason = f"timeout {self.timeout:g}s"
         elif now >= self._next_look:
             self._look(now)
+        return self.reason
+
+    def urgent(self) -> str:
+        """:meth:`spent` without the progress line: the time, the memory and Ctrl-C, for the
+        timer that interrupts a deployer's code that runs on without yielding
+        (:func:`desmon.deployment.guard.watching`); it sets :attr:`reason` as spent does."""
+        if not self.reason:
+            if self.interrupted:
+                self.reason = INTERRUPTED
+            elif time.perf_counter() > self.deadline:
+                self.reason = f"timeout {self.timeout:g}s"
+            elif self.max_memory is not None:
+                mb = self.measure(list(self.pids()))
+                if mb > self.max_memory:
+                    self.memory = mb
+                    self.reason = f"memory budget {self.max_memory:g} MB reached: {mb:,.0f} MB resident"
         return self.reason
 
     def _look(self, now: float) -> None:
@@ -356,7 +376,7 @@ class Trail:
     def done(self) -> bool:
         """Whether the search has what it looks for: a counterexample (or one of each
         invariant with ``keep_going``)."""
-        return (not self.keep_going and bool(self.found)) or self.wanted <= set(self.found)
+        return (not self.keep_going and bool(self.found)) or self.wanted <= set(self.found) or CRASH in self.found
 
     def truncate(self, states: list | array) -> None:  # type: ignore[type-arg]
         """Drop a state half-added when a second Ctrl-C came (``states``: the engine's list of them)."""
@@ -378,7 +398,12 @@ def finish(res: CheckResult, system: "TransitionSystem", found: dict[str, Counte
     res.peak_mb = peak_mb()
     res.incomplete = incomplete
     res.counterexamples = [found[i.name] for i in system.invariants if i.name in found]
-    if res.counterexamples:
+    if CRASH in found:  # the deployer's fault ends the search: what it found before stays listed
+        crash = found[CRASH]
+        res.counterexamples.append(crash)
+        res.verdict = CRASHED
+        res.reason = f"the deployer failed in step {crash.length}"
+    elif res.counterexamples:
         res.verdict = VIOLATED
         res.reason = ", ".join(c.invariant for c in res.counterexamples)
         if incomplete:

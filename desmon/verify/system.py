@@ -21,7 +21,9 @@ from __future__ import annotations
 from collections import Counter
 from typing import Any, Container, Iterable, Iterator, Protocol, Sequence
 
-from desmon.deployment.core import DeploymentCore
+from desmon.deployment.core import DeploymentCore, StepLog
+from desmon.deployment.guard import CRASH, DeployerFault
+from desmon.deployment.ports import RaiseError
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.invariants import Invariant, SystemView, check_invariants, get_invariants
 from desmon.errors import CheckerError, NondeterminismError
@@ -34,7 +36,21 @@ from desmon.verify.search import NOT_CHECKED, Record, Segment
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore
 from desmon.verify.trace import KEPT_BRANCH, Label, Step, branch_name, initial_step, make_step
 
-__all__ = ["TransitionSystem", "Reduction"]
+__all__ = ["TransitionSystem", "Reduction", "command_key", "RECHECK_FIRST", "RECHECK_EVERY"]
+
+#: Nondeterminism detection: the first RECHECK_FIRST transitions a system runs, and every
+#: RECHECK_EVERY-th after them, are run twice and compared (:meth:`TransitionSystem.run_one`).
+RECHECK_FIRST, RECHECK_EVERY = 64, 64
+#: the commands of a failed reaction a counterexample shows (a runaway one issued thousands)
+SHOWN_COMMANDS = 8
+
+
+def command_key(cmd: Any) -> tuple:
+    """What a command does, for comparing two runs of a reaction (an error's detail text
+    left out); its first item shows it."""
+    if isinstance(cmd, RaiseError):
+        return (RaiseError(cmd.kind, cmd.graph, cmd.platform), cmd.kind, cmd.graph, cmd.platform)
+    return (cmd, type(cmd).__name__, getattr(cmd, "graph", None), getattr(cmd, "platform", None))
 
 
 class Reduction(Protocol):
@@ -79,6 +95,7 @@ class TransitionSystem:
         self._enabled_memo: dict[tuple, tuple[tuple[Event, str], ...]] = {}
         self._event_pairs: dict[Event, tuple[Event, str]] = {}  # one (event, kind) object per event
         self._frozen: dict[tuple[str, ...], frozenset[str]] = {}
+        self._runs = 0  # transitions run (run_one), for the nondeterminism re-runs
         self._slots_cache: dict[str | None, tuple[tuple[str, ...], ...]] = {}
         self.branches: Counter = Counter()
         #: the distinct (canonical) states of the last run, in BFS order
@@ -171,10 +188,62 @@ class TransitionSystem:
         core = self.core
         core.standing = self._standing(key.standing)
         st.begin(prefix)
-        _stim, log = core.step(event, st)
+        _stim, log = self.step_under_guard(core, st, event)
         if core.unjustified and st.instant is None and "no-flapping" in self._checked:
             st.instant = ("no-flapping", core.unjustified[0], "the reaction")
-        return st.key(core.standing), tuple(st.outcomes), log, st.instant
+        out = st.key(core.standing), tuple(st.outcomes), log, st.instant
+        self._runs += 1
+        if self._runs <= RECHECK_FIRST or not self._runs % RECHECK_EVERY:
+            self._same_again(key, event, prefix, out)
+        return out
+
+    def step_under_guard(self, core: DeploymentCore, st: StateStore, event: Event, *, recording: bool = False) -> tuple[Any, StepLog]:
+        """``core.step(event, st)``; a fault of the deployer (it raised, yielded a wrong
+        command, or never ended: :class:`~desmon.deployment.guard.DeployerFault`) is the
+        transition's instantaneous :data:`~desmon.deployment.guard.CRASH`, which ends the
+        search with the outcome CRASHED and the path to it. ``recording`` (the table
+        engine's recorded run): a ``TypeError`` or ``AttributeError`` is raised as it is,
+        for the engine to tell the deployer's own bug from a check result it wraps."""
+        try:
+            return core.step(event, st)
+        except DeployerFault as fault:
+            if recording and isinstance(fault.cause, (TypeError, AttributeError)):
+                raise fault.cause from None
+            log = fault.log if fault.log is not None else StepLog()
+            if len(log.commands) > SHOWN_COMMANDS:  # a runaway reaction: its trace shows the first ones
+                log = StepLog(log.commands[:SHOWN_COMMANDS])
+            # no branching on the starts of a failed reaction (the search ends at it): its
+            # starts beyond the prefix are no choice points, and its label fails no start
+            st.outcomes = list(st.prefix) if False in st.prefix else []
+            if st.instant is None or st.instant[0] != CRASH:
+                st.instant = (CRASH, fault.what, str(log.commands[-1][0]) if log.commands else "")
+            return fault.stimulus, log
+
+    def _same_again(self, key: Key, event: Event, prefix: tuple[bool, ...], first: tuple) -> None:
+        """Run the transition again and compare: a reaction is a function of its state and
+        stimulus, so different commands (or another next state) are nondeterminism of the
+        deployer, refused with both command lists (docs/deployers.md). The store is left in
+        the next state, as :meth:`run_one` leaves it."""
+        st = self.store
+        st.load(key)
+        core = self.core
+        core.standing = self._standing(key.standing)
+        st.begin(prefix)
+        _stim, log = self.step_under_guard(core, st, event)
+        if core.unjustified and st.instant is None and "no-flapping" in self._checked:
+            st.instant = ("no-flapping", core.unjustified[0], "the reaction")
+        again = st.key(core.standing), tuple(st.outcomes), log, st.instant
+        was, now = [str(c) for c, _ok in first[2].commands], [str(c) for c, _ok in log.commands]
+        same = [command_key(c) for c, _ok in first[2].commands] == [command_key(c) for c, _ok in log.commands]
+        if not same or again[0] != first[0] or again[3] != first[3]:
+            def listing(cmds: list[str]) -> str:
+                return "[" + ", ".join(cmds) + "]" if cmds else "[no command]"
+
+            diff = f"first {listing(was)}, then {listing(now)}" if not same else f"the same commands {listing(was)} reached another state"
+            raise NondeterminismError(
+                f"deployer {self.deployer_name} is nondeterministic (not a function of what it reads through its ports): reacting twice to {event} in the same state it issued {diff}; "
+                "a reaction must be a function of its readings (no randomness, clock or state kept between calls: docs/deployers.md)"
+            )
 
     def successors(self, key: Key, event: Event) -> Iterator[tuple[tuple[int, ...], Key, Any, tuple[str, str, str] | None]]:
         """Every (failed start indices, next key, StepLog, instantaneous violation) of ``event``.

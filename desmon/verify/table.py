@@ -68,6 +68,7 @@ import numpy.ma  # noqa: F401  (np.unique imports it on first use, leaving cycli
 
 from desmon.deployment import validity as _validity
 from desmon.deployment.core import DeploymentCore
+from desmon.deployment.guard import CRASH, ReactionStopped
 from desmon.errors import CheckerError, NondeterminismError
 from desmon.model.events import (
     ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp,
@@ -78,7 +79,7 @@ from desmon.model.system import PlatformState
 from desmon.verify.environment import EVENT_KINDS
 from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Trail, final_status as _final_status
 from desmon.verify.state import Key, StateStore
-from desmon.verify.system import TransitionSystem
+from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key
 from desmon.verify.trace import KEPT_BRANCH, Counterexample, branch_name
 
 __all__ = ["TableEngine", "TableUnsupported", "UnobservedRead", "table_unsupported", "CHUNK_STATES"]
@@ -103,6 +104,11 @@ _KIND_ID = {k: i for i, k in enumerate(EVENT_KINDS)}
 def _root_key(system: np.ndarray, ctx: np.ndarray, stim: np.ndarray | int, prefix: np.ndarray | int) -> np.ndarray:
     """The decision-tree root of each (system part, context digit, stimulus, prefix)."""
     return (((system << _ROOT_CTX | ctx) << _ROOT_STIM | stim) << _ROOT_PREFIX) | prefix
+
+
+class _PlainRun(tuple):
+    """A transition run on the direct engine's store (:meth:`TransitionSystem.run_one`),
+    standing for a recorded run that failed on the deployer's own TypeError or AttributeError."""
 
 
 class TableUnsupported(CheckerError):
@@ -1233,7 +1239,10 @@ class TableEngine:
             out = run()
         except (TypeError, AttributeError) as exc:
             _RECORDING, _validity._observer = _Idle(), None
-            plain()  # the deployer's own error: raised here, as the direct engine would
+            out = plain()  # the deployer's own error: raised here, as the direct engine would
+            if isinstance(out, tuple) and len(out) == 4 and out[3] is not None and out[3][0] == CRASH:
+                self.records += 1  # the deployer's own fault (the direct run fails too): its CRASH, as recorded so far
+                return _PlainRun(out), rec.obs
             raise TableUnsupported(
                 f"the reaction used a requirement check's result in a way the table engine cannot observe ({exc}); "
                 "run with --engine direct"
@@ -1251,14 +1260,23 @@ class TableEngine:
             st.load(key)
             rc.core.standing = frozenset(key.standing)
             st.begin(prefix)
-            stimulus, log = rc.core.step(event, st)
+            stimulus, log = rc.step_under_guard(rc.core, st, event, recording=True)  # a fault: the instant CRASH
             instant = st.instant
             if rc.core.unjustified and instant is None and "no-flapping" in rc._checked:  # as TransitionSystem.run_one
                 instant = ("no-flapping", rc.core.unjustified[0], "the reaction")
             return stimulus, log, st.key(rc.core.standing), tuple(st.outcomes), instant
 
-        (stimulus, log, nkey, outcomes, instant), obs = self._recording(run, lambda: self.checker.run_one(key, event, prefix))
-        if stimulus.context_changed:
+        out, obs = self._recording(run, lambda: self.checker.run_one(key, event, prefix))
+        if isinstance(out, _PlainRun):  # the deployer failed with a TypeError or AttributeError of its own
+            nkey, outcomes, log, instant = out
+            stimulus = None
+        else:
+            (stimulus, log, nkey, outcomes, instant) = out
+            if self.records <= RECHECK_FIRST or not self.records % RECHECK_EVERY:
+                self._same_commands(key, event, prefix, log)
+        if stimulus is None:
+            got = stim
+        elif stimulus.context_changed:
             got = 0
         elif stimulus.specs_changed:
             got = self.P + 3 + self.env.vgraphs.index(stimulus.specs_changed[0])
@@ -1272,6 +1290,18 @@ class TableEngine:
         inst = instant[0] if instant is not None else None
         leaf = self._leaf(("r", self.system(nkey.deployments, nkey.standing), outcomes, fails, names, inst))
         self._insert(root, obs, leaf)
+
+    def _same_commands(self, key: Key, event: Event, prefix: tuple[bool, ...], log: Any) -> None:
+        """The recorded reaction run again on the direct engine's store: other commands are
+        the deployer's nondeterminism (refused with both lists, as the direct engine does)."""
+        _n, _o, again, _i = self.checker.run_one(key, event, prefix)
+        if [command_key(c) for c, _ok in log.commands] != [command_key(c) for c, _ok in again.commands]:
+            was, now = [str(command_key(c)[0]) for c, _ok in log.commands], [str(c) for c, _ok in again.commands]
+            raise NondeterminismError(
+                f"deployer {self.checker.deployer_name} is nondeterministic (not a function of what it reads through its ports): reacting twice to {event} in the same state it issued "
+                f"first [{', '.join(was) or 'no command'}], then [{', '.join(now) or 'no command'}]; a reaction must be a function "
+                "of its readings (no randomness, clock or state kept between calls: docs/deployers.md)"
+            )
 
     def record_invariants(self, key: Key, root: int) -> None:
         bad, obs = self._recording(lambda: self.rc.violations(key), lambda: self.checker.violations(key))
@@ -1379,6 +1409,9 @@ class TableEngine:
                 frontier = np.array(nxt, dtype=np.int64)
         except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
             self.incomplete = INTERRUPTED
+            trail.truncate(codes)
+        except ReactionStopped as stop:  # the budget ran out inside a deployer's reaction
+            self.incomplete = budget.reason or str(stop)
             trail.truncate(codes)
         res.transitions = self.transitions
         res.states = len(codes)

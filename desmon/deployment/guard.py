@@ -1,0 +1,280 @@
+"""A user's deployer runs under guard: whatever it does, desmon stays in charge.
+
+Every engine (the checker, the scripted replay, the fuzzer, the SimPy world) obtains a
+reaction from :meth:`DeploymentCore.reaction <desmon.deployment.core.DeploymentCore.reaction>`,
+which hands back :func:`guarded` around the deployer's generator. Between the
+deployer's code and the engine, the guard
+
+* turns anything the deployer raises (and a ``react`` that cannot be called) into a
+  :class:`DeployerFault`: one line naming the deployer, what it was reacting to, the
+  exception and where in the deployer's code it was raised;
+* validates each command as it is yielded: a :class:`~desmon.deployment.ports.Start`,
+  :class:`~desmon.deployment.ports.Stop` or :class:`~desmon.deployment.ports.RaiseError`
+  of a perception graph and a platform the model declares, an error kind of
+  :data:`~desmon.deployment.ports.ERROR_KINDS`; a wrong one is a :class:`DeployerFault`
+  naming the command;
+* counts the commands of one reaction: more than :data:`MAX_COMMANDS` (settable:
+  :func:`commands_limit`, ``--max-commands``) is a :class:`DeployerFault` ("a
+  reaction that never ends");
+* asks the running search's budget (time, memory, Ctrl-C), installed by
+  :func:`watching`, before each command, and -- for a reaction that computes or sleeps
+  without yielding -- from a timer signal every :data:`TICK` seconds while the
+  deployer's code runs. A spent budget raises :class:`ReactionStopped` (a
+  ``BaseException``, so a deployer's ``except Exception`` cannot swallow it) and the
+  engine ends the search INCOMPLETE as at any other budget check.
+
+What a fault *means* is the engine's business: the checker reports a fault in a
+reachable state as the outcome CRASHED with the shortest path to it, and a fault in the
+initial reaction (the deployer cannot run at all) as bad input; see docs/deployers.md,
+"When your deployer crashes".
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import threading
+import traceback
+from types import GeneratorType
+from typing import Any, Callable, Iterator
+
+from desmon.deployment.ports import ERROR_KINDS, RaiseError, Reaction, Start, Stop
+from desmon.errors import CheckerError, ModelError
+
+__all__ = [
+    "DeployerFault", "ReactionStopped", "guarded", "watching", "commands_limit", "MAX_COMMANDS", "TICK", "CRASH",
+    "describe_stimulus", "uncallable", "EXIT_CRASHED",
+]
+
+#: the exit code of every command whose deployer failed in a reachable state (not the first reaction)
+EXIT_CRASHED = 4
+
+#: The most commands one reaction may issue before it is judged never to end. The
+#: built-in deployers issue a few per slot; the default leaves room for large models.
+MAX_COMMANDS = 10_000
+
+#: The budget is asked before the first command of a reaction and every
+#: WATCH_EVERY + 1 commands after it (a mask: 255 asks every 256).
+WATCH_EVERY = 255
+
+#: How often (seconds) the timer looks at the budget while a deployer's code runs.
+TICK = 0.2
+
+#: The name under which the checker records a deployer's fault (its outcome is CRASHED).
+CRASH = "deployer-crash"
+
+
+class DeployerFault(ModelError):
+    """The deployer failed in one reaction: it raised, yielded a command that is not a
+    valid one, or issued more than :data:`MAX_COMMANDS` commands.
+
+    ``stimulus`` is what it was reacting to, ``log`` (set by
+    :func:`~desmon.deployment.core.run_sync`) the commands it issued before, ``cause``
+    the exception it raised (None for a wrong command or a runaway reaction)."""
+
+    stimulus: Any = None
+    log: Any = None
+    cause: BaseException | None = None
+    #: the fault without the deployer's name and stimulus (a counterexample's last line)
+    what: str = ""
+    #: whether it failed in its first reaction (the initial state): it cannot run at all,
+    #: which is bad input (exit 2); a fault in a later reaction is the outcome CRASHED (exit 4)
+    initial: bool = False
+
+
+class ReactionStopped(BaseException):
+    """The search's budget ran out (time, memory, Ctrl-C) while a reaction ran: the
+    engine stops the search INCOMPLETE, as at any other budget check."""
+
+
+_limit = [MAX_COMMANDS]
+
+
+def commands_limit(n: int | None = None) -> int:
+    """The commands a reaction may issue (:data:`MAX_COMMANDS` unless set); with ``n``,
+    set it (a positive int) and return it. ``--max-commands`` sets it for one command."""
+    if n is not None:
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+            raise ModelError(f"--max-commands {n!r}: give a whole number of commands above 0, e.g. --max-commands {MAX_COMMANDS}")
+        _limit[0] = n
+    return _limit[0]
+
+
+# the budget check the running search installed (watching), and whether the deployer's
+# code runs now (the timer only interrupts that)
+_watch: list[Callable[[], str] | None] = [None]
+_inside = [0]
+
+
+def describe_stimulus(stimulus: Any, context: Any = None, cause: object = None) -> str:
+    """What a reaction reacts to, in words: ``cause`` (the event) if known, else the stimulus."""
+    if cause is not None:
+        what = str(cause)
+    elif stimulus is None:
+        what = "its first call"
+    elif getattr(stimulus, "context_changed", False):
+        what = "a context change"
+    elif getattr(stimulus, "specs_changed", ()):
+        what = f"a requirement change of {', '.join(stimulus.specs_changed)}"
+    elif getattr(stimulus, "changed_platforms", ()):
+        what = f"a change on {', '.join(stimulus.changed_platforms)}"
+    else:
+        what = "no change"
+    return f"{what} (context {context})" if context is not None else what
+
+
+def _where(exc: BaseException) -> str:
+    """``file:line`` of the innermost frame of ``exc``'s traceback, or ""."""
+    frames = traceback.extract_tb(exc.__traceback__)
+    if not frames:
+        return ""
+    f = frames[-1]
+    return f"{f.filename}:{f.lineno}"
+
+
+def _fault(name: str, reacting: str, what: str, stimulus: Any, cause: BaseException | None = None) -> DeployerFault:
+    fault = DeployerFault(" ".join(f"deployer {name}, reacting to {reacting}: {what}".split()))
+    fault.stimulus, fault.cause, fault.what = stimulus, cause, " ".join(what.split())
+    return fault
+
+
+def uncallable(name: str, react: object) -> DeployerFault:
+    """The fault of a deployer whose ``react`` cannot be called at all."""
+    what = (
+        f"it cannot be called: its react is {type(react).__name__} {react!r:.60}, not callable; give a reaction function "
+        "react(q, slots, changed, context_changed) that yields Start/Stop/RaiseError (docs/deployers.md)"
+    )
+    return _fault(name, "any change", what, None)
+
+
+def _raised(exc: BaseException) -> str:
+    detail = " ".join(str(exc).split())[:300]
+    where = _where(exc)
+    return f"raised {type(exc).__name__}{': ' + detail if detail else ''}" + (f" (at {where})" if where else "")
+
+
+def _check_command(cmd: object, graphs: frozenset[str], platforms: frozenset[str]) -> str:
+    """Why ``cmd`` is not a command this model can execute, or ""."""
+    if isinstance(cmd, (Start, Stop)):
+        if not isinstance(cmd.graph, str) or cmd.graph not in graphs:
+            return f"yielded `{cmd}`: the model has no perception graph {cmd.graph!r} (it has {', '.join(sorted(graphs))})"
+        if not isinstance(cmd.platform, str) or cmd.platform not in platforms:
+            return f"yielded `{cmd}`: the model has no platform {cmd.platform!r} (it has {', '.join(sorted(platforms))})"
+        return ""
+    if isinstance(cmd, RaiseError):
+        if cmd.kind not in ERROR_KINDS:
+            return f"yielded RaiseError({cmd.kind!r}, {cmd.graph!r}): no error kind {cmd.kind!r}; the kinds are {', '.join(ERROR_KINDS)}"
+        if not isinstance(cmd.graph, str) or cmd.graph not in graphs:
+            return f"yielded `{cmd}`: the model has no perception graph {cmd.graph!r} (it has {', '.join(sorted(graphs))})"
+        if cmd.platform is not None and cmd.platform not in platforms:
+            return f"yielded `{cmd}`: the model has no platform {cmd.platform!r} (it has {', '.join(sorted(platforms))})"
+        return ""
+    return (
+        f"yielded {cmd!r} ({type(cmd).__name__}): yield only Start, Stop or RaiseError "
+        "(desmon.deployment.ports; docs/deployers.md)"
+    )
+
+
+def guarded(
+    name: str, make: Callable[[], Any], stimulus: Any, graphs: frozenset[str], platforms: frozenset[str],
+    reacting: Callable[[], str],
+) -> Reaction:
+    """The reaction ``make()`` returns, under guard (see the module docstring).
+
+    ``make`` calls the deployer's ``react``; ``reacting()`` says in words what it reacts
+    to (called only for a fault). Raises :class:`DeployerFault`, or
+    :class:`ReactionStopped` when the installed budget is spent."""
+    watch = _watch[0]
+    inside = _inside
+    inside[0] += 1
+    try:
+        reaction = make()
+    except (ReactionStopped, KeyboardInterrupt, CheckerError):
+        raise
+    except Exception as exc:
+        raise _fault(name, reacting(), _raised(exc), stimulus, exc) from None
+    finally:
+        inside[0] -= 1
+    if type(reaction) is not GeneratorType:
+        raise _fault(
+            name, reacting(), f"its reaction returned {type(reaction).__name__}, not a generator; "
+            "write react(q, slots, changed, context_changed) with yield Start/Stop/RaiseError (docs/deployers.md)", stimulus,
+        )
+    limit = _limit[0]
+    n = 0
+    outcome: bool | None = None
+    send = reaction.send
+    while True:
+        if watch is not None and not n & WATCH_EVERY:  # (the timer watches a deployer's own code in between)
+            why = watch()
+            if why:
+                reaction.close()
+                raise ReactionStopped(why)
+        inside[0] += 1
+        try:
+            cmd = send(outcome)
+        except StopIteration:
+            return
+        except (ReactionStopped, KeyboardInterrupt, CheckerError):
+            raise  # the budget, Ctrl-C, an engine's own signal (the table engine's unobserved read)
+        except Exception as exc:
+            if isinstance(exc, DeployerFault) and exc.stimulus is not None:
+                raise  # a nested deployer's (a mutant's) fault, already named
+            raise _fault(name, reacting(), _raised(exc), stimulus, exc) from None
+        finally:
+            inside[0] -= 1
+        kind = type(cmd)
+        try:  # the common case first, without a call
+            ok = (kind is Start or kind is Stop) and cmd.graph in graphs and cmd.platform in platforms  # type: ignore[union-attr]
+        except TypeError:  # an unhashable graph or platform
+            ok = False
+        why = "" if ok else _check_command(cmd, graphs, platforms)
+        if why:
+            reaction.close()
+            raise _fault(name, reacting(), why, stimulus)
+        n += 1
+        if n > limit:
+            reaction.close()
+            raise _fault(
+                name, reacting(), f"issued more than {limit:,} commands in one reaction (the last: `{cmd}`), so it never ends; "
+                "a reaction must return. If it really needs more, raise the limit with --max-commands N", stimulus,
+            )
+        outcome = yield cmd  # type: ignore[misc]
+
+
+@contextlib.contextmanager
+def watching(check: Callable[[], str], urgent: Callable[[], str] | None = None) -> Iterator[None]:
+    """While a search runs: ``check()`` (why the search must stop, or "") is asked before
+    every command of every reaction, and every :data:`TICK` seconds by a timer signal
+    while a deployer's own code runs (one that computes or sleeps without yielding), so
+    that the time limit, the memory budget and Ctrl-C stop the search. The timer is used
+    only in the main thread, where SIGALRM is not otherwise taken; the timer asks
+    ``urgent`` (default ``check``), which must not print. A forked worker process does
+    not ask the parent's check (its reactions are bounded by the command limit)."""
+    previous = _watch[0]
+    pid = os.getpid()
+    _watch[0] = lambda: check() if os.getpid() == pid else ""
+    urgent = urgent or check
+    timer = (
+        hasattr(signal, "setitimer")
+        and threading.current_thread() is threading.main_thread()
+        and signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, None)
+    )
+
+    def tick(signum: int, frame: Any) -> None:
+        if _inside[0] > 0 and os.getpid() == pid:
+            why = urgent()
+            if why:
+                raise ReactionStopped(why)
+
+    if timer:
+        signal.signal(signal.SIGALRM, tick)
+        signal.setitimer(signal.ITIMER_REAL, TICK, TICK)
+    try:
+        yield
+    finally:
+        if timer:
+            signal.setitimer(signal.ITIMER_REAL, 0, 0)
+            signal.signal(signal.SIGALRM, signal.SIG_DFL)
+        _watch[0] = previous
