@@ -458,7 +458,7 @@ MAX_LABEL_ROWS = 4  # rows of fault labels (above their markers) and of error la
 
 @dataclass
 class _Label:
-    """An event label placed in a row: its text, left end (data) and width (pixels)."""
+    """An event label placed in a row: its text, left end (in seconds), row and colour."""
 
     text: str
     x: float
@@ -489,6 +489,9 @@ def _pack(items: list[tuple[float, str, str]], tl: Timeline, width_px: float, me
     gap = 6.0
     for t, text, color in sorted(items, key=lambda x: x[0]):
         w = measure(text)
+        if w > width_px:  # wider than the whole panel: no row can hold it
+            out.left_out += 1
+            continue
         left = (t - tl.start) * px_per_s - w / 2
         left = max(0.0, min(left, width_px - w))
         for row in range(MAX_LABEL_ROWS):
