@@ -1,0 +1,71 @@
+"""Every code block of the docs imports what it uses and runs as written, and the output
+blocks of docs/detectors.md are what their commands print.
+
+docs/scenarios.md and docs/deployers.md quote their example files piece by piece; their
+blocks run as one module in tests/test_scenarios_doc.py and tests/test_tutorial.py."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from docblocks import blocks
+from test_tutorial import check_quotes, run_doc
+
+#: pages whose python blocks each run alone, as written
+STANDALONE = ("README.md", "docs/tutorial.md", "docs/detectors.md", "docs/fleet.md", "docs/design.md")
+
+
+def python_blocks(root: Path, page: str) -> list[str]:
+    return [b.body for b in blocks((root / page).read_text()) if b.lang == "python"]
+
+
+@pytest.mark.parametrize("page", STANDALONE)
+def test_every_python_block_runs_as_written(root, page, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for code in python_blocks(root, page):
+        with contextlib.redirect_stdout(io.StringIO()):
+            exec(compile(code, page, "exec"), {"__name__": "doc_block"})  # a NameError: the block uses what it never imports
+
+
+def test_the_detectors_pass_ranges_are_what_their_code_prints(root):
+    (code,) = python_blocks(root, "docs/detectors.md")
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        exec(compile(code, "docs/detectors.md", "exec"), {"__name__": "doc_block"})
+    printed = dict(re.findall(r"(\d+)/60: (\d+-\d+) of 300", out.getvalue()))
+    table = (root / "docs" / "detectors.md").read_text()
+    heads = re.search(r"^\| paper k/60 \|(.*)\|$", table, re.M).group(1).split("|")
+    cells = re.search(r"^\| sim k/300 that pass \|(.*)\|$", table, re.M).group(1).split("|")
+    assert {h.strip(): c.strip().replace("–", "-") for h, c in zip(heads, cells)} == printed
+
+
+@pytest.mark.slow
+def test_the_detectors_output_blocks_are_exactly_what_evaluate_prints(root, tmp_path):
+    ran = run_doc(root, tmp_path / "detectors", "detectors.md")
+    assert len(ran) == 2
+    check_quotes(root, "detectors.md", ran, at_least=2)
+
+
+@pytest.mark.slow
+def test_the_sweeps_python_block_reads_the_table_the_sweep_wrote(root, tmp_path, monkeypatch):
+    pytest.importorskip("distributed")
+    desmon = str(Path(sys.executable).parent / "desmon")
+    proc = subprocess.run(
+        [desmon, "sweep", str(root / "scenarios" / "robot_day.py"), "-p", "hand_memory=256,384", "-p", "hours=0.1",
+         "--seeds", "1", "--workers", "1", "-o", "results.parquet", "--no-progress"],
+        cwd=tmp_path, capture_output=True, text=True, timeout=600, env={**os.environ},
+    )
+    assert proc.returncode == 0, proc.stderr
+    (code,) = python_blocks(root, "docs/sweeps.md")
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {"__name__": "doc_block"}
+    exec(compile(code, "docs/sweeps.md", "exec"), namespace)
+    assert len(namespace["df"]) == 2 and set(namespace["df"]["hand_memory"]) == {256, 384}
