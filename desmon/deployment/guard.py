@@ -145,7 +145,9 @@ def uncallable(name: str, react: object) -> DeployerFault:
         f"it cannot be called: its react is {type(react).__name__} {react!r:.60}, not callable; give a reaction function "
         "react(q, slots, changed, context_changed) that yields Start/Stop/RaiseError (docs/deployers.md)"
     )
-    return _fault(name, "any change", what, None)
+    fault = _fault(name, "any change", what, None)
+    fault.initial = True  # it can never run
+    return fault
 
 
 def _raised(exc: BaseException) -> str:
