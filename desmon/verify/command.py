@@ -54,6 +54,7 @@ def verify_command(args: argparse.Namespace) -> int:
     from desmon.model.params import parse_assignments
     from desmon.verify.checker import Checker
     from desmon.verify.report import counterexample_pytest, format_result, result_to_json
+    from desmon.verify.search import CRASHED
 
     _positive("max-states", args.max_states)
     _positive("max-depth", args.max_depth)
@@ -81,7 +82,10 @@ def verify_command(args: argparse.Namespace) -> int:
     if result.interrupted:  # Ctrl-C: the partial result and its JSON, and nothing slower
         checker.release()
         return result.exit_code
-    if getattr(args, "plot", None):
+    crashed = result.verdict == CRASHED  # the path reaches a reaction that failed: nothing to draw or to replay as a test
+    if crashed and (getattr(args, "plot", None) or args.pytest):
+        print(f"the deployer crashed: {' and '.join(o for o in (getattr(args, 'plot', None), args.pytest) if o)} not written (fix the deployer, then re-run)")
+    elif getattr(args, "plot", None):
         if result.counterexamples:
             from desmon.verify.plot import plot_counterexample
 
@@ -90,7 +94,7 @@ def verify_command(args: argparse.Namespace) -> int:
             print(f"wrote {out} ({shortest.invariant}, {shortest.length} step{'s' if shortest.length != 1 else ''})")
         else:
             print(f"no counterexample: {args.plot} not written")
-    if args.pytest:
+    if args.pytest and not crashed:
         if result.counterexamples:
             path = str(Path(args.scenario).resolve())
             params = parse_assignments(getattr(args, "param", None))

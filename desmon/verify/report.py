@@ -360,6 +360,11 @@ def read_counterexample(path: str | Path, number: int | None = None) -> SavedCou
     n, c = _pick(src, top, number)
     where = f"{src}: counterexamples[{n - 1}]"
     invariant = _field(where, c, "invariant", str)
+    if invariant == CRASH:
+        raise CheckerError(
+            f"{where} is the path to a reaction in which the deployer crashed, not an invariant's counterexample: "
+            "fix the deployer, then re-run desmon verify (it reports the crash again if it still happens)"
+        )
     if invariant not in checked:
         raise CheckerError(f"{where}.invariant = {invariant!r} is not one of the invariants the run checked ({', '.join(checked)})")
     during = c.get("during")
