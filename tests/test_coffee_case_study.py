@@ -47,10 +47,13 @@ def test_r3_matters_the_combined_detector_fits_only_on_the_torso_pc(scenario):
     from desmon.deployment import acceptable_platforms
     from desmon.repository import RepositoryQuery
 
-    result = replay(scenario)
+    result = replay(scenario)  # ends at t3: the wrench (on arm_pc) is broken
     v = acceptable_platforms(RepositoryQuery(result.repo), "combined_slip_detector")
-    assert v.acceptable == ("torso_pc",)
-    assert {name for name, _f in v.rejected} == {"arm_pc", "hand_pc"}
+    # only its unreadable input rejects torso_pc; R3 (250 MB) rejects the other two as well
+    assert v.acceptable == ()
+    assert [(f.requirement, f.reason) for f in v.failures("torso_pc")] == [("reads force_sensor", "lwr_wrench on arm_pc failed")]
+    for pc in ("arm_pc", "hand_pc"):
+        assert v.failures(pc)[0].requirement == "Capacity(memory >= 250 MB)"
 
 
 def test_running_the_scenario_file_prints_the_four_steps(root):

@@ -105,7 +105,7 @@ def test_a_start_whose_only_input_device_failed_is_refused_by_every_engine() -> 
     e = _Engines()
     e.fact(DeviceFail("wrench"))
     assert e.start("combined", "torso_pc") == (False, False, False)
-    assert "no readable force_sensor" in e.store.refused
+    assert e.store.refused == "reads force_sensor: wrench on arm_pc failed"
     assert e.start("tactile", "hand_pc") == (True, True, True)
 
 

@@ -93,8 +93,8 @@ def test_acceptable_platforms_come_by_preference_then_declaration_order():
 
 def test_a_fixed_deployment_is_valid_only_on_its_executable_on_platform():
     spec = DeploymentSpec("g", (), fixed_platform="a")
-    assert deployment_valid(spec, state("a")) == ()
-    assert deployment_valid(spec, state("b"))[0].reason == "runs on another platform"
+    assert deployment_valid(spec, state("a"), (state("a"), state("b"))) == ()
+    assert deployment_valid(spec, state("b"), (state("a"), state("b")))[0].reason == "runs on another platform"
 
 
 def test_unmemoised_checks_give_the_same_answers_and_store_nothing_in_the_memos():

@@ -36,12 +36,12 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import Callable
 
-from desmon.deployment.validity import check_platform
+from desmon.deployment.validity import check_platform, input_failures
 from desmon.repository.facts import ImmediateControl
 from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import Repository
 from desmon.model.platform import Device
-from desmon.model.requirements import PLATFORM_HAS, Attribute, DeploymentSpec, Quantity, Requirement, Selection
+from desmon.model.requirements import PLATFORM_HAS, Attribute, DeploymentSpec, Quantity, Reads, Requirement, Selection
 from desmon.model.system import PlatformState, SystemModel
 
 __all__ = ["ControlRules", "repository_control", "repository_refusal", "StateOf", "PLATFORM_DOWN", "device_requirements"]
@@ -71,7 +71,7 @@ def device_requirements(requirements: tuple[Requirement, ...]) -> tuple[Requirem
 class ControlRules:
     """The start rules for one model (its input wiring memoised per graph and platform)."""
 
-    __slots__ = ("model", "spec_of", "_wiring", "_device_reqs", "_hosts")
+    __slots__ = ("model", "spec_of", "_wiring", "_device_reqs")
 
     def __init__(self, model: SystemModel, spec_of: "Callable[[str], DeploymentSpec | None] | None" = None) -> None:
         self.model = model
@@ -79,8 +79,6 @@ class ControlRules:
         #: None reads the model's declared ones
         self.spec_of = spec_of
         self._wiring: dict[tuple[str, str], tuple[tuple[str, tuple[Device, ...]], ...]] = {}
-        #: (graph, platform) -> (kind, hosting platforms, refusal text) per input kind with devices
-        self._hosts: dict[tuple[str, str], tuple[tuple[str, tuple[str, ...], str], ...]] = {}
         self._device_reqs: dict[tuple, tuple[Requirement, ...]] = {}
 
     def input_devices(self, graph: str, platform: str) -> tuple[tuple[str, tuple[Device, ...]], ...]:
@@ -98,6 +96,10 @@ class ControlRules:
             found = self._wiring[key] = tuple(out)
         return found
 
+    def _declared_reads(self, graph: str) -> tuple[Reads, ...]:
+        spec = self.model.spec(graph)
+        return spec.reads if spec is not None else ()
+
     def start_refusal(self, graph: str, platform: str, state_of: StateOf) -> str | None:
         """Why the infrastructure refuses to start ``graph`` on ``platform``, or None.
 
@@ -113,20 +115,15 @@ class ControlRules:
             reqs = self._device_reqs[declared] = device_requirements(declared)
         if reqs and check_platform(reqs, state_of(platform), graph, first_only=True):
             return f"the devices of {platform} no longer meet {', '.join(r.describe() for r in reqs)}"
-        inputs = self._hosts.get((graph, platform))
-        if inputs is None:
-            inputs = self._hosts[(graph, platform)] = tuple(
-                (
-                    kind,
-                    tuple(dict.fromkeys(d.platform for d in devices)),
-                    f"no readable {kind} ({', '.join(d.name for d in devices)}: failed or on a platform that is down)",
-                )
-                for kind, devices in self.input_devices(graph, platform)
-                if devices
-            )
-        for kind, hosts, why in inputs:
-            if all(check_platform(_has(kind), state_of(h), graph) for h in hosts):
-                return why
+        reads = spec.reads if spec is not None else self._declared_reads(graph)
+        if reads:
+            st = state_of(platform)
+            own = tuple(r for r in reads if platform in r.hosts)  # its own half (rule 3 on its devices)
+            fails = check_platform(own, st, graph, first_only=True) if own else ()
+            if not fails:
+                fails = input_failures(reads, platform, state_of, graph)
+            if fails:
+                return f"{fails[0].requirement}: {fails[0].reason}"
         return None
 
 

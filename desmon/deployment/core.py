@@ -229,8 +229,9 @@ class DeploymentCore:
         spec = self.query.deployment_information(cmd.graph)
         if spec is None or spec.rebalance is None:
             return None
-        state = next((s for s in self.query.platform_states() if s.name == cmd.platform), None)
-        if state is None or deployment_valid(spec, state):
+        states = self.query.platform_states()
+        state = next((s for s in states if s.name == cmd.platform), None)
+        if state is None or deployment_valid(spec, state, states):
             return None
         validity = validity_for(self.query, spec, reasons=False)
         gain = validity.gain(cmd.platform) if cmd.platform in validity.acceptable else 0.0

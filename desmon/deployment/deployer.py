@@ -33,13 +33,13 @@ from desmon.deployment.ports import (
     Start,
     Stop,
 )
-from desmon.deployment.validity import check_validity, validity_for
+from desmon.deployment.validity import check_validity, spec_validity, validity_for
 from desmon.errors import ModelError
 from desmon.model.requirements import DeploymentSpec
 
 __all__ = [
     "Deployer", "PAPER", "DESMON", "DESMON_KEEP_FALLBACK", "DEPLOYERS", "get_deployer", "ensure_deployed",
-    "make_desmon_react", "BREAK_BEFORE_MAKE", "KEEP_FALLBACK", "UPGRADE_POLICIES",
+    "make_desmon_react", "upgrade_due", "BREAK_BEFORE_MAKE", "KEEP_FALLBACK", "UPGRADE_POLICIES",
 ]
 
 #: Generator returning True when the graph ended up deployed.
@@ -273,18 +273,24 @@ UPGRADE_POLICIES = (BREAK_BEFORE_MAKE, KEEP_FALLBACK)
 def _fits_if_freed(g: str, spec: DeploymentSpec, q: QueryPort, freed: list[str]) -> tuple[str, ...]:
     """The platforms acceptable for ``g`` if the running ``freed`` graphs were stopped
     (Capacity is the only requirement their stop can change)."""
-    states = q.platform_states()
+    world = states = q.platform_states()
     fixed = q.fixed_platform(spec)
     if fixed is not None:
         states = tuple(s for s in states if s.name == fixed)
-    return check_validity(q.constraints(spec), states, (g, *freed), reasons=False).acceptable
+    return spec_validity(q.constraints(spec), spec.reads, states, world, (g, *freed), reasons=False).acceptable
+
+
+def _reads_from(spec: DeploymentSpec | None, platforms: tuple[str, ...] | frozenset[str]) -> bool:
+    """Does a graph of ``spec`` read a device hosted on one of ``platforms``?"""
+    return spec is not None and any(h in platforms for r in spec.reads for h in r.hosts)
 
 
 def _recheck(
     q: QueryPort, changed: tuple[str, ...], placed: dict[str, bool], make_before_break: bool, triggers: frozenset[str] | None = None
 ) -> Reaction:
-    """Corrected Algorithm 2: every deployment on a ``changed`` platform is kept if still
-    valid, else migrated, else stopped with an error; each graph's outcome goes to ``placed``.
+    """Corrected Algorithm 2: every deployment on a ``changed`` platform, and every one
+    that reads a device hosted on a changed platform, is kept if still valid, else
+    migrated, else stopped with an error; each graph's outcome goes to ``placed``.
 
     Placing a graph is ensure_deployed, written out as its two halves so that a graph
     that is simply kept (the common case) creates no generator.
@@ -295,6 +301,10 @@ def _recheck(
             if g not in placed:
                 survey = _survey(g, q, triggers)
                 placed[g] = True if _kept(survey) else (yield from _act_on(g, q, survey, make_before_break))
+    for g, _p in q.deployments():  # the readers of a changed platform's devices
+        if g not in placed and _reads_from(q.deployment_information(g), changed):
+            survey = _survey(g, q, triggers)
+            placed[g] = True if _kept(survey) else (yield from _act_on(g, q, survey, make_before_break))
 
 
 def _place_slots(
@@ -305,6 +315,7 @@ def _place_slots(
     make_before_break: bool,
     upgrading: bool,
     triggers: frozenset[str] | None = None,
+    context_changed: bool = False,
 ) -> Generator[Command, "bool | None", set[str]]:
     """Corrected Algorithm 1: place one graph of every slot (the first alternative that
     can be placed, each graph decided once per reaction); return the graphs chosen."""
@@ -316,7 +327,7 @@ def _place_slots(
                 survey = _survey(g, q, triggers)
                 spec = survey[0]
                 if upgrading and spec is not None and not survey[1] and i + 1 < len(slot):
-                    survey = yield from _upgrade(g, spec, slot[i + 1:], survey, q, changed, placed)
+                    survey = yield from _upgrade(g, spec, slot[i + 1:], survey, q, changed, placed, context_changed)
                 ok = placed[g] = True if _kept(survey) else (yield from _act_on(g, q, survey, make_before_break))
             if ok:
                 chosen.add(g)
@@ -332,20 +343,35 @@ def _upgrade(
     q: QueryPort,
     changed: tuple[str, ...],
     placed: dict[str, bool],
+    context_changed: bool = False,
 ) -> Generator[Command, "bool | None", Survey]:
     """The upgrade: a running fallback of this slot may be all that blocks ``g``.
 
-    If stopping the running ``fallbacks`` would make ``g`` fit on a changed platform,
-    stop them (break before make), forget their decisions (they are decided again if
-    ``g`` cannot be placed) and return ``g``'s new survey; else return ``survey``.
+    If stopping the running ``fallbacks`` would make ``g`` acceptable somewhere, and this
+    reaction answers a change that may have made it so (:func:`upgrade_due`: the context
+    changed, or a platform where ``g`` would then fit or whose devices ``g`` reads
+    changed), stop them (break before make), forget their decisions (they are decided
+    again if ``g`` cannot be placed) and return ``g``'s new survey; else ``survey``.
     """
     freed = [f for f in fallbacks if q.deployed_on(f)]
-    if freed and changed and any(p in changed for p in _fits_if_freed(g, spec, q, freed)):
+    if freed and (context_changed or changed) and upgrade_due(spec, _fits_if_freed(g, spec, q, freed), changed, context_changed):
         yield from _stop_graphs(freed, q)  # break before make
         for f in freed:
             placed.pop(f, None)
         return _survey(g, q)
     return survey
+
+
+def upgrade_due(spec: DeploymentSpec, fits: tuple[str, ...], changed: tuple[str, ...] | frozenset[str], context_changed: bool) -> bool:
+    """The upgrade rule (docs/design.md §8), one definition for the deployer and the
+    ``preferred-when-possible`` invariant: the preferred alternative of ``spec``, which
+    would be acceptable on ``fits`` with its slot's running fallbacks stopped, is due a
+    try in a reaction to a context change, or to a change of a platform where it would
+    fit or whose devices it reads. A start refused or failed since is not retried until
+    one of those changes again."""
+    if not fits:
+        return False
+    return context_changed or any(p in changed for p in fits) or _reads_from(spec, changed)
 
 
 def make_desmon_react(
@@ -365,10 +391,10 @@ def make_desmon_react(
     preferred alternative, and places the fallback again if that fails (the robot is
     blind from the stop until the preferred detector is warm); ``"keep-fallback"``
     keeps the fallback running (no blind time, but the preferred detector never returns
-    while the fallback holds its room). An upgrade is attempted only in a reaction to a
-    change of a platform where the preferred alternative would then fit (its room is
-    what changed): a start the infrastructure keeps refusing there (an unreadable input,
-    docs/design.md §6) is retried at that platform's next change, not at every reaction.
+    while the fallback holds its room). An upgrade is attempted when :func:`upgrade_due`
+    says so: in a reaction to a context change, or to a change of a platform where the
+    preferred alternative would then fit or whose devices it reads; a start that failed
+    is retried at the next such change, not at every reaction.
     """
     if upgrade not in UPGRADE_POLICIES:
         raise ModelError(f"unknown upgrade policy {upgrade!r}: choose one of {', '.join(UPGRADE_POLICIES)}")
@@ -386,7 +412,7 @@ def make_desmon_react(
         unwanted = [g for g in _active_graphs(q) if g not in wanted]
         if unwanted:
             yield from _stop_graphs(unwanted, q)
-        chosen = yield from _place_slots(q, slots, changed, placed, make_before_break, upgrading, triggers)
+        chosen = yield from _place_slots(q, slots, changed, placed, make_before_break, upgrading, triggers, context_changed)
         # Fallbacks that are no longer needed (a better alternative is placed again).
         unneeded = [g for g in _active_graphs(q) if g in wanted and g not in chosen]
         if unneeded:

@@ -96,7 +96,7 @@ def validly_active_among(
         g
         for s in states
         for g, _use in s.deployed
-        if (graphs is None or g in graphs) and not deployment_valid(spec(g), s)
+        if (graphs is None or g in graphs) and not deployment_valid(spec(g), s, states)
     )
 
 
@@ -114,7 +114,7 @@ class Invariant:
 
 def _valid_or_error(v: SystemView) -> str | None:
     for g, p in v.deployments:
-        fails = deployment_valid(v.spec(g), v.state(p))
+        fails = deployment_valid(v.spec(g), v.state(p), v.states)
         if fails and g not in v.standing:
             return f"{g} is active on {p}, which is invalid ({'; '.join(f.requirement + ': ' + f.reason for f in fails)}), and no error stands for it"
     return None
@@ -242,7 +242,7 @@ def _no_flapping(v: SystemView) -> str | None:
         if not isinstance(cmd, Stop) or cmd.graph not in wanted or (cmd.graph, cmd.platform) not in v.deployments:
             continue
         spec = v.spec(cmd.graph)
-        if spec is not None and spec.rebalance is not None and not deployment_valid(spec, v.state(cmd.platform)):
+        if spec is not None and spec.rebalance is not None and not deployment_valid(spec, v.state(cmd.platform), v.states):
             return (
                 f"with nothing changed the deployer would move {cmd.graph} off {cmd.platform} again, where it runs validly "
                 f"(rebalance min_gain {spec.rebalance:g}): it flaps"

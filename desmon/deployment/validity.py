@@ -9,7 +9,7 @@ import threading
 from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any, Iterable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence
 
 from desmon.model.requirements import (
     PLATFORM_HAS,
@@ -22,6 +22,7 @@ from desmon.model.requirements import (
     Option,
     Preference,
     Quantity,
+    Reads,
     Requirement,
     Selection,
 )
@@ -57,7 +58,7 @@ _MEMO_LOCK = threading.Lock()
 #: :func:`_check_validity` would (a Validity) or None to leave it to the loop below.
 _vector_path: Any = None
 
-__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "unmemoised", "reads_fixed_facts"]
+__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "unmemoised", "reads_fixed_facts", "unreadable", "spec_validity", "input_failures"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -189,6 +190,17 @@ def _selection(req: Selection, state: PlatformState, graph: Placing) -> str | No
     return f"{len(have)} of the options available ({', '.join(have) or 'none'}), needs {req.at_least}"
 
 
+def _reads(req: Reads, state: PlatformState, graph: Placing) -> str | None:
+    """The platform's own half of :class:`Reads`: on a platform hosting devices of the
+    kind the graph reads those, so one of them must work there (the other half,
+    elsewhere, is :func:`unreadable`)."""
+    name = state.platform.name
+    if name not in req.hosts or any(d.kind == req.kind for d in state.devices):
+        return None
+    own = ", ".join(d for d, p in req.devices if p == name)
+    return f"{own} on {name} failed"
+
+
 def _soft(req: Preference, state: PlatformState, graph: Placing) -> str | None:
     return None  # a preference never rejects a platform: it scores it (preference_term)
 
@@ -201,6 +213,7 @@ _HOLDS: dict[type, Any] = {
     Maximum: _maximum,
     Attribute: _attribute,
     Selection: _selection,
+    Reads: _reads,
     Preference: _soft,
 }
 
@@ -323,6 +336,100 @@ def _failures(
     return tuple(out)
 
 
+@lru_cache(maxsize=256)
+def _has(kind: str) -> tuple[Attribute, ...]:
+    return (Attribute(PLATFORM_HAS, kind),)
+
+
+def unreadable(req: Reads, state_of: "Callable[[str], PlatformState | None]", graph: Placing, *, reasons: bool = True) -> str | None:
+    """Why no device of ``req.kind`` is readable anywhere on the robot (None if one is).
+
+    A device is readable while it works and its platform is up. This is the half of
+    :class:`Reads` that a platform hosting none of the devices depends on: the graph
+    then reads any of them, on the other platforms. ``state_of`` gives a platform's
+    facts (None: not in the model's view). Each hosting platform is asked through
+    :func:`check_platform`, so the checker's table engine observes exactly the hosts it
+    reads; the text (only with ``reasons``) names each device and why it cannot be read.
+    """
+    place = graph if graph is None or type(graph) is str else graph[0]
+    hosts = req.hosts
+    seen: list[tuple[str, PlatformState | None]] = []
+    for h in hosts:
+        st = state_of(h)
+        if st is not None and not check_platform(_has(req.kind), st, place):
+            return None
+        seen.append((h, st))
+    if not reasons:
+        return f"no readable {req.kind}"
+    parts = []
+    for h, st in seen:
+        names = ", ".join(d for d, p in req.devices if p == h)
+        if st is None:
+            parts.append(f"{names} on {h}: platform unknown")
+            continue
+        first = check_platform(_has(req.kind), st, place)[0]
+        status = "failed" if first.requirement != "platform up" else ("is not there" if first.reason == _ABSENT else "is down")
+        parts.append(f"{names} on {h} {status}")
+    return "; ".join(parts)
+
+
+def input_failures(reads: tuple[Reads, ...], platform: str, state_of: "Callable[[str], PlatformState | None]", graph: Placing, *, reasons: bool = True) -> tuple[Failure, ...]:
+    """The failures of the remote half of ``reads`` for a graph on ``platform``: each
+    kind ``platform`` hosts no device of and no platform can give (the platform's own
+    half is checked with its requirements: :class:`Reads` in :func:`check_platform`)."""
+    out = []
+    for r in reads:
+        if platform not in r.hosts:
+            why = unreadable(r, state_of, graph, reasons=reasons)
+            if why is not None:
+                out.append(Failure(platform, r.describe(), why))
+                if not reasons:
+                    break
+    return tuple(out)
+
+
+def _lookup(states: Sequence[PlatformState]) -> "Callable[[str], PlatformState | None]":
+    by_name = {s.platform.name: s for s in states}
+    return by_name.get
+
+
+def spec_validity(
+    reqs: tuple[Requirement, ...],
+    reads: tuple[Reads, ...],
+    states: Sequence[PlatformState],
+    world: Sequence[PlatformState],
+    graph: Placing,
+    *,
+    reasons: bool = True,
+) -> Validity:
+    """:func:`check_validity` of ``reqs`` and what the graph's inputs require (``reads``)
+    over the candidate ``states``, reading remote inputs from ``world`` (every platform).
+
+    A :class:`Reads` whose kind no platform of ``world`` can give rejects every
+    candidate: the hosting ones by their own half (their devices failed or they are
+    down), the others with the reason :func:`unreadable` gives. Otherwise the answer is
+    :func:`check_validity`'s, so the checker's table engine observes it as lazily as
+    any requirement check.
+    """
+    if not reads:
+        return check_validity(reqs, states, graph, reasons=reasons)
+    validity = check_validity(tuple(reqs) + reads, states, graph, reasons=reasons)
+    state_of = _lookup(world)
+    dead = [(r, why) for r in reads if (why := unreadable(r, state_of, graph, reasons=reasons)) is not None]
+    if not dead:
+        return validity
+    rejected = []
+    for st in order_platforms(states):
+        name = st.platform.name
+        own = validity.failures(name) if reasons else ()
+        extra = tuple(Failure(name, r.describe(), why) for r, why in dead if name not in r.hosts)
+        fails = tuple(own) + extra
+        if not fails:  # a hosting platform that still passes cannot be (no host is readable)
+            fails = tuple(Failure(name, r.describe(), why) for r, why in dead)
+        rejected.append((name, fails if reasons else fails[:1]))
+    return Validity((), tuple(rejected))
+
+
 def clear_memos() -> None:
     """Forget every memoised validity result (tests; memory)."""
     _check_platform.cache_clear()
@@ -433,7 +540,7 @@ def validity_for(q: "QueryPort", spec: DeploymentSpec, *, reasons: bool = True) 
     fixed = q.fixed_platform(spec)
     if fixed is not None:
         states = tuple(s for s in states if s.name == fixed)
-    validity = check_validity(q.constraints(spec), states, spec.graph, reasons=reasons)
+    validity = spec_validity(q.constraints(spec), spec.reads, states, all_states, spec.graph, reasons=reasons)
     if memo is not None:
         if len(memo) > _MEMO_SIZE:
             memo.clear()
@@ -451,14 +558,22 @@ def acceptable_platforms(q: "QueryPort", graph: str) -> Validity:
     return validity_for(q, spec)
 
 
-def deployment_valid(spec: DeploymentSpec | None, state: PlatformState) -> tuple[Failure, ...]:
-    """Why an active deployment of ``spec`` on ``state`` is invalid (empty if it is valid).
+def deployment_valid(spec: DeploymentSpec | None, state: PlatformState, states: Sequence[PlatformState]) -> tuple[Failure, ...]:
+    """Why an active deployment of ``spec`` on ``state`` is invalid (empty if it is valid);
+    ``states`` are every platform's facts (where remote inputs are read).
 
     Used by the corrected deployer's bookkeeping and by the invariants alike: up, on its
-    EXECUTABLE_ON platform if fixed, every requirement met (own Capacity share excluded).
+    EXECUTABLE_ON platform if fixed, every requirement met (own Capacity share excluded),
+    and every device kind the graph reads readable (:class:`Reads`).
     """
     if spec is None:
         return (Failure(state.name, "deployment information", "missing"),)
     if spec.fixed_platform is not None and spec.fixed_platform != state.name:
         return (Failure(state.name, f"EXECUTABLE_ON {spec.fixed_platform}", "runs on another platform"),)
-    return check_platform(spec.requirements, state, spec.graph)
+    reads = spec.reads
+    if not reads:
+        return check_platform(spec.requirements, state, spec.graph)
+    fails = check_platform(spec.requirements + reads, state, spec.graph)
+    if fails:
+        return fails
+    return input_failures(reads, state.platform.name, _lookup(states), spec.graph)

@@ -6,7 +6,7 @@ The semantics of each kind (docs/design.md §4) is implemented once, in
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Iterable
 
 from desmon.errors import ModelError
@@ -29,6 +29,7 @@ __all__ = [
     "PREFERENCE_KINDS",
     "make_preference",
     "Constraint",
+    "Reads",
 ]
 
 #: The Attribute name that means "the platform has a working device of this kind" (R1).
@@ -205,6 +206,33 @@ class Selection:
         return f"Selection({self.at_least} of {', '.join(o.describe() for o in self.options)})"
 
 
+@dataclass(frozen=True, slots=True)
+class Reads:
+    """The requirement a perception graph's inputs make: a device of ``kind`` it reads is
+    readable (docs/design.md §6, the Control rules' reading rule).
+
+    Nobody writes it: :class:`~desmon.model.system.SystemModel` derives one per device
+    kind a graph's sensor components read (:attr:`DeploymentSpec.reads`). ``devices``
+    are the declared devices of that kind as ``(device, platform)`` pairs, in
+    declaration order. On a platform that hosts some of them the graph reads its own
+    (one must work there); elsewhere it reads any of them, so one must work on a
+    platform that is up. The first half is a fact of the platform alone and is checked
+    with its other requirements; the second is read from the hosting platforms'
+    facts (:func:`desmon.deployment.validity.unreadable_inputs`).
+    """
+
+    kind: str
+    devices: tuple[tuple[str, str], ...]
+
+    @property
+    def hosts(self) -> tuple[str, ...]:
+        """The platforms hosting a device of this kind, in declaration order, without repeats."""
+        return tuple(dict.fromkeys(p for _d, p in self.devices))
+
+    def describe(self) -> str:
+        return f"reads {self.kind}"
+
+
 Requirement = Quantity | Capacity | Minimum | Maximum | Attribute | Selection
 
 #: Soft preference kinds and their arguments (see :class:`Preference`).
@@ -358,6 +386,11 @@ class DeploymentSpec:
     #: The rebalancing threshold: a valid deployment moves to a better-scoring platform
     #: only when the score gain exceeds it (hysteresis); None never moves a valid one.
     rebalance: float | None = None
+    #: What the graph's inputs require (one :class:`Reads` per device kind its sensor
+    #: components read that some device provides), derived by the
+    #: :class:`~desmon.model.system.SystemModel` from its graphs and devices: not part of
+    #: what a user writes, nor of the specification's identity (equality, hash).
+    reads: tuple[Reads, ...] = field(default=(), compare=False)
 
     def __post_init__(self) -> None:
         check_name("deployment specification graph", self.graph)
@@ -370,6 +403,13 @@ class DeploymentSpec:
             check_name(f"fixed platform of {self.graph!r}", self.fixed_platform)
         if self.rebalance is not None:
             check_number(f"rebalance min_gain of {self.graph!r}", self.rebalance)
+        reads = tuple(self.reads) if isinstance(self.reads, (tuple, list)) else self.reads
+        if not isinstance(reads, tuple) or not all(isinstance(r, Reads) for r in reads):
+            raise ModelError(
+                f"deployment specification of {self.graph!r} reads = {self.reads!r}: leave it out "
+                "(the system model derives it from the graph's sensor components and the devices)"
+            )
+        object.__setattr__(self, "reads", reads)
 
     def rebalance_problem(self) -> str | None:
         """Why this specification's ``rebalance`` can never move anything (None if it can,

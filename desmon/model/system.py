@@ -6,7 +6,7 @@ checking reads (whoever holds them: the networkx repository or the checker's sta
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Mapping
 
 from desmon.errors import DesmonError, ModelError
@@ -23,6 +23,7 @@ from desmon.model.requirements import (
     Minimum,
     Preference,
     Quantity,
+    Reads,
     Requirement,
     Selection,
 )
@@ -274,6 +275,18 @@ class SystemModel:
         if self.devices:  # a model with no devices at all is a pure platform/requirement study
             self._check_device_kinds()
         self._check_rules(graphs)
+        object.__setattr__(self, "specs", tuple(self._with_reads(s) for s in self.specs))
+
+    def _with_reads(self, spec: DeploymentSpec) -> DeploymentSpec:
+        """``spec`` with what its graph's inputs require (:class:`Reads`, one per device kind
+        its sensor components read that some device provides; a kind no device provides
+        imposes nothing: a model without devices is a pure platform study)."""
+        reads = tuple(
+            Reads(kind, tuple((d.name, d.platform) for d in self.devices if d.kind == kind))
+            for kind in self.graph(spec.graph).device_kinds
+            if any(d.kind == kind for d in self.devices)
+        )
+        return spec if reads == spec.reads else replace(spec, reads=reads)
 
     def _check_field_types(self) -> None:
         """Every tuple field holds items of its type (normalised to a tuple); rules is a RuleTable."""

@@ -92,7 +92,7 @@ def change_requirements(repo: Repository, change: RequirementChange) -> tuple[st
     for req in new:
         if req not in spec.requirements:
             _add_requirement(repo, dep, change.graph, req)
-    repo.update_node(dep, spec=DeploymentSpec(change.graph, new, spec.fixed_platform, spec.rebalance))
+    repo.update_node(dep, spec=DeploymentSpec(change.graph, new, spec.fixed_platform, spec.rebalance, spec.reads))
     repo.specs_version += 1
     return tuple(repo.graph.nodes[p]["name"] for p in repo.successors(dep, L.DEPLOYED_ON))
 

@@ -54,7 +54,8 @@ class RepositoryQuery:
         fixed = self._out(dep, L.EXECUTABLE_ON)
         declared = self._g.nodes[dep].get("spec")
         rebalance = declared.rebalance if declared is not None else None
-        return DeploymentSpec(graph, reqs, self._g.nodes[fixed[0]]["name"] if fixed else None, rebalance)
+        reads = declared.reads if declared is not None else ()
+        return DeploymentSpec(graph, reqs, self._g.nodes[fixed[0]]["name"] if fixed else None, rebalance, reads)
 
     def has_fixed_deployment(self, spec: DeploymentSpec) -> bool:
         return self.fixed_platform(spec) is not None

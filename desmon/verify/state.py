@@ -186,7 +186,7 @@ class StateStore:
             if g == graph:
                 spec = self._spec_memo.get((g, reqs))
                 if spec is None:
-                    spec = self._spec_memo[(g, reqs)] = DeploymentSpec(g, reqs, declared.fixed_platform, declared.rebalance)
+                    spec = self._spec_memo[(g, reqs)] = DeploymentSpec(g, reqs, declared.fixed_platform, declared.rebalance, declared.reads)
                 return spec
         return declared
 
