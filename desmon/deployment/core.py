@@ -11,11 +11,11 @@ same generator with start latencies.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Iterable
+from typing import Container, Iterable
 
 from desmon.deployment.deployer import Deployer, get_deployer
 from desmon.deployment.guard import DeployerFault, describe_stimulus, guarded, uncallable
-from desmon.deployment.invariants import SystemView, validly_active_among, view_of
+from desmon.deployment.invariants import ReactionBook, SystemView, judge_reaction, raise_problem, validly_active_among, view_of
 from desmon.deployment.monitor import InsertPort, Stimulus, observe
 from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop
 from desmon.deployment.validity import deployment_valid, validity_for
@@ -140,6 +140,12 @@ class DeploymentCore:
         self._rebalancing = any(s.rebalance is not None for s in model.specs)
         #: the last reaction's moves that broke ``no-flapping`` (what happened, one line each)
         self.unjustified: list[str] = []
+        #: the last reaction's broken transition properties, (invariant, message) each:
+        #: ``no-flapping``'s moves, ``errors-justified``, ``preferred-when-possible``
+        #: (:func:`~desmon.deployment.invariants.judge_reaction`); set by :meth:`settle`
+        self.findings: list[tuple[str, str]] = []
+        #: what the running reaction did, for the transition properties (None: no reaction since the last settle)
+        self._book: ReactionBook | None = None
         # context -> (requested slots, the graphs they name); the rules and the deployer
         # are immutable, so this is a pure memo (bounded by the contexts seen, see _selection)
         self._selection_memo: dict[str | None, tuple[tuple[tuple[str, ...], ...], frozenset[str]]] = {}
@@ -180,9 +186,38 @@ class DeploymentCore:
             stimulus, *self._known, lambda: describe_stimulus(stimulus, query.context(), cause),
         )
         self.unjustified = []
+        self.findings = []
+        book = self._book = ReactionBook(stimulus.changed_platforms, stimulus.context_changed)
+        reaction = self._audit_reaction(reaction, book)
         if self._rebalancing:
             return self._audit_moves(reaction)
         return reaction
+
+    def finding(self, names: "Container[str]") -> tuple[str, str] | None:
+        """The last reaction's first broken transition property among ``names``, as
+        (invariant, message), or None."""
+        for found in self.findings:
+            if found[0] in names:
+                return found
+        return None
+
+    def _audit_reaction(self, reaction: Reaction, book: ReactionBook) -> Reaction:
+        """``reaction``, passed through, with what it does noted in ``book``: each start
+        and stop with its outcome, and each error judged true or not at the instant it is
+        raised (``errors-justified``, :func:`~desmon.deployment.invariants.raise_problem`)."""
+        outcome: bool | None = None
+        q = self.query
+        while True:
+            try:
+                cmd = reaction.send(outcome)
+            except StopIteration:
+                return
+            if type(cmd) is RaiseError:
+                if book.bad_raise is None:
+                    book.bad_raise = raise_problem(cmd, book, q)
+                book.raised[cmd.graph] = cmd.kind
+            outcome = yield cmd
+            book.note(cmd, outcome)
 
     def _audit_moves(self, reaction: Reaction) -> Reaction:
         """``reaction``, passed through, noting every move of a valid deployment of a
@@ -262,8 +297,17 @@ class DeploymentCore:
         return None
 
     def settle(self, raised: Iterable[str]) -> frozenset[str]:
-        """Update the standing errors after a reaction that raised errors for ``raised``."""
-        raised = tuple(raised)
+        """Update the standing errors after a reaction that raised errors for ``raised``,
+        then judge the reaction's transition properties (:attr:`findings`)."""
+        standing = self._settle(tuple(raised))
+        book, self._book = self._book, None
+        findings = [("no-flapping", m) for m in self.unjustified]
+        if book is not None:
+            findings += judge_reaction(self.query, book, standing, self._selection()[0], self._spec_of)
+        self.findings = findings
+        return standing
+
+    def _settle(self, raised: tuple[str, ...]) -> frozenset[str]:
         if not raised and not self.standing:
             # nothing can stand: standing_after(∅, ∅, ...) is ∅ whatever the view says
             return self.standing
@@ -286,6 +330,8 @@ class DeploymentCore:
     def step(self, event: Event, control: ControlPort, *, force: bool = False) -> tuple[Stimulus, StepLog]:
         """Observe ``event`` and run the whole reaction at once (no latency)."""
         self.unjustified = []  # this step's moves only (an event that changes nothing runs no reaction)
+        self.findings = []
+        self._book = None
         stim = self.observe(event)
         log = StepLog()
         if not stim.empty or force:

@@ -39,7 +39,7 @@ from desmon.model.requirements import DeploymentSpec
 
 __all__ = [
     "Deployer", "PAPER", "DESMON", "DESMON_KEEP_FALLBACK", "DEPLOYERS", "get_deployer", "ensure_deployed",
-    "make_desmon_react", "upgrade_due", "BREAK_BEFORE_MAKE", "KEEP_FALLBACK", "UPGRADE_POLICIES",
+    "make_desmon_react", "upgrade_due", "fits_if_freed", "BREAK_BEFORE_MAKE", "KEEP_FALLBACK", "UPGRADE_POLICIES",
 ]
 
 #: Generator returning True when the graph ended up deployed.
@@ -270,7 +270,7 @@ KEEP_FALLBACK = "keep-fallback"
 UPGRADE_POLICIES = (BREAK_BEFORE_MAKE, KEEP_FALLBACK)
 
 
-def _fits_if_freed(g: str, spec: DeploymentSpec, q: QueryPort, freed: list[str]) -> tuple[str, ...]:
+def fits_if_freed(g: str, spec: DeploymentSpec, q: QueryPort, freed: list[str]) -> tuple[str, ...]:
     """The platforms acceptable for ``g`` if the running ``freed`` graphs were stopped
     (Capacity is the only requirement their stop can change)."""
     world = states = q.platform_states()
@@ -354,7 +354,7 @@ def _upgrade(
     again if ``g`` cannot be placed) and return ``g``'s new survey; else ``survey``.
     """
     freed = [f for f in fallbacks if q.deployed_on(f)]
-    if freed and (context_changed or changed) and upgrade_due(spec, _fits_if_freed(g, spec, q, freed), changed, context_changed):
+    if freed and (context_changed or changed) and upgrade_due(spec, fits_if_freed(g, spec, q, freed), changed, context_changed):
         yield from _stop_graphs(freed, q)  # break before make
         for f in freed:
             placed.pop(f, None)

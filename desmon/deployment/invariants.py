@@ -10,13 +10,19 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable, Container
 
-from desmon.deployment.ports import QueryPort, Start, Stop
-from desmon.deployment.validity import deployment_valid
+from desmon.deployment.deployer import fits_if_freed, upgrade_due
+from desmon.deployment.ports import (
+    DEPLOYMENT_FAILED, DEPLOYMENT_INFORMATION_MISSING, NO_ACCEPTABLE_PLATFORMS, STOPPING_FAILED, QueryPort, RaiseError, Start, Stop,
+)
+from desmon.deployment.validity import deployment_valid, validity_for
 from desmon.errors import ModelError
 from desmon.model.requirements import DeploymentSpec
 from desmon.model.system import PlatformState
 
-__all__ = ["SystemView", "Invariant", "INVARIANTS", "view_of", "check_invariants", "get_invariants", "validly_active", "validly_active_among"]
+__all__ = [
+    "SystemView", "Invariant", "INVARIANTS", "view_of", "check_invariants", "get_invariants", "validly_active", "validly_active_among",
+    "ReactionBook", "raise_problem", "judge_reaction", "TRANSITION_INVARIANTS",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -223,6 +229,10 @@ class _ViewQuery:
         return None
 
 
+def _transition_only(v: SystemView) -> str | None:
+    return None  # judged on a reaction (judge_reaction), not on a state alone
+
+
 def _no_flapping(v: SystemView) -> str | None:
     """Re-run the reaction with nothing changed, executing nothing (every Start answered
     as failed, every Stop as done): it must stop no valid deployment of a graph that
@@ -250,6 +260,110 @@ def _no_flapping(v: SystemView) -> str | None:
     return None
 
 
+# ------------------------------------------------------------------------------------
+# transition properties: judged on one reaction (what it did) and the state it left
+# ------------------------------------------------------------------------------------
+@dataclass(slots=True)
+class ReactionBook:
+    """What one reaction did, as ``errors-justified`` and ``preferred-when-possible``
+    judge it: the stimulus it answered, each graph's tried platforms, its last start or
+    stop (verb, platform, succeeded), the kind of the last error raised for it, and the
+    first error raised without its reason holding at that instant."""
+
+    changed: tuple[str, ...]
+    context_changed: bool
+    tried: dict[str, set[str]] = field(default_factory=dict)
+    last: dict[str, tuple[str, str, bool]] = field(default_factory=dict)
+    raised: dict[str, str] = field(default_factory=dict)
+    bad_raise: str | None = None
+
+    def note(self, cmd: object, outcome: bool | None) -> None:
+        """Record an executed Start or Stop and its outcome."""
+        if type(cmd) is Start:
+            self.tried.setdefault(cmd.graph, set()).add(cmd.platform)
+            self.last[cmd.graph] = ("start", cmd.platform, bool(outcome))
+        elif type(cmd) is Stop:
+            self.last[cmd.graph] = ("stop", cmd.platform, bool(outcome))
+
+
+def raise_problem(cmd: RaiseError, book: ReactionBook, q: QueryPort) -> str | None:
+    """Why the error ``cmd`` is not true at the instant it is raised (None if it is):
+
+    * ``no_acceptable_platforms`` -- no platform is acceptable for the graph now;
+    * ``deployment_failed`` -- the graph's last start or stop in this reaction was a start
+      (on the error's platform, when it names one) that failed or was refused;
+    * ``stopping_failed`` -- likewise a stop that failed;
+    * ``deployment_information_missing`` -- the graph has no deployment specification.
+    """
+    g, kind = cmd.graph, cmd.kind
+    if kind in (DEPLOYMENT_FAILED, STOPPING_FAILED):
+        verb = "start" if kind == DEPLOYMENT_FAILED else "stop"
+        last = book.last.get(g)
+        if last is None or last[0] != verb:
+            return f"{cmd.kind} raised for {g}, but no {verb} of {g} preceded it in this reaction"
+        if last[2]:
+            return f"{cmd.kind} raised for {g}, but its last {verb} (on {last[1]}) succeeded"
+        if cmd.platform is not None and cmd.platform != last[1]:
+            return f"{cmd.kind} raised for {g} on {cmd.platform}, but its last {verb} was on {last[1]}"
+        return None
+    spec = q.deployment_information(g)
+    if kind == DEPLOYMENT_INFORMATION_MISSING:
+        return None if spec is None else f"{kind} raised for {g}, which has a deployment specification"
+    if kind == NO_ACCEPTABLE_PLATFORMS:
+        if spec is None:
+            return f"{kind} raised for {g}, which has no deployment specification (that is {DEPLOYMENT_INFORMATION_MISSING})"
+        acceptable = validity_for(q, spec, reasons=False).acceptable
+        if acceptable:
+            return f"{kind} raised for {g} while {', '.join(acceptable)} {'is' if len(acceptable) == 1 else 'are'} acceptable"
+    return None
+
+
+def judge_reaction(
+    q: QueryPort,
+    book: ReactionBook,
+    standing: frozenset[str],
+    slots: tuple[tuple[str, ...], ...],
+    spec_of: Callable[[str], DeploymentSpec | None],
+) -> list[tuple[str, str]]:
+    """The transition halves of ``errors-justified`` and ``preferred-when-possible`` for
+    one reaction (``book``) and the state it left (through ``q``); (invariant, message)
+    for each broken one (docs/design.md §7-§9)."""
+    out: list[tuple[str, str]] = []
+    if book.bad_raise is not None:
+        out.append(("errors-justified", book.bad_raise))
+    for g in sorted(standing):
+        # a standing error is true only while no acceptable platform is left untried:
+        # a graph still running (its stop failed) is judged by valid-or-error instead
+        spec = spec_of(g)
+        if spec is None or q.deployed_on(g):
+            continue
+        untried = [p for p in validity_for(q, spec, reasons=False).acceptable if p not in book.tried.get(g, ())]
+        if untried:
+            why = f"{book.raised[g]} raised in this reaction" if g in book.raised else "standing from before"
+            out.append((
+                "errors-justified",
+                f"an error stands for {g} ({why}) although it is acceptable on {', '.join(untried)}, which this reaction did not try",
+            ))
+            break
+    for slot in slots:
+        g = slot[0]
+        spec = spec_of(g)
+        if spec is None or g in book.tried or q.deployed_on(g):
+            continue
+        running = [f for f in slot[1:] if q.deployed_on(f)]
+        fits = fits_if_freed(g, spec, q, running)
+        if upgrade_due(spec, fits, book.changed, book.context_changed):
+            cause = "the context changed" if book.context_changed else f"{', '.join(book.changed)} changed"
+            freed = f" with {', '.join(running)} stopped" if running else ""
+            serves = f"{', '.join(running)} serves the slot" if running else "the slot is unserved"
+            out.append((
+                "preferred-when-possible",
+                f"{g} would be acceptable on {', '.join(fits)}{freed} and {cause}, but the reaction did not try it: {serves}",
+            ))
+            break
+    return out
+
+
 INVARIANTS: dict[str, Invariant] = {
     inv.name: inv
     for inv in (
@@ -261,12 +375,27 @@ INVARIANTS: dict[str, Invariant] = {
         Invariant("history", "every stop leaves one DEPLOYMENT_HISTORY edge; every DEPLOYED_ON edge matches a running detector", _history),
         Invariant("fixed", "a fixed deployment runs only on its EXECUTABLE_ON platform", _fixed),
         Invariant(
+            "errors-justified",
+            "every error is true when raised (no_acceptable_platforms: no platform is acceptable; deployment_failed / stopping_failed: the graph's last start / stop just failed; deployment_information_missing: no specification), and an error stands after a reaction only while every platform acceptable for its graph was tried in that reaction",
+            _transition_only,
+        ),
+        Invariant(
+            "preferred-when-possible",
+            "after a reaction to a change that may let a slot's preferred alternative run (the context, a platform where it would fit with the slot's fallbacks stopped, or one it reads), the preferred alternative runs or the reaction tried it",
+            _transition_only,
+        ),
+        Invariant(
             "no-flapping",
             "with the environment unchanged no deployment moves again: re-running the reaction with nothing changed moves no valid deployment of a graph that rebalances",
             _no_flapping,
         ),
     )
 }
+
+
+#: The invariants judged on a reaction, not on a state alone (their ``check`` of a view
+#: says nothing; :func:`judge_reaction` and the core's move audit report them).
+TRANSITION_INVARIANTS = ("errors-justified", "preferred-when-possible")
 
 
 def get_invariants(names: list[str] | tuple[str, ...] | None = None) -> tuple[Invariant, ...]:

@@ -722,10 +722,13 @@ class SimWorld:
                 else:
                     raise not_a_command(cmd)
             self.core.settle(book.raised)
-            for msg in self.core.unjustified:  # no-flapping, its transition half
-                self.violations.append((env.now, "no-flapping", msg))
-                self.trace.emit(env.now, "violation", invariant="no-flapping", message=msg)
-            if not self._pending():
+            quiescent = not self._pending()
+            for name, msg in self.core.findings:  # transition properties (no-flapping, errors-justified, ...)
+                # the others judge the reaction on the facts it left: only at a quiescent point
+                if name == "no-flapping" or quiescent:
+                    self.violations.append((env.now, name, msg))
+                    self.trace.emit(env.now, "violation", invariant=name, message=msg)
+            if quiescent:
                 self._audit()
 
     def _command_start(self, cmd: Start, book: "_Reaction"):  # type: ignore[no-untyped-def]

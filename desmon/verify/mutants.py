@@ -16,6 +16,10 @@ code (``make_desmon_react`` and ``ensure_deployed``), changed in one place:
     stands for a graph while it is wanted and not validly active even when another
     alternative serves its slot, and a running fallback is never upgraded back to the
     preferred alternative (``errors-current`` catches it);
+``raise-instead``
+    never deploys: it raises ``no_acceptable_platforms`` for every graph the selector
+    wants, without looking (the errors make ``valid-or-error`` and ``coverage`` hold
+    vacuously; ``errors-justified`` catches it);
 ``no-hysteresis``
     rebalances without hysteresis: a valid deployment of a graph that rebalances moves
     to a better platform on any positive score gain, not only above the graph's
@@ -28,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 
 from desmon.deployment.deployer import DESMON, KEEP_FALLBACK, Deployer, make_desmon_react
-from desmon.deployment.ports import QueryPort, Reaction
+from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, QueryPort, RaiseError, Reaction
 from desmon.model.requirements import DeploymentSpec
 from desmon.model.system import PlatformState
 
@@ -55,6 +59,12 @@ class HideConsumption:
 
     def __getattr__(self, name: str):  # type: ignore[no-untyped-def]
         return getattr(self.inner, name)
+
+
+def _raise_instead(q: QueryPort, slots, changed, context_changed) -> Reaction:  # type: ignore[no-untyped-def]
+    for slot in slots:
+        for g in slot:
+            yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g)
 
 
 def _capacity_blind(q: QueryPort, slots, changed, context_changed) -> Reaction:  # type: ignore[no-untyped-def]
@@ -101,6 +111,7 @@ MUTANTS: dict[str, Deployer] = {
             "stale-errors", "mutant: errors stand per graph even when the slot is served; no upgrade back to the preferred alternative",
             make_desmon_react(upgrade=KEEP_FALLBACK), stale_errors=True,
         ),
+        Deployer("raise-instead", "mutant: raises no_acceptable_platforms for every wanted graph instead of deploying", _raise_instead),
         Deployer("no-hysteresis", "mutant: a rebalancing graph moves on any positive score gain, ignoring its min_gain", _no_hysteresis),
     )
 }

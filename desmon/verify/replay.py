@@ -10,13 +10,13 @@ verify --replay`` (:meth:`RepositoryRun.trace`) step a :class:`RepositoryRun` ev
 
 from __future__ import annotations
 
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any, Callable, Container, Iterator, Sequence
 
 from desmon.deployment.control import repository_refusal
 from desmon.deployment.core import DeploymentCore, run_sync
 from desmon.deployment.guard import DeployerFault
 from desmon.deployment.deployer import Deployer
-from desmon.deployment.invariants import Invariant, check_invariants
+from desmon.deployment.invariants import INVARIANTS, Invariant, check_invariants
 from desmon.deployment.monitor import Stimulus
 from desmon.deployment.ports import ControlPort
 from desmon.model.events import ActionChange, Event
@@ -124,18 +124,20 @@ class RepositoryRun:
         """The invariants on the current view, plus the last reaction's moves that broke
         ``no-flapping`` (its transition half, noted by the core)."""
         out = check_invariants(self.view(), invariants)
-        if self.core.unjustified and (invariants is None or any(i.name == "no-flapping" for i in invariants)):
-            if not any(name == "no-flapping" for name, _m in out):
-                out.append(("no-flapping", self.core.unjustified[0]))
+        names = {i.name for i in invariants} if invariants is not None else INVARIANTS
+        for name, msg in self.core.findings:
+            if name in names and not any(n == name for n, _m in out):
+                out.append((name, msg))
         return out
 
     def trace(
-        self, labels: Sequence[Label], instant: tuple[Invariant, ...] = (), flapping: bool = False
+        self, labels: Sequence[Label], instant: tuple[Invariant, ...] = (), transitions: Container[str] = ()
     ) -> Iterator[tuple[Step, tuple[str, str, str] | None]]:
         """The current state as step 0, then each label stepped, as the checker's
         counterexample shows it. With each step: the first violation of an ``instant``
-        invariant after a start or stop inside its reaction, or (``flapping``) the
-        reaction's move that broke ``no-flapping``, as ``(invariant, message, after what)``;
+        invariant after a start or stop inside its reaction, or the reaction's first broken
+        transition property among ``transitions`` (``no-flapping``, ``errors-justified``,
+        ``preferred-when-possible``), as ``(invariant, message, after what)``;
         else None. The checker watches the same (:class:`~desmon.verify.bounds.Bounds`' ``instantaneous``)."""
         yield initial_step(self.key()), None
         for i, (event, fails) in enumerate(labels, start=1):
@@ -152,6 +154,7 @@ class RepositoryRun:
                 _stim, log = self.step(event, fails)
             finally:
                 self.control.after = None
-            if not found and flapping and self.core.unjustified:
-                found.append(("no-flapping", self.core.unjustified[0], "the reaction"))
+            transition = self.core.finding(transitions) if not found and transitions else None
+            if transition is not None:
+                found.append((transition[0], transition[1], "the reaction"))
             yield make_step(i, prev, event, self.key(), log, fails, self.control.refuse), (found[0] if found else None)

@@ -40,7 +40,7 @@ def replay_command(args: argparse.Namespace) -> int:
     instant = get_invariants([n for n in run.bounds.instantaneous if n in saved.invariants])
     print(format_replay_head(saved))
     diverged, last, steps = None, None, []
-    trace = run.trace(saved.labels, instant, flapping="no-flapping" in saved.invariants)
+    trace = run.trace(saved.labels, instant, transitions=frozenset(saved.invariants))
     for (step, last), recorded in zip(_stepping(trace, saved), saved.states):
         print(format_trace([step]), flush=True)
         steps.append(step)

@@ -189,8 +189,10 @@ class TransitionSystem:
         core.standing = self._standing(key.standing)
         st.begin(prefix)
         _stim, log = self.step_under_guard(core, st, event)
-        if core.unjustified and st.instant is None and "no-flapping" in self._checked:
-            st.instant = ("no-flapping", core.unjustified[0], "the reaction")
+        if core.findings and st.instant is None:
+            found = core.finding(self._checked)  # a broken transition property (no-flapping, errors-justified, ...)
+            if found is not None:
+                st.instant = (found[0], found[1], "the reaction")
         out = st.key(core.standing), tuple(st.outcomes), log, st.instant
         self._runs += 1
         if self._runs <= RECHECK_FIRST or not self._runs % RECHECK_EVERY:
@@ -230,8 +232,10 @@ class TransitionSystem:
         core.standing = self._standing(key.standing)
         st.begin(prefix)
         _stim, log = self.step_under_guard(core, st, event)
-        if core.unjustified and st.instant is None and "no-flapping" in self._checked:
-            st.instant = ("no-flapping", core.unjustified[0], "the reaction")
+        if core.findings and st.instant is None:
+            found = core.finding(self._checked)  # a broken transition property (no-flapping, errors-justified, ...)
+            if found is not None:
+                st.instant = (found[0], found[1], "the reaction")
         again = st.key(core.standing), tuple(st.outcomes), log, st.instant
         was, now = [str(c) for c, _ok in first[2].commands], [str(c) for c, _ok in log.commands]
         same = [command_key(c) for c, _ok in first[2].commands] == [command_key(c) for c, _ok in log.commands]

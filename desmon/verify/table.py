@@ -1262,8 +1262,10 @@ class TableEngine:
             st.begin(prefix)
             stimulus, log = rc.step_under_guard(rc.core, st, event, recording=True)  # a fault: the instant CRASH
             instant = st.instant
-            if rc.core.unjustified and instant is None and "no-flapping" in rc._checked:  # as TransitionSystem.run_one
-                instant = ("no-flapping", rc.core.unjustified[0], "the reaction")
+            if rc.core.findings and instant is None:  # as TransitionSystem.run_one
+                found = rc.core.finding(rc._checked)
+                if found is not None:
+                    instant = (found[0], found[1], "the reaction")
             return stimulus, log, st.key(rc.core.standing), tuple(st.outcomes), instant
 
         out, obs = self._recording(run, lambda: self.checker.run_one(key, event, prefix))
