@@ -60,7 +60,10 @@ scenario = Scenario(
             "paper": {
                 "verdict": "VIOLATED",
                 "states": 153,
-                "counterexamples": {"valid-or-error": 1, "no-overcommit": 4, "single-instance": 1, "coverage": 2},
+                "counterexamples": {
+                    "valid-or-error": 1, "no-overcommit": 4, "single-instance": 1, "coverage": 2,
+                    "errors-justified": 2, "preferred-when-possible": 2,
+                },
             },
         },
     },

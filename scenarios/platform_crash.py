@@ -47,8 +47,8 @@ scenario = Scenario(
     expected={
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
-            "desmon": {"verdict": "HOLDS", "states": 43, "counterexamples": {}},
-            "paper": {"verdict": "VIOLATED", "states": 51, "counterexamples": {"valid-or-error": 2, "single-instance": 2}},
+            "desmon": {"verdict": "HOLDS", "states": 38, "counterexamples": {}},
+            "paper": {"verdict": "VIOLATED", "states": 55, "counterexamples": {"valid-or-error": 2, "single-instance": 2, "coverage": 2, "errors-justified": 1}},
         },
         # desmon run (SimPy world), seed 0, per deployer: asserted exactly by tests/test_scenarios_sim.py
         "desmon": {

@@ -64,8 +64,8 @@ scenario = Scenario(
     expected={
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
-            "desmon": {"verdict": "HOLDS", "states": 333, "counterexamples": {}},
-            "paper": {"verdict": "VIOLATED", "states": 386, "counterexamples": {"valid-or-error": 2, "single-instance": 2}},
+            "desmon": {"verdict": "HOLDS", "states": 294, "counterexamples": {}},
+            "paper": {"verdict": "VIOLATED", "states": 416, "counterexamples": {"valid-or-error": 2, "single-instance": 2, "coverage": 2, "errors-justified": 1}},
         },
         # desmon deployer, seed 0, --until 1800 (asserted by tests/test_scenarios_sim.py)
         "first_30_min": {

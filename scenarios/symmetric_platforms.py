@@ -61,8 +61,8 @@ scenario = Scenario(
     expected={
         "verify": {
             # desmon verify --continue [--symmetry]: verdict, distinct states
-            "desmon": {"verdict": "HOLDS", "states": 2411, "counterexamples": {}},
-            "desmon --symmetry": {"verdict": "HOLDS", "states": 649, "counterexamples": {}},
+            "desmon": {"verdict": "HOLDS", "states": 1748, "counterexamples": {}},
+            "desmon --symmetry": {"verdict": "HOLDS", "states": 475, "counterexamples": {}},
         },
     },
 )

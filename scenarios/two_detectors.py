@@ -61,7 +61,7 @@ scenario = Scenario(
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
             "desmon": {"verdict": "HOLDS", "states": 40, "counterexamples": {}},
-            "paper": {"verdict": "VIOLATED", "states": 52, "counterexamples": {"coverage": 1}},
+            "paper": {"verdict": "VIOLATED", "states": 52, "counterexamples": {"coverage": 1, "errors-justified": 2, "preferred-when-possible": 1}},
         },
     },
 )

@@ -145,8 +145,12 @@ class SimWorld:
         trace: Trace | None = None,
         signals: bool | None = None,
         progress: Callable[[float, float], None] | None = None,
+        on_quiescent: "Callable[[SimWorld], None] | None" = None,
     ) -> None:
         self.scenario = scenario
+        #: called with this world at every quiescent point, after its audit (a conformance
+        #: harness compares the world there with the checker's state; None: nobody asks)
+        self.on_quiescent = on_quiescent
         self.model = scenario.model
         self.world = world_of(scenario)
         self.seed = int(seed)
@@ -806,6 +810,14 @@ class SimWorld:
         for name, msg in check_invariants(view):
             self.violations.append((self.env.now, name, msg))
             self.trace.emit(self.env.now, "violation", invariant=name, message=msg)
+        if self.on_quiescent is not None:
+            self.on_quiescent(self)
+
+    def physically_valid(self, graph: str, platform: str) -> bool:
+        """Whether the running instance of ``graph`` on ``platform`` can monitor: its
+        platform is up and every stream it reads has a readable device (warm-up aside)."""
+        inst = self.instances.get((graph, platform))
+        return inst is not None and self.up[platform] and self._inputs_ok(inst)
 
     # ------------------------------------------------------------------ run
     def _start_processes(self) -> None:

@@ -30,7 +30,7 @@ from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.state import Key
 from desmon.verify.trace import Label, Step, initial_step, make_step
 
-__all__ = ["initial_reaction", "first_reaction_fault", "ScriptedControl", "RepositoryRun"]
+__all__ = ["initial_reaction", "first_reaction_fault", "ScriptedControl", "RepositoryRun", "repository_key"]
 
 
 def initial_reaction(core: DeploymentCore, scenario: Scenario, bounds: Bounds, control: ControlPort) -> None:
@@ -88,6 +88,18 @@ class ScriptedControl(ImmediateControl):
         return ok
 
 
+def repository_key(repo: Repository, core: DeploymentCore) -> Key:
+    """The checker's key of a networkx repository's current state, with ``core``'s standing
+    errors and current specifications: how a replay, or a simulation at a quiescent
+    point, is compared with the states the checker reaches."""
+    failed = tuple(sorted(d["name"] for _n, d in repo.nodes(L.DEVICE) if not d["working"]))
+    down = tuple(sorted(d["name"] for _n, d in repo.nodes(L.PLATFORM) if not d["up"]))
+    loads = tuple((d["name"], tuple(sorted(d["load"].items()))) for _n, d in repo.nodes(L.PLATFORM) if d["load"])
+    declared = {s.graph: s.requirements for s in core.model.specs}
+    specs = tuple(sorted((s.graph, s.requirements) for s in core.specs() if s.requirements != declared[s.graph]))
+    return Key(core.query.context(), failed, down, loads, core.query.deployments(), tuple(sorted(core.standing)), specs)
+
+
 class RepositoryRun:
     """The deployment core on a fresh networkx repository, stepped event by event."""
 
@@ -108,12 +120,7 @@ class RepositoryRun:
 
     def key(self) -> Key:
         """The checker's key of the repository's current state (for cross-checks)."""
-        failed = tuple(sorted(d["name"] for _n, d in self.repo.nodes(L.DEVICE) if not d["working"]))
-        down = tuple(sorted(d["name"] for _n, d in self.repo.nodes(L.PLATFORM) if not d["up"]))
-        loads = tuple((d["name"], tuple(sorted(d["load"].items()))) for _n, d in self.repo.nodes(L.PLATFORM) if d["load"])
-        declared = {s.graph: s.requirements for s in self.scenario.model.specs}
-        specs = tuple(sorted((s.graph, s.requirements) for s in self.core.specs() if s.requirements != declared[s.graph]))
-        return Key(self.query.context(), failed, down, loads, self.query.deployments(), tuple(sorted(self.core.standing)), specs)
+        return repository_key(self.repo, self.core)
 
     def view(self) -> Any:
         """The SystemView of every invariant, ``history`` included (running list, stops, edges)."""
