@@ -19,7 +19,7 @@ def test_a_parameter_changes_the_model_the_checker_explores(capsys: pytest.Captu
     default = capsys.readouterr().out
     assert main(["verify", str(ROBOT_DAY), "-p", "hand_memory=256", "--no-progress"]) == 0
     smaller = capsys.readouterr().out
-    assert "states: 333 " in default and "states: 304 " in smaller
+    assert "states: 294 " in default and "states: 286 " in smaller
 
 
 def test_a_parameter_changes_the_simulated_world() -> None:

@@ -20,12 +20,12 @@ from pathlib import Path
 import pytest
 
 from desmon.deployment.core import standing_after
-from desmon.deployment.deployer import Deployer, _stop_graphs, _active_graphs
+from desmon.deployment.deployer import Deployer, _active_graphs, _noting_starts, _second_chance, _stop_graphs
 from desmon.deployment.ports import (
     DEPLOYMENT_FAILED, DEPLOYMENT_INFORMATION_MISSING, NO_ACCEPTABLE_PLATFORMS, STOPPING_FAILED, RaiseError, Start, Stop,
 )
 from desmon.deployment.invariants import validly_active
-from desmon.deployment.validity import check_validity, validity_for
+from desmon.deployment.validity import spec_validity, validity_for
 from desmon.loader import load_scenario
 from desmon.verify import Checker
 
@@ -40,7 +40,9 @@ def _reference_ensure_deployed(g, q):  # type: ignore[no-untyped-def]
         yield RaiseError(DEPLOYMENT_INFORMATION_MISSING, g)
         return False
     fixed = q.fixed_platform(spec)
-    acceptable = check_validity(q.constraints(spec), [s for s in q.platform_states() if fixed is None or s.name == fixed], g).acceptable
+    world = q.platform_states()
+    candidates = [s for s in world if fixed is None or s.name == fixed]
+    acceptable = spec_validity(q.constraints(spec), spec.reads, candidates, world, g).acceptable
     current = q.deployed_on(g)
     keep = next((p for p in current if p in acceptable), None)
     for p in [p for p in current if p != keep]:
@@ -50,7 +52,7 @@ def _reference_ensure_deployed(g, q):  # type: ignore[no-untyped-def]
     if keep is not None:
         return True
     if not acceptable:
-        explained = check_validity(q.constraints(spec), [s for s in q.platform_states() if fixed is None or s.name == fixed], g).explain()
+        explained = spec_validity(q.constraints(spec), spec.reads, candidates, world, g).explain()
         yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, fixed, explained if fixed is None else f"fixed platform {fixed}: {explained}")
         return False
     for pk in acceptable:
@@ -61,9 +63,15 @@ def _reference_ensure_deployed(g, q):  # type: ignore[no-untyped-def]
 
 
 def _reference_react(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    placed: dict[str, bool] = {}
+    tried: dict[str, set[str]] = {}
+    yield from _noting_starts(_reference_body(q, slots, changed, context_changed, placed), tried)
+    yield from _second_chance(q, slots, placed, tried)
+
+
+def _reference_body(q, slots, changed, context_changed, placed):  # type: ignore[no-untyped-def]
     """The corrected reaction as it was before the fast paths: every graph placed by the
     unsplit ensure_deployed (above), no memo of the validity answers."""
-    placed: dict[str, bool] = {}
 
     def place(g):  # type: ignore[no-untyped-def]
         if g not in placed:
@@ -73,6 +81,10 @@ def _reference_react(q, slots, changed, context_changed):  # type: ignore[no-unt
     for p in changed:
         for d in q.active_deployments(p):
             yield from place(q.perception_graph(d))
+    for g, _p in q.deployments():  # the readers of a changed platform's devices
+        spec = q.deployment_information(g)
+        if spec is not None and any(h in changed for r in spec.reads for h in r.hosts):
+            yield from place(g)
     wanted = {g for slot in slots for g in slot}
     yield from _stop_graphs([g for g in _active_graphs(q) if g not in wanted], q)
     chosen: set[str] = set()
@@ -92,7 +104,7 @@ def _plain_validity(q, spec, reasons):  # type: ignore[no-untyped-def]
     fixed = q.fixed_platform(spec)
     if fixed is not None:
         states = tuple(s for s in states if s.name == fixed)
-    return check_validity(q.constraints(spec), states, spec.graph, reasons=reasons)
+    return spec_validity(q.constraints(spec), spec.reads, states, q.platform_states(), spec.graph, reasons=reasons)
 
 
 @pytest.mark.parametrize("name", NAMES)

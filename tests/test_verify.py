@@ -40,7 +40,7 @@ def test_pinned_verdicts_and_state_counts(name, deployer):
 def test_desmon_holds_on_coffee_from_cli(capsys):
     assert main(["verify", str(SCENARIOS / "coffee_handover.py"), "--no-progress"]) == 0
     out = capsys.readouterr().out
-    assert "verdict: HOLDS" in out and "states: 747" in out
+    assert "verdict: HOLDS" in out and "states: 693" in out
     assert "events (enabled / new states)" in out and "deployer branches" in out
 
 
@@ -96,7 +96,7 @@ def test_cli_paper_json_and_generated_pytest(tmp_path, capsys):
     assert data["counterexamples"][0]["states"][0]["state"]["context"] == "hold"
     res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(py)], capture_output=True, text=True, cwd=tmp_path)
     assert res.returncode == 0, res.stdout + res.stderr
-    assert "4 passed" in res.stdout
+    assert "6 passed" in res.stdout
     src = py.read_text()  # a replay through the networkx repository, not a copy of the bootstrap
     assert "from desmon.verify import RepositoryRun" in src and "ScriptedControl" not in src and "run_sync" not in src
 
@@ -148,7 +148,10 @@ def test_history_is_left_to_the_audit_and_the_fuzzer(capsys):
     assert main(["verify", path, "--no-progress"]) == 0
     head = capsys.readouterr().out.splitlines()[0]
     checked = head.split("invariants: ")[1].split(" (")[0].split(", ")
-    assert "history" not in checked and checked == ["valid-or-error", "no-overcommit", "single-instance", "coverage", "errors-current", "fixed", "no-flapping"]
+    assert "history" not in checked and checked == [
+        "valid-or-error", "no-overcommit", "single-instance", "coverage", "errors-current", "fixed",
+        "errors-justified", "preferred-when-possible", "no-flapping",
+    ]
     assert head.endswith("(not history: sim audit and fuzz only)")
     assert main(["verify", path, "--invariant", "history", "--no-progress"]) == 2
     cap = capsys.readouterr()

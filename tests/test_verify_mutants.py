@@ -20,8 +20,8 @@ def _cex(name, mutant, invariant):
 
 def test_no_recheck_after_device_loss():
     c = _cex("coffee_handover", "no-recheck", "valid-or-error")
-    # the combined detector stays on a crashed torso_pc: nothing re-checks it
-    assert [s.event for s in c.steps[1:]] == [ActionChange("grasp"), PlatformDown("torso_pc")]
+    # the combined detector stays on torso_pc reading a broken wrench: nothing re-checks it
+    assert [s.event for s in c.steps[1:]] == [ActionChange("grasp"), DeviceFail("lwr_wrench")]
     assert "combined_slip_detector is active on torso_pc" in c.message
 
 
@@ -51,7 +51,7 @@ def test_stale_errors_found_from_memory_pressure_alone():
     from dataclasses import replace
 
     scenario = load_scenario(SCENARIOS / "fallbacks.py")
-    no_failures = replace(scenario, checker=replace(scenario.checker, start_failures=0))
+    no_failures = replace(scenario, checker=replace(scenario.checker, start_failures=0, devices=()))
     r = Checker(no_failures, MUTANTS["stale-errors"], invariants=["errors-current"]).run()
     assert r.verdict == VIOLATED
     # combined on torso_pc; the load climbs 600 -> 800 MB; force serves, combined's error stays

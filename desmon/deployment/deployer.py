@@ -404,6 +404,14 @@ def make_desmon_react(
         q: QueryPort, slots: tuple[tuple[str, ...], ...], changed: tuple[str, ...], context_changed: bool
     ) -> Reaction:
         placed: dict[str, bool] = {}  # each graph is decided once per reaction
+        tried: dict[str, set[str]] = {}  # the platforms each graph's starts were issued on
+        yield from _noting_starts(body(q, slots, changed, context_changed, placed), tried)
+        if not all(any(placed.get(g) for g in slot) for slot in slots):
+            yield from _second_chance(q, slots, placed, tried)
+
+    def body(
+        q: QueryPort, slots: tuple[tuple[str, ...], ...], changed: tuple[str, ...], context_changed: bool, placed: dict[str, bool]
+    ) -> Reaction:
         triggers = None if context_changed else frozenset(changed)  # what a rebalancing move may answer
         if changed:
             yield from _recheck(q, changed, placed, make_before_break, triggers)
@@ -419,6 +427,47 @@ def make_desmon_react(
             yield from _stop_graphs(unneeded, q)
 
     return react
+
+
+def _noting_starts(reaction: Reaction, tried: dict[str, set[str]]) -> Reaction:
+    """``reaction``, passed through, noting in ``tried`` the platform of every start."""
+    outcome: bool | None = None
+    while True:
+        try:
+            cmd = reaction.send(outcome)
+        except StopIteration:
+            return
+        if type(cmd) is Start:
+            tried.setdefault(cmd.graph, set()).add(cmd.platform)
+        outcome = yield cmd
+
+
+def _second_chance(q: QueryPort, slots: tuple[tuple[str, ...], ...], placed: dict[str, bool], tried: dict[str, set[str]]) -> Reaction:
+    """A slot still unserved at the end of the reaction, whose alternatives were decided
+    before a later stop freed room (a re-checked graph stopped after them, an unneeded
+    fallback): each alternative that failed and does not run is started on the platforms
+    that are acceptable now and were not tried in this reaction, in preference order.
+    Without it an error would stand while an acceptable platform is left untried
+    (``errors-justified``, docs/design.md §7)."""
+    for slot in slots:
+        if any(placed.get(g) for g in slot):
+            continue
+        for g in slot:
+            if placed.get(g) is not False or q.deployed_on(g):
+                continue
+            spec = q.deployment_information(g)
+            if spec is None:
+                continue
+            done = tried.get(g, ())
+            for p in validity_for(q, spec, reasons=False).acceptable:
+                if p in done:
+                    continue
+                if (yield Start(g, p)):
+                    placed[g] = True
+                    break
+                yield RaiseError(DEPLOYMENT_FAILED, g, p)
+            if placed.get(g):
+                break
 
 
 PAPER = Deployer("paper", "Algorithms 1 and 2 of the paper, transcribed literally", _paper_react, fallbacks=False)
