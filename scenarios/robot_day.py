@@ -70,14 +70,14 @@ scenario = Scenario(
         # desmon deployer, seed 0, --until 1800 (asserted by tests/test_scenarios_sim.py)
         "first_30_min": {
             "switches": 95, "starts": 92, "stops": 91, "slips_injected": 2, "slips_detected": 2,
-            "errors": {"deployment_failed": 4, "no_acceptable_platforms": 1}, "unmonitored_exposure_s": 77.6,
+            "errors": {"deployment_failed": 1, "no_acceptable_platforms": 3}, "unmonitored_exposure_s": 77.6,
             "violations": 0,
         },
         # the full 8 h day, seed 0 (desmon run scenarios/robot_day.py)
         # (asserted by tests/test_scenarios_sim.py::test_robot_day_full_day_pinned)
         "day": {
             "switches": 1515, "starts": 1442, "slips_injected": 29, "slips_detected": 24, "false_alarms": 12,
-            "errors": {"deployment_failed": 71, "no_acceptable_platforms": 70}, "unmonitored_exposure_s": 2049.904534,
+            "errors": {"deployment_failed": 33, "no_acceptable_platforms": 90}, "unmonitored_exposure_s": 2049.904534,
             "violations": 0,
         },
     },

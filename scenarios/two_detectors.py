@@ -57,7 +57,7 @@ scenario = Scenario(
     expected={
         # desmon run (SimPy world), seed 0, per deployer: asserted exactly by tests/test_scenarios_sim.py
         "desmon": {"violated": [], "errors": {}, "unmonitored_exposure_s": 0.0, "risky_time_s": 5.0},
-        "paper": {"violated": ["coverage"], "errors": {}, "unmonitored_exposure_s": 5.0, "risky_time_s": 5.0},
+        "paper": {"violated": ["coverage", "preferred-when-possible"], "errors": {}, "unmonitored_exposure_s": 5.0, "risky_time_s": 5.0},
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
             "desmon": {"verdict": "HOLDS", "states": 40, "counterexamples": {}},
