@@ -29,7 +29,7 @@ from desmon.options import (
     preflight,
     worker_count,
 )
-from desmon.paths import SCENARIO_FILE, TRACE_FILE
+from desmon.paths import SCENARIO_FILE, TRACE_FILE, plan_outputs
 
 __all__ = ["main", "build_parser"]
 
@@ -497,6 +497,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     try:
         commands_limit(getattr(args, "max_commands", None) or MAX_COMMANDS)  # this command's (a process may run several)
+        plan_outputs(())  # (preflight records this command's outputs)
         preflight(args)  # inputs, numbers, windows and output paths, before any long work
         return int(args.handler(args))
     except DeployerFault as exc:

@@ -127,7 +127,7 @@ def test_a_malformed_parameter_list_is_refused_in_one_line(items, fragment):
 def test_the_table_has_a_row_per_run_with_parameters_seed_and_metrics(tmp_path, cluster):
     result, out = sweep(tmp_path, str(ROBOT_DAY), ["hand_memory=256,384", "hours=0.02"], 2, cluster)
     df = pd.read_parquet(out)
-    assert result.complete and result.failed == 0 and len(df) == 4
+    assert result.complete and result.failed == 0 and len(df) == 4, df["error"].tolist()
     assert list(df.columns[:5]) == ["point", "seed_index", "seed", "hand_memory", "hours"]
     assert list(df["hand_memory"]) == [256, 256, 384, 384]
     for column in ("exit_code", "exposure_s", "switches", "errors", "slips_detected", "slips_missed", "false_alarms",

@@ -17,6 +17,7 @@ __all__ = ["add_parsers", "sweep_command", "sweep_plot_command", "TABLE_FILE"]
 
 TABLE_FILE = ("sweep table", "write one with: desmon sweep SCENARIO -p NAME=V1,V2 -o results.parquet")
 EXIT_OK, EXIT_FAILED_ROWS, EXIT_INTERRUPTED = 0, 1, 130
+DEFAULT_SEEDS = 10
 _SETTING_FLAGS = {"until": "--until", "max_states": "--max-states", "examples": "--examples", "trials": "--trials"}
 _SETTING_DEFAULTS = {"until": None, "max_states": 2_000_000, "examples": 200, "trials": 100}
 
@@ -35,7 +36,8 @@ def add_parsers(sub: Any) -> None:
         "every combination is a point). With --job evaluate: a signal-model parameter, e.g. -p noise_counts=2,4,8",
     )
     p.add_argument("--job", choices=JOBS, default="run", help="what each run does: desmon run / verify / fuzz / evaluate")
-    p.add_argument("--seeds", type=positive_int, default=10, metavar="N", help="runs per point, each with its own derived seed")
+    p.add_argument("--seeds", type=positive_int, default=None, metavar="N",
+                   help="runs per point, each with its own derived seed (default: 10; --job verify: 1, the check uses no seed)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="the sweep seed every run's seed is derived from")
     p.add_argument("--deployer", default="desmon", metavar="SPEC", help="the deployer, as for desmon run (docs/deployers.md)")
     p.add_argument("--until", type=positive_seconds, default=None, help="--job run: simulated seconds (default: each point's horizon)")
@@ -83,7 +85,7 @@ def _setting(args: argparse.Namespace) -> Any:
 def sweep_command(args: argparse.Namespace) -> int:
     from desmon.paths import PathError, check_output_file
     from desmon.sweep.grid import SweepError, parse_axes
-    from desmon.sweep.runner import check_scheduler_address, require_extra
+    from desmon.sweep.runner import check_scheduler_address, probe_scheduler, require_extra
     from desmon.sweep.table import journal_path
 
     require_extra("sweep")
@@ -92,7 +94,15 @@ def sweep_command(args: argparse.Namespace) -> int:
         if args.workers is not None:
             raise SweepError("--workers sets the size of the local cluster; with --scheduler the cluster has its own workers: drop it")
     setting = _setting(args)
+    if args.job == "verify" and args.seeds is not None and args.seeds > 1:
+        raise SweepError(
+            f"--seeds {args.seeds} with --job verify: the check is exhaustive and uses no seed, so every seed gives the same "
+            "row; drop --seeds (one check per point)"
+        )
+    seeds = args.seeds if args.seeds is not None else 1 if args.job == "verify" else DEFAULT_SEEDS
     axes = parse_axes(args.param)
+    if args.scheduler is not None:
+        probe_scheduler(args.scheduler)  # a few seconds at most: not a Dask scheduler is one line, not a hang
     inputs = [args.scenario] if args.scenario else []
     try:
         check_output_file(journal_path(args.output), "-o", (".jsonl",), inputs)
@@ -101,16 +111,16 @@ def sweep_command(args: argparse.Namespace) -> int:
     from desmon.sweep.core import run_sweep
 
     result = run_sweep(
-        job=args.job, scenario=args.scenario, axes=axes, seeds=args.seeds, output=args.output, sweep_seed=args.seed,
+        job=args.job, scenario=args.scenario, axes=axes, seeds=seeds, output=args.output, sweep_seed=args.seed,
         deployer=args.deployer, setting=setting, task_timeout=args.task_timeout, scheduler=args.scheduler,
         workers=args.workers, retries=args.retries, resume=args.resume, progress=not args.no_progress,
     )
-    points = result.total // args.seeds
+    points = result.total // seeds
     resumed = f", {result.resumed:,} kept from before" if result.resumed else ""
     where = f"on {result.workers} worker{'s' if result.workers != 1 else ''}" if result.workers else "(nothing left to run)"
     print(
-        f"wrote {result.output}: {result.rows:,} rows ({points:,} point{'s' if points != 1 else ''} x {args.seeds} seed"
-        f"{'s' if args.seeds != 1 else ''}{resumed}), {result.failed:,} failed, in {result.seconds:.1f} s {where}"
+        f"wrote {result.output}: {result.rows:,} rows ({points:,} point{'s' if points != 1 else ''} x {seeds} seed"
+        f"{'s' if seeds != 1 else ''}{resumed}), {result.failed:,} failed, in {result.seconds:.1f} s {where}"
     )
     if result.failed:
         print(f"desmon sweep: {result.failed} run(s) failed: see the error column of {result.output}", file=sys.stderr)

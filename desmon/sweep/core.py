@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import IO, Any, Callable, Sequence
 
 from desmon.sweep.grid import Axis, Grid, Run, SweepError
-from desmon.sweep.jobs import JOBS, JobSpec, check_values, run_point
+from desmon.sweep.jobs import JOBS, JobSpec, check_points, check_values, run_point
 from desmon.sweep.runner import Progress, execute
 from desmon.sweep.table import Journal, check_same_sweep, frame, journal_path, read_journal, read_table, write_table
 
@@ -113,17 +113,30 @@ class _Rows:
 
 
 def _finish(rows: _Rows, out: Path, journal: Path, total: int, axes: tuple[Axis, ...], job: str, settings: dict[str, Any],
-            interrupted: bool, err: IO[str]) -> None:
-    """Write the table of every finished row (also after Ctrl-C); drop the journal once complete."""
+            interrupted: bool, err: IO[str], had_table: bool, resume: bool) -> None:
+    """Write the table of every finished row; drop the journal once complete.
+
+    A complete table replaces ``out`` (atomically: :func:`write_table`). An incomplete one
+    (Ctrl-C, a failure) is written only where it loses nothing: when there was no table
+    at ``out`` before, or with ``--resume`` (its rows are among those kept). A table of an
+    earlier sweep is never replaced by a part of this one: the finished rows stay in the
+    journal, and ``--resume`` finishes the sweep."""
     rows.bar.close()
     rows.journal.close()
-    if rows.kept or interrupted:
+    complete = len(rows.kept) == total
+    partial_ok = rows.new > 0 and (not had_table or resume)
+    if complete or partial_ok:
         write_table(frame(rows.kept, axes, job, list(settings)), out)
-    if len(rows.kept) == total:
+    if complete:
         journal.unlink(missing_ok=True)
     if interrupted:
-        print(f"desmon sweep: interrupted: wrote {out} with the {len(rows.kept):,} of {total:,} runs finished; "
-              "pass --resume to run the rest", file=err)
+        if complete or partial_ok:
+            done = f"wrote {out} with the {len(rows.kept):,} of {total:,} runs finished; pass --resume to run the rest"
+        elif rows.new:
+            done = f"left {out} as it was; the {rows.new:,} run(s) finished are in {journal}: pass --resume to run the rest"
+        else:
+            done = "no run had finished: nothing written" + (f", {out} left as it was" if had_table else "")
+        print(f"desmon sweep: interrupted: {done}", file=err)
 
 
 def run_sweep(
@@ -157,6 +170,7 @@ def run_sweep(
 
     grid = Grid(axes, seeds, sweep_seed)
     deployer = _checked(job, scenario, axes, deployer)
+    check_points(job, scenario, grid.iter_points(), setting)  # every point, before a cluster starts
     settings = {SETTINGS[job]: setting}
     identity = {
         "job": job, "scenario": scenario or "", "deployer": deployer, "sweep_seed": sweep_seed,
@@ -164,6 +178,7 @@ def run_sweep(
     }
     out = Path(output)
     journal = journal_path(out)
+    had_table = out.exists()
     done = _previous(out, journal, grid, identity, settings, resume)
     spec = JobSpec(job, scenario and os.path.abspath(scenario), deployer, tuple(settings.items()), task_timeout)
     all_runs = list(grid.runs())
@@ -182,6 +197,9 @@ def run_sweep(
             workers_seen = execute(spec, todo, rows.keep, scheduler=scheduler, workers=workers, retries=retries, task=task)
     except KeyboardInterrupt:
         interrupted = True
+        if rows.new == 0 and not resume:  # Ctrl-C before any run finished (the cluster starting): leave no files behind
+            rows.journal.close()
+            journal.unlink(missing_ok=True)
         raise
     except BaseException:
         if rows.new == 0 and not resume:  # nothing ran (no scheduler answered, ...): leave no files behind
@@ -190,7 +208,7 @@ def run_sweep(
             kept.clear()
         raise
     finally:
-        _finish(rows, out, journal, len(all_runs), axes, job, settings, interrupted, err)
+        _finish(rows, out, journal, len(all_runs), axes, job, settings, interrupted, err, had_table, resume)
     return SweepResult(
         output=str(output), rows=len(kept), total=len(all_runs), failed=sum(1 for r in kept if r.get("error")),
         resumed=len(done), workers=workers_seen, seconds=time.perf_counter() - started,

@@ -27,7 +27,7 @@ from typing import Any, Callable
 from desmon.errors import DesmonError
 from desmon.sweep.grid import Axis, Run, SweepError
 
-__all__ = [
+__all__ = ["check_points", 
     "JOBS", "JobSpec", "run_point", "check_values", "signal_parameters", "EXIT_TIMEOUT", "EXIT_CRASH", "EXIT_KILLED",
     "EXIT_BAD_VALUE", "METRICS",
 ]
@@ -309,3 +309,37 @@ def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> None
                 if _is_value_error(message, axis.name):
                     raise SweepError(message.removeprefix(f"{scenario}: invalid scenario: ")) from None
                 # a value that parses but the scenario refuses: its points become error rows
+
+
+def check_points(job: str, scenario: str | None, points: Any, setting: Any) -> None:
+    """Refuse, before a cluster starts, what would fail (or never end) at some point of
+    the grid, with ``--job run``: a fleet scenario, which the job does not simulate
+    (``desmon run`` does, alone), and an ``--until`` past a point's horizon, which ``desmon run``
+    refuses too (past it the last action would go on forever). ``points`` are the grid's
+    points; one the scenario refuses is left to be its error row, as :func:`check_values` says."""
+    if job == "evaluate" or scenario is None:
+        return
+    from desmon.loader import load_scenario
+    from desmon.sim.fleet import is_fleet
+
+    for point in points:
+        try:
+            loaded = load_scenario(scenario, dict(point.values))
+        except DesmonError:
+            continue  # its rows say why (exit code 2)
+        where = f"at {point.text}" if point.values else ""
+        if job == "run" and is_fleet(loaded):
+            raise SweepError(
+                f"{scenario}: a fleet of robots (world is a Fleet){' ' + where if where else ''}: desmon sweep runs one robot per "
+                f"run; simulate the fleet with desmon run {scenario}, or sweep a single-robot scenario"
+            )
+        if job == "run" and setting is not None:  # (the other jobs take no --until)
+            from desmon.sim.world import world_of
+
+            horizon = float(world_of(loaded).horizon)
+            if setting > horizon:
+                raise SweepError(
+                    f"--until {setting:g}: the scenario's task ends at its horizon of {horizon:g} s{' ' + where if where else ''}; "
+                    "give --until at most that, or leave it out to run each point to its own horizon"
+                )
+

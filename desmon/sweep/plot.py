@@ -78,6 +78,11 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
             raise SweepError(f"{table}: not a table written by desmon sweep (no {required} column)")
     _column(df, "-y", y)
     _column(df, "-x" if x is not None else "--pareto", x or pareto)  # type: ignore[arg-type]
+    if x is not None and x not in _parameters(df):
+        params = _parameters(df)
+        what = "the seeds a point's runs were given" if x in ("seed", "seed_index") else "not a swept parameter"
+        listing = f"the swept parameters are {', '.join(params)}" if params else "this sweep swept no parameter (no -p): draw --pareto, or sweep one"
+        raise SweepError(f"-x {x}: {what}; -x takes a swept parameter ({listing})")
     ok = df[df["error"].isna()]
     ok = ok[ok[y].notna()]
     if ok.empty:

@@ -28,7 +28,7 @@ from desmon.progress import StatusLine
 from desmon.sweep.grid import Run, SweepError
 from desmon.sweep.jobs import EXIT_KILLED, JobSpec, run_point
 
-__all__ = ["Progress", "execute", "check_scheduler_address", "EXTRA_HINT", "require_extra"]
+__all__ = ["Progress", "execute", "check_scheduler_address", "probe_scheduler", "EXTRA_HINT", "require_extra"]
 
 EXTRA_HINT = "pip install 'desmon[sweep]'"
 #: how long to wait for a --scheduler to answer
@@ -53,6 +53,63 @@ def check_scheduler_address(address: str) -> str:
             "--scheduler tcp://10.0.0.5:8786 (start one with: dask-scheduler), or leave --scheduler out to run on this machine"
         )
     return address
+
+
+#: how long the probe of a --scheduler waits for the greeting a Dask scheduler sends
+PROBE_TIMEOUT = 5.0
+
+
+def probe_scheduler(address: str, timeout: float = PROBE_TIMEOUT) -> None:
+    """Refuse (one line) a ``--scheduler`` that is not a Dask scheduler, before Dask connects.
+
+    A Dask scheduler greets a new connection at once with a framed handshake: an 8-byte
+    little-endian length, an 8-byte frame count, the frames' lengths, then a msgpack map
+    naming ``python`` and ``pickle-protocol``. Anything else -- no connection, no greeting
+    within ``timeout`` (an HTTP server waits for a request), other bytes (an SSH banner)
+    -- would make Dask hang or fail deep inside (it read an HTTP answer as the length of
+    a 2.8 EiB frame)."""
+    import socket
+    import struct
+
+    scheme, _, rest = address.partition("://")
+    host, _, port = rest.rpartition(":")
+    host = host.strip("[]")
+    fix = "start one (dask-scheduler, then dask-worker ADDRESS on each machine) or leave --scheduler out"
+    give_up = time.monotonic() + CONNECT_TIMEOUT  # a scheduler just started may not listen yet: Dask waits as long
+    while True:
+        try:
+            socket.create_connection((host, int(port)), timeout=timeout).close()
+            break
+        except OSError as exc:
+            if time.monotonic() >= give_up or isinstance(exc, socket.gaierror):
+                raise SweepError(f"--scheduler {address}: no Dask scheduler answered ({exc.strerror or exc}); {fix}") from None
+            time.sleep(0.2)
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout) as sock:
+            if scheme == "tls":
+                return  # the greeting comes after the TLS handshake, with the cluster's certificates: Dask checks it
+            sock.settimeout(timeout)
+            data = b""
+            deadline = time.monotonic() + timeout
+            while len(data) < 256 and time.monotonic() < deadline and b"pickle-protocol" not in data:
+                try:
+                    chunk = sock.recv(256)
+                except socket.timeout:
+                    if data:
+                        break  # it said something, then waits: judged below
+                    raise
+                if not chunk:
+                    break
+                data += chunk
+    except socket.timeout:
+        raise SweepError(f"--scheduler {address}: it accepted a connection but sent no greeting within {timeout:g} s (a Dask "
+                         f"scheduler greets at once): another service, a web server?; {fix}") from None
+    except OSError as exc:
+        raise SweepError(f"--scheduler {address}: no Dask scheduler answered ({exc.strerror or exc}); {fix}") from None
+    greeting = len(data) >= 16 and struct.unpack("<QQ", data[:16])[0] < 1 << 20 and 0 < struct.unpack("<QQ", data[:16])[1] <= 64
+    if not (greeting and b"python" in data):
+        shown = data[:40].decode("ascii", "replace").encode("unicode_escape").decode()
+        raise SweepError(f"--scheduler {address}: it answered, but not as a Dask scheduler does (it sent {shown!r}); {fix}")
 
 
 @dataclass
@@ -145,9 +202,13 @@ def _client(scheduler: str | None, workers: int | None, retries: int) -> Iterato
                 client.close()
             return
         n = workers or os.cpu_count() or 1
-        cluster = LocalCluster(
-            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.CRITICAL,
-        )
+        try:
+            cluster = LocalCluster(
+                n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.CRITICAL,
+            )
+        except BaseException:  # Ctrl-C while the cluster starts: no half-started cluster for Dask's exit hook to trip on
+            _forget_clusters()
+            raise
         try:
             client = Client(cluster, set_as_default=False)
             try:
@@ -156,6 +217,17 @@ def _client(scheduler: str | None, workers: int | None, retries: int) -> Iterato
                 client.close()
         finally:
             cluster.close()
+
+
+def _forget_clusters() -> None:
+    """Close, quietly, the clusters Dask registered for closing at exit (one interrupted
+    while it started cannot be closed there: its exit hook would print a traceback)."""
+    from distributed.deploy.spec import SpecCluster
+
+    for cluster in list(SpecCluster._instances):
+        with contextlib.suppress(BaseException):
+            cluster.close(timeout=2)
+        SpecCluster._instances.discard(cluster)
 
 
 def execute(

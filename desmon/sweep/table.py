@@ -19,7 +19,7 @@ import os
 from pathlib import Path
 from typing import IO, Any, Iterable, Sequence
 
-from desmon.sweep.grid import Axis, Grid, Run, SweepError
+from desmon.sweep.grid import Axis, Grid, Run, SweepError, derive_seed
 from desmon.sweep.jobs import METRICS
 
 __all__ = [
@@ -190,6 +190,9 @@ def key_of_row(row: dict[str, Any], axes: Sequence[Axis]) -> tuple[str, int]:
 
 def _check_identity(where: str, row: dict[str, Any], names: set[str], grid: Grid, identity: dict[str, Any], settings: dict[str, Any]) -> None:
     """A stored row was made with this sweep's parameters, job, deployer, scenario and settings."""
+    if any(row.get(c, "") is None for c in ("point", "seed_index", "seed", "job", "deployer", "exit_code", "wall_s")):
+        raise SweepError(f"--resume: {where} holds a row cut short (its last column, wall_s, or its job, seed or exit code is "
+                         "empty: the file was cut off while written?); delete the incomplete line(s), or name another -o")
     stored = {c for c in row if c in names}
     if stored != names:
         raise SweepError(f"--resume: {where} sweeps other parameters than -p {', '.join(grid.names) or '(none)'}; "
@@ -220,9 +223,28 @@ def _run_of(where: str, row: dict[str, Any], grid: Grid, runs: dict[tuple[str, i
         raise SweepError(f"--resume: {where} holds point {key[0]!r}, which is not in this grid: it is not this sweep "
                          "(give every value it had, or name another -o)")
     if int(row["seed"]) != run.seed:
+        as_ints = _whole_numbers(grid, run)
+        if as_ints is not None and derive_seed(grid.sweep_seed, as_ints, run.seed_index) == int(row["seed"]):
+            floats = [a.name for a in grid.axes if a.kind == "float"]
+            raise SweepError(
+                f"--resume: {where} was made when the values of -p {', '.join(floats)} were whole numbers ({as_ints}); now a "
+                f"decimal value among them makes every value a decimal ({run.point.text}), and a point's seeds derive from its "
+                "text, so they differ: resume with the whole-number values only (sweep the decimals with another -o)"
+            )
         raise SweepError(f"--resume: {where} was made with another --seed (its seeds differ): give the sweep's own --seed, "
                          "or name another -o")
     return key
+
+
+def _whole_numbers(grid: Grid, run: Run) -> str | None:
+    """``run``'s point text with its whole-valued floats written as ints (as an int axis
+    wrote them), or None if it has no such value."""
+    out, changed = [], False
+    for axis, (name, text) in zip(grid.axes, run.point.values):
+        if axis.kind == "float" and float(text).is_integer():
+            text, changed = str(int(float(text))), True
+        out.append(f"{name}={text}")
+    return ",".join(out) if changed else None
 
 
 def check_same_sweep(

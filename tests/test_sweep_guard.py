@@ -1,0 +1,175 @@
+"""A sweep never hangs and never loses a table (issue 23; docs/sweeps.md, "Long sweeps").
+
+No test here starts a Dask cluster: the refusals come before one would start, and the
+runs of an interrupted sweep are handed over by a stand-in for the cluster.
+"""
+
+from __future__ import annotations
+
+import socket
+import threading
+from pathlib import Path
+
+import pytest
+
+pd = pytest.importorskip("pandas")
+pytest.importorskip("distributed")
+pytest.importorskip("pyarrow")
+
+from desmon.cli import main  # noqa: E402
+from desmon.sweep import core  # noqa: E402
+from desmon.sweep.core import run_sweep  # noqa: E402
+from desmon.sweep.grid import Grid, SweepError, parse_axes  # noqa: E402
+from desmon.sweep.table import frame, journal_path, write_table  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+CLOUD = str(ROOT / "scenarios" / "cloud_offload.py")  # declares hours (horizon hours * 3600 s)
+FLEET = str(ROOT / "scenarios" / "fleet.py")
+
+
+def _earlier_table(path: Path, params: list[str], seeds: int, until: float | None = 60.0, cut: bool = False) -> bytes:
+    """A table as desmon sweep --job run wrote it for ``params`` (figures made up), as bytes."""
+    axes = parse_axes(params)
+    grid = Grid(axes, seeds, 0)
+    rows = [
+        {"point": r.point.index, "seed_index": r.seed_index, "seed": r.seed, **grid.typed(r.point), "scenario": CLOUD,
+         "job": "run", "deployer": "desmon", "until": until, "exit_code": 0, "error": None, "exposure_s": 1.5, "wall_s": 0.5}
+        for r in grid.runs()
+    ]
+    write_table(frame(rows, axes, "run", ["until"]), path)
+    if cut:  # the last row cut off while written
+        text = path.read_text()
+        path.write_text(text[: text.rstrip("\n").rfind(",", 0, len(text) - 20)])
+    return path.read_bytes()
+
+
+def test_until_past_a_points_horizon_is_refused_before_any_run(tmp_path, capsys):
+    out = tmp_path / "u.csv"
+    assert main(["sweep", CLOUD, "-p", "hours=1,0.05", "--until", "3000", "-o", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "--until 3000: the scenario's task ends at its horizon of 180 s at hours=0.05" in err and len(err.splitlines()) == 1
+    assert not out.exists() and not journal_path(out).exists()
+
+
+def test_the_fleet_is_refused_up_front_for_job_run(tmp_path, capsys):
+    assert main(["sweep", FLEET, "-o", str(tmp_path / "f.csv"), "--no-progress"]) == 2
+    assert "a fleet of robots" in capsys.readouterr().err
+
+
+def test_job_verify_takes_no_seeds(tmp_path, capsys):
+    assert main(["sweep", CLOUD, "--job", "verify", "--seeds", "3", "-o", str(tmp_path / "v.csv"), "--no-progress"]) == 2
+    assert "--seeds 3 with --job verify: the check is exhaustive and uses no seed" in capsys.readouterr().err
+
+
+def test_sweep_plot_takes_only_a_swept_parameter_as_x(tmp_path, capsys):
+    table = tmp_path / "t.csv"
+    _earlier_table(table, ["hours=0.05,0.1"], 2)
+    for x, says in (("seed", "-x seed: the seeds a point's runs were given"), ("exposure_s", "-x exposure_s: not a swept parameter")):
+        assert main(["sweep-plot", str(table), "-x", x, "-y", "exposure_s", "-o", str(tmp_path / "p.png")]) == 2
+        err = capsys.readouterr().err
+        assert says in err and "the swept parameters are hours" in err
+    assert not (tmp_path / "p.png").exists()
+
+
+def test_resume_names_a_row_cut_short(tmp_path, capsys):
+    table = tmp_path / "t.csv"
+    before = _earlier_table(table, ["hours=0.05,0.1"], 2, cut=True)
+    assert main(["sweep", CLOUD, "-p", "hours=0.05,0.1", "--seeds", "2", "--until", "60", "-o", str(table), "--resume",
+                 "--no-progress"]) == 2
+    assert "holds a row cut short" in capsys.readouterr().err
+    assert table.read_bytes() == before
+
+
+def test_resume_says_why_whole_numbers_that_became_decimals_have_other_seeds(tmp_path, capsys):
+    table = tmp_path / "t.csv"
+    before = _earlier_table(table, ["hours=1"], 1)
+    assert main(["sweep", CLOUD, "-p", "hours=1,2.5", "--seeds", "1", "--until", "60", "-o", str(table), "--resume",
+                 "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "were whole numbers (hours=1)" in err and "another --seed" not in err
+    assert table.read_bytes() == before
+
+
+def _interrupted_after(n: int):  # type: ignore[no-untyped-def]
+    """A stand-in for the cluster: hands over ``n`` rows, then Ctrl-C."""
+    def execute(spec, runs, on_row, **kw):  # type: ignore[no-untyped-def]
+        for run in list(runs)[:n]:
+            on_row(run, {"exit_code": 0, "error": None, "exposure_s": 2.0, "wall_s": 0.1})
+        raise KeyboardInterrupt
+
+    return execute
+
+
+@pytest.mark.parametrize("finished", [0, 2])
+def test_ctrl_c_never_replaces_an_earlier_table(tmp_path, monkeypatch, finished):
+    table = tmp_path / "t.csv"
+    before = _earlier_table(table, ["hours=0.05,0.1"], 2, until=None)  # another sweep's table
+    monkeypatch.setattr(core, "execute", _interrupted_after(finished))
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(job="run", scenario=CLOUD, axes=parse_axes(["hours=0.05,0.1"]), seeds=3, output=str(table), sweep_seed=5)
+    assert table.read_bytes() == before
+    assert journal_path(table).exists() == (finished > 0)  # the finished rows are kept for --resume
+
+
+def test_ctrl_c_writes_the_finished_rows_where_no_table_was(tmp_path, monkeypatch):
+    table = tmp_path / "t.csv"
+    monkeypatch.setattr(core, "execute", _interrupted_after(2))
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(job="run", scenario=CLOUD, axes=parse_axes(["hours=0.05"]), seeds=3, output=str(table))
+    assert len(pd.read_csv(table)) == 2 and journal_path(table).exists()
+
+
+def _server(reply: bytes | None):  # type: ignore[no-untyped-def]
+    """A TCP server on a free port that answers ``reply`` (None: says nothing) to each connection."""
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen()
+    held = []
+
+    def serve() -> None:
+        while True:
+            try:
+                conn, _ = srv.accept()
+            except OSError:
+                return
+            held.append(conn)
+            if reply is not None:
+                conn.sendall(reply)
+
+    threading.Thread(target=serve, daemon=True).start()
+    return srv, held
+
+
+@pytest.mark.parametrize(
+    "reply, says",
+    [(b"SSH-2.0-OpenSSH_9.6\r\n", "it answered, but not as a Dask scheduler does (it sent 'SSH-2.0-OpenSSH_9.6"),
+     (None, "it accepted a connection but sent no greeting within 0.5 s")],
+)
+def test_a_scheduler_that_is_not_dask_is_one_line_not_a_hang(tmp_path, capsys, monkeypatch, reply, says):
+    from desmon.sweep import runner
+
+    monkeypatch.setattr(runner, "PROBE_TIMEOUT", 0.5)
+    monkeypatch.setattr(runner.probe_scheduler, "__defaults__", (0.5,))
+    srv, held = _server(reply)
+    try:
+        address = f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+        out = tmp_path / "s.csv"
+        assert main(["sweep", CLOUD, "-p", "hours=0.05", "--seeds", "1", "--scheduler", address, "-o", str(out), "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert says in err and len(err.splitlines()) == 1
+        assert not out.exists() and not journal_path(out).exists()
+        # and the next run is not blocked by anything left behind
+        assert main(["sweep", CLOUD, "-p", "hours=0.05", "--seeds", "1", "--scheduler", address, "-o", str(out), "--no-progress"]) == 2
+        assert "interrupted sweep" not in capsys.readouterr().err
+    finally:
+        srv.close()
+        for c in held:
+            c.close()
+
+
+def test_a_sweep_seed_row_refusal_still_names_another_seed(tmp_path):
+    table = tmp_path / "t.csv"
+    _earlier_table(table, ["hours=0.05"], 1)
+    with pytest.raises(SweepError, match="another --seed"):
+        run_sweep(job="run", scenario=CLOUD, axes=parse_axes(["hours=0.05"]), seeds=1, output=str(table), sweep_seed=9,
+                  setting=60.0, resume=True)
