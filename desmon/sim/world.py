@@ -194,6 +194,11 @@ class LoadWalk:
             )
 
 
+#: the most random requirement changes a run's horizon may hold on average (:class:`RandomChanges`):
+#: each is a reaction of the deployer; more would run for hours without a word
+MAX_RANDOM_CHANGES = 100_000
+
+
 @strict_init(ScenarioError)
 @dataclass(frozen=True, slots=True)
 class RandomChanges:
@@ -371,6 +376,13 @@ class World:
         object.__setattr__(self, "changes", changes)
         if self.random_changes is not None and not isinstance(self.random_changes, RandomChanges):
             raise ScenarioError(f"world: random_changes = {self.random_changes!r} is not a RandomChanges: write RandomChanges(changes=(...), mean_interval=600)")
+        if self.random_changes is not None and self.horizon / self.random_changes.mean_interval > MAX_RANDOM_CHANGES:
+            least = self.horizon / MAX_RANDOM_CHANGES
+            raise ScenarioError(
+                f"world: random changes every {self.random_changes.mean_interval:g} s on average over the horizon of "
+                f"{self.horizon:g} s are about {self.horizon / self.random_changes.mean_interval:,.0f} changes, more than the "
+                f"{MAX_RANDOM_CHANGES:,} a run simulates; give mean_interval at least {least:.3g}"
+            )
         if self.lease is not None and not isinstance(self.lease, Lease):
             raise ScenarioError(f"world: lease = {self.lease!r} is not a Lease: write Lease(idle_s=60)")
         self._check_one_master(changes)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Container, Iterator, Sequence
 
+from desmon.errors import CheckerError
 from desmon.deployment.control import repository_refusal
 from desmon.deployment.core import DeploymentCore, run_sync
 from desmon.deployment.guard import DeployerFault
@@ -161,6 +162,11 @@ class RepositoryRun:
                 _stim, log = self.step(event, fails)
             finally:
                 self.control.after = None
+            if fails and max(fails) >= self.control.n:  # a failing start the reaction no longer issues
+                raise CheckerError(
+                    f"its fail_indices {list(fails)} fail start #{max(fails) + 1} of the reaction, which issues "
+                    f"{self.control.n} real start{'s' if self.control.n != 1 else ''} now"
+                )
             transition = self.core.finding(transitions) if not found and transitions else None
             if transition is not None:
                 found.append((transition[0], transition[1], "the reaction"))
