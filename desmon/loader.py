@@ -89,6 +89,8 @@ def _rerun(path: str | Path) -> str:
 def _script_error(path: str | Path, exc: BaseException) -> ScenarioError:
     """The one-line error for a scenario script that raised ``exc`` (not KeyboardInterrupt)."""
     if isinstance(exc, SyntaxError):
+        if exc.lineno is None:  # no line to name: the file as a whole is not Python source (NUL bytes, ...)
+            return ScenarioError(f"{path}: not Python source ({exc.msg}): is it a binary file? give the scenario's .py script")
         return ScenarioError(f"{path}:{exc.lineno}: syntax error: {exc.msg}")
     if isinstance(exc, DesmonError):
         if str(exc).startswith(f"{path}: "):  # already names the file (an unknown parameter)

@@ -80,6 +80,11 @@ def check_output_file(
         raise PathError(f"{flag} {text!r}: a path cannot hold a NUL byte; name another file")
     if text.strip() == "" or text.endswith(("/", os.sep)):
         raise PathError(f"{flag} {text!r}: give a file name, e.g. {flag} out{suffixes[0]}")
+    if text.startswith("/dev/") or (p.exists() and not p.is_file() and not p.is_dir()):  # /dev/stdout, a pipe: a suffix would not help
+        raise PathError(
+            f"{flag} {text}: is a device or a pipe, not a file; desmon writes {flag} to a file "
+            f"(replaced only once complete): name one, e.g. {flag} out{suffixes[0]}"
+        )
     if not p.name.lower().endswith(tuple(s.lower() for s in suffixes)):
         wanted = " or ".join(suffixes)
         raise PathError(f"{flag} {text}: the file name must end in {wanted}, e.g. {flag} {_with_suffix(p, suffixes[0])}")
@@ -155,7 +160,10 @@ def replacing(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:  #
     On an exception (or Ctrl-C) the temporary file is removed and ``path`` is untouched.
     """
     target = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent or ".")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent or ".")
+    except OSError as exc:  # named as the user gave it, not as the temporary file beside it
+        raise OSError(exc.errno, f"{exc.strerror or exc} (no file can be created in {target.parent or '.'})", str(target)) from None
     try:
         with os.fdopen(fd, mode, **({} if "b" in mode else {"encoding": "utf-8"})) as fh:
             yield fh

@@ -34,7 +34,7 @@ import os
 import sys
 import time
 from dataclasses import asdict, dataclass
-from typing import Callable, Final, Sequence, TextIO
+from typing import Any, Callable, Final, Sequence, TextIO
 
 import numpy as np
 
@@ -802,6 +802,16 @@ def _test_line() -> str:
             f"null: {NULL_HYPOTHESIS}; pass if p >= alpha = {ALPHA}")
 
 
+def _powerless(cells: Sequence[Any]) -> int:
+    """How many ``cells`` the test could not fail at their number of trials: neither 0 nor
+    all of their trials (the most extreme counts) would be rejected against the paper's."""
+    return sum(
+        1 for c in cells
+        if fisher_exact(0, c.trials, c.paper_count, c.paper_trials) >= ALPHA
+        and fisher_exact(c.trials, c.trials, c.paper_count, c.paper_trials) >= ALPHA
+    )
+
+
 def render_table(ev: Evaluation) -> str:
     """The readable report of one seed."""
     lines = [
@@ -823,6 +833,12 @@ def render_table(ev: Evaluation) -> str:
         )
     n_pass = sum(c.passed for c in ev.cells)
     lines += ["", f"{n_pass}/{len(ev.cells)} cells pass" + ("" if ev.all_pass else "  (FAIL)")]
+    blind = _powerless(ev.cells)
+    if blind:
+        lines.append(
+            f"  note: with {ev.trials} trial{'s' if ev.trials != 1 else ''} per action, {blind} of these cells would pass whatever "
+            "the simulation counted (no count k of n is rejected): their pass says nothing; run more --trials (e.g. 60, the paper's)"
+        )
     if ev.missions:
         lines += [
             "",

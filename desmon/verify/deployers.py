@@ -126,6 +126,8 @@ def _loading(spec: str, source: str, rerun: str, module: str | None = None) -> I
         ) from None
     except SyntaxError as exc:
         where = source if module is None else (exc.filename or source)  # a file as the user named it
+        if exc.lineno is None:  # no line to name: the file as a whole is not Python source (NUL bytes, ...)
+            raise _refuse(spec, f"{where}: not Python source ({exc.msg}): is it a binary file? give the deployer's .py file") from None
         raise _refuse(spec, f"{where}:{exc.lineno}: syntax error: {exc.msg}") from None
     except SystemExit as exc:
         code = "" if exc.code is None else repr(exc.code)
