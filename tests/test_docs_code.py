@@ -69,3 +69,42 @@ def test_the_sweeps_python_block_reads_the_table_the_sweep_wrote(root, tmp_path,
     namespace: dict = {"__name__": "doc_block"}
     exec(compile(code, "docs/sweeps.md", "exec"), namespace)
     assert len(namespace["df"]) == 2 and set(namespace["df"]["hand_memory"]) == {256, 384}
+
+
+@pytest.mark.slow
+def test_the_sweeps_cluster_recipe_starts_single_threaded_workers_without_malloc_trimming(root, tmp_path):
+    """The worker line of docs/sweeps.md, run as written (HOST and N filled in), starts N
+    single-threaded workers whose processes do not carry Dask's MALLOC_TRIM_THRESHOLD_."""
+    import shlex
+    import socket
+    import time
+
+    pytest.importorskip("distributed")
+    from distributed import Client
+
+    sh = [c for b in blocks((root / "docs" / "sweeps.md").read_text()) if b.lang == "sh" for c in b.body.splitlines()]
+    (line,) = [c.split("   #")[0] for c in sh if " dask worker " in c]
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    worker_line = line.replace("tcp://HOST:8786", address).replace("--nworkers N", "--nworkers 2") + " --no-dashboard"
+    bindir = Path(sys.executable).parent
+    env = {**os.environ, "PATH": f"{bindir}{os.pathsep}{os.environ.get('PATH', '')}"}
+    env.pop("MALLOC_TRIM_THRESHOLD_", None)
+    quiet = {"env": env, "cwd": tmp_path, "stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "start_new_session": True}
+    procs = [subprocess.Popen(["dask", "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"], **quiet)]
+    try:
+        procs.append(subprocess.Popen(["bash", "-c", worker_line], **quiet))
+        with Client(address, timeout="60s", set_as_default=False) as client:
+            client.wait_for_workers(2, timeout=120)
+            threads = sorted(w["nthreads"] for w in client.scheduler_info()["workers"].values())
+            environ = client.run(lambda: (os.environ.get("MALLOC_TRIM_THRESHOLD_"), os.environ.get("OMP_NUM_THREADS")))
+        assert threads == [1, 1], worker_line
+        assert sorted(environ.values()) == [(None, "1"), (None, "1")], environ
+        assert shlex.split(worker_line)[1:3] == ["dask", "worker"]
+    finally:
+        for p in reversed(procs):
+            os.killpg(p.pid, 15)
+            p.wait(timeout=60)
+        time.sleep(0.5)
