@@ -15,7 +15,7 @@ states. Every search runs with the cyclic garbage collector paused, as the check
 does. Peak memory is the maximum resident size of the process (and of the largest
 worker).
 
-bench_fallbacks (``--fallbacks N`` states, default complete: about 925,000) is the
+bench_fallbacks (``--fallbacks N`` states, default complete: about 826,000) is the
 fallback-heavy model: 6 platforms all with background load in 0-300 MB steps, three
 detectors whose slots all have a fallback (grasp and hold prefer combined over force,
 move_base tactile over force, release force over tactile), two wrenches and two pads
@@ -277,7 +277,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--prefix", type=int, default=30_000, metavar="N", help="states of bench_6p the direct engine searches (default 30,000)")
     ap.add_argument("--workers", type=int, default=2, help="also run the direct engine with this many workers (1: skip)")
     ap.add_argument("--huge", type=int, default=0, metavar="N", help="also run bench_7p up to N states (e.g. 1400000)")
-    ap.add_argument("--fallbacks", type=int, default=None, metavar="N", help="cap the fallback model's search (default: complete, about 925,000 states)")
+    ap.add_argument("--fallbacks", type=int, default=None, metavar="N", help="cap the fallback model's search (default: complete, about 826,000 states)")
     args = ap.parse_args(argv)
     result: dict[str, str] = {}
     # the fallback-heavy model first: its peak memory (the process's maximum resident size) is its own

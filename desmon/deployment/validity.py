@@ -406,8 +406,10 @@ def spec_validity(
     over the candidate ``states``, reading remote inputs from ``world`` (every platform).
 
     A :class:`Reads` whose kind no platform of ``world`` can give rejects every
-    candidate: the hosting ones by their own half (their devices failed or they are
-    down), the others with the reason :func:`unreadable` gives. Otherwise the answer is
+    candidate, each with the reason :func:`unreadable` gives (the hosts' devices failed
+    or their platforms are down); the other requirements are then not asked, so a
+    search reads no more than that (:func:`acceptable_platforms`, the question of
+    ``desmon explain``, adds every other failing requirement). Otherwise the answer is
     :func:`check_validity`'s, so the checker's table engine observes it as lazily as
     any requirement check.
     """
@@ -421,11 +423,7 @@ def spec_validity(
     rejected = []
     for st in order_platforms(states):
         name = st.platform.name
-        own = validity.failures(name) if reasons else ()
-        extra = tuple(Failure(name, r.describe(), why) for r, why in dead if name not in r.hosts)
-        fails = tuple(own) + extra
-        if not fails:  # a hosting platform that still passes cannot be (no host is readable)
-            fails = tuple(Failure(name, r.describe(), why) for r, why in dead)
+        fails = tuple(Failure(name, r.describe(), why) for r, why in dead)
         rejected.append((name, fails if reasons else fails[:1]))
     return Validity((), tuple(rejected))
 
@@ -555,7 +553,18 @@ def acceptable_platforms(q: "QueryPort", graph: str) -> Validity:
     spec = q.deployment_information(graph)
     if spec is None:
         raise QueryError(f"no deployment information for perception graph {graph!r}: add a deployment specification")
-    return validity_for(q, spec)
+    validity = validity_for(q, spec)
+    if validity.acceptable or not spec.reads:
+        return validity
+    # no input readable anywhere: list every other failing requirement too (the search's
+    # answer stops at the unreadable input; a person asking wants the whole picture)
+    states = q.platform_states()
+    fixed = q.fixed_platform(spec)
+    if fixed is not None:
+        states = tuple(s for s in states if s.name == fixed)
+    others = check_validity(tuple(q.constraints(spec)) + spec.reads, states, spec.graph)
+    merged = tuple((name, tuple(others.failures(name)) + tuple(f for f in fails if f not in others.failures(name))) for name, fails in validity.rejected)
+    return Validity((), merged)
 
 
 def deployment_valid(spec: DeploymentSpec | None, state: PlatformState, states: Sequence[PlatformState]) -> tuple[Failure, ...]:

@@ -145,7 +145,7 @@ def counterexample_frames(
     recorder = _Recorder(run)
     frames, latest, diverged = [], {}, None  # type: ignore[var-annotated]
     final: list[tuple[str, str]] = []
-    for s, found in run.trace(labels, instant, flapping="no-flapping" in invariants):
+    for s, found in run.trace(labels, instant, transitions=frozenset(invariants)):
         if keys is not None and s.index < len(keys) and run.key() != keys[s.index]:
             raise NondeterminismError(
                 f"explore: replaying step {s.index} ({s.title()}) on the repository gave {run.key()}, the checker had {keys[s.index]}"

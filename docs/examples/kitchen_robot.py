@@ -122,8 +122,11 @@ scenario = Scenario(
     ),
     expected={  # pinned results (tests/test_scenarios_doc.py asserts them)
         "verify": {  # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
-            "desmon": {"verdict": "HOLDS", "states": 266, "counterexamples": {}},
-            "paper": {"verdict": "VIOLATED", "states": 270, "counterexamples": {"coverage": 3}},
+            "desmon": {"verdict": "HOLDS", "states": 235, "counterexamples": {}},
+            "paper": {
+                "verdict": "VIOLATED", "states": 270,
+                "counterexamples": {"valid-or-error": 4, "coverage": 3, "errors-justified": 2, "preferred-when-possible": 3},
+            },
         },
         # desmon run, seed 0, default parameters
         "run": {"unmonitored_exposure_s": 339.0, "switches": 135, "slips_detected": 4, "false_alarms": 165, "violations": 0},
