@@ -479,7 +479,26 @@ def _add_explore(sub: _Subparsers) -> None:
     p.set_defaults(handler=_lazy("desmon.viz.explore_command", "explore_command"), _inputs=(*p.get_default("_inputs"), Input("from_json", CEX_FILE)))
 
 
+def _process_age() -> float:
+    """Seconds since this process started (interpreter start-up and imports included), 0 where unknown."""
+    import os
+
+    try:
+        with open("/proc/self/stat", "rb") as fh:
+            start_ticks = int(fh.read().rsplit(b")", 1)[1].split()[19])
+        with open("/proc/uptime", "rb") as fh:
+            uptime = float(fh.read().split()[0])
+        return max(0.0, uptime - start_ticks / os.sysconf("SC_CLK_TCK"))
+    except (OSError, ValueError, IndexError):
+        return 0.0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    import time
+
+    # a budget (verify --timeout) counts from the start of the command: from the process's
+    # start when desmon is the program (argv None), from this call when a caller runs it
+    started = time.perf_counter() - (_process_age() if argv is None else 0.0)
     parser = build_parser()
     try:
         args, extra = parser.parse_known_args(argv)
@@ -489,6 +508,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         prog = f"desmon {args.command}" if getattr(args, "command", None) else "desmon"
         sys.stderr.write(_usage_error(prog, f"unrecognized arguments: {' '.join(extra)}"))
         return EXIT_USAGE
+    args._started = started
     if not getattr(args, "handler", None):
         parser.print_help()
         print(f"desmon: error: no command given; choose one of {', '.join(args.commands)} (desmon COMMAND --help)", file=sys.stderr)

@@ -199,5 +199,22 @@ def test_a_seeded_random_deployer_is_refused_not_holds():
 
 
 def test_the_guard_costs_a_correct_deployer_nothing_in_its_verdict():
-    res = Checker(load_scenario(COFFEE)).run()
-    assert res.verdict == "HOLDS" and res.states == 747
+    table, direct = (Checker(load_scenario(COFFEE)).run(engine=e) for e in ("table", "direct"))
+    assert table.verdict == direct.verdict == "HOLDS" and table.states == direct.states and table.transitions == direct.transitions
+
+
+def test_a_deployer_failing_only_in_the_no_flapping_re_run_is_one_line(deployers, capsys, tmp_path):
+    path = tmp_path / "quiet.py"
+    path.write_text(
+        "from desmon.deployment.deployer import DEPLOYERS\n"
+        "def fails_when_nothing_changed(q, slots, changed, context_changed):\n"
+        "    if not changed and not context_changed:\n"
+        "        raise RuntimeError('nothing to do')\n"
+        "    yield from DEPLOYERS['desmon'].react(q, slots, changed, context_changed)\n"
+    )
+    cloud = str(ROOT / "scenarios" / "cloud_offload.py")  # rebalances: no-flapping re-runs the reaction
+    for argv in (["verify", cloud, "--no-progress"], ["run", cloud, "--until", "600"]):
+        assert main([*argv, "--deployer", f"{path}:fails_when_nothing_changed"]) == 4
+        err = capsys.readouterr().err
+        assert "reacting to the no-flapping check's re-run of its reaction with nothing changed: raised RuntimeError" in err
+        assert len(err.splitlines()) == 1 and "Traceback" not in err

@@ -179,7 +179,7 @@ class DeploymentCore:
         if not callable(react):
             raise uncallable(self.deployer.name, react)
         if self._known is None:
-            self._known = (frozenset(g.name for g in self.model.graphs), frozenset(p.name for p in self.model.platforms))
+            self._known = self._names()
         reaction = guarded(
             self.deployer.name,
             lambda: react(query, slots, stimulus.changed_platforms, stimulus.context_changed),
@@ -218,6 +218,23 @@ class DeploymentCore:
                 book.raised[cmd.graph] = cmd.kind
             outcome = yield cmd
             book.note(cmd, outcome)
+
+    def _names(self) -> tuple[frozenset[str], frozenset[str]]:
+        return frozenset(g.name for g in self.model.graphs), frozenset(p.name for p in self.model.platforms)
+
+    def guarded_react(self, q: QueryPort, slots: tuple[tuple[str, ...], ...], changed: tuple[str, ...], context_changed: bool) -> Reaction:
+        """The deployer's ``react`` under guard, as the invariants call it (``no-flapping``
+        re-runs it with nothing changed): a fault is the same one-line DeployerFault."""
+        react = self.deployer.react
+        if not callable(react):
+            raise uncallable(self.deployer.name, react)
+        if self._known is None:
+            self._known = self._names()
+        return guarded(
+            self.deployer.name, lambda: react(q, slots, changed, context_changed),
+            Stimulus(tuple(changed), bool(context_changed)), *self._known,
+            lambda: "the no-flapping check's re-run of its reaction with nothing changed",
+        )
 
     def _audit_moves(self, reaction: Reaction) -> Reaction:
         """``reaction``, passed through, noting every move of a valid deployment of a
@@ -273,7 +290,7 @@ class DeploymentCore:
         return cmd.platform, gain, spec.rebalance
 
     def view(self, **extra: object) -> SystemView:
-        return view_of(self.query, self.specs(), self.standing, self.slots(), react=self.deployer.react, **extra)  # type: ignore[arg-type]
+        return view_of(self.query, self.specs(), self.standing, self.slots(), react=self.guarded_react, **extra)  # type: ignore[arg-type]
 
     def specs(self) -> tuple[DeploymentSpec, ...]:
         """The current deployment specifications (as the repository holds them now).

@@ -257,11 +257,6 @@ class SystemModel:
     def __post_init__(self) -> None:
         check_name("robot", self.robot)
         self._check_field_types()
-        if not self.platforms:
-            raise ModelError(
-                "system model platforms=(): a model needs at least one platform for the monitors to run on; "
-                "declare one, e.g. platforms=(Platform.make('pc', memory=512),)"
-            )
         _unique("platform", [p.name for p in self.platforms])
         _unique("device", [d.name for d in self.devices])
         _unique("perception graph", [g.name for g in self.graphs])

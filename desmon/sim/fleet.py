@@ -479,7 +479,7 @@ class _Member(SimWorld):
         core = self.core
         view = _OwnView(
             self._audited_states(), core.specs(), core.standing, core.slots(), tuple(sorted(self.instances)),
-            self.stops, self.history_edges, core.deployer.react,
+            self.stops, self.history_edges, core.guarded_react,
         )
         for name, msg in check_invariants(view):
             self.violations.append((self.env.now, name, msg))

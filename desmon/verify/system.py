@@ -78,6 +78,11 @@ class TransitionSystem:
     ) -> None:
         self.scenario = scenario
         self.model = scenario.model
+        if not self.model.platforms:
+            raise CheckerError(
+                f"scenario {scenario.name!r}: its model has no platform (SystemModel(platforms=())), so no monitor can run "
+                "and there is nothing to check; declare one, e.g. platforms=(Platform.make('pc', memory=512),)"
+            )
         self.bounds = bounds if bounds is not None else bounds_of(scenario)
         if bounds is not None:
             bounds.validate(scenario)
@@ -272,7 +277,7 @@ class TransitionSystem:
         """The invariants' view of the store's current state (current specifications, and
         the deployer's reaction for ``no-flapping``)."""
         st = self.store
-        return SystemView(st.platform_states(), st.current_specs(), standing, self.slots(context), react=self.core.deployer.react)
+        return SystemView(st.platform_states(), st.current_specs(), standing, self.slots(context), react=self.core.guarded_react)
 
     def violations(self, key: Key) -> list[tuple[str, str]]:
         self.store.load(key)
