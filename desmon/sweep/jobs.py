@@ -24,6 +24,7 @@ from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from desmon.deployment.guard import EXIT_CRASHED, DeployerFault
 from desmon.errors import DesmonError
 from desmon.sweep.grid import Axis, Run, SweepError
 
@@ -212,6 +213,9 @@ def _guarded(spec: JobSpec, run: Run) -> dict[str, Any]:
         row = _JOBS[spec.job](spec, run)
         row.setdefault("error", None)
         return row
+    except DeployerFault as exc:  # the deployer failed: in its first reaction bad input (2), later CRASHED (4)
+        initial = exc.initial or getattr(exc.__cause__, "initial", False)
+        return _error_row(EXIT_BAD_VALUE if initial else EXIT_CRASHED, _one_line(exc))
     except DesmonError as exc:
         return _error_row(EXIT_BAD_VALUE, _one_line(exc))
     except _TimedOut:
