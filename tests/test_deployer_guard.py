@@ -163,6 +163,26 @@ def test_one_ctrl_c_stops_a_spinning_reaction(deployers):
     assert took < 2, f"Ctrl-C took {took:.1f} s"
 
 
+def test_timeout_stops_a_worker_process_stuck_in_a_reaction(tmp_path):
+    path = tmp_path / "stuck.py"
+    path.write_text(
+        "import os\n"
+        "from desmon.deployment.deployer import DEPLOYERS\n"
+        "PARENT = os.getpid()  # the worker processes are forked from the process that imported this\n"
+        "def stuck_in_workers(q, slots, changed, context_changed):\n"
+        "    while os.getpid() != PARENT:\n"
+        "        pass\n"
+        "    yield from DEPLOYERS['desmon'].react(q, slots, changed, context_changed)\n"
+    )
+    scenario = str(ROOT / "scenarios" / "symmetric_platforms.py")  # levels of 256 states and more: they go to the workers
+    code, took, out, err = _desmon(
+        str(path), "verify", scenario, "--deployer", f"{path}:stuck_in_workers", "--engine", "direct", "--workers", "2",
+        "--timeout", "8", "--no-progress",
+    )
+    assert code == 3 and "verdict: INCOMPLETE (timeout 8s)" in out and "+ 2 workers" in out, out + err
+    assert took < 8 + 2, f"--timeout 8 took {took:.1f} s"
+
+
 def test_max_memory_stops_a_reaction_that_hoards_memory(deployers):
     code, took, out, err = _desmon(
         deployers, "verify", COFFEE, "--deployer", f"{deployers}:hoards_memory_on_grasp", "--max-memory", "300", "--no-progress"

@@ -114,6 +114,8 @@ class DirectSearch:
             if self.pool is None:
                 self.pool = self._make_pool(self.system, self.workers)
                 self.budget.pids = self.pool.pids  # their memory counts in the budget
+                if hasattr(self.pool, "should_stop"):  # asked while waiting on a worker (one may be stuck in a reaction)
+                    self.pool.should_stop = self.budget.urgent
             return self.pool.expand([keys[ki] for ki in frontier])
         expand, index = self.system.expand, self.index
         return (expand(keys[ki], index) for ki in frontier)

@@ -19,6 +19,7 @@ seen before.
 
 from __future__ import annotations
 
+import contextlib
 import gc
 import multiprocessing
 import resource
@@ -26,8 +27,9 @@ import signal
 from collections import deque
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from typing import TYPE_CHECKING, Iterator
+from typing import TYPE_CHECKING, Callable, Iterator
 
+from desmon.deployment.guard import ReactionStopped
 from desmon.errors import CheckerError
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -36,6 +38,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from desmon.verify.system import TransitionSystem
 
 __all__ = ["ExpansionPool", "WORKER_MEMORY"]
+
+#: How often (seconds) the parent looks at the budget while it waits on a worker.
+WAIT_LOOK = 0.2
 
 #: States per chunk at most, and chunks in flight per worker.
 CHUNK = 64
@@ -101,6 +106,10 @@ class ExpansionPool:
         self.levels = 0  # BFS levels handed to the workers
         self.peak_mb = 0.0  # the largest worker's peak resident size
         self._pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_start_worker, initargs=(checker,))
+        #: why the search must stop now, or "" (the search's budget): asked while waiting on a
+        #: worker, so that a worker stuck in a deployer's reaction cannot hold the search
+        self.should_stop: Callable[[], str] = lambda: ""
+        self._abandoned = False
 
     def expand(self, frontier: "list[Key]") -> Iterator["list[list[Segment]]"]:
         """The expansions of ``frontier``'s states, in frontier order.
@@ -132,18 +141,33 @@ class ExpansionPool:
             raise CheckerError(f"cannot start {self.workers} worker processes ({exc.strerror or exc}): use fewer --workers") from None
 
     def _result(self, future: Future) -> "list[list[list[Segment]]]":
-        try:
-            out, peak = future.result()
-        except BrokenProcessPool:
-            raise _died() from None
+        while True:
+            try:
+                out, peak = future.result(timeout=WAIT_LOOK)
+                break
+            except TimeoutError:  # the chunk is still running: is the budget spent meanwhile?
+                why = self.should_stop()
+                if why:
+                    self._abandon()
+                    raise ReactionStopped(why) from None
+            except BrokenProcessPool:
+                raise _died() from None
         if peak > self.peak_mb:
             self.peak_mb = peak
         return out
 
+    def _abandon(self) -> None:
+        """Stop the workers now, whatever they are on (the search stops, and a worker may
+        be stuck in a deployer's reaction that never returns)."""
+        self._abandoned = True
+        for proc in list((getattr(self._pool, "_processes", None) or {}).values()):
+            with contextlib.suppress(Exception):
+                proc.terminate()
+
     def close(self) -> float:
-        """Stop the workers (after the chunks they are on); returns the largest
-        worker's peak resident size in MB."""
-        self._pool.shutdown(wait=True, cancel_futures=True)
+        """Stop the workers (after the chunks they are on, unless abandoned); returns the
+        largest worker's peak resident size in MB."""
+        self._pool.shutdown(wait=not self._abandoned, cancel_futures=True)
         return self.peak_mb
 
 
