@@ -195,17 +195,11 @@ def run_sweep(
     try:
         if todo:
             workers_seen = execute(spec, todo, rows.keep, scheduler=scheduler, workers=workers, retries=retries, task=task)
-    except KeyboardInterrupt:
-        interrupted = True
-        if rows.new == 0 and not resume:  # Ctrl-C before any run finished (the cluster starting): leave no files behind
+    except BaseException as exc:
+        interrupted = isinstance(exc, KeyboardInterrupt)
+        if rows.new == 0 and not resume:  # nothing ran (no scheduler answered, Ctrl-C while the cluster started): no files
             rows.journal.close()
             journal.unlink(missing_ok=True)
-        raise
-    except BaseException:
-        if rows.new == 0 and not resume:  # nothing ran (no scheduler answered, ...): leave no files behind
-            rows.journal.close()
-            journal.unlink(missing_ok=True)
-            kept.clear()
         raise
     finally:
         _finish(rows, out, journal, len(all_runs), axes, job, settings, interrupted, err, had_table, resume)
