@@ -9,7 +9,7 @@ from desmon.deployment import placement, validity
 from desmon.deployment.placement import ChangeLogColumns, PlatformColumns
 from desmon.errors import ModelError, QueryError
 from desmon.model import Device, Platform, PlatformState, RobotBuilder, make_requirement as req
-from desmon.model.requirements import Attribute, Capacity, Maximum, Minimum, Option, Quantity, Selection
+from desmon.model.requirements import Attribute, Capacity, Maximum, Minimum, Option, Quantity, Reads, Selection
 from desmon.repository import Repository, RepositoryQuery, load_model, set_device_working, set_load, set_platform_up
 from desmon.repository.facts import record_start, record_stop
 
@@ -76,6 +76,8 @@ requirements = st.one_of(
     st.lists(options, min_size=1, max_size=3).flatmap(
         lambda opts: st.builds(Selection, st.just(tuple(opts)), st.integers(1, len(opts)))
     ),
+    # what a graph's inputs require (its own half: a hosting platform needs a working device)
+    st.builds(Reads, st.sampled_from(KINDS), st.lists(st.tuples(st.just("dev"), st.sampled_from([f"p{i}" for i in range(12)])), min_size=1, max_size=3).map(tuple)),
 )
 placings = st.none() | st.sampled_from((*GRAPHS, "g9")) | st.lists(st.sampled_from(GRAPHS), min_size=1, max_size=3).map(tuple)
 

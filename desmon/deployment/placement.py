@@ -66,7 +66,7 @@ import numpy as np
 
 from desmon.deployment import validity as _validity
 from desmon.errors import ModelError, QueryError
-from desmon.model.requirements import PLATFORM_HAS, Attribute, Capacity, Maximum, Minimum, Option, Quantity, Selection
+from desmon.model.requirements import PLATFORM_HAS, Attribute, Capacity, Maximum, Minimum, Option, Quantity, Reads, Selection
 from desmon.model.system import PlatformState
 from desmon.repository import labels as _L
 from desmon.repository.store import ADD_NODE
@@ -104,7 +104,7 @@ _EXACT_INT = 2**40
 _COMPENSATED_SUM = sys.version_info >= (3, 12)
 
 #: The hard requirement kinds the columns evaluate (exact types: a subclass declines).
-_HARD = frozenset({Quantity, Capacity, Minimum, Maximum, Attribute, Selection})
+_HARD = frozenset({Quantity, Capacity, Minimum, Maximum, Attribute, Selection, Reads})
 
 #: How often each path ran: ``vector`` (answered by the columns), ``declined`` (a
 #: requirement or a number the columns do not cover: the scalar loop answered).
@@ -378,6 +378,8 @@ class PlatformColumns:
             for opt in req.options:  # type: ignore[union-attr]
                 have += self._option(opt)
             return have >= req.at_least  # type: ignore[union-attr]
+        if t is Reads:  # its own half: a platform hosting devices of the kind needs one working
+            return ~np.isin(self._names, req.hosts) | (self._count(req.kind) > 0)  # type: ignore[union-attr]
         raise TypeError(f"platform columns cannot evaluate {req!r}: check supported() first")
 
     def _count(self, kind: str, vendor: str | None = None) -> np.ndarray:
@@ -603,6 +605,8 @@ class PlatformColumns:
             return np.stack([self._option(o)[rows] for o in req.options], axis=1)  # which options hold
         elif t is Capacity:
             return self._capacity_keys(req, rows, graph)
+        elif t is Reads:  # the text names the row's platform and its devices
+            key = rows.astype(np.int64)
         else:  # platform_has: one text
             key = np.zeros(len(rows), dtype=np.int8)
         return key[:, None]
