@@ -38,8 +38,8 @@ from desmon.verify.trace import KEPT_BRANCH, Label, Step, branch_name, initial_s
 
 __all__ = ["TransitionSystem", "Reduction", "command_key", "RECHECK_FIRST", "RECHECK_EVERY"]
 
-#: Nondeterminism detection: the first RECHECK_FIRST transitions a system runs, and every
-#: RECHECK_EVERY-th after them, are run twice and compared (:meth:`TransitionSystem.run_one`).
+#: Nondeterminism detection: the first RECHECK_FIRST transitions a search runs, and every
+#: RECHECK_EVERY-th after them, are run twice and compared (:meth:`TransitionSystem.successors`).
 RECHECK_FIRST, RECHECK_EVERY = 64, 64
 #: the commands of a failed reaction a counterexample shows (a runaway one issued thousands)
 SHOWN_COMMANDS = 8
@@ -100,7 +100,7 @@ class TransitionSystem:
         self._enabled_memo: dict[tuple, tuple[tuple[Event, str], ...]] = {}
         self._event_pairs: dict[Event, tuple[Event, str]] = {}  # one (event, kind) object per event
         self._frozen: dict[tuple[str, ...], frozenset[str]] = {}
-        self._runs = 0  # transitions run (run_one), for the nondeterminism re-runs
+        self._runs = 0  # transitions the search ran (successors), for the nondeterminism re-runs
         self._slots_cache: dict[str | None, tuple[tuple[str, ...], ...]] = {}
         self.branches: Counter = Counter()
         #: the distinct (canonical) states of the last run, in BFS order
@@ -198,11 +198,7 @@ class TransitionSystem:
             found = core.finding(self._checked)  # a broken transition property (no-flapping, errors-justified, ...)
             if found is not None:
                 st.instant = (found[0], found[1], "the reaction")
-        out = st.key(core.standing), tuple(st.outcomes), log, st.instant
-        self._runs += 1
-        if self._runs <= RECHECK_FIRST or not self._runs % RECHECK_EVERY:
-            self._same_again(key, event, prefix, out)
-        return out
+        return st.key(core.standing), tuple(st.outcomes), log, st.instant
 
     def step_under_guard(self, core: DeploymentCore, st: StateStore, event: Event, *, recording: bool = False) -> tuple[Any, StepLog]:
         """``core.step(event, st)``; a fault of the deployer (it raised, yielded a wrong
@@ -267,6 +263,9 @@ class TransitionSystem:
         while pending:
             prefix = pending.pop(0)
             nkey, outcomes, log, instant = run_one(key, event, prefix)
+            self._runs += 1
+            if self._runs <= RECHECK_FIRST or not self._runs % RECHECK_EVERY:  # nondeterminism: run it again, compare
+                self._same_again(key, event, prefix, (nkey, outcomes, log, instant))
             fails = tuple(i for i, ok in enumerate(outcomes) if not ok) if False in outcomes else ()
             if len(fails) < bound:
                 for i in range(len(prefix), len(outcomes)):
