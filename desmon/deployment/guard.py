@@ -151,6 +151,10 @@ def uncallable(name: str, react: object) -> DeployerFault:
 
 
 def _raised(exc: BaseException) -> str:
+    if isinstance(exc, SystemExit):
+        code = "" if exc.code is None else repr(exc.code)
+        where = _where(exc)
+        return f"called sys.exit({code}) inside its reaction" + (f" (at {where})" if where else "") + "; a reaction returns, it never exits"
     detail = " ".join(str(exc).split())[:300]
     where = _where(exc)
     return f"raised {type(exc).__name__}{': ' + detail if detail else ''}" + (f" (at {where})" if where else "")
@@ -194,7 +198,7 @@ def guarded(
         reaction = make()
     except (ReactionStopped, KeyboardInterrupt, CheckerError):
         raise
-    except Exception as exc:
+    except (Exception, SystemExit) as exc:  # sys.exit() in a reaction must not end desmon (with exit 0, say)
         raise _fault(name, reacting(), _raised(exc), stimulus, exc) from None
     finally:
         inside[0] -= 1
@@ -220,7 +224,7 @@ def guarded(
             return
         except (ReactionStopped, KeyboardInterrupt, CheckerError):
             raise  # the budget, Ctrl-C, an engine's own signal (the table engine's unobserved read)
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:  # sys.exit() in a reaction must not end desmon (with exit 0, say)
             if isinstance(exc, DeployerFault) and exc.stimulus is not None:
                 raise  # a nested deployer's (a mutant's) fault, already named
             raise _fault(name, reacting(), _raised(exc), stimulus, exc) from None
