@@ -17,7 +17,7 @@ deployer's code and the engine, the guard
   :func:`commands_limit`, ``--max-commands``) is a :class:`DeployerFault` ("a
   reaction that never ends");
 * asks the running search's budget (time, memory, Ctrl-C), installed by
-  :func:`watching`, before each command, and -- for a reaction that computes or sleeps
+  :func:`watching`, before the first command and every 256th, and -- for a reaction that computes or sleeps
   without yielding -- from a timer signal every :data:`TICK` seconds while the
   deployer's code runs. A spent budget raises :class:`ReactionStopped` (a
   ``BaseException``, so a deployer's ``except Exception`` cannot swallow it) and the
@@ -173,13 +173,19 @@ def _check_command(cmd: object, graphs: frozenset[str], platforms: frozenset[str
             return f"yielded RaiseError({cmd.kind!r}, {cmd.graph!r}): no error kind {cmd.kind!r}; the kinds are {', '.join(ERROR_KINDS)}"
         if not isinstance(cmd.graph, str) or cmd.graph not in graphs:
             return f"yielded `{cmd}`: the model has no perception graph {cmd.graph!r} (it has {', '.join(sorted(graphs))})"
-        if cmd.platform is not None and cmd.platform not in platforms:
+        if cmd.platform is not None and (not isinstance(cmd.platform, str) or cmd.platform not in platforms):
             return f"yielded `{cmd}`: the model has no platform {cmd.platform!r} (it has {', '.join(sorted(platforms))})"
         return ""
     return (
         f"yielded {cmd!r} ({type(cmd).__name__}): yield only Start, Stop or RaiseError "
         "(desmon.deployment.ports; docs/deployers.md)"
     )
+
+
+def _close(reaction: Any) -> None:
+    """Close a reaction desmon abandons; whatever its own clean-up does is not desmon's concern."""
+    with contextlib.suppress(Exception):
+        reaction.close()
 
 
 def guarded(
@@ -215,7 +221,7 @@ def guarded(
         if watch is not None and not n & WATCH_EVERY:  # (the timer watches a deployer's own code in between)
             why = watch()
             if why:
-                reaction.close()
+                _close(reaction)
                 raise ReactionStopped(why)
         inside[0] += 1
         try:
@@ -237,11 +243,11 @@ def guarded(
             ok = False
         why = "" if ok else _check_command(cmd, graphs, platforms)
         if why:
-            reaction.close()
+            _close(reaction)
             raise _fault(name, reacting(), why, stimulus)
         n += 1
         if n > limit:
-            reaction.close()
+            _close(reaction)
             raise _fault(
                 name, reacting(), f"issued more than {limit:,} commands in one reaction (the last: `{cmd}`), so it never ends; "
                 "a reaction must return. If it really needs more, raise the limit with --max-commands N", stimulus,
@@ -252,7 +258,7 @@ def guarded(
 @contextlib.contextmanager
 def watching(check: Callable[[], str], urgent: Callable[[], str] | None = None) -> Iterator[None]:
     """While a search runs: ``check()`` (why the search must stop, or "") is asked before
-    every command of every reaction, and every :data:`TICK` seconds by a timer signal
+    the first command of every reaction and every 256th, and every :data:`TICK` seconds by a timer signal
     while a deployer's own code runs (one that computes or sleeps without yielding), so
     that the time limit, the memory budget and Ctrl-C stop the search. The timer is used
     only in the main thread, where SIGALRM is not otherwise taken; the timer asks
