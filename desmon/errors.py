@@ -5,6 +5,8 @@ errors also derive from the builtin a caller would naturally catch::
 
     DesmonError
      ├── ModelError (ValueError)          a malformed platform, graph, spec or rule table
+     │    └── DeployerFault               a user's deployer raised, yielded a wrong command or
+     │                                    never ended (desmon.deployment.guard)
      ├── ScenarioError (ValueError)       a scenario file that does not load or is inconsistent
      ├── QueryError (LookupError)         a repository query for something that is not there
      ├── SignalError (ValueError)         bad signal-model / detector parameters

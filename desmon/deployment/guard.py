@@ -26,7 +26,7 @@ deployer's code and the engine, the guard
 What a fault *means* is the engine's business: the checker reports a fault in a
 reachable state as the outcome CRASHED with the shortest path to it, and a fault in the
 initial reaction (the deployer cannot run at all) as bad input; see docs/deployers.md,
-"When your deployer crashes".
+"When your deployer fails".
 """
 
 from __future__ import annotations
