@@ -126,8 +126,9 @@ def describe_stimulus(stimulus: Any, context: Any = None, cause: object = None) 
 
 def _where(exc: BaseException) -> str:
     """``file:line`` of the innermost frame of ``exc``'s traceback, or ""."""
-    frames = traceback.extract_tb(exc.__traceback__)
-    if not frames:
+    own = (os.path.abspath(__file__), os.path.join(os.path.dirname(os.path.abspath(__file__)), "core.py"))
+    frames = [f for f in traceback.extract_tb(exc.__traceback__) if os.path.abspath(f.filename) not in own]
+    if not frames:  # raised by the call itself (react called with the wrong arguments): no line of the deployer's
         return ""
     f = frames[-1]
     return f"{f.filename}:{f.lineno}"
