@@ -173,3 +173,13 @@ def test_a_sweep_seed_row_refusal_still_names_another_seed(tmp_path):
     with pytest.raises(SweepError, match="another --seed"):
         run_sweep(job="run", scenario=CLOUD, axes=parse_axes(["hours=0.05"]), seeds=1, output=str(table), sweep_seed=9,
                   setting=60.0, resume=True)
+
+
+def test_a_deployer_that_cannot_run_is_refused_before_the_cluster_starts(tmp_path, capsys):
+    path = tmp_path / "broken.py"
+    path.write_text("def react(q, slots, changed, context_changed):\n    yield from ()\n    raise RuntimeError('not yet written')\n")
+    out = tmp_path / "b.csv"
+    assert main(["sweep", CLOUD, "-p", "hours=0.05,0.1", "--deployer", f"{path}:react", "-o", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "cannot run at all" in err and "raised RuntimeError: not yet written" in err and "at hours=0.05" in err
+    assert not out.exists() and not journal_path(out).exists()

@@ -170,7 +170,7 @@ def run_sweep(
 
     grid = Grid(axes, seeds, sweep_seed)
     deployer = _checked(job, scenario, axes, deployer)
-    check_points(job, scenario, grid.iter_points(), setting)  # every point, before a cluster starts
+    check_points(job, scenario, grid.iter_points(), setting, deployer)  # every point, before a cluster starts
     settings = {SETTINGS[job]: setting}
     identity = {
         "job": job, "scenario": scenario or "", "deployer": deployer, "sweep_seed": sweep_seed,

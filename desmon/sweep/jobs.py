@@ -315,12 +315,14 @@ def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> None
                 # a value that parses but the scenario refuses: its points become error rows
 
 
-def check_points(job: str, scenario: str | None, points: Any, setting: Any) -> None:
+def check_points(job: str, scenario: str | None, points: Any, setting: Any, deployer: Any = None) -> None:
     """Refuse, before a cluster starts, what would fail (or never end) at some point of
     the grid, with ``--job run``: a fleet scenario, which the job does not simulate
     (``desmon run`` does, alone), and an ``--until`` past a point's horizon, which ``desmon run``
     refuses too (past it the last action would go on forever). ``points`` are the grid's
-    points; one the scenario refuses is left to be its error row, as :func:`check_values` says."""
+    points; one the scenario refuses is left to be its error row, as :func:`check_values` says.
+    With ``deployer`` (a spec), its first reaction runs at every point: a deployer that
+    cannot run at all there is refused now, not in every row."""
     if job == "evaluate" or scenario is None:
         return
     from desmon.loader import load_scenario
@@ -337,6 +339,8 @@ def check_points(job: str, scenario: str | None, points: Any, setting: Any) -> N
                 f"{scenario}: a fleet of robots (world is a Fleet){' ' + where if where else ''}: desmon sweep runs one robot per "
                 f"run; simulate the fleet with desmon run {scenario}, or sweep a single-robot scenario"
             )
+        if deployer is not None:
+            _first_reaction(loaded, deployer, where)
         if job == "run" and setting is not None:  # (the other jobs take no --until)
             from desmon.sim.world import world_of
 
@@ -346,4 +350,18 @@ def check_points(job: str, scenario: str | None, points: Any, setting: Any) -> N
                     f"--until {setting:g}: the scenario's task ends at its horizon of {horizon:g} s{' ' + where if where else ''}; "
                     "give --until at most that, or leave it out to run each point to its own horizon"
                 )
+
+
+def _first_reaction(scenario: Any, deployer: str, where: str) -> None:
+    """The deployer's first reaction in ``scenario`` (its initial state), as the checker runs
+    it: a SweepError if the deployer cannot run at all there."""
+    from desmon.verify.system import TransitionSystem
+
+    try:
+        TransitionSystem(scenario, _deployer(deployer)).initial()
+    except DeployerFault as exc:
+        if exc.initial:
+            raise SweepError(f"{_one_line(exc)}{' ' + where if where else ''}") from None
+    except DesmonError:
+        pass  # no checker bounds, say: the runs say what they say
 
