@@ -104,11 +104,20 @@ def test_a_detector_without_a_signal_model_is_drawn_as_such_not_as_warming_up(bu
     assert tl.no_signal == ["spill_detector"]
     phases = {ph for _a, _b, g, ph in tl.runs["gpu_box"] if g == "spill_detector"}
     assert "no_signal" in phases and "warming" not in phases and "valid" not in phases
-    # after the camera is repaired the running instance is back to "no signal model", not left as "no valid input"
-    runs = [(a, b, ph) for a, b, g, ph in tl.runs["gpu_box"] if g == "spill_detector"]
-    assert any(prev[2] == "invalid" and nxt[2] == "no_signal" and prev[1] == nxt[0] for prev, nxt in zip(runs, runs[1:]))
     legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert "spill_detector (no signal model)" in legend and "no signal model: cannot alarm" in legend
+
+
+def test_a_detector_without_a_signal_model_whose_input_comes_back_is_drawn_as_such_again(tmp_path):
+    """The paper's deployer leaves the spill detector running while its camera is broken
+    (its Algorithm 2 does not re-check the inputs; the corrected one stops it): the
+    instance is drawn "no valid input", then, once the camera is repaired, "no signal
+    model" again, not left as "no valid input"."""
+    trace = tmp_path / "busy_paper.jsonl"
+    assert main(["run", BUSY, "--deployer", "paper", "--trace", str(trace), "--no-progress"]) in (0, 1)
+    tl = build_timeline(read_trace(trace))
+    runs = [(a, b, ph) for a, b, g, ph in tl.runs["gpu_box"] if g == "spill_detector"]
+    assert any(prev[2] == "invalid" and nxt[2] == "no_signal" and prev[1] == nxt[0] for prev, nxt in zip(runs, runs[1:]))
 
 
 def _centre(text, renderer):  # type: ignore[no-untyped-def]
