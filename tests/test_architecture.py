@@ -11,6 +11,7 @@ implied by Python, not written by the code, and is left out.
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import networkx as nx
@@ -157,12 +158,18 @@ def test_the_layer_rule_catches_an_upward_import():
     assert ups == list(g.edges)
 
 
-def test_the_readme_architecture_table_names_every_layer_row(root):
-    readme = (root / "README.md").read_text()
-    section = readme.split("## Architecture", 1)[1].split("\n## ", 1)[0]
-    for row in LAYERS:
+@pytest.mark.parametrize("doc, heading", [("README.md", "## Architecture"), ("docs/design.md", "## 2. Layers")])
+def test_the_docs_layer_tables_give_every_row_its_layer(root, doc, heading):
+    section = (root / doc).read_text().split(heading, 1)[1].split("\n## ", 1)[0]
+    layer_of_path = {}
+    for line in section.splitlines():
+        cells = line.split("|")
+        if len(cells) > 3 and cells[1].strip().isdigit():
+            for path in re.findall(r"`(desmon[\w/.]*)`", cells[2]):
+                layer_of_path[path.removesuffix(".py").removesuffix("/__init__").rstrip("/")] = int(cells[1])
+    for row, layer in LAYERS.items():
         path = row.replace(".", "/")
-        assert f"`{path}" in section, f"README.md's architecture table does not name {path}"
+        assert layer_of_path.get(path) == layer, f"{doc}'s layer table gives {path} layer {layer_of_path.get(path)}, the test {layer}"
 
 
 def test_each_checker_engine_imports_nothing_of_another_engine(graph):
