@@ -12,8 +12,10 @@ to monitor (platform down or an input stream with no readable device) must be in
 to the checker, every slot the world leaves unmonitored must have no validly active
 alternative in the checker's state.
 
-Coverage: every shipped scenario with checker bounds (the event kinds a scripted world
-plays: actions, device and platform faults and repairs, loads), with the ``desmon``,
+Coverage: every shipped scenario with checker bounds (every event kind the checker
+knows: actions, device and platform faults and repairs and loads on the world's timeline;
+requirement changes and platforms joining and leaving as its scripted run-time changes),
+with the ``desmon``,
 ``desmon-keep-fallback`` and ``paper`` deployers, and hypothesis-generated models whose
 detectors read devices hosted on other platforms, with fallbacks and failing starts.
 ``test_conformance_fails_when_validity_ignores_inputs`` shows the comparison fails on a
@@ -34,7 +36,9 @@ from hypothesis import strategies as hst
 from desmon.deployment.invariants import TRANSITION_INVARIANTS, validly_active
 from desmon.loader import load_scenario
 from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
-from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformUp
+from desmon.model.events import (
+    ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp, RequirementChange,
+)
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.sim.engine import SimWorld
 from desmon.sim.world import StartFailure, world_from_timeline
@@ -44,8 +48,9 @@ from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
-#: the event kinds a scripted simulation world plays
+#: the event kinds a scripted simulation world plays: on its timeline, and as run-time changes
 SIM_KINDS = (ActionChange, DeviceFail, DeviceRepair, PlatformDown, PlatformUp, LoadChange)
+CHANGE_KINDS = (RequirementChange, PlatformJoin, PlatformLeave)
 #: seconds between two events: every reaction (start latencies included) ends well before
 GAP = 10.0
 
@@ -69,7 +74,7 @@ def walk(system: TransitionSystem, rng: random.Random, steps: int, failures: boo
     key = system.initial()
     path = []
     for _ in range(steps):
-        events = [e for e in system.enabled(key) if isinstance(e, SIM_KINDS)]
+        events = [e for e in system.enabled(key) if isinstance(e, SIM_KINDS + CHANGE_KINDS)]
         if not events:
             break
         event = rng.choice(events)
@@ -130,9 +135,12 @@ def compare(scenario: Scenario, deployer: str, seed: int, steps: int = 20, failu
     # a checker without an initial action starts with no context; the world's robot is idle
     first = bounds.initial_action or init.context
     start = [TimedEvent(0.0, ActionChange(first))] if first else []
-    timeline = start + [TimedEvent(GAP * (i + 1), e) for i, (e, *_r) in enumerate(path)]
+    timeline = start + [TimedEvent(GAP * (i + 1), e) for i, (e, *_r) in enumerate(path) if isinstance(e, SIM_KINDS)]
+    changes = tuple(TimedEvent(GAP * (i + 1), e) for i, (e, *_r) in enumerate(path) if isinstance(e, CHANGE_KINDS))
     sim_scenario = dataclasses.replace(scenario, world=None, timeline=tuple(timeline))
-    world = dataclasses.replace(world_from_timeline(sim_scenario), horizon=GAP * (len(path) + 1), start_failure=StartFailure(script=_script(init, path)))
+    world = dataclasses.replace(
+        world_from_timeline(sim_scenario), horizon=GAP * (len(path) + 1), start_failure=StartFailure(script=_script(init, path)), changes=changes,
+    )
     sim_scenario = dataclasses.replace(sim_scenario, world=world)
 
     seen: list[tuple[float, Key, dict[tuple[str, str], bool]]] = []
