@@ -248,8 +248,11 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 def _draw_trace(trace: str, out: str, start: float | None, end: float | None, flags: tuple[str, str] = ("--from", "--to")) -> None:
     from desmon.viz.timeline import build_timeline, plot_timeline, read_trace
 
-    plot_timeline(build_timeline(read_trace(trace), start, end, flags=flags), out)
+    records = read_trace(trace)
+    plot_timeline(build_timeline(records, start, end, flags=flags), out)
     print(f"wrote {out}", file=sys.stderr)
+    if not records[0].get("platforms"):  # drawn, but say why the picture has no platform lanes
+        print(f"desmon: note: {trace} declares no platforms in its run record: only the context lane is drawn", file=sys.stderr)
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:

@@ -19,3 +19,15 @@ def test_the_note_counts_only_cells_the_test_cannot_fail():
         assert min(fisher_exact(0, 60, paper_k, 60), fisher_exact(60, 60, paper_k, 60)) < ALPHA
     # at 1 trial nothing is
     assert all(min(fisher_exact(0, 1, k, 60), fisher_exact(1, 1, k, 60)) >= ALPHA for k in range(61))
+
+
+def test_plot_of_a_trace_without_platforms_draws_the_context_and_says_why_nothing_else(tmp_path, capsys):
+    trace = tmp_path / "bare.jsonl"
+    trace.write_text(
+        '{"t": 0.0, "type": "run", "scenario": "s", "deployer": "desmon", "horizon": 10.0, "platforms": {}, "graphs": {}}\n'
+        '{"t": 0.0, "type": "action", "action": "idle", "duration": 10.0}\n'
+    )
+    png = tmp_path / "bare.png"
+    assert main(["plot", str(trace), "-o", str(png)]) == 0
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    assert "declares no platforms in its run record: only the context lane is drawn" in capsys.readouterr().err

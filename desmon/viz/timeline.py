@@ -67,6 +67,7 @@ def read_trace(path: str | Path) -> list[dict[str, Any]]:
     """The records of a JSON Lines trace; a ScenarioError names a missing file or bad line."""
     p = check_input_file(path, *TRACE_FILE)
     out: list[dict[str, Any]] = []
+    lines: list[int] = []  # the line of each record
     with p.open("rb") as fh:
         head = fh.read(2)
         if head == b"\x1f\x8b":
@@ -93,11 +94,29 @@ def read_trace(path: str | Path) -> list[dict[str, Any]]:
                     f"{path}:{n}: {shape}, not a record; a trace holds one JSON object per line (JSON Lines): {_HOW}"
                 )
             out.append(record)
+            lines.append(n)
     if not out:
         raise ScenarioError(f"{path}: is empty; {_HOW}")
     if out[0].get("type") != "run":
         raise ScenarioError(f"{path}: does not start with a 'run' record; is it a desmon run trace? {_HOW}")
+    _check_platforms(path, out, lines)
     return out
+
+
+def _check_platforms(path: str | Path, records: list[dict[str, Any]], lines: list[int]) -> None:
+    """Every platform a record names is one the run record declares: a timeline draws one
+    lane per declared platform, so a record on another one would be drawn without a word
+    of what is wrong (a hand-edited trace, or records of another run pasted in)."""
+    declared = records[0].get("platforms")
+    if not isinstance(declared, dict):
+        return  # a missing or malformed field is the run record's own check
+    for record, n in zip(records[1:], lines[1:]):
+        p = record.get("platform")
+        if isinstance(p, str) and p not in declared:
+            raise ScenarioError(
+                f"{path}:{n}: a {record.get('type')!r} record on platform {p!r}, which the run record does not declare "
+                f"(it declares {', '.join(map(str, declared)) or 'none'}); is the trace from another run or edited? {_HOW}"
+            )
 
 
 def check_window(
