@@ -108,3 +108,18 @@ def test_the_sweeps_cluster_recipe_starts_single_threaded_workers_without_malloc
             os.killpg(p.pid, 15)
             p.wait(timeout=60)
         time.sleep(0.5)
+
+
+#: the pages whose every block says what it is; docs/design.md's module listing and
+#: docs/findings.md's quoted sessions (a "$ command" line, then an abbreviated output) are not yet in this form
+TYPED = ("README.md", "docs/tutorial.md", "docs/deployers.md", "docs/scenarios.md", "docs/detectors.md", "docs/sweeps.md", "docs/fleet.md")
+
+
+@pytest.mark.parametrize("page", TYPED)
+def test_every_block_says_whether_it_is_a_command_code_or_output_and_cut_output_says_excerpt(root, page):
+    from docblocks import bare_blocks, quotes
+
+    text = (root / page).read_text()
+    assert bare_blocks(text) == [], f"{page}: a block without a language (sh, python or text)"
+    assert {b.lang for b in blocks(text)} <= {"sh", "python", "text"}
+    quotes(text)  # each output block follows a command and is marked an excerpt exactly when it is cut
