@@ -110,9 +110,30 @@ def test_the_sweeps_cluster_recipe_starts_single_threaded_workers_without_malloc
         time.sleep(0.5)
 
 
-#: the pages whose every block says what it is; docs/design.md's module listing and
-#: docs/findings.md's quoted sessions (a "$ command" line, then an abbreviated output) are not yet in this form
-TYPED = ("README.md", "docs/tutorial.md", "docs/deployers.md", "docs/scenarios.md", "docs/detectors.md", "docs/sweeps.md", "docs/fleet.md")
+#: the pages whose every block says what it is (docs/design.md's module listing is not yet in this form)
+TYPED = (
+    "README.md", "docs/tutorial.md", "docs/deployers.md", "docs/scenarios.md", "docs/detectors.md", "docs/sweeps.md",
+    "docs/fleet.md", "docs/findings.md",
+)
+
+
+def test_the_counterexamples_findings_quotes_are_what_verify_prints(root, capsys):
+    """docs/findings.md quotes the paper's bugs as ``desmon verify`` prints them (excerpts)."""
+    import shlex
+
+    from docblocks import check_quote, quotes
+
+    from desmon.cli import main
+
+    found = quotes((root / "docs/findings.md").read_text())
+    assert len(found) >= 5
+    for q in found:
+        argv = shlex.split(q.command.split("#")[0])
+        assert argv[0] == "desmon"
+        code = main([*(a if not a.startswith("scenarios/") else str(root / a) for a in argv[1:]), "--no-progress"])
+        printed = capsys.readouterr()
+        assert code == 1, q.command
+        check_quote(q, printed.out.replace(str(root) + "/", "") + printed.err)
 
 
 @pytest.mark.parametrize("page", TYPED)
