@@ -17,7 +17,7 @@ from desmon.deployment.deployer import Deployer, get_deployer
 from desmon.deployment.guard import DeployerFault, describe_stimulus, guarded, uncallable
 from desmon.deployment.invariants import ReactionBook, SystemView, judge_reaction, raise_problem, validly_active_among, view_of
 from desmon.deployment.monitor import InsertPort, Stimulus, observe
-from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop
+from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop, relay
 from desmon.deployment.validity import deployment_valid, validity_for
 from desmon.errors import ModelError
 from desmon.model.events import Event
@@ -205,19 +205,15 @@ class DeploymentCore:
         """``reaction``, passed through, with what it does noted in ``book``: each start
         and stop with its outcome, and each error judged true or not at the instant it is
         raised (``errors-justified``, :func:`~desmon.deployment.invariants.raise_problem`)."""
-        outcome: bool | None = None
         q = self.query
-        while True:
-            try:
-                cmd = reaction.send(outcome)
-            except StopIteration:
-                return
+
+        def judge(cmd: Command) -> None:
             if type(cmd) is RaiseError:
                 if book.bad_raise is None:
                     book.bad_raise = raise_problem(cmd, book, q)
                 book.raised[cmd.graph] = cmd.kind
-            outcome = yield cmd
-            book.note(cmd, outcome)
+
+        return relay(reaction, before=judge, after=book.note)
 
     def _names(self) -> tuple[frozenset[str], frozenset[str]]:
         return frozenset(g.name for g in self.model.graphs), frozenset(p.name for p in self.model.platforms)

@@ -32,6 +32,7 @@ from desmon.deployment.ports import (
     Reaction,
     Start,
     Stop,
+    relay,
 )
 from desmon.deployment.validity import check_validity, spec_validity, validity_for
 from desmon.errors import ModelError
@@ -431,15 +432,12 @@ def make_desmon_react(
 
 def _noting_starts(reaction: Reaction, tried: dict[str, set[str]]) -> Reaction:
     """``reaction``, passed through, noting in ``tried`` the platform of every start."""
-    outcome: bool | None = None
-    while True:
-        try:
-            cmd = reaction.send(outcome)
-        except StopIteration:
-            return
+
+    def note(cmd: Command) -> None:
         if type(cmd) is Start:
             tried.setdefault(cmd.graph, set()).add(cmd.platform)
-        outcome = yield cmd
+
+    return relay(reaction, before=note)
 
 
 def _second_chance(q: QueryPort, slots: tuple[tuple[str, ...], ...], placed: dict[str, bool], tried: dict[str, set[str]]) -> Reaction:

@@ -15,7 +15,7 @@ the checker's state-backed view.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Generator, Protocol, runtime_checkable
+from typing import Callable, Generator, Protocol, runtime_checkable
 
 from desmon.model.requirements import DeploymentSpec, Requirement
 from desmon.model.system import PlatformState
@@ -35,6 +35,7 @@ __all__ = [
     "QueryPort",
     "ControlPort",
     "ErrorPort",
+    "relay",
 ]
 
 DEPLOYMENT_FAILED = "deployment_failed"
@@ -97,6 +98,26 @@ class ErrorRecord:
 
     def to_json(self) -> dict[str, object]:
         return {"kind": self.kind, "graph": self.graph, "platform": self.platform, "time": self.time, "detail": self.detail}
+
+
+def relay(
+    reaction: Reaction,
+    before: "Callable[[Command], None] | None" = None,
+    after: "Callable[[Command, bool | None], None] | None" = None,
+) -> Reaction:
+    """``reaction`` passed through command by command, for whoever watches it: ``before(cmd)``
+    as each command is yielded, ``after(cmd, outcome)`` once its outcome came back."""
+    outcome: bool | None = None
+    while True:
+        try:
+            cmd = reaction.send(outcome)
+        except StopIteration:
+            return
+        if before is not None:
+            before(cmd)
+        outcome = yield cmd
+        if after is not None:
+            after(cmd, outcome)
 
 
 @runtime_checkable

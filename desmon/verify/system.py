@@ -188,6 +188,12 @@ class TransitionSystem:
         Returns (next key, start outcomes, StepLog, instantaneous violation or None); the
         store is left in the next state.
         """
+        return self._transition(key, event, prefix)
+
+    def _transition(self, key: Key, event: Event, prefix: tuple[bool, ...]) -> tuple[Key, tuple[bool, ...], StepLog, Any]:
+        """``event`` and its reaction on ``key`` in the store: (next key, start outcomes,
+        StepLog, instantaneous violation or None), a broken transition property
+        (``no-flapping``, ``errors-justified``, ...) reported as one "right after the reaction"."""
         st = self.store
         st.load(key)
         core = self.core
@@ -195,7 +201,7 @@ class TransitionSystem:
         st.begin(prefix)
         _stim, log = self.step_under_guard(core, st, event)
         if core.findings and st.instant is None:
-            found = core.finding(self._checked)  # a broken transition property (no-flapping, errors-justified, ...)
+            found = core.finding(self._checked)
             if found is not None:
                 st.instant = (found[0], found[1], "the reaction")
         return st.key(core.standing), tuple(st.outcomes), log, st.instant
@@ -227,17 +233,8 @@ class TransitionSystem:
         stimulus, so different commands (or another next state) are nondeterminism of the
         deployer, refused with both command lists (docs/deployers.md). The store is left in
         the next state, as :meth:`run_one` leaves it."""
-        st = self.store
-        st.load(key)
-        core = self.core
-        core.standing = self._standing(key.standing)
-        st.begin(prefix)
-        _stim, log = self.step_under_guard(core, st, event)
-        if core.findings and st.instant is None:
-            found = core.finding(self._checked)  # a broken transition property (no-flapping, errors-justified, ...)
-            if found is not None:
-                st.instant = (found[0], found[1], "the reaction")
-        again = st.key(core.standing), tuple(st.outcomes), log, st.instant
+        again = self._transition(key, event, prefix)
+        log = again[2]
         was, now = [str(c) for c, _ok in first[2].commands], [str(c) for c, _ok in log.commands]
         same = [command_key(c) for c, _ok in first[2].commands] == [command_key(c) for c, _ok in log.commands]
         if not same or again[0] != first[0] or again[3] != first[3]:
