@@ -223,11 +223,12 @@ class Reads:
 
     kind: str
     devices: tuple[tuple[str, str], ...]
+    #: The platforms hosting a device of this kind, in declaration order, without repeats
+    #: (derived from ``devices`` once: every validity question asks it).
+    hosts: tuple[str, ...] = field(init=False, repr=False, compare=False)
 
-    @property
-    def hosts(self) -> tuple[str, ...]:
-        """The platforms hosting a device of this kind, in declaration order, without repeats."""
-        return tuple(dict.fromkeys(p for _d, p in self.devices))
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "hosts", tuple(dict.fromkeys(p for _d, p in self.devices)))
 
     def describe(self) -> str:
         return f"reads {self.kind}"
