@@ -90,7 +90,7 @@ def _resolve_deployer(spec: str) -> object:
     return resolve_deployer(spec)
 
 
-def _deployer_arg(p: argparse.ArgumentParser) -> None:
+def _deployer_arg(p: argparse.ArgumentParser, *, deadline: bool = True) -> None:
     from desmon.verify.deployers import MUTANT_PREFIX
     from desmon.verify.mutants import MUTANTS
 
@@ -106,6 +106,12 @@ def _deployer_arg(p: argparse.ArgumentParser) -> None:
         help="the most commands one reaction of the deployer may issue; more is a reaction that never ends, "
         "reported as the deployer's failure (default: 10000)",
     )
+    if deadline:  # (verify has --timeout: its budget stops a reaction that runs too long)
+        p.add_argument(
+            "--max-reaction-seconds", type=positive_seconds, default=None, metavar="S",
+            help="the longest the deployer's code may run without yielding a command or returning; longer is a "
+            "reaction that never ends, reported as the deployer's failure (default: 60)",
+        )
 
 
 def _load_scripted(args: argparse.Namespace):  # type: ignore[no-untyped-def]
@@ -403,7 +409,7 @@ def _add_plot(sub: _Subparsers) -> None:
 def _add_verify(sub: _Subparsers) -> None:
     p = sub.add_parser("verify", help="explore every interleaving of events and check the invariants")
     _scenario_arg(p)
-    _deployer_arg(p)
+    _deployer_arg(p, deadline=False)
     p.add_argument("--invariant", action="append", default=None, help="check only this invariant (repeatable)")
     p.add_argument("--continue", dest="keep_going", action="store_true", help="collect the first counterexample of each invariant")
     _add_verify_limits(p)
@@ -516,13 +522,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         print(f"desmon: error: no command given; choose one of {', '.join(args.commands)} (desmon COMMAND --help)", file=sys.stderr)
         return EXIT_USAGE
-    from desmon.deployment.guard import EXIT_CRASHED, MAX_COMMANDS, DeployerFault, commands_limit
+    from desmon.deployment.guard import EXIT_CRASHED, MAX_COMMANDS, MAX_REACTION_SECONDS, DeployerFault, commands_limit, reaction_deadline
 
     try:
         commands_limit(getattr(args, "max_commands", None) or MAX_COMMANDS)  # this command's (a process may run several)
         plan_outputs(())  # (preflight records this command's outputs)
         preflight(args)  # inputs, numbers, windows and output paths, before any long work
-        return int(args.handler(args))
+        if not hasattr(args, "max_reaction_seconds"):  # no deployer, or verify (its --timeout)
+            return int(args.handler(args))
+        with reaction_deadline(args.max_reaction_seconds or MAX_REACTION_SECONDS):
+            return int(args.handler(args))
     except DeployerFault as exc:
         # (SimPy re-raises a process's exception as a copy caused by the original)
         if exc.initial or getattr(exc.__cause__, "initial", False):  # the deployer cannot run at all: bad input

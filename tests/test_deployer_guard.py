@@ -68,6 +68,12 @@ def spins_on_grasp(q, slots, changed, context_changed):
     yield from _desmon(q, slots, changed, context_changed)
 
 
+def spins_on_release(q, slots, changed, context_changed):
+    while q.context() == "release":
+        pass
+    yield from _desmon(q, slots, changed, context_changed)
+
+
 def sleeps_on_grasp(q, slots, changed, context_changed):
     if q.context() == "grasp":
         time.sleep(60)
@@ -153,6 +159,18 @@ def test_timeout_stops_a_reaction_that_never_yields_within_two_seconds(deployers
     code, took, out, err = _desmon(deployers, "verify", COFFEE, "--deployer", f"{deployers}:{name}", "--timeout", "3", "--no-progress")
     assert code == 3 and "verdict: INCOMPLETE (timeout 3s)" in out and "Traceback" not in err, out + err
     assert took < 3 + 2, f"--timeout 3 took {took:.1f} s"
+
+
+@pytest.mark.parametrize("command", ["run", "replay"])
+def test_a_reaction_that_never_returns_is_the_deployers_failure_where_there_is_no_timeout(deployers, command):
+    """run and replay have no --timeout: a reaction whose code spins without yielding is
+    stopped after --max-reaction-seconds and reported as the deployer's failure (CRASHED)."""
+    code, took, out, err = _desmon(
+        deployers, command, COFFEE, "--deployer", f"{deployers}:spins_on_release", "--max-reaction-seconds", "1",
+    )
+    assert code == 4 and "desmon: CRASHED: " in err and "ran for over 1 s without yielding a command or returning" in err, out + err
+    assert "spins_on_release" in err and "Traceback" not in err
+    assert took < 20, f"{command} took {took:.1f} s"
 
 
 def test_one_ctrl_c_stops_a_spinning_reaction(deployers):

@@ -35,6 +35,7 @@ import contextlib
 import os
 import signal
 import threading
+import time
 import traceback
 from types import GeneratorType
 from typing import Any, Callable, Iterator
@@ -44,7 +45,7 @@ from desmon.errors import CheckerError, ModelError
 
 __all__ = [
     "DeployerFault", "ReactionStopped", "guarded", "watching", "commands_limit", "MAX_COMMANDS", "TICK", "CRASH",
-    "describe_stimulus", "uncallable", "EXIT_CRASHED",
+    "describe_stimulus", "uncallable", "EXIT_CRASHED", "reaction_deadline", "MAX_REACTION_SECONDS", "RanAway",
 ]
 
 #: the exit code of every command whose deployer failed in a reachable state (not the first reaction)
@@ -60,6 +61,12 @@ WATCH_EVERY = 255
 
 #: How often (seconds) the timer looks at the budget while a deployer's code runs.
 TICK = 0.2
+
+#: The longest (seconds) a deployer's own code may run without yielding a command or
+#: returning, in the commands that have no ``--timeout`` of their own (run, replay, fuzz,
+#: explain, show, explore): past it the reaction is judged never to end, a
+#: :class:`DeployerFault`. ``--max-reaction-seconds S`` sets it (:func:`reaction_deadline`).
+MAX_REACTION_SECONDS = 60.0
 
 #: The name under which the checker records a deployer's fault (its outcome is CRASHED).
 CRASH = "deployer-crash"
@@ -183,6 +190,51 @@ def _check_command(cmd: object, graphs: frozenset[str], platforms: frozenset[str
     )
 
 
+class RanAway(Exception):
+    """Raised by :func:`reaction_deadline`'s timer inside a deployer's code that has run
+    too long without yielding; the guard reports it as the deployer's fault."""
+
+
+#: while a deadline is armed: its seconds, and when the deployer's code was last entered
+_deadline: list[float | None] = [None]
+_since = [0.0]
+
+
+@contextlib.contextmanager
+def reaction_deadline(seconds: float) -> Iterator[None]:
+    """Within it, a deployer's code that runs for more than ``seconds`` without yielding a
+    command or returning is stopped by a timer signal (every :data:`TICK` s) and reported
+    as its fault: a reaction that never ends, in a command without a ``--timeout`` of its
+    own. The timer is used only in the main thread, where SIGALRM is not otherwise taken
+    (a search started inside it then asks its budget between commands only)."""
+    if not (
+        hasattr(signal, "setitimer")
+        and threading.current_thread() is threading.main_thread()
+        and signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, None)
+    ):
+        yield
+        return
+    previous = _deadline[0]
+    _deadline[0] = seconds
+
+    def tick(signum: int, frame: Any) -> None:
+        if _inside[0] > 0 and time.monotonic() - _since[0] > seconds:
+            _since[0] = time.monotonic()  # once
+            raise RanAway(
+                f"its code ran for over {seconds:g} s without yielding a command or returning, so it never ends; "
+                "a reaction must return (--max-reaction-seconds S sets the limit)"
+            )
+
+    signal.signal(signal.SIGALRM, tick)
+    signal.setitimer(signal.ITIMER_REAL, TICK, TICK)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0, 0)
+        signal.signal(signal.SIGALRM, signal.SIG_DFL)
+        _deadline[0] = previous
+
+
 def _close(reaction: Any) -> None:
     """Close a reaction desmon abandons; whatever its own clean-up does is not desmon's concern."""
     with contextlib.suppress(Exception):
@@ -200,6 +252,9 @@ def guarded(
     :class:`ReactionStopped` when the installed budget is spent."""
     watch = _watch[0]
     inside = _inside
+    armed = _deadline[0] is not None
+    if armed and not inside[0]:
+        _since[0] = time.monotonic()
     inside[0] += 1
     try:
         reaction = make()
@@ -224,6 +279,8 @@ def guarded(
             if why:
                 _close(reaction)
                 raise ReactionStopped(why)
+        if armed and not inside[0]:
+            _since[0] = time.monotonic()
         inside[0] += 1
         try:
             cmd = send(outcome)
