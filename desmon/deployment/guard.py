@@ -235,6 +235,14 @@ def reaction_deadline(seconds: float) -> Iterator[None]:
         _deadline[0] = previous
 
 
+def _enter(armed: bool) -> None:
+    """The deployer's code is about to run: count it, and start its clock where a
+    :func:`reaction_deadline` is armed and it is not already running."""
+    if armed and not _inside[0]:
+        _since[0] = time.monotonic()
+    _inside[0] += 1
+
+
 def _close(reaction: Any) -> None:
     """Close a reaction desmon abandons; whatever its own clean-up does is not desmon's concern."""
     with contextlib.suppress(Exception):
@@ -253,9 +261,7 @@ def guarded(
     watch = _watch[0]
     inside = _inside
     armed = _deadline[0] is not None
-    if armed and not inside[0]:
-        _since[0] = time.monotonic()
-    inside[0] += 1
+    _enter(armed)
     try:
         reaction = make()
     except (ReactionStopped, KeyboardInterrupt, CheckerError):
@@ -279,9 +285,7 @@ def guarded(
             if why:
                 _close(reaction)
                 raise ReactionStopped(why)
-        if armed and not inside[0]:
-            _since[0] = time.monotonic()
-        inside[0] += 1
+        _enter(armed)
         try:
             cmd = send(outcome)
         except StopIteration:
