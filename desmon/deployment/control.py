@@ -33,7 +33,6 @@ the checker's table engine observes them like any requirement check.
 
 from __future__ import annotations
 
-from functools import lru_cache
 from typing import Callable
 
 from desmon.deployment.validity import check_platform, input_failures
@@ -51,11 +50,6 @@ StateOf = Callable[[str], PlatformState]
 
 #: The refusal reason of rule 1.
 PLATFORM_DOWN = "platform down"
-
-
-@lru_cache(maxsize=256)
-def _has(kind: str) -> tuple[Attribute, ...]:
-    return (Attribute(PLATFORM_HAS, kind),)
 
 
 def device_requirements(requirements: tuple[Requirement, ...]) -> tuple[Requirement, ...]:

@@ -250,17 +250,16 @@ class DeploymentCore:
             for g in slot:
                 mates.setdefault(g, set()).update(slot)
         moving: dict[str, tuple[str, float, float]] = {}
-        outcome: bool | None = None
-        while True:
-            try:
-                cmd = reaction.send(outcome)
-            except StopIteration:
-                return
-            note = self._move_note(cmd) if isinstance(cmd, Stop) else None
+        noted: list[tuple[str, float, float] | None] = [None]  # the move note of the command in flight
+
+        def before(cmd: Command) -> None:
+            noted[0] = self._move_note(cmd) if isinstance(cmd, Stop) else None
             if moving and isinstance(cmd, Start):
                 for other in [g for g in moving if g != cmd.graph and g in mates.get(cmd.graph, ())]:
                     del moving[other]  # its stop made room for cmd.graph, its slot's other alternative
-            outcome = yield cmd
+
+        def after(cmd: Command, outcome: bool | None) -> None:
+            note = noted[0]
             if note is not None and outcome:
                 moving[cmd.graph] = note
             elif isinstance(cmd, Start) and outcome and cmd.graph in moving:
@@ -270,6 +269,8 @@ class DeploymentCore:
                         f"{cmd.graph} moved from {source}, where it ran validly, to {cmd.platform} with a score gain of "
                         f"{gain:.3g}, not above its min_gain {min_gain:g}"
                     )
+
+        return relay(reaction, before=before, after=after)
 
     def _move_note(self, cmd: Stop) -> tuple[str, float, float] | None:
         """(platform, score gain of the best platform over it, min_gain) if ``cmd`` stops a
