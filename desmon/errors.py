@@ -60,5 +60,30 @@ class NondeterminismError(CheckerError):
     """Replaying a trace did not reproduce the state the search stored."""
 
 
+class TableUnsupported(CheckerError):
+    """The table engine cannot run this search (``--engine auto`` falls back to the direct engine)."""
+
+
+class UnobservedRead(TableUnsupported):
+    """A reaction read a platform fact outside the requirement checks: it cannot be memoised.
+
+    ``fact`` names what was read and ``platform`` whose; ``caller`` is the module that
+    read it, once the engine that caught the error has found it in the traceback
+    (see :meth:`message`)."""
+
+    def __init__(self, message: str = "", *, fact: str = "", platform: str = "") -> None:
+        super().__init__(message)
+        self.fact, self.platform = fact, platform
+
+    def named(self, caller: str) -> "UnobservedRead":
+        """This refusal with the reading module named (what the user is told)."""
+        out = UnobservedRead(
+            f"{caller} read {self.fact} of platform {self.platform} outside the requirement checks "
+            "(desmon.deployment.validity): the table engine cannot memoise this reaction; run with --engine direct",
+            fact=self.fact, platform=self.platform,
+        )
+        return out
+
+
 class SimulationError(DesmonError):
     """The simulation reached a state its own bookkeeping forbids."""

@@ -6,10 +6,9 @@ from desmon.deployment.invariants import INVARIANTS, Invariant, SystemView, chec
 from desmon.deployment.monitor import GripperObservation, InsertPort, Stimulus, interpret, observe
 from desmon.deployment.ports import (
     DEPLOYMENT_FAILED, DEPLOYMENT_INFORMATION_MISSING, ERROR_KINDS, NO_ACCEPTABLE_PLATFORMS, STOPPING_FAILED,
-    Command, ControlPort, ErrorPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop,
+    ChecksPort, Command, ControlPort, ErrorPort, ErrorRecord, PlatformHandle, QueryPort, RaiseError, Reaction, Start, Stop,
 )
-from desmon.deployment.validity import Failure, Validity, acceptable_platforms, check_platform, check_validity, deployment_valid, validity_for
-from desmon.deployment import placement as _placement  # noqa: F401  (registers the vectorised path, issue 16)
+from desmon.deployment.validity import DEFAULT_CHECKS, Failure, ScalarChecks, Validity, acceptable_platforms, check_platform, check_validity, deployment_valid, validity_for
 
 __all__ = [
     "DeploymentCore", "StepLog", "run_sync", "stamp", "standing_after",
@@ -17,6 +16,6 @@ __all__ = [
     "INVARIANTS", "Invariant", "SystemView", "check_invariants", "get_invariants", "validly_active", "view_of",
     "GripperObservation", "InsertPort", "Stimulus", "interpret", "observe",
     "DEPLOYMENT_FAILED", "DEPLOYMENT_INFORMATION_MISSING", "ERROR_KINDS", "NO_ACCEPTABLE_PLATFORMS", "STOPPING_FAILED",
-    "Command", "ControlPort", "ErrorPort", "ErrorRecord", "QueryPort", "RaiseError", "Reaction", "Start", "Stop",
+    "ChecksPort", "PlatformHandle", "ScalarChecks", "DEFAULT_CHECKS", "Command", "ControlPort", "ErrorPort", "ErrorRecord", "QueryPort", "RaiseError", "Reaction", "Start", "Stop",
     "Failure", "Validity", "acceptable_platforms", "check_platform", "check_validity", "deployment_valid", "validity_for",
 ]

@@ -33,7 +33,7 @@ the checker's table engine observes them like any requirement check.
 
 from __future__ import annotations
 
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from desmon.deployment.validity import check_platform, input_failures
 from desmon.repository.facts import ImmediateControl
@@ -42,6 +42,9 @@ from desmon.repository.store import Repository
 from desmon.model.platform import Device
 from desmon.model.requirements import PLATFORM_HAS, Attribute, DeploymentSpec, Quantity, Reads, Requirement, Selection
 from desmon.model.system import PlatformState, SystemModel
+
+if TYPE_CHECKING:
+    from desmon.deployment.ports import ChecksPort
 
 __all__ = ["ControlRules", "repository_control", "repository_refusal", "StateOf", "PLATFORM_DOWN", "device_requirements"]
 
@@ -65,10 +68,14 @@ def device_requirements(requirements: tuple[Requirement, ...]) -> tuple[Requirem
 class ControlRules:
     """The start rules for one model (its input wiring memoised per graph and platform)."""
 
-    __slots__ = ("model", "spec_of", "_wiring", "_device_reqs")
+    __slots__ = ("model", "spec_of", "checks", "_wiring", "_device_reqs")
 
-    def __init__(self, model: SystemModel, spec_of: "Callable[[str], DeploymentSpec | None] | None" = None) -> None:
+    def __init__(
+        self, model: SystemModel, spec_of: "Callable[[str], DeploymentSpec | None] | None" = None, checks: "ChecksPort | None" = None
+    ) -> None:
         self.model = model
+        #: the Checks port the rules ask (None: the default memoised checks)
+        self.checks = checks
         #: the current specification of a graph (requirements may change at run time);
         #: None reads the model's declared ones
         self.spec_of = spec_of
@@ -100,22 +107,23 @@ class ControlRules:
         ``state_of`` gives a platform's current facts (only ``up`` and the working
         devices are read, through :func:`check_platform`).
         """
-        if check_platform((), state_of(platform), graph):
+        checks = self.checks
+        if check_platform((), state_of(platform), graph, checks=checks):
             return PLATFORM_DOWN
         spec = self.spec_of(graph) if self.spec_of is not None else self.model.spec(graph)
         declared = spec.requirements if spec is not None else ()
         reqs = self._device_reqs.get(declared)
         if reqs is None:
             reqs = self._device_reqs[declared] = device_requirements(declared)
-        if reqs and check_platform(reqs, state_of(platform), graph, first_only=True):
+        if reqs and check_platform(reqs, state_of(platform), graph, first_only=True, checks=checks):
             return f"the devices of {platform} no longer meet {', '.join(r.describe() for r in reqs)}"
         reads = spec.reads if spec is not None else self._declared_reads(graph)
         if reads:
             st = state_of(platform)
             own = tuple(r for r in reads if platform in r.hosts)  # its own half (rule 3 on its devices)
-            fails = check_platform(own, st, graph, first_only=True) if own else ()
+            fails = check_platform(own, st, graph, first_only=True, checks=checks) if own else ()
             if not fails:
-                fails = input_failures(reads, platform, state_of, graph)
+                fails = input_failures(reads, platform, state_of, graph, checks=checks)
             if fails:
                 return f"{fails[0].requirement}: {fails[0].reason}"
         return None

@@ -280,7 +280,7 @@ class DeploymentCore:
             return None
         states = self.query.platform_states()
         state = next((s for s in states if s.name == cmd.platform), None)
-        if state is None or deployment_valid(spec, state, states):
+        if state is None or deployment_valid(spec, state, states, self.query.checks):
             return None
         validity = validity_for(self.query, spec, reasons=False)
         gain = validity.gain(cmd.platform) if cmd.platform in validity.acceptable else 0.0
@@ -294,7 +294,7 @@ class DeploymentCore:
 
         A port with a ``specs_version`` (the networkx repository's query, whose specs are
         rebuilt from the graph on every call) lets this be memoised per version."""
-        version = getattr(self.query, "specs_version", None)
+        version = self.query.specs_version
         if version is None:
             return current_specs(self.model, self.query)
         memo = self._specs_memo
@@ -303,7 +303,7 @@ class DeploymentCore:
         return memo[1]
 
     def _spec_of(self, graph: str) -> DeploymentSpec | None:
-        if getattr(self.query, "specs_version", None) is None:
+        if self.query.specs_version is None:
             return self.query.deployment_information(graph)
         for spec in self.specs():
             if spec.graph == graph:
@@ -334,7 +334,7 @@ class DeploymentCore:
             self.standing = frozenset()
             return self.standing
         mates = {h for slot in slots if any(g in slot for g in candidates) for h in slot}
-        valid = validly_active_among(self.query.platform_states(), self._spec_of, mates)
+        valid = validly_active_among(self.query.platform_states(), self._spec_of, mates, self.query.checks)
         deployed_on = self.query.deployed_on
         active = frozenset(g for g in candidates if deployed_on(g))
         rule = stale_standing_after if self.deployer.stale_errors else standing_after

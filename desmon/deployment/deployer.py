@@ -63,7 +63,7 @@ def paper_deploy(graphs: Iterable[str], q: QueryPort) -> Reaction:
                 yield RaiseError(DEPLOYMENT_FAILED, g, p)  # 10
                 return  # 11
             c = q.constraints(d)  # 13
-            validity = check_validity(c, q.platform_states(), g)  # 14
+            validity = check_validity(c, q.platform_states(), g, checks=q.checks)  # 14
             acceptable = validity.acceptable
             if acceptable:  # 15
                 if not any(p in acceptable for p in q.deployed_on(g)):  # 16
@@ -87,7 +87,7 @@ def paper_check_deployment(p_i: str, q: QueryPort) -> Reaction:
         g = q.perception_graph(d)  # 4
         spec = q.deployment_information(g)
         c = q.constraints(spec) if spec is not None else ()  # 5
-        validity = check_validity(c, q.platform_states(), g)  # 6
+        validity = check_validity(c, q.platform_states(), g, checks=q.checks)  # 6
         acceptable = validity.acceptable
         if not acceptable:  # 7
             yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, None, validity.explain())  # 8
@@ -278,7 +278,7 @@ def fits_if_freed(g: str, spec: DeploymentSpec, q: QueryPort, freed: list[str]) 
     fixed = q.fixed_platform(spec)
     if fixed is not None:
         states = tuple(s for s in states if s.name == fixed)
-    return spec_validity(q.constraints(spec), spec.reads, states, world, (g, *freed), reasons=False).acceptable
+    return spec_validity(q.constraints(spec), spec.reads, states, world, (g, *freed), reasons=False, checks=q.checks).acceptable
 
 
 def _reads_from(spec: DeploymentSpec | None, platforms: tuple[str, ...] | frozenset[str]) -> bool:

@@ -45,6 +45,8 @@ class SystemView:
     #: the deployer's reaction ``react(q, slots, changed, context_changed)``, for the
     #: ``no-flapping`` property (which re-runs it on this view); None skips that property
     react: Callable[..., Any] | None = None
+    #: the Checks port requirement questions about ``states`` go to (None: the default)
+    checks: Any = None
     # :attr:`deployments`, computed on first use (a performance cache: several
     # invariants read it; no part of equality, repr or the constructor)
     _deployments: tuple[tuple[str, str], ...] | None = field(default=None, init=False, repr=False, compare=False)
@@ -82,18 +84,19 @@ def view_of(
     history: int | None = None,
     react: Callable[..., Any] | None = None,
 ) -> SystemView:
-    return SystemView(q.platform_states(), specs, standing, slots, running, stops, history, react)
+    return SystemView(q.platform_states(), specs, standing, slots, running, stops, history, react, q.checks)
 
 
 def validly_active(view: SystemView) -> frozenset[str]:
     """Graphs active on at least one platform where their deployment is valid."""
-    return validly_active_among(view.states, view.spec)
+    return validly_active_among(view.states, view.spec, checks=view.checks)
 
 
 def validly_active_among(
     states: tuple[PlatformState, ...],
     spec: Callable[[str], DeploymentSpec | None],
     graphs: Container[str] | None = None,
+    checks: Any = None,
 ) -> frozenset[str]:
     """:func:`validly_active` on ``states`` (``spec`` maps a graph to its specification),
     restricted to ``graphs`` when given: only their deployments are tested, which is all
@@ -102,7 +105,7 @@ def validly_active_among(
         g
         for s in states
         for g, _use in s.deployed
-        if (graphs is None or g in graphs) and not deployment_valid(spec(g), s, states)
+        if (graphs is None or g in graphs) and not deployment_valid(spec(g), s, states, checks)
     )
 
 
@@ -120,7 +123,7 @@ class Invariant:
 
 def _valid_or_error(v: SystemView) -> str | None:
     for g, p in v.deployments:
-        fails = deployment_valid(v.spec(g), v.state(p), v.states)
+        fails = deployment_valid(v.spec(g), v.state(p), v.states, v.checks)
         if fails and g not in v.standing:
             return f"{g} is active on {p}, which is invalid ({'; '.join(f.requirement + ': ' + f.reason for f in fails)}), and no error stands for it"
     return None
@@ -198,8 +201,12 @@ def _fixed(v: SystemView) -> str | None:
 class _ViewQuery:
     """The Query port over a :class:`SystemView` (read-only), for re-running a reaction."""
 
+    validity_memo = None
+    specs_version = None
+
     def __init__(self, view: SystemView) -> None:
         self.view = view
+        self.checks = view.checks
 
     def deployment_information(self, graph: str) -> DeploymentSpec | None:
         return self.view.spec(graph)
@@ -252,7 +259,7 @@ def _no_flapping(v: SystemView) -> str | None:
         if not isinstance(cmd, Stop) or cmd.graph not in wanted or (cmd.graph, cmd.platform) not in v.deployments:
             continue
         spec = v.spec(cmd.graph)
-        if spec is not None and spec.rebalance is not None and not deployment_valid(spec, v.state(cmd.platform), v.states):
+        if spec is not None and spec.rebalance is not None and not deployment_valid(spec, v.state(cmd.platform), v.states, v.checks):
             return (
                 f"with nothing changed the deployer would move {cmd.graph} off {cmd.platform} again, where it runs validly "
                 f"(rebalance min_gain {spec.rebalance:g}): it flaps"

@@ -35,5 +35,5 @@ def lease_choice(q: QueryPort, graph: str, absent: Iterable[str]) -> str | None:
     )
     if not joined:
         return None
-    acceptable = check_validity(q.constraints(spec), joined, graph, reasons=False).acceptable
+    acceptable = check_validity(q.constraints(spec), joined, graph, reasons=False, checks=q.checks).acceptable
     return acceptable[0] if acceptable else None

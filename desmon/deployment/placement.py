@@ -38,11 +38,11 @@ for the on-demand and once for the other platforms. The failure tuples are then 
 together per pattern of failing requirements. (Cold, every reason for one
 specification over 10,000 platforms takes about 10-20 ms; ``python -m bench.bench_validity``.)
 
-**Dispatch.** Importing this module registers :func:`vector_validity` with
-:mod:`desmon.deployment.validity`; ``check_validity`` then takes the columns for
-:data:`VECTOR_MIN_PLATFORMS` platforms or more, never while the checker's observer
-is set, and never for a requirement kind the columns do not cover (a soft
-preference, say): :func:`vector_validity` answers None and the scalar loop runs.
+**Dispatch.** :class:`ColumnChecks` is the Checks port that uses the columns: a
+caller that places over many platforms (the fleet) builds its Query port with it.
+It takes the columns for :data:`VECTOR_MIN_PLATFORMS` platforms or more, and never
+for a requirement kind the columns do not cover (a soft preference, say):
+:func:`vector_validity` answers None and the scalar loop runs.
 
 **Incremental upkeep.** The last few column stores are kept. A new states tuple
 equal to a kept one costs one tuple comparison; one that differs in a few rows
@@ -57,7 +57,6 @@ from __future__ import annotations
 
 import sys
 import threading
-from contextlib import contextmanager
 from itertools import repeat
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
@@ -65,6 +64,7 @@ from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
 import numpy as np
 
 from desmon.deployment import validity as _validity
+from desmon.deployment.ports import PlatformHandle
 from desmon.errors import ModelError, QueryError
 from desmon.model.requirements import PLATFORM_HAS, Attribute, Capacity, Maximum, Minimum, Option, Quantity, Reads, Selection
 from desmon.model.system import PlatformState
@@ -78,7 +78,7 @@ __all__ = [
     "vector_validity",
     "acceptable",
     "supported",
-    "scalar_only",
+    "ColumnChecks",
     "COUNTS",
 ]
 
@@ -693,11 +693,12 @@ def columns_for(states: tuple[PlatformState, ...]) -> PlatformColumns:
 
 
 def vector_validity(
-    requirements: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool
+    requirements: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool,
+    min_platforms: int = VECTOR_MIN_PLATFORMS,
 ) -> _validity.Validity | None:
-    """The column answer of ``check_validity``, or None: fewer than
-    :data:`VECTOR_MIN_PLATFORMS` platforms, or something the columns do not cover."""
-    if len(states) < VECTOR_MIN_PLATFORMS:
+    """The column answer of ``check_validity``, or None: fewer than ``min_platforms``
+    platforms, or something the columns do not cover."""
+    if len(states) < min_platforms:
         return None
     if not supported(requirements):
         COUNTS["declined"] += 1
@@ -711,30 +712,36 @@ def vector_validity(
         return st.validity(requirements, graph, reasons=reasons)
 
 
+class ColumnChecks(_validity.ScalarChecks):
+    """The Checks port for fleet scale: :data:`VECTOR_MIN_PLATFORMS` platforms or more
+    (``min_platforms``) are checked over numpy columns (:func:`vector_validity`), fewer,
+    or a requirement kind the columns do not cover, one platform at a time. Same
+    answers as :class:`~desmon.deployment.validity.ScalarChecks`; ``memo`` as there."""
+
+    def __init__(self, *, memo: bool = True, min_platforms: int = VECTOR_MIN_PLATFORMS) -> None:
+        super().__init__(memo=memo)
+        self.min_platforms = min_platforms
+
+    def compute(self, reqs: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool) -> _validity.Validity:
+        if len(states) >= self.min_platforms:
+            fast = vector_validity(reqs, states, graph, reasons, self.min_platforms)
+            if fast is not None:
+                return fast
+        return _validity.loop_validity(reqs, states, graph, reasons)
+
+
 def acceptable(requirements: Iterable[object], states: Sequence[PlatformState], graph: _validity.Placing = None) -> tuple[str, ...]:
     """``check_validity(requirements, states, graph).acceptable`` without building the
     rejected platforms' failures: the fast question of a deployer that only places."""
     reqs = tuple(requirements)
     states = tuple(states)
-    if len(states) >= VECTOR_MIN_PLATFORMS and _validity._observer is None and supported(reqs):
+    if len(states) >= VECTOR_MIN_PLATFORMS and type(states[0]) is not PlatformHandle and supported(reqs):
         with _LOCK:
             st = columns_for(states)
             if st.exact:
                 COUNTS["vector"] += 1
                 return st.acceptable(reqs, graph)
     return _validity.check_validity(reqs, states, graph, reasons=False).acceptable  # type: ignore[arg-type]
-
-
-@contextmanager
-def scalar_only() -> Iterator[None]:
-    """Within the block ``check_validity`` never takes the columns (benchmarks, tests)."""
-    global VECTOR_MIN_PLATFORMS
-    saved = VECTOR_MIN_PLATFORMS
-    VECTOR_MIN_PLATFORMS = sys.maxsize
-    try:
-        yield
-    finally:
-        VECTOR_MIN_PLATFORMS = saved
 
 
 # -- following a repository's change log ----------------------------------------------------------------
@@ -807,9 +814,3 @@ class ChangeLogColumns:
             self._columns = PlatformColumns(states)
         return self._columns
 
-
-def _register(hook: Callable[..., Any]) -> None:
-    _validity._vector_path = hook
-
-
-_register(vector_validity)

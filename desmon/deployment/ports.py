@@ -15,10 +15,15 @@ the checker's state-backed view.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Generator, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Callable, Generator, Protocol, runtime_checkable
 
+from desmon.errors import UnobservedRead
+from desmon.model.platform import Platform
 from desmon.model.requirements import DeploymentSpec, Requirement
 from desmon.model.system import PlatformState
+
+if TYPE_CHECKING:
+    from desmon.deployment.validity import Failure, Placing, Validity
 
 __all__ = [
     "Start",
@@ -33,6 +38,8 @@ __all__ = [
     "STOPPING_FAILED",
     "ERROR_KINDS",
     "QueryPort",
+    "ChecksPort",
+    "PlatformHandle",
     "ControlPort",
     "ErrorPort",
     "relay",
@@ -120,9 +127,97 @@ def relay(
             after(cmd, outcome)
 
 
+class ChecksPort(Protocol):
+    """Requirement evaluation (the paper's checkValidity), as the core and every deployer ask it.
+
+    Every answer is the one :func:`desmon.deployment.validity.loop_validity` and
+    :func:`~desmon.deployment.validity.platform_failures` compute; implementations differ
+    in how: :class:`~desmon.deployment.validity.ScalarChecks` (one platform at a time,
+    memoised or not), :class:`~desmon.deployment.placement.ColumnChecks` (numpy columns
+    for fleets) and the checker's recording checks (the table engine learns what a
+    reaction observed of the platforms). The caller that builds a Query port chooses.
+    """
+
+    def validity(self, reqs: tuple[Requirement, ...], states: tuple[Any, ...], graph: "Placing", reasons: bool) -> "Validity":
+        """The acceptable platforms among ``states`` for ``graph`` and why the others are not."""
+
+    def platform(self, reqs: tuple[Requirement, ...], state: Any, graph: "Placing", first_only: bool) -> "tuple[Failure, ...]":
+        """Every requirement (or the first) that ``state`` fails for ``graph``."""
+
+
+class PlatformHandle:
+    """A platform as the checker's recording Query port hands it out: opaque.
+
+    It carries what a reaction may read freely -- the platform's declaration and what is
+    deployed on it (both part of what the table engine keys a reaction on) -- and the
+    Checks port that alone can read its run-time facts. Reading ``up``, ``devices`` or
+    ``load`` raises :class:`~desmon.errors.UnobservedRead`: the guard holds by
+    construction, since the handle holds no such facts. Handles compare and hash by
+    identity (one handle per platform facts and deployments in a recording).
+    """
+
+    __slots__ = ("platform", "deployed", "index", "checks")
+
+    def __init__(self, platform: Platform, deployed: tuple, index: int, checks: ChecksPort) -> None:
+        self.platform, self.deployed, self.index, self.checks = platform, deployed, index, checks
+
+    @property
+    def name(self) -> str:
+        return self.platform.name
+
+    def _refuse(self, fact: str) -> UnobservedRead:
+        return UnobservedRead(f"read {fact} of platform {self.platform.name} outside the requirement checks", fact=fact, platform=self.platform.name)
+
+    @property
+    def up(self) -> bool:
+        raise self._refuse("`up`")
+
+    @property
+    def devices(self) -> tuple:
+        raise self._refuse("`devices`")
+
+    @property
+    def load(self) -> tuple:
+        raise self._refuse("`load`")
+
+    def load_of(self, resource: str) -> float:
+        raise self._refuse("`load`")
+
+    def used_by(self, resource: str, *, excluding: str | None = None) -> list[tuple[str, float]]:
+        return PlatformState.used_by(self, resource, excluding=excluding)  # type: ignore[arg-type]
+
+    def with_deployed(self, deployed: tuple) -> "PlatformHandle":
+        """The handle of the same platform and facts with other deployments (its checks make it)."""
+        return self.checks.derive(self, deployed)  # type: ignore[no-any-return,attr-defined]
+
+    def __eq__(self, other: object) -> bool:
+        if self is other:
+            return True
+        if isinstance(other, (PlatformHandle, PlatformState)):
+            raise self._refuse("the facts (comparing states)")
+        return NotImplemented
+
+    __hash__ = object.__hash__
+
+    def __repr__(self) -> str:
+        return f"PlatformHandle({self.platform.name!r})"
+
+
 @runtime_checkable
 class QueryPort(Protocol):
-    """The Query interface of the repository, as Algorithms 1 and 2 use it."""
+    """The Query interface of the repository, as Algorithms 1 and 2 use it.
+
+    Besides the named queries it carries three attributes its builder sets: ``checks``,
+    the Checks port every requirement question about its platforms goes to (None: the
+    default memoised checks); ``specs_version``, a number that changes with every
+    run-time requirement change (None: the port rebuilds nothing, so nothing is
+    memoised on it); ``validity_memo``, a dict for memoising validity answers on the
+    identity of its platform-states tuples (None: every check is performed).
+    """
+
+    checks: ChecksPort | None
+    specs_version: int | None
+    validity_memo: dict | None
 
     def deployment_information(self, graph: str) -> DeploymentSpec | None:
         """d_i: the deployment node resolving ``graph``, or None (Alg. 1 line 3)."""

@@ -5,11 +5,9 @@ The semantics of every requirement kind (docs/design.md §4) lives here and nowh
 
 from __future__ import annotations
 
-import threading
-from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Sequence
 
 from desmon.model.requirements import (
     PLATFORM_HAS,
@@ -28,8 +26,10 @@ from desmon.model.requirements import (
 )
 from desmon.model.system import PlatformState
 
+from desmon.deployment.ports import PlatformHandle
+
 if TYPE_CHECKING:
-    from desmon.deployment.ports import QueryPort
+    from desmon.deployment.ports import ChecksPort, QueryPort
 
 #: The graph being placed, or a tuple (the graph, then graphs whose Capacity shares
 #: are to be treated as freed), or None (no graph: every deployed share counts).
@@ -38,27 +38,7 @@ Placing = str | tuple[str, ...] | None
 #: Results kept by the memoised pure checks (bounded, so long simulations stay flat).
 _MEMO_SIZE = 1 << 16
 
-#: An observer of every requirement check, or None (always, outside the checker's table
-#: engine). While :mod:`desmon.verify.table` records one reaction it sets this to an
-#: object whose ``validity(reqs, states, graph, reasons)`` and ``platform(reqs, state,
-#: graph, first_only)`` answer :func:`check_validity` and :func:`check_platform` (with the
-#: implementations below) and record what the reaction uses of the answers: that is how
-#: the engine learns what a reaction observed of the platforms. Nothing else reads it.
-_observer: Any = None
-
-#: Are the memos of :func:`check_validity` and :func:`check_platform` used? False while
-#: any :func:`unmemoised` block runs (a fleet turns them off for its run); ``_unmemoised``
-#: counts those blocks, under ``_MEMO_LOCK`` (blocks of several threads may overlap).
-_memoise = True
-_unmemoised = 0
-_MEMO_LOCK = threading.Lock()
-
-#: Issue 16: the vectorised placement path, registered by :mod:`desmon.deployment.placement`
-#: when it is imported: ``vector_validity(reqs, states, graph, reasons)`` answers what
-#: :func:`_check_validity` would (a Validity) or None to leave it to the loop below.
-_vector_path: Any = None
-
-__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "unmemoised", "reads_fixed_facts", "unreadable", "spec_validity", "input_failures"]
+__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "ScalarChecks", "DEFAULT_CHECKS", "checks_for", "reads_fixed_facts", "unreadable", "spec_validity", "input_failures"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -271,23 +251,22 @@ _ABSENT = "platform is not there (on demand: not joined, left, or down)"
 
 
 def check_platform(
-    requirements: Iterable[Requirement], state: PlatformState, graph: Placing, *, first_only: bool = False
+    requirements: Iterable[Requirement], state: PlatformState, graph: Placing, *, first_only: bool = False,
+    checks: "ChecksPort | None" = None,
 ) -> tuple[Failure, ...]:
     """Every requirement ``state`` fails for ``graph`` (only the first if ``first_only``);
-    a down platform fails them all. Memoised: it is pure and the deployer, the invariants
-    and the checker ask it again and again about the same facts."""
+    a down platform fails them all. Asked of ``checks`` (by default :func:`checks_for`
+    the state: the memoised scalar checks, or the recording checks a handle came from)."""
     reqs = requirements if type(requirements) is tuple else tuple(requirements)
-    if _observer is not None:
-        return _observer.platform(reqs, state, graph, first_only)  # type: ignore[no-any-return]
-    if not _memoise:
-        return _check_platform.__wrapped__(reqs, state, graph, first_only)  # type: ignore[arg-type]
-    return _check_platform(reqs, state, graph, first_only)  # type: ignore[arg-type]
+    if checks is None:
+        checks = checks_for((state,))
+    return checks.platform(reqs, state, graph, first_only)
 
 
-@lru_cache(maxsize=_MEMO_SIZE)
-def _check_platform(
+def platform_failures(
     requirements: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool
 ) -> tuple[Failure, ...]:
+    """What :func:`check_platform` answers, computed (no memo, no port): the semantics."""
     return _failures(_checks(requirements), state, graph, first_only, {})
 
 
@@ -341,7 +320,9 @@ def _has(kind: str) -> tuple[Attribute, ...]:
     return (Attribute(PLATFORM_HAS, kind),)
 
 
-def unreadable(req: Reads, state_of: "Callable[[str], PlatformState | None]", graph: Placing, *, reasons: bool = True) -> str | None:
+def unreadable(
+    req: Reads, state_of: "Callable[[str], PlatformState | None]", graph: Placing, *, reasons: bool = True, checks: "ChecksPort | None" = None
+) -> str | None:
     """Why no device of ``req.kind`` is readable anywhere on the robot (None if one is).
 
     A device is readable while it works and its platform is up. This is the half of
@@ -356,7 +337,7 @@ def unreadable(req: Reads, state_of: "Callable[[str], PlatformState | None]", gr
     seen: list[tuple[str, PlatformState | None]] = []
     for h in hosts:
         st = state_of(h)
-        if st is not None and not check_platform(_has(req.kind), st, place):
+        if st is not None and not check_platform(_has(req.kind), st, place, checks=checks):
             return None
         seen.append((h, st))
     if not reasons:
@@ -367,20 +348,23 @@ def unreadable(req: Reads, state_of: "Callable[[str], PlatformState | None]", gr
         if st is None:
             parts.append(f"{names} on {h}: platform unknown")
             continue
-        first = check_platform(_has(req.kind), st, place)[0]
+        first = check_platform(_has(req.kind), st, place, checks=checks)[0]
         status = "failed" if first.requirement != "platform up" else ("is not there" if first.reason == _ABSENT else "is down")
         parts.append(f"{names} on {h} {status}")
     return "; ".join(parts)
 
 
-def input_failures(reads: tuple[Reads, ...], platform: str, state_of: "Callable[[str], PlatformState | None]", graph: Placing, *, reasons: bool = True) -> tuple[Failure, ...]:
+def input_failures(
+    reads: tuple[Reads, ...], platform: str, state_of: "Callable[[str], PlatformState | None]", graph: Placing, *,
+    reasons: bool = True, checks: "ChecksPort | None" = None,
+) -> tuple[Failure, ...]:
     """The failures of the remote half of ``reads`` for a graph on ``platform``: each
     kind ``platform`` hosts no device of and no platform can give (the platform's own
     half is checked with its requirements: :class:`Reads` in :func:`check_platform`)."""
     out = []
     for r in reads:
         if platform not in r.hosts:
-            why = unreadable(r, state_of, graph, reasons=reasons)
+            why = unreadable(r, state_of, graph, reasons=reasons, checks=checks)
             if why is not None:
                 out.append(Failure(platform, r.describe(), why))
                 if not reasons:
@@ -401,6 +385,7 @@ def spec_validity(
     graph: Placing,
     *,
     reasons: bool = True,
+    checks: "ChecksPort | None" = None,
 ) -> Validity:
     """:func:`check_validity` of ``reqs`` and what the graph's inputs require (``reads``)
     over the candidate ``states``, reading remote inputs from ``world`` (every platform).
@@ -414,10 +399,10 @@ def spec_validity(
     any requirement check.
     """
     if not reads:
-        return check_validity(reqs, states, graph, reasons=reasons)
-    validity = check_validity(tuple(reqs) + reads, states, graph, reasons=reasons)
+        return check_validity(reqs, states, graph, reasons=reasons, checks=checks)
+    validity = check_validity(tuple(reqs) + reads, states, graph, reasons=reasons, checks=checks)
     state_of = _lookup(world)
-    dead = [(r, why) for r in reads if (why := unreadable(r, state_of, graph, reasons=reasons)) is not None]
+    dead = [(r, why) for r in reads if (why := unreadable(r, state_of, graph, reasons=reasons, checks=checks)) is not None]
     if not dead:
         return validity
     rejected = []
@@ -426,33 +411,6 @@ def spec_validity(
         fails = tuple(Failure(name, r.describe(), why) for r, why in dead)
         rejected.append((name, fails if reasons else fails[:1]))
     return Validity((), tuple(rejected))
-
-
-def clear_memos() -> None:
-    """Forget every memoised validity result (tests; memory)."""
-    _check_platform.cache_clear()
-    _check_validity.cache_clear()
-
-
-@contextmanager
-def unmemoised() -> Iterator[None]:
-    """Within it, :func:`check_validity` and :func:`check_platform` compute every answer
-    afresh (same answers, no memo). For runs whose facts seldom recur -- a fleet, where
-    some platform changed between almost any two questions, so almost no answer came
-    from a memo -- the memos cost hashing on every call and hold old platform states
-    alive: a third of the 8-hour fleet's peak memory. The checker keeps them (its
-    states recur by construction). Process-wide while any such block runs: blocks nest
-    and may overlap across threads (the memos come back when the last one ends)."""
-    global _memoise, _unmemoised
-    with _MEMO_LOCK:
-        _unmemoised += 1
-        _memoise = False
-    try:
-        yield
-    finally:
-        with _MEMO_LOCK:
-            _unmemoised -= 1
-            _memoise = _unmemoised == 0
 
 
 def order_platforms(states: Sequence[PlatformState]) -> list[PlatformState]:
@@ -466,6 +424,7 @@ def check_validity(
     graph: Placing = None,
     *,
     reasons: bool = True,
+    checks: "ChecksPort | None" = None,
 ) -> Validity:
     """The platforms among ``states`` that meet every requirement, for deploying ``graph``.
 
@@ -475,27 +434,22 @@ def check_validity(
     running fallbacks were stopped"); none of their shares counts. Acceptable
     platforms come in preference order (see :func:`order_platforms`); rejected ones
     carry every failing requirement with a readable reason (only the first one when
-    ``reasons`` is False, the fast path of the deployer). Results are memoised (pure;
-    see :func:`unmemoised`).
+    ``reasons`` is False, the fast path of the deployer). Asked of ``checks`` (by
+    default :func:`checks_for` the states).
     """
     reqs = requirements if type(requirements) is tuple else tuple(requirements)
-    if _observer is not None:
-        return _observer.validity(reqs, states if type(states) is tuple else tuple(states), graph, reasons)  # type: ignore[no-any-return]
-    check = _check_validity if _memoise else _check_validity.__wrapped__
-    return check(reqs, states if type(states) is tuple else tuple(states), graph, reasons)  # type: ignore[arg-type,no-any-return]
+    states = states if type(states) is tuple else tuple(states)
+    if checks is None:
+        checks = checks_for(states)
+    return checks.validity(reqs, states, graph, reasons)
 
 
-@lru_cache(maxsize=_MEMO_SIZE)
-def _check_validity(
-    reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool
-) -> Validity:
-    if _vector_path is not None and _observer is None:  # issue 16: columns for large fleets
-        fast = _vector_path(reqs, states, graph, reasons)
-        if fast is not None:
-            return fast  # type: ignore[no-any-return]
+def loop_validity(reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
+    """What :func:`check_validity` answers, computed platform by platform (no memo, no
+    port): the semantics every implementation of the Checks port agrees with."""
     acceptable: list[PlatformState] = []
     rejected: list[tuple[str, tuple[Failure, ...]]] = []
-    checks = _checks(reqs)  # memoised as a whole here; per pair only in check_platform
+    checks = _checks(reqs)  # looked up once for every platform
     texts: dict[int, str] = {}
     first_only = not reasons
     for state in order_platforms(states):
@@ -511,6 +465,71 @@ def _check_validity(
     return Validity(tuple(s.name for _v, s in scored), tuple(rejected), tuple(v for v, _s in scored), breakdown)
 
 
+class ScalarChecks:
+    """The Checks port answered platform by platform (:func:`loop_validity`,
+    :func:`platform_failures`).
+
+    With ``memo`` (the default) each instance memoises its answers (bounded, least
+    recently used first): they are pure, and a checker or a robot asks them again and
+    again about the same facts. Without it every answer is computed afresh: for runs
+    whose facts seldom recur (a fleet, where some platform changed between almost any
+    two questions) a memo costs hashing on every call and holds old states alive.
+    Memoisation is a property of the instance its caller chose, never a global switch.
+    """
+
+    def __init__(self, *, memo: bool = True, size: int = _MEMO_SIZE) -> None:
+        self.memo = memo
+        if memo:
+            self._platform = lru_cache(maxsize=size)(platform_failures)
+            self._validity = lru_cache(maxsize=size)(self.compute)
+        else:
+            self._platform = platform_failures
+            self._validity = self.compute
+
+    def compute(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
+        """The answer of :meth:`validity` without the memo (implementations refine this)."""
+        return loop_validity(reqs, states, graph, reasons)
+
+    def validity(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
+        return self._validity(reqs, states, graph, reasons)  # type: ignore[no-any-return]
+
+    def platform(self, reqs: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool) -> tuple[Failure, ...]:
+        return self._platform(reqs, state, graph, first_only)  # type: ignore[no-any-return]
+
+    def clear(self) -> None:
+        """Forget every memoised answer (a process about to exit; tests)."""
+        if self.memo:
+            self._platform.cache_clear()  # type: ignore[attr-defined]
+            self._validity.cache_clear()  # type: ignore[attr-defined]
+
+
+#: The checks of a caller that names none (a library call, a query port built without
+#: one): memoised, one platform at a time. Never reassigned.
+DEFAULT_CHECKS = ScalarChecks()
+
+
+def checks_for(states: Sequence[Any]) -> "ChecksPort":
+    """The checks to ask about ``states`` when the caller names none: those a platform
+    handle came from (the checker's recording Query port hands out handles, whose facts
+    only their checks can read), else :data:`DEFAULT_CHECKS`."""
+    if states:
+        first = states[0]
+        if type(first) is PlatformHandle:
+            return first.checks  # type: ignore[no-any-return]
+    return DEFAULT_CHECKS
+
+
+def clear_memos() -> None:
+    """Forget the memoised answers of :data:`DEFAULT_CHECKS` (tests; memory)."""
+    DEFAULT_CHECKS.clear()
+
+
+def query_checks(q: "QueryPort") -> "ChecksPort":
+    """The Checks port of Query port ``q`` (its ``checks``; None: :data:`DEFAULT_CHECKS`)."""
+    checks = q.checks
+    return DEFAULT_CHECKS if checks is None else checks
+
+
 def validity_for(q: "QueryPort", spec: DeploymentSpec, *, reasons: bool = True) -> Validity:
     """check_validity for ``spec`` on the repository's current facts; a fixed deployment
     considers only its EXECUTABLE_ON platform.
@@ -522,13 +541,11 @@ def validity_for(q: "QueryPort", spec: DeploymentSpec, *, reasons: bool = True) 
     their ids cannot be reused while it exists, and a hit is confirmed with ``is``.
     This skips hashing the states and requirements (Python-level ``__hash__`` calls)
     that the :func:`check_validity` memo needs. The memo is cleared when it holds
-    more than :data:`_MEMO_SIZE` entries. A port without the attribute (the networkx
-    repository, whose states are rebuilt on every call) takes the plain path.
+    more than :data:`_MEMO_SIZE` entries. A port whose ``validity_memo`` is None (the
+    networkx repository, whose states are rebuilt on every call) takes the plain path.
     """
     states = q.platform_states()
-    memo: dict[tuple[int, int, bool], tuple[tuple[PlatformState, ...], DeploymentSpec, Validity]] | None = getattr(
-        q, "validity_memo", None
-    )
+    memo: dict[tuple[int, int, bool], tuple[tuple[PlatformState, ...], DeploymentSpec, Validity]] | None = q.validity_memo
     if memo is not None:
         mk = (id(states), id(spec), reasons)
         hit = memo.get(mk)
@@ -538,7 +555,7 @@ def validity_for(q: "QueryPort", spec: DeploymentSpec, *, reasons: bool = True) 
     fixed = q.fixed_platform(spec)
     if fixed is not None:
         states = tuple(s for s in states if s.name == fixed)
-    validity = spec_validity(q.constraints(spec), spec.reads, states, all_states, spec.graph, reasons=reasons)
+    validity = spec_validity(q.constraints(spec), spec.reads, states, all_states, spec.graph, reasons=reasons, checks=query_checks(q))
     if memo is not None:
         if len(memo) > _MEMO_SIZE:
             memo.clear()
@@ -562,12 +579,14 @@ def acceptable_platforms(q: "QueryPort", graph: str) -> Validity:
     fixed = q.fixed_platform(spec)
     if fixed is not None:
         states = tuple(s for s in states if s.name == fixed)
-    others = check_validity(tuple(q.constraints(spec)) + spec.reads, states, spec.graph)
+    others = check_validity(tuple(q.constraints(spec)) + spec.reads, states, spec.graph, checks=query_checks(q))
     merged = tuple((name, tuple(others.failures(name)) + tuple(f for f in fails if f not in others.failures(name))) for name, fails in validity.rejected)
     return Validity((), merged)
 
 
-def deployment_valid(spec: DeploymentSpec | None, state: PlatformState, states: Sequence[PlatformState]) -> tuple[Failure, ...]:
+def deployment_valid(
+    spec: DeploymentSpec | None, state: PlatformState, states: Sequence[PlatformState], checks: "ChecksPort | None" = None
+) -> tuple[Failure, ...]:
     """Why an active deployment of ``spec`` on ``state`` is invalid (empty if it is valid);
     ``states`` are every platform's facts (where remote inputs are read).
 
@@ -581,8 +600,8 @@ def deployment_valid(spec: DeploymentSpec | None, state: PlatformState, states: 
         return (Failure(state.name, f"EXECUTABLE_ON {spec.fixed_platform}", "runs on another platform"),)
     reads = spec.reads
     if not reads:
-        return check_platform(spec.requirements, state, spec.graph)
-    fails = check_platform(spec.requirements + reads, state, spec.graph)
+        return check_platform(spec.requirements, state, spec.graph, checks=checks)
+    fails = check_platform(spec.requirements + reads, state, spec.graph, checks=checks)
     if fails:
         return fails
-    return input_failures(reads, state.platform.name, _lookup(states), spec.graph)
+    return input_failures(reads, state.platform.name, _lookup(states), spec.graph, checks=checks)

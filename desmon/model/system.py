@@ -201,6 +201,11 @@ class PlatformState:
     def name(self) -> str:
         return self.platform.name
 
+    def with_deployed(self, deployed: tuple[tuple[str, tuple[tuple[str, float], ...]], ...]) -> "PlatformState":
+        """The same platform and facts with other deployments on it (what a port that shows
+        the deployments otherwise -- a mutant, a what-if -- hands out)."""
+        return PlatformState(self.platform, self.up, self.devices, self.load, deployed)
+
     def load_of(self, resource: str) -> float:
         for res, amount in self.load:
             if res == resource:

@@ -18,10 +18,18 @@ __all__ = ["RepositoryQuery"]
 
 
 class RepositoryQuery:
-    """Named queries over a :class:`Repository`."""
+    """Named queries over a :class:`Repository`.
 
-    def __init__(self, repo: Repository) -> None:
+    ``checks`` is the Checks port requirement questions about its platforms go to
+    (:class:`desmon.deployment.ports.ChecksPort`, chosen by whoever builds the port;
+    None: the default memoised checks)."""
+
+    #: platform states are rebuilt on every call: nothing to memoise on their identity
+    validity_memo = None
+
+    def __init__(self, repo: Repository, checks: Any = None) -> None:
         self.repo = repo
+        self.checks = checks
 
     @property
     def _g(self):  # type: ignore[no-untyped-def]

@@ -49,6 +49,7 @@ from desmon.deployment.core import DeploymentCore, not_a_command, stamp
 from desmon.deployment.invariants import check_invariants
 from desmon.deployment.monitor import GripperObservation, Stimulus, interpret
 from desmon.deployment.ports import ErrorRecord, RaiseError, Start, Stop
+from desmon.deployment.validity import ScalarChecks
 from desmon.detectors.base import Alarm
 from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
 from desmon.deployment.lease import lease_choice
@@ -162,7 +163,7 @@ class SimWorld:
         env = self.env
         self.repo = Repository(clock=lambda: env.now)
         load_model(self.repo, self.model)
-        self.query = RepositoryQuery(self.repo)
+        self.query = RepositoryQuery(self.repo, ScalarChecks())  # its own memoised checks
         self.core = DeploymentCore(self.model, self.query, RepositoryInsert(self.repo, self.model.robot), deployer)
         self.deployer_name = self.core.deployer.name
         self._init_physical()
@@ -189,7 +190,7 @@ class SimWorld:
         self.host = {d.name: d.platform for d in self.model.devices}
         self._hosted = {p.name: self.model.devices_on(p.name) for p in self.model.platforms}
         #: the one Control semantics (desmon.deployment.control), on the physical facts
-        self.rules = ControlRules(self.model, self.query.deployment_information)
+        self.rules = ControlRules(self.model, self.query.deployment_information, self.query.checks)
         self.instances: dict[tuple[str, str], Instance] = {}
         #: memory (MB) a running instance of each graph consumes: its spec's consumption()
         self.consumes = {s.graph: dict(s.consumption()).get("memory", 0.0) for s in self.model.specs}

@@ -45,7 +45,8 @@ from desmon.errors import QueryError, ScenarioError
 from desmon.model.checks import check_items, check_names, strict_init
 from desmon.model.platform import Platform
 from desmon.model.scenario import Scenario
-from desmon.deployment.validity import check_platform, reads_fixed_facts, unmemoised
+from desmon.deployment.placement import ColumnChecks
+from desmon.deployment.validity import check_platform, reads_fixed_facts
 from desmon.model.requirements import Capacity, DeploymentSpec, Requirement
 from desmon.model.system import PlatformState, Rule, RuleTable, SystemModel
 from desmon.repository import labels as L
@@ -254,9 +255,10 @@ class RobotView(RepositoryQuery):
     """
 
     def __init__(
-        self, repo: Repository, robot: str, own: tuple[str, ...], edges: tuple[str, ...], graphs: tuple[str, ...], cache: _StateCache
+        self, repo: Repository, robot: str, own: tuple[str, ...], edges: tuple[str, ...], graphs: tuple[str, ...], cache: _StateCache,
+        checks: Any = None,
     ) -> None:
-        super().__init__(repo)
+        super().__init__(repo, checks)
         self.robot = robot
         self.own = own
         self.edges = edges
@@ -581,6 +583,9 @@ class FleetWorld:
         env = self.env
         self.repo = Repository(clock=lambda: env.now)
         self.cache = _StateCache(self.repo)
+        #: the robots' Checks port: columns for many platforms, no memo (a fleet's facts
+        #: seldom recur, so memos would only cost hashing and hold old states alive)
+        self.checks = ColumnChecks(memo=False)
         edges = self.fleet.edges
         edge_set = set(edges)
         #: platform -> the robots it concerns; deployment node -> its robot; robot node -> its robot
@@ -593,7 +598,7 @@ class FleetWorld:
         for sc in self.fleet.robots:
             m = sc.model
             own = tuple(p.name for p in m.platforms if p.name not in edge_set)
-            view = RobotView(self.repo, m.robot, own, edges, tuple(g.name for g in m.graphs), self.cache)
+            view = RobotView(self.repo, m.robot, own, edges, tuple(g.name for g in m.graphs), self.cache, self.checks)
             member = _Member(
                 sc, env=env, repo=self.repo, view=view, deployer=deployer, seed=robot_seed(self.seed, m.robot),
                 horizon=self.horizon, trace=_RobotTrace(trace, m.robot), edges=edges, admission=self.fleet.admission,
@@ -668,7 +673,7 @@ class FleetWorld:
         self.repo.subscribe(self._route)
         if self.progress is not None:
             self.env.process(self._progress())
-        with _collector_relaxed(), unmemoised():  # a fleet's facts seldom recur: the memos only cost
+        with _collector_relaxed():
             self.env.run(until=self.horizon)
         now = self.horizon
         self.edge_meter.close(now)

@@ -202,14 +202,12 @@ class Checker(TransitionSystem):
 
     def release(self) -> None:
         """Forget the last run's states and everything the searches memoised (here, in the
-        store and in :mod:`desmon.deployment.validity`): a process about to exit then does
+        store and in its Checks port): a process about to exit then does
         not spend seconds in the cyclic garbage collector walking millions of memoised
         tuples. The checker stays usable (its next search starts cold)."""
-        from desmon.deployment import validity
-
         drop = getattr(self.explored, "release", None)
         if drop is not None:
             drop()
         self.explored = []
+        self.store.checks.clear()
         self.forget()
-        validity.clear_memos()

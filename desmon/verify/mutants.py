@@ -55,7 +55,7 @@ class HideConsumption:
         self.inner = inner
 
     def platform_states(self) -> tuple[PlatformState, ...]:
-        return tuple(dataclasses.replace(s, deployed=()) for s in self.inner.platform_states())
+        return tuple(s.with_deployed(()) for s in self.inner.platform_states())
 
     def __getattr__(self, name: str):  # type: ignore[no-untyped-def]
         return getattr(self.inner, name)

@@ -24,7 +24,7 @@ long runs; a cleared memo only costs recomputation.
 
 from __future__ import annotations
 
-from typing import Callable, NamedTuple
+from typing import Any, Callable, NamedTuple
 
 from desmon.deployment.control import ControlRules
 from desmon.deployment.invariants import SystemView, Invariant
@@ -88,12 +88,18 @@ class _Deployments(dict):
 class StateStore:
     """QueryPort + InsertPort + ControlPort over the parts of one :class:`Key`."""
 
-    #: the class of the platform states it hands out (the table engine's recording
-    #: store hands out a guarded subclass, see :mod:`desmon.verify.table`)
-    state_class: type[PlatformState] = PlatformState
+    #: requirements never change behind the store's back: nothing is memoised on a version
+    specs_version = None
 
-    def __init__(self, model: SystemModel) -> None:
+    def __init__(self, model: SystemModel, checks: Any = None, make_state: Callable[..., Any] = PlatformState) -> None:
         self.model = model
+        #: what builds the platform states it hands out from (platform, up, devices, load,
+        #: deployed): PlatformState, or the table engine's recording checks, which hand
+        #: out opaque handles (:class:`~desmon.deployment.ports.PlatformHandle`)
+        self.make_state = make_state
+        #: the Checks port requirement questions about its platforms go to (the Query
+        #: port's and the Control rules'; None: the default memoised checks)
+        self.checks = checks
         self.platform_names = tuple(p.name for p in model.platforms)
         self._order = {p: i for i, p in enumerate(self.platform_names)}
         self._platform = {p.name: p for p in model.platforms}
@@ -103,7 +109,7 @@ class StateStore:
         self._graphs = {g.name for g in model.graphs}
         self._use = {s.graph: s.consumption() for s in model.specs}
         self._ps_cache: dict[tuple, PlatformState] = {}
-        self.rules = ControlRules(model, self._current)
+        self.rules = ControlRules(model, self._current, checks)
         #: why the last start was refused by the Control rules ("" when it was not)
         self.refused = ""
         self._use_memo: dict[tuple[str, ...], tuple] = {}
@@ -236,7 +242,7 @@ class StateStore:
         if st is None:
             if len(self._ps_cache) > MEMO_LIMIT:
                 self._ps_cache.clear()
-            st = self.state_class(self._platform[platform], up, devices, load, deployed)
+            st = self.make_state(self._platform[platform], up, devices, load, deployed)
             self._ps_cache[ck] = st
         return st
 
@@ -432,4 +438,4 @@ class StateStore:
 
 
 def view_from(store: StateStore, standing: frozenset[str], slots: tuple[tuple[str, ...], ...]) -> SystemView:
-    return SystemView(store.platform_states(), store.current_specs(), standing, slots)
+    return SystemView(store.platform_states(), store.current_specs(), standing, slots, checks=store.checks)

@@ -24,6 +24,7 @@ from typing import Any, Container, Iterable, Iterator, Protocol, Sequence
 from desmon.deployment.core import DeploymentCore, StepLog
 from desmon.deployment.guard import CRASH, DeployerFault
 from desmon.deployment.ports import RaiseError
+from desmon.deployment.validity import ScalarChecks
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.invariants import Invariant, SystemView, check_invariants, get_invariants
 from desmon.errors import CheckerError, NondeterminismError
@@ -91,7 +92,7 @@ class TransitionSystem:
         self._choose_invariants(invariants)
         names = {i.name for i in self.invariants}
         self.instant = tuple(i for i in get_invariants(list(self.bounds.instantaneous)) if i.name in names) if self.bounds.instantaneous else ()
-        self.store = StateStore(self.model)
+        self.store = StateStore(self.model, ScalarChecks())
         self.core = DeploymentCore(self.model, self.store, self.store, deployer)
         self.deployer_name = self.core.deployer.name
         self.store.watch = self.instant
@@ -125,10 +126,24 @@ class TransitionSystem:
         """Drop every memo and start a fresh store and core (the next search starts cold)."""
         self._instant_memo.clear()
         self._enabled_memo.clear()
-        self.store = StateStore(self.model)
+        self.store = StateStore(self.model, ScalarChecks())
         self.core = DeploymentCore(self.model, self.store, self.store, self.core.deployer)
         self.store.watch = self.instant
         self.store.watch_check = self._instant_check
+
+    def twin(self, store: StateStore, query: Any, instant_memo: dict) -> "TransitionSystem":
+        """This system (scenario, deployer, invariants, bounds) on another ``store`` whose
+        Query port, as the core sees it, is ``query`` (the table engine's recording runs);
+        ``instant_memo`` memoises the instantaneous invariants (one that never remembers
+        makes every check run)."""
+        twin = object.__new__(type(self))
+        twin.__dict__.update(self.__dict__)
+        twin.store = store
+        twin.core = DeploymentCore(self.model, query, store, self.core.deployer)
+        store.watch = self.instant
+        store.watch_check = twin._instant_check
+        twin._instant_memo = instant_memo
+        return twin
 
     # -- the transition relation ------------------------------------------------------------
     def slots(self, context: str | None) -> tuple[tuple[str, ...], ...]:
@@ -273,7 +288,7 @@ class TransitionSystem:
         """The invariants' view of the store's current state (current specifications, and
         the deployer's reaction for ``no-flapping``)."""
         st = self.store
-        return SystemView(st.platform_states(), st.current_specs(), standing, self.slots(context), react=self.core.guarded_react)
+        return SystemView(st.platform_states(), st.current_specs(), standing, self.slots(context), react=self.core.guarded_react, checks=st.checks)
 
     def violations(self, key: Key) -> list[tuple[str, str]]:
         self.store.load(key)

@@ -1,0 +1,573 @@
+"""Recording one run of the real core: what it observes of the platforms, and nothing else.
+
+While the table engine records a reaction (or an invariants check), the core runs on a
+:class:`~desmon.verify.state.StateStore` whose platform states are opaque
+:class:`~desmon.deployment.ports.PlatformHandle` objects made by
+:class:`RecordingChecks`, the Checks port of that run. The handles carry no run-time
+facts, so the only way to learn whether a platform is up, which devices work or what
+load it carries is to ask a requirement check -- of these checks, which answer with the
+real result, wrapped so that what the run *uses* of it is recorded (see
+:class:`RecordingChecks`). The guard holds by construction: a read of a fact anywhere
+else raises :class:`~desmon.errors.UnobservedRead`, and the core's Query port
+(:class:`RecordingQuery`) offers only the QueryPort methods.
+"""
+
+from __future__ import annotations
+
+import traceback
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
+
+from desmon.deployment.guard import CRASH
+from desmon.deployment.ports import PlatformHandle
+from desmon.deployment.validity import Validity, loop_validity, order_platforms, platform_failures
+from desmon.errors import NondeterminismError, TableUnsupported, UnobservedRead
+from desmon.model.events import Event
+from desmon.model.requirements import Preference
+from desmon.model.system import PlatformState
+from desmon.verify.state import Key, StateStore
+from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key
+from desmon.verify.table.tables import AnswerTables, score_key
+from desmon.verify.trace import KEPT_BRANCH, branch_name
+
+if TYPE_CHECKING:
+    from desmon.verify.table.search import TableEngine
+
+__all__ = ["RecordingChecks", "RecordingQuery", "Recorder", "QUERY_METHODS", "PlainRun"]
+
+
+class RecordingChecks:
+    """The Checks port of a recorded run (see the module doc).
+
+    It makes the handles the recording store hands out (:meth:`handle`, the store's
+    ``make_state``) and keeps each one's real facts. It answers each check with the
+    real result, wrapped so that the run's *use* of it is what gets recorded: asking
+    whether one platform is acceptable observes that platform's answer only;
+    iterating, truth-testing or indexing the acceptable platforms observes them one by
+    one in preference order (up to where the code stops); anything else (length,
+    slicing, comparing, the rejected platforms and their reasons) observes every
+    answer, down to the failure texts when those are read; an explanation is observed
+    only where its text is used.
+    """
+
+    def __init__(self, tables: AnswerTables) -> None:
+        self.tables = tables
+        self.obs: list[tuple[tuple, int]] = []
+        #: the observations of this run so far (an observation made again adds nothing)
+        self.made: set[tuple] = set()
+        self._real: dict[PlatformHandle, PlatformState] = {}
+        self._derived: dict[tuple[PlatformHandle, tuple], PlatformHandle] = {}  # (handle, deployed) -> handle
+        self.store: StateStore | None = None
+
+    def begin(self) -> None:
+        """A new recorded run: no observation yet."""
+        self.obs = []
+        self.made = set()
+
+    def handle(self, platform: Any, up: bool, devices: tuple, load: tuple, deployed: tuple) -> PlatformHandle:
+        """The handle of a platform with these facts (the recording store's ``make_state``)."""
+        h = PlatformHandle(platform, deployed, self.tables.platform_index[platform.name], self)
+        self._real[h] = PlatformState(platform, up, devices, load, deployed)
+        return h
+
+    def derive(self, h: PlatformHandle, deployed: tuple) -> PlatformHandle:
+        """The handle of ``h``'s platform and facts with ``deployed`` on it."""
+        got = self._derived.get((h, deployed))
+        if got is None:
+            real = self._real[h]
+            got = self._derived[(h, deployed)] = self.handle(real.platform, real.up, real.devices, real.load, deployed)
+        return got
+
+    def observe(self, desc: tuple, code: int) -> None:
+        """Record that the run observed answer ``code`` to ``desc`` (once per run: the same
+        question on the same path always has the same answer)."""
+        if desc not in self.made:
+            self.made.add(desc)
+            self.obs.append((desc, code))
+
+    def validity(self, reqs: tuple, states: tuple, graph: str | None, reasons: bool) -> Any:
+        real_states = self._reals(states)
+        parts = self._parts(real_states)
+        fails = [platform_failures(reqs, st, graph, not reasons) for st in real_states]
+        real = loop_validity(reqs, real_states, graph, reasons)
+        at = {id(st): i for i, st in enumerate(real_states)}
+        order = [at[id(st)] for st in order_platforms(real_states)]
+        ranked = any(type(r) is Preference for r in reqs)
+        scored = [None if f else score_key(reqs, st, graph) for f, st in zip(fails, real_states)] if ranked else None
+        check = _Check(self, reqs, graph, not reasons, parts, fails, [st.platform.name for st in real_states], scored)
+        acceptable = _Acceptable(check, real.acceptable, order)
+        if not ranked:
+            return _ObservedValidity(acceptable, _Reasons(check, real.rejected))  # type: ignore[arg-type]
+        # with preferences the order of the acceptable platforms, their scores and the
+        # breakdown are observed as the scores of every platform ("rank")
+        breakdown = _Ranked(check, real.breakdown, acceptable) if real.breakdown else ()
+        return _ObservedValidity(acceptable, _Reasons(check, real.rejected), _Ranked(check, real.scores, acceptable), breakdown)  # type: ignore[arg-type]
+
+    def platform(self, reqs: tuple, state: Any, graph: str | None, first_only: bool) -> Any:
+        (real,) = self._reals((state,))
+        parts = self._parts((real,))
+        fails = platform_failures(reqs, real, graph, first_only)
+        return _Reasons(_Check(self, reqs, graph, first_only, parts, [fails], [real.platform.name]), fails, single=True)
+
+    def _reals(self, states: Sequence[Any]) -> tuple[PlatformState, ...]:
+        """The real facts behind each handle; a state that is not a handle of this run must
+        carry the facts the store holds for its platform."""
+        out = []
+        for s in states:
+            real = self._real.get(s) if type(s) is PlatformHandle else None
+            if real is None:
+                real = self._own_facts(s)
+            out.append(real)
+        return tuple(out)
+
+    def _own_facts(self, s: Any) -> PlatformState:
+        store = self.store
+        assert store is not None
+        name = s.platform.name
+        canonical = self._real[store.platform_state(name)]
+        if type(s) is not PlatformState or (s.platform, s.up, s.devices, s.load) != (canonical.platform, canonical.up, canonical.devices, canonical.load):
+            shown = f"up={s.up}, devices={[d.name for d in s.devices]}, load={s.load}" if type(s) is PlatformState else repr(s)
+            raise TableUnsupported(
+                f"a requirement check saw platform {name} with facts that are not the state's own "
+                f"(platform={s.platform}, {shown}): the table engine cannot "
+                "memoise a port that rewrites platform facts; run with --engine direct"
+            )
+        return s
+
+    def _parts(self, states: tuple[PlatformState, ...]) -> tuple[tuple[int, int], ...]:
+        """(platform index, interned deployments) of each state."""
+        tables = self.tables
+        index = tables.platform_index
+        return tuple((index[s.platform.name], tables.intern_deployed(s.deployed)) for s in states)
+
+
+class _Check:
+    """One requirement check's real answers, and how to record observing them."""
+
+    __slots__ = ("rec", "table", "first_only", "parts", "fails", "names", "scored")
+
+    def __init__(self, rec: "RecordingChecks", reqs: tuple, graph: str | None, first_only: bool,
+                 parts: tuple[tuple[int, int], ...], fails: list[tuple], names: list[str],
+                 scored: list[tuple | None] | None = None) -> None:
+        self.rec = rec
+        self.table = rec.tables.intern_table(reqs, graph)
+        self.first_only = first_only
+        self.parts = parts
+        self.fails = fails
+        self.names = names
+        self.scored = scored  # each platform's score key (None: rejected), with preferences
+
+    def ok(self, which: Sequence[int]) -> None:
+        """Observe whether the platforms at positions ``which`` pass."""
+        code = 0
+        for j, i in enumerate(which):
+            code |= (not self.fails[i]) << j
+        self.rec.observe(("ok", self.table, None, tuple(self.parts[i] for i in which)), code)
+
+    def why(self) -> None:
+        """Observe every platform's failures, reasons included."""
+        eng = self.rec.tables
+        code, mult = 0, 1
+        for (p, dep), f in zip(self.parts, self.fails):
+            value, radix = eng.failure_id(self.table, self.first_only, p, dep, f)
+            code += value * mult
+            mult *= radix
+        self.rec.observe(("why", self.table, self.first_only, self.parts), code)
+
+    def rank(self) -> None:
+        """Observe every platform's acceptability and score (with preferences: what the
+        order of the acceptable platforms, their scores and the breakdown derive from)."""
+        assert self.scored is not None
+        eng = self.rec.tables
+        code, mult = 0, 1
+        for (p, dep), key in zip(self.parts, self.scored):
+            value, radix = eng.score_id(self.table, p, dep, key)
+            code += value * mult
+            mult *= radix
+        self.rec.observe(("rank", self.table, None, self.parts), code)
+
+
+class _Observed:
+    """A read-only sequence whose every use is recorded (see :class:`RecordingChecks`)."""
+
+    __slots__ = ("_check", "_real")
+
+    def _all(self) -> tuple:
+        raise NotImplementedError  # pragma: no cover
+
+    def __len__(self) -> int:
+        return len(self._all())
+
+    def __bool__(self) -> bool:
+        return len(self) > 0
+
+    def __iter__(self) -> Iterator[Any]:
+        return iter(self._all())
+
+    def __getitem__(self, i: Any) -> Any:
+        return self._all()[i]
+
+    def __contains__(self, x: object) -> bool:
+        return x in self._all()
+
+    def __eq__(self, other: object) -> bool:
+        return self._all() == (other._all() if isinstance(other, _Observed) else other)
+
+    def __ne__(self, other: object) -> bool:
+        return not self == other
+
+    def __hash__(self) -> int:
+        return hash(self._all())
+
+    def __repr__(self) -> str:
+        return repr(self._all())
+
+    def __reversed__(self) -> Iterator[Any]:
+        return reversed(self._all())
+
+    def __add__(self, other: Any) -> Any:
+        return self._all() + other
+
+    def __radd__(self, other: Any) -> Any:
+        return other + self._all()
+
+    def __mul__(self, n: Any) -> Any:
+        return self._all() * n
+
+    __rmul__ = __mul__
+
+    def __lt__(self, other: Any) -> bool:
+        return self._all() < (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
+
+    def __le__(self, other: Any) -> bool:
+        return self._all() <= (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
+
+    def __gt__(self, other: Any) -> bool:
+        return self._all() > (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
+
+    def __ge__(self, other: Any) -> bool:
+        return self._all() >= (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
+
+    def index(self, *args: Any) -> int:
+        return self._all().index(*args)
+
+    def count(self, x: Any) -> int:
+        return self._all().count(x)
+
+
+class _ObservedValidity(Validity):
+    """The :class:`~desmon.deployment.validity.Validity` of a recorded check: its
+    explanation is only observed where the run uses the text (see :class:`_Text`)."""
+
+    __slots__ = ()
+
+    def explain(self) -> str:
+        return _Text(lambda: Validity.explain(self))  # type: ignore[return-value]
+
+
+class _Text(_Observed):
+    """An explanation a recorded run has not read yet.
+
+    A reaction usually only carries it into an error's detail, which decides nothing;
+    every use of the text (formatting, comparing, searching, any ``str`` method)
+    computes it, and so observes the answers it is made of.
+    """
+
+    __slots__ = ()
+
+    def __init__(self, make: Callable[[], str]) -> None:
+        self._check, self._real = None, make
+
+    def _all(self) -> Any:
+        return self._real()
+
+    def __str__(self) -> str:
+        return self._all()  # type: ignore[no-any-return]
+
+    def __format__(self, spec: str) -> str:
+        return format(self._all(), spec)
+
+    def __mod__(self, other: Any) -> Any:
+        return self._all() % other
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._all(), name)
+
+
+class _Acceptable(_Observed):
+    """``Validity.acceptable`` of a recorded check: membership and iteration observe lazily.
+
+    With preferences the order depends on every acceptable platform's score: iterating,
+    indexing or using the whole observes them all (:meth:`_Check.rank`); membership,
+    length and truth do not depend on the order and observe as without preferences."""
+
+    __slots__ = ("_order",)
+
+    def __init__(self, check: _Check, real: tuple[str, ...], order: list[int]) -> None:
+        self._check, self._real, self._order = check, real, order
+
+    def _all(self) -> tuple:
+        check = self._check
+        if check.scored is not None:
+            check.rank()
+        else:
+            check.ok(range(len(check.parts)))
+        return self._real  # type: ignore[no-any-return]
+
+    def __len__(self) -> int:
+        self._check.ok(range(len(self._check.parts)))
+        return len(self._real)
+
+    def __contains__(self, x: object) -> bool:
+        names = self._check.names
+        if x not in names:
+            return False  # not a checked platform: the answer depends on no platform fact
+        i = names.index(x)  # type: ignore[arg-type]
+        self._check.ok((i,))
+        return not self._check.fails[i]
+
+    def _static(self) -> Iterator[str]:
+        """The acceptable platforms in the static order, observed one by one."""
+        check = self._check
+        for i in self._order:
+            check.ok((i,))
+            if not check.fails[i]:
+                yield check.names[i]
+
+    def __iter__(self) -> Iterator[str]:
+        if self._check.scored is not None:
+            return iter(self._all())
+        return self._static()
+
+    def __bool__(self) -> bool:
+        for _name in self._static():  # observes the platforms up to the first acceptable one
+            return True
+        return False
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, int) and i >= 0 and self._check.scored is None:
+            for k, name in enumerate(self):  # observes the platforms up to the i-th acceptable one
+                if k == i:
+                    return name
+            raise IndexError("tuple index out of range")
+        return self._all()[i]
+
+
+class _Reasons(_Observed):
+    """``Validity.rejected`` or ``check_platform``'s failures: a length observes which
+    platforms fail, any content the failures themselves."""
+
+    __slots__ = ("_single",)
+
+    def __init__(self, check: _Check, real: tuple, single: bool = False) -> None:
+        self._check, self._real, self._single = check, real, single
+
+    def _all(self) -> tuple:
+        self._check.why()
+        return self._real  # type: ignore[no-any-return]
+
+    def __len__(self) -> int:
+        if self._single and not self._check.first_only:
+            return len(self._all())  # how many requirements one platform fails: the failures themselves
+        self._check.ok(range(len(self._check.parts)))  # how many platforms fail, or whether one does
+        return len(self._real)
+
+    def __bool__(self) -> bool:
+        self._check.ok(range(len(self._check.parts)))  # whether any platform fails (a valid deployment: none)
+        return len(self._real) > 0
+
+
+class _Ranked(_Observed):
+    """``Validity.scores`` or ``.breakdown`` of a recorded check with preferences: any use
+    observes every platform's score (:meth:`_Check.rank`); their length and truth are the
+    acceptable platforms'."""
+
+    __slots__ = ("_acceptable",)
+
+    def __init__(self, check: _Check, real: tuple, acceptable: _Acceptable) -> None:
+        self._check, self._real, self._acceptable = check, real, acceptable
+
+    def _all(self) -> tuple:
+        self._check.rank()
+        return self._real  # type: ignore[no-any-return]
+
+    def __len__(self) -> int:
+        return len(self._acceptable)
+
+    def __bool__(self) -> bool:
+        return bool(self._acceptable)
+
+
+#: the QueryPort's methods (desmon.deployment.ports.QueryPort)
+QUERY_METHODS = ("deployment_information", "fixed_platform", "constraints", "platform_states", "deployed_on",
+                 "active_deployments", "deployments", "perception_graph", "context")
+
+
+def _forward(name: str) -> Callable[..., Any]:
+    def method(self: "RecordingQuery", *args: Any) -> Any:
+        return getattr(self._store, name)(*args)  # looked up per call: the store rebinds some per deployment set
+
+    method.__name__ = name
+    return method
+
+
+class RecordingQuery:
+    """The recording core's Query port: the store's QueryPort methods and nothing else.
+
+    Any other attribute of the store (its fact tuples, its helpers) would let a reaction
+    read platform facts unobserved: asking for one stops the recording. One the store
+    lacks raises AttributeError, as the store would. Its ``checks`` are the recording
+    checks; it memoises no validity answer (every check is performed and observed).
+    """
+
+    __slots__ = ("_store", "checks")
+    validity_memo = None
+    specs_version = None
+
+    def __init__(self, store: StateStore, checks: RecordingChecks) -> None:
+        object.__setattr__(self, "_store", store)
+        object.__setattr__(self, "checks", checks)
+
+    def __getattr__(self, name: str) -> Any:
+        if not hasattr(self._store, name):  # what the store itself answers (``getattr(port, name, default)`` works alike)
+            raise AttributeError(f"{type(self._store).__name__!r} object has no attribute {name!r}")
+        raise UnobservedRead(
+            f"the reaction asked its Query port for `{name}`, which is not a QueryPort method: the table engine "
+            "cannot know what it reads; run with --engine direct"
+        )
+
+
+for _name in QUERY_METHODS:
+    setattr(RecordingQuery, _name, _forward(_name))
+
+
+class _NoMemo(dict):
+    """A memo that never remembers (a recorded run must perform every check it makes)."""
+
+    def __setitem__(self, key: Any, value: Any) -> None:
+        pass
+
+
+class PlainRun(tuple):
+    """A transition run on the direct engine's store (:meth:`TransitionSystem.run_one`),
+    standing for a recorded run that failed on the deployer's own TypeError or AttributeError."""
+
+
+#: modules whose functions read a state on behalf of their caller (a refusal names the caller)
+_HELPERS = frozenset({
+    "desmon.deployment.ports", "desmon.model.system", "desmon.deployment.validity", "dataclasses", "reprlib", "pprint",
+    "copy", "copyreg", "logging",
+})
+
+
+def _reader(tb: Any) -> str:
+    """The module that read a fact, from the traceback of the refusal: the innermost frame
+    outside the helpers that read on their caller's behalf."""
+    frames = [f for f, _line in traceback.walk_tb(tb)]
+    for frame in reversed(frames):
+        name = frame.f_globals.get("__name__", "?")
+        if name not in _HELPERS:
+            return str(name)
+    return "?"  # pragma: no cover - a refusal always has a reader
+
+
+class Recorder:
+    """The recorded runs of one table-engine search: each runs the real core on the
+    recording twin of the system, then adds its path to the decision trees."""
+
+    def __init__(self, engine: "TableEngine") -> None:
+        self.engine = engine
+        self.checker = engine.checker
+        self.checks = RecordingChecks(engine.tables)
+        store = StateStore(engine.model, self.checks, self.checks.handle)
+        self.checks.store = store
+        store.validity_memo = None  # type: ignore[assignment]
+        self.rc = engine.checker.twin(store, RecordingQuery(store, self.checks), _NoMemo())
+        self.records = 0  # real runs of the core (reactions and invariant checks)
+
+    def _recording(self, run: Callable[[], Any], plain: Callable[[], Any]) -> tuple[Any, list[tuple[tuple, int]]]:
+        """``run()`` on the recording twin: (its result, the observations).
+
+        A ``TypeError`` or ``AttributeError`` may be the deployer's own bug or a check's
+        result used as what its wrapper is not (a ``str`` for ``str.join``...): ``plain()``,
+        the same run on the direct engine's store, tells them apart. Its error is the
+        deployer's and is raised as it is; if it succeeds, the table engine bows out. A
+        read of a fact outside the checks is refused, naming the code that read it.
+        """
+        rec = self.checks
+        rec.begin()
+        try:
+            out = run()
+        except UnobservedRead as exc:
+            if exc.fact:
+                raise exc.named(_reader(exc.__traceback__)) from None
+            raise
+        except (TypeError, AttributeError) as exc:
+            out = plain()  # the deployer's own error: raised here, as the direct engine would
+            if isinstance(out, tuple) and len(out) == 4 and out[3] is not None and out[3][0] == CRASH:
+                self.records += 1  # the deployer's own fault (the direct run fails too): its CRASH, as recorded so far
+                return PlainRun(out), rec.obs
+            raise TableUnsupported(
+                f"the reaction used a requirement check's result in a way the table engine cannot observe ({exc}); "
+                "run with --engine direct"
+            ) from exc
+        self.records += 1
+        return out, rec.obs
+
+    def record_reaction(self, key: Key, event: Event, prefix: tuple[bool, ...], root: int, env2: int, stim: int) -> None:
+        """Run ``event``'s reaction on ``key`` (with ``prefix``) for real and add its path under ``root``."""
+        rc, eng = self.rc, self.engine
+
+        def run() -> tuple:
+            st = rc.store
+            st.load(key)
+            rc.core.standing = frozenset(key.standing)
+            st.begin(prefix)
+            stimulus, log = rc.step_under_guard(rc.core, st, event, recording=True)  # a fault: the instant CRASH
+            instant = st.instant
+            if rc.core.findings and instant is None:  # as TransitionSystem.run_one
+                found = rc.core.finding(rc._checked)
+                if found is not None:
+                    instant = (found[0], found[1], "the reaction")
+            return stimulus, log, st.key(rc.core.standing), tuple(st.outcomes), instant
+
+        out, obs = self._recording(run, lambda: self.checker.run_one(key, event, prefix))
+        if isinstance(out, PlainRun):  # the deployer failed with a TypeError or AttributeError of its own
+            nkey, outcomes, log, instant = out
+            stimulus = None
+        else:
+            (stimulus, log, nkey, outcomes, instant) = out
+            if self.records <= RECHECK_FIRST or not self.records % RECHECK_EVERY:
+                self._same_commands(key, event, prefix, log)
+        if stimulus is None:
+            got = stim
+        elif stimulus.context_changed:
+            got = 0
+        elif stimulus.specs_changed:
+            got = eng.P + 3 + eng.env.vgraphs.index(stimulus.specs_changed[0])
+        else:
+            got = eng.tables.platform_index[stimulus.changed_platforms[0]] + 1 if stimulus.changed_platforms else eng.P + 1
+        expect = eng.env.key(env2, (nkey.deployments, nkey.standing))
+        if got != stim or expect != nkey:
+            raise TableUnsupported(f"table engine: {event} on {key} gave {nkey} (stimulus {stimulus}), the encoding expected {expect}")  # pragma: no cover
+        fails = tuple(i for i, ok in enumerate(outcomes) if not ok)
+        names = tuple(branch_name(c, ok) for c, ok in log.commands) if log.commands else KEPT_BRANCH
+        inst = instant[0] if instant is not None else None
+        leaf = eng.trees.leaf(("r", eng.system(nkey.deployments, nkey.standing), outcomes, fails, names, inst))
+        eng.trees.insert(root, obs, leaf)
+
+    def _same_commands(self, key: Key, event: Event, prefix: tuple[bool, ...], log: Any) -> None:
+        """The recorded reaction run again on the direct engine's store: other commands are
+        the deployer's nondeterminism (refused with both lists, as the direct engine does)."""
+        _n, _o, again, _i = self.checker.run_one(key, event, prefix)
+        if [command_key(c) for c, _ok in log.commands] != [command_key(c) for c, _ok in again.commands]:
+            was, now = [str(command_key(c)[0]) for c, _ok in log.commands], [str(c) for c, _ok in again.commands]
+            raise NondeterminismError(
+                f"deployer {self.checker.deployer_name} is nondeterministic (not a function of what it reads through its ports): reacting twice to {event} in the same state it issued "
+                f"first [{', '.join(was) or 'no command'}], then [{', '.join(now) or 'no command'}]; a reaction must be a function "
+                "of its readings (no randomness, clock or state kept between calls: docs/deployers.md)"
+            )
+
+    def record_invariants(self, key: Key, root: int) -> None:
+        """Check the invariants of ``key`` for real and add the path under ``root``."""
+        bad, obs = self._recording(lambda: self.rc.violations(key), lambda: self.checker.violations(key))
+        self.engine.trees.insert(root, obs, self.engine.trees.leaf(("v", tuple(n for n, _m in bad))))

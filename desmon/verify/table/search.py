@@ -1,0 +1,384 @@
+"""The table engine's search: the direct engine's BFS over encoded states, a batch at a time.
+
+:class:`TableEngine` explores the states in the direct engine's order and counts what it
+counts; each batch's transitions are resolved by walking the decision trees
+(:mod:`desmon.verify.table.tree`), which run the real core (:mod:`desmon.verify.table.recording`)
+only where no recorded run answers yet.
+"""
+
+from __future__ import annotations
+
+from array import array
+from typing import Any, Iterator, NamedTuple, Sequence
+
+import numpy as np
+import numpy.ma  # noqa: F401  (np.unique imports it on first use, leaving cyclic garbage: not during a search)
+
+from desmon.deployment.guard import ReactionStopped
+from desmon.errors import TableUnsupported
+from desmon.verify.environment import EVENT_KINDS
+from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Trail, final_status as _final_status
+from desmon.verify.state import Key
+from desmon.verify.system import TransitionSystem
+from desmon.verify.table.encoding import ROOT_CTX, ROOT_PREFIX, ROOT_STIM, SYS_BITS, SYS_MASK, Env, Events, Transitions, root_key
+from desmon.verify.table.recording import Recorder
+from desmon.verify.table.tables import AnswerTables, Interned
+from desmon.verify.table.tree import DecisionTrees
+from desmon.verify.trace import Counterexample
+
+__all__ = ["TableEngine", "table_unsupported", "CHUNK_STATES", "MAX_DIGITS"]
+
+#: combinations of one platform's facts the engine tabulates answers for (beyond: direct engine)
+MAX_DIGITS = 4096
+#: frontier states expanded per numpy batch (bounds the memory of one batch)
+CHUNK_STATES = 16_384
+#: new states added between two looks at the search's budget (time, memory, Ctrl-C)
+LOOK_EVERY = 64
+
+
+def _count(counter: Any, names: Sequence[Any], values: np.ndarray, size: int) -> None:
+    """Add the occurrences of each number in ``values`` to ``counter`` under its name."""
+    for k, n in enumerate(np.bincount(values, minlength=size).tolist()):
+        if n:
+            counter[names[k]] += n
+
+
+class _Spent(Exception):
+    """The search's budget ran out inside a batch (between two recorded runs or walk rounds):
+    the batch is dropped, nothing of it having been counted yet."""
+
+
+def table_unsupported(checker: TransitionSystem) -> str | None:
+    """Why the table engine cannot run ``checker``'s search, or None."""
+    if checker.symmetry is not None:
+        return "symmetry reduction runs on the direct engine"
+    b = checker.bounds
+    where = {d.name: d.platform for d in checker.model.devices}
+    for p in checker.model.platforms:
+        k = sum(1 for d in b.devices if where[d] == p.name)
+        digits = (2 if p.name in b.platforms or p.name in b.joins else 1) * (1 << k) * len(b.loads.get(p.name, (0,)))
+        if digits > MAX_DIGITS:
+            return (f"platform {p.name} has {digits:,} combinations of facts (its bounded devices, up/down and load levels); "
+                    f"the table engine tabulates at most {MAX_DIGITS:,} per platform")
+    return None
+
+
+
+class Units(NamedTuple):
+    """A batch's (transition, failed-start prefix) units in the direct engine's order."""
+
+    ids: np.ndarray  # the batch's state numbers
+    tr: Transitions  # its enabled transitions
+    t: np.ndarray  # each unit's transition
+    pre: np.ndarray  # its failed-start prefix
+    leaf: np.ndarray  # its reaction leaf
+    code: np.ndarray  # the state it reaches
+
+
+class TableEngine:
+    """The table engine for one :class:`~desmon.verify.system.TransitionSystem` (see :mod:`desmon.verify.table`)."""
+
+    def __init__(self, checker: TransitionSystem) -> None:
+        self.checker = checker
+        self.model = checker.model
+        self.bounds = checker.bounds
+        self.P = len(self.model.platforms)
+        self.systems = Interned(1 << SYS_BITS, "distinct deployment states")  # (deployments, standing)
+        self.prefixes = Interned(1 << ROOT_PREFIX, "failed-start prefixes")
+        self.prefixes(())
+        self.budget = Budget(0.0)  # the search's (set by run)
+        self.recorder: Recorder | None = None  # made with the encoding (:meth:`_encode`)
+
+    @property
+    def records(self) -> int:
+        """Real runs of the core (reactions and invariant checks)."""
+        return self.recorder.records if self.recorder is not None else 0
+
+    def _go_on(self) -> None:
+        """Raise :class:`_Spent` if the search must stop (time, memory, Ctrl-C)."""
+        if self.budget.spent():
+            raise _Spent
+
+    def system(self, deployments: tuple, standing: tuple) -> int:
+        return self.systems((deployments, standing))
+
+    def prefix(self, p: tuple[bool, ...]) -> int:
+        return self.prefixes(p)
+
+    # -- the search ---------------------------------------------------------------------
+    def key_of(self, i: int) -> Key:
+        """The :class:`Key` of state number ``i``."""
+        c = self.codes[i]
+        return self.env.key(c >> SYS_BITS, self.systems[c & SYS_MASK])
+
+    def _units(self, ids: np.ndarray, tr: Transitions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every (transition, failed-start prefix) unit of a batch, resolved to its leaf, in the
+        direct engine's order: by transition, then generation by generation as
+        :meth:`TransitionSystem.successors <desmon.verify.system.TransitionSystem.successors>` queues the
+        prefixes each run's start outcomes open. Returns (transition, prefix, leaf) arrays."""
+        G, bound = self.env.G, self.bounds.start_failures
+        T = len(tr.env2)
+        u_t = np.arange(T, dtype=np.int64)
+        u_pre = np.zeros(T, dtype=np.int64)
+        u_rank = np.zeros(T, dtype=np.int64)
+        parts: list[tuple[np.ndarray, ...]] = []
+        gen = 0
+        while len(u_t):
+            roots = root_key(tr.sys[u_t], tr.env2[u_t] % G, tr.stim[u_t], u_pre)
+
+            def record_unit(u: int, u_t: np.ndarray = u_t, u_pre: np.ndarray = u_pre, roots: np.ndarray = roots) -> None:
+                t = int(u_t[u])
+                self.recorder.record_reaction(self.key_of(int(ids[tr.pos[t]])), self.events.events[int(tr.ev[t])],
+                                     self.prefixes[int(u_pre[u])], int(roots[u]), int(tr.env2[t]), int(tr.stim[t]))
+
+            leaf = self.trees.walk(roots, u_t, tr.loc, record_unit)
+            parts.append((u_t, np.full(len(u_t), gen, dtype=np.int64), u_rank, u_pre, leaf))
+            if not bound:
+                break
+            # the failed-start prefixes each unit's start outcomes open
+            n_leaves = len(self.trees.leaves)
+            pairs = u_pre * n_leaves + leaf
+            up, pinv = np.unique(pairs, return_inverse=True)
+            kids: list[list[int]] = []
+            for pv in up.tolist():
+                pre, lf = self.prefixes[pv // n_leaves], self.trees.leaves[pv % n_leaves]
+                outcomes, fails = lf[2], lf[3]
+                kids.append([self.prefix(outcomes[:i] + (False,)) for i in range(len(pre), len(outcomes))] if len(fails) < bound else [])
+            counts = np.array([len(k) for k in kids], dtype=np.int64)[pinv]
+            if not counts.any():
+                break
+            order = np.lexsort((u_rank, u_t))
+            order = order[counts[order] > 0]
+            n_t = np.repeat(u_t[order], counts[order])
+            n_pre = np.array([x for i in order.tolist() for x in kids[pinv[i]]], dtype=np.int64)
+            starts = np.r_[0, np.flatnonzero(np.diff(n_t)) + 1]
+            u_rank = np.arange(len(n_t)) - np.repeat(starts, np.diff(np.r_[starts, len(n_t)]))
+            u_t, u_pre = n_t, n_pre
+            gen += 1
+        U_t, U_gen, U_rank, U_pre, U_leaf = (np.concatenate(x) for x in zip(*parts))
+        order = np.lexsort((U_rank, U_gen, U_t))
+        return U_t[order], U_pre[order], U_leaf[order]
+
+    def _violated(self, cand_t: np.ndarray, cand_sys: np.ndarray, tr: Transitions) -> np.ndarray:
+        """The invariants leaf of each candidate new state (memoised like reactions)."""
+        if not len(cand_t):
+            return np.zeros(0, dtype=np.int64)
+        roots = root_key(cand_sys, tr.env2[cand_t] % self.env.G, self.P + 2, 0)
+
+        def record_state(u: int) -> None:
+            t = int(cand_t[u])
+            self.recorder.record_invariants(self.env.key(int(tr.env2[t]), self.systems[int(cand_sys[u])]), int(roots[u]))
+
+        return self.trees.walk(roots, cand_t, tr.loc, record_state)
+
+    def run(self, res: "CheckResult", *, max_states: int | None, max_depth: int | None, keep_going: bool,
+            budget: Budget) -> tuple[dict[str, Counterexample], str, int]:
+        """The BFS of the direct engine (:mod:`desmon.verify.direct`), counting into ``res``;
+        returns (counterexamples found, why incomplete or "", depth).
+
+        ``budget`` (time, memory, Ctrl-C) is looked at before each batch, between two
+        recorded runs of the core and two rounds of a tree walk (a batch that runs out
+        there is dropped whole: nothing of it is counted yet), and every
+        :data:`LOOK_EVERY` new states (the batch is then cut after the current
+        transition, as ``max_states`` cuts it)."""
+        self.budget, self.res, self.max_states = budget, res, max_states
+        ch = self.checker
+        init = ch.initial()
+        env = self._encode(init)
+        # states: code = env << SYS_BITS | system
+        codes = self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
+        trail = self.trail = Trail(ch, self.key_of, keep_going)
+        self.seen = {codes[0]}
+        for name, msg in ch.violations(init):
+            trail.record(name, msg, 0)
+        self.any_found = bool(trail.found)
+        self.depth = self.transitions = 0
+        self.incomplete = ""
+        budget.status = lambda: (len(codes), self.transitions, self.depth)
+        try:
+            frontier = np.array([0], dtype=np.int64)
+            while len(frontier) and not self._finished() and not self.incomplete:
+                if max_depth is not None and self.depth >= max_depth:
+                    self.incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
+                    break
+                nxt = self._level(frontier)
+                if nxt:
+                    self.depth += 1
+                frontier = np.array(nxt, dtype=np.int64)
+        except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
+            self.incomplete = INTERRUPTED
+            trail.truncate(codes)
+        except ReactionStopped as stop:  # the budget ran out inside a deployer's reaction
+            self.incomplete = budget.reason or str(stop)
+            trail.truncate(codes)
+        res.transitions = self.transitions
+        res.states = len(codes)
+        budget.status = _final_status(len(codes), self.transitions, self.depth)  # (the search's closure let go)
+        return trail.found, self.incomplete, self.depth
+
+    def _encode(self, init: Key) -> Env:
+        """The environment code, events, answer tables, trees and recorder of the search from
+        ``init`` (or why the engine cannot run it)."""
+        env = self.env = Env(self.checker, init)
+        if env.G > 1 << ROOT_CTX or self.P + 3 + len(env.vgraphs) > 1 << ROOT_STIM:
+            raise TableUnsupported(
+                f"table engine: {env.C} contexts, {env.G // env.C} combinations of requirements and {self.P} platforms do not fit "
+                "its tree keys; run with --engine direct"
+            )
+        if env.space.bit_length() + SYS_BITS > 62:
+            raise TableUnsupported(f"table engine: the environment has {env.space:,} combinations, too many to encode; run with --engine direct")
+        self.tables = AnswerTables(self.model, env)
+        self.trees = DecisionTrees(self.tables, self.P, self._go_on)
+        self.recorder = Recorder(self)
+        self.events = Events(self.bounds, env, self.tables.platform_index)
+        return env
+
+    def _finished(self) -> bool:
+        return self.any_found and self.trail.done()
+
+    def _level(self, frontier: np.ndarray) -> list[int]:
+        """One BFS level, batch by batch; returns the next level."""
+        nxt: list[int] = []
+        for lo in range(0, len(frontier), CHUNK_STATES):
+            if self.budget.spent():
+                self.incomplete = self.budget.reason
+                break
+            if self._batch(frontier[lo: lo + CHUNK_STATES], nxt):
+                break
+        return nxt
+
+    def _batch(self, ids: np.ndarray, nxt: list[int]) -> bool:
+        """Expand the states ``ids`` (one numpy batch); True if the search stops in it."""
+        sc = np.frombuffer(self.codes, dtype=np.int64)[ids]
+        tr = self.events.enabled(sc)
+        if not len(tr.env2):  # no state of this batch enables an event
+            _count(self.res.rules, self.env.ctxs, tr.ctx, self.env.C)
+            return False
+        try:
+            U_t, U_pre, U_leaf = self._units(ids, tr)
+            leaf_sys = np.array(self.trees.leaf_sys, dtype=np.int64)
+            U_code = (tr.env2[U_t] << SYS_BITS) | leaf_sys[U_leaf]
+            # candidate new states: first occurrence in this batch, not seen before
+            seen = self.seen
+            uniq, first = np.unique(U_code, return_index=True)
+            fresh = np.fromiter((c not in seen for c in uniq.tolist()), dtype=bool, count=len(uniq))
+            cand = np.sort(first[fresh])
+            bad_of = dict(zip(cand.tolist(), self._violated(U_t[cand], leaf_sys[U_leaf[cand]], tr).tolist()))
+        except _Spent:  # between two recorded runs or walk rounds: the batch is dropped
+            self.incomplete = self.budget.reason
+            return True
+        units = Units(ids, tr, U_t, U_pre, U_leaf, U_code)
+        cut_t, stop_unit = self._consume(units, cand, bad_of, nxt)
+        self._count_batch(units, sc, cut_t, stop_unit)
+        return cut_t < len(tr.env2)
+
+    def _consume(self, units: "Units", cand: np.ndarray, bad_of: dict[int, int], nxt: list[int]) -> tuple[int, int]:
+        """The records in order, as the direct engine's search loop meets them: it stops
+        after the event that found what it looked for or reached the cap, or at once when
+        a repaired instantaneous violation completes the search. Returns (the last
+        transition counted, the unit the search stopped at or -1)."""
+        U_t, U_leaf = units.t, units.leaf
+        inst_units = np.flatnonzero(np.array(self.trees.leaf_inst, dtype=bool)[U_leaf])
+        cut_t, stop_unit = len(units.tr.env2), -1
+        spent = self.budget.spent
+        for n_looked, u in enumerate(np.union1d(cand, inst_units).tolist(), 1):
+            t = int(U_t[u])
+            if t > cut_t:
+                break
+            if not n_looked % LOOK_EVERY and not self.incomplete and spent():
+                self.incomplete, cut_t = self.budget.reason, t  # cut after this transition, as max_states does
+            lf = self.trees.leaves[int(U_leaf[u])]
+            if lf[5] is not None and lf[5] not in self.trail.found and self._repaired(units, u, t, lf):
+                return t, u
+            if u in bad_of:
+                self._new_state(units, u, t, lf, self.trees.leaves[bad_of[u]][1], nxt)
+            if self._finished() or self.incomplete:
+                cut_t = t
+        return cut_t, stop_unit
+
+    def _repaired(self, units: "Units", u: int, t: int, lf: tuple) -> bool:
+        """Unit ``u`` broke instantaneous invariant ``lf[5]`` inside its reaction: if it was
+        repaired before quiescence, record it (the real run gives the message). True if
+        the search then has what it looks for."""
+        tr = units.tr
+        ch = self.checker
+        nkey = self.env.key(int(tr.env2[t]), self.systems[lf[1]])
+        if lf[5] in {v for v, _m in ch.violations(nkey)}:
+            return False
+        here = int(units.ids[tr.pos[t]])
+        event = self.events.events[int(tr.ev[t])]
+        _n, _o, _log, instant = ch.run_one(self.key_of(here), event, self.prefixes[int(units.pre[u])])
+        self.trail.record(instant[0], instant[1], here, instant[2], (event, lf[3]))
+        self.any_found = True
+        return self.trail.done()
+
+    def _new_state(self, units: "Units", u: int, t: int, lf: tuple, bad: tuple, nxt: list[int]) -> None:
+        """Unit ``u`` reached a new state: number it, label it, and record what it violates."""
+        tr, ev = units.tr, self.events
+        c = int(units.code[u])
+        self.seen.add(c)
+        codes = self.codes
+        ni = len(codes)
+        codes.append(c)
+        e = int(tr.ev[t])
+        self.trail.add(int(units.ids[tr.pos[t]]), (e, lf[3]), (ev.events[e], lf[3]))
+        self.res.new_states[EVENT_KINDS[ev.kind_of[e]]] += 1
+        if self.max_states is not None and len(codes) >= self.max_states:
+            self.incomplete = f"max states {self.max_states:,} reached"
+        if bad:
+            for name, msg in self.checker.violations(self.key_of(ni)):
+                self.trail.record(name, msg, ni)
+            self.any_found = True
+        else:
+            nxt.append(ni)
+
+    def _count_batch(self, units: "Units", sc: np.ndarray, cut_t: int, stop_unit: int) -> None:
+        """Count what the direct engine counts up to the cut."""
+        res, tr, ev, env = self.res, units.tr, self.events, self.env
+        U_t, U_leaf, U_code = units.t, units.leaf, units.code
+        T = len(tr.env2)
+        inc = np.arange(stop_unit + 1) if stop_unit >= 0 else np.flatnonzero(U_t <= cut_t)
+        self.transitions += len(inc)
+        leaf_counts = np.bincount(U_leaf[inc], minlength=len(self.trees.leaves))
+        for lf_id in np.flatnonzero(leaf_counts).tolist():
+            n = int(leaf_counts[lf_id])
+            for name in self.trees.leaves[lf_id][4]:
+                res.branches[name] += n
+        moved = inc[:-1] if stop_unit >= 0 else inc  # the stopping unit is not counted as a change
+        moved = moved[U_code[moved] != sc[tr.pos[U_t[moved]]]]
+        _count(res.changed, EVENT_KINDS, ev.kind_of[tr.ev[U_t[moved]]], len(EVENT_KINDS))
+        last_t = min(cut_t, T - 1)
+        _count(res.enabled, EVENT_KINDS, ev.kind_of[tr.ev[: last_t + 1]], len(EVENT_KINDS))
+        n_states = int(tr.pos[last_t]) + 1 if cut_t < T else len(units.ids)
+        _count(res.rules, env.ctxs, tr.ctx[:n_states], env.C)
+
+    def explored(self) -> "_Explored":
+        return _Explored(self)
+
+    def release(self) -> None:
+        """Drop the trees, tables and states (see :meth:`Checker.release
+        <desmon.verify.checker.Checker.release>`): freed now by reference counting, not
+        by the cyclic collector (the recorder and the recording twin point back)."""
+        self.__dict__.clear()
+
+
+class _Explored(Sequence[Key]):
+    """The distinct states of a table-engine run in BFS order, decoded on access."""
+
+    def __init__(self, engine: TableEngine) -> None:
+        self._e = engine
+
+    def release(self) -> None:
+        self._e.release()
+
+    def __len__(self) -> int:
+        return len(self._e.codes)
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        return self._e.key_of(i)
+
+    def __iter__(self) -> Iterator[Key]:
+        for i in range(len(self)):
+            yield self[i]

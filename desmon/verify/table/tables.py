@@ -1,0 +1,173 @@
+"""The table engine's answer tables: every requirement check's answer per platform digit.
+
+A reaction observes requirement checks; each observation is a question about a few
+platforms. :class:`AnswerTables` computes, once per (check, platform, deployments on
+it), the answer for every value of that platform's digit (the combinations of its
+facts the environment can give), with the same requirement code the core runs
+(:func:`~desmon.deployment.validity.platform_failures`), and numbers the answers:
+"ok" (1/0), "why" (the failures, numbered in order of first appearance) and "rank"
+(the score key with preferences). A decision tree's walk reads them as one array.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from desmon.deployment.validity import platform_failures, platform_score, score_breakdown
+from desmon.errors import CheckerError, TableUnsupported
+from desmon.model.system import PlatformState, SystemModel
+
+if TYPE_CHECKING:
+    from desmon.verify.table.encoding import Env
+
+__all__ = ["Grow", "Interned", "AnswerTables", "score_key"]
+
+
+class Grow:
+    """A numpy array with amortised appends."""
+
+    def __init__(self, shape: tuple[int, ...], fill: int = 0) -> None:
+        self.a = np.full(shape, fill, dtype=np.int64)
+        self.n = 0
+        self.fill = fill
+
+    def append(self, row: Any) -> int:
+        if self.n == len(self.a):
+            more = np.full(self.a.shape, self.fill, dtype=np.int64)
+            self.a = np.concatenate([self.a, more])
+        self.a[self.n] = row
+        self.n += 1
+        return self.n - 1
+
+
+class Interned(list):
+    """Distinct values numbered in order of first appearance: ``numbers(x)`` is x's number,
+    ``numbers[i]`` the value numbered i. Past ``limit`` values the engine bows out."""
+
+    def __init__(self, limit: int | None = None, what: str = "values") -> None:
+        super().__init__()
+        self._ids: dict[Any, int] = {}
+        self._limit, self._what = limit, what
+
+    def __call__(self, value: Any) -> int:
+        i = self._ids.get(value)
+        if i is None:
+            i = self._ids[value] = len(self)
+            if self._limit is not None and i >= self._limit:
+                raise TableUnsupported(f"table engine: more than {self._limit:,} {self._what}; run with --engine direct")
+            self.append(value)
+        return i
+
+
+def score_key(reqs: tuple, state: PlatformState, graph: Any) -> tuple:
+    """What the preferences make of one acceptable platform: its score and the weighted
+    terms it is the sum of (what ``Validity.breakdown`` shows)."""
+    return (platform_score(reqs, state, graph), score_breakdown(reqs, state, graph))
+
+
+class AnswerTables:
+    """The per-digit answers of the requirement checks of one search (see the module doc)."""
+
+    def __init__(self, model: SystemModel, env: "Env") -> None:
+        self.model, self.env = model, env
+        self.platform_index = {p.name: i for i, p in enumerate(model.platforms)}
+        self._deployed = Interned()  # deployments on one platform, as its states carry them
+        self._table_args = Interned()  # (requirements, graph) of a requirement check
+        self.ok = Grow((4096,))
+        # the answers of unused check positions: a block of zeros as long as any platform's digit range
+        for _ in range(max(env.R)):
+            self.ok.append(0)
+        self._blocks: dict[tuple, tuple[int, int]] = {}
+        self._fails: dict[tuple, list[tuple]] = {}
+        self._plat_states: dict[tuple[int, int], list[PlatformState]] = {}
+        self._ids: dict[tuple, dict[tuple, int]] = {}
+
+    def intern_deployed(self, deployed: tuple) -> int:
+        return self._deployed(deployed)
+
+    def intern_table(self, reqs: tuple, graph: str | None) -> int:
+        return self._table_args((reqs, graph))
+
+    def _states(self, p: int, dep: int) -> list[PlatformState]:
+        """Platform ``p``'s state with deployments ``dep``, per platform digit."""
+        k = (p, dep)
+        out = self._plat_states.get(k)
+        if out is None:
+            platform = self.model.platforms[p]
+            devices_on = tuple(d for d in self.model.devices if d.platform == platform.name)
+            deployed = self._deployed[dep]
+            out = []
+            always = self.env.const_failed
+            for down, failed, load in self.env.decoded[p]:
+                out_of_order = set(failed).union(always)
+                devices = tuple(d for d in devices_on if d.name not in out_of_order)
+                out.append(PlatformState(platform, not down, devices, load, deployed))
+            self._plat_states[k] = out
+        return out
+
+    def _failures(self, table: int, first_only: bool, p: int, dep: int) -> list[tuple]:
+        """The failures of check ``table`` on platform ``p`` with deployments ``dep``, per platform digit."""
+        k = (table, first_only, p, dep)
+        out = self._fails.get(k)
+        if out is None:
+            reqs, graph = self._table_args[table]
+            out = self._fails[k] = [platform_failures(reqs, st, graph, first_only) for st in self._states(p, dep)]
+        return out
+
+    def _score_keys(self, table: int, p: int, dep: int) -> list[tuple | None]:
+        """The score key (:func:`_score_key`) of check ``table`` on platform ``p`` with
+        deployments ``dep`` per platform digit, None where the platform is rejected."""
+        reqs, graph = self._table_args[table]
+        return [None if f else score_key(reqs, st, graph) for f, st in zip(self._failures(table, True, p, dep), self._states(p, dep))]
+
+    def block(self, mode: str, table: int, first_only: bool | None, p: int, dep: int) -> tuple[int, int]:
+        """(offset, radix) of the answers of a check per platform digit: 1/0 for "ok", for
+        "why" the failures numbered in order of first appearance."""
+        k = (mode, table, first_only, p, dep)
+        hit = self._blocks.get(k)
+        if hit is not None:
+            return hit
+        off = self.ok.n
+        if mode == "rank":  # 0 rejected, else 1 + the score key's number
+            ids: dict[tuple | None, int] = {None: 0}
+            for sk in self._score_keys(table, p, dep):
+                self.ok.append(ids.setdefault(sk, len(ids)))
+            self._ids[("rank", table, p, dep)] = ids
+            self._blocks[k] = (off, len(ids))
+            return off, len(ids)
+        fails = self._failures(table, bool(first_only), p, dep)
+        if mode == "ok":
+            for f in fails:
+                self.ok.append(0 if f else 1)
+            radix = 2
+        else:
+            ids = {}
+            for f in fails:
+                self.ok.append(ids.setdefault(f, len(ids)))
+            self._ids[(table, bool(first_only), p, dep)] = ids
+            radix = len(ids)
+        self._blocks[k] = (off, radix)
+        return off, radix
+
+    def failure_id(self, table: int, first_only: bool, p: int, dep: int, fails: tuple) -> tuple[int, int]:
+        """(number, radix) of ``fails`` among the failures check ``table`` can give on ``p`` with ``dep``."""
+        self.block("why", table, first_only, p, dep)
+        ids = self._ids[(table, first_only, p, dep)]
+        if fails not in ids:
+            raise CheckerError(  # pragma: no cover - a bug in the engine, not in the system under test
+                f"table engine: a recorded requirement check on {self.model.platforms[p].name} is not among its per-digit answers"
+            )
+        return ids[fails], len(ids)
+
+    def score_id(self, table: int, p: int, dep: int, key: tuple | None) -> tuple[int, int]:
+        """(number, radix) of score key ``key`` (None: rejected) among those check ``table``
+        can give on ``p`` with ``dep``."""
+        self.block("rank", table, None, p, dep)
+        ids = self._ids[("rank", table, p, dep)]
+        if key not in ids:
+            raise CheckerError(  # pragma: no cover - a bug in the engine, not in the system under test
+                f"table engine: a recorded preference score on {self.model.platforms[p].name} is not among its per-digit answers"
+            )
+        return ids[key], len(ids)
