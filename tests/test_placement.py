@@ -24,8 +24,12 @@ ATTR_VALUES = ("linux", "qnx", "1", 1, 1.0, 2)
 
 def scalar(reqs, states, graph, reasons):
     """The scalar loop itself (no memo, no columns)."""
-    with placement.scalar_only():
-        return validity._check_validity.__wrapped__(tuple(reqs), tuple(states), graph, reasons)
+    return validity.loop_validity(tuple(reqs), tuple(states), graph, reasons)
+
+
+def columns_checks():
+    """The fleet's Checks port: numpy columns from VECTOR_MIN_PLATFORMS platforms on, no memo."""
+    return placement.ColumnChecks(memo=False)
 
 
 # -- fleets ----------------------------------------------------------------------------------------
@@ -163,26 +167,23 @@ FLEET_REQS = (req("capacity", "memory", 250), req("attribute", "os", "linux"), r
 
 def test_check_validity_takes_the_columns_at_the_threshold_and_answers_the_same():
     states = big_fleet(placement.VECTOR_MIN_PLATFORMS)
-    validity.clear_memos()
     before = placement.COUNTS["vector"]
-    got = validity.check_validity(FLEET_REQS, states, "g0", reasons=True)
+    got = validity.check_validity(FLEET_REQS, states, "g0", reasons=True, checks=columns_checks())
     assert placement.COUNTS["vector"] == before + 1
     assert got == scalar(FLEET_REQS, states, "g0", True)
 
 
 def test_check_validity_keeps_the_scalar_loop_below_the_threshold():
     states = big_fleet(placement.VECTOR_MIN_PLATFORMS - 1)
-    validity.clear_memos()
     before = placement.COUNTS["vector"]
-    validity.check_validity(FLEET_REQS, states, "g0")
+    validity.check_validity(FLEET_REQS, states, "g0", checks=columns_checks())
     assert placement.COUNTS["vector"] == before
 
 
-def test_check_validity_never_takes_the_columns_while_the_checker_observes(monkeypatch):
+def test_the_scalar_checks_never_take_the_columns_however_many_platforms():
     states = big_fleet(placement.VECTOR_MIN_PLATFORMS * 2)
-    monkeypatch.setattr(validity, "_observer", object())
     before = placement.COUNTS["vector"]
-    got = validity._check_validity(FLEET_REQS, states, None, False)  # what the table engine calls
+    got = validity.check_validity(FLEET_REQS, states, None, reasons=False, checks=validity.ScalarChecks(memo=False))
     assert placement.COUNTS["vector"] == before
     assert got == scalar(FLEET_REQS, states, None, False)
 
@@ -195,9 +196,8 @@ def test_a_requirement_the_columns_do_not_cover_falls_back_to_the_scalar_loop():
     reqs = (*FLEET_REQS, pref)
     states = big_fleet(placement.VECTOR_MIN_PLATFORMS)
     assert not placement.supported(reqs)
-    validity.clear_memos()
     vector, declined = placement.COUNTS["vector"], placement.COUNTS["declined"]
-    got = validity.check_validity(reqs, states, "g0")
+    got = validity.check_validity(reqs, states, "g0", checks=columns_checks())
     assert (placement.COUNTS["vector"], placement.COUNTS["declined"]) == (vector, declined + 1)
     assert got == scalar(reqs, states, "g0", True)
 

@@ -97,8 +97,9 @@ def test_a_fixed_deployment_is_valid_only_on_its_executable_on_platform():
     assert deployment_valid(spec, state("b"), (state("a"), state("b")))[0].reason == "runs on another platform"
 
 
-def test_unmemoised_checks_give_the_same_answers_and_store_nothing_in_the_memos():
+def test_every_checks_implementation_gives_the_same_answers_and_only_a_memo_remembers():
     from desmon.deployment import validity as V
+    from desmon.deployment.placement import ColumnChecks
 
     reqs = [req("capacity", "memory", 250), req("maximum", "link_latency_ms", 10)]
     states = [
@@ -106,35 +107,22 @@ def test_unmemoised_checks_give_the_same_answers_and_store_nothing_in_the_memos(
         state("b", memory=1024, deployed=[("x", 100)], properties={"link_latency_ms": 5}),
         state("c", properties={"link_latency_ms": 20}),
     ]
+    memo, plain = V.ScalarChecks(), V.ScalarChecks(memo=False)
+    columns = ColumnChecks(memo=False, min_platforms=1)  # the numpy columns even for three platforms
+    answers = [check_validity(reqs, states, "g", checks=c) for c in (memo, plain, columns)]
+    assert answers[0] == answers[1] == answers[2] == V.loop_validity(tuple(reqs), tuple(states), "g", True)
+    assert [V.check_platform(reqs, states[0], "g", checks=c) for c in (memo, plain)] == [V.platform_failures(tuple(reqs), states[0], "g", False)] * 2
+    assert memo._validity.cache_info().currsize == 1 and memo._platform.cache_info().currsize == 1
+    assert not hasattr(plain._validity, "cache_info")  # nothing is kept
+    memo.clear()
+    assert memo._validity.cache_info().currsize == 0
+
+
+def test_a_caller_naming_no_checks_gets_the_default_memoised_ones():
+    from desmon.deployment import validity as V
+
+    states = [state("a", memory=1024)]
+    assert V.checks_for(states) is V.DEFAULT_CHECKS
     V.clear_memos()
-    with V.unmemoised():
-        inside = check_validity(reqs, states, "g")
-        one = V.check_platform(reqs, states[0], "g")
-        assert V._check_validity.cache_info().currsize == 0
-        assert V._check_platform.cache_info().currsize == 0
-    assert check_validity(reqs, states, "g") == inside
-    assert V.check_platform(reqs, states[0], "g") == one
-    assert V._check_validity.cache_info().currsize == 1  # memoised again once it ends
-
-
-def test_unmemoised_ends_even_when_its_block_raises():
-    from desmon.deployment import validity as V
-
-    try:
-        with V.unmemoised():
-            raise KeyError("boom")
-    except KeyError:
-        pass
-    assert V._memoise is True
-
-
-def test_unmemoised_blocks_that_overlap_bring_the_memos_back_only_when_the_last_one_ends():
-    from desmon.deployment import validity as V
-
-    first, second = V.unmemoised(), V.unmemoised()
-    first.__enter__()
-    second.__enter__()
-    first.__exit__(None, None, None)  # the first to start ends first (another thread's run)
-    assert V._memoise is False
-    second.__exit__(None, None, None)
-    assert V._memoise is True
+    check_validity([req("capacity", "memory", 10)], states, "g")
+    assert V.DEFAULT_CHECKS._validity.cache_info().currsize == 1
