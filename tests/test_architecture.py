@@ -111,6 +111,7 @@ LAYERS = {
     "desmon.loader": 7,  # a scenario file run as a script (its checker bounds validated)
     "desmon.sweep": 8,  # Dask sweeps over the engines
     "desmon.options": 9,  # command-line options shared by the commands
+    "desmon.api": 9,  # the public verbs check() and simulate() over the engines
     "desmon": 10,  # the package itself: the curated public API (desmon/__init__.py)
     "desmon.sim.command": 11,  # one module per command: arguments in, report out
     "desmon.verify.command": 11,

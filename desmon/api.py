@@ -1,0 +1,76 @@
+"""The public verbs: :func:`check` a scenario exhaustively, :func:`simulate` it.
+
+Both take a :class:`~desmon.model.scenario.Scenario` or the path of a scenario file and
+return the result objects the command line prints (``desmon verify``, ``desmon run``)::
+
+    import desmon
+
+    result = desmon.check("scenarios/coffee_handover.py")
+    print(result.verdict, result.states)
+    run = desmon.simulate("scenarios/coffee_handover.py", seed=1)
+    print(run.metrics["unmonitored_exposure_s"])
+
+The engines are imported on first use (numpy, networkx and SimPy are not loaded by
+``import desmon``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Iterable
+
+if TYPE_CHECKING:
+    from desmon.deployment.deployer import Deployer
+    from desmon.model.scenario import Scenario
+    from desmon.sim.metrics import RunResult
+    from desmon.verify.bounds import Bounds
+    from desmon.verify.search import CheckResult
+
+__all__ = ["check", "simulate"]
+
+
+def _scenario(scenario: "Scenario | str | Path") -> "Scenario":
+    if isinstance(scenario, (str, Path)):
+        from desmon.loader import load_scenario
+
+        return load_scenario(scenario)
+    return scenario
+
+
+def check(
+    scenario: "Scenario | str | Path",
+    deployer: "str | Deployer" = "desmon",
+    *,
+    engine: str = "auto",
+    invariants: Iterable[str] | None = None,
+    bounds: "Bounds | None" = None,
+    symmetry: bool = False,
+    **budget: Any,
+) -> "CheckResult":
+    """Explore every interleaving of the scenario's bounded events through the real
+    deployment core and check the invariants (what ``desmon verify`` runs).
+
+    ``engine`` is "auto", "table" or "direct"; ``budget`` takes the search's limits and
+    options (``max_states``, ``max_depth``, ``timeout``, ``max_memory``, ``keep_going``,
+    ``workers``, ``progress``), as :meth:`desmon.verify.checker.Checker.run` names them.
+    """
+    from desmon.verify.checker import Checker
+
+    return Checker(_scenario(scenario), deployer, invariants=invariants, bounds=bounds, symmetry=symmetry).run(engine=engine, **budget)
+
+
+def simulate(
+    scenario: "Scenario | str | Path",
+    deployer: str = "desmon",
+    *,
+    seed: int = 0,
+    until: float | None = None,
+    signals: bool | None = None,
+    **options: Any,
+) -> "RunResult":
+    """Run the scenario in the SimPy world (what ``desmon run`` runs): same seed, same
+    result. ``options`` are the remaining keyword arguments of
+    :class:`desmon.sim.engine.SimWorld` (``trace``, ``progress``, ``on_quiescent``)."""
+    from desmon.sim.engine import SimWorld
+
+    return SimWorld(_scenario(scenario), deployer=deployer, seed=seed, until=until, signals=signals, **options).run()
