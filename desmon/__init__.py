@@ -5,6 +5,7 @@ carrying a hot coffee mug, three in-hand slip detectors as safety monitors, and 
 deployer (Algorithms 1 and 2) that keeps them on platforms meeting their requirements.
 """
 
+from desmon.api import check, simulate
 from desmon.deployment import DEPLOYERS, INVARIANTS, DeploymentCore, check_validity
 from desmon.errors import (
     CheckerError,
@@ -25,6 +26,8 @@ __version__ = "0.1.0"
 
 __all__ = [
     "__version__",
+    "check",
+    "simulate",
     "DEPLOYERS",
     "INVARIANTS",
     "DeploymentCore",

@@ -50,18 +50,23 @@ def check(
     """Explore every interleaving of the scenario's bounded events through the real
     deployment core and check the invariants (what ``desmon verify`` runs).
 
+    ``deployer`` is a shipped name, ``mutant:NAME``, ``FILE.py:NAME``, ``module:NAME``
+    or a :class:`~desmon.deployment.deployer.Deployer` (as ``--deployer`` takes it).
+
     ``engine`` is "auto", "table" or "direct"; ``budget`` takes the search's limits and
     options (``max_states``, ``max_depth``, ``timeout``, ``max_memory``, ``keep_going``,
     ``workers``, ``progress``), as :meth:`desmon.verify.checker.Checker.run` names them.
     """
     from desmon.verify.checker import Checker
+    from desmon.verify.deployers import resolve_deployer
 
-    return Checker(_scenario(scenario), deployer, invariants=invariants, bounds=bounds, symmetry=symmetry).run(engine=engine, **budget)
+    chosen = resolve_deployer(deployer)
+    return Checker(_scenario(scenario), chosen, invariants=invariants, bounds=bounds, symmetry=symmetry).run(engine=engine, **budget)
 
 
 def simulate(
     scenario: "Scenario | str | Path",
-    deployer: str = "desmon",
+    deployer: "str | Deployer" = "desmon",
     *,
     seed: int = 0,
     until: float | None = None,
@@ -72,5 +77,7 @@ def simulate(
     result. ``options`` are the remaining keyword arguments of
     :class:`desmon.sim.engine.SimWorld` (``trace``, ``progress``, ``on_quiescent``)."""
     from desmon.sim.engine import SimWorld
+    from desmon.verify.deployers import resolve_deployer
 
-    return SimWorld(_scenario(scenario), deployer=deployer, seed=seed, until=until, signals=signals, **options).run()
+    chosen = resolve_deployer(deployer)
+    return SimWorld(_scenario(scenario), deployer=chosen, seed=seed, until=until, signals=signals, **options).run()  # type: ignore[arg-type]

@@ -225,12 +225,14 @@ def test_a_hundred_robots_share_twenty_edge_servers_for_a_quarter_hour_without_v
     assert result.metrics["edge_starts"] > 0
 
 
-def test_a_fleet_run_leaves_nothing_in_the_validity_memos() -> None:
+def test_a_fleet_run_memoises_no_validity_answer() -> None:
     from desmon.deployment import validity as V
+    from desmon.deployment.placement import ColumnChecks
 
     world = FleetWorld(fleet(3, 2, 0.05), seed=1)
     V.clear_memos()
     world.run()
-    assert V._check_validity.cache_info().currsize == 0
-    assert V._check_platform.cache_info().currsize == 0
-    assert V._memoise is True
+    # the robots ask the fleet's own Checks port: numpy columns, no memo
+    assert type(world.checks) is ColumnChecks and not world.checks.memo
+    assert not hasattr(world.checks._validity, "cache_info")
+    assert V.DEFAULT_CHECKS._validity.cache_info().currsize == 0  # and nothing went to the default ones

@@ -22,7 +22,8 @@ from desmon.errors import CheckerError
 from desmon.loader import load_scenario
 from desmon.verify import Checker
 from desmon.verify.search import EXIT_INTERRUPTED, HOLDS, INCOMPLETE, INTERRUPTED, Budget, resident_mb
-from desmon.verify.table import TableEngine
+from desmon.verify.system import TransitionSystem
+from desmon.verify.table.recording import Recorder
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIOS = ROOT / "scenarios"
@@ -73,14 +74,14 @@ def test_the_table_engine_looks_at_the_clock_inside_a_batch(big, monkeypatch):  
     # a budget that runs out while the first batches record reactions: the batch is
     # dropped (nothing of it counted), the states before it are the result
     calls = []
-    real = TableEngine.record_reaction
+    real = Recorder.record_reaction
 
     def slow(self, *args):  # type: ignore[no-untyped-def]
         calls.append(1)
         time.sleep(0.01)  # a reaction that takes long to run
         return real(self, *args)
 
-    monkeypatch.setattr(TableEngine, "record_reaction", slow)
+    monkeypatch.setattr(Recorder, "record_reaction", slow)
     t = time.perf_counter()
     r = Checker(big).run(timeout=0.3, engine="table")
     wall = time.perf_counter() - t
@@ -168,9 +169,9 @@ def test_a_keyboard_interrupt_in_the_search_gives_the_partial_result(big, engine
     # what a second Ctrl-C does (the first only asks the search to stop at its next look)
     calls = [0]
     if engine == "table":
-        target, name = TableEngine, "record_reaction"
+        target, name = Recorder, "record_reaction"
     else:
-        target, name = Checker, "expand"
+        target, name = TransitionSystem, "expand"
     real = getattr(target, name)
 
     def interrupting(self, *args):  # type: ignore[no-untyped-def]

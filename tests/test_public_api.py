@@ -8,7 +8,7 @@ PUBLIC = {
     "__version__", "DEPLOYERS", "INVARIANTS", "DeploymentCore", "check_validity", "CheckerError", "DesmonError",
     "ModelError", "NondeterminismError", "QueryError", "ScenarioError", "SignalError", "SimulationError",
     "load_scenario", "RobotBuilder", "RuleTable", "SystemModel", "Scenario", "TimedEvent", "Repository",
-    "RepositoryQuery",
+    "RepositoryQuery", "check", "simulate",
 }
 
 

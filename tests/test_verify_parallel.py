@@ -13,6 +13,7 @@ import desmon.verify.direct as direct_module
 import desmon.verify.parallel as parallel_module
 from desmon.cli import main
 from desmon.errors import CheckerError
+from desmon.verify.system import TransitionSystem
 from desmon.loader import load_scenario
 from desmon.verify import Checker
 from desmon.verify.mutants import MUTANTS
@@ -104,7 +105,7 @@ def test_cli_workers_flag_prints_the_same_report_but_for_timings(capsys, monkeyp
 
 def test_a_worker_that_dies_ends_the_search_with_a_one_line_error(monkeypatch, capsys):
     monkeypatch.setattr(direct_module, "PARALLEL_LEVEL", 1)
-    real = Checker.expand
+    real = TransitionSystem.expand
     parent = os.getpid()
 
     def dies_in_a_worker(self, key, known):  # type: ignore[no-untyped-def]
@@ -112,7 +113,7 @@ def test_a_worker_that_dies_ends_the_search_with_a_one_line_error(monkeypatch, c
             os._exit(9)  # as the out-of-memory killer would end it
         return real(self, key, known)
 
-    monkeypatch.setattr(Checker, "expand", dies_in_a_worker)  # inherited by the forked workers
+    monkeypatch.setattr(TransitionSystem, "expand", dies_in_a_worker)  # inherited by the forked workers
     assert main(["verify", str(SCENARIOS / "symmetric_platforms.py"), "--engine", "direct", "--workers", "2", "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert "worker process died" in err and "Traceback" not in err

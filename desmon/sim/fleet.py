@@ -289,7 +289,7 @@ class RobotView(RepositoryQuery):
         fixed = {spec.fixed_platform for spec in (self.deployment_information(g) for g in self.graph_names) if spec is not None}
         usable = tuple(
             e for e in self.edges
-            if e in fixed or any(not check_platform(r, PlatformState(self._cache.state(e).platform), None) for r in reqs)
+            if e in fixed or any(not check_platform(r, PlatformState(self._cache.state(e).platform), None, checks=self.checks) for r in reqs)
         )
         self.platform_names = self.own + usable
         self._index = {p: i for i, p in enumerate(self.platform_names)}

@@ -89,7 +89,6 @@ class DirectSearch:
                 self._close_pool()
         # the status closure points back at this search: let it go (no reference cycle is left behind)
         self.budget.status = final_status(len(self.keys), self.transitions, self.depth)
-        system.explored = self.keys  # the distinct (canonical) states of the last run, BFS order
         self.res.states = len(self.keys)
         self.res.transitions = self.transitions
         return trail.found, self.incomplete, self.depth

@@ -102,6 +102,8 @@ class CheckResult:
     incomplete: str = ""  # why the search stopped early ("" if it did not), whatever the verdict
     timeout: float | None = None  # the time limit it ran under (seconds)
     max_memory: float | None = None  # the memory budget it ran under (MB)
+    #: the distinct (canonical) states the search explored, in BFS order (not part of the report)
+    explored: Sequence["Key"] = field(default=(), repr=False, compare=False)
 
     @property
     def states_per_second(self) -> float:

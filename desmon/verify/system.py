@@ -19,7 +19,7 @@ under test.
 from __future__ import annotations
 
 from collections import Counter
-from typing import Any, Container, Iterable, Iterator, Protocol, Sequence
+from typing import Any, Callable, Container, Iterable, Iterator, Protocol
 
 from desmon.deployment.core import DeploymentCore, StepLog
 from desmon.deployment.guard import CRASH, DeployerFault
@@ -64,10 +64,14 @@ class Reduction(Protocol):
 
 
 class TransitionSystem:
-    """A scenario's bounded environment and the real core's reactions, as states and transitions."""
+    """A scenario's bounded environment and the real core's reactions, as states and transitions.
 
-    #: the reduction the search stores states under (installed by the engine choice), or None
-    symmetry: Reduction | None = None
+    ``reduction``, if given, builds the state-space reduction the search stores states
+    under from the system (``reduction=Symmetry``: :mod:`desmon.verify.symmetry`). The
+    system keeps no result of a search: engines return theirs
+    (:func:`desmon.verify.checker.check`); what it keeps are its store, its core and
+    memos of answers that depend only on a state.
+    """
 
     def __init__(
         self,
@@ -76,6 +80,7 @@ class TransitionSystem:
         *,
         invariants: Iterable[str] | None = None,
         bounds: Bounds | None = None,
+        reduction: "Callable[[TransitionSystem], Reduction] | None" = None,
     ) -> None:
         self.scenario = scenario
         self.model = scenario.model
@@ -104,8 +109,8 @@ class TransitionSystem:
         self._runs = 0  # transitions the search ran (successors), for the nondeterminism re-runs
         self._slots_cache: dict[str | None, tuple[tuple[str, ...], ...]] = {}
         self.branches: Counter = Counter()
-        #: the distinct (canonical) states of the last run, in BFS order
-        self.explored: Sequence[Key] = []
+        #: the reduction the search stores states under, or None
+        self.symmetry: Reduction | None = reduction(self) if reduction is not None else None
 
     def _choose_invariants(self, invariants: Iterable[str] | None) -> None:
         """The invariants to check: the named ones (unknown names: ModelError; one the checker

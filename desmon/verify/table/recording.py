@@ -15,17 +15,18 @@ else raises :class:`~desmon.errors.UnobservedRead`, and the core's Query port
 from __future__ import annotations
 
 import traceback
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from desmon.deployment.guard import CRASH
 from desmon.deployment.ports import PlatformHandle
-from desmon.deployment.validity import Validity, loop_validity, order_platforms, platform_failures
+from desmon.deployment.validity import loop_validity, order_platforms, platform_failures
 from desmon.errors import NondeterminismError, TableUnsupported, UnobservedRead
 from desmon.model.events import Event
 from desmon.model.requirements import Preference
 from desmon.model.system import PlatformState
 from desmon.verify.state import Key, StateStore
-from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key
+from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, command_key
+from desmon.verify.table.observed import Acceptable, Check, ObservedValidity, Ranked, Reasons
 from desmon.verify.table.tables import AnswerTables, score_key
 from desmon.verify.trace import KEPT_BRANCH, branch_name
 
@@ -93,20 +94,20 @@ class RecordingChecks:
         order = [at[id(st)] for st in order_platforms(real_states)]
         ranked = any(type(r) is Preference for r in reqs)
         scored = [None if f else score_key(reqs, st, graph) for f, st in zip(fails, real_states)] if ranked else None
-        check = _Check(self, reqs, graph, not reasons, parts, fails, [st.platform.name for st in real_states], scored)
-        acceptable = _Acceptable(check, real.acceptable, order)
+        check = Check(self, reqs, graph, not reasons, parts, fails, [st.platform.name for st in real_states], scored)
+        acceptable = Acceptable(check, real.acceptable, order)
         if not ranked:
-            return _ObservedValidity(acceptable, _Reasons(check, real.rejected))  # type: ignore[arg-type]
+            return ObservedValidity(acceptable, Reasons(check, real.rejected))  # type: ignore[arg-type]
         # with preferences the order of the acceptable platforms, their scores and the
         # breakdown are observed as the scores of every platform ("rank")
-        breakdown = _Ranked(check, real.breakdown, acceptable) if real.breakdown else ()
-        return _ObservedValidity(acceptable, _Reasons(check, real.rejected), _Ranked(check, real.scores, acceptable), breakdown)  # type: ignore[arg-type]
+        breakdown = Ranked(check, real.breakdown, acceptable) if real.breakdown else ()
+        return ObservedValidity(acceptable, Reasons(check, real.rejected), Ranked(check, real.scores, acceptable), breakdown)  # type: ignore[arg-type]
 
     def platform(self, reqs: tuple, state: Any, graph: str | None, first_only: bool) -> Any:
         (real,) = self._reals((state,))
         parts = self._parts((real,))
         fails = platform_failures(reqs, real, graph, first_only)
-        return _Reasons(_Check(self, reqs, graph, first_only, parts, [fails], [real.platform.name]), fails, single=True)
+        return Reasons(Check(self, reqs, graph, first_only, parts, [fails], [real.platform.name]), fails, single=True)
 
     def _reals(self, states: Sequence[Any]) -> tuple[PlatformState, ...]:
         """The real facts behind each handle; a state that is not a handle of this run must
@@ -138,263 +139,6 @@ class RecordingChecks:
         tables = self.tables
         index = tables.platform_index
         return tuple((index[s.platform.name], tables.intern_deployed(s.deployed)) for s in states)
-
-
-class _Check:
-    """One requirement check's real answers, and how to record observing them."""
-
-    __slots__ = ("rec", "table", "first_only", "parts", "fails", "names", "scored")
-
-    def __init__(self, rec: "RecordingChecks", reqs: tuple, graph: str | None, first_only: bool,
-                 parts: tuple[tuple[int, int], ...], fails: list[tuple], names: list[str],
-                 scored: list[tuple | None] | None = None) -> None:
-        self.rec = rec
-        self.table = rec.tables.intern_table(reqs, graph)
-        self.first_only = first_only
-        self.parts = parts
-        self.fails = fails
-        self.names = names
-        self.scored = scored  # each platform's score key (None: rejected), with preferences
-
-    def ok(self, which: Sequence[int]) -> None:
-        """Observe whether the platforms at positions ``which`` pass."""
-        code = 0
-        for j, i in enumerate(which):
-            code |= (not self.fails[i]) << j
-        self.rec.observe(("ok", self.table, None, tuple(self.parts[i] for i in which)), code)
-
-    def why(self) -> None:
-        """Observe every platform's failures, reasons included."""
-        eng = self.rec.tables
-        code, mult = 0, 1
-        for (p, dep), f in zip(self.parts, self.fails):
-            value, radix = eng.failure_id(self.table, self.first_only, p, dep, f)
-            code += value * mult
-            mult *= radix
-        self.rec.observe(("why", self.table, self.first_only, self.parts), code)
-
-    def rank(self) -> None:
-        """Observe every platform's acceptability and score (with preferences: what the
-        order of the acceptable platforms, their scores and the breakdown derive from)."""
-        assert self.scored is not None
-        eng = self.rec.tables
-        code, mult = 0, 1
-        for (p, dep), key in zip(self.parts, self.scored):
-            value, radix = eng.score_id(self.table, p, dep, key)
-            code += value * mult
-            mult *= radix
-        self.rec.observe(("rank", self.table, None, self.parts), code)
-
-
-class _Observed:
-    """A read-only sequence whose every use is recorded (see :class:`RecordingChecks`)."""
-
-    __slots__ = ("_check", "_real")
-
-    def _all(self) -> tuple:
-        raise NotImplementedError  # pragma: no cover
-
-    def __len__(self) -> int:
-        return len(self._all())
-
-    def __bool__(self) -> bool:
-        return len(self) > 0
-
-    def __iter__(self) -> Iterator[Any]:
-        return iter(self._all())
-
-    def __getitem__(self, i: Any) -> Any:
-        return self._all()[i]
-
-    def __contains__(self, x: object) -> bool:
-        return x in self._all()
-
-    def __eq__(self, other: object) -> bool:
-        return self._all() == (other._all() if isinstance(other, _Observed) else other)
-
-    def __ne__(self, other: object) -> bool:
-        return not self == other
-
-    def __hash__(self) -> int:
-        return hash(self._all())
-
-    def __repr__(self) -> str:
-        return repr(self._all())
-
-    def __reversed__(self) -> Iterator[Any]:
-        return reversed(self._all())
-
-    def __add__(self, other: Any) -> Any:
-        return self._all() + other
-
-    def __radd__(self, other: Any) -> Any:
-        return other + self._all()
-
-    def __mul__(self, n: Any) -> Any:
-        return self._all() * n
-
-    __rmul__ = __mul__
-
-    def __lt__(self, other: Any) -> bool:
-        return self._all() < (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
-
-    def __le__(self, other: Any) -> bool:
-        return self._all() <= (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
-
-    def __gt__(self, other: Any) -> bool:
-        return self._all() > (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
-
-    def __ge__(self, other: Any) -> bool:
-        return self._all() >= (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
-
-    def index(self, *args: Any) -> int:
-        return self._all().index(*args)
-
-    def count(self, x: Any) -> int:
-        return self._all().count(x)
-
-
-class _ObservedValidity(Validity):
-    """The :class:`~desmon.deployment.validity.Validity` of a recorded check: its
-    explanation is only observed where the run uses the text (see :class:`_Text`)."""
-
-    __slots__ = ()
-
-    def explain(self) -> str:
-        return _Text(lambda: Validity.explain(self))  # type: ignore[return-value]
-
-
-class _Text(_Observed):
-    """An explanation a recorded run has not read yet.
-
-    A reaction usually only carries it into an error's detail, which decides nothing;
-    every use of the text (formatting, comparing, searching, any ``str`` method)
-    computes it, and so observes the answers it is made of.
-    """
-
-    __slots__ = ()
-
-    def __init__(self, make: Callable[[], str]) -> None:
-        self._check, self._real = None, make
-
-    def _all(self) -> Any:
-        return self._real()
-
-    def __str__(self) -> str:
-        return self._all()  # type: ignore[no-any-return]
-
-    def __format__(self, spec: str) -> str:
-        return format(self._all(), spec)
-
-    def __mod__(self, other: Any) -> Any:
-        return self._all() % other
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._all(), name)
-
-
-class _Acceptable(_Observed):
-    """``Validity.acceptable`` of a recorded check: membership and iteration observe lazily.
-
-    With preferences the order depends on every acceptable platform's score: iterating,
-    indexing or using the whole observes them all (:meth:`_Check.rank`); membership,
-    length and truth do not depend on the order and observe as without preferences."""
-
-    __slots__ = ("_order",)
-
-    def __init__(self, check: _Check, real: tuple[str, ...], order: list[int]) -> None:
-        self._check, self._real, self._order = check, real, order
-
-    def _all(self) -> tuple:
-        check = self._check
-        if check.scored is not None:
-            check.rank()
-        else:
-            check.ok(range(len(check.parts)))
-        return self._real  # type: ignore[no-any-return]
-
-    def __len__(self) -> int:
-        self._check.ok(range(len(self._check.parts)))
-        return len(self._real)
-
-    def __contains__(self, x: object) -> bool:
-        names = self._check.names
-        if x not in names:
-            return False  # not a checked platform: the answer depends on no platform fact
-        i = names.index(x)  # type: ignore[arg-type]
-        self._check.ok((i,))
-        return not self._check.fails[i]
-
-    def _static(self) -> Iterator[str]:
-        """The acceptable platforms in the static order, observed one by one."""
-        check = self._check
-        for i in self._order:
-            check.ok((i,))
-            if not check.fails[i]:
-                yield check.names[i]
-
-    def __iter__(self) -> Iterator[str]:
-        if self._check.scored is not None:
-            return iter(self._all())
-        return self._static()
-
-    def __bool__(self) -> bool:
-        for _name in self._static():  # observes the platforms up to the first acceptable one
-            return True
-        return False
-
-    def __getitem__(self, i: Any) -> Any:
-        if isinstance(i, int) and i >= 0 and self._check.scored is None:
-            for k, name in enumerate(self):  # observes the platforms up to the i-th acceptable one
-                if k == i:
-                    return name
-            raise IndexError("tuple index out of range")
-        return self._all()[i]
-
-
-class _Reasons(_Observed):
-    """``Validity.rejected`` or ``check_platform``'s failures: a length observes which
-    platforms fail, any content the failures themselves."""
-
-    __slots__ = ("_single",)
-
-    def __init__(self, check: _Check, real: tuple, single: bool = False) -> None:
-        self._check, self._real, self._single = check, real, single
-
-    def _all(self) -> tuple:
-        self._check.why()
-        return self._real  # type: ignore[no-any-return]
-
-    def __len__(self) -> int:
-        if self._single and not self._check.first_only:
-            return len(self._all())  # how many requirements one platform fails: the failures themselves
-        self._check.ok(range(len(self._check.parts)))  # how many platforms fail, or whether one does
-        return len(self._real)
-
-    def __bool__(self) -> bool:
-        self._check.ok(range(len(self._check.parts)))  # whether any platform fails (a valid deployment: none)
-        return len(self._real) > 0
-
-
-class _Ranked(_Observed):
-    """``Validity.scores`` or ``.breakdown`` of a recorded check with preferences: any use
-    observes every platform's score (:meth:`_Check.rank`); their length and truth are the
-    acceptable platforms'."""
-
-    __slots__ = ("_acceptable",)
-
-    def __init__(self, check: _Check, real: tuple, acceptable: _Acceptable) -> None:
-        self._check, self._real, self._acceptable = check, real, acceptable
-
-    def _all(self) -> tuple:
-        self._check.rank()
-        return self._real  # type: ignore[no-any-return]
-
-    def __len__(self) -> int:
-        return len(self._acceptable)
-
-    def __bool__(self) -> bool:
-        return bool(self._acceptable)
 
 
 #: the QueryPort's methods (desmon.deployment.ports.QueryPort)
