@@ -258,6 +258,9 @@ def test_the_recording_port_offers_exactly_the_query_port_methods():
 
     protocol = {n for n, v in vars(QueryPort).items() if callable(v) and not n.startswith("_")}
     assert set(_QUERY_METHODS) == protocol
+    from desmon.verify.table.recording import RecordingQuery
+
+    assert {n for n, v in vars(RecordingQuery).items() if callable(v) and not n.startswith("_")} == protocol
 
 
 def test_auto_falls_back_to_the_direct_engine_and_says_why():

@@ -49,7 +49,9 @@ IN_FLIGHT = 3
 #: Keys a worker remembers before it forgets them all (memory bound per worker).
 WORKER_MEMORY = 200_000
 
-_checker: "TransitionSystem | None" = None  # set in each worker by _start_worker
+#: the worker process's own state, filled by :func:`_start_worker` in each worker: its
+#: system ("system") and the states it knows expanded. Never read in the parent.
+_WORKER: dict = {}
 _known: set = set()
 
 
@@ -58,16 +60,15 @@ def _start_worker(checker: "TransitionSystem") -> None:
     pauses its cyclic collector for the search, and so does the worker. Ctrl-C reaches
     every process of the terminal's group: a worker ignores it (no traceback of its own)
     and finishes its chunk; the parent stops the search and reports it."""
-    global _checker
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _checker = checker
+    _WORKER["system"] = checker
     _known.clear()
     gc.disable()
 
 
 def _expand_chunk(chunk: "list[Key]") -> "tuple[list[list[list[Segment]]], float]":
     """The expansions of ``chunk``'s states, and this worker's peak resident size (MB)."""
-    checker = _checker
+    checker = _WORKER.get("system")
     if checker is None:  # pragma: no cover - a worker not started by ExpansionPool
         raise CheckerError("internal error: a checker worker started without its checker")
     known = _known

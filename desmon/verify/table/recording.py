@@ -146,14 +146,6 @@ QUERY_METHODS = ("deployment_information", "fixed_platform", "constraints", "pla
                  "active_deployments", "deployments", "perception_graph", "context")
 
 
-def _forward(name: str) -> Callable[..., Any]:
-    def method(self: "RecordingQuery", *args: Any) -> Any:
-        return getattr(self._store, name)(*args)  # looked up per call: the store rebinds some per deployment set
-
-    method.__name__ = name
-    return method
-
-
 class RecordingQuery:
     """The recording core's Query port: the store's QueryPort methods and nothing else.
 
@@ -161,6 +153,8 @@ class RecordingQuery:
     read platform facts unobserved: asking for one stops the recording. One the store
     lacks raises AttributeError, as the store would. Its ``checks`` are the recording
     checks; it memoises no validity answer (every check is performed and observed).
+    Each method looks the store's method up per call: the store rebinds some of them
+    per deployment set.
     """
 
     __slots__ = ("_store", "checks")
@@ -168,8 +162,34 @@ class RecordingQuery:
     specs_version = None
 
     def __init__(self, store: StateStore, checks: RecordingChecks) -> None:
-        object.__setattr__(self, "_store", store)
-        object.__setattr__(self, "checks", checks)
+        self._store, self.checks = store, checks
+
+    def deployment_information(self, graph: str) -> Any:
+        return self._store.deployment_information(graph)
+
+    def fixed_platform(self, spec: Any) -> Any:
+        return self._store.fixed_platform(spec)
+
+    def constraints(self, spec: Any) -> Any:
+        return self._store.constraints(spec)
+
+    def platform_states(self) -> Any:
+        return self._store.platform_states()
+
+    def deployed_on(self, graph: str) -> Any:
+        return self._store.deployed_on(graph)
+
+    def active_deployments(self, platform: str) -> Any:
+        return self._store.active_deployments(platform)
+
+    def deployments(self) -> Any:
+        return self._store.deployments()
+
+    def perception_graph(self, deployment: str) -> Any:
+        return self._store.perception_graph(deployment)
+
+    def context(self) -> Any:
+        return self._store.context()
 
     def __getattr__(self, name: str) -> Any:
         if not hasattr(self._store, name):  # what the store itself answers (``getattr(port, name, default)`` works alike)
@@ -178,10 +198,6 @@ class RecordingQuery:
             f"the reaction asked its Query port for `{name}`, which is not a QueryPort method: the table engine "
             "cannot know what it reads; run with --engine direct"
         )
-
-
-for _name in QUERY_METHODS:
-    setattr(RecordingQuery, _name, _forward(_name))
 
 
 class _NoMemo(dict):
