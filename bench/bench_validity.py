@@ -40,7 +40,7 @@ import tracemalloc
 
 from desmon.deployment import placement
 from desmon.deployment.placement import ChangeLogColumns
-from desmon.deployment.validity import check_validity, clear_memos
+from desmon.deployment.validity import ScalarChecks, check_validity, clear_memos
 from desmon.errors import DesmonError
 from desmon.model import Device, Platform, PlatformState, RobotBuilder, make_requirement
 from desmon.repository import Repository, RepositoryQuery, load_model, set_device_working, set_load, set_platform_up
@@ -112,6 +112,12 @@ def _timed(fn, *args, **kwargs):  # type: ignore[no-untyped-def]
     return time.perf_counter() - t0, out
 
 
+#: the two Checks ports compared: numpy columns from VECTOR_MIN_PLATFORMS on, and the
+#: scalar loop; neither memoises (each timing is of the computation itself)
+COLUMNS = placement.ColumnChecks(memo=False)
+SCALAR = ScalarChecks(memo=False)
+
+
 def _fresh() -> None:
     """Forget memoised answers and collect garbage, so one section's objects do not slow the next."""
     clear_memos()
@@ -159,15 +165,14 @@ def run(args: argparse.Namespace) -> dict[str, float]:
     cols.forget_reasons()
 
     _fresh()
-    dispatched, _ = _timed(lambda: [check_validity(r, states, _graph(i), reasons=False) for i, r in enumerate(specs)])
+    dispatched, _ = _timed(lambda: [check_validity(r, states, _graph(i), reasons=False, checks=COLUMNS) for i, r in enumerate(specs)])
     _fresh()
-    with placement.scalar_only():
-        t_sample, scalar_answers = _timed(lambda: [check_validity(specs[i], states, _graph(i), reasons=False) for i in sample])
-        _fresh()
-        sca = []
-        for i in reason_specs:
-            gc.collect()
-            sca.append(_timed(check_validity, specs[i], states, _graph(i), reasons=True))
+    t_sample, scalar_answers = _timed(lambda: [check_validity(specs[i], states, _graph(i), reasons=False, checks=SCALAR) for i in sample])
+    _fresh()
+    sca = []
+    for i in reason_specs:
+        gc.collect()
+        sca.append(_timed(check_validity, specs[i], states, _graph(i), reasons=True, checks=SCALAR))
     sca_reasons = [t for t, _v in sca]
     scalar = t_sample * len(specs) / len(sample)
     for i, answer in zip(sample, scalar_answers):
@@ -245,8 +250,7 @@ def changelog(args: argparse.Namespace) -> None:
         t_log += time.perf_counter() - t0
     _size, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
-    with placement.scalar_only():
-        _check("acceptable set after the events", got, check_validity(reqs, query.platform_states(), "force", reasons=False).acceptable)
+    _check("acceptable set after the events", got, check_validity(reqs, query.platform_states(), "force", reasons=False, checks=SCALAR).acceptable)
     print(f"repository events: {n:,} platforms (loaded in {build:.1f} s), random load / up / device changes, placing one spec after each")
     print(f"  re-read every platform  {t_full / rereads * 1e3:8.2f} ms per event (platform_states + column sync, {rereads} events)")
     print(f"  follow the change log   {t_log / args.events * 1e3:8.2f} ms per event ({args.events} events, "
@@ -265,12 +269,10 @@ def crossover(args: argparse.Namespace) -> None:
         cols = placement.PlatformColumns(states)
         reps = max(1, 2000 // n)
         t_v = min(_timed(lambda: [cols.validity(r, "g0", reasons=False) for r in specs])[0] for _ in range(reps))
-        with placement.scalar_only():
-            def scalar() -> None:
-                clear_memos()
-                for r in specs:
-                    check_validity(r, states, "g0", reasons=False)
-            t_s = min(_timed(scalar)[0] for _ in range(reps))
+        def scalar() -> None:
+            for r in specs:
+                check_validity(r, states, "g0", reasons=False, checks=SCALAR)
+        t_s = min(_timed(scalar)[0] for _ in range(reps))
         print(f"  {n:9d} {t_s / len(specs) * 1e6:9.1f} {t_v / len(specs) * 1e6:9.1f} {t_s / t_v:6.2f}")
     print(f"  (current VECTOR_MIN_PLATFORMS = {placement.VECTOR_MIN_PLATFORMS})")
 
