@@ -9,6 +9,7 @@ from __future__ import annotations
 import hypothesis.strategies as st
 from hypothesis import HealthCheck, given, settings
 
+from desmon.verify.state import StoreInsert
 from desmon.deployment.control import PLATFORM_DOWN, repository_control
 from desmon.model.dsl import RobotBuilder
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, PlatformDown, PlatformUp
@@ -68,11 +69,11 @@ class _Engines:
     def fact(self, ev: object) -> None:
         if isinstance(ev, (DeviceFail, DeviceRepair)):
             working = isinstance(ev, DeviceRepair)
-            self.store.set_device_working(ev.device, working)
+            StoreInsert(self.store).set_device_working(ev.device, working)
             self.insert.set_device_working(ev.device, working)
         else:
             up = isinstance(ev, PlatformUp)
-            self.store.set_platform_up(ev.platform, up)  # type: ignore[union-attr]
+            StoreInsert(self.store).set_platform_up(ev.platform, up)  # type: ignore[union-attr]
             self.insert.set_platform_up(ev.platform, up)  # type: ignore[union-attr]
         self.sim._fault(ev, "test")  # type: ignore[arg-type]
         self.sim.env.run(until=self.sim.env.now + 1)  # the monitor notices it

@@ -14,6 +14,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as hst
 
+from desmon.verify.state import StoreInsert
 from desmon.errors import QueryError
 from desmon.loader import load_scenario
 from desmon.model.events import DeviceFail
@@ -160,11 +161,11 @@ def test_a_load_back_at_zero_leaves_no_entry_in_either():
     assert all(p != "pc1" for p, _items in key.loads)
     checker.store.load(key)
     for amount in (100, 0):
-        assert checker.store.set_load("pc1", "memory", amount)
+        assert StoreInsert(checker.store).set_load("pc1", "memory", amount)
         assert run.query.repo is run.repo
         from desmon.repository.facts import set_load
 
         assert set_load(run.repo, "pc1", "memory", amount)
     assert checker.store.key(frozenset(key.standing)) == key
     assert checker.store.platform_state("pc1").load == run.query.platform_state("pc1").load == ()
-    assert not checker.store.set_load("pc1", "memory", 0) and not set_load(run.repo, "pc1", "memory", 0)
+    assert not StoreInsert(checker.store).set_load("pc1", "memory", 0) and not set_load(run.repo, "pc1", "memory", 0)

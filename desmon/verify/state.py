@@ -33,7 +33,7 @@ from desmon.model.events import RequirementChange
 from desmon.model.requirements import DeploymentSpec, Requirement
 from desmon.model.system import PlatformState, SystemModel, with_load
 
-__all__ = ["Key", "StateStore", "MEMO_LIMIT"]
+__all__ = ["Key", "StateStore", "StoreInsert", "MEMO_LIMIT"]
 
 #: Entries a store memo may hold before it is cleared.
 MEMO_LIMIT = 50_000
@@ -324,73 +324,6 @@ class StateStore:
         return self.deployed
 
     # -- InsertPort ---------------------------------------------------------------------
-    def set_context(self, context: str) -> bool:
-        if self.ctx == context:
-            return False
-        self.ctx = context
-        return True
-
-    def set_device_working(self, device: str, working: bool) -> str | None:
-        if device not in self._device_platform:
-            raise QueryError(f"unknown device {device!r}: it is not in the repository")
-        if (device not in self.failed) == working:
-            return None
-        if working:
-            self.failed = tuple(d for d in self.failed if d != device)
-        else:
-            self.failed = tuple(sorted(self.failed + (device,)))
-        platform = self._device_platform[device]
-        self._touch(platform)
-        return platform
-
-    def set_platform_up(self, platform: str, up: bool) -> bool:
-        if platform not in self._platform:
-            raise QueryError(f"unknown platform {platform!r}: it is not in the repository")
-        if (platform not in self.down) == up:
-            return False
-        if up:
-            self.down = tuple(p for p in self.down if p != platform)
-        else:
-            self.down = tuple(sorted(self.down + (platform,)))
-        self._touch(platform)
-        return True
-
-    def set_load(self, platform: str, resource: str, amount: float) -> bool:
-        if platform not in self._platform:
-            raise QueryError(f"unknown platform {platform!r}: it is not in the repository")
-        cur = with_load(dict(self._load_of(platform)), resource, amount)
-        if cur is None:
-            return False
-        # a platform without load has no entry either (as in the initial state)
-        loads = dict(self.loads)
-        if cur:
-            loads[platform] = tuple(sorted(cur.items()))
-        else:
-            del loads[platform]
-        self.loads = tuple((p, loads[p]) for p in self.platform_names if p in loads)
-        self._touch(platform)
-        return True
-
-    def change_requirements(self, change: RequirementChange) -> tuple[str, ...] | None:
-        """Apply a requirement change: the key's ``specs`` part follows (a graph whose
-        requirements are the declared ones again has no entry). Returns the platforms
-        the graph is deployed on (their states change with its consumption), or None."""
-        declared = self._spec.get(change.graph)
-        if declared is None:
-            raise QueryError(f"{change}: no deployment specification for {change.graph!r} in the repository")
-        current = self._current(change.graph)
-        assert current is not None
-        new = change.apply(current.requirements)
-        if new == current.requirements:
-            return None
-        others = tuple((g, r) for g, r in self.specs_now if g != change.graph)
-        mine = () if new == declared.requirements else ((change.graph, new),)
-        self.specs_now = tuple(sorted(others + mine))
-        hosts = self.deployed_on(change.graph)
-        for p in self.platform_names:  # every platform's deployed shares may read the graph's consumption
-            self._touch(p)
-        return hosts
-
     # -- ControlPort (the Control rules; starts they allow follow the outcome prefix) ------
     def start(self, graph: str, platform: str) -> bool:
         pair = (graph, platform)
@@ -435,6 +368,84 @@ class StateStore:
             return
         if bad:
             self.instant = (bad[0][0], bad[0][1], f"{verb} {pair[0]} on {pair[1]}")
+
+
+
+class StoreInsert:
+    """The Insert port over a :class:`StateStore`: the context monitor writes an event's
+    facts into the store's key parts (the store is the Query and Control ports)."""
+
+    __slots__ = ("store",)
+
+    def __init__(self, store: StateStore) -> None:
+        self.store = store
+
+    def set_context(self, context: str) -> bool:
+        if self.store.ctx == context:
+            return False
+        self.store.ctx = context
+        return True
+
+    def set_device_working(self, device: str, working: bool) -> str | None:
+        if device not in self.store._device_platform:
+            raise QueryError(f"unknown device {device!r}: it is not in the repository")
+        if (device not in self.store.failed) == working:
+            return None
+        if working:
+            self.store.failed = tuple(d for d in self.store.failed if d != device)
+        else:
+            self.store.failed = tuple(sorted(self.store.failed + (device,)))
+        platform = self.store._device_platform[device]
+        self.store._touch(platform)
+        return platform
+
+    def set_platform_up(self, platform: str, up: bool) -> bool:
+        if platform not in self.store._platform:
+            raise QueryError(f"unknown platform {platform!r}: it is not in the repository")
+        if (platform not in self.store.down) == up:
+            return False
+        if up:
+            self.store.down = tuple(p for p in self.store.down if p != platform)
+        else:
+            self.store.down = tuple(sorted(self.store.down + (platform,)))
+        self.store._touch(platform)
+        return True
+
+    def set_load(self, platform: str, resource: str, amount: float) -> bool:
+        if platform not in self.store._platform:
+            raise QueryError(f"unknown platform {platform!r}: it is not in the repository")
+        cur = with_load(dict(self.store._load_of(platform)), resource, amount)
+        if cur is None:
+            return False
+        # a platform without load has no entry either (as in the initial state)
+        loads = dict(self.store.loads)
+        if cur:
+            loads[platform] = tuple(sorted(cur.items()))
+        else:
+            del loads[platform]
+        self.store.loads = tuple((p, loads[p]) for p in self.store.platform_names if p in loads)
+        self.store._touch(platform)
+        return True
+
+    def change_requirements(self, change: RequirementChange) -> tuple[str, ...] | None:
+        """Apply a requirement change: the key's ``specs`` part follows (a graph whose
+        requirements are the declared ones again has no entry). Returns the platforms
+        the graph is deployed on (their states change with its consumption), or None."""
+        declared = self.store._spec.get(change.graph)
+        if declared is None:
+            raise QueryError(f"{change}: no deployment specification for {change.graph!r} in the repository")
+        current = self.store._current(change.graph)
+        assert current is not None
+        new = change.apply(current.requirements)
+        if new == current.requirements:
+            return None
+        others = tuple((g, r) for g, r in self.store.specs_now if g != change.graph)
+        mine = () if new == declared.requirements else ((change.graph, new),)
+        self.store.specs_now = tuple(sorted(others + mine))
+        hosts = self.store.deployed_on(change.graph)
+        for p in self.store.platform_names:  # every platform's deployed shares may read the graph's consumption
+            self.store._touch(p)
+        return hosts
 
 
 def view_from(store: StateStore, standing: frozenset[str], slots: tuple[tuple[str, ...], ...]) -> SystemView:

@@ -34,7 +34,7 @@ from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.environment import enabled_events
 from desmon.verify.replay import initial_reaction
 from desmon.verify.search import NOT_CHECKED, Record, Segment
-from desmon.verify.state import MEMO_LIMIT, Key, StateStore
+from desmon.verify.state import MEMO_LIMIT, Key, StateStore, StoreInsert
 from desmon.verify.trace import KEPT_BRANCH, Label, Step, branch_name, initial_step, make_step
 
 __all__ = ["TransitionSystem", "Reduction", "command_key", "RECHECK_FIRST", "RECHECK_EVERY"]
@@ -98,7 +98,7 @@ class TransitionSystem:
         names = {i.name for i in self.invariants}
         self.instant = tuple(i for i in get_invariants(list(self.bounds.instantaneous)) if i.name in names) if self.bounds.instantaneous else ()
         self.store = StateStore(self.model, ScalarChecks())
-        self.core = DeploymentCore(self.model, self.store, self.store, deployer)
+        self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), deployer)
         self.deployer_name = self.core.deployer.name
         self.store.watch = self.instant
         self.store.watch_check = self._instant_check
@@ -132,7 +132,7 @@ class TransitionSystem:
         self._instant_memo.clear()
         self._enabled_memo.clear()
         self.store = StateStore(self.model, ScalarChecks())
-        self.core = DeploymentCore(self.model, self.store, self.store, self.core.deployer)
+        self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), self.core.deployer)
         self.store.watch = self.instant
         self.store.watch_check = self._instant_check
 
@@ -144,7 +144,7 @@ class TransitionSystem:
         twin = object.__new__(type(self))
         twin.__dict__.update(self.__dict__)
         twin.store = store
-        twin.core = DeploymentCore(self.model, query, store, self.core.deployer)
+        twin.core = DeploymentCore(self.model, query, StoreInsert(store), self.core.deployer)
         store.watch = self.instant
         store.watch_check = twin._instant_check
         twin._instant_memo = instant_memo
@@ -248,25 +248,6 @@ class TransitionSystem:
                 st.instant = (CRASH, fault.what, str(log.commands[-1][0]) if log.commands else "")
             return fault.stimulus, log
 
-    def _same_again(self, key: Key, event: Event, prefix: tuple[bool, ...], first: tuple) -> None:
-        """Run the transition again and compare: a reaction is a function of its state and
-        stimulus, so different commands (or another next state) are nondeterminism of the
-        deployer, refused with both command lists (docs/deployers.md). The store is left in
-        the next state, as :meth:`run_one` leaves it."""
-        again = self._transition(key, event, prefix)
-        log = again[2]
-        was, now = [str(c) for c, _ok in first[2].commands], [str(c) for c, _ok in log.commands]
-        same = [command_key(c) for c, _ok in first[2].commands] == [command_key(c) for c, _ok in log.commands]
-        if not same or again[0] != first[0] or again[3] != first[3]:
-            def listing(cmds: list[str]) -> str:
-                return "[" + ", ".join(cmds) + "]" if cmds else "[no command]"
-
-            diff = f"first {listing(was)}, then {listing(now)}" if not same else f"the same commands {listing(was)} reached another state"
-            raise NondeterminismError(
-                f"deployer {self.deployer_name} is nondeterministic (not a function of what it reads through its ports): reacting twice to {event} in the same state it issued {diff}; "
-                "a reaction must be a function of its readings (no randomness, clock or state kept between calls: docs/deployers.md)"
-            )
-
     def successors(self, key: Key, event: Event) -> Iterator[tuple[tuple[int, ...], Key, Any, tuple[str, str, str] | None]]:
         """Every (failed start indices, next key, StepLog, instantaneous violation) of ``event``.
 
@@ -282,7 +263,7 @@ class TransitionSystem:
             nkey, outcomes, log, instant = run_one(key, event, prefix)
             self._runs += 1
             if self._runs <= RECHECK_FIRST or not self._runs % RECHECK_EVERY:  # nondeterminism: run it again, compare
-                self._same_again(key, event, prefix, (nkey, outcomes, log, instant))
+                _same_again(self, key, event, prefix, (nkey, outcomes, log, instant))
             fails = tuple(i for i, ok in enumerate(outcomes) if not ok) if False in outcomes else ()
             if len(fails) < bound:
                 for i in range(len(prefix), len(outcomes)):
@@ -370,3 +351,23 @@ class TransitionSystem:
             st = self.store  # left in the step's next state: the Control rules' refusals there tell refused starts from chosen failures
             steps.append(make_step(i, prev, event, key, log, fails, lambda g, p: st.rules.start_refusal(g, p, st.platform_state)))
         return steps
+
+
+def _same_again(system: "TransitionSystem", key: Key, event: Event, prefix: tuple[bool, ...], first: tuple) -> None:
+    """Run the transition again and compare: a reaction is a function of its state and
+    stimulus, so different commands (or another next state) are nondeterminism of the
+    deployer, refused with both command lists (docs/deployers.md). The store is left in
+    the next state, as :meth:`run_one` leaves it."""
+    again = system._transition(key, event, prefix)
+    log = again[2]
+    was, now = [str(c) for c, _ok in first[2].commands], [str(c) for c, _ok in log.commands]
+    same = [command_key(c) for c, _ok in first[2].commands] == [command_key(c) for c, _ok in log.commands]
+    if not same or again[0] != first[0] or again[3] != first[3]:
+        def listing(cmds: list[str]) -> str:
+            return "[" + ", ".join(cmds) + "]" if cmds else "[no command]"
+
+        diff = f"first {listing(was)}, then {listing(now)}" if not same else f"the same commands {listing(was)} reached another state"
+        raise NondeterminismError(
+            f"deployer {system.deployer_name} is nondeterministic (not a function of what it reads through its ports): reacting twice to {event} in the same state it issued {diff}; "
+            "a reaction must be a function of its readings (no randomness, clock or state kept between calls: docs/deployers.md)"
+        )
