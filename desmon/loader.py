@@ -11,11 +11,11 @@ from types import ModuleType
 from typing import Any, Iterator, Mapping
 
 from desmon.errors import DesmonError, ScenarioError
-from desmon.model.params import overriding, parse_assignments
+from desmon.model.params import overriding
 from desmon.model.scenario import Scenario
 from desmon.paths import SCENARIO_FILE, PathError, check_input_file, check_outputs_spare_modules, script_folder_on_path
 
-__all__ = ["load_scenario", "load_from_args"]
+__all__ = ["load_scenario"]
 
 
 def load_scenario(path: str | Path, params: Mapping[str, str] | None = None) -> Scenario:
@@ -119,12 +119,6 @@ def _scenario_of(path: str | Path, module: ModuleType) -> Scenario:
             "(scenario = Scenario(name=..., model=...))"
         )
     return candidates[0]
-
-
-def load_from_args(args: Any) -> Scenario:
-    """The scenario a command line names: ``args.scenario`` with the ``-p NAME=VALUE``
-    parameters of ``args.param`` (every command that takes a scenario)."""
-    return load_scenario(args.scenario, parse_assignments(getattr(args, "param", None)))
 
 
 @contextlib.contextmanager

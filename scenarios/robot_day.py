@@ -86,7 +86,7 @@ scenario = Scenario(
 if __name__ == "__main__":
     import sys
 
-    from desmon.sim.command import format_summary
+    from desmon.cli.run import format_summary
     from desmon.sim.engine import simulate
 
     r = simulate(scenario, sys.argv[1] if len(sys.argv) > 1 else "desmon")

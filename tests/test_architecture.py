@@ -110,15 +110,11 @@ LAYERS = {
     "desmon.verify": 6,  # engines: checker and fuzzer
     "desmon.loader": 7,  # a scenario file run as a script (its checker bounds validated)
     "desmon.sweep": 8,  # Dask sweeps over the engines
-    "desmon.options": 9,  # command-line options shared by the commands
+    "desmon.cli.options": 9,  # command-line options shared by the commands
     "desmon.api": 9,  # the public verbs check() and simulate() over the engines
     "desmon": 10,  # the package itself: the curated public API (desmon/__init__.py)
-    "desmon.sim.command": 11,  # one module per command: arguments in, report out
-    "desmon.verify.command": 11,
-    "desmon.verify.replay_command": 11,
-    "desmon.sweep.command": 11,
-    "desmon.viz.explore_command": 11,  # desmon explore: the page of a replay or a counterexample
-    "desmon.cli": 12,  # the desmon entry point: parses and dispatches to the commands
+    "desmon.cli.common": 11,  # what the commands share: exit codes, the parser, scenario and --deployer options
+    "desmon.cli": 12,  # the command line: one module per command (parse, call the library, print), main()
     "desmon.__main__": 13,  # python -m desmon
 }
 
@@ -139,7 +135,7 @@ def test_every_module_of_desmon_has_a_layer(graph):
     assert not missing, f"modules without a layer (add a row to LAYERS and to README.md's table): {missing}"
     top_level = {p.stem for p in PACKAGE.glob("*.py") if p.stem != "__init__"} | {p.name for p in PACKAGE.iterdir() if (p / "__init__.py").exists()}
     assert top_level <= {r.split(".")[1] for r in LAYERS if r.count(".") == 1}, sorted(top_level)
-    assert {"desmon.loader", "desmon.options", "desmon.paths"} <= set(graph.nodes)
+    assert {"desmon.loader", "desmon.cli.options", "desmon.paths"} <= set(graph.nodes)
 
 
 def test_imports_only_point_down(graph):

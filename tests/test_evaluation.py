@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from desmon.cli import main
+from desmon.cli.evaluate import render_sweep, render_table, run_evaluate
 from desmon.detectors.combined import CombinedDetector
 from desmon.detectors.evaluation import (
     ALPHA,
@@ -22,10 +23,7 @@ from desmon.detectors.evaluation import (
     evaluate,
     evaluate_seeds,
     fisher_exact,
-    render_sweep,
-    render_table,
     run_detectors,
-    run_evaluate,
     wilson,
 )
 from desmon.detectors.force import ForceDetector

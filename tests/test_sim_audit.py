@@ -8,7 +8,7 @@ from argparse import Namespace
 from pathlib import Path
 
 from desmon.loader import load_scenario
-from desmon.sim.command import run_command
+from desmon.cli.run import run_command
 from desmon.sim.engine import simulate
 from desmon.verify.mutants import get_mutant
 

@@ -103,7 +103,7 @@ def test_the_metrics_list_the_graphs_without_a_signal_model() -> None:
 
 
 def test_the_run_report_flags_a_graph_without_a_signal_model() -> None:
-    from desmon.sim.command import format_summary
+    from desmon.cli.run import format_summary
     from desmon.sim.engine import simulate
 
     assert "NO SIGNAL MODEL: vision (reads camera)" in format_summary(simulate(_camera_scenario()))
@@ -118,7 +118,7 @@ def test_a_kind_mapped_in_signal_kinds_is_monitored() -> None:
 
 def test_a_run_without_signals_says_so_in_the_report(root) -> None:  # type: ignore[no-untyped-def]
     from desmon.loader import load_scenario
-    from desmon.sim.command import format_summary
+    from desmon.cli.run import format_summary
     from desmon.sim.engine import simulate
 
     r = simulate(load_scenario(root / "scenarios" / "shared_platform.py"))

@@ -12,7 +12,7 @@ Typical use by the SimPy world::
 
 from desmon.detectors.base import Alarm, DetectorState, DetectorStatus, merge_alarms
 from desmon.detectors.combined import CombinedDetector
-from desmon.detectors.evaluation import Evaluation, evaluate, run_evaluate
+from desmon.detectors.evaluation import Evaluation, evaluate
 from desmon.detectors.force import ForceDetector
 from desmon.detectors.signals import (
     DOWN,
@@ -62,5 +62,4 @@ __all__ = [
     "GRAVITATIONAL",
     "Evaluation",
     "evaluate",
-    "run_evaluate",
 ]

@@ -28,13 +28,9 @@ best TPR - FPR measured in the same run).
 
 from __future__ import annotations
 
-import json
 import math
-import os
-import sys
-import time
 from dataclasses import asdict, dataclass
-from typing import Any, Callable, Final, Sequence, TextIO
+from typing import Callable, Final, Sequence
 
 import numpy as np
 
@@ -71,9 +67,8 @@ __all__ = [
     "evaluate",
     "evaluate_seeds",
     "sweep_of",
-    "render_table",
-    "render_sweep",
-    "run_evaluate",
+    "checked_inputs",
+    "rules_text",
 ]
 
 Arr = np.ndarray
@@ -580,6 +575,13 @@ def _check_args(trials: object, seed: object) -> tuple[int, int]:
     return int(trials), int(seed)
 
 
+def checked_inputs(trials: object, seed: object, seeds: object = None) -> tuple[int, int, int]:
+    """``trials``, ``seed`` and the number of seeds (``seeds`` None: one), each checked as
+    :func:`evaluate` and :func:`evaluate_seeds` check them (a bad value is one SignalError)."""
+    trials, seed = _check_args(trials, seed)
+    return trials, seed, 1 if seeds is None else _check_seeds(seeds)
+
+
 def _check_seeds(seeds: object) -> int:
     if isinstance(seeds, bool) or not isinstance(seeds, (int, np.integer)) or seeds < 1:
         raise SignalError(f"seeds {seeds!r} must be a positive integer (how many seeds to run); pass e.g. --seeds 10")
@@ -677,7 +679,7 @@ class MissionSweep:
     blind_time: Spread
 
 
-def _rules_text(rules: dict[str, str]) -> str:
+def rules_text(rules: dict[str, str]) -> str:
     return ", ".join(f"{c}->{rules[c]}" for c in MISSION_CONTEXTS)
 
 
@@ -726,7 +728,7 @@ def _rule_picks(per: Sequence[MissionResult]) -> dict[str, int]:
     """How many seeds used each set of rules, most used first (ties by text)."""
     picks: dict[str, int] = {}
     for m in per:
-        key = _rules_text(m.rules)
+        key = rules_text(m.rules)
         picks[key] = picks.get(key, 0) + 1
     return dict(sorted(picks.items(), key=lambda kv: (-kv[1], kv[0])))
 
@@ -784,200 +786,3 @@ def evaluate_seeds(
             on_seed(i, s)
         runs.append(evaluate(trials, s, missions=missions, mission_trials=mission_trials, progress=progress, params=params))
     return sweep_of(runs)
-
-
-# --------------------------------------------------------------------------- presentation
-
-
-def _pct(x: float | None) -> str:
-    return "   -  " if x is None else f"{100 * x:5.1f}%"
-
-
-def _ms(x: float | None) -> str:
-    return "    -" if x is None else f"{1000 * x:+5.0f}"
-
-
-def _test_line() -> str:
-    return (f"test per cell: {TEST_NAME}, on the 2x2 table sim k/n vs paper k/60; "
-            f"null: {NULL_HYPOTHESIS}; pass if p >= alpha = {ALPHA}")
-
-
-def _powerless(cells: Sequence[Any]) -> int:
-    """How many ``cells`` the test could not fail at their number of trials: neither 0 nor
-    all of their trials (the most extreme counts) would be rejected against the paper's."""
-    return sum(
-        1 for c in cells
-        if fisher_exact(0, c.trials, c.paper_count, c.paper_trials) >= ALPHA
-        and fisher_exact(c.trials, c.trials, c.paper_count, c.paper_trials) >= ALPHA
-    )
-
-
-def render_table(ev: Evaluation) -> str:
-    """The readable report of one seed."""
-    lines = [
-        f"desmon evaluate: {ev.trials} trials per action, seed {ev.seed}; paper = Sanchez et al. 2016 Tables 1-2 (k/60)",
-        _test_line(),
-        "",
-        f"{'action':<11}{'det':<9}{'':3}{'sim k/n':>10}{'rate':>8}{'sim 95% Wilson':>16}{'paper':>8}{'paper 95% Wilson':>19}"
-        f"{'p':>8}  verdict{'lat med/p95 (ms, motion)':>27}{'load med':>10}{'dir ok':>8}",
-    ]
-    for c in ev.cells:
-        ws = f"[{100 * c.wilson_sim[0]:4.1f},{100 * c.wilson_sim[1]:5.1f}]"
-        wp = f"[{100 * c.wilson_paper[0]:4.1f},{100 * c.wilson_paper[1]:5.1f}]"
-        lat = "" if c.kind == "FP" else f"{_ms(c.latency_motion_median)} / {_ms(c.latency_motion_p95)}"
-        lines.append(
-            f"{c.action:<11}{c.detector:<9}{c.kind:<3}{f'{c.count}/{c.trials}':>10}{_pct(c.rate):>8}{ws:>16}"
-            f"{f'{c.paper_count}/{c.paper_trials}':>8}{wp:>19}{c.p_value:8.3f}  {'pass' if c.passed else 'FAIL'}   {lat:>24}"
-            f"{'' if c.kind == 'FP' else _ms(c.latency_load_median):>10}"
-            f"{'' if c.direction_accuracy is None else _pct(c.direction_accuracy):>8}".rstrip()
-        )
-    n_pass = sum(c.passed for c in ev.cells)
-    lines += ["", f"{n_pass}/{len(ev.cells)} cells pass" + ("" if ev.all_pass else "  (FAIL)")]
-    blind = _powerless(ev.cells)
-    if blind:
-        lines.append(
-            f"  note: with {ev.trials} trial{'s' if ev.trials != 1 else ''} per action, {blind} of these cells would pass whatever "
-            "the simulation counted (no count k of n is rejected): their pass says nothing; run more --trials (e.g. 60, the paper's)"
-        )
-    if ev.missions:
-        lines += [
-            "",
-            "Mission grasp -> move_base -> release (slip-free missions for false alarms; one pulled slip per slip mission)",
-            f"{'strategy':<20}{'switch':<7}{'FA/mission':>11}{'P(FA>=1)':>10}{'TPR g/b/r':>19}{'miss':>7}"
-            f"{'lat med':>9}{'p95':>7}{'load med':>9}{'switches':>9}{'blind s':>9}  rules",
-        ]
-        for m in ev.missions:
-            tp = "/".join(f"{100 * m.tpr[c]:.0f}" for c in MISSION_CONTEXTS)
-            lines.append(
-                f"{m.strategy:<20}{m.switching:<7}{m.fa_per_mission:11.3f}{_pct(m.p_any_fa):>10}{tp:>19}{_pct(m.miss_rate):>7}"
-                f"{_ms(m.latency_median):>9}{_ms(m.latency_p95):>7}{_ms(m.latency_load_median):>9}{m.switches:9.0f}"
-                f"{m.blind_time:9.2f}  {_rules_text(m.rules)}"
-            )
-    return "\n".join(lines) + "\n"
-
-
-def _range(s: Spread | None, fmt: Callable[[float], str]) -> str:
-    """``mean [min..max]``."""
-    return "-" if s is None else f"{fmt(s.mean)} [{fmt(s.min)}..{fmt(s.max)}]"
-
-
-def _p1(x: float) -> str:
-    return f"{100 * x:.1f}"
-
-
-def _f3(x: float) -> str:
-    return f"{x:.3f}"
-
-
-def _f2(x: float) -> str:
-    return f"{x:.2f}"
-
-
-def _ms0(x: float) -> str:
-    return f"{1000 * x:+.0f}"
-
-
-def _seed_span(seeds: Sequence[int]) -> str:
-    return f"seed {seeds[0]}" if len(seeds) == 1 else f"seeds {seeds[0]}..{seeds[-1]} ({len(seeds)} seeds)"
-
-
-def render_sweep(sw: Sweep) -> str:
-    """The readable report over several seeds: per-cell pass counts, mission figures as mean [min..max]."""
-    n = len(sw.seeds)
-    lines = [
-        f"desmon evaluate: {sw.trials} trials per action, {_seed_span(sw.seeds)}; "
-        f"paper = Sanchez et al. 2016 Tables 1-2 (k/60)",
-        _test_line() + "; one test per seed",
-        "",
-        f"{'action':<11}{'det':<9}{'':4}{'paper':>6}  {'sim rate % mean [min..max]':<28}{'p min':>7}{'p median':>10}{'passes':>9}",
-    ]
-    for c in sw.cells:
-        lines.append(
-            f"{c.action:<11}{c.detector:<9}{c.kind:<4}{f'{c.paper_count}/{c.paper_trials}':>6}  {_range(c.rate, _p1):<28}"
-            f"{c.p_min:7.3f}{c.p_median:10.3f}{f'{c.passes}/{c.seeds}':>9}" + ("" if c.holds else "  FAILS on most seeds")
-        )
-    every = sum(c.passes == c.seeds for c in sw.cells)
-    most = sum(c.holds for c in sw.cells)
-    tests = sum(c.passes for c in sw.cells)
-    lines += [
-        "",
-        f"cells passing on every seed: {every}/{len(sw.cells)}; on more than half of the seeds: {most}/{len(sw.cells)}; "
-        f"tests passed: {tests}/{len(sw.cells) * n}" + ("" if sw.all_hold else "  (FAIL)"),
-    ]
-    if sw.missions:
-        lines += [
-            "",
-            "Mission grasp -> move_base -> release, each figure mean [min..max] over the seeds "
-            "(slip-free missions for false alarms; one pulled slip per slip mission)",
-            f"{'strategy':<20}{'switch':<7}{'P(FA>=1) %':<22}{'FA/mission':<24}{'slips caught %':<22}{'miss %':<22}"
-            f"{'TPR % g/b/r (means)':<21}{'lat med ms':<20}{'blind s':<20}rules",
-        ]
-        for m in sw.missions:
-            tp = "/".join(f"{100 * m.tpr[c].mean:.0f}" for c in MISSION_CONTEXTS)
-            top, count = next(iter(m.rule_picks.items()))
-            rules = top if count == n else f"{top} ({count}/{n} seeds)"
-            lines.append(
-                f"{m.strategy:<20}{m.switching:<7}{_range(m.p_any_fa, _p1):<22}{_range(m.fa_per_mission, _f3):<24}"
-                f"{_range(m.mean_tpr, _p1):<22}{_range(m.miss_rate, _p1):<22}{tp:<21}{_range(m.latency_median, _ms0):<20}"
-                f"{_range(m.blind_time, _f2):<20}{rules}"
-            )
-        oracle = next((m for m in sw.missions if m.strategy == "oracle"), None)
-        if oracle is not None:
-            lines += ["", "oracle's rules (per context the detector with the best TPR - FPR in that seed's run):"]
-            lines += [f"  {rules}: {count}/{n} seeds" for rules, count in oracle.rule_picks.items()]
-    return "\n".join(lines) + "\n"
-
-
-class _Progress:
-    def __init__(self, total: int, stream: TextIO) -> None:
-        self.total = total
-        self.done = 0
-        self.stream = stream
-        self.label = ""
-        self.t0 = time.perf_counter()
-
-    def __call__(self, n: int) -> None:
-        self.done += n
-        frac = min(1.0, self.done / self.total)
-        bar = "#" * int(30 * frac)
-        rate = self.done / max(time.perf_counter() - self.t0, 1e-9)
-        self.stream.write(f"\r[{bar:<30}] {100 * frac:5.1f}%  {rate:7.0f} trials/s{self.label}")
-        if self.done >= self.total:
-            self.stream.write("\n")
-        self.stream.flush()
-
-
-def run_evaluate(trials: int, seed: int, as_json: bool, progress: bool, out: TextIO, seeds: int | None = None) -> int:
-    """CLI entry: evaluate, write a table (or JSON) to ``out``.
-
-    ``seeds`` None: one run with ``seed``; exit status 0 iff all 21 cells pass.
-    ``seeds`` N: runs with seeds ``seed .. seed + N - 1`` (:func:`evaluate_seeds`); exit
-    status 0 iff every cell passes on more than half of the seeds.
-    The progress bar goes to stderr when ``progress`` is true and stderr is a terminal
-    (or ``DESMON_PROGRESS=1`` forces it).
-    """
-    trials, seed = _check_args(trials, seed)
-    n_seeds = 1 if seeds is None else _check_seeds(seeds)
-    cb: _Progress | None = None
-    if progress and (sys.stderr.isatty() or os.environ.get("DESMON_PROGRESS") == "1"):
-        cb = _Progress(trials * (len(P1_ACTIONS) + 1 + len(MISSION_CONTEXTS)) * n_seeds, sys.stderr)
-    if seeds is None:
-        ev = evaluate(trials, seed, progress=cb)
-        if as_json:
-            json.dump(ev.to_json(), out, indent=2)
-            out.write("\n")
-        else:
-            out.write(render_table(ev))
-        return 0 if ev.all_pass else 1
-
-    def on_seed(i: int, s: int) -> None:
-        if cb is not None:
-            cb.label = f"  seed {s} ({i + 1}/{n_seeds})"
-
-    sw = evaluate_seeds(trials, seed, n_seeds, progress=cb, on_seed=on_seed)
-    if as_json:
-        json.dump(sw.to_json(), out, indent=2)
-        out.write("\n")
-    else:
-        out.write(render_sweep(sw))
-    return 0 if sw.all_hold else 1

@@ -58,8 +58,8 @@ from desmon.sim.trace import Trace
 from desmon.sim.world import World
 
 __all__ = [
-    "Fleet", "FleetWorld", "FleetResult", "RobotView", "simulate_fleet", "merged_model", "format_fleet_summary", "fleet_json",
-    "is_fleet", "run_fleet_command", "write_fleet_report", "robot_seed", "peak_rss_mb",
+    "Fleet", "FleetWorld", "FleetResult", "RobotView", "simulate_fleet", "merged_model",
+    "is_fleet", "robot_seed", "peak_rss_mb",
 ]
 
 
@@ -758,91 +758,3 @@ def peak_rss_mb() -> float:
 def simulate_fleet(scenario: Scenario, deployer: str = "desmon", seed: int = 0, **kw: Any) -> FleetResult:
     """Run the fleet ``scenario`` in the SimPy world and return the result."""
     return FleetWorld(scenario, deployer=deployer, seed=seed, **kw).run()
-
-
-def _fmt_spread(s: dict[str, float], unit: str = "", scale: float = 1.0, digits: int = 1) -> str:
-    f = lambda v: f"{v * scale:.{digits}f}"  # noqa: E731
-    return f"{f(s['mean'])}{unit} [{f(s['min'])}-{f(s['max'])}]"
-
-
-def format_fleet_summary(r: FleetResult) -> str:
-    """The human-readable report of ``desmon run`` on a fleet scenario."""
-    m = r.metrics
-    lines = [
-        f"{r.scenario.name} -- SimPy fleet, {m['robots']} robots, {m['edges']} edge servers, deployer {r.deployer}, "
-        f"seed {r.seed}, {r.horizon:g} s simulated in {m['wall_s']:.2f} s wall ({m['realtime_ratio']:g}x real time)",
-        "Signals: off: no detector is simulated; a running, warmed-up valid deployment counts as monitoring.",
-        "",
-        "Per robot, mean [min-max] over the robots:",
-        f"  unmonitored exposure (s)       {_fmt_spread(m['exposure_per_robot_s'])}",
-        f"  risky time (s)                 {_fmt_spread(m['risky_time_per_robot_s'])}",
-        "Edge servers, mean [min-max] over the servers:",
-        f"  memory share, time average     {_fmt_spread(m['edge_memory_share_mean'], '%', 100.0)}",
-        f"  memory share, peak             {_fmt_spread(m['edge_memory_share_peak'], '%', 100.0)}",
-        f"  seconds with a detector        {_fmt_spread(m['edge_busy_s'], '', 1.0, 0)}",
-        f"  detector starts on edges       {m['edge_starts']}",
-        "Errors by kind (all robots):",
-    ]
-    lines += [f"  {k:<30} {n}" for k, n in m["errors"].items()] or ["  (none)"]
-    lines += [
-        "Fleet totals:",
-        f"  reactions / audits             {m['reactions']} / {m['audits']}",
-        f"  starts / failed starts / stops {m['starts']} / {m['start_failures']} / {m['stops']}",
-        f"  migrations                     {m['migrations']}",
-        f"  slips injected                 {m['slips_injected']}",
-        f"  repository changes             {m['repository_changes']}",
-        f"  peak memory (RSS, MB)          {m['peak_rss_mb']:g}",
-        "",
-    ]
-    if r.violations:
-        lines.append(f"INVARIANTS VIOLATED ({len(r.violations)}):")
-        for t, robot, name, msg in r.violations[:10]:
-            lines.append(f"  t={t:.3f}s {robot} {name}: {msg}")
-        if len(r.violations) > 10:
-            lines.append(f"  ... {len(r.violations) - 10} more")
-    else:
-        lines.append("Invariants: all held at every quiescent point of every robot (edge servers audited with every robot's load).")
-    return "\n".join(lines) + "\n"
-
-
-def fleet_json(r: FleetResult) -> dict[str, Any]:
-    """The ``desmon run --json`` summary of a fleet run."""
-    return {
-        "scenario": r.scenario.name,
-        "deployer": r.deployer,
-        "seed": r.seed,
-        "horizon_s": r.horizon,
-        "metrics": r.metrics,
-        "robots": r.robots,
-        "violations": [{"t": t, "robot": robot, "invariant": n, "message": m} for t, robot, n, m in r.violations],
-    }
-
-
-def run_fleet_command(args: Any, scenario: Scenario, progress: Callable[[float, float], None] | None = None) -> FleetResult:
-    """``desmon run`` on a fleet scenario: check the arguments, run the fleet (``progress``
-    as :class:`FleetWorld` takes it), write the trace; :func:`write_fleet_report` prints it."""
-    from desmon.paths import replacing
-
-    fleet: Fleet = scenario.world
-    if getattr(args, "plot", None):
-        raise ScenarioError(f"--plot draws one robot's timeline; {scenario.name!r} is a fleet of {len(fleet.robots)}: drop --plot")
-    if args.until is not None and args.until > fleet.horizon:
-        raise ScenarioError(
-            f"--until {args.until:g}: the fleet's shift ends at its horizon of {fleet.horizon:g} s; give --until at most that"
-        )
-    with contextlib.ExitStack() as stack:
-        fh = stack.enter_context(replacing(args.trace)) if args.trace else None
-        return FleetWorld(scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=fh, progress=progress).run()
-
-
-def write_fleet_report(args: Any, result: FleetResult, out: IO[str]) -> int:
-    """Print a fleet run's summary (or ``--json``): exit 0 if every audit held, 1 otherwise."""
-    import json
-
-    if args.json:
-        out.write(json.dumps(fleet_json(result), indent=2) + "\n")
-    else:
-        out.write(format_fleet_summary(result))
-        if args.trace:
-            out.write(f"Trace: {args.trace}\n")
-    return 1 if result.violations else 0

@@ -26,8 +26,10 @@ from typing import Iterator, Sequence
 
 from desmon.errors import DesmonError
 
-__all__ = ["SweepError", "Axis", "Point", "Run", "Grid", "parse_axes", "derive_seed", "MAX_RUNS"]
+__all__ = ["SweepError", "Axis", "Point", "Run", "Grid", "parse_axes", "derive_seed", "MAX_RUNS", "JOBS"]
 
+#: what a sweep's runs can do: desmon run / verify / fuzz / evaluate (desmon.sweep.jobs runs each)
+JOBS = ("run", "verify", "fuzz", "evaluate")
 #: the most runs one sweep may hold (a typo such as --seeds 1000000 is refused, not started)
 MAX_RUNS = 10_000_000
 _TRUE = ("true", "yes", "on")

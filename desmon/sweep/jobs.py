@@ -26,14 +26,13 @@ from typing import Any, Callable
 
 from desmon.deployment.guard import EXIT_CRASHED, DeployerFault
 from desmon.errors import DesmonError
-from desmon.sweep.grid import Axis, Run, SweepError
+from desmon.sweep.grid import JOBS, Axis, Run, SweepError
 
 __all__ = ["check_points", 
     "JOBS", "JobSpec", "run_point", "check_values", "signal_parameters", "EXIT_TIMEOUT", "EXIT_CRASH", "EXIT_KILLED",
     "EXIT_BAD_VALUE", "METRICS",
 ]
 
-JOBS = ("run", "verify", "fuzz", "evaluate")
 EXIT_BAD_VALUE, EXIT_TIMEOUT, EXIT_CRASH, EXIT_KILLED = 2, 124, 125, 137
 
 #: each job's figures, in table order (run adds memory_peak_mb_<platform> and errors_<kind>)

@@ -15,9 +15,9 @@ Each step is taken on the live repository of that moment: its snapshot, and the 
 ``desmon explain --at`` does); a counterexample is stepped once through a
 :class:`~desmon.verify.replay.RepositoryRun`, as ``desmon verify --plot`` and ``--replay`` do.
 
-This module is a command (the layer of ``desmon.sim.command`` and ``desmon.verify.command``,
-above both engines: it reads sim's replay and verify's runs); it hands frames to
-:mod:`desmon.viz.explore`, which draws them and imports neither engine.
+This module is a command (the CLI's layer, above both engines: it reads sim's replay
+and verify's runs); it hands frames to :mod:`desmon.viz.explore`, which draws them and
+imports neither engine.
 """
 
 from __future__ import annotations
@@ -27,9 +27,29 @@ import shlex
 from dataclasses import replace
 from typing import Any
 
+from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg
+from desmon.cli.options import Input, add_output, positive_int
 from desmon.errors import CheckerError, DesmonError, NondeterminismError, ScenarioError
 
-__all__ = ["explore_command", "timeline_frames", "counterexample_frames"]
+__all__ = ["add_parser", "run", "timeline_frames", "counterexample_frames"]
+
+
+def add_parser(sub: Subparsers) -> None:
+    p = sub.add_parser(
+        "explore",
+        help="one self-contained HTML page to step through the scripted timeline or a counterexample (docs/tutorial.md)",
+    )
+    scenario_arg(p)
+    deployer_arg(p, default_note=" (default: desmon; with --from-json: the deployer the file was written with)")
+    p.set_defaults(deployer=None)  # desmon, or the deployer a --from-json file was written with
+    add_output(p, "-o", "--output", suffixes=(".html", ".htm"), default="explore.html", metavar="FILE.html", help="the page to write")
+    p.add_argument("--verify", action="store_true", help="step through the shortest counterexample desmon verify finds instead of the timeline")
+    p.add_argument("--invariant", default=None, metavar="NAME", help="with --verify: the shortest counterexample of this invariant")
+    p.add_argument("--max-states", type=positive_int, default=None, metavar="N", help=f"with --verify: search at most N states (default: {MAX_STATES})")
+    p.add_argument("--from-json", default=None, metavar="FILE.json", help="step through a counterexample saved by desmon verify --json")
+    p.add_argument("--counterexample", type=positive_int, default=None, metavar="N", help="with --from-json: the file's N-th counterexample (default: the first)")
+    p.add_argument("--no-progress", action="store_true", help="with --verify: no progress line")
+    p.set_defaults(handler=run, _inputs=(*p.get_default("_inputs"), Input("from_json", CEX_FILE)))
 
 
 def _standing(standing: frozenset[str], latest: dict[str, str]) -> tuple[tuple[str, str], ...]:
@@ -209,15 +229,14 @@ def _command_line(args: argparse.Namespace) -> str:
     return shlex.join(parts)
 
 
-def explore_command(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     """``desmon explore``: write the page; 0 once written, 2 on bad input."""
-    from desmon.loader import load_from_args
     from desmon.paths import replacing
     from desmon.verify.deployers import resolve_deployer
     from desmon.viz.explore import render_page
 
     _check_options(args)
-    scenario = load_from_args(args)
+    scenario = load_scenario_of(args)
     banner = ""
     if args.from_json is not None:
         frames, lines, banner = _saved(args, scenario)
@@ -252,7 +271,7 @@ def _searched(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str],
     deployer = args.deployer if args.deployer is not None else resolve_deployer("desmon")
     invariants = [args.invariant] if args.invariant else None
     checker = Checker(scenario, deployer, invariants=invariants)
-    result = checker.run(max_states=args.max_states or 2_000_000, progress=not args.no_progress)
+    result = checker.run(max_states=args.max_states or MAX_STATES, progress=not args.no_progress)
     if not result.counterexamples:
         what = f"{result.verdict} in {result.states:,} states"
         if result.incomplete:

@@ -1,8 +1,8 @@
-"""``desmon sweep`` and ``desmon sweep-plot``: their parsers and handlers.
+"""``desmon sweep``: a grid of parameters x seeds (run, verify, fuzz or evaluate) on Dask,
+one table row per run (docs/sweeps.md); ``desmon sweep-plot`` is :mod:`desmon.cli.sweep_plot`.
 
-``desmon/cli.py`` calls :func:`add_parsers`; everything else about the two commands is
-here. Importing this module imports neither Dask nor pandas: a missing ``sweep`` extra
-is reported in one line when a command runs (exit 2).
+Importing this module imports neither Dask nor pandas: a missing ``sweep`` extra is
+reported in one line when the command runs (exit 2).
 """
 
 from __future__ import annotations
@@ -11,22 +11,20 @@ import argparse
 import sys
 from typing import Any
 
-from desmon.options import add_input, add_output, non_negative_int, positive_int, positive_seconds, worker_count
+from desmon.cli.common import Subparsers
+from desmon.cli.options import add_input, add_output, non_negative_int, positive_int, positive_seconds, worker_count
+from desmon.paths import SCENARIO_FILE
+from desmon.sweep.grid import JOBS
 
-__all__ = ["add_parsers", "sweep_command", "sweep_plot_command", "TABLE_FILE"]
+__all__ = ["add_parser", "run"]
 
-TABLE_FILE = ("sweep table", "write one with: desmon sweep SCENARIO -p NAME=V1,V2 -o results.parquet")
-EXIT_OK, EXIT_FAILED_ROWS, EXIT_INTERRUPTED = 0, 1, 130
+EXIT_OK, EXIT_FAILED_ROWS = 0, 1
 DEFAULT_SEEDS = 10
 _SETTING_FLAGS = {"until": "--until", "max_states": "--max-states", "examples": "--examples", "trials": "--trials"}
 _SETTING_DEFAULTS = {"until": None, "max_states": 2_000_000, "examples": 200, "trials": 100}
 
 
-def add_parsers(sub: Any) -> None:
-    """Add ``sweep`` and ``sweep-plot`` to the CLI's subparsers."""
-    from desmon.paths import SCENARIO_FILE
-    from desmon.sweep.jobs import JOBS
-
+def add_parser(sub: Subparsers) -> None:
     p = sub.add_parser("sweep", help="run a grid of parameters x seeds (run, verify, fuzz or evaluate) on Dask; one table row per run")
     add_input(p, "scenario", SCENARIO_FILE, nargs="?", default=None,
               help="scenario file, e.g. scenarios/robot_day.py (not with --job evaluate)")
@@ -56,16 +54,7 @@ def add_parsers(sub: Any) -> None:
                    help="run a task again when the worker running it dies, up to N times")
     p.add_argument("--resume", action="store_true", help="keep the rows already in -o (and its journal); run only the others")
     p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
-    p.set_defaults(handler=sweep_command)
-
-    p = sub.add_parser("sweep-plot", help="draw a sweep table: a figure vs a parameter (mean, min-max over seeds), or a Pareto front")
-    add_input(p, "table", TABLE_FILE, help="table written by desmon sweep (.parquet or .csv)")
-    p.add_argument("-x", default=None, metavar="COLUMN", help="the parameter on the x axis, e.g. hand_memory")
-    p.add_argument("-y", required=True, metavar="COLUMN", help="the figure on the y axis, e.g. exposure_s")
-    p.add_argument("--pareto", default=None, metavar="COST",
-                   help="instead of -x: each point's mean -y against this cost column (e.g. hand_memory), with the Pareto front")
-    add_output(p, "-o", "--output", suffixes=(".png",), default="sweep.png", metavar="FILE.png", help="PNG file")
-    p.set_defaults(handler=sweep_plot_command)
+    p.set_defaults(handler=run)
 
 
 def _setting(args: argparse.Namespace) -> Any:
@@ -82,7 +71,7 @@ def _setting(args: argparse.Namespace) -> Any:
     return _SETTING_DEFAULTS[mine] if value is None else value
 
 
-def sweep_command(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from desmon.paths import PathError, check_output_file
     from desmon.sweep.grid import SweepError, parse_axes
     from desmon.sweep.runner import check_scheduler_address, probe_scheduler, require_extra
@@ -125,14 +114,3 @@ def sweep_command(args: argparse.Namespace) -> int:
     if result.failed:
         print(f"desmon sweep: {result.failed} run(s) failed: see the error column of {result.output}", file=sys.stderr)
     return EXIT_FAILED_ROWS if result.failed else EXIT_OK
-
-
-def sweep_plot_command(args: argparse.Namespace) -> int:
-    from desmon.sweep.plot import plot_sweep
-    from desmon.sweep.runner import require_extra
-
-    modules = ("pandas", "pyarrow") if args.table.lower().endswith(".parquet") else ("pandas",)
-    require_extra("sweep-plot", modules)
-    plot_sweep(args.table, args.output, x=args.x, y=args.y, pareto=args.pareto)
-    print(f"wrote {args.output}")
-    return EXIT_OK

@@ -1,5 +1,6 @@
-"""``desmon verify SCENARIO --replay cex.json [--counterexample N]``: the CLI handler that
-re-runs a counterexample saved by ``desmon verify --json`` (it returns the exit code).
+"""``desmon verify SCENARIO --replay cex.json [--counterexample N]``: the handler that
+re-runs a counterexample saved by ``desmon verify --json`` (it returns the exit code;
+:mod:`desmon.cli.verify` parses the options and dispatches here).
 
 The file is read back field by field (:func:`desmon.verify.report.read_counterexample`),
 refused when it was written for another scenario, deployer or ``-p`` parameters, and its
@@ -14,23 +15,23 @@ from __future__ import annotations
 import argparse
 import json
 
+from desmon.cli.common import load_scenario_of
 from desmon.errors import CheckerError, DesmonError
 
-__all__ = ["replay_command"]
+__all__ = ["replay_counterexample"]
 
 
-def replay_command(args: argparse.Namespace) -> int:
+def replay_counterexample(args: argparse.Namespace) -> int:
     """``verify --replay FILE``: one saved counterexample stepped through the real core on
     the repository, each step printed as the text report prints it, then the invariants
     on the final state. Exit 1 if it still violates its invariant or diverges from the
     recorded states, 0 if it replays as recorded without the violation, 2 bad input."""
     from desmon.deployment.invariants import get_invariants
-    from desmon.loader import load_from_args
     from desmon.verify.replay import RepositoryRun
     from desmon.verify.report import format_divergence, format_replay_head, format_replay_verdict, format_trace, key_to_json
 
     saved = _saved_counterexample(args)
-    scenario = load_from_args(args)
+    scenario = load_scenario_of(args)
     if scenario.name != saved.scenario:
         raise CheckerError(
             f"{saved.source} holds a counterexample of scenario {saved.scenario!r}, but {args.scenario} is scenario "

@@ -1,0 +1,167 @@
+"""What the commands share: exit codes, the parser class, the scenario and ``--deployer``
+options, loading the scenario a command line names, ``--at`` times and drawing a trace.
+
+Importing this module imports no engine (nor networkx or numpy): ``desmon --help`` builds
+every command's parser from these, and each engine is imported when its command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import sys
+from typing import TYPE_CHECKING, Any, NoReturn, TypeAlias
+
+from desmon.cli.options import HelpFormatter, add_input, add_resolved, positive_int, positive_seconds
+from desmon.paths import SCENARIO_FILE
+
+if TYPE_CHECKING:
+    from desmon.model.scenario import Scenario
+
+__all__ = [
+    "EXIT_OK", "EXIT_VIOLATED", "EXIT_USAGE", "EXIT_INCOMPLETE", "MAX_STATES", "CEX_FILE", "MUTANT_PREFIX", "MUTANT_NAMES", "Parser", "Subparsers",
+    "one_line", "usage_error", "scenario_arg", "deployer_arg", "load_scenario_of", "load_scripted", "resolve_times",
+    "draw_trace",
+]
+
+EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
+MAX_STATES = 2_000_000  # verify --max-states when not given
+CEX_FILE = ("counterexample file", "write one with: desmon verify SCENARIO --json cex.json")
+
+Subparsers: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
+
+
+def one_line(text: object) -> str:
+    """``text`` on one line (a message may quote a user's value holding a newline)."""
+    return " ".join(str(text).split())
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line: ``desmon: error: COMMAND: ...; see: desmon COMMAND --help``,
+    ``--help`` shows every option's default (:class:`~desmon.cli.options.HelpFormatter`), and an
+    option must be written in full (no abbreviations: a typo is refused, not guessed)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        kwargs.setdefault("allow_abbrev", False)  # --time is not silently --timeout
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, usage_error(self.prog, message))
+
+
+def usage_error(prog: str, message: str) -> str:
+    """The one line for a usage error of ``prog`` ("desmon" or "desmon COMMAND")."""
+    command = prog.removeprefix("desmon").strip()
+    where = f"{command}: " if command else ""
+    message = re.sub(r"^argument (\S+): must ", r"\1 must ", one_line(message))  # "--seed must be ..., got -1"
+    return f"desmon: error: {where}{message}; see: {prog} --help\n"
+
+
+def scenario_arg(p: argparse.ArgumentParser, help: str = "scenario file, e.g. scenarios/coffee_handover.py") -> None:
+    add_input(p, "scenario", SCENARIO_FILE, help=help)
+    p.add_argument(
+        "-p", "--param", action="append", default=None, metavar="NAME=VALUE",
+        help="set a parameter the scenario declares with parameters(...), e.g. -p hand_memory=384 (repeatable)",
+    )
+
+
+def _resolve_deployer(spec: str) -> object:
+    from desmon.verify.deployers import resolve_deployer
+
+    return resolve_deployer(spec)
+
+
+#: ``--deployer mutant:NAME``: the prefix and the names of :data:`desmon.verify.mutants.MUTANTS`,
+#: written here because the mutants' module loads the deployment core (networkx, numpy),
+#: which building the parser must not (``desmon verify --help`` stays light);
+#: tests/test_cli_imports.py checks that they agree.
+MUTANT_PREFIX = "mutant"
+MUTANT_NAMES = ("no-recheck", "capacity-blind", "make-before-break", "stale-errors", "raise-instead", "no-hysteresis")
+
+
+def deployer_arg(p: argparse.ArgumentParser, *, deadline: bool = True, default_note: str = "") -> None:
+    """``--deployer`` and the limits of one reaction of the deployer's code; ``default_note``
+    is appended to the ``--deployer`` help."""
+    add_resolved(
+        p, "--deployer", resolve=_resolve_deployer, default="desmon", metavar="SPEC",
+        help="desmon (corrected, upgrades to a preferred detector break-before-make), "
+        "desmon-keep-fallback (keeps a running fallback), paper (Algorithms 1 and 2 as published), "
+        f"{MUTANT_PREFIX}:NAME (a seeded bug: {', '.join(MUTANT_NAMES)}), "
+        f"or your own: path/to/file.py:NAME or module:NAME (docs/deployers.md){default_note}",
+    )
+    p.add_argument(
+        "--max-commands", type=positive_int, default=None, metavar="N",
+        help="the most commands one reaction of the deployer may issue; more is a reaction that never ends, "
+        "reported as the deployer's failure (default: 10000)",
+    )
+    if deadline:  # (verify has --timeout: its budget stops a reaction that runs too long)
+        p.add_argument(
+            "--max-reaction-seconds", type=positive_seconds, default=None, metavar="S",
+            help="the longest the deployer's code may run without yielding a command or returning; longer is a "
+            "reaction that never ends, reported as the deployer's failure (default: 60)",
+        )
+
+
+def load_scenario_of(args: argparse.Namespace) -> Scenario:
+    """The scenario a command line names: ``args.scenario`` with the ``-p NAME=VALUE``
+    parameters of ``args.param`` (every command that takes a scenario)."""
+    from desmon.loader import load_scenario
+    from desmon.model.params import parse_assignments
+
+    return load_scenario(args.scenario, parse_assignments(getattr(args, "param", None)))
+
+
+def load_scripted(args: argparse.Namespace) -> Scenario:
+    """A scenario for the timeline-based commands (replay, explain, show): it needs a scripted timeline."""
+    from desmon.errors import ScenarioError
+
+    path = args.scenario
+    scenario = load_scenario_of(args)
+    if not scenario.timeline:
+        raise ScenarioError(
+            f"{path}: scenario {scenario.name!r} has no scripted timeline, so there is no moment to replay; "
+            f"simulate it with: desmon run {path} --trace run.jsonl (and desmon plot run.jsonl)"
+        )
+    return scenario
+
+
+def resolve_times(scenario: Scenario, spec: str | None) -> list[tuple[str, float]]:
+    """``--at``: (title, seconds) of each comma-separated time or timeline label (None: the timeline's end)."""
+    from desmon.errors import ScenarioError
+
+    if spec is None:
+        end = scenario.timeline[-1].time if scenario.timeline else 0.0
+        return [(f"t={end:g}s", end)]
+    labels = {te.label: te.time for te in scenario.timeline if te.label}
+    out = []
+    for part in spec.split(","):
+        part = part.strip()
+        if part in labels:
+            out.append((f"{part} (t={labels[part]:g}s)", labels[part]))
+            continue
+        try:
+            t = float(part)
+        except ValueError:
+            raise ScenarioError(
+                f"--at {part!r} is neither a time in seconds nor a timeline label ({', '.join(labels) or 'none'})"
+            ) from None
+        if not math.isfinite(t):
+            raise ScenarioError(f"--at {part}: give a finite time in seconds or a timeline label ({', '.join(labels) or 'none'})")
+        first = scenario.timeline[0].time
+        if t < first:
+            raise ScenarioError(f"--at {part}: the timeline starts at t={first:g}s; give a time at or after it")
+        out.append((f"t={t:g}s", t))
+    return out
+
+
+def draw_trace(trace: str, out: str, start: float | None, end: float | None, flags: tuple[str, str] = ("--from", "--to")) -> None:
+    """The timeline of a run's trace file drawn to the PNG ``out`` (``desmon plot``, ``desmon run --plot``)."""
+    from desmon.viz.timeline import build_timeline, plot_timeline, read_trace
+
+    records = read_trace(trace)
+    plot_timeline(build_timeline(records, start, end, flags=flags), out)
+    print(f"wrote {out}", file=sys.stderr)
+    if not records[0].get("platforms"):  # drawn, but say why the picture has no platform lanes
+        print(f"desmon: note: {trace} declares no platforms in its run record: only the context lane is drawn", file=sys.stderr)

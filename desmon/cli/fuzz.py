@@ -1,0 +1,35 @@
+"""``desmon fuzz``: hypothesis-generated failure sequences through the deployment core, shrunk on failure.
+
+Ctrl-C ends it with its partial result, exit 130, without a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from desmon.cli.common import Subparsers, deployer_arg, load_scenario_of, scenario_arg
+from desmon.cli.options import non_negative_int, positive_int
+from desmon.errors import CheckerError
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: Subparsers) -> None:
+    p = sub.add_parser("fuzz", help="hypothesis-generated failure sequences, shrunk on failure")
+    scenario_arg(p)
+    deployer_arg(p)
+    p.add_argument("--examples", type=positive_int, default=200, help="failure sequences to generate")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="hypothesis seed (the same seed draws the same sequences)")
+    p.add_argument("--no-progress", action="store_true")
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from desmon.verify.fuzz import fuzz
+
+    if args.examples <= 0:
+        raise CheckerError(f"--examples must be positive, got {args.examples}")
+    scenario = load_scenario_of(args)
+    outcome = fuzz(scenario, args.deployer, examples=args.examples, seed=args.seed, progress=not args.no_progress)
+    print(outcome.text, end="")
+    return outcome.exit_code

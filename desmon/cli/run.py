@@ -1,0 +1,368 @@
+"""``desmon run``: simulate a scenario in the SimPy world (one robot, or a fleet of robots
+sharing edge servers) and print a readable summary, or ``--json``; ``--plot`` draws the run's timeline.
+
+Exit codes: 0 every audit passed, 1 an invariant was violated, 2 bad input (raised as a
+one-line :class:`~desmon.errors.DesmonError`, printed by the CLI).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import sys
+import tempfile
+import time
+from typing import IO, TYPE_CHECKING, Any, Callable, Iterator
+
+from desmon.cli.common import EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, draw_trace, load_scenario_of, scenario_arg
+from desmon.cli.options import add_output, add_window, non_negative_int, positive_seconds
+from desmon.errors import ScenarioError
+from desmon.paths import replacing
+from desmon.progress import StatusLine
+
+if TYPE_CHECKING:
+    from desmon.model.scenario import Scenario
+    from desmon.sim.engine import RunResult
+    from desmon.sim.fleet import FleetResult
+
+__all__ = ["add_parser", "run", "run_command", "format_summary", "summary_json", "format_fleet_summary", "fleet_json"]
+
+MAX_TIMELINE = 40
+#: wall seconds after which a run shows its progress line (a short run shows none)
+PROGRESS_AFTER = 1.0
+#: how the progress line of a run starts (a fleet run's line too)
+PROGRESS_PREFIX = "desmon run: "
+RUN_WINDOW = ("--plot-from", "--plot-to")
+
+
+def add_parser(sub: Subparsers) -> None:
+    p = sub.add_parser("run", help="simulate a scenario in the SimPy world")
+    scenario_arg(p)
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed of the world (faults, slips, start failures)")
+    p.add_argument("--until", type=positive_seconds, default=None, help="simulated seconds (default: the scenario's horizon)")
+    deployer_arg(p)
+    add_output(p, "--trace", suffixes=(".jsonl",), default=None, metavar="FILE.jsonl", help="write the JSON Lines trace to this file")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.add_argument("--no-progress", action="store_true")
+    add_output(
+        p, "--plot", suffixes=(".png",), default=None, metavar="FILE.png",
+        help="draw the timeline of the run to this PNG (needs desmon[plot])",
+    )
+    add_window(p, ("--plot-from", "plot_from"), ("--plot-to", "plot_to"), needs=("plot", "--plot"))
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """``desmon run``; with ``--plot`` and no ``--trace`` the trace goes to a temporary file."""
+    from desmon.viz.timeline import check_window
+
+    def window_fits(horizon: float) -> None:  # before simulating, once the horizon is known
+        check_window(args.plot_from, args.plot_to, horizon, flags=RUN_WINDOW)
+
+    tmp = None
+    if args.plot and not args.trace:
+        fd, tmp = tempfile.mkstemp(suffix=".jsonl")
+        os.close(fd)
+        args.trace = tmp
+        args.trace_is_temporary = True  # deleted below: the summary does not name it
+    try:
+        code = run_command(args, before_run=window_fits if args.plot else None)
+        if args.plot and code in (EXIT_OK, EXIT_VIOLATED):
+            draw_trace(args.trace, args.plot, args.plot_from, args.plot_to, RUN_WINDOW)
+        return code
+    finally:
+        if tmp is not None and os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def run_command(
+    args: Any, out: IO[str] | None = None, err: IO[str] | None = None, before_run: Callable[[float], None] | None = None
+) -> int:
+    """Simulate ``args.scenario``; ``before_run(horizon)`` may refuse the run once the horizon is known."""
+    out = out or sys.stdout
+    err = err or sys.stderr
+    if args.until is not None and not args.until > 0:
+        raise ScenarioError(f"--until {args.until!r}: give a positive number of simulated seconds")
+    if args.seed is not None and args.seed < 0:
+        raise ScenarioError(f"--seed {args.seed!r}: give a non-negative integer")
+    scenario = load_scenario_of(args)
+    from desmon.sim.fleet import is_fleet
+
+    show = not getattr(args, "no_progress", False) and not args.json
+    if is_fleet(scenario):  # a fleet of robots sharing edge servers: desmon.sim.fleet
+        return _run_fleet(args, scenario, out, err, show)
+    from desmon.sim.world import world_of
+
+    horizon = float(world_of(scenario).horizon)  # declared, or derived from the timeline
+    if args.until is not None and args.until > horizon:
+        raise ScenarioError(
+            f"--until {args.until:g}: the scenario's task ends at its horizon of {horizon:g} s; "
+            "give --until at most that (past it the last action would go on forever)"
+        )
+    if before_run is not None:
+        before_run(float(args.until) if args.until is not None else horizon)
+    t_wall = time.perf_counter()
+    result = _simulate(args, scenario, err, show, t_wall)
+    wall = time.perf_counter() - t_wall
+    if args.json:
+        out.write(json.dumps(summary_json(result, wall), indent=2) + "\n")
+    else:
+        out.write(format_summary(result, wall))
+        if args.trace and not getattr(args, "trace_is_temporary", False):
+            out.write(f"Trace: {args.trace} ({result.trace.count} records)\n")
+    return 1 if result.violations else 0
+
+
+def _simulate(args: Any, scenario: Scenario, err: IO[str], show: bool, t_wall: float) -> RunResult:
+    """One robot's run in the SimPy world, its trace written to ``args.trace`` once complete."""
+    from desmon.sim.engine import SimWorld
+    from desmon.sim.trace import Trace
+
+    with contextlib.ExitStack() as stack:
+        line = stack.enter_context(_status_line(err))  # ended before the summary, or before an error's message
+        progress = _reporter(line, t_wall) if show else None
+        # the trace replaces an existing file only once the run is complete (nothing lost on an error)
+        fh = stack.enter_context(replacing(args.trace)) if args.trace else None
+        world = SimWorld(
+            scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=Trace(fh, keep=False), progress=progress
+        )
+        result = world.run()
+        result.metrics["audits"] = world.audits
+    return result
+
+
+def _run_fleet(args: Any, scenario: Scenario, out: IO[str], err: IO[str], show: bool) -> int:
+    """``desmon run`` on a fleet scenario (:mod:`desmon.sim.fleet`), its progress on one line:
+    check the arguments, run the fleet, write the trace, print the summary (or ``--json``);
+    exit 0 if every audit held, 1 otherwise."""
+    from desmon.sim.fleet import simulate_fleet
+
+    fleet = scenario.world
+    if getattr(args, "plot", None):
+        raise ScenarioError(f"--plot draws one robot's timeline; {scenario.name!r} is a fleet of {len(fleet.robots)}: drop --plot")
+    if args.until is not None and args.until > fleet.horizon:
+        raise ScenarioError(
+            f"--until {args.until:g}: the fleet's shift ends at its horizon of {fleet.horizon:g} s; give --until at most that"
+        )
+    with _status_line(err) as line:  # ended before the summary, or before an error's message
+        progress = _reporter(line, time.perf_counter()) if show else None
+        with contextlib.ExitStack() as stack:
+            fh = stack.enter_context(replacing(args.trace)) if args.trace else None
+            result = simulate_fleet(scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=fh, progress=progress)
+    if args.json:
+        out.write(json.dumps(fleet_json(result), indent=2) + "\n")
+    else:
+        out.write(format_fleet_summary(result))
+        if args.trace:
+            out.write(f"Trace: {args.trace}\n")
+    return 1 if result.violations else 0
+
+
+@contextlib.contextmanager
+def _status_line(err: IO[str]) -> Iterator[StatusLine]:
+    """A :class:`StatusLine` on ``err``, ended however the block ends."""
+    line = StatusLine(err)
+    try:
+        yield line
+    finally:
+        line.close()
+
+
+def _reporter(line: StatusLine, t_wall: float) -> Callable[[float, float], None]:
+    """The progress callback of a run (one robot or a fleet): drawn on ``line`` once the
+    run has taken :data:`PROGRESS_AFTER` wall seconds."""
+
+    def report_progress(now: float, end: float) -> None:
+        if time.perf_counter() - t_wall > PROGRESS_AFTER:
+            line.show(f"{PROGRESS_PREFIX}{100 * now / end:5.1f}%  t={now:.0f}/{end:.0f} s")
+
+    return report_progress
+
+
+# --------------------------------------------------------------------------- presenters
+
+
+def _fmt(v: Any) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.3f}".rstrip("0").rstrip(".") if v != int(v) else f"{v:g}"
+    if isinstance(v, dict):
+        return ", ".join(f"{k} {_fmt(x)}" for k, x in v.items()) or "-"
+    return str(v)
+
+
+def format_summary(r: RunResult, wall: float | None = None) -> str:
+    m = r.metrics
+    lines = [f"{r.scenario.name} -- SimPy world, deployer {r.deployer}, seed {r.seed}, {r.horizon:g} s simulated"]
+    if wall is not None:
+        lines[0] += f" in {wall:.2f} s wall"
+    lines += _signal_status(r)
+    lines += ["", "Deployment decisions:"]
+    shown = 0
+    rows: list[tuple[float, str]] = []
+    for d in r.decisions:
+        why = f" ({d['why']})" if d.get("why") else ""
+        rows.append((d["t"], f"  t={d['t']:>9.3f}s  {d['command']} {d['graph']} on {d['platform']}: {'ok' if d['ok'] else 'FAILED'}{why}"))
+    for e in r.errors:
+        rows.append((e.time, f"  t={e.time:>9.3f}s  ERROR {e.kind}: {e.graph}" + (f" on {e.platform}" if e.platform else "")))
+    rows.sort(key=lambda x: x[0])
+    for _t, line in rows:
+        if shown >= MAX_TIMELINE:
+            lines.append(f"  ... {len(rows) - shown} more (see --trace)")
+            break
+        lines.append(line)
+        shown += 1
+    if not rows:
+        lines.append("  (none)")
+    lines += ["", "Errors by kind:"]
+    lines += [f"  {k:<32} {n}" for k, n in m["errors"].items()] or ["  (none)"]
+    lines += ["", "Metrics:"]
+    order = [
+        ("unmonitored exposure (s)", "unmonitored_exposure_s"),
+        ("risky time (s)", "risky_time_s"),
+        ("switches", "switches"),
+        ("blind time per switch (s)", "blind_time_per_switch_s"),
+        ("blind time max (s)", "blind_time_max_s"),
+        ("starts / failed starts", None),
+        ("stops", "stops"),
+        ("migrations", "migrations"),
+        ("upgrades / failed upgrades", None),
+        ("upgrade blind time (s)", "upgrade_blind_s"),
+        ("requirement changes", "requirement_changes"),
+        ("leases", "leases"),
+        ("leased time (s)", "leased_s"),
+        ("slips injected", "slips_injected"),
+        ("slips detected", "slips_detected"),
+        ("slips missed", "slips_missed"),
+        ("false alarms", "false_alarms"),
+        ("detection latency median (s) [2]", "latency_median_s"),
+        ("detection latency p95 (s) [2]", "latency_p95_s"),
+        ("memory peak (MB) [1]", "memory_peak_mb"),
+        ("over capacity (s) [1]", "overcommit_s"),
+        ("reactions / audits", None),
+    ]
+    for label, key in order:
+        if key is None:
+            if label.startswith("starts"):
+                val = f"{m['starts']} / {m['start_failures']}"
+            elif label.startswith("upgrades"):
+                val = f"{m['upgrades']} / {m['upgrades_failed']}"
+            else:
+                val = f"{m['reactions']} / {m.get('audits', '-')}"
+        elif key not in m:
+            continue
+        else:
+            val = _fmt(m[key])
+        lines.append(f"  {label:<30} {val}")
+    lines += [
+        "  [1] background load + running detectors. The load is not a deployment: the peak can pass",
+        "      the capacity for the instant (0 s) before the deployer reacts to a load rise, and the",
+        "      no-overcommit invariant counts deployments only.",
+        "  [2] first alarm minus slip-motion onset; an alarm up to 0.3 s before onset counts (the force",
+        "      detector fires while the pull builds up, before the object moves), so it can be negative.",
+        "",
+    ]
+    if r.violations:
+        lines.append(f"INVARIANTS VIOLATED ({len(r.violations)}):")
+        for t, name, msg in r.violations[:10]:
+            lines.append(f"  t={t:.3f}s {name}: {msg}")
+        if len(r.violations) > 10:
+            lines.append(f"  ... {len(r.violations) - 10} more")
+    else:
+        lines.append("Invariants: all held at every quiescent point (after each reaction with no further stimulus pending).")
+    return "\n".join(lines) + "\n"
+
+
+def _signal_status(r: RunResult) -> list[str]:
+    """What the exposure figures mean in this run: signals off, or graphs without a signal model."""
+    m = r.metrics
+    if not m.get("signals", True):
+        why = " (the world is derived from the scripted timeline)" if r.scenario.world is None else ""
+        return [
+            f"Signals: off{why}: no detector is simulated; a running, warmed-up",
+            "  deployment counts as monitoring, and slips are injected but not detected.",
+        ]
+    missing = m.get("no_signal_model") or {}
+    if not missing:
+        return []
+    graphs = "; ".join(f"{g} (reads {', '.join(kinds)})" for g, kinds in missing.items())
+    return [
+        f"NO SIGNAL MODEL: {graphs}",
+        "  these run and use memory but can never alarm, so they never count as monitoring (their time",
+        "  is unmonitored exposure): map the kinds in World(signal_kinds=...) or set World(signals=False).",
+    ]
+
+
+def summary_json(r: RunResult, wall: float | None = None) -> dict[str, Any]:
+    return {
+        "scenario": r.scenario.name,
+        "deployer": r.deployer,
+        "seed": r.seed,
+        "horizon_s": r.horizon,
+        "wall_s": None if wall is None else round(wall, 3),
+        "decisions": r.decisions,
+        "errors": [e.to_json() for e in r.errors],
+        "violations": [{"t": t, "invariant": n, "message": m} for t, n, m in r.violations],
+        "metrics": r.metrics,
+    }
+
+
+def _fmt_spread(s: dict[str, float], unit: str = "", scale: float = 1.0, digits: int = 1) -> str:
+    f = lambda v: f"{v * scale:.{digits}f}"  # noqa: E731
+    return f"{f(s['mean'])}{unit} [{f(s['min'])}-{f(s['max'])}]"
+
+
+def format_fleet_summary(r: FleetResult) -> str:
+    """The human-readable report of ``desmon run`` on a fleet scenario."""
+    m = r.metrics
+    lines = [
+        f"{r.scenario.name} -- SimPy fleet, {m['robots']} robots, {m['edges']} edge servers, deployer {r.deployer}, "
+        f"seed {r.seed}, {r.horizon:g} s simulated in {m['wall_s']:.2f} s wall ({m['realtime_ratio']:g}x real time)",
+        "Signals: off: no detector is simulated; a running, warmed-up valid deployment counts as monitoring.",
+        "",
+        "Per robot, mean [min-max] over the robots:",
+        f"  unmonitored exposure (s)       {_fmt_spread(m['exposure_per_robot_s'])}",
+        f"  risky time (s)                 {_fmt_spread(m['risky_time_per_robot_s'])}",
+        "Edge servers, mean [min-max] over the servers:",
+        f"  memory share, time average     {_fmt_spread(m['edge_memory_share_mean'], '%', 100.0)}",
+        f"  memory share, peak             {_fmt_spread(m['edge_memory_share_peak'], '%', 100.0)}",
+        f"  seconds with a detector        {_fmt_spread(m['edge_busy_s'], '', 1.0, 0)}",
+        f"  detector starts on edges       {m['edge_starts']}",
+        "Errors by kind (all robots):",
+    ]
+    lines += [f"  {k:<30} {n}" for k, n in m["errors"].items()] or ["  (none)"]
+    lines += [
+        "Fleet totals:",
+        f"  reactions / audits             {m['reactions']} / {m['audits']}",
+        f"  starts / failed starts / stops {m['starts']} / {m['start_failures']} / {m['stops']}",
+        f"  migrations                     {m['migrations']}",
+        f"  slips injected                 {m['slips_injected']}",
+        f"  repository changes             {m['repository_changes']}",
+        f"  peak memory (RSS, MB)          {m['peak_rss_mb']:g}",
+        "",
+    ]
+    if r.violations:
+        lines.append(f"INVARIANTS VIOLATED ({len(r.violations)}):")
+        for t, robot, name, msg in r.violations[:10]:
+            lines.append(f"  t={t:.3f}s {robot} {name}: {msg}")
+        if len(r.violations) > 10:
+            lines.append(f"  ... {len(r.violations) - 10} more")
+    else:
+        lines.append("Invariants: all held at every quiescent point of every robot (edge servers audited with every robot's load).")
+    return "\n".join(lines) + "\n"
+
+
+def fleet_json(r: FleetResult) -> dict[str, Any]:
+    """The ``desmon run --json`` summary of a fleet run."""
+    return {
+        "scenario": r.scenario.name,
+        "deployer": r.deployer,
+        "seed": r.seed,
+        "horizon_s": r.horizon,
+        "metrics": r.metrics,
+        "robots": r.robots,
+        "violations": [{"t": t, "robot": robot, "invariant": n, "message": m} for t, robot, n, m in r.violations],
+    }
