@@ -130,7 +130,7 @@ def _search(args: argparse.Namespace) -> int:
     """The search, its report and its files: the one place the command uses the checker."""
     # --timeout counts the process's start-up (desmon as a program), the imports and the scenario's loading too
     started = getattr(args, "_started", None) or time.perf_counter()
-    from desmon.verify.checker import Checker
+    from desmon.verify.checker import check, release, system_of
 
     _positive("max-states", args.max_states)
     _positive("max-depth", args.max_depth)
@@ -139,8 +139,9 @@ def _search(args: argparse.Namespace) -> int:
     max_memory = getattr(args, "max_memory", None)
     check_megabytes("--max-memory", max_memory)
     scenario = load_scenario_of(args)
-    checker = Checker(scenario, args.deployer, invariants=args.invariant, symmetry=bool(getattr(args, "symmetry", False)))
-    result = checker.run(
+    system = system_of(scenario, args.deployer, invariants=args.invariant, symmetry=bool(getattr(args, "symmetry", False)))
+    result = check(
+        system,
         max_states=args.max_states,
         max_depth=args.max_depth,
         timeout=args.timeout,
@@ -154,9 +155,9 @@ def _search(args: argparse.Namespace) -> int:
     try:
         _report(args, result)
         if not result.interrupted:  # Ctrl-C: the partial result and its JSON, and nothing slower
-            _write_outputs(args, scenario, result, checker.core.deployer, checker.bounds)
+            _write_outputs(args, scenario, result, system.core.deployer, system.bounds)
     finally:
-        checker.release()  # the process exits next: free the memos now, not in a slow final collection
+        release(system, result)  # the process exits next: free the memos now, not in a slow final collection
     return result.exit_code
 
 

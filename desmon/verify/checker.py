@@ -32,7 +32,7 @@ from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 from desmon.verify.trace import Counterexample
 
-__all__ = ["Checker", "ENGINES", "Engine", "Exploration", "check"]
+__all__ = ["Checker", "ENGINES", "Engine", "Exploration", "check", "release", "system_of"]
 
 #: How :func:`check` computes transitions (see there).
 ENGINES = ("auto", "table", "direct")
@@ -191,44 +191,82 @@ def check(
     _check_run_arguments(workers, engine, timeout, max_memory)
     if engine != "direct":
         import desmon.verify.table  # noqa: F401  (it imports numpy: before the search's clock starts)
-
-    def fresh() -> CheckResult:
-        return CheckResult(
-            system.scenario.name, system.deployer_name, tuple(i.name for i in system.invariants), HOLDS,
-            symmetry=system.symmetry is not None, not_checked=system.not_checked, workers=workers,
-            timeout=timeout, max_memory=max_memory,
-        )
-
     t0 = time.perf_counter()
     timeout_spent += t0 - entered  # (the timeout's clock started earlier)
-    res = fresh()
+    res = _fresh_result(system, workers, timeout, max_memory)
     budget = Budget(
         t0, timeout=timeout, timeout_spent=timeout_spent, max_memory=max_memory, progress=progress, progress_after=progress_after, progress_every=progress_every, out=out,
     )
     search = dict(max_states=max_states, max_depth=max_depth, keep_going=keep_going, budget=budget, workers=workers)
     try:
         with ctrl_c(budget), watching(budget.spent, budget.urgent):
-            why = "" if engine == "direct" else _table_refusal(system, engine, workers)
-            if why is None:
-                try:
-                    return _finished(res, system, TABLE.explore(system, res, **search), budget)
-                except TableUnsupported as exc:
-                    if engine == "table":
-                        raise
-                    # the table engine bowed out: the direct engine, under the same budget
-                    # (the abandoned attempt's time counts in the result's)
-                    res, why = fresh(), str(exc)
-            res.engine_note = why
-            return _finished(res, system, DIRECT.explore(system, res, **search), budget)
+            return _search(system, engine, res, budget, search)
     except ReactionStopped as stop:  # in the initial reaction, before the search loop
         return finish(res, system, {}, budget.reason or str(stop), 0, budget)
     finally:
         budget.close()
 
 
+def _fresh_result(system: TransitionSystem, workers: int, timeout: float | None, max_memory: float | None) -> CheckResult:
+    """A result before any search: HOLDS, nothing counted."""
+    return CheckResult(
+        system.scenario.name, system.deployer_name, tuple(i.name for i in system.invariants), HOLDS,
+        symmetry=system.symmetry is not None, not_checked=system.not_checked, workers=workers,
+        timeout=timeout, max_memory=max_memory,
+    )
+
+
+def _search(system: TransitionSystem, engine: str, res: CheckResult, budget: Budget, search: dict[str, Any]) -> CheckResult:
+    """The table engine if it can run the search (``engine`` "auto" or "table"), else the
+    direct engine with the reason in ``engine_note``; a table attempt that bows out is
+    dropped and its time counts in the direct search's result."""
+    why = "" if engine == "direct" else _table_refusal(system, engine, search["workers"])
+    if why is None:
+        try:
+            return _finished(res, system, TABLE.explore(system, res, **search), budget)
+        except TableUnsupported as exc:
+            if engine == "table":
+                raise
+            res, why = _fresh_result(system, search["workers"], res.timeout, res.max_memory), str(exc)
+    res.engine_note = why
+    return _finished(res, system, DIRECT.explore(system, res, **search), budget)
+
+
 def _finished(res: CheckResult, system: TransitionSystem, run: Exploration, budget: Budget) -> CheckResult:
     res.explored = run.explored
     return finish(res, system, run.found, run.incomplete, run.depth, budget)
+
+
+def system_of(
+    scenario: Scenario,
+    deployer: str | Deployer = "desmon",
+    *,
+    invariants: Iterable[str] | None = None,
+    bounds: Bounds | None = None,
+    symmetry: bool = False,
+) -> TransitionSystem:
+    """The transition system :func:`check` explores for ``scenario`` (``symmetry``: under
+    the symmetry reduction, :mod:`desmon.verify.symmetry`)."""
+    reduction = None
+    if symmetry:
+        from desmon.verify.symmetry import Symmetry
+
+        reduction = Symmetry
+    return TransitionSystem(scenario, deployer, invariants=invariants, bounds=bounds, reduction=reduction)
+
+
+def release(system: TransitionSystem, result: CheckResult | None = None) -> None:
+    """Forget ``result``'s states and everything ``system``'s searches memoised (in the
+    store and in its Checks port): a process about to exit then does not spend seconds
+    in the cyclic garbage collector walking millions of memoised tuples. The system
+    stays usable (its next search starts cold)."""
+    if result is not None:
+        drop = getattr(result.explored, "release", None)
+        if drop is not None:
+            drop()
+        result.explored = ()
+    system.store.checks.clear()
+    system.forget()
 
 
 class Checker:
@@ -249,12 +287,7 @@ class Checker:
         bounds: Bounds | None = None,
         symmetry: bool = False,
     ) -> None:
-        reduction = None
-        if symmetry:
-            from desmon.verify.symmetry import Symmetry
-
-            reduction = Symmetry
-        self.system = TransitionSystem(scenario, deployer, invariants=invariants, bounds=bounds, reduction=reduction)
+        self.system = system_of(scenario, deployer, invariants=invariants, bounds=bounds, symmetry=symmetry)
         #: the distinct (canonical) states of the last run, in BFS order
         self.explored: Sequence[Key] = []
 
@@ -272,13 +305,9 @@ class Checker:
         return res
 
     def release(self) -> None:
-        """Forget the last run's states and everything the searches memoised (in the store
-        and in its Checks port): a process about to exit then does not spend seconds in
-        the cyclic garbage collector walking millions of memoised tuples. The checker
-        stays usable (its next search starts cold)."""
+        """:func:`release` of the system and the last run's states."""
         drop = getattr(self.explored, "release", None)
         if drop is not None:
             drop()
         self.explored = []
-        self.system.store.checks.clear()
-        self.system.forget()
+        release(self.system)
