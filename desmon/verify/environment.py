@@ -13,9 +13,9 @@ Adding an event kind to the checker's alphabet: the kind is a class of
 ``_<kind>_events`` function called from :func:`enabled_events`. The direct engine and
 the symmetry reduction then explore it (:meth:`Symmetry.rename_event
 <desmon.verify.symmetry.Symmetry.rename_event>` must map it if it names a platform).
-The table engine encodes the environment as numbers (:class:`desmon.verify.table._Env`
-and ``_Events``, mirroring this order); until it encodes the new kind, make
-:func:`desmon.verify.table.table_unsupported` name the new bounds so ``--engine auto``
+The table engine encodes the environment as numbers (:class:`desmon.verify.table.encoding.Env`
+and ``Events``, mirroring this order); until it encodes the new kind, make
+:func:`desmon.verify.table.search.table_unsupported` name the new bounds so ``--engine auto``
 falls back to the direct engine.
 """
 
