@@ -12,18 +12,7 @@ from typing import Protocol
 
 from desmon.errors import ModelError
 from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
-from desmon.model.events import (
-    ActionChange,
-    DeviceFail,
-    DeviceRepair,
-    Event,
-    LoadChange,
-    PlatformDown,
-    PlatformJoin,
-    PlatformLeave,
-    PlatformUp,
-    RequirementChange,
-)
+from desmon.model.events import Effects, Event, RequirementChange
 
 __all__ = ["GripperObservation", "interpret", "InsertPort", "Stimulus", "observe"]
 
@@ -107,20 +96,25 @@ def _platform_changed(platform: str) -> Stimulus:
     return stim
 
 
+class _Effects(Effects):
+    """The stimuli an event's :meth:`~desmon.model.events.Event.write` returns (interned)."""
+
+    nothing = _NOTHING
+    context_changed = _CONTEXT_CHANGED
+
+    def platform_changed(self, platform: str) -> Stimulus:
+        return _platform_changed(platform)
+
+    def specs_changed(self, hosts: tuple[str, ...], graph: str) -> Stimulus:
+        return Stimulus(changed_platforms=hosts, specs_changed=(graph,))
+
+
+_EFFECTS = _Effects()
+
+
 def observe(event: Event, store: InsertPort) -> Stimulus:
-    """Write the facts ``event`` implies and say what changed."""
-    if isinstance(event, ActionChange):
-        return _CONTEXT_CHANGED if store.set_context(event.action) else _NOTHING
-    if isinstance(event, (DeviceFail, DeviceRepair)):
-        platform = store.set_device_working(event.device, isinstance(event, DeviceRepair))
-        return _platform_changed(platform) if platform else _NOTHING
-    if isinstance(event, (PlatformDown, PlatformUp, PlatformJoin, PlatformLeave)):
-        changed = store.set_platform_up(event.platform, isinstance(event, (PlatformUp, PlatformJoin)))
-        return _platform_changed(event.platform) if changed else _NOTHING
-    if isinstance(event, RequirementChange):
-        hosts = store.change_requirements(event)
-        return _NOTHING if hosts is None else Stimulus(changed_platforms=hosts, specs_changed=(event.graph,))
-    if isinstance(event, LoadChange):
-        changed = store.set_load(event.platform, event.resource, event.amount)
-        return _platform_changed(event.platform) if changed else _NOTHING
-    raise ModelError(f"not an environment event: {event!r}")
+    """Write the facts ``event`` implies and say what changed (each kind writes its own:
+    :meth:`Event.write <desmon.model.events.Event.write>`)."""
+    if not isinstance(event, Event):
+        raise ModelError(f"not an environment event: {event!r}")
+    return event.write(store, _EFFECTS)  # type: ignore[no-any-return]

@@ -13,44 +13,16 @@ from dataclasses import dataclass, field
 from typing import Any, Iterable, Mapping
 
 from desmon.errors import ModelError
-from desmon.model.checks import check_items, check_name, check_number, check_text, strict_init, suggest
+from desmon.model.checks import check_items, check_name, check_number, check_text, strict_init
 
-from desmon.model.events import (
-    ActionChange,
-    DeviceFail,
-    DeviceRepair,
-    Event,
-    LoadChange,
-    PlatformDown,
-    PlatformJoin,
-    PlatformLeave,
-    PlatformUp,
-    RequirementChange,
-)
-from desmon.model.system import SystemModel, action_problem, constraint_problem
+from desmon.model.events import Event, event_types
+from desmon.model.system import SystemModel
 
 __all__ = ["TimedEvent", "Scenario", "EVENT_TYPES", "event_problem"]
 
-#: Every environment event type.
-EVENT_TYPES = (ActionChange, DeviceFail, DeviceRepair, PlatformDown, PlatformUp, LoadChange, RequirementChange, PlatformJoin, PlatformLeave)
-
-
-def _requirement_change_problem(ev: RequirementChange, model: SystemModel, others: Iterable[Event]) -> str | None:
-    spec = model.spec(ev.graph)
-    if spec is None:
-        known = [s.graph for s in model.specs]
-        return f"{ev} names graph {ev.graph!r} with no deployment specification{suggest(ev.graph, known)} (specifications: {', '.join(known) or 'none'})"
-    # a change may remove what the specification declares or what a change adds
-    removable = list(spec.requirements) + [r for o in others if isinstance(o, RequirementChange) and o.graph == ev.graph for r in o.add]
-    for r in ev.remove:
-        if r not in removable:
-            have = ", ".join(x.describe() for x in spec.requirements) or "none"
-            return f"{ev} removes {r.describe()}, which {ev.graph!r} never has (declared: {have}; nor does any change add it): remove a requirement it has"
-    for r in ev.add:
-        problem = constraint_problem(model, ev.graph, r)
-        if problem is not None:
-            return f"{ev} adds {r.describe()} but {problem}"
-    return None
+#: Every environment event type (the kinds registered when this module was imported;
+#: :func:`desmon.model.events.event_types` lists them as of now).
+EVENT_TYPES = event_types()
 
 
 def event_problem(ev: Event, model: SystemModel, others: Iterable[Event] = ()) -> str | None:
@@ -59,34 +31,9 @@ def event_problem(ev: Event, model: SystemModel, others: Iterable[Event] = ()) -
     One rule for every place an event is written: a scenario's ``initial`` and
     ``timeline``, the SimPy world's scripted faults and loads, and the checker's bounds.
     ``others`` are the other events written beside it (a requirement change may remove
-    what another change adds).
+    what another change adds). Each kind says it (:meth:`Event.problem`).
     """
-    if isinstance(ev, ActionChange):
-        return action_problem(model, ev.action)
-    if isinstance(ev, RequirementChange):
-        return _requirement_change_problem(ev, model, others)
-    devices = [d.name for d in model.devices]
-    platforms = [p.name for p in model.platforms]
-    if isinstance(ev, (DeviceFail, DeviceRepair)):
-        if ev.device not in devices:
-            other = f": {ev.device!r} is a platform (use PlatformDown / PlatformUp)" if ev.device in platforms else ""
-            return f"{ev} names unknown device {ev.device!r}{suggest(ev.device, devices)}{other} (devices: {', '.join(devices) or 'none'})"
-        return None
-    if ev.platform not in platforms:
-        other = f": {ev.platform!r} is a device (use DeviceFail / DeviceRepair)" if ev.platform in devices else ""
-        return f"{ev} names unknown platform {ev.platform!r}{suggest(ev.platform, platforms)}{other} (platforms: {', '.join(platforms)})"
-    if isinstance(ev, (PlatformDown, PlatformUp)) and model.platform(ev.platform).on_demand:
-        return f"{ev}: platform {ev.platform!r} is on demand: it joins and leaves (PlatformJoin / PlatformLeave) instead of going up and down"
-    if isinstance(ev, (PlatformJoin, PlatformLeave)) and not model.platform(ev.platform).on_demand:
-        return f"{ev}: platform {ev.platform!r} is not on demand, so it cannot join or leave: declare it with on_demand=True, or use PlatformUp / PlatformDown"
-    if isinstance(ev, LoadChange):
-        caps = [r for r, _ in model.platform(ev.platform).capacities]
-        if ev.resource not in caps:
-            return (
-                f"{ev}: platform {ev.platform!r} has no {ev.resource!r} capacity{suggest(ev.resource, caps)}, so the load "
-                f"would change nothing: fix the resource or declare the capacity (capacities of {ev.platform!r}: {', '.join(caps) or 'none'})"
-            )
-    return None
+    return ev.problem(model, others)
 
 
 @strict_init(ModelError)
@@ -107,7 +54,7 @@ class TimedEvent:
     label: str = ""
 
     def __post_init__(self) -> None:
-        if not isinstance(self.event, EVENT_TYPES):
+        if not isinstance(self.event, Event):
             raise ModelError(
                 f"TimedEvent at t={self.time!r}: {self.event!r} is not an environment event: "
                 "write e.g. TimedEvent(1.0, ActionChange('grasp')) or TimedEvent(5.0, DeviceFail('lwr_wrench'))"
@@ -158,7 +105,7 @@ class Scenario:
         where = f"scenario {self.name!r}"
         if not isinstance(self.model, SystemModel):
             raise ModelError(f"{where}: model must be a SystemModel (use RobotBuilder(...).build())")
-        initial = check_items(f"{where} initial", self.initial, EVENT_TYPES, example="initial=(LoadChange('arm_pc', 300),)")
+        initial = check_items(f"{where} initial", self.initial, event_types(), example="initial=(LoadChange('arm_pc', 300),)")
         timeline = check_items(
             f"{where} timeline", self.timeline, TimedEvent, example="timeline=(TimedEvent(0.0, ActionChange('grasp'), 't0'),)"
         )

@@ -56,11 +56,13 @@ from desmon.deployment.lease import lease_choice
 from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS
 from desmon.model.events import (
     ActionChange,
+    DeviceEvent,
     DeviceFail,
     DeviceRepair,
     Event,
     LoadChange,
     PlatformDown,
+    PlatformEvent,
     PlatformJoin,
     PlatformLeave,
     PlatformUp,
@@ -236,8 +238,8 @@ class SimWorld:
     def _apply_initial(self, scenario: Scenario) -> None:
         """The scenario's initial facts, silently (before Notify is wired)."""
         for ev in scenario.initial:
-            if isinstance(ev, (PlatformDown, PlatformUp, PlatformJoin, PlatformLeave)):
-                self._platform_flip(ev.platform, isinstance(ev, (PlatformUp, PlatformJoin)), 0.0)
+            if isinstance(ev, PlatformEvent):
+                self._platform_flip(ev.platform, ev.up, 0.0)
             else:
                 self._apply_physical(ev, 0.0)
             self.core.observe(ev)
@@ -250,14 +252,10 @@ class SimWorld:
     def _apply_physical(self, ev: Event, t: float) -> None:
         if isinstance(ev, LoadChange) and ev.resource == "memory":
             self.load[ev.platform] = ev.amount
-        elif isinstance(ev, DeviceFail):
-            self.dev_ok[ev.device] = False
-            if self.bank is not None and self.up[self.host[ev.device]]:  # else silent already
-                self.bank.fail(ev.device, t)
-        elif isinstance(ev, DeviceRepair):
-            self.dev_ok[ev.device] = True
-            if self.bank is not None and self.up[self.host[ev.device]]:  # else silent until it is up
-                self.bank.repair(ev.device, t)
+        elif isinstance(ev, DeviceEvent):
+            self.dev_ok[ev.device] = ev.working
+            if self.bank is not None and self.up[self.host[ev.device]]:  # else silent (until it is up)
+                (self.bank.repair if ev.working else self.bank.fail)(ev.device, t)
 
     def _used(self, p: str) -> float:
         if not self.up[p]:
@@ -356,15 +354,15 @@ class SimWorld:
         """The fault injector changes the physical world; the monitor notices later."""
         env = self.env
         now = env.now
-        if isinstance(ev, (DeviceFail, DeviceRepair)):
-            if self.dev_ok[ev.device] == isinstance(ev, DeviceRepair):
+        if isinstance(ev, DeviceEvent):
+            if self.dev_ok[ev.device] == ev.working:
                 return
             self.trace.emit(now, "fault", event=str(ev), source=source)
             self.exposure.advance(now)
             readers = [i for i in self.instances.values() if any(ev.device in devs for devs in i.streams.values())]
             self._inputs_change(readers, now, lambda: self._apply_physical(ev, now))
         else:
-            up = isinstance(ev, (PlatformUp, PlatformJoin))
+            up = ev.up
             if self.up[ev.platform] == up:
                 return
             self.trace.emit(now, "fault", event=str(ev), source=source)
@@ -466,11 +464,11 @@ class SimWorld:
         """A scripted or random run-time change: a requirement change is written by the
         context monitor at once (it is a decision of the robot's software, not a fault to
         be noticed); a platform joins or leaves like a platform that comes up or goes down."""
-        if not isinstance(ev, RequirementChange):
+        if isinstance(ev, PlatformEvent):
             self._fault(ev, source)
-            if isinstance(ev, PlatformJoin):
+            if ev.up:
                 self._leased.setdefault(ev.platform, self.env.now)
-            elif isinstance(ev, PlatformLeave) and ev.platform in self._leased:
+            elif ev.platform in self._leased:
                 self.leased_s += self.env.now - self._leased.pop(ev.platform)
             return
         now = self.env.now
@@ -688,7 +686,7 @@ class SimWorld:
         inst.fed = t1
         if inst.halted or inst.adapter is None or self.bank is None or not self.up[inst.platform]:
             return
-        alarms = inst.adapter.feed(self.bank, t0, t1, inst.streams.get("wrench", ()), inst.streams.get("tactile", ()))
+        alarms = inst.adapter.feed(self.bank, t0, t1, inst.streams)
         for a in alarms:
             self.alarms.append(a)
             self.trace.emit(a.time, "alarm", detector=inst.graph, platform=inst.platform, direction=a.direction)

@@ -10,25 +10,33 @@ built-in contexts only: the SimPy world maps a model's own actions to the built-
 are declared like (``desmon.sim.world.like_segments``).
 
 :class:`DetectorAdapter` gives the SimPy world one interface over the streaming
-detectors of :mod:`desmon.detectors` (force, tactile, combined).
+detectors of :mod:`desmon.detectors` (force, tactile, combined): which detector a graph
+runs, its warm-up and the samples it consumes follow from the stream classes of
+:mod:`desmon.sim.streams` (:func:`~desmon.sim.streams.detector_plan`).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
 from desmon.detectors.base import Alarm
 from desmon.detectors.signals import N_PADS, MissionSignals, Segment, SlipEvent
 from desmon.model.platform import Device
+from desmon.sim.streams import detector_plan, fusions, signal_streams
 from desmon.sim.world import Slip
 
 __all__ = ["SensorBank", "DetectorAdapter", "WARMUP"]
 
-#: Seconds of warm-up after activation: force re-tare 0.5 s, tactile 3 frames.
-WARMUP = {"wrench": 0.5, "tactile": 3.0 / 30.0, "both": 0.5}
+#: Seconds of warm-up after activation by detector kind (force re-tare 0.5 s, tactile 3
+#: frames, combined the longer), derived from the stream classes as of import.
+WARMUP = {
+    plan.kind: plan.warmup
+    for plan in (detector_plan(frozenset(s)) for s in [*((st.name,) for st in signal_streams()), *(f.streams for f in fusions())])
+    if plan is not None
+}
 
 
 class SensorBank:
@@ -47,7 +55,8 @@ class SensorBank:
         self.pad = {name: i % N_PADS for i, name in enumerate(pads)}
         #: device name -> list of [fail_start, fail_end) intervals
         self.down: dict[str, list[list[float]]] = {d.name: [] for d, _ in devices}
-        self.samples = {"wrench": 0, "tactile": 0}
+        #: samples rendered per stream
+        self.samples = {s.name: 0 for s in signal_streams()}
 
     def fail(self, device: str, t: float) -> None:
         iv = self.down.get(device)
@@ -127,33 +136,20 @@ class SensorBank:
 
 
 class DetectorAdapter:
-    """One streaming detector of :mod:`desmon.detectors` behind a uniform ``feed``."""
+    """One streaming detector of :mod:`desmon.detectors` behind a uniform ``feed``; which
+    one follows from the streams it reads (:func:`desmon.sim.streams.detector_plan`)."""
 
     def __init__(self, streams: frozenset[str], name: str) -> None:
         self.streams = streams
         self.name = name
-        if streams == frozenset({"wrench"}):
-            from desmon.detectors.force import ForceDetector
-
-            self.kind = "wrench"
-            self.det = ForceDetector(name=name)
-        elif streams == frozenset({"tactile"}):
-            from desmon.detectors.tactile import TactileDetector
-
-            self.kind = "tactile"
-            self.det = TactileDetector(name=name)
-        elif streams == frozenset({"wrench", "tactile"}):
-            from desmon.detectors.combined import CombinedDetector
-
-            self.kind = "both"
-            self.det = CombinedDetector(name=name)
-        else:
-            self.kind = "none"
-            self.det = None
+        plan = detector_plan(streams)
+        self.kind = plan.kind if plan is not None else "none"
+        self.det = plan.factory(name) if plan is not None else None
+        self._plan = plan
 
     @property
     def warmup(self) -> float:
-        return WARMUP.get(self.kind, 0.0)
+        return self._plan.warmup if self._plan is not None else 0.0
 
     def activate(self, t: float) -> None:
         if self.det is not None:
@@ -163,17 +159,12 @@ class DetectorAdapter:
         if self.det is not None:
             self.det.deactivate()
 
-    def feed(self, bank: SensorBank, t0: float, t1: float, wrench_devs: Sequence[str], tactile_devs: Sequence[str]) -> tuple[Alarm, ...]:
-        """Consume every sample in ``[t0, t1)`` of the given devices; return the alarms."""
+    def feed(self, bank: SensorBank, t0: float, t1: float, devices: Mapping[str, Sequence[str]]) -> tuple[Alarm, ...]:
+        """Consume every sample in ``[t0, t1)`` of ``devices`` (stream -> devices read); return the alarms."""
         det = self.det
-        if det is None or t1 <= t0:
+        if det is None or t1 <= t0 or self._plan is None:
             return ()
-        if self.kind == "wrench":
-            wt, wv = bank.wrench(t0, t1, wrench_devs)
-            return det.process(wt, wv, until=t1)
-        if self.kind == "tactile":
-            tt, tm = bank.tactile(t0, t1, tactile_devs)
-            return det.process(tt, tm, until=t1)
-        wt, wv = bank.wrench(t0, t1, wrench_devs)
-        tt, tm = bank.tactile(t0, t1, tactile_devs)
-        return det.process(wt, wv, tt, tm, until=t1)
+        args: list[Any] = []
+        for stream in self._plan.streams:
+            args.extend(stream.samples(bank, t0, t1, devices.get(stream.name, ())))
+        return det.process(*args, until=t1)  # type: ignore[no-any-return]

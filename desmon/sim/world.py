@@ -32,21 +32,11 @@ from desmon.model.checks import (
     strict_init,
     suggest,
 )
-from desmon.model.events import (
-    ActionChange,
-    DeviceFail,
-    DeviceRepair,
-    Event,
-    LoadChange,
-    PlatformDown,
-    PlatformJoin,
-    PlatformLeave,
-    PlatformUp,
-    RequirementChange,
-)
+from desmon.model.events import Event, LoadChange, PlatformEvent, RequirementChange, event_types
 from desmon.model.graph import PerceptionGraph
 from desmon.model.scenario import Scenario, TimedEvent, event_problem
 from desmon.model.system import SystemModel, check_action
+from desmon.sim.streams import default_signal_kinds, stream_names
 
 __all__ = [
     "Step",
@@ -68,12 +58,18 @@ __all__ = [
     "draw_slips",
 ]
 
-#: The signal streams desmon models (numpy signal models in :mod:`desmon.detectors.signals`).
-SIGNAL_STREAMS = ("wrench", "tactile")
-#: The default device kind -> signal stream mapping of ``World.signal_kinds``. A kind that
-#: is not mapped has no signal model: with signals on, a graph reading it runs but can
-#: never alarm, so it never counts as monitoring (the run report lists it).
-SIGNAL_KINDS: tuple[tuple[str, str], ...] = (("force_sensor", "wrench"), ("tactile_pad", "tactile"), ("tactile_array", "tactile"))
+#: The signal streams desmon models (the stream classes of :mod:`desmon.sim.streams`, as of import).
+SIGNAL_STREAMS = stream_names()
+#: The default device kind -> signal stream mapping of ``World.signal_kinds`` (each
+#: stream's ``device_kinds``). A kind that is not mapped has no signal model: with
+#: signals on, a graph reading it runs but can never alarm, so it never counts as
+#: monitoring (the run report lists it).
+SIGNAL_KINDS: tuple[tuple[str, str], ...] = default_signal_kinds()
+
+
+def _of_role(role: str) -> str:
+    """The event classes of ``role`` (:attr:`desmon.model.events.Event.role`), for a message."""
+    return ", ".join(cls.__name__ for cls in event_types() if cls.role == role)
 
 
 def _seconds(what: str, v: object, *, zero: bool = True) -> float:
@@ -302,11 +298,12 @@ class World:
         self._check_scripted()
         self._check_stochastic()
         kinds = check_pairs("world: signal_kinds", self.signal_kinds, error=err, example="{'force_sensor': 'wrench'}")
+        streams = stream_names()
         for kind, stream in kinds:
-            if stream not in SIGNAL_STREAMS:
+            if stream not in streams:
                 raise ScenarioError(
-                    f"world: signal_kinds maps {kind!r} to {stream!r}{suggest(stream, SIGNAL_STREAMS)}, which is no signal "
-                    f"stream: use one of {', '.join(SIGNAL_STREAMS)}"
+                    f"world: signal_kinds maps {kind!r} to {stream!r}{suggest(stream, streams)}, which is no signal "
+                    f"stream: use one of {', '.join(streams)}"
                 )
         object.__setattr__(self, "signal_kinds", kinds)
         if not self.repeat:
@@ -351,26 +348,26 @@ class World:
         example = "faults=(TimedEvent(20.0, DeviceFail('lwr_wrench')),)"
         faults = check_items("world: faults", self.faults, TimedEvent, error=err, example=example)
         for te in faults:
-            if not isinstance(te.event, (DeviceFail, DeviceRepair, PlatformDown, PlatformUp)):
+            if te.event.role != "fault":
                 raise ScenarioError(
-                    f"world: fault {te.event} is not a device or platform event: faults are DeviceFail, DeviceRepair, "
-                    "PlatformDown, PlatformUp (loads go in loads=, actions in task=)"
+                    f"world: fault {te.event} is not a device or platform event: faults are {_of_role('fault')} "
+                    "(loads go in loads=, actions in task=)"
                 )
         self._timed("faults", faults)
         object.__setattr__(self, "faults", faults)
         loads = check_items("world: loads", self.loads, TimedEvent, error=err, example="loads=(TimedEvent(10.0, LoadChange('arm_pc', 450)),)")
         for te in loads:
-            if not isinstance(te.event, LoadChange):
+            if te.event.role != "load":
                 raise ScenarioError(f"world: load event {te.event} is not a LoadChange: put it in faults= or the task")
         self._timed("loads", loads)
         object.__setattr__(self, "loads", loads)
         example = "changes=(TimedEvent(60.0, PlatformJoin('edge')),)"
         changes = check_items("world: changes", self.changes, TimedEvent, error=err, example=example)
         for te in changes:
-            if not isinstance(te.event, (RequirementChange, PlatformJoin, PlatformLeave)):
+            if te.event.role != "change":
                 raise ScenarioError(
-                    f"world: change {te.event} is not a run-time change: changes are RequirementChange, PlatformJoin, "
-                    "PlatformLeave (faults go in faults=, loads in loads=)"
+                    f"world: change {te.event} is not a run-time change: changes are {_of_role('change')} "
+                    "(faults go in faults=, loads in loads=)"
                 )
         self._timed("changes", changes)
         object.__setattr__(self, "changes", changes)
@@ -398,7 +395,7 @@ class World:
             return
         for te in changes:
             ev = te.event
-            if isinstance(ev, (PlatformJoin, PlatformLeave)) and (not self.lease.platforms or ev.platform in self.lease.platforms):
+            if isinstance(ev, PlatformEvent) and (not self.lease.platforms or ev.platform in self.lease.platforms):
                 leased = f"lease=Lease(platforms={self.lease.platforms!r})" if self.lease.platforms else "lease=Lease() (every on-demand platform)"
                 raise ScenarioError(
                     f"world: platform {ev.platform!r} has two masters of its presence: {leased} and the scripted "
@@ -632,7 +629,7 @@ def draw_slips(world: World, segments: Sequence[Segment], seed: int) -> tuple[Sl
 def world_from_timeline(scenario: Scenario) -> World:
     """A world that plays a scenario's scripted ``timeline``: action changes become task
     steps, device / platform events become scripted faults, load changes scripted loads."""
-    actions = [(te.time, te.event.action) for te in scenario.timeline if isinstance(te.event, ActionChange)]
+    actions = [(te.time, te.event.action) for te in scenario.timeline if te.event.role == "action"]
     last = scenario.timeline[-1].time if scenario.timeline else 0.0
     horizon = last + 5.0
     if not actions or actions[0][0] > 0:
@@ -642,8 +639,8 @@ def world_from_timeline(scenario: Scenario) -> World:
         end = actions[i + 1][0] if i + 1 < len(actions) else horizon
         if end > t:
             steps.append(Step(a, end - t))
-    faults = tuple(te for te in scenario.timeline if isinstance(te.event, (DeviceFail, DeviceRepair, PlatformDown, PlatformUp)))
-    loads = tuple(te for te in scenario.timeline if isinstance(te.event, LoadChange))
+    faults = tuple(te for te in scenario.timeline if te.event.role == "fault")
+    loads = tuple(te for te in scenario.timeline if te.event.role == "load")
     return World(task=tuple(steps), horizon=horizon, faults=faults, loads=loads, signals=False)
 
 

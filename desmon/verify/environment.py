@@ -6,15 +6,16 @@ reaction follows. :data:`EVENT_KINDS` names the kinds (the report counts per kin
 :func:`enabled_events` lists a state's events in the order every engine explores them
 (the order fixes which shortest counterexample a search reports).
 
-Adding an event kind (say a requirement change, or a platform joining) is local:
-a ``Bounds`` field that bounds it (:mod:`desmon.verify.bounds`, validated there), a
-name in :data:`EVENT_KINDS` (and in :func:`desmon.model.events.event_kind`), and one
+Adding an event kind to the checker's alphabet: the kind is a class of
+:mod:`desmon.model.events` (its name, JSON and facts travel with it, see docs/design.md
+"Recipe: a new event kind"); here it takes a ``Bounds`` field that bounds it
+(:mod:`desmon.verify.bounds`, validated there), a place in :data:`ALPHABET` and one
 ``_<kind>_events`` function called from :func:`enabled_events`. The direct engine and
 the symmetry reduction then explore it (:meth:`Symmetry.rename_event
 <desmon.verify.symmetry.Symmetry.rename_event>` must map it if it names a platform).
-The table engine encodes the environment as numbers (:class:`desmon.verify.table._Env`
-and ``_Events``, mirroring this order); until it encodes the new kind, make
-:func:`desmon.verify.table.table_unsupported` name the new bounds so ``--engine auto``
+The table engine encodes the environment as numbers (:class:`desmon.verify.table.encoding.Env`
+and ``Events``, mirroring this order); until it encodes the new kind, make
+:func:`desmon.verify.table.search.table_unsupported` name the new bounds so ``--engine auto``
 falls back to the direct engine.
 """
 
@@ -32,19 +33,19 @@ from desmon.model.events import (
     PlatformJoin,
     PlatformLeave,
     PlatformUp,
+    RequirementChange,
 )
 from desmon.verify.state import Key
 
 if TYPE_CHECKING:  # pragma: no cover
     from desmon.verify.bounds import Bounds
 
-__all__ = ["EVENT_KINDS", "enabled_events"]
+__all__ = ["ALPHABET", "EVENT_KINDS", "enabled_events"]
 
-#: the kinds of environment events (:func:`desmon.model.events.event_kind`), in report order
-EVENT_KINDS = (
-    "action", "device_fail", "device_repair", "platform_down", "platform_up", "load",
-    "platform_join", "platform_leave", "requirements",
-)
+#: the event classes the checker explores, in exploration (and report) order
+ALPHABET = (ActionChange, DeviceFail, DeviceRepair, PlatformDown, PlatformUp, LoadChange, PlatformJoin, PlatformLeave, RequirementChange)
+#: their kinds (:attr:`desmon.model.events.Event.kind`), in report order
+EVENT_KINDS = tuple(cls.kind for cls in ALPHABET)
 
 
 def enabled_events(b: "Bounds", key: Key) -> list[Event]:

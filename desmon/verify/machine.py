@@ -13,11 +13,13 @@ drives the same :class:`~desmon.deployment.core.DeploymentCore` as the checker.
 
 from __future__ import annotations
 
+from typing import Callable
+
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, rule
 
 from desmon.deployment.deployer import Deployer
-from desmon.model.events import Event
+from desmon.model.events import DeviceEvent, Event, PlatformEvent
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.replay import RepositoryRun, ScriptedControl
@@ -39,8 +41,8 @@ def make_machine(scenario: Scenario, deployer: str | Deployer = "desmon", bounds
             self.run = RepositoryRun(scenario, deployer, b)
             self.trace: list[tuple[Event, tuple[int, ...]]] = []
 
-        def _do(self, data, kinds: tuple[type, ...]) -> None:  # type: ignore[no-untyped-def]
-            options = [e for e in enabler.enabled(self.run.key()) if isinstance(e, kinds)]
+        def _do(self, data, family: Callable[[Event], bool]) -> None:  # type: ignore[no-untyped-def]
+            options = [e for e in enabler.enabled(self.run.key()) if family(e)]
             if not options:
                 return
             event = data.draw(st.sampled_from(options), label="event")
@@ -50,33 +52,23 @@ def make_machine(scenario: Scenario, deployer: str | Deployer = "desmon", bounds
 
         @rule(data=st.data())
         def action(self, data) -> None:  # type: ignore[no-untyped-def]
-            from desmon.model.events import ActionChange as A
-
-            self._do(data, (A,))
+            self._do(data, lambda e: e.role == "action")
 
         @rule(data=st.data())
         def device(self, data) -> None:  # type: ignore[no-untyped-def]
-            from desmon.model.events import DeviceFail, DeviceRepair
-
-            self._do(data, (DeviceFail, DeviceRepair))
+            self._do(data, lambda e: isinstance(e, DeviceEvent))
 
         @rule(data=st.data())
         def platform(self, data) -> None:  # type: ignore[no-untyped-def]
-            from desmon.model.events import PlatformDown, PlatformUp
-
-            self._do(data, (PlatformDown, PlatformUp))
+            self._do(data, lambda e: isinstance(e, PlatformEvent) and e.role == "fault")
 
         @rule(data=st.data())
         def load(self, data) -> None:  # type: ignore[no-untyped-def]
-            from desmon.model.events import LoadChange
-
-            self._do(data, (LoadChange,))
+            self._do(data, lambda e: e.role == "load")
 
         @rule(data=st.data())
         def runtime_change(self, data) -> None:  # type: ignore[no-untyped-def]
-            from desmon.model.events import PlatformJoin, PlatformLeave, RequirementChange
-
-            self._do(data, (PlatformJoin, PlatformLeave, RequirementChange))
+            self._do(data, lambda e: e.role == "change")
 
     def _make_inv(name: str):  # type: ignore[no-untyped-def]
         from desmon.deployment.invariants import INVARIANTS

@@ -9,10 +9,7 @@ from typing import Any
 
 from desmon.errors import CheckerError, ModelError
 from desmon.model.checks import suggest
-from desmon.model.events import (
-    ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp, RequirementChange,
-    event_kind,
-)
+from desmon.model.events import Event
 from desmon.model.requirements import (
     PREFERENCE_KINDS, REQUIREMENT_KINDS, Attribute, Capacity, Constraint, Maximum, Minimum, Option, Preference, Quantity, Selection,
 )
@@ -80,45 +77,16 @@ def format_result(r: CheckResult) -> str:
 
 
 # -- JSON ------------------------------------------------------------------------------------
-#: ``kind`` of an event in the JSON -> the keys it holds besides ``kind`` (required ones first)
-_EVENT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "action": (("action",), ()),
-    "device_fail": (("device",), ()),
-    "device_repair": (("device",), ()),
-    "platform_down": (("platform",), ()),
-    "platform_up": (("platform",), ()),
-    "platform_join": (("platform",), ()),
-    "platform_leave": (("platform",), ()),
-    "load": (("platform", "amount"), ("resource",)),
-    "requirements": (("graph",), ("label", "add", "remove")),
-}
-_SIMPLE_EVENTS: dict[str, Any] = {
-    "action": ActionChange, "device_fail": DeviceFail, "device_repair": DeviceRepair, "platform_down": PlatformDown,
-    "platform_up": PlatformUp, "platform_join": PlatformJoin, "platform_leave": PlatformLeave,
-}
 #: a hard requirement's ``requirement`` name in the JSON -> its class (fields written by name)
 _REQUIREMENT_CLASSES: dict[str, Any] = dict(zip(REQUIREMENT_KINDS, (Quantity, Capacity, Minimum, Maximum, Attribute, Selection)))
 _REQUIREMENT_NAMES: dict[type, str] = {cls: kind for kind, cls in _REQUIREMENT_CLASSES.items()}
-_OLD_FORMAT = (
-    "written by an older desmon, which kept a requirement change by its description only: "
-    "re-run desmon verify --json to write it in full"
-)
 
 
 def event_to_json(e: Event | None) -> dict[str, Any] | None:
     """``e`` as JSON that :func:`event_from_json` rebuilds into an equal event (None for the initial state)."""
     if e is None:
         return None
-    kind = event_kind(e)
-    if isinstance(e, LoadChange):
-        return {"kind": kind, "platform": e.platform, "amount": e.amount, "resource": e.resource}
-    if isinstance(e, RequirementChange):
-        return {
-            "kind": kind, "graph": e.graph, "label": e.label,
-            "add": [constraint_to_json(r) for r in e.add], "remove": [constraint_to_json(r) for r in e.remove],
-        }
-    (field,) = _EVENT_KEYS[kind][0]
-    return {"kind": kind, field: getattr(e, field)}
+    return e.to_json(constraint_to_json)  # each kind writes its own keys (Event.to_json)
 
 
 def constraint_to_json(c: Constraint) -> dict[str, Any]:
@@ -141,23 +109,13 @@ def event_from_json(data: object, *, where: str = "event") -> Event:
     values pass the same checks as the event built in a scenario."""
     d = _mapping(where, data, '{"kind": "action", "action": "grasp"}')
     kind = d.get("kind")
-    if not isinstance(kind, str) or kind not in _EVENT_KEYS:
-        raise CheckerError(
-            f"{where}.kind = {kind!r} is not an event kind{suggest(kind, _EVENT_KEYS)}: use one of {', '.join(_EVENT_KEYS)}"
-        )
-    required, optional = _EVENT_KEYS[kind]
+    cls = Event.of_kind(kind)
+    if cls is None:
+        kinds = [c.kind for c in Event.kinds()]
+        raise CheckerError(f"{where}.kind = {kind!r} is not an event kind{suggest(kind, kinds)}: use one of {', '.join(kinds)}")
+    required, optional = cls.json_keys()
     _check_keys(where, d, ("kind", *required), optional)
-    args = {k: d[k] for k in (*required, *optional) if k in d}
-    if kind == "requirements":
-        for side in ("add", "remove"):
-            if side in args:
-                items = args[side]
-                if not isinstance(items, list):
-                    raise CheckerError(f"{where}.{side} = {items!r} is not a list: write [] or a list of requirements")
-                if any(isinstance(x, str) for x in items):
-                    raise CheckerError(f"{where}: the requirement change of {d['graph']!r} is {_OLD_FORMAT}")
-                args[side] = tuple(constraint_from_json(x, where=f"{where}.{side}[{i}]") for i, x in enumerate(items))
-    cls = RequirementChange if kind == "requirements" else LoadChange if kind == "load" else _SIMPLE_EVENTS[kind]
+    args = cls.json_args({k: d[k] for k in (*required, *optional) if k in d}, constraint_from_json, where)
     return _build(where, cls, args)  # type: ignore[return-value]
 
 
@@ -484,9 +442,7 @@ FAILS fail. The test asserts the invariant is violated where the checker said.
 
 from desmon.deployment.invariants import TRANSITION_INVARIANTS, SystemView, check_invariants, get_invariants
 from desmon.loader import load_scenario
-from desmon.model.events import (
-    ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp, RequirementChange,
-)
+{event_imports}
 from desmon.model.requirements import Attribute, Capacity, Maximum, Minimum, Option, Preference, Quantity, Selection
 from desmon.verify import RepositoryRun
 from desmon.verify.deployers import resolve_deployer
@@ -545,7 +501,8 @@ def counterexample_pytest(
     from desmon.verify.deployers import portable_spec
 
     src = _PYTEST.format(
-        scenario_path=scenario_path, params=dict(params or {}), deployer=portable_spec(r.deployer), initial_action=initial_action
+        scenario_path=scenario_path, params=dict(params or {}), deployer=portable_spec(r.deployer), initial_action=initial_action,
+        event_imports=_event_imports(),
     )
     for c in r.counterexamples:
         steps = []
@@ -559,6 +516,14 @@ def counterexample_pytest(
         else:
             src += _CASE.format(name=c.invariant.replace("-", "_"), invariant=c.invariant, length=c.length, during=during, steps="\n".join(steps))
     return src
+
+
+def _event_imports() -> str:
+    """The import lines of every event class (the registry), by module, names sorted."""
+    modules: dict[str, list[str]] = {}
+    for cls in Event.kinds():
+        modules.setdefault(cls.__module__, []).append(cls.__name__)
+    return "\n".join(f"from {m} import (\n    {', '.join(sorted(names))},\n)" for m, names in modules.items())
 
 
 _CASE_DURING = '''
