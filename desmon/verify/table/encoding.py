@@ -18,7 +18,7 @@ from desmon.model.events import (
     ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp,
     RequirementChange, event_kind,
 )
-from desmon.verify.environment import EVENT_KINDS
+from desmon.verify.environment import EVENT_KINDS, variables
 from desmon.verify.state import Key
 from desmon.verify.table.tables import Interned
 
@@ -215,13 +215,29 @@ class Transitions(NamedTuple):
 
 
 class Events:
-    """The bounded environment's events as numpy operations on environment codes, in
-    the order of :func:`desmon.verify.environment.enabled_events`."""
+    """The bounded environment's events as numpy operations on environment codes: each
+    variable of :func:`desmon.verify.environment.variables`, in its order, becomes one or
+    more slots, so the enabled events come out in the order of
+    :func:`~desmon.verify.environment.enabled_events`."""
 
     def __init__(self, bounds: "Bounds", env: Env, platform_index: dict[str, int]) -> None:
-        b = bounds
-        self.env, self.bounds, self.P = env, b, len(platform_index)
+        self.env, self.bounds, self.P = env, bounds, len(platform_index)
+        self.platform_index = platform_index
         self.events: Interned = Interned()
+        self.slots: list[tuple] = []
+        # one or more slots per variable of the environment, in its order (the same walk
+        # as enabled_events); a slot is one array operation giving at most one event per state
+        build = {"action": self._action, "device": self._device, "platform": self._platform, "load": self._load,
+                 "join": self._join, "requirements": self._requirements}
+        for v in variables(bounds):
+            slots = build.get(v.kind)
+            if slots is None:
+                raise TableUnsupported(f"table engine: no array operations for the environment's {v.kind} events; run with --engine direct")
+            self.slots += slots(v.subject)
+        self.kind_of = np.array([_KIND_ID[event_kind(e)] for e in self.events] or [0], dtype=np.int64)
+
+    def _action(self, _subject: None) -> list[tuple]:
+        env, b = self.env, self.bounds
         C = env.C
         moves = [b.action_moves(c) for c in env.ctxs]
         kmax = max((len(m) for m in moves), default=0)
@@ -231,24 +247,28 @@ class Events:
             for k, a in enumerate(m):
                 self.move_to[c, k] = env.ctxs.index(a)
                 self.move_ev[c, k] = self._id(ActionChange(a))
-        self.slots: list[tuple] = [("action", k) for k in range(kmax)]
-        for d in b.devices:
-            p = platform_index[env.platform_of[d]]
-            self.slots.append(("device", p, env.vdev[p].index(d), self._id(DeviceFail(d)), self._id(DeviceRepair(d))))
-        for name in b.platforms:
-            self.slots.append(("platform", platform_index[name], self._id(PlatformDown(name)), self._id(PlatformUp(name))))
-        for name, lv in b.loads.items():
-            ids = np.array([self._id(LoadChange(name, x, b.load_resource)) for x in lv], dtype=np.int64)
-            self.slots.append(("load", platform_index[name], +1, ids))
-            self.slots.append(("load", platform_index[name], -1, ids))
-        for name in b.joins:
-            self.slots.append(("join", platform_index[name], self._id(PlatformJoin(name)), self._id(PlatformLeave(name))))
-        for change in b.requirement_changes:
-            g = env.vgraphs.index(change.graph)
-            vs = env.variants[change.graph]
-            to = np.array([vs.index(change.apply(r)) for r in vs], dtype=np.int64)
-            self.slots.append(("requirements", g, to, self._id(change)))
-        self.kind_of = np.array([_KIND_ID[event_kind(e)] for e in self.events] or [0], dtype=np.int64)
+        return [("action", k) for k in range(kmax)]
+
+    def _device(self, d: str) -> list[tuple]:
+        p = self.platform_index[self.env.platform_of[d]]
+        return [("device", p, self.env.vdev[p].index(d), self._id(DeviceFail(d)), self._id(DeviceRepair(d)))]
+
+    def _platform(self, name: str) -> list[tuple]:
+        return [("platform", self.platform_index[name], self._id(PlatformDown(name)), self._id(PlatformUp(name)))]
+
+    def _load(self, name: str) -> list[tuple]:
+        b = self.bounds
+        ids = np.array([self._id(LoadChange(name, x, b.load_resource)) for x in b.loads[name]], dtype=np.int64)
+        return [("load", self.platform_index[name], +1, ids), ("load", self.platform_index[name], -1, ids)]
+
+    def _join(self, name: str) -> list[tuple]:
+        return [("join", self.platform_index[name], self._id(PlatformJoin(name)), self._id(PlatformLeave(name)))]
+
+    def _requirements(self, change: RequirementChange) -> list[tuple]:
+        env = self.env
+        vs = env.variants[change.graph]
+        to = np.array([vs.index(change.apply(r)) for r in vs], dtype=np.int64)
+        return [("requirements", env.vgraphs.index(change.graph), to, self._id(change))]
 
     def _id(self, e: Event) -> int:
         return self.events(e)
