@@ -146,9 +146,12 @@ class Requirement(Constraint):
         if word is None:
             return
         old = _KINDS.get(word)
-        if old is not None and (old.__module__, old.__qualname__) != (cls.__module__, cls.__qualname__):
-            raise ModelError(f"requirement kind {word!r} is defined twice ({old.__qualname__} and {cls.__qualname__}): give it another word")
-        _KINDS[word] = cls  # a @dataclass(slots=True) rebuilds the class: the final one stays
+        if old is not None and (old.__module__, old.__name__) != (cls.__module__, cls.__name__):
+            raise ModelError(
+                f"requirement kind {word!r} is defined twice ({old.__module__}.{old.__name__} and "
+                f"{cls.__module__}.{cls.__name__}): give one another word"
+            )
+        _KINDS[word] = cls  # @dataclass(slots=True) rebuilds the class (same name): the final one stays
 
     @classmethod
     def unregister(cls) -> None:
