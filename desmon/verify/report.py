@@ -344,7 +344,7 @@ from desmon.loader import load_scenario
 from desmon.model.events import (
     ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp, RequirementChange,
 )
-from desmon.model.requirements import Attribute, Capacity, Maximum, Minimum, Option, Preference, Quantity, Selection
+{requirement_imports}
 from desmon.verify import RepositoryRun
 from desmon.verify.deployers import resolve_deployer
 
@@ -402,6 +402,7 @@ def counterexample_pytest(
     from desmon.verify.deployers import portable_spec
 
     src = _PYTEST.format(
+        requirement_imports=_requirement_imports(),
         scenario_path=scenario_path, params=dict(params or {}), deployer=portable_spec(r.deployer), initial_action=initial_action
     )
     for c in r.counterexamples:
@@ -416,6 +417,19 @@ def counterexample_pytest(
         else:
             src += _CASE.format(name=c.invariant.replace("-", "_"), invariant=c.invariant, length=c.length, during=during, steps="\n".join(steps))
     return src
+
+
+def _requirement_imports() -> str:
+    """The import lines of the generated test for every requirement kind (the events'
+    reprs name them), read from the registry: desmon's own kinds, Option and Preference
+    from :mod:`desmon.model.requirements`, a kind defined elsewhere from its module."""
+    from desmon.model.kinds import requirement_class, requirement_kinds
+
+    by_module: dict[str, set[str]] = {"desmon.model.requirements": {"Option", "Preference"}}
+    for word in requirement_kinds():
+        cls = requirement_class(word)
+        by_module.setdefault(cls.__module__, set()).add(cls.__name__)  # type: ignore[union-attr]
+    return "\n".join(f"from {module} import {', '.join(sorted(names))}" for module, names in by_module.items())
 
 
 _CASE_DURING = '''
