@@ -134,11 +134,13 @@ def test_rows_with_equal_facts_ask_the_scalar_once(monkeypatch):
 
 
 def test_a_capacity_text_format_the_columns_do_not_know_is_taken_from_the_scalar(monkeypatch):
+    real = Capacity.holds
+
     def other_format(req, state, graph):
-        reason = validity._capacity(req, state, graph)
+        reason = real(req, state, graph)
         return None if reason is None else f"short by {req.amount}: {reason}"
 
-    monkeypatch.setitem(validity._HOLDS, Capacity, other_format)
+    monkeypatch.setattr(Capacity, "holds", other_format)
     states = tuple(state(f"p{i}", caps=(("memory", 100 + i),), deployed=(("g1", (("memory", 20),)),)) for i in range(70))
     reqs = (Capacity("memory", 150),)
     got = PlatformColumns(states).validity(reqs, "g0")

@@ -40,7 +40,7 @@ from desmon.repository.facts import ImmediateControl
 from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import Repository
 from desmon.model.platform import Device
-from desmon.model.requirements import PLATFORM_HAS, Attribute, DeploymentSpec, Quantity, Reads, Requirement, Selection
+from desmon.model.requirements import DeploymentSpec, Reads, Requirement
 from desmon.model.system import PlatformState, SystemModel
 
 if TYPE_CHECKING:
@@ -56,13 +56,9 @@ PLATFORM_DOWN = "platform down"
 
 
 def device_requirements(requirements: tuple[Requirement, ...]) -> tuple[Requirement, ...]:
-    """The requirements among ``requirements`` that only a platform's devices decide."""
-    return tuple(
-        r for r in requirements
-        if isinstance(r, Quantity)
-        or (isinstance(r, Attribute) and r.name == PLATFORM_HAS)
-        or (isinstance(r, Selection) and all(o.attribute is None for o in r.options))
-    )
+    """The requirements among ``requirements`` that only a platform's devices decide (each
+    kind says: :meth:`~desmon.model.kinds.Constraint.device_only`)."""
+    return tuple(r for r in requirements if r.device_only())
 
 
 class ControlRules:

@@ -66,7 +66,7 @@ import numpy as np
 from desmon.deployment import validity as _validity
 from desmon.deployment.ports import PlatformHandle
 from desmon.errors import ModelError, QueryError
-from desmon.model.requirements import PLATFORM_HAS, Attribute, Capacity, Maximum, Minimum, Option, Quantity, Reads, Selection
+from desmon.model.requirements import Capacity, Option
 from desmon.model.system import PlatformState
 from desmon.repository import labels as _L
 from desmon.repository.store import ADD_NODE
@@ -103,9 +103,6 @@ _EXACT_INT = 2**40
 #: or more shares is left to the scalar code (row by row) so the verdicts stay equal.
 _COMPENSATED_SUM = sys.version_info >= (3, 12)
 
-#: The hard requirement kinds the columns evaluate (exact types: a subclass declines).
-_HARD = frozenset({Quantity, Capacity, Minimum, Maximum, Attribute, Selection, Reads})
-
 #: How often each path ran: ``vector`` (answered by the columns), ``declined`` (a
 #: requirement or a number the columns do not cover: the scalar loop answered).
 #: Observability for tests and benchmarks; nothing reads it to decide.
@@ -119,15 +116,13 @@ def _inexact(x: object) -> bool:
 
 
 def supported(requirements: Iterable[object]) -> bool:
-    """True if every requirement is a hard kind the columns evaluate exactly."""
+    """True if every requirement is of a kind with columns (its class, the one defining its
+    ``holds``, defines ``column_mask``: a subclass changing the semantics declines) whose
+    numbers the columns hold exactly."""
     for req in requirements:
-        if type(req) not in _HARD:
+        if not getattr(type(req), "vectorised", False):
             return False
-        if isinstance(req, Capacity) and _inexact(req.amount):
-            return False
-        if isinstance(req, (Minimum, Maximum)) and _inexact(req.value):
-            return False
-        if isinstance(req, Quantity) and _inexact(req.count):
+        if any(_inexact(x) for x in req.column_numbers()):  # type: ignore[attr-defined]
             return False
     return True
 
@@ -357,48 +352,82 @@ class PlatformColumns:
         return self._order
 
     # -- requirement kinds, vectorised -----------------------------------------------------------
+    # Each kind's ``column_mask`` and ``column_keys`` (desmon.model.requirements) combine the
+    # primitives below: columns of counts, properties, attribute tests and row keys.
     def holds(self, req: object, graph: _validity.Placing) -> np.ndarray:
         """Boolean row mask: where ``req`` holds for placing ``graph`` (up flags not applied)."""
-        t = type(req)
-        if t is Capacity:
-            return self._capacity(req, graph)  # type: ignore[arg-type]
-        if t is Quantity:
-            return self._count(req.device_kind) >= req.count  # type: ignore[union-attr]
-        if t is Minimum or t is Maximum:
-            col = self._props.get(req.prop)  # type: ignore[union-attr]
-            if col is None:
-                return np.zeros(self.n, dtype=bool)
-            return col >= req.value if t is Minimum else col <= req.value  # type: ignore[union-attr]
-        if t is Attribute:
-            if req.name == PLATFORM_HAS:  # type: ignore[union-attr]
-                return self._count(req.value) > 0  # type: ignore[union-attr]
-            return self._attr_is(req.name, req.value)  # type: ignore[union-attr]
-        if t is Selection:
-            have = np.zeros(self.n, dtype=np.int32)
-            for opt in req.options:  # type: ignore[union-attr]
-                have += self._option(opt)
-            return have >= req.at_least  # type: ignore[union-attr]
-        if t is Reads:  # its own half: a platform hosting devices of the kind needs one working
-            return ~np.isin(self._names, req.hosts) | (self._count(req.kind) > 0)  # type: ignore[union-attr]
-        raise TypeError(f"platform columns cannot evaluate {req!r}: check supported() first")
+        if not getattr(type(req), "vectorised", False):
+            raise TypeError(f"platform columns cannot evaluate {req!r}: check supported() first")
+        return req.column_mask(self, graph)  # type: ignore[attr-defined,no-any-return]
 
-    def _count(self, kind: str, vendor: str | None = None) -> np.ndarray:
+    def count(self, kind: str, vendor: str | None = None) -> np.ndarray:
+        """Working devices of ``kind`` (of ``vendor``) per row."""
         col = self._kinds.get(kind) if vendor is None else self._vendors.get((kind, vendor))
         return col if col is not None else np.zeros(self.n, dtype=np.int32)
 
-    def _attr_is(self, name: str, value: object) -> np.ndarray:
+    _count = count
+
+    def prop(self, name: str) -> np.ndarray | None:
+        """The numeric property ``name`` per row (NaN where missing), or None if no row has it."""
+        return self._props.get(name)
+
+    def none(self) -> np.ndarray:
+        """A mask holding on no row."""
+        return np.zeros(self.n, dtype=bool)
+
+    def attr_is(self, name: str, value: object) -> np.ndarray:
+        """Where attribute ``name`` equals ``value`` as text."""
         col = self._attrs.get(name)
         codes = self._attr_text.get(name, {}).get(str(value))
         if col is None or not codes:
             return np.zeros(self.n, dtype=bool)
         return col == codes[0] if len(codes) == 1 else np.isin(col, codes)
 
-    def _option(self, opt: Option) -> np.ndarray:
+    _attr_is = attr_is
+
+    def option(self, opt: Option) -> np.ndarray:
+        """Where a Selection option is available."""
         if opt.attribute is not None:
             return self._attr_is(opt.attribute, opt.value)
         return self._count(opt.device_kind or "", opt.vendor) > 0
 
-    def _capacity(self, req: Capacity, graph: _validity.Placing) -> np.ndarray:
+    _option = option
+
+    def how_many(self, options: Iterable[Option]) -> np.ndarray:
+        """How many of ``options`` are available per row."""
+        have = np.zeros(self.n, dtype=np.int32)
+        for opt in options:
+            have += self._option(opt)
+        return have
+
+    def hosted_by(self, platforms: Iterable[str]) -> np.ndarray:
+        """Where the row's platform is one of ``platforms``."""
+        return np.isin(self._names, tuple(platforms))
+
+    def row_key(self, rows: np.ndarray) -> np.ndarray:
+        """A text key for ``rows``: every row its own class."""
+        return rows.astype(np.int64)
+
+    def one_key(self, rows: np.ndarray) -> np.ndarray:
+        """A text key for ``rows``: one class (the text is the same on every row)."""
+        return np.zeros(len(rows), dtype=np.int8)
+
+    def prop_key(self, name: str, rows: np.ndarray) -> np.ndarray:
+        """A text key showing property ``name`` (by its bits: -0.0 and 0.0 differ; NaN: missing)."""
+        col = self._props.get(name)
+        return col[rows].view(np.int64) if col is not None else np.zeros(len(rows), dtype=np.int64)
+
+    def attr_key(self, name: str, rows: np.ndarray) -> np.ndarray:
+        """A text key showing attribute ``name`` as written (codes of its repr; -1: missing)."""
+        col = self._attrs.get(name)
+        return col[rows] if col is not None else np.zeros(len(rows), dtype=np.int32)
+
+    def option_keys(self, options: Iterable[Option], rows: np.ndarray) -> np.ndarray:
+        """A text key showing which of ``options`` hold (rows x options)."""
+        return np.stack([self._option(o)[rows] for o in options], axis=1)
+
+    def capacity(self, req: Capacity, graph: _validity.Placing) -> np.ndarray:
+        """Where a Capacity holds, the free amount summed as :meth:`Capacity.holds` sums it."""
         cap = self._caps.get(req.resource)
         if cap is None:
             return np.zeros(self.n, dtype=bool)
@@ -519,19 +548,24 @@ class PlatformColumns:
         return out
 
     def _texts(self, req: Any, rows: np.ndarray, graph: _validity.Placing) -> list[str]:
-        """The reason ``req`` fails on each of ``rows`` (all failing): the scalar text, asked
-        once per class of rows with equal :meth:`_text_keys` (a Capacity's text, which
-        differs on most rows, is formatted here instead: :meth:`_capacity_texts`)."""
-        if type(req) is Capacity and not _COMPENSATED_SUM:
-            texts = self._capacity_texts(req, rows, graph)
-            if texts is not None:
-                return texts
+        """The reason ``req`` fails on each of ``rows`` (all failing): the kind's
+        ``column_texts`` if it formats them (a Capacity's text, which differs on most rows:
+        :meth:`capacity_texts`), else the scalar text, asked once per class of rows with
+        equal :meth:`_text_keys`."""
+        texts = req.column_texts(self, rows, graph)
+        if texts is not None:
+            return texts  # type: ignore[no-any-return]
         return self._shared(rows, self._text_keys(req, rows, graph), lambda i: self._reason(req, i, graph))
+
+    def capacity_texts(self, req: Capacity, rows: np.ndarray, graph: _validity.Placing) -> list[str] | None:
+        """A Capacity's reasons formatted from the columns (:meth:`_capacity_texts`), or None:
+        on Python 3.12 (compensated sums) and where the format differs from the scalar one."""
+        return None if _COMPENSATED_SUM else self._capacity_texts(req, rows, graph)
 
     def _capacity_texts(self, req: Capacity, rows: np.ndarray, graph: _validity.Placing) -> list[str] | None:
         """Capacity reasons formatted from the columns, as the scalar formats them
         ("<free>[ MB] free (capacity <c>, used by <graph> <amount>, ..., load <l>)", every
-        number with ``:g``; the free amount summed as :meth:`_capacity` sums it). Checked
+        number with ``:g``; the free amount summed as :meth:`capacity` sums it). Checked
         against the scalar text on the first row and on a row listing the most shares:
         None (ask the scalar) if either differs."""
         cap = self._caps.get(req.resource)
@@ -592,26 +626,10 @@ class PlatformColumns:
         columns (floats by their bits, so -0.0 and 0.0 differ; an int and the equal float
         print alike with ``:g``). Keys may split rows whose texts are equal, never join
         rows whose texts differ."""
-        t = type(req)
-        if t is Quantity:
-            key = self._count(req.device_kind)[rows]
-        elif t is Minimum or t is Maximum:
-            col = self._props.get(req.prop)
-            key = col[rows].view(np.int64) if col is not None else np.zeros(len(rows), dtype=np.int64)  # NaN: missing
-        elif t is Attribute and req.name != PLATFORM_HAS:
-            col = self._attrs.get(req.name)  # codes of repr(value), the text shows the repr; -1: missing
-            key = col[rows] if col is not None else np.zeros(len(rows), dtype=np.int32)
-        elif t is Selection:
-            return np.stack([self._option(o)[rows] for o in req.options], axis=1)  # which options hold
-        elif t is Capacity:
-            return self._capacity_keys(req, rows, graph)
-        elif t is Reads:  # the text names the row's platform and its devices
-            key = rows.astype(np.int64)
-        else:  # platform_has: one text
-            key = np.zeros(len(rows), dtype=np.int8)
-        return key[:, None]
+        key = req.column_keys(self, rows, graph)
+        return key[:, None] if key.ndim == 1 else key  # type: ignore[no-any-return]
 
-    def _capacity_keys(self, req: Capacity, rows: np.ndarray, graph: _validity.Placing) -> np.ndarray:
+    def capacity_keys(self, req: Capacity, rows: np.ndarray, graph: _validity.Placing) -> np.ndarray:
         """Capacity text keys: the capacity, the load and each share the text lists (graph
         code and amount; a share of a graph left out is blanked)."""
         cap = self._caps.get(req.resource)
@@ -639,7 +657,7 @@ class PlatformColumns:
         :data:`_REASONS_KEPT` failures the least recently asked requirements lose theirs."""
         # repr: equal requirements may read differently (2 vs 2.0); only a Capacity's text
         # depends on the graph placed (whose shares it leaves out)
-        key = (repr(req), graph if type(req) is Capacity else None)
+        key = (repr(req), graph if type(req).texts_read_graph else None)  # type: ignore[attr-defined]
         memo = self._reasons.pop(key, None)
         if memo is None:
             memo = {}

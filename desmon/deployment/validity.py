@@ -1,6 +1,8 @@
 """Requirement checking: the paper's ``checkValidity`` with reasons.
 
-The semantics of every requirement kind (docs/design.md §4) lives here and nowhere else.
+The semantics of every requirement kind (docs/design.md §4) lives in the kind's class
+(:meth:`~desmon.model.kinds.Constraint.holds`, in :mod:`desmon.model.requirements`); this
+module asks it about platforms, with reasons, memoised.
 """
 
 from __future__ import annotations
@@ -9,31 +11,14 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any, Callable, Iterable, Sequence
 
-from desmon.model.requirements import (
-    PLATFORM_HAS,
-    Attribute,
-    DeploymentSpec,
-    Capacity,
-    Constraint,
-    Maximum,
-    Minimum,
-    Option,
-    Preference,
-    Quantity,
-    Reads,
-    Requirement,
-    Selection,
-)
+from desmon.model.kinds import Placing, others_using  # Placing: the graph being placed (re-exported)
+from desmon.model.requirements import PLATFORM_HAS, Attribute, Constraint, DeploymentSpec, Preference, Reads, Requirement
 from desmon.model.system import PlatformState
 
 from desmon.deployment.ports import PlatformHandle
 
 if TYPE_CHECKING:
     from desmon.deployment.ports import ChecksPort, QueryPort
-
-#: The graph being placed, or a tuple (the graph, then graphs whose Capacity shares
-#: are to be treated as freed), or None (no graph: every deployed share counts).
-Placing = str | tuple[str, ...] | None
 
 #: Results kept by the memoised pure checks (bounded, so long simulations stay flat).
 _MEMO_SIZE = 1 << 16
@@ -96,122 +81,19 @@ class Validity:
         return "\n".join(lines)
 
 
-def _option_holds(option: Option, state: PlatformState) -> bool:
-    if option.attribute is not None:
-        return str(state.platform.attribute(option.attribute)) == str(option.value)
-    return any(d.matches(option.device_kind or "", option.vendor) for d in state.devices)
-
-
-def _fmt(x: float) -> str:
-    return f"{x:g}"
-
-
-def _quantity(req: Quantity, state: PlatformState, graph: Placing) -> str | None:
-    have = sum(1 for d in state.devices if d.kind == req.device_kind)
-    if have >= req.count:
-        return None
-    return f"{have} working {req.device_kind} device(s), needs {req.count}"
-
-
-def _others_using(resource: str, state: PlatformState, graph: Placing) -> list[tuple[str, float]]:
-    """Shares of ``resource`` held by graphs other than the one being placed (and, for a
-    tuple ``graph``, other than the graphs a placement would free)."""
-    if graph is None or type(graph) is str:
-        return state.used_by(resource, excluding=graph)  # type: ignore[arg-type]
-    return [(g, a) for g, a in state.used_by(resource) if g not in graph]
-
-
-def _capacity(req: Capacity, state: PlatformState, graph: Placing) -> str | None:
-    cap = state.platform.capacity(req.resource)
-    if cap is None:
-        return f"has no {req.resource} capacity"
-    others = _others_using(req.resource, state, graph)
-    load = state.load_of(req.resource)
-    free = cap - sum(a for _g, a in others) - load
-    if free >= req.amount:
-        return None
-    unit = " MB" if req.resource == "memory" else ""
-    parts = [f"capacity {_fmt(cap)}"]
-    parts += [f"used by {g} {_fmt(a)}" for g, a in others]
-    parts.append(f"load {_fmt(load)}")
-    return f"{_fmt(free)}{unit} free ({', '.join(parts)})"
-
-
-def _minimum(req: Minimum, state: PlatformState, graph: Placing) -> str | None:
-    value = state.platform.prop(req.prop)
-    if value is None:
-        return f"has no property {req.prop!r}"
-    return None if value >= req.value else f"{req.prop} is {_fmt(value)}"
-
-
-def _maximum(req: Maximum, state: PlatformState, graph: Placing) -> str | None:
-    value = state.platform.prop(req.prop)
-    if value is None:
-        return f"has no property {req.prop!r}"
-    return None if value <= req.value else f"{req.prop} is {_fmt(value)}"
-
-
-def _attribute(req: Attribute, state: PlatformState, graph: Placing) -> str | None:
-    if req.name == PLATFORM_HAS:
-        if any(d.kind == req.value for d in state.devices):
-            return None
-        return f"no working {req.value} attached"
-    actual = state.platform.attribute(req.name)
-    if actual is not None and str(actual) == str(req.value):
-        return None
-    return f"{req.name} is {actual!r}" if actual is not None else f"has no attribute {req.name!r}"
-
-
-def _selection(req: Selection, state: PlatformState, graph: Placing) -> str | None:
-    held = [o for o in req.options if _option_holds(o, state)]
-    if len(held) >= req.at_least:
-        return None
-    have = [o.describe() for o in held]
-    return f"{len(have)} of the options available ({', '.join(have) or 'none'}), needs {req.at_least}"
-
-
-def _reads(req: Reads, state: PlatformState, graph: Placing) -> str | None:
-    """The platform's own half of :class:`Reads`: on a platform hosting devices of the
-    kind the graph reads those, so one of them must work there (the other half,
-    elsewhere, is :func:`unreadable`)."""
-    name = state.platform.name
-    if name not in req.hosts or any(d.kind == req.kind for d in state.devices):
-        return None
-    own = ", ".join(d for d, p in req.devices if p == name)
-    return f"{own} on {name} failed"
-
-
-def _soft(req: Preference, state: PlatformState, graph: Placing) -> str | None:
-    return None  # a preference never rejects a platform: it scores it (preference_term)
-
-
-#: The semantics of each requirement kind, one function per kind.
-_HOLDS: dict[type, Any] = {
-    Quantity: _quantity,
-    Capacity: _capacity,
-    Minimum: _minimum,
-    Maximum: _maximum,
-    Attribute: _attribute,
-    Selection: _selection,
-    Reads: _reads,
-    Preference: _soft,
-}
-
-
 def requirement_holds(req: Constraint, state: PlatformState, graph: Placing) -> str | None:
     """``None`` if ``req`` holds on ``state`` for ``graph``, else the reason it fails
-    (a preference always holds)."""
-    holds = _HOLDS.get(type(req))
-    if holds is None:
+    (a preference always holds): the kind's own :meth:`~desmon.model.kinds.Constraint.holds`."""
+    if not isinstance(req, Constraint):
         raise TypeError(f"not a requirement: {req!r}")
-    return holds(req, state, graph)  # type: ignore[no-any-return]
+    return req.holds(state, graph)
 
 
 def _free_fraction(resource: str, state: PlatformState, graph: Placing) -> float:
     cap = state.platform.capacity(resource)
     if not cap:
         return 0.0
-    free = cap - sum(a for _g, a in _others_using(resource, state, graph)) - state.load_of(resource)
+    free = cap - sum(a for _g, a in others_using(resource, state, graph)) - state.load_of(resource)
     return min(1.0, max(0.0, free / cap))
 
 
@@ -273,25 +155,19 @@ def platform_failures(
 def reads_fixed_facts(req: Constraint) -> bool:
     """Does ``req`` read only a platform's fixed facts (properties, attributes), never
     its run-time ones (devices, load, deployments)? Its answer for a platform then
-    never changes."""
-    if isinstance(req, (Maximum, Minimum)):
-        return True
-    if isinstance(req, Attribute):
-        return req.name != PLATFORM_HAS
-    if isinstance(req, Selection):
-        return all(o.attribute is not None for o in req.options)
-    return False
+    never changes (the kind's own :meth:`~desmon.model.kinds.Constraint.reads_fixed_facts`)."""
+    return req.reads_fixed_facts()
 
 
 def _checks(requirements: tuple[Requirement, ...]) -> list[tuple[Any, Requirement]]:
-    """Each requirement with the function of its kind (:data:`_HOLDS`), looked up once."""
+    """Each hard requirement with the ``holds`` of its kind, looked up once (a preference
+    never rejects a platform)."""
     out = []
     for req in requirements:
-        holds = _HOLDS.get(type(req))
-        if holds is None:
+        if not isinstance(req, Constraint):
             raise TypeError(f"not a requirement: {req!r}")
-        if holds is not _soft:  # a preference never rejects a platform
-            out.append((holds, req))
+        if not req.soft:
+            out.append((type(req).holds, req))
     return out
 
 

@@ -32,19 +32,7 @@ from desmon.model.actions import Action
 from desmon.model.checks import check_name, check_names, strict_call
 from desmon.model.graph import Component, PerceptionGraph, ProcessingComponent, SensorComponent
 from desmon.model.platform import Device, Platform
-from desmon.model.requirements import (
-    Attribute,
-    Capacity,
-    DeploymentSpec,
-    Maximum,
-    Constraint,
-    Minimum,
-    Preference,
-    Quantity,
-    Selection,
-    make_preference,
-    make_requirement,
-)
+from desmon.model.requirements import Constraint, DeploymentSpec, Preference, constraint_types, make_preference, make_requirement
 from desmon.model.system import RuleTable, SystemModel
 
 __all__ = ["RobotBuilder", "PlatformBuilder", "GraphBuilder", "SpecBuilder"]
@@ -149,7 +137,7 @@ class SpecBuilder:
     @strict_call(ModelError, "require(...)")
     def require(self, requirement: Constraint) -> "SpecBuilder":
         """Add an already-built requirement (or preference) object."""
-        if not isinstance(requirement, (Quantity, Capacity, Minimum, Maximum, Attribute, Selection, Preference)):
+        if not isinstance(requirement, constraint_types()):
             raise ModelError(
                 f"deployment specification of {self.graph!r}: require({requirement!r}) is not a requirement: "
                 "pass Capacity('memory', 150) and the like, or use add_constraint('capacity', 'memory', 150)"

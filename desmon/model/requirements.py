@@ -1,16 +1,44 @@
 """DepSL requirements (the OMG deployment-specification kinds) and deployment specifications.
 
-The semantics of each kind (docs/design.md §4) is implemented once, in
-:mod:`desmon.deployment.validity`; this module is pure vocabulary and validation.
+**Each requirement kind is one class carrying its behaviour** (docs/design.md §2,
+"Recipe: a new requirement kind"): its fields and their checks, :meth:`~Requirement.holds`
+(the semantics of docs/design.md §4: ``None`` or the reason it fails on a platform),
+:meth:`~Constraint.describe`, the DSL words (:attr:`~Requirement.word`,
+:attr:`~Requirement.usage`), the model's facts problem (:meth:`~Constraint.platform_problem`,
+:meth:`~Constraint.device_problem`), its JSON (:meth:`~Constraint.to_json`,
+:meth:`~Requirement.json_args`), whether it reads only fixed facts or only devices, and
+optionally its columns for the vectorised placement (:meth:`~Constraint.column_mask`;
+``None``: no vector path). A class with a :attr:`~Requirement.word` registers itself
+when it is defined: every list of kinds (the DSL's, the JSON's, what a deployment
+specification accepts) is read from that registry.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Iterable
+from dataclasses import dataclass, field, fields
+from typing import TYPE_CHECKING, Any, Callable, Iterable
 
-from desmon.errors import ModelError
+from desmon.errors import CheckerError, ModelError
 from desmon.model.checks import check_items, check_keywords, check_name, check_number, check_value, strict_init, suggest
+from desmon.model.kinds import (
+    _KINDS,
+    PLATFORM_HAS,
+    Columns,
+    Constraint,
+    Placing,
+    Requirement,
+    _fmt,
+    attribute_problem,
+    device_kind_problem,
+    others_using,
+    property_problem,
+    requirement_class,
+    requirement_kinds,
+)
+
+if TYPE_CHECKING:
+    from desmon.model.platform import Device, Platform
+    from desmon.model.system import PlatformState
 
 __all__ = [
     "Quantity",
@@ -22,6 +50,9 @@ __all__ = [
     "Option",
     "Requirement",
     "REQUIREMENT_KINDS",
+    "requirement_kinds",
+    "requirement_class",
+    "constraint_types",
     "make_requirement",
     "DeploymentSpec",
     "PLATFORM_HAS",
@@ -30,19 +61,19 @@ __all__ = [
     "make_preference",
     "Constraint",
     "Reads",
+    "Placing",
 ]
-
-#: The Attribute name that means "the platform has a working device of this kind" (R1).
-PLATFORM_HAS = "platform_has"
-
 
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
-class Quantity:
+class Quantity(Requirement):
     """At least ``count`` working devices of ``device_kind`` on the platform (R2)."""
 
     device_kind: str
     count: int
+
+    word = "quantity"
+    usage = "write ('quantity', device_kind, count)"
 
     def __post_init__(self) -> None:
         check_name("Quantity device kind", self.device_kind)
@@ -53,14 +84,39 @@ class Quantity:
     def describe(self) -> str:
         return f"Quantity({self.device_kind} >= {self.count:g})"
 
+    def holds(self, state: "PlatformState", graph: Placing) -> str | None:
+        have = sum(1 for d in state.devices if d.kind == self.device_kind)
+        if have >= self.count:
+            return None
+        return f"{have} working {self.device_kind} device(s), needs {self.count}"
+
+    def device_only(self) -> bool:
+        return True
+
+    def device_problem(self, devices: "tuple[Device, ...]") -> str | None:
+        return device_kind_problem(self.device_kind, devices)
+
+    def column_mask(self, cols: Columns, graph: Placing) -> Any:
+        return cols.count(self.device_kind) >= self.count
+
+    def column_keys(self, cols: Columns, rows: Any, graph: Placing) -> Any:
+        return cols.count(self.device_kind)[rows]  # the text shows the count
+
+    def column_numbers(self) -> tuple[object, ...]:
+        return (self.count,)
+
 
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
-class Capacity:
+class Capacity(Requirement):
     """``amount`` of ``resource`` free on the platform; a deployed graph consumes it (R3)."""
 
     resource: str
     amount: float
+
+    word = "capacity"
+    usage = "write ('capacity', resource, amount)"
+    texts_read_graph = True  # the graph placed: its own share is left out
 
     def __post_init__(self) -> None:
         check_name("Capacity resource", self.resource)
@@ -70,14 +126,53 @@ class Capacity:
         unit = " MB" if self.resource == "memory" else ""
         return f"Capacity({self.resource} >= {self.amount:g}{unit})"
 
+    def holds(self, state: "PlatformState", graph: Placing) -> str | None:
+        cap = state.platform.capacity(self.resource)
+        if cap is None:
+            return f"has no {self.resource} capacity"
+        others = others_using(self.resource, state, graph)
+        load = state.load_of(self.resource)
+        free = cap - sum(a for _g, a in others) - load
+        if free >= self.amount:
+            return None
+        unit = " MB" if self.resource == "memory" else ""
+        parts = [f"capacity {_fmt(cap)}"]
+        parts += [f"used by {g} {_fmt(a)}" for g, a in others]
+        parts.append(f"load {_fmt(load)}")
+        return f"{_fmt(free)}{unit} free ({', '.join(parts)})"
+
+    def platform_problem(self, platforms: "tuple[Platform, ...]") -> str | None:
+        declared = sorted({r for p in platforms for r, _ in p.capacities})
+        if self.resource in declared:
+            return None
+        return (
+            f"no platform declares a {self.resource!r} capacity{suggest(self.resource, declared)}: "
+            f"add it to the platforms or fix the name (capacities: {', '.join(declared) or 'none'})"
+        )
+
+    def column_mask(self, cols: Columns, graph: Placing) -> Any:
+        return cols.capacity(self, graph)
+
+    def column_keys(self, cols: Columns, rows: Any, graph: Placing) -> Any:
+        return cols.capacity_keys(self, rows, graph)
+
+    def column_texts(self, cols: Columns, rows: Any, graph: Placing) -> list[str] | None:
+        return cols.capacity_texts(self, rows, graph)  # type: ignore[no-any-return]
+
+    def column_numbers(self) -> tuple[object, ...]:
+        return (self.amount,)
+
 
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
-class Minimum:
+class Minimum(Requirement):
     """The platform's numeric ``prop`` is at least ``value``."""
 
     prop: str
     value: float
+
+    word = "minimum"
+    usage = "write ('minimum', property, value)"
 
     def __post_init__(self) -> None:
         check_name("Minimum property", self.prop)
@@ -86,14 +181,39 @@ class Minimum:
     def describe(self) -> str:
         return f"Minimum({self.prop} >= {self.value:g})"
 
+    def holds(self, state: "PlatformState", graph: Placing) -> str | None:
+        value = state.platform.prop(self.prop)
+        if value is None:
+            return f"has no property {self.prop!r}"
+        return None if value >= self.value else f"{self.prop} is {_fmt(value)}"
+
+    def reads_fixed_facts(self) -> bool:
+        return True
+
+    def platform_problem(self, platforms: "tuple[Platform, ...]") -> str | None:
+        return property_problem(self.prop, platforms)
+
+    def column_mask(self, cols: Columns, graph: Placing) -> Any:
+        col = cols.prop(self.prop)
+        return cols.none() if col is None else col >= self.value
+
+    def column_keys(self, cols: Columns, rows: Any, graph: Placing) -> Any:
+        return cols.prop_key(self.prop, rows)  # the text shows the value
+
+    def column_numbers(self) -> tuple[object, ...]:
+        return (self.value,)
+
 
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
-class Maximum:
+class Maximum(Requirement):
     """The platform's numeric ``prop`` is at most ``value`` (e.g. link latency)."""
 
     prop: str
     value: float
+
+    word = "maximum"
+    usage = "write ('maximum', property, value)"
 
     def __post_init__(self) -> None:
         check_name("Maximum property", self.prop)
@@ -102,10 +222,32 @@ class Maximum:
     def describe(self) -> str:
         return f"Maximum({self.prop} <= {self.value:g})"
 
+    def holds(self, state: "PlatformState", graph: Placing) -> str | None:
+        value = state.platform.prop(self.prop)
+        if value is None:
+            return f"has no property {self.prop!r}"
+        return None if value <= self.value else f"{self.prop} is {_fmt(value)}"
+
+    def reads_fixed_facts(self) -> bool:
+        return True
+
+    def platform_problem(self, platforms: "tuple[Platform, ...]") -> str | None:
+        return property_problem(self.prop, platforms)
+
+    def column_mask(self, cols: Columns, graph: Placing) -> Any:
+        col = cols.prop(self.prop)
+        return cols.none() if col is None else col <= self.value
+
+    def column_keys(self, cols: Columns, rows: Any, graph: Placing) -> Any:
+        return cols.prop_key(self.prop, rows)
+
+    def column_numbers(self) -> tuple[object, ...]:
+        return (self.value,)
+
 
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
-class Attribute:
+class Attribute(Requirement):
     """The platform has attribute ``name`` equal to ``value``.
 
     ``Attribute("platform_has", kind)`` means: a working device of that kind is attached (R1).
@@ -113,6 +255,9 @@ class Attribute:
 
     name: str
     value: str
+
+    word = "attribute"
+    usage = "write ('attribute', name, value)"
 
     def __post_init__(self) -> None:
         check_name("Attribute name", self.name)
@@ -125,6 +270,44 @@ class Attribute:
         if self.name == PLATFORM_HAS:
             return f"Attribute(platform_has {self.value})"
         return f"Attribute({self.name} = {self.value})"
+
+    @classmethod
+    def from_words(cls, *args: object, **kwargs: object) -> Requirement:
+        if len(args) == 2 and isinstance(args[0], str):
+            args = (args[0].lstrip(":"), args[1])  # ':platform_has' as the paper writes it
+        return cls(*args, **kwargs)
+
+    def holds(self, state: "PlatformState", graph: Placing) -> str | None:
+        if self.name == PLATFORM_HAS:
+            if any(d.kind == self.value for d in state.devices):
+                return None
+            return f"no working {self.value} attached"
+        actual = state.platform.attribute(self.name)
+        if actual is not None and str(actual) == str(self.value):
+            return None
+        return f"{self.name} is {actual!r}" if actual is not None else f"has no attribute {self.name!r}"
+
+    def reads_fixed_facts(self) -> bool:
+        return self.name != PLATFORM_HAS
+
+    def device_only(self) -> bool:
+        return self.name == PLATFORM_HAS
+
+    def platform_problem(self, platforms: "tuple[Platform, ...]") -> str | None:
+        return None if self.name == PLATFORM_HAS else attribute_problem(self.name, self.value, platforms)
+
+    def device_problem(self, devices: "tuple[Device, ...]") -> str | None:
+        return device_kind_problem(self.value, devices) if self.name == PLATFORM_HAS else None
+
+    def column_mask(self, cols: Columns, graph: Placing) -> Any:
+        if self.name == PLATFORM_HAS:
+            return cols.count(self.value) > 0
+        return cols.attr_is(self.name, self.value)
+
+    def column_keys(self, cols: Columns, rows: Any, graph: Placing) -> Any:
+        if self.name == PLATFORM_HAS:
+            return cols.one_key(rows)  # one text
+        return cols.attr_key(self.name, rows)  # the text shows the repr of the value
 
 
 @strict_init(ModelError)
@@ -179,14 +362,23 @@ class Option:
             return f"{self.attribute}={self.value}"
         return f"{self.device_kind}@{self.vendor}" if self.vendor else str(self.device_kind)
 
+    def holds(self, state: "PlatformState") -> bool:
+        if self.attribute is not None:
+            return str(state.platform.attribute(self.attribute)) == str(self.value)
+        return any(d.matches(self.device_kind or "", self.vendor) for d in state.devices)
+
 
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
-class Selection:
+class Selection(Requirement):
     """At least ``at_least`` of the listed alternatives are available on the platform."""
 
     options: tuple[Option, ...]
     at_least: int = 1
+
+    word = "selection"
+    usage = "write ('selection', option, option, ..., at_least=1)"
+    keywords = ("at_least",)
 
     def __post_init__(self) -> None:
         options = check_items("Selection options", self.options, Option, example="(Option.parse('tactile_pad@weiss'), ...)")
@@ -205,9 +397,82 @@ class Selection:
     def describe(self) -> str:
         return f"Selection({self.at_least} of {', '.join(o.describe() for o in self.options)})"
 
+    @classmethod
+    def arity(cls) -> int | None:
+        return None  # options, as many as given
+
+    @classmethod
+    def from_words(cls, *args: object, **kwargs: object) -> Requirement:
+        opts: Iterable[object] = args
+        if len(args) == 1 and isinstance(args[0], (list, tuple)):
+            opts = args[0]
+        return cls(tuple(Option.parse(o) for o in opts), kwargs.get("at_least", 1))  # type: ignore[arg-type]
+
+    def holds(self, state: "PlatformState", graph: Placing) -> str | None:
+        held = [o for o in self.options if o.holds(state)]
+        if len(held) >= self.at_least:
+            return None
+        have = [o.describe() for o in held]
+        return f"{len(have)} of the options available ({', '.join(have) or 'none'}), needs {self.at_least}"
+
+    def reads_fixed_facts(self) -> bool:
+        return all(o.attribute is not None for o in self.options)
+
+    def device_only(self) -> bool:
+        return all(o.attribute is None for o in self.options)
+
+    def platform_problem(self, platforms: "tuple[Platform, ...]") -> str | None:
+        for opt in self.options:
+            if opt.attribute is not None:
+                problem = attribute_problem(opt.attribute, opt.value, platforms)
+                if problem is not None:
+                    return f"option {opt.describe()!r}: {problem}"
+        return None
+
+    def device_problem(self, devices: "tuple[Device, ...]") -> str | None:
+        """Why an option names a device kind or a kind@vendor no device is."""
+        kinds = sorted({d.kind for d in devices})
+        for opt in self.options:
+            if opt.device_kind is None:
+                continue
+            if opt.device_kind not in kinds:
+                return (
+                    f"option {opt.describe()!r}: no device is of kind {opt.device_kind!r}{suggest(opt.device_kind, kinds)}: "
+                    f"fix the kind (kinds: {', '.join(kinds)})"
+                )
+            if opt.vendor is not None:
+                vendors = sorted({d.vendor for d in devices if d.kind == opt.device_kind})
+                if opt.vendor not in vendors:
+                    return (
+                        f"option {opt.describe()!r}: no {opt.device_kind} device is made by {opt.vendor!r}"
+                        f"{suggest(opt.vendor, vendors)}, so it can never hold: fix the vendor "
+                        f"({opt.device_kind} vendors: {', '.join(vendors)})"
+                    )
+        return None
+
+    def to_json(self) -> dict[str, Any]:
+        options = [{f.name: getattr(o, f.name) for f in fields(o) if getattr(o, f.name) is not None} for o in self.options]
+        return {"requirement": "selection", "options": options, "at_least": self.at_least}
+
+    @classmethod
+    def json_args(cls, args: dict[str, Any], where: str, item: Callable[[str, type, object, str], object]) -> dict[str, Any]:
+        if "options" in args:
+            options = args["options"]
+            if not isinstance(options, list):
+                raise CheckerError(f"{where}.options = {options!r} is not a list: write [{{\"device_kind\": \"tactile_pad\"}}, ...]")
+            example = '{"device_kind": "tactile_pad", "vendor": "weiss"}'
+            args["options"] = tuple(item(f"{where}.options[{i}]", Option, o, example) for i, o in enumerate(options))
+        return args
+
+    def column_mask(self, cols: Columns, graph: Placing) -> Any:
+        return cols.how_many(self.options) >= self.at_least
+
+    def column_keys(self, cols: Columns, rows: Any, graph: Placing) -> Any:
+        return cols.option_keys(self.options, rows)  # which options hold
+
 
 @dataclass(frozen=True, slots=True)
-class Reads:
+class Reads(Requirement):
     """The requirement a perception graph's inputs make: a device of ``kind`` it reads is
     readable (docs/design.md §6, the Control rules' reading rule).
 
@@ -217,8 +482,8 @@ class Reads:
     declaration order. On a platform that hosts some of them the graph reads its own
     (one must work there); elsewhere it reads any of them, so one must work on a
     platform that is up. The first half is a fact of the platform alone and is checked
-    with its other requirements; the second is read from the hosting platforms'
-    facts (:func:`desmon.deployment.validity.unreadable_inputs`).
+    with its other requirements (:meth:`holds`); the second is read from the hosting
+    platforms' facts (:func:`desmon.deployment.validity.unreadable_inputs`).
     """
 
     kind: str
@@ -233,8 +498,26 @@ class Reads:
     def describe(self) -> str:
         return f"reads {self.kind}"
 
+    def holds(self, state: "PlatformState", graph: Placing) -> str | None:
+        """The platform's own half: on a platform hosting devices of the kind the graph
+        reads those, so one of them must work there (the other half, elsewhere, is
+        :func:`desmon.deployment.validity.unreadable`)."""
+        name = state.platform.name
+        if name not in self.hosts or any(d.kind == self.kind for d in state.devices):
+            return None
+        own = ", ".join(d for d, p in self.devices if p == name)
+        return f"{own} on {name} failed"
 
-Requirement = Quantity | Capacity | Minimum | Maximum | Attribute | Selection
+    def column_mask(self, cols: Columns, graph: Placing) -> Any:
+        return ~cols.hosted_by(self.hosts) | (cols.count(self.kind) > 0)
+
+    def column_keys(self, cols: Columns, rows: Any, graph: Placing) -> Any:
+        return cols.row_key(rows)  # the text names the row's platform and its devices
+
+
+#: The requirement kinds of desmon itself (:func:`requirement_kinds` adds those defined later).
+REQUIREMENT_KINDS = requirement_kinds()
+
 
 #: Soft preference kinds and their arguments (see :class:`Preference`).
 PREFERENCE_KINDS = ("vendor", "attribute", "most_free", "least_loaded", "colocate", "spread")
@@ -251,7 +534,7 @@ _PREFERENCE_ARITY = {"vendor": (2, 2), "attribute": (2, 2), "most_free": (1, 1),
 
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
-class Preference:
+class Preference(Constraint):
     """A soft DepSL constraint: it never rejects a platform, it scores it.
 
     Hard requirements decide which platforms are *acceptable*; the preferences of a
@@ -278,6 +561,8 @@ class Preference:
     kind: str
     args: tuple[str, ...] = ()
     weight: float = 1.0
+
+    soft = True
 
     def __post_init__(self) -> None:
         if not isinstance(self.kind, str) or self.kind not in _PREFERENCE_USAGE:
@@ -306,9 +591,12 @@ class Preference:
         }.get(self.kind, lambda a: ", ".join(a))(self.args)
         return f"prefer {self.kind}({inner}) x{self.weight:g}"
 
+    def holds(self, state: "PlatformState", graph: Placing) -> str | None:
+        return None  # a preference never rejects a platform: it scores it (validity.preference_term)
 
-#: What a deployment specification lists: hard requirements and soft preferences.
-Constraint = Requirement | Preference
+    def to_json(self) -> dict[str, Any]:
+        """``{"preference": KIND, "args": [...], "weight": w}``."""
+        return {"preference": self.kind, "args": list(self.args), "weight": self.weight}
 
 
 def make_preference(kind: str, *args: object, weight: object = 1.0, **kwargs: object) -> Preference:
@@ -323,53 +611,37 @@ def make_preference(kind: str, *args: object, weight: object = 1.0, **kwargs: ob
         args = tuple(args[0])
     return Preference(key, tuple(args), weight)  # type: ignore[arg-type]
 
-REQUIREMENT_KINDS = ("quantity", "capacity", "minimum", "maximum", "attribute", "selection")
-_REQUIREMENT_TYPES = (Quantity, Capacity, Minimum, Maximum, Attribute, Selection)
+
+def constraint_types() -> tuple[type[Constraint], ...]:
+    """What a deployment specification lists: every requirement kind users write (as
+    :func:`requirement_kinds`), then :class:`Preference`."""
+    return (*_KINDS.values(), Preference)
+
+
+#: :func:`constraint_types` of desmon's own kinds.
+_CONSTRAINT_TYPES = constraint_types()
 
 
 def make_requirement(kind: str, *args: object, **kwargs: object) -> Requirement:
     """Build a requirement from DepSL-style words: ``make_requirement("capacity", "memory", 250)``.
 
     Kinds: quantity(kind, n), capacity(resource, amount), minimum(prop, v),
-    maximum(prop, v), attribute(name, value), selection(option, ..., at_least=1).
+    maximum(prop, v), attribute(name, value), selection(option, ..., at_least=1),
+    and any kind defined since (:func:`requirement_kinds`; each class's ``usage``).
     """
+    words = requirement_kinds()
     if not isinstance(kind, str):
-        raise ModelError(f"requirement kind {kind!r} is not a string: use one of {', '.join(REQUIREMENT_KINDS)}")
+        raise ModelError(f"requirement kind {kind!r} is not a string: use one of {', '.join(words)}")
     key = kind.lower().lstrip(":")
-    if key not in _USAGE:
-        raise ModelError(f"unknown requirement kind {kind!r}{suggest(key, REQUIREMENT_KINDS)}: use one of {', '.join(REQUIREMENT_KINDS)}")
-    check_keywords(f"requirement {kind!r}", kwargs, ("at_least",) if key == "selection" else (), usage=_USAGE[key])
-    if key != "selection" and len(args) != 2:
+    cls = _KINDS.get(key)
+    if cls is None:
+        raise ModelError(f"unknown requirement kind {kind!r}{suggest(key, words)}: use one of {', '.join(words)}")
+    check_keywords(f"requirement {kind!r}", kwargs, cls.keywords, usage=cls.usage)
+    arity = cls.arity()
+    if arity is not None and len(args) != arity:
         shown = ", ".join(repr(a) for a in args) or "nothing"
-        raise ModelError(f"requirement {kind!r} got {len(args)} argument(s) ({shown}) but takes 2: {_USAGE[key]}")
-    if key == "quantity":
-        return Quantity(*args)  # type: ignore[arg-type]
-    if key == "capacity":
-        return Capacity(*args)  # type: ignore[arg-type]
-    if key == "minimum":
-        return Minimum(*args)  # type: ignore[arg-type]
-    if key == "maximum":
-        return Maximum(*args)  # type: ignore[arg-type]
-    if key == "attribute":
-        name, value = args
-        return Attribute(name.lstrip(":") if isinstance(name, str) else name, value)  # type: ignore[arg-type]
-    opts: Iterable[object] = args
-    if len(args) == 1 and isinstance(args[0], (list, tuple)):
-        opts = args[0]
-    return Selection(tuple(Option.parse(o) for o in opts), kwargs.get("at_least", 1))  # type: ignore[arg-type]
-
-
-_USAGE = {
-    "quantity": "write ('quantity', device_kind, count)",
-    "capacity": "write ('capacity', resource, amount)",
-    "minimum": "write ('minimum', property, value)",
-    "maximum": "write ('maximum', property, value)",
-    "attribute": "write ('attribute', name, value)",
-    "selection": "write ('selection', option, option, ..., at_least=1)",
-}
-
-
-_CONSTRAINT_TYPES = (*_REQUIREMENT_TYPES, Preference)
+        raise ModelError(f"requirement {kind!r} got {len(args)} argument(s) ({shown}) but takes {arity}: {cls.usage}")
+    return cls.from_words(*args, **kwargs)
 
 
 @strict_init(ModelError)
@@ -396,7 +668,7 @@ class DeploymentSpec:
     def __post_init__(self) -> None:
         check_name("deployment specification graph", self.graph)
         reqs = check_items(
-            f"deployment specification of {self.graph!r} requirements", self.requirements, _CONSTRAINT_TYPES,
+            f"deployment specification of {self.graph!r} requirements", self.requirements, constraint_types(),
             example="(Capacity('memory', 150),) or add_constraint('capacity', 'memory', 150)",
         )
         object.__setattr__(self, "requirements", reqs)

@@ -14,19 +14,8 @@ from desmon.model.actions import ACTIONS, RISKY_ACTIONS, Action
 from desmon.model.checks import check_items, check_name, check_names, strict_init, suggest
 from desmon.model.graph import PerceptionGraph
 from desmon.model.platform import Device, Platform
-from desmon.model.requirements import (
-    PLATFORM_HAS,
-    Attribute,
-    Capacity,
-    DeploymentSpec,
-    Maximum,
-    Minimum,
-    Preference,
-    Quantity,
-    Reads,
-    Requirement,
-    Selection,
-)
+from desmon.model.kinds import attribute_problem
+from desmon.model.requirements import DeploymentSpec, Preference, Reads, Requirement
 
 __all__ = ["Rule", "RuleTable", "SystemModel", "PlatformState", "with_load", "action_problem", "check_action", "preference_problem", "constraint_problem"]
 
@@ -329,7 +318,7 @@ class SystemModel:
                 if problem is not None:
                     raise ModelError(f"deployment of {spec.graph!r} would {req.describe()} but {problem}")
                 continue
-            problem = _platform_fact_problem(req, self.platforms)
+            problem = req.platform_problem(self.platforms)
             if problem is not None:
                 raise ModelError(f"deployment of {spec.graph!r} needs {req.describe()} but {problem}")
 
@@ -345,13 +334,7 @@ class SystemModel:
                     )
         for spec in self.specs:
             for req in spec.requirements:
-                wanted = _wanted_device_kind(req)
-                if wanted is not None and wanted not in kinds:
-                    raise ModelError(
-                        f"deployment of {spec.graph!r} needs {req.describe()} but no device is of kind "
-                        f"{wanted!r}{suggest(wanted, kinds)}: fix the kind (kinds: {', '.join(sorted(kinds))})"
-                    )
-                problem = _device_option_problem(req, self.devices)
+                problem = req.device_problem(self.devices)
                 if problem is not None:
                     raise ModelError(f"deployment of {spec.graph!r} needs {req.describe()} but {problem}")
 
@@ -440,46 +423,14 @@ def check_action(model: SystemModel, name: object, *, where: str, what: str = "a
     return name  # type: ignore[return-value]
 
 
-def _platform_fact_problem(req: Requirement, platforms: tuple[Platform, ...]) -> str | None:
-    """Why ``req`` names a platform fact (capacity, property, attribute, attribute value)
-    that no platform declares -- a requirement that can never hold, almost surely a typo."""
-    if isinstance(req, Capacity):
-        declared = sorted({r for p in platforms for r, _ in p.capacities})
-        if req.resource not in declared:
-            return (
-                f"no platform declares a {req.resource!r} capacity{suggest(req.resource, declared)}: "
-                f"add it to the platforms or fix the name (capacities: {', '.join(declared) or 'none'})"
-            )
-    elif isinstance(req, (Minimum, Maximum)):
-        declared = sorted({k for p in platforms for k, _ in p.properties})
-        if req.prop not in declared:
-            return (
-                f"no platform declares a property {req.prop!r}{suggest(req.prop, declared)}: "
-                f"add properties={{{req.prop!r}: ...}} to the platforms or fix the name (properties: {', '.join(declared) or 'none'})"
-            )
-    elif isinstance(req, Attribute) and req.name != PLATFORM_HAS:
-        return _attribute_problem(req.name, req.value, platforms)
-    elif isinstance(req, Selection):
-        for opt in req.options:
-            if opt.attribute is not None:
-                problem = _attribute_problem(opt.attribute, opt.value, platforms)
-                if problem is not None:
-                    return f"option {opt.describe()!r}: {problem}"
-    return None
-
-
 def constraint_problem(model: "SystemModel", graph: str, req: Requirement | Preference) -> str | None:
     """Why a requirement or preference of ``graph`` names what ``model`` lacks (the rule
     a declared specification obeys, for requirements added at run time), or None."""
     if isinstance(req, Preference):
         return preference_problem(model, graph, req)
-    problem = _platform_fact_problem(req, model.platforms)
+    problem = req.platform_problem(model.platforms)
     if problem is None and model.devices:
-        kinds = sorted({d.kind for d in model.devices})
-        wanted = _wanted_device_kind(req)
-        if wanted is not None and wanted not in kinds:
-            return f"no device is of kind {wanted!r}{suggest(wanted, kinds)}: fix the kind (kinds: {', '.join(kinds)})"
-        problem = _device_option_problem(req, model.devices)
+        problem = req.device_problem(model.devices)
     return problem
 
 
@@ -496,7 +447,7 @@ def preference_problem(model: "SystemModel", graph: str, pref: Preference) -> st
                 f"fix the name (capacities: {', '.join(declared) or 'none'})"
             )
     elif kind == "attribute":
-        return _attribute_problem(args[0], args[1], model.platforms)
+        return attribute_problem(args[0], args[1], model.platforms)
     elif kind == "vendor":
         kinds = sorted({d.kind for d in model.devices})
         if args[0] not in kinds:
@@ -511,56 +462,6 @@ def preference_problem(model: "SystemModel", graph: str, pref: Preference) -> st
                 return f"it names its own graph {graph!r}: name the graphs to run beside it"
             if other not in graphs:
                 return f"there is no perception graph {other!r}{suggest(other, graphs)}: fix the name (graphs: {', '.join(graphs)})"
-    return None
-
-
-def _attribute_problem(name: str, value: object, platforms: tuple[Platform, ...]) -> str | None:
-    declared = sorted({k for p in platforms for k, _ in p.attributes})
-    if name not in declared:
-        return (
-            f"no platform declares an attribute {name!r}{suggest(name, declared)}: "
-            f"add attributes={{{name!r}: ...}} to the platforms or fix the name (attributes: {', '.join(declared) or 'none'})"
-        )
-    # attributes compare as text (deployment.validity); a value no platform has never holds
-    values = sorted({str(v) for p in platforms for k, v in p.attributes if k == name})
-    if str(value) not in values:
-        return (
-            f"no platform has {name} = {value!r}{suggest(str(value), values)}: fix the value "
-            f"(values of {name!r}: {', '.join(repr(v) for v in values)})"
-        )
-    return None
-
-
-def _wanted_device_kind(req: Requirement) -> str | None:
-    """The device kind ``req`` asks for directly (a ``platform has`` attribute or a quantity), if any."""
-    if isinstance(req, Attribute) and req.name == PLATFORM_HAS:
-        return req.value
-    if isinstance(req, Quantity):
-        return req.device_kind
-    return None
-
-
-def _device_option_problem(req: Requirement, devices: tuple[Device, ...]) -> str | None:
-    """Why a Selection option names a device kind or a kind@vendor no device is."""
-    if not isinstance(req, Selection):
-        return None
-    kinds = sorted({d.kind for d in devices})
-    for opt in req.options:
-        if opt.device_kind is None:
-            continue
-        if opt.device_kind not in kinds:
-            return (
-                f"option {opt.describe()!r}: no device is of kind {opt.device_kind!r}{suggest(opt.device_kind, kinds)}: "
-                f"fix the kind (kinds: {', '.join(kinds)})"
-            )
-        if opt.vendor is not None:
-            vendors = sorted({d.vendor for d in devices if d.kind == opt.device_kind})
-            if opt.vendor not in vendors:
-                return (
-                    f"option {opt.describe()!r}: no {opt.device_kind} device is made by {opt.vendor!r}"
-                    f"{suggest(opt.vendor, vendors)}, so it can never hold: fix the vendor "
-                    f"({opt.device_kind} vendors: {', '.join(vendors)})"
-                )
     return None
 
 

@@ -3,16 +3,13 @@
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from desmon.errors import CheckerError, ModelError
-from desmon.model.checks import suggest
+from desmon.model.codec import _mapping, constraint_from_json, constraint_to_json, event_from_json, event_to_json
 from desmon.model.events import Event
-from desmon.model.requirements import (
-    PREFERENCE_KINDS, REQUIREMENT_KINDS, Attribute, Capacity, Constraint, Maximum, Minimum, Option, Preference, Quantity, Selection,
-)
 from desmon.deployment.guard import CRASH
 from desmon.verify.search import NOT_CHECKED, CheckResult
 from desmon.verify.trace import Counterexample, Label, Step, rule_of
@@ -77,104 +74,7 @@ def format_result(r: CheckResult) -> str:
 
 
 # -- JSON ------------------------------------------------------------------------------------
-#: a hard requirement's ``requirement`` name in the JSON -> its class (fields written by name)
-_REQUIREMENT_CLASSES: dict[str, Any] = dict(zip(REQUIREMENT_KINDS, (Quantity, Capacity, Minimum, Maximum, Attribute, Selection)))
-_REQUIREMENT_NAMES: dict[type, str] = {cls: kind for kind, cls in _REQUIREMENT_CLASSES.items()}
-
-
-def event_to_json(e: Event | None) -> dict[str, Any] | None:
-    """``e`` as JSON that :func:`event_from_json` rebuilds into an equal event (None for the initial state)."""
-    if e is None:
-        return None
-    return e.to_json(constraint_to_json)  # each kind writes its own keys (Event.to_json)
-
-
-def constraint_to_json(c: Constraint) -> dict[str, Any]:
-    """A requirement as ``{"requirement": KIND, FIELD: value, ...}`` (its dataclass fields by name),
-    a preference as ``{"preference": KIND, "args": [...], "weight": w}``."""
-    if isinstance(c, Preference):
-        return {"preference": c.kind, "args": list(c.args), "weight": c.weight}
-    if isinstance(c, Selection):
-        return {"requirement": "selection", "options": [_option_to_json(o) for o in c.options], "at_least": c.at_least}
-    return {"requirement": _REQUIREMENT_NAMES[type(c)], **{f.name: getattr(c, f.name) for f in fields(c)}}
-
-
-def _option_to_json(o: Option) -> dict[str, Any]:
-    return {f.name: getattr(o, f.name) for f in fields(o) if getattr(o, f.name) is not None}
-
-
-def event_from_json(data: object, *, where: str = "event") -> Event:
-    """The event :func:`event_to_json` wrote. Whatever is wrong in a (hand-edited) ``d`` is a
-    one-line :class:`~desmon.errors.CheckerError` naming ``where`` and the field; the
-    values pass the same checks as the event built in a scenario."""
-    d = _mapping(where, data, '{"kind": "action", "action": "grasp"}')
-    kind = d.get("kind")
-    cls = Event.of_kind(kind)
-    if cls is None:
-        kinds = [c.kind for c in Event.kinds()]
-        raise CheckerError(f"{where}.kind = {kind!r} is not an event kind{suggest(kind, kinds)}: use one of {', '.join(kinds)}")
-    required, optional = cls.json_keys()
-    _check_keys(where, d, ("kind", *required), optional)
-    args = cls.json_args({k: d[k] for k in (*required, *optional) if k in d}, constraint_from_json, where)
-    return _build(where, cls, args)  # type: ignore[return-value]
-
-
-def constraint_from_json(data: object, *, where: str = "requirement") -> Constraint:
-    """The requirement or preference :func:`constraint_to_json` wrote, checked as when a scenario builds it."""
-    d = _mapping(where, data, '{"requirement": "capacity", "resource": "memory", "amount": 250}')
-    if ("requirement" in d) == ("preference" in d):
-        raise CheckerError(
-            f"{where} = {d!r} must name one kind, by \"requirement\" (one of {', '.join(REQUIREMENT_KINDS)}) "
-            f"or by \"preference\" (one of {', '.join(PREFERENCE_KINDS)})"
-        )
-    if "preference" in d:
-        _check_keys(where, d, ("preference", "args"), ("weight",))
-        args = d["args"]
-        if not isinstance(args, list):
-            raise CheckerError(f"{where}.args = {args!r} is not a list: write a list of names, e.g. [\"memory\"]")
-        weight = {"weight": d["weight"]} if "weight" in d else {}
-        return _build(where, Preference, {"kind": d["preference"], "args": tuple(args), **weight})  # type: ignore[return-value]
-    kind = d["requirement"]
-    if not isinstance(kind, str) or kind not in _REQUIREMENT_CLASSES:
-        raise CheckerError(
-            f"{where}.requirement = {kind!r} is not a requirement kind{suggest(kind, REQUIREMENT_KINDS)}: "
-            f"use one of {', '.join(REQUIREMENT_KINDS)}"
-        )
-    cls = _REQUIREMENT_CLASSES[kind]
-    args = {k: v for k, v in d.items() if k != "requirement"}
-    if kind == "selection" and "options" in args:
-        options = args["options"]
-        if not isinstance(options, list):
-            raise CheckerError(f"{where}.options = {options!r} is not a list: write [{{\"device_kind\": \"tactile_pad\"}}, ...]")
-        example = '{"device_kind": "tactile_pad", "vendor": "weiss"}'
-        args["options"] = tuple(
-            _build(f"{where}.options[{i}]", Option, _mapping(f"{where}.options[{i}]", o, example)) for i, o in enumerate(options)
-        )
-    return _build(where, cls, args)  # type: ignore[return-value]
-
-
-def _mapping(where: str, d: object, example: str) -> dict[str, Any]:
-    if not isinstance(d, dict):
-        raise CheckerError(f"{where} = {d!r} is not a JSON object: write e.g. {example}")
-    return d
-
-
-def _check_keys(where: str, d: dict[str, Any], required: tuple[str, ...], optional: tuple[str, ...]) -> None:
-    allowed = (*required, *optional)
-    for key in d:
-        if key not in allowed:
-            raise CheckerError(f"{where}: unknown key {key!r}{suggest(key, allowed)}; it holds {', '.join(allowed)}")
-    missing = [k for k in required if k not in d]
-    if missing:
-        raise CheckerError(f"{where}: missing {', '.join(repr(m) for m in missing)}; it holds {', '.join(allowed)}")
-
-
-def _build(where: str, cls: Any, args: dict[str, Any]) -> object:
-    """``cls(**args)``, its one-line ModelError re-raised as a CheckerError naming ``where``."""
-    try:
-        return cls(**args)
-    except ModelError as exc:
-        raise CheckerError(f"{where}: {exc}") from None
+# The codec of model values (events, requirements) is desmon.model.codec; re-exported here.
 
 
 def labels_from_json(counterexample: object, *, where: str = "counterexample") -> tuple[Label, ...]:
@@ -443,7 +343,7 @@ FAILS fail. The test asserts the invariant is violated where the checker said.
 from desmon.deployment.invariants import TRANSITION_INVARIANTS, SystemView, check_invariants, get_invariants
 from desmon.loader import load_scenario
 {event_imports}
-from desmon.model.requirements import Attribute, Capacity, Maximum, Minimum, Option, Preference, Quantity, Selection
+{requirement_imports}
 from desmon.verify import RepositoryRun
 from desmon.verify.deployers import resolve_deployer
 
@@ -502,7 +402,7 @@ def counterexample_pytest(
 
     src = _PYTEST.format(
         scenario_path=scenario_path, params=dict(params or {}), deployer=portable_spec(r.deployer), initial_action=initial_action,
-        event_imports=_event_imports(),
+        event_imports=_event_imports(), requirement_imports=_requirement_imports(),
     )
     for c in r.counterexamples:
         steps = []
@@ -524,6 +424,19 @@ def _event_imports() -> str:
     for cls in Event.kinds():
         modules.setdefault(cls.__module__, []).append(cls.__name__)
     return "\n".join(f"from {m} import (\n    {', '.join(sorted(names))},\n)" for m, names in modules.items())
+
+
+def _requirement_imports() -> str:
+    """The import lines of the generated test for every requirement kind (the events'
+    reprs name them), read from the registry: desmon's own kinds, Option and Preference
+    from :mod:`desmon.model.requirements`, a kind defined elsewhere from its module."""
+    from desmon.model.kinds import requirement_class, requirement_kinds
+
+    by_module: dict[str, set[str]] = {"desmon.model.requirements": {"Option", "Preference"}}
+    for word in requirement_kinds():
+        cls = requirement_class(word)
+        by_module.setdefault(cls.__module__, set()).add(cls.__name__)  # type: ignore[union-attr]
+    return "\n".join(f"from {module} import {', '.join(sorted(names))}" for module, names in by_module.items())
 
 
 _CASE_DURING = '''

@@ -214,7 +214,8 @@ class PlainRun(tuple):
 
 #: modules whose functions read a state on behalf of their caller (a refusal names the caller)
 _HELPERS = frozenset({
-    "desmon.deployment.ports", "desmon.model.system", "desmon.deployment.validity", "dataclasses", "reprlib", "pprint",
+    "desmon.deployment.ports", "desmon.model.system", "desmon.model.kinds", "desmon.model.requirements", "desmon.deployment.validity",
+    "dataclasses", "reprlib", "pprint",
     "copy", "copyreg", "logging",
 })
 
