@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterable, TypeVar
 
 from desmon.errors import CheckerError, ModelError
 from desmon.model.checks import check_items, check_name, check_number, strict_init, suggest
-from desmon.model.requirements import _CONSTRAINT_TYPES, Constraint
+from desmon.model.requirements import Constraint, constraint_types
 from desmon.model.system import action_problem, constraint_problem
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -330,8 +330,8 @@ class RequirementChange(Event):
     def __post_init__(self) -> None:
         check_name("RequirementChange graph", self.graph)
         example = "(Capacity('memory', 350),)"
-        add = check_items(f"RequirementChange({self.graph!r}) add", self.add, _CONSTRAINT_TYPES, example=example)
-        remove = check_items(f"RequirementChange({self.graph!r}) remove", self.remove, _CONSTRAINT_TYPES, example=example)
+        add = check_items(f"RequirementChange({self.graph!r}) add", self.add, constraint_types(), example=example)
+        remove = check_items(f"RequirementChange({self.graph!r}) remove", self.remove, constraint_types(), example=example)
         if not add and not remove:
             raise ModelError(f"RequirementChange({self.graph!r}) adds and removes nothing: give add=(...) and/or remove=(...)")
         for what, items in (("adds", add), ("removes", remove)):

@@ -618,10 +618,6 @@ def constraint_types() -> tuple[type[Constraint], ...]:
     return (*_KINDS.values(), Preference)
 
 
-#: :func:`constraint_types` of desmon's own kinds.
-_CONSTRAINT_TYPES = constraint_types()
-
-
 def make_requirement(kind: str, *args: object, **kwargs: object) -> Requirement:
     """Build a requirement from DepSL-style words: ``make_requirement("capacity", "memory", 250)``.
 
