@@ -31,7 +31,7 @@ def assert_texts_are_scalar(states, reqs, graph) -> None:
     for r in reqs:
         rows = failing_rows(cols, r, graph)
         if len(rows):
-            assert cols._texts(r, rows, graph) == scalar_texts(states, r, rows, graph), r
+            assert placement._cols_texts(cols, r, rows, graph) == scalar_texts(states, r, rows, graph), r
 
 
 @pytest.mark.slow
@@ -49,7 +49,7 @@ def test_capacity_texts_are_formatted_from_the_columns_not_asked_row_by_row(stat
     for r in reqs:
         rows = failing_rows(cols, r, graph)
         if len(rows) and r.resource in cols._caps:
-            assert cols._capacity_texts(r, rows, graph) == scalar_texts(states, r, rows, graph)
+            assert placement._cols_capacity_texts(cols, r, rows, graph) == scalar_texts(states, r, rows, graph)
 
 
 # -- hand-made fleets: one per requirement kind ----------------------------------------------------------
@@ -73,10 +73,10 @@ def test_capacity_texts_list_concurrent_deployments_and_leave_out_every_graph_a_
     for graph in (None, "g1", ("g9", "g0", "g3"), ("g0", "g1", "g2", "g3")):
         for r in (Capacity("memory", 0.3), Capacity("memory", 300), Capacity("memory", 400), Capacity("cpu", 4)):
             rows = failing_rows(cols, r, graph)
-            assert cols._texts(r, rows, graph) == scalar_texts(states, r, rows, graph)
+            assert placement._cols_texts(cols, r, rows, graph) == scalar_texts(states, r, rows, graph)
     rows = failing_rows(cols, Capacity("memory", 400), ("g1",))
     # 512 - (100 + 0.1 + 0.2) - 100, g1's share left out
-    assert cols._texts(Capacity("memory", 400), rows, ("g1",))[0] == "311.7 MB free (capacity 512, used by g0 100, used by g2 0.1, used by g3 0.2, load 100)"
+    assert placement._cols_texts(cols, Capacity("memory", 400), rows, ("g1",))[0] == "311.7 MB free (capacity 512, used by g0 100, used by g2 0.1, used by g3 0.2, load 100)"
 
 
 def test_selection_texts_name_the_options_each_row_has():
@@ -94,7 +94,7 @@ def test_minimum_and_maximum_texts_tell_minus_zero_ints_and_missing_properties_a
     reqs = (Minimum("lat", 5), Maximum("lat", -1), Minimum("gpu", 1))
     assert_texts_are_scalar(states, reqs, None)
     cols = PlatformColumns(states)
-    assert cols._texts(Maximum("lat", -1), np.arange(6), None)[:2] == ["lat is -0", "lat is 0"]
+    assert placement._cols_texts(cols, Maximum("lat", -1), np.arange(6), None)[:2] == ["lat is -0", "lat is 0"]
 
 
 def test_attribute_texts_show_the_value_as_written():

@@ -182,64 +182,18 @@ class PlatformColumns:
         vendors: dict[tuple[str, str], dict[int, int]] = {}
         shares: dict[str, dict[int, list[tuple[int, float]]]] = {}
         for i, s in enumerate(states):
-            facts = self._facts(i, s)
+            facts = _cols_facts(self, i, s)
             for table, row in zip((caps, loads, props, attrs, kinds, vendors, shares), facts):
                 for key, value in row.items():
                     table.setdefault(key, {})[i] = value  # type: ignore[index]
-        self._caps = {k: self._column(v, np.nan, np.float64) for k, v in caps.items()}
-        self._loads = {k: self._column(v, 0.0, np.float64) for k, v in loads.items()}
-        self._props = {k: self._column(v, np.nan, np.float64) for k, v in props.items()}
-        self._attrs = {k: self._column(v, -1, np.int32) for k, v in attrs.items()}
-        self._kinds = {k: self._column(v, 0, np.int32) for k, v in kinds.items()}
-        self._vendors = {k: self._column(v, 0, np.int32) for k, v in vendors.items()}
-        self._shares = {k: self._share_matrix(v) for k, v in shares.items()}
+        self._caps = {k: _cols_column(self, v, np.nan, np.float64) for k, v in caps.items()}
+        self._loads = {k: _cols_column(self, v, 0.0, np.float64) for k, v in loads.items()}
+        self._props = {k: _cols_column(self, v, np.nan, np.float64) for k, v in props.items()}
+        self._attrs = {k: _cols_column(self, v, -1, np.int32) for k, v in attrs.items()}
+        self._kinds = {k: _cols_column(self, v, 0, np.int32) for k, v in kinds.items()}
+        self._vendors = {k: _cols_column(self, v, 0, np.int32) for k, v in vendors.items()}
+        self._shares = {k: _cols_share_matrix(self, v) for k, v in shares.items()}
 
-    def _column(self, values: dict[int, Any], default: Any, dtype: Any) -> np.ndarray:
-        col = np.full(self.n, default, dtype=dtype)
-        if values:
-            col[np.fromiter(values.keys(), dtype=np.intp, count=len(values))] = list(values.values())
-        return col
-
-    def _share_matrix(self, rows: dict[int, list[tuple[int, float]]]) -> _Shares:
-        width = max(len(r) for r in rows.values())
-        out = _Shares(np.zeros((self.n, width)), np.full((self.n, width), -1, dtype=np.int32))
-        for i, entries in rows.items():
-            for j, (code, amount) in enumerate(entries):
-                out.graphs[i, j] = code
-                out.amounts[i, j] = amount
-        return out
-
-    def _facts(self, i: int, s: PlatformState) -> tuple[dict, ...]:
-        """One platform's facts, keyed per column family (see :meth:`_build`)."""
-        p = s.platform
-        numbers = [v for _k, v in p.capacities] + [v for _k, v in s.load] + [v for _k, v in p.properties]
-        numbers += [a for _g, use in s.deployed for _r, a in use]
-        if _inexact(p.preference) or any(_inexact(v) for v in numbers):
-            self._inexact_rows.add(i)
-        else:
-            self._inexact_rows.discard(i)
-        attrs = {}
-        for key, value in p.attributes:
-            codes = self._attr_code.setdefault(key, {})
-            code = codes.get(repr(value))
-            if code is None:
-                code = codes[repr(value)] = len(codes)
-                self._attr_text.setdefault(key, {}).setdefault(str(value), []).append(code)
-            attrs[key] = code
-        kinds: dict[str, int] = {}
-        vendors: dict[tuple[str, str], int] = {}
-        for d in s.devices:
-            kinds[d.kind] = kinds.get(d.kind, 0) + 1
-            vendors[(d.kind, d.vendor)] = vendors.get((d.kind, d.vendor), 0) + 1
-        shares: dict[str, list[tuple[int, float]]] = {}
-        for g, use in s.deployed:  # the order of PlatformState.used_by: deployments, then their uses
-            code = self._graph_code.setdefault(g, len(self._graph_code))
-            for res, amount in use:
-                if amount:
-                    shares.setdefault(res, []).append((code, amount))
-        return dict(p.capacities), dict(s.load), dict(p.properties), attrs, kinds, vendors, shares
-
-    # -- incremental upkeep ----------------------------------------------------------------
     def update(self, changes: Mapping[int, PlatformState] | Iterable[tuple[int, PlatformState]]) -> int:
         """Rewrite the rows ``index -> new state`` (the same platform, new facts); returns
         how many rows changed. A state for another platform than the row's is refused."""
@@ -291,7 +245,7 @@ class PlatformColumns:
         if self._pref[i] != s.platform.preference:
             self._pref[i] = s.platform.preference
             self._order = None
-        caps, loads, props, attrs, kinds, vendors, shares = self._facts(i, s)
+        caps, loads, props, attrs, kinds, vendors, shares = _cols_facts(self, i, s)
         for table, row, default, dtype in (
             (self._caps, caps, np.nan, np.float64),
             (self._loads, loads, 0.0, np.float64),
@@ -487,147 +441,12 @@ class PlatformColumns:
         rows = order[~in_order]
         if not len(rows):
             return _validity.Validity(acceptable, ())
-        return _validity.Validity(acceptable, self._rejected(reqs, ok[:, rows], rows, graph, reasons))
-
-    def _rejected(self, reqs: tuple, ok: np.ndarray, rows: np.ndarray, graph: _validity.Placing, reasons: bool) -> tuple[_Pair, ...]:
-        """``(name, failures)`` of each rejected row, in the order of ``rows`` (``ok``: reqs x rows).
-
-        Each failing (requirement, row) cell gets its Failure first, one requirement at a
-        time; then the rows are grouped by which cells they fail, and each group's
-        failure tuples are zipped together from those cells."""
-        up = self._up[rows]
-        failing = ~ok & up  # a down row fails only "platform up"
-        if not reasons and len(reqs):  # the first failure only
-            first = np.argmax(failing, axis=0)
-            failing = np.zeros_like(failing)
-            failing[first, np.arange(len(rows))] = up
-        table = np.vstack([~up, failing])  # (1 + reqs) x rows: which failures each row has
-        cells = [self._down_failures(rows, ~up, graph)]
-        cells += [self._failures(req, rows, fails, graph) if fails.any() else None for req, fails in zip(reqs, failing)]
-        _first, inv = _classes(table.T)
-        out: list[Any] = [None] * len(rows)
-        for pos in np.split(np.argsort(inv, kind="stable"), np.cumsum(np.bincount(inv))[:-1]):
-            columns = [cells[k][pos].tolist() for k in np.flatnonzero(table[:, pos[0]]).tolist()]  # type: ignore[index]
-            for p, fails in zip(pos.tolist(), zip(*columns)):
-                out[p] = fails
-        return tuple(zip(self._names[rows].tolist(), out))
-
-    def _failures(self, req: Any, rows: np.ndarray, fails: np.ndarray, graph: _validity.Placing) -> np.ndarray:
-        """Object array over ``rows``: the Failure of ``req`` where ``fails`` (None elsewhere),
-        taken from the memo or made and kept there."""
-        where = rows[fails]
-        memo = self._memo(req, graph)
-        got: list[Any] = list(map(memo.get, where.tolist())) if memo else [None] * len(where)
-        missing = [j for j, f in enumerate(got) if f is None]
-        if missing:
-            new = where[missing] if len(missing) < len(where) else where
-            names = self._names[new].tolist()
-            made = list(map(_validity.Failure, names, repeat(req.describe()), self._texts(req, new, graph)))
-            memo.update(zip(new.tolist(), made))
-            self._memoised += len(made)
-            if len(missing) == len(got):
-                got = made
-            else:
-                for j, f in zip(missing, made):
-                    got[j] = f
-        out = np.empty(len(rows), dtype=object)
-        out[fails] = got
-        return out
-
-    def _down_failures(self, rows: np.ndarray, down: np.ndarray, graph: _validity.Placing) -> np.ndarray | None:
-        """Object array over ``rows``: a down row's one failure, as the scalar check gives it
-        (its text depends only on whether the platform is on demand)."""
-        if not down.any():
-            return None
-        where = rows[down]
-        scalar = self._shared(
-            where, self._on_demand[where][:, None], lambda i: _validity.check_platform((), self.states[i], graph, first_only=True)[0]
-        )
-        out = np.empty(len(rows), dtype=object)
-        out[down] = [_validity.Failure(name, f.requirement, f.reason) for name, f in zip(self._names[where].tolist(), scalar)]
-        return out
-
-    def _texts(self, req: Any, rows: np.ndarray, graph: _validity.Placing) -> list[str]:
-        """The reason ``req`` fails on each of ``rows`` (all failing): the kind's
-        ``column_texts`` if it formats them (a Capacity's text, which differs on most rows:
-        :meth:`capacity_texts`), else the scalar text, asked once per class of rows with
-        equal :meth:`_text_keys`."""
-        texts = req.column_texts(self, rows, graph)
-        if texts is not None:
-            return texts  # type: ignore[no-any-return]
-        return self._shared(rows, self._text_keys(req, rows, graph), lambda i: self._reason(req, i, graph))
+        return _validity.Validity(acceptable, _cols_rejected(self, reqs, ok[:, rows], rows, graph, reasons))
 
     def capacity_texts(self, req: Capacity, rows: np.ndarray, graph: _validity.Placing) -> list[str] | None:
-        """A Capacity's reasons formatted from the columns (:meth:`_capacity_texts`), or None:
+        """A Capacity's reasons formatted from the columns (:func:`_cols_capacity_texts`), or None:
         on Python 3.12 (compensated sums) and where the format differs from the scalar one."""
-        return None if _COMPENSATED_SUM else self._capacity_texts(req, rows, graph)
-
-    def _capacity_texts(self, req: Capacity, rows: np.ndarray, graph: _validity.Placing) -> list[str] | None:
-        """Capacity reasons formatted from the columns, as the scalar formats them
-        ("<free>[ MB] free (capacity <c>, used by <graph> <amount>, ..., load <l>)", every
-        number with ``:g``; the free amount summed as :meth:`capacity` sums it). Checked
-        against the scalar text on the first row and on a row listing the most shares:
-        None (ask the scalar) if either differs."""
-        cap = self._caps.get(req.resource)
-        if cap is None:
-            return None
-        out = np.empty(len(rows), dtype=object)
-        has = ~np.isnan(cap[rows])
-        if not has.all():  # "has no <resource> capacity": one text
-            out[~has] = self._reason(req, int(rows[~has][0]), graph)
-        where = rows[has]
-        c = cap[where]
-        load = self._loads.get(req.resource)
-        l = load[where] if load is not None else np.zeros(len(where))
-        used, shares, listed = np.zeros(len(where)), np.full(len(where), "", dtype=object), np.zeros(len(where), dtype=np.intp)
-        sh = self._shares.get(req.resource)
-        if sh is not None:
-            graphs, amounts = sh.graphs[where], sh.amounts[where]
-            excluded = self._excluded(graph)
-            if excluded is not None:
-                left_out = np.isin(graphs, excluded)
-                graphs[left_out] = -1
-                amounts[left_out] = 0.0
-            used_by = np.array([f", used by {g} " for g in self._graph_code], dtype=object)  # by code
-            for j in range(amounts.shape[1]):  # left to right, as Python's sum adds them
-                used = used + amounts[:, j]
-                on = graphs[:, j] >= 0
-                if on.any():
-                    piece = np.full(len(where), "", dtype=object)
-                    piece[on] = used_by[graphs[on, j]] + _g(amounts[on, j])
-                    shares = shares + piece
-                    listed += on
-        unit = " MB" if req.resource == "memory" else ""
-        texts = _g(c - used - l) + f"{unit} free (capacity " + _g(c) + shares + ", load " + _g(l) + ")"
-        for j in {0, int(np.argmax(listed))} if len(where) else ():
-            if _validity.requirement_holds(req, self.states[int(where[j])], graph) != texts[j]:
-                return None
-        out[has] = texts
-        return out.tolist()  # type: ignore[no-any-return]
-
-    def _reason(self, req: Any, i: int, graph: _validity.Placing) -> str:
-        reason = _validity.requirement_holds(req, self.states[i], graph)
-        if reason is None:  # the masks and the scalar semantics disagree: a bug here
-            raise AssertionError(f"placement columns: {req.describe()} fails on {self._names[i]} but the scalar check holds")
-        return reason
-
-    @staticmethod
-    def _shared(rows: np.ndarray, keys: np.ndarray, ask: Callable[[int], Any]) -> list[Any]:
-        """``ask(row)`` for each of ``rows``, asked only of the first row of each class of
-        equal ``keys`` (rows x width) and shared with the rest of the class."""
-        first, inv = _classes(keys)
-        answers = np.empty(len(first), dtype=object)
-        answers[:] = [ask(i) for i in rows[first].tolist()]
-        return answers[inv].tolist()  # type: ignore[no-any-return]
-
-    def _text_keys(self, req: Any, rows: np.ndarray, graph: _validity.Placing) -> np.ndarray:
-        """rows x width integers such that rows with equal keys get byte-equal reason texts
-        from the scalar semantics for ``req``: the facts each text shows, read from the
-        columns (floats by their bits, so -0.0 and 0.0 differ; an int and the equal float
-        print alike with ``:g``). Keys may split rows whose texts are equal, never join
-        rows whose texts differ."""
-        key = req.column_keys(self, rows, graph)
-        return key[:, None] if key.ndim == 1 else key  # type: ignore[no-any-return]
+        return None if _COMPENSATED_SUM else _cols_capacity_texts(self, req, rows, graph)
 
     def capacity_keys(self, req: Capacity, rows: np.ndarray, graph: _validity.Placing) -> np.ndarray:
         """Capacity text keys: the capacity, the load and each share the text lists (graph
@@ -652,19 +471,212 @@ class PlatformColumns:
         keys[np.isnan(cap[rows])] = 0  # "has no capacity": one text whatever the rest
         return keys
 
-    def _memo(self, req: object, graph: _validity.Placing) -> dict[int, _validity.Failure]:
-        """Row -> the Failure of ``req`` for ``graph``, kept until the row changes; beyond
-        :data:`_REASONS_KEPT` failures the least recently asked requirements lose theirs."""
-        # repr: equal requirements may read differently (2 vs 2.0); only a Capacity's text
-        # depends on the graph placed (whose shares it leaves out)
-        key = (repr(req), graph if type(req).texts_read_graph else None)  # type: ignore[attr-defined]
-        memo = self._reasons.pop(key, None)
-        if memo is None:
-            memo = {}
-            while self._memoised > _REASONS_KEPT and self._reasons:  # least recently asked first
-                self._memoised -= len(self._reasons.pop(next(iter(self._reasons))))
-        self._reasons[key] = memo  # (re)inserted last: the most recently asked
-        return memo
+
+def _cols_column(cols: "PlatformColumns", values: dict[int, Any], default: Any, dtype: Any) -> np.ndarray:
+    col = np.full(cols.n, default, dtype=dtype)
+    if values:
+        col[np.fromiter(values.keys(), dtype=np.intp, count=len(values))] = list(values.values())
+    return col
+
+
+def _cols_share_matrix(cols: "PlatformColumns", rows: dict[int, list[tuple[int, float]]]) -> _Shares:
+    width = max(len(r) for r in rows.values())
+    out = _Shares(np.zeros((cols.n, width)), np.full((cols.n, width), -1, dtype=np.int32))
+    for i, entries in rows.items():
+        for j, (code, amount) in enumerate(entries):
+            out.graphs[i, j] = code
+            out.amounts[i, j] = amount
+    return out
+
+
+def _cols_facts(cols: "PlatformColumns", i: int, s: PlatformState) -> tuple[dict, ...]:
+    """One platform's facts, keyed per column family (see :meth:`_build`)."""
+    p = s.platform
+    numbers = [v for _k, v in p.capacities] + [v for _k, v in s.load] + [v for _k, v in p.properties]
+    numbers += [a for _g, use in s.deployed for _r, a in use]
+    if _inexact(p.preference) or any(_inexact(v) for v in numbers):
+        cols._inexact_rows.add(i)
+    else:
+        cols._inexact_rows.discard(i)
+    attrs = {}
+    for key, value in p.attributes:
+        codes = cols._attr_code.setdefault(key, {})
+        code = codes.get(repr(value))
+        if code is None:
+            code = codes[repr(value)] = len(codes)
+            cols._attr_text.setdefault(key, {}).setdefault(str(value), []).append(code)
+        attrs[key] = code
+    kinds: dict[str, int] = {}
+    vendors: dict[tuple[str, str], int] = {}
+    for d in s.devices:
+        kinds[d.kind] = kinds.get(d.kind, 0) + 1
+        vendors[(d.kind, d.vendor)] = vendors.get((d.kind, d.vendor), 0) + 1
+    shares: dict[str, list[tuple[int, float]]] = {}
+    for g, use in s.deployed:  # the order of PlatformState.used_by: deployments, then their uses
+        code = cols._graph_code.setdefault(g, len(cols._graph_code))
+        for res, amount in use:
+            if amount:
+                shares.setdefault(res, []).append((code, amount))
+    return dict(p.capacities), dict(s.load), dict(p.properties), attrs, kinds, vendors, shares
+
+# -- incremental upkeep ----------------------------------------------------------------
+
+
+def _cols_rejected(cols: "PlatformColumns", reqs: tuple, ok: np.ndarray, rows: np.ndarray, graph: _validity.Placing, reasons: bool) -> tuple[_Pair, ...]:
+    """``(name, failures)`` of each rejected row, in the order of ``rows`` (``ok``: reqs x rows).
+
+    Each failing (requirement, row) cell gets its Failure first, one requirement at a
+    time; then the rows are grouped by which cells they fail, and each group's
+    failure tuples are zipped together from those cells."""
+    up = cols._up[rows]
+    failing = ~ok & up  # a down row fails only "platform up"
+    if not reasons and len(reqs):  # the first failure only
+        first = np.argmax(failing, axis=0)
+        failing = np.zeros_like(failing)
+        failing[first, np.arange(len(rows))] = up
+    table = np.vstack([~up, failing])  # (1 + reqs) x rows: which failures each row has
+    cells = [_cols_down_failures(cols, rows, ~up, graph)]
+    cells += [_cols_failures(cols, req, rows, fails, graph) if fails.any() else None for req, fails in zip(reqs, failing)]
+    _first, inv = _classes(table.T)
+    out: list[Any] = [None] * len(rows)
+    for pos in np.split(np.argsort(inv, kind="stable"), np.cumsum(np.bincount(inv))[:-1]):
+        columns = [cells[k][pos].tolist() for k in np.flatnonzero(table[:, pos[0]]).tolist()]  # type: ignore[index]
+        for p, fails in zip(pos.tolist(), zip(*columns)):
+            out[p] = fails
+    return tuple(zip(cols._names[rows].tolist(), out))
+
+
+def _cols_failures(cols: "PlatformColumns", req: Any, rows: np.ndarray, fails: np.ndarray, graph: _validity.Placing) -> np.ndarray:
+    """Object array over ``rows``: the Failure of ``req`` where ``fails`` (None elsewhere),
+    taken from the memo or made and kept there."""
+    where = rows[fails]
+    memo = _cols_memo(cols, req, graph)
+    got: list[Any] = list(map(memo.get, where.tolist())) if memo else [None] * len(where)
+    missing = [j for j, f in enumerate(got) if f is None]
+    if missing:
+        new = where[missing] if len(missing) < len(where) else where
+        names = cols._names[new].tolist()
+        made = list(map(_validity.Failure, names, repeat(req.describe()), _cols_texts(cols, req, new, graph)))
+        memo.update(zip(new.tolist(), made))
+        cols._memoised += len(made)
+        if len(missing) == len(got):
+            got = made
+        else:
+            for j, f in zip(missing, made):
+                got[j] = f
+    out = np.empty(len(rows), dtype=object)
+    out[fails] = got
+    return out
+
+
+def _cols_down_failures(cols: "PlatformColumns", rows: np.ndarray, down: np.ndarray, graph: _validity.Placing) -> np.ndarray | None:
+    """Object array over ``rows``: a down row's one failure, as the scalar check gives it
+    (its text depends only on whether the platform is on demand)."""
+    if not down.any():
+        return None
+    where = rows[down]
+    scalar = _cols_shared(
+        where, cols._on_demand[where][:, None], lambda i: _validity.check_platform((), cols.states[i], graph, first_only=True)[0]
+    )
+    out = np.empty(len(rows), dtype=object)
+    out[down] = [_validity.Failure(name, f.requirement, f.reason) for name, f in zip(cols._names[where].tolist(), scalar)]
+    return out
+
+
+def _cols_texts(cols: "PlatformColumns", req: Any, rows: np.ndarray, graph: _validity.Placing) -> list[str]:
+    """The reason ``req`` fails on each of ``rows`` (all failing): the kind's
+    ``column_texts`` if it formats them (a Capacity's text, which differs on most rows:
+    :meth:`capacity_texts`), else the scalar text, asked once per class of rows with
+    equal :func:`_cols_text_keys`."""
+    texts = req.column_texts(cols, rows, graph)
+    if texts is not None:
+        return texts  # type: ignore[no-any-return]
+    return _cols_shared(rows, _cols_text_keys(cols, req, rows, graph), lambda i: _cols_reason(cols, req, i, graph))
+
+
+def _cols_capacity_texts(cols: "PlatformColumns", req: Capacity, rows: np.ndarray, graph: _validity.Placing) -> list[str] | None:
+    """Capacity reasons formatted from the columns, as the scalar formats them
+    ("<free>[ MB] free (capacity <c>, used by <graph> <amount>, ..., load <l>)", every
+    number with ``:g``; the free amount summed as :meth:`capacity` sums it). Checked
+    against the scalar text on the first row and on a row listing the most shares:
+    None (ask the scalar) if either differs."""
+    cap = cols._caps.get(req.resource)
+    if cap is None:
+        return None
+    out = np.empty(len(rows), dtype=object)
+    has = ~np.isnan(cap[rows])
+    if not has.all():  # "has no <resource> capacity": one text
+        out[~has] = _cols_reason(cols, req, int(rows[~has][0]), graph)
+    where = rows[has]
+    c = cap[where]
+    load = cols._loads.get(req.resource)
+    l = load[where] if load is not None else np.zeros(len(where))
+    used, shares, listed = np.zeros(len(where)), np.full(len(where), "", dtype=object), np.zeros(len(where), dtype=np.intp)
+    sh = cols._shares.get(req.resource)
+    if sh is not None:
+        graphs, amounts = sh.graphs[where], sh.amounts[where]
+        excluded = cols._excluded(graph)
+        if excluded is not None:
+            left_out = np.isin(graphs, excluded)
+            graphs[left_out] = -1
+            amounts[left_out] = 0.0
+        used_by = np.array([f", used by {g} " for g in cols._graph_code], dtype=object)  # by code
+        for j in range(amounts.shape[1]):  # left to right, as Python's sum adds them
+            used = used + amounts[:, j]
+            on = graphs[:, j] >= 0
+            if on.any():
+                piece = np.full(len(where), "", dtype=object)
+                piece[on] = used_by[graphs[on, j]] + _g(amounts[on, j])
+                shares = shares + piece
+                listed += on
+    unit = " MB" if req.resource == "memory" else ""
+    texts = _g(c - used - l) + f"{unit} free (capacity " + _g(c) + shares + ", load " + _g(l) + ")"
+    for j in {0, int(np.argmax(listed))} if len(where) else ():
+        if _validity.requirement_holds(req, cols.states[int(where[j])], graph) != texts[j]:
+            return None
+    out[has] = texts
+    return out.tolist()  # type: ignore[no-any-return]
+
+
+def _cols_reason(cols: "PlatformColumns", req: Any, i: int, graph: _validity.Placing) -> str:
+    reason = _validity.requirement_holds(req, cols.states[i], graph)
+    if reason is None:  # the masks and the scalar semantics disagree: a bug here
+        raise AssertionError(f"placement columns: {req.describe()} fails on {cols._names[i]} but the scalar check holds")
+    return reason
+
+
+def _cols_shared(rows: np.ndarray, keys: np.ndarray, ask: Callable[[int], Any]) -> list[Any]:
+    """``ask(row)`` for each of ``rows``, asked only of the first row of each class of
+    equal ``keys`` (rows x width) and shared with the rest of the class."""
+    first, inv = _classes(keys)
+    answers = np.empty(len(first), dtype=object)
+    answers[:] = [ask(i) for i in rows[first].tolist()]
+    return answers[inv].tolist()  # type: ignore[no-any-return]
+
+
+def _cols_text_keys(cols: "PlatformColumns", req: Any, rows: np.ndarray, graph: _validity.Placing) -> np.ndarray:
+    """rows x width integers such that rows with equal keys get byte-equal reason texts
+    from the scalar semantics for ``req``: the facts each text shows, read from the
+    columns (floats by their bits, so -0.0 and 0.0 differ; an int and the equal float
+    print alike with ``:g``). Keys may split rows whose texts are equal, never join
+    rows whose texts differ."""
+    key = req.column_keys(cols, rows, graph)
+    return key[:, None] if key.ndim == 1 else key  # type: ignore[no-any-return]
+
+
+def _cols_memo(cols: "PlatformColumns", req: object, graph: _validity.Placing) -> dict[int, _validity.Failure]:
+    """Row -> the Failure of ``req`` for ``graph``, kept until the row changes; beyond
+    :data:`_REASONS_KEPT` failures the least recently asked requirements lose theirs."""
+    # repr: equal requirements may read differently (2 vs 2.0); only a Capacity's text
+    # depends on the graph placed (whose shares it leaves out)
+    key = (repr(req), graph if type(req).texts_read_graph else None)  # type: ignore[attr-defined]
+    memo = cols._reasons.pop(key, None)
+    if memo is None:
+        memo = {}
+        while cols._memoised > _REASONS_KEPT and cols._reasons:  # least recently asked first
+            cols._memoised -= len(cols._reasons.pop(next(iter(cols._reasons))))
+    cols._reasons[key] = memo  # (re)inserted last: the most recently asked
+    return memo
 
 
 def _g(values: np.ndarray) -> np.ndarray:
