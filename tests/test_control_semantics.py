@@ -18,6 +18,7 @@ from desmon.repository.facts import RepositoryInsert, load_model
 from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import Repository
 from desmon.sim.engine import SimWorld, simulate
+from desmon.sim.processes import fault
 from desmon.sim.world import Step, World
 from desmon.verify.checker import Checker
 from desmon.verify.replay import RepositoryRun
@@ -75,16 +76,16 @@ class _Engines:
             up = isinstance(ev, PlatformUp)
             StoreInsert(self.store).set_platform_up(ev.platform, up)  # type: ignore[union-attr]
             self.insert.set_platform_up(ev.platform, up)  # type: ignore[union-attr]
-        self.sim._fault(ev, "test")  # type: ignore[arg-type]
+        fault(self.sim.parts, ev, "test")  # type: ignore[arg-type]
         self.sim.env.run(until=self.sim.env.now + 1)  # the monitor notices it
 
     def start(self, graph: str, platform: str) -> tuple[bool, bool, bool]:
-        proc = self.sim.env.process(self.sim._start(graph, platform))
+        proc = self.sim.env.process(self.sim.infra.start(graph, platform))
         self.sim.env.run(until=proc)
         return self.store.start(graph, platform), self.control.start(graph, platform), proc.value is True
 
     def stop(self, graph: str, platform: str) -> tuple[bool, bool, bool]:
-        return self.store.stop(graph, platform), self.control.stop(graph, platform), self.sim._stop(graph, platform)
+        return self.store.stop(graph, platform), self.control.stop(graph, platform), self.sim.infra.stop(graph, platform)
 
     def deployments(self) -> tuple[tuple[str, str], ...]:
         a = self.store.deployments()

@@ -5,8 +5,8 @@ Written once and used by every engine (``docs/design.md`` §6; what it changed: 
 * the scripted replay and the checker's repository replay
   (:func:`repository_control`),
 * the checker's state store (:class:`desmon.verify.state.StateStore`),
-* the SimPy infrastructure (``SimWorld._start``), on the *physical* facts at the moment
-  the start completes.
+* the SimPy infrastructure (``desmon.sim.infrastructure.Infrastructure.start``), on the
+  *physical* facts at the moment the start completes.
 
 Rules
     A start of a graph on a platform it already runs on is a no-op success. Otherwise

@@ -8,9 +8,9 @@ names of the edge servers every robot's model declares (the same Platform in eac
 :class:`FleetWorld` runs them in one SimPy environment over one shared networkx
 :class:`~desmon.repository.store.Repository`: every robot's platforms, devices, graphs
 and requirements, the shared edge servers and one Robot node per robot. Each robot is
-an ordinary :class:`~desmon.sim.engine.SimWorld` process set (robot, context monitor,
-deployer, faults, loads) whose deployment core reads the repository through its own
-:class:`RobotView`: its own context, its own PCs and the edge servers -- never another
+assembled from the same parts as a :class:`~desmon.sim.engine.SimWorld`
+(:mod:`desmon.sim.parts`: robot, context monitor, deployer, faults, loads) and its
+deployment core reads the repository through its own :class:`RobotView`: its own context, its own PCs and the edge servers -- never another
 robot's PCs -- and only its own deployments to stop or re-check. An edge server's
 ``deployed`` facts hold every robot's detectors, so one robot's deployment there takes
 capacity every other robot's deployer sees (and the ``no-overcommit`` audit checks).
@@ -39,8 +39,7 @@ from typing import IO, Any, Callable, Iterable, Iterator
 
 import simpy
 
-from desmon.deployment.core import DeploymentCore
-from desmon.deployment.invariants import SystemView, check_invariants
+from desmon.deployment.invariants import SystemView
 from desmon.errors import QueryError, ScenarioError
 from desmon.model.checks import check_items, check_names, strict_init
 from desmon.model.platform import Platform
@@ -50,10 +49,12 @@ from desmon.deployment.validity import check_platform, reads_fixed_facts
 from desmon.model.requirements import Capacity, DeploymentSpec, Requirement
 from desmon.model.system import PlatformState, Rule, RuleTable, SystemModel
 from desmon.repository import labels as L
-from desmon.repository.facts import RepositoryInsert, load_model
+from desmon.repository.facts import load_model
 from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import ADD_EDGE, UPDATE_NODE, Change, Repository, node_id
-from desmon.sim.engine import SimWorld
+from desmon.sim.accounting import audit, robot_metrics
+from desmon.sim.parts import RobotParts, robot_parts, start_processes
+from desmon.sim.processes import apply_initial
 from desmon.sim.trace import Trace
 from desmon.sim.world import World
 
@@ -441,70 +442,66 @@ class _OwnView(SystemView):
         return d
 
 
-class _Member(SimWorld):
-    """One robot of the fleet: a SimWorld on the shared environment and repository."""
+class _Member:
+    """One robot of the fleet: the parts of a robot's world (:mod:`desmon.sim.parts`) on
+    the shared environment and repository, read through its :class:`RobotView`, its
+    edge servers behind their admission control, its audit on its own deployments."""
 
     def __init__(
         self, scenario: Scenario, *, env: simpy.Environment, repo: Repository, view: RobotView, deployer: str, seed: int,
         horizon: float, trace: Trace, edges: tuple[str, ...] = (), admission: bool = True,
     ) -> None:
-        self.scenario = scenario
         self.model = scenario.model
-        self.world = scenario.world
-        self.seed = seed
-        self.horizon = horizon
-        self.signals_on = False
-        self.trace = trace
-        self.progress = None
-        self.env = env
-        self.repo = repo
         self.query = view
-        self.core = DeploymentCore(self.model, view, RepositoryInsert(repo, self.model.robot), deployer)
-        self.deployer_name = self.core.deployer.name
-        self._edges = frozenset(edges)
-        self._init_physical()
-        if admission:
-            self.rules = _Admission(self.rules, view, frozenset(edges))  # type: ignore[assignment]
-        self._init_ground_truth()
-        self._init_metrics()
-        self._init_pending()
+        self.edges = frozenset(edges)
+        rules = (lambda control: _Admission(control, view, self.edges)) if admission else None
+        self.parts: RobotParts = robot_parts(
+            scenario, scenario.world, env=env, repo=repo, query=view, deployer=deployer, seed=seed, horizon=horizon,
+            signals=False, trace=trace, rules=rules, keep_decisions=False,
+        )
+        self.deployer_name = self.parts.core.deployer.name
+        #: what the fleet's router tells the robot: Notify, a DEPLOYMENT_HISTORY edge written
+        self.notify = self.parts.inbox.notify
+        self.count_history = self.parts.books.count_history
+        #: memory (MB) a running instance of each of its graphs consumes
+        self.consumes = self.parts.facts.consumes
+
+    @property
+    def violations(self) -> list[tuple[float, str, str]]:
+        return self.parts.books.violations
 
     def start(self) -> None:
-        """Register the robot's processes (SimWorld.run without running the environment)."""
-        self._apply_initial(self.scenario)
-        self._start_processes()
+        """The initial facts, silently, and the robot's processes (SimWorld.run without
+        running the environment)."""
+        apply_initial(self.parts)
+        start_processes(self.parts, self.audit)
 
-    def _audit(self) -> None:
+    def audit(self) -> None:
         """The named invariants on this robot's view: its own deployments, judged on the
         platforms' full facts (an edge server's capacity with every robot's detectors)."""
-        self.audits += 1
-        core = self.core
+        parts = self.parts
+        core = parts.core
         view = _OwnView(
-            self._audited_states(), core.specs(), core.standing, core.slots(), tuple(sorted(self.instances)),
-            self.stops, self.history_edges, core.guarded_react,
+            self._audited_states(), core.specs(), core.standing, core.slots(), tuple(sorted(parts.facts.instances)),
+            parts.infra.stops, parts.books.history_edges, core.guarded_react,
         )
-        for name, msg in check_invariants(view):
-            self.violations.append((self.env.now, name, msg))
-            self.trace.emit(self.env.now, "violation", invariant=name, message=msg)
+        audit(parts, view)
 
     def _audited_states(self) -> tuple[PlatformState, ...]:
         """The states the audit reads: the robot's own PCs and the edge servers where one of
         its detectors runs. An edge server without one holds nothing this robot's
         invariants judge, and it cannot be over-committed by a start of this robot: the
         robot whose start over-commits it audits it at its own next quiescent point."""
-        edges = self._edges
-        mine = {p for (_g, p) in self.instances if p in edges}
+        edges = self.edges
+        mine = {p for (_g, p) in self.parts.facts.instances if p in edges}
         return tuple(s for s in self.query.platform_states() if s.name not in edges or s.name in mine)
 
-    def _decision(self, what: str, graph: str, platform: str, ok: bool, issued: float, why: str) -> None:
-        """Counted in the trace only (a fleet keeps no per-robot decision list in memory)."""
-        self.trace.emit(self.env.now, "decision", command=what, graph=graph, platform=platform, ok=ok, issued=issued, why=why)
-
     def finish(self, now: float) -> dict[str, Any]:
-        self.exposure.close(now)
-        self.memory.close(now)
-        m = self._metrics()
-        m["audits"] = self.audits
+        parts = self.parts
+        parts.exposure.close(now)
+        parts.memory.close(now)
+        m = robot_metrics(parts)
+        m["audits"] = parts.books.audits
         return m
 
 
@@ -623,20 +620,20 @@ class FleetWorld:
         if label == L.IN_CONTEXT:
             mb = self._robot_of.get(change.source)  # type: ignore[arg-type]
             if mb is not None:
-                mb._notify(change)
+                mb.notify(change)
             return
         if label == L.HAS_DEVICE:
             name = change.source.partition(":")[2]  # type: ignore[union-attr]
             self.cache.mark(name)
             for mb in self._owners.get(name, ()):
-                mb._notify(change)
+                mb.notify(change)
             return
         if label == L.PLATFORM:
             if change.op == UPDATE_NODE:
                 name = change.node.partition(":")[2]  # type: ignore[union-attr]
                 self.cache.mark(name)
                 for mb in self._owners.get(name, ()):
-                    mb._notify(change)
+                    mb.notify(change)
             return
         if label == L.DEPLOYMENT:
             if change.op == UPDATE_NODE:  # a requirement change: what deployments consume
@@ -655,7 +652,7 @@ class FleetWorld:
             if mb is not None:
                 mb.query.forget_deployments(change.source.partition(":")[2])  # type: ignore[union-attr]
                 if label == L.DEPLOYMENT_HISTORY:
-                    mb._count_history(change)
+                    mb.count_history(change)
 
     def _progress(self):  # type: ignore[no-untyped-def]
         step = max(self.horizon / 100.0, 1.0)

@@ -486,8 +486,8 @@ class World:
             problem = event_problem(te.event, model, changes)
             if problem is not None:
                 raise ScenarioError(f"{where}: at t={te.time:g}: {problem}")
-        self._check_runtime_changes(model, where, changes)
-        self._check_components(scenario, where)
+        _check_runtime_changes(self, model, where, changes)
+        _check_components(self, scenario, where)
         kinds = sorted({d.kind for d in model.devices})
         for kind, stream in self.signal_kinds:
             if kind not in kinds and (kind, stream) not in SIGNAL_KINDS:
@@ -495,61 +495,62 @@ class World:
                     f"{where}: signal_kinds maps {kind!r}, which no device is{suggest(kind, kinds)}: fix the kind (kinds: {', '.join(kinds)})"
                 )
 
-    def _check_runtime_changes(self, model: SystemModel, where: str, changes: list[Event]) -> None:
-        """Random requirement changes and the lease name what the model has."""
-        for ev in self.random_changes.changes if self.random_changes else ():
-            problem = event_problem(ev, model, changes)
-            if problem is not None:
-                raise ScenarioError(f"{where}: random changes: {problem}")
-        if self.lease is None:
-            return
-        on_demand = [p.name for p in model.platforms if p.on_demand]
-        if not on_demand:
-            raise ScenarioError(f"{where}: lease given but no platform is on demand: declare one with on_demand=True or drop lease")
-        for p in self.lease.platforms:
-            if p not in on_demand:
-                raise ScenarioError(f"{where}: lease names {p!r}, which is no on-demand platform{suggest(p, on_demand)} (on demand: {', '.join(on_demand)})")
 
-    def _check_components(self, scenario: Scenario, where: str) -> None:
-        """The devices, platforms and graphs named by MTTFs, load walks, start latencies and
-        the start failure script exist in the scenario's model."""
-        model = scenario.model
-        devices = [d.name for d in model.devices]
-        platforms = [p.name for p in model.platforms]
-        for m in self.stochastic_faults:
-            if m.component not in devices and m.component not in platforms:
-                raise ScenarioError(
-                    f"{where}: MTTF for unknown component {m.component!r}{suggest(m.component, devices + platforms)} "
-                    f"(devices {sorted(devices)}, platforms {sorted(platforms)})"
-                )
-            if m.component in platforms and model.platform(m.component).on_demand:
-                raise ScenarioError(f"{where}: MTTF for on-demand platform {m.component!r}: it joins and leaves; script PlatformJoin / PlatformLeave in changes= instead")
-            if m.component in devices and m.component in platforms:
-                raise ScenarioError(
-                    f"{where}: MTTF for {m.component!r} is ambiguous: it names both a device and a platform; rename one of them"
-                )
-        for w in self.load_walks:
-            problem = event_problem(LoadChange(w.platform, w.low, w.resource), model)
-            if problem is not None:
-                raise ScenarioError(f"{where}: load walk: {problem}")
-        for p, _v in self.platform_latency:
-            if p not in platforms:
-                raise ScenarioError(f"{where}: start latency for unknown platform {p!r}{suggest(p, platforms)} (platforms: {', '.join(platforms)})")
-        self._check_start_script(where, [g.name for g in model.graphs], platforms)
+def _check_runtime_changes(world: World, model: SystemModel, where: str, changes: list[Event]) -> None:
+    """Random requirement changes and the lease name what the model has."""
+    for ev in world.random_changes.changes if world.random_changes else ():
+        problem = event_problem(ev, model, changes)
+        if problem is not None:
+            raise ScenarioError(f"{where}: random changes: {problem}")
+    if world.lease is None:
+        return
+    on_demand = [p.name for p in model.platforms if p.on_demand]
+    if not on_demand:
+        raise ScenarioError(f"{where}: lease given but no platform is on demand: declare one with on_demand=True or drop lease")
+    for p in world.lease.platforms:
+        if p not in on_demand:
+            raise ScenarioError(f"{where}: lease names {p!r}, which is no on-demand platform{suggest(p, on_demand)} (on demand: {', '.join(on_demand)})")
 
-    def _check_start_script(self, where: str, graphs: list[str], platforms: list[str]) -> None:
-        """Each (graph, platform, n) of the start failure script names a known graph and platform."""
-        for graph, platform, n in self.start_failure.script:
-            if graph not in graphs:
-                raise ScenarioError(
-                    f"{where}: start failure script ({graph!r}, {platform!r}, {n}) names unknown perception graph "
-                    f"{graph!r}{suggest(graph, graphs)} (graphs: {', '.join(graphs)})"
-                )
-            if platform not in platforms:
-                raise ScenarioError(
-                    f"{where}: start failure script ({graph!r}, {platform!r}, {n}) names unknown platform "
-                    f"{platform!r}{suggest(platform, platforms)} (platforms: {', '.join(platforms)})"
-                )
+def _check_components(world: World, scenario: Scenario, where: str) -> None:
+    """The devices, platforms and graphs named by MTTFs, load walks, start latencies and
+    the start failure script exist in the scenario's model."""
+    model = scenario.model
+    devices = [d.name for d in model.devices]
+    platforms = [p.name for p in model.platforms]
+    for m in world.stochastic_faults:
+        if m.component not in devices and m.component not in platforms:
+            raise ScenarioError(
+                f"{where}: MTTF for unknown component {m.component!r}{suggest(m.component, devices + platforms)} "
+                f"(devices {sorted(devices)}, platforms {sorted(platforms)})"
+            )
+        if m.component in platforms and model.platform(m.component).on_demand:
+            raise ScenarioError(f"{where}: MTTF for on-demand platform {m.component!r}: it joins and leaves; script PlatformJoin / PlatformLeave in changes= instead")
+        if m.component in devices and m.component in platforms:
+            raise ScenarioError(
+                f"{where}: MTTF for {m.component!r} is ambiguous: it names both a device and a platform; rename one of them"
+            )
+    for w in world.load_walks:
+        problem = event_problem(LoadChange(w.platform, w.low, w.resource), model)
+        if problem is not None:
+            raise ScenarioError(f"{where}: load walk: {problem}")
+    for p, _v in world.platform_latency:
+        if p not in platforms:
+            raise ScenarioError(f"{where}: start latency for unknown platform {p!r}{suggest(p, platforms)} (platforms: {', '.join(platforms)})")
+    _check_start_script(world, where, [g.name for g in model.graphs], platforms)
+
+def _check_start_script(world: World, where: str, graphs: list[str], platforms: list[str]) -> None:
+    """Each (graph, platform, n) of the start failure script names a known graph and platform."""
+    for graph, platform, n in world.start_failure.script:
+        if graph not in graphs:
+            raise ScenarioError(
+                f"{where}: start failure script ({graph!r}, {platform!r}, {n}) names unknown perception graph "
+                f"{graph!r}{suggest(graph, graphs)} (graphs: {', '.join(graphs)})"
+            )
+        if platform not in platforms:
+            raise ScenarioError(
+                f"{where}: start failure script ({graph!r}, {platform!r}, {n}) names unknown platform "
+                f"{platform!r}{suggest(platform, platforms)} (platforms: {', '.join(platforms)})"
+            )
 
 
 def expand_task(world: World, horizon: float) -> tuple[Segment, ...]:

@@ -1,0 +1,171 @@
+"""The deployer driver of one robot's SimPy world: the process that runs the pure core.
+
+:class:`Inbox` collects what the repository's Notify subscription (or a fleet's router)
+reports -- platforms changed, the context changed, specifications changed -- and wakes
+the driver. :func:`deployer` takes it as a stimulus and drives ``core.reaction``: each
+``Start`` is executed by the Control infrastructure (latency, outcome), ``Stop`` at
+once, ``RaiseError`` is stamped with ``env.now``. After every reaction ``core.settle``
+and, when no newer fact is pending, the named invariants are audited (``audit``). No
+decision is made here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Callable, Iterable
+
+import simpy
+
+from desmon.deployment.core import not_a_command, stamp
+from desmon.deployment.guard import DeployerFault
+from desmon.deployment.monitor import Stimulus
+from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, RaiseError, Start, Stop
+from desmon.repository import labels as L
+from desmon.repository.store import UPDATE_NODE, Repository
+from desmon.sim.processes import maybe_lease
+
+if TYPE_CHECKING:
+    from desmon.sim.parts import RobotParts
+
+__all__ = ["Inbox", "deployer"]
+
+
+class Inbox:
+    """What the deployer process has yet to react to, and the event that wakes it."""
+
+    def __init__(self, repo: Repository) -> None:
+        self.repo = repo
+        self.platforms: dict[str, None] = {}
+        self.context = False
+        self.specs: dict[str, None] = {}
+        self.wake: simpy.Event | None = None
+
+    def notify(self, change: Any) -> None:
+        """Notify: a repository change the deployer reacts to (context, HAS_DEVICE, platform)."""
+        if change.label == L.IN_CONTEXT:
+            self.context = True
+        elif change.label == L.HAS_DEVICE:
+            self.platforms[self.repo.graph.nodes[change.source]["name"]] = None
+        elif change.label == L.PLATFORM and change.op == UPDATE_NODE:
+            self.platforms[self.repo.graph.nodes[change.node]["name"]] = None
+        self._wake()
+
+    def add(self, platforms: Iterable[str], specs: Iterable[str]) -> None:
+        """A requirement change the context monitor wrote: its platforms and specifications."""
+        self.platforms.update(dict.fromkeys(platforms))
+        self.specs.update(dict.fromkeys(specs))
+        self._wake()
+
+    def _wake(self) -> None:
+        if self.wake is not None and not self.wake.triggered:
+            self.wake.succeed()
+
+    def pending(self) -> bool:
+        return bool(self.platforms or self.context or self.specs)
+
+    def take(self) -> Stimulus:
+        stim = Stimulus(tuple(self.platforms), self.context, tuple(self.specs))
+        self.platforms = {}
+        self.context = False
+        self.specs = {}
+        return stim
+
+
+@dataclass
+class _Reaction:
+    """What the deployer process books during one reaction."""
+
+    slots: tuple[tuple[str, ...], ...]
+    raised: list[str] = field(default_factory=list)
+    stopped_here: dict[str, str] = field(default_factory=dict)
+    stopped_at: dict[str, float] = field(default_factory=dict)  # wanted slot members stopped in this reaction
+    tried: set[str] = field(default_factory=set)  # graphs whose start failed in this reaction
+
+
+def deployer(parts: RobotParts, audit: Callable[[], None]):  # type: ignore[no-untyped-def]
+    """The deployer's process: one reaction per stimulus, ``audit`` at every quiescent point."""
+    env = parts.env
+    inbox = parts.inbox
+    books = parts.books
+    core = parts.core
+    while True:
+        if not inbox.pending():
+            inbox.wake = env.event()
+            yield inbox.wake
+            inbox.wake = None
+        stim = inbox.take()
+        books.reactions += 1
+        ctx = parts.query.context()
+        parts.trace.emit(env.now, "reaction", context=ctx, changed=list(stim.changed_platforms), context_changed=stim.context_changed)
+        book = _Reaction(core.slots())  # what this reaction serves, even if the context moves on meanwhile
+        yield from _drive(parts, core.reaction(stim), book)
+        core.settle(book.raised)
+        quiescent = not inbox.pending()
+        for name, msg in core.findings:  # transition properties (no-flapping, errors-justified, ...)
+            # the others judge the reaction on the facts it left: only at a quiescent point
+            if name == "no-flapping" or quiescent:
+                books.violation(env.now, name, msg)
+        if quiescent:
+            audit()
+
+
+def _drive(parts: RobotParts, reaction: Any, book: _Reaction):  # type: ignore[no-untyped-def]
+    """Execute the commands of one reaction, sending each outcome back."""
+    outcome: bool | None = None
+    while True:
+        try:
+            cmd = reaction.send(outcome)
+        except StopIteration:
+            return
+        except DeployerFault as fault:  # where in the run: the first reaction means it cannot run at all
+            fault.initial = parts.books.reactions == 1
+            fault.args = (f"at t={parts.env.now:g} s, {fault.args[0]}",)
+            raise
+        if isinstance(cmd, Start):
+            outcome = yield from _command_start(parts, cmd, book)
+        elif isinstance(cmd, Stop):
+            outcome = _command_stop(parts, cmd, book)
+        elif isinstance(cmd, RaiseError):
+            outcome = None
+            _command_error(parts, cmd, book)
+        else:
+            raise not_a_command(cmd)
+
+
+def _command_start(parts: RobotParts, cmd: Start, book: _Reaction):  # type: ignore[no-untyped-def]
+    """Execute a Start of the reaction (latency, outcome) and count what it means."""
+    issued = parts.env.now
+    res = yield from parts.infra.start(cmd.graph, cmd.platform)
+    outcome = res is True
+    books = parts.books
+    instances = parts.facts.instances
+    elsewhere = [p for (g, p) in instances if g == cmd.graph and p != cmd.platform]
+    if outcome and (elsewhere or book.stopped_here.get(cmd.graph, cmd.platform) != cmd.platform):
+        books.migrations += 1
+    if outcome and book.stopped_at:
+        books.count_upgrade(cmd.graph, instances[(cmd.graph, cmd.platform)].valid_from, book.slots, book.stopped_at, book.tried)
+    elif not outcome:
+        book.tried.add(cmd.graph)
+    books.decision(parts.env.now, "start", cmd.graph, cmd.platform, outcome, issued, "" if outcome else str(res))
+    return outcome
+
+
+def _command_stop(parts: RobotParts, cmd: Stop, book: _Reaction) -> bool:
+    now = parts.env.now
+    outcome = parts.infra.stop(cmd.graph, cmd.platform)
+    if outcome:
+        book.stopped_here[cmd.graph] = cmd.platform
+        if any(cmd.graph in slot and len(slot) > 1 for slot in book.slots):
+            book.stopped_at[cmd.graph] = now
+    parts.books.decision(now, "stop", cmd.graph, cmd.platform, outcome, now, "")
+    return outcome
+
+
+def _command_error(parts: RobotParts, cmd: RaiseError, book: _Reaction) -> None:
+    now = parts.env.now
+    rec = stamp(cmd, now)
+    parts.books.errors.append(rec)
+    book.raised.append(cmd.graph)
+    parts.trace.emit(now, "error", kind=rec.kind, graph=rec.graph, platform=rec.platform, detail=rec.detail)
+    if cmd.kind == NO_ACCEPTABLE_PLATFORMS and parts.world.lease is not None:
+        maybe_lease(parts, cmd.graph)

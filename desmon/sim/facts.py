@@ -1,0 +1,151 @@
+"""The physical facts of one robot's SimPy world, and its ground truth.
+
+:class:`PhysicalFacts` is what is *really* so, whatever the repository says: which
+platforms are up, their background memory load, which devices work, which detector
+instances run where and what each consumes. The Control infrastructure
+(:mod:`desmon.sim.infrastructure`) changes it; the exposure meter, the audit and the
+Control rules read it.
+
+:class:`GroundTruth` is what the robot does and what happens to it: the task's
+segments, the slips drawn for the run, the sensor bank (signals on) and the detector
+wake-up grid around the slips (:meth:`GroundTruth.next_wake`).
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from desmon.detectors.signals import Segment
+from desmon.model.system import PlatformState, SystemModel
+from desmon.sim.sensors import DetectorAdapter, SensorBank
+from desmon.sim.world import Slip, World, draw_slips, expand_task, like_segments
+
+__all__ = ["Instance", "PhysicalFacts", "GroundTruth", "SLIP_WINDOW"]
+
+#: Around a ground-truth slip at t_s, detectors wake every ``world.block`` seconds in
+#: [t_s + lo, t_s + hi] (a pulled slip loads the wrist up to 1 s before motion onset;
+#: the detection window ends 1 s after it).
+SLIP_WINDOW = (-2.0, 2.0)
+
+
+@dataclass
+class Instance:
+    """A running detector: a graph started on a platform by the infrastructure."""
+
+    graph: str
+    platform: str
+    memory: float
+    streams: dict[str, tuple[str, ...]]  # stream -> devices read
+    adapter: DetectorAdapter | None
+    started: float
+    valid_from: float = math.inf
+    fed: float = 0.0
+    halted: bool = False
+    proc: Any = None
+    gen: int = 0  # activations so far (a warm-up end of an older one is ignored)
+
+
+class PhysicalFacts:
+    """Platforms up (an on-demand one absent until it joins), loads, devices, instances."""
+
+    def __init__(self, model: SystemModel) -> None:
+        self.model = model
+        self.up = {p.name: not p.on_demand for p in model.platforms}
+        self.load: dict[str, float] = {p.name: 0.0 for p in model.platforms}
+        self.dev_ok = {d.name: True for d in model.devices}
+        self.host = {d.name: d.platform for d in model.devices}
+        self.hosted = {p.name: model.devices_on(p.name) for p in model.platforms}
+        self.instances: dict[tuple[str, str], Instance] = {}
+        #: memory (MB) a running instance of each graph consumes: its spec's consumption()
+        self.consumes = {s.graph: dict(s.consumption()).get("memory", 0.0) for s in model.specs}
+
+    def used(self, p: str) -> float:
+        """Memory in use on ``p``: its background load and its instances (0 while down)."""
+        if not self.up[p]:
+            return 0.0
+        return self.load[p] + sum(i.memory for i in self.instances.values() if i.platform == p)
+
+    def readable(self, device: str) -> bool:
+        """A device's signal reaches a detector while it works and its platform is up."""
+        return self.dev_ok[device] and self.up[self.host[device]]
+
+    def inputs_ok(self, inst: Instance) -> bool:
+        return all(any(self.readable(d) for d in devs) for devs in inst.streams.values())
+
+    def state(self, platform: str) -> PlatformState:
+        """The physical facts of ``platform`` the Control rules read (up, working devices)."""
+        return PlatformState(
+            self.model.platform(platform),
+            self.up[platform],
+            tuple(d for d in self.hosted[platform] if self.dev_ok[d.name]),
+        )
+
+    def alive(self, inst: Instance) -> bool:
+        return self.up[inst.platform] and not inst.halted and self.inputs_ok(inst)
+
+    def valid_from(self, graph: str) -> float:
+        """The earliest time a running instance of ``graph`` is valid from (inf: none)."""
+        best = math.inf
+        for inst in self.instances.values():
+            if inst.graph == graph and self.alive(inst):
+                best = min(best, inst.valid_from)
+        return best
+
+    def physically_valid(self, graph: str, platform: str) -> bool:
+        """Whether the running instance of ``graph`` on ``platform`` can monitor: its
+        platform is up and every stream it reads has a readable device (warm-up aside)."""
+        inst = self.instances.get((graph, platform))
+        return inst is not None and self.up[platform] and self.inputs_ok(inst)
+
+
+class GroundTruth:
+    """Task segments, slips and (with signals on) the sensor bank of one run."""
+
+    def __init__(self, world: World, model: SystemModel, horizon: float, seed: int, signals: bool) -> None:
+        self.world = world
+        self.segments: tuple[Segment, ...] = expand_task(world, horizon)
+        #: the same segments as the signals see them: each action replaced by the built-in it is like
+        physical = like_segments(self.segments, model.like)
+        slips = draw_slips(world, physical, seed)
+        self.slips: tuple[Slip, ...] = tuple(s for s in slips if s.time < horizon)
+        self._busy = _merge_windows([(s.time + SLIP_WINDOW[0], s.time + SLIP_WINDOW[1]) for s in self.slips])
+        devs = [(d, world.signal_of(d.kind)) for d in model.devices]
+        self.stream_of = {d.name: s for d, s in devs}
+        self.bank: SensorBank | None = None
+        if signals:
+            self.bank = SensorBank(physical, self.slips, seed, [(d, s) for d, s in devs if s is not None])
+
+    def next_wake(self, now: float) -> float:
+        """The next detector wake-up after ``now``: the next ``block`` grid point while a
+        slip window is near, else the grid point ``quiet_block`` ahead (or the grid point
+        that starts the next slip window, whichever comes first)."""
+        block = self.world.block
+        k = math.floor(now / block + 1e-9) + 1
+        nxt = k * block
+        quiet = self.world.quiet_block
+        if quiet <= block:
+            return nxt
+        far = max(nxt, math.floor((now + quiet) / block + 1e-9) * block)
+        lo, hi = self._busy
+        i = bisect.bisect_right(hi, now)
+        if i < len(lo) and lo[i] < far:
+            if lo[i] <= nxt:
+                return nxt
+            return max(nxt, math.floor(lo[i] / block + 1e-9) * block)
+        return far
+
+
+def _merge_windows(ws: list[tuple[float, float]]) -> tuple[list[float], list[float]]:
+    """Sorted, merged windows as ``(starts, ends)``."""
+    lo: list[float] = []
+    hi: list[float] = []
+    for a, b in sorted(ws):
+        if hi and a <= hi[-1]:
+            hi[-1] = max(hi[-1], b)
+        else:
+            lo.append(a)
+            hi.append(b)
+    return lo, hi

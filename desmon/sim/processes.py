@@ -1,0 +1,289 @@
+"""The processes of one robot's SimPy world: small generator functions over the robot's
+parts (:class:`desmon.sim.parts.RobotParts`), and the steps they take.
+
+* **Robot** (:func:`robot`) walks the task's ground-truth segments; each new action
+  becomes a gripper / base observation that the context monitor interprets
+  (``deployment.monitor.interpret``) after the recognition delay (:func:`recognise`). An
+  action the gripper does not show (``rotate_*``, a model's own actions) is recognised
+  directly, after the same delay.
+* **Context monitor** (:func:`insert`, :func:`notice`) inserts facts into the repository
+  through the core's Insert port (context, HAS_DEVICE loss / repair noticed after the
+  heartbeat timeout, platform up / down, background load).
+* **Fault injector** (:func:`fault`, :func:`scripted_faults`, :func:`stochastic_faults`)
+  fails and repairs devices and platforms (script or MTTF / MTTR); **load** processes
+  (:func:`scripted_loads`, :func:`load_walk`) change the background memory load.
+* **Run-time changes** (:func:`change`, :func:`scripted_changes`, :func:`random_changes`)
+  and **leases** (:func:`maybe_lease`, :func:`lease`) of on-demand platforms.
+"""
+
+from __future__ import annotations
+
+import random
+from typing import TYPE_CHECKING, Callable
+
+from desmon.deployment.lease import lease_choice
+from desmon.deployment.monitor import GripperObservation, interpret
+from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
+from desmon.model.events import (
+    ActionChange,
+    DeviceEvent,
+    DeviceFail,
+    DeviceRepair,
+    Event,
+    LoadChange,
+    PlatformDown,
+    PlatformEvent,
+    PlatformJoin,
+    PlatformLeave,
+    PlatformUp,
+    RequirementChange,
+)
+from desmon.sim.trace import graph_resources
+
+if TYPE_CHECKING:
+    from desmon.sim.parts import RobotParts
+
+__all__ = [
+    "OBSERVATION", "apply_initial", "robot", "recognise", "insert", "notice", "fault", "scripted_faults", "stochastic_faults",
+    "set_load", "scripted_loads", "load_walk", "change", "follow_consumption", "scripted_changes", "random_changes",
+    "maybe_lease", "lease", "progress",
+]
+
+#: What the context monitor sees of gripper and base in each ground-truth action; an
+#: action not listed here (rotate_*, a model's own actions) is recognised directly.
+OBSERVATION = {
+    GRASP: GripperObservation("closing"),
+    RELEASE: GripperObservation("opening"),
+    MOVE_BASE: GripperObservation("closed", base_moving=True),
+    HOLD: GripperObservation("closed"),
+    IDLE: GripperObservation("open", holding=False),
+}
+
+
+def apply_initial(parts: RobotParts) -> None:
+    """The scenario's initial facts, silently (before Notify is wired)."""
+    infra = parts.infra
+    for ev in parts.scenario.initial:
+        if isinstance(ev, PlatformEvent):
+            infra.platform_flip(ev.platform, ev.up, 0.0)
+        else:
+            infra.apply_physical(ev, 0.0)
+        parts.core.observe(ev)
+        if isinstance(ev, RequirementChange):
+            follow_consumption(parts, ev.graph)
+    for p in parts.facts.up:
+        parts.memory.set(p, 0.0, parts.facts.used(p))
+
+
+# ---------------------------------------------------------------------- robot and context monitor
+def robot(parts: RobotParts):  # type: ignore[no-untyped-def]
+    env = parts.env
+    risky = parts.model.risky_actions
+    slots_for = parts.model.rules.slots_for
+    for seg in parts.truth.segments:
+        if seg.start > env.now:
+            yield env.timeout(seg.start - env.now)
+        # the selector's slots in the TRUE context, kept apart (one covered slot does
+        # not hide an uncovered one); the core's selector gives them for the recognised
+        # one. Exposure counts risky contexts only (an object in the hand).
+        slots = slots_for(seg.context) if seg.context in risky else ()
+        parts.trace.emit(env.now, "action", action=seg.context, duration=seg.duration)
+        parts.exposure.set_wanted(env.now, slots, seg.context)
+        env.process(recognise(parts, seg.context))
+
+
+def recognise(parts: RobotParts, action: str):  # type: ignore[no-untyped-def]
+    if parts.world.recognition_delay:
+        yield parts.env.timeout(parts.world.recognition_delay)
+    obs = OBSERVATION.get(action)
+    context = interpret(obs) if obs is not None else action
+    insert(parts, ActionChange(context))
+
+
+def insert(parts: RobotParts, ev: Event) -> None:
+    """The context monitor writes a fact (Insert); Notify does the rest."""
+    stim = parts.core.observe(ev)
+    if not stim.empty:
+        parts.trace.emit(parts.env.now, "fact", fact=str(ev))
+
+
+def notice(parts: RobotParts, ev: Event):  # type: ignore[no-untyped-def]
+    if parts.world.heartbeat_timeout:
+        yield parts.env.timeout(parts.world.heartbeat_timeout)
+    insert(parts, ev)
+
+
+# ---------------------------------------------------------------------- faults and loads
+def fault(parts: RobotParts, ev: Event, source: str) -> None:
+    """The fault injector changes the physical world; the monitor notices later."""
+    env = parts.env
+    now = env.now
+    facts = parts.facts
+    infra = parts.infra
+    if isinstance(ev, DeviceEvent):
+        if facts.dev_ok[ev.device] == ev.working:
+            return
+        parts.trace.emit(now, "fault", event=str(ev), source=source)
+        parts.exposure.advance(now)
+        readers = [i for i in facts.instances.values() if any(ev.device in devs for devs in i.streams.values())]
+        infra.inputs_change(readers, now, lambda: infra.apply_physical(ev, now))
+    else:
+        up = ev.up
+        if facts.up[ev.platform] == up:
+            return
+        parts.trace.emit(now, "fault", event=str(ev), source=source)
+        parts.exposure.advance(now)
+        hosted = {d.name for d in facts.hosted[ev.platform]}
+        readers = [
+            i for i in facts.instances.values()
+            if i.platform != ev.platform and any(d in hosted for devs in i.streams.values() for d in devs)
+        ]
+        infra.inputs_change(readers, now, lambda: infra.platform_flip(ev.platform, up, now))
+        parts.trace.emit(now, "platform", platform=ev.platform, up=up)
+    infra.flush_ready()
+    parts.exposure.check(now)
+    env.process(notice(parts, ev))
+
+
+def scripted_faults(parts: RobotParts):  # type: ignore[no-untyped-def]
+    env = parts.env
+    for te in parts.world.faults:
+        if te.time >= parts.horizon:
+            break
+        if te.time > env.now:
+            yield env.timeout(te.time - env.now)
+        fault(parts, te.event, te.label or "script")
+
+
+def stochastic_faults(parts: RobotParts, component: str, mttf: float, mttr: float):  # type: ignore[no-untyped-def]
+    env = parts.env
+    rng = random.Random(f"{parts.seed}:fault:{component}")
+    is_dev = component in parts.facts.dev_ok
+    while True:
+        yield env.timeout(rng.expovariate(1.0 / mttf))
+        fault(parts, DeviceFail(component) if is_dev else PlatformDown(component), "mttf")
+        yield env.timeout(rng.expovariate(1.0 / mttr))
+        fault(parts, DeviceRepair(component) if is_dev else PlatformUp(component), "mttr")
+
+
+def set_load(parts: RobotParts, ev: LoadChange) -> None:
+    if ev.resource == "memory":
+        parts.facts.load[ev.platform] = ev.amount
+        parts.infra.mem(ev.platform)
+    parts.trace.emit(parts.env.now, "load", platform=ev.platform, resource=ev.resource, amount=ev.amount)
+    insert(parts, ev)
+
+
+def scripted_loads(parts: RobotParts):  # type: ignore[no-untyped-def]
+    env = parts.env
+    for te in parts.world.loads:
+        if te.time >= parts.horizon:
+            break
+        if te.time > env.now:
+            yield env.timeout(te.time - env.now)
+        set_load(parts, te.event)  # type: ignore[arg-type]
+
+
+def load_walk(parts: RobotParts, i: int):  # type: ignore[no-untyped-def]
+    w = parts.world.load_walks[i]
+    rng = random.Random(f"{parts.seed}:load:{w.platform}:{i}")
+    x = w.start
+    set_load(parts, LoadChange(w.platform, round(x, 1), w.resource))
+    while True:
+        yield parts.env.timeout(w.interval)
+        x = min(w.high, max(w.low, x + w.drift + rng.gauss(0.0, w.sigma)))
+        set_load(parts, LoadChange(w.platform, round(x, 1), w.resource))
+
+
+# ---------------------------------------------------------------------- run-time changes and leases
+def change(parts: RobotParts, ev: Event, source: str) -> None:
+    """A scripted or random run-time change: a requirement change is written by the
+    context monitor at once (it is a decision of the robot's software, not a fault to
+    be noticed); a platform joins or leaves like a platform that comes up or goes down."""
+    now = parts.env.now
+    if isinstance(ev, PlatformEvent):
+        fault(parts, ev, source)
+        if ev.up:
+            parts.books.lease_joined(ev.platform, now)
+        else:
+            parts.books.lease_left(ev.platform, now)
+        return
+    parts.trace.emit(now, "change", event=str(ev), source=source)
+    stim = parts.core.observe(ev)
+    if stim.empty:
+        return
+    parts.books.requirement_changes += 1
+    follow_consumption(parts, ev.graph)
+    parts.trace.emit(now, "consumption", graph=ev.graph, resources=graph_resources(parts.query.deployment_information(ev.graph)))
+    parts.trace.emit(now, "fact", fact=str(ev))
+    parts.inbox.add(stim.changed_platforms, stim.specs_changed)
+
+
+def follow_consumption(parts: RobotParts, graph: str) -> None:
+    """What ``graph`` consumes follows its current specification, running instances included."""
+    parts.infra.follow_consumption(graph, parts.query.deployment_information(graph))
+
+
+def scripted_changes(parts: RobotParts):  # type: ignore[no-untyped-def]
+    env = parts.env
+    for te in parts.world.changes:
+        if te.time >= parts.horizon:
+            break
+        if te.time > env.now:
+            yield env.timeout(te.time - env.now)
+        change(parts, te.event, te.label or "script")
+
+
+def random_changes(parts: RobotParts):  # type: ignore[no-untyped-def]
+    spec = parts.world.random_changes
+    assert spec is not None
+    rng = random.Random(f"{parts.seed}:changes")
+    while True:
+        yield parts.env.timeout(rng.expovariate(1.0 / spec.mean_interval))
+        change(parts, rng.choice(spec.changes), "random")
+
+
+def maybe_lease(parts: RobotParts, graph: str) -> None:
+    """No acceptable platform for ``graph``: lease an on-demand platform on which it
+    would be acceptable (:func:`desmon.deployment.lease.lease_choice`), unless one is
+    already on its way."""
+    spec = parts.world.lease
+    assert spec is not None
+    books = parts.books
+    allowed = spec.platforms or tuple(p.name for p in parts.model.platforms if p.on_demand)
+    absent = [p for p in allowed if not parts.facts.up[p] and p not in books.lease_requested]
+    choice = lease_choice(parts.query, graph, absent) if absent else None
+    if choice is None:
+        return
+    books.lease_requested.add(choice)
+    books.leases += 1
+    parts.trace.emit(parts.env.now, "lease", platform=choice, graph=graph)
+    parts.env.process(lease(parts, choice))
+
+
+def lease(parts: RobotParts, platform: str):  # type: ignore[no-untyped-def]
+    """A leased platform joins after its start-up delay and leaves once it has hosted
+    nothing for the lease's ``idle_s``."""
+    env = parts.env
+    idle = parts.world.lease.idle_s  # type: ignore[union-attr]
+    last_busy = parts.infra.last_busy
+    yield env.timeout(parts.model.platform(platform).startup_s)
+    change(parts, PlatformJoin(platform), "lease")
+    last_busy[platform] = env.now
+    while True:
+        busy = any(p == platform for _g, p in parts.facts.instances)
+        wait = idle if busy else idle - (env.now - last_busy[platform])
+        if not busy and wait <= 0:
+            break
+        yield env.timeout(max(wait, 1e-6))
+    change(parts, PlatformLeave(platform), "lease")
+    parts.books.lease_requested.discard(platform)
+
+
+def progress(parts: RobotParts, report: Callable[[float, float], None], steps: int = 20):  # type: ignore[no-untyped-def]
+    """Call ``report(now, horizon)`` ``steps`` times a run."""
+    env = parts.env
+    step = parts.horizon / steps
+    while True:
+        yield env.timeout(step)
+        report(env.now, parts.horizon)
