@@ -210,7 +210,7 @@ class PlatformColumns:
                     f"platform columns: row {i} holds platform {self._names[i]!r}, not {s.platform.name!r}: "
                     "build new columns for a changed platform list"
                 )
-            self._rewrite(i, s)
+            _cols_rewrite(self, i, s)
             states[i] = s
             count += 1
         self.states = tuple(states)
@@ -232,53 +232,9 @@ class PlatformColumns:
         if any(s.platform.name != names[i] for i, s in changed):
             return False
         for i, s in changed:
-            self._rewrite(i, s)
+            _cols_rewrite(self, i, s)
         self.states = states
         return True
-
-    def _rewrite(self, i: int, s: PlatformState) -> None:
-        for memo in self._reasons.values():
-            if memo.pop(i, None) is not None:
-                self._memoised -= 1
-        self._up[i] = s.up
-        self._on_demand[i] = s.platform.on_demand
-        if self._pref[i] != s.platform.preference:
-            self._pref[i] = s.platform.preference
-            self._order = None
-        caps, loads, props, attrs, kinds, vendors, shares = _cols_facts(self, i, s)
-        for table, row, default, dtype in (
-            (self._caps, caps, np.nan, np.float64),
-            (self._loads, loads, 0.0, np.float64),
-            (self._props, props, np.nan, np.float64),
-            (self._attrs, attrs, -1, np.int32),
-            (self._kinds, kinds, 0, np.int32),
-            (self._vendors, vendors, 0, np.int32),
-        ):
-            for key, col in table.items():
-                col[i] = row.get(key, default)
-            for key in row.keys() - table.keys():
-                table[key] = col = np.full(self.n, default, dtype=dtype)
-                col[i] = row[key]
-        for res, sh in self._shares.items():
-            sh.amounts[i] = 0.0
-            sh.graphs[i] = -1
-        for res, entries in shares.items():
-            sh = self._shares.get(res)
-            if sh is None or sh.amounts.shape[1] < len(entries):
-                sh = self._widen(res, len(entries))
-            for j, (code, amount) in enumerate(entries):
-                sh.graphs[i, j] = code
-                sh.amounts[i, j] = amount
-
-    def _widen(self, res: str, width: int) -> _Shares:
-        old = self._shares.get(res)
-        new = _Shares(np.zeros((self.n, width)), np.full((self.n, width), -1, dtype=np.int32))
-        if old is not None:
-            k = old.amounts.shape[1]
-            new.amounts[:, :k] = old.amounts
-            new.graphs[:, :k] = old.graphs
-        self._shares[res] = new
-        return new
 
     def forget_reasons(self) -> None:
         """Drop every memoised failure (memory; benchmarks timing a cold explanation)."""
@@ -470,6 +426,52 @@ class PlatformColumns:
         keys = np.concatenate(parts, axis=1)
         keys[np.isnan(cap[rows])] = 0  # "has no capacity": one text whatever the rest
         return keys
+
+
+def _cols_rewrite(cols: "PlatformColumns", i: int, s: PlatformState) -> None:
+    for memo in cols._reasons.values():
+        if memo.pop(i, None) is not None:
+            cols._memoised -= 1
+    cols._up[i] = s.up
+    cols._on_demand[i] = s.platform.on_demand
+    if cols._pref[i] != s.platform.preference:
+        cols._pref[i] = s.platform.preference
+        cols._order = None
+    caps, loads, props, attrs, kinds, vendors, shares = _cols_facts(cols, i, s)
+    for table, row, default, dtype in (
+        (cols._caps, caps, np.nan, np.float64),
+        (cols._loads, loads, 0.0, np.float64),
+        (cols._props, props, np.nan, np.float64),
+        (cols._attrs, attrs, -1, np.int32),
+        (cols._kinds, kinds, 0, np.int32),
+        (cols._vendors, vendors, 0, np.int32),
+    ):
+        for key, col in table.items():
+            col[i] = row.get(key, default)
+        for key in row.keys() - table.keys():
+            table[key] = col = np.full(cols.n, default, dtype=dtype)
+            col[i] = row[key]
+    for res, sh in cols._shares.items():
+        sh.amounts[i] = 0.0
+        sh.graphs[i] = -1
+    for res, entries in shares.items():
+        sh = cols._shares.get(res)
+        if sh is None or sh.amounts.shape[1] < len(entries):
+            sh = _cols_widen(cols, res, len(entries))
+        for j, (code, amount) in enumerate(entries):
+            sh.graphs[i, j] = code
+            sh.amounts[i, j] = amount
+
+
+def _cols_widen(cols: "PlatformColumns", res: str, width: int) -> _Shares:
+    old = cols._shares.get(res)
+    new = _Shares(np.zeros((cols.n, width)), np.full((cols.n, width), -1, dtype=np.int32))
+    if old is not None:
+        k = old.amounts.shape[1]
+        new.amounts[:, :k] = old.amounts
+        new.graphs[:, :k] = old.graphs
+    cols._shares[res] = new
+    return new
 
 
 def _cols_column(cols: "PlatformColumns", values: dict[int, Any], default: Any, dtype: Any) -> np.ndarray:
