@@ -30,6 +30,7 @@ def python_blocks(root: Path, page: str) -> list[str]:
 @pytest.mark.parametrize("page", STANDALONE)
 def test_every_python_block_runs_as_written(root, page, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
+    (tmp_path / "scenarios").symlink_to(root / "scenarios")  # the docs' paths are the repository's, as a reader runs them
     for code in python_blocks(root, page):
         with contextlib.redirect_stdout(io.StringIO()):
             exec(compile(code, page, "exec"), {"__name__": "doc_block"})  # a NameError: the block uses what it never imports
