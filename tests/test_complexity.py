@@ -1,4 +1,4 @@
-"""Complexity guard (issue 17): no function in ``desmon/`` is above cyclomatic complexity
+"""Complexity guard: no function in ``desmon/`` is above cyclomatic complexity
 20 or longer than 80 lines unless its docstring says why, on a line of its own::
 
     Complexity: one branch per keyword of the DSL; splitting it would scatter the table.

@@ -1,4 +1,4 @@
-"""A user's deployer cannot fool or hang desmon (issue 23): it runs under guard
+"""A user's deployer cannot fool or hang desmon: it runs under guard
 (desmon/deployment/guard.py; docs/deployers.md, "When your deployer fails").
 
 * a deployer that raises, yields a wrong command or never ends in a *reachable* state

@@ -18,7 +18,7 @@ from desmon.sim.engine import simulate
 from desmon.sim.world import Step, StartFailure, World
 from desmon.verify import Bounds, Checker
 from desmon.verify.mutants import MUTANTS
-from test_table_issue14 import preference_scenarios
+from test_verify_table_preferences import preference_scenarios
 from test_verify_table import _both  # everything a user sees of a result, engine against engine
 
 

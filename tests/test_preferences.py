@@ -1,4 +1,4 @@
-"""Soft preferences (issue 14): they never reject a platform, they order the acceptable
+"""Soft preferences: they never reject a platform, they order the acceptable
 ones by score; rebalancing moves a valid deployment only on a gain above its threshold."""
 
 from __future__ import annotations

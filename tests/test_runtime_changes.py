@@ -1,4 +1,4 @@
-"""Requirements that change at run time and on-demand platforms (issue 14): the deployer
+"""Requirements that change at run time and on-demand platforms: the deployer
 follows a RequirementChange like any fact, an on-demand platform is absent until it
 joins, and the SimPy world leases one when nothing else fits."""
 

@@ -1,4 +1,4 @@
-"""A sweep never hangs and never loses a table (issue 23; docs/sweeps.md, "Long sweeps").
+"""A sweep never hangs and never loses a table (docs/sweeps.md, "Long sweeps").
 
 No test here starts a Dask cluster: the refusals come before one would start, and the
 runs of an interrupted sweep are handed over by a stand-in for the cluster.

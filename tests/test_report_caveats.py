@@ -1,4 +1,4 @@
-"""Reports that used to leave a user guessing (issue 23, "still unclear"): they now say so."""
+"""Reports that would leave a user guessing say so: a pass that means nothing, a plot with nothing to draw."""
 
 from __future__ import annotations
 
