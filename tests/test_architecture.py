@@ -208,3 +208,314 @@ def test_the_table_engine_explores_exactly_the_events_of_the_environment_alphabe
     assert len(states) > 50
     for key, events in zip(states, table):
         assert events == enabled_events(checker.bounds, key), key
+
+
+# -- the redesign's rules: no hidden wiring, small files and classes, a light CLI -------------
+#
+# Each rule is checked on every module of desmon/ (the same files as the import graph) and
+# proved on a synthetic source that must break it: a rule that cannot fail guards nothing.
+
+#: the longest file and the longest class of desmon/, in lines
+MAX_FILE_LINES = 900
+MAX_CLASS_LINES = 300
+#: third-party packages `import desmon.cli` (and `desmon --help`) must not load
+HEAVY = ("networkx", "numpy")
+#: assignments into another module that are the library's documented recipe, not wiring:
+#: importlib's "importing a source file directly" registers the module in sys.modules
+ALLOWED_FOREIGN_TARGETS = ("sys.modules[",)
+#: methods that change the container they are called on
+MUTATORS = frozenset({
+    "append", "extend", "insert", "update", "add", "clear", "pop", "popitem", "setdefault", "remove", "discard",
+    "__setitem__", "__delitem__", "__setattr__", "__delattr__",
+})
+
+
+def _sources() -> dict[str, tuple[Path, ast.Module]]:
+    """Every module of desmon/ (module name -> path and syntax tree)."""
+    return {_module_name(p): (p, ast.parse(p.read_text(), str(p))) for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+@pytest.fixture(scope="module")
+def sources() -> dict[str, tuple[Path, ast.Module]]:
+    return _sources()
+
+
+def test_the_rules_below_read_every_module_of_desmon(sources, graph):
+    # the same files as the layer rules: the top-level modules and every subpackage's
+    on_disk = {_module_name(p) for p in PACKAGE.rglob("*.py")}
+    assert set(sources) == on_disk == set(graph.nodes)
+    assert {"desmon.loader", "desmon.options", "desmon.paths", "desmon.progress", "desmon.errors", "desmon.cli", "desmon.__main__"} <= set(sources)
+    assert any(m.startswith("desmon.detectors.signals.") for m in sources)
+
+
+def _root(node: ast.AST) -> str | None:
+    """The name a chain ``a.b[c].d`` starts from (``a``), or None."""
+    while isinstance(node, (ast.Attribute, ast.Subscript)):
+        node = node.value
+    return node.id if isinstance(node, ast.Name) else None
+
+
+def _bound_by_import(node: ast.Import | ast.ImportFrom) -> dict[str, str]:
+    """name -> what it names, for the names an import statement binds."""
+    if isinstance(node, ast.Import):
+        return {(a.asname or a.name.split(".")[0]): (a.name if a.asname else a.name.split(".")[0]) for a in node.names}
+    base = "." * node.level + (node.module or "")
+    return {(a.asname or a.name): f"{base}.{a.name}" for a in node.names}
+
+
+def _is_desmon(origin: str) -> bool:
+    return origin.startswith(".") or origin == "desmon" or origin.startswith("desmon.")
+
+
+def _targets(node: ast.AST) -> list[ast.expr]:
+    """What an assignment, augmented or annotated assignment or ``del`` writes, unpacked."""
+    if isinstance(node, (ast.Assign, ast.Delete)):
+        todo = list(node.targets)
+    elif isinstance(node, (ast.AugAssign, ast.AnnAssign)):
+        todo = [node.target]
+    else:
+        return []
+    out: list[ast.expr] = []
+    while todo:
+        t = todo.pop()
+        if isinstance(t, (ast.Tuple, ast.List)):
+            todo.extend(t.elts)
+        elif isinstance(t, ast.Starred):
+            todo.append(t.value)
+        else:
+            out.append(t)
+    return out
+
+
+def _locals_of(fn: ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda) -> set[str]:
+    """The names a function binds itself (parameters, plain assignments, loop and with targets),
+    not counting the ones it declares global or imports."""
+    a = fn.args
+    names = {x.arg for x in [*a.posonlyargs, *a.args, *a.kwonlyargs, *([a.vararg] if a.vararg else []), *([a.kwarg] if a.kwarg else [])]}
+    declared: set[str] = set()
+    body = fn.body if isinstance(fn.body, list) else [fn.body]
+    todo: list[ast.AST] = list(body)
+    while todo:
+        node = todo.pop()
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Lambda)):
+            if not isinstance(node, ast.Lambda):
+                names.add(node.name)
+            continue  # its own scope
+        if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            names.add(node.id)
+        elif isinstance(node, (ast.Global, ast.Nonlocal)):
+            declared.update(node.names)
+        todo.extend(ast.iter_child_nodes(node))
+    return names - declared
+
+
+def _own_imports(scope: ast.AST) -> dict[str, str]:
+    """The names bound by the import statements of one scope (not of the functions in it)."""
+    out: dict[str, str] = {}
+    todo = list(ast.iter_child_nodes(scope))
+    while todo:
+        node = todo.pop()
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Lambda)):
+            continue
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            out.update(_bound_by_import(node))
+        todo.extend(ast.iter_child_nodes(node))
+    return out
+
+
+def _foreign_writes_in(node: ast.AST, imported: dict[str, str]) -> list[tuple[int, str]]:
+    """(line, what) for each write into an imported module or object at this one node."""
+    out = []
+    for t in _targets(node):
+        if isinstance(t, (ast.Attribute, ast.Subscript)) and _root(t) in imported:
+            text = ast.unparse(t)
+            if not text.startswith(ALLOWED_FOREIGN_TARGETS):
+                out.append((node.lineno, f"{text} = ... ({_root(t)} is imported: {imported[_root(t)]})"))
+    if isinstance(node, ast.Call) and node.args:
+        f, first = node.func, node.args[0]
+        setter = (isinstance(f, ast.Name) and f.id in ("setattr", "delattr")) or (
+            isinstance(f, ast.Attribute) and f.attr in ("__setattr__", "__delattr__") and isinstance(f.value, ast.Name) and f.value.id in ("object", "type")
+        )
+        if setter and _root(first) in imported:
+            out.append((node.lineno, f"{ast.unparse(node)[:80]} ({_root(first)} is imported: {imported[_root(first)]})"))
+    if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in MUTATORS:
+        receiver = node.func.value
+        if isinstance(receiver, (ast.Attribute, ast.Subscript)) and _root(receiver) in imported and _is_desmon(imported[_root(receiver)]):
+            out.append((node.lineno, f"{ast.unparse(node)[:80]} changes {ast.unparse(receiver)} ({_root(receiver)} is imported: {imported[_root(receiver)]})"))
+    return out
+
+
+def foreign_writes(tree: ast.Module) -> list[tuple[int, str]]:
+    """Every statement that assigns to (or deletes, setattr's, or -- for desmon's own modules --
+    changes a container of) a module or object imported from another module: a module global
+    reprogrammed from outside, invisible in the import graph. A name a function binds itself
+    (a parameter, a local) is not the import it shadows."""
+    out: list[tuple[int, str]] = []
+
+    def visit(scope: ast.AST, imported: dict[str, str]) -> None:
+        todo = list(ast.iter_child_nodes(scope))
+        while todo:
+            node = todo.pop()
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+                inner = {k: v for k, v in imported.items() if k not in _locals_of(node)}
+                visit(node, {**inner, **_own_imports(node)})
+                todo.extend(d for d in getattr(node, "decorator_list", []))
+                continue
+            out.extend(_foreign_writes_in(node, imported))
+            todo.extend(ast.iter_child_nodes(node))
+
+    visit(tree, _own_imports(tree))
+    return sorted(out)
+
+
+def global_statements(tree: ast.Module) -> list[tuple[int, str]]:
+    return sorted((n.lineno, "global " + ", ".join(n.names)) for n in ast.walk(tree) if isinstance(n, ast.Global))
+
+
+#: frame introspection: code that behaves differently depending on who called it
+FRAME_ATTRIBUTES = frozenset({"_getframe", "currentframe", "f_back", "f_globals", "f_locals"})
+
+
+def frame_reads(tree: ast.Module) -> list[tuple[int, str]]:
+    out = []
+    for n in ast.walk(tree):
+        if isinstance(n, ast.Attribute) and n.attr in FRAME_ATTRIBUTES:
+            out.append((n.lineno, ast.unparse(n)))
+        elif isinstance(n, ast.ImportFrom) and any(a.name in FRAME_ATTRIBUTES for a in n.names):
+            out.append((n.lineno, f"from {n.module} import " + ", ".join(a.name for a in n.names)))
+    return sorted(out)
+
+
+def long_classes(tree: ast.Module, limit: int = MAX_CLASS_LINES) -> list[tuple[int, str]]:
+    return sorted(
+        (n.lineno, f"class {n.name}: {n.end_lineno - n.lineno + 1} lines")  # type: ignore[operator]
+        for n in ast.walk(tree)
+        if isinstance(n, ast.ClassDef) and n.end_lineno - n.lineno + 1 > limit  # type: ignore[operator]
+    )
+
+
+def _offenders(sources, rule) -> list[str]:  # type: ignore[no-untyped-def]
+    return [f"{p.relative_to(ROOT).as_posix()}:{line} {what}" for _m, (p, tree) in sorted(sources.items()) for line, what in rule(tree)]
+
+
+def test_no_module_assigns_to_another_modules_globals(sources):
+    bad = _offenders(sources, foreign_writes)
+    assert not bad, "assignments into another module (pass the value as an argument or a port instead):\n" + "\n".join(bad)
+
+
+def test_no_global_statement(sources):
+    bad = _offenders(sources, global_statements)
+    assert not bad, "global statements (keep the state in an object the caller owns):\n" + "\n".join(bad)
+
+
+def test_no_frame_introspection(sources):
+    bad = _offenders(sources, frame_reads)
+    assert not bad, "sys._getframe and other frame reads (code must not depend on who calls it):\n" + "\n".join(bad)
+
+
+def test_no_file_of_desmon_is_over_900_lines(sources):
+    bad = [f"{p.relative_to(ROOT).as_posix()}: {n} lines" for p, _t in sources.values() if (n := len(p.read_text().splitlines())) > MAX_FILE_LINES]
+    assert not bad, f"files over {MAX_FILE_LINES} lines (split them by responsibility):\n" + "\n".join(sorted(bad))
+
+
+def test_no_class_of_desmon_is_over_300_lines(sources):
+    bad = _offenders(sources, long_classes)
+    assert not bad, f"classes over {MAX_CLASS_LINES} lines (compose smaller parts):\n" + "\n".join(bad)
+
+
+_PROBE_IMPORTS = """
+import contextlib, io, sys
+{statement}
+heavy = sorted({{m.split(".")[0] for m in sys.modules}} & set(sys.argv[1:]))
+print(",".join(heavy))
+"""
+
+
+def _heavy_modules_after(statement: str) -> list[str]:
+    import subprocess
+    import sys
+
+    code = _PROBE_IMPORTS.format(statement=statement)
+    p = subprocess.run([sys.executable, "-c", code, *HEAVY], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    return [m for m in p.stdout.strip().split(",") if m]
+
+
+def test_importing_the_cli_loads_neither_networkx_nor_numpy():
+    assert _heavy_modules_after("import desmon.cli") == [], "import desmon.cli loads them"
+
+
+def test_desmon_help_loads_neither_networkx_nor_numpy():
+    statement = (
+        "from desmon.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()), contextlib.suppress(SystemExit):\n"
+        "    main(['--help'])"
+    )
+    assert _heavy_modules_after(statement) == [], "desmon --help loads them"
+
+
+# -- each rule fails on a source that breaks it ----------------------------------------------
+
+_BREAKS_EVERY_RULE = '''
+import sys
+from desmon.deployment import validity as _validity
+import desmon.deployment.placement
+from desmon.model.system import PlatformState
+
+_RECORDING = None
+
+
+def wire(rec):
+    global _RECORDING
+    _RECORDING = rec
+    _validity._observer = rec
+    desmon.deployment.placement.VECTOR_MIN_PLATFORMS = 3
+    setattr(_validity, "_memoise", False)
+    _validity._TABLE["k"] = rec
+    _validity._HOOKS.append(rec)
+    del _validity._cache
+    PlatformState.load = property(lambda self: 0)
+    return sys._getframe(1).f_globals
+
+
+class Big:
+''' + "    x = 1\n" * 301
+
+
+_KEEPS_EVERY_RULE = '''
+import sys
+from desmon.deployment import validity
+
+
+def fine(args, name, module, validity_view):
+    args.format = "png"           # a parameter, not an import
+    setattr(args, name, 1)
+    sys.modules[name] = module    # importlib's recipe
+    sys.path.insert(0, name)      # not desmon's state
+    validity = {"x": 1}           # a local that shadows the import
+    validity["x"] = 2
+    return validity
+
+
+class Small:
+    def __init__(self):
+        self.state = 1
+        object.__setattr__(self, "frozen", 2)
+'''
+
+
+def test_each_rule_catches_a_source_that_breaks_it():
+    bad = ast.parse(_BREAKS_EVERY_RULE)
+    writes = [what for _line, what in foreign_writes(bad)]
+    assert [w.split(" ", 1)[0] for w in writes] == [
+        "_validity._observer", "desmon.deployment.placement.VECTOR_MIN_PLATFORMS", "setattr(_validity,",
+        "_validity._TABLE['k']", "_validity._HOOKS.append(rec)", "_validity._cache", "PlatformState.load",
+    ], writes
+    assert global_statements(bad) == [(11, "global _RECORDING")]
+    assert [w for _l, w in frame_reads(bad)] == ["sys._getframe", "sys._getframe(1).f_globals"]
+    assert long_classes(bad) == [(23, "class Big: 302 lines")]
+
+
+def test_the_rules_keep_parameters_locals_and_the_import_recipe():
+    good = ast.parse(_KEEPS_EVERY_RULE)
+    assert foreign_writes(good) == global_statements(good) == frame_reads(good) == long_classes(good) == []
