@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench clean
+.PHONY: demo test test-fast bench clean
 
 # The first run installs into .venv and shows pip's own output; later runs skip it.
 $(STAMP): pyproject.toml
@@ -25,6 +25,14 @@ test: $(STAMP)
 	@echo "==> the whole test suite, about 17 min on 2 busy cores (12 CPU-minutes): the fast tests first, one dot each, then the slow ones by name"
 	$(BIN)/python -m pytest -m "not slow"
 	$(BIN)/python -m pytest -m slow -v --durations=10
+
+# The maintainer's loop: the tests marked fast (tests/conftest.py's FAST list; pytest -m fast
+# selects the same from any command line), only their files collected. About 15 CPU-seconds.
+FAST_FILES = $(shell $(BIN)/python -c "import sys; sys.path.insert(0, 'tests'); from conftest import FAST; print(' '.join(sorted({'tests/' + e.split('::')[0] for e in FAST})))" 2>/dev/null)
+
+test-fast: $(STAMP)
+	@echo "==> the fast subset, under a minute: every layer touched; make test runs everything"
+	$(BIN)/python -m pytest -m fast -q $(FAST_FILES)
 
 bench: $(STAMP)
 	$(BIN)/python -m bench

@@ -41,3 +41,61 @@ def pytest_terminal_summary(terminalreporter) -> None:  # type: ignore[no-untype
             reasons.add(text[text.index("browser test not run: "):])
     for reason in sorted(reasons):
         terminalreporter.write_line(f"desmon: {reason}", yellow=True, bold=True)
+
+
+#: The maintainer's loop (``make test-fast``, ``pytest -m fast``): whole modules, or single
+#: tests (``module::test_name``, every parameter of it), chosen to touch every layer -- the
+#: model, validity, repository, deployers, Control, signals, the world, the checker's pinned
+#: verdicts, the simulation's pinned results, a fleet, the JSON codecs, the architecture --
+#: in under a minute on two busy cores. A slow-marked test is never in it. An entry that
+#: names no test of a collected module is an error (a renamed test must be renamed here).
+FAST = (
+    "test_architecture.py",
+    "test_compare_outputs.py",
+    "test_control_semantics.py",
+    "test_custom_actions.py",
+    "test_deployer.py",
+    "test_docblocks.py",
+    "test_docs.py",
+    "test_event_json.py",
+    "test_input_gaps.py",
+    "test_model.py",
+    "test_monitor.py",
+    "test_no_flapping_upgrade.py",
+    "test_placement_reasons.py",
+    "test_public_api.py",
+    "test_readme.py",
+    "test_report_caveats.py",
+    "test_repository.py",
+    "test_signals.py",
+    "test_sim_audit.py",
+    "test_strict_inputs.py",
+    "test_tutorial.py",
+    "test_validity.py",
+    "test_verify_mutants.py",
+    "test_world.py",
+    "test_coffee_case_study.py::test_each_snapshot_has_exactly_the_deployment_edges_of_fig_5",
+    "test_fleet.py::test_a_robot_sees_its_own_pcs_and_the_edge_servers_only",
+    "test_fleet.py::test_the_checker_still_finds_the_papers_deployer_wrong_on_the_small_fleet",
+    "test_fleet.py::test_desmon_run_json_gives_every_robots_metrics",
+    "test_scenarios_sim.py::test_pinned_sim_results_are_exact",
+    "test_verify.py::test_pinned_verdicts_and_state_counts",
+)
+
+
+def pytest_collection_modifyitems(config, items) -> None:  # type: ignore[no-untyped-def]
+    """Marks the tests of :data:`FAST` ``fast`` (never a ``slow`` one)."""
+    used: set[str] = set()
+    modules: set[str] = set()
+    for item in items:
+        module = Path(str(item.fspath)).name
+        modules.add(module)
+        test = f"{module}::{item.nodeid.split('::', 1)[-1].split('[', 1)[0]}"
+        entry = module if module in FAST else test if test in FAST else None
+        if entry is not None:
+            used.add(entry)
+            if item.get_closest_marker("slow") is None:
+                item.add_marker(pytest.mark.fast)
+    stale = [e for e in FAST if e.split("::")[0] in modules and e not in used]
+    if stale:
+        raise pytest.UsageError(f"tests/conftest.py FAST names no collected test (renamed?): {', '.join(stale)}")

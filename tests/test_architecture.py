@@ -54,14 +54,16 @@ def _imports(tree: ast.AST) -> list[ast.Import | ast.ImportFrom]:
     return out
 
 
-def import_graph() -> nx.DiGraph:
-    """desmon's modules and the imports between them (see the module docstring)."""
+def import_graph(trees: dict[str, ast.Module] | None = None) -> nx.DiGraph:
+    """desmon's modules and the imports between them (see the module docstring);
+    ``trees``: the modules' syntax trees if already parsed."""
     paths = {_module_name(p): p for p in PACKAGE.rglob("*.py")}
     graph = nx.DiGraph()
     graph.add_nodes_from(paths)
     for name, path in paths.items():
         package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-        for node in _imports(ast.parse(path.read_text(), str(path))):
+        tree = trees[name] if trees is not None else ast.parse(path.read_text(), str(path))
+        for node in _imports(tree):
             if isinstance(node, ast.Import):
                 targets = [a.name for a in node.names]
             else:
@@ -78,8 +80,14 @@ def import_graph() -> nx.DiGraph:
 
 
 @pytest.fixture(scope="module")
-def graph() -> nx.DiGraph:
-    return import_graph()
+def sources() -> dict[str, tuple[Path, ast.Module]]:
+    """Every module of desmon/ (module name -> path and syntax tree), parsed once for every rule."""
+    return {_module_name(p): (p, ast.parse(p.read_text(), str(p))) for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+@pytest.fixture(scope="module")
+def graph(sources) -> nx.DiGraph:  # type: ignore[no-untyped-def]
+    return import_graph({name: tree for name, (_p, tree) in sources.items()})
 
 
 def test_the_import_graph_sees_function_level_and_submodule_imports(graph):
@@ -230,16 +238,6 @@ MUTATORS = frozenset({
 })
 
 
-def _sources() -> dict[str, tuple[Path, ast.Module]]:
-    """Every module of desmon/ (module name -> path and syntax tree)."""
-    return {_module_name(p): (p, ast.parse(p.read_text(), str(p))) for p in sorted(PACKAGE.rglob("*.py"))}
-
-
-@pytest.fixture(scope="module")
-def sources() -> dict[str, tuple[Path, ast.Module]]:
-    return _sources()
-
-
 def test_the_rules_below_read_every_module_of_desmon(sources, graph):
     # the same files as the layer rules: the top-level modules and every subpackage's
     on_disk = {_module_name(p) for p in PACKAGE.rglob("*.py")}
@@ -357,7 +355,8 @@ def foreign_writes(tree: ast.Module) -> list[tuple[int, str]]:
         while todo:
             node = todo.pop()
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
-                inner = {k: v for k, v in imported.items() if k not in _locals_of(node)}
+                shadowed = _locals_of(node)
+                inner = {k: v for k, v in imported.items() if k not in shadowed}
                 visit(node, {**inner, **_own_imports(node)})
                 todo.extend(d for d in getattr(node, "decorator_list", []))
                 continue
