@@ -270,6 +270,8 @@ def first_difference(base: str, head: str, width: int = 100) -> str | None:
 def _excerpt(line: str | None, other: str | None, width: int) -> str:
     if line is None:
         return "<end of output>"
+    if len(line) <= width:
+        return repr(line)
     col = next((i for i, (p, q) in enumerate(zip(line, other or "")) if p != q), min(len(line), len(other or "")))
     start = max(0, col - width // 3)
     cut = line[start:start + width]
