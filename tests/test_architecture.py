@@ -319,26 +319,43 @@ def _own_imports(scope: ast.AST) -> dict[str, str]:
     return out
 
 
-def _foreign_writes_in(node: ast.AST, imported: dict[str, str]) -> list[tuple[int, str]]:
-    """(line, what) for each write into an imported module or object at this one node."""
+def _assigned(node: ast.AST, imported: dict[str, str]) -> list[tuple[int, str]]:
+    """``mod.x = ...``, ``mod.t[k] = ...``, ``del mod.x`` with ``mod`` imported."""
     out = []
     for t in _targets(node):
-        if isinstance(t, (ast.Attribute, ast.Subscript)) and _root(t) in imported:
+        root = _root(t)
+        if isinstance(t, (ast.Attribute, ast.Subscript)) and root in imported:
             text = ast.unparse(t)
             if not text.startswith(ALLOWED_FOREIGN_TARGETS):
-                out.append((node.lineno, f"{text} = ... ({_root(t)} is imported: {imported[_root(t)]})"))
-    if isinstance(node, ast.Call) and node.args:
-        f, first = node.func, node.args[0]
-        setter = (isinstance(f, ast.Name) and f.id in ("setattr", "delattr")) or (
-            isinstance(f, ast.Attribute) and f.attr in ("__setattr__", "__delattr__") and isinstance(f.value, ast.Name) and f.value.id in ("object", "type")
-        )
-        if setter and _root(first) in imported:
-            out.append((node.lineno, f"{ast.unparse(node)[:80]} ({_root(first)} is imported: {imported[_root(first)]})"))
-    if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in MUTATORS:
-        receiver = node.func.value
-        if isinstance(receiver, (ast.Attribute, ast.Subscript)) and _root(receiver) in imported and _is_desmon(imported[_root(receiver)]):
-            out.append((node.lineno, f"{ast.unparse(node)[:80]} changes {ast.unparse(receiver)} ({_root(receiver)} is imported: {imported[_root(receiver)]})"))
+                out.append((node.lineno, f"{text} = ... ({root} is imported: {imported[root]})"))
     return out
+
+
+def _set_by_call(node: ast.AST, imported: dict[str, str]) -> list[tuple[int, str]]:
+    """``setattr(mod, ...)``, ``delattr``, ``object.__setattr__(mod, ...)`` with ``mod`` imported."""
+    if not (isinstance(node, ast.Call) and node.args):
+        return []
+    f, root = node.func, _root(node.args[0])
+    setter = (isinstance(f, ast.Name) and f.id in ("setattr", "delattr")) or (
+        isinstance(f, ast.Attribute) and f.attr in ("__setattr__", "__delattr__") and isinstance(f.value, ast.Name) and f.value.id in ("object", "type")
+    )
+    return [(node.lineno, f"{ast.unparse(node)[:80]} ({root} is imported: {imported[root]})")] if setter and root in imported else []
+
+
+def _changed_by_method(node: ast.AST, imported: dict[str, str]) -> list[tuple[int, str]]:
+    """``mod.TABLE.update(...)`` and the like, with ``mod`` imported from desmon."""
+    if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in MUTATORS):
+        return []
+    receiver = node.func.value
+    root = _root(receiver)
+    if isinstance(receiver, (ast.Attribute, ast.Subscript)) and root in imported and _is_desmon(imported[root]):
+        return [(node.lineno, f"{ast.unparse(node)[:80]} changes {ast.unparse(receiver)} ({root} is imported: {imported[root]})")]
+    return []
+
+
+def _foreign_writes_in(node: ast.AST, imported: dict[str, str]) -> list[tuple[int, str]]:
+    """(line, what) for each write into an imported module or object at this one node."""
+    return _assigned(node, imported) + _set_by_call(node, imported) + _changed_by_method(node, imported)
 
 
 def foreign_writes(tree: ast.Module) -> list[tuple[int, str]]:
