@@ -163,9 +163,42 @@ class Capacity(Requirement):
         return (self.amount,)
 
 
+class _PropertyBound(Requirement):
+    """A bound on a platform's numeric property: :class:`Minimum` and :class:`Maximum`
+    (``within`` says on which side of ``value`` a property holds)."""
+
+    __slots__ = ()
+
+    def within(self, value: Any) -> Any:
+        """Whether ``value`` (a number, or a column of them) meets the bound."""
+        raise NotImplementedError
+
+    def holds(self, state: "PlatformState", graph: Placing) -> str | None:
+        value = state.platform.prop(self.prop)  # type: ignore[attr-defined]
+        if value is None:
+            return f"has no property {self.prop!r}"  # type: ignore[attr-defined]
+        return None if self.within(value) else f"{self.prop} is {_fmt(value)}"  # type: ignore[attr-defined]
+
+    def reads_fixed_facts(self) -> bool:
+        return True
+
+    def platform_problem(self, platforms: "tuple[Platform, ...]") -> str | None:
+        return property_problem(self.prop, platforms)  # type: ignore[attr-defined]
+
+    def column_mask(self, cols: Columns, graph: Placing) -> Any:
+        col = cols.prop(self.prop)  # type: ignore[attr-defined]
+        return cols.none() if col is None else self.within(col)
+
+    def column_keys(self, cols: Columns, rows: Any, graph: Placing) -> Any:
+        return cols.prop_key(self.prop, rows)  # type: ignore[attr-defined]  # the text shows the value
+
+    def column_numbers(self) -> tuple[object, ...]:
+        return (self.value,)  # type: ignore[attr-defined]
+
+
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
-class Minimum(Requirement):
+class Minimum(_PropertyBound):
     """The platform's numeric ``prop`` is at least ``value``."""
 
     prop: str
@@ -181,32 +214,13 @@ class Minimum(Requirement):
     def describe(self) -> str:
         return f"Minimum({self.prop} >= {self.value:g})"
 
-    def holds(self, state: "PlatformState", graph: Placing) -> str | None:
-        value = state.platform.prop(self.prop)
-        if value is None:
-            return f"has no property {self.prop!r}"
-        return None if value >= self.value else f"{self.prop} is {_fmt(value)}"
-
-    def reads_fixed_facts(self) -> bool:
-        return True
-
-    def platform_problem(self, platforms: "tuple[Platform, ...]") -> str | None:
-        return property_problem(self.prop, platforms)
-
-    def column_mask(self, cols: Columns, graph: Placing) -> Any:
-        col = cols.prop(self.prop)
-        return cols.none() if col is None else col >= self.value
-
-    def column_keys(self, cols: Columns, rows: Any, graph: Placing) -> Any:
-        return cols.prop_key(self.prop, rows)  # the text shows the value
-
-    def column_numbers(self) -> tuple[object, ...]:
-        return (self.value,)
+    def within(self, value: Any) -> Any:
+        return value >= self.value
 
 
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
-class Maximum(Requirement):
+class Maximum(_PropertyBound):
     """The platform's numeric ``prop`` is at most ``value`` (e.g. link latency)."""
 
     prop: str
@@ -222,27 +236,8 @@ class Maximum(Requirement):
     def describe(self) -> str:
         return f"Maximum({self.prop} <= {self.value:g})"
 
-    def holds(self, state: "PlatformState", graph: Placing) -> str | None:
-        value = state.platform.prop(self.prop)
-        if value is None:
-            return f"has no property {self.prop!r}"
-        return None if value <= self.value else f"{self.prop} is {_fmt(value)}"
-
-    def reads_fixed_facts(self) -> bool:
-        return True
-
-    def platform_problem(self, platforms: "tuple[Platform, ...]") -> str | None:
-        return property_problem(self.prop, platforms)
-
-    def column_mask(self, cols: Columns, graph: Placing) -> Any:
-        col = cols.prop(self.prop)
-        return cols.none() if col is None else col <= self.value
-
-    def column_keys(self, cols: Columns, rows: Any, graph: Placing) -> Any:
-        return cols.prop_key(self.prop, rows)
-
-    def column_numbers(self) -> tuple[object, ...]:
-        return (self.value,)
+    def within(self, value: Any) -> Any:
+        return value <= self.value
 
 
 @strict_init(ModelError)

@@ -19,7 +19,7 @@ parts (:class:`desmon.sim.parts.RobotParts`), and the steps they take.
 from __future__ import annotations
 
 import random
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from desmon.deployment.lease import lease_choice
 from desmon.deployment.monitor import GripperObservation, interpret
@@ -145,14 +145,19 @@ def fault(parts: RobotParts, ev: Event, source: str) -> None:
     env.process(notice(parts, ev))
 
 
-def scripted_faults(parts: RobotParts):  # type: ignore[no-untyped-def]
+def scripted(parts: RobotParts, timeline: tuple, apply: Callable[[Any], None]):  # type: ignore[no-untyped-def]
+    """Apply each timed event of ``timeline`` at its time, until the horizon."""
     env = parts.env
-    for te in parts.world.faults:
+    for te in timeline:
         if te.time >= parts.horizon:
             break
         if te.time > env.now:
             yield env.timeout(te.time - env.now)
-        fault(parts, te.event, te.label or "script")
+        apply(te)
+
+
+def scripted_faults(parts: RobotParts):  # type: ignore[no-untyped-def]
+    return scripted(parts, parts.world.faults, lambda te: fault(parts, te.event, te.label or "script"))
 
 
 def stochastic_faults(parts: RobotParts, component: str, mttf: float, mttr: float):  # type: ignore[no-untyped-def]
@@ -175,13 +180,7 @@ def set_load(parts: RobotParts, ev: LoadChange) -> None:
 
 
 def scripted_loads(parts: RobotParts):  # type: ignore[no-untyped-def]
-    env = parts.env
-    for te in parts.world.loads:
-        if te.time >= parts.horizon:
-            break
-        if te.time > env.now:
-            yield env.timeout(te.time - env.now)
-        set_load(parts, te.event)  # type: ignore[arg-type]
+    return scripted(parts, parts.world.loads, lambda te: set_load(parts, te.event))
 
 
 def load_walk(parts: RobotParts, i: int):  # type: ignore[no-untyped-def]
@@ -225,13 +224,7 @@ def follow_consumption(parts: RobotParts, graph: str) -> None:
 
 
 def scripted_changes(parts: RobotParts):  # type: ignore[no-untyped-def]
-    env = parts.env
-    for te in parts.world.changes:
-        if te.time >= parts.horizon:
-            break
-        if te.time > env.now:
-            yield env.timeout(te.time - env.now)
-        change(parts, te.event, te.label or "script")
+    return scripted(parts, parts.world.changes, lambda te: change(parts, te.event, te.label or "script"))
 
 
 def random_changes(parts: RobotParts):  # type: ignore[no-untyped-def]
