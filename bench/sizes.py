@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import sys
 from pathlib import Path
 
 
@@ -29,11 +30,21 @@ def sizes(root: Path) -> tuple[list[tuple[int, str]], list[tuple[int, str]]]:
     return sorted(files, reverse=True), sorted(classes, reverse=True)
 
 
+def _refuse(message: str) -> None:
+    """One line on stderr, exit 2 (a bad argument)."""
+    print(f"bench.sizes: {message}", file=sys.stderr)
+    raise SystemExit(2)
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--root", type=Path, default=Path(__file__).resolve().parent.parent, help="the tree to read (default: this one)")
     ap.add_argument("--top", type=int, default=6)
     args = ap.parse_args(argv)
+    if args.top < 1:
+        _refuse(f"--top {args.top}: give at least 1")
+    if not (args.root / "desmon").is_dir():
+        _refuse(f"--root {args.root}: no desmon/ package there; give the top folder of a desmon tree")
     files, classes = sizes(args.root)
     print("largest files:  " + "; ".join(f"{name} {n:,}" for n, name in files[: args.top]))
     print("largest classes: " + "; ".join(f"{name} {n:,}" for n, name in classes[: args.top]))

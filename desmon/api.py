@@ -30,10 +30,19 @@ __all__ = ["check", "simulate"]
 
 
 def _scenario(scenario: "Scenario | str | Path") -> "Scenario":
+    from desmon.model.scenario import Scenario
+
     if isinstance(scenario, (str, Path)):
         from desmon.loader import load_scenario
 
         return load_scenario(scenario)
+    if not isinstance(scenario, Scenario):
+        from desmon.errors import ScenarioError
+
+        raise ScenarioError(
+            f"scenario {scenario!r} ({type(scenario).__name__}) is neither a Scenario nor the path of a scenario file: "
+            "pass e.g. 'scenarios/coffee_handover.py'"
+        )
     return scenario
 
 

@@ -27,3 +27,15 @@ def test_simulate_is_the_sim_worlds_run_for_the_same_seed():
     got = desmon.simulate(SCENARIO, seed=3)
     want = SimWorld(load_scenario(SCENARIO), seed=3).run()
     assert got.metrics == want.metrics
+
+
+def test_a_scenario_that_is_neither_a_scenario_nor_a_path_is_one_line():
+    import pytest
+
+    from desmon.errors import ScenarioError
+
+    for verb in (desmon.check, desmon.simulate):
+        with pytest.raises(ScenarioError, match=r"42 \(int\) is neither a Scenario nor the path"):
+            verb(42)
+        with pytest.raises(ScenarioError, match="no such scenario file"):
+            verb("scenarios/no_such_scenario.py")

@@ -227,7 +227,7 @@ def run_evaluate(trials: int, seed: int, as_json: bool, progress: bool, out: Tex
         cb = _Progress(trials * (len(P1_ACTIONS) + 1 + len(MISSION_CONTEXTS)) * n_seeds, sys.stderr)
     if seeds is None:
         ev = evaluate(trials, seed, progress=cb)
-        _emit(ev.to_json() if as_json else None, render_table(ev), out)
+        _emit(ev.to_json() if as_json else None, lambda: render_table(ev), out)
         return 0 if ev.all_pass else 1
 
     def on_seed(i: int, s: int) -> None:
@@ -235,14 +235,14 @@ def run_evaluate(trials: int, seed: int, as_json: bool, progress: bool, out: Tex
             cb.label = f"  seed {s} ({i + 1}/{n_seeds})"
 
     sw = evaluate_seeds(trials, seed, n_seeds, progress=cb, on_seed=on_seed)
-    _emit(sw.to_json() if as_json else None, render_sweep(sw), out)
+    _emit(sw.to_json() if as_json else None, lambda: render_sweep(sw), out)
     return 0 if sw.all_hold else 1
 
 
-def _emit(data: Any, text: str, out: Any) -> None:
-    """``data`` as indented JSON when the command was asked for JSON, else ``text``."""
+def _emit(data: Any, text: Callable[[], str], out: Any) -> None:
+    """``data`` as indented JSON when the command was asked for JSON, else ``text()``."""
     if data is not None:
         json.dump(data, out, indent=2)
         out.write("\n")
     else:
-        out.write(text)
+        out.write(text())

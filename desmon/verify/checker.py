@@ -34,6 +34,9 @@ from desmon.verify.trace import Counterexample
 
 __all__ = ["Checker", "ENGINES", "Engine", "Exploration", "check", "release", "system_of"]
 
+#: why ``--engine auto`` runs the direct engine when ``workers`` > 1 is asked for
+_WORKERS_NOTE = "--workers runs the direct engine"
+
 #: How :func:`check` computes transitions (see there).
 ENGINES = ("auto", "table", "direct")
 
@@ -93,7 +96,7 @@ class TableEngineChoice:
 
         why = table_unsupported(system)
         if why is None and workers > 1:
-            why = "--workers runs the direct engine"
+            why = _WORKERS_NOTE
         return why
 
     def explore(self, system: TransitionSystem, res: CheckResult, *, budget: Budget, workers: int, **search: Any) -> Exploration:
@@ -125,14 +128,12 @@ def _check_run_arguments(workers: int, engine: str, timeout: float | None, max_m
 def _table_refusal(system: TransitionSystem, engine: str, workers: int) -> str | None:
     """None if the table engine runs (``engine`` "table" or "auto"), else why the direct
     engine runs instead (under "auto"; "table" refuses with a CheckerError)."""
-    from desmon.verify.table import table_unsupported
-
-    why = table_unsupported(system)
-    if engine == "table" and why:
+    why = TABLE.refusal(system, workers)
+    if engine == "table" and why is not None:
+        if why == _WORKERS_NOTE:
+            raise CheckerError("--workers runs the direct engine in several processes; the table engine runs in one: drop --workers or use --engine direct")
         raise CheckerError(f"--engine table: {why}; use --engine direct or auto")
-    if engine == "table" and workers > 1:
-        raise CheckerError("--workers runs the direct engine in several processes; the table engine runs in one: drop --workers or use --engine direct")
-    return TABLE.refusal(system, workers)
+    return why
 
 
 def check(
@@ -288,26 +289,26 @@ class Checker:
         symmetry: bool = False,
     ) -> None:
         self.system = system_of(scenario, deployer, invariants=invariants, bounds=bounds, symmetry=symmetry)
-        #: the distinct (canonical) states of the last run, in BFS order
-        self.explored: Sequence[Key] = []
+        self._last: CheckResult | None = None
+
+    @property
+    def explored(self) -> Sequence[Key]:
+        """The distinct (canonical) states of the last run, in BFS order."""
+        return self._last.explored if self._last is not None else ()
 
     def __getattr__(self, name: str) -> Any:
-        if name == "system":  # not set yet (unpickling, a failed constructor)
+        if name in ("system", "_last"):  # not set yet (unpickling, a failed constructor)
             raise AttributeError(name)
         return getattr(self.system, name)
 
     def run(self, **options: Any) -> CheckResult:
         """:func:`check` of the system (the same options); the states it explored are kept
         in :attr:`explored` until the next run or :meth:`release`."""
-        self.explored = []
-        res = check(self.system, **options)
-        self.explored = res.explored
-        return res
+        self._last = None
+        self._last = check(self.system, **options)
+        return self._last
 
     def release(self) -> None:
         """:func:`release` of the system and the last run's states."""
-        drop = getattr(self.explored, "release", None)
-        if drop is not None:
-            drop()
-        self.explored = []
-        release(self.system)
+        release(self.system, self._last)
+        self._last = None
