@@ -117,6 +117,7 @@ LAYERS = {
     "desmon.sim": 6,  # engine: scripted replay and SimPy world
     "desmon.verify": 6,  # engines: checker and fuzzer
     "desmon.loader": 7,  # a scenario file run as a script (its checker bounds validated)
+    "desmon.analyze": 7,  # engine: the Markov chain of the checker's transitions, solved exactly
     "desmon.sweep": 8,  # Dask sweeps over the engines
     "desmon.cli.options": 9,  # command-line options shared by the commands
     "desmon.api": 9,  # the public verbs check() and simulate() over the engines

@@ -18,7 +18,7 @@ import argparse
 import sys
 from typing import Sequence
 
-from desmon.cli import evaluate, explain, explore, fuzz, plot, replay, run, show, sweep, sweep_plot, verify
+from desmon.cli import analyze, evaluate, explain, explore, fuzz, plot, replay, run, show, sweep, sweep_plot, verify
 from desmon.cli.common import EXIT_USAGE, Parser, one_line, usage_error
 from desmon.cli.options import preflight
 from desmon.errors import DesmonError
@@ -27,7 +27,7 @@ from desmon.paths import plan_outputs
 __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: the commands, in the order ``desmon --help`` lists them (sweep adds sweep and sweep-plot)
-COMMANDS = (replay, explain, show, evaluate, run, plot, verify, fuzz, explore, sweep, sweep_plot)
+COMMANDS = (replay, explain, show, evaluate, run, plot, verify, analyze, fuzz, explore, sweep, sweep_plot)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -17,7 +17,7 @@ import time
 from typing import IO, TYPE_CHECKING, Any, Callable, Iterator
 
 from desmon.cli.common import EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, draw_trace, load_scenario_of, scenario_arg
-from desmon.cli.options import add_output, add_window, non_negative_int, positive_seconds
+from desmon.cli.options import add_output, add_window, non_negative_int, positive_int, positive_seconds
 from desmon.errors import ScenarioError
 from desmon.paths import replacing
 from desmon.progress import StatusLine
@@ -46,6 +46,12 @@ def add_parser(sub: Subparsers) -> None:
     add_output(p, "--trace", suffixes=(".jsonl",), default=None, metavar="FILE.jsonl", help="write the JSON Lines trace to this file")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--no-progress", action="store_true")
+    p.add_argument(
+        "--timing", choices=("fixed", "exponential"), default=None,
+        help="exponential: the Markov world desmon analyze solves (random step durations and delays with the given means)",
+    )
+    p.add_argument("--phases", type=positive_int, default=None, help="Erlang phases of a task step under --timing exponential (default 1)")
+    p.add_argument("--no-signals", action="store_true", help="simulate no sensor signals (exposure counts running, ready detectors)")
     add_output(
         p, "--plot", suffixes=(".png",), default=None, metavar="FILE.png",
         help="draw the timeline of the run to this PNG (needs desmon[plot])",
@@ -87,7 +93,7 @@ def run_command(
         raise ScenarioError(f"--until {args.until!r}: give a positive number of simulated seconds")
     if args.seed is not None and args.seed < 0:
         raise ScenarioError(f"--seed {args.seed!r}: give a non-negative integer")
-    scenario = load_scenario_of(args)
+    scenario = with_timing(load_scenario_of(args), args)
     from desmon.sim.fleet import is_fleet
 
     show = not getattr(args, "no_progress", False) and not args.json
@@ -113,6 +119,29 @@ def run_command(
         if args.trace and not getattr(args, "trace_is_temporary", False):
             out.write(f"Trace: {args.trace} ({result.trace.count} records)\n")
     return 1 if result.violations else 0
+
+
+def with_timing(scenario: Scenario, args: Any) -> Scenario:
+    """``scenario`` with the world's timing, phases and signals of ``--timing``,
+    ``--phases`` and ``--no-signals`` (unchanged when none is given)."""
+    timing, phases, no_signals = getattr(args, "timing", None), getattr(args, "phases", None), getattr(args, "no_signals", False)
+    if timing is None and phases is None and not no_signals:
+        return scenario
+    from dataclasses import replace
+
+    from desmon.sim.world import world_of
+
+    if phases is not None and timing != "exponential":
+        raise ScenarioError(f"--phases {phases}: phases shape the exponential timing's step durations; add --timing exponential")
+    world = world_of(scenario)
+    changes: dict[str, Any] = {}
+    if timing is not None:
+        changes["timing"] = timing
+    if phases is not None:
+        changes["phases"] = phases
+    if no_signals:
+        changes["signals"] = False
+    return replace(scenario, world=replace(world, **changes))
 
 
 def _simulate(args: Any, scenario: Scenario, err: IO[str], show: bool, t_wall: float) -> RunResult:

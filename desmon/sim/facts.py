@@ -46,6 +46,7 @@ class Instance:
     halted: bool = False
     proc: Any = None
     gen: int = 0  # activations so far (a warm-up end of an older one is ignored)
+    ready_at: float = 0.0  # exponential timing: when its start latency has passed (never valid before)
 
 
 class PhysicalFacts:
@@ -106,7 +107,7 @@ class GroundTruth:
 
     def __init__(self, world: World, model: SystemModel, horizon: float, seed: int, signals: bool) -> None:
         self.world = world
-        self.segments: tuple[Segment, ...] = expand_task(world, horizon)
+        self.segments: tuple[Segment, ...] = expand_task(world, horizon, seed)
         #: the same segments as the signals see them: each action replaced by the built-in it is like
         physical = like_segments(self.segments, model.like)
         slips = draw_slips(world, physical, seed)

@@ -58,6 +58,8 @@ class Infrastructure:
         self.starts = self.start_failures = self.stops = 0
         self.attempts: dict[tuple[str, str], int] = {}
         self.rng_start = random.Random(f"{seed}:start")
+        #: exponential timing (World.timing): start latencies drawn from here
+        self.rng_latency = random.Random(f"{seed}:latency")
         self.alarms: list[Alarm] = []
         #: when each platform last hosted an instance (a lease ends once it stayed idle)
         self.last_busy: dict[str, float] = {}
@@ -147,7 +149,10 @@ class Infrastructure:
             return True
         n = self.attempts[(graph, platform)] = self.attempts.get((graph, platform), 0) + 1
         latency = self.world.latency(platform)
-        if latency:
+        ready_at = env.now
+        if latency and self.world.timing == "exponential":  # decided at once, ready after the latency
+            ready_at += self.rng_latency.expovariate(1.0 / latency)
+        elif latency:
             yield env.timeout(latency)
         reason = self._refusal(graph, platform, n)
         if reason:
@@ -158,7 +163,7 @@ class Infrastructure:
         self.exposure.advance(env.now)
         streams = self.devices_for(graph, platform)
         adapter = DetectorAdapter(frozenset(streams), graph) if self.signals else None
-        inst = Instance(graph, platform, self.facts.consumes.get(graph, 0.0), streams, adapter, env.now)
+        inst = Instance(graph, platform, self.facts.consumes.get(graph, 0.0), streams, adapter, env.now, ready_at=ready_at)
         self.activate(inst, env.now)
         instances[(graph, platform)] = inst
         self.last_busy[platform] = env.now
@@ -217,13 +222,14 @@ class Infrastructure:
                 self.trace.emit(now, "no_signal", graph=inst.graph, platform=inst.platform)
             return
         warm = inst.adapter.warmup if inst.adapter is not None else 0.0
-        inst.valid_from = now + warm
+        wait = warm if inst.ready_at <= now + warm else inst.ready_at - now  # a start latency still running (exponential timing)
+        inst.valid_from = now + warm if wait == warm else inst.ready_at
         inst.gen += 1
         if inst.adapter is not None:
             inst.adapter.activate(now)
-        if warm > 0:
+        if wait > 0:
             gen = inst.gen
-            self.env.timeout(warm).callbacks.append(lambda _ev: self._warmed(inst, gen))
+            self.env.timeout(wait).callbacks.append(lambda _ev: self._warmed(inst, gen))
         else:
             self._pending_ready.append(inst)  # valid at once: reported once it is registered
 

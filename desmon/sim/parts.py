@@ -19,7 +19,8 @@ repository (own or shared), the Query port, the Control rules, the trace and the
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import random
+from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import simpy
@@ -65,6 +66,10 @@ class RobotParts:
     infra: Infrastructure
     books: Books
     inbox: Inbox
+    #: exponential timing (World.timing): the delays' random stream, and what the
+    #: context monitor has a recognition or notice pending for ("context", components)
+    markov: random.Random = field(default_factory=random.Random)
+    noticing: set[str] = field(default_factory=set)
 
 
 def robot_parts(
@@ -93,7 +98,7 @@ def robot_parts(
     )
     return RobotParts(
         scenario, model, world, seed, horizon, signals, env, repo, query, core, trace, facts, truth, exposure, memory, infra,
-        Books(trace, keep_decisions), Inbox(repo),
+        Books(trace, keep_decisions), Inbox(repo), random.Random(f"{seed}:timing"),
     )
 
 

@@ -89,15 +89,33 @@ def robot(parts: RobotParts):  # type: ignore[no-untyped-def]
         slots = slots_for(seg.context) if seg.context in risky else ()
         parts.trace.emit(env.now, "action", action=seg.context, duration=seg.duration)
         parts.exposure.set_wanted(env.now, slots, seg.context)
-        env.process(recognise(parts, seg.context))
+        if parts.world.timing == "exponential":
+            if "context" not in parts.noticing:
+                parts.noticing.add("context")
+                env.process(recognise_latest(parts))
+        else:
+            env.process(recognise(parts, seg.context))
+
+
+def recognised_context(action: str) -> str:
+    """The context the monitor makes of what the gripper and base show in ``action``."""
+    obs = OBSERVATION.get(action)
+    return interpret(obs) if obs is not None else action
 
 
 def recognise(parts: RobotParts, action: str):  # type: ignore[no-untyped-def]
     if parts.world.recognition_delay:
         yield parts.env.timeout(parts.world.recognition_delay)
-    obs = OBSERVATION.get(action)
-    context = interpret(obs) if obs is not None else action
-    insert(parts, ActionChange(context))
+    insert(parts, ActionChange(recognised_context(action)))
+
+
+def recognise_latest(parts: RobotParts):  # type: ignore[no-untyped-def]
+    """Exponential timing: after an exponential delay the monitor reports the action
+    the robot performs *then* (one recognition pending at a time)."""
+    if parts.world.recognition_delay:
+        yield parts.env.timeout(parts.markov.expovariate(1.0 / parts.world.recognition_delay))
+    parts.noticing.discard("context")
+    insert(parts, ActionChange(recognised_context(parts.exposure.context)))
 
 
 def insert(parts: RobotParts, ev: Event) -> None:
@@ -111,6 +129,19 @@ def notice(parts: RobotParts, ev: Event):  # type: ignore[no-untyped-def]
     if parts.world.heartbeat_timeout:
         yield parts.env.timeout(parts.world.heartbeat_timeout)
     insert(parts, ev)
+
+
+def notice_latest(parts: RobotParts, component: str):  # type: ignore[no-untyped-def]
+    """Exponential timing: after an exponential delay the monitor reports the state
+    ``component`` is in *then* (one notice pending per component)."""
+    if parts.world.heartbeat_timeout:
+        yield parts.env.timeout(parts.markov.expovariate(1.0 / parts.world.heartbeat_timeout))
+    parts.noticing.discard(component)
+    facts = parts.facts
+    if component in facts.dev_ok:
+        insert(parts, DeviceRepair(component) if facts.dev_ok[component] else DeviceFail(component))
+    else:
+        insert(parts, PlatformUp(component) if facts.up[component] else PlatformDown(component))
 
 
 # ---------------------------------------------------------------------- faults and loads
@@ -142,7 +173,13 @@ def fault(parts: RobotParts, ev: Event, source: str) -> None:
         parts.trace.emit(now, "platform", platform=ev.platform, up=up)
     infra.flush_ready()
     parts.exposure.check(now)
-    env.process(notice(parts, ev))
+    if parts.world.timing == "exponential":
+        component = ev.device if isinstance(ev, DeviceEvent) else ev.platform
+        if component not in parts.noticing:
+            parts.noticing.add(component)
+            env.process(notice_latest(parts, component))
+    else:
+        env.process(notice(parts, ev))
 
 
 def scripted(parts: RobotParts, timeline: tuple, apply: Callable[[Any], None]):  # type: ignore[no-untyped-def]

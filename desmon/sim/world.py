@@ -190,6 +190,11 @@ class LoadWalk:
             )
 
 
+#: the timings a World may run under (``World.timing``)
+TIMINGS = ("fixed", "exponential")
+#: the most Erlang phases of a task step (``World.phases``, ``desmon analyze --phases``)
+MAX_PHASES = 64
+
 #: the most random requirement changes a run's horizon may hold on average (:class:`RandomChanges`):
 #: each is a reaction of the deployer; more would run for hours without a word
 MAX_RANDOM_CHANGES = 100_000
@@ -287,6 +292,13 @@ class World:
     random_changes: RandomChanges | None = None
     #: leasing of on-demand platforms when nothing else fits, or None (never leased)
     lease: Lease | None = None
+    #: "fixed": every delay as given; "exponential": the Markov world of ``desmon
+    #: analyze`` (task steps Erlang-``phases`` with the step's duration as mean, the
+    #: task repeating; recognition, heartbeat and start latency exponential with the
+    #: given means; a start's outcome decided at once, the detector ready after its latency)
+    timing: str = "fixed"
+    #: Erlang phases of a task step under exponential timing (1: exponential)
+    phases: int = 1
 
     def __post_init__(self) -> None:
         err = ScenarioError
@@ -328,6 +340,9 @@ class World:
             _seconds(f"start latency of {p}", v)
         object.__setattr__(self, "platform_latency", latencies)
         _seconds("recognition delay", self.recognition_delay)
+        if self.timing not in TIMINGS:
+            raise ScenarioError(f"world: timing = {self.timing!r}: give one of {', '.join(repr(t) for t in TIMINGS)}")
+        check_number("world: phases", self.phases, error=err, positive=True, integer=True, high=MAX_PHASES)
         _seconds("heartbeat timeout", self.heartbeat_timeout)
         _seconds("block", self.block, zero=False)
         _seconds("quiet block", self.quiet_block, zero=False)
@@ -553,9 +568,13 @@ def _check_start_script(world: World, where: str, graphs: list[str], platforms: 
             )
 
 
-def expand_task(world: World, horizon: float) -> tuple[Segment, ...]:
+def expand_task(world: World, horizon: float, seed: int = 0) -> tuple[Segment, ...]:
     """The ground-truth segments up to ``horizon`` (the task once, or repeated); each
-    segment's ``context`` is the step's action."""
+    segment's ``context`` is the step's action. Under exponential timing the task
+    repeats and each step lasts an Erlang-``phases`` time of mean its duration, drawn
+    from ``seed``."""
+    if world.timing == "exponential":
+        return _random_task(world, horizon, seed)
     out: list[Segment] = []
     t = 0.0
     while t < horizon:
@@ -566,6 +585,21 @@ def expand_task(world: World, horizon: float) -> tuple[Segment, ...]:
             t += step.duration
         if not world.repeat:
             break
+    return tuple(out)
+
+
+def _random_task(world: World, horizon: float, seed: int) -> tuple[Segment, ...]:
+    rng = random.Random(f"{seed}:task")
+    k = world.phases
+    out: list[Segment] = []
+    t = 0.0
+    while t < horizon:
+        for step in world.task:
+            if t >= horizon:
+                break
+            d = sum(rng.expovariate(k / step.duration) for _ in range(k))
+            out.append(Segment(step.action, float(t), float(d)))
+            t += d
     return tuple(out)
 
 

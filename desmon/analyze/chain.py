@@ -1,0 +1,342 @@
+"""The continuous-time Markov chain of a scenario, built from the checker's own transitions.
+
+A chain state is the checker's state (:class:`~desmon.verify.state.Key`: what the
+repository knows, the deployments, the standing errors) plus what the world adds: the
+position in the task cycle and its Erlang phase, the components that are *physically*
+down (the repository learns of it when the context monitor notices), and the started
+detectors whose start latency has not yet passed. Every reaction is the real
+deployer's, run by :meth:`TransitionSystem.run_one
+<desmon.verify.system.TransitionSystem.run_one>` on the checker's store exactly as
+``desmon verify`` runs it (no re-model): starts beyond the outcome prefix succeed, and
+each start is a choice point that fails with probability ``start_failure_p``.
+
+Rates and what they do (:mod:`desmon.analyze.markov`):
+
+* task phase ends (rate phases/duration): the next phase, or the next step; the true
+  action changes and, with no recognition delay, the context monitor reports it at once;
+* recognition (rate 1/recognition_delay) while the recognised context differs from the
+  true action's: the monitor reports the true action;
+* a component fails or is repaired (1/MTTF, 1/MTTR): physically at once; the repository
+  learns of it at once (no heartbeat) or when the monitor notices (1/heartbeat), which
+  reports the component's state *then*;
+* a started detector becomes ready (1/start latency of its platform);
+* a random requirement change (its rate).
+
+A state is **unmonitored** when the true action is risky and a slot of the selector's
+rules for it has no member that is deployed, ready, on a physically up platform, with
+a physically readable input for every device kind it reads: the simulation's
+exposure (docs/design.md §10), state by state.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable, Iterator, NamedTuple
+
+import numpy as np
+
+from desmon.deployment.control import ControlRules
+from desmon.deployment.guard import CRASH
+from desmon.deployment.ports import Start, Stop
+from desmon.errors import CheckerError
+from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, PlatformDown, PlatformUp
+from desmon.model.scenario import Scenario
+from desmon.sim.processes import OBSERVATION
+from desmon.deployment.monitor import interpret
+from desmon.verify.state import Key
+from desmon.verify.system import TransitionSystem
+
+from desmon.analyze.markov import AnalysisError, MarkovWorld, chain_bounds
+
+__all__ = ["ChainState", "Chain", "build_chain", "BudgetExceeded", "recognised"]
+
+
+class BudgetExceeded(AnalysisError):
+    """The chain grew past ``--max-states`` (exit 3)."""
+
+
+class ChainState(NamedTuple):
+    key: Key
+    pos: int  # task step
+    phase: int
+    phys_failed: tuple[str, ...]  # devices physically failed, sorted
+    phys_down: tuple[str, ...]  # platforms physically down (absent on-demand ones included), sorted
+    starting: tuple[tuple[str, str], ...]  # (graph, platform) started, not yet ready, sorted
+
+
+def recognised(action: str) -> str:
+    """The context the monitor reports for the true ``action`` (what the simulation's
+    context monitor makes of the gripper and base it sees)."""
+    obs = OBSERVATION.get(action)
+    return interpret(obs) if obs is not None else action
+
+
+@dataclass
+class Chain:
+    """The chain: states, rates (COO arrays), labels and what each state is."""
+
+    states: list[ChainState]
+    rows: np.ndarray
+    cols: np.ndarray
+    rates: np.ndarray
+    world: MarkovWorld
+    system: TransitionSystem
+    #: 1.0 where the state is unmonitored (risky true action, an uncovered slot)
+    unmonitored: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    risky: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: slips per second that go undetected in each state
+    undetected: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: the initial distribution: (state index, probability)
+    initial: tuple[tuple[int, float], ...] = ((0, 1.0),)
+    build_s: float = 0.0
+    reactions: int = 0
+
+    @property
+    def n(self) -> int:
+        return len(self.states)
+
+    def generator(self):  # type: ignore[no-untyped-def]
+        """The infinitesimal generator Q (scipy CSR): off-diagonal rates, diagonal -exit rate."""
+        import scipy.sparse as sp
+
+        n = self.n
+        off = sp.csr_matrix((self.rates, (self.rows, self.cols)), shape=(n, n))
+        exit_ = np.asarray(off.sum(axis=1)).ravel()
+        return (off - sp.diags(exit_)).tocsr(), exit_
+
+    def describe(self, i: int) -> str:
+        """One line for state ``i``: the task step, what is known, deployed and down."""
+        s = self.states[i]
+        action = self.world.steps[s.pos][0]
+        parts = [f"{action}" + (f" (phase {s.phase + 1}/{self.world.phases})" if self.world.phases > 1 else "")]
+        parts.append(f"context {s.key.context}")
+        parts.append("deployed " + (", ".join(f"{g}@{p}" for g, p in s.key.deployments) or "nothing"))
+        if s.starting:
+            parts.append("starting " + ", ".join(f"{g}@{p}" for g, p in s.starting))
+        down = [*s.phys_failed, *(p for p in s.phys_down if not self.system.model.platform(p).on_demand)]
+        if down:
+            parts.append("broken " + ", ".join(down))
+        known = set(s.key.failed) | set(s.key.down)
+        unseen = [c for c in (*s.phys_failed, *s.phys_down) if c not in known]
+        if unseen:
+            parts.append("not yet noticed " + ", ".join(unseen))
+        if s.key.standing:
+            parts.append("errors for " + ", ".join(s.key.standing))
+        return "; ".join(parts)
+
+
+class _Builder:
+    """Breadth-first over chain states; one transition system, its reactions memoised."""
+
+    def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld, max_states: int | None,
+                 progress: Callable[[int], None] | None) -> None:
+        self.mw = mw
+        # the checker's bounds without its budgets, and no scripted first action: the
+        # chain starts before the monitor has recognised anything
+        plain = replace(scenario, timeline=())
+        self.system = TransitionSystem(plain, deployer, invariants=(), bounds=chain_bounds(scenario, mw))
+        self.model = scenario.model
+        self.max_states = max_states
+        self.progress = progress
+        self.rules = ControlRules(self.model)
+        self._react_memo: dict[tuple[Key, Event], list[tuple[float, Key, tuple]]] = {}
+        self.reactions = 0
+        devices = {d.name for d in self.model.devices}
+        self.faults = tuple((c, c in devices, 1.0 / f, 1.0 / r) for c, _k, f, r in mw.faults)
+        self.latency = {p.name: mw.latency_of(p.name) for p in self.model.platforms}
+
+    # -- reactions -----------------------------------------------------------------------
+    def react(self, key: Key, event: Event) -> list[tuple[float, Key, tuple]]:
+        """(probability, next key, commands) of each outcome of ``event`` on ``key``: the
+        real reaction, every start a coin of ``start_failure_p``."""
+        mk = (key, event)
+        out = self._react_memo.get(mk)
+        if out is not None:
+            return out
+        p = self.mw.start_failure_p
+        out = []
+        pending: list[tuple[bool, ...]] = [()]
+        while pending:
+            prefix = pending.pop()
+            nkey, outcomes, log, instant = self.system.run_one(key, event, prefix)
+            self.reactions += 1
+            if instant is not None and instant[0] == CRASH:
+                raise AnalysisError(
+                    f"the deployer crashed reacting to {event} ({instant[1]}): desmon verify shows the path to it; "
+                    "the chain of a crashing deployer has no meaning"
+                )
+            nf = outcomes.count(False)
+            prob = (p ** nf) * ((1.0 - p) ** (len(outcomes) - nf)) if p > 0 else 1.0
+            if p > 0:
+                for i in range(len(prefix), len(outcomes)):
+                    pending.append(outcomes[:i] + (False,))
+            cmds = tuple((type(c) is Start, c.graph, c.platform) for c, ok in log.commands if ok and isinstance(c, (Start, Stop)))
+            if prob > 0:
+                out.append((prob, nkey, cmds))
+        self._react_memo[mk] = out
+        return out
+
+    def _starting_after(self, s: ChainState, cmds: tuple, nkey: Key) -> tuple[tuple[str, str], ...]:
+        """The detectors still starting after a reaction's successful starts and stops."""
+        deployed = set(s.key.deployments)
+        starting = set(s.starting)
+        for is_start, g, p in cmds:
+            pair = (g, p)
+            if is_start:
+                if pair not in deployed:
+                    deployed.add(pair)
+                    if self.latency.get(p, 0.0) > 0:
+                        starting.add(pair)
+            else:
+                deployed.discard(pair)
+                starting.discard(pair)
+        live = set(nkey.deployments)
+        return tuple(sorted(starting & live))
+
+    # -- transitions -----------------------------------------------------------------------
+    def transitions(self, s: ChainState) -> Iterator[tuple[float, ChainState]]:
+        mw = self.mw
+        yield from self._task(s)
+        if mw.recognition_delay > 0:
+            ctx = recognised(mw.steps[s.pos][0])
+            if ctx != s.key.context:
+                yield from self._deliver(s, ActionChange(ctx), 1.0 / mw.recognition_delay)
+        yield from self._faults(s)
+        for pair in s.starting:
+            lat = self.latency[pair[1]]
+            yield 1.0 / lat, s._replace(starting=tuple(x for x in s.starting if x != pair))
+        for change, rate in mw.changes:
+            yield from self._deliver(s, change, rate)
+
+    def _deliver(self, s: ChainState, event: Event, rate: float) -> Iterator[tuple[float, ChainState]]:
+        for prob, nkey, cmds in self.react(s.key, event):
+            yield rate * prob, s._replace(key=nkey, starting=self._starting_after(s, cmds, nkey))
+
+    def _task(self, s: ChainState) -> Iterator[tuple[float, ChainState]]:
+        mw = self.mw
+        action, dur = mw.steps[s.pos]
+        rate = mw.phases / dur
+        if s.phase + 1 < mw.phases:
+            yield rate, s._replace(phase=s.phase + 1)
+            return
+        nxt = s._replace(pos=(s.pos + 1) % len(mw.steps), phase=0)
+        if mw.recognition_delay > 0:
+            yield rate, nxt
+        else:
+            yield from self._deliver(nxt, ActionChange(recognised(mw.steps[nxt.pos][0])), rate)
+
+    def _faults(self, s: ChainState) -> Iterator[tuple[float, ChainState]]:
+        hb = self.mw.heartbeat_timeout
+        known_failed, known_down = set(s.key.failed), set(s.key.down)
+        for c, is_dev, fail, repair in self.faults:
+            phys = s.phys_failed if is_dev else s.phys_down
+            broken = c in phys
+            flipped = tuple(sorted(set(phys) - {c})) if broken else tuple(sorted((*phys, c)))
+            ns = s._replace(phys_failed=flipped) if is_dev else s._replace(phys_down=flipped)
+            rate = repair if broken else fail
+            if hb > 0:
+                yield rate, ns
+            else:
+                yield from self._deliver(ns, _event(c, is_dev, not broken), rate)
+            if hb > 0 and broken != (c in (known_failed if is_dev else known_down)):
+                yield from self._deliver(s, _event(c, is_dev, broken), 1.0 / hb)
+
+
+def _event(component: str, is_device: bool, broken: bool) -> Event:
+    if is_device:
+        return DeviceFail(component) if broken else DeviceRepair(component)
+    return PlatformDown(component) if broken else PlatformUp(component)
+
+
+def build_chain(
+    scenario: Scenario, deployer: Any, mw: MarkovWorld, *, max_states: int | None = None,
+    progress: Callable[[int], None] | None = None, miss: dict[str, float] | None = None,
+) -> Chain:
+    """Every chain state reachable from the initial ones, with its rates and rewards;
+    ``miss`` is each graph's probability of missing a slip (1 where not given)."""
+    t0 = time.perf_counter()
+    b = _Builder(scenario, deployer, mw, max_states, progress)
+    try:
+        key0 = b.system.initial()
+    except CheckerError as exc:
+        raise AnalysisError(str(exc)) from None
+    s0 = ChainState(key0, 0, 0, (), tuple(sorted(key0.down)), ())
+    start = [(1.0, s0)]
+    if mw.recognition_delay == 0:  # the monitor sees the first step at once: its reaction's outcomes
+        start = list(b._deliver(s0, ActionChange(recognised(mw.steps[0][0])), 1.0))
+    index: dict[ChainState, int] = {}
+    states: list[ChainState] = []
+    initial: dict[int, float] = {}
+    for prob, s in start:
+        j = index.setdefault(s, len(states))
+        if j == len(states):
+            states.append(s)
+        initial[j] = initial.get(j, 0.0) + prob
+    rows: list[int] = []
+    cols: list[int] = []
+    rates: list[float] = []
+    i = 0
+    while i < len(states):
+        s = states[i]
+        merged: dict[int, float] = {}
+        for rate, t in b.transitions(s):
+            j = index.get(t)
+            if j is None:
+                j = index[t] = len(states)
+                states.append(t)
+                if max_states is not None and len(states) > max_states:
+                    raise BudgetExceeded(f"the chain has more than --max-states {max_states} states: raise it, or analyze fewer faults")
+            if j != i:
+                merged[j] = merged.get(j, 0.0) + rate
+        for j, r in merged.items():
+            rows.append(i)
+            cols.append(j)
+            rates.append(r)
+        i += 1
+        if progress is not None and not i % 5000:
+            progress(i)
+    chain = Chain(states, np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64), np.asarray(rates, dtype=float), mw, b.system)
+    chain.initial = tuple(sorted(initial.items()))
+    _rewards(chain, b.rules, dict(miss or {}))
+    chain.build_s = time.perf_counter() - t0
+    chain.reactions = b.reactions
+    return chain
+
+
+def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, float]) -> None:
+    """The unmonitored and risky labels and the undetected-slip rate of every state."""
+    model = chain.system.model
+    risky_actions = model.risky_actions
+    mw = chain.world
+    n = chain.n
+    unmon = np.zeros(n)
+    risky = np.zeros(n)
+    undetected = np.zeros(n)
+    wiring: dict[tuple[str, str], tuple] = {}
+    hosts = {d.name: d.platform for d in model.devices}
+    for i, s in enumerate(chain.states):
+        action = mw.steps[s.pos][0]
+        if action not in risky_actions:
+            continue
+        risky[i] = 1.0
+        slots = [(x,) if isinstance(x, str) else tuple(x) for x in model.rules.slots_for(action)]
+        covered = set()
+        for g, p in s.key.deployments:
+            if (g, p) in s.starting or p in s.phys_down:
+                continue
+            w = wiring.get((g, p))
+            if w is None:
+                w = wiring[(g, p)] = tuple(tuple(d.name for d in devs) for _k, devs in rules.input_devices(g, p))
+            if all(any(d not in s.phys_failed and hosts[d] not in s.phys_down for d in devs) for devs in w):
+                covered.add(g)
+        if any(not covered.intersection(slot) for slot in slots):
+            unmon[i] = 1.0
+            undetected[i] = mw.slip_rate
+        elif slots:
+            m = 1.0
+            for g in covered:
+                if any(g in slot for slot in slots):
+                    m *= miss.get(g, 1.0)
+            undetected[i] = mw.slip_rate * m
+    chain.unmonitored, chain.risky, chain.undetected = unmon, risky, undetected

@@ -1,0 +1,219 @@
+"""The Markov world: a scenario's World read as rates, matched against its checker bounds.
+
+The chain (:mod:`desmon.analyze.chain`) lets the environment do what the scenario's
+:class:`~desmon.verify.bounds.Bounds` let the checker do, at the rates the scenario's
+:class:`~desmon.sim.world.World` gives:
+
+* the robot's task is a repeating cycle of its steps; each step lasts an exponential
+  time with the step's duration as mean, or an Erlang-``phases`` time (``--phases k``:
+  k exponential phases of mean duration/k each, closer to a fixed duration);
+* each component of ``World.stochastic_faults`` fails after an exponential time of
+  mean MTTF and is repaired after one of mean MTTR;
+* the context monitor recognises a new action after an exponential delay of mean
+  ``recognition_delay`` and notices a failure or repair after one of mean
+  ``heartbeat_timeout`` (0: at once); it then reports what the world is like *then*;
+* a started detector is ready after an exponential start latency of mean
+  ``start_latency`` (or the platform's own); a start fails with probability
+  ``start_failure_p`` (default ``World.start_failure.probability``), decided at once;
+* random requirement changes (``World.random_changes``) arrive at rate
+  1/``mean_interval``, each change equally likely;
+* slips arrive at ``World.slip_rate`` per second of object-in-hand time.
+
+Every event the bounds let the checker choose needs a rate here, and every rate an
+event there: :func:`markov_world` refuses a mismatch in one line naming it (a fault
+without MTTF, an MTTF of a component the checker never fails, scripted faults, loads
+or changes, which have no rate). The bounds' ``max_failures`` and ``start_failures``
+are budgets of the checker, not facts of the world: the chain drops them (any number
+of components may be down at once; any start may fail), and says so
+(:attr:`MarkovWorld.dropped`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+from desmon.errors import DesmonError
+from desmon.model.checks import check_number
+from desmon.model.events import RequirementChange
+from desmon.model.scenario import Scenario
+from desmon.sim.world import World, world_of
+from desmon.verify.bounds import Bounds, bounds_of
+
+__all__ = ["AnalysisError", "MarkovWorld", "markov_world", "MAX_PHASES"]
+
+#: the most Erlang phases a task step may take (``--phases``)
+MAX_PHASES = 64
+
+
+class AnalysisError(DesmonError, ValueError):
+    """The analysis cannot run as asked (a rate without an event, a bad horizon, ...)."""
+
+
+@dataclass(frozen=True)
+class MarkovWorld:
+    """The rates of the chain, all in events per second (0: the event never happens)."""
+
+    #: (action, mean duration s) of each task step, in cycle order
+    steps: tuple[tuple[str, float], ...]
+    phases: int
+    #: (component, "device" | "platform", mttf s, mttr s)
+    faults: tuple[tuple[str, str, float, float], ...]
+    #: mean start latency per platform (s; 0: ready at once)
+    latency: tuple[tuple[str, float], ...]
+    recognition_delay: float
+    heartbeat_timeout: float
+    start_failure_p: float
+    slip_rate: float
+    #: (change, rate) of each random requirement change
+    changes: tuple[tuple[RequirementChange, float], ...]
+    #: the checker's budgets the chain drops, as (field, value) pairs
+    dropped: tuple[tuple[str, Any], ...] = ()
+
+    def latency_of(self, platform: str) -> float:
+        return dict(self.latency).get(platform, 0.0)
+
+    def to_json(self) -> dict[str, Any]:
+        """The rates used, as ``desmon analyze --json`` writes them (per second)."""
+        return {
+            "task_steps": [{"action": a, "mean_s": d, "rate_per_s": 1.0 / d} for a, d in self.steps],
+            "phases": self.phases,
+            "faults": [
+                {"component": c, "kind": k, "mttf_s": f, "mttr_s": r, "fail_rate_per_s": 1.0 / f, "repair_rate_per_s": 1.0 / r}
+                for c, k, f, r in self.faults
+            ],
+            "start_latency_s": dict(self.latency),
+            "recognition_delay_s": self.recognition_delay,
+            "heartbeat_timeout_s": self.heartbeat_timeout,
+            "start_failure_p": self.start_failure_p,
+            "slip_rate_per_s": self.slip_rate,
+            "requirement_changes": [{"change": c.label or str(c), "rate_per_s": r} for c, r in self.changes],
+            "dropped_checker_budgets": dict(self.dropped),
+        }
+
+
+def _refuse(scenario: Scenario, msg: str) -> AnalysisError:
+    return AnalysisError(f"scenario {scenario.name!r}: {msg}")
+
+
+def _check_unrated(scenario: Scenario, world: World) -> None:
+    """Scripted parts of the world have times, not rates."""
+    scripted = [
+        ("faults", world.faults, "stochastic_faults=(MTTF('lwr_wrench', mttf=3600, mttr=120),)"),
+        ("loads", world.loads, "no scripted loads"),
+        ("changes", world.changes, "random_changes=RandomChanges(...)"),
+    ]
+    for field_, events, fix in scripted:
+        if events:
+            first = events[0]
+            raise _refuse(
+                scenario,
+                f"World {field_} are scripted ({first.event} at {first.time:g} s): a Markov chain needs rates, not times; "
+                f"give {fix} instead (a scenario may offer a stochastic variant as a parameter, -p)",
+            )
+    if world.load_walks:
+        w = world.load_walks[0]
+        raise _refuse(scenario, f"World load walk of {w.platform!r} is a Gaussian walk with no rate per load level: analyze cannot model it; drop load_walks for the analysis")
+    if world.lease is not None:
+        raise _refuse(scenario, "World lease (on-demand platforms joining when nothing fits) is not modelled by the chain yet: analyze a world without lease")
+    if world.start_failure.script:
+        g, p, n = world.start_failure.script[0]
+        raise _refuse(scenario, f"World start failure script ({g} on {p}, attempt {n}) is scripted: give StartFailure(probability=...) instead")
+
+
+def _check_matching(scenario: Scenario, world: World, b: Bounds) -> None:
+    """An event of the bounds without a rate, or a rate without an event: one line."""
+    rated = {m.component for m in world.stochastic_faults}
+    for what, names in (("device", b.devices), ("platform", b.platforms)):
+        for n in names:
+            if n not in rated:
+                verb = "fail" if what == "device" else "go down"
+                raise _refuse(
+                    scenario,
+                    f"the checker bounds let {what} {n!r} {verb} but the World gives it no rate: add MTTF({n!r}, mttf=..., mttr=...) "
+                    f"to World.stochastic_faults, or drop {n!r} from the bounds' {what}s",
+                )
+    bounded = set(b.devices) | set(b.platforms)
+    for m in world.stochastic_faults:
+        if m.component not in bounded:
+            raise _refuse(
+                scenario,
+                f"World.stochastic_faults gives {m.component!r} an MTTF but the checker bounds never let it fail: "
+                f"add {m.component!r} to the bounds' devices or platforms, or drop its MTTF",
+            )
+    if world.stochastic_faults and not b.repair:
+        raise _refuse(scenario, f"World repairs {world.stochastic_faults[0].component!r} (MTTR) but the checker bounds say repair=False: set repair=True")
+    if b.loads:
+        p = next(iter(b.loads))
+        raise _refuse(scenario, f"the checker bounds move the load of {p!r} but the World gives load steps no rate: drop loads from the bounds for the analysis")
+    if b.joins:
+        raise _refuse(scenario, f"the checker bounds let {b.joins[0]!r} join and leave but the chain has no rate for it (leases are not modelled yet)")
+    random = world.random_changes.changes if world.random_changes is not None else ()
+    for c in b.requirement_changes:
+        if c not in random:
+            raise _refuse(scenario, f"the checker bounds apply requirement change {c.label or c} but World.random_changes gives it no rate: add it there")
+    for c in random:
+        if c not in b.requirement_changes:
+            raise _refuse(scenario, f"World.random_changes makes requirement change {c.label or c} but the checker bounds never apply it: add it to requirement_changes")
+
+
+def _kind_of(scenario: Scenario, component: str) -> str:
+    model = scenario.model
+    if component in {d.name for d in model.devices}:
+        return "device"
+    return "platform"
+
+
+def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float | None = None) -> MarkovWorld:
+    """The rates of ``scenario``'s World, matched against its checker bounds (see the
+    module docstring); :class:`AnalysisError` names the first mismatch."""
+    check_number("--phases", phases, error=AnalysisError, positive=True, integer=True, high=MAX_PHASES)
+    if start_failure_p is not None:
+        check_number("--start-failure-p", start_failure_p, error=AnalysisError, high=1.0)
+        if start_failure_p >= 1.0:
+            raise AnalysisError(f"--start-failure-p = {start_failure_p!r}: every start would fail and no detector ever runs; give a probability below 1")
+    if scenario.world is None:
+        raise _refuse(scenario, "it declares no World, so the chain has no rates: give it Scenario(world=World(task=..., stochastic_faults=...))")
+    world = world_of(scenario)
+    b = bounds_of(scenario)
+    _check_unrated(scenario, world)
+    _check_matching(scenario, world, b)
+    for i, step in enumerate(world.task):
+        if step.duration <= 0:
+            raise _refuse(scenario, f"World task step {i + 1} ({step.action}) lasts 0 s, which has no rate: give it a positive duration")
+    p = world.start_failure.probability if start_failure_p is None else float(start_failure_p)
+    latency = tuple((pl.name, world.latency(pl.name)) for pl in scenario.model.platforms)
+    changes: tuple[tuple[RequirementChange, float], ...] = ()
+    if world.random_changes is not None:
+        rc = world.random_changes
+        changes = tuple((c, 1.0 / (rc.mean_interval * len(rc.changes))) for c in rc.changes)
+    dropped = []
+    if b.max_failures is not None:
+        dropped.append(("max_failures", b.max_failures))
+    if p > 0 and b.start_failures != math.inf:
+        dropped.append(("start_failures", b.start_failures))
+    return MarkovWorld(
+        steps=tuple((s.action, float(s.duration)) for s in world.task),
+        phases=int(phases),
+        faults=tuple((m.component, _kind_of(scenario, m.component), m.mttf, m.mttr) for m in world.stochastic_faults),
+        latency=latency,
+        recognition_delay=world.recognition_delay,
+        heartbeat_timeout=world.heartbeat_timeout,
+        start_failure_p=p,
+        slip_rate=world.slip_rate,
+        changes=changes,
+        dropped=tuple(dropped),
+    )
+
+
+def chain_bounds(scenario: Scenario, mw: MarkovWorld) -> Bounds:
+    """The checker bounds the chain's transition system runs under: no failure budget,
+    every start a choice while ``start_failure_p`` > 0, no initial action (the context
+    monitor recognises the task's first step like any other)."""
+    b = bounds_of(scenario)
+    return replace(b, max_failures=None, start_failures=10**6 if mw.start_failure_p > 0 else 0, initial_action=None)
+
+
+def is_rate(x: float) -> bool:
+    return math.isfinite(x) and x > 0

@@ -1,0 +1,294 @@
+"""Exact solutions of a chain on scipy sparse matrices.
+
+* :func:`steady_state` — the long-run distribution: the chain's one bottom strongly
+  connected component (every long run ends there), solved as ``pi Q = 0, sum pi = 1``
+  with one unknown pinned, by BiCGSTAB; where it breaks down the sparse LU solve
+  (small chains) or the power method on the uniformised chain takes over. The residual
+  ``max |pi Q|`` is reported. A chain with an absorbing state, or with two closed
+  classes, has no single steady state: :class:`~desmon.analyze.markov.AnalysisError`
+  names the state and suggests a transient query.
+* :func:`transient` — the distribution at time T and the expected reward accumulated
+  over [0, T], from an initial distribution. Short horizons (``Lambda * T`` up to
+  :data:`UNIFORM_STEPS`) by uniformisation: Poisson-weighted powers of ``P = I +
+  Q / Lambda``, truncated where the Poisson tail is below :data:`EPS`. Longer ones (a
+  stiff chain: fast recognition and start latencies, slow faults, an 8 h shift) by the
+  Krylov exponential :func:`expv` on the generator augmented with the reward
+  (tolerance 1e-10 per step); :attr:`Transient.error` bounds the error either way.
+* :func:`mean_time_to` — the expected time to reach a set of states (one sparse solve).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from desmon.analyze.markov import AnalysisError
+
+__all__ = ["steady_state", "transient", "mean_time_to", "expv", "Transient", "EPS", "UNIFORM_STEPS"]
+
+#: the truncation error of uniformisation: the Poisson mass left out
+EPS = 1e-10
+#: the most expected uniformisation steps (Lambda * T) before the Krylov exponential takes over
+UNIFORM_STEPS = 20_000
+#: the largest closed class the direct sparse LU solve is tried on
+DIRECT_MAX = 30_000
+
+
+def _csgraph():  # type: ignore[no-untyped-def]
+    import scipy.sparse.csgraph as csgraph
+
+    return csgraph
+
+
+def _off_diagonal(Q):  # type: ignore[no-untyped-def]
+    adj = Q.tocsr(copy=True)
+    adj.setdiag(0)
+    adj.eliminate_zeros()
+    return adj
+
+
+def closed_class(Q, describe) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """The states of the chain's one bottom strongly connected component."""
+    adj = _off_diagonal(Q)
+    ncomp, labels = _csgraph().connected_components(adj, directed=True, connection="strong")
+    coo = adj.tocoo()
+    leaving = np.zeros(ncomp, dtype=bool)
+    cross = labels[coo.row] != labels[coo.col]
+    leaving[labels[coo.row[cross]]] = True
+    bottom = [c for c in range(ncomp) if not leaving[c]]
+    sizes = {c: int((labels == c).sum()) for c in bottom}
+    if len(bottom) > 1 or sizes[bottom[0]] == 1:
+        trap = next((c for c in bottom if sizes[c] == 1), bottom[0])
+        i = int(np.flatnonzero(labels == trap)[0])
+        what = "is absorbing (no event leaves it)" if sizes[trap] == 1 else f"is in one of {len(bottom)} closed classes"
+        raise AnalysisError(
+            f"the chain has no single steady state: state {i} ({describe(i)}) {what}; ask a transient question instead "
+            "(--transient-only, with --horizon T: exposure within T seconds)"
+        )
+    return np.flatnonzero(labels == bottom[0])
+
+
+def steady_state(Q, describe) -> tuple[np.ndarray, float, str]:  # type: ignore[no-untyped-def]
+    """The long-run distribution of the chain with generator ``Q`` (CSR), the residual
+    ``max |pi Q|`` and the method that found it; ``describe(i)`` names state i in an error."""
+    n = Q.shape[0]
+    members = closed_class(Q, describe)
+    pi_sub, method = _solve_closed(Q[members][:, members].T.tocsr())
+    pi = np.zeros(n)
+    pi[members] = pi_sub
+    residual = float(np.abs(Q.T @ pi).max()) if n else 0.0
+    return pi, residual, method
+
+
+def _solve_closed(A) -> tuple[np.ndarray, str]:  # type: ignore[no-untyped-def]
+    """``A x = 0, sum x = 1`` for the transposed generator ``A`` of an irreducible chain."""
+    import scipy.sparse.linalg as sla
+
+    m = A.shape[0]
+    if m == 1:
+        return np.ones(1), "trivial"
+    scale = float(np.abs(A.diagonal()).max())
+    M = A[: m - 1, : m - 1].tocsc()
+    b = -A[: m - 1, m - 1].toarray().ravel()
+
+    def done(x: np.ndarray) -> np.ndarray | None:
+        if not np.all(np.isfinite(x)):
+            return None
+        pi = np.clip(np.append(x, 1.0), 0.0, None)
+        pi /= pi.sum()
+        return pi if float(np.abs(A @ pi).max()) <= 1e-11 * scale else None
+
+    with np.errstate(all="ignore"):
+        x, _info = sla.bicgstab(M, b, rtol=1e-13, atol=0.0, maxiter=max(1000, 4 * m))
+    pi = done(x)
+    if pi is not None:
+        return pi, "BiCGSTAB"
+    if m <= DIRECT_MAX:
+        pi = done(sla.spsolve(M, b, permc_spec="MMD_AT_PLUS_A"))
+        if pi is not None:
+            return pi, "sparse LU"
+    return _power(A), "power method"
+
+
+def _power(A, limit: int = 2_000_000) -> np.ndarray:  # type: ignore[no-untyped-def]
+    lam = float(np.abs(A.diagonal()).max()) * 1.02
+    P = (A / lam).tocsr()
+    pi = np.full(A.shape[0], 1.0 / A.shape[0])
+    for k in range(limit):
+        nxt = pi + P @ pi
+        if not k % 64 and np.abs(nxt - pi).max() < 1e-16:
+            return nxt / nxt.sum()
+        pi = nxt
+    raise AnalysisError(f"the steady state did not converge in {limit} power steps; ask a transient question instead (--transient-only)")
+
+
+@dataclass(frozen=True)
+class Transient:
+    """The distribution at T, the reward accumulated over [0, T] (one per reward row)."""
+
+    at: np.ndarray
+    accumulated: np.ndarray
+    error: float
+    method: str
+
+
+def transient(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, *, method: str = "auto") -> Transient:  # type: ignore[no-untyped-def]
+    """From ``p0`` over ``[0, horizon]``: the distribution at the horizon and each reward
+    row of ``rewards`` (k x n) accumulated (see the module docstring)."""
+    rewards = np.atleast_2d(rewards)
+    exit_ = -Q.diagonal()
+    lam = float(exit_.max()) * 1.02 if exit_.size and exit_.max() > 0 else 1.0
+    if method == "uniformisation" or (method == "auto" and lam * horizon <= UNIFORM_STEPS):
+        return _uniformisation(Q, p0, horizon, rewards, lam)
+    return _krylov(Q, p0, horizon, rewards)
+
+
+def _krylov(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray) -> Transient:  # type: ignore[no-untyped-def]
+    """d/dt [p, c] = [p Q, p R^T]: one Krylov exponential of the augmented matrix."""
+    import scipy.sparse as sp
+
+    n = Q.shape[0]
+    k = rewards.shape[0]
+    B = sp.bmat([[Q.T, None], [sp.csr_matrix(rewards), sp.csr_matrix((k, k))]], format="csr")
+    y0 = np.concatenate([p0.astype(float), np.zeros(k)])
+    y, err, steps = expv(horizon, B, y0)
+    at = np.clip(y[:n], 0.0, None)
+    defect = abs(1.0 - float(y[:n].sum()))
+    return Transient(at, y[n:], max(err, defect), f"Krylov exponential ({steps} steps)")
+
+
+def _uniformisation(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, lam: float) -> Transient:  # type: ignore[no-untyped-def]
+    from scipy.stats import poisson
+
+    qt = lam * horizon
+    PT = (Q.T / lam).tocsr()  # pi_{k+1} = pi_k + pi_k Q / lam
+    kmax = int(poisson.isf(EPS, qt)) + 1 if qt > 0 else 1
+    v = p0.astype(float).copy()
+    at = np.zeros_like(v)
+    occ = np.zeros_like(v)
+    logw = -qt
+    cdf = 0.0
+    for k in range(kmax + 1):
+        w = math.exp(logw)
+        at += w * v
+        cdf += w
+        occ += (1.0 - cdf) / lam * v  # P(N > k) / lam: the expected time spent after k jumps
+        v = v + PT @ v
+        logw += math.log(qt) - math.log(k + 1) if qt > 0 else -math.inf
+    return Transient(at, rewards @ occ, EPS * max(1.0, horizon), f"uniformisation ({kmax} steps)")
+
+
+def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = 30) -> tuple[np.ndarray, float, int]:  # type: ignore[no-untyped-def]
+    """``exp(t A) v`` by Krylov subspace projection with adaptive time steps and a
+    local error estimate per step (after Sidje's Expokit ``expv``); returns the vector,
+    the summed error estimate and the number of steps."""
+    from scipy.linalg import expm
+
+    n = v.shape[0]
+    m = max(1, min(m, n - 1))
+    anorm = float(abs(A).sum(axis=1).max()) or 1.0
+    w = np.array(v, dtype=float)
+    beta = float(np.linalg.norm(w))
+    if beta == 0 or t == 0:
+        return w, 0.0, 0
+    fact = ((m + 1) / math.e) ** (m + 1) * math.sqrt(2 * math.pi * (m + 1))
+    t_new = (1.0 / anorm) * ((fact * tol) / (4.0 * beta * anorm)) ** (1.0 / m)
+    t_now, s_err, steps = 0.0, 0.0, 0
+    while t_now < t:
+        steps += 1
+        t_step = min(t - t_now, t_new)
+        V, H, mb, happy, avnorm = _arnoldi(A, w / beta, m)
+        if happy:
+            t_step = t - t_now
+        for _reject in range(11):
+            if happy:
+                F = expm(t_step * H[:mb, :mb])
+                err, xm = 1e-7, 1.0 / m
+                break
+            F = expm(t_step * H)
+            err, xm = _local_error(beta, F, avnorm, m)
+            if err <= 1.2 * t_step * tol:
+                break
+            t_step = 0.9 * t_step * (t_step * tol / err) ** xm
+        k = mb if happy else m + 1
+        w = V[:, :k] @ (beta * F[:k, 0])
+        beta = float(np.linalg.norm(w))
+        t_now += t_step
+        t_new = 0.9 * t_step * (t_step * tol / max(err, 1e-300)) ** xm
+        s_err += max(err, anorm * np.finfo(float).eps)
+        if beta == 0:
+            break
+    return w, s_err, steps
+
+
+def _arnoldi(A, v: np.ndarray, m: int):  # type: ignore[no-untyped-def]
+    """The Krylov basis V (as columns) and Hessenberg H (with the extra row and column of
+    the error estimate), its size, whether it broke down happily, and ``|A v_{m+1}|``.
+    Classical Gram-Schmidt, applied twice (as accurate as the modified one, in matrix products)."""
+    n = v.shape[0]
+    B = np.zeros((m + 1, n))  # basis vectors as rows: contiguous
+    H = np.zeros((m + 2, m + 2))
+    B[0] = v
+    for j in range(m):
+        p = A @ B[j]
+        h = B[: j + 1] @ p
+        p -= h @ B[: j + 1]
+        h2 = B[: j + 1] @ p
+        p -= h2 @ B[: j + 1]
+        H[: j + 1, j] = h + h2
+        s = float(np.linalg.norm(p))
+        if s < 1e-7:
+            return B.T, H, j + 1, True, 0.0
+        H[j + 1, j] = s
+        B[j + 1] = p / s
+    H[m + 1, m] = 1.0
+    return B.T, H, m, False, float(np.linalg.norm(A @ B[m]))
+
+
+def _local_error(beta: float, F: np.ndarray, avnorm: float, m: int) -> tuple[float, float]:
+    phi1 = abs(beta * F[m, 0])
+    phi2 = abs(beta * F[m + 1, 0] * avnorm)
+    if phi1 > 10 * phi2:
+        return phi2, 1.0 / m
+    if phi1 > phi2:
+        return phi1 * phi2 / (phi1 - phi2), 1.0 / m
+    return phi1, 1.0 / max(1, m - 1)
+
+
+def mean_time_to(Q, target: np.ndarray, p0: np.ndarray) -> float:  # type: ignore[no-untyped-def]
+    """Expected time from ``p0`` until the chain first enters a state of ``target``
+    (a boolean mask); ``inf`` if it may never."""
+    import scipy.sparse.linalg as sla
+
+    if not target.any():
+        return math.inf
+    if p0[~target].sum() == 0:
+        return 0.0
+    reach = _reaches(_off_diagonal(Q), target)
+    if (p0[~reach] > 0).any():
+        return math.inf
+    rest = np.flatnonzero(~target)
+    sub = Q[rest][:, rest].tocsc()
+    ones = -np.ones(len(rest))
+    with np.errstate(all="ignore"):
+        t, _info = sla.bicgstab(sub, ones, rtol=1e-13, atol=0.0, maxiter=max(1000, 4 * len(rest)))
+    if not np.all(np.isfinite(t)) or np.abs(sub @ t - ones).max() > 1e-8:
+        t = sla.spsolve(sub, ones, permc_spec="MMD_AT_PLUS_A")
+    full = np.zeros(Q.shape[0])
+    full[rest] = np.atleast_1d(t)
+    return float(p0 @ full)
+
+
+def _reaches(adj, target: np.ndarray) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """Which states can reach ``target`` (backward search over the rate graph)."""
+    back = adj.T.tocsr()
+    seen = target.copy()
+    frontier = np.flatnonzero(target)
+    while frontier.size:
+        nxt = np.unique(back[frontier].indices)
+        nxt = nxt[~seen[nxt]]
+        seen[nxt] = True
+        frontier = nxt
+    return seen
