@@ -14,7 +14,8 @@ in the bounds, so the chain of ``desmon analyze`` is the World's own process.
 
 Parameters (``-p NAME=VALUE``): ``force_sensors`` (1, or 2: a wrist force/torque
 sensor ``wrist_ft`` on a small ``wrist_pc`` backs up the arm's wrench estimate),
-``wrench_mttf`` (s, default 3600), ``hours`` (default 8).
+``wrench_mttf`` (s, default 3600), ``hours`` (default 8), ``faults`` (False: nothing
+breaks; the exposure left is the blind time of the switches alone).
 
     desmon analyze scenarios/coffee_shift.py                      # exact exposure per hour and per shift
     desmon analyze scenarios/coffee_shift.py -p force_sensors=2   # what a second force sensor buys
@@ -31,7 +32,7 @@ from desmon.model.scenario import Scenario
 from desmon.sim.world import MTTF, StartFailure, Step, World
 from desmon.verify.bounds import Bounds
 
-p = parameters(force_sensors=1, wrench_mttf=3600.0, hours=8.0)
+p = parameters(force_sensors=1, wrench_mttf=3600.0, hours=8.0, faults=True)
 if p.force_sensors not in (1, 2):
     from desmon.errors import ScenarioError
 
@@ -45,12 +46,15 @@ faults = [
     MTTF("torso_pc", mttf=28800.0, mttr=90.0),
 ]
 devices = ["lwr_wrench", "pad_thumb_prox"]
+if not p.faults:
+    faults, devices = [], []
 if p.force_sensors == 2:
     robot.platform("wrist_pc", memory=128, attributes={"os": "linux", "arch": "armv7"}, properties={"link_latency_ms": 1.0}).device(
         "wrist_ft", kind="force_sensor", vendor="ati", version="mini45"
     )
-    faults.append(MTTF("wrist_ft", mttf=p.wrench_mttf, mttr=120.0))
-    devices.append("wrist_ft")
+    if p.faults:
+        faults.append(MTTF("wrist_ft", mttf=p.wrench_mttf, mttr=120.0))
+        devices.append("wrist_ft")
 
 scenario = Scenario(
     name="coffee_shift",
@@ -73,7 +77,7 @@ scenario = Scenario(
         task={IDLE: (GRASP,), GRASP: (HOLD,), HOLD: (MOVE_BASE,), MOVE_BASE: (RELEASE,), RELEASE: (IDLE,)},
         initial_action=IDLE,
         devices=tuple(devices),
-        platforms=("torso_pc", "hand_pc"),
+        platforms=("torso_pc", "hand_pc") if p.faults else (),
         start_failures=1,
         max_failures=2,
     ),

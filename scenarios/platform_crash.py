@@ -11,6 +11,11 @@ crashes, at t=15 s it reboots.
   ``desmon run --deployer paper`` exits 1).
 
 Run: ``desmon run scenarios/platform_crash.py [--deployer paper]``.
+
+Parameter ``stochastic`` (default False): True replaces the scripted crash by an hour of
+grasp / carry / hand-over cycles in which torso_pc, hand_pc and the wrench break and
+are repaired at random (MTTF / MTTR), the world ``desmon analyze`` solves exactly:
+``desmon analyze scenarios/platform_crash.py -p stochastic=True``.
 """
 
 from __future__ import annotations
@@ -20,14 +25,30 @@ from desmon.model.events import LoadChange, PlatformDown, PlatformUp
 from desmon.verify.bounds import Bounds, levels
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.model.cob3 import LOADS, care_o_bot
-from desmon.sim.world import Slip, Step, World
+from desmon.model.params import parameters
+from desmon.sim.world import MTTF, Slip, Step, World
+
+p = parameters(stochastic=False)
+
+#: the stochastic variant's world: every fault the checker bounds allow, at a rate
+STOCHASTIC = World(
+    task=(Step(GRASP, 25.0), Step(MOVE_BASE, 10.0), Step(RELEASE, 5.0)),
+    repeat=True,
+    horizon=3600.0,
+    slip_rate=1.0 / 600.0,
+    stochastic_faults=(MTTF("torso_pc", mttf=600.0, mttr=30.0), MTTF("hand_pc", mttf=1200.0, mttr=30.0), MTTF("lwr_wrench", mttf=1800.0, mttr=60.0)),
+    start_latency=0.3,
+    platform_latency=(("hand_pc", 0.4),),
+    recognition_delay=0.1,
+    heartbeat_timeout=0.5,
+)
 
 scenario = Scenario(
     name="platform_crash",
     description="torso_pc crashes while the combined slip detector runs on it",
     model=care_o_bot(hand_pc_memory=384).build(),  # hand_pc can host the combined detector too
     initial=tuple(LoadChange(p, mb) for p, mb in LOADS.items()),
-    world=World(
+    world=STOCHASTIC if p.stochastic else World(
         task=(Step(GRASP, 25.0),),
         horizon=25.0,
         faults=(TimedEvent(8.0, PlatformDown("torso_pc"), "crash"), TimedEvent(15.0, PlatformUp("torso_pc"), "reboot")),

@@ -332,11 +332,9 @@ def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, float]) -> None:
                 covered.add(g)
         if any(not covered.intersection(slot) for slot in slots):
             unmon[i] = 1.0
-            undetected[i] = mw.slip_rate
-        elif slots:
-            m = 1.0
-            for g in covered:
-                if any(g in slot for slot in slots):
-                    m *= miss.get(g, 1.0)
-            undetected[i] = mw.slip_rate * m
+        # a slip in the hand goes undetected unless a running, valid detector catches it
+        m = 1.0
+        for g in covered:
+            m *= miss.get(g, 1.0)
+        undetected[i] = mw.slip_rate * m
     chain.unmonitored, chain.risky, chain.undetected = unmon, risky, undetected

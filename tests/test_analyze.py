@@ -1,0 +1,213 @@
+"""desmon analyze: the exact exposure of the real deployer's Markov chain.
+
+What a user relies on: the chain's numbers are the simulation's (the exact value lies
+inside the 99 % confidence interval of the SimPy world run with the same rates, and a
+wrong rate or an off-by-one reward does not), both solvers agree, a mismatch between
+the World's rates and the checker's events is refused in one line, bad input exits 2
+and a budget 3 with nothing written, and the exported chain is the one solved.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from desmon.analyze import AnalysisError, analyze, build_chain, markov_world
+from desmon.analyze.agreement import agreement, simulated_exposure
+from desmon.analyze.chain import _rewards
+from desmon.analyze.solve import steady_state, transient
+from desmon.cli import main
+from desmon.deployment.control import ControlRules
+from desmon.loader import load_scenario
+from desmon.sim.world import MTTF
+
+ROOT = Path(__file__).resolve().parents[1]
+SHIFT = str(ROOT / "scenarios" / "coffee_shift.py")
+CRASH = str(ROOT / "scenarios" / "platform_crash.py")
+NO_MISS: dict[str, float] = {}
+
+
+def _shift(**params: str):
+    return load_scenario(SHIFT, params=params or None)
+
+
+# -- refusals: the World's rates and the checker's events must match -------------------------
+@pytest.mark.parametrize(
+    ("scenario", "params", "says"),
+    [
+        ("coffee_handover.py", None, "World faults are scripted (device lwr_wrench fails at 23 s)"),
+        ("robot_day.py", None, "World load walk of 'torso_pc' is a Gaussian walk"),
+        ("cloud_offload.py", None, "World load walk of 'torso_pc' is a Gaussian walk"),
+    ],
+)
+def test_a_world_without_rates_for_the_checkers_events_is_refused_in_one_line(scenario, params, says):
+    sc = load_scenario(ROOT / "scenarios" / scenario, params=params)
+    with pytest.raises(AnalysisError) as e:
+        markov_world(sc)
+    assert says in str(e.value) and "\n" not in str(e.value)
+
+
+def test_an_event_without_a_rate_is_refused():
+    sc = _shift()
+    sc = replace(sc, checker=replace(sc.checker, platforms=("torso_pc", "hand_pc", "arm_pc")))
+    with pytest.raises(AnalysisError, match="the checker bounds let platform 'arm_pc' go down but the World gives it no rate"):
+        markov_world(sc)
+
+
+def test_a_rate_without_an_event_is_refused():
+    sc = _shift(faults="False")
+    sc = replace(sc, world=replace(sc.world, stochastic_faults=(MTTF("lwr_wrench", mttf=100.0, mttr=10.0),)))
+    with pytest.raises(AnalysisError, match="gives 'lwr_wrench' an MTTF but the checker bounds never let it fail"):
+        markov_world(sc)
+
+
+def test_the_checkers_budgets_are_dropped_and_said():
+    mw = markov_world(_shift())
+    assert dict(mw.dropped) == {"max_failures": 2, "start_failures": 1}
+    assert mw.to_json()["dropped_checker_budgets"] == {"max_failures": 2, "start_failures": 1}
+
+
+# -- bad input on the command line ---------------------------------------------------------------
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["--phases", "0"], ["--phases", "65"], ["--horizon", "0"], ["--horizon", "-5"], ["--horizon", "nan"],
+        ["--start-failure-p", "1"], ["--start-failure-p", "-0.1"], ["--start-failure-p", "nan"], ["--simulate", "2"],
+    ],
+)
+def test_bad_numbers_exit_2_in_one_line_and_write_nothing(argv, tmp_path, capsys):
+    out = tmp_path / "a.json"
+    code = main(["analyze", SHIFT, "-p", "faults=False", "--json", str(out), *argv])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and not out.exists(), err
+
+
+def test_a_chain_past_max_states_is_incomplete_exit_3_with_nothing_written(tmp_path, capsys):
+    out = tmp_path / "a.json"
+    code = main(["analyze", SHIFT, "--max-states", "100", "--horizon", "60", "--json", str(out), "--export", str(tmp_path / "c.drn")])
+    assert code == 3 and "more than --max-states 100" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_steady_state_of_a_chain_with_a_trap_names_the_state_and_suggests_a_transient_query():
+    Q = sp.csr_matrix(np.array([[-1.0, 1.0, 0.0], [0.5, -1.0, 0.5], [0.0, 0.0, 0.0]]))
+    with pytest.raises(AnalysisError, match=r"state 2 \(third\) is absorbing.*--transient-only"):
+        steady_state(Q, lambda i: ["first", "second", "third"][i])
+
+
+# -- the numbers ---------------------------------------------------------------------------------
+def test_uniformisation_and_the_krylov_exponential_agree():
+    sc = _shift(faults="False")
+    chain = build_chain(sc, "desmon", markov_world(sc))
+    Q, _ = chain.generator()
+    p0 = np.zeros(chain.n)
+    p0[0] = 1.0
+    a = transient(Q, p0, 300.0, chain.unmonitored, method="uniformisation")
+    b = transient(Q, p0, 300.0, chain.unmonitored, method="krylov")
+    assert a.accumulated[0] == pytest.approx(b.accumulated[0], rel=1e-6)
+    assert np.abs(a.at - b.at).max() < 1e-6
+
+
+def test_the_long_run_is_the_per_mission_rate_of_a_long_mission():
+    a = analyze(_shift(faults="False"), miss=NO_MISS, horizon=20 * 3600.0)
+    assert a.exposure_s_per_mission / 20 == pytest.approx(a.exposure_s_per_hour, rel=2e-3)
+    assert a.residual < 1e-12
+
+
+def test_undetected_slips_count_each_detectors_miss_probability():
+    sc = _shift(faults="False")
+    blind = analyze(sc, miss={g.name: 1.0 for g in sc.model.graphs}, steady=True, horizon=600.0)
+    perfect = analyze(sc, miss={g.name: 0.0 for g in sc.model.graphs}, steady=True, horizon=600.0)
+    risky_share = 37.0 / 57.0  # grasp + hold + carry + hand over, of the 57 s cycle
+    assert blind.undetected_slips_per_hour == pytest.approx(3600 * sc.world.slip_rate * risky_share, rel=1e-6)
+    # perfect detectors miss only the slips no running detector sees: at least the unmonitored ones
+    assert 3600 * sc.world.slip_rate * blind.long_run_unmonitored_fraction <= perfect.undetected_slips_per_hour < blind.undetected_slips_per_hour
+
+
+@pytest.mark.slow
+def test_a_second_force_sensor_changes_the_chain_not_the_method():
+    one = analyze(_shift(hours="0.25"), miss=NO_MISS, steady=False)
+    two = analyze(_shift(hours="0.25", force_sensors="2"), miss=NO_MISS, steady=False)
+    assert two.states > one.states
+    assert two.exposure_s_per_mission < one.exposure_s_per_mission
+
+
+def test_the_chain_is_exported_as_solved(tmp_path):
+    sc = _shift(faults="False")
+    chain = build_chain(sc, "desmon", markov_world(sc))
+    from desmon.analyze.export import export_chain
+
+    drn = export_chain(chain, str(tmp_path / "c.drn"))
+    text = Path(drn[0]).read_text()
+    assert "@type: CTMC" in text and text.count("\nstate ") == chain.n
+    assert text.count(" unmonitored\n") + text.count(" init unmonitored\n") == int(chain.unmonitored.sum())
+    files = export_chain(chain, str(tmp_path / "c.tra"))
+    assert [Path(f).suffix for f in files] == [".tra", ".sta", ".lab", ".srew"]
+    head = Path(files[0]).read_text().splitlines()
+    assert head[0] == f"{chain.n} {len(chain.rates)}" and len(head) == len(chain.rates) + 1
+    rates = sum(float(line.split()[2]) for line in head[1:])
+    assert rates == pytest.approx(float(chain.rates.sum()))
+
+
+def test_the_json_has_the_measures_and_the_rates(tmp_path, capsys):
+    out = tmp_path / "a.json"
+    assert main(["analyze", SHIFT, "-p", "faults=False", "--horizon", "600", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    for k in ("states", "transitions", "long_run_unmonitored_fraction", "exposure_s_per_hour", "undetected_slips_per_hour",
+              "mean_time_to_exposure_s", "rates"):
+        assert k in doc
+    assert doc["rates"]["task_steps"][0] == {"action": "idle", "mean_s": 20.0, "rate_per_s": 0.05}
+    assert "Long run: unmonitored" in capsys.readouterr().out
+
+
+# -- agreement with the simulation -----------------------------------------------------------------
+SEEDS = range(40)
+
+
+def _agree(sc, exact_sc=None, reward=None):
+    """The exact per-hour exposure of ``exact_sc`` (default ``sc``) against 40 simulated hours of ``sc``."""
+    a = analyze(exact_sc or sc, miss=NO_MISS, horizon=3600.0, steady=False)
+    exact = a.exposure_s_per_mission if reward is None else reward(a)
+    return agreement(exact, simulated_exposure(sc, "desmon", SEEDS, 3600.0))
+
+
+def _next_step_reward(a):
+    """A mutation: the reward of each state read from the *next* task step (an off-by-one)."""
+    chain = a.chain
+    shifted = replace(chain.world, steps=chain.world.steps[1:] + chain.world.steps[:1])
+    mutated = replace(chain, world=shifted)
+    _rewards(mutated, ControlRules(chain.system.model), {})
+    Q, _ = chain.generator()
+    p0 = np.zeros(chain.n)
+    for i, p in chain.initial:
+        p0[i] = p
+    return float(transient(Q, p0, 3600.0, mutated.unmonitored).accumulated[0])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["coffee_shift", "platform_crash"])
+def test_the_exact_exposure_lies_in_the_simulations_99_percent_interval(name):
+    sc = _shift(hours="1") if name == "coffee_shift" else load_scenario(CRASH, params={"stochastic": "True"})
+    ag = _agree(sc)
+    assert ag.inside, ag.to_json()
+
+
+@pytest.mark.slow
+def test_a_wrong_rate_or_an_off_by_one_reward_falls_outside_the_interval():
+    sc = load_scenario(CRASH, params={"stochastic": "True"})
+    wrong = replace(sc, world=replace(sc.world, stochastic_faults=tuple(
+        replace(m, mttr=m.mttr * 2) if m.component == "lwr_wrench" else m for m in sc.world.stochastic_faults)))
+    assert not _agree(sc, exact_sc=wrong).inside
+    assert not _agree(sc, reward=_next_step_reward).inside
+
+
+def test_exponential_timing_is_deterministic_for_a_seed():
+    sc = _shift(faults="False")
+    assert simulated_exposure(sc, "desmon", [3, 3], 600.0)[0] == simulated_exposure(sc, "desmon", [3], 600.0)[0]
+    assert math.isfinite(simulated_exposure(sc, "desmon", [4], 600.0)[0])
