@@ -1,0 +1,69 @@
+"""Exact exposure: chain building against the checker's exploration, and the solvers.
+
+For ``scenarios/coffee_shift.py`` (1 force sensor, 1 h) it prints: the chain's states and
+transitions, the wall time of building the chain (every reaction run by the checker's
+transition system) and of ``desmon verify``'s exploration of the same scenario in the
+same run (``build_ratio``: chain / exploration; goal <= 2), the steady-state and
+transient solution times, and the exact exposure beside the simulated mean over
+``--seeds`` seeds of the same Markov world.
+
+Run: ``python -m bench.bench_analyze [--quick] [--seeds N]``; the last line is
+``RESULT states=... build_s=... explore_s=... build_ratio=... steady_s=... transient_s=... exact_s=... sim_mean_s=... sim_ci_low=... sim_ci_high=...``.
+Figures vary with the machine's load: compare the ratios.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def main(argv: list[str] | None = None) -> int:
+    from desmon.analyze import build_chain, markov_world
+    from desmon.analyze.agreement import agreement, simulated_exposure
+    from desmon.analyze.solve import steady_state, transient
+    from desmon.loader import load_scenario
+    from desmon.verify.checker import check, system_of
+
+    ap = argparse.ArgumentParser(prog="python -m bench.bench_analyze")
+    ap.add_argument("--quick", action="store_true", help="the fault-free shift (60 states) and 5 seeds")
+    ap.add_argument("--seeds", type=int, default=20)
+    args = ap.parse_args(argv)
+    params = {"hours": "1"} | ({"faults": "False"} if args.quick else {})
+    seeds = 5 if args.quick else args.seeds
+    sc = load_scenario(ROOT / "scenarios" / "coffee_shift.py", params=params)
+    t0 = time.perf_counter()
+    chain = build_chain(sc, "desmon", markov_world(sc))
+    build = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    res = check(system_of(sc, "desmon"))
+    explore = time.perf_counter() - t0
+    Q, _ = chain.generator()
+    t0 = time.perf_counter()
+    steady_state(Q, chain.describe)
+    steady = time.perf_counter() - t0
+    p0 = np.zeros(chain.n)
+    for i, p in chain.initial:
+        p0[i] = p
+    t0 = time.perf_counter()
+    exact = float(transient(Q, p0, 3600.0, chain.unmonitored).accumulated[0])
+    trans = time.perf_counter() - t0
+    ag = agreement(exact, simulated_exposure(sc, "desmon", range(seeds), 3600.0))
+    print(f"coffee_shift {params}: chain {chain.n:,} states, {len(chain.rates):,} transitions; checker {res.states:,} states")
+    print(f"chain built in {build:.2f} s; checker exploration {explore:.2f} s; ratio {build / explore:.2f} (goal <= 2)")
+    print(f"steady state {steady:.2f} s; transient over 1 h {trans:.2f} s")
+    print(f"exact {exact:.3f} s per hour; simulated mean {ag.mean:.3f} s, 99 % CI [{ag.low:.3f}, {ag.high:.3f}] over {seeds} seeds: {'inside' if ag.inside else 'OUTSIDE'}")
+    print(
+        f"RESULT states={chain.n} build_s={build:.3f} explore_s={explore:.3f} build_ratio={build / explore:.3f} steady_s={steady:.3f} "
+        f"transient_s={trans:.3f} exact_s={exact:.4f} sim_mean_s={ag.mean:.4f} sim_ci_low={ag.low:.4f} sim_ci_high={ag.high:.4f}"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
