@@ -211,3 +211,15 @@ def test_exponential_timing_is_deterministic_for_a_seed():
     sc = _shift(faults="False")
     assert simulated_exposure(sc, "desmon", [3, 3], 600.0)[0] == simulated_exposure(sc, "desmon", [3], 600.0)[0]
     assert math.isfinite(simulated_exposure(sc, "desmon", [4], 600.0)[0])
+
+
+# -- the optimality gap of the deployer's placements -------------------------------------------------
+def test_the_deployer_sits_between_the_best_and_worst_placements_and_its_own_value_is_its_chains():
+    from desmon.analyze.mdp import optimality_gap
+
+    sc = _shift(faults="False", force_sensors="2")
+    gap = optimality_gap(sc, "desmon")
+    own = analyze(sc, miss=NO_MISS, horizon=60.0)
+    assert gap.min_s_per_hour <= gap.exposure_s_per_hour <= gap.max_s_per_hour
+    assert gap.exposure_s_per_hour == pytest.approx(own.exposure_s_per_hour, rel=1e-6)
+    assert gap.to_json()["above_optimal"] >= 0

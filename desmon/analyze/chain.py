@@ -56,6 +56,10 @@ class BudgetExceeded(AnalysisError):
     """The chain grew past ``--max-states`` (exit 3)."""
 
 
+#: one race out of a state: (rate, the event reacted to or None, ((probability, next state, commands), ...))
+Slot = tuple
+
+
 class ChainState(NamedTuple):
     key: Key
     pos: int  # task step
@@ -196,37 +200,49 @@ class _Builder:
 
     # -- transitions -----------------------------------------------------------------------
     def transitions(self, s: ChainState) -> Iterator[tuple[float, ChainState]]:
+        """(rate, next state) of every transition out of ``s``."""
+        for rate, _event, outcomes in self.slots(s):
+            for prob, t, _cmds in outcomes:
+                yield rate * prob, t
+
+    def slots(self, s: ChainState) -> Iterator[Slot]:
+        """Every race out of ``s``: (rate, the event the deployer reacts to or None, its
+        outcomes as (probability, next state, successful starts and stops)), in one
+        fixed order (the MDP of :mod:`desmon.analyze.mdp` lines up the slots of several
+        deployers by it)."""
         mw = self.mw
         yield from self._task(s)
         if mw.recognition_delay > 0:
             ctx = recognised(mw.steps[s.pos][0])
             if ctx != s.key.context:
-                yield from self._deliver(s, ActionChange(ctx), 1.0 / mw.recognition_delay)
+                yield self._deliver(s, ActionChange(ctx), 1.0 / mw.recognition_delay)
         yield from self._faults(s)
         for pair in s.starting:
             lat = self.latency[pair[1]]
-            yield 1.0 / lat, s._replace(starting=tuple(x for x in s.starting if x != pair))
+            yield 1.0 / lat, None, ((1.0, s._replace(starting=tuple(x for x in s.starting if x != pair)), ()),)
         for change, rate in mw.changes:
-            yield from self._deliver(s, change, rate)
+            yield self._deliver(s, change, rate)
 
-    def _deliver(self, s: ChainState, event: Event, rate: float) -> Iterator[tuple[float, ChainState]]:
-        for prob, nkey, cmds in self.react(s.key, event):
-            yield rate * prob, s._replace(key=nkey, starting=self._starting_after(s, cmds, nkey))
+    def _deliver(self, s: ChainState, event: Event, rate: float) -> Slot:
+        outcomes = tuple(
+            (prob, s._replace(key=nkey, starting=self._starting_after(s, cmds, nkey)), cmds) for prob, nkey, cmds in self.react(s.key, event)
+        )
+        return rate, event, outcomes
 
-    def _task(self, s: ChainState) -> Iterator[tuple[float, ChainState]]:
+    def _task(self, s: ChainState) -> Iterator[Slot]:
         mw = self.mw
         action, dur = mw.steps[s.pos]
         rate = mw.phases / dur
         if s.phase + 1 < mw.phases:
-            yield rate, s._replace(phase=s.phase + 1)
+            yield rate, None, ((1.0, s._replace(phase=s.phase + 1), ()),)
             return
         nxt = s._replace(pos=(s.pos + 1) % len(mw.steps), phase=0)
         if mw.recognition_delay > 0:
-            yield rate, nxt
+            yield rate, None, ((1.0, nxt, ()),)
         else:
-            yield from self._deliver(nxt, ActionChange(recognised(mw.steps[nxt.pos][0])), rate)
+            yield self._deliver(nxt, ActionChange(recognised(mw.steps[nxt.pos][0])), rate)
 
-    def _faults(self, s: ChainState) -> Iterator[tuple[float, ChainState]]:
+    def _faults(self, s: ChainState) -> Iterator[Slot]:
         hb = self.mw.heartbeat_timeout
         known_failed, known_down = set(s.key.failed), set(s.key.down)
         for c, is_dev, fail, repair in self.faults:
@@ -236,11 +252,11 @@ class _Builder:
             ns = s._replace(phys_failed=flipped) if is_dev else s._replace(phys_down=flipped)
             rate = repair if broken else fail
             if hb > 0:
-                yield rate, ns
+                yield rate, None, ((1.0, ns, ()),)
             else:
-                yield from self._deliver(ns, _event(c, is_dev, not broken), rate)
+                yield self._deliver(ns, _event(c, is_dev, not broken), rate)
             if hb > 0 and broken != (c in (known_failed if is_dev else known_down)):
-                yield from self._deliver(s, _event(c, is_dev, broken), 1.0 / hb)
+                yield self._deliver(s, _event(c, is_dev, broken), 1.0 / hb)
 
 
 def _event(component: str, is_device: bool, broken: bool) -> Event:
@@ -264,7 +280,7 @@ def build_chain(
     s0 = ChainState(key0, 0, 0, (), tuple(sorted(key0.down)), ())
     start = [(1.0, s0)]
     if mw.recognition_delay == 0:  # the monitor sees the first step at once: its reaction's outcomes
-        start = list(b._deliver(s0, ActionChange(recognised(mw.steps[0][0])), 1.0))
+        start = [(p, t) for p, t, _c in b._deliver(s0, ActionChange(recognised(mw.steps[0][0])), 1.0)[2]]
     index: dict[ChainState, int] = {}
     states: list[ChainState] = []
     initial: dict[int, float] = {}

@@ -46,6 +46,10 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--horizon", type=positive_seconds, default=None, metavar="T", help="mission length in seconds (default: the World's horizon)")
     p.add_argument("--transient-only", action="store_true", help="per-mission measures only (no steady state: for a chain with a trap)")
     p.add_argument("--max-states", type=positive_int, default=DEFAULT_MAX_STATES, help="stop (exit 3) past this many chain states")
+    p.add_argument(
+        "--placements", action="store_true",
+        help="also the optimality gap: the best and worst long-run exposure over the deployer's placement choices (an MDP) and its first differing decision",
+    )
     p.add_argument("--simulate", type=positive_int, default=None, metavar="N", help="also simulate the Markov world with N seeds (0..N-1) and compare")
     add_output(p, "--json", suffixes=(".json",), default=None, metavar="FILE.json", help="write the measures and the rates used as JSON")
     add_output(p, "--export", suffixes=(".drn", ".tra"), default=None, metavar="FILE", help="write the chain: FILE.drn (Storm) or FILE.tra (PRISM explicit, with .sta .lab .srew)")
@@ -76,6 +80,11 @@ def run(args: argparse.Namespace) -> int:
     if args.simulate:
         values = simulated_exposure(scenario, args.deployer, range(args.simulate), result.horizon_s, phases=args.phases)
         agree = agreement(result.exposure_s_per_mission or 0.0, values)
+    gap = None
+    if args.placements:
+        from desmon.analyze.mdp import optimality_gap
+
+        gap = optimality_gap(scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, max_states=args.max_states)
     files: list[str] = []
     if args.export:
         from desmon.analyze.export import export_chain
@@ -85,10 +94,14 @@ def run(args: argparse.Namespace) -> int:
     doc = result.to_json()
     if agree is not None:
         doc["simulation"] = agree.to_json()
+    if gap is not None:
+        doc["placements"] = gap.to_json()
     if args.json:
         with replacing(args.json) as fh:
             fh.write(json.dumps(doc, indent=2) + "\n")
     sys.stdout.write(format_analysis(result, agree))
+    if gap is not None:
+        sys.stdout.write(gap.text())
     for f in files:
         sys.stdout.write(f"Chain written: {f}\n")
     return EXIT_VIOLATED if agree is not None and not agree.inside else EXIT_OK
