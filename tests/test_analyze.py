@@ -9,6 +9,7 @@ and a budget 3 with nothing written, and the exported chain is the one solved.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from dataclasses import replace
@@ -168,13 +169,23 @@ def test_the_json_has_the_measures_and_the_rates(tmp_path, capsys):
 
 # -- agreement with the simulation -----------------------------------------------------------------
 SEEDS = range(40)
+HOUR = 3600.0
 
 
-def _agree(sc, exact_sc=None, reward=None):
-    """The exact per-hour exposure of ``exact_sc`` (default ``sc``) against 40 simulated hours of ``sc``."""
-    a = analyze(exact_sc or sc, miss=NO_MISS, horizon=3600.0, steady=False)
-    exact = a.exposure_s_per_mission if reward is None else reward(a)
-    return agreement(exact, simulated_exposure(sc, "desmon", SEEDS, 3600.0))
+@functools.lru_cache(maxsize=None)
+def _scenario(name: str):
+    return _shift(hours="1") if name == "coffee_shift" else load_scenario(CRASH, params={"stochastic": "True"})
+
+
+@functools.lru_cache(maxsize=None)
+def _simulated(name: str) -> tuple[float, ...]:
+    """40 simulated hours of the scenario's Markov world (seeds 0..39), computed once per test run."""
+    return tuple(simulated_exposure(_scenario(name), "desmon", SEEDS, HOUR))
+
+
+def _exact(sc, reward=None) -> float:
+    a = analyze(sc, miss=NO_MISS, horizon=HOUR, steady=False)
+    return a.exposure_s_per_mission if reward is None else reward(a)
 
 
 def _next_step_reward(a):
@@ -187,24 +198,23 @@ def _next_step_reward(a):
     p0 = np.zeros(chain.n)
     for i, p in chain.initial:
         p0[i] = p
-    return float(transient(Q, p0, 3600.0, mutated.unmonitored).accumulated[0])
+    return float(transient(Q, p0, HOUR, mutated.unmonitored).accumulated[0])
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["coffee_shift", "platform_crash"])
 def test_the_exact_exposure_lies_in_the_simulations_99_percent_interval(name):
-    sc = _shift(hours="1") if name == "coffee_shift" else load_scenario(CRASH, params={"stochastic": "True"})
-    ag = _agree(sc)
+    ag = agreement(_exact(_scenario(name)), _simulated(name))
     assert ag.inside, ag.to_json()
 
 
 @pytest.mark.slow
 def test_a_wrong_rate_or_an_off_by_one_reward_falls_outside_the_interval():
-    sc = load_scenario(CRASH, params={"stochastic": "True"})
+    sc = _scenario("platform_crash")
     wrong = replace(sc, world=replace(sc.world, stochastic_faults=tuple(
         replace(m, mttr=m.mttr * 2) if m.component == "lwr_wrench" else m for m in sc.world.stochastic_faults)))
-    assert not _agree(sc, exact_sc=wrong).inside
-    assert not _agree(sc, reward=_next_step_reward).inside
+    assert not agreement(_exact(wrong), _simulated("platform_crash")).inside
+    assert not agreement(_exact(sc, reward=_next_step_reward), _simulated("platform_crash")).inside
 
 
 def test_exponential_timing_is_deterministic_for_a_seed():
