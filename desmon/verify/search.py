@@ -332,8 +332,8 @@ class Trail:
         self.system = system
         self.key_of = key_of
         self.keep_going = keep_going
-        self.parent = array("l", [-1])
-        self.label = array("l", [-1])
+        self.parent = array("i", [-1])  # (4 bytes a state: at most 2**31 states)
+        self.label = array("i", [-1])
         self.labels: list[Label] = []
         self._label_ids: dict[Any, int] = {}
         self.found: dict[str, Counterexample] = {}
@@ -350,6 +350,11 @@ class Trail:
         """The next state's parent and label."""
         self.parent.append(parent)
         self.label.append(self.label_id(lookup, label))
+
+    def extend(self, parents: Any, label_ids: Any) -> None:
+        """The next states' parents and label numbers (numpy arrays of :meth:`label_id`)."""
+        self.parent.frombytes(parents.astype("int32").tobytes())
+        self.label.frombytes(label_ids.astype("int32").tobytes())
 
     def path(self, i: int) -> tuple[list[Label], list[Key]]:
         """The labels from the initial state to state ``i``, and the states on the way."""
