@@ -66,15 +66,11 @@ class DecisionTrees:
         return i
 
     def _node(self) -> int:
-        self.kid_base.append(-1)
-        self.digit_base.append(-1)
-        self.node_p0.append(0)
+        for g in (self.kid_base, self.digit_base, self.node_p0, self.node_base, self.node_plat, self.node_mult):
+            g.extend(1)  # (their fill values)
         self.node_desc.append(None)
-        self.node_base.append(0)
-        self.node_plat.append(0)
-        self.node_mult.append(0)
         self.node_len.append(1)
-        n = self.node_leaf.append(-2)
+        n = self.node_leaf.extend(1)
         if n >= 1 << 22:
             raise TableUnsupported("table engine: more than 4 million decision nodes; run with --engine direct")
         return n
@@ -101,13 +97,9 @@ class DecisionTrees:
                     raise TableUnsupported("table engine: a requirement check with too many distinct answers; run with --engine direct")
                 self.node_p0.a[node] = parts[0][0]
                 if len(parts) == 1:
-                    self.digit_base.a[node] = self.digit_kids.n
-                    for _ in range(self.tables.env.R[parts[0][0]]):
-                        self.digit_kids.append(-1)
+                    self.digit_base.a[node] = self.digit_kids.extend(self.tables.env.R[parts[0][0]])
                 if mult <= DENSE_ANSWERS:
-                    self.kid_base.a[node] = self.kids.n
-                    for _ in range(mult):
-                        self.kids.append(-1)
+                    self.kid_base.a[node] = self.kids.extend(mult)
                 self.width = max(self.width, len(parts))
             elif state != -1 or self.node_desc[node] != desc:
                 raise NondeterminismError(
