@@ -85,6 +85,8 @@ class CheckResult:
     depth: int = 0
     seconds: float = 0.0
     peak_mb: float = 0.0
+    #: the process's resident memory when the search began (MB; see :attr:`bytes_per_state`)
+    start_mb: float = field(default=0.0, compare=False)
     counterexamples: list[Counterexample] = field(default_factory=list)
     enabled: Counter = field(default_factory=Counter)
     new_states: Counter = field(default_factory=Counter)
@@ -108,6 +110,13 @@ class CheckResult:
     @property
     def states_per_second(self) -> float:
         return self.states / self.seconds if self.seconds > 0 else float("inf")
+
+    @property
+    def bytes_per_state(self) -> float:
+        """The resident memory the search added, per state: (peak resident size - resident
+        size at its start) / states (the peak is the process's: a search after a larger
+        one in the same process reads low)."""
+        return max(self.peak_mb - self.start_mb, 0.0) * 2**20 / self.states if self.states else 0.0
 
     @property
     def transitions_per_second(self) -> float:
