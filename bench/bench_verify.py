@@ -278,7 +278,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=2, help="also run the direct engine with this many workers (1: skip)")
     ap.add_argument("--huge", type=int, default=0, metavar="N", help="also run bench_7p up to N states (e.g. 1400000)")
     ap.add_argument("--fallbacks", type=int, default=None, metavar="N", help="cap the fallback model's search (default: complete, about 826,000 states)")
+    ap.add_argument("--quick", action="store_true", help="a smoke run: 20,000 states of each model, 2,000 of the direct engine, no workers")
     args = ap.parse_args(argv)
+    if args.quick:
+        args.fallbacks, args.large_max_states, args.prefix, args.workers = 20_000, 20_000, 2_000, 1
     result: dict[str, str] = {}
     # the fallback-heavy model first: its peak memory (the process's maximum resident size) is its own
     scenario = build_fallbacks()
@@ -286,7 +289,9 @@ def main(argv: list[str] | None = None) -> int:
     fb = Checker(scenario, "desmon").run(max_states=args.fallbacks, progress=True)
     fb_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(_row("desmon (table)", fb.states, fb.transitions, fb.seconds) + f"  {fb.verdict} {fb.reason}".rstrip() + f"  ({fb.records:,} recorded runs)")
-    print(f"  {'':<16} peak memory (max RSS of the process so far): {fb_rss:.0f} MB")
+    print(f"  {'':<16} peak memory (max RSS of the process so far): {fb_rss:.0f} MB; {fb.bytes_per_state:,.0f} bytes/state "
+          f"(resident memory the search added: {fb.peak_mb - fb.start_mb:,.0f} MB over {fb.start_mb:,.0f} MB at its start); "
+          f"{fb.states_per_second:,.0f} states/s (goals: >= 100,000 states/s, <= 150 bytes/state)")
     plain = plain_fallback_bfs(scenario, fb.states if args.fallbacks else None)
     print(_row("plain tuples", *plain))
     print(_ratio(plain, fb))
@@ -294,11 +299,13 @@ def main(argv: list[str] | None = None) -> int:
 
     stale = _checker("stale-errors", scenario, args.fallbacks, plain, deployer=MUTANTS["stale-errors"], invariants=["valid-or-error"])
     result.update(
+        states_per_s=f"{fb.states_per_second:.0f}", bytes_per_state=f"{fb.bytes_per_state:.0f}", records=str(fb.records),
         fallback_states=str(fb.states), fallback_transitions=str(fb.transitions), fallback_seconds=f"{fb.seconds:.2f}",
         fallback_peak_mb=f"{fb_rss:.0f}", fallback_ratio=f"{(plain[0] / plain[2]) / (fb.states / fb.seconds):.2f}",
         stale_states=str(stale.states),
     )
-    for scenario, cap, prefix in ((build(4, 2, 2), None, None), (build(6, 3, None), args.large_max_states, args.prefix)):
+    small = args.prefix if args.quick else None  # --quick: the direct engine on bench_4p's first states only
+    for scenario, cap, prefix in ((build(4, 2, 2), None, small), (build(6, 3, None), args.large_max_states, args.prefix)):
         print(f"{scenario.name}: {len(scenario.model.platforms)} platforms, 3 detectors")
         plain = plain_bfs(scenario, cap)
         print(_row("plain tuples", *plain))
