@@ -32,7 +32,7 @@ __all__ = ["TableEngine", "table_unsupported", "CHUNK_STATES", "MAX_DIGITS"]
 #: combinations of one platform's facts the engine tabulates answers for (beyond: direct engine)
 MAX_DIGITS = 4096
 #: frontier states expanded per numpy batch (bounds the memory of one batch)
-CHUNK_STATES = 16_384
+CHUNK_STATES = 4_096
 #: new states added between two looks at the search's budget (time, memory, Ctrl-C)
 LOOK_EVERY = 64
 #: values below which :func:`_grouped` numbers distinct values with an array, not a sort
@@ -407,16 +407,23 @@ class TableEngine:
         res, tr, ev, env = self.res, units.tr, self.events, self.env
         U_t, U_leaf, U_code = units.t, units.leaf, units.code
         T = len(tr.env2)
-        inc = np.arange(stop_unit + 1) if stop_unit >= 0 else np.flatnonzero(U_t <= cut_t)
-        self.transitions += len(inc)
-        leaf_counts = np.bincount(U_leaf[inc], minlength=len(self.trees.leaves))
+        if stop_unit >= 0:
+            n_inc = stop_unit + 1
+        else:
+            n_inc = int(np.searchsorted(U_t, cut_t, side="right"))  # (units are in transition order)
+        self.transitions += n_inc
+        leaf_counts = np.bincount(U_leaf[:n_inc], minlength=len(self.trees.leaves))
         for lf_id in np.flatnonzero(leaf_counts).tolist():
             n = int(leaf_counts[lf_id])
             for name in self.trees.leaves[lf_id][4]:
                 res.branches[name] += n
-        moved = inc[:-1] if stop_unit >= 0 else inc  # the stopping unit is not counted as a change
-        moved = moved[U_code[moved] != sc[tr.pos[U_t[moved]]]]
-        _count(res.changed, EVENT_KINDS, ev.kind_of[tr.ev[U_t[moved]]], len(EVENT_KINDS))
+        n_moved = n_inc - 1 if stop_unit >= 0 else n_inc  # the stopping unit is not counted as a change
+        t = U_t[:n_moved]
+        changed = U_code[:n_moved] != sc[tr.pos][t]
+        kinds = ev.kind_of[tr.ev][t]
+        for k, n in enumerate(np.bincount(kinds, weights=changed, minlength=len(EVENT_KINDS)).tolist()):
+            if n:
+                res.changed[EVENT_KINDS[k]] += int(n)
         last_t = min(cut_t, T - 1)
         _count(res.enabled, EVENT_KINDS, ev.kind_of[tr.ev[: last_t + 1]], len(EVENT_KINDS))
         n_states = int(tr.pos[last_t]) + 1 if cut_t < T else len(units.ids)
