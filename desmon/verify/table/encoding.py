@@ -350,9 +350,10 @@ class Events:
         pos, slot = np.nonzero(M.T)
         at = slot * N + pos
         # the platform digits after each event: the state's, one of them moved
-        loc = L.astype(np.int16)[pos]
-        sp = self.slot_platform[slot]
+        loc = np.take(L.astype(np.int16), pos, axis=0)
+        sp = np.take(self.slot_platform, slot)
         on = np.flatnonzero(sp >= 0)
-        loc.ravel()[on * P + sp[on]] += DD.ravel()[at[on]].astype(np.int16)
-        return Transitions(pos, E2.ravel()[at], EV.ravel()[at], ST.ravel()[at], syss[pos], loc, ctx)
+        loc.ravel()[on * P + np.take(sp, on)] += np.take(DD, np.take(at, on)).astype(np.int16)
+        take = lambda a: np.take(a, at)  # noqa: E731  (flat indices into the slot-by-state arrays)
+        return Transitions(pos, take(E2), take(EV), take(ST), np.take(syss, pos), loc, ctx)
 

@@ -34,12 +34,12 @@ class IntTable:
         shift = np.uint64(64 - self._bits)
         pos = ((keys.astype(np.uint64) * _MUL) >> shift).astype(np.int64)
         table, mask = self.keys, (1 << self._bits) - 1
-        k = table[pos]
+        k = np.take(table, pos)
         pending = np.flatnonzero((k != keys) & (k != _EMPTY))
         while pending.size:
             p = (pos[pending] + 1) & mask
             pos[pending] = p
-            k = table[p]
+            k = np.take(table, p)
             pending = pending[(k != keys[pending]) & (k != _EMPTY)]
         return pos
 
@@ -47,7 +47,7 @@ class IntTable:
         """Whether each key is in the table."""
         if not len(keys):
             return np.zeros(0, dtype=bool)
-        return self.keys[self._slots(keys)] == keys
+        return np.take(self.keys, self._slots(keys)) == keys
 
     def get(self, keys: np.ndarray) -> np.ndarray:
         """The value of each key, -1 where it is absent."""

@@ -139,7 +139,7 @@ class TableEngine:
         u_pre = np.zeros(T, dtype=np.int64)
         parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         while len(u_t):
-            roots = root_key(tr.sys[u_t], tr.env2[u_t] % G, tr.stim[u_t], u_pre)
+            roots = root_key(np.take(tr.sys, u_t), np.take(tr.env2, u_t) % G, np.take(tr.stim, u_t), u_pre)
 
             def record_unit(u: int, u_t: np.ndarray = u_t, u_pre: np.ndarray = u_pre, roots: np.ndarray = roots) -> None:
                 t = int(u_t[u])
@@ -159,7 +159,7 @@ class TableEngine:
         # each generation is in (transition, rank) order: a stable sort by transition
         # gives the (transition, generation, rank) order (a merge of sorted runs)
         order = np.argsort(U_t, kind="stable")
-        return U_t[order], U_pre[order], U_leaf[order]
+        return np.take(U_t, order), np.take(U_pre, order), np.take(U_leaf, order)
 
     def _opened(self, u_t: np.ndarray, u_pre: np.ndarray, leaf: np.ndarray, bound: int) -> tuple[np.ndarray, np.ndarray]:
         """The next generation's units: the failed-start prefixes each unit's start outcomes
@@ -283,7 +283,7 @@ class TableEngine:
         try:
             U_t, U_pre, U_leaf = self._units(ids, tr)
             leaf_sys = np.array(self.trees.leaf_sys, dtype=np.int64)
-            U_code = (tr.env2[U_t] << SYS_BITS) | leaf_sys[U_leaf]
+            U_code = (np.take(tr.env2, U_t) << SYS_BITS) | np.take(leaf_sys, U_leaf)
             # candidate new states: first occurrence in this batch, not seen before
             fresh = np.flatnonzero(~self.seen.contains(U_code))
             _uniq, first = np.unique(U_code[fresh], return_index=True)

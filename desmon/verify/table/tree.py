@@ -161,40 +161,49 @@ class DecisionTrees:
         out = self.node_leaf.a[node]
         P = loc.shape[1]
         flat_loc = loc.ravel()
+        # (np.take and index arrays, not boolean masks: several times faster on these sizes)
         idx = np.flatnonzero(out < 0)  # the units still at a check node
-        nd, rp = node[idx], rows[idx] * P
+        nd, rp = np.take(node, idx), np.take(rows, idx) * P
         while idx.size:
             go_on()
             child = self._step(nd, rp, flat_loc)
-            missed = np.flatnonzero(child < 0)
-            if missed.size:
-                # record a run for each distinct missing branch, with its first unit
-                _again, firsts = np.unique(self._edge_keys(nd[missed], rp[missed], flat_loc), return_index=True)
-                for m in np.sort(firsts).tolist():
-                    go_on()
-                    record(int(idx[missed[m]]))
-                child[missed] = self._step(nd[missed], rp[missed], flat_loc)
-                if (child[missed] < 0).any():
-                    raise TableUnsupported(  # pragma: no cover - an unobserved rewrite of facts, or a bug in the engine
-                        "table engine: a per-platform answer disagrees with the real requirement check; run with --engine direct"
-                    )
-            lf = self.node_leaf.a[child]
-            done = lf >= 0
-            out[idx[done]] = lf[done]
-            more = ~done
-            idx, nd, rp = idx[more], child[more], rp[more]
+            if child.min() < 0:
+                self._record_missed(child, idx, nd, rp, flat_loc, record)
+            lf = np.take(self.node_leaf.a, child)
+            keep = np.flatnonzero(lf < 0)
+            if len(keep) < len(lf):
+                done = np.flatnonzero(lf >= 0)
+                out[np.take(idx, done)] = np.take(lf, done)
+                idx, nd, rp = np.take(idx, keep), np.take(child, keep), np.take(rp, keep)
+            else:
+                nd = child
         return out
+
+    def _record_missed(self, child: np.ndarray, idx: np.ndarray, nd: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray,
+                       record: Callable[[int], None]) -> None:
+        """Record a run for each distinct missing branch (``child`` -1), with its first unit,
+        and fill in the children the runs added."""
+        missed = np.flatnonzero(child < 0)
+        _again, firsts = np.unique(self._edge_keys(nd[missed], rp[missed], flat_loc), return_index=True)
+        for m in np.sort(firsts).tolist():
+            self.go_on()
+            record(int(idx[missed[m]]))
+        child[missed] = self._step(nd[missed], rp[missed], flat_loc)
+        if (child[missed] < 0).any():
+            raise TableUnsupported(  # pragma: no cover - an unobserved rewrite of facts, or a bug in the engine
+                "table engine: a per-platform answer disagrees with the real requirement check; run with --engine direct"
+            )
 
     def _step(self, nd: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray) -> np.ndarray:
         """The child of each check node ``nd`` for its unit's answer (-1: no branch yet):
         from its platform's digit at a one-platform node, else from the answer code."""
-        db = self.digit_base.a[nd]
-        at = db + flat_loc[rp + self.node_p0.a[nd]]
+        db = np.take(self.digit_base.a, nd)
+        at = db + np.take(flat_loc, rp + np.take(self.node_p0.a, nd))
+        if len(db) and db.min() >= 0:
+            return np.take(self.digit_kids.a, at)
         other = np.flatnonzero(db < 0)
-        if not other.size:
-            return self.digit_kids.a[at]
         at[other] = 0
-        child = self.digit_kids.a[at]
+        child = np.take(self.digit_kids.a, at)
         child[other] = self._children(nd[other], rp[other], flat_loc)
         return child
 
