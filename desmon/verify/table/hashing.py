@@ -51,12 +51,10 @@ class IntTable:
 
     def get(self, keys: np.ndarray) -> np.ndarray:
         """The value of each key, -1 where it is absent."""
-        out = np.full(len(keys), -1, dtype=np.int64)
-        if len(keys):
-            pos = self._slots(keys)
-            hit = self.keys[pos] == keys
-            out[hit] = self.vals[pos[hit]]  # type: ignore[index]
-        return out
+        if not len(keys):
+            return np.full(0, -1, dtype=np.int64)
+        pos = self._slots(keys)
+        return np.where(np.take(self.keys, pos) == keys, np.take(self.vals, pos), -1)  # type: ignore[arg-type]
 
     def add(self, keys: np.ndarray, vals: np.ndarray | None = None) -> None:
         """Add ``keys`` (distinct, absent) with ``vals``."""

@@ -286,7 +286,7 @@ class TableEngine:
             U_code = (np.take(tr.env2, U_t) << SYS_BITS) | np.take(leaf_sys, U_leaf)
             # candidate new states: first occurrence in this batch, not seen before
             fresh = np.flatnonzero(~self.seen.contains(U_code))
-            _uniq, first = np.unique(U_code[fresh], return_index=True)
+            _uniq, first = np.unique(np.take(U_code, fresh), return_index=True)
             cand = np.sort(fresh[first])
             bad = self._violated(U_t[cand], leaf_sys[U_leaf[cand]], tr)
         except _Spent:  # between two recorded runs or walk rounds: the batch is dropped
@@ -419,8 +419,8 @@ class TableEngine:
                 res.branches[name] += n
         n_moved = n_inc - 1 if stop_unit >= 0 else n_inc  # the stopping unit is not counted as a change
         t = U_t[:n_moved]
-        changed = U_code[:n_moved] != sc[tr.pos][t]
-        kinds = ev.kind_of[tr.ev][t]
+        changed = U_code[:n_moved] != np.take(np.take(sc, tr.pos), t)
+        kinds = np.take(np.take(ev.kind_of, tr.ev), t)
         for k, n in enumerate(np.bincount(kinds, weights=changed, minlength=len(EVENT_KINDS)).tolist()):
             if n:
                 res.changed[EVENT_KINDS[k]] += int(n)
