@@ -348,12 +348,15 @@ class Events:
                 EV[s] = ids_lv[np.clip(to, 0, len(ids_lv) - 1)]
                 ST[s] = p + 1
         pos, slot = np.nonzero(M.T)
-        at = slot * N + pos
-        # the platform digits after each event: the state's, one of them moved
+        at = slot * N + pos  # flat indices into the slot-by-state arrays
+        return Transitions(pos, np.take(E2, at), np.take(EV, at), np.take(ST, at), np.take(syss, pos), self._moved(L, pos, slot, np.take(DD, at)), ctx)
+
+    def _moved(self, L: np.ndarray, pos: np.ndarray, slot: np.ndarray, dd: np.ndarray) -> np.ndarray:
+        """The platform digits after each event (int16): its state's ``L[pos]``, the digit
+        of the platform its slot moves changed by ``dd``."""
         loc = np.take(L.astype(np.int16), pos, axis=0)
         sp = np.take(self.slot_platform, slot)
         on = np.flatnonzero(sp >= 0)
-        loc.ravel()[on * P + np.take(sp, on)] += np.take(DD, np.take(at, on)).astype(np.int16)
-        take = lambda a: np.take(a, at)  # noqa: E731  (flat indices into the slot-by-state arrays)
-        return Transitions(pos, take(E2), take(EV), take(ST), np.take(syss, pos), loc, ctx)
+        loc.ravel()[on * self.P + np.take(sp, on)] += np.take(dd, on).astype(np.int16)
+        return loc
 

@@ -152,7 +152,7 @@ class TableEngine:
                 break
             # the units are in (transition, rank) order (generation 0: one per transition;
             # the next ones are built in that order): so are the units their prefixes open
-            u_t, u_pre = self._opened(u_t, u_pre, leaf, bound)
+            u_t, u_pre = _opened(self, u_t, u_pre, leaf, bound)
         if len(parts) == 1:
             return parts[0]
         U_t, U_pre, U_leaf = (np.concatenate(x) for x in zip(*parts))
@@ -160,29 +160,6 @@ class TableEngine:
         # gives the (transition, generation, rank) order (a merge of sorted runs)
         order = np.argsort(U_t, kind="stable")
         return np.take(U_t, order), np.take(U_pre, order), np.take(U_leaf, order)
-
-    def _opened(self, u_t: np.ndarray, u_pre: np.ndarray, leaf: np.ndarray, bound: int) -> tuple[np.ndarray, np.ndarray]:
-        """The next generation's units: the failed-start prefixes each unit's start outcomes
-        open (in the units' order, each unit's in order of its outcomes)."""
-        n_leaves = len(self.trees.leaves)
-        up, pinv = _grouped(u_pre * n_leaves + leaf)
-        flat: list[int] = []
-        count = np.zeros(len(up), dtype=np.int64)
-        for k, pv in enumerate(up.tolist()):
-            pre, lf = self.prefixes[pv // n_leaves], self.trees.leaves[pv % n_leaves]
-            outcomes, fails = lf[2], lf[3]
-            if len(fails) < bound:
-                kids = [self.prefix(outcomes[:i] + (False,)) for i in range(len(pre), len(outcomes))]
-                flat += kids
-                count[k] = len(kids)
-        reps = count[pinv]
-        order = np.flatnonzero(reps)
-        if not len(order):
-            return order, order
-        reps = reps[order]
-        start = (np.cumsum(count) - count)[pinv[order]]
-        within = np.arange(int(reps.sum())) - np.repeat(np.cumsum(reps) - reps, reps)
-        return np.repeat(u_t[order], reps), np.array(flat, dtype=np.int64)[np.repeat(start, reps) + within]
 
     def _violated(self, cand_t: np.ndarray, cand_sys: np.ndarray, tr: Transitions) -> np.ndarray:
         """The invariants leaf of each candidate new state (memoised like reactions)."""
@@ -218,9 +195,10 @@ class TableEngine:
         for name, msg in ch.violations(init):
             trail.record(name, msg, 0)
         self.any_found = bool(trail.found)
-        self.depth = self.transitions = 0
+        self.depth = 0
         self.incomplete = ""
-        budget.status = lambda: (len(codes), self.transitions, self.depth)
+        counts = self.counts = _BatchCounts(self)
+        budget.status = lambda: (len(codes), counts.transitions, self.depth)
         try:
             frontier = np.array([0], dtype=np.int64)
             while len(frontier) and not self._finished() and not self.incomplete:
@@ -237,9 +215,9 @@ class TableEngine:
         except ReactionStopped as stop:  # the budget ran out inside a deployer's reaction
             self.incomplete = budget.reason or str(stop)
             trail.truncate(codes)
-        res.transitions = self.transitions
+        res.transitions = counts.transitions
         res.states = len(codes)
-        budget.status = _final_status(len(codes), self.transitions, self.depth)  # (the search's closure let go)
+        budget.status = _final_status(len(codes), counts.transitions, self.depth)  # (the search's closure let go)
         return trail.found, self.incomplete, self.depth
 
     def _encode(self, init: Key) -> Env:
@@ -299,7 +277,7 @@ class TableEngine:
         else:
             cut_t, stop_unit = self._consume(units, cand, dict(zip(cand.tolist(), bad.tolist())), nxt)
         self.seen.add(np.frombuffer(self.codes, dtype=np.int64)[n0:].copy())
-        self._count_batch(units, sc, cut_t, stop_unit)
+        self.counts.count_batch(units, sc, cut_t, stop_unit)
         return cut_t < len(tr.env2)
 
     def _plain(self, units: "Units", cand: np.ndarray, bad: np.ndarray) -> bool:
@@ -402,8 +380,49 @@ class TableEngine:
         else:
             nxt.append(ni)
 
-    def _count_batch(self, units: "Units", sc: np.ndarray, cut_t: int, stop_unit: int) -> None:
-        """Count what the direct engine counts up to the cut."""
+    def explored(self) -> "_Explored":
+        return _Explored(self)
+
+    def release(self) -> None:
+        """Drop the trees, tables and states (see :meth:`Checker.release
+        <desmon.verify.checker.Checker.release>`): freed now by reference counting, not
+        by the cyclic collector (the recorder and the recording twin point back)."""
+        self.__dict__.clear()
+
+
+def _opened(engine: "TableEngine", u_t: np.ndarray, u_pre: np.ndarray, leaf: np.ndarray, bound: int) -> tuple[np.ndarray, np.ndarray]:
+    """The next generation's units: the failed-start prefixes each unit's start outcomes
+    open (in the units' order, each unit's in order of its outcomes)."""
+    n_leaves = len(engine.trees.leaves)
+    up, pinv = _grouped(u_pre * n_leaves + leaf)
+    flat: list[int] = []
+    count = np.zeros(len(up), dtype=np.int64)
+    for k, pv in enumerate(up.tolist()):
+        pre, lf = engine.prefixes[pv // n_leaves], engine.trees.leaves[pv % n_leaves]
+        outcomes, fails = lf[2], lf[3]
+        if len(fails) < bound:
+            kids = [engine.prefix(outcomes[:i] + (False,)) for i in range(len(pre), len(outcomes))]
+            flat += kids
+            count[k] = len(kids)
+    reps = count[pinv]
+    order = np.flatnonzero(reps)
+    if not len(order):
+        return order, order
+    reps = reps[order]
+    start = (np.cumsum(count) - count)[pinv[order]]
+    within = np.arange(int(reps.sum())) - np.repeat(np.cumsum(reps) - reps, reps)
+    return np.repeat(u_t[order], reps), np.array(flat, dtype=np.int64)[np.repeat(start, reps) + within]
+
+
+class _BatchCounts:
+    """The counters of a search (:class:`CheckResult`'s and the transitions), batch by batch."""
+
+    def __init__(self, engine: "TableEngine") -> None:
+        self.res, self.events, self.env, self.trees = engine.res, engine.events, engine.env, engine.trees
+        self.transitions = 0
+
+    def count_batch(self, units: "Units", sc: np.ndarray, cut_t: int, stop_unit: int) -> None:
+        """Count into ``res`` what the direct engine counts of a batch, up to the cut."""
         res, tr, ev, env = self.res, units.tr, self.events, self.env
         U_t, U_leaf, U_code = units.t, units.leaf, units.code
         T = len(tr.env2)
@@ -428,15 +447,6 @@ class TableEngine:
         _count(res.enabled, EVENT_KINDS, ev.kind_of[tr.ev[: last_t + 1]], len(EVENT_KINDS))
         n_states = int(tr.pos[last_t]) + 1 if cut_t < T else len(units.ids)
         _count(res.rules, env.ctxs, tr.ctx[:n_states], env.C)
-
-    def explored(self) -> "_Explored":
-        return _Explored(self)
-
-    def release(self) -> None:
-        """Drop the trees, tables and states (see :meth:`Checker.release
-        <desmon.verify.checker.Checker.release>`): freed now by reference counting, not
-        by the cyclic collector (the recorder and the recording twin point back)."""
-        self.__dict__.clear()
 
 
 class _Explored(Sequence[Key]):

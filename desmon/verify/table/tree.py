@@ -170,10 +170,9 @@ class DecisionTrees:
             if child.min() < 0:
                 self._record_missed(child, idx, nd, rp, flat_loc, record)
             lf = np.take(self.node_leaf.a, child)
+            out[idx] = lf  # final for the units at a leaf, overwritten later for the others
             keep = np.flatnonzero(lf < 0)
             if len(keep) < len(lf):
-                done = np.flatnonzero(lf >= 0)
-                out[np.take(idx, done)] = np.take(lf, done)
                 idx, nd, rp = np.take(idx, keep), np.take(child, keep), np.take(rp, keep)
             else:
                 nd = child
