@@ -1,6 +1,6 @@
 """Checker throughput: the real deployment core in the loop vs a plain tuple BFS.
 
-``python -m bench.bench_verify [--large-max-states N] [--prefix N] [--workers W] [--huge N]``
+``python -m bench.bench_verify [--large-max-states N] [--prefix N] [--workers W] [--huge N] [--fallbacks N] [--quick]``
 builds a 4-platform, 3-detector scenario (bench_4p, 4,495 states) and a larger
 6-platform one (bench_6p, 311,400 states, searched completely by default), and in the
 same run a minimal plain-Python BFS over tuples exploring the same environment
@@ -24,6 +24,12 @@ first, so that its peak memory is its own, against a plain tuple BFS with the sa
 environment and the same slot semantics (first alternative that fits, else the next;
 an unserved slot carries its errors), and under the ``stale-errors`` mutant (the error
 semantics before issue 12) to count the states stale errors added.
+
+Issue 27's goals are measured on that model: at least 100,000 states/s on one core and at
+most 150 bytes per state (the resident memory the search added, over its states: what
+``desmon verify --stats`` prints); the last line ``RESULT states_per_s=<s> bytes_per_state=<b>
+records=<recorded runs> fallback_...`` carries them, and ``python -m bench`` compares them
+with ``bench/goals.py``. ``--quick`` is a smoke run (20,000 states of each model).
 
 ``--huge 1400000`` also runs the issue's 1.4-million-state budget on a 7-platform model
 with 4 loaded platforms (bench_7p) with the table engine, and the plain BFS on the
