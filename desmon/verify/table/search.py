@@ -156,7 +156,8 @@ class TableEngine:
             u_t, u_pre = _opened(self, u_t, u_pre, leaf, bound)
         if len(parts) == 1:
             return parts[0]
-        U_t, U_pre, U_leaf = (np.concatenate(x) for x in zip(*parts))
+        U_t, U_pre, U_leaf = [np.concatenate(x) for x in zip(*parts)]
+        parts.clear()  # (the generations' arrays: not held during the sort)
         # each generation is in (transition, rank) order: a stable sort by transition
         # gives the (transition, generation, rank) order (a merge of sorted runs)
         order = np.argsort(U_t, kind="stable")
