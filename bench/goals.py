@@ -36,6 +36,7 @@ _OPS: dict[str, Callable[[float, float], bool]] = {">=": operator.ge, "<=": oper
 
 #: bench module -> the goals of its RESULT figures (on its full configuration)
 GOALS: dict[str, tuple[Goal, ...]] = {
+    "bench_analyze": (Goal("build_ratio", "<=", 2, "issue 25: the chain's build at most twice the checker's exploration"),),
     "bench_sim": (
         Goal("x_real_time", ">=", 5000, "issue 27: the 8 h robot day at 5,000x real time or more"),
         Goal("ratio_bare", "<=", 100, "issue 27: at most 100x the bare SimPy cost of the same events"),
@@ -57,6 +58,7 @@ GOALS: dict[str, tuple[Goal, ...]] = {
 
 #: bench module -> its options in the small configuration (a smoke run of seconds)
 QUICK: dict[str, tuple[str, ...]] = {
+    "bench_analyze": ("--quick",),
     "bench_detectors": ("--trials", "10", "--hours", "0.02"),
     "bench_fleet": ("--robots", "3", "--edges", "1", "--hours", "0.1"),
     "bench_preferences": ("--quick",),
