@@ -6,6 +6,9 @@ sample count: Gaussian noise for every wrench sample and every tactile cell (6 p
 evaluation; 1 s blocks for the mission stream). Ratios are ours / baseline time.
 
     python -m bench.bench_detectors [--trials N] [--hours H] [--seed S]
+
+Last line: ``RESULT trials_per_s=<evaluation> eval_ratio=<ours / baseline> missions_per_s=<missions>
+detectors_us_per_sim_s=<the three detectors per simulated s, the worse of the two days>``.
 """
 
 from __future__ import annotations
@@ -107,6 +110,7 @@ def main(argv: list[str] | None = None) -> None:
 
     seconds = args.hours * 3600.0
     t_sbase = _baseline_stream(seconds, rng)
+    det_us = []
     for label, segs in (("delivery day (mostly idle, a delivery every 10 min)", _day(args.hours)),
                         ("holding all day (worst case for tactile)", _hold_day(args.hours))):
         gen, det = _stream(segs, seconds, args.seed, args.block)
@@ -115,6 +119,9 @@ def main(argv: list[str] | None = None) -> None:
               f"(ratio {gen / t_sbase:.2f}x baseline {1e6 * t_sbase / seconds:.1f} us/s); 8 h day: {8 * 3600 * gen / seconds:.2f} s")
         print(f"  3 detectors       {1e6 * det / seconds:7.1f} us per simulated s "
               f"(ratio {det / t_sbase:.2f}x); 8 h day: {8 * 3600 * det / seconds:.2f} s")
+        det_us.append(1e6 * det / seconds)
+    print(f"RESULT trials_per_s={n_trials / t_eval:.0f} eval_ratio={t_eval / t_base:.2f} missions_per_s={4 * args.trials / t_mis:.0f} "
+          f"detectors_us_per_sim_s={max(det_us):.1f}")
 
 
 if __name__ == "__main__":

@@ -28,7 +28,7 @@ SEARCH_OPTIONS = {
     "invariant": ("--invariant", None), "keep_going": ("--continue", False), "max_states": ("--max-states", MAX_STATES),
     "max_depth": ("--max-depth", None), "timeout": ("--timeout", None), "max_memory": ("--max-memory", None),
     "symmetry": ("--symmetry", False), "workers": ("--workers", 1), "engine": ("--engine", "auto"),
-    "json": ("--json", None), "pytest": ("--pytest", None),
+    "json": ("--json", None), "pytest": ("--pytest", None), "stats": ("--stats", False),
 }
 
 
@@ -60,6 +60,12 @@ def add_parser(sub: Subparsers) -> None:
         help="draw the shortest counterexample as repository snapshots (with --replay: the replayed one)",
     )
     p.add_argument("--no-progress", action="store_true")
+    p.add_argument(
+        "--stats", action="store_true",
+        help="also print the search's throughput: states/s, resident memory per state (bytes/state: what the search "
+        "added to the process's resident size, over its states) and the table engine's recorded runs of the core "
+        '(with --json: also under the key "stats")',
+    )
     p.add_argument(
         "--replay", default=None, metavar="FILE.json",
         help="instead of a search, replay a counterexample saved by --json through the real core, step by step, and check "
@@ -164,11 +170,17 @@ def _search(args: argparse.Namespace) -> int:
 def _report(args: argparse.Namespace, result: Any) -> None:
     """The search's report, and ``--json``."""
     from desmon.model.params import parse_assignments
-    from desmon.verify.report import format_result, result_to_json
+    from desmon.verify.report import format_result, format_stats, result_to_json, stats_to_json
 
     print(format_result(result), end="", flush=True)
+    stats = getattr(args, "stats", False)
+    if stats:
+        print(format_stats(result), flush=True)
     if args.json:
-        Path(args.json).write_text(json.dumps(result_to_json(result, parse_assignments(getattr(args, "param", None))), indent=2) + "\n")
+        out = result_to_json(result, parse_assignments(getattr(args, "param", None)))
+        if stats:
+            out["stats"] = stats_to_json(result)
+        Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
         print(f"wrote {args.json}")
 
 

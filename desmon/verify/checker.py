@@ -27,7 +27,7 @@ from desmon.errors import CheckerError, TableUnsupported
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds
 from desmon.verify.direct import DirectSearch, Pool
-from desmon.verify.search import HOLDS, Budget, CheckResult, ctrl_c, finish, paused_gc
+from desmon.verify.search import HOLDS, Budget, CheckResult, ctrl_c, finish, paused_gc, resident_mb
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 from desmon.verify.trace import Counterexample
@@ -194,7 +194,7 @@ def check(
         import desmon.verify.table  # noqa: F401  (it imports numpy: before the search's clock starts)
     t0 = time.perf_counter()
     timeout_spent += t0 - entered  # (the timeout's clock started earlier)
-    res = _fresh_result(system, workers, timeout, max_memory)
+    res = _fresh_result(system, workers, timeout, max_memory, resident_mb() or 0.0)
     budget = Budget(
         t0, timeout=timeout, timeout_spent=timeout_spent, max_memory=max_memory, progress=progress, progress_after=progress_after, progress_every=progress_every, out=out,
     )
@@ -208,12 +208,12 @@ def check(
         budget.close()
 
 
-def _fresh_result(system: TransitionSystem, workers: int, timeout: float | None, max_memory: float | None) -> CheckResult:
+def _fresh_result(system: TransitionSystem, workers: int, timeout: float | None, max_memory: float | None, start_mb: float) -> CheckResult:
     """A result before any search: HOLDS, nothing counted."""
     return CheckResult(
         system.scenario.name, system.deployer_name, tuple(i.name for i in system.invariants), HOLDS,
         symmetry=system.symmetry is not None, not_checked=system.not_checked, workers=workers,
-        timeout=timeout, max_memory=max_memory,
+        timeout=timeout, max_memory=max_memory, start_mb=start_mb,
     )
 
 
@@ -228,7 +228,7 @@ def _search(system: TransitionSystem, engine: str, res: CheckResult, budget: Bud
         except TableUnsupported as exc:
             if engine == "table":
                 raise
-            res, why = _fresh_result(system, search["workers"], res.timeout, res.max_memory), str(exc)
+            res, why = _fresh_result(system, search["workers"], res.timeout, res.max_memory, res.start_mb), str(exc)
     res.engine_note = why
     return _finished(res, system, DIRECT.explore(system, res, **search), budget)
 

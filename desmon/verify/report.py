@@ -16,7 +16,7 @@ from desmon.verify.trace import Counterexample, Label, Step, rule_of
 from desmon.verify.state import Key
 
 __all__ = [
-    "format_result", "format_trace", "result_to_json", "counterexample_pytest", "event_to_json", "event_from_json",
+    "format_result", "format_stats", "stats_to_json", "format_trace", "result_to_json", "counterexample_pytest", "event_to_json", "event_from_json",
     "constraint_to_json", "constraint_from_json", "labels_from_json", "key_to_json",
     "SavedCounterexample", "read_counterexample", "format_replay_head", "format_divergence", "format_replay_verdict",
 ]
@@ -171,6 +171,25 @@ def result_to_json(r: CheckResult, params: dict[str, str] | None = None) -> dict
         "not_checked": {n: NOT_CHECKED.get(n, "") for n in r.not_checked},
         "counterexamples": [counterexample_to_json(c) for c in r.counterexamples],
     }
+
+
+def stats_to_json(r: CheckResult) -> dict[str, Any]:
+    """The search's throughput (``desmon verify --stats --json``, key "stats")."""
+    return {
+        "states_per_s": round(r.states_per_second, 1) if r.seconds > 0 else None,
+        "bytes_per_state": round(r.bytes_per_state, 1),
+        "start_mb": round(r.start_mb, 1),
+        "peak_mb": round(r.peak_mb, 1),
+        "records": r.records if r.engine == "table" else None,
+    }
+
+
+def format_stats(r: CheckResult) -> str:
+    """The line ``desmon verify --stats`` prints after the report."""
+    rate = f"{r.states_per_second:,.0f} states/s" if r.seconds > 0 else "states/s not measured"
+    runs = f", {r.records:,} recorded runs of the core (table engine)" if r.engine == "table" else ""
+    return (f"stats: {rate}, {r.bytes_per_state:,.0f} bytes/state "
+            f"(peak {r.peak_mb:,.0f} MB resident, {r.start_mb:,.0f} MB when the search began){runs}")
 
 
 # -- reading a counterexample back (desmon verify --replay) ---------------------------------------

@@ -85,6 +85,8 @@ class CheckResult:
     depth: int = 0
     seconds: float = 0.0
     peak_mb: float = 0.0
+    #: the process's resident memory when the search began (MB; see :attr:`bytes_per_state`)
+    start_mb: float = field(default=0.0, compare=False)
     counterexamples: list[Counterexample] = field(default_factory=list)
     enabled: Counter = field(default_factory=Counter)
     new_states: Counter = field(default_factory=Counter)
@@ -108,6 +110,13 @@ class CheckResult:
     @property
     def states_per_second(self) -> float:
         return self.states / self.seconds if self.seconds > 0 else float("inf")
+
+    @property
+    def bytes_per_state(self) -> float:
+        """The resident memory the search added, per state: (peak resident size - resident
+        size at its start) / states (the peak is the process's: a search after a larger
+        one in the same process reads low)."""
+        return max(self.peak_mb - self.start_mb, 0.0) * 2**20 / self.states if self.states else 0.0
 
     @property
     def transitions_per_second(self) -> float:
@@ -332,8 +341,8 @@ class Trail:
         self.system = system
         self.key_of = key_of
         self.keep_going = keep_going
-        self.parent = array("l", [-1])
-        self.label = array("l", [-1])
+        self.parent = array("i", [-1])  # (4 bytes a state: at most 2**31 states)
+        self.label = array("i", [-1])
         self.labels: list[Label] = []
         self._label_ids: dict[Any, int] = {}
         self.found: dict[str, Counterexample] = {}
@@ -350,6 +359,11 @@ class Trail:
         """The next state's parent and label."""
         self.parent.append(parent)
         self.label.append(self.label_id(lookup, label))
+
+    def extend(self, parents: Any, label_ids: Any) -> None:
+        """The next states' parents and label numbers (numpy arrays of :meth:`label_id`)."""
+        self.parent.frombytes(parents.astype("int32").tobytes())
+        self.label.frombytes(label_ids.astype("int32").tobytes())
 
     def path(self, i: int) -> tuple[list[Label], list[Key]]:
         """The labels from the initial state to state ``i``, and the states on the way."""

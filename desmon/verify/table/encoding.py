@@ -235,6 +235,8 @@ class Events:
                 raise TableUnsupported(f"table engine: no array operations for the environment's {v.kind} events; run with --engine direct")
             self.slots += slots(v.subject)
         self.kind_of = np.array([_KIND_ID[event_kind(e)] for e in self.events] or [0], dtype=np.int64)
+        #: the platform whose digit each slot's event moves (-1: none)
+        self.slot_platform = np.array([-1 if sl[0] in ("action", "requirements") else sl[1] for sl in self.slots] or [-1], dtype=np.int64)
 
     def _action(self, _subject: None) -> list[tuple]:
         env, b = self.env, self.bounds
@@ -291,6 +293,7 @@ class Events:
         E2 = np.zeros((S, N), dtype=np.int64)
         EV = np.zeros((S, N), dtype=np.int64)
         ST = np.zeros((S, N), dtype=np.int64)
+        DD = np.zeros((S, N), dtype=np.int64)  # the change of the event's platform digit
         for s, spec in enumerate(self.slots):
             kind = spec[0]
             if kind == "action":
@@ -302,10 +305,10 @@ class Events:
                 ST[s] = np.where(tgt == ctx, P + 1, 0)
             elif kind == "device":
                 _k, p, j, ev_fail, ev_rep = spec
-                unit = env.W[p] * env.U[p] * (1 << j)
                 failed = ((L[:, p] // env.U[p] >> j) & 1).astype(bool)
                 M[s] = np.where(failed, b.repair, can_fail)
-                E2[s] = np.where(failed, envs - unit, envs + unit)
+                DD[s] = np.where(failed, -(env.U[p] << j), env.U[p] << j)
+                E2[s] = envs + DD[s] * env.W[p]
                 EV[s] = np.where(failed, ev_rep, ev_fail)
                 ST[s] = p + 1
             elif kind == "platform":
@@ -313,6 +316,7 @@ class Events:
                 unit = env.W[p]
                 down = (L[:, p] % 2).astype(bool)
                 M[s] = np.where(down, b.repair, can_fail)
+                DD[s] = np.where(down, -1, 1)
                 E2[s] = np.where(down, envs - unit, envs + unit)
                 EV[s] = np.where(down, ev_up, ev_down)
                 ST[s] = p + 1
@@ -321,6 +325,7 @@ class Events:
                 unit = env.W[p]
                 down = (L[:, p] % 2).astype(bool)
                 M[s] = True
+                DD[s] = np.where(down, -1, 1)
                 E2[s] = np.where(down, envs - unit, envs + unit)
                 EV[s] = np.where(down, ev_join, ev_leave)
                 ST[s] = p + 1
@@ -338,10 +343,20 @@ class Events:
                 unit = env.W[p] * env.U[p] * (1 << env.K[p])
                 to = L[:, p] // (env.U[p] << env.K[p]) + step
                 M[s] = (to >= 0) & (to < len(ids_lv))
+                DD[s] = step * (env.U[p] << env.K[p])
                 E2[s] = envs + step * unit
                 EV[s] = ids_lv[np.clip(to, 0, len(ids_lv) - 1)]
                 ST[s] = p + 1
         pos, slot = np.nonzero(M.T)
-        env2 = E2[slot, pos]
-        return Transitions(pos, env2, EV[slot, pos], ST[slot, pos], syss[pos], env.locals(env2), ctx)
+        at = slot * N + pos  # flat indices into the slot-by-state arrays
+        return Transitions(pos, np.take(E2, at), np.take(EV, at), np.take(ST, at), np.take(syss, pos), self._moved(L, pos, slot, np.take(DD, at)), ctx)
+
+    def _moved(self, L: np.ndarray, pos: np.ndarray, slot: np.ndarray, dd: np.ndarray) -> np.ndarray:
+        """The platform digits after each event (int16): its state's ``L[pos]``, the digit
+        of the platform its slot moves changed by ``dd``."""
+        loc = np.take(L.astype(np.int16), pos, axis=0)
+        sp = np.take(self.slot_platform, slot)
+        on = np.flatnonzero(sp >= 0)
+        loc.ravel()[on * self.P + np.take(sp, on)] += np.take(dd, on).astype(np.int16)
+        return loc
 

@@ -20,6 +20,7 @@ from desmon.verify.environment import EVENT_KINDS
 from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Trail, final_status as _final_status
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
+from desmon.verify.table.hashing import IntTable
 from desmon.verify.table.encoding import ROOT_CTX, ROOT_PREFIX, ROOT_STIM, SYS_BITS, SYS_MASK, Env, Events, Transitions, root_key
 from desmon.verify.table.recording import Recorder
 from desmon.verify.table.tables import AnswerTables, Interned
@@ -30,10 +31,13 @@ __all__ = ["TableEngine", "table_unsupported", "CHUNK_STATES", "MAX_DIGITS"]
 
 #: combinations of one platform's facts the engine tabulates answers for (beyond: direct engine)
 MAX_DIGITS = 4096
-#: frontier states expanded per numpy batch (bounds the memory of one batch)
+#: frontier states expanded per numpy batch (bounds the memory of one batch; a search capped by
+#: max_states walks, and records, the units of the whole batch that reaches the cap)
 CHUNK_STATES = 16_384
 #: new states added between two looks at the search's budget (time, memory, Ctrl-C)
 LOOK_EVERY = 64
+#: values below which :func:`_grouped` numbers distinct values with an array, not a sort
+DENSE_GROUPS = 1 << 20
 
 
 def _count(counter: Any, names: Sequence[Any], values: np.ndarray, size: int) -> None:
@@ -41,6 +45,20 @@ def _count(counter: Any, names: Sequence[Any], values: np.ndarray, size: int) ->
     for k, n in enumerate(np.bincount(values, minlength=size).tolist()):
         if n:
             counter[names[k]] += n
+
+
+def _grouped(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(values, return_inverse=True)`` of non-negative ints, without a sort
+    when they are small."""
+    top = int(values.max()) + 1 if len(values) else 0
+    if top > DENSE_GROUPS:
+        return np.unique(values, return_inverse=True)
+    present = np.zeros(top, dtype=bool)
+    present[values] = True
+    up = np.flatnonzero(present)
+    number = np.zeros(top, dtype=np.int64)
+    number[up] = np.arange(len(up))
+    return up, number[values]
 
 
 class _Spent(Exception):
@@ -120,11 +138,9 @@ class TableEngine:
         T = len(tr.env2)
         u_t = np.arange(T, dtype=np.int64)
         u_pre = np.zeros(T, dtype=np.int64)
-        u_rank = np.zeros(T, dtype=np.int64)
-        parts: list[tuple[np.ndarray, ...]] = []
-        gen = 0
+        parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         while len(u_t):
-            roots = root_key(tr.sys[u_t], tr.env2[u_t] % G, tr.stim[u_t], u_pre)
+            roots = root_key(np.take(tr.sys, u_t), np.take(tr.env2, u_t) % G, np.take(tr.stim, u_t), u_pre)
 
             def record_unit(u: int, u_t: np.ndarray = u_t, u_pre: np.ndarray = u_pre, roots: np.ndarray = roots) -> None:
                 t = int(u_t[u])
@@ -132,32 +148,20 @@ class TableEngine:
                                      self.prefixes[int(u_pre[u])], int(roots[u]), int(tr.env2[t]), int(tr.stim[t]))
 
             leaf = self.trees.walk(roots, u_t, tr.loc, record_unit)
-            parts.append((u_t, np.full(len(u_t), gen, dtype=np.int64), u_rank, u_pre, leaf))
+            parts.append((u_t, u_pre, leaf))
             if not bound:
                 break
-            # the failed-start prefixes each unit's start outcomes open
-            n_leaves = len(self.trees.leaves)
-            pairs = u_pre * n_leaves + leaf
-            up, pinv = np.unique(pairs, return_inverse=True)
-            kids: list[list[int]] = []
-            for pv in up.tolist():
-                pre, lf = self.prefixes[pv // n_leaves], self.trees.leaves[pv % n_leaves]
-                outcomes, fails = lf[2], lf[3]
-                kids.append([self.prefix(outcomes[:i] + (False,)) for i in range(len(pre), len(outcomes))] if len(fails) < bound else [])
-            counts = np.array([len(k) for k in kids], dtype=np.int64)[pinv]
-            if not counts.any():
-                break
-            order = np.lexsort((u_rank, u_t))
-            order = order[counts[order] > 0]
-            n_t = np.repeat(u_t[order], counts[order])
-            n_pre = np.array([x for i in order.tolist() for x in kids[pinv[i]]], dtype=np.int64)
-            starts = np.r_[0, np.flatnonzero(np.diff(n_t)) + 1]
-            u_rank = np.arange(len(n_t)) - np.repeat(starts, np.diff(np.r_[starts, len(n_t)]))
-            u_t, u_pre = n_t, n_pre
-            gen += 1
-        U_t, U_gen, U_rank, U_pre, U_leaf = (np.concatenate(x) for x in zip(*parts))
-        order = np.lexsort((U_rank, U_gen, U_t))
-        return U_t[order], U_pre[order], U_leaf[order]
+            # the units are in (transition, rank) order (generation 0: one per transition;
+            # the next ones are built in that order): so are the units their prefixes open
+            u_t, u_pre = _opened(self, u_t, u_pre, leaf, bound)
+        if len(parts) == 1:
+            return parts[0]
+        U_t, U_pre, U_leaf = [np.concatenate(x) for x in zip(*parts)]
+        parts.clear()  # (the generations' arrays: not held during the sort)
+        # each generation is in (transition, rank) order: a stable sort by transition
+        # gives the (transition, generation, rank) order (a merge of sorted runs)
+        order = np.argsort(U_t, kind="stable")
+        return np.take(U_t, order), np.take(U_pre, order), np.take(U_leaf, order)
 
     def _violated(self, cand_t: np.ndarray, cand_sys: np.ndarray, tr: Transitions) -> np.ndarray:
         """The invariants leaf of each candidate new state (memoised like reactions)."""
@@ -188,13 +192,15 @@ class TableEngine:
         # states: code = env << SYS_BITS | system
         codes = self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
         trail = self.trail = Trail(ch, self.key_of, keep_going)
-        self.seen = {codes[0]}
+        self.seen = IntTable(values=False)  # the codes of the states numbered before this batch
+        self.seen.add(np.array([codes[0]], dtype=np.int64))
         for name, msg in ch.violations(init):
             trail.record(name, msg, 0)
         self.any_found = bool(trail.found)
-        self.depth = self.transitions = 0
+        self.depth = 0
         self.incomplete = ""
-        budget.status = lambda: (len(codes), self.transitions, self.depth)
+        counts = self.counts = _BatchCounts(self)
+        budget.status = lambda: (len(codes), counts.transitions, self.depth)
         try:
             frontier = np.array([0], dtype=np.int64)
             while len(frontier) and not self._finished() and not self.incomplete:
@@ -204,16 +210,16 @@ class TableEngine:
                 nxt = self._level(frontier)
                 if nxt:
                     self.depth += 1
-                frontier = np.array(nxt, dtype=np.int64)
+                frontier = np.frombuffer(nxt, dtype=np.int64)
         except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
             self.incomplete = INTERRUPTED
             trail.truncate(codes)
         except ReactionStopped as stop:  # the budget ran out inside a deployer's reaction
             self.incomplete = budget.reason or str(stop)
             trail.truncate(codes)
-        res.transitions = self.transitions
+        res.transitions = counts.transitions
         res.states = len(codes)
-        budget.status = _final_status(len(codes), self.transitions, self.depth)  # (the search's closure let go)
+        budget.status = _final_status(len(codes), counts.transitions, self.depth)  # (the search's closure let go)
         return trail.found, self.incomplete, self.depth
 
     def _encode(self, init: Key) -> Env:
@@ -236,9 +242,9 @@ class TableEngine:
     def _finished(self) -> bool:
         return self.any_found and self.trail.done()
 
-    def _level(self, frontier: np.ndarray) -> list[int]:
+    def _level(self, frontier: np.ndarray) -> array:  # type: ignore[type-arg]
         """One BFS level, batch by batch; returns the next level."""
-        nxt: list[int] = []
+        nxt = array("q")
         for lo in range(0, len(frontier), CHUNK_STATES):
             if self.budget.spent():
                 self.incomplete = self.budget.reason
@@ -247,7 +253,7 @@ class TableEngine:
                 break
         return nxt
 
-    def _batch(self, ids: np.ndarray, nxt: list[int]) -> bool:
+    def _batch(self, ids: np.ndarray, nxt: array) -> bool:  # type: ignore[type-arg]
         """Expand the states ``ids`` (one numpy batch); True if the search stops in it."""
         sc = np.frombuffer(self.codes, dtype=np.int64)[ids]
         tr = self.events.enabled(sc)
@@ -257,22 +263,67 @@ class TableEngine:
         try:
             U_t, U_pre, U_leaf = self._units(ids, tr)
             leaf_sys = np.array(self.trees.leaf_sys, dtype=np.int64)
-            U_code = (tr.env2[U_t] << SYS_BITS) | leaf_sys[U_leaf]
+            U_code = (np.take(tr.env2, U_t) << SYS_BITS) | np.take(leaf_sys, U_leaf)
             # candidate new states: first occurrence in this batch, not seen before
-            seen = self.seen
-            uniq, first = np.unique(U_code, return_index=True)
-            fresh = np.fromiter((c not in seen for c in uniq.tolist()), dtype=bool, count=len(uniq))
-            cand = np.sort(first[fresh])
-            bad_of = dict(zip(cand.tolist(), self._violated(U_t[cand], leaf_sys[U_leaf[cand]], tr).tolist()))
+            fresh = np.flatnonzero(~self.seen.contains(U_code))
+            _uniq, first = np.unique(np.take(U_code, fresh), return_index=True)
+            cand = np.sort(fresh[first])
+            bad = self._violated(U_t[cand], leaf_sys[U_leaf[cand]], tr)
         except _Spent:  # between two recorded runs or walk rounds: the batch is dropped
             self.incomplete = self.budget.reason
             return True
         units = Units(ids, tr, U_t, U_pre, U_leaf, U_code)
-        cut_t, stop_unit = self._consume(units, cand, bad_of, nxt)
-        self._count_batch(units, sc, cut_t, stop_unit)
+        n0 = len(self.codes)
+        if self._plain(units, cand, bad):
+            cut_t, stop_unit = self._consume_all(units, cand, nxt)
+        else:
+            cut_t, stop_unit = self._consume(units, cand, dict(zip(cand.tolist(), bad.tolist())), nxt)
+        self.seen.add(np.frombuffer(self.codes, dtype=np.int64)[n0:].copy())
+        self.counts.count_batch(units, sc, cut_t, stop_unit)
         return cut_t < len(tr.env2)
 
-    def _consume(self, units: "Units", cand: np.ndarray, bad_of: dict[int, int], nxt: list[int]) -> tuple[int, int]:
+    def _plain(self, units: "Units", cand: np.ndarray, bad: np.ndarray) -> bool:
+        """Whether the batch's candidates are all new states that violate nothing, no unit
+        broke an instantaneous invariant and the cap is not reached: then every candidate
+        is a new state, in order (:meth:`_consume_all`)."""
+        leaves = self.trees.leaves
+        return (
+            (self.max_states is None or len(self.codes) + len(cand) < self.max_states)
+            and not any(leaves[v][1] for v in np.unique(bad).tolist())
+            and not np.array(self.trees.leaf_inst, dtype=bool)[units.leaf].any()
+        )
+
+    def _consume_all(self, units: "Units", cand: np.ndarray, nxt: array) -> tuple[int, int]:  # type: ignore[type-arg]
+        """:meth:`_consume` of a plain batch (:meth:`_plain`), as array operations: every
+        candidate becomes a new state (numbered, labelled, queued), unless the budget is
+        spent, where the direct engine's loop would see it first: after the transition
+        of the :data:`LOOK_EVERY`-th candidate."""
+        tr = units.tr
+        cut_t = len(tr.env2)
+        if len(cand) >= LOOK_EVERY and not self.incomplete and self.budget.spent():
+            cut_t = int(units.t[cand[LOOK_EVERY - 1]])
+            self.incomplete = self.budget.reason
+            cand = cand[units.t[cand] <= cut_t]
+        if not len(cand):
+            return cut_t, -1
+        t = units.t[cand]
+        e = tr.ev[t]
+        ni = len(self.codes)
+        self.codes.frombytes(units.code[cand].tobytes())
+        # each new state's label: its event and the start failures of its reaction
+        n_leaves = len(self.trees.leaves)
+        pairs, inv = _grouped(e * n_leaves + units.leaf[cand])
+        lids = np.array([self._label(pv // n_leaves, pv % n_leaves) for pv in pairs.tolist()], dtype=np.int64)
+        self.trail.extend(units.ids[tr.pos[t]], lids[inv])
+        _count(self.res.new_states, EVENT_KINDS, self.events.kind_of[e], len(EVENT_KINDS))
+        nxt.frombytes(np.arange(ni, ni + len(cand), dtype=np.int64).tobytes())
+        return cut_t, -1
+
+    def _label(self, e: int, leaf: int) -> int:
+        fails = self.trees.leaves[leaf][3]
+        return self.trail.label_id((e, fails), (self.events.events[e], fails))
+
+    def _consume(self, units: "Units", cand: np.ndarray, bad_of: dict[int, int], nxt: array) -> tuple[int, int]:  # type: ignore[type-arg]
         """The records in order, as the direct engine's search loop meets them: it stops
         after the event that found what it looked for or reached the cap, or at once when
         a repaired instantaneous violation completes the search. Returns (the last
@@ -312,11 +363,10 @@ class TableEngine:
         self.any_found = True
         return self.trail.done()
 
-    def _new_state(self, units: "Units", u: int, t: int, lf: tuple, bad: tuple, nxt: list[int]) -> None:
+    def _new_state(self, units: "Units", u: int, t: int, lf: tuple, bad: tuple, nxt: array) -> None:  # type: ignore[type-arg]
         """Unit ``u`` reached a new state: number it, label it, and record what it violates."""
         tr, ev = units.tr, self.events
         c = int(units.code[u])
-        self.seen.add(c)
         codes = self.codes
         ni = len(codes)
         codes.append(c)
@@ -332,26 +382,6 @@ class TableEngine:
         else:
             nxt.append(ni)
 
-    def _count_batch(self, units: "Units", sc: np.ndarray, cut_t: int, stop_unit: int) -> None:
-        """Count what the direct engine counts up to the cut."""
-        res, tr, ev, env = self.res, units.tr, self.events, self.env
-        U_t, U_leaf, U_code = units.t, units.leaf, units.code
-        T = len(tr.env2)
-        inc = np.arange(stop_unit + 1) if stop_unit >= 0 else np.flatnonzero(U_t <= cut_t)
-        self.transitions += len(inc)
-        leaf_counts = np.bincount(U_leaf[inc], minlength=len(self.trees.leaves))
-        for lf_id in np.flatnonzero(leaf_counts).tolist():
-            n = int(leaf_counts[lf_id])
-            for name in self.trees.leaves[lf_id][4]:
-                res.branches[name] += n
-        moved = inc[:-1] if stop_unit >= 0 else inc  # the stopping unit is not counted as a change
-        moved = moved[U_code[moved] != sc[tr.pos[U_t[moved]]]]
-        _count(res.changed, EVENT_KINDS, ev.kind_of[tr.ev[U_t[moved]]], len(EVENT_KINDS))
-        last_t = min(cut_t, T - 1)
-        _count(res.enabled, EVENT_KINDS, ev.kind_of[tr.ev[: last_t + 1]], len(EVENT_KINDS))
-        n_states = int(tr.pos[last_t]) + 1 if cut_t < T else len(units.ids)
-        _count(res.rules, env.ctxs, tr.ctx[:n_states], env.C)
-
     def explored(self) -> "_Explored":
         return _Explored(self)
 
@@ -360,6 +390,65 @@ class TableEngine:
         <desmon.verify.checker.Checker.release>`): freed now by reference counting, not
         by the cyclic collector (the recorder and the recording twin point back)."""
         self.__dict__.clear()
+
+
+def _opened(engine: "TableEngine", u_t: np.ndarray, u_pre: np.ndarray, leaf: np.ndarray, bound: int) -> tuple[np.ndarray, np.ndarray]:
+    """The next generation's units: the failed-start prefixes each unit's start outcomes
+    open (in the units' order, each unit's in order of its outcomes)."""
+    n_leaves = len(engine.trees.leaves)
+    up, pinv = _grouped(u_pre * n_leaves + leaf)
+    flat: list[int] = []
+    count = np.zeros(len(up), dtype=np.int64)
+    for k, pv in enumerate(up.tolist()):
+        pre, lf = engine.prefixes[pv // n_leaves], engine.trees.leaves[pv % n_leaves]
+        outcomes, fails = lf[2], lf[3]
+        if len(fails) < bound:
+            kids = [engine.prefix(outcomes[:i] + (False,)) for i in range(len(pre), len(outcomes))]
+            flat += kids
+            count[k] = len(kids)
+    reps = count[pinv]
+    order = np.flatnonzero(reps)
+    if not len(order):
+        return order, order
+    reps = reps[order]
+    start = (np.cumsum(count) - count)[pinv[order]]
+    within = np.arange(int(reps.sum())) - np.repeat(np.cumsum(reps) - reps, reps)
+    return np.repeat(u_t[order], reps), np.array(flat, dtype=np.int64)[np.repeat(start, reps) + within]
+
+
+class _BatchCounts:
+    """The counters of a search (:class:`CheckResult`'s and the transitions), batch by batch."""
+
+    def __init__(self, engine: "TableEngine") -> None:
+        self.res, self.events, self.env, self.trees = engine.res, engine.events, engine.env, engine.trees
+        self.transitions = 0
+
+    def count_batch(self, units: "Units", sc: np.ndarray, cut_t: int, stop_unit: int) -> None:
+        """Count into ``res`` what the direct engine counts of a batch, up to the cut."""
+        res, tr, ev, env = self.res, units.tr, self.events, self.env
+        U_t, U_leaf, U_code = units.t, units.leaf, units.code
+        T = len(tr.env2)
+        if stop_unit >= 0:
+            n_inc = stop_unit + 1
+        else:
+            n_inc = int(np.searchsorted(U_t, cut_t, side="right"))  # (units are in transition order)
+        self.transitions += n_inc
+        leaf_counts = np.bincount(U_leaf[:n_inc], minlength=len(self.trees.leaves))
+        for lf_id in np.flatnonzero(leaf_counts).tolist():
+            n = int(leaf_counts[lf_id])
+            for name in self.trees.leaves[lf_id][4]:
+                res.branches[name] += n
+        n_moved = n_inc - 1 if stop_unit >= 0 else n_inc  # the stopping unit is not counted as a change
+        t = U_t[:n_moved]
+        changed = U_code[:n_moved] != np.take(np.take(sc, tr.pos), t)
+        kinds = np.take(np.take(ev.kind_of, tr.ev), t)
+        for k, n in enumerate(np.bincount(kinds, weights=changed, minlength=len(EVENT_KINDS)).tolist()):
+            if n:
+                res.changed[EVENT_KINDS[k]] += int(n)
+        last_t = min(cut_t, T - 1)
+        _count(res.enabled, EVENT_KINDS, ev.kind_of[tr.ev[: last_t + 1]], len(EVENT_KINDS))
+        n_states = int(tr.pos[last_t]) + 1 if cut_t < T else len(units.ids)
+        _count(res.rules, env.ctxs, tr.ctx[:n_states], env.C)
 
 
 class _Explored(Sequence[Key]):

@@ -41,6 +41,13 @@ class Grow:
         self.n += 1
         return self.n - 1
 
+    def extend(self, k: int) -> int:
+        """Append ``k`` fill values; returns the index of the first."""
+        while self.n + k > len(self.a):
+            self.a = np.concatenate([self.a, np.full(self.a.shape, self.fill, dtype=np.int64)])
+        self.n += k
+        return self.n - k
+
 
 class Interned(list):
     """Distinct values numbered in order of first appearance: ``numbers(x)`` is x's number,

@@ -16,9 +16,13 @@ from typing import Callable
 import numpy as np
 
 from desmon.errors import NondeterminismError, TableUnsupported
+from desmon.verify.table.hashing import IntTable
 from desmon.verify.table.tables import AnswerTables, Grow, Interned
 
-__all__ = ["DecisionTrees"]
+__all__ = ["DecisionTrees", "DENSE_ANSWERS"]
+
+#: a check node with at most this many answer codes keeps its children in an array
+DENSE_ANSWERS = 64
 
 
 class DecisionTrees:
@@ -35,9 +39,18 @@ class DecisionTrees:
         self.node_mult = Grow((1024, P))
         self.node_len = Grow((1024,))
         self.edges: dict[int, int] = {}
-        self._ekeys = np.zeros(0, dtype=np.int64)
-        self._echild = np.zeros(0, dtype=np.int64)
-        self._new_edges: dict[int, int] = {}  # edges added since the arrays were last merged
+        # a check node's children: with at most DENSE_ANSWERS answer codes, kids[kid_base[node] + code]
+        # (-1: no branch yet); beyond, in the hash table of (node << 40 | code) edges
+        self.kid_base = Grow((1024,), -1)
+        # a check node about one platform: its child per digit of that platform (the answer
+        # table and the answer's branch in one), digit_kids[digit_base[node] + digit]
+        self.digit_base = Grow((1024,), -1)
+        self.digit_kids = Grow((1024,), -1)
+        self.node_p0 = Grow((1024,))
+        self.kids = Grow((1024,), -1)
+        self.wide_edges = IntTable()
+        self._new_roots: dict[int, int] = {}
+        self.root_nodes = IntTable()
         self.leaves = Interned()
         self.leaf_sys: list[int] = []  # a reaction leaf's next system part (-1: an invariants leaf)
         self.leaf_inst: list[bool] = []  # a reaction leaf with an instantaneous violation
@@ -53,12 +66,11 @@ class DecisionTrees:
         return i
 
     def _node(self) -> int:
+        for g in (self.kid_base, self.digit_base, self.node_p0, self.node_base, self.node_plat, self.node_mult):
+            g.extend(1)  # (their fill values)
         self.node_desc.append(None)
-        self.node_base.append(0)
-        self.node_plat.append(0)
-        self.node_mult.append(0)
         self.node_len.append(1)
-        n = self.node_leaf.append(-2)
+        n = self.node_leaf.extend(1)
         if n >= 1 << 22:
             raise TableUnsupported("table engine: more than 4 million decision nodes; run with --engine direct")
         return n
@@ -66,7 +78,7 @@ class DecisionTrees:
     def insert(self, root: int, obs: list[tuple[tuple, int]], leaf: int) -> None:
         node = self.roots.get(root)
         if node is None:
-            node = self.roots[root] = self._node()
+            node = self.roots[root] = self._new_roots[root] = self._node()
         for desc, code in obs:
             state = self.node_leaf.a[node]
             if state == -2:
@@ -83,6 +95,11 @@ class DecisionTrees:
                 self.node_len.a[node] = len(parts)
                 if mult > 1 << 40:
                     raise TableUnsupported("table engine: a requirement check with too many distinct answers; run with --engine direct")
+                self.node_p0.a[node] = parts[0][0]
+                if len(parts) == 1:
+                    self.digit_base.a[node] = self.digit_kids.extend(self.tables.env.R[parts[0][0]])
+                if mult <= DENSE_ANSWERS:
+                    self.kid_base.a[node] = self.kids.extend(mult)
                 self.width = max(self.width, len(parts))
             elif state != -1 or self.node_desc[node] != desc:
                 raise NondeterminismError(
@@ -92,7 +109,13 @@ class DecisionTrees:
             ek = (node << 40) | code
             child = self.edges.get(ek)
             if child is None:
-                child = self.edges[ek] = self._new_edges[ek] = self._node()
+                child = self.edges[ek] = self._node()
+                self._digit_branch(node, code, child)
+                kb = int(self.kid_base.a[node])
+                if kb >= 0:
+                    self.kids.a[kb + code] = child
+                else:
+                    self.wide_edges.add(np.array([ek], dtype=np.int64), np.array([child], dtype=np.int64))
             node = child
         state = self.node_leaf.a[node]
         if state == -2:
@@ -103,68 +126,115 @@ class DecisionTrees:
                 "it is not a function of what it reads through its ports"
             )
 
+    def _digit_branch(self, node: int, code: int, child: int) -> None:
+        """Enter ``child`` for every digit of a one-platform node that answers ``code``."""
+        db = int(self.digit_base.a[node])
+        if db >= 0:
+            base = int(self.node_base.a[node, 0])
+            for d, c in enumerate(self.tables.ok.a[base: base + self.tables.env.R[int(self.node_p0.a[node])]].tolist()):
+                if c == code:
+                    self.digit_kids.a[db + d] = child
+
+    def _root_nodes(self, roots: np.ndarray, record: Callable[[int], None]) -> np.ndarray:
+        """The root node of each unit, recording a run for each root met for the first time
+        (in order of root key, with its first unit)."""
+        if self._new_roots:
+            self.root_nodes.add(np.fromiter(self._new_roots, dtype=np.int64), np.fromiter(self._new_roots.values(), dtype=np.int64))
+            self._new_roots = {}
+        node = self.root_nodes.get(roots)
+        missing = np.flatnonzero(node < 0)
+        if missing.size:
+            _uk, first = np.unique(roots[missing], return_index=True)
+            for u in missing[first].tolist():
+                self.go_on()
+                record(u)
+            self.root_nodes.add(np.fromiter(self._new_roots, dtype=np.int64), np.fromiter(self._new_roots.values(), dtype=np.int64))
+            self._new_roots = {}
+            node[missing] = self.root_nodes.get(roots[missing])
+        return node
+
     def walk(self, roots: np.ndarray, rows: np.ndarray, loc: np.ndarray, record: Callable[[int], None]) -> np.ndarray:
         """Leaf ids for units with root keys ``roots`` and platform digits ``loc[rows]``;
         ``record(unit)`` runs the real core for a unit whose answers leave the trees."""
         go_on = self.go_on  # the budget, between two recorded runs and two rounds
-        uk, first, inv = np.unique(roots, return_index=True, return_inverse=True)
-        top = np.empty(len(uk), dtype=np.int64)
-        for i, k in enumerate(uk.tolist()):
-            n = self.roots.get(k)
-            if n is None:
-                go_on()
-                record(int(first[i]))
-                n = self.roots[k]
-            top[i] = n
-        node = top[inv]
-        active = np.flatnonzero(self.node_leaf.a[node] < 0)
-        while active.size:
+        node = self._root_nodes(roots, record)
+        out = self.node_leaf.a[node]
+        P = loc.shape[1]
+        flat_loc = loc.ravel()
+        # (np.take and index arrays, not boolean masks: several times faster on these sizes)
+        idx = np.flatnonzero(out < 0)  # the units still at a check node
+        nd, rp = np.take(node, idx), np.take(rows, idx) * P
+        while idx.size:
             go_on()
-            nd = node[active]
-            r = rows[active]
-            ok = self.tables.ok.a
-            base, plat, mult = self.node_base.a, self.node_plat.a, self.node_mult.a
-            # the answer code of each unit's check: most checks ask about one platform,
-            # so position j is computed only for the units whose check has more
-            code = ok[base[nd, 0] + loc[r, plat[nd, 0]]] * mult[nd, 0]
-            if self.width > 1:
-                wide = np.flatnonzero(self.node_len.a[nd] > 1)
-                for j in range(1, self.width):
-                    if not wide.size:
-                        break
-                    w = nd[wide]
-                    code[wide] += ok[base[w, j] + loc[r[wide], plat[w, j]]] * mult[w, j]
-                    wide = wide[self.node_len.a[w] > j + 1]
-            ek = (nd << 40) | code
-            child = self._lookup(ek)
-            missed = np.flatnonzero(child < 0)
-            if missed.size:
-                _again, firsts = np.unique(ek[missed], return_index=True)
-                for m in np.sort(firsts):
-                    go_on()
-                    record(int(active[missed[m]]))
-                child[missed] = self._lookup(ek[missed])
-                if (child[missed] < 0).any():
-                    raise TableUnsupported(  # pragma: no cover - an unobserved rewrite of facts, or a bug in the engine
-                        "table engine: a per-platform answer disagrees with the real requirement check; run with --engine direct"
-                    )
-            node[active] = child
-            active = active[self.node_leaf.a[child] < 0]
-        return self.node_leaf.a[node]
-
-    def _lookup(self, ek: np.ndarray) -> np.ndarray:
-        """The child node of each (node << 40 | answer code), -1 where the trees have none yet."""
-        if self._new_edges:
-            nk = np.array(sorted(self._new_edges), dtype=np.int64)
-            nv = np.array([self._new_edges[k] for k in nk.tolist()], dtype=np.int64)
-            at = np.searchsorted(self._ekeys, nk)
-            self._ekeys = np.insert(self._ekeys, at, nk)
-            self._echild = np.insert(self._echild, at, nv)
-            self._new_edges = {}
-        out = np.full(len(ek), -1, dtype=np.int64)
-        if len(self._ekeys):
-            pos = np.searchsorted(self._ekeys, ek)
-            np.minimum(pos, len(self._ekeys) - 1, out=pos)
-            hit = self._ekeys[pos] == ek
-            out[hit] = self._echild[pos[hit]]
+            child = self._step(nd, rp, flat_loc)
+            if child.min() < 0:
+                self._record_missed(child, idx, nd, rp, flat_loc, record)
+            lf = np.take(self.node_leaf.a, child)
+            out[idx] = lf  # final for the units at a leaf, overwritten later for the others
+            keep = np.flatnonzero(lf < 0)
+            if len(keep) < len(lf):
+                idx, nd, rp = np.take(idx, keep), np.take(child, keep), np.take(rp, keep)
+            else:
+                nd = child
         return out
+
+    def _record_missed(self, child: np.ndarray, idx: np.ndarray, nd: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray,
+                       record: Callable[[int], None]) -> None:
+        """Record a run for each distinct missing branch (``child`` -1), with its first unit,
+        and fill in the children the runs added."""
+        missed = np.flatnonzero(child < 0)
+        _again, firsts = np.unique(self._edge_keys(nd[missed], rp[missed], flat_loc), return_index=True)
+        for m in np.sort(firsts).tolist():
+            self.go_on()
+            record(int(idx[missed[m]]))
+        child[missed] = self._step(nd[missed], rp[missed], flat_loc)
+        if (child[missed] < 0).any():
+            raise TableUnsupported(  # pragma: no cover - an unobserved rewrite of facts, or a bug in the engine
+                "table engine: a per-platform answer disagrees with the real requirement check; run with --engine direct"
+            )
+
+    def _step(self, nd: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray) -> np.ndarray:
+        """The child of each check node ``nd`` for its unit's answer (-1: no branch yet):
+        from its platform's digit at a one-platform node, else from the answer code."""
+        db = np.take(self.digit_base.a, nd)
+        at = db + np.take(flat_loc, rp + np.take(self.node_p0.a, nd))
+        if len(db) and db.min() >= 0:
+            return np.take(self.digit_kids.a, at)
+        other = np.flatnonzero(db < 0)
+        at[other] = 0
+        child = np.take(self.digit_kids.a, at)
+        child[other] = self._children(nd[other], rp[other], flat_loc)
+        return child
+
+    def _codes(self, nd: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray) -> np.ndarray:
+        """The answer code of each unit's check at node ``nd`` (``rp``: its row of platform
+        digits times their number): most checks ask about one platform, so position j
+        is computed only for the units whose check has more."""
+        ok = self.tables.ok.a
+        base, plat, mult = self.node_base.a, self.node_plat.a, self.node_mult.a
+        code = ok[base[nd, 0] + flat_loc[rp + plat[nd, 0]]]
+        if self.width > 1:
+            wide = np.flatnonzero(self.node_len.a[nd] > 1)
+            for j in range(1, self.width):
+                if not wide.size:
+                    break
+                w = nd[wide]
+                code[wide] += ok[base[w, j] + flat_loc[rp[wide] + plat[w, j]]] * mult[w, j]
+                wide = wide[self.node_len.a[w] > j + 1]
+        return code
+
+    def _edge_keys(self, nd: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray) -> np.ndarray:
+        return (nd << 40) | self._codes(nd, rp, flat_loc)
+
+    def _children(self, nd: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray) -> np.ndarray:
+        """The child of each check node ``nd`` for its unit's answer, -1 where the trees have none yet."""
+        code = self._codes(nd, rp, flat_loc)
+        kb = self.kid_base.a[nd]
+        wide = np.flatnonzero(kb < 0)
+        if not wide.size:
+            return self.kids.a[kb + code]
+        at = kb + code
+        at[wide] = 0
+        child = self.kids.a[at]
+        child[wide] = self.wide_edges.get((nd[wide] << 40) | code[wide])
+        return child

@@ -1,0 +1,103 @@
+"""The benchmarks' goals in one table, their small configurations, and the RESULT line.
+
+Every ``bench/bench_*.py`` ends its output with one line ``RESULT key=value ...``;
+:data:`GOALS` says which of those figures has a goal (the issue that set it in the
+note), :data:`QUICK` the options of each bench's small configuration (``python -m
+bench --quick``, ``tests/test_benches.py``). ``python -m bench`` (:mod:`bench.__main__`)
+runs them and compares.
+"""
+
+from __future__ import annotations
+
+import operator
+from typing import Callable, NamedTuple
+
+__all__ = ["Goal", "GOALS", "QUICK", "BENCHES", "parse_result", "missed", "BenchError"]
+
+
+class BenchError(Exception):
+    """A bench whose output has no RESULT line to compare (it is broken)."""
+
+
+class Goal(NamedTuple):
+    key: str  # the RESULT key
+    op: str  # ">=", "<=", "<" or ">"
+    value: float
+    note: str = ""
+
+    def met(self, figure: float) -> bool:
+        return _OPS[self.op](figure, self.value)
+
+    def __str__(self) -> str:
+        return f"{self.key} {self.op} {self.value:g}"
+
+
+_OPS: dict[str, Callable[[float, float], bool]] = {">=": operator.ge, "<=": operator.le, "<": operator.lt, ">": operator.gt}
+
+#: bench module -> the goals of its RESULT figures (on its full configuration)
+GOALS: dict[str, tuple[Goal, ...]] = {
+    "bench_analyze": (Goal("build_ratio", "<=", 2, "issue 25: the chain's build at most twice the checker's exploration"),),
+    "bench_sim": (
+        Goal("x_real_time", ">=", 5000, "issue 27: the 8 h robot day at 5,000x real time or more"),
+        Goal("ratio_bare", "<=", 100, "issue 27: at most 100x the bare SimPy cost of the same events"),
+        Goal("signals_off_s", "<", 1.5, "issue 27: the day with signals off under 1.5 s"),
+    ),
+    "bench_verify": (
+        Goal("states_per_s", ">=", 100_000, "issue 27: the fallback-heavy model at 100,000 states/s on one core"),
+        Goal("bytes_per_state", "<=", 150, "issue 27: at most 150 bytes of resident memory per state"),
+    ),
+    "bench_sweep": (
+        Goal("speedup", ">=", 1.8, "2 Dask workers vs 1 on 2 idle cores"),
+        Goal("overhead", "<", 0.05, "Dask vs the bare loop"),
+    ),
+    "bench_validity": (
+        Goal("seconds", "<", 1.0, "issue 16: acceptable sets of every spec"),
+        Goal("reasons_max_ms", "<", 50.0, "issue 16: every reason for the slowest spec"),
+    ),
+}
+
+#: bench module -> its options in the small configuration (a smoke run of seconds)
+QUICK: dict[str, tuple[str, ...]] = {
+    "bench_analyze": ("--quick",),
+    "bench_detectors": ("--trials", "10", "--hours", "0.02"),
+    "bench_fleet": ("--robots", "3", "--edges", "1", "--hours", "0.1"),
+    "bench_preferences": ("--quick",),
+    "bench_sim": ("--until", "600"),
+    "bench_sweep": ("--hours", "0.02", "--seeds", "1"),
+    "bench_table_prefs": ("--quick", "--repeat", "1"),
+    "bench_upgrade": ("--seeds", "1", "--hours", "0.2"),
+    "bench_validity": ("--platforms", "300", "--specs", "30", "--scalar-specs", "5", "--reason-specs", "2", "--events", "20"),
+    "bench_verify": ("--quick",),
+}
+
+#: every bench, in the order ``python -m bench`` runs them
+BENCHES: tuple[str, ...] = tuple(sorted(QUICK))
+
+
+def parse_result(output: str) -> dict[str, float | str]:
+    """The figures of a bench's last line ``RESULT key=value ...`` (numbers as floats)."""
+    lines = [ln for ln in output.splitlines() if ln.strip()]
+    if not lines or not lines[-1].startswith("RESULT "):
+        raise BenchError("its output does not end with a RESULT line" + (f" (last line: {lines[-1][:120]!r})" if lines else " (no output)"))
+    out: dict[str, float | str] = {}
+    for item in lines[-1].split()[1:]:
+        key, eq, value = item.partition("=")
+        if not eq or not key:
+            raise BenchError(f"RESULT item {item!r} is not key=value")
+        try:
+            out[key] = float(value)
+        except ValueError:
+            out[key] = value
+    return out
+
+
+def missed(bench: str, figures: dict[str, float | str]) -> list[str]:
+    """The goals of ``bench`` its figures miss (or lack), one line each."""
+    out = []
+    for goal in GOALS.get(bench, ()):
+        figure = figures.get(goal.key)
+        if not isinstance(figure, float):
+            out.append(f"{bench}: {goal}: no figure {goal.key} in its RESULT line")
+        elif not goal.met(figure):
+            out.append(f"{bench}: {goal}: measured {figure:g}")
+    return out

@@ -1,0 +1,57 @@
+"""Every benchmark runs in its small configuration and ends with a RESULT line that
+carries the figures its goals name (``bench/goals.py``): a broken bench fails here.
+No timing is asserted (the goals are ``python -m bench``'s to judge)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from bench.goals import BENCHES, GOALS, QUICK, BenchError, Goal, missed, parse_result
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_every_bench_module_has_a_small_configuration():
+    modules = sorted(p.stem for p in (ROOT / "bench").glob("bench_*.py"))
+    assert modules == sorted(BENCHES)
+    assert set(GOALS) <= set(QUICK)
+
+
+def test_result_line_parses_numbers_and_words():
+    out = "some figures\nRESULT states_per_s=120000 bytes_per_state=90.5 engine=table\n\n"
+    assert parse_result(out) == {"states_per_s": 120000.0, "bytes_per_state": 90.5, "engine": "table"}
+
+
+@pytest.mark.parametrize("out", ["", "figures only\n", "RESULT x=1\nmore after it\n", "RESULT novalue\n"])
+def test_a_missing_or_malformed_result_line_is_an_error(out):
+    with pytest.raises(BenchError):
+        parse_result(out)
+
+
+def test_missed_goals_name_the_figure():
+    assert missed("bench_verify", {"states_per_s": 150_000.0, "bytes_per_state": 100.0}) == []
+    lines = missed("bench_verify", {"states_per_s": 50_000.0})
+    assert len(lines) == 2 and "states_per_s >= 100000: measured 50000" in lines[0] and "no figure bytes_per_state" in lines[1]
+    assert Goal("t", "<", 1.5).met(1.4) and not Goal("t", "<", 1.5).met(1.5)
+
+
+def test_python_m_bench_refuses_an_unknown_bench():
+    proc = subprocess.run([sys.executable, "-m", "bench", "--quick", "bench_nothing"], cwd=ROOT, capture_output=True, text=True)
+    assert proc.returncode == 2 and "unknown bench bench_nothing" in proc.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", BENCHES)
+def test_bench_runs_small_and_reports_its_figures(name):
+    if "RESULT" not in (ROOT / "bench" / f"{name}.py").read_text():
+        pytest.skip(f"{name} prints no RESULT line yet")  # bench_sim's comes with issue 27 part 1
+    proc = subprocess.run([sys.executable, "-m", f"bench.{name}", *QUICK[name]], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    figures = parse_result(proc.stdout)
+    assert figures
+    for goal in GOALS.get(name, ()):
+        assert isinstance(figures.get(goal.key), float), f"{name}'s RESULT line lacks {goal.key}"
