@@ -133,8 +133,12 @@ def test_undetected_slips_count_each_detectors_miss_probability():
 
 @pytest.mark.slow
 def test_a_second_force_sensor_changes_the_chain_not_the_method():
-    one = analyze(_shift(hours="0.25"), miss=NO_MISS, steady=False)
-    two = analyze(_shift(hours="0.25", force_sensors="2"), miss=NO_MISS, steady=False)
+    def quick(**params: str):  # no start failures and no monitor delays: a smaller chain, the same question
+        sc = _shift(hours="0.25", **params)
+        return replace(sc, world=replace(sc.world, recognition_delay=0.0, heartbeat_timeout=0.0))
+
+    one = analyze(quick(), miss=NO_MISS, steady=False, start_failure_p=0.0)
+    two = analyze(quick(force_sensors="2"), miss=NO_MISS, steady=False, start_failure_p=0.0)
     assert two.states > one.states
     assert two.exposure_s_per_mission < one.exposure_s_per_mission
 
@@ -169,12 +173,12 @@ def test_the_json_has_the_measures_and_the_rates(tmp_path, capsys):
 
 # -- agreement with the simulation -----------------------------------------------------------------
 SEEDS = range(40)
-HOUR = 3600.0
+HOUR = 1800.0  # half an hour of each seed: enough faults to test, quick enough for CI
 
 
 @functools.lru_cache(maxsize=None)
 def _scenario(name: str):
-    return _shift(hours="1") if name == "coffee_shift" else load_scenario(CRASH, params={"stochastic": "True"})
+    return _shift(hours="0.5") if name == "coffee_shift" else load_scenario(CRASH, params={"stochastic": "True"})
 
 
 @functools.lru_cache(maxsize=None)
@@ -233,3 +237,27 @@ def test_the_deployer_sits_between_the_best_and_worst_placements_and_its_own_val
     assert gap.min_s_per_hour <= gap.exposure_s_per_hour <= gap.max_s_per_hour
     assert gap.exposure_s_per_hour == pytest.approx(own.exposure_s_per_hour, rel=1e-6)
     assert gap.to_json()["above_optimal"] >= 0
+
+
+# -- the simulation's exponential timing, as a user runs it --------------------------------------------
+def test_run_timing_options_refuse_nonsense_in_one_line(capsys):
+    assert main(["run", SHIFT, "--phases", "3", "--until", "60", "--no-progress"]) == 2
+    assert "add --timing exponential" in capsys.readouterr().err
+    assert main(["run", SHIFT, "--timing", "exponential", "--phases", "65", "--until", "60", "--no-progress"]) == 2
+    assert "world: phases = 65" in capsys.readouterr().err
+
+
+def test_run_under_exponential_timing_is_the_markov_world(capsys):
+    assert main(["run", SHIFT, "-p", "faults=False", "--timing", "exponential", "--phases", "2", "--no-signals", "--until", "600",
+                 "--seed", "3", "--json", "--no-progress"]) == 0
+    m = json.loads(capsys.readouterr().out)
+    values = simulated_exposure(_shift(faults="False"), "desmon", [3], 600.0, phases=2)
+    assert m["metrics"]["unmonitored_exposure_s"] == pytest.approx(values[0])
+
+
+def test_a_world_refuses_an_unknown_timing():
+    from desmon.errors import ScenarioError
+
+    sc = _shift(faults="False")
+    with pytest.raises(ScenarioError, match="world: timing = 'random'"):
+        replace(sc.world, timing="random")

@@ -574,32 +574,25 @@ def expand_task(world: World, horizon: float, seed: int = 0) -> tuple[Segment, .
     repeats and each step lasts an Erlang-``phases`` time of mean its duration, drawn
     from ``seed``."""
     if world.timing == "exponential":
-        return _random_task(world, horizon, seed)
+        rng = random.Random(f"{seed}:task")
+        k = world.phases
+
+        def duration(step: Step) -> float:
+            return sum(rng.expovariate(k / step.duration) for _ in range(k))
+    else:
+        def duration(step: Step) -> float:
+            return step.duration
     out: list[Segment] = []
     t = 0.0
     while t < horizon:
         for step in world.task:
             if t >= horizon:
                 break
-            out.append(Segment(step.action, float(t), float(step.duration)))
-            t += step.duration
-        if not world.repeat:
-            break
-    return tuple(out)
-
-
-def _random_task(world: World, horizon: float, seed: int) -> tuple[Segment, ...]:
-    rng = random.Random(f"{seed}:task")
-    k = world.phases
-    out: list[Segment] = []
-    t = 0.0
-    while t < horizon:
-        for step in world.task:
-            if t >= horizon:
-                break
-            d = sum(rng.expovariate(k / step.duration) for _ in range(k))
+            d = duration(step)
             out.append(Segment(step.action, float(t), float(d)))
             t += d
+        if not world.repeat and world.timing != "exponential":
+            break
     return tuple(out)
 
 
