@@ -109,6 +109,12 @@ class Chain:
         exit_ = np.asarray(off.sum(axis=1)).ravel()
         return (off - sp.diags(exit_)).tocsr(), exit_
 
+    def blocks(self) -> np.ndarray:
+        """A block number per state: states with the same physically broken components
+        (faults are the chain's slow events; everything else moves within a block)."""
+        ids: dict[tuple, int] = {}
+        return np.fromiter((ids.setdefault((s.phys_failed, s.phys_down), len(ids)) for s in self.states), dtype=np.int64, count=self.n)
+
     def describe(self, i: int) -> str:
         """One line for state ``i``: the task step, what is known, deployed and down."""
         s = self.states[i]

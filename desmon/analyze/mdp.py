@@ -150,11 +150,11 @@ def _generator(mdp: _MDP, policy: list[list[int]]):  # type: ignore[no-untyped-d
     return (off - sp.diags(np.asarray(off.sum(axis=1)).ravel())).tocsr()
 
 
-def _evaluate(Q, r: np.ndarray, describe) -> tuple[float, np.ndarray]:  # type: ignore[no-untyped-def]
+def _evaluate(Q, r: np.ndarray, describe, blocks: np.ndarray) -> tuple[float, np.ndarray]:  # type: ignore[no-untyped-def]
     """The gain (long-run reward per second) and a bias vector of the policy's chain."""
     import scipy.sparse.linalg as sla
 
-    pi, _res, _m = steady_state(Q, describe)
+    pi, _res, _m = steady_state(Q, describe, blocks)
     g = float(pi @ r)
     ref = int(np.argmax(pi))
     keep = np.flatnonzero(np.arange(Q.shape[0]) != ref)
@@ -184,10 +184,10 @@ def _improve(mdp: _MDP, policy: list[list[int]], h: np.ndarray, sign: float) -> 
     return changed
 
 
-def _optimise(mdp: _MDP, r: np.ndarray, sign: float, describe) -> tuple[float, list[list[int]], np.ndarray, int]:  # type: ignore[no-untyped-def]
+def _optimise(mdp: _MDP, r: np.ndarray, sign: float, describe, blocks: np.ndarray) -> tuple[float, list[list[int]], np.ndarray, int]:  # type: ignore[no-untyped-def]
     policy = [[0] * len(races) for races in mdp.races]
     for it in range(1, 100):
-        g, h = _evaluate(_generator(mdp, policy), r, describe)
+        g, h = _evaluate(_generator(mdp, policy), r, describe, blocks)
         if not _improve(mdp, policy, h, sign):
             return g, policy, h, it
     raise AnalysisError("policy iteration did not settle in 100 rounds")
@@ -209,10 +209,11 @@ def optimality_gap(scenario: Scenario, deployer: Any = "desmon", *, phases: int 
     def describe(i: int) -> str:
         return holder.describe(i)
 
+    blocks = holder.blocks()
     own = [[0] * len(races) for races in mdp.races]
-    g_own, _h = _evaluate(_generator(mdp, own), r, describe)
-    g_min, best, h_min, it1 = _optimise(mdp, r, 1.0, describe)
-    g_max, _worst, _h, it2 = _optimise(mdp, r, -1.0, describe)
+    g_own, _h = _evaluate(_generator(mdp, own), r, describe, blocks)
+    g_min, best, h_min, it1 = _optimise(mdp, r, 1.0, describe, blocks)
+    g_max, _worst, _h, it2 = _optimise(mdp, r, -1.0, describe, blocks)
     differs = None
     for i, races in enumerate(mdp.races):  # breadth-first order: the first state where the best choice is strictly better
         for k, (_rate, event, alts, cmds) in enumerate(races):

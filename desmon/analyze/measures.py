@@ -127,7 +127,7 @@ def _p0(chain: Chain) -> np.ndarray:
 
 
 def _long_run(chain: Chain, Q: Any) -> tuple[float, float, float, list[tuple[float, str]]]:
-    pi, residual, _method = steady_state(Q, chain.describe)
+    pi, residual, _method = steady_state(Q, chain.describe, chain.blocks())
     frac = float(pi @ chain.unmonitored)
     slips = float(pi @ chain.undetected) * 3600.0
     contrib = pi * chain.unmonitored * 3600.0
