@@ -24,12 +24,18 @@ class RepositoryQuery:
     (:class:`desmon.deployment.ports.ChecksPort`, chosen by whoever builds the port;
     None: the default memoised checks)."""
 
-    #: platform states are rebuilt on every call: nothing to memoise on their identity
-    validity_memo = None
-
     def __init__(self, repo: Repository, checks: Any = None) -> None:
         self.repo = repo
         self.checks = checks
+        #: validity answers memoised on the identity of :meth:`platform_states`' tuple,
+        #: which is the same object while no platform's facts changed (see
+        #: :func:`desmon.deployment.validity.validity_for`)
+        self.validity_memo: dict | None = {}
+        # platform -> (the repository stamps it was read at, its state)
+        self._state_memo: dict[str, tuple[tuple[int, ...], PlatformState]] = {}
+        self._states: tuple[PlatformState, ...] = ()
+        # graph -> (the stamps of its deployment node and edges, the spec)
+        self._spec_memo: dict[str, tuple[tuple[int, ...], DeploymentSpec | None]] = {}
 
     @property
     def _g(self):  # type: ignore[no-untyped-def]
@@ -48,14 +54,28 @@ class RepositoryQuery:
 
     # -- the algorithms' queries ---------------------------------------------------------
     def deployment_information(self, graph: str) -> DeploymentSpec | None:
-        """The deployment node RESOLVING ``graph`` as a spec, or None (Alg. 1 line 3)."""
+        """The deployment node RESOLVING ``graph`` as a spec, or None (Alg. 1 line 3).
+
+        Memoised while no change touched the graph's node, its deployment node or their
+        edges: the same spec object comes back for the same facts."""
         gid = node_id(L.PERCEPTION_GRAPH, graph)
-        if gid not in self._g:
+        touched = self.repo.touched
+        stamp = touched.get(gid)
+        if stamp is None:
             return None
         deps = self._in(gid, L.RESOLVES)
         if not deps:
             return None
         dep = deps[0]
+        key = (stamp, touched[dep], *(touched[r] for r in self._out(dep, L.REQUIRES)))
+        hit = self._spec_memo.get(graph)
+        if hit is not None and hit[0] == key:
+            return hit[1]
+        spec = self._read_spec(graph, dep)
+        self._spec_memo[graph] = (key, spec)
+        return spec
+
+    def _read_spec(self, graph: str, dep: str) -> DeploymentSpec:
         reqs = tuple(
             self._g.nodes[r]["requirement"] for r in sorted(self._out(dep, L.REQUIRES), key=lambda r: self._g.nodes[r]["order"])
         )
@@ -83,14 +103,27 @@ class RepositoryQuery:
         return spec.consumption() if spec is not None else ()
 
     def platform_state(self, platform: str) -> PlatformState:
+        """The run-time facts of ``platform``; memoised while no change touched its node,
+        its devices or the deployments on it (the same object for the same facts)."""
         pid = node_id(L.PLATFORM, platform)
-        if pid not in self._g:
+        touched = self.repo.touched
+        stamp = touched.get(pid)
+        if stamp is None or pid not in self._g:
             raise QueryError(f"unknown platform {platform!r}")
+        devs = self._out(pid, L.HAS_DEVICE)
+        deps = self._in(pid, L.DEPLOYED_ON)
+        key = (stamp, *(touched[d] for d in devs), -1, *(touched[d] for d in deps))
+        hit = self._state_memo.get(platform)
+        if hit is not None and hit[0] == key:
+            return hit[1]
+        state = self._read_state(pid, devs, deps)
+        self._state_memo[platform] = (key, state)
+        return state
+
+    def _read_state(self, pid: str, devs: list[str], deps: list[str]) -> PlatformState:
         data = self._g.nodes[pid]
-        devices = tuple(
-            self._g.nodes[d]["device"] for d in sorted(self._out(pid, L.HAS_DEVICE), key=lambda d: self._g.nodes[d]["order"])
-        )
-        deployed = tuple(sorted((self._g.nodes[d]["name"], self._consumption(d)) for d in self._in(pid, L.DEPLOYED_ON)))
+        devices = tuple(self._g.nodes[d]["device"] for d in sorted(devs, key=lambda d: self._g.nodes[d]["order"]))
+        deployed = tuple(sorted((self._g.nodes[d]["name"], self._consumption(d)) for d in deps))
         return PlatformState(
             platform=data["platform"],
             up=bool(data["up"]),
@@ -101,7 +134,13 @@ class RepositoryQuery:
 
     def platform_states(self) -> tuple[PlatformState, ...]:
         """Every platform's run-time facts, in declaration order."""
-        return tuple(self.platform_state(data["name"]) for _nid, data in self.repo.nodes(L.PLATFORM))
+        nodes = self._g.nodes
+        states = tuple(self.platform_state(nodes[pid]["name"]) for pid in self.repo.node_ids(L.PLATFORM))
+        last = self._states
+        if len(last) == len(states) and all(a is b for a, b in zip(last, states)):
+            return last  # the same facts: the same tuple (the validity memo's key)
+        self._states = states
+        return states
 
     def deployed_on(self, graph: str) -> tuple[str, ...]:
         dep = node_id(L.DEPLOYMENT, graph)
@@ -130,23 +169,23 @@ class RepositoryQuery:
         return str(self._g.nodes[graphs[0]]["name"])
 
     def context(self) -> str | None:
-        for _nid, _data in self.repo.nodes(L.ROBOT):
-            ctx = self._out(_nid, L.IN_CONTEXT)
+        for nid in self.repo.node_ids(L.ROBOT):
+            ctx = self._out(nid, L.IN_CONTEXT)
             return str(self._g.nodes[ctx[0]]["name"]) if ctx else None
         return None
 
     def deployments(self) -> tuple[tuple[str, str], ...]:
         """Every active (graph, platform) pair, sorted."""
-        return tuple(
-            sorted((self._g.nodes[s]["name"], self._g.nodes[t]["name"]) for s, t, _d in self.repo.edges(L.DEPLOYED_ON))
-        )
+        nodes = self._g.nodes
+        return tuple(sorted((nodes[s]["name"], nodes[t]["name"]) for s, t, _k in self.repo.labelled(L.DEPLOYED_ON)))
 
     def history(self) -> tuple[tuple[str, str, float, float], ...]:
         """Every stopped deployment as (graph, platform, start, stop), in stop order."""
-        rows = [
-            (self._g.nodes[s]["name"], self._g.nodes[t]["name"], float(d["start"]), float(d["stop"]))
-            for s, t, d in self.repo.edges(L.DEPLOYMENT_HISTORY)
-        ]
+        nodes, edges = self._g.nodes, self._g.edges
+        rows = []
+        for s, t, k in self.repo.labelled(L.DEPLOYMENT_HISTORY):
+            d = edges[s, t, k]
+            rows.append((nodes[s]["name"], nodes[t]["name"], float(d["start"]), float(d["stop"])))
         return tuple(sorted(rows, key=lambda r: (r[3], r[2], r[0], r[1])))
 
     # -- generic ------------------------------------------------------------------------
