@@ -16,6 +16,11 @@ from desmon.repository.store import Repository, node_id
 
 __all__ = ["RepositoryQuery"]
 
+# keys of the answers memoised per repository version (no graph name is a tuple)
+_STATES = ("platform_states",)
+_CONTEXT = ("context",)
+_DEPLOYMENTS = ("deployments",)
+
 
 class RepositoryQuery:
     """Named queries over a :class:`Repository`.
@@ -36,6 +41,16 @@ class RepositoryQuery:
         self._states: tuple[PlatformState, ...] = ()
         # graph -> (the stamps of its deployment node and edges, the spec)
         self._spec_memo: dict[str, tuple[tuple[int, ...], DeploymentSpec | None]] = {}
+        # answers that hold while the repository does not change: (its version, {question: answer})
+        self._now: tuple[int, dict[Any, Any]] = (-1, {})
+
+    def _current(self) -> dict[Any, Any]:
+        """The answers memoised at the repository's current version (emptied when it moved)."""
+        version = self.repo.version
+        now = self._now
+        if now[0] != version:
+            now = self._now = (version, {})
+        return now[1]
 
     @property
     def _g(self):  # type: ignore[no-untyped-def]
@@ -134,19 +149,25 @@ class RepositoryQuery:
 
     def platform_states(self) -> tuple[PlatformState, ...]:
         """Every platform's run-time facts, in declaration order."""
+        current = self._current()
+        states = current.get(_STATES)
+        if states is not None:
+            return states  # type: ignore[no-any-return]
         nodes = self._g.nodes
         states = tuple(self.platform_state(nodes[pid]["name"]) for pid in self.repo.node_ids(L.PLATFORM))
         last = self._states
         if len(last) == len(states) and all(a is b for a, b in zip(last, states)):
-            return last  # the same facts: the same tuple (the validity memo's key)
-        self._states = states
+            states = last  # the same facts: the same tuple (the validity memo's key)
+        self._states = current[_STATES] = states
         return states
 
     def deployed_on(self, graph: str) -> tuple[str, ...]:
-        dep = node_id(L.DEPLOYMENT, graph)
-        if dep not in self._g:
-            return ()
-        return tuple(sorted(self._g.nodes[p]["name"] for p in self._out(dep, L.DEPLOYED_ON)))
+        current = self._current()
+        on = current.get(graph)
+        if on is None:
+            dep = node_id(L.DEPLOYMENT, graph)
+            on = current[graph] = tuple(sorted(self._g.nodes[p]["name"] for p in self._out(dep, L.DEPLOYED_ON))) if dep in self._g else ()
+        return on  # type: ignore[no-any-return]
 
     def is_deployed(self, graph: str, platforms: tuple[str, ...] | None = None) -> bool:
         """isDeployed(g, P): is ``graph`` active on one of ``platforms`` (any, if None)?"""
@@ -169,15 +190,25 @@ class RepositoryQuery:
         return str(self._g.nodes[graphs[0]]["name"])
 
     def context(self) -> str | None:
+        current = self._current()
+        if _CONTEXT in current:
+            return current[_CONTEXT]  # type: ignore[no-any-return]
+        ctx: str | None = None
         for nid in self.repo.node_ids(L.ROBOT):
-            ctx = self._out(nid, L.IN_CONTEXT)
-            return str(self._g.nodes[ctx[0]]["name"]) if ctx else None
-        return None
+            out = self._out(nid, L.IN_CONTEXT)
+            ctx = str(self._g.nodes[out[0]]["name"]) if out else None
+            break
+        current[_CONTEXT] = ctx
+        return ctx
 
     def deployments(self) -> tuple[tuple[str, str], ...]:
         """Every active (graph, platform) pair, sorted."""
-        nodes = self._g.nodes
-        return tuple(sorted((nodes[s]["name"], nodes[t]["name"]) for s, t, _k in self.repo.labelled(L.DEPLOYED_ON)))
+        current = self._current()
+        out = current.get(_DEPLOYMENTS)
+        if out is None:
+            nodes = self._g.nodes
+            out = current[_DEPLOYMENTS] = tuple(sorted((nodes[s]["name"], nodes[t]["name"]) for s, t, _k in self.repo.labelled(L.DEPLOYED_ON)))
+        return out  # type: ignore[no-any-return]
 
     def history(self) -> tuple[tuple[str, str, float, float], ...]:
         """Every stopped deployment as (graph, platform, start, stop), in stop order."""

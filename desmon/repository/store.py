@@ -150,6 +150,11 @@ class Repository:
         return float(self._clock())
 
     @property
+    def version(self) -> int:
+        """The number of changes so far: equal versions, the same graph (readers memoise on it)."""
+        return len(self._log)
+
+    @property
     def log(self) -> tuple[Change, ...]:
         """The append-only change log."""
         return tuple(self._log)
