@@ -39,8 +39,8 @@ class RepositoryQuery:
         # platform -> (the repository stamps it was read at, its state)
         self._state_memo: dict[str, tuple[tuple[int, ...], PlatformState]] = {}
         self._states: tuple[PlatformState, ...] = ()
-        # graph -> (the stamps of its deployment node and edges, the spec)
-        self._spec_memo: dict[str, tuple[tuple[int, ...], DeploymentSpec | None]] = {}
+        # graph -> (what its spec was read from, the declared spec object, the spec)
+        self._spec_memo: dict[str, tuple[tuple[Any, ...], Any, DeploymentSpec]] = {}
         # answers that hold while the repository does not change: (its version, {question: answer})
         self._now: tuple[int, dict[Any, Any]] = (-1, {})
 
@@ -71,23 +71,25 @@ class RepositoryQuery:
     def deployment_information(self, graph: str) -> DeploymentSpec | None:
         """The deployment node RESOLVING ``graph`` as a spec, or None (Alg. 1 line 3).
 
-        Memoised while no change touched the graph's node, its deployment node or their
-        edges: the same spec object comes back for the same facts."""
+        Memoised on what it reads: the deployment node, its declared spec (the object),
+        its REQUIRES targets (and their last changes) and EXECUTABLE_ON targets; the
+        same spec object comes back while they are the same."""
         gid = node_id(L.PERCEPTION_GRAPH, graph)
-        touched = self.repo.touched
-        stamp = touched.get(gid)
-        if stamp is None:
+        if gid not in self._g:
             return None
         deps = self._in(gid, L.RESOLVES)
         if not deps:
             return None
         dep = deps[0]
-        key = (stamp, touched[dep], *(touched[r] for r in self._out(dep, L.REQUIRES)))
+        touched = self.repo.touched
+        reqs = self._out(dep, L.REQUIRES)
+        key = (dep, tuple(reqs), tuple(touched[r] for r in reqs), tuple(self._out(dep, L.EXECUTABLE_ON)))
+        declared = self._g.nodes[dep].get("spec")
         hit = self._spec_memo.get(graph)
-        if hit is not None and hit[0] == key:
-            return hit[1]
+        if hit is not None and hit[0] == key and hit[1] is declared:
+            return hit[2]
         spec = self._read_spec(graph, dep)
-        self._spec_memo[graph] = (key, spec)
+        self._spec_memo[graph] = (key, declared, spec)
         return spec
 
     def _read_spec(self, graph: str, dep: str) -> DeploymentSpec:
