@@ -20,21 +20,38 @@ the figures are printed but not judged.
 The last line is ``RESULT x_real_time=<float> ratio_bare=<float> signals_off_s=<float>
 wall_s=<float> bare_s=<float> events=<int> until_s=<float>``.
 
-Measured with ``python -m bench.bench_sim`` (seed 0, 8 h) on the shared 2-core machine,
-the revision before issue 27 (6640ccc) and this one run in turn, 5 pairs (medians):
+Measured with ``python -m bench.bench_sim`` (seed 0, 8 h), the revision before issue 27
+(6640ccc) and this one run in turn, 5 pairs, medians of the in-process figures each run
+prints. The shared 2-core machine was far from idle (load average about 5), so the
+absolute figures are slow; the pairs' ratios are what carries over:
 
-=====================================  ======================  ======================
-                                        before (6640ccc)        issue 27
-=====================================  ======================  ======================
-robot day, 28,800 sim-s, wall           BEFORE_WALL             AFTER_WALL
-sim-s per wall-s (x real time)          BEFORE_X                AFTER_X
-SimPy events                            25,002                  25,002
-ratio full run / bare SimPy             BEFORE_RATIO            AFTER_RATIO
-same day, signals off                   BEFORE_OFF              AFTER_OFF
-=====================================  ======================  ======================
+=====================================  =================  =================  ==========
+                                        before (6640ccc)   issue 27           ratio
+=====================================  =================  =================  ==========
+robot day, 28,800 sim-s, wall           17.7 s             12.0 s             0.68
+sim-s per wall-s (x real time)          1,626x             2,392x
+SimPy events                            25,002             25,002
+ratio full run / bare SimPy             326x               250x
+same day, signals off                   7.8 s              2.3 s              0.30
+whole process, CPU s (farm of 5 pairs)  16.5 s             10.2 s             0.61
+=====================================  =================  =================  ==========
 
-Where the time goes (cProfile of the day; ``python -m cProfile -s tottime -m bench.bench_sim``):
-PROFILE_NOTE
+The fastest runs seen at quieter moments (load average 1-2.5): this revision 4.9-6.0 s
+for the day (4,800-5,800x real time), signals off 1.2-1.5 s; the revision before
+7.2-9.1 s and 3.2-3.7 s. The goal of at most 100x the bare SimPy cost is not met: the
+signals cost about four times what the rest of the run costs (below).
+
+Where the time goes (cProfile of the day with signals on; ``python -m cProfile -s
+cumtime -m bench.bench_sim``): feeding the detectors about half -- tactile frames a
+third (rendering a quarter: about 20 M cells above the dead-band, each with its own
+normal, kept bit-identical to the pad-by-pad reference), the wrench a twelfth, the
+detectors' scoring a tenth; the deployer's reactions about an eighth, the audit of the
+invariants after every reaction a twelfth, the context monitor's inserts and the
+infrastructure's starts the rest. Before issue 27 the signals-off day spent two thirds
+of its time listing the repository's DEPLOYED_ON edges by scanning every edge,
+DEPLOYMENT_HISTORY included (``Repository.edges``), which grows all day; the repository
+now indexes edges and nodes by label, and the Query port memoises platform states,
+specifications and validity answers while the facts they read are unchanged.
 
 Run: ``python -m bench.bench_sim [--until SECONDS] [--seed S] [--quick]``.
 """
