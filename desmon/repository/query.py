@@ -16,6 +16,11 @@ from desmon.repository.store import Repository, node_id
 
 __all__ = ["RepositoryQuery"]
 
+# keys of the answers memoised per repository version (no graph name is a tuple)
+_STATES = ("platform_states",)
+_CONTEXT = ("context",)
+_DEPLOYMENTS = ("deployments",)
+
 
 class RepositoryQuery:
     """Named queries over a :class:`Repository`.
@@ -24,12 +29,28 @@ class RepositoryQuery:
     (:class:`desmon.deployment.ports.ChecksPort`, chosen by whoever builds the port;
     None: the default memoised checks)."""
 
-    #: platform states are rebuilt on every call: nothing to memoise on their identity
-    validity_memo = None
-
     def __init__(self, repo: Repository, checks: Any = None) -> None:
         self.repo = repo
         self.checks = checks
+        #: validity answers memoised on the identity of :meth:`platform_states`' tuple,
+        #: which is the same object while no platform's facts changed (see
+        #: :func:`desmon.deployment.validity.validity_for`)
+        self.validity_memo: dict | None = {}
+        # platform -> (the repository stamps it was read at, its state)
+        self._state_memo: dict[str, tuple[tuple[int, ...], PlatformState]] = {}
+        self._states: tuple[PlatformState, ...] = ()
+        # graph -> (what its spec was read from, the declared spec object, the spec)
+        self._spec_memo: dict[str, tuple[tuple[Any, ...], Any, DeploymentSpec]] = {}
+        # answers that hold while the repository does not change: (its version, {question: answer})
+        self._now: tuple[int, dict[Any, Any]] = (-1, {})
+
+    def _current(self) -> dict[Any, Any]:
+        """The answers memoised at the repository's current version (emptied when it moved)."""
+        version = self.repo.version
+        now = self._now
+        if now[0] != version:
+            now = self._now = (version, {})
+        return now[1]
 
     @property
     def _g(self):  # type: ignore[no-untyped-def]
@@ -48,7 +69,11 @@ class RepositoryQuery:
 
     # -- the algorithms' queries ---------------------------------------------------------
     def deployment_information(self, graph: str) -> DeploymentSpec | None:
-        """The deployment node RESOLVING ``graph`` as a spec, or None (Alg. 1 line 3)."""
+        """The deployment node RESOLVING ``graph`` as a spec, or None (Alg. 1 line 3).
+
+        Memoised on what it reads: the deployment node, its declared spec (the object),
+        its REQUIRES targets (and their last changes) and EXECUTABLE_ON targets; the
+        same spec object comes back while they are the same."""
         gid = node_id(L.PERCEPTION_GRAPH, graph)
         if gid not in self._g:
             return None
@@ -56,6 +81,18 @@ class RepositoryQuery:
         if not deps:
             return None
         dep = deps[0]
+        touched = self.repo.touched
+        reqs = self._out(dep, L.REQUIRES)
+        key = (dep, tuple(reqs), tuple(touched[r] for r in reqs), tuple(self._out(dep, L.EXECUTABLE_ON)))
+        declared = self._g.nodes[dep].get("spec")
+        hit = self._spec_memo.get(graph)
+        if hit is not None and hit[0] == key and hit[1] is declared:
+            return hit[2]
+        spec = self._read_spec(graph, dep)
+        self._spec_memo[graph] = (key, declared, spec)
+        return spec
+
+    def _read_spec(self, graph: str, dep: str) -> DeploymentSpec:
         reqs = tuple(
             self._g.nodes[r]["requirement"] for r in sorted(self._out(dep, L.REQUIRES), key=lambda r: self._g.nodes[r]["order"])
         )
@@ -83,14 +120,27 @@ class RepositoryQuery:
         return spec.consumption() if spec is not None else ()
 
     def platform_state(self, platform: str) -> PlatformState:
+        """The run-time facts of ``platform``; memoised while no change touched its node,
+        its devices or the deployments on it (the same object for the same facts)."""
         pid = node_id(L.PLATFORM, platform)
-        if pid not in self._g:
+        touched = self.repo.touched
+        stamp = touched.get(pid)
+        if stamp is None or pid not in self._g:
             raise QueryError(f"unknown platform {platform!r}")
+        devs = self._out(pid, L.HAS_DEVICE)
+        deps = self._in(pid, L.DEPLOYED_ON)
+        key = (stamp, *(touched[d] for d in devs), -1, *(touched[d] for d in deps))
+        hit = self._state_memo.get(platform)
+        if hit is not None and hit[0] == key:
+            return hit[1]
+        state = self._read_state(pid, devs, deps)
+        self._state_memo[platform] = (key, state)
+        return state
+
+    def _read_state(self, pid: str, devs: list[str], deps: list[str]) -> PlatformState:
         data = self._g.nodes[pid]
-        devices = tuple(
-            self._g.nodes[d]["device"] for d in sorted(self._out(pid, L.HAS_DEVICE), key=lambda d: self._g.nodes[d]["order"])
-        )
-        deployed = tuple(sorted((self._g.nodes[d]["name"], self._consumption(d)) for d in self._in(pid, L.DEPLOYED_ON)))
+        devices = tuple(self._g.nodes[d]["device"] for d in sorted(devs, key=lambda d: self._g.nodes[d]["order"]))
+        deployed = tuple(sorted((self._g.nodes[d]["name"], self._consumption(d)) for d in deps))
         return PlatformState(
             platform=data["platform"],
             up=bool(data["up"]),
@@ -101,13 +151,25 @@ class RepositoryQuery:
 
     def platform_states(self) -> tuple[PlatformState, ...]:
         """Every platform's run-time facts, in declaration order."""
-        return tuple(self.platform_state(data["name"]) for _nid, data in self.repo.nodes(L.PLATFORM))
+        current = self._current()
+        states = current.get(_STATES)
+        if states is not None:
+            return states  # type: ignore[no-any-return]
+        nodes = self._g.nodes
+        states = tuple(self.platform_state(nodes[pid]["name"]) for pid in self.repo.node_ids(L.PLATFORM))
+        last = self._states
+        if len(last) == len(states) and all(a is b for a, b in zip(last, states)):
+            states = last  # the same facts: the same tuple (the validity memo's key)
+        self._states = current[_STATES] = states
+        return states
 
     def deployed_on(self, graph: str) -> tuple[str, ...]:
-        dep = node_id(L.DEPLOYMENT, graph)
-        if dep not in self._g:
-            return ()
-        return tuple(sorted(self._g.nodes[p]["name"] for p in self._out(dep, L.DEPLOYED_ON)))
+        current = self._current()
+        on = current.get(graph)
+        if on is None:
+            dep = node_id(L.DEPLOYMENT, graph)
+            on = current[graph] = tuple(sorted(self._g.nodes[p]["name"] for p in self._out(dep, L.DEPLOYED_ON))) if dep in self._g else ()
+        return on  # type: ignore[no-any-return]
 
     def is_deployed(self, graph: str, platforms: tuple[str, ...] | None = None) -> bool:
         """isDeployed(g, P): is ``graph`` active on one of ``platforms`` (any, if None)?"""
@@ -130,23 +192,33 @@ class RepositoryQuery:
         return str(self._g.nodes[graphs[0]]["name"])
 
     def context(self) -> str | None:
-        for _nid, _data in self.repo.nodes(L.ROBOT):
-            ctx = self._out(_nid, L.IN_CONTEXT)
-            return str(self._g.nodes[ctx[0]]["name"]) if ctx else None
-        return None
+        current = self._current()
+        if _CONTEXT in current:
+            return current[_CONTEXT]  # type: ignore[no-any-return]
+        ctx: str | None = None
+        for nid in self.repo.node_ids(L.ROBOT):
+            out = self._out(nid, L.IN_CONTEXT)
+            ctx = str(self._g.nodes[out[0]]["name"]) if out else None
+            break
+        current[_CONTEXT] = ctx
+        return ctx
 
     def deployments(self) -> tuple[tuple[str, str], ...]:
         """Every active (graph, platform) pair, sorted."""
-        return tuple(
-            sorted((self._g.nodes[s]["name"], self._g.nodes[t]["name"]) for s, t, _d in self.repo.edges(L.DEPLOYED_ON))
-        )
+        current = self._current()
+        out = current.get(_DEPLOYMENTS)
+        if out is None:
+            nodes = self._g.nodes
+            out = current[_DEPLOYMENTS] = tuple(sorted((nodes[s]["name"], nodes[t]["name"]) for s, t, _k in self.repo.labelled(L.DEPLOYED_ON)))
+        return out  # type: ignore[no-any-return]
 
     def history(self) -> tuple[tuple[str, str, float, float], ...]:
         """Every stopped deployment as (graph, platform, start, stop), in stop order."""
-        rows = [
-            (self._g.nodes[s]["name"], self._g.nodes[t]["name"], float(d["start"]), float(d["stop"]))
-            for s, t, d in self.repo.edges(L.DEPLOYMENT_HISTORY)
-        ]
+        nodes, edges = self._g.nodes, self._g.edges
+        rows = []
+        for s, t, k in self.repo.labelled(L.DEPLOYMENT_HISTORY):
+            d = edges[s, t, k]
+            rows.append((nodes[s]["name"], nodes[t]["name"], float(d["start"]), float(d["stop"])))
         return tuple(sorted(rows, key=lambda r: (r[3], r[2], r[0], r[1])))
 
     # -- generic ------------------------------------------------------------------------

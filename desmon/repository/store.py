@@ -132,6 +132,14 @@ class Repository:
         # however many DEPLOYMENT_HISTORY edges a long run accumulates on a node.
         self._out_index: dict[tuple[str, str], dict[str, int]] = {}
         self._in_index: dict[tuple[str, str], dict[str, int]] = {}
+        # label -> {(source, target, key): None}: the edges carrying each label, so a
+        # label's edges are read without a scan of every other edge
+        self._label_index: dict[str, dict[tuple[str, str, str], None]] = {}
+        # label -> {node id: None}, in insertion order (nodes are never removed)
+        self._nodes_of: dict[str, dict[str, None]] = {}
+        #: node id -> seq of the last change that touched it (the node itself, or an edge
+        #: from or to it): readers memoise what they derive from a node and its edges on it
+        self.touched: dict[str, int] = {}
 
     # -- clock and log ---------------------------------------------------------------
     def set_clock(self, clock: Callable[[], float]) -> None:
@@ -140,6 +148,11 @@ class Repository:
     @property
     def now(self) -> float:
         return float(self._clock())
+
+    @property
+    def version(self) -> int:
+        """The number of changes so far: equal versions, the same graph (readers memoise on it)."""
+        return len(self._log)
 
     @property
     def log(self) -> tuple[Change, ...]:
@@ -158,6 +171,13 @@ class Repository:
         )
         _apply(self.graph, change)
         self._index(change)
+        seq = change.seq
+        if change.node is not None:
+            if op == ADD_NODE and change.node not in self.touched:
+                self._nodes_of.setdefault(label, {})[change.node] = None
+            self.touched[change.node] = seq
+        else:
+            self.touched[change.source] = self.touched[change.target] = seq  # type: ignore[index]
         self._log.append(change)
         for sub in list(self._subs):
             if sub.matches(change):
@@ -169,12 +189,14 @@ class Repository:
             return
         if c.op in (REMOVE_EDGE, RELABEL_EDGE):
             old = c.old_label if c.op == RELABEL_EDGE else c.label
+            del self._label_index[old][(c.source, c.target, c.old_label if c.op == RELABEL_EDGE else c.key)]  # type: ignore[index]
             for index, a, b in ((self._out_index, c.source, c.target), (self._in_index, c.target, c.source)):
                 bucket = index[(a, old)]
                 bucket[b] -= 1
                 if not bucket[b]:
                     del bucket[b]
         if c.op in (ADD_EDGE, RELABEL_EDGE):
+            self._label_index.setdefault(c.label, {})[(c.source, c.target, c.key)] = None  # type: ignore[index]
             for index, a, b in ((self._out_index, c.source, c.target), (self._in_index, c.target, c.source)):
                 bucket = index.setdefault((a, c.label), {})
                 bucket[b] = bucket.get(b, 0) + 1
@@ -259,14 +281,25 @@ class Repository:
 
     def nodes(self, label: str) -> Iterator[tuple[str, dict[str, Any]]]:
         """(id, attributes) of every node with ``label``, in insertion order."""
-        for nid, data in self.graph.nodes(data=True):
-            if data.get("label") == label:
-                yield nid, data
+        nodes = self.graph.nodes
+        for nid in list(self._nodes_of.get(label, ())):
+            yield nid, nodes[nid]
+
+    def node_ids(self, label: str) -> tuple[str, ...]:
+        """The ids of every node with ``label``, in insertion order (indexed)."""
+        return tuple(self._nodes_of.get(label, ()))
 
     def edges(self, label: str | None = None) -> Iterator[tuple[str, str, dict[str, Any]]]:
+        """(source, target, attributes) of every edge (with ``label``, if given), in the
+        graph's order."""
         for s, t, data in self.graph.edges(data=True):
             if label is None or data.get("label") == label:
                 yield s, t, data
+
+    def labelled(self, label: str) -> list[tuple[str, str, str]]:
+        """(source, target, key) of every edge labelled ``label`` (indexed, in the order
+        they got the label; not the graph's order)."""
+        return list(self._label_index.get(label, ()))
 
     def snapshot(self, at: float | None = None) -> nx.MultiDiGraph:
         """The graph as it was at time ``at`` (all changes with time <= at); a copy."""

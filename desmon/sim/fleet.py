@@ -260,6 +260,7 @@ class RobotView(RepositoryQuery):
         checks: Any = None,
     ) -> None:
         super().__init__(repo, checks)
+        self.validity_memo = None  # a fleet's facts seldom recur: no memo to hold old states alive
         self.robot = robot
         self.own = own
         self.edges = edges

@@ -92,6 +92,9 @@ def initial_loads(model: Any, initial: Any) -> list[tuple[str, str, float]]:
 
 
 def _clean(v: Any) -> Any:
+    kind = type(v)
+    if kind is str or kind is int or kind is bool or v is None:  # the common fields, unchanged
+        return v
     if isinstance(v, float):
         return round(v, 6)
     if isinstance(v, (list, tuple)):

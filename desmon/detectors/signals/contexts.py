@@ -21,10 +21,20 @@ from desmon.errors import SignalError
 from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE, ROTATE_CCW, ROTATE_CW
 
 
-def base_profile(tau: Arr, a_max: Arr, leg: float, pause: float) -> tuple[Arr, Arr]:
+def _select(shape: tuple[int, ...], conds: tuple[Arr, ...], choices: tuple[Arr, ...]) -> Arr:
+    """``np.select(conds, choices, 0.0)`` of float ``choices`` broadcast to ``shape`` (the
+    same values: the first condition that holds wins), without its argument checks."""
+    out = np.zeros(shape)
+    for cond, choice in zip(conds[::-1], choices[::-1]):
+        np.copyto(out, choice, where=cond)
+    return out
+
+
+def base_profile(tau: Arr, a_max: Arr, leg: float, pause: float, *, speed: bool = True) -> tuple[Arr, Arr | None]:
     """Base acceleration and speed for the back-and-forth drive: pulses +,-, pause, -,+.
 
     ``tau`` is time since the drive started; each pulse lasts ``sqrt(leg / a_max)``.
+    With ``speed`` False the speed is not computed (None).
     """
     ta = np.sqrt(leg / a_max)
     t2 = tau - 2.0 * ta - pause
@@ -32,8 +42,12 @@ def base_profile(tau: Arr, a_max: Arr, leg: float, pause: float) -> tuple[Arr, A
     c2 = (tau >= ta) & (tau < 2 * ta)
     c3 = (t2 >= 0) & (t2 < ta)
     c4 = (t2 >= ta) & (t2 < 2 * ta)
-    acc = np.select([c1, c2, c3, c4], [a_max, -a_max, -a_max, a_max], 0.0)
-    vel = np.select([c1, c2, c3, c4], [a_max * tau, a_max * (2 * ta - tau), -a_max * t2, -a_max * (2 * ta - t2)], 0.0)
+    shape = np.broadcast_shapes(tau.shape, np.shape(a_max))
+    conds = (c1, c2, c3, c4)
+    acc = _select(shape, conds, (a_max, -a_max, -a_max, a_max))
+    if not speed:
+        return acc, None
+    vel = _select(shape, conds, (a_max * tau, a_max * (2 * ta - tau), -a_max * t2, -a_max * (2 * ta - t2)))
     return acc, vel
 
 
@@ -174,7 +188,7 @@ def context_tactile(context: str, t_rel: Arr, cp: Params, p: SignalParams) -> tu
         arc = cp["arc"][:, None, None] * q
         return one, arc * cp["ydir"][:, None, None], arc * cp["xdir"][:, None, None]
     if context == MOVE_BASE:
-        acc, _ = base_profile(t_rel - cp["start"][:, None, None], cp["a_max"][:, None, None], p.base_leg, p.base_pause)
+        acc, _ = base_profile(t_rel - cp["start"][:, None, None], cp["a_max"][:, None, None], p.base_leg, p.base_pause, speed=False)
         rel = acc / cp["a_max"][:, None, None]
         jump = cp["settle"][:, None, None] * cp["settle_jump"][:, None, None] * (t_rel >= cp["settle_t"][:, None, None])
         return 1.0 + 0.03 * rel, 0.05 * rel + jump, zero

@@ -68,6 +68,13 @@ class Jitter:
         if k.size and k.ndim == 1 and int(k.min()) // JITTER_BLOCK == int(k.max()) // JITTER_BLOCK:
             b = int(k[0]) // JITTER_BLOCK
             return self._block(b)[k - b * JITTER_BLOCK]
+        if k.size == 0:
+            return np.empty(k.shape)
+        b0, b1 = int(k.min()) // JITTER_BLOCK, int(k.max()) // JITTER_BLOCK
+        if b1 - b0 < JITTER_CACHE:
+            # a few neighbouring blocks (a render of several tactile blocks): one table
+            table = np.concatenate([self._block(b) for b in range(b0, b1 + 1)])
+            return table[k - b0 * JITTER_BLOCK]
         out = np.empty(k.shape)
         blocks = k // JITTER_BLOCK
         for b in np.unique(blocks):

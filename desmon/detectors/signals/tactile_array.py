@@ -66,12 +66,16 @@ def episode_pad_state(t: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, A
     yc = np.broadcast_to(c["y"][:, None, :], amp.shape).copy()
     xc = np.broadcast_to(c["x"][:, None, :], amp.shape).copy()
     t3 = t[..., None]
+    ascending = t.shape[0] == 1 and bool(np.all(t[0, 1:] >= t[0, :-1]))
     for context, start, dur, cp in ep.segments:
         tr = np.clip(t3 - start, 0.0, dur)
         if context == HOLD:
             amp *= hold_creep(tr, c["kappa"], p)
             continue
         if context == IDLE:
+            continue
+        if ascending:
+            _apply_context(context, tr, dur, cp, p, amp, yc, xc)
             continue
         fac, dy, dx = context_tactile(context, tr, cp, p)
         amp *= fac
@@ -83,6 +87,23 @@ def episode_pad_state(t: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, A
         yc += dy
     inside = ((t3 >= ep.start) & (t3 < ep.end))
     return np.where(inside, amp, 0.0), yc, xc
+
+
+def _apply_context(context: str, tr: Arr, dur: float, cp: dict, p: SignalParams, amp: Arr, yc: Arr, xc: Arr) -> None:
+    """``amp *= fac; yc += dy; xc += dx`` of :func:`context_tactile` at the clipped times
+    ``tr`` ``(1, K, 1)``, ascending: the frames before the segment (``tr`` 0) and after it
+    (``tr`` ``dur``) share one value each, so the kernel (exact arithmetic only: the same
+    value for the same ``tr``) is evaluated on one frame of each and on the frames inside."""
+    line = tr[0, :, 0]
+    lo = int(np.searchsorted(line, 0.0, side="right"))  # frames before the segment: tr 0
+    hi = max(lo, int(np.searchsorted(line, dur, side="left")))  # from here on: tr dur
+    for a, b, constant in ((0, lo, True), (lo, hi, False), (hi, line.size, True)):
+        if b <= a:
+            continue
+        fac, dy, dx = context_tactile(context, tr[:, a : a + 1] if constant else tr[:, a:b], cp, p)
+        amp[:, a:b] *= fac
+        yc[:, a:b] += dy
+        xc[:, a:b] += dx
 
 
 def render_pad_moments(
@@ -352,6 +373,8 @@ class TactileArray:
             bt, bm, bf = self._block(b0, frames)
             j = k - b0 * TACTILE_BLOCK
             return bt[j], bm[j], (bf[j] if bf is not None else None)
+        if k.size and int(k.max()) - int(k.min()) < 3 * TACTILE_BLOCK:
+            return self._clean_span(k, frames)
         t = np.empty(k.shape)
         mom = np.empty(k.shape + (N_PADS, 3))
         fr = np.empty(k.shape + (N_PADS, MAX_ROWS, PAD_COLS), dtype=np.int16) if frames else None
@@ -367,6 +390,21 @@ class TactileArray:
             mom[sel] = bm[j]
             if fr is not None and bf is not None:
                 fr[sel] = bf[j]
+        return t, mom, fr
+
+    def _clean_span(self, k: Arr, frames: bool) -> Rendered:
+        """:meth:`clean` of frame numbers within a few neighbouring blocks: every block of
+        the span, rendered if missing, concatenated into one table that ``k`` indexes."""
+        B = TACTILE_BLOCK
+        b0, b1 = int(k.min()) // B, int(k.max()) // B
+        span = range(b0, b1 + 1)
+        missing = [b for b in span if (b, frames) not in self._cache]
+        rendered = dict(zip(missing, self.render_blocks(missing, frames))) if missing else {}
+        parts = [rendered[b] if b in rendered else self._block(b, frames) for b in span]
+        j = k - b0 * B
+        t = np.concatenate([part[0] for part in parts])[j]
+        mom = np.concatenate([part[1] for part in parts])[j]
+        fr = np.concatenate([part[2] for part in parts])[j] if frames else None  # type: ignore[misc]
         return t, mom, fr
 
     def at(self, index: Arr, frames: bool = False) -> TactileBlock:

@@ -93,9 +93,12 @@ class WrenchSensor:
             s = self.segments[i]
             if s.context in (HOLD, IDLE):
                 continue
-            inside = (t >= s.start) & (t < s.end)
-            d = context_force(s.context, t - s.start, self.seg_params[i], self.params, self.config.coupling)
-            val = val + np.where(inside, d, 0.0)
+            # only the samples inside the segment (t ascends): the force is elementwise in t
+            # and outside the segment nothing is added (``val`` is this block's own array)
+            lo, hi = np.searchsorted(t[0], (s.start, s.end), side="left")
+            if hi > lo:
+                ts = t[:, lo:hi]
+                val[:, lo:hi] += context_force(s.context, ts - s.start, self.seg_params[i], self.params, self.config.coupling)
         for sl in self.slips:
             if t_hi < float(sl.t_s[0]) - 1.5 or t_lo > float(sl.t_s[0]) + 2.0:
                 continue
