@@ -244,8 +244,9 @@ def _uniformisation(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, lam:
 
 def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = 30) -> tuple[np.ndarray, float, int]:  # type: ignore[no-untyped-def]
     """``exp(t A) v`` by Krylov subspace projection with adaptive time steps and a
-    local error estimate per step (after Sidje's Expokit ``expv``); returns the vector,
-    the summed error estimate and the number of steps."""
+    local error estimate per step (after Sidje's Expokit ``expv``), relative to the
+    vector's norm where it exceeds 1; returns the vector, the summed error estimate and
+    the number of steps."""
     from scipy.linalg import expm
 
     n = v.shape[0]
@@ -269,6 +270,7 @@ def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = 30) -> tuple[n
                 break
             F = expm(t_step * H)
             err, xm = _local_error(beta, F, avnorm, m)
+            err /= max(1.0, beta)  # relative to the vector's size (the accumulated reward grows with T)
             if err <= 1.2 * t_step * tol:
                 break
             t_step = 0.9 * t_step * (t_step * tol / err) ** xm
@@ -286,19 +288,23 @@ def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = 30) -> tuple[n
 def _arnoldi(A, v: np.ndarray, m: int):  # type: ignore[no-untyped-def]
     """The Krylov basis V (as columns) and Hessenberg H (with the extra row and column of
     the error estimate), its size, whether it broke down happily, and ``|A v_{m+1}|``.
-    Classical Gram-Schmidt, applied twice (as accurate as the modified one, in matrix products)."""
+    Classical Gram-Schmidt in matrix products, repeated where cancellation calls for it."""
     n = v.shape[0]
     B = np.zeros((m + 1, n))  # basis vectors as rows: contiguous
     H = np.zeros((m + 2, m + 2))
     B[0] = v
     for j in range(m):
         p = A @ B[j]
+        before = float(np.linalg.norm(p))
         h = B[: j + 1] @ p
         p -= h @ B[: j + 1]
-        h2 = B[: j + 1] @ p
-        p -= h2 @ B[: j + 1]
-        H[: j + 1, j] = h + h2
         s = float(np.linalg.norm(p))
+        if s < 0.7 * before:  # cancellation: orthogonalise once more ("twice is enough")
+            h2 = B[: j + 1] @ p
+            p -= h2 @ B[: j + 1]
+            h = h + h2
+            s = float(np.linalg.norm(p))
+        H[: j + 1, j] = h
         if s < 1e-12 * max(1.0, float(np.abs(h).max())):
             return B.T, H, j + 1, True, 0.0
         H[j + 1, j] = s
