@@ -13,7 +13,10 @@ steps of 1, 4 and 16 Erlang phases beside the simulation with the World's own fi
 timing (fixed step durations, recognition, heartbeat and start latencies) over
 ``--seeds`` seeds: the error of modelling fixed delays by phases.
 
-Run: ``python -m bench.bench_analyze [--quick] [--seeds N] [--phases-error]``; the last line is
+``--large K``: instead, a large chain (two force sensors, K phases per step: about
+45,000 states times K) and the time of its steady state and its 1 h transient.
+
+Run: ``python -m bench.bench_analyze [--quick] [--seeds N] [--phases-error] [--large K]``; the last line is
 ``RESULT states=... build_s=... explore_s=... build_ratio=... steady_s=... transient_s=... exact_s=... sim_mean_s=... sim_ci_low=... sim_ci_high=...``.
 Figures vary with the machine's load: compare the ratios.
 """
@@ -40,9 +43,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="the fault-free shift (60 states) and 5 seeds")
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--phases-error", action="store_true", help="the exact values with 1, 4, 16 phases against fixed timing")
+    ap.add_argument("--large", type=int, default=None, metavar="K",
+                    help="instead, a large chain: coffee_shift with two force sensors and K phases per step; its build and solution times")
     args = ap.parse_args(argv)
     if args.phases_error:
         return _phases_error(args.seeds)
+    if args.large is not None:
+        return _large(args.large)
     params = {"hours": "1"} | ({"faults": "False"} if args.quick else {})
     seeds = 5 if args.quick else args.seeds
     sc = load_scenario(ROOT / "scenarios" / "coffee_shift.py", params=params)
@@ -71,6 +78,34 @@ def main(argv: list[str] | None = None) -> int:
         f"RESULT states={chain.n} build_s={build:.3f} explore_s={explore:.3f} build_ratio={build / explore:.3f} steady_s={steady:.3f} "
         f"transient_s={trans:.3f} exact_s={exact:.4f} sim_mean_s={ag.mean:.4f} sim_ci_low={ag.low:.4f} sim_ci_high={ag.high:.4f}"
     )
+    return 0
+
+
+def _large(k: int) -> int:
+    import resource
+
+    from desmon.analyze import build_chain, markov_world
+    from desmon.analyze.solve import steady_state, transient
+    from desmon.loader import load_scenario
+
+    sc = load_scenario(ROOT / "scenarios" / "coffee_shift.py", params={"force_sensors": "2", "hours": "1"})
+    t0 = time.perf_counter()
+    chain = build_chain(sc, "desmon", markov_world(sc, phases=k))
+    build = time.perf_counter() - t0
+    Q, _ = chain.generator()
+    t0 = time.perf_counter()
+    _pi, residual, method = steady_state(Q, chain.describe, chain.blocks())
+    steady = time.perf_counter() - t0
+    p0 = np.zeros(chain.n)
+    for i, p in chain.initial:
+        p0[i] = p
+    t0 = time.perf_counter()
+    tr = transient(Q, p0, 3600.0, chain.unmonitored)
+    trans = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"coffee_shift, 2 force sensors, {k} phases: {chain.n:,} states, {len(chain.rates):,} transitions")
+    print(f"built in {build:.1f} s; steady state ({method}) {steady:.1f} s, residual {residual:.1e}; 1 h transient ({tr.method}) {trans:.1f} s; peak {peak:.0f} MB")
+    print(f"RESULT states={chain.n} build_s={build:.3f} steady_s={steady:.3f} transient_s={trans:.3f} solve_s={steady + trans:.3f} peak_mb={peak:.0f}")
     return 0
 
 

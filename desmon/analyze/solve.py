@@ -1,9 +1,13 @@
 """Exact solutions of a chain on scipy sparse matrices.
 
 * :func:`steady_state` — the long-run distribution: the chain's one bottom strongly
-  connected component (every long run ends there), solved as ``pi Q = 0, sum pi = 1``
-  with one unknown pinned, by BiCGSTAB; where it breaks down the sparse LU solve
-  (small chains) or the power method on the uniformised chain takes over. The residual
+  connected component (every long run ends there), solved as ``pi Q = 0, sum pi = 1``.
+  Given blocks of states (the chain's: the same broken components), by iterative
+  aggregation-disaggregation (Koury, McAllister and Stewart), which suits a nearly
+  decomposable chain: fast task and monitor events inside a block, slow faults between
+  blocks. Otherwise, or where it does not converge, with one unknown pinned, by
+  BiCGSTAB; where that breaks down the sparse LU solve (small chains) or the power
+  method on the uniformised chain takes over. The residual
   ``max |pi Q|`` is reported. A chain with an absorbing state, or with two closed
   classes, has no single steady state: :class:`~desmon.analyze.markov.AnalysisError`
   names the state and suggests a transient query.
