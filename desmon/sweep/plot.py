@@ -19,7 +19,8 @@ from desmon.sweep.grid import SweepError
 __all__ = ["plot_sweep", "pareto_front", "summarise"]
 
 _NOT_PARAMETERS = {
-    "point", "seed_index", "seed", "scenario", "job", "deployer", "until", "max_states", "examples", "trials", "exit_code", "error",
+    "point", "seed_index", "seed", "scenario", "job", "deployer", "until", "max_states", "examples", "trials", "phases", "horizon",
+    "exit_code", "error",
 }
 
 
