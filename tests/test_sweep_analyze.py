@@ -53,7 +53,7 @@ def test_a_sweep_on_dask_tabulates_what_desmon_analyze_computes_at_each_point(tm
     assert "2 rows (2 points x 1 seed), 0 failed" in capsys.readouterr().out
     df = pd.read_csv(out)
     assert list(df["hours"]) == [1, 2] and list(df["exit_code"]) == [0, 0] and df["error"].isna().all()
-    assert list(df["phases"]) == [1] and df["horizon"].isna().all() and list(df["max_states"]) == [2_000_000] * 2
+    assert list(df["phases"]) == [1, 1] and df["horizon"].isna().all() and list(df["max_states"]) == [2_000_000] * 2
     for _, row in df.iterrows():
         a = analyze(load_scenario(COFFEE, {"faults": "False", "hours": str(row["hours"])}), "desmon")
         for figure in FIGURES:
