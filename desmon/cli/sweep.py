@@ -1,4 +1,4 @@
-"""``desmon sweep``: a grid of parameters x seeds (run, verify, fuzz or evaluate) on Dask,
+"""``desmon sweep``: a grid of parameters x seeds (run, verify, fuzz, evaluate or analyze) on Dask,
 one table row per run (docs/sweeps.md); ``desmon sweep-plot`` is :mod:`desmon.cli.sweep_plot`.
 
 Importing this module imports neither Dask nor pandas: a missing ``sweep`` extra is
@@ -20,12 +20,17 @@ __all__ = ["add_parser", "run"]
 
 EXIT_OK, EXIT_FAILED_ROWS = 0, 1
 DEFAULT_SEEDS = 10
-_SETTING_FLAGS = {"until": "--until", "max_states": "--max-states", "examples": "--examples", "trials": "--trials"}
-_SETTING_DEFAULTS = {"until": None, "max_states": 2_000_000, "examples": 200, "trials": 100}
+_SETTING_FLAGS = {
+    "until": "--until", "max_states": "--max-states", "examples": "--examples", "trials": "--trials", "phases": "--phases",
+    "horizon": "--horizon",
+}
+_SETTING_DEFAULTS = {"until": None, "max_states": 2_000_000, "examples": 200, "trials": 100, "phases": 1, "horizon": None}
+#: the jobs that use no seed: one run per point, --seeds above 1 refused
+_EXACT = {"verify": "the check is exhaustive", "analyze": "the analysis is exact"}
 
 
 def add_parser(sub: Subparsers) -> None:
-    p = sub.add_parser("sweep", help="run a grid of parameters x seeds (run, verify, fuzz or evaluate) on Dask; one table row per run")
+    p = sub.add_parser("sweep", help="run a grid of parameters x seeds (run, verify, fuzz, evaluate or analyze) on Dask; one table row per run")
     add_input(p, "scenario", SCENARIO_FILE, nargs="?", default=None,
               help="scenario file, e.g. scenarios/robot_day.py (not with --job evaluate)")
     p.add_argument(
@@ -33,16 +38,20 @@ def add_parser(sub: Subparsers) -> None:
         help="sweep a parameter the scenario declares over these values, e.g. -p hand_memory=256,384 (repeatable; "
         "every combination is a point). With --job evaluate: a signal-model parameter, e.g. -p noise_counts=2,4,8",
     )
-    p.add_argument("--job", choices=JOBS, default="run", help="what each run does: desmon run / verify / fuzz / evaluate")
+    p.add_argument("--job", choices=JOBS, default="run", help="what each run does: desmon run / verify / fuzz / evaluate / analyze")
     p.add_argument("--seeds", type=positive_int, default=None, metavar="N",
-                   help="runs per point, each with its own derived seed (default: 10; --job verify: 1, the check uses no seed)")
+                   help="runs per point, each with its own derived seed (default: 10; --job verify and analyze: 1, they use no seed)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="the sweep seed every run's seed is derived from")
     p.add_argument("--deployer", default="desmon", metavar="SPEC", help="the deployer, as for desmon run (docs/deployers.md)")
     p.add_argument("--until", type=positive_seconds, default=None, help="--job run: simulated seconds (default: each point's horizon)")
-    p.add_argument("--max-states", type=positive_int, default=None, help="--job verify: stop INCOMPLETE after this many states "
-                   f"(default: {_SETTING_DEFAULTS['max_states']:,})")
+    p.add_argument("--max-states", type=positive_int, default=None, help="--job verify and analyze: stop INCOMPLETE after this "
+                   f"many states (default: {_SETTING_DEFAULTS['max_states']:,})")
     p.add_argument("--examples", type=positive_int, default=None, help=f"--job fuzz: sequences per run (default: {_SETTING_DEFAULTS['examples']})")
     p.add_argument("--trials", type=positive_int, default=None, help=f"--job evaluate: trials per cell (default: {_SETTING_DEFAULTS['trials']})")
+    p.add_argument("--phases", type=positive_int, default=None, metavar="K",
+                   help="--job analyze: Erlang phases per task step (default: 1, exponential; at most 64)")
+    p.add_argument("--horizon", type=positive_seconds, default=None, metavar="T",
+                   help="--job analyze: mission length in seconds for the per-mission measures (default: each point's horizon)")
     add_output(p, "-o", "--output", suffixes=(".parquet", ".csv"), required=True, metavar="FILE",
                help="the table: FILE.parquet or FILE.csv (finished rows also go to FILE.journal.jsonl while it runs)")
     p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
@@ -57,18 +66,17 @@ def add_parser(sub: Subparsers) -> None:
     p.set_defaults(handler=run)
 
 
-def _setting(args: argparse.Namespace) -> Any:
-    """The value of the job's own setting; a setting of another job is refused."""
-    from desmon.sweep.core import SETTINGS
+def _settings(args: argparse.Namespace) -> dict[str, Any]:
+    """The values of the job's own settings, by name; a setting of another job is refused."""
+    from desmon.sweep.core import JOB_SETTINGS
     from desmon.sweep.grid import SweepError
 
-    mine = SETTINGS[args.job]
+    mine = JOB_SETTINGS[args.job]
     for name, flag in _SETTING_FLAGS.items():
-        if name != mine and getattr(args, name) is not None:
-            owner = next(j for j, s in SETTINGS.items() if s == name)
+        if name not in mine and getattr(args, name) is not None:
+            owner = next(j for j, names in JOB_SETTINGS.items() if name in names)
             raise SweepError(f"{flag} applies to --job {owner}, not --job {args.job}; drop it")
-    value = getattr(args, mine)
-    return _SETTING_DEFAULTS[mine] if value is None else value
+    return {name: _SETTING_DEFAULTS[name] if getattr(args, name) is None else getattr(args, name) for name in mine}
 
 
 def run(args: argparse.Namespace) -> int:
@@ -82,13 +90,13 @@ def run(args: argparse.Namespace) -> int:
         check_scheduler_address(args.scheduler)
         if args.workers is not None:
             raise SweepError("--workers sets the size of the local cluster; with --scheduler the cluster has its own workers: drop it")
-    setting = _setting(args)
-    if args.job == "verify" and args.seeds is not None and args.seeds > 1:
+    settings = _settings(args)
+    if args.job in _EXACT and args.seeds is not None and args.seeds > 1:
         raise SweepError(
-            f"--seeds {args.seeds} with --job verify: the check is exhaustive and uses no seed, so every seed gives the same "
-            "row; drop --seeds (one check per point)"
+            f"--seeds {args.seeds} with --job {args.job}: {_EXACT[args.job]} and uses no seed, so every seed gives the same "
+            f"row; drop --seeds (one {'check' if args.job == 'verify' else 'analysis'} per point)"
         )
-    seeds = args.seeds if args.seeds is not None else 1 if args.job == "verify" else DEFAULT_SEEDS
+    seeds = args.seeds if args.seeds is not None else 1 if args.job in _EXACT else DEFAULT_SEEDS
     axes = parse_axes(args.param)
     if args.scheduler is not None:
         probe_scheduler(args.scheduler)  # a few seconds at most: not a Dask scheduler is one line, not a hang
@@ -101,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
 
     result = run_sweep(
         job=args.job, scenario=args.scenario, axes=axes, seeds=seeds, output=args.output, sweep_seed=args.seed,
-        deployer=args.deployer, setting=setting, task_timeout=args.task_timeout, scheduler=args.scheduler,
+        deployer=args.deployer, settings=settings, task_timeout=args.task_timeout, scheduler=args.scheduler,
         workers=args.workers, retries=args.retries, resume=args.resume, progress=not args.no_progress,
     )
     points = result.total // seeds

@@ -19,10 +19,17 @@ from desmon.sweep.jobs import JOBS, JobSpec, check_points, check_values, run_poi
 from desmon.sweep.runner import Progress, execute
 from desmon.sweep.table import Journal, check_same_sweep, frame, journal_path, read_journal, read_table, write_table
 
-__all__ = ["SweepResult", "run_sweep", "SETTINGS"]
+__all__ = ["SweepResult", "run_sweep", "SETTINGS", "JOB_SETTINGS"]
 
-#: the one setting of each job that changes its figures (a table column, part of the sweep's identity)
-SETTINGS = {"run": "until", "verify": "max_states", "fuzz": "examples", "evaluate": "trials"}
+#: the settings of each job that change its figures (table columns, part of the sweep's identity)
+JOB_SETTINGS: dict[str, tuple[str, ...]] = {
+    "run": ("until",), "verify": ("max_states",), "fuzz": ("examples",), "evaluate": ("trials",),
+    "analyze": ("phases", "horizon", "max_states"),
+}
+#: the first setting of each job (the only one but for analyze): :func:`run_sweep`'s ``setting``
+SETTINGS = {job: names[0] for job, names in JOB_SETTINGS.items()}
+#: a setting's value when the sweep leaves it out, where None would not do
+_DEFAULTS = {("analyze", "phases"): 1}
 
 
 @dataclass(frozen=True, slots=True)
@@ -93,6 +100,22 @@ def _checked(job: str, scenario: str | None, axes: tuple[Axis, ...], deployer: s
     return deployer
 
 
+def _settings_of(job: str, setting: Any, more: dict[str, Any] | None) -> dict[str, Any]:
+    """Every setting of ``job`` (:data:`JOB_SETTINGS`), by name: ``setting`` is the first,
+    ``more`` any of them by name; one left out (or None) is None, or its default."""
+    if job not in JOB_SETTINGS:
+        return {}  # refused by _checked
+    names = JOB_SETTINGS[job]
+    unknown = [n for n in more or {} if n not in names]
+    if unknown:
+        raise SweepError(f"--job {job} takes the settings {', '.join(names)}, not {', '.join(unknown)}")
+    values = {n: _DEFAULTS.get((job, n)) for n in names}
+    if setting is not None or len(names) == 1:
+        values[names[0]] = setting
+    values.update({n: v for n, v in (more or {}).items() if v is not None})
+    return values
+
+
 class _Rows:
     """The rows of a sweep as they arrive: kept, appended to the journal, counted on the progress line."""
 
@@ -149,6 +172,7 @@ def run_sweep(
     sweep_seed: int = 0,
     deployer: str = "desmon",
     setting: Any = None,
+    settings: dict[str, Any] | None = None,
     task_timeout: float | None = None,
     scheduler: str | None = None,
     workers: int | None = None,
@@ -162,7 +186,9 @@ def run_sweep(
     """Run (or resume) a sweep and write its table to ``output`` (.parquet or .csv).
 
     ``setting``: the job's setting (:data:`SETTINGS`): ``until`` seconds (None: the
-    scenario's horizon), ``max_states``, ``examples`` or ``trials``. ``on_row(n)`` is
+    scenario's horizon), ``max_states``, ``examples`` or ``trials``, or analyze's
+    ``phases``; ``settings``: any of the job's settings by name (analyze's ``phases``,
+    ``horizon`` seconds, None: each point's own, ``max_states``). ``on_row(n)`` is
     called after the n-th new row is kept (tests use it to interrupt a sweep).
     A KeyboardInterrupt propagates after the table of the finished rows is written.
     """
@@ -170,8 +196,9 @@ def run_sweep(
 
     grid = Grid(axes, seeds, sweep_seed)
     deployer = _checked(job, scenario, axes, deployer)
-    check_points(job, scenario, grid.iter_points(), setting, deployer)  # every point, before a cluster starts
-    settings = {SETTINGS[job]: setting}
+    settings = _settings_of(job, setting, settings)
+    # every point, before a cluster starts
+    check_points(job, scenario, grid.iter_points(), settings.get(SETTINGS.get(job, "")), deployer, settings=settings)
     identity = {
         "job": job, "scenario": scenario or "", "deployer": deployer, "sweep_seed": sweep_seed,
         "axes": {a.name: a.kind for a in axes}, "settings": settings,

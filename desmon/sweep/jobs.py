@@ -7,7 +7,7 @@ becomes figures with an ``exit_code`` and an ``error`` line, so a failing point 
 stops the sweep; only a worker that dies (killed, out of memory) fails the task, and
 Dask then runs it again on another worker.
 
-Exit codes of a row: the command's own (0 / 1, verify 3 INCOMPLETE), 2 a value the
+Exit codes of a row: the command's own (0 / 1, verify and analyze 3 INCOMPLETE), 2 a value the
 scenario refuses (a :class:`~desmon.errors.DesmonError`), 124 the ``--task-timeout``
 passed, 125 any other exception (a bug: the error names its type), 137 the workers
 running it died every time Dask tried it.
@@ -30,10 +30,12 @@ from desmon.sweep.grid import JOBS, Axis, Run, SweepError
 
 __all__ = ["check_points", 
     "JOBS", "JobSpec", "run_point", "check_values", "signal_parameters", "EXIT_TIMEOUT", "EXIT_CRASH", "EXIT_KILLED",
-    "EXIT_BAD_VALUE", "METRICS",
+    "EXIT_BAD_VALUE", "EXIT_INCOMPLETE", "METRICS",
 ]
 
 EXIT_BAD_VALUE, EXIT_TIMEOUT, EXIT_CRASH, EXIT_KILLED = 2, 124, 125, 137
+#: the exit code of an analysis whose chain grew past --max-states (as desmon analyze's)
+EXIT_INCOMPLETE = 3
 
 #: each job's figures, in table order (run adds memory_peak_mb_<platform> and errors_<kind>)
 METRICS: dict[str, tuple[str, ...]] = {
@@ -48,6 +50,11 @@ METRICS: dict[str, tuple[str, ...]] = {
         "cells_passed", "cells", "tp_rate_tactile", "tp_rate_force", "tp_rate_combined",
         "fp_rate_tactile", "fp_rate_force", "fp_rate_combined",
     ),
+    "analyze": (
+        "exposure_s_per_hour", "exposure_s_per_mission", "undetected_slips_per_hour", "mean_time_to_exposure_s",
+        "p_exposure_within_T", "long_run_unmonitored_fraction", "horizon_s", "states", "transitions",
+        "top_state", "top_state_s_per_hour",
+    ),
 }
 _RUN_RENAMED = {"exposure_s": "unmonitored_exposure_s"}
 #: run metrics present only when the world has run-time changes or a lease
@@ -61,7 +68,7 @@ class JobSpec:
     job: str
     scenario: str | None  # absolute path (None for evaluate)
     deployer: str = "desmon"
-    settings: tuple[tuple[str, Any], ...] = ()  # until / max_states / examples / trials
+    settings: tuple[tuple[str, Any], ...] = ()  # until / max_states / examples / trials / phases, horizon, max_states
     timeout: float | None = None
 
     def setting(self, name: str, default: Any = None) -> Any:
@@ -102,7 +109,7 @@ def _deployer(spec: str) -> Any:
     return resolve_deployer(spec)
 
 
-# ----------------------------------------------------------------------------- the four jobs
+# ------------------------------------------------------------------------------ the five jobs
 
 
 def _job_run(spec: JobSpec, run: Run) -> dict[str, Any]:
@@ -191,8 +198,31 @@ def _job_evaluate(spec: JobSpec, run: Run) -> dict[str, Any]:
     return row
 
 
+def _job_analyze(spec: JobSpec, run: Run) -> dict[str, Any]:
+    """``desmon analyze`` at the point: its exact measures (the seed plays no part)."""
+    from desmon.analyze import BudgetExceeded, analyze
+
+    scenario = _scenario(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    try:
+        a = analyze(
+            scenario, _deployer(spec.deployer), phases=spec.setting("phases") or 1, horizon=spec.setting("horizon"),
+            max_states=spec.setting("max_states"),
+        )
+    except BudgetExceeded as exc:  # as desmon analyze: INCOMPLETE, exit 3, no measure
+        return _error_row(EXIT_INCOMPLETE, f"INCOMPLETE: {_one_line(exc)}")
+    top = a.contributions[0] if a.contributions else (None, None)
+    return {
+        "exposure_s_per_hour": a.exposure_s_per_hour, "exposure_s_per_mission": a.exposure_s_per_mission,
+        "undetected_slips_per_hour": a.undetected_slips_per_hour, "mean_time_to_exposure_s": a.mean_time_to_exposure_s,
+        "p_exposure_within_T": a.p_exposure_within_T, "long_run_unmonitored_fraction": a.long_run_unmonitored_fraction,
+        "horizon_s": a.horizon_s, "states": a.states, "transitions": a.transitions,
+        "top_state": top[1], "top_state_s_per_hour": top[0],
+        "exit_code": 0,
+    }
+
+
 _JOBS: dict[str, Callable[[JobSpec, Run], dict[str, Any]]] = {
-    "run": _job_run, "verify": _job_verify, "fuzz": _job_fuzz, "evaluate": _job_evaluate,
+    "run": _job_run, "verify": _job_verify, "fuzz": _job_fuzz, "evaluate": _job_evaluate, "analyze": _job_analyze,
 }
 
 
@@ -314,14 +344,18 @@ def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> None
                 # a value that parses but the scenario refuses: its points become error rows
 
 
-def check_points(job: str, scenario: str | None, points: Any, setting: Any, deployer: Any = None) -> None:
+def check_points(
+    job: str, scenario: str | None, points: Any, setting: Any, deployer: Any = None, *, settings: dict[str, Any] | None = None
+) -> None:
     """Refuse, before a cluster starts, what would fail (or never end) at some point of
     the grid, with ``--job run``: a fleet scenario, which the job does not simulate
     (``desmon run`` does, alone), and an ``--until`` past a point's horizon, which ``desmon run``
-    refuses too (past it the last action would go on forever). ``points`` are the grid's
-    points; one the scenario refuses is left to be its error row, as :func:`check_values` says.
-    With ``deployer`` (a spec), its first reaction runs at every point: a deployer that
-    cannot run at all there is refused now, not in every row."""
+    refuses too (past it the last action would go on forever); with ``--job analyze``, a
+    world the chain cannot be built from (a rate with no event, an event with no rate,
+    a ``phases`` out of range: :func:`desmon.analyze.markov_world`, with ``settings``).
+    ``points`` are the grid's points; one the scenario refuses is left to be its error row,
+    as :func:`check_values` says. With ``deployer`` (a spec), its first reaction runs at
+    every point: a deployer that cannot run at all there is refused now, not in every row."""
     if job == "evaluate" or scenario is None:
         return
     from desmon.loader import load_scenario
@@ -338,6 +372,8 @@ def check_points(job: str, scenario: str | None, points: Any, setting: Any, depl
                 f"{scenario}: a fleet of robots (world is a Fleet){' ' + where if where else ''}: desmon sweep runs one robot per "
                 f"run; simulate the fleet with desmon run {scenario}, or sweep a single-robot scenario"
             )
+        if job == "analyze":
+            _markov_world(loaded, dict(settings or {}), where)
         if deployer is not None:
             _first_reaction(loaded, deployer, where)
         if job == "run" and setting is not None:  # (the other jobs take no --until)
@@ -364,3 +400,14 @@ def _first_reaction(scenario: Any, deployer: str, where: str) -> None:
     except DesmonError:
         pass  # no checker bounds, say: the runs say what they say
 
+
+
+def _markov_world(scenario: Any, settings: dict[str, Any], where: str) -> None:
+    """The rates of ``scenario``'s chain (what ``desmon analyze`` reads first): a
+    SweepError naming the point if the World and the checker bounds disagree."""
+    from desmon.analyze import AnalysisError, markov_world
+
+    try:
+        markov_world(scenario, phases=settings.get("phases") or 1)
+    except AnalysisError as exc:
+        raise SweepError(f"{_one_line(exc)}{' ' + where if where else ''}") from None

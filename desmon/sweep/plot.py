@@ -7,7 +7,9 @@
   (say ``hand_memory``), min-max bars over the seeds, and the Pareto front: the points
   no other point beats on both (lower cost and lower figure).
 
-Rows with an error are left out (the title says how many).
+Rows with an error are left out (the title says how many). ``log_x`` draws the x axis
+on a log scale (values that span decades: an MTTF of 15 min to 4 h). A table of
+``--job analyze`` holds one exact value per point, not a mean over seeds: the title says so.
 """
 
 from __future__ import annotations
@@ -19,7 +21,8 @@ from desmon.sweep.grid import SweepError
 __all__ = ["plot_sweep", "pareto_front", "summarise"]
 
 _NOT_PARAMETERS = {
-    "point", "seed_index", "seed", "scenario", "job", "deployer", "until", "max_states", "examples", "trials", "exit_code", "error",
+    "point", "seed_index", "seed", "scenario", "job", "deployer", "until", "max_states", "examples", "trials", "phases", "horizon",
+    "exit_code", "error",
 }
 
 
@@ -119,9 +122,34 @@ def _pareto(ax: Any, ok: Any, params: list[str], pareto: str, y: str) -> int:
     return len(s)
 
 
-def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None = None) -> None:
-    """Draw ``table`` to ``output`` (PNG): ``y`` against ``x``, or against ``pareto`` with the front."""
+def _check_log_x(ok: Any, column: str) -> None:
+    """A log x axis needs values above 0."""
+    low = float(ok[column].min())
+    if not low > 0:
+        raise SweepError(f"--log-x: {column} has the value {low:g}; a log axis needs values above 0: drop --log-x")
+
+
+def _log_axis(ax: Any, values: list[float]) -> None:
+    """A log x axis; a few values are labelled as they are (900, 1800, ...), not as powers of ten."""
+    ax.set_xscale("log")
+    if len(values) <= 12:
+        from matplotlib.ticker import NullFormatter
+
+        ax.set_xticks(values, [f"{v:g}" for v in values])
+        ax.xaxis.set_minor_formatter(NullFormatter())
+
+
+def _exact(ok: Any) -> bool:
+    """Whether every row is an exact analysis (``--job analyze``): one value per point, no spread."""
+    return "job" in ok.columns and bool((ok["job"] == "analyze").all())
+
+
+def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None = None, log_x: bool = False) -> None:
+    """Draw ``table`` to ``output`` (PNG): ``y`` against ``x``, or against ``pareto`` with the front
+    (``log_x``: the x axis on a log scale)."""
     ok, failed = _rows(table, x, y, pareto)
+    if log_x:
+        _check_log_x(ok, x or pareto)  # type: ignore[arg-type]
     params = [p for p in _parameters(ok)]
     from desmon.viz.common import require_matplotlib
 
@@ -134,7 +162,11 @@ def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | 
     fig, ax = plt.subplots(figsize=(7.5, 4.8), dpi=120)
     seeds = int(ok.groupby(params or ["job"])["seed"].count().max())
     note = f"{len(ok)} runs" + (f", {failed} failed runs left out" if failed else "")
-    if x is not None:
+    if x is not None and _exact(ok):
+        _against(ax, ok, params, x, y)
+        ax.set_title(f"{y} vs {x}: exact (desmon analyze), {len(ok)} points" + (f", {failed} failed left out" if failed else ""),
+                     fontsize=9)
+    elif x is not None:
         _against(ax, ok, params, x, y)
         ax.set_title(f"{y} vs {x}: mean and min-max over up to {seeds} seeds ({note})", fontsize=9)
     else:
@@ -142,6 +174,8 @@ def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | 
         points = _pareto(ax, ok, params, pareto, y)
         ax.set_title(f"{y} vs {pareto}: Pareto front of {points} points ({note})", fontsize=9)
     ax.set_ylabel(y)
+    if log_x:
+        _log_axis(ax, sorted({float(v) for v in ok[x or pareto]}))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()

@@ -3,7 +3,8 @@ rows are appended to as they finish, and the Parquet / CSV files written from it
 
 Columns, in order: ``point`` (index in the grid), ``seed_index``, ``seed`` (derived, see
 :mod:`desmon.sweep.grid`), one column per swept parameter, ``scenario``, ``job``,
-``deployer``, the job's setting (``until`` / ``max_states`` / ``examples`` / ``trials``),
+``deployer``, the job's settings (``until`` / ``max_states`` / ``examples`` / ``trials`` /
+``phases``, ``horizon``, ``max_states``),
 ``exit_code``, ``error`` (empty unless the run failed), the job's figures
 (:data:`desmon.sweep.jobs.METRICS`, then ``errors_<kind>`` and ``memory_peak_mb_<platform>``
 for ``run``), and last ``wall_s``: the run's wall-clock seconds, the one column that
@@ -30,7 +31,12 @@ __all__ = [
 FORMAT = 1
 TABLE_SUFFIXES = (".parquet", ".csv")
 _HEAD = ("point", "seed_index", "seed")
-_STR_METRICS = {"verdict", "violated", "error"}
+_STR_METRICS = {"verdict", "violated", "error", "top_state"}
+#: analyze's figures that are numbers with a fraction but whose names do not say so
+_FLOAT_METRICS = {
+    "exposure_s_per_hour", "exposure_s_per_mission", "undetected_slips_per_hour", "p_exposure_within_T",
+    "long_run_unmonitored_fraction", "top_state_s_per_hour",
+}
 
 
 def journal_path(output: str | os.PathLike[str]) -> Path:
@@ -40,7 +46,7 @@ def journal_path(output: str | os.PathLike[str]) -> Path:
 
 
 def _is_float(column: str) -> bool:
-    return column.endswith("_s") or column.startswith("memory_peak_mb_") or "_rate_" in column or column.startswith(("tp_rate", "fp_rate"))
+    return column in _FLOAT_METRICS or column.endswith("_s") or column.startswith("memory_peak_mb_") or "_rate_" in column or column.startswith(("tp_rate", "fp_rate"))
 
 
 def columns_of(axes: Sequence[Axis], job: str, settings: Sequence[str], rows: Iterable[dict[str, Any]]) -> list[str]:
