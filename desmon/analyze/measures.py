@@ -21,6 +21,7 @@ Per mission (transient from the initial state over the horizon T, default the Wo
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -47,15 +48,11 @@ def detector_miss(scenario: Scenario, *, trials: int = 200, seed: int = 0) -> di
     """Each graph's probability of missing a slip: 1 - the TP rate of its detector in
     the evaluation of Tables 1-2 (``desmon evaluate``: ``trials`` slips up and down,
     ``seed``); 1 for a graph whose device kinds have no signal model."""
-    from desmon.detectors.evaluation import evaluate_actions
     from desmon.sim.streams import detector_plan
     from desmon.sim.world import world_of
 
     world = world_of(scenario)
-    tp: dict[str, list[float]] = {}
-    for cell in evaluate_actions(trials, seed):
-        if cell.kind == "TP":
-            tp.setdefault(cell.detector, []).append(cell.rate)
+    tp = _tp_rates(trials, seed)
     out = {}
     for g in scenario.model.graphs:
         streams = frozenset(world.signal_of(k) or "" for k in g.device_kinds)
@@ -63,6 +60,18 @@ def detector_miss(scenario: Scenario, *, trials: int = 200, seed: int = 0) -> di
         name = _EVALUATED.get(plan.kind) if plan is not None else None
         out[g.name] = 1.0 - float(np.mean(tp[name])) if name in tp else 1.0
     return out
+
+
+@functools.lru_cache(maxsize=8)
+def _tp_rates(trials: int, seed: int) -> dict[str, list[float]]:
+    """Each detector's TP rates (slips down and up) in the Tables 1-2 evaluation, once per process."""
+    from desmon.detectors.evaluation import evaluate_actions
+
+    tp: dict[str, list[float]] = {}
+    for cell in evaluate_actions(trials, seed):
+        if cell.kind == "TP":
+            tp.setdefault(cell.detector, []).append(cell.rate)
+    return tp
 
 
 @dataclass
