@@ -5,7 +5,10 @@ the mean time to the first one, and where the unmonitored time comes from.
 
 ``--simulate N`` runs the same Markov world N times in SimPy and puts the simulated
 mean and its 99 % confidence interval beside the exact value; ``--export`` writes the
-chain for Storm (``.drn``) or PRISM (``.tra`` with ``.sta``, ``.lab``, ``.srew``).
+chain for Storm (``.drn``) or PRISM (``.tra`` with ``.sta``, ``.lab``, ``.srew``);
+``--engine storm`` model-checks the chain with Storm too (:mod:`desmon.analyze.storm`,
+stormpy from ``desmon[exact]``) and prints its numbers beside scipy's, exit 1 if they
+differ by more than 1e-6 relative.
 Bad input (a rate with no event, a horizon <= 0, ``--phases`` out of range, a steady
 state asked of a chain with a trap) is one line, exit 2; a chain past ``--max-states``
 is exit 3; nothing is written then.
@@ -21,7 +24,7 @@ from typing import Any
 from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg
 from desmon.cli.options import add_output, positive_int, positive_seconds
 
-__all__ = ["add_parser", "run", "format_analysis", "DEFAULT_MAX_STATES"]
+__all__ = ["add_parser", "run", "format_analysis", "format_cross_check", "DEFAULT_MAX_STATES"]
 
 #: the chain's default state budget (--max-states)
 DEFAULT_MAX_STATES = 2_000_000
@@ -53,6 +56,10 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--simulate", type=positive_int, default=None, metavar="N", help="also simulate the Markov world with N seeds (0..N-1) and compare")
     add_output(p, "--json", suffixes=(".json",), default=None, metavar="FILE.json", help="write the measures and the rates used as JSON")
     add_output(p, "--export", suffixes=(".drn", ".tra"), default=None, metavar="FILE", help="write the chain: FILE.drn (Storm) or FILE.tra (PRISM explicit, with .sta .lab .srew)")
+    p.add_argument(
+        "--engine", choices=("scipy", "storm"), default="scipy",
+        help="storm: also model-check the chain with Storm (stormpy, pip install 'desmon[exact]') and print its numbers beside scipy's",
+    )
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(handler=run)
 
@@ -64,6 +71,7 @@ def run(args: argparse.Namespace) -> int:
 
     scenario = load_scenario_of(args)
     err = sys.stderr
+    stormpy = _stormpy(args.engine)  # before any work: a missing stormpy is one line at once
     if args.simulate is not None and args.simulate < 3:
         from desmon.analyze import AnalysisError
 
@@ -85,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
         from desmon.analyze.mdp import optimality_gap
 
         gap = optimality_gap(scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, max_states=args.max_states)
+    cross = _cross_check(stormpy, result) if stormpy is not None else None  # before any file is written
     files: list[str] = []
     if args.export:
         from desmon.analyze.export import export_chain
@@ -96,15 +105,66 @@ def run(args: argparse.Namespace) -> int:
         doc["simulation"] = agree.to_json()
     if gap is not None:
         doc["placements"] = gap.to_json()
+    if cross is not None:
+        doc["storm"] = {**cross[0].to_json(), "differences": [d.to_json() for d in cross[1]]}
     if args.json:
         with replacing(args.json) as fh:
             fh.write(json.dumps(doc, indent=2) + "\n")
     sys.stdout.write(format_analysis(result, agree))
     if gap is not None:
         sys.stdout.write(gap.text())
+    if cross is not None:
+        sys.stdout.write(format_cross_check(*cross))
     for f in files:
         sys.stdout.write(f"Chain written: {f}\n")
-    return EXIT_VIOLATED if agree is not None and not agree.inside else EXIT_OK
+    outside = agree is not None and not agree.inside
+    disagree = cross is not None and not all(d.agrees for d in cross[1])
+    return EXIT_VIOLATED if outside or disagree else EXIT_OK
+
+
+def _stormpy(engine: str) -> Any:
+    """stormpy for ``--engine storm`` (one line, exit 2, if it is not installed), else None."""
+    if engine != "storm":
+        return None
+    from desmon.analyze import storm
+
+    return storm.import_stormpy()
+
+
+def _cross_check(stormpy: Any, result: Any) -> tuple[Any, list[Any]]:
+    """Storm's numbers for the analysed chain and their differences from desmon's."""
+    from desmon.analyze.storm import check_chain, compare
+
+    assert result.chain is not None
+    storm = check_chain(result.chain, result.horizon_s, steady=result.long_run_unmonitored_fraction is not None, importer=lambda: stormpy)
+    return storm, compare(result, storm)
+
+
+_MEASURES = {
+    "long_run_unmonitored_fraction": "long-run unmonitored fraction",
+    "exposure_s_per_mission": "unmonitored s per mission",
+    "p_exposure_within_T": "P(any exposure within T)",
+}
+
+
+def format_cross_check(storm: Any, differences: list[Any]) -> str:
+    """Storm's numbers beside desmon's (``--engine storm``)."""
+    from desmon.analyze.storm import AGREEMENT, ENVIRONMENT
+
+    spent = storm.parse_s + storm.steady_s + storm.transient_s + storm.within_s
+    out = [
+        f"Storm {storm.version} (stormpy) on the exported chain: {storm.states:,} states, {storm.transitions:,} transitions "
+        f"(parsed and checked in {spent:.1f} s)",
+        f"  environment: {ENVIRONMENT}",
+    ]
+    out += [
+        f"  {_MEASURES[d.measure]:<30} desmon {d.desmon:.10g}  Storm {d.storm:.10g}  relative difference {d.relative:.1e}"
+        for d in differences
+    ]
+    worst = max((d.relative for d in differences), default=0.0)
+    verdict = "agree" if worst <= AGREEMENT else "DISAGREE"
+    out.append(f"  the engines {verdict} (largest relative difference {worst:.1e}; tolerance {AGREEMENT:g})")
+    return "\n".join(out) + "\n"
 
 
 def _n(x: float) -> str:
