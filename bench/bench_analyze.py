@@ -17,7 +17,10 @@ timing (fixed step durations, recognition, heartbeat and start latencies) over
 45,000 states times K) and the time of its steady state and its 1 h transient.
 
 Run: ``python -m bench.bench_analyze [--quick] [--seeds N] [--phases-error] [--large K]``; the last line is
-``RESULT states=... build_s=... explore_s=... build_ratio=... steady_s=... transient_s=... exact_s=... sim_mean_s=... sim_ci_low=... sim_ci_high=...``.
+``RESULT states=... build_s=... explore_s=... build_ratio=... steady_s=... transient_s=... exact_s=... sim_mean_s=... sim_ci_low=... sim_ci_high=...``,
+then ``storm_steady_s=... storm_transient_s=...`` when stormpy is installed (Storm's
+long-run average and reward up to 1 h on the same chain, exported to DRN; parsing not
+counted).
 Figures vary with the machine's load: compare the ratios.
 """
 
@@ -74,9 +77,11 @@ def main(argv: list[str] | None = None) -> int:
     print(f"chain built in {build:.2f} s; checker exploration {explore:.2f} s; ratio {build / explore:.2f} (goal <= 2)")
     print(f"steady state {steady:.2f} s; transient over 1 h {trans:.2f} s")
     print(f"exact {exact:.3f} s per hour; simulated mean {ag.mean:.3f} s, 99 % CI [{ag.low:.3f}, {ag.high:.3f}] over {seeds} seeds: {'inside' if ag.inside else 'OUTSIDE'}")
+    storm = _storm(chain)
     print(
         f"RESULT states={chain.n} build_s={build:.3f} explore_s={explore:.3f} build_ratio={build / explore:.3f} steady_s={steady:.3f} "
         f"transient_s={trans:.3f} exact_s={exact:.4f} sim_mean_s={ag.mean:.4f} sim_ci_low={ag.low:.4f} sim_ci_high={ag.high:.4f}"
+        + (f" storm_steady_s={storm.steady_s:.3f} storm_transient_s={storm.transient_s:.3f}" if storm else "")
     )
     return 0
 
@@ -128,6 +133,20 @@ def _phases_error(seeds: int) -> int:
                   f"[{ag.low:.3f}, {ag.high:.3f}] ({seeds} seeds): {100 * err:+.1f} %")
     print(f"RESULT phases_error_16={worst:.4f}")
     return 0
+
+
+def _storm(chain):  # type: ignore[no-untyped-def]
+    """Storm's steady state and transient on the same chain, exported, if stormpy is installed."""
+    from desmon.analyze import AnalysisError
+    from desmon.analyze.storm import check_chain
+
+    try:
+        storm = check_chain(chain, 3600.0)
+    except AnalysisError as exc:  # stormpy is not installed: no Storm figures
+        print(f"no Storm figures: {exc}")
+        return None
+    print(f"Storm {storm.version} (same chain, exported): steady state {storm.steady_s:.2f} s; transient over 1 h {storm.transient_s:.2f} s")
+    return storm
 
 
 if __name__ == "__main__":

@@ -19,11 +19,12 @@ difference.
 **The environment** (:func:`storm_environment`). stormpy's default environment
 (``stormpy.environments.default``) is the *sound* one: it solves the long-run average
 by sound value iteration over expected visiting times, which on these chains is 6 to
-100 times slower than the direct solve and only guarantees 1e-6 relative (measured
-2.4e-7 off on coffee_shift). desmon asks explicitly for a non-sound
+12 times slower than the direct solve and only guarantees 1e-6 relative (measured
+2.3e-7 off on the 8 h coffee shift). A plain ``stormpy.Environment()`` (gmm++
+iterative, 1e-6) is fast but 9.5e-7 off there. desmon asks explicitly for a non-sound
 ``stormpy.Environment()`` whose linear equations are solved by Eigen (a sparse LU
 factorisation): the long-run average then agrees with scipy to a few 1e-9 relative
-(Storm's gain/bias equations, not a bound it proves). The time-bounded properties are
+(measured; not a bound Storm proves). The time-bounded properties are
 uniformisation with Fox-Glynn truncation in either environment; their precision is
 Storm's default for time-bounded solvers, 1e-6 *relative* (stormpy 2.0 offers no setter
 for it; measured 1e-8 to 1e-9 from scipy's values). Uniformisation makes Lambda*T
