@@ -93,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
         from desmon.analyze.mdp import optimality_gap
 
         gap = optimality_gap(scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, max_states=args.max_states)
-    cross = _cross_check(stormpy, result) if stormpy is not None else None  # before any file is written
+    cross = _cross_check(stormpy, result)  # before any file is written
     files: list[str] = []
     if args.export:
         from desmon.analyze.export import export_chain
@@ -105,21 +105,17 @@ def run(args: argparse.Namespace) -> int:
         doc["simulation"] = agree.to_json()
     if gap is not None:
         doc["placements"] = gap.to_json()
-    if cross is not None:
-        doc["storm"] = {**cross[0].to_json(), "differences": [d.to_json() for d in cross[1]]}
+    doc |= _cross_json(cross)
     if args.json:
         with replacing(args.json) as fh:
             fh.write(json.dumps(doc, indent=2) + "\n")
     sys.stdout.write(format_analysis(result, agree))
     if gap is not None:
         sys.stdout.write(gap.text())
-    if cross is not None:
-        sys.stdout.write(format_cross_check(*cross))
+    sys.stdout.write(format_cross_check(cross))
     for f in files:
         sys.stdout.write(f"Chain written: {f}\n")
-    outside = agree is not None and not agree.inside
-    disagree = cross is not None and not all(d.agrees for d in cross[1])
-    return EXIT_VIOLATED if outside or disagree else EXIT_OK
+    return EXIT_VIOLATED if (agree is not None and not agree.inside) or _disagree(cross) else EXIT_OK
 
 
 def _stormpy(engine: str) -> Any:
@@ -131,13 +127,27 @@ def _stormpy(engine: str) -> Any:
     return storm.import_stormpy()
 
 
-def _cross_check(stormpy: Any, result: Any) -> tuple[Any, list[Any]]:
-    """Storm's numbers for the analysed chain and their differences from desmon's."""
+def _cross_check(stormpy: Any, result: Any) -> tuple[Any, list[Any]] | None:
+    """Storm's numbers for the analysed chain and their differences from desmon's (None
+    without ``--engine storm``)."""
+    if stormpy is None:
+        return None
     from desmon.analyze.storm import check_chain, compare
 
     assert result.chain is not None
     storm = check_chain(result.chain, result.horizon_s, steady=result.long_run_unmonitored_fraction is not None, importer=lambda: stormpy)
     return storm, compare(result, storm)
+
+
+def _cross_json(cross: tuple[Any, list[Any]] | None) -> dict[str, Any]:
+    """The JSON key ``storm`` (``--engine storm`` only)."""
+    if cross is None:
+        return {}
+    return {"storm": {**cross[0].to_json(), "differences": [d.to_json() for d in cross[1]]}}
+
+
+def _disagree(cross: tuple[Any, list[Any]] | None) -> bool:
+    return cross is not None and not all(d.agrees for d in cross[1])
 
 
 _MEASURES = {
@@ -147,10 +157,13 @@ _MEASURES = {
 }
 
 
-def format_cross_check(storm: Any, differences: list[Any]) -> str:
-    """Storm's numbers beside desmon's (``--engine storm``)."""
+def format_cross_check(cross: tuple[Any, list[Any]] | None) -> str:
+    """Storm's numbers beside desmon's (``--engine storm``; nothing without it)."""
     from desmon.analyze.storm import AGREEMENT, ENVIRONMENT
 
+    if cross is None:
+        return ""
+    storm, differences = cross
     spent = storm.parse_s + storm.steady_s + storm.transient_s + storm.within_s
     out = [
         f"Storm {storm.version} (stormpy) on the exported chain: {storm.states:,} states, {storm.transitions:,} transitions "
