@@ -135,25 +135,43 @@ def _p0(chain: Chain) -> np.ndarray:
     return p0
 
 
-def _long_run(chain: Chain, Q: Any) -> tuple[float, float, float, list[tuple[float, str]]]:
+def _long_run(chain: Chain, Q: Any) -> tuple[float, float, float, list[tuple[float, str]], np.ndarray]:
     pi, residual, _method = steady_state(Q, chain.describe, chain.blocks())
     frac = float(pi @ chain.unmonitored)
     slips = float(pi @ chain.undetected) * 3600.0
     contrib = pi * chain.unmonitored * 3600.0
     top = np.argsort(-contrib)[:TOP_STATES]
     rows = [(float(contrib[i]), chain.describe(int(i))) for i in top if contrib[i] > 0]
-    return frac, slips, residual, rows
+    return frac, slips, residual, rows, pi
 
 
 def _within(chain: Chain, Q: Any, p0: np.ndarray, horizon: float) -> float:
-    """P(an unmonitored moment in [0, T]): the unmonitored states made absorbing."""
+    """P(an unmonitored moment in [0, T]): the unmonitored states made absorbing; the
+    mass not yet absorbed only shrinks, so the solution stops once it is below
+    :data:`~desmon.analyze.solve.SETTLED` (the answer is then exact to that)."""
     import scipy.sparse as sp
 
+    from desmon.analyze.solve import FIRST_CHUNK, SETTLED, UNIFORM_STEPS, expv
+
     target = chain.unmonitored > 0
+    if not target.any():
+        return 0.0
     keep = sp.diags((~target).astype(float))
     Qa = (keep @ Q).tocsr()
-    tr = transient(Qa, p0, horizon, np.zeros((1, chain.n)))
-    return float(min(1.0, tr.at[target].sum()))
+    lam = float(-Qa.diagonal().min()) * 1.02
+    if lam * horizon <= UNIFORM_STEPS:
+        tr = transient(Qa, p0, horizon, np.zeros((1, chain.n)), method="uniformisation")
+        return float(min(1.0, tr.at[target].sum()))
+    A = Qa.T.tocsr()
+    v = p0.astype(float)
+    t, chunk = 0.0, FIRST_CHUNK
+    while t < horizon:
+        span = min(chunk, horizon - t)
+        v, _err, _steps = expv(span, A, v)
+        t, chunk = t + span, chunk * 2
+        if float(v[~target].sum()) < SETTLED:
+            break
+    return float(min(1.0, max(0.0, 1.0 - v[~target].sum())))
 
 
 def analyze(
@@ -178,11 +196,11 @@ def analyze(
     t0 = time.perf_counter()
     Q, _exit = chain.generator()
     p0 = _p0(chain)
-    frac = slips = residual = None
+    frac = slips = residual = pi = None
     rows: list[tuple[float, str]] = []
     if steady:
-        frac, slips, residual, rows = _long_run(chain, Q)
-    tr = transient(Q, p0, T, np.vstack([chain.unmonitored, chain.undetected]))
+        frac, slips, residual, rows, pi = _long_run(chain, Q)
+    tr = transient(Q, p0, T, np.vstack([chain.unmonitored, chain.undetected]), limit=pi)
     per_mission = float(tr.accumulated[0])
     within = _within(chain, Q, p0, T)
     mtte = mean_time_to(Q, chain.unmonitored > 0, p0)
