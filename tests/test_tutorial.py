@@ -66,8 +66,15 @@ def run_doc(root: Path, work: Path, doc: str) -> dict[str, subprocess.CompletedP
 @pytest.mark.slow
 def test_every_tutorial_command_runs_as_documented(root, tmp_path):
     work = tmp_path / "tour"
-    run_doc(root, work, "tutorial.md")
+    ran = run_doc(root, work, "tutorial.md")
     text = (root / "docs" / "tutorial.md").read_text()
+    from docblocks import check_quote, quotes
+
+    exact = [q for q in quotes(text) if q.command.startswith("desmon analyze")]  # §10 quotes the exact figures
+    assert len(exact) == 2
+    for q in exact:
+        proc = ran[q.command.split("#")[0].strip()]
+        check_quote(q, proc.stdout + proc.stderr)
     for picture in re.findall(r"!\[[^\]]*\]\((img/[^)]+)\)", text):
         made = work / "docs" / picture
         assert made.exists() and made.stat().st_size > 20_000, picture

@@ -194,10 +194,8 @@ def format_analysis(a: Any, agree: Any = None) -> str:
     timing = "exponential" if w.phases == 1 else f"Erlang-{w.phases}"
     out.append(f"  task steps {timing}; start failure p = {w.start_failure_p:g}; recognition {w.recognition_delay:g} s; heartbeat {w.heartbeat_timeout:g} s")
     if a.long_run_unmonitored_fraction is not None:
-        out.append(
-            f"Long run: unmonitored {100 * a.long_run_unmonitored_fraction:.4f} % of the time = "
-            f"{a.exposure_s_per_hour:.3f} s per hour (steady-state residual {a.residual:.1e})"
-        )
+        out.append(f"Long run: unmonitored {100 * a.long_run_unmonitored_fraction:.4f} % of the time = {a.exposure_s_per_hour:.3f} s per hour")
+        out.append(f"  (steady state residual {a.residual:.1e})")
         out.append(f"Undetected slips: {a.undetected_slips_per_hour:.4f} per hour")
     out.append(
         f"Per mission (T = {_n(a.horizon_s)} s): {a.exposure_s_per_mission:.3f} s unmonitored expected; "
