@@ -42,8 +42,7 @@ from desmon.deployment.ports import Start, Stop
 from desmon.errors import CheckerError
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, PlatformDown, PlatformUp
 from desmon.model.scenario import Scenario
-from desmon.sim.processes import OBSERVATION
-from desmon.deployment.monitor import interpret
+from desmon.sim.processes import recognised_context
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 
@@ -69,11 +68,8 @@ class ChainState(NamedTuple):
     starting: tuple[tuple[str, str], ...]  # (graph, platform) started, not yet ready, sorted
 
 
-def recognised(action: str) -> str:
-    """The context the monitor reports for the true ``action`` (what the simulation's
-    context monitor makes of the gripper and base it sees)."""
-    obs = OBSERVATION.get(action)
-    return interpret(obs) if obs is not None else action
+#: the context the monitor reports for the true action: the simulation's own rule
+recognised = recognised_context
 
 
 @dataclass
