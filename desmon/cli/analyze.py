@@ -76,11 +76,23 @@ def run(args: argparse.Namespace) -> int:
         from desmon.analyze import AnalysisError
 
         raise AnalysisError(f"--simulate {args.simulate}: a 99 % confidence interval needs at least 3 seeds")
+    from desmon.progress import StatusLine
+
+    line = StatusLine(err)
+    show = not args.no_progress and err.isatty()
+
+    def progress(n: int) -> None:
+        if show:
+            line.show(f"desmon analyze: {n:,} chain states explored")
+
     try:
-        result = analyze(
-            scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, horizon=args.horizon,
-            steady=not args.transient_only, max_states=args.max_states,
-        )
+        try:
+            result = analyze(
+                scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, horizon=args.horizon,
+                steady=not args.transient_only, max_states=args.max_states, progress=progress,
+            )
+        finally:
+            line.close()
     except BudgetExceeded as exc:
         err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
         return EXIT_INCOMPLETE
