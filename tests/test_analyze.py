@@ -261,3 +261,17 @@ def test_a_world_refuses_an_unknown_timing():
     sc = _shift(faults="False")
     with pytest.raises(ScenarioError, match="world: timing = 'random'"):
         replace(sc.world, timing="random")
+
+
+def test_a_deployer_that_crashes_in_a_reached_state_is_crashed_exit_4(tmp_path, capsys):
+    path = tmp_path / "fragile.py"
+    path.write_text(
+        "from desmon.deployment.deployer import DEPLOYERS\n"
+        "def fragile(q, slots, changed, context_changed):\n"
+        "    if q.context() == 'move_base':\n"
+        "        raise RuntimeError('cannot carry')\n"
+        "    yield from DEPLOYERS['desmon'].react(q, slots, changed, context_changed)\n"
+    )
+    code = main(["analyze", SHIFT, "-p", "faults=False", "--horizon", "60", "--deployer", f"{path}:fragile"])
+    err = capsys.readouterr().err
+    assert code == 4 and "crashed reacting to action move_base" in err and len(err.strip().splitlines()) == 1, err

@@ -37,7 +37,7 @@ from typing import Any, Callable, Iterator, NamedTuple
 import numpy as np
 
 from desmon.deployment.control import ControlRules
-from desmon.deployment.guard import CRASH
+from desmon.deployment.guard import CRASH, DeployerFault
 from desmon.deployment.ports import Start, Stop
 from desmon.errors import CheckerError
 from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, PlatformDown, PlatformUp
@@ -167,10 +167,10 @@ class _Builder:
             prefix = pending.pop()
             nkey, outcomes, log, instant = self.system.run_one(key, event, prefix)
             self.reactions += 1
-            if instant is not None and instant[0] == CRASH:
-                raise AnalysisError(
-                    f"the deployer crashed reacting to {event} ({instant[1]}): desmon verify shows the path to it; "
-                    "the chain of a crashing deployer has no meaning"
+            if instant is not None and instant[0] == CRASH:  # exit 4, as desmon verify's CRASHED
+                raise DeployerFault(
+                    f"deployer {self.system.deployer_name} crashed reacting to {event} in a state the chain reached: {instant[1]}; "
+                    "desmon verify shows the path to it (a crashing deployer has no exposure to compute)"
                 )
             nf = outcomes.count(False)
             prob = (p ** nf) * ((1.0 - p) ** (len(outcomes) - nf)) if p > 0 else 1.0
