@@ -275,3 +275,10 @@ def test_a_deployer_that_crashes_in_a_reached_state_is_crashed_exit_4(tmp_path, 
     code = main(["analyze", SHIFT, "-p", "faults=False", "--horizon", "60", "--deployer", f"{path}:fragile"])
     err = capsys.readouterr().err
     assert code == 4 and "crashed reacting to action move_base" in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_simulate_runs_the_world_the_chain_was_given():
+    from desmon.analyze.agreement import markov_scenario
+
+    sc = markov_scenario(_shift(faults="False"), phases=3, start_failure_p=0.25)
+    assert (sc.world.timing, sc.world.phases, sc.world.signals, sc.world.start_failure.probability) == ("exponential", 3, False, 0.25)

@@ -22,22 +22,26 @@ __all__ = ["Agreement", "simulated_exposure", "agreement", "markov_scenario", "M
 MIN_SEEDS = 3
 
 
-def markov_scenario(scenario: Scenario, *, phases: int = 1, timing: str = "exponential") -> Scenario:
-    """``scenario`` with its World under ``timing`` (Erlang ``phases``) and signals off."""
-    from desmon.sim.world import world_of
+def markov_scenario(scenario: Scenario, *, phases: int = 1, timing: str = "exponential", start_failure_p: float | None = None) -> Scenario:
+    """``scenario`` with its World under ``timing`` (Erlang ``phases``) and signals off;
+    ``start_failure_p``, if given, replaces the World's start failure probability (as
+    ``desmon analyze --start-failure-p`` does for the chain)."""
+    from desmon.sim.world import StartFailure, world_of
 
     world = replace(world_of(scenario), timing=timing, phases=phases if timing == "exponential" else 1, signals=False)
+    if start_failure_p is not None:
+        world = replace(world, start_failure=StartFailure(probability=start_failure_p))
     return replace(scenario, world=world)
 
 
 def simulated_exposure(
     scenario: Scenario, deployer: Any, seeds: Sequence[int], horizon: float, *, phases: int = 1, timing: str = "exponential",
-    progress: Callable[[int], None] | None = None,
+    start_failure_p: float | None = None, progress: Callable[[int], None] | None = None,
 ) -> list[float]:
     """Unmonitored seconds in ``[0, horizon]`` of one simulated run per seed."""
     from desmon.sim.engine import simulate
 
-    sc = markov_scenario(scenario, phases=phases, timing=timing)
+    sc = markov_scenario(scenario, phases=phases, timing=timing, start_failure_p=start_failure_p)
     out = []
     for i, seed in enumerate(seeds):
         r = simulate(sc, deployer, seed=seed, until=horizon)
