@@ -110,7 +110,9 @@ def test_a_memory_budget_ends_the_search_incomplete(big, engine):  # type: ignor
     r = checker.run(max_memory=budget, engine=engine, timeout=20, max_states=None)
     assert r.verdict == INCOMPLETE and r.reason.startswith(f"memory budget {budget:g} MB reached: "), r.reason
     assert r.exit_code == 3 and r.states > 1
-    assert resident_mb() < budget + 20  # it stopped near the budget, not long after
+    # it stopped near the budget, not long after: within one batch and one doubling of the
+    # table engine's seen-state hash table (16 bytes a slot, about 16 MB at this size)
+    assert resident_mb() < budget + 48
 
 
 def test_the_memory_of_workers_counts(big, monkeypatch):  # type: ignore[no-untyped-def]
