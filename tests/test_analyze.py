@@ -282,3 +282,35 @@ def test_simulate_runs_the_world_the_chain_was_given():
 
     sc = markov_scenario(_shift(faults="False"), phases=3, start_failure_p=0.25)
     assert (sc.world.timing, sc.world.phases, sc.world.signals, sc.world.start_failure.probability) == ("exponential", 3, False, 0.25)
+
+
+def test_a_deployer_that_never_yields_is_stopped_not_waited_for(tmp_path, capsys):
+    path = tmp_path / "stuck.py"
+    path.write_text(
+        "from desmon.deployment.deployer import DEPLOYERS\n"
+        "def stuck(q, slots, changed, context_changed):\n"
+        "    while q.context() == 'move_base':\n"
+        "        pass\n"
+        "    yield from DEPLOYERS['desmon'].react(q, slots, changed, context_changed)\n"
+    )
+    code = main(["analyze", SHIFT, "-p", "faults=False", "--horizon", "60", "--deployer", f"{path}:stuck", "--max-reaction-seconds", "0.5"])
+    err = capsys.readouterr().err
+    assert code == 4 and len(err.strip().splitlines()) == 1, err
+
+
+def test_placements_refuse_a_model_with_too_many_orders_and_stop_at_the_state_budget():
+    from desmon.analyze import BudgetExceeded
+    from desmon.analyze.mdp import optimality_gap
+
+    with pytest.raises(AnalysisError, match="5 platforms, 120 orders"):
+        optimality_gap(_five_platforms())
+    with pytest.raises(BudgetExceeded, match="placement MDP has more than --max-states 10"):
+        optimality_gap(_shift(faults="False"), max_states=10)
+
+
+def _five_platforms():
+    sc = _shift(faults="False", force_sensors="2")
+    from desmon.model.platform import Platform
+
+    extra = Platform.make("spare_pc", memory=256)
+    return replace(sc, model=replace(sc.model, platforms=(*sc.model.platforms, extra)))

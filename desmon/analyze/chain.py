@@ -135,16 +135,13 @@ class Chain:
 class _Builder:
     """Breadth-first over chain states; one transition system, its reactions memoised."""
 
-    def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld, max_states: int | None,
-                 progress: Callable[[int], None] | None) -> None:
+    def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld) -> None:
         self.mw = mw
         # the checker's bounds without its budgets, and no scripted first action: the
         # chain starts before the monitor has recognised anything
         plain = replace(scenario, timeline=())
         self.system = TransitionSystem(plain, deployer, invariants=(), bounds=chain_bounds(scenario, mw))
         self.model = scenario.model
-        self.max_states = max_states
-        self.progress = progress
         self.rules = ControlRules(self.model)
         self._react_memo: dict[tuple[Key, Event], list[tuple[float, Key, tuple]]] = {}
         self.reactions = 0
@@ -274,7 +271,7 @@ def build_chain(
     """Every chain state reachable from the initial ones, with its rates and rewards;
     ``miss`` is each graph's probability of missing a slip (1 where not given)."""
     t0 = time.perf_counter()
-    b = _Builder(scenario, deployer, mw, max_states, progress)
+    b = _Builder(scenario, deployer, mw)
     try:
         key0 = b.system.initial()
     except CheckerError as exc:

@@ -20,12 +20,13 @@ the deployer's and is strictly better.
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
-from desmon.analyze.chain import ChainState, _Builder, _rewards, recognised
+from desmon.analyze.chain import BudgetExceeded, ChainState, _Builder, _rewards, recognised
 from desmon.analyze.markov import AnalysisError, MarkovWorld, markov_world
 from desmon.analyze.solve import steady_state
 from desmon.deployment.control import ControlRules
@@ -91,8 +92,13 @@ class _MDP:
 
     def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld, max_states: int | None) -> None:
         names = tuple(p.name for p in scenario.model.platforms)
-        orders = list(itertools.permutations(names))[:MAX_ORDERS]
-        self.builders = [_Builder(_ordered(scenario, o), deployer, mw, None, None) for o in orders]
+        if math.factorial(len(names)) > MAX_ORDERS:  # a cut list of orders would make "best" a lie
+            raise AnalysisError(
+                f"--placements: the model has {len(names)} platforms, {math.factorial(len(names)):,} orders to choose among; "
+                f"it handles at most {MAX_ORDERS} (4 platforms): analyze without --placements"
+            )
+        orders = list(itertools.permutations(names))
+        self.builders = [_Builder(_ordered(scenario, o), deployer, mw) for o in orders]
         self.main = self.builders[0]
         self.max_states = max_states
         self.states: list[ChainState] = []
@@ -106,7 +112,7 @@ class _MDP:
             j = self.index[s] = len(self.states)
             self.states.append(s)
             if self.max_states is not None and len(self.states) > self.max_states:
-                raise AnalysisError(f"the placement MDP has more than --max-states {self.max_states} states")
+                raise BudgetExceeded(f"the placement MDP has more than --max-states {self.max_states} states: raise it")
         return j
 
     def build(self) -> None:

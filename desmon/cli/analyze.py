@@ -43,7 +43,7 @@ def _probability(text: str) -> float:
 def add_parser(sub: Subparsers) -> None:
     p = sub.add_parser("analyze", help="exact unmonitored exposure from the Markov chain of the real deployer")
     scenario_arg(p, help="scenario file whose World gives rates, e.g. scenarios/coffee_shift.py")
-    deployer_arg(p, deadline=False)
+    deployer_arg(p)  # --max-reaction-seconds: a deployer that never yields is stopped, not waited for
     p.add_argument("--phases", type=positive_int, default=1, metavar="K", help="Erlang phases per task step (1: exponential; at most 64)")
     p.add_argument("--start-failure-p", type=_probability, default=None, metavar="P", help="probability a start fails (default: the World's)")
     p.add_argument("--horizon", type=positive_seconds, default=None, metavar="T", help="mission length in seconds (default: the World's horizon)")
@@ -106,7 +106,11 @@ def run(args: argparse.Namespace) -> int:
     if args.placements:
         from desmon.analyze.mdp import optimality_gap
 
-        gap = optimality_gap(scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, max_states=args.max_states)
+        try:
+            gap = optimality_gap(scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, max_states=args.max_states)
+        except BudgetExceeded as exc:
+            err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
+            return EXIT_INCOMPLETE
     cross = _cross_check(stormpy, result)  # before any file is written
     files: list[str] = []
     if args.export:
