@@ -18,13 +18,17 @@ combined detector asks for 350 MB instead of 250 MB (a ``RequirementChange`` the
 deployer re-checks like any fact).
 
 Parameters: ``lease`` (lease the edge server when nothing fits, default True),
-``hours`` (length of the shift, default 2).
+``hours`` (length of the shift, default 2), ``stochastic`` (default False): True gives
+every event the checker explores a rate, for ``desmon analyze``: the torso load steps
+between the checker's two levels (600 and 800 MB, on average every 5 min) instead of
+the Gaussian walk, and the wrench breaks down (MTTF 1 h, MTTR 5 min).
 
     desmon replay scenarios/cloud_offload.py              # the scripted walk-through, step by step
     desmon explain scenarios/cloud_offload.py combined_slip_detector --at leased
     desmon run scenarios/cloud_offload.py                 # with the lease
     desmon run scenarios/cloud_offload.py -p lease=False  # without: exposure rises
     desmon verify scenarios/cloud_offload.py              # joins and leaves in every order: HOLDS
+    desmon analyze scenarios/cloud_offload.py -p stochastic=True   # the exact unmonitored time, with the lease
 """
 
 from __future__ import annotations
@@ -35,10 +39,10 @@ from desmon.model.events import ActionChange, LoadChange, PlatformJoin, Platform
 from desmon.model.requirements import Capacity
 from desmon.model.params import parameters
 from desmon.model.scenario import Scenario, TimedEvent
-from desmon.sim.world import Lease, LoadWalk, RandomChanges, Step, World
+from desmon.sim.world import MTTF, Lease, LoadSteps, LoadWalk, RandomChanges, Step, World
 from desmon.verify.bounds import Bounds, levels
 
-p = parameters(lease=True, hours=2.0)
+p = parameters(lease=True, hours=2.0, stochastic=False)
 
 #: The robot speeds up: the combined detector samples faster and needs 350 MB; and back.
 FAST = RequirementChange(COMBINED, add=(Capacity("memory", 350),), remove=(Capacity("memory", 250),), label="fast: 350 MB")
@@ -79,7 +83,9 @@ scenario = Scenario(
         horizon=p.hours * 3600.0,
         slip_rate=1.0 / 600.0,
         start_latency=0.3,
-        load_walks=(LoadWalk("torso_pc", start=600, sigma=40.0, interval=30.0, low=400, high=900),),
+        load_walks=() if p.stochastic else (LoadWalk("torso_pc", start=600, sigma=40.0, interval=30.0, low=400, high=900),),
+        load_steps=(LoadSteps("torso_pc", levels=(600, 800), start=600, mean_interval=300.0),) if p.stochastic else (),
+        stochastic_faults=(MTTF("lwr_wrench", mttf=3600.0, mttr=300.0),) if p.stochastic else (),
         recognition_delay=0.1,
         heartbeat_timeout=0.5,
         block=1.0,

@@ -26,11 +26,13 @@ from desmon.analyze.solve import steady_state, transient
 from desmon.cli import main
 from desmon.deployment.control import ControlRules
 from desmon.loader import load_scenario
-from desmon.sim.world import MTTF
+from desmon.errors import ScenarioError
+from desmon.sim.world import MTTF, LoadSteps
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIFT = str(ROOT / "scenarios" / "coffee_shift.py")
 CRASH = str(ROOT / "scenarios" / "platform_crash.py")
+OFFLOAD = str(ROOT / "scenarios" / "cloud_offload.py")
 NO_MISS: dict[str, float] = {}
 
 
@@ -66,6 +68,68 @@ def test_a_rate_without_an_event_is_refused():
     sc = replace(sc, world=replace(sc.world, stochastic_faults=(MTTF("lwr_wrench", mttf=100.0, mttr=10.0),)))
     with pytest.raises(AnalysisError, match="gives 'lwr_wrench' an MTTF but the checker bounds never let it fail"):
         markov_world(sc)
+
+
+def _offload(**changes):
+    sc = load_scenario(OFFLOAD, params={"stochastic": "True"})
+    world = changes.pop("world", {})
+    bounds = changes.pop("checker", {})
+    return replace(sc, world=replace(sc.world, **world), checker=replace(sc.checker, **bounds), **changes)
+
+
+@pytest.mark.parametrize(
+    ("changes", "says"),
+    [
+        ({"world": {"load_steps": (LoadSteps("torso_pc", levels=(600, 700, 800), start=600, mean_interval=300.0),)}},
+         "World load steps of 'torso_pc' move over levels [600.0, 700.0, 800.0] but the checker bounds over [600, 800]"),
+        ({"world": {"load_steps": ()}}, "the checker bounds move the memory load of 'torso_pc' but the World gives it no rate"),
+        ({"checker": {"loads": {}}}, "World load steps move the memory load of 'torso_pc' but the checker bounds never do"),
+        ({"world": {"load_steps": (LoadSteps("torso_pc", levels=(600, 800), start=800, mean_interval=300.0),)}},
+         "World load steps of 'torso_pc' start at 800 but the scenario's initial load is 600"),
+        ({"world": {"lease": None}}, "the checker bounds let 'edge' join and leave but the World has no lease"),
+    ],
+)
+def test_load_steps_and_leases_must_match_the_checkers_loads_and_joins(changes, says):
+    with pytest.raises(AnalysisError) as e:
+        markov_world(_offload(**changes))
+    assert says in str(e.value) and "\n" not in str(e.value)
+
+
+def test_a_lease_platform_that_joins_at_once_has_no_rate():
+    sc = _offload()
+    platforms = tuple(replace(p, startup_s=0.0) if p.name == "edge" else p for p in sc.model.platforms)
+    with pytest.raises(AnalysisError, match="on-demand platform 'edge' joins at once"):
+        markov_world(replace(sc, model=replace(sc.model, platforms=platforms)))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "says"),
+    [
+        ({"levels": (600,)}, "give at least two"),
+        ({"levels": (800, 600)}, "not strictly increasing"),
+        ({"start": 700}, "start 700 is not one of its levels"),
+        ({"mean_interval": 0}, "load steps mean interval of torso_pc"),
+        ({"levels": "600,800"}, "is not a sequence of numbers"),
+    ],
+)
+def test_load_steps_refuse_nonsense_in_one_line(kwargs, says):
+    args = {"platform": "torso_pc", "levels": (600, 800), "start": 600, "mean_interval": 300.0} | kwargs
+    with pytest.raises(ScenarioError, match=says):
+        LoadSteps(**args)
+
+
+def test_the_lease_is_in_the_chain_the_way_the_simulation_leases():
+    """A grasp while the torso is full raises no acceptable platform for the combined
+    detector: the chain requests the edge server, which joins and then hosts it."""
+    a = analyze(_offload(), miss=NO_MISS, horizon=600.0, steady=False)
+    chain = a.chain
+    requested = [s for s in chain.states if s.requested]
+    assert requested and all(s.requested == ("edge",) and "edge" in s.phys_down for s in requested)
+    on_edge = [s for s in chain.states if ("combined_slip_detector", "edge") in s.key.deployments]
+    assert on_edge and all("edge" not in s.phys_down for s in on_edge if "edge" not in s.key.down)
+    loads = {dict(dict(s.key.loads)["torso_pc"])["memory"] for s in chain.states}
+    assert loads == {600, 800}
+    assert a.world.to_json()["lease"]["idle_s"] == 120.0
 
 
 def test_the_checkers_budgets_are_dropped_and_said():
@@ -178,7 +242,9 @@ HOUR = 1800.0  # half an hour of each seed: enough faults to test, quick enough 
 
 @functools.lru_cache(maxsize=None)
 def _scenario(name: str):
-    return _shift(hours="0.5") if name == "coffee_shift" else load_scenario(CRASH, params={"stochastic": "True"})
+    if name == "coffee_shift":
+        return _shift(hours="0.5")
+    return load_scenario(CRASH if name == "platform_crash" else OFFLOAD, params={"stochastic": "True"})
 
 
 @functools.lru_cache(maxsize=None)
@@ -206,7 +272,7 @@ def _next_step_reward(a):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["coffee_shift", "platform_crash"])
+@pytest.mark.parametrize("name", ["coffee_shift", "platform_crash", "cloud_offload"])
 def test_the_exact_exposure_lies_in_the_simulations_99_percent_interval(name):
     ag = agreement(_exact(_scenario(name)), _simulated(name))
     assert ag.inside, ag.to_json()
@@ -219,6 +285,14 @@ def test_a_wrong_rate_or_an_off_by_one_reward_falls_outside_the_interval():
         replace(m, mttr=m.mttr * 2) if m.component == "lwr_wrench" else m for m in sc.world.stochastic_faults)))
     assert not agreement(_exact(wrong), _simulated("platform_crash")).inside
     assert not agreement(_exact(sc, reward=_next_step_reward), _simulated("platform_crash")).inside
+
+
+@pytest.mark.slow
+def test_a_wrong_lease_start_up_falls_outside_the_interval():
+    sc = _scenario("cloud_offload")
+    slow = tuple(replace(p, startup_s=p.startup_s * 3) if p.on_demand else p for p in sc.model.platforms)
+    assert agreement(_exact(sc), _simulated("cloud_offload")).inside
+    assert not agreement(_exact(replace(sc, model=replace(sc.model, platforms=slow))), _simulated("cloud_offload")).inside
 
 
 def test_exponential_timing_is_deterministic_for_a_seed():

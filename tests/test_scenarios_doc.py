@@ -14,7 +14,7 @@ import pytest
 from desmon.loader import load_scenario
 from desmon.model.scenario import Scenario
 from desmon.sim.engine import simulate
-from desmon.sim.world import MTTF, LoadWalk, Slip, StartFailure, Step, World
+from desmon.sim.world import MTTF, LoadSteps, LoadWalk, Slip, StartFailure, Step, World
 from desmon.verify import Bounds, Checker
 from test_tutorial import check_quotes, doc_commands, run_doc
 
@@ -29,7 +29,7 @@ def example(root: Path) -> Path:
     return root / "docs" / "examples" / "kitchen_robot.py"
 
 
-@pytest.mark.parametrize("cls", [Scenario, World, Step, Slip, MTTF, StartFailure, LoadWalk, Bounds], ids=lambda c: c.__name__)
+@pytest.mark.parametrize("cls", [Scenario, World, Step, Slip, MTTF, StartFailure, LoadWalk, LoadSteps, Bounds], ids=lambda c: c.__name__)
 def test_the_guide_explains_every_field(root: Path, cls: type) -> None:
     text = guide(root)
     missing = [f.name for f in dataclasses.fields(cls) if f.init and f"`{f.name}`" not in text]

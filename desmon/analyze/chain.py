@@ -20,7 +20,18 @@ Rates and what they do (:mod:`desmon.analyze.markov`):
   learns of it at once (no heartbeat) or when the monitor notices (1/heartbeat), which
   reports the component's state *then*;
 * a started detector becomes ready (1/start latency of its platform);
-* a random requirement change (its rate).
+* a random requirement change (its rate);
+* a load step to a neighbouring level (its rate, split over the neighbours): the
+  repository learns it at once;
+* a lease: a reaction that raises *no acceptable platform* for a graph requests the
+  on-demand platform the simulation would lease (:func:`~desmon.deployment.lease.lease_choice`
+  on the store after the reaction); it joins (1/startup_s) and, while it hosts
+  nothing, leaves (1/idle_s); the monitor notices joins and leaves like repairs and
+  breakdowns.
+
+Where the world differs from what the repository knows (a platform gone or a device
+broken, not yet noticed), a start the Control rules refuse on the *physical* facts
+fails, as in the simulation, whatever the repository says.
 
 A state is **unmonitored** when the true action is risky and a slot of the selector's
 rules for it has no member that is deployed, ready, on a physically up platform, with
@@ -38,10 +49,22 @@ import numpy as np
 
 from desmon.deployment.control import ControlRules
 from desmon.deployment.guard import CRASH, DeployerFault
-from desmon.deployment.ports import Start, Stop
+from desmon.deployment.lease import lease_choice
+from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, RaiseError, Start, Stop
 from desmon.errors import CheckerError
-from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, Event, PlatformDown, PlatformUp
+from desmon.model.events import (
+    ActionChange,
+    DeviceFail,
+    DeviceRepair,
+    Event,
+    LoadChange,
+    PlatformDown,
+    PlatformJoin,
+    PlatformLeave,
+    PlatformUp,
+)
 from desmon.model.scenario import Scenario
+from desmon.model.system import PlatformState
 from desmon.sim.processes import recognised_context
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
@@ -66,6 +89,7 @@ class ChainState(NamedTuple):
     phys_failed: tuple[str, ...]  # devices physically failed, sorted
     phys_down: tuple[str, ...]  # platforms physically down (absent on-demand ones included), sorted
     starting: tuple[tuple[str, str], ...]  # (graph, platform) started, not yet ready, sorted
+    requested: tuple[str, ...] = ()  # on-demand platforms leased, not yet joined, sorted
 
 
 #: the context the monitor reports for the true action: the simulation's own rule
@@ -109,7 +133,11 @@ class Chain:
         """A block number per state: states with the same physically broken components
         (faults are the chain's slow events; everything else moves within a block)."""
         ids: dict[tuple, int] = {}
-        return np.fromiter((ids.setdefault((s.phys_failed, s.phys_down), len(ids)) for s in self.states), dtype=np.int64, count=self.n)
+        leased = {p for p, _t in self.world.lease}
+        return np.fromiter(
+            (ids.setdefault((s.phys_failed, tuple(p for p in s.phys_down if p not in leased)), len(ids)) for s in self.states),
+            dtype=np.int64, count=self.n,
+        )
 
     def describe(self, i: int) -> str:
         """One line for state ``i``: the task step, what is known, deployed and down."""
@@ -120,6 +148,7 @@ class Chain:
         parts.append("deployed " + (", ".join(f"{g}@{p}" for g, p in s.key.deployments) or "nothing"))
         if s.starting:
             parts.append("starting " + ", ".join(f"{g}@{p}" for g, p in s.starting))
+        parts.extend(self._changes(s))
         down = [*s.phys_failed, *(p for p in s.phys_down if not self.system.model.platform(p).on_demand)]
         if down:
             parts.append("broken " + ", ".join(down))
@@ -130,6 +159,22 @@ class Chain:
         if s.key.standing:
             parts.append("errors for " + ", ".join(s.key.standing))
         return "; ".join(parts)
+
+
+    def _changes(self, s: ChainState) -> Iterator[str]:
+        """What run-time changes made of ``s``: loads, requirements, leases."""
+        loads = dict(s.key.loads)
+        for p, r, _lv, _rate in self.world.loads:
+            yield f"{p} {r} load {dict(loads.get(p, ())).get(r, 0):g}"
+        for g, reqs in s.key.specs:
+            now = set(reqs)
+            label = next((c.label for c, _r in self.world.changes if c.graph == g and c.label and set(c.add) <= now), "")
+            yield f"{g} requirements {label or 'changed'}"
+        joined = [p for p, _t in self.world.lease if p not in s.phys_down]
+        if joined:
+            yield "leased " + ", ".join(joined)
+        if s.requested:
+            yield "lease requested " + ", ".join(s.requested)
 
 
 class _Builder:
@@ -143,23 +188,50 @@ class _Builder:
         self.system = TransitionSystem(plain, deployer, invariants=(), bounds=chain_bounds(scenario, mw))
         self.model = scenario.model
         self.rules = ControlRules(self.model)
-        self._react_memo: dict[tuple[Key, Event], list[tuple[float, Key, tuple]]] = {}
+        self._react_memo: dict[tuple[Key, Event], list[tuple[float, Key, tuple, tuple[str, ...]]]] = {}
+        self._lease_memo: dict[tuple[Key, str, tuple[str, ...]], str | None] = {}
+        self.leased = dict(mw.lease)  # on-demand platform -> mean start-up
         self.reactions = 0
         devices = {d.name for d in self.model.devices}
         self.faults = tuple((c, c in devices, 1.0 / f, 1.0 / r) for c, _k, f, r in mw.faults)
         self.latency = {p.name: mw.latency_of(p.name) for p in self.model.platforms}
 
     # -- reactions -----------------------------------------------------------------------
-    def react(self, key: Key, event: Event) -> list[tuple[float, Key, tuple]]:
-        """(probability, next key, commands) of each outcome of ``event`` on ``key``: the
-        real reaction, every start a coin of ``start_failure_p``."""
-        mk = (key, event)
+    def react(self, key: Key, event: Event, world: tuple | None = None) -> list[tuple[float, Key, tuple, tuple[str, ...]]]:
+        """(probability, next key, commands, graphs with no acceptable platform) of each
+        outcome of ``event`` on ``key``: the real reaction, every start a coin of
+        ``start_failure_p``. ``world``: the physically (failed devices, down platforms)
+        where they differ from what ``key`` knows; a start on a platform that is gone,
+        or whose inputs are, fails there (the Control rules on the physical facts, as in
+        the simulation), and is no coin."""
+        mk = (key, event, world)
         out = self._react_memo.get(mk)
         if out is not None:
             return out
         p = self.mw.start_failure_p
         out = []
         pending: list[tuple[bool, ...]] = [()]
+        store = self.system.store
+        store.physical = self._physical(*world) if world is not None else None
+        try:
+            self._run_outcomes(key, event, p, pending, out)
+        finally:
+            store.physical = None
+        self._react_memo[mk] = out
+        return out
+
+    def _physical(self, failed: tuple[str, ...], down: tuple[str, ...]) -> Callable[[str, str], str | None]:
+        """The Control rules' refusal of a start on the physical facts."""
+        model = self.model
+        gone, broken = set(down), set(failed)
+        states = {
+            p.name: PlatformState(p, p.name not in gone, tuple(d for d in model.devices_on(p.name) if d.name not in broken))
+            for p in model.platforms
+        }
+        rules = self.system.store.rules
+        return lambda g, pl: rules.start_refusal(g, pl, states.__getitem__)
+
+    def _run_outcomes(self, key: Key, event: Event, p: float, pending: list, out: list) -> None:
         while pending:
             prefix = pending.pop()
             nkey, outcomes, log, instant = self.system.run_one(key, event, prefix)
@@ -175,10 +247,9 @@ class _Builder:
                 for i in range(len(prefix), len(outcomes)):
                     pending.append(outcomes[:i] + (False,))
             cmds = tuple((type(c) is Start, c.graph, c.platform) for c, ok in log.commands if ok and isinstance(c, (Start, Stop)))
+            homeless = tuple(c.graph for c, _ok in log.commands if isinstance(c, RaiseError) and c.kind == NO_ACCEPTABLE_PLATFORMS)
             if prob > 0:
-                out.append((prob, nkey, cmds))
-        self._react_memo[mk] = out
-        return out
+                out.append((prob, nkey, cmds, homeless))
 
     def _starting_after(self, s: ChainState, cmds: tuple, nkey: Key) -> tuple[tuple[str, str], ...]:
         """The detectors still starting after a reaction's successful starts and stops."""
@@ -221,12 +292,67 @@ class _Builder:
             yield 1.0 / lat, None, ((1.0, s._replace(starting=tuple(x for x in s.starting if x != pair)), ()),)
         for change, rate in mw.changes:
             yield self._deliver(s, change, rate)
+        yield from self._loads(s)
+        if self.leased:
+            yield from self._lease(s)
 
     def _deliver(self, s: ChainState, event: Event, rate: float) -> Slot:
+        key = s.key
+        same = s.phys_failed == key.failed and s.phys_down == key.down
         outcomes = tuple(
-            (prob, s._replace(key=nkey, starting=self._starting_after(s, cmds, nkey)), cmds) for prob, nkey, cmds in self.react(s.key, event)
+            (prob, self._requesting(s._replace(key=nkey, starting=self._starting_after(s, cmds, nkey)), homeless), cmds)
+            for prob, nkey, cmds, homeless in self.react(key, event, None if same else (s.phys_failed, s.phys_down))
         )
         return rate, event, outcomes
+
+    def _requesting(self, s: ChainState, homeless: tuple[str, ...]) -> ChainState:
+        """``s`` after the lease has answered each graph the reaction found no platform
+        for: the simulation's choice among the absent platforms not yet on their way."""
+        if not homeless or not self.leased:
+            return s
+        requested = set(s.requested)
+        for g in homeless:
+            absent = tuple(p for p in self.leased if p in s.phys_down and p not in requested)
+            if not absent:
+                break
+            mk = (s.key, g, absent)
+            if mk not in self._lease_memo:
+                store = self.system.store
+                store.load(s.key)
+                self._lease_memo[mk] = lease_choice(store, g, absent)
+            choice = self._lease_memo[mk]
+            if choice is not None:
+                requested.add(choice)
+        return s._replace(requested=tuple(sorted(requested)))
+
+    def _loads(self, s: ChainState) -> Iterator[Slot]:
+        """A load step to each neighbouring level."""
+        loads = dict(s.key.loads)
+        for p, r, levels, rate in self.mw.loads:
+            i = levels.index(dict(loads.get(p, ())).get(r, 0))
+            nbrs = [levels[j] for j in (i - 1, i + 1) if 0 <= j < len(levels)]
+            for level in nbrs:
+                yield self._deliver(s, LoadChange(p, level, r), rate / len(nbrs))
+
+    def _lease(self, s: ChainState) -> Iterator[Slot]:
+        """Leased platforms joining, leaving while idle, and the monitor noticing it."""
+        hb = self.mw.heartbeat_timeout
+        busy = {p for _g, p in s.key.deployments}
+        for p, startup in self.leased.items():
+            absent = p in s.phys_down
+            if absent and p not in s.requested:
+                flip = None
+            elif absent:
+                flip = (1.0 / startup, s._replace(requested=tuple(x for x in s.requested if x != p), phys_down=tuple(x for x in s.phys_down if x != p)))
+            elif p not in busy:
+                flip = (1.0 / self.mw.lease_idle_s, s._replace(phys_down=tuple(sorted((*s.phys_down, p)))))
+            else:
+                flip = None
+            if flip is not None:
+                rate, ns = flip
+                yield (rate, None, ((1.0, ns, ()),)) if hb > 0 else self._deliver(ns, _join_event(p, absent), rate)
+            if hb > 0 and absent != (p in s.key.down):
+                yield self._deliver(s, _join_event(p, not absent), 1.0 / hb)
 
     def _task(self, s: ChainState) -> Iterator[Slot]:
         mw = self.mw
@@ -256,6 +382,10 @@ class _Builder:
                 yield self._deliver(ns, _event(c, is_dev, not broken), rate)
             if hb > 0 and broken != (c in (known_failed if is_dev else known_down)):
                 yield self._deliver(s, _event(c, is_dev, broken), 1.0 / hb)
+
+
+def _join_event(platform: str, joins: bool) -> Event:
+    return PlatformJoin(platform) if joins else PlatformLeave(platform)
 
 
 def _event(component: str, is_device: bool, broken: bool) -> Event:

@@ -17,12 +17,19 @@ The chain (:mod:`desmon.analyze.chain`) lets the environment do what the scenari
   ``start_failure_p`` (default ``World.start_failure.probability``), decided at once;
 * random requirement changes (``World.random_changes``) arrive at rate
   1/``mean_interval``, each change equally likely;
-* slips arrive at ``World.slip_rate`` per second of object-in-hand time.
+* slips arrive at ``World.slip_rate`` per second of object-in-hand time;
+* a load walk over levels (``World.load_steps``) moves to a neighbouring level at
+  rate 1/``mean_interval``, split evenly over the neighbours; the repository learns
+  the new load at once;
+* with ``World.lease``, a reaction that raises *no acceptable platform* for a graph
+  requests the on-demand platform :func:`~desmon.deployment.lease.lease_choice` names
+  (the simulation's own choice); it joins after an exponential start-up of mean its
+  ``startup_s``, and leaves at rate 1/``idle_s`` while it hosts nothing.
 
 Every event the bounds let the checker choose needs a rate here, and every rate an
 event there: :func:`markov_world` refuses a mismatch in one line naming it (a fault
 without MTTF, an MTTF of a component the checker never fails, scripted faults, loads
-or changes, which have no rate). The bounds' ``max_failures`` and ``start_failures``
+or changes, which have no rate; a Gaussian load walk). The bounds' ``max_failures`` and ``start_failures``
 are budgets of the checker, not facts of the world: the chain drops them (any number
 of components may be down at once; any start may fail), and says so
 (:attr:`MarkovWorld.dropped`).
@@ -36,7 +43,7 @@ from typing import Any
 
 from desmon.errors import DesmonError
 from desmon.model.checks import check_number
-from desmon.model.events import RequirementChange
+from desmon.model.events import LoadChange, RequirementChange
 from desmon.model.scenario import Scenario
 from desmon.sim.world import World, world_of
 from desmon.verify.bounds import Bounds, bounds_of
@@ -70,6 +77,12 @@ class MarkovWorld:
     changes: tuple[tuple[RequirementChange, float], ...]
     #: the checker's budgets the chain drops, as (field, value) pairs
     dropped: tuple[tuple[str, Any], ...] = ()
+    #: (platform, resource, levels, rate of a step) of each load walk over levels
+    loads: tuple[tuple[str, str, tuple[float, ...], float], ...] = ()
+    #: (on-demand platform, mean start-up s) of each platform the lease may join
+    lease: tuple[tuple[str, float], ...] = ()
+    #: mean seconds a leased platform stays once it hosts nothing (0: no lease)
+    lease_idle_s: float = 0.0
 
     def latency_of(self, platform: str) -> float:
         return dict(self.latency).get(platform, 0.0)
@@ -90,6 +103,14 @@ class MarkovWorld:
             "slip_rate_per_s": self.slip_rate,
             "requirement_changes": [{"change": c.label or str(c), "rate_per_s": r} for c, r in self.changes],
             "dropped_checker_budgets": dict(self.dropped),
+            "load_steps": [
+                {"platform": p, "resource": r, "levels": list(lv), "rate_per_s": rate} for p, r, lv, rate in self.loads
+            ],
+            "lease": {
+                "platforms": [{"platform": p, "startup_s": t, "join_rate_per_s": 1.0 / t} for p, t in self.lease],
+                "idle_s": self.lease_idle_s,
+                "leave_rate_per_s_while_idle": 1.0 / self.lease_idle_s if self.lease_idle_s else 0.0,
+            },
         }
 
 
@@ -114,9 +135,11 @@ def _check_unrated(scenario: Scenario, world: World) -> None:
             )
     if world.load_walks:
         w = world.load_walks[0]
-        raise _refuse(scenario, f"World load walk of {w.platform!r} is a Gaussian walk with no rate per load level: analyze cannot model it; drop load_walks for the analysis")
-    if world.lease is not None:
-        raise _refuse(scenario, "World lease (on-demand platforms joining when nothing fits) is not modelled by the chain yet: analyze a world without lease")
+        raise _refuse(
+            scenario,
+            f"World load walk of {w.platform!r} is a Gaussian walk with no rate per load level: give "
+            f"load_steps=(LoadSteps({w.platform!r}, levels=..., start=..., mean_interval=...),) instead (the bounds' load levels)",
+        )
     if world.start_failure.script:
         g, p, n = world.start_failure.script[0]
         raise _refuse(scenario, f"World start failure script ({g} on {p}, attempt {n}) is scripted: give StartFailure(probability=...) instead")
@@ -144,11 +167,8 @@ def _check_matching(scenario: Scenario, world: World, b: Bounds) -> None:
             )
     if world.stochastic_faults and not b.repair:
         raise _refuse(scenario, f"World repairs {world.stochastic_faults[0].component!r} (MTTR) but the checker bounds say repair=False: set repair=True")
-    if b.loads:
-        p = next(iter(b.loads))
-        raise _refuse(scenario, f"the checker bounds move the load of {p!r} but the World gives load steps no rate: drop loads from the bounds for the analysis")
-    if b.joins:
-        raise _refuse(scenario, f"the checker bounds let {b.joins[0]!r} join and leave but the chain has no rate for it (leases are not modelled yet)")
+    _check_loads(scenario, world, b)
+    _check_lease(scenario, world, b)
     random = world.random_changes.changes if world.random_changes is not None else ()
     for c in b.requirement_changes:
         if c not in random:
@@ -156,6 +176,55 @@ def _check_matching(scenario: Scenario, world: World, b: Bounds) -> None:
     for c in random:
         if c not in b.requirement_changes:
             raise _refuse(scenario, f"World.random_changes makes requirement change {c.label or c} but the checker bounds never apply it: add it to requirement_changes")
+
+
+def _check_loads(scenario: Scenario, world: World, b: Bounds) -> None:
+    """The bounds' load levels and the World's load steps name the same walks."""
+    steps = {w.platform: w for w in world.load_steps}
+    initial = {ev.platform: ev.amount for ev in scenario.initial if isinstance(ev, LoadChange) and ev.resource == b.load_resource}
+    for p, lv in b.loads.items():
+        w = steps.get(p)
+        if w is None or w.resource != b.load_resource:
+            raise _refuse(
+                scenario,
+                f"the checker bounds move the {b.load_resource} load of {p!r} but the World gives it no rate: add "
+                f"LoadSteps({p!r}, levels={tuple(lv)!r}, start=..., mean_interval=...) to World.load_steps, or drop {p!r} from the bounds' loads",
+            )
+        if tuple(float(x) for x in lv) != w.levels:
+            raise _refuse(scenario, f"World load steps of {p!r} move over levels {list(w.levels)} but the checker bounds over {list(lv)}: give both the same levels")
+        if float(initial.get(p, 0)) != w.start:
+            raise _refuse(
+                scenario,
+                f"World load steps of {p!r} start at {w.start:g} but the scenario's initial load is {initial.get(p, 0):g}: give them the same value",
+            )
+    for w in world.load_steps:
+        if w.platform not in b.loads or w.resource != b.load_resource:
+            raise _refuse(
+                scenario,
+                f"World load steps move the {w.resource} load of {w.platform!r} but the checker bounds never do: add "
+                f"loads={{{w.platform!r}: {w.levels!r}}} (load_resource={w.resource!r}) to the bounds, or drop the load steps",
+            )
+
+
+def _check_lease(scenario: Scenario, world: World, b: Bounds) -> None:
+    """Every platform the bounds let join is leased by the World, after a positive start-up."""
+    if not b.joins:
+        return
+    if world.lease is None:
+        raise _refuse(
+            scenario,
+            f"the checker bounds let {b.joins[0]!r} join and leave but the World has no lease, so nothing gives the joins a rate: "
+            "add World(lease=Lease(idle_s=...)), or drop joins from the bounds",
+        )
+    leased = world.lease.platforms or b.joins
+    for p in b.joins:
+        if p not in leased:
+            raise _refuse(scenario, f"the checker bounds let {p!r} join but the World's lease never leases it: add it to Lease(platforms=...)")
+        if scenario.model.platform(p).startup_s <= 0:
+            raise _refuse(
+                scenario,
+                f"on-demand platform {p!r} joins at once (startup_s=0), which has no rate: give it a positive startup_s",
+            )
 
 
 def _kind_of(scenario: Scenario, component: str) -> str:
@@ -204,6 +273,9 @@ def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float 
         slip_rate=world.slip_rate,
         changes=changes,
         dropped=tuple(dropped),
+        loads=tuple((w.platform, w.resource, w.levels, 1.0 / w.mean_interval) for w in world.load_steps),
+        lease=tuple((p, scenario.model.platform(p).startup_s) for p in b.joins),
+        lease_idle_s=world.lease.idle_s if world.lease is not None and b.joins else 0.0,
     )
 
 

@@ -117,6 +117,8 @@ def start_processes(parts: RobotParts, audit: Callable[[], None]) -> None:
         env.process(P.scripted_loads(parts))
     for i in range(len(world.load_walks)):
         env.process(P.load_walk(parts, i))
+    for i in range(len(world.load_steps)):
+        env.process(P.load_steps(parts, i))
     if world.changes:
         env.process(P.scripted_changes(parts))
     if world.random_changes is not None:

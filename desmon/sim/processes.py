@@ -46,7 +46,7 @@ if TYPE_CHECKING:
 __all__ = [
     "OBSERVATION", "apply_initial", "robot", "recognise", "insert", "notice", "fault", "scripted_faults", "stochastic_faults",
     "set_load", "scripted_loads", "load_walk", "change", "follow_consumption", "scripted_changes", "random_changes",
-    "maybe_lease", "lease", "progress",
+    "maybe_lease", "lease", "markov_lease", "load_steps", "progress",
 ]
 
 #: What the context monitor sees of gripper and base in each ground-truth action; an
@@ -140,6 +140,8 @@ def notice_latest(parts: RobotParts, component: str):  # type: ignore[no-untyped
     facts = parts.facts
     if component in facts.dev_ok:
         insert(parts, DeviceRepair(component) if facts.dev_ok[component] else DeviceFail(component))
+    elif parts.model.platform(component).on_demand:
+        insert(parts, PlatformJoin(component) if facts.up[component] else PlatformLeave(component))
     else:
         insert(parts, PlatformUp(component) if facts.up[component] else PlatformDown(component))
 
@@ -231,6 +233,18 @@ def load_walk(parts: RobotParts, i: int):  # type: ignore[no-untyped-def]
         set_load(parts, LoadChange(w.platform, round(x, 1), w.resource))
 
 
+def load_steps(parts: RobotParts, i: int):  # type: ignore[no-untyped-def]
+    """A :class:`~desmon.sim.world.LoadSteps` walk: exponential gaps, a neighbouring level each."""
+    w = parts.world.load_steps[i]
+    rng = random.Random(f"{parts.seed}:loadsteps:{w.platform}:{i}")
+    level = w.start
+    set_load(parts, LoadChange(w.platform, level, w.resource))
+    while True:
+        yield parts.env.timeout(rng.expovariate(1.0 / w.mean_interval))
+        level = rng.choice(w.neighbours(level))
+        set_load(parts, LoadChange(w.platform, level, w.resource))
+
+
 # ---------------------------------------------------------------------- run-time changes and leases
 def change(parts: RobotParts, ev: Event, source: str) -> None:
     """A scripted or random run-time change: a requirement change is written by the
@@ -288,7 +302,7 @@ def maybe_lease(parts: RobotParts, graph: str) -> None:
     books.lease_requested.add(choice)
     books.leases += 1
     parts.trace.emit(parts.env.now, "lease", platform=choice, graph=graph)
-    parts.env.process(lease(parts, choice))
+    parts.env.process(lease(parts, choice) if parts.world.timing != "exponential" else markov_lease(parts, choice))
 
 
 def lease(parts: RobotParts, platform: str):  # type: ignore[no-untyped-def]
@@ -306,6 +320,25 @@ def lease(parts: RobotParts, platform: str):  # type: ignore[no-untyped-def]
         if not busy and wait <= 0:
             break
         yield env.timeout(max(wait, 1e-6))
+    change(parts, PlatformLeave(platform), "lease")
+    parts.books.lease_requested.discard(platform)
+
+
+def markov_lease(parts: RobotParts, platform: str):  # type: ignore[no-untyped-def]
+    """Exponential timing: the platform joins after an exponential start-up (mean its
+    ``startup_s``); then, at exponential gaps of mean the lease's ``idle_s``, it leaves if
+    it hosts nothing then (a clock that runs only while the platform is idle, as the
+    chain of ``desmon analyze`` has it)."""
+    env = parts.env
+    idle = parts.world.lease.idle_s  # type: ignore[union-attr]
+    rng = random.Random(f"{parts.seed}:lease:{platform}:{parts.books.leases}")
+    startup = parts.model.platform(platform).startup_s
+    yield env.timeout(rng.expovariate(1.0 / startup) if startup > 0 else 0.0)
+    change(parts, PlatformJoin(platform), "lease")
+    while True:
+        yield env.timeout(rng.expovariate(1.0 / idle))
+        if not any(p == platform for _g, p in parts.facts.instances):
+            break
     change(parts, PlatformLeave(platform), "lease")
     parts.books.lease_requested.discard(platform)
 

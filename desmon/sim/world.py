@@ -44,6 +44,7 @@ __all__ = [
     "MTTF",
     "StartFailure",
     "LoadWalk",
+    "LoadSteps",
     "RandomChanges",
     "Lease",
     "World",
@@ -190,6 +191,46 @@ class LoadWalk:
             )
 
 
+@strict_init(ScenarioError)
+@dataclass(frozen=True, slots=True)
+class LoadSteps:
+    """Background load of ``platform`` as a Markov walk over ``levels``: it starts at
+    ``start`` and after exponential gaps of mean ``mean_interval`` seconds moves to a
+    neighbouring level (either one with equal chance; from an end level, to its only
+    neighbour). Unlike :class:`LoadWalk` it has a rate per level, so ``desmon analyze``
+    can model it: the checker bounds' ``loads`` of the platform must list the same levels."""
+
+    platform: str
+    levels: tuple[float, ...]
+    start: float
+    mean_interval: float
+    resource: str = "memory"
+
+    def __post_init__(self) -> None:
+        check_name("world: load steps platform", self.platform, error=ScenarioError)
+        where = f"world: load steps of {self.platform}"
+        check_name(f"{where}: resource", self.resource, error=ScenarioError)
+        example = "levels=(600, 800)"
+        if isinstance(self.levels, (str, bytes)) or not isinstance(self.levels, Sequence):
+            raise ScenarioError(f"{where}: levels = {self.levels!r} is not a sequence of numbers: write {example}")
+        levels = tuple(float(check_number(f"{where}: level", v, error=ScenarioError)) for v in self.levels)
+        if len(levels) < 2:
+            raise ScenarioError(f"{where}: levels {list(levels)} give the walk nowhere to go: give at least two, e.g. {example}")
+        if any(b <= a for a, b in zip(levels, levels[1:])):
+            raise ScenarioError(f"{where}: levels {[f'{v:g}' for v in levels]} are not strictly increasing: sort them and list each once")
+        object.__setattr__(self, "levels", levels)
+        check_number(f"{where}: start", self.start, error=ScenarioError)
+        if float(self.start) not in levels:
+            raise ScenarioError(f"{where}: start {self.start:g} is not one of its levels {[f'{v:g}' for v in levels]}: start on a level")
+        object.__setattr__(self, "start", float(self.start))
+        _seconds(f"load steps mean interval of {self.platform}", self.mean_interval, zero=False)
+
+    def neighbours(self, level: float) -> tuple[float, ...]:
+        """The levels the walk may move to from ``level``."""
+        i = self.levels.index(level)
+        return tuple(self.levels[j] for j in (i - 1, i + 1) if 0 <= j < len(self.levels))
+
+
 #: the timings a World may run under (``World.timing``)
 TIMINGS = ("fixed", "exponential")
 #: the most Erlang phases of a task step (``World.phases``, ``desmon analyze --phases``)
@@ -268,6 +309,8 @@ class World:
     #: scripted LoadChange events
     loads: tuple[TimedEvent, ...] = ()
     load_walks: tuple[LoadWalk, ...] = ()
+    #: background loads as Markov walks over levels (a rate per level: ``desmon analyze`` models them)
+    load_steps: tuple[LoadSteps, ...] = ()
     #: seconds the context monitor needs to recognise a new action context
     recognition_delay: float = 0.0
     #: seconds until a missing device / platform heartbeat is noticed (and a repair seen)
@@ -435,6 +478,17 @@ class World:
                 raise ScenarioError(f"world: two load walks of {w.platform!r} {w.resource}: give one per platform and resource")
             walked.add((w.platform, w.resource))
         object.__setattr__(self, "load_walks", walks)
+        steps = check_items("world: load_steps", self.load_steps, LoadSteps, error=err, example="(LoadSteps('torso_pc', levels=(600, 800), start=600, mean_interval=300),)")
+        for w in steps:
+            if (w.platform, w.resource) in walked:
+                raise ScenarioError(f"world: two load walks or load steps of {w.platform!r} {w.resource}: give one per platform and resource")
+            walked.add((w.platform, w.resource))
+            if self.horizon / w.mean_interval > MAX_RANDOM_CHANGES:
+                raise ScenarioError(
+                    f"world: load steps of {w.platform!r} every {w.mean_interval:g} s on average over the horizon of {self.horizon:g} s "
+                    f"are more than the {MAX_RANDOM_CHANGES:,} steps a run simulates; give mean_interval at least {self.horizon / MAX_RANDOM_CHANGES:.3g}"
+                )
+        object.__setattr__(self, "load_steps", steps)
 
     def _check_slips(self, like: Callable[[str], str]) -> None:
         """A scripted slip needs an object in the hand (with signals off it would still
@@ -548,6 +602,10 @@ def _check_components(world: World, scenario: Scenario, where: str) -> None:
         problem = event_problem(LoadChange(w.platform, w.low, w.resource), model)
         if problem is not None:
             raise ScenarioError(f"{where}: load walk: {problem}")
+    for st in world.load_steps:
+        problem = event_problem(LoadChange(st.platform, st.start, st.resource), model)
+        if problem is not None:
+            raise ScenarioError(f"{where}: load steps: {problem}")
     for p, _v in world.platform_latency:
         if p not in platforms:
             raise ScenarioError(f"{where}: start latency for unknown platform {p!r}{suggest(p, platforms)} (platforms: {', '.join(platforms)})")

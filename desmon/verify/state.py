@@ -112,6 +112,10 @@ class StateStore:
         self.rules = ControlRules(model, self._current, checks)
         #: why the last start was refused by the Control rules ("" when it was not)
         self.refused = ""
+        #: the world's own refusal of a start, (graph, platform) -> reason or None, where
+        #: the physical world differs from what the repository knows (``desmon analyze``:
+        #: a platform gone but not yet noticed refuses the start, as in the simulation)
+        self.physical: Callable[[str, str], str | None] | None = None
         self._use_memo: dict[tuple[str, ...], tuple] = {}
         self._states_memo: dict[tuple, tuple[PlatformState, ...]] = {}
         self._index_memo: dict[tuple, tuple] = {}
@@ -332,6 +336,8 @@ class StateStore:
         # a start the rules refuse is no choice point: it fails in every branch, and does
         # not take a position of the outcome prefix (desmon.deployment.control)
         why = self.rules.start_refusal(graph, platform, self.platform_state)
+        if why is None and self.physical is not None:
+            why = self.physical(graph, platform)
         self.refused = why or ""
         if why is not None:
             return False
