@@ -14,9 +14,16 @@ timing (fixed step durations, recognition, heartbeat and start latencies) over
 ``--seeds`` seeds: the error of modelling fixed delays by phases.
 
 ``--large K``: instead, a large chain (two force sensors, K phases per step: about
-45,000 states times K) and the time of its steady state and its 1 h transient.
+45,000 states times K) and the time of its steady state (the exposure per hour) and,
+unless ``--steady-only``, of its 1 h transient; ``peak_mb`` is the process's peak
+resident memory.
 
-Run: ``python -m bench.bench_analyze [--quick] [--seeds N] [--phases-error] [--large K]``; the last line is
+``--agreement``: instead, the exact exposure of the three analysable shipped
+scenarios (``coffee_shift`` 1 h, ``platform_crash -p stochastic=True`` and
+``cloud_offload -p stochastic=True``, 1 h each) beside their simulations over
+``--seeds`` seeds; the last line counts those inside the 99 % interval.
+
+Run: ``python -m bench.bench_analyze [--quick] [--seeds N] [--phases-error] [--agreement] [--large K [--steady-only]]``; the last line is
 ``RESULT states=... build_s=... explore_s=... build_ratio=... steady_s=... transient_s=... exact_s=... sim_mean_s=... sim_ci_low=... sim_ci_high=...``,
 then ``storm_steady_s=... storm_transient_s=...`` when stormpy is installed (Storm's
 long-run average and reward up to 1 h on the same chain, exported to DRN; parsing not
@@ -48,11 +55,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--phases-error", action="store_true", help="the exact values with 1, 4, 16 phases against fixed timing")
     ap.add_argument("--large", type=int, default=None, metavar="K",
                     help="instead, a large chain: coffee_shift with two force sensors and K phases per step; its build and solution times")
+    ap.add_argument("--steady-only", action="store_true", help="with --large: no 1 h transient")
+    ap.add_argument("--agreement", action="store_true", help="exact against simulated for the three analysable scenarios")
     args = ap.parse_args(argv)
     if args.phases_error:
         return _phases_error(args.seeds)
+    if args.agreement:
+        return _agreement(args.seeds)
     if args.large is not None:
-        return _large(args.large)
+        return _large(args.large, args.steady_only)
     params = {"hours": "1"} | ({"faults": "False"} if args.quick else {})
     seeds = 5 if args.quick else args.seeds
     sc = load_scenario(ROOT / "scenarios" / "coffee_shift.py", params=params)
@@ -86,7 +97,25 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def _large(k: int) -> int:
+def _agreement(seeds: int) -> int:
+    from desmon.analyze import analyze
+    from desmon.analyze.agreement import agreement, simulated_exposure
+    from desmon.loader import load_scenario
+
+    cases = [("coffee_shift.py", {"hours": "1"}), ("platform_crash.py", {"stochastic": "True"}), ("cloud_offload.py", {"stochastic": "True"})]
+    inside = 0
+    for name, params in cases:
+        sc = load_scenario(ROOT / "scenarios" / name, params=params)
+        a = analyze(sc, miss={}, horizon=3600.0, steady=False)
+        ag = agreement(a.exposure_s_per_mission or 0.0, simulated_exposure(sc, "desmon", range(seeds), 3600.0))
+        inside += ag.inside
+        print(f"{name} {params}: {a.chain.n:,} states; exact {ag.exact:.3f} s in 1 h; simulated mean {ag.mean:.3f} s, "
+              f"99 % CI [{ag.low:.3f}, {ag.high:.3f}] over {seeds} seeds: {'inside' if ag.inside else 'OUTSIDE'}")
+    print(f"RESULT scenarios={len(cases)} inside={inside} seeds={seeds}")
+    return 0
+
+
+def _large(k: int, steady_only: bool = False) -> int:
     import resource
 
     from desmon.analyze import build_chain, markov_world
@@ -99,17 +128,22 @@ def _large(k: int) -> int:
     build = time.perf_counter() - t0
     Q, _ = chain.generator()
     t0 = time.perf_counter()
-    _pi, residual, method = steady_state(Q, chain.describe, chain.blocks())
+    pi, residual, method = steady_state(Q, chain.describe, chain.blocks())
     steady = time.perf_counter() - t0
     p0 = np.zeros(chain.n)
     for i, p in chain.initial:
         p0[i] = p
-    t0 = time.perf_counter()
-    tr = transient(Q, p0, 3600.0, chain.unmonitored)
-    trans = time.perf_counter() - t0
+    per_hour = 3600.0 * float(pi @ chain.unmonitored)
+    trans = 0.0
+    tr_text = "no transient"
+    if not steady_only:
+        t0 = time.perf_counter()
+        tr = transient(Q, p0, 3600.0, chain.unmonitored)
+        trans = time.perf_counter() - t0
+        tr_text = f"1 h transient ({tr.method}) {trans:.1f} s"
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"coffee_shift, 2 force sensors, {k} phases: {chain.n:,} states, {len(chain.rates):,} transitions")
-    print(f"built in {build:.1f} s; steady state ({method}) {steady:.1f} s, residual {residual:.1e}; 1 h transient ({tr.method}) {trans:.1f} s; peak {peak:.0f} MB")
+    print(f"built in {build:.1f} s; steady state ({method}) {steady:.1f} s, residual {residual:.1e}, exposure {per_hour:.3f} s per hour; {tr_text}; peak {peak:.0f} MB")
     print(f"RESULT states={chain.n} build_s={build:.3f} steady_s={steady:.3f} transient_s={trans:.3f} solve_s={steady + trans:.3f} peak_mb={peak:.0f}")
     return 0
 

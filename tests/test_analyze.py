@@ -388,3 +388,18 @@ def _five_platforms():
 
     extra = Platform.make("spare_pc", memory=256)
     return replace(sc, model=replace(sc.model, platforms=(*sc.model.platforms, extra)))
+
+
+# -- the bench's other configurations run (their figures are python -m bench.bench_analyze's) -------
+@pytest.mark.slow
+@pytest.mark.parametrize("argv", [["--agreement", "--seeds", "3"], ["--large", "1", "--steady-only"]], ids=["agreement", "large"])
+def test_the_analyze_bench_modes_end_with_their_result_line(argv):
+    import subprocess
+    import sys
+
+    from bench.goals import parse_result
+
+    proc = subprocess.run([sys.executable, "-m", "bench.bench_analyze", *argv], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    figures = parse_result(proc.stdout)
+    assert figures.get("scenarios") == 3.0 if argv[0] == "--agreement" else figures["states"] > 40_000
