@@ -41,7 +41,9 @@ exposure (docs/design.md §10), state by state.
 
 from __future__ import annotations
 
+import functools
 import time
+from array import array
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Iterator, NamedTuple
 
@@ -190,6 +192,7 @@ class _Builder:
         self.rules = ControlRules(self.model)
         self._react_memo: dict[tuple[Key, Event], list[tuple[float, Key, tuple, tuple[str, ...]]]] = {}
         self._lease_memo: dict[tuple[Key, str, tuple[str, ...]], str | None] = {}
+        self._physical_memo: dict[tuple, Callable[[str, str], str | None]] = {}
         self.leased = dict(mw.lease)  # on-demand platform -> mean start-up
         self.reactions = 0
         devices = {d.name for d in self.model.devices}
@@ -212,7 +215,10 @@ class _Builder:
         out = []
         pending: list[tuple[bool, ...]] = [()]
         store = self.system.store
-        store.physical = self._physical(*world) if world is not None else None
+        if world is None:
+            store.physical = None
+        else:
+            store.physical = self._physical_memo.get(world) or self._physical_memo.setdefault(world, self._physical(*world))
         try:
             self._run_outcomes(key, event, p, pending, out)
         finally:
@@ -285,7 +291,7 @@ class _Builder:
         if mw.recognition_delay > 0:
             ctx = recognised(mw.steps[s.pos][0])
             if ctx != s.key.context:
-                yield self._deliver(s, ActionChange(ctx), 1.0 / mw.recognition_delay)
+                yield self._deliver(s, _action(ctx), 1.0 / mw.recognition_delay)
         yield from self._faults(s)
         for pair in s.starting:
             lat = self.latency[pair[1]]
@@ -332,7 +338,7 @@ class _Builder:
             i = levels.index(dict(loads.get(p, ())).get(r, 0))
             nbrs = [levels[j] for j in (i - 1, i + 1) if 0 <= j < len(levels)]
             for level in nbrs:
-                yield self._deliver(s, LoadChange(p, level, r), rate / len(nbrs))
+                yield self._deliver(s, _load(p, level, r), rate / len(nbrs))
 
     def _lease(self, s: ChainState) -> Iterator[Slot]:
         """Leased platforms joining, leaving while idle, and the monitor noticing it."""
@@ -365,7 +371,7 @@ class _Builder:
         if mw.recognition_delay > 0:
             yield rate, None, ((1.0, nxt, ()),)
         else:
-            yield self._deliver(nxt, ActionChange(recognised(mw.steps[nxt.pos][0])), rate)
+            yield self._deliver(nxt, _action(recognised(mw.steps[nxt.pos][0])), rate)
 
     def _faults(self, s: ChainState) -> Iterator[Slot]:
         hb = self.mw.heartbeat_timeout
@@ -384,10 +390,17 @@ class _Builder:
                 yield self._deliver(s, _event(c, is_dev, broken), 1.0 / hb)
 
 
+# events are frozen and check their names when built: one object per event
+_action = functools.lru_cache(maxsize=None)(ActionChange)
+_load = functools.lru_cache(maxsize=None)(LoadChange)
+
+
+@functools.lru_cache(maxsize=None)
 def _join_event(platform: str, joins: bool) -> Event:
     return PlatformJoin(platform) if joins else PlatformLeave(platform)
 
 
+@functools.lru_cache(maxsize=None)
 def _event(component: str, is_device: bool, broken: bool) -> Event:
     if is_device:
         return DeviceFail(component) if broken else DeviceRepair(component)
@@ -418,9 +431,8 @@ def build_chain(
         if j == len(states):
             states.append(s)
         initial[j] = initial.get(j, 0.0) + prob
-    rows: list[int] = []
-    cols: list[int] = []
-    rates: list[float] = []
+    # compact typed arrays: a million-state chain has about ten million transitions
+    rows, cols, rates = array("q"), array("q"), array("d")
     i = 0
     while i < len(states):
         s = states[i]
@@ -441,7 +453,7 @@ def build_chain(
         i += 1
         if progress is not None and not i % 5000:
             progress(i)
-    chain = Chain(states, np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64), np.asarray(rates, dtype=float), mw, b.system)
+    chain = Chain(states, np.frombuffer(rows, dtype=np.int64), np.frombuffer(cols, dtype=np.int64), np.frombuffer(rates, dtype=float), mw, b.system)
     chain.initial = tuple(sorted(initial.items()))
     _rewards(chain, b.rules, dict(miss or {}))
     chain.build_s = time.perf_counter() - t0

@@ -28,7 +28,7 @@ import numpy as np
 
 from desmon.analyze.chain import BudgetExceeded, ChainState, _Builder, _rewards, recognised
 from desmon.analyze.markov import AnalysisError, MarkovWorld, markov_world
-from desmon.analyze.solve import steady_state
+from desmon.analyze.solve import one_blas_thread, steady_state
 from desmon.deployment.control import ControlRules
 from desmon.model.events import ActionChange
 from desmon.model.scenario import Scenario
@@ -156,6 +156,7 @@ def _generator(mdp: _MDP, policy: list[list[int]]):  # type: ignore[no-untyped-d
     return (off - sp.diags(np.asarray(off.sum(axis=1)).ravel())).tocsr()
 
 
+@one_blas_thread
 def _evaluate(Q, r: np.ndarray, describe, blocks: np.ndarray) -> tuple[float, np.ndarray]:  # type: ignore[no-untyped-def]
     """The gain (long-run reward per second) and a bias vector of the policy's chain."""
     import scipy.sparse.linalg as sla

@@ -31,7 +31,7 @@ import numpy as np
 
 from desmon.analyze.chain import Chain, build_chain
 from desmon.analyze.markov import AnalysisError, MarkovWorld, markov_world
-from desmon.analyze.solve import steady_state, transient, mean_time_to
+from desmon.analyze.solve import mean_time_to, one_blas_thread, steady_state, transient
 from desmon.model.checks import check_number
 from desmon.model.scenario import Scenario
 
@@ -145,6 +145,7 @@ def _long_run(chain: Chain, Q: Any) -> tuple[float, float, float, list[tuple[flo
     return frac, slips, residual, rows, pi
 
 
+@one_blas_thread
 def _within(chain: Chain, Q: Any, p0: np.ndarray, horizon: float) -> float:
     """P(an unmonitored moment in [0, T]): the unmonitored states made absorbing; the
     mass not yet absorbed only shrinks, so the solution stops once it is below

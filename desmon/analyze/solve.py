@@ -23,10 +23,13 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
+from typing import Any, Callable, TypeVar
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from desmon.analyze.markov import AnalysisError
 
@@ -38,6 +41,24 @@ EPS = 1e-10
 UNIFORM_STEPS = 20_000
 #: the largest closed class the direct sparse LU solve is tried on
 DIRECT_MAX = 30_000
+
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def one_blas_thread(fn: F) -> F:
+    """Run ``fn`` with the BLAS on one thread. The solvers' dense work is vector sized
+    (norms, dot products, Gram-Schmidt over a Krylov basis): a multi-threaded BLAS
+    gains little there on an idle machine and, on a busy one, its threads wait for each
+    other: a norm of 45,000 numbers was measured at 8 ms with OpenBLAS's default
+    threads against 60 us on one, on a loaded 2-core machine."""
+
+    @functools.wraps(fn)
+    def run(*args: Any, **kwargs: Any) -> Any:
+        with threadpool_limits(limits=1, user_api="blas"):
+            return fn(*args, **kwargs)
+
+    return run  # type: ignore[return-value]
 
 
 def _csgraph():  # type: ignore[no-untyped-def]
@@ -74,6 +95,7 @@ def closed_class(Q, describe) -> np.ndarray:  # type: ignore[no-untyped-def]
     return np.flatnonzero(labels == bottom[0])
 
 
+@one_blas_thread
 def steady_state(Q, describe, blocks: np.ndarray | None = None) -> tuple[np.ndarray, float, str]:  # type: ignore[no-untyped-def]
     """The long-run distribution of the chain with generator ``Q`` (CSR), the residual
     ``max |pi Q|`` and the method that found it; ``describe(i)`` names state i in an error.
@@ -200,6 +222,7 @@ class Transient:
     method: str
 
 
+@one_blas_thread
 def transient(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, *, method: str = "auto",  # type: ignore[no-untyped-def]
               limit: np.ndarray | None = None) -> Transient:
     """From ``p0`` over ``[0, horizon]``: the distribution at the horizon and each reward
@@ -272,6 +295,7 @@ def _uniformisation(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, lam:
     return Transient(at, rewards @ occ, EPS * max(1.0, horizon), f"uniformisation ({kmax} steps)")
 
 
+@one_blas_thread
 def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = 30) -> tuple[np.ndarray, float, int]:  # type: ignore[no-untyped-def]
     """``exp(t A) v`` by Krylov subspace projection with adaptive time steps and a
     local error estimate per step (after Sidje's Expokit ``expv``); returns the vector,
@@ -351,6 +375,7 @@ def _local_error(beta: float, F: np.ndarray, avnorm: float, m: int) -> tuple[flo
     return phi1, 1.0 / max(1, m - 1)
 
 
+@one_blas_thread
 def mean_time_to(Q, target: np.ndarray, p0: np.ndarray) -> float:  # type: ignore[no-untyped-def]
     """Expected time from ``p0`` until the chain first enters a state of ``target``
     (a boolean mask); ``inf`` if it may never."""
