@@ -4,7 +4,9 @@ Every ``bench/bench_*.py`` ends its output with one line ``RESULT key=value ...`
 :data:`GOALS` says which of those figures has a goal (the issue that set it in the
 note), :data:`QUICK` the options of each bench's small configuration (``python -m
 bench --quick``, ``tests/test_benches.py``). ``python -m bench`` (:mod:`bench.__main__`)
-runs them and compares.
+runs them and compares. :data:`RESULT_KEYS` lists the keys each RESULT line carries:
+the figures the README and docs quote are marked with them and rewritten from the
+benches' runs (:mod:`bench.figures`).
 """
 
 from __future__ import annotations
@@ -12,7 +14,7 @@ from __future__ import annotations
 import operator
 from typing import Callable, NamedTuple
 
-__all__ = ["Goal", "GOALS", "QUICK", "BENCHES", "parse_result", "missed", "BenchError"]
+__all__ = ["Goal", "GOALS", "QUICK", "BENCHES", "RESULT_KEYS", "OPTIONAL_KEYS", "result_mode", "unexpected_keys", "parse_result", "missed", "BenchError"]
 
 
 class BenchError(Exception):
@@ -72,6 +74,57 @@ QUICK: dict[str, tuple[str, ...]] = {
 
 #: every bench, in the order ``python -m bench`` runs them
 BENCHES: tuple[str, ...] = tuple(sorted(QUICK))
+
+#: the keys of each bench's RESULT line, by mode: ``"bench_x"`` is its usual run (any
+#: options but a mode's), ``"bench_x --flag"`` the run with that option, whose RESULT line
+#: differs. ``python -m bench`` reports a bench whose RESULT line lacks one of these keys
+#: or carries another as broken, and the docs' figure markers may name only these keys
+#: (``tests/test_figures.py``), so the list cannot rot silently.
+RESULT_KEYS: dict[str, tuple[str, ...]] = {
+    "bench_analyze": (
+        "states", "build_s", "explore_s", "build_ratio", "steady_s", "transient_s", "exact_s", "sim_mean_s", "sim_ci_low",
+        "sim_ci_high", "storm_steady_s", "storm_transient_s",
+    ),
+    "bench_analyze --large": ("states", "build_s", "steady_s", "transient_s", "solve_s", "peak_mb"),
+    "bench_analyze --phases-error": ("phases_error_16",),
+    "bench_detectors": ("trials_per_s", "eval_ratio", "missions_per_s", "detectors_us_per_sim_s"),
+    "bench_fleet": ("seconds", "realtime_ratio", "peak_mb", "robots", "edges", "hours", "per_robot_vs_alone", "reactions_per_s", "violations"),
+    "bench_preferences": ("pref_time_ratio", "exposure_with_lease", "exposure_without_lease"),
+    "bench_sim": ("x_real_time", "ratio_bare", "signals_off_s", "wall_s", "bare_s", "events", "until_s"),
+    "bench_sweep": ("speedup", "overhead", "runs", "hours", "bare_s", "one_worker_s", "two_workers_s"),
+    "bench_sweep --scheduler": ("per_task_ratio", "in_task_ratio", "cpu_ratio", "runs", "hours", "rounds", "workers", "threads"),
+    "bench_table_prefs": ("cloud_ratio", "cloud_wide_ratio", "pref_median_ratio"),
+    "bench_upgrade": (
+        "seeds", "hours", "exposure_bbm", "exposure_keep", "exposure_diff_mean", "exposure_diff_min", "exposure_diff_max",
+        "upgrades_per_run", "upgrade_blind_s_per_run",
+    ),
+    "bench_validity": ("seconds", "scalar_ratio", "reasons_max_ms", "reasons_ratio"),
+    "bench_verify": (
+        "states_per_s", "bytes_per_state", "records", "states_per_cpu_s", "fallback_states", "fallback_transitions",
+        "fallback_seconds", "fallback_peak_mb", "fallback_ratio", "stale_states", "4p_states", "4p_ratio", "6p_states", "6p_ratio",
+    ),
+}
+
+#: keys of :data:`RESULT_KEYS` a RESULT line may lack (Storm's figures: only with stormpy installed)
+OPTIONAL_KEYS: frozenset[str] = frozenset({"storm_steady_s", "storm_transient_s"})
+
+
+def result_mode(name: str, args: tuple[str, ...] | list[str]) -> str:
+    """The :data:`RESULT_KEYS` entry of ``python -m bench.<name> <args>``: ``name``, or
+    ``"name --flag"`` when one of ``args`` is a flag whose run prints other keys."""
+    for arg in args:
+        mode = f"{name} {arg.partition('=')[0]}"
+        if mode in RESULT_KEYS:
+            return mode
+    return name
+
+
+def unexpected_keys(mode: str, figures: dict[str, float | str]) -> list[str]:
+    """What differs between a RESULT line's keys and :data:`RESULT_KEYS` ``[mode]`` (empty: nothing)."""
+    declared = RESULT_KEYS.get(mode, ())
+    lacking = [k for k in declared if k not in figures and k not in OPTIONAL_KEYS]
+    extra = [k for k in figures if k not in declared]
+    return ([f"lacks {', '.join(lacking)}"] if lacking else []) + ([f"carries {', '.join(extra)}, not in bench/goals.py RESULT_KEYS[{mode!r}]"] if extra else [])
 
 
 def parse_result(output: str) -> dict[str, float | str]:
