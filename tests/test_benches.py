@@ -1,5 +1,6 @@
 """Every benchmark runs in its small configuration and ends with a RESULT line that
-carries the figures its goals name (``bench/goals.py``): a broken bench fails here.
+carries the figures its goals name and exactly the keys ``bench/goals.py`` declares for it
+(the docs quote them): a broken bench fails here.
 No timing is asserted (the goals are ``python -m bench``'s to judge)."""
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from bench.goals import BENCHES, GOALS, QUICK, BenchError, Goal, missed, parse_result
+from bench.goals import BENCHES, GOALS, QUICK, BenchError, Goal, missed, parse_result, result_mode, unexpected_keys
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -55,3 +56,4 @@ def test_bench_runs_small_and_reports_its_figures(name):
     assert figures
     for goal in GOALS.get(name, ()):
         assert isinstance(figures.get(goal.key), float), f"{name}'s RESULT line lacks {goal.key}"
+    assert unexpected_keys(result_mode(name, QUICK[name]), figures) == []  # the keys the docs' figure markers may name
