@@ -68,7 +68,7 @@ def rewrite_docs(root: Path, results: Path) -> int:
     changes, errors = docs.update_docs(root, results)
     if errors:
         print("\n".join(errors), file=sys.stderr)
-        print(f"--update-docs: {len(errors)} figure(s) cannot be produced; nothing written", file=sys.stderr)
+        print("--update-docs: a marked figure cannot be produced (above); nothing written", file=sys.stderr)
         return 2
     print("\n".join(changes) if changes else "every marked figure already equals its saved run")
     return 0

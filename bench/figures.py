@@ -7,7 +7,8 @@ A figure a bench prints in its RESULT line is marked where the docs quote it, on
 
 The opening comment names the run (``python -m bench.<bench> [options]``), then after the
 colon the RESULT key and its format: ``.Nf`` is N decimals, a leading ``,`` adds thousands
-separators, a leading ``+`` a sign (``+,.1f``). Markdown shows only the figure.
+separators, a leading ``+`` a sign (``+,.1f``). Markdown shows only the figure. A marker
+inside code (a fenced block or an inline code span) is an example and is left alone.
 
 ``python -m bench`` saves every run's RESULT figures in ``bench/results.json`` (one entry
 per command, the latest run's; not in git), and ``python -m bench --update-docs``
@@ -38,6 +39,8 @@ MARKER = re.compile(r"<!-- (?P<run>bench_\w+(?: [^:>]*?)?): (?P<key>\w+) (?P<fmt
 #: anything that starts a marker or ends one: what MARKER does not consume of these is malformed
 MARKER_PART = re.compile(r"<!--\s*/?\s*bench")
 FORMAT = re.compile(r"\+?,?\.\d+f")
+#: an inline code span: a marker in it (or in a fenced block) is an example, not a figure
+CODE_SPAN = re.compile(r"`[^`\n]*`")
 
 
 class Marker(NamedTuple):
@@ -73,7 +76,10 @@ def parse_markers(text: str, path: str) -> tuple[list[Marker], list[str]]:
     markers: list[Marker] = []
     bad: list[str] = []
     offset = 0
-    for number, line in enumerate(text.splitlines(keepends=True), 1):
+    fenced = False
+    for number, raw in enumerate(text.splitlines(keepends=True), 1):
+        fenced ^= raw.lstrip().startswith("```")
+        line = "" if fenced or raw.lstrip().startswith("```") else CODE_SPAN.sub(lambda c: " " * len(c[0]), raw)
         used: list[tuple[int, int]] = []
         for m in MARKER.finditer(line):
             used.append(m.span())
@@ -82,7 +88,7 @@ def parse_markers(text: str, path: str) -> tuple[list[Marker], list[str]]:
         for m in MARKER_PART.finditer(line):
             if not any(a <= m.start() < b for a, b in used):
                 bad.append(f"{path}:{number}: malformed figure marker (the form: <!-- bench_x [options]: KEY ,.0f -->FIGURE<!-- /bench --> on one line)")
-        offset += len(line)
+        offset += len(raw)
     return markers, bad
 
 
@@ -145,23 +151,28 @@ def _commit() -> str | None:
     return proc.stdout.strip() or None if proc.returncode == 0 else None
 
 
-def _fix(m: Marker) -> str:
+def _fix(m: Marker, results: Path) -> str:
+    where = "" if results == RESULTS else f" --results {results}"
     if not m.args:
-        return f"python -m bench {m.bench}"
+        return f"python -m bench{where} {m.bench}"
     if tuple(m.args) == QUICK[m.bench]:
-        return f"python -m bench --quick {m.bench}"
-    return "python -m bench --docs-runs"
+        return f"python -m bench{where} --quick {m.bench}"
+    return f"python -m bench{where} --docs-runs"
+
+
+def _shown(results: Path) -> str:
+    return "bench/results.json" if results == RESULTS else str(results)
 
 
 def new_figure(m: Marker, runs: dict[str, dict], results: Path) -> tuple[str | None, str | None]:
     """(the figure from the saved run, None) or (None, what is missing and the fix)."""
     run = runs.get(run_key(m.bench, m.args))
     if run is None:
-        return None, f"{m.where}: no saved run of python -m bench.{m.run} in {results.name}: run {_fix(m)}"
+        return None, f"{m.where}: no saved run of python -m bench.{m.run} in {_shown(results)}: run {_fix(m, results)}"
     value = run["figures"].get(m.key)
     if not isinstance(value, (int, float)):
         why = "has no" if value is None else f"has a word ({value!r}) for"
-        return None, f"{m.where}: the saved run of python -m bench.{m.run} {why} {m.key}: fix the marker's key or re-run {_fix(m)}"
+        return None, f"{m.where}: the saved run of python -m bench.{m.run} {why} {m.key}: fix the marker's key or re-run {_fix(m, results)}"
     return format(float(value), m.fmt), None
 
 
@@ -179,6 +190,7 @@ def update_docs(root: Path = ROOT, results: Path = RESULTS, write: bool = True) 
             continue
         if figure != m.figure:
             changes.append(f"{m.where}: {m.run} {m.key}: {m.figure} -> {figure}")
+    errors = list(dict.fromkeys(errors))  # several figures of one line from one run: one line
     if errors or not write:
         return changes, errors
     for path in doc_files(root):

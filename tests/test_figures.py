@@ -110,7 +110,7 @@ def test_update_docs_writes_nothing_when_one_figure_cannot_be_produced(tmp_path,
     root, saved = _copy(tmp_path, results, readme)
     before = _files(root)
     assert main(["--update-docs", "--root", str(root), "--results", str(saved)]) == 2
-    err = capsys.readouterr().err
+    err = capsys.readouterr().err.replace(f" --results {saved}", "").replace(str(saved), "results.json")
     assert message in err and "nothing written" in err
     assert _files(root) == before  # the good markers were not rewritten either, and no temporary file is left
 
@@ -129,3 +129,11 @@ def test_the_saved_runs_keep_one_entry_per_command(tmp_path):
 def test_docs_runs_are_the_distinct_commands_the_markers_name(tmp_path):
     root, _ = _copy(tmp_path, other="<!-- bench_sim: wall_s .1f -->1.0<!-- /bench -->\n")
     assert figures.docs_runs(root) == [("bench_sim", []), ("bench_analyze", ["--quick"]), ("bench_upgrade", [])]
+
+
+def test_a_marker_in_code_is_an_example_not_a_figure():
+    text = "a `<!-- bench_sim: x_real_time ,.0f -->5,400<!-- /bench -->` b\n```text\n<!-- bench_sim: nokey .1f -->x<!-- /bench -->\n```\n" \
+           "c <!-- bench_sim: wall_s .1f -->4.0<!-- /bench --> d\n"
+    markers, bad = figures.parse_markers(text, "x.md")
+    assert bad == [] and [(m.line, m.key, m.figure) for m in markers] == [(5, "wall_s", "4.0")]
+    assert text[markers[0].start : markers[0].end] == "4.0"
