@@ -2,10 +2,13 @@
 
 For ``scenarios/coffee_shift.py`` (1 force sensor, 1 h) it prints: the chain's states and
 transitions, the wall time of building the chain (every reaction run by the checker's
-transition system) and of ``desmon verify``'s exploration of the same scenario in the
-same run (``build_ratio``: chain / exploration; goal <= 2), the steady-state and
-transient solution times, and the exact exposure beside the simulated mean over
-``--seeds`` seeds of the same Markov world.
+transition system) and of the checker's exploration of the same model in the same run:
+the scenario under the chain's bounds (the checker's budgets dropped, as the chain drops
+them), whose states are the chain's distinct checker keys (``build_ratio``: chain /
+exploration; goal <= 2; ``build_per_state_ratio``: the same per state, the chain having
+the task's, the faults' and the starting detectors' states times each key), the
+steady-state and transient solution times, and the exact exposure beside the simulated
+mean over ``--seeds`` seeds of the same Markov world.
 
 ``--phases-error``: instead, what the chain leaves out. For ``coffee_shift -p faults=False``
 and ``platform_crash -p stochastic=True`` (1 h) it prints the exact exposure with task
@@ -35,6 +38,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -45,6 +49,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def main(argv: list[str] | None = None) -> int:
     from desmon.analyze import build_chain, markov_world
     from desmon.analyze.agreement import agreement, simulated_exposure
+    from desmon.analyze.markov import chain_bounds
     from desmon.analyze.solve import steady_state, transient
     from desmon.loader import load_scenario
     from desmon.verify.checker import check, system_of
@@ -71,11 +76,14 @@ def main(argv: list[str] | None = None) -> int:
     chain = build_chain(sc, "desmon", markov_world(sc))
     build = time.perf_counter() - t0
     t0 = time.perf_counter()
-    res = check(system_of(sc, "desmon"))
+    # the same model: the checker under the chain's bounds (its budgets dropped, as the chain drops them)
+    res = check(system_of(replace(sc, timeline=()), "desmon", bounds=chain_bounds(sc, chain.world)))
     explore = time.perf_counter() - t0
+    keys = len({s.key for s in chain.states})
+    per_state = (build / chain.n) / (explore / res.states)
     Q, _ = chain.generator()
     t0 = time.perf_counter()
-    steady_state(Q, chain.describe)
+    steady_state(Q, chain.describe, chain.blocks())
     steady = time.perf_counter() - t0
     p0 = np.zeros(chain.n)
     for i, p in chain.initial:
@@ -84,13 +92,16 @@ def main(argv: list[str] | None = None) -> int:
     exact = float(transient(Q, p0, 3600.0, chain.unmonitored).accumulated[0])
     trans = time.perf_counter() - t0
     ag = agreement(exact, simulated_exposure(sc, "desmon", range(seeds), 3600.0))
-    print(f"coffee_shift {params}: chain {chain.n:,} states, {len(chain.rates):,} transitions; checker {res.states:,} states")
-    print(f"chain built in {build:.2f} s; checker exploration {explore:.2f} s; ratio {build / explore:.2f} (goal <= 2)")
+    print(f"coffee_shift {params}: chain {chain.n:,} states ({keys:,} checker states times the world's), {len(chain.rates):,} transitions, "
+          f"{chain.reactions:,} reactions run; checker under the same bounds {res.states:,} states")
+    print(f"chain built in {build:.2f} s; checker exploration {explore:.2f} s; ratio {build / explore:.2f} (goal <= 2); "
+          f"per state {per_state:.3f}")
     print(f"steady state {steady:.2f} s; transient over 1 h {trans:.2f} s")
     print(f"exact {exact:.3f} s per hour; simulated mean {ag.mean:.3f} s, 99 % CI [{ag.low:.3f}, {ag.high:.3f}] over {seeds} seeds: {'inside' if ag.inside else 'OUTSIDE'}")
     storm = _storm(chain)
     print(
-        f"RESULT states={chain.n} build_s={build:.3f} explore_s={explore:.3f} build_ratio={build / explore:.3f} steady_s={steady:.3f} "
+        f"RESULT states={chain.n} build_s={build:.3f} explore_s={explore:.3f} build_ratio={build / explore:.3f} "
+        f"build_per_state_ratio={per_state:.4f} steady_s={steady:.3f} "
         f"transient_s={trans:.3f} exact_s={exact:.4f} sim_mean_s={ag.mean:.4f} sim_ci_low={ag.low:.4f} sim_ci_high={ag.high:.4f}"
         + (f" storm_steady_s={storm.steady_s:.3f} storm_transient_s={storm.transient_s:.3f}" if storm else "")
     )

@@ -82,11 +82,12 @@ BENCHES: tuple[str, ...] = tuple(sorted(QUICK))
 #: (``tests/test_figures.py``), so the list cannot rot silently.
 RESULT_KEYS: dict[str, tuple[str, ...]] = {
     "bench_analyze": (
-        "states", "build_s", "explore_s", "build_ratio", "steady_s", "transient_s", "exact_s", "sim_mean_s", "sim_ci_low",
+        "states", "build_s", "explore_s", "build_ratio", "build_per_state_ratio", "steady_s", "transient_s", "exact_s", "sim_mean_s", "sim_ci_low",
         "sim_ci_high", "storm_steady_s", "storm_transient_s",
     ),
     "bench_analyze --large": ("states", "build_s", "steady_s", "transient_s", "solve_s", "peak_mb"),
     "bench_analyze --phases-error": ("phases_error_16",),
+    "bench_analyze --agreement": ("scenarios", "inside", "seeds"),
     "bench_detectors": ("trials_per_s", "eval_ratio", "missions_per_s", "detectors_us_per_sim_s"),
     "bench_fleet": ("seconds", "realtime_ratio", "peak_mb", "robots", "edges", "hours", "per_robot_vs_alone", "reactions_per_s", "violations"),
     "bench_preferences": ("pref_time_ratio", "exposure_with_lease", "exposure_without_lease"),

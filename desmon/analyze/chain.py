@@ -193,6 +193,7 @@ class _Builder:
         self._react_memo: dict[tuple[Key, Event], list[tuple[float, Key, tuple, tuple[str, ...]]]] = {}
         self._lease_memo: dict[tuple[Key, str, tuple[str, ...]], str | None] = {}
         self._physical_memo: dict[tuple, Callable[[str, str], str | None]] = {}
+        self._tried: dict[tuple[Key, Event], frozenset[tuple[str, str]]] = {}
         self.leased = dict(mw.lease)  # on-demand platform -> mean start-up
         self.reactions = 0
         devices = {d.name for d in self.model.devices}
@@ -207,23 +208,35 @@ class _Builder:
         where they differ from what ``key`` knows; a start on a platform that is gone,
         or whose inputs are, fails there (the Control rules on the physical facts, as in
         the simulation), and is no coin."""
-        mk = (key, event, world)
-        out = self._react_memo.get(mk)
-        if out is not None:
-            return out
-        p = self.mw.start_failure_p
-        out = []
-        pending: list[tuple[bool, ...]] = [()]
-        store = self.system.store
+        known = self._react_memo.get((key, event, None))
+        if known is None:
+            known = self._react(key, event, None)
         if world is None:
-            store.physical = None
-        else:
-            store.physical = self._physical_memo.get(world) or self._physical_memo.setdefault(world, self._physical(*world))
+            return known
+        # the physical facts change the reaction only if they refuse a start it tries:
+        # up to such a start both runs see the same answers (the rules read the graph's
+        # requirements after the event: the store is loaded with an outcome's key)
+        physical = self._physical_memo.get(world) or self._physical_memo.setdefault(world, self._physical(*world))
+        tried = self._tried[(key, event)]
+        if not tried:
+            return known
+        self.system.store.load(known[0][1] if known else key)
+        if not any(physical(g, pl) for g, pl in tried):
+            return known
+        out = self._react_memo.get((key, event, world))
+        return out if out is not None else self._react(key, event, world, physical)
+
+    def _react(self, key: Key, event: Event, world: tuple | None, physical: Callable[[str, str], str | None] | None = None) -> list:
+        out: list = []
+        store = self.system.store
+        store.physical = physical
         try:
-            self._run_outcomes(key, event, p, pending, out)
+            tried = self._run_outcomes(key, event, self.mw.start_failure_p, [()], out)
         finally:
             store.physical = None
-        self._react_memo[mk] = out
+        if world is None:
+            self._tried[(key, event)] = tried
+        self._react_memo[(key, event, world)] = out
         return out
 
     def _physical(self, failed: tuple[str, ...], down: tuple[str, ...]) -> Callable[[str, str], str | None]:
@@ -237,7 +250,10 @@ class _Builder:
         rules = self.system.store.rules
         return lambda g, pl: rules.start_refusal(g, pl, states.__getitem__)
 
-    def _run_outcomes(self, key: Key, event: Event, p: float, pending: list, out: list) -> None:
+    def _run_outcomes(self, key: Key, event: Event, p: float, pending: list, out: list) -> frozenset[tuple[str, str]]:
+        """Run every outcome of the reaction into ``out``; the (graph, platform) of every
+        start it tried."""
+        tried: set[tuple[str, str]] = set()
         while pending:
             prefix = pending.pop()
             nkey, outcomes, log, instant = self.system.run_one(key, event, prefix)
@@ -252,10 +268,12 @@ class _Builder:
             if p > 0:
                 for i in range(len(prefix), len(outcomes)):
                     pending.append(outcomes[:i] + (False,))
+            tried.update((c.graph, c.platform) for c, _ok in log.commands if type(c) is Start)
             cmds = tuple((type(c) is Start, c.graph, c.platform) for c, ok in log.commands if ok and isinstance(c, (Start, Stop)))
             homeless = tuple(c.graph for c, _ok in log.commands if isinstance(c, RaiseError) and c.kind == NO_ACCEPTABLE_PLATFORMS)
             if prob > 0:
                 out.append((prob, nkey, cmds, homeless))
+        return frozenset(tried)
 
     def _starting_after(self, s: ChainState, cmds: tuple, nkey: Key) -> tuple[tuple[str, str], ...]:
         """The detectors still starting after a reaction's successful starts and stops."""
