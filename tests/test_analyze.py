@@ -372,6 +372,47 @@ def test_a_deployer_that_never_yields_is_stopped_not_waited_for(tmp_path, capsys
     assert code == 4 and len(err.strip().splitlines()) == 1, err
 
 
+def _markov_automaton(path: Path) -> tuple[int, dict[int, list[list[float]]], set[int]]:
+    """(declared states, each state's actions as lists of probabilities, Markovian states) of a DRN file."""
+    lines = path.read_text().splitlines()
+    assert "@type: Markov Automaton" in lines
+    n = int(lines[lines.index("@nr_states") + 1])
+    actions: dict[int, list[list[float]]] = {}
+    markovian: set[int] = set()
+    state = -1
+    for line in lines[lines.index("@model") + 1:]:
+        if line.startswith("state "):
+            state = int(line.split()[1])
+            actions[state] = []
+            if float(line.split()[2][1:]) > 0:  # "!exit rate": 0 for a probabilistic state
+                markovian.add(state)
+        elif line.startswith("\taction"):
+            actions[state].append([])
+        else:
+            actions[state][-1].append(float(line.split(":")[1]))
+    return n, actions, markovian
+
+
+def test_the_placement_mdp_is_exported_beside_the_chain_as_a_markov_automaton(tmp_path, capsys):
+    out = tmp_path / "crash.drn"
+    argv = ["analyze", CRASH, "-p", "stochastic=True", "--deployer", "paper", "--placements", "--transient-only", "--horizon", "60"]
+    assert main([*argv, "--export", str(out)]) == 0
+    text = capsys.readouterr().out
+    mdp = tmp_path / "crash-placements.drn"
+    assert f"Placement MDP written: {mdp}" in text and out.exists()
+    n, actions, markovian = _markov_automaton(mdp)
+    mdp_states = int(text.split("MDP of ")[1].split(" states")[0].replace(",", ""))
+    assert len(actions) == n and len(markovian) == mdp_states and n > mdp_states  # a choice state per reaction with a choice
+    for s, acts in actions.items():
+        assert len(acts) == 1 or s not in markovian  # a Markovian state races; a choice state has the actions
+        for dist in acts:
+            assert abs(sum(dist) - 1.0) < 1e-9
+    assert any(len(acts) > 1 for s, acts in actions.items() if s not in markovian)
+    assert main([*argv, "--export", str(tmp_path / "crash.tra")]) == 0
+    assert "the placement MDP is written only with --export FILE.drn" in capsys.readouterr().out
+    assert not (tmp_path / "crash-placements.tra").exists()
+
+
 def test_placements_refuse_a_model_with_too_many_orders_and_stop_at_the_state_budget():
     from desmon.analyze import BudgetExceeded
     from desmon.analyze.mdp import optimality_gap

@@ -36,6 +36,8 @@ CASES = {
     "coffee_shift faults=False T=30": (SHIFT, {"faults": "False"}, 30.0),
     # a faulty one: platforms and the wrench fail and are repaired (1,056 states)
     "platform_crash stochastic T=600": (CRASH, {"stochastic": "True"}, 600.0),
+    # the lease and the load steps (5,580 states)
+    "cloud_offload stochastic T=600": (str(ROOT / "scenarios" / "cloud_offload.py"), {"stochastic": "True"}, 600.0),
 }
 
 
@@ -65,6 +67,20 @@ def test_the_exported_drn_file_is_read_by_storm(tmp_path):
     s = storm.check_drn(path, 60.0, steady=False)
     assert (s.states, s.transitions, s.long_run_unmonitored_fraction) == (chain.n, len(chain.rates), None)
     assert 0 < s.p_exposure_within_T < 1 and 0 < s.exposure_s_per_mission < 60
+
+
+def test_storm_finds_the_same_best_and_worst_placements():
+    """The placement MDP, exported as a Markov automaton: Storm's minimal and maximal
+    long-run exposure are desmon's policy iteration's (the paper's deployer on
+    platform_crash, where the placements differ)."""
+    pytest.importorskip("stormpy")
+    from desmon.analyze.mdp import optimality_gap
+
+    gap = optimality_gap(load_scenario(CRASH, params={"stochastic": "True"}), "paper")
+    assert gap.max_s_per_hour > gap.min_s_per_hour
+    differences = storm.check_placements(gap)
+    assert [d.measure for d in differences] == ["placements_min_s_per_hour", "placements_max_s_per_hour"]
+    assert all(d.agrees for d in differences), [d.to_json() for d in differences]
 
 
 def test_a_wrong_rate_is_a_disagreement():

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -51,6 +51,8 @@ class Gap:
     iterations: int
     #: the first state where the best placement differs: (state, event, deployer's commands, best commands)
     differs: tuple[str, str, str, str] | None
+    #: the MDP and its reward vector (for :func:`desmon.analyze.export.export_placements`)
+    model: tuple[Any, np.ndarray] | None = field(default=None, compare=False, repr=False)
 
     @property
     def above_optimal(self) -> float:
@@ -233,4 +235,4 @@ def optimality_gap(scenario: Scenario, deployer: Any = "desmon", *, phases: int 
                     break
         if differs is not None:
             break
-    return Gap(mdp.main.system.deployer_name, len(mdp.states), g_own * 3600.0, g_min * 3600.0, g_max * 3600.0, it1 + it2, differs)
+    return Gap(mdp.main.system.deployer_name, len(mdp.states), g_own * 3600.0, g_min * 3600.0, g_max * 3600.0, it1 + it2, differs, (mdp, r))

@@ -221,6 +221,29 @@ def check_chain(
         return check_drn(path, horizon, initial=chain.initial, steady=steady, importer=lambda: stormpy)
 
 
+def check_placements(gap: Any, *, importer: Callable[[], ModuleType] = import_stormpy) -> list["Difference"]:
+    """Storm's best and worst long-run exposure of the placement MDP of ``gap``
+    (:func:`desmon.analyze.mdp.optimality_gap`), exported as a Markov automaton, beside
+    desmon's (s per hour)."""
+    from desmon.analyze.export import export_placements
+
+    stormpy = importer()
+    with tempfile.TemporaryDirectory(prefix="desmon-storm-") as tmp:
+        path = str(Path(tmp) / "placements.drn")
+        export_placements(gap, path)
+        try:
+            model = stormpy.build_model_from_drn(path)
+        except Exception as exc:
+            raise AnalysisError(f"Storm could not read the placement MDP: {_one_line(exc)}") from None
+        c = _Checker(stormpy, model, ((0, 1.0),))
+        best, _t = c.value(f'R{{"{REWARD}"}}min=? [ LRA ]')
+        worst, _t = c.value(f'R{{"{REWARD}"}}max=? [ LRA ]')
+    return [
+        Difference("placements_min_s_per_hour", float(gap.min_s_per_hour), best * 3600.0),
+        Difference("placements_max_s_per_hour", float(gap.max_s_per_hour), worst * 3600.0),
+    ]
+
+
 def relative_difference(a: float, b: float) -> float:
     """``|a - b| / max(|a|, |b|)`` (0 where both are 0)."""
     scale = max(abs(a), abs(b))

@@ -111,13 +111,8 @@ def run(args: argparse.Namespace) -> int:
         except BudgetExceeded as exc:
             err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
             return EXIT_INCOMPLETE
-    cross = _cross_check(stormpy, result)  # before any file is written
-    files: list[str] = []
-    if args.export:
-        from desmon.analyze.export import export_chain
-
-        assert result.chain is not None
-        files = export_chain(result.chain, args.export)
+    cross = _cross_check(stormpy, result, gap)  # before any file is written
+    files = _export(args.export, result, gap)
     doc = result.to_json()
     if agree is not None:
         doc["simulation"] = agree.to_json()
@@ -131,9 +126,29 @@ def run(args: argparse.Namespace) -> int:
     if gap is not None:
         sys.stdout.write(gap.text())
     sys.stdout.write(format_cross_check(cross))
-    for f in files:
-        sys.stdout.write(f"Chain written: {f}\n")
+    _say_written(files, args.export if gap is not None else None)
     return EXIT_VIOLATED if (agree is not None and not agree.inside) or _disagree(cross) else EXIT_OK
+
+
+def _export(path: str | None, result: Any, gap: Any) -> list[str]:
+    """``--export``: the chain, and with ``--placements`` the placement MDP beside a DRN file."""
+    if not path:
+        return []
+    from desmon.analyze.export import export_chain, export_placements, placements_path
+
+    assert result.chain is not None
+    files = export_chain(result.chain, path)
+    beside = placements_path(path)
+    if gap is not None and beside is not None:
+        files.append(export_placements(gap, beside))
+    return files
+
+
+def _say_written(files: list[str], placements_export: str | None) -> None:
+    for f in files:
+        sys.stdout.write(f"{'Placement MDP' if f.endswith('-placements.drn') else 'Chain'} written: {f}\n")
+    if placements_export and not any(f.endswith("-placements.drn") for f in files):
+        sys.stdout.write("(the placement MDP is written only with --export FILE.drn: PRISM's explicit format has no Markov automata)\n")
 
 
 def _stormpy(engine: str) -> Any:
@@ -145,16 +160,19 @@ def _stormpy(engine: str) -> Any:
     return storm.import_stormpy()
 
 
-def _cross_check(stormpy: Any, result: Any) -> tuple[Any, list[Any]] | None:
-    """Storm's numbers for the analysed chain and their differences from desmon's (None
-    without ``--engine storm``)."""
+def _cross_check(stormpy: Any, result: Any, gap: Any = None) -> tuple[Any, list[Any]] | None:
+    """Storm's numbers for the analysed chain (and the placement MDP) and their
+    differences from desmon's (None without ``--engine storm``)."""
     if stormpy is None:
         return None
-    from desmon.analyze.storm import check_chain, compare
+    from desmon.analyze.storm import check_chain, check_placements, compare
 
     assert result.chain is not None
     storm = check_chain(result.chain, result.horizon_s, steady=result.long_run_unmonitored_fraction is not None, importer=lambda: stormpy)
-    return storm, compare(result, storm)
+    differences = compare(result, storm)
+    if gap is not None:
+        differences += check_placements(gap, importer=lambda: stormpy)
+    return storm, differences
 
 
 def _cross_json(cross: tuple[Any, list[Any]] | None) -> dict[str, Any]:
@@ -172,6 +190,8 @@ _MEASURES = {
     "long_run_unmonitored_fraction": "long-run unmonitored fraction",
     "exposure_s_per_mission": "unmonitored s per mission",
     "p_exposure_within_T": "P(any exposure within T)",
+    "placements_min_s_per_hour": "best placements s/h",
+    "placements_max_s_per_hour": "worst placements s/h",
 }
 
 
