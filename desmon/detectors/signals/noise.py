@@ -38,9 +38,11 @@ def wrench_noise(seed: int, block: int, sigma: float) -> Arr:
     return sigma * block_rng(seed, STREAM_WRENCH, block).standard_normal(WRENCH_BLOCK)
 
 
-def tactile_normals(seed: int, block: int, count: int) -> Arr:
-    """The first ``count`` standard normals of tactile render block ``block`` (cell noise before scaling)."""
-    return block_rng(seed, STREAM_TACTILE, block).standard_normal(count)
+def tactile_normals(seed: int, block: int, count: int, out: Arr | None = None) -> Arr:
+    """The first ``count`` standard normals of tactile render block ``block`` (cell noise before
+    scaling), written into ``out`` (``count`` float64) if given."""
+    g = block_rng(seed, STREAM_TACTILE, block)
+    return g.standard_normal(count) if out is None else g.standard_normal(out=out)
 
 
 class Jitter:

@@ -52,8 +52,10 @@ PREFETCH_S: Final = 40.0
 _ROW_OK: Final = np.arange(MAX_ROWS)[None, :] < np.asarray(PAD_ROWS)[:, None]  # (6, 14) cells that exist
 _II: Final = np.arange(MAX_ROWS, dtype=float)
 _JJ: Final = np.arange(PAD_COLS, dtype=float)
-_CELL_ROW: Final = np.repeat(_II, PAD_COLS)  # flat cell -> row
-_CELL_COL: Final = np.tile(_JJ, MAX_ROWS)  # flat cell -> column
+#: flat cell -> ``i + j * 2**22``: a row's sum of ``value * code`` packs its moments ``sum i P``
+#: (below 2**22) and ``sum j P``, exactly (integers below 2**53), for one reduction instead of two
+_PACK: Final = float(2**22)
+_CELL_CODE: Final = np.repeat(_II, PAD_COLS) + np.tile(_JJ, MAX_ROWS) * _PACK
 
 #: One rendered block: frame times ``(B,)``, moments ``(B, 6, 3)``, frames ``(B, 6, 14, 6)`` or None.
 Rendered = tuple[Arr, Arr, "Arr | None"]
@@ -171,14 +173,23 @@ def render_rows(
     noiseless values ``mu = amp * (ey_i * ex_j)`` follow row by row, cells ascending:
     the order in which :func:`render_pad_moments` draws its normals when the rows are
     laid out (pad, frame). The values are bit-identical to :func:`render_pad_moments`.
+    """
+    count, sel, mu, sup_cell = _row_cells(amp, yc, xc, pad, sy, sx, p)
+    return count, sup_cell[sel], mu
+
+
+def _row_cells(amp: Arr, yc: Arr, xc: Arr, pad: Arr, sy: Arr, sx: Arr, p: SignalParams) -> tuple[Arr, Arr, Arr, Arr]:
+    """:func:`render_rows` with the cells left as indices: ``(count, sel, mu, sup_cell)``, the
+    flat cell of kept cell ``m`` being ``sup_cell[sel[m]]``.
 
     Consecutive rows with the same pad and centre share one template ``ey_i * ex_j``
     (a hold, a move_base phase, a jerk of a slip), and only the template's cells that
-    can reach the dead-band at the run's peak amplitude are evaluated per frame.
+    can reach the dead-band at the run's peak amplitude are evaluated per frame; when
+    every one of them reaches it (nearly always) nothing is filtered.
     """
     n = amp.size
     if n == 0:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0)
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=np.int64)
     change = np.empty(n, dtype=bool)
     change[0] = True
     np.not_equal(pad[1:], pad[:-1], out=change[1:])
@@ -198,14 +209,16 @@ def render_rows(
     offset = np.cumsum(count) - count
     per_row = count[run]
     first = np.cumsum(per_row) - per_row
-    idx = np.arange(int(first[-1] + per_row[-1])) - np.repeat(first - offset[run], per_row)
+    idx = np.arange(int(first[-1] + per_row[-1]))
+    idx -= np.repeat(first - offset[run], per_row)
     mu = np.repeat(amp, per_row)
     mu *= sup_tmpl[idx]
-    hit = mu >= p.deadband
-    keep = np.flatnonzero(hit)
+    if not mu.size or mu.min() >= p.deadband:
+        return per_row, idx, mu, sup_cell
+    keep = np.flatnonzero(mu >= p.deadband)
     # kept cells per row: positions of the row starts among the kept cells
     kept = np.diff(np.searchsorted(keep, np.append(first, idx.size)))
-    return kept, sup_cell[idx[keep]], mu[keep]
+    return kept, idx[keep], mu[keep], sup_cell
 
 
 def frame_moments(frames: Arr) -> Arr:
@@ -319,7 +332,7 @@ class TactileArray:
         for i in range(blocks.size):
             c = int(per_block[i])
             if c:
-                vals[at : at + c] = tactile_normals(self.seed, int(blocks[i]), c)
+                tactile_normals(self.seed, int(blocks[i]), c, out=vals[at : at + c])
                 at += c
         vals *= self.params.noise_counts
         vals += mu
@@ -345,16 +358,18 @@ class TactileArray:
         units, by_ep = _episode_units(t, nb, self.episodes, self._ep_starts)
         if units:
             rows = _contact_rows(t, units, by_ep, self.episodes, self.params)
-            count, cell, mu = render_rows(rows.amp, rows.yc, rows.xc, rows.pad, rows.sy, rows.sx, self.params)
+            count, sel, mu, sup_cell = _row_cells(rows.amp, rows.yc, rows.xc, rows.pad, rows.sy, rows.sx, self.params)
             vals = self._noisy_values(rows, count, mu, barr)
             hit = np.flatnonzero(count)
             if hit.size:
                 first = (np.cumsum(count) - count)[hit]
                 fr_, pd_ = rows.frame[hit], rows.pad[hit]
                 mom[fr_, pd_, 0] = np.add.reduceat(vals, first)
-                mom[fr_, pd_, 1] = np.add.reduceat(vals * _CELL_ROW[cell], first)
-                mom[fr_, pd_, 2] = np.add.reduceat(vals * _CELL_COL[cell], first)
+                packed = np.add.reduceat(vals * _CELL_CODE[sup_cell][sel], first)
+                mom[fr_, pd_, 1] = np.fmod(packed, _PACK)  # exact, and -0.0 where every value is -0.0
+                mom[fr_, pd_, 2] = np.floor(packed / _PACK)
             if fr is not None:
+                cell = sup_cell[sel]
                 rr = np.repeat(np.arange(count.size), count)
                 fr[rows.frame[rr], rows.pad[rr], cell // PAD_COLS, cell % PAD_COLS] = vals.astype(np.int16)
         out = []
