@@ -52,6 +52,7 @@ PREFETCH_S: Final = 40.0
 _ROW_OK: Final = np.arange(MAX_ROWS)[None, :] < np.asarray(PAD_ROWS)[:, None]  # (6, 14) cells that exist
 _II: Final = np.arange(MAX_ROWS, dtype=float)
 _JJ: Final = np.arange(PAD_COLS, dtype=float)
+_PADS: Final = np.arange(N_PADS, dtype=np.int64)
 #: flat cell -> ``i + j * 2**22``: a row's sum of ``value * code`` packs its moments ``sum i P``
 #: (below 2**22) and ``sum j P``, exactly (integers below 2**53), for one reduction instead of two
 _PACK: Final = float(2**22)
@@ -271,33 +272,30 @@ def _episode_units(t: Arr, nb: int, episodes: Sequence[Episode], ep_starts: Arr)
 
 
 def _contact_rows(
-    t: Arr, units: list[tuple[int, int]], by_ep: dict[int, list[tuple[int, int]]], episodes: Sequence[Episode], p: SignalParams
+    t: Arr,
+    units: list[tuple[int, int]],
+    by_ep: dict[int, list[tuple[int, int]]],
+    episodes: Sequence[Episode],
+    p: SignalParams,
 ) -> _Rows:
     """Pad states at every frame of the units, expanded to rows and kept where the pad is touched."""
     nf = t.size
-    amp = np.zeros((nf, N_PADS))
-    yc = np.zeros((nf, N_PADS))
-    xc = np.zeros((nf, N_PADS))
-    sy = np.ones((nf, N_PADS))
-    sx = np.ones((nf, N_PADS))
+    state = np.zeros((5, nf, N_PADS))  # amplitude, row centre, column centre, row spread, column spread
+    state[3:] = 1.0
     for ei, ranges in by_ep.items():
         ep = episodes[ei]
-        sel = np.concatenate([np.arange(lo, hi) for lo, hi in ranges])
+        sel = np.concatenate([np.arange(lo, hi) for lo, hi in ranges]) if len(ranges) > 1 else slice(*ranges[0])
         a, y, x = episode_pad_state(t[sel][None, :], ep, p)
-        amp[sel], yc[sel], xc[sel] = a[0], y[0], x[0]
-        sy[sel] = ep.contact["sy"][0]
-        sx[sel] = ep.contact["sx"][0]
-    f0 = np.array([u[0] for u in units], dtype=np.int64)
-    ln = np.array([u[1] - u[0] for u in units], dtype=np.int64)
-    per = N_PADS * ln
-    o = np.arange(int(per.sum())) - np.repeat(np.cumsum(per) - per, per)
-    lr = np.repeat(ln, per)
-    pad = o // lr
-    frame = np.repeat(f0, per) + o % lr
-    a_r = amp[frame, pad]
-    on = np.flatnonzero(a_r > 0)
-    pad, frame = pad[on], frame[on]
-    return _Rows(frame, pad, a_r[on], yc[frame, pad], xc[frame, pad], sy[frame, pad], sx[frame, pad])
+        state[0, sel], state[1, sel], state[2, sel] = a[0], y[0], x[0]
+        state[3, sel] = ep.contact["sy"][0]
+        state[4, sel] = ep.contact["sx"][0]
+    # rows laid out (unit, pad, frame): each unit's frames transposed to pad-major
+    rows = np.concatenate([state[:, lo:hi].transpose(0, 2, 1).reshape(5, -1) for lo, hi in units], axis=1)
+    frame = np.concatenate([np.tile(np.arange(lo, hi, dtype=np.int64), N_PADS) for lo, hi in units])
+    pad = np.concatenate([np.repeat(_PADS, hi - lo) for lo, hi in units])
+    on = np.flatnonzero(rows[0] > 0)
+    r = rows[:, on]
+    return _Rows(frame[on], pad[on], r[0], r[1], r[2], r[3], r[4])
 
 
 class TactileArray:
@@ -366,8 +364,10 @@ class TactileArray:
                 fr_, pd_ = rows.frame[hit], rows.pad[hit]
                 mom[fr_, pd_, 0] = np.add.reduceat(vals, first)
                 packed = np.add.reduceat(vals * _CELL_CODE[sup_cell][sel], first)
-                mom[fr_, pd_, 1] = np.fmod(packed, _PACK)  # exact, and -0.0 where every value is -0.0
-                mom[fr_, pd_, 2] = np.floor(packed / _PACK)
+                sum_j = np.floor(packed / _PACK)  # exact: integers and a power of two
+                # sum i P exactly, -0.0 where every value is -0.0 (as a sum of them would be)
+                mom[fr_, pd_, 1] = np.copysign(packed - sum_j * _PACK, packed)
+                mom[fr_, pd_, 2] = sum_j
             if fr is not None:
                 cell = sup_cell[sel]
                 rr = np.repeat(np.arange(count.size), count)
