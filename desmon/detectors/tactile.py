@@ -43,6 +43,8 @@ WARMUP_FRAMES: Final = 3
 Arr = np.ndarray
 _ROWS = np.asarray(PAD_ROWS, dtype=float)
 _CELLS = _ROWS * PAD_COLS
+_ROW_MID = (_ROWS - 1) / 2
+_COL_MID = (PAD_COLS - 1) / 2
 
 
 def centred_cop(moments: Arr) -> tuple[Arr, Arr]:
@@ -53,9 +55,10 @@ def centred_cop(moments: Arr) -> tuple[Arr, Arr]:
     s = moments[..., 0]
     contact = s > 0
     safe = np.where(contact, s, 1.0)
-    cy = np.where(contact, moments[..., 1] / safe - (_ROWS - 1) / 2, 0.0)
-    cx = np.where(contact, moments[..., 2] / safe - (PAD_COLS - 1) / 2, 0.0)
-    return np.stack([cy, cx], axis=-1), contact
+    cop = np.zeros(s.shape + (2,))
+    np.copyto(cop[..., 0], moments[..., 1] / safe - _ROW_MID, where=contact)
+    np.copyto(cop[..., 1], moments[..., 2] / safe - _COL_MID, where=contact)
+    return cop, contact
 
 
 def slip_index(prev_frame: Arr, frame: Arr) -> Arr:
@@ -97,12 +100,16 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
         last_index = state.cop.copy() if k == 1 else z
         return np.zeros((n, k)), np.zeros((n, k), dtype=bool), TactileState(z, last_index, state.run + k)
     cop, contact = centred_cop(moments)
-    cop_ext = np.concatenate([state.cop[:, None], cop], axis=1)
-    index = cop_ext[:, 1:] + cop_ext[:, :-1]
-    idx_ext = np.concatenate([state.index[:, None], index], axis=1)
+    n, k = contact.shape[:2]
+    cop_ext = np.empty((n, k + 1, N_PADS, 2))
+    cop_ext[:, 0] = state.cop
+    cop_ext[:, 1:] = cop
+    idx_ext = np.empty_like(cop_ext)
+    idx_ext[:, 0] = state.index
+    index = idx_ext[:, 1:]
+    np.add(cop_ext[:, 1:], cop_ext[:, :-1], out=index)
     d = idx_ext[:, 1:] - idx_ext[:, :-1]
     phi = np.sqrt(d[..., 0] ** 2 + d[..., 1] ** 2)
-    k = contact.shape[1]
     run = state.run[:, None] + np.arange(1, k + 1)[None, :]  # frames since activation, this one included
     valid_pad = (contact & (run >= WARMUP_FRAMES)[..., None]) if gating else contact
     w = np.where(valid_pad, moments[..., 0] / _CELLS, 0.0)
@@ -176,23 +183,28 @@ class TactileDetector(StreamingDetector):
         if m.shape[0] != t.size:
             raise SignalError(f"tactile samples: {t.size} times but {m.shape[0]} frames; pass one time per frame")
         keep = t >= self._t_act
-        t, m = t[keep], m[keep]
+        if not keep.all():
+            t, m = t[keep], m[keep]
         if t.size == 0:
             return t, np.zeros(0), np.zeros(0, dtype=bool)
-        prev = np.concatenate([self._last_m[None], m[:-1]])
-        same = np.all(m == prev, axis=(1, 2))
-        idx = np.arange(t.size)
-        brk = np.maximum.accumulate(np.where(~same, idx, -1))
-        run = np.where(brk >= 0, idx - brk + 1, self._run + idx + 1)
-        self._run = int(run[-1])
+        n = t.size
+        # frames repeating the one before (the first: the last of the previous call)
+        same = np.empty(n, dtype=bool)
+        same[0] = bool(np.all(m[0] == self._last_m))
+        if n > 1:
+            np.all((m[1:] == m[:-1]).reshape(n - 1, -1), axis=1, out=same[1:])
+        changed = np.flatnonzero(~same)
+        # frames in the current run of identical frames, the last one included
+        run_last = n - int(changed[-1]) if changed.size else self._run + n
+        self._run = run_last
         self._last_m = m[-1].copy()
         self._last_t = float(t[-1])
         s, valid, self._state = tactile_scores(m[None], self._state, self.warmup_gating)
         s, valid = s[0], valid[0]
         self._seen_valid = self._seen_valid or bool(valid.any())
-        if run[-1] >= self.stuck_frames:
+        if run_last >= self.stuck_frames:
             reason = "no_contact" if not np.any(m[-1, :, 0] > 0) else "stuck"
-            first_bad = int(idx[-1] - (run[-1] - self.stuck_frames))
+            first_bad = n - 1 - (run_last - self.stuck_frames)
             self._set(DetectorState.NO_INPUT, reason, float(t[max(first_bad, 0)]))
         elif not valid[-1]:
             self._set(DetectorState.WARMING, "warm_up", float(t[-1]))

@@ -110,26 +110,25 @@ class SensorBank:
         self.samples["tactile"] += int(t.size)
         pads = [d for d in devices if d in self.pad]
         arrays = [d for d in devices if d not in self.pad]
-        any_ok = np.zeros(t.shape, dtype=bool)
-        masks = []
-        for d in devices:
-            m = self._up_mask(d, t)
-            m = np.ones(t.shape, dtype=bool) if m is None else m
-            masks.append((d, m))
-            any_ok |= m
+        # the devices down at some frame, with their masks (None: up at every frame)
+        masks = [(d, self._up_mask(d, t)) for d in devices]
+        down = [(d, m) for d, m in masks if m is not None and not m.all()]
         if pads and not arrays:
             covered = np.zeros(N_PADS, dtype=bool)
-            changed = False
-            for d, m in masks:
+            for d in pads:
                 covered[self.pad[d]] = True
-                if not m.all():
-                    if not changed:
-                        mom = mom.copy()
-                        changed = True
+            if down:
+                mom = mom.copy()
+                for d, m in down:
                     mom[~m, self.pad[d], :] = 0.0
             if not covered.all():  # pads the graph cannot reach read nothing
                 mom = mom.copy()
                 mom[:, ~covered, :] = 0.0
+        if len(down) < len(masks):  # some device is up at every frame
+            return t, mom
+        any_ok = np.zeros(t.shape, dtype=bool)
+        for _, m in down:
+            any_ok |= m
         if any_ok.all():
             return t, mom
         return t[any_ok], mom[any_ok]

@@ -425,7 +425,9 @@ class TactileArray:
     def at(self, index: Arr, frames: bool = False) -> TactileBlock:
         """Frames by frame number (int array, >= 0), faults applied."""
         k = np.asarray(index, dtype=np.int64)
-        t, mom, fr = self.clean(k, frames)
+        t, mom, fr = self.clean(k, frames)  # fresh arrays
+        if not self.faults and k.ndim == 1:
+            return TactileBlock(k.copy() if k is index else k, t, mom, fr)
         keep = np.ones(k.shape, dtype=bool)
         for f in self.faults:
             hit = (t >= f.start) & (t < f.end)
