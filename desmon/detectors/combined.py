@@ -53,6 +53,20 @@ def zoh(sample_t: Arr, values: Arr, valid: Arr, ticks: Arr, stale: float) -> tup
     return np.where(good, values.ravel()[pos], 0.0).reshape(n, m), good.reshape(n, m)
 
 
+def _nan_to_num(a: Arr) -> Arr:
+    """``np.nan_to_num(a)``: ``a`` itself when every value is finite (the caller's own copy)."""
+    return a if np.isfinite(a).all() else np.nan_to_num(a)
+
+
+def _nan_to_num1(x: float) -> float:
+    """``float(np.nan_to_num(x))`` of one value."""
+    if math.isnan(x):
+        return 0.0
+    if math.isinf(x):
+        return float(np.finfo(float).max) if x > 0 else -float(np.finfo(float).max)
+    return x
+
+
 def _zoh1(carry: tuple[float, float, bool], t: Arr, s: Arr, v: Arr, ticks: Arr, stale: float) -> tuple[Arr, Arr]:
     """One-stream zero-order hold with a carried last sample (the streaming case of :func:`zoh`)."""
     pos = np.searchsorted(t, ticks, side="right") - 1
@@ -60,7 +74,7 @@ def _zoh1(carry: tuple[float, float, bool], t: Arr, s: Arr, v: Arr, ticks: Arr, 
     p = np.maximum(pos, 0)
     if t.size:
         st = np.where(new, t[p], carry[0])
-        val = np.where(new, np.nan_to_num(s[p]), carry[1])
+        val = np.where(new, _nan_to_num(s[p]), carry[1])
         ok = np.where(new, v[p], carry[2])
     else:
         st = np.full(ticks.shape, carry[0])
@@ -159,7 +173,7 @@ class CombinedDetector:
             alarms = tuple(Alarm(float(ticks[i]), self.name, UP if up[i] else DOWN) for i in hit)
             self._next += ticks.size
         if ft.size:
-            self._f = (float(ft[-1]), float(np.nan_to_num(fs[-1])), bool(fv[-1]))
+            self._f = (float(ft[-1]), _nan_to_num1(float(fs[-1])), bool(fv[-1]))
         if tt.size:
             self._t = (float(tt[-1]), float(ts[-1]), bool(tv[-1]))
         fst, tst = self.force.status, self.tactile.status
