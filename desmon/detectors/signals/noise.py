@@ -29,8 +29,10 @@ JITTER_CACHE: Final = 8
 
 
 def block_rng(seed: int, tag: int, block: int) -> np.random.Generator:
-    """The generator of block ``block`` of stream ``tag`` (``STREAM_*``) for ``seed``."""
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, tag, block])))
+    """The generator of block ``block`` of stream ``tag`` (``STREAM_*``) for ``seed``: PCG64
+    seeded by ``SeedSequence([seed, tag, block])`` (given the entropy list, the bit
+    generator builds that seed sequence itself, skipping a slow type check)."""
+    return np.random.Generator(np.random.PCG64([seed, tag, block]))
 
 
 def wrench_noise(seed: int, block: int, sigma: float) -> Arr:
