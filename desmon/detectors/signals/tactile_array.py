@@ -272,30 +272,29 @@ def _episode_units(t: Arr, nb: int, episodes: Sequence[Episode], ep_starts: Arr)
 
 
 def _contact_rows(
-    t: Arr,
-    units: list[tuple[int, int]],
-    by_ep: dict[int, list[tuple[int, int]]],
-    episodes: Sequence[Episode],
-    p: SignalParams,
+    t: Arr, units: list[tuple[int, int]], by_ep: dict[int, list[tuple[int, int]]], episodes: Sequence[Episode], p: SignalParams
 ) -> _Rows:
     """Pad states at every frame of the units, expanded to rows and kept where the pad is touched."""
     nf = t.size
-    state = np.zeros((5, nf, N_PADS))  # amplitude, row centre, column centre, row spread, column spread
-    state[3:] = 1.0
+    # amplitude, row centre, column centre, row spread, column spread of (pad, frame); only
+    # the units' frames are written, and only they are read
+    state = np.empty((5, N_PADS, nf))
     for ei, ranges in by_ep.items():
         ep = episodes[ei]
-        sel = np.concatenate([np.arange(lo, hi) for lo, hi in ranges]) if len(ranges) > 1 else slice(*ranges[0])
+        if all(ranges[i][1] == ranges[i + 1][0] for i in range(len(ranges) - 1)):
+            sel: Arr | slice = slice(ranges[0][0], ranges[-1][1])  # one run of frames (neighbouring blocks)
+        else:
+            sel = np.concatenate([np.arange(lo, hi) for lo, hi in ranges])
         a, y, x = episode_pad_state(t[sel][None, :], ep, p)
-        state[0, sel], state[1, sel], state[2, sel] = a[0], y[0], x[0]
-        state[3, sel] = ep.contact["sy"][0]
-        state[4, sel] = ep.contact["sx"][0]
-    # rows laid out (unit, pad, frame): each unit's frames transposed to pad-major
-    rows = np.concatenate([state[:, lo:hi].transpose(0, 2, 1).reshape(5, -1) for lo, hi in units], axis=1)
-    frame = np.concatenate([np.tile(np.arange(lo, hi, dtype=np.int64), N_PADS) for lo, hi in units])
-    pad = np.concatenate([np.repeat(_PADS, hi - lo) for lo, hi in units])
-    on = np.flatnonzero(rows[0] > 0)
-    r = rows[:, on]
-    return _Rows(frame[on], pad[on], r[0], r[1], r[2], r[3], r[4])
+        state[0][:, sel], state[1][:, sel], state[2][:, sel] = a[0].T, y[0].T, x[0].T
+        state[3][:, sel] = ep.contact["sy"][0][:, None]
+        state[4][:, sel] = ep.contact["sx"][0][:, None]
+    # rows laid out (unit, pad, frame), as flat indices pad * nf + frame into a field
+    idx = np.concatenate([(_PADS[:, None] * nf + np.arange(lo, hi)).reshape(-1) for lo, hi in units])
+    idx = idx[state[0].reshape(-1)[idx] > 0]
+    r = state.reshape(5, -1)[:, idx]
+    pad, frame = np.divmod(idx, nf)
+    return _Rows(frame, pad, r[0], r[1], r[2], r[3], r[4])
 
 
 class TactileArray:
