@@ -416,6 +416,13 @@ class TactileArray:
         rendered = dict(zip(missing, self.render_blocks(missing, frames))) if missing else {}
         parts = [rendered[b] if b in rendered else self._block(b, frames) for b in span]
         j = k - b0 * B
+        lo, hi = int(j[0]), int(j[-1]) + 1
+        if k.ndim == 1 and hi - lo == j.size and bool(np.all(j[1:] - j[:-1] == 1)):
+            # consecutive frames (a request by time): the blocks' slices, copied once
+            cuts = [(i, slice(max(lo - i * B, 0), min(hi - i * B, B))) for i in range(len(parts)) if lo < (i + 1) * B and hi > i * B]
+            fields = range(3) if frames else range(2)
+            out = [np.concatenate([parts[i][f][c] for i, c in cuts]) for f in fields]  # type: ignore[index]
+            return out[0], out[1], (out[2] if frames else None)
         t = np.concatenate([part[0] for part in parts])[j]
         mom = np.concatenate([part[1] for part in parts])[j]
         fr = np.concatenate([part[2] for part in parts])[j] if frames else None  # type: ignore[misc]
