@@ -127,7 +127,9 @@ class WrenchSensor:
         """Samples for grid indices ``index`` (int array, >= 0), faults applied."""
         k = np.asarray(index, dtype=np.int64)
         t = k / self.rate
-        v = self.clean(k)
+        v = self.clean(k)  # a fresh array
+        if not self.faults and k.ndim == 1:
+            return WrenchBlock(k.copy() if k is index else k, t, v)
         keep = np.ones(k.shape, dtype=bool)
         for f in self.faults:
             hit = (t >= f.start) & (t < f.end)
