@@ -76,8 +76,10 @@ class SensorBank:
         iv = self.down.get(device)
         if not iv:
             return None
-        ok = np.ones(times.shape, dtype=bool)
         lo = float(times[0]) if times.size else 0.0
+        if iv[-1][1] <= lo:  # up again since before the first sample (times ascend)
+            return None
+        ok = np.ones(times.shape, dtype=bool)
         for a, b in reversed(iv):
             if b <= lo:
                 break

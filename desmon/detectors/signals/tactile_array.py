@@ -387,7 +387,7 @@ class TactileArray:
             bt, bm, bf = self._block(b0, frames)
             j = k - b0 * TACTILE_BLOCK
             return bt[j], bm[j], (bf[j] if bf is not None else None)
-        if k.size and int(k.max()) - int(k.min()) < 3 * TACTILE_BLOCK:
+        if k.size and (k.ndim == 1 and int(k[-1]) - int(k[0]) + 1 == k.size or int(k.max()) - int(k.min()) < 3 * TACTILE_BLOCK):
             return self._clean_span(k, frames)
         t = np.empty(k.shape)
         mom = np.empty(k.shape + (N_PADS, 3))
@@ -407,8 +407,9 @@ class TactileArray:
         return t, mom, fr
 
     def _clean_span(self, k: Arr, frames: bool) -> Rendered:
-        """:meth:`clean` of frame numbers within a few neighbouring blocks: every block of
-        the span, rendered if missing, concatenated into one table that ``k`` indexes."""
+        """:meth:`clean` of frame numbers within a few neighbouring blocks, or of consecutive
+        ones (a request by time): every block of the span, rendered if missing; their slices
+        are copied (consecutive frames) or concatenated into one table that ``k`` indexes."""
         B = TACTILE_BLOCK
         b0, b1 = int(k.min()) // B, int(k.max()) // B
         span = range(b0, b1 + 1)
