@@ -67,6 +67,13 @@ class Jitter:
             self._cache[b] = arr
         return arr
 
+    def span(self, k0: int, k1: int) -> Arr:
+        """Jitter (s) of frames ``k0 .. k1 - 1`` (``0 <= k0 < k1``): the blocks' slices, read only."""
+        b0, b1 = k0 // JITTER_BLOCK, (k1 - 1) // JITTER_BLOCK
+        if b0 == b1:
+            return self._block(b0)[k0 - b0 * JITTER_BLOCK : k1 - b0 * JITTER_BLOCK]
+        return self(np.arange(k0, k1, dtype=np.int64))
+
     def __call__(self, k: Arr) -> Arr:
         """Jitter (s) of frame numbers ``k`` (int64 array, >= 0)."""
         if k.size and k.ndim == 1 and int(k.min()) // JITTER_BLOCK == int(k.max()) // JITTER_BLOCK:

@@ -315,6 +315,10 @@ class TactileArray:
         k = np.asarray(index, dtype=np.int64)
         return k / self.rate + self.jitter(k)
 
+    def _times_range(self, k0: int, k1: int) -> Arr:
+        """:meth:`times` of the frames ``k0 .. k1 - 1`` (``k0 < k1``)."""
+        return np.arange(k0, k1, dtype=np.int64) / self.rate + self.jitter.span(k0, k1)
+
     def _block(self, b: int, frames: bool) -> Rendered:
         hit = self._cache.get((b, frames))
         if hit is not None:
@@ -349,7 +353,10 @@ class TactileArray:
         B = TACTILE_BLOCK
         nb = len(blocks)
         barr = np.asarray(blocks, dtype=np.int64)
-        t = self.times((barr[:, None] * B + np.arange(B, dtype=np.int64)[None, :]).reshape(-1))
+        if nb and int(barr[-1]) - int(barr[0]) + 1 == nb and bool(np.all(barr[1:] > barr[:-1])):  # neighbouring blocks
+            t = self._times_range(int(barr[0]) * B, (int(barr[-1]) + 1) * B)
+        else:
+            t = self.times((barr[:, None] * B + np.arange(B, dtype=np.int64)[None, :]).reshape(-1))
         mom = np.zeros((t.size, N_PADS, 3))
         fr = np.zeros((t.size, N_PADS, MAX_ROWS, PAD_COLS), dtype=np.int16) if frames else None
         units, by_ep = _episode_units(t, nb, self.episodes, self._ep_starts)
@@ -486,5 +493,5 @@ class TactileArray:
         cand = tactile_nominal_indices(t0, t1, self.rate, self.params.tactile_jitter_clip)
         if cand.size:
             self._prefetch(int(cand[0]), int(cand[-1]), t1, frames)
-        t = self.times(cand)
+        t = self._times_range(int(cand[0]), int(cand[-1]) + 1) if cand.size else self.times(cand)  # cand: consecutive
         return self.at(cand[(t >= t0) & (t < t1)], frames=frames)
