@@ -100,10 +100,18 @@ def _apply_context(context: str, tr: Arr, dur: float, cp: dict, p: SignalParams,
     line = tr[0, :, 0]
     lo = int(np.searchsorted(line, 0.0, side="right"))  # frames before the segment: tr 0
     hi = max(lo, int(np.searchsorted(line, dur, side="left")))  # from here on: tr dur
+    # (frames a..b, where their values are in the kernel's input): one kernel call
+    parts = []
+    m = 0
     for a, b, constant in ((0, lo, True), (lo, hi, False), (hi, line.size, True)):
-        if b <= a:
-            continue
-        fac, dy, dx = context_tactile(context, tr[:, a : a + 1] if constant else tr[:, a:b], cp, p)
+        if b > a:
+            n = 1 if constant else b - a
+            parts.append((a, b, m, m + n))
+            m += n
+    sub = tr[:, parts[0][0] : parts[0][0] + m] if len(parts) == 1 else np.concatenate([tr[:, a : a + (e - s)] for a, _b, s, e in parts], axis=1)
+    out = context_tactile(context, sub, cp, p)
+    for a, b, s, e in parts:
+        fac, dy, dx = (x[:, s:e] if x.ndim == 3 and x.shape[1] == m else x for x in out)
         amp[:, a:b] *= fac
         yc[:, a:b] += dy
         xc[:, a:b] += dx
