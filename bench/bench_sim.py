@@ -20,38 +20,56 @@ the figures are printed but not judged.
 The last line is ``RESULT x_real_time=<float> ratio_bare=<float> signals_off_s=<float>
 wall_s=<float> bare_s=<float> events=<int> until_s=<float>``.
 
-Measured with ``python -m bench.bench_sim`` (seed 0, 8 h), the revision before issue 27
-(6640ccc) and this one run in turn, 5 pairs, medians of the in-process figures each run
-prints. The shared 2-core machine was far from idle (load average about 5), so the
-absolute figures are slow; the pairs' ratios are what carries over:
+Measured with ``python -m bench.bench_sim`` (seed 0, 8 h): main before the signal-side
+work of issue 27 (18df3ce) and this revision run in turn (A B A B ..., one warm-up pair
+not counted), 5 pairs, medians of the in-process figures each run prints, ranges in
+brackets. The shared 2-core machine was busy (load average 1-3):
 
-=====================================  =================  =================  ==========
-                                        before (6640ccc)   issue 27           ratio
-=====================================  =================  =================  ==========
-robot day, 28,800 sim-s, wall           17.7 s             12.0 s             0.68
-sim-s per wall-s (x real time)          1,626x             2,392x
-SimPy events                            25,002             25,002
-ratio full run / bare SimPy             326x               250x
-same day, signals off                   7.8 s              2.3 s              0.30
-whole process, CPU s (farm of 5 pairs)  16.5 s             10.2 s             0.61
-=====================================  =================  =================  ==========
+=====================================  =========================  =========================  ==========
+                                        before (18df3ce)           this revision              ratio
+=====================================  =========================  =========================  ==========
+robot day, 28,800 sim-s, wall           5.64 s (4.75-5.91)         4.87 s (4.01-5.64)         0.87 [a]
+sim-s per wall-s (x real time)          5,104x (4,878-6,069)       5,910x (5,107-7,189)
+SimPy events                            25,002                     25,002
+bare SimPy, same events                 0.020-0.034 s              0.021-0.035 s
+ratio full run / bare SimPy             205x (164-279)             206x (162-213)
+same day, signals off                   1.47 s (1.00-1.54)         1.30 s (1.18-1.34)
+whole process, CPU s                    8.36 s                     7.26 s                     0.90 [a]
+=====================================  =========================  =========================  ==========
 
-The fastest runs seen at quieter moments (load average 1-2.5): this revision 4.9-6.0 s
-for the day (4,800-5,800x real time), signals off 1.2-1.5 s; the revision before
-7.2-9.1 s and 3.2-3.7 s. The goal of at most 100x the bare SimPy cost is not met: the
-signals cost about four times what the rest of the run costs (below).
+[a] median of the five pairs' ratios. At a quieter moment (load average below 1; the same
+pairs against 3175b1f, whose simulation is the same): the day 3.98 s (3.67-4.52) against
+4.55 s (4.22-5.09), pair ratio 0.88; 7,234x against 6,332x real time; signals off 1.02 s
+against 1.02 s; ratio to bare SimPy 200x against 225x (bare 0.019-0.028 s).
 
-Where the time goes (cProfile of the day with signals on; ``python -m cProfile -s
-cumtime -m bench.bench_sim``): feeding the detectors about half -- tactile frames a
-third (rendering a quarter: about 20 M cells above the dead-band, each with its own
-normal, kept bit-identical to the pad-by-pad reference), the wrench a twelfth, the
-detectors' scoring a tenth; the deployer's reactions about an eighth, the audit of the
-invariants after every reaction a twelfth, the context monitor's inserts and the
-infrastructure's starts the rest. Before issue 27 the signals-off day spent two thirds
-of its time listing the repository's DEPLOYED_ON edges by scanning every edge,
-DEPLOYMENT_HISTORY included (``Repository.edges``), which grows all day; the repository
-now indexes edges and nodes by label, and the Query port memoises platform states,
-specifications and validity answers while the facts they read are unchanged.
+The goal of at most 100x the bare SimPy cost is not met, and the ratio carries over less
+well than hoped: bare SimPy is pure-Python event handling, the day is mostly numpy work,
+and on a quiet machine the bare run drops to about 0.020 s, so 100x asks for a 2 s day,
+about half of what it takes. 5,000x real time and signals off under 1.5 s hold in most
+runs on this machine, at its quiet moments by a margin.
+
+Where the time goes (py-spy of the day with signals on, this revision; shares of
+``SimWorld.run``): feeding the detectors about two thirds -- rendering tactile frames
+38 % (the standard normals of the cells above the dead-band, about 21.5 M a day drawn
+bit-identically in a fixed order, 8 %: a floor; each episode's pad states 11 %; the
+cells above the dead-band 9 %; the noisy values and the per-pad moments the rest), the
+wrench 8 %, the detectors' scoring 13 % (tactile 7.5 %, combined 4.6 %), frame times and
+device masks 5 %; the deployer's reactions 8 %, the infrastructure's starts 7 %, the audit
+5 %, the context monitor's inserts 4 %, SimPy and the trace the rest.
+
+What moved it, all without changing a draw or a float: the normals drawn into the value
+array in place; when every template cell reaches the dead-band (nearly always) nothing is
+filtered; the two cell-weighted moments packed into one exact reduction (integer sums
+below 2**53); each episode's context kernel evaluated once per segment, with the frames
+before and after it; pad states laid out (pad, frame) once and rows picked by one flat
+index; consecutive frames copied as the cached blocks' slices (no tables, no gathers) and
+their times from the jitter blocks' slices; the tactile detector's run length from its
+last change only, centres written in place; nan_to_num only where a value is not finite;
+no masks for devices that were never down; generators seeded from the entropy list.
+Earlier in issue 27 (6640ccc -> 2.3x on the signals-off day): the repository indexes
+edges and nodes by label (it listed DEPLOYED_ON edges by scanning every edge, history
+included), and the Query port memoises platform states, specifications and validity
+answers while the facts they read are unchanged.
 
 Run: ``python -m bench.bench_sim [--until SECONDS] [--seed S] [--quick]``.
 """
