@@ -1,8 +1,8 @@
 """Checker throughput: the real deployment core in the loop vs a plain tuple BFS.
 
 ``python -m bench.bench_verify [--large-max-states N] [--prefix N] [--workers W] [--huge N] [--fallbacks N] [--quick]``
-builds a 4-platform, 3-detector scenario (bench_4p, 4,495 states) and a larger
-6-platform one (bench_6p, 311,400 states, searched completely by default), and in the
+builds a 4-platform, 3-detector scenario (bench_4p, 4,289 states) and a larger
+6-platform one (bench_6p, 293,226 states, searched completely by default), and in the
 same run a minimal plain-Python BFS over tuples exploring the same environment
 (context, failed devices, platforms down, loads) with a trivial hard-coded placement
 rule. The figure is the ratio of their states/s (and transitions/s).
