@@ -162,7 +162,6 @@ class Chain:
             parts.append("errors for " + ", ".join(s.key.standing))
         return "; ".join(parts)
 
-
     def _changes(self, s: ChainState) -> Iterator[str]:
         """What run-time changes made of ``s``: loads, requirements, leases."""
         loads = dict(s.key.loads)
@@ -190,7 +189,8 @@ class _Builder:
         self.system = TransitionSystem(plain, deployer, invariants=(), bounds=chain_bounds(scenario, mw))
         self.model = scenario.model
         self.rules = ControlRules(self.model)
-        self._react_memo: dict[tuple[Key, Event], list[tuple[float, Key, tuple, tuple[str, ...]]]] = {}
+        # (key, event, physical facts where they differ or None) -> the reaction's outcomes
+        self._react_memo: dict[tuple[Key, Event, tuple | None], list[tuple[float, Key, tuple, tuple[str, ...]]]] = {}
         self._lease_memo: dict[tuple[Key, str, tuple[str, ...]], str | None] = {}
         self._physical_memo: dict[tuple, Callable[[str, str], str | None]] = {}
         self._tried: dict[tuple[Key, Event], frozenset[tuple[str, str]]] = {}
