@@ -180,11 +180,11 @@ def _check_matching(scenario: Scenario, world: World, b: Bounds) -> None:
 
 def _check_loads(scenario: Scenario, world: World, b: Bounds) -> None:
     """The bounds' load levels and the World's load steps name the same walks."""
-    steps = {w.platform: w for w in world.load_steps}
+    steps = {w.platform: w for w in world.load_steps if w.resource == b.load_resource}
     initial = {ev.platform: ev.amount for ev in scenario.initial if isinstance(ev, LoadChange) and ev.resource == b.load_resource}
     for p, lv in b.loads.items():
         w = steps.get(p)
-        if w is None or w.resource != b.load_resource:
+        if w is None:
             raise _refuse(
                 scenario,
                 f"the checker bounds move the {b.load_resource} load of {p!r} but the World gives it no rate: add "
