@@ -132,6 +132,18 @@ def test_the_lease_is_in_the_chain_the_way_the_simulation_leases():
     assert a.world.to_json()["lease"]["idle_s"] == 120.0
 
 
+def test_each_solution_step_is_announced_before_it_runs():
+    said: list[str] = []
+    a = analyze(_shift(faults="False"), miss=NO_MISS, horizon=600.0, status=said.append)
+    assert said == [
+        f"the steady state of {a.states:,} states", "the exposure over 600 s",
+        "the probability of any exposure within 600 s", "the mean time to the first exposure",
+    ]
+    said.clear()
+    analyze(_shift(faults="False"), miss=NO_MISS, horizon=600.0, steady=False, status=said.append)
+    assert said[0] == "the exposure over 600 s" and len(said) == 3
+
+
 def test_the_checkers_budgets_are_dropped_and_said():
     mw = markov_world(_shift())
     assert dict(mw.dropped) == {"max_failures": 2, "start_failures": 1}

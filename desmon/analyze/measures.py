@@ -186,8 +186,12 @@ def analyze(
     max_states: int | None = None,
     miss: dict[str, float] | None = None,
     progress: Callable[[int], None] | None = None,
+    status: Callable[[str], None] | None = None,
 ) -> Analysis:
-    """Build the chain of ``scenario`` under ``deployer`` and compute its measures."""
+    """Build the chain of ``scenario`` under ``deployer`` and compute its measures;
+    ``progress(n)`` is called as states are explored, ``status(what)`` before each
+    solution step (long on a large chain)."""
+    say = status or (lambda _what: None)
     mw = markov_world(scenario, phases=phases, start_failure_p=start_failure_p)
     T = scenario.world.horizon if horizon is None else horizon
     check_number("--horizon", T, error=AnalysisError, positive=True, unit=" of seconds")
@@ -200,10 +204,14 @@ def analyze(
     frac = slips = residual = pi = None
     rows: list[tuple[float, str]] = []
     if steady:
+        say(f"the steady state of {chain.n:,} states")
         frac, slips, residual, rows, pi = _long_run(chain, Q)
+    say(f"the exposure over {T:,.0f} s")
     tr = transient(Q, p0, T, np.vstack([chain.unmonitored, chain.undetected]), limit=pi)
     per_mission = float(tr.accumulated[0])
+    say(f"the probability of any exposure within {T:,.0f} s")
     within = _within(chain, Q, p0, T)
+    say("the mean time to the first exposure")
     mtte = mean_time_to(Q, chain.unmonitored > 0, p0)
     return Analysis(
         scenario=scenario.name,

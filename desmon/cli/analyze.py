@@ -60,7 +60,8 @@ def add_parser(sub: Subparsers) -> None:
         "--engine", choices=("scipy", "storm"), default="scipy",
         help="storm: also model-check the chain with Storm (stormpy, pip install 'desmon[exact]') and print its numbers beside scipy's",
     )
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress line (on a terminal it shows the chain states explored, then the solution step under way)")
     p.set_defaults(handler=run)
 
 
@@ -85,11 +86,15 @@ def run(args: argparse.Namespace) -> int:
         if show:
             line.show(f"desmon analyze: {n:,} chain states explored")
 
+    def status(what: str) -> None:
+        if show:
+            line.show(f"desmon analyze: solving {what}")
+
     try:
         try:
             result = analyze(
                 scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, horizon=args.horizon,
-                steady=not args.transient_only, max_states=args.max_states, progress=progress,
+                steady=not args.transient_only, max_states=args.max_states, progress=progress, status=status,
             )
         finally:
             line.close()
