@@ -363,6 +363,21 @@ def test_a_deployer_that_crashes_in_a_reached_state_is_crashed_exit_4(tmp_path, 
     assert code == 4 and "crashed reacting to action move_base" in err and len(err.strip().splitlines()) == 1, err
 
 
+def test_a_deployer_that_crashes_only_under_another_platform_order_names_that_order(tmp_path, capsys):
+    path = tmp_path / "ordered.py"
+    path.write_text(
+        "from desmon.deployment.deployer import DEPLOYERS\n"
+        "def ordered(q, slots, changed, context_changed):\n"
+        "    if q.platform_states()[0].name != 'torso_pc':\n"
+        "        raise RuntimeError('only the declared order')\n"
+        "    yield from DEPLOYERS['desmon'].react(q, slots, changed, context_changed)\n"
+    )
+    argv = ["analyze", CRASH, "-p", "stochastic=True", "--transient-only", "--horizon", "60", "--placements", "--deployer", f"{path}:ordered"]
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 4 and "one --placements tries (desmon verify runs the declared order)" in err and len(err.strip().splitlines()) == 1, err
+
+
 def test_simulate_runs_the_world_the_chain_was_given():
     from desmon.analyze.agreement import markov_scenario
 

@@ -181,8 +181,10 @@ class Chain:
 class _Builder:
     """Breadth-first over chain states; one transition system, its reactions memoised."""
 
-    def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld) -> None:
+    def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld, *, where: str = "") -> None:
         self.mw = mw
+        #: where a crash can be replayed ("": desmon verify, which runs the model as declared)
+        self.where = where or "desmon verify shows the path to it"
         # the checker's bounds without its budgets, and no scripted first action: the
         # chain starts before the monitor has recognised anything
         plain = replace(scenario, timeline=())
@@ -261,7 +263,7 @@ class _Builder:
             if instant is not None and instant[0] == CRASH:  # exit 4, as desmon verify's CRASHED
                 raise DeployerFault(
                     f"deployer {self.system.deployer_name} crashed reacting to {event} in a state the chain reached: {instant[1]}; "
-                    "desmon verify shows the path to it (a crashing deployer has no exposure to compute)"
+                    f"{self.where} (a crashing deployer has no exposure to compute)"
                 )
             nf = outcomes.count(False)
             prob = (p ** nf) * ((1.0 - p) ** (len(outcomes) - nf)) if p > 0 else 1.0

@@ -100,7 +100,11 @@ class _MDP:
                 f"it handles at most {MAX_ORDERS} (4 platforms): analyze without --placements"
             )
         orders = list(itertools.permutations(names))
-        self.builders = [_Builder(_ordered(scenario, o), deployer, mw) for o in orders]
+        self.builders = [
+            _Builder(_ordered(scenario, o), deployer, mw, where="" if k == 0 else
+                     f"with the platforms in the order {', '.join(o)}, one --placements tries (desmon verify runs the declared order)")
+            for k, o in enumerate(orders)
+        ]
         self.main = self.builders[0]
         self.max_states = max_states
         self.states: list[ChainState] = []
