@@ -46,6 +46,22 @@ def test_chunked_generation_equals_one_shot_generation() -> None:
     assert np.array_equal(np.concatenate([t.frames for t in ts]), whole_t.frames)  # type: ignore[misc]
 
 
+@pytest.mark.parametrize("rate", [50.0, 1000.0])
+def test_a_wrench_sample_reads_the_same_bytes_whether_its_block_is_rendered_whole_or_in_part(rate: float) -> None:
+    # a request by time renders only its own samples of a block; an index request the whole block
+    source = "lwr_estimate" if rate == 50.0 else "wrist_ft"
+    whole = _make(wrench_source=source, wrench_rate=rate)
+    n = int(13.4 * rate)
+    scattered = np.arange(n)[::-1].copy()  # not consecutive: whole blocks, cached
+    reference = whole.wrench_at(scattered).values[::-1]
+    parts = _make(wrench_source=source, wrench_rate=rate)
+    rng = np.random.default_rng(0)
+    edges = np.unique(np.concatenate([[0.0, 13.4], rng.uniform(0.0, 13.4, 40)]))
+    values = np.concatenate([parts.wrench(a, b).values for a, b in zip(edges, edges[1:])])
+    assert values.size == n
+    assert np.array_equal(values.view(np.int64), reference.view(np.int64))  # bit for bit
+
+
 def test_same_seed_gives_identical_signals_and_another_seed_does_not() -> None:
     a, b, c = _make(3), _make(3), _make(4)
     assert np.array_equal(a.wrench(0, 13).values, b.wrench(0, 13).values)

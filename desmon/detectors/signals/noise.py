@@ -35,9 +35,10 @@ def block_rng(seed: int, tag: int, block: int) -> np.random.Generator:
     return np.random.Generator(np.random.PCG64([seed, tag, block]))
 
 
-def wrench_noise(seed: int, block: int, sigma: float) -> Arr:
-    """White sensor noise (N) of the ``WRENCH_BLOCK`` wrench samples of ``block``."""
-    return sigma * block_rng(seed, STREAM_WRENCH, block).standard_normal(WRENCH_BLOCK)
+def wrench_noise(seed: int, block: int, sigma: float, count: int = WRENCH_BLOCK) -> Arr:
+    """White sensor noise (N) of the first ``count`` wrench samples of ``block`` (by default all
+    ``WRENCH_BLOCK``; a prefix of the block's draws, so a sample's noise does not depend on ``count``)."""
+    return sigma * block_rng(seed, STREAM_WRENCH, block).standard_normal(count)
 
 
 def tactile_normals(seed: int, block: int, count: int, out: Arr | None = None) -> Arr:

@@ -83,18 +83,30 @@ class WrenchSensor:
         hit = self._cache.get(b)
         if hit is not None:
             return hit
-        k = np.arange(b * WRENCH_BLOCK, (b + 1) * WRENCH_BLOCK, dtype=np.int64)
-        t = (k / self.rate)[None, :]
-        val = wrench_noise(self.seed, b, self.config.sigma)[None, :]
-        t_lo, t_hi = float(t[0, 0]), float(t[0, -1])
-        i0 = int(np.searchsorted(self._seg_ends, t_lo, side="right"))
-        i1 = int(np.searchsorted(self._seg_starts, t_hi, side="right"))
+        out = self._render(b, b * WRENCH_BLOCK, (b + 1) * WRENCH_BLOCK)
+        if len(self._cache) >= WRENCH_CACHE:
+            del self._cache[next(iter(self._cache))]
+        self._cache[b] = out
+        return out
+
+    def _render(self, b: int, k0: int, k1: int) -> Arr:
+        """Samples ``k0 .. k1 - 1`` of block ``b`` (``b * WRENCH_BLOCK <= k0 < k1 <= (b + 1) *
+        WRENCH_BLOCK``): the block's noise (its first ``k1 - b * WRENCH_BLOCK`` normals, a prefix
+        of the block's draws), the contexts and the slips near the block. Every kernel is
+        elementwise in ``t``, and which slips count is decided on the whole block's span, so
+        a sample reads the same bytes whichever range of its block is rendered."""
+        base = b * WRENCH_BLOCK
+        t = (np.arange(k0, k1, dtype=np.int64) / self.rate)[None, :]
+        val = wrench_noise(self.seed, b, self.config.sigma, k1 - base)[None, k0 - base :]
+        t_lo, t_hi = base / self.rate, (base + WRENCH_BLOCK - 1) / self.rate  # the block's span
+        i0 = int(np.searchsorted(self._seg_ends, float(t[0, 0]), side="right"))
+        i1 = int(np.searchsorted(self._seg_starts, float(t[0, -1]), side="right"))
         for i in range(i0, i1):
             s = self.segments[i]
             if s.context in (HOLD, IDLE):
                 continue
             # only the samples inside the segment (t ascends): the force is elementwise in t
-            # and outside the segment nothing is added (``val`` is this block's own array)
+            # and outside the segment nothing is added (``val`` is this range's own array)
             lo, hi = np.searchsorted(t[0], (s.start, s.end), side="left")
             if hi > lo:
                 ts = t[:, lo:hi]
@@ -103,11 +115,7 @@ class WrenchSensor:
             if t_hi < float(sl.t_s[0]) - 1.5 or t_lo > float(sl.t_s[0]) + 2.0:
                 continue
             val = val + slip_force(t, sl.t_s, sl.sign, sl.grav, sl.params)
-        out = val[0]
-        if len(self._cache) >= WRENCH_CACHE:
-            del self._cache[next(iter(self._cache))]
-        self._cache[b] = out
-        return out
+        return val[0]
 
     def clean(self, k: Arr) -> Arr:
         """Fault-free samples at grid indices ``k``."""
@@ -116,7 +124,11 @@ class WrenchSensor:
             return out
         b0 = int(k[0]) // WRENCH_BLOCK
         if k.ndim == 1 and int(k[-1]) // WRENCH_BLOCK == b0 and int(k.min()) // WRENCH_BLOCK == b0:
-            return self._block(b0)[k - b0 * WRENCH_BLOCK]
+            hit = self._cache.get(b0)
+            if hit is None and int(k[-1]) - int(k[0]) + 1 == k.size and bool(np.all(k[1:] > k[:-1])):
+                # consecutive samples of one block (a request by time): only they are rendered
+                return self._render(b0, int(k[0]), int(k[-1]) + 1)
+            return (hit if hit is not None else self._block(b0))[k - b0 * WRENCH_BLOCK]
         blocks = k // WRENCH_BLOCK
         for b in np.unique(blocks):
             sel = blocks == b
