@@ -58,6 +58,8 @@ _PADS: Final = np.arange(N_PADS, dtype=np.int64)
 _PACK: Final = float(2**22)
 _CELL_CODE: Final = np.repeat(_II, PAD_COLS) + np.tile(_JJ, MAX_ROWS) * _PACK
 
+#: A segment kernel's output over time as rows, and whether it is neutral before / after the segment.
+_Term = tuple[Arr, bool, bool]
 #: One rendered block: frame times ``(B,)``, moments ``(B, 6, 3)``, frames ``(B, 6, 14, 6)`` or None.
 Rendered = tuple[Arr, Arr, "Arr | None"]
 
@@ -115,6 +117,115 @@ def _apply_context(context: str, tr: Arr, dur: float, cp: dict, p: SignalParams,
         amp[:, a:b] *= fac
         yc[:, a:b] += dy
         xc[:, a:b] += dx
+
+
+def _segment_kernel(tt: Arr, lo: int, hi: int, seg: tuple[str, float, float, dict], kappa: Arr, p: SignalParams) -> tuple[_Term | None, ...]:
+    """One segment's ``(fac, dy, dx)`` (``dy``, ``dx`` None for a hold: it moves no centre), each
+    as rows over ``m + 2`` times: row 0 at ``tr = 0`` (the frames before the segment), rows
+    ``1..m`` at the clipped times of frames ``lo..hi-1``, row ``m + 1`` at ``tr = dur`` (the
+    frames after it). A row has 6 pads or 1 (the same for every pad); a term the same for
+    every time has one row."""
+    context, start, dur, cp = seg
+    m = hi - lo
+    arg = np.empty(m + 2)
+    arg[0] = 0.0
+    arg[m + 1] = dur
+    inner = arg[1 : m + 1]
+    np.subtract(tt[lo:hi], start, out=inner)
+    np.clip(inner, 0.0, dur, out=inner)
+    tr = arg.reshape(1, m + 2, 1)
+    if context == HOLD:
+        return _term(hold_creep(tr, kappa, p), 1.0), None, None
+    fac, dy, dx = context_tactile(context, tr, cp, p)
+    return _term(fac, 1.0), _term(dy, 0.0), _term(dx, 0.0)
+
+
+def _term(x: Arr, neutral: float) -> _Term:
+    """A kernel output (``(1, m + 2, 6 or 1)`` or ``(1,)``) as rows ``(m + 2 or 1, 6 or 1)``, with
+    whether its value before and after the segment is ``neutral`` for every pad."""
+    rows = x[0] if x.ndim == 3 else x.reshape(1, -1)
+    ends = rows[0 :: max(rows.shape[0] - 1, 1)].tolist()
+    return rows, all(v == neutral for v in ends[0]), all(v == neutral for v in ends[-1])
+
+
+def _ascending_state(tt: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, Arr] | None:
+    """:func:`episode_pad_state` of ascending frame times ``tt`` ``(K,)`` inside the episode, as
+    ``(K, 6)`` arrays of the same floats; None (use :func:`episode_pad_state`) if a frame lies
+    outside the episode or a contact centre is -0.0.
+
+    At a frame time every segment but the one under way sits at a constant state (``tr`` 0
+    before it, ``tr = dur`` after it). The frames are cut into pieces at each segment's first
+    frame with ``t > start`` (``tr > 0``) and first frame with ``t > start + dur`` (from there
+    on ``tr = dur``: ``t - start`` exceeds ``dur`` exactly, so its rounding is not below it);
+    a segment's kernel is evaluated once, on its own frames and its two constants. A piece
+    applies the segments in order, as :func:`episode_pad_state` does, with two exact
+    shortcuts: a constant met before any per-frame array is applied to the pad vector (the
+    same operations on the same operands), and a constant factor 1.0 or offset 0.0 is
+    skipped (``x * 1.0 == x``; ``x + 0.0 == x`` unless ``x`` is -0.0, and a running sum that
+    starts at a centre other than -0.0 never is -0.0: a sum is -0.0 only if both terms are).
+    """
+    c = ep.contact
+    y0, x0 = c["y"][0], c["x"][0]
+    n = tt.size
+    if n == 0 or tt[0] < ep.start or tt[-1] >= ep.end:
+        return None
+    if bool(((y0 == 0) & np.signbit(y0)).any()) or bool(((x0 == 0) & np.signbit(x0)).any()):
+        return None
+    segs = []
+    cuts = {0, n}
+    for seg in ep.segments:
+        if seg[0] == IDLE:
+            continue
+        lo = int(np.searchsorted(tt, seg[1], side="right"))
+        hi = max(lo, int(np.searchsorted(tt, np.nextafter(seg[1] + seg[2], np.inf), side="left")))
+        segs.append((lo, hi, _segment_kernel(tt, lo, hi, seg, c["kappa"], p)))
+        cuts.update((lo, hi))
+    bounds = sorted(cuts)
+    out = [np.empty((n, N_PADS)) for _ in range(3)]
+    starts = (c["A"][0], y0, x0)
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        if b > a:
+            for f in range(3):
+                out[f][a:b] = _piece(a, b, segs, f, starts[f])
+    if ep.slips:
+        t3 = tt[None, :, None]
+        for t_s, sign, sp in ep.slips:
+            fac, dy = slip_tactile(t3, t_s, sign, sp, p)
+            out[0] *= fac[0]
+            out[1] += dy[0]
+    return out[0], out[1], out[2]
+
+
+def _piece(a: int, b: int, segs: list, f: int, acc: Arr) -> Arr:
+    """Field ``f`` (0 amplitude: products, 1 and 2 centres: sums) over frames ``a..b-1``, which
+    lie before, inside or after each segment as a whole; ``acc`` the field's start per pad."""
+    op = np.multiply if f == 0 else np.add
+    vector = True
+    for lo, hi, kernel in segs:
+        term = kernel[f]
+        if term is None:
+            continue
+        rows, neutral_before, neutral_after = term
+        if rows.shape[0] == 1:  # the same at every time
+            if neutral_before:
+                continue
+            x = rows[0]
+        elif b <= lo:
+            if neutral_before:
+                continue
+            x = rows[0]
+        elif a >= hi:
+            if neutral_after:
+                continue
+            x = rows[-1]
+        else:
+            x = rows[a - lo + 1 : b - lo + 1]
+        if vector:
+            acc = op(acc, x)
+            vector = acc.ndim == 1
+        else:
+            op(acc, x, out=acc)
+    return acc
 
 
 def render_pad_moments(
@@ -258,12 +369,11 @@ class _Rows:
     sx: Arr
 
 
-def _episode_units(t: Arr, nb: int, episodes: Sequence[Episode], ep_starts: Arr) -> tuple[list[tuple[int, int]], dict[int, list[tuple[int, int]]]]:
-    """The (block, episode) frame ranges of ``nb`` concatenated blocks of frame times ``t``, in
-    draw order, and the same ranges grouped by episode number."""
+def _episode_units(t: Arr, nb: int, episodes: Sequence[Episode], ep_starts: Arr) -> list[tuple[int, int, int]]:
+    """The (block, episode) frame ranges ``(lo, hi, episode number)`` of ``nb`` concatenated
+    blocks of frame times ``t``, in draw order."""
     B = TACTILE_BLOCK
-    units: list[tuple[int, int]] = []
-    by_ep: dict[int, list[tuple[int, int]]] = {}
+    units: list[tuple[int, int, int]] = []
     for i in range(nb):
         tb = t[i * B : (i + 1) * B]
         first = int(np.searchsorted(ep_starts, tb[0], side="right")) - 1
@@ -274,34 +384,49 @@ def _episode_units(t: Arr, nb: int, episodes: Sequence[Episode], ep_starts: Arr)
             lo = int(np.searchsorted(tb, ep.start, side="left"))
             hi = int(np.searchsorted(tb, ep.end, side="left"))
             if hi > lo:
-                units.append((i * B + lo, i * B + hi))
-                by_ep.setdefault(ei, []).append((i * B + lo, i * B + hi))
-    return units, by_ep
+                units.append((i * B + lo, i * B + hi, ei))
+    return units
 
 
-def _contact_rows(
-    t: Arr, units: list[tuple[int, int]], by_ep: dict[int, list[tuple[int, int]]], episodes: Sequence[Episode], p: SignalParams
-) -> _Rows:
+def _episode_state(t: Arr, ranges: list[tuple[int, int]], ep: Episode, p: SignalParams) -> tuple[Arr | slice, Arr, Arr, Arr]:
+    """The frames of an episode's ranges (a slice if they are one run) and the pads' amplitude,
+    row and column centres there, each ``(frames, 6)``: :func:`_ascending_state` where it
+    applies (frame times ascending: any render of blocks in order), else :func:`episode_pad_state`."""
+    if all(ranges[i][1] == ranges[i + 1][0] for i in range(len(ranges) - 1)):
+        sel: Arr | slice = slice(ranges[0][0], ranges[-1][1])  # one run of frames (neighbouring blocks)
+    else:
+        sel = np.concatenate([np.arange(lo, hi) for lo, hi in ranges])
+    tt = t[sel]
+    fast = _ascending_state(tt, ep, p) if bool(np.all(tt[1:] >= tt[:-1])) else None
+    if fast is not None:
+        return (sel, *fast)
+    a, y, x = episode_pad_state(tt[None, :], ep, p)
+    return sel, a[0], y[0], x[0]
+
+
+def _contact_rows(t: Arr, units: list[tuple[int, int, int]], episodes: Sequence[Episode], p: SignalParams) -> _Rows:
     """Pad states at every frame of the units, expanded to rows and kept where the pad is touched."""
     nf = t.size
-    # amplitude, row centre, column centre, row spread, column spread of (pad, frame); only
+    # amplitude, row centre, column centre, row spread, column spread of (frame, pad); only
     # the units' frames are written, and only they are read
-    state = np.empty((5, N_PADS, nf))
+    state = np.empty((5, nf, N_PADS))
+    by_ep: dict[int, list[tuple[int, int]]] = {}
+    for lo, hi, ei in units:
+        by_ep.setdefault(ei, []).append((lo, hi))
+    pads = {}
     for ei, ranges in by_ep.items():
-        ep = episodes[ei]
-        if all(ranges[i][1] == ranges[i + 1][0] for i in range(len(ranges) - 1)):
-            sel: Arr | slice = slice(ranges[0][0], ranges[-1][1])  # one run of frames (neighbouring blocks)
-        else:
-            sel = np.concatenate([np.arange(lo, hi) for lo, hi in ranges])
-        a, y, x = episode_pad_state(t[sel][None, :], ep, p)
-        state[0][:, sel], state[1][:, sel], state[2][:, sel] = a[0].T, y[0].T, x[0].T
-        state[3][:, sel] = ep.contact["sy"][0][:, None]
-        state[4][:, sel] = ep.contact["sx"][0][:, None]
-    # rows laid out (unit, pad, frame), as flat indices pad * nf + frame into a field
-    idx = np.concatenate([(_PADS[:, None] * nf + np.arange(lo, hi)).reshape(-1) for lo, hi in units])
-    idx = idx[state[0].reshape(-1)[idx] > 0]
-    r = state.reshape(5, -1)[:, idx]
-    pad, frame = np.divmod(idx, nf)
+        c = episodes[ei].contact
+        sel, state[0, sel], state[1, sel], state[2, sel] = _episode_state(t, ranges, episodes[ei], p)
+        state[3, sel] = c["sy"][0]
+        state[4, sel] = c["sx"][0]
+        # a pad without contact (amplitude 0) has amplitude 0 (or NaN) in every frame: no rows
+        pads[ei] = _PADS[c["A"][0] != 0][:, None]
+    # rows laid out (unit, pad, frame), as flat indices frame * 6 + pad into a field
+    idx = np.concatenate([(np.arange(lo * N_PADS, hi * N_PADS, N_PADS) + pads[ei]).reshape(-1) for lo, hi, ei in units])
+    flat = state.reshape(5, -1)
+    idx = idx[flat[0][idx] > 0]
+    r = flat[:, idx]
+    frame, pad = np.divmod(idx, N_PADS)
     return _Rows(frame, pad, r[0], r[1], r[2], r[3], r[4])
 
 
@@ -367,9 +492,9 @@ class TactileArray:
             t = self.times((barr[:, None] * B + np.arange(B, dtype=np.int64)[None, :]).reshape(-1))
         mom = np.zeros((t.size, N_PADS, 3))
         fr = np.zeros((t.size, N_PADS, MAX_ROWS, PAD_COLS), dtype=np.int16) if frames else None
-        units, by_ep = _episode_units(t, nb, self.episodes, self._ep_starts)
+        units = _episode_units(t, nb, self.episodes, self._ep_starts)
         if units:
-            rows = _contact_rows(t, units, by_ep, self.episodes, self.params)
+            rows = _contact_rows(t, units, self.episodes, self.params)
             count, sel, mu, sup_cell = _row_cells(rows.amp, rows.yc, rows.xc, rows.pad, rows.sy, rows.sx, self.params)
             vals = self._noisy_values(rows, count, mu, barr)
             hit = np.flatnonzero(count)
