@@ -294,13 +294,14 @@ def render_rows(
     the order in which :func:`render_pad_moments` draws its normals when the rows are
     laid out (pad, frame). The values are bit-identical to :func:`render_pad_moments`.
     """
-    count, sel, mu, sup_cell = _row_cells(amp, yc, xc, pad, sy, sx, p)
+    count, sel, mu, sup_cell, _first = _row_cells(amp, yc, xc, pad, sy, sx, p)
     return count, sup_cell[sel], mu
 
 
-def _row_cells(amp: Arr, yc: Arr, xc: Arr, pad: Arr, sy: Arr, sx: Arr, p: SignalParams) -> tuple[Arr, Arr, Arr, Arr]:
-    """:func:`render_rows` with the cells left as indices: ``(count, sel, mu, sup_cell)``, the
-    flat cell of kept cell ``m`` being ``sup_cell[sel[m]]``.
+def _row_cells(amp: Arr, yc: Arr, xc: Arr, pad: Arr, sy: Arr, sx: Arr, p: SignalParams) -> tuple[Arr, Arr, Arr, Arr, Arr]:
+    """:func:`render_rows` with the cells left as indices: ``(count, sel, mu, sup_cell, first)``,
+    the flat cell of kept cell ``m`` being ``sup_cell[sel[m]]``, row ``r``'s cells starting at
+    ``first[r]``.
 
     Consecutive rows with the same pad and centre share one template ``ey_i * ex_j``
     (a hold, a move_base phase, a jerk of a slip), and only the template's cells that
@@ -309,7 +310,7 @@ def _row_cells(amp: Arr, yc: Arr, xc: Arr, pad: Arr, sy: Arr, sx: Arr, p: Signal
     """
     n = amp.size
     if n == 0:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=np.int64)
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
     change = np.empty(n, dtype=bool)
     change[0] = True
     np.not_equal(pad[1:], pad[:-1], out=change[1:])
@@ -333,12 +334,15 @@ def _row_cells(amp: Arr, yc: Arr, xc: Arr, pad: Arr, sy: Arr, sx: Arr, p: Signal
     idx -= np.repeat(first - offset[run], per_row)
     mu = np.repeat(amp, per_row)
     mu *= sup_tmpl[idx]
-    if not mu.size or mu.min() >= p.deadband:
-        return per_row, idx, mu, sup_cell
+    # every cell reaches the dead-band iff it does at its run's lowest amplitude (rounding is
+    # monotonic: amp <= amp' gives amp * w <= amp' * w), checked on the templates, not the cells
+    low = np.minimum.reduceat(amp, starts)
+    if bool((sup_tmpl * np.repeat(low, count) >= p.deadband).all()):
+        return per_row, idx, mu, sup_cell, first
     keep = np.flatnonzero(mu >= p.deadband)
     # kept cells per row: positions of the row starts among the kept cells
-    kept = np.diff(np.searchsorted(keep, np.append(first, idx.size)))
-    return kept, idx[keep], mu[keep], sup_cell
+    at = np.searchsorted(keep, np.append(first, idx.size))
+    return np.diff(at), idx[keep], mu[keep], sup_cell, at[:-1]
 
 
 def frame_moments(frames: Arr) -> Arr:
@@ -495,18 +499,21 @@ class TactileArray:
         units = _episode_units(t, nb, self.episodes, self._ep_starts)
         if units:
             rows = _contact_rows(t, units, self.episodes, self.params)
-            count, sel, mu, sup_cell = _row_cells(rows.amp, rows.yc, rows.xc, rows.pad, rows.sy, rows.sx, self.params)
+            count, sel, mu, sup_cell, first = _row_cells(rows.amp, rows.yc, rows.xc, rows.pad, rows.sy, rows.sx, self.params)
             vals = self._noisy_values(rows, count, mu, barr)
             hit = np.flatnonzero(count)
             if hit.size:
-                first = (np.cumsum(count) - count)[hit]
-                fr_, pd_ = rows.frame[hit], rows.pad[hit]
-                mom[fr_, pd_, 0] = np.add.reduceat(vals, first)
-                packed = np.add.reduceat(vals * _CELL_CODE[sup_cell][sel], first)
+                at = (rows.frame * N_PADS + rows.pad) * 3  # (frame, pad, 0) in the flat moments
+                if hit.size < count.size:
+                    first, at = first[hit], at[hit]
+                flat = mom.reshape(-1)
+                flat[at] = np.add.reduceat(vals, first)
+                code = _CELL_CODE[sup_cell][sel]
+                packed = np.add.reduceat(np.multiply(code, vals, out=code), first)
                 sum_j = np.floor(packed / _PACK)  # exact: integers and a power of two
                 # sum i P exactly, -0.0 where every value is -0.0 (as a sum of them would be)
-                mom[fr_, pd_, 1] = np.copysign(packed - sum_j * _PACK, packed)
-                mom[fr_, pd_, 2] = sum_j
+                flat[at + 1] = np.copysign(packed - sum_j * _PACK, packed)
+                flat[at + 2] = sum_j
             if fr is not None:
                 cell = sup_cell[sel]
                 rr = np.repeat(np.arange(count.size), count)
