@@ -69,10 +69,16 @@ class Jitter:
         return arr
 
     def span(self, k0: int, k1: int) -> Arr:
-        """Jitter (s) of frames ``k0 .. k1 - 1`` (``0 <= k0 < k1``): the blocks' slices, read only."""
+        """Jitter (s) of frames ``k0 .. k1 - 1`` (``0 <= k0 < k1``): a block's slice (read only) or
+        a few blocks' slices joined."""
         b0, b1 = k0 // JITTER_BLOCK, (k1 - 1) // JITTER_BLOCK
         if b0 == b1:
             return self._block(b0)[k0 - b0 * JITTER_BLOCK : k1 - b0 * JITTER_BLOCK]
+        if b1 - b0 < JITTER_CACHE:  # the blocks' slices, joined (each block made once, in order)
+            parts = [self._block(b) for b in range(b0, b1 + 1)]
+            parts[0] = parts[0][k0 - b0 * JITTER_BLOCK :]
+            parts[-1] = parts[-1][: k1 - b1 * JITTER_BLOCK]
+            return np.concatenate(parts)
         return self(np.arange(k0, k1, dtype=np.int64))
 
     def __call__(self, k: Arr) -> Arr:
