@@ -192,3 +192,29 @@ def test_vectorised_rendering_is_bit_identical_to_the_pad_by_pad_reference() -> 
     one = MissionSignals(segs, slips, seed=11)
     for b in (nblocks - 1, 0, 2):  # one by one, out of order
         assert np.array_equal(one.tactile_array.render_blocks([b], True)[0][1], got[b][1])
+
+
+def test_ascending_episode_state_is_bit_identical_to_episode_pad_state() -> None:
+    # the renderer's piecewise pad states against the reference, on every episode of a
+    # mission with rotations, slips, frames inside and on segment bounds, and sparse frames
+    from desmon.detectors.signals.tactile_array import _ascending_state, episode_pad_state
+
+    segs = []
+    t = 0.0
+    for i in range(6):
+        for ctx, d in (("idle", 0.5), ("grasp", 1.1), ("hold", 0.9 + 0.1 * i), ("rotate_cw", 1.0), ("move_base", 2.3), ("release", 0.8)):
+            segs.append((ctx, t, d))
+            t += d
+    slips = [SlipEvent(s + 0.3, "up", "gravitational") for c, s, d in segs if c == "hold"][::2]
+    ms = MissionSignals(segs, slips, seed=5)
+    rng = np.random.default_rng(3)
+    for ep in ms.tactile_array.episodes:
+        bounds = [s for _c, s, _d, _p in ep.segments] + [s + d for _c, s, d, _p in ep.segments]
+        dense = np.arange(ep.start, ep.end, 1 / 30) + rng.uniform(-0.008, 0.008, int(np.ceil((ep.end - ep.start) * 30)))
+        for tt in (np.sort(np.clip(dense, ep.start, np.nextafter(ep.end, 0))), np.sort(np.array(bounds[:-1])), np.sort(dense)[::7]):
+            tt = tt[(tt >= ep.start) & (tt < ep.end)]
+            got = _ascending_state(tt, ep, ms.params)
+            ref = episode_pad_state(tt[None, :], ep, ms.params)
+            assert got is not None
+            for g, r in zip(got, ref):
+                assert g.tobytes() == np.ascontiguousarray(r[0]).tobytes()
