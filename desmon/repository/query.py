@@ -16,7 +16,7 @@ from desmon.repository.store import Repository, node_id
 
 __all__ = ["RepositoryQuery"]
 
-# keys of the answers memoised per repository version (no graph name is a tuple)
+# keys of the memoised answers (no graph name is a tuple)
 _STATES = ("platform_states",)
 _CONTEXT = ("context",)
 _DEPLOYMENTS = ("deployments",)
@@ -41,16 +41,9 @@ class RepositoryQuery:
         self._states: tuple[PlatformState, ...] = ()
         # graph -> (what its spec was read from, the declared spec object, the spec)
         self._spec_memo: dict[str, tuple[tuple[Any, ...], Any, DeploymentSpec]] = {}
-        # answers that hold while the repository does not change: (its version, {question: answer})
-        self._now: tuple[int, dict[Any, Any]] = (-1, {})
-
-    def _current(self) -> dict[Any, Any]:
-        """The answers memoised at the repository's current version (emptied when it moved)."""
-        version = self.repo.version
-        now = self._now
-        if now[0] != version:
-            now = self._now = (version, {})
-        return now[1]
+        # answers that hold while no node of some labels is touched: {question: (stamps, answer)}
+        self._stamped: dict[Any, tuple[Any, Any]] = {}
+        self._deployed: tuple[int | None, dict[str, tuple[str, ...]]] = (-1, {})
 
     @property
     def _g(self):  # type: ignore[no-untyped-def]
@@ -150,26 +143,39 @@ class RepositoryQuery:
         )
 
     def platform_states(self) -> tuple[PlatformState, ...]:
-        """Every platform's run-time facts, in declaration order."""
-        current = self._current()
-        states = current.get(_STATES)
-        if states is not None:
-            return states  # type: ignore[no-any-return]
+        """Every platform's run-time facts, in declaration order; memoised while no
+        platform, device or deployment node is touched (what :meth:`platform_state` reads:
+        a HAS_DEVICE or DEPLOYED_ON edge touches its platform too)."""
+        stamps = self.repo.label_touched
+        key = (stamps.get(L.PLATFORM), stamps.get(L.DEVICE), stamps.get(L.DEPLOYMENT))
+        hit = self._stamped.get(_STATES)
+        if hit is not None and hit[0] == key:
+            return hit[1]  # type: ignore[no-any-return]
         nodes = self._g.nodes
         states = tuple(self.platform_state(nodes[pid]["name"]) for pid in self.repo.node_ids(L.PLATFORM))
         last = self._states
         if len(last) == len(states) and all(a is b for a, b in zip(last, states)):
             states = last  # the same facts: the same tuple (the validity memo's key)
-        self._states = current[_STATES] = states
+        self._states = states
+        self._stamped[_STATES] = (key, states)
         return states
 
+    def _deployed_memo(self) -> dict[str, tuple[str, ...]]:
+        """Answers about DEPLOYED_ON edges, memoised while no deployment node is touched
+        (every such edge starts at one)."""
+        stamp = self.repo.label_touched.get(L.DEPLOYMENT)
+        memo = self._deployed
+        if memo[0] != stamp:
+            memo = self._deployed = (stamp, {})
+        return memo[1]
+
     def deployed_on(self, graph: str) -> tuple[str, ...]:
-        current = self._current()
+        current = self._deployed_memo()
         on = current.get(graph)
         if on is None:
             dep = node_id(L.DEPLOYMENT, graph)
             on = current[graph] = tuple(sorted(self._g.nodes[p]["name"] for p in self._out(dep, L.DEPLOYED_ON))) if dep in self._g else ()
-        return on  # type: ignore[no-any-return]
+        return on
 
     def is_deployed(self, graph: str, platforms: tuple[str, ...] | None = None) -> bool:
         """isDeployed(g, P): is ``graph`` active on one of ``platforms`` (any, if None)?"""
@@ -192,25 +198,28 @@ class RepositoryQuery:
         return str(self._g.nodes[graphs[0]]["name"])
 
     def context(self) -> str | None:
-        current = self._current()
-        if _CONTEXT in current:
-            return current[_CONTEXT]  # type: ignore[no-any-return]
+        """The robot's current context; memoised while no robot node is touched (its
+        IN_CONTEXT edge starts there)."""
+        stamp = self.repo.label_touched.get(L.ROBOT)
+        hit = self._stamped.get(_CONTEXT)
+        if hit is not None and hit[0] == stamp:
+            return hit[1]  # type: ignore[no-any-return]
         ctx: str | None = None
         for nid in self.repo.node_ids(L.ROBOT):
             out = self._out(nid, L.IN_CONTEXT)
             ctx = str(self._g.nodes[out[0]]["name"]) if out else None
             break
-        current[_CONTEXT] = ctx
+        self._stamped[_CONTEXT] = (stamp, ctx)
         return ctx
 
     def deployments(self) -> tuple[tuple[str, str], ...]:
         """Every active (graph, platform) pair, sorted."""
-        current = self._current()
-        out = current.get(_DEPLOYMENTS)
+        current = self._deployed_memo()
+        out = current.get(_DEPLOYMENTS)  # type: ignore[call-overload]
         if out is None:
             nodes = self._g.nodes
-            out = current[_DEPLOYMENTS] = tuple(sorted((nodes[s]["name"], nodes[t]["name"]) for s, t, _k in self.repo.labelled(L.DEPLOYED_ON)))
-        return out  # type: ignore[no-any-return]
+            out = current[_DEPLOYMENTS] = tuple(sorted((nodes[s]["name"], nodes[t]["name"]) for s, t, _k in self.repo.labelled(L.DEPLOYED_ON)))  # type: ignore[index]
+        return out  # type: ignore[return-value]
 
     def history(self) -> tuple[tuple[str, str, float, float], ...]:
         """Every stopped deployment as (graph, platform, start, stop), in stop order."""

@@ -140,6 +140,11 @@ class Repository:
         #: node id -> seq of the last change that touched it (the node itself, or an edge
         #: from or to it): readers memoise what they derive from a node and its edges on it
         self.touched: dict[str, int] = {}
+        #: label -> seq of the last change that touched a node carrying it (a node change,
+        #: or an edge from or to it): readers memoise what they derive from every node of
+        #: a few labels on the stamps of those labels
+        self.label_touched: dict[str, int] = {}
+        self._label_of: dict[str, str] = {}  # node id -> its label
 
     # -- clock and log ---------------------------------------------------------------
     def set_clock(self, clock: Callable[[], float]) -> None:
@@ -172,12 +177,19 @@ class Repository:
         _apply(self.graph, change)
         self._index(change)
         seq = change.seq
-        if change.node is not None:
-            if op == ADD_NODE and change.node not in self.touched:
-                self._nodes_of.setdefault(label, {})[change.node] = None
-            self.touched[change.node] = seq
+        node = change.node
+        stamps = self.label_touched
+        if node is not None:
+            if op == ADD_NODE and node not in self.touched:
+                self._nodes_of.setdefault(label, {})[node] = None
+                self._label_of[node] = label
+            self.touched[node] = seq
+            stamps[label] = seq  # a node change carries the node's label
         else:
-            self.touched[change.source] = self.touched[change.target] = seq  # type: ignore[index]
+            source, target = change.source, change.target
+            self.touched[source] = self.touched[target] = seq  # type: ignore[index]
+            label_of = self._label_of
+            stamps[label_of[source]] = stamps[label_of[target]] = seq  # type: ignore[index]
         self._log.append(change)
         for sub in list(self._subs):
             if sub.matches(change):
