@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 #: Results kept by the memoised pure checks (bounded, so long simulations stay flat).
 _MEMO_SIZE = 1 << 16
 
-__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "ScalarChecks", "DEFAULT_CHECKS", "checks_for", "reads_fixed_facts", "unreadable", "spec_validity", "input_failures"]
+__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "ScalarChecks", "PlatformMemoChecks", "DEFAULT_CHECKS", "checks_for", "reads_fixed_facts", "unreadable", "spec_validity", "input_failures"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -377,6 +377,67 @@ class ScalarChecks:
         if self.memo:
             self._platform.cache_clear()  # type: ignore[attr-defined]
             self._validity.cache_clear()  # type: ignore[attr-defined]
+
+
+class PlatformMemoChecks(ScalarChecks):
+    """:class:`ScalarChecks` whose computed answers reuse each platform's part: the
+    failures of one platform for one question (requirements, graph, ``reasons``) and its
+    preference score depend on that platform's facts only, so when one platform's facts
+    change (a load, a deployment) the others' parts are looked up, not recomputed. The
+    answers are :func:`loop_validity`'s, object for object equal. For a run that asks
+    about the same few platforms again and again while their facts change one at a time
+    (one robot's SimPy world); every memo is bounded by ``size`` (cleared past it)."""
+
+    def __init__(self, *, size: int = _MEMO_SIZE) -> None:
+        super().__init__(memo=True, size=size)
+        self._size = size
+        self._parts: dict[tuple[Any, ...], Any] = {}
+        self._lookups: dict[tuple[Requirement, ...], list[tuple[Any, Requirement]]] = {}
+        self._order: tuple[tuple[PlatformState, ...], list[PlatformState]] | None = None
+
+    def _ordered(self, states: tuple[PlatformState, ...]) -> list[PlatformState]:
+        last = self._order
+        if last is not None and last[0] is states:
+            return last[1]
+        ordered = order_platforms(states)
+        self._order = (states, ordered)
+        return ordered
+
+    def compute(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
+        """:func:`loop_validity`, each platform's failures and score memoised."""
+        lookups = self._lookups.get(reqs)
+        if lookups is None:
+            if len(self._lookups) > self._size:
+                self._lookups.clear()
+            lookups = self._lookups[reqs] = _checks(reqs)
+        parts = self._parts
+        if len(parts) > self._size:
+            parts.clear()
+        acceptable: list[PlatformState] = []
+        rejected: list[tuple[str, tuple[Failure, ...]]] = []
+        texts: dict[int, str] = {}
+        first_only = not reasons
+        for state in self._ordered(states):
+            key = (reqs, state, graph, first_only)
+            fails = parts.get(key)
+            if fails is None:
+                fails = parts[key] = _failures(lookups, state, graph, first_only, texts)
+            if fails:
+                rejected.append((state.name, fails))
+            else:
+                acceptable.append(state)
+        if not any(type(r) is Preference for r in reqs):
+            return Validity(tuple(s.name for s in acceptable), tuple(rejected))
+        scores = []
+        for s in acceptable:
+            key = (reqs, s, graph, None)
+            score = parts.get(key)
+            if score is None:
+                score = parts[key] = platform_score(reqs, s, graph)
+            scores.append((score, s))
+        scored = sorted(scores, key=lambda x: -x[0])  # stable
+        breakdown = tuple((s.name, score_breakdown(reqs, s, graph)) for _v, s in scored) if reasons else ()
+        return Validity(tuple(s.name for _v, s in scored), tuple(rejected), tuple(v for v, _s in scored), breakdown)
 
 
 #: The checks of a caller that names none (a library call, a query port built without

@@ -36,8 +36,10 @@ class RepositoryQuery:
         #: which is the same object while no platform's facts changed (see
         #: :func:`desmon.deployment.validity.validity_for`)
         self.validity_memo: dict | None = {}
-        # platform -> (the repository stamps it was read at, its state)
-        self._state_memo: dict[str, tuple[tuple[int, ...], PlatformState]] = {}
+        # platform -> (the stamps it was read at, its state)
+        self._state_memo: dict[str, tuple[tuple[int | None, ...], PlatformState]] = {}
+        # the platforms' (node id, name), in declaration order, and the ids they were read for
+        self._platforms: tuple[tuple[str, ...], tuple[tuple[str, str], ...]] = ((), ())
         self._states: tuple[PlatformState, ...] = ()
         # graph -> (what its spec was read from, the declared spec object, the spec)
         self._spec_memo: dict[str, tuple[tuple[Any, ...], Any, DeploymentSpec]] = {}
@@ -115,18 +117,22 @@ class RepositoryQuery:
     def platform_state(self, platform: str) -> PlatformState:
         """The run-time facts of ``platform``; memoised while no change touched its node,
         its devices or the deployments on it (the same object for the same facts)."""
-        pid = node_id(L.PLATFORM, platform)
-        touched = self.repo.touched
-        stamp = touched.get(pid)
+        return self._state_of(node_id(L.PLATFORM, platform), platform)
+
+    def _state_of(self, pid: str, platform: str) -> PlatformState:
+        """:meth:`platform_state` of node ``pid``, memoised on what it reads: the platform
+        node's stamp (its attributes, and its HAS_DEVICE and DEPLOYED_ON edges, which touch
+        it) and the last node change of any device and any deployment (their attributes)."""
+        repo = self.repo
+        stamp = repo.touched.get(pid)
         if stamp is None or pid not in self._g:
             raise QueryError(f"unknown platform {platform!r}")
-        devs = self._out(pid, L.HAS_DEVICE)
-        deps = self._in(pid, L.DEPLOYED_ON)
-        key = (stamp, *(touched[d] for d in devs), -1, *(touched[d] for d in deps))
+        updated = repo.label_updated
+        key = (stamp, updated.get(L.DEVICE), updated.get(L.DEPLOYMENT))
         hit = self._state_memo.get(platform)
         if hit is not None and hit[0] == key:
             return hit[1]
-        state = self._read_state(pid, devs, deps)
+        state = self._read_state(pid, repo.successors(pid, L.HAS_DEVICE), repo.predecessors(pid, L.DEPLOYED_ON))
         self._state_memo[platform] = (key, state)
         return state
 
@@ -143,16 +149,22 @@ class RepositoryQuery:
         )
 
     def platform_states(self) -> tuple[PlatformState, ...]:
-        """Every platform's run-time facts, in declaration order; memoised while no
-        platform, device or deployment node is touched (what :meth:`platform_state` reads:
-        a HAS_DEVICE or DEPLOYED_ON edge touches its platform too)."""
-        stamps = self.repo.label_touched
-        key = (stamps.get(L.PLATFORM), stamps.get(L.DEVICE), stamps.get(L.DEPLOYMENT))
+        """Every platform's run-time facts, in declaration order; memoised while no change
+        touches a platform node and no device or deployment node changes (what
+        :meth:`platform_state` reads: a HAS_DEVICE or DEPLOYED_ON edge touches its
+        platform; devices and deployments are read for their attributes only)."""
+        updated = self.repo.label_updated
+        key = (self.repo.label_touched.get(L.PLATFORM), updated.get(L.DEVICE), updated.get(L.DEPLOYMENT))
         hit = self._stamped.get(_STATES)
         if hit is not None and hit[0] == key:
             return hit[1]  # type: ignore[no-any-return]
-        nodes = self._g.nodes
-        states = tuple(self.platform_state(nodes[pid]["name"]) for pid in self.repo.node_ids(L.PLATFORM))
+        ids = self.repo.node_ids(L.PLATFORM)
+        known = self._platforms
+        if known[0] != ids:
+            nodes = self._g.nodes
+            known = self._platforms = (ids, tuple((pid, nodes[pid]["name"]) for pid in ids))
+        state_of = self._state_of
+        states = tuple([state_of(pid, name) for pid, name in known[1]])
         last = self._states
         if len(last) == len(states) and all(a is b for a, b in zip(last, states)):
             states = last  # the same facts: the same tuple (the validity memo's key)

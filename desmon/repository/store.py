@@ -88,11 +88,15 @@ class Subscription:
     def matches(self, change: Change) -> bool:
         if not self.active:
             return False
-        if self.ops is not None and change.op not in self.ops:
-            return False
-        if self.labels is not None and change.label not in self.labels and change.old_label not in self.labels:
+        if not self.routes(change.op, change.label, change.old_label):
             return False
         return self.where is None or bool(self.where(change))
+
+    def routes(self, op: str, label: str, old_label: str | None) -> bool:
+        """Do the ``ops`` and ``labels`` filters take a change of ``op`` and these labels?"""
+        if self.ops is not None and op not in self.ops:
+            return False
+        return self.labels is None or label in self.labels or old_label in self.labels
 
     def cancel(self) -> None:
         self.active = False
@@ -144,7 +148,13 @@ class Repository:
         #: or an edge from or to it): readers memoise what they derive from every node of
         #: a few labels on the stamps of those labels
         self.label_touched: dict[str, int] = {}
+        #: label -> seq of the last node change (added or updated) of a node carrying it:
+        #: what a node's attributes say moves only with it
+        self.label_updated: dict[str, int] = {}
         self._label_of: dict[str, str] = {}  # node id -> its label
+        # (op, label, old label) -> the subscriptions whose ops and labels take such a
+        # change, in subscription order (rebuilt after every subscribe)
+        self._routes: dict[tuple[str, str, str | None], list[Subscription]] = {}
 
     # -- clock and log ---------------------------------------------------------------
     def set_clock(self, clock: Callable[[], float]) -> None:
@@ -164,54 +174,56 @@ class Repository:
         """The append-only change log."""
         return tuple(self._log)
 
-    def _record(self, op: str, label: str, **fields: Any) -> Change:
-        attrs = fields.pop("attrs", {})
-        change = Change(
-            seq=len(self._log),
-            time=self.now,
-            op=op,
-            label=label,
-            attrs=tuple(attrs.items()),
-            **fields,
-        )
+    def _record(
+        self, op: str, label: str, node: str | None = None, source: str | None = None, target: str | None = None,
+        key: str | None = None, old_label: str | None = None, attrs: dict[str, Any] | None = None,
+    ) -> Change:
+        log = self._log
+        seq = len(log)
+        change = Change(seq, self.now, op, label, node, source, target, key, old_label, tuple(attrs.items()) if attrs else ())
         _apply(self.graph, change)
-        self._index(change)
-        seq = change.seq
-        node = change.node
+        touched = self.touched
         stamps = self.label_touched
         if node is not None:
-            if op == ADD_NODE and node not in self.touched:
+            if op == ADD_NODE and node not in touched:
                 self._nodes_of.setdefault(label, {})[node] = None
                 self._label_of[node] = label
-            self.touched[node] = seq
-            stamps[label] = seq  # a node change carries the node's label
+            touched[node] = seq
+            stamps[label] = self.label_updated[label] = seq  # a node change carries the node's label
         else:
-            source, target = change.source, change.target
-            self.touched[source] = self.touched[target] = seq  # type: ignore[index]
+            self._index(change)
+            touched[source] = touched[target] = seq  # type: ignore[index]
             label_of = self._label_of
             stamps[label_of[source]] = stamps[label_of[target]] = seq  # type: ignore[index]
-        self._log.append(change)
-        for sub in list(self._subs):
-            if sub.matches(change):
+        log.append(change)
+        route = (op, label, old_label)
+        subs = self._routes.get(route)
+        if subs is None:
+            subs = self._routes[route] = [sub for sub in self._subs if sub.routes(op, label, old_label)]
+        for sub in subs:
+            if sub.active and (sub.where is None or sub.where(change)):
                 sub.callback(change)
         return change
 
     def _index(self, c: Change) -> None:
-        if c.source is None or c.target is None:
-            return
-        if c.op in (REMOVE_EDGE, RELABEL_EDGE):
-            old = c.old_label if c.op == RELABEL_EDGE else c.label
-            del self._label_index[old][(c.source, c.target, c.old_label if c.op == RELABEL_EDGE else c.key)]  # type: ignore[index]
-            for index, a, b in ((self._out_index, c.source, c.target), (self._in_index, c.target, c.source)):
-                bucket = index[(a, old)]
-                bucket[b] -= 1
-                if not bucket[b]:
+        """The label and neighbour indexes after edge change ``c``."""
+        op, source, target = c.op, c.source, c.target
+        if op != ADD_EDGE:
+            old = c.old_label if op == RELABEL_EDGE else c.label
+            del self._label_index[old][(source, target, c.old_label if op == RELABEL_EDGE else c.key)]  # type: ignore[index, arg-type]
+            for bucket, b in ((self._out_index[(source, old)], target), (self._in_index[(target, old)], source)):  # type: ignore[index]
+                n = bucket[b] - 1
+                if n:
+                    bucket[b] = n
+                else:
                     del bucket[b]
-        if c.op in (ADD_EDGE, RELABEL_EDGE):
-            self._label_index.setdefault(c.label, {})[(c.source, c.target, c.key)] = None  # type: ignore[index]
-            for index, a, b in ((self._out_index, c.source, c.target), (self._in_index, c.target, c.source)):
-                bucket = index.setdefault((a, c.label), {})
-                bucket[b] = bucket.get(b, 0) + 1
+        if op != REMOVE_EDGE:
+            label = c.label
+            self._label_index.setdefault(label, {})[(source, target, c.key)] = None  # type: ignore[index]
+            bucket = self._out_index.setdefault((source, label), {})  # type: ignore[arg-type]
+            bucket[target] = bucket.get(target, 0) + 1  # type: ignore[index]
+            bucket = self._in_index.setdefault((target, label), {})  # type: ignore[arg-type]
+            bucket[source] = bucket.get(source, 0) + 1  # type: ignore[index]
 
     def successors(self, nid: str, label: str) -> list[str]:
         """Targets of ``nid``'s out-edges labelled ``label`` (indexed: no scan of other edges)."""
@@ -282,6 +294,7 @@ class Repository:
             where,
         )
         self._subs.append(sub)
+        self._routes = {}
         return sub
 
     # -- reading -----------------------------------------------------------------------

@@ -35,7 +35,7 @@ from typing import Any, Callable
 import simpy
 
 from desmon.deployment.ports import ErrorRecord
-from desmon.deployment.validity import ScalarChecks
+from desmon.deployment.validity import PlatformMemoChecks
 from desmon.detectors.base import Alarm
 from desmon.model.scenario import Scenario
 from desmon.repository import labels as L
@@ -103,7 +103,7 @@ class SimWorld:
         env = self.env
         self.repo = Repository(clock=lambda: env.now)
         load_model(self.repo, self.model)
-        self.query = RepositoryQuery(self.repo, ScalarChecks())  # its own memoised checks
+        self.query = RepositoryQuery(self.repo, PlatformMemoChecks())  # its own memoised checks, per platform
         #: the parts the processes share (facts, infrastructure, books, inbox, ...)
         self.parts: RobotParts = robot_parts(
             scenario, self.world, env=env, repo=self.repo, query=self.query, deployer=deployer, seed=self.seed,
