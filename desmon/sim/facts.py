@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import bisect
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from desmon.detectors.signals import Segment
@@ -47,6 +47,22 @@ class Instance:
     proc: Any = None
     gen: int = 0  # activations so far (a warm-up end of an older one is ignored)
     ready_at: float = 0.0  # exponential timing: when its start latency has passed (never valid before)
+    #: (the facts' readability version it was asked at, whether its inputs were readable)
+    inputs_seen: tuple[int, bool] = field(default=(-1, False), repr=False, compare=False)
+
+
+class _Readability(dict):  # type: ignore[type-arg]
+    """A dict of what decides whether a device can be read (platforms up, devices
+    working): every item assignment moves the owner's ``readability`` version, on which
+    :meth:`PhysicalFacts.inputs_ok` memoises its answers."""
+
+    def __init__(self, owner: "PhysicalFacts", items: dict[str, bool]) -> None:
+        super().__init__(items)
+        self.owner = owner
+
+    def __setitem__(self, key: str, value: bool) -> None:
+        super().__setitem__(key, value)
+        self.owner.readability += 1
 
 
 class PhysicalFacts:
@@ -54,12 +70,15 @@ class PhysicalFacts:
 
     def __init__(self, model: SystemModel) -> None:
         self.model = model
-        self.up = {p.name: not p.on_demand for p in model.platforms}
+        #: moves with every write to ``up`` or ``dev_ok`` (what makes a device readable)
+        self.readability = 0
+        self.up: dict[str, bool] = _Readability(self, {p.name: not p.on_demand for p in model.platforms})
         self.load: dict[str, float] = {p.name: 0.0 for p in model.platforms}
-        self.dev_ok = {d.name: True for d in model.devices}
+        self.dev_ok: dict[str, bool] = _Readability(self, {d.name: True for d in model.devices})
         self.host = {d.name: d.platform for d in model.devices}
         self.hosted = {p.name: model.devices_on(p.name) for p in model.platforms}
         self.instances: dict[tuple[str, str], Instance] = {}
+        self._states: dict[str, tuple[int, PlatformState]] = {}  # platform -> (readability, state)
         #: memory (MB) a running instance of each graph consumes: its spec's consumption()
         self.consumes = {s.graph: dict(s.consumption()).get("memory", 0.0) for s in model.specs}
 
@@ -74,15 +93,30 @@ class PhysicalFacts:
         return self.dev_ok[device] and self.up[self.host[device]]
 
     def inputs_ok(self, inst: Instance) -> bool:
-        return all(any(self.readable(d) for d in devs) for devs in inst.streams.values())
+        """Every stream of ``inst`` has a readable device (memoised per instance while no
+        platform goes up or down and no device fails or is repaired)."""
+        version = self.readability
+        seen = inst.inputs_seen
+        if seen[0] == version:
+            return seen[1]
+        ok = all(any(self.readable(d) for d in devs) for devs in inst.streams.values())
+        inst.inputs_seen = (version, ok)
+        return ok
 
     def state(self, platform: str) -> PlatformState:
-        """The physical facts of ``platform`` the Control rules read (up, working devices)."""
-        return PlatformState(
+        """The physical facts of ``platform`` the Control rules read (up, working devices);
+        the same object while no platform goes up or down and no device fails or is repaired."""
+        version = self.readability
+        hit = self._states.get(platform)
+        if hit is not None and hit[0] == version:
+            return hit[1]
+        state = PlatformState(
             self.model.platform(platform),
             self.up[platform],
             tuple(d for d in self.hosted[platform] if self.dev_ok[d.name]),
         )
+        self._states[platform] = (version, state)
+        return state
 
     def alive(self, inst: Instance) -> bool:
         return self.up[inst.platform] and not inst.halted and self.inputs_ok(inst)
