@@ -395,6 +395,11 @@ class PlatformMemoChecks(ScalarChecks):
         self._lookups: dict[tuple[Requirement, ...], list[tuple[Any, Requirement]]] = {}
         self._order: tuple[tuple[PlatformState, ...], list[PlatformState]] | None = None
 
+    def validity(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
+        """:meth:`compute`, without a memo of whole answers (its parts are memoised; a
+        whole answer seldom recurs when one platform's facts change at a time)."""
+        return self.compute(reqs, states, graph, reasons)
+
     def _ordered(self, states: tuple[PlatformState, ...]) -> list[PlatformState]:
         last = self._order
         if last is not None and last[0] is states:

@@ -41,8 +41,9 @@ class RepositoryQuery:
         # the platforms' (node id, name), in declaration order, and the ids they were read for
         self._platforms: tuple[tuple[str, ...], tuple[tuple[str, str], ...]] = ((), ())
         self._states: tuple[PlatformState, ...] = ()
-        # graph -> (what its spec was read from, the declared spec object, the spec)
-        self._spec_memo: dict[str, tuple[tuple[Any, ...], Any, DeploymentSpec]] = {}
+        # graph -> (what its spec was read from, the declared spec object, the spec, its
+        # deployment node, the stamps of the graph's node, that node and the requirements)
+        self._spec_memo: dict[str, tuple[tuple[Any, ...], Any, DeploymentSpec, str, tuple[int | None, ...]]] = {}
         # answers that hold while no node of some labels is touched: {question: (stamps, answer)}
         self._stamped: dict[Any, tuple[Any, Any]] = {}
         self._deployed: tuple[int | None, dict[str, tuple[str, ...]]] = (-1, {})
@@ -68,23 +69,32 @@ class RepositoryQuery:
 
         Memoised on what it reads: the deployment node, its declared spec (the object),
         its REQUIRES targets (and their last changes) and EXECUTABLE_ON targets; the
-        same spec object comes back while they are the same."""
+        same spec object comes back while they are the same. Asked first: did no change
+        touch the graph's node or the deployment node, and no requirement node change,
+        since it was read (then nothing it reads moved)?"""
         gid = node_id(L.PERCEPTION_GRAPH, graph)
+        repo = self.repo
+        touched = repo.touched
+        hit = self._spec_memo.get(graph)
+        if hit is not None:
+            dep = hit[3]
+            if (touched.get(gid), touched.get(dep), repo.label_updated.get(L.REQUIREMENT)) == hit[4]:
+                return hit[2]
         if gid not in self._g:
             return None
         deps = self._in(gid, L.RESOLVES)
         if not deps:
             return None
         dep = deps[0]
-        touched = self.repo.touched
         reqs = self._out(dep, L.REQUIRES)
-        key = (dep, tuple(reqs), tuple(touched[r] for r in reqs), tuple(self._out(dep, L.EXECUTABLE_ON)))
+        key = (dep, tuple(reqs), tuple([touched[r] for r in reqs]), tuple(self._out(dep, L.EXECUTABLE_ON)))
         declared = self._g.nodes[dep].get("spec")
-        hit = self._spec_memo.get(graph)
+        coarse = (touched.get(gid), touched.get(dep), repo.label_updated.get(L.REQUIREMENT))
         if hit is not None and hit[0] == key and hit[1] is declared:
-            return hit[2]
-        spec = self._read_spec(graph, dep)
-        self._spec_memo[graph] = (key, declared, spec)
+            spec = hit[2]
+        else:
+            spec = self._read_spec(graph, dep)
+        self._spec_memo[graph] = (key, declared, spec, dep, coarse)
         return spec
 
     def _read_spec(self, graph: str, dep: str) -> DeploymentSpec:
@@ -195,10 +205,15 @@ class RepositoryQuery:
         return bool(on) if platforms is None else any(p in platforms for p in on)
 
     def active_deployments(self, platform: str) -> tuple[str, ...]:
-        pid = node_id(L.PLATFORM, platform)
-        if pid not in self._g:
-            raise QueryError(f"unknown platform {platform!r}")
-        return tuple(sorted(self._g.nodes[d]["name"] for d in self._in(pid, L.DEPLOYED_ON)))
+        current = self._deployed_memo()
+        question = (platform,)  # no graph name is a tuple
+        on = current.get(question)  # type: ignore[call-overload]
+        if on is None:
+            pid = node_id(L.PLATFORM, platform)
+            if pid not in self._g:
+                raise QueryError(f"unknown platform {platform!r}")
+            on = current[question] = tuple(sorted(self._g.nodes[d]["name"] for d in self._in(pid, L.DEPLOYED_ON)))  # type: ignore[index]
+        return on  # type: ignore[no-any-return]
 
     def perception_graph(self, deployment: str) -> str:
         dep = node_id(L.DEPLOYMENT, deployment)

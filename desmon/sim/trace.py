@@ -114,7 +114,16 @@ class Trace:
         self.count = 0
 
     def emit(self, t: float, type_: str, **fields: Any) -> None:
-        rec = {"t": round(float(t), 6), "type": type_, **{k: _clean(v) for k, v in fields.items()}}
+        rec: dict[str, Any] = {"t": round(float(t), 6), "type": type_}
+        for k, v in fields.items():
+            kind = type(v)
+            # the common fields inline, as _clean has them (a float subclass goes there)
+            if kind is str or kind is int or kind is bool or v is None:
+                rec[k] = v
+            elif kind is float:
+                rec[k] = round(v, 6)
+            else:
+                rec[k] = _clean(v)
         self.count += 1
         if self.keep:
             self.records.append(rec)
