@@ -380,24 +380,58 @@ class ScalarChecks:
 
 
 class PlatformMemoChecks(ScalarChecks):
-    """:class:`ScalarChecks` whose computed answers reuse each platform's part: the
-    failures of one platform for one question (requirements, graph, ``reasons``) and its
+    """:class:`ScalarChecks` whose answers reuse each platform's part: the failures of
+    one platform for one question (requirements, graph, ``first_only``) and its
     preference score depend on that platform's facts only, so when one platform's facts
     change (a load, a deployment) the others' parts are looked up, not recomputed. The
-    answers are :func:`loop_validity`'s, object for object equal. For a run that asks
-    about the same few platforms again and again while their facts change one at a time
-    (one robot's SimPy world); every memo is bounded by ``size`` (cleared past it)."""
+    answers are :func:`loop_validity`'s and :func:`platform_failures`', equal object for
+    object.
+
+    For a caller that asks about the same few platforms again and again while their
+    facts change one at a time, and hands out the same :class:`PlatformState` object
+    for the same facts (one robot's SimPy world, whose Query port memoises states):
+    the parts are keyed on the identities of the requirement objects and of the state
+    (each entry holds them, so an identity cannot be reused while it exists), which
+    spares hashing requirements and states. Every memo is cleared past ``size`` entries.
+    """
 
     def __init__(self, *, size: int = _MEMO_SIZE) -> None:
-        super().__init__(memo=True, size=size)
+        super().__init__(memo=False)
         self._size = size
-        self._parts: dict[tuple[Any, ...], Any] = {}
-        self._lookups: dict[tuple[Requirement, ...], list[tuple[Any, Requirement]]] = {}
+        # ids of a question's requirement objects -> (those objects, their checks, a number)
+        self._reqs: dict[tuple[int, ...], tuple[tuple[Requirement, ...], list[tuple[Any, Requirement]], int]] = {}
+        # (requirements' number, id of the state, graph, first_only or None for the score)
+        # -> (the state, its failures or score)
+        self._parts: dict[tuple[Any, ...], tuple[PlatformState, Any]] = {}
         self._order: tuple[tuple[PlatformState, ...], list[PlatformState]] | None = None
 
+    def _interned(self, reqs: tuple[Requirement, ...]) -> tuple[tuple[Requirement, ...], list[tuple[Any, Requirement]], int]:
+        """(``reqs`` as first seen, their :func:`_checks`, their number)."""
+        found = self._reqs.get(tuple(map(id, reqs)))
+        if found is None:
+            if len(self._reqs) > self._size:
+                self._reqs.clear()
+                self._parts.clear()  # the numbers start again
+            found = self._reqs[tuple(map(id, reqs))] = (reqs, _checks(reqs), len(self._reqs))
+        return found
+
+    def _failures_of(self, reqs: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool, texts: dict[int, str]) -> tuple[Failure, ...]:
+        _reqs, lookups, number = self._interned(reqs)
+        parts = self._parts
+        key = (number, id(state), graph, first_only)
+        hit = parts.get(key)
+        if hit is not None and hit[0] is state:
+            return hit[1]  # type: ignore[no-any-return]
+        if len(parts) > self._size:
+            parts.clear()
+        fails = _failures(lookups, state, graph, first_only, texts)
+        parts[key] = (state, fails)
+        return fails
+
+    def platform(self, reqs: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool) -> tuple[Failure, ...]:
+        return self._failures_of(reqs, state, graph, first_only, {})
+
     def validity(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
-        """:meth:`compute`, without a memo of whole answers (its parts are memoised; a
-        whole answer seldom recurs when one platform's facts change at a time)."""
         return self.compute(reqs, states, graph, reasons)
 
     def _ordered(self, states: tuple[PlatformState, ...]) -> list[PlatformState]:
@@ -410,23 +444,22 @@ class PlatformMemoChecks(ScalarChecks):
 
     def compute(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
         """:func:`loop_validity`, each platform's failures and score memoised."""
-        lookups = self._lookups.get(reqs)
-        if lookups is None:
-            if len(self._lookups) > self._size:
-                self._lookups.clear()
-            lookups = self._lookups[reqs] = _checks(reqs)
-        parts = self._parts
-        if len(parts) > self._size:
-            parts.clear()
+        _reqs, lookups, number = self._interned(reqs)  # a requirement that is none raises even without platforms
         acceptable: list[PlatformState] = []
         rejected: list[tuple[str, tuple[Failure, ...]]] = []
         texts: dict[int, str] = {}
         first_only = not reasons
+        parts = self._parts
         for state in self._ordered(states):
-            key = (reqs, state, graph, first_only)
-            fails = parts.get(key)
-            if fails is None:
-                fails = parts[key] = _failures(lookups, state, graph, first_only, texts)
+            key = (number, id(state), graph, first_only)
+            hit = parts.get(key)
+            if hit is not None and hit[0] is state:
+                fails = hit[1]
+            else:
+                if len(parts) > self._size:
+                    parts.clear()
+                fails = _failures(lookups, state, graph, first_only, texts)
+                parts[key] = (state, fails)
             if fails:
                 rejected.append((state.name, fails))
             else:
@@ -435,14 +468,22 @@ class PlatformMemoChecks(ScalarChecks):
             return Validity(tuple(s.name for s in acceptable), tuple(rejected))
         scores = []
         for s in acceptable:
-            key = (reqs, s, graph, None)
-            score = parts.get(key)
-            if score is None:
-                score = parts[key] = platform_score(reqs, s, graph)
+            key = (number, id(s), graph, None)
+            hit = parts.get(key)
+            if hit is not None and hit[0] is s:
+                score = hit[1]
+            else:
+                score = platform_score(reqs, s, graph)
+                parts[key] = (s, score)
             scores.append((score, s))
         scored = sorted(scores, key=lambda x: -x[0])  # stable
         breakdown = tuple((s.name, score_breakdown(reqs, s, graph)) for _v, s in scored) if reasons else ()
         return Validity(tuple(s.name for _v, s in scored), tuple(rejected), tuple(v for v, _s in scored), breakdown)
+
+    def clear(self) -> None:
+        self._reqs.clear()
+        self._parts.clear()
+        self._order = None
 
 
 #: The checks of a caller that names none (a library call, a query port built without
