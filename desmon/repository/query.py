@@ -20,6 +20,8 @@ __all__ = ["RepositoryQuery"]
 _STATES = ("platform_states",)
 _CONTEXT = ("context",)
 _DEPLOYMENTS = ("deployments",)
+#: platform states kept for handing out equal facts as the same object (cleared past it)
+_SEEN = 1 << 14
 
 
 class RepositoryQuery:
@@ -36,6 +38,9 @@ class RepositoryQuery:
         #: which is the same object while no platform's facts changed (see
         #: :func:`desmon.deployment.validity.validity_for`)
         self.validity_memo: dict | None = {}
+        # every state handed out (bounded): equal facts are handed out as one object, on
+        # whose identity readers (the validity memo, the checks' parts) memoise
+        self._seen_states: dict[PlatformState, PlatformState] = {}
         # platform -> (the stamps it was read at, its state)
         self._state_memo: dict[str, tuple[tuple[int | None, ...], PlatformState]] = {}
         # the platforms' (node id, name), in declaration order, and the ids they were read for
@@ -143,6 +148,10 @@ class RepositoryQuery:
         if hit is not None and hit[0] == key:
             return hit[1]
         state = self._read_state(pid, repo.successors(pid, L.HAS_DEVICE), repo.predecessors(pid, L.DEPLOYED_ON))
+        seen = self._seen_states
+        if len(seen) > _SEEN:
+            seen.clear()
+        state = seen.setdefault(state, state)  # facts seen before: the object handed out then
         self._state_memo[platform] = (key, state)
         return state
 
