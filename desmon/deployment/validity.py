@@ -404,15 +404,26 @@ class PlatformMemoChecks(ScalarChecks):
         # -> (the state, its failures or score)
         self._parts: dict[tuple[Any, ...], tuple[PlatformState, Any]] = {}
         self._order: tuple[tuple[PlatformState, ...], list[PlatformState]] | None = None
+        # id of a requirements tuple -> (the tuple, what _interned answered for it)
+        self._last_reqs: dict[int, tuple[tuple[Requirement, ...], Any]] = {}
 
     def _interned(self, reqs: tuple[Requirement, ...]) -> tuple[tuple[Requirement, ...], list[tuple[Any, Requirement]], int]:
-        """(``reqs`` as first seen, their :func:`_checks`, their number)."""
-        found = self._reqs.get(tuple(map(id, reqs)))
+        """(``reqs`` as first seen, their :func:`_checks`, their number); a tuple object
+        asked before is found by its identity."""
+        last = self._last_reqs.get(id(reqs))
+        if last is not None and last[0] is reqs:
+            return last[1]
+        ids = tuple(map(id, reqs))
+        found = self._reqs.get(ids)
         if found is None:
             if len(self._reqs) > self._size:
                 self._reqs.clear()
+                self._last_reqs.clear()
                 self._parts.clear()  # the numbers start again
-            found = self._reqs[tuple(map(id, reqs))] = (reqs, _checks(reqs), len(self._reqs))
+            found = self._reqs[ids] = (reqs, _checks(reqs), len(self._reqs))
+        if len(self._last_reqs) > 1024:
+            self._last_reqs.clear()
+        self._last_reqs[id(reqs)] = (reqs, found)
         return found
 
     def _failures_of(self, reqs: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool, texts: dict[int, str]) -> tuple[Failure, ...]:
@@ -482,6 +493,7 @@ class PlatformMemoChecks(ScalarChecks):
 
     def clear(self) -> None:
         self._reqs.clear()
+        self._last_reqs.clear()
         self._parts.clear()
         self._order = None
 
