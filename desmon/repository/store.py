@@ -152,6 +152,7 @@ class Repository:
         #: what a node's attributes say moves only with it
         self.label_updated: dict[str, int] = {}
         self._label_of: dict[str, str] = {}  # node id -> its label
+        self._edge_label: dict[tuple[str, str, str], str] = {}  # (source, target, key) -> label, of every edge
         # (op, label, old label) -> the subscriptions whose ops and labels take such a
         # change, in subscription order (rebuilt after every subscribe)
         self._routes: dict[tuple[str, str, str | None], list[Subscription]] = {}
@@ -210,7 +211,9 @@ class Repository:
         op, source, target = c.op, c.source, c.target
         if op != ADD_EDGE:
             old = c.old_label if op == RELABEL_EDGE else c.label
-            del self._label_index[old][(source, target, c.old_label if op == RELABEL_EDGE else c.key)]  # type: ignore[index, arg-type]
+            gone = (source, target, c.old_label if op == RELABEL_EDGE else c.key)
+            del self._label_index[old][gone]  # type: ignore[index]
+            del self._edge_label[gone]  # type: ignore[arg-type]
             for bucket, b in ((self._out_index[(source, old)], target), (self._in_index[(target, old)], source)):  # type: ignore[index]
                 n = bucket[b] - 1
                 if n:
@@ -219,7 +222,9 @@ class Repository:
                     del bucket[b]
         if op != REMOVE_EDGE:
             label = c.label
-            self._label_index.setdefault(label, {})[(source, target, c.key)] = None  # type: ignore[index]
+            edge = (source, target, c.key)
+            self._label_index.setdefault(label, {})[edge] = None  # type: ignore[index]
+            self._edge_label[edge] = label  # type: ignore[index]
             bucket = self._out_index.setdefault((source, label), {})  # type: ignore[arg-type]
             bucket[target] = bucket.get(target, 0) + 1  # type: ignore[index]
             bucket = self._in_index.setdefault((target, label), {})  # type: ignore[arg-type]
@@ -252,22 +257,23 @@ class Repository:
     def add_edge(self, source: str, target: str, label: str, key: str | None = None, **attrs: Any) -> str:
         """Create an edge ``source -[label]-> target``; unique labels use the label as key."""
         for n in (source, target):
-            self.node_label(n)
+            if n not in self._label_of:
+                raise QueryError(f"the repository has no node {n!r}")
         key = key or label
-        if self.graph.has_edge(source, target, key):
+        if (source, target, key) in self._edge_label:
             return key
         self._record(ADD_EDGE, label, source=source, target=target, key=key, attrs={"label": label, **attrs})
         return key
 
     def remove_edge(self, source: str, target: str, key: str) -> None:
-        if not self.graph.has_edge(source, target, key):
+        label = self._edge_label.get((source, target, key))
+        if label is None:
             raise QueryError(f"no edge {source} -[{key}]-> {target} to remove")
-        label = self.graph.edges[source, target, key]["label"]
         self._record(REMOVE_EDGE, label, source=source, target=target, key=key)
 
     def relabel_edge(self, source: str, target: str, old: str, new: str, **attrs: Any) -> str:
         """Relabel ``source -[old]-> target`` to ``new`` (a fresh unique key), adding ``attrs``."""
-        if not self.graph.has_edge(source, target, old):
+        if (source, target, old) not in self._edge_label:
             raise QueryError(f"no edge {source} -[{old}]-> {target} to relabel")
         key = f"{new}#{len(self._log)}"
         self._record(RELABEL_EDGE, new, source=source, target=target, key=key, old_label=old, attrs={"label": new, **attrs})
