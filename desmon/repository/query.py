@@ -51,7 +51,7 @@ class RepositoryQuery:
         self._spec_memo: dict[str, tuple[tuple[Any, ...], Any, DeploymentSpec, str, tuple[int | None, ...]]] = {}
         # answers that hold while no node of some labels is touched: {question: (stamps, answer)}
         self._stamped: dict[Any, tuple[Any, Any]] = {}
-        self._deployed: tuple[int | None, dict[str, tuple[str, ...]]] = (-1, {})
+        self._on_memo: tuple[int | None, dict[str, tuple[str, ...]]] = (-1, {})
 
     @property
     def _g(self):  # type: ignore[no-untyped-def]
@@ -195,9 +195,9 @@ class RepositoryQuery:
         """Answers about DEPLOYED_ON edges, memoised while no deployment node is touched
         (every such edge starts at one)."""
         stamp = self.repo.label_touched.get(L.DEPLOYMENT)
-        memo = self._deployed
+        memo = self._on_memo
         if memo[0] != stamp:
-            memo = self._deployed = (stamp, {})
+            memo = self._on_memo = (stamp, {})
         return memo[1]
 
     def deployed_on(self, graph: str) -> tuple[str, ...]:
