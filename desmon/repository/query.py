@@ -46,11 +46,16 @@ class RepositoryQuery:
         # the platforms' (node id, name), in declaration order, and the ids they were read for
         self._platforms: tuple[tuple[str, ...], tuple[tuple[str, str], ...]] = ((), ())
         self._states: tuple[PlatformState, ...] = ()
-        # graph -> (what its spec was read from, the declared spec object, the spec, its
-        # deployment node, the stamps of the graph's node, that node and the requirements)
-        self._spec_memo: dict[str, tuple[tuple[Any, ...], Any, DeploymentSpec, str, tuple[int | None, ...]]] = {}
+        # graph -> (what its spec was read from, the declared spec object, the spec, (graph
+        # node, deployment node), the stamps of what it read: see _spec_key)
+        self._spec_memo: dict[str, tuple[tuple[Any, ...], Any, DeploymentSpec, tuple[str, str], tuple[int | None, ...]]] = {}
         # answers that hold while no node of some labels is touched: {question: (stamps, answer)}
         self._stamped: dict[Any, tuple[Any, Any]] = {}
+        # deployment node -> (the stamps they were read at, its fixed platform / its requirements)
+        self._fixed_memo: dict[str, tuple[int | None, str | None]] = {}
+        # platform node -> (stamps, its devices, stamps, its deployments): parts of its state
+        self._state_parts: dict[str, tuple[Any, tuple[Any, ...], Any, tuple[Any, ...]]] = {}
+        self._constraints_memo: dict[str, tuple[tuple[int | None, ...], tuple[Requirement, ...]]] = {}
         self._on_memo: tuple[int | None, dict[str, tuple[str, ...]]] = (-1, {})
 
     @property
@@ -72,35 +77,41 @@ class RepositoryQuery:
     def deployment_information(self, graph: str) -> DeploymentSpec | None:
         """The deployment node RESOLVING ``graph`` as a spec, or None (Alg. 1 line 3).
 
-        Memoised on what it reads: the deployment node, its declared spec (the object),
-        its REQUIRES targets (and their last changes) and EXECUTABLE_ON targets; the
-        same spec object comes back while they are the same. Asked first: did no change
-        touch the graph's node or the deployment node, and no requirement node change,
-        since it was read (then nothing it reads moved)?"""
-        gid = node_id(L.PERCEPTION_GRAPH, graph)
+        Memoised on what it reads: the RESOLVES edges of the graph's node, the deployment
+        node's attributes (its declared spec) and its REQUIRES and EXECUTABLE_ON edges, and
+        the requirement nodes' attributes; the same spec object comes back while none of
+        them changed (and while the spec read from them is equal)."""
         repo = self.repo
-        touched = repo.touched
         hit = self._spec_memo.get(graph)
-        if hit is not None:
-            dep = hit[3]
-            if (touched.get(gid), touched.get(dep), repo.label_updated.get(L.REQUIREMENT)) == hit[4]:
-                return hit[2]
+        if hit is not None and self._spec_key(hit[3]) == hit[4]:
+            return hit[2]
+        gid = node_id(L.PERCEPTION_GRAPH, graph)
         if gid not in self._g:
             return None
         deps = self._in(gid, L.RESOLVES)
         if not deps:
             return None
         dep = deps[0]
+        touched = repo.touched
         reqs = self._out(dep, L.REQUIRES)
         key = (dep, tuple(reqs), tuple([touched[r] for r in reqs]), tuple(self._out(dep, L.EXECUTABLE_ON)))
         declared = self._g.nodes[dep].get("spec")
-        coarse = (touched.get(gid), touched.get(dep), repo.label_updated.get(L.REQUIREMENT))
         if hit is not None and hit[0] == key and hit[1] is declared:
             spec = hit[2]
         else:
             spec = self._read_spec(graph, dep)
-        self._spec_memo[graph] = (key, declared, spec, dep, coarse)
+        self._spec_memo[graph] = (key, declared, spec, (gid, dep), self._spec_key((gid, dep)))
         return spec
+
+    def _spec_key(self, nodes: tuple[str, str]) -> tuple[int | None, ...]:
+        """The stamps of what :meth:`deployment_information` reads, for (graph node, deployment node)."""
+        gid, dep = nodes
+        repo = self.repo
+        edges = repo.edge_touched
+        return (
+            edges.get((gid, L.RESOLVES)), repo.node_updated.get(dep), edges.get((dep, L.REQUIRES)),
+            edges.get((dep, L.EXECUTABLE_ON)), repo.label_updated.get(L.REQUIREMENT),
+        )
 
     def _read_spec(self, graph: str, dep: str) -> DeploymentSpec:
         reqs = tuple(
@@ -116,14 +127,30 @@ class RepositoryQuery:
         return self.fixed_platform(spec) is not None
 
     def fixed_platform(self, spec: DeploymentSpec) -> str | None:
-        fixed = self._out(node_id(L.DEPLOYMENT, spec.graph), L.EXECUTABLE_ON)
-        return self._g.nodes[fixed[0]]["name"] if fixed else None
+        dep = node_id(L.DEPLOYMENT, spec.graph)
+        stamp = self.repo.edge_touched.get((dep, L.EXECUTABLE_ON))
+        hit = self._fixed_memo.get(dep)
+        if hit is not None and hit[0] == stamp:
+            return hit[1]
+        fixed = self._out(dep, L.EXECUTABLE_ON)
+        name = self._g.nodes[fixed[0]]["name"] if fixed else None
+        self._fixed_memo[dep] = (stamp, name)
+        return name
 
     def constraints(self, spec: DeploymentSpec) -> tuple[Requirement, ...]:
+        """The requirements the deployment node of ``spec``'s graph REQUIRES now, in
+        order; memoised while none of its REQUIRES edges and no requirement node changed."""
         dep = node_id(L.DEPLOYMENT, spec.graph)
-        return tuple(
+        repo = self.repo
+        key = (repo.edge_touched.get((dep, L.REQUIRES)), repo.label_updated.get(L.REQUIREMENT))
+        hit = self._constraints_memo.get(dep)
+        if hit is not None and hit[0] == key:
+            return hit[1]
+        reqs = tuple(
             self._g.nodes[r]["requirement"] for r in sorted(self._out(dep, L.REQUIRES), key=lambda r: self._g.nodes[r]["order"])
         )
+        self._constraints_memo[dep] = (key, reqs)
+        return reqs
 
     def _consumption(self, dep: str) -> tuple[tuple[str, float], ...]:
         spec = self._g.nodes[dep].get("spec")
@@ -147,7 +174,7 @@ class RepositoryQuery:
         hit = self._state_memo.get(platform)
         if hit is not None and hit[0] == key:
             return hit[1]
-        state = self._read_state(pid, repo.successors(pid, L.HAS_DEVICE), repo.predecessors(pid, L.DEPLOYED_ON))
+        state = self._read_state(pid)
         seen = self._seen_states
         if len(seen) > _SEEN:
             seen.clear()
@@ -155,10 +182,26 @@ class RepositoryQuery:
         self._state_memo[platform] = (key, state)
         return state
 
-    def _read_state(self, pid: str, devs: list[str], deps: list[str]) -> PlatformState:
-        data = self._g.nodes[pid]
-        devices = tuple(self._g.nodes[d]["device"] for d in sorted(devs, key=lambda d: self._g.nodes[d]["order"]))
-        deployed = tuple(sorted((self._g.nodes[d]["name"], self._consumption(d)) for d in deps))
+    def _read_state(self, pid: str) -> PlatformState:
+        """The facts of platform node ``pid``; its devices and its deployments are
+        re-read only when its HAS_DEVICE / DEPLOYED_ON edges or a device / deployment node changed."""
+        repo = self.repo
+        nodes = self._g.nodes
+        data = nodes[pid]
+        edges, updated = repo.edge_touched, repo.label_updated
+        parts = self._state_parts.get(pid)
+        dkey = (edges.get((pid, L.HAS_DEVICE)), updated.get(L.DEVICE))
+        if parts is not None and parts[0] == dkey:
+            devices = parts[1]
+        else:
+            devs = repo.successors(pid, L.HAS_DEVICE)
+            devices = tuple(nodes[d]["device"] for d in sorted(devs, key=lambda d: nodes[d]["order"]))
+        gkey = (edges.get((pid, L.DEPLOYED_ON)), updated.get(L.DEPLOYMENT))
+        if parts is not None and parts[2] == gkey:
+            deployed = parts[3]
+        else:
+            deployed = tuple(sorted((nodes[d]["name"], self._consumption(d)) for d in repo.predecessors(pid, L.DEPLOYED_ON)))
+        self._state_parts[pid] = (dkey, devices, gkey, deployed)
         return PlatformState(
             platform=data["platform"],
             up=bool(data["up"]),

@@ -148,6 +148,11 @@ class Repository:
         #: or an edge from or to it): readers memoise what they derive from every node of
         #: a few labels on the stamps of those labels
         self.label_touched: dict[str, int] = {}
+        #: node id -> seq of the last change of its own attributes (added or updated)
+        self.node_updated: dict[str, int] = {}
+        #: (node id, edge label) -> seq of the last change of an edge with that label from
+        #: or to the node (a relabel stamps the old label and the new)
+        self.edge_touched: dict[tuple[str, str], int] = {}
         #: label -> seq of the last node change (added or updated) of a node carrying it:
         #: what a node's attributes say moves only with it
         self.label_updated: dict[str, int] = {}
@@ -189,7 +194,7 @@ class Repository:
             if op == ADD_NODE and node not in touched:
                 self._nodes_of.setdefault(label, {})[node] = None
                 self._label_of[node] = label
-            touched[node] = seq
+            touched[node] = self.node_updated[node] = seq
             stamps[label] = self.label_updated[label] = seq  # a node change carries the node's label
         else:
             self._index(change)
@@ -209,8 +214,11 @@ class Repository:
     def _index(self, c: Change) -> None:
         """The label and neighbour indexes after edge change ``c``."""
         op, source, target = c.op, c.source, c.target
+        stamps = self.edge_touched
+        seq = c.seq
         if op != ADD_EDGE:
             old = c.old_label if op == RELABEL_EDGE else c.label
+            stamps[(source, old)] = stamps[(target, old)] = seq  # type: ignore[index]
             gone = (source, target, c.old_label if op == RELABEL_EDGE else c.key)
             del self._label_index[old][gone]  # type: ignore[index]
             del self._edge_label[gone]  # type: ignore[arg-type]
@@ -222,6 +230,7 @@ class Repository:
                     del bucket[b]
         if op != REMOVE_EDGE:
             label = c.label
+            stamps[(source, label)] = stamps[(target, label)] = seq  # type: ignore[index]
             edge = (source, target, c.key)
             self._label_index.setdefault(label, {})[edge] = None  # type: ignore[index]
             self._edge_label[edge] = label  # type: ignore[index]
