@@ -398,49 +398,34 @@ class PlatformMemoChecks(ScalarChecks):
     def __init__(self, *, size: int = _MEMO_SIZE) -> None:
         super().__init__(memo=False)
         self._size = size
-        # ids of a question's requirement objects -> (those objects, their checks, a number)
-        self._reqs: dict[tuple[int, ...], tuple[tuple[Requirement, ...], list[tuple[Any, Requirement]], int]] = {}
-        # (requirements' number, id of the state, graph, first_only or None for the score)
-        # -> (the state, its failures or score)
-        self._parts: dict[tuple[Any, ...], tuple[PlatformState, Any]] = {}
+        # ids of a question's requirement objects -> their checks (_checks)
+        self._lookups: dict[tuple[int, ...], tuple[tuple[Requirement, ...], list[tuple[Any, Requirement]]]] = {}
+        # (ids of the requirement objects, id of the state, graph, first_only or None for
+        # the score) -> (the state, the requirements, its failures or score): the entry
+        # holds the objects whose ids its key names
+        self._parts: dict[tuple[Any, ...], tuple[PlatformState, tuple[Requirement, ...], Any]] = {}
         self._order: tuple[tuple[PlatformState, ...], list[PlatformState]] | None = None
-        # id of a requirements tuple -> (the tuple, what _interned answered for it)
-        self._last_reqs: dict[int, tuple[tuple[Requirement, ...], Any]] = {}
 
-    def _interned(self, reqs: tuple[Requirement, ...]) -> tuple[tuple[Requirement, ...], list[tuple[Any, Requirement]], int]:
-        """(``reqs`` as first seen, their :func:`_checks`, their number); a tuple object
-        asked before is found by its identity."""
-        last = self._last_reqs.get(id(reqs))
-        if last is not None and last[0] is reqs:
-            return last[1]
-        ids = tuple(map(id, reqs))
-        found = self._reqs.get(ids)
+    def _checks_of(self, ids: tuple[int, ...], reqs: tuple[Requirement, ...]) -> list[tuple[Any, Requirement]]:
+        found = self._lookups.get(ids)
         if found is None:
-            if len(self._reqs) > self._size:
-                self._reqs.clear()
-                self._last_reqs.clear()
-                self._parts.clear()  # the numbers start again
-            found = self._reqs[ids] = (reqs, _checks(reqs), len(self._reqs))
-        if len(self._last_reqs) > 1024:
-            self._last_reqs.clear()
-        self._last_reqs[id(reqs)] = (reqs, found)
-        return found
-
-    def _failures_of(self, reqs: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool, texts: dict[int, str]) -> tuple[Failure, ...]:
-        _reqs, lookups, number = self._interned(reqs)
-        parts = self._parts
-        key = (number, id(state), graph, first_only)
-        hit = parts.get(key)
-        if hit is not None and hit[0] is state:
-            return hit[1]  # type: ignore[no-any-return]
-        if len(parts) > self._size:
-            parts.clear()
-        fails = _failures(lookups, state, graph, first_only, texts)
-        parts[key] = (state, fails)
-        return fails
+            if len(self._lookups) > self._size:
+                self._lookups.clear()
+            found = self._lookups[ids] = (reqs, _checks(reqs))
+        return found[1]
 
     def platform(self, reqs: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool) -> tuple[Failure, ...]:
-        return self._failures_of(reqs, state, graph, first_only, {})
+        ids = tuple(map(id, reqs))
+        key = (ids, id(state), graph, first_only)
+        parts = self._parts
+        hit = parts.get(key)
+        if hit is not None and hit[0] is state:
+            return hit[2]  # type: ignore[no-any-return]
+        fails = _failures(self._checks_of(ids, reqs), state, graph, first_only, {})
+        if len(parts) > self._size:
+            parts.clear()
+        parts[key] = (state, reqs, fails)
+        return fails
 
     def validity(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
         return self.compute(reqs, states, graph, reasons)
@@ -455,22 +440,23 @@ class PlatformMemoChecks(ScalarChecks):
 
     def compute(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
         """:func:`loop_validity`, each platform's failures and score memoised."""
-        _reqs, lookups, number = self._interned(reqs)  # a requirement that is none raises even without platforms
+        ids = tuple(map(id, reqs))
+        lookups = self._checks_of(ids, reqs)  # a requirement that is none raises even without platforms
         acceptable: list[PlatformState] = []
         rejected: list[tuple[str, tuple[Failure, ...]]] = []
         texts: dict[int, str] = {}
         first_only = not reasons
         parts = self._parts
         for state in self._ordered(states):
-            key = (number, id(state), graph, first_only)
+            key = (ids, id(state), graph, first_only)
             hit = parts.get(key)
             if hit is not None and hit[0] is state:
-                fails = hit[1]
+                fails = hit[2]
             else:
                 if len(parts) > self._size:
                     parts.clear()
                 fails = _failures(lookups, state, graph, first_only, texts)
-                parts[key] = (state, fails)
+                parts[key] = (state, reqs, fails)
             if fails:
                 rejected.append((state.name, fails))
             else:
@@ -479,21 +465,20 @@ class PlatformMemoChecks(ScalarChecks):
             return Validity(tuple(s.name for s in acceptable), tuple(rejected))
         scores = []
         for s in acceptable:
-            key = (number, id(s), graph, None)
+            key = (ids, id(s), graph, None)
             hit = parts.get(key)
             if hit is not None and hit[0] is s:
-                score = hit[1]
+                score = hit[2]
             else:
                 score = platform_score(reqs, s, graph)
-                parts[key] = (s, score)
+                parts[key] = (s, reqs, score)
             scores.append((score, s))
         scored = sorted(scores, key=lambda x: -x[0])  # stable
         breakdown = tuple((s.name, score_breakdown(reqs, s, graph)) for _v, s in scored) if reasons else ()
         return Validity(tuple(s.name for _v, s in scored), tuple(rejected), tuple(v for v, _s in scored), breakdown)
 
     def clear(self) -> None:
-        self._reqs.clear()
-        self._last_reqs.clear()
+        self._lookups.clear()
         self._parts.clear()
         self._order = None
 
