@@ -71,6 +71,7 @@ class Exposure:
         self._open: int | None = None  # index into blind of the switch not yet covered
         self.open_since: float | None = None
         self.intervals: list[tuple[float, float, str]] = []
+        self._wanted: dict[tuple, tuple[frozenset[str], ...]] = {}  # slots -> their sets (the rule table's few)
 
     def _covered_from(self) -> float:
         """The earliest time from which every slot has a valid member (``inf`` if never)."""
@@ -93,7 +94,14 @@ class Exposure:
     def set_wanted(self, now: float, slots: Iterable[Iterable[str] | str], context: str = "") -> None:
         """The true context became ``context``, where the selector wants ``slots``
         (as ``RuleTable.slots_for`` returns them; a bare graph name is a one-graph slot)."""
-        wanted = tuple(frozenset((slot,) if isinstance(slot, str) else slot) for slot in slots)
+        try:  # the rule table's slots are tuples of tuples: their sets are made once
+            wanted = self._wanted.get(slots)  # type: ignore[arg-type]
+        except TypeError:  # slots given as lists
+            wanted = None
+        if wanted is None:
+            wanted = tuple(frozenset((slot,) if isinstance(slot, str) else slot) for slot in slots)
+            if type(slots) is tuple and all(type(slot) is tuple or type(slot) is str for slot in slots):
+                self._wanted[slots] = wanted
         self.advance(now)
         if context != self.context and self.open_since is not None:
             self._close(now)
