@@ -14,7 +14,7 @@ from desmon.model.system import PlatformState
 from desmon.repository import labels as L
 from desmon.repository.store import Repository, node_id
 
-__all__ = ["RepositoryQuery"]
+__all__ = ["RepositoryQuery", "PlatformStateReader"]
 
 # keys of the memoised answers (no graph name is a tuple)
 _STATES = ("platform_states",)
@@ -22,6 +22,75 @@ _CONTEXT = ("context",)
 _DEPLOYMENTS = ("deployments",)
 #: platform states kept for handing out equal facts as the same object (cleared past it)
 _SEEN = 1 << 14
+
+
+class PlatformStateReader:
+    """The platform states of a :class:`Repository`, memoised on what each reads (the
+    query's part that builds :class:`PlatformState` objects)."""
+
+    def __init__(self, repo: Repository) -> None:
+        self.repo = repo
+        # every state handed out (bounded): equal facts are handed out as one object, on
+        # whose identity readers (the validity memo, the checks' parts) memoise
+        self._seen_states: dict[PlatformState, PlatformState] = {}
+        # platform -> (the stamps it was read at, its state)
+        self._state_memo: dict[str, tuple[tuple[int | None, ...], PlatformState]] = {}
+        # platform node -> (stamps, its devices, stamps, its deployments): parts of its state
+        self._state_parts: dict[str, tuple[Any, tuple[Any, ...], Any, tuple[Any, ...]]] = {}
+
+    def state_of(self, pid: str, platform: str) -> PlatformState:
+        """:meth:`RepositoryQuery.platform_state` of node ``pid``, memoised on what it
+        reads: the platform node's stamp (its attributes, and its HAS_DEVICE and
+        DEPLOYED_ON edges, which touch it) and the last node change of any device and any
+        deployment (their attributes)."""
+        repo = self.repo
+        stamp = repo.touched.get(pid)
+        if stamp is None or pid not in repo.graph:
+            raise QueryError(f"unknown platform {platform!r}")
+        updated = repo.label_updated
+        key = (stamp, updated.get(L.DEVICE), updated.get(L.DEPLOYMENT))
+        hit = self._state_memo.get(platform)
+        if hit is not None and hit[0] == key:
+            return hit[1]
+        state = self._read_state(pid)
+        seen = self._seen_states
+        if len(seen) > _SEEN:
+            seen.clear()
+        state = seen.setdefault(state, state)  # facts seen before: the object handed out then
+        self._state_memo[platform] = (key, state)
+        return state
+
+    def _read_state(self, pid: str) -> PlatformState:
+        """The facts of platform node ``pid``; its devices and its deployments are
+        re-read only when its HAS_DEVICE / DEPLOYED_ON edges or a device / deployment node changed."""
+        repo = self.repo
+        nodes = repo.graph.nodes
+        data = nodes[pid]
+        edges, updated = repo.edge_touched, repo.label_updated
+        parts = self._state_parts.get(pid)
+        dkey = (edges.get((pid, L.HAS_DEVICE)), updated.get(L.DEVICE))
+        if parts is not None and parts[0] == dkey:
+            devices = parts[1]
+        else:
+            devs = repo.successors(pid, L.HAS_DEVICE)
+            devices = tuple(nodes[d]["device"] for d in sorted(devs, key=lambda d: nodes[d]["order"]))
+        gkey = (edges.get((pid, L.DEPLOYED_ON)), updated.get(L.DEPLOYMENT))
+        if parts is not None and parts[2] == gkey:
+            deployed = parts[3]
+        else:
+            deployed = tuple(sorted((nodes[d]["name"], self._consumption(d)) for d in repo.predecessors(pid, L.DEPLOYED_ON)))
+        self._state_parts[pid] = (dkey, devices, gkey, deployed)
+        return PlatformState(
+            platform=data["platform"],
+            up=bool(data["up"]),
+            devices=devices,
+            load=tuple(sorted(data["load"].items())),
+            deployed=deployed,
+        )
+
+    def _consumption(self, dep: str) -> tuple[tuple[str, float], ...]:
+        spec = self.repo.graph.nodes[dep].get("spec")
+        return spec.consumption() if spec is not None else ()
 
 
 class RepositoryQuery:
@@ -38,11 +107,8 @@ class RepositoryQuery:
         #: which is the same object while no platform's facts changed (see
         #: :func:`desmon.deployment.validity.validity_for`)
         self.validity_memo: dict | None = {}
-        # every state handed out (bounded): equal facts are handed out as one object, on
-        # whose identity readers (the validity memo, the checks' parts) memoise
-        self._seen_states: dict[PlatformState, PlatformState] = {}
-        # platform -> (the stamps it was read at, its state)
-        self._state_memo: dict[str, tuple[tuple[int | None, ...], PlatformState]] = {}
+        self._reader = PlatformStateReader(repo)
+        self._state_of = self._reader.state_of
         # the platforms' (node id, name), in declaration order, and the ids they were read for
         self._platforms: tuple[tuple[str, ...], tuple[tuple[str, str], ...]] = ((), ())
         self._states: tuple[PlatformState, ...] = ()
@@ -53,8 +119,6 @@ class RepositoryQuery:
         self._stamped: dict[Any, tuple[Any, Any]] = {}
         # deployment node -> (the stamps they were read at, its fixed platform / its requirements)
         self._fixed_memo: dict[str, tuple[int | None, str | None]] = {}
-        # platform node -> (stamps, its devices, stamps, its deployments): parts of its state
-        self._state_parts: dict[str, tuple[Any, tuple[Any, ...], Any, tuple[Any, ...]]] = {}
         self._constraints_memo: dict[str, tuple[tuple[int | None, ...], tuple[Requirement, ...]]] = {}
         self._on_memo: tuple[int | None, dict[str, tuple[str, ...]]] = (-1, {})
 
@@ -152,63 +216,10 @@ class RepositoryQuery:
         self._constraints_memo[dep] = (key, reqs)
         return reqs
 
-    def _consumption(self, dep: str) -> tuple[tuple[str, float], ...]:
-        spec = self._g.nodes[dep].get("spec")
-        return spec.consumption() if spec is not None else ()
-
     def platform_state(self, platform: str) -> PlatformState:
         """The run-time facts of ``platform``; memoised while no change touched its node,
         its devices or the deployments on it (the same object for the same facts)."""
         return self._state_of(node_id(L.PLATFORM, platform), platform)
-
-    def _state_of(self, pid: str, platform: str) -> PlatformState:
-        """:meth:`platform_state` of node ``pid``, memoised on what it reads: the platform
-        node's stamp (its attributes, and its HAS_DEVICE and DEPLOYED_ON edges, which touch
-        it) and the last node change of any device and any deployment (their attributes)."""
-        repo = self.repo
-        stamp = repo.touched.get(pid)
-        if stamp is None or pid not in self._g:
-            raise QueryError(f"unknown platform {platform!r}")
-        updated = repo.label_updated
-        key = (stamp, updated.get(L.DEVICE), updated.get(L.DEPLOYMENT))
-        hit = self._state_memo.get(platform)
-        if hit is not None and hit[0] == key:
-            return hit[1]
-        state = self._read_state(pid)
-        seen = self._seen_states
-        if len(seen) > _SEEN:
-            seen.clear()
-        state = seen.setdefault(state, state)  # facts seen before: the object handed out then
-        self._state_memo[platform] = (key, state)
-        return state
-
-    def _read_state(self, pid: str) -> PlatformState:
-        """The facts of platform node ``pid``; its devices and its deployments are
-        re-read only when its HAS_DEVICE / DEPLOYED_ON edges or a device / deployment node changed."""
-        repo = self.repo
-        nodes = self._g.nodes
-        data = nodes[pid]
-        edges, updated = repo.edge_touched, repo.label_updated
-        parts = self._state_parts.get(pid)
-        dkey = (edges.get((pid, L.HAS_DEVICE)), updated.get(L.DEVICE))
-        if parts is not None and parts[0] == dkey:
-            devices = parts[1]
-        else:
-            devs = repo.successors(pid, L.HAS_DEVICE)
-            devices = tuple(nodes[d]["device"] for d in sorted(devs, key=lambda d: nodes[d]["order"]))
-        gkey = (edges.get((pid, L.DEPLOYED_ON)), updated.get(L.DEPLOYMENT))
-        if parts is not None and parts[2] == gkey:
-            deployed = parts[3]
-        else:
-            deployed = tuple(sorted((nodes[d]["name"], self._consumption(d)) for d in repo.predecessors(pid, L.DEPLOYED_ON)))
-        self._state_parts[pid] = (dkey, devices, gkey, deployed)
-        return PlatformState(
-            platform=data["platform"],
-            up=bool(data["up"]),
-            devices=devices,
-            load=tuple(sorted(data["load"].items())),
-            deployed=deployed,
-        )
 
     def platform_states(self) -> tuple[PlatformState, ...]:
         """Every platform's run-time facts, in declaration order; memoised while no change
