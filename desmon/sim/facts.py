@@ -129,6 +129,17 @@ class PhysicalFacts:
                 best = min(best, inst.valid_from)
         return best
 
+    def valid_times(self) -> dict[str, float]:
+        """:meth:`valid_from` of every graph with a live instance, in one pass (a graph
+        not in it: inf)."""
+        out: dict[str, float] = {}
+        for inst in self.instances.values():
+            if self.alive(inst):
+                g = inst.graph
+                t = out.get(g)
+                out[g] = inst.valid_from if t is None else min(t, inst.valid_from)
+        return out
+
     def physically_valid(self, graph: str, platform: str) -> bool:
         """Whether the running instance of ``graph`` on ``platform`` can monitor: its
         platform is up and every stream it reads has a readable device (warm-up aside)."""

@@ -58,8 +58,14 @@ class Exposure:
     kept in ``intervals``. Their lengths add up to ``exposure``.
     """
 
-    def __init__(self, valid_from: Callable[[str], float], emit: Callable[[float, str, str], None] | None = None) -> None:
+    def __init__(
+        self, valid_from: Callable[[str], float], emit: Callable[[float, str, str], None] | None = None,
+        valid_times: Callable[[], Mapping[str, float]] | None = None,
+    ) -> None:
         self.valid_from = valid_from
+        #: every graph's ``valid_from`` at once (graphs not in it: inf), if the owner can
+        #: say so in one pass; else ``valid_from`` is asked graph by graph
+        self.valid_times = valid_times
         self.emit = emit
         self.slots: tuple[frozenset[str], ...] = ()
         self.context = ""
@@ -75,6 +81,10 @@ class Exposure:
 
     def _covered_from(self) -> float:
         """The earliest time from which every slot has a valid member (``inf`` if never)."""
+        if self.valid_times is not None:
+            times = self.valid_times()
+            inf = math.inf
+            return max(min((times.get(g, inf) for g in slot), default=inf) for slot in self.slots)
         vf = self.valid_from
         return max(min((vf(g) for g in slot), default=math.inf) for slot in self.slots)
 

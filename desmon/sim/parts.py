@@ -90,7 +90,7 @@ def robot_parts(
     def emit_exposure(t: float, state: str, context: str) -> None:
         trace.emit(t, "exposure", state=state, context=context)
 
-    exposure = Exposure(facts.valid_from, emit_exposure)
+    exposure = Exposure(facts.valid_from, emit_exposure, facts.valid_times)
     memory = MemoryMeter({p.name: p.capacity("memory") or math.inf for p in model.platforms})
     infra = Infrastructure(
         env, world, repo, trace, facts, truth, rules(control) if rules is not None else control, exposure, memory,
