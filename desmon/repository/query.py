@@ -24,6 +24,12 @@ _DEPLOYMENTS = ("deployments",)
 _SEEN = 1 << 14
 
 
+def _amount_types(state: PlatformState) -> list[type]:
+    """The types of the amounts in ``state``'s loads and deployments: equal numbers of
+    another type (1 and 1.0) are other facts, which may print otherwise."""
+    return [type(a) for _r, a in state.load] + [type(a) for _g, use in state.deployed for _r, a in use]
+
+
 class PlatformStateReader:
     """The platform states of a :class:`Repository`, memoised on what each reads (the
     query's part that builds :class:`PlatformState` objects)."""
@@ -56,7 +62,11 @@ class PlatformStateReader:
         seen = self._seen_states
         if len(seen) > _SEEN:
             seen.clear()
-        state = seen.setdefault(state, state)  # facts seen before: the object handed out then
+        got = seen.get(state)
+        if got is not None and _amount_types(got) == _amount_types(state):
+            state = got  # facts seen before: the object handed out then
+        else:
+            seen[state] = state
         self._state_memo[platform] = (key, state)
         return state
 
