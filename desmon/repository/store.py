@@ -113,7 +113,7 @@ def _apply(g: nx.MultiDiGraph, c: Change) -> None:
     elif c.op == REMOVE_EDGE:
         g.remove_edge(c.source, c.target, key=c.key)
     elif c.op == RELABEL_EDGE:
-        old = dict(g.edges[c.source, c.target, c.old_label])
+        old = dict(g.get_edge_data(c.source, c.target, c.old_label))
         g.remove_edge(c.source, c.target, key=c.old_label)
         old.update(attrs)
         g.add_edge(c.source, c.target, key=c.key, **old)

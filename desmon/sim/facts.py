@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import bisect
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 from desmon.detectors.signals import Segment
@@ -47,8 +47,6 @@ class Instance:
     proc: Any = None
     gen: int = 0  # activations so far (a warm-up end of an older one is ignored)
     ready_at: float = 0.0  # exponential timing: when its start latency has passed (never valid before)
-    #: (the facts' readability version it was asked at, whether its inputs were readable)
-    inputs_seen: tuple[int, bool] = field(default=(-1, False), repr=False, compare=False)
 
 
 class _Readability(dict):  # type: ignore[type-arg]
@@ -79,6 +77,8 @@ class PhysicalFacts:
         self.hosted = {p.name: model.devices_on(p.name) for p in model.platforms}
         self.instances: dict[tuple[str, str], Instance] = {}
         self._states: dict[str, tuple[int, PlatformState]] = {}  # platform -> (readability, state)
+        # id of an instance's streams -> (those streams, readability, whether all are readable)
+        self._inputs: dict[int, tuple[dict[str, tuple[str, ...]], int, bool]] = {}
         #: memory (MB) a running instance of each graph consumes: its spec's consumption()
         self.consumes = {s.graph: dict(s.consumption()).get("memory", 0.0) for s in model.specs}
 
@@ -93,14 +93,18 @@ class PhysicalFacts:
         return self.dev_ok[device] and self.up[self.host[device]]
 
     def inputs_ok(self, inst: Instance) -> bool:
-        """Every stream of ``inst`` has a readable device (memoised per instance while no
-        platform goes up or down and no device fails or is repaired)."""
+        """Every stream of ``inst`` has a readable device (memoised per streams object --
+        the infrastructure hands out one per graph and platform -- while no platform goes
+        up or down and no device fails or is repaired)."""
+        streams = inst.streams
         version = self.readability
-        seen = inst.inputs_seen
-        if seen[0] == version:
-            return seen[1]
-        ok = all(any(self.readable(d) for d in devs) for devs in inst.streams.values())
-        inst.inputs_seen = (version, ok)
+        seen = self._inputs.get(id(streams))
+        if seen is not None and seen[0] is streams and seen[1] == version:
+            return seen[2]
+        ok = all(any(self.readable(d) for d in devs) for devs in streams.values())
+        if len(self._inputs) > 1024:
+            self._inputs.clear()
+        self._inputs[id(streams)] = (streams, version, ok)  # the entry holds the object its key names
         return ok
 
     def state(self, platform: str) -> PlatformState:

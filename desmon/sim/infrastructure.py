@@ -64,6 +64,7 @@ class Infrastructure:
         #: when each platform last hosted an instance (a lease ends once it stayed idle)
         self.last_busy: dict[str, float] = {}
         self._pending_ready: list[Instance] = []
+        self._wiring: dict[tuple[str, str], dict[str, tuple[str, ...]]] = {}  # (graph, platform) -> devices_for
 
     # ------------------------------------------------------------------ physical changes
     def mem(self, p: str) -> None:
@@ -134,11 +135,15 @@ class Infrastructure:
 
     # ------------------------------------------------------------------ Control
     def devices_for(self, graph: str, platform: str) -> dict[str, tuple[str, ...]]:
-        out: dict[str, tuple[str, ...]] = {}
-        for kind, devices in self.rules.input_devices(graph, platform):
-            devs = tuple(d.name for d in devices)
-            stream = self.world.signal_of(kind) or kind
-            out[stream] = out.get(stream, ()) + devs
+        """Stream -> the devices ``graph`` reads on ``platform``: one dict per pair, which
+        nobody changes (instances share it; the facts memoise on its identity)."""
+        out = self._wiring.get((graph, platform))
+        if out is None:
+            out = self._wiring[(graph, platform)] = {}
+            for kind, devices in self.rules.input_devices(graph, platform):
+                devs = tuple(d.name for d in devices)
+                stream = self.world.signal_of(kind) or kind
+                out[stream] = out.get(stream, ()) + devs
         return out
 
     def start(self, graph: str, platform: str):  # type: ignore[no-untyped-def]
