@@ -256,9 +256,9 @@ class RepositoryQuery:
         return states
 
     def _deployed_memo(self) -> dict[str, tuple[str, ...]]:
-        """Answers about DEPLOYED_ON edges, memoised while no deployment node is touched
-        (every such edge starts at one)."""
-        stamp = self.repo.label_touched.get(L.DEPLOYMENT)
+        """Answers about DEPLOYED_ON edges, memoised while none changes (they name their
+        ends by the nodes' names, which are fixed when a node is added)."""
+        stamp = self.repo.edges_changed.get(L.DEPLOYED_ON)
         memo = self._on_memo
         if memo[0] != stamp:
             memo = self._on_memo = (stamp, {})
@@ -299,7 +299,8 @@ class RepositoryQuery:
 
     def context(self) -> str | None:
         """The robot's current context; memoised while no robot node is touched (its
-        IN_CONTEXT edge starts there)."""
+        IN_CONTEXT edge starts there; a context is named by its node's name, fixed when
+        the node is added)."""
         stamp = self.repo.label_touched.get(L.ROBOT)
         hit = self._stamped.get(_CONTEXT)
         if hit is not None and hit[0] == stamp:

@@ -153,6 +153,8 @@ class Repository:
         #: (node id, edge label) -> seq of the last change of an edge with that label from
         #: or to the node (a relabel stamps the old label and the new)
         self.edge_touched: dict[tuple[str, str], int] = {}
+        #: edge label -> seq of the last change of an edge with that label (old and new, for a relabel)
+        self.edges_changed: dict[str, int] = {}
         #: label -> seq of the last node change (added or updated) of a node carrying it:
         #: what a node's attributes say moves only with it
         self.label_updated: dict[str, int] = {}
@@ -218,7 +220,7 @@ class Repository:
         seq = c.seq
         if op != ADD_EDGE:
             old = c.old_label if op == RELABEL_EDGE else c.label
-            stamps[(source, old)] = stamps[(target, old)] = seq  # type: ignore[index]
+            stamps[(source, old)] = stamps[(target, old)] = self.edges_changed[old] = seq  # type: ignore[index]
             gone = (source, target, c.old_label if op == RELABEL_EDGE else c.key)
             del self._label_index[old][gone]  # type: ignore[index]
             del self._edge_label[gone]  # type: ignore[arg-type]
@@ -230,7 +232,7 @@ class Repository:
                     del bucket[b]
         if op != REMOVE_EDGE:
             label = c.label
-            stamps[(source, label)] = stamps[(target, label)] = seq  # type: ignore[index]
+            stamps[(source, label)] = stamps[(target, label)] = self.edges_changed[label] = seq  # type: ignore[index]
             edge = (source, target, c.key)
             self._label_index.setdefault(label, {})[edge] = None  # type: ignore[index]
             self._edge_label[edge] = label  # type: ignore[index]
