@@ -194,3 +194,24 @@ def test_the_edge_index_agrees_with_the_graph_after_any_changes(world):
             assert sorted(repo.successors(nid, label)) == out
             assert sorted(repo.predecessors(nid, label)) == into
     assert len(RepositoryQuery(repo).history()) == 5
+
+
+def test_query_memos_follow_every_change_they_read(world):
+    from desmon.repository.facts import record_start, record_stop
+
+    model, repo, _ = world
+    q = RepositoryQuery(repo)
+    before = q.platform_states()
+    assert q.platform_states() is before  # nothing changed: the same tuple
+    p = before[0].name
+    set_load(repo, p, "memory", 123.0)
+    after = q.platform_states()
+    assert after is not before and after[0].load_of("memory") == 123.0 and after[1:] == before[1:]
+    g = model.specs[0].graph
+    record_start(repo, g, p)
+    assert q.deployed_on(g) == (p,) and (g, p) in q.deployments() and g in q.active_deployments(p)
+    assert g in dict(q.platform_state(p).deployed)
+    record_stop(repo, g, p)
+    assert q.deployed_on(g) == () and g not in q.active_deployments(p) and not q.platform_state(p).deployed
+    set_load(repo, p, "memory", before[0].load_of("memory"))
+    assert q.platform_state(p) is before[0]  # the same facts again: the same object

@@ -126,3 +126,24 @@ def test_a_caller_naming_no_checks_gets_the_default_memoised_ones():
     V.clear_memos()
     check_validity([req("capacity", "memory", 10)], states, "g")
     assert V.DEFAULT_CHECKS._validity.cache_info().currsize == 1
+
+
+def test_platform_memo_checks_answer_as_the_loop_while_one_platform_changes_at_a_time():
+    from desmon.deployment.validity import PlatformMemoChecks, ScalarChecks
+    from desmon.model.requirements import make_preference
+
+    memo, plain = PlatformMemoChecks(), ScalarChecks(memo=False)
+    pads = [("tactile_pad", "weiss")] * 6
+    reqs = (req("quantity", "tactile_pad", 6), req("capacity", "memory", 250), make_preference("most_free", "memory"))
+    a, b = state("a", devices=pads, deployed=[("x", 100)]), state("b", devices=pads, load=100)
+    for states in ((a, b), (a, state("b", devices=pads, load=300)), (state("a", devices=pads[:5]), b), (a, b)):
+        for reasons in (True, False):
+            assert memo.validity(reqs, states, "g", reasons) == plain.validity(reqs, states, "g", reasons)
+            for s in states:
+                assert memo.platform(reqs, s, "g", not reasons) == plain.platform(reqs, s, "g", not reasons)
+    try:
+        memo.validity(("not a requirement",), (), "g", True)
+    except TypeError:
+        pass
+    else:  # pragma: no cover
+        raise AssertionError("a requirement that is none is rejected even without platforms")
