@@ -43,6 +43,7 @@ from desmon.repository.facts import load_model
 from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import ADD_EDGE, REMOVE_EDGE, RELABEL_EDGE, UPDATE_NODE, Repository
 from desmon.sim.accounting import audit, robot_metrics
+from desmon.sim.collector import collector_relaxed
 from desmon.sim.facts import SLIP_WINDOW, Instance
 from desmon.sim.parts import RobotParts, robot_parts, start_processes
 from desmon.sim.processes import OBSERVATION, apply_initial, progress
@@ -184,7 +185,8 @@ class SimWorld:
         start_processes(parts, self._audit)
         if self.progress is not None:
             self.env.process(progress(parts, self.progress))
-        self.env.run(until=self.horizon)
+        with collector_relaxed(collect=False):  # the world built so far stays out of the collector's scans
+            self.env.run(until=self.horizon)
         now = self.horizon
         for inst in list(self.instances.values()):
             self.infra.feed(inst, now)

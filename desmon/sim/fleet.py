@@ -27,15 +27,13 @@ so no event copies the repository.
 
 from __future__ import annotations
 
-import contextlib
-import gc
 import math
 import random
 import resource
 import sys
 import time
 from dataclasses import dataclass, field
-from typing import IO, Any, Callable, Iterable, Iterator
+from typing import IO, Any, Callable, Iterable
 
 import simpy
 
@@ -53,6 +51,7 @@ from desmon.repository.facts import load_model
 from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import ADD_EDGE, UPDATE_NODE, Change, Repository, node_id
 from desmon.sim.accounting import audit, robot_metrics
+from desmon.sim.collector import collector_relaxed
 from desmon.sim.parts import RobotParts, robot_parts, start_processes
 from desmon.sim.processes import apply_initial
 from desmon.sim.trace import Trace
@@ -671,7 +670,7 @@ class FleetWorld:
         self.repo.subscribe(self._route)
         if self.progress is not None:
             self.env.process(self._progress())
-        with _collector_relaxed():
+        with collector_relaxed():  # a fleet's heap is large: full collections cost about a quarter of the run
             self.env.run(until=self.horizon)
         now = self.horizon
         self.edge_meter.close(now)
@@ -720,24 +719,6 @@ class FleetWorld:
             "peak_rss_mb": round(peak_rss_mb(), 1),
         }
         return out
-
-
-@contextlib.contextmanager
-def _collector_relaxed() -> Iterator[None]:
-    """Run with the cyclic garbage collector's young-generation threshold raised and
-    the objects built so far (the models, the repository) frozen out of its scans: a
-    fleet's heap is large and mostly long-lived, and full collections over it cost
-    about a quarter of the run (the run leaves little cyclic garbage: its peak memory
-    is the same with the collector off). Restored afterwards."""
-    threshold = gc.get_threshold()
-    gc.collect()
-    gc.freeze()
-    gc.set_threshold(100_000, 50, 100)
-    try:
-        yield
-    finally:
-        gc.set_threshold(*threshold)
-        gc.unfreeze()
 
 
 def _spread(values: list[float]) -> dict[str, float]:

@@ -1,0 +1,34 @@
+"""The cyclic garbage collector while a simulation runs.
+
+A run's heap is mostly long-lived (the model, the repository and its change log, the
+trace records, the signal tables) and the run makes little cyclic garbage (finished
+SimPy processes and their events), yet the collector's scans walk the long-lived part
+again and again. :func:`collector_relaxed` freezes what exists out of the scans and
+raises the young-generation threshold for the run; it restores both afterwards. No
+output depends on when the collector runs.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gc
+from typing import Iterator
+
+__all__ = ["collector_relaxed"]
+
+
+@contextlib.contextmanager
+def collector_relaxed(*, collect: bool = True) -> Iterator[None]:
+    """Run with the objects built so far frozen out of the collector's scans (after a
+    full collection first, if ``collect``) and its young-generation threshold raised;
+    restored afterwards."""
+    threshold = gc.get_threshold()
+    if collect:
+        gc.collect()
+    gc.freeze()
+    gc.set_threshold(100_000, 50, 100)
+    try:
+        yield
+    finally:
+        gc.set_threshold(*threshold)
+        gc.unfreeze()
