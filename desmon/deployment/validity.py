@@ -323,20 +323,38 @@ def check_validity(
 def loop_validity(reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
     """What :func:`check_validity` answers, computed platform by platform (no memo, no
     port): the semantics every implementation of the Checks port agrees with."""
-    acceptable: list[PlatformState] = []
-    rejected: list[tuple[str, tuple[Failure, ...]]] = []
     checks = _checks(reqs)  # looked up once for every platform
     texts: dict[int, str] = {}
     first_only = not reasons
-    for state in order_platforms(states):
-        fails = _failures(checks, state, graph, first_only, texts)
+    return _assemble(
+        reqs, order_platforms(states), graph, reasons,
+        lambda state: _failures(checks, state, graph, first_only, texts),
+        lambda state: platform_score(reqs, state, graph),
+    )
+
+
+def _assemble(
+    reqs: tuple[Requirement, ...],
+    ordered: Iterable[PlatformState],
+    graph: Placing,
+    reasons: bool,
+    failures: Callable[[PlatformState], tuple[Failure, ...]],
+    score: Callable[[PlatformState], float],
+) -> Validity:
+    """The :class:`Validity` of the platforms in ``ordered`` (:func:`order_platforms`), given
+    each one's ``failures`` and preference ``score``: the one body of :func:`loop_validity`
+    and of the memoised :meth:`PlatformMemoChecks.compute`."""
+    acceptable: list[PlatformState] = []
+    rejected: list[tuple[str, tuple[Failure, ...]]] = []
+    for state in ordered:
+        fails = failures(state)
         if fails:
             rejected.append((state.name, fails))
         else:
             acceptable.append(state)
     if not any(type(r) is Preference for r in reqs):
         return Validity(tuple(s.name for s in acceptable), tuple(rejected))
-    scored = sorted(((platform_score(reqs, s, graph), s) for s in acceptable), key=lambda x: -x[0])  # stable
+    scored = sorted(((score(s), s) for s in acceptable), key=lambda x: -x[0])  # stable
     breakdown = tuple((s.name, score_breakdown(reqs, s, graph)) for _v, s in scored) if reasons else ()
     return Validity(tuple(s.name for _v, s in scored), tuple(rejected), tuple(v for v, _s in scored), breakdown)
 
@@ -442,40 +460,31 @@ class PlatformMemoChecks(ScalarChecks):
         """:func:`loop_validity`, each platform's failures and score memoised."""
         ids = tuple(map(id, reqs))
         lookups = self._checks_of(ids, reqs)  # a requirement that is none raises even without platforms
-        acceptable: list[PlatformState] = []
-        rejected: list[tuple[str, tuple[Failure, ...]]] = []
         texts: dict[int, str] = {}
         first_only = not reasons
         parts = self._parts
-        for state in self._ordered(states):
+
+        def failures(state: PlatformState) -> tuple[Failure, ...]:
             key = (ids, id(state), graph, first_only)
             hit = parts.get(key)
             if hit is not None and hit[0] is state:
-                fails = hit[2]
-            else:
-                if len(parts) > self._size:
-                    parts.clear()
-                fails = _failures(lookups, state, graph, first_only, texts)
-                parts[key] = (state, reqs, fails)
-            if fails:
-                rejected.append((state.name, fails))
-            else:
-                acceptable.append(state)
-        if not any(type(r) is Preference for r in reqs):
-            return Validity(tuple(s.name for s in acceptable), tuple(rejected))
-        scores = []
-        for s in acceptable:
-            key = (ids, id(s), graph, None)
+                return hit[2]  # type: ignore[no-any-return]
+            if len(parts) > self._size:
+                parts.clear()
+            fails = _failures(lookups, state, graph, first_only, texts)
+            parts[key] = (state, reqs, fails)
+            return fails
+
+        def score(state: PlatformState) -> float:
+            key = (ids, id(state), graph, None)
             hit = parts.get(key)
-            if hit is not None and hit[0] is s:
-                score = hit[2]
-            else:
-                score = platform_score(reqs, s, graph)
-                parts[key] = (s, reqs, score)
-            scores.append((score, s))
-        scored = sorted(scores, key=lambda x: -x[0])  # stable
-        breakdown = tuple((s.name, score_breakdown(reqs, s, graph)) for _v, s in scored) if reasons else ()
-        return Validity(tuple(s.name for _v, s in scored), tuple(rejected), tuple(v for v, _s in scored), breakdown)
+            if hit is not None and hit[0] is state:
+                return hit[2]  # type: ignore[no-any-return]
+            value = platform_score(reqs, state, graph)
+            parts[key] = (state, reqs, value)
+            return value
+
+        return _assemble(reqs, self._ordered(states), graph, reasons, failures, score)
 
     def clear(self) -> None:
         self._lookups.clear()

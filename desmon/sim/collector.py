@@ -4,8 +4,8 @@ A run's heap is mostly long-lived (the model, the repository and its change log,
 trace records, the signal tables) and the run makes little cyclic garbage (finished
 SimPy processes and their events), yet the collector's scans walk the long-lived part
 again and again. :func:`collector_relaxed` freezes what exists out of the scans and
-raises the young-generation threshold for the run; it restores both afterwards. No
-output depends on when the collector runs.
+raises the young-generation threshold for the run; it restores both afterwards (a
+caller's own frozen objects stay frozen). No output depends on when the collector runs.
 """
 
 from __future__ import annotations
@@ -23,12 +23,17 @@ def collector_relaxed(*, collect: bool = True) -> Iterator[None]:
     full collection first, if ``collect``) and its young-generation threshold raised;
     restored afterwards."""
     threshold = gc.get_threshold()
-    if collect:
+    # a caller that froze objects itself keeps them frozen: then nothing is frozen here
+    # (an unfreeze would thaw the caller's objects too), only the threshold is raised
+    freeze = gc.get_freeze_count() == 0
+    if collect and freeze:
         gc.collect()
-    gc.freeze()
+    if freeze:
+        gc.freeze()
     gc.set_threshold(100_000, 50, 100)
     try:
         yield
     finally:
         gc.set_threshold(*threshold)
-        gc.unfreeze()
+        if freeze:
+            gc.unfreeze()

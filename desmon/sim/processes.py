@@ -103,24 +103,10 @@ def recognised_context(action: str) -> str:
     return interpret(obs) if obs is not None else action
 
 
-#: the ActionChange of each recognised context (events are immutable; bounded: a day sees a few)
-_ACTION_CHANGES: dict[str, ActionChange] = {}
-
-
-def action_change(context: str) -> ActionChange:
-    """``ActionChange(context)``, one object per context."""
-    ev = _ACTION_CHANGES.get(context)
-    if ev is None:
-        if len(_ACTION_CHANGES) > 1024:
-            _ACTION_CHANGES.clear()
-        ev = _ACTION_CHANGES[context] = ActionChange(context)
-    return ev
-
-
 def recognise(parts: RobotParts, action: str):  # type: ignore[no-untyped-def]
     if parts.world.recognition_delay:
         yield parts.env.timeout(parts.world.recognition_delay)
-    insert(parts, action_change(recognised_context(action)))
+    insert(parts, ActionChange(recognised_context(action)))
 
 
 def recognise_latest(parts: RobotParts):  # type: ignore[no-untyped-def]
@@ -129,7 +115,7 @@ def recognise_latest(parts: RobotParts):  # type: ignore[no-untyped-def]
     if parts.world.recognition_delay:
         yield parts.env.timeout(parts.markov.expovariate(1.0 / parts.world.recognition_delay))
     parts.noticing.discard("context")
-    insert(parts, action_change(recognised_context(parts.exposure.context)))
+    insert(parts, ActionChange(recognised_context(parts.exposure.context)))
 
 
 def insert(parts: RobotParts, ev: Event) -> None:
