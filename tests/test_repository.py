@@ -215,3 +215,17 @@ def test_query_memos_follow_every_change_they_read(world):
     assert q.deployed_on(g) == () and g not in q.active_deployments(p) and not q.platform_state(p).deployed
     set_load(repo, p, "memory", before[0].load_of("memory"))
     assert q.platform_state(p) is before[0]  # the same facts again: the same object
+
+
+def test_equal_facts_of_another_type_are_not_handed_out_as_the_earlier_state(world):
+    # 2 and 2.0 compare equal but print otherwise: each state says what the repository holds
+    _model, repo, _ = world
+    q = RepositoryQuery(repo)
+    p = q.platform_states()[0].name
+    set_load(repo, p, "memory", 2)
+    seen = q.platform_state(p)
+    set_load(repo, p, "memory", 77.0)
+    q.platform_state(p)
+    set_load(repo, p, "memory", 2.0)
+    assert repr(q.platform_state(p).load_of("memory")) == "2.0"
+    assert repr(seen.load_of("memory")) == "2"
