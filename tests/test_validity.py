@@ -99,7 +99,7 @@ def test_a_fixed_deployment_is_valid_only_on_its_executable_on_platform():
 
 def test_every_checks_implementation_gives_the_same_answers_and_only_a_memo_remembers():
     from desmon.deployment import validity as V
-    from desmon.deployment.placement import ColumnChecks
+    from desmon.deployment.placement import ColumnChecks, PlatformMemoColumnChecks
 
     reqs = [req("capacity", "memory", 250), req("maximum", "link_latency_ms", 10)]
     states = [
@@ -109,8 +109,11 @@ def test_every_checks_implementation_gives_the_same_answers_and_only_a_memo_reme
     ]
     memo, plain = V.ScalarChecks(), V.ScalarChecks(memo=False)
     columns = ColumnChecks(memo=False, min_platforms=1)  # the numpy columns even for three platforms
-    answers = [check_validity(reqs, states, "g", checks=c) for c in (memo, plain, columns)]
-    assert answers[0] == answers[1] == answers[2] == V.loop_validity(tuple(reqs), tuple(states), "g", True)
+    # the fleet's: columns from min_platforms on, below them each platform's part memoised
+    parts_columns, parts_loop = PlatformMemoColumnChecks(min_platforms=1), PlatformMemoColumnChecks(min_platforms=4)
+    answers = [check_validity(reqs, states, "g", checks=c) for c in (memo, plain, columns, parts_columns, parts_loop, parts_loop)]
+    assert all(a == V.loop_validity(tuple(reqs), tuple(states), "g", True) for a in answers)
+    assert parts_loop._parts and not parts_columns._parts  # only the loop keeps platforms' parts
     assert [V.check_platform(reqs, states[0], "g", checks=c) for c in (memo, plain)] == [V.platform_failures(tuple(reqs), states[0], "g", False)] * 2
     assert memo._validity.cache_info().currsize == 1 and memo._platform.cache_info().currsize == 1
     assert not hasattr(plain._validity, "cache_info")  # nothing is kept

@@ -79,6 +79,7 @@ __all__ = [
     "acceptable",
     "supported",
     "ColumnChecks",
+    "PlatformMemoColumnChecks",
     "COUNTS",
 ]
 
@@ -760,6 +761,27 @@ class ColumnChecks(_validity.ScalarChecks):
             if fast is not None:
                 return fast
         return _validity.loop_validity(reqs, states, graph, reasons)
+
+
+class PlatformMemoColumnChecks(_validity.PlatformMemoChecks):
+    """:class:`ColumnChecks`' dispatch over :class:`~desmon.deployment.validity.PlatformMemoChecks`:
+    :data:`VECTOR_MIN_PLATFORMS` platforms or more (``min_platforms``) over numpy
+    columns, fewer one platform at a time with each platform's part memoised on the
+    identities of its state and of the requirements (the fleet's robots: each asks
+    about its few own PCs and edge servers, whose states are the same objects until
+    they change; no whole answer is memoised). Same answers as
+    :class:`~desmon.deployment.validity.ScalarChecks`."""
+
+    def __init__(self, *, size: int = _validity._MEMO_SIZE, min_platforms: int = VECTOR_MIN_PLATFORMS) -> None:
+        super().__init__(size=size)
+        self.min_platforms = min_platforms
+
+    def compute(self, reqs: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool) -> _validity.Validity:
+        if len(states) >= self.min_platforms:
+            fast = vector_validity(reqs, states, graph, reasons, self.min_platforms)
+            if fast is not None:
+                return fast
+        return super().compute(reqs, states, graph, reasons)
 
 
 def acceptable(requirements: Iterable[object], states: Sequence[PlatformState], graph: _validity.Placing = None) -> tuple[str, ...]:

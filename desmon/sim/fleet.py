@@ -42,7 +42,7 @@ from desmon.errors import QueryError, ScenarioError
 from desmon.model.checks import check_items, check_names, strict_init
 from desmon.model.platform import Platform
 from desmon.model.scenario import Scenario
-from desmon.deployment.placement import ColumnChecks
+from desmon.deployment.placement import PlatformMemoColumnChecks
 from desmon.deployment.validity import check_platform, reads_fixed_facts
 from desmon.model.requirements import Capacity, DeploymentSpec, Requirement
 from desmon.model.system import PlatformState, Rule, RuleTable, SystemModel
@@ -267,6 +267,8 @@ class RobotView(RepositoryQuery):
         self._own_graphs = frozenset(graphs)
         self._own_platforms = frozenset(own + edges)
         self._robot_id = node_id(L.ROBOT, robot)
+        self._context_key = (self._robot_id, L.IN_CONTEXT)
+        self._context: tuple[int | None, str | None] = (-1, None)  # (the stamp it was read at, the context)
         self._cache = cache
         self._deployed: dict[str, tuple[str, ...]] = {}  # graph -> platforms, until a DEPLOYED_ON change
         self._deployments: tuple[tuple[str, str], ...] | None = None
@@ -299,8 +301,16 @@ class RobotView(RepositoryQuery):
         self._states: tuple[PlatformState, ...] | None = None  # None: one of its platforms changed
 
     def context(self) -> str | None:
+        """Its Robot node's context; re-read only after an IN_CONTEXT edge of that node
+        changed (a context node's name is fixed when it is added)."""
+        stamp = self.repo.edge_touched.get(self._context_key)
+        memo = self._context
+        if memo[0] == stamp:
+            return memo[1]
         ctx = self.repo.successors(self._robot_id, L.IN_CONTEXT)
-        return str(self.repo.graph.nodes[ctx[0]]["name"]) if ctx else None
+        name = str(self.repo.graph.nodes[ctx[0]]["name"]) if ctx else None
+        self._context = (stamp, name)
+        return name
 
     def platform_state(self, platform: str) -> PlatformState:
         if platform not in self._own_platforms:
@@ -483,7 +493,7 @@ class _Member:
         core = parts.core
         view = _OwnView(
             self._audited_states(), core.specs(), core.standing, core.slots(), tuple(sorted(parts.facts.instances)),
-            parts.infra.stops, parts.books.history_edges, core.guarded_react,
+            parts.infra.stops, parts.books.history_edges, core.guarded_react, self.query.checks,
         )
         audit(parts, view)
 
@@ -580,9 +590,11 @@ class FleetWorld:
         env = self.env
         self.repo = Repository(clock=lambda: env.now)
         self.cache = _StateCache(self.repo)
-        #: the robots' Checks port: columns for many platforms, no memo (a fleet's facts
-        #: seldom recur, so memos would only cost hashing and hold old states alive)
-        self.checks = ColumnChecks(memo=False)
+        #: the robots' Checks port: columns for many platforms; for a robot's few, each
+        #: platform's part memoised on its state's identity (most of a robot's platforms
+        #: are unchanged between its questions); no whole answer memoised (a fleet's
+        #: states tuples seldom recur)
+        self.checks = PlatformMemoColumnChecks()
         edges = self.fleet.edges
         edge_set = set(edges)
         #: platform -> the robots it concerns; deployment node -> its robot; robot node -> its robot
