@@ -745,25 +745,39 @@ def vector_validity(
         return st.validity(requirements, graph, reasons=reasons)
 
 
-class ColumnChecks(_validity.ScalarChecks):
-    """The Checks port for fleet scale: :data:`VECTOR_MIN_PLATFORMS` platforms or more
-    (``min_platforms``) are checked over numpy columns (:func:`vector_validity`), fewer,
-    or a requirement kind the columns do not cover, one platform at a time. Same
-    answers as :class:`~desmon.deployment.validity.ScalarChecks`; ``memo`` as there."""
+class _ColumnsFirst:
+    """``compute`` over numpy columns from ``min_platforms`` platforms on
+    (:func:`vector_validity`), else (fewer platforms, or a requirement kind the columns do
+    not cover) by the class's own one-platform-at-a-time ``_scalar``."""
 
-    def __init__(self, *, memo: bool = True, min_platforms: int = VECTOR_MIN_PLATFORMS) -> None:
-        super().__init__(memo=memo)
-        self.min_platforms = min_platforms
+    min_platforms: int
 
     def compute(self, reqs: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool) -> _validity.Validity:
         if len(states) >= self.min_platforms:
             fast = vector_validity(reqs, states, graph, reasons, self.min_platforms)
             if fast is not None:
                 return fast
+        return self._scalar(reqs, states, graph, reasons)
+
+    def _scalar(self, reqs: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool) -> _validity.Validity:
+        raise NotImplementedError
+
+
+class ColumnChecks(_ColumnsFirst, _validity.ScalarChecks):
+    """The Checks port for fleet scale: :data:`VECTOR_MIN_PLATFORMS` platforms or more
+    (``min_platforms``) are checked over numpy columns (:func:`vector_validity`), fewer,
+    or a requirement kind the columns do not cover, one platform at a time. Same
+    answers as :class:`~desmon.deployment.validity.ScalarChecks`; ``memo`` as there."""
+
+    def __init__(self, *, memo: bool = True, min_platforms: int = VECTOR_MIN_PLATFORMS) -> None:
+        self.min_platforms = min_platforms
+        super().__init__(memo=memo)
+
+    def _scalar(self, reqs: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool) -> _validity.Validity:
         return _validity.loop_validity(reqs, states, graph, reasons)
 
 
-class PlatformMemoColumnChecks(_validity.PlatformMemoChecks):
+class PlatformMemoColumnChecks(_ColumnsFirst, _validity.PlatformMemoChecks):
     """:class:`ColumnChecks`' dispatch over :class:`~desmon.deployment.validity.PlatformMemoChecks`:
     :data:`VECTOR_MIN_PLATFORMS` platforms or more (``min_platforms``) over numpy
     columns, fewer one platform at a time with each platform's part memoised on the
@@ -773,15 +787,11 @@ class PlatformMemoColumnChecks(_validity.PlatformMemoChecks):
     :class:`~desmon.deployment.validity.ScalarChecks`."""
 
     def __init__(self, *, size: int = _validity._MEMO_SIZE, min_platforms: int = VECTOR_MIN_PLATFORMS) -> None:
-        super().__init__(size=size)
         self.min_platforms = min_platforms
+        super().__init__(size=size)
 
-    def compute(self, reqs: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool) -> _validity.Validity:
-        if len(states) >= self.min_platforms:
-            fast = vector_validity(reqs, states, graph, reasons, self.min_platforms)
-            if fast is not None:
-                return fast
-        return super().compute(reqs, states, graph, reasons)
+    def _scalar(self, reqs: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool) -> _validity.Validity:
+        return _validity.PlatformMemoChecks.compute(self, reqs, states, graph, reasons)
 
 
 def acceptable(requirements: Iterable[object], states: Sequence[PlatformState], graph: _validity.Placing = None) -> tuple[str, ...]:
