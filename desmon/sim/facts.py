@@ -62,6 +62,36 @@ class _Readability(dict):  # type: ignore[type-arg]
         super().__setitem__(key, value)
         self.owner.readability += 1
 
+    # every other way to change a dict moves the version too: a memo that missed a
+    # write would answer that a dead sensor can be read
+    def __delitem__(self, key: str) -> None:
+        super().__delitem__(key)
+        self.owner.readability += 1
+
+    def update(self, *args: Any, **kw: Any) -> None:
+        super().update(*args, **kw)
+        self.owner.readability += 1
+
+    def pop(self, *args: Any) -> Any:
+        self.owner.readability += 1
+        return super().pop(*args)
+
+    def popitem(self) -> tuple[str, bool]:
+        self.owner.readability += 1
+        return super().popitem()
+
+    def setdefault(self, key: str, default: Any = None) -> Any:
+        self.owner.readability += 1
+        return super().setdefault(key, default)
+
+    def clear(self) -> None:
+        super().clear()
+        self.owner.readability += 1
+
+    def __ior__(self, other: Any) -> "_Readability":
+        self.update(other)
+        return self
+
 
 class PhysicalFacts:
     """Platforms up (an on-demand one absent until it joins), loads, devices, instances."""
