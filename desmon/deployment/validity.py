@@ -432,18 +432,24 @@ class PlatformMemoChecks(ScalarChecks):
             found = self._lookups[ids] = (reqs, _checks(reqs))
         return found[1]
 
-    def platform(self, reqs: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool) -> tuple[Failure, ...]:
-        ids = tuple(map(id, reqs))
-        key = (ids, id(state), graph, first_only)
+    def _part(self, key: tuple[Any, ...], state: PlatformState, reqs: tuple[Requirement, ...], fn: Callable[..., Any], *args: Any) -> Any:
+        """The memoised part ``key`` names (``fn(*args)`` on a miss); ``key`` holds the ids of
+        ``state`` and ``reqs``, which its entry keeps alive."""
         parts = self._parts
         hit = parts.get(key)
         if hit is not None and hit[0] is state:
-            return hit[2]  # type: ignore[no-any-return]
-        fails = _failures(self._checks_of(ids, reqs), state, graph, first_only, {})
+            return hit[2]
         if len(parts) > self._size:
             parts.clear()
-        parts[key] = (state, reqs, fails)
-        return fails
+        value = fn(*args)
+        parts[key] = (state, reqs, value)
+        return value
+
+    def platform(self, reqs: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool) -> tuple[Failure, ...]:
+        ids = tuple(map(id, reqs))
+        return self._part(  # type: ignore[no-any-return]
+            (ids, id(state), graph, first_only), state, reqs, _failures, self._checks_of(ids, reqs), state, graph, first_only, {}
+        )
 
     def validity(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
         return self.compute(reqs, states, graph, reasons)
@@ -462,27 +468,13 @@ class PlatformMemoChecks(ScalarChecks):
         lookups = self._checks_of(ids, reqs)  # a requirement that is none raises even without platforms
         texts: dict[int, str] = {}
         first_only = not reasons
-        parts = self._parts
+        part = self._part
 
         def failures(state: PlatformState) -> tuple[Failure, ...]:
-            key = (ids, id(state), graph, first_only)
-            hit = parts.get(key)
-            if hit is not None and hit[0] is state:
-                return hit[2]  # type: ignore[no-any-return]
-            if len(parts) > self._size:
-                parts.clear()
-            fails = _failures(lookups, state, graph, first_only, texts)
-            parts[key] = (state, reqs, fails)
-            return fails
+            return part((ids, id(state), graph, first_only), state, reqs, _failures, lookups, state, graph, first_only, texts)  # type: ignore[no-any-return]
 
         def score(state: PlatformState) -> float:
-            key = (ids, id(state), graph, None)
-            hit = parts.get(key)
-            if hit is not None and hit[0] is state:
-                return hit[2]  # type: ignore[no-any-return]
-            value = platform_score(reqs, state, graph)
-            parts[key] = (state, reqs, value)
-            return value
+            return part((ids, id(state), graph, None), state, reqs, platform_score, reqs, state, graph)  # type: ignore[no-any-return]
 
         return _assemble(reqs, self._ordered(states), graph, reasons, failures, score)
 

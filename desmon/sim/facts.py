@@ -157,11 +157,7 @@ class PhysicalFacts:
 
     def valid_from(self, graph: str) -> float:
         """The earliest time a running instance of ``graph`` is valid from (inf: none)."""
-        best = math.inf
-        for inst in self.instances.values():
-            if inst.graph == graph and self.alive(inst):
-                best = min(best, inst.valid_from)
-        return best
+        return self.valid_times().get(graph, math.inf)
 
     def valid_times(self) -> dict[str, float]:
         """:meth:`valid_from` of every graph with a live instance, in one pass (a graph
