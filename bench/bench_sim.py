@@ -107,7 +107,7 @@ GOAL_SIGNALS_OFF_S = 1.5
 QUICK_UNTIL = 1800.0
 
 
-def _bare(n_events: int, repeat: int = 21) -> float:
+def bare_simpy_s(n_events: int, repeat: int = 21) -> float:
     """Wall seconds of ``n_events`` timeouts on a bare SimPy environment (fastest of
     ``repeat``), with the objects that exist beforehand (a finished day's heap) frozen out
     of the garbage collector's scans: a full collection over them during the bare run would
@@ -138,18 +138,23 @@ def _fastest(n_events: int, repeat: int) -> float:
 
 def _timed_run(world: SimWorld, count: bool):  # type: ignore[no-untyped-def]
     """(wall seconds of ``world.run()``, the run's result, the SimPy events stepped if ``count``)."""
-    counter = [0]
-    if count:
-        step = world.env.step
-
-        def counted() -> None:
-            counter[0] += 1
-            step()
-
-        world.env.step = counted  # type: ignore[method-assign]
+    counter = count_events(world.env) if count else [0]
     t0 = time.perf_counter()
     result = world.run()
     return time.perf_counter() - t0, result, counter[0]
+
+
+def count_events(env: simpy.Environment) -> list[int]:
+    """A one-item list counting the events ``env`` steps from now on (its ``step`` wrapped)."""
+    counter = [0]
+    step = env.step
+
+    def counted() -> None:
+        counter[0] += 1
+        step()
+
+    env.step = counted  # type: ignore[method-assign]
+    return counter
 
 
 def _verdict(ok: bool, judged: bool) -> str:
@@ -167,7 +172,7 @@ def main(argv: list[str] | None = None) -> int:
     until = a.until if a.until is not None else (QUICK_UNTIL if a.quick else None)
     sc = load_scenario(SCENARIO)
     wall, r, events = _timed_run(SimWorld(sc, seed=a.seed, until=until), count=True)
-    bare = _bare(events)
+    bare = bare_simpy_s(events)
     off, _r0, _n = _timed_run(SimWorld(sc, seed=a.seed, until=until, signals=False), count=False)
     sim = r.horizon
     x_real = sim / wall

@@ -89,7 +89,10 @@ RESULT_KEYS: dict[str, tuple[str, ...]] = {
     "bench_analyze --phases-error": ("phases_error_16",),
     "bench_analyze --agreement": ("scenarios", "inside", "seeds"),
     "bench_detectors": ("trials_per_s", "eval_ratio", "missions_per_s", "detectors_us_per_sim_s"),
-    "bench_fleet": ("seconds", "realtime_ratio", "peak_mb", "robots", "edges", "hours", "per_robot_vs_alone", "reactions_per_s", "violations"),
+    "bench_fleet": (
+        "seconds", "realtime_ratio", "peak_mb", "robots", "edges", "hours", "per_robot_vs_alone", "reactions_per_s", "violations", "events",
+        "bare_s", "ratio_bare",
+    ),
     "bench_preferences": ("pref_time_ratio", "exposure_with_lease", "exposure_without_lease"),
     "bench_sim": ("x_real_time", "ratio_bare", "signals_off_s", "wall_s", "bare_s", "events", "until_s"),
     "bench_sweep": ("speedup", "overhead", "runs", "hours", "bare_s", "one_worker_s", "two_workers_s"),
