@@ -14,7 +14,7 @@ from desmon.deployment.deployer import fits_if_freed, upgrade_due
 from desmon.deployment.ports import (
     DEPLOYMENT_FAILED, DEPLOYMENT_INFORMATION_MISSING, NO_ACCEPTABLE_PLATFORMS, STOPPING_FAILED, QueryPort, RaiseError, Start, Stop,
 )
-from desmon.deployment.validity import deployment_valid, validity_for
+from desmon.deployment.validity import Failure, deployment_valid, validity_for
 from desmon.errors import ModelError
 from desmon.model.requirements import DeploymentSpec
 from desmon.model.system import PlatformState
@@ -50,6 +50,10 @@ class SystemView:
     # :attr:`deployments`, computed on first use (a performance cache: several
     # invariants read it; no part of equality, repr or the constructor)
     _deployments: tuple[tuple[str, str], ...] | None = field(default=None, init=False, repr=False, compare=False)
+    # :meth:`failures` of each (graph, platform) asked, and :func:`validly_active`, computed
+    # on first use (a performance cache: the view is immutable and several invariants ask)
+    _failures: dict[tuple[str, str], tuple[Failure, ...]] | None = field(default=None, init=False, repr=False, compare=False)
+    _valid: frozenset[str] | None = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def deployments(self) -> tuple[tuple[str, str], ...]:
@@ -59,6 +63,20 @@ class SystemView:
             d = tuple(sorted((g, s.name) for s in self.states for g, _use in s.deployed))
             object.__setattr__(self, "_deployments", d)
         return d
+
+    def failures(self, graph: str, state: PlatformState) -> tuple[Failure, ...]:
+        """Why the active deployment of ``graph`` on ``state`` (one of :attr:`states`) is
+        invalid (:func:`~desmon.deployment.validity.deployment_valid`; empty if valid),
+        asked once per view."""
+        memo = self._failures
+        if memo is None:
+            memo = {}
+            object.__setattr__(self, "_failures", memo)
+        key = (graph, state.platform.name)
+        fails = memo.get(key)
+        if fails is None:
+            fails = memo[key] = deployment_valid(self.spec(graph), state, self.states, self.checks)
+        return fails
 
     def spec(self, graph: str) -> DeploymentSpec | None:
         for s in self.specs:
@@ -88,8 +106,14 @@ def view_of(
 
 
 def validly_active(view: SystemView) -> frozenset[str]:
-    """Graphs active on at least one platform where their deployment is valid."""
-    return validly_active_among(view.states, view.spec, checks=view.checks)
+    """Graphs active on at least one platform where their deployment is valid (computed
+    once per view: :meth:`SystemView.failures` of each deployment, in the states' order)."""
+    valid = view._valid
+    if valid is None:
+        failures = view.failures
+        valid = frozenset(g for s in view.states for g, _use in s.deployed if not failures(g, s))
+        object.__setattr__(view, "_valid", valid)
+    return valid
 
 
 def validly_active_among(
@@ -123,7 +147,7 @@ class Invariant:
 
 def _valid_or_error(v: SystemView) -> str | None:
     for g, p in v.deployments:
-        fails = deployment_valid(v.spec(g), v.state(p), v.states, v.checks)
+        fails = v.failures(g, v.state(p))
         if fails and g not in v.standing:
             return f"{g} is active on {p}, which is invalid ({'; '.join(f.requirement + ': ' + f.reason for f in fails)}), and no error stands for it"
     return None
@@ -259,7 +283,7 @@ def _no_flapping(v: SystemView) -> str | None:
         if not isinstance(cmd, Stop) or cmd.graph not in wanted or (cmd.graph, cmd.platform) not in v.deployments:
             continue
         spec = v.spec(cmd.graph)
-        if spec is not None and spec.rebalance is not None and not deployment_valid(spec, v.state(cmd.platform), v.states, v.checks):
+        if spec is not None and spec.rebalance is not None and not v.failures(cmd.graph, v.state(cmd.platform)):
             return (
                 f"with nothing changed the deployer would move {cmd.graph} off {cmd.platform} again, where it runs validly "
                 f"(rebalance min_gain {spec.rebalance:g}): it flaps"

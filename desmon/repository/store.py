@@ -75,6 +75,35 @@ class Change:
         return f"{self.op} {self.source} -[{self.label}]-> {self.target}"
 
 
+#: the slots of :class:`Change`, in field order, as their setters (see :func:`_change`)
+_CHANGE_SETTERS = tuple(
+    getattr(Change, name).__set__ for name in ("seq", "time", "op", "label", "node", "source", "target", "key", "old_label", "attrs")
+)
+
+
+def _change(
+    seq: int, time: float, op: str, label: str, node: str | None, source: str | None, target: str | None, key: str | None,
+    old_label: str | None, attrs: tuple[tuple[str, Any], ...],
+) -> Change:
+    """``Change(seq, time, ...)``, every field given, built without the frozen class's
+    ``__init__`` (which sets each slot through ``object.__setattr__``): the repository
+    writes one per change. Equal to the constructor's record (the class has no
+    ``__post_init__``)."""
+    change = object.__new__(Change)
+    s_seq, s_time, s_op, s_label, s_node, s_source, s_target, s_key, s_old, s_attrs = _CHANGE_SETTERS
+    s_seq(change, seq)
+    s_time(change, time)
+    s_op(change, op)
+    s_label(change, label)
+    s_node(change, node)
+    s_source(change, source)
+    s_target(change, target)
+    s_key(change, key)
+    s_old(change, old_label)
+    s_attrs(change, attrs)
+    return change
+
+
 @dataclass(slots=True)
 class Subscription:
     """Handle returned by :meth:`Repository.subscribe`."""
@@ -102,8 +131,10 @@ class Subscription:
         self.active = False
 
 
-def _apply(g: nx.MultiDiGraph, c: Change) -> None:
-    attrs = dict(c.attrs)
+def _apply(g: nx.MultiDiGraph, c: Change, attrs: dict[str, Any] | None = None) -> None:
+    """Apply change ``c`` to ``g``; ``attrs``: ``dict(c.attrs)`` if the caller has it (it is not kept)."""
+    if attrs is None:
+        attrs = dict(c.attrs)
     if c.op == ADD_NODE:
         g.add_node(c.node, **attrs)
     elif c.op == UPDATE_NODE:
@@ -188,8 +219,12 @@ class Repository:
     ) -> Change:
         log = self._log
         seq = len(log)
-        change = Change(seq, self.now, op, label, node, source, target, key, old_label, tuple(attrs.items()) if attrs else ())
-        _apply(self.graph, change)
+        if attrs:
+            change = _change(seq, self.now, op, label, node, source, target, key, old_label, tuple(attrs.items()))
+            _apply(self.graph, change, attrs)
+        else:
+            change = _change(seq, self.now, op, label, node, source, target, key, old_label, ())
+            _apply(self.graph, change, {})
         touched = self.touched
         stamps = self.label_touched
         if node is not None:

@@ -55,7 +55,12 @@ class Books:
 
     def decision(self, now: float, what: str, graph: str, platform: str, ok: bool, issued: float, why: str) -> None:
         if self.keep_decisions:
-            rec = {"t": round(now, 6), "issued": round(issued, 6), "command": what, "graph": graph, "platform": platform, "ok": ok}
+            rounded = self.trace.rounded  # round(float(x), 6): for a float the same as round(x, 6)
+            rec = {
+                "t": rounded(now) if type(now) is float else round(now, 6),
+                "issued": rounded(issued) if type(issued) is float else round(issued, 6),
+                "command": what, "graph": graph, "platform": platform, "ok": ok,
+            }
             if why:
                 rec["why"] = why
             self.decisions.append(rec)

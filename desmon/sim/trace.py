@@ -112,16 +112,28 @@ class Trace:
         self.keep = keep
         self.records: list[dict[str, Any]] = []
         self.count = 0
+        # the last time rounded and its rounding: a clock hands out the same float object
+        # until it moves, and many records in a row carry it (a reaction, its decisions)
+        self._last: tuple[Any, float] = (None, 0.0)
+
+    def rounded(self, t: float) -> float:
+        """``round(float(t), 6)``, computed once for the same object ``t`` in a row."""
+        last = self._last
+        if t is last[0]:
+            return last[1]
+        r = round(float(t), 6)
+        self._last = (t, r)
+        return r
 
     def emit(self, t: float, type_: str, **fields: Any) -> None:
-        rec: dict[str, Any] = {"t": round(float(t), 6), "type": type_}
+        rec: dict[str, Any] = {"t": self.rounded(t), "type": type_}
         for k, v in fields.items():
             kind = type(v)
             # the common fields inline, as _clean has them (a float subclass goes there)
             if kind is str or kind is int or kind is bool or v is None:
                 rec[k] = v
             elif kind is float:
-                rec[k] = round(v, 6)
+                rec[k] = self.rounded(v)
             else:
                 rec[k] = _clean(v)
         self.count += 1
