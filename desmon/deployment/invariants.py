@@ -155,8 +155,9 @@ def _valid_or_error(v: SystemView) -> str | None:
 
 def _no_overcommit(v: SystemView) -> str | None:
     for s in v.states:
+        deployed = s.deployed
         for res, cap in s.platform.capacities:
-            used = s.used_by(res)
+            used = s.used_by(res) if deployed else []
             total = sum(a for _g, a in used)
             if total > cap:
                 who = ", ".join(f"{g} {a:g}" for g, a in used)

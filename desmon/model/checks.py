@@ -21,6 +21,7 @@ from desmon.errors import DesmonError, ModelError
 __all__ = [
     "suggest",
     "check_name",
+    "is_plain_name",
     "check_number",
     "check_amount",
     "is_numeric_text",
@@ -59,6 +60,13 @@ def check_name(what: str, name: object, *, error: Error = ModelError) -> str:
     if any(ch in name for ch in "/\n\t"):
         raise error(f"{what} {name!r} contains '/', a newline or a tab: use letters, digits, '_' or '-'")
     return name
+
+
+def is_plain_name(name: object) -> bool:
+    """True when :func:`check_name` surely accepts ``name``: a ``str`` (not a subclass),
+    not blank, without '/', a newline or a tab. A constructor built very often asks this
+    first and calls the checks (which build their messages) only when it is False."""
+    return type(name) is str and bool(name.strip()) and "/" not in name and "\n" not in name and "\t" not in name
 
 
 def _wanted(*, low: float | None, high: float | None, positive: bool, integer: bool, unit: str) -> str:

@@ -17,11 +17,12 @@ kind") says how to add one.
 
 from __future__ import annotations
 
+import math
 from dataclasses import MISSING, dataclass, fields
 from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterable, TypeVar
 
 from desmon.errors import CheckerError, ModelError
-from desmon.model.checks import check_items, check_name, check_number, strict_init, suggest
+from desmon.model.checks import check_items, check_name, check_number, is_plain_name, strict_init, suggest
 from desmon.model.requirements import Constraint, constraint_types
 from desmon.model.system import action_problem, constraint_problem
 
@@ -280,6 +281,9 @@ class LoadChange(Event):
     resource: str = "memory"
 
     def __post_init__(self) -> None:
+        amount = self.amount
+        if is_plain_name(self.platform) and is_plain_name(self.resource) and type(amount) is float and 0.0 <= amount < math.inf:
+            return  # what the checks below accept (a load walk builds one every step): no message built
         check_name("LoadChange platform", self.platform)
         check_name(f"LoadChange({self.platform!r}) resource", self.resource)
         check_number(f"load on {self.platform!r} {self.resource}", self.amount)

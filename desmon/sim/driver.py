@@ -39,6 +39,9 @@ class Inbox:
         self.context = False
         self.specs: dict[str, None] = {}
         self.wake: simpy.Event | None = None
+        # (platforms, context, specs) -> the Stimulus taken for them (immutable, so one
+        # object serves every equal take; a robot's few platforms make few keys)
+        self._stimuli: dict[tuple[tuple[str, ...], bool, tuple[str, ...]], Stimulus] = {}
 
     def notify(self, change: Any) -> None:
         """Notify: a repository change the deployer reacts to (context, HAS_DEVICE, platform)."""
@@ -64,7 +67,12 @@ class Inbox:
         return bool(self.platforms or self.context or self.specs)
 
     def take(self) -> Stimulus:
-        stim = Stimulus(tuple(self.platforms), self.context, tuple(self.specs))
+        key = (tuple(self.platforms), self.context, tuple(self.specs))
+        stim = self._stimuli.get(key)
+        if stim is None:
+            if len(self._stimuli) > 1024:
+                self._stimuli.clear()
+            stim = self._stimuli[key] = Stimulus(*key)
         self.platforms = {}
         self.context = False
         self.specs = {}
