@@ -17,7 +17,7 @@ from desmon.model.platform import Device, Platform
 from desmon.model.kinds import attribute_problem
 from desmon.model.requirements import DeploymentSpec, Preference, Reads, Requirement
 
-__all__ = ["Rule", "RuleTable", "SystemModel", "PlatformState", "with_load", "action_problem", "check_action", "preference_problem", "constraint_problem"]
+__all__ = ["Rule", "RuleTable", "SystemModel", "PlatformState", "new_platform_state", "with_load", "action_problem", "check_action", "preference_problem", "constraint_problem"]
 
 
 @strict_init(ModelError)
@@ -216,6 +216,28 @@ class PlatformState:
 #: readers of PlatformState's slots (what a subclass that guards a field cannot intercept)
 _LOAD_SLOT = PlatformState.load.__get__
 _DEPLOYED_SLOT = PlatformState.deployed.__get__
+#: writers of PlatformState's slots, in field order (see :func:`new_platform_state`)
+_STATE_SETTERS = tuple(getattr(PlatformState, name).__set__ for name in ("platform", "up", "devices", "load", "deployed", "_hash"))
+
+
+def new_platform_state(
+    platform: Platform, up: bool, devices: tuple[Device, ...], load: tuple[tuple[str, float], ...],
+    deployed: tuple[tuple[str, tuple[tuple[str, float], ...]], ...],
+) -> PlatformState:
+    """``PlatformState(platform, up, devices, load, deployed)``, every field given, built
+    without the frozen class's ``__init__`` (which sets each slot through
+    ``object.__setattr__``) and checked by its ``__post_init__`` all the same: a Query
+    port builds one whenever a platform's facts change. Equal to the constructor's."""
+    state = object.__new__(PlatformState)
+    s_platform, s_up, s_devices, s_load, s_deployed, s_hash = _STATE_SETTERS
+    s_platform(state, platform)
+    s_up(state, up)
+    s_devices(state, devices)
+    s_load(state, load)
+    s_deployed(state, deployed)
+    s_hash(state, -1)
+    state.__post_init__()
+    return state
 
 
 def _named_twice(platform: object, field_: str, each: str, pairs: tuple[tuple[str, object], ...]) -> str:

@@ -10,7 +10,7 @@ from typing import Any, Iterator
 
 from desmon.errors import QueryError
 from desmon.model.requirements import DeploymentSpec, Requirement
-from desmon.model.system import PlatformState
+from desmon.model.system import PlatformState, new_platform_state
 from desmon.repository import labels as L
 from desmon.repository.store import Repository, node_id
 
@@ -24,10 +24,10 @@ _DEPLOYMENTS = ("deployments",)
 _SEEN = 1 << 14
 
 
-def _amount_types(state: PlatformState) -> list[type]:
-    """The types of the amounts in ``state``'s loads and deployments: equal numbers of
+def _amount_types(load: tuple[tuple[str, float], ...], deployed: tuple[tuple[str, tuple[tuple[str, float], ...]], ...]) -> list[type]:
+    """The types of the amounts in a state's ``load`` and ``deployed``: equal numbers of
     another type (1 and 1.0) are other facts, which may print otherwise."""
-    return [type(a) for _r, a in state.load] + [type(a) for _g, use in state.deployed for _r, a in use]
+    return [type(a) for _r, a in load] + [type(a) for _g, use in deployed for _r, a in use]
 
 
 class PlatformStateReader:
@@ -37,8 +37,14 @@ class PlatformStateReader:
     def __init__(self, repo: Repository) -> None:
         self.repo = repo
         # every state handed out (bounded): equal facts are handed out as one object, on
-        # whose identity readers (the validity memo, the checks' parts) memoise
-        self._seen_states: dict[PlatformState, PlatformState] = {}
+        # whose identity readers (the validity memo, the checks' parts) memoise. Keyed on
+        # (id of the platform, up, id of the devices tuple, load, deployed): the platform
+        # object is its node's, and equal device lists are one tuple (_devices), so the
+        # key is hashed and compared without a Python-level __hash__ or __eq__; the state
+        # an entry holds keeps the objects its ids name alive
+        self._seen_states: dict[tuple[Any, ...], PlatformState] = {}
+        # ids of a platform's working devices, in order -> the one tuple of them handed out
+        self._devices: dict[tuple[int, ...], tuple[Any, ...]] = {}
         # platform -> (the stamps it was read at, its state)
         self._state_memo: dict[str, tuple[tuple[int | None, ...], PlatformState]] = {}
         # platform node -> (stamps, its devices, stamps, its deployments): parts of its state
@@ -59,20 +65,13 @@ class PlatformStateReader:
         if hit is not None and hit[0] == key:
             return hit[1]
         state = self._read_state(pid)
-        seen = self._seen_states
-        if len(seen) > _SEEN:
-            seen.clear()
-        got = seen.get(state)
-        if got is not None and _amount_types(got) == _amount_types(state):
-            state = got  # facts seen before: the object handed out then
-        else:
-            seen[state] = state
         self._state_memo[platform] = (key, state)
         return state
 
     def _read_state(self, pid: str) -> PlatformState:
-        """The facts of platform node ``pid``; its devices and its deployments are
-        re-read only when its HAS_DEVICE / DEPLOYED_ON edges or a device / deployment node changed."""
+        """The facts of platform node ``pid`` (the object handed out before for equal
+        facts); its devices and its deployments are re-read only when its HAS_DEVICE /
+        DEPLOYED_ON edges or a device / deployment node changed."""
         repo = self.repo
         nodes = repo.graph.nodes
         data = nodes[pid]
@@ -84,19 +83,30 @@ class PlatformStateReader:
         else:
             devs = repo.successors(pid, L.HAS_DEVICE)
             devices = tuple(nodes[d]["device"] for d in sorted(devs, key=lambda d: nodes[d]["order"]))
+            ids = tuple(map(id, devices))
+            known = self._devices.get(ids)
+            if known is not None:
+                devices = known  # the same devices as before: the same tuple (the seen states' key)
+            else:
+                if len(self._devices) > _SEEN:
+                    self._devices.clear()
+                self._devices[ids] = devices  # the tuple keeps the devices its key names alive
         gkey = (edges.get((pid, L.DEPLOYED_ON)), updated.get(L.DEPLOYMENT))
         if parts is not None and parts[2] == gkey:
             deployed = parts[3]
         else:
             deployed = tuple(sorted((nodes[d]["name"], self._consumption(d)) for d in repo.predecessors(pid, L.DEPLOYED_ON)))
         self._state_parts[pid] = (dkey, devices, gkey, deployed)
-        return PlatformState(
-            platform=data["platform"],
-            up=bool(data["up"]),
-            devices=devices,
-            load=tuple(sorted(data["load"].items())),
-            deployed=deployed,
-        )
+        platform, up, load = data["platform"], bool(data["up"]), tuple(sorted(data["load"].items()))
+        seen = self._seen_states
+        facts = (id(platform), up, id(devices), load, deployed)
+        got = seen.get(facts)
+        if got is not None and _amount_types(got.load, got.deployed) == _amount_types(load, deployed):
+            return got  # facts seen before: the object handed out then
+        if len(seen) > _SEEN:
+            seen.clear()
+        state = seen[facts] = new_platform_state(platform, up, devices, load, deployed)
+        return state
 
     def _consumption(self, dep: str) -> tuple[tuple[str, float], ...]:
         spec = self.repo.graph.nodes[dep].get("spec")
