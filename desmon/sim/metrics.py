@@ -82,9 +82,23 @@ class Exposure:
     def _covered_from(self) -> float:
         """The earliest time from which every slot has a valid member (``inf`` if never)."""
         if self.valid_times is not None:
+            # max over the slots of min over each slot's members, written out (the first
+            # extreme wins, as with max() and min()): the meter asks at every change
             times = self.valid_times()
             inf = math.inf
-            return max(min((times.get(g, inf) for g in slot), default=inf) for slot in self.slots)
+            get = times.get
+            covered: float | None = None
+            for slot in self.slots:
+                best = inf
+                for g in slot:
+                    t = get(g, inf)
+                    if t < best:
+                        best = t
+                if covered is None or best > covered:
+                    covered = best
+            if covered is None:
+                raise ValueError("max() arg is an empty sequence")  # what max() says (no slot: the callers never ask)
+            return covered
         vf = self.valid_from
         return max(min((vf(g) for g in slot), default=math.inf) for slot in self.slots)
 
