@@ -57,7 +57,7 @@ def check_name(what: str, name: object, *, error: Error = ModelError) -> str:
         raise error(f"{what} {name!r} is a number, not a name: write it in quotes, {str(name)!r}")
     if not isinstance(name, str) or not name.strip():
         raise error(f"{what} {name!r} is not a name: give a non-empty string")
-    if any(ch in name for ch in "/\n\t"):
+    if "/" in name or "\n" in name or "\t" in name:
         raise error(f"{what} {name!r} contains '/', a newline or a tab: use letters, digits, '_' or '-'")
     return name
 
