@@ -212,3 +212,22 @@ def test_a_plain_name_is_one_check_name_accepts(name, plain):
     else:
         with pytest.raises(ModelError):
             check_name("x", name)
+
+
+# ---------------------------------------------------------------------------- Quantity
+@pytest.mark.parametrize("working, need", [(0, 1), (1, 1), (2, 1), (1, 2), (2, 2), (3, 2)])
+def test_quantity_counts_as_the_whole_count_says(working, need):
+    from desmon.model.requirements import Quantity
+
+    robot = RobotBuilder("r")
+    pc = robot.platform("pc", memory=512)
+    for i in range(3):
+        pc.device(f"ft{i}", kind="force_sensor")
+    pc.device("cam", kind="camera")
+    model = robot.build()
+    devices = tuple(d for d in model.devices if d.kind == "camera") + tuple(d for d in model.devices if d.kind == "force_sensor")[:working]
+    state = PlatformState(model.platforms[0], True, devices)
+    req = Quantity("force_sensor", need)
+    have = sum(1 for d in devices if d.kind == "force_sensor")
+    expected = None if have >= need else f"{have} working force_sensor device(s), needs {need}"
+    assert req.holds(state, "g") == expected

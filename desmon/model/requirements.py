@@ -85,10 +85,16 @@ class Quantity(Requirement):
         return f"Quantity({self.device_kind} >= {self.count:g})"
 
     def holds(self, state: "PlatformState", graph: Placing) -> str | None:
-        have = sum(1 for d in state.devices if d.kind == self.device_kind)
-        if have >= self.count:
+        kind, need = self.device_kind, self.count
+        have = 0
+        for d in state.devices:  # counted up to what is needed (the whole count only for the reason)
+            if d.kind == kind:
+                have += 1
+                if have >= need:
+                    return None
+        if have >= need:
             return None
-        return f"{have} working {self.device_kind} device(s), needs {self.count}"
+        return f"{have} working {kind} device(s), needs {need}"
 
     def device_only(self) -> bool:
         return True
