@@ -28,6 +28,20 @@ JITTER_BLOCK: Final = 1024
 JITTER_CACHE: Final = 8
 
 
+#: SeedSequence's hashing constants (numpy's ``bit_generator.pyx``) and PCG64's 128-bit multiplier
+_INIT_A: Final = 0x43B0D7E5
+_MULT_A: Final = 0x931E8875
+_INIT_B: Final = 0x8B51F9DD
+_MULT_B: Final = 0x58F38DED
+_MIX_L: Final = 0xCA01F9DD
+_MIX_R: Final = 0x4973F715
+_M32: Final = 0xFFFFFFFF
+_M128: Final = (1 << 128) - 1
+_PCG_MULT: Final = (2549297995355413924 << 64) + 4865540595714422341
+#: Blocks whose seeds :class:`BlockStream` hashes in one vectorised pass.
+SEED_CHUNK: Final = 1024
+
+
 def block_rng(seed: int, tag: int, block: int) -> np.random.Generator:
     """The generator of block ``block`` of stream ``tag`` (``STREAM_*``) for ``seed``: PCG64
     seeded by ``SeedSequence([seed, tag, block])`` (given the entropy list, the bit
@@ -35,16 +49,84 @@ def block_rng(seed: int, tag: int, block: int) -> np.random.Generator:
     return np.random.Generator(np.random.PCG64([seed, tag, block]))
 
 
-def wrench_noise(seed: int, block: int, sigma: float, count: int = WRENCH_BLOCK) -> Arr:
+def _hashed_seeds(seed: int, tag: int, blocks: Arr) -> list[list[int]]:
+    """``SeedSequence([seed, tag, b]).generate_state(4, np.uint64)`` of every ``b`` in ``blocks``
+    (seed, tag and blocks below 2**32: one 32-bit entropy word each), as four lists of ints:
+    numpy's mixing algorithm in uint32 array arithmetic (wrapping, as its C code does)."""
+    b = blocks.astype(np.uint32)
+    shift = np.uint32(16)
+    hc = _INIT_A
+
+    def hashmix(v: Arr) -> Arr:
+        nonlocal hc
+        v = v ^ np.uint32(hc)
+        hc = (hc * _MULT_A) & _M32
+        v *= np.uint32(hc)
+        return v ^ (v >> shift)
+
+    mixer = [hashmix(np.full(b.shape, w, dtype=np.uint32)) for w in (seed, tag)] + [hashmix(b), hashmix(np.zeros(b.shape, dtype=np.uint32))]
+    for src in range(4):
+        for dst in range(4):
+            if src != dst:
+                r = np.uint32(_MIX_L) * mixer[dst] - np.uint32(_MIX_R) * hashmix(mixer[src])
+                mixer[dst] = r ^ (r >> shift)
+    hc = _INIT_B
+    words = []
+    for i in range(8):
+        v = mixer[i % 4] ^ np.uint32(hc)
+        hc = (hc * _MULT_B) & _M32
+        v *= np.uint32(hc)
+        words.append((v ^ (v >> shift)).astype(np.uint64))
+    return [(words[2 * i] | (words[2 * i + 1] << np.uint64(32))).tolist() for i in range(4)]
+
+
+class BlockStream:
+    """The generators of the blocks of stream ``tag`` for ``seed``: the same draws as
+    :func:`block_rng`, without building a seed sequence and a generator per block.
+
+    The seed sequences of ``SEED_CHUNK`` neighbouring blocks are hashed in one vectorised
+    pass (:func:`_hashed_seeds`); a block's PCG64 state (``pcg64_set_seed``: two steps of
+    the 128-bit LCG) is set on one reused bit generator. :meth:`generator` returns that
+    one shared generator: draw from it before asking for the next block. Seeds, tags or
+    blocks of 2**32 or more take :func:`block_rng`.
+    """
+
+    def __init__(self, seed: int, tag: int) -> None:
+        self.seed = seed
+        self.tag = tag
+        self._fast = 0 <= seed <= _M32 and 0 <= tag <= _M32
+        self._bitgen = np.random.PCG64(0)
+        self._gen = np.random.Generator(self._bitgen)
+        self._chunks: dict[int, list[list[int]]] = {}
+
+    def generator(self, block: int) -> np.random.Generator:
+        """The generator of ``block``, at the start of its draws (shared: see the class docstring)."""
+        if not (self._fast and 0 <= block <= _M32):
+            return block_rng(self.seed, self.tag, block)
+        c, i = divmod(block, SEED_CHUNK)
+        words = self._chunks.get(c)
+        if words is None:
+            words = _hashed_seeds(self.seed, self.tag, np.arange(c * SEED_CHUNK, min((c + 1) * SEED_CHUNK, _M32 + 1), dtype=np.int64))
+            self._chunks[c] = words
+        inc = (((words[2][i] << 64) | words[3][i]) << 1 | 1) & _M128
+        state = (((inc + ((words[0][i] << 64) | words[1][i])) & _M128) * _PCG_MULT + inc) & _M128
+        self._bitgen.state = {"bit_generator": "PCG64", "state": {"state": state, "inc": inc}, "has_uint32": 0, "uinteger": 0}
+        return self._gen
+
+
+def wrench_noise(seed: int, block: int, sigma: float, count: int = WRENCH_BLOCK, stream: BlockStream | None = None) -> Arr:
     """White sensor noise (N) of the first ``count`` wrench samples of ``block`` (by default all
-    ``WRENCH_BLOCK``; a prefix of the block's draws, so a sample's noise does not depend on ``count``)."""
-    return sigma * block_rng(seed, STREAM_WRENCH, block).standard_normal(count)
+    ``WRENCH_BLOCK``; a prefix of the block's draws, so a sample's noise does not depend on ``count``);
+    ``stream`` (the ``(seed, STREAM_WRENCH)`` :class:`BlockStream`) supplies the generator if given."""
+    g = block_rng(seed, STREAM_WRENCH, block) if stream is None else stream.generator(block)
+    return sigma * g.standard_normal(count)
 
 
-def tactile_normals(seed: int, block: int, count: int, out: Arr | None = None) -> Arr:
+def tactile_normals(seed: int, block: int, count: int, out: Arr | None = None, stream: BlockStream | None = None) -> Arr:
     """The first ``count`` standard normals of tactile render block ``block`` (cell noise before
-    scaling), written into ``out`` (``count`` float64) if given."""
-    g = block_rng(seed, STREAM_TACTILE, block)
+    scaling), written into ``out`` (``count`` float64) if given; ``stream`` (the
+    ``(seed, STREAM_TACTILE)`` :class:`BlockStream`) supplies the generator if given."""
+    g = block_rng(seed, STREAM_TACTILE, block) if stream is None else stream.generator(block)
     return g.standard_normal(count) if out is None else g.standard_normal(out=out)
 
 
@@ -55,13 +137,14 @@ class Jitter:
     def __init__(self, seed: int, params: SignalParams) -> None:
         self.seed = seed
         self.params = params
+        self._stream = BlockStream(seed, STREAM_JITTER)
         self._cache: dict[int, Arr] = {}
 
     def _block(self, b: int) -> Arr:
         arr = self._cache.get(b)
         if arr is None:
             p = self.params
-            g = block_rng(self.seed, STREAM_JITTER, b)
+            g = self._stream.generator(b)
             arr = np.clip(g.normal(0.0, p.tactile_jitter, JITTER_BLOCK), -p.tactile_jitter_clip, p.tactile_jitter_clip)
             if len(self._cache) >= JITTER_CACHE:
                 del self._cache[next(iter(self._cache))]

@@ -38,7 +38,7 @@ from desmon.detectors.signals.common import (
 )
 from desmon.detectors.signals.contexts import context_tactile, hold_creep
 from desmon.detectors.signals.episodes import Episode
-from desmon.detectors.signals.noise import Jitter, tactile_normals
+from desmon.detectors.signals.noise import STREAM_TACTILE, BlockStream, Jitter, tactile_normals
 from desmon.detectors.signals.slips import slip_tactile
 from desmon.model.actions import HOLD, IDLE
 
@@ -444,6 +444,7 @@ class TactileArray:
         self.params = params
         self.rate = params.tactile_rate
         self.jitter = Jitter(seed, params)
+        self._normals = BlockStream(seed, STREAM_TACTILE)
         self._ep_starts = np.array([ep.start for ep in self.episodes])
         self._cache: dict[tuple[int, bool], Rendered] = {}
 
@@ -470,7 +471,7 @@ class TactileArray:
         for i in range(blocks.size):
             c = int(per_block[i])
             if c:
-                tactile_normals(self.seed, int(blocks[i]), c, out=vals[at : at + c])
+                tactile_normals(self.seed, int(blocks[i]), c, out=vals[at : at + c], stream=self._normals)
                 at += c
         vals *= self.params.noise_counts
         vals += mu

@@ -20,7 +20,7 @@ import numpy as np
 
 from desmon.detectors.signals.common import Arr, Params, Segment, SensorFault, SignalParams, WrenchBlock, WrenchSource, wrench_indices
 from desmon.detectors.signals.contexts import context_force
-from desmon.detectors.signals.noise import WRENCH_BLOCK, wrench_noise
+from desmon.detectors.signals.noise import STREAM_WRENCH, WRENCH_BLOCK, BlockStream, wrench_noise
 from desmon.detectors.signals.slips import MissionSlip, slip_force
 from desmon.errors import SignalError
 from desmon.model.actions import HOLD, IDLE
@@ -77,6 +77,7 @@ class WrenchSensor:
         self.params = params
         self._seg_starts = np.array([s.start for s in self.segments])
         self._seg_ends = np.array([s.end for s in self.segments])
+        self._noise = BlockStream(seed, STREAM_WRENCH)
         self._cache: dict[int, Arr] = {}
 
     def _block(self, b: int) -> Arr:
@@ -97,7 +98,7 @@ class WrenchSensor:
         a sample reads the same bytes whichever range of its block is rendered."""
         base = b * WRENCH_BLOCK
         t = (np.arange(k0, k1, dtype=np.int64) / self.rate)[None, :]
-        val = wrench_noise(self.seed, b, self.config.sigma, k1 - base)[None, k0 - base :]
+        val = wrench_noise(self.seed, b, self.config.sigma, k1 - base, self._noise)[None, k0 - base :]
         t_lo, t_hi = base / self.rate, (base + WRENCH_BLOCK - 1) / self.rate  # the block's span
         i0 = int(np.searchsorted(self._seg_ends, float(t[0, 0]), side="right"))
         i1 = int(np.searchsorted(self._seg_starts, float(t[0, -1]), side="right"))

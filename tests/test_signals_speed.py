@@ -1,0 +1,46 @@
+"""Fast paths of the signal side against their references, bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from desmon.detectors.signals.noise import SEED_CHUNK, BlockStream, block_rng, tactile_normals, wrench_noise
+
+
+def _same_draws(a: np.random.Generator, b: np.random.Generator) -> bool:
+    x = np.concatenate([a.standard_normal(7), a.random(3), a.integers(0, 2**63, 3).astype(float)])
+    y = np.concatenate([b.standard_normal(7), b.random(3), b.integers(0, 2**63, 3).astype(float)])
+    return x.tobytes() == y.tobytes()
+
+
+@pytest.mark.parametrize("seed, tag", [(0, 0), (0, 1), (0, 2), (0, 3), (1, 2), (12345, 7), (2**32 - 1, 2)])
+def test_block_stream_draws_what_block_rng_draws(seed: int, tag: int) -> None:
+    stream = BlockStream(seed, tag)
+    blocks = [0, 1, 2, 5, SEED_CHUNK - 1, SEED_CHUNK, 3 * SEED_CHUNK + 17, 2**32 - 1, 2**32, 2**40 + 3, 4]
+    for b in blocks:
+        assert stream.generator(b).bit_generator.state == block_rng(seed, tag, b).bit_generator.state, b
+        assert _same_draws(stream.generator(b), block_rng(seed, tag, b)), b
+
+
+@pytest.mark.parametrize("seed", [2**32, 2**64 + 5])
+def test_block_stream_large_seeds_take_the_reference(seed: int) -> None:
+    stream = BlockStream(seed, 2)
+    for b in (0, 3, 2**33):
+        assert _same_draws(stream.generator(b), block_rng(seed, 2, b))
+
+
+def test_block_stream_every_block_of_a_chunk() -> None:
+    stream = BlockStream(0, 2)
+    for b in range(0, 2 * SEED_CHUNK, 7):
+        assert stream.generator(b).bit_generator.state == block_rng(0, 2, b).bit_generator.state
+
+
+def test_noise_helpers_with_a_stream_match_without() -> None:
+    s_t, s_w = BlockStream(3, 2), BlockStream(3, 1)
+    for b in (0, 9, 1500):
+        assert tactile_normals(3, b, 100, stream=s_t).tobytes() == tactile_normals(3, b, 100).tobytes()
+        out = np.empty(50)
+        tactile_normals(3, b, 50, out=out, stream=s_t)
+        assert out.tobytes() == tactile_normals(3, b, 50).tobytes()
+        assert wrench_noise(3, b, 0.7, 300, s_w).tobytes() == wrench_noise(3, b, 0.7, 300).tobytes()
