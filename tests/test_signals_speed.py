@@ -44,3 +44,35 @@ def test_noise_helpers_with_a_stream_match_without() -> None:
         tactile_normals(3, b, 50, out=out, stream=s_t)
         assert out.tobytes() == tactile_normals(3, b, 50).tobytes()
         assert wrench_noise(3, b, 0.7, 300, s_w).tobytes() == wrench_noise(3, b, 0.7, 300).tobytes()
+
+
+def _run_last_reference(frames: list[np.ndarray]) -> int:
+    """Frames in the last run of identical frames (``==`` per value) over the whole stream."""
+    run = 0
+    for i, f in enumerate(frames):
+        run = run + 1 if i and bool(np.all(f == frames[i - 1])) else 1
+    return run
+
+
+@pytest.mark.parametrize("chunks", [[1], [2], [3], [2, 5], [10]])
+@pytest.mark.parametrize("tail", [0, 1, 2, 3, 6])
+@pytest.mark.parametrize("fill", [7.0, 0.0])
+def test_tactile_detector_runs_of_identical_frames(chunks: list[int], tail: int, fill: float) -> None:
+    """The run of identical frames (stuck / no-contact input) whatever the chunking, against a frame-by-frame count."""
+    from desmon.detectors.base import DetectorState
+    from desmon.detectors.tactile import TactileDetector
+
+    rng = np.random.default_rng(tail)
+    frames = [rng.uniform(1.0, 50.0, (6, 3)) for _ in range(4)] + [np.full((6, 3), fill)] * tail + [rng.uniform(1.0, 50.0, (6, 3))]
+    frames += [frames[-1]] * (tail // 2)
+    det = TactileDetector(stuck_frames=3)
+    det.activate(0.0)
+    at, i = 0, 0
+    while at < len(frames):
+        part = frames[at : at + chunks[i % len(chunks)]]
+        i += 1
+        det.scores(0.01 * np.arange(at + 1, at + 1 + len(part)), np.stack(part))
+        at += len(part)
+        ref = _run_last_reference(frames[:at])
+        assert det._run == ref
+        assert (det.status.state is DetectorState.NO_INPUT) == (ref >= 3)

@@ -188,14 +188,17 @@ class TactileDetector(StreamingDetector):
         if t.size == 0:
             return t, np.zeros(0), np.zeros(0, dtype=bool)
         n = t.size
-        # frames repeating the one before (the first: the last of the previous call)
-        same = np.empty(n, dtype=bool)
-        same[0] = bool(np.all(m[0] == self._last_m))
-        if n > 1:
-            np.all((m[1:] == m[:-1]).reshape(n - 1, -1), axis=1, out=same[1:])
-        changed = np.flatnonzero(~same)
         # frames in the current run of identical frames, the last one included
-        run_last = n - int(changed[-1]) if changed.size else self._run + n
+        if n > 1 and not bool(np.all(m[-1] == m[-2])):
+            run_last = 1  # the last frame differs from the one before
+        else:
+            # frames repeating the one before (the first: the last of the previous call)
+            same = np.empty(n, dtype=bool)
+            same[0] = bool(np.all(m[0] == self._last_m))
+            if n > 1:
+                np.all((m[1:] == m[:-1]).reshape(n - 1, -1), axis=1, out=same[1:])
+            changed = np.flatnonzero(~same)
+            run_last = n - int(changed[-1]) if changed.size else self._run + n
         self._run = run_last
         self._last_m = m[-1].copy()
         self._last_t = float(t[-1])
