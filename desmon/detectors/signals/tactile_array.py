@@ -176,8 +176,8 @@ def _ascending_state(tt: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, A
     for seg in ep.segments:
         if seg[0] == IDLE:
             continue
-        lo = int(np.searchsorted(tt, seg[1], side="right"))
-        hi = max(lo, int(np.searchsorted(tt, np.nextafter(seg[1] + seg[2], np.inf), side="left")))
+        lo = int(tt.searchsorted(seg[1], side="right"))
+        hi = max(lo, int(tt.searchsorted(math.nextafter(seg[1] + seg[2], math.inf), side="left")))
         segs.append((lo, hi, _segment_kernel(tt, lo, hi, seg, c["kappa"], p)))
         cuts.update((lo, hi))
     bounds = sorted(cuts)
@@ -186,7 +186,7 @@ def _ascending_state(tt: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, A
     for a, b in zip(bounds[:-1], bounds[1:]):
         if b > a:
             for f in range(3):
-                out[f][a:b] = _piece(a, b, segs, f, starts[f])
+                _piece(a, b, segs, f, starts[f], out[f][a:b])
     if ep.slips:
         t3 = tt[None, :, None]
         for t_s, sign, sp in ep.slips:
@@ -196,9 +196,10 @@ def _ascending_state(tt: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, A
     return out[0], out[1], out[2]
 
 
-def _piece(a: int, b: int, segs: list, f: int, acc: Arr) -> Arr:
+def _piece(a: int, b: int, segs: list, f: int, acc: Arr, dest: Arr) -> None:
     """Field ``f`` (0 amplitude: products, 1 and 2 centres: sums) over frames ``a..b-1``, which
-    lie before, inside or after each segment as a whole; ``acc`` the field's start per pad."""
+    lie before, inside or after each segment as a whole, written into ``dest`` ``(b - a, 6)``;
+    ``acc`` the field's start per pad."""
     op = np.multiply if f == 0 else np.add
     vector = True
     for lo, hi, kernel in segs:
@@ -220,12 +221,15 @@ def _piece(a: int, b: int, segs: list, f: int, acc: Arr) -> Arr:
             x = rows[-1]
         else:
             x = rows[a - lo + 1 : b - lo + 1]
-        if vector:
-            acc = op(acc, x)
-            vector = acc.ndim == 1
-        else:
+        if not vector:
             op(acc, x, out=acc)
-    return acc
+        elif x.ndim == 2:  # the first per-frame term: from here on in place, in ``dest``
+            acc = op(acc, x, out=dest)
+            vector = False
+        else:
+            acc = op(acc, x)
+    if vector:
+        dest[...] = acc
 
 
 def render_pad_moments(
