@@ -76,3 +76,22 @@ def test_tactile_detector_runs_of_identical_frames(chunks: list[int], tail: int,
         ref = _run_last_reference(frames[:at])
         assert det._run == ref
         assert (det.status.state is DetectorState.NO_INPUT) == (ref >= 3)
+
+
+def test_block_stream_falls_back_where_numpy_seeds_otherwise(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Should a numpy release hash seed sequences otherwise than BlockStream re-derives, the
+    once-per-process check says so and every block takes block_rng: the draws never part."""
+    from desmon.detectors.signals import noise
+
+    noise._hashing_agrees.cache_clear()
+    monkeypatch.setattr(noise, "_MULT_A", noise._MULT_A ^ 1)  # another hash than numpy's
+    try:
+        assert not noise._hashing_agrees()
+        stream = BlockStream(0, 2)
+        for b in (0, 5, SEED_CHUNK + 1):
+            assert stream.generator(b).bit_generator.state == block_rng(0, 2, b).bit_generator.state
+            assert _same_draws(stream.generator(b), block_rng(0, 2, b))
+    finally:
+        noise._hashing_agrees.cache_clear()
+    monkeypatch.undo()
+    assert noise._hashing_agrees()

@@ -9,6 +9,7 @@ only on its index, never on how requests are chunked.
 
 from __future__ import annotations
 
+import functools
 from typing import Final
 
 import numpy as np
@@ -80,6 +81,30 @@ def _hashed_seeds(seed: int, tag: int, blocks: Arr) -> list[list[int]]:
     return [(words[2 * i] | (words[2 * i + 1] << np.uint64(32))).tolist() for i in range(4)]
 
 
+def _pcg64_state(words: list[list[int]], i: int) -> dict[str, object]:
+    """The PCG64 ``state`` dict that seeding with hashed words ``words[0..3][i]`` gives
+    (numpy's ``pcg64_set_seed``: the increment from words 2-3, two steps of the 128-bit LCG)."""
+    inc = (((words[2][i] << 64) | words[3][i]) << 1 | 1) & _M128
+    state = (((inc + ((words[0][i] << 64) | words[1][i])) & _M128) * _PCG_MULT + inc) & _M128
+    return {"bit_generator": "PCG64", "state": {"state": state, "inc": inc}, "has_uint32": 0, "uinteger": 0}
+
+
+@functools.cache
+def _hashing_agrees() -> bool:
+    """Whether :func:`_hashed_seeds` and :func:`_pcg64_state` give this numpy's own PCG64
+    states (``PCG64([seed, tag, block])``), checked once per process on a few seeds, tags and
+    blocks, the extremes included. They re-derive numpy's seeding; should a numpy release
+    seed otherwise, :class:`BlockStream` takes :func:`block_rng` for every block, so the
+    draws stay those of ``block_rng`` either way."""
+    blocks = np.array([0, 1, SEED_CHUNK - 1, SEED_CHUNK, _M32], dtype=np.int64)
+    for seed, tag in ((0, 0), (12345, 2), (_M32, _M32)):
+        words = _hashed_seeds(seed, tag, blocks)
+        for i, b in enumerate(blocks.tolist()):
+            if _pcg64_state(words, i) != np.random.PCG64([seed, tag, b]).state:
+                return False
+    return True
+
+
 class BlockStream:
     """The generators of the blocks of stream ``tag`` for ``seed``: the same draws as
     :func:`block_rng`, without building a seed sequence and a generator per block.
@@ -88,15 +113,16 @@ class BlockStream:
     pass (:func:`_hashed_seeds`); a block's PCG64 state (``pcg64_set_seed``: two steps of
     the 128-bit LCG) is set on one reused bit generator. :meth:`generator` returns that
     one shared generator: draw from it before asking for the next block. Seeds, tags or
-    blocks of 2**32 or more take :func:`block_rng`.
+    blocks of 2**32 or more take :func:`block_rng`, and so does every block if numpy seeds
+    otherwise than this re-derivation (:func:`_hashing_agrees`, checked once per process).
     """
 
     def __init__(self, seed: int, tag: int) -> None:
         self.seed = seed
         self.tag = tag
-        self._fast = 0 <= seed <= _M32 and 0 <= tag <= _M32
-        self._bitgen = np.random.PCG64(0)
-        self._gen = np.random.Generator(self._bitgen)
+        self._fast = 0 <= seed <= _M32 and 0 <= tag <= _M32 and _hashing_agrees()
+        self._bitgen: np.random.PCG64 | None = None
+        self._gen: np.random.Generator | None = None
         self._chunks: dict[int, list[list[int]]] = {}
 
     def generator(self, block: int) -> np.random.Generator:
@@ -108,10 +134,11 @@ class BlockStream:
         if words is None:
             words = _hashed_seeds(self.seed, self.tag, np.arange(c * SEED_CHUNK, min((c + 1) * SEED_CHUNK, _M32 + 1), dtype=np.int64))
             self._chunks[c] = words
-        inc = (((words[2][i] << 64) | words[3][i]) << 1 | 1) & _M128
-        state = (((inc + ((words[0][i] << 64) | words[1][i])) & _M128) * _PCG_MULT + inc) & _M128
-        self._bitgen.state = {"bit_generator": "PCG64", "state": {"state": state, "inc": inc}, "has_uint32": 0, "uinteger": 0}
-        return self._gen
+        if self._bitgen is None:
+            self._bitgen = np.random.PCG64(0)
+            self._gen = np.random.Generator(self._bitgen)
+        self._bitgen.state = _pcg64_state(words, i)
+        return self._gen  # type: ignore[return-value]
 
 
 def wrench_noise(seed: int, block: int, sigma: float, count: int = WRENCH_BLOCK, stream: BlockStream | None = None) -> Arr:
