@@ -412,3 +412,45 @@ EXAMPLES = int(os.environ.get("DESMON_TABLE_EXAMPLES", "40"))
 def test_table_engine_equals_direct_engine_on_generated_models(scenario, deployer, keep_going, cap):
     d, t, _r = _both(scenario, MUTANTS.get(deployer, deployer), keep_going=keep_going, max_states=cap)
     assert t == d
+
+
+def _follow(trees, node: int, d: int) -> int:  # type: ignore[no-untyped-def]
+    """The node the branch for digit ``d`` leads to from one-platform check ``node``, then on
+    through every check of the same platform that already has a branch for ``d``."""
+    p = int(trees.node_p0.a[node])
+    child = int(trees.digit_kids.a[int(trees.digit_base.a[node]) + d])
+    while child >= 0:
+        cb = int(trees.digit_base.a[child])
+        if cb < 0 or int(trees.node_p0.a[child]) != p or int(trees.digit_kids.a[cb + d]) < 0:
+            break
+        child = int(trees.digit_kids.a[cb + d])
+    return child
+
+
+@pytest.mark.parametrize("name", ["fallbacks", "robot_day", "memory_pressure"])
+def test_the_walks_shortcuts_land_where_the_same_platforms_branches_lead(name):
+    # a check that asks about the platform its parent branched on is answered by the same
+    # digit: the walk takes both branches in one step. Every shortcut, after a whole search
+    # has grown the trees run by run, must land exactly where following the branches lands
+    checker = Checker(load_scenario(SCENARIOS / f"{name}.py"))
+    checker.run(engine="table", max_states=20_000)
+    trees = checker.explored._e.trees  # the table engine's decision trees
+    R = trees.tables.env.R
+    checked = skipped = 0
+    for node in range(trees.node_leaf.n):
+        db = int(trees.digit_base.a[node])
+        if db < 0:
+            continue
+        for d in range(R[int(trees.node_p0.a[node])]):
+            jump = int(trees.digit_jump.a[db + d])
+            assert jump == _follow(trees, node, d), (node, d)
+            checked += 1
+            skipped += jump != int(trees.digit_kids.a[db + d])
+    assert checked > 100 and skipped > 0  # (the scenario has such repeated checks)
+    # platforms with many digits recompute them with numpy: the same shortcuts, children first
+    python_made = trees.digit_jump.a.copy()
+    trees.digit_jump.a[:] = -1
+    trees.small_digits = 0
+    for node in range(trees.node_leaf.n - 1, -1, -1):  # (a child is numbered after its parent)
+        trees._rejump(node)
+    assert (trees.digit_jump.a[: trees.digit_kids.n] == python_made[: trees.digit_kids.n]).all()

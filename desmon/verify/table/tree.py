@@ -19,10 +19,12 @@ from desmon.errors import NondeterminismError, TableUnsupported
 from desmon.verify.table.hashing import IntTable
 from desmon.verify.table.tables import AnswerTables, Grow, Interned
 
-__all__ = ["DecisionTrees", "DENSE_ANSWERS"]
+__all__ = ["DecisionTrees", "DENSE_ANSWERS", "SMALL_DIGITS"]
 
 #: a check node with at most this many answer codes keeps its children in an array
 DENSE_ANSWERS = 64
+#: a platform with at most this many digits has its shortcuts recomputed in plain Python
+SMALL_DIGITS = 32
 
 
 class DecisionTrees:
@@ -46,6 +48,11 @@ class DecisionTrees:
         # table and the answer's branch in one), digit_kids[digit_base[node] + digit]
         self.digit_base = Grow((1024,), -1)
         self.digit_kids = Grow((1024,), -1)
+        # the walk's shortcut beside digit_kids: where the child for a digit checks the same
+        # platform again and has a branch for that digit, the node that branch leads to
+        # (repeatedly); else the child itself (:meth:`_rejump`)
+        self.digit_jump = Grow((1024,), -1)
+        self.small_digits = SMALL_DIGITS
         self.node_p0 = Grow((1024,))
         self.kids = Grow((1024,), -1)
         self.wide_edges = IntTable()
@@ -79,6 +86,7 @@ class DecisionTrees:
         node = self.roots.get(root)
         if node is None:
             node = self.roots[root] = self._new_roots[root] = self._node()
+        path: list[tuple[int, bool]] = []  # (node, whether this insert changed its branches)
         for desc, code in obs:
             state = self.node_leaf.a[node]
             if state == -2:
@@ -98,6 +106,7 @@ class DecisionTrees:
                 self.node_p0.a[node] = parts[0][0]
                 if len(parts) == 1:
                     self.digit_base.a[node] = self.digit_kids.extend(self.tables.env.R[parts[0][0]])
+                    self.digit_jump.extend(self.tables.env.R[parts[0][0]])
                 if mult <= DENSE_ANSWERS:
                     self.kid_base.a[node] = self.kids.extend(mult)
                 self.width = max(self.width, len(parts))
@@ -108,6 +117,7 @@ class DecisionTrees:
                 )
             ek = (node << 40) | code
             child = self.edges.get(ek)
+            path.append((node, child is None))
             if child is None:
                 child = self.edges[ek] = self._node()
                 self._digit_branch(node, code, child)
@@ -125,6 +135,50 @@ class DecisionTrees:
                 "the deployment core reacted differently to states with the same readings: "
                 "it is not a function of what it reads through its ports"
             )
+        self._rejump_path(path)
+
+    def _rejump_path(self, path: list[tuple[int, bool]]) -> None:
+        """Bring the shortcuts (``digit_jump``) of an insert's path up to date, deepest first.
+
+        A check about one platform branches on that platform's digit ``d``; when the child
+        for ``d`` checks the same platform again, its branch is again the one for ``d``, so
+        the walk takes it in the same step. An insert changes the branches of its path's
+        nodes only (a new branch's shortcut is its child, set by :meth:`_digit_branch`), so
+        a node's shortcuts can change only where its child on the path checks the same
+        platform and that child's branches or shortcuts changed."""
+        below = False  # the shortcuts of the node below on the path changed
+        for i in range(len(path) - 1, -1, -1):
+            node, new = path[i]
+            if below and self._same_platform(node, path[i + 1][0]):
+                self._rejump(node)
+                new = True
+            below = new
+
+    def _same_platform(self, node: int, child: int) -> bool:
+        db, cb = int(self.digit_base.a[node]), int(self.digit_base.a[child])
+        return db >= 0 and cb >= 0 and int(self.node_p0.a[node]) == int(self.node_p0.a[child])
+
+    def _rejump(self, node: int) -> None:
+        """Recompute the shortcuts of one-platform check ``node`` from its children's."""
+        db = int(self.digit_base.a[node])
+        if db < 0:
+            return
+        p = int(self.node_p0.a[node])
+        r = self.tables.env.R[p]
+        if r <= self.small_digits:  # a few digits: plain Python is several times faster than numpy calls
+            base, p0, kids_of, jump = self.digit_base.a, self.node_p0.a, self.digit_kids.a, self.digit_jump.a
+            for d, kid in enumerate(kids_of[db: db + r].tolist()):
+                kb = int(base[kid]) if kid >= 0 else -1
+                same = kb >= 0 and int(p0[kid]) == p and int(kids_of[kb + d]) >= 0
+                jump[db + d] = jump[kb + d] if same else kid
+            return
+        kids = self.digit_kids.a[db: db + r]
+        safe = np.maximum(kids, 0)
+        kdb = self.digit_base.a[safe]
+        same = (kids >= 0) & (kdb >= 0) & (self.node_p0.a[safe] == p)
+        at = np.where(same, kdb, 0) + np.arange(r)
+        same &= self.digit_kids.a[at] >= 0  # the child has a branch for the digit: take it too
+        self.digit_jump.a[db: db + r] = np.where(same, self.digit_jump.a[at], kids)
 
     def _digit_branch(self, node: int, code: int, child: int) -> None:
         """Enter ``child`` for every digit of a one-platform node that answers ``code``."""
@@ -134,6 +188,7 @@ class DecisionTrees:
             for d, c in enumerate(self.tables.ok.a[base: base + self.tables.env.R[int(self.node_p0.a[node])]].tolist()):
                 if c == code:
                     self.digit_kids.a[db + d] = child
+                    self.digit_jump.a[db + d] = child  # (a new node: nothing to skip yet)
 
     def _root_nodes(self, roots: np.ndarray, record: Callable[[int], None]) -> np.ndarray:
         """The root node of each unit, recording a run for each root met for the first time
@@ -199,10 +254,10 @@ class DecisionTrees:
         db = np.take(self.digit_base.a, nd)
         at = db + np.take(flat_loc, rp + np.take(self.node_p0.a, nd))
         if len(db) and db.min() >= 0:
-            return np.take(self.digit_kids.a, at)
+            return np.take(self.digit_jump.a, at)
         other = np.flatnonzero(db < 0)
         at[other] = 0
-        child = np.take(self.digit_kids.a, at)
+        child = np.take(self.digit_jump.a, at)
         child[other] = self._children(nd[other], rp[other], flat_loc)
         return child
 
