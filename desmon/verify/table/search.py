@@ -33,7 +33,7 @@ __all__ = ["TableEngine", "table_unsupported", "CHUNK_STATES", "MAX_DIGITS"]
 MAX_DIGITS = 4096
 #: frontier states expanded per numpy batch (bounds the memory of one batch; a search capped by
 #: max_states walks, and records, the units of the whole batch that reaches the cap)
-CHUNK_STATES = 16_384
+CHUNK_STATES = 4_096
 #: new states added between two looks at the search's budget (time, memory, Ctrl-C)
 LOOK_EVERY = 64
 #: values below which :func:`_grouped` numbers distinct values with an array, not a sort
