@@ -451,6 +451,13 @@ class PlatformMemoChecks(ScalarChecks):
             (ids, id(state), graph, first_only), state, reqs, _failures, self._checks_of(ids, reqs), state, graph, first_only, {}
         )
 
+    def each_platform(self, reqs: tuple[Requirement, ...], states: Sequence[PlatformState], graph: Placing, first_only: bool) -> list[tuple[Failure, ...]]:
+        """:meth:`platform`'s answer for each of ``states``, in their order."""
+        ids = tuple(map(id, reqs))
+        lookups = self._checks_of(ids, reqs)
+        part = self._part
+        return [part((ids, id(st), graph, first_only), st, reqs, _failures, lookups, st, graph, first_only, {}) for st in states]
+
     def validity(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
         return self.compute(reqs, states, graph, reasons)
 

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from desmon.deployment.guard import CRASH
 from desmon.deployment.ports import PlatformHandle
-from desmon.deployment.validity import loop_validity, order_platforms, platform_failures
+from desmon.deployment.validity import PlatformMemoChecks, order_platforms
 from desmon.errors import NondeterminismError, TableUnsupported, UnobservedRead
 from desmon.model.events import Event
 from desmon.model.requirements import Preference
@@ -34,6 +34,9 @@ if TYPE_CHECKING:
     from desmon.verify.table.search import TableEngine
 
 __all__ = ["RecordingChecks", "RecordingQuery", "Recorder", "QUERY_METHODS", "PlainRun"]
+
+#: Wrapped answers :class:`RecordingChecks` keeps before it forgets them all.
+_ANSWERS_LIMIT = 1 << 16
 
 
 class RecordingChecks:
@@ -58,6 +61,13 @@ class RecordingChecks:
         self._real: dict[PlatformHandle, PlatformState] = {}
         self._derived: dict[tuple[PlatformHandle, tuple], PlatformHandle] = {}  # (handle, deployed) -> handle
         self.store: StateStore | None = None
+        #: the real answers, computed once per platform's facts and question (pure
+        #: functions of the facts; every use of them is still observed, see :meth:`validity`)
+        self._computed = PlatformMemoChecks()
+        #: (ids of the requirement objects, id of the handles tuple or handle, graph,
+        #: reasons or first_only) -> (the requirements, the handles, the wrapped answer);
+        #: the entry holds the objects its key names (see :meth:`_answer`)
+        self._answers: dict[tuple, tuple[tuple, Any, Any]] = {}
 
     def begin(self) -> None:
         """A new recorded run: no observation yet."""
@@ -85,16 +95,44 @@ class RecordingChecks:
             self.made.add(desc)
             self.obs.append((desc, code))
 
+    def _answer(self, key: tuple, reqs: tuple, states: Any) -> Any:
+        """The wrapped answer memoised under ``key`` (None: not yet). The wrappers hold no
+        state of a run (each use observes afresh, into the run's own observations), so one
+        wrapper serves every run that asks the same question about the same handles."""
+        hit = self._answers.get(key)
+        if hit is not None and hit[1] is states:
+            return hit[2]
+        return None
+
+    def _keep(self, key: tuple, reqs: tuple, states: Any, answer: Any) -> Any:
+        answers = self._answers
+        if len(answers) > _ANSWERS_LIMIT:
+            answers.clear()
+        answers[key] = (reqs, states, answer)
+        return answer
+
     def validity(self, reqs: tuple, states: tuple, graph: str | None, reasons: bool) -> Any:
+        key = (tuple(map(id, reqs)), id(states), graph, reasons)
+        found = self._answer(key, reqs, states)
+        if found is not None:
+            return found
         real_states = self._reals(states)
+        answer = self._validity(reqs, real_states, graph, reasons)
+        if type(states) is tuple and all(type(s) is PlatformHandle for s in states):  # handles' facts never change
+            self._keep(key, reqs, states, answer)
+        return answer
+
+    def _validity(self, reqs: tuple, real_states: tuple[PlatformState, ...], graph: str | None, reasons: bool) -> Any:
         parts = self._parts(real_states)
-        fails = [platform_failures(reqs, st, graph, not reasons) for st in real_states]
-        real = loop_validity(reqs, real_states, graph, reasons)
+        computed = self._computed
+        first_only = not reasons
+        fails = computed.each_platform(reqs, real_states, graph, first_only)  # platform_failures' of each
+        real = computed.compute(reqs, real_states, graph, reasons)  # loop_validity's answer (the same parts)
         at = {id(st): i for i, st in enumerate(real_states)}
         order = [at[id(st)] for st in order_platforms(real_states)]
         ranked = any(type(r) is Preference for r in reqs)
         scored = [None if f else score_key(reqs, st, graph) for f, st in zip(fails, real_states)] if ranked else None
-        check = Check(self, reqs, graph, not reasons, parts, fails, [st.platform.name for st in real_states], scored)
+        check = Check(self, reqs, graph, first_only, parts, fails, [st.platform.name for st in real_states], scored)
         acceptable = Acceptable(check, real.acceptable, order)
         if not ranked:
             return ObservedValidity(acceptable, Reasons(check, real.rejected))  # type: ignore[arg-type]
@@ -104,10 +142,17 @@ class RecordingChecks:
         return ObservedValidity(acceptable, Reasons(check, real.rejected), Ranked(check, real.scores, acceptable), breakdown)  # type: ignore[arg-type]
 
     def platform(self, reqs: tuple, state: Any, graph: str | None, first_only: bool) -> Any:
+        key = (tuple(map(id, reqs)), id(state), graph, first_only)
+        found = self._answer(key, reqs, state)
+        if found is not None:
+            return found
         (real,) = self._reals((state,))
         parts = self._parts((real,))
-        fails = platform_failures(reqs, real, graph, first_only)
-        return Reasons(Check(self, reqs, graph, first_only, parts, [fails], [real.platform.name]), fails, single=True)
+        fails = self._computed.platform(reqs, real, graph, first_only)  # platform_failures' answer
+        answer = Reasons(Check(self, reqs, graph, first_only, parts, [fails], [real.platform.name]), fails, single=True)
+        if type(state) is PlatformHandle:  # a handle's facts never change
+            self._keep(key, reqs, state, answer)
+        return answer
 
     def _reals(self, states: Sequence[Any]) -> tuple[PlatformState, ...]:
         """The real facts behind each handle; a state that is not a handle of this run must
