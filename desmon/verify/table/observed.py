@@ -24,7 +24,7 @@ __all__ = ["Check", "ObservedValidity", "Acceptable", "Reasons", "Ranked"]
 class Check:
     """One requirement check's real answers, and how to record observing them."""
 
-    __slots__ = ("rec", "table", "first_only", "parts", "fails", "names", "scored")
+    __slots__ = ("rec", "table", "first_only", "parts", "fails", "names", "scored", "_all_ok", "_one_ok")
 
     def __init__(self, rec: "RecordingChecks", reqs: tuple, graph: str | None, first_only: bool,
                  parts: tuple[tuple[int, int], ...], fails: list[tuple], names: list[str],
@@ -36,13 +36,36 @@ class Check:
         self.fails = fails
         self.names = names
         self.scored = scored  # each platform's score key (None: rejected), with preferences
+        # the observations of :meth:`ok_all` and :meth:`ok_one`, made on first use (a
+        # check's answers never change, and the recording checks reuse a check across runs)
+        self._all_ok: tuple | None = None
+        self._one_ok: list[tuple | None] = [None] * len(parts)
 
     def ok(self, which: Sequence[int]) -> None:
         """Observe whether the platforms at positions ``which`` pass."""
         code = 0
+        fails = self.fails
         for j, i in enumerate(which):
-            code |= (not self.fails[i]) << j
-        self.rec.observe(("ok", self.table, None, tuple(self.parts[i] for i in which)), code)
+            code |= (not fails[i]) << j
+        parts = self.parts
+        self.rec.observe(("ok", self.table, None, tuple([parts[i] for i in which])), code)
+
+    def ok_all(self) -> None:
+        """:meth:`ok` of every platform."""
+        made = self._all_ok
+        if made is None:
+            code = 0
+            for j, f in enumerate(self.fails):
+                code |= (not f) << j
+            made = self._all_ok = (("ok", self.table, None, self.parts), code)
+        self.rec.observe(*made)
+
+    def ok_one(self, i: int) -> None:
+        """:meth:`ok` of the platform at position ``i``."""
+        made = self._one_ok[i]
+        if made is None:
+            made = self._one_ok[i] = (("ok", self.table, None, (self.parts[i],)), int(not self.fails[i]))
+        self.rec.observe(*made)
 
     def why(self) -> None:
         """Observe every platform's failures, reasons included."""
@@ -191,11 +214,11 @@ class Acceptable(_Observed):
         if check.scored is not None:
             check.rank()
         else:
-            check.ok(range(len(check.parts)))
+            check.ok_all()
         return self._real  # type: ignore[no-any-return]
 
     def __len__(self) -> int:
-        self._check.ok(range(len(self._check.parts)))
+        self._check.ok_all()
         return len(self._real)
 
     def __contains__(self, x: object) -> bool:
@@ -203,14 +226,14 @@ class Acceptable(_Observed):
         if x not in names:
             return False  # not a checked platform: the answer depends on no platform fact
         i = names.index(x)  # type: ignore[arg-type]
-        self._check.ok((i,))
+        self._check.ok_one(i)
         return not self._check.fails[i]
 
     def _static(self) -> Iterator[str]:
         """The acceptable platforms in the static order, observed one by one."""
         check = self._check
         for i in self._order:
-            check.ok((i,))
+            check.ok_one(i)
             if not check.fails[i]:
                 yield check.names[i]
 
@@ -249,11 +272,11 @@ class Reasons(_Observed):
     def __len__(self) -> int:
         if self._single and not self._check.first_only:
             return len(self._all())  # how many requirements one platform fails: the failures themselves
-        self._check.ok(range(len(self._check.parts)))  # how many platforms fail, or whether one does
+        self._check.ok_all()  # how many platforms fail, or whether one does
         return len(self._real)
 
     def __bool__(self) -> bool:
-        self._check.ok(range(len(self._check.parts)))  # whether any platform fails (a valid deployment: none)
+        self._check.ok_all()  # whether any platform fails (a valid deployment: none)
         return len(self._real) > 0
 
 
