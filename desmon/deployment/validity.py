@@ -23,6 +23,14 @@ if TYPE_CHECKING:
 #: Results kept by the memoised pure checks (bounded, so long simulations stay flat).
 _MEMO_SIZE = 1 << 16
 
+#: Requirement tuples :class:`PlatformMemoChecks` knows by identity before it forgets them.
+_TUPLES = 1 << 12
+
+#: What :class:`PlatformMemoChecks` derives once per question's requirements: the ids of
+#: their objects, each hard one with its kind's ``holds`` (:func:`_checks`), and whether
+#: one is a preference.
+_Question = tuple[tuple[int, ...], list[tuple[Any, "Requirement"]], bool]
+
 __all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "ScalarChecks", "PlatformMemoChecks", "DEFAULT_CHECKS", "checks_for", "reads_fixed_facts", "unreadable", "spec_validity", "input_failures"]
 
 
@@ -326,37 +334,48 @@ def loop_validity(reqs: tuple[Requirement, ...], states: tuple[PlatformState, ..
     checks = _checks(reqs)  # looked up once for every platform
     texts: dict[int, str] = {}
     first_only = not reasons
+    ordered = order_platforms(states)
     return _assemble(
-        reqs, order_platforms(states), graph, reasons,
-        lambda state: _failures(checks, state, graph, first_only, texts),
+        reqs, ordered, [_failures(checks, state, graph, first_only, texts) for state in ordered], graph, reasons,
         lambda state: platform_score(reqs, state, graph),
     )
 
 
 def _assemble(
     reqs: tuple[Requirement, ...],
-    ordered: Iterable[PlatformState],
+    ordered: Sequence[PlatformState],
+    failures: Sequence[tuple[Failure, ...]],
     graph: Placing,
     reasons: bool,
-    failures: Callable[[PlatformState], tuple[Failure, ...]],
     score: Callable[[PlatformState], float],
+    ranked: bool | None = None,
 ) -> Validity:
     """The :class:`Validity` of the platforms in ``ordered`` (:func:`order_platforms`), given
-    each one's ``failures`` and preference ``score``: the one body of :func:`loop_validity`
-    and of the memoised :meth:`PlatformMemoChecks.compute`."""
+    each one's ``failures`` (aligned with ``ordered``) and preference ``score``; ``ranked``
+    says whether ``reqs`` holds a preference (None: look). The one body of
+    :func:`loop_validity` and of the memoised :meth:`PlatformMemoChecks.compute`."""
     acceptable: list[PlatformState] = []
     rejected: list[tuple[str, tuple[Failure, ...]]] = []
-    for state in ordered:
-        fails = failures(state)
+    for state, fails in zip(ordered, failures):
         if fails:
             rejected.append((state.name, fails))
         else:
             acceptable.append(state)
-    if not any(type(r) is Preference for r in reqs):
-        return Validity(tuple(s.name for s in acceptable), tuple(rejected))
+    if ranked is None:
+        ranked = _ranked(reqs)
+    if not ranked:
+        return Validity(tuple([s.name for s in acceptable]), tuple(rejected))
     scored = sorted(((score(s), s) for s in acceptable), key=lambda x: -x[0])  # stable
     breakdown = tuple((s.name, score_breakdown(reqs, s, graph)) for _v, s in scored) if reasons else ()
     return Validity(tuple(s.name for _v, s in scored), tuple(rejected), tuple(v for v, _s in scored), breakdown)
+
+
+def _ranked(reqs: tuple[Requirement, ...]) -> bool:
+    """Does ``reqs`` hold a preference (whose scores order the acceptable platforms)?"""
+    for r in reqs:
+        if type(r) is Preference:
+            return True
+    return False
 
 
 class ScalarChecks:
@@ -416,20 +435,35 @@ class PlatformMemoChecks(ScalarChecks):
     def __init__(self, *, size: int = _MEMO_SIZE) -> None:
         super().__init__(memo=False)
         self._size = size
-        # ids of a question's requirement objects -> their checks (_checks)
-        self._lookups: dict[tuple[int, ...], tuple[tuple[Requirement, ...], list[tuple[Any, Requirement]]]] = {}
+        # ids of a question's requirement objects -> (the requirements, (those ids, their
+        # checks (_checks), whether one is a preference))
+        self._lookups: dict[tuple[int, ...], tuple[tuple[Requirement, ...], _Question]] = {}
+        # id of a requirements tuple -> (the tuple, its _Question): the same lookup for a
+        # caller that asks with the same tuple object again (bounded by _TUPLES)
+        self._tuples: dict[int, tuple[tuple[Requirement, ...], _Question]] = {}
         # (ids of the requirement objects, id of the state, graph, first_only or None for
         # the score) -> (the state, the requirements, its failures or score): the entry
         # holds the objects whose ids its key names
         self._parts: dict[tuple[Any, ...], tuple[PlatformState, tuple[Requirement, ...], Any]] = {}
         self._order: tuple[tuple[PlatformState, ...], list[PlatformState]] | None = None
 
-    def _checks_of(self, ids: tuple[int, ...], reqs: tuple[Requirement, ...]) -> list[tuple[Any, Requirement]]:
+    def _question(self, reqs: tuple[Requirement, ...]) -> "_Question":
+        """(ids of the objects of ``reqs``, their checks, whether one is a preference): found
+        by the tuple's identity, else by the ids of its objects (each entry holds what its
+        key names); a requirement that is none raises (:func:`_checks`)."""
+        tuples = self._tuples
+        hit = tuples.get(id(reqs))
+        if hit is not None and hit[0] is reqs:
+            return hit[1]
+        ids = tuple(map(id, reqs))
         found = self._lookups.get(ids)
         if found is None:
             if len(self._lookups) > self._size:
                 self._lookups.clear()
-            found = self._lookups[ids] = (reqs, _checks(reqs))
+            found = self._lookups[ids] = (reqs, (ids, _checks(reqs), _ranked(reqs)))
+        if len(tuples) > _TUPLES:
+            tuples.clear()
+        tuples[id(reqs)] = (reqs, found[1])
         return found[1]
 
     def _part(self, key: tuple[Any, ...], state: PlatformState, reqs: tuple[Requirement, ...], fn: Callable[..., Any], *args: Any) -> Any:
@@ -446,15 +480,16 @@ class PlatformMemoChecks(ScalarChecks):
         return value
 
     def platform(self, reqs: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool) -> tuple[Failure, ...]:
-        ids = tuple(map(id, reqs))
-        return self._part(  # type: ignore[no-any-return]
-            (ids, id(state), graph, first_only), state, reqs, _failures, self._checks_of(ids, reqs), state, graph, first_only, {}
-        )
+        ids, lookups, _ranked_ = self._question(reqs)
+        key = (ids, id(state), graph, first_only)
+        hit = self._parts.get(key)
+        if hit is not None and hit[0] is state:
+            return hit[2]  # type: ignore[no-any-return]
+        return self._part(key, state, reqs, _failures, lookups, state, graph, first_only, {})  # type: ignore[no-any-return]
 
     def each_platform(self, reqs: tuple[Requirement, ...], states: Sequence[PlatformState], graph: Placing, first_only: bool) -> list[tuple[Failure, ...]]:
         """:meth:`platform`'s answer for each of ``states``, in their order."""
-        ids = tuple(map(id, reqs))
-        lookups = self._checks_of(ids, reqs)
+        ids, lookups, _ranked_ = self._question(reqs)
         part = self._part
         return [part((ids, id(st), graph, first_only), st, reqs, _failures, lookups, st, graph, first_only, {}) for st in states]
 
@@ -471,22 +506,29 @@ class PlatformMemoChecks(ScalarChecks):
 
     def compute(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
         """:func:`loop_validity`, each platform's failures and score memoised."""
-        ids = tuple(map(id, reqs))
-        lookups = self._checks_of(ids, reqs)  # a requirement that is none raises even without platforms
+        ids, lookups, ranked = self._question(reqs)  # a requirement that is none raises even without platforms
         texts: dict[int, str] = {}
         first_only = not reasons
+        parts = self._parts
+        ordered = self._ordered(states)
+        failures = []
+        for state in ordered:
+            key = (ids, id(state), graph, first_only)
+            hit = parts.get(key)
+            if hit is not None and hit[0] is state:
+                failures.append(hit[2])
+            else:
+                failures.append(self._part(key, state, reqs, _failures, lookups, state, graph, first_only, texts))
         part = self._part
-
-        def failures(state: PlatformState) -> tuple[Failure, ...]:
-            return part((ids, id(state), graph, first_only), state, reqs, _failures, lookups, state, graph, first_only, texts)  # type: ignore[no-any-return]
 
         def score(state: PlatformState) -> float:
             return part((ids, id(state), graph, None), state, reqs, platform_score, reqs, state, graph)  # type: ignore[no-any-return]
 
-        return _assemble(reqs, self._ordered(states), graph, reasons, failures, score)
+        return _assemble(reqs, ordered, failures, graph, reasons, score, ranked)
 
     def clear(self) -> None:
         self._lookups.clear()
+        self._tuples.clear()
         self._parts.clear()
         self._order = None
 
