@@ -76,7 +76,7 @@ class ControlRules:
         #: None reads the model's declared ones
         self.spec_of = spec_of
         self._wiring: dict[tuple[str, str], tuple[tuple[str, tuple[Device, ...]], ...]] = {}
-        self._device_reqs: dict[tuple, tuple[Requirement, ...]] = {}
+        self._device_reqs: dict[int, tuple[tuple, tuple[Requirement, ...]]] = {}
 
     def input_devices(self, graph: str, platform: str) -> tuple[tuple[str, tuple[Device, ...]], ...]:
         """``(kind, devices)`` per device kind ``graph`` reads when it runs on ``platform``:
@@ -108,9 +108,14 @@ class ControlRules:
             return PLATFORM_DOWN
         spec = self.spec_of(graph) if self.spec_of is not None else self.model.spec(graph)
         declared = spec.requirements if spec is not None else ()
-        reqs = self._device_reqs.get(declared)
-        if reqs is None:
-            reqs = self._device_reqs[declared] = device_requirements(declared)
+        found = self._device_reqs.get(id(declared))  # by identity: no requirement's Python-level hash
+        if found is not None and found[0] is declared:
+            reqs = found[1]
+        else:
+            if len(self._device_reqs) > 4096:
+                self._device_reqs.clear()
+            reqs = device_requirements(declared)
+            self._device_reqs[id(declared)] = (declared, reqs)  # the entry holds the tuple its key names
         if reqs and check_platform(reqs, state_of(platform), graph, first_only=True, checks=checks):
             return f"the devices of {platform} no longer meet {', '.join(r.describe() for r in reqs)}"
         reads = spec.reads if spec is not None else self._declared_reads(graph)

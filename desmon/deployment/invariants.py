@@ -20,7 +20,7 @@ from desmon.model.requirements import DeploymentSpec
 from desmon.model.system import PlatformState
 
 __all__ = [
-    "SystemView", "Invariant", "INVARIANTS", "view_of", "check_invariants", "get_invariants", "validly_active", "validly_active_among",
+    "SystemView", "Invariant", "INVARIANTS", "view_of", "make_view", "check_invariants", "get_invariants", "validly_active", "validly_active_among",
     "ReactionBook", "raise_problem", "judge_reaction", "TRANSITION_INVARIANTS",
 ]
 
@@ -91,6 +91,44 @@ class SystemView:
         raise KeyError(platform)
 
 
+#: the slots of :class:`SystemView`, in field order, as their setters (see :func:`make_view`)
+_VIEW_SETTERS = tuple(
+    getattr(SystemView, name).__set__
+    for name in ("states", "specs", "standing", "slots", "running", "stops", "history", "react", "checks", "_deployments", "_failures", "_valid")
+)
+
+
+def make_view(
+    states: tuple[PlatformState, ...],
+    specs: tuple[DeploymentSpec, ...],
+    standing: frozenset[str],
+    slots: tuple[tuple[str, ...], ...],
+    running: tuple[tuple[str, str], ...] | None = None,
+    stops: int | None = None,
+    history: int | None = None,
+    react: Callable[..., Any] | None = None,
+    checks: Any = None,
+) -> SystemView:
+    """``SystemView(states, specs, ...)``, built without the frozen class's ``__init__``
+    (which sets each slot through ``object.__setattr__``): every audit builds one. Equal
+    to the constructor's view (the class has no ``__post_init__``)."""
+    view = object.__new__(SystemView)
+    s_states, s_specs, s_standing, s_slots, s_running, s_stops, s_history, s_react, s_checks, s_dep, s_fail, s_valid = _VIEW_SETTERS
+    s_states(view, states)
+    s_specs(view, specs)
+    s_standing(view, standing)
+    s_slots(view, slots)
+    s_running(view, running)
+    s_stops(view, stops)
+    s_history(view, history)
+    s_react(view, react)
+    s_checks(view, checks)
+    s_dep(view, None)
+    s_fail(view, None)
+    s_valid(view, None)
+    return view
+
+
 def view_of(
     q: QueryPort,
     specs: tuple[DeploymentSpec, ...],
@@ -102,7 +140,7 @@ def view_of(
     history: int | None = None,
     react: Callable[..., Any] | None = None,
 ) -> SystemView:
-    return SystemView(q.platform_states(), specs, standing, slots, running, stops, history, react, q.checks)
+    return make_view(q.platform_states(), specs, standing, slots, running, stops, history, react, q.checks)
 
 
 def validly_active(view: SystemView) -> frozenset[str]:

@@ -257,8 +257,40 @@ def input_failures(
 
 
 def _lookup(states: Sequence[PlatformState]) -> "Callable[[str], PlatformState | None]":
+    """A platform's state among ``states`` by name (the last tuple's answer kept: a
+    question asks it for the same world again and again)."""
+    last = _LAST_LOOKUP.get(id(states))
+    if last is not None and last[0] is states:
+        return last[1]
     by_name = {s.platform.name: s for s in states}
+    if type(states) is tuple:  # immutable: its answer cannot change
+        _LAST_LOOKUP.clear()
+        _LAST_LOOKUP[id(states)] = (states, by_name.get)
     return by_name.get
+
+
+#: id of the last states tuple :func:`_lookup` indexed -> (the tuple, its lookup): one entry
+_LAST_LOOKUP: dict[int, tuple[tuple, "Callable[[str], PlatformState | None]"]] = {}
+
+#: (id of the requirements, id of the reads) -> (both tuples, their concatenation): one
+#: tuple object per question, which the Checks ports find by identity (see :func:`_joined`)
+_JOINED: dict[tuple[int, int], tuple[tuple, tuple, tuple]] = {}
+
+
+def _joined(reqs: Sequence[Requirement], reads: tuple[Reads, ...]) -> tuple[Requirement, ...]:
+    """``tuple(reqs) + reads``, the same tuple object each time for the same tuples (each
+    entry holds the tuples its key names); past :data:`_TUPLES` entries all are forgotten."""
+    if type(reqs) is not tuple:
+        return tuple(reqs) + reads
+    key = (id(reqs), id(reads))
+    hit = _JOINED.get(key)
+    if hit is not None and hit[0] is reqs and hit[1] is reads:
+        return hit[2]
+    if len(_JOINED) > _TUPLES:
+        _JOINED.clear()
+    joined = reqs + reads
+    _JOINED[key] = (reqs, reads, joined)
+    return joined
 
 
 def spec_validity(
@@ -284,7 +316,7 @@ def spec_validity(
     """
     if not reads:
         return check_validity(reqs, states, graph, reasons=reasons, checks=checks)
-    validity = check_validity(tuple(reqs) + reads, states, graph, reasons=reasons, checks=checks)
+    validity = check_validity(_joined(reqs, reads), states, graph, reasons=reasons, checks=checks)
     state_of = _lookup(world)
     dead = [(r, why) for r in reads if (why := unreadable(r, state_of, graph, reasons=reasons, checks=checks)) is not None]
     if not dead:
@@ -631,7 +663,7 @@ def deployment_valid(
     reads = spec.reads
     if not reads:
         return check_platform(spec.requirements, state, spec.graph, checks=checks)
-    fails = check_platform(spec.requirements + reads, state, spec.graph, checks=checks)
+    fails = check_platform(_joined(spec.requirements, reads), state, spec.graph, checks=checks)
     if fails:
         return fails
     return input_failures(reads, state.platform.name, _lookup(states), spec.graph, checks=checks)

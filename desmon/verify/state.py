@@ -27,7 +27,7 @@ from __future__ import annotations
 from typing import Any, Callable, NamedTuple
 
 from desmon.deployment.control import ControlRules
-from desmon.deployment.invariants import SystemView, Invariant
+from desmon.deployment.invariants import SystemView, Invariant, make_view
 from desmon.errors import QueryError
 from desmon.model.events import RequirementChange
 from desmon.model.requirements import DeploymentSpec, Requirement
@@ -455,4 +455,4 @@ class StoreInsert:
 
 
 def view_from(store: StateStore, standing: frozenset[str], slots: tuple[tuple[str, ...], ...]) -> SystemView:
-    return SystemView(store.platform_states(), store.current_specs(), standing, slots, checks=store.checks)
+    return make_view(store.platform_states(), store.current_specs(), standing, slots, checks=store.checks)
