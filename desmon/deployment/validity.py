@@ -257,20 +257,9 @@ def input_failures(
 
 
 def _lookup(states: Sequence[PlatformState]) -> "Callable[[str], PlatformState | None]":
-    """A platform's state among ``states`` by name (the last tuple's answer kept: a
-    question asks it for the same world again and again)."""
-    last = _LAST_LOOKUP.get(id(states))
-    if last is not None and last[0] is states:
-        return last[1]
     by_name = {s.platform.name: s for s in states}
-    if type(states) is tuple:  # immutable: its answer cannot change
-        _LAST_LOOKUP.clear()
-        _LAST_LOOKUP[id(states)] = (states, by_name.get)
     return by_name.get
 
-
-#: id of the last states tuple :func:`_lookup` indexed -> (the tuple, its lookup): one entry
-_LAST_LOOKUP: dict[int, tuple[tuple, "Callable[[str], PlatformState | None]"]] = {}
 
 #: (id of the requirements, id of the reads) -> (both tuples, their concatenation): one
 #: tuple object per question, which the Checks ports find by identity (see :func:`_joined`)

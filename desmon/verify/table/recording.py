@@ -51,6 +51,12 @@ class RecordingChecks:
     slicing, comparing, the rejected platforms and their reasons) observes every
     answer, down to the failure texts when those are read; an explanation is observed
     only where its text is used.
+
+    The real answers are pure functions of the facts behind the handles, computed once
+    per platform's facts (a :class:`~desmon.deployment.validity.PlatformMemoChecks`), and
+    the wrapped answer of a question about handles is kept: the wrappers hold no state
+    of a run, so a run that asks the same question again gets the same wrapper, and
+    every use of it observes again, into that run's observations.
     """
 
     def __init__(self, tables: AnswerTables) -> None:
@@ -95,7 +101,7 @@ class RecordingChecks:
             self.made.add(desc)
             self.obs.append((desc, code))
 
-    def _answer(self, key: tuple, reqs: tuple, states: Any) -> Any:
+    def _answer(self, key: tuple, states: Any) -> Any:
         """The wrapped answer memoised under ``key`` (None: not yet). The wrappers hold no
         state of a run (each use observes afresh, into the run's own observations), so one
         wrapper serves every run that asks the same question about the same handles."""
@@ -104,16 +110,16 @@ class RecordingChecks:
             return hit[2]
         return None
 
-    def _keep(self, key: tuple, reqs: tuple, states: Any, answer: Any) -> Any:
+    def _keep(self, key: tuple, reqs: tuple, states: Any, answer: Any) -> None:
+        """Keep ``answer`` under ``key`` (the entry holds ``reqs`` and ``states``, whose ids the key names)."""
         answers = self._answers
         if len(answers) > _ANSWERS_LIMIT:
             answers.clear()
         answers[key] = (reqs, states, answer)
-        return answer
 
     def validity(self, reqs: tuple, states: tuple, graph: str | None, reasons: bool) -> Any:
         key = (tuple(map(id, reqs)), id(states), graph, reasons)
-        found = self._answer(key, reqs, states)
+        found = self._answer(key, states)
         if found is not None:
             return found
         real_states = self._reals(states)
@@ -143,7 +149,7 @@ class RecordingChecks:
 
     def platform(self, reqs: tuple, state: Any, graph: str | None, first_only: bool) -> Any:
         key = (tuple(map(id, reqs)), id(state), graph, first_only)
-        found = self._answer(key, reqs, state)
+        found = self._answer(key, state)
         if found is not None:
             return found
         (real,) = self._reals((state,))
@@ -197,7 +203,7 @@ class RecordingQuery:
     Any other attribute of the store (its fact tuples, its helpers) would let a reaction
     read platform facts unobserved: asking for one stops the recording. One the store
     lacks raises AttributeError, as the store would. Its ``checks`` are the recording
-    checks; it memoises no validity answer (every check is performed and observed).
+    checks; it memoises no validity answer (every check is asked of them, and observed where it is used).
     Each method looks the store's method up per call: the store rebinds some of them
     per deployment set.
     """
