@@ -97,6 +97,18 @@ class ControlRules:
         spec = self.model.spec(graph)
         return spec.reads if spec is not None else ()
 
+    def _device_reqs_of(self, declared: tuple[Requirement, ...]) -> tuple[Requirement, ...]:
+        """:func:`device_requirements` of ``declared``, kept per tuple and found by its
+        identity (no requirement's Python-level hash); the entry holds the tuple its key names."""
+        found = self._device_reqs.get(id(declared))
+        if found is not None and found[0] is declared:
+            return found[1]
+        if len(self._device_reqs) > 4096:
+            self._device_reqs.clear()
+        reqs = device_requirements(declared)
+        self._device_reqs[id(declared)] = (declared, reqs)
+        return reqs
+
     def start_refusal(self, graph: str, platform: str, state_of: StateOf) -> str | None:
         """Why the infrastructure refuses to start ``graph`` on ``platform``, or None.
 
@@ -107,15 +119,7 @@ class ControlRules:
         if check_platform((), state_of(platform), graph, checks=checks):
             return PLATFORM_DOWN
         spec = self.spec_of(graph) if self.spec_of is not None else self.model.spec(graph)
-        declared = spec.requirements if spec is not None else ()
-        found = self._device_reqs.get(id(declared))  # by identity: no requirement's Python-level hash
-        if found is not None and found[0] is declared:
-            reqs = found[1]
-        else:
-            if len(self._device_reqs) > 4096:
-                self._device_reqs.clear()
-            reqs = device_requirements(declared)
-            self._device_reqs[id(declared)] = (declared, reqs)  # the entry holds the tuple its key names
+        reqs = self._device_reqs_of(spec.requirements if spec is not None else ())
         if reqs and check_platform(reqs, state_of(platform), graph, first_only=True, checks=checks):
             return f"the devices of {platform} no longer meet {', '.join(r.describe() for r in reqs)}"
         reads = spec.reads if spec is not None else self._declared_reads(graph)
