@@ -449,8 +449,13 @@ def test_the_walks_shortcuts_land_where_the_same_platforms_branches_lead(name):
     assert checked > 100 and skipped > 0  # (the scenario has such repeated checks)
     # platforms with many digits recompute them with numpy: the same shortcuts, children first
     python_made = trees.digit_jump.a.copy()
-    trees.digit_jump.a[:] = -1
+    trees.digit_jump.a[:] = trees.digit_kids.a  # (each shortcut its branch, then the skips)
     trees.small_digits = 0
     for node in range(trees.node_leaf.n - 1, -1, -1):  # (a child is numbered after its parent)
-        trees._rejump(node)
+        db = int(trees.digit_base.a[node])
+        if db >= 0:
+            p = int(trees.node_p0.a[node])
+            for kid in set(trees.digit_kids.a[db: db + R[p]].tolist()):
+                if kid >= 0 and int(trees.digit_base.a[kid]) >= 0 and int(trees.node_p0.a[kid]) == p:
+                    trees._rejump(node, kid)
     assert (trees.digit_jump.a[: trees.digit_kids.n] == python_made[: trees.digit_kids.n]).all()

@@ -147,38 +147,30 @@ class DecisionTrees:
         a node's shortcuts can change only where its child on the path checks the same
         platform and that child's branches or shortcuts changed."""
         below = False  # the shortcuts of the node below on the path changed
+        base, p0 = self.digit_base.a, self.node_p0.a
         for i in range(len(path) - 1, -1, -1):
             node, new = path[i]
-            if below and self._same_platform(node, path[i + 1][0]):
-                self._rejump(node)
-                new = True
+            if below:
+                child = path[i + 1][0]
+                db, cb = int(base[node]), int(base[child])
+                if db >= 0 and cb >= 0 and int(p0[node]) == int(p0[child]):
+                    self._rejump(node, child)
+                    new = True
             below = new
 
-    def _same_platform(self, node: int, child: int) -> bool:
+    def _rejump(self, node: int, child: int) -> None:
+        """Recompute the shortcuts of one-platform check ``node`` for the digits whose branch
+        is ``child``, a check of the same platform, from ``child``'s (current) ones."""
         db, cb = int(self.digit_base.a[node]), int(self.digit_base.a[child])
-        return db >= 0 and cb >= 0 and int(self.node_p0.a[node]) == int(self.node_p0.a[child])
-
-    def _rejump(self, node: int) -> None:
-        """Recompute the shortcuts of one-platform check ``node`` from its children's."""
-        db = int(self.digit_base.a[node])
-        if db < 0:
-            return
-        p = int(self.node_p0.a[node])
-        r = self.tables.env.R[p]
+        r = self.tables.env.R[int(self.node_p0.a[node])]
+        kids_of, jump = self.digit_kids.a, self.digit_jump.a
         if r <= self.small_digits:  # a few digits: plain Python is several times faster than numpy calls
-            base, p0, kids_of, jump = self.digit_base.a, self.node_p0.a, self.digit_kids.a, self.digit_jump.a
             for d, kid in enumerate(kids_of[db: db + r].tolist()):
-                kb = int(base[kid]) if kid >= 0 else -1
-                same = kb >= 0 and int(p0[kid]) == p and int(kids_of[kb + d]) >= 0
-                jump[db + d] = jump[kb + d] if same else kid
+                if kid == child:
+                    jump[db + d] = jump[cb + d] if kids_of[cb + d] >= 0 else child
             return
-        kids = self.digit_kids.a[db: db + r]
-        safe = np.maximum(kids, 0)
-        kdb = self.digit_base.a[safe]
-        same = (kids >= 0) & (kdb >= 0) & (self.node_p0.a[safe] == p)
-        at = np.where(same, kdb, 0) + np.arange(r)
-        same &= self.digit_kids.a[at] >= 0  # the child has a branch for the digit: take it too
-        self.digit_jump.a[db: db + r] = np.where(same, self.digit_jump.a[at], kids)
+        digits = np.flatnonzero(kids_of[db: db + r] == child)
+        jump[db + digits] = np.where(kids_of[cb + digits] >= 0, jump[cb + digits], child)
 
     def _digit_branch(self, node: int, code: int, child: int) -> None:
         """Enter ``child`` for every digit of a one-platform node that answers ``code``."""
@@ -253,7 +245,7 @@ class DecisionTrees:
         from its platform's digit at a one-platform node, else from the answer code."""
         db = np.take(self.digit_base.a, nd)
         at = db + np.take(flat_loc, rp + np.take(self.node_p0.a, nd))
-        if len(db) and db.min() >= 0:
+        if self.width == 1 or (len(db) and db.min() >= 0):  # (width 1: every check is about one platform)
             return np.take(self.digit_jump.a, at)
         other = np.flatnonzero(db < 0)
         at[other] = 0
