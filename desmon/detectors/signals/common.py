@@ -196,8 +196,8 @@ def wrench_indices(t0: float, t1: float, rate: float) -> Arr:
     k0 = max(0, math.floor(t0 * rate) - 1)
     k1 = max(k0, math.ceil(t1 * rate) + 1)
     k = np.arange(k0, k1, dtype=np.int64)
-    tk = k / rate
-    return k[(tk >= t0) & (tk < t1)]
+    tk = k / rate  # non-decreasing (rounding is monotonic): the kept ones are one run
+    return k[int(tk.searchsorted(t0, side="left")) : int(tk.searchsorted(t1, side="left"))]
 
 
 def tactile_nominal_indices(t0: float, t1: float, rate: float, slack: float) -> Arr:

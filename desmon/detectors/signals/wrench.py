@@ -79,6 +79,10 @@ class WrenchSensor:
         self._seg_ends = np.array([s.end for s in self.segments])
         self._noise = BlockStream(seed, STREAM_WRENCH)
         self._cache: dict[int, Arr] = {}
+        #: per slip: the span of times its load is rendered for (a block reaching into it)
+        self._slip_spans = tuple((float(sl.t_s[0]) - 1.5, float(sl.t_s[0]) + 2.0, sl) for sl in self.slips)
+        #: per segment: whether it adds a force (hold and idle add none)
+        self._forceful = tuple(s.context not in (HOLD, IDLE) for s in self.segments)
 
     def _block(self, b: int) -> Arr:
         hit = self._cache.get(b)
@@ -97,39 +101,48 @@ class WrenchSensor:
         elementwise in ``t``, and which slips count is decided on the whole block's span, so
         a sample reads the same bytes whichever range of its block is rendered."""
         base = b * WRENCH_BLOCK
-        t = (np.arange(k0, k1, dtype=np.int64) / self.rate)[None, :]
-        val = wrench_noise(self.seed, b, self.config.sigma, k1 - base, self._noise)[None, k0 - base :]
+        t = np.arange(k0, k1, dtype=np.int64) / self.rate
+        val = wrench_noise(self.seed, b, self.config.sigma, k1 - base, self._noise)[k0 - base :]
         t_lo, t_hi = base / self.rate, (base + WRENCH_BLOCK - 1) / self.rate  # the block's span
-        i0 = int(np.searchsorted(self._seg_ends, float(t[0, 0]), side="right"))
-        i1 = int(np.searchsorted(self._seg_starts, float(t[0, -1]), side="right"))
+        i0 = int(self._seg_ends.searchsorted(float(t[0]), side="right"))
+        i1 = int(self._seg_starts.searchsorted(float(t[-1]), side="right"))
         for i in range(i0, i1):
-            s = self.segments[i]
-            if s.context in (HOLD, IDLE):
+            if not self._forceful[i]:
                 continue
+            s = self.segments[i]
             # only the samples inside the segment (t ascends): the force is elementwise in t
             # and outside the segment nothing is added (``val`` is this range's own array)
-            lo, hi = np.searchsorted(t[0], (s.start, s.end), side="left")
+            lo = int(t.searchsorted(s.start, side="left"))
+            hi = int(t.searchsorted(s.end, side="left"))
             if hi > lo:
-                ts = t[:, lo:hi]
-                val[:, lo:hi] += context_force(s.context, ts - s.start, self.seg_params[i], self.params, self.config.coupling)
-        for sl in self.slips:
-            if t_hi < float(sl.t_s[0]) - 1.5 or t_lo > float(sl.t_s[0]) + 2.0:
+                val[lo:hi] += context_force(s.context, t[None, lo:hi] - s.start, self.seg_params[i], self.params, self.config.coupling)[0]
+        for before, after, sl in self._slip_spans:
+            if t_hi < before or t_lo > after:
                 continue
-            val = val + slip_force(t, sl.t_s, sl.sign, sl.grav, sl.params)
-        return val[0]
+            val = val + slip_force(t[None, :], sl.t_s, sl.sign, sl.grav, sl.params)[0]
+        return val
+
+    def _span(self, k0: int, k1: int) -> Arr:
+        """Fault-free samples ``k0 .. k1 - 1`` (a request by time), a fresh array: of each block
+        they touch, a cached block's slice or else only the samples asked for, rendered."""
+        B = WRENCH_BLOCK
+        parts = []
+        for b in range(k0 // B, (k1 - 1) // B + 1):
+            lo, hi = max(k0, b * B), min(k1, (b + 1) * B)
+            hit = self._cache.get(b)
+            parts.append(hit[lo - b * B : hi - b * B].copy() if hit is not None else self._render(b, lo, hi))
+        return parts[0] if len(parts) == 1 else np.concatenate(parts)
 
     def clean(self, k: Arr) -> Arr:
         """Fault-free samples at grid indices ``k``."""
         out = np.empty(k.shape)
         if k.size == 0:
             return out
+        if k.ndim == 1 and int(k[-1]) - int(k[0]) + 1 == k.size and bool((k[1:] > k[:-1]).all()):
+            return self._span(int(k[0]), int(k[-1]) + 1)
         b0 = int(k[0]) // WRENCH_BLOCK
         if k.ndim == 1 and int(k[-1]) // WRENCH_BLOCK == b0 and int(k.min()) // WRENCH_BLOCK == b0:
-            hit = self._cache.get(b0)
-            if hit is None and int(k[-1]) - int(k[0]) + 1 == k.size and bool(np.all(k[1:] > k[:-1])):
-                # consecutive samples of one block (a request by time): only they are rendered
-                return self._render(b0, int(k[0]), int(k[-1]) + 1)
-            return (hit if hit is not None else self._block(b0))[k - b0 * WRENCH_BLOCK]
+            return self._block(b0)[k - b0 * WRENCH_BLOCK]
         blocks = k // WRENCH_BLOCK
         for b in np.unique(blocks):
             sel = blocks == b
