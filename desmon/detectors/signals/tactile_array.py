@@ -64,6 +64,26 @@ _Term = tuple[Arr, bool, bool]
 Rendered = tuple[Arr, Arr, "Arr | None"]
 
 
+class _Scratch:
+    """Work arrays a :class:`TactileArray` reuses from render to render: a render's largest
+    arrays (per cell, per frame) are written into them instead of into fresh memory, which
+    the allocator hands back to the system after each render and the next one faults in
+    again, page by page."""
+
+    __slots__ = ("_bufs",)
+
+    def __init__(self) -> None:
+        self._bufs: dict[str, Arr] = {}
+
+    def get(self, name: str, n: int, dtype: type) -> Arr:
+        """The first ``n`` elements of work array ``name`` (contents undefined), grown if shorter."""
+        buf = self._bufs.get(name)
+        if buf is None or buf.size < n:
+            buf = np.empty(max(n, buf.size + buf.size // 4 if buf is not None else n), dtype)
+            self._bufs[name] = buf
+        return buf[:n]
+
+
 def episode_pad_state(t: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, Arr]:
     """Amplitude, row centre and column centre of every pad, each ``(n, K, 6)``, at times ``t`` ``(n, K)``."""
     c = ep.contact
@@ -302,7 +322,9 @@ def render_rows(
     return count, sup_cell[sel], mu
 
 
-def _row_cells(amp: Arr, yc: Arr, xc: Arr, pad: Arr, sy: Arr, sx: Arr, p: SignalParams) -> tuple[Arr, Arr, Arr, Arr, Arr]:
+def _row_cells(
+    amp: Arr, yc: Arr, xc: Arr, pad: Arr, sy: Arr, sx: Arr, p: SignalParams, scratch: _Scratch | None = None
+) -> tuple[Arr, Arr, Arr, Arr, Arr]:
     """:func:`render_rows` with the cells left as indices: ``(count, sel, mu, sup_cell, first)``,
     the flat cell of kept cell ``m`` being ``sup_cell[sel[m]]``, row ``r``'s cells starting at
     ``first[r]``.
@@ -310,7 +332,8 @@ def _row_cells(amp: Arr, yc: Arr, xc: Arr, pad: Arr, sy: Arr, sx: Arr, p: Signal
     Consecutive rows with the same pad and centre share one template ``ey_i * ex_j``
     (a hold, a move_base phase, a jerk of a slip), and only the template's cells that
     can reach the dead-band at the run's peak amplitude are evaluated per frame; when
-    every one of them reaches it (nearly always) nothing is filtered.
+    every one of them reaches it (nearly always) nothing is filtered. With ``scratch`` the
+    per-cell ``sel`` and ``mu`` are written into its work arrays.
     """
     n = amp.size
     if n == 0:
@@ -334,10 +357,16 @@ def _row_cells(amp: Arr, yc: Arr, xc: Arr, pad: Arr, sy: Arr, sx: Arr, p: Signal
     offset = np.cumsum(count) - count
     per_row = count[run]
     first = np.cumsum(per_row) - per_row
-    idx = np.arange(int(first[-1] + per_row[-1]))
-    idx -= np.repeat(first - offset[run], per_row)
-    mu = np.repeat(amp, per_row)
-    mu *= sup_tmpl[idx]
+    total = int(first[-1] + per_row[-1])
+    if scratch is None:
+        idx = np.arange(total)
+        idx -= np.repeat(first - offset[run], per_row)
+        mu = np.repeat(amp, per_row)
+        mu *= sup_tmpl[idx]
+    else:
+        idx = _cell_templates(per_row, first, offset[run], scratch.get("idx", total, np.int64))
+        mu = np.take(sup_tmpl, idx, out=scratch.get("mu", total, float), mode="clip")
+        mu *= np.repeat(amp, per_row)  # amp * w, as above (a product does not depend on the order)
     # every cell reaches the dead-band iff it does at its run's lowest amplitude (rounding is
     # monotonic: amp <= amp' gives amp * w <= amp' * w), checked on the templates, not the cells
     low = np.minimum.reduceat(amp, starts)
@@ -347,6 +376,20 @@ def _row_cells(amp: Arr, yc: Arr, xc: Arr, pad: Arr, sy: Arr, sx: Arr, p: Signal
     # kept cells per row: positions of the row starts among the kept cells
     at = np.searchsorted(keep, np.append(first, idx.size))
     return np.diff(at), idx[keep], mu[keep], sup_cell, at[:-1]
+
+
+def _cell_templates(per_row: Arr, first: Arr, start: Arr, out: Arr) -> Arr:
+    """``out[m] = start[r] + (m - first[r])`` for the ``per_row[r]`` cells ``m`` of row ``r``
+    (from ``first[r]``): a cell's index into the template cells, as steps of one from each
+    row's start, summed in place (integers: exact)."""
+    if out.size:
+        nz = np.flatnonzero(per_row)
+        at, v = first[nz], start[nz]
+        out.fill(1)
+        out[at[0]] = v[0]
+        out[at[1:]] = v[1:] - v[:-1] - per_row[nz[:-1]] + 1
+        np.cumsum(out, out=out)
+    return out
 
 
 def frame_moments(frames: Arr) -> Arr:
@@ -412,12 +455,12 @@ def _episode_state(t: Arr, ranges: list[tuple[int, int]], ep: Episode, p: Signal
     return sel, a[0], y[0], x[0]
 
 
-def _contact_rows(t: Arr, units: list[tuple[int, int, int]], episodes: Sequence[Episode], p: SignalParams) -> _Rows:
+def _contact_rows(t: Arr, units: list[tuple[int, int, int]], episodes: Sequence[Episode], p: SignalParams, scratch: _Scratch) -> _Rows:
     """Pad states at every frame of the units, expanded to rows and kept where the pad is touched."""
     nf = t.size
     # amplitude, row centre, column centre, row spread, column spread of (frame, pad); only
     # the units' frames are written, and only they are read
-    state = np.empty((5, nf, N_PADS))
+    state = scratch.get("state", 5 * nf * N_PADS, float).reshape(5, nf, N_PADS)
     by_ep: dict[int, list[tuple[int, int]]] = {}
     for lo, hi, ei in units:
         by_ep.setdefault(ei, []).append((lo, hi))
@@ -451,6 +494,7 @@ class TactileArray:
         self._normals = BlockStream(seed, STREAM_TACTILE)
         self._ep_starts = np.array([ep.start for ep in self.episodes])
         self._cache: dict[tuple[int, bool], Rendered] = {}
+        self._scratch = _Scratch()
 
     def times(self, index: Arr) -> Arr:
         """Jittered time of each frame number."""
@@ -470,7 +514,7 @@ class TactileArray:
     def _noisy_values(self, rows: _Rows, count: Arr, mu: Arr, blocks: Arr) -> Arr:
         """Cell readings ``clip(rint(mu + noise), 0, FULL_SCALE)``; each block's normals from its own generator."""
         per_block = np.bincount(rows.frame // TACTILE_BLOCK, weights=count, minlength=blocks.size).astype(np.int64)
-        vals = np.empty(mu.size)
+        vals = self._scratch.get("vals", mu.size, float)
         at = 0
         for i in range(blocks.size):
             c = int(per_block[i])
@@ -503,8 +547,8 @@ class TactileArray:
         fr = np.zeros((t.size, N_PADS, MAX_ROWS, PAD_COLS), dtype=np.int16) if frames else None
         units = _episode_units(t, nb, self.episodes, self._ep_starts)
         if units:
-            rows = _contact_rows(t, units, self.episodes, self.params)
-            count, sel, mu, sup_cell, first = _row_cells(rows.amp, rows.yc, rows.xc, rows.pad, rows.sy, rows.sx, self.params)
+            rows = _contact_rows(t, units, self.episodes, self.params, self._scratch)
+            count, sel, mu, sup_cell, first = _row_cells(rows.amp, rows.yc, rows.xc, rows.pad, rows.sy, rows.sx, self.params, self._scratch)
             vals = self._noisy_values(rows, count, mu, barr)
             hit = np.flatnonzero(count)
             if hit.size:
@@ -513,7 +557,7 @@ class TactileArray:
                     first, at = first[hit], at[hit]
                 flat = mom.reshape(-1)
                 flat[at] = np.add.reduceat(vals, first)
-                code = _CELL_CODE[sup_cell][sel]
+                code = np.take(_CELL_CODE[sup_cell], sel, out=mu, mode="clip")  # mu is read no more
                 packed = np.add.reduceat(np.multiply(code, vals, out=code), first)
                 sum_j = np.floor(packed / _PACK)  # exact: integers and a power of two
                 # sum i P exactly, -0.0 where every value is -0.0 (as a sum of them would be)
