@@ -69,7 +69,7 @@ def _nan_to_num1(x: float) -> float:
 
 def _zoh1(carry: tuple[float, float, bool], t: Arr, s: Arr, v: Arr, ticks: Arr, stale: float) -> tuple[Arr, Arr]:
     """One-stream zero-order hold with a carried last sample (the streaming case of :func:`zoh`)."""
-    pos = np.searchsorted(t, ticks, side="right") - 1
+    pos = t.searchsorted(ticks, side="right") - 1
     new = pos >= 0
     p = np.maximum(pos, 0)
     if t.size:
@@ -169,7 +169,7 @@ class CombinedDetector:
             sf, okf = _zoh1(self._f, ft, fs, fv, ticks, self.force.timeout)
             st, okt = _zoh1(self._t, tt, ts, tv, ticks, self.tactile.timeout)
             up, down = combined_mask(st, okt, sf, okf, self.tactile.threshold, self.force.threshold)
-            hit = np.flatnonzero(up | down)
+            hit = (up | down).nonzero()[0]
             alarms = tuple(Alarm(float(ticks[i]), self.name, UP if up[i] else DOWN) for i in hit)
             self._next += ticks.size
         if ft.size:

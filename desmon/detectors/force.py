@@ -114,7 +114,7 @@ class ForceDetector(StreamingDetector):
         start = 0
         if self._tare is None:
             end_t = self._t_act + self.tare_window
-            n_in = int(np.searchsorted(t, end_t, side="left"))
+            n_in = int(t.searchsorted(end_t, side="left"))
             self._buf.append(v[:n_in][good[:n_in]])
             start = n_in
             if n_in < t.size:
@@ -153,5 +153,5 @@ class ForceDetector(StreamingDetector):
         if until is not None:
             self.check_input(float(until))
         up, down = force_alarm_mask(s, self.threshold)
-        hit = np.flatnonzero(valid & (up | down))
+        hit = (valid & (up | down)).nonzero()[0]
         return tuple(Alarm(float(t[i]), self.name, UP if up[i] else DOWN) for i in hit)

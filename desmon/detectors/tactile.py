@@ -189,15 +189,15 @@ class TactileDetector(StreamingDetector):
             return t, np.zeros(0), np.zeros(0, dtype=bool)
         n = t.size
         # frames in the current run of identical frames, the last one included
-        if n > 1 and not bool(np.all(m[-1] == m[-2])):
+        if n > 1 and not bool((m[-1] == m[-2]).all()):
             run_last = 1  # the last frame differs from the one before
         else:
             # frames repeating the one before (the first: the last of the previous call)
             same = np.empty(n, dtype=bool)
-            same[0] = bool(np.all(m[0] == self._last_m))
+            same[0] = bool((m[0] == self._last_m).all())
             if n > 1:
                 np.all((m[1:] == m[:-1]).reshape(n - 1, -1), axis=1, out=same[1:])
-            changed = np.flatnonzero(~same)
+            changed = (~same).nonzero()[0]
             run_last = n - int(changed[-1]) if changed.size else self._run + n
         self._run = run_last
         self._last_m = m[-1].copy()
@@ -206,13 +206,13 @@ class TactileDetector(StreamingDetector):
         s, valid = s[0], valid[0]
         self._seen_valid = self._seen_valid or bool(valid.any())
         if run_last >= self.stuck_frames:
-            reason = "no_contact" if not np.any(m[-1, :, 0] > 0) else "stuck"
+            reason = "no_contact" if not (m[-1, :, 0] > 0).any() else "stuck"
             first_bad = n - 1 - (run_last - self.stuck_frames)
             self._set(DetectorState.NO_INPUT, reason, float(t[max(first_bad, 0)]))
         elif not valid[-1]:
             self._set(DetectorState.WARMING, "warm_up", float(t[-1]))
         else:
-            bad = np.flatnonzero(~valid)
+            bad = (~valid).nonzero()[0]
             self._set(DetectorState.OK, "", float(t[bad[-1] + 1] if bad.size else t[0]))
         return t, s, valid
 
@@ -228,5 +228,5 @@ class TactileDetector(StreamingDetector):
         t, s, valid = self.scores(times, samples)
         if until is not None:
             self.check_input(float(until))
-        hit = np.flatnonzero(valid & (s >= self.threshold))
+        hit = (valid & (s >= self.threshold)).nonzero()[0]
         return tuple(Alarm(float(t[i]), self.name, None) for i in hit)

@@ -178,10 +178,10 @@ def context_tactile(context: str, t_rel: Arr, cp: Params, p: SignalParams) -> tu
     one = np.ones(1)
     zero = np.zeros(1)
     if context == GRASP:
-        g = np.clip((t_rel - cp["t_on"][:, None, :]) / cp["ramp"][:, None, :], 0.0, 1.0)
+        g = ((t_rel - cp["t_on"][:, None, :]) / cp["ramp"][:, None, :]).clip(0.0, 1.0)
         return g, cp["dy"][:, None, :] * (1 - g), cp["dx"][:, None, :] * (1 - g)
     if context == RELEASE:
-        g = 1.0 - np.clip((t_rel - cp["t_off"][:, None, :]) / cp["ramp"][:, None, :], 0.0, 1.0)
+        g = 1.0 - ((t_rel - cp["t_off"][:, None, :]) / cp["ramp"][:, None, :]).clip(0.0, 1.0)
         return g, cp["dy"][:, None, :] * (1 - g), cp["dx"][:, None, :] * (1 - g)
     if context in (ROTATE_CCW, ROTATE_CW):
         q = jerky(t_rel, cp["t0"][:, None, None], cp["dur"][:, None, None], cp["jerks"][:, None, None])

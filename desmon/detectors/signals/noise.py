@@ -172,7 +172,7 @@ class Jitter:
         if arr is None:
             p = self.params
             g = self._stream.generator(b)
-            arr = np.clip(g.normal(0.0, p.tactile_jitter, JITTER_BLOCK), -p.tactile_jitter_clip, p.tactile_jitter_clip)
+            arr = g.normal(0.0, p.tactile_jitter, JITTER_BLOCK).clip(-p.tactile_jitter_clip, p.tactile_jitter_clip)
             if len(self._cache) >= JITTER_CACHE:
                 del self._cache[next(iter(self._cache))]
             self._cache[b] = arr

@@ -17,6 +17,7 @@ reference of that order, :func:`render_rows` the vectorised form used for missio
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 from typing import Callable, Final, Sequence
@@ -152,7 +153,7 @@ def _segment_kernel(tt: Arr, lo: int, hi: int, seg: tuple[str, float, float, dic
     arg[m + 1] = dur
     inner = arg[1 : m + 1]
     np.subtract(tt[lo:hi], start, out=inner)
-    np.clip(inner, 0.0, dur, out=inner)
+    inner.clip(0.0, dur, out=inner)
     tr = arg.reshape(1, m + 2, 1)
     if context == HOLD:
         return _term(hold_creep(tr, kappa, p), 1.0), None, None
@@ -342,21 +343,21 @@ def _row_cells(
     change[0] = True
     np.not_equal(pad[1:], pad[:-1], out=change[1:])
     change[1:] |= (yc[1:] != yc[:-1]) | (xc[1:] != xc[:-1]) | (sy[1:] != sy[:-1]) | (sx[1:] != sx[:-1])
-    starts = np.flatnonzero(change)
-    run = np.cumsum(change) - 1
+    starts = change.nonzero()[0]
+    run = change.cumsum() - 1
     ey = np.exp(-((_II - yc[starts][:, None]) ** 2) / (2.0 * sy[starts][:, None] ** 2))
     ex = np.exp(-((_JJ - xc[starts][:, None]) ** 2) / (2.0 * sx[starts][:, None] ** 2))
     ey *= _ROW_OK[pad[starts]]  # rows a distal pad does not have read nothing
     tmpl = (ey[:, :, None] * ex[:, None, :]).reshape(-1)
     # a cell below the dead-band at the run's peak amplitude is below it in every frame
     peak = np.maximum.reduceat(amp, starts)
-    sup_flat = np.flatnonzero(tmpl * np.repeat(peak, MAX_ROWS * PAD_COLS) >= p.deadband)
+    sup_flat = (tmpl * peak.repeat(MAX_ROWS * PAD_COLS) >= p.deadband).nonzero()[0]
     sup_tmpl = tmpl[sup_flat]
     sup_cell = sup_flat % (MAX_ROWS * PAD_COLS)
     count = np.bincount(sup_flat // (MAX_ROWS * PAD_COLS), minlength=starts.size)
-    offset = np.cumsum(count) - count
+    offset = count.cumsum() - count
     per_row = count[run]
-    first = np.cumsum(per_row) - per_row
+    first = per_row.cumsum() - per_row
     total = int(first[-1] + per_row[-1])
     if scratch is None:
         idx = np.arange(total)
@@ -366,11 +367,11 @@ def _row_cells(
     else:
         idx = _cell_templates(per_row, first, offset[run], scratch.get("idx", total, np.int64))
         mu = np.take(sup_tmpl, idx, out=scratch.get("mu", total, float), mode="clip")
-        mu *= np.repeat(amp, per_row)  # amp * w, as above (a product does not depend on the order)
+        mu *= amp.repeat(per_row)  # amp * w, as above (a product does not depend on the order)
     # every cell reaches the dead-band iff it does at its run's lowest amplitude (rounding is
     # monotonic: amp <= amp' gives amp * w <= amp' * w), checked on the templates, not the cells
     low = np.minimum.reduceat(amp, starts)
-    if bool((sup_tmpl * np.repeat(low, count) >= p.deadband).all()):
+    if bool((sup_tmpl * low.repeat(count) >= p.deadband).all()):
         return per_row, idx, mu, sup_cell, first
     keep = np.flatnonzero(mu >= p.deadband)
     # kept cells per row: positions of the row starts among the kept cells
@@ -383,7 +384,7 @@ def _cell_templates(per_row: Arr, first: Arr, start: Arr, out: Arr) -> Arr:
     (from ``first[r]``): a cell's index into the template cells, as steps of one from each
     row's start, summed in place (integers: exact)."""
     if out.size:
-        nz = np.flatnonzero(per_row)
+        nz = per_row.nonzero()[0]
         at, v = first[nz], start[nz]
         out.fill(1)
         out[at[0]] = v[0]
@@ -420,20 +421,21 @@ class _Rows:
     sx: Arr
 
 
-def _episode_units(t: Arr, nb: int, episodes: Sequence[Episode], ep_starts: Arr) -> list[tuple[int, int, int]]:
+def _episode_units(t: Arr, nb: int, episodes: Sequence[Episode], ep_starts: list[float]) -> list[tuple[int, int, int]]:
     """The (block, episode) frame ranges ``(lo, hi, episode number)`` of ``nb`` concatenated
-    blocks of frame times ``t``, in draw order."""
+    blocks of frame times ``t``, in draw order (``ep_starts``: the episodes' starts, ascending)."""
     B = TACTILE_BLOCK
     units: list[tuple[int, int, int]] = []
     for i in range(nb):
         tb = t[i * B : (i + 1) * B]
-        first = int(np.searchsorted(ep_starts, tb[0], side="right")) - 1
+        t_first, t_last = float(tb[0]), float(tb[-1])
+        first = bisect.bisect_right(ep_starts, t_first) - 1
         for ei in range(max(first, 0), len(episodes)):
             ep = episodes[ei]
-            if ep.start > tb[-1]:
+            if ep.start > t_last:
                 break
-            lo = int(np.searchsorted(tb, ep.start, side="left"))
-            hi = int(np.searchsorted(tb, ep.end, side="left"))
+            lo = int(tb.searchsorted(ep.start, side="left"))
+            hi = int(tb.searchsorted(ep.end, side="left"))
             if hi > lo:
                 units.append((i * B + lo, i * B + hi, ei))
     return units
@@ -448,7 +450,7 @@ def _episode_state(t: Arr, ranges: list[tuple[int, int]], ep: Episode, p: Signal
     else:
         sel = np.concatenate([np.arange(lo, hi) for lo, hi in ranges])
     tt = t[sel]
-    fast = _ascending_state(tt, ep, p) if bool(np.all(tt[1:] >= tt[:-1])) else None
+    fast = _ascending_state(tt, ep, p) if bool((tt[1:] >= tt[:-1]).all()) else None
     if fast is not None:
         return (sel, *fast)
     a, y, x = episode_pad_state(tt[None, :], ep, p)
@@ -492,7 +494,7 @@ class TactileArray:
         self.rate = params.tactile_rate
         self.jitter = Jitter(seed, params)
         self._normals = BlockStream(seed, STREAM_TACTILE)
-        self._ep_starts = np.array([ep.start for ep in self.episodes])
+        self._ep_starts = [float(ep.start) for ep in self.episodes]
         self._cache: dict[tuple[int, bool], Rendered] = {}
         self._scratch = _Scratch()
 
@@ -524,7 +526,7 @@ class TactileArray:
         vals *= self.params.noise_counts
         vals += mu
         np.rint(vals, out=vals)
-        np.clip(vals, 0.0, FULL_SCALE, out=vals)
+        vals.clip(0.0, FULL_SCALE, out=vals)
         return vals
 
     def render_blocks(self, blocks: Sequence[int], frames: bool) -> list[Rendered]:
@@ -539,7 +541,7 @@ class TactileArray:
         B = TACTILE_BLOCK
         nb = len(blocks)
         barr = np.asarray(blocks, dtype=np.int64)
-        if nb and int(barr[-1]) - int(barr[0]) + 1 == nb and bool(np.all(barr[1:] > barr[:-1])):  # neighbouring blocks
+        if nb and int(barr[-1]) - int(barr[0]) + 1 == nb and bool((barr[1:] > barr[:-1]).all()):  # neighbouring blocks
             t = self._times_range(int(barr[0]) * B, (int(barr[-1]) + 1) * B)
         else:
             t = self.times((barr[:, None] * B + np.arange(B, dtype=np.int64)[None, :]).reshape(-1))
@@ -550,7 +552,7 @@ class TactileArray:
             rows = _contact_rows(t, units, self.episodes, self.params, self._scratch)
             count, sel, mu, sup_cell, first = _row_cells(rows.amp, rows.yc, rows.xc, rows.pad, rows.sy, rows.sx, self.params, self._scratch)
             vals = self._noisy_values(rows, count, mu, barr)
-            hit = np.flatnonzero(count)
+            hit = count.nonzero()[0]
             if hit.size:
                 at = (rows.frame * N_PADS + rows.pad) * 3  # (frame, pad, 0) in the flat moments
                 if hit.size < count.size:
@@ -614,7 +616,7 @@ class TactileArray:
         parts = [rendered[b] if b in rendered else self._block(b, frames) for b in span]
         j = k - b0 * B
         lo, hi = int(j[0]), int(j[-1]) + 1
-        if k.ndim == 1 and hi - lo == j.size and bool(np.all(j[1:] - j[:-1] == 1)):
+        if k.ndim == 1 and hi - lo == j.size and bool((j[1:] - j[:-1] == 1).all()):
             # consecutive frames (a request by time): the blocks' slices, copied once
             cuts = [(i, slice(max(lo - i * B, 0), min(hi - i * B, B))) for i in range(len(parts)) if lo < (i + 1) * B and hi > i * B]
             fields = range(3) if frames else range(2)
@@ -666,7 +668,7 @@ class TactileArray:
         if all((b, frames) in self._cache for b in range(b0, b1 + 1)):
             return
         b2 = b1
-        ei = int(np.searchsorted(self._ep_starts, t1, side="right")) - 1
+        ei = bisect.bisect_right(self._ep_starts, t1) - 1
         if ei >= 0 and self.episodes[ei].end > t1:
             end = min(self.episodes[ei].end, t1 + PREFETCH_S)
             b2 = max(b1, int(math.ceil((end + self.params.tactile_jitter_clip) * self.rate)) // B)
