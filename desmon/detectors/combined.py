@@ -54,8 +54,15 @@ def zoh(sample_t: Arr, values: Arr, valid: Arr, ticks: Arr, stale: float) -> tup
 
 
 def _nan_to_num(a: Arr) -> Arr:
-    """``np.nan_to_num(a)``: ``a`` itself when every value is finite (the caller's own copy)."""
-    return a if np.isfinite(a).all() else np.nan_to_num(a)
+    """``np.nan_to_num(a)`` of a float array, written into ``a`` itself (the caller's own copy):
+    NaN reads 0.0, infinities the largest finite values."""
+    if np.isfinite(a).all():
+        return a
+    np.copyto(a, 0.0, where=np.isnan(a))
+    big = np.finfo(a.dtype).max
+    np.copyto(a, big, where=a == np.inf)
+    np.copyto(a, -big, where=a == -np.inf)
+    return a
 
 
 def _nan_to_num1(x: float) -> float:

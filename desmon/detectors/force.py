@@ -19,7 +19,10 @@ Arr = np.ndarray
 
 def tare_value(window: Arr) -> Arr:
     """Tare per trial: mean of the samples in the tare window, ``window (n, w)`` -> ``(n,)``."""
-    return np.mean(window, axis=-1)
+    if window.shape[-1] == 0:
+        return np.mean(window, axis=-1)  # NaN, with numpy's warning
+    # np.mean's own steps (its sum, then a division by the count) without its dispatch
+    return np.add.reduce(window, axis=-1) / window.shape[-1]
 
 
 def force_alarm_mask(scores: Arr, threshold: float) -> tuple[Arr, Arr]:
