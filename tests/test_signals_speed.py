@@ -95,3 +95,44 @@ def test_block_stream_falls_back_where_numpy_seeds_otherwise(monkeypatch: pytest
         noise._hashing_agrees.cache_clear()
     monkeypatch.undo()
     assert noise._hashing_agrees()
+
+
+_DAY = [("idle", 0.0, 1.0), ("grasp", 1.0, 2.0), ("hold", 3.0, 20.0), ("move_base", 23.0, 3.7), ("release", 26.7, 1.2), ("idle", 27.9, 2.0)]
+
+
+@pytest.mark.parametrize("frames", [False, True])
+def test_tactile_between_from_cached_blocks_matches_by_index(frames: bool) -> None:
+    """A request by time read from the cached blocks (one run of frames) is what the frames of
+    its candidates kept by time give, spans inside a block, across blocks, empty and reversed."""
+    from desmon.detectors.signals import MissionSignals, SlipEvent
+    from desmon.detectors.signals.common import tactile_nominal_indices
+
+    ms = MissionSignals(_DAY, [SlipEvent(10.0, "down", "pulled")], seed=4)
+    ref = MissionSignals(_DAY, [SlipEvent(10.0, "down", "pulled")], seed=4).tactile_array
+    rng = np.random.default_rng(5)
+    spans = [(0.0, 29.9), (8.5, 8.51), (8.52, 8.52), (9.0, 8.0), (8.5334, 8.5334 + 1 / 30)]
+    spans += [(float(a), float(a + d)) for a, d in zip(rng.uniform(0.0, 29.0, 40), rng.exponential(2.0, 40))]
+    for t0, t1 in spans:
+        got = ms.tactile(t0, t1, frames=frames)
+        cand = tactile_nominal_indices(t0, t1, ref.rate, ref.params.tactile_jitter_clip)
+        t = ref.times(cand)
+        want = ref.at(cand[(t >= t0) & (t < t1)], frames=frames)
+        for g, w in ((got.index, want.index), (got.times, want.times), (got.moments, want.moments), (got.frames, want.frames)):
+            assert (g is None) == (w is None)
+            if g is not None:
+                assert g.dtype == w.dtype and g.shape == w.shape and g.tobytes() == w.tobytes(), (t0, t1)
+
+
+def test_wrench_request_by_time_matches_whole_blocks() -> None:
+    """A request by time renders only its samples of each block it touches (one or two blocks):
+    the same bytes as the whole blocks' samples."""
+    from desmon.detectors.signals import MissionSignals, SlipEvent
+
+    ms = MissionSignals(_DAY, [SlipEvent(10.0, "down", "pulled")], seed=4)
+    ref = MissionSignals(_DAY, [SlipEvent(10.0, "down", "pulled")], seed=4).wrench_sensor
+    for t0, t1 in ((0.0, 1.7), (19.5, 21.2), (20.0, 20.5), (10.0, 29.9), (20.48, 20.5), (3.0, 3.0)):
+        got = ms.wrench(t0, t1)
+        k = got.index
+        assert np.array_equal(k, np.flatnonzero((np.arange(2000) / 50.0 >= t0) & (np.arange(2000) / 50.0 < t1)))
+        want = np.concatenate([ref._block(int(b))[k[k // 1024 == b] - b * 1024] for b in np.unique(k // 1024)]) if k.size else np.zeros(0)
+        assert got.values.tobytes() == want.tobytes(), (t0, t1)

@@ -497,6 +497,8 @@ class TactileArray:
         self._ep_starts = [float(ep.start) for ep in self.episodes]
         self._cache: dict[tuple[int, bool], Rendered] = {}
         self._scratch = _Scratch()
+        #: frame times ascend (jitter under half a frame period): a span of times is a run of frames
+        self._ordered = 2.0 * params.tactile_jitter_clip < 1.0 / params.tactile_rate
 
     def times(self, index: Arr) -> Arr:
         """Jittered time of each frame number."""
@@ -679,10 +681,44 @@ class TactileArray:
         missing = [b for b in range(b0, b2 + 1) if (b, frames) not in self._cache]
         self.render_blocks(missing, frames)
 
+    def _cached_between(self, k0: int, k1: int, t0: float, t1: float, frames: bool) -> TactileBlock | None:
+        """:meth:`between` of candidate frames ``k0 .. k1 - 1`` read from the cached blocks
+        (None if one is missing), without faults: frame times ascend, so the frames with
+        ``t0 <= t < t1`` are one run, cut from the blocks' own times, moments and frames."""
+        B = TACTILE_BLOCK
+        parts = []
+        for b in range(k0 // B, (k1 - 1) // B + 1):
+            hit = self._cache.get((b, frames))
+            if hit is None:
+                return None
+            parts.append((b * B, hit))
+        cand = [(base, hit[0][max(k0 - base, 0) : min(k1 - base, B)]) for base, hit in parts]
+        # the run of frames: from the first with t >= t0 to the first with t >= t1 (all candidates ascending)
+        lo = hi = None
+        for base, tb in cand:
+            if lo is None and tb.size and tb[-1] >= t0:
+                lo = max(k0, base) + int(tb.searchsorted(t0, side="left"))
+            if tb.size and tb[-1] >= t1:
+                hi = max(k0, base) + int(tb.searchsorted(t1, side="left"))
+                break
+        hi = k1 if hi is None else hi
+        lo = hi if lo is None else min(lo, hi)
+        fields = []
+        for f in range(3 if frames else 2):
+            cuts = [hit[f][max(lo - base, 0) : min(hi - base, B)] for base, hit in parts if lo < base + B and hi > base]  # type: ignore[index]
+            if not cuts:
+                cuts = [parts[0][1][f][:0]]  # type: ignore[index]
+            fields.append(cuts[0].copy() if len(cuts) == 1 else np.concatenate(cuts))
+        return TactileBlock(np.arange(lo, hi, dtype=np.int64), fields[0], fields[1], fields[2] if frames else None)
+
     def between(self, t0: float, t1: float, frames: bool = False) -> TactileBlock:
         """All frames with ``t0 <= t < t1`` (moments always; full frames if ``frames``)."""
         cand = tactile_nominal_indices(t0, t1, self.rate, self.params.tactile_jitter_clip)
         if cand.size:
             self._prefetch(int(cand[0]), int(cand[-1]), t1, frames)
+            if self._ordered and not self.faults:
+                hit = self._cached_between(int(cand[0]), int(cand[-1]) + 1, t0, t1, frames)
+                if hit is not None:
+                    return hit
         t = self._times_range(int(cand[0]), int(cand[-1]) + 1) if cand.size else self.times(cand)  # cand: consecutive
         return self.at(cand[(t >= t0) & (t < t1)], frames=frames)
