@@ -92,29 +92,41 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
     The returned state continues the stream: splitting ``K`` into chunks gives
     bit-identical results.
     """
-    if not moments[..., 0].any():  # no contact anywhere: nothing valid (same result as below, cheaper)
-        n, k = moments.shape[:2]
+    n, k = moments.shape[:2]
+    s = moments[..., 0]
+    if not s.any():  # no contact anywhere: nothing valid (same result as below, cheaper)
         if k == 0:
             return np.zeros((n, 0)), np.zeros((n, 0), dtype=bool), state
         z = np.zeros((n, N_PADS, 2))
         last_index = state.cop.copy() if k == 1 else z
         return np.zeros((n, k)), np.zeros((n, k), dtype=bool), TactileState(z, last_index, state.run + k)
-    cop, contact = centred_cop(moments)
-    n, k = contact.shape[:2]
+    contact = s > 0
+    off = ~contact
+    safe = np.where(contact, s, 1.0)
+    # the centred centres of pressure (:func:`centred_cop`: the same operations), written
+    # after the carried one; then the slip indices after the carried one
     cop_ext = np.empty((n, k + 1, N_PADS, 2))
     cop_ext[:, 0] = state.cop
-    cop_ext[:, 1:] = cop
+    cop = cop_ext[:, 1:]
+    for c, mid in ((0, _ROW_MID), (1, _COL_MID)):
+        part = cop[..., c]
+        np.divide(moments[..., 1 + c], safe, out=part)
+        part -= mid
+        np.copyto(part, 0.0, where=off)
     idx_ext = np.empty_like(cop_ext)
     idx_ext[:, 0] = state.index
     index = idx_ext[:, 1:]
-    np.add(cop_ext[:, 1:], cop_ext[:, :-1], out=index)
+    np.add(cop, cop_ext[:, :-1], out=index)
     d = idx_ext[:, 1:] - idx_ext[:, :-1]
-    phi = np.sqrt(d[..., 0] ** 2 + d[..., 1] ** 2)
+    d *= d  # x ** 2 is x * x
+    phi = d[..., 0] + d[..., 1]
+    np.sqrt(phi, out=phi)
     run = state.run[:, None] + np.arange(1, k + 1)[None, :]  # frames since activation, this one included
     valid_pad = (contact & (run >= WARMUP_FRAMES)[..., None]) if gating else contact
-    w = np.where(valid_pad, moments[..., 0] / _CELLS, 0.0)
+    w = np.where(valid_pad, s / _CELLS, 0.0)
     den = w.sum(axis=-1)
-    num = (w * phi).sum(axis=-1)
+    phi *= w  # w * phi (a product does not depend on the order)
+    num = phi.sum(axis=-1)
     valid = den > 0
     s_t = np.where(valid, num / np.where(valid, den, 1.0), 0.0)
     if k:
