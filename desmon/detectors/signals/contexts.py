@@ -175,24 +175,23 @@ def context_tactile(context: str, t_rel: Arr, cp: Params, p: SignalParams) -> tu
     ``t_rel`` ``(n, K, 1)`` is clipped by the caller to ``[0, duration]`` so that the
     state at the end of an action persists afterwards.
     """
-    one = np.ones(1)
-    zero = np.zeros(1)
-    if context == GRASP:
-        g = ((t_rel - cp["t_on"][:, None, :]) / cp["ramp"][:, None, :]).clip(0.0, 1.0)
-        return g, cp["dy"][:, None, :] * (1 - g), cp["dx"][:, None, :] * (1 - g)
-    if context == RELEASE:
-        g = 1.0 - ((t_rel - cp["t_off"][:, None, :]) / cp["ramp"][:, None, :]).clip(0.0, 1.0)
-        return g, cp["dy"][:, None, :] * (1 - g), cp["dx"][:, None, :] * (1 - g)
+    if context == GRASP or context == RELEASE:
+        on = "t_on" if context == GRASP else "t_off"
+        g = ((t_rel - cp[on][:, None, :]) / cp["ramp"][:, None, :]).clip(0.0, 1.0)
+        if context == RELEASE:
+            g = 1.0 - g
+        rest = 1 - g
+        return g, cp["dy"][:, None, :] * rest, cp["dx"][:, None, :] * rest
     if context in (ROTATE_CCW, ROTATE_CW):
         q = jerky(t_rel, cp["t0"][:, None, None], cp["dur"][:, None, None], cp["jerks"][:, None, None])
         arc = cp["arc"][:, None, None] * q
-        return one, arc * cp["ydir"][:, None, None], arc * cp["xdir"][:, None, None]
+        return np.ones(1), arc * cp["ydir"][:, None, None], arc * cp["xdir"][:, None, None]
     if context == MOVE_BASE:
         acc, _ = base_profile(t_rel - cp["start"][:, None, None], cp["a_max"][:, None, None], p.base_leg, p.base_pause, speed=False)
         rel = acc / cp["a_max"][:, None, None]
         jump = cp["settle"][:, None, None] * cp["settle_jump"][:, None, None] * (t_rel >= cp["settle_t"][:, None, None])
-        return 1.0 + 0.03 * rel, 0.05 * rel + jump, zero
-    return one, zero, zero
+        return 1.0 + 0.03 * rel, 0.05 * rel + jump, np.zeros(1)
+    return np.ones(1), np.zeros(1), np.zeros(1)
 
 
 def hold_creep(t_rel: Arr, kappa: Arr, p: SignalParams) -> Arr:
