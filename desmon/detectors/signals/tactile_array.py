@@ -84,6 +84,14 @@ class _Scratch:
             self._bufs[name] = buf
         return buf[:n]
 
+    def arange(self, n: int) -> Arr:
+        """``np.arange(n)`` (int64), read only: a view of one kept, grown if shorter."""
+        buf = self._bufs.get("arange")
+        if buf is None or buf.size < n:
+            buf = np.arange(max(n, buf.size + buf.size // 4 if buf is not None else n), dtype=np.int64)
+            self._bufs["arange"] = buf
+        return buf[:n]
+
 
 def episode_pad_state(t: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, Arr]:
     """Amplitude, row centre and column centre of every pad, each ``(n, K, 6)``, at times ``t`` ``(n, K)``."""
@@ -365,7 +373,7 @@ def _row_cells(
         mu = np.repeat(amp, per_row)
         mu *= sup_tmpl[idx]
     else:
-        idx = _cell_templates(per_row, first, offset[run], scratch.get("idx", total, np.int64))
+        idx = np.subtract(scratch.arange(total), (first - offset[run]).repeat(per_row), out=scratch.get("idx", total, np.int64))
         mu = np.take(sup_tmpl, idx, out=scratch.get("mu", total, float), mode="clip")
         mu *= amp.repeat(per_row)  # amp * w, as above (a product does not depend on the order)
     # every cell reaches the dead-band iff it does at its run's lowest amplitude (rounding is
@@ -377,20 +385,6 @@ def _row_cells(
     # kept cells per row: positions of the row starts among the kept cells
     at = np.searchsorted(keep, np.append(first, idx.size))
     return np.diff(at), idx[keep], mu[keep], sup_cell, at[:-1]
-
-
-def _cell_templates(per_row: Arr, first: Arr, start: Arr, out: Arr) -> Arr:
-    """``out[m] = start[r] + (m - first[r])`` for the ``per_row[r]`` cells ``m`` of row ``r``
-    (from ``first[r]``): a cell's index into the template cells, as steps of one from each
-    row's start, summed in place (integers: exact)."""
-    if out.size:
-        nz = per_row.nonzero()[0]
-        at, v = first[nz], start[nz]
-        out.fill(1)
-        out[at[0]] = v[0]
-        out[at[1:]] = v[1:] - v[:-1] - per_row[nz[:-1]] + 1
-        np.cumsum(out, out=out)
-    return out
 
 
 def frame_moments(frames: Arr) -> Arr:
