@@ -47,17 +47,22 @@ _ROW_MID = (_ROWS - 1) / 2
 _COL_MID = (PAD_COLS - 1) / 2
 
 
-def centred_cop(moments: Arr) -> tuple[Arr, Arr]:
+def centred_cop(moments: Arr, out: Arr | None = None) -> tuple[Arr, Arr]:
     """Centred centre of pressure ``(..., 6, 2)`` (row, column) and contact mask ``(..., 6)``.
 
-    Pads without contact get centre (0, 0).
+    Pads without contact get centre (0, 0). With ``out`` (shape ``(..., 6, 2)``) the centres
+    are written there.
     """
     s = moments[..., 0]
     contact = s > 0
+    off = ~contact
     safe = np.where(contact, s, 1.0)
-    cop = np.zeros(s.shape + (2,))
-    np.copyto(cop[..., 0], moments[..., 1] / safe - _ROW_MID, where=contact)
-    np.copyto(cop[..., 1], moments[..., 2] / safe - _COL_MID, where=contact)
+    cop = np.empty(s.shape + (2,)) if out is None else out
+    for c, mid in ((0, _ROW_MID), (1, _COL_MID)):
+        part = cop[..., c]
+        np.divide(moments[..., 1 + c], safe, out=part)
+        part -= mid
+        np.copyto(part, 0.0, where=off)
     return cop, contact
 
 
@@ -100,19 +105,11 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
         z = np.zeros((n, N_PADS, 2))
         last_index = state.cop.copy() if k == 1 else z
         return np.zeros((n, k)), np.zeros((n, k), dtype=bool), TactileState(z, last_index, state.run + k)
-    contact = s > 0
-    off = ~contact
-    safe = np.where(contact, s, 1.0)
-    # the centred centres of pressure (:func:`centred_cop`: the same operations), written
-    # after the carried one; then the slip indices after the carried one
+    # the centred centres of pressure written after the carried one; then the slip indices
+    # after the carried one
     cop_ext = np.empty((n, k + 1, N_PADS, 2))
     cop_ext[:, 0] = state.cop
-    cop = cop_ext[:, 1:]
-    for c, mid in ((0, _ROW_MID), (1, _COL_MID)):
-        part = cop[..., c]
-        np.divide(moments[..., 1 + c], safe, out=part)
-        part -= mid
-        np.copyto(part, 0.0, where=off)
+    cop, contact = centred_cop(moments, out=cop_ext[:, 1:])
     idx_ext = np.empty_like(cop_ext)
     idx_ext[:, 0] = state.index
     index = idx_ext[:, 1:]
