@@ -22,7 +22,7 @@ demo: $(STAMP)
 
 # Fast tests first (one dot each), then the tests marked slow, each by name with its time.
 test: $(STAMP)
-	@echo "==> the whole test suite, about 10 min on 2 cores, up to 17 when they are busy: the fast tests first, one dot each, then the slow ones by name"
+	@echo "==> the whole test suite, about 11 min on 2 cores, up to 17 when they are busy: the fast tests first, one dot each, then the slow ones by name"
 	$(BIN)/python -m pytest -m "not slow"
 	$(BIN)/python -m pytest -m slow -v --durations=10
 
