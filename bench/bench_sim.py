@@ -87,9 +87,10 @@ cached blocks.
 
 Later in issue 27 (fourth round, against 08b3c2c; the same outputs byte for byte): each
 tactile array keeps the work arrays its renders write into (fresh ones were handed back
-to the system after each render and faulted in again: 152k-161k minor page faults a day,
-now about 11k), requests by time are cut from the cached blocks, the scoring works in
-place, and the core's requirement checks do less per call. Timed alone in a fresh process
+to the system after each render and faulted in again: 152k-161k minor page faults a
+day, now about 11k, as ``resource.getrusage`` counts them around ``SimWorld(...).run()``),
+requests by time are cut from the cached blocks, the scoring works in place, and the
+core's requirement checks do less per call. Timed alone in a fresh process
 (``SimWorld(...).run()``, 6 pairs, CPU s, load below 1): signals on 3.42 s against 4.12 s
 (pair ratio 0.82, range 0.77-1.00), signals off 0.89 s against 1.03 s (0.92). With this
 bench, 3 pairs: 171-198x the bare SimPy cost against 189-213x; 100x is still missed.
