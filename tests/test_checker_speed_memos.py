@@ -93,8 +93,9 @@ def test_the_control_rules_find_a_graphs_device_requirements_by_its_tuple(declar
 
     scenario = load_scenario(SCENARIOS / "coffee_handover.py")
     rules = ControlRules(scenario.model)
-    spec = scenario.model.specs[0]
-    reqs = spec.requirements if declared == "same" else tuple(list(spec.requirements))
-    for _ in range(2):
-        got = rules._device_reqs_of(reqs)
-        assert got == device_requirements(reqs)
+    specs = scenario.model.specs
+    assert len({device_requirements(s.requirements) for s in specs}) > 1  # (the answers differ)
+    for _ in range(2):  # each graph's own answer, asked in turn, first and kept
+        for spec in specs:
+            reqs = spec.requirements if declared == "same" else tuple(list(spec.requirements))
+            assert rules._device_reqs_of(reqs) == device_requirements(reqs)

@@ -113,19 +113,9 @@ def make_view(
     (which sets each slot through ``object.__setattr__``): every audit builds one. Equal
     to the constructor's view (the class has no ``__post_init__``)."""
     view = object.__new__(SystemView)
-    s_states, s_specs, s_standing, s_slots, s_running, s_stops, s_history, s_react, s_checks, s_dep, s_fail, s_valid = _VIEW_SETTERS
-    s_states(view, states)
-    s_specs(view, specs)
-    s_standing(view, standing)
-    s_slots(view, slots)
-    s_running(view, running)
-    s_stops(view, stops)
-    s_history(view, history)
-    s_react(view, react)
-    s_checks(view, checks)
-    s_dep(view, None)
-    s_fail(view, None)
-    s_valid(view, None)
+    values = (states, specs, standing, slots, running, stops, history, react, checks, None, None, None)
+    for set_slot, value in zip(_VIEW_SETTERS, values):
+        set_slot(view, value)
     return view
 
 
