@@ -466,7 +466,8 @@ class PlatformMemoChecks(ScalarChecks):
         # the score) -> (the state, the requirements, its failures or score): the entry
         # holds the objects whose ids its key names
         self._parts: dict[tuple[Any, ...], tuple[PlatformState, tuple[Requirement, ...], Any]] = {}
-        self._order: tuple[tuple[PlatformState, ...], list[PlatformState]] | None = None
+        # id of a states tuple -> (the tuple, its platforms in preference order)
+        self._orders: dict[int, tuple[tuple[PlatformState, ...], list[PlatformState]]] = {}
 
     def _question(self, reqs: tuple[Requirement, ...]) -> "_Question":
         """(ids of the objects of ``reqs``, their checks, whether one is a preference): found
@@ -518,11 +519,15 @@ class PlatformMemoChecks(ScalarChecks):
         return self.compute(reqs, states, graph, reasons)
 
     def _ordered(self, states: tuple[PlatformState, ...]) -> list[PlatformState]:
-        last = self._order
-        if last is not None and last[0] is states:
-            return last[1]
+        """:func:`order_platforms` of ``states``, kept per tuple (the entry holds it)."""
+        orders = self._orders
+        hit = orders.get(id(states))
+        if hit is not None and hit[0] is states:
+            return hit[1]
         ordered = order_platforms(states)
-        self._order = (states, ordered)
+        if len(orders) > _TUPLES:
+            orders.clear()
+        orders[id(states)] = (states, ordered)
         return ordered
 
     def compute(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
@@ -551,7 +556,7 @@ class PlatformMemoChecks(ScalarChecks):
         self._lookups.clear()
         self._tuples.clear()
         self._parts.clear()
-        self._order = None
+        self._orders.clear()
 
 
 #: The checks of a caller that names none (a library call, a query port built without

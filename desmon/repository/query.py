@@ -131,7 +131,8 @@ class RepositoryQuery:
         self._state_of = self._reader.state_of
         # the platforms' (node id, name), in declaration order, and the ids they were read for
         self._platforms: tuple[tuple[str, ...], tuple[tuple[str, str], ...]] = ((), ())
-        self._states: tuple[PlatformState, ...] = ()
+        # ids of the states of a platform_states answer -> the tuple of them handed out
+        self._tuples: dict[tuple[int, ...], tuple[PlatformState, ...]] = {}
         # graph -> (what its spec was read from, the declared spec object, the spec, (graph
         # node, deployment node), the stamps of what it read: see _spec_key)
         self._spec_memo: dict[str, tuple[tuple[Any, ...], Any, DeploymentSpec, tuple[str, str], tuple[int | None, ...]]] = {}
@@ -258,10 +259,17 @@ class RepositoryQuery:
             known = self._platforms = (ids, tuple((pid, nodes[pid]["name"]) for pid in ids))
         state_of = self._state_of
         states = tuple([state_of(pid, name) for pid, name in known[1]])
-        last = self._states
-        if len(last) == len(states) and all(a is b for a, b in zip(last, states)):
-            states = last  # the same facts: the same tuple (the validity memo's key)
-        self._states = states
+        # the same states (facts): the same tuple handed out before, the validity memo's
+        # key; the entry holds the tuple, so the ids of its states name those objects
+        ids = tuple(map(id, states))
+        tuples = self._tuples
+        seen = tuples.get(ids)
+        if seen is not None:
+            states = seen
+        else:
+            if len(tuples) > _SEEN:
+                tuples.clear()
+            tuples[ids] = states
         self._stamped[_STATES] = (key, states)
         return states
 
