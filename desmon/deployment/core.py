@@ -11,7 +11,7 @@ same generator with start latencies.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Container, Iterable
+from typing import Callable, Container, Iterable
 
 from desmon.deployment.deployer import Deployer, get_deployer
 from desmon.deployment.guard import DeployerFault, describe_stimulus, guarded, uncallable
@@ -180,15 +180,15 @@ class DeploymentCore:
             raise uncallable(self.deployer.name, react)
         if self._known is None:
             self._known = self._names()
+        self.unjustified = []
+        self.findings = []
+        book = self._book = ReactionBook(stimulus.changed_platforms, stimulus.context_changed)
         reaction = guarded(
             self.deployer.name,
             lambda: react(query, slots, stimulus.changed_platforms, stimulus.context_changed),
             stimulus, *self._known, lambda: describe_stimulus(stimulus, query.context(), cause),
+            self._judge(book), book.note,  # what it does noted in the book (see _judge)
         )
-        self.unjustified = []
-        self.findings = []
-        book = self._book = ReactionBook(stimulus.changed_platforms, stimulus.context_changed)
-        reaction = self._audit_reaction(reaction, book)
         if self._rebalancing:
             return self._audit_moves(reaction)
         return reaction
@@ -201,10 +201,11 @@ class DeploymentCore:
                 return found
         return None
 
-    def _audit_reaction(self, reaction: Reaction, book: ReactionBook) -> Reaction:
-        """``reaction``, passed through, with what it does noted in ``book``: each start
-        and stop with its outcome, and each error judged true or not at the instant it is
-        raised (``errors-justified``, :func:`~desmon.deployment.invariants.raise_problem`)."""
+    def _judge(self, book: ReactionBook) -> Callable[[Command], None]:
+        """What the guard calls before each command of a reaction, with ``after=book.note``:
+        each start and stop is noted with its outcome in ``book``, and each error is judged
+        true or not at the instant it is raised (``errors-justified``,
+        :func:`~desmon.deployment.invariants.raise_problem`)."""
         q = self.query
 
         def judge(cmd: Command) -> None:
@@ -213,7 +214,7 @@ class DeploymentCore:
                     book.bad_raise = raise_problem(cmd, book, q)
                 book.raised[cmd.graph] = cmd.kind
 
-        return relay(reaction, before=judge, after=book.note)
+        return judge
 
     def _names(self) -> tuple[frozenset[str], frozenset[str]]:
         return frozenset(g.name for g in self.model.graphs), frozenset(p.name for p in self.model.platforms)

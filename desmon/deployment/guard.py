@@ -251,13 +251,17 @@ def _close(reaction: Any) -> None:
 
 def guarded(
     name: str, make: Callable[[], Any], stimulus: Any, graphs: frozenset[str], platforms: frozenset[str],
-    reacting: Callable[[], str],
+    reacting: Callable[[], str], before: "Callable[[Any], None] | None" = None,
+    after: "Callable[[Any, bool | None], None] | None" = None,
 ) -> Reaction:
     """The reaction ``make()`` returns, under guard (see the module docstring).
 
     ``make`` calls the deployer's ``react``; ``reacting()`` says in words what it reacts
     to (called only for a fault). Raises :class:`DeployerFault`, or
-    :class:`ReactionStopped` when the installed budget is spent."""
+    :class:`ReactionStopped` when the installed budget is spent. ``before`` and ``after``
+    watch the commands that pass the guard as :func:`~desmon.deployment.ports.relay`
+    around the guarded reaction would (``before(cmd)`` as each is yielded,
+    ``after(cmd, outcome)`` once its outcome came back), without a generator of their own."""
     watch = _watch[0]
     inside = _inside
     armed = _deadline[0] is not None
@@ -314,7 +318,11 @@ def guarded(
                 name, reacting(), f"issued more than {limit:,} commands in one reaction (the last: `{cmd}`), so it never ends; "
                 "a reaction must return. If it really needs more, raise the limit with --max-commands N", stimulus,
             )
+        if before is not None:
+            before(cmd)
         outcome = yield cmd  # type: ignore[misc]
+        if after is not None:
+            after(cmd, outcome)
 
 
 @contextlib.contextmanager

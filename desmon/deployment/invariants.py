@@ -184,7 +184,10 @@ def _valid_or_error(v: SystemView) -> str | None:
 def _no_overcommit(v: SystemView) -> str | None:
     for s in v.states:
         deployed = s.deployed
-        for res, cap in s.platform.capacities:
+        capacities = s.platform.capacities
+        if not deployed and all(cap >= 0 for _res, cap in capacities):
+            continue  # nothing consumes: a total of 0 exceeds no capacity of 0 or more
+        for res, cap in capacities:
             used = s.used_by(res) if deployed else []
             total = sum(a for _g, a in used)
             if total > cap:
@@ -194,8 +197,11 @@ def _no_overcommit(v: SystemView) -> str | None:
 
 
 def _single_instance(v: SystemView) -> str | None:
+    deployments = v.deployments
+    if len({g for g, _p in deployments}) == len(deployments):
+        return None  # no graph twice
     where: dict[str, list[str]] = {}
-    for g, p in v.deployments:
+    for g, p in deployments:
         where.setdefault(g, []).append(p)
     for g, ps in sorted(where.items()):
         if len(ps) > 1:

@@ -318,6 +318,22 @@ def spec_validity(
     return Validity((), tuple(rejected))
 
 
+#: the slots of :class:`Validity`, in field order, as their setters (see :func:`_validity`)
+_VALIDITY_SETTERS = tuple(getattr(Validity, name).__set__ for name in ("acceptable", "rejected", "scores", "breakdown"))
+
+
+def _validity(acceptable: tuple[str, ...], rejected: tuple[tuple[str, tuple[Failure, ...]], ...]) -> Validity:
+    """``Validity(acceptable, rejected)`` (no scores), built without the frozen class's
+    ``__init__``; equal to the constructor's (the class has no ``__post_init__``)."""
+    validity = object.__new__(Validity)
+    s_acceptable, s_rejected, s_scores, s_breakdown = _VALIDITY_SETTERS
+    s_acceptable(validity, acceptable)
+    s_rejected(validity, rejected)
+    s_scores(validity, ())
+    s_breakdown(validity, ())
+    return validity
+
+
 def order_platforms(states: Sequence[PlatformState]) -> list[PlatformState]:
     """Deterministic preference order: higher ``preference`` first, then declaration order."""
     return sorted(states, key=lambda s: -s.platform.preference)  # sorted() is stable
@@ -545,6 +561,15 @@ class PlatformMemoChecks(ScalarChecks):
                 failures.append(hit[2])
             else:
                 failures.append(self._part(key, state, reqs, _failures, lookups, state, graph, first_only, texts))
+        if not ranked:  # _assemble's answer without preferences, written out
+            acceptable: list[str] = []
+            rejected: list[tuple[str, tuple[Failure, ...]]] = []
+            for state, fails in zip(ordered, failures):
+                if fails:
+                    rejected.append((state.name, fails))
+                else:
+                    acceptable.append(state.name)
+            return _validity(tuple(acceptable), tuple(rejected))
         part = self._part
 
         def score(state: PlatformState) -> float:
