@@ -280,9 +280,11 @@ class Attribute(Requirement):
 
     def holds(self, state: "PlatformState", graph: Placing) -> str | None:
         if self.name == PLATFORM_HAS:
-            if any(d.kind == self.value for d in state.devices):
-                return None
-            return f"no working {self.value} attached"
+            value = self.value
+            for d in state.devices:  # any(d.kind == value ...), without a generator
+                if d.kind == value:
+                    return None
+            return f"no working {value} attached"
         actual = state.platform.attribute(self.name)
         if actual is not None and str(actual) == str(self.value):
             return None

@@ -24,6 +24,7 @@ from typing import Any, Callable
 
 import simpy
 
+from desmon.deployment.control import ControlRules
 from desmon.detectors.base import Alarm
 from desmon.model.events import DeviceEvent, Event, LoadChange
 from desmon.repository.facts import record_start, record_stop
@@ -65,6 +66,8 @@ class Infrastructure:
         self.last_busy: dict[str, float] = {}
         self._pending_ready: list[Instance] = []
         self._wiring: dict[tuple[str, str], dict[str, tuple[str, ...]]] = {}  # (graph, platform) -> devices_for
+        # (graph, platform) -> (readability version, specification, refusal): see _rules_refusal
+        self._refusals: dict[tuple[str, str], tuple[int, Any, str]] = {}
 
     # ------------------------------------------------------------------ physical changes
     def mem(self, p: str) -> None:
@@ -183,7 +186,7 @@ class Infrastructure:
 
     def _refusal(self, graph: str, platform: str, n: int) -> str:
         """Why the ``n``-th start of ``graph`` on ``platform`` fails ("": it succeeds)."""
-        reason = self.rules.start_refusal(graph, platform, self.facts.state) or ""
+        reason = self._rules_refusal(graph, platform)
         if reason:
             return reason
         failure = self.world.start_failure
@@ -192,6 +195,24 @@ class Infrastructure:
         if failure.probability and self.rng_start.random() < failure.probability:
             return "start failed"
         return ""
+
+    def _rules_refusal(self, graph: str, platform: str) -> str:
+        """The Control rules' refusal of ``graph`` on ``platform`` ("": none). Plain
+        :class:`ControlRules` read only the facts' platform states (the same while the
+        readability version stands), the graph's specification (the same object while
+        unchanged) and pure checks: their answer is kept on those two; other rules (a
+        fleet's admission control) are asked every time."""
+        rules = self.rules
+        if type(rules) is not ControlRules or rules.spec_of is None:
+            return rules.start_refusal(graph, platform, self.facts.state) or ""
+        spec = rules.spec_of(graph)
+        version = self.facts.readability
+        hit = self._refusals.get((graph, platform))
+        if hit is not None and hit[0] == version and hit[1] is spec:
+            return hit[2]
+        reason = rules.start_refusal(graph, platform, self.facts.state) or ""
+        self._refusals[(graph, platform)] = (version, spec, reason)  # the entry holds the spec its test names
+        return reason
 
     def stop(self, graph: str, platform: str) -> bool:
         """Control.stop: free the memory, end the process, record DEPLOYMENT_HISTORY."""
