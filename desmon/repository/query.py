@@ -42,7 +42,7 @@ class PlatformStateReader:
         # object is its node's, and equal device lists are one tuple (_devices), so the
         # key is hashed and compared without a Python-level __hash__ or __eq__; the state
         # an entry holds keeps the objects its ids name alive
-        self._seen_states: dict[tuple[Any, ...], PlatformState] = {}
+        self._seen_states: dict[tuple[Any, ...], tuple[PlatformState, list[type]]] = {}  # (the state, _amount_types of it)
         # ids of a platform's working devices, in order -> the one tuple of them handed out
         self._devices: dict[tuple[int, ...], tuple[Any, ...]] = {}
         # platform -> (the stamps it was read at, its state)
@@ -101,11 +101,13 @@ class PlatformStateReader:
         seen = self._seen_states
         facts = (id(platform), up, id(devices), load, deployed)
         got = seen.get(facts)
-        if got is not None and _amount_types(got.load, got.deployed) == _amount_types(load, deployed):
-            return got  # facts seen before: the object handed out then
+        types = _amount_types(load, deployed)
+        if got is not None and got[1] == types:
+            return got[0]  # facts seen before: the object handed out then
         if len(seen) > _SEEN:
             seen.clear()
-        state = seen[facts] = new_platform_state(platform, up, devices, load, deployed)
+        state = new_platform_state(platform, up, devices, load, deployed)
+        seen[facts] = (state, types)
         return state
 
     def _consumption(self, dep: str) -> tuple[tuple[str, float], ...]:

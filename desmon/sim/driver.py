@@ -11,7 +11,6 @@ decision is made here.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Iterable
 
 import simpy
@@ -79,15 +78,17 @@ class Inbox:
         return stim
 
 
-@dataclass
 class _Reaction:
-    """What the deployer process books during one reaction."""
+    """What the deployer process books during one reaction (a plain class: one per reaction)."""
 
-    slots: tuple[tuple[str, ...], ...]
-    raised: list[str] = field(default_factory=list)
-    stopped_here: dict[str, str] = field(default_factory=dict)
-    stopped_at: dict[str, float] = field(default_factory=dict)  # wanted slot members stopped in this reaction
-    tried: set[str] = field(default_factory=set)  # graphs whose start failed in this reaction
+    __slots__ = ("slots", "raised", "stopped_here", "stopped_at", "tried")
+
+    def __init__(self, slots: tuple[tuple[str, ...], ...]) -> None:
+        self.slots = slots
+        self.raised: list[str] = []
+        self.stopped_here: dict[str, str] = {}
+        self.stopped_at: dict[str, float] = {}  # wanted slot members stopped in this reaction
+        self.tried: set[str] = set()  # graphs whose start failed in this reaction
 
 
 def deployer(parts: RobotParts, audit: Callable[[], None]):  # type: ignore[no-untyped-def]

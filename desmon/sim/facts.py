@@ -163,8 +163,10 @@ class PhysicalFacts:
         """:meth:`valid_from` of every graph with a live instance, in one pass (a graph
         not in it: inf)."""
         out: dict[str, float] = {}
+        up = self.up
+        inputs_ok = self.inputs_ok
         for inst in self.instances.values():
-            if self.alive(inst):
+            if up[inst.platform] and not inst.halted and inputs_ok(inst):  # alive(inst), inline
                 g = inst.graph
                 t = out.get(g)
                 out[g] = inst.valid_from if t is None else min(t, inst.valid_from)
