@@ -57,7 +57,7 @@ class PlatformStateReader:
         deployment (their attributes)."""
         repo = self.repo
         stamp = repo.touched.get(pid)
-        if stamp is None or pid not in repo.graph:
+        if stamp is None:  # every node added has a stamp, and nodes are never removed
             raise QueryError(f"unknown platform {platform!r}")
         updated = repo.label_updated
         key = (stamp, updated.get(L.DEVICE), updated.get(L.DEPLOYMENT))

@@ -1,0 +1,227 @@
+"""The shortcuts of issue 27's fifth round on the deployment side answer exactly what the
+long way answers.
+
+Each test fails if its shortcut is wrong: an edge change on the live graph that leaves
+the adjacency other than networkx's own methods leave it, a states tuple handed out for
+other states, guard watchers called in another order than a relay calls them, a Control
+refusal kept past a device failure or a specification change, an invariant's fast answer
+that differs from its full one.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from desmon.deployment.control import ControlRules
+from desmon.deployment.guard import guarded
+from desmon.deployment.invariants import INVARIANTS, make_view
+from desmon.deployment.ports import RaiseError, Start, Stop, relay
+from desmon.deployment.validity import PlatformMemoChecks, loop_validity
+from desmon.model import RobotBuilder
+from desmon.model.requirements import DeploymentSpec
+from desmon.model.system import PlatformState
+from desmon.repository import Repository, RepositoryQuery, load_model, set_device_working, set_load
+from desmon.repository.facts import record_start, record_stop
+
+
+@pytest.fixture
+def world():
+    robot = RobotBuilder("r")
+    robot.platform("pc1", memory=512).device("ft", kind="force_sensor").device("ft2", kind="force_sensor")
+    robot.platform("pc2", memory=256)
+    with robot.rpsl.perception_graph("force") as g:
+        g.sensor("w", reads="force_sensor")
+    with robot.rpsl.perception_graph("other") as g:
+        g.sensor("w", reads="force_sensor")
+    robot.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor").add_constraint("capacity", "memory", 50)
+    robot.depsl.deployment_specification("other").add_constraint("capacity", "memory", 300)
+    model = robot.build()
+    repo = Repository()
+    load_model(repo, model)
+    return model, repo
+
+
+def _adjacency(g):  # type: ignore[no-untyped-def]
+    """Every side of a MultiDiGraph's adjacency, in its orders (nodes, neighbours, keys)."""
+    succ = [(u, [(v, list(kd.items())) for v, kd in nbrs.items()]) for u, nbrs in g._succ.items()]
+    pred = [(u, [(v, list(kd.items())) for v, kd in nbrs.items()]) for u, nbrs in g._pred.items()]
+    return list(g.nodes(data=True)), succ, pred
+
+
+# ---------------------------------------------------------------------------- live edge changes
+def test_edge_changes_leave_the_graph_as_networkx_leaves_it(world):
+    _model, repo = world
+    dep, other, pc1, pc2 = "Deployment:force", "Deployment:other", "Platform:pc1", "Platform:pc2"
+    # two edges between one pair (the second key keeps the pair's key dict), relabels,
+    # removals that empty a pair and re-add it (it then comes last among the neighbours)
+    record_start(repo, "force", "pc1")
+    repo.add_edge(dep, pc1, "EXTRA", key="EXTRA#1", note=1)
+    record_start(repo, "other", "pc2")
+    record_stop(repo, "force", "pc1")
+    record_start(repo, "force", "pc2")
+    repo.remove_edge(dep, pc1, "EXTRA#1")
+    record_stop(repo, "force", "pc2")
+    record_start(repo, "force", "pc1")
+    record_stop(repo, "other", "pc2")
+    set_device_working(repo, "ft", False)
+    set_device_working(repo, "ft", True)
+    live, replayed = repo.graph, repo.snapshot()
+    assert _adjacency(live) == _adjacency(replayed)
+    for u, nbrs in live._succ.items():
+        for v, keys in nbrs.items():
+            assert live._pred[v][u] is keys  # one key dict per pair, shared as networkx shares it
+    assert repo.successors(dep, "DEPLOYED_ON") == [pc1] and repo.predecessors(pc2, "DEPLOYED_ON") == []
+    assert len(repo.labelled("DEPLOYMENT_HISTORY")) == 3 and sorted(repo.successors(other, "DEPLOYMENT_HISTORY")) == [pc2]
+
+
+# ---------------------------------------------------------------------------- the states tuple
+def test_the_states_tuple_is_handed_out_again_only_for_the_same_states(world):
+    _model, repo = world
+    q = RepositoryQuery(repo)
+    first = q.platform_states()
+    set_load(repo, "pc1", "memory", 100.0)
+    loaded = q.platform_states()
+    assert loaded is not first and loaded[0].load == (("memory", 100.0),)
+    set_load(repo, "pc1", "memory", 0.0)
+    back = q.platform_states()
+    assert back is first and all(a is b for a, b in zip(back, first))
+    set_device_working(repo, "ft", False)
+    failed = q.platform_states()
+    assert failed is not first and [d.name for d in failed[0].devices] == ["ft2"]
+    assert failed == (q.platform_state("pc1"), q.platform_state("pc2"))
+
+
+# ---------------------------------------------------------------------------- guard watchers
+def _reaction(log):  # type: ignore[no-untyped-def]
+    def react():  # type: ignore[no-untyped-def]
+        ok = yield Start("force", "pc1")
+        log.append(("got", ok))
+        yield RaiseError("deployment_failed", "force", "pc1")
+        ok = yield Stop("other", "pc2")
+        log.append(("got", ok))
+    return react
+
+
+def _drive(reaction, outcomes):  # type: ignore[no-untyped-def]
+    outcome = None
+    try:
+        while True:
+            cmd = reaction.send(outcome)
+            outcome = outcomes.get(type(cmd))
+    except StopIteration:
+        pass
+
+
+@pytest.mark.parametrize("outcomes", [{Start: True, Stop: True}, {Start: False, Stop: False}])
+def test_guard_watchers_see_what_a_relay_sees(outcomes):
+    names = (frozenset({"force", "other"}), frozenset({"pc1", "pc2"}))
+    seen: dict[str, list] = {"hooks": [], "relay": []}
+    for way in seen:
+        log = seen[way]
+
+        def before(cmd, log=log):  # type: ignore[no-untyped-def]
+            log.append(("before", cmd))
+
+        def after(cmd, outcome, log=log):  # type: ignore[no-untyped-def]
+            log.append(("after", cmd, outcome))
+
+        make = _reaction(log)
+        if way == "hooks":
+            reaction = guarded("d", make, None, *names, lambda: "", before, after)
+        else:
+            reaction = relay(guarded("d", make, None, *names, lambda: ""), before=before, after=after)
+        _drive(reaction, outcomes)
+    assert seen["hooks"] == seen["relay"]
+    assert [e[0] for e in seen["hooks"]][:3] == ["before", "after", "got"]
+
+
+# ---------------------------------------------------------------------------- validity without preferences
+def test_memo_validity_without_preferences_is_the_loops(world):
+    model, repo = world
+    q = RepositoryQuery(repo)
+    checks = PlatformMemoChecks()
+    record_start(repo, "other", "pc2")
+    for _step in range(2):
+        states = q.platform_states()
+        for spec in model.specs:
+            for reasons in (False, True):
+                got = checks.compute(spec.requirements, states, spec.graph, reasons)
+                assert got == loop_validity(spec.requirements, states, spec.graph, reasons)
+                assert repr(got) == repr(loop_validity(spec.requirements, states, spec.graph, reasons))
+        set_device_working(repo, "ft", False)
+        set_device_working(repo, "ft2", False)
+
+
+# ---------------------------------------------------------------------------- the Control refusal
+def test_a_kept_refusal_follows_the_facts_and_the_spec():
+    from desmon.loader import load_scenario
+    from desmon.sim.engine import SimWorld
+
+    w = SimWorld(load_scenario("scenarios/robot_day.py"), seed=0, signals=False, until=1.0)
+    infra, facts = w.infra, w.facts
+    assert type(infra.rules) is ControlRules
+    pairs = [(g.name, p.name) for g in w.model.graphs for p in w.model.platforms]
+
+    def fresh(g: str, p: str) -> str:
+        return infra.rules.start_refusal(g, p, facts.state) or ""
+
+    assert all(infra._rules_refusal(g, p) == fresh(g, p) for g, p in pairs)
+    before = {pair: infra._rules_refusal(*pair) for pair in pairs}
+    for d in w.model.devices:  # every device fails: the kept answers must not outlive it
+        facts.dev_ok[d.name] = False
+    assert all(infra._rules_refusal(g, p) == fresh(g, p) for g, p in pairs)
+    assert any(infra._rules_refusal(*pair) != before[pair] for pair in pairs)
+    for d in w.model.devices:
+        facts.dev_ok[d.name] = True
+    assert {pair: infra._rules_refusal(*pair) for pair in pairs} == before
+    # another specification object (a requirement change): asked again. With every device
+    # failed the declared specifications are refused; one that reads and needs nothing is not
+    for d in w.model.devices:
+        facts.dev_ok[d.name] = False
+    refused = {pair: infra._rules_refusal(*pair) for pair in pairs}
+    graph = next(g for g, p in pairs if refused[(g, p)])
+    spec = w.query.deployment_information(graph)
+    changed = DeploymentSpec(graph, (), spec.fixed_platform, spec.rebalance, ())
+    infra.rules.spec_of = lambda g: changed if g == graph else w.query.deployment_information(g)
+    assert all(infra._rules_refusal(g, p) == fresh(g, p) for g, p in pairs)
+    assert any(infra._rules_refusal(g, p) != refused[(g, p)] for g, p in pairs if g == graph)
+
+
+# ---------------------------------------------------------------------------- invariants' fast answers
+def _full_single_instance(v):  # type: ignore[no-untyped-def]
+    where: dict[str, list[str]] = {}
+    for g, p in v.deployments:
+        where.setdefault(g, []).append(p)
+    for g, ps in sorted(where.items()):
+        if len(ps) > 1:
+            return f"{g} is active on {len(ps)} platforms: {', '.join(ps)}"
+    return None
+
+
+def test_invariants_fast_answers_are_the_full_ones(world):
+    model, _repo = world
+    pc1, pc2 = model.platforms
+    use = (("memory", 300.0),)
+    specs = model.specs
+    cases = [
+        (PlatformState(pc1), PlatformState(pc2)),
+        (PlatformState(pc1, deployed=(("other", use),)), PlatformState(pc2, deployed=(("other", use),))),
+        (PlatformState(pc1, deployed=(("force", (("memory", 50.0),)), ("other", use))), PlatformState(pc2)),
+    ]
+    single, overcommit, fixed = INVARIANTS["single-instance"], INVARIANTS["no-overcommit"], INVARIANTS["fixed"]
+    for states in cases:
+        v = make_view(states, specs, frozenset(), ())
+        assert single.check(v) == _full_single_instance(v)
+    assert single.check(make_view(cases[1], specs, frozenset(), ())) == "other is active on 2 platforms: pc1, pc2"
+    assert overcommit.check(make_view(cases[1], specs, frozenset(), ())) == (
+        "pc2: deployments consume 300 memory (other 300) but the capacity is 256"
+    )
+    assert overcommit.check(make_view(cases[0], specs, frozenset(), ())) is None
+    # fixed: a tuple without a fixed platform, then one with: each answered for itself
+    v = make_view(cases[1], specs, frozenset(), ())
+    assert fixed.check(v) is None
+    fixed_specs = tuple(DeploymentSpec(s.graph, s.requirements, "pc1", s.rebalance, s.reads) for s in specs)
+    assert fixed.check(make_view(cases[1], fixed_specs, frozenset(), ())) == "other is fixed to pc1 (EXECUTABLE_ON) but runs on pc2"
+    assert fixed.check(make_view(cases[1], list(specs), frozenset(), ())) is None  # type: ignore[arg-type]
+    assert fixed.check(make_view(cases[1], list(fixed_specs), frozenset(), ())) is not None  # type: ignore[arg-type]
+    assert fixed.check(v) is None
