@@ -249,10 +249,14 @@ def _close(reaction: Any) -> None:
         reaction.close()
 
 
+def _unwatched(*_args: Any) -> None:
+    """No watcher (:func:`guarded`'s default ``before`` and ``after``)."""
+
+
 def guarded(
     name: str, make: Callable[[], Any], stimulus: Any, graphs: frozenset[str], platforms: frozenset[str],
-    reacting: Callable[[], str], before: "Callable[[Any], None] | None" = None,
-    after: "Callable[[Any, bool | None], None] | None" = None,
+    reacting: Callable[[], str], before: "Callable[[Any], None]" = _unwatched,
+    after: "Callable[[Any, bool | None], None]" = _unwatched,
 ) -> Reaction:
     """The reaction ``make()`` returns, under guard (see the module docstring).
 
@@ -318,11 +322,9 @@ def guarded(
                 name, reacting(), f"issued more than {limit:,} commands in one reaction (the last: `{cmd}`), so it never ends; "
                 "a reaction must return. If it really needs more, raise the limit with --max-commands N", stimulus,
             )
-        if before is not None:
-            before(cmd)
+        before(cmd)
         outcome = yield cmd  # type: ignore[misc]
-        if after is not None:
-            after(cmd, outcome)
+        after(cmd, outcome)
 
 
 @contextlib.contextmanager
