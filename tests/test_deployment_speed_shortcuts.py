@@ -1,8 +1,8 @@
 """The shortcuts of issue 27's fifth round on the deployment side answer exactly what the
 long way answers.
 
-Each test fails if its shortcut is wrong: an edge change on the live graph that leaves
-the adjacency other than networkx's own methods leave it, a states tuple handed out for
+Each test fails if its shortcut is wrong: the live graph's adjacency other than a
+replay of the change log gives, a states tuple handed out for
 other states, guard watchers called in another order than a relay calls them, a Control
 refusal kept past a device failure or a specification change, an invariant's fast answer
 that differs from its full one.
@@ -67,9 +67,6 @@ def test_edge_changes_leave_the_graph_as_networkx_leaves_it(world):
     set_device_working(repo, "ft", True)
     live, replayed = repo.graph, repo.snapshot()
     assert _adjacency(live) == _adjacency(replayed)
-    for u, nbrs in live._succ.items():
-        for v, keys in nbrs.items():
-            assert live._pred[v][u] is keys  # one key dict per pair, shared as networkx shares it
     assert repo.successors(dep, "DEPLOYED_ON") == [pc1] and repo.predecessors(pc2, "DEPLOYED_ON") == []
     assert len(repo.labelled("DEPLOYMENT_HISTORY")) == 3 and sorted(repo.successors(other, "DEPLOYMENT_HISTORY")) == [pc2]
 

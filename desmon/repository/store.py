@@ -219,91 +219,62 @@ class Repository:
     ) -> Change:
         log = self._log
         seq = len(log)
-        if not attrs:
-            attrs = {}
-        change = _change(seq, float(self._clock()), op, label, node, source, target, key, old_label, tuple(attrs.items()) if attrs else ())
+        if attrs:
+            change = _change(seq, self.now, op, label, node, source, target, key, old_label, tuple(attrs.items()))
+            _apply(self.graph, change, attrs)
+        else:
+            change = _change(seq, self.now, op, label, node, source, target, key, old_label, ())
+            _apply(self.graph, change, {})
         touched = self.touched
         stamps = self.label_touched
         if node is not None:
-            _apply(self.graph, change, attrs)
             if op == ADD_NODE and node not in touched:
                 self._nodes_of.setdefault(label, {})[node] = None
                 self._label_of[node] = label
             touched[node] = self.node_updated[node] = seq
             stamps[label] = self.label_updated[label] = seq  # a node change carries the node's label
         else:
-            self._edge_change(op, label, source, target, key, old_label, attrs, seq)  # type: ignore[arg-type]
+            self._index(change)
             touched[source] = touched[target] = seq  # type: ignore[index]
             label_of = self._label_of
             stamps[label_of[source]] = stamps[label_of[target]] = seq  # type: ignore[index]
         log.append(change)
-        subs = self._routes.get((op, label, old_label))
+        route = (op, label, old_label)
+        subs = self._routes.get(route)
         if subs is None:
-            subs = self._routes[(op, label, old_label)] = [sub for sub in self._subs if sub.routes(op, label, old_label)]
+            subs = self._routes[route] = [sub for sub in self._subs if sub.routes(op, label, old_label)]
         for sub in subs:
             if sub.active and (sub.where is None or sub.where(change)):
                 sub.callback(change)
         return change
 
-    def _edge_change(
-        self, op: str, label: str, source: str, target: str, key: str, old_label: str | None, attrs: dict[str, Any], seq: int
-    ) -> None:
-        """Edge change ``seq`` on the live graph (what :func:`_apply` does, on the
-        ``MultiDiGraph``'s adjacency dicts directly: both ends exist, as the Insert
-        methods checked, and the edge added or removed is or is not there as they
-        checked) and on the label and neighbour indexes."""
-        g = self.graph
-        succ = g._succ
+    def _index(self, c: Change) -> None:
+        """The label and neighbour indexes after edge change ``c``."""
+        op, source, target = c.op, c.source, c.target
         stamps = self.edge_touched
-        changed = self.edges_changed
+        seq = c.seq
         if op != ADD_EDGE:
-            old = old_label if op == RELABEL_EDGE else label
-            gone_key = old_label if op == RELABEL_EDGE else key
-            keydict = succ[source][target]
-            data = keydict.pop(gone_key)
-            if not keydict:
-                del succ[source][target]
-                del g._pred[target][source]
-            stamps[(source, old)] = stamps[(target, old)] = changed[old] = seq  # type: ignore[index]
-            gone = (source, target, gone_key)
+            old = c.old_label if op == RELABEL_EDGE else c.label
+            stamps[(source, old)] = stamps[(target, old)] = self.edges_changed[old] = seq  # type: ignore[index]
+            gone = (source, target, c.old_label if op == RELABEL_EDGE else c.key)
             del self._label_index[old][gone]  # type: ignore[index]
-            del self._edge_label[gone]
-            bucket = self._out_index[(source, old)]  # type: ignore[index]
-            n = bucket[target] - 1
-            if n:
-                bucket[target] = n
-            else:
-                del bucket[target]
-            bucket = self._in_index[(target, old)]  # type: ignore[index]
-            n = bucket[source] - 1
-            if n:
-                bucket[source] = n
-            else:
-                del bucket[source]
-            if op == RELABEL_EDGE:
-                data = dict(data)
-                data.update(attrs)
-                attrs = data
+            del self._edge_label[gone]  # type: ignore[arg-type]
+            for bucket, b in ((self._out_index[(source, old)], target), (self._in_index[(target, old)], source)):  # type: ignore[index]
+                n = bucket[b] - 1
+                if n:
+                    bucket[b] = n
+                else:
+                    del bucket[b]
         if op != REMOVE_EDGE:
-            keydict = succ[source].get(target)
-            if keydict is None:
-                keydict = succ[source][target] = g._pred[target][source] = {}
-            datadict = keydict.get(key)
-            if datadict is None:
-                datadict = {}
-            datadict.update(attrs)
-            keydict[key] = datadict
-            stamps[(source, label)] = stamps[(target, label)] = changed[label] = seq
-            edge = (source, target, key)
-            self._label_index.setdefault(label, {})[edge] = None
-            self._edge_label[edge] = label
-            bucket = self._out_index.setdefault((source, label), {})
-            bucket[target] = bucket.get(target, 0) + 1
-            bucket = self._in_index.setdefault((target, label), {})
-            bucket[source] = bucket.get(source, 0) + 1
-        cache = getattr(g, "__networkx_cache__", None)
-        if cache:
-            cache.clear()  # what networkx's own edge methods do (nx._clear_cache)
+            label = c.label
+            stamps[(source, label)] = stamps[(target, label)] = self.edges_changed[label] = seq  # type: ignore[index]
+            edge = (source, target, c.key)
+            self._label_index.setdefault(label, {})[edge] = None  # type: ignore[index]
+            self._edge_label[edge] = label  # type: ignore[index]
+            bucket = self._out_index.setdefault((source, label), {})  # type: ignore[arg-type]
+            bucket[target] = bucket.get(target, 0) + 1  # type: ignore[index]
+            bucket = self._in_index.setdefault((target, label), {})  # type: ignore[arg-type]
+            bucket[source] = bucket.get(source, 0) + 1  # type: ignore[index]
 
     def successors(self, nid: str, label: str) -> list[str]:
         """Targets of ``nid``'s out-edges labelled ``label`` (indexed: no scan of other edges)."""
