@@ -48,8 +48,8 @@ def _adjacency(g):  # type: ignore[no-untyped-def]
     return list(g.nodes(data=True)), succ, pred
 
 
-# ---------------------------------------------------------------------------- live edge changes
-def test_edge_changes_leave_the_graph_as_networkx_leaves_it(world):
+# ---------------------------------------------------------------------------- the live graph
+def test_the_live_graph_is_what_the_change_log_replays_to(world):
     _model, repo = world
     dep, other, pc1, pc2 = "Deployment:force", "Deployment:other", "Platform:pc1", "Platform:pc2"
     # two edges between one pair (the second key keeps the pair's key dict), relabels,
