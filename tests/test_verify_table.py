@@ -8,6 +8,7 @@ import json
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as hst
@@ -23,6 +24,7 @@ from desmon.model.events import ActionChange, DeviceFail, LoadChange, PlatformDo
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.verify import Bounds, Checker
 from desmon.verify.mutants import MUTANTS
+from desmon.verify.table.tree import LEAF, WIDE
 from desmon.verify.table import TableUnsupported, UnobservedRead
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
@@ -427,6 +429,21 @@ def _follow(trees, node: int, d: int) -> int:  # type: ignore[no-untyped-def]
     return child
 
 
+def _the_walk_codes_are_the_shortcuts(trees) -> None:  # type: ignore[no-untyped-def]
+    """Each node's walk code says what it is (a leaf and which, a one-platform check with its
+    digit table and platform, another check), and each shortcut's code is its target's."""
+    for node in range(trees.node_leaf.n):
+        leaf, db = int(trees.node_leaf.a[node]), int(trees.digit_base.a[node])
+        want = LEAF | leaf if leaf >= 0 else (db << trees.code_bits | int(trees.node_p0.a[node]) if db >= 0 else WIDE | node)
+        assert int(trees.node_code.a[node]) == want, node
+        if db >= 0:
+            assert int(trees.digit_node.a[db]) == node
+    n = trees.digit_kids.n
+    jump = trees.digit_jump.a[:n]
+    assert (trees.jump_code.a[:n] == np.where(jump >= 0, trees.node_code.a[jump], -1)).all()
+    assert (jump >= 0).any()
+
+
 @pytest.mark.parametrize("name", ["fallbacks", "robot_day", "memory_pressure"])
 def test_the_walks_shortcuts_land_where_the_same_platforms_branches_lead(name):
     # a check that asks about the platform its parent branched on is answered by the same
@@ -447,6 +464,7 @@ def test_the_walks_shortcuts_land_where_the_same_platforms_branches_lead(name):
             checked += 1
             skipped += jump != int(trees.digit_kids.a[db + d])
     assert checked > 100 and skipped > 0  # (the scenario has such repeated checks)
+    _the_walk_codes_are_the_shortcuts(trees)
     # platforms with many digits recompute them with numpy: the same shortcuts, children first
     python_made = trees.digit_jump.a.copy()
     trees.digit_jump.a[:] = trees.digit_kids.a  # (each shortcut its branch, then the skips)

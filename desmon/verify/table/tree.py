@@ -25,6 +25,9 @@ __all__ = ["DecisionTrees", "DENSE_ANSWERS", "SMALL_DIGITS"]
 DENSE_ANSWERS = 64
 #: a platform with at most this many digits has its shortcuts recomputed in plain Python
 SMALL_DIGITS = 32
+#: walk codes (:meth:`DecisionTrees._code`): a one-platform check is ``digit_base << code_bits
+#: | platform`` (below WIDE), another check ``WIDE | node``, a leaf node ``LEAF | leaf``
+WIDE, LEAF = 1 << 60, 1 << 61
 
 
 class DecisionTrees:
@@ -52,6 +55,12 @@ class DecisionTrees:
         # platform again and has a branch for that digit, the node that branch leads to
         # (repeatedly); else the child itself (:meth:`_rejump`)
         self.digit_jump = Grow((1024,), -1)
+        # the walk's view of the same shortcuts: digit_jump's targets as walk codes
+        # (:meth:`_code`), so that a step reads one array; kept by :meth:`_recode`
+        self.jump_code = Grow((1024,), -1)
+        self.node_code = Grow((1024,), -1)  # each node's walk code (-1: open)
+        self.digit_node = Grow((1024,), -1)  # the node whose digit table starts at an offset
+        self.code_bits = max(1, (platforms - 1).bit_length())  # the low bits of a check's code: its platform
         self.small_digits = SMALL_DIGITS
         self.node_p0 = Grow((1024,))
         self.kids = Grow((1024,), -1)
@@ -73,7 +82,7 @@ class DecisionTrees:
         return i
 
     def _node(self) -> int:
-        for g in (self.kid_base, self.digit_base, self.node_p0, self.node_base, self.node_plat, self.node_mult):
+        for g in (self.kid_base, self.digit_base, self.node_p0, self.node_base, self.node_plat, self.node_mult, self.node_code):
             g.extend(1)  # (their fill values)
         self.node_desc.append(None)
         self.node_len.append(1)
@@ -105,8 +114,14 @@ class DecisionTrees:
                     raise TableUnsupported("table engine: a requirement check with too many distinct answers; run with --engine direct")
                 self.node_p0.a[node] = parts[0][0]
                 if len(parts) == 1:
-                    self.digit_base.a[node] = self.digit_kids.extend(self.tables.env.R[parts[0][0]])
+                    db = self.digit_base.a[node] = self.digit_kids.extend(self.tables.env.R[parts[0][0]])
                     self.digit_jump.extend(self.tables.env.R[parts[0][0]])
+                    self.jump_code.extend(self.tables.env.R[parts[0][0]])
+                    self.digit_node.extend(self.tables.env.R[parts[0][0]])
+                    self.digit_node.a[db] = node
+                    self.node_code.a[node] = db << self.code_bits | parts[0][0]
+                else:
+                    self.node_code.a[node] = WIDE | node
                 if mult <= DENSE_ANSWERS:
                     self.kid_base.a[node] = self.kids.extend(mult)
                 self.width = max(self.width, len(parts))
@@ -130,14 +145,31 @@ class DecisionTrees:
         state = self.node_leaf.a[node]
         if state == -2:
             self.node_leaf.a[node] = leaf
+            self.node_code.a[node] = LEAF | leaf
         elif state != leaf:
             raise NondeterminismError(
                 "the deployment core reacted differently to states with the same readings: "
                 "it is not a function of what it reads through its ports"
             )
-        self._rejump_path(path)
+        for node in self._rejump_path(path):
+            self._recode(node)
 
-    def _rejump_path(self, path: list[tuple[int, bool]]) -> None:
+    def _recode(self, node: int) -> None:
+        """Bring the ``jump_code`` entries of ``node`` up to date with its ``digit_jump`` ones:
+        each the walk code of its target, -1 where there is no branch yet."""
+        db = int(self.digit_base.a[node])
+        if db < 0:
+            return
+        r = self.tables.env.R[int(self.node_p0.a[node])]
+        jump, jc, code = self.digit_jump.a, self.jump_code.a, self.node_code.a
+        if r <= self.small_digits:
+            for d, t in enumerate(jump[db: db + r].tolist(), db):
+                jc[d] = code[t] if t >= 0 else -1
+            return
+        t = jump[db: db + r]
+        jc[db: db + r] = np.where(t >= 0, code[t], -1)
+
+    def _rejump_path(self, path: list[tuple[int, bool]]) -> list[int]:
         """Bring the shortcuts (``digit_jump``) of an insert's path up to date, deepest first.
 
         A check about one platform branches on that platform's digit ``d``; when the child
@@ -145,8 +177,10 @@ class DecisionTrees:
         the walk takes it in the same step. An insert changes the branches of its path's
         nodes only (a new branch's shortcut is its child, set by :meth:`_digit_branch`), so
         a node's shortcuts can change only where its child on the path checks the same
-        platform and that child's branches or shortcuts changed."""
+        platform and that child's branches or shortcuts changed. Returns the nodes whose
+        branches or shortcuts changed."""
         below = False  # the shortcuts of the node below on the path changed
+        changed = []
         base, p0 = self.digit_base.a, self.node_p0.a
         for i in range(len(path) - 1, -1, -1):
             node, new = path[i]
@@ -157,6 +191,9 @@ class DecisionTrees:
                     self._rejump(node, child)
                     new = True
             below = new
+            if new:
+                changed.append(node)
+        return changed
 
     def _rejump(self, node: int, child: int) -> None:
         """Recompute the shortcuts of one-platform check ``node`` for the digits whose branch
@@ -202,55 +239,63 @@ class DecisionTrees:
 
     def walk(self, roots: np.ndarray, rows: np.ndarray, loc: np.ndarray, record: Callable[[int], None]) -> np.ndarray:
         """Leaf ids for units with root keys ``roots`` and platform digits ``loc[rows]``;
-        ``record(unit)`` runs the real core for a unit whose answers leave the trees."""
+        ``record(unit)`` runs the real core for a unit whose answers leave the trees.
+
+        The units move by walk codes (:meth:`_step`): a unit's code says where its check's
+        digit table starts and which platform it asks about, so a step reads the unit's
+        digit and one shortcut (``jump_code``), which is the next check's code or the leaf's."""
         go_on = self.go_on  # the budget, between two recorded runs and two rounds
-        node = self._root_nodes(roots, record)
-        out = self.node_leaf.a[node]
+        node = self._root_nodes(roots, record)  # (it may record runs: the arrays below grow)
+        out = np.take(self.node_code.a, node)
         P = loc.shape[1]
         flat_loc = loc.ravel()
         # (np.take and index arrays, not boolean masks: several times faster on these sizes)
-        idx = np.flatnonzero(out < 0)  # the units still at a check node
-        nd, rp = np.take(node, idx), np.take(rows, idx) * P
+        idx = np.flatnonzero(out < LEAF)  # the units still at a check node
+        cur, rp = np.take(out, idx), np.take(rows, idx) * P
         while idx.size:
             go_on()
-            child = self._step(nd, rp, flat_loc)
+            child = self._step(cur, rp, flat_loc)
             if child.min() < 0:
-                self._record_missed(child, idx, nd, rp, flat_loc, record)
-            lf = np.take(self.node_leaf.a, child)
-            out[idx] = lf  # final for the units at a leaf, overwritten later for the others
-            keep = np.flatnonzero(lf < 0)
-            if len(keep) < len(lf):
-                idx, nd, rp = np.take(idx, keep), np.take(child, keep), np.take(rp, keep)
+                self._record_missed(child, idx, cur, rp, flat_loc, record)
+            out[idx] = child  # final for the units at a leaf, overwritten later for the others
+            keep = np.flatnonzero(child < LEAF)
+            if len(keep) < len(child):
+                idx, cur, rp = np.take(idx, keep), np.take(child, keep), np.take(rp, keep)
             else:
-                nd = child
+                cur = child
+        out -= LEAF
         return out
 
-    def _record_missed(self, child: np.ndarray, idx: np.ndarray, nd: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray,
+    def _record_missed(self, child: np.ndarray, idx: np.ndarray, cur: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray,
                        record: Callable[[int], None]) -> None:
         """Record a run for each distinct missing branch (``child`` -1), with its first unit,
         and fill in the children the runs added."""
         missed = np.flatnonzero(child < 0)
-        _again, firsts = np.unique(self._edge_keys(nd[missed], rp[missed], flat_loc), return_index=True)
+        c = cur[missed]
+        nd = np.where(c >= WIDE, c - WIDE, np.take(self.digit_node.a, np.where(c >= WIDE, 0, c >> self.code_bits)))
+        _again, firsts = np.unique(self._edge_keys(nd, rp[missed], flat_loc), return_index=True)
         for m in np.sort(firsts).tolist():
             self.go_on()
             record(int(idx[missed[m]]))
-        child[missed] = self._step(nd[missed], rp[missed], flat_loc)
+        child[missed] = self._step(c, rp[missed], flat_loc)
         if (child[missed] < 0).any():
             raise TableUnsupported(  # pragma: no cover - an unobserved rewrite of facts, or a bug in the engine
                 "table engine: a per-platform answer disagrees with the real requirement check; run with --engine direct"
             )
 
-    def _step(self, nd: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray) -> np.ndarray:
-        """The child of each check node ``nd`` for its unit's answer (-1: no branch yet):
-        from its platform's digit at a one-platform node, else from the answer code."""
-        db = np.take(self.digit_base.a, nd)
-        at = db + np.take(flat_loc, rp + np.take(self.node_p0.a, nd))
-        if self.width == 1 or (len(db) and db.min() >= 0):  # (width 1: every check is about one platform)
-            return np.take(self.digit_jump.a, at)
-        other = np.flatnonzero(db < 0)
-        at[other] = 0
-        child = np.take(self.digit_jump.a, at)
-        child[other] = self._children(nd[other], rp[other], flat_loc)
+    def _step(self, cur: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray) -> np.ndarray:
+        """The walk code of the child of each check with walk code ``cur`` for its unit's
+        answer (-1: no branch yet): from its platform's digit at a one-platform check (and
+        on past the checks of the same platform), else from the answer code."""
+        bits, mask = self.code_bits, (1 << self.code_bits) - 1
+        if self.width == 1 or cur.max() < WIDE:  # (width 1: every check is about one platform)
+            return np.take(self.jump_code.a, (cur >> bits) + np.take(flat_loc, rp + (cur & mask)))
+        child = np.empty_like(cur)
+        one, other = np.flatnonzero(cur < WIDE), np.flatnonzero(cur >= WIDE)
+        c = cur[one]
+        child[one] = np.take(self.jump_code.a, (c >> bits) + np.take(flat_loc, rp[one] + (c & mask)))
+        kids = self._children(cur[other] - WIDE, rp[other], flat_loc)
+        child[other] = np.where(kids >= 0, np.take(self.node_code.a, kids), -1)
         return child
 
     def _codes(self, nd: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray) -> np.ndarray:
