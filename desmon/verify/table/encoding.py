@@ -209,7 +209,7 @@ class Transitions(NamedTuple):
     ev: np.ndarray  # the event's number (:attr:`Events.events`)
     stim: np.ndarray  # what the event changed: 0 context, 1 + platform, P + 1 nothing
     sys: np.ndarray  # the state's system part
-    loc: np.ndarray  # the platform digits after the event, one row per transition
+    loc: np.ndarray  # the platform digits after the event, one row per transition (Events.loc_width wide)
     ctx: np.ndarray  # the context digit of each state of the batch
 
 
@@ -237,6 +237,9 @@ class Events:
         self.kind_of = np.array([_KIND_ID[event_kind(e)] for e in self.events] or [0], dtype=np.int64)
         #: the platform whose digit each slot's event moves (-1: none)
         self.slot_platform = np.array([-1 if sl[0] in ("action", "requirements") else sl[1] for sl in self.slots] or [-1], dtype=np.int64)
+        self.slot_column = np.maximum(self.slot_platform, 0)
+        #: the row width of the batches' platform digits (:meth:`_moved`)
+        self.loc_width = next((w for w in (1, 2, 4, 8, 16) if w >= self.P), self.P)
 
     def _action(self, _subject: None) -> list[tuple]:
         env, b = self.env, self.bounds
@@ -345,18 +348,25 @@ class Events:
                 M[s] = (to >= 0) & (to < len(ids_lv))
                 DD[s] = step * (env.U[p] << env.K[p])
                 E2[s] = envs + step * unit
-                EV[s] = ids_lv[np.clip(to, 0, len(ids_lv) - 1)]
+                EV[s] = np.take(ids_lv, to, mode="clip")
                 ST[s] = p + 1
-        pos, slot = np.nonzero(M.T)
+        at = np.flatnonzero(M.T)  # the enabled (state, slot) pairs, state-major: state * S + slot
+        pos = at // S
+        slot = at - pos * S
         at = slot * N + pos  # flat indices into the slot-by-state arrays
         return Transitions(pos, np.take(E2, at), np.take(EV, at), np.take(ST, at), np.take(syss, pos), self._moved(L, pos, slot, np.take(DD, at)), ctx)
 
     def _moved(self, L: np.ndarray, pos: np.ndarray, slot: np.ndarray, dd: np.ndarray) -> np.ndarray:
-        """The platform digits after each event (int16): its state's ``L[pos]``, the digit
-        of the platform its slot moves changed by ``dd``."""
-        loc = np.take(L.astype(np.int16), pos, axis=0)
-        sp = np.take(self.slot_platform, slot)
-        on = np.flatnonzero(sp >= 0)
-        loc.ravel()[on * self.P + np.take(sp, on)] += np.take(dd, on).astype(np.int16)
+        """The platform digits after each event (int16, in the first P of ``loc_width``
+        columns: numpy copies rows of 2, 4, 8 or 16 int16 several times faster than of 6):
+        its state's ``L[pos]``, the digit of the platform its slot moves changed by ``dd``
+        (0 for a slot that moves none, whose column is then 0)."""
+        W = self.loc_width
+        padded = np.zeros((len(L), W), dtype=np.int16)
+        padded[:, : self.P] = L
+        loc = np.take(padded, pos, axis=0)
+        at = np.take(self.slot_column, slot)
+        at += np.arange(0, len(pos) * W, W)
+        loc.ravel()[at] += dd.astype(np.int16)
         return loc
 

@@ -31,8 +31,9 @@ class IntTable:
 
     def _slots(self, keys: np.ndarray) -> np.ndarray:
         """The slot of each key: where it is, or the empty slot its probe ends at."""
-        shift = np.uint64(64 - self._bits)
-        pos = ((keys.astype(np.uint64) * _MUL) >> shift).astype(np.int64)
+        h = np.multiply(keys.astype(np.int64, copy=False).view(np.uint64), _MUL)  # (non-negative keys: the view is astype's value)
+        h >>= np.uint64(64 - self._bits)
+        pos = h.view(np.int64)
         table, mask = self.keys, (1 << self._bits) - 1
         k = np.take(table, pos)
         pending = np.flatnonzero((k != keys) & (k != _EMPTY))
