@@ -466,8 +466,10 @@ def test_the_walks_shortcuts_land_where_the_same_platforms_branches_lead(name):
     assert checked > 100 and skipped > 0  # (the scenario has such repeated checks)
     _the_walk_codes_are_the_shortcuts(trees)
     # platforms with many digits recompute them with numpy: the same shortcuts, children first
-    python_made = trees.digit_jump.a.copy()
+    python_made, python_codes = trees.digit_jump.a.copy(), trees.jump_code.a.copy()
     trees.digit_jump.a[:] = trees.digit_kids.a  # (each shortcut its branch, then the skips)
+    kids = trees.digit_kids.a
+    trees.jump_code.a[:] = np.where(kids >= 0, trees.node_code.a[kids], -1)
     trees.small_digits = 0
     for node in range(trees.node_leaf.n - 1, -1, -1):  # (a child is numbered after its parent)
         db = int(trees.digit_base.a[node])
@@ -477,3 +479,4 @@ def test_the_walks_shortcuts_land_where_the_same_platforms_branches_lead(name):
                 if kid >= 0 and int(trees.digit_base.a[kid]) >= 0 and int(trees.node_p0.a[kid]) == p:
                     trees._rejump(node, kid)
     assert (trees.digit_jump.a[: trees.digit_kids.n] == python_made[: trees.digit_kids.n]).all()
+    assert (trees.jump_code.a[: trees.digit_kids.n] == python_codes[: trees.digit_kids.n]).all()

@@ -30,194 +30,9 @@ SMALL_DIGITS = 32
 WIDE, LEAF = 1 << 60, 1 << 61
 
 
-class DecisionTrees:
-    """The decision trees of one search over ``tables``; ``go_on()`` raises when the search must stop."""
-
-    def __init__(self, tables: AnswerTables, platforms: int, go_on: Callable[[], None]) -> None:
-        self.tables, self.go_on = tables, go_on
-        P = platforms
-        self.roots: dict[int, int] = {}
-        self.node_leaf = Grow((1024,), -2)  # -2 open, -1 check node, >= 0 leaf id
-        self.node_desc: list[tuple | None] = []
-        self.node_base = Grow((1024, P))
-        self.node_plat = Grow((1024, P))
-        self.node_mult = Grow((1024, P))
-        self.node_len = Grow((1024,))
-        self.edges: dict[int, int] = {}
-        # a check node's children: with at most DENSE_ANSWERS answer codes, kids[kid_base[node] + code]
-        # (-1: no branch yet); beyond, in the hash table of (node << 40 | code) edges
-        self.kid_base = Grow((1024,), -1)
-        # a check node about one platform: its child per digit of that platform (the answer
-        # table and the answer's branch in one), digit_kids[digit_base[node] + digit]
-        self.digit_base = Grow((1024,), -1)
-        self.digit_kids = Grow((1024,), -1)
-        # the walk's shortcut beside digit_kids: where the child for a digit checks the same
-        # platform again and has a branch for that digit, the node that branch leads to
-        # (repeatedly); else the child itself (:meth:`_rejump`)
-        self.digit_jump = Grow((1024,), -1)
-        # the walk's view of the same shortcuts: digit_jump's targets as walk codes
-        # (:meth:`_code`), so that a step reads one array; kept by :meth:`_recode`
-        self.jump_code = Grow((1024,), -1)
-        self.node_code = Grow((1024,), -1)  # each node's walk code (-1: open)
-        self.digit_node = Grow((1024,), -1)  # the node whose digit table starts at an offset
-        self.code_bits = max(1, (platforms - 1).bit_length())  # the low bits of a check's code: its platform
-        self.small_digits = SMALL_DIGITS
-        self.node_p0 = Grow((1024,))
-        self.kids = Grow((1024,), -1)
-        self.wide_edges = IntTable()
-        self._new_roots: dict[int, int] = {}
-        self.root_nodes = IntTable()
-        self.leaves = Interned()
-        self.leaf_sys: list[int] = []  # a reaction leaf's next system part (-1: an invariants leaf)
-        self.leaf_inst: list[bool] = []  # a reaction leaf with an instantaneous violation
-        self.width = 1
-
-    def leaf(self, value: tuple) -> int:
-        """The number of leaf ``value``: ("r", system, outcomes, fails, branch names, instant) or ("v", violated)."""
-        n = len(self.leaves)
-        i = self.leaves(value)
-        if i == n:  # a new leaf
-            self.leaf_sys.append(value[1] if value[0] == "r" else -1)
-            self.leaf_inst.append(value[0] == "r" and value[5] is not None)
-        return i
-
-    def _node(self) -> int:
-        for g in (self.kid_base, self.digit_base, self.node_p0, self.node_base, self.node_plat, self.node_mult, self.node_code):
-            g.extend(1)  # (their fill values)
-        self.node_desc.append(None)
-        self.node_len.append(1)
-        n = self.node_leaf.extend(1)
-        if n >= 1 << 22:
-            raise TableUnsupported("table engine: more than 4 million decision nodes; run with --engine direct")
-        return n
-
-    def insert(self, root: int, obs: list[tuple[tuple, int]], leaf: int) -> None:
-        node = self.roots.get(root)
-        if node is None:
-            node = self.roots[root] = self._new_roots[root] = self._node()
-        path: list[tuple[int, bool]] = []  # (node, whether this insert changed its branches)
-        for desc, code in obs:
-            state = self.node_leaf.a[node]
-            if state == -2:
-                mode, table, first_only, parts = desc
-                self.node_leaf.a[node] = -1
-                self.node_desc[node] = desc
-                mult = 1
-                for j, (p, dep) in enumerate(parts):
-                    off, radix = self.tables.block(mode, table, first_only, p, dep)
-                    self.node_base.a[node, j] = off
-                    self.node_plat.a[node, j] = p
-                    self.node_mult.a[node, j] = mult
-                    mult *= radix
-                self.node_len.a[node] = len(parts)
-                if mult > 1 << 40:
-                    raise TableUnsupported("table engine: a requirement check with too many distinct answers; run with --engine direct")
-                self.node_p0.a[node] = parts[0][0]
-                if len(parts) == 1:
-                    db = self.digit_base.a[node] = self.digit_kids.extend(self.tables.env.R[parts[0][0]])
-                    self.digit_jump.extend(self.tables.env.R[parts[0][0]])
-                    self.jump_code.extend(self.tables.env.R[parts[0][0]])
-                    self.digit_node.extend(self.tables.env.R[parts[0][0]])
-                    self.digit_node.a[db] = node
-                    self.node_code.a[node] = db << self.code_bits | parts[0][0]
-                else:
-                    self.node_code.a[node] = WIDE | node
-                if mult <= DENSE_ANSWERS:
-                    self.kid_base.a[node] = self.kids.extend(mult)
-                self.width = max(self.width, len(parts))
-            elif state != -1 or self.node_desc[node] != desc:
-                raise NondeterminismError(
-                    "the deployment core checked different requirements on a state with the same readings: "
-                    "it is not a function of what it reads through its ports"
-                )
-            ek = (node << 40) | code
-            child = self.edges.get(ek)
-            path.append((node, child is None))
-            if child is None:
-                child = self.edges[ek] = self._node()
-                self._digit_branch(node, code, child)
-                kb = int(self.kid_base.a[node])
-                if kb >= 0:
-                    self.kids.a[kb + code] = child
-                else:
-                    self.wide_edges.add(np.array([ek], dtype=np.int64), np.array([child], dtype=np.int64))
-            node = child
-        state = self.node_leaf.a[node]
-        if state == -2:
-            self.node_leaf.a[node] = leaf
-            self.node_code.a[node] = LEAF | leaf
-        elif state != leaf:
-            raise NondeterminismError(
-                "the deployment core reacted differently to states with the same readings: "
-                "it is not a function of what it reads through its ports"
-            )
-        for node in self._rejump_path(path):
-            self._recode(node)
-
-    def _recode(self, node: int) -> None:
-        """Bring the ``jump_code`` entries of ``node`` up to date with its ``digit_jump`` ones:
-        each the walk code of its target, -1 where there is no branch yet."""
-        db = int(self.digit_base.a[node])
-        if db < 0:
-            return
-        r = self.tables.env.R[int(self.node_p0.a[node])]
-        jump, jc, code = self.digit_jump.a, self.jump_code.a, self.node_code.a
-        if r <= self.small_digits:
-            for d, t in enumerate(jump[db: db + r].tolist(), db):
-                jc[d] = code[t] if t >= 0 else -1
-            return
-        t = jump[db: db + r]
-        jc[db: db + r] = np.where(t >= 0, code[t], -1)
-
-    def _rejump_path(self, path: list[tuple[int, bool]]) -> list[int]:
-        """Bring the shortcuts (``digit_jump``) of an insert's path up to date, deepest first.
-
-        A check about one platform branches on that platform's digit ``d``; when the child
-        for ``d`` checks the same platform again, its branch is again the one for ``d``, so
-        the walk takes it in the same step. An insert changes the branches of its path's
-        nodes only (a new branch's shortcut is its child, set by :meth:`_digit_branch`), so
-        a node's shortcuts can change only where its child on the path checks the same
-        platform and that child's branches or shortcuts changed. Returns the nodes whose
-        branches or shortcuts changed."""
-        below = False  # the shortcuts of the node below on the path changed
-        changed = []
-        base, p0 = self.digit_base.a, self.node_p0.a
-        for i in range(len(path) - 1, -1, -1):
-            node, new = path[i]
-            if below:
-                child = path[i + 1][0]
-                db, cb = int(base[node]), int(base[child])
-                if db >= 0 and cb >= 0 and int(p0[node]) == int(p0[child]):
-                    self._rejump(node, child)
-                    new = True
-            below = new
-            if new:
-                changed.append(node)
-        return changed
-
-    def _rejump(self, node: int, child: int) -> None:
-        """Recompute the shortcuts of one-platform check ``node`` for the digits whose branch
-        is ``child``, a check of the same platform, from ``child``'s (current) ones."""
-        db, cb = int(self.digit_base.a[node]), int(self.digit_base.a[child])
-        r = self.tables.env.R[int(self.node_p0.a[node])]
-        kids_of, jump = self.digit_kids.a, self.digit_jump.a
-        if r <= self.small_digits:  # a few digits: plain Python is several times faster than numpy calls
-            for d, kid in enumerate(kids_of[db: db + r].tolist()):
-                if kid == child:
-                    jump[db + d] = jump[cb + d] if kids_of[cb + d] >= 0 else child
-            return
-        digits = np.flatnonzero(kids_of[db: db + r] == child)
-        jump[db + digits] = np.where(kids_of[cb + digits] >= 0, jump[cb + digits], child)
-
-    def _digit_branch(self, node: int, code: int, child: int) -> None:
-        """Enter ``child`` for every digit of a one-platform node that answers ``code``."""
-        db = int(self.digit_base.a[node])
-        if db >= 0:
-            base = int(self.node_base.a[node, 0])
-            for d, c in enumerate(self.tables.ok.a[base: base + self.tables.env.R[int(self.node_p0.a[node])]].tolist()):
-                if c == code:
-                    self.digit_kids.a[db + d] = child
-                    self.digit_jump.a[db + d] = child  # (a new node: nothing to skip yet)
+class _Walk:
+    """The walk half of :class:`DecisionTrees`: the leaf of each unit of a batch, a round
+    of array operations per level of the trees (it reads the arrays the inserts keep)."""
 
     def _root_nodes(self, roots: np.ndarray, record: Callable[[int], None]) -> np.ndarray:
         """The root node of each unit, recording a run for each root met for the first time
@@ -330,3 +145,193 @@ class DecisionTrees:
         child = self.kids.a[at]
         child[wide] = self.wide_edges.get((nd[wide] << 40) | code[wide])
         return child
+
+
+class DecisionTrees(_Walk):
+    """The decision trees of one search over ``tables``; ``go_on()`` raises when the search must stop."""
+
+    def __init__(self, tables: AnswerTables, platforms: int, go_on: Callable[[], None]) -> None:
+        self.tables, self.go_on = tables, go_on
+        P = platforms
+        self.roots: dict[int, int] = {}
+        self.node_leaf = Grow((1024,), -2)  # -2 open, -1 check node, >= 0 leaf id
+        self.node_desc: list[tuple | None] = []
+        self.node_base = Grow((1024, P))
+        self.node_plat = Grow((1024, P))
+        self.node_mult = Grow((1024, P))
+        self.node_len = Grow((1024,), 1)
+        self.edges: dict[int, int] = {}
+        # a check node's children: with at most DENSE_ANSWERS answer codes, kids[kid_base[node] + code]
+        # (-1: no branch yet); beyond, in the hash table of (node << 40 | code) edges
+        self.kid_base = Grow((1024,), -1)
+        # a check node about one platform: its child per digit of that platform (the answer
+        # table and the answer's branch in one), digit_kids[digit_base[node] + digit]
+        self.digit_base = Grow((1024,), -1)
+        self.digit_kids = Grow((1024,), -1)
+        # the walk's shortcut beside digit_kids: where the child for a digit checks the same
+        # platform again and has a branch for that digit, the node that branch leads to
+        # (repeatedly); else the child itself (:meth:`_rejump`)
+        self.digit_jump = Grow((1024,), -1)
+        # the walk's view of the same shortcuts: digit_jump's targets as walk codes
+        # (:meth:`_code`), so that a step reads one array; kept by :meth:`_recode`
+        self.jump_code = Grow((1024,), -1)
+        self.node_code = Grow((1024,), -1)  # each node's walk code (-1: open)
+        self.digit_node = Grow((1024,), -1)  # the node whose digit table starts at an offset
+        self.code_bits = max(1, (platforms - 1).bit_length())  # the low bits of a check's code: its platform
+        self.small_digits = SMALL_DIGITS
+        self.node_p0 = Grow((1024,))
+        self.kids = Grow((1024,), -1)
+        self.wide_edges = IntTable()
+        self._new_roots: dict[int, int] = {}
+        self.root_nodes = IntTable()
+        self.leaves = Interned()
+        self.leaf_sys: list[int] = []  # a reaction leaf's next system part (-1: an invariants leaf)
+        self.leaf_inst: list[bool] = []  # a reaction leaf with an instantaneous violation
+        self.width = 1
+        self._per_node = (self.node_leaf, self.kid_base, self.digit_base, self.node_p0, self.node_base, self.node_plat,
+                          self.node_mult, self.node_code, self.node_len)
+
+    def leaf(self, value: tuple) -> int:
+        """The number of leaf ``value``: ("r", system, outcomes, fails, branch names, instant) or ("v", violated)."""
+        n = len(self.leaves)
+        i = self.leaves(value)
+        if i == n:  # a new leaf
+            self.leaf_sys.append(value[1] if value[0] == "r" else -1)
+            self.leaf_inst.append(value[0] == "r" and value[5] is not None)
+        return i
+
+    def _node(self) -> int:
+        n = self.node_leaf.n
+        if n == len(self.node_leaf.a):  # (the per-node arrays grow together)
+            for g in self._per_node:
+                g.extend(1)  # (their fill values)
+        else:
+            for g in self._per_node:
+                g.n = n + 1
+        self.node_desc.append(None)
+        if n >= 1 << 22:
+            raise TableUnsupported("table engine: more than 4 million decision nodes; run with --engine direct")
+        return n
+
+    def _open(self, node: int, desc: tuple) -> None:
+        """Make open node ``node`` the check ``desc`` (mode, table, first_only, parts)."""
+        mode, table, first_only, parts = desc
+        self.node_leaf.a[node] = -1
+        self.node_desc[node] = desc
+        mult = 1
+        for j, (p, dep) in enumerate(parts):
+            off, radix = self.tables.block(mode, table, first_only, p, dep)
+            self.node_base.a[node, j] = off
+            self.node_plat.a[node, j] = p
+            self.node_mult.a[node, j] = mult
+            mult *= radix
+        self.node_len.a[node] = len(parts)
+        if mult > 1 << 40:
+            raise TableUnsupported("table engine: a requirement check with too many distinct answers; run with --engine direct")
+        p0 = self.node_p0.a[node] = parts[0][0]
+        if len(parts) == 1:
+            r = self.tables.env.R[p0]
+            db = self.digit_base.a[node] = self.digit_kids.extend(r)
+            for g in (self.digit_jump, self.jump_code, self.digit_node):
+                g.extend(r)
+            self.digit_node.a[db] = node
+            self.node_code.a[node] = db << self.code_bits | p0
+        else:
+            self.node_code.a[node] = WIDE | node
+        if mult <= DENSE_ANSWERS:
+            self.kid_base.a[node] = self.kids.extend(mult)
+        self.width = max(self.width, len(parts))
+
+    def insert(self, root: int, obs: list[tuple[tuple, int]], leaf: int) -> None:
+        node = self.roots.get(root)
+        if node is None:
+            node = self.roots[root] = self._new_roots[root] = self._node()
+        path: list[tuple[int, bool]] = []  # (node, whether this insert changed its branches)
+        made = None  # (parent, code) of a branch this insert made to ``node``
+        for desc, code in obs:
+            state = self.node_leaf.a[node]
+            if state == -2:
+                self._open(node, desc)
+            elif state != -1 or self.node_desc[node] != desc:
+                raise NondeterminismError(
+                    "the deployment core checked different requirements on a state with the same readings: "
+                    "it is not a function of what it reads through its ports"
+                )
+            if made is not None:  # (now that its walk code is known)
+                self._digit_branch(made[0], made[1], node)
+            ek = (node << 40) | code
+            child = self.edges.get(ek)
+            path.append((node, child is None))
+            made = None
+            if child is None:
+                child = self.edges[ek] = self._node()
+                made = (node, code)
+                kb = int(self.kid_base.a[node])
+                if kb >= 0:
+                    self.kids.a[kb + code] = child
+                else:
+                    self.wide_edges.add(np.array([ek], dtype=np.int64), np.array([child], dtype=np.int64))
+            node = child
+        state = self.node_leaf.a[node]
+        if state == -2:
+            self.node_leaf.a[node] = leaf
+            self.node_code.a[node] = LEAF | leaf
+        elif state != leaf:
+            raise NondeterminismError(
+                "the deployment core reacted differently to states with the same readings: "
+                "it is not a function of what it reads through its ports"
+            )
+        if made is not None:
+            self._digit_branch(made[0], made[1], node)
+        self._rejump_path(path)
+
+    def _rejump_path(self, path: list[tuple[int, bool]]) -> None:
+        """Bring the shortcuts (``digit_jump``, ``jump_code``) of an insert's path up to
+        date, deepest first.
+
+        A check about one platform branches on that platform's digit ``d``; when the child
+        for ``d`` checks the same platform again, its branch is again the one for ``d``, so
+        the walk takes it in the same step. An insert changes the branches of its path's
+        nodes only (a new branch's shortcut is its child, set by :meth:`_digit_branch`), so
+        a node's shortcuts can change only where its child on the path checks the same
+        platform and that child's branches or shortcuts changed."""
+        below = False  # the shortcuts of the node below on the path changed
+        base, p0 = self.digit_base.a, self.node_p0.a
+        for i in range(len(path) - 1, -1, -1):
+            node, new = path[i]
+            if below:
+                child = path[i + 1][0]
+                db, cb = int(base[node]), int(base[child])
+                if db >= 0 and cb >= 0 and int(p0[node]) == int(p0[child]):
+                    self._rejump(node, child)
+                    new = True
+            below = new
+
+    def _rejump(self, node: int, child: int) -> None:
+        """Recompute the shortcuts of one-platform check ``node`` for the digits whose branch
+        is ``child``, a check of the same platform, from ``child``'s (current) ones."""
+        db, cb = int(self.digit_base.a[node]), int(self.digit_base.a[child])
+        r = self.tables.env.R[int(self.node_p0.a[node])]
+        kids_of, jump, jc, own = self.digit_kids.a, self.digit_jump.a, self.jump_code.a, int(self.node_code.a[child])
+        if r <= self.small_digits:  # a few digits: plain Python is several times faster than numpy calls
+            for d, kid in enumerate(kids_of[db: db + r].tolist(), db):
+                if kid == child:
+                    on = kids_of[cb - db + d] >= 0
+                    jump[d] = jump[cb - db + d] if on else child
+                    jc[d] = jc[cb - db + d] if on else own
+            return
+        digits = np.flatnonzero(kids_of[db: db + r] == child)
+        on = kids_of[cb + digits] >= 0
+        jump[db + digits] = np.where(on, jump[cb + digits], child)
+        jc[db + digits] = np.where(on, jc[cb + digits], own)
+
+    def _digit_branch(self, node: int, code: int, child: int) -> None:
+        """Enter ``child`` (its walk code made) for every digit of a one-platform node that answers ``code``."""
+        db = int(self.digit_base.a[node])
+        if db >= 0:
+            base, own = int(self.node_base.a[node, 0]), int(self.node_code.a[child])
+            kids, jump, jc = self.digit_kids.a, self.digit_jump.a, self.jump_code.a
+            for d, c in enumerate(self.tables.ok.a[base: base + self.tables.env.R[int(self.node_p0.a[node])]].tolist(), db):
+                if c == code:
+                    kids[d] = jump[d] = child  # (a new node: nothing to skip yet)
+                    jc[d] = own
