@@ -65,3 +65,25 @@ def test_int_table_is_a_set_and_a_map_through_growth():
     s = IntTable(bits=1, values=False)
     s.add(np.arange(0, 3000, 3))
     assert s.contains(np.array([0, 3, 4, 2997, 3000])).tolist() == [True, True, False, True, False]
+
+
+def test_int_table_answers_as_a_dict_along_long_probes():
+    # lookups read the key their probe ends at as they go (no second read of the slots):
+    # random batches, tables kept small so that probes run long, present and absent keys
+    import numpy as np
+
+    rng = np.random.default_rng(1)
+    for trial in range(20):
+        t = IntTable(bits=3, values=bool(trial % 2))
+        ref: dict[int, int] = {}
+        for _ in range(15):
+            ks = np.unique(rng.integers(0, 1 << int(rng.integers(3, 40)), int(rng.integers(0, 400))))
+            ks = np.array([k for k in ks.tolist() if k not in ref], dtype=np.int64)
+            rng.shuffle(ks)
+            vs = rng.integers(0, 100, len(ks))
+            t.add(ks, vs if t.vals is not None else None)
+            ref.update(zip(ks.tolist(), vs.tolist()))
+            q = np.concatenate([ks, rng.integers(0, 1 << 40, 200)])
+            assert t.contains(q).tolist() == [k in ref for k in q.tolist()]
+            if t.vals is not None:
+                assert t.get(q).tolist() == [ref.get(k, -1) for k in q.tolist()]

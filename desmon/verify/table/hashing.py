@@ -29,33 +29,43 @@ class IntTable:
     def __len__(self) -> int:
         return self.n
 
-    def _slots(self, keys: np.ndarray) -> np.ndarray:
-        """The slot of each key: where it is, or the empty slot its probe ends at."""
+    def _probe(self, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The slot of each key (where it is, or the empty slot its probe ends at) and the
+        key held there (the key itself if present, else empty)."""
         h = np.multiply(keys.astype(np.int64, copy=False).view(np.uint64), _MUL)  # (non-negative keys: the view is astype's value)
         h >>= np.uint64(64 - self._bits)
         pos = h.view(np.int64)
         table, mask = self.keys, (1 << self._bits) - 1
-        k = np.take(table, pos)
-        pending = np.flatnonzero((k != keys) & (k != _EMPTY))
+        k = table.take(pos)
+        other = k != keys
+        other &= k != _EMPTY
+        pending = np.flatnonzero(other)
         while pending.size:
-            p = (pos[pending] + 1) & mask
+            p = pos.take(pending)
+            p += 1
+            p &= mask
             pos[pending] = p
-            k = np.take(table, p)
-            pending = pending[(k != keys[pending]) & (k != _EMPTY)]
-        return pos
+            kp = table.take(p)
+            k[pending] = kp
+            pending = pending[(kp != keys.take(pending)) & (kp != _EMPTY)]
+        return pos, k
+
+    def _slots(self, keys: np.ndarray) -> np.ndarray:
+        """The slot of each key: where it is, or the empty slot its probe ends at."""
+        return self._probe(keys)[0]
 
     def contains(self, keys: np.ndarray) -> np.ndarray:
         """Whether each key is in the table."""
         if not len(keys):
             return np.zeros(0, dtype=bool)
-        return np.take(self.keys, self._slots(keys)) == keys
+        return self._probe(keys)[1] == keys
 
     def get(self, keys: np.ndarray) -> np.ndarray:
         """The value of each key, -1 where it is absent."""
         if not len(keys):
             return np.full(0, -1, dtype=np.int64)
-        pos = self._slots(keys)
-        return np.where(np.take(self.keys, pos) == keys, np.take(self.vals, pos), -1)  # type: ignore[arg-type]
+        pos, k = self._probe(keys)
+        return np.where(k == keys, self.vals.take(pos), -1)  # type: ignore[union-attr]
 
     def add(self, keys: np.ndarray, vals: np.ndarray | None = None) -> None:
         """Add ``keys`` (distinct, absent) with ``vals``."""

@@ -75,7 +75,7 @@ class _Walk:
             out[idx] = child  # final for the units at a leaf, overwritten later for the others
             keep = np.flatnonzero(child < LEAF)
             if len(keep) < len(child):
-                idx, cur, rp = np.take(idx, keep), np.take(child, keep), np.take(rp, keep)
+                idx, cur, rp = idx.take(keep), child.take(keep), rp.take(keep)
             else:
                 cur = child
         out -= LEAF
@@ -104,7 +104,12 @@ class _Walk:
         on past the checks of the same platform), else from the answer code."""
         bits, mask = self.code_bits, (1 << self.code_bits) - 1
         if self.width == 1 or cur.max() < WIDE:  # (width 1: every check is about one platform)
-            return np.take(self.jump_code.a, (cur >> bits) + np.take(flat_loc, rp + (cur & mask)))
+            at = cur & mask
+            at += rp
+            digit = flat_loc.take(at)
+            np.right_shift(cur, bits, out=at)
+            at += digit
+            return self.jump_code.a.take(at)
         child = np.empty_like(cur)
         one, other = np.flatnonzero(cur < WIDE), np.flatnonzero(cur >= WIDE)
         c = cur[one]
