@@ -480,3 +480,15 @@ def test_the_walks_shortcuts_land_where_the_same_platforms_branches_lead(name):
                     trees._rejump(node, kid)
     assert (trees.digit_jump.a[: trees.digit_kids.n] == python_made[: trees.digit_kids.n]).all()
     assert (trees.jump_code.a[: trees.digit_kids.n] == python_codes[: trees.digit_kids.n]).all()
+
+
+@settings(max_examples=200, deadline=None)
+@given(hst.lists(hst.integers(0, 12), max_size=60), hst.integers(0, 1 << 40))
+def test_firsts_are_the_first_occurrences_of_each_value_in_order(small, offset):
+    # the batch's candidate new states: the first unit reaching each code (np.unique's index)
+    from desmon.verify.table.search import _firsts
+
+    values = np.array([offset + 97 * v for v in small], dtype=np.int64)
+    want = np.sort(np.unique(values, return_index=True)[1]) if len(values) else np.zeros(0, dtype=np.int64)
+    got = _firsts(values)
+    assert got.tolist() == want.tolist() and got.dtype == np.int64
