@@ -38,7 +38,13 @@ _KIND_ID = {k: i for i, k in enumerate(EVENT_KINDS)}
 
 def root_key(system: np.ndarray, ctx: np.ndarray, stim: np.ndarray | int, prefix: np.ndarray | int) -> np.ndarray:
     """The decision-tree root of each (system part, context digit, stimulus, prefix)."""
-    return (((system << ROOT_CTX | ctx) << ROOT_STIM | stim) << ROOT_PREFIX) | prefix
+    key = system << ROOT_CTX  # (one new array, the rest in place)
+    key |= ctx
+    key <<= ROOT_STIM
+    key |= stim
+    key <<= ROOT_PREFIX
+    key |= prefix
+    return key
 
 
 def _contexts(init: Key, b: Any) -> list[str | None]:

@@ -155,8 +155,13 @@ class TableEngine:
         u_t = np.arange(T, dtype=np.int64)
         u_pre = np.zeros(T, dtype=np.int64)
         parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        first = root_key(tr.sys, tr.env2 % G, tr.stim, 0)  # each transition's root with the empty prefix
         while len(u_t):
-            roots = root_key(np.take(tr.sys, u_t), np.take(tr.env2, u_t) % G, np.take(tr.stim, u_t), u_pre)
+            if len(parts):
+                roots = first.take(u_t)
+                roots |= u_pre
+            else:  # (generation 0: every transition once, with the empty prefix)
+                roots = first
 
             def record_unit(u: int, u_t: np.ndarray = u_t, u_pre: np.ndarray = u_pre, roots: np.ndarray = roots) -> None:
                 t = int(u_t[u])
@@ -279,7 +284,9 @@ class TableEngine:
         try:
             U_t, U_pre, U_leaf = self._units(ids, tr)
             leaf_sys = np.array(self.trees.leaf_sys, dtype=np.int64)
-            U_code = (np.take(tr.env2, U_t) << SYS_BITS) | np.take(leaf_sys, U_leaf)
+            U_code = tr.env2.take(U_t)
+            U_code <<= SYS_BITS
+            U_code |= leaf_sys.take(U_leaf)
             # candidate new states: first occurrence in this batch, not seen before
             fresh = np.flatnonzero(~self.seen.contains(U_code))
             cand = fresh[_firsts(U_code.take(fresh))]
@@ -455,13 +462,11 @@ class _BatchCounts:
                 res.branches[name] += n
         n_moved = n_inc - 1 if stop_unit >= 0 else n_inc  # the stopping unit is not counted as a change
         t = U_t[:n_moved]
-        changed = U_code[:n_moved] != np.take(np.take(sc, tr.pos), t)
-        kinds = np.take(np.take(ev.kind_of, tr.ev), t)
-        for k, n in enumerate(np.bincount(kinds, weights=changed, minlength=len(EVENT_KINDS)).tolist()):
-            if n:
-                res.changed[EVENT_KINDS[k]] += int(n)
+        kind_of_t = ev.kind_of.take(tr.ev)  # each transition's event kind
+        changed = U_code[:n_moved] != sc.take(tr.pos).take(t)
+        _count(res.changed, EVENT_KINDS, kind_of_t.take(t)[changed], len(EVENT_KINDS))
         last_t = min(cut_t, T - 1)
-        _count(res.enabled, EVENT_KINDS, ev.kind_of[tr.ev[: last_t + 1]], len(EVENT_KINDS))
+        _count(res.enabled, EVENT_KINDS, kind_of_t[: last_t + 1], len(EVENT_KINDS))
         n_states = int(tr.pos[last_t]) + 1 if cut_t < T else len(units.ids)
         _count(res.rules, env.ctxs, tr.ctx[:n_states], env.C)
 
