@@ -157,11 +157,7 @@ class TableEngine:
         parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         first = root_key(tr.sys, tr.env2 % G, tr.stim, 0)  # each transition's root with the empty prefix
         while len(u_t):
-            if len(parts):
-                roots = first.take(u_t)
-                roots |= u_pre
-            else:  # (generation 0: every transition once, with the empty prefix)
-                roots = first
+            roots = first.take(u_t) | u_pre if parts else first  # (generation 0: every transition once, with prefix ())
 
             def record_unit(u: int, u_t: np.ndarray = u_t, u_pre: np.ndarray = u_pre, roots: np.ndarray = roots) -> None:
                 t = int(u_t[u])
@@ -284,8 +280,7 @@ class TableEngine:
         try:
             U_t, U_pre, U_leaf = self._units(ids, tr)
             leaf_sys = np.array(self.trees.leaf_sys, dtype=np.int64)
-            U_code = tr.env2.take(U_t)
-            U_code <<= SYS_BITS
+            U_code = tr.env2.take(U_t) << SYS_BITS
             U_code |= leaf_sys.take(U_leaf)
             # candidate new states: first occurrence in this batch, not seen before
             fresh = np.flatnonzero(~self.seen.contains(U_code))

@@ -25,8 +25,8 @@ __all__ = ["DecisionTrees", "DENSE_ANSWERS", "SMALL_DIGITS"]
 DENSE_ANSWERS = 64
 #: a platform with at most this many digits has its shortcuts recomputed in plain Python
 SMALL_DIGITS = 32
-#: walk codes (:meth:`DecisionTrees._code`): a one-platform check is ``digit_base << code_bits
-#: | platform`` (below WIDE), another check ``WIDE | node``, a leaf node ``LEAF | leaf``
+#: walk codes (:meth:`_Walk.walk`): a one-platform check is ``digit_base << code_bits | platform``
+#: (below WIDE), another check ``WIDE | node``, a leaf node ``LEAF | leaf``
 WIDE, LEAF = 1 << 60, 1 << 61
 
 
@@ -122,7 +122,7 @@ class _Walk:
 
     def _codes(self, nd: np.ndarray, rp: np.ndarray, flat_loc: np.ndarray) -> np.ndarray:
         """The answer code of each unit's check at node ``nd`` (``rp``: its row of platform
-        digits times their number): most checks ask about one platform, so position j
+        digits times the row's width): most checks ask about one platform, so position j
         is computed only for the units whose check has more."""
         ok = self.tables.ok.a
         base, plat, mult = self.node_base.a, self.node_plat.a, self.node_mult.a
