@@ -72,11 +72,9 @@ class _Walk:
             child = self._step(cur, rp, flat_loc)
             if child.min() < 0:
                 self._record_missed(child, idx, cur, rp, flat_loc, record)
-            going = child < LEAF
-            keep = np.flatnonzero(going)
+            out[idx] = child  # final for the units at a leaf, overwritten later for the others
+            keep = np.flatnonzero(child < LEAF)
             if len(keep) < len(child):
-                done = np.flatnonzero(~going)
-                out[idx.take(done)] = child.take(done)
                 idx, cur, rp = idx.take(keep), child.take(keep), rp.take(keep)
             else:
                 cur = child
