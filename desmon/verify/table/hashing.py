@@ -37,8 +37,9 @@ class IntTable:
         pos = h.view(np.int64)
         table, mask = self.keys, (1 << self._bits) - 1
         k = table.take(pos)
-        pending = np.flatnonzero(k != keys)  # (most lookups find their key at once)
-        pending = pending[k.take(pending) != _EMPTY]
+        other = k != keys
+        other &= k != _EMPTY
+        pending = np.flatnonzero(other)
         while pending.size:
             p = pos.take(pending)
             p += 1
