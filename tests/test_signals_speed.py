@@ -136,3 +136,28 @@ def test_wrench_request_by_time_matches_whole_blocks() -> None:
         assert np.array_equal(k, np.flatnonzero((np.arange(2000) / 50.0 >= t0) & (np.arange(2000) / 50.0 < t1)))
         want = np.concatenate([ref._block(int(b))[k[k // 1024 == b] - b * 1024] for b in np.unique(k // 1024)]) if k.size else np.zeros(0)
         assert got.values.tobytes() == want.tobytes(), (t0, t1)
+
+
+def test_move_base_tactile_matches_context_tactile() -> None:
+    # the piecewise-constant drive against the general kernel, on random drives (settle jump
+    # forced on for half of them) at ascending times that include every case's bounds exactly
+    from desmon.detectors.signals.common import DEFAULT_PARAMS as p
+    from desmon.detectors.signals.contexts import base_duration, context_tactile, draw_context, move_base_tactile
+
+    rng = np.random.default_rng(7)
+    for trial in range(200):
+        cp = draw_context("move_base", rng, 1, None, p)
+        if trial % 2:
+            cp["settle"] = np.ones(1)
+        start, a = float(cp["start"][0]), float(cp["a_max"][0])
+        ta = float(np.sqrt(p.base_leg / a))
+        dur = start + base_duration(a, p) + 0.3
+        edges = [start + e for e in (0.0, ta, 2 * ta, 2 * ta + p.base_pause, 3 * ta + p.base_pause, 4 * ta + p.base_pause)]
+        edges += [float(cp["settle_t"][0])]
+        t = np.concatenate([rng.uniform(0.0, dur, 40), edges, np.nextafter(edges, -np.inf), np.nextafter(edges, np.inf), [0.0, dur, dur]])
+        t = np.sort(t.clip(0.0, dur))
+        fac, dy = move_base_tactile(t, cp, p)
+        rf, rdy, rdx = context_tactile("move_base", t[None, :, None], cp, p)
+        assert fac.tobytes() == rf.reshape(-1).tobytes()
+        assert dy.tobytes() == rdy.reshape(-1).tobytes()
+        assert not rdx.any() and rdx.size == 1

@@ -194,6 +194,38 @@ def context_tactile(context: str, t_rel: Arr, cp: Params, p: SignalParams) -> tu
     return np.ones(1), np.zeros(1), np.zeros(1)
 
 
+def move_base_tactile(t_rel: Arr, cp: Params, p: SignalParams) -> tuple[Arr, Arr]:
+    """:func:`context_tactile`'s pressure factor and row offset of one ``MOVE_BASE`` trial
+    (``cp`` arrays ``(1,)``) at non-decreasing times ``t_rel`` ``(K,)``, each ``(K,)`` (the
+    column offset is zero): the same floats, from the same scalar operations.
+
+    Both are piecewise constant: :func:`base_profile`'s four pulse conditions and the
+    settle jump's ``t_rel >= settle_t`` each hold on one run of frames (``tau = t_rel -
+    start`` and ``t2`` are non-decreasing: a rounded difference with a constant is
+    monotonic), found by bisection; each frame gets the value of its (pulse, jump) case,
+    the first pulse that holds winning as in :func:`base_profile`.
+    """
+    a = float(cp["a_max"][0])
+    ta = math.sqrt(p.base_leg / a)
+    tau = t_rel - float(cp["start"][0])
+    t2 = tau - 2.0 * ta
+    t2 -= p.base_pause
+    edges = (0.0, ta, 2 * ta)
+    i0, i1, i2 = tau.searchsorted(edges).tolist()
+    j0, j1, j2 = t2.searchsorted(edges).tolist()
+    case = np.zeros(t_rel.size, dtype=np.intp)
+    case[j1:j2] = 4  # the later pulses first: an earlier one that holds overwrites them
+    case[j0:j1] = 3
+    case[i1:i2] = 2
+    case[i0:i1] = 1
+    case[int(t_rel.searchsorted(float(cp["settle_t"][0]))) :] += 5
+    rel = [acc / a for acc in (0.0, a, -a, -a, a)]
+    sj = float(cp["settle"][0]) * float(cp["settle_jump"][0])
+    fac = np.array([1.0 + 0.03 * r for r in rel] * 2)
+    dy = np.array([0.05 * r + sj * on for on in (0.0, 1.0) for r in rel])
+    return fac.take(case), dy.take(case)
+
+
 def hold_creep(t_rel: Arr, kappa: Arr, p: SignalParams) -> Arr:
     """Slow pressure creep while holding, saturating at ``1 + kappa * tau``."""
     return 1.0 + kappa[:, None, None] * p.creep_tau * (1.0 - np.exp(-t_rel / p.creep_tau))

@@ -37,11 +37,11 @@ from desmon.detectors.signals.common import (
     TactileBlock,
     tactile_nominal_indices,
 )
-from desmon.detectors.signals.contexts import context_tactile, hold_creep
+from desmon.detectors.signals.contexts import context_tactile, hold_creep, move_base_tactile
 from desmon.detectors.signals.episodes import Episode
 from desmon.detectors.signals.noise import STREAM_TACTILE, BlockStream, Jitter, tactile_normals
 from desmon.detectors.signals.slips import slip_tactile
-from desmon.model.actions import HOLD, IDLE
+from desmon.model.actions import HOLD, IDLE, MOVE_BASE
 
 #: Frames per tactile render block.
 TACTILE_BLOCK: Final = 256
@@ -61,6 +61,9 @@ _CELL_CODE: Final = np.repeat(_II, PAD_COLS) + np.tile(_JJ, MAX_ROWS) * _PACK
 
 #: A segment kernel's output over time as rows, and whether it is neutral before / after the segment.
 _Term = tuple[Arr, bool, bool]
+#: The term of an offset that is zero at every time and pad (what ``_term(np.zeros(1), 0.0)`` gives).
+_ZERO_TERM: Final = (np.zeros((1, 1)), True, True)
+_ZERO_TERM[0].flags.writeable = False
 #: One rendered block: frame times ``(B,)``, moments ``(B, 6, 3)``, frames ``(B, 6, 14, 6)`` or None.
 Rendered = tuple[Arr, Arr, "Arr | None"]
 
@@ -165,6 +168,9 @@ def _segment_kernel(tt: Arr, lo: int, hi: int, seg: tuple[str, float, float, dic
     tr = arg.reshape(1, m + 2, 1)
     if context == HOLD:
         return _term(hold_creep(tr, kappa, p), 1.0), None, None
+    if context == MOVE_BASE and cp["start"].shape == (1,):  # piecewise constant: see move_base_tactile
+        fac, dy = move_base_tactile(arg, cp, p)
+        return _term(fac.reshape(tr.shape), 1.0), _term(dy.reshape(tr.shape), 0.0), _ZERO_TERM
     fac, dy, dx = context_tactile(context, tr, cp, p)
     return _term(fac, 1.0), _term(dy, 0.0), _term(dx, 0.0)
 
