@@ -179,8 +179,9 @@ def _term(x: Arr, neutral: float) -> _Term:
     """A kernel output (``(1, m + 2, 6 or 1)`` or ``(1,)``) as rows ``(m + 2 or 1, 6 or 1)``, with
     whether its value before and after the segment is ``neutral`` for every pad."""
     rows = x[0] if x.ndim == 3 else x.reshape(1, -1)
-    ends = rows[0 :: max(rows.shape[0] - 1, 1)].tolist()
-    return rows, all(v == neutral for v in ends[0]), all(v == neutral for v in ends[-1])
+    first, last = rows[0].tolist(), rows[-1].tolist()
+    # list.count compares with == (fresh float objects: no identity shortcut applies)
+    return rows, first.count(neutral) == len(first), last.count(neutral) == len(last)
 
 
 def _ascending_state(tt: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, Arr] | None:
@@ -204,7 +205,7 @@ def _ascending_state(tt: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, A
     n = tt.size
     if n == 0 or tt[0] < ep.start or tt[-1] >= ep.end:
         return None
-    if bool(((y0 == 0) & np.signbit(y0)).any()) or bool(((x0 == 0) & np.signbit(x0)).any()):
+    if any(v == 0.0 and math.copysign(1.0, v) < 0.0 for v in y0.tolist() + x0.tolist()):  # a centre -0.0
         return None
     segs = []
     cuts = {0, n}
