@@ -161,3 +161,67 @@ def test_move_base_tactile_matches_context_tactile() -> None:
         assert fac.tobytes() == rf.reshape(-1).tobytes()
         assert dy.tobytes() == rdy.reshape(-1).tobytes()
         assert not rdx.any() and rdx.size == 1
+
+
+def _reference_tactile_scores(moments: np.ndarray, state, gating: bool):  # type: ignore[no-untyped-def]
+    """c30a13d's tactile_scores body (contact present), the reference for its shortcuts."""
+    from desmon.detectors.tactile import _CELLS, WARMUP_FRAMES, TactileState, centred_cop
+
+    n, k = moments.shape[:2]
+    s = moments[..., 0]
+    cop_ext = np.empty((n, k + 1, 6, 2))
+    cop_ext[:, 0] = state.cop
+    cop, contact = centred_cop(moments, out=cop_ext[:, 1:])
+    idx_ext = np.empty_like(cop_ext)
+    idx_ext[:, 0] = state.index
+    index = idx_ext[:, 1:]
+    np.add(cop, cop_ext[:, :-1], out=index)
+    d = idx_ext[:, 1:] - idx_ext[:, :-1]
+    d *= d
+    phi = np.sqrt(d[..., 0] + d[..., 1])
+    run = state.run[:, None] + np.arange(1, k + 1)[None, :]
+    valid_pad = (contact & (run >= WARMUP_FRAMES)[..., None]) if gating else contact
+    w = np.where(valid_pad, s / _CELLS, 0.0)
+    den = w.sum(axis=-1)
+    num = (phi * w).sum(axis=-1)
+    valid = den > 0
+    s_t = np.where(valid, num / np.where(valid, den, 1.0), 0.0)
+    return s_t, valid, TactileState(cop[:, -1].copy(), index[:, -1].copy(), np.minimum(run[:, -1], 1 << 30))
+
+
+@pytest.mark.parametrize("k", [1, 3, 63, 64, 65, 300, 889])
+def test_tactile_scores_shortcuts_match_the_reference(k: int) -> None:
+    # the warm-up shortcut (every frame past the warm-up) and the pad sums along the frames,
+    # against the plain body, on moments with pads on, off and flickering, for states of
+    # every run around the warm-up, both gatings, one trial and three
+    from desmon.detectors.tactile import TactileState, tactile_scores
+
+    rng = np.random.default_rng(k)
+    for n in (1, 3):
+        mom = rng.uniform(0.0, 4000.0, (n, k, 6, 3)) * 10.0 ** rng.integers(-3, 3, (n, k, 6, 1))
+        mom[..., 1, :] = 0.0  # a pad without contact throughout
+        mom[:, ::3, 2, 0] = 0.0  # a flickering pad
+        mom[:, ::5, 4, :] = -0.0
+        for run in range(5):
+            st = TactileState(rng.normal(0, 2, (n, 6, 2)), rng.normal(0, 2, (n, 6, 2)), np.full(n, run, dtype=np.int64))
+            for gating in (True, False):
+                got = tactile_scores(mom, st, gating)
+                ref = _reference_tactile_scores(mom, st, gating)
+                for g, r in zip(got[:2] + (got[2].cop, got[2].index, got[2].run), ref[:2] + (ref[2].cop, ref[2].index, ref[2].run)):
+                    assert g.dtype == r.dtype and g.shape == r.shape and g.tobytes() == r.tobytes()
+
+
+@pytest.mark.parametrize("shape", [(1, 64, 6), (1, 889, 6), (3, 100, 6), (1, 20000, 6)])
+def test_pad_sum_adds_as_numpy_sums_six_pads(shape: tuple[int, int, int]) -> None:
+    # numpy's order over an axis of six (from 0.0, left to right), on magnitudes that round
+    # differently in any other order, with signed zeros, infinities and NaN
+    from desmon.detectors.tactile import _pad_sum
+
+    rng = np.random.default_rng(shape[1])
+    x = rng.standard_normal(shape) * 10.0 ** rng.integers(-8, 8, shape)
+    x[:, ::7] = -0.0
+    x[:, ::11, 0] = 0.0
+    x[:, ::13, 1:] = -0.0
+    x[:, ::17, 3] = np.inf
+    x[:, ::19, 2] = np.nan
+    assert _pad_sum(x).tobytes() == x.sum(axis=-1).tobytes()
