@@ -23,6 +23,10 @@ from desmon.detectors.signals.contexts import draw_context
 from desmon.model.actions import GRASP, IDLE, RELEASE
 
 
+#: Each pad's rows minus 5: the span of its contact's row centre above 2.
+_Y_SPAN = np.asarray(PAD_ROWS, dtype=float) - 5.0
+
+
 @dataclass(frozen=True, slots=True)
 class Episode:
     """An object-in-hand interval: contact constants, its action segments and slips."""
@@ -40,9 +44,8 @@ def draw_contact(rng: np.random.Generator, n: int, two_finger: Arr, p: SignalPar
     Three-finger grasps touch 3-4 pads, two-finger grasps 2-3; pads not in contact
     get amplitude 0.
     """
-    rows = np.asarray(PAD_ROWS, dtype=float)
-    order = np.argsort(rng.random((n, N_PADS)), axis=1)
-    rank = np.argsort(order, axis=1)
+    order = rng.random((n, N_PADS)).argsort(axis=1)
+    rank = order.argsort(axis=1)
     m = np.where(two_finger, integers(rng, 2, 4, n), integers(rng, 3, 5, n))
     contact = rank < m[:, None]
     amp = np.exp(rng.uniform(math.log(p.peak_lo), math.log(p.peak_hi), (n, N_PADS)))
@@ -51,7 +54,7 @@ def draw_contact(rng: np.random.Generator, n: int, two_finger: Arr, p: SignalPar
         "A": np.where(contact, amp, 0.0),
         "sy": _u(rng, (p.sigma_lo, p.sigma_hi), (n, N_PADS)),
         "sx": _u(rng, (p.sigma_lo, p.sigma_hi), (n, N_PADS)),
-        "y": 2.0 + rng.random((n, N_PADS)) * (rows - 5.0),  # U(2, R - 3)
+        "y": 2.0 + rng.random((n, N_PADS)) * _Y_SPAN,  # U(2, R - 3)
         "x": _u(rng, (1.5, 3.5), (n, N_PADS)),
         "kappa": rng.uniform(0.0, p.creep_max, n),
     }

@@ -415,6 +415,8 @@ class _Rows:
 
     frame: Arr
     pad: Arr
+    #: ``frame * 6 + pad``
+    slot: Arr
     amp: Arr
     yc: Arr
     xc: Arr
@@ -481,7 +483,7 @@ def _contact_rows(t: Arr, units: list[tuple[int, int, int]], episodes: Sequence[
     idx = idx[flat[0][idx] > 0]
     r = flat[:, idx]
     frame, pad = np.divmod(idx, N_PADS)
-    return _Rows(frame, pad, r[0], r[1], r[2], r[3], r[4])
+    return _Rows(frame, pad, idx, r[0], r[1], r[2], r[3], r[4])
 
 
 class TactileArray:
@@ -557,7 +559,7 @@ class TactileArray:
             vals = self._noisy_values(rows, count, mu, barr)
             hit = count.nonzero()[0]
             if hit.size:
-                at = (rows.frame * N_PADS + rows.pad) * 3  # (frame, pad, 0) in the flat moments
+                at = rows.slot * 3  # (frame, pad, 0) in the flat moments
                 if hit.size < count.size:
                     first, at = first[hit], at[hit]
                 flat = mom.reshape(-1)
