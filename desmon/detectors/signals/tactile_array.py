@@ -45,6 +45,9 @@ from desmon.model.actions import HOLD, IDLE, MOVE_BASE
 
 #: Frames per tactile render block.
 TACTILE_BLOCK: Final = 256
+#: ``frame >> _BLOCK_SHIFT`` is ``frame // TACTILE_BLOCK`` (a power of two)
+_BLOCK_SHIFT: Final = TACTILE_BLOCK.bit_length() - 1
+assert TACTILE_BLOCK == 1 << _BLOCK_SHIFT
 #: Rendered tactile blocks kept per mission (a sim detector's quiet chunk spans ~4).
 TACTILE_CACHE: Final = 16
 #: Seconds of an object-in-hand episode rendered ahead of a tactile request.
@@ -481,8 +484,9 @@ def _contact_rows(t: Arr, units: list[tuple[int, int, int]], episodes: Sequence[
     idx = np.concatenate([(np.arange(lo * N_PADS, hi * N_PADS, N_PADS) + pads[ei]).reshape(-1) for lo, hi, ei in units])
     flat = state.reshape(5, -1)
     idx = idx[flat[0][idx] > 0]
-    r = flat[:, idx]
-    frame, pad = np.divmod(idx, N_PADS)
+    r = flat.take(idx, axis=1, mode="clip")  # idx in range: no bounds to check
+    frame = idx // N_PADS
+    pad = idx - frame * N_PADS  # idx % N_PADS (one integer division, not two)
     return _Rows(frame, pad, idx, r[0], r[1], r[2], r[3], r[4])
 
 
@@ -520,7 +524,7 @@ class TactileArray:
 
     def _noisy_values(self, rows: _Rows, count: Arr, mu: Arr, blocks: Arr) -> Arr:
         """Cell readings ``clip(rint(mu + noise), 0, FULL_SCALE)``; each block's normals from its own generator."""
-        per_block = np.bincount(rows.frame // TACTILE_BLOCK, weights=count, minlength=blocks.size).astype(np.int64)
+        per_block = np.bincount(rows.frame >> _BLOCK_SHIFT, weights=count, minlength=blocks.size).astype(np.int64)
         vals = self._scratch.get("vals", mu.size, float)
         at = 0
         for i in range(blocks.size):
