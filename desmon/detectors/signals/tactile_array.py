@@ -371,8 +371,9 @@ def _row_cells(
     peak = np.maximum.reduceat(amp, starts)
     sup_flat = (tmpl * peak.repeat(MAX_ROWS * PAD_COLS) >= p.deadband).nonzero()[0]
     sup_tmpl = tmpl[sup_flat]
-    sup_cell = sup_flat % (MAX_ROWS * PAD_COLS)
-    count = np.bincount(sup_flat // (MAX_ROWS * PAD_COLS), minlength=starts.size)
+    sup_run = sup_flat // (MAX_ROWS * PAD_COLS)
+    sup_cell = sup_flat - sup_run * (MAX_ROWS * PAD_COLS)  # sup_flat % 84 (one integer division, not two)
+    count = np.bincount(sup_run, minlength=starts.size)
     offset = count.cumsum() - count
     per_row = count[run]
     first = per_row.cumsum() - per_row
