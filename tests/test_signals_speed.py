@@ -242,3 +242,24 @@ def test_integers_and_signs_draw_what_numpy_draws(n: int) -> None:
             assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
             assert r1.random() == r2.random()
         assert r1.bit_generator.state == r2.bit_generator.state
+
+
+def test_tactile_blocks_apart_render_as_one_by_one() -> None:
+    # episodes longer than a block, rendered in one pass over blocks that are not neighbours,
+    # in order and out of order (an episode's frames then are not one run), and block by
+    # block (one run each, written in place)
+    from desmon.detectors.signals import MissionSignals, SlipEvent
+
+    segs = []
+    t = 0.0
+    for ctx, d in (("idle", 1.0), ("grasp", 1.1), ("hold", 3.0), ("move_base", 20.0), ("release", 0.8)) * 2:
+        segs.append((ctx, t, d))
+        t += d
+    slips = [SlipEvent(s + 0.5, "up", "gravitational") for c, s, d in segs if c == "hold"]
+    for blocks in ([0, 2, 3, 5], [5, 3, 2, 0]):
+        together = MissionSignals(segs, slips, seed=4).tactile_array.render_blocks(blocks, True)
+        for b, got in zip(blocks, together):
+            ref = MissionSignals(segs, slips, seed=4).tactile_array.render_blocks([b], True)[0]
+            for g, r in zip(got, ref):
+                assert g.tobytes() == r.tobytes(), b
+            assert got[1].any(), b

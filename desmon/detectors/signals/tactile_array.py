@@ -187,10 +187,11 @@ def _term(x: Arr, neutral: float) -> _Term:
     return rows, first.count(neutral) == len(first), last.count(neutral) == len(last)
 
 
-def _ascending_state(tt: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, Arr] | None:
+def _ascending_state(tt: Arr, ep: Episode, p: SignalParams, out: list[Arr] | None = None) -> tuple[Arr, Arr, Arr] | None:
     """:func:`episode_pad_state` of ascending frame times ``tt`` ``(K,)`` inside the episode, as
-    ``(K, 6)`` arrays of the same floats; None (use :func:`episode_pad_state`) if a frame lies
-    outside the episode or a contact centre is -0.0.
+    ``(K, 6)`` arrays of the same floats (written into ``out``'s three if given); None (use
+    :func:`episode_pad_state`; nothing written) if a frame lies outside the episode or a
+    contact centre is -0.0.
 
     At a frame time every segment but the one under way sits at a constant state (``tr`` 0
     before it, ``tr = dur`` after it). The frames are cut into pieces at each segment's first
@@ -220,7 +221,8 @@ def _ascending_state(tt: Arr, ep: Episode, p: SignalParams) -> tuple[Arr, Arr, A
         segs.append((lo, hi, _segment_kernel(tt, lo, hi, seg, c["kappa"], p)))
         cuts.update((lo, hi))
     bounds = sorted(cuts)
-    out = [np.empty((n, N_PADS)) for _ in range(3)]
+    if out is None:
+        out = [np.empty((n, N_PADS)) for _ in range(3)]
     starts = (c["A"][0], y0, x0)
     for a, b in zip(bounds[:-1], bounds[1:]):
         if b > a:
@@ -448,20 +450,25 @@ def _episode_units(t: Arr, nb: int, episodes: Sequence[Episode], ep_starts: list
     return units
 
 
-def _episode_state(t: Arr, ranges: list[tuple[int, int]], ep: Episode, p: SignalParams) -> tuple[Arr | slice, Arr, Arr, Arr]:
-    """The frames of an episode's ranges (a slice if they are one run) and the pads' amplitude,
-    row and column centres there, each ``(frames, 6)``: :func:`_ascending_state` where it
-    applies (frame times ascending: any render of blocks in order), else :func:`episode_pad_state`."""
-    if all(ranges[i][1] == ranges[i + 1][0] for i in range(len(ranges) - 1)):
+def _episode_state(t: Arr, ranges: list[tuple[int, int]], ep: Episode, p: SignalParams, state: Arr) -> Arr | slice:
+    """The frames of an episode's ranges (a slice if they are one run), with the pads'
+    amplitude, row and column centres there written into ``state[0..2, frames]`` (each
+    ``(frames, 6)``): :func:`_ascending_state` where it applies (frame times ascending: any
+    render of blocks in order; for one run straight into ``state``), else :func:`episode_pad_state`."""
+    run = all(ranges[i][1] == ranges[i + 1][0] for i in range(len(ranges) - 1))
+    if run:
         sel: Arr | slice = slice(ranges[0][0], ranges[-1][1])  # one run of frames (neighbouring blocks)
     else:
         sel = np.concatenate([np.arange(lo, hi) for lo, hi in ranges])
     tt = t[sel]
-    fast = _ascending_state(tt, ep, p) if bool((tt[1:] >= tt[:-1]).all()) else None
-    if fast is not None:
-        return (sel, *fast)
-    a, y, x = episode_pad_state(tt[None, :], ep, p)
-    return sel, a[0], y[0], x[0]
+    fast = _ascending_state(tt, ep, p, [state[f, sel] for f in range(3)] if run else None) if bool((tt[1:] >= tt[:-1]).all()) else None
+    if fast is None:
+        a, y, x = episode_pad_state(tt[None, :], ep, p)
+        fast = (a[0], y[0], x[0])
+    elif run:
+        return sel  # written in place
+    state[0, sel], state[1, sel], state[2, sel] = fast
+    return sel
 
 
 def _contact_rows(t: Arr, units: list[tuple[int, int, int]], episodes: Sequence[Episode], p: SignalParams, scratch: _Scratch) -> _Rows:
@@ -476,7 +483,7 @@ def _contact_rows(t: Arr, units: list[tuple[int, int, int]], episodes: Sequence[
     pads = {}
     for ei, ranges in by_ep.items():
         c = episodes[ei].contact
-        sel, state[0, sel], state[1, sel], state[2, sel] = _episode_state(t, ranges, episodes[ei], p)
+        sel = _episode_state(t, ranges, episodes[ei], p, state)
         state[3, sel] = c["sy"][0]
         state[4, sel] = c["sx"][0]
         # a pad without contact (amplitude 0) has amplitude 0 (or NaN) in every frame: no rows
