@@ -163,15 +163,31 @@ def test_move_base_tactile_matches_context_tactile() -> None:
         assert not rdx.any() and rdx.size == 1
 
 
+def _reference_cop(moments: np.ndarray, cop: np.ndarray) -> np.ndarray:
+    """c30a13d's centred_cop (every pad-frame without contact zeroed by a mask), into ``cop``."""
+    from desmon.detectors.tactile import _COL_MID, _ROW_MID
+
+    s = moments[..., 0]
+    contact = s > 0
+    safe = np.where(contact, s, 1.0)
+    for c, mid in ((0, _ROW_MID), (1, _COL_MID)):
+        part = cop[..., c]
+        np.divide(moments[..., 1 + c], safe, out=part)
+        part -= mid
+        np.copyto(part, 0.0, where=~contact)
+    return contact
+
+
 def _reference_tactile_scores(moments: np.ndarray, state, gating: bool):  # type: ignore[no-untyped-def]
     """c30a13d's tactile_scores body (contact present), the reference for its shortcuts."""
-    from desmon.detectors.tactile import _CELLS, WARMUP_FRAMES, TactileState, centred_cop
+    from desmon.detectors.tactile import _CELLS, WARMUP_FRAMES, TactileState
 
     n, k = moments.shape[:2]
     s = moments[..., 0]
     cop_ext = np.empty((n, k + 1, 6, 2))
     cop_ext[:, 0] = state.cop
-    cop, contact = centred_cop(moments, out=cop_ext[:, 1:])
+    cop = cop_ext[:, 1:]
+    contact = _reference_cop(moments, cop)
     idx_ext = np.empty_like(cop_ext)
     idx_ext[:, 0] = state.index
     index = idx_ext[:, 1:]
@@ -191,17 +207,24 @@ def _reference_tactile_scores(moments: np.ndarray, state, gating: bool):  # type
 
 @pytest.mark.parametrize("k", [1, 3, 63, 64, 65, 300, 889])
 def test_tactile_scores_shortcuts_match_the_reference(k: int) -> None:
-    # the warm-up shortcut (every frame past the warm-up) and the pad sums along the frames,
-    # against the plain body, on moments with pads on, off and flickering, for states of
-    # every run around the warm-up, both gatings, one trial and three
-    from desmon.detectors.tactile import TactileState, tactile_scores
+    # the warm-up shortcut (every frame past the warm-up), the steady contact shortcut (pads
+    # zeroed whole) and the pad sums along the frames, against the plain body, on moments
+    # with pads on, off (0.0, -0.0, negative) and flickering or not, for states of every run around
+    # the warm-up, both gatings, one trial and three
+    from desmon.detectors.tactile import TactileState, centred_cop, tactile_scores
 
     rng = np.random.default_rng(k)
-    for n in (1, 3):
+    for n, flicker in ((1, True), (1, False), (3, True), (3, False)):
         mom = rng.uniform(0.0, 4000.0, (n, k, 6, 3)) * 10.0 ** rng.integers(-3, 3, (n, k, 6, 1))
-        mom[..., 1, :] = 0.0  # a pad without contact throughout
-        mom[:, ::3, 2, 0] = 0.0  # a flickering pad
-        mom[:, ::5, 4, :] = -0.0
+        mom[..., 1, :] = 0.0  # pads without contact throughout: 0, -0, negative
+        mom[..., 1, 0] = -3.0
+        mom[..., 4, :] = -0.0
+        if flicker:
+            mom[:, ::3, 2, 0] = 0.0
+            mom[:, ::5, 3, :] = -0.0
+        ref_cop = np.empty((n, k, 6, 2))
+        _reference_cop(mom, ref_cop)
+        assert centred_cop(mom)[0].tobytes() == ref_cop.tobytes()
         for run in range(5):
             st = TactileState(rng.normal(0, 2, (n, 6, 2)), rng.normal(0, 2, (n, 6, 2)), np.full(n, run, dtype=np.int64))
             for gating in (True, False):

@@ -53,17 +53,37 @@ def centred_cop(moments: Arr, out: Arr | None = None) -> tuple[Arr, Arr]:
     Pads without contact get centre (0, 0). With ``out`` (shape ``(..., 6, 2)``) the centres
     are written there.
     """
+    cop, contact, _steady = _centred_cop(moments, out)
+    return cop, contact
+
+
+def _centred_cop(moments: Arr, out: Arr | None) -> tuple[Arr, Arr, list[int] | None]:
+    """:func:`centred_cop` and :func:`_steady_off` of its contact mask."""
     s = moments[..., 0]
     contact = s > 0
-    off = ~contact
     safe = np.where(contact, s, 1.0)
     cop = np.empty(s.shape + (2,)) if out is None else out
+    steady = _steady_off(contact)
+    off = ~contact if steady is None else None
     for c, mid in ((0, _ROW_MID), (1, _COL_MID)):
         part = cop[..., c]
         np.divide(moments[..., 1 + c], safe, out=part)
         part -= mid
-        np.copyto(part, 0.0, where=off)
-    return cop, contact
+        if off is not None:
+            np.copyto(part, 0.0, where=off)
+    for pad in steady or ():
+        cop[..., pad, :] = 0.0
+    return cop, contact, steady
+
+
+def _steady_off(contact: Arr) -> list[int] | None:
+    """The pads without contact in every frame of ``contact`` ``(..., 6)`` (C order) if every frame
+    has the same contact as the one before (the usual chunk: contact changes at a grasp or a
+    release); else None. Zeroing those pads then zeroes every pad-frame without contact."""
+    flat = contact.reshape(-1)
+    if flat.size and not (flat[N_PADS:] == flat[:-N_PADS]).all():
+        return None
+    return [i for i, on in enumerate(flat[:N_PADS].tolist()) if not on]
 
 
 def slip_index(prev_frame: Arr, frame: Arr) -> Arr:
@@ -109,7 +129,7 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
     # after the carried one
     cop_ext = np.empty((n, k + 1, N_PADS, 2))
     cop_ext[:, 0] = state.cop
-    cop, contact = centred_cop(moments, out=cop_ext[:, 1:])
+    cop, contact, steady = _centred_cop(moments, cop_ext[:, 1:])
     idx_ext = np.empty_like(cop_ext)
     idx_ext[:, 0] = state.index
     index = idx_ext[:, 1:]
@@ -121,8 +141,13 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
     run = state.run[:, None] + np.arange(1, k + 1)[None, :]  # frames since activation, this one included
     # past the warm-up in every frame if in the first (run ascends): the contact mask itself
     warm = not gating or int(state.run.min()) + 1 >= WARMUP_FRAMES
-    valid_pad = contact if warm else (contact & (run >= WARMUP_FRAMES)[..., None])
-    w = np.where(valid_pad, s / _CELLS, 0.0)
+    if warm and steady is not None:  # the weights of the pads in contact throughout, 0 elsewhere
+        w = s / _CELLS
+        for pad in steady:
+            w[..., pad] = 0.0
+    else:
+        valid_pad = contact if warm else (contact & (run >= WARMUP_FRAMES)[..., None])
+        w = np.where(valid_pad, s / _CELLS, 0.0)
     den = _pad_sum(w)
     phi *= w  # w * phi (a product does not depend on the order)
     num = _pad_sum(phi)
