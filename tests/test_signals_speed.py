@@ -250,23 +250,6 @@ def test_pad_sum_adds_as_numpy_sums_six_pads(shape: tuple[int, int, int]) -> Non
     assert _pad_sum(x).tobytes() == x.sum(axis=-1).tobytes()
 
 
-@pytest.mark.parametrize("n", [1, 2, 5])
-def test_integers_and_signs_draw_what_numpy_draws(n: int) -> None:
-    # the one-trial scalar draws against the sized calls they stand for: the same values,
-    # dtypes and generator states after, over many seeds
-    from desmon.detectors.signals.common import integers, signs
-
-    for seed in range(300):
-        r1, r2 = np.random.default_rng(seed), np.random.default_rng(seed)
-        for lo, hi in ((2, 4), (3, 5), (2, 5), (0, 2)):
-            a, b = integers(r1, lo, hi, n), r2.integers(lo, hi, n)
-            assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
-            a, b = signs(r1, n), r2.choice([-1.0, 1.0], n)
-            assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
-            assert r1.random() == r2.random()
-        assert r1.bit_generator.state == r2.bit_generator.state
-
-
 def test_tactile_blocks_apart_render_as_one_by_one() -> None:
     # episodes longer than a block, rendered in one pass over blocks that are not neighbours,
     # in order and out of order (an episode's frames then are not one run), and block by

@@ -176,22 +176,6 @@ def uniform(rng: np.random.Generator, lohi: tuple[float, float], size: int | tup
     return rng.uniform(lohi[0], lohi[1], size)
 
 
-def integers(rng: np.random.Generator, lo: int, hi: int, n: int) -> Arr:
-    """``rng.integers(lo, hi, n)``; for ``n == 1`` drawn as one scalar (the same draw: numpy fills
-    one value either way, a test pins it), without the sized call's argument handling."""
-    return np.array([rng.integers(lo, hi)]) if n == 1 else rng.integers(lo, hi, n)
-
-
-#: The values ``signs`` picks from.
-_SIGNS: Final = np.array([-1.0, 1.0])
-
-
-def signs(rng: np.random.Generator, n: int) -> Arr:
-    """``rng.choice([-1.0, 1.0], n)``; for ``n == 1`` as the value at the drawn index
-    ``rng.integers(0, 2)`` (the same draw: a test pins it), without choice's argument handling."""
-    return _SIGNS[[rng.integers(0, 2)]] if n == 1 else rng.choice([-1.0, 1.0], n)
-
-
 def half_sine(t: Arr, t0: Arr, width: Arr) -> Arr:
     """``sin(pi (t - t0) / width)`` on ``[t0, t0 + width]``, zero elsewhere (broadcasting)."""
     u = (t - t0) / width

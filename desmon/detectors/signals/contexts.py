@@ -15,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 
-from desmon.detectors.signals.common import DEFAULT_PARAMS, N_PADS, Arr, Params, SignalParams, half_sine, integers, jerky, no_signal_model, signs
+from desmon.detectors.signals.common import DEFAULT_PARAMS, N_PADS, Arr, Params, SignalParams, half_sine, jerky, no_signal_model
 from desmon.detectors.signals.common import uniform as _u
 from desmon.errors import SignalError
 from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE, ROTATE_CCW, ROTATE_CW
@@ -93,7 +93,7 @@ def _draw_rotate(ccw: bool) -> Callable[[np.random.Generator, int, Arr | None, S
         return {
             "t0": _u(rng, p.rot_start, n),
             "dur": _u(rng, p.rot_dur, n),
-            "jerks": integers(rng, 2, 5, n).astype(float),
+            "jerks": rng.integers(2, 5, n).astype(float),
             "arc": _u(rng, p.rot_arc_ccw if ccw else p.rot_arc_cw, n),
             "ydir": rng.normal(0.0, 0.5, n),
             "xdir": np.full(n, 1.0 if ccw else -1.0),
@@ -115,7 +115,7 @@ def _draw_move_base(rng: np.random.Generator, n: int, contact: Arr | None, p: Si
         "phase": rng.uniform(0.0, 2 * math.pi, n),
         "settle": (rng.random(n) < p.base_settle_p).astype(float),
         "settle_t": start + rng.random(n) * motion,
-        "settle_jump": _u(rng, p.base_settle_jump, n) * signs(rng, n),
+        "settle_jump": _u(rng, p.base_settle_jump, n) * rng.choice([-1.0, 1.0], n),
     }
 
 

@@ -17,7 +17,7 @@ from typing import Sequence
 
 import numpy as np
 
-from desmon.detectors.signals.common import DEFAULT_PARAMS, N_PADS, PAD_ROWS, Arr, Params, Segment, SignalParams, integers
+from desmon.detectors.signals.common import DEFAULT_PARAMS, N_PADS, PAD_ROWS, Arr, Params, Segment, SignalParams
 from desmon.detectors.signals.common import uniform as _u
 from desmon.detectors.signals.contexts import draw_context
 from desmon.model.actions import GRASP, IDLE, RELEASE
@@ -46,7 +46,7 @@ def draw_contact(rng: np.random.Generator, n: int, two_finger: Arr, p: SignalPar
     """
     order = rng.random((n, N_PADS)).argsort(axis=1)
     rank = order.argsort(axis=1)
-    m = np.where(two_finger, integers(rng, 2, 4, n), integers(rng, 3, 5, n))
+    m = np.where(two_finger, rng.integers(2, 4, n), rng.integers(3, 5, n))
     contact = rank < m[:, None]
     amp = np.exp(rng.uniform(math.log(p.peak_lo), math.log(p.peak_hi), (n, N_PADS)))
     return {
