@@ -51,8 +51,8 @@ process per run, 7 pairs, CPU seconds): the day 4.34 s against 3.53 s (0.78, ran
 The goal of at most 100x the bare SimPy cost is not met: 100x asks for a 2 s day. 5,000x
 real time and signals off under 1.5 s hold, by a margin. Later rounds of issue 27 brought
 the day to 130-159x in three runs of ``python -m bench.bench_sim`` (fifth round);
-docs/findings.md ("What 100x bare SimPy would
-take") says what is left and why numpy alone does not reach 100x.
+docs/findings.md ("What 100x bare SimPy would take") says what is left and why numpy
+alone does not reach 100x.
 
 Where the time goes (py-spy of the day, this revision; shares of ``SimWorld.run``):
 rendering tactile frames 41 % (the per-cell standard normals, about 20.7 M a day drawn
