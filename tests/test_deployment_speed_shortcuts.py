@@ -222,3 +222,87 @@ def test_invariants_fast_answers_are_the_full_ones(world):
     assert fixed.check(make_view(cases[1], list(specs), frozenset(), ())) is None  # type: ignore[arg-type]
     assert fixed.check(make_view(cases[1], list(fixed_specs), frozenset(), ())) is not None  # type: ignore[arg-type]
     assert fixed.check(v) is None
+
+
+# ---------------------------------------------------------------------------- platform state parts
+def _facts(states):  # type: ignore[no-untyped-def]
+    """Each state's facts with the types of its amounts (1 and 1.0 are other facts)."""
+    return [
+        (s.name, s.up, [d.name for d in s.devices], [(r, a, type(a)) for r, a in s.load],
+         [(g, [(r, a, type(a)) for r, a in use]) for g, use in s.deployed])
+        for s in states
+    ]
+
+
+def test_kept_loads_and_consumptions_follow_the_repository(world):
+    from desmon.model.events import RequirementChange
+    from desmon.model.requirements import Capacity
+    from desmon.repository.facts import change_requirements
+
+    _model, repo = world
+    q = RepositoryQuery(repo)
+
+    def same_as_fresh():  # type: ignore[no-untyped-def]
+        kept = q.platform_states()
+        assert _facts(kept) == _facts(RepositoryQuery(repo).platform_states())
+        return kept
+
+    same_as_fresh()
+    set_load(repo, "pc1", "memory", 100.0)
+    same_as_fresh()
+    record_start(repo, "force", "pc1")  # the platform is re-read, its load dict is the same
+    same_as_fresh()
+    set_load(repo, "pc1", "memory", 7)  # an int: another fact than 7.0
+    same_as_fresh()
+    set_load(repo, "pc1", "memory", 7.0)
+    same_as_fresh()
+    change_requirements(repo, RequirementChange("force", add=(Capacity("memory", 80),), remove=(Capacity("memory", 50),)))
+    states = same_as_fresh()
+    assert states[0].deployed == (("force", (("memory", 80.0),)),)
+    record_start(repo, "other", "pc1")
+    record_stop(repo, "force", "pc1")
+    same_as_fresh()
+
+
+# ---------------------------------------------------------------------------- failure texts and remote inputs
+def test_kept_failure_texts_are_each_questions_own(world):
+    from desmon.deployment.validity import platform_failures
+    from desmon.model.requirements import Capacity
+
+    _model, repo = world
+    checks = PlatformMemoChecks()
+    states = RepositoryQuery(repo).platform_states()
+    questions = [(Capacity("memory", 600),), (Capacity("memory", 900), Capacity("memory", 700)), (Capacity("memory", 600),)]
+    for _round in range(2):
+        for reqs in questions:
+            for first_only in (True, False):
+                want = [platform_failures(reqs, s, "force", first_only) for s in states]
+                assert checks.each_platform(reqs, states, "force", first_only) == want
+                assert [checks.platform(reqs, s, "force", first_only) for s in states] == want
+                got = checks.compute(reqs, states, "force", not first_only)
+                assert got == loop_validity(reqs, states, "force", not first_only)
+
+
+def test_deployment_valid_reads_remote_inputs_only_where_the_platform_hosts_none(world):
+    from desmon.deployment.validity import _joined, _lookup, check_platform, deployment_valid, input_failures
+
+    model, repo = world
+    force = next(s for s in model.specs if s.graph == "force")
+    # no requirement of its own: on pc2 only the remote half (pc1's force sensors) can fail
+    spec = DeploymentSpec("force", (), None, None, force.reads)
+    q = RepositoryQuery(repo)
+    remote = []
+    for step in ("ok", "ft fails", "ft2 fails", "pc1 loaded"):
+        if step == "ft fails":
+            set_device_working(repo, "ft", False)
+        elif step == "ft2 fails":
+            set_device_working(repo, "ft2", False)
+        elif step == "pc1 loaded":
+            set_load(repo, "pc1", "memory", 500.0)
+        states = q.platform_states()
+        for state in states:
+            fails = check_platform(_joined(spec.requirements, spec.reads), state, spec.graph)
+            want = fails or input_failures(spec.reads, state.platform.name, _lookup(states), spec.graph)
+            assert deployment_valid(spec, state, states) == want
+            remote += [f.platform for f in want if f.platform == "pc2"]
+    assert remote == ["pc2", "pc2"]  # the remote half failed once both of pc1's sensors failed

@@ -28,8 +28,9 @@ _TUPLES = 1 << 12
 
 #: What :class:`PlatformMemoChecks` derives once per question's requirements: the ids of
 #: their objects, each hard one with its kind's ``holds`` (:func:`_checks`), and whether
-#: one is a preference.
-_Question = tuple[tuple[int, ...], list[tuple[Any, "Requirement"]], bool]
+#: one is a preference, and each hard one's description by its position in those checks
+#: (filled as failures are reported: a requirement object describes itself alike each time).
+_Question = tuple[tuple[int, ...], list[tuple[Any, "Requirement"]], bool, dict[int, str]]
 
 __all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "ScalarChecks", "PlatformMemoChecks", "DEFAULT_CHECKS", "checks_for", "reads_fixed_facts", "unreadable", "spec_validity", "input_failures"]
 
@@ -486,7 +487,8 @@ class PlatformMemoChecks(ScalarChecks):
         self._orders: dict[int, tuple[tuple[PlatformState, ...], list[PlatformState]]] = {}
 
     def _question(self, reqs: tuple[Requirement, ...]) -> "_Question":
-        """(ids of the objects of ``reqs``, their checks, whether one is a preference): found
+        """(ids of the objects of ``reqs``, their checks, whether one is a preference, their
+        descriptions so far): found
         by the tuple's identity, else by the ids of its objects (each entry holds what its
         key names); a requirement that is none raises (:func:`_checks`)."""
         tuples = self._tuples
@@ -498,7 +500,7 @@ class PlatformMemoChecks(ScalarChecks):
         if found is None:
             if len(self._lookups) > self._size:
                 self._lookups.clear()
-            found = self._lookups[ids] = (reqs, (ids, _checks(reqs), _ranked(reqs)))
+            found = self._lookups[ids] = (reqs, (ids, _checks(reqs), _ranked(reqs), {}))
         if len(tuples) > _TUPLES:
             tuples.clear()
         tuples[id(reqs)] = (reqs, found[1])
@@ -518,18 +520,18 @@ class PlatformMemoChecks(ScalarChecks):
         return value
 
     def platform(self, reqs: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool) -> tuple[Failure, ...]:
-        ids, lookups, _ranked_ = self._question(reqs)
+        ids, lookups, _ranked_, texts = self._question(reqs)
         key = (ids, id(state), graph, first_only)
         hit = self._parts.get(key)
         if hit is not None and hit[0] is state:
             return hit[2]  # type: ignore[no-any-return]
-        return self._part(key, state, reqs, _failures, lookups, state, graph, first_only, {})  # type: ignore[no-any-return]
+        return self._part(key, state, reqs, _failures, lookups, state, graph, first_only, texts)  # type: ignore[no-any-return]
 
     def each_platform(self, reqs: tuple[Requirement, ...], states: Sequence[PlatformState], graph: Placing, first_only: bool) -> list[tuple[Failure, ...]]:
         """:meth:`platform`'s answer for each of ``states``, in their order."""
-        ids, lookups, _ranked_ = self._question(reqs)
+        ids, lookups, _ranked_, texts = self._question(reqs)
         part = self._part
-        return [part((ids, id(st), graph, first_only), st, reqs, _failures, lookups, st, graph, first_only, {}) for st in states]
+        return [part((ids, id(st), graph, first_only), st, reqs, _failures, lookups, st, graph, first_only, texts) for st in states]
 
     def validity(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
         return self.compute(reqs, states, graph, reasons)
@@ -548,8 +550,7 @@ class PlatformMemoChecks(ScalarChecks):
 
     def compute(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
         """:func:`loop_validity`, each platform's failures and score memoised."""
-        ids, lookups, ranked = self._question(reqs)  # a requirement that is none raises even without platforms
-        texts: dict[int, str] = {}
+        ids, lookups, ranked, texts = self._question(reqs)  # a requirement that is none raises even without platforms
         first_only = not reasons
         parts = self._parts
         ordered = self._ordered(states)
@@ -685,4 +686,8 @@ def deployment_valid(
     fails = check_platform(_joined(spec.requirements, reads), state, spec.graph, checks=checks)
     if fails:
         return fails
-    return input_failures(reads, state.platform.name, _lookup(states), spec.graph, checks=checks)
+    name = state.platform.name
+    for r in reads:
+        if name not in r.hosts:  # a remote half: read from the other platforms' states
+            return input_failures(reads, name, _lookup(states), spec.graph, checks=checks)
+    return ()  # input_failures' answer when the platform hosts every kind read

@@ -47,8 +47,15 @@ class PlatformStateReader:
         self._devices: dict[tuple[int, ...], tuple[Any, ...]] = {}
         # platform -> (the stamps it was read at, its state)
         self._state_memo: dict[str, tuple[tuple[int | None, ...], PlatformState]] = {}
-        # platform node -> (stamps, its devices, stamps, its deployments): parts of its state
-        self._state_parts: dict[str, tuple[Any, tuple[Any, ...], Any, tuple[Any, ...]]] = {}
+        # platform node -> (stamps, its devices, stamps, its deployments, the types of
+        # their amounts): parts of its state
+        self._state_parts: dict[str, tuple[Any, tuple[Any, ...], Any, tuple[Any, ...], list[type]]] = {}
+        # platform node -> (its load dict, that dict's sorted items, the types of their
+        # amounts): a load write puts a new dict on the node (desmon.model.system.with_load),
+        # so the same dict object has the same items; the entry keeps the dict alive
+        self._loads: dict[str, tuple[dict[str, Any], tuple[tuple[str, Any], ...], list[type]]] = {}
+        # id of a deployment spec -> (the spec, its consumption()): specs are frozen
+        self._uses: dict[int, tuple[DeploymentSpec, tuple[tuple[str, float], ...]]] = {}
 
     def state_of(self, pid: str, platform: str) -> PlatformState:
         """:meth:`RepositoryQuery.platform_state` of node ``pid``, memoised on what it
@@ -93,15 +100,21 @@ class PlatformStateReader:
                 self._devices[ids] = devices  # the tuple keeps the devices its key names alive
         gkey = (edges.get((pid, L.DEPLOYED_ON)), updated.get(L.DEPLOYMENT))
         if parts is not None and parts[2] == gkey:
-            deployed = parts[3]
+            deployed, used = parts[3], parts[4]
         else:
             deployed = tuple(sorted((nodes[d]["name"], self._consumption(d)) for d in repo.predecessors(pid, L.DEPLOYED_ON)))
-        self._state_parts[pid] = (dkey, devices, gkey, deployed)
-        platform, up, load = data["platform"], bool(data["up"]), tuple(sorted(data["load"].items()))
+            used = _amount_types((), deployed)
+        self._state_parts[pid] = (dkey, devices, gkey, deployed, used)
+        raw = data["load"]
+        loads = self._loads.get(pid)
+        if loads is None or loads[0] is not raw:
+            load = tuple(sorted(raw.items()))
+            loads = self._loads[pid] = (raw, load, _amount_types(load, ()))
+        platform, up, load = data["platform"], bool(data["up"]), loads[1]
         seen = self._seen_states
         facts = (id(platform), up, id(devices), load, deployed)
         got = seen.get(facts)
-        types = _amount_types(load, deployed)
+        types = loads[2] + used  # _amount_types(load, deployed)
         if got is not None and got[1] == types:
             return got[0]  # facts seen before: the object handed out then
         if len(seen) > _SEEN:
@@ -111,8 +124,19 @@ class PlatformStateReader:
         return state
 
     def _consumption(self, dep: str) -> tuple[tuple[str, float], ...]:
+        """``spec.consumption()`` of deployment node ``dep`` (() without a spec), kept per spec object."""
         spec = self.repo.graph.nodes[dep].get("spec")
-        return spec.consumption() if spec is not None else ()
+        if spec is None:
+            return ()
+        uses = self._uses
+        hit = uses.get(id(spec))
+        if hit is not None and hit[0] is spec:
+            return hit[1]
+        use = spec.consumption()
+        if len(uses) > _SEEN:
+            uses.clear()
+        uses[id(spec)] = (spec, use)
+        return use
 
 
 class RepositoryQuery:
