@@ -306,3 +306,66 @@ def test_deployment_valid_reads_remote_inputs_only_where_the_platform_hosts_none
             assert deployment_valid(spec, state, states) == want
             remote += [f.platform for f in want if f.platform == "pc2"]
     assert remote == ["pc2", "pc2"]  # the remote half failed once both of pc1's sensors failed
+
+
+# ---------------------------------------------------------------------------- exposure checks
+def test_exposure_asks_valid_times_once_per_switch_as_graph_by_graph():
+    import random
+
+    from desmon.sim.metrics import Exposure
+
+    rng = random.Random(7)
+    times: dict[str, float] = {}
+    asked: list[dict[str, float]] = []
+
+    def valid_times():  # type: ignore[no-untyped-def]
+        asked.append(dict(times))
+        return dict(times)
+
+    events_a: list[tuple] = []
+    events_b: list[tuple] = []
+    fast = Exposure(lambda g: times.get(g, float("inf")), lambda *a: events_a.append(a), valid_times)
+    slow = Exposure(lambda g: times.get(g, float("inf")), lambda *a: events_b.append(a))
+    slots_of = [(), (("a",),), (("a", "b"), ("c",)), (("b",), ("c",))]
+    now = 0.0
+    for _ in range(400):
+        now += rng.choice([0.0, 0.5, 1.0, 2.0])
+        g = rng.choice("abc")
+        if rng.random() < 0.5:
+            times[g] = now + rng.choice([0.0, 0.7, 3.0])
+        else:
+            times.pop(g, None)
+        if rng.random() < 0.3:  # else the switch finds time to account since the last change
+            for ex in (fast, slow):
+                ex.advance(now)
+                ex.check(now)
+        now += rng.choice([0.0, 0.5])
+        ctx = rng.choice(["x", "y"])
+        slots = rng.choice(slots_of)
+        for ex in (fast, slow):
+            ex.set_wanted(now, slots, ctx)
+        assert (fast.exposure, fast.risky, fast.blind, fast.intervals) == (slow.exposure, slow.risky, slow.blind, slow.intervals)
+    assert events_a == events_b and events_a
+    assert len(asked) < 2 * 400  # the switches asked once where the advance and the check both needed it
+
+
+@pytest.mark.parametrize("signals", [False, True])
+def test_a_start_checks_the_exposure_once_as_twice(monkeypatch, signals):
+    from desmon.loader import load_scenario
+    from desmon.sim.engine import SimWorld
+    from desmon.sim.infrastructure import Infrastructure
+
+    def records():  # type: ignore[no-untyped-def]
+        world = SimWorld(load_scenario("scenarios/robot_day.py"), seed=3, signals=signals, until=1800.0)
+        res = world.run()
+        return res.trace.records, res.metrics
+
+    short = records()
+    flush = Infrastructure.flush_ready
+
+    def long_way(self):  # type: ignore[no-untyped-def]
+        flush(self)
+        return False  # every caller checks the exposure again
+
+    monkeypatch.setattr(Infrastructure, "flush_ready", long_way)
+    assert records() == short

@@ -178,8 +178,8 @@ class Infrastructure:
         self.starts += 1
         record_start(self.repo, graph, platform)
         self.mem(platform)
-        self.flush_ready()
-        self.exposure.check(env.now)
+        if not self.flush_ready():  # a ready instance reported: its check was this one (nothing changed since)
+            self.exposure.check(env.now)
         if adapter is not None and adapter.det is not None:
             inst.proc = env.process(self._detector(inst))
         return True
@@ -266,10 +266,15 @@ class Infrastructure:
             self.trace.emit(now, "ready", graph=inst.graph, platform=inst.platform)
         self.exposure.check(now)
 
-    def flush_ready(self) -> None:
+    def flush_ready(self) -> bool:
+        """Report the instances valid at once; True if there was one (each report ends
+        with the exposure's check at this instant)."""
+        reported = False
         while self._pending_ready:
             inst = self._pending_ready.pop(0)
             self._warmed(inst, inst.gen)
+            reported = True
+        return reported
 
     def _detector(self, inst: Instance):  # type: ignore[no-untyped-def]
         env = self.env

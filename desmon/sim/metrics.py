@@ -79,12 +79,14 @@ class Exposure:
         self.intervals: list[tuple[float, float, str]] = []
         self._wanted: dict[tuple, tuple[frozenset[str], ...]] = {}  # slots -> their sets (the rule table's few)
 
-    def _covered_from(self) -> float:
-        """The earliest time from which every slot has a valid member (``inf`` if never)."""
+    def _covered_from(self, times: Mapping[str, float] | None = None) -> float:
+        """The earliest time from which every slot has a valid member (``inf`` if never);
+        ``times``: what ``valid_times()`` answers now, if the caller has it."""
         if self.valid_times is not None:
             # max over the slots of min over each slot's members, written out (the first
             # extreme wins, as with max() and min()): the meter asks at every change
-            times = self.valid_times()
+            if times is None:
+                times = self.valid_times()
             inf = math.inf
             get = times.get
             covered: float | None = None
@@ -102,10 +104,10 @@ class Exposure:
         vf = self.valid_from
         return max(min((vf(g) for g in slot), default=math.inf) for slot in self.slots)
 
-    def advance(self, now: float) -> None:
+    def advance(self, now: float, times: Mapping[str, float] | None = None) -> None:
         a, b = self.last, now
         if b > a and self.slots:
-            v = self._covered_from()
+            v = self._covered_from(times)
             start_cov = min(b, max(a, v))
             self.exposure += start_cov - a
             self.risky += b - a
@@ -126,7 +128,12 @@ class Exposure:
             wanted = tuple(frozenset((slot,) if isinstance(slot, str) else slot) for slot in slots)
             if type(slots) is tuple and all(type(slot) is tuple or type(slot) is str for slot in slots):
                 self._wanted[slots] = wanted
-        self.advance(now)
+        # what valid_times() answers is the same for the advance and the check (nothing
+        # between them changes an instance): asked once where both need it
+        times = None
+        if self.valid_times is not None and wanted and self.slots and now > self.last:
+            times = self.valid_times()
+        self.advance(now, times)
         if context != self.context and self.open_since is not None:
             self._close(now)
         self.context = context
@@ -138,11 +145,12 @@ class Exposure:
             else:
                 self._open = None
             self.slots = wanted
-        self.check(now)
+        self.check(now, times)
 
-    def check(self, now: float) -> None:
-        """Open or close the exposure interval after a change of state at ``now``."""
-        exposed = bool(self.slots) and self._covered_from() > now
+    def check(self, now: float, times: Mapping[str, float] | None = None) -> None:
+        """Open or close the exposure interval after a change of state at ``now``
+        (``times``: what ``valid_times()`` answers now, if the caller has it)."""
+        exposed = bool(self.slots) and self._covered_from(times) > now
         if exposed and self.open_since is None:
             self.open_since = now
             if self.emit is not None:

@@ -173,8 +173,8 @@ def fault(parts: RobotParts, ev: Event, source: str) -> None:
         ]
         infra.inputs_change(readers, now, lambda: infra.platform_flip(ev.platform, up, now))
         parts.trace.emit(now, "platform", platform=ev.platform, up=up)
-    infra.flush_ready()
-    parts.exposure.check(now)
+    if not infra.flush_ready():  # a ready instance reported: its check was this one (nothing changed since)
+        parts.exposure.check(now)
     if parts.world.timing == "exponential":
         component = ev.device if isinstance(ev, DeviceEvent) else ev.platform
         if component not in parts.noticing:
