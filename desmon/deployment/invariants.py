@@ -259,21 +259,9 @@ def _fixed(v: SystemView) -> str | None:
     return None
 
 
-#: the last specifications tuple :func:`_any_fixed` was asked about, and its answer
-_LAST_FIXED: list[tuple[tuple[DeploymentSpec, ...], bool]] = [((), False)]
-
-
 def _any_fixed(specs: tuple[DeploymentSpec, ...]) -> bool:
-    """Does a specification of ``specs`` name a fixed platform? (Kept for the last tuple
-    asked, found by its identity: a robot's audits hand in the same tuple until its
-    requirements change; the entry holds the tuple.)"""
-    last = _LAST_FIXED[0]
-    if last[0] is specs:
-        return last[1]
-    fixed = any(s is not None and s.fixed_platform is not None for s in specs)
-    if type(specs) is tuple:  # immutable: the answer holds while it is the same object
-        _LAST_FIXED[0] = (specs, fixed)
-    return fixed
+    """Does a specification of ``specs`` name a fixed platform?"""
+    return any(s is not None and s.fixed_platform is not None for s in specs)
 
 
 class _ViewQuery:
