@@ -207,7 +207,7 @@ def _reference_tactile_scores(moments: np.ndarray, state, gating: bool):  # type
 
 @pytest.mark.parametrize("k", [1, 3, 63, 64, 65, 300, 889])
 def test_tactile_scores_shortcuts_match_the_reference(k: int) -> None:
-    # the warm-up shortcut (every frame past the warm-up), the steady contact shortcut (pads
+    # the warm-up shortcut (every frame past the warm-up), the all-valid division, the steady contact shortcut (pads
     # zeroed whole) and the pad sums along the frames, against the plain body, on moments
     # with pads on, off (0.0, -0.0, negative) and flickering or not, for states of every run around
     # the warm-up, both gatings, one trial and three

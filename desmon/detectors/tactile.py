@@ -138,7 +138,6 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
     d *= d  # x ** 2 is x * x
     phi = d[..., 0] + d[..., 1]
     np.sqrt(phi, out=phi)
-    run = state.run[:, None] + np.arange(1, k + 1)[None, :]  # frames since activation, this one included
     # past the warm-up in every frame if in the first (run ascends): the contact mask itself
     warm = not gating or int(state.run.min()) + 1 >= WARMUP_FRAMES
     if warm and steady is not None:  # the weights of the pads in contact throughout, 0 elsewhere
@@ -146,15 +145,19 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
         for pad in steady:
             w[..., pad] = 0.0
     else:
+        run = state.run[:, None] + np.arange(1, k + 1)[None, :]  # frames since activation, this one included
         valid_pad = contact if warm else (contact & (run >= WARMUP_FRAMES)[..., None])
         w = np.where(valid_pad, s / _CELLS, 0.0)
     den = _pad_sum(w)
     phi *= w  # w * phi (a product does not depend on the order)
     num = _pad_sum(phi)
     valid = den > 0
-    s_t = np.where(valid, num / np.where(valid, den, 1.0), 0.0)
+    if valid.all():  # num / den everywhere (the masks select it whole)
+        s_t = np.divide(num, den, out=num)
+    else:
+        s_t = np.where(valid, num / np.where(valid, den, 1.0), 0.0)
     if k:
-        new = TactileState(cop[:, -1].copy(), index[:, -1].copy(), np.minimum(run[:, -1], 1 << 30))
+        new = TactileState(cop[:, -1].copy(), index[:, -1].copy(), np.minimum(state.run + k, 1 << 30))
     else:
         new = state
     return s_t, valid, new
