@@ -53,27 +53,36 @@ def centred_cop(moments: Arr, out: Arr | None = None) -> tuple[Arr, Arr]:
     Pads without contact get centre (0, 0). With ``out`` (shape ``(..., 6, 2)``) the centres
     are written there.
     """
-    cop, contact, _steady = _centred_cop(moments, out)
+    planes = np.empty((2,) + moments.shape[:-1])
+    _s, contact, _steady = _planar_cop(moments, planes)
+    cop = np.empty(moments.shape[:-1] + (2,)) if out is None else out
+    np.copyto(cop, np.moveaxis(planes, 0, -1))
     return cop, contact
 
 
-def _centred_cop(moments: Arr, out: Arr | None) -> tuple[Arr, Arr, list[int] | None]:
-    """:func:`centred_cop` and :func:`_steady_off` of its contact mask."""
-    s = moments[..., 0]
+def _planar_cop(moments: Arr, cop: Arr) -> tuple[Arr, Arr, list[int] | None]:
+    """:func:`centred_cop` in planes: the centres of ``moments`` ``(..., 6, 3)`` written into
+    ``cop`` ``(2, ..., 6)`` (rows, then columns); returns the pressure sums ``(..., 6)``, the
+    contact mask and :func:`_steady_off` of it.
+
+    The moments are first copied as three contiguous planes (one transposing copy), so each
+    elementwise step below runs on contiguous arrays instead of strided views: the same
+    operations on the same values."""
+    planes = moments.reshape(-1, 3).T.copy().reshape((3,) + moments.shape[:-1])
+    s = planes[0]
     contact = s > 0
     safe = np.where(contact, s, 1.0)
-    cop = np.empty(s.shape + (2,)) if out is None else out
     steady = _steady_off(contact)
     off = ~contact if steady is None else None
     for c, mid in ((0, _ROW_MID), (1, _COL_MID)):
-        part = cop[..., c]
-        np.divide(moments[..., 1 + c], safe, out=part)
+        part = cop[c]
+        np.divide(planes[1 + c], safe, out=part)
         part -= mid
         if off is not None:
             np.copyto(part, 0.0, where=off)
     for pad in steady or ():
-        cop[..., pad, :] = 0.0
-    return cop, contact, steady
+        cop[..., pad] = 0.0
+    return s, contact, steady
 
 
 def _steady_off(contact: Arr) -> list[int] | None:
@@ -118,25 +127,23 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
     bit-identical results.
     """
     n, k = moments.shape[:2]
-    s = moments[..., 0]
-    if not s.any():  # no contact anywhere: nothing valid (same result as below, cheaper)
+    if not moments[..., 0].any():  # no contact anywhere: nothing valid (same result as below, cheaper)
         if k == 0:
             return np.zeros((n, 0)), np.zeros((n, 0), dtype=bool), state
         z = np.zeros((n, N_PADS, 2))
         last_index = state.cop.copy() if k == 1 else z
         return np.zeros((n, k)), np.zeros((n, k), dtype=bool), TactileState(z, last_index, state.run + k)
     # the centred centres of pressure written after the carried one; then the slip indices
-    # after the carried one
-    cop_ext = np.empty((n, k + 1, N_PADS, 2))
-    cop_ext[:, 0] = state.cop
-    cop, contact, steady = _centred_cop(moments, cop_ext[:, 1:])
+    # after the carried one; in planes (row, column) of (n, K + 1, 6), contiguous
+    cop_ext = np.empty((2, n, k + 1, N_PADS))
+    cop_ext[:, :, 0] = state.cop.transpose(2, 0, 1)
+    s, contact, steady = _planar_cop(moments, cop_ext[:, :, 1:])
     idx_ext = np.empty_like(cop_ext)
-    idx_ext[:, 0] = state.index
-    index = idx_ext[:, 1:]
-    np.add(cop, cop_ext[:, :-1], out=index)
-    d = idx_ext[:, 1:] - idx_ext[:, :-1]
+    idx_ext[:, :, 0] = state.index.transpose(2, 0, 1)
+    np.add(cop_ext[:, :, 1:], cop_ext[:, :, :-1], out=idx_ext[:, :, 1:])
+    d = idx_ext[:, :, 1:] - idx_ext[:, :, :-1]
     d *= d  # x ** 2 is x * x
-    phi = d[..., 0] + d[..., 1]
+    phi = d[0] + d[1]
     np.sqrt(phi, out=phi)
     # past the warm-up in every frame if in the first (run ascends): the contact mask itself
     warm = not gating or int(state.run.min()) + 1 >= WARMUP_FRAMES
@@ -157,7 +164,9 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
     else:
         s_t = np.where(valid, num / np.where(valid, den, 1.0), 0.0)
     if k:
-        new = TactileState(cop[:, -1].copy(), index[:, -1].copy(), np.minimum(state.run + k, 1 << 30))
+        new = TactileState(
+            cop_ext[:, :, -1].transpose(1, 2, 0).copy(), idx_ext[:, :, -1].transpose(1, 2, 0).copy(), np.minimum(state.run + k, 1 << 30)
+        )
     else:
         new = state
     return s_t, valid, new
