@@ -269,3 +269,68 @@ def test_tactile_blocks_apart_render_as_one_by_one() -> None:
             for g, r in zip(got, ref):
                 assert g.tobytes() == r.tobytes(), b
             assert got[1].any(), b
+
+
+def _reference_zoh1(carry, t, s, v, ticks, stale):  # type: ignore[no-untyped-def]
+    """224b636's _zoh1 (every tick through the carried-sample masks), the reference for its shortcut."""
+    pos = t.searchsorted(ticks, side="right") - 1
+    new = pos >= 0
+    p = np.maximum(pos, 0)
+    if t.size:
+        st = np.where(new, t[p], carry[0])
+        val = np.where(new, np.nan_to_num(s[p]), carry[1])
+        ok = np.where(new, v[p], carry[2])
+    else:
+        st = np.full(ticks.shape, carry[0])
+        val = np.full(ticks.shape, carry[1])
+        ok = np.full(ticks.shape, carry[2])
+    good = ok & (ticks - st <= stale)
+    return np.where(good, val, 0.0), good
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_zoh1_shortcut_matches_the_reference(seed: int) -> None:
+    # a new sample before every tick (the shortcut) or not, with invalid samples, NaN,
+    # infinities, signed zeros and stale gaps
+    from desmon.detectors.combined import _zoh1
+
+    rng = np.random.default_rng(seed)
+    for _ in range(20):
+        k = int(rng.integers(0, 12))
+        t = np.sort(rng.uniform(0.0, 1.0, k))
+        s = rng.choice([0.0, -0.0, 1.5, -2.0, np.nan, np.inf, -np.inf, 3.25], k)
+        v = rng.random(k) < 0.8
+        lo = float(t[0]) if k and rng.random() < 0.6 else -0.1
+        ticks = np.sort(rng.uniform(lo, 1.2, int(rng.integers(0, 8))))
+        carry = (float(rng.uniform(-0.5, 0.0)), float(rng.choice([0.0, -0.0, 1.0])), bool(rng.random() < 0.5))
+        stale = float(rng.choice([0.05, 0.1, 0.3]))
+        got = _zoh1(carry, t, s.copy(), v, ticks, stale)
+        ref = _reference_zoh1(carry, t, s, v, ticks, stale)
+        for g, r in zip(got, ref):
+            assert g.dtype == r.dtype and g.shape == r.shape and g.tobytes() == r.tobytes()
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_force_tared_shortcut_matches_the_general_path(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    # chunks of noise with runs of repeated (stuck) values, through the tare, with and without the shortcut
+    from desmon.detectors.force import ForceDetector
+
+    rng = np.random.default_rng(seed)
+    n = 600
+    t = np.arange(n) / 50.0
+    vals = rng.normal(0.0, 1.0, n)
+    for start in rng.integers(0, n - 20, 4):
+        vals[start : start + int(rng.integers(2, 15))] = vals[start]
+    vals[rng.integers(0, n, 5)] = -0.0
+    cuts = np.unique(np.concatenate([[0, n], rng.integers(1, n, 40)]))
+    results = []
+    for shortcut in (True, False):
+        monkeypatch.setattr(ForceDetector, "SHORTCUT", shortcut)
+        det = ForceDetector(stuck_samples=4)
+        det.activate(0.1)
+        out = []
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            tt, s, valid = det.scores(t[a:b], vals[a:b])
+            out.append((tt.tobytes(), s.tobytes(), valid.tobytes(), s.dtype, valid.dtype, det.status, det._run, det._last_v, det._last_t))
+        results.append(out)
+    assert results[0] == results[1]

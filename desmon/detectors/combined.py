@@ -77,6 +77,11 @@ def _nan_to_num1(x: float) -> float:
 def _zoh1(carry: tuple[float, float, bool], t: Arr, s: Arr, v: Arr, ticks: Arr, stale: float) -> tuple[Arr, Arr]:
     """One-stream zero-order hold with a carried last sample (the streaming case of :func:`zoh`)."""
     pos = t.searchsorted(ticks, side="right") - 1
+    if t.size and pos.size and pos[0] >= 0:  # a new sample at or before every tick (pos ascends): no carry
+        val = _nan_to_num(s[pos])
+        good = v[pos]
+        good &= ticks - t[pos] <= stale
+        return (val if good.all() else np.where(good, val, 0.0)), good
     new = pos >= 0
     p = np.maximum(pos, 0)
     if t.size:
