@@ -54,21 +54,22 @@ def centred_cop(moments: Arr, out: Arr | None = None) -> tuple[Arr, Arr]:
     are written there.
     """
     planes = np.empty((2,) + moments.shape[:-1])
-    _s, contact, _steady = _planar_cop(moments, planes)
+    contact, _steady = _planar_cop(_planes(moments), planes)
     cop = np.empty(moments.shape[:-1] + (2,)) if out is None else out
     np.copyto(cop, np.moveaxis(planes, 0, -1))
     return cop, contact
 
 
-def _planar_cop(moments: Arr, cop: Arr) -> tuple[Arr, Arr, list[int] | None]:
-    """:func:`centred_cop` in planes: the centres of ``moments`` ``(..., 6, 3)`` written into
-    ``cop`` ``(2, ..., 6)`` (rows, then columns); returns the pressure sums ``(..., 6)``, the
-    contact mask and :func:`_steady_off` of it.
+def _planes(moments: Arr) -> Arr:
+    """``moments`` ``(..., 6, 3)`` as three contiguous planes ``(3, ..., 6)`` (one transposing
+    copy), so that elementwise steps on them run on contiguous arrays, not strided views."""
+    return moments.reshape(-1, 3).T.copy().reshape((3,) + moments.shape[:-1])
 
-    The moments are first copied as three contiguous planes (one transposing copy), so each
-    elementwise step below runs on contiguous arrays instead of strided views: the same
-    operations on the same values."""
-    planes = moments.reshape(-1, 3).T.copy().reshape((3,) + moments.shape[:-1])
+
+def _planar_cop(planes: Arr, cop: Arr) -> tuple[Arr, list[int] | None]:
+    """:func:`centred_cop` in planes: the centres of the moments' ``planes`` (:func:`_planes`)
+    written into ``cop`` ``(2, ..., 6)`` (rows, then columns); returns the contact mask and
+    :func:`_steady_off` of it (the same operations on the same values as strided views)."""
     s = planes[0]
     contact = s > 0
     safe = np.where(contact, s, 1.0)
@@ -82,7 +83,7 @@ def _planar_cop(moments: Arr, cop: Arr) -> tuple[Arr, Arr, list[int] | None]:
             np.copyto(part, 0.0, where=off)
     for pad in steady or ():
         cop[..., pad] = 0.0
-    return s, contact, steady
+    return contact, steady
 
 
 def _steady_off(contact: Arr) -> list[int] | None:
@@ -127,7 +128,9 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
     bit-identical results.
     """
     n, k = moments.shape[:2]
-    if not moments[..., 0].any():  # no contact anywhere: nothing valid (same result as below, cheaper)
+    planes = _planes(moments)
+    s = planes[0]
+    if not s.any():  # no contact anywhere: nothing valid (same result as below, cheaper)
         if k == 0:
             return np.zeros((n, 0)), np.zeros((n, 0), dtype=bool), state
         z = np.zeros((n, N_PADS, 2))
@@ -137,7 +140,7 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
     # after the carried one; in planes (row, column) of (n, K + 1, 6), contiguous
     cop_ext = np.empty((2, n, k + 1, N_PADS))
     cop_ext[:, :, 0] = state.cop.transpose(2, 0, 1)
-    s, contact, steady = _planar_cop(moments, cop_ext[:, :, 1:])
+    contact, steady = _planar_cop(planes, cop_ext[:, :, 1:])
     idx_ext = np.empty_like(cop_ext)
     idx_ext[:, :, 0] = state.index.transpose(2, 0, 1)
     np.add(cop_ext[:, :, 1:], cop_ext[:, :, :-1], out=idx_ext[:, :, 1:])
