@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import ClassVar, Final
+from typing import Final
 
 import numpy as np
 
@@ -53,8 +53,6 @@ class ForceDetector(StreamingDetector):
     """
 
     WARMUP_REASON = "tare"
-    #: whether :meth:`scores` takes :meth:`_tared_scores` where it applies (tests turn it off)
-    SHORTCUT: ClassVar[bool] = True
 
     def __init__(
         self,
@@ -105,8 +103,13 @@ class ForceDetector(StreamingDetector):
         same = np.empty(v.shape, dtype=bool)
         same[0] = v[0] == self._last_v
         np.equal(v[1:], v[:-1], out=same[1:])
-        if self._tare is not None and self.SHORTCUT and not same.any():
+        if self._tare is not None and not same.any():
             return self._tared_scores(t, v)
+        return self._general_scores(t, v, same)
+
+    def _general_scores(self, t: Arr, v: Arr, same: Arr) -> tuple[Arr, Arr, Arr]:
+        """:meth:`scores` of samples ``t``, ``v`` at or after the activation (at least one),
+        ``same[i]`` whether value ``i`` equals the one before it."""
         if not same.any():
             run = np.ones(v.shape, dtype=np.int64)
             good = np.ones(v.shape, dtype=bool)
