@@ -50,7 +50,7 @@ process per run, 7 pairs, CPU seconds): the day 4.34 s against 3.53 s (0.78, ran
 
 The goal of at most 100x the bare SimPy cost is not met: 100x asks for a 2 s day. 5,000x
 real time and signals off under 1.5 s hold, by a margin. Later rounds of issue 27 brought
-the day to 130-159x in three runs of ``python -m bench.bench_sim`` (fifth round);
+the day to 123-139x in three runs of ``python -m bench.bench_sim`` (fifth round);
 docs/findings.md ("What 100x bare SimPy would take") says what is left and why numpy
 alone does not reach 100x.
 
