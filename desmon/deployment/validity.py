@@ -402,7 +402,7 @@ def _assemble(
     if ranked is None:
         ranked = _ranked(reqs)
     if not ranked:
-        return Validity(tuple([s.name for s in acceptable]), tuple(rejected))
+        return _validity(tuple([s.name for s in acceptable]), tuple(rejected))
     scored = sorted(((score(s), s) for s in acceptable), key=lambda x: -x[0])  # stable
     breakdown = tuple((s.name, score_breakdown(reqs, s, graph)) for _v, s in scored) if reasons else ()
     return Validity(tuple(s.name for _v, s in scored), tuple(rejected), tuple(v for v, _s in scored), breakdown)
@@ -562,15 +562,6 @@ class PlatformMemoChecks(ScalarChecks):
                 failures.append(hit[2])
             else:
                 failures.append(self._part(key, state, reqs, _failures, lookups, state, graph, first_only, texts))
-        if not ranked:  # _assemble's answer without preferences, written out
-            acceptable: list[str] = []
-            rejected: list[tuple[str, tuple[Failure, ...]]] = []
-            for state, fails in zip(ordered, failures):
-                if fails:
-                    rejected.append((state.name, fails))
-                else:
-                    acceptable.append(state.name)
-            return _validity(tuple(acceptable), tuple(rejected))
         part = self._part
 
         def score(state: PlatformState) -> float:

@@ -82,6 +82,12 @@ def _zoh1(carry: tuple[float, float, bool], t: Arr, s: Arr, v: Arr, ticks: Arr, 
         good = v[pos]
         good &= ticks - t[pos] <= stale
         return (val if good.all() else np.where(good, val, 0.0)), good
+    return _zoh1_carried(carry, t, s, v, ticks, stale, pos)
+
+
+def _zoh1_carried(carry: tuple[float, float, bool], t: Arr, s: Arr, v: Arr, ticks: Arr, stale: float, pos: Arr) -> tuple[Arr, Arr]:
+    """:func:`_zoh1` through the carried sample at every tick (its general path); ``pos`` is
+    each tick's last new sample (-1: none yet, the carried one holds)."""
     new = pos >= 0
     p = np.maximum(pos, 0)
     if t.size:
