@@ -24,6 +24,29 @@ def refused(error: type[DesmonError], build: Callable[[], object]) -> str:
 
 # Hypothesis draws its examples from a fixed seed here: the same suite explores the same
 # sequences on every machine, so CI is reproducible (desmon fuzz takes --seed for users).
+def force_robot_world(other: bool = False):  # type: ignore[no-untyped-def]
+    """A small robot in a loaded repository, ``(model, repo)``: pc1 (512 MB, two force
+    sensors) and pc2 (256 MB); graph ``force`` needs a force sensor and 50 MB, and with
+    ``other`` a second graph ``other`` reading one needs 300 MB. The speed tests'
+    shortcuts run on it."""
+    from desmon.model import RobotBuilder
+    from desmon.repository import Repository, load_model
+
+    robot = RobotBuilder("r")
+    robot.platform("pc1", memory=512).device("ft", kind="force_sensor").device("ft2", kind="force_sensor")
+    robot.platform("pc2", memory=256)
+    for name in ("force", "other") if other else ("force",):
+        with robot.rpsl.perception_graph(name) as g:
+            g.sensor("w", reads="force_sensor")
+    robot.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor").add_constraint("capacity", "memory", 50)
+    if other:
+        robot.depsl.deployment_specification("other").add_constraint("capacity", "memory", 300)
+    model = robot.build()
+    repo = Repository()
+    load_model(repo, model)
+    return model, repo
+
+
 from hypothesis import settings  # noqa: E402
 
 settings.register_profile("desmon", derandomize=True, deadline=None)

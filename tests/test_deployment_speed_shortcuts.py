@@ -11,34 +11,22 @@ that differs from its full one.
 from __future__ import annotations
 
 import pytest
+from conftest import force_robot_world
 
 from desmon.deployment.control import ControlRules
 from desmon.deployment.guard import guarded
 from desmon.deployment.invariants import INVARIANTS, make_view
 from desmon.deployment.ports import RaiseError, Start, Stop, relay
 from desmon.deployment.validity import PlatformMemoChecks, loop_validity
-from desmon.model import RobotBuilder
 from desmon.model.requirements import DeploymentSpec
 from desmon.model.system import PlatformState
-from desmon.repository import Repository, RepositoryQuery, load_model, set_device_working, set_load
+from desmon.repository import RepositoryQuery, set_device_working, set_load
 from desmon.repository.facts import record_start, record_stop
 
 
 @pytest.fixture
-def world():
-    robot = RobotBuilder("r")
-    robot.platform("pc1", memory=512).device("ft", kind="force_sensor").device("ft2", kind="force_sensor")
-    robot.platform("pc2", memory=256)
-    with robot.rpsl.perception_graph("force") as g:
-        g.sensor("w", reads="force_sensor")
-    with robot.rpsl.perception_graph("other") as g:
-        g.sensor("w", reads="force_sensor")
-    robot.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor").add_constraint("capacity", "memory", 50)
-    robot.depsl.deployment_specification("other").add_constraint("capacity", "memory", 300)
-    model = robot.build()
-    repo = Repository()
-    load_model(repo, model)
-    return model, repo
+def world():  # type: ignore[no-untyped-def]
+    return force_robot_world(other=True)
 
 
 def _adjacency(g):  # type: ignore[no-untyped-def]

@@ -13,6 +13,7 @@ import math
 import pickle
 
 import pytest
+from conftest import force_robot_world
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -24,7 +25,7 @@ from desmon.model import RobotBuilder
 from desmon.model.checks import check_name, check_number, is_plain_name
 from desmon.model.events import LoadChange
 from desmon.model.system import PlatformState, new_platform_state
-from desmon.repository import Repository, RepositoryQuery, load_model, set_device_working, set_load, set_platform_up
+from desmon.repository import RepositoryQuery, set_device_working, set_load, set_platform_up
 from desmon.repository.facts import record_start, record_stop
 from desmon.repository.store import Change
 from desmon.sim.driver import Inbox
@@ -32,17 +33,8 @@ from desmon.sim.trace import Trace
 
 
 @pytest.fixture
-def world():
-    robot = RobotBuilder("r")
-    robot.platform("pc1", memory=512).device("ft", kind="force_sensor").device("ft2", kind="force_sensor")
-    robot.platform("pc2", memory=256)
-    with robot.rpsl.perception_graph("force") as g:
-        g.sensor("w", reads="force_sensor")
-    robot.depsl.deployment_specification("force").add_constraint("attribute", "platform_has", "force_sensor").add_constraint("capacity", "memory", 50)
-    model = robot.build()
-    repo = Repository()
-    load_model(repo, model)
-    return model, repo
+def world():  # type: ignore[no-untyped-def]
+    return force_robot_world()
 
 
 # ---------------------------------------------------------------------------- platform states
