@@ -319,22 +319,6 @@ def spec_validity(
     return Validity((), tuple(rejected))
 
 
-#: the slots of :class:`Validity`, in field order, as their setters (see :func:`_validity`)
-_VALIDITY_SETTERS = tuple(getattr(Validity, name).__set__ for name in ("acceptable", "rejected", "scores", "breakdown"))
-
-
-def _validity(acceptable: tuple[str, ...], rejected: tuple[tuple[str, tuple[Failure, ...]], ...]) -> Validity:
-    """``Validity(acceptable, rejected)`` (no scores), built without the frozen class's
-    ``__init__``; equal to the constructor's (the class has no ``__post_init__``)."""
-    validity = object.__new__(Validity)
-    s_acceptable, s_rejected, s_scores, s_breakdown = _VALIDITY_SETTERS
-    s_acceptable(validity, acceptable)
-    s_rejected(validity, rejected)
-    s_scores(validity, ())
-    s_breakdown(validity, ())
-    return validity
-
-
 def order_platforms(states: Sequence[PlatformState]) -> list[PlatformState]:
     """Deterministic preference order: higher ``preference`` first, then declaration order."""
     return sorted(states, key=lambda s: -s.platform.preference)  # sorted() is stable
@@ -402,7 +386,7 @@ def _assemble(
     if ranked is None:
         ranked = _ranked(reqs)
     if not ranked:
-        return _validity(tuple([s.name for s in acceptable]), tuple(rejected))
+        return Validity(tuple([s.name for s in acceptable]), tuple(rejected))
     scored = sorted(((score(s), s) for s in acceptable), key=lambda x: -x[0])  # stable
     breakdown = tuple((s.name, score_breakdown(reqs, s, graph)) for _v, s in scored) if reasons else ()
     return Validity(tuple(s.name for _v, s in scored), tuple(rejected), tuple(v for v, _s in scored), breakdown)
@@ -488,9 +472,8 @@ class PlatformMemoChecks(ScalarChecks):
 
     def _question(self, reqs: tuple[Requirement, ...]) -> "_Question":
         """(ids of the objects of ``reqs``, their checks, whether one is a preference, their
-        descriptions so far): found
-        by the tuple's identity, else by the ids of its objects (each entry holds what its
-        key names); a requirement that is none raises (:func:`_checks`)."""
+        descriptions so far): found by the tuple's identity, else by the ids of its objects
+        (each entry holds what its key names); a requirement that is none raises (:func:`_checks`)."""
         tuples = self._tuples
         hit = tuples.get(id(reqs))
         if hit is not None and hit[0] is reqs:

@@ -126,13 +126,7 @@ class Trace:
         return r
 
     def emit(self, t: float, type_: str, **fields: Any) -> None:
-        last = self._last
-        if t is last[0]:  # rounded(t), inline: most records carry the clock of the record before
-            rt = last[1]
-        else:
-            rt = round(float(t), 6)
-            self._last = (t, rt)
-        rec: dict[str, Any] = {"t": rt, "type": type_}
+        rec: dict[str, Any] = {"t": self.rounded(t), "type": type_}
         for k, v in fields.items():
             kind = type(v)
             # the common fields inline, as _clean has them (a float subclass goes there)
