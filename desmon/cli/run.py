@@ -52,6 +52,11 @@ def add_parser(sub: Subparsers) -> None:
     )
     p.add_argument("--phases", type=positive_int, default=None, help="Erlang phases of a task step under --timing exponential (default 1)")
     p.add_argument("--no-signals", action="store_true", help="simulate no sensor signals (exposure counts running, ready detectors)")
+    p.add_argument(
+        "--render-ahead", choices=("auto", "on", "off"), default="auto",
+        help="render the tactile frames in a second process while the run goes on; the run's output is the same "
+        "either way (auto: on Linux with 2+ cores for runs with 5 min or more of object in hand)",
+    )
     add_output(
         p, "--plot", suffixes=(".png",), default=None, metavar="FILE.png",
         help="draw the timeline of the run to this PNG (needs desmon[plot])",
@@ -155,7 +160,8 @@ def _simulate(args: Any, scenario: Scenario, err: IO[str], show: bool, t_wall: f
         # the trace replaces an existing file only once the run is complete (nothing lost on an error)
         fh = stack.enter_context(replacing(args.trace)) if args.trace else None
         world = SimWorld(
-            scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=Trace(fh, keep=False), progress=progress
+            scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=Trace(fh, keep=False), progress=progress,
+            render_ahead={"on": True, "off": False}.get(getattr(args, "render_ahead", "auto")),
         )
         result = world.run()
         result.metrics["audits"] = world.audits
@@ -169,6 +175,8 @@ def _run_fleet(args: Any, scenario: Scenario, out: IO[str], err: IO[str], show: 
     from desmon.sim.fleet import simulate_fleet
 
     fleet = scenario.world
+    if getattr(args, "render_ahead", "auto") != "auto":
+        raise ScenarioError(f"--render-ahead applies to one robot's run; {scenario.name!r} is a fleet of {len(fleet.robots)}: drop --render-ahead")
     if getattr(args, "plot", None):
         raise ScenarioError(f"--plot draws one robot's timeline; {scenario.name!r} is a fleet of {len(fleet.robots)}: drop --plot")
     if args.until is not None and args.until > fleet.horizon:

@@ -37,6 +37,7 @@ import simpy
 from desmon.deployment.ports import ErrorRecord
 from desmon.deployment.validity import PlatformMemoChecks
 from desmon.detectors.base import Alarm
+from desmon.detectors.signals.ahead import AHEAD_MIN_S, check_render_ahead, fork_safe
 from desmon.model.scenario import Scenario
 from desmon.repository import labels as L
 from desmon.repository.facts import load_model
@@ -88,8 +89,13 @@ class SimWorld:
         signals: bool | None = None,
         progress: Callable[[float, float], None] | None = None,
         on_quiescent: "Callable[[SimWorld], None] | None" = None,
+        render_ahead: bool | None = None,
     ) -> None:
         self.scenario = scenario
+        #: render the tactile frames in a second process while the run goes on (True, False;
+        #: None: where :func:`~desmon.detectors.signals.ahead.fork_safe` holds and the run has
+        #: at least ``AHEAD_MIN_S`` of object in hand); the run's bytes are the same either way
+        self.render_ahead = check_render_ahead(render_ahead)
         #: called with this world at every quiescent point, after its audit (a conformance
         #: harness compares the world there with the checker's state; None: nobody asks)
         self.on_quiescent = on_quiescent
@@ -179,14 +185,31 @@ class SimWorld:
         for s in self.slips:
             trace.emit(s.time, "slip", direction=s.direction, kind=s.kind)
 
+    def _ahead_wanted(self) -> bool:
+        """Whether this run renders its tactile frames ahead in a second process (``render_ahead``)."""
+        bank = self.bank
+        if bank is None or self.render_ahead is False:
+            return False
+        if self.render_ahead:
+            return True
+        arr = bank.signals.tactile_array
+        return fork_safe() and min(arr.episode_seconds(), self.horizon) >= AHEAD_MIN_S
+
     def run(self) -> RunResult:
         parts = self.parts
         self._trace_header()
         start_processes(parts, self._audit)
         if self.progress is not None:
             self.env.process(progress(parts, self.progress))
-        with collector_relaxed(collect=False):  # the world built so far stays out of the collector's scans
-            self.env.run(until=self.horizon)
+        ahead = self.bank.signals.tactile_array if self.bank is not None and self._ahead_wanted() else None
+        if ahead is not None:
+            ahead.start_ahead()
+        try:
+            with collector_relaxed(collect=False):  # the world built so far stays out of the collector's scans
+                self.env.run(until=self.horizon)
+        finally:
+            if ahead is not None:
+                ahead.stop_ahead()
         now = self.horizon
         for inst in list(self.instances.values()):
             self.infra.feed(inst, now)

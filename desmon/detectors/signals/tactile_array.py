@@ -37,6 +37,7 @@ from desmon.detectors.signals.common import (
     TactileBlock,
     tactile_nominal_indices,
 )
+from desmon.detectors.signals.ahead import RenderAhead
 from desmon.detectors.signals.contexts import context_tactile, hold_creep, move_base_tactile
 from desmon.detectors.signals.episodes import Episode
 from desmon.detectors.signals.noise import STREAM_TACTILE, BlockStream, Jitter, tactile_normals
@@ -501,6 +502,9 @@ def _contact_rows(t: Arr, units: list[tuple[int, int, int]], episodes: Sequence[
 class TactileArray:
     """Deterministic tactile frames of one mission (see the module docstring)."""
 
+    #: frames per block (what a worker rendering ahead writes per slot)
+    block_len: Final = TACTILE_BLOCK
+
     def __init__(self, seed: int, episodes: Sequence[Episode], faults: Sequence[SensorFault], params: SignalParams) -> None:
         self.seed = seed
         self.episodes = tuple(episodes)
@@ -512,6 +516,10 @@ class TactileArray:
         self._ep_starts = [float(ep.start) for ep in self.episodes]
         self._cache: dict[tuple[int, bool], Rendered] = {}
         self._scratch = _Scratch()
+        #: the worker rendering ahead, while one runs (:meth:`start_ahead`)
+        self._ahead: RenderAhead | None = None
+        #: blocks taken from workers rendering ahead, over this array's life
+        self.ahead_taken = 0
         #: frame times ascend (jitter under half a frame period): a span of times is a run of frames
         self._ordered = 2.0 * params.tactile_jitter_clip < 1.0 / params.tactile_rate
 
@@ -546,7 +554,61 @@ class TactileArray:
         vals.clip(0.0, FULL_SCALE, out=vals)
         return vals
 
+    # ------------------------------------------------------------------ rendering ahead
+    def ahead_blocks(self) -> list[int]:
+        """The blocks with frames of an object-in-hand episode, ascending: what a worker
+        rendering ahead renders (:mod:`desmon.detectors.signals.ahead`)."""
+        B, clip, rate = TACTILE_BLOCK, self.params.tactile_jitter_clip, self.rate
+        out: set[int] = set()
+        for ep in self.episodes:
+            k0 = max(int(math.floor((ep.start - clip) * rate)), 0)
+            k1 = max(int(math.ceil((ep.end + clip) * rate)), k0)
+            out.update(range(k0 // B, k1 // B + 1))
+        return sorted(out)
+
+    def episode_seconds(self) -> float:
+        """Seconds of the mission with an object in the hand (the episodes' total length)."""
+        return float(sum(ep.end - ep.start for ep in self.episodes))
+
+    def start_ahead(self) -> RenderAhead:
+        """Fork a worker that renders this array's episode blocks ahead (stop it with
+        :meth:`stop_ahead`); blocks of frames are then taken from it where it has them."""
+        self.stop_ahead()
+        self._ahead = RenderAhead(self, self.ahead_blocks())
+        return self._ahead
+
+    def stop_ahead(self) -> None:
+        """Stop the worker rendering ahead, if one runs; from then on every block is rendered here."""
+        ahead, self._ahead = self._ahead, None
+        if ahead is not None:
+            ahead.close()
+            self.ahead_taken += ahead.taken
+
     def render_blocks(self, blocks: Sequence[int], frames: bool) -> list[Rendered]:
+        """:meth:`render_here`, with the blocks a worker rendering ahead has taken from it (the
+        same bytes; full frames are always rendered here)."""
+        ahead = self._ahead
+        if ahead is None or frames:
+            return self.render_here(blocks, frames)
+        got = [ahead.take(int(b)) for b in blocks]
+        rest = [b for b, g in zip(blocks, got) if g is None]
+        local = iter(self.render_here(rest, False)) if rest else iter(())
+        out = []
+        for b, g in zip(blocks, got):
+            if g is None:
+                out.append(next(local))
+            else:
+                res = (g[0], g[1], None)
+                self._keep(int(b), False, res)
+                out.append(res)
+        return out
+
+    def _keep(self, block: int, frames: bool, res: Rendered) -> None:
+        if len(self._cache) >= TACTILE_CACHE:
+            del self._cache[next(iter(self._cache))]
+        self._cache[(block, frames)] = res
+
+    def render_here(self, blocks: Sequence[int], frames: bool) -> list[Rendered]:
         """Render whole tactile blocks (``TACTILE_BLOCK`` frames each) in one vectorised pass.
 
         Block ``b``'s frames depend only on the seed and ``b``: its normals come from
@@ -589,9 +651,7 @@ class TactileArray:
         out = []
         for i in range(nb):
             res = (t[i * B : (i + 1) * B], mom[i * B : (i + 1) * B], fr[i * B : (i + 1) * B] if fr is not None else None)
-            if len(self._cache) >= TACTILE_CACHE:
-                del self._cache[next(iter(self._cache))]
-            self._cache[(int(barr[i]), frames)] = res
+            self._keep(int(barr[i]), frames, res)
             out.append(res)
         return out
 

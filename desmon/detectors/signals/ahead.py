@@ -1,0 +1,224 @@
+"""Rendering ahead: a tactile array's blocks of frames rendered in a second process.
+
+A tactile block's frames depend only on the seed and the block number
+(:mod:`desmon.detectors.signals.tactile_array`), so another process can render them
+before they are asked for and hand over the very bytes the simulation would have made.
+:class:`RenderAhead` forks one worker that renders the blocks of every object-in-hand
+episode in time order into slots of a shared memory map and says which block lies in
+which slot over a pipe; the simulation takes a block from there when it asks for it, or
+renders it itself when the worker has not got there (a request far ahead makes the
+worker skip to it), has passed it or is gone. Who rendered a block never changes a byte:
+tests compare whole runs with and without the worker.
+
+The worker runs while the simulation does, on a second core: the render is about a third
+of a robot day with signals on (``python -m bench.bench_sim`` prints the day both ways).
+It is a plain ``os.fork`` with one shared map and two pipes; :func:`fork_safe` says when
+desmon uses it unasked (Linux, two cores or more, no other thread in the process).
+"""
+
+from __future__ import annotations
+
+import bisect
+import mmap
+import os
+import select
+import signal
+import struct
+import sys
+import threading
+from typing import TYPE_CHECKING, Final, Sequence
+
+import numpy as np
+
+from desmon.detectors.signals.common import N_PADS
+from desmon.errors import SignalError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from desmon.detectors.signals.tactile_array import TactileArray
+
+#: Slots of the shared map: how many blocks the worker may be ahead of the simulation.
+SLOTS: Final = 64
+#: Blocks the worker renders in one pass (as the simulation's prefetch does, at most).
+GROUP: Final = 16
+#: Seconds the simulation waits for the worker's next block before it renders alone.
+STALL_S: Final = 20.0
+_MSG: Final = struct.Struct("<qq")  # worker -> simulation: (block, slot); simulation -> worker: (slot, seek block)
+
+
+#: Seconds of object in hand from which a run renders ahead unasked (a fork costs a few
+#: milliseconds; the render of 5 minutes of holding, about 0.1 s).
+AHEAD_MIN_S: Final = 300.0
+
+
+def check_render_ahead(value: object) -> bool | None:
+    """``render_ahead`` as given (True, False or None for automatic), or a :class:`SignalError`
+    naming the value and the fix."""
+    if value is None or isinstance(value, bool):
+        if value and not hasattr(os, "fork"):
+            raise SignalError("render_ahead=True needs os.fork (Linux or macOS); pass None (automatic) or False")
+        return value
+    raise SignalError(f"render_ahead {value!r} must be True, False or None (automatic)")
+
+
+def fork_safe() -> bool:
+    """Whether a worker may be forked without being asked for: Linux (``os.fork`` of a process
+    whose only thread is this one cannot inherit a lock another thread held) with at least
+    two cores (on one, the worker would only take turns with the simulation)."""
+    return sys.platform.startswith("linux") and (os.cpu_count() or 1) >= 2 and threading.active_count() == 1
+
+
+class RenderAhead:
+    """A forked worker rendering ``blocks`` (ascending) of ``array`` ahead (module docstring)."""
+
+    def __init__(self, array: "TactileArray", blocks: Sequence[int]) -> None:
+        self.blocks = list(blocks)
+        self._pos = {b: i for i, b in enumerate(self.blocks)}
+        self._block_len = array.block_len
+        self._slot = self._block_len * (1 + N_PADS * 3) * 8  # times, then moments, float64
+        self._map = mmap.mmap(-1, SLOTS * self._slot)
+        done_r, done_w = os.pipe()
+        free_r, free_w = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the worker: renders, never returns
+            code = 1
+            try:
+                os.close(done_r)
+                os.close(free_w)
+                _work(array, self.blocks, self._map, self._slot, done_w, free_r)
+                code = 0
+            finally:
+                os._exit(code)
+        os.close(done_w)
+        os.close(free_r)
+        self.pid: int | None = pid
+        self._done = done_r
+        self._free = free_w
+        self._buf = b""
+        #: blocks received and not yet taken, by block
+        self._got: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        #: plan position of the last block received (-1: none yet)
+        self._last = -1
+        #: blocks the simulation took from the worker / rendered itself though planned
+        self.taken = 0
+        self.missed = 0
+
+    @property
+    def alive(self) -> bool:
+        return self.pid is not None
+
+    def take(self, block: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """Times and moments of ``block`` from the worker, or None (render it here)."""
+        hit = self._got.pop(block, None)
+        if hit is not None:
+            self.taken += 1
+            return hit
+        at = self._pos.get(block)
+        if at is None or self.pid is None:
+            return None
+        if at <= self._last:  # the worker has passed it (its slot given back unread)
+            self.missed += 1
+            return None
+        if at - self._last > SLOTS:  # far ahead of the worker: it skips there
+            self._tell(_MSG.pack(-1, block))
+        while self.pid is not None and self._last < at:
+            self._receive()
+        hit = self._got.pop(block, None)
+        if hit is None:
+            self.missed += 1
+        else:
+            self.taken += 1
+        return hit
+
+    def _receive(self) -> None:
+        """Read the worker's next messages (waiting up to ``STALL_S``), copy their blocks out of
+        their slots and give the slots back."""
+        ready, _, _ = select.select([self._done], [], [], STALL_S)
+        chunk = os.read(self._done, 64 * _MSG.size) if ready else b""
+        if not chunk:  # gone, or stalled: render here from now on
+            self.close()
+            return
+        self._buf += chunk
+        n = len(self._buf) // _MSG.size
+        freed = []
+        for i in range(n):
+            block, slot = _MSG.unpack_from(self._buf, i * _MSG.size)
+            base = slot * self._slot
+            t = np.frombuffer(self._map, np.float64, self._block_len, base).copy()
+            mom = np.frombuffer(self._map, np.float64, self._block_len * N_PADS * 3, base + self._block_len * 8).reshape(self._block_len, N_PADS, 3).copy()
+            freed.append(_MSG.pack(slot, -1))
+            self._last = self._pos[block]
+            self._got[block] = (t, mom)
+        self._buf = self._buf[n * _MSG.size :]
+        self._tell(b"".join(freed))
+        if len(self._got) > 2 * SLOTS:  # blocks the simulation went past without taking
+            for b in sorted(self._got)[: len(self._got) - SLOTS]:
+                del self._got[b]
+
+    def _tell(self, msg: bytes) -> None:
+        """Write to the worker, which may have finished its blocks and gone."""
+        try:
+            os.write(self._free, msg)
+        except OSError:
+            pass
+
+    def close(self) -> None:
+        """Stop the worker (if running) and release the map and pipes."""
+        pid, self.pid = self.pid, None
+        if pid is None:
+            return
+        for fd in (self._done, self._free):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+        try:
+            os.kill(pid, signal.SIGKILL)  # it holds nothing to clean up; a handler the process set cannot keep it
+        except ProcessLookupError:
+            pass
+        os.waitpid(pid, 0)
+        self._map.close()
+
+
+def _work(array: "TactileArray", blocks: list[int], shared: mmap.mmap, slot_bytes: int, done: int, free: int) -> None:
+    """The worker's loop: render ``blocks`` in groups of neighbours, each block into a free
+    slot; between groups, take back freed slots and skip to a block the simulation asks for."""
+    free_slots = list(range(SLOTS))
+    n_len = array.block_len
+    buf = b""
+    i = 0
+
+    def read(wait: bool) -> bool:
+        nonlocal buf, i
+        if not wait and not select.select([free], [], [], 0)[0]:
+            return True
+        chunk = os.read(free, 64 * _MSG.size)
+        if not chunk:
+            return False  # the simulation is gone
+        buf += chunk
+        n = len(buf) // _MSG.size
+        for k in range(n):
+            slot, seek = _MSG.unpack_from(buf, k * _MSG.size)
+            if slot >= 0:
+                free_slots.append(slot)
+            elif seek >= 0:
+                i = max(i, bisect.bisect_left(blocks, seek))
+        buf = buf[n * _MSG.size :]
+        return True
+
+    while i < len(blocks):
+        if not read(False):
+            return
+        j = i + 1
+        while j < len(blocks) and j - i < GROUP and blocks[j] == blocks[j - 1] + 1:
+            j += 1
+        group = blocks[i:j]
+        i = j
+        for b, (t, mom, _fr) in zip(group, array.render_here(group, False)):
+            while not free_slots:
+                if not read(True):
+                    return
+            slot = free_slots.pop()
+            base = slot * slot_bytes
+            shared[base : base + n_len * 8] = t.tobytes()
+            shared[base + n_len * 8 : base + slot_bytes] = mom.tobytes()
+            os.write(done, _MSG.pack(b, slot))

@@ -1,0 +1,172 @@
+"""Rendering ahead: a second process renders the tactile blocks, and nothing a user sees
+changes but the wall time."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from desmon.detectors.signals import MissionSignals, SlipEvent, ahead
+from desmon.errors import SignalError
+from desmon.loader import load_scenario
+from desmon.sim.engine import SimWorld
+
+ROOT = Path(__file__).resolve().parents[1]
+
+pytestmark = pytest.mark.skipif(not hasattr(os, "fork"), reason="rendering ahead forks")
+
+#: a 22-minute mission: holds, moves and slips in every episode
+_SEGS = []
+_t = 0.0
+for _ctx, _d in (("idle", 1.0), ("grasp", 1.1), ("hold", 13.0), ("move_base", 21.0), ("hold", 4.0), ("release", 0.8), ("idle", 2.5)) * 30:
+    _SEGS.append((_ctx, _t, _d))
+    _t += _d
+_SLIPS = [SlipEvent(s + 2.5, "down", "pulled") for c, s, _ in _SEGS if c == "hold"][::2]
+
+
+def _pair() -> tuple[MissionSignals, MissionSignals]:
+    return MissionSignals(_SEGS, _SLIPS, seed=9), MissionSignals(_SEGS, _SLIPS, seed=9)
+
+
+def _requests(rng: np.random.Generator) -> list[tuple[float, float]]:
+    """Requests by time as a detector makes them: chunks in order, a few jumps back and ahead."""
+    out, t = [], 0.0
+    while t < _t:
+        d = float(rng.exponential(3.0))
+        out.append((t, t + d))
+        t += d if rng.random() > 0.05 else -d / 2
+    return out
+
+
+def _same(a, b) -> bool:  # type: ignore[no-untyped-def]
+    return all(x.tobytes() == y.tobytes() for x, y in zip((a.index, a.times, a.moments), (b.index, b.times, b.moments)))
+
+
+def test_frames_from_the_worker_are_the_frames_rendered_here() -> None:
+    fast, ref = _pair()
+    arr = fast.tactile_array
+    worker = arr.start_ahead()
+    pid = worker.pid
+    try:
+        for t0, t1 in _requests(np.random.default_rng(1)):
+            assert _same(fast.tactile(t0, t1), ref.tactile(t0, t1)), (t0, t1)
+        assert worker.taken > 0.8 * len(arr.ahead_blocks())
+    finally:
+        arr.stop_ahead()
+    assert not worker.alive and arr.ahead_taken == worker.taken
+    with pytest.raises(ChildProcessError):  # reaped: no zombie left
+        os.waitpid(pid, os.WNOHANG)  # type: ignore[arg-type]
+
+
+def test_a_request_far_ahead_makes_the_worker_skip_there() -> None:
+    fast, ref = _pair()
+    arr = fast.tactile_array
+    worker = arr.start_ahead()
+    try:
+        blocks = arr.ahead_blocks()
+        late = blocks[-3] * 256 / arr.rate  # past the worker's first slots' worth of blocks
+        assert blocks.index(blocks[-3]) > ahead.SLOTS
+        assert _same(fast.tactile(late, late + 5.0), ref.tactile(late, late + 5.0))
+        assert worker.taken >= 1
+        assert _same(fast.tactile(1.0, 9.0), ref.tactile(1.0, 9.0))  # passed by the skip: rendered here
+        assert worker.missed >= 1
+    finally:
+        arr.stop_ahead()
+
+
+def test_a_worker_that_dies_leaves_the_run_to_render_alone() -> None:
+    fast, ref = _pair()
+    arr = fast.tactile_array
+    worker = arr.start_ahead()
+    reqs = _requests(np.random.default_rng(2))
+    try:
+        for i, (t0, t1) in enumerate(reqs):
+            if i == len(reqs) // 3:
+                os.kill(worker.pid, signal.SIGKILL)  # type: ignore[arg-type]
+            assert _same(fast.tactile(t0, t1), ref.tactile(t0, t1)), (t0, t1)
+        assert not worker.alive and worker.taken > 0
+    finally:
+        arr.stop_ahead()
+
+
+def test_a_stalled_worker_is_given_up_after_the_stall_limit(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(ahead, "STALL_S", 0.2)
+    fast, ref = _pair()
+    arr = fast.tactile_array
+    worker = arr.start_ahead()
+    try:
+        os.kill(worker.pid, signal.SIGSTOP)  # type: ignore[arg-type]
+        time.sleep(0.05)
+        late = arr.ahead_blocks()[-1] * 256 / arr.rate
+        t0 = time.perf_counter()
+        assert _same(fast.tactile(late, late + 3.0), ref.tactile(late, late + 3.0))
+        assert time.perf_counter() - t0 < 10.0
+        assert not worker.alive  # stopped, then killed and reaped
+    finally:
+        arr.stop_ahead()
+
+
+def test_a_run_is_the_same_bytes_with_and_without_the_worker() -> None:
+    sc = load_scenario(ROOT / "scenarios" / "robot_day.py")
+    runs = []
+    taken = []
+    for mode in (True, False):
+        w = SimWorld(sc, seed=3, until=1500.0, render_ahead=mode)
+        r = w.run()
+        runs.append((json.dumps(r.trace.records), r.metrics, [(a.time, a.detector) for a in r.alarms]))
+        taken.append(w.bank.signals.tactile_array.ahead_taken)  # type: ignore[union-attr]
+    assert runs[0] == runs[1]
+    assert taken[0] > 0 and taken[1] == 0
+    assert runs[0][2]  # the detectors saw frames and fired
+
+
+def test_automatic_rendering_ahead_needs_a_long_run_and_a_lone_thread() -> None:
+    sc = load_scenario(ROOT / "scenarios" / "robot_day.py")
+    assert SimWorld(sc, until=7200.0)._ahead_wanted() is ahead.fork_safe()
+    assert not SimWorld(sc, until=60.0)._ahead_wanted()  # under AHEAD_MIN_S of object in hand
+    assert not SimWorld(sc, until=7200.0, render_ahead=False)._ahead_wanted()
+    assert not SimWorld(sc, until=7200.0, signals=False, render_ahead=True)._ahead_wanted()  # nothing to render
+    stop = threading.Event()
+    th = threading.Thread(target=stop.wait)
+    th.start()
+    try:
+        assert not ahead.fork_safe()  # another thread might hold a lock the fork would copy
+    finally:
+        stop.set()
+        th.join()
+
+
+@pytest.mark.parametrize("value", ["yes", 1, 0.0, "auto"])
+def test_render_ahead_takes_true_false_or_none(value: object) -> None:
+    sc = load_scenario(ROOT / "scenarios" / "coffee_handover.py")
+    with pytest.raises(SignalError, match=r"render_ahead .* must be True, False or None"):
+        SimWorld(sc, render_ahead=value)  # type: ignore[arg-type]
+
+
+def test_cli_render_ahead_is_checked_and_changes_no_output(tmp_path: Path) -> None:
+    def run(*extra: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
+            [sys.executable, "-m", "desmon", "run", str(ROOT / "scenarios" / "robot_day.py"), "--until", "900", "--no-progress", "--json", *extra],
+            capture_output=True, text=True, cwd=ROOT, timeout=300,
+        )
+
+    on, off = run("--render-ahead", "on"), run("--render-ahead", "off")
+    assert on.returncode == off.returncode == 0, on.stderr + off.stderr
+    strip = lambda s: {k: v for k, v in json.loads(s).items() if "wall" not in k}  # noqa: E731
+    assert strip(on.stdout) == strip(off.stdout)
+    bad = run("--render-ahead", "sometimes")
+    assert bad.returncode == 2 and "invalid choice: 'sometimes'" in bad.stderr and "Traceback" not in bad.stderr
+    fleet = subprocess.run(
+        [sys.executable, "-m", "desmon", "run", str(ROOT / "scenarios" / "fleet.py"), "--render-ahead", "on", "--no-progress"],
+        capture_output=True, text=True, cwd=ROOT, timeout=300,
+    )
+    assert fleet.returncode == 2 and "drop --render-ahead" in fleet.stderr and "Traceback" not in fleet.stderr
