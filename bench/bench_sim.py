@@ -171,8 +171,8 @@ def _cpu_s() -> float:
 
 
 def _ahead_taken(world: SimWorld) -> int:
-    """Tactile blocks the run took from a worker rendering ahead (0: it rendered alone)."""
-    return world.bank.signals.tactile_array.ahead_taken if world.bank is not None else 0
+    """Blocks (tactile and wrench) the run took from workers rendering ahead (0: it rendered alone)."""
+    return world.bank.signals.ahead_taken if world.bank is not None else 0
 
 
 def count_events(env: simpy.Environment) -> list[int]:
@@ -218,7 +218,7 @@ def main(argv: list[str] | None = None) -> int:
     samples = r.metrics.get("samples", {})
     print(f"robot day, seed {a.seed}: {sim:,.0f} sim-s in {wall:.2f} s wall -> {x_real:,.0f}x real time")
     print(f"  SimPy events: {events:,}; samples wrench {samples.get('wrench', 0):,}, tactile {samples.get('tactile', 0):,}")
-    how = f"tactile frames rendered ahead in a second process ({ahead:,} blocks taken from it)" if ahead else "in this process alone"
+    how = f"tactile frames and wrench rendered ahead in forked workers ({ahead:,} blocks taken from them)" if ahead else "in this process alone"
     print(f"  {how}; CPU s of both processes: {cpu:.2f}")
     print(f"  bare SimPy, same event count: {bare:.4f} s ({events / bare:,.0f} events/s); full run / bare: {ratio:.1f}x")
     print(f"  same day rendered in this process alone (render_ahead=False): {serial:.2f} s wall, {serial / bare:.1f}x bare SimPy")

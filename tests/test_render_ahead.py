@@ -67,6 +67,22 @@ def test_frames_from_the_worker_are_the_frames_rendered_here() -> None:
         os.waitpid(pid, os.WNOHANG)  # type: ignore[arg-type]
 
 
+def test_wrench_from_the_worker_is_the_wrench_rendered_here() -> None:
+    fast, ref = _pair()
+    sensor = fast.wrench_sensor
+    worker = sensor.start_ahead()
+    try:
+        for t0, t1 in _requests(np.random.default_rng(4)):
+            a, b = fast.wrench(t0, t1), ref.wrench(t0, t1)
+            assert all(x.tobytes() == y.tobytes() for x, y in zip((a.index, a.times, a.values), (b.index, b.times, b.values))), (t0, t1)
+        k = np.array([5, 3000, 7, 40_000, 1024, 1023])  # by index, out of order, across blocks
+        assert fast.wrench_at(k).values.tobytes() == ref.wrench_at(k).values.tobytes()
+        assert worker.taken > 0.8 * len(sensor.ahead_blocks())
+    finally:
+        fast.stop_ahead()
+    assert sensor.ahead_taken == worker.taken and fast.ahead_taken == worker.taken
+
+
 def test_a_request_far_ahead_makes_the_worker_skip_there() -> None:
     fast, ref = _pair()
     arr = fast.tactile_array
@@ -123,7 +139,7 @@ def test_a_run_is_the_same_bytes_with_and_without_the_worker() -> None:
         w = SimWorld(sc, seed=3, until=1500.0, render_ahead=mode)
         r = w.run()
         runs.append((json.dumps(r.trace.records), r.metrics, [(a.time, a.detector) for a in r.alarms]))
-        taken.append(w.bank.signals.tactile_array.ahead_taken)  # type: ignore[union-attr]
+        taken.append(w.bank.signals.ahead_taken)  # type: ignore[union-attr]
     assert runs[0] == runs[1]
     assert taken[0] > 0 and taken[1] == 0
     assert runs[0][2]  # the detectors saw frames and fired

@@ -218,3 +218,12 @@ def test_ascending_episode_state_is_bit_identical_to_episode_pad_state() -> None
             assert got is not None
             for g, r in zip(got, ref):
                 assert g.tobytes() == np.ascontiguousarray(r[0]).tobytes()
+
+
+def test_wrench_by_index_in_any_order_across_blocks() -> None:
+    # indices whose first, last and least fall in one block while others lie in later blocks
+    ms = MissionSignals([("idle", 0.0, 1.0), ("grasp", 1.0, 2.0), ("hold", 3.0, 2000.0)], seed=1)
+    k = np.array([5, 3000, 7, 40_000, 1024, 1023])
+    got = ms.wrench_at(k)
+    one_by_one = np.array([ms.wrench_at(np.array([i])).values[0] for i in k])
+    assert got.index.tolist() == k.tolist() and got.values.tobytes() == one_by_one.tobytes()

@@ -26,15 +26,12 @@ import signal
 import struct
 import sys
 import threading
-from typing import TYPE_CHECKING, Final, Sequence
+import time
+from typing import Callable, Final, Sequence
 
 import numpy as np
 
-from desmon.detectors.signals.common import N_PADS
 from desmon.errors import SignalError
-
-if TYPE_CHECKING:  # pragma: no cover
-    from desmon.detectors.signals.tactile_array import TactileArray
 
 #: Slots of the shared map: how many blocks the worker may be ahead of the simulation.
 SLOTS: Final = 64
@@ -68,13 +65,17 @@ def fork_safe() -> bool:
 
 
 class RenderAhead:
-    """A forked worker rendering ``blocks`` (ascending) of ``array`` ahead (module docstring)."""
+    """A forked worker rendering ``blocks`` (ascending) ahead (module docstring): ``render(group)``
+    gives, for each block of a group of neighbouring blocks, float64 arrays of ``shapes``
+    (the same for every block), the bytes the simulation's own render gives."""
 
-    def __init__(self, array: "TactileArray", blocks: Sequence[int]) -> None:
+    def __init__(self, render: Callable[[list[int]], Sequence[Sequence[np.ndarray]]], blocks: Sequence[int], shapes: Sequence[tuple[int, ...]]) -> None:
         self.blocks = list(blocks)
         self._pos = {b: i for i, b in enumerate(self.blocks)}
-        self._block_len = array.block_len
-        self._slot = self._block_len * (1 + N_PADS * 3) * 8  # times, then moments, float64
+        self._shapes = [tuple(sh) for sh in shapes]
+        sizes = [int(np.prod(sh)) * 8 for sh in self._shapes]
+        self._offsets = [sum(sizes[:i]) for i in range(len(sizes))]
+        self._slot = sum(sizes)
         self._map = mmap.mmap(-1, SLOTS * self._slot)
         done_r, done_w = os.pipe()
         free_r, free_w = os.pipe()
@@ -84,7 +85,7 @@ class RenderAhead:
             try:
                 os.close(done_r)
                 os.close(free_w)
-                _work(array, self.blocks, self._map, self._slot, done_w, free_r)
+                _work(render, self.blocks, self._map, self._slot, done_w, free_r)
                 code = 0
             finally:
                 os._exit(code)
@@ -95,19 +96,21 @@ class RenderAhead:
         self._free = free_w
         self._buf = b""
         #: blocks received and not yet taken, by block
-        self._got: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._got: dict[int, tuple[np.ndarray, ...]] = {}
         #: plan position of the last block received (-1: none yet)
         self._last = -1
         #: blocks the simulation took from the worker / rendered itself though planned
         self.taken = 0
         self.missed = 0
+        #: wall seconds the simulation waited for the worker
+        self.waited_s = 0.0
 
     @property
     def alive(self) -> bool:
         return self.pid is not None
 
-    def take(self, block: int) -> tuple[np.ndarray, np.ndarray] | None:
-        """Times and moments of ``block`` from the worker, or None (render it here)."""
+    def take(self, block: int) -> tuple[np.ndarray, ...] | None:
+        """The arrays of ``block`` from the worker, or None (render it here)."""
         hit = self._got.pop(block, None)
         if hit is not None:
             self.taken += 1
@@ -132,7 +135,9 @@ class RenderAhead:
     def _receive(self) -> None:
         """Read the worker's next messages (waiting up to ``STALL_S``), copy their blocks out of
         their slots and give the slots back."""
+        t0 = time.perf_counter()
         ready, _, _ = select.select([self._done], [], [], STALL_S)
+        self.waited_s += time.perf_counter() - t0
         chunk = os.read(self._done, 64 * _MSG.size) if ready else b""
         if not chunk:  # gone, or stalled: render here from now on
             self.close()
@@ -143,11 +148,11 @@ class RenderAhead:
         for i in range(n):
             block, slot = _MSG.unpack_from(self._buf, i * _MSG.size)
             base = slot * self._slot
-            t = np.frombuffer(self._map, np.float64, self._block_len, base).copy()
-            mom = np.frombuffer(self._map, np.float64, self._block_len * N_PADS * 3, base + self._block_len * 8).reshape(self._block_len, N_PADS, 3).copy()
+            self._got[block] = tuple(
+                np.frombuffer(self._map, np.float64, int(np.prod(sh)), base + off).reshape(sh).copy() for sh, off in zip(self._shapes, self._offsets)
+            )
             freed.append(_MSG.pack(slot, -1))
             self._last = self._pos[block]
-            self._got[block] = (t, mom)
         self._buf = self._buf[n * _MSG.size :]
         self._tell(b"".join(freed))
         if len(self._got) > 2 * SLOTS:  # blocks the simulation went past without taking
@@ -179,11 +184,10 @@ class RenderAhead:
         self._map.close()
 
 
-def _work(array: "TactileArray", blocks: list[int], shared: mmap.mmap, slot_bytes: int, done: int, free: int) -> None:
+def _work(render: Callable[[list[int]], Sequence[Sequence[np.ndarray]]], blocks: list[int], shared: mmap.mmap, slot_bytes: int, done: int, free: int) -> None:
     """The worker's loop: render ``blocks`` in groups of neighbours, each block into a free
     slot; between groups, take back freed slots and skip to a block the simulation asks for."""
     free_slots = list(range(SLOTS))
-    n_len = array.block_len
     buf = b""
     i = 0
 
@@ -213,12 +217,14 @@ def _work(array: "TactileArray", blocks: list[int], shared: mmap.mmap, slot_byte
             j += 1
         group = blocks[i:j]
         i = j
-        for b, (t, mom, _fr) in zip(group, array.render_here(group, False)):
+        for b, arrays in zip(group, render(group)):
             while not free_slots:
                 if not read(True):
                     return
             slot = free_slots.pop()
-            base = slot * slot_bytes
-            shared[base : base + n_len * 8] = t.tobytes()
-            shared[base + n_len * 8 : base + slot_bytes] = mom.tobytes()
+            at = slot * slot_bytes
+            for a in arrays:
+                data = np.ascontiguousarray(a, dtype=np.float64).tobytes()
+                shared[at : at + len(data)] = data
+                at += len(data)
             os.write(done, _MSG.pack(b, slot))

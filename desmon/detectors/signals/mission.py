@@ -111,6 +111,22 @@ class MissionSignals:
         self.wrench_sensor = WrenchSensor(self.seed, config, self.segments, seg_params, drawn, self.faults, params)
         self.tactile_array = TactileArray(self.seed, with_slips(episodes, drawn), self.faults, params)
 
+    def start_ahead(self) -> None:
+        """Render the tactile frames and the wrench ahead, each in a forked worker
+        (:mod:`desmon.detectors.signals.ahead`); the samples are the same bytes either way."""
+        self.tactile_array.start_ahead()
+        self.wrench_sensor.start_ahead()
+
+    def stop_ahead(self) -> None:
+        """Stop the workers rendering ahead (if any); from then on every sample is rendered here."""
+        self.tactile_array.stop_ahead()
+        self.wrench_sensor.stop_ahead()
+
+    @property
+    def ahead_taken(self) -> int:
+        """Blocks (tactile and wrench) taken from workers rendering ahead so far."""
+        return self.tactile_array.ahead_taken + self.wrench_sensor.ahead_taken
+
     @property
     def end_time(self) -> float:
         """End of the last segment."""

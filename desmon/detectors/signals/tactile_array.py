@@ -502,8 +502,6 @@ def _contact_rows(t: Arr, units: list[tuple[int, int, int]], episodes: Sequence[
 class TactileArray:
     """Deterministic tactile frames of one mission (see the module docstring)."""
 
-    #: frames per block (what a worker rendering ahead writes per slot)
-    block_len: Final = TACTILE_BLOCK
 
     def __init__(self, seed: int, episodes: Sequence[Episode], faults: Sequence[SensorFault], params: SignalParams) -> None:
         self.seed = seed
@@ -574,8 +572,13 @@ class TactileArray:
         """Fork a worker that renders this array's episode blocks ahead (stop it with
         :meth:`stop_ahead`); blocks of frames are then taken from it where it has them."""
         self.stop_ahead()
-        self._ahead = RenderAhead(self, self.ahead_blocks())
+        B = TACTILE_BLOCK
+        self._ahead = RenderAhead(self._render_ahead, self.ahead_blocks(), [(B,), (B, N_PADS, 3)])
         return self._ahead
+
+    def _render_ahead(self, group: list[int]) -> list[tuple[Arr, Arr]]:
+        """A worker's render of neighbouring blocks: their frame times and moments."""
+        return [(t, mom) for t, mom, _fr in self.render_here(group, False)]
 
     def stop_ahead(self) -> None:
         """Stop the worker rendering ahead, if one runs; from then on every block is rendered here."""

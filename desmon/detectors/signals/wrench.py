@@ -18,6 +18,7 @@ from typing import Final, Sequence
 
 import numpy as np
 
+from desmon.detectors.signals.ahead import RenderAhead
 from desmon.detectors.signals.common import Arr, Params, Segment, SensorFault, SignalParams, WrenchBlock, WrenchSource, wrench_indices
 from desmon.detectors.signals.contexts import context_force
 from desmon.detectors.signals.noise import STREAM_WRENCH, WRENCH_BLOCK, BlockStream, wrench_noise
@@ -83,15 +84,56 @@ class WrenchSensor:
         self._slip_spans = tuple((float(sl.t_s[0]) - 1.5, float(sl.t_s[0]) + 2.0, sl) for sl in self.slips)
         #: per segment: whether it adds a force (hold and idle add none)
         self._forceful = tuple(s.context not in (HOLD, IDLE) for s in self.segments)
+        #: the worker rendering ahead, while one runs (:meth:`start_ahead`)
+        self._ahead: RenderAhead | None = None
+        #: blocks taken from workers rendering ahead, over this sensor's life
+        self.ahead_taken = 0
+
+    # ------------------------------------------------------------------ rendering ahead
+    def ahead_blocks(self) -> list[int]:
+        """The blocks up to the end of the last segment: what a worker rendering ahead renders
+        (:mod:`desmon.detectors.signals.ahead`)."""
+        end = float(self._seg_ends.max()) if self._seg_ends.size else 0.0
+        return list(range(int(end * self.rate) // WRENCH_BLOCK + 1))
+
+    def start_ahead(self) -> RenderAhead:
+        """Fork a worker that renders this sensor's blocks ahead (stop it with :meth:`stop_ahead`)."""
+        self.stop_ahead()
+        self._ahead = RenderAhead(self._render_ahead, self.ahead_blocks(), [(WRENCH_BLOCK,)])
+        return self._ahead
+
+    def stop_ahead(self) -> None:
+        """Stop the worker rendering ahead, if one runs; from then on every block is rendered here."""
+        ahead, self._ahead = self._ahead, None
+        if ahead is not None:
+            ahead.close()
+            self.ahead_taken += ahead.taken
+
+    def _render_ahead(self, group: list[int]) -> list[tuple[Arr]]:
+        """A worker's render of whole blocks."""
+        return [(self._render(b, b * WRENCH_BLOCK, (b + 1) * WRENCH_BLOCK),) for b in group]
+
+    def _cached(self, b: int) -> Arr | None:
+        """Block ``b`` if cached or rendered ahead (then cached), else None."""
+        hit = self._cache.get(b)
+        if hit is None and self._ahead is not None:
+            got = self._ahead.take(b)
+            if got is not None:
+                hit = got[0]
+                self._keep(b, hit)
+        return hit
+
+    def _keep(self, b: int, values: Arr) -> None:
+        if len(self._cache) >= WRENCH_CACHE:
+            del self._cache[next(iter(self._cache))]
+        self._cache[b] = values
 
     def _block(self, b: int) -> Arr:
-        hit = self._cache.get(b)
+        hit = self._cached(b)
         if hit is not None:
             return hit
         out = self._render(b, b * WRENCH_BLOCK, (b + 1) * WRENCH_BLOCK)
-        if len(self._cache) >= WRENCH_CACHE:
-            del self._cache[next(iter(self._cache))]
-        self._cache[b] = out
+        self._keep(b, out)
         return out
 
     def _render(self, b: int, k0: int, k1: int) -> Arr:
@@ -129,7 +171,7 @@ class WrenchSensor:
         parts = []
         for b in range(k0 // B, (k1 - 1) // B + 1):
             lo, hi = max(k0, b * B), min(k1, (b + 1) * B)
-            hit = self._cache.get(b)
+            hit = self._cached(b)
             parts.append(hit[lo - b * B : hi - b * B].copy() if hit is not None else self._render(b, lo, hi))
         return parts[0] if len(parts) == 1 else np.concatenate(parts)
 
@@ -141,7 +183,7 @@ class WrenchSensor:
         if k.ndim == 1 and int(k[-1]) - int(k[0]) + 1 == k.size and bool((k[1:] > k[:-1]).all()):
             return self._span(int(k[0]), int(k[-1]) + 1)
         b0 = int(k[0]) // WRENCH_BLOCK
-        if k.ndim == 1 and int(k[-1]) // WRENCH_BLOCK == b0 and int(k.min()) // WRENCH_BLOCK == b0:
+        if k.ndim == 1 and int(k.max()) // WRENCH_BLOCK == b0 and int(k.min()) // WRENCH_BLOCK == b0:
             return self._block(b0)[k - b0 * WRENCH_BLOCK]
         blocks = k // WRENCH_BLOCK
         for b in np.unique(blocks):
