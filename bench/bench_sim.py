@@ -3,12 +3,18 @@
 What it runs and prints, for one seed (``--seed``, default 0) and one horizon (``--until``,
 default the scenario's 8 h day, 28,800 simulated s):
 
-* the day with signals and detectors on: wall seconds of ``SimWorld.run`` (the scenario
-  loaded and the world built beforehand, not counted), simulated seconds per wall second
-  (``x_real_time``), the SimPy events it stepped and the sensor samples it read;
+* the day with signals and detectors on, as a user runs it: wall seconds of
+  ``SimWorld.run`` (the scenario loaded and the world built beforehand, not counted),
+  simulated seconds per wall second (``x_real_time``), the SimPy events it stepped and
+  the sensor samples it read. Where desmon forks workers that render the tactile frames
+  and the wrench ahead (``render_ahead`` automatic: Linux, 2+ cores, one thread; docs/design.md,
+  "Rendering ahead"), it does so here too: the line says so, with the blocks taken from
+  them (``ahead_blocks``) and the CPU seconds of this process and the workers (``cpu_s``);
 * the bare SimPy cost of the same event count: one ``env.timeout`` per event on an empty
   ``simpy.Environment``, the fastest of 21 runs (below), and the ratio of the full run's wall time
   to it (``ratio_bare``: a ratio, so it carries over to a slower machine);
+* the same day rendered in this process alone (``render_ahead=False``: ``serial_s`` and
+  ``serial_ratio_bare``), the same bytes;
 * the same day with signals off (``signals_off_s``): the deployment core, the repository,
   the audit of the invariants after every reaction, the infrastructure and SimPy only.
 
@@ -18,7 +24,8 @@ printed ``met`` or ``NOT met``; with a shorter ``--until`` (``--quick``: the fir
 the figures are printed but not judged.
 
 The last line is ``RESULT x_real_time=<float> ratio_bare=<float> signals_off_s=<float>
-wall_s=<float> bare_s=<float> events=<int> until_s=<float>``.
+wall_s=<float> bare_s=<float> events=<int> until_s=<float> serial_s=<float>
+serial_ratio_bare=<float> cpu_s=<float> ahead_blocks=<int>``.
 
 The bare figure is the fastest of 21 runs, measured with the finished day's objects frozen
 out of the garbage collector's scans: before, a full collection over the day's heap could
@@ -48,11 +55,11 @@ same day, signals off                   1.11 s (0.99-1.40)         0.94 s (0.74-
 process per run, 7 pairs, CPU seconds): the day 4.34 s against 3.53 s (0.78, range
 0.70-0.99), signals off 1.19 s against 0.97 s (0.79).
 
-The goal of at most 100x the bare SimPy cost is not met: 100x asks for a 2 s day. 5,000x
-real time and signals off under 1.5 s hold, by a margin. Later rounds of issue 27 brought
-the day to 123-139x in three runs of ``python -m bench.bench_sim`` (fifth round);
-docs/findings.md ("What 100x bare SimPy would take") says what is left and why numpy
-alone does not reach 100x.
+The goal of at most 100x the bare SimPy cost was not met by that round: 100x asks for a
+2 s day. 5,000x real time and signals off under 1.5 s hold, by a margin. Later rounds of
+issue 27 brought the day to 123-139x in three runs of ``python -m bench.bench_sim``
+(fifth round); the sixth renders the signals ahead on the second core and meets it:
+docs/findings.md ("How the day reached 100x bare SimPy") has the figures, both ways.
 
 Where the time goes (py-spy of the day, this revision; shares of ``SimWorld.run``):
 rendering tactile frames 41 % (the per-cell standard normals, about 20.7 M a day drawn

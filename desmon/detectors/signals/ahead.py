@@ -10,10 +10,11 @@ renders it itself when the worker has not got there (a request far ahead makes t
 worker skip to it), has passed it or is gone. Who rendered a block never changes a byte:
 tests compare whole runs with and without the worker.
 
-The worker runs while the simulation does, on a second core: the render is about a third
-of a robot day with signals on (``python -m bench.bench_sim`` prints the day both ways).
-It is a plain ``os.fork`` with one shared map and two pipes; :func:`fork_safe` says when
-desmon uses it unasked (Linux, two cores or more, no other thread in the process).
+The worker runs while the simulation does, on another core: the tactile render alone is
+about a third of the robot day with signals on (``python -m bench.bench_sim`` prints the
+day both ways). It is a plain ``os.fork`` with one shared map and two pipes;
+:func:`fork_safe` says when desmon uses it unasked (Linux, two cores or more, no other
+thread in the process).
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ _MSG: Final = struct.Struct("<qq")  # worker -> simulation: (block, slot); simul
 
 
 #: Seconds of object in hand from which a run renders ahead unasked (a fork costs a few
-#: milliseconds; the render of 5 minutes of holding, about 0.1 s).
+#: milliseconds, less than rendering 5 minutes of holding).
 AHEAD_MIN_S: Final = 300.0
 
 
