@@ -74,10 +74,12 @@ class RenderAhead:
         self.blocks = list(blocks)
         self._pos = {b: i for i, b in enumerate(self.blocks)}
         self._shapes = [tuple(sh) for sh in shapes]
-        sizes = [int(np.prod(sh)) * 8 for sh in self._shapes]
-        self._offsets = [sum(sizes[:i]) for i in range(len(sizes))]
-        self._slot = sum(sizes)
+        counts = [int(np.prod(sh)) for sh in self._shapes]
+        #: per array of a block: (first float, one past its last float, shape) within a slot
+        self._parts = [(sum(counts[:i]), sum(counts[: i + 1]), sh) for i, sh in enumerate(self._shapes)]
+        self._slot = sum(counts) * 8
         self._map = mmap.mmap(-1, SLOTS * self._slot)
+        self._floats = np.frombuffer(self._map, np.float64)
         done_r, done_w = os.pipe()
         free_r, free_w = os.pipe()
         pid = os.fork()
@@ -148,10 +150,9 @@ class RenderAhead:
         freed = []
         for i in range(n):
             block, slot = _MSG.unpack_from(self._buf, i * _MSG.size)
-            base = slot * self._slot
-            self._got[block] = tuple(
-                np.frombuffer(self._map, np.float64, int(np.prod(sh)), base + off).reshape(sh).copy() for sh, off in zip(self._shapes, self._offsets)
-            )
+            base = slot * (self._slot // 8)
+            floats = self._floats
+            self._got[block] = tuple(floats[base + lo : base + hi].reshape(sh).copy() for lo, hi, sh in self._parts)
             freed.append(_MSG.pack(slot, -1))
             self._last = self._pos[block]
         self._buf = self._buf[n * _MSG.size :]
@@ -182,6 +183,7 @@ class RenderAhead:
         except ProcessLookupError:
             pass
         os.waitpid(pid, 0)
+        del self._floats  # the map closes once no array views it
         self._map.close()
 
 
