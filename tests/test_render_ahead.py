@@ -148,7 +148,7 @@ def test_a_run_is_the_same_bytes_with_and_without_the_worker() -> None:
 def test_automatic_rendering_ahead_needs_a_long_run_and_a_lone_thread() -> None:
     sc = load_scenario(ROOT / "scenarios" / "robot_day.py")
     assert SimWorld(sc, until=7200.0)._ahead_wanted() is ahead.fork_safe()
-    assert not SimWorld(sc, until=60.0)._ahead_wanted()  # under AHEAD_MIN_S of object in hand
+    assert not SimWorld(sc, until=1500.0)._ahead_wanted()  # 962 s of object in hand: under AHEAD_MIN_S
     assert not SimWorld(sc, until=7200.0, render_ahead=False)._ahead_wanted()
     assert not SimWorld(sc, until=7200.0, signals=False, render_ahead=True)._ahead_wanted()  # nothing to render
     stop = threading.Event()

@@ -55,7 +55,7 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument(
         "--render-ahead", choices=("auto", "on", "off"), default="auto",
         help="render the tactile frames in a second process while the run goes on; the run's output is the same "
-        "either way (auto: on Linux with 2+ cores for runs with 5 min or more of object in hand)",
+        "either way (auto: on Linux with 2+ cores for runs with 20 min or more of object in hand)",
     )
     add_output(
         p, "--plot", suffixes=(".png",), default=None, metavar="FILE.png",

@@ -38,6 +38,7 @@ from desmon.deployment.ports import ErrorRecord
 from desmon.deployment.validity import PlatformMemoChecks
 from desmon.detectors.base import Alarm
 from desmon.detectors.signals.ahead import AHEAD_MIN_S, check_render_ahead, fork_safe
+from desmon.detectors.signals.tactile_array import holding_seconds
 from desmon.model.scenario import Scenario
 from desmon.repository import labels as L
 from desmon.repository.facts import load_model
@@ -192,8 +193,7 @@ class SimWorld:
             return False
         if self.render_ahead:
             return True
-        arr = bank.signals.tactile_array
-        return fork_safe() and min(arr.episode_seconds(), self.horizon) >= AHEAD_MIN_S
+        return fork_safe() and holding_seconds(bank.signals.tactile_array.episodes, self.horizon) >= AHEAD_MIN_S
 
     def run(self) -> RunResult:
         parts = self.parts

@@ -43,9 +43,10 @@ STALL_S: Final = 20.0
 _MSG: Final = struct.Struct("<qq")  # worker -> simulation: (block, slot); simulation -> worker: (slot, seek block)
 
 
-#: Seconds of object in hand from which a run renders ahead unasked (a fork costs a few
-#: milliseconds, less than rendering 5 minutes of holding).
-AHEAD_MIN_S: Final = 300.0
+#: Seconds of object in hand from which a run renders ahead unasked: a short run pays the
+#: forks and the wait for the first blocks and gains little (``python -m bench.bench_sim
+#: --until 2400`` prints a run of 26 minutes of holding both ways).
+AHEAD_MIN_S: Final = 1200.0
 
 
 def check_render_ahead(value: object) -> bool | None:
@@ -212,12 +213,14 @@ def _work(render: Callable[[list[int]], Sequence[Sequence[np.ndarray]]], blocks:
         buf = buf[n * _MSG.size :]
         return True
 
+    size = 1  # groups grow from one block to GROUP: the first block comes soon
     while i < len(blocks):
         if not read(False):
             return
         j = i + 1
-        while j < len(blocks) and j - i < GROUP and blocks[j] == blocks[j - 1] + 1:
+        while j < len(blocks) and j - i < size and blocks[j] == blocks[j - 1] + 1:
             j += 1
+        size = min(2 * size, GROUP)
         group = blocks[i:j]
         i = j
         for b, arrays in zip(group, render(group)):

@@ -499,6 +499,22 @@ def _contact_rows(t: Arr, units: list[tuple[int, int, int]], episodes: Sequence[
     return _Rows(frame, pad, idx, r[0], r[1], r[2], r[3], r[4])
 
 
+def episode_blocks(episodes: Sequence[Episode], rate: float, clip: float) -> list[int]:
+    """The tactile blocks holding frames of the ``episodes`` (frame ``k`` at ``k / rate`` give or
+    take ``clip`` s), ascending."""
+    out: set[int] = set()
+    for ep in episodes:
+        k0 = max(int(math.floor((ep.start - clip) * rate)), 0)
+        k1 = max(int(math.ceil((ep.end + clip) * rate)), k0)
+        out.update(range(k0 // TACTILE_BLOCK, k1 // TACTILE_BLOCK + 1))
+    return sorted(out)
+
+
+def holding_seconds(episodes: Sequence[Episode], until: float) -> float:
+    """Seconds with an object in the hand before ``until`` (the episodes cut there)."""
+    return float(sum(max(0.0, min(ep.end, until) - ep.start) for ep in episodes))
+
+
 class TactileArray:
     """Deterministic tactile frames of one mission (see the module docstring)."""
 
@@ -556,17 +572,7 @@ class TactileArray:
     def ahead_blocks(self) -> list[int]:
         """The blocks with frames of an object-in-hand episode, ascending: what a worker
         rendering ahead renders (:mod:`desmon.detectors.signals.ahead`)."""
-        B, clip, rate = TACTILE_BLOCK, self.params.tactile_jitter_clip, self.rate
-        out: set[int] = set()
-        for ep in self.episodes:
-            k0 = max(int(math.floor((ep.start - clip) * rate)), 0)
-            k1 = max(int(math.ceil((ep.end + clip) * rate)), k0)
-            out.update(range(k0 // B, k1 // B + 1))
-        return sorted(out)
-
-    def episode_seconds(self) -> float:
-        """Seconds of the mission with an object in the hand (the episodes' total length)."""
-        return float(sum(ep.end - ep.start for ep in self.episodes))
+        return episode_blocks(self.episodes, self.rate, self.params.tactile_jitter_clip)
 
     def start_ahead(self) -> RenderAhead:
         """Fork a worker that renders this array's episode blocks ahead (stop it with
