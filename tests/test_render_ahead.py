@@ -186,3 +186,14 @@ def test_cli_render_ahead_is_checked_and_changes_no_output(tmp_path: Path) -> No
         capture_output=True, text=True, cwd=ROOT, timeout=300,
     )
     assert fleet.returncode == 2 and "drop --render-ahead" in fleet.stderr and "Traceback" not in fleet.stderr
+
+
+def test_a_refused_fork_leaves_the_run_to_render_alone(monkeypatch: pytest.MonkeyPatch) -> None:
+    def refuse() -> int:
+        raise BlockingIOError(11, "Resource temporarily unavailable")
+
+    fast, ref = _pair()
+    monkeypatch.setattr(os, "fork", refuse)
+    fast.start_ahead()  # no worker, no error
+    assert fast.tactile_array._ahead is None and fast.wrench_sensor._ahead is None
+    assert _same(fast.tactile(10.0, 60.0), ref.tactile(10.0, 60.0))

@@ -54,7 +54,7 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--no-signals", action="store_true", help="simulate no sensor signals (exposure counts running, ready detectors)")
     p.add_argument(
         "--render-ahead", choices=("auto", "on", "off"), default="auto",
-        help="render the tactile frames in a second process while the run goes on; the run's output is the same "
+        help="render the tactile frames and the wrench in forked workers while the run goes on; the output is the same "
         "either way (auto: on Linux with 2+ cores for runs with 20 min or more of object in hand)",
     )
     add_output(

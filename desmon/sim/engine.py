@@ -93,9 +93,9 @@ class SimWorld:
         render_ahead: bool | None = None,
     ) -> None:
         self.scenario = scenario
-        #: render the tactile frames in a second process while the run goes on (True, False;
-        #: None: where :func:`~desmon.detectors.signals.ahead.fork_safe` holds and the run has
-        #: at least ``AHEAD_MIN_S`` of object in hand); the run's bytes are the same either way
+        #: render the tactile frames and the wrench in forked workers while the run goes on
+        #: (True, False; None: where :func:`~desmon.detectors.signals.ahead.fork_safe` holds and
+        #: the run has at least ``AHEAD_MIN_S`` of object in hand); the same bytes either way
         self.render_ahead = check_render_ahead(render_ahead)
         #: called with this world at every quiescent point, after its audit (a conformance
         #: harness compares the world there with the checker's state; None: nobody asks)
@@ -187,7 +187,7 @@ class SimWorld:
             trace.emit(s.time, "slip", direction=s.direction, kind=s.kind)
 
     def _ahead_wanted(self) -> bool:
-        """Whether this run renders its tactile frames ahead in a second process (``render_ahead``)."""
+        """Whether this run renders its signals ahead in forked workers (``render_ahead``)."""
         bank = self.bank
         if bank is None or self.render_ahead is False:
             return False

@@ -1,20 +1,19 @@
-"""Rendering ahead: a tactile array's blocks of frames rendered in a second process.
+"""Rendering ahead: a stream's blocks of samples rendered in a second process.
 
-A tactile block's frames depend only on the seed and the block number
-(:mod:`desmon.detectors.signals.tactile_array`), so another process can render them
-before they are asked for and hand over the very bytes the simulation would have made.
-:class:`RenderAhead` forks one worker that renders the blocks of every object-in-hand
-episode in time order into slots of a shared memory map and says which block lies in
-which slot over a pipe; the simulation takes a block from there when it asks for it, or
-renders it itself when the worker has not got there (a request far ahead makes the
-worker skip to it), has passed it or is gone. Who rendered a block never changes a byte:
-tests compare whole runs with and without the worker.
+A block of samples (256 tactile frames, 1,024 wrench samples) depends only on the seed and
+the block number (:mod:`desmon.detectors.signals.noise`), so another process can render it
+before it is asked for and hand over the very bytes the simulation would have made.
+:class:`RenderAhead` forks one worker that renders a plan of blocks in time order into
+slots of a shared memory map and says which block lies in which slot over a pipe; the
+simulation takes a block from there when it asks for it, or renders it itself when the
+worker has not got there (a request far ahead makes the worker skip to it), has passed it
+or is gone. Who rendered a block never changes a byte: tests compare requests and whole
+runs with and without the workers.
 
-The worker runs while the simulation does, on another core: the tactile render alone is
-about a third of the robot day with signals on (``python -m bench.bench_sim`` prints the
-day both ways). It is a plain ``os.fork`` with one shared map and two pipes;
-:func:`fork_safe` says when desmon uses it unasked (Linux, two cores or more, no other
-thread in the process).
+The workers run while the simulation does, on the other cores (``python -m
+bench.bench_sim`` prints the robot day both ways). Each is a plain ``os.fork`` with one
+shared map and two pipes; :func:`fork_safe` says when desmon forks them unasked (Linux,
+two cores or more for this process, no other thread in it).
 """
 
 from __future__ import annotations
@@ -62,8 +61,9 @@ def check_render_ahead(value: object) -> bool | None:
 def fork_safe() -> bool:
     """Whether a worker may be forked without being asked for: Linux (``os.fork`` of a process
     whose only thread is this one cannot inherit a lock another thread held) with at least
-    two cores (on one, the worker would only take turns with the simulation)."""
-    return sys.platform.startswith("linux") and (os.cpu_count() or 1) >= 2 and threading.active_count() == 1
+    two cores this process may run on (on one, the worker would only take turns with the
+    simulation)."""
+    return sys.platform.startswith("linux") and len(os.sched_getaffinity(0)) >= 2 and threading.active_count() == 1
 
 
 class RenderAhead:
@@ -80,10 +80,15 @@ class RenderAhead:
         self._parts = [(sum(counts[:i]), sum(counts[: i + 1]), sh) for i, sh in enumerate(self._shapes)]
         self._slot = sum(counts) * 8
         self._map = mmap.mmap(-1, SLOTS * self._slot)
-        self._floats = np.frombuffer(self._map, np.float64)
         done_r, done_w = os.pipe()
         free_r, free_w = os.pipe()
-        pid = os.fork()
+        try:
+            pid = os.fork()
+        except OSError:  # no process to be had: the caller renders alone
+            for fd in (done_r, done_w, free_r, free_w):
+                os.close(fd)
+            self._map.close()
+            raise
         if pid == 0:  # the worker: renders, never returns
             code = 1
             try:
@@ -95,6 +100,7 @@ class RenderAhead:
                 os._exit(code)
         os.close(done_w)
         os.close(free_r)
+        self._floats = np.frombuffer(self._map, np.float64)
         self.pid: int | None = pid
         self._done = done_r
         self._free = free_w

@@ -113,9 +113,13 @@ class MissionSignals:
 
     def start_ahead(self) -> None:
         """Render the tactile frames and the wrench ahead, each in a forked worker
-        (:mod:`desmon.detectors.signals.ahead`); the samples are the same bytes either way."""
-        self.tactile_array.start_ahead()
-        self.wrench_sensor.start_ahead()
+        (:mod:`desmon.detectors.signals.ahead`); the samples are the same bytes either way.
+        A stream whose worker cannot be forked (the system refuses a process) renders here."""
+        for stream in (self.tactile_array, self.wrench_sensor):
+            try:
+                stream.start_ahead()
+            except OSError:
+                pass
 
     def stop_ahead(self) -> None:
         """Stop the workers rendering ahead (if any); from then on every sample is rendered here."""

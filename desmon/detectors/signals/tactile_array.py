@@ -518,7 +518,6 @@ def holding_seconds(episodes: Sequence[Episode], until: float) -> float:
 class TactileArray:
     """Deterministic tactile frames of one mission (see the module docstring)."""
 
-
     def __init__(self, seed: int, episodes: Sequence[Episode], faults: Sequence[SensorFault], params: SignalParams) -> None:
         self.seed = seed
         self.episodes = tuple(episodes)
