@@ -195,5 +195,5 @@ def test_a_refused_fork_leaves_the_run_to_render_alone(monkeypatch: pytest.Monke
     fast, ref = _pair()
     monkeypatch.setattr(os, "fork", refuse)
     fast.start_ahead()  # no worker, no error
-    assert fast.tactile_array._ahead is None and fast.wrench_sensor._ahead is None
+    assert fast.tactile_array.ahead.worker is None and fast.wrench_sensor.ahead.worker is None
     assert _same(fast.tactile(10.0, 60.0), ref.tactile(10.0, 60.0))

@@ -194,6 +194,34 @@ class RenderAhead:
         self._map.close()
 
 
+class Ahead:
+    """A stream's worker rendering ahead (``worker``, while one runs) and the blocks taken from
+    its workers so far (``taken``): what a sensor keeps of :class:`RenderAhead`."""
+
+    __slots__ = ("worker", "taken")
+
+    def __init__(self) -> None:
+        self.worker: RenderAhead | None = None
+        self.taken = 0
+
+    def start(self, render: Callable[[list[int]], Sequence[Sequence[np.ndarray]]], blocks: Sequence[int], shapes: Sequence[tuple[int, ...]]) -> RenderAhead:
+        """Stop any worker, then fork one (:class:`RenderAhead`); an ``OSError`` of the fork passes through."""
+        self.stop()
+        self.worker = RenderAhead(render, blocks, shapes)
+        return self.worker
+
+    def stop(self) -> None:
+        """Stop the worker, if one runs, and count what was taken from it."""
+        worker, self.worker = self.worker, None
+        if worker is not None:
+            worker.close()
+            self.taken += worker.taken
+
+    def take(self, block: int) -> tuple[np.ndarray, ...] | None:
+        """The arrays of ``block`` from the worker, or None (no worker, or render it here)."""
+        return None if self.worker is None else self.worker.take(block)
+
+
 def _work(render: Callable[[list[int]], Sequence[Sequence[np.ndarray]]], blocks: list[int], shared: mmap.mmap, slot_bytes: int, done: int, free: int) -> None:
     """The worker's loop: render ``blocks`` in groups of neighbours, each block into a free
     slot; between groups, take back freed slots and skip to a block the simulation asks for."""

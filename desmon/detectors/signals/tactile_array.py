@@ -37,7 +37,7 @@ from desmon.detectors.signals.common import (
     TactileBlock,
     tactile_nominal_indices,
 )
-from desmon.detectors.signals.ahead import RenderAhead
+from desmon.detectors.signals.ahead import Ahead, RenderAhead
 from desmon.detectors.signals.contexts import context_tactile, hold_creep, move_base_tactile
 from desmon.detectors.signals.episodes import Episode
 from desmon.detectors.signals.noise import STREAM_TACTILE, BlockStream, Jitter, tactile_normals
@@ -529,10 +529,8 @@ class TactileArray:
         self._ep_starts = [float(ep.start) for ep in self.episodes]
         self._cache: dict[tuple[int, bool], Rendered] = {}
         self._scratch = _Scratch()
-        #: the worker rendering ahead, while one runs (:meth:`start_ahead`)
-        self._ahead: RenderAhead | None = None
-        #: blocks taken from workers rendering ahead, over this array's life
-        self.ahead_taken = 0
+        #: the worker rendering ahead, while one runs (:meth:`start_ahead`), and what it gave
+        self.ahead = Ahead()
         #: frame times ascend (jitter under half a frame period): a span of times is a run of frames
         self._ordered = 2.0 * params.tactile_jitter_clip < 1.0 / params.tactile_rate
 
@@ -576,10 +574,7 @@ class TactileArray:
     def start_ahead(self) -> RenderAhead:
         """Fork a worker that renders this array's episode blocks ahead (stop it with
         :meth:`stop_ahead`); blocks of frames are then taken from it where it has them."""
-        self.stop_ahead()
-        B = TACTILE_BLOCK
-        self._ahead = RenderAhead(self._render_ahead, self.ahead_blocks(), [(B,), (B, N_PADS, 3)])
-        return self._ahead
+        return self.ahead.start(self._render_ahead, self.ahead_blocks(), [(TACTILE_BLOCK,), (TACTILE_BLOCK, N_PADS, 3)])
 
     def _render_ahead(self, group: list[int]) -> list[tuple[Arr, Arr]]:
         """A worker's render of neighbouring blocks: their frame times and moments."""
@@ -587,15 +582,17 @@ class TactileArray:
 
     def stop_ahead(self) -> None:
         """Stop the worker rendering ahead, if one runs; from then on every block is rendered here."""
-        ahead, self._ahead = self._ahead, None
-        if ahead is not None:
-            ahead.close()
-            self.ahead_taken += ahead.taken
+        self.ahead.stop()
+
+    @property
+    def ahead_taken(self) -> int:
+        """Blocks taken from workers rendering ahead, over this array's life."""
+        return self.ahead.taken
 
     def render_blocks(self, blocks: Sequence[int], frames: bool) -> list[Rendered]:
         """:meth:`render_here`, with the blocks a worker rendering ahead has taken from it (the
         same bytes; full frames are always rendered here)."""
-        ahead = self._ahead
+        ahead = self.ahead.worker
         if ahead is None or frames:
             return self.render_here(blocks, frames)
         got = [ahead.take(int(b)) for b in blocks]

@@ -18,7 +18,7 @@ from typing import Final, Sequence
 
 import numpy as np
 
-from desmon.detectors.signals.ahead import RenderAhead
+from desmon.detectors.signals.ahead import Ahead, RenderAhead
 from desmon.detectors.signals.common import Arr, Params, Segment, SensorFault, SignalParams, WrenchBlock, WrenchSource, wrench_indices
 from desmon.detectors.signals.contexts import context_force
 from desmon.detectors.signals.noise import STREAM_WRENCH, WRENCH_BLOCK, BlockStream, wrench_noise
@@ -84,10 +84,8 @@ class WrenchSensor:
         self._slip_spans = tuple((float(sl.t_s[0]) - 1.5, float(sl.t_s[0]) + 2.0, sl) for sl in self.slips)
         #: per segment: whether it adds a force (hold and idle add none)
         self._forceful = tuple(s.context not in (HOLD, IDLE) for s in self.segments)
-        #: the worker rendering ahead, while one runs (:meth:`start_ahead`)
-        self._ahead: RenderAhead | None = None
-        #: blocks taken from workers rendering ahead, over this sensor's life
-        self.ahead_taken = 0
+        #: the worker rendering ahead, while one runs (:meth:`start_ahead`), and what it gave
+        self.ahead = Ahead()
 
     # ------------------------------------------------------------------ rendering ahead
     def ahead_blocks(self) -> list[int]:
@@ -98,16 +96,16 @@ class WrenchSensor:
 
     def start_ahead(self) -> RenderAhead:
         """Fork a worker that renders this sensor's blocks ahead (stop it with :meth:`stop_ahead`)."""
-        self.stop_ahead()
-        self._ahead = RenderAhead(self._render_ahead, self.ahead_blocks(), [(WRENCH_BLOCK,)])
-        return self._ahead
+        return self.ahead.start(self._render_ahead, self.ahead_blocks(), [(WRENCH_BLOCK,)])
 
     def stop_ahead(self) -> None:
         """Stop the worker rendering ahead, if one runs; from then on every block is rendered here."""
-        ahead, self._ahead = self._ahead, None
-        if ahead is not None:
-            ahead.close()
-            self.ahead_taken += ahead.taken
+        self.ahead.stop()
+
+    @property
+    def ahead_taken(self) -> int:
+        """Blocks taken from workers rendering ahead, over this sensor's life."""
+        return self.ahead.taken
 
     def _render_ahead(self, group: list[int]) -> list[tuple[Arr]]:
         """A worker's render of whole blocks."""
@@ -116,8 +114,8 @@ class WrenchSensor:
     def _cached(self, b: int) -> Arr | None:
         """Block ``b`` if cached or rendered ahead (then cached), else None."""
         hit = self._cache.get(b)
-        if hit is None and self._ahead is not None:
-            got = self._ahead.take(b)
+        if hit is None:
+            got = self.ahead.take(b)
             if got is not None:
                 hit = got[0]
                 self._keep(b, hit)
