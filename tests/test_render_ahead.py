@@ -175,10 +175,14 @@ def test_cli_render_ahead_is_checked_and_changes_no_output(tmp_path: Path) -> No
             capture_output=True, text=True, cwd=ROOT, timeout=300,
         )
 
-    on, off = run("--render-ahead", "on"), run("--render-ahead", "off")
+    on = run("--render-ahead", "on", "--trace", str(tmp_path / "on.jsonl"))
+    off = run("--render-ahead", "off", "--trace", str(tmp_path / "off.jsonl"))
     assert on.returncode == off.returncode == 0, on.stderr + off.stderr
-    strip = lambda s: {k: v for k, v in json.loads(s).items() if "wall" not in k}  # noqa: E731
+    strip = lambda s: {k: v for k, v in json.loads(s).items() if "wall" not in k and k != "trace"}  # noqa: E731
     assert strip(on.stdout) == strip(off.stdout)
+    # the workers write nothing: the trace (streamed to its file during the run) is the same bytes
+    assert (tmp_path / "on.jsonl").read_bytes() == (tmp_path / "off.jsonl").read_bytes()
+    assert on.stderr == off.stderr == ""
     bad = run("--render-ahead", "sometimes")
     assert bad.returncode == 2 and "invalid choice: 'sometimes'" in bad.stderr and "Traceback" not in bad.stderr
     fleet = subprocess.run(
