@@ -201,3 +201,16 @@ def test_a_refused_fork_leaves_the_run_to_render_alone(monkeypatch: pytest.Monke
     fast.start_ahead()  # no worker, no error
     assert fast.tactile_array.ahead.worker is None and fast.wrench_sensor.ahead.worker is None
     assert _same(fast.tactile(10.0, 60.0), ref.tactile(10.0, 60.0))
+
+
+def test_a_process_that_ignores_sigchld_still_stops_its_workers(monkeypatch: pytest.MonkeyPatch) -> None:
+    # with SIGCHLD ignored the kernel reaps the workers itself: stopping must not fail
+    old = signal.signal(signal.SIGCHLD, signal.SIG_IGN)
+    try:
+        fast, ref = _pair()
+        fast.start_ahead()
+        assert _same(fast.tactile(10.0, 60.0), ref.tactile(10.0, 60.0))
+        fast.stop_ahead()
+        assert fast.tactile_array.ahead.worker is None and fast.ahead_taken > 0
+    finally:
+        signal.signal(signal.SIGCHLD, old)

@@ -189,7 +189,10 @@ class RenderAhead:
             os.kill(pid, signal.SIGKILL)  # it holds nothing to clean up; a handler the process set cannot keep it
         except ProcessLookupError:
             pass
-        os.waitpid(pid, 0)
+        try:
+            os.waitpid(pid, 0)
+        except ChildProcessError:  # reaped already (a process that ignores SIGCHLD)
+            pass
         del self._floats  # the map closes once no array views it
         self._map.close()
 
