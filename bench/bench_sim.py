@@ -58,9 +58,9 @@ process per run, 7 pairs, CPU seconds): the day 4.34 s against 3.53 s (0.78, ran
 The goal of at most 100x the bare SimPy cost was not met by that round: 100x asks for a
 2 s day. 5,000x real time and signals off under 1.5 s hold, by a margin. Later rounds of
 issue 27 brought the day to 123-139x in three runs of ``python -m bench.bench_sim``
-(fifth round); the sixth renders the signals ahead in forked workers: six runs of this
-bench printed 81-107x with them (median 93x: met in 3, missed in the shared machine's slow
-spells) and 130-146x in one process; docs/findings.md ("How the day reached 100x bare
+(fifth round); the sixth renders the signals ahead in forked workers: nine runs of this
+bench printed 81-107x with them (median 99x: met in 5, missed in the shared machine's slow
+spells) and 121-173x in one process; docs/findings.md ("How the day reached 100x bare
 SimPy") has the figures.
 
 Where the time goes (py-spy of the day, this revision; shares of ``SimWorld.run``):
