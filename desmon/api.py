@@ -84,7 +84,8 @@ def simulate(
 ) -> "RunResult":
     """Run the scenario in the SimPy world (what ``desmon run`` runs): same seed, same
     result. ``options`` are the remaining keyword arguments of
-    :class:`desmon.sim.engine.SimWorld` (``trace``, ``progress``, ``on_quiescent``)."""
+    :class:`desmon.sim.engine.SimWorld` (``trace``, ``progress``, ``on_quiescent``,
+    ``render_ahead``: the signals rendered in forked workers, the same result either way)."""
     from desmon.sim.engine import SimWorld
     from desmon.verify.deployers import resolve_deployer
 
