@@ -236,7 +236,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  fastest of {a.repeat} runs, each in a fresh world: {', '.join(f'{d[0]:.2f}' for d in days)} s")
     print(f"  SimPy events: {events:,}; samples wrench {samples.get('wrench', 0):,}, tactile {samples.get('tactile', 0):,}")
     how = f"tactile frames and wrench rendered ahead in forked workers ({ahead:,} blocks taken from them)" if ahead else "in this process alone"
-    print(f"  {how}; CPU s of both processes: {cpu:.2f}")
+    print(f"  {how}; CPU s of all processes: {cpu:.2f}")
     print(f"  bare SimPy, same event count: {bare:.4f} s ({events / bare:,.0f} events/s); full run / bare: {ratio:.1f}x")
     print(f"  same day rendered in this process alone (render_ahead=False), fastest of {a.repeat}: {serial:.2f} s wall, {serial / bare:.1f}x bare SimPy")
     print(f"  same day with signals off: {off:.2f} s wall (deployment core, repository, audit, infrastructure, SimPy)")
