@@ -60,8 +60,8 @@ The goal of at most 100x the bare SimPy cost was not met by that round: 100x ask
 issue 27 brought the day to 123-139x in three runs of ``python -m bench.bench_sim``
 (fifth round); the sixth renders the signals ahead in forked workers: nine runs of this
 bench printed 81-107x with them (median 99x: met in 5, missed in the shared machine's slow
-spells) and 121-173x in one process; docs/findings.md ("How the day reached 100x bare
-SimPy") has the figures.
+spells) and 121-173x in one process; docs/findings.md ("Toward 100x bare SimPy:
+rendering ahead") has the figures.
 
 Where the time goes (py-spy of the day, this revision; shares of ``SimWorld.run``):
 rendering tactile frames 41 % (the per-cell standard normals, about 20.7 M a day drawn

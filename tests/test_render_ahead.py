@@ -190,6 +190,8 @@ def test_cli_render_ahead_is_checked_and_changes_no_output(tmp_path: Path) -> No
         capture_output=True, text=True, cwd=ROOT, timeout=300,
     )
     assert fleet.returncode == 2 and "drop --render-ahead" in fleet.stderr and "Traceback" not in fleet.stderr
+    quiet = run("--render-ahead", "on", "--no-signals")
+    assert quiet.returncode == 2 and "drop --render-ahead" in quiet.stderr and quiet.stderr.count("\n") == 1
 
 
 def test_a_refused_fork_leaves_the_run_to_render_alone(monkeypatch: pytest.MonkeyPatch) -> None:

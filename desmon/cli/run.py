@@ -106,7 +106,10 @@ def run_command(
         return _run_fleet(args, scenario, out, err, show)
     from desmon.sim.world import world_of
 
-    horizon = float(world_of(scenario).horizon)  # declared, or derived from the timeline
+    world = world_of(scenario)
+    horizon = float(world.horizon)  # declared, or derived from the timeline
+    if getattr(args, "render_ahead", "auto") == "on" and not world.signals:
+        raise ScenarioError(f"--render-ahead on renders sensor signals, and {scenario.name!r} runs without them (--no-signals or its world): drop --render-ahead")
     if args.until is not None and args.until > horizon:
         raise ScenarioError(
             f"--until {args.until:g}: the scenario's task ends at its horizon of {horizon:g} s; "

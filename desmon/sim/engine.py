@@ -201,7 +201,7 @@ class SimWorld:
         start_processes(parts, self._audit)
         if self.progress is not None:
             self.env.process(progress(parts, self.progress))
-        ahead = self.bank.signals if self.bank is not None and self._ahead_wanted() else None
+        ahead = self.bank.signals if self._ahead_wanted() and self.bank is not None else None
         if ahead is not None:
             ahead.start_ahead()
         try:
