@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from desmon.detectors.signals import MissionSignals, SlipEvent, ahead
+from desmon.detectors.tactile import TactileDetector
 from desmon.errors import SignalError
 from desmon.loader import load_scenario
 from desmon.sim.engine import SimWorld
@@ -131,17 +132,24 @@ def test_a_stalled_worker_is_given_up_after_the_stall_limit(monkeypatch: pytest.
         arr.stop_ahead()
 
 
-def test_a_run_is_the_same_bytes_with_and_without_the_worker() -> None:
+def test_a_run_is_the_same_bytes_with_and_without_the_worker(monkeypatch: pytest.MonkeyPatch) -> None:
     sc = load_scenario(ROOT / "scenarios" / "robot_day.py")
+    made: list[TactileDetector] = []  # every tactile detector of the runs (the combined ones' too)
+    init = TactileDetector.__init__
+    monkeypatch.setattr(TactileDetector, "__init__", lambda self, *a, **k: (init(self, *a, **k), made.append(self))[0])
     runs = []
     taken = []
+    hinted = []
     for mode in (True, False):
+        made.clear()
         w = SimWorld(sc, seed=3, until=1500.0, render_ahead=mode)
         r = w.run()
         runs.append((json.dumps(r.trace.records), r.metrics, [(a.time, a.detector) for a in r.alarms]))
         taken.append(w.bank.signals.ahead_taken)  # type: ignore[union-attr]
+        hinted.append(sum(d.hinted for d in made))
     assert runs[0] == runs[1]
     assert taken[0] > 0 and taken[1] == 0
+    assert hinted[0] > 0 and hinted[1] == 0  # the worker's tactile flow was taken, and changed no byte
     assert runs[0][2]  # the detectors saw frames and fired
 
 

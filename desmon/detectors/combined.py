@@ -18,7 +18,7 @@ import numpy as np
 from desmon.detectors.base import INACTIVE_STATUS, Alarm, DetectorState, DetectorStatus, check_threshold
 from desmon.detectors.force import DEFAULT_THETA_F, ForceDetector
 from desmon.detectors.signals import DOWN, UP
-from desmon.detectors.tactile import DEFAULT_THETA_T, TactileDetector
+from desmon.detectors.tactile import DEFAULT_THETA_T, FlowHint, TactileDetector
 
 __all__ = ["CombinedDetector", "zoh", "DEFAULT_TICK"]
 
@@ -114,8 +114,12 @@ class CombinedDetector:
     ``process(wrench_times, wrench_values, tactile_times, tactile_samples, until)``:
     the caller passes every sample with time <= ``until`` not passed before; ticks up to
     ``until`` are evaluated. Warm-up and tare follow the inner detectors (WARMING until
-    both are OK); NO_INPUT if either input is missing.
+    both are OK); NO_INPUT if either input is missing. ``tactile_flow``: the tactile
+    frames' flow worked out ahead (:meth:`TactileDetector.scores`).
     """
+
+    #: the keyword hints :meth:`process` takes (the simulation passes those a stream offers)
+    hints = ("tactile_flow",)
 
     def __init__(
         self,
@@ -172,11 +176,13 @@ class CombinedDetector:
         tactile_times: Arr,
         tactile_samples: Arr,
         until: float,
+        *,
+        tactile_flow: FlowHint | None = None,
     ) -> tuple[Alarm, ...]:
         if not self._active:
             return ()
         ft, fs, fv = self.force.scores(wrench_times, wrench_values)
-        tt, ts, tv = self.tactile.scores(tactile_times, tactile_samples)
+        tt, ts, tv = self.tactile.scores(tactile_times, tactile_samples, tactile_flow)
         self.force.check_input(until)
         self.tactile.check_input(until)
         last = math.floor((until - self._t_act) / self.tick + 1e-9)

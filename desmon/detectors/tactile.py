@@ -29,8 +29,10 @@ from desmon.detectors.signals import N_PADS, PAD_COLS, PAD_ROWS
 from desmon.errors import SignalError
 
 __all__ = [
+    "FlowHint",
     "TactileDetector",
     "TactileState",
+    "flow_ahead",
     "centred_cop",
     "slip_index",
     "tactile_scores",
@@ -175,6 +177,39 @@ def tactile_scores(moments: Arr, state: TactileState, gating: bool = True) -> tu
     return s_t, valid, new
 
 
+@dataclass(frozen=True, slots=True)
+class FlowHint:
+    """The tactile flow of a run of fault-free frames, worked out before it is asked for (by a
+    worker rendering ahead, :mod:`desmon.detectors.signals.ahead`): ``values[i]`` is ``S_T`` of
+    frame number ``first + i`` from that frame and the two before it in the stream, -1.0 where
+    no pad is in contact (no valid flow), NaN where not worked out. Past the warm-up those are
+    the very floats :func:`tactile_scores` gives a detector fed the same frames in order, so
+    the detector takes them instead of working them out (:meth:`TactileDetector.scores`)."""
+
+    first: int
+    values: Arr
+
+
+_NO_FLOW = np.zeros(2)
+_NOT_VALID = np.zeros(2, dtype=bool)
+#: the state :func:`flow_ahead` starts from: past the warm-up, so only the frames themselves count
+_PAST_WARMUP = TactileState(np.zeros((1, N_PADS, 2)), np.zeros((1, N_PADS, 2)), np.full(1, WARMUP_FRAMES, dtype=np.int64))
+
+
+def flow_ahead(moments: Arr, before: Arr | None = None) -> Arr:
+    """:class:`FlowHint` values of consecutive frames ``moments`` ``(K, 6, 3)``, given the two
+    frames ``before`` them (``(2, 6, 3)``), or without them NaN for the first two."""
+    m = moments if before is None else np.concatenate([before, moments])
+    if before is not None and before.shape[0] != 2:
+        raise SignalError(f"flow_ahead: {before.shape[0]} frames before, need the 2 before the first")
+    s, valid, _ = tactile_scores(m[None], _PAST_WARMUP, True)
+    out = np.where(valid[0], s[0], -1.0)
+    if before is None:
+        out[:2] = np.nan
+        return out
+    return out[2:]
+
+
 def _pad_sum(x: Arr) -> Arr:
     """``x.sum(axis=-1)`` of ``x`` ``(n, K, 6)`` (C order), the same floats: numpy sums an axis of
     six as ``(((((0.0 + x0) + x1) + x2) + x3) + x4) + x5`` (a test pins it against numpy).
@@ -215,6 +250,8 @@ class TactileDetector(StreamingDetector):
             raise SignalError(f"stuck_frames {stuck_frames!r} must be an integer >= 2")
         self.stuck_frames = int(stuck_frames)
         self.name = name
+        #: frames whose flow came from a :class:`FlowHint` (not worked out here), over the detector's life
+        self.hinted = 0
         self._active = False
         self.status: DetectorStatus = INACTIVE_STATUS
         self._reset(0.0)
@@ -222,6 +259,11 @@ class TactileDetector(StreamingDetector):
     def _reset(self, t: float) -> None:
         self._t_act = t
         self._state = TactileState.initial(1)
+        #: the state still to be worked out from the last two frames and the frames since
+        #: activation (after frames whose flow came from a hint), or None
+        self._lazy: tuple[Arr, int] | None = None
+        #: one past the last frame number of hinted, consecutive frames just consumed (-1: none)
+        self._hint_end = -1
         self._last_t = t
         self._last_m: Arr = np.full((N_PADS, 3), np.nan)
         self._run = 0
@@ -240,15 +282,19 @@ class TactileDetector(StreamingDetector):
             )
         return a.reshape(-1, N_PADS, 3)
 
-    def scores(self, times: Arr, samples: Arr) -> tuple[Arr, Arr, Arr]:
-        """Advance with new frames; return ``(times, S_T, valid)`` per frame."""
+    def scores(self, times: Arr, samples: Arr, flow: FlowHint | None = None) -> tuple[Arr, Arr, Arr]:
+        """Advance with new frames; return ``(times, S_T, valid)`` per frame. ``flow`` (the
+        simulation's workers rendering ahead pass it) holds the flow of these very frames,
+        fault-free and consecutive in the stream (:class:`FlowHint`)."""
         t = np.asarray(times, dtype=float).reshape(-1)
         m = self._as_moments(samples)
         if m.shape[0] != t.size:
             raise SignalError(f"tactile samples: {t.size} times but {m.shape[0]} frames; pass one time per frame")
+        if flow is not None and flow.values.shape != (t.size,):
+            raise SignalError(f"tactile flow hint of shape {flow.values.shape} for {t.size} frames; pass one value per frame or none")
         keep = t >= self._t_act
         if not keep.all():
-            t, m = t[keep], m[keep]
+            t, m, flow = t[keep], m[keep], None
         if t.size == 0:
             return t, np.zeros(0), np.zeros(0, dtype=bool)
         n = t.size
@@ -266,8 +312,7 @@ class TactileDetector(StreamingDetector):
         self._run = run_last
         self._last_m = m[-1].copy()
         self._last_t = float(t[-1])
-        s, valid, self._state = tactile_scores(m[None], self._state, self.warmup_gating)
-        s, valid = s[0], valid[0]
+        s, valid = self._flow(m, flow)
         self._seen_valid = self._seen_valid or bool(valid.any())
         if run_last >= self.stuck_frames:
             reason = "no_contact" if not (m[-1, :, 0] > 0).any() else "stuck"
@@ -280,16 +325,57 @@ class TactileDetector(StreamingDetector):
             self._set(DetectorState.OK, "", float(t[bad[-1] + 1] if bad.size else t[0]))
         return t, s, valid
 
+    def _flow(self, m: Arr, hint: FlowHint | None) -> tuple[Arr, Arr]:
+        """``S_T`` and validity of frames ``m`` ``(K, 6, 3)``, carrying the state: from ``hint``
+        where it holds them (past the first two frames, or from the first when the frames
+        before were hinted and consecutive with these and past the warm-up), else worked out."""
+        n = m.shape[0]
+        lazy = self._lazy
+        since = lazy[1] if lazy is not None else int(self._state.run[0])
+        # the two frames before these were fed here, fault-free (then a hint's values hold from the first)
+        contiguous = hint is not None and hint.first == self._hint_end
+        head = 0 if contiguous and since + 1 >= WARMUP_FRAMES else 2
+        if hint is None or n < max(head + 1, 2) or np.isnan(hint.values[head:]).any():
+            self._hint_end = hint.first + n if hint is not None and (n >= 2 or contiguous) else -1
+            s, valid, self._state = tactile_scores(m[None], self.state, self.warmup_gating)
+            self._lazy = None
+            return s[0], valid[0]
+        tail = hint.values[head:]
+        s, valid = np.maximum(tail, 0.0), tail >= 0.0
+        if head and self.warmup_gating and since + head < WARMUP_FRAMES:  # both in the warm-up: no flow
+            s, valid = np.concatenate([_NO_FLOW, s]), np.concatenate([_NOT_VALID, valid])
+        elif head:  # the first two frames from the state carried so far
+            s0, v0, _ = tactile_scores(m[None, :head], self.state, self.warmup_gating)
+            s, valid = np.concatenate([s0[0], s]), np.concatenate([v0[0], valid])
+        self._hint_end = hint.first + n
+        self._lazy = (m[-2:].copy(), min(since + n, 1 << 30))
+        self.hinted += n - head
+        return s, valid
+
+    @property
+    def state(self) -> TactileState:
+        """The flow's carried state (:class:`TactileState`) after the frames consumed so far."""
+        if self._lazy is not None:
+            tail, run = self._lazy
+            cop, _contact = centred_cop(tail)
+            self._state = TactileState(cop[-1:].copy(), np.add(cop[-1:], cop[-2:-1]), np.full(1, run, dtype=np.int64))
+            self._lazy = None
+        return self._state
+
     def check_input(self, until: float) -> None:
         """Flag NO_INPUT ('no_samples') if no frame arrived within ``timeout`` before ``until``."""
         if self._active and until - self._last_t > self.timeout and self.status.state is not DetectorState.NO_INPUT:
             self._set(DetectorState.NO_INPUT, "no_samples", self._last_t + self.timeout)
 
-    def process(self, times: Arr, samples: Arr, until: float | None = None) -> tuple[Alarm, ...]:
-        """Consume tactile frames (moments ``(K, 6, 3)`` or frames ``(K, 6, 14, 6)``) and return alarms."""
+    #: the keyword hints :meth:`process` takes (the simulation passes those a stream offers)
+    hints = ("tactile_flow",)
+
+    def process(self, times: Arr, samples: Arr, until: float | None = None, *, tactile_flow: FlowHint | None = None) -> tuple[Alarm, ...]:
+        """Consume tactile frames (moments ``(K, 6, 3)`` or frames ``(K, 6, 14, 6)``) and return
+        alarms; ``tactile_flow``: see :meth:`scores`."""
         if not self._active:
             return ()
-        t, s, valid = self.scores(times, samples)
+        t, s, valid = self.scores(times, samples, tactile_flow)
         if until is not None:
             self.check_input(float(until))
         hit = (valid & (s >= self.threshold)).nonzero()[0]

@@ -39,6 +39,7 @@ from desmon.deployment.validity import PlatformMemoChecks
 from desmon.detectors.base import Alarm
 from desmon.detectors.signals.ahead import AHEAD_MIN_S, check_render_ahead, fork_safe
 from desmon.detectors.signals.tactile_array import holding_seconds
+from desmon.detectors.tactile import flow_ahead
 from desmon.model.scenario import Scenario
 from desmon.repository import labels as L
 from desmon.repository.facts import load_model
@@ -203,7 +204,7 @@ class SimWorld:
             self.env.process(progress(parts, self.progress))
         ahead = self.bank.signals if self._ahead_wanted() and self.bank is not None else None
         if ahead is not None:
-            ahead.start_ahead()
+            ahead.start_ahead(tactile_flow=flow_ahead)
         try:
             with collector_relaxed(collect=False):  # the world built so far stays out of the collector's scans
                 self.env.run(until=self.horizon)

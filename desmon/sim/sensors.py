@@ -24,6 +24,7 @@ import numpy as np
 
 from desmon.detectors.base import Alarm
 from desmon.detectors.signals import N_PADS, MissionSignals, Segment, SlipEvent
+from desmon.detectors.tactile import FlowHint
 from desmon.model.platform import Device
 from desmon.sim.streams import detector_plan, fusions, signal_streams
 from desmon.sim.world import Slip
@@ -105,35 +106,49 @@ class SensorBank:
 
     def tactile(self, t0: float, t1: float, devices: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         """Tactile frames (moments ``(K, 6, 3)``) in ``[t0, t1)``; failed pads read zero."""
+        t, mom, _flow = self.tactile_read(t0, t1, devices)
+        return t, mom
+
+    def _pads_read(self, mom: np.ndarray, pads: Sequence[str], down: Sequence[tuple[str, np.ndarray]]) -> np.ndarray:
+        """Moments ``mom`` as a graph reading the tactile ``pads`` alone sees them: a down pad's
+        frames and the pads it cannot reach read zero (a changed copy), else ``mom`` itself."""
+        covered = np.zeros(N_PADS, dtype=bool)
+        for d in pads:
+            covered[self.pad[d]] = True
+        if down:
+            mom = mom.copy()
+            for d, m in down:
+                mom[~m, self.pad[d], :] = 0.0
+        if not covered.all():  # pads the graph cannot reach read nothing
+            mom = mom.copy()
+            mom[:, ~covered, :] = 0.0
+        return mom
+
+    def tactile_read(self, t0: float, t1: float, devices: Sequence[str]) -> tuple[np.ndarray, np.ndarray, FlowHint | None]:
+        """:meth:`tactile`, and the frames' flow worked out ahead (:class:`FlowHint`) if a worker
+        rendering ahead gave it and the frames are the stream's own, every one, unchanged."""
         if t1 <= t0 or not devices:
-            return np.zeros(0), np.zeros((0, N_PADS, 3))
+            return np.zeros(0), np.zeros((0, N_PADS, 3)), None
         blk = self.signals.tactile(t0, t1)
         t, mom = blk.times, blk.moments
+        flow = None if blk.flow is None or not t.size else FlowHint(int(blk.index[0]), blk.flow)
         self.samples["tactile"] += int(t.size)
         pads = [d for d in devices if d in self.pad]
-        arrays = [d for d in devices if d not in self.pad]
         # the devices down at some frame, with their masks (None: up at every frame)
         masks = [(d, self._up_mask(d, t)) for d in devices]
         down = [(d, m) for d, m in masks if m is not None and not m.all()]
-        if pads and not arrays:
-            covered = np.zeros(N_PADS, dtype=bool)
-            for d in pads:
-                covered[self.pad[d]] = True
-            if down:
-                mom = mom.copy()
-                for d, m in down:
-                    mom[~m, self.pad[d], :] = 0.0
-            if not covered.all():  # pads the graph cannot reach read nothing
-                mom = mom.copy()
-                mom[:, ~covered, :] = 0.0
+        if len(pads) == len(devices):
+            read = self._pads_read(mom, pads, down)
+            if read is not mom:  # the frames changed: their flow is not the stream's
+                mom, flow = read, None
         if len(down) < len(masks):  # some device is up at every frame
-            return t, mom
+            return t, mom, flow
         any_ok = np.zeros(t.shape, dtype=bool)
         for _, m in down:
             any_ok |= m
         if any_ok.all():
-            return t, mom
-        return t[any_ok], mom[any_ok]
+            return t, mom, flow
+        return t[any_ok], mom[any_ok], None
 
 
 class DetectorAdapter:
@@ -166,6 +181,10 @@ class DetectorAdapter:
         if det is None or t1 <= t0 or self._plan is None:
             return ()
         args: list[Any] = []
+        hints: dict[str, Any] = {}
         for stream in self._plan.streams:
-            args.extend(stream.samples(bank, t0, t1, devices.get(stream.name, ())))
-        return det.process(*args, until=t1)  # type: ignore[no-any-return]
+            samples, offered = stream.read(bank, t0, t1, devices.get(stream.name, ()))
+            args.extend(samples)
+            hints.update(offered)
+        taken = getattr(det, "hints", ())
+        return det.process(*args, until=t1, **{k: v for k, v in hints.items() if k in taken and v is not None})  # type: ignore[no-any-return]

@@ -60,6 +60,12 @@ class SignalStream:
         raise NotImplementedError
 
     @classmethod
+    def read(cls, bank: "SensorBank", t0: float, t1: float, devices: Sequence[str]) -> tuple[tuple[Any, ...], dict[str, Any]]:
+        """:meth:`samples`, and keyword hints for the detector (by keyword; a detector takes
+        those its ``hints`` names): none unless a stream offers some."""
+        return cls.samples(bank, t0, t1, devices), {}
+
+    @classmethod
     def detector(cls, name: str) -> Any:
         """A new streaming detector called ``name`` consuming this stream alone."""
         raise NotImplementedError
@@ -164,6 +170,12 @@ class TactileStream(SignalStream):
     @classmethod
     def samples(cls, bank: "SensorBank", t0: float, t1: float, devices: Sequence[str]) -> tuple[Any, ...]:
         return bank.tactile(t0, t1, devices)
+
+    @classmethod
+    def read(cls, bank: "SensorBank", t0: float, t1: float, devices: Sequence[str]) -> tuple[tuple[Any, ...], dict[str, Any]]:
+        """The frames, and their flow worked out ahead as the hint ``tactile_flow`` (or None)."""
+        t, mom, flow = bank.tactile_read(t0, t1, devices)
+        return (t, mom), {"tactile_flow": flow}
 
     @classmethod
     def detector(cls, name: str) -> Any:

@@ -160,12 +160,15 @@ class WrenchBlock:
 @dataclass(frozen=True, slots=True)
 class TactileBlock:
     """Tactile frames: ``index`` (frame number), ``times`` (s, jittered), ``moments`` ``(K, 6, 3)``
-    and, if requested, ``frames`` ``(K, 6, 14, 6)`` int16."""
+    and, if requested, ``frames`` ``(K, 6, 14, 6)`` int16; ``flow``: the tactile flow of each
+    frame worked out ahead (``desmon.detectors.tactile.FlowHint`` values) when a worker rendering
+    ahead gave it for fault-free consecutive frames, else None."""
 
     index: Arr
     times: Arr
     moments: Arr
     frames: Arr | None = None
+    flow: Arr | None = None
 
 
 # --------------------------------------------------------------------------- shape helpers

@@ -9,7 +9,7 @@ slips. Sampling is delegated to them.
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -111,13 +111,15 @@ class MissionSignals:
         self.wrench_sensor = WrenchSensor(self.seed, config, self.segments, seg_params, drawn, self.faults, params)
         self.tactile_array = TactileArray(self.seed, with_slips(episodes, drawn), self.faults, params)
 
-    def start_ahead(self) -> None:
+    def start_ahead(self, tactile_flow: Callable[[np.ndarray, np.ndarray | None], np.ndarray] | None = None) -> None:
         """Render the tactile frames and the wrench ahead, each in a forked worker
         (:mod:`desmon.detectors.signals.ahead`); the samples are the same bytes either way.
-        A stream whose worker cannot be forked (the system refuses a process) renders here."""
-        for stream in (self.tactile_array, self.wrench_sensor):
+        With ``tactile_flow`` (``desmon.detectors.tactile.flow_ahead``) the tactile worker
+        works out the frames' flow too (``TactileBlock.flow``). A stream whose worker cannot
+        be forked (the system refuses a process) renders here."""
+        for start in (lambda: self.tactile_array.start_ahead(tactile_flow), self.wrench_sensor.start_ahead):
             try:
-                stream.start_ahead()
+                start()
             except OSError:
                 pass
 

@@ -499,6 +499,15 @@ def _contact_rows(t: Arr, units: list[tuple[int, int, int]], episodes: Sequence[
     return _Rows(frame, pad, idx, r[0], r[1], r[2], r[3], r[4])
 
 
+def _cut(parts: list[tuple[int, Arr]], lo: int, hi: int) -> Arr:
+    """Frames ``lo .. hi - 1`` of neighbouring blocks' arrays ``(first frame, array)``, one new array."""
+    B = TACTILE_BLOCK
+    cuts = [a[max(lo - base, 0) : min(hi - base, B)] for base, a in parts if lo < base + B and hi > base]
+    if not cuts:
+        return parts[0][1][:0].copy()
+    return cuts[0].copy() if len(cuts) == 1 else np.concatenate(cuts)
+
+
 def episode_blocks(episodes: Sequence[Episode], rate: float, clip: float) -> list[int]:
     """The tactile blocks holding frames of the ``episodes`` (frame ``k`` at ``k / rate`` give or
     take ``clip`` s), ascending."""
@@ -515,6 +524,29 @@ def holding_seconds(episodes: Sequence[Episode], until: float) -> float:
     return float(sum(max(0.0, min(ep.end, until) - ep.start) for ep in episodes))
 
 
+class _RenderAhead:
+    """What a worker rendering a :class:`TactileArray` ahead does with a group of neighbouring
+    blocks: renders their frame times and moments and, given ``flow`` (the tactile detector's
+    ``flow_ahead``), their flow hint values, carried over from the group before it when that
+    one ends just before (else the first two frames' are NaN)."""
+
+    def __init__(self, array: "TactileArray", flow: Callable[[Arr, Arr | None], Arr] | None) -> None:
+        self.array = array
+        self.flow = flow
+        self.last: tuple[int, Arr] | None = None  # the last block rendered and its last two frames
+
+    def __call__(self, group: list[int]) -> list[tuple[Arr, ...]]:
+        got = self.array.render_here(group, False)
+        if self.flow is None:
+            return [(t, mom) for t, mom, _fr in got]
+        mom = np.concatenate([m for _t, m, _fr in got])
+        before = self.last[1] if self.last is not None and self.last[0] == group[0] - 1 else None
+        values = self.flow(mom, before)
+        self.last = (group[-1], mom[-2:].copy())
+        B = TACTILE_BLOCK
+        return [(t, m, values[i * B : (i + 1) * B]) for i, (t, m, _fr) in enumerate(got)]
+
+
 class TactileArray:
     """Deterministic tactile frames of one mission (see the module docstring)."""
 
@@ -528,6 +560,8 @@ class TactileArray:
         self._normals = BlockStream(seed, STREAM_TACTILE)
         self._ep_starts = [float(ep.start) for ep in self.episodes]
         self._cache: dict[tuple[int, bool], Rendered] = {}
+        #: flow hint values of cached blocks that came from a worker rendering ahead (by block)
+        self._flow: dict[int, Arr] = {}
         self._scratch = _Scratch()
         #: the worker rendering ahead, while one runs (:meth:`start_ahead`), and what it gave
         self.ahead = Ahead()
@@ -571,14 +605,14 @@ class TactileArray:
         rendering ahead renders (:mod:`desmon.detectors.signals.ahead`)."""
         return episode_blocks(self.episodes, self.rate, self.params.tactile_jitter_clip)
 
-    def start_ahead(self) -> RenderAhead:
+    def start_ahead(self, flow: Callable[[Arr, Arr | None], Arr] | None = None) -> RenderAhead:
         """Fork a worker that renders this array's episode blocks ahead (stop it with
-        :meth:`stop_ahead`); blocks of frames are then taken from it where it has them."""
-        return self.ahead.start(self._render_ahead, self.ahead_blocks(), [(TACTILE_BLOCK,), (TACTILE_BLOCK, N_PADS, 3)])
-
-    def _render_ahead(self, group: list[int]) -> list[tuple[Arr, Arr]]:
-        """A worker's render of neighbouring blocks: their frame times and moments."""
-        return [(t, mom) for t, mom, _fr in self.render_here(group, False)]
+        :meth:`stop_ahead`); blocks of frames are then taken from it where it has them. With
+        ``flow`` (``desmon.detectors.tactile.flow_ahead``) it works out their tactile flow too,
+        which :meth:`between` then hands out (``TactileBlock.flow``)."""
+        B = TACTILE_BLOCK
+        shapes = [(B,), (B, N_PADS, 3)] + ([(B,)] if flow is not None else [])
+        return self.ahead.start(_RenderAhead(self, flow), self.ahead_blocks(), shapes)
 
     def stop_ahead(self) -> None:
         """Stop the worker rendering ahead, if one runs; from then on every block is rendered here."""
@@ -605,12 +639,17 @@ class TactileArray:
             else:
                 res = (g[0], g[1], None)
                 self._keep(int(b), False, res)
+                if len(g) > 2:
+                    self._flow[int(b)] = g[2]
                 out.append(res)
         return out
 
     def _keep(self, block: int, frames: bool, res: Rendered) -> None:
         if len(self._cache) >= TACTILE_CACHE:
-            del self._cache[next(iter(self._cache))]
+            old, _frames = next(iter(self._cache))
+            del self._cache[(old, _frames)]
+            if not _frames:
+                self._flow.pop(old, None)
         self._cache[(block, frames)] = res
 
     def render_here(self, blocks: Sequence[int], frames: bool) -> list[Rendered]:
@@ -783,13 +822,17 @@ class TactileArray:
                 break
         hi = k1 if hi is None else hi
         lo = hi if lo is None else min(lo, hi)
-        fields = []
-        for f in range(3 if frames else 2):
-            cuts = [hit[f][max(lo - base, 0) : min(hi - base, B)] for base, hit in parts if lo < base + B and hi > base]  # type: ignore[index]
-            if not cuts:
-                cuts = [parts[0][1][f][:0]]  # type: ignore[index]
-            fields.append(cuts[0].copy() if len(cuts) == 1 else np.concatenate(cuts))
-        return TactileBlock(np.arange(lo, hi, dtype=np.int64), fields[0], fields[1], fields[2] if frames else None)
+        fields = [_cut([(base, hit[f]) for base, hit in parts], lo, hi) for f in range(3 if frames else 2)]  # type: ignore[index]
+        flow = None if frames else self._flow_cut([base for base, _hit in parts], lo, hi)
+        return TactileBlock(np.arange(lo, hi, dtype=np.int64), fields[0], fields[1], fields[2] if frames else None, flow)
+
+    def _flow_cut(self, bases: list[int], lo: int, hi: int) -> Arr | None:
+        """The flow hint values of frames ``lo .. hi - 1`` of the neighbouring blocks starting at
+        ``bases``, or None unless a worker gave them for every one of those blocks."""
+        flows = [self._flow.get(base // TACTILE_BLOCK) for base in bases]
+        if any(v is None for v in flows):
+            return None
+        return _cut(list(zip(bases, flows)), lo, hi)  # type: ignore[arg-type]
 
     def between(self, t0: float, t1: float, frames: bool = False) -> TactileBlock:
         """All frames with ``t0 <= t < t1`` (moments always; full frames if ``frames``)."""
