@@ -190,8 +190,17 @@ class FlowHint:
     values: Arr
 
 
-_NO_FLOW = np.zeros(2)
-_NOT_VALID = np.zeros(2, dtype=bool)
+def _frozen(a: Arr) -> Arr:
+    a.setflags(write=False)  # shared by every detector: a write would raise, not leak
+    return a
+
+
+#: a detector's flow state at activation, and the frame "before" its first (none: NaN)
+_FRESH = TactileState(_frozen(np.zeros((1, N_PADS, 2))), _frozen(np.zeros((1, N_PADS, 2))), _frozen(np.zeros(1, dtype=np.int64)))
+_NO_FRAME = _frozen(np.full((N_PADS, 3), np.nan))
+#: the flow and validity of two frames in the warm-up
+_NO_FLOW = _frozen(np.zeros(2))
+_NOT_VALID = _frozen(np.zeros(2, dtype=bool))
 #: the state :func:`flow_ahead` starts from: past the warm-up, so only the frames themselves count
 _PAST_WARMUP = TactileState(np.zeros((1, N_PADS, 2)), np.zeros((1, N_PADS, 2)), np.full(1, WARMUP_FRAMES, dtype=np.int64))
 
@@ -258,14 +267,14 @@ class TactileDetector(StreamingDetector):
 
     def _reset(self, t: float) -> None:
         self._t_act = t
-        self._state = TactileState.initial(1)
+        self._state = _FRESH
         #: the state still to be worked out from the last two frames and the frames since
         #: activation (after frames whose flow came from a hint), or None
         self._lazy: tuple[Arr, int] | None = None
         #: one past the last frame number of hinted, consecutive frames just consumed (-1: none)
         self._hint_end = -1
         self._last_t = t
-        self._last_m: Arr = np.full((N_PADS, 3), np.nan)
+        self._last_m: Arr = _NO_FRAME
         self._run = 0
         self._seen_valid = False
 
