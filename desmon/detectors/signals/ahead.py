@@ -250,6 +250,7 @@ def _work(render: Callable[[list[int]], Sequence[Sequence[np.ndarray]]], blocks:
         buf = buf[n * _MSG.size :]
         return True
 
+    floats = np.frombuffer(shared, np.float64)  # the slots, written in place
     size = 1  # groups grow from one block to GROUP: the first block comes soon
     while i < len(blocks):
         if not read(False):
@@ -265,9 +266,8 @@ def _work(render: Callable[[list[int]], Sequence[Sequence[np.ndarray]]], blocks:
                 if not read(True):
                     return
             slot = free_slots.pop()
-            at = slot * slot_bytes
+            at = slot * (slot_bytes // 8)
             for a in arrays:
-                data = np.ascontiguousarray(a, dtype=np.float64).tobytes()
-                shared[at : at + len(data)] = data
-                at += len(data)
+                floats[at : at + a.size] = a.reshape(-1)
+                at += a.size
             os.write(done, _MSG.pack(b, slot))
