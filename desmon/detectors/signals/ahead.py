@@ -105,6 +105,8 @@ class RenderAhead:
         self._done = done_r
         self._free = free_w
         self._buf = b""
+        #: slots copied out and not yet given back (messages for the worker)
+        self._freed: list[bytes] = []
         #: blocks received and not yet taken, by block
         self._got: dict[int, tuple[np.ndarray, ...]] = {}
         #: plan position of the last block received (-1: none yet)
@@ -144,29 +146,39 @@ class RenderAhead:
 
     def _receive(self) -> None:
         """Read the worker's next messages (waiting up to ``STALL_S``), copy their blocks out of
-        their slots and give the slots back."""
-        t0 = time.perf_counter()
-        ready, _, _ = select.select([self._done], [], [], STALL_S)
-        self.waited_s += time.perf_counter() - t0
+        their slots and give the slots back: a quarter of the slots at a time, and every one
+        before waiting (the worker may be waiting for a slot)."""
+        ready, _, _ = select.select([self._done], [], [], 0)
+        if not ready:
+            self._give_back()
+            t0 = time.perf_counter()
+            ready, _, _ = select.select([self._done], [], [], STALL_S)
+            self.waited_s += time.perf_counter() - t0
         chunk = os.read(self._done, 64 * _MSG.size) if ready else b""
         if not chunk:  # gone, or stalled: render here from now on
             self.close()
             return
         self._buf += chunk
         n = len(self._buf) // _MSG.size
-        freed = []
+        floats, size = self._floats, self._slot // 8
         for i in range(n):
             block, slot = _MSG.unpack_from(self._buf, i * _MSG.size)
-            base = slot * (self._slot // 8)
-            floats = self._floats
-            self._got[block] = tuple(floats[base + lo : base + hi].reshape(sh).copy() for lo, hi, sh in self._parts)
-            freed.append(_MSG.pack(slot, -1))
+            whole = floats[slot * size : (slot + 1) * size].copy()  # one copy; the block's arrays view it
+            self._got[block] = tuple(whole[lo:hi].reshape(sh) for lo, hi, sh in self._parts)
+            self._freed.append(_MSG.pack(slot, -1))
             self._last = self._pos[block]
         self._buf = self._buf[n * _MSG.size :]
-        self._tell(b"".join(freed))
+        if len(self._freed) >= SLOTS // 4:
+            self._give_back()
         if len(self._got) > 2 * SLOTS:  # blocks the simulation went past without taking
             for b in sorted(self._got)[: len(self._got) - SLOTS]:
                 del self._got[b]
+
+    def _give_back(self) -> None:
+        """Tell the worker the slots copied out since the last time."""
+        if self._freed:
+            self._tell(b"".join(self._freed))
+            self._freed.clear()
 
     def _tell(self, msg: bytes) -> None:
         """Write to the worker, which may have finished its blocks and gone."""
