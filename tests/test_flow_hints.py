@@ -134,3 +134,35 @@ def test_the_sensor_bank_passes_a_hint_only_for_the_streams_own_frames() -> None
         assert later is None
     finally:
         bank.signals.tactile_array.stop_ahead()
+
+
+class _Recorder:
+    """A user's own detector over the tactile stream: records the keywords it is called with."""
+
+    def __init__(self) -> None:
+        self.calls: list[dict[str, object]] = []
+
+    def process(self, times, samples, until=None, **hints):  # type: ignore[no-untyped-def]
+        self.calls.append(hints)
+        return ()
+
+
+def test_a_detector_gets_only_the_hints_its_class_names() -> None:
+    from desmon.sim.sensors import DetectorAdapter
+
+    pads = [(Device(f"pad{i}", "tactile_pad", "arm"), "tactile") for i in range(6)]
+    bank = SensorBank(_SEGS, [], seed=9, devices=pads)
+    devices = {"tactile": [d.name for d, _ in pads]}
+    bank.signals.tactile_array.start_ahead(flow_ahead)
+    try:
+        plain, asking = _Recorder(), _Recorder()
+        asking.hints = ("tactile_flow",)  # type: ignore[attr-defined]
+        for det in (plain, asking):
+            adapter = DetectorAdapter(frozenset({"tactile"}), "own")
+            adapter.det = det
+            adapter.feed(bank, 3.0, 12.0, devices)
+    finally:
+        bank.signals.tactile_array.stop_ahead()
+    assert plain.calls == [{}]
+    (got,) = asking.calls
+    assert isinstance(got["tactile_flow"], FlowHint)
