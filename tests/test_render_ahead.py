@@ -68,6 +68,19 @@ def test_frames_from_the_worker_are_the_frames_rendered_here() -> None:
         os.waitpid(pid, os.WNOHANG)  # type: ignore[arg-type]
 
 
+@pytest.mark.skipif(not hasattr(os, "SCHED_BATCH"), reason="Linux scheduling policies")
+def test_a_worker_runs_as_a_batch_process_so_waking_it_never_preempts_the_simulation() -> None:
+    fast, _ref = _pair()
+    worker = fast.tactile_array.start_ahead()
+    try:
+        assert worker.pid is not None
+        assert worker.take(worker.blocks[0]) is not None  # the worker is under way
+        assert os.sched_getscheduler(worker.pid) == os.SCHED_BATCH
+        assert os.sched_getscheduler(0) != os.SCHED_BATCH  # the simulation keeps its own
+    finally:
+        fast.tactile_array.stop_ahead()
+
+
 def test_wrench_from_the_worker_is_the_wrench_rendered_here() -> None:
     fast, ref = _pair()
     sensor = fast.wrench_sensor
