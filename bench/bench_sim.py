@@ -9,7 +9,7 @@ default the scenario's 8 h day, 28,800 simulated s):
   the sensor samples it read. Where desmon forks workers that render the tactile frames
   and the wrench ahead (``render_ahead`` automatic: Linux, 2+ cores, one thread; docs/design.md,
   "Rendering ahead"), it does so here too: the line says so, with the blocks taken from
-  them (``ahead_blocks``) and the CPU seconds of this process and the workers (``cpu_s``);
+  them (``ahead_blocks``) and the CPU seconds of this process (``sim_cpu_s``) and of all processes (``cpu_s``);
 * the bare SimPy cost of the same event count: one ``env.timeout`` per event on an empty
   ``simpy.Environment``, the fastest of 21 runs (below), and the ratio of the full run's wall time
   to it (``ratio_bare``: a ratio, so it carries over to a slower machine);
@@ -25,7 +25,8 @@ the figures are printed but not judged.
 
 The last line is ``RESULT x_real_time=<float> ratio_bare=<float> signals_off_s=<float>
 wall_s=<float> bare_s=<float> events=<int> until_s=<float> serial_s=<float>
-serial_ratio_bare=<float> cpu_s=<float> ahead_blocks=<int>``.
+serial_ratio_bare=<float> cpu_s=<float> sim_cpu_s=<float> ahead_blocks=<int>`` (``sim_cpu_s``: the
+CPU seconds of the simulation's own process; ``cpu_s`` adds the workers').
 
 The bare figure is the fastest of 21 runs, measured with the finished day's objects frozen
 out of the garbage collector's scans: before, a full collection over the day's heap could
@@ -61,7 +62,10 @@ issue 27 brought the day to 123-139x in three runs of ``python -m bench.bench_si
 (fifth round); the sixth renders the signals ahead in forked workers: nine runs of this
 bench printed 81-107x with them (median 99x: met in 5, missed in the shared machine's slow
 spells) and 121-173x in one process; docs/findings.md ("Toward 100x bare SimPy:
-rendering ahead") has the figures.
+rendering ahead") has the figures. The seventh has the tactile worker work out the
+frames' flow too (the detectors take it) and runs the workers under ``SCHED_BATCH``:
+thirteen runs printed 59-117x (median 83x, met in 11), and against the sixth round's last
+commit, run in turn, a pair ratio of 0.92 (docs/findings.md, "Seventh round").
 
 Where the time goes (py-spy of the day, this revision; shares of ``SimWorld.run``):
 rendering tactile frames 41 % (the per-cell standard normals, about 20.7 M a day drawn
@@ -175,10 +179,10 @@ def _timed_run(world: SimWorld, count: bool):  # type: ignore[no-untyped-def]
     return time.perf_counter() - t0, result, counter[0]
 
 
-def _cpu_s() -> float:
-    """CPU seconds of this process and of its reaped children (a worker rendering ahead)."""
+def _cpu_s() -> tuple[float, float]:
+    """CPU seconds of this process, and of its reaped children (the workers rendering ahead)."""
     t = os.times()
-    return t.user + t.system + t.children_user + t.children_system
+    return t.user + t.system, t.children_user + t.children_system
 
 
 def _ahead_taken(world: SimWorld) -> int:
@@ -217,13 +221,15 @@ def main(argv: list[str] | None = None) -> int:
     until = a.until if a.until is not None else (QUICK_UNTIL if a.quick else None)
     sc = load_scenario(SCENARIO)
     gauge = bare_simpy_s(GAUGE_EVENTS) / GAUGE_EVENTS  # seconds per bare event, before the day
-    days = []  # (wall, result, events, CPU s of all processes, blocks rendered ahead), one per fresh world
+    days = []  # (wall, result, events, CPU s of (this process, the workers), blocks rendered ahead), one per fresh world
     for _ in range(a.repeat):
         world = SimWorld(sc, seed=a.seed, until=until)  # as a user runs it: rendering ahead where desmon does unasked
-        cpu0 = _cpu_s()
+        own0, kids0 = _cpu_s()
         wall_i, r_i, events_i = _timed_run(world, count=True)
-        days.append((wall_i, r_i, events_i, _cpu_s() - cpu0, _ahead_taken(world)))
-    wall, r, events, cpu, ahead = min(days, key=lambda d: d[0])
+        own1, kids1 = _cpu_s()
+        days.append((wall_i, r_i, events_i, (own1 - own0, kids1 - kids0), _ahead_taken(world)))
+    wall, r, events, (sim_cpu, kids_cpu), ahead = min(days, key=lambda d: d[0])
+    cpu = sim_cpu + kids_cpu
     bare = min(bare_simpy_s(events), gauge * events)
     serial = min(_timed_run(SimWorld(sc, seed=a.seed, until=until, render_ahead=False), count=False)[0] for _ in range(a.repeat))
     off, _r0, _n = _timed_run(SimWorld(sc, seed=a.seed, until=until, signals=False), count=False)
@@ -236,7 +242,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  fastest of {a.repeat} runs, each in a fresh world: {', '.join(f'{d[0]:.2f}' for d in days)} s")
     print(f"  SimPy events: {events:,}; samples wrench {samples.get('wrench', 0):,}, tactile {samples.get('tactile', 0):,}")
     how = f"tactile frames and wrench rendered ahead in forked workers ({ahead:,} blocks taken from them)" if ahead else "in this process alone"
-    print(f"  {how}; CPU s of all processes: {cpu:.2f}")
+    print(f"  {how}; CPU s of all processes: {cpu:.2f} (the simulation's process {sim_cpu:.2f}, the workers {kids_cpu:.2f})")
     print(f"  bare SimPy, same event count: {bare:.4f} s ({events / bare:,.0f} events/s); full run / bare: {ratio:.1f}x")
     print(f"  same day rendered in this process alone (render_ahead=False), fastest of {a.repeat}: {serial:.2f} s wall, {serial / bare:.1f}x bare SimPy")
     print(f"  same day with signals off: {off:.2f} s wall (deployment core, repository, audit, infrastructure, SimPy)")
@@ -246,7 +252,7 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"RESULT x_real_time={x_real:.1f} ratio_bare={ratio:.1f} signals_off_s={off:.3f} "
         f"wall_s={wall:.3f} bare_s={bare:.4f} events={events} until_s={sim:.0f} "
-        f"serial_s={serial:.3f} serial_ratio_bare={serial / bare:.1f} cpu_s={cpu:.3f} ahead_blocks={ahead}"
+        f"serial_s={serial:.3f} serial_ratio_bare={serial / bare:.1f} cpu_s={cpu:.3f} sim_cpu_s={sim_cpu:.3f} ahead_blocks={ahead}"
     )
     return 0
 

@@ -95,7 +95,7 @@ RESULT_KEYS: dict[str, tuple[str, ...]] = {
     ),
     "bench_preferences": ("pref_time_ratio", "exposure_with_lease", "exposure_without_lease"),
     "bench_sim": (
-        "x_real_time", "ratio_bare", "signals_off_s", "wall_s", "bare_s", "events", "until_s", "serial_s", "serial_ratio_bare", "cpu_s", "ahead_blocks",
+        "x_real_time", "ratio_bare", "signals_off_s", "wall_s", "bare_s", "events", "until_s", "serial_s", "serial_ratio_bare", "cpu_s", "sim_cpu_s", "ahead_blocks",
     ),
     "bench_sweep": ("speedup", "overhead", "runs", "hours", "bare_s", "one_worker_s", "two_workers_s"),
     "bench_sweep --scheduler": ("per_task_ratio", "in_task_ratio", "cpu_ratio", "runs", "hours", "rounds", "workers", "threads"),
