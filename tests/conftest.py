@@ -22,6 +22,17 @@ def refused(error: type[DesmonError], build: Callable[[], object]) -> str:
     return msg
 
 
+def deliveries(times: int) -> tuple[list[tuple[str, float, float]], float]:
+    """Segments of ``times`` deliveries (idle, grasp, hold, move_base, hold, release, idle:
+    43.4 s each) as ``(context, start, duration)``, and their end: the render-ahead tests'
+    missions."""
+    segs, t = [], 0.0
+    for ctx, d in (("idle", 1.0), ("grasp", 1.1), ("hold", 13.0), ("move_base", 21.0), ("hold", 4.0), ("release", 0.8), ("idle", 2.5)) * times:
+        segs.append((ctx, t, d))
+        t += d
+    return segs, t
+
+
 # Hypothesis draws its examples from a fixed seed here: the same suite explores the same
 # sequences on every machine, so CI is reproducible (desmon fuzz takes --seed for users).
 def force_robot_world(other: bool = False):  # type: ignore[no-untyped-def]

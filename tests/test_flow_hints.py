@@ -11,6 +11,7 @@ import os
 
 import numpy as np
 import pytest
+from conftest import deliveries
 
 from desmon.detectors.signals import MissionSignals, SlipEvent
 from desmon.detectors.tactile import FlowHint, TactileDetector, flow_ahead
@@ -22,11 +23,7 @@ from desmon.sim.world import Slip
 pytestmark = pytest.mark.skipif(not hasattr(os, "fork"), reason="rendering ahead forks")
 
 #: an 11-minute mission: grasps, holds, moves and slips
-_SEGS = []
-_t = 0.0
-for _ctx, _d in (("idle", 1.0), ("grasp", 1.1), ("hold", 13.0), ("move_base", 21.0), ("hold", 4.0), ("release", 0.8), ("idle", 2.5)) * 15:
-    _SEGS.append((_ctx, _t, _d))
-    _t += _d
+_SEGS, _t = deliveries(15)
 _SLIPS = [SlipEvent(s + 2.5, "down", "pulled") for c, s, _ in _SEGS if c == "hold"][::2]
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import deliveries
 
 from desmon.detectors.signals import MissionSignals, SlipEvent, ahead
 from desmon.detectors.tactile import TactileDetector
@@ -26,11 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.skipif(not hasattr(os, "fork"), reason="rendering ahead forks")
 
 #: a 22-minute mission: holds, moves and slips in every episode
-_SEGS = []
-_t = 0.0
-for _ctx, _d in (("idle", 1.0), ("grasp", 1.1), ("hold", 13.0), ("move_base", 21.0), ("hold", 4.0), ("release", 0.8), ("idle", 2.5)) * 30:
-    _SEGS.append((_ctx, _t, _d))
-    _t += _d
+_SEGS, _t = deliveries(30)
 _SLIPS = [SlipEvent(s + 2.5, "down", "pulled") for c, s, _ in _SEGS if c == "hold"][::2]
 
 
