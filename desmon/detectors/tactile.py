@@ -208,9 +208,9 @@ _PAST_WARMUP = TactileState(np.zeros((1, N_PADS, 2)), np.zeros((1, N_PADS, 2)), 
 def flow_ahead(moments: Arr, before: Arr | None = None) -> Arr:
     """:class:`FlowHint` values of consecutive frames ``moments`` ``(K, 6, 3)``, given the two
     frames ``before`` them (``(2, 6, 3)``), or without them NaN for the first two."""
-    m = moments if before is None else np.concatenate([before, moments])
     if before is not None and before.shape[0] != 2:
         raise SignalError(f"flow_ahead: {before.shape[0]} frames before, need the 2 before the first")
+    m = moments if before is None else np.concatenate([before, moments])
     s, valid, _ = tactile_scores(m[None], _PAST_WARMUP, True)
     out = np.where(valid[0], s[0], -1.0)
     if before is None:

@@ -524,7 +524,7 @@ def holding_seconds(episodes: Sequence[Episode], until: float) -> float:
     return float(sum(max(0.0, min(ep.end, until) - ep.start) for ep in episodes))
 
 
-class _RenderAhead:
+class _WorkerRender:
     """What a worker rendering a :class:`TactileArray` ahead does with a group of neighbouring
     blocks: renders their frame times and moments and, given ``flow`` (the tactile detector's
     ``flow_ahead``), their flow hint values, carried over from the group before it when that
@@ -612,7 +612,7 @@ class TactileArray:
         which :meth:`between` then hands out (``TactileBlock.flow``)."""
         B = TACTILE_BLOCK
         shapes = [(B,), (B, N_PADS, 3)] + ([(B,)] if flow is not None else [])
-        return self.ahead.start(_RenderAhead(self, flow), self.ahead_blocks(), shapes)
+        return self.ahead.start(_WorkerRender(self, flow), self.ahead_blocks(), shapes)
 
     def stop_ahead(self) -> None:
         """Stop the worker rendering ahead, if one runs; from then on every block is rendered here."""
@@ -646,10 +646,10 @@ class TactileArray:
 
     def _keep(self, block: int, frames: bool, res: Rendered) -> None:
         if len(self._cache) >= TACTILE_CACHE:
-            old, _frames = next(iter(self._cache))
-            del self._cache[(old, _frames)]
-            if not _frames:
-                self._flow.pop(old, None)
+            oldest = next(iter(self._cache))
+            del self._cache[oldest]
+            if not oldest[1]:  # moments: their flow goes with them
+                self._flow.pop(oldest[0], None)
         self._cache[(block, frames)] = res
 
     def render_here(self, blocks: Sequence[int], frames: bool) -> list[Rendered]:
