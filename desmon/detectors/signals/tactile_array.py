@@ -539,10 +539,12 @@ class _WorkerRender:
         got = self.array.render_here(group, False)
         if self.flow is None:
             return [(t, mom) for t, mom, _fr in got]
-        mom = np.concatenate([m for _t, m, _fr in got])
-        before = self.last[1] if self.last is not None and self.last[0] == group[0] - 1 else None
-        values = self.flow(mom, before)
-        self.last = (group[-1], mom[-2:].copy())
+        moms = [m for _t, m, _fr in got]
+        if self.last is not None and self.last[0] == group[0] - 1:  # the two frames before, in one copy with the group's
+            values = self.flow(np.concatenate([self.last[1]] + moms), None)[2:]
+        else:
+            values = self.flow(np.concatenate(moms), None)
+        self.last = (group[-1], moms[-1][-2:].copy())
         B = TACTILE_BLOCK
         return [(t, m, values[i * B : (i + 1) * B]) for i, (t, m, _fr) in enumerate(got)]
 
