@@ -11,7 +11,7 @@ import os
 
 import numpy as np
 import pytest
-from conftest import deliveries
+from conftest import deliveries, refused
 
 from desmon.detectors.signals import MissionSignals, SlipEvent
 from desmon.detectors.tactile import FlowHint, TactileDetector, flow_ahead
@@ -163,3 +163,20 @@ def test_a_detector_gets_only_the_hints_its_class_names() -> None:
     assert plain.calls == [{}]
     (got,) = asking.calls
     assert isinstance(got["tactile_flow"], FlowHint)
+
+
+@pytest.mark.parametrize(
+    "build, word",
+    [
+        (lambda: FlowHint(-1, np.zeros(3)), "first frame -1"),
+        (lambda: FlowHint(2.5, np.zeros(3)), "first frame 2.5"),  # type: ignore[arg-type]
+        (lambda: FlowHint(True, np.zeros(3)), "first frame True"),
+        (lambda: FlowHint(0, np.zeros((3, 2))), "shape (3, 2)"),
+        (lambda: FlowHint(0, ["a", "b"]), "type list"),  # type: ignore[arg-type]
+        (lambda: TactileDetector().scores(np.zeros(2), np.zeros((2, 6, 3)), [0.0, 0.0]), "type list"),  # type: ignore[arg-type]
+        (lambda: flow_ahead(np.zeros((4, 6))), "moments of shape (4, 6)"),
+        (lambda: flow_ahead(np.zeros((4, 6, 3)), np.zeros((3, 6, 3))), "3 frames before"),
+    ],
+)
+def test_a_malformed_hint_is_refused_in_one_line(build, word) -> None:  # type: ignore[no-untyped-def]
+    assert word in refused(SignalError, build)

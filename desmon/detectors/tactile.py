@@ -189,6 +189,19 @@ class FlowHint:
     first: int
     values: Arr
 
+    def __post_init__(self) -> None:
+        first = self.first
+        if isinstance(first, bool) or not isinstance(first, (int, np.integer)) or first < 0:
+            raise SignalError(f"flow hint first frame {first!r} must be a frame number (an integer >= 0)")
+        try:
+            values = np.asarray(self.values, dtype=float)
+        except (TypeError, ValueError):
+            raise SignalError(f"flow hint values of type {type(self.values).__name__}: pass one float per frame (a 1-D array)") from None
+        if values.ndim != 1:
+            raise SignalError(f"flow hint values of shape {values.shape}: pass one float per frame (a 1-D array)")
+        object.__setattr__(self, "first", int(first))
+        object.__setattr__(self, "values", values)
+
 
 def _frozen(a: Arr) -> Arr:
     a.setflags(write=False)  # shared by every detector: a write would raise, not leak
@@ -208,6 +221,9 @@ _PAST_WARMUP = TactileState(np.zeros((1, N_PADS, 2)), np.zeros((1, N_PADS, 2)), 
 def flow_ahead(moments: Arr, before: Arr | None = None) -> Arr:
     """:class:`FlowHint` values of consecutive frames ``moments`` ``(K, 6, 3)``, given the two
     frames ``before`` them (``(2, 6, 3)``), or without them NaN for the first two."""
+    for name, a in (("moments", moments), ("before", before)):
+        if a is not None and (not isinstance(a, np.ndarray) or a.ndim != 3 or a.shape[1:] != (N_PADS, 3)):
+            raise SignalError(f"flow_ahead: {name} of shape {getattr(a, 'shape', type(a).__name__)}: pass frame moments (K, 6, 3)")
     if before is not None and before.shape[0] != 2:
         raise SignalError(f"flow_ahead: {before.shape[0]} frames before, need the 2 before the first")
     m = moments if before is None else np.concatenate([before, moments])
@@ -299,6 +315,8 @@ class TactileDetector(StreamingDetector):
         m = self._as_moments(samples)
         if m.shape[0] != t.size:
             raise SignalError(f"tactile samples: {t.size} times but {m.shape[0]} frames; pass one time per frame")
+        if flow is not None and not isinstance(flow, FlowHint):
+            raise SignalError(f"tactile flow hint of type {type(flow).__name__}: pass a FlowHint or none")
         if flow is not None and flow.values.shape != (t.size,):
             raise SignalError(f"tactile flow hint of shape {flow.values.shape} for {t.size} frames; pass one value per frame or none")
         keep = t >= self._t_act
