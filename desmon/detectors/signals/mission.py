@@ -111,13 +111,22 @@ class MissionSignals:
         self.wrench_sensor = WrenchSensor(self.seed, config, self.segments, seg_params, drawn, self.faults, params)
         self.tactile_array = TactileArray(self.seed, with_slips(episodes, drawn), self.faults, params)
 
-    def start_ahead(self, tactile_flow: Callable[[np.ndarray, np.ndarray | None], np.ndarray] | None = None) -> None:
-        """Render the tactile frames and the wrench ahead, each in a forked worker
-        (:mod:`desmon.detectors.signals.ahead`); the samples are the same bytes either way.
-        With ``tactile_flow`` (``desmon.detectors.tactile.flow_ahead``) the tactile worker
-        works out the frames' flow too (``TactileBlock.flow``). A stream whose worker cannot
-        be forked (the system refuses a process) renders here."""
-        for start in (lambda: self.tactile_array.start_ahead(tactile_flow), self.wrench_sensor.start_ahead):
+    def start_ahead(self, tactile_flow: Callable[[np.ndarray, np.ndarray | None], np.ndarray] | None = None, *, wrench: bool = False) -> None:
+        """Render the tactile frames ahead in a forked worker, and with ``wrench`` the wrench in
+        a second one (:mod:`desmon.detectors.signals.ahead`); the samples are the same bytes
+        either way. With ``tactile_flow`` (``desmon.detectors.tactile.flow_ahead``) the tactile
+        worker works out the frames' flow too (``TactileBlock.flow``). A stream whose worker
+        cannot be forked (the system refuses a process) renders here.
+
+        The wrench stays here unless asked: a request by time renders only its own samples
+        of a block, so a run whose force graphs read a small part of the mission (the robot
+        day reads 80k of its 1.06 M samples) renders far less here than a worker rendering
+        every block would, and a second worker takes CPU from the first (docs/design.md,
+        "Rendering ahead")."""
+        starts = [lambda: self.tactile_array.start_ahead(tactile_flow)]
+        if wrench:
+            starts.append(self.wrench_sensor.start_ahead)
+        for start in starts:
             try:
                 start()
             except OSError:
