@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -320,3 +322,64 @@ def test_force_tared_shortcut_matches_the_general_path(seed: int) -> None:
             out.append((tt.tobytes(), s.tobytes(), valid.tobytes(), s.dtype, valid.dtype, det.status, det._run, det._last_v, det._last_t))
         results.append(out)
     assert results[0] == results[1]
+
+
+def test_move_base_force_matches_context_force() -> None:
+    # the wrench's drive by its pulses against the general kernel, on random drives at
+    # ascending times that include every pulse's bounds exactly and the samples beside them
+    from desmon.detectors.signals.common import DEFAULT_PARAMS as p
+    from desmon.detectors.signals.contexts import base_duration, context_force, draw_context, move_base_force
+
+    rng = np.random.default_rng(11)
+    for trial in range(200):
+        cp = draw_context("move_base", rng, 1, None, p)
+        start, a = float(cp["start"][0]), float(cp["a_max"][0])
+        ta = float(np.sqrt(p.base_leg / a))
+        dur = start + base_duration(a, p) + 0.3
+        edges = [start + e for e in (0.0, ta, 2 * ta, 2 * ta + p.base_pause, 3 * ta + p.base_pause, 4 * ta + p.base_pause)]
+        t = np.concatenate([rng.uniform(0.0, dur, 60), edges, np.nextafter(edges, -np.inf), np.nextafter(edges, np.inf), [0.0, dur, dur]])
+        t = np.sort(t.clip(0.0, dur))
+        coupling = float(rng.choice([1.0, 0.35, -0.8]))
+        got = move_base_force(t, cp, p, coupling)
+        want = context_force("move_base", t[None, :], cp, p, coupling)
+        assert got.shape == t.shape and got.tobytes() == want.reshape(-1).tobytes(), trial
+
+
+def test_trial_force_matches_context_force_for_every_context() -> None:
+    # one trial's force at 1-D times, parameters as numbers, against the general kernel
+    from desmon.detectors.signals.common import DEFAULT_PARAMS as p
+    from desmon.detectors.signals.contexts import context_force, draw_context, trial_force
+    from desmon.errors import SignalError
+
+    rng = np.random.default_rng(5)
+    for context in ("grasp", "release", "rotate_ccw", "rotate_cw", "move_base", "hold", "idle"):
+        for _ in range(40):
+            cp = draw_context(context, rng, 1, None, p)
+            t = np.sort(np.concatenate([rng.uniform(-0.5, 12.0, 50), [0.0, 0.0]]))
+            bounds = []  # the bump's or the drive's bounds hit exactly, and the samples beside them
+            for key, width in (("b0", "bw"), ("t0", "dur"), ("start", None)):
+                if key in cp:
+                    b = float(cp[key][0])
+                    bounds += [b] if width is None else [b, b + float(cp[width][0])]
+            t = np.sort(np.concatenate([t, bounds, np.nextafter(bounds, -np.inf), np.nextafter(bounds, np.inf)]))
+            want = context_force(context, t[None, :], cp, p, 0.6)
+            got = trial_force(context, t, cp, p, 0.6)
+            assert got.shape == t.shape and got.tobytes() == np.broadcast_to(want, (1, t.size)).reshape(-1).tobytes(), context
+    two = draw_context("grasp", rng, 2, None, p)
+    with pytest.raises(SignalError, match="trial_force: parameters of shape .* hold 2 trials"):
+        trial_force("grasp", np.zeros(3), two, p, 1.0)
+
+
+def test_wrench_indices_are_the_grid_points_in_the_window() -> None:
+    # against the plain reference: every k of a generous range with t0 <= k / rate < t1
+    from desmon.detectors.signals.common import wrench_indices
+
+    rng = np.random.default_rng(3)
+    for rate, far in ((50.0, 500.0), (37.3, 500.0), (1000.0, 500.0), (0.7, 500.0), (1000.0, 3e13)):  # far: k / rate's rounding is coarser than a sample
+        for _ in range(300):
+            t0 = float(rng.choice([rng.uniform(0, far), round(float(rng.uniform(0, far)) * rate) / rate]))
+            t1 = t0 + float(rng.choice([rng.exponential(2.0), 0.0, 1.0 / rate, round(float(rng.uniform(0, 5)) * rate) / rate]))
+            k = np.arange(max(0, math.floor(t0 * rate) - 1), math.ceil(t1 * rate) + 1)  # the window wrench_indices looks in
+            want = k[(k / rate >= t0) & (k / rate < t1)]
+            got = wrench_indices(t0, t1, rate)
+            assert got.dtype == np.int64 and got.tolist() == want.tolist(), (rate, t0, t1)

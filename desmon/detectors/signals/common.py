@@ -198,9 +198,21 @@ def wrench_indices(t0: float, t1: float, rate: float) -> Arr:
     """Indices ``k`` of the fixed-rate wrench grid ``t = k / rate`` with ``t0 <= t < t1``."""
     k0 = max(0, math.floor(t0 * rate) - 1)
     k1 = max(k0, math.ceil(t1 * rate) + 1)
-    k = np.arange(k0, k1, dtype=np.int64)
-    tk = k / rate  # non-decreasing (rounding is monotonic): the kept ones are one run
-    return k[int(tk.searchsorted(t0, side="left")) : int(tk.searchsorted(t1, side="left"))]
+    # ``k / rate`` is non-decreasing in ``k`` (rounding is monotonic): the kept ones are one
+    # run, from the first ``k`` of ``k0 .. k1 - 1`` with ``k / rate >= t0`` to the first with
+    # ``k / rate >= t1``, each found by a few steps from its estimate (``k / rate`` in Python
+    # is numpy's float64 division of the same numbers)
+    return np.arange(_first_at(t0, rate, k0, k1, k0), _first_at(t1, rate, k0, k1, math.floor(t1 * rate) - 1), dtype=np.int64)
+
+
+def _first_at(t: float, rate: float, k0: int, k1: int, guess: int) -> int:
+    """The first ``k`` of ``k0 .. k1 - 1`` with ``k / rate >= t`` (``k1`` if none), from ``guess``."""
+    k = min(max(guess, k0), k1)
+    while k > k0 and (k - 1) / rate >= t:
+        k -= 1
+    while k < k1 and k / rate < t:
+        k += 1
+    return k
 
 
 def tactile_nominal_indices(t0: float, t1: float, rate: float, slack: float) -> Arr:

@@ -206,6 +206,8 @@ def move_base_tactile(t_rel: Arr, cp: Params, p: SignalParams) -> tuple[Arr, Arr
     the first pulse that holds winning as in :func:`base_profile`.
     """
     a = float(cp["a_max"][0])
+    if not (a > 0.0 and p.base_leg >= 0.0):  # outside the drive's domain (math.sqrt would raise): the general kernel
+        return context_force(MOVE_BASE, t_rel[None, :], cp, p, coupling)[0]
     ta = math.sqrt(p.base_leg / a)
     tau = t_rel - float(cp["start"][0])
     t2 = tau - 2.0 * ta
@@ -224,6 +226,75 @@ def move_base_tactile(t_rel: Arr, cp: Params, p: SignalParams) -> tuple[Arr, Arr
     fac = np.array([1.0 + 0.03 * r for r in rel] * 2)
     dy = np.array([0.05 * r + sj * on for on in (0.0, 1.0) for r in rel])
     return fac.take(case), dy.take(case)
+
+
+def trial_force(context: str, t_rel: Arr, cp: Params, p: SignalParams, coupling: float) -> Arr:
+    """:func:`context_force` of one trial (``cp`` arrays of one row: ``(1,)``, or ``(1, 6)``
+    for the per-pad ones) at non-decreasing times ``t_rel`` ``(K,)``, as ``(K,)``: the same
+    floats from the same operations on each sample, the parameters taken as numbers (no
+    broadcasting of one-element arrays). A ``MOVE_BASE`` drive: :func:`move_base_force`."""
+    first = next(iter(cp.values()), None)  # every parameter of a draw has its trials on the first axis
+    if first is not None and first.shape[:1] != (1,):
+        raise SignalError(f"trial_force: parameters of shape {first.shape} hold {first.shape[0] if first.ndim else 0} trials; pass one trial's (first axis 1) or use context_force")
+    if context == GRASP or context == RELEASE:
+        return float(cp["amp"][0]) * _half_sine_ascending(t_rel, float(cp["b0"][0]), float(cp["bw"][0]))
+    if context in (ROTATE_CCW, ROTATE_CW):
+        return float(cp["amp"][0]) * _half_sine_ascending(t_rel, float(cp["t0"][0]), float(cp["dur"][0]))
+    if context == MOVE_BASE:
+        return move_base_force(t_rel, cp, p, coupling)
+    return context_force(context, t_rel[None, :], cp, p, coupling)[0]
+
+
+def _half_sine_ascending(t: Arr, t0: float, width: float) -> Arr:
+    """:func:`half_sine` of non-decreasing times ``t`` ``(K,)``: the samples on ``[t0, t0 + width]``
+    are one run (``u = (t - t0) / width`` is non-decreasing for ``width > 0``), where the sine is
+    taken (clipping ``u`` there changes nothing); zero elsewhere."""
+    if not width > 0.0:
+        return half_sine(t, t0, width)
+    u = t - t0
+    u /= width
+    a, b = u.searchsorted((0.0, 1.0), side="left").tolist()
+    b += int(u[b:].searchsorted(1.0, side="right"))  # the samples at u == 1 exactly are inside too
+    out = np.zeros(t.size)
+    part = u[a:b]
+    part *= np.pi
+    np.sin(part, out=out[a:b])
+    return out
+
+
+def move_base_force(t_rel: Arr, cp: Params, p: SignalParams, coupling: float) -> Arr:
+    """:func:`context_force` of one ``MOVE_BASE`` trial (``cp`` arrays ``(1,)``) at
+    non-decreasing times ``t_rel`` ``(K,)``, as ``(K,)``: the same floats, from the same
+    operations on each sample.
+
+    The drive's four pulses (:func:`base_profile`) each hold on one run of samples (``tau =
+    t_rel - start`` and ``t2`` are non-decreasing: a rounded difference with a constant is
+    monotonic), found by bisection; the acceleration is set per run and the speed is worked
+    out on the pulses only (zero elsewhere, as the selection leaves it). The vibration's sine
+    is taken at every sample, so a zero speed gives the zero of the same sign."""
+    a = float(cp["a_max"][0])
+    if not (a > 0.0 and p.base_leg >= 0.0):  # outside the drive's domain (math.sqrt would raise): the general kernel
+        return context_force(MOVE_BASE, t_rel[None, :], cp, p, coupling)[0]
+    ta = math.sqrt(p.base_leg / a)
+    tau = t_rel - float(cp["start"][0])
+    t2 = tau - 2.0 * ta
+    t2 -= p.base_pause
+    edges = (0.0, ta, 2 * ta)
+    i0, i1, i2 = tau.searchsorted(edges).tolist()
+    j0, j1, j2 = t2.searchsorted(edges).tolist()
+    acc = np.zeros(t_rel.size)
+    vel = np.zeros(t_rel.size)
+    # the later pulses first: an earlier one that holds overwrites them (the first that holds wins)
+    acc[j1:j2] = a
+    vel[j1:j2] = -a * (2 * ta - t2[j1:j2])
+    acc[j0:j1] = -a
+    vel[j0:j1] = -a * t2[j0:j1]
+    acc[i1:i2] = -a
+    vel[i1:i2] = a * (2 * ta - tau[i1:i2])
+    acc[i0:i1] = a
+    vel[i0:i1] = a * tau[i0:i1]
+    vib = p.base_kv * np.abs(vel) * np.sin(2 * math.pi * float(cp["fv"][0]) * t_rel + float(cp["phase"][0]))
+    return coupling * float(cp["gain"][0]) * acc + vib
 
 
 def hold_creep(t_rel: Arr, kappa: Arr, p: SignalParams) -> Arr:

@@ -12,6 +12,7 @@ sigma 0.05 N, weak coupling). Samples are rendered and cached in blocks of
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 from typing import Final, Sequence
@@ -20,7 +21,7 @@ import numpy as np
 
 from desmon.detectors.signals.ahead import Ahead, RenderAhead
 from desmon.detectors.signals.common import Arr, Params, Segment, SensorFault, SignalParams, WrenchBlock, WrenchSource, wrench_indices
-from desmon.detectors.signals.contexts import context_force
+from desmon.detectors.signals.contexts import trial_force
 from desmon.detectors.signals.noise import STREAM_WRENCH, WRENCH_BLOCK, BlockStream, wrench_noise
 from desmon.detectors.signals.slips import MissionSlip, slip_force
 from desmon.errors import SignalError
@@ -82,6 +83,11 @@ class WrenchSensor:
         self._cache: dict[int, Arr] = {}
         #: per slip: the span of times its load is rendered for (a block reaching into it)
         self._slip_spans = tuple((float(sl.t_s[0]) - 1.5, float(sl.t_s[0]) + 2.0, sl) for sl in self.slips)
+        #: the spans' starts and ends, and whether both ascend (slips in time order): then the
+        #: spans a block reaches are one run of them, found by bisection
+        self._span_lo = [lo for lo, _hi, _sl in self._slip_spans]
+        self._span_hi = [hi for _lo, hi, _sl in self._slip_spans]
+        self._spans_sorted = self._span_lo == sorted(self._span_lo) and self._span_hi == sorted(self._span_hi)
         #: per segment: whether it adds a force (hold and idle add none)
         self._forceful = tuple(s.context not in (HOLD, IDLE) for s in self.segments)
         #: the worker rendering ahead, while one runs (:meth:`start_ahead`), and what it gave
@@ -155,8 +161,11 @@ class WrenchSensor:
             lo = int(t.searchsorted(s.start, side="left"))
             hi = int(t.searchsorted(s.end, side="left"))
             if hi > lo:
-                val[lo:hi] += context_force(s.context, t[None, lo:hi] - s.start, self.seg_params[i], self.params, self.config.coupling)[0]
-        for before, after, sl in self._slip_spans:
+                val[lo:hi] += trial_force(s.context, t[lo:hi] - s.start, self.seg_params[i], self.params, self.config.coupling)
+        spans = self._slip_spans
+        if self._spans_sorted:  # the spans with before <= t_hi and after >= t_lo, in order
+            spans = spans[bisect.bisect_left(self._span_hi, t_lo) : bisect.bisect_right(self._span_lo, t_hi)]
+        for before, after, sl in spans:
             if t_hi < before or t_lo > after:
                 continue
             val = val + slip_force(t[None, :], sl.t_s, sl.sign, sl.grav, sl.params)[0]
