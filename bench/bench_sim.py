@@ -6,10 +6,10 @@ default the scenario's 8 h day, 28,800 simulated s):
 * the day with signals and detectors on, as a user runs it: wall seconds of
   ``SimWorld.run`` (the scenario loaded and the world built beforehand, not counted),
   simulated seconds per wall second (``x_real_time``), the SimPy events it stepped and
-  the sensor samples it read. Where desmon forks workers that render the tactile frames
-  and the wrench ahead (``render_ahead`` automatic: Linux, 2+ cores, one thread; docs/design.md,
+  the sensor samples it read. Where desmon forks a worker that renders the tactile frames
+  ahead (``render_ahead`` automatic: Linux, 2+ cores, one thread; docs/design.md,
   "Rendering ahead"), it does so here too: the line says so, with the blocks taken from
-  them (``ahead_blocks``) and the CPU seconds of this process (``sim_cpu_s``) and of all processes (``cpu_s``);
+  it (``ahead_blocks``) and the CPU seconds of this process (``sim_cpu_s``) and of all processes (``cpu_s``);
 * the bare SimPy cost of the same event count: one ``env.timeout`` per event on an empty
   ``simpy.Environment``, the fastest of 21 runs (below), and the ratio of the full run's wall time
   to it (``ratio_bare``: a ratio, so it carries over to a slower machine);
@@ -189,7 +189,7 @@ def _cpu_s() -> tuple[float, float]:
 
 
 def _ahead_taken(world: SimWorld) -> int:
-    """Blocks (tactile and wrench) the run took from workers rendering ahead (0: it rendered alone)."""
+    """Blocks the run took from workers rendering ahead (0: it rendered alone)."""
     return world.bank.signals.ahead_taken if world.bank is not None else 0
 
 
@@ -245,7 +245,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"robot day, seed {a.seed}: {sim:,.0f} sim-s in {wall:.2f} s wall -> {x_real:,.0f}x real time")
     print(f"  fastest of {a.repeat} runs, each in a fresh world: {', '.join(f'{d[0]:.2f}' for d in days)} s")
     print(f"  SimPy events: {events:,}; samples wrench {samples.get('wrench', 0):,}, tactile {samples.get('tactile', 0):,}")
-    how = f"tactile frames and wrench rendered ahead in forked workers ({ahead:,} blocks taken from them)" if ahead else "in this process alone"
+    how = f"rendered ahead in forked workers ({ahead:,} blocks taken from them)" if ahead else "in this process alone"
     print(f"  {how}; CPU s of all processes: {cpu:.2f} (the simulation's process {sim_cpu:.2f}, the workers {kids_cpu:.2f})")
     print(f"  bare SimPy, same event count: {bare:.4f} s ({events / bare:,.0f} events/s); full run / bare: {ratio:.1f}x")
     print(f"  same day rendered in this process alone (render_ahead=False), fastest of {a.repeat}: {serial:.2f} s wall, {serial / bare:.1f}x bare SimPy")
