@@ -58,6 +58,8 @@ class SensorBank:
         self.down: dict[str, list[list[float]]] = {d.name: [] for d, _ in devices}
         #: samples rendered per stream
         self.samples = {s.name: 0 for s in signal_streams()}
+        #: the pads a graph reading these tactile pads reaches, by the pads' names (read only)
+        self._covered: dict[tuple[str, ...], np.ndarray] = {}
 
     def fail(self, device: str, t: float) -> None:
         iv = self.down.get(device)
@@ -112,9 +114,13 @@ class SensorBank:
     def _pads_read(self, mom: np.ndarray, pads: Sequence[str], down: Sequence[tuple[str, np.ndarray]]) -> np.ndarray:
         """Moments ``mom`` as a graph reading the tactile ``pads`` alone sees them: a down pad's
         frames and the pads it cannot reach read zero (a changed copy), else ``mom`` itself."""
-        covered = np.zeros(N_PADS, dtype=bool)
-        for d in pads:
-            covered[self.pad[d]] = True
+        key = tuple(pads)
+        covered = self._covered.get(key)
+        if covered is None:
+            covered = self._covered[key] = np.zeros(N_PADS, dtype=bool)
+            for d in pads:
+                covered[self.pad[d]] = True
+            covered.setflags(write=False)
         if down:
             mom = mom.copy()
             for d, m in down:

@@ -217,9 +217,13 @@ def _first_at(t: float, rate: float, k0: int, k1: int, guess: int) -> int:
 
 def tactile_nominal_indices(t0: float, t1: float, rate: float, slack: float) -> Arr:
     """Candidate frame numbers whose jittered time may fall in ``[t0, t1)`` (``slack`` = max |jitter|)."""
+    return np.arange(*tactile_nominal_range(t0, t1, rate, slack), dtype=np.int64)
+
+
+def tactile_nominal_range(t0: float, t1: float, rate: float, slack: float) -> tuple[int, int]:
+    """:func:`tactile_nominal_indices` as the range ``(k0, k1)`` of those frame numbers."""
     k0 = max(0, math.floor((t0 - slack) * rate))
-    k1 = max(k0, math.ceil((t1 + slack) * rate) + 1)
-    return np.arange(k0, k1, dtype=np.int64)
+    return k0, max(k0, math.ceil((t1 + slack) * rate) + 1)
 
 
 # --------------------------------------------------------------------------- checks

@@ -36,6 +36,7 @@ from desmon.detectors.signals.common import (
     SignalParams,
     TactileBlock,
     tactile_nominal_indices,
+    tactile_nominal_range,
 )
 from desmon.detectors.signals.ahead import Ahead, RenderAhead
 from desmon.detectors.signals.contexts import context_tactile, hold_creep, move_base_tactile
@@ -499,13 +500,37 @@ def _contact_rows(t: Arr, units: list[tuple[int, int, int]], episodes: Sequence[
     return _Rows(frame, pad, idx, r[0], r[1], r[2], r[3], r[4])
 
 
-def _cut(parts: list[tuple[int, Arr]], lo: int, hi: int) -> Arr:
-    """Frames ``lo .. hi - 1`` of neighbouring blocks' arrays ``(first frame, array)``, one new array."""
+def _run_of_times(times: list[Arr], first: int, k0: int, k1: int, t0: float, t1: float) -> tuple[int, int]:
+    """The frames ``lo .. hi - 1`` among ``k0 .. k1 - 1`` with ``t0 <= t < t1``, ``times`` being the
+    frame times of neighbouring blocks from frame ``first`` on (ascending: the frames are one
+    run, from the first with ``t >= t0`` to the first with ``t >= t1``)."""
     B = TACTILE_BLOCK
-    cuts = [a[max(lo - base, 0) : min(hi - base, B)] for base, a in parts if lo < base + B and hi > base]
-    if not cuts:
-        return parts[0][1][:0].copy()
-    return cuts[0].copy() if len(cuts) == 1 else np.concatenate(cuts)
+    lo = hi = None
+    for i, tb in enumerate(times):
+        base = first + i * B
+        a = max(k0 - base, 0)
+        tb = tb[a : min(k1 - base, B)]
+        if not tb.size:
+            continue
+        last = tb[-1]
+        if lo is None and last >= t0:
+            lo = base + a + int(tb.searchsorted(t0, side="left"))
+        if last >= t1:
+            hi = base + a + int(tb.searchsorted(t1, side="left"))
+            break
+    hi = k1 if hi is None else hi
+    return (hi if lo is None else min(lo, hi)), hi
+
+
+def _cut_shares(arrays: list[Arr], shares: list[tuple[int, int, int]]) -> Arr:
+    """The frames ``shares`` names (``(i, a, b)``: frames ``a .. b - 1`` of ``arrays[i]``, one
+    array per neighbouring block), in order, as one new array."""
+    if not shares:
+        return arrays[0][:0].copy()
+    if len(shares) == 1:
+        i, a, b = shares[0]
+        return arrays[i][a:b].copy()
+    return np.concatenate([arrays[i][a:b] for i, a, b in shares])
 
 
 def episode_blocks(episodes: Sequence[Episode], rate: float, clip: float) -> list[int]:
@@ -805,45 +830,37 @@ class TactileArray:
     def _cached_between(self, k0: int, k1: int, t0: float, t1: float, frames: bool) -> TactileBlock | None:
         """:meth:`between` of candidate frames ``k0 .. k1 - 1`` read from the cached blocks
         (None if one is missing), without faults: frame times ascend, so the frames with
-        ``t0 <= t < t1`` are one run, cut from the blocks' own times, moments and frames."""
+        ``t0 <= t < t1`` are one run, cut from the blocks' own times, moments and frames (and
+        their flow, where a worker gave it for every one of the blocks)."""
         B = TACTILE_BLOCK
-        parts = []
-        for b in range(k0 // B, (k1 - 1) // B + 1):
-            hit = self._cache.get((b, frames))
+        cache = self._cache
+        b0 = k0 >> _BLOCK_SHIFT
+        hits = []
+        for b in range(b0, ((k1 - 1) >> _BLOCK_SHIFT) + 1):
+            hit = cache.get((b, frames))
             if hit is None:
                 return None
-            parts.append((b * B, hit))
-        cand = [(base, hit[0][max(k0 - base, 0) : min(k1 - base, B)]) for base, hit in parts]
-        # the run of frames: from the first with t >= t0 to the first with t >= t1 (all candidates ascending)
-        lo = hi = None
-        for base, tb in cand:
-            if lo is None and tb.size and tb[-1] >= t0:
-                lo = max(k0, base) + int(tb.searchsorted(t0, side="left"))
-            if tb.size and tb[-1] >= t1:
-                hi = max(k0, base) + int(tb.searchsorted(t1, side="left"))
-                break
-        hi = k1 if hi is None else hi
-        lo = hi if lo is None else min(lo, hi)
-        fields = [_cut([(base, hit[f]) for base, hit in parts], lo, hi) for f in range(3 if frames else 2)]  # type: ignore[index]
-        flow = None if frames else self._flow_cut([base for base, _hit in parts], lo, hi)
+            hits.append(hit)
+        lo, hi = _run_of_times([hit[0] for hit in hits], b0 * B, k0, k1, t0, t1)
+        # each block's share of frames lo .. hi - 1, as (block, first, one past the last)
+        shares = [(i, max(lo - base, 0), min(hi - base, B)) for i, base in enumerate(range(b0 * B, (b0 + len(hits)) * B, B)) if lo < base + B and hi > base]
+        fields = [_cut_shares([hit[f] for hit in hits], shares) for f in range(3 if frames else 2)]  # type: ignore[misc]
+        flow = None
+        if not frames:
+            flows = [self._flow.get(b0 + i) for i in range(len(hits))]
+            if not any(v is None for v in flows):
+                flow = _cut_shares(flows, shares)  # type: ignore[arg-type]
         return TactileBlock(np.arange(lo, hi, dtype=np.int64), fields[0], fields[1], fields[2] if frames else None, flow)
-
-    def _flow_cut(self, bases: list[int], lo: int, hi: int) -> Arr | None:
-        """The flow hint values of frames ``lo .. hi - 1`` of the neighbouring blocks starting at
-        ``bases``, or None unless a worker gave them for every one of those blocks."""
-        flows = [self._flow.get(base // TACTILE_BLOCK) for base in bases]
-        if any(v is None for v in flows):
-            return None
-        return _cut(list(zip(bases, flows)), lo, hi)  # type: ignore[arg-type]
 
     def between(self, t0: float, t1: float, frames: bool = False) -> TactileBlock:
         """All frames with ``t0 <= t < t1`` (moments always; full frames if ``frames``)."""
-        cand = tactile_nominal_indices(t0, t1, self.rate, self.params.tactile_jitter_clip)
-        if cand.size:
-            self._prefetch(int(cand[0]), int(cand[-1]), t1, frames)
+        k0, k1 = tactile_nominal_range(t0, t1, self.rate, self.params.tactile_jitter_clip)
+        if k1 > k0:
+            self._prefetch(k0, k1 - 1, t1, frames)
             if self._ordered and not self.faults:
-                hit = self._cached_between(int(cand[0]), int(cand[-1]) + 1, t0, t1, frames)
+                hit = self._cached_between(k0, k1, t0, t1, frames)
                 if hit is not None:
                     return hit
-        t = self._times_range(int(cand[0]), int(cand[-1]) + 1) if cand.size else self.times(cand)  # cand: consecutive
+        cand = np.arange(k0, k1, dtype=np.int64)
+        t = self._times_range(k0, k1) if k1 > k0 else self.times(cand)  # cand: consecutive
         return self.at(cand[(t >= t0) & (t < t1)], frames=frames)
