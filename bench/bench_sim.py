@@ -68,9 +68,15 @@ spells) and 121-173x in one process; docs/findings.md ("Toward 100x bare SimPy:
 rendering ahead") has the figures. The seventh has the tactile worker work out the
 frames' flow too (the detectors take it) and runs the workers under ``SCHED_BATCH``:
 thirteen runs printed 59-117x (median 83x, met in 11), and against the sixth round's last
-commit, run in turn, a pair ratio of 0.92 (docs/findings.md, "Seventh round").
+commit, run in turn, a pair ratio of 0.92 (docs/findings.md, "Seventh round"). The eighth
+leaves the wrench in the simulation's process (its worker rendered every block of the
+mission for the 80k samples the day reads, and took turns with the other two processes
+on two cores) and renders a request's wrench samples with less work: twelve runs printed
+66.6-90.4x (median 75.4x, met in 12), against 82.7-99.6x (median 88.5x) for the seventh
+round's code on the same day (docs/findings.md, "Eighth round").
 
-Where the time goes (py-spy of the day, this revision; shares of ``SimWorld.run``):
+Where the time went in the second round (py-spy of the day in one process; shares of ``SimWorld.run``;
+docs/findings.md has the later rounds' shares):
 rendering tactile frames 41 % (the per-cell standard normals, about 20.7 M a day drawn
 bit-identically in a fixed order, 10.5 %: a floor; each episode's pad states 9 %; the
 cells above the dead-band 9 %; creating the per-block generators, tactile, wrench and
