@@ -94,6 +94,22 @@ def test_wrench_from_the_worker_is_the_wrench_rendered_here() -> None:
     assert sensor.ahead_taken == worker.taken and fast.ahead_taken == worker.taken
 
 
+def test_blocks_the_simulation_goes_past_give_their_slots_back() -> None:
+    # a block is copied out of its slot when taken; the slots of blocks never taken go back
+    # before the simulation waits, so the worker never waits for a slot that nobody frees
+    blocks = list(range(4 * ahead.SLOTS))
+    worker = ahead.RenderAhead(lambda group: [(np.full(4, float(b)),) for b in group], blocks, [(4,)])
+    try:
+        t0 = time.perf_counter()
+        for b in blocks[::3]:  # two blocks of three never taken
+            got = worker.take(b)
+            assert got is not None and got[0].tolist() == [float(b)] * 4
+        assert worker.taken == len(blocks[::3]) and worker.missed == 0
+        assert time.perf_counter() - t0 < ahead.STALL_S / 4  # no stall: the worker always had a slot
+    finally:
+        worker.close()
+
+
 def test_a_request_far_ahead_makes_the_worker_skip_there() -> None:
     fast, ref = _pair()
     arr = fast.tactile_array

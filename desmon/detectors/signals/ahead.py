@@ -118,8 +118,8 @@ class RenderAhead:
         self._buf = b""
         #: slots copied out and not yet given back (messages for the worker)
         self._freed: list[bytes] = []
-        #: blocks received and not yet taken, by block
-        self._got: dict[int, tuple[np.ndarray, ...]] = {}
+        #: blocks received and not yet taken: block -> its slot (copied out when taken)
+        self._got: dict[int, int] = {}
         #: plan position of the last block received (-1: none yet)
         self._last = -1
         #: blocks the simulation took from the worker / rendered itself though planned
@@ -134,10 +134,9 @@ class RenderAhead:
 
     def take(self, block: int) -> tuple[np.ndarray, ...] | None:
         """The arrays of ``block`` from the worker, or None (render it here)."""
-        hit = self._got.pop(block, None)
-        if hit is not None:
-            self.taken += 1
-            return hit
+        slot = self._got.pop(block, None)
+        if slot is not None:
+            return self._copy_out(slot)
         at = self._pos.get(block)
         if at is None or self.pid is None:
             return None
@@ -147,17 +146,36 @@ class RenderAhead:
         if at - self._last > SLOTS:  # far ahead of the worker: it skips there
             self._tell(_MSG.pack(-1, block))
         while self.pid is not None and self._last < at:
+            self._free_passed(at)
             self._receive()
-        hit = self._got.pop(block, None)
-        if hit is None:
+        slot = self._got.pop(block, None)
+        if slot is None or self.pid is None:
             self.missed += 1
-        else:
-            self.taken += 1
-        return hit
+            return None
+        return self._copy_out(slot)
+
+    def _copy_out(self, slot: int) -> tuple[np.ndarray, ...]:
+        """The arrays of the block in ``slot``, in one copy (they view it), and the slot freed:
+        copied when taken, so the block is warm in the cache for the reads that follow."""
+        size = self._slot // 8
+        whole = self._floats[slot * size : (slot + 1) * size].copy()
+        self.taken += 1
+        self._freed.append(_MSG.pack(slot, -1))
+        if len(self._freed) >= SLOTS // 4:
+            self._give_back()
+        return tuple(whole[lo:hi].reshape(sh) for lo, hi, sh in self._parts)
+
+    def _free_passed(self, at: int) -> None:
+        """Free the slots of the blocks received before plan position ``at`` and not taken: the
+        simulation has gone past them (asked again, they are rendered here), and the worker,
+        which the simulation is about to wait for, may be waiting for a slot."""
+        pos = self._pos
+        for b in [b for b in self._got if pos[b] < at]:
+            self._freed.append(_MSG.pack(self._got.pop(b), -1))
 
     def _receive(self) -> None:
-        """Read the worker's next messages (waiting up to ``STALL_S``), copy their blocks out of
-        their slots and give the slots back: a quarter of the slots at a time, and every one
+        """Read the worker's next messages (waiting up to ``STALL_S``) and note which block lies
+        in which slot; freed slots go back a quarter of the slots at a time, and every one
         before waiting (the worker may be waiting for a slot)."""
         ready, _, _ = select.select([self._done], [], [], 0)
         if not ready:
@@ -171,19 +189,11 @@ class RenderAhead:
             return
         self._buf += chunk
         n = len(self._buf) // _MSG.size
-        floats, size = self._floats, self._slot // 8
         for i in range(n):
             block, slot = _MSG.unpack_from(self._buf, i * _MSG.size)
-            whole = floats[slot * size : (slot + 1) * size].copy()  # one copy; the block's arrays view it
-            self._got[block] = tuple(whole[lo:hi].reshape(sh) for lo, hi, sh in self._parts)
-            self._freed.append(_MSG.pack(slot, -1))
+            self._got[block] = slot
             self._last = self._pos[block]
         self._buf = self._buf[n * _MSG.size :]
-        if len(self._freed) >= SLOTS // 4:
-            self._give_back()
-        if len(self._got) > 2 * SLOTS:  # blocks the simulation went past without taking
-            for b in sorted(self._got)[: len(self._got) - SLOTS]:
-                del self._got[b]
 
     def _give_back(self) -> None:
         """Tell the worker the slots copied out since the last time."""
@@ -203,6 +213,7 @@ class RenderAhead:
         pid, self.pid = self.pid, None
         if pid is None:
             return
+        self._got.clear()  # their slots go with the map: asked for, they are rendered here
         for fd in (self._done, self._free):
             try:
                 os.close(fd)
