@@ -194,6 +194,20 @@ def context_tactile(context: str, t_rel: Arr, cp: Params, p: SignalParams) -> tu
     return np.ones(1), np.zeros(1), np.zeros(1)
 
 
+def _drive_runs(t_rel: Arr, cp: Params, p: SignalParams) -> tuple[float, float, Arr, Arr, list[int], list[int]]:
+    """One ``MOVE_BASE`` drive at non-decreasing times ``t_rel`` ``(K,)``: its peak acceleration
+    ``a``, pulse length ``ta``, ``tau = t_rel - start``, ``t2 = tau - 2 ta - pause`` (the second
+    half's time), and where ``tau`` and ``t2`` reach 0, ``ta`` and ``2 ta`` (by bisection): the
+    pulses of :func:`base_profile` are ``tau`` in ``[0, ta)``, ``[ta, 2 ta)`` and ``t2`` in the same two."""
+    a = float(cp["a_max"][0])
+    ta = math.sqrt(p.base_leg / a)
+    tau = t_rel - float(cp["start"][0])
+    t2 = tau - 2.0 * ta
+    t2 -= p.base_pause
+    edges = (0.0, ta, 2 * ta)
+    return a, ta, tau, t2, tau.searchsorted(edges).tolist(), t2.searchsorted(edges).tolist()
+
+
 def move_base_tactile(t_rel: Arr, cp: Params, p: SignalParams) -> tuple[Arr, Arr]:
     """:func:`context_tactile`'s pressure factor and row offset of one ``MOVE_BASE`` trial
     (``cp`` arrays ``(1,)``) at non-decreasing times ``t_rel`` ``(K,)``, each ``(K,)`` (the
@@ -205,16 +219,7 @@ def move_base_tactile(t_rel: Arr, cp: Params, p: SignalParams) -> tuple[Arr, Arr
     monotonic), found by bisection; each frame gets the value of its (pulse, jump) case,
     the first pulse that holds winning as in :func:`base_profile`.
     """
-    a = float(cp["a_max"][0])
-    if not (a > 0.0 and p.base_leg >= 0.0):  # outside the drive's domain (math.sqrt would raise): the general kernel
-        return context_force(MOVE_BASE, t_rel[None, :], cp, p, coupling)[0]
-    ta = math.sqrt(p.base_leg / a)
-    tau = t_rel - float(cp["start"][0])
-    t2 = tau - 2.0 * ta
-    t2 -= p.base_pause
-    edges = (0.0, ta, 2 * ta)
-    i0, i1, i2 = tau.searchsorted(edges).tolist()
-    j0, j1, j2 = t2.searchsorted(edges).tolist()
+    a, ta, tau, t2, (i0, i1, i2), (j0, j1, j2) = _drive_runs(t_rel, cp, p)
     case = np.zeros(t_rel.size, dtype=np.intp)
     case[j1:j2] = 4  # the later pulses first: an earlier one that holds overwrites them
     case[j0:j1] = 3
@@ -272,16 +277,9 @@ def move_base_force(t_rel: Arr, cp: Params, p: SignalParams, coupling: float) ->
     monotonic), found by bisection; the acceleration is set per run and the speed is worked
     out on the pulses only (zero elsewhere, as the selection leaves it). The vibration's sine
     is taken at every sample, so a zero speed gives the zero of the same sign."""
-    a = float(cp["a_max"][0])
-    if not (a > 0.0 and p.base_leg >= 0.0):  # outside the drive's domain (math.sqrt would raise): the general kernel
+    if not (float(cp["a_max"][0]) > 0.0 and p.base_leg >= 0.0):  # outside the drive's domain (math.sqrt would raise): the general kernel
         return context_force(MOVE_BASE, t_rel[None, :], cp, p, coupling)[0]
-    ta = math.sqrt(p.base_leg / a)
-    tau = t_rel - float(cp["start"][0])
-    t2 = tau - 2.0 * ta
-    t2 -= p.base_pause
-    edges = (0.0, ta, 2 * ta)
-    i0, i1, i2 = tau.searchsorted(edges).tolist()
-    j0, j1, j2 = t2.searchsorted(edges).tolist()
+    a, ta, tau, t2, (i0, i1, i2), (j0, j1, j2) = _drive_runs(t_rel, cp, p)
     acc = np.zeros(t_rel.size)
     vel = np.zeros(t_rel.size)
     # the later pulses first: an earlier one that holds overwrites them (the first that holds wins)
