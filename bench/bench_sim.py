@@ -74,9 +74,10 @@ thirteen runs printed 59-117x (median 83x, met in 11), and against the sixth rou
 commit, run in turn, a pair ratio of 0.92 (docs/findings.md, "Seventh round"). The eighth
 leaves the wrench in the simulation's process (its worker rendered every block of the
 mission for the 80k samples the day reads, and took turns with the other two processes
-on two cores) and renders a request's wrench samples with less work: twelve runs printed
-66.6-90.4x (median 75.4x, met in 12), against 82.7-99.6x (median 88.5x) for the seventh
-round's code on the same day (docs/findings.md, "Eighth round").
+on two cores), renders a request's wrench samples with less work and copies a block out of
+its slot when it is taken: 21 runs printed 66.6-90.4x (median 77.5x, met in 21), against
+82.7-99.6x (median 88.5x) for the seventh round's code on the same day (docs/findings.md,
+"Eighth round").
 
 Where the time went in the second round (py-spy of the day in one process; shares of ``SimWorld.run``;
 docs/findings.md has the later rounds' shares):
