@@ -110,6 +110,24 @@ def test_blocks_the_simulation_goes_past_give_their_slots_back() -> None:
         worker.close()
 
 
+def test_a_mission_renders_the_wrench_ahead_only_when_asked() -> None:
+    # a request by time renders only its own wrench samples; a worker would render every block
+    fast, _ref = _pair()
+    fast.start_ahead()
+    try:
+        assert fast.tactile_array.ahead.worker is not None and fast.wrench_sensor.ahead.worker is None
+    finally:
+        fast.stop_ahead()
+    fast.start_ahead(wrench=True)
+    try:
+        assert fast.tactile_array.ahead.worker is not None and fast.wrench_sensor.ahead.worker is not None
+    finally:
+        fast.stop_ahead()
+    with pytest.raises(SignalError, match="start_ahead: wrench 'yes' must be True or False"):
+        fast.start_ahead(wrench="yes")  # type: ignore[arg-type]
+    assert fast.tactile_array.ahead.worker is None  # nothing forked
+
+
 def test_a_request_far_ahead_makes_the_worker_skip_there() -> None:
     fast, ref = _pair()
     arr = fast.tactile_array

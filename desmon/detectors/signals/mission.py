@@ -123,6 +123,8 @@ class MissionSignals:
         day reads 80k of its 1.06 M samples) renders far less here than a worker rendering
         every block would, and a second worker takes CPU from the first (docs/design.md,
         "Rendering ahead")."""
+        if not isinstance(wrench, bool):
+            raise SignalError(f"start_ahead: wrench {wrench!r} must be True or False")
         starts = [lambda: self.tactile_array.start_ahead(tactile_flow)]
         if wrench:
             starts.append(self.wrench_sensor.start_ahead)
