@@ -31,7 +31,7 @@ import numpy as np
 
 from desmon.analyze.chain import Chain, build_chain
 from desmon.analyze.markov import AnalysisError, MarkovWorld, markov_world
-from desmon.analyze.solve import mean_time_to, one_blas_thread, steady_state, transient
+from desmon.analyze.solve import KRYLOV_TOL, mean_time_to, one_blas_thread, steady_state, transient
 from desmon.model.checks import check_number
 from desmon.model.scenario import Scenario
 
@@ -168,7 +168,7 @@ def _within(chain: Chain, Q: Any, p0: np.ndarray, horizon: float) -> float:
     t, chunk = 0.0, FIRST_CHUNK
     while t < horizon:
         span = min(chunk, horizon - t)
-        v, _err, _steps = expv(span, A, v)
+        v, _err, _steps = expv(span, A, v, tol=KRYLOV_TOL)
         t, chunk = t + span, chunk * 2
         if float(v[~target].sum()) < SETTLED:
             break

@@ -244,7 +244,7 @@ def format_analysis(a: Any, agree: Any = None) -> str:
         f"Per mission (T = {_n(a.horizon_s)} s): {a.exposure_s_per_mission:.3f} s unmonitored expected; "
         f"P(any exposure within T) = {a.p_exposure_within_T:.6f}; mean time to first exposure {a.mean_time_to_exposure_s:.4g} s"
     )
-    out.append(f"  ({a.method}; error bound {a.transient_error:.1e})")
+    out.append(f"  ({a.method}; error estimate {a.transient_error:.1e})")
     if agree is not None:
         verdict = "inside" if agree.inside else "OUTSIDE"
         out.append(
