@@ -248,7 +248,7 @@ def transient(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, *, method:
 #: total variation distance to the limit below which the Krylov solution stops early
 SETTLED = 1e-9
 #: the Krylov exponential's tolerance per step (see the module docstring: at 1e-10 a shift's
-#: accumulated reward moved by 1e-4 of itself between two machines' BLAS)
+#: accumulated reward moved by 1e-4 of itself between two machines)
 KRYLOV_TOL = 1e-12
 #: the first chunk of the early-stopping Krylov solution (s); each next one doubles
 FIRST_CHUNK = 60.0
