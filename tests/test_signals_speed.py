@@ -371,7 +371,8 @@ def test_trial_force_matches_context_force_for_every_context() -> None:
 
 
 def test_wrench_indices_are_the_grid_points_in_the_window() -> None:
-    # against the plain reference: every k of a generous range with t0 <= k / rate < t1
+    # against the plain reference: every k of the window it looks in with t0 <= k / rate < t1
+    # (the window holds every such k, but where k / rate rounds coarser than a sample)
     from desmon.detectors.signals.common import wrench_indices
 
     rng = np.random.default_rng(3)
