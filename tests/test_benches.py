@@ -57,3 +57,13 @@ def test_bench_runs_small_and_reports_its_figures(name):
     for goal in GOALS.get(name, ()):
         assert isinstance(figures.get(goal.key), float), f"{name}'s RESULT line lacks {goal.key}"
     assert unexpected_keys(result_mode(name, QUICK[name]), figures) == []  # the keys the docs' figure markers may name
+
+
+def test_bench_timers_times_named_functions_and_refuses_an_unknown_one():
+    cmd = [sys.executable, "-m", "bench.timers", "--until", "600", "--days", "1", "desmon.sim.sensors:SensorBank.tactile_read"]
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    result = parse_result(proc.stdout)
+    assert result["ms_0"] > 0 and result["sim_cpu_s"] > 0
+    bad = subprocess.run([*cmd[:-1], "desmon.sim.sensors:SensorBank.nothing"], cwd=ROOT, capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stderr.strip().splitlines() == ["bench.timers: 'desmon.sim.sensors:SensorBank.nothing': no function 'nothing' there; name a function or method"]

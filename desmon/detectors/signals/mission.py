@@ -120,7 +120,7 @@ class MissionSignals:
 
         The wrench stays here unless asked: a request by time renders only its own samples
         of a block, so a run whose force graphs read a small part of the mission (the robot
-        day reads 80k of its 1.06 M samples) renders far less here than a worker rendering
+        day reads 80k of its 1.44 M samples) renders far less here than a worker rendering
         every block would, and a second worker takes CPU from the first (docs/design.md,
         "Rendering ahead")."""
         if not isinstance(wrench, bool):
