@@ -242,6 +242,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help=f"the first {QUICK_UNTIL:.0f} simulated s only (a smoke run of a few seconds)")
     ap.add_argument("--repeat", type=int, default=REPEAT, help=f"runs of the day each way, the fastest counts (default {REPEAT})")
     a = ap.parse_args(argv)
+    if a.seed < 0:
+        ap.error(f"--seed {a.seed}: give a seed of 0 or more")
     if a.repeat < 1:
         ap.error(f"--repeat {a.repeat}: give at least 1 run")
     until = a.until if a.until is not None else (QUICK_UNTIL if a.quick else None)

@@ -81,6 +81,8 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     if a.until is not None and not (math.isfinite(a.until) and a.until > 0):
         ap.error(f"--until {a.until}: give a positive number of simulated seconds")
+    if a.seed < 0:
+        ap.error(f"--seed {a.seed}: give a seed of 0 or more")
     if a.days < 1:
         ap.error(f"--days {a.days}: give at least 1")
     targets = [_target(f) for f in a.funcs]

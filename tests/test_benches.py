@@ -67,3 +67,6 @@ def test_bench_timers_times_named_functions_and_refuses_an_unknown_one():
     assert result["ms_0"] > 0 and result["sim_cpu_s"] > 0
     bad = subprocess.run([*cmd[:-1], "desmon.sim.sensors:SensorBank.nothing"], cwd=ROOT, capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.strip().splitlines() == ["bench.timers: 'desmon.sim.sensors:SensorBank.nothing': no function 'nothing' there; name a function or method"]
+    for neg_cmd in ([*cmd, "--seed", "-1"], [sys.executable, "-m", "bench.bench_sim", "--seed", "-1"]):
+        neg = subprocess.run(neg_cmd, cwd=ROOT, capture_output=True, text=True)
+        assert neg.returncode == 2 and "--seed -1: give a seed of 0 or more" in neg.stderr and "Traceback" not in neg.stderr
