@@ -97,9 +97,18 @@ def test_what_a_scenario_script_prints_goes_to_stderr_so_stdout_stays_parseable(
 
 
 def test_a_real_ctrl_c_while_a_scenario_loads_still_interrupts(tmp_path, capsys):
+    import signal
+
     slow = tmp_path / "slow.py"
     slow.write_text("import os, signal, time\nos.kill(os.getpid(), signal.SIGINT)\ntime.sleep(5)\n")
-    assert main(["replay", str(slow)]) == 130
+    # Ctrl-C as a terminal delivers it: Python's own handler. A suite started with SIGINT
+    # ignored (nohup, `trap "" INT`) inherits SIG_IGN, and desmon rightly leaves an ignored
+    # Ctrl-C ignored; so the handler is set for this test and put back after it.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        assert main(["replay", str(slow)]) == 130
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert capsys.readouterr().err == "desmon: interrupted\n"
 
 
