@@ -258,3 +258,17 @@ def test_search_leaves_no_cyclic_garbage_so_pausing_the_collector_is_safe(deploy
     states, garbage = int(out[0]), int(out[1])
     assert states == load_scenario(SCENARIOS / "migration.py").expected["verify"][deployer]["states"]
     assert garbage == 0
+
+
+def test_a_transition_property_is_reported_as_broken_by_the_reaction_as_a_whole(capsys):
+    """preferred-when-possible judges a whole reaction, not one of its commands: the report
+    says so instead of naming a command it came "right after"."""
+    from desmon.verify.trace import WHOLE_REACTION, where_in_reaction
+
+    assert main(["verify", str(SCENARIOS / "two_detectors.py"), "--deployer", "paper", "--no-progress"]) == 1
+    out = capsys.readouterr().out
+    assert "VIOLATED preferred-when-possible after 1 step (shortest), by the reaction as a whole:" in out
+    assert "right after `the reaction`" not in out
+    assert where_in_reaction(WHOLE_REACTION) == "by the reaction as a whole"
+    assert where_in_reaction("start x on p") == "during the reaction, right after `start x on p`"
+    assert where_in_reaction(None) == ""

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from desmon.errors import NondeterminismError
-from desmon.verify.trace import Counterexample, describe_state
+from desmon.verify.trace import WHOLE_REACTION, Counterexample, describe_state
 from desmon.verify.replay import RepositoryRun
 from desmon.viz.snapshot import draw_snapshots
 
@@ -50,7 +50,7 @@ def snapshot_panels(scenario: Any, deployer: Any, bounds: Any, c: Counterexample
         lines = list(s.changes)
         head = f"{s.index}. {s.title()}"
         if s.index == c.length:
-            where = f" (during the reaction, after `{c.during}`)" if c.during else ""
+            where = "" if not c.during else " (by the reaction as a whole)" if c.during == WHOLE_REACTION else f" (during the reaction, after `{c.during}`)"
             lines = [*lines, f"=> {c.invariant} VIOLATED{where}: {c.message}"]
             panels.append((_title(head, lines), run.repo.snapshot()))
             continue

@@ -29,7 +29,7 @@ from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import Repository
 from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.state import Key
-from desmon.verify.trace import Label, Step, initial_step, make_step
+from desmon.verify.trace import WHOLE_REACTION, Label, Step, initial_step, make_step
 
 __all__ = ["initial_reaction", "first_reaction_fault", "ScriptedControl", "RepositoryRun", "repository_key"]
 
@@ -169,5 +169,5 @@ class RepositoryRun:
                 )
             transition = self.core.finding(transitions) if not found and transitions else None
             if transition is not None:
-                found.append((transition[0], transition[1], "the reaction"))
+                found.append((transition[0], transition[1], WHOLE_REACTION))
             yield make_step(i, prev, event, self.key(), log, fails, self.control.refuse), (found[0] if found else None)

@@ -12,7 +12,7 @@ from desmon.model.codec import _mapping, constraint_from_json, constraint_to_jso
 from desmon.model.events import Event
 from desmon.deployment.guard import CRASH
 from desmon.verify.search import NOT_CHECKED, CheckResult
-from desmon.verify.trace import Counterexample, Label, Step, rule_of
+from desmon.verify.trace import Counterexample, Label, Step, rule_of, where_in_reaction
 from desmon.verify.state import Key
 
 __all__ = [
@@ -38,7 +38,7 @@ def format_counterexample(c: Counterexample) -> str:
         return f"{head}:\n{format_trace(c.steps)}\n  => the deployer {c.message}"
     head = f"VIOLATED {c.invariant} after {c.length} step{'s' if c.length != 1 else ''} (shortest)"
     if c.during:
-        head += f", during the reaction, right after `{c.during}`"
+        head += f", {where_in_reaction(c.during)}"
     return f"{head}:\n{format_trace(c.steps)}\n  => {c.invariant}: {c.message}"
 
 
@@ -298,7 +298,7 @@ def _field(where: str, d: dict[str, Any], key: str, kind: type) -> Any:
 
 def format_replay_head(saved: SavedCounterexample) -> str:
     steps = len(saved.labels)
-    during = f", during the reaction, right after `{saved.during}`" if saved.during else ""
+    during = f", {where_in_reaction(saved.during)}" if saved.during else ""
     return (
         f"replaying counterexample {saved.number} of {saved.count} of {saved.source}: {saved.invariant} violated after "
         f"{steps} step{'s' if steps != 1 else ''}{during} -- {saved.scenario} -- deployer {saved.deployer}"
@@ -331,7 +331,7 @@ def format_replay_verdict(
         if name in bad:
             lines.append(f"  {name:<{width}}  VIOLATED: {bad[name]}")
         elif instant is not None and instant[0] == name:
-            lines.append(f"  {name:<{width}}  VIOLATED during the reaction, right after `{instant[2]}`: {instant[1]}")
+            lines.append(f"  {name:<{width}}  VIOLATED {where_in_reaction(instant[2])}: {instant[1]}")
         else:
             lines.append(f"  {name:<{width}}  holds")
     x = saved.invariant

@@ -35,7 +35,7 @@ from desmon.verify.environment import enabled_events
 from desmon.verify.replay import initial_reaction
 from desmon.verify.search import NOT_CHECKED, Record, Segment
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore, StoreInsert
-from desmon.verify.trace import KEPT_BRANCH, Label, Step, branch_name, initial_step, make_step
+from desmon.verify.trace import KEPT_BRANCH, WHOLE_REACTION, Label, Step, branch_name, initial_step, make_step
 
 __all__ = ["TransitionSystem", "Reduction", "command_key", "RECHECK_FIRST", "RECHECK_EVERY"]
 
@@ -213,7 +213,8 @@ class TransitionSystem:
     def _transition(self, key: Key, event: Event, prefix: tuple[bool, ...]) -> tuple[Key, tuple[bool, ...], StepLog, Any]:
         """``event`` and its reaction on ``key`` in the store: (next key, start outcomes,
         StepLog, instantaneous violation or None), a broken transition property
-        (``no-flapping``, ``errors-justified``, ...) reported as one "right after the reaction"."""
+        (``no-flapping``, ``errors-justified``, ...) reported as one of the reaction as a whole
+        (:data:`~desmon.verify.trace.WHOLE_REACTION`)."""
         st = self.store
         st.load(key)
         core = self.core
@@ -223,7 +224,7 @@ class TransitionSystem:
         if core.findings and st.instant is None:
             found = core.finding(self._checked)
             if found is not None:
-                st.instant = (found[0], found[1], "the reaction")
+                st.instant = (found[0], found[1], WHOLE_REACTION)
         return st.key(core.standing), tuple(st.outcomes), log, st.instant
 
     def step_under_guard(self, core: DeploymentCore, st: StateStore, event: Event, *, recording: bool = False) -> tuple[Any, StepLog]:

@@ -17,7 +17,8 @@ from desmon.model.events import Event
 from desmon.verify.state import Key
 
 __all__ = [
-    "Label", "Step", "Counterexample", "KEPT_BRANCH", "CHOSEN", "branch_name", "describe_state", "diff", "failed_starts", "rule_of",
+    "Label", "Step", "Counterexample", "KEPT_BRANCH", "CHOSEN", "WHOLE_REACTION", "branch_name", "describe_state", "diff",
+    "failed_starts", "rule_of", "where_in_reaction",
 ]
 
 #: A transition label: the event and the indices of the Control.start calls that failed.
@@ -89,12 +90,28 @@ class Step:
         return f"{self.event}{extra}"
 
 
+#: ``Counterexample.during`` of a transition property (``errors-justified``,
+#: ``preferred-when-possible``, ``no-flapping``'s moves): the reaction as a whole broke it,
+#: not one of its commands. Saved as is in ``verify --json``.
+WHOLE_REACTION = "the reaction"
+
+
+def where_in_reaction(during: str | None) -> str:
+    """Where in the last step's reaction an invariant broke, as the reports say it: after
+    one of its commands, or by the reaction as a whole ("" when the state after it did)."""
+    if during is None:
+        return ""
+    if during == WHOLE_REACTION:
+        return "by the reaction as a whole"
+    return f"during the reaction, right after `{during}`"
+
+
 @dataclass(frozen=True)
 class Counterexample:
     invariant: str
     message: str
     steps: tuple[Step, ...]
-    during: str | None = None  # the command after which an instantaneous invariant broke
+    during: str | None = None  # the command after which an instantaneous invariant broke, or WHOLE_REACTION
 
     @property
     def length(self) -> int:

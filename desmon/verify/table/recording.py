@@ -28,7 +28,7 @@ from desmon.verify.state import Key, StateStore
 from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, command_key
 from desmon.verify.table.observed import Acceptable, Check, ObservedValidity, Ranked, Reasons
 from desmon.verify.table.tables import AnswerTables, score_key
-from desmon.verify.trace import KEPT_BRANCH, branch_name
+from desmon.verify.trace import KEPT_BRANCH, WHOLE_REACTION, branch_name
 
 if TYPE_CHECKING:
     from desmon.verify.table.search import TableEngine
@@ -339,7 +339,7 @@ class Recorder:
             if rc.core.findings and instant is None:  # as TransitionSystem.run_one
                 found = rc.core.finding(rc._checked)
                 if found is not None:
-                    instant = (found[0], found[1], "the reaction")
+                    instant = (found[0], found[1], WHOLE_REACTION)
             return stimulus, log, st.key(rc.core.standing), tuple(st.outcomes), instant
 
         out, obs = self._recording(run, lambda: self.checker.run_one(key, event, prefix))
