@@ -35,3 +35,36 @@ def test_the_design_document_covers_what_the_code_points_at() -> None:
 
     for name in INVARIANTS:
         assert f"`{name}`" in design, name
+
+
+#: the options by which a desmon command names a file it writes
+OUTPUT_OPTIONS = ("-o", "--plot", "--json", "--trace", "--pytest", "--export")
+
+
+def test_every_command_of_the_docs_writes_its_files_under_out_after_making_it() -> None:
+    """A reader running the docs' commands gets every file they write in out/ (git ignores
+    it), never in the checkout's own folders (docs/img holds the committed pictures); each
+    page makes out/ before its first command that writes there."""
+    import shlex
+
+    from docblocks import blocks, commands
+
+    wrong, unmade = [], []
+    for doc in DOCS:
+        made = False
+        for block in blocks(doc.read_text()):
+            if block.lang not in ("sh", "bash"):
+                continue
+            for line, _code in commands(block):
+                argv = shlex.split(line.split("#")[0])
+                if argv[:3] == ["mkdir", "-p", "out"]:
+                    made = True
+                for option, value in zip(argv, argv[1:]):
+                    if option in OUTPUT_OPTIONS and not value.startswith("-"):
+                        if not value.startswith("out/"):
+                            wrong.append(f"{doc.relative_to(ROOT)}: {line}")
+                        elif not made:
+                            unmade.append(f"{doc.relative_to(ROOT)}: {line}")
+    assert wrong == [], "write these under out/"
+    assert unmade == [], "these run before the page's mkdir -p out"
+    assert "out/" in (ROOT / ".gitignore").read_text().split()

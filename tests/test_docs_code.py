@@ -59,9 +59,10 @@ def test_the_detectors_output_blocks_are_exactly_what_evaluate_prints(root, tmp_
 def test_the_sweeps_python_block_reads_the_table_the_sweep_wrote(root, tmp_path, monkeypatch):
     pytest.importorskip("distributed")
     desmon = str(Path(sys.executable).parent / "desmon")
+    (tmp_path / "out").mkdir()  # the page's mkdir -p out
     proc = subprocess.run(
         [desmon, "sweep", str(root / "scenarios" / "robot_day.py"), "-p", "hand_memory=256,384", "-p", "hours=0.1",
-         "--seeds", "1", "--workers", "1", "-o", "results.parquet", "--no-progress"],
+         "--seeds", "1", "--workers", "1", "-o", "out/results.parquet", "--no-progress"],
         cwd=tmp_path, capture_output=True, text=True, timeout=600, env={**os.environ},
     )
     assert proc.returncode == 0, proc.stderr

@@ -102,8 +102,9 @@ def test_every_readme_command_runs_as_written_in_one_fresh_shell(root, tmp_path)
     assert quoted
     for q in quoted:
         check_quote(q, printed[q.command])
-    # every picture a command names was drawn
+    # every picture a command names was drawn, under out/ (never over a file of the checkout)
     for cmd, _code in cmds:
-        for png in re.findall(r"([\w.-]+\.png)", cmd.split("#")[0]):
+        for png in re.findall(r"([\w./-]+\.png)", cmd.split("#")[0]):
+            assert png.startswith("out/"), f"{cmd}: {png} is not under out/"
             made = work / png
             assert made.exists() and made.read_bytes()[:4] == b"\x89PNG", f"{cmd}: no {png}"

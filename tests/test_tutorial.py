@@ -1,6 +1,7 @@
 """The executed documents cannot rot: every command in the sh blocks of docs/tutorial.md
 and docs/deployers.md runs and exits as it says, every picture the tutorial shows is
-produced by those commands, and the code and output deployers.md quotes are the real ones."""
+produced by those commands (under out/; tests/test_docs_pictures.py compares them with
+docs/img), and the code and output deployers.md quotes are the real ones."""
 
 import os
 import re
@@ -39,17 +40,19 @@ def tutorial_commands(root: Path) -> list[tuple[str, int]]:
 def test_the_tutorial_has_commands_and_pictures(root):
     cmds = tutorial_commands(root)
     assert len(cmds) >= 12
-    pictures = re.findall(r"!\[[^\]]*\]\((img/[^)]+)\)", (root / "docs" / "tutorial.md").read_text())
+    pictures = re.findall(r"!\[[^\]]*\]\(img/([^)]+)\)", (root / "docs" / "tutorial.md").read_text())
     produced = " ".join(c for c, _ in cmds)
-    assert pictures and all(f"docs/{p}" in produced for p in pictures)
+    assert pictures and all(f"out/{p}" in produced for p in pictures)
+    assert cmds[0] == ("mkdir -p out", 0)  # the folder the commands write to exists before they run
 
 
 def run_doc(root: Path, work: Path, doc: str) -> dict[str, subprocess.CompletedProcess[str]]:
     """Run every command of ``docs/<doc>`` in ``work`` (a copy of scenarios/ and
-    docs/examples/), asserting each exit code; returns each command's process."""
+    docs/examples/; a page that writes files makes its out/ first, and a command writing
+    into docs/img finds no such folder and fails), asserting each exit code; returns each
+    command's process."""
     shutil.copytree(root / "scenarios", work / "scenarios")
     shutil.copytree(root / "docs" / "examples", work / "docs" / "examples")
-    (work / "docs" / "img").mkdir(parents=True)
     bindir = Path(sys.executable).parent
     env = {**os.environ, "PATH": f"{bindir}{os.pathsep}{os.environ.get('PATH', '')}"}
     ran = {}
@@ -75,8 +78,8 @@ def test_every_tutorial_command_runs_as_documented(root, tmp_path):
     for q in exact:
         proc = ran[q.command.split("#")[0].strip()]
         check_quote(q, proc.stdout + proc.stderr)
-    for picture in re.findall(r"!\[[^\]]*\]\((img/[^)]+)\)", text):
-        made = work / "docs" / picture
+    for picture in re.findall(r"!\[[^\]]*\]\(img/([^)]+)\)", text):
+        made = work / "out" / picture
         assert made.exists() and made.stat().st_size > 20_000, picture
         assert made.read_bytes()[:4] == b"\x89PNG"
 
