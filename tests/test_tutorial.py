@@ -120,6 +120,26 @@ def test_deployers_md_gives_the_deployer_signature_as_the_code_has_it(root):
     assert f"`Deployer({written})`" in (root / "docs" / "deployers.md").read_text()
 
 
+def test_deployers_md_tables_every_field_and_method_of_the_platform_state(root):
+    """The table of what a reaction sees of a platform names every field of PlatformState
+    and of the Platform it carries, and every public method of PlatformState."""
+    import dataclasses
+
+    from desmon.model.platform import Platform
+    from desmon.model.system import PlatformState
+
+    text = (root / "docs" / "deployers.md").read_text()
+    table = text[text.index("### What a reaction sees of a platform"):]
+    table = table[: table.index("\n\n", table.index("| field or method |"))]
+    rows = {line.split("|")[1].strip() for line in table.splitlines() if line.startswith("| `")}
+    names = {r.strip("`").split("(")[0] for r in rows}
+    fields = {f.name for f in dataclasses.fields(PlatformState) if f.init}
+    methods = {n for n, v in vars(PlatformState).items() if not n.startswith("_") and (callable(v) or isinstance(v, property))}
+    assert fields | methods == names
+    platform_row = next(line for line in table.splitlines() if line.startswith("| `platform` |"))
+    assert [f.name for f in dataclasses.fields(Platform) if f"`{f.name}`" not in platform_row] == []
+
+
 @pytest.mark.slow
 def test_every_deployers_md_command_runs_and_prints_what_it_quotes(root, tmp_path):
     """The walk-through runs as written (exit codes included), and each text block it

@@ -270,6 +270,7 @@ def test_auto_falls_back_to_the_direct_engine_and_says_why():
     auto = Checker(scenario, PEEKING).run()
     direct = Checker(scenario, PEEKING).run(engine="direct")
     assert auto.engine == "direct" and "outside the requirement checks" in auto.engine_note
+    assert "--engine direct" not in auto.engine_note  # it ran: the note gives the reason, not advice
     assert (auto.verdict, auto.states, auto.transitions) == (direct.verdict, direct.states, direct.transitions)
 
 

@@ -217,6 +217,16 @@ def _fresh_result(system: TransitionSystem, workers: int, timeout: float | None,
     )
 
 
+#: how a refusal of the table engine ends: advice for ``--engine table``, which stops with it.
+#: Under ``auto`` the direct engine has already run, and the note keeps only the reason.
+_ADVICE = "; run with --engine direct"
+
+
+def _reason(refusal: str) -> str:
+    """``refusal`` without its closing advice to run the direct engine."""
+    return refusal[: -len(_ADVICE)] if refusal.endswith(_ADVICE) else refusal
+
+
 def _search(system: TransitionSystem, engine: str, res: CheckResult, budget: Budget, search: dict[str, Any]) -> CheckResult:
     """The table engine if it can run the search (``engine`` "auto" or "table"), else the
     direct engine with the reason in ``engine_note``; a table attempt that bows out is
@@ -228,7 +238,7 @@ def _search(system: TransitionSystem, engine: str, res: CheckResult, budget: Bud
         except TableUnsupported as exc:
             if engine == "table":
                 raise
-            res, why = _fresh_result(system, search["workers"], res.timeout, res.max_memory, res.start_mb), str(exc)
+            res, why = _fresh_result(system, search["workers"], res.timeout, res.max_memory, res.start_mb), _reason(str(exc))
     res.engine_note = why
     return _finished(res, system, DIRECT.explore(system, res, **search), budget)
 
