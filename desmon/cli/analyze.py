@@ -72,6 +72,7 @@ def run(args: argparse.Namespace) -> int:
 
     scenario = load_scenario_of(args)
     err = sys.stderr
+    warn_uncovered(scenario)
     stormpy = _stormpy(args.engine)  # before any work: a missing stormpy is one line at once
     if args.simulate is not None and args.simulate < 3:
         from desmon.analyze import AnalysisError
@@ -128,7 +129,6 @@ def run(args: argparse.Namespace) -> int:
         with replacing(args.json) as fh:
             fh.write(json.dumps(doc, indent=2) + "\n")
     sys.stdout.write(format_analysis(result, agree))
-    warn_uncovered(scenario)
     if gap is not None:
         sys.stdout.write(gap.text())
     sys.stdout.write(format_cross_check(cross))

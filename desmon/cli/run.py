@@ -108,6 +108,7 @@ def run_command(
 
     world = world_of(scenario)
     horizon = float(world.horizon)  # declared, or derived from the timeline
+    warn_uncovered(scenario)
     if getattr(args, "render_ahead", "auto") == "on" and not world.signals:
         raise ScenarioError(f"--render-ahead on renders sensor signals, and {scenario.name!r} runs without them (--no-signals or its world): drop --render-ahead")
     if args.until is not None and args.until > horizon:
@@ -124,7 +125,6 @@ def run_command(
         out.write(json.dumps(summary_json(result, wall), indent=2) + "\n")
     else:
         out.write(format_summary(result, wall))
-        warn_uncovered(scenario)
         if args.trace and not getattr(args, "trace_is_temporary", False):
             out.write(f"Trace: {args.trace} ({result.trace.count} records)\n")
     return 1 if result.violations else 0

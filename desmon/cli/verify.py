@@ -145,6 +145,7 @@ def _search(args: argparse.Namespace) -> int:
     max_memory = getattr(args, "max_memory", None)
     check_megabytes("--max-memory", max_memory)
     scenario = load_scenario_of(args)
+    warn_uncovered(scenario)
     system = system_of(scenario, args.deployer, invariants=args.invariant, symmetry=bool(getattr(args, "symmetry", False)))
     result = check(
         system,
@@ -160,7 +161,6 @@ def _search(args: argparse.Namespace) -> int:
     )
     try:
         _report(args, result)
-        warn_uncovered(scenario)
         if not result.interrupted:  # Ctrl-C: the partial result and its JSON, and nothing slower
             _write_outputs(args, scenario, result, system.core.deployer, system.bounds)
     finally:
