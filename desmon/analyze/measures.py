@@ -44,12 +44,10 @@ TOP_STATES = 8
 _EVALUATED = {"wrench": "force", "tactile": "tactile", "both": "combined"}
 
 
-def detector_miss(scenario: Scenario, *, phases: int = 1, trials: int = 200, seed: int = 0) -> dict[str, dict[str, float]]:
+def detector_miss(scenario: Scenario, *, trials: int = 200, seed: int = 0) -> dict[str, dict[str, float]]:
     """Each graph's probability of missing a slip in each risky action of the task:
     1 - its detector's rate in :func:`~desmon.detectors.evaluation.detection_rates` for
-    the built-in the action is like, its steps Erlang-``phases`` with the action's mean
-    step duration (as the chain times them) after a grasp of the task's mean grasp
-    duration, with the slip
+    the built-in the action is like, at the action's mean step duration, with the slip
     direction and kind ``World.slip_kinds`` gives there (``trials`` slips, ``seed``); 1
     for a graph that cannot detect (an input without a signal model)."""
     from desmon.detectors.evaluation import detection_rates
@@ -62,13 +60,11 @@ def detector_miss(scenario: Scenario, *, phases: int = 1, trials: int = 200, see
     for step in world.task:
         if step.action in model.risky_actions:
             spans.setdefault(step.action, []).append(step.duration)
-    grasps = [s.duration for s in world.task if model.like(s.action) == "grasp"]
-    grasp = round(sum(grasps) / len(grasps), 6) if grasps else 2.0
     rates: dict[str, dict[str, float]] = {}
     for action, durations in spans.items():
         like = model.like(action)
         direction, kind = slip_kind(world, like)
-        rates[action] = detection_rates(like, round(sum(durations) / len(durations), 6), direction, kind, grasp=grasp, phases=phases, trials=trials, seed=seed)
+        rates[action] = detection_rates(like, round(sum(durations) / len(durations), 6), direction, kind, trials=trials, seed=seed)
     out: dict[str, dict[str, float]] = {}
     for g in model.graphs:
         plan = plans.get(g.name)
@@ -219,7 +215,7 @@ def analyze(
     T = scenario.world.horizon if horizon is None else horizon
     check_number("--horizon", T, error=AnalysisError, positive=True, unit=" of seconds")
     if miss is None:
-        miss = detector_miss(scenario, phases=phases)
+        miss = detector_miss(scenario)
     chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss)
     t0 = time.perf_counter()
     Q, _exit = chain.generator()
