@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered
+from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg
 from desmon.cli.options import Input, add_output, positive_int, positive_seconds, worker_count
 from desmon.errors import CheckerError
 
@@ -145,7 +145,6 @@ def _search(args: argparse.Namespace) -> int:
     max_memory = getattr(args, "max_memory", None)
     check_megabytes("--max-memory", max_memory)
     scenario = load_scenario_of(args)
-    warn_uncovered(scenario)
     system = system_of(scenario, args.deployer, invariants=args.invariant, symmetry=bool(getattr(args, "symmetry", False)))
     result = check(
         system,

@@ -28,8 +28,6 @@ best TPR - FPR measured in the same run).
 
 from __future__ import annotations
 
-import functools
-
 import math
 from dataclasses import asdict, dataclass
 from typing import Callable, Final, Sequence
@@ -65,7 +63,6 @@ __all__ = [
     "fisher_exact",
     "wilson",
     "evaluate_actions",
-    "detection_rates",
     "evaluate_missions",
     "evaluate",
     "evaluate_seeds",
@@ -294,37 +291,6 @@ def _timeline(action: str) -> tuple[list[Segment], tuple[float, float] | None, s
 
 def _rng(seed: int, *key: int) -> np.random.Generator:
     return np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, *key])))
-
-
-@functools.lru_cache(maxsize=64)
-def detection_rates(
-    action: str, duration: float, direction: str, kind: str, *, trials: int = 200, seed: int = 0
-) -> dict[str, float]:
-    """Each detector's probability of catching a slip that starts uniformly at random in
-    a step of ``action`` (a built-in with an object in the hand) lasting ``duration``
-    seconds: the fraction of ``trials`` slips of that ``direction`` and ``kind`` with an
-    alarm in [onset - 0.3 s, onset + 1.0 s], the SimPy world's own rule for a detected
-    slip. The step follows 0.5 s of ``hold`` (``idle`` before a ``grasp``, where the
-    object is taken) in which the detectors tare, and is followed by 1.5 s of ``hold``
-    (nothing after a ``release``: the object is handed over), so that a slip late in
-    the step still has its whole detection window. ``desmon analyze`` takes its
-    undetected-slip rates from here."""
-    before = IDLE if action == GRASP else HOLD
-    timeline = [Segment(before, 0.0, PRE), Segment(action, PRE, float(duration))]
-    if action != RELEASE:
-        timeline.append(Segment(HOLD, PRE + float(duration), 1.5))
-    hits = {d: 0 for d in DETECTORS}
-    for ci, start in enumerate(range(0, trials, CHUNK)):
-        n = min(CHUNK, trials - start)
-        b = simulate_batch(
-            timeline, n, _rng(seed, 2, ci), slip_window=(PRE, PRE + float(duration)), slip_direction=direction,
-            slip_kind=kind, first_trial=start,
-        )
-        runs = run_detectors(b, 0.0)
-        for d in DETECTORS:
-            t_first, _ = first_alarm(runs[d], b.slip_onset - TP_BEFORE, b.slip_onset + TP_AFTER)
-            hits[d] += int(np.isfinite(t_first).sum())
-    return {d: hits[d] / trials for d in DETECTORS}
 
 
 def evaluate_actions(
