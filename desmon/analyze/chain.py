@@ -33,10 +33,12 @@ Where the world differs from what the repository knows (a platform gone or a dev
 broken, not yet noticed), a start the Control rules refuse on the *physical* facts
 fails, as in the simulation, whatever the repository says.
 
-A state is **unmonitored** when the true action is risky and a slot of the selector's
-rules for it has no member that is deployed, ready, on a physically up platform, with
-a physically readable input for every device kind it reads: the simulation's
-exposure (docs/design.md §10), state by state.
+A state is **unmonitored** by the one definition of :mod:`desmon.deployment.exposure`,
+which the simulation counts by too: the true action is risky and no rule covers it, or
+a slot of its rule has no watching member (deployed, its start latency and warm-up
+over, on a physically up platform, every input physically readable, able to detect a
+slip). Each unmonitored state has its cause; an action declared ``watched=False`` is
+labelled excluded instead.
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ from typing import Any, Callable, Iterator, NamedTuple
 import numpy as np
 
 from desmon.deployment.control import ControlRules
+from desmon.deployment.exposure import CAUSES, WATCHING, best_state, cause, needs_table
 from desmon.deployment.guard import CRASH, DeployerFault
 from desmon.deployment.lease import lease_choice
 from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, RaiseError, Start, Stop
@@ -92,6 +95,7 @@ class ChainState(NamedTuple):
     phys_down: tuple[str, ...]  # platforms physically down (absent on-demand ones included), sorted
     starting: tuple[tuple[str, str], ...]  # (graph, platform) started, not yet ready, sorted
     requested: tuple[str, ...] = ()  # on-demand platforms leased, not yet joined, sorted
+    warming: tuple[tuple[str, str, int], ...] = ()  # (graph, platform, Erlang phase) warming up, sorted
 
 
 #: the context the monitor reports for the true action: the simulation's own rule
@@ -113,6 +117,10 @@ class Chain:
     risky: np.ndarray = field(default_factory=lambda: np.zeros(0))
     #: slips per second that go undetected in each state
     undetected: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: 1.0 where the state is unmonitored for that cause (desmon.deployment.exposure.CAUSES)
+    causes: dict[str, np.ndarray] = field(default_factory=dict)
+    #: 1.0 where the true action is risky but declared watched=False (excluded)
+    excluded: np.ndarray = field(default_factory=lambda: np.zeros(0))
     #: the initial distribution: (state index, probability)
     initial: tuple[tuple[int, float], ...] = ((0, 1.0),)
     build_s: float = 0.0
@@ -150,6 +158,8 @@ class Chain:
         parts.append("deployed " + (", ".join(f"{g}@{p}" for g, p in s.key.deployments) or "nothing"))
         if s.starting:
             parts.append("starting " + ", ".join(f"{g}@{p}" for g, p in s.starting))
+        if s.warming:
+            parts.append("warming up " + ", ".join(f"{g}@{p}" for g, p, _k in s.warming))
         parts.extend(self._changes(s))
         down = [*s.phys_failed, *(p for p in s.phys_down if not self.system.model.platform(p).on_demand)]
         if down:
@@ -196,11 +206,14 @@ class _Builder:
         self._lease_memo: dict[tuple[Key, str, tuple[str, ...]], str | None] = {}
         self._physical_memo: dict[tuple, Callable[[str, str], str | None]] = {}
         self._tried: dict[tuple[Key, Event], frozenset[tuple[str, str]]] = {}
+        self._wires: dict[tuple[str, str], tuple[tuple[str, ...], ...]] = {}
+        self._hosts = {d.name: d.platform for d in scenario.model.devices}
         self.leased = dict(mw.lease)  # on-demand platform -> mean start-up
         self.reactions = 0
         devices = {d.name for d in self.model.devices}
         self.faults = tuple((c, c in devices, 1.0 / f, 1.0 / r) for c, _k, f, r in mw.faults)
         self.latency = {p.name: mw.latency_of(p.name) for p in self.model.platforms}
+        self.warm = dict(mw.warmup)  # graph -> mean warm-up s
 
     # -- reactions -----------------------------------------------------------------------
     def react(self, key: Key, event: Event, world: tuple | None = None) -> list[tuple[float, Key, tuple, tuple[str, ...]]]:
@@ -277,10 +290,12 @@ class _Builder:
                 out.append((prob, nkey, cmds, homeless))
         return frozenset(tried)
 
-    def _starting_after(self, s: ChainState, cmds: tuple, nkey: Key) -> tuple[tuple[str, str], ...]:
-        """The detectors still starting after a reaction's successful starts and stops."""
+    def _starting_after(self, s: ChainState, cmds: tuple, nkey: Key) -> ChainState:
+        """``s`` with ``nkey`` and the detectors still starting or warming up after a
+        reaction's successful starts and stops (a start with no latency warms up at once)."""
         deployed = set(s.key.deployments)
         starting = set(s.starting)
+        warming = {(g, p): k for g, p, k in s.warming}
         for is_start, g, p in cmds:
             pair = (g, p)
             if is_start:
@@ -288,11 +303,54 @@ class _Builder:
                     deployed.add(pair)
                     if self.latency.get(p, 0.0) > 0:
                         starting.add(pair)
+                    elif self.warm.get(g, 0.0) > 0 and self._inputs_up(s, g, p):
+                        warming[pair] = 0
             else:
                 deployed.discard(pair)
                 starting.discard(pair)
+                warming.pop(pair, None)
         live = set(nkey.deployments)
-        return tuple(sorted(starting & live))
+        return s._replace(
+            key=nkey, starting=tuple(sorted(starting & live)),
+            warming=tuple(sorted((g, p, k) for (g, p), k in warming.items() if (g, p) in live)),
+        )
+
+    def _wiring(self, g: str, p: str) -> tuple[tuple[str, ...], ...]:
+        """The devices ``g`` reads on ``p``, per device kind (the simulation's wiring)."""
+        w = self._wires.get((g, p))
+        if w is None:
+            w = self._wires[(g, p)] = tuple(tuple(d.name for d in devs) for _k, devs in self.rules.input_devices(g, p))
+        return w
+
+    def _inputs_up(self, s: ChainState, g: str, p: str) -> bool:
+        """``g`` on ``p`` runs physically with every input readable in ``s``."""
+        if p in s.phys_down:
+            return False
+        hosts = self._hosts
+        return all(any(d not in s.phys_failed and hosts[d] not in s.phys_down for d in devs) for devs in self._wiring(g, p))
+
+    def _rewarm(self, before: ChainState, after: ChainState) -> ChainState:
+        """``after`` a physical change: a deployed, started detector whose platform or
+        inputs came back warms up again from its first phase (the simulation re-activates
+        it); one that lost them stops warming (it warms again when they return)."""
+        if not self.warm:
+            return after
+        warming = {(g, p): k for g, p, k in after.warming}
+        starting = set(after.starting)
+        changed = False
+        for g, p in after.key.deployments:
+            if (g, p) in starting or self.warm.get(g, 0.0) <= 0:
+                continue
+            was, now = self._inputs_up(before, g, p), self._inputs_up(after, g, p)
+            if now and not was:
+                warming[(g, p)] = 0
+                changed = True
+            elif was and not now and (g, p) in warming:
+                del warming[(g, p)]
+                changed = True
+        if not changed:
+            return after
+        return after._replace(warming=tuple(sorted((g, p, k) for (g, p), k in warming.items())))
 
     # -- transitions -----------------------------------------------------------------------
     def transitions(self, s: ChainState) -> Iterator[tuple[float, ChainState]]:
@@ -315,7 +373,16 @@ class _Builder:
         yield from self._faults(s)
         for pair in s.starting:
             lat = self.latency[pair[1]]
-            yield 1.0 / lat, None, ((1.0, s._replace(starting=tuple(x for x in s.starting if x != pair)), ()),)
+            ready = s._replace(starting=tuple(x for x in s.starting if x != pair))
+            g, p = pair
+            if self.warm.get(g, 0.0) > 0 and self._inputs_up(s, g, p):  # ready: its warm-up begins
+                ready = ready._replace(warming=tuple(sorted((*s.warming, (g, p, 0)))))
+            yield 1.0 / lat, None, ((1.0, ready, ()),)
+        for entry in s.warming:
+            g, p, k = entry
+            rest = tuple(x for x in s.warming if x != entry)
+            nxt = rest if k + 1 >= mw.phases else tuple(sorted((*rest, (g, p, k + 1))))
+            yield mw.phases / self.warm[g], None, ((1.0, s._replace(warming=nxt), ()),)
         for change, rate in mw.changes:
             yield self._deliver(s, change, rate)
         yield from self._loads(s)
@@ -326,7 +393,7 @@ class _Builder:
         key = s.key
         same = s.phys_failed == key.failed and s.phys_down == key.down
         outcomes = tuple(
-            (prob, self._requesting(s._replace(key=nkey, starting=self._starting_after(s, cmds, nkey)), homeless), cmds)
+            (prob, self._requesting(self._starting_after(s, cmds, nkey), homeless), cmds)
             for prob, nkey, cmds, homeless in self.react(key, event, None if same else (s.phys_failed, s.phys_down))
         )
         return rate, event, outcomes
@@ -376,6 +443,7 @@ class _Builder:
                 flip = None
             if flip is not None:
                 rate, ns = flip
+                ns = self._rewarm(s, ns)
                 yield (rate, None, ((1.0, ns, ()),)) if hb > 0 else self._deliver(ns, _join_event(p, absent), rate)
             if hb > 0 and absent != (p in s.key.down):
                 yield self._deliver(s, _join_event(p, not absent), 1.0 / hb)
@@ -401,6 +469,7 @@ class _Builder:
             broken = c in phys
             flipped = tuple(sorted(set(phys) - {c})) if broken else tuple(sorted((*phys, c)))
             ns = s._replace(phys_failed=flipped) if is_dev else s._replace(phys_down=flipped)
+            ns = self._rewarm(s, ns)
             rate = repair if broken else fail
             if hb > 0:
                 yield rate, None, ((1.0, ns, ()),)
@@ -429,7 +498,7 @@ def _event(component: str, is_device: bool, broken: bool) -> Event:
 
 def build_chain(
     scenario: Scenario, deployer: Any, mw: MarkovWorld, *, max_states: int | None = None,
-    progress: Callable[[int], None] | None = None, miss: dict[str, float] | None = None,
+    progress: Callable[[int], None] | None = None, miss: dict[str, Any] | None = None,
 ) -> Chain:
     """Every chain state reachable from the initial ones, with its rates and rewards;
     ``miss`` is each graph's probability of missing a slip (1 where not given)."""
@@ -481,37 +550,60 @@ def build_chain(
     return chain
 
 
-def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, float]) -> None:
-    """The unmonitored and risky labels and the undetected-slip rate of every state."""
+def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any]) -> None:
+    """The labels of every state by the one definition of :mod:`desmon.deployment.exposure`
+    (unmonitored, by cause; risky; excluded) and its undetected-slip rate: slips arrive
+    at ``slip_rate`` while an object is in the hand, and each watching detector misses
+    one with its probability for the action (``miss[graph]``: a number, or action ->
+    number)."""
     model = chain.system.model
-    risky_actions = model.risky_actions
     mw = chain.world
+    table = needs_table(model)
+    blind = set(mw.blind)
     n = chain.n
     unmon = np.zeros(n)
     risky = np.zeros(n)
+    excluded = np.zeros(n)
     undetected = np.zeros(n)
+    by_cause = {c: np.zeros(n) for c in CAUSES}
     wiring: dict[tuple[str, str], tuple] = {}
     hosts = {d.name: d.platform for d in model.devices}
     for i, s in enumerate(chain.states):
         action = mw.steps[s.pos][0]
-        if action not in risky_actions:
+        need = table[action]
+        if not need.risky:
             continue
         risky[i] = 1.0
-        slots = [(x,) if isinstance(x, str) else tuple(x) for x in model.rules.slots_for(action)]
-        covered = set()
+        if need.excluded:
+            excluded[i] = 1.0
+        warming = {(g, p) for g, p, _k in s.warming}
+        state: dict[str, list[str]] = {}
         for g, p in s.key.deployments:
-            if (g, p) in s.starting or p in s.phys_down:
-                continue
-            w = wiring.get((g, p))
-            if w is None:
-                w = wiring[(g, p)] = tuple(tuple(d.name for d in devs) for _k, devs in rules.input_devices(g, p))
-            if all(any(d not in s.phys_failed and hosts[d] not in s.phys_down for d in devs) for devs in w):
-                covered.add(g)
-        if any(not covered.intersection(slot) for slot in slots):
+            if (g, p) in s.starting:
+                st = "starting"
+            else:
+                w = wiring.get((g, p))
+                if w is None:
+                    w = wiring[(g, p)] = tuple(tuple(d.name for d in devs) for _k, devs in rules.input_devices(g, p))
+                if p in s.phys_down or not all(any(d not in s.phys_failed and hosts[d] not in s.phys_down for d in devs) for devs in w):
+                    st = "input_lost"
+                elif g in blind:
+                    st = "cannot_detect"
+                elif (g, p) in warming:
+                    st = "starting"
+                else:
+                    st = WATCHING
+            state.setdefault(g, []).append(st)
+        why = cause(need, lambda g: best_state(state.get(g, ())))
+        if why is not None:
             unmon[i] = 1.0
-        # a slip in the hand goes undetected unless a running, valid detector catches it
+            by_cause[why][i] = 1.0
+        # a slip in the hand goes undetected unless a watching detector catches it
         m = 1.0
-        for g in covered:
-            m *= miss.get(g, 1.0)
+        for g, sts in state.items():
+            if WATCHING in sts:
+                mg = miss.get(g, 1.0)
+                m *= mg.get(action, 1.0) if isinstance(mg, dict) else mg
         undetected[i] = mw.slip_rate * m
     chain.unmonitored, chain.risky, chain.undetected = unmon, risky, undetected
+    chain.causes, chain.excluded = by_cause, excluded

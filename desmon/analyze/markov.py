@@ -15,6 +15,10 @@ The chain (:mod:`desmon.analyze.chain`) lets the environment do what the scenari
 * a started detector is ready after an exponential start latency of mean
   ``start_latency`` (or the platform's own); a start fails with probability
   ``start_failure_p`` (default ``World.start_failure.probability``), decided at once;
+* once ready, and again whenever its platform comes back or a lost input returns, a
+  detector warms up (the force detector re-tares 0.5 s, the tactile one waits three
+  frames: its signal model's warm-up) for an Erlang-``phases`` time of that mean, as
+  the task steps; it watches only after that;
 * random requirement changes (``World.random_changes``) arrive at rate
   1/``mean_interval``, each change equally likely;
 * slips arrive at ``World.slip_rate`` per second of object-in-hand time;
@@ -45,7 +49,7 @@ from desmon.errors import DesmonError
 from desmon.model.checks import check_number
 from desmon.model.events import LoadChange, RequirementChange
 from desmon.model.scenario import Scenario
-from desmon.sim.world import World, world_of
+from desmon.sim.world import World, detector_plans, world_of
 from desmon.verify.bounds import Bounds, bounds_of
 
 __all__ = ["AnalysisError", "MarkovWorld", "markov_world", "MAX_PHASES"]
@@ -83,6 +87,10 @@ class MarkovWorld:
     lease: tuple[tuple[str, float], ...] = ()
     #: mean seconds a leased platform stays once it hosts nothing (0: no lease)
     lease_idle_s: float = 0.0
+    #: (graph, mean warm-up s) of every graph that warms up after an activation
+    warmup: tuple[tuple[str, float], ...] = ()
+    #: graphs that cannot detect a slip (an input without a signal model): never watching
+    blind: tuple[str, ...] = ()
 
     def latency_of(self, platform: str) -> float:
         return dict(self.latency).get(platform, 0.0)
@@ -101,6 +109,8 @@ class MarkovWorld:
             "heartbeat_timeout_s": self.heartbeat_timeout,
             "start_failure_p": self.start_failure_p,
             "slip_rate_per_s": self.slip_rate,
+            "warm_up_s": dict(self.warmup),
+            "cannot_detect": list(self.blind),
             "requirement_changes": [{"change": c.label or str(c), "rate_per_s": r} for c, r in self.changes],
             "dropped_checker_budgets": dict(self.dropped),
             "load_steps": [
@@ -248,10 +258,17 @@ def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float 
     b = bounds_of(scenario)
     _check_unrated(scenario, world)
     _check_matching(scenario, world, b)
+    if not world.repeat:
+        raise _refuse(
+            scenario,
+            "World(repeat=False): the task runs once and then nothing happens, which a chain of a repeating cycle would "
+            "misstate; give World(repeat=True) to analyze the task as a cycle (desmon run simulates the single pass)",
+        )
     for i, step in enumerate(world.task):
         if step.duration <= 0:
             raise _refuse(scenario, f"World task step {i + 1} ({step.action}) lasts 0 s, which has no rate: give it a positive duration")
     p = world.start_failure.probability if start_failure_p is None else float(start_failure_p)
+    plans = detector_plans(world, scenario.model)
     latency = tuple((pl.name, world.latency(pl.name)) for pl in scenario.model.platforms)
     changes: tuple[tuple[RequirementChange, float], ...] = ()
     if world.random_changes is not None:
@@ -276,6 +293,8 @@ def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float 
         loads=tuple((w.platform, w.resource, w.levels, 1.0 / w.mean_interval) for w in world.load_steps),
         lease=tuple((p, scenario.model.platform(p).startup_s) for p in b.joins),
         lease_idle_s=world.lease.idle_s if world.lease is not None and b.joins else 0.0,
+        warmup=tuple((g, plan.warmup) for g, plan in plans.items() if plan is not None and plan.warmup > 0),
+        blind=tuple(g for g, plan in plans.items() if plan is None),
     )
 
 

@@ -21,7 +21,6 @@ Per mission (transient from the initial state over the horizon T, default the Wo
 
 from __future__ import annotations
 
-import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -32,6 +31,7 @@ import numpy as np
 from desmon.analyze.chain import Chain, build_chain
 from desmon.analyze.markov import AnalysisError, MarkovWorld, markov_world
 from desmon.analyze.solve import KRYLOV_TOL, mean_time_to, one_blas_thread, steady_state, transient
+from desmon.deployment.exposure import CAUSES
 from desmon.model.checks import check_number
 from desmon.model.scenario import Scenario
 
@@ -44,34 +44,37 @@ TOP_STATES = 8
 _EVALUATED = {"wrench": "force", "tactile": "tactile", "both": "combined"}
 
 
-def detector_miss(scenario: Scenario, *, trials: int = 200, seed: int = 0) -> dict[str, float]:
-    """Each graph's probability of missing a slip: 1 - the TP rate of its detector in
-    the evaluation of Tables 1-2 (``desmon evaluate``: ``trials`` slips up and down,
-    ``seed``); 1 for a graph whose device kinds have no signal model."""
-    from desmon.sim.streams import detector_plan
-    from desmon.sim.world import world_of
+def detector_miss(scenario: Scenario, *, phases: int = 1, trials: int = 200, seed: int = 0) -> dict[str, dict[str, float]]:
+    """Each graph's probability of missing a slip in each risky action of the task:
+    1 - its detector's rate in :func:`~desmon.detectors.evaluation.detection_rates` for
+    the built-in the action is like, its steps Erlang-``phases`` with the action's mean
+    step duration (as the chain times them) after a grasp of the task's mean grasp
+    duration, with the slip
+    direction and kind ``World.slip_kinds`` gives there (``trials`` slips, ``seed``); 1
+    for a graph that cannot detect (an input without a signal model)."""
+    from desmon.detectors.evaluation import detection_rates
+    from desmon.sim.world import detector_plans, slip_kind, world_of
 
     world = world_of(scenario)
-    tp = _tp_rates(trials, seed)
-    out = {}
-    for g in scenario.model.graphs:
-        streams = frozenset(world.signal_of(k) or "" for k in g.device_kinds)
-        plan = detector_plan(streams) if "" not in streams else None
+    model = scenario.model
+    plans = detector_plans(world, model)
+    spans: dict[str, list[float]] = {}
+    for step in world.task:
+        if step.action in model.risky_actions:
+            spans.setdefault(step.action, []).append(step.duration)
+    grasps = [s.duration for s in world.task if model.like(s.action) == "grasp"]
+    grasp = round(sum(grasps) / len(grasps), 6) if grasps else 2.0
+    rates: dict[str, dict[str, float]] = {}
+    for action, durations in spans.items():
+        like = model.like(action)
+        direction, kind = slip_kind(world, like)
+        rates[action] = detection_rates(like, round(sum(durations) / len(durations), 6), direction, kind, grasp=grasp, phases=phases, trials=trials, seed=seed)
+    out: dict[str, dict[str, float]] = {}
+    for g in model.graphs:
+        plan = plans.get(g.name)
         name = _EVALUATED.get(plan.kind) if plan is not None else None
-        out[g.name] = 1.0 - float(np.mean(tp[name])) if name in tp else 1.0
+        out[g.name] = {a: (1.0 - r[name] if name in r else 1.0) for a, r in rates.items()}
     return out
-
-
-@functools.lru_cache(maxsize=8)
-def _tp_rates(trials: int, seed: int) -> dict[str, list[float]]:
-    """Each detector's TP rates (slips down and up) in the Tables 1-2 evaluation, once per process."""
-    from desmon.detectors.evaluation import evaluate_actions
-
-    tp: dict[str, list[float]] = {}
-    for cell in evaluate_actions(trials, seed):
-        if cell.kind == "TP":
-            tp.setdefault(cell.detector, []).append(cell.rate)
-    return tp
 
 
 @dataclass
@@ -90,8 +93,20 @@ class Analysis:
     exposure_s_per_mission: float | None
     p_exposure_within_T: float | None
     mean_time_to_exposure_s: float
-    miss: dict[str, float]
+    miss: dict[str, dict[str, float]]
     contributions: list[tuple[float, str]] = field(default_factory=list)
+    #: the denominators and the split of the figures: seconds per hour (long run) and
+    #: per mission of risky time, excluded time, and unmonitored time by cause
+    risky_s_per_hour: float | None = None
+    risky_s_per_mission: float | None = None
+    excluded_s_per_hour: float | None = None
+    excluded_s_per_mission: float | None = None
+    causes_s_per_hour: dict[str, float] = field(default_factory=dict)
+    causes_s_per_mission: dict[str, float] = field(default_factory=dict)
+    #: what the chain leaves out of the world it stands for, one line each
+    leaves_out: tuple[str, ...] = ()
+    #: the mean length of an unmonitored interval (s) in the long run
+    mean_unmonitored_interval_s: float | None = None
     residual: float | None = None
     method: str = ""
     transient_error: float = 0.0
@@ -117,10 +132,18 @@ class Analysis:
             "p_exposure_within_T": num(self.p_exposure_within_T),
             "mean_time_to_exposure_s": num(self.mean_time_to_exposure_s),
             "detector_miss_probability": self.miss,
+            "risky_s_per_hour": num(self.risky_s_per_hour),
+            "risky_s_per_mission": num(self.risky_s_per_mission),
+            "excluded_s_per_hour": num(self.excluded_s_per_hour),
+            "excluded_s_per_mission": num(self.excluded_s_per_mission),
+            "unmonitored_by_cause_s_per_hour": {c: num(v) for c, v in self.causes_s_per_hour.items()},
+            "unmonitored_by_cause_s_per_mission": {c: num(v) for c, v in self.causes_s_per_mission.items()},
+            "mean_unmonitored_interval_s": num(self.mean_unmonitored_interval_s),
+            "leaves_out": list(self.leaves_out),
             "contributions": [{"exposure_s_per_hour": round(v, 9), "state": d} for v, d in self.contributions],
             "steady_state_residual": self.residual,
             "transient_method": self.method,
-            "transient_error_bound": self.transient_error,
+            "transient_error_estimate": self.transient_error,
             "rates": self.world.to_json(),
             "build_s": round(self.build_s, 3),
             "solve_s": round(self.solve_s, 3),
@@ -196,7 +219,7 @@ def analyze(
     T = scenario.world.horizon if horizon is None else horizon
     check_number("--horizon", T, error=AnalysisError, positive=True, unit=" of seconds")
     if miss is None:
-        miss = detector_miss(scenario)
+        miss = detector_miss(scenario, phases=phases)
     chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss)
     t0 = time.perf_counter()
     Q, _exit = chain.generator()
@@ -207,8 +230,20 @@ def analyze(
         say(f"the steady state of {chain.n:,} states")
         frac, slips, residual, rows, pi = _long_run(chain, Q)
     say(f"the exposure over {T:,.0f} s")
-    tr = transient(Q, p0, T, np.vstack([chain.unmonitored, chain.undetected]), limit=pi)
+    rewards = np.vstack([chain.unmonitored, chain.undetected, chain.risky, chain.excluded, *(chain.causes[c] for c in CAUSES)])
+    tr = transient(Q, p0, T, rewards, limit=pi)
     per_mission = float(tr.accumulated[0])
+    extra: dict[str, Any] = {
+        "risky_s_per_mission": float(tr.accumulated[2]),
+        "excluded_s_per_mission": float(tr.accumulated[3]),
+        "causes_s_per_mission": {c: float(tr.accumulated[4 + i]) for i, c in enumerate(CAUSES)},
+        "leaves_out": leaves_out(scenario, mw),
+    }
+    if pi is not None:
+        extra["risky_s_per_hour"] = float(pi @ chain.risky) * 3600.0
+        extra["excluded_s_per_hour"] = float(pi @ chain.excluded) * 3600.0
+        extra["causes_s_per_hour"] = {c: float(pi @ chain.causes[c]) * 3600.0 for c in CAUSES}
+        extra["mean_unmonitored_interval_s"] = _mean_interval(Q, pi, chain.unmonitored > 0)
     say(f"the probability of any exposure within {T:,.0f} s")
     within = _within(chain, Q, p0, T)
     say("the mean time to the first exposure")
@@ -235,4 +270,47 @@ def analyze(
         solve_s=time.perf_counter() - t0,
         reactions=chain.reactions,
         chain=chain,
+        **extra,
     )
+
+
+def _mean_interval(Q: Any, pi: np.ndarray, target: np.ndarray) -> float | None:
+    """The mean length of an unmonitored interval in the long run: the long-run
+    unmonitored fraction over the rate at which the chain enters unmonitored states
+    (None when it never does)."""
+    import scipy.sparse as sp
+
+    if not target.any():
+        return None
+    C = sp.csr_matrix(Q, copy=True)  # Q itself is solved on after this
+    C.setdiag(0)
+    C.eliminate_zeros()
+    into = float(pi[~target] @ (C[~target][:, target] @ np.ones(int(target.sum()))))
+    if into <= 0:
+        return None
+    return float(pi[target].sum()) / into
+
+
+def leaves_out(scenario: Scenario, mw: MarkovWorld) -> tuple[str, ...]:
+    """What the chain leaves out of the world it stands for, one line each: printed with
+    every figure of ``desmon analyze`` (docs/analyze.md explains each)."""
+    lines = []
+    timing = "exponential" if mw.phases == 1 else f"Erlang-{mw.phases}"
+    lines.append(
+        f"timing: task steps and warm-ups are {timing} with the given means (the simulation's are fixed: "
+        "raise --phases to approach it); start latency, recognition and heartbeat delays are exponential"
+    )
+    if mw.slip_rate > 0:
+        lines.append(
+            "slip detection: each watching detector catches a slip with its rate for the action, measured once by "
+            "desmon's detection trials (200 slips per action, not the run's own signals)"
+        )
+    if mw.dropped:
+        lines.append("checker budgets dropped: " + ", ".join(f"{k}={v}" for k, v in mw.dropped) + " (any number of faults may overlap)")
+    if mw.blind:
+        lines.append("cannot detect (an input without a signal model): " + ", ".join(mw.blind) + " (never counted as watching)")
+    excluded = sorted(scenario.model.unwatched_actions)
+    if excluded:
+        lines.append("excluded on purpose (watched=False): " + ", ".join(excluded) + " (their seconds are reported apart)")
+    lines.append("false alarms are not modelled (desmon run counts them)")
+    return tuple(lines)

@@ -21,7 +21,7 @@ import json
 import sys
 from typing import Any
 
-from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg
+from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered
 from desmon.cli.options import add_output, positive_int, positive_seconds
 
 __all__ = ["add_parser", "run", "format_analysis", "format_cross_check", "DEFAULT_MAX_STATES"]
@@ -128,6 +128,7 @@ def run(args: argparse.Namespace) -> int:
         with replacing(args.json) as fh:
             fh.write(json.dumps(doc, indent=2) + "\n")
     sys.stdout.write(format_analysis(result, agree))
+    warn_uncovered(scenario)
     if gap is not None:
         sys.stdout.write(gap.text())
     sys.stdout.write(format_cross_check(cross))
@@ -237,13 +238,26 @@ def format_analysis(a: Any, agree: Any = None) -> str:
     timing = "exponential" if w.phases == 1 else f"Erlang-{w.phases}"
     out.append(f"  task steps {timing}; start failure p = {w.start_failure_p:g}; recognition {w.recognition_delay:g} s; heartbeat {w.heartbeat_timeout:g} s")
     if a.long_run_unmonitored_fraction is not None:
-        out.append(f"Long run: unmonitored {100 * a.long_run_unmonitored_fraction:.4f} % of the time = {a.exposure_s_per_hour:.3f} s per hour")
+        out.append(
+            f"Long run, per hour: {a.risky_s_per_hour:.3f} s risky (an object in the hand), of which {a.exposure_s_per_hour:.3f} s "
+            f"unmonitored{_share(a.exposure_s_per_hour, a.risky_s_per_hour)} ({100 * a.long_run_unmonitored_fraction:.4f} % of all time)"
+        )
+        out += _causes(a.causes_s_per_hour, a.excluded_s_per_hour)
+        if a.mean_unmonitored_interval_s is not None:
+            out.append(f"  an unmonitored interval lasts {a.mean_unmonitored_interval_s:.4g} s on average")
         out.append(f"  (steady state residual {a.residual:.1e})")
         out.append(f"Undetected slips: {a.undetected_slips_per_hour:.4f} per hour")
     out.append(
-        f"Per mission (T = {_n(a.horizon_s)} s): {a.exposure_s_per_mission:.3f} s unmonitored expected; "
-        f"P(any exposure within T) = {a.p_exposure_within_T:.6f}; mean time to first exposure {a.mean_time_to_exposure_s:.4g} s"
+        f"Per mission (T = {_n(a.horizon_s)} s): {a.exposure_s_per_mission:.3f} s unmonitored expected, of "
+        f"{a.risky_s_per_mission:.3f} s risky{_share(a.exposure_s_per_mission, a.risky_s_per_mission)}"
     )
+    out += _causes(a.causes_s_per_mission, a.excluded_s_per_mission)
+    if a.p_exposure_within_T is not None and a.p_exposure_within_T < 1.0 - 5e-7:
+        out.append(
+            f"  P(any exposure within T) = {a.p_exposure_within_T:.6f}; mean time to first exposure {a.mean_time_to_exposure_s:.4g} s"
+        )
+    else:
+        out.append("  an unmonitored moment within T is certain (to 6 digits)")
     out.append(f"  ({a.method}; error estimate {a.transient_error:.1e})")
     if agree is not None:
         verdict = "inside" if agree.inside else "OUTSIDE"
@@ -254,4 +268,22 @@ def format_analysis(a: Any, agree: Any = None) -> str:
     if a.contributions:
         out.append("Where the unmonitored time comes from (s per hour, long run):")
         out += [f"  {v:9.3f}  {d}" for v, d in a.contributions]
+    if a.leaves_out:
+        out.append("What this chain leaves out (docs/analyze.md):")
+        out += [f"  - {line}" for line in a.leaves_out]
     return "\n".join(out) + "\n"
+
+
+def _share(part: float | None, whole: float | None) -> str:
+    return f" = {100.0 * part / whole:.1f} % of the risky time" if part is not None and whole else ""
+
+
+def _causes(by_cause: dict[str, float], excluded: float | None) -> list[str]:
+    """One line: the unmonitored seconds by cause (docs/design.md), and the excluded ones."""
+    from desmon.deployment.exposure import CAUSE_TEXT
+
+    parts = [f"{CAUSE_TEXT[c]} {v:.3f}" for c, v in by_cause.items() if v > 5e-10]
+    lines = ["  by cause (s): " + "; ".join(parts)] if parts else []
+    if excluded:
+        lines.append(f"  excluded on purpose (watched=False): {excluded:.3f} s, in neither figure")
+    return lines

@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "EXIT_OK", "EXIT_VIOLATED", "EXIT_USAGE", "EXIT_INCOMPLETE", "MAX_STATES", "CEX_FILE", "MUTANT_PREFIX", "MUTANT_NAMES", "Parser", "Subparsers",
-    "one_line", "usage_error", "scenario_arg", "deployer_arg", "load_scenario_of", "load_scripted", "resolve_times",
+    "one_line", "usage_error", "scenario_arg", "deployer_arg", "load_scenario_of", "load_scripted", "warn_uncovered", "resolve_times",
     "draw_trace",
 ]
 
@@ -111,6 +111,19 @@ def load_scenario_of(args: argparse.Namespace) -> Scenario:
     from desmon.model.params import parse_assignments
 
     return load_scenario(args.scenario, parse_assignments(getattr(args, "param", None)))
+
+
+def warn_uncovered(scenario: Scenario) -> None:
+    """One warning line on stderr per risky action of ``scenario``'s task that no selector
+    rule covers (``run``, ``verify`` and ``analyze``): its seconds count as unmonitored."""
+    from desmon.deployment.exposure import no_rule_warnings
+    from desmon.sim.world import World, world_of
+
+    world = world_of(scenario) if isinstance(scenario.world, World) or scenario.world is None else None
+    if world is None:
+        return
+    for line in no_rule_warnings(scenario.model, ((s.action, s.duration) for s in world.task), world.horizon, world.repeat):
+        print(f"desmon: {line}", file=sys.stderr)
 
 
 def load_scripted(args: argparse.Namespace) -> Scenario:

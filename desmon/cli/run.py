@@ -16,7 +16,7 @@ import tempfile
 import time
 from typing import IO, TYPE_CHECKING, Any, Callable, Iterator
 
-from desmon.cli.common import EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, draw_trace, load_scenario_of, scenario_arg
+from desmon.cli.common import EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, draw_trace, load_scenario_of, scenario_arg, warn_uncovered
 from desmon.cli.options import add_output, add_window, non_negative_int, positive_int, positive_seconds
 from desmon.errors import ScenarioError
 from desmon.paths import replacing
@@ -124,6 +124,7 @@ def run_command(
         out.write(json.dumps(summary_json(result, wall), indent=2) + "\n")
     else:
         out.write(format_summary(result, wall))
+        warn_uncovered(scenario)
         if args.trace and not getattr(args, "trace_is_temporary", False):
             out.write(f"Trace: {args.trace} ({result.trace.count} records)\n")
     return 1 if result.violations else 0
@@ -260,9 +261,8 @@ def format_summary(r: RunResult, wall: float | None = None) -> str:
     lines += ["", "Errors by kind:"]
     lines += [f"  {k:<32} {n}" for k, n in m["errors"].items()] or ["  (none)"]
     lines += ["", "Metrics:"]
+    lines += exposure_lines(m)
     order = [
-        ("unmonitored exposure (s)", "unmonitored_exposure_s"),
-        ("risky time (s)", "risky_time_s"),
         ("switches", "switches"),
         ("blind time per switch (s)", "blind_time_per_switch_s"),
         ("blind time max (s)", "blind_time_max_s"),
@@ -316,23 +316,43 @@ def format_summary(r: RunResult, wall: float | None = None) -> str:
     return "\n".join(lines) + "\n"
 
 
+def exposure_lines(m: dict[str, Any]) -> list[str]:
+    """The exposure figure with its denominator and its causes (docs/design.md, the
+    definition of :mod:`desmon.deployment.exposure`)."""
+    from desmon.deployment.exposure import CAUSE_TEXT
+
+    risky, unmon = m["risky_time_s"], m["unmonitored_exposure_s"]
+    share = f" = {100.0 * unmon / risky:.1f} % of the risky time" if risky > 0 else ""
+    lines = [
+        f"  {'risky time (s)':<30} {_fmt(risky)}   (an object in the hand)",
+        f"  {'unmonitored exposure (s)':<30} {_fmt(unmon)}{share}",
+    ]
+    for c, v in m.get("unmonitored_by_cause_s", {}).items():
+        if v > 0:
+            lines.append(f"    {CAUSE_TEXT[c]:<32} {_fmt(v)}")
+    if m.get("excluded_s"):
+        lines.append(f"  {'excluded on purpose (s)':<30} {_fmt(m['excluded_s'])}   (risky actions declared watched=False: in neither figure above)")
+    return lines
+
+
 def _signal_status(r: RunResult) -> list[str]:
     """What the exposure figures mean in this run: signals off, or graphs without a signal model."""
     m = r.metrics
+    out: list[str] = []
     if not m.get("signals", True):
         why = " (the world is derived from the scripted timeline)" if r.scenario.world is None else ""
-        return [
-            f"Signals: off{why}: no detector is simulated; a running, warmed-up",
-            "  deployment counts as monitoring, and slips are injected but not detected.",
+        out = [
+            f"Signals: off{why}: no detector is simulated; a running, warmed-up deployment that",
+            "  could detect a slip counts as watching, and slips are injected but not detected.",
         ]
     missing = m.get("no_signal_model") or {}
     if not missing:
-        return []
+        return out
     graphs = "; ".join(f"{g} (reads {', '.join(kinds)})" for g, kinds in missing.items())
-    return [
+    return out + [
         f"NO SIGNAL MODEL: {graphs}",
-        "  these run and use memory but can never alarm, so they never count as monitoring (their time",
-        "  is unmonitored exposure): map the kinds in World(signal_kinds=...) or set World(signals=False).",
+        "  these run and use memory but cannot detect a slip, so they never count as watching (their time",
+        "  is unmonitored exposure, cause: cannot detect): map the kinds in World(signal_kinds=...).",
     ]
 
 

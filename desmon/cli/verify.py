@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg
+from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered
 from desmon.cli.options import Input, add_output, positive_int, positive_seconds, worker_count
 from desmon.errors import CheckerError
 
@@ -160,6 +160,7 @@ def _search(args: argparse.Namespace) -> int:
     )
     try:
         _report(args, result)
+        warn_uncovered(scenario)
         if not result.interrupted:  # Ctrl-C: the partial result and its JSON, and nothing slower
             _write_outputs(args, scenario, result, system.core.deployer, system.bounds)
     finally:

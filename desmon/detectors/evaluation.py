@@ -28,6 +28,8 @@ best TPR - FPR measured in the same run).
 
 from __future__ import annotations
 
+import functools
+
 import math
 from dataclasses import asdict, dataclass
 from typing import Callable, Final, Sequence
@@ -63,6 +65,7 @@ __all__ = [
     "fisher_exact",
     "wilson",
     "evaluate_actions",
+    "detection_rates",
     "evaluate_missions",
     "evaluate",
     "evaluate_seeds",
@@ -291,6 +294,67 @@ def _timeline(action: str) -> tuple[list[Segment], tuple[float, float] | None, s
 
 def _rng(seed: int, *key: int) -> np.random.Generator:
     return np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, *key])))
+
+
+#: groups of :func:`detection_rates` (each a pair of quantiles of the step's and the grasp's lengths)
+RATE_GROUPS: Final = 16
+
+
+def _lengths(mean: float, phases: int, biased: bool) -> list[float]:
+    """:data:`RATE_GROUPS` quantiles of a step's length: ``mean`` when fixed (``phases``
+    0), else of the Erlang-``phases`` law of that mean, length-biased (Gamma(phases+1))
+    for the step a random moment falls in."""
+    if phases <= 0:
+        return [float(mean)] * RATE_GROUPS
+    from scipy.stats import gamma
+
+    shape = phases + 1 if biased else phases
+    return [float(gamma.ppf((i + 0.5) / RATE_GROUPS, shape, scale=mean / phases)) for i in range(RATE_GROUPS)]
+
+
+@functools.lru_cache(maxsize=64)
+def detection_rates(
+    action: str, duration: float, direction: str, kind: str, *, grasp: float = 2.0, phases: int = 0, trials: int = 200,
+    seed: int = 0,
+) -> dict[str, float]:
+    """Each detector's probability of catching a slip that starts at a random moment of
+    a step of ``action`` (a built-in with an object in the hand) while it watches: the
+    fraction of ``trials`` slips of that ``direction`` and ``kind`` with an alarm in
+    [onset - 0.3 s, onset + 1.0 s], the SimPy world's own rule for a detected slip.
+
+    The episode starts with a grasp of ``grasp`` seconds (a short grasp holds the object
+    less firmly, and the tactile detector sees less), then the step; the detectors start
+    with the step and the slip falls after their warm-up (0.5 s, or half a shorter
+    step). The step lasts ``duration`` seconds and the grasp ``grasp`` (``phases`` 0:
+    fixed), or Erlang-``phases`` times of those means, as ``desmon analyze`` times them:
+    the slip's step then has the length-biased length (a Poisson slip is likelier in a
+    longer step). :data:`RATE_GROUPS` quantile pairs of the two laws split the trials.
+    The step is followed by 1.5 s of ``hold`` (nothing after a ``release``: the object
+    is handed over), so that a late slip has its whole detection window."""
+    steps = _lengths(duration, phases, True)
+    grasps = _lengths(grasp, phases, False)
+    hits = {d: 0 for d in DETECTORS}
+    for gi, length in enumerate(steps):
+        n = trials // RATE_GROUPS + (1 if gi < trials % RATE_GROUPS else 0)
+        if n == 0:
+            continue
+        if action == GRASP:
+            timeline, t_act = [Segment(IDLE, 0.0, PRE), Segment(GRASP, PRE, length)], PRE
+        else:
+            g = grasps[(5 * gi + 3) % RATE_GROUPS]  # a fixed shuffle: step and grasp lengths independent
+            timeline, t_act = [Segment(IDLE, 0.0, PRE), Segment(GRASP, PRE, g), Segment(action, PRE + g, length)], PRE + g
+        end = t_act + length
+        if action != RELEASE:
+            timeline.append(Segment(HOLD, end, 1.5))
+        b = simulate_batch(
+            timeline, n, _rng(seed, 2, gi), slip_window=(t_act + min(0.5, length / 2), end), slip_direction=direction,
+            slip_kind=kind,
+        )
+        runs = run_detectors(b, t_act)
+        for d in DETECTORS:
+            t_first, _ = first_alarm(runs[d], b.slip_onset - TP_BEFORE, b.slip_onset + TP_AFTER)
+            hits[d] += int(np.isfinite(t_first).sum())
+    return {d: hits[d] / trials for d in DETECTORS}
 
 
 def evaluate_actions(

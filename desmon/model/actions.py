@@ -47,14 +47,24 @@ class Action:
         built-ins only): default ``"hold"`` when risky, ``"idle"`` when not. It must
         agree with ``risky``: a risky action is like a risky built-in, a safe one like
         ``idle``.
+    ``watched``
+        ``False`` excludes a risky action from unmonitored exposure on purpose (say, the
+        user accepts the risk of ``hold``): its seconds are reported as *excluded* beside
+        every exposure figure instead (:mod:`desmon.deployment.exposure`). This is the
+        one way to name a built-in action here: ``Action("hold", watched=False)``.
     """
 
     name: str
     risky: bool = True
     like: str | None = None
+    watched: bool = True
 
     def __post_init__(self) -> None:
         check_name("action", self.name)
+        check_flag(f"action {self.name!r} watched", self.watched)
+        if self.name in ACTIONS and not self.watched:
+            self._exclude_builtin()
+            return
         if self.name in ACTIONS:
             raise ModelError(
                 f"action {self.name!r} is built in: use it without declaring it, or give the new action another name "
@@ -75,3 +85,21 @@ class Action:
                 f"{'an empty hand' if self.risky else 'an object in the hand'}: write {fix}, or risky={not self.risky}"
             )
         object.__setattr__(self, "like", like)
+
+    def _exclude_builtin(self) -> None:
+        """``Action("hold", watched=False)``: a built-in action excluded from exposure; it
+        keeps its own risk and signals."""
+        check_flag(f"action {self.name!r} risky", self.risky)
+        builtin_risky = self.name in RISKY_ACTIONS
+        if self.risky != builtin_risky:
+            raise ModelError(
+                f"action {self.name!r} is built in and {'has an object in the hand' if builtin_risky else 'has an empty hand'}: "
+                f"write risky={builtin_risky} (or leave it out) to exclude it with watched=False"
+            )
+        if not builtin_risky:
+            raise ModelError(
+                f"action {self.name!r} has an empty hand, so it is never in unmonitored exposure: remove watched=False"
+            )
+        if self.like not in (None, self.name):
+            raise ModelError(f"action {self.name!r} is built in: it has its own signals, so leave like={self.like!r} out")
+        object.__setattr__(self, "like", self.name)

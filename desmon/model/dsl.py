@@ -228,12 +228,15 @@ class RobotBuilder:
         return PlatformBuilder(self, name)
 
     @strict_call(ModelError, "action(...)")
-    def action(self, name: str, *, risky: bool = True, like: str | None = None) -> "RobotBuilder":
+    def action(self, name: str, *, risky: bool = True, like: str | None = None, watched: bool = True) -> "RobotBuilder":
         """Declare an action context of this robot beyond the built-in ones (see
         :class:`~desmon.model.actions.Action`): ``risky`` means an object is in the hand
         (exposure counts it, slips may happen); ``like`` names the built-in action whose
-        sensor signals it has (default ``hold`` when risky, ``idle`` when not)."""
-        self._actions.append(Action(name, risky, like))
+        sensor signals it has (default ``hold`` when risky, ``idle`` when not);
+        ``watched=False`` excludes a risky action (a built-in one too, e.g.
+        ``robot.action("hold", watched=False)``) from unmonitored exposure, and every
+        report prints the excluded seconds beside the figure."""
+        self._actions.append(Action(name, risky, like, watched))
         return self
 
     def _add_graph(self, graph: PerceptionGraph) -> None:

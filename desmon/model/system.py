@@ -375,7 +375,13 @@ class SystemModel:
     @property
     def actions(self) -> tuple[str, ...]:
         """Every action context of this model: the built-ins, then the declared ones."""
-        return ACTIONS + tuple(a.name for a in self.declared_actions)
+        return ACTIONS + tuple(a.name for a in self.declared_actions if a.name not in ACTIONS)
+
+    @property
+    def unwatched_actions(self) -> frozenset[str]:
+        """The risky actions the scenario excludes from unmonitored exposure on purpose
+        (``robot.action(name, watched=False)``): reported as excluded, never silently."""
+        return frozenset(a.name for a in self.declared_actions if not a.watched)
 
     @property
     def risky_actions(self) -> frozenset[str]:
@@ -386,7 +392,7 @@ class SystemModel:
         """The built-in action whose signals ``action`` has (a built-in is like itself)."""
         if action in ACTIONS:
             return action
-        for a in self.declared_actions:
+        for a in self.declared_actions:  # a built-in excluded with watched=False is answered above
             if a.name == action:
                 return a.like  # type: ignore[return-value]  # set by Action.__post_init__
         return check_action(self, action, where=f"robot {self.robot!r}")

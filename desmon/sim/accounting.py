@@ -127,6 +127,8 @@ def robot_metrics(parts: "RobotParts") -> dict[str, Any]:
         "horizon_s": parts.horizon,
         "risky_time_s": round(ex.risky, 6),
         "unmonitored_exposure_s": round(ex.exposure, 6),
+        "unmonitored_by_cause_s": {c: round(v, 6) for c, v in ex.by_cause.items()},
+        "excluded_s": round(ex.excluded, 6),
         "switches": ex.switches,
         "blind_time_per_switch_s": round(sum(ex.blind) / len(ex.blind), 6) if ex.blind else 0.0,
         "blind_time_max_s": round(max(ex.blind), 6) if ex.blind else 0.0,
@@ -150,9 +152,9 @@ def robot_metrics(parts: "RobotParts") -> dict[str, Any]:
         m["requirement_changes"] = books.requirement_changes
         m["leases"] = books.leases
         m["leased_s"] = round(books.leased_s, 6)
+    # graphs that cannot detect a slip: never counted as watching (Infrastructure.activate)
+    m["no_signal_model"] = {g: list(kinds) for g, kinds in world.no_signal_model(parts.model.graphs).items()}
     if parts.signals:
-        # graphs that cannot alarm: never counted as monitoring (see Infrastructure.activate)
-        m["no_signal_model"] = {g: list(kinds) for g, kinds in world.no_signal_model(parts.model.graphs).items()}
         m.update(slip_metrics(parts.truth.slips, infra.alarms))
         bank = parts.truth.bank
         m["samples"] = dict(bank.samples) if bank is not None else {}

@@ -18,6 +18,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from desmon.deployment.exposure import best_state
 from desmon.detectors.signals import Segment
 from desmon.model.system import PlatformState, SystemModel
 from desmon.sim.sensors import DetectorAdapter, SensorBank
@@ -106,6 +107,11 @@ class PhysicalFacts:
         self.host = {d.name: d.platform for d in model.devices}
         self.hosted = {p.name: model.devices_on(p.name) for p in model.platforms}
         self.instances: dict[tuple[str, str], Instance] = {}
+        #: (graph, platform) started and waiting out its start latency (fixed timing)
+        self.pending: set[tuple[str, str]] = set()
+        #: graph -> whether it can detect a slip (its inputs have a signal model); set by
+        #: the world's assembly (:func:`desmon.sim.world.detector_plans`)
+        self.detects: dict[str, bool] = {}
         self._states: dict[str, tuple[int, PlatformState]] = {}  # platform -> (readability, state)
         # id of an instance's streams -> (those streams, readability, whether all are readable)
         self._inputs: dict[int, tuple[dict[str, tuple[str, ...]], int, bool]] = {}
@@ -171,6 +177,23 @@ class PhysicalFacts:
                 t = out.get(g)
                 out[g] = inst.valid_from if t is None else min(t, inst.valid_from)
         return out
+
+    def member_state(self, graph: str, now: float) -> str:
+        """The state of ``graph`` as a slot member at ``now`` (the best over its instances
+        and pending starts): one of :data:`desmon.deployment.exposure.MEMBER_STATES`."""
+        states = ["starting" for g, _p in self.pending if g == graph]
+        for inst in self.instances.values():
+            if inst.graph != graph:
+                continue
+            if not (self.up[inst.platform] and not inst.halted and self.inputs_ok(inst)):
+                states.append("input_lost")
+            elif not self.detects.get(graph, True):
+                states.append("cannot_detect")
+            elif inst.valid_from > now:
+                states.append("starting")
+            else:
+                states.append("watching")
+        return best_state(states)
 
     def physically_valid(self, graph: str, platform: str) -> bool:
         """Whether the running instance of ``graph`` on ``platform`` can monitor: its

@@ -33,7 +33,7 @@ from desmon.sim.facts import GroundTruth, Instance, PhysicalFacts
 from desmon.sim.metrics import Exposure, MemoryMeter
 from desmon.sim.sensors import DetectorAdapter
 from desmon.sim.trace import Trace
-from desmon.sim.world import World
+from desmon.sim.world import World, detector_plans
 
 __all__ = ["Infrastructure"]
 
@@ -61,6 +61,10 @@ class Infrastructure:
         self.rng_start = random.Random(f"{seed}:start")
         #: exponential timing (World.timing): start latencies drawn from here
         self.rng_latency = random.Random(f"{seed}:latency")
+        self.rng_warmup = random.Random(f"{seed}:warmup")
+        #: graph -> its detector plan, or None: it cannot detect (desmon.sim.world.detector_plans)
+        self.plans = detector_plans(world, facts.model)
+        facts.detects = {g: plan is not None for g, plan in self.plans.items()}
         self.alarms: list[Alarm] = []
         #: when each platform last hosted an instance (a lease ends once it stayed idle)
         self.last_busy: dict[str, float] = {}
@@ -161,7 +165,13 @@ class Infrastructure:
         if latency and self.world.timing == "exponential":  # decided at once, ready after the latency
             ready_at += self.rng_latency.expovariate(1.0 / latency)
         elif latency:
-            yield env.timeout(latency)
+            self.exposure.advance(env.now)
+            self.facts.pending.add((graph, platform))
+            try:
+                yield env.timeout(latency)
+            finally:
+                self.exposure.advance(env.now)
+                self.facts.pending.discard((graph, platform))
         reason = self._refusal(graph, platform, n)
         if reason:
             self.start_failures += 1
@@ -238,18 +248,19 @@ class Infrastructure:
     # ------------------------------------------------------------------ detector instances
     def activate(self, inst: Instance, now: float) -> None:
         inst.fed = now
-        if inst.adapter is not None and inst.adapter.det is None:
-            # signals on, but what the graph reads has no signal model (World.no_signal_model):
-            # it runs and uses memory, yet can never alarm, so it never becomes valid and
-            # never counts as monitoring (the run report lists it)
+        if self.plans.get(inst.graph) is None:
+            # what the graph reads has no signal model (World.no_signal_model): it runs
+            # and uses memory, yet cannot detect a slip, so it never becomes valid and
+            # never counts as watching, signals on or off (the run report lists it)
             inst.valid_from = math.inf
             inst.gen += 1
             if self.facts.instances.get((inst.graph, inst.platform)) is inst:  # its input is back: say so (no ready follows)
                 self.trace.emit(now, "no_signal", graph=inst.graph, platform=inst.platform)
             return
-        warm = inst.adapter.warmup if inst.adapter is not None else 0.0
-        wait = warm if inst.ready_at <= now + warm else inst.ready_at - now  # a start latency still running (exponential timing)
-        inst.valid_from = now + warm if wait == warm else inst.ready_at
+        warm = self.warmup(inst.graph)
+        # a start latency still running (exponential timing): the warm-up follows it
+        wait = warm + max(0.0, inst.ready_at - now)
+        inst.valid_from = now + wait
         inst.gen += 1
         if inst.adapter is not None:
             inst.adapter.activate(now)
@@ -258,6 +269,17 @@ class Infrastructure:
             self.env.timeout(wait).callbacks.append(lambda _ev: self._warmed(inst, gen))
         else:
             self._pending_ready.append(inst)  # valid at once: reported once it is registered
+
+    def warmup(self, graph: str) -> float:
+        """Seconds ``graph`` warms up after an activation: its detector's (force re-tare,
+        tactile frames), signals on or off; under exponential timing drawn as an Erlang
+        of ``World.phases`` phases with that mean, as ``desmon analyze`` models it."""
+        plan = self.plans.get(graph)
+        warm = plan.warmup if plan is not None else 0.0
+        if warm and self.world.timing == "exponential":
+            k = self.world.phases
+            warm = sum(self.rng_warmup.expovariate(k / warm) for _ in range(k))
+        return warm
 
     def _warmed(self, inst: Instance, gen: int) -> None:
         """A warm-up ended: report the instance ready if it is still that activation and alive."""

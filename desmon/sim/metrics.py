@@ -1,16 +1,16 @@
 """The metrics of docs/design.md §10, accumulated while the world runs.
 
-* **Unmonitored exposure**: seconds in which the robot's *true* action context is risky
-  (an object in the hand: ``SystemModel.risky_actions``, built-in or declared with
-  ``risky=True``), the selector wants detectors in it, and at least one of its slots
-  has no member that is running on an up platform with its inputs and warmed up. The
-  slots are kept apart: a covered slot (say the force detector in ``grasp``) does not
-  hide an uncovered one (the tactile detector the same rule also wants). With signals
-  on, an instance of a graph that reads a device kind without a signal model
-  (``World.no_signal_model``, the ``no_signal_model`` metric) is never valid: it runs and
-  uses memory but cannot alarm, so it never counts as monitoring. With signals off no
-  detector is simulated and a running, warmed-up deployment counts.
-  :class:`Exposure` also reports each interval it counts (for the trace's
+* **Unmonitored exposure**: the definition of :mod:`desmon.deployment.exposure`, applied
+  to the *true* action context: risky time (an object in the hand) in which a slot of
+  what the selector's rule wants has no watching member (running on an up platform, its
+  start latency and warm-up over, every input readable, able to detect here), or which
+  no rule covers. The slots are kept apart: a covered slot (say the force detector in
+  ``grasp``) does not hide an uncovered one (the tactile detector the same rule also
+  wants). A graph whose inputs have no signal model (``World.no_signal_model``) cannot
+  detect a slip: it runs and uses memory, but never counts as watching, signals on or
+  off. :class:`Exposure` also splits the unmonitored seconds by cause
+  (:data:`~desmon.deployment.exposure.CAUSES`), keeps the excluded seconds of actions
+  declared ``watched=False``, and reports each interval it counts (for the trace's
   ``exposure`` start / end records).
 * **Blind time per switch**: for every change of the true context that changes what
   the selector wants (a switch), the exposure between the change and the first moment
@@ -33,6 +33,7 @@ from typing import Any, Callable, Iterable, Mapping
 
 import numpy as np
 
+from desmon.deployment.exposure import CAUSES, Needs
 from desmon.detectors.base import Alarm, merge_alarms
 from desmon.sim.world import Slip
 
@@ -61,13 +62,21 @@ class Exposure:
     def __init__(
         self, valid_from: Callable[[str], float], emit: Callable[[float, str, str], None] | None = None,
         valid_times: Callable[[], Mapping[str, float]] | None = None,
+        cause_of: Callable[[Needs], str | None] | None = None,
     ) -> None:
         self.valid_from = valid_from
+        #: the cause of an uncovered moment with no member about to be valid (the owner
+        #: asks the definition with its members' states); None: ``not_deployed``
+        self.cause_of = cause_of
         #: every graph's ``valid_from`` at once (graphs not in it: inf), if the owner can
         #: say so in one pass; else ``valid_from`` is asked graph by graph
         self.valid_times = valid_times
         self.emit = emit
         self.slots: tuple[frozenset[str], ...] = ()
+        self.need: Needs | None = None
+        #: unmonitored seconds by cause, and the seconds of actions declared watched=False
+        self.by_cause: dict[str, float] = dict.fromkeys(CAUSES, 0.0)
+        self.excluded = 0.0
         self.context = ""
         self.last = 0.0
         self.exposure = 0.0
@@ -106,20 +115,35 @@ class Exposure:
 
     def advance(self, now: float, times: Mapping[str, float] | None = None) -> None:
         a, b = self.last, now
-        if b > a and self.slots:
-            v = self._covered_from(times)
-            start_cov = min(b, max(a, v))
-            self.exposure += start_cov - a
+        need = self.need
+        if b > a and need is not None and (need.counted or need.excluded):
             self.risky += b - a
-            if self._open is not None:
-                self.blind[self._open] += start_cov - a
-                if v <= b:
-                    self._open = None
+            if need.excluded:
+                self.excluded += b - a
+            elif not self.slots:  # a risky action no rule covers: unmonitored throughout
+                self.exposure += b - a
+                self.by_cause["no_rule"] += b - a
+            else:
+                v = self._covered_from(times)
+                start_cov = min(b, max(a, v))
+                if start_cov > a:
+                    self.exposure += start_cov - a
+                    if v < math.inf:
+                        why = "starting"  # a member becomes valid at v: its latency or warm-up runs
+                    else:
+                        why = (self.cause_of(need) if self.cause_of is not None else None) or "not_deployed"
+                    self.by_cause[why] += start_cov - a
+                if self._open is not None:
+                    self.blind[self._open] += start_cov - a
+                    if v <= b:
+                        self._open = None
         self.last = max(self.last, now)
 
     def set_wanted(self, now: float, slots: Iterable[Iterable[str] | str], context: str = "") -> None:
-        """The true context became ``context``, where the selector wants ``slots``
-        (as ``RuleTable.slots_for`` returns them; a bare graph name is a one-graph slot)."""
+        """The true context became ``context``, where the selector wants ``slots`` (as
+        ``RuleTable.slots_for`` returns them; a bare graph name is a one-graph slot) and
+        the context counts as risky exactly when it wants some: :meth:`set_need` with
+        the definition's :class:`~desmon.deployment.exposure.Needs` is the full form."""
         try:  # the rule table's slots are tuples of tuples: their sets are made once
             wanted = self._wanted.get(slots)  # type: ignore[arg-type]
         except TypeError:  # slots given as lists
@@ -128,15 +152,23 @@ class Exposure:
             wanted = tuple(frozenset((slot,) if isinstance(slot, str) else slot) for slot in slots)
             if type(slots) is tuple and all(type(slot) is tuple or type(slot) is str for slot in slots):
                 self._wanted[slots] = wanted
+        self.set_need(now, Needs(context, bool(wanted), False, wanted))
+
+    def set_need(self, now: float, need: Needs) -> None:
+        """The true context became ``need.action``, which the definition
+        (:func:`desmon.deployment.exposure.needs`) asks ``need`` of."""
+        wanted = need.slots
         # what valid_times() answers is the same for the advance and the check (nothing
         # between them changes an instance): asked once where both need it
         times = None
         if self.valid_times is not None and wanted and self.slots and now > self.last:
             times = self.valid_times()
         self.advance(now, times)
+        context = need.action
         if context != self.context and self.open_since is not None:
             self._close(now)
         self.context = context
+        self.need = need
         if wanted != self.slots:
             if wanted:
                 self.switches += 1
@@ -150,7 +182,8 @@ class Exposure:
     def check(self, now: float, times: Mapping[str, float] | None = None) -> None:
         """Open or close the exposure interval after a change of state at ``now``
         (``times``: what ``valid_times()`` answers now, if the caller has it)."""
-        exposed = bool(self.slots) and self._covered_from(times) > now
+        need = self.need
+        exposed = need is not None and need.counted and (not self.slots or self._covered_from(times) > now)
         if exposed and self.open_since is None:
             self.open_since = now
             if self.emit is not None:

@@ -27,6 +27,7 @@ import simpy
 
 from desmon.deployment.control import ControlRules
 from desmon.deployment.core import DeploymentCore
+from desmon.deployment.exposure import Needs, cause
 from desmon.model.scenario import Scenario
 from desmon.model.system import SystemModel
 from desmon.repository.facts import RepositoryInsert
@@ -90,7 +91,10 @@ def robot_parts(
     def emit_exposure(t: float, state: str, context: str) -> None:
         trace.emit(t, "exposure", state=state, context=context)
 
-    exposure = Exposure(facts.valid_from, emit_exposure, facts.valid_times)
+    def cause_of(need: Needs) -> str | None:
+        return cause(need, lambda g: facts.member_state(g, env.now))
+
+    exposure = Exposure(facts.valid_from, emit_exposure, facts.valid_times, cause_of)
     memory = MemoryMeter({p.name: p.capacity("memory") or math.inf for p in model.platforms})
     infra = Infrastructure(
         env, world, repo, trace, facts, truth, rules(control) if rules is not None else control, exposure, memory,

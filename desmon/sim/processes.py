@@ -21,6 +21,7 @@ from __future__ import annotations
 import random
 from typing import TYPE_CHECKING, Any, Callable
 
+from desmon.deployment.exposure import needs_table
 from desmon.deployment.lease import lease_choice
 from desmon.deployment.monitor import GripperObservation, interpret
 from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
@@ -78,17 +79,15 @@ def apply_initial(parts: RobotParts) -> None:
 # ---------------------------------------------------------------------- robot and context monitor
 def robot(parts: RobotParts):  # type: ignore[no-untyped-def]
     env = parts.env
-    risky = parts.model.risky_actions
-    slots_for = parts.model.rules.slots_for
+    table = needs_table(parts.model)
     for seg in parts.truth.segments:
         if seg.start > env.now:
             yield env.timeout(seg.start - env.now)
-        # the selector's slots in the TRUE context, kept apart (one covered slot does
-        # not hide an uncovered one); the core's selector gives them for the recognised
-        # one. Exposure counts risky contexts only (an object in the hand).
-        slots = slots_for(seg.context) if seg.context in risky else ()
+        # what the definition asks of the TRUE context (desmon.deployment.exposure):
+        # the selector's slots, kept apart (one covered slot does not hide an uncovered
+        # one); the core's selector gives them for the recognised one
         parts.trace.emit(env.now, "action", action=seg.context, duration=seg.duration)
-        parts.exposure.set_wanted(env.now, slots, seg.context)
+        parts.exposure.set_need(env.now, table[seg.context])
         if parts.world.timing == "exponential":
             if "context" not in parts.noticing:
                 parts.noticing.add("context")

@@ -36,10 +36,11 @@ from desmon.model.events import Event, LoadChange, PlatformEvent, RequirementCha
 from desmon.model.graph import PerceptionGraph
 from desmon.model.scenario import Scenario, TimedEvent, event_problem
 from desmon.model.system import SystemModel, check_action
-from desmon.sim.streams import default_signal_kinds, stream_names
+from desmon.sim.streams import DetectorPlan, default_signal_kinds, detector_plan, stream_names
 
 __all__ = [
     "Step",
+    "detector_plans",
     "Slip",
     "MTTF",
     "StartFailure",
@@ -299,6 +300,11 @@ class World:
     slips: tuple[Slip, ...] = ()
     #: stochastic slips per second of object-in-hand time (Poisson), on top of ``slips``
     slip_rate: float = 0.0
+    #: the kind of a random slip in each risky built-in action (a model's own action
+    #: takes its ``like``'s): ``(action, direction, kind)`` triples; the default puts a
+    #: pulled slip up in ``release`` (the hand-over), a gravitational slip down in
+    #: ``move_base`` (the base accelerates), a pulled slip down elsewhere
+    slip_kinds: tuple[tuple[str, str, str], ...] = ()
     #: scripted device / platform events (DeviceFail, DeviceRepair, PlatformDown, PlatformUp)
     faults: tuple[TimedEvent, ...] = ()
     stochastic_faults: tuple[MTTF, ...] = ()
@@ -390,6 +396,7 @@ class World:
         _seconds("block", self.block, zero=False)
         _seconds("quiet block", self.quiet_block, zero=False)
         check_number("world: slip_rate", self.slip_rate, error=err, unit=" of slips per second of object-in-hand time")
+        object.__setattr__(self, "slip_kinds", _check_slip_kinds(self.slip_kinds))
         if not isinstance(self.start_failure, StartFailure):
             raise ScenarioError(f"world: start_failure = {self.start_failure!r} is not a StartFailure: write StartFailure(probability=0.02)")
 
@@ -690,26 +697,84 @@ def in_hand(segments: Sequence[Segment]) -> list[tuple[float, float, str]]:
     return out
 
 
+#: :attr:`World.slip_kinds` by default: (action, direction, kind) of a random slip
+DEFAULT_SLIP_KINDS: tuple[tuple[str, str, str], ...] = (
+    (GRASP, "down", "pulled"),
+    ("hold", "down", "pulled"),
+    (MOVE_BASE, "down", "gravitational"),
+    (RELEASE, "up", "pulled"),
+    ("rotate_ccw", "down", "pulled"),
+    ("rotate_cw", "down", "pulled"),
+)
+
+
+def _check_slip_kinds(given: object) -> tuple[tuple[str, str, str], ...]:
+    """``World.slip_kinds`` over the defaults: each entry (action, direction, kind) names
+    a risky built-in action once, a direction up/down and a kind pulled/gravitational."""
+    example = "slip_kinds=(('move_base', 'down', 'pulled'),)"
+    if not isinstance(given, (tuple, list)):
+        raise ScenarioError(f"world: slip_kinds = {given!r}: give (action, direction, kind) triples, e.g. {example}")
+    out = dict((a, (d, k)) for a, d, k in DEFAULT_SLIP_KINDS)
+    seen: set[str] = set()
+    for entry in given:
+        if not (isinstance(entry, (tuple, list)) and len(entry) == 3 and all(isinstance(x, str) for x in entry)):
+            raise ScenarioError(f"world: slip_kinds entry {entry!r} is not an (action, direction, kind) triple of names: write e.g. {example}")
+        a, d, k = entry
+        if a not in out:
+            raise ScenarioError(
+                f"world: slip_kinds names {a!r}{suggest(a, list(out))}, which is no built-in action with an object in the hand: "
+                f"use one of {', '.join(out)} (a model's own action slips like its like=)"
+            )
+        if a in seen:
+            raise ScenarioError(f"world: slip_kinds names {a!r} twice: give each action once")
+        seen.add(a)
+        if d not in ("up", "down") or k not in ("pulled", "gravitational"):
+            raise ScenarioError(
+                f"world: slip_kinds entry {tuple(entry)!r}: direction must be 'up' or 'down' and kind 'pulled' or 'gravitational'"
+            )
+        out[a] = (d, k)
+    return tuple((a, d, k) for a, (d, k) in out.items())
+
+
+def slip_kind(world: World, action: str) -> tuple[str, str]:
+    """(direction, kind) of a random slip in built-in ``action`` (:attr:`World.slip_kinds`)."""
+    for a, d, k in world.slip_kinds:
+        if a == action:
+            return d, k
+    return "down", "pulled"
+
+
 def draw_slips(world: World, segments: Sequence[Segment], seed: int) -> tuple[Slip, ...]:
-    """Scripted slips plus Poisson slips over in-hand time, from their own seeded stream
-    (``segments`` with built-in contexts: :func:`like_segments`)."""
+    """Scripted slips plus random ones, from their own seeded stream (``segments`` with
+    built-in contexts: :func:`like_segments`).
+
+    The one rule for random slips, which ``desmon analyze`` models exactly: a Poisson
+    process of ``slip_rate`` per second over every moment with an object in the hand
+    (:func:`in_hand`), whatever happened before; a slip's direction and kind are those
+    :attr:`World.slip_kinds` gives for the action it falls in."""
     slips = list(world.slips)
     if world.slip_rate > 0:
         rng = random.Random(f"{seed}:slips")
         for start, end, action in in_hand(segments):
-            lo, hi = start + 0.4, end - 1.2
-            if hi <= lo:
-                continue
-            t = lo + rng.expovariate(world.slip_rate)
-            while t < hi:
-                if action == RELEASE:
-                    slips.append(Slip(round(t, 4), "up", "pulled"))
-                elif action == MOVE_BASE:
-                    slips.append(Slip(round(t, 4), "down", "gravitational"))
-                else:
-                    slips.append(Slip(round(t, 4), "down", "pulled"))
-                t += 2.5 + rng.expovariate(world.slip_rate)
+            direction, kind = slip_kind(world, action)
+            t = start + rng.expovariate(world.slip_rate)
+            while t < end:
+                at = round(t, 4)
+                if at < end:  # rounding never carries a slip past its step
+                    slips.append(Slip(at, direction, kind))
+                t += rng.expovariate(world.slip_rate)
     return tuple(sorted(slips, key=lambda s: s.time))
+
+
+def detector_plans(world: World, model: SystemModel) -> dict[str, DetectorPlan | None]:
+    """Graph -> the detector it runs (:func:`desmon.sim.streams.detector_plan`: its kind
+    and warm-up), or None when an input has no signal model in ``world``: such a graph
+    cannot detect a slip, so it never counts as watching (signals on or off). Every
+    engine takes warm-ups and the ability to detect from here."""
+    return {
+        g.name: detector_plan(frozenset(world.signal_of(k) or f"?{k}" for k in g.device_kinds)) if g.device_kinds else None
+        for g in model.graphs
+    }
 
 
 def world_from_timeline(scenario: Scenario) -> World:

@@ -1,0 +1,214 @@
+"""Unmonitored exposure has one definition (desmon.deployment.exposure), and every engine counts by it.
+
+Risky time is an object in the hand; a risky moment is unmonitored unless every slot of
+the rule for the true action has a watching member; a risky action no rule covers is
+unmonitored throughout, unless the scenario excludes it on purpose (watched=False), and
+then its seconds are reported apart. The chain of ``desmon analyze`` and the SimPy world
+agree on the result under the same (exponential) timing.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from desmon.analyze import analyze
+from desmon.analyze.agreement import agreement, confidence
+from desmon.cli import main
+from desmon.deployment.exposure import CAUSES, Needs, cause, needs, no_rule_seconds
+from desmon.errors import ModelError
+from desmon.loader import load_scenario
+from desmon.model.actions import Action
+from desmon.sim.engine import simulate
+from desmon.sim.world import world_of
+
+SHIFT = "scenarios/coffee_shift.py"
+PICK = "scenarios/pick_place_camera.py"
+
+
+def _excluding_hold(sc):
+    model = replace(sc.model, declared_actions=(*sc.model.declared_actions, Action("hold", watched=False)))
+    return replace(sc, model=model)
+
+
+# -- the definition ----------------------------------------------------------------------------------
+def test_a_risky_action_no_rule_covers_is_unmonitored_and_an_excluded_one_is_not_counted():
+    sc = load_scenario(SHIFT)
+    hold = needs(sc.model, "hold")
+    assert hold.counted and hold.no_rule
+    assert cause(hold, lambda g: "watching") == "no_rule"
+    excluded = needs(_excluding_hold(sc).model, "hold")
+    assert excluded.excluded and not excluded.counted and cause(excluded, lambda g: "not_deployed") is None
+    assert needs(sc.model, "idle") == Needs("idle", False, False, ())
+
+
+def test_the_cause_is_the_first_uncovered_slot_and_its_member_closest_to_watching():
+    need = Needs("grasp", True, False, (frozenset({"a"}), frozenset({"b", "c"})))
+    states = {"a": "watching", "b": "cannot_detect", "c": "starting"}
+    assert cause(need, states.__getitem__) == "starting"
+    states = {"a": "input_lost", "b": "watching", "c": "not_deployed"}
+    assert cause(need, states.__getitem__) == "input_lost"
+    assert cause(need, {"a": "watching", "b": "watching", "c": "not_deployed"}.__getitem__) is None
+
+
+def test_a_builtin_action_can_only_be_excluded_and_keeps_its_own_risk():
+    assert Action("hold", watched=False).like == "hold"
+    with pytest.raises(ModelError, match="is built in"):
+        Action("hold")
+    with pytest.raises(ModelError, match="empty hand"):
+        Action("idle", risky=False, watched=False)
+    with pytest.raises(ModelError, match="watched"):
+        Action("pour", watched="no")  # type: ignore[arg-type]
+
+
+# -- the simulation ----------------------------------------------------------------------------------
+@functools.lru_cache(maxsize=None)
+def _shift_run(exclude: bool = False):
+    sc = load_scenario(SHIFT, {"hours": "1"})
+    return simulate(_excluding_hold(sc) if exclude else sc, "desmon", seed=0)
+
+
+def test_the_coffee_robots_headline_includes_the_mug_held_with_no_rule():
+    m = _shift_run().metrics
+    sc = load_scenario(SHIFT, {"hours": "1"})
+    w = world_of(sc)
+    hold_s = no_rule_seconds(sc.model, [(s.action, s.duration) for s in w.task], w.horizon, w.repeat)["hold"]
+    assert m["unmonitored_by_cause_s"]["no_rule"] == pytest.approx(hold_s)
+    assert m["unmonitored_exposure_s"] == pytest.approx(sum(m["unmonitored_by_cause_s"].values()))
+    # risky time is every moment with the mug in the hand: grasp to release, hold included
+    in_hand = sum(s.duration for s in w.task if s.action != "idle") / sum(s.duration for s in w.task) * w.horizon
+    assert m["risky_time_s"] == pytest.approx(in_hand, abs=60.0)
+    assert m["excluded_s"] == 0.0
+
+
+def test_an_excluded_action_moves_its_seconds_beside_the_figure_not_into_it():
+    plain, excl = _shift_run().metrics, _shift_run(True).metrics
+    assert excl["unmonitored_by_cause_s"]["no_rule"] == 0.0
+    assert excl["excluded_s"] == pytest.approx(plain["unmonitored_by_cause_s"]["no_rule"])
+    assert excl["risky_time_s"] == pytest.approx(plain["risky_time_s"])
+
+
+def test_a_detector_that_cannot_detect_never_watches_signals_on_or_off():
+    sc = load_scenario(PICK, {"hours": "0.5"})
+    for signals in (True, False):
+        m = simulate(replace(sc, world=replace(sc.world, signals=signals)), "desmon", seed=1).metrics
+        assert m["no_signal_model"] == {"camera_slip_detector": ["camera"]}
+        assert m["unmonitored_by_cause_s"]["cannot_detect"] > 0
+
+
+def test_run_verify_and_analyze_warn_about_a_risky_action_no_rule_covers(capsys):
+    for argv in (["run", PICK, "-p", "hours=0.1"], ["verify", PICK, "--max-states", "50"],
+                 ["analyze", PICK, "--horizon", "60", "--transient-only"]):
+        main(argv)
+        err = capsys.readouterr().err
+        warnings = [line for line in err.splitlines() if "warning: risky action 'inspect'" in line]
+        assert len(warnings) == 1, (argv, err)
+        assert "watched=False" in warnings[0]
+    main(["run", PICK, "-p", "hours=0.1", "-p", "inspect_rule=True"])
+    assert "warning" not in capsys.readouterr().err
+
+
+def test_every_report_prints_the_denominator_and_the_causes(capsys):
+    assert main(["run", SHIFT, "-p", "hours=0.2"]) in (0, 1)
+    out = capsys.readouterr().out
+    assert "risky time (s)" in out and "% of the risky time" in out and "risky action no rule covers" in out
+    assert main(["analyze", SHIFT, "-p", "hours=0.2", "-p", "faults=False"]) == 0
+    out = capsys.readouterr().out
+    assert "s risky (an object in the hand)" in out and "by cause (s):" in out
+    assert "What this chain leaves out" in out and "timing:" in out
+
+
+# -- the chain against the world ---------------------------------------------------------------------
+SEEDS = range(20)
+
+
+@functools.lru_cache(maxsize=None)
+def _scenario(path: str, hours: str):
+    return load_scenario(path, {"hours": hours})
+
+
+@functools.lru_cache(maxsize=None)
+def _simulated(path: str, hours: str, signals: bool) -> dict[str, tuple[float, ...]]:
+    """The SimPy world under the chain's exponential timing, one run per seed."""
+    sc = _scenario(path, hours)
+    sc = replace(sc, world=replace(world_of(sc), timing="exponential", phases=1, signals=signals))
+    out: dict[str, list[float]] = {"exposure": [], "risky": [], "missed_per_h": [], "no_rule": [], "starting": []}
+    for seed in SEEDS:
+        m = simulate(sc, "desmon", seed=seed).metrics
+        out["exposure"].append(m["unmonitored_exposure_s"])
+        out["risky"].append(m["risky_time_s"])
+        out["no_rule"].append(m["unmonitored_by_cause_s"]["no_rule"])
+        out["starting"].append(m["unmonitored_by_cause_s"]["starting"])
+        out["missed_per_h"].append(m.get("slips_missed", 0) * 3600.0 / sc.world.horizon)
+    return {k: tuple(v) for k, v in out.items()}
+
+
+def _inside(exact: float, values) -> bool:
+    return agreement(exact, values).inside
+
+
+@pytest.mark.parametrize("path", [SHIFT, PICK])
+def test_the_exact_exposure_and_risky_time_lie_in_the_simulations_99_percent_interval(path):
+    a = analyze(_scenario(path, "1"), steady=False)
+    sim = _simulated(path, "1", False)
+    assert _inside(a.exposure_s_per_mission, sim["exposure"]), (a.exposure_s_per_mission, confidence(sim["exposure"]))
+    assert _inside(a.risky_s_per_mission, sim["risky"]), (a.risky_s_per_mission, confidence(sim["risky"]))
+
+
+def _without(a, *causes_left_out) -> float:
+    """A mutation: the chain's per-mission exposure with some causes left out."""
+    chain = a.chain
+    Q, _ = chain.generator()
+    p0 = np.zeros(chain.n)
+    for i, p in chain.initial:
+        p0[i] = p
+    from desmon.analyze.solve import transient
+
+    keep = sum(chain.causes[c] for c in CAUSES if c not in causes_left_out)
+    return float(transient(Q, p0, a.horizon_s, keep).accumulated[0])
+
+
+@pytest.mark.parametrize("path", [SHIFT, PICK])
+def test_leaving_out_the_no_rule_time_or_the_warm_up_falls_outside_the_interval(path):
+    a = analyze(_scenario(path, "1"), steady=False)
+    sim = _simulated(path, "1", False)
+    assert not _inside(_without(a, "no_rule"), sim["exposure"])
+    # a chain without warm-up: the detectors watch from the end of their start latency
+    sc = _scenario(path, "1")
+    import desmon.analyze.markov as markov
+
+    mw = markov.markov_world(sc)
+    from desmon.analyze.chain import build_chain
+
+    plain = build_chain(sc, "desmon", replace(mw, warmup=()), miss={})
+    Q, _ = plain.generator()
+    p0 = np.zeros(plain.n)
+    for i, p in plain.initial:
+        p0[i] = p
+    from desmon.analyze.solve import transient
+
+    # the seconds spent starting or warming up: the exact ones inside the interval, the
+    # chain's without warm-up outside
+    starting = a.causes_s_per_mission["starting"]
+    assert _inside(starting, sim["starting"]), (starting, confidence(sim["starting"]))
+    no_warm = float(transient(Q, p0, a.horizon_s, plain.causes["starting"]).accumulated[0])
+    assert no_warm < starting
+    assert not _inside(no_warm, sim["starting"]), (no_warm, confidence(sim["starting"]))
+    assert _inside(a.causes_s_per_mission["no_rule"], sim["no_rule"])
+
+
+@pytest.mark.slow
+def test_the_exact_undetected_slips_lie_in_the_interval_and_a_context_free_rate_does_not():
+    """The coffee robot, signals on: every slip really rendered and really detected or missed."""
+    sc = _scenario(SHIFT, "8")
+    a = analyze(sc)
+    sim = _simulated(SHIFT, "8", True)
+    assert _inside(a.undetected_slips_per_hour, sim["missed_per_h"]), (a.undetected_slips_per_hour, confidence(sim["missed_per_h"]))
+    flat = {g: dict.fromkeys(rates, sum(rates.values()) / len(rates)) for g, rates in a.miss.items()}
+    b = analyze(sc, miss=flat)
+    assert not _inside(b.undetected_slips_per_hour, sim["missed_per_h"]), (b.undetected_slips_per_hour, confidence(sim["missed_per_h"]))
+    assert _inside(a.exposure_s_per_mission, sim["exposure"])
+    assert _inside(a.risky_s_per_mission, sim["risky"])
