@@ -80,8 +80,8 @@ scenario = Scenario(
             "errors": [("no_acceptable_platforms", FORCE)],
         },
         # desmon run (SimPy world), seed 0, per deployer: asserted exactly by tests/test_scenarios_sim.py
-        "desmon": {"violated": [], "errors": {"no_acceptable_platforms": 1}, "unmonitored_exposure_s": 6.3, "switches": 2, "slips_detected": 2},
-        "paper": {"violated": [], "errors": {"no_acceptable_platforms": 1}, "unmonitored_exposure_s": 6.3, "switches": 2, "slips_detected": 2},
+        "desmon": {"violated": [], "errors": {"no_acceptable_platforms": 1}, "unmonitored_exposure_s": 11.3, "risky_time_s": 28.0, "switches": 2, "slips_detected": 2},
+        "paper": {"violated": [], "errors": {"no_acceptable_platforms": 1}, "unmonitored_exposure_s": 11.3, "risky_time_s": 28.0, "switches": 2, "slips_detected": 2},
     },
 )
 

@@ -70,14 +70,16 @@ scenario = Scenario(
         # desmon deployer, seed 0, --until 1800 (asserted by tests/test_scenarios_sim.py)
         "first_30_min": {
             "switches": 95, "starts": 92, "stops": 91, "slips_injected": 2, "slips_detected": 2,
-            "errors": {"deployment_failed": 1, "no_acceptable_platforms": 3}, "unmonitored_exposure_s": 77.6,
+            "errors": {"deployment_failed": 1, "no_acceptable_platforms": 3}, "unmonitored_exposure_s": 173.6,
+            "unmonitored_by_cause_s": {"no_rule": 96.0, "not_deployed": 15.2, "starting": 62.4, "input_lost": 0.0, "cannot_detect": 0.0},
             "violations": 0,
         },
         # the full 8 h day, seed 0 (desmon run scenarios/robot_day.py)
         # (asserted by tests/test_scenarios_sim.py::test_robot_day_full_day_pinned)
         "day": {
-            "switches": 1515, "starts": 1442, "slips_injected": 29, "slips_detected": 24, "false_alarms": 12,
-            "errors": {"deployment_failed": 33, "no_acceptable_platforms": 90}, "unmonitored_exposure_s": 2049.904534,
+            "switches": 1515, "starts": 1442, "slips_injected": 29, "slips_detected": 22, "false_alarms": 12,
+            "errors": {"deployment_failed": 33, "no_acceptable_platforms": 90}, "unmonitored_exposure_s": 3564.904534,
+            "risky_time_s": 18685.0,
             "violations": 0,
         },
     },

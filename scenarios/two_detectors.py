@@ -56,8 +56,15 @@ scenario = Scenario(
     ),
     expected={
         # desmon run (SimPy world), seed 0, per deployer: asserted exactly by tests/test_scenarios_sim.py
-        "desmon": {"violated": [], "errors": {}, "unmonitored_exposure_s": 0.0, "risky_time_s": 5.0},
-        "paper": {"violated": ["coverage", "preferred-when-possible"], "errors": {}, "unmonitored_exposure_s": 5.0, "risky_time_s": 5.0},
+        # (the 2 s of hold have no rule: unmonitored whatever the deployer does)
+        "desmon": {
+            "violated": [], "errors": {}, "unmonitored_exposure_s": 2.5, "risky_time_s": 7.0,
+            "unmonitored_by_cause_s": {"no_rule": 2.0, "not_deployed": 0.0, "starting": 0.5, "input_lost": 0.0, "cannot_detect": 0.0},
+        },
+        "paper": {
+            "violated": ["coverage", "preferred-when-possible"], "errors": {}, "unmonitored_exposure_s": 7.0, "risky_time_s": 7.0,
+            "unmonitored_by_cause_s": {"no_rule": 2.0, "not_deployed": 5.0, "starting": 0.0, "input_lost": 0.0, "cannot_detect": 0.0},
+        },
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
             "desmon": {"verdict": "HOLDS", "states": 40, "counterexamples": {}},

@@ -203,8 +203,10 @@ def test_undetected_slips_count_each_detectors_miss_probability():
     perfect = analyze(sc, miss={g.name: 0.0 for g in sc.model.graphs}, steady=True, horizon=600.0)
     risky_share = 37.0 / 57.0  # grasp + hold + carry + hand over, of the 57 s cycle
     assert blind.undetected_slips_per_hour == pytest.approx(3600 * sc.world.slip_rate * risky_share, rel=1e-6)
-    # perfect detectors miss only the slips no running detector sees: at least the unmonitored ones
-    assert 3600 * sc.world.slip_rate * blind.long_run_unmonitored_fraction <= perfect.undetected_slips_per_hour < blind.undetected_slips_per_hour
+    # perfect detectors miss only the slips no running detector sees: those fall in unmonitored time (hold, with no
+    # rule, is most of it), but not every unmonitored moment is blind (a detector the rule no longer wants may still run)
+    unmonitored = 3600 * sc.world.slip_rate * blind.long_run_unmonitored_fraction
+    assert 0.5 * unmonitored < perfect.undetected_slips_per_hour <= unmonitored < blind.undetected_slips_per_hour
 
 
 @pytest.mark.slow
@@ -244,7 +246,8 @@ def test_the_json_has_the_measures_and_the_rates(tmp_path, capsys):
               "mean_time_to_exposure_s", "rates"):
         assert k in doc
     assert doc["rates"]["task_steps"][0] == {"action": "idle", "mean_s": 20.0, "rate_per_s": 0.05}
-    assert "Long run: unmonitored" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "Long run, per hour:" in out and "s unmonitored = " in out and "by cause (s): risky action no rule covers" in out
 
 
 # -- agreement with the simulation -----------------------------------------------------------------

@@ -42,7 +42,10 @@ def test_coffee_reproduces_t0_t3_on_the_simpy_world() -> None:
     assert [(e.kind, e.graph) for e in r.errors] == [tuple(x) for x in sc.expected["t3"]["errors"]]
     m = r.metrics
     assert (m["slips_injected"], m["slips_detected"], m["false_alarms"]) == (2, 2, 0)
-    assert m["unmonitored_exposure_s"] == pytest.approx(6.3)
+    # hold (0-5 s) has no rule; release after the sensor breaks (23.2-28 s) and the two recognitions have no detector;
+    # two starts and warm-ups; the 0.2 s between the break and its notice
+    assert m["unmonitored_exposure_s"] == pytest.approx(11.3) and m["risky_time_s"] == 28.0
+    assert m["unmonitored_by_cause_s"] == pytest.approx({"no_rule": 5.0, "not_deployed": 5.0, "starting": 1.1, "input_lost": 0.2, "cannot_detect": 0.0})
     assert m["switches"] == 2
     assert m["memory_peak_mb"] == {"torso_pc": 600, "arm_pc": 350, "hand_pc": 250}
 
@@ -115,17 +118,19 @@ def test_vendor_selection_other_array_takes_over() -> None:
 
 def test_two_detectors_paper_exposure_counts_the_uncovered_slot() -> None:
     """grasp wants force AND tactile; the paper deployer starts only force: one covered slot
-    must not hide the other, so the whole grasp is unmonitored exposure."""
+    must not hide the other, so the whole grasp is unmonitored exposure (no detector
+    deployed for the tactile slot), beside the 2 s of hold that no rule covers."""
     sc = load("two_detectors")
     r = simulate(sc, "paper")
     m = r.metrics
     # the tactile detector is never tried although it is acceptable: preferred-when-possible
     assert {n for _t, n, _m in r.violations} == {"coverage", "preferred-when-possible"}
     assert m["unmonitored_exposure_s"] > 0
-    assert m["unmonitored_exposure_s"] == m["risky_time_s"] == 5.0
-    assert m["blind_time_per_switch_s"] == 5.0
+    assert m["unmonitored_exposure_s"] == m["risky_time_s"] == 7.0
+    assert m["unmonitored_by_cause_s"]["not_deployed"] == m["blind_time_per_switch_s"] == 5.0
     ok = simulate(sc, "desmon").metrics
-    assert ok["unmonitored_exposure_s"] == 0.0 and ok["risky_time_s"] == 5.0
+    assert ok["unmonitored_by_cause_s"]["not_deployed"] == 0.0 and ok["risky_time_s"] == 7.0
+    assert ok["unmonitored_exposure_s"] == ok["unmonitored_by_cause_s"]["no_rule"] + ok["unmonitored_by_cause_s"]["starting"]
 
 
 @pytest.mark.slow

@@ -59,11 +59,11 @@ def test_exposure_intervals_add_up_to_the_metric(name: str, kw: dict) -> None:
     assert [(round(a, 6), round(b, 6), c) for a, b, c in w.exposure.intervals] == iv
     end = recs[-1]
     assert end["type"] == "end" and end["unmonitored_exposure_s"] == metric
-    # every interval lies in one true context that wants a detector
+    # every interval lies in one true risky context (hold too: no rule covers it, so nothing watches it)
     actions = [(x["t"], x["action"]) for x in recs if x["type"] == "action"]
     for a, b, ctx in iv:
         current = [act for t, act in actions if t <= a][-1]
-        assert current == ctx and ctx in ("grasp", "move_base", "release")
+        assert current == ctx and ctx in ("grasp", "hold", "move_base", "release")
 
 
 def test_run_header_and_loads() -> None:

@@ -550,6 +550,26 @@ def build_chain(
     return chain
 
 
+def _member_states(s: Any, blind: set[str], hosts: dict[str, str], inputs: Callable[[str, str], tuple]) -> dict[str, list[str]]:
+    """The state of every deployed instance in chain state ``s``, per graph (one of
+    :data:`~desmon.deployment.exposure.MEMBER_STATES`)."""
+    warming = {(g, p) for g, p, _k in s.warming}
+    state: dict[str, list[str]] = {}
+    for g, p in s.key.deployments:
+        if (g, p) in s.starting:
+            st = "starting"
+        elif p in s.phys_down or not all(any(d not in s.phys_failed and hosts[d] not in s.phys_down for d in devs) for devs in inputs(g, p)):
+            st = "input_lost"
+        elif g in blind:
+            st = "cannot_detect"
+        elif (g, p) in warming:
+            st = "starting"
+        else:
+            st = WATCHING
+        state.setdefault(g, []).append(st)
+    return state
+
+
 def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any]) -> None:
     """The labels of every state by the one definition of :mod:`desmon.deployment.exposure`
     (unmonitored, by cause; risky; excluded) and its undetected-slip rate: slips arrive
@@ -568,6 +588,13 @@ def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any]) -> None:
     by_cause = {c: np.zeros(n) for c in CAUSES}
     wiring: dict[tuple[str, str], tuple] = {}
     hosts = {d.name: d.platform for d in model.devices}
+
+    def inputs(g: str, p: str) -> tuple:  # the alternative devices of each input of g on p
+        w = wiring.get((g, p))
+        if w is None:
+            w = wiring[(g, p)] = tuple(tuple(d.name for d in devs) for _k, devs in rules.input_devices(g, p))
+        return w
+
     for i, s in enumerate(chain.states):
         action = mw.steps[s.pos][0]
         need = table[action]
@@ -576,24 +603,7 @@ def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any]) -> None:
         risky[i] = 1.0
         if need.excluded:
             excluded[i] = 1.0
-        warming = {(g, p) for g, p, _k in s.warming}
-        state: dict[str, list[str]] = {}
-        for g, p in s.key.deployments:
-            if (g, p) in s.starting:
-                st = "starting"
-            else:
-                w = wiring.get((g, p))
-                if w is None:
-                    w = wiring[(g, p)] = tuple(tuple(d.name for d in devs) for _k, devs in rules.input_devices(g, p))
-                if p in s.phys_down or not all(any(d not in s.phys_failed and hosts[d] not in s.phys_down for d in devs) for devs in w):
-                    st = "input_lost"
-                elif g in blind:
-                    st = "cannot_detect"
-                elif (g, p) in warming:
-                    st = "starting"
-                else:
-                    st = WATCHING
-            state.setdefault(g, []).append(st)
+        state = _member_states(s, blind, hosts, inputs)
         why = cause(need, lambda g: best_state(state.get(g, ())))
         if why is not None:
             unmon[i] = 1.0

@@ -244,20 +244,16 @@ def _kind_of(scenario: Scenario, component: str) -> str:
     return "platform"
 
 
-def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float | None = None) -> MarkovWorld:
-    """The rates of ``scenario``'s World, matched against its checker bounds (see the
-    module docstring); :class:`AnalysisError` names the first mismatch."""
+def _check_arguments(phases: int, start_failure_p: float | None) -> None:
     check_number("--phases", phases, error=AnalysisError, positive=True, integer=True, high=MAX_PHASES)
     if start_failure_p is not None:
         check_number("--start-failure-p", start_failure_p, error=AnalysisError, high=1.0)
         if start_failure_p >= 1.0:
             raise AnalysisError(f"--start-failure-p = {start_failure_p!r}: every start would fail and no detector ever runs; give a probability below 1")
-    if scenario.world is None:
-        raise _refuse(scenario, "it declares no World, so the chain has no rates: give it Scenario(world=World(task=..., stochastic_faults=...))")
-    world = world_of(scenario)
-    b = bounds_of(scenario)
-    _check_unrated(scenario, world)
-    _check_matching(scenario, world, b)
+
+
+def _check_cycle(scenario: Scenario, world: World) -> None:
+    """The task must repeat (a chain is a cycle) and every step must have a rate."""
     if not world.repeat:
         raise _refuse(
             scenario,
@@ -267,6 +263,19 @@ def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float 
     for i, step in enumerate(world.task):
         if step.duration <= 0:
             raise _refuse(scenario, f"World task step {i + 1} ({step.action}) lasts 0 s, which has no rate: give it a positive duration")
+
+
+def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float | None = None) -> MarkovWorld:
+    """The rates of ``scenario``'s World, matched against its checker bounds (see the
+    module docstring); :class:`AnalysisError` names the first mismatch."""
+    _check_arguments(phases, start_failure_p)
+    if scenario.world is None:
+        raise _refuse(scenario, "it declares no World, so the chain has no rates: give it Scenario(world=World(task=..., stochastic_faults=...))")
+    world = world_of(scenario)
+    b = bounds_of(scenario)
+    _check_unrated(scenario, world)
+    _check_matching(scenario, world, b)
+    _check_cycle(scenario, world)
     p = world.start_failure.probability if start_failure_p is None else float(start_failure_p)
     plans = detector_plans(world, scenario.model)
     latency = tuple((pl.name, world.latency(pl.name)) for pl in scenario.model.platforms)

@@ -128,7 +128,7 @@ def run(args: argparse.Namespace) -> int:
         with replacing(args.json) as fh:
             fh.write(json.dumps(doc, indent=2) + "\n")
     sys.stdout.write(format_analysis(result, agree))
-    warn_uncovered(scenario)
+    warn_uncovered(scenario, result.horizon_s)
     if gap is not None:
         sys.stdout.write(gap.text())
     sys.stdout.write(format_cross_check(cross))

@@ -113,16 +113,17 @@ def load_scenario_of(args: argparse.Namespace) -> Scenario:
     return load_scenario(args.scenario, parse_assignments(getattr(args, "param", None)))
 
 
-def warn_uncovered(scenario: Scenario) -> None:
+def warn_uncovered(scenario: Scenario, horizon: float | None = None) -> None:
     """One warning line on stderr per risky action of ``scenario``'s task that no selector
-    rule covers (``run``, ``verify`` and ``analyze``): its seconds count as unmonitored."""
+    rule covers (``run``, ``verify`` and ``analyze``): its seconds within ``horizon`` (the
+    world's own if None) count as unmonitored."""
     from desmon.deployment.exposure import no_rule_warnings
     from desmon.sim.world import World, world_of
 
     world = world_of(scenario) if isinstance(scenario.world, World) or scenario.world is None else None
     if world is None:
         return
-    for line in no_rule_warnings(scenario.model, ((s.action, s.duration) for s in world.task), world.horizon, world.repeat):
+    for line in no_rule_warnings(scenario.model, ((s.action, s.duration) for s in world.task), world.horizon if horizon is None else horizon, world.repeat):
         print(f"desmon: {line}", file=sys.stderr)
 
 

@@ -124,7 +124,7 @@ def run_command(
         out.write(json.dumps(summary_json(result, wall), indent=2) + "\n")
     else:
         out.write(format_summary(result, wall))
-        warn_uncovered(scenario)
+        warn_uncovered(scenario, float(args.until) if args.until is not None else None)
         if args.trace and not getattr(args, "trace_is_temporary", False):
             out.write(f"Trace: {args.trace} ({result.trace.count} records)\n")
     return 1 if result.violations else 0
