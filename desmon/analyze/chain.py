@@ -47,7 +47,7 @@ import functools
 import time
 from array import array
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Iterator, NamedTuple
+from typing import Any, Callable, Final, Iterator, NamedTuple
 
 import numpy as np
 
@@ -570,6 +570,48 @@ def _member_states(s: Any, blind: set[str], hosts: dict[str, str], inputs: Calla
     return state
 
 
+#: seconds after a slip's onset in which an alarm still catches it (the simulation's
+#: rule, desmon.sim.metrics.DETECT_AFTER)
+CATCH_WINDOW: Final = 1.0
+
+
+@functools.lru_cache(maxsize=4096)
+def _ready_within(rates: tuple[float, ...], window: float) -> float:
+    """P(a sum of independent exponential stages of ``rates`` is at most ``window``)."""
+    from scipy.linalg import expm
+
+    n = len(rates)
+    if n == 0:
+        return 1.0
+    Q = np.zeros((n + 1, n + 1))
+    for i, r in enumerate(rates):
+        Q[i, i], Q[i, i + 1] = -r, r
+    return float(expm(Q * window)[0, n])
+
+
+def late_catch(mw: Any, s: Any, g: str) -> float:
+    """The probability that graph ``g``, starting or warming up in chain state ``s``, is
+    ready within :data:`CATCH_WINDOW` of now: a slip that starts now is then still
+    caught as one that starts while it watches (the best of its instances)."""
+    warm = dict(mw.warmup).get(g, 0.0)
+    best = 0.0
+    warming = {(wg, wp): k for wg, wp, k in s.warming}
+    for dg, p in s.key.deployments:
+        if dg != g:
+            continue
+        stages: list[float] = []
+        if (g, p) in s.starting:
+            lat = mw.latency_of(p)
+            stages += [1.0 / lat] if lat > 0 else []
+            stages += [mw.phases / warm] * mw.phases if warm > 0 else []
+        elif (g, p) in warming:
+            stages += [mw.phases / warm] * (mw.phases - warming[(g, p)])
+        else:
+            continue
+        best = max(best, _ready_within(tuple(stages), CATCH_WINDOW))
+    return best
+
+
 def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any]) -> None:
     """The labels of every state by the one definition of :mod:`desmon.deployment.exposure`
     (unmonitored, by cause; risky; excluded) and its undetected-slip rate: slips arrive
@@ -608,12 +650,16 @@ def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any]) -> None:
         if why is not None:
             unmon[i] = 1.0
             by_cause[why][i] = 1.0
-        # a slip in the hand goes undetected unless a watching detector catches it
+        # a slip in the hand goes undetected unless a watching detector catches it, or one
+        # still starting or warming up is ready soon enough to catch it (late_catch)
         m = 1.0
         for g, sts in state.items():
+            mg = miss.get(g, 1.0)
+            mg = mg.get(action, 1.0) if isinstance(mg, dict) else mg
             if WATCHING in sts:
-                mg = miss.get(g, 1.0)
-                m *= mg.get(action, 1.0) if isinstance(mg, dict) else mg
+                m *= mg
+            elif "starting" in sts:
+                m *= 1.0 - late_catch(mw, s, g) * (1.0 - mg)
         undetected[i] = mw.slip_rate * m
     chain.unmonitored, chain.risky, chain.undetected = unmon, risky, undetected
     chain.causes, chain.excluded = by_cause, excluded
