@@ -16,6 +16,11 @@ steps of 1, 4 and 16 Erlang phases beside the simulation with the World's own fi
 timing (fixed step durations, recognition, heartbeat and start latencies) over
 ``--seeds`` seeds: the error of modelling fixed delays by phases.
 
+``--undetected``: instead, the exact undetected slips per hour of ``coffee_shift`` and
+``pick_place_camera`` (8 h shifts) beside the SimPy world with signals on (every slip
+rendered and really detected or missed) under the chain's exponential timing, over
+``--seeds`` seeds; the last line counts those inside the 99 % interval.
+
 ``--large K``: instead, a large chain (two force sensors, K phases per step: about
 45,000 states times K) and the time of its steady state (the exposure per hour) and,
 unless ``--steady-only``, of its 1 h transient; ``peak_mb`` is the process's peak
@@ -26,7 +31,7 @@ scenarios (``coffee_shift`` 1 h, ``platform_crash -p stochastic=True`` and
 ``cloud_offload -p stochastic=True``, 1 h each) beside their simulations over
 ``--seeds`` seeds; the last line counts those inside the 99 % interval.
 
-Run: ``python -m bench.bench_analyze [--quick] [--seeds N] [--phases-error] [--agreement] [--large K [--steady-only]]``; the last line is
+Run: ``python -m bench.bench_analyze [--quick] [--seeds N] [--phases-error] [--agreement] [--undetected] [--large K [--steady-only]]``; the last line is
 ``RESULT states=... build_s=... explore_s=... build_ratio=... steady_s=... transient_s=... exact_s=... sim_mean_s=... sim_ci_low=... sim_ci_high=...``,
 then ``storm_steady_s=... storm_transient_s=...`` when stormpy is installed (Storm's
 long-run average and reward up to 1 h on the same chain, exported to DRN; parsing not
@@ -62,7 +67,10 @@ def main(argv: list[str] | None = None) -> int:
                     help="instead, a large chain: coffee_shift with two force sensors and K phases per step; its build and solution times")
     ap.add_argument("--steady-only", action="store_true", help="with --large: no 1 h transient")
     ap.add_argument("--agreement", action="store_true", help="exact against simulated for the three analysable scenarios")
+    ap.add_argument("--undetected", action="store_true", help="exact against simulated undetected slips per hour, signals on")
     args = ap.parse_args(argv)
+    if args.undetected:
+        return _undetected(args.seeds)
     if args.phases_error:
         return _phases_error(args.seeds)
     if args.agreement:
@@ -123,6 +131,28 @@ def _agreement(seeds: int) -> int:
         print(f"{name} {params}: {a.chain.n:,} states; exact {ag.exact:.3f} s in 1 h; simulated mean {ag.mean:.3f} s, "
               f"99 % CI [{ag.low:.3f}, {ag.high:.3f}] over {seeds} seeds: {'inside' if ag.inside else 'OUTSIDE'}")
     print(f"RESULT scenarios={len(cases)} inside={inside} seeds={seeds}")
+    return 0
+
+
+def _undetected(seeds: int) -> int:
+    from desmon.analyze import analyze
+    from desmon.analyze.agreement import agreement
+    from desmon.loader import load_scenario
+    from desmon.sim.engine import simulate
+    from desmon.sim.world import world_of
+
+    inside = 0
+    names = ("coffee_shift.py", "pick_place_camera.py")
+    for name in names:
+        sc = load_scenario(ROOT / "scenarios" / name, params={"hours": "8"})
+        a = analyze(sc)
+        run = replace(sc, world=replace(world_of(sc), timing="exponential", phases=1, signals=True))
+        per_h = [simulate(run, "desmon", seed=seed).metrics["slips_missed"] * 3600.0 / run.world.horizon for seed in range(seeds)]
+        ag = agreement(a.undetected_slips_per_hour or 0.0, per_h)
+        inside += ag.inside
+        print(f"{name}: undetected slips per hour: exact {ag.exact:.3f}; simulated mean {ag.mean:.3f}, "
+              f"99 % CI [{ag.low:.3f}, {ag.high:.3f}] over {seeds} shifts of 8 h: {'inside' if ag.inside else 'OUTSIDE'}")
+    print(f"RESULT scenarios={len(names)} inside={inside} seeds={seeds}")
     return 0
 
 

@@ -214,3 +214,15 @@ def test_the_exact_undetected_slips_lie_in_the_interval_and_a_context_free_rate_
         flat = {g: dict.fromkeys(rates, sum(rates.values()) / len(rates)) for g, rates in a.miss.items()}
         b = analyze(sc, miss=flat)
         assert not _inside(b.undetected_slips_per_hour, sim["missed_per_h"]), (b.undetected_slips_per_hour, confidence(sim["missed_per_h"]))
+
+@pytest.mark.slow
+def test_under_fixed_timing_more_phases_bring_the_chain_to_the_simulation():
+    """The World's own timing is fixed; the chain's Erlang phases approach it (task steps
+    and warm-ups; the coffee shift without faults, where those are the delays that count)."""
+    from desmon.analyze.agreement import simulated_exposure
+
+    sc = load_scenario(SHIFT, {"faults": "False", "hours": "1"})
+    fixed = simulated_exposure(sc, "desmon", SEEDS, 3600.0, timing="fixed")
+    gaps = [abs(analyze(sc, miss={}, phases=k, horizon=3600.0, steady=False).exposure_s_per_mission - np.mean(fixed)) for k in (1, 4, 16)]
+    assert gaps[0] > gaps[1] > gaps[2]
+    assert _inside(analyze(sc, miss={}, phases=16, horizon=3600.0, steady=False).exposure_s_per_mission, fixed)
