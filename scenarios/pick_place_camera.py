@@ -19,7 +19,9 @@ solves it exactly:
     desmon run scenarios/pick_place_camera.py
 
 Parameters (``-p NAME=VALUE``): ``hours`` (default 8), ``inspect_rule`` (False: no rule
-for ``inspect``; True: the force detector watches it too).
+for ``inspect``; True: the force detector watches it too), ``camera_rate`` (0: the camera
+detector cannot detect; a probability above 0: the rate at which it catches a slip it
+watches, given in ``World.detection_rates`` as a user would from their own trials).
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ from desmon.model.scenario import Scenario
 from desmon.sim.world import MTTF, StartFailure, Step, World
 from desmon.verify.bounds import Bounds
 
-p = parameters(hours=8.0, inspect_rule=False)
+p = parameters(hours=8.0, inspect_rule=False, camera_rate=0.0)
 
 robot = RobotBuilder("pick_place_arm")
 robot.platform("base_pc", memory=1024, attributes={"os": "linux", "arch": "x86_64"})
@@ -85,6 +87,7 @@ scenario = Scenario(
         start_failure=StartFailure(probability=0.02),
         recognition_delay=0.2,
         heartbeat_timeout=1.0,
+        detection_rates={"camera_slip_detector": p.camera_rate} if p.camera_rate else {},
     ),
     checker=Bounds(
         task={"idle": ("pick",), "pick": ("inspect",), "inspect": ("carry",), "carry": ("place",), "place": ("idle",)},

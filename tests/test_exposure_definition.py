@@ -226,3 +226,36 @@ def test_under_fixed_timing_more_phases_bring_the_chain_to_the_simulation():
     gaps = [abs(analyze(sc, miss={}, phases=k, horizon=3600.0, steady=False).exposure_s_per_mission - np.mean(fixed)) for k in (1, 4, 16)]
     assert gaps[0] > gaps[1] > gaps[2]
     assert _inside(analyze(sc, miss={}, phases=16, horizon=3600.0, steady=False).exposure_s_per_mission, fixed)
+
+
+def test_a_camera_detector_watches_in_every_engine_once_the_user_gives_its_rate():
+    blind = load_scenario(PICK, {"hours": "1"})
+    rated = load_scenario(PICK, {"hours": "1", "camera_rate": "0.8"})
+    # the simulation: without a rate its running time is 'cannot detect'; with one, it watches and alarms
+    without = simulate(blind, "desmon", seed=0)
+    with_rate = simulate(rated, "desmon", seed=0)
+    assert without.metrics["unmonitored_by_cause_s"]["cannot_detect"] > 0
+    assert with_rate.metrics["unmonitored_by_cause_s"]["cannot_detect"] == 0.0
+    assert with_rate.metrics["unmonitored_exposure_s"] < without.metrics["unmonitored_exposure_s"]
+    assert [a.detector for a in with_rate.alarms].count("camera_slip_detector") >= 1
+    assert not [a for a in without.alarms if a.detector == "camera_slip_detector"]
+    assert with_rate.metrics["given_detection_rates"] == {"camera_slip_detector": 0.8}
+    # the same seed draws the same catches
+    assert simulate(rated, "desmon", seed=0).alarms == with_rate.alarms
+    # the chain: the same cause gone, the miss probability the user's
+    a, b = analyze(blind), analyze(rated)
+    assert a.causes_s_per_mission["cannot_detect"] > 0 and b.causes_s_per_mission["cannot_detect"] == 0.0
+    assert all(m == pytest.approx(0.2) for m in b.miss["camera_slip_detector"].values())
+    assert b.undetected_slips_per_hour < a.undetected_slips_per_hour
+    assert any("camera_slip_detector 0.8" in line for line in b.leaves_out)
+
+
+@pytest.mark.slow
+def test_with_a_given_rate_the_exact_undetected_slips_and_exposure_lie_in_the_interval():
+    sc = load_scenario(PICK, {"hours": "8", "camera_rate": "0.8"})
+    a = analyze(sc)
+    run = replace(sc, world=replace(world_of(sc), timing="exponential", phases=1, signals=True))
+    ms = [simulate(run, "desmon", seed=seed).metrics for seed in SEEDS]
+    missed = [m["slips_missed"] * 3600.0 / run.world.horizon for m in ms]
+    assert _inside(a.undetected_slips_per_hour, missed), (a.undetected_slips_per_hour, confidence(missed))
+    assert _inside(a.exposure_s_per_mission, [m["unmonitored_exposure_s"] for m in ms])

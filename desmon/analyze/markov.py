@@ -303,7 +303,7 @@ def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float 
         lease=tuple((p, scenario.model.platform(p).startup_s) for p in b.joins),
         lease_idle_s=world.lease.idle_s if world.lease is not None and b.joins else 0.0,
         warmup=tuple((g, plan.warmup) for g, plan in plans.items() if plan is not None and plan.warmup > 0),
-        blind=tuple(g for g, plan in plans.items() if plan is None),
+        blind=tuple(g for g, plan in plans.items() if plan is None and world.given_rate(g) is None),
     )
 
 

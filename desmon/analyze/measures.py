@@ -73,7 +73,11 @@ def detector_miss(scenario: Scenario, *, phases: int = 1, trials: int = 200, see
     for g in model.graphs:
         plan = plans.get(g.name)
         name = _EVALUATED.get(plan.kind) if plan is not None else None
-        out[g.name] = {a: (1.0 - r[name] if name in r else 1.0) for a, r in rates.items()}
+        given = world.given_rate(g.name)
+        if given is not None and name is None:  # no signal model: the rate World.detection_rates gives
+            out[g.name] = {a: 1.0 - given for a in rates}
+        else:
+            out[g.name] = {a: (1.0 - r[name] if name in r else 1.0) for a, r in rates.items()}
     return out
 
 
@@ -309,6 +313,15 @@ def leaves_out(scenario: Scenario, mw: MarkovWorld) -> tuple[str, ...]:
         )
     if mw.dropped:
         lines.append("checker budgets dropped: " + ", ".join(f"{k}={v}" for k, v in mw.dropped) + " (any number of faults may overlap)")
+    from desmon.sim.world import world_of
+
+    given = world_of(scenario).detection_rates
+    if given:
+        lines.append(
+            "given detection rates (World.detection_rates, no signal model): "
+            + ", ".join(f"{g} {p:g}" for g, p in given)
+            + " (the same in every action; the user's figures, not measured)"
+        )
     if mw.blind:
         lines.append("cannot detect (an input without a signal model): " + ", ".join(mw.blind) + " (never counted as watching)")
     excluded = sorted(scenario.model.unwatched_actions)

@@ -345,6 +345,13 @@ def _signal_status(r: RunResult) -> list[str]:
             f"Signals: off{why}: no detector is simulated; a running, warmed-up deployment that",
             "  could detect a slip counts as watching, and slips are injected but not detected.",
         ]
+    given = m.get("given_detection_rates") or {}
+    if given:
+        rates = "; ".join(f"{g} {p:g}" for g, p in given.items())
+        out += [
+            f"GIVEN DETECTION RATES: {rates} (World.detection_rates)",
+            "  these have no signal model: each catches a slip it watches with that probability, a seeded draw, not a signal.",
+        ]
     missing = m.get("no_signal_model") or {}
     if not missing:
         return out

@@ -153,7 +153,10 @@ def robot_metrics(parts: "RobotParts") -> dict[str, Any]:
         m["leases"] = books.leases
         m["leased_s"] = round(books.leased_s, 6)
     # graphs that cannot detect a slip: never counted as watching (Infrastructure.activate)
-    m["no_signal_model"] = {g: list(kinds) for g, kinds in world.no_signal_model(parts.model.graphs).items()}
+    m["no_signal_model"] = {
+        g: list(kinds) for g, kinds in world.no_signal_model(parts.model.graphs).items() if world.given_rate(g) is None
+    }
+    m["given_detection_rates"] = dict(world.detection_rates)
     if parts.signals:
         m.update(slip_metrics(parts.truth.slips, infra.alarms))
         bank = parts.truth.bank

@@ -33,9 +33,13 @@ from desmon.sim.facts import GroundTruth, Instance, PhysicalFacts
 from desmon.sim.metrics import Exposure, MemoryMeter
 from desmon.sim.sensors import DetectorAdapter
 from desmon.sim.trace import Trace
-from desmon.sim.world import World, detector_plans
+from desmon.sim.world import World, can_detect, detector_plans
 
 __all__ = ["Infrastructure"]
+
+
+#: seconds from a slip's onset to the alarm of a detector with a given rate
+GIVEN_LATENCY = 0.1
 
 
 class Infrastructure:
@@ -62,9 +66,11 @@ class Infrastructure:
         #: exponential timing (World.timing): start latencies drawn from here
         self.rng_latency = random.Random(f"{seed}:latency")
         self.rng_warmup = random.Random(f"{seed}:warmup")
+        #: the draws of the detectors whose rate World.detection_rates gives
+        self.rng_given = random.Random(f"{seed}:given")
         #: graph -> its detector plan, or None: it cannot detect (desmon.sim.world.detector_plans)
         self.plans = detector_plans(world, facts.model)
-        facts.detects = {g: plan is not None for g, plan in self.plans.items()}
+        facts.detects = can_detect(world, self.plans)
         self.alarms: list[Alarm] = []
         #: when each platform last hosted an instance (a lease ends once it stayed idle)
         self.last_busy: dict[str, float] = {}
@@ -192,6 +198,8 @@ class Infrastructure:
             self.exposure.check(env.now)
         if adapter is not None and adapter.det is not None:
             inst.proc = env.process(self._detector(inst))
+        elif self.signals and self.world.given_rate(graph) is not None:
+            inst.proc = env.process(self._given(inst, self.world.given_rate(graph)))
         return True
 
     def _refusal(self, graph: str, platform: str, n: int) -> str:
@@ -248,7 +256,7 @@ class Infrastructure:
     # ------------------------------------------------------------------ detector instances
     def activate(self, inst: Instance, now: float) -> None:
         inst.fed = now
-        if self.plans.get(inst.graph) is None:
+        if not self.facts.detects.get(inst.graph, True):
             # what the graph reads has no signal model (World.no_signal_model): it runs
             # and uses memory, yet cannot detect a slip, so it never becomes valid and
             # never counts as watching, signals on or off (the run report lists it)
@@ -305,6 +313,26 @@ class Infrastructure:
             while True:
                 yield env.timeout(next_wake(env.now) - env.now)
                 self.feed(inst, env.now)
+        except simpy.Interrupt:
+            return
+
+    def _given(self, inst: Instance, rate: float):  # type: ignore[no-untyped-def]
+        """A detector with a given rate (``World.detection_rates``), no signals: at each
+        slip's onset, if it watches (valid, platform up, inputs readable), it alarms
+        :data:`GIVEN_LATENCY` later, unless stopped by then, with probability ``rate``
+        (one seeded draw per slip it watches)."""
+        env = self.env
+        try:
+            for slip in self.truth.slips:
+                if slip.time < env.now:
+                    continue
+                yield env.timeout(slip.time - env.now)
+                if inst.halted or inst.valid_from > env.now or not self.facts.alive(inst):
+                    continue
+                if self.rng_given.random() < rate:
+                    yield env.timeout(GIVEN_LATENCY)  # stopped meanwhile: interrupted, no alarm
+                    self.alarms.append(Alarm(env.now, inst.graph, slip.direction))
+                    self.trace.emit(env.now, "alarm", detector=inst.graph, platform=inst.platform, direction=slip.direction)
         except simpy.Interrupt:
             return
 

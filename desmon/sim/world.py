@@ -41,6 +41,7 @@ from desmon.sim.streams import DetectorPlan, default_signal_kinds, detector_plan
 __all__ = [
     "Step",
     "detector_plans",
+    "can_detect",
     "Slip",
     "MTTF",
     "StartFailure",
@@ -334,6 +335,11 @@ class World:
     #: guessed from its name): with signals on, a graph reading it can never alarm and
     #: never counts as monitoring.
     signal_kinds: tuple[tuple[str, str], ...] = SIGNAL_KINDS
+    #: graph -> the probability (0 < p <= 1) that it catches a slip while it watches, for
+    #: a graph that reads a device kind with no signal model (a camera): a dict or pairs.
+    #: Such a graph then watches once started (no warm-up) and alarms on a slip with that
+    #: probability, in every engine; without a rate it cannot detect.
+    detection_rates: tuple[tuple[str, float], ...] = ()
     description: str = ""
     #: scripted run-time changes: RequirementChange, PlatformJoin, PlatformLeave
     changes: tuple[TimedEvent, ...] = ()
@@ -367,6 +373,15 @@ class World:
                     f"stream: use one of {', '.join(streams)}"
                 )
         object.__setattr__(self, "signal_kinds", kinds)
+        rates = check_pairs("world: detection_rates", self.detection_rates, error=err, example="{'camera_slip_detector': 0.8}")
+        for g, v in rates:
+            check_number(f"world: detection_rates of {g}", v, error=err, high=1.0)
+            if v <= 0:
+                raise ScenarioError(
+                    f"world: detection_rates gives {g!r} a rate of {v!r}: give a probability above 0 (a graph without a "
+                    "rate cannot detect: leave it out)"
+                )
+        object.__setattr__(self, "detection_rates", tuple((g, float(v)) for g, v in rates))
         if not self.repeat:
             length = sum(s.duration for s in task)
             if length > self.horizon + 1e-9:
@@ -540,6 +555,13 @@ class World:
                 return s
         return None
 
+    def given_rate(self, graph: str) -> float | None:
+        """The detection rate ``detection_rates`` gives ``graph``, or None."""
+        for g, v in self.detection_rates:
+            if g == graph:
+                return v
+        return None
+
     def no_signal_model(self, graphs: Iterable[PerceptionGraph]) -> dict[str, tuple[str, ...]]:
         """Graph -> the device kinds it reads that have no signal model (graphs with none left out)."""
         out: dict[str, tuple[str, ...]] = {}
@@ -564,6 +586,19 @@ class World:
                 raise ScenarioError(f"{where}: at t={te.time:g}: {problem}")
         _check_runtime_changes(self, model, where, changes)
         _check_components(self, scenario, where)
+        graphs = [g.name for g in model.graphs]
+        blind = self.no_signal_model(model.graphs)
+        for g, _v in self.detection_rates:
+            if g not in graphs:
+                raise ScenarioError(
+                    f"{where}: detection_rates names {g!r}{suggest(g, graphs)}, which is no perception graph of the model: "
+                    f"give the rate of one without a signal model ({', '.join(blind) or 'the model has none'})"
+                )
+            if g not in blind:
+                raise ScenarioError(
+                    f"{where}: detection_rates gives {g!r} a rate, but every input it reads has a signal model, so its "
+                    "rate is measured from its signals: drop it from detection_rates"
+                )
         kinds = sorted({d.kind for d in model.devices})
         for kind, stream in self.signal_kinds:
             if kind not in kinds and (kind, stream) not in SIGNAL_KINDS:
@@ -769,12 +804,18 @@ def draw_slips(world: World, segments: Sequence[Segment], seed: int) -> tuple[Sl
 def detector_plans(world: World, model: SystemModel) -> dict[str, DetectorPlan | None]:
     """Graph -> the detector it runs (:func:`desmon.sim.streams.detector_plan`: its kind
     and warm-up), or None when an input has no signal model in ``world``: such a graph
-    cannot detect a slip, so it never counts as watching (signals on or off). Every
-    engine takes warm-ups and the ability to detect from here."""
+    cannot detect a slip, so it never counts as watching (signals on or off), unless
+    ``World.detection_rates`` gives its rate (:func:`can_detect`). Every engine takes
+    warm-ups and the ability to detect from here."""
     return {
         g.name: detector_plan(frozenset(world.signal_of(k) or f"?{k}" for k in g.device_kinds)) if g.device_kinds else None
         for g in model.graphs
     }
+
+
+def can_detect(world: World, plans: dict[str, DetectorPlan | None]) -> dict[str, bool]:
+    """Graph -> whether it can detect a slip: it has a detector plan, or a given rate."""
+    return {g: plan is not None or world.given_rate(g) is not None for g, plan in plans.items()}
 
 
 def world_from_timeline(scenario: Scenario) -> World:
