@@ -24,6 +24,7 @@ from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from desmon.deployment.exposure import CAUSES
 from desmon.deployment.guard import EXIT_CRASHED, DeployerFault
 from desmon.errors import DesmonError
 from desmon.sweep.grid import JOBS, Axis, Run, SweepError
@@ -40,7 +41,7 @@ EXIT_INCOMPLETE = 3
 #: each job's figures, in table order (run adds memory_peak_mb_<platform> and errors_<kind>)
 METRICS: dict[str, tuple[str, ...]] = {
     "run": (
-        "exposure_s", "risky_time_s", "switches", "blind_time_per_switch_s", "blind_time_max_s", "starts", "start_failures",
+        "exposure_s", "risky_time_s", "excluded_s", *(f"{c}_s" for c in CAUSES), "switches", "blind_time_per_switch_s", "blind_time_max_s", "starts", "start_failures",
         "stops", "migrations", "upgrades", "upgrades_failed", "errors", "slips_injected", "slips_detected", "slips_missed",
         "false_alarms", "latency_median_s", "latency_p95_s", "violations",
     ),
@@ -51,7 +52,8 @@ METRICS: dict[str, tuple[str, ...]] = {
         "fp_rate_tactile", "fp_rate_force", "fp_rate_combined",
     ),
     "analyze": (
-        "exposure_s_per_hour", "exposure_s_per_mission", "undetected_slips_per_hour", "mean_time_to_exposure_s",
+        "exposure_s_per_hour", "risky_s_per_hour", *(f"{c}_s_per_hour" for c in CAUSES), "exposure_s_per_mission",
+        "risky_s_per_mission", "undetected_slips_per_hour", "mean_time_to_exposure_s",
         "p_exposure_within_T", "long_run_unmonitored_fraction", "horizon_s", "states", "transitions",
         "top_state", "top_state_s_per_hour",
     ),
@@ -119,6 +121,8 @@ def _job_run(spec: JobSpec, run: Run) -> dict[str, Any]:
     result = SimWorld(scenario, deployer=_deployer(spec.deployer), seed=run.seed, until=spec.setting("until")).run()
     m = result.metrics
     row: dict[str, Any] = {k: m.get(_RUN_RENAMED.get(k, k)) for k in METRICS["run"] if k not in ("errors", "violations")}
+    for c in CAUSES:  # the exposure's causes (desmon.deployment.exposure), beside the figure
+        row[f"{c}_s"] = m["unmonitored_by_cause_s"][c]
     errors = dict(m.get("errors") or {})
     row["errors"] = sum(errors.values())
     row["violations"] = len(result.violations)
@@ -212,7 +216,9 @@ def _job_analyze(spec: JobSpec, run: Run) -> dict[str, Any]:
         return _error_row(EXIT_INCOMPLETE, f"INCOMPLETE: {_one_line(exc)}")
     top = a.contributions[0] if a.contributions else (None, None)
     return {
-        "exposure_s_per_hour": a.exposure_s_per_hour, "exposure_s_per_mission": a.exposure_s_per_mission,
+        "exposure_s_per_hour": a.exposure_s_per_hour, "risky_s_per_hour": a.risky_s_per_hour,
+        **{f"{c}_s_per_hour": a.causes_s_per_hour.get(c) for c in CAUSES},
+        "exposure_s_per_mission": a.exposure_s_per_mission, "risky_s_per_mission": a.risky_s_per_mission,
         "undetected_slips_per_hour": a.undetected_slips_per_hour, "mean_time_to_exposure_s": a.mean_time_to_exposure_s,
         "p_exposure_within_T": a.p_exposure_within_T, "long_run_unmonitored_fraction": a.long_run_unmonitored_fraction,
         "horizon_s": a.horizon_s, "states": a.states, "transitions": a.transitions,

@@ -46,7 +46,7 @@ def journal_path(output: str | os.PathLike[str]) -> Path:
 
 
 def _is_float(column: str) -> bool:
-    return column in _FLOAT_METRICS or column.endswith("_s") or column.startswith("memory_peak_mb_") or "_rate_" in column or column.startswith(("tp_rate", "fp_rate"))
+    return column in _FLOAT_METRICS or column.endswith(("_s", "_s_per_hour", "_s_per_mission")) or column.startswith("memory_peak_mb_") or "_rate_" in column or column.startswith(("tp_rate", "fp_rate"))
 
 
 def columns_of(axes: Sequence[Axis], job: str, settings: Sequence[str], rows: Iterable[dict[str, Any]]) -> list[str]:
