@@ -384,6 +384,8 @@ def _fmt_spread(s: dict[str, float], unit: str = "", scale: float = 1.0, digits:
 
 def format_fleet_summary(r: FleetResult) -> str:
     """The human-readable report of ``desmon run`` on a fleet scenario."""
+    from desmon.deployment.exposure import CAUSE_TEXT
+
     m = r.metrics
     lines = [
         f"{r.scenario.name} -- SimPy fleet, {m['robots']} robots, {m['edges']} edge servers, deployer {r.deployer}, "
@@ -393,6 +395,7 @@ def format_fleet_summary(r: FleetResult) -> str:
         "Per robot, mean [min-max] over the robots:",
         f"  unmonitored exposure (s)       {_fmt_spread(m['exposure_per_robot_s'])}",
         f"  risky time (s)                 {_fmt_spread(m['risky_time_per_robot_s'])}",
+        *(f"    {CAUSE_TEXT[c]:<31} {_fmt_spread(v)}" for c, v in m["exposure_by_cause_per_robot_s"].items() if v["max"] > 0),
         "Edge servers, mean [min-max] over the servers:",
         f"  memory share, time average     {_fmt_spread(m['edge_memory_share_mean'], '%', 100.0)}",
         f"  memory share, peak             {_fmt_spread(m['edge_memory_share_peak'], '%', 100.0)}",

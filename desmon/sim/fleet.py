@@ -37,6 +37,7 @@ from typing import IO, Any, Callable, Iterable
 
 import simpy
 
+from desmon.deployment.exposure import CAUSES
 from desmon.deployment.invariants import SystemView
 from desmon.errors import QueryError, ScenarioError
 from desmon.model.checks import check_items, check_names, strict_init
@@ -711,6 +712,7 @@ class FleetWorld:
             "horizon_s": h,
             "exposure_per_robot_s": _spread(exposure),
             "risky_time_per_robot_s": _spread(risky),
+            "exposure_by_cause_per_robot_s": {c: _spread([m["unmonitored_by_cause_s"][c] for m in robots.values()]) for c in CAUSES},
             "edge_memory_share_mean": _spread(list(share.values())),
             "edge_memory_share_peak": _spread(list(peak.values())),
             "edge_busy_s": _spread(list(em.busy.values())),
