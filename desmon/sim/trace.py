@@ -26,9 +26,9 @@ Schema (keys in this order after ``t`` and ``type``)
                whose motion starts at ``t``.
 ``action``     ``action, duration``: the robot's true action context from ``t``.
 ``exposure``   ``state`` ("start" | "end"), ``context`` (the true action): bracket every
-               interval counted as unmonitored exposure -- the true context wants a
-               detector and no instance of a selected graph is running on an up platform
-               with its inputs and warmed up. Intervals never nest or overlap, an interval
+               interval counted as unmonitored exposure (desmon.deployment.exposure:
+               an object in the hand and a slot of the rule for the true action with
+               no watching member, or no rule for it). Intervals never nest or overlap, an interval
                never spans two contexts (a context change ends one and may start the
                next at the same ``t``), and an open interval ends at the horizon. The
                lengths add up to the ``end`` record's ``unmonitored_exposure_s``.
