@@ -259,3 +259,17 @@ def test_with_a_given_rate_the_exact_undetected_slips_and_exposure_lie_in_the_in
     missed = [m["slips_missed"] * 3600.0 / run.world.horizon for m in ms]
     assert _inside(a.undetected_slips_per_hour, missed), (a.undetected_slips_per_hour, confidence(missed))
     assert _inside(a.exposure_s_per_mission, [m["unmonitored_exposure_s"] for m in ms])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", ["scenarios/platform_crash.py", "scenarios/cloud_offload.py"])
+def test_the_other_analysable_scenarios_agree_on_undetected_slips_and_risky_time(path):
+    """Signals on, 40 runs of an hour under the chain's timing (the exposure itself:
+    tests/test_analyze.py)."""
+    sc = load_scenario(path, {"stochastic": "True"})
+    a = analyze(sc, horizon=3600.0)
+    run = replace(sc, world=replace(world_of(sc), timing="exponential", phases=1, signals=True))
+    ms = [simulate(run, "desmon", seed=seed, until=3600.0).metrics for seed in range(40)]
+    missed = [m["slips_missed"] for m in ms]
+    assert _inside(a.undetected_slips_per_hour, missed), (a.undetected_slips_per_hour, confidence(missed))
+    assert _inside(a.risky_s_per_mission, [m["risky_time_s"] for m in ms])
