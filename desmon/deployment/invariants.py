@@ -443,7 +443,13 @@ INVARIANTS: dict[str, Invariant] = {
         Invariant("valid-or-error", "every active deployment runs on an up platform meeting all its requirements, or an error stands for its graph", _valid_or_error),
         Invariant("no-overcommit", "on every platform the Capacity consumed by active deployments stays within the capacity", _no_overcommit),
         Invariant("single-instance", "no perception graph is active on two platforms", _single_instance),
-        Invariant("coverage", "after each reaction every graph the selector wants is active on a valid platform, or an error explains why not", _coverage),
+        Invariant(
+            "coverage",
+            "after each reaction every graph the selector wants is active on a valid platform, or an error explains why not "
+            "(it checks the rules' slots: a risky action no rule covers has none, so it holds there, and the exposure counts "
+            "that time as unmonitored, cause no_rule, with a warning)",
+            _coverage,
+        ),
         Invariant("errors-current", "a standing error describes the present: its graph is wanted, not validly active, and either active on an invalid platform or in a slot no alternative serves", _errors_current),
         Invariant("history", "every stop leaves one DEPLOYMENT_HISTORY edge; every DEPLOYED_ON edge matches a running detector", _history),
         Invariant("fixed", "a fixed deployment runs only on its EXECUTABLE_ON platform", _fixed),
