@@ -49,7 +49,7 @@ from desmon.errors import DesmonError
 from desmon.model.checks import check_number
 from desmon.model.events import LoadChange, RequirementChange
 from desmon.model.scenario import Scenario
-from desmon.sim.world import World, detector_plans, world_of
+from desmon.sim.world import World, can_detect, detector_plans, world_of
 from desmon.verify.bounds import Bounds, bounds_of
 
 __all__ = ["AnalysisError", "MarkovWorld", "markov_world", "MAX_PHASES"]
@@ -303,7 +303,7 @@ def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float 
         lease=tuple((p, scenario.model.platform(p).startup_s) for p in b.joins),
         lease_idle_s=world.lease.idle_s if world.lease is not None and b.joins else 0.0,
         warmup=tuple((g, plan.warmup) for g, plan in plans.items() if plan is not None and plan.warmup > 0),
-        blind=tuple(g for g, plan in plans.items() if plan is None and world.given_rate(g) is None),
+        blind=tuple(g for g, detects in can_detect(world, plans).items() if not detects),
     )
 
 

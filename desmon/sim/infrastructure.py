@@ -199,7 +199,7 @@ class Infrastructure:
         if adapter is not None and adapter.det is not None:
             inst.proc = env.process(self._detector(inst))
         elif self.signals and self.world.given_rate(graph) is not None:
-            inst.proc = env.process(self._given(inst, self.world.given_rate(graph)))
+            inst.proc = env.process(_given_alarms(self, inst, self.world.given_rate(graph)))
         return True
 
     def _refusal(self, graph: str, platform: str, n: int) -> str:
@@ -316,26 +316,6 @@ class Infrastructure:
         except simpy.Interrupt:
             return
 
-    def _given(self, inst: Instance, rate: float):  # type: ignore[no-untyped-def]
-        """A detector with a given rate (``World.detection_rates``), no signals: at each
-        slip's onset, if it watches (valid, platform up, inputs readable), it alarms
-        :data:`GIVEN_LATENCY` later, unless stopped by then, with probability ``rate``
-        (one seeded draw per slip it watches)."""
-        env = self.env
-        try:
-            for slip in self.truth.slips:
-                if slip.time < env.now:
-                    continue
-                yield env.timeout(slip.time - env.now)
-                if inst.halted or inst.valid_from > env.now or not self.facts.alive(inst):
-                    continue
-                if self.rng_given.random() < rate:
-                    yield env.timeout(GIVEN_LATENCY)  # stopped meanwhile: interrupted, no alarm
-                    self.alarms.append(Alarm(env.now, inst.graph, slip.direction))
-                    self.trace.emit(env.now, "alarm", detector=inst.graph, platform=inst.platform, direction=slip.direction)
-        except simpy.Interrupt:
-            return
-
     def feed(self, inst: Instance, t1: float) -> None:
         """Feed ``inst`` the samples of its devices up to ``t1``; record its alarms."""
         t0 = inst.fed
@@ -349,3 +329,24 @@ class Infrastructure:
         for a in alarms:
             self.alarms.append(a)
             self.trace.emit(a.time, "alarm", detector=inst.graph, platform=inst.platform, direction=a.direction)
+
+
+def _given_alarms(infra: Infrastructure, inst: Instance, rate: float):  # type: ignore[no-untyped-def]
+    """A detector with a given rate (``World.detection_rates``), no signals: at each
+    slip's onset, if it watches (valid, platform up, inputs readable), it alarms
+    :data:`GIVEN_LATENCY` later, unless stopped by then, with probability ``rate``
+    (one seeded draw per slip it watches)."""
+    env = infra.env
+    try:
+        for slip in infra.truth.slips:
+            if slip.time < env.now:
+                continue
+            yield env.timeout(slip.time - env.now)
+            if inst.halted or inst.valid_from > env.now or not infra.facts.alive(inst):
+                continue
+            if infra.rng_given.random() < rate:
+                yield env.timeout(GIVEN_LATENCY)  # stopped meanwhile: interrupted, no alarm
+                infra.alarms.append(Alarm(env.now, inst.graph, slip.direction))
+                infra.trace.emit(env.now, "alarm", detector=inst.graph, platform=inst.platform, direction=slip.direction)
+    except simpy.Interrupt:
+        return

@@ -373,15 +373,7 @@ class World:
                     f"stream: use one of {', '.join(streams)}"
                 )
         object.__setattr__(self, "signal_kinds", kinds)
-        rates = check_pairs("world: detection_rates", self.detection_rates, error=err, example="{'camera_slip_detector': 0.8}")
-        for g, v in rates:
-            check_number(f"world: detection_rates of {g}", v, error=err, high=1.0)
-            if v <= 0:
-                raise ScenarioError(
-                    f"world: detection_rates gives {g!r} a rate of {v!r}: give a probability above 0 (a graph without a "
-                    "rate cannot detect: leave it out)"
-                )
-        object.__setattr__(self, "detection_rates", tuple((g, float(v)) for g, v in rates))
+        object.__setattr__(self, "detection_rates", _check_rates(self.detection_rates))
         if not self.repeat:
             length = sum(s.duration for s in task)
             if length > self.horizon + 1e-9:
@@ -557,10 +549,7 @@ class World:
 
     def given_rate(self, graph: str) -> float | None:
         """The detection rate ``detection_rates`` gives ``graph``, or None."""
-        for g, v in self.detection_rates:
-            if g == graph:
-                return v
-        return None
+        return dict(self.detection_rates).get(graph)
 
     def no_signal_model(self, graphs: Iterable[PerceptionGraph]) -> dict[str, tuple[str, ...]]:
         """Graph -> the device kinds it reads that have no signal model (graphs with none left out)."""
@@ -586,25 +575,43 @@ class World:
                 raise ScenarioError(f"{where}: at t={te.time:g}: {problem}")
         _check_runtime_changes(self, model, where, changes)
         _check_components(self, scenario, where)
-        graphs = [g.name for g in model.graphs]
-        blind = self.no_signal_model(model.graphs)
-        for g, _v in self.detection_rates:
-            if g not in graphs:
-                raise ScenarioError(
-                    f"{where}: detection_rates names {g!r}{suggest(g, graphs)}, which is no perception graph of the model: "
-                    f"give the rate of one without a signal model ({', '.join(blind) or 'the model has none'})"
-                )
-            if g not in blind:
-                raise ScenarioError(
-                    f"{where}: detection_rates gives {g!r} a rate, but every input it reads has a signal model, so its "
-                    "rate is measured from its signals: drop it from detection_rates"
-                )
+        _check_rates_against(self, model, where)
         kinds = sorted({d.kind for d in model.devices})
         for kind, stream in self.signal_kinds:
             if kind not in kinds and (kind, stream) not in SIGNAL_KINDS:
                 raise ScenarioError(
                     f"{where}: signal_kinds maps {kind!r}, which no device is{suggest(kind, kinds)}: fix the kind (kinds: {', '.join(kinds)})"
                 )
+
+
+def _check_rates(given: object) -> tuple[tuple[str, float], ...]:
+    """``World.detection_rates``: (graph, probability) pairs, each probability in (0, 1]."""
+    rates = check_pairs("world: detection_rates", given, error=ScenarioError, example="{'camera_slip_detector': 0.8}")
+    for g, v in rates:
+        check_number(f"world: detection_rates of {g}", v, error=ScenarioError, high=1.0)
+        if v <= 0:  # type: ignore[operator]
+            raise ScenarioError(
+                f"world: detection_rates gives {g!r} a rate of {v!r}: give a probability above 0 (a graph without a "
+                "rate cannot detect: leave it out)"
+            )
+    return tuple((str(g), float(v)) for g, v in rates)  # type: ignore[arg-type]
+
+
+def _check_rates_against(world: World, model: SystemModel, where: str) -> None:
+    """A given rate names a graph of the model that has no signal model."""
+    graphs = [g.name for g in model.graphs]
+    blind = world.no_signal_model(model.graphs)
+    for g, _v in world.detection_rates:
+        if g not in graphs:
+            raise ScenarioError(
+                f"{where}: detection_rates names {g!r}{suggest(g, graphs)}, which is no perception graph of the model: "
+                f"give the rate of one without a signal model ({', '.join(blind) or 'the model has none'})"
+            )
+        if g not in blind:
+            raise ScenarioError(
+                f"{where}: detection_rates gives {g!r} a rate, but every input it reads has a signal model, so its "
+                "rate is measured from its signals: drop it from detection_rates"
+            )
 
 
 def _check_runtime_changes(world: World, model: SystemModel, where: str, changes: list[Event]) -> None:
