@@ -3,10 +3,18 @@
 * ``*.drn`` — Storm's explicit DRN format: ``@type: CTMC``, one ``state`` block per
   state with its exit rate after ``!``, its reward (unmonitored: 1 per second) in
   brackets and its labels, then ``action 0`` and one ``target : rate`` line per
-  transition (the entries are rates).
+  transition (the entries are rates). An absorbing state gets a self-loop of rate 1
+  (Storm drops a state with no transition from time-bounded queries). DRN knows initial
+  states, not their probabilities: with several, a header comment gives them
+  (``// initial distribution: state probability ...``, read by
+  :func:`initial_distribution`).
 * ``*.tra`` — PRISM's explicit format: ``STATES TRANSITIONS`` then ``i j rate`` per
-  line, with ``.sta`` (each state's variables), ``.lab`` (labels ``init`` and
-  ``unmonitored``) and ``.srew`` (state reward 1 where unmonitored) beside it.
+  line, with ``.sta`` (each state's variables: the task step and its phase, and a number
+  for each distinct repository state, set of broken components, starting, warming and
+  requested detectors, so that a row identifies its state), ``.lab`` (labels ``init`` and
+  ``unmonitored``) and ``.srew`` (state reward 1 where unmonitored) beside it. This is
+  PRISM's format, not Storm's explicit one (which wants a model hint in place of the
+  header): Storm reads the DRN.
 
 With ``--placements``, ``*.drn`` also gets the placement MDP beside it
 (``<name>-placements.drn``): a Markov automaton (``@type: Markov Automaton``) whose
@@ -17,11 +25,13 @@ placement; Storm's ``R{"unmonitored_time"}min=? [ LRA ]`` and ``max`` are the be
 worst long-run exposure ``desmon analyze --placements`` reports. PRISM's explicit
 format has no Markov automata: with ``*.tra`` the MDP is not written.
 
-The label ``unmonitored`` marks the states in which a risky action runs and a slot of
-what the rules want has no valid, ready detector; the expected reward accumulated up to
+The label ``unmonitored`` marks the states that are unmonitored by the one definition
+(:mod:`desmon.deployment.exposure`); the expected reward accumulated up to
 T (or per time unit in the long run) is the exposure ``desmon analyze`` reports.
 Every file is written in full before it replaces one of the same name
-(:func:`desmon.paths.replacing`), so a failure leaves nothing half-written.
+(:func:`desmon.paths.replacing`), all of an export's files together
+(:func:`export_all`), so a failure leaves nothing half-written and no file of the
+export replaced.
 """
 
 from __future__ import annotations
@@ -37,26 +47,53 @@ from desmon.analyze.chain import Chain
 from desmon.analyze.markov import AnalysisError
 from desmon.paths import replacing
 
-__all__ = ["export_chain", "export_placements", "placements_path", "SUFFIXES"]
+__all__ = ["export_chain", "export_placements", "export_all", "placements_path", "initial_distribution", "SUFFIXES"]
 
 SUFFIXES = (".drn", ".tra")
 
 
 def export_chain(chain: Chain, path: str) -> list[str]:
     """Write ``chain`` to ``path`` (``.drn`` or ``.tra`` and its companions); the files written."""
+    return export_all(chain, path)
+
+
+def export_all(chain: Chain, path: str, gap: Any = None) -> list[str]:
+    """Write ``chain`` to ``path`` (``.drn`` or ``.tra`` and its companions) and, with
+    ``gap`` and a ``.drn`` path, the placement MDP beside it: all of the files or none
+    (each is written in full first; if one fails, none replaces its namesake)."""
     suffix = Path(path).suffix
-    if suffix == ".drn":
-        with replacing(path) as fh:
-            _drn(chain, fh)
-        return [path]
-    if suffix == ".tra":
-        stem = str(Path(path).with_suffix(""))
-        names = [path, stem + ".sta", stem + ".lab", stem + ".srew"]
-        with ExitStack() as stack:
-            tra, sta, lab, srew = (stack.enter_context(replacing(n)) for n in names)
-            _prism(chain, tra, sta, lab, srew)
-        return names
-    raise AnalysisError(f"--export {path}: give a file ending in .drn (Storm) or .tra (PRISM explicit)")
+    if suffix not in SUFFIXES:
+        raise AnalysisError(f"--export {path}: give a file ending in .drn (Storm) or .tra (PRISM explicit)")
+    stem = str(Path(path).with_suffix(""))
+    names = [path] if suffix == ".drn" else [path, stem + ".sta", stem + ".lab", stem + ".srew"]
+    beside = placements_path(path) if gap is not None else None
+    with ExitStack() as stack:
+        files = [stack.enter_context(replacing(n)) for n in names + ([beside] if beside else [])]
+        if suffix == ".drn":
+            _drn(chain, files[0])
+        else:
+            _prism(chain, *files[:4])
+        if beside:
+            mdp, reward = gap.model
+            _ma(mdp, reward, files[-1])
+    return names + ([beside] if beside else [])
+
+
+def initial_distribution(path: str | Path) -> tuple[tuple[int, float], ...] | None:
+    """The initial distribution a DRN file of :func:`export_chain` states in its header
+    comment, or None (one ``init`` state, probability 1)."""
+    with open(path, encoding="utf-8") as fh:
+        for line in fh:
+            if not line.startswith("//"):
+                return None
+            if line.startswith(_INITIAL):
+                pairs = line[len(_INITIAL):].split()
+                return tuple((int(pairs[k]), float(pairs[k + 1])) for k in range(0, len(pairs), 2))
+    return None
+
+
+#: the header comment of a DRN file with several initial states: "state probability" pairs
+_INITIAL = "// initial distribution:"
 
 
 def placements_path(path: str) -> str | None:
@@ -117,11 +154,17 @@ def _drn(chain: Chain, fh) -> None:  # type: ignore[no-untyped-def]
     rows, cols, rates = _by_row(chain)
     exit_ = np.bincount(rows, weights=rates, minlength=chain.n)
     init = {i for i, p in chain.initial if p > 0}
-    fh.write("// desmon analyze: the CTMC of the real deployer (rates per second)\n@type: CTMC\n@parameters\n\n")
+    fh.write("// desmon analyze: the CTMC of the real deployer (rates per second)\n")
+    if len(init) > 1:  # DRN has init labels only: their probabilities go in the header (initial_distribution)
+        fh.write(_INITIAL + "".join(f" {i} {p!r}" for i, p in chain.initial if p > 0) + "\n")
+    fh.write("@type: CTMC\n@parameters\n\n")
     fh.write(f"@reward_models\nunmonitored_time\n@nr_states\n{chain.n}\n@nr_choices\n{chain.n}\n@model\n")
     start = np.searchsorted(rows, np.arange(chain.n + 1))
     for i in range(chain.n):
         labels = (" init" if i in init else "") + (" unmonitored" if chain.unmonitored[i] else "")
+        if start[i] == start[i + 1]:  # absorbing: a self-loop, so that Storm keeps the state (time-bounded queries)
+            fh.write(f"state {i} !1.0 [{chain.unmonitored[i]:g}]{labels}\n\taction 0\n\t\t{i} : 1.0\n")
+            continue
         fh.write(f"state {i} !{float(exit_[i])!r} [{chain.unmonitored[i]:g}]{labels}\n\taction 0\n")
         for k in range(start[i], start[i + 1]):
             fh.write(f"\t\t{int(cols[k])} : {float(rates[k])!r}\n")
@@ -132,11 +175,14 @@ def _prism(chain: Chain, tra, sta, lab, srew) -> None:  # type: ignore[no-untype
     tra.write(f"{chain.n} {len(rates)}\n")
     for i, j, r in zip(rows.tolist(), cols.tolist(), rates.tolist()):
         tra.write(f"{i} {j} {r!r}\n")
-    sta.write("(step,phase,known_failures,broken,deployed,starting,errors)\n")
+    # each variable but step and phase numbers the distinct values of one part of the state in order of first
+    # appearance, so that a row identifies its state (the chain's describe() says what each state is)
+    sta.write("(step,phase,repository,broken,starting,warming,requested)\n")
+    codes: list[dict[Any, int]] = [{}, {}, {}, {}, {}]
     for i, s in enumerate(chain.states):
-        known = len(s.key.failed) + len(s.key.down)
-        broken = len(s.phys_failed) + len(s.phys_down)
-        sta.write(f"{i}:({s.pos},{s.phase},{known},{broken},{len(s.key.deployments)},{len(s.starting)},{len(s.key.standing)})\n")
+        parts = (s.key, (s.phys_failed, s.phys_down), s.starting, s.warming, s.requested)
+        ids = [c.setdefault(v, len(c)) for c, v in zip(codes, parts)]
+        sta.write(f"{i}:({s.pos},{s.phase},{','.join(map(str, ids))})\n")
     lab.write('0="init" 1="deadlock" 2="unmonitored"\n')
     init = {i for i, p in chain.initial if p > 0}
     for i in range(chain.n):

@@ -168,7 +168,8 @@ def check_drn(
 ) -> StormResult:
     """Storm's numbers for the DRN file ``path`` (as ``desmon analyze --export`` writes
     it) over the horizon ``horizon`` s; ``initial``: the initial distribution
-    (default: the file's one ``init`` state); ``steady=False`` skips the long run."""
+    (default: the file's, its one ``init`` state or the distribution its header
+    states); ``steady=False`` skips the long run."""
     if not (horizon > 0 and math.isfinite(horizon)):
         raise AnalysisError(f"--horizon {horizon}: give a positive, finite number of seconds")
     stormpy = importer()
@@ -180,6 +181,10 @@ def check_drn(
     parse_s = time.perf_counter() - t0
     if REWARD not in model.reward_models:
         raise AnalysisError(f"{path} has no reward model {REWARD!r}: write it with desmon analyze --export FILE.drn")
+    if initial is None:  # the file's own (several initial states: its header comment)
+        from desmon.analyze.export import initial_distribution
+
+        initial = initial_distribution(path)
     c = _Checker(stormpy, model, _initial(model, initial, str(path)))
     frac, steady_s = c.value(f'R{{"{REWARD}"}}=? [ LRA ]') if steady else (None, 0.0)
     T = _number(horizon)

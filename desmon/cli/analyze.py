@@ -140,14 +140,10 @@ def _export(path: str | None, result: Any, gap: Any) -> list[str]:
     """``--export``: the chain, and with ``--placements`` the placement MDP beside a DRN file."""
     if not path:
         return []
-    from desmon.analyze.export import export_chain, export_placements, placements_path
+    from desmon.analyze.export import export_all
 
     assert result.chain is not None
-    files = export_chain(result.chain, path)
-    beside = placements_path(path)
-    if gap is not None and beside is not None:
-        files.append(export_placements(gap, beside))
-    return files
+    return export_all(result.chain, path, gap)
 
 
 def _say_written(files: list[str], placements_export: str | None) -> None:
