@@ -335,6 +335,23 @@ def test_the_deployer_sits_between_the_best_and_worst_placements_and_its_own_val
     assert gap.to_json()["above_optimal"] >= 0
 
 
+def test_the_gap_splits_into_the_deployers_decisions_and_names_the_best_a_deployer_can_reach():
+    """The paper's deployer on platform_crash: every decision of its gap to the best is
+    taken while torso_pc's crash is not yet noticed, so no deployer sees what the best
+    sees; the best fixed platform order is the deployer's own."""
+    from desmon.analyze.mdp import optimality_gap
+
+    gap = optimality_gap(load_scenario(CRASH, params={"stochastic": "True"}), "paper")
+    assert gap.min_s_per_hour < gap.exposure_s_per_hour
+    assert gap.shares_total == pytest.approx(1.0, rel=1e-6)  # the shares add up to the gap
+    assert gap.unobservable_share == pytest.approx(1.0, rel=1e-6)
+    state, _event, mine, best, share = gap.largest
+    assert "not yet noticed torso_pc" in state and mine != best and 0.5 < share <= 1.0
+    order, value = gap.best_order
+    assert value == pytest.approx(gap.exposure_s_per_hour, rel=1e-9) and gap.min_s_per_hour <= value
+    assert "no deployer need reach them" in gap.text() and "largest share of the gap" in gap.text()
+
+
 # -- the simulation's exponential timing, as a user runs it --------------------------------------------
 def test_run_timing_options_refuse_nonsense_in_one_line(capsys):
     assert main(["run", SHIFT, "--phases", "3", "--until", "60", "--no-progress"]) == 2

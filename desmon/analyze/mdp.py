@@ -15,6 +15,18 @@ state and its bias, then improved greedily event by event, until no choice chang
 the deployer's own exposure (the declaration order everywhere), and the first state
 (in breadth-first order from the start) where the optimal policy's choice differs from
 the deployer's and is strictly better.
+
+**The best is a relaxation.** The MDP's policies decide on the whole chain state, which
+holds facts no deployer sees: a component broken that the monitor has not yet noticed,
+a start still under way. So the best (and the worst) may be out of any deployer's
+reach. :class:`Gap` says how much: it splits the deployer's distance to the best into
+the shares of its decisions (the performance-difference identity: a decision's share
+is its state's long-run probability under the deployer, times the race's rate, times
+the optimal bias lost by the deployer's choice; the shares add up to the gap), reports
+the decision with the largest share and the part of the gap decided in states with an
+unnoticed fact, and gives the best a deployer can be written to reach: the best of the
+fixed platform orders (the same deployer code with the model's platforms reordered
+once, for every reaction).
 """
 
 from __future__ import annotations
@@ -51,6 +63,14 @@ class Gap:
     iterations: int
     #: the first state where the best placement differs: (state, event, deployer's commands, best commands)
     differs: tuple[str, str, str, str] | None
+    #: the decision with the largest share of the gap: (state, event, deployer's, best's, share of the gap)
+    largest: tuple[str, str, str, str, float] | None = None
+    #: the part of the gap decided in states where a broken component is not yet noticed
+    unobservable_share: float = 0.0
+    #: the best fixed platform order (names, s/h): a deployer that can be written
+    best_order: tuple[tuple[str, ...], float] | None = None
+    #: the decisions' shares added up, over the gap: 1 to the solver's precision (the identity, checked)
+    shares_total: float = 0.0
     #: the MDP and its reward vector (for :func:`desmon.analyze.export.export_placements`)
     model: tuple[Any, np.ndarray] | None = field(default=None, compare=False, repr=False)
 
@@ -65,6 +85,10 @@ class Gap:
             "min_s_per_hour": self.min_s_per_hour, "max_s_per_hour": self.max_s_per_hour,
             "above_optimal": self.above_optimal, "policy_iterations": self.iterations,
             "first_difference": None if self.differs is None else dict(zip(("state", "event", "deployer", "optimal"), self.differs)),
+            "largest_share": None if self.largest is None else dict(zip(("state", "event", "deployer", "optimal", "share"), self.largest)),
+            "unobservable_share": self.unobservable_share,
+            "best_order": None if self.best_order is None else {"platforms": list(self.best_order[0]), "s_per_hour": self.best_order[1]},
+            "shares_total": self.shares_total,
         }
 
     def text(self) -> str:
@@ -72,9 +96,21 @@ class Gap:
             f"Placements ({self.deployer}, MDP of {self.states:,} states): deployer {self.exposure_s_per_hour:.3f} s/h; "
             f"best {self.min_s_per_hour:.3f}, worst {self.max_s_per_hour:.3f} s/h; {100 * self.above_optimal:.3g} % above optimal"
         ]
+        if self.best_order is not None:
+            order, value = self.best_order
+            lines.append(
+                f"  best and worst are over policies that see the whole world, unnoticed faults included: no deployer need "
+                f"reach them; the best fixed platform order ({', '.join(order)}) gives {value:.3f} s/h"
+            )
+        if self.largest is not None:
+            state, event, mine, best, share = self.largest
+            lines.append(
+                f"  largest share of the gap ({100 * share:.3g} %): in [{state}] on {event}: deployer {mine}; optimal {best}; "
+                f"{100 * self.unobservable_share:.3g} % of the gap is decided where a broken component is not yet noticed"
+            )
         if self.differs is not None:
             state, event, mine, best = self.differs
-            lines.append(f"  first differing decision: in [{state}] on {event}: deployer {mine}; optimal {best}")
+            lines.append(f"  first differing decision (breadth-first): in [{state}] on {event}: deployer {mine}; optimal {best}")
         return "\n".join(lines) + "\n"
 
 
@@ -100,6 +136,7 @@ class _MDP:
                 f"it handles at most {MAX_ORDERS} (4 platforms): analyze without --placements"
             )
         orders = list(itertools.permutations(names))
+        self.orders = orders
         self.builders = [
             _Builder(_ordered(scenario, o), deployer, mw, where="" if k == 0 else
                      f"with the platforms in the order {', '.join(o)}, one --placements tries (desmon verify runs the declared order)")
@@ -111,6 +148,8 @@ class _MDP:
         self.index: dict[ChainState, int] = {}
         # per state: list of (rate, event, [alternative: ((prob, target index), ...)], [commands of each alternative])
         self.races: list[list[tuple[float, Any, list[tuple[tuple[int, float], ...]], list[str]]]] = []
+        # per state and race: the alternative each platform order takes (index into the race's alternatives)
+        self.which: list[list[tuple[int, ...]]] = []
 
     def _id(self, s: ChainState) -> int:
         j = self.index.get(s)
@@ -132,17 +171,21 @@ class _MDP:
         while i < len(self.states):
             s = self.states[i]
             per_builder = [list(b.slots(s)) for b in self.builders]
-            races = []
+            races, which = [], []
             for k, (rate, event, outcomes) in enumerate(per_builder[0]):
                 alts: list[tuple[tuple[int, float], ...]] = []
                 cmds: list[str] = []
+                chosen = []
                 for slots in per_builder:
                     dist = tuple(sorted((self._id(t), p) for p, t, _c in slots[k][2]))
                     if dist not in alts:
                         alts.append(dist)
                         cmds.append(_commands(max(slots[k][2], key=lambda o: o[0])[2]))
+                    chosen.append(alts.index(dist))
                 races.append((rate, event, alts, cmds))
+                which.append(tuple(chosen))
             self.races.append(races)
+            self.which.append(which)
             i += 1
 
 
@@ -163,8 +206,9 @@ def _generator(mdp: _MDP, policy: list[list[int]]):  # type: ignore[no-untyped-d
 
 
 @one_blas_thread
-def _evaluate(Q, r: np.ndarray, describe, blocks: np.ndarray) -> tuple[float, np.ndarray]:  # type: ignore[no-untyped-def]
-    """The gain (long-run reward per second) and a bias vector of the policy's chain."""
+def _evaluate(Q, r: np.ndarray, describe, blocks: np.ndarray, with_pi: bool = False):  # type: ignore[no-untyped-def]
+    """The gain (long-run reward per second) and a bias vector of the policy's chain
+    (and its steady state, ``with_pi``)."""
     import scipy.sparse.linalg as sla
 
     pi, _res, _m = steady_state(Q, describe, blocks)
@@ -179,7 +223,7 @@ def _evaluate(Q, r: np.ndarray, describe, blocks: np.ndarray) -> tuple[float, np
         h = sla.spsolve(sub, rhs, permc_spec="MMD_AT_PLUS_A")
     bias = np.zeros(Q.shape[0])
     bias[keep] = h
-    return g, bias
+    return (g, bias, pi) if with_pi else (g, bias)
 
 
 def _improve(mdp: _MDP, policy: list[list[int]], h: np.ndarray, sign: float) -> bool:
@@ -224,7 +268,7 @@ def optimality_gap(scenario: Scenario, deployer: Any = "desmon", *, phases: int 
 
     blocks = holder.blocks()
     own = [[0] * len(races) for races in mdp.races]
-    g_own, _h = _evaluate(_generator(mdp, own), r, describe, blocks)
+    g_own, _h, d_own = _evaluate(_generator(mdp, own), r, describe, blocks, with_pi=True)
     g_min, best, h_min, it1 = _optimise(mdp, r, 1.0, describe, blocks)
     g_max, _worst, _h, it2 = _optimise(mdp, r, -1.0, describe, blocks)
     differs = None
@@ -239,4 +283,39 @@ def optimality_gap(scenario: Scenario, deployer: Any = "desmon", *, phases: int 
                     break
         if differs is not None:
             break
-    return Gap(mdp.main.system.deployer_name, len(mdp.states), g_own * 3600.0, g_min * 3600.0, g_max * 3600.0, it1 + it2, differs, (mdp, r))
+    largest, unobservable, total = _shares(mdp, best, h_min, d_own, g_own - g_min, describe)
+    orders = [_evaluate(_generator(mdp, [[w[b] for w in which] for which in mdp.which]), r, describe, blocks)[0] for b in range(len(mdp.orders))]
+    b = int(np.argmin(orders))
+    return Gap(
+        mdp.main.system.deployer_name, len(mdp.states), g_own * 3600.0, g_min * 3600.0, g_max * 3600.0, it1 + it2, differs,
+        model=(mdp, r), largest=largest, unobservable_share=unobservable, best_order=(mdp.orders[b], orders[b] * 3600.0), shares_total=total,
+    )
+
+
+def _unnoticed(s: ChainState) -> bool:
+    """Whether chain state ``s`` holds a broken component the repository does not know of."""
+    return set(s.phys_failed) != set(s.key.failed) or set(s.phys_down) != set(s.key.down)
+
+
+def _shares(mdp: _MDP, best: list[list[int]], h: np.ndarray, d: np.ndarray, gap: float, describe):  # type: ignore[no-untyped-def]
+    """The decision with the largest share of ``gap`` (the deployer's gain minus the
+    best's) and the part of it decided in states with an unnoticed fault (module
+    docstring: share = d(i) x rate x (bias after the deployer's choice - after the best's))."""
+    if gap <= 1e-12:
+        return None, 0.0, 0.0
+    top, top_share, hidden, total = None, 0.0, 0.0, 0.0
+    for i, races in enumerate(mdp.races):
+        for k, (rate, event, alts, cmds) in enumerate(races):
+            a = best[i][k]
+            if a == 0:
+                continue
+            share = d[i] * rate * (sum(p * h[j] for j, p in alts[0]) - sum(p * h[j] for j, p in alts[a])) / gap
+            total += share
+            if share > top_share:
+                top, top_share = (i, k, event, cmds[0], cmds[a]), share
+            if _unnoticed(mdp.states[i]):
+                hidden += share
+    if top is None:
+        return None, 0.0, total
+    i, _k, event, mine, theirs = top
+    return (describe(i), str(event), mine, theirs, top_share), min(1.0, max(0.0, hidden)), total
