@@ -10,6 +10,7 @@ agree on the result under the same (exponential) timing.
 from __future__ import annotations
 
 import functools
+import os
 from dataclasses import replace
 
 import numpy as np
@@ -123,6 +124,8 @@ def test_every_report_prints_the_denominator_and_the_causes(capsys):
 
 # -- the chain against the world ---------------------------------------------------------------------
 SEEDS = range(20)
+#: the 8 h shifts of the undetected-slip comparisons (CI: 20, 160 simulated hours; DESMON_UNDETECTED_SHIFTS=125 for 1,000)
+SHIFTS = range(int(os.environ.get("DESMON_UNDETECTED_SHIFTS", "20")))
 
 
 @functools.lru_cache(maxsize=None)
@@ -136,7 +139,7 @@ def _simulated(path: str, hours: str, signals: bool) -> dict[str, tuple[float, .
     sc = _scenario(path, hours)
     sc = replace(sc, world=replace(world_of(sc), timing="exponential", phases=1, signals=signals))
     out: dict[str, list[float]] = {"exposure": [], "risky": [], "missed_per_h": [], "no_rule": [], "starting": []}
-    for seed in SEEDS:
+    for seed in SHIFTS if signals else SEEDS:
         m = simulate(sc, "desmon", seed=seed).metrics
         out["exposure"].append(m["unmonitored_exposure_s"])
         out["risky"].append(m["risky_time_s"])
@@ -255,7 +258,7 @@ def test_with_a_given_rate_the_exact_undetected_slips_and_exposure_lie_in_the_in
     sc = load_scenario(PICK, {"hours": "8", "camera_rate": "0.8"})
     a = analyze(sc)
     run = replace(sc, world=replace(world_of(sc), timing="exponential", phases=1, signals=True))
-    ms = [simulate(run, "desmon", seed=seed).metrics for seed in SEEDS]
+    ms = [simulate(run, "desmon", seed=seed).metrics for seed in SHIFTS]
     missed = [m["slips_missed"] * 3600.0 / run.world.horizon for m in ms]
     assert _inside(a.undetected_slips_per_hour, missed), (a.undetected_slips_per_hour, confidence(missed))
     assert _inside(a.exposure_s_per_mission, [m["unmonitored_exposure_s"] for m in ms])
