@@ -498,3 +498,14 @@ def test_the_analyze_bench_modes_end_with_their_result_line(argv):
     assert proc.returncode == 0, proc.stderr[-2000:]
     figures = parse_result(proc.stdout)
     assert figures.get("scenarios") == 3.0 if argv[0] == "--agreement" else figures["states"] > 40_000
+
+
+@pytest.mark.slow
+def test_a_leases_idle_time_in_erlang_phases_is_the_worlds_under_the_same_phases():
+    """With --phases 2 the lease's idle time is two phases, counted while the platform
+    hosts nothing, in the chain and in the simulation alike (140 half-hours)."""
+    sc = _scenario("cloud_offload")
+    a = analyze(sc, miss=NO_MISS, phases=2, horizon=HOUR, steady=False)
+    assert a.states > analyze(sc, miss=NO_MISS, horizon=HOUR, steady=False).states
+    ag = agreement(a.exposure_s_per_mission, simulated_exposure(sc, "desmon", range(140), HOUR, phases=2))
+    assert ag.inside, ag.to_json()

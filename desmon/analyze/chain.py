@@ -96,6 +96,7 @@ class ChainState(NamedTuple):
     starting: tuple[tuple[str, str], ...]  # (graph, platform) started, not yet ready, sorted
     requested: tuple[str, ...] = ()  # on-demand platforms leased, not yet joined, sorted
     warming: tuple[tuple[str, str, int], ...] = ()  # (graph, platform, Erlang phase) warming up, sorted
+    idle: tuple[tuple[str, int], ...] = ()  # (leased platform, Erlang phases of idle time passed), sorted
 
 
 #: the context the monitor reports for the true action: the simulation's own rule
@@ -310,9 +311,11 @@ class _Builder:
                 starting.discard(pair)
                 warming.pop(pair, None)
         live = set(nkey.deployments)
+        busy = {p for _g, p in live}
         return s._replace(
             key=nkey, starting=tuple(sorted(starting & live)),
             warming=tuple(sorted((g, p, k) for (g, p), k in warming.items() if (g, p) in live)),
+            idle=tuple((p, k) for p, k in s.idle if p not in busy),  # hosting again: its idle time starts over
         )
 
     def _wiring(self, g: str, p: str) -> tuple[tuple[str, ...], ...]:
@@ -428,19 +431,24 @@ class _Builder:
                 yield self._deliver(s, _load(p, level, r), rate / len(nbrs))
 
     def _lease(self, s: ChainState) -> Iterator[Slot]:
-        """Leased platforms joining, leaving while idle, and the monitor noticing it."""
+        """Leased platforms joining, leaving after an idle time (Erlang-``phases``, its
+        phases counted only while the platform hosts nothing), and the monitor noticing it."""
         hb = self.mw.heartbeat_timeout
         busy = {p for _g, p in s.key.deployments}
+        idle = dict(s.idle)
         for p, startup in self.leased.items():
             absent = p in s.phys_down
-            if absent and p not in s.requested:
-                flip = None
-            elif absent:
+            flip = None
+            if absent and p in s.requested:
                 flip = (1.0 / startup, s._replace(requested=tuple(x for x in s.requested if x != p), phys_down=tuple(x for x in s.phys_down if x != p)))
-            elif p not in busy:
-                flip = (1.0 / self.mw.lease_idle_s, s._replace(phys_down=tuple(sorted((*s.phys_down, p)))))
-            else:
-                flip = None
+            elif not absent and p not in busy:
+                rate = self.mw.phases / self.mw.lease_idle_s
+                k = idle.get(p, 0) + 1
+                rest = tuple(x for x in s.idle if x[0] != p)
+                if k < self.mw.phases:  # one more phase of idle time: nothing happens yet
+                    yield rate, None, ((1.0, s._replace(idle=tuple(sorted((*rest, (p, k))))), ()),)
+                else:
+                    flip = (rate, s._replace(phys_down=tuple(sorted((*s.phys_down, p))), idle=rest))
             if flip is not None:
                 rate, ns = flip
                 ns = self._rewarm(s, ns)

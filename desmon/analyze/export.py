@@ -11,7 +11,7 @@
 * ``*.tra`` — PRISM's explicit format: ``STATES TRANSITIONS`` then ``i j rate`` per
   line, with ``.sta`` (each state's variables: the task step and its phase, and a number
   for each distinct repository state, set of broken components, starting, warming and
-  requested detectors, so that a row identifies its state), ``.lab`` (labels ``init`` and
+  requested leases and their idle phases, so that a row identifies its state), ``.lab`` (labels ``init`` and
   ``unmonitored``) and ``.srew`` (state reward 1 where unmonitored) beside it. This is
   PRISM's format, not Storm's explicit one (which wants a model hint in place of the
   header): Storm reads the DRN.
@@ -180,7 +180,7 @@ def _prism(chain: Chain, tra, sta, lab, srew) -> None:  # type: ignore[no-untype
     sta.write("(step,phase,repository,broken,starting,warming,requested)\n")
     codes: list[dict[Any, int]] = [{}, {}, {}, {}, {}]
     for i, s in enumerate(chain.states):
-        parts = (s.key, (s.phys_failed, s.phys_down), s.starting, s.warming, s.requested)
+        parts = (s.key, (s.phys_failed, s.phys_down), s.starting, s.warming, (s.requested, s.idle))
         ids = [c.setdefault(v, len(c)) for c, v in zip(codes, parts)]
         sta.write(f"{i}:({s.pos},{s.phase},{','.join(map(str, ids))})\n")
     lab.write('0="init" 1="deadlock" 2="unmonitored"\n')

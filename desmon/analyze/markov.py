@@ -120,6 +120,7 @@ class MarkovWorld:
                 "platforms": [{"platform": p, "startup_s": t, "join_rate_per_s": 1.0 / t} for p, t in self.lease],
                 "idle_s": self.lease_idle_s,
                 "leave_rate_per_s_while_idle": 1.0 / self.lease_idle_s if self.lease_idle_s else 0.0,
+                "idle_phases": self.phases,
             },
         }
 

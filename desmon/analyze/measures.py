@@ -301,7 +301,7 @@ def leaves_out(scenario: Scenario, mw: MarkovWorld) -> tuple[str, ...]:
     lines = []
     timing = "exponential" if mw.phases == 1 else f"Erlang-{mw.phases}"
     lines.append(
-        f"timing: task steps and warm-ups are {timing} with the given means (the simulation's are fixed: "
+        f"timing: task steps, warm-ups and lease idle times are {timing} with the given means (the simulation's are fixed: "
         "raise --phases to approach it); start latency, recognition and heartbeat delays are exponential"
     )
     if mw.slip_rate > 0:

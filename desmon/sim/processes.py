@@ -325,19 +325,29 @@ def lease(parts: RobotParts, platform: str):  # type: ignore[no-untyped-def]
 
 def markov_lease(parts: RobotParts, platform: str):  # type: ignore[no-untyped-def]
     """Exponential timing: the platform joins after an exponential start-up (mean its
-    ``startup_s``); then, at exponential gaps of mean the lease's ``idle_s``, it leaves if
-    it hosts nothing then (a clock that runs only while the platform is idle, as the
-    chain of ``desmon analyze`` has it)."""
+    ``startup_s``); then it leaves after an idle time of ``World.phases`` Erlang phases
+    (mean the lease's ``idle_s``) counted only while it hosts nothing, as the chain of
+    ``desmon analyze`` has it: phase ends come at exponential gaps of mean
+    ``idle_s / phases``; one that finds the platform hosting counts nothing, and hosting
+    since the last one starts the count over."""
     env = parts.env
     idle = parts.world.lease.idle_s  # type: ignore[union-attr]
+    k = parts.world.phases
     rng = random.Random(f"{parts.seed}:lease:{platform}:{parts.books.leases}")
     startup = parts.model.platform(platform).startup_s
     yield env.timeout(rng.expovariate(1.0 / startup) if startup > 0 else 0.0)
     change(parts, PlatformJoin(platform), "lease")
-    while True:
-        yield env.timeout(rng.expovariate(1.0 / idle))
-        if not any(p == platform for _g, p in parts.facts.instances):
-            break
+    last_busy = parts.infra.last_busy
+    phase, tick = 0, env.now
+    while phase < k:
+        yield env.timeout(rng.expovariate(k / idle))
+        if any(p == platform for _g, p in parts.facts.instances):
+            phase = 0
+        elif last_busy.get(platform, -1.0) > tick:  # it hosted something since the last phase end
+            phase = 1
+        else:
+            phase += 1
+        tick = env.now
     change(parts, PlatformLeave(platform), "lease")
     parts.books.lease_requested.discard(platform)
 
