@@ -16,13 +16,13 @@ import sys
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
-from typing import IO, Iterable, Iterator
+from typing import IO, Iterable, Iterator, Sequence
 
 from desmon.errors import DesmonError
 
 __all__ = [
     "PathError", "SCENARIO_FILE", "TRACE_FILE", "check_input_file", "check_output_file", "same_file", "replacing",
-    "script_folder_on_path",
+    "replacing_all", "script_folder_on_path",
 ]
 
 #: (what, how to get a right one) of each kind of input, for :func:`check_input_file`.
@@ -175,6 +175,43 @@ def replacing(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:  #
         except FileNotFoundError:
             pass
         raise
+
+
+@contextmanager
+def replacing_all(paths: Sequence[str | os.PathLike[str]]) -> Iterator[list[IO]]:  # type: ignore[type-arg]
+    """Temporary text files next to ``paths``; they replace them only if the block
+    completes, and only once every one is written and no target is a directory: a
+    failure leaves every path untouched (as :func:`replacing`, for several files)."""
+    targets = [Path(p) for p in paths]
+    tmps: list[str] = []
+    handles: list[IO] = []  # type: ignore[type-arg]
+    try:
+        for t in targets:
+            try:
+                fd, tmp = tempfile.mkstemp(prefix=f".{t.name}.", suffix=".part", dir=t.parent or ".")
+            except OSError as exc:
+                raise OSError(exc.errno, f"{exc.strerror or exc} (no file can be created in {t.parent or '.'})", str(t)) from None
+            tmps.append(tmp)
+            handles.append(os.fdopen(fd, "w", encoding="utf-8"))
+        yield handles
+        for h in handles:
+            h.close()
+        for t in targets:
+            if t.is_dir():
+                raise IsADirectoryError(21, "Is a directory", str(t))
+        while tmps:
+            tmp, t = tmps[0], targets[len(targets) - len(tmps)]
+            os.chmod(tmp, _mode_for(t))
+            os.replace(tmp, t)
+            tmps.pop(0)
+    finally:
+        for h in handles:
+            h.close()
+        for tmp in tmps:
+            try:
+                os.unlink(tmp)
+            except FileNotFoundError:
+                pass
 
 
 def script_folder_on_path(script: str | Path) -> None:

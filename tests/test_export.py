@@ -98,3 +98,20 @@ def test_an_export_is_all_of_its_files_or_none(tmp_path, monkeypatch, capsys):
     assert code == 2, capsys.readouterr()
     assert out.read_text() == "old chain\n" and beside.read_text() == "old mdp\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c-placements.drn", "c.drn"]
+
+
+def test_several_files_are_replaced_together_or_not_at_all(tmp_path):
+    from desmon.paths import replacing_all
+
+    a, b = tmp_path / "a.txt", tmp_path / "b.txt"
+    a.write_text("old\n")
+    b.mkdir()  # cannot be replaced by a file: found only once both are written
+    with pytest.raises(IsADirectoryError):
+        with replacing_all([a, b]) as (fa, fb):
+            fa.write("new\n")
+            fb.write("new\n")
+    assert a.read_text() == "old\n" and sorted(p.name for p in tmp_path.iterdir()) == ["a.txt", "b.txt"]
+    with replacing_all([a, tmp_path / "c.txt"]) as (fa, fc):
+        fa.write("new\n")
+        fc.write("c\n")
+    assert a.read_text() == "new\n" and (tmp_path / "c.txt").read_text() == "c\n"

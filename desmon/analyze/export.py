@@ -37,7 +37,6 @@ export replaced.
 from __future__ import annotations
 
 import math
-from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
@@ -45,9 +44,9 @@ import numpy as np
 
 from desmon.analyze.chain import Chain
 from desmon.analyze.markov import AnalysisError
-from desmon.paths import replacing
+from desmon.paths import replacing, replacing_all
 
-__all__ = ["export_chain", "export_placements", "export_all", "placements_path", "initial_distribution", "SUFFIXES"]
+__all__ = ["export_chain", "export_placements", "export_all", "export_paths", "check_export", "placements_path", "initial_distribution", "SUFFIXES"]
 
 SUFFIXES = (".drn", ".tra")
 
@@ -57,26 +56,39 @@ def export_chain(chain: Chain, path: str) -> list[str]:
     return export_all(chain, path)
 
 
+def export_paths(path: str, placements: bool = False) -> list[str]:
+    """Every file ``--export path`` writes (with ``placements``: the MDP beside a DRN file)."""
+    low = path.lower()
+    if not low.endswith(SUFFIXES):
+        raise AnalysisError(f"--export {path}: give a file ending in .drn (Storm) or .tra (PRISM explicit)")
+    stem = path[: -len(".tra")]
+    names = [path] if low.endswith(".drn") else [path, stem + ".sta", stem + ".lab", stem + ".srew"]
+    beside = placements_path(path) if placements else None
+    return names + ([beside] if beside else [])
+
+
+def check_export(path: str, placements: bool = False) -> None:
+    """Before any work: no file of the export is a directory (the CLI checked ``path``)."""
+    for name in export_paths(path, placements):
+        if Path(name).is_dir():
+            raise AnalysisError(f"--export {path} would write {name}, which is a directory: remove it or export under another name")
+
+
 def export_all(chain: Chain, path: str, gap: Any = None) -> list[str]:
     """Write ``chain`` to ``path`` (``.drn`` or ``.tra`` and its companions) and, with
     ``gap`` and a ``.drn`` path, the placement MDP beside it: all of the files or none
-    (each is written in full first; if one fails, none replaces its namesake)."""
-    suffix = Path(path).suffix
-    if suffix not in SUFFIXES:
-        raise AnalysisError(f"--export {path}: give a file ending in .drn (Storm) or .tra (PRISM explicit)")
-    stem = str(Path(path).with_suffix(""))
-    names = [path] if suffix == ".drn" else [path, stem + ".sta", stem + ".lab", stem + ".srew"]
-    beside = placements_path(path) if gap is not None else None
-    with ExitStack() as stack:
-        files = [stack.enter_context(replacing(n)) for n in names + ([beside] if beside else [])]
-        if suffix == ".drn":
+    (:func:`desmon.paths.replacing_all`: each is written in full first, and none
+    replaces its namesake unless all can)."""
+    names = export_paths(path, gap is not None)
+    with replacing_all(names) as files:
+        if path.lower().endswith(".drn"):
             _drn(chain, files[0])
         else:
             _prism(chain, *files[:4])
-        if beside:
+        if len(files) > (1 if path.lower().endswith(".drn") else 4):
             mdp, reward = gap.model
             _ma(mdp, reward, files[-1])
-    return names + ([beside] if beside else [])
+    return names
 
 
 def initial_distribution(path: str | Path) -> tuple[tuple[int, float], ...] | None:
@@ -98,8 +110,7 @@ _INITIAL = "// initial distribution:"
 
 def placements_path(path: str) -> str | None:
     """Where ``--export path`` writes the placement MDP (None: ``path``'s format has no MDPs)."""
-    p = Path(path)
-    return str(p.with_name(p.stem + "-placements.drn")) if p.suffix == ".drn" else None
+    return path[: -len(".drn")] + "-placements.drn" if path.lower().endswith(".drn") else None
 
 
 def export_placements(gap: Any, path: str) -> str:

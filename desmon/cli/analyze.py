@@ -77,6 +77,10 @@ def run(args: argparse.Namespace) -> int:
         from desmon.analyze import AnalysisError
 
         raise AnalysisError(f"--simulate {args.simulate}: a 99 % confidence interval needs at least 3 seeds")
+    if args.export:  # every file of the export, before any work
+        from desmon.analyze.export import check_export
+
+        check_export(args.export, args.placements)
     from desmon.progress import StatusLine
 
     line = StatusLine(err)
@@ -236,7 +240,7 @@ def format_analysis(a: Any, agree: Any = None) -> str:
     if a.long_run_unmonitored_fraction is not None:
         out.append(
             f"Long run, per hour: {a.risky_s_per_hour:.3f} s risky (an object in the hand), of which {a.exposure_s_per_hour:.3f} s "
-            f"unmonitored{_share(a.exposure_s_per_hour, a.risky_s_per_hour)} ({100 * a.long_run_unmonitored_fraction:.4f} % of all time)"
+            f"unmonitored{_share(a.exposure_s_per_hour, a.risky_s_per_hour, a.excluded_s_per_hour)} ({100 * a.long_run_unmonitored_fraction:.4f} % of all time)"
         )
         out += _causes(a.causes_s_per_hour, a.excluded_s_per_hour)
         if a.mean_unmonitored_interval_s is not None:
@@ -245,7 +249,7 @@ def format_analysis(a: Any, agree: Any = None) -> str:
         out.append(f"Undetected slips: {a.undetected_slips_per_hour:.4f} per hour")
     out.append(
         f"Per mission (T = {_n(a.horizon_s)} s): {a.exposure_s_per_mission:.3f} s unmonitored expected, of "
-        f"{a.risky_s_per_mission:.3f} s risky{_share(a.exposure_s_per_mission, a.risky_s_per_mission)}"
+        f"{a.risky_s_per_mission:.3f} s risky{_share(a.exposure_s_per_mission, a.risky_s_per_mission, a.excluded_s_per_mission)}"
     )
     out += _causes(a.causes_s_per_mission, a.excluded_s_per_mission)
     if a.p_exposure_within_T is not None and a.p_exposure_within_T < 1.0 - 5e-7:
@@ -270,8 +274,14 @@ def format_analysis(a: Any, agree: Any = None) -> str:
     return "\n".join(out) + "\n"
 
 
-def _share(part: float | None, whole: float | None) -> str:
-    return f" = {100.0 * part / whole:.1f} % of the risky time" if part is not None and whole else ""
+def _share(part: float | None, whole: float | None, excluded: float | None = None) -> str:
+    """The unmonitored share of the risky time that is not excluded on purpose."""
+    if part is None or not whole:
+        return ""
+    if excluded:
+        rest = whole - excluded
+        return f" = {100.0 * part / rest:.1f} % of the risky time not excluded ({rest:.3f} s)" if rest > 0 else ""
+    return f" = {100.0 * part / whole:.1f} % of the risky time"
 
 
 def _causes(by_cause: dict[str, float], excluded: float | None) -> list[str]:
@@ -281,5 +291,5 @@ def _causes(by_cause: dict[str, float], excluded: float | None) -> list[str]:
     parts = [f"{CAUSE_TEXT[c]} {v:.3f}" for c, v in by_cause.items() if v > 5e-10]
     lines = ["  by cause (s): " + "; ".join(parts)] if parts else []
     if excluded:
-        lines.append(f"  excluded on purpose (watched=False): {excluded:.3f} s, in neither figure")
+        lines.append(f"  excluded on purpose (watched=False): {excluded:.3f} s of the risky time, never counted as unmonitored")
     return lines

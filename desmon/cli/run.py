@@ -124,9 +124,9 @@ def run_command(
         out.write(json.dumps(summary_json(result, wall), indent=2) + "\n")
     else:
         out.write(format_summary(result, wall))
-        warn_uncovered(scenario, float(args.until) if args.until is not None else None)
         if args.trace and not getattr(args, "trace_is_temporary", False):
             out.write(f"Trace: {args.trace} ({result.trace.count} records)\n")
+    warn_uncovered(scenario, float(args.until) if args.until is not None else None)  # stderr, JSON or not
     return 1 if result.violations else 0
 
 
@@ -321,8 +321,11 @@ def exposure_lines(m: dict[str, Any]) -> list[str]:
     definition of :mod:`desmon.deployment.exposure`)."""
     from desmon.deployment.exposure import CAUSE_TEXT
 
-    risky, unmon = m["risky_time_s"], m["unmonitored_exposure_s"]
-    share = f" = {100.0 * unmon / risky:.1f} % of the risky time" if risky > 0 else ""
+    risky, unmon, excluded = m["risky_time_s"], m["unmonitored_exposure_s"], m.get("excluded_s") or 0.0
+    if excluded and risky - excluded > 0:
+        share = f" = {100.0 * unmon / (risky - excluded):.1f} % of the risky time not excluded ({_fmt(risky - excluded)} s)"
+    else:
+        share = f" = {100.0 * unmon / risky:.1f} % of the risky time" if risky > 0 and not excluded else ""
     lines = [
         f"  {'risky time (s)':<30} {_fmt(risky)}   (an object in the hand)",
         f"  {'unmonitored exposure (s)':<30} {_fmt(unmon)}{share}",
@@ -331,7 +334,7 @@ def exposure_lines(m: dict[str, Any]) -> list[str]:
         if v > 0:
             lines.append(f"    {CAUSE_TEXT[c]:<32} {_fmt(v)}")
     if m.get("excluded_s"):
-        lines.append(f"  {'excluded on purpose (s)':<30} {_fmt(m['excluded_s'])}   (risky actions declared watched=False: in neither figure above)")
+        lines.append(f"  {'excluded on purpose (s)':<30} {_fmt(m['excluded_s'])}   (risky actions declared watched=False: part of the risky time, never unmonitored)")
     return lines
 
 

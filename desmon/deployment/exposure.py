@@ -154,7 +154,7 @@ def no_rule_warnings(model: object, steps: Iterable[tuple[str, float]], horizon:
     lines = []
     for action, seconds in no_rule_seconds(model, steps, horizon, repeat).items():
         lines.append(
-            f"warning: risky action {action!r} has no selector rule, so nothing watches it: its {seconds:,.0f} s of the "
+            f"warning: risky action {action!r} has no selector rule, so nothing watches it: its {seconds:,.4g} s of the "
             f"{horizon:,.0f} s horizon count as unmonitored (add a rule for {action!r}, or exclude it on purpose with "
             f"robot.action({action!r}, watched=False))"
         )

@@ -84,21 +84,23 @@ class Action:
                 f"action {self.name!r} is {'risky' if self.risky else 'not risky'} ({hand}) but like={like!r} has "
                 f"{'an empty hand' if self.risky else 'an object in the hand'}: write {fix}, or risky={not self.risky}"
             )
+        if not self.risky and not self.watched:
+            raise ModelError(
+                f"action {self.name!r} is not risky (an empty hand), so it is never in unmonitored exposure: remove watched=False"
+            )
         object.__setattr__(self, "like", like)
 
     def _exclude_builtin(self) -> None:
         """``Action("hold", watched=False)``: a built-in action excluded from exposure; it
         keeps its own risk and signals."""
         check_flag(f"action {self.name!r} risky", self.risky)
-        builtin_risky = self.name in RISKY_ACTIONS
-        if self.risky != builtin_risky:
-            raise ModelError(
-                f"action {self.name!r} is built in and {'has an object in the hand' if builtin_risky else 'has an empty hand'}: "
-                f"write risky={builtin_risky} (or leave it out) to exclude it with watched=False"
-            )
-        if not builtin_risky:
+        if self.name not in RISKY_ACTIONS:
             raise ModelError(
                 f"action {self.name!r} has an empty hand, so it is never in unmonitored exposure: remove watched=False"
+            )
+        if not self.risky:
+            raise ModelError(
+                f"action {self.name!r} is built in and has an object in the hand: leave risky= out to exclude it with watched=False"
             )
         if self.like not in (None, self.name):
             raise ModelError(f"action {self.name!r} is built in: it has its own signals, so leave like={self.like!r} out")

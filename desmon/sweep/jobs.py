@@ -52,7 +52,7 @@ METRICS: dict[str, tuple[str, ...]] = {
         "fp_rate_tactile", "fp_rate_force", "fp_rate_combined",
     ),
     "analyze": (
-        "exposure_s_per_hour", "risky_s_per_hour", *(f"{c}_s_per_hour" for c in CAUSES), "exposure_s_per_mission",
+        "exposure_s_per_hour", "risky_s_per_hour", "excluded_s_per_hour", *(f"{c}_s_per_hour" for c in CAUSES), "exposure_s_per_mission",
         "risky_s_per_mission", "undetected_slips_per_hour", "mean_time_to_exposure_s",
         "p_exposure_within_T", "long_run_unmonitored_fraction", "horizon_s", "states", "transitions",
         "top_state", "top_state_s_per_hour",
@@ -216,7 +216,7 @@ def _job_analyze(spec: JobSpec, run: Run) -> dict[str, Any]:
         return _error_row(EXIT_INCOMPLETE, f"INCOMPLETE: {_one_line(exc)}")
     top = a.contributions[0] if a.contributions else (None, None)
     return {
-        "exposure_s_per_hour": a.exposure_s_per_hour, "risky_s_per_hour": a.risky_s_per_hour,
+        "exposure_s_per_hour": a.exposure_s_per_hour, "risky_s_per_hour": a.risky_s_per_hour, "excluded_s_per_hour": a.excluded_s_per_hour,
         **{f"{c}_s_per_hour": a.causes_s_per_hour.get(c) for c in CAUSES},
         "exposure_s_per_mission": a.exposure_s_per_mission, "risky_s_per_mission": a.risky_s_per_mission,
         "undetected_slips_per_hour": a.undetected_slips_per_hour, "mean_time_to_exposure_s": a.mean_time_to_exposure_s,
