@@ -12,7 +12,8 @@ up, with a readable device for every input, and able to detect a slip in this ac
 that no rule covers is unmonitored all the time: nothing is asked to watch it.
 
 An action the scenario explicitly excludes (``robot.action("hold", watched=False)``)
-counts neither way: its seconds are reported as *excluded* beside every figure.
+is risky time that is never unmonitored: its seconds are reported as *excluded*
+beside every figure, and the unmonitored share is of the risky time not excluded.
 
 Each unmonitored moment has one **cause**, so that a report can say where its figure
 comes from. The first slot (in the rule's order) without a watching member decides; of
