@@ -10,6 +10,7 @@ agree on the result under the same (exponential) timing.
 from __future__ import annotations
 
 import functools
+import json
 import os
 from dataclasses import replace
 
@@ -276,3 +277,14 @@ def test_the_other_analysable_scenarios_agree_on_undetected_slips_and_risky_time
     missed = [m["slips_missed"] for m in ms]
     assert _inside(a.undetected_slips_per_hour, missed), (a.undetected_slips_per_hour, confidence(missed))
     assert _inside(a.risky_s_per_mission, [m["risky_time_s"] for m in ms])
+
+
+def test_a_fleet_warns_once_per_uncovered_action_and_prints_its_excluded_time(capsys):
+    fleet = "scenarios/fleet.py"
+    assert main(["run", fleet, "-p", "robots=3", "-p", "hours=0.2", "--no-progress", "--json"]) == 0
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
+    per_robot = doc["metrics"]["exposure_by_cause_per_robot_s"]["no_rule"]["mean"]
+    (line,) = err.splitlines()
+    assert line.startswith("desmon: warning: risky action 'hold' has no selector rule on 3 of the 3 robots")
+    assert f"{per_robot:,.4g} s per such robot of the 720 s horizon" in line

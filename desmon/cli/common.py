@@ -115,11 +115,18 @@ def load_scenario_of(args: argparse.Namespace) -> Scenario:
 
 def warn_uncovered(scenario: Scenario, horizon: float | None = None) -> None:
     """One warning line on stderr per risky action of ``scenario``'s task that no selector
-    rule covers (``run``, ``verify`` and ``analyze``): its seconds within ``horizon`` (the
-    world's own if None) count as unmonitored."""
-    from desmon.deployment.exposure import no_rule_warnings
+    rule covers (``run``, ``verify`` and ``analyze``; a fleet's over its robots): its
+    seconds within ``horizon`` (the world's own if None) count as unmonitored."""
+    from desmon.deployment.exposure import fleet_no_rule_warnings, no_rule_warnings
+    from desmon.sim.fleet import Fleet
     from desmon.sim.world import World, world_of
 
+    if isinstance(scenario.world, Fleet):  # every robot's task, over the fleet's one horizon
+        fleet = scenario.world
+        robots = [(r.model, [(s.action, s.duration) for s in world_of(r).task], world_of(r).repeat) for r in fleet.robots]
+        for line in fleet_no_rule_warnings(robots, fleet.horizon if horizon is None else horizon):
+            print(f"desmon: {line}", file=sys.stderr)
+        return
     world = world_of(scenario) if isinstance(scenario.world, World) or scenario.world is None else None
     if world is None:
         return

@@ -198,6 +198,7 @@ def _run_fleet(args: Any, scenario: Scenario, out: IO[str], err: IO[str], show: 
         out.write(format_fleet_summary(result))
         if args.trace:
             out.write(f"Trace: {args.trace}\n")
+    warn_uncovered(scenario, float(args.until) if args.until is not None else None)
     return 1 if result.violations else 0
 
 
@@ -399,6 +400,8 @@ def format_fleet_summary(r: FleetResult) -> str:
         f"  unmonitored exposure (s)       {_fmt_spread(m['exposure_per_robot_s'])}",
         f"  risky time (s)                 {_fmt_spread(m['risky_time_per_robot_s'])}",
         *(f"    {CAUSE_TEXT[c]:<31} {_fmt_spread(v)}" for c, v in m["exposure_by_cause_per_robot_s"].items() if v["max"] > 0),
+        *([f"  excluded on purpose (s)        {_fmt_spread(m['excluded_per_robot_s'])}   (watched=False: risky, never unmonitored)"]
+          if m["excluded_per_robot_s"]["max"] > 0 else []),
         "Edge servers, mean [min-max] over the servers:",
         f"  memory share, time average     {_fmt_spread(m['edge_memory_share_mean'], '%', 100.0)}",
         f"  memory share, peak             {_fmt_spread(m['edge_memory_share_peak'], '%', 100.0)}",

@@ -42,7 +42,7 @@ from typing import Callable, Final, Iterable
 
 __all__ = [
     "CAUSES", "CAUSE_TEXT", "MEMBER_STATES", "WATCHING", "Needs", "needs", "needs_table", "cause", "best_state", "uncovered_actions",
-    "no_rule_seconds", "no_rule_warnings",
+    "no_rule_seconds", "no_rule_warnings", "fleet_no_rule_warnings",
 ]
 
 #: the causes of an unmonitored moment, in report order
@@ -160,3 +160,21 @@ def no_rule_warnings(model: object, steps: Iterable[tuple[str, float]], horizon:
             f"robot.action({action!r}, watched=False))"
         )
     return lines
+
+
+def fleet_no_rule_warnings(robots: Iterable[tuple[object, Iterable[tuple[str, float]], bool]], horizon: float) -> list[str]:
+    """:func:`no_rule_warnings` for a fleet: one line per risky action that no rule covers
+    on some robot (``robots``: each one's model, task steps and ``repeat``), with how
+    many robots and the mean seconds per robot it adds."""
+    seconds: dict[str, list[float]] = {}
+    n = 0
+    for model, steps, repeat in robots:
+        n += 1
+        for action, v in no_rule_seconds(model, steps, horizon, repeat).items():
+            seconds.setdefault(action, []).append(v)
+    return [
+        f"warning: risky action {action!r} has no selector rule on {len(vs)} of the {n} robots, so nothing watches it there: "
+        f"{sum(vs) / len(vs):,.4g} s per such robot of the {horizon:,.0f} s horizon count as unmonitored (add a rule for "
+        f"{action!r}, or exclude it on purpose with robot.action({action!r}, watched=False))"
+        for action, vs in seconds.items()
+    ]

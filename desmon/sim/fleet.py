@@ -713,6 +713,7 @@ class FleetWorld:
             "exposure_per_robot_s": _spread(exposure),
             "risky_time_per_robot_s": _spread(risky),
             "exposure_by_cause_per_robot_s": {c: _spread([m["unmonitored_by_cause_s"][c] for m in robots.values()]) for c in CAUSES},
+            "excluded_per_robot_s": _spread([m.get("excluded_s", 0.0) for m in robots.values()]),
             "edge_memory_share_mean": _spread(list(share.values())),
             "edge_memory_share_peak": _spread(list(peak.values())),
             "edge_busy_s": _spread(list(em.busy.values())),
