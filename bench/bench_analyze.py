@@ -17,10 +17,13 @@ steps (and warm-ups) of 1, 4 and 16 Erlang phases, for ``cloud_offload -p stocha
 timing (fixed step durations, recognition, heartbeat and start latencies) over
 ``--seeds`` seeds (default 200): the error of modelling fixed delays by phases.
 
-``--undetected``: instead, the exact undetected slips per hour of ``coffee_shift`` and
-``pick_place_camera`` (8 h shifts) beside the SimPy world with signals on (every slip
-rendered and really detected or missed) under the chain's exponential timing, over
-``--seeds`` seeds; the last line counts those inside the 99 % interval.
+``--undetected``: instead, the exact undetected slips per hour of ``coffee_shift``,
+``pick_place_camera`` and ``pick_place_camera -p camera_rate=0.8`` (8 h shifts) beside the
+SimPy world with signals on (every slip rendered and really detected or missed) under
+the chain's exponential timing, over ``--seeds`` seeds (default 20); the chain's
+detection rates from ``--trials`` evaluation slips each (default 200, analyze's own);
+the last line counts those inside the 99 % interval. ``--seeds 125 --trials 2000`` is
+the 1,000-hour comparison docs/analyze.md quotes.
 
 ``--large K``: instead, a large chain (two force sensors, K phases per step: about
 45,000 states times K) and the time of its steady state (the exposure per hour) and,
@@ -32,7 +35,7 @@ scenarios (``coffee_shift`` 1 h, ``platform_crash -p stochastic=True`` and
 ``cloud_offload -p stochastic=True``, 1 h each) beside their simulations over
 ``--seeds`` seeds; the last line counts those inside the 99 % interval.
 
-Run: ``python -m bench.bench_analyze [--quick] [--seeds N] [--phases-error] [--agreement] [--undetected] [--large K [--steady-only]]``.
+Run: ``python -m bench.bench_analyze [--quick] [--seeds N] [--phases-error] [--agreement] [--undetected [--trials N]] [--large K [--steady-only]]``.
 ``--phases-error`` ends ``RESULT phases_error_most=...`` (the largest error at each
 scenario's most phases); ``--agreement`` and ``--undetected`` end ``RESULT scenarios=...
 inside=... seeds=...``. Otherwise the last line is
@@ -72,9 +75,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--steady-only", action="store_true", help="with --large: no 1 h transient")
     ap.add_argument("--agreement", action="store_true", help="exact against simulated for the three analysable scenarios")
     ap.add_argument("--undetected", action="store_true", help="exact against simulated undetected slips per hour, signals on")
+    ap.add_argument("--trials", type=int, default=200, help="with --undetected: evaluation slips behind each detection rate (default 200)")
     args = ap.parse_args(argv)
     if args.undetected:
-        return _undetected(args.seeds or 20)
+        return _undetected(args.seeds or 20, args.trials)
     if args.phases_error:
         return _phases_error(args.seeds or PHASES_ERROR_SEEDS)
     if args.agreement:
@@ -138,7 +142,7 @@ def _agreement(seeds: int) -> int:
     return 0
 
 
-def _undetected(seeds: int) -> int:
+def _undetected(seeds: int, trials: int = 200) -> int:
     from desmon.analyze import analyze
     from desmon.analyze.agreement import agreement
     from desmon.loader import load_scenario
@@ -146,17 +150,19 @@ def _undetected(seeds: int) -> int:
     from desmon.sim.world import world_of
 
     inside = 0
-    names = ("coffee_shift.py", "pick_place_camera.py")
-    for name in names:
-        sc = load_scenario(ROOT / "scenarios" / name, params={"hours": "8"})
-        a = analyze(sc)
+    names = (("coffee_shift.py", {}), ("pick_place_camera.py", {}), ("pick_place_camera.py", {"camera_rate": "0.8"}))
+    for file, extra in names:
+        name = file + "".join(f" -p {k}={v}" for k, v in extra.items())
+        sc = load_scenario(ROOT / "scenarios" / file, params={"hours": "8", **extra})
+        a = analyze(sc, trials=trials)
         run = replace(sc, world=replace(world_of(sc), timing="exponential", phases=1, signals=True))
         per_h = [simulate(run, "desmon", seed=seed).metrics["slips_missed"] * 3600.0 / run.world.horizon for seed in range(seeds)]
         ag = agreement(a.undetected_slips_per_hour or 0.0, per_h)
         inside += ag.inside
         print(f"{name}: undetected slips per hour: exact {ag.exact:.3f}; simulated mean {ag.mean:.3f}, "
-              f"99 % CI [{ag.low:.3f}, {ag.high:.3f}] over {seeds} shifts of 8 h: {'inside' if ag.inside else 'OUTSIDE'}")
-    print(f"RESULT scenarios={len(names)} inside={inside} seeds={seeds}")
+              f"99 % CI [{ag.low:.3f}, {ag.high:.3f}] over {seeds} shifts of 8 h ({100 * (ag.exact / ag.mean - 1):+.1f} %): "
+              f"{'inside' if ag.inside else 'OUTSIDE'}")
+    print(f"RESULT scenarios={len(names)} inside={inside} seeds={seeds} trials={trials}")
     return 0
 
 

@@ -88,7 +88,7 @@ RESULT_KEYS: dict[str, tuple[str, ...]] = {
     "bench_analyze --large": ("states", "build_s", "steady_s", "transient_s", "solve_s", "peak_mb"),
     "bench_analyze --phases-error": ("phases_error_most",),
     "bench_analyze --agreement": ("scenarios", "inside", "seeds"),
-    "bench_analyze --undetected": ("scenarios", "inside", "seeds"),
+    "bench_analyze --undetected": ("scenarios", "inside", "seeds", "trials"),
     "bench_detectors": ("trials_per_s", "eval_ratio", "missions_per_s", "detectors_us_per_sim_s"),
     "bench_fleet": (
         "seconds", "realtime_ratio", "peak_mb", "robots", "edges", "hours", "per_robot_vs_alone", "reactions_per_s", "violations", "events",

@@ -127,6 +127,9 @@ def test_every_report_prints_the_denominator_and_the_causes(capsys):
 SEEDS = range(20)
 #: the 8 h shifts of the undetected-slip comparisons (CI: 20, 160 simulated hours; DESMON_UNDETECTED_SHIFTS=125 for 1,000)
 SHIFTS = range(int(os.environ.get("DESMON_UNDETECTED_SHIFTS", "20")))
+#: the evaluation trials behind each detection rate of those comparisons (analyze's default:
+#: 200, a rate good to about +-0.07; the 1,000-hour form needs DESMON_UNDETECTED_TRIALS=2000)
+TRIALS = int(os.environ.get("DESMON_UNDETECTED_TRIALS", "200"))
 
 
 @functools.lru_cache(maxsize=None)
@@ -209,15 +212,19 @@ def test_leaving_out_the_no_rule_time_or_the_warm_up_falls_outside_the_interval(
 def test_the_exact_undetected_slips_lie_in_the_interval_and_a_context_free_rate_does_not(path):
     """Signals on: every slip really rendered and really detected or missed, 20 shifts of 8 h."""
     sc = _scenario(path, "8")
-    a = analyze(sc)
+    a = analyze(sc, trials=TRIALS)
     sim = _simulated(path, "8", True)
     assert _inside(a.undetected_slips_per_hour, sim["missed_per_h"]), (a.undetected_slips_per_hour, confidence(sim["missed_per_h"]))
     assert _inside(a.exposure_s_per_mission, sim["exposure"])
     assert _inside(a.risky_s_per_mission, sim["risky"])
     if path == PICK:  # the force detector misses a third of the slips in carry and almost none elsewhere
         flat = {g: dict.fromkeys(rates, sum(rates.values()) / len(rates)) for g, rates in a.miss.items()}
-        b = analyze(sc, miss=flat)
+        b = analyze(sc, miss=flat, start_catch=a.start_catch)
         assert not _inside(b.undetected_slips_per_hour, sim["missed_per_h"]), (b.undetected_slips_per_hour, confidence(sim["missed_per_h"]))
+        # a force detector that tares on the moving base alarms at once: without its
+        # starting rate the chain misses the slips of every carry's first second
+        c = analyze(sc, miss=a.miss, start_catch={}, trials=TRIALS)
+        assert not _inside(c.undetected_slips_per_hour, sim["missed_per_h"]), (c.undetected_slips_per_hour, confidence(sim["missed_per_h"]))
 
 @pytest.mark.slow
 def test_under_fixed_timing_more_phases_bring_the_chain_to_the_simulation():
@@ -250,6 +257,10 @@ def test_a_camera_detector_watches_in_every_engine_once_the_user_gives_its_rate(
     a, b = analyze(blind), analyze(rated)
     assert a.causes_s_per_mission["cannot_detect"] > 0 and b.causes_s_per_mission["cannot_detect"] == 0.0
     assert all(m == pytest.approx(0.2) for m in b.miss["camera_slip_detector"].values())
+    # a given rate counts while it watches, never while it starts (the world's rule); a
+    # detector with a signal model also catches while it starts
+    assert all(set(by.values()) == {0.0} for by in b.start_catch["camera_slip_detector"].values())
+    assert b.start_catch["force_slip_detector"]["carry"][0.5] > 0.3
     assert b.undetected_slips_per_hour < a.undetected_slips_per_hour
     assert any("camera_slip_detector 0.8" in line for line in b.leaves_out)
 
@@ -257,7 +268,7 @@ def test_a_camera_detector_watches_in_every_engine_once_the_user_gives_its_rate(
 @pytest.mark.slow
 def test_with_a_given_rate_the_exact_undetected_slips_and_exposure_lie_in_the_interval():
     sc = load_scenario(PICK, {"hours": "8", "camera_rate": "0.8"})
-    a = analyze(sc)
+    a = analyze(sc, trials=TRIALS)
     run = replace(sc, world=replace(world_of(sc), timing="exponential", phases=1, signals=True))
     ms = [simulate(run, "desmon", seed=seed).metrics for seed in SHIFTS]
     missed = [m["slips_missed"] * 3600.0 / run.world.horizon for m in ms]
@@ -277,6 +288,20 @@ def test_the_other_analysable_scenarios_agree_on_undetected_slips_and_risky_time
     missed = [m["slips_missed"] for m in ms]
     assert _inside(a.undetected_slips_per_hour, missed), (a.undetected_slips_per_hour, confidence(missed))
     assert _inside(a.risky_s_per_mission, [m["risky_time_s"] for m in ms])
+
+
+def test_analyze_takes_its_trials_from_the_user_and_refuses_a_bad_count(capsys, tmp_path):
+    out = tmp_path / "a.json"
+    assert main(["analyze", PICK, "-p", "hours=0.1", "--transient-only", "--trials", "32", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert set(doc["detector_start_catch_probability"]["force_slip_detector"]["carry"]) == {"0.5", "1.5"}
+    assert any("32 slips per action" in line for line in doc["leaves_out"])
+    capsys.readouterr()
+    for bad in ("0", "-3", "many", "200000"):
+        assert main(["analyze", PICK, "--trials", bad, "--json", str(out)]) == 2, bad
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "--trials" in err[0], (bad, err)
+    assert json.loads(out.read_text()) == doc  # nothing overwritten
 
 
 def test_a_fleet_warns_once_per_uncovered_action_and_prints_its_excluded_time(capsys):

@@ -507,9 +507,12 @@ def _event(component: str, is_device: bool, broken: bool) -> Event:
 def build_chain(
     scenario: Scenario, deployer: Any, mw: MarkovWorld, *, max_states: int | None = None,
     progress: Callable[[int], None] | None = None, miss: dict[str, Any] | None = None,
+    start_catch: dict[str, Any] | None = None,
 ) -> Chain:
     """Every chain state reachable from the initial ones, with its rates and rewards;
-    ``miss`` is each graph's probability of missing a slip (1 where not given)."""
+    ``miss`` is each graph's probability of missing a slip while it watches (1 where
+    not given), ``start_catch`` of catching one while it starts (graph -> action ->
+    start latency -> p; 0 where not given)."""
     t0 = time.perf_counter()
     b = _Builder(scenario, deployer, mw)
     try:
@@ -552,7 +555,7 @@ def build_chain(
             progress(i)
     chain = Chain(states, np.frombuffer(rows, dtype=np.int64), np.frombuffer(cols, dtype=np.int64), np.frombuffer(rates, dtype=float), mw, b.system)
     chain.initial = tuple(sorted(initial.items()))
-    _rewards(chain, b.rules, dict(miss or {}))
+    _rewards(chain, b.rules, dict(miss or {}), dict(start_catch or {}))
     chain.build_s = time.perf_counter() - t0
     chain.reactions = b.reactions
     return chain
@@ -578,49 +581,19 @@ def _member_states(s: Any, blind: set[str], hosts: dict[str, str], inputs: Calla
     return state
 
 
-#: seconds after a slip's onset in which an alarm still catches it (the simulation's
-#: rule, desmon.sim.metrics.DETECT_AFTER)
-CATCH_WINDOW: Final = 1.0
-
-
-@functools.lru_cache(maxsize=4096)
-def _ready_within(rates: tuple[float, ...], window: float) -> float:
-    """P(a sum of independent exponential stages of ``rates`` is at most ``window``)."""
-    from scipy.linalg import expm
-
-    n = len(rates)
-    if n == 0:
-        return 1.0
-    Q = np.zeros((n + 1, n + 1))
-    for i, r in enumerate(rates):
-        Q[i, i], Q[i, i + 1] = -r, r
-    return float(expm(Q * window)[0, n])
-
-
-def late_catch(mw: Any, s: Any, g: str) -> float:
-    """The probability that graph ``g``, starting or warming up in chain state ``s``, is
-    ready within :data:`CATCH_WINDOW` of now: a slip that starts now is then still
-    caught as one that starts while it watches (the best of its instances)."""
-    warm = dict(mw.warmup).get(g, 0.0)
+def start_catch_of(mw: Any, s: Any, g: str, catch: dict[float, float]) -> float:
+    """The probability that graph ``g``, starting or warming up in chain state ``s``,
+    catches a slip that begins now: ``catch`` by the start latency of its platform
+    (:func:`~desmon.analyze.measures.detector_start_catch`), the best of its instances."""
+    warming = {(wg, wp) for wg, wp, _k in s.warming}
     best = 0.0
-    warming = {(wg, wp): k for wg, wp, k in s.warming}
     for dg, p in s.key.deployments:
-        if dg != g:
-            continue
-        stages: list[float] = []
-        if (g, p) in s.starting:
-            lat = mw.latency_of(p)
-            stages += [1.0 / lat] if lat > 0 else []
-            stages += [mw.phases / warm] * mw.phases if warm > 0 else []
-        elif (g, p) in warming:
-            stages += [mw.phases / warm] * (mw.phases - warming[(g, p)])
-        else:
-            continue
-        best = max(best, _ready_within(tuple(stages), CATCH_WINDOW))
+        if dg == g and ((g, p) in s.starting or (g, p) in warming):
+            best = max(best, catch.get(mw.latency_of(p), 0.0))
     return best
 
 
-def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any]) -> None:
+def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any], start_catch: dict[str, Any] | None = None) -> None:
     """The labels of every state by the one definition of :mod:`desmon.deployment.exposure`
     (unmonitored, by cause; risky; excluded) and its undetected-slip rate: slips arrive
     at ``slip_rate`` while an object is in the hand, and each watching detector misses
@@ -638,6 +611,7 @@ def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any]) -> None:
     by_cause = {c: np.zeros(n) for c in CAUSES}
     wiring: dict[tuple[str, str], tuple] = {}
     hosts = {d.name: d.platform for d in model.devices}
+    catching = start_catch or {}
 
     def inputs(g: str, p: str) -> tuple:  # the alternative devices of each input of g on p
         w = wiring.get((g, p))
@@ -659,15 +633,15 @@ def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any]) -> None:
             unmon[i] = 1.0
             by_cause[why][i] = 1.0
         # a slip in the hand goes undetected unless a watching detector catches it, or one
-        # still starting or warming up is ready soon enough to catch it (late_catch)
+        # still starting or warming up alarms in its window (start_catch_of)
         m = 1.0
         for g, sts in state.items():
             mg = miss.get(g, 1.0)
             mg = mg.get(action, 1.0) if isinstance(mg, dict) else mg
             if WATCHING in sts:
                 m *= mg
-            elif "starting" in sts:
-                m *= 1.0 - late_catch(mw, s, g) * (1.0 - mg)
+            elif "starting" in sts and g in catching:
+                m *= 1.0 - start_catch_of(mw, s, g, catching[g].get(action, {}))
         undetected[i] = mw.slip_rate * m
     chain.unmonitored, chain.risky, chain.undetected = unmon, risky, undetected
     chain.causes, chain.excluded = by_cause, excluded

@@ -315,25 +315,37 @@ def _lengths(mean: float, phases: int, biased: bool) -> list[float]:
 @functools.lru_cache(maxsize=64)
 def detection_rates(
     action: str, duration: float, direction: str, kind: str, *, grasp: float = 2.0, phases: int = 0, trials: int = 200,
-    seed: int = 0,
-) -> dict[str, float]:
-    """Each detector's probability of catching a slip that starts at a random moment of
-    a step of ``action`` (a built-in with an object in the hand) while it watches: the
+    seed: int = 0, recognition: float = 0.0, latency: float = 0.0, warmups: tuple[tuple[str, float], ...] = (),
+) -> dict[str, tuple[float, float]]:
+    """Each detector's probability of catching a slip in a step of ``action`` (a built-in
+    with an object in the hand), as (while it watches, while it starts): the weighted
     fraction of ``trials`` slips of that ``direction`` and ``kind`` with an alarm in
     [onset - 0.3 s, onset + 1.0 s], the SimPy world's own rule for a detected slip.
 
-    The episode starts with a grasp of ``grasp`` seconds (a short grasp holds the object
-    less firmly, and the tactile detector sees less), then the step; the detectors start
-    with the step and the slip falls after their warm-up (0.5 s, or half a shorter
-    step). The step lasts ``duration`` seconds and the grasp ``grasp`` (``phases`` 0:
-    fixed), or Erlang-``phases`` times of those means, as ``desmon analyze`` times them:
-    the slip's step then has the length-biased length (a Poisson slip is likelier in a
-    longer step). :data:`RATE_GROUPS` quantile pairs of the two laws split the trials.
-    The step is followed by 1.5 s of ``hold`` (nothing after a ``release``: the object
-    is handed over), so that a late slip has its whole detection window."""
+    Each trial replays how the world deploys a detector for a new step: the episode
+    starts with a grasp of ``grasp`` seconds (a short grasp holds the object less
+    firmly, and the tactile detector sees less), then the step begins; the monitor
+    recognises it ``recognition`` seconds later, when the detector is requested and
+    begins to process its inputs (as under exponential timing); it watches once its
+    start ``latency`` and its warm-up (``warmups``: detector -> seconds) are over. A
+    slip falls uniformly over the step from the request on; it counts for "starts" when
+    it begins before the detector watches, for "watches" after. A detector that starts
+    on a moving signal may alarm at once, so the two differ. The step, the grasp, the
+    recognition and the latency last their means (``phases`` 0: fixed) or
+    Erlang-``phases`` times of those means, as ``desmon analyze`` times them (the slip's
+    step has the length-biased length: a Poisson slip is likelier in a longer step);
+    :data:`RATE_GROUPS` quantile tuples of these laws split the trials. A quarter of
+    each group's slips fall in the start, the rest after it, each weighted by the time
+    it stands for. The step is followed by 1.5 s of ``hold`` (nothing after a
+    ``release``: the object is handed over), so that a late slip has its whole
+    detection window."""
     steps = _lengths(duration, phases, True)
     grasps = _lengths(grasp, phases, False)
-    hits = {d: 0 for d in DETECTORS}
+    recognitions = _lengths(recognition, phases, False) if recognition > 0 else [0.0] * RATE_GROUPS
+    latencies = _lengths(latency, phases, False) if latency > 0 else [0.0] * RATE_GROUPS
+    warm = {d: 0.0 for d in DETECTORS} | dict(warmups)
+    hit = {d: [0.0, 0.0] for d in DETECTORS}  # weighted hits: watching, starting
+    weight = {d: [0.0, 0.0] for d in DETECTORS}
     for gi, length in enumerate(steps):
         n = trials // RATE_GROUPS + (1 if gi < trials % RATE_GROUPS else 0)
         if n == 0:
@@ -341,20 +353,32 @@ def detection_rates(
         if action == GRASP:
             timeline, t_act = [Segment(IDLE, 0.0, PRE), Segment(GRASP, PRE, length)], PRE
         else:
-            g = grasps[(5 * gi + 3) % RATE_GROUPS]  # a fixed shuffle: step and grasp lengths independent
+            g = grasps[(5 * gi + 3) % RATE_GROUPS]  # fixed shuffles: the laws' quantiles independent
             timeline, t_act = [Segment(IDLE, 0.0, PRE), Segment(GRASP, PRE, g), Segment(action, PRE + g, length)], PRE + g
         end = t_act + length
+        request = t_act + recognitions[(7 * gi + 5) % RATE_GROUPS]
+        if request >= end:
+            continue
+        ready = min(end, request + latencies[(11 * gi + 9) % RATE_GROUPS] + max(warm.values()))
         if action != RELEASE:
             timeline.append(Segment(HOLD, end, 1.5))
-        b = simulate_batch(
-            timeline, n, _rng(seed, 2, gi), slip_window=(t_act + min(0.5, length / 2), end), slip_direction=direction,
-            slip_kind=kind,
-        )
-        runs = run_detectors(b, t_act)
-        for d in DETECTORS:
-            t_first, _ = first_alarm(runs[d], b.slip_onset - TP_BEFORE, b.slip_onset + TP_AFTER)
-            hits[d] += int(np.isfinite(t_first).sum())
-    return {d: hits[d] / trials for d in DETECTORS}
+        parts = [(request, ready, n - 3 * n // 4), (ready, end, 3 * n // 4)] if ready < end else [(request, ready, n)]
+        for k, (lo, hi, m) in enumerate(parts):
+            if m == 0 or hi <= lo:
+                continue
+            b = simulate_batch(
+                timeline, m, _rng(seed, 4 + k, gi), slip_window=(lo, hi), slip_direction=direction, slip_kind=kind,
+            )
+            runs = run_detectors(b, request)
+            w = (hi - lo) / m / length  # the share of the step's time each slip stands for
+            for d in DETECTORS:
+                t_first, _ = first_alarm(runs[d], b.slip_onset - TP_BEFORE, b.slip_onset + TP_AFTER)
+                caught = np.isfinite(t_first)
+                starting = b.slip_onset < ready - max(warm.values()) + warm[d]
+                for cls, mask in ((0, ~starting), (1, starting)):
+                    hit[d][cls] += w * float(caught[mask].sum())
+                    weight[d][cls] += w * float(mask.sum())
+    return {d: tuple(hit[d][c] / weight[d][c] if weight[d][c] else 0.0 for c in (0, 1)) for d in DETECTORS}  # type: ignore[misc]
 
 
 def evaluate_actions(
