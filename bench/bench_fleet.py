@@ -17,9 +17,9 @@ environment, fastest of 5 after the run, or fastest of 21 of 25,000 events befor
 if lower), and a last line ``RESULT seconds=<s> realtime_ratio=<x>
 peak_mb=<m> ... ratio_bare=<fleet wall / bare>``.
 
-The fleet's goal (issue 16: 100 robots for 8 h in under 60 s) was set in seconds on one
-machine; wall seconds differ between machines by more than the code's changes do (the
-commit that measured 46.7 s took 128-146 s on a later machine), so ``ratio_bare``, a
+The fleet's goal (100 robots for 8 h in under 60 s) is stated in seconds of one machine;
+wall seconds differ between machines by more than the code's changes do (one version of
+the code took 46.7 s on one machine and 128-146 s of CPU on another, docs/fleet.md), so ``ratio_bare``, a
 ratio to a cost measured in the same run, is the figure to compare across machines.
 """
 

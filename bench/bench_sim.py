@@ -18,113 +18,28 @@ default the scenario's 8 h day, 28,800 simulated s):
 * the same day with signals off (``signals_off_s``): the deployment core, the repository,
   the audit of the invariants after every reaction, the infrastructure and SimPy only.
 
-Goals (issue 27; they are stated for the 8 h day on an idle 2-core machine): at least
-5,000x real time, at most 100x the bare SimPy cost, signals off under 1.5 s. Each is
-printed ``met`` or ``NOT met``; with a shorter ``--until`` (``--quick``: the first half hour)
-the figures are printed but not judged.
+Goals (stated for the 8 h day on an idle 2-core machine): at least 5,000x real time, at
+most 100x the bare SimPy cost, signals off under 1.5 s. Each is printed ``met`` or ``NOT
+met``; with a shorter ``--until`` (``--quick``: the first half hour) the figures are
+printed but not judged.
 
 The last line is ``RESULT x_real_time=<float> ratio_bare=<float> signals_off_s=<float>
 wall_s=<float> bare_s=<float> events=<int> until_s=<float> serial_s=<float>
 serial_ratio_bare=<float> cpu_s=<float> sim_cpu_s=<float> ahead_blocks=<int>`` (``sim_cpu_s``: the
 CPU seconds of the simulation's own process; ``cpu_s`` adds the workers').
 
-The bare figure is the fastest of 21 runs, measured with the finished day's objects frozen
-out of the garbage collector's scans: before, a full collection over the day's heap could
-land in the bare run and make it swing from 0.019 to 0.035 s between processes (a ratio
-of 93x in one run of six, against about 170x in the others). It is also measured before
-the day (21 runs of 25,000 events, scaled to the day's count) and the lower of the two is
-taken: on a shared machine a slow spell that covers only the runs after the day made the
-bare figure 0.0377 s in one run of six (issue 27, third round; 0.020-0.033 s in the others),
-which printed a ratio of 100.4x next to 159-217x, one tenth from a false "met". In the
-seventh round one run of thirteen read 0.0289 s for both (0.0186-0.0201 s in the others)
-and printed 59x; the gauge is now taken a third time, after the one-process and
-signals-off days, and the lowest of the three counts. In the eighth round one run read
-0.0449 s in all three (0.025-0.029 s in the others, and its days as fast as theirs) and
-printed 44.9x: a slow process rather than a slow spell. So the gauge is also taken in
-three fresh interpreters (``bare_elsewhere``), and the lowest of all six counts.
+The day runs ``--repeat`` times each way (default 3), each in a fresh world, and the
+fastest counts. The bare figure is the lowest of six gauges, each the fastest of 21 runs
+with the objects that exist beforehand frozen out of the garbage collector's scans (a full
+collection over the day's heap during a bare run would be counted as SimPy's cost): three
+in this process (before the day, of 25,000 events scaled to the day's count; after the
+days as a user runs them; after the one-process and signals-off days) and three in fresh
+interpreters (:func:`bare_elsewhere`). On a shared machine a slow spell during one gauge, or a process
+whose every bare run is slow, would otherwise make the ratio flatter the day.
+docs/findings.md ("Benchmarks" and "Rendering ahead") has the measured figures and where
+the day's time goes.
 
-Measured with ``python -m bench.bench_sim`` (seed 0, 8 h): 90c76af (main before this
-round of issue 27) and this revision run in turn (A B A B ..., 6 pairs), this revision's
-bench file driving both trees' ``desmon`` (``PYTHONPATH=TREE python bench/bench_sim.py``);
-medians, ranges in brackets; the shared 2-core machine at load average about 1:
-
-=====================================  =========================  =========================  ==========
-                                        before (90c76af)           this revision              ratio [a]
-=====================================  =========================  =========================  ==========
-robot day, 28,800 sim-s, wall           4.07 s (3.80-5.42)         3.78 s (3.08-4.59)         0.88
-sim-s per wall-s (x real time)          7,096x (5,312-7,587)       7,674x (6,273-9,352)
-bare SimPy, same 25,002 events          0.0201 s (0.0193-0.0208)   0.0207 s (0.0193-0.0248)
-ratio full run / bare SimPy             205x (187-260)             170x (160-214)             0.80
-same day, signals off                   1.11 s (0.99-1.40)         0.94 s (0.74-1.15)         0.79
-=====================================  =========================  =========================  ==========
-
-[a] median of the pairs' ratios. In process (``SimWorld(...).run()`` timed alone, a fresh
-process per run, 7 pairs, CPU seconds): the day 4.34 s against 3.53 s (0.78, range
-0.70-0.99), signals off 1.19 s against 0.97 s (0.79).
-
-The goal of at most 100x the bare SimPy cost was not met by that round: 100x asks for a
-2 s day. 5,000x real time and signals off under 1.5 s hold, by a margin. Later rounds of
-issue 27 brought the day to 123-139x in three runs of ``python -m bench.bench_sim``
-(fifth round); the sixth renders the signals ahead in forked workers: nine runs of this
-bench printed 81-107x with them (median 99x: met in 5, missed in the shared machine's slow
-spells) and 121-173x in one process; docs/findings.md ("Toward 100x bare SimPy:
-rendering ahead") has the figures. The seventh has the tactile worker work out the
-frames' flow too (the detectors take it) and runs the workers under ``SCHED_BATCH``:
-thirteen runs printed 59-117x (median 83x, met in 11), and against the sixth round's last
-commit, run in turn, a pair ratio of 0.92 (docs/findings.md, "Seventh round"). The eighth
-leaves the wrench in the simulation's process (its worker rendered every block of the
-mission for the 80k samples the day reads, and took turns with the other two processes
-on two cores), renders a request's wrench samples with less work and copies a block out of
-its slot when it is taken: 21 runs printed 66.6-90.4x (median 77.5x, met in 21), against
-82.7-99.6x (median 88.5x) for the seventh round's code on the same day (docs/findings.md,
-"Eighth round").
-
-Where the time went in the second round (py-spy of the day in one process; shares of ``SimWorld.run``;
-docs/findings.md has the later rounds' shares):
-rendering tactile frames 41 % (the per-cell standard normals, about 20.7 M a day drawn
-bit-identically in a fixed order, 10.5 %: a floor; each episode's pad states 9 %; the
-cells above the dead-band 9 %; creating the per-block generators, tactile, wrench and
-jitter, 5 %), the detectors' scoring 13 %, the wrench 7 %, the rest of the tactile stream
-5 %; the deployment side about a quarter (the deployer's reactions 6 %, the audit 6 %, the
-infrastructure's starts 5 %, the context monitor's inserts 4.5 %, metrics and trace 3 %);
-SimPy, the driver and the rest 9 %.
-
-What moved it, all without changing a draw or a float (``python -m bench.compare_outputs
---base 90c76af``: 361 of 361 commands identical):
-
-* the deployment side (signals off 0.79x): the repository stamps its writes per node, per
-  (node, edge label), per edge label and per label, and the Query port keeps each answer
-  (platform states and their parts, deployments, specifications, the context) until a
-  stamp it read moves -- before, every write, the 5,000 context edges of a day included,
-  threw all of them away; each simulated robot's Checks (``PlatformMemoChecks``) keep each
-  platform's failures and score, so a change on one platform re-checks that platform
-  only; an instance's readable inputs and a platform's physical state are kept until a
-  device or platform goes down or up; the collector's scans skip the world built before
-  the run (the fleet's policy, now ``desmon.sim.collector``);
-* the wrench: a request by time renders only its own samples of a block (962 requests of
-  about 85 samples rendered 1,035 blocks of 1,024 a day);
-* the tactile render (0.93x of its own time, replayed): each episode's pad states cut at
-  the segments' bounds with each context kernel evaluated once on its own frames, rows
-  built for touched pads only, the dead-band check on the templates instead of every cell,
-  the moments scattered by one flat index.
-
-Earlier in issue 27 (6640ccc -> 18df3ce -> 90c76af): the repository indexes edges and
-nodes by label, the Query port memoises platform states, specifications and validity
-answers, the normals are drawn into the value array in place, two cell-weighted moments
-are packed into one exact reduction, and consecutive frames are copied as slices of the
-cached blocks.
-
-Later in issue 27 (fourth round, against 08b3c2c; the same outputs byte for byte): each
-tactile array keeps the work arrays its renders write into (fresh ones were handed back
-to the system after each render and faulted in again: 152k-161k minor page faults a
-day, now about 11k, as ``resource.getrusage`` counts them around ``SimWorld(...).run()``),
-requests by time are cut from the cached blocks, the scoring works in place, and the
-core's requirement checks do less per call. Timed alone in a fresh process
-(``SimWorld(...).run()``, 6 pairs, CPU s, load below 1): signals on 3.42 s against 4.12 s
-(pair ratio 0.82, range 0.77-1.00), signals off 0.89 s against 1.03 s (0.92). With this
-bench, 3 pairs: 171-198x the bare SimPy cost against 189-213x; 100x is still missed.
-
-Run: ``python -m bench.bench_sim [--until SECONDS] [--seed S] [--quick]``.
+Run: ``python -m bench.bench_sim [--until SECONDS] [--seed S] [--quick] [--repeat N]``.
 """
 
 from __future__ import annotations
@@ -145,7 +60,7 @@ from desmon.sim.engine import SimWorld
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "scenarios" / "robot_day.py"
 
-#: the goals of issue 27 for the 8 h day
+#: the goals for the 8 h day
 GOAL_X_REAL_TIME = 5000.0
 GOAL_RATIO_BARE = 100.0
 GOAL_SIGNALS_OFF_S = 1.5
@@ -161,7 +76,7 @@ def bare_simpy_s(n_events: int, repeat: int = 21) -> float:
     """Wall seconds of ``n_events`` timeouts on a bare SimPy environment (fastest of
     ``repeat``), with the objects that exist beforehand (a finished day's heap) frozen out
     of the garbage collector's scans: a full collection over them during the bare run would
-    be counted as SimPy's cost, and made the bare figure swing from 0.019 to 0.035 s."""
+    be counted as SimPy's cost, and can make the bare figure swing from 0.019 to 0.035 s."""
     gc.collect()
     gc.freeze()
     try:

@@ -13,7 +13,7 @@ Measured in one run, on the same generated fleet:
   floor any pure-Python checker pays;
 * **reasons for one specification** (every failure of every rejected platform), columns
   vs scalar, mean and [min-max] over ``--reason-specs`` specifications, each timed cold
-  (no failure memoised); the goal (issue 16) is under 50 ms for the slowest of them;
+  (no failure memoised); the goal is under 50 ms for the slowest of them;
 * the column store's build time, size and tracemalloc peak.
 
 The vectorised answers are compared with the scalar ones on the subsample (an
@@ -129,7 +129,7 @@ def _check(what: str, got: object, want: object) -> None:
         raise DesmonError(f"bench_validity: the vectorised {what} differs from the scalar one: a placement bug")
 
 
-#: Issue 16's goals: acceptable sets of every spec, and every reason for the slowest spec.
+#: The goals: acceptable sets of every spec, and every reason for the slowest spec.
 GOAL_SECONDS, GOAL_REASONS_MS = 1.0, 50.0
 
 

@@ -385,7 +385,7 @@ def compare(cmds: list[Command], base: Side, head: Side, timeout: float, echo=pr
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m bench.compare_outputs", description=__doc__.splitlines()[0])
-    ap.add_argument("--base", required=True, help="the revision to compare this working tree against (e.g. main, 4af79c7)")
+    ap.add_argument("--base", required=True, help="the revision to compare this working tree against (e.g. main, HEAD~1, a commit hash)")
     ap.add_argument("--quick", action="store_true", help="a subset: about two minutes")
     ap.add_argument("--keep", metavar="DIR", help="write the outputs to DIR/base and DIR/head and keep them (default: a temporary directory)")
     ap.add_argument("--only", metavar="REGEX", help="only the commands whose name matches")

@@ -1,9 +1,9 @@
 """The benchmarks' goals in one table, their small configurations, and the RESULT line.
 
 Every ``bench/bench_*.py`` ends its output with one line ``RESULT key=value ...``;
-:data:`GOALS` says which of those figures has a goal (the issue that set it in the
-note), :data:`QUICK` the options of each bench's small configuration (``python -m
-bench --quick``, ``tests/test_benches.py``). ``python -m bench`` (:mod:`bench.__main__`)
+:data:`GOALS` says which of those figures has a goal (what it asks, in the note),
+:data:`QUICK` the options of each bench's small configuration (``python -m bench
+--quick``, ``tests/test_benches.py``). ``python -m bench`` (:mod:`bench.__main__`)
 runs them and compares. :data:`RESULT_KEYS` lists the keys each RESULT line carries:
 the figures the README and docs quote are marked with them and rewritten from the
 benches' runs (:mod:`bench.figures`).
@@ -38,23 +38,23 @@ _OPS: dict[str, Callable[[float, float], bool]] = {">=": operator.ge, "<=": oper
 
 #: bench module -> the goals of its RESULT figures (on its full configuration)
 GOALS: dict[str, tuple[Goal, ...]] = {
-    "bench_analyze": (Goal("build_ratio", "<=", 2, "issue 25: the chain's build at most twice the checker's exploration"),),
+    "bench_analyze": (Goal("build_ratio", "<=", 2, "the chain's build at most twice the checker's exploration"),),
     "bench_sim": (
-        Goal("x_real_time", ">=", 5000, "issue 27: the 8 h robot day at 5,000x real time or more"),
-        Goal("ratio_bare", "<=", 100, "issue 27: at most 100x the bare SimPy cost of the same events"),
-        Goal("signals_off_s", "<", 1.5, "issue 27: the day with signals off under 1.5 s"),
+        Goal("x_real_time", ">=", 5000, "the 8 h robot day at 5,000x real time or more"),
+        Goal("ratio_bare", "<=", 100, "at most 100x the bare SimPy cost of the same events"),
+        Goal("signals_off_s", "<", 1.5, "the day with signals off under 1.5 s"),
     ),
     "bench_verify": (
-        Goal("states_per_s", ">=", 100_000, "issue 27: the fallback-heavy model at 100,000 states/s on one core"),
-        Goal("bytes_per_state", "<=", 150, "issue 27: at most 150 bytes of resident memory per state"),
+        Goal("states_per_s", ">=", 100_000, "the fallback-heavy model at 100,000 states/s on one core"),
+        Goal("bytes_per_state", "<=", 150, "at most 150 bytes of resident memory per state"),
     ),
     "bench_sweep": (
         Goal("speedup", ">=", 1.8, "2 Dask workers vs 1 on 2 idle cores"),
         Goal("overhead", "<", 0.05, "Dask vs the bare loop"),
     ),
     "bench_validity": (
-        Goal("seconds", "<", 1.0, "issue 16: acceptable sets of every spec"),
-        Goal("reasons_max_ms", "<", 50.0, "issue 16: every reason for the slowest spec"),
+        Goal("seconds", "<", 1.0, "acceptable sets of every spec"),
+        Goal("reasons_max_ms", "<", 50.0, "every reason for the slowest spec"),
     ),
 }
 

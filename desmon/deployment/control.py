@@ -1,6 +1,6 @@
 """The Control semantics: when the infrastructure refuses a start or a stop.
 
-Written once and used by every engine (``docs/design.md`` §6; what it changed: ``docs/findings.md``, "One Control semantics"):
+Written once and used by every engine (``docs/design.md`` §6; the rules, and the test that holds every engine to them: ``docs/findings.md``, "One Control semantics"):
 
 * the scripted replay and the checker's repository replay
   (:func:`repository_control`),

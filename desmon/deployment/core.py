@@ -63,8 +63,8 @@ def stale_standing_after(
     valid: frozenset[str],
     active: frozenset[str],
 ) -> frozenset[str]:
-    """The earlier error semantics, kept for the ``stale-errors`` mutant: an error stands
-    for a graph while it is wanted and not validly active, even when another alternative
+    """The stale error semantics of the ``stale-errors`` mutant: an error stands for a
+    graph while it is wanted and not validly active, even when another alternative
     serves its slot."""
     wanted = {g for slot in slots for g in slot}
     return frozenset(g for g in previous.union(raised) if g in wanted and g not in valid)

@@ -216,7 +216,7 @@ class Deployer:
     #: False for a variant whose selector knows no fallbacks (the paper's): it is asked,
     #: and judged by ``coverage``, for the first graph of each slot only.
     fallbacks: bool = True
-    #: True only for the seeded mutant that keeps the earlier error semantics: an error
+    #: True only for the seeded mutant with stale error semantics: an error
     #: stands for a graph while it is wanted and not validly active, even when another
     #: alternative serves its slot (see :func:`desmon.deployment.core.standing_after`).
     stale_errors: bool = False

@@ -12,7 +12,7 @@ code (``make_desmon_react`` and ``ensure_deployed``), changed in one place:
 ``make-before-break``
     migrates by starting the new instance before stopping the old one;
 ``stale-errors``
-    the corrected deployer as it was before errors described the present: an error
+    the corrected deployer with errors that need not describe the present: an error
     stands for a graph while it is wanted and not validly active even when another
     alternative serves its slot, and a running fallback is never upgraded back to the
     preferred alternative (``errors-current`` catches it);
