@@ -54,6 +54,7 @@ def check(
     invariants: Iterable[str] | None = None,
     bounds: "Bounds | None" = None,
     symmetry: bool = False,
+    max_commands: int | None = None,
     **budget: Any,
 ) -> "CheckResult":
     """Explore every interleaving of the scenario's bounded events through the real
@@ -64,13 +65,17 @@ def check(
 
     ``engine`` is "auto", "table" or "direct"; ``budget`` takes the search's limits and
     options (``max_states``, ``max_depth``, ``timeout``, ``max_memory``, ``keep_going``,
-    ``workers``, ``progress``), as :meth:`desmon.verify.checker.Checker.run` names them.
+    ``workers``, ``progress``), as :meth:`desmon.verify.checker.Checker.run` names them;
+    ``max_commands`` the commands one reaction may issue (default
+    :data:`~desmon.deployment.guard.MAX_COMMANDS`), this call's own.
     """
+    from desmon.deployment.guard import MAX_COMMANDS, Guard
     from desmon.verify.checker import Checker
     from desmon.verify.deployers import resolve_deployer
 
     chosen = resolve_deployer(deployer)
-    return Checker(_scenario(scenario), chosen, invariants=invariants, bounds=bounds, symmetry=symmetry).run(engine=engine, **budget)
+    guard = Guard(MAX_COMMANDS if max_commands is None else max_commands)
+    return Checker(_scenario(scenario), chosen, invariants=invariants, bounds=bounds, symmetry=symmetry, guard=guard).run(engine=engine, **budget)
 
 
 def simulate(

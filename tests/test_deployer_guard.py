@@ -23,7 +23,7 @@ import pytest
 
 from desmon.cli import main
 from desmon.deployment.deployer import DEPLOYERS, Deployer
-from desmon.deployment.guard import MAX_COMMANDS, commands_limit
+from desmon.deployment.guard import MAX_COMMANDS
 from desmon.deployment.ports import Start
 from desmon.errors import NondeterminismError
 from desmon.loader import load_scenario
@@ -37,7 +37,7 @@ DESMON = DEPLOYERS["desmon"]
 DEPLOYERS_PY = """
 import time
 from desmon.deployment.deployer import DEPLOYERS
-from desmon.deployment.ports import RaiseError, Start
+from desmon.deployment.ports import RaiseError, Start, Stop
 
 _desmon = DEPLOYERS["desmon"].react
 
@@ -60,6 +60,19 @@ def restarts_forever_on_grasp(q, slots, changed, context_changed):
         for g, p in q.deployments():
             while True:
                 yield Start(g, p)
+
+
+def stops_forty_times_on_grasp(q, slots, changed, context_changed):
+    yield from _desmon(q, slots, changed, context_changed)
+    if q.context() == "grasp":
+        for _ in range(40):
+            yield Stop(slots[0][0], q.platform_states()[0].name)
+
+
+def stops_forty_times_always(q, slots, changed, context_changed):
+    for _ in range(40):
+        yield Stop("force_slip_detector", q.platform_states()[0].name)
+    yield from _desmon(q, slots, changed, context_changed)
 
 
 def spins_on_grasp(q, slots, changed, context_changed):
@@ -95,12 +108,6 @@ def deployers(tmp_path: Path) -> str:
     return str(path)
 
 
-@pytest.fixture(autouse=True)
-def _default_limit():
-    yield
-    commands_limit(MAX_COMMANDS)
-
-
 @pytest.mark.parametrize(
     "name, says",
     [
@@ -125,6 +132,27 @@ def test_a_deployer_failing_in_a_reachable_state_is_crashed_with_the_shortest_pa
 def test_the_command_budget_is_settable(deployers, capsys):
     assert main(["verify", COFFEE, "--deployer", f"{deployers}:restarts_forever_on_grasp", "--max-commands", "30", "--no-progress"]) == 4
     assert "issued more than 30 commands" in capsys.readouterr().out
+
+
+def test_each_run_keeps_its_own_command_budget(deployers, capsys):
+    """The limit belongs to the run that set it: a later run in the same process, or one
+    with another limit, is not held to it (the guard keeps no state in the module)."""
+    import desmon
+
+    forty = f"{deployers}:stops_forty_times_on_grasp"
+    assert main(["verify", COFFEE, "--deployer", forty, "--max-commands", "30", "--no-progress"]) == 4
+    assert "issued more than 30 commands" in capsys.readouterr().out
+    assert main(["verify", COFFEE, "--deployer", forty, "--no-progress"]) in (0, 1)  # the default, 10,000
+    assert "issued more than" not in capsys.readouterr().out
+    tight = desmon.check(COFFEE, forty, max_commands=30, max_states=5000)
+    loose = desmon.check(COFFEE, forty, max_states=5000)
+    assert tight.verdict == "CRASHED" and loose.verdict != "CRASHED", (tight.verdict, loose.verdict)
+    assert MAX_COMMANDS == 10_000
+    always = f"{deployers}:stops_forty_times_always"  # in its first reaction: it cannot run at all under 30
+    assert main(["run", COFFEE, "--deployer", always, "--max-commands", "30"]) == 2
+    assert "issued more than 30 commands" in capsys.readouterr().err
+    assert main(["run", COFFEE, "--deployer", always]) in (0, 1)
+    assert "issued more than" not in capsys.readouterr().err
 
 
 def test_fuzz_reports_a_crash_as_crashed_with_the_checkers_shortest_path(deployers, capsys):

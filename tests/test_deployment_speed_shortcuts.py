@@ -14,7 +14,7 @@ import pytest
 from conftest import force_robot_world
 
 from desmon.deployment.control import ControlRules
-from desmon.deployment.guard import guarded
+from desmon.deployment.guard import Guard
 from desmon.deployment.invariants import INVARIANTS, make_view
 from desmon.deployment.ports import RaiseError, Start, Stop, relay
 from desmon.deployment.validity import PlatformMemoChecks, loop_validity
@@ -112,9 +112,9 @@ def test_guard_watchers_see_what_a_relay_sees(outcomes):
 
         make = _reaction(log)
         if way == "hooks":
-            reaction = guarded("d", make, None, *names, lambda: "", before, after)
+            reaction = Guard().guarded("d", make, None, *names, lambda: "", before, after)
         else:
-            reaction = relay(guarded("d", make, None, *names, lambda: ""), before=before, after=after)
+            reaction = relay(Guard().guarded("d", make, None, *names, lambda: ""), before=before, after=after)
         _drive(reaction, outcomes)
     assert seen["hooks"] == seen["relay"]
     assert [e[0] for e in seen["hooks"]][:3] == ["before", "after", "got"]

@@ -7,6 +7,7 @@ import io
 from argparse import Namespace
 from pathlib import Path
 
+from desmon.deployment.guard import Guard
 from desmon.loader import load_scenario
 from desmon.cli.run import run_command
 from desmon.sim.engine import simulate
@@ -42,7 +43,7 @@ def _file(tmp_path: Path) -> Path:
 
 
 def _run(path: Path, deployer: object) -> tuple[int, str]:
-    args = Namespace(scenario=str(path), seed=None, until=None, deployer=deployer, trace=None, json=False, no_progress=True)
+    args = Namespace(scenario=str(path), seed=None, until=None, deployer=deployer, trace=None, json=False, no_progress=True, guard=Guard())
     out = io.StringIO()
     code = run_command(args, out, io.StringIO())
     return code, out.getvalue()

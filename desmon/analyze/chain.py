@@ -192,14 +192,14 @@ class Chain:
 class _Builder:
     """Breadth-first over chain states; one transition system, its reactions memoised."""
 
-    def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld, *, where: str = "") -> None:
+    def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld, *, where: str = "", guard: Any = None) -> None:
         self.mw = mw
         #: where a crash can be replayed ("": desmon verify, which runs the model as declared)
         self.where = where or "desmon verify shows the path to it"
         # the checker's bounds without its budgets, and no scripted first action: the
         # chain starts before the monitor has recognised anything
         plain = replace(scenario, timeline=())
-        self.system = TransitionSystem(plain, deployer, invariants=(), bounds=chain_bounds(scenario, mw))
+        self.system = TransitionSystem(plain, deployer, invariants=(), bounds=chain_bounds(scenario, mw), guard=guard)
         self.model = scenario.model
         self.rules = ControlRules(self.model)
         # (key, event, physical facts where they differ or None) -> the reaction's outcomes
@@ -507,14 +507,15 @@ def _event(component: str, is_device: bool, broken: bool) -> Event:
 def build_chain(
     scenario: Scenario, deployer: Any, mw: MarkovWorld, *, max_states: int | None = None,
     progress: Callable[[int], None] | None = None, miss: dict[str, Any] | None = None,
-    start_catch: dict[str, Any] | None = None,
+    start_catch: dict[str, Any] | None = None, guard: Any = None,
 ) -> Chain:
     """Every chain state reachable from the initial ones, with its rates and rewards;
     ``miss`` is each graph's probability of missing a slip while it watches (1 where
     not given), ``start_catch`` of catching one while it starts (graph -> action ->
-    start latency -> p; 0 where not given)."""
+    start latency -> p; 0 where not given); ``guard``: the run's guard around the deployer
+    (:mod:`desmon.deployment.guard`)."""
     t0 = time.perf_counter()
-    b = _Builder(scenario, deployer, mw)
+    b = _Builder(scenario, deployer, mw, guard=guard)
     try:
         key0 = b.system.initial()
     except CheckerError as exc:

@@ -128,7 +128,7 @@ class _MDP:
     """States, and per state its races; a race's alternatives are the distinct outcome
     distributions of the deployer under each platform order (index 0: the declared one)."""
 
-    def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld, max_states: int | None) -> None:
+    def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld, max_states: int | None, guard: Any = None) -> None:
         names = tuple(p.name for p in scenario.model.platforms)
         if math.factorial(len(names)) > MAX_ORDERS:  # a cut list of orders would make "best" a lie
             raise AnalysisError(
@@ -139,7 +139,8 @@ class _MDP:
         self.orders = orders
         self.builders = [
             _Builder(_ordered(scenario, o), deployer, mw, where="" if k == 0 else
-                     f"with the platforms in the order {', '.join(o)}, one --placements tries (desmon verify runs the declared order)")
+                     f"with the platforms in the order {', '.join(o)}, one --placements tries (desmon verify runs the declared order)",
+                     guard=guard)
             for k, o in enumerate(orders)
         ]
         self.main = self.builders[0]
@@ -251,10 +252,10 @@ def _optimise(mdp: _MDP, r: np.ndarray, sign: float, describe, blocks: np.ndarra
 
 
 def optimality_gap(scenario: Scenario, deployer: Any = "desmon", *, phases: int = 1, start_failure_p: float | None = None,
-                   max_states: int | None = None) -> Gap:
+                   max_states: int | None = None, guard: Any = None) -> Gap:
     """The deployer's long-run exposure between the best and worst placements (module docstring)."""
     mw = markov_world(scenario, phases=phases, start_failure_p=start_failure_p)
-    mdp = _MDP(scenario, deployer, mw, max_states)
+    mdp = _MDP(scenario, deployer, mw, max_states, guard)
     mdp.build()
     # rewards of the MDP's states (the chain's definition)
     from desmon.analyze.chain import Chain

@@ -244,6 +244,11 @@ def _within(chain: Chain, Q: Any, p0: np.ndarray, horizon: float) -> float:
     return float(min(1.0, max(0.0, 1.0 - v[~target].sum())))
 
 
+def _check_trials(trials: object) -> None:
+    if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= MAX_TRIALS:
+        raise AnalysisError(f"--trials {trials!r} must be a whole number from 1 to {MAX_TRIALS:,}: pass e.g. --trials 2000")
+
+
 def analyze(
     scenario: Scenario,
     deployer: Any = "desmon",
@@ -256,25 +261,22 @@ def analyze(
     miss: dict[str, float] | None = None,
     start_catch: dict[str, Any] | None = None,
     trials: int = 200,
+    guard: Any = None,
     progress: Callable[[int], None] | None = None,
     status: Callable[[str], None] | None = None,
 ) -> Analysis:
     """Build the chain of ``scenario`` under ``deployer`` and compute its measures;
     ``progress(n)`` is called as states are explored, ``status(what)`` before each
-    solution step (long on a large chain). ``miss`` (each graph's probability of
-    missing a slip while it watches) and ``start_catch`` (of catching one while it
-    starts) default to :func:`detector_miss` and :func:`detector_start_catch` over
-    ``trials`` slips each; a given ``miss`` without ``start_catch`` credits starting
-    detectors with nothing."""
+    solution step. ``miss`` and ``start_catch`` default to :func:`detector_miss` and
+    :func:`detector_start_catch` over ``trials`` slips (a given ``miss`` alone: none caught while starting)."""
     say = status or (lambda _what: None)
     mw = markov_world(scenario, phases=phases, start_failure_p=start_failure_p)
     T = scenario.world.horizon if horizon is None else horizon
     check_number("--horizon", T, error=AnalysisError, positive=True, unit=" of seconds")
-    if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= MAX_TRIALS:
-        raise AnalysisError(f"--trials {trials!r} must be a whole number from 1 to {MAX_TRIALS:,}: pass e.g. --trials 2000")
+    _check_trials(trials)
     if miss is None:
         miss, start_catch = _rates(scenario, phases, trials, 0) if start_catch is None else (detector_miss(scenario, phases=phases, trials=trials), start_catch)
-    chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch)
+    chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch, guard=guard)
     t0 = time.perf_counter()
     Q, _exit = chain.generator()
     p0 = _p0(chain)

@@ -84,15 +84,15 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _dispatch(args: argparse.Namespace) -> int:
     """Check the parsed arguments, run the command's handler; a DesmonError is one line."""
-    from desmon.deployment.guard import EXIT_CRASHED, MAX_COMMANDS, MAX_REACTION_SECONDS, DeployerFault, commands_limit, reaction_deadline
+    from desmon.deployment.guard import EXIT_CRASHED, MAX_COMMANDS, MAX_REACTION_SECONDS, DeployerFault, Guard
 
     try:
-        commands_limit(getattr(args, "max_commands", None) or MAX_COMMANDS)  # this command's (a process may run several)
+        # this command's guard around the deployer: its limits, handed to every engine it runs
+        deadline = (args.max_reaction_seconds or MAX_REACTION_SECONDS) if hasattr(args, "max_reaction_seconds") else None
+        args.guard = Guard(getattr(args, "max_commands", None) or MAX_COMMANDS, deadline)  # (verify: its --timeout instead)
         plan_outputs(())  # (preflight records this command's outputs)
         preflight(args)  # inputs, numbers, windows and output paths, before any long work
-        if not hasattr(args, "max_reaction_seconds"):  # no deployer, or verify (its --timeout)
-            return int(args.handler(args))
-        with reaction_deadline(args.max_reaction_seconds or MAX_REACTION_SECONDS):
+        with args.guard.deadline():
             return int(args.handler(args))
     except DeployerFault as exc:
         # (SimPy re-raises a process's exception as a copy caused by the original)

@@ -51,7 +51,7 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--max-states", type=positive_int, default=DEFAULT_MAX_STATES, help="stop (exit 3) past this many chain states")
     p.add_argument(
         "--trials", type=positive_int, default=200, metavar="N",
-        help="evaluation slips behind each detection rate (default 200: a rate good to about +-0.07; 2000: about +-0.02, and slower)",
+        help="evaluation slips behind each detection rate (200: a watching rate good to about +-0.08; 2000: about +-0.02, and slower)",
     )
     p.add_argument(
         "--placements", action="store_true",
@@ -102,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             result = analyze(
                 scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, horizon=args.horizon,
-                steady=not args.transient_only, max_states=args.max_states, trials=args.trials, progress=progress, status=status,
+                steady=not args.transient_only, max_states=args.max_states, trials=args.trials, guard=args.guard, progress=progress, status=status,
             )
         finally:
             line.close()
@@ -113,6 +113,7 @@ def run(args: argparse.Namespace) -> int:
     if args.simulate:
         values = simulated_exposure(
             scenario, args.deployer, range(args.simulate), result.horizon_s, phases=args.phases, start_failure_p=args.start_failure_p,
+            guard=args.guard,
         )
         agree = agreement(result.exposure_s_per_mission or 0.0, values)
     gap = None
@@ -120,7 +121,9 @@ def run(args: argparse.Namespace) -> int:
         from desmon.analyze.mdp import optimality_gap
 
         try:
-            gap = optimality_gap(scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, max_states=args.max_states)
+            gap = optimality_gap(
+                scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, max_states=args.max_states, guard=args.guard,
+            )
         except BudgetExceeded as exc:
             err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
             return EXIT_INCOMPLETE

@@ -34,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
         known = ", ".join(s.graph for s in scenario.model.specs)
         raise QueryError(f"{args.scenario}: no deployment specification for {args.graph!r}; known: {known}")
     timeline = tuple(te for te in scenario.timeline if te.time <= at)
-    result = replay(replace(scenario, timeline=timeline), args.deployer)
+    result = replay(replace(scenario, timeline=timeline), args.deployer, guard=args.guard)
     validity = acceptable_platforms(RepositoryQuery(result.repo), args.graph)
     fixed = scenario.model.spec(args.graph).fixed_platform  # type: ignore[union-attr]
     print(f"{args.graph} at {when} ({args.deployer.name} deployer):")

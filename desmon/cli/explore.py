@@ -56,7 +56,7 @@ def _standing(standing: frozenset[str], latest: dict[str, str]) -> tuple[tuple[s
     return tuple((g, latest.get(g, f"error standing for {g}")) for g in sorted(standing))
 
 
-def timeline_frames(scenario: Any, deployer: Any) -> list:  # type: ignore[type-arg]
+def timeline_frames(scenario: Any, deployer: Any, guard: Any = None) -> list:  # type: ignore[type-arg]
     """One frame per event of ``scenario``'s scripted timeline, as ``desmon replay`` runs it."""
     from desmon.repository.query import RepositoryQuery
     from desmon.sim.replay import replay
@@ -65,7 +65,7 @@ def timeline_frames(scenario: Any, deployer: Any) -> list:  # type: ignore[type-
     graphs = [s.graph for s in scenario.model.specs]
     frames, latest = [], {}
     for i in range(len(scenario.timeline)):
-        result = replay(replace(scenario, timeline=scenario.timeline[: i + 1]), deployer)
+        result = replay(replace(scenario, timeline=scenario.timeline[: i + 1]), deployer, guard=guard)
         step = result.steps[-1]
         raised = []
         for e in step.errors:
@@ -145,6 +145,7 @@ def counterexample_frames(
     *,
     keys: tuple[Any, ...] | None = None,
     recorded: tuple[dict, ...] | None = None,  # type: ignore[type-arg]
+    guard: Any = None,
 ) -> tuple[list, list[tuple[str, str]], int | None]:  # type: ignore[type-arg]
     """Frames of a counterexample: the initial state, then one per label (event and the
     starts the checker made fail), stepped through the real core on the repository.
@@ -159,7 +160,7 @@ def counterexample_frames(
     from desmon.viz.explore import Frame, capture_reasons
 
     graphs = [s.graph for s in scenario.model.specs]
-    run = RepositoryRun(scenario, deployer)
+    run = RepositoryRun(scenario, deployer, guard=guard)
     checked = get_invariants(list(invariants))
     instant = get_invariants([n for n in run.bounds.instantaneous if n in invariants])
     recorder = _Recorder(run)
@@ -249,7 +250,7 @@ def run(args: argparse.Namespace) -> int:
                 f"counterexample instead: desmon explore {args.scenario} --verify (or simulate it: desmon run {args.scenario} --plot run.png)"
             )
         deployer = args.deployer if args.deployer is not None else resolve_deployer("desmon")
-        frames = timeline_frames(scenario, deployer)
+        frames = timeline_frames(scenario, deployer, args.guard)
         lines = [f"the scripted timeline ({len(frames)} steps) as desmon replay runs it, deployer {deployer.name}"]
         violated = sorted({name for f in frames for name, _m in f.violations})
         if violated:
@@ -270,7 +271,7 @@ def _searched(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str],
 
     deployer = args.deployer if args.deployer is not None else resolve_deployer("desmon")
     invariants = [args.invariant] if args.invariant else None
-    checker = Checker(scenario, deployer, invariants=invariants)
+    checker = Checker(scenario, deployer, invariants=invariants, guard=args.guard)
     result = checker.run(max_states=args.max_states or MAX_STATES, progress=not args.no_progress)
     if not result.counterexamples:
         what = f"{result.verdict} in {result.states:,} states"
@@ -285,7 +286,7 @@ def _searched(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str],
         )
     c = min(result.counterexamples, key=lambda c: c.length)
     frames, _final, _d = counterexample_frames(
-        scenario, deployer, c.events, tuple(result.invariants), keys=tuple(s.key for s in c.steps)
+        scenario, deployer, c.events, tuple(result.invariants), keys=tuple(s.key for s in c.steps), guard=args.guard,
     )
     others = [x.invariant for x in result.counterexamples if x is not c]
     lines = [
@@ -325,7 +326,7 @@ def _saved(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str], st
         raise CheckerError(f"{saved.source} was written with {shown}: pass the same -p NAME=VALUE to explore it")
     try:
         frames, final, diverged = counterexample_frames(
-            scenario, deployer, saved.labels, tuple(saved.invariants), recorded=tuple(saved.states)
+            scenario, deployer, saved.labels, tuple(saved.invariants), recorded=tuple(saved.states), guard=args.guard,
         )
     except CheckerError:
         raise

@@ -30,6 +30,6 @@ def run(args: argparse.Namespace) -> int:
     if args.examples <= 0:
         raise CheckerError(f"--examples must be positive, got {args.examples}")
     scenario = load_scenario_of(args)
-    outcome = fuzz(scenario, args.deployer, examples=args.examples, seed=args.seed, progress=not args.no_progress)
+    outcome = fuzz(scenario, args.deployer, examples=args.examples, seed=args.seed, progress=not args.no_progress, guard=args.guard)
     print(outcome.text, end="")
     return outcome.exit_code

@@ -20,6 +20,6 @@ def run(args: argparse.Namespace) -> int:
     from desmon.sim.replay import format_replay, replay
 
     scenario = load_scripted(args)
-    result = replay(scenario, args.deployer)
+    result = replay(scenario, args.deployer, guard=args.guard)
     print(format_replay(result), end="")
     return EXIT_VIOLATED if result.violations else EXIT_OK

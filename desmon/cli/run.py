@@ -165,7 +165,7 @@ def _simulate(args: Any, scenario: Scenario, err: IO[str], show: bool, t_wall: f
         fh = stack.enter_context(replacing(args.trace)) if args.trace else None
         world = SimWorld(
             scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=Trace(fh, keep=False), progress=progress,
-            render_ahead={"on": True, "off": False}.get(getattr(args, "render_ahead", "auto")),
+            render_ahead={"on": True, "off": False}.get(getattr(args, "render_ahead", "auto")), guard=args.guard,
         )
         result = world.run()
         result.metrics["audits"] = world.audits
@@ -191,7 +191,7 @@ def _run_fleet(args: Any, scenario: Scenario, out: IO[str], err: IO[str], show: 
         progress = _reporter(line, time.perf_counter()) if show else None
         with contextlib.ExitStack() as stack:
             fh = stack.enter_context(replacing(args.trace)) if args.trace else None
-            result = simulate_fleet(scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=fh, progress=progress)
+            result = simulate_fleet(scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=fh, progress=progress, guard=args.guard)
     if args.json:
         out.write(json.dumps(fleet_json(result), indent=2) + "\n")
     else:

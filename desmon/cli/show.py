@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
 
     scenario = load_scripted(args)
     moments = resolve_times(scenario, args.at)
-    result = replay(scenario, args.deployer)
+    result = replay(scenario, args.deployer, guard=args.guard)
     snaps = _snapshots(scenario, result, moments)
     fmt = args.format  # preflight set it from -o when --format was not given
     if fmt != "png" and len(snaps) > 1:

@@ -145,7 +145,7 @@ def _search(args: argparse.Namespace) -> int:
     max_memory = getattr(args, "max_memory", None)
     check_megabytes("--max-memory", max_memory)
     scenario = load_scenario_of(args)
-    system = system_of(scenario, args.deployer, invariants=args.invariant, symmetry=bool(getattr(args, "symmetry", False)))
+    system = system_of(scenario, args.deployer, invariants=args.invariant, symmetry=bool(getattr(args, "symmetry", False)), guard=args.guard)
     result = check(
         system,
         max_states=args.max_states,

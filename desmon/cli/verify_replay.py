@@ -37,7 +37,7 @@ def replay_counterexample(args: argparse.Namespace) -> int:
             f"{saved.source} holds a counterexample of scenario {saved.scenario!r}, but {args.scenario} is scenario "
             f"{scenario.name!r}: give the scenario file of {saved.scenario!r}"
         )
-    run = RepositoryRun(scenario, args.deployer)
+    run = RepositoryRun(scenario, args.deployer, guard=args.guard)
     instant = get_invariants([n for n in run.bounds.instantaneous if n in saved.invariants])
     print(format_replay_head(saved))
     diverged, last, steps = None, None, []

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Container, Iterable
 
 from desmon.deployment.deployer import Deployer, get_deployer
-from desmon.deployment.guard import DeployerFault, describe_stimulus, guarded, uncallable
+from desmon.deployment.guard import DeployerFault, Guard, describe_stimulus, uncallable
 from desmon.deployment.invariants import ReactionBook, SystemView, judge_reaction, raise_problem, validly_active_among, view_of
 from desmon.deployment.monitor import InsertPort, Stimulus, observe
 from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop, relay
@@ -127,8 +127,11 @@ class DeploymentCore:
         query: QueryPort,
         insert: InsertPort,
         deployer: str | Deployer = "desmon",
+        guard: Guard | None = None,
     ) -> None:
         self.model = model
+        #: the run's guard around every reaction (:mod:`desmon.deployment.guard`): its limits and budget
+        self.guard = guard if guard is not None else Guard()
         self.query = query
         self.insert = insert
         self.deployer = get_deployer(deployer)
@@ -183,7 +186,7 @@ class DeploymentCore:
         self.unjustified = []
         self.findings = []
         book = self._book = ReactionBook(stimulus.changed_platforms, stimulus.context_changed)
-        reaction = guarded(
+        reaction = self.guard.guarded(
             self.deployer.name,
             lambda: react(query, slots, stimulus.changed_platforms, stimulus.context_changed),
             stimulus, *self._known, lambda: describe_stimulus(stimulus, query.context(), cause),
@@ -227,7 +230,7 @@ class DeploymentCore:
             raise uncallable(self.deployer.name, react)
         if self._known is None:
             self._known = self._names()
-        return guarded(
+        return self.guard.guarded(
             self.deployer.name, lambda: react(q, slots, changed, context_changed),
             Stimulus(tuple(changed), bool(context_changed)), *self._known,
             lambda: "the no-flapping check's re-run of its reaction with nothing changed",

@@ -2,7 +2,7 @@
 
 Every engine (the checker, the scripted replay, the fuzzer, the SimPy world) obtains a
 reaction from :meth:`DeploymentCore.reaction <desmon.deployment.core.DeploymentCore.reaction>`,
-which hands back :func:`guarded` around the deployer's generator. Between the
+which hands back :meth:`Guard.guarded` around the deployer's generator. Between the
 deployer's code and the engine, the guard
 
 * turns anything the deployer raises (and a ``react`` that cannot be called) into a
@@ -13,15 +13,20 @@ deployer's code and the engine, the guard
   of a perception graph and a platform the model declares, an error kind of
   :data:`~desmon.deployment.ports.ERROR_KINDS`; a wrong one is a :class:`DeployerFault`
   naming the command;
-* counts the commands of one reaction: more than :data:`MAX_COMMANDS` (settable:
-  :func:`commands_limit`, ``--max-commands``) is a :class:`DeployerFault` ("a
+* counts the commands of one reaction: more than :attr:`Guard.max_commands` (default
+  :data:`MAX_COMMANDS`, ``--max-commands``) is a :class:`DeployerFault` ("a
   reaction that never ends");
 * asks the running search's budget (time, memory, Ctrl-C), installed by
-  :func:`watching`, before the first command and every 256th, and -- for a reaction that computes or sleeps
+  :meth:`Guard.watching`, before the first command and every 256th, and -- for a reaction that computes or sleeps
   without yielding -- from a timer signal every :data:`TICK` seconds while the
   deployer's code runs. A spent budget raises :class:`ReactionStopped` (a
   ``BaseException``, so a deployer's ``except Exception`` cannot swallow it) and the
   engine ends the search INCOMPLETE as at any other budget check.
+
+A :class:`Guard` belongs to one run: its limits and its state (the budget it asks,
+whether the deployer's code runs now) live on it, never in this module, so two runs in
+one process with different limits do not meet. The engine that builds a
+:class:`~desmon.deployment.core.DeploymentCore` hands it the run's guard.
 
 What a fault *means* is the engine's business: the checker reports a fault in a
 reachable state as the outcome CRASHED with the shortest path to it, and a fault in the
@@ -44,8 +49,8 @@ from desmon.deployment.ports import ERROR_KINDS, RaiseError, Reaction, Start, St
 from desmon.errors import CheckerError, ModelError
 
 __all__ = [
-    "DeployerFault", "ReactionStopped", "guarded", "watching", "commands_limit", "MAX_COMMANDS", "TICK", "CRASH",
-    "describe_stimulus", "uncallable", "EXIT_CRASHED", "reaction_deadline", "MAX_REACTION_SECONDS", "RanAway",
+    "DeployerFault", "ReactionStopped", "Guard", "check_max_commands", "MAX_COMMANDS", "TICK", "CRASH",
+    "describe_stimulus", "uncallable", "EXIT_CRASHED", "MAX_REACTION_SECONDS", "RanAway",
 ]
 
 #: the exit code of every command whose deployer failed in a reachable state (not the first reaction)
@@ -65,7 +70,7 @@ TICK = 0.2
 #: The longest (seconds) a deployer's own code may run without yielding a command or
 #: returning, in the commands that have no ``--timeout`` of their own (run, replay, fuzz,
 #: explain, show, explore): past it the reaction is judged never to end, a
-#: :class:`DeployerFault`. ``--max-reaction-seconds S`` sets it (:func:`reaction_deadline`).
+#: :class:`DeployerFault`. ``--max-reaction-seconds S`` sets it (:meth:`Guard.deadline`).
 MAX_REACTION_SECONDS = 60.0
 
 #: The name under which the checker records a deployer's fault (its outcome is CRASHED).
@@ -74,7 +79,7 @@ CRASH = "deployer-crash"
 
 class DeployerFault(ModelError):
     """The deployer failed in one reaction: it raised, yielded a command that is not a
-    valid one, or issued more than :data:`MAX_COMMANDS` commands.
+    valid one, or issued more than its guard's ``max_commands`` commands.
 
     ``stimulus`` is what it was reacting to, ``log`` (set by
     :func:`~desmon.deployment.core.run_sync`) the commands it issued before, ``cause``
@@ -95,23 +100,11 @@ class ReactionStopped(BaseException):
     engine stops the search INCOMPLETE, as at any other budget check."""
 
 
-_limit = [MAX_COMMANDS]
-
-
-def commands_limit(n: int | None = None) -> int:
-    """The commands a reaction may issue (:data:`MAX_COMMANDS` unless set); with ``n``,
-    set it (a positive int) and return it. ``--max-commands`` sets it for one command."""
-    if n is not None:
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ModelError(f"--max-commands {n!r}: give a whole number of commands above 0, e.g. --max-commands {MAX_COMMANDS}")
-        _limit[0] = n
-    return _limit[0]
-
-
-# the budget check the running search installed (watching), and whether the deployer's
-# code runs now (the timer only interrupts that)
-_watch: list[Callable[[], str] | None] = [None]
-_inside = [0]
+def check_max_commands(n: object) -> int:
+    """``n`` as the commands a reaction may issue: a whole number above 0."""
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise ModelError(f"--max-commands {n!r}: give a whole number of commands above 0, e.g. --max-commands {MAX_COMMANDS}")
+    return n
 
 
 def describe_stimulus(stimulus: Any, context: Any = None, cause: object = None) -> str:
@@ -191,56 +184,8 @@ def _check_command(cmd: object, graphs: frozenset[str], platforms: frozenset[str
 
 
 class RanAway(Exception):
-    """Raised by :func:`reaction_deadline`'s timer inside a deployer's code that has run
+    """Raised by :meth:`Guard.deadline`'s timer inside a deployer's code that has run
     too long without yielding; the guard reports it as the deployer's fault."""
-
-
-#: while a deadline is armed: its seconds, and when the deployer's code was last entered
-_deadline: list[float | None] = [None]
-_since = [0.0]
-
-
-@contextlib.contextmanager
-def reaction_deadline(seconds: float) -> Iterator[None]:
-    """Within it, a deployer's code that runs for more than ``seconds`` without yielding a
-    command or returning is stopped by a timer signal (every :data:`TICK` s) and reported
-    as its fault: a reaction that never ends, in a command without a ``--timeout`` of its
-    own. The timer is used only in the main thread, where SIGALRM is not otherwise taken
-    (a search started inside it then asks its budget between commands only)."""
-    if not (
-        hasattr(signal, "setitimer")
-        and threading.current_thread() is threading.main_thread()
-        and signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, None)
-    ):
-        yield
-        return
-    previous = _deadline[0]
-    _deadline[0] = seconds
-
-    def tick(signum: int, frame: Any) -> None:
-        if _inside[0] > 0 and time.monotonic() - _since[0] > seconds:
-            _since[0] = time.monotonic()  # once
-            raise RanAway(
-                f"its code ran for over {seconds:g} s without yielding a command or returning, so it never ends; "
-                "a reaction must return (--max-reaction-seconds S sets the limit)"
-            )
-
-    signal.signal(signal.SIGALRM, tick)
-    signal.setitimer(signal.ITIMER_REAL, TICK, TICK)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0, 0)
-        signal.signal(signal.SIGALRM, signal.SIG_DFL)
-        _deadline[0] = previous
-
-
-def _enter(armed: bool) -> None:
-    """The deployer's code is about to run: count it, and start its clock where a
-    :func:`reaction_deadline` is armed and it is not already running."""
-    if armed and not _inside[0]:
-        _since[0] = time.monotonic()
-    _inside[0] += 1
 
 
 def _close(reaction: Any) -> None:
@@ -253,112 +198,177 @@ def _unwatched(*_args: Any) -> None:
     """No watcher (:func:`guarded`'s default ``before`` and ``after``)."""
 
 
-def guarded(
-    name: str, make: Callable[[], Any], stimulus: Any, graphs: frozenset[str], platforms: frozenset[str],
-    reacting: Callable[[], str], before: "Callable[[Any], None]" = _unwatched,
-    after: "Callable[[Any, bool | None], None]" = _unwatched,
-) -> Reaction:
-    """The reaction ``make()`` returns, under guard (see the module docstring).
-
-    ``make`` calls the deployer's ``react``; ``reacting()`` says in words what it reacts
-    to (called only for a fault). Raises :class:`DeployerFault`, or
-    :class:`ReactionStopped` when the installed budget is spent. ``before`` and ``after``
-    watch the commands that pass the guard as :func:`~desmon.deployment.ports.relay`
-    around the guarded reaction would (``before(cmd)`` as each is yielded,
-    ``after(cmd, outcome)`` once its outcome came back), without a generator of their own."""
-    watch = _watch[0]
-    inside = _inside
-    armed = _deadline[0] is not None
-    _enter(armed)
-    try:
-        reaction = make()
-    except (ReactionStopped, KeyboardInterrupt, CheckerError):
-        raise
-    except (Exception, SystemExit) as exc:  # sys.exit() in a reaction must not end desmon (with exit 0, say)
-        raise _fault(name, reacting(), _raised(exc), stimulus, exc) from None
-    finally:
-        inside[0] -= 1
-    if type(reaction) is not GeneratorType:
-        raise _fault(
-            name, reacting(), f"its reaction returned {type(reaction).__name__}, not a generator; "
-            "write react(q, slots, changed, context_changed) with yield Start/Stop/RaiseError (docs/deployers.md)", stimulus,
-        )
-    limit = _limit[0]
-    n = 0
-    outcome: bool | None = None
-    send = reaction.send
-    while True:
-        if watch is not None and not n & WATCH_EVERY:  # (the timer watches a deployer's own code in between)
-            why = watch()
-            if why:
-                _close(reaction)
-                raise ReactionStopped(why)
-        _enter(armed)
-        try:
-            cmd = send(outcome)
-        except StopIteration:
-            return
-        except (ReactionStopped, KeyboardInterrupt, CheckerError):
-            raise  # the budget, Ctrl-C, an engine's own signal (the table engine's unobserved read)
-        except (Exception, SystemExit) as exc:  # sys.exit() in a reaction must not end desmon (with exit 0, say)
-            if isinstance(exc, DeployerFault) and exc.stimulus is not None:
-                raise  # a nested deployer's (a mutant's) fault, already named
-            raise _fault(name, reacting(), _raised(exc), stimulus, exc) from None
-        finally:
-            inside[0] -= 1
-        kind = type(cmd)
-        try:  # the common case first, without a call
-            ok = (kind is Start or kind is Stop) and cmd.graph in graphs and cmd.platform in platforms  # type: ignore[union-attr]
-        except TypeError:  # an unhashable graph or platform
-            ok = False
-        why = "" if ok else _check_command(cmd, graphs, platforms)
-        if why:
-            _close(reaction)
-            raise _fault(name, reacting(), why, stimulus)
-        n += 1
-        if n > limit:
-            _close(reaction)
-            raise _fault(
-                name, reacting(), f"issued more than {limit:,} commands in one reaction (the last: `{cmd}`), so it never ends; "
-                "a reaction must return. If it really needs more, raise the limit with --max-commands N", stimulus,
-            )
-        before(cmd)
-        outcome = yield cmd  # type: ignore[misc]
-        after(cmd, outcome)
-
-
-@contextlib.contextmanager
-def watching(check: Callable[[], str], urgent: Callable[[], str] | None = None) -> Iterator[None]:
-    """While a search runs: ``check()`` (why the search must stop, or "") is asked before
-    the first command of every reaction and every 256th, and every :data:`TICK` seconds by a timer signal
-    while a deployer's own code runs (one that computes or sleeps without yielding), so
-    that the time limit, the memory budget and Ctrl-C stop the search. The timer is used
-    only in the main thread, where SIGALRM is not otherwise taken; the timer asks
-    ``urgent`` (default ``check``), which must not print. A forked worker process does
-    not ask the parent's check (its reactions are bounded by the command limit)."""
-    previous = _watch[0]
-    pid = os.getpid()
-    _watch[0] = lambda: check() if os.getpid() == pid else ""
-    urgent = urgent or check
-    timer = (
+def _timer_free() -> bool:
+    """Whether this thread may take the timer signal: the main thread, SIGALRM not taken."""
+    return (
         hasattr(signal, "setitimer")
         and threading.current_thread() is threading.main_thread()
         and signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, None)
     )
 
-    def tick(signum: int, frame: Any) -> None:
-        if _inside[0] > 0 and os.getpid() == pid:
-            why = urgent()
-            if why:
-                raise ReactionStopped(why)
 
-    if timer:
-        signal.signal(signal.SIGALRM, tick)
-        signal.setitimer(signal.ITIMER_REAL, TICK, TICK)
+@contextlib.contextmanager
+def _timer(tick: Callable[[int, Any], None]) -> Iterator[None]:
+    """``tick`` on SIGALRM every :data:`TICK` seconds within it."""
+    signal.signal(signal.SIGALRM, tick)
+    signal.setitimer(signal.ITIMER_REAL, TICK, TICK)
     try:
         yield
     finally:
-        if timer:
-            signal.setitimer(signal.ITIMER_REAL, 0, 0)
-            signal.signal(signal.SIGALRM, signal.SIG_DFL)
-        _watch[0] = previous
+        signal.setitimer(signal.ITIMER_REAL, 0, 0)
+        signal.signal(signal.SIGALRM, signal.SIG_DFL)
+
+
+class Guard:
+    """The guard of one run (see the module docstring): its limits, ``max_commands`` per
+    reaction and ``max_reaction_seconds`` of a deployer's own code without yielding (None:
+    no limit but the search's budget), and its state while the run goes on."""
+
+    def __init__(self, max_commands: int = MAX_COMMANDS, max_reaction_seconds: float | None = None) -> None:
+        self.max_commands = check_max_commands(max_commands)
+        self.max_reaction_seconds = max_reaction_seconds
+        #: the budget check the running search installed (:meth:`watching`), or None
+        self.watch: Callable[[], str] | None = None
+        #: how deep the deployer's code runs now (the timer interrupts only that)
+        self.inside = 0
+        #: when the deployer's code was last entered (the deadline's clock)
+        self.since = 0.0
+        #: whether a deadline timer is armed (:meth:`deadline`)
+        self.armed = False
+
+    def __repr__(self) -> str:
+        return f"Guard(max_commands={self.max_commands}, max_reaction_seconds={self.max_reaction_seconds})"
+
+    def _enter(self) -> None:
+        """The deployer's code is about to run: count it, and start its clock where a
+        deadline is armed and it is not already running."""
+        if self.armed and not self.inside:
+            self.since = time.monotonic()
+        self.inside += 1
+
+    @contextlib.contextmanager
+    def deadline(self) -> Iterator[None]:
+        """Within it, a deployer's code that runs for more than ``max_reaction_seconds``
+        without yielding a command or returning is stopped by a timer signal (every
+        :data:`TICK` s) and reported as its fault: a reaction that never ends, in a command
+        without a ``--timeout`` of its own. The timer is used only in the main thread,
+        where SIGALRM is not otherwise taken (a search started inside it then asks its
+        budget between commands only). Without a limit it does nothing."""
+        seconds = self.max_reaction_seconds
+        if seconds is None or not _timer_free():
+            yield
+            return
+
+        def tick(signum: int, frame: Any) -> None:
+            if self.inside > 0 and time.monotonic() - self.since > seconds:
+                self.since = time.monotonic()  # once
+                raise RanAway(
+                    f"its code ran for over {seconds:g} s without yielding a command or returning, so it never ends; "
+                    "a reaction must return (--max-reaction-seconds S sets the limit)"
+                )
+
+        self.armed = True
+        try:
+            with _timer(tick):
+                yield
+        finally:
+            self.armed = False
+
+    @contextlib.contextmanager
+    def watching(self, check: Callable[[], str], urgent: Callable[[], str] | None = None) -> Iterator[None]:
+        """While a search runs: ``check()`` (why the search must stop, or "") is asked
+        before the first command of every reaction and every 256th, and every
+        :data:`TICK` seconds by a timer signal while a deployer's own code runs (one that
+        computes or sleeps without yielding), so that the time limit, the memory budget
+        and Ctrl-C stop the search. The timer is used only in the main thread, where
+        SIGALRM is not otherwise taken; the timer asks ``urgent`` (default ``check``),
+        which must not print. A forked worker process does not ask the parent's check
+        (its reactions are bounded by the command limit)."""
+        previous = self.watch
+        pid = os.getpid()
+        self.watch = lambda: check() if os.getpid() == pid else ""
+        urgent = urgent or check
+
+        def tick(signum: int, frame: Any) -> None:
+            if self.inside > 0 and os.getpid() == pid:
+                why = urgent()
+                if why:
+                    raise ReactionStopped(why)
+
+        try:
+            with _timer(tick) if _timer_free() else contextlib.nullcontext():
+                yield
+        finally:
+            self.watch = previous
+
+    def guarded(
+        self, name: str, make: Callable[[], Any], stimulus: Any, graphs: frozenset[str], platforms: frozenset[str],
+        reacting: Callable[[], str], before: "Callable[[Any], None]" = _unwatched,
+        after: "Callable[[Any, bool | None], None]" = _unwatched,
+    ) -> Reaction:
+        """The reaction ``make()`` returns, under guard (see the module docstring).
+
+        ``make`` calls the deployer's ``react``; ``reacting()`` says in words what it
+        reacts to (called only for a fault). Raises :class:`DeployerFault`, or
+        :class:`ReactionStopped` when the installed budget is spent. ``before`` and
+        ``after`` watch the commands that pass the guard as
+        :func:`~desmon.deployment.ports.relay` around the guarded reaction would
+        (``before(cmd)`` as each is yielded, ``after(cmd, outcome)`` once its outcome came
+        back), without a generator of their own."""
+        watch = self.watch
+        self._enter()
+        try:
+            reaction = make()
+        except (ReactionStopped, KeyboardInterrupt, CheckerError):
+            raise
+        except (Exception, SystemExit) as exc:  # sys.exit() in a reaction must not end desmon (with exit 0, say)
+            raise _fault(name, reacting(), _raised(exc), stimulus, exc) from None
+        finally:
+            self.inside -= 1
+        if type(reaction) is not GeneratorType:
+            raise _fault(
+                name, reacting(), f"its reaction returned {type(reaction).__name__}, not a generator; "
+                "write react(q, slots, changed, context_changed) with yield Start/Stop/RaiseError (docs/deployers.md)", stimulus,
+            )
+        limit = self.max_commands
+        n = 0
+        outcome: bool | None = None
+        send = reaction.send
+        while True:
+            if watch is not None and not n & WATCH_EVERY:  # (the timer watches a deployer's own code in between)
+                why = watch()
+                if why:
+                    _close(reaction)
+                    raise ReactionStopped(why)
+            self._enter()
+            try:
+                cmd = send(outcome)
+            except StopIteration:
+                return
+            except (ReactionStopped, KeyboardInterrupt, CheckerError):
+                raise  # the budget, Ctrl-C, an engine's own signal (the table engine's unobserved read)
+            except (Exception, SystemExit) as exc:  # sys.exit() in a reaction must not end desmon (with exit 0, say)
+                if isinstance(exc, DeployerFault) and exc.stimulus is not None:
+                    raise  # a nested deployer's (a mutant's) fault, already named
+                raise _fault(name, reacting(), _raised(exc), stimulus, exc) from None
+            finally:
+                self.inside -= 1
+            kind = type(cmd)
+            try:  # the common case first, without a call
+                ok = (kind is Start or kind is Stop) and cmd.graph in graphs and cmd.platform in platforms  # type: ignore[union-attr]
+            except TypeError:  # an unhashable graph or platform
+                ok = False
+            why = "" if ok else _check_command(cmd, graphs, platforms)
+            if why:
+                _close(reaction)
+                raise _fault(name, reacting(), why, stimulus)
+            n += 1
+            if n > limit:
+                _close(reaction)
+                raise _fault(
+                    name, reacting(), f"issued more than {limit:,} commands in one reaction (the last: `{cmd}`), so it never ends; "
+                    "a reaction must return. If it really needs more, raise the limit with --max-commands N", stimulus,
+                )
+            before(cmd)
+            outcome = yield cmd  # type: ignore[misc]
+            after(cmd, outcome)

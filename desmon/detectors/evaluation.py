@@ -32,7 +32,7 @@ import functools
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Callable, Final, Sequence
+from typing import Any, Callable, Final, Sequence
 
 import numpy as np
 
@@ -364,21 +364,26 @@ def detection_rates(
             timeline.append(Segment(HOLD, end, 1.5))
         parts = [(request, ready, n - 3 * n // 4), (ready, end, 3 * n // 4)] if ready < end else [(request, ready, n)]
         for k, (lo, hi, m) in enumerate(parts):
-            if m == 0 or hi <= lo:
-                continue
-            b = simulate_batch(
-                timeline, m, _rng(seed, 4 + k, gi), slip_window=(lo, hi), slip_direction=direction, slip_kind=kind,
-            )
-            runs = run_detectors(b, request)
-            w = (hi - lo) / m / length  # the share of the step's time each slip stands for
-            for d in DETECTORS:
-                t_first, _ = first_alarm(runs[d], b.slip_onset - TP_BEFORE, b.slip_onset + TP_AFTER)
-                caught = np.isfinite(t_first)
-                starting = b.slip_onset < ready - max(warm.values()) + warm[d]
-                for cls, mask in ((0, ~starting), (1, starting)):
-                    hit[d][cls] += w * float(caught[mask].sum())
-                    weight[d][cls] += w * float(mask.sum())
+            if m and hi > lo:
+                b = simulate_batch(timeline, m, _rng(seed, 4 + k, gi), slip_window=(lo, hi), slip_direction=direction, slip_kind=kind)
+                _count_catches(b, request, ready - max(warm.values()), warm, (hi - lo) / m / length, hit, weight)
     return {d: tuple(hit[d][c] / weight[d][c] if weight[d][c] else 0.0 for c in (0, 1)) for d in DETECTORS}  # type: ignore[misc]
+
+
+def _count_catches(
+    b: Any, request: float, started: float, warm: dict[str, float], w: float, hit: dict[str, list[float]], weight: dict[str, list[float]],
+) -> None:
+    """Add a batch's catches to ``hit`` and its slips to ``weight`` (each slip weighs ``w``,
+    the share of the step's time it stands for), by class: watching (the slip begins
+    after the detector's latency, over at ``started``, and its warm-up) or starting."""
+    runs = run_detectors(b, request)
+    for d in DETECTORS:
+        t_first, _ = first_alarm(runs[d], b.slip_onset - TP_BEFORE, b.slip_onset + TP_AFTER)
+        caught = np.isfinite(t_first)
+        starting = b.slip_onset < started + warm[d]
+        for cls, mask in ((0, ~starting), (1, starting)):
+            hit[d][cls] += w * float(caught[mask].sum())
+            weight[d][cls] += w * float(mask.sum())
 
 
 def evaluate_actions(

@@ -34,6 +34,7 @@ from typing import Any, Callable
 
 import simpy
 
+from desmon.deployment.guard import Guard
 from desmon.deployment.ports import ErrorRecord
 from desmon.deployment.validity import PlatformMemoChecks
 from desmon.detectors.base import Alarm
@@ -92,6 +93,7 @@ class SimWorld:
         progress: Callable[[float, float], None] | None = None,
         on_quiescent: "Callable[[SimWorld], None] | None" = None,
         render_ahead: bool | None = None,
+        guard: Guard | None = None,
     ) -> None:
         self.scenario = scenario
         #: render the tactile frames and the wrench in forked workers while the run goes on
@@ -116,7 +118,7 @@ class SimWorld:
         #: the parts the processes share (facts, infrastructure, books, inbox, ...)
         self.parts: RobotParts = robot_parts(
             scenario, self.world, env=env, repo=self.repo, query=self.query, deployer=deployer, seed=self.seed,
-            horizon=self.horizon, signals=self.signals_on, trace=self.trace,
+            horizon=self.horizon, signals=self.signals_on, trace=self.trace, guard=guard,
         )
         self.core = self.parts.core
         self.deployer_name = self.core.deployer.name

@@ -460,7 +460,7 @@ class _Member:
 
     def __init__(
         self, scenario: Scenario, *, env: simpy.Environment, repo: Repository, view: RobotView, deployer: str, seed: int,
-        horizon: float, trace: Trace, edges: tuple[str, ...] = (), admission: bool = True,
+        horizon: float, trace: Trace, edges: tuple[str, ...] = (), admission: bool = True, guard: Any = None,
     ) -> None:
         self.model = scenario.model
         self.query = view
@@ -468,7 +468,7 @@ class _Member:
         rules = (lambda control: _Admission(control, view, self.edges)) if admission else None
         self.parts: RobotParts = robot_parts(
             scenario, scenario.world, env=env, repo=repo, query=view, deployer=deployer, seed=seed, horizon=horizon,
-            signals=False, trace=trace, rules=rules, keep_decisions=False,
+            signals=False, trace=trace, rules=rules, keep_decisions=False, guard=guard,
         )
         self.deployer_name = self.parts.core.deployer.name
         #: what the fleet's router tells the robot: Notify, a DEPLOYMENT_HISTORY edge written
@@ -578,6 +578,7 @@ class FleetWorld:
         until: float | None = None,
         trace: IO[str] | None = None,
         progress: Callable[[float, float], None] | None = None,
+        guard: Any = None,
     ) -> None:
         if not is_fleet(scenario):
             raise ScenarioError(f"scenario {scenario.name!r} is no fleet: its world is not a desmon.sim.fleet.Fleet")
@@ -611,7 +612,7 @@ class FleetWorld:
             view = RobotView(self.repo, m.robot, own, edges, tuple(g.name for g in m.graphs), self.cache, self.checks)
             member = _Member(
                 sc, env=env, repo=self.repo, view=view, deployer=deployer, seed=robot_seed(self.seed, m.robot),
-                horizon=self.horizon, trace=_RobotTrace(trace, m.robot), edges=edges, admission=self.fleet.admission,
+                horizon=self.horizon, trace=_RobotTrace(trace, m.robot), edges=edges, admission=self.fleet.admission, guard=guard,
             )
             self.members.append(member)
             for p in own:

@@ -12,7 +12,7 @@ from typing import Callable
 
 import networkx as nx
 
-from desmon.deployment.guard import DeployerFault
+from desmon.deployment.guard import DeployerFault, Guard
 from desmon.deployment.control import repository_control
 from desmon.deployment.core import DeploymentCore, stamp
 from desmon.deployment.invariants import check_invariants
@@ -75,14 +75,16 @@ def replay(
     deployer: str = "desmon",
     *,
     start_fails: Callable[[str, str], bool] | None = None,
+    guard: Guard | None = None,
 ) -> Replay:
-    """Run ``scenario.timeline`` through the deployment core; returns every step."""
+    """Run ``scenario.timeline`` through the deployment core (under ``guard``, the run's
+    guard: :mod:`desmon.deployment.guard`); returns every step."""
     now = [scenario.timeline[0].time if scenario.timeline else 0.0]
     repo = Repository(clock=lambda: now[0])
     load_model(repo, scenario.model)
     query = RepositoryQuery(repo)
     control = repository_control(repo, scenario.model, start_fails)
-    core = DeploymentCore(scenario.model, query, RepositoryInsert(repo, scenario.model.robot), deployer)
+    core = DeploymentCore(scenario.model, query, RepositoryInsert(repo, scenario.model.robot), deployer, guard)
     for event in scenario.initial:
         core.observe(event)
     result = Replay(scenario, core.deployer.name, repo, control)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from typing import Any, Iterable, Protocol, Sequence
 
 from desmon.deployment.deployer import Deployer
-from desmon.deployment.guard import ReactionStopped, watching
+from desmon.deployment.guard import Guard, ReactionStopped
 from desmon.errors import CheckerError, TableUnsupported
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds
@@ -200,7 +200,7 @@ def check(
     )
     search = dict(max_states=max_states, max_depth=max_depth, keep_going=keep_going, budget=budget, workers=workers)
     try:
-        with ctrl_c(budget), watching(budget.spent, budget.urgent):
+        with ctrl_c(budget), system.guard.watching(budget.spent, budget.urgent):
             return _search(system, engine, res, budget, search)
     except ReactionStopped as stop:  # in the initial reaction, before the search loop
         return finish(res, system, {}, budget.reason or str(stop), 0, budget)
@@ -255,15 +255,17 @@ def system_of(
     invariants: Iterable[str] | None = None,
     bounds: Bounds | None = None,
     symmetry: bool = False,
+    guard: Guard | None = None,
 ) -> TransitionSystem:
     """The transition system :func:`check` explores for ``scenario`` (``symmetry``: under
-    the symmetry reduction, :mod:`desmon.verify.symmetry`)."""
+    the symmetry reduction, :mod:`desmon.verify.symmetry`; ``guard``: the run's guard,
+    :mod:`desmon.deployment.guard`, its limits ``--max-commands``)."""
     reduction = None
     if symmetry:
         from desmon.verify.symmetry import Symmetry
 
         reduction = Symmetry
-    return TransitionSystem(scenario, deployer, invariants=invariants, bounds=bounds, reduction=reduction)
+    return TransitionSystem(scenario, deployer, invariants=invariants, bounds=bounds, reduction=reduction, guard=guard)
 
 
 def release(system: TransitionSystem, result: CheckResult | None = None) -> None:
@@ -297,8 +299,9 @@ class Checker:
         invariants: Iterable[str] | None = None,
         bounds: Bounds | None = None,
         symmetry: bool = False,
+        guard: Guard | None = None,
     ) -> None:
-        self.system = system_of(scenario, deployer, invariants=invariants, bounds=bounds, symmetry=symmetry)
+        self.system = system_of(scenario, deployer, invariants=invariants, bounds=bounds, symmetry=symmetry, guard=guard)
         self._last: CheckResult | None = None
 
     @property

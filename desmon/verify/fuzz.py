@@ -23,7 +23,7 @@ from typing import Any, Iterator
 from hypothesis import HealthCheck, Phase, find, settings
 from hypothesis.errors import NoSuchExample
 
-from desmon.deployment.guard import CRASH, EXIT_CRASHED, DeployerFault, ReactionStopped, watching
+from desmon.deployment.guard import CRASH, EXIT_CRASHED, DeployerFault, Guard, ReactionStopped
 from desmon.deployment.deployer import Deployer
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import bounds_of
@@ -49,7 +49,7 @@ class FuzzOutcome:
 
 def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice], enabler: Checker):  # type: ignore[no-untyped-def]
     """Run ``seq``; returns (labels up to the first violation, first violation or None)."""
-    run = RepositoryRun(scenario, deployer, enabler.bounds)
+    run = RepositoryRun(scenario, deployer, enabler.bounds, enabler.system.guard)
     labels: list[Label] = []
     bad = run.violations()
     if bad:
@@ -103,9 +103,11 @@ def fuzz(
     max_size: int = 12,
     progress: bool = False,
     rederive_up_to: int = 8,
+    guard: Guard | None = None,
 ) -> FuzzOutcome:
     bounds = bounds_of(scenario)
-    enabler = Checker(scenario, deployer, bounds=bounds)
+    guard = guard if guard is not None else Guard()
+    enabler = Checker(scenario, deployer, bounds=bounds, guard=guard)
     name = enabler.deployer_name
     head = f"{scenario.name} -- deployer {name} -- fuzz seed {seed}"
     calls = [0]
@@ -142,7 +144,7 @@ def fuzz(
     interrupted = False
     ctrl_c = [False]
     try:
-        with _ctrl_c_noted() as ctrl_c, watching(lambda: INTERRUPTED if ctrl_c[0] else ""):
+        with _ctrl_c_noted() as ctrl_c, guard.watching(lambda: INTERRUPTED if ctrl_c[0] else ""):
             seq = find(choices(scenario, max_size=max_size, bounds=bounds), fails, settings=cfg, random=random.Random(seed))
             if ctrl_c[0]:  # noted after the last sequence: the search ended on its own
                 raise KeyboardInterrupt
@@ -189,7 +191,7 @@ def _violation(
         f"  => the deployer {msg}" if crashed else f"  => {inv}: {msg}",
     ]
     if not interrupted and len(labels) <= rederive_up_to and inv != "history":
-        res = Checker(scenario, deployer, bounds=bounds, invariants=None if crashed else [inv]).run(max_states=200_000, timeout=30)
+        res = Checker(scenario, deployer, bounds=bounds, invariants=None if crashed else [inv], guard=enabler.system.guard).run(max_states=200_000, timeout=30)
         found = [c for c in res.counterexamples if c.invariant == inv]
         if found:
             c = found[0]

@@ -15,7 +15,7 @@ from typing import Any, Callable, Container, Iterator, Sequence
 from desmon.errors import CheckerError
 from desmon.deployment.control import repository_refusal
 from desmon.deployment.core import DeploymentCore, run_sync
-from desmon.deployment.guard import DeployerFault
+from desmon.deployment.guard import DeployerFault, Guard
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.invariants import INVARIANTS, Invariant, check_invariants
 from desmon.deployment.monitor import Stimulus
@@ -104,14 +104,14 @@ def repository_key(repo: Repository, core: DeploymentCore) -> Key:
 class RepositoryRun:
     """The deployment core on a fresh networkx repository, stepped event by event."""
 
-    def __init__(self, scenario: Scenario, deployer: str | Deployer = "desmon", bounds: Bounds | None = None) -> None:
+    def __init__(self, scenario: Scenario, deployer: str | Deployer = "desmon", bounds: Bounds | None = None, guard: Guard | None = None) -> None:
         self.scenario = scenario
         self.bounds = bounds or bounds_of(scenario)
         self.repo = Repository()
         load_model(self.repo, scenario.model)
         self.query = RepositoryQuery(self.repo)
         self.control = ScriptedControl(self.repo, scenario.model)
-        self.core = DeploymentCore(scenario.model, self.query, RepositoryInsert(self.repo, scenario.model.robot), deployer)
+        self.core = DeploymentCore(scenario.model, self.query, RepositoryInsert(self.repo, scenario.model.robot), deployer, guard)
         initial_reaction(self.core, scenario, self.bounds, self.control)
 
     def step(self, event: Event, fails: tuple[int, ...] = ()):  # type: ignore[no-untyped-def]

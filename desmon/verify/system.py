@@ -22,7 +22,7 @@ from collections import Counter
 from typing import Any, Callable, Container, Iterable, Iterator, Protocol
 
 from desmon.deployment.core import DeploymentCore, StepLog
-from desmon.deployment.guard import CRASH, DeployerFault
+from desmon.deployment.guard import CRASH, DeployerFault, Guard
 from desmon.deployment.ports import RaiseError
 from desmon.deployment.validity import ScalarChecks
 from desmon.deployment.deployer import Deployer
@@ -81,8 +81,11 @@ class TransitionSystem:
         invariants: Iterable[str] | None = None,
         bounds: Bounds | None = None,
         reduction: "Callable[[TransitionSystem], Reduction] | None" = None,
+        guard: Guard | None = None,
     ) -> None:
         self.scenario = scenario
+        #: the guard of this system's searches: its limits, and the budget a search installs
+        self.guard = guard if guard is not None else Guard()
         self.model = scenario.model
         if not self.model.platforms:
             raise CheckerError(
@@ -98,7 +101,7 @@ class TransitionSystem:
         names = {i.name for i in self.invariants}
         self.instant = tuple(i for i in get_invariants(list(self.bounds.instantaneous)) if i.name in names) if self.bounds.instantaneous else ()
         self.store = StateStore(self.model, ScalarChecks())
-        self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), deployer)
+        self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), deployer, self.guard)
         self.deployer_name = self.core.deployer.name
         self.store.watch = self.instant
         self.store.watch_check = self._instant_check
@@ -132,7 +135,7 @@ class TransitionSystem:
         self._instant_memo.clear()
         self._enabled_memo.clear()
         self.store = StateStore(self.model, ScalarChecks())
-        self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), self.core.deployer)
+        self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), self.core.deployer, self.guard)
         self.store.watch = self.instant
         self.store.watch_check = self._instant_check
 
@@ -144,7 +147,7 @@ class TransitionSystem:
         twin = object.__new__(type(self))
         twin.__dict__.update(self.__dict__)
         twin.store = store
-        twin.core = DeploymentCore(self.model, query, StoreInsert(store), self.core.deployer)
+        twin.core = DeploymentCore(self.model, query, StoreInsert(store), self.core.deployer, self.guard)
         store.watch = self.instant
         store.watch_check = twin._instant_check
         twin._instant_memo = instant_memo
