@@ -13,7 +13,7 @@ from typing import Any, Iterator, Mapping
 from desmon.errors import DesmonError, ScenarioError
 from desmon.model.params import overriding
 from desmon.model.scenario import Scenario
-from desmon.paths import SCENARIO_FILE, PathError, check_input_file, check_outputs_spare_modules, script_folder_on_path
+from desmon.paths import SCENARIO_FILE, PathError, check_input_file, script_folder_on_path
 
 __all__ = ["load_scenario"]
 
@@ -36,10 +36,6 @@ def load_scenario(path: str | Path, params: Mapping[str, str] | None = None) -> 
     except PathError as exc:
         raise ScenarioError(str(exc)) from None
     module = _run_script(path, p, params or {})
-    try:
-        check_outputs_spare_modules()  # an output must not overwrite a module the script imported
-    except PathError as exc:
-        raise ScenarioError(str(exc)) from None
     found = _scenario_of(path, module)
     if isinstance(found.checker, Mapping):  # bounds as a dict: checked now, as a Bounds is when built
         from desmon.errors import CheckerError

@@ -105,22 +105,13 @@ def check_output_file(
     return p
 
 
-#: the outputs the running command will write, (flag, path): set by the CLI's preflight,
-#: looked at again once user code has run (:func:`check_outputs_spare_modules`)
-_planned: list[tuple[str, str]] = []
-
-
-def plan_outputs(outputs: Iterable[tuple[str, str]]) -> None:
-    """Record the running command's outputs (the CLI, once per command)."""
-    _planned[:] = list(outputs)
-
-
-def check_outputs_spare_modules() -> None:
-    """A PathError if an output the running command will write is the file of a module
-    loaded in this process: one the scenario or the deployer imported (a helper beside
-    it), which the output would overwrite. Called after a scenario or a deployer has been
-    loaded; only outputs that exist are looked at (a module's file exists)."""
-    existing = [(flag, out, os.stat(out)) for flag, out in _planned if os.path.isfile(out)]
+def check_outputs_spare_modules(outputs: Iterable[tuple[str, str]]) -> None:
+    """A PathError if one of ``outputs`` ((flag, path) each) that the running command will
+    write is the file of a module loaded in this process: one the scenario or the
+    deployer imported (a helper beside it), which the output would overwrite. Called
+    after a scenario or a deployer has been loaded; only outputs that exist are looked
+    at (a module's file exists)."""
+    existing = [(flag, out, os.stat(out)) for flag, out in outputs if os.path.isfile(out)]
     if not existing:
         return
     for name, module in list(sys.modules.items()):

@@ -22,7 +22,6 @@ from desmon.cli import analyze, evaluate, explain, explore, fuzz, plot, replay, 
 from desmon.cli.common import EXIT_USAGE, Parser, one_line, usage_error
 from desmon.cli.options import preflight
 from desmon.errors import DesmonError
-from desmon.paths import plan_outputs
 
 __all__ = ["main", "build_parser", "COMMANDS"]
 
@@ -90,7 +89,6 @@ def _dispatch(args: argparse.Namespace) -> int:
         # this command's guard around the deployer: its limits, handed to every engine it runs
         deadline = (args.max_reaction_seconds or MAX_REACTION_SECONDS) if hasattr(args, "max_reaction_seconds") else None
         args.guard = Guard(getattr(args, "max_commands", None) or MAX_COMMANDS, deadline)  # (verify: its --timeout instead)
-        plan_outputs(())  # (preflight records this command's outputs)
         preflight(args)  # inputs, numbers, windows and output paths, before any long work
         with args.guard.deadline():
             return int(args.handler(args))

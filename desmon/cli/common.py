@@ -107,10 +107,17 @@ def deployer_arg(p: argparse.ArgumentParser, *, deadline: bool = True, default_n
 def load_scenario_of(args: argparse.Namespace) -> Scenario:
     """The scenario a command line names: ``args.scenario`` with the ``-p NAME=VALUE``
     parameters of ``args.param`` (every command that takes a scenario)."""
+    from desmon.errors import ScenarioError
     from desmon.loader import load_scenario
     from desmon.model.params import parse_assignments
+    from desmon.paths import PathError, check_outputs_spare_modules
 
-    return load_scenario(args.scenario, parse_assignments(getattr(args, "param", None)))
+    scenario = load_scenario(args.scenario, parse_assignments(getattr(args, "param", None)))
+    try:
+        check_outputs_spare_modules(getattr(args, "outputs", ()))  # an output must not overwrite a module the script imported
+    except PathError as exc:
+        raise ScenarioError(str(exc)) from None
+    return scenario
 
 
 def warn_uncovered(scenario: Scenario, horizon: float | None = None) -> None:

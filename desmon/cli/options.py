@@ -17,7 +17,7 @@ import os
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping
 
-from desmon.paths import PathError, check_input_file, check_output_file, check_outputs_spare_modules, plan_outputs, same_file
+from desmon.paths import PathError, check_input_file, check_output_file, check_outputs_spare_modules, same_file
 
 __all__ = [
     "positive_int",
@@ -256,9 +256,9 @@ def preflight(args: argparse.Namespace) -> None:
             if same_file(value, other):
                 raise PathError(f"{o.flag} {value}: {flag} writes the same file; give each output its own name")
         written.append((o.flag, value))
-    plan_outputs(written)  # looked at again once the scenario and the deployer are loaded
+    args.outputs = tuple(written)  # this command's outputs: looked at again once the scenario and the deployer are loaded
     for r in getattr(args, "_resolved", ()):
         value = getattr(args, r.dest, None)
         if isinstance(value, str):
             setattr(args, r.dest, r.resolve(value))
-    check_outputs_spare_modules()  # a module the deployer imported is an input too
+    check_outputs_spare_modules(args.outputs)  # a module the deployer imported is an input too
