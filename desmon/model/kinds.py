@@ -21,7 +21,7 @@ from desmon.model.checks import suggest
 
 if TYPE_CHECKING:
     from desmon.model.platform import Device, Platform
-    from desmon.model.system import PlatformState
+    from desmon.model.state import PlatformState
 
 __all__ = [
     "PLATFORM_HAS", "Placing", "Columns", "Constraint", "Requirement", "requirement_kinds", "requirement_class",

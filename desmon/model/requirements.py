@@ -38,7 +38,7 @@ from desmon.model.kinds import (
 
 if TYPE_CHECKING:
     from desmon.model.platform import Device, Platform
-    from desmon.model.system import PlatformState
+    from desmon.model.state import PlatformState
 
 __all__ = [
     "Quantity",
