@@ -786,9 +786,10 @@ class PlatformMemoColumnChecks(_ColumnsFirst, _validity.PlatformMemoChecks):
     they change; no whole answer is memoised). Same answers as
     :class:`~desmon.deployment.validity.ScalarChecks`."""
 
-    def __init__(self, *, size: int = _validity._MEMO_SIZE, min_platforms: int = VECTOR_MIN_PLATFORMS) -> None:
+    def __init__(self, *, min_platforms: int = VECTOR_MIN_PLATFORMS, **memo: int) -> None:
+        # memo: PlatformMemoChecks' own options (its size), with its defaults
         self.min_platforms = min_platforms
-        super().__init__(size=size)
+        super().__init__(**memo)
 
     def _scalar(self, reqs: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool) -> _validity.Validity:
         return _validity.PlatformMemoChecks.compute(self, reqs, states, graph, reasons)
