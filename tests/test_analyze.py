@@ -21,7 +21,7 @@ import scipy.sparse as sp
 
 from desmon.analyze import AnalysisError, analyze, build_chain, markov_world
 from desmon.analyze.agreement import agreement, simulated_exposure
-from desmon.analyze.chain import _rewards
+from desmon.analyze.chain import rewards
 from desmon.analyze.solve import steady_state, transient
 from desmon.cli import main
 from desmon.deployment.control import ControlRules
@@ -278,7 +278,7 @@ def _next_step_reward(a):
     chain = a.chain
     shifted = replace(chain.world, steps=chain.world.steps[1:] + chain.world.steps[:1])
     mutated = replace(chain, world=shifted)
-    _rewards(mutated, ControlRules(chain.system.model), {})
+    rewards(mutated, ControlRules(chain.system.model), {})
     Q, _ = chain.generator()
     p0 = np.zeros(chain.n)
     for i, p in chain.initial:

@@ -2,10 +2,13 @@
 
 The import graph is built from the source with ``ast``: every ``import`` and
 ``from ... import`` statement of every module of ``desmon/`` (function-level ones
-included; only the ``if TYPE_CHECKING:`` blocks, which never run, are left out), with
-``from package import name`` resolved to the submodule ``package.name`` when there is
-one. Importing a submodule also runs its package's ``__init__``, but that edge is
-implied by Python, not written by the code, and is left out.
+included), with ``from package import name`` resolved to the submodule
+``package.name`` when there is one. Importing a submodule also runs its package's
+``__init__``, but that edge is implied by Python, not written by the code, and is left
+out. Two graphs: the imports that run (the bodies of ``if TYPE_CHECKING:`` left out),
+and the dependencies (those bodies counted too: a type named in a signature is a
+dependency all the same). The layers and the circles are checked on the dependencies:
+a circle through a type-only import is a circle.
 """
 
 from __future__ import annotations
@@ -39,13 +42,14 @@ def _is_type_checking(test: ast.expr) -> bool:
     )
 
 
-def _imports(tree: ast.AST) -> list[ast.Import | ast.ImportFrom]:
-    """Every import statement that can run (the bodies of ``if TYPE_CHECKING:`` skipped)."""
+def _imports(tree: ast.AST, *, type_only: bool = False) -> list[ast.Import | ast.ImportFrom]:
+    """Every import statement that can run (the bodies of ``if TYPE_CHECKING:`` skipped),
+    or with ``type_only`` every import statement (those bodies too)."""
     out: list[ast.Import | ast.ImportFrom] = []
     todo: list[ast.AST] = [tree]
     while todo:
         node = todo.pop()
-        if isinstance(node, ast.If) and _is_type_checking(node.test):
+        if not type_only and isinstance(node, ast.If) and _is_type_checking(node.test):
             todo.extend(node.orelse)
             continue
         if isinstance(node, (ast.Import, ast.ImportFrom)):
@@ -54,29 +58,47 @@ def _imports(tree: ast.AST) -> list[ast.Import | ast.ImportFrom]:
     return out
 
 
-def import_graph(trees: dict[str, ast.Module] | None = None) -> nx.DiGraph:
+def _package_of(name: str) -> str:
+    """The package a module's relative imports start from (a package's is itself)."""
+    return name if (PACKAGE.parent / name.replace(".", "/") / "__init__.py").exists() else name.rpartition(".")[0]
+
+
+def _from_base(node: ast.ImportFrom, package: str) -> str:
+    """The absolute name of what ``from ... import`` imports from."""
+    base = node.module or ""
+    if node.level:
+        anchor = package.split(".")
+        anchor = anchor[: len(anchor) - (node.level - 1)]
+        base = ".".join(anchor + ([base] if base else []))
+    return base
+
+
+def import_graph(trees: dict[str, ast.Module] | None = None, *, type_only: bool = False) -> nx.DiGraph:
     """desmon's modules and the imports between them (see the module docstring);
-    ``trees``: the modules' syntax trees if already parsed."""
+    ``trees``: the modules' syntax trees if already parsed; ``type_only``: the
+    ``if TYPE_CHECKING:`` imports counted too (the dependencies)."""
     paths = {_module_name(p): p for p in PACKAGE.rglob("*.py")}
     graph = nx.DiGraph()
     graph.add_nodes_from(paths)
     for name, path in paths.items():
-        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        package = _package_of(name)
         tree = trees[name] if trees is not None else ast.parse(path.read_text(), str(path))
-        for node in _imports(tree):
+        for node in _imports(tree, type_only=type_only):
             if isinstance(node, ast.Import):
                 targets = [a.name for a in node.names]
             else:
-                base = node.module or ""
-                if node.level:
-                    anchor = package.split(".")
-                    anchor = anchor[: len(anchor) - (node.level - 1)]
-                    base = ".".join(anchor + ([base] if base else []))
+                base = _from_base(node, package)
                 targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in paths else base for a in node.names]
             for target in targets:
                 if target in paths and target != name:
                     graph.add_edge(name, target)
     return graph
+
+
+def import_circles(graph: nx.DiGraph) -> list[str]:
+    """Every circle of ``graph``, as ``a -> b -> a`` (from its first module in name order)."""
+    rotated = [c[c.index(min(c)):] + c[: c.index(min(c))] for c in nx.simple_cycles(graph)]
+    return [" -> ".join([*c, c[0]]) for c in sorted(rotated)]
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +109,14 @@ def sources() -> dict[str, tuple[Path, ast.Module]]:
 
 @pytest.fixture(scope="module")
 def graph(sources) -> nx.DiGraph:  # type: ignore[no-untyped-def]
+    """The imports that run."""
     return import_graph({name: tree for name, (_p, tree) in sources.items()})
+
+
+@pytest.fixture(scope="module")
+def dependencies(sources) -> nx.DiGraph:  # type: ignore[no-untyped-def]
+    """The imports that run and the type-only ones (``if TYPE_CHECKING:``)."""
+    return import_graph({name: tree for name, (_p, tree) in sources.items()}, type_only=True)
 
 
 def test_the_import_graph_sees_function_level_and_submodule_imports(graph):
@@ -97,9 +126,17 @@ def test_the_import_graph_sees_function_level_and_submodule_imports(graph):
     assert graph.has_edge("desmon.verify", CHOOSER)
 
 
-def test_no_module_of_desmon_is_part_of_an_import_circle(graph):
-    cycles = sorted(nx.simple_cycles(graph))
-    assert not cycles, "import circles:\n" + "\n".join(" -> ".join([*c, c[0]]) for c in cycles)
+def test_the_dependencies_are_the_imports_and_the_type_only_ones(graph, dependencies):
+    assert set(graph.edges) <= set(dependencies.edges)
+    # the public API names its verbs' types for type checkers only
+    assert dependencies.has_edge("desmon", "desmon.api") and not graph.has_edge("desmon", "desmon.api")
+
+
+def test_no_module_of_desmon_is_part_of_an_import_circle(dependencies):
+    # a type-only import counts: two modules that name each other's types are one module
+    # split in two (move the shared type down, or let the lower one own a Protocol)
+    cycles = import_circles(dependencies)
+    assert not cycles, "import circles (type-only imports counted):\n" + "\n".join(cycles)
 
 
 #: The layer of every module of desmon, by the longest matching name: a module imports
@@ -147,21 +184,45 @@ def test_every_module_of_desmon_has_a_layer(graph):
     assert {"desmon.loader", "desmon.cli.options", "desmon.paths"} <= set(graph.nodes)
 
 
-def test_imports_only_point_down(graph):
+def upward_imports(graph: nx.DiGraph) -> list[str]:
+    """Every edge of ``graph`` from a module to one of its own layer (another row) or above."""
     bad = []
-    for a, b in graph.edges:
+    for a, b in sorted(graph.edges):
         (row_a, la), (row_b, lb) = layer_of(a), layer_of(b)
         if la == lb and row_a == row_b:
             continue  # inside one row: a package's own modules
         if lb >= la:
             bad.append(f"{a} (layer {la:g}, {row_a}) imports {b} (layer {lb:g}, {row_b})")
-    assert not bad, "\n".join(bad)
+    return bad
+
+
+def test_imports_only_point_down(dependencies):
+    bad = upward_imports(dependencies)
+    assert not bad, "imports that do not point down (type-only imports counted):\n" + "\n".join(bad)
 
 
 def test_the_layer_rule_catches_an_upward_import():
     g = nx.DiGraph([("desmon.model.scenario", "desmon.sim.world"), ("desmon.paths", "desmon.loader")])
-    ups = [(a, b) for a, b in g.edges if layer_of(b)[1] >= layer_of(a)[1]]
-    assert ups == list(g.edges)
+    assert [line.split(" ", 1)[0] for line in upward_imports(g)] == ["desmon.model.scenario", "desmon.paths"]
+
+
+_TYPE_ONLY_UPWARD = """
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from desmon.deployment.validity import Validity
+"""
+
+
+def test_the_circle_and_layer_rules_count_a_type_only_import(sources):
+    # plant a type-only import of validity (layer 4) into the model's kinds (layer 2), which
+    # validity imports: the imports that run see nothing, the dependencies a circle going up
+    trees = {name: tree for name, (_p, tree) in sources.items()}
+    trees["desmon.model.kinds"] = ast.parse(ast.unparse(trees["desmon.model.kinds"]) + _TYPE_ONLY_UPWARD)
+    runs, deps = import_graph(trees), import_graph(trees, type_only=True)
+    assert not runs.has_edge("desmon.model.kinds", "desmon.deployment.validity")
+    assert "desmon.deployment.validity -> desmon.model.kinds -> desmon.deployment.validity" in import_circles(deps)
+    assert any(line.startswith("desmon.model.kinds (layer 2") for line in upward_imports(deps))
 
 
 @pytest.mark.parametrize("doc, heading", [("README.md", "## Architecture"), ("docs/design.md", "## 2. Layers")])
@@ -178,11 +239,11 @@ def test_the_docs_layer_tables_give_every_row_its_layer(root, doc, heading):
         assert layer_of_path.get(path) == layer, f"{doc}'s layer table gives {path} layer {layer_of_path.get(path)}, the test {layer}"
 
 
-def test_each_checker_engine_imports_nothing_of_another_engine(graph):
-    assert set(ENGINES) <= set(graph.nodes), "an engine module is missing"
+def test_each_checker_engine_imports_nothing_of_another_engine(dependencies):
+    assert set(ENGINES) <= set(dependencies.nodes), "an engine module is missing"
     bad = []
     for engine in ENGINES:
-        reached = nx.descendants(graph, engine)
+        reached = nx.descendants(dependencies, engine)
         bad += [f"{engine} reaches {other}" for other in ENGINES if other in reached]
         if CHOOSER in reached:
             bad.append(f"{engine} reaches the engine choice {CHOOSER}")
@@ -405,6 +466,42 @@ def frame_reads(tree: ast.Module) -> list[tuple[int, str]]:
     return sorted(out)
 
 
+def _is_private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def private_imports(name: str, tree: ast.Module, modules: set[str]) -> list[tuple[int, str]]:
+    """Every private name (a leading underscore; dunders are public) module ``name`` takes
+    from another module of ``modules``: ``from m import _x``, and ``m._x`` with ``m`` a
+    module it imports (``import a.m``, ``from a import m as _m``). What a module keeps
+    private is its own: another module that needs it needs a public name (or the code
+    moved to where it is used)."""
+    package = _package_of(name)
+    out: list[tuple[int, str]] = []
+    bound: dict[str, str] = {}  # a local name -> the module of desmon it names
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            base = _from_base(node, package)
+            for a in node.names:
+                full = f"{base}.{a.name}"
+                if full in modules:
+                    bound[a.asname or a.name] = full
+                elif base in modules and base != name and _is_private(a.name):
+                    out.append((node.lineno, f"from {base} import {a.name}"))
+        elif isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name in modules:
+                    bound[a.asname or a.name.split(".")[0]] = a.name if a.asname else a.name.split(".")[0]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and _is_private(node.attr):
+            chain = ast.unparse(node.value)
+            root, _dot, rest = chain.partition(".")
+            module = bound[root] + _dot + rest if root in bound else None
+            if module in modules and module != name:
+                out.append((node.lineno, f"{chain}.{node.attr} (a private name of {module})"))
+    return sorted(set(out))
+
+
 def long_classes(tree: ast.Module, limit: int = MAX_CLASS_LINES) -> list[tuple[int, str]]:
     return sorted(
         (n.lineno, f"class {n.name}: {n.end_lineno - n.lineno + 1} lines")  # type: ignore[operator]
@@ -432,6 +529,16 @@ def test_no_frame_introspection(sources):
     assert not bad, "sys._getframe and other frame reads (code must not depend on who calls it):\n" + "\n".join(bad)
 
 
+def test_no_module_takes_another_modules_private_names(sources):
+    modules = set(sources)
+    bad = [
+        f"{p.relative_to(ROOT).as_posix()}:{line} {what}"
+        for name, (p, tree) in sorted(sources.items())
+        for line, what in private_imports(name, tree, modules)
+    ]
+    assert not bad, "private names taken from another module (make the name public, or move the code to where it is used):\n" + "\n".join(bad)
+
+
 def test_no_file_of_desmon_is_over_900_lines(sources):
     bad = [f"{p.relative_to(ROOT).as_posix()}: {n} lines" for p, _t in sources.values() if (n := len(p.read_text().splitlines())) > MAX_FILE_LINES]
     assert not bad, f"files over {MAX_FILE_LINES} lines (split them by responsibility):\n" + "\n".join(sorted(bad))
@@ -454,6 +561,7 @@ import sys
 from desmon.deployment import validity as _validity
 import desmon.deployment.placement
 from desmon.model.system import PlatformState
+from desmon.model.kinds import _fmt, Requirement as _Requirement, __doc__
 
 _RECORDING = None
 
@@ -469,7 +577,8 @@ def wire(rec):
     del _validity._cache
     PlatformState.load = property(lambda self: 0)
     caller = inspect.currentframe().f_back
-    return sys._getframe(1).f_globals, caller
+    memo = _validity._MEMO_SIZE + desmon.deployment.placement._cols_names(rec)
+    return sys._getframe(1).f_globals, caller, memo
 
 
 class Big:
@@ -511,11 +620,21 @@ def test_each_rule_catches_a_source_that_breaks_it():
         "_validity._observer", "desmon.deployment.placement.VECTOR_MIN_PLATFORMS", "setattr(_validity,",
         "_validity._TABLE['k']", "_validity._HOOKS.append(rec)", "_validity._cache", "PlatformState.load",
     ], writes
-    assert global_statements(bad) == [(12, "global _RECORDING")]
+    assert global_statements(bad) == [(13, "global _RECORDING")]
     assert [w for _l, w in frame_reads(bad)] == ["inspect.currentframe", "inspect.currentframe().f_back", "sys._getframe"]
-    assert long_classes(bad) == [(25, "class Big: 302 lines")]
+    assert long_classes(bad) == [(27, "class Big: 302 lines")]
+    modules = {"desmon.deployment.validity", "desmon.deployment.placement", "desmon.model.system", "desmon.model.kinds", "desmon.deployment"}
+    taken = [w.split(" (", 1)[0] for _l, w in private_imports("desmon.sim.planted", bad, modules)]
+    assert taken == [
+        "from desmon.model.kinds import _fmt", "_validity._observer", "_validity._TABLE", "_validity._HOOKS", "_validity._cache",
+        "_validity._MEMO_SIZE", "desmon.deployment.placement._cols_names",
+    ], taken
+    # a module's own private names are its own (a private alias of a public name, a dunder: no breach)
+    own = [w.split(" (", 1)[0] for _l, w in private_imports("desmon.deployment.validity", bad, modules)]
+    assert own == ["from desmon.model.kinds import _fmt", "desmon.deployment.placement._cols_names"], own
 
 
 def test_the_rules_keep_parameters_locals_and_the_import_recipe():
     good = ast.parse(_KEEPS_EVERY_RULE)
     assert foreign_writes(good) == global_statements(good) == frame_reads(good) == long_classes(good) == []
+    assert private_imports("desmon.sim.planted", good, {"desmon.deployment.validity", "desmon.deployment"}) == []

@@ -48,7 +48,7 @@ def test_capacity_texts_are_formatted_from_the_columns_not_asked_row_by_row(stat
     cols = PlatformColumns(states)
     for r in reqs:
         rows = failing_rows(cols, r, graph)
-        if len(rows) and r.resource in cols._caps:
+        if len(rows) and r.resource in cols.facts.caps:
             assert placement._cols_capacity_texts(cols, r, rows, graph) == scalar_texts(states, r, rows, graph)
 
 

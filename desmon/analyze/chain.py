@@ -76,7 +76,7 @@ from desmon.verify.system import TransitionSystem
 
 from desmon.analyze.markov import AnalysisError, MarkovWorld, chain_bounds
 
-__all__ = ["ChainState", "Chain", "build_chain", "BudgetExceeded", "recognised"]
+__all__ = ["ChainState", "Chain", "Builder", "build_chain", "rewards", "BudgetExceeded", "recognised"]
 
 
 class BudgetExceeded(AnalysisError):
@@ -189,7 +189,7 @@ class Chain:
             yield "lease requested " + ", ".join(s.requested)
 
 
-class _Builder:
+class Builder:
     """Breadth-first over chain states; one transition system, its reactions memoised."""
 
     def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld, *, where: str = "", guard: Any = None) -> None:
@@ -515,7 +515,7 @@ def build_chain(
     start latency -> p; 0 where not given); ``guard``: the run's guard around the deployer
     (:mod:`desmon.deployment.guard`)."""
     t0 = time.perf_counter()
-    b = _Builder(scenario, deployer, mw, guard=guard)
+    b = Builder(scenario, deployer, mw, guard=guard)
     try:
         key0 = b.system.initial()
     except CheckerError as exc:
@@ -556,7 +556,7 @@ def build_chain(
             progress(i)
     chain = Chain(states, np.frombuffer(rows, dtype=np.int64), np.frombuffer(cols, dtype=np.int64), np.frombuffer(rates, dtype=float), mw, b.system)
     chain.initial = tuple(sorted(initial.items()))
-    _rewards(chain, b.rules, dict(miss or {}), dict(start_catch or {}))
+    rewards(chain, b.rules, dict(miss or {}), dict(start_catch or {}))
     chain.build_s = time.perf_counter() - t0
     chain.reactions = b.reactions
     return chain
@@ -594,7 +594,7 @@ def start_catch_of(mw: Any, s: Any, g: str, catch: dict[float, float]) -> float:
     return best
 
 
-def _rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any], start_catch: dict[str, Any] | None = None) -> None:
+def rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any], start_catch: dict[str, Any] | None = None) -> None:
     """The labels of every state by the one definition of :mod:`desmon.deployment.exposure`
     (unmonitored, by cause; risky; excluded) and its undetected-slip rate: slips arrive
     at ``slip_rate`` while an object is in the hand, and each watching detector misses

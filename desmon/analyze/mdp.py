@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from desmon.analyze.chain import BudgetExceeded, ChainState, _Builder, _rewards, recognised
+from desmon.analyze.chain import BudgetExceeded, Builder, ChainState, recognised, rewards
 from desmon.analyze.markov import AnalysisError, MarkovWorld, markov_world
 from desmon.analyze.solve import one_blas_thread, steady_state
 from desmon.deployment.control import ControlRules
@@ -138,9 +138,9 @@ class _MDP:
         orders = list(itertools.permutations(names))
         self.orders = orders
         self.builders = [
-            _Builder(_ordered(scenario, o), deployer, mw, where="" if k == 0 else
-                     f"with the platforms in the order {', '.join(o)}, one --placements tries (desmon verify runs the declared order)",
-                     guard=guard)
+            Builder(_ordered(scenario, o), deployer, mw, where="" if k == 0 else
+                    f"with the platforms in the order {', '.join(o)}, one --placements tries (desmon verify runs the declared order)",
+                    guard=guard)
             for k, o in enumerate(orders)
         ]
         self.main = self.builders[0]
@@ -261,7 +261,7 @@ def optimality_gap(scenario: Scenario, deployer: Any = "desmon", *, phases: int 
     from desmon.analyze.chain import Chain
 
     holder = Chain(mdp.states, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), mw, mdp.main.system)
-    _rewards(holder, ControlRules(scenario.model), {})
+    rewards(holder, ControlRules(scenario.model), {})
     r = holder.unmonitored
 
     def describe(i: int) -> str:

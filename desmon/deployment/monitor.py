@@ -1,18 +1,19 @@
 """The context monitor's interpretation: observations and events -> repository facts.
 
 Pure logic over an :class:`InsertPort` (implemented by the networkx repository adapter
-and by the checker's state store): it decides *what* to write and reports what changed
-as a :class:`Stimulus`, which is what wakes the selector and the deployer (Notify).
+and by the checker's state store; the events write through it, so it is
+:mod:`desmon.model.events`' and re-exported here): it decides *what* to write and
+reports what changed as a :class:`Stimulus`, which is what wakes the selector and the
+deployer (Notify).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
 
 from desmon.errors import ModelError
 from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
-from desmon.model.events import Effects, Event, RequirementChange
+from desmon.model.events import Effects, Event, InsertPort
 
 __all__ = ["GripperObservation", "interpret", "InsertPort", "Stimulus", "observe"]
 
@@ -45,23 +46,6 @@ def interpret(obs: GripperObservation) -> str:
     if obs.gripper == "closed" and obs.holding:
         return MOVE_BASE if obs.base_moving else HOLD
     return IDLE
-
-
-class InsertPort(Protocol):
-    """The Insert facts the context monitor writes; each returns whether anything changed."""
-
-    def set_context(self, context: str) -> bool: ...
-
-    def set_device_working(self, device: str, working: bool) -> str | None:
-        """Returns the platform whose HAS_DEVICE edge changed, or None."""
-
-    def set_platform_up(self, platform: str, up: bool) -> bool: ...
-
-    def set_load(self, platform: str, resource: str, amount: float) -> bool: ...
-
-    def change_requirements(self, change: RequirementChange) -> tuple[str, ...] | None:
-        """Apply a requirement change; returns the platforms its graph is deployed on, or
-        None if the requirements did not change."""
 
 
 @dataclass(frozen=True, slots=True)

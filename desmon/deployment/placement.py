@@ -58,12 +58,12 @@ from __future__ import annotations
 import sys
 import threading
 from itertools import repeat
-from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
 from desmon.deployment import validity as _validity
+from desmon.deployment.columns import FactColumns, inexact
 from desmon.deployment.ports import PlatformHandle
 from desmon.errors import ModelError, QueryError
 from desmon.model.requirements import Capacity, Option
@@ -74,6 +74,7 @@ from desmon.repository.store import ADD_NODE
 __all__ = [
     "VECTOR_MIN_PLATFORMS",
     "PlatformColumns",
+    "ReasonMemo",
     "ChangeLogColumns",
     "vector_validity",
     "acceptable",
@@ -97,9 +98,6 @@ _KEPT = 2
 #: least recently asked requirements lose theirs.
 _REASONS_KEPT = 100_000
 
-#: Integers beyond this do not survive float64 sums exactly: such rows decline.
-_EXACT_INT = 2**40
-
 #: Python 3.12's ``sum`` adds floats with compensation; there, a Capacity sum of three
 #: or more shares is left to the scalar code (row by row) so the verdicts stay equal.
 _COMPENSATED_SUM = sys.version_info >= (3, 12)
@@ -112,10 +110,6 @@ COUNTS: dict[str, int] = {"vector": 0, "declined": 0}
 _LOCK = threading.RLock()
 
 
-def _inexact(x: object) -> bool:
-    return type(x) is int and abs(x) > _EXACT_INT  # type: ignore[arg-type]
-
-
 def supported(requirements: Iterable[object]) -> bool:
     """True if every requirement is of a kind with columns (its class, the one defining its
     ``holds``, defines ``column_mask``: a subclass changing the semantics declines) whose
@@ -123,7 +117,7 @@ def supported(requirements: Iterable[object]) -> bool:
     for req in requirements:
         if not getattr(type(req), "vectorised", False):
             return False
-        if any(_inexact(x) for x in req.column_numbers()):  # type: ignore[attr-defined]
+        if any(inexact(x) for x in req.column_numbers()):  # type: ignore[attr-defined]
             return False
     return True
 
@@ -132,12 +126,41 @@ def supported(requirements: Iterable[object]) -> bool:
 _Pair = tuple[str, tuple[Any, ...]]
 
 
-@dataclass(slots=True)
-class _Shares:
-    """One resource's deployed shares: rows x slots amounts and the graph codes (-1: empty)."""
+class ReasonMemo:
+    """(requirement, graph) -> row -> its Failure (the scalar text), kept until the row
+    changes; beyond :data:`_REASONS_KEPT` failures the least recently asked requirements
+    lose theirs."""
 
-    amounts: np.ndarray
-    graphs: np.ndarray
+    def __init__(self) -> None:
+        self._memos: dict[tuple[str, _validity.Placing], dict[int, _validity.Failure]] = {}
+        self._size = 0  # failures held
+
+    def of(self, req: object, graph: _validity.Placing) -> dict[int, _validity.Failure]:
+        """Row -> the Failure of ``req`` for ``graph`` (to be filled: say how many with :meth:`added`)."""
+        # repr: equal requirements may read differently (2 vs 2.0); only a Capacity's text
+        # depends on the graph placed (whose shares it leaves out)
+        key = (repr(req), graph if type(req).texts_read_graph else None)  # type: ignore[attr-defined]
+        memo = self._memos.pop(key, None)
+        if memo is None:
+            memo = {}
+            while self._size > _REASONS_KEPT and self._memos:  # least recently asked first
+                self._size -= len(self._memos.pop(next(iter(self._memos))))
+        self._memos[key] = memo  # (re)inserted last: the most recently asked
+        return memo
+
+    def added(self, k: int) -> None:
+        """``k`` failures were put into a memo of :meth:`of`."""
+        self._size += k
+
+    def drop_row(self, i: int) -> None:
+        """Forget row ``i``'s failures (its facts changed)."""
+        for memo in self._memos.values():
+            if memo.pop(i, None) is not None:
+                self._size -= 1
+
+    def clear(self) -> None:
+        self._memos.clear()
+        self._size = 0
 
 
 class PlatformColumns:
@@ -145,7 +168,9 @@ class PlatformColumns:
 
     Build it from the states (``PlatformColumns(states)``), keep it current with
     :meth:`update` (rows by index) or :meth:`sync` (a whole new states tuple, only
-    the changed rows rewritten), and ask :meth:`validity` or :meth:`acceptable`.
+    the changed rows rewritten), and ask :meth:`validity` or :meth:`acceptable`. The
+    columns are its :class:`~desmon.deployment.columns.FactColumns`; the failures it
+    explained, its :class:`ReasonMemo`.
     """
 
     def __init__(self, states: Sequence[PlatformState]) -> None:
@@ -155,46 +180,10 @@ class PlatformColumns:
                 raise ModelError(f"platform columns: item {i} = {s!r} is not a PlatformState: pass query.platform_states()")
         self.states: tuple[PlatformState, ...] = states
         self.n = len(states)
-        self._names = np.array([s.platform.name for s in states], dtype=object)
-        self._graph_code: dict[str, int] = {}
-        #: attribute -> repr(value) -> code (the reason text shows the repr), and
-        #: attribute -> str(value) -> its codes (attributes compare as text: 1 and "1" match)
-        self._attr_code: dict[str, dict[str, int]] = {}
-        self._attr_text: dict[str, dict[str, list[int]]] = {}
-        self._inexact_rows: set[int] = set()
-        self._order: np.ndarray | None = None
-        #: (requirement, graph) -> row -> its Failure (the scalar text); a rewritten row
-        #: drops its entries
-        self._reasons: dict[tuple[str, _validity.Placing], dict[int, _validity.Failure]] = {}
-        self._memoised = 0
-        self._build(states)
+        self.facts = FactColumns(states)
+        self.reasons = ReasonMemo()
 
-    # -- building ------------------------------------------------------------------------
-    def _build(self, states: tuple[PlatformState, ...]) -> None:
-        n = self.n
-        self._up = np.fromiter((s.up for s in states), dtype=bool, count=n)
-        self._on_demand = np.fromiter((s.platform.on_demand for s in states), dtype=bool, count=n)
-        self._pref = np.fromiter((s.platform.preference for s in states), dtype=np.float64, count=n)
-        caps: dict[str, dict[int, float]] = {}
-        loads: dict[str, dict[int, float]] = {}
-        props: dict[str, dict[int, float]] = {}
-        attrs: dict[str, dict[int, int]] = {}
-        kinds: dict[str, dict[int, int]] = {}
-        vendors: dict[tuple[str, str], dict[int, int]] = {}
-        shares: dict[str, dict[int, list[tuple[int, float]]]] = {}
-        for i, s in enumerate(states):
-            facts = _cols_facts(self, i, s)
-            for table, row in zip((caps, loads, props, attrs, kinds, vendors, shares), facts):
-                for key, value in row.items():
-                    table.setdefault(key, {})[i] = value  # type: ignore[index]
-        self._caps = {k: _cols_column(self, v, np.nan, np.float64) for k, v in caps.items()}
-        self._loads = {k: _cols_column(self, v, 0.0, np.float64) for k, v in loads.items()}
-        self._props = {k: _cols_column(self, v, np.nan, np.float64) for k, v in props.items()}
-        self._attrs = {k: _cols_column(self, v, -1, np.int32) for k, v in attrs.items()}
-        self._kinds = {k: _cols_column(self, v, 0, np.int32) for k, v in kinds.items()}
-        self._vendors = {k: _cols_column(self, v, 0, np.int32) for k, v in vendors.items()}
-        self._shares = {k: _cols_share_matrix(self, v) for k, v in shares.items()}
-
+    # -- keeping current ---------------------------------------------------------------------
     def update(self, changes: Mapping[int, PlatformState] | Iterable[tuple[int, PlatformState]]) -> int:
         """Rewrite the rows ``index -> new state`` (the same platform, new facts); returns
         how many rows changed. A state for another platform than the row's is refused."""
@@ -206,12 +195,12 @@ class PlatformColumns:
                 raise QueryError(f"platform columns: row {i!r} is not an index in 0..{self.n - 1}: pass the platform's position")
             if not isinstance(s, PlatformState):
                 raise ModelError(f"platform columns: row {i} = {s!r} is not a PlatformState: pass the platform's new state")
-            if s.platform.name != self._names[i]:
+            if s.platform.name != self.facts.names[i]:
                 raise QueryError(
-                    f"platform columns: row {i} holds platform {self._names[i]!r}, not {s.platform.name!r}: "
+                    f"platform columns: row {i} holds platform {self.facts.names[i]!r}, not {s.platform.name!r}: "
                     "build new columns for a changed platform list"
                 )
-            _cols_rewrite(self, i, s)
+            self._rewrite(i, s)
             states[i] = s
             count += 1
         self.states = tuple(states)
@@ -228,39 +217,37 @@ class PlatformColumns:
         if old == states:  # C-level; element identity first, so cheap for the same objects
             self.states = states
             return True
-        names = self._names
+        names = self.facts.names
         changed = [(i, s) for i, (a, s) in enumerate(zip(old, states)) if a is not s and a != s]
         if any(s.platform.name != names[i] for i, s in changed):
             return False
         for i, s in changed:
-            _cols_rewrite(self, i, s)
+            self._rewrite(i, s)
         self.states = states
         return True
 
+    def _rewrite(self, i: int, s: PlatformState) -> None:
+        self.reasons.drop_row(i)
+        self.facts.rewrite(i, s)
+
     def forget_reasons(self) -> None:
         """Drop every memoised failure (memory; benchmarks timing a cold explanation)."""
-        self._reasons.clear()
-        self._memoised = 0
+        self.reasons.clear()
 
     # -- facts -------------------------------------------------------------------------------
     @property
     def exact(self) -> bool:
         """False if some row holds a number float64 cannot be trusted with (see module doc)."""
-        return not self._inexact_rows
+        return not self.facts.inexact_rows
 
     @property
     def nbytes(self) -> int:
         """Bytes held by the numpy columns (the names and code books not counted)."""
-        arrays = [self._up, self._on_demand, self._pref, *self._caps.values(), *self._loads.values(), *self._props.values()]
-        arrays += [*self._attrs.values(), *self._kinds.values(), *self._vendors.values()]
-        arrays += [a for sh in self._shares.values() for a in (sh.amounts, sh.graphs)]
-        return sum(a.nbytes for a in arrays)
+        return self.facts.nbytes
 
     def order(self) -> np.ndarray:
         """Row indices in preference order (higher ``preference`` first, then declaration order)."""
-        if self._order is None:
-            self._order = np.argsort(-self._pref, kind="stable")
-        return self._order
+        return self.facts.order()
 
     # -- requirement kinds, vectorised -----------------------------------------------------------
     # Each kind's ``column_mask`` and ``column_keys`` (desmon.model.requirements) combine the
@@ -273,14 +260,14 @@ class PlatformColumns:
 
     def count(self, kind: str, vendor: str | None = None) -> np.ndarray:
         """Working devices of ``kind`` (of ``vendor``) per row."""
-        col = self._kinds.get(kind) if vendor is None else self._vendors.get((kind, vendor))
+        col = self.facts.kinds.get(kind) if vendor is None else self.facts.vendors.get((kind, vendor))
         return col if col is not None else np.zeros(self.n, dtype=np.int32)
 
     _count = count
 
     def prop(self, name: str) -> np.ndarray | None:
         """The numeric property ``name`` per row (NaN where missing), or None if no row has it."""
-        return self._props.get(name)
+        return self.facts.props.get(name)
 
     def none(self) -> np.ndarray:
         """A mask holding on no row."""
@@ -288,8 +275,8 @@ class PlatformColumns:
 
     def attr_is(self, name: str, value: object) -> np.ndarray:
         """Where attribute ``name`` equals ``value`` as text."""
-        col = self._attrs.get(name)
-        codes = self._attr_text.get(name, {}).get(str(value))
+        col = self.facts.attrs.get(name)
+        codes = self.facts.attr_text.get(name, {}).get(str(value))
         if col is None or not codes:
             return np.zeros(self.n, dtype=bool)
         return col == codes[0] if len(codes) == 1 else np.isin(col, codes)
@@ -313,7 +300,7 @@ class PlatformColumns:
 
     def hosted_by(self, platforms: Iterable[str]) -> np.ndarray:
         """Where the row's platform is one of ``platforms``."""
-        return np.isin(self._names, tuple(platforms))
+        return np.isin(self.facts.names, tuple(platforms))
 
     def row_key(self, rows: np.ndarray) -> np.ndarray:
         """A text key for ``rows``: every row its own class."""
@@ -325,12 +312,12 @@ class PlatformColumns:
 
     def prop_key(self, name: str, rows: np.ndarray) -> np.ndarray:
         """A text key showing property ``name`` (by its bits: -0.0 and 0.0 differ; NaN: missing)."""
-        col = self._props.get(name)
+        col = self.facts.props.get(name)
         return col[rows].view(np.int64) if col is not None else np.zeros(len(rows), dtype=np.int64)
 
     def attr_key(self, name: str, rows: np.ndarray) -> np.ndarray:
         """A text key showing attribute ``name`` as written (codes of its repr; -1: missing)."""
-        col = self._attrs.get(name)
+        col = self.facts.attrs.get(name)
         return col[rows] if col is not None else np.zeros(len(rows), dtype=np.int32)
 
     def option_keys(self, options: Iterable[Option], rows: np.ndarray) -> np.ndarray:
@@ -339,12 +326,12 @@ class PlatformColumns:
 
     def capacity(self, req: Capacity, graph: _validity.Placing) -> np.ndarray:
         """Where a Capacity holds, the free amount summed as :meth:`Capacity.holds` sums it."""
-        cap = self._caps.get(req.resource)
+        cap = self.facts.caps.get(req.resource)
         if cap is None:
             return np.zeros(self.n, dtype=bool)
         used = np.zeros(self.n)
-        sh = self._shares.get(req.resource)
-        excluded = self._excluded(graph)
+        sh = self.facts.shares.get(req.resource)
+        excluded = self.facts.excluded(graph)
         counted = None
         if sh is not None:
             for j in range(sh.amounts.shape[1]):  # left to right, as Python's sum adds them
@@ -354,18 +341,13 @@ class PlatformColumns:
                 used = used + col
             if _COMPENSATED_SUM:
                 counted = (sh.graphs >= 0) & ~np.isin(sh.graphs, excluded if excluded is not None else [])
-        load = self._loads.get(req.resource)
+        load = self.facts.loads.get(req.resource)
         free = cap - used - (load if load is not None else 0.0)
         ok = free >= req.amount
         if counted is not None:
             for i in np.flatnonzero(counted.sum(axis=1) >= 3).tolist():
                 ok[i] = _validity.requirement_holds(req, self.states[i], graph) is None
         return ok
-
-    def _excluded(self, graph: _validity.Placing) -> np.ndarray | None:
-        names = () if graph is None else (graph,) if type(graph) is str else graph
-        codes = [self._graph_code[g] for g in names if g in self._graph_code]  # type: ignore[union-attr]
-        return np.array(codes, dtype=np.int32) if codes else None
 
     # -- answers ---------------------------------------------------------------------------------
     def masks(self, requirements: Sequence[object], graph: _validity.Placing) -> np.ndarray:
@@ -376,11 +358,11 @@ class PlatformColumns:
 
     def acceptable(self, requirements: Sequence[object], graph: _validity.Placing = None) -> tuple[str, ...]:
         """The acceptable platforms in preference order (``check_validity(...).acceptable``)."""
-        good = self._up.copy()
+        good = self.facts.up.copy()
         for req in requirements:
             good &= self.holds(req, graph)
         order = self.order()
-        return tuple(self._names[order[good[order]]].tolist())
+        return tuple(self.facts.names[order[good[order]]].tolist())
 
     def validity(self, requirements: Sequence[object], graph: _validity.Placing = None, *, reasons: bool = True) -> _validity.Validity:
         """What ``check_validity(requirements, self.states, graph, reasons=reasons)`` returns.
@@ -391,10 +373,10 @@ class PlatformColumns:
         """
         reqs = tuple(requirements)
         ok = self.masks(reqs, graph)
-        good = self._up & ok.all(axis=0)
+        good = self.facts.up & ok.all(axis=0)
         order = self.order()
         in_order = good[order]
-        acceptable = tuple(self._names[order[in_order]].tolist())
+        acceptable = tuple(self.facts.names[order[in_order]].tolist())
         rows = order[~in_order]
         if not len(rows):
             return _validity.Validity(acceptable, ())
@@ -408,17 +390,17 @@ class PlatformColumns:
     def capacity_keys(self, req: Capacity, rows: np.ndarray, graph: _validity.Placing) -> np.ndarray:
         """Capacity text keys: the capacity, the load and each share the text lists (graph
         code and amount; a share of a graph left out is blanked)."""
-        cap = self._caps.get(req.resource)
+        cap = self.facts.caps.get(req.resource)
         if cap is None:
             return np.zeros((len(rows), 1), dtype=np.int64)
         parts = [cap[rows].view(np.int64)[:, None]]
-        load = self._loads.get(req.resource)
+        load = self.facts.loads.get(req.resource)
         if load is not None:
             parts.append(load[rows].view(np.int64)[:, None])
-        sh = self._shares.get(req.resource)
+        sh = self.facts.shares.get(req.resource)
         if sh is not None:
             graphs, amounts = sh.graphs[rows].astype(np.int64), sh.amounts[rows]
-            excluded = self._excluded(graph)
+            excluded = self.facts.excluded(graph)
             if excluded is not None:
                 left_out = np.isin(graphs, excluded)
                 graphs[left_out] = -1
@@ -429,99 +411,6 @@ class PlatformColumns:
         return keys
 
 
-def _cols_rewrite(cols: "PlatformColumns", i: int, s: PlatformState) -> None:
-    for memo in cols._reasons.values():
-        if memo.pop(i, None) is not None:
-            cols._memoised -= 1
-    cols._up[i] = s.up
-    cols._on_demand[i] = s.platform.on_demand
-    if cols._pref[i] != s.platform.preference:
-        cols._pref[i] = s.platform.preference
-        cols._order = None
-    caps, loads, props, attrs, kinds, vendors, shares = _cols_facts(cols, i, s)
-    for table, row, default, dtype in (
-        (cols._caps, caps, np.nan, np.float64),
-        (cols._loads, loads, 0.0, np.float64),
-        (cols._props, props, np.nan, np.float64),
-        (cols._attrs, attrs, -1, np.int32),
-        (cols._kinds, kinds, 0, np.int32),
-        (cols._vendors, vendors, 0, np.int32),
-    ):
-        for key, col in table.items():
-            col[i] = row.get(key, default)
-        for key in row.keys() - table.keys():
-            table[key] = col = np.full(cols.n, default, dtype=dtype)
-            col[i] = row[key]
-    for res, sh in cols._shares.items():
-        sh.amounts[i] = 0.0
-        sh.graphs[i] = -1
-    for res, entries in shares.items():
-        sh = cols._shares.get(res)
-        if sh is None or sh.amounts.shape[1] < len(entries):
-            sh = _cols_widen(cols, res, len(entries))
-        for j, (code, amount) in enumerate(entries):
-            sh.graphs[i, j] = code
-            sh.amounts[i, j] = amount
-
-
-def _cols_widen(cols: "PlatformColumns", res: str, width: int) -> _Shares:
-    old = cols._shares.get(res)
-    new = _Shares(np.zeros((cols.n, width)), np.full((cols.n, width), -1, dtype=np.int32))
-    if old is not None:
-        k = old.amounts.shape[1]
-        new.amounts[:, :k] = old.amounts
-        new.graphs[:, :k] = old.graphs
-    cols._shares[res] = new
-    return new
-
-
-def _cols_column(cols: "PlatformColumns", values: dict[int, Any], default: Any, dtype: Any) -> np.ndarray:
-    col = np.full(cols.n, default, dtype=dtype)
-    if values:
-        col[np.fromiter(values.keys(), dtype=np.intp, count=len(values))] = list(values.values())
-    return col
-
-
-def _cols_share_matrix(cols: "PlatformColumns", rows: dict[int, list[tuple[int, float]]]) -> _Shares:
-    width = max(len(r) for r in rows.values())
-    out = _Shares(np.zeros((cols.n, width)), np.full((cols.n, width), -1, dtype=np.int32))
-    for i, entries in rows.items():
-        for j, (code, amount) in enumerate(entries):
-            out.graphs[i, j] = code
-            out.amounts[i, j] = amount
-    return out
-
-
-def _cols_facts(cols: "PlatformColumns", i: int, s: PlatformState) -> tuple[dict, ...]:
-    """One platform's facts, keyed per column family (see :meth:`_build`)."""
-    p = s.platform
-    numbers = [v for _k, v in p.capacities] + [v for _k, v in s.load] + [v for _k, v in p.properties]
-    numbers += [a for _g, use in s.deployed for _r, a in use]
-    if _inexact(p.preference) or any(_inexact(v) for v in numbers):
-        cols._inexact_rows.add(i)
-    else:
-        cols._inexact_rows.discard(i)
-    attrs = {}
-    for key, value in p.attributes:
-        codes = cols._attr_code.setdefault(key, {})
-        code = codes.get(repr(value))
-        if code is None:
-            code = codes[repr(value)] = len(codes)
-            cols._attr_text.setdefault(key, {}).setdefault(str(value), []).append(code)
-        attrs[key] = code
-    kinds: dict[str, int] = {}
-    vendors: dict[tuple[str, str], int] = {}
-    for d in s.devices:
-        kinds[d.kind] = kinds.get(d.kind, 0) + 1
-        vendors[(d.kind, d.vendor)] = vendors.get((d.kind, d.vendor), 0) + 1
-    shares: dict[str, list[tuple[int, float]]] = {}
-    for g, use in s.deployed:  # the order of PlatformState.used_by: deployments, then their uses
-        code = cols._graph_code.setdefault(g, len(cols._graph_code))
-        for res, amount in use:
-            if amount:
-                shares.setdefault(res, []).append((code, amount))
-    return dict(p.capacities), dict(s.load), dict(p.properties), attrs, kinds, vendors, shares
-
 # -- incremental upkeep ----------------------------------------------------------------
 
 
@@ -531,7 +420,7 @@ def _cols_rejected(cols: "PlatformColumns", reqs: tuple, ok: np.ndarray, rows: n
     Each failing (requirement, row) cell gets its Failure first, one requirement at a
     time; then the rows are grouped by which cells they fail, and each group's
     failure tuples are zipped together from those cells."""
-    up = cols._up[rows]
+    up = cols.facts.up[rows]
     failing = ~ok & up  # a down row fails only "platform up"
     if not reasons and len(reqs):  # the first failure only
         first = np.argmax(failing, axis=0)
@@ -546,22 +435,22 @@ def _cols_rejected(cols: "PlatformColumns", reqs: tuple, ok: np.ndarray, rows: n
         columns = [cells[k][pos].tolist() for k in np.flatnonzero(table[:, pos[0]]).tolist()]  # type: ignore[index]
         for p, fails in zip(pos.tolist(), zip(*columns)):
             out[p] = fails
-    return tuple(zip(cols._names[rows].tolist(), out))
+    return tuple(zip(cols.facts.names[rows].tolist(), out))
 
 
 def _cols_failures(cols: "PlatformColumns", req: Any, rows: np.ndarray, fails: np.ndarray, graph: _validity.Placing) -> np.ndarray:
     """Object array over ``rows``: the Failure of ``req`` where ``fails`` (None elsewhere),
     taken from the memo or made and kept there."""
     where = rows[fails]
-    memo = _cols_memo(cols, req, graph)
+    memo = cols.reasons.of(req, graph)
     got: list[Any] = list(map(memo.get, where.tolist())) if memo else [None] * len(where)
     missing = [j for j, f in enumerate(got) if f is None]
     if missing:
         new = where[missing] if len(missing) < len(where) else where
-        names = cols._names[new].tolist()
+        names = cols.facts.names[new].tolist()
         made = list(map(_validity.Failure, names, repeat(req.describe()), _cols_texts(cols, req, new, graph)))
         memo.update(zip(new.tolist(), made))
-        cols._memoised += len(made)
+        cols.reasons.added(len(made))
         if len(missing) == len(got):
             got = made
         else:
@@ -579,10 +468,10 @@ def _cols_down_failures(cols: "PlatformColumns", rows: np.ndarray, down: np.ndar
         return None
     where = rows[down]
     scalar = _cols_shared(
-        where, cols._on_demand[where][:, None], lambda i: _validity.check_platform((), cols.states[i], graph, first_only=True)[0]
+        where, cols.facts.on_demand[where][:, None], lambda i: _validity.check_platform((), cols.states[i], graph, first_only=True)[0]
     )
     out = np.empty(len(rows), dtype=object)
-    out[down] = [_validity.Failure(name, f.requirement, f.reason) for name, f in zip(cols._names[where].tolist(), scalar)]
+    out[down] = [_validity.Failure(name, f.requirement, f.reason) for name, f in zip(cols.facts.names[where].tolist(), scalar)]
     return out
 
 
@@ -603,7 +492,7 @@ def _cols_capacity_texts(cols: "PlatformColumns", req: Capacity, rows: np.ndarra
     number with ``:g``; the free amount summed as :meth:`capacity` sums it). Checked
     against the scalar text on the first row and on a row listing the most shares:
     None (ask the scalar) if either differs."""
-    cap = cols._caps.get(req.resource)
+    cap = cols.facts.caps.get(req.resource)
     if cap is None:
         return None
     out = np.empty(len(rows), dtype=object)
@@ -612,18 +501,18 @@ def _cols_capacity_texts(cols: "PlatformColumns", req: Capacity, rows: np.ndarra
         out[~has] = _cols_reason(cols, req, int(rows[~has][0]), graph)
     where = rows[has]
     c = cap[where]
-    load = cols._loads.get(req.resource)
+    load = cols.facts.loads.get(req.resource)
     l = load[where] if load is not None else np.zeros(len(where))
     used, shares, listed = np.zeros(len(where)), np.full(len(where), "", dtype=object), np.zeros(len(where), dtype=np.intp)
-    sh = cols._shares.get(req.resource)
+    sh = cols.facts.shares.get(req.resource)
     if sh is not None:
         graphs, amounts = sh.graphs[where], sh.amounts[where]
-        excluded = cols._excluded(graph)
+        excluded = cols.facts.excluded(graph)
         if excluded is not None:
             left_out = np.isin(graphs, excluded)
             graphs[left_out] = -1
             amounts[left_out] = 0.0
-        used_by = np.array([f", used by {g} " for g in cols._graph_code], dtype=object)  # by code
+        used_by = np.array([f", used by {g} " for g in cols.facts.graph_code], dtype=object)  # by code
         for j in range(amounts.shape[1]):  # left to right, as Python's sum adds them
             used = used + amounts[:, j]
             on = graphs[:, j] >= 0
@@ -644,7 +533,7 @@ def _cols_capacity_texts(cols: "PlatformColumns", req: Capacity, rows: np.ndarra
 def _cols_reason(cols: "PlatformColumns", req: Any, i: int, graph: _validity.Placing) -> str:
     reason = _validity.requirement_holds(req, cols.states[i], graph)
     if reason is None:  # the masks and the scalar semantics disagree: a bug here
-        raise AssertionError(f"placement columns: {req.describe()} fails on {cols._names[i]} but the scalar check holds")
+        raise AssertionError(f"placement columns: {req.describe()} fails on {cols.facts.names[i]} but the scalar check holds")
     return reason
 
 
@@ -665,21 +554,6 @@ def _cols_text_keys(cols: "PlatformColumns", req: Any, rows: np.ndarray, graph: 
     rows whose texts differ."""
     key = req.column_keys(cols, rows, graph)
     return key[:, None] if key.ndim == 1 else key  # type: ignore[no-any-return]
-
-
-def _cols_memo(cols: "PlatformColumns", req: object, graph: _validity.Placing) -> dict[int, _validity.Failure]:
-    """Row -> the Failure of ``req`` for ``graph``, kept until the row changes; beyond
-    :data:`_REASONS_KEPT` failures the least recently asked requirements lose theirs."""
-    # repr: equal requirements may read differently (2 vs 2.0); only a Capacity's text
-    # depends on the graph placed (whose shares it leaves out)
-    key = (repr(req), graph if type(req).texts_read_graph else None)  # type: ignore[attr-defined]
-    memo = cols._reasons.pop(key, None)
-    if memo is None:
-        memo = {}
-        while cols._memoised > _REASONS_KEPT and cols._reasons:  # least recently asked first
-            cols._memoised -= len(cols._reasons.pop(next(iter(cols._reasons))))
-    cols._reasons[key] = memo  # (re)inserted last: the most recently asked
-    return memo
 
 
 def _g(values: np.ndarray) -> np.ndarray:
@@ -786,9 +660,10 @@ class PlatformMemoColumnChecks(_ColumnsFirst, _validity.PlatformMemoChecks):
     they change; no whole answer is memoised). Same answers as
     :class:`~desmon.deployment.validity.ScalarChecks`."""
 
-    def __init__(self, *, size: int = _validity._MEMO_SIZE, min_platforms: int = VECTOR_MIN_PLATFORMS) -> None:
+    def __init__(self, *, min_platforms: int = VECTOR_MIN_PLATFORMS, **memo: int) -> None:
+        # memo: PlatformMemoChecks' own options (its size), with its defaults
         self.min_platforms = min_platforms
-        super().__init__(size=size)
+        super().__init__(**memo)
 
     def _scalar(self, reqs: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool) -> _validity.Validity:
         return _validity.PlatformMemoChecks.compute(self, reqs, states, graph, reasons)

@@ -9,21 +9,21 @@ each command's outcome (``True``/``False`` for Start/Stop). The engines drive it
 * the SimPy world executes them with start latency and failures.
 
 Reads go through a :class:`QueryPort`, implemented by the networkx repository and by
-the checker's state-backed view.
+the checker's state-backed view; requirement checks through a :class:`ChecksPort`,
+whose answers (:class:`Validity`, :class:`Failure`) are defined here with it
+(:mod:`desmon.deployment.validity` computes them and re-exports both).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, Generator, Protocol, runtime_checkable
+from typing import Any, Callable, Generator, Protocol, runtime_checkable
 
 from desmon.errors import UnobservedRead
+from desmon.model.kinds import Placing
 from desmon.model.platform import Platform
 from desmon.model.requirements import DeploymentSpec, Requirement
 from desmon.model.system import PlatformState
-
-if TYPE_CHECKING:
-    from desmon.deployment.validity import Failure, Placing, Validity
 
 __all__ = [
     "Start",
@@ -32,6 +32,8 @@ __all__ = [
     "Command",
     "Reaction",
     "ErrorRecord",
+    "Failure",
+    "Validity",
     "DEPLOYMENT_FAILED",
     "NO_ACCEPTABLE_PLATFORMS",
     "DEPLOYMENT_INFORMATION_MISSING",
@@ -125,6 +127,61 @@ def relay(
         outcome = yield cmd
         if after is not None:
             after(cmd, outcome)
+
+
+@dataclass(frozen=True, slots=True)
+class Failure:
+    """One requirement that one platform does not meet, and why."""
+
+    platform: str
+    requirement: str
+    reason: str
+
+    def __str__(self) -> str:
+        return f"{self.platform}: {self.requirement} fails: {self.reason}"
+
+
+@dataclass(frozen=True, slots=True)
+class Validity:
+    """Result of :func:`~desmon.deployment.validity.check_validity`: acceptable platforms
+    (best first) and every failure of every rejected platform.
+
+    With preferences, ``scores`` holds each acceptable platform's score (aligned with
+    ``acceptable``) and, when reasons were asked for, ``breakdown`` each one's weighted
+    terms per preference; both are empty without preferences.
+    """
+
+    acceptable: tuple[str, ...]
+    rejected: tuple[tuple[str, tuple[Failure, ...]], ...]
+    scores: tuple[float, ...] = ()
+    breakdown: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
+
+    def failures(self, platform: str) -> tuple[Failure, ...]:
+        for name, fails in self.rejected:
+            if name == platform:
+                return fails
+        return ()
+
+    def score(self, platform: str) -> float:
+        """The preference score of an acceptable ``platform`` (0 without preferences)."""
+        if not self.scores:
+            return 0.0
+        return self.scores[self.acceptable.index(platform)]
+
+    def gain(self, platform: str) -> float:
+        """How much the best acceptable platform scores above ``platform`` (0 if it is the best)."""
+        if not self.scores or not self.acceptable:
+            return 0.0
+        return self.scores[0] - self.score(platform)
+
+    def explain(self) -> str:
+        lines = [f"acceptable: {', '.join(self.acceptable) or '(none)'}"]
+        for name, terms in self.breakdown:
+            parts = " + ".join(f"{what} {value:.3g}" for what, value in terms)
+            lines.append(f"score {name}: {sum(v for _w, v in terms):.3g} = {parts}")
+        for _name, fails in self.rejected:
+            lines.extend(str(f) for f in fails)
+        return "\n".join(lines)
 
 
 class ChecksPort(Protocol):

@@ -7,7 +7,6 @@ module asks it about platforms, with reasons, memoised.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any, Callable, Iterable, Sequence
 
@@ -15,7 +14,7 @@ from desmon.model.kinds import Placing, others_using  # Placing: the graph being
 from desmon.model.requirements import PLATFORM_HAS, Attribute, Constraint, DeploymentSpec, Preference, Reads, Requirement
 from desmon.model.system import PlatformState
 
-from desmon.deployment.ports import PlatformHandle
+from desmon.deployment.ports import Failure, PlatformHandle, Validity  # Failure, Validity: the Checks port's answers (re-exported)
 
 if TYPE_CHECKING:
     from desmon.deployment.ports import ChecksPort, QueryPort
@@ -33,61 +32,6 @@ _TUPLES = 1 << 12
 _Question = tuple[tuple[int, ...], list[tuple[Any, "Requirement"]], bool, dict[int, str]]
 
 __all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "ScalarChecks", "PlatformMemoChecks", "DEFAULT_CHECKS", "checks_for", "reads_fixed_facts", "unreadable", "spec_validity", "input_failures"]
-
-
-@dataclass(frozen=True, slots=True)
-class Failure:
-    """One requirement that one platform does not meet, and why."""
-
-    platform: str
-    requirement: str
-    reason: str
-
-    def __str__(self) -> str:
-        return f"{self.platform}: {self.requirement} fails: {self.reason}"
-
-
-@dataclass(frozen=True, slots=True)
-class Validity:
-    """Result of :func:`check_validity`: acceptable platforms (best first) and every
-    failure of every rejected platform.
-
-    With preferences, ``scores`` holds each acceptable platform's score (aligned with
-    ``acceptable``) and, when reasons were asked for, ``breakdown`` each one's weighted
-    terms per preference; both are empty without preferences.
-    """
-
-    acceptable: tuple[str, ...]
-    rejected: tuple[tuple[str, tuple[Failure, ...]], ...]
-    scores: tuple[float, ...] = ()
-    breakdown: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
-
-    def failures(self, platform: str) -> tuple[Failure, ...]:
-        for name, fails in self.rejected:
-            if name == platform:
-                return fails
-        return ()
-
-    def score(self, platform: str) -> float:
-        """The preference score of an acceptable ``platform`` (0 without preferences)."""
-        if not self.scores:
-            return 0.0
-        return self.scores[self.acceptable.index(platform)]
-
-    def gain(self, platform: str) -> float:
-        """How much the best acceptable platform scores above ``platform`` (0 if it is the best)."""
-        if not self.scores or not self.acceptable:
-            return 0.0
-        return self.scores[0] - self.score(platform)
-
-    def explain(self) -> str:
-        lines = [f"acceptable: {', '.join(self.acceptable) or '(none)'}"]
-        for name, terms in self.breakdown:
-            parts = " + ".join(f"{what} {value:.3g}" for what, value in terms)
-            lines.append(f"score {name}: {sum(v for _w, v in terms):.3g} = {parts}")
-        for _name, fails in self.rejected:
-            lines.extend(str(f) for f in fails)
-        return "\n".join(lines)
 
 
 def requirement_holds(req: Constraint, state: PlatformState, graph: Placing) -> str | None:

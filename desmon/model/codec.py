@@ -20,7 +20,7 @@ from desmon.model.events import Event
 from desmon.model.kinds import requirement_class, requirement_kinds
 from desmon.model.requirements import PREFERENCE_KINDS, Constraint, Preference
 
-__all__ = ["event_to_json", "event_from_json", "constraint_to_json", "constraint_from_json"]
+__all__ = ["event_to_json", "event_from_json", "constraint_to_json", "constraint_from_json", "json_object"]
 
 
 # -- events ----------------------------------------------------------------------------------
@@ -41,7 +41,7 @@ def event_from_json(data: object, *, where: str = "event") -> Event:
     """The event :func:`event_to_json` wrote. Whatever is wrong in a (hand-edited) ``d`` is a
     one-line :class:`~desmon.errors.CheckerError` naming ``where`` and the field; the
     values pass the same checks as the event built in a scenario."""
-    d = _mapping(where, data, '{"kind": "action", "action": "grasp"}')
+    d = json_object(where, data, '{"kind": "action", "action": "grasp"}')
     kind = d.get("kind")
     cls = Event.of_kind(kind)
     if cls is None:
@@ -55,7 +55,7 @@ def event_from_json(data: object, *, where: str = "event") -> Event:
 
 def constraint_from_json(data: object, *, where: str = "requirement") -> Constraint:
     """The requirement or preference :func:`constraint_to_json` wrote, checked as when a scenario builds it."""
-    d = _mapping(where, data, '{"requirement": "capacity", "resource": "memory", "amount": 250}')
+    d = json_object(where, data, '{"requirement": "capacity", "resource": "memory", "amount": 250}')
     if ("requirement" in d) == ("preference" in d):
         raise CheckerError(
             f"{where} = {d!r} must name one kind, by \"requirement\" (one of {', '.join(requirement_kinds())}) "
@@ -81,10 +81,12 @@ def constraint_from_json(data: object, *, where: str = "requirement") -> Constra
 
 def _item(where: str, cls: type, data: object, example: str) -> object:
     """A nested object of a requirement's JSON (a Selection's option), checked like the rest."""
-    return _build(where, cls, _mapping(where, data, example))
+    return _build(where, cls, json_object(where, data, example))
 
 
-def _mapping(where: str, d: object, example: str) -> dict[str, Any]:
+def json_object(where: str, d: object, example: str) -> dict[str, Any]:
+    """``d`` if it is a JSON object (a dict), else a :class:`CheckerError` naming ``where``
+    and showing ``example``."""
     if not isinstance(d, dict):
         raise CheckerError(f"{where} = {d!r} is not a JSON object: write e.g. {example}")
     return d

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import MISSING, dataclass, fields
-from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterable, TypeVar
+from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterable, Protocol, TypeVar
 
 from desmon.errors import CheckerError, ModelError
 from desmon.model.checks import check_items, check_name, check_number, is_plain_name, strict_init, suggest
@@ -27,11 +27,10 @@ from desmon.model.requirements import Constraint, constraint_types
 from desmon.model.system import action_problem, constraint_problem
 
 if TYPE_CHECKING:  # pragma: no cover
-    from desmon.deployment.monitor import InsertPort
     from desmon.model.system import SystemModel
 
 __all__ = [
-    "Event", "DeviceEvent", "PlatformEvent", "Effects",
+    "Event", "DeviceEvent", "PlatformEvent", "Effects", "InsertPort",
     "ActionChange", "DeviceFail", "DeviceRepair", "PlatformDown", "PlatformUp", "LoadChange",
     "RequirementChange", "PlatformJoin", "PlatformLeave", "event_kind", "event_types",
 ]
@@ -55,6 +54,23 @@ class Effects:
 
     def specs_changed(self, hosts: tuple[str, ...], graph: str) -> Any:  # pragma: no cover - a port
         raise NotImplementedError
+
+
+class InsertPort(Protocol):
+    """The Insert facts the context monitor writes; each returns whether anything changed."""
+
+    def set_context(self, context: str) -> bool: ...
+
+    def set_device_working(self, device: str, working: bool) -> str | None:
+        """Returns the platform whose HAS_DEVICE edge changed, or None."""
+
+    def set_platform_up(self, platform: str, up: bool) -> bool: ...
+
+    def set_load(self, platform: str, resource: str, amount: float) -> bool: ...
+
+    def change_requirements(self, change: RequirementChange) -> tuple[str, ...] | None:
+        """Apply a requirement change; returns the platforms its graph is deployed on, or
+        None if the requirements did not change."""
 
 
 class Event:

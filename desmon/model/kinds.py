@@ -21,10 +21,10 @@ from desmon.model.checks import suggest
 
 if TYPE_CHECKING:
     from desmon.model.platform import Device, Platform
-    from desmon.model.system import PlatformState
+    from desmon.model.state import PlatformState
 
 __all__ = [
-    "PLATFORM_HAS", "Placing", "Columns", "Constraint", "Requirement", "requirement_kinds", "requirement_class",
+    "PLATFORM_HAS", "Placing", "Columns", "Constraint", "Requirement", "requirement_kinds", "requirement_class", "requirement_classes",
     "property_problem", "attribute_problem", "device_kind_problem", "others_using",
 ]
 
@@ -42,10 +42,6 @@ Columns = Any
 #: Every requirement kind a user can write, by its word, in definition order: filled by
 #: :meth:`Requirement.__init_subclass__` (see :func:`requirement_kinds`).
 _KINDS: dict[str, type["Requirement"]] = {}
-
-
-def _fmt(x: float) -> str:
-    return f"{x:g}"
 
 
 class Constraint:
@@ -189,6 +185,11 @@ def requirement_kinds() -> tuple[str, ...]:
 def requirement_class(word: str) -> type[Requirement] | None:
     """The requirement kind written ``word`` (None if there is none)."""
     return _KINDS.get(word)
+
+
+def requirement_classes() -> tuple[type[Requirement], ...]:
+    """Every requirement kind defined now, in definition order (as :func:`requirement_kinds`)."""
+    return tuple(_KINDS.values())
 
 
 def device_kind_problem(wanted: str, devices: "tuple[Device, ...]") -> str | None:

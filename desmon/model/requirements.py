@@ -21,24 +21,23 @@ from typing import TYPE_CHECKING, Any, Callable, Iterable
 from desmon.errors import CheckerError, ModelError
 from desmon.model.checks import check_items, check_keywords, check_name, check_number, check_value, strict_init, suggest
 from desmon.model.kinds import (
-    _KINDS,
     PLATFORM_HAS,
     Columns,
     Constraint,
     Placing,
     Requirement,
-    _fmt,
     attribute_problem,
     device_kind_problem,
     others_using,
     property_problem,
     requirement_class,
+    requirement_classes,
     requirement_kinds,
 )
 
 if TYPE_CHECKING:
     from desmon.model.platform import Device, Platform
-    from desmon.model.system import PlatformState
+    from desmon.model.state import PlatformState
 
 __all__ = [
     "Quantity",
@@ -63,6 +62,11 @@ __all__ = [
     "Reads",
     "Placing",
 ]
+
+
+def _fmt(x: float) -> str:
+    return f"{x:g}"
+
 
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
@@ -618,7 +622,7 @@ def make_preference(kind: str, *args: object, weight: object = 1.0, **kwargs: ob
 def constraint_types() -> tuple[type[Constraint], ...]:
     """What a deployment specification lists: every requirement kind users write (as
     :func:`requirement_kinds`), then :class:`Preference`."""
-    return (*_KINDS.values(), Preference)
+    return (*requirement_classes(), Preference)
 
 
 def make_requirement(kind: str, *args: object, **kwargs: object) -> Requirement:
@@ -632,7 +636,7 @@ def make_requirement(kind: str, *args: object, **kwargs: object) -> Requirement:
     if not isinstance(kind, str):
         raise ModelError(f"requirement kind {kind!r} is not a string: use one of {', '.join(words)}")
     key = kind.lower().lstrip(":")
-    cls = _KINDS.get(key)
+    cls = requirement_class(key)
     if cls is None:
         raise ModelError(f"unknown requirement kind {kind!r}{suggest(key, words)}: use one of {', '.join(words)}")
     check_keywords(f"requirement {kind!r}", kwargs, cls.keywords, usage=cls.usage)

@@ -12,7 +12,7 @@ from typing import Any
 
 import networkx as nx
 
-from desmon.repository.store import OBJECT_ATTRS, _jsonable
+from desmon.repository.store import OBJECT_ATTRS, jsonable
 
 __all__ = ["graph_to_dot", "graph_to_cypher", "FORMATS"]
 
@@ -40,7 +40,7 @@ def _props(data: dict[str, Any]) -> dict[str, Any]:
     for k, v in sorted(data.items()):
         if k in OBJECT_ATTRS or k == "label":
             continue
-        v = _jsonable(v)
+        v = jsonable(v)
         out[k] = v if isinstance(v, (str, int, float, bool)) else json.dumps(v, sort_keys=True)
     return out
 

@@ -25,7 +25,7 @@ import networkx as nx
 from desmon.errors import QueryError
 from desmon.repository import labels as L
 
-__all__ = ["Change", "Subscription", "Repository", "node_id", "graph_to_json", "graph_to_graphml"]
+__all__ = ["Change", "Subscription", "Repository", "node_id", "graph_to_json", "graph_to_graphml", "jsonable"]
 
 ADD_NODE = "add_node"
 UPDATE_NODE = "update_node"
@@ -389,13 +389,15 @@ class Repository:
 
 
 # -- exports ---------------------------------------------------------------------------
-def _jsonable(value: Any) -> Any:
+def jsonable(value: Any) -> Any:
+    """``value`` as plain JSON: numbers, strings, lists and string-keyed objects (a model
+    object by its description)."""
     if isinstance(value, (str, int, float, bool)) or value is None:
         return value
     if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
+        return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
+        return [jsonable(v) for v in value]
     describe = getattr(value, "describe", None)
     if callable(describe):
         return describe()
@@ -409,11 +411,11 @@ OBJECT_ATTRS = frozenset({"platform", "device", "spec", "requirement"})
 def graph_to_json(g: nx.MultiDiGraph) -> dict[str, Any]:
     """A stable JSON-able dict of a snapshot: nodes and edges sorted, attributes flattened."""
     nodes = [
-        {"id": n, **{k: _jsonable(v) for k, v in sorted(d.items()) if k not in OBJECT_ATTRS}}
+        {"id": n, **{k: jsonable(v) for k, v in sorted(d.items()) if k not in OBJECT_ATTRS}}
         for n, d in sorted(g.nodes(data=True))
     ]
     edges = [
-        {"source": s, "target": t, "key": k, **{a: _jsonable(v) for a, v in sorted(d.items())}}
+        {"source": s, "target": t, "key": k, **{a: jsonable(v) for a, v in sorted(d.items())}}
         for s, t, k, d in sorted(g.edges(keys=True, data=True), key=lambda e: (e[0], e[1], str(e[2])))
     ]
     return {"nodes": nodes, "edges": edges}
@@ -424,7 +426,7 @@ def graph_to_graphml(g: nx.MultiDiGraph, path: str) -> None:
     out = nx.MultiDiGraph()
 
     def scalar(v: Any) -> Any:
-        v = _jsonable(v)
+        v = jsonable(v)
         return v if isinstance(v, (str, int, float, bool)) else json.dumps(v, sort_keys=True)
 
     for n, d in g.nodes(data=True):

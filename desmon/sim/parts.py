@@ -1,26 +1,26 @@
 """One robot's SimPy world as parts, and their assembly.
 
-:class:`RobotParts` is the context the processes share: the run's settings, the SimPy
-environment, the repository and the robot's Query port, its deployment core, and the
-parts themselves --
+:class:`RobotParts` (:mod:`desmon.sim.robot`, re-exported here) is the context the
+processes share: the run's settings, the SimPy environment, the repository and the
+robot's Query port, its deployment core, and the parts themselves --
 
 * the physical facts and ground truth (:mod:`desmon.sim.facts`),
 * the Control infrastructure (:mod:`desmon.sim.infrastructure`),
-* the accounting (:mod:`desmon.sim.accounting`): books, exposure and memory meters,
-* the deployer's inbox (:mod:`desmon.sim.driver`).
+* the books (:mod:`desmon.sim.books`), exposure and memory meters,
+* the deployer's inbox (:mod:`desmon.sim.inbox`).
 
 :func:`robot_parts` builds them for one robot; :func:`start_processes` registers the
-robot's processes (:mod:`desmon.sim.processes`, the deployer driver). Both the
-one-robot :class:`~desmon.sim.engine.SimWorld` and a fleet's robots
-(:mod:`desmon.sim.fleet`) are assembled this way: they differ in the environment and
-repository (own or shared), the Query port, the Control rules, the trace and the audit.
+robot's processes (:mod:`desmon.sim.processes`, the deployer driver
+:mod:`desmon.sim.driver`). Both the one-robot :class:`~desmon.sim.engine.SimWorld` and
+a fleet's robots (:mod:`desmon.sim.fleet`) are assembled this way: they differ in the
+environment and repository (own or shared), the Query port, the Control rules, the
+trace and the audit.
 """
 
 from __future__ import annotations
 
 import math
 import random
-from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import simpy
@@ -30,48 +30,21 @@ from desmon.deployment.core import DeploymentCore
 from desmon.deployment.guard import Guard
 from desmon.deployment.exposure import Needs, cause
 from desmon.model.scenario import Scenario
-from desmon.model.system import SystemModel
 from desmon.repository.facts import RepositoryInsert
 from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import Repository
 from desmon.sim import processes as P
-from desmon.sim.accounting import Books
-from desmon.sim.driver import Inbox, deployer
+from desmon.sim.books import Books
+from desmon.sim.driver import deployer
 from desmon.sim.facts import GroundTruth, PhysicalFacts
+from desmon.sim.inbox import Inbox
 from desmon.sim.infrastructure import Infrastructure
 from desmon.sim.metrics import Exposure, MemoryMeter
+from desmon.sim.robot import RobotParts
 from desmon.sim.trace import Trace
 from desmon.sim.world import World
 
 __all__ = ["RobotParts", "robot_parts", "start_processes"]
-
-
-@dataclass(frozen=True, eq=False)
-class RobotParts:
-    """The parts of one robot's world: what its processes share."""
-
-    scenario: Scenario
-    model: SystemModel
-    world: World
-    seed: int
-    horizon: float
-    signals: bool
-    env: simpy.Environment
-    repo: Repository
-    query: RepositoryQuery
-    core: DeploymentCore
-    trace: Trace
-    facts: PhysicalFacts
-    truth: GroundTruth
-    exposure: Exposure
-    memory: MemoryMeter
-    infra: Infrastructure
-    books: Books
-    inbox: Inbox
-    #: exponential timing (World.timing): the delays' random stream, and what the
-    #: context monitor has a recognition or notice pending for ("context", components)
-    markov: random.Random = field(default_factory=random.Random)
-    noticing: set[str] = field(default_factory=set)
 
 
 def robot_parts(

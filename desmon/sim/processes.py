@@ -1,5 +1,5 @@
 """The processes of one robot's SimPy world: small generator functions over the robot's
-parts (:class:`desmon.sim.parts.RobotParts`), and the steps they take.
+parts (:class:`desmon.sim.robot.RobotParts`), and the steps they take.
 
 * **Robot** (:func:`robot`) walks the task's ground-truth segments; each new action
   becomes a gripper / base observation that the context monitor interprets
@@ -42,7 +42,7 @@ from desmon.model.events import (
 from desmon.sim.trace import graph_resources
 
 if TYPE_CHECKING:
-    from desmon.sim.parts import RobotParts
+    from desmon.sim.robot import RobotParts
 
 __all__ = [
     "OBSERVATION", "apply_initial", "robot", "recognise", "insert", "notice", "fault", "scripted_faults", "stochastic_faults",

@@ -3,8 +3,9 @@
 A :class:`SignalStream` says what one stream is: its ``name`` (what
 ``World.signal_kinds`` maps device kinds to), the device kinds mapped to it by default,
 its ``warmup`` after a detector's activation, how its ``samples`` in ``[t0, t1)`` are
-read from the world's :class:`~desmon.sim.sensors.SensorBank` for the devices a graph
-reads, and the ``detector`` that consumes it alone. A :class:`Fusion` names a detector
+read from the world's sensor bank (a :class:`SampleSource`: the SimPy world's is
+:class:`~desmon.sim.sensors.SensorBank`) for the devices a graph reads, and the
+``detector`` that consumes it alone. A :class:`Fusion` names a detector
 that consumes several streams at once (the combined force + tactile detector); its
 warm-up is the longest of its streams'. Setting ``name`` (a stream) or ``streams`` (a
 fusion) registers the class; :func:`detector_plan` derives which detector a graph runs
@@ -15,15 +16,31 @@ new sensor stream") says how to add one.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar, Sequence
-
-if TYPE_CHECKING:  # pragma: no cover
-    from desmon.sim.sensors import SensorBank
+from typing import Any, ClassVar, Protocol, Sequence
 
 __all__ = [
-    "SignalStream", "Fusion", "DetectorPlan", "detector_plan", "stream_names", "signal_streams", "fusions", "default_signal_kinds",
+    "SampleSource", "SignalStream", "Fusion", "DetectorPlan", "detector_plan", "stream_names", "signal_streams", "fusions", "default_signal_kinds",
     "WrenchStream", "TactileStream", "ForceAndTactile",
 ]
+
+class SampleSource(Protocol):
+    """What a stream reads its samples from: the world's sensor bank
+    (:class:`desmon.sim.sensors.SensorBank` is the one the SimPy world builds). The
+    arrays are numpy arrays (``times``, then values: a wrench axis, or tactile moments
+    ``(K, 6, 3)``)."""
+
+    def working(self, device: str, t: float) -> bool:
+        """Whether ``device`` is readable at ``t``."""
+
+    def wrench(self, t0: float, t1: float, devices: Sequence[str]) -> tuple[Any, Any]:
+        """Wrench samples in ``[t0, t1)`` from any working one of ``devices``."""
+
+    def tactile(self, t0: float, t1: float, devices: Sequence[str]) -> tuple[Any, Any]:
+        """Tactile frames in ``[t0, t1)``; failed pads read zero."""
+
+    def tactile_read(self, t0: float, t1: float, devices: Sequence[str]) -> tuple[Any, Any, Any]:
+        """:meth:`tactile`, and the frames' flow worked out ahead (or None)."""
+
 
 #: stream name -> class, filled by :meth:`SignalStream.__init_subclass__` (in definition order)
 _STREAMS: dict[str, type["SignalStream"]] = {}
@@ -58,13 +75,13 @@ class SignalStream:
             _PLANS.clear()
 
     @classmethod
-    def samples(cls, bank: "SensorBank", t0: float, t1: float, devices: Sequence[str]) -> tuple[Any, ...]:
+    def samples(cls, bank: SampleSource, t0: float, t1: float, devices: Sequence[str]) -> tuple[Any, ...]:
         """The arguments its detector's ``process`` takes for this stream: the samples in
         ``[t0, t1)`` of the working ones of ``devices``."""
         raise NotImplementedError
 
     @classmethod
-    def read(cls, bank: "SensorBank", t0: float, t1: float, devices: Sequence[str]) -> tuple[tuple[Any, ...], dict[str, Any]]:
+    def read(cls, bank: SampleSource, t0: float, t1: float, devices: Sequence[str]) -> tuple[tuple[Any, ...], dict[str, Any]]:
         """:meth:`samples`, and keyword hints for the detector (by keyword; a detector takes
         those its ``hints`` names): none unless a stream offers some."""
         return cls.samples(bank, t0, t1, devices), {}
@@ -164,7 +181,7 @@ class WrenchStream(SignalStream):
     device_kinds = ("force_sensor",)
 
     @classmethod
-    def samples(cls, bank: "SensorBank", t0: float, t1: float, devices: Sequence[str]) -> tuple[Any, ...]:
+    def samples(cls, bank: SampleSource, t0: float, t1: float, devices: Sequence[str]) -> tuple[Any, ...]:
         return bank.wrench(t0, t1, devices)
 
     @classmethod
@@ -182,11 +199,11 @@ class TactileStream(SignalStream):
     device_kinds = ("tactile_pad", "tactile_array")
 
     @classmethod
-    def samples(cls, bank: "SensorBank", t0: float, t1: float, devices: Sequence[str]) -> tuple[Any, ...]:
+    def samples(cls, bank: SampleSource, t0: float, t1: float, devices: Sequence[str]) -> tuple[Any, ...]:
         return bank.tactile(t0, t1, devices)
 
     @classmethod
-    def read(cls, bank: "SensorBank", t0: float, t1: float, devices: Sequence[str]) -> tuple[tuple[Any, ...], dict[str, Any]]:
+    def read(cls, bank: SampleSource, t0: float, t1: float, devices: Sequence[str]) -> tuple[tuple[Any, ...], dict[str, Any]]:
         """The frames, and their flow worked out ahead as the hint ``tactile_flow`` (or None)."""
         t, mom, flow = bank.tactile_read(t0, t1, devices)
         return (t, mom), {"tactile_flow": flow}

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from desmon.errors import CheckerError, ModelError
-from desmon.model.codec import _mapping, constraint_from_json, constraint_to_json, event_from_json, event_to_json
+from desmon.model.codec import constraint_from_json, constraint_to_json, event_from_json, event_to_json, json_object
 from desmon.model.events import Event
 from desmon.deployment.guard import CRASH
 from desmon.verify.search import NOT_CHECKED, CheckResult
@@ -81,17 +81,17 @@ def labels_from_json(counterexample: object, *, where: str = "counterexample") -
     """The ``(event, failing start indices)`` of each step of a counterexample written by
     ``desmon verify --json`` (one of its ``counterexamples``), after the initial state: what
     :meth:`RepositoryRun.step <desmon.verify.replay.RepositoryRun.step>` replays."""
-    c = _mapping(where, counterexample, '{"states": [...]}')
+    c = json_object(where, counterexample, '{"states": [...]}')
     states = c.get("states")
     if not isinstance(states, list) or not states:
         raise CheckerError(f"{where}.states = {states!r} is not a non-empty list of states: re-run desmon verify --json")
-    first = _mapping(f"{where}.states[0]", states[0], '{"event": null, ...}')
+    first = json_object(f"{where}.states[0]", states[0], '{"event": null, ...}')
     if first.get("event") is not None:
         raise CheckerError(f"{where}.states[0].event = {first.get('event')!r}: the initial state has no event (null); re-run desmon verify --json")
     out: list[Label] = []
     for i, state in enumerate(states[1:], start=1):
         at = f"{where}.states[{i}]"
-        s = _mapping(at, state, '{"event": {...}, "fail_indices": []}')
+        s = json_object(at, state, '{"event": {...}, "fail_indices": []}')
         event = event_from_json(s.get("event"), where=f"{at}.event")
         fails = s.get("fail_indices")
         if fails is None and not s.get("failed_starts"):
@@ -221,7 +221,7 @@ def read_counterexample(path: str | Path, number: int | None = None) -> SavedCou
     from desmon.deployment.invariants import get_invariants
 
     src = str(path)
-    top = _mapping(src, _read_json(path), '{"scenario": ..., "deployer": ..., "counterexamples": [...]}')
+    top = json_object(src, _read_json(path), '{"scenario": ..., "deployer": ..., "counterexamples": [...]}')
     scenario, deployer = (_field(src, top, k, str) for k in ("scenario", "deployer"))
     params = top.get("params")
     if params is not None and not (isinstance(params, dict) and all(isinstance(v, str) for v in params.values())):
@@ -249,7 +249,7 @@ def read_counterexample(path: str | Path, number: int | None = None) -> SavedCou
         raise CheckerError(f"{where}.during = {during!r} is neither null nor the command text it was violated after")
     labels = labels_from_json(c, where=where)
     states = tuple(
-        _field(f"{where}.states[{i}]", _mapping(f"{where}.states[{i}]", s, '{"event": ..., "state": {...}}'), "state", dict)
+        _field(f"{where}.states[{i}]", json_object(f"{where}.states[{i}]", s, '{"event": ..., "state": {...}}'), "state", dict)
         for i, s in enumerate(c["states"])
     )
     return SavedCounterexample(
@@ -283,7 +283,7 @@ def _pick(src: str, top: dict[str, Any], number: int | None) -> tuple[int, dict[
         give = "give --counterexample 1" if len(found) == 1 else f"give --counterexample 1 to {len(found)}"
         plural = "counterexample" if len(found) == 1 else "counterexamples"
         raise CheckerError(f"--counterexample {n}: {src} holds {len(found)} {plural} ({names}); {give}")
-    return n, _mapping(f"{src}: counterexamples[{n - 1}]", found[n - 1], '{"invariant": ..., "states": [...]}')
+    return n, json_object(f"{src}: counterexamples[{n - 1}]", found[n - 1], '{"invariant": ..., "states": [...]}')
 
 
 def _field(where: str, d: dict[str, Any], key: str, kind: type) -> Any:

@@ -31,19 +31,19 @@ import time
 from array import array
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence, TextIO
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Protocol, Sequence, TextIO
 
 from desmon.deployment.guard import CRASH, EXIT_CRASHED
 from desmon.progress import StatusLine
 from desmon.verify.state import Key
-from desmon.verify.trace import Counterexample, Label
+from desmon.verify.trace import Counterexample, Label, Step
 
 if TYPE_CHECKING:  # pragma: no cover
-    from desmon.verify.system import TransitionSystem
+    from desmon.deployment.invariants import Invariant
 
 __all__ = [
     "HOLDS", "VIOLATED", "INCOMPLETE", "CRASHED", "EXIT_CRASHED", "INTERRUPTED", "EXIT_INTERRUPTED", "NOT_CHECKED", "Record", "Segment",
-    "CheckResult", "Budget", "Trail", "finish", "final_status", "ctrl_c", "paused_gc", "resident_mb", "proportional_mb", "peak_mb",
+    "CheckResult", "Budget", "Replayable", "Trail", "finish", "final_status", "ctrl_c", "paused_gc", "resident_mb", "proportional_mb", "peak_mb",
     "MEMORY_EVERY", "MEMORY_EVERY_WORKERS",
 ]
 
@@ -326,6 +326,17 @@ def paused_gc() -> Iterator[None]:
             resume_gc()
 
 
+class Replayable(Protocol):
+    """What a search's bookkeeping needs of the system it explores
+    (:class:`~desmon.verify.system.TransitionSystem` is the one): the invariants it
+    checks, and the replay of a path's labels through the real core."""
+
+    @property
+    def invariants(self) -> tuple[Invariant, ...]: ...
+
+    def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]: ...
+
+
 class Trail:
     """The search tree of a BFS: each state's parent and transition label, by state number,
     and the counterexamples found so far, each rebuilt (once per invariant) by replaying
@@ -337,7 +348,7 @@ class Trail:
     under the engine's ``lookup`` key for it.
     """
 
-    def __init__(self, system: "TransitionSystem", key_of: Callable[[int], Key], keep_going: bool) -> None:
+    def __init__(self, system: Replayable, key_of: Callable[[int], Key], keep_going: bool) -> None:
         self.system = system
         self.key_of = key_of
         self.keep_going = keep_going
@@ -407,7 +418,7 @@ def final_status(states: int, transitions: int, depth: int) -> Callable[[], tupl
     return lambda: figures
 
 
-def finish(res: CheckResult, system: "TransitionSystem", found: dict[str, Counterexample], incomplete: str, depth: int, budget: Budget) -> CheckResult:
+def finish(res: CheckResult, system: Replayable, found: dict[str, Counterexample], incomplete: str, depth: int, budget: Budget) -> CheckResult:
     """Verdict, depth, time and memory of a finished search (any engine)."""
     res.depth = max([depth] + [c.length for c in found.values()])
     res.seconds = time.perf_counter() - budget.t0

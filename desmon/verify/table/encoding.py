@@ -20,7 +20,7 @@ from desmon.model.events import (
 )
 from desmon.verify.environment import EVENT_KINDS, variables
 from desmon.verify.state import Key
-from desmon.verify.table.tables import Interned
+from desmon.verify.table.hashing import Interned
 
 if TYPE_CHECKING:
     from desmon.verify.bounds import Bounds

@@ -1,17 +1,23 @@
-"""A numpy hash table of non-negative int64 keys, looked up and filled a batch at a time.
+"""The table engine's stores: a numpy hash table of non-negative int64 keys, looked up
+and filled a batch at a time, and the growing arrays and numberings it keeps beside it.
 
-The table engine's seen-state set, decision-tree roots and edges: open addressing with
-linear probing in two int64 arrays (keys, values), at most half full. A state costs 16
-bytes of it (8 at worst-case half load, 32 just after doubling) where a Python set of
-ints costs about 90; a batch lookup is a few array passes instead of a sort or a
-Python loop.
+:class:`IntTable` is the seen-state set, the decision-tree roots and edges: open
+addressing with linear probing in two int64 arrays (keys, values), at most half full. A
+state costs 16 bytes of it (8 at worst-case half load, 32 just after doubling) where a
+Python set of ints costs about 90; a batch lookup is a few array passes instead of a
+sort or a Python loop. :class:`Grow` is a numpy array with amortised appends;
+:class:`Interned` numbers distinct values in order of first appearance.
 """
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-__all__ = ["IntTable"]
+from desmon.errors import TableUnsupported
+
+__all__ = ["IntTable", "Grow", "Interned"]
 
 _EMPTY = -1
 _MUL = np.uint64(0x9E3779B97F4A7C15)  # Fibonacci hashing: the high bits of key * 2^64/phi
@@ -94,3 +100,46 @@ class IntTable:
         keys = old_keys[full]
         del old_keys
         self.add(keys, None if old_vals is None else old_vals[full])
+
+
+class Grow:
+    """A numpy array with amortised appends."""
+
+    def __init__(self, shape: tuple[int, ...], fill: int = 0) -> None:
+        self.a = np.full(shape, fill, dtype=np.int64)
+        self.n = 0
+        self.fill = fill
+
+    def append(self, row: Any) -> int:
+        if self.n == len(self.a):
+            more = np.full(self.a.shape, self.fill, dtype=np.int64)
+            self.a = np.concatenate([self.a, more])
+        self.a[self.n] = row
+        self.n += 1
+        return self.n - 1
+
+    def extend(self, k: int) -> int:
+        """Append ``k`` fill values; returns the index of the first."""
+        while self.n + k > len(self.a):
+            self.a = np.concatenate([self.a, np.full(self.a.shape, self.fill, dtype=np.int64)])
+        self.n += k
+        return self.n - k
+
+
+class Interned(list):
+    """Distinct values numbered in order of first appearance: ``numbers(x)`` is x's number,
+    ``numbers[i]`` the value numbered i. Past ``limit`` values the engine bows out."""
+
+    def __init__(self, limit: int | None = None, what: str = "values") -> None:
+        super().__init__()
+        self._ids: dict[Any, int] = {}
+        self._limit, self._what = limit, what
+
+    def __call__(self, value: Any) -> int:
+        i = self._ids.get(value)
+        if i is None:
+            i = self._ids[value] = len(self)
+            if self._limit is not None and i >= self._limit:
+                raise TableUnsupported(f"table engine: more than {self._limit:,} {self._what}; run with --engine direct")
+            self.append(value)
+        return i

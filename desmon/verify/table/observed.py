@@ -11,14 +11,24 @@ observed only where its text is used.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Protocol, Sequence
 
 from desmon.deployment.validity import Validity
 
 if TYPE_CHECKING:
-    from desmon.verify.table.recording import RecordingChecks
+    from desmon.verify.table.tables import AnswerTables
 
-__all__ = ["Check", "ObservedValidity", "Acceptable", "Reasons", "Ranked"]
+__all__ = ["Observer", "Check", "ObservedValidity", "Acceptable", "Reasons", "Ranked"]
+
+
+class Observer(Protocol):
+    """Where a check's observations go (:class:`~desmon.verify.table.recording.RecordingChecks`
+    is the one): the answer tables that number them, and the record of the run."""
+
+    tables: AnswerTables
+
+    def observe(self, desc: tuple, code: int) -> None:
+        """Record that the run observed answer ``code`` to ``desc``."""
 
 
 class Check:
@@ -26,7 +36,7 @@ class Check:
 
     __slots__ = ("rec", "table", "first_only", "parts", "fails", "names", "scored", "_all_ok", "_one_ok")
 
-    def __init__(self, rec: "RecordingChecks", reqs: tuple, graph: str | None, first_only: bool,
+    def __init__(self, rec: Observer, reqs: tuple, graph: str | None, first_only: bool,
                  parts: tuple[tuple[int, int], ...], fails: list[tuple], names: list[str],
                  scored: list[tuple | None] | None = None) -> None:
         self.rec = rec
@@ -91,7 +101,8 @@ class Check:
 
 
 class _Observed:
-    """A read-only sequence whose every use is recorded (see :class:`RecordingChecks`)."""
+    """A read-only sequence whose every use is recorded (see
+    :class:`~desmon.verify.table.recording.RecordingChecks`)."""
 
     __slots__ = ("_check", "_real")
 

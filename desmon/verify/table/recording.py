@@ -15,7 +15,7 @@ else raises :class:`~desmon.errors.UnobservedRead`, and the core's Query port
 from __future__ import annotations
 
 import traceback
-from typing import TYPE_CHECKING, Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Protocol, Sequence
 
 from desmon.deployment.guard import CRASH
 from desmon.deployment.ports import PlatformHandle
@@ -23,17 +23,18 @@ from desmon.deployment.validity import PlatformMemoChecks, order_platforms
 from desmon.errors import NondeterminismError, TableUnsupported, UnobservedRead
 from desmon.model.events import Event
 from desmon.model.requirements import Preference
-from desmon.model.system import PlatformState
+from desmon.model.system import PlatformState, SystemModel
 from desmon.verify.state import Key, StateStore
-from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, command_key
+from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key
 from desmon.verify.table.observed import Acceptable, Check, ObservedValidity, Ranked, Reasons
 from desmon.verify.table.tables import AnswerTables, score_key
 from desmon.verify.trace import KEPT_BRANCH, WHOLE_REACTION, branch_name
 
 if TYPE_CHECKING:
-    from desmon.verify.table.search import TableEngine
+    from desmon.verify.table.encoding import Env
+    from desmon.verify.table.tree import DecisionTrees
 
-__all__ = ["RecordingChecks", "RecordingQuery", "Recorder", "QUERY_METHODS", "PlainRun"]
+__all__ = ["RecordingChecks", "RecordingQuery", "Recorder", "RecordedEngine", "QUERY_METHODS", "PlainRun"]
 
 #: Wrapped answers :class:`RecordingChecks` keeps before it forgets them all.
 _ANSWERS_LIMIT = 1 << 16
@@ -282,11 +283,28 @@ def _reader(tb: Any) -> str:
     return "?"  # pragma: no cover - a refusal always has a reader
 
 
+class RecordedEngine(Protocol):
+    """What a :class:`Recorder` needs of the table engine it records for
+    (:class:`~desmon.verify.table.search.TableEngine` is the one): the transition system
+    and its model, the number of platforms, the encoding's environment, answer tables and
+    decision trees, and the numbering of deployment states."""
+
+    checker: TransitionSystem
+    model: SystemModel
+    P: int
+    env: Env
+    tables: AnswerTables
+    trees: DecisionTrees
+
+    def system(self, deployments: tuple, standing: tuple) -> int:
+        """The number of the system part (deployments, standing)."""
+
+
 class Recorder:
     """The recorded runs of one table-engine search: each runs the real core on the
     recording twin of the system, then adds its path to the decision trees."""
 
-    def __init__(self, engine: "TableEngine") -> None:
+    def __init__(self, engine: RecordedEngine) -> None:
         self.engine = engine
         self.checker = engine.checker
         self.checks = RecordingChecks(engine.tables)

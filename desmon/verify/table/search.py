@@ -20,10 +20,10 @@ from desmon.verify.environment import EVENT_KINDS
 from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Trail, final_status as _final_status
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
-from desmon.verify.table.hashing import IntTable
+from desmon.verify.table.hashing import Interned, IntTable
 from desmon.verify.table.encoding import ROOT_CTX, ROOT_PREFIX, ROOT_STIM, SYS_BITS, SYS_MASK, Env, Events, Transitions, root_key
 from desmon.verify.table.recording import Recorder
-from desmon.verify.table.tables import AnswerTables, Interned
+from desmon.verify.table.tables import AnswerTables
 from desmon.verify.table.tree import DecisionTrees
 from desmon.verify.trace import Counterexample
 

@@ -13,59 +13,15 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from desmon.deployment.validity import platform_failures, platform_score, score_breakdown
-from desmon.errors import CheckerError, TableUnsupported
+from desmon.errors import CheckerError
 from desmon.model.system import PlatformState, SystemModel
+from desmon.verify.table.hashing import Grow, Interned
 
 if TYPE_CHECKING:
     from desmon.verify.table.encoding import Env
 
-__all__ = ["Grow", "Interned", "AnswerTables", "score_key"]
-
-
-class Grow:
-    """A numpy array with amortised appends."""
-
-    def __init__(self, shape: tuple[int, ...], fill: int = 0) -> None:
-        self.a = np.full(shape, fill, dtype=np.int64)
-        self.n = 0
-        self.fill = fill
-
-    def append(self, row: Any) -> int:
-        if self.n == len(self.a):
-            more = np.full(self.a.shape, self.fill, dtype=np.int64)
-            self.a = np.concatenate([self.a, more])
-        self.a[self.n] = row
-        self.n += 1
-        return self.n - 1
-
-    def extend(self, k: int) -> int:
-        """Append ``k`` fill values; returns the index of the first."""
-        while self.n + k > len(self.a):
-            self.a = np.concatenate([self.a, np.full(self.a.shape, self.fill, dtype=np.int64)])
-        self.n += k
-        return self.n - k
-
-
-class Interned(list):
-    """Distinct values numbered in order of first appearance: ``numbers(x)`` is x's number,
-    ``numbers[i]`` the value numbered i. Past ``limit`` values the engine bows out."""
-
-    def __init__(self, limit: int | None = None, what: str = "values") -> None:
-        super().__init__()
-        self._ids: dict[Any, int] = {}
-        self._limit, self._what = limit, what
-
-    def __call__(self, value: Any) -> int:
-        i = self._ids.get(value)
-        if i is None:
-            i = self._ids[value] = len(self)
-            if self._limit is not None and i >= self._limit:
-                raise TableUnsupported(f"table engine: more than {self._limit:,} {self._what}; run with --engine direct")
-            self.append(value)
-        return i
+__all__ = ["AnswerTables", "score_key"]
 
 
 def score_key(reqs: tuple, state: PlatformState, graph: Any) -> tuple:

@@ -16,8 +16,8 @@ from typing import Callable
 import numpy as np
 
 from desmon.errors import NondeterminismError, TableUnsupported
-from desmon.verify.table.hashing import IntTable
-from desmon.verify.table.tables import AnswerTables, Grow, Interned
+from desmon.verify.table.hashing import Grow, Interned, IntTable
+from desmon.verify.table.tables import AnswerTables
 
 __all__ = ["DecisionTrees", "DENSE_ANSWERS", "SMALL_DIGITS"]
 
