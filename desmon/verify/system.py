@@ -214,21 +214,28 @@ class TransitionSystem:
         return self._transition(key, event, prefix)
 
     def _transition(self, key: Key, event: Event, prefix: tuple[bool, ...]) -> tuple[Key, tuple[bool, ...], StepLog, Any]:
-        """``event`` and its reaction on ``key`` in the store: (next key, start outcomes,
-        StepLog, instantaneous violation or None), a broken transition property
-        (``no-flapping``, ``errors-justified``, ...) reported as one of the reaction as a whole
-        (:data:`~desmon.verify.trace.WHOLE_REACTION`)."""
+        """:meth:`transition` without its stimulus."""
+        _stim, nkey, outcomes, log, instant = self.transition(key, event, prefix)
+        return nkey, outcomes, log, instant
+
+    def transition(
+        self, key: Key, event: Event, prefix: tuple[bool, ...], *, recording: bool = False,
+    ) -> tuple[Any, Key, tuple[bool, ...], StepLog, Any]:
+        """``event`` and its reaction on ``key`` in the store, as every engine runs it (the
+        table engine on its recording twin, ``recording``: :meth:`step_under_guard`):
+        (stimulus, next key, start outcomes, StepLog, instantaneous violation or None); a
+        broken transition property is one of the whole reaction (``WHOLE_REACTION``)."""
         st = self.store
         st.load(key)
         core = self.core
         core.standing = self._standing(key.standing)
         st.begin(prefix)
-        _stim, log = self.step_under_guard(core, st, event)
+        stimulus, log = self.step_under_guard(core, st, event, recording=recording)
         if core.findings and st.instant is None:
             found = core.finding(self._checked)
             if found is not None:
                 st.instant = (found[0], found[1], WHOLE_REACTION)
-        return st.key(core.standing), tuple(st.outcomes), log, st.instant
+        return stimulus, st.key(core.standing), tuple(st.outcomes), log, st.instant
 
     def step_under_guard(self, core: DeploymentCore, st: StateStore, event: Event, *, recording: bool = False) -> tuple[Any, StepLog]:
         """``core.step(event, st)``; a fault of the deployer (it raised, yielded a wrong

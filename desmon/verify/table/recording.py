@@ -28,7 +28,7 @@ from desmon.verify.state import Key, StateStore
 from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key
 from desmon.verify.table.observed import Acceptable, Check, ObservedValidity, Ranked, Reasons
 from desmon.verify.table.tables import AnswerTables, score_key
-from desmon.verify.trace import KEPT_BRANCH, WHOLE_REACTION, branch_name
+from desmon.verify.trace import KEPT_BRANCH, branch_name
 
 if TYPE_CHECKING:
     from desmon.verify.table.encoding import Env
@@ -347,18 +347,9 @@ class Recorder:
         """Run ``event``'s reaction on ``key`` (with ``prefix``) for real and add its path under ``root``."""
         rc, eng = self.rc, self.engine
 
-        def run() -> tuple:
-            st = rc.store
-            st.load(key)
-            rc.core.standing = frozenset(key.standing)
-            st.begin(prefix)
-            stimulus, log = rc.step_under_guard(rc.core, st, event, recording=True)  # a fault: the instant CRASH
-            instant = st.instant
-            if rc.core.findings and instant is None:  # as TransitionSystem.run_one
-                found = rc.core.finding(rc._checked)
-                if found is not None:
-                    instant = (found[0], found[1], WHOLE_REACTION)
-            return stimulus, log, st.key(rc.core.standing), tuple(st.outcomes), instant
+        def run() -> tuple:  # the system's own transition, on the recording twin (a fault: the instant CRASH)
+            stimulus, nkey, outcomes, log, instant = rc.transition(key, event, prefix, recording=True)
+            return stimulus, log, nkey, outcomes, instant
 
         out, obs = self._recording(run, lambda: self.checker.run_one(key, event, prefix))
         if isinstance(out, PlainRun):  # the deployer failed with a TypeError or AttributeError of its own
