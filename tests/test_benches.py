@@ -49,7 +49,7 @@ def test_python_m_bench_refuses_an_unknown_bench():
 @pytest.mark.parametrize("name", BENCHES)
 def test_bench_runs_small_and_reports_its_figures(name):
     if "RESULT" not in (ROOT / "bench" / f"{name}.py").read_text():
-        pytest.skip(f"{name} prints no RESULT line yet")  # bench_sim's comes with issue 27 part 1
+        pytest.skip(f"{name} prints no RESULT line yet")  # a bench without its RESULT line yet
     proc = subprocess.run([sys.executable, "-m", f"bench.{name}", *QUICK[name]], cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-2000:]
     figures = parse_result(proc.stdout)

@@ -1,4 +1,4 @@
-"""The shortcuts of issue 27's fifth round on the deployment side answer exactly what the
+"""The shortcuts on the deployment side answer exactly what the
 long way answers.
 
 Each test fails if its shortcut is wrong: the live graph's adjacency other than a

@@ -1,4 +1,4 @@
-"""The shortcuts of issue 27's deployment-path speed work answer exactly what the long
+"""The shortcuts of the deployment path answer exactly what the long
 way answers, and every write that changes the facts changes the answer.
 
 Each test below fails if its shortcut kept an answer past a write that changes it: a
