@@ -90,22 +90,27 @@ settings.load_profile("desmon")
 
 class SlowLines:
     """In a run that prints one character per test (not ``-v``), each test marked slow also
-    gets a line of its own as it ends: its outcome, name and seconds. ``make test`` runs
+    gets a line of its own as it ends: its outcome, name and seconds (its setup's too, where
+    a shared fixture such as ``tutorial_run`` may do the work). ``make test`` runs
     the fast and the slow tests together on two processes (slow ones first), so the slow
     ones show by name among the dots."""
 
     def __init__(self, reporter) -> None:  # type: ignore[no-untyped-def]
         self.reporter = reporter
+        self.setup: dict[str, float] = {}  # seconds of each test's setup (a shared fixture's work counts)
 
     @pytest.hookimpl(trylast=True)  # after the reporter's own character
     def pytest_runtest_logreport(self, report) -> None:  # type: ignore[no-untyped-def]
         if "slow" not in report.keywords:
             return
+        if report.when == "setup" and report.passed:
+            self.setup[report.nodeid] = report.duration
         if report.when == "call" or (report.when == "setup" and not report.passed) or (report.when == "teardown" and report.failed):
             where = "" if report.when == "call" else f" (at {report.when})"
+            seconds = report.duration + (self.setup.pop(report.nodeid, 0.0) if report.when == "call" else 0.0)
             if getattr(self.reporter._tw, "width_of_current_line", 0):  # after the dots of this row
                 self.reporter.write("\n")
-            self.reporter.write_line(f"{report.outcome.upper()}{where} {report.nodeid} in {report.duration:.1f} s")
+            self.reporter.write_line(f"{report.outcome.upper()}{where} {report.nodeid} in {seconds:.1f} s")
 
 
 class XdistGroups:
