@@ -69,7 +69,10 @@ def commands(names: list[str]) -> list[tuple[str, int]]:
     return out
 
 
-def _environment(config: Path) -> dict[str, str]:
+def environment(config: Path) -> dict[str, str]:
+    """This process's environment for commands that draw: matplotlib's Agg backend and its
+    own defaults (no ``MATPLOTLIBRC``, the fresh config folder ``config``). The tutorial's
+    test (tests/conftest.py's ``tutorial_run``) runs its commands in the same one."""
     env = {k: v for k, v in os.environ.items() if k not in ("MATPLOTLIBRC", "MPLBACKEND")}
     env.update(MPLBACKEND="Agg", MPLCONFIGDIR=str(config))
     return env
@@ -82,7 +85,7 @@ def draw(names: list[str], work: Path, root: Path = ROOT) -> dict[str, Path]:
     shutil.copytree(root / "docs" / "examples", work / "docs" / "examples", ignore=shutil.ignore_patterns("__pycache__"))
     (work / "out").mkdir()
     (work / "mplconfig").mkdir()
-    env = _environment(work / "mplconfig")
+    env = environment(work / "mplconfig")
     for cmd, code in commands(names):
         argv = shlex.split(cmd)
         proc = subprocess.run([sys.executable, "-m", "desmon", *argv[1:]], cwd=work, env=env, capture_output=True, text=True)

@@ -273,6 +273,17 @@ def _exact(sc, reward=None) -> float:
     return a.exposure_s_per_mission if reward is None else reward(a)
 
 
+@functools.lru_cache(maxsize=None)
+def _analysis(name: str):
+    """The chain :func:`_exact` solves for the named scenario, solved once per test process
+    and only read: the three tests that read cloud_offload's are the xdist group
+    ``analysis-cloud_offload``, so ``make test``'s processes solve it once."""
+    return analyze(_scenario(name), miss=NO_MISS, horizon=HOUR, steady=False)
+
+
+OFFLOAD_ANALYSIS = pytest.mark.xdist_group("analysis-cloud_offload")
+
+
 def _next_step_reward(a):
     """A mutation: the reward of each state read from the *next* task step (an off-by-one)."""
     chain = a.chain
@@ -286,14 +297,21 @@ def _next_step_reward(a):
     return float(transient(Q, p0, HOUR, mutated.unmonitored).accumulated[0])
 
 
+#: the xdist group of the tests that read ``_simulated("platform_crash")`` (cached per
+#: process): ``make test``'s processes run them in one process and simulate once
+CRASH_SIMULATED = pytest.mark.xdist_group("simulated-platform_crash")
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["coffee_shift", "platform_crash", "cloud_offload"])
+@pytest.mark.parametrize("name", ["coffee_shift", pytest.param("platform_crash", marks=CRASH_SIMULATED),
+                                  pytest.param("cloud_offload", marks=OFFLOAD_ANALYSIS)])
 def test_the_exact_exposure_lies_in_the_simulations_99_percent_interval(name):
-    ag = agreement(_exact(_scenario(name)), _simulated(name))
+    ag = agreement(_analysis(name).exposure_s_per_mission, _simulated(name))  # _exact(_scenario(name)), solved once
     assert ag.inside, ag.to_json()
 
 
 @pytest.mark.slow
+@CRASH_SIMULATED
 def test_a_wrong_rate_or_an_off_by_one_reward_falls_outside_the_interval():
     sc = _scenario("platform_crash")
     wrong = replace(sc, world=replace(sc.world, stochastic_faults=tuple(
@@ -303,6 +321,7 @@ def test_a_wrong_rate_or_an_off_by_one_reward_falls_outside_the_interval():
 
 
 @pytest.mark.slow
+@OFFLOAD_ANALYSIS
 def test_a_wrong_lease_start_up_falls_outside_the_interval():
     sc = _scenario("cloud_offload")
     slow = tuple(replace(p, startup_s=p.startup_s * 3) if p.on_demand else p for p in sc.model.platforms)
@@ -313,7 +332,7 @@ def test_a_wrong_lease_start_up_falls_outside_the_interval():
     def not_deployed(s) -> float:
         return analyze(s, miss=NO_MISS, horizon=HOUR, steady=False).causes_s_per_mission["not_deployed"]
 
-    assert agreement(not_deployed(sc), sim).inside
+    assert agreement(_analysis("cloud_offload").causes_s_per_mission["not_deployed"], sim).inside  # not_deployed(sc), solved once
     assert not agreement(not_deployed(replace(sc, model=replace(sc.model, platforms=slow))), sim).inside
 
 
@@ -501,11 +520,12 @@ def test_the_analyze_bench_modes_end_with_their_result_line(argv):
 
 
 @pytest.mark.slow
+@OFFLOAD_ANALYSIS
 def test_a_leases_idle_time_in_erlang_phases_is_the_worlds_under_the_same_phases():
     """With --phases 2 the lease's idle time is two phases, counted while the platform
     hosts nothing, in the chain and in the simulation alike (140 half-hours)."""
     sc = _scenario("cloud_offload")
     a = analyze(sc, miss=NO_MISS, phases=2, horizon=HOUR, steady=False)
-    assert a.states > analyze(sc, miss=NO_MISS, horizon=HOUR, steady=False).states
+    assert a.states > _analysis("cloud_offload").states  # analyze(sc, miss=NO_MISS, horizon=HOUR, steady=False), solved once
     ag = agreement(a.exposure_s_per_mission, simulated_exposure(sc, "desmon", range(140), HOUR, phases=2))
     assert ag.inside, ag.to_json()

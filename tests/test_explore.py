@@ -271,6 +271,7 @@ def _shown(driver, shots: str | None = None) -> dict:  # type: ignore[no-untyped
     return view
 
 
+@pytest.mark.xdist_group("browser")  # one process starts Chromium (the module's browser fixture) for both
 def test_the_explorer_in_headless_chromium_steps_through_fig_5(browser, coffee):
     from selenium.webdriver.common.by import By
     from selenium.webdriver.common.keys import Keys
@@ -312,6 +313,7 @@ def test_the_explorer_in_headless_chromium_steps_through_fig_5(browser, coffee):
     assert _console_errors(browser) == []
 
 
+@pytest.mark.xdist_group("browser")  # one process starts Chromium (the module's browser fixture) for both
 def test_a_counterexample_page_loads_in_headless_chromium(browser, root, tmp_path, capsys):
     from selenium.webdriver.common.by import By
 

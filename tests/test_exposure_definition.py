@@ -67,12 +67,14 @@ def test_a_builtin_action_can_only_be_excluded_and_keeps_its_own_risk():
 
 
 # -- the simulation ----------------------------------------------------------------------------------
+# the two tests that read _shift_run() are in the xdist group "shift-run": one process runs both, and the runs once
 @functools.lru_cache(maxsize=None)
 def _shift_run(exclude: bool = False):
     sc = load_scenario(SHIFT, {"hours": "1"})
     return simulate(_excluding_hold(sc) if exclude else sc, "desmon", seed=0)
 
 
+@pytest.mark.xdist_group("shift-run")
 def test_the_coffee_robots_headline_includes_the_mug_held_with_no_rule():
     m = _shift_run().metrics
     sc = load_scenario(SHIFT, {"hours": "1"})
@@ -86,6 +88,7 @@ def test_the_coffee_robots_headline_includes_the_mug_held_with_no_rule():
     assert m["excluded_s"] == 0.0
 
 
+@pytest.mark.xdist_group("shift-run")
 def test_an_excluded_action_moves_its_seconds_beside_the_figure_not_into_it():
     plain, excl = _shift_run().metrics, _shift_run(True).metrics
     assert excl["unmonitored_by_cause_s"]["no_rule"] == 0.0
@@ -157,9 +160,22 @@ def _inside(exact: float, values) -> bool:
     return agreement(exact, values).inside
 
 
-@pytest.mark.parametrize("path", [SHIFT, PICK])
+#: SHIFT and PICK, each in an xdist group of its own: the two tests of a path read the same
+#: simulations (``_simulated(path, "1", False)``) and chain (``_one_hour_analysis``), each
+#: cached per process, so ``make test``'s processes run them in one process and compute once
+ONE_HOUR = [pytest.param(path, marks=pytest.mark.xdist_group(f"simulated-1h-{path}")) for path in (SHIFT, PICK)]
+
+
+@functools.lru_cache(maxsize=None)
+def _one_hour_analysis(path: str):
+    """``analyze(_scenario(path, "1"), steady=False)``, solved once per process (the tests of
+    :data:`ONE_HOUR` only read it)."""
+    return analyze(_scenario(path, "1"), steady=False)
+
+
+@pytest.mark.parametrize("path", ONE_HOUR)
 def test_the_exact_exposure_and_risky_time_lie_in_the_simulations_99_percent_interval(path):
-    a = analyze(_scenario(path, "1"), steady=False)
+    a = _one_hour_analysis(path)
     sim = _simulated(path, "1", False)
     assert _inside(a.exposure_s_per_mission, sim["exposure"]), (a.exposure_s_per_mission, confidence(sim["exposure"]))
     assert _inside(a.risky_s_per_mission, sim["risky"]), (a.risky_s_per_mission, confidence(sim["risky"]))
@@ -178,9 +194,9 @@ def _without(a, *causes_left_out) -> float:
     return float(transient(Q, p0, a.horizon_s, keep).accumulated[0])
 
 
-@pytest.mark.parametrize("path", [SHIFT, PICK])
+@pytest.mark.parametrize("path", ONE_HOUR)
 def test_leaving_out_the_no_rule_time_or_the_warm_up_falls_outside_the_interval(path):
-    a = analyze(_scenario(path, "1"), steady=False)
+    a = _one_hour_analysis(path)
     sim = _simulated(path, "1", False)
     assert not _inside(_without(a, "no_rule"), sim["exposure"])
     # a chain without warm-up: the detectors watch from the end of their start latency
@@ -234,9 +250,10 @@ def test_under_fixed_timing_more_phases_bring_the_chain_to_the_simulation():
 
     sc = load_scenario(SHIFT, {"faults": "False", "hours": "1"})
     fixed = simulated_exposure(sc, "desmon", SEEDS, 3600.0, timing="fixed")
-    gaps = [abs(analyze(sc, miss={}, phases=k, horizon=3600.0, steady=False).exposure_s_per_mission - np.mean(fixed)) for k in (1, 4, 16)]
+    exact = {k: analyze(sc, miss={}, phases=k, horizon=3600.0, steady=False).exposure_s_per_mission for k in (1, 4, 16)}
+    gaps = [abs(exact[k] - np.mean(fixed)) for k in (1, 4, 16)]
     assert gaps[0] > gaps[1] > gaps[2]
-    assert _inside(analyze(sc, miss={}, phases=16, horizon=3600.0, steady=False).exposure_s_per_mission, fixed)
+    assert _inside(exact[16], fixed)  # the 16-phase chain (4,800 states) solved once, not again for this line
 
 
 def test_a_camera_detector_watches_in_every_engine_once_the_user_gives_its_rate():

@@ -2,7 +2,9 @@
 
 One 2-worker LocalCluster serves most tests (``cluster`` fixture); the determinism test
 starts its own 1-worker cluster, the cluster test a real dask-scheduler and dask-worker.
-Runs use robot_day shortened to a minute or two (``hours`` 0.02-0.04).
+Runs use robot_day shortened to a minute or two (``hours`` 0.02-0.04). The module's tests
+are one xdist group: ``make test``'s processes run them in one process, which starts the
+cluster once.
 """
 
 from __future__ import annotations
@@ -53,6 +55,9 @@ if p.crash_once and not os.path.exists(p.crash_once) and in_worker():
 time.sleep(p.sleep)
 scenario = load_scenario({str(ROBOT_DAY)!r}, {{"hand_memory": str(p.hand_memory), "hours": str(p.hours)}})
 '''
+
+
+pytestmark = pytest.mark.xdist_group("dask-cluster")
 
 
 @pytest.fixture(scope="module")

@@ -1,7 +1,13 @@
 """The executed documents cannot rot: every command in the sh blocks of docs/tutorial.md
 and docs/deployers.md runs and exits as it says, every picture the tutorial shows is
 produced by those commands (under out/; tests/test_docs_pictures.py compares them with
-docs/img), and the code and output deployers.md quotes are the real ones."""
+docs/img), and the code and output deployers.md quotes are the real ones.
+
+The tutorial's commands run once per test process, in the session fixture
+``tutorial_run`` (tests/conftest.py): this module's test checks their exit codes, quotes
+and pictures, and tests/test_docs_pictures.py compares the same pictures with docs/img
+(both tests are in the xdist group ``tutorial``, so ``make test``'s processes run them in
+one process and the commands once)."""
 
 import os
 import re
@@ -46,30 +52,52 @@ def test_the_tutorial_has_commands_and_pictures(root):
     assert cmds[0] == ("mkdir -p out", 0)  # the folder the commands write to exists before they run
 
 
-def run_doc(root: Path, work: Path, doc: str) -> dict[str, subprocess.CompletedProcess[str]]:
-    """Run every command of ``docs/<doc>`` in ``work`` (a copy of scenarios/ and
+#: (command, the exit code the page gives it, its process) of each command run
+Ran = list[tuple[str, int, subprocess.CompletedProcess[str]]]
+
+
+def run_commands(root: Path, work: Path, doc: str, *, env: dict[str, str] | None = None, keep_going: bool = False) -> Ran:
+    """Run the commands of ``docs/<doc>`` in order in ``work`` (a copy of scenarios/ and
     docs/examples/; a page that writes files makes its out/ first, and a command writing
-    into docs/img finds no such folder and fails), asserting each exit code; returns each
-    command's process."""
+    into docs/img finds no such folder and fails), in ``env`` (default: this process's)
+    with this environment's bin first on PATH. Stops after the first command that exits
+    otherwise than the page says, unless ``keep_going``."""
     shutil.copytree(root / "scenarios", work / "scenarios")
     shutil.copytree(root / "docs" / "examples", work / "docs" / "examples")
     bindir = Path(sys.executable).parent
-    env = {**os.environ, "PATH": f"{bindir}{os.pathsep}{os.environ.get('PATH', '')}"}
-    ran = {}
+    env = dict(os.environ if env is None else env)
+    env["PATH"] = f"{bindir}{os.pathsep}{env.get('PATH', '')}"
+    ran: Ran = []
     for cmd, expected in doc_commands(root, doc):
         argv = shlex.split(cmd)
         if argv[0] == "python":
             argv[0] = sys.executable
         proc = subprocess.run(argv, cwd=work, env=env, capture_output=True, text=True, timeout=600)
-        assert proc.returncode == expected, f"{cmd}\n--- stdout\n{proc.stdout[-3000:]}\n--- stderr\n{proc.stderr[-3000:]}"
-        ran[cmd] = proc
+        ran.append((cmd, expected, proc))
+        if proc.returncode != expected and not keep_going:
+            break
     return ran
 
 
+def exited_as_documented(ran: Ran) -> dict[str, subprocess.CompletedProcess[str]]:
+    """Asserts that each command of ``ran`` exited as its page says, in order; each one's process."""
+    for cmd, expected, proc in ran:
+        assert proc.returncode == expected, f"{cmd}\n--- stdout\n{proc.stdout[-3000:]}\n--- stderr\n{proc.stderr[-3000:]}"
+    return {cmd: proc for cmd, _expected, proc in ran}
+
+
+def run_doc(root: Path, work: Path, doc: str) -> dict[str, subprocess.CompletedProcess[str]]:
+    """Run every command of ``docs/<doc>`` in ``work`` (:func:`run_commands`), asserting
+    each exit code; returns each command's process."""
+    return exited_as_documented(run_commands(root, work, doc))
+
+
 @pytest.mark.slow
-def test_every_tutorial_command_runs_as_documented(root, tmp_path):
-    work = tmp_path / "tour"
-    ran = run_doc(root, work, "tutorial.md")
+@pytest.mark.xdist_group("tutorial")
+def test_every_tutorial_command_runs_as_documented(root, tutorial_run):
+    work, commands = tutorial_run
+    ran = exited_as_documented(commands)
+    assert [c for c, _, _ in commands] == [c for c, _ in tutorial_commands(root)]  # every one of them ran
     text = (root / "docs" / "tutorial.md").read_text()
     from docblocks import check_quote, quotes
 
