@@ -114,8 +114,8 @@ def _timed(fn, *args, **kwargs):  # type: ignore[no-untyped-def]
 
 #: the two Checks ports compared: numpy columns from VECTOR_MIN_PLATFORMS on, and the
 #: scalar loop; neither memoises (each timing is of the computation itself)
-COLUMNS = placement.ColumnChecks(memo=False)
-SCALAR = ScalarChecks(memo=False)
+COLUMNS = placement.ColumnChecks()
+SCALAR = ScalarChecks()
 
 
 def _fresh() -> None:
@@ -147,7 +147,7 @@ def run(args: argparse.Namespace) -> dict[str, float]:
     build, _ = _timed(placement.PlatformColumns, states)
     gc.collect()
     tracemalloc.start()  # (slows allocation down: the build is timed above, without it)
-    cols = placement.columns_for(states)  # the store check_validity's dispatch uses
+    cols = placement.columns_for(states, COLUMNS.columns)  # the store check_validity's dispatch uses
     _size, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
 
@@ -235,7 +235,7 @@ def changelog(args: argparse.Namespace) -> None:
     for _ in range(rereads):
         event()
         t0 = time.perf_counter()
-        placement.columns_for(query.platform_states()).acceptable(reqs, "force")
+        placement.columns_for(query.platform_states(), COLUMNS.columns).acceptable(reqs, "force")
         t_full += time.perf_counter() - t0
     follower = ChangeLogColumns(repo, query)
     follower.columns()

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from desmon.deployment import validity
 from desmon.deployment.invariants import SystemView, make_view
+from desmon.deployment.memo import MemoChecks
 from desmon.deployment.validity import PlatformMemoChecks, ScalarChecks
 from desmon.loader import load_scenario
 from desmon.model import Device, Platform, PlatformState, make_requirement as req
@@ -47,16 +47,18 @@ def test_a_view_made_without_the_constructor_is_the_constructors_view():
 def test_a_question_with_reads_is_the_requirements_then_the_reads_the_same_tuple_each_time():
     reqs = (req("quantity", "tactile_pad", 6), req("capacity", "memory", 100))
     reads = (Reads("tactile_pad", (("pad0", "a"),)),)
-    joined = validity._joined(reqs, reads)
+    memo = MemoChecks(ScalarChecks())
+    joined = memo.joined(reqs, reads)
     assert joined == reqs + reads
-    assert validity._joined(reqs, reads) is joined  # found again by identity
+    assert memo.joined(reqs, reads) is joined  # found again by identity
+    assert MemoChecks(ScalarChecks()).joined(reqs, reads) is not joined  # each run's memo is its own
     other = tuple(reqs)[:1]
-    assert validity._joined(other, reads) == other + reads  # another tuple: its own question
-    assert validity._joined(list(reqs), reads) == reqs + reads  # not a tuple: joined afresh
+    assert memo.joined(other, reads) == other + reads  # another tuple: its own question
+    assert memo.joined(list(reqs), reads) == reqs + reads  # not a tuple: joined afresh
 
 
 def test_memoised_checks_answer_as_the_loop_whatever_tuple_a_question_comes_in():
-    memo, plain = PlatformMemoChecks(), ScalarChecks(memo=False)
+    memo, plain = PlatformMemoChecks(), ScalarChecks()
     a, b = _state("a", devices=PADS, deployed=[("x", 100)]), _state("b", devices=PADS[:5], load=300)
     first = (req("quantity", "tactile_pad", 6), req("capacity", "memory", 250))
     same_objects = tuple(list(first))  # another tuple of the same requirement objects

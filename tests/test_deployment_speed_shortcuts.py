@@ -272,7 +272,7 @@ def test_kept_failure_texts_are_each_questions_own(world):
 
 
 def test_deployment_valid_reads_remote_inputs_only_where_the_platform_hosts_none(world):
-    from desmon.deployment.validity import _joined, _lookup, check_platform, deployment_valid, input_failures
+    from desmon.deployment.validity import _lookup, check_platform, deployment_valid, input_failures
 
     model, repo = world
     force = next(s for s in model.specs if s.graph == "force")
@@ -289,7 +289,7 @@ def test_deployment_valid_reads_remote_inputs_only_where_the_platform_hosts_none
             set_load(repo, "pc1", "memory", 500.0)
         states = q.platform_states()
         for state in states:
-            fails = check_platform(_joined(spec.requirements, spec.reads), state, spec.graph)
+            fails = check_platform(spec.requirements + spec.reads, state, spec.graph)
             want = fails or input_failures(spec.reads, state.platform.name, _lookup(states), spec.graph)
             assert deployment_valid(spec, state, states) == want
             remote += [f.platform for f in want if f.platform == "pc2"]

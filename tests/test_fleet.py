@@ -227,15 +227,14 @@ def test_a_hundred_robots_share_twenty_edge_servers_for_a_quarter_hour_without_v
 
 def test_a_fleet_run_memoises_no_validity_answer() -> None:
     from desmon.deployment import validity as V
+    from desmon.deployment.memo import MemoChecks
     from desmon.deployment.placement import PlatformMemoColumnChecks
 
     world = FleetWorld(fleet(3, 2, 0.05), seed=1)
-    V.clear_memos()
     world.run()
     # the robots ask the fleet's own Checks port: numpy columns, each platform's part
     # memoised on its state's identity, no whole answer memoised
-    assert type(world.checks) is PlatformMemoColumnChecks and not world.checks.memo
-    assert not hasattr(world.checks._validity, "cache_info")
-    # and nothing went to the default ones (the audit asks the fleet's port too)
-    assert V.DEFAULT_CHECKS._validity.cache_info().currsize == 0
-    assert V.DEFAULT_CHECKS._platform.cache_info().currsize == 0
+    assert type(world.checks) is MemoChecks and type(world.checks.inner) is PlatformMemoColumnChecks and not world.checks.answers
+    assert not hasattr(world.checks.validity, "cache_info")
+    # and the default checks, which remember nothing, stay what they are
+    assert type(V.DEFAULT_CHECKS) is V.ScalarChecks

@@ -6,6 +6,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from desmon.deployment import placement, validity
+from desmon.deployment.memo import ColumnMemo
 from desmon.deployment.placement import ChangeLogColumns, PlatformColumns
 from desmon.errors import ModelError, QueryError
 from desmon.model import Device, Platform, PlatformState, RobotBuilder, make_requirement as req
@@ -28,8 +29,8 @@ def scalar(reqs, states, graph, reasons):
 
 
 def columns_checks():
-    """The fleet's Checks port: numpy columns from VECTOR_MIN_PLATFORMS platforms on, no memo."""
-    return placement.ColumnChecks(memo=False)
+    """The fleet's Checks port: numpy columns from VECTOR_MIN_PLATFORMS platforms on, no memoised answer."""
+    return placement.ColumnChecks()
 
 
 # -- fleets ----------------------------------------------------------------------------------------
@@ -167,24 +168,23 @@ FLEET_REQS = (req("capacity", "memory", 250), req("attribute", "os", "linux"), r
 
 def test_check_validity_takes_the_columns_at_the_threshold_and_answers_the_same():
     states = big_fleet(placement.VECTOR_MIN_PLATFORMS)
-    before = placement.COUNTS["vector"]
-    got = validity.check_validity(FLEET_REQS, states, "g0", reasons=True, checks=columns_checks())
-    assert placement.COUNTS["vector"] == before + 1
+    checks = columns_checks()
+    got = validity.check_validity(FLEET_REQS, states, "g0", reasons=True, checks=checks)
+    assert checks.columns.counts == {"vector": 1, "declined": 0}
     assert got == scalar(FLEET_REQS, states, "g0", True)
 
 
 def test_check_validity_keeps_the_scalar_loop_below_the_threshold():
     states = big_fleet(placement.VECTOR_MIN_PLATFORMS - 1)
-    before = placement.COUNTS["vector"]
-    validity.check_validity(FLEET_REQS, states, "g0", checks=columns_checks())
-    assert placement.COUNTS["vector"] == before
+    checks = columns_checks()
+    validity.check_validity(FLEET_REQS, states, "g0", checks=checks)
+    assert checks.columns.counts == {"vector": 0, "declined": 0}
 
 
 def test_the_scalar_checks_never_take_the_columns_however_many_platforms():
     states = big_fleet(placement.VECTOR_MIN_PLATFORMS * 2)
-    before = placement.COUNTS["vector"]
-    got = validity.check_validity(FLEET_REQS, states, None, reasons=False, checks=validity.ScalarChecks(memo=False))
-    assert placement.COUNTS["vector"] == before
+    got = validity.check_validity(FLEET_REQS, states, None, reasons=False, checks=validity.ScalarChecks())
+    assert not hasattr(validity.ScalarChecks(), "columns")
     assert got == scalar(FLEET_REQS, states, None, False)
 
 
@@ -196,9 +196,9 @@ def test_a_requirement_the_columns_do_not_cover_falls_back_to_the_scalar_loop():
     reqs = (*FLEET_REQS, pref)
     states = big_fleet(placement.VECTOR_MIN_PLATFORMS)
     assert not placement.supported(reqs)
-    vector, declined = placement.COUNTS["vector"], placement.COUNTS["declined"]
-    got = validity.check_validity(reqs, states, "g0", checks=columns_checks())
-    assert (placement.COUNTS["vector"], placement.COUNTS["declined"]) == (vector, declined + 1)
+    checks = columns_checks()
+    got = validity.check_validity(reqs, states, "g0", checks=checks)
+    assert checks.columns.counts == {"vector": 0, "declined": 1}
     assert got == scalar(reqs, states, "g0", True)
 
 
@@ -219,12 +219,14 @@ def test_the_acceptable_shortcut_matches_check_validity_on_both_sides_of_the_thr
 
 def test_a_kept_store_is_rewritten_row_by_row_for_a_repository_style_fresh_but_equal_list():
     states = big_fleet(placement.VECTOR_MIN_PLATFORMS * 2)
-    first = placement.columns_for(states)
+    memo = ColumnMemo()
+    first = placement.columns_for(states, memo)
     fresh = tuple(PlatformState(s.platform, s.up, s.devices, s.load, s.deployed) for s in states)
     moved = list(fresh)
     moved[3] = PlatformState(fresh[3].platform, up=not fresh[3].up, devices=fresh[3].devices, load=fresh[3].load)
-    assert placement.columns_for(fresh) is first
-    assert placement.columns_for(tuple(moved)) is first
+    assert placement.columns_for(fresh, memo) is first
+    assert placement.columns_for(tuple(moved), memo) is first
+    assert placement.columns_for(states) is not first  # without a memo nothing is kept
     assert first.validity(FLEET_REQS, "g1") == scalar(FLEET_REQS, moved, "g1", True)
 
 

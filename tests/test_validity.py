@@ -99,6 +99,7 @@ def test_a_fixed_deployment_is_valid_only_on_its_executable_on_platform():
 
 def test_every_checks_implementation_gives_the_same_answers_and_only_a_memo_remembers():
     from desmon.deployment import validity as V
+    from desmon.deployment.memo import MemoChecks
     from desmon.deployment.placement import ColumnChecks, PlatformMemoColumnChecks
 
     reqs = [req("capacity", "memory", 250), req("maximum", "link_latency_ms", 10)]
@@ -107,35 +108,34 @@ def test_every_checks_implementation_gives_the_same_answers_and_only_a_memo_reme
         state("b", memory=1024, deployed=[("x", 100)], properties={"link_latency_ms": 5}),
         state("c", properties={"link_latency_ms": 20}),
     ]
-    memo, plain = V.ScalarChecks(), V.ScalarChecks(memo=False)
-    columns = ColumnChecks(memo=False, min_platforms=1)  # the numpy columns even for three platforms
+    memo, plain = MemoChecks(V.ScalarChecks()), V.ScalarChecks()
+    columns = ColumnChecks(min_platforms=1)  # the numpy columns even for three platforms
     # the fleet's: columns from min_platforms on, below them each platform's part memoised
     parts_columns, parts_loop = PlatformMemoColumnChecks(min_platforms=1), PlatformMemoColumnChecks(min_platforms=4)
     answers = [check_validity(reqs, states, "g", checks=c) for c in (memo, plain, columns, parts_columns, parts_loop, parts_loop)]
     assert all(a == V.loop_validity(tuple(reqs), tuple(states), "g", True) for a in answers)
     assert parts_loop._parts and not parts_columns._parts  # only the loop keeps platforms' parts
     assert [V.check_platform(reqs, states[0], "g", checks=c) for c in (memo, plain)] == [V.platform_failures(tuple(reqs), states[0], "g", False)] * 2
-    assert memo._validity.cache_info().currsize == 1 and memo._platform.cache_info().currsize == 1
-    assert not hasattr(plain._validity, "cache_info")  # nothing is kept
+    assert memo.validity.cache_info().currsize == 1 and memo.platform.cache_info().currsize == 1
+    assert not hasattr(plain.validity, "cache_info")  # nothing is kept
     memo.clear()
-    assert memo._validity.cache_info().currsize == 0
+    assert memo.validity.cache_info().currsize == 0
 
 
-def test_a_caller_naming_no_checks_gets_the_default_memoised_ones():
+def test_a_caller_naming_no_checks_gets_the_default_ones_which_remember_nothing():
     from desmon.deployment import validity as V
 
     states = [state("a", memory=1024)]
     assert V.checks_for(states) is V.DEFAULT_CHECKS
-    V.clear_memos()
-    check_validity([req("capacity", "memory", 10)], states, "g")
-    assert V.DEFAULT_CHECKS._validity.cache_info().currsize == 1
+    assert type(V.DEFAULT_CHECKS) is V.ScalarChecks  # no memo lives in a module: a run owns its MemoChecks
+    assert check_validity([req("capacity", "memory", 10)], states, "g").acceptable == ("a",)
 
 
 def test_platform_memo_checks_answer_as_the_loop_while_one_platform_changes_at_a_time():
     from desmon.deployment.validity import PlatformMemoChecks, ScalarChecks
     from desmon.model.requirements import make_preference
 
-    memo, plain = PlatformMemoChecks(), ScalarChecks(memo=False)
+    memo, plain = PlatformMemoChecks(), ScalarChecks()
     pads = [("tactile_pad", "weiss")] * 6
     reqs = (req("quantity", "tactile_pad", 6), req("capacity", "memory", 250), make_preference("most_free", "memory"))
     a, b = state("a", devices=pads, deployed=[("x", 100)]), state("b", devices=pads, load=100)

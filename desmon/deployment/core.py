@@ -16,7 +16,8 @@ from typing import Callable, Container, Iterable
 from desmon.deployment.deployer import Deployer, get_deployer
 from desmon.deployment.guard import DeployerFault, Guard, describe_stimulus, uncallable
 from desmon.deployment.invariants import ReactionBook, SystemView, judge_reaction, raise_problem, validly_active_among, view_of
-from desmon.deployment.monitor import InsertPort, Stimulus, observe
+from desmon.deployment.memo import memo_of
+from desmon.deployment.monitor import InsertPort, Stimuli, Stimulus, observe
 from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop, relay
 from desmon.deployment.validity import deployment_valid, validity_for
 from desmon.errors import ModelError
@@ -134,6 +135,8 @@ class DeploymentCore:
         self.guard = guard if guard is not None else Guard()
         self.query = query
         self.insert = insert
+        #: the stimuli its observations return, interned on the run's memo (its query's checks)
+        self._stimuli = Stimuli(memo_of(query.checks))
         self.deployer = get_deployer(deployer)
         self.standing: frozenset[str] = frozenset()
         # the current specifications come from the repository: requirements may change at run time
@@ -157,7 +160,7 @@ class DeploymentCore:
 
     def observe(self, event: Event) -> Stimulus:
         """The context monitor: write the facts ``event`` implies (Insert), return the Notify."""
-        return observe(event, self.insert)
+        return observe(event, self.insert, self._stimuli)
 
     def slots(self) -> tuple[tuple[str, ...], ...]:
         """The selector: what the rule table wants in the current context."""

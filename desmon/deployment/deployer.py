@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, Generator, Iterable
 
+from desmon.deployment.memo import memo_of
 from desmon.deployment.ports import (
     DEPLOYMENT_FAILED,
     DEPLOYMENT_INFORMATION_MISSING,
@@ -239,17 +240,17 @@ def _active_graphs(q: QueryPort) -> list[str]:
     return sorted({g for g, _p in deployments}) if deployments else []
 
 
-_WANTED: dict[tuple[tuple[str, ...], ...], frozenset[str]] = {}
+def _named_in(slots: tuple[tuple[str, ...], ...]) -> frozenset[str]:
+    return frozenset(g for slot in slots for g in slot)
 
 
-def _wanted_by(slots: tuple[tuple[str, ...], ...]) -> frozenset[str]:
-    """Every graph named in ``slots`` (memoised: slots are few and immutable)."""
-    wanted = _WANTED.get(slots)
-    if wanted is None:
-        if len(_WANTED) > 1024:
-            _WANTED.clear()
-        wanted = _WANTED[slots] = frozenset(g for slot in slots for g in slot)
-    return wanted
+def _wanted_by(slots: tuple[tuple[str, ...], ...], q: QueryPort) -> frozenset[str]:
+    """Every graph named in ``slots``; interned on the run's memo when ``q``'s checks keep
+    one (slots are few and immutable)."""
+    memo = memo_of(q.checks)
+    if memo is None:
+        return _named_in(slots)
+    return memo.interned(("wanted", slots), _named_in, slots)  # type: ignore[no-any-return]
 
 
 def _paper_react(
@@ -416,7 +417,7 @@ def make_desmon_react(
         triggers = None if context_changed else frozenset(changed)  # what a rebalancing move may answer
         if changed:
             yield from _recheck(q, changed, placed, make_before_break, triggers)
-        wanted = _wanted_by(slots)
+        wanted = _wanted_by(slots, q)
         # Free what the context no longer wants first: its capacity may be needed.
         unwanted = [g for g in _active_graphs(q) if g not in wanted]
         if unwanted:

@@ -11,11 +11,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from desmon.deployment.memo import MemoChecks
 from desmon.errors import ModelError
 from desmon.model.actions import GRASP, HOLD, IDLE, MOVE_BASE, RELEASE
 from desmon.model.events import Effects, Event, InsertPort
 
-__all__ = ["GripperObservation", "interpret", "InsertPort", "Stimulus", "observe"]
+__all__ = ["GripperObservation", "interpret", "InsertPort", "Stimulus", "Stimuli", "observe"]
 
 GRIPPER_STATES = ("open", "closing", "closed", "opening")
 
@@ -63,42 +64,44 @@ class Stimulus:
         return not self.changed_platforms and not self.context_changed and not self.specs_changed
 
 
-#: The stimuli observe returns, interned (they are immutable): nothing changed, the
-#: context changed, and one per changed platform (see :func:`_platform_changed`).
+#: The stimuli that need no memo: nothing changed, the context changed.
 _NOTHING = Stimulus()
 _CONTEXT_CHANGED = Stimulus(context_changed=True)
-_PLATFORM_CHANGED: dict[str, Stimulus] = {}
 
 
-def _platform_changed(platform: str) -> Stimulus:
-    """``Stimulus(changed_platforms=(platform,))``, interned (bounded: cleared past 1024)."""
-    stim = _PLATFORM_CHANGED.get(platform)
-    if stim is None:
-        if len(_PLATFORM_CHANGED) > 1024:
-            _PLATFORM_CHANGED.clear()
-        stim = _PLATFORM_CHANGED[platform] = Stimulus(changed_platforms=(platform,))
-    return stim
+def _one_platform(platform: str) -> Stimulus:
+    return Stimulus(changed_platforms=(platform,))
 
 
-class _Effects(Effects):
-    """The stimuli an event's :meth:`~desmon.model.events.Event.write` returns (interned)."""
+class Stimuli(Effects):
+    """The stimuli an event's :meth:`~desmon.model.events.Event.write` returns. With a
+    run's ``memo`` (:class:`~desmon.deployment.memo.MemoChecks`, the core's) the stimulus
+    of one changed platform is interned there (one object per platform); without, each
+    is made afresh (equal either way: they are immutable)."""
 
     nothing = _NOTHING
     context_changed = _CONTEXT_CHANGED
 
+    def __init__(self, memo: MemoChecks | None = None) -> None:
+        self.memo = memo
+
     def platform_changed(self, platform: str) -> Stimulus:
-        return _platform_changed(platform)
+        memo = self.memo
+        if memo is None:
+            return _one_platform(platform)
+        return memo.interned(("stimulus", platform), _one_platform, platform)  # type: ignore[no-any-return]
 
     def specs_changed(self, hosts: tuple[str, ...], graph: str) -> Stimulus:
         return Stimulus(changed_platforms=hosts, specs_changed=(graph,))
 
 
-_EFFECTS = _Effects()
+_PLAIN = Stimuli()
 
 
-def observe(event: Event, store: InsertPort) -> Stimulus:
+def observe(event: Event, store: InsertPort, stimuli: Stimuli | None = None) -> Stimulus:
     """Write the facts ``event`` implies and say what changed (each kind writes its own:
-    :meth:`Event.write <desmon.model.events.Event.write>`)."""
+    :meth:`Event.write <desmon.model.events.Event.write>`); ``stimuli`` build the answer
+    (the core passes its own, which intern)."""
     if not isinstance(event, Event):
         raise ModelError(f"not an environment event: {event!r}")
-    return event.write(store, _EFFECTS)  # type: ignore[no-any-return]
+    return event.write(store, stimuli if stimuli is not None else _PLAIN)  # type: ignore[no-any-return]

@@ -44,7 +44,9 @@ It takes the columns for :data:`VECTOR_MIN_PLATFORMS` platforms or more, and nev
 for a requirement kind the columns do not cover (a soft preference, say):
 :func:`vector_validity` answers None and the scalar loop runs.
 
-**Incremental upkeep.** The last few column stores are kept. A new states tuple
+**Incremental upkeep.** Each column-backed Checks port keeps its last few column
+stores (its ``columns``, a :class:`~desmon.deployment.memo.ColumnMemo`, which also
+counts how its questions were answered). A new states tuple
 equal to a kept one costs one tuple comparison; one that differs in a few rows
 (what a repository event changes: one platform's up flag, load, devices or
 deployments) rewrites only those rows (:meth:`PlatformColumns.sync`,
@@ -64,6 +66,7 @@ import numpy as np
 
 from desmon.deployment import validity as _validity
 from desmon.deployment.columns import FactColumns, inexact
+from desmon.deployment.memo import ColumnMemo
 from desmon.deployment.ports import PlatformHandle
 from desmon.errors import ModelError, QueryError
 from desmon.model.requirements import Capacity, Option
@@ -81,7 +84,7 @@ __all__ = [
     "supported",
     "ColumnChecks",
     "PlatformMemoColumnChecks",
-    "COUNTS",
+    "columns_for",
 ]
 
 #: ``check_validity`` takes the columns from this many platforms on. Measured with
@@ -91,9 +94,6 @@ __all__ = [
 #: columns are 1.3x faster at 128 and 2x at 256.
 VECTOR_MIN_PLATFORMS = 128
 
-#: How many column stores are kept (each one platform list, most recently used first).
-_KEPT = 2
-
 #: Failures kept for reuse per column store (a few hundred bytes each); beyond, the
 #: least recently asked requirements lose theirs.
 _REASONS_KEPT = 100_000
@@ -101,11 +101,6 @@ _REASONS_KEPT = 100_000
 #: Python 3.12's ``sum`` adds floats with compensation; there, a Capacity sum of three
 #: or more shares is left to the scalar code (row by row) so the verdicts stay equal.
 _COMPENSATED_SUM = sys.version_info >= (3, 12)
-
-#: How often each path ran: ``vector`` (answered by the columns), ``declined`` (a
-#: requirement or a number the columns do not cover: the scalar loop answered).
-#: Observability for tests and benchmarks; nothing reads it to decide.
-COUNTS: dict[str, int] = {"vector": 0, "declined": 0}
 
 _LOCK = threading.RLock()
 
@@ -578,44 +573,35 @@ def _classes(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 # -- the dispatch ----------------------------------------------------------------------------------
-_stores: list[PlatformColumns] = []
-
-
-def columns_for(states: tuple[PlatformState, ...]) -> PlatformColumns:
-    """Column store holding ``states``: a kept one (rewritten where rows changed) or a new one."""
+def columns_for(states: tuple[PlatformState, ...], memo: ColumnMemo | None = None) -> PlatformColumns:
+    """Column store holding ``states``: one ``memo`` keeps (rewritten where rows changed),
+    or a new one (kept by ``memo``; without a memo, nothing is kept)."""
+    if memo is None:
+        return PlatformColumns(states)
     with _LOCK:
-        for k, st in enumerate(_stores):
-            if st.states is states or (st.n == len(states) and st.states == states):
-                st.states = states
-                _stores.insert(0, _stores.pop(k))
-                return st
-        for k, st in enumerate(_stores):
-            if st.sync(states):
-                _stores.insert(0, _stores.pop(k))
-                return st
-        st = PlatformColumns(states)
-        _stores.insert(0, st)
-        del _stores[_KEPT:]
-        return st
+        return memo.store_for(states, PlatformColumns)  # type: ignore[no-any-return]
 
 
 def vector_validity(
     requirements: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool,
-    min_platforms: int = VECTOR_MIN_PLATFORMS,
+    min_platforms: int = VECTOR_MIN_PLATFORMS, memo: ColumnMemo | None = None,
 ) -> _validity.Validity | None:
     """The column answer of ``check_validity``, or None: fewer than ``min_platforms``
-    platforms, or something the columns do not cover."""
+    platforms, or something the columns do not cover. ``memo`` keeps the column stores
+    and counts the answers (:class:`~desmon.deployment.memo.ColumnMemo`)."""
     if len(states) < min_platforms:
         return None
+    if memo is None:
+        memo = ColumnMemo(kept=0)
     if not supported(requirements):
-        COUNTS["declined"] += 1
+        memo.count("declined")
         return None
     with _LOCK:
-        st = columns_for(states)
+        st = columns_for(states, memo)
         if not st.exact:
-            COUNTS["declined"] += 1
+            memo.count("declined")
             return None
-        COUNTS["vector"] += 1
+        memo.count("vector")
         return st.validity(requirements, graph, reasons=reasons)
 
 
@@ -625,10 +611,12 @@ class _ColumnsFirst:
     not cover) by the class's own one-platform-at-a-time ``_scalar``."""
 
     min_platforms: int
+    #: the column stores it keeps and its counts of how questions were answered
+    columns: ColumnMemo
 
     def compute(self, reqs: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool) -> _validity.Validity:
         if len(states) >= self.min_platforms:
-            fast = vector_validity(reqs, states, graph, reasons, self.min_platforms)
+            fast = vector_validity(reqs, states, graph, reasons, self.min_platforms, self.columns)
             if fast is not None:
                 return fast
         return self._scalar(reqs, states, graph, reasons)
@@ -641,11 +629,13 @@ class ColumnChecks(_ColumnsFirst, _validity.ScalarChecks):
     """The Checks port for fleet scale: :data:`VECTOR_MIN_PLATFORMS` platforms or more
     (``min_platforms``) are checked over numpy columns (:func:`vector_validity`), fewer,
     or a requirement kind the columns do not cover, one platform at a time. Same
-    answers as :class:`~desmon.deployment.validity.ScalarChecks`; ``memo`` as there."""
+    answers as :class:`~desmon.deployment.validity.ScalarChecks`, and like it no answer
+    is memoised (wrap it in a :class:`~desmon.deployment.memo.MemoChecks` for that); its
+    ``columns`` keep the last column stores, rewritten row by row as platforms change."""
 
-    def __init__(self, *, memo: bool = True, min_platforms: int = VECTOR_MIN_PLATFORMS) -> None:
+    def __init__(self, *, min_platforms: int = VECTOR_MIN_PLATFORMS) -> None:
         self.min_platforms = min_platforms
-        super().__init__(memo=memo)
+        self.columns = ColumnMemo()
 
     def _scalar(self, reqs: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool) -> _validity.Validity:
         return _validity.loop_validity(reqs, states, graph, reasons)
@@ -663,22 +653,27 @@ class PlatformMemoColumnChecks(_ColumnsFirst, _validity.PlatformMemoChecks):
     def __init__(self, *, min_platforms: int = VECTOR_MIN_PLATFORMS, **memo: int) -> None:
         # memo: PlatformMemoChecks' own options (its size), with its defaults
         self.min_platforms = min_platforms
+        self.columns = ColumnMemo()
         super().__init__(**memo)
 
     def _scalar(self, reqs: tuple, states: tuple[PlatformState, ...], graph: _validity.Placing, reasons: bool) -> _validity.Validity:
         return _validity.PlatformMemoChecks.compute(self, reqs, states, graph, reasons)
 
 
-def acceptable(requirements: Iterable[object], states: Sequence[PlatformState], graph: _validity.Placing = None) -> tuple[str, ...]:
+def acceptable(
+    requirements: Iterable[object], states: Sequence[PlatformState], graph: _validity.Placing = None, memo: ColumnMemo | None = None
+) -> tuple[str, ...]:
     """``check_validity(requirements, states, graph).acceptable`` without building the
-    rejected platforms' failures: the fast question of a deployer that only places."""
+    rejected platforms' failures: the fast question of a deployer that only places
+    (``memo``: the column stores to keep and count with, as :func:`vector_validity`)."""
     reqs = tuple(requirements)
     states = tuple(states)
     if len(states) >= VECTOR_MIN_PLATFORMS and type(states[0]) is not PlatformHandle and supported(reqs):
         with _LOCK:
-            st = columns_for(states)
+            st = columns_for(states, memo)
             if st.exact:
-                COUNTS["vector"] += 1
+                if memo is not None:
+                    memo.count("vector")
                 return st.acceptable(reqs, graph)
     return _validity.check_validity(reqs, states, graph, reasons=False).acceptable  # type: ignore[arg-type]
 

@@ -14,6 +14,7 @@ from desmon.model.kinds import Placing, others_using  # Placing: the graph being
 from desmon.model.requirements import PLATFORM_HAS, Attribute, Constraint, DeploymentSpec, Preference, Reads, Requirement
 from desmon.model.system import PlatformState
 
+from desmon.deployment.memo import memo_of
 from desmon.deployment.ports import Failure, PlatformHandle, Validity  # Failure, Validity: the Checks port's answers (re-exported)
 
 if TYPE_CHECKING:
@@ -91,7 +92,7 @@ def check_platform(
 ) -> tuple[Failure, ...]:
     """Every requirement ``state`` fails for ``graph`` (only the first if ``first_only``);
     a down platform fails them all. Asked of ``checks`` (by default :func:`checks_for`
-    the state: the memoised scalar checks, or the recording checks a handle came from)."""
+    the state: the scalar checks, or the recording checks a handle came from)."""
     reqs = requirements if type(requirements) is tuple else tuple(requirements)
     if checks is None:
         checks = checks_for((state,))
@@ -206,25 +207,14 @@ def _lookup(states: Sequence[PlatformState]) -> "Callable[[str], PlatformState |
     return by_name.get
 
 
-#: (id of the requirements, id of the reads) -> (both tuples, their concatenation): one
-#: tuple object per question, which the Checks ports find by identity (see :func:`_joined`)
-_JOINED: dict[tuple[int, int], tuple[tuple, tuple, tuple]] = {}
-
-
-def _joined(reqs: Sequence[Requirement], reads: tuple[Reads, ...]) -> tuple[Requirement, ...]:
-    """``tuple(reqs) + reads``, the same tuple object each time for the same tuples (each
-    entry holds the tuples its key names); past :data:`_TUPLES` entries all are forgotten."""
-    if type(reqs) is not tuple:
-        return tuple(reqs) + reads
-    key = (id(reqs), id(reads))
-    hit = _JOINED.get(key)
-    if hit is not None and hit[0] is reqs and hit[1] is reads:
-        return hit[2]
-    if len(_JOINED) > _TUPLES:
-        _JOINED.clear()
-    joined = reqs + reads
-    _JOINED[key] = (reqs, reads, joined)
-    return joined
+def _joined(reqs: Sequence[Requirement], reads: tuple[Reads, ...], checks: "ChecksPort") -> tuple[Requirement, ...]:
+    """``tuple(reqs) + reads``: one tuple object per question when ``checks`` keep a run's
+    memos (:meth:`~desmon.deployment.memo.MemoChecks.joined`), which the Checks ports
+    find again by identity; a fresh one otherwise."""
+    memo = memo_of(checks)
+    if memo is not None:
+        return memo.joined(reqs, reads)  # type: ignore[no-any-return]
+    return tuple(reqs) + reads
 
 
 def spec_validity(
@@ -250,7 +240,9 @@ def spec_validity(
     """
     if not reads:
         return check_validity(reqs, states, graph, reasons=reasons, checks=checks)
-    validity = check_validity(_joined(reqs, reads), states, graph, reasons=reasons, checks=checks)
+    if checks is None:
+        checks = checks_for(states)
+    validity = check_validity(_joined(reqs, reads, checks), states, graph, reasons=reasons, checks=checks)
     state_of = _lookup(world)
     dead = [(r, why) for r in reads if (why := unreadable(r, state_of, graph, reasons=reasons, checks=checks)) is not None]
     if not dead:
@@ -346,40 +338,31 @@ def _ranked(reqs: tuple[Requirement, ...]) -> bool:
 
 class ScalarChecks:
     """The Checks port answered platform by platform (:func:`loop_validity`,
-    :func:`platform_failures`).
+    :func:`platform_failures`), every answer computed afresh.
 
-    With ``memo`` (the default) each instance memoises its answers (bounded, least
-    recently used first): they are pure, and a checker or a robot asks them again and
-    again about the same facts. Without it every answer is computed afresh: for runs
-    whose facts seldom recur (a fleet, where some platform changed between almost any
-    two questions) a memo costs hashing on every call and holds old states alive.
-    Memoisation is a property of the instance its caller chose, never a global switch.
+    It remembers nothing: a run that asks the same questions about the same facts again
+    and again (the checker) wraps it in a :class:`~desmon.deployment.memo.MemoChecks` it
+    owns, and a run whose facts seldom recur (a fleet, where some platform changed
+    between almost any two questions) asks it as it is, sparing the hashing and the old
+    states a memo would hold. Memoisation is a property of the instance its caller
+    chose, never a global switch.
     """
 
-    def __init__(self, *, memo: bool = True, size: int = _MEMO_SIZE) -> None:
-        self.memo = memo
-        if memo:
-            self._platform = lru_cache(maxsize=size)(platform_failures)
-            self._validity = lru_cache(maxsize=size)(self.compute)
-        else:
-            self._platform = platform_failures
-            self._validity = self.compute
-
     def compute(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
-        """The answer of :meth:`validity` without the memo (implementations refine this)."""
+        """The answer of :meth:`validity` (implementations refine this)."""
         return loop_validity(reqs, states, graph, reasons)
 
     def validity(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
-        return self._validity(reqs, states, graph, reasons)  # type: ignore[no-any-return]
+        return self.compute(reqs, states, graph, reasons)
 
     def platform(self, reqs: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool) -> tuple[Failure, ...]:
-        return self._platform(reqs, state, graph, first_only)  # type: ignore[no-any-return]
+        return platform_failures(reqs, state, graph, first_only)
 
     def clear(self) -> None:
-        """Forget every memoised answer (a process about to exit; tests)."""
-        if self.memo:
-            self._platform.cache_clear()  # type: ignore[attr-defined]
-            self._validity.cache_clear()  # type: ignore[attr-defined]
+        """Forget what it remembers (nothing: a memoising subclass refines this)."""
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
 
 
 class PlatformMemoChecks(ScalarChecks):
@@ -399,7 +382,6 @@ class PlatformMemoChecks(ScalarChecks):
     """
 
     def __init__(self, *, size: int = _MEMO_SIZE) -> None:
-        super().__init__(memo=False)
         self._size = size
         # ids of a question's requirement objects -> (the requirements, (those ids, their
         # checks (_checks), whether one is a preference))
@@ -504,7 +486,8 @@ class PlatformMemoChecks(ScalarChecks):
 
 
 #: The checks of a caller that names none (a library call, a query port built without
-#: one): memoised, one platform at a time. Never reassigned.
+#: one): one platform at a time, remembering nothing (a run memoises on checks it owns,
+#: :class:`~desmon.deployment.memo.MemoChecks`). Never reassigned.
 DEFAULT_CHECKS = ScalarChecks()
 
 
@@ -520,7 +503,7 @@ def checks_for(states: Sequence[Any]) -> "ChecksPort":
 
 
 def clear_memos() -> None:
-    """Forget the memoised answers of :data:`DEFAULT_CHECKS` (tests; memory)."""
+    """Forget what :data:`DEFAULT_CHECKS` remembers (nothing: it memoises no answer)."""
     DEFAULT_CHECKS.clear()
 
 
@@ -601,7 +584,9 @@ def deployment_valid(
     reads = spec.reads
     if not reads:
         return check_platform(spec.requirements, state, spec.graph, checks=checks)
-    fails = check_platform(_joined(spec.requirements, reads), state, spec.graph, checks=checks)
+    if checks is None:
+        checks = checks_for((state,))
+    fails = check_platform(_joined(spec.requirements, reads, checks), state, spec.graph, checks=checks)
     if fails:
         return fails
     name = state.platform.name

@@ -36,6 +36,7 @@ import simpy
 
 from desmon.deployment.guard import Guard
 from desmon.deployment.ports import ErrorRecord
+from desmon.deployment.memo import MemoChecks
 from desmon.deployment.validity import PlatformMemoChecks
 from desmon.detectors.base import Alarm
 from desmon.detectors.signals.ahead import AHEAD_MIN_S, check_render_ahead, fork_safe
@@ -114,7 +115,7 @@ class SimWorld:
         env = self.env
         self.repo = Repository(clock=lambda: env.now)
         load_model(self.repo, self.model)
-        self.query = RepositoryQuery(self.repo, PlatformMemoChecks())  # its own memoised checks, per platform
+        self.query = RepositoryQuery(self.repo, MemoChecks(PlatformMemoChecks(), answers=False))  # its own memoised checks, per platform
         #: the parts the processes share (facts, infrastructure, books, inbox, ...)
         self.parts: RobotParts = robot_parts(
             scenario, self.world, env=env, repo=self.repo, query=self.query, deployer=deployer, seed=self.seed,

@@ -43,6 +43,7 @@ from desmon.errors import QueryError, ScenarioError
 from desmon.model.checks import check_items, check_names, strict_init
 from desmon.model.platform import Platform
 from desmon.model.scenario import Scenario
+from desmon.deployment.memo import MemoChecks
 from desmon.deployment.placement import PlatformMemoColumnChecks
 from desmon.deployment.validity import check_platform, reads_fixed_facts
 from desmon.model.requirements import Capacity, DeploymentSpec, Requirement
@@ -596,7 +597,7 @@ class FleetWorld:
         #: platform's part memoised on its state's identity (most of a robot's platforms
         #: are unchanged between its questions); no whole answer memoised (a fleet's
         #: states tuples seldom recur)
-        self.checks = PlatformMemoColumnChecks()
+        self.checks = MemoChecks(PlatformMemoColumnChecks(), answers=False)
         edges = self.fleet.edges
         edge_set = set(edges)
         #: platform -> the robots it concerns; deployment node -> its robot; robot node -> its robot

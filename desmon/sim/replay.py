@@ -16,7 +16,9 @@ from desmon.deployment.guard import DeployerFault, Guard
 from desmon.deployment.control import repository_control
 from desmon.deployment.core import DeploymentCore, stamp
 from desmon.deployment.invariants import check_invariants
+from desmon.deployment.memo import MemoChecks
 from desmon.deployment.monitor import Stimulus
+from desmon.deployment.validity import ScalarChecks
 from desmon.deployment.ports import Command, ErrorRecord, Start
 from desmon.model.events import Event
 from desmon.model.scenario import Scenario
@@ -82,7 +84,7 @@ def replay(
     now = [scenario.timeline[0].time if scenario.timeline else 0.0]
     repo = Repository(clock=lambda: now[0])
     load_model(repo, scenario.model)
-    query = RepositoryQuery(repo)
+    query = RepositoryQuery(repo, MemoChecks(ScalarChecks()))  # the replay's own memoised checks
     control = repository_control(repo, scenario.model, start_fails)
     core = DeploymentCore(scenario.model, query, RepositoryInsert(repo, scenario.model.robot), deployer, guard)
     for event in scenario.initial:

@@ -46,8 +46,6 @@ class SampleSource(Protocol):
 _STREAMS: dict[str, type["SignalStream"]] = {}
 #: the streams a fusion consumes -> its class, filled by :meth:`Fusion.__init_subclass__`
 _FUSIONS: dict[frozenset[str], type["Fusion"]] = {}
-#: :func:`detector_plan`'s answers, forgotten whenever a stream or fusion comes or goes
-_PLANS: dict[frozenset[str], "DetectorPlan | None"] = {}
 
 
 class SignalStream:
@@ -65,14 +63,12 @@ class SignalStream:
         super().__init_subclass__(**kwargs)
         if cls.__dict__.get("name"):
             _STREAMS[cls.name] = cls
-            _PLANS.clear()
 
     @classmethod
     def unregister(cls) -> None:
         """Forget this stream (a stream defined for a test only)."""
         if _STREAMS.get(cls.name) is cls:
             del _STREAMS[cls.name]
-            _PLANS.clear()
 
     @classmethod
     def samples(cls, bank: SampleSource, t0: float, t1: float, devices: Sequence[str]) -> tuple[Any, ...]:
@@ -104,13 +100,11 @@ class Fusion:
         super().__init_subclass__(**kwargs)
         if cls.__dict__.get("streams"):
             _FUSIONS[frozenset(cls.streams)] = cls
-            _PLANS.clear()
 
     @classmethod
     def unregister(cls) -> None:
         if _FUSIONS.get(frozenset(cls.streams)) is cls:
             del _FUSIONS[frozenset(cls.streams)]
-            _PLANS.clear()
 
     @classmethod
     def detector(cls, name: str) -> Any:
@@ -131,15 +125,8 @@ class DetectorPlan:
 def detector_plan(streams: frozenset[str]) -> DetectorPlan | None:
     """The detector a graph reading ``streams`` runs: the stream's own for one stream, a
     registered :class:`Fusion` for several; None if a stream has no model or no fusion
-    consumes exactly these."""
-    try:
-        return _PLANS[streams]
-    except KeyError:
-        plan = _PLANS[streams] = _plan(streams)
-        return plan
-
-
-def _plan(streams: frozenset[str]) -> DetectorPlan | None:
+    consumes exactly these. Derived from the registries on each call (a few lookups),
+    so a stream or fusion defined later is seen at once."""
     if not streams or not all(s in _STREAMS for s in streams):
         return None
     if len(streams) == 1:

@@ -15,6 +15,7 @@ running it died every time Dask tried it.
 
 from __future__ import annotations
 
+import contextvars
 import ctypes
 import dataclasses
 import os
@@ -83,26 +84,63 @@ class _TimedOut(BaseException):
 
 # ------------------------------------------------------------------- scenario, deployer caches
 
-_SCENARIOS: OrderedDict[tuple[Any, ...], Any] = OrderedDict()
 _CACHE_SIZE = 32
 _LOCK = threading.Lock()
 
 
+class ScenarioCache:
+    """A worker's loaded scenarios (the last :data:`_CACHE_SIZE`), keyed by path, file
+    time and parameter values: a scenario is immutable, so a worker loads each once."""
+
+    def __init__(self) -> None:
+        self._loaded: OrderedDict[tuple[Any, ...], Any] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, path: str, values: tuple[tuple[str, str], ...]) -> Any:
+        from desmon.loader import load_scenario
+
+        key = (path, os.stat(path).st_mtime_ns, values)
+        with self._lock:
+            if key in self._loaded:
+                self._loaded.move_to_end(key)
+                return self._loaded[key]
+        scenario = load_scenario(path, dict(values))
+        with self._lock:
+            self._loaded[key] = scenario
+            while len(self._loaded) > _CACHE_SIZE:
+                self._loaded.popitem(last=False)
+        return scenario
+
+
+def _worker_cache() -> ScenarioCache | None:
+    """The scenario cache of the Dask worker running this task, made on its first task
+    (the worker object owns it); None outside a Dask worker (each call loads afresh)."""
+    import sys
+
+    if "distributed" not in sys.modules:  # no Dask in this process: not a worker
+        return None
+    from distributed import get_worker
+
+    try:
+        worker = get_worker()
+    except ValueError:  # not in a worker's task
+        return None
+    with _LOCK:
+        cache = getattr(worker, "desmon_scenarios", None)
+        if cache is None:
+            cache = ScenarioCache()
+            worker.desmon_scenarios = cache
+    return cache
+
+
 def _scenario(path: str, values: tuple[tuple[str, str], ...]) -> Any:
     """The scenario at ``path`` with ``values``, loaded once per worker (it is immutable)."""
-    from desmon.loader import load_scenario
+    cache = _worker_cache()
+    if cache is None:
+        from desmon.loader import load_scenario
 
-    key = (path, os.stat(path).st_mtime_ns, values)
-    with _LOCK:
-        if key in _SCENARIOS:
-            _SCENARIOS.move_to_end(key)
-            return _SCENARIOS[key]
-    scenario = load_scenario(path, dict(values))
-    with _LOCK:
-        _SCENARIOS[key] = scenario
-        while len(_SCENARIOS) > _CACHE_SIZE:
-            _SCENARIOS.popitem(last=False)
-    return scenario
+        return load_scenario(path, dict(values))
+    return cache.get(path, values)
 
 
 def _deployer(spec: str) -> Any:
@@ -284,7 +322,9 @@ def run_point(spec: JobSpec, run: Run) -> dict[str, Any]:
             except _TimedOut:
                 pass
 
-        thread = threading.Thread(target=target, name=f"desmon-sweep-{run.point.index}-{run.seed_index}", daemon=True)
+        # the run's thread sees this task's context (the Dask worker whose scenarios it loads)
+        context = contextvars.copy_context()
+        thread = threading.Thread(target=context.run, args=(target,), name=f"desmon-sweep-{run.point.index}-{run.seed_index}", daemon=True)
         thread.start()
         thread.join(spec.timeout)
         if thread.is_alive() or not box:

@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 
 from desmon.deployment.deployer import DESMON, KEEP_FALLBACK, Deployer, make_desmon_react
+from desmon.deployment.memo import memo_of
 from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, QueryPort, RaiseError, Reaction
 from desmon.model.requirements import DeploymentSpec
 from desmon.model.system import PlatformState
@@ -71,8 +72,8 @@ def _capacity_blind(q: QueryPort, slots, changed, context_changed) -> Reaction: 
     yield from DESMON.react(HideConsumption(q), slots, changed, context_changed)  # type: ignore[arg-type]
 
 
-#: spec -> the same spec with ``rebalance`` 0 (one object per spec, so validity memos on identity hit)
-_ZERO: dict[DeploymentSpec, DeploymentSpec] = {}
+def _zero(spec: DeploymentSpec) -> DeploymentSpec:
+    return dataclasses.replace(spec, rebalance=0.0)
 
 
 class NoHysteresis:
@@ -86,12 +87,11 @@ class NoHysteresis:
         spec = self.inner.deployment_information(graph)
         if spec is None or not spec.rebalance:
             return spec
-        zero = _ZERO.get(spec)
-        if zero is None:
-            if len(_ZERO) > 1024:
-                _ZERO.clear()
-            zero = _ZERO[spec] = dataclasses.replace(spec, rebalance=0.0)
-        return zero
+        memo = memo_of(self.inner.checks)
+        if memo is None:
+            return _zero(spec)
+        # one object per spec, interned on the run's memo, so validity memos on identity hit
+        return memo.interned(("rebalance 0", spec), _zero, spec)  # type: ignore[no-any-return]
 
     def __getattr__(self, name: str):  # type: ignore[no-untyped-def]
         return getattr(self.inner, name)

@@ -49,10 +49,40 @@ IN_FLIGHT = 3
 #: Keys a worker remembers before it forgets them all (memory bound per worker).
 WORKER_MEMORY = 200_000
 
-#: the worker process's own state, filled by :func:`_start_worker` in each worker: its
-#: system ("system") and the states it knows expanded. Never read in the parent.
-_WORKER: dict = {}
-_known: set = set()
+class _Worker:
+    """One worker process's own state: its system (inherited through ``fork``) and the
+    keys it knows are in the parent's index (bounded by :data:`WORKER_MEMORY`)."""
+
+    __slots__ = ("system", "known")
+
+    def __init__(self, system: "TransitionSystem") -> None:
+        self.system = system
+        self.known: set = set()
+
+    def expand(self, chunk: "list[Key]") -> "tuple[list[list[list[Segment]]], float]":
+        """The expansions of ``chunk``'s states, and this worker's peak resident size (MB)."""
+        checker, known = self.system, self.known
+        if len(known) > WORKER_MEMORY:
+            known.clear()
+        known.update(chunk)  # the states being expanded are in the parent's index
+        out = []
+        for key in chunk:
+            per_event = checker.expand(key, known)
+            for segments in per_event:
+                for i, (n, moved, names, rec) in enumerate(segments):
+                    if rec is not None and rec[1] is not None:
+                        known.add(rec[1])
+                        # a plain tuple unpickles about 10x faster than a NamedTuple, and
+                        # equals and hashes like the Key (the parent re-creates the Key)
+                        segments[i] = (n, moved, names, (rec[0], tuple(rec[1]), *rec[2:]))
+            out.append(per_event)
+        return out, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+#: The one slot of a worker process: its :class:`_Worker`, set by :func:`_start_worker`
+#: as the process starts (a pool's task is a module-level function, so the process's
+#: object must be found through its module). Never set in the parent.
+_WORKER: list[_Worker] = []
 
 
 def _start_worker(checker: "TransitionSystem") -> None:
@@ -61,32 +91,15 @@ def _start_worker(checker: "TransitionSystem") -> None:
     every process of the terminal's group: a worker ignores it (no traceback of its own)
     and finishes its chunk; the parent stops the search and reports it."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _WORKER["system"] = checker
-    _known.clear()
+    _WORKER[:] = [_Worker(checker)]
     gc.disable()
 
 
 def _expand_chunk(chunk: "list[Key]") -> "tuple[list[list[list[Segment]]], float]":
-    """The expansions of ``chunk``'s states, and this worker's peak resident size (MB)."""
-    checker = _WORKER.get("system")
-    if checker is None:  # pragma: no cover - a worker not started by ExpansionPool
+    """The expansions of ``chunk``'s states by this process's worker (see :class:`_Worker`)."""
+    if not _WORKER:  # pragma: no cover - a worker not started by ExpansionPool
         raise CheckerError("internal error: a checker worker started without its checker")
-    known = _known
-    if len(known) > WORKER_MEMORY:
-        known.clear()
-    known.update(chunk)  # the states being expanded are in the parent's index
-    out = []
-    for key in chunk:
-        per_event = checker.expand(key, known)
-        for segments in per_event:
-            for i, (n, moved, names, rec) in enumerate(segments):
-                if rec is not None and rec[1] is not None:
-                    known.add(rec[1])
-                    # a plain tuple unpickles about 10x faster than a NamedTuple, and
-                    # equals and hashes like the Key (the parent re-creates the Key)
-                    segments[i] = (n, moved, names, (rec[0], tuple(rec[1]), *rec[2:]))
-        out.append(per_event)
-    return out, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    return _WORKER[0].expand(chunk)
 
 
 class ExpansionPool:

@@ -18,7 +18,9 @@ from desmon.deployment.core import DeploymentCore, run_sync
 from desmon.deployment.guard import DeployerFault, Guard
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.invariants import INVARIANTS, Invariant, check_invariants
+from desmon.deployment.memo import MemoChecks
 from desmon.deployment.monitor import Stimulus
+from desmon.deployment.validity import ScalarChecks
 from desmon.deployment.ports import ControlPort
 from desmon.model.events import ActionChange, Event
 from desmon.model.scenario import Scenario
@@ -109,7 +111,7 @@ class RepositoryRun:
         self.bounds = bounds or bounds_of(scenario)
         self.repo = Repository()
         load_model(self.repo, scenario.model)
-        self.query = RepositoryQuery(self.repo)
+        self.query = RepositoryQuery(self.repo, MemoChecks(ScalarChecks()))  # the replay's own memoised checks
         self.control = ScriptedControl(self.repo, scenario.model)
         self.core = DeploymentCore(scenario.model, self.query, RepositoryInsert(self.repo, scenario.model.robot), deployer, guard)
         initial_reaction(self.core, scenario, self.bounds, self.control)

@@ -24,6 +24,7 @@ from typing import Any, Callable, Container, Iterable, Iterator, Protocol
 from desmon.deployment.core import DeploymentCore, StepLog
 from desmon.deployment.guard import CRASH, DeployerFault, Guard
 from desmon.deployment.ports import RaiseError
+from desmon.deployment.memo import MemoChecks
 from desmon.deployment.validity import ScalarChecks
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.invariants import Invariant, SystemView, check_invariants, get_invariants
@@ -100,7 +101,7 @@ class TransitionSystem:
         self._choose_invariants(invariants)
         names = {i.name for i in self.invariants}
         self.instant = tuple(i for i in get_invariants(list(self.bounds.instantaneous)) if i.name in names) if self.bounds.instantaneous else ()
-        self.store = StateStore(self.model, ScalarChecks())
+        self.store = StateStore(self.model, MemoChecks(ScalarChecks()))
         self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), deployer, self.guard)
         self.deployer_name = self.core.deployer.name
         self.store.watch = self.instant
@@ -134,7 +135,7 @@ class TransitionSystem:
         """Drop every memo and start a fresh store and core (the next search starts cold)."""
         self._instant_memo.clear()
         self._enabled_memo.clear()
-        self.store = StateStore(self.model, ScalarChecks())
+        self.store = StateStore(self.model, MemoChecks(ScalarChecks()))
         self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), self.core.deployer, self.guard)
         self.store.watch = self.instant
         self.store.watch_check = self._instant_check
