@@ -19,7 +19,7 @@ import sys
 from typing import Sequence
 
 from desmon.cli import analyze, evaluate, explain, explore, fuzz, plot, replay, run, show, sweep, sweep_plot, verify
-from desmon.cli.common import EXIT_USAGE, Parser, one_line, usage_error
+from desmon.cli.common import EXIT_USAGE, Parser, one_line, run_of, usage_error
 from desmon.cli.options import preflight
 from desmon.errors import DesmonError
 
@@ -90,6 +90,7 @@ def _dispatch(args: argparse.Namespace) -> int:
         deadline = (args.max_reaction_seconds or MAX_REACTION_SECONDS) if hasattr(args, "max_reaction_seconds") else None
         args.guard = Guard(getattr(args, "max_commands", None) or MAX_COMMANDS, deadline)  # (verify: its --timeout instead)
         preflight(args)  # inputs, numbers, windows and output paths, before any long work
+        run_of(args)  # this command's run context: its guard and its planned outputs (each engine adds its own memoised checks)
         with args.guard.deadline():
             return int(args.handler(args))
     except DeployerFault as exc:

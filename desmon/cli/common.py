@@ -22,7 +22,7 @@ if TYPE_CHECKING:
 __all__ = [
     "EXIT_OK", "EXIT_VIOLATED", "EXIT_USAGE", "EXIT_INCOMPLETE", "MAX_STATES", "CEX_FILE", "MUTANT_PREFIX", "MUTANT_NAMES", "Parser", "Subparsers",
     "one_line", "usage_error", "scenario_arg", "deployer_arg", "load_scenario_of", "load_scripted", "warn_uncovered", "resolve_times",
-    "draw_trace",
+    "draw_trace", "run_of",
 ]
 
 EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
@@ -30,6 +30,17 @@ MAX_STATES = 2_000_000  # verify --max-states when not given
 CEX_FILE = ("counterexample file", "write one with: desmon verify SCENARIO --json cex.json")
 
 Subparsers: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
+
+
+def run_of(args: argparse.Namespace) -> Any:
+    """The command's run context (:class:`desmon.deployment.run.RunContext`): the one
+    the dispatch made (its guard and planned outputs), else one around ``args.guard``."""
+    run = getattr(args, "run", None)
+    if run is None:
+        from desmon.deployment.run import RunContext
+
+        run = args.run = RunContext(guard=args.guard, outputs=tuple(getattr(args, "outputs", ()) or ()))
+    return run
 
 
 def one_line(text: object) -> str:

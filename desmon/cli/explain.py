@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from desmon.cli.common import EXIT_OK, Subparsers, deployer_arg, load_scripted, resolve_times, scenario_arg
+from desmon.cli.common import EXIT_OK, Subparsers, deployer_arg, load_scripted, resolve_times, scenario_arg, run_of
 
 __all__ = ["add_parser", "run"]
 
@@ -34,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
         known = ", ".join(s.graph for s in scenario.model.specs)
         raise QueryError(f"{args.scenario}: no deployment specification for {args.graph!r}; known: {known}")
     timeline = tuple(te for te in scenario.timeline if te.time <= at)
-    result = replay(replace(scenario, timeline=timeline), args.deployer, guard=args.guard)
+    result = replay(replace(scenario, timeline=timeline), args.deployer, run=run_of(args))
     validity = acceptable_platforms(RepositoryQuery(result.repo), args.graph)
     fixed = scenario.model.spec(args.graph).fixed_platform  # type: ignore[union-attr]
     print(f"{args.graph} at {when} ({args.deployer.name} deployer):")

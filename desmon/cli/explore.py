@@ -27,7 +27,7 @@ import shlex
 from dataclasses import replace
 from typing import Any
 
-from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg
+from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg, run_of
 from desmon.cli.options import Input, add_output, positive_int
 from desmon.errors import CheckerError, DesmonError, NondeterminismError, ScenarioError
 
@@ -271,7 +271,7 @@ def _searched(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str],
 
     deployer = args.deployer if args.deployer is not None else resolve_deployer("desmon")
     invariants = [args.invariant] if args.invariant else None
-    checker = Checker(scenario, deployer, invariants=invariants, guard=args.guard)
+    checker = Checker(scenario, deployer, invariants=invariants, run=run_of(args))
     result = checker.run(max_states=args.max_states or MAX_STATES, progress=not args.no_progress)
     if not result.counterexamples:
         what = f"{result.verdict} in {result.states:,} states"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from desmon.cli.common import EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scripted, scenario_arg
+from desmon.cli.common import EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scripted, scenario_arg, run_of
 
 __all__ = ["add_parser", "run"]
 
@@ -20,6 +20,6 @@ def run(args: argparse.Namespace) -> int:
     from desmon.sim.replay import format_replay, replay
 
     scenario = load_scripted(args)
-    result = replay(scenario, args.deployer, guard=args.guard)
+    result = replay(scenario, args.deployer, run=run_of(args))
     print(format_replay(result), end="")
     return EXIT_VIOLATED if result.violations else EXIT_OK

@@ -16,7 +16,7 @@ import tempfile
 import time
 from typing import IO, TYPE_CHECKING, Any, Callable, Iterator
 
-from desmon.cli.common import EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, draw_trace, load_scenario_of, scenario_arg, warn_uncovered
+from desmon.cli.common import EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, draw_trace, load_scenario_of, scenario_arg, warn_uncovered, run_of
 from desmon.cli.options import add_output, add_window, non_negative_int, positive_int, positive_seconds
 from desmon.errors import ScenarioError
 from desmon.paths import replacing
@@ -165,7 +165,7 @@ def _simulate(args: Any, scenario: Scenario, err: IO[str], show: bool, t_wall: f
         fh = stack.enter_context(replacing(args.trace)) if args.trace else None
         world = SimWorld(
             scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=Trace(fh, keep=False), progress=progress,
-            render_ahead={"on": True, "off": False}.get(getattr(args, "render_ahead", "auto")), guard=args.guard,
+            render_ahead={"on": True, "off": False}.get(getattr(args, "render_ahead", "auto")), run=run_of(args),
         )
         result = world.run()
         result.metrics["audits"] = world.audits

@@ -7,7 +7,7 @@ import argparse
 import sys
 from typing import Any
 
-from desmon.cli.common import EXIT_OK, Subparsers, deployer_arg, load_scripted, resolve_times, scenario_arg
+from desmon.cli.common import EXIT_OK, Subparsers, deployer_arg, load_scripted, resolve_times, scenario_arg, run_of
 from desmon.cli.options import add_output
 
 __all__ = ["add_parser", "run", "SHOW_FORMATS"]
@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
 
     scenario = load_scripted(args)
     moments = resolve_times(scenario, args.at)
-    result = replay(scenario, args.deployer, guard=args.guard)
+    result = replay(scenario, args.deployer, run=run_of(args))
     snaps = _snapshots(scenario, result, moments)
     fmt = args.format  # preflight set it from -o when --format was not given
     if fmt != "png" and len(snaps) > 1:

@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered
+from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered, run_of
 from desmon.cli.options import Input, add_output, positive_int, positive_seconds, worker_count
 from desmon.errors import CheckerError
 
@@ -145,7 +145,7 @@ def _search(args: argparse.Namespace) -> int:
     max_memory = getattr(args, "max_memory", None)
     check_megabytes("--max-memory", max_memory)
     scenario = load_scenario_of(args)
-    system = system_of(scenario, args.deployer, invariants=args.invariant, symmetry=bool(getattr(args, "symmetry", False)), guard=args.guard)
+    system = system_of(scenario, args.deployer, invariants=args.invariant, symmetry=bool(getattr(args, "symmetry", False)), run=run_of(args))
     result = check(
         system,
         max_states=args.max_states,

@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from desmon.cli.common import load_scenario_of
+from desmon.cli.common import load_scenario_of, run_of
 from desmon.errors import CheckerError, DesmonError
 
 __all__ = ["replay_counterexample"]
@@ -37,7 +37,7 @@ def replay_counterexample(args: argparse.Namespace) -> int:
             f"{saved.source} holds a counterexample of scenario {saved.scenario!r}, but {args.scenario} is scenario "
             f"{scenario.name!r}: give the scenario file of {saved.scenario!r}"
         )
-    run = RepositoryRun(scenario, args.deployer, guard=args.guard)
+    run = RepositoryRun(scenario, args.deployer, run=run_of(args))
     instant = get_invariants([n for n in run.bounds.instantaneous if n in saved.invariants])
     print(format_replay_head(saved))
     diverged, last, steps = None, None, []

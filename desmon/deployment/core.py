@@ -18,6 +18,7 @@ from desmon.deployment.guard import DeployerFault, Guard, describe_stimulus, unc
 from desmon.deployment.invariants import ReactionBook, SystemView, judge_reaction, raise_problem, validly_active_among, view_of
 from desmon.deployment.memo import memo_of
 from desmon.deployment.monitor import InsertPort, Stimuli, Stimulus, observe
+from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.ports import Command, ControlPort, ErrorRecord, QueryPort, RaiseError, Reaction, Start, Stop, relay
 from desmon.deployment.validity import deployment_valid, validity_for
 from desmon.errors import ModelError
@@ -129,10 +130,13 @@ class DeploymentCore:
         insert: InsertPort,
         deployer: str | Deployer = "desmon",
         guard: Guard | None = None,
+        run: RunContext | None = None,
     ) -> None:
         self.model = model
+        #: the run this core serves (:mod:`desmon.deployment.run`): its guard, checks and outputs
+        self.run_context = run_context(run, guard)
         #: the run's guard around every reaction (:mod:`desmon.deployment.guard`): its limits and budget
-        self.guard = guard if guard is not None else Guard()
+        self.guard = self.run_context.guard
         self.query = query
         self.insert = insert
         #: the stimuli its observations return, interned on the run's memo (its query's checks)

@@ -36,7 +36,7 @@ import simpy
 
 from desmon.deployment.guard import Guard
 from desmon.deployment.ports import ErrorRecord
-from desmon.deployment.memo import MemoChecks
+from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.validity import PlatformMemoChecks
 from desmon.detectors.base import Alarm
 from desmon.detectors.signals.ahead import AHEAD_MIN_S, check_render_ahead, fork_safe
@@ -95,8 +95,13 @@ class SimWorld:
         on_quiescent: "Callable[[SimWorld], None] | None" = None,
         render_ahead: bool | None = None,
         guard: Guard | None = None,
+        run: RunContext | None = None,
     ) -> None:
         self.scenario = scenario
+        #: the run this world belongs to (:mod:`desmon.deployment.run`): its guard, and its
+        #: Checks port (each platform's part memoised, no whole answer: a robot's facts
+        #: change one platform at a time)
+        self.run_context = run_context(run, guard).with_checks(PlatformMemoChecks, answers=False)
         #: render the tactile frames and the wrench in forked workers while the run goes on
         #: (True, False; None: where :func:`~desmon.detectors.signals.ahead.fork_safe` holds and
         #: the run has at least ``AHEAD_MIN_S`` of object in hand); the same bytes either way
@@ -115,11 +120,11 @@ class SimWorld:
         env = self.env
         self.repo = Repository(clock=lambda: env.now)
         load_model(self.repo, self.model)
-        self.query = RepositoryQuery(self.repo, MemoChecks(PlatformMemoChecks(), answers=False))  # its own memoised checks, per platform
+        self.query = RepositoryQuery(self.repo, self.run_context.checks)  # the run's memoised checks, per platform
         #: the parts the processes share (facts, infrastructure, books, inbox, ...)
         self.parts: RobotParts = robot_parts(
             scenario, self.world, env=env, repo=self.repo, query=self.query, deployer=deployer, seed=self.seed,
-            horizon=self.horizon, signals=self.signals_on, trace=self.trace, guard=guard,
+            horizon=self.horizon, signals=self.signals_on, trace=self.trace, run=self.run_context,
         )
         self.core = self.parts.core
         self.deployer_name = self.core.deployer.name

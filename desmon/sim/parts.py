@@ -28,6 +28,7 @@ import simpy
 from desmon.deployment.control import ControlRules
 from desmon.deployment.core import DeploymentCore
 from desmon.deployment.guard import Guard
+from desmon.deployment.run import RunContext
 from desmon.deployment.exposure import Needs, cause
 from desmon.model.scenario import Scenario
 from desmon.repository.facts import RepositoryInsert
@@ -50,15 +51,16 @@ __all__ = ["RobotParts", "robot_parts", "start_processes"]
 def robot_parts(
     scenario: Scenario, world: World, *, env: simpy.Environment, repo: Repository, query: RepositoryQuery, deployer: Any,
     seed: int, horizon: float, signals: bool, trace: Trace, rules: Callable[[ControlRules], Any] | None = None,
-    keep_decisions: bool = True, guard: Guard | None = None,
+    keep_decisions: bool = True, guard: Guard | None = None, run: RunContext | None = None,
 ) -> RobotParts:
     """The parts of ``scenario``'s robot on ``env`` and ``repo`` (read through ``query``).
 
     ``rules`` wraps the Control rules (a fleet's edge servers add their admission
     control); ``keep_decisions`` False: decisions go to the trace only; ``guard``: the
-    run's guard around the deployer (:mod:`desmon.deployment.guard`)."""
+    run's guard around the deployer (:mod:`desmon.deployment.guard`), or ``run``: the
+    whole run context (:mod:`desmon.deployment.run`)."""
     model = scenario.model
-    core = DeploymentCore(model, query, RepositoryInsert(repo, model.robot), deployer, guard)
+    core = DeploymentCore(model, query, RepositoryInsert(repo, model.robot), deployer, guard, run)
     facts = PhysicalFacts(model)
     control = ControlRules(model, query.deployment_information, query.checks)
     truth = GroundTruth(world, model, horizon, seed, signals)

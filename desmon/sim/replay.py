@@ -16,7 +16,7 @@ from desmon.deployment.guard import DeployerFault, Guard
 from desmon.deployment.control import repository_control
 from desmon.deployment.core import DeploymentCore, stamp
 from desmon.deployment.invariants import check_invariants
-from desmon.deployment.memo import MemoChecks
+from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.monitor import Stimulus
 from desmon.deployment.validity import ScalarChecks
 from desmon.deployment.ports import Command, ErrorRecord, Start
@@ -78,15 +78,18 @@ def replay(
     *,
     start_fails: Callable[[str, str], bool] | None = None,
     guard: Guard | None = None,
+    run: RunContext | None = None,
 ) -> Replay:
     """Run ``scenario.timeline`` through the deployment core (under ``guard``, the run's
-    guard: :mod:`desmon.deployment.guard`); returns every step."""
+    guard: :mod:`desmon.deployment.guard`, or the whole ``run`` context,
+    :mod:`desmon.deployment.run`); returns every step."""
+    context = run_context(run, guard).with_checks(ScalarChecks)
     now = [scenario.timeline[0].time if scenario.timeline else 0.0]
     repo = Repository(clock=lambda: now[0])
     load_model(repo, scenario.model)
-    query = RepositoryQuery(repo, MemoChecks(ScalarChecks()))  # the replay's own memoised checks
+    query = RepositoryQuery(repo, context.checks)  # the run's memoised checks
     control = repository_control(repo, scenario.model, start_fails)
-    core = DeploymentCore(scenario.model, query, RepositoryInsert(repo, scenario.model.robot), deployer, guard)
+    core = DeploymentCore(scenario.model, query, RepositoryInsert(repo, scenario.model.robot), deployer, run=context)
     for event in scenario.initial:
         core.observe(event)
     result = Replay(scenario, core.deployer.name, repo, control)

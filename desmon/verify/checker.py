@@ -23,6 +23,7 @@ from typing import Any, Iterable, Protocol, Sequence
 
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.guard import Guard, ReactionStopped
+from desmon.deployment.run import RunContext
 from desmon.errors import CheckerError, TableUnsupported
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds
@@ -256,16 +257,18 @@ def system_of(
     bounds: Bounds | None = None,
     symmetry: bool = False,
     guard: Guard | None = None,
+    run: RunContext | None = None,
 ) -> TransitionSystem:
     """The transition system :func:`check` explores for ``scenario`` (``symmetry``: under
     the symmetry reduction, :mod:`desmon.verify.symmetry`; ``guard``: the run's guard,
-    :mod:`desmon.deployment.guard`, its limits ``--max-commands``)."""
+    :mod:`desmon.deployment.guard`, its limits ``--max-commands``; ``run``: the whole run
+    context instead, :mod:`desmon.deployment.run`, its guard and its memoised checks)."""
     reduction = None
     if symmetry:
         from desmon.verify.symmetry import Symmetry
 
         reduction = Symmetry
-    return TransitionSystem(scenario, deployer, invariants=invariants, bounds=bounds, reduction=reduction, guard=guard)
+    return TransitionSystem(scenario, deployer, invariants=invariants, bounds=bounds, reduction=reduction, guard=guard, run=run)
 
 
 def release(system: TransitionSystem, result: CheckResult | None = None) -> None:
@@ -300,8 +303,9 @@ class Checker:
         bounds: Bounds | None = None,
         symmetry: bool = False,
         guard: Guard | None = None,
+        run: RunContext | None = None,
     ) -> None:
-        self.system = system_of(scenario, deployer, invariants=invariants, bounds=bounds, symmetry=symmetry, guard=guard)
+        self.system = system_of(scenario, deployer, invariants=invariants, bounds=bounds, symmetry=symmetry, guard=guard, run=run)
         self._last: CheckResult | None = None
 
     @property

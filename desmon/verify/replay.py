@@ -18,7 +18,7 @@ from desmon.deployment.core import DeploymentCore, run_sync
 from desmon.deployment.guard import DeployerFault, Guard
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.invariants import INVARIANTS, Invariant, check_invariants
-from desmon.deployment.memo import MemoChecks
+from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.monitor import Stimulus
 from desmon.deployment.validity import ScalarChecks
 from desmon.deployment.ports import ControlPort
@@ -104,16 +104,21 @@ def repository_key(repo: Repository, core: DeploymentCore) -> Key:
 
 
 class RepositoryRun:
-    """The deployment core on a fresh networkx repository, stepped event by event."""
+    """The deployment core on a fresh networkx repository, stepped event by event (under
+    ``guard``, or the whole ``run`` context: :mod:`desmon.deployment.run`)."""
 
-    def __init__(self, scenario: Scenario, deployer: str | Deployer = "desmon", bounds: Bounds | None = None, guard: Guard | None = None) -> None:
+    def __init__(
+        self, scenario: Scenario, deployer: str | Deployer = "desmon", bounds: Bounds | None = None, guard: Guard | None = None,
+        run: RunContext | None = None,
+    ) -> None:
         self.scenario = scenario
+        self.run_context = run_context(run, guard).with_checks(ScalarChecks)
         self.bounds = bounds or bounds_of(scenario)
         self.repo = Repository()
         load_model(self.repo, scenario.model)
-        self.query = RepositoryQuery(self.repo, MemoChecks(ScalarChecks()))  # the replay's own memoised checks
+        self.query = RepositoryQuery(self.repo, self.run_context.checks)  # the run's memoised checks
         self.control = ScriptedControl(self.repo, scenario.model)
-        self.core = DeploymentCore(scenario.model, self.query, RepositoryInsert(self.repo, scenario.model.robot), deployer, guard)
+        self.core = DeploymentCore(scenario.model, self.query, RepositoryInsert(self.repo, scenario.model.robot), deployer, run=self.run_context)
         initial_reaction(self.core, scenario, self.bounds, self.control)
 
     def step(self, event: Event, fails: tuple[int, ...] = ()):  # type: ignore[no-untyped-def]

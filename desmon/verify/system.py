@@ -24,7 +24,7 @@ from typing import Any, Callable, Container, Iterable, Iterator, Protocol
 from desmon.deployment.core import DeploymentCore, StepLog
 from desmon.deployment.guard import CRASH, DeployerFault, Guard
 from desmon.deployment.ports import RaiseError
-from desmon.deployment.memo import MemoChecks
+from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.validity import ScalarChecks
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.invariants import Invariant, SystemView, check_invariants, get_invariants
@@ -68,10 +68,9 @@ class TransitionSystem:
     """A scenario's bounded environment and the real core's reactions, as states and transitions.
 
     ``reduction``, if given, builds the state-space reduction the search stores states
-    under from the system (``reduction=Symmetry``: :mod:`desmon.verify.symmetry`). The
-    system keeps no result of a search: engines return theirs
-    (:func:`desmon.verify.checker.check`); what it keeps are its store, its core and
-    memos of answers that depend only on a state.
+    under from the system (``reduction=Symmetry``: :mod:`desmon.verify.symmetry`). It keeps
+    no result of a search (engines return theirs: :func:`desmon.verify.checker.check`),
+    only its store, its core and memos of answers that depend only on a state.
     """
 
     def __init__(
@@ -82,11 +81,12 @@ class TransitionSystem:
         invariants: Iterable[str] | None = None,
         bounds: Bounds | None = None,
         reduction: "Callable[[TransitionSystem], Reduction] | None" = None,
-        guard: Guard | None = None,
+        guard: Guard | None = None, run: RunContext | None = None,
     ) -> None:
         self.scenario = scenario
-        #: the guard of this system's searches: its limits, and the budget a search installs
-        self.guard = guard if guard is not None else Guard()
+        #: its searches' run (:mod:`desmon.deployment.run`): the guard and the memoised Checks port
+        self.run_context = run_context(run, guard).with_checks(ScalarChecks)
+        self.guard = self.run_context.guard
         self.model = scenario.model
         if not self.model.platforms:
             raise CheckerError(
@@ -101,8 +101,8 @@ class TransitionSystem:
         self._choose_invariants(invariants)
         names = {i.name for i in self.invariants}
         self.instant = tuple(i for i in get_invariants(list(self.bounds.instantaneous)) if i.name in names) if self.bounds.instantaneous else ()
-        self.store = StateStore(self.model, MemoChecks(ScalarChecks()))
-        self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), deployer, self.guard)
+        self.store = StateStore(self.model, self.run_context.checks)
+        self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), deployer, run=self.run_context)
         self.deployer_name = self.core.deployer.name
         self.store.watch = self.instant
         self.store.watch_check = self._instant_check
@@ -135,8 +135,9 @@ class TransitionSystem:
         """Drop every memo and start a fresh store and core (the next search starts cold)."""
         self._instant_memo.clear()
         self._enabled_memo.clear()
-        self.store = StateStore(self.model, MemoChecks(ScalarChecks()))
-        self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), self.core.deployer, self.guard)
+        self.run_context.checks.clear()  # type: ignore[union-attr]
+        self.store = StateStore(self.model, self.run_context.checks)
+        self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), self.core.deployer, run=self.run_context)
         self.store.watch = self.instant
         self.store.watch_check = self._instant_check
 
@@ -148,7 +149,7 @@ class TransitionSystem:
         twin = object.__new__(type(self))
         twin.__dict__.update(self.__dict__)
         twin.store = store
-        twin.core = DeploymentCore(self.model, query, StoreInsert(store), self.core.deployer, self.guard)
+        twin.core = DeploymentCore(self.model, query, StoreInsert(store), self.core.deployer, run=self.run_context)
         store.watch = self.instant
         store.watch_check = twin._instant_check
         twin._instant_memo = instant_memo
