@@ -139,8 +139,9 @@ class DeploymentCore:
         self.guard = self.run_context.guard
         self.query = query
         self.insert = insert
-        #: the stimuli its observations return, interned on the run's memo (its query's checks)
-        self._stimuli = Stimuli(memo_of(query.checks))
+        #: the stimuli its observations return, interned on the run's memo (the run's checks,
+        #: else its query's)
+        self._stimuli = Stimuli(memo_of(self.run_context.checks) or memo_of(query.checks))
         self.deployer = get_deployer(deployer)
         self.standing: frozenset[str] = frozenset()
         # the current specifications come from the repository: requirements may change at run time
