@@ -131,3 +131,8 @@ def test_the_memo_wrapper_keeps_one_joined_tuple_and_interns_per_instance():
     a.interned(("k", 1), make, 1)
     assert made == [1, 1, 1]
     assert MemoChecks(a).inner is a.inner  # wrapping a wrapper wraps what it wraps
+    table = a.values("k")
+    assert table is a.values("k") and table[("k", 1)] == (1,)  # interned reads and fills the table of its kind
+    assert table.keep("x", 2) == 2 and table.get("x") == 2
+    a.clear()
+    assert not table and a.values("k") is table  # cleared in place: a kept table stays the memo's

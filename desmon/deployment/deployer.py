@@ -21,7 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, Generator, Iterable
 
-from desmon.deployment.memo import memo_of
+from desmon.deployment.memo import MemoChecks
 from desmon.deployment.ports import (
     DEPLOYMENT_FAILED,
     DEPLOYMENT_INFORMATION_MISSING,
@@ -247,10 +247,14 @@ def _named_in(slots: tuple[tuple[str, ...], ...]) -> frozenset[str]:
 def _wanted_by(slots: tuple[tuple[str, ...], ...], q: QueryPort) -> frozenset[str]:
     """Every graph named in ``slots``; interned on the run's memo when ``q``'s checks keep
     one (slots are few and immutable)."""
-    memo = memo_of(q.checks)
-    if memo is None:
+    checks = q.checks
+    if type(checks) is not MemoChecks:
         return _named_in(slots)
-    return memo.interned(("wanted", slots), _named_in, slots)  # type: ignore[no-any-return]
+    known = checks.values("wanted")
+    wanted = known.get(slots)
+    if wanted is None:
+        wanted = known.keep(slots, _named_in(slots))
+    return wanted  # type: ignore[no-any-return]
 
 
 def _paper_react(

@@ -12,9 +12,9 @@ share nothing they could disagree on:
   is finer: :class:`~desmon.deployment.validity.PlatformMemoChecks` keeps each
   platform's part). Either way it keeps the run's other pure memos: one tuple object
   per (requirements, reads) pair (:meth:`MemoChecks.joined`, which identity-keyed
-  memos downstream find again) and small interned values (:meth:`MemoChecks.interned`:
-  the graphs a slot tuple names, a stimulus per platform, a specification seen with
-  another threshold).
+  memos downstream find again) and tables of small interned values
+  (:meth:`MemoChecks.values`: the graphs a slot tuple names, a stimulus per platform, a
+  specification seen with another threshold).
 * :class:`ColumnMemo` keeps the last few column stores of a column-backed Checks port
   (:class:`~desmon.deployment.placement.ColumnChecks`) and counts how each question was
   answered (``counts``: observability for tests and benchmarks; no decision reads them).
@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any, Callable, Hashable, Sequence
 if TYPE_CHECKING:
     from desmon.deployment.ports import ChecksPort
 
-__all__ = ["MemoChecks", "ColumnMemo", "MEMO_SIZE", "TUPLES", "INTERNED", "KEPT_COLUMNS", "memo_of"]
+__all__ = ["MemoChecks", "ColumnMemo", "Interned", "MEMO_SIZE", "TUPLES", "INTERNED", "KEPT_COLUMNS", "memo_of"]
 
 #: Answers a :class:`MemoChecks` keeps per question kind (bounded, so long runs stay flat).
 MEMO_SIZE = 1 << 16
@@ -45,6 +45,21 @@ INTERNED = 1024
 
 #: Column stores a :class:`ColumnMemo` keeps (each one platform list, most recently used first).
 KEPT_COLUMNS = 2
+
+
+class Interned(dict):  # type: ignore[type-arg]
+    """One kind of interned values: key -> the value, a pure function of the key, one
+    object per key. Read it as a dict (``get``); :meth:`keep` adds an entry and forgets
+    them all past :data:`INTERNED` entries (they are few: slot tuples, platforms, specs)."""
+
+    __slots__ = ()
+
+    def keep(self, key: Hashable, value: Any) -> Any:
+        """Keep ``value`` under ``key``; returns ``value``."""
+        if len(self) > INTERNED:
+            self.clear()
+        self[key] = value
+        return value
 
 
 class MemoChecks:
@@ -63,7 +78,7 @@ class MemoChecks:
         # (id of the requirements, id of the reads) -> (both tuples, their concatenation):
         # the entry holds the tuples its key names, so the ids cannot be reused meanwhile
         self._joined: dict[tuple[int, int], tuple[tuple, tuple, tuple]] = {}
-        self._interned: dict[Hashable, Any] = {}
+        self._values: dict[str, Interned] = {}
         self.validity: Callable[..., Any]
         self.platform: Callable[..., Any]
         self._bind()
@@ -97,22 +112,29 @@ class MemoChecks:
         memo[key] = (reqs, reads, joined)
         return joined
 
+    def values(self, kind: str) -> Interned:
+        """The table of interned values of ``kind`` (made empty on the first call): read
+        it with ``get``, fill it with :meth:`Interned.keep`. A caller that asks often
+        keeps the table it got (it stays the same object; :meth:`clear` empties it)."""
+        table = self._values.get(kind)
+        if table is None:
+            table = self._values[kind] = Interned()
+        return table
+
     def interned(self, key: Hashable, make: Callable[..., Any], *args: Any) -> Any:
-        """The value under ``key`` (``make(*args)`` on a miss): a pure function of ``key``, kept
-        so that equal keys give the same object (past :data:`INTERNED` entries all are
-        forgotten). A key names its kind in its first item, so kinds never meet."""
-        memo = self._interned
-        value = memo.get(key)
+        """The value under ``key`` (``make(*args)`` on a miss), among the values of the kind
+        ``key[0]`` names: equal keys give the same object."""
+        table = self.values(key[0])  # type: ignore[index]
+        value = table.get(key)
         if value is None:
-            if len(memo) > INTERNED:
-                memo.clear()
-            value = memo[key] = make(*args)
+            value = table.keep(key, make(*args))
         return value
 
     def clear(self) -> None:
         """Forget every memoised answer and value (a process about to exit; tests)."""
         self._joined.clear()
-        self._interned.clear()
+        for table in self._values.values():
+            table.clear()
         if self.answers:
             self.validity.cache_clear()  # type: ignore[attr-defined]
             self.platform.cache_clear()  # type: ignore[attr-defined]

@@ -83,13 +83,16 @@ class Stimuli(Effects):
     context_changed = _CONTEXT_CHANGED
 
     def __init__(self, memo: MemoChecks | None = None) -> None:
-        self.memo = memo
+        self._known = memo.values("stimulus") if memo is not None else None
 
     def platform_changed(self, platform: str) -> Stimulus:
-        memo = self.memo
-        if memo is None:
+        known = self._known
+        if known is None:
             return _one_platform(platform)
-        return memo.interned(("stimulus", platform), _one_platform, platform)  # type: ignore[no-any-return]
+        stim = known.get(platform)
+        if stim is None:
+            stim = known.keep(platform, _one_platform(platform))
+        return stim  # type: ignore[no-any-return]
 
     def specs_changed(self, hosts: tuple[str, ...], graph: str) -> Stimulus:
         return Stimulus(changed_platforms=hosts, specs_changed=(graph,))

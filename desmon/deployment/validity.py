@@ -14,7 +14,7 @@ from desmon.model.kinds import Placing, others_using  # Placing: the graph being
 from desmon.model.requirements import PLATFORM_HAS, Attribute, Constraint, DeploymentSpec, Preference, Reads, Requirement
 from desmon.model.system import PlatformState
 
-from desmon.deployment.memo import memo_of
+from desmon.deployment.memo import MemoChecks
 from desmon.deployment.ports import Failure, PlatformHandle, Validity  # Failure, Validity: the Checks port's answers (re-exported)
 
 if TYPE_CHECKING:
@@ -211,9 +211,8 @@ def _joined(reqs: Sequence[Requirement], reads: tuple[Reads, ...], checks: "Chec
     """``tuple(reqs) + reads``: one tuple object per question when ``checks`` keep a run's
     memos (:meth:`~desmon.deployment.memo.MemoChecks.joined`), which the Checks ports
     find again by identity; a fresh one otherwise."""
-    memo = memo_of(checks)
-    if memo is not None:
-        return memo.joined(reqs, reads)  # type: ignore[no-any-return]
+    if type(checks) is MemoChecks:
+        return checks.joined(reqs, reads)  # type: ignore[no-any-return]
     return tuple(reqs) + reads
 
 

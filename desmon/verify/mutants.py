@@ -91,7 +91,7 @@ class NoHysteresis:
         if memo is None:
             return _zero(spec)
         # one object per spec, interned on the run's memo, so validity memos on identity hit
-        return memo.interned(("rebalance 0", spec), _zero, spec)  # type: ignore[no-any-return]
+        return memo.interned(("rebalance 0", spec), _zero, spec)
 
     def __getattr__(self, name: str):  # type: ignore[no-untyped-def]
         return getattr(self.inner, name)
