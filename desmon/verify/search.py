@@ -85,6 +85,7 @@ class Exploration:
     depth: int
     explored: Sequence[Key]
 
+
 @dataclass
 class CheckResult:
     scenario: str

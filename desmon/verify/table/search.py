@@ -16,12 +16,11 @@ import numpy.ma  # noqa: F401  (np.unique imports it on first use, leaving cycli
 
 from desmon.deployment.guard import ReactionStopped
 from desmon.errors import TableUnsupported
-from desmon.verify.environment import EVENT_KINDS
 from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Trail, final_status as _final_status
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 from desmon.verify.table.hashing import Interned, IntTable
-from desmon.verify.table.encoding import ROOT_CTX, ROOT_PREFIX, ROOT_STIM, SYS_BITS, SYS_MASK, Env, Events, Transitions, root_key
+from desmon.verify.table.encoding import ROOT_CTX, ROOT_PREFIX, ROOT_STIM, SYS_BITS, SYS_MASK, Env, Events, Transitions, layout, root_key
 from desmon.verify.table.recording import Recorder
 from desmon.verify.table.tables import AnswerTables
 from desmon.verify.table.tree import DecisionTrees
@@ -86,11 +85,13 @@ def table_unsupported(checker: TransitionSystem) -> str | None:
     """Why the table engine cannot run ``checker``'s search, or None."""
     if checker.symmetry is not None:
         return "symmetry reduction runs on the direct engine"
-    b = checker.bounds
-    where = {d.name: d.platform for d in checker.model.devices}
+    names = [p.name for p in checker.model.platforms]
+    try:
+        downs, devices, levels = layout(checker.bounds, names, {d.name: d.platform for d in checker.model.devices})
+    except TableUnsupported as exc:
+        return str(exc).removeprefix("table engine: ").removesuffix("; run with --engine direct")
     for p in checker.model.platforms:
-        k = sum(1 for d in b.devices if where[d] == p.name)
-        digits = (2 if p.name in b.platforms or p.name in b.joins else 1) * (1 << k) * len(b.loads.get(p.name, (0,)))
+        digits = (2 if p.name in downs else 1) * (1 << len(devices[p.name])) * len(levels.get(p.name, (0,)))
         if digits > MAX_DIGITS:
             return (f"platform {p.name} has {digits:,} combinations of facts (its bounded devices, up/down and load levels); "
                     f"the table engine tabulates at most {MAX_DIGITS:,} per platform")
@@ -332,7 +333,7 @@ class TableEngine:
         pairs, inv = _grouped(e * n_leaves + units.leaf[cand])
         lids = np.array([self._label(pv // n_leaves, pv % n_leaves) for pv in pairs.tolist()], dtype=np.int64)
         self.trail.extend(units.ids[tr.pos[t]], lids[inv])
-        _count(self.res.new_states, EVENT_KINDS, self.events.kind_of[e], len(EVENT_KINDS))
+        _count(self.res.new_states, self.events.kinds, self.events.kind_of[e], len(self.events.kinds))
         nxt.frombytes(np.arange(ni, ni + len(cand), dtype=np.int64).tobytes())
         return cut_t, -1
 
@@ -389,7 +390,7 @@ class TableEngine:
         codes.append(c)
         e = int(tr.ev[t])
         self.trail.add(int(units.ids[tr.pos[t]]), (e, lf[3]), (ev.events[e], lf[3]))
-        self.res.new_states[EVENT_KINDS[ev.kind_of[e]]] += 1
+        self.res.new_states[ev.kinds[ev.kind_of[e]]] += 1
         if self.max_states is not None and len(codes) >= self.max_states:
             self.incomplete = f"max states {self.max_states:,} reached"
         if bad:
@@ -459,9 +460,9 @@ class _BatchCounts:
         t = U_t[:n_moved]
         kind_of_t = ev.kind_of.take(tr.ev)  # each transition's event kind
         changed = U_code[:n_moved] != sc.take(tr.pos).take(t)
-        _count(res.changed, EVENT_KINDS, kind_of_t.take(t)[changed], len(EVENT_KINDS))
+        _count(res.changed, ev.kinds, kind_of_t.take(t)[changed], len(ev.kinds))
         last_t = min(cut_t, T - 1)
-        _count(res.enabled, EVENT_KINDS, kind_of_t[: last_t + 1], len(EVENT_KINDS))
+        _count(res.enabled, ev.kinds, kind_of_t[: last_t + 1], len(ev.kinds))
         n_states = int(tr.pos[last_t]) + 1 if cut_t < T else len(units.ids)
         _count(res.rules, env.ctxs, tr.ctx[:n_states], env.C)
 
