@@ -20,12 +20,12 @@ from typing import TYPE_CHECKING, Any, Callable, Protocol, Sequence
 from desmon.deployment.guard import CRASH
 from desmon.deployment.ports import PlatformHandle
 from desmon.deployment.validity import PlatformMemoChecks, order_platforms
-from desmon.errors import NondeterminismError, TableUnsupported, UnobservedRead
+from desmon.errors import TableUnsupported, UnobservedRead
 from desmon.model.events import Event
 from desmon.model.requirements import Preference
 from desmon.model.system import PlatformState, SystemModel
 from desmon.verify.state import Key, StateStore
-from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key
+from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key, nondeterminism
 from desmon.verify.table.observed import Acceptable, Check, ObservedValidity, Ranked, Reasons
 from desmon.verify.table.tables import AnswerTables, score_key
 from desmon.verify.trace import KEPT_BRANCH, branch_name
@@ -198,6 +198,12 @@ QUERY_METHODS = ("deployment_information", "fixed_platform", "constraints", "pla
                  "active_deployments", "deployments", "perception_graph", "context")
 
 
+def _query(name: str) -> Callable[..., Any]:
+    """The QueryPort method ``name`` of the store, looked up per call (the store rebinds
+    some of them per deployment set)."""
+    return lambda self, *args: getattr(self._store, name)(*args)
+
+
 class RecordingQuery:
     """The recording core's Query port: the store's QueryPort methods and nothing else.
 
@@ -205,8 +211,6 @@ class RecordingQuery:
     read platform facts unobserved: asking for one stops the recording. One the store
     lacks raises AttributeError, as the store would. Its ``checks`` are the recording
     checks; it memoises no validity answer (every check is asked of them, and observed where it is used).
-    Each method looks the store's method up per call: the store rebinds some of them
-    per deployment set.
     """
 
     __slots__ = ("_store", "checks")
@@ -216,33 +220,6 @@ class RecordingQuery:
     def __init__(self, store: StateStore, checks: RecordingChecks) -> None:
         self._store, self.checks = store, checks
 
-    def deployment_information(self, graph: str) -> Any:
-        return self._store.deployment_information(graph)
-
-    def fixed_platform(self, spec: Any) -> Any:
-        return self._store.fixed_platform(spec)
-
-    def constraints(self, spec: Any) -> Any:
-        return self._store.constraints(spec)
-
-    def platform_states(self) -> Any:
-        return self._store.platform_states()
-
-    def deployed_on(self, graph: str) -> Any:
-        return self._store.deployed_on(graph)
-
-    def active_deployments(self, platform: str) -> Any:
-        return self._store.active_deployments(platform)
-
-    def deployments(self) -> Any:
-        return self._store.deployments()
-
-    def perception_graph(self, deployment: str) -> Any:
-        return self._store.perception_graph(deployment)
-
-    def context(self) -> Any:
-        return self._store.context()
-
     def __getattr__(self, name: str) -> Any:
         if not hasattr(self._store, name):  # what the store itself answers (``getattr(port, name, default)`` works alike)
             raise AttributeError(f"{type(self._store).__name__!r} object has no attribute {name!r}")
@@ -250,6 +227,10 @@ class RecordingQuery:
             f"the reaction asked its Query port for `{name}`, which is not a QueryPort method: the table engine "
             "cannot know what it reads; run with --engine direct"
         )
+
+
+for _name in QUERY_METHODS:
+    setattr(RecordingQuery, _name, _query(_name))
 
 
 class _NoMemo(dict):
@@ -382,11 +363,7 @@ class Recorder:
         _n, _o, again, _i = self.checker.run_one(key, event, prefix)
         if [command_key(c) for c, _ok in log.commands] != [command_key(c) for c, _ok in again.commands]:
             was, now = [str(command_key(c)[0]) for c, _ok in log.commands], [str(c) for c, _ok in again.commands]
-            raise NondeterminismError(
-                f"deployer {self.checker.deployer_name} is nondeterministic (not a function of what it reads through its ports): reacting twice to {event} in the same state it issued "
-                f"first [{', '.join(was) or 'no command'}], then [{', '.join(now) or 'no command'}]; a reaction must be a function "
-                "of its readings (no randomness, clock or state kept between calls: docs/deployers.md)"
-            )
+            raise nondeterminism(self.checker.deployer_name, event, was, now)
 
     def record_invariants(self, key: Key, root: int) -> None:
         """Check the invariants of ``key`` for real and add the path under ``root``."""
