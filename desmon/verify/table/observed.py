@@ -80,25 +80,23 @@ class Check:
 
     def why(self) -> None:
         """Observe every platform's failures, reasons included."""
-        eng = self.rec.tables
-        code, mult = 0, 1
-        for (p, dep), f in zip(self.parts, self.fails):
-            value, radix = eng.failure_id(self.table, self.first_only, p, dep, f)
-            code += value * mult
-            mult *= radix
-        self.rec.observe(("why", self.table, self.first_only, self.parts), code)
+        self._every("why", self.first_only, self.fails)
 
     def rank(self) -> None:
         """Observe every platform's acceptability and score (with preferences: what the
         order of the acceptable platforms, their scores and the breakdown derive from)."""
         assert self.scored is not None
-        eng = self.rec.tables
+        self._every("rank", None, self.scored)
+
+    def _every(self, mode: str, first_only: bool | None, answers: Sequence[Any]) -> None:
+        """Observe every platform's answer, numbered among those its facts can give."""
+        tables = self.rec.tables
         code, mult = 0, 1
-        for (p, dep), key in zip(self.parts, self.scored):
-            value, radix = eng.score_id(self.table, p, dep, key)
+        for (p, dep), answer in zip(self.parts, answers):
+            value, radix = tables.answer_id(mode, self.table, first_only, p, dep, answer)
             code += value * mult
             mult *= radix
-        self.rec.observe(("rank", self.table, None, self.parts), code)
+        self.rec.observe((mode, self.table, first_only, self.parts), code)
 
 
 def _forward(op: Callable[..., Any]) -> Callable[..., Any]:

@@ -2,14 +2,11 @@
 
 While the table engine records a reaction (or an invariants check), the core runs on a
 :class:`~desmon.verify.state.StateStore` whose platform states are opaque
-:class:`~desmon.deployment.ports.PlatformHandle` objects made by
-:class:`RecordingChecks`, the Checks port of that run. The handles carry no run-time
-facts, so the only way to learn whether a platform is up, which devices work or what
-load it carries is to ask a requirement check -- of these checks, which answer with the
-real result, wrapped so that what the run *uses* of it is recorded (see
-:class:`RecordingChecks`). The guard holds by construction: a read of a fact anywhere
-else raises :class:`~desmon.errors.UnobservedRead`, and the core's Query port
-(:class:`RecordingQuery`) offers only the QueryPort methods.
+:class:`~desmon.deployment.ports.PlatformHandle` objects made by :class:`RecordingChecks`,
+the run's Checks port: the only way to learn a platform's facts is to ask a requirement
+check, whose use is recorded. A read of a fact anywhere else raises
+:class:`~desmon.errors.UnobservedRead`, and the core's Query port (:class:`RecordingQuery`)
+offers only the QueryPort methods.
 """
 
 from __future__ import annotations
@@ -41,23 +38,14 @@ _ANSWERS_LIMIT = 1 << 16
 
 
 class RecordingChecks:
-    """The Checks port of a recorded run (see the module doc).
-
-    It makes the handles the recording store hands out (:meth:`handle`, the store's
-    ``make_state``) and keeps each one's real facts. It answers each check with the
-    real result, wrapped so that the run's *use* of it is what gets recorded: asking
-    whether one platform is acceptable observes that platform's answer only;
-    iterating, truth-testing or indexing the acceptable platforms observes them one by
-    one in preference order (up to where the code stops); anything else (length,
-    slicing, comparing, the rejected platforms and their reasons) observes every
-    answer, down to the failure texts when those are read; an explanation is observed
-    only where its text is used.
-
-    The real answers are pure functions of the facts behind the handles, computed once
-    per platform's facts (a :class:`~desmon.deployment.validity.PlatformMemoChecks`), and
-    the wrapped answer of a question about handles is kept: the wrappers hold no state
-    of a run, so a run that asks the same question again gets the same wrapper, and
-    every use of it observes again, into that run's observations.
+    """The Checks port of a recorded run (see the module doc): it makes the handles the
+    recording store hands out (:meth:`handle`, the store's ``make_state``), keeps each
+    one's real facts, and answers each check with the real result wrapped as
+    :mod:`~desmon.verify.table.observed` says, so that the run's *use* of it is recorded.
+    The real answers are computed once per platform's facts (a
+    :class:`~desmon.deployment.validity.PlatformMemoChecks`), and the wrapped answer of a
+    question about handles is kept: a wrapper holds no state of a run, so a run that asks
+    again gets the same wrapper, and its every use observes again, into that run.
     """
 
     def __init__(self, tables: AnswerTables) -> None:
