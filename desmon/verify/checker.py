@@ -30,7 +30,6 @@ from desmon.verify.engines import AUTO, load, names
 from desmon.verify.search import HOLDS, Budget, CheckResult, Exploration, ctrl_c, finish, paused_gc, resident_mb
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
-from desmon.verify.trace import Counterexample
 
 __all__ = ["Checker", "ENGINES", "Engine", "Exploration", "check", "release", "system_of"]
 
