@@ -52,15 +52,6 @@ class Check:
         self._all_ok: tuple | None = None
         self._one_ok: list[tuple | None] = [None] * len(parts)
 
-    def ok(self, which: Sequence[int]) -> None:
-        """Observe whether the platforms at positions ``which`` pass."""
-        code = 0
-        fails = self.fails
-        for j, i in enumerate(which):
-            code |= (not fails[i]) << j
-        parts = self.parts
-        self.rec.observe(("ok", self.table, None, tuple([parts[i] for i in which])), code)
-
     def ok_all(self) -> None:
         """:meth:`ok` of every platform."""
         made = self._all_ok
@@ -164,14 +155,7 @@ class _Text(_Observed):
     def _all(self) -> Any:
         return self._real()
 
-    def __str__(self) -> str:
-        return self._all()  # type: ignore[no-any-return]
-
-    def __format__(self, spec: str) -> str:
-        return format(self._all(), spec)
-
-    def __mod__(self, other: Any) -> Any:
-        return self._all() % other
+    __str__, __format__, __mod__ = _forward(str), _forward(format), _forward(operator.mod)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._all(), name)

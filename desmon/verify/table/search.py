@@ -98,7 +98,6 @@ def table_unsupported(checker: TransitionSystem) -> str | None:
     return None
 
 
-
 class Units(NamedTuple):
     """A batch's (transition, failed-start prefix) units in the direct engine's order."""
 
