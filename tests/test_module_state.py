@@ -17,6 +17,7 @@ PACKAGE = ROOT / "desmon"
 ALLOWED = {
     ("desmon/model/events.py", "_REGISTRY"): "registry: the event kinds, filled as each is defined",
     ("desmon/model/kinds.py", "_KINDS"): "registry: the requirement kinds, filled as each is defined",
+    ("desmon/verify/environment.py", "_KINDS"): "registry: the checker's kinds of variable, filled as each is defined",
     ("desmon/sim/streams.py", "_STREAMS"): "registry: the signal streams, filled as each is defined",
     ("desmon/sim/streams.py", "_FUSIONS"): "registry: the fusion detectors, filled as each is defined",
     ("desmon/verify/parallel.py", "_WORKER"): (

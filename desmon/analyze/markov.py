@@ -30,8 +30,9 @@ The chain (:mod:`desmon.analyze.chain`) lets the environment do what the scenari
   (the simulation's own choice); it joins after an exponential start-up of mean its
   ``startup_s``, and leaves at rate 1/``idle_s`` while it hosts nothing.
 
-Every event the bounds let the checker choose needs a rate here, and every rate an
-event there: :func:`markov_world` refuses a mismatch in one line naming it (a fault
+Every event the bounds let the checker choose needs a rate here (each kind of variable
+names what gives its events one: :attr:`desmon.verify.environment.VariableKind.rate`),
+and every rate an event there: :func:`markov_world` refuses a mismatch in one line naming it (a fault
 without MTTF, an MTTF of a component the checker never fails, scripted faults, loads
 or changes, which have no rate; a Gaussian load walk). The bounds' ``max_failures`` and ``start_failures``
 are budgets of the checker, not facts of the world: the chain drops them (any number
@@ -51,6 +52,7 @@ from desmon.model.events import LoadChange, RequirementChange
 from desmon.model.scenario import Scenario
 from desmon.sim.world import World, can_detect, detector_plans, world_of
 from desmon.verify.bounds import Bounds, bounds_of
+from desmon.verify.environment import variable_kind, variables
 
 __all__ = ["AnalysisError", "MarkovWorld", "markov_world", "MAX_PHASES"]
 
@@ -158,6 +160,14 @@ def _check_unrated(scenario: Scenario, world: World) -> None:
 
 def _check_matching(scenario: Scenario, world: World, b: Bounds) -> None:
     """An event of the bounds without a rate, or a rate without an event: one line."""
+    for v in variables(b):
+        kind = variable_kind(v.kind)
+        if kind is None or kind.rate is None:
+            raise _refuse(
+                scenario,
+                f"the checker bounds let the {v.kind} variable {v.subject!r} change, but nothing gives its events a rate "
+                f"(its kind of variable names none): drop it from the bounds' variables to analyze the rest",
+            )
     rated = {m.component for m in world.stochastic_faults}
     for what, names in (("device", b.devices), ("platform", b.platforms)):
         for n in names:

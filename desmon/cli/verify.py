@@ -20,6 +20,7 @@ from typing import Any
 from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered, run_of
 from desmon.cli.options import Input, add_output, positive_int, positive_seconds, worker_count
 from desmon.errors import CheckerError
+from desmon.verify import engines
 
 __all__ = ["add_parser", "run", "check_megabytes", "workers_for", "SEARCH_OPTIONS"]
 
@@ -48,10 +49,8 @@ def add_parser(sub: Subparsers) -> None:
         "and --workers is not used",
     )
     p.add_argument(
-        "--engine", choices=("auto", "table", "direct"), default="auto",
-        help="table: run the real core once per distinct reading of a reaction and replay it (fast); "
-        "direct: run it on every transition; auto: table unless --symmetry, else (or when the deployer reads platform "
-        "facts outside the requirement checks) direct; the result is the same",
+        "--engine", choices=engines.names(), default=engines.AUTO,
+        help=engines.described(),
     )
     add_output(p, "--json", suffixes=(".json",), default=None, metavar="FILE.json", help="write the counterexample(s) as JSON states")
     add_output(p, "--pytest", suffixes=(".py",), default=None, metavar="FILE.py", help="write a pytest replaying the counterexample")

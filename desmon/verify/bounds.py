@@ -8,7 +8,7 @@ that name unknown actions, devices or platforms with one clear :class:`CheckerEr
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Any, Mapping
 
 from desmon.errors import CheckerError
 from desmon.model.checks import check_flag, check_items, check_name, check_names, check_number, strict_init, suggest
@@ -71,7 +71,10 @@ class Bounds:
         ``RequirementChange`` events the environment may apply, in any order and any
         number of times (one that changes nothing is a no-op);
     ``instantaneous``
-        invariants also checked after every command inside a reaction.
+        invariants also checked after every command inside a reaction;
+    ``variables``
+        ``{kind: subjects}`` for the kinds of variable registered beyond the built-in ones
+        (:class:`~desmon.verify.environment.VariableKind`), each subject a variable of that kind.
     """
 
     actions: tuple[str, ...] = ()
@@ -88,6 +91,7 @@ class Bounds:
     instantaneous: tuple[str, ...] = INSTANT_INVARIANTS
     joins: tuple[str, ...] = ()
     requirement_changes: tuple[RequirementChange, ...] = ()
+    variables: Mapping[str, tuple[Any, ...]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         """Types and ranges; names are checked against a scenario by :meth:`validate`."""
@@ -154,6 +158,12 @@ class Bounds:
         groups = check_items(
             f"{w} interchangeable", self.interchangeable, (tuple, list), error=err, example="interchangeable=(('e1', 'e2', 'e3'),)"
         )
+        if not isinstance(self.variables, Mapping):
+            raise CheckerError(f"{w} variables = {self.variables!r} is not a mapping: write variables={{'kind': (subject, ...)}}")
+        object.__setattr__(self, "variables", {
+            check_name(f"{w} variables kind", k, error=err): tuple(check_items(f"{w} variables[{k!r}]", v, object, error=err, example="(subject, ...)"))
+            for k, v in self.variables.items()
+        })
         object.__setattr__(
             self, "interchangeable",
             tuple(check_names(f"{w} interchangeable group", g, each=f"{w} interchangeable platform", error=err, example="('e1', 'e2')") for g in groups),
@@ -188,6 +198,7 @@ class Bounds:
                 raise CheckerError(f"{where}: unknown platform {p!r}{suggest(p, platforms)} (known: {', '.join(platforms)})")
         self._validate_loads(where, scenario)
         self._validate_runtime_changes(where, scenario)
+        self._validate_variables(where, scenario)
         from desmon.deployment.invariants import INVARIANTS
 
         for n in self.instantaneous:
@@ -220,6 +231,18 @@ class Bounds:
             problem = event_problem(ev, m, others)
             if problem is not None:
                 raise CheckerError(f"{where}: requirement_changes: {problem}")
+
+    def _validate_variables(self, where: str, scenario: Scenario) -> None:
+        """Each kind ``variables`` names is a registered kind that reads its subjects there."""
+        from desmon.verify.environment import VariableKind, variable_kinds
+
+        known = [k.name for k in variable_kinds() if type(k).subjects is VariableKind.subjects]
+        for name, subjects in self.variables.items():
+            if name not in known:
+                raise CheckerError(f"{where}: variables names {name!r}, which is no kind of variable read from there{suggest(name, known)} (kinds: {', '.join(known) or 'none'})")
+            problem = next(k for k in variable_kinds() if k.name == name).problem(subjects, scenario)
+            if problem is not None:
+                raise CheckerError(f"{where}: variables[{name!r}]: {problem}")
 
     def _validate_actions(self, where: str, m: SystemModel) -> None:
         """Either actions or a task; every action they name is the model's."""

@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 import sys
 import time
-from dataclasses import dataclass
 from typing import Any, Iterable, Protocol, Sequence
 
 from desmon.deployment.deployer import Deployer
@@ -28,29 +27,18 @@ from desmon.errors import CheckerError, TableUnsupported
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds
 from desmon.verify.direct import DirectSearch, Pool
-from desmon.verify.search import HOLDS, Budget, CheckResult, ctrl_c, finish, paused_gc, resident_mb
+from desmon.verify.engines import AUTO, load, names
+from desmon.verify.search import HOLDS, Budget, CheckResult, Exploration, ctrl_c, finish, paused_gc, resident_mb
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
-from desmon.verify.trace import Counterexample
 
 __all__ = ["Checker", "ENGINES", "Engine", "Exploration", "check", "release", "system_of"]
 
 #: why ``--engine auto`` runs the direct engine when ``workers`` > 1 is asked for
 _WORKERS_NOTE = "--workers runs the direct engine"
 
-#: How :func:`check` computes transitions (see there).
-ENGINES = ("auto", "table", "direct")
-
-
-@dataclass
-class Exploration:
-    """What an engine's search found: counterexamples by invariant, why it stopped early
-    ("" if it did not), its depth, and the distinct states in BFS order."""
-
-    found: dict[str, Counterexample]
-    incomplete: str
-    depth: int
-    explored: Sequence[Key]
+#: How :func:`check` computes transitions (see there): :func:`desmon.verify.engines.names`.
+ENGINES = names()
 
 
 class Engine(Protocol):
@@ -60,6 +48,9 @@ class Engine(Protocol):
 
     def refusal(self, system: TransitionSystem, workers: int) -> str | None:
         """Why this engine cannot run the search (None: it can)."""
+
+    def refused(self, why: str) -> str:
+        """The error when this engine, asked for by name, refuses the search (``why``: its refusal)."""
 
     def explore(self, system: TransitionSystem, res: CheckResult, *, budget: Budget, workers: int, **search: Any) -> Exploration:
         """The search, counting into ``res`` (``search``: max_states, max_depth, keep_going);
@@ -81,6 +72,9 @@ class DirectEngine:
     def refusal(self, system: TransitionSystem, workers: int) -> str | None:
         return None
 
+    def refused(self, why: str) -> str:  # pragma: no cover - it never refuses
+        return f"--engine direct: {why}"
+
     def explore(self, system: TransitionSystem, res: CheckResult, *, budget: Budget, workers: int, **search: Any) -> Exploration:
         direct = DirectSearch(system, res, budget=budget, workers=workers, pool=_expansion_pool, **search)
         found, incomplete, depth = direct.run()
@@ -100,6 +94,11 @@ class TableEngineChoice:
             why = _WORKERS_NOTE
         return why
 
+    def refused(self, why: str) -> str:
+        if why == _WORKERS_NOTE:
+            return "--workers runs the direct engine in several processes; the table engine runs in one: drop --workers or use --engine direct"
+        return f"--engine table: {why}; use --engine direct or auto"
+
     def explore(self, system: TransitionSystem, res: CheckResult, *, budget: Budget, workers: int, **search: Any) -> Exploration:
         from desmon.verify.table import TableEngine
 
@@ -111,10 +110,6 @@ class TableEngineChoice:
         return Exploration(found, incomplete, depth, table.explored())
 
 
-DIRECT: Engine = DirectEngine()
-TABLE: Engine = TableEngineChoice()
-
-
 def _check_run_arguments(workers: int, engine: str, timeout: float | None, max_memory: float | None) -> None:
     if workers < 1:
         raise CheckerError(f"--workers must be at least 1, got {workers}")
@@ -124,17 +119,6 @@ def _check_run_arguments(workers: int, engine: str, timeout: float | None, max_m
         if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             unit = "seconds" if name == "timeout" else "MB"
             raise CheckerError(f"--{name} {value!r}: give a finite number of {unit} above 0, or none for no limit")
-
-
-def _table_refusal(system: TransitionSystem, engine: str, workers: int) -> str | None:
-    """None if the table engine runs (``engine`` "table" or "auto"), else why the direct
-    engine runs instead (under "auto"; "table" refuses with a CheckerError)."""
-    why = TABLE.refusal(system, workers)
-    if engine == "table" and why is not None:
-        if why == _WORKERS_NOTE:
-            raise CheckerError("--workers runs the direct engine in several processes; the table engine runs in one: drop --workers or use --engine direct")
-        raise CheckerError(f"--engine table: {why}; use --engine direct or auto")
-    return why
 
 
 def check(
@@ -229,19 +213,27 @@ def _reason(refusal: str) -> str:
 
 
 def _search(system: TransitionSystem, engine: str, res: CheckResult, budget: Budget, search: dict[str, Any]) -> CheckResult:
-    """The table engine if it can run the search (``engine`` "auto" or "table"), else the
-    direct engine with the reason in ``engine_note``; a table attempt that bows out is
-    dropped and its time counts in the direct search's result."""
-    why = "" if engine == "direct" else _table_refusal(system, engine, search["workers"])
-    if why is None:
+    """The engine asked for, or under ``auto`` the first of :data:`ENGINES` that runs the
+    search, with why the ones before it did not in ``engine_note``; an engine that bows
+    out during its search is dropped, and its time counts in the next one's result."""
+    tried = names()[1:] if engine == AUTO else (engine,)
+    why = ""
+    for i, name in enumerate(tried):
+        chosen: Engine = load(name)
+        refusal = chosen.refusal(system, search["workers"])
+        if refusal is not None:
+            if engine != AUTO:
+                raise CheckerError(chosen.refused(refusal))
+            why = refusal
+            continue
+        res.engine_note = why
         try:
-            return _finished(res, system, TABLE.explore(system, res, **search), budget)
+            return _finished(res, system, chosen.explore(system, res, **search), budget)
         except TableUnsupported as exc:
-            if engine == "table":
+            if engine != AUTO or i == len(tried) - 1:
                 raise
             res, why = _fresh_result(system, search["workers"], res.timeout, res.max_memory, res.start_mb), _reason(str(exc))
-    res.engine_note = why
-    return _finished(res, system, DIRECT.explore(system, res, **search), budget)
+    raise CheckerError(f"no engine runs this search: {why}")  # pragma: no cover - the last engine accepts every search
 
 
 def _finished(res: CheckResult, system: TransitionSystem, run: Exploration, budget: Budget) -> CheckResult:

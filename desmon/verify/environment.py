@@ -1,36 +1,35 @@
-"""The checker's environment: its event alphabet, one place.
+"""The checker's environment: its event alphabet, one definition per kind of variable.
 
 A transition starts with one environment event, chosen among those the scenario's
 :class:`~desmon.verify.bounds.Bounds` enable in the current state; the system's
-reaction follows. :data:`EVENT_KINDS` names the kinds (the report counts per kind) and
-:func:`enabled_events` lists a state's events in the order every engine explores them
-(the order fixes which shortest counterexample a search reports).
+reaction follows. The environment is a list of bounded *variables* (:func:`variables`:
+the context, each bounded device, platform, load and on-demand platform, each
+requirement change), and every kind of variable is one :class:`VariableKind` carrying
+everything the checker's parts need of it:
 
-The environment is a list of bounded *variables* (:func:`variables`: the context, each
-bounded device, platform, load and on-demand platform, each requirement change), and
-each kind of variable enables its events (``_EVENTS``). Both engines walk that list:
-the direct engine through :func:`enabled_events`, the table engine by turning each
-variable into array operations on its environment codes
-(:class:`desmon.verify.table.encoding.Events`), so the alphabet and its order are
-written once, here.
+* its event classes (:attr:`VariableKind.events`: the report counts per kind, in
+  :func:`event_kinds` order) and the events it enables in a state
+  (:meth:`VariableKind.enabled`: the direct engine, through :func:`enabled_events`);
+* the part of the state it moves and its array operation for the table engine
+  (:meth:`VariableKind.digits` and :meth:`VariableKind.moves`: per value of that
+  digit, the value after the event and the event, which
+  :class:`desmon.verify.table.encoding.Events` turns into numpy operations);
+* its symmetry rule (:attr:`VariableKind.symmetric`, :meth:`VariableKind.rename`:
+  :mod:`desmon.verify.symmetry`);
+* what gives its events a rate in ``desmon analyze`` (:attr:`VariableKind.rate`:
+  :mod:`desmon.analyze.markov` refuses a variable without one).
 
-Adding an event kind to the checker's alphabet: the kind is a class of
-:mod:`desmon.model.events` (its name, JSON and facts travel with it, see docs/design.md
-"Recipe: a new event kind"); here it takes a ``Bounds`` field that bounds it
-(:mod:`desmon.verify.bounds`, validated there), a place in :data:`ALPHABET`, a kind of
-variable in :func:`variables` and its events in ``_EVENTS``. The direct engine and the
-symmetry reduction then explore it (:meth:`Symmetry.rename_event
-<desmon.verify.symmetry.Symmetry.rename_event>` must map it if it names a platform).
-The table engine refuses a kind of variable it has no array operations for
-(:class:`~desmon.verify.table.encoding.Events` raises
-:class:`~desmon.errors.TableUnsupported`), so ``--engine auto`` falls back to the
-direct engine until it has them.
+Defining a subclass that sets ``name`` registers the kind (after the built-in ones, in
+definition order); its subjects are the bounds' ``variables[name]`` unless it reads
+them from a field of its own. Every engine walks :func:`variables` in that order, so
+the alphabet and its order are written once, here. docs/design.md ("Recipe: a new event
+kind") says how to add one.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Callable, ClassVar, NamedTuple, Sequence
 
 from desmon.model.events import (
     ActionChange,
@@ -46,99 +45,309 @@ from desmon.model.events import (
 )
 from desmon.verify.state import Key
 
-if TYPE_CHECKING:  # pragma: no cover
-    from desmon.verify.bounds import Bounds
+__all__ = [
+    "Digit", "Move", "Variable", "VariableKind", "variable_kinds", "variable_kind", "alphabet", "event_kinds",
+    "variables", "can_fail", "enabled_events",
+]
 
-__all__ = ["ALPHABET", "EVENT_KINDS", "Variable", "variables", "can_fail", "enabled_events"]
+#: kind name -> its definition, filled by :meth:`VariableKind.__init_subclass__` (in definition order)
+_KINDS: dict[str, "VariableKind"] = {}
 
-#: the event classes the checker explores, in exploration (and report) order
-ALPHABET = (ActionChange, DeviceFail, DeviceRepair, PlatformDown, PlatformUp, LoadChange, PlatformJoin, PlatformLeave, RequirementChange)
-#: their kinds (:attr:`desmon.model.events.Event.kind`), in report order
-EVENT_KINDS = tuple(cls.kind for cls in ALPHABET)
+
+class Digit(NamedTuple):
+    """A part of the state a variable moves, as the table engine encodes it: ``fact`` is
+    "context", "requirements" (``subject``: a graph: which of its requirement variants
+    holds), "down" (``subject``: a platform down, or absent if on demand), "device" (a
+    device failed) or "load" (a platform's load of the bounds' ``load_resource``, over
+    ``levels``)."""
+
+    fact: str
+    subject: Any = None
+    levels: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
+class Move:
+    """One array operation of the table engine: for each value of ``digit`` (numbered as
+    the encoding numbers them: :meth:`VariableKind.moves`), the value after the event (-1:
+    no event there), the event, and whether it needs room under ``max_failures``."""
+
+    digit: Digit
+    to: tuple[int, ...]
+    events: tuple[Event | None, ...]
+    needs_room: tuple[bool, ...]
 
 
 @dataclass(frozen=True, slots=True)
 class Variable:
-    """One bounded variable of the environment, whose events a state may enable: the
-    context (``kind`` "action"), a device, a platform that may go down, a platform's load,
-    an on-demand platform that joins and leaves, a requirement change (``subject``: the
-    device's or platform's name, or the :class:`RequirementChange`)."""
+    """One bounded variable of the environment: its kind's name and its ``subject`` (the
+    device's or platform's name, the :class:`RequirementChange`, None for the context)."""
 
     kind: str
     subject: Any = None
 
 
-def variables(b: "Bounds") -> tuple[Variable, ...]:
-    """The environment's variables in exploration order: the context, the bounded devices,
-    the platforms that may go down, the loaded platforms, the on-demand platforms, the
-    requirement changes. :func:`enabled_events` and the table engine's event encoding
+class VariableKind:
+    """The definition of one kind of checker variable (see the module docstring).
+
+    A subclass sets ``name`` (which registers it), ``events`` and, where they apply,
+    ``symmetric`` and ``rate``; it implements :meth:`enabled`, and :meth:`digits` and
+    :meth:`moves` for the table engine (without them the table engine refuses the
+    search and ``--engine auto`` runs the direct engine).
+    """
+
+    #: the kind's name (the key of ``Bounds.variables`` for a kind without a field of its own)
+    name: ClassVar[str] = ""
+    #: its event classes, in the order the report counts them
+    events: ClassVar[tuple[type[Event], ...]] = ()
+    #: whether the symmetry reduction covers it (its events then map by :meth:`rename`)
+    symmetric: ClassVar[bool] = False
+    #: what gives its events a rate in ``desmon analyze`` (None: nothing, analyze refuses it)
+    rate: ClassVar[str | None] = None
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if cls.__dict__.get("name"):
+            _KINDS[cls.name] = cls()
+
+    @classmethod
+    def unregister(cls) -> None:
+        """Forget this kind (a kind defined for a test only)."""
+        if type(_KINDS.get(cls.name)) is cls:
+            del _KINDS[cls.name]
+
+    def subjects(self, b: Any) -> tuple[Any, ...]:
+        """Its variables' subjects under bounds ``b``, in exploration order."""
+        return tuple(b.variables.get(self.name, ()))
+
+    def problem(self, subjects: tuple[Any, ...], scenario: Any) -> str | None:
+        """What is wrong with ``subjects`` (given in ``Bounds.variables``) for ``scenario``, or None."""
+        return None
+
+    def enabled(self, b: Any, key: Key, subject: Any, room: bool) -> list[Event]:
+        """The events of the variable of ``subject`` enabled in ``key`` (``room``: another
+        failure fits under ``max_failures``)."""
+        raise NotImplementedError
+
+    def digits(self, b: Any, subject: Any) -> tuple[Digit, ...] | None:
+        """The parts of the state its events move (None: no array operations)."""
+        return None
+
+    def moves(self, b: Any, subject: Any, values: Callable[[Digit], Sequence[Any]]) -> list[Move]:
+        """Its array operations, in event order; ``values(digit)`` lists the values of a
+        digit as the encoding numbers them (False/True for "down" and "device")."""
+        raise NotImplementedError
+
+    def rename(self, event: Event, platform: Callable[[str], str], device: Callable[[str], str]) -> Event:
+        """``event`` under a renaming of platforms and of their devices (symmetry)."""
+        return event
+
+
+def variable_kinds() -> tuple[VariableKind, ...]:
+    """Every registered kind of variable, in definition order."""
+    return tuple(_KINDS.values())
+
+
+def variable_kind(name: str) -> VariableKind | None:
+    """The kind of variable called ``name``, or None."""
+    return _KINDS.get(name)
+
+
+def alphabet() -> tuple[type[Event], ...]:
+    """The event classes the checker explores, in exploration (and report) order."""
+    return tuple(cls for kind in _KINDS.values() for cls in kind.events)
+
+
+def event_kinds() -> tuple[str, ...]:
+    """Their kinds (:attr:`desmon.model.events.Event.kind`), in report order."""
+    return tuple(cls.kind for cls in alphabet())
+
+
+def variables(b: Any) -> tuple[Variable, ...]:
+    """The environment's variables in exploration order: each kind's subjects, kind by
+    kind (the context, the bounded devices, the platforms that may go down, the loaded
+    platforms, the on-demand platforms, the requirement changes, then the registered
+    kinds). :func:`enabled_events` and the table engine's event encoding
     (:class:`desmon.verify.table.encoding.Events`) both walk this list."""
-    return (
-        Variable("action"),
-        *(Variable("device", d) for d in b.devices),
-        *(Variable("platform", p) for p in b.platforms),
-        *(Variable("load", p) for p in b.loads),
-        *(Variable("join", p) for p in b.joins),
-        *(Variable("requirements", c) for c in b.requirement_changes),
-    )
+    return tuple(Variable(kind.name, s) for kind in _KINDS.values() for s in kind.subjects(b))
 
 
-def can_fail(b: "Bounds", key: Key) -> bool:
+def can_fail(b: Any, key: Key) -> bool:
     """Whether ``key`` has room for another failure under ``b.max_failures`` (absent
     on-demand platforms are not failures)."""
     down = len(key.down) - sum(1 for p in b.joins if p in key.down) if b.joins else len(key.down)
     return b.max_failures is None or len(key.failed) + down < b.max_failures
 
 
-def enabled_events(b: "Bounds", key: Key) -> list[Event]:
+def enabled_events(b: Any, key: Key) -> list[Event]:
     """Every environment event ``b`` enables in state ``key``, in exploration order
-    (:func:`variables`): action changes, device failures and repairs, platforms down and
-    up, load steps, then on-demand platforms joining or leaving and requirement changes."""
+    (:func:`variables`)."""
     room = can_fail(b, key)
     out: list[Event] = []
     for v in variables(b):
-        out += _EVENTS[v.kind](b, key, v.subject, room)
+        out += _KINDS[v.kind].enabled(b, key, v.subject, room)
     return out
 
 
-def _action_events(b: "Bounds", key: Key, _subject: None, _room: bool) -> list[Event]:
-    return [ActionChange(a) for a in b.action_moves(key.context)]
+def _toggle(digit: Digit, on: Event, off: Event, *, back: bool, room: bool) -> Move:
+    """A two-valued digit: ``on`` sets it (needs room when ``room``), ``off`` clears it (when ``back``)."""
+    return Move(digit, (1, 0 if back else -1), (on, off), (room, False))
 
 
-def _device_events(b: "Bounds", key: Key, d: str, room: bool) -> list[Event]:
-    if d in key.failed:
-        return [DeviceRepair(d)] if b.repair else []
-    return [DeviceFail(d)] if room else []
+# -- the built-in kinds ---------------------------------------------------------------------------
+class ActionVariable(VariableKind):
+    """The robot's context: it moves among the bounds' actions (or along its task)."""
+
+    name = "action"
+    events = (ActionChange,)
+    symmetric = True
+    rate = "the World's task steps (each step's duration)"
+
+    def subjects(self, b: Any) -> tuple[Any, ...]:
+        return (None,)
+
+    def enabled(self, b: Any, key: Key, subject: Any, room: bool) -> list[Event]:
+        return [ActionChange(a) for a in b.action_moves(key.context)]
+
+    def digits(self, b: Any, subject: Any) -> tuple[Digit, ...]:
+        return (Digit("context"),)
+
+    def moves(self, b: Any, subject: Any, values: Callable[[Digit], Sequence[Any]]) -> list[Move]:
+        ctxs = list(values(Digit("context")))
+        nxt = [b.action_moves(c) for c in ctxs]
+        return [
+            Move(Digit("context"), tuple(ctxs.index(m[k]) if k < len(m) else -1 for m in nxt),
+                 tuple(ActionChange(m[k]) if k < len(m) else None for m in nxt), (False,) * len(ctxs))
+            for k in range(max((len(m) for m in nxt), default=0))
+        ]
 
 
-def _platform_events(b: "Bounds", key: Key, p: str, room: bool) -> list[Event]:
-    if p in key.down:
-        return [PlatformUp(p)] if b.repair else []
-    return [PlatformDown(p)] if room else []
+class DeviceVariable(VariableKind):
+    """A device that may fail (within ``max_failures``) and, with ``repair``, be repaired."""
+
+    name = "device"
+    events = (DeviceFail, DeviceRepair)
+    symmetric = True
+    rate = "World.stochastic_faults (the device's MTTF and MTTR)"
+
+    def subjects(self, b: Any) -> tuple[Any, ...]:
+        return tuple(b.devices)
+
+    def enabled(self, b: Any, key: Key, d: str, room: bool) -> list[Event]:
+        if d in key.failed:
+            return [DeviceRepair(d)] if b.repair else []
+        return [DeviceFail(d)] if room else []
+
+    def digits(self, b: Any, d: str) -> tuple[Digit, ...]:
+        return (Digit("device", d),)
+
+    def moves(self, b: Any, d: str, values: Callable[[Digit], Sequence[Any]]) -> list[Move]:
+        return [_toggle(Digit("device", d), DeviceFail(d), DeviceRepair(d), back=b.repair, room=True)]
+
+    def rename(self, event: Event, platform: Callable[[str], str], device: Callable[[str], str]) -> Event:
+        return type(event)(device(event.device))  # type: ignore[attr-defined, call-arg]
 
 
-def _load_events(b: "Bounds", key: Key, p: str, _room: bool) -> list[Event]:
-    """A load step up and down (to the neighbouring bounded levels) on loaded platform ``p``."""
-    lv = b.loads[p]
-    i = lv.index(dict(dict(key.loads).get(p, ())).get(b.load_resource, 0))
-    out: list[Event] = []
-    if i + 1 < len(lv):
-        out.append(LoadChange(p, lv[i + 1], b.load_resource))
-    if i > 0:
-        out.append(LoadChange(p, lv[i - 1], b.load_resource))
-    return out
+class PlatformVariable(VariableKind):
+    """A platform that may go down (within ``max_failures``) and, with ``repair``, come up."""
+
+    name = "platform"
+    events = (PlatformDown, PlatformUp)
+    symmetric = True
+    rate = "World.stochastic_faults (the platform's MTTF and MTTR)"
+
+    def subjects(self, b: Any) -> tuple[Any, ...]:
+        return tuple(b.platforms)
+
+    def enabled(self, b: Any, key: Key, p: str, room: bool) -> list[Event]:
+        if p in key.down:
+            return [PlatformUp(p)] if b.repair else []
+        return [PlatformDown(p)] if room else []
+
+    def digits(self, b: Any, p: str) -> tuple[Digit, ...]:
+        return (Digit("down", p),)
+
+    def moves(self, b: Any, p: str, values: Callable[[Digit], Sequence[Any]]) -> list[Move]:
+        return [_toggle(Digit("down", p), PlatformDown(p), PlatformUp(p), back=b.repair, room=True)]
+
+    def rename(self, event: Event, platform: Callable[[str], str], device: Callable[[str], str]) -> Event:
+        return type(event)(platform(event.platform))  # type: ignore[attr-defined, call-arg]
 
 
-def _join_events(b: "Bounds", key: Key, p: str, _room: bool) -> list[Event]:
-    return [PlatformJoin(p) if p in key.down else PlatformLeave(p)]
+class LoadVariable(VariableKind):
+    """A platform's background load, stepping to a neighbouring level of the bounds' ``loads``."""
+
+    name = "load"
+    events = (LoadChange,)
+    symmetric = True
+    rate = "World.load_steps (the walk's mean interval)"
+
+    def subjects(self, b: Any) -> tuple[Any, ...]:
+        return tuple(b.loads)
+
+    def enabled(self, b: Any, key: Key, p: str, room: bool) -> list[Event]:
+        lv = b.loads[p]
+        i = lv.index(dict(dict(key.loads).get(p, ())).get(b.load_resource, 0))
+        out: list[Event] = []
+        if i + 1 < len(lv):
+            out.append(LoadChange(p, lv[i + 1], b.load_resource))
+        if i > 0:
+            out.append(LoadChange(p, lv[i - 1], b.load_resource))
+        return out
+
+    def digits(self, b: Any, p: str) -> tuple[Digit, ...]:
+        return (Digit("load", p, tuple(b.loads[p])),)
+
+    def moves(self, b: Any, p: str, values: Callable[[Digit], Sequence[Any]]) -> list[Move]:
+        (digit,) = self.digits(b, p)
+        lv, n = digit.levels, len(digit.levels)
+        return [
+            Move(digit, tuple(i + step if 0 <= i + step < n else -1 for i in range(n)),
+                 tuple(LoadChange(p, lv[i + step], b.load_resource) if 0 <= i + step < n else None for i in range(n)), (False,) * n)
+            for step in (+1, -1)
+        ]
+
+    def rename(self, event: Event, platform: Callable[[str], str], device: Callable[[str], str]) -> Event:
+        assert isinstance(event, LoadChange)
+        return LoadChange(platform(event.platform), event.amount, event.resource)
 
 
-def _requirement_events(b: "Bounds", key: Key, change: RequirementChange, _room: bool) -> list[Event]:
-    return [change]
+class JoinVariable(VariableKind):
+    """An on-demand platform that joins while absent and leaves while present (no failure)."""
+
+    name = "join"
+    events = (PlatformJoin, PlatformLeave)
+    rate = "World.lease (the platform's startup_s, and idle_s while it hosts nothing)"
+
+    def subjects(self, b: Any) -> tuple[Any, ...]:
+        return tuple(b.joins)
+
+    def enabled(self, b: Any, key: Key, p: str, room: bool) -> list[Event]:
+        return [PlatformJoin(p) if p in key.down else PlatformLeave(p)]
+
+    def digits(self, b: Any, p: str) -> tuple[Digit, ...]:
+        return (Digit("down", p),)
+
+    def moves(self, b: Any, p: str, values: Callable[[Digit], Sequence[Any]]) -> list[Move]:
+        return [_toggle(Digit("down", p), PlatformLeave(p), PlatformJoin(p), back=True, room=False)]
 
 
-#: the events of each kind of variable
-_EVENTS = {
-    "action": _action_events, "device": _device_events, "platform": _platform_events, "load": _load_events,
-    "join": _join_events, "requirements": _requirement_events,
-}
+class RequirementsVariable(VariableKind):
+    """A requirement change the environment may apply at any time (one that changes nothing is a no-op)."""
+
+    name = "requirements"
+    events = (RequirementChange,)
+    rate = "World.random_changes (their mean interval)"
+
+    def subjects(self, b: Any) -> tuple[Any, ...]:
+        return tuple(b.requirement_changes)
+
+    def enabled(self, b: Any, key: Key, change: RequirementChange, room: bool) -> list[Event]:
+        return [change]
+
+    def digits(self, b: Any, change: RequirementChange) -> tuple[Digit, ...]:
+        return (Digit("requirements", change.graph),)
+
+    def moves(self, b: Any, change: RequirementChange, values: Callable[[Digit], Sequence[Any]]) -> list[Move]:
+        vs = list(values(Digit("requirements", change.graph)))
+        return [Move(Digit("requirements", change.graph), tuple(vs.index(change.apply(r)) for r in vs), (change,) * len(vs), (False,) * len(vs))]

@@ -42,6 +42,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from desmon.deployment.invariants import Invariant
 
 __all__ = [
+    "Exploration",
     "HOLDS", "VIOLATED", "INCOMPLETE", "CRASHED", "EXIT_CRASHED", "INTERRUPTED", "EXIT_INTERRUPTED", "NOT_CHECKED", "Record", "Segment",
     "CheckResult", "Budget", "Replayable", "Trail", "finish", "final_status", "ctrl_c", "paused_gc", "resident_mb", "proportional_mb", "peak_mb",
     "MEMORY_EVERY", "MEMORY_EVERY_WORKERS",
@@ -71,6 +72,18 @@ Record = tuple[tuple[int, ...], "Key | None", bool, tuple[str, ...], "tuple[str,
 #: A run of routine transitions (only counted: how many, how many moved the state, their
 #: branch names) followed by one :data:`Record`, or by None at the end of an event.
 Segment = tuple[int, int, tuple[str, ...], "Record | None"]
+
+
+
+@dataclass
+class Exploration:
+    """What an engine's search found: counterexamples by invariant, why it stopped early
+    ("" if it did not), its depth, and the distinct states in BFS order."""
+
+    found: dict[str, Counterexample]
+    incomplete: str
+    depth: int
+    explored: Sequence[Key]
 
 
 @dataclass

@@ -58,8 +58,9 @@ from typing import Any
 
 from desmon.deployment.validity import check_platform
 from desmon.errors import CheckerError
-from desmon.model.events import DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformUp
+from desmon.model.events import Event, LoadChange
 from desmon.model.system import PlatformState
+from desmon.verify.environment import variable_kind, variable_kinds, variables
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 from desmon.verify.trace import Label, Step, initial_step, make_step
@@ -88,6 +89,8 @@ class Symmetry:
         self._device_platform = {d.name: (d.platform, self._devices[d.platform].index(d.name)) for d in model.devices}
         self._order = {p.name: i for i, p in enumerate(model.platforms)}
         self._members = {p for g in groups for p in g}
+        #: event class -> the kind of variable whose rule renames it
+        self._kind_of = {cls: kind for kind in variable_kinds() for cls in kind.events}
 
     # -- refusal -------------------------------------------------------------------------
     def _refuse(self, why: str) -> None:
@@ -105,6 +108,9 @@ class Symmetry:
                 "the model has preferences, joining platforms or requirement changes; the soundness argument of the "
                 "reduction covers neither score ties nor platforms that come and go"
             )
+        other = [v.kind for v in variables(c.bounds) if not getattr(variable_kind(v.kind), "symmetric", False)]
+        if other:
+            self._refuse(f"the bounds' {other[0]} variables have no symmetry rule")
         order = [p.name for p in c.model.platforms]
         seen: set[str] = set()
         for grp in self.groups:
@@ -135,17 +141,25 @@ class Symmetry:
                 self._refuse(f"{spec.graph} is fixed (EXECUTABLE_ON) to {spec.fixed_platform}")
 
     def _refuse_unless_alike_in_bounds(self, grp: tuple[str, ...]) -> None:
-        """(2) all or none may go down, no device may fail, no load varies or is set at the start."""
+        """(2) all or none may go down, no device may fail, no load varies or is set at the
+        start: what the variables move (:meth:`VariableKind.digits
+        <desmon.verify.environment.VariableKind.digits>`)."""
         c = self.checker
         model, b = c.model, c.bounds
-        inb = [p in b.platforms for p in grp]
+        moved: set[tuple[str, Any]] = set()
+        for v in variables(b):
+            digits = variable_kind(v.kind).digits(b, v.subject)  # type: ignore[union-attr]
+            if digits is None:
+                self._refuse(f"the bounds' {v.kind} variables do not say what they move")
+            moved.update((d.fact, d.subject) for d in digits)
+        inb = [("down", p) in moved for p in grp]
         if any(inb) and not all(inb):
             self._refuse("the bounds let only some of them go down")
         for p in grp:
             for d in model.devices_on(p):
-                if d.name in b.devices:
+                if ("device", d.name) in moved:
                     self._refuse(f"device {d.name} of {p} may fail, so acceptable group platforms can differ in working devices")
-            if p in b.loads:
+            if ("load", p) in moved:
                 self._refuse(f"the load of {p} varies, so acceptable group platforms can differ in load")
         initial = {ev.platform: ev.amount for ev in c.scenario.initial if isinstance(ev, LoadChange) and ev.platform in grp and ev.amount}
         if initial:
@@ -207,16 +221,16 @@ class Symmetry:
         return self.rename(key, self.permutation(key))
 
     def rename_event(self, event: Event, perm: dict[str, str]) -> Event:
-        if not perm:
+        """``event`` with the platforms of ``perm`` renamed, by its kind of variable's rule."""
+        kind = self._kind_of.get(type(event))
+        if not perm or kind is None:
             return event
-        if isinstance(event, (DeviceFail, DeviceRepair)):
-            p, i = self._device_platform[event.device]
-            return type(event)(self._devices[perm.get(p, p)][i])
-        if isinstance(event, (PlatformDown, PlatformUp)):
-            return type(event)(perm.get(event.platform, event.platform))
-        if isinstance(event, LoadChange):
-            return LoadChange(perm.get(event.platform, event.platform), event.amount, event.resource)
-        return event
+
+        def device(d: str) -> str:
+            p, i = self._device_platform[d]
+            return self._devices[perm.get(p, p)][i]
+
+        return kind.rename(event, lambda p: perm.get(p, p), device)
 
     # -- traces ------------------------------------------------------------------------------
     def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]:

@@ -38,7 +38,7 @@ from desmon.verify.search import NOT_CHECKED, Record, Segment
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore, StoreInsert
 from desmon.verify.trace import KEPT_BRANCH, WHOLE_REACTION, Label, Step, branch_name, initial_step, make_step
 
-__all__ = ["TransitionSystem", "Reduction", "command_key", "RECHECK_FIRST", "RECHECK_EVERY"]
+__all__ = ["TransitionSystem", "Reduction", "command_key", "nondeterminism", "RECHECK_FIRST", "RECHECK_EVERY"]
 
 #: Nondeterminism detection: the first RECHECK_FIRST transitions a search runs, and every
 #: RECHECK_EVERY-th after them, are run twice and compared (:meth:`TransitionSystem.successors`).
@@ -376,11 +376,17 @@ def _same_again(system: "TransitionSystem", key: Key, event: Event, prefix: tupl
     was, now = [str(c) for c, _ok in first[2].commands], [str(c) for c, _ok in log.commands]
     same = [command_key(c) for c, _ok in first[2].commands] == [command_key(c) for c, _ok in log.commands]
     if not same or again[0] != first[0] or again[3] != first[3]:
-        def listing(cmds: list[str]) -> str:
-            return "[" + ", ".join(cmds) + "]" if cmds else "[no command]"
+        raise nondeterminism(system.deployer_name, event, was, now, same)
 
-        diff = f"first {listing(was)}, then {listing(now)}" if not same else f"the same commands {listing(was)} reached another state"
-        raise NondeterminismError(
-            f"deployer {system.deployer_name} is nondeterministic (not a function of what it reads through its ports): reacting twice to {event} in the same state it issued {diff}; "
-            "a reaction must be a function of its readings (no randomness, clock or state kept between calls: docs/deployers.md)"
-        )
+
+def nondeterminism(deployer: str, event: Event, was: list[str], now: list[str], same: bool = False) -> NondeterminismError:
+    """The error of ``deployer`` reacting twice to ``event`` in one state: commands ``was``,
+    then ``now`` (``same``: the same commands, which reached another state)."""
+    def listing(cmds: list[str]) -> str:
+        return "[" + ", ".join(cmds) + "]" if cmds else "[no command]"
+
+    diff = f"first {listing(was)}, then {listing(now)}" if not same else f"the same commands {listing(was)} reached another state"
+    return NondeterminismError(
+        f"deployer {deployer} is nondeterministic (not a function of what it reads through its ports): reacting twice to {event} in the same state it issued {diff}; "
+        "a reaction must be a function of its readings (no randomness, clock or state kept between calls: docs/deployers.md)"
+    )

@@ -14,18 +14,15 @@ from typing import TYPE_CHECKING, Any, NamedTuple, Sequence
 import numpy as np
 
 from desmon.errors import CheckerError, TableUnsupported
-from desmon.model.events import (
-    ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp,
-    RequirementChange, event_kind,
-)
-from desmon.verify.environment import EVENT_KINDS, variables
+from desmon.model.events import RequirementChange, event_kind
+from desmon.verify.environment import Digit, event_kinds, variable_kind, variables
 from desmon.verify.state import Key
 from desmon.verify.table.hashing import Interned
 
 if TYPE_CHECKING:
     from desmon.verify.bounds import Bounds
 
-__all__ = ["SYS_BITS", "SYS_MASK", "ROOT_CTX", "ROOT_STIM", "ROOT_PREFIX", "root_key", "Env", "Events", "Transitions"]
+__all__ = ["SYS_BITS", "SYS_MASK", "ROOT_CTX", "ROOT_STIM", "ROOT_PREFIX", "root_key", "layout", "Env", "Events", "Transitions"]
 
 #: bits of a state code that hold the interned system part (deployments, standing)
 SYS_BITS = 24
@@ -33,7 +30,8 @@ SYS_MASK = (1 << SYS_BITS) - 1
 #: a decision tree's root key packs (system part, context digit, stimulus, prefix) into
 #: one int64: 24 + 10 + 13 + 16 bits (each limit is checked where its part is made)
 ROOT_CTX, ROOT_STIM, ROOT_PREFIX = 10, 13, 16
-_KIND_ID = {k: i for i, k in enumerate(EVENT_KINDS)}
+#: the facts of a state the encoding has digits for (:class:`~desmon.verify.environment.Digit`)
+_FACTS = ("context", "requirements", "down", "device", "load")
 
 
 def root_key(system: np.ndarray, ctx: np.ndarray, stim: np.ndarray | int, prefix: np.ndarray | int) -> np.ndarray:
@@ -45,6 +43,28 @@ def root_key(system: np.ndarray, ctx: np.ndarray, stim: np.ndarray | int, prefix
     key <<= ROOT_PREFIX
     key |= prefix
     return key
+
+
+def layout(b: Any, platforms: Sequence[str], platform_of: dict[str, str]) -> tuple[frozenset[str], dict[str, list[str]], dict[str, tuple[float, ...]]]:
+    """The platform facts the variables move (:meth:`VariableKind.digits
+    <desmon.verify.environment.VariableKind.digits>`): the platforms that may be down or
+    absent, each platform's devices that may fail (in variable order) and each loaded
+    platform's levels."""
+    downs: set[str] = set()
+    devices: dict[str, list[str]] = {p: [] for p in platforms}
+    levels: dict[str, tuple[float, ...]] = {}
+    for v in variables(b):
+        digits = variable_kind(v.kind).digits(b, v.subject)  # type: ignore[union-attr]
+        if digits is None or any(d.fact not in _FACTS for d in digits):
+            raise TableUnsupported(f"table engine: no array operations for the environment's {v.kind} events; run with --engine direct")
+        for d in digits:
+            if d.fact == "down":
+                downs.add(d.subject)
+            elif d.fact == "device" and d.subject not in devices[platform_of[d.subject]]:
+                devices[platform_of[d.subject]].append(d.subject)
+            elif d.fact == "load" and levels.setdefault(d.subject, d.levels) != d.levels:
+                raise TableUnsupported(f"table engine: two kinds of variable move the load of {d.subject} over different levels; run with --engine direct")
+    return frozenset(downs), devices, levels
 
 
 def _contexts(init: Key, b: Any) -> list[str | None]:
@@ -84,8 +104,10 @@ def _variants(model: Any, changes: Sequence[RequirementChange], init: Key) -> di
 class Env:
     """Environment facts <-> one int: a context digit, a digit per changed graph (its
     current requirements), then one digit per platform (down or absent, failed devices,
-    load level). The context and requirement digits together are the *global* digit
-    (``env % G``): what a reaction may read besides the deployments and the platforms."""
+    load level): the facts the variables move (:meth:`VariableKind.digits
+    <desmon.verify.environment.VariableKind.digits>`). The context and requirement digits
+    together are the *global* digit (``env % G``): what a reaction may read besides the
+    deployments and the platforms."""
 
     def __init__(self, checker: Any, init: Key) -> None:
         model, b = checker.model, checker.bounds
@@ -106,9 +128,10 @@ class Env:
         self.G = v
         self.res = b.load_resource
         self.joins = frozenset(b.joins)
-        self.const_failed = tuple(d for d in init.failed if d not in b.devices)
-        self.const_down = tuple(p for p in init.down if p not in b.platforms and p not in self.joins)
-        self.vdev: list[list[str]] = []
+        self.downs, self.vdev, self.levels = layout(b, self.plats, self.platform_of)
+        moved = {d for ds in self.vdev.values() for d in ds}
+        self.const_failed = tuple(d for d in init.failed if d not in moved)
+        self.const_down = tuple(p for p in init.down if p not in self.downs)
         self.U: list[int] = []
         self.K: list[int] = []
         self.R: list[int] = []
@@ -116,10 +139,9 @@ class Env:
         self.decoded: list[list[tuple[bool, tuple[str, ...], tuple[tuple[str, float], ...]]]] = []
         w = self.G
         for name in self.plats:
-            vd = [d for d in b.devices if self.platform_of[d] == name]
-            U = 2 if name in b.platforms or name in self.joins else 1
-            table = self._digits(name, vd, U, b, init)
-            self.vdev.append(vd)
+            vd = self.vdev[name]
+            U = 2 if name in self.downs else 1
+            table = self._digits(name, vd, U, init)
             self.U.append(U)
             self.K.append(len(vd))
             self.R.append(len(table))
@@ -134,11 +156,11 @@ class Env:
         ]
         self.const_failures = len(self.const_failed) + len(self.const_down)
 
-    def _digits(self, name: str, vd: list[str], U: int, b: Any, init: Key) -> list[tuple[bool, tuple[str, ...], tuple[tuple[str, float], ...]]]:
+    def _digits(self, name: str, vd: list[str], U: int, init: Key) -> list[tuple[bool, tuple[str, ...], tuple[tuple[str, float], ...]]]:
         """Platform ``name``'s facts (down, failed devices, load items) for each value of its
         digit: down bit (if it may go down), then one bit per bounded device, then the load level."""
-        loaded = name in b.loads
-        lv = tuple(b.loads[name]) if loaded else (0,)
+        loaded = name in self.levels
+        lv = self.levels.get(name, (0,))
         const_items = tuple((r, a) for r, a in dict(init.loads).get(name, ()) if not (loaded and r == self.res))
         table = []
         for c in range(U * (1 << len(vd)) * len(lv)):
@@ -163,7 +185,7 @@ class Env:
         if any(d not in failed for d in self.const_failed) or any(p not in down for p in self.const_down):
             raise CheckerError("table engine: a state left the encoded environment")  # pragma: no cover
         for p, name in enumerate(self.plats):
-            want = (name in down, tuple(d for d in self.vdev[p] if d in failed), loads.get(name, ()))
+            want = (name in down, tuple(d for d in self.vdev[name] if d in failed), loads.get(name, ()))
             try:
                 c = self.decoded[p].index(want)
             except ValueError:
@@ -197,6 +219,31 @@ class Env:
         return Key(ctx, tuple(sorted(failed)), tuple(sorted(down)), tuple(loads), system[0], system[1],
                    self.specs(env) if self.vgraphs else ())
 
+    def values(self, digit: Digit) -> Sequence[Any]:
+        """The values of ``digit`` in the order the code numbers them."""
+        if digit.fact == "context":
+            return self.ctxs
+        if digit.fact == "requirements":
+            return self.variants[digit.subject]
+        return digit.levels if digit.fact == "load" else (False, True)
+
+    def place(self, digit: Digit) -> tuple[int, int, int, int, int]:
+        """Where ``digit`` is in the code: (weight, radix, the stimulus when it changes,
+        its platform or -1, its weight within the platform's digit)."""
+        P = len(self.plats)
+        if digit.fact == "context":
+            return 1, self.C, 0, -1, 0
+        if digit.fact == "requirements":
+            g = self.vgraphs.index(digit.subject)
+            return self.VW[g], len(self.variants[digit.subject]), P + 3 + g, -1, 0
+        name = self.platform_of[digit.subject] if digit.fact == "device" else digit.subject
+        p = self.plats.index(name)
+        U, K = self.U[p], self.K[p]
+        if digit.fact == "load":
+            return self.W[p] * (U << K), self.R[p] // (U << K), p + 1, p, U << K
+        unit = U << self.vdev[name].index(digit.subject) if digit.fact == "device" else 1
+        return self.W[p] * unit, 2, p + 1, p, unit
+
     def locals(self, envs: np.ndarray) -> np.ndarray:
         out = np.empty((len(envs), self.P), dtype=np.int64)
         rest = envs // self.G
@@ -222,67 +269,32 @@ class Transitions(NamedTuple):
 
 class Events:
     """The bounded environment's events as numpy operations on environment codes: each
-    variable of :func:`desmon.verify.environment.variables`, in its order, becomes one or
-    more slots, so the enabled events come out in the order of
+    variable of :func:`desmon.verify.environment.variables`, in its order, gives its
+    kind's :class:`~desmon.verify.environment.Move` operations, one *slot* each (at most
+    one event per state), so the enabled events come out in the order of
     :func:`~desmon.verify.environment.enabled_events`."""
 
     def __init__(self, bounds: "Bounds", env: Env, platform_index: dict[str, int]) -> None:
         self.env, self.bounds, self.P = env, bounds, len(platform_index)
-        self.platform_index = platform_index
         self.events: Interned = Interned()
+        #: per slot: (weight, radix, stimulus, platform column or -1, unit, to, event ids, needs room)
         self.slots: list[tuple] = []
-        # one or more slots per variable of the environment, in its order (the same walk
-        # as enabled_events); a slot is one array operation giving at most one event per state
-        build = {"action": self._action, "device": self._device, "platform": self._platform, "load": self._load,
-                 "join": self._join, "requirements": self._requirements}
         for v in variables(bounds):
-            slots = build.get(v.kind)
-            if slots is None:
-                raise TableUnsupported(f"table engine: no array operations for the environment's {v.kind} events; run with --engine direct")
-            self.slots += slots(v.subject)
-        self.kind_of = np.array([_KIND_ID[event_kind(e)] for e in self.events] or [0], dtype=np.int64)
+            kind = variable_kind(v.kind)
+            assert kind is not None
+            for move in kind.moves(bounds, v.subject, env.values):
+                ids = [self.events(e) if e is not None else 0 for e in move.events]
+                self.slots.append((*env.place(move.digit), np.array(move.to, dtype=np.int64), np.array(ids, dtype=np.int64),
+                                   np.array(move.needs_room, dtype=bool)))
+        #: the event kinds the counts name, and each event's number among them
+        self.kinds = event_kinds()
+        kind_id = {k: i for i, k in enumerate(self.kinds)}
+        self.kind_of = np.array([kind_id[event_kind(e)] for e in self.events] or [0], dtype=np.int64)
         #: the platform whose digit each slot's event moves (-1: none)
-        self.slot_platform = np.array([-1 if sl[0] in ("action", "requirements") else sl[1] for sl in self.slots] or [-1], dtype=np.int64)
+        self.slot_platform = np.array([sl[3] for sl in self.slots] or [-1], dtype=np.int64)
         self.slot_column = np.maximum(self.slot_platform, 0)
         #: the row width of the batches' platform digits (:meth:`_moved`)
         self.loc_width = next((w for w in (1, 2, 4, 8, 16) if w >= self.P), self.P)
-
-    def _action(self, _subject: None) -> list[tuple]:
-        env, b = self.env, self.bounds
-        C = env.C
-        moves = [b.action_moves(c) for c in env.ctxs]
-        kmax = max((len(m) for m in moves), default=0)
-        self.move_to = np.full((C, max(kmax, 1)), -1, dtype=np.int64)
-        self.move_ev = np.full((C, max(kmax, 1)), -1, dtype=np.int64)
-        for c, m in enumerate(moves):
-            for k, a in enumerate(m):
-                self.move_to[c, k] = env.ctxs.index(a)
-                self.move_ev[c, k] = self._id(ActionChange(a))
-        return [("action", k) for k in range(kmax)]
-
-    def _device(self, d: str) -> list[tuple]:
-        p = self.platform_index[self.env.platform_of[d]]
-        return [("device", p, self.env.vdev[p].index(d), self._id(DeviceFail(d)), self._id(DeviceRepair(d)))]
-
-    def _platform(self, name: str) -> list[tuple]:
-        return [("platform", self.platform_index[name], self._id(PlatformDown(name)), self._id(PlatformUp(name)))]
-
-    def _load(self, name: str) -> list[tuple]:
-        b = self.bounds
-        ids = np.array([self._id(LoadChange(name, x, b.load_resource)) for x in b.loads[name]], dtype=np.int64)
-        return [("load", self.platform_index[name], +1, ids), ("load", self.platform_index[name], -1, ids)]
-
-    def _join(self, name: str) -> list[tuple]:
-        return [("join", self.platform_index[name], self._id(PlatformJoin(name)), self._id(PlatformLeave(name)))]
-
-    def _requirements(self, change: RequirementChange) -> list[tuple]:
-        env = self.env
-        vs = env.variants[change.graph]
-        to = np.array([vs.index(change.apply(r)) for r in vs], dtype=np.int64)
-        return [("requirements", env.vgraphs.index(change.graph), to, self._id(change))]
-
-    def _id(self, e: Event) -> int:
-        return self.events(e)
 
     def enabled(self, codes: np.ndarray) -> Transitions:
         """The enabled transitions out of the states ``codes`` (env << SYS_BITS | system)."""
@@ -303,59 +315,15 @@ class Events:
         EV = np.zeros((S, N), dtype=np.int64)
         ST = np.zeros((S, N), dtype=np.int64)
         DD = np.zeros((S, N), dtype=np.int64)  # the change of the event's platform digit
-        for s, spec in enumerate(self.slots):
-            kind = spec[0]
-            if kind == "action":
-                k = spec[1]
-                tgt = self.move_to[ctx, k]
-                M[s] = tgt >= 0
-                E2[s] = envs - ctx + tgt
-                EV[s] = self.move_ev[ctx, k]
-                ST[s] = np.where(tgt == ctx, P + 1, 0)
-            elif kind == "device":
-                _k, p, j, ev_fail, ev_rep = spec
-                failed = ((L[:, p] // env.U[p] >> j) & 1).astype(bool)
-                M[s] = np.where(failed, b.repair, can_fail)
-                DD[s] = np.where(failed, -(env.U[p] << j), env.U[p] << j)
-                E2[s] = envs + DD[s] * env.W[p]
-                EV[s] = np.where(failed, ev_rep, ev_fail)
-                ST[s] = p + 1
-            elif kind == "platform":
-                _k, p, ev_down, ev_up = spec
-                unit = env.W[p]
-                down = (L[:, p] % 2).astype(bool)
-                M[s] = np.where(down, b.repair, can_fail)
-                DD[s] = np.where(down, -1, 1)
-                E2[s] = np.where(down, envs - unit, envs + unit)
-                EV[s] = np.where(down, ev_up, ev_down)
-                ST[s] = p + 1
-            elif kind == "join":  # always enabled: absent -> join, present -> leave
-                _k, p, ev_join, ev_leave = spec
-                unit = env.W[p]
-                down = (L[:, p] % 2).astype(bool)
-                M[s] = True
-                DD[s] = np.where(down, -1, 1)
-                E2[s] = np.where(down, envs - unit, envs + unit)
-                EV[s] = np.where(down, ev_join, ev_leave)
-                ST[s] = p + 1
-            elif kind == "requirements":  # always enabled; a change that changes nothing is no stimulus
-                _k, g, to, ev_id = spec
-                vw = env.VW[g]
-                v = envs // vw % len(to)
-                w = to[v]
-                M[s] = True
-                E2[s] = envs + (w - v) * vw
-                EV[s] = ev_id
-                ST[s] = np.where(w != v, P + 3 + g, P + 1)
-            else:
-                _k, p, step, ids_lv = spec
-                unit = env.W[p] * env.U[p] * (1 << env.K[p])
-                to = L[:, p] // (env.U[p] << env.K[p]) + step
-                M[s] = (to >= 0) & (to < len(ids_lv))
-                DD[s] = step * (env.U[p] << env.K[p])
-                E2[s] = envs + step * unit
-                EV[s] = np.take(ids_lv, to, mode="clip")
-                ST[s] = p + 1
+        for s, (weight, radix, stim, _col, unit, to, ids, room) in enumerate(self.slots):
+            v = envs // weight % radix
+            w = to.take(v)
+            M[s] = (w >= 0) & (can_fail | ~room.take(v))
+            d = w - v
+            E2[s] = envs + d * weight
+            EV[s] = ids.take(v)
+            ST[s] = np.where(d != 0, stim, P + 1)
+            DD[s] = d * unit
         at = np.flatnonzero(M.T)  # the enabled (state, slot) pairs, state-major: state * S + slot
         pos = at // S
         slot = at - pos * S

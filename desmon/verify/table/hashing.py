@@ -56,10 +56,6 @@ class IntTable:
             pending = pending[(kp != keys.take(pending)) & (kp != _EMPTY)]
         return pos, k
 
-    def _slots(self, keys: np.ndarray) -> np.ndarray:
-        """The slot of each key: where it is, or the empty slot its probe ends at."""
-        return self._probe(keys)[0]
-
     def contains(self, keys: np.ndarray) -> np.ndarray:
         """Whether each key is in the table."""
         if not len(keys):
@@ -81,7 +77,7 @@ class IntTable:
             self._grow(self.n + len(keys))
         self.n += len(keys)
         while len(keys):
-            pos = self._slots(keys)
+            pos = self._probe(keys)[0]  # where each key is, or the empty slot its probe ends at
             self.keys[pos] = keys  # keys that probe to the same empty slot: one of them wins it
             won = self.keys[pos] == keys
             if vals is not None:

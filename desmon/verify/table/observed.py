@@ -11,6 +11,7 @@ observed only where its text is used.
 
 from __future__ import annotations
 
+import operator
 from typing import TYPE_CHECKING, Any, Callable, Iterator, Protocol, Sequence
 
 from desmon.deployment.validity import Validity
@@ -51,15 +52,6 @@ class Check:
         self._all_ok: tuple | None = None
         self._one_ok: list[tuple | None] = [None] * len(parts)
 
-    def ok(self, which: Sequence[int]) -> None:
-        """Observe whether the platforms at positions ``which`` pass."""
-        code = 0
-        fails = self.fails
-        for j, i in enumerate(which):
-            code |= (not fails[i]) << j
-        parts = self.parts
-        self.rec.observe(("ok", self.table, None, tuple([parts[i] for i in which])), code)
-
     def ok_all(self) -> None:
         """:meth:`ok` of every platform."""
         made = self._all_ok
@@ -79,30 +71,38 @@ class Check:
 
     def why(self) -> None:
         """Observe every platform's failures, reasons included."""
-        eng = self.rec.tables
-        code, mult = 0, 1
-        for (p, dep), f in zip(self.parts, self.fails):
-            value, radix = eng.failure_id(self.table, self.first_only, p, dep, f)
-            code += value * mult
-            mult *= radix
-        self.rec.observe(("why", self.table, self.first_only, self.parts), code)
+        self._every("why", self.first_only, self.fails)
 
     def rank(self) -> None:
         """Observe every platform's acceptability and score (with preferences: what the
         order of the acceptable platforms, their scores and the breakdown derive from)."""
         assert self.scored is not None
-        eng = self.rec.tables
+        self._every("rank", None, self.scored)
+
+    def _every(self, mode: str, first_only: bool | None, answers: Sequence[Any]) -> None:
+        """Observe every platform's answer, numbered among those its facts can give."""
+        tables = self.rec.tables
         code, mult = 0, 1
-        for (p, dep), key in zip(self.parts, self.scored):
-            value, radix = eng.score_id(self.table, p, dep, key)
+        for (p, dep), answer in zip(self.parts, answers):
+            value, radix = tables.answer_id(mode, self.table, first_only, p, dep, answer)
             code += value * mult
             mult *= radix
-        self.rec.observe(("rank", self.table, None, self.parts), code)
+        self.rec.observe((mode, self.table, first_only, self.parts), code)
+
+
+def _forward(op: Callable[..., Any]) -> Callable[..., Any]:
+    """A method that applies ``op`` to the whole (observed) value and its arguments."""
+    return lambda self, *args: op(self._all(), *args)
+
+
+def _compare(op: Callable[[Any, Any], Any]) -> Callable[[Any, Any], Any]:
+    """A comparison of the whole (observed) value with another, itself observed if it is one."""
+    return lambda self, other: op(self._all(), other._all() if isinstance(other, _Observed) else other)
 
 
 class _Observed:
     """A read-only sequence whose every use is recorded (see
-    :class:`~desmon.verify.table.recording.RecordingChecks`)."""
+    :class:`~desmon.verify.table.recording.RecordingChecks`): each use reads :meth:`_all`."""
 
     __slots__ = ("_check", "_real")
 
@@ -115,58 +115,18 @@ class _Observed:
     def __bool__(self) -> bool:
         return len(self) > 0
 
-    def __iter__(self) -> Iterator[Any]:
-        return iter(self._all())
-
-    def __getitem__(self, i: Any) -> Any:
-        return self._all()[i]
-
-    def __contains__(self, x: object) -> bool:
-        return x in self._all()
-
-    def __eq__(self, other: object) -> bool:
-        return self._all() == (other._all() if isinstance(other, _Observed) else other)
-
     def __ne__(self, other: object) -> bool:
         return not self == other
-
-    def __hash__(self) -> int:
-        return hash(self._all())
-
-    def __repr__(self) -> str:
-        return repr(self._all())
-
-    def __reversed__(self) -> Iterator[Any]:
-        return reversed(self._all())
-
-    def __add__(self, other: Any) -> Any:
-        return self._all() + other
 
     def __radd__(self, other: Any) -> Any:
         return other + self._all()
 
-    def __mul__(self, n: Any) -> Any:
-        return self._all() * n
-
-    __rmul__ = __mul__
-
-    def __lt__(self, other: Any) -> bool:
-        return self._all() < (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
-
-    def __le__(self, other: Any) -> bool:
-        return self._all() <= (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
-
-    def __gt__(self, other: Any) -> bool:
-        return self._all() > (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
-
-    def __ge__(self, other: Any) -> bool:
-        return self._all() >= (other._all() if isinstance(other, _Observed) else other)  # type: ignore[no-any-return]
-
-    def index(self, *args: Any) -> int:
-        return self._all().index(*args)
-
-    def count(self, x: Any) -> int:
-        return self._all().count(x)
+    __iter__, __reversed__, __repr__, __hash__ = _forward(iter), _forward(reversed), _forward(repr), _forward(hash)
+    __getitem__, __contains__ = _forward(operator.getitem), _forward(operator.contains)
+    __add__, __mul__, __rmul__ = _forward(operator.add), _forward(operator.mul), _forward(operator.mul)
+    __eq__, __lt__, __le__ = _compare(operator.eq), _compare(operator.lt), _compare(operator.le)  # type: ignore[assignment]
+    __gt__, __ge__ = _compare(operator.gt), _compare(operator.ge)
+    index, count = _forward(lambda whole, *a: whole.index(*a)), _forward(lambda whole, x: whole.count(x))
 
 
 class ObservedValidity(Validity):
@@ -195,14 +155,7 @@ class _Text(_Observed):
     def _all(self) -> Any:
         return self._real()
 
-    def __str__(self) -> str:
-        return self._all()  # type: ignore[no-any-return]
-
-    def __format__(self, spec: str) -> str:
-        return format(self._all(), spec)
-
-    def __mod__(self, other: Any) -> Any:
-        return self._all() % other
+    __str__, __format__, __mod__ = _forward(str), _forward(format), _forward(operator.mod)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._all(), name)

@@ -2,14 +2,11 @@
 
 While the table engine records a reaction (or an invariants check), the core runs on a
 :class:`~desmon.verify.state.StateStore` whose platform states are opaque
-:class:`~desmon.deployment.ports.PlatformHandle` objects made by
-:class:`RecordingChecks`, the Checks port of that run. The handles carry no run-time
-facts, so the only way to learn whether a platform is up, which devices work or what
-load it carries is to ask a requirement check -- of these checks, which answer with the
-real result, wrapped so that what the run *uses* of it is recorded (see
-:class:`RecordingChecks`). The guard holds by construction: a read of a fact anywhere
-else raises :class:`~desmon.errors.UnobservedRead`, and the core's Query port
-(:class:`RecordingQuery`) offers only the QueryPort methods.
+:class:`~desmon.deployment.ports.PlatformHandle` objects made by :class:`RecordingChecks`,
+the run's Checks port: the only way to learn a platform's facts is to ask a requirement
+check, whose use is recorded. A read of a fact anywhere else raises
+:class:`~desmon.errors.UnobservedRead`, and the core's Query port (:class:`RecordingQuery`)
+offers only the QueryPort methods.
 """
 
 from __future__ import annotations
@@ -20,12 +17,12 @@ from typing import TYPE_CHECKING, Any, Callable, Protocol, Sequence
 from desmon.deployment.guard import CRASH
 from desmon.deployment.ports import PlatformHandle
 from desmon.deployment.validity import PlatformMemoChecks, order_platforms
-from desmon.errors import NondeterminismError, TableUnsupported, UnobservedRead
+from desmon.errors import TableUnsupported, UnobservedRead
 from desmon.model.events import Event
 from desmon.model.requirements import Preference
 from desmon.model.system import PlatformState, SystemModel
 from desmon.verify.state import Key, StateStore
-from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key
+from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key, nondeterminism
 from desmon.verify.table.observed import Acceptable, Check, ObservedValidity, Ranked, Reasons
 from desmon.verify.table.tables import AnswerTables, score_key
 from desmon.verify.trace import KEPT_BRANCH, branch_name
@@ -41,23 +38,14 @@ _ANSWERS_LIMIT = 1 << 16
 
 
 class RecordingChecks:
-    """The Checks port of a recorded run (see the module doc).
-
-    It makes the handles the recording store hands out (:meth:`handle`, the store's
-    ``make_state``) and keeps each one's real facts. It answers each check with the
-    real result, wrapped so that the run's *use* of it is what gets recorded: asking
-    whether one platform is acceptable observes that platform's answer only;
-    iterating, truth-testing or indexing the acceptable platforms observes them one by
-    one in preference order (up to where the code stops); anything else (length,
-    slicing, comparing, the rejected platforms and their reasons) observes every
-    answer, down to the failure texts when those are read; an explanation is observed
-    only where its text is used.
-
-    The real answers are pure functions of the facts behind the handles, computed once
-    per platform's facts (a :class:`~desmon.deployment.validity.PlatformMemoChecks`), and
-    the wrapped answer of a question about handles is kept: the wrappers hold no state
-    of a run, so a run that asks the same question again gets the same wrapper, and
-    every use of it observes again, into that run's observations.
+    """The Checks port of a recorded run (see the module doc): it makes the handles the
+    recording store hands out (:meth:`handle`, the store's ``make_state``), keeps each
+    one's real facts, and answers each check with the real result wrapped as
+    :mod:`~desmon.verify.table.observed` says, so that the run's *use* of it is recorded.
+    The real answers are computed once per platform's facts (a
+    :class:`~desmon.deployment.validity.PlatformMemoChecks`), and the wrapped answer of a
+    question about handles is kept: a wrapper holds no state of a run, so a run that asks
+    again gets the same wrapper, and its every use observes again, into that run.
     """
 
     def __init__(self, tables: AnswerTables) -> None:
@@ -198,6 +186,12 @@ QUERY_METHODS = ("deployment_information", "fixed_platform", "constraints", "pla
                  "active_deployments", "deployments", "perception_graph", "context")
 
 
+def _query(name: str) -> Callable[..., Any]:
+    """The QueryPort method ``name`` of the store, looked up per call (the store rebinds
+    some of them per deployment set)."""
+    return lambda self, *args: getattr(self._store, name)(*args)
+
+
 class RecordingQuery:
     """The recording core's Query port: the store's QueryPort methods and nothing else.
 
@@ -205,8 +199,6 @@ class RecordingQuery:
     read platform facts unobserved: asking for one stops the recording. One the store
     lacks raises AttributeError, as the store would. Its ``checks`` are the recording
     checks; it memoises no validity answer (every check is asked of them, and observed where it is used).
-    Each method looks the store's method up per call: the store rebinds some of them
-    per deployment set.
     """
 
     __slots__ = ("_store", "checks")
@@ -216,33 +208,6 @@ class RecordingQuery:
     def __init__(self, store: StateStore, checks: RecordingChecks) -> None:
         self._store, self.checks = store, checks
 
-    def deployment_information(self, graph: str) -> Any:
-        return self._store.deployment_information(graph)
-
-    def fixed_platform(self, spec: Any) -> Any:
-        return self._store.fixed_platform(spec)
-
-    def constraints(self, spec: Any) -> Any:
-        return self._store.constraints(spec)
-
-    def platform_states(self) -> Any:
-        return self._store.platform_states()
-
-    def deployed_on(self, graph: str) -> Any:
-        return self._store.deployed_on(graph)
-
-    def active_deployments(self, platform: str) -> Any:
-        return self._store.active_deployments(platform)
-
-    def deployments(self) -> Any:
-        return self._store.deployments()
-
-    def perception_graph(self, deployment: str) -> Any:
-        return self._store.perception_graph(deployment)
-
-    def context(self) -> Any:
-        return self._store.context()
-
     def __getattr__(self, name: str) -> Any:
         if not hasattr(self._store, name):  # what the store itself answers (``getattr(port, name, default)`` works alike)
             raise AttributeError(f"{type(self._store).__name__!r} object has no attribute {name!r}")
@@ -250,6 +215,10 @@ class RecordingQuery:
             f"the reaction asked its Query port for `{name}`, which is not a QueryPort method: the table engine "
             "cannot know what it reads; run with --engine direct"
         )
+
+
+for _name in QUERY_METHODS:
+    setattr(RecordingQuery, _name, _query(_name))
 
 
 class _NoMemo(dict):
@@ -382,11 +351,7 @@ class Recorder:
         _n, _o, again, _i = self.checker.run_one(key, event, prefix)
         if [command_key(c) for c, _ok in log.commands] != [command_key(c) for c, _ok in again.commands]:
             was, now = [str(command_key(c)[0]) for c, _ok in log.commands], [str(c) for c, _ok in again.commands]
-            raise NondeterminismError(
-                f"deployer {self.checker.deployer_name} is nondeterministic (not a function of what it reads through its ports): reacting twice to {event} in the same state it issued "
-                f"first [{', '.join(was) or 'no command'}], then [{', '.join(now) or 'no command'}]; a reaction must be a function "
-                "of its readings (no randomness, clock or state kept between calls: docs/deployers.md)"
-            )
+            raise nondeterminism(self.checker.deployer_name, event, was, now)
 
     def record_invariants(self, key: Key, root: int) -> None:
         """Check the invariants of ``key`` for real and add the path under ``root``."""

@@ -9,19 +9,18 @@ only where no recorded run answers yet.
 from __future__ import annotations
 
 from array import array
-from typing import Any, Iterator, NamedTuple, Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 import numpy.ma  # noqa: F401  (np.unique imports it on first use, leaving cyclic garbage: not during a search)
 
 from desmon.deployment.guard import ReactionStopped
 from desmon.errors import TableUnsupported
-from desmon.verify.environment import EVENT_KINDS
 from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Trail, final_status as _final_status
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 from desmon.verify.table.hashing import Interned, IntTable
-from desmon.verify.table.encoding import ROOT_CTX, ROOT_PREFIX, ROOT_STIM, SYS_BITS, SYS_MASK, Env, Events, Transitions, root_key
+from desmon.verify.table.encoding import ROOT_CTX, ROOT_PREFIX, ROOT_STIM, SYS_BITS, SYS_MASK, Env, Events, Transitions, layout, root_key
 from desmon.verify.table.recording import Recorder
 from desmon.verify.table.tables import AnswerTables
 from desmon.verify.table.tree import DecisionTrees
@@ -86,16 +85,17 @@ def table_unsupported(checker: TransitionSystem) -> str | None:
     """Why the table engine cannot run ``checker``'s search, or None."""
     if checker.symmetry is not None:
         return "symmetry reduction runs on the direct engine"
-    b = checker.bounds
-    where = {d.name: d.platform for d in checker.model.devices}
+    names = [p.name for p in checker.model.platforms]
+    try:
+        downs, devices, levels = layout(checker.bounds, names, {d.name: d.platform for d in checker.model.devices})
+    except TableUnsupported as exc:
+        return str(exc).removeprefix("table engine: ").removesuffix("; run with --engine direct")
     for p in checker.model.platforms:
-        k = sum(1 for d in b.devices if where[d] == p.name)
-        digits = (2 if p.name in b.platforms or p.name in b.joins else 1) * (1 << k) * len(b.loads.get(p.name, (0,)))
+        digits = (2 if p.name in downs else 1) * (1 << len(devices[p.name])) * len(levels.get(p.name, (0,)))
         if digits > MAX_DIGITS:
             return (f"platform {p.name} has {digits:,} combinations of facts (its bounded devices, up/down and load levels); "
                     f"the table engine tabulates at most {MAX_DIGITS:,} per platform")
     return None
-
 
 
 class Units(NamedTuple):
@@ -135,9 +135,6 @@ class TableEngine:
 
     def system(self, deployments: tuple, standing: tuple) -> int:
         return self.systems((deployments, standing))
-
-    def prefix(self, p: tuple[bool, ...]) -> int:
-        return self.prefixes(p)
 
     # -- the search ---------------------------------------------------------------------
     def key_of(self, i: int) -> Key:
@@ -216,8 +213,8 @@ class TableEngine:
         self.any_found = bool(trail.found)
         self.depth = 0
         self.incomplete = ""
-        counts = self.counts = _BatchCounts(self)
-        budget.status = lambda: (len(codes), counts.transitions, self.depth)
+        self.transitions = 0
+        budget.status = lambda: (len(codes), self.transitions, self.depth)
         try:
             frontier = np.array([0], dtype=np.int64)
             while len(frontier) and not self._finished() and not self.incomplete:
@@ -234,9 +231,9 @@ class TableEngine:
         except ReactionStopped as stop:  # the budget ran out inside a deployer's reaction
             self.incomplete = budget.reason or str(stop)
             trail.truncate(codes)
-        res.transitions = counts.transitions
+        res.transitions = self.transitions
         res.states = len(codes)
-        budget.status = _final_status(len(codes), counts.transitions, self.depth)  # (the search's closure let go)
+        budget.status = _final_status(len(codes), self.transitions, self.depth)  # (the search's closure let go)
         return trail.found, self.incomplete, self.depth
 
     def _encode(self, init: Key) -> Env:
@@ -296,7 +293,7 @@ class TableEngine:
         else:
             cut_t, stop_unit = self._consume(units, cand, dict(zip(cand.tolist(), bad.tolist())), nxt)
         self.seen.add(np.frombuffer(self.codes, dtype=np.int64)[n0:].copy())
-        self.counts.count_batch(units, sc, cut_t, stop_unit)
+        _count_batch(self, units, sc, cut_t, stop_unit)
         return cut_t < len(tr.env2)
 
     def _plain(self, units: "Units", cand: np.ndarray, bad: np.ndarray) -> bool:
@@ -332,7 +329,7 @@ class TableEngine:
         pairs, inv = _grouped(e * n_leaves + units.leaf[cand])
         lids = np.array([self._label(pv // n_leaves, pv % n_leaves) for pv in pairs.tolist()], dtype=np.int64)
         self.trail.extend(units.ids[tr.pos[t]], lids[inv])
-        _count(self.res.new_states, EVENT_KINDS, self.events.kind_of[e], len(EVENT_KINDS))
+        _count(self.res.new_states, self.events.kinds, self.events.kind_of[e], len(self.events.kinds))
         nxt.frombytes(np.arange(ni, ni + len(cand), dtype=np.int64).tobytes())
         return cut_t, -1
 
@@ -389,7 +386,7 @@ class TableEngine:
         codes.append(c)
         e = int(tr.ev[t])
         self.trail.add(int(units.ids[tr.pos[t]]), (e, lf[3]), (ev.events[e], lf[3]))
-        self.res.new_states[EVENT_KINDS[ev.kind_of[e]]] += 1
+        self.res.new_states[ev.kinds[ev.kind_of[e]]] += 1
         if self.max_states is not None and len(codes) >= self.max_states:
             self.incomplete = f"max states {self.max_states:,} reached"
         if bad:
@@ -420,7 +417,7 @@ def _opened(engine: "TableEngine", u_t: np.ndarray, u_pre: np.ndarray, leaf: np.
         pre, lf = engine.prefixes[pv // n_leaves], engine.trees.leaves[pv % n_leaves]
         outcomes, fails = lf[2], lf[3]
         if len(fails) < bound:
-            kids = [engine.prefix(outcomes[:i] + (False,)) for i in range(len(pre), len(outcomes))]
+            kids = [engine.prefixes(outcomes[:i] + (False,)) for i in range(len(pre), len(outcomes))]
             flat += kids
             count[k] = len(kids)
     reps = count[pinv]
@@ -433,37 +430,30 @@ def _opened(engine: "TableEngine", u_t: np.ndarray, u_pre: np.ndarray, leaf: np.
     return np.repeat(u_t[order], reps), np.array(flat, dtype=np.int64)[np.repeat(start, reps) + within]
 
 
-class _BatchCounts:
-    """The counters of a search (:class:`CheckResult`'s and the transitions), batch by batch."""
-
-    def __init__(self, engine: "TableEngine") -> None:
-        self.res, self.events, self.env, self.trees = engine.res, engine.events, engine.env, engine.trees
-        self.transitions = 0
-
-    def count_batch(self, units: "Units", sc: np.ndarray, cut_t: int, stop_unit: int) -> None:
-        """Count into ``res`` what the direct engine counts of a batch, up to the cut."""
-        res, tr, ev, env = self.res, units.tr, self.events, self.env
-        U_t, U_leaf, U_code = units.t, units.leaf, units.code
-        T = len(tr.env2)
-        if stop_unit >= 0:
-            n_inc = stop_unit + 1
-        else:
-            n_inc = int(np.searchsorted(U_t, cut_t, side="right"))  # (units are in transition order)
-        self.transitions += n_inc
-        leaf_counts = np.bincount(U_leaf[:n_inc], minlength=len(self.trees.leaves))
-        for lf_id in np.flatnonzero(leaf_counts).tolist():
-            n = int(leaf_counts[lf_id])
-            for name in self.trees.leaves[lf_id][4]:
-                res.branches[name] += n
-        n_moved = n_inc - 1 if stop_unit >= 0 else n_inc  # the stopping unit is not counted as a change
-        t = U_t[:n_moved]
-        kind_of_t = ev.kind_of.take(tr.ev)  # each transition's event kind
-        changed = U_code[:n_moved] != sc.take(tr.pos).take(t)
-        _count(res.changed, EVENT_KINDS, kind_of_t.take(t)[changed], len(EVENT_KINDS))
-        last_t = min(cut_t, T - 1)
-        _count(res.enabled, EVENT_KINDS, kind_of_t[: last_t + 1], len(EVENT_KINDS))
-        n_states = int(tr.pos[last_t]) + 1 if cut_t < T else len(units.ids)
-        _count(res.rules, env.ctxs, tr.ctx[:n_states], env.C)
+def _count_batch(engine: "TableEngine", units: "Units", sc: np.ndarray, cut_t: int, stop_unit: int) -> None:
+    """Count into the engine's result what the direct engine counts of a batch, up to the cut."""
+    res, tr, ev, env, trees = engine.res, units.tr, engine.events, engine.env, engine.trees
+    U_t, U_leaf, U_code = units.t, units.leaf, units.code
+    T = len(tr.env2)
+    if stop_unit >= 0:
+        n_inc = stop_unit + 1
+    else:
+        n_inc = int(np.searchsorted(U_t, cut_t, side="right"))  # (units are in transition order)
+    engine.transitions += n_inc
+    leaf_counts = np.bincount(U_leaf[:n_inc], minlength=len(trees.leaves))
+    for lf_id in np.flatnonzero(leaf_counts).tolist():
+        n = int(leaf_counts[lf_id])
+        for name in trees.leaves[lf_id][4]:
+            res.branches[name] += n
+    n_moved = n_inc - 1 if stop_unit >= 0 else n_inc  # the stopping unit is not counted as a change
+    t = U_t[:n_moved]
+    kind_of_t = ev.kind_of.take(tr.ev)  # each transition's event kind
+    changed = U_code[:n_moved] != sc.take(tr.pos).take(t)
+    _count(res.changed, ev.kinds, kind_of_t.take(t)[changed], len(ev.kinds))
+    last_t = min(cut_t, T - 1)
+    _count(res.enabled, ev.kinds, kind_of_t[: last_t + 1], len(ev.kinds))
+    n_states = int(tr.pos[last_t]) + 1 if cut_t < T else len(units.ids)
+    _count(res.rules, env.ctxs, tr.ctx[:n_states], env.C)
 
 
 class _Explored(Sequence[Key]):
@@ -482,7 +472,3 @@ class _Explored(Sequence[Key]):
         if isinstance(i, slice):
             return [self[j] for j in range(*i.indices(len(self)))]
         return self._e.key_of(i)
-
-    def __iter__(self) -> Iterator[Key]:
-        for i in range(len(self)):
-            yield self[i]

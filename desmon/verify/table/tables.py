@@ -45,7 +45,7 @@ class AnswerTables:
         self._blocks: dict[tuple, tuple[int, int]] = {}
         self._fails: dict[tuple, list[tuple]] = {}
         self._plat_states: dict[tuple[int, int], list[PlatformState]] = {}
-        self._ids: dict[tuple, dict[tuple, int]] = {}
+        self._ids: dict[tuple, dict[Any, int]] = {}
 
     def intern_deployed(self, deployed: tuple) -> int:
         return self._deployed(deployed)
@@ -87,50 +87,33 @@ class AnswerTables:
 
     def block(self, mode: str, table: int, first_only: bool | None, p: int, dep: int) -> tuple[int, int]:
         """(offset, radix) of the answers of a check per platform digit: 1/0 for "ok", for
-        "why" the failures numbered in order of first appearance."""
+        "why" the failures and for "rank" the score keys (0: rejected) numbered in order of
+        first appearance."""
         k = (mode, table, first_only, p, dep)
         hit = self._blocks.get(k)
         if hit is not None:
             return hit
         off = self.ok.n
-        if mode == "rank":  # 0 rejected, else 1 + the score key's number
-            ids: dict[tuple | None, int] = {None: 0}
-            for sk in self._score_keys(table, p, dep):
-                self.ok.append(ids.setdefault(sk, len(ids)))
-            self._ids[("rank", table, p, dep)] = ids
-            self._blocks[k] = (off, len(ids))
-            return off, len(ids)
-        fails = self._failures(table, bool(first_only), p, dep)
         if mode == "ok":
-            for f in fails:
-                self.ok.append(0 if f else 1)
-            radix = 2
+            values, radix = [0 if f else 1 for f in self._failures(table, bool(first_only), p, dep)], 2
         else:
-            ids = {}
-            for f in fails:
-                self.ok.append(ids.setdefault(f, len(ids)))
-            self._ids[(table, bool(first_only), p, dep)] = ids
+            ids: dict[Any, int] = {None: 0} if mode == "rank" else {}
+            self._ids[k] = ids
+            answers = self._score_keys(table, p, dep) if mode == "rank" else self._failures(table, bool(first_only), p, dep)
+            values = [ids.setdefault(a, len(ids)) for a in answers]
             radix = len(ids)
+        for v in values:
+            self.ok.append(v)
         self._blocks[k] = (off, radix)
         return off, radix
 
-    def failure_id(self, table: int, first_only: bool, p: int, dep: int, fails: tuple) -> tuple[int, int]:
-        """(number, radix) of ``fails`` among the failures check ``table`` can give on ``p`` with ``dep``."""
-        self.block("why", table, first_only, p, dep)
-        ids = self._ids[(table, first_only, p, dep)]
-        if fails not in ids:
+    def answer_id(self, mode: str, table: int, first_only: bool | None, p: int, dep: int, answer: Any) -> tuple[int, int]:
+        """(number, radix) of ``answer`` (failures for "why", a score key or None for
+        "rank") among those check ``table`` can give on ``p`` with ``dep``."""
+        self.block(mode, table, first_only, p, dep)
+        ids = self._ids[(mode, table, first_only, p, dep)]
+        if answer not in ids:
             raise CheckerError(  # pragma: no cover - a bug in the engine, not in the system under test
                 f"table engine: a recorded requirement check on {self.model.platforms[p].name} is not among its per-digit answers"
             )
-        return ids[fails], len(ids)
-
-    def score_id(self, table: int, p: int, dep: int, key: tuple | None) -> tuple[int, int]:
-        """(number, radix) of score key ``key`` (None: rejected) among those check ``table``
-        can give on ``p`` with ``dep``."""
-        self.block("rank", table, None, p, dep)
-        ids = self._ids[("rank", table, p, dep)]
-        if key not in ids:
-            raise CheckerError(  # pragma: no cover - a bug in the engine, not in the system under test
-                f"table engine: a recorded preference score on {self.model.platforms[p].name} is not among its per-digit answers"
-            )
-        return ids[key], len(ids)
+        return ids[answer], len(ids)
