@@ -25,7 +25,9 @@ def tutorial_run(root: Path, tmp_path_factory: pytest.TempPathFactory):  # type:
     commands run as bench/docs_pictures.py runs them (matplotlib's Agg backend, its own
     defaults, a fresh config folder), so the pictures are the ones it would draw, and
     they run to the end, so a command that fails does not keep the pictures of the later
-    ones from being compared. Both tests are in the xdist group ``tutorial``: one process
+    ones from being compared. Its sh blocks run two at a time, each in a folder of its
+    own (``run_commands``'s ``jobs``): the longest blocks, at the page's end, do not
+    wait for the others. Both tests are in the xdist group ``tutorial``: one process
     runs the two, and the commands once."""
     from test_tutorial import run_commands
 
@@ -34,7 +36,7 @@ def tutorial_run(root: Path, tmp_path_factory: pytest.TempPathFactory):  # type:
     scratch = tmp_path_factory.mktemp("tutorial")
     (scratch / "mplconfig").mkdir()
     work = scratch / "tour"
-    return work, run_commands(root, work, "tutorial.md", env=environment(scratch / "mplconfig"), keep_going=True)
+    return work, run_commands(root, work, "tutorial.md", env=environment(scratch / "mplconfig"), keep_going=True, jobs=2)
 
 
 def refused(error: type[DesmonError], build: Callable[[], object]) -> str:

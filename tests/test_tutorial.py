@@ -24,19 +24,26 @@ EXIT = re.compile(r"#\s*exit\s+(\d+)\s*$")
 EXECUTED_DOCS = ("tutorial.md", "deployers.md")
 
 
-def doc_commands(root: Path, doc: str) -> list[tuple[str, int]]:
-    """(command, expected exit code) of every line of ``docs/<doc>``'s sh blocks."""
+def doc_blocks(root: Path, doc: str) -> list[list[tuple[str, int]]]:
+    """(command, expected exit code) of every line of each of ``docs/<doc>``'s sh blocks."""
     text = (root / "docs" / doc).read_text()
     out = []
     for block in re.findall(r"```sh\n(.*?)```", text, flags=re.S):
+        cmds = []
         for line in block.splitlines():
             line = line.strip()
             if not line or line.startswith("#"):
                 continue
             m = EXIT.search(line)
             code = int(m.group(1)) if m else 0
-            out.append((line.split("#")[0].strip(), code))
+            cmds.append((line.split("#")[0].strip(), code))
+        out.append(cmds)
     return out
+
+
+def doc_commands(root: Path, doc: str) -> list[tuple[str, int]]:
+    """(command, expected exit code) of every line of ``docs/<doc>``'s sh blocks, in order."""
+    return [c for block in doc_blocks(root, doc) for c in block]
 
 
 def tutorial_commands(root: Path) -> list[tuple[str, int]]:
@@ -56,19 +63,55 @@ def test_the_tutorial_has_commands_and_pictures(root):
 Ran = list[tuple[str, int, subprocess.CompletedProcess[str]]]
 
 
-def run_commands(root: Path, work: Path, doc: str, *, env: dict[str, str] | None = None, keep_going: bool = False) -> Ran:
-    """Run the commands of ``docs/<doc>`` in order in ``work`` (a copy of scenarios/ and
+def run_commands(
+    root: Path, work: Path, doc: str, *, env: dict[str, str] | None = None, keep_going: bool = False, jobs: int = 1
+) -> Ran:
+    """Run the commands of ``docs/<doc>`` in ``work`` (a copy of scenarios/ and
     docs/examples/; a page that writes files makes its out/ first, and a command writing
     into docs/img finds no such folder and fails), in ``env`` (default: this process's)
     with this environment's bin first on PATH. Stops after the first command that exits
-    otherwise than the page says, unless ``keep_going``."""
+    otherwise than the page says, unless ``keep_going``.
+
+    With ``jobs`` > 1 each sh block runs in a folder of its own (a fresh copy, with an
+    empty out/), ``jobs`` blocks at a time, the page's last blocks first (its longest
+    commands come last); the files each block wrote under out/ are then gathered into
+    ``work/out``. A block that reads what an earlier block wrote then fails every time,
+    never by chance: such commands belong in one block. The commands are returned in
+    the page's order; ``keep_going`` False stops a block at its first wrong exit."""
+    env = dict(os.environ if env is None else env)
+    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
+    blocks = doc_blocks(root, doc)
+    if jobs <= 1:
+        _copy_inputs(root, work)
+        return _run_block([c for b in blocks for c in b], work, env, keep_going)
+    from concurrent.futures import ThreadPoolExecutor
+
+    folders = [work / "blocks" / str(i) for i in range(len(blocks))]
+    for folder in folders:
+        _copy_inputs(root, folder)
+        (folder / "out").mkdir()
+    with ThreadPoolExecutor(jobs) as pool:
+        running = {i: pool.submit(_run_block, blocks[i], folders[i], env, keep_going) for i in reversed(range(len(blocks)))}
+        ran = [r for i in range(len(blocks)) for r in running[i].result()]
+    (work / "out").mkdir(exist_ok=True)
+    for folder in folders:
+        for made in sorted((folder / "out").rglob("*")):
+            if made.is_file():
+                target = work / "out" / made.relative_to(folder / "out")
+                assert not target.exists(), f"two sh blocks of docs/{doc} write out/{target.name}"
+                target.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copy2(made, target)
+    return ran
+
+
+def _copy_inputs(root: Path, work: Path) -> None:
     shutil.copytree(root / "scenarios", work / "scenarios")
     shutil.copytree(root / "docs" / "examples", work / "docs" / "examples")
-    bindir = Path(sys.executable).parent
-    env = dict(os.environ if env is None else env)
-    env["PATH"] = f"{bindir}{os.pathsep}{env.get('PATH', '')}"
+
+
+def _run_block(cmds: list[tuple[str, int]], work: Path, env: dict[str, str], keep_going: bool) -> Ran:
     ran: Ran = []
-    for cmd, expected in doc_commands(root, doc):
+    for cmd, expected in cmds:
         argv = shlex.split(cmd)
         if argv[0] == "python":
             argv[0] = sys.executable

@@ -252,6 +252,10 @@ SETTLED = 1e-9
 KRYLOV_TOL = 1e-12
 #: the first chunk of the early-stopping Krylov solution (s); each next one doubles
 FIRST_CHUNK = 60.0
+#: the Krylov basis size of :func:`expv`. On the coffee shift's 8 h transient (48,820
+#: states with two force sensors) 40 vectors took 273 steps where 30 took 446, and the
+#: shift's figures agreed to 12 digits; 50 saved little more and its error estimate grew
+KRYLOV_DIM = 40
 
 
 def _krylov(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, limit: np.ndarray | None) -> Transient:  # type: ignore[no-untyped-def]
@@ -303,7 +307,7 @@ def _uniformisation(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, lam:
 
 
 @one_blas_thread
-def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = 30) -> tuple[np.ndarray, float, int]:  # type: ignore[no-untyped-def]
+def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV_DIM) -> tuple[np.ndarray, float, int]:  # type: ignore[no-untyped-def]
     """``exp(t A) v`` by Krylov subspace projection with adaptive time steps and a
     local error estimate per step (after Sidje's Expokit ``expv``); returns the vector,
     the summed error estimate and the number of steps."""
