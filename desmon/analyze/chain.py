@@ -8,7 +8,11 @@ detectors whose start latency has not yet passed. Every reaction is the real
 deployer's, run by :meth:`TransitionSystem.run_one
 <desmon.verify.system.TransitionSystem.run_one>` on the checker's store exactly as
 ``desmon verify`` runs it (no re-model): starts beyond the outcome prefix succeed, and
-each start is a choice point that fails with probability ``start_failure_p``.
+each start is a choice point that fails with probability ``start_failure_p``. The
+reactions are checked for determinism as ``desmon verify`` checks them (the first
+:data:`~desmon.verify.system.RECHECK_FIRST` and every
+:data:`~desmon.verify.system.RECHECK_EVERY`-th run twice and compared,
+:func:`~desmon.verify.system.same_again`): a deployer that decides at random is refused.
 
 Rates and what they do (:mod:`desmon.analyze.markov`):
 
@@ -72,7 +76,7 @@ from desmon.model.scenario import Scenario
 from desmon.model.system import PlatformState
 from desmon.sim.processes import recognised_context
 from desmon.verify.state import Key
-from desmon.verify.system import TransitionSystem
+from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, same_again
 
 from desmon.analyze.markov import AnalysisError, MarkovWorld, chain_bounds
 
@@ -272,8 +276,11 @@ class Builder:
         tried: set[tuple[str, str]] = set()
         while pending:
             prefix = pending.pop()
-            nkey, outcomes, log, instant = self.system.run_one(key, event, prefix)
+            first = self.system.run_one(key, event, prefix)
+            nkey, outcomes, log, instant = first
             self.reactions += 1
+            if self.reactions <= RECHECK_FIRST or not self.reactions % RECHECK_EVERY:  # desmon verify's nondeterminism check
+                same_again(self.system, key, event, prefix, first)
             if instant is not None and instant[0] == CRASH:  # exit 4, as desmon verify's CRASHED
                 raise DeployerFault(
                     f"deployer {self.system.deployer_name} crashed reacting to {event} in a state the chain reached: {instant[1]}; "

@@ -38,7 +38,7 @@ from desmon.verify.search import NOT_CHECKED, Record, Segment
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore, StoreInsert
 from desmon.verify.trace import KEPT_BRANCH, WHOLE_REACTION, Label, Step, branch_name, initial_step, make_step
 
-__all__ = ["TransitionSystem", "Reduction", "command_key", "nondeterminism", "RECHECK_FIRST", "RECHECK_EVERY"]
+__all__ = ["TransitionSystem", "Reduction", "command_key", "nondeterminism", "same_again", "RECHECK_FIRST", "RECHECK_EVERY"]
 
 #: Nondeterminism detection: the first RECHECK_FIRST transitions a search runs, and every
 #: RECHECK_EVERY-th after them, are run twice and compared (:meth:`TransitionSystem.successors`).
@@ -276,7 +276,7 @@ class TransitionSystem:
             nkey, outcomes, log, instant = run_one(key, event, prefix)
             self._runs += 1
             if self._runs <= RECHECK_FIRST or not self._runs % RECHECK_EVERY:  # nondeterminism: run it again, compare
-                _same_again(self, key, event, prefix, (nkey, outcomes, log, instant))
+                same_again(self, key, event, prefix, (nkey, outcomes, log, instant))
             fails = tuple(i for i, ok in enumerate(outcomes) if not ok) if False in outcomes else ()
             if len(fails) < bound:
                 for i in range(len(prefix), len(outcomes)):
@@ -366,11 +366,12 @@ class TransitionSystem:
         return steps
 
 
-def _same_again(system: "TransitionSystem", key: Key, event: Event, prefix: tuple[bool, ...], first: tuple) -> None:
+def same_again(system: "TransitionSystem", key: Key, event: Event, prefix: tuple[bool, ...], first: tuple) -> None:
     """Run the transition again and compare: a reaction is a function of its state and
     stimulus, so different commands (or another next state) are nondeterminism of the
     deployer, refused with both command lists (docs/deployers.md). The store is left in
-    the next state, as :meth:`run_one` leaves it."""
+    the next state, as :meth:`run_one` leaves it. ``first`` is what :meth:`run_one`
+    returned; desmon analyze's chain checks its reactions by it too."""
     again = system._transition(key, event, prefix)
     log = again[2]
     was, now = [str(c) for c, _ok in first[2].commands], [str(c) for c, _ok in log.commands]
