@@ -54,7 +54,7 @@ from desmon.sim.world import World, can_detect, detector_plans, world_of
 from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.environment import variable_kind, variables
 
-__all__ = ["AnalysisError", "MarkovWorld", "markov_world", "MAX_PHASES"]
+__all__ = ["AnalysisError", "MarkovWorld", "markov_world", "MAX_PHASES", "RATE_RATIO", "check_rates", "named_rates"]
 
 #: the most Erlang phases a task step may take (``--phases``)
 MAX_PHASES = 64
@@ -328,3 +328,44 @@ def chain_bounds(scenario: Scenario, mw: MarkovWorld) -> Bounds:
 
 def is_rate(x: float) -> bool:
     return math.isfinite(x) and x > 0
+
+
+#: the widest spread of a chain's rates the solvers take: the fastest rate over the
+#: slowest (the horizon counting as a rate of 1/T). Past it the exit rate of a state
+#: holds its slow rates to fewer than four of double precision's sixteen digits (at
+#: 1e16 they vanish from it), and the transient solution needs about the ratio in steps
+RATE_RATIO = 1e12
+
+
+def named_rates(mw: MarkovWorld, horizon: float) -> list[tuple[float, str]]:
+    """(rate per s, what gives it) of every rate of the chain, and the horizon as 1/T."""
+    out = [(mw.phases / d, f"World task step {i + 1} ({a}) duration {d:g} s") for i, (a, d) in enumerate(mw.steps)]
+    for c, _k, f, r in mw.faults:
+        out += [(1.0 / f, f"MTTF of {c!r} {f:g} s"), (1.0 / r, f"MTTR of {c!r} {r:g} s")]
+    delays = [("World.recognition_delay", mw.recognition_delay), ("World.heartbeat_timeout", mw.heartbeat_timeout)]
+    delays += [(f"start latency of {p!r}", lat) for p, lat in mw.latency]
+    delays += [(f"lease start-up of {p!r}", t) for p, t in mw.lease] + [("Lease idle_s", mw.lease_idle_s)]
+    out += [(1.0 / d, f"{what} {d:g} s") for what, d in delays if d > 0]
+    out += [(mw.phases / w, f"warm-up of {g!r} {w:g} s") for g, w in mw.warmup]
+    out += [(r, f"random requirement change {c.label or c} every {1.0 / r:g} s") for c, r in mw.changes]
+    out += [(r, f"load steps of {p!r} every {1.0 / r:g} s") for p, _r, _lv, r in mw.loads]
+    out.append((1.0 / horizon, f"the horizon {horizon:g} s (--horizon)"))
+    return out
+
+
+def check_rates(mw: MarkovWorld, horizon: float) -> None:
+    """Refuse, in one line naming the two, rates the solvers cannot take in double
+    precision: one that is not a finite positive number (a mean of a subnormal number
+    of seconds), or a fastest rate more than :data:`RATE_RATIO` times the slowest."""
+    rates = named_rates(mw, horizon)
+    for r, what in rates:
+        if not is_rate(r):
+            raise AnalysisError(f"{what} gives a rate of {r:g} per second, which double precision cannot hold: give a mean of at least 1e-300 s")
+    fast = max(rates, key=lambda x: x[0])
+    slow = min(rates, key=lambda x: x[0])
+    if fast[0] > RATE_RATIO * slow[0]:
+        raise AnalysisError(
+            f"{fast[1]} against {slow[1]}: the fastest rate is {fast[0] / slow[0]:.1e} times the slowest, more than the "
+            f"{RATE_RATIO:.0e} the solvers take in double precision (the slow rate is lost beside the fast one, and a mission "
+            f"needs about that many steps); bring the two within a factor {RATE_RATIO:.0e} of each other"
+        )

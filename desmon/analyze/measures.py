@@ -29,7 +29,7 @@ from typing import Any, Callable
 import numpy as np
 
 from desmon.analyze.chain import Chain, build_chain
-from desmon.analyze.markov import AnalysisError, MarkovWorld, markov_world
+from desmon.analyze.markov import AnalysisError, MarkovWorld, check_rates, markov_world
 from desmon.analyze.solve import KRYLOV_TOL, mean_time_to, one_blas_thread, steady_state, transient
 from desmon.deployment.exposure import CAUSES
 from desmon.model.checks import check_number
@@ -160,7 +160,8 @@ class Analysis:
 
     def to_json(self) -> dict[str, Any]:
         def num(x: float | None) -> float | str | None:
-            return None if x is None else (x if math.isfinite(x) else "inf")
+            # an infinite mean time (never) is the string "inf"; NaN stays NaN for the strict writer to refuse
+            return None if x is None else (x if math.isfinite(x) or x != math.inf else "inf")
 
         return {
             "scenario": self.scenario,
@@ -273,6 +274,7 @@ def analyze(
     mw = markov_world(scenario, phases=phases, start_failure_p=start_failure_p)
     T = scenario.world.horizon if horizon is None else horizon
     check_number("--horizon", T, error=AnalysisError, positive=True, unit=" of seconds")
+    check_rates(mw, float(T))
     _check_trials(trials)
     if miss is None:
         miss, start_catch = _rates(scenario, phases, trials, 0) if start_catch is None else (detector_miss(scenario, phases=phases, trials=trials), start_catch)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from typing import Any
 
@@ -128,16 +129,17 @@ def run(args: argparse.Namespace) -> int:
             err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
             return EXIT_INCOMPLETE
     cross = _cross_check(stormpy, result, gap)  # before any file is written
-    files = _export(args.export, result, gap)
     doc = result.to_json()
     if agree is not None:
         doc["simulation"] = agree.to_json()
     if gap is not None:
         doc["placements"] = gap.to_json()
     doc |= _cross_json(cross)
+    text = _strict_json(doc)  # before anything is written: a figure that is no number is refused
+    files = _export(args.export, result, gap)
     if args.json:
         with replacing(args.json) as fh:
-            fh.write(json.dumps(doc, indent=2) + "\n")
+            fh.write(text)
     sys.stdout.write(format_analysis(result, agree))
     warn_uncovered(scenario, result.horizon_s)
     if gap is not None:
@@ -145,6 +147,32 @@ def run(args: argparse.Namespace) -> int:
     sys.stdout.write(format_cross_check(cross))
     _say_written(files, args.export if gap is not None else None)
     return EXIT_VIOLATED if (agree is not None and not agree.inside) or _disagree(cross) else EXIT_OK
+
+
+def _strict_json(doc: dict[str, Any]) -> str:
+    """``doc`` as strict JSON (no NaN or Infinity constant: an infinite mean time is the
+    string ``"inf"``); a figure that is still not a finite number is an AnalysisError
+    naming it, before any file is written."""
+    from desmon.analyze import AnalysisError
+
+    try:
+        return json.dumps(doc, indent=2, allow_nan=False) + "\n"
+    except ValueError:
+        bad = next(_not_finite(doc), "a figure")
+        raise AnalysisError(f"the solution gave {bad}, which is not a finite number: the rates are too far apart for double precision; "
+                            "bring the fastest and slowest closer (docs/analyze.md, Numerics)") from None
+
+
+def _not_finite(x: Any, where: str = "") -> Any:
+    """The JSON keys whose value is a float that is NaN or infinite."""
+    if isinstance(x, float) and not math.isfinite(x):
+        yield f"{where or 'a figure'} = {x}"
+    elif isinstance(x, dict):
+        for k, v in x.items():
+            yield from _not_finite(v, f"{where}.{k}" if where else str(k))
+    elif isinstance(x, (list, tuple)):
+        for i, v in enumerate(x):
+            yield from _not_finite(v, f"{where}[{i}]")
 
 
 def _export(path: str | None, result: Any, gap: Any) -> list[str]:
@@ -260,9 +288,8 @@ def format_analysis(a: Any, agree: Any = None) -> str:
     )
     out += _causes(a.causes_s_per_mission, a.excluded_s_per_mission)
     if a.p_exposure_within_T is not None and a.p_exposure_within_T < 1.0 - 5e-7:
-        out.append(
-            f"  P(any exposure within T) = {a.p_exposure_within_T:.6f}; mean time to first exposure {a.mean_time_to_exposure_s:.4g} s"
-        )
+        first = f"{a.mean_time_to_exposure_s:.4g} s" if math.isfinite(a.mean_time_to_exposure_s) else "never (no unmonitored state is reachable)"
+        out.append(f"  P(any exposure within T) = {a.p_exposure_within_T:.6f}; mean time to first exposure {first}")
     else:
         out.append("  an unmonitored moment within T is certain (to 6 digits)")
     out.append(f"  ({a.method}; error estimate {a.transient_error:.1e})")

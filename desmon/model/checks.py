@@ -72,6 +72,8 @@ def is_plain_name(name: object) -> bool:
 def _wanted(*, low: float | None, high: float | None, positive: bool, integer: bool, unit: str) -> str:
     noun = "whole number" if integer else "number"
     if low is not None and high is not None:
+        if positive:  # 0 is refused: the range starts above it
+            return f"a whole number in [1, {high:g}]{unit}" if integer and low < 1 else f"a {noun} in ({low:g}, {high:g}]{unit}"
         return f"a {noun} in [{low:g}, {high:g}]{unit}"
     if positive:
         return f"a positive {noun}{unit}"
