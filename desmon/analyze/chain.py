@@ -78,13 +78,9 @@ from desmon.sim.processes import recognised_context
 from desmon.verify.state import Key
 from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, same_again
 
-from desmon.analyze.markov import AnalysisError, MarkovWorld, chain_bounds
+from desmon.analyze.markov import AnalysisError, BudgetExceeded, MarkovWorld, chain_bounds, no_budget
 
 __all__ = ["ChainState", "Chain", "Builder", "build_chain", "rewards", "BudgetExceeded", "recognised"]
-
-
-class BudgetExceeded(AnalysisError):
-    """The chain grew past ``--max-states`` (exit 3)."""
 
 
 #: one race out of a state: (rate, the event reacted to or None, ((probability, next state, commands), ...))
@@ -514,13 +510,14 @@ def _event(component: str, is_device: bool, broken: bool) -> Event:
 def build_chain(
     scenario: Scenario, deployer: Any, mw: MarkovWorld, *, max_states: int | None = None,
     progress: Callable[[int], None] | None = None, miss: dict[str, Any] | None = None,
-    start_catch: dict[str, Any] | None = None, guard: Any = None,
+    start_catch: dict[str, Any] | None = None, guard: Any = None, budget: Callable[[], None] = no_budget,
 ) -> Chain:
     """Every chain state reachable from the initial ones, with its rates and rewards;
     ``miss`` is each graph's probability of missing a slip while it watches (1 where
     not given), ``start_catch`` of catching one while it starts (graph -> action ->
     start latency -> p; 0 where not given); ``guard``: the run's guard around the deployer
-    (:mod:`desmon.deployment.guard`)."""
+    (:mod:`desmon.deployment.guard`); ``budget()`` raises :class:`BudgetExceeded` once the
+    time or memory budget is spent (:class:`~desmon.analyze.markov.Budget`)."""
     t0 = time.perf_counter()
     b = Builder(scenario, deployer, mw, guard=guard)
     try:
@@ -559,6 +556,8 @@ def build_chain(
             cols.append(j)
             rates.append(r)
         i += 1
+        if not i % 256:
+            budget()
         if progress is not None and not i % 5000:
             progress(i)
     chain = Chain(states, np.frombuffer(rows, dtype=np.int64), np.frombuffer(cols, dtype=np.int64), np.frombuffer(rates, dtype=float), mw, b.system)

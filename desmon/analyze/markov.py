@@ -43,6 +43,8 @@ of components may be down at once; any start may fail), and says so
 from __future__ import annotations
 
 import math
+import resource
+import time
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -54,7 +56,7 @@ from desmon.sim.world import World, can_detect, detector_plans, world_of
 from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.environment import variable_kind, variables
 
-__all__ = ["AnalysisError", "MarkovWorld", "markov_world", "MAX_PHASES", "RATE_RATIO", "check_rates", "named_rates"]
+__all__ = ["AnalysisError", "MarkovWorld", "markov_world", "MAX_PHASES", "RATE_RATIO", "check_rates", "named_rates", "BudgetExceeded", "Budget", "no_budget"]
 
 #: the most Erlang phases a task step may take (``--phases``)
 MAX_PHASES = 64
@@ -62,6 +64,42 @@ MAX_PHASES = 64
 
 class AnalysisError(DesmonError, ValueError):
     """The analysis cannot run as asked (a rate without an event, a bad horizon, ...)."""
+
+
+class BudgetExceeded(AnalysisError):
+    """The chain grew past ``--max-states``, or the work past ``--timeout`` or ``--max-memory`` (exit 3)."""
+
+
+#: seconds between two looks at the resident memory (``--max-memory``)
+MEMORY_EVERY = 0.5
+
+
+class Budget:
+    """``--timeout`` (seconds from ``started``, a ``time.perf_counter`` value) and
+    ``--max-memory`` (MB of peak resident memory) of one analysis: calling it raises
+    :class:`BudgetExceeded` once either is spent. The chain's construction and every
+    solver loop call it, so no step runs on past the budget by more than one of its
+    iterations (a sparse factorisation, a library call, is one)."""
+
+    def __init__(self, timeout: float | None = None, max_memory: float | None = None, started: float | None = None) -> None:
+        self.timeout, self.max_memory = timeout, max_memory
+        t0 = time.perf_counter() if started is None else started
+        self.deadline = math.inf if timeout is None else t0 + timeout
+        self._next_look = 0.0
+
+    def __call__(self, *_ignored: Any) -> None:
+        now = time.perf_counter()
+        if now > self.deadline:
+            raise BudgetExceeded(f"timeout {self.timeout:g}s reached before the analysis ended: raise --timeout, or analyze a smaller chain")
+        if self.max_memory is not None and now >= self._next_look:
+            self._next_look = now + MEMORY_EVERY
+            mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+            if mb > self.max_memory:
+                raise BudgetExceeded(f"memory budget {self.max_memory:g} MB reached: {mb:,.0f} MB resident; raise --max-memory, or analyze a smaller chain")
+
+
+def no_budget(*_ignored: Any) -> None:
+    """The budget of an analysis without one."""
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ from typing import Any, Callable
 import numpy as np
 
 from desmon.analyze.chain import Chain, build_chain
-from desmon.analyze.markov import AnalysisError, MarkovWorld, check_rates, markov_world
+from desmon.analyze.markov import AnalysisError, MarkovWorld, check_rates, markov_world, no_budget
 from desmon.analyze.solve import KRYLOV_TOL, mean_time_to, one_blas_thread, steady_state, transient
 from desmon.deployment.exposure import CAUSES
 from desmon.model.checks import check_number
@@ -205,8 +205,8 @@ def _p0(chain: Chain) -> np.ndarray:
     return p0
 
 
-def _long_run(chain: Chain, Q: Any) -> tuple[float, float, float, list[tuple[float, str]], np.ndarray]:
-    pi, residual, _method = steady_state(Q, chain.describe, chain.blocks())
+def _long_run(chain: Chain, Q: Any, budget: Callable[..., None] = no_budget) -> tuple[float, float, float, list[tuple[float, str]], np.ndarray]:
+    pi, residual, _method = steady_state(Q, chain.describe, chain.blocks(), budget)
     frac = float(pi @ chain.unmonitored)
     slips = float(pi @ chain.undetected) * 3600.0
     contrib = pi * chain.unmonitored * 3600.0
@@ -216,7 +216,7 @@ def _long_run(chain: Chain, Q: Any) -> tuple[float, float, float, list[tuple[flo
 
 
 @one_blas_thread
-def _within(chain: Chain, Q: Any, p0: np.ndarray, horizon: float) -> float:
+def _within(chain: Chain, Q: Any, p0: np.ndarray, horizon: float, budget: Callable[..., None] = no_budget) -> float:
     """P(an unmonitored moment in [0, T]): the unmonitored states made absorbing; the
     mass not yet absorbed only shrinks, so the solution stops once it is below
     :data:`~desmon.analyze.solve.SETTLED` (the answer is then exact to that)."""
@@ -231,14 +231,14 @@ def _within(chain: Chain, Q: Any, p0: np.ndarray, horizon: float) -> float:
     Qa = (keep @ Q).tocsr()
     lam = float(-Qa.diagonal().min()) * 1.02
     if lam * horizon <= UNIFORM_STEPS:
-        tr = transient(Qa, p0, horizon, np.zeros((1, chain.n)), method="uniformisation")
+        tr = transient(Qa, p0, horizon, np.zeros((1, chain.n)), method="uniformisation", budget=budget)
         return float(min(1.0, tr.at[target].sum()))
     A = Qa.T.tocsr()
     v = p0.astype(float)
     t, chunk = 0.0, FIRST_CHUNK
     while t < horizon:
         span = min(chunk, horizon - t)
-        v, _err, _steps = expv(span, A, v, tol=KRYLOV_TOL)
+        v, _err, _steps = expv(span, A, v, tol=KRYLOV_TOL, budget=budget)
         t, chunk = t + span, chunk * 2
         if float(v[~target].sum()) < SETTLED:
             break
@@ -257,19 +257,18 @@ def analyze(
     phases: int = 1,
     start_failure_p: float | None = None,
     horizon: float | None = None,
-    steady: bool = True,
-    max_states: int | None = None,
+    steady: bool = True, max_states: int | None = None,
     miss: dict[str, float] | None = None,
     start_catch: dict[str, Any] | None = None,
-    trials: int = 200,
-    guard: Any = None,
-    progress: Callable[[int], None] | None = None,
-    status: Callable[[str], None] | None = None,
+    trials: int = 200, guard: Any = None,
+    progress: Callable[[int], None] | None = None, status: Callable[[str], None] | None = None,
+    budget: Callable[..., None] = no_budget,
 ) -> Analysis:
     """Build the chain of ``scenario`` under ``deployer`` and compute its measures;
     ``progress(n)`` is called as states are explored, ``status(what)`` before each
     solution step. ``miss`` and ``start_catch`` default to :func:`detector_miss` and
-    :func:`detector_start_catch` over ``trials`` slips (a given ``miss`` alone: none caught while starting)."""
+    :func:`detector_start_catch` over ``trials`` slips (a given ``miss`` alone: none caught while starting);
+    ``budget()``, called as the chain grows and in every solver iteration, raises once spent."""
     say = status or (lambda _what: None)
     mw = markov_world(scenario, phases=phases, start_failure_p=start_failure_p)
     T = scenario.world.horizon if horizon is None else horizon
@@ -278,18 +277,18 @@ def analyze(
     _check_trials(trials)
     if miss is None:
         miss, start_catch = _rates(scenario, phases, trials, 0) if start_catch is None else (detector_miss(scenario, phases=phases, trials=trials), start_catch)
-    chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch, guard=guard)
+    chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch, guard=guard, budget=budget)
     t0 = time.perf_counter()
     Q, _exit = chain.generator()
     p0 = _p0(chain)
     frac = slips = residual = pi = None
-    rows: list[tuple[float, str]] = []
+    rows: list[tuple[float, str]] = []  # (a Budget raises BudgetExceeded past --timeout or --max-memory)
     if steady:
         say(f"the steady state of {chain.n:,} states")
-        frac, slips, residual, rows, pi = _long_run(chain, Q)
+        frac, slips, residual, rows, pi = _long_run(chain, Q, budget)
     say(f"the exposure over {T:,.0f} s")
     rewards = np.vstack([chain.unmonitored, chain.undetected, chain.risky, chain.excluded, *(chain.causes[c] for c in CAUSES)])
-    tr = transient(Q, p0, T, rewards, limit=pi)
+    tr = transient(Q, p0, T, rewards, limit=pi, budget=budget)
     per_mission = float(tr.accumulated[0])
     extra: dict[str, Any] = {
         "risky_s_per_mission": float(tr.accumulated[2]),
@@ -303,9 +302,9 @@ def analyze(
         extra["causes_s_per_hour"] = {c: float(pi @ chain.causes[c]) * 3600.0 for c in CAUSES}
         extra["mean_unmonitored_interval_s"] = _mean_interval(Q, pi, chain.unmonitored > 0)
     say(f"the probability of any exposure within {T:,.0f} s")
-    within = _within(chain, Q, p0, T)
+    within = _within(chain, Q, p0, T, budget)
     say("the mean time to the first exposure")
-    mtte = mean_time_to(Q, chain.unmonitored > 0, p0)
+    mtte = mean_time_to(Q, chain.unmonitored > 0, p0, budget)
     return Analysis(
         scenario=scenario.name,
         deployer=chain.system.deployer_name,

@@ -34,7 +34,7 @@ from typing import Any, Callable, TypeVar
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from desmon.analyze.markov import AnalysisError
+from desmon.analyze.markov import AnalysisError, no_budget
 
 __all__ = ["steady_state", "transient", "mean_time_to", "expv", "Transient", "EPS", "UNIFORM_STEPS"]
 
@@ -100,27 +100,28 @@ def closed_class(Q, describe) -> np.ndarray:  # type: ignore[no-untyped-def]
 
 
 @one_blas_thread
-def steady_state(Q, describe, blocks: np.ndarray | None = None) -> tuple[np.ndarray, float, str]:  # type: ignore[no-untyped-def]
+def steady_state(Q, describe, blocks: np.ndarray | None = None, budget: Callable[..., None] = no_budget) -> tuple[np.ndarray, float, str]:  # type: ignore[no-untyped-def]
     """The long-run distribution of the chain with generator ``Q`` (CSR), the residual
     ``max |pi Q|`` and the method that found it; ``describe(i)`` names state i in an error.
     ``blocks`` (a block number per state: states whose fast events keep them together,
     e.g. the same broken components) lets iterative aggregation-disaggregation solve
-    a nearly decomposable chain in a few sweeps."""
+    a nearly decomposable chain in a few sweeps; ``budget()`` is called in every
+    iteration (it raises once the time or memory budget is spent)."""
     n = Q.shape[0]
     members = closed_class(Q, describe)
     pi_sub = None
     if blocks is not None and len(members) > 1:
-        pi_sub = _iad(Q[members][:, members].tocsr(), blocks[members])
+        pi_sub = _iad(Q[members][:, members].tocsr(), blocks[members], budget)
         method = "aggregation-disaggregation"
     if pi_sub is None:
-        pi_sub, method = _solve_closed(Q[members][:, members].T.tocsr())
+        pi_sub, method = _solve_closed(Q[members][:, members].T.tocsr(), budget)
     pi = np.zeros(n)
     pi[members] = pi_sub
     residual = float(np.abs(Q.T @ pi).max()) if n else 0.0
     return pi, residual, method
 
 
-def _solve_closed(A) -> tuple[np.ndarray, str]:  # type: ignore[no-untyped-def]
+def _solve_closed(A, budget: Callable[..., None] = no_budget) -> tuple[np.ndarray, str]:  # type: ignore[no-untyped-def]
     """``A x = 0, sum x = 1`` for the transposed generator ``A`` of an irreducible chain."""
     import scipy.sparse.linalg as sla
 
@@ -139,7 +140,7 @@ def _solve_closed(A) -> tuple[np.ndarray, str]:  # type: ignore[no-untyped-def]
         return pi if float(np.abs(A @ pi).max()) <= 1e-11 * scale else None
 
     with np.errstate(all="ignore"):
-        x, _info = sla.bicgstab(M, b, rtol=1e-13, atol=0.0, maxiter=max(1000, 4 * m))
+        x, _info = sla.bicgstab(M, b, rtol=1e-13, atol=0.0, maxiter=max(1000, 4 * m), callback=budget)
     pi = done(x)
     if pi is not None:
         return pi, "BiCGSTAB"
@@ -147,10 +148,10 @@ def _solve_closed(A) -> tuple[np.ndarray, str]:  # type: ignore[no-untyped-def]
         pi = done(sla.spsolve(M, b, permc_spec="MMD_AT_PLUS_A"))
         if pi is not None:
             return pi, "sparse LU"
-    return _power(A), "power method"
+    return _power(A, budget), "power method"
 
 
-def _iad(Q, blocks: np.ndarray, sweeps: int = 200, tol: float = 1e-13) -> np.ndarray | None:  # type: ignore[no-untyped-def]
+def _iad(Q, blocks: np.ndarray, budget: Callable[..., None] = no_budget, sweeps: int = 200, tol: float = 1e-13) -> np.ndarray | None:  # type: ignore[no-untyped-def]
     """Koury-McAllister-Stewart iterative aggregation-disaggregation: aggregate the blocks
     into a small chain weighted by the current vector, solve it, disaggregate, then one
     block Gauss-Seidel sweep with each block's own generator factorised once. None if it
@@ -175,6 +176,7 @@ def _iad(Q, blocks: np.ndarray, sweeps: int = 200, tol: float = 1e-13) -> np.nda
     agg = sp.csr_matrix((np.ones(len(bp)), (np.arange(len(bp)), bp)), shape=(len(bp), k))
     pi = np.full(len(bp), 1.0 / len(bp))
     for _sweep in range(sweeps):
+        budget()
         mass = agg.T @ pi
         w = pi / np.maximum(mass[bp], 1e-300)
         C = (agg.T @ sp.diags(w) @ Qp @ agg).toarray()
@@ -204,14 +206,16 @@ def _small_steady(C: np.ndarray) -> np.ndarray | None:
     return xi / xi.sum() if xi.sum() > 0 else None
 
 
-def _power(A, limit: int = 2_000_000) -> np.ndarray:  # type: ignore[no-untyped-def]
+def _power(A, budget: Callable[..., None] = no_budget, limit: int = 2_000_000) -> np.ndarray:  # type: ignore[no-untyped-def]
     lam = float(np.abs(A.diagonal()).max()) * 1.02
     P = (A / lam).tocsr()
     pi = np.full(A.shape[0], 1.0 / A.shape[0])
     for k in range(limit):
         nxt = pi + P @ pi
-        if not k % 64 and np.abs(nxt - pi).max() < 1e-16:
-            return nxt / nxt.sum()
+        if not k % 64:
+            budget()
+            if np.abs(nxt - pi).max() < 1e-16:
+                return nxt / nxt.sum()
         pi = nxt
     raise AnalysisError(f"the steady state did not converge in {limit} power steps; ask a transient question instead (--transient-only)")
 
@@ -228,7 +232,7 @@ class Transient:
 
 @one_blas_thread
 def transient(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, *, method: str = "auto",  # type: ignore[no-untyped-def]
-              limit: np.ndarray | None = None) -> Transient:
+              limit: np.ndarray | None = None, budget: Callable[..., None] = no_budget) -> Transient:
     """From ``p0`` over ``[0, horizon]``: the distribution at the horizon and each reward
     row of ``rewards`` (k x n) accumulated (see the module docstring).
 
@@ -241,8 +245,8 @@ def transient(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, *, method:
     exit_ = -Q.diagonal()
     lam = float(exit_.max()) * 1.02 if exit_.size and exit_.max() > 0 else 1.0
     if method == "uniformisation" or (method == "auto" and lam * horizon <= UNIFORM_STEPS):
-        return _uniformisation(Q, p0, horizon, rewards, lam)
-    return _krylov(Q, p0, horizon, rewards, limit)
+        return _uniformisation(Q, p0, horizon, rewards, lam, budget)
+    return _krylov(Q, p0, horizon, rewards, limit, budget)
 
 
 #: total variation distance to the limit below which the Krylov solution stops early
@@ -258,7 +262,8 @@ FIRST_CHUNK = 60.0
 KRYLOV_DIM = 40
 
 
-def _krylov(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, limit: np.ndarray | None) -> Transient:  # type: ignore[no-untyped-def]
+def _krylov(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, limit: np.ndarray | None,  # type: ignore[no-untyped-def]
+            budget: Callable[..., None] = no_budget) -> Transient:
     """d/dt [p, c] = [p Q, p R^T]: Krylov exponentials of the augmented matrix, in
     doubling chunks when a ``limit`` is known (see :func:`transient`)."""
     import scipy.sparse as sp
@@ -270,7 +275,7 @@ def _krylov(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, limit: np.nd
     t, chunk, err, steps, note = 0.0, FIRST_CHUNK, 0.0, 0, ""
     while t < horizon:
         span = horizon - t if limit is None else min(chunk, horizon - t)
-        y, e, st = expv(span, B, y, tol=KRYLOV_TOL)
+        y, e, st = expv(span, B, y, tol=KRYLOV_TOL, budget=budget)
         t, chunk, err, steps = t + span, chunk * 2, err + e, steps + st
         if limit is not None and t < horizon:
             distance = 0.5 * float(np.abs(y[:n] - limit).sum())
@@ -285,7 +290,8 @@ def _krylov(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, limit: np.nd
     return Transient(at, y[n:], max(err, defect), f"Krylov exponential ({steps} steps{note})")
 
 
-def _uniformisation(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, lam: float) -> Transient:  # type: ignore[no-untyped-def]
+def _uniformisation(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, lam: float,  # type: ignore[no-untyped-def]
+                    budget: Callable[..., None] = no_budget) -> Transient:
     from scipy.stats import poisson
 
     qt = lam * horizon
@@ -302,12 +308,15 @@ def _uniformisation(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, lam:
         cdf += w
         occ += (1.0 - cdf) / lam * v  # P(N > k) / lam: the expected time spent after k jumps
         v = v + PT @ v
+        if not k % 64:
+            budget()
         logw += math.log(qt) - math.log(k + 1) if qt > 0 else -math.inf
     return Transient(at, rewards @ occ, EPS * max(1.0, horizon), f"uniformisation ({kmax} steps)")
 
 
 @one_blas_thread
-def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV_DIM) -> tuple[np.ndarray, float, int]:  # type: ignore[no-untyped-def]
+def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV_DIM,  # type: ignore[no-untyped-def]
+         budget: Callable[..., None] = no_budget) -> tuple[np.ndarray, float, int]:
     """``exp(t A) v`` by Krylov subspace projection with adaptive time steps and a
     local error estimate per step (after Sidje's Expokit ``expv``); returns the vector,
     the summed error estimate and the number of steps."""
@@ -324,6 +333,7 @@ def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV_DIM) ->
     t_new = (1.0 / anorm) * ((fact * tol) / (4.0 * beta * anorm)) ** (1.0 / m)
     t_now, s_err, steps = 0.0, 0.0, 0
     while t_now < t:
+        budget()
         steps += 1
         t_step = min(t - t_now, t_new)
         V, H, mb, happy, avnorm = _arnoldi(A, w / beta, m)
@@ -387,7 +397,7 @@ def _local_error(beta: float, F: np.ndarray, avnorm: float, m: int) -> tuple[flo
 
 
 @one_blas_thread
-def mean_time_to(Q, target: np.ndarray, p0: np.ndarray) -> float:  # type: ignore[no-untyped-def]
+def mean_time_to(Q, target: np.ndarray, p0: np.ndarray, budget: Callable[..., None] = no_budget) -> float:  # type: ignore[no-untyped-def]
     """Expected time from ``p0`` until the chain first enters a state of ``target``
     (a boolean mask); ``inf`` if it may never."""
     import scipy.sparse.linalg as sla
@@ -403,7 +413,7 @@ def mean_time_to(Q, target: np.ndarray, p0: np.ndarray) -> float:  # type: ignor
     sub = Q[rest][:, rest].tocsc()
     ones = -np.ones(len(rest))
     with np.errstate(all="ignore"):
-        t, _info = sla.bicgstab(sub, ones, rtol=1e-13, atol=0.0, maxiter=max(1000, 4 * len(rest)))
+        t, _info = sla.bicgstab(sub, ones, rtol=1e-13, atol=0.0, maxiter=max(1000, 4 * len(rest)), callback=budget)
     if not np.all(np.isfinite(t)) or np.abs(sub @ t - ones).max() > 1e-8:
         t = sla.spsolve(sub, ones, permc_spec="MMD_AT_PLUS_A")
     full = np.zeros(Q.shape[0])

@@ -9,9 +9,10 @@ chain for Storm (``.drn``) or PRISM (``.tra`` with ``.sta``, ``.lab``, ``.srew``
 ``--engine storm`` model-checks the chain with Storm too (:mod:`desmon.analyze.storm`,
 stormpy from ``desmon[exact]``) and prints its numbers beside scipy's, exit 1 if they
 differ by more than 1e-6 relative.
-Bad input (a rate with no event, a horizon <= 0, ``--phases`` out of range, a steady
-state asked of a chain with a trap) is one line, exit 2; a chain past ``--max-states``
-is exit 3; nothing is written then.
+Bad input (a rate with no event, a horizon <= 0, ``--phases`` out of range, rates too
+far apart for double precision, a nondeterministic deployer) is one line, exit 2; a
+chain past ``--max-states``, work past ``--timeout`` or ``--max-memory`` is exit 3;
+nothing is written then.
 """
 
 from __future__ import annotations
@@ -50,6 +51,11 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--horizon", type=positive_seconds, default=None, metavar="T", help="mission length in seconds (default: the World's horizon)")
     p.add_argument("--transient-only", action="store_true", help="per-mission measures only (no steady state: for a chain with a trap)")
     p.add_argument("--max-states", type=positive_int, default=DEFAULT_MAX_STATES, help="stop (exit 3) past this many chain states")
+    p.add_argument("--timeout", type=positive_seconds, default=None, help="stop INCOMPLETE (exit 3) after this many seconds (unset: no limit)")
+    p.add_argument(
+        "--max-memory", type=float, default=None, metavar="MB",
+        help="memory budget: stop INCOMPLETE (exit 3) once the resident memory exceeds it (unset: no limit)",
+    )
     p.add_argument(
         "--trials", type=positive_int, default=200, metavar="N",
         help="evaluation slips behind each detection rate (200: a watching rate good to about +-0.08; 2000: about +-0.02, and slower)",
@@ -74,6 +80,8 @@ def run(args: argparse.Namespace) -> int:
     from desmon.analyze import BudgetExceeded, analyze
     from desmon.analyze.agreement import agreement, simulated_exposure
     from desmon.paths import replacing
+
+    budget = _budget(args)
 
     scenario = load_scenario_of(args)
     err = sys.stderr
@@ -104,6 +112,7 @@ def run(args: argparse.Namespace) -> int:
             result = analyze(
                 scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, horizon=args.horizon,
                 steady=not args.transient_only, max_states=args.max_states, trials=args.trials, guard=args.guard, progress=progress, status=status,
+                budget=budget,
             )
         finally:
             line.close()
@@ -147,6 +156,15 @@ def run(args: argparse.Namespace) -> int:
     sys.stdout.write(format_cross_check(cross))
     _say_written(files, args.export if gap is not None else None)
     return EXIT_VIOLATED if (agree is not None and not agree.inside) or _disagree(cross) else EXIT_OK
+
+
+def _budget(args: argparse.Namespace) -> Any:
+    """``--timeout`` (counted from the command's start, as desmon verify's) and ``--max-memory``."""
+    from desmon.analyze.markov import Budget
+    from desmon.cli.verify import check_megabytes
+
+    check_megabytes("--max-memory", args.max_memory)
+    return Budget(args.timeout, args.max_memory, getattr(args, "_started", None))
 
 
 def _strict_json(doc: dict[str, Any]) -> str:
