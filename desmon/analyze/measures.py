@@ -206,7 +206,7 @@ def _p0(chain: Chain) -> np.ndarray:
 
 
 def _long_run(chain: Chain, Q: Any, budget: Callable[..., None] = no_budget) -> tuple[float, float, float, list[tuple[float, str]], np.ndarray]:
-    pi, residual, _method = steady_state(Q, chain.describe, chain.blocks(), budget)
+    pi, residual, _method = steady_state(Q, chain.describe, chain.blocks(), budget, ends=(_p0(chain), chain.unmonitored))
     frac = float(pi @ chain.unmonitored)
     slips = float(pi @ chain.undetected) * 3600.0
     contrib = pi * chain.unmonitored * 3600.0

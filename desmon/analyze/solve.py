@@ -8,9 +8,13 @@
   blocks. Otherwise, or where it does not converge, with one unknown pinned, by
   BiCGSTAB; where that breaks down the sparse LU solve (small chains) or the power
   method on the uniformised chain takes over. The residual
-  ``max |pi Q|`` is reported. A chain with an absorbing state, or with two closed
-  classes, has no single steady state: :class:`~desmon.analyze.markov.AnalysisError`
-  names the state and suggests a transient query.
+  ``max |pi Q|`` is reported. A chain whose one closed class is an absorbing state
+  stays there. A chain with several closed classes (absorbing states among them) has
+  the long-run figures that hold in every class: where each class has the same
+  long-run exposure, the classes' steady states weighted by the probability of ending
+  in each (:func:`absorption`, one sparse solve); where they differ,
+  :class:`~desmon.analyze.markov.AnalysisError` names two of them and suggests a
+  transient query.
 * :func:`transient` — the distribution at time T and the expected reward accumulated
   over [0, T], from an initial distribution. Short horizons (``Lambda * T`` up to
   :data:`UNIFORM_STEPS`) by uniformisation: Poisson-weighted powers of ``P = I +
@@ -78,37 +82,82 @@ def _off_diagonal(Q):  # type: ignore[no-untyped-def]
     return adj
 
 
-def closed_class(Q, describe) -> np.ndarray:  # type: ignore[no-untyped-def]
-    """The states of the chain's one bottom strongly connected component."""
+def closed_classes(Q) -> list[np.ndarray]:  # type: ignore[no-untyped-def]
+    """The states of each bottom strongly connected component (closed class) of the
+    chain; an absorbing state is a class of one."""
     adj = _off_diagonal(Q)
     ncomp, labels = _csgraph().connected_components(adj, directed=True, connection="strong")
     coo = adj.tocoo()
     leaving = np.zeros(ncomp, dtype=bool)
     cross = labels[coo.row] != labels[coo.col]
     leaving[labels[coo.row[cross]]] = True
-    bottom = [c for c in range(ncomp) if not leaving[c]]
-    sizes = {c: int((labels == c).sum()) for c in bottom}
-    if len(bottom) > 1 or sizes[bottom[0]] == 1:
-        trap = next((c for c in bottom if sizes[c] == 1), bottom[0])
-        i = int(np.flatnonzero(labels == trap)[0])
-        what = "is absorbing (no event leaves it)" if sizes[trap] == 1 else f"is in one of {len(bottom)} closed classes"
-        raise AnalysisError(
-            f"the chain has no single steady state: state {i} ({describe(i)}) {what}; ask a transient question instead "
-            "(--transient-only, with --horizon T: exposure within T seconds)"
-        )
-    return np.flatnonzero(labels == bottom[0])
+    return [np.flatnonzero(labels == c) for c in range(ncomp) if not leaving[c]]
+
+
+def absorption(Q, classes: list[np.ndarray], p0: np.ndarray) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """The probability, from ``p0``, that the chain ends in each of ``classes``: one
+    sparse solve over the states outside them (the expected time spent in each, times
+    the rates into each class)."""
+    import scipy.sparse.linalg as sla
+
+    inside = np.zeros(Q.shape[0], dtype=bool)
+    for c in classes:
+        inside[c] = True
+    rest = np.flatnonzero(~inside)
+    direct = np.array([float(p0[c].sum()) for c in classes])
+    if not rest.size or not p0[rest].any():
+        return direct
+    occupancy = np.atleast_1d(sla.spsolve((-Q[rest][:, rest]).T.tocsc(), p0[rest]))  # expected seconds in each
+    into = Q[rest].tocsc()
+    return direct + np.array([float(occupancy @ np.asarray(into[:, c].sum(axis=1)).ravel()) for c in classes])
+
+
+def _refuse_classes(describe, classes: list[np.ndarray], values: list[float]) -> AnalysisError:  # type: ignore[no-untyped-def]
+    lo, hi = int(np.argmin(values)), int(np.argmax(values))
+    i, j = int(classes[lo][0]), int(classes[hi][0])
+    return AnalysisError(
+        f"the chain ends in one of {len(classes)} closed classes with different long-run exposure ({3600 * values[lo]:.6g} s/h "
+        f"in the class of state {i} ({describe(i)}), {3600 * values[hi]:.6g} s/h in that of state {j} ({describe(j)})): no one "
+        "long-run figure holds; ask a transient question instead (--transient-only, with --horizon T: exposure within T seconds)"
+    )
 
 
 @one_blas_thread
-def steady_state(Q, describe, blocks: np.ndarray | None = None, budget: Callable[..., None] = no_budget) -> tuple[np.ndarray, float, str]:  # type: ignore[no-untyped-def]
+def steady_state(Q, describe, blocks: np.ndarray | None = None, budget: Callable[..., None] = no_budget,  # type: ignore[no-untyped-def]
+                 ends: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, float, str]:
     """The long-run distribution of the chain with generator ``Q`` (CSR), the residual
     ``max |pi Q|`` and the method that found it; ``describe(i)`` names state i in an error.
     ``blocks`` (a block number per state: states whose fast events keep them together,
     e.g. the same broken components) lets iterative aggregation-disaggregation solve
     a nearly decomposable chain in a few sweeps; ``budget()`` is called in every
-    iteration (it raises once the time or memory budget is spent)."""
+    iteration (it raises once the time or memory budget is spent).
+
+    A chain with several closed classes (or absorbing states) has the long-run
+    distribution of each class weighted by the probability of ending in it, given
+    ``ends`` = (initial distribution, unmonitored reward), where every class has the
+    same long-run exposure; otherwise :class:`AnalysisError` names two classes that differ."""
+    classes = closed_classes(Q)
+    if len(classes) == 1:
+        return _steady_in(Q, classes[0], blocks, budget)
+    if ends is None:
+        i = int(classes[0][0])
+        raise AnalysisError(
+            f"the chain has no single steady state: state {i} ({describe(i)}) is in one of {len(classes)} closed classes; "
+            "ask a transient question instead (--transient-only, with --horizon T: exposure within T seconds)"
+        )
+    parts = [_steady_in(Q, c, blocks, budget) for c in classes]
+    values = [float(part[0] @ ends[1]) for part in parts]
+    if max(values) - min(values) > 1e-12 * max(1.0, max(values)):
+        raise _refuse_classes(describe, classes, values)
+    weights = absorption(Q, classes, ends[0])
+    pi = sum(w * part[0] for w, part in zip(weights, parts))
+    residual = float(np.abs(Q.T @ pi).max())
+    return pi, residual, f"{len(classes)} closed classes, weighted by absorption"
+
+
+def _steady_in(Q, members: np.ndarray, blocks: np.ndarray | None, budget: Callable[..., None]) -> tuple[np.ndarray, float, str]:  # type: ignore[no-untyped-def]
+    """The steady state of the closed class ``members`` (0 elsewhere), its residual and method."""
     n = Q.shape[0]
-    members = closed_class(Q, describe)
     pi_sub = None
     if blocks is not None and len(members) > 1:
         pi_sub = _iad(Q[members][:, members].tocsr(), blocks[members], budget)

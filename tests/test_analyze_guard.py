@@ -1,0 +1,135 @@
+"""desmon analyze's guards: rates too far apart for double precision are refused in one
+line naming the two, the time and memory budgets stop every step (exit 3), no figure
+written or printed is NaN or infinite, and a chain with several closed classes gets
+the long-run answer that exists or a refusal saying what to ask instead."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from desmon.analyze import AnalysisError
+from desmon.analyze.solve import absorption, steady_state
+
+ROOT = Path(__file__).resolve().parents[1]
+SHIFT = ROOT / "scenarios" / "coffee_shift.py"
+
+#: a coffee shift with one World value replaced (environment variables HB, MTTF, MTTR, STEP)
+VARIANT = f'''
+import dataclasses, os
+from desmon.loader import load_scenario
+from desmon.sim.world import MTTF
+_b = load_scenario({str(SHIFT)!r})
+w = _b.world
+env = os.environ
+if env.get("HB"):
+    w = dataclasses.replace(w, heartbeat_timeout=float(env["HB"]))
+if env.get("MTTF") or env.get("MTTR"):
+    f = w.stochastic_faults[0]
+    f = MTTF(f.component, mttf=float(env.get("MTTF") or f.mttf), mttr=float(env.get("MTTR") or f.mttr))
+    w = dataclasses.replace(w, stochastic_faults=(f, *w.stochastic_faults[1:]))
+if env.get("STEP"):
+    w = dataclasses.replace(w, task=(dataclasses.replace(w.task[0], duration=float(env["STEP"])), *w.task[1:]))
+scenario = dataclasses.replace(_b, world=w)
+'''
+
+
+def _desmon(tmp_path: Path, env: dict[str, str], *argv: str, timeout: float = 90) -> subprocess.CompletedProcess:
+    case = tmp_path / "variant.py"  # the shift itself where no value is replaced
+    case.write_text(VARIANT if env else f"from desmon.loader import load_scenario\nscenario = load_scenario({str(SHIFT)!r}, params={{'faults': 'False'}})\n")
+    full = {**os.environ, **env, "PYTHONPATH": str(ROOT)}
+    return subprocess.run(
+        [sys.executable, "-m", "desmon", "analyze", str(case), "--no-progress", "--trials", "1", *argv],
+        capture_output=True, text=True, env=full, cwd=tmp_path, timeout=timeout,
+    )
+
+
+@pytest.mark.parametrize(
+    ("env", "names"),
+    [
+        ({"MTTF": "1e-300"}, ["MTTF of 'lwr_wrench' 1e-300 s", "MTTF of 'torso_pc' 28800 s"]),
+        ({"STEP": "1e-300"}, ["World task step 1 (idle) duration 1e-300 s"]),
+        ({"HB": "1e-9"}, ["World.heartbeat_timeout 1e-09 s"]),
+        ({"MTTF": "1e12", "MTTR": "1e-9"}, ["MTTR of 'lwr_wrench' 1e-09 s against MTTF of 'lwr_wrench' 1e+12 s"]),
+        ({"STEP": "1e-320"}, ["which double precision cannot hold"]),
+    ],
+)
+def test_rates_too_far_apart_are_refused_in_one_line_naming_them(tmp_path, env, names):
+    out = tmp_path / "a.json"
+    done = _desmon(tmp_path, env, "--json", str(out))
+    err = done.stderr.strip()
+    assert done.returncode == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert all(n in err for n in names), err
+    assert not out.exists() and done.stdout == ""
+
+
+def test_a_stiff_chain_stops_at_the_timeout_exit_3_with_nothing_written(tmp_path):
+    out = tmp_path / "a.json"
+    done = _desmon(tmp_path, {"HB": "1e-3"}, "--timeout", "6", "--json", str(out))
+    assert done.returncode == 3 and "INCOMPLETE: timeout 6s" in done.stderr, done.stderr
+    assert not out.exists()
+
+
+def test_a_memory_budget_stops_the_analysis_exit_3(tmp_path):
+    done = _desmon(tmp_path, {}, "--horizon", "60", "--max-memory", "1")
+    assert done.returncode == 3 and "memory budget 1 MB reached" in done.stderr, done.stderr
+
+
+def test_the_json_is_strict_and_every_number_finite(tmp_path):
+    out = tmp_path / "a.json"
+    done = _desmon(tmp_path, {}, "--horizon", "60", "--json", str(out))
+    assert done.returncode == 0, done.stderr
+    text = out.read_text()
+    doc = json.loads(text, parse_constant=lambda c: pytest.fail(f"non-JSON constant {c}"))
+    assert "NaN" not in done.stdout and " inf " not in done.stdout
+
+    def numbers(x):
+        if isinstance(x, float):
+            yield x
+        elif isinstance(x, dict):
+            for v in x.values():
+                yield from numbers(v)
+        elif isinstance(x, list):
+            for v in x:
+                yield from numbers(v)
+
+    assert all(np.isfinite(v) for v in numbers(doc))
+
+
+def test_phases_out_of_range_names_the_accepted_range(tmp_path):
+    done = _desmon(tmp_path, {}, "--phases", "65")
+    assert done.returncode == 2 and "give a whole number in [1, 64]" in done.stderr, done.stderr
+
+
+# -- several closed classes ----------------------------------------------------------------
+#: from state 0 the chain ends in absorbing state 1 (probability 1/4) or in the class {2, 3} (3/4)
+TWO_ENDS = sp.csr_matrix(np.array([[-4.0, 1.0, 3.0, 0.0], [0.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, 1.0], [0.0, 0.0, 1.0, -1.0]]))
+P0 = np.array([1.0, 0.0, 0.0, 0.0])
+
+
+def _name(i: int) -> str:
+    return f"s{i}"
+
+
+def test_absorption_probabilities_are_exact():
+    assert absorption(TWO_ENDS, [np.array([1]), np.array([2, 3])], P0) == pytest.approx([0.25, 0.75], abs=1e-15)
+
+
+def test_closed_classes_with_the_same_exposure_give_the_absorption_weighted_long_run():
+    pi, residual, method = steady_state(TWO_ENDS, _name, ends=(P0, np.zeros(4)))
+    assert pi == pytest.approx([0.0, 0.25, 0.375, 0.375], abs=1e-15) and residual < 1e-15
+    assert "2 closed classes" in method
+
+
+def test_closed_classes_with_different_exposure_are_refused_with_what_to_ask_instead():
+    with pytest.raises(AnalysisError) as e:
+        steady_state(TWO_ENDS, _name, ends=(P0, np.array([0.0, 0.0, 1.0, 0.0])))
+    msg = str(e.value)
+    assert "2 closed classes" in msg and "state 1 (s1)" in msg and "--transient-only" in msg and "\n" not in msg
