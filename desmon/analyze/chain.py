@@ -275,13 +275,13 @@ class Builder:
             first = self.system.run_one(key, event, prefix)
             nkey, outcomes, log, instant = first
             self.reactions += 1
-            if self.reactions <= RECHECK_FIRST or not self.reactions % RECHECK_EVERY:  # desmon verify's nondeterminism check
-                same_again(self.system, key, event, prefix, first)
             if instant is not None and instant[0] == CRASH:  # exit 4, as desmon verify's CRASHED
                 raise DeployerFault(
                     f"deployer {self.system.deployer_name} crashed reacting to {event} in a state the chain reached: {instant[1]}; "
                     f"{self.where} (a crashing deployer has no exposure to compute)"
                 )
+            if self.reactions <= RECHECK_FIRST or not self.reactions % RECHECK_EVERY:  # desmon verify's nondeterminism check
+                same_again(self.system, key, event, prefix, first)
             nf = outcomes.count(False)
             prob = (p ** nf) * ((1.0 - p) ** (len(outcomes) - nf)) if p > 0 else 1.0
             if p > 0:
