@@ -156,7 +156,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--quick", action="store_true", help=f"the first {QUICK_UNTIL:.0f} simulated s only (a smoke run of a few seconds)")
     ap.add_argument("--repeat", type=int, default=REPEAT, help=f"runs of the day each way, the fastest counts (default {REPEAT})")
+    ap.add_argument("--collector", action="store_true", help="instead: the collector's cost of many short runs in a process with a large heap")
     a = ap.parse_args(argv)
+    if a.collector:
+        return collector_bench()
     if a.seed < 0:
         ap.error(f"--seed {a.seed}: give a seed of 0 or more")
     if a.repeat < 1:
@@ -199,6 +202,37 @@ def main(argv: list[str] | None = None) -> int:
         f"wall_s={wall:.3f} bare_s={bare:.4f} events={events} until_s={sim:.0f} "
         f"serial_s={serial:.3f} serial_ratio_bare={serial / bare:.1f} cpu_s={cpu:.3f} sim_cpu_s={sim_cpu:.3f} ahead_blocks={ahead}"
     )
+    return 0
+
+
+#: the short runs and the heap (objects built before them) of ``--collector``
+COLLECTOR_RUNS, COLLECTOR_HEAP = 20, 3_000_000
+
+
+def collector_bench() -> int:
+    """CPU seconds of :data:`COLLECTOR_RUNS` runs of the coffee handover in this process
+    once :data:`COLLECTOR_HEAP` dicts (and as many lists) exist: with desmon's collector
+    policy, and with a full collection after every run (the baseline, measured here too)."""
+    import desmon.sim.collector as collector
+    from desmon.sim.engine import simulate
+
+    sc = load_scenario("scenarios/coffee_handover.py")
+    simulate(sc, "desmon", seed=0)  # imports and caches settle
+    heap = [{"a": [i]} for i in range(COLLECTOR_HEAP)]
+    cpu = {}
+    for name, full_after in (("every_run", 0.0), ("policy", collector.FULL_AFTER)):
+        saved, collector.FULL_AFTER = collector.FULL_AFTER, full_after
+        try:
+            t0 = time.process_time()
+            for seed in range(COLLECTOR_RUNS):
+                simulate(sc, "desmon", seed=seed)
+            cpu[name] = time.process_time() - t0
+        finally:
+            collector.FULL_AFTER = saved
+    print(f"{COLLECTOR_RUNS} runs of the coffee handover beside {2 * len(heap):,} objects: "
+          f"{cpu['policy']:.2f} CPU s, {cpu['every_run']:.2f} CPU s with a full collection after each run")
+    print(f"RESULT runs={COLLECTOR_RUNS} heap_objects={2 * len(heap)} policy_cpu_s={cpu['policy']:.3f} "
+          f"every_run_cpu_s={cpu['every_run']:.3f} ratio={cpu['every_run'] / max(cpu['policy'], 1e-9):.1f}")
     return 0
 
 

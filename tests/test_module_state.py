@@ -20,6 +20,7 @@ ALLOWED = {
     ("desmon/verify/environment.py", "_KINDS"): "registry: the checker's kinds of variable, filled as each is defined",
     ("desmon/sim/streams.py", "_STREAMS"): "registry: the signal streams, filled as each is defined",
     ("desmon/sim/streams.py", "_FUSIONS"): "registry: the fusion detectors, filled as each is defined",
+    ("desmon/sim/collector.py", "_LEFT"): "the process's collector bookkeeping (objects runs left since its last full collection), as the collector's own counts are",
     ("desmon/verify/parallel.py", "_WORKER"): (
         "the one slot of a forked checker worker process, set as it starts: a process pool's task is a "
         "module-level function, so the process's own object (its system and known keys) is found through its module"
