@@ -4,7 +4,9 @@
 * an output must name a file (not a directory) in an existing directory, end in the
   suffix of what is written into it, and must not be one of the inputs being read;
 * an output is replaced only once it is complete (:func:`replacing`), so an error or an
-  interrupt half-way leaves the previous file as it was.
+  interrupt half-way leaves the previous file as it was;
+* what desmon prints is printed whole (:class:`WholeWrites`): a signal that arrives while
+  a slow reader holds a pipe up neither cuts a large output short nor stops it.
 
 Every refusal is a :class:`PathError` whose one-line message names the path and the fix.
 """
@@ -12,8 +14,10 @@ Every refusal is a :class:`PathError` whose one-line message names the path and 
 from __future__ import annotations
 
 import os
+import signal
 import sys
 import tempfile
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Iterable, Iterator, Sequence
@@ -22,7 +26,7 @@ from desmon.errors import DesmonError
 
 __all__ = [
     "PathError", "SCENARIO_FILE", "TRACE_FILE", "check_input_file", "check_output_file", "same_file", "replacing",
-    "replacing_all", "script_folder_on_path",
+    "replacing_all", "script_folder_on_path", "timer_held", "write_whole", "WholeWrites",
 ]
 
 #: (what, how to get a right one) of each kind of input, for :func:`check_input_file`.
@@ -211,3 +215,64 @@ def script_folder_on_path(script: str | Path) -> None:
     folder = str(Path(script).resolve().parent)
     if folder not in sys.path:
         sys.path.insert(0, folder)
+
+
+@contextmanager
+def timer_held() -> Iterator[None]:
+    """Within it, the timer signal (SIGALRM, which polices a deployer's code) waits: it
+    is blocked in this thread and delivered once the block ends. Where signals cannot be
+    blocked (no ``pthread_sigmask``), nothing changes."""
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGALRM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def _fd_of(stream: IO[str]) -> int | None:
+    """The file descriptor under ``stream``, or None (a ``StringIO``, a test's capture)."""
+    try:
+        return stream.fileno()
+    except (AttributeError, OSError, ValueError):
+        return None
+
+
+def write_whole(stream: IO[str], text: str) -> int:
+    """Write ``text`` to ``stream`` in full, the timer signal held (:func:`timer_held`):
+    to a file descriptor in a loop that goes on after every partial write (a write that
+    a signal interrupts half-way), else through the stream. Returns ``len(text)``."""
+    with timer_held():
+        fd = _fd_of(stream)
+        if fd is None:
+            stream.write(text)
+            stream.flush()
+            return len(text)
+        stream.flush()  # what was written before goes first
+        data = memoryview(text.encode(getattr(stream, "encoding", None) or "utf-8", getattr(stream, "errors", None) or "strict"))
+        while data:
+            data = data[os.write(fd, data):]  # (os.write retries EINTR itself, PEP 475)
+    return len(text)
+
+
+class WholeWrites:
+    """A text stream (standard output) whose large writes are whole (:func:`write_whole`);
+    small ones go through the stream's own buffer, which completes them. Everything else
+    is the stream's."""
+
+    #: a write of at least this many characters goes out whole at once (below it, the
+    #: stream's buffer takes it)
+    LARGE = 2048
+
+    def __init__(self, stream: IO[str]) -> None:
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        if len(text) < self.LARGE:
+            return self.stream.write(text)
+        return write_whole(self.stream, text)
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self.stream, name)

@@ -1,0 +1,105 @@
+"""Outputs are whole or absent: what desmon prints reaches a slow reader in full while
+the timer that polices a deployer's code keeps ticking, and writers that carry names
+stay well-formed whatever a name holds."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from desmon.paths import WholeWrites, timer_held, write_whole
+
+ROOT = Path(__file__).resolve().parent.parent
+ENV = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+RUN = ["run", str(ROOT / "scenarios" / "coffee_shift.py"), "--until", "8000", "--json"]
+
+
+def _desmon(args: list[str], *, slow: bool) -> tuple[bytes, int]:
+    """desmon's stdout and exit code, its stdout read in 4 KiB chunks with a pause after each when ``slow``."""
+    proc = subprocess.Popen([sys.executable, "-m", "desmon", *args], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=ENV, cwd=ROOT)
+    assert proc.stdout is not None
+    chunks = []
+    while True:
+        chunk = proc.stdout.read1(4096)
+        if not chunk:
+            break
+        chunks.append(chunk)
+        if slow:
+            time.sleep(0.01)
+    return b"".join(chunks), proc.wait(timeout=300)
+
+
+def test_a_large_json_summary_reaches_a_slow_reader_whole():
+    fast, code = _desmon(RUN, slow=False)
+    assert code in (0, 1)
+    assert len(fast) > 2 * 65536  # more than a pipe holds: the writer blocks while the timer ticks
+    slow, slow_code = _desmon(RUN, slow=True)
+    assert slow_code == code
+    assert len(slow) == len(fast)
+    fast_json, slow_json = json.loads(fast), json.loads(slow)
+    fast_json.pop("wall_s"), slow_json.pop("wall_s")
+    assert slow_json == fast_json
+
+
+_TICKING = """
+import signal, sys
+sys.path.insert(0, {root!r})
+from desmon.paths import WholeWrites
+signal.signal(signal.SIGALRM, lambda *_: None)
+signal.setitimer(signal.ITIMER_REAL, 0.05, 0.05)
+out = WholeWrites(sys.stdout)
+out.write("x" * 600000 + "\\n")
+for i in range(20000):
+    print("line", i, file=out)
+out.flush()
+"""
+
+
+def test_every_write_is_whole_while_a_timer_ticks():
+    script = _TICKING.format(root=str(ROOT))
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, env=ENV)
+    assert proc.stdout is not None
+    got = bytearray()
+    while chunk := proc.stdout.read1(4096):
+        got += chunk
+        time.sleep(0.002)
+    assert proc.wait(timeout=120) == 0
+    lines = bytes(got).decode().split("\n")
+    assert lines[0] == "x" * 600000
+    assert lines[1:-1] == [f"line {i}" for i in range(20000)]
+
+
+def test_write_whole_goes_through_a_stream_without_a_file_descriptor():
+    out = io.StringIO()
+    assert write_whole(out, "abc" * 5000) == 15000
+    assert out.getvalue() == "abc" * 5000
+    wrapped = WholeWrites(out)
+    wrapped.write("d")
+    wrapped.write("e" * WholeWrites.LARGE)
+    assert out.getvalue().endswith("d" + "e" * WholeWrites.LARGE)
+    assert wrapped.getvalue() == out.getvalue()  # everything else is the stream's
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_sigmask"), reason="signals cannot be blocked here")
+def test_the_timer_signal_waits_while_held_and_arrives_after():
+    seen = []
+    previous = signal.signal(signal.SIGALRM, lambda *_: seen.append(1))
+    try:
+        with timer_held():
+            signal.setitimer(signal.ITIMER_REAL, 0.01)
+            time.sleep(0.05)
+            assert not seen
+            assert signal.SIGALRM in signal.sigpending()
+        assert seen == [1]
+        assert signal.SIGALRM not in signal.pthread_sigmask(signal.SIG_BLOCK, set())
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
