@@ -23,6 +23,7 @@ __all__ = [
     "suggest",
     "check_name",
     "is_plain_name",
+    "visible",
     "check_number",
     "check_amount",
     "is_numeric_text",
@@ -79,6 +80,17 @@ def is_plain_name(name: object) -> bool:
     of letters, digits, '_', '-' and '.'. A constructor built very often asks this first and
     calls the checks (which build their messages) only when it is False."""
     return type(name) is str and _NAME.fullmatch(name) is not None
+
+
+def visible(text: str) -> str:
+    """``text`` with every character that is not printable (a control, format, separator
+    or unassigned one; a newline and a tab stay) written as its Python escape
+    (``\\x00``, ``\\u202e``): what a writer puts into a file that must stay well-formed
+    whatever a name or a value holds (XML cannot hold a NUL at all) and that shows what
+    it holds. Printable text comes back as it is."""
+    if text.isprintable():
+        return text
+    return "".join(ch if ch.isprintable() or ch in "\n\t" else repr(ch)[1:-1] for ch in text)
 
 
 def _wanted(*, low: float | None, high: float | None, positive: bool, integer: bool, unit: str) -> str:
