@@ -14,6 +14,7 @@ Every refusal is a :class:`PathError` whose one-line message names the path and 
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import sys
 import tempfile
@@ -176,7 +177,9 @@ def replacing(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:  #
 def replacing_all(paths: Sequence[str | os.PathLike[str]]) -> Iterator[list[IO]]:  # type: ignore[type-arg]
     """Temporary text files next to ``paths``; they replace them only if the block
     completes, and only once every one is written and no target is a directory: a
-    failure leaves every path untouched (as :func:`replacing`, for several files)."""
+    failure leaves every path untouched (as :func:`replacing`, for several files). Should
+    a rename fail half-way, the files already replaced are put back as they were (a file
+    that did not exist is removed again): all of the set or none of it."""
     targets = [Path(p) for p in paths]
     tmps: list[str] = []
     handles: list[IO] = []  # type: ignore[type-arg]
@@ -194,19 +197,61 @@ def replacing_all(paths: Sequence[str | os.PathLike[str]]) -> Iterator[list[IO]]
         for t in targets:
             if t.is_dir():
                 raise IsADirectoryError(21, "Is a directory", str(t))
-        while tmps:
-            tmp, t = tmps[0], targets[len(targets) - len(tmps)]
-            os.chmod(tmp, _mode_for(t))
-            os.replace(tmp, t)
-            tmps.pop(0)
+        _replace_together(tmps, targets)
+        tmps.clear()
     finally:
         for h in handles:
             h.close()
         for tmp in tmps:
-            try:
-                os.unlink(tmp)
-            except FileNotFoundError:
-                pass
+            _remove(tmp)
+
+
+def _remove(path: str | os.PathLike[str]) -> None:
+    try:
+        os.unlink(path)
+    except FileNotFoundError:
+        pass
+
+
+def _replace_together(tmps: Sequence[str], targets: Sequence[Path]) -> None:
+    """Rename each of ``tmps`` over its target; if one fails, undo the ones done (each
+    present target is kept as a hard link, or a copy, until all are renamed)."""
+    kept: list[str | None] = []
+    done = 0
+    try:
+        for t in targets:
+            kept.append(_keep(t))
+        for tmp, t in zip(tmps, targets):
+            os.chmod(tmp, _mode_for(t))
+            os.replace(tmp, t)
+            done += 1
+    except BaseException:
+        for t, old in zip(targets[:done], kept):
+            if old is None:
+                _remove(t)
+            else:
+                os.replace(old, t)
+        kept = kept[done:]
+        raise
+    finally:
+        for old in kept:
+            if old is not None:
+                _remove(old)
+
+
+def _keep(target: Path) -> str | None:
+    """A hard link (or, where none can be made, a copy) of ``target`` beside it; None if
+    ``target`` is no file."""
+    if not target.is_file():
+        return None
+    fd, keep = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".kept", dir=target.parent or ".")
+    os.close(fd)
+    os.unlink(keep)
+    try:
+        os.link(target, keep)
+    except OSError:
+        shutil.copy2(target, keep)
+    return keep
 
 
 def script_folder_on_path(script: str | Path) -> None:

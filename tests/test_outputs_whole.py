@@ -103,3 +103,72 @@ def test_the_timer_signal_waits_while_held_and_arrives_after():
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
+
+
+# ------------------------------------------------------------------ several files: all or none
+ANALYZE = ["analyze", str(ROOT / "scenarios" / "coffee_shift.py"), "-p", "faults=False", "--horizon", "60", "--no-progress"]
+
+
+def _analyze_export(tmp_path: Path, capsys) -> tuple[int, str]:  # type: ignore[no-untyped-def]
+    from desmon.cli import main
+
+    code = main([*ANALYZE, "--export", str(tmp_path / "m.tra")])
+    return code, capsys.readouterr().err
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
+def test_an_export_whose_companion_is_a_pipe_is_refused_before_any_work(tmp_path, capsys):
+    os.mkfifo(tmp_path / "m.lab")
+    code, err = _analyze_export(tmp_path, capsys)
+    assert code == 2
+    assert err.count("\n") == 1 and f"would write {tmp_path / 'm.lab'}, which is not a regular file" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.lab"]
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="permissions do not bind root")
+def test_an_export_whose_companion_is_write_protected_is_refused_before_any_work(tmp_path, capsys):
+    (tmp_path / "m.srew").write_text("old\n")
+    (tmp_path / "m.srew").chmod(0o444)
+    code, err = _analyze_export(tmp_path, capsys)
+    assert code == 2
+    assert err.count("\n") == 1 and f"would write {tmp_path / 'm.srew'}, which is write-protected" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.srew"]
+    assert (tmp_path / "m.srew").read_text() == "old\n"
+
+
+def test_a_rename_that_fails_half_way_puts_back_the_files_already_replaced(tmp_path, monkeypatch):
+    import desmon.paths as paths
+
+    names = [tmp_path / f"m.{s}" for s in ("tra", "sta", "lab", "srew")]
+    names[0].write_text("old tra\n")
+    names[1].write_text("old sta\n")
+    real = os.replace
+    calls = []
+
+    def failing(src, dst):  # type: ignore[no-untyped-def]
+        if str(src).endswith(".part"):
+            calls.append(dst)
+            if len(calls) == 3:
+                raise PermissionError(13, "Permission denied", str(dst))
+        return real(src, dst)
+
+    monkeypatch.setattr(paths.os, "replace", failing)
+    with pytest.raises(PermissionError):
+        with paths.replacing_all(names) as files:
+            for fh, name in zip(files, names):
+                fh.write(f"new {name.suffix}\n")
+    assert len(calls) == 3
+    assert names[0].read_text() == "old tra\n" and names[1].read_text() == "old sta\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.sta", "m.tra"]  # no new file, nothing left over
+
+
+def test_the_files_of_a_set_replace_their_namesakes_together(tmp_path):
+    from desmon.paths import replacing_all
+
+    names = [tmp_path / "a.tra", tmp_path / "a.sta"]
+    names[0].write_text("old\n")
+    with replacing_all(names) as files:
+        files[0].write("new tra\n")
+        files[1].write("new sta\n")
+    assert [p.read_text() for p in names] == ["new tra\n", "new sta\n"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.sta", "a.tra"]
