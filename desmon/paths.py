@@ -4,7 +4,9 @@
 * an output must name a file (not a directory) in an existing directory, end in the
   suffix of what is written into it, and must not be one of the inputs being read;
 * an output is replaced only once it is complete (:func:`replacing`), so an error or an
-  interrupt half-way leaves the previous file as it was.
+  interrupt half-way leaves the previous file as it was;
+* what desmon prints is printed whole (:class:`WholeWrites`): a signal that arrives while
+  a slow reader holds a pipe up neither cuts a large output short nor stops it.
 
 Every refusal is a :class:`PathError` whose one-line message names the path and the fix.
 """
@@ -12,8 +14,11 @@ Every refusal is a :class:`PathError` whose one-line message names the path and 
 from __future__ import annotations
 
 import os
+import shutil
+import signal
 import sys
 import tempfile
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Iterable, Iterator, Sequence
@@ -22,7 +27,7 @@ from desmon.errors import DesmonError
 
 __all__ = [
     "PathError", "SCENARIO_FILE", "TRACE_FILE", "check_input_file", "check_output_file", "same_file", "replacing",
-    "replacing_all", "script_folder_on_path",
+    "replacing_all", "script_folder_on_path", "timer_held", "write_whole", "WholeWrites",
 ]
 
 #: (what, how to get a right one) of each kind of input, for :func:`check_input_file`.
@@ -172,7 +177,9 @@ def replacing(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:  #
 def replacing_all(paths: Sequence[str | os.PathLike[str]]) -> Iterator[list[IO]]:  # type: ignore[type-arg]
     """Temporary text files next to ``paths``; they replace them only if the block
     completes, and only once every one is written and no target is a directory: a
-    failure leaves every path untouched (as :func:`replacing`, for several files)."""
+    failure leaves every path untouched (as :func:`replacing`, for several files). Should
+    a rename fail half-way, the files already replaced are put back as they were (a file
+    that did not exist is removed again): all of the set or none of it."""
     targets = [Path(p) for p in paths]
     tmps: list[str] = []
     handles: list[IO] = []  # type: ignore[type-arg]
@@ -190,19 +197,61 @@ def replacing_all(paths: Sequence[str | os.PathLike[str]]) -> Iterator[list[IO]]
         for t in targets:
             if t.is_dir():
                 raise IsADirectoryError(21, "Is a directory", str(t))
-        while tmps:
-            tmp, t = tmps[0], targets[len(targets) - len(tmps)]
-            os.chmod(tmp, _mode_for(t))
-            os.replace(tmp, t)
-            tmps.pop(0)
+        _replace_together(tmps, targets)
+        tmps.clear()
     finally:
         for h in handles:
             h.close()
         for tmp in tmps:
-            try:
-                os.unlink(tmp)
-            except FileNotFoundError:
-                pass
+            _remove(tmp)
+
+
+def _remove(path: str | os.PathLike[str]) -> None:
+    try:
+        os.unlink(path)
+    except FileNotFoundError:
+        pass
+
+
+def _replace_together(tmps: Sequence[str], targets: Sequence[Path]) -> None:
+    """Rename each of ``tmps`` over its target; if one fails, undo the ones done (each
+    present target is kept as a hard link, or a copy, until all are renamed)."""
+    kept: list[str | None] = []
+    done = 0
+    try:
+        for t in targets:
+            kept.append(_keep(t))
+        for tmp, t in zip(tmps, targets):
+            os.chmod(tmp, _mode_for(t))
+            os.replace(tmp, t)
+            done += 1
+    except BaseException:
+        for t, old in zip(targets[:done], kept):
+            if old is None:
+                _remove(t)
+            else:
+                os.replace(old, t)
+        kept = kept[done:]
+        raise
+    finally:
+        for old in kept:
+            if old is not None:
+                _remove(old)
+
+
+def _keep(target: Path) -> str | None:
+    """A hard link (or, where none can be made, a copy) of ``target`` beside it; None if
+    ``target`` is no file."""
+    if not target.is_file():
+        return None
+    fd, keep = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".kept", dir=target.parent or ".")
+    os.close(fd)
+    os.unlink(keep)
+    try:
+        os.link(target, keep)
+    except OSError:
+        shutil.copy2(target, keep)
+    return keep
 
 
 def script_folder_on_path(script: str | Path) -> None:
@@ -211,3 +260,64 @@ def script_folder_on_path(script: str | Path) -> None:
     folder = str(Path(script).resolve().parent)
     if folder not in sys.path:
         sys.path.insert(0, folder)
+
+
+@contextmanager
+def timer_held() -> Iterator[None]:
+    """Within it, the timer signal (SIGALRM, which polices a deployer's code) waits: it
+    is blocked in this thread and delivered once the block ends. Where signals cannot be
+    blocked (no ``pthread_sigmask``), nothing changes."""
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGALRM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def _fd_of(stream: IO[str]) -> int | None:
+    """The file descriptor under ``stream``, or None (a ``StringIO``, a test's capture)."""
+    try:
+        return stream.fileno()
+    except (AttributeError, OSError, ValueError):
+        return None
+
+
+def write_whole(stream: IO[str], text: str) -> int:
+    """Write ``text`` to ``stream`` in full, the timer signal held (:func:`timer_held`):
+    to a file descriptor in a loop that goes on after every partial write (a write that
+    a signal interrupts half-way), else through the stream. Returns ``len(text)``."""
+    with timer_held():
+        fd = _fd_of(stream)
+        if fd is None:
+            stream.write(text)
+            stream.flush()
+            return len(text)
+        stream.flush()  # what was written before goes first
+        data = memoryview(text.encode(getattr(stream, "encoding", None) or "utf-8", getattr(stream, "errors", None) or "strict"))
+        while data:
+            data = data[os.write(fd, data):]  # (os.write retries EINTR itself, PEP 475)
+    return len(text)
+
+
+class WholeWrites:
+    """A text stream (standard output) whose large writes are whole (:func:`write_whole`);
+    small ones go through the stream's own buffer, which completes them. Everything else
+    is the stream's."""
+
+    #: a write of at least this many characters goes out whole at once (below it, the
+    #: stream's buffer takes it)
+    LARGE = 2048
+
+    def __init__(self, stream: IO[str]) -> None:
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        if len(text) < self.LARGE:
+            return self.stream.write(text)
+        return write_whole(self.stream, text)
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self.stream, name)

@@ -30,11 +30,13 @@ from desmon.verify.report import event_from_json, event_to_json, key_to_json, la
 from conftest import refused
 
 # -- strategies: every event kind, every requirement and preference kind ---------------------
-# names may hold the characters a textual form would split on ('@', '=', ':', spaces)
-names = st.text(alphabet=string.ascii_letters + string.digits + "_-@=: .", min_size=1, max_size=8).filter(str.strip)
+# names hold what the name rule allows (letters, digits, '_', '-', '.'); a text value may
+# hold the characters a textual form would split on ('@', '=', ':', spaces)
+names = st.text(alphabet=string.ascii_letters + string.digits + "_-.", min_size=1, max_size=8)
+texts = st.text(alphabet=string.ascii_letters + string.digits + "_-@=: .", min_size=1, max_size=8).filter(str.strip)
 amounts = st.integers(0, 10**6) | st.floats(0.0, 1e6, allow_nan=False, allow_infinity=False)
 signed = st.integers(-(10**6), 10**6) | st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
-values = names | signed  # an attribute value: text or a finite number
+values = texts | signed  # an attribute value: text or a finite number
 options = st.builds(lambda k, v: Option(device_kind=k, vendor=v), names, st.none() | names) | st.builds(
     lambda a, v: Option(attribute=a, value=v), names, values
 )

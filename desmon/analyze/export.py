@@ -37,6 +37,7 @@ export replaced.
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 from typing import Any
 
@@ -68,10 +69,27 @@ def export_paths(path: str, placements: bool = False) -> list[str]:
 
 
 def check_export(path: str, placements: bool = False) -> None:
-    """Before any work: no file of the export is a directory (the CLI checked ``path``)."""
+    """Before any work: every file of the export can be written (the CLI checked ``path``
+    itself): none is a directory or another non-file, none is write-protected, and its
+    folder takes new files. A refusal names the file and the fix."""
     for name in export_paths(path, placements):
-        if Path(name).is_dir():
-            raise AnalysisError(f"--export {path} would write {name}, which is a directory: remove it or export under another name")
+        problem = _unwritable(Path(name))
+        if problem:
+            raise AnalysisError(f"--export {path} would write {name}, which {problem}: remove it or export under another name")
+
+
+def _unwritable(p: Path) -> str:
+    """Why ``p`` cannot be replaced by a new file ("" if it can)."""
+    if p.is_dir():
+        return "is a directory"
+    if p.exists() and not p.is_file():
+        return "is not a regular file (a device or a pipe)"
+    if p.exists() and not os.access(p, os.W_OK):
+        return "is write-protected (permission denied)"
+    parent = p.parent
+    if parent.is_dir() and not os.access(parent, os.W_OK | os.X_OK):
+        return f"cannot be created (permission denied in {parent})"
+    return ""
 
 
 def export_all(chain: Chain, path: str, gap: Any = None) -> list[str]:

@@ -15,6 +15,7 @@ as one line ``desmon: error: ...`` without a traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from typing import Sequence
 
@@ -22,6 +23,7 @@ from desmon.cli import analyze, evaluate, explain, explore, fuzz, plot, replay, 
 from desmon.cli.common import EXIT_USAGE, Parser, one_line, run_of, usage_error
 from desmon.cli.options import preflight
 from desmon.errors import DesmonError
+from desmon.paths import WholeWrites
 
 __all__ = ["main", "build_parser", "COMMANDS"]
 
@@ -91,7 +93,7 @@ def _dispatch(args: argparse.Namespace) -> int:
         args.guard = Guard(getattr(args, "max_commands", None) or MAX_COMMANDS, deadline)  # (verify: its --timeout instead)
         preflight(args)  # inputs, numbers, windows and output paths, before any long work
         run_of(args)  # this command's run context: its guard and its planned outputs (each engine adds its own memoised checks)
-        with args.guard.deadline():
+        with args.guard.deadline(), contextlib.redirect_stdout(WholeWrites(sys.stdout)):  # (printed whole under the timer)
             return int(args.handler(args))
     except DeployerFault as exc:
         # (SimPy re-raises a process's exception as a copy caused by the original)

@@ -14,6 +14,7 @@ import difflib
 import functools
 import inspect
 import math
+import re
 from typing import Any, Callable, Iterable, Mapping, Sequence, TypeVar
 
 from desmon.errors import DesmonError, ModelError
@@ -22,6 +23,7 @@ __all__ = [
     "suggest",
     "check_name",
     "is_plain_name",
+    "visible",
     "check_number",
     "check_amount",
     "is_numeric_text",
@@ -52,21 +54,43 @@ def suggest(name: object, choices: Iterable[str]) -> str:
 
 
 def check_name(what: str, name: object, *, error: Error = ModelError) -> str:
-    """Return ``name`` if it is a usable identifier-like string, else raise ``error``."""
+    """Return ``name`` if it is a name: a non-empty ``str`` of letters, digits, '_', '-'
+    and '.' only (the one rule for every name the model holds), else raise ``error``
+    naming it (its ``repr``, so an invisible character shows) and the fix."""
+    if type(name) is str and _NAME.fullmatch(name):
+        return name
     if isinstance(name, (int, float)) and not isinstance(name, bool):
         raise error(f"{what} {name!r} is a number, not a name: write it in quotes, {str(name)!r}")
     if not isinstance(name, str) or not name.strip():
         raise error(f"{what} {name!r} is not a name: give a non-empty string")
-    if "/" in name or "\n" in name or "\t" in name:
-        raise error(f"{what} {name!r} contains '/', a newline or a tab: use letters, digits, '_' or '-'")
-    return name
+    bad = next((ch for ch in name if not _NAME.fullmatch(ch)), None)
+    if bad is None:  # a str subclass of good characters
+        return name
+    shown = "a space" if bad == " " else f"{bad!r} (U+{ord(bad):04X})"
+    raise error(f"{what} {name!r} contains {shown}: write a name of letters, digits, '_', '-' or '.' only")
+
+
+#: a name: letters and digits of any script, '_', '-' and '.' (no space, no other
+#: punctuation, no control, format or markup character)
+_NAME = re.compile(r"(?:[^\W]|[-.])+")
 
 
 def is_plain_name(name: object) -> bool:
-    """True when :func:`check_name` surely accepts ``name``: a ``str`` (not a subclass),
-    not blank, without '/', a newline or a tab. A constructor built very often asks this
-    first and calls the checks (which build their messages) only when it is False."""
-    return type(name) is str and bool(name.strip()) and "/" not in name and "\n" not in name and "\t" not in name
+    """True when :func:`check_name` surely accepts ``name``: a ``str`` (not a subclass)
+    of letters, digits, '_', '-' and '.'. A constructor built very often asks this first and
+    calls the checks (which build their messages) only when it is False."""
+    return type(name) is str and _NAME.fullmatch(name) is not None
+
+
+def visible(text: str) -> str:
+    """``text`` with every character that is not printable (a control, format, separator
+    or unassigned one; a newline and a tab stay) written as its Python escape
+    (``\\x00``, ``\\u202e``): what a writer puts into a file that must stay well-formed
+    whatever a name or a value holds (XML cannot hold a NUL at all) and that shows what
+    it holds. Printable text comes back as it is."""
+    if text.isprintable():
+        return text
+    return "".join(ch if ch.isprintable() or ch in "\n\t" else repr(ch)[1:-1] for ch in text)
 
 
 def _wanted(*, low: float | None, high: float | None, positive: bool, integer: bool, unit: str) -> str:

@@ -23,6 +23,7 @@ from typing import Any, Callable, Iterable, Iterator
 import networkx as nx
 
 from desmon.errors import QueryError
+from desmon.model.checks import visible
 from desmon.repository import labels as L
 
 __all__ = ["Change", "Subscription", "Repository", "node_id", "graph_to_json", "graph_to_graphml", "jsonable"]
@@ -422,17 +423,24 @@ def graph_to_json(g: nx.MultiDiGraph) -> dict[str, Any]:
 
 
 def graph_to_graphml(g: nx.MultiDiGraph, path: str) -> None:
-    """Write a snapshot as GraphML (non-scalar attributes as JSON strings)."""
+    """Write a snapshot as GraphML (non-scalar attributes as JSON strings). Every text is
+    :func:`~desmon.model.checks.visible` (a character XML cannot hold is written as its
+    escape) and XML-escaped by the writer, so the file parses whatever a name holds."""
     out = nx.MultiDiGraph()
 
     def scalar(v: Any) -> Any:
         v = jsonable(v)
-        return v if isinstance(v, (str, int, float, bool)) else json.dumps(v, sort_keys=True)
+        if isinstance(v, str):
+            return visible(v)
+        return v if isinstance(v, (int, float, bool)) else visible(json.dumps(v, sort_keys=True))
+
+    def key(k: Any) -> Any:
+        return visible(k) if isinstance(k, str) else k
 
     for n, d in g.nodes(data=True):
-        out.add_node(n, **{k: scalar(v) for k, v in d.items() if v is not None and k not in OBJECT_ATTRS})
+        out.add_node(key(n), **{visible(k): scalar(v) for k, v in d.items() if v is not None and k not in OBJECT_ATTRS})
     for s, t, k, d in g.edges(keys=True, data=True):
-        out.add_edge(s, t, key=k, **{a: scalar(v) for a, v in d.items() if v is not None})
+        out.add_edge(key(s), key(t), key=key(k), **{visible(a): scalar(v) for a, v in d.items() if v is not None})
     nx.write_graphml(out, path)
 
 

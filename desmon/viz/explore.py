@@ -24,6 +24,7 @@ from typing import Any, Iterable, Sequence
 
 import networkx as nx
 
+from desmon.model.checks import visible
 from desmon.repository import labels as L
 
 __all__ = ["Reasons", "Frame", "capture_reasons", "render_page", "FIG5_EDGES", "COLUMNS"]
@@ -98,7 +99,9 @@ def capture_reasons(query: Any, graphs: Iterable[str]) -> tuple[Reasons, ...]:
 
 # --------------------------------------------------------------------------- text helpers
 def _e(text: object) -> str:
-    return html.escape(str(text), quote=True)
+    """``text`` for the page: HTML-escaped, a character that is not printable (a NUL, a
+    right-to-left override) written as its escape, so no name is markup or hides."""
+    return html.escape(visible(str(text)), quote=True)
 
 
 def _n(x: float) -> str:
