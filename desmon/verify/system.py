@@ -376,16 +376,24 @@ def _same_again(system: "TransitionSystem", key: Key, event: Event, prefix: tupl
     was, now = [str(c) for c, _ok in first[2].commands], [str(c) for c, _ok in log.commands]
     same = [command_key(c) for c, _ok in first[2].commands] == [command_key(c) for c, _ok in log.commands]
     if not same or again[0] != first[0] or again[3] != first[3]:
-        raise nondeterminism(system.deployer_name, event, was, now, same)
+        crashed = (first[3], again[3]) if any(i is not None and i[0] == CRASH for i in (first[3], again[3])) else (None, None)
+        raise nondeterminism(system.deployer_name, event, was, now, same, crashed)
 
 
-def nondeterminism(deployer: str, event: Event, was: list[str], now: list[str], same: bool = False) -> NondeterminismError:
+def nondeterminism(
+    deployer: str, event: Event, was: list[str], now: list[str], same: bool = False, failed: tuple[Any, Any] = (None, None),
+) -> NondeterminismError:
     """The error of ``deployer`` reacting twice to ``event`` in one state: commands ``was``,
-    then ``now`` (``same``: the same commands, which reached another state)."""
-    def listing(cmds: list[str]) -> str:
-        return "[" + ", ".join(cmds) + "]" if cmds else "[no command]"
+    then ``now`` (``same``: the same commands, which reached another state; ``failed``:
+    the two runs' instantaneous violations, a :data:`CRASH` one naming how that run failed)."""
+    def listing(cmds: list[str], instant: Any) -> str:
+        shown = "[" + ", ".join(cmds) + "]" if cmds else "[no command]"
+        return f"{shown} and failed ({instant[1]})" if instant is not None and instant[0] == CRASH else shown
 
-    diff = f"first {listing(was)}, then {listing(now)}" if not same else f"the same commands {listing(was)} reached another state"
+    if same and failed == (None, None):
+        diff = f"the same commands {listing(was, None)} reached another state"
+    else:
+        diff = f"first {listing(was, failed[0])}, then {listing(now, failed[1])}"
     return NondeterminismError(
         f"deployer {deployer} is nondeterministic (not a function of what it reads through its ports): reacting twice to {event} in the same state it issued {diff}; "
         "a reaction must be a function of its readings (no randomness, clock or state kept between calls: docs/deployers.md)"
