@@ -21,6 +21,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import sys
+from types import FunctionType
 from typing import Any, Iterator
 
 __all__ = ["code_fingerprint", "changed", "model_fingerprint", "BASELINE_MODULES"]
@@ -50,13 +51,13 @@ def _function_parts(fn: Any) -> Iterator[tuple[str, int]]:
 
 def _parts(value: Any) -> Iterator[tuple[str, int]]:
     """(a suffix naming the part, its identity) of ``value`` and of what it holds, one level down."""
-    if hasattr(value, "__code__"):
+    if isinstance(value, FunctionType):
         yield from _function_parts(value)
         return
     yield "", id(value)
     if isinstance(value, type):
         for name, item in list(vars(value).items()):
-            for suffix, ident in _function_parts(item) if hasattr(item, "__code__") else (("", id(item)),):
+            for suffix, ident in _function_parts(item) if isinstance(item, FunctionType) else (("", id(item)),):
                 yield f".{name}{suffix}", ident
     elif isinstance(value, (tuple, frozenset)):
         for i, item in enumerate(value if isinstance(value, tuple) else sorted(value, key=repr)):

@@ -328,6 +328,8 @@ class Recorder:
             (stimulus, log, nkey, outcomes, instant) = out
             if self.records <= RECHECK_FIRST or not self.records % RECHECK_EVERY:
                 self._same_commands(key, event, prefix, log, instant)
+            if self.checker.reactions is not None:  # a user's deployer: re-run at the end in a fresh instance
+                self.checker.reactions.append((key, event, prefix, log.commands, instant))
         if stimulus is None:
             got = stim
         elif stimulus.context_changed:
