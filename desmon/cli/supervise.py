@@ -11,11 +11,11 @@ deployer must not touch:
 * **the output.** The child's stdout goes to a file the parent copies out only then
   (dropped when the child refuses its own result, :class:`Tamper`); its stderr is
   relayed as it comes;
-* **the budget.** ``verify --timeout T``: the child is killed at T + 1.5 s if it has not
+* **the budget.** ``verify --timeout T``: the child is killed at T + 1 s if it has not
   ended (a deployer that took the timer signal, swallowed desmon's stop or sleeps in a
   C call), INCOMPLETE (exit 3). Where a reaction has a limit (``--max-reaction-seconds``,
   60 s unless given), the guard publishes on the shared page how long the deployer's own
-  code has run in the current reaction; past the limit + 1.5 s the child is killed,
+  code has run in the current reaction; past the limit + 1 s the child is killed,
   CRASHED (exit 4);
 * **the right to kill.** The child is the leader of its own process group: when the
   command ends, the whole group is killed (threads the deployer left running, processes
@@ -42,7 +42,7 @@ from typing import Any, Callable
 __all__ = ["supervise", "Tamper", "Beacon", "GRACE"]
 
 #: how long past a budget (seconds) the parent waits before it kills the child
-GRACE = 1.5
+GRACE = 1.0
 #: the shared page: the deployer's clock (since, used), then the child's pid and exit code
 _LAYOUT = struct.Struct("ddqq")
 #: desmon's modules each command runs in, fingerprinted before the deployer is imported

@@ -104,7 +104,15 @@ def model_fingerprint(model: Any) -> dict[str, str]:
         value = getattr(model, f.name)
         if f.name == "platforms":
             for p in value:
-                out[f"platform {p.name}"] = repr(p)
+                out[f"platform {getattr(p, 'name', '?')}"] = _text(p)
         else:
-            out[f.name] = repr(value)
+            out[f.name] = _text(value)
     return out
+
+
+def _text(value: Any) -> str:
+    """``repr(value)``, or what kept it from being written (a changed model may hold anything)."""
+    try:
+        return repr(value)
+    except Exception as exc:
+        return f"unprintable: {type(exc).__name__}"
