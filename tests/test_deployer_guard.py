@@ -677,3 +677,45 @@ def test_a_deployer_without_memory_still_holds(memory):
     for engine in ("table", "direct"):
         code, _took, out, err = _desmon(memory, "verify", robot_day, "--deployer", f"{memory}:stateless", "--engine", engine, "--no-progress")
         assert code == 0 and "verdict: HOLDS" in out, out + err
+
+
+@pytest.mark.parametrize("command", [["fuzz", "--examples", "5", "--seed", "1"], ["analyze", "--scenario-for-analyze"]])
+def test_a_deployer_fighting_the_timer_is_crashed_at_the_reaction_limit_in_fuzz_and_analyze(isolation, command):
+    code, took, out, err = _desmon(
+        str(isolation), *_command(command), "--deployer", _spec(isolation, "ignores_alarm_and_spins"), "--max-reaction-seconds", "2",
+        timeout=_slow(command),
+    )
+    assert code == 4 and "desmon: CRASHED: " in err and "ran for over 2 s in one reaction" in err and "Traceback" not in err, out + err
+
+
+PEEKS_PY = """
+from desmon.deployment.ports import Stop
+from desmon.deployment.deployer import DEPLOYERS
+
+
+def _up(s):
+    real = getattr(getattr(s, "checks", None), "_real", None)  # the table engine's private map, where there is one
+    return real[s].up if real is not None and s in real else s.up
+
+
+def peeks(q, slots, changed, context_changed):
+    for s in q.platform_states():
+        if not _up(s):
+            for g, _c in s.deployed:
+                yield Stop(g, s.name)
+    if not any(not _up(s) for s in q.platform_states()):
+        yield from DEPLOYERS["desmon"].react(q, slots, changed, context_changed)
+"""
+
+
+def test_a_deployer_reading_through_a_private_attribute_never_holds(tmp_path):
+    """Reading `up` through the table engine's private map: refused (exit 2) or VIOLATED on
+    either engine, never HOLDS on one engine and VIOLATED on the other."""
+    path = tmp_path / "peeks.py"
+    path.write_text(textwrap.dedent(PEEKS_PY))
+    codes = []
+    for engine in ("table", "direct"):
+        code, _took, out, err = _desmon(str(path), "verify", COFFEE, "--deployer", f"{path}:peeks", "--engine", engine, "--no-progress")
+        assert code in (1, 2) and "HOLDS" not in out, out + err
+        codes.append(code)
+    assert 0 not in codes
