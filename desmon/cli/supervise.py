@@ -9,8 +9,8 @@ deployer must not touch:
   before it ends. A child that ends in any other way (``os._exit``, a signal, a thread
   sending SIGALRM) ends the command CRASHED (exit 4), one line saying how it ended;
 * **the output.** The child's stdout goes to a file the parent copies out only then
-  (dropped when the child refuses its own result, :class:`Tamper`); its stderr is
-  relayed as it comes;
+  (dropped when the child refuses its own result, :class:`Tamper`); its stderr is the
+  parent's own (a progress line stays on the terminal);
 * **the budget.** ``verify --timeout T``: the child is killed at T + 1 s if it has not
   ended (a deployer that took the timer signal, swallowed desmon's stop or sleeps in a
   C call), INCOMPLETE (exit 3). Where a reaction has a limit (``--max-reaction-seconds``,
@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import select
 import signal
 import struct
 import sys
@@ -118,30 +117,25 @@ def supervise(args: argparse.Namespace, work: Callable[[Beacon], int]) -> int:
 
     page = mmap.mmap(-1, _LAYOUT.size)
     out = tempfile.TemporaryFile()
-    err_r, err_w = os.pipe()
     sys.stdout.flush()
     sys.stderr.flush()
     pid = os.fork()
     if pid == 0:  # pragma: no cover - the child (its coverage is the command's)
-        _child(page, out, err_r, err_w, work)
-    os.close(err_w)
+        _child(page, out, work)
     notes: list[tuple[Any, str]] = []
     try:
-        code = _watch(args, pid, page, err_r, notes)
+        code = _watch(args, pid, page, notes)
     finally:
         _kill(pid)
-        os.close(err_r)
     _copy_out(out, code)
     for stream, line in notes:  # after the child's own output: how desmon ended it
         print(line, file=sys.stdout if stream == "out" else sys.stderr, flush=True)
     return code - 1000 if code >= 1000 else code
 
 
-def _child(page: Any, out: Any, err_r: int, err_w: int, work: Callable[[Beacon], int]) -> None:  # pragma: no cover
+def _child(page: Any, out: Any, work: Callable[[Beacon], int]) -> None:  # pragma: no cover
     os.setpgid(0, 0)
-    os.close(err_r)
-    os.dup2(out.fileno(), 1)
-    os.dup2(err_w, 2)
+    os.dup2(out.fileno(), 1)  # (stderr is the parent's own: a progress line stays on the terminal)
     signal.signal(signal.SIGINT, signal.default_int_handler)
     beacon = Beacon(page)
     code = 4
@@ -172,17 +166,7 @@ def _kill(pid: int) -> None:
         pass
 
 
-def _relay(fd: int, wait: float) -> None:
-    """What the child wrote on stderr within ``wait`` seconds, copied to ours."""
-    ready, _w, _x = select.select([fd], [], [], wait)
-    if ready:
-        data = os.read(fd, 65536)
-        if data:
-            sys.stderr.buffer.write(data) if hasattr(sys.stderr, "buffer") else sys.stderr.write(data.decode(errors="replace"))
-            sys.stderr.flush()
-
-
-def _watch(args: argparse.Namespace, pid: int, page: Any, err_r: int, notes: list[tuple[Any, str]]) -> int:
+def _watch(args: argparse.Namespace, pid: int, page: Any, notes: list[tuple[Any, str]]) -> int:
     """Wait for the child: its exit code, or the code of how desmon ended it (and in
     ``notes`` the line that says so, ("out" or "err", line))."""
     end, limit = _limits(args)
@@ -190,7 +174,7 @@ def _watch(args: argparse.Namespace, pid: int, page: Any, err_r: int, notes: lis
     previous = signal.signal(signal.SIGINT, lambda s, f: interrupts.append(time.monotonic()) or _forward(pid))
     try:
         while True:
-            _relay(err_r, 0.05)
+            time.sleep(0.05)
             done, status = os.waitpid(pid, os.WNOHANG)
             since, used, who, code = _LAYOUT.unpack_from(page)
             if who == pid:  # the child's verdict: it is done, whatever it leaves running
@@ -202,7 +186,6 @@ def _watch(args: argparse.Namespace, pid: int, page: Any, err_r: int, notes: lis
                 return why
     finally:
         signal.signal(signal.SIGINT, previous)
-        _drain(err_r)
 
 
 def _forward(pid: int) -> None:
@@ -210,15 +193,6 @@ def _forward(pid: int) -> None:
         os.kill(pid, signal.SIGINT)
     except ProcessLookupError:
         pass
-
-
-def _drain(fd: int) -> None:
-    while select.select([fd], [], [], 0)[0]:
-        data = os.read(fd, 65536)
-        if not data:
-            return
-        sys.stderr.buffer.write(data) if hasattr(sys.stderr, "buffer") else sys.stderr.write(data.decode(errors="replace"))
-    sys.stderr.flush()
 
 
 def _overrun(
