@@ -162,8 +162,9 @@ def test_fuzz_reports_a_crash_as_crashed_with_the_checkers_shortest_path(deploye
     assert "the checker's shortest counterexample" in out
 
 
-def _desmon(deployers: str, *args: str, interrupt_after: float | None = None) -> tuple[int, float, str, str]:
-    """``desmon ARGS`` in a process of its own: (exit code, seconds it took, stdout, stderr)."""
+def _desmon(deployers: str, *args: str, interrupt_after: float | None = None, timeout: float = 60) -> tuple[int, float, str, str]:
+    """``desmon ARGS`` in a process of its own: (exit code, seconds it took, stdout, stderr);
+    one that takes over ``timeout`` seconds fails the test (it hung)."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "desmon", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # a shell's background job ignores it
@@ -174,7 +175,7 @@ def _desmon(deployers: str, *args: str, interrupt_after: float | None = None) ->
         proc.send_signal(signal.SIGINT)
         t0 = time.monotonic()
     try:
-        out, err = proc.communicate(timeout=60)
+        out, err = proc.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
         proc.kill()
         proc.communicate()
@@ -196,7 +197,7 @@ def test_a_reaction_that_never_returns_is_the_deployers_failure_where_there_is_n
     code, took, out, err = _desmon(
         deployers, command, COFFEE, "--deployer", f"{deployers}:spins_on_release", "--max-reaction-seconds", "1",
     )
-    assert code == 4 and "desmon: CRASHED: " in err and "ran for over 1 s without yielding a command or returning" in err, out + err
+    assert code == 4 and "desmon: CRASHED: " in err and "ran for over 1 s in one reaction without returning" in err, out + err
     assert "spins_on_release" in err and "Traceback" not in err
     assert took < 20, f"{command} took {took:.1f} s"
 
@@ -284,3 +285,437 @@ def test_a_deployer_failing_only_in_the_no_flapping_re_run_is_one_line(deployers
         err = capsys.readouterr().err
         assert "reacting to the no-flapping check's re-run of its reaction with nothing changed: raised RuntimeError" in err
         assert len(err.splitlines()) == 1 and "Traceback" not in err
+
+
+# -- isolation: a deployer cannot change what desmon checks, nor its signals, timers, threads or exit ------------------
+# (docs/deployers.md, "What desmon's isolation catches"). Every case runs `desmon` as the program, as a user runs it:
+# the deployer then runs in the worker process desmon supervises (desmon/cli/supervise.py).
+
+#: deployers that misbehave once the robot grasps (reachable in one step), each in one way
+ISOLATION_PY = """
+import os, signal, sys, threading, time
+from desmon.deployment.deployer import DEPLOYERS
+from desmon.deployment.guard import ReactionStopped
+from desmon.deployment.ports import RaiseError, Start, Stop
+
+_desmon = DEPLOYERS["desmon"].react
+
+
+class Boom(BaseException):
+    pass
+
+
+def _on_grasp(q, slots, changed, context_changed, act):
+    yield from _desmon(q, slots, changed, context_changed)
+    if q.context() in ("grasp", "release"):
+        act(q)
+
+
+def _raise(exc):
+    def act(q):
+        raise exc
+    return act
+
+
+def base_exception(q, slots, changed, context_changed):
+    yield from _on_grasp(q, slots, changed, context_changed, _raise(Boom("boom")))
+
+
+def keyboard_interrupt(q, slots, changed, context_changed):
+    yield from _on_grasp(q, slots, changed, context_changed, _raise(KeyboardInterrupt()))
+
+
+def reaction_stopped(q, slots, changed, context_changed):
+    yield from _on_grasp(q, slots, changed, context_changed, _raise(ReactionStopped("timeout 5s")))
+
+
+def generator_exit(q, slots, changed, context_changed):
+    yield from _on_grasp(q, slots, changed, context_changed, _raise(GeneratorExit()))
+
+
+def _deeper(n):
+    return _deeper(n + 1) + 1
+
+
+def recursion(q, slots, changed, context_changed):
+    yield from _on_grasp(q, slots, changed, context_changed, lambda q: _deeper(0))
+
+
+def exit0(q, slots, changed, context_changed):
+    yield from _on_grasp(q, slots, changed, context_changed, lambda q: os._exit(0))
+
+
+def exit1(q, slots, changed, context_changed):
+    yield from _on_grasp(q, slots, changed, context_changed, lambda q: os._exit(1))
+
+
+def _fork_once(q):
+    if not os.environ.get("FORKED_ONCE"):  # (not a global of this module: that is state kept between reactions)
+        os.environ["FORKED_ONCE"] = "1"
+        os.fork()
+
+
+def forks(q, slots, changed, context_changed):
+    yield from _on_grasp(q, slots, changed, context_changed, _fork_once)
+
+
+def _alarm_soon():
+    time.sleep(0.05)
+    os.kill(os.getpid(), signal.SIGALRM)
+
+
+def thread_sends_alarm(q, slots, changed, context_changed):
+    signal.signal(signal.SIGALRM, signal.SIG_DFL)  # desmon's handler gone: the signal's default ends the process
+    threading.Thread(target=_alarm_soon).start()
+    time.sleep(0.5)
+    yield from _desmon(q, slots, changed, context_changed)
+
+
+def leaves_a_thread(q, slots, changed, context_changed):
+    threading.Thread(target=time.sleep, args=(3600,)).start()  # not a daemon: Python would wait for it at exit
+    yield from _desmon(q, slots, changed, context_changed)
+
+
+def ignores_alarm_and_spins(q, slots, changed, context_changed):
+    yield from _desmon(q, slots, changed, context_changed)
+    if q.context() in ("grasp", "release"):
+        signal.signal(signal.SIGALRM, signal.SIG_IGN)
+        while True:
+            pass
+
+
+def cancels_the_timer_and_spins(q, slots, changed, context_changed):
+    yield from _desmon(q, slots, changed, context_changed)
+    if q.context() in ("grasp", "release"):
+        signal.setitimer(signal.ITIMER_REAL, 0, 0)
+        while True:
+            pass
+
+
+def swallows_everything(q, slots, changed, context_changed):
+    yield from _desmon(q, slots, changed, context_changed)
+    while q.context() in ("grasp", "release"):
+        try:
+            time.sleep(0.2)
+        except BaseException:
+            pass
+
+
+def no_op_every_half_second(q, slots, changed, context_changed):
+    yield from _desmon(q, slots, changed, context_changed)
+    while q.context() in ("grasp", "release"):
+        try:
+            time.sleep(0.5)
+        except Exception:
+            pass
+        yield RaiseError("deployment_failed", slots[0][0]) if slots else Stop("force_slip_detector", q.platform_states()[0].name)
+
+
+class Shifty(Start):
+    __slots__ = ()
+    reads = 0
+
+    def __init__(self, platform):
+        object.__setattr__(self, "platform", platform)
+
+    @property
+    def graph(self):
+        Shifty.reads += 1
+        return "combined_slip_detector" if Shifty.reads < 3 else "force_slip_detector"
+
+
+def shifty_command(q, slots, changed, context_changed):
+    if q.context() == "grasp":
+        yield Shifty(q.platform_states()[0].name)
+    yield from _desmon(q, slots, changed, context_changed)
+
+
+def changes_commands_after_yield(q, slots, changed, context_changed):
+    reaction = _desmon(q, slots, changed, context_changed)
+    outcome = None
+    while True:
+        try:
+            cmd = reaction.send(outcome)
+        except StopIteration:
+            return
+        outcome = yield cmd
+        if isinstance(cmd, (Start, Stop)):
+            object.__setattr__(cmd, "platform", "no_such_platform")
+
+
+def raises_capacities(q, slots, changed, context_changed):
+    for s in q.platform_states():
+        object.__setattr__(s.platform, "capacities", tuple((r, 1e9) for r, _a in s.platform.capacities))
+    yield from _desmon(q, slots, changed, context_changed)
+
+
+def deploys_nothing(q, slots, changed, context_changed):
+    return
+    yield
+"""
+
+#: modules that misbehave while imported (each its own file)
+IMPORT_TIME = {
+    "patches_invariants": (
+        "import desmon.deployment.invariants as inv\n"
+        "inv.check_invariants = lambda view, invariants=None: []\n"
+        "inv.get_invariants = lambda names=None: ()\n"
+    ),
+    "wraps_the_query_port": (
+        "import desmon.deployment.ports as ports\n"
+        "_real = ports.PlatformHandle.__init__\n"
+        "def _wrapped(self, *a, **k):\n"
+        "    _real(self, *a, **k)\n"
+        "ports.PlatformHandle.__init__ = _wrapped\n"
+    ),
+    "ignores_alarm_at_import": "import signal\nsignal.signal(signal.SIGALRM, signal.SIG_IGN)\n",
+}
+
+IMPORT_TAIL = """
+from desmon.deployment.deployer import DEPLOYERS
+
+def deploys_nothing(q, slots, changed, context_changed):
+    return
+    yield
+
+def spins_on_grasp(q, slots, changed, context_changed):
+    while q.context() in ("grasp", "release"):
+        pass
+    yield from DEPLOYERS["desmon"].react(q, slots, changed, context_changed)
+"""
+
+
+@pytest.fixture
+def isolation(tmp_path: Path) -> Path:
+    (tmp_path / "isolation.py").write_text(textwrap.dedent(ISOLATION_PY))
+    for name, head in IMPORT_TIME.items():
+        (tmp_path / f"{name}.py").write_text(head + IMPORT_TAIL)
+    return tmp_path
+
+
+def _spec(isolation: Path, name: str, module: str = "isolation") -> str:
+    return f"{isolation / module}.py:{name}"
+
+
+SHIFT = str(ROOT / "scenarios" / "coffee_shift.py")  # a scenario analyze takes (stochastic faults, rates)
+
+
+def _command(command: list[str]) -> list[str]:
+    """``command`` with its scenario: analyze needs one with rates."""
+    if "--scenario-for-analyze" in command:
+        return [command[0], SHIFT, "-p", "faults=False", "--horizon", "60"]
+    return [command[0], COFFEE, *command[1:]]
+
+
+def _slow(command: list[str]) -> float:
+    """How long a run of ``command`` may take before it counts as hung (analyze builds a Markov chain: slow on a busy machine)."""
+    return 180 if command[0] == "analyze" else 60
+
+
+def _verdict_line(out: str) -> list[str]:
+    return [line for line in out.splitlines() if line.startswith("verdict:")]
+
+
+@pytest.mark.parametrize("engine", ["table", "direct"])
+@pytest.mark.parametrize(
+    "name, says",
+    [
+        ("base_exception", "raised Boom: boom"),
+        ("keyboard_interrupt", "raised KeyboardInterrupt"),
+        ("reaction_stopped", "raised ReactionStopped: timeout 5s"),
+        ("generator_exit", "raised GeneratorExit"),
+        ("recursion", "raised RecursionError"),
+        ("shifty_command", "yield the commands of desmon.deployment.ports themselves"),
+    ],
+)
+def test_whatever_a_deployer_raises_or_yields_is_its_crash_not_desmons(isolation, engine, name, says):
+    """A BaseException of its own, a KeyboardInterrupt or ReactionStopped it raises itself
+    (not a Ctrl-C, not a budget), endless recursion, a command whose fields change after
+    they are read: the verdict CRASHED with the path to it, one line, no traceback."""
+    code, _took, out, err = _desmon(str(isolation), "verify", COFFEE, "--deployer", _spec(isolation, name), "--engine", engine, "--no-progress")
+    assert code == 4 and "verdict: CRASHED (the deployer failed in step 1)" in out and says in out, out + err
+    assert "Traceback" not in err and "interrupted" not in out + err
+
+
+@pytest.mark.parametrize("command", [["verify", "--no-progress"], ["verify", "--no-progress", "--engine", "direct"], ["run"], ["fuzz", "--examples", "5", "--seed", "1"], ["analyze", "--scenario-for-analyze"]])
+@pytest.mark.parametrize("name", ["exit0", "exit1", "thread_sends_alarm"])
+def test_a_deployer_that_ends_the_process_is_crashed_never_a_verdict(isolation, command, name):
+    """os._exit(0) or (1) in a reaction, a thread that sends SIGALRM once desmon's handler is
+    gone: the worker ends without a verdict, and desmon says CRASHED (exit 4)."""
+    code, took, out, err = _desmon(str(isolation), *_command(command), "--deployer", _spec(isolation, name), timeout=_slow(command))
+    assert code == 4 and "desmon: CRASHED: deployer" in err and "ended desmon's worker process without a verdict" in err, out + err
+    assert "HOLDS" not in out and not _verdict_line(out) or "CRASHED" in out
+
+
+@pytest.mark.parametrize("engine", ["table", "direct"])
+def test_a_fork_in_a_reaction_leaves_one_report(isolation, engine):
+    code, _took, out, err = _desmon(str(isolation), "verify", COFFEE, "--deployer", _spec(isolation, "forks"), "--engine", engine, "--no-progress")
+    assert code == 0 and len(_verdict_line(out)) == 1 and out.count("coffee_handover -- deployer") == 1, out + err
+
+
+@pytest.mark.parametrize("command", [["verify", "--no-progress"], ["run"]])
+def test_a_thread_the_deployer_leaves_running_does_not_hold_desmon(isolation, command):
+    code, took, out, err = _desmon(str(isolation), *_command(command), "--deployer", _spec(isolation, "leaves_a_thread"))
+    assert code == 0 and took < 30, out + err
+
+
+@pytest.mark.parametrize("engine", ["table", "direct"])
+@pytest.mark.parametrize("name", ["ignores_alarm_and_spins", "cancels_the_timer_and_spins", "swallows_everything", "no_op_every_half_second"])
+def test_a_deployer_fighting_the_timer_ends_at_the_timeout(isolation, engine, name):
+    """SIGALRM ignored or the interval timer cancelled inside a reaction, every exception
+    swallowed, a no-op command every 0.5 s: verify --timeout 5 ends INCOMPLETE (exit 3)
+    within the timeout plus 2 s (the supervisor kills the worker if it must)."""
+    code, took, out, err = _desmon(
+        str(isolation), "verify", COFFEE, "--deployer", _spec(isolation, name), "--engine", engine, "--timeout", "5", "--no-progress",
+    )
+    assert code == 3 and "verdict: INCOMPLETE (timeout 5s" in out and "Traceback" not in err, out + err
+    assert took < 5 + 2, f"--timeout 5 took {took:.1f} s"
+
+
+@pytest.mark.parametrize("name", ["ignores_alarm_and_spins", "cancels_the_timer_and_spins", "swallows_everything", "no_op_every_half_second"])
+def test_a_deployer_fighting_the_timer_is_crashed_at_the_reaction_limit_in_run(isolation, name):
+    code, took, out, err = _desmon(str(isolation), "run", COFFEE, "--deployer", _spec(isolation, name), "--max-reaction-seconds", "2")
+    assert code == 4 and "desmon: CRASHED: " in err and "ran for over 2 s in one reaction" in err and "Traceback" not in err, out + err
+    assert took < 30, f"run took {took:.1f} s"
+
+
+@pytest.mark.parametrize("command", [["verify", "--timeout", "5", "--no-progress"], ["run", "--max-reaction-seconds", "2"]])
+def test_a_deployer_ignoring_the_timer_signal_from_import_ends_within_the_budget(isolation, command):
+    code, took, out, err = _desmon(str(isolation), *_command(command), "--deployer", _spec(isolation, "spins_on_grasp", "ignores_alarm_at_import"))
+    assert code in (3, 4) and "Traceback" not in err, out + err
+    assert took < 5 + 2 + 5, f"{command[0]} took {took:.1f} s"
+
+
+@pytest.mark.parametrize("command", [["verify", "--no-progress"], ["verify", "--no-progress", "--engine", "direct"], ["run"], ["fuzz", "--examples", "5", "--seed", "1"], ["analyze", "--scenario-for-analyze"]])
+@pytest.mark.parametrize("module", ["patches_invariants", "wraps_the_query_port"])
+def test_a_deployer_changing_desmons_code_at_import_is_refused(isolation, command, module):
+    """A module that replaces desmon's invariant functions or wraps a port while it is
+    imported (and deploys nothing) never gets HOLDS: one line naming what it changed, exit 2."""
+    code, _took, out, err = _desmon(str(isolation), *_command(command), "--deployer", _spec(isolation, "deploys_nothing", module), timeout=_slow(command))
+    assert code == 2 and "changed desmon's own code while it ran (desmon.deployment." in err, out + err
+    assert "HOLDS" not in out and err.strip().splitlines()[-1].startswith("desmon: error: deployer ")
+
+
+@pytest.mark.parametrize("command", [["verify", "--no-progress"], ["verify", "--no-progress", "--engine", "direct"], ["run"], ["fuzz", "--examples", "5", "--seed", "1"], ["analyze", "--scenario-for-analyze"]])
+def test_a_deployer_raising_the_platforms_capacities_is_refused(isolation, command):
+    code, _took, out, err = _desmon(str(isolation), *_command(command), "--deployer", _spec(isolation, "raises_capacities"), timeout=_slow(command))
+    assert code == 2 and "changed the model it was handed while it ran (platform " in err, out + err
+    assert "HOLDS" not in out
+
+
+def test_a_command_changed_after_it_was_yielded_is_acted_on_as_read(isolation):
+    """desmon acts on its own copy of each command: changing the object afterwards changes nothing."""
+    plain = _desmon(str(isolation), "verify", COFFEE, "--no-progress")
+    changed = _desmon(str(isolation), "verify", COFFEE, "--deployer", _spec(isolation, "changes_commands_after_yield"), "--no-progress")
+    assert plain[0] == changed[0] == 0
+    assert plain[2].split("states:")[1].split("time:")[0] == changed[2].split("states:")[1].split("time:")[0]
+
+
+# -- deployers with memory: caught at the end of the search, not sampled ------------------------------------------------
+
+MEMORY_PY = """
+from desmon.deployment.deployer import DEPLOYERS
+
+_desmon = DEPLOYERS["desmon"].react
+CALLS = [0]
+SEEN = set()
+
+
+def tires(q, slots, changed, context_changed):
+    '''Works for 300 reactions, then does nothing.'''
+    CALLS[0] += 1
+    if CALLS[0] > 300:
+        return
+    yield from _desmon(q, slots, changed, context_changed)
+
+
+def tires_early(q, slots, changed, context_changed):
+    '''Works for 20 reactions, then does nothing.'''
+    CALLS[0] += 1
+    if CALLS[0] > 20:
+        return
+    yield from _desmon(q, slots, changed, context_changed)
+
+
+def raises_once_when_asked_again(q, slots, changed, context_changed):
+    '''Raises the first time it is asked the same thing twice (the re-run of a sampled reaction).'''
+    reading = (q.context(), tuple(q.deployments()), tuple(changed), context_changed)
+    if reading in SEEN and not CALLS[0]:
+        CALLS[0] = 1
+        raise RuntimeError("asked again")
+    SEEN.add(reading)
+    yield from _desmon(q, slots, changed, context_changed)
+
+
+def stateless(q, slots, changed, context_changed):
+    yield from _desmon(q, slots, changed, context_changed)
+"""
+
+
+@pytest.fixture
+def memory(tmp_path: Path) -> str:
+    path = tmp_path / "memory.py"
+    path.write_text(textwrap.dedent(MEMORY_PY))
+    return str(path)
+
+
+@pytest.mark.parametrize("engine", ["table", "direct"])
+@pytest.mark.parametrize("name", ["tires", "tires_early", "raises_once_when_asked_again"])
+def test_a_deployer_with_memory_is_caught_never_holds(memory, engine, name):
+    """A deployer that counts its calls and stops after some (even more than the search
+    ran: the state its module keeps changed), or raises once in a re-run: refused, exit 2."""
+    robot_day = str(ROOT / "scenarios" / "robot_day.py")
+    code, _took, out, err = _desmon(memory, "verify", robot_day, "--deployer", f"{memory}:{name}", "--engine", engine, "--no-progress")
+    assert code == 2 and "HOLDS" not in out and err.strip().splitlines()[-1].startswith("desmon: error: "), out + err
+    assert "keeps state between reactions" in err or "nondeterministic" in err or "not a function of what it reads" in err, err
+    if name == "raises_once_when_asked_again":
+        assert "and failed (raised RuntimeError: asked again" in err or "keeps state" in err, err
+
+
+def test_a_deployer_without_memory_still_holds(memory):
+    robot_day = str(ROOT / "scenarios" / "robot_day.py")
+    for engine in ("table", "direct"):
+        code, _took, out, err = _desmon(memory, "verify", robot_day, "--deployer", f"{memory}:stateless", "--engine", engine, "--no-progress")
+        assert code == 0 and "verdict: HOLDS" in out, out + err
+
+
+@pytest.mark.parametrize("command", [["fuzz", "--examples", "5", "--seed", "1"], ["analyze", "--scenario-for-analyze"]])
+def test_a_deployer_fighting_the_timer_is_crashed_at_the_reaction_limit_in_fuzz_and_analyze(isolation, command):
+    code, took, out, err = _desmon(
+        str(isolation), *_command(command), "--deployer", _spec(isolation, "ignores_alarm_and_spins"), "--max-reaction-seconds", "2",
+        timeout=_slow(command),
+    )
+    assert code == 4 and "desmon: CRASHED: " in err and "ran for over 2 s in one reaction" in err and "Traceback" not in err, out + err
+
+
+PEEKS_PY = """
+from desmon.deployment.ports import Stop
+from desmon.deployment.deployer import DEPLOYERS
+
+
+def _up(s):
+    real = getattr(getattr(s, "checks", None), "_real", None)  # the table engine's private map, where there is one
+    return real[s].up if real is not None and s in real else s.up
+
+
+def peeks(q, slots, changed, context_changed):
+    for s in q.platform_states():
+        if not _up(s):
+            for g, _c in s.deployed:
+                yield Stop(g, s.name)
+    if not any(not _up(s) for s in q.platform_states()):
+        yield from DEPLOYERS["desmon"].react(q, slots, changed, context_changed)
+"""
+
+
+def test_a_deployer_reading_through_a_private_attribute_never_holds(tmp_path):
+    """Reading `up` through the table engine's private map: refused (exit 2) or VIOLATED on
+    either engine, never HOLDS on one engine and VIOLATED on the other."""
+    path = tmp_path / "peeks.py"
+    path.write_text(textwrap.dedent(PEEKS_PY))
+    codes = []
+    for engine in ("table", "direct"):
+        code, _took, out, err = _desmon(str(path), "verify", COFFEE, "--deployer", f"{path}:peeks", "--engine", engine, "--no-progress")
+        assert code in (1, 2) and "HOLDS" not in out, out + err
+        codes.append(code)
+    assert 0 not in codes

@@ -22,7 +22,7 @@ if TYPE_CHECKING:
 __all__ = [
     "EXIT_OK", "EXIT_VIOLATED", "EXIT_USAGE", "EXIT_INCOMPLETE", "MAX_STATES", "CEX_FILE", "MUTANT_PREFIX", "MUTANT_NAMES", "Parser", "Subparsers",
     "one_line", "usage_error", "scenario_arg", "deployer_arg", "load_scenario_of", "load_scripted", "warn_uncovered", "resolve_times",
-    "draw_trace", "run_of",
+    "draw_trace", "run_of", "users_deployer",
 ]
 
 EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
@@ -92,6 +92,14 @@ MUTANT_PREFIX = "mutant"
 MUTANT_NAMES = ("no-recheck", "capacity-blind", "make-before-break", "stale-errors", "raise-instead", "no-hysteresis")
 
 
+def users_deployer(spec: object) -> bool:
+    """Whether ``--deployer spec`` names a user's file or module (not a built-in, not a mutant)."""
+    if not isinstance(spec, str):
+        return False
+    source, colon, _name = spec.rpartition(":")
+    return bool(colon and source and source != MUTANT_PREFIX)
+
+
 def deployer_arg(p: argparse.ArgumentParser, *, deadline: bool = True, default_note: str = "") -> None:
     """``--deployer`` and the limits of one reaction of the deployer's code; ``default_note``
     is appended to the ``--deployer`` help."""
@@ -110,7 +118,7 @@ def deployer_arg(p: argparse.ArgumentParser, *, deadline: bool = True, default_n
     if deadline:  # (verify has --timeout: its budget stops a reaction that runs too long)
         p.add_argument(
             "--max-reaction-seconds", type=positive_seconds, default=None, metavar="S",
-            help="the longest the deployer's code may run without yielding a command or returning; longer is a "
+            help="the longest the deployer's own code may run in one reaction (summed over its commands); longer is a "
             "reaction that never ends, reported as the deployer's failure (default: 60)",
         )
 
@@ -124,6 +132,10 @@ def load_scenario_of(args: argparse.Namespace) -> Scenario:
     from desmon.paths import PathError, check_outputs_spare_modules
 
     scenario = load_scenario(args.scenario, parse_assignments(getattr(args, "param", None)))
+    if users_deployer(getattr(getattr(args, "deployer", None), "name", None)) and not hasattr(args, "model_fingerprint"):
+        from desmon.deployment.integrity import model_fingerprint  # the model as loaded: the deployer must leave it alone
+
+        args.model_fingerprint = (scenario.model, model_fingerprint(scenario.model))
     try:
         check_outputs_spare_modules(getattr(args, "outputs", ()))  # an output must not overwrite a module the script imported
     except PathError as exc:

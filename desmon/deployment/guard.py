@@ -183,9 +183,48 @@ def _check_command(cmd: object, graphs: frozenset[str], platforms: frozenset[str
     )
 
 
-class RanAway(Exception):
+class RanAway(BaseException):
     """Raised by :meth:`Guard.deadline`'s timer inside a deployer's code that has run
-    too long without yielding; the guard reports it as the deployer's fault."""
+    too long without yielding; the guard reports it as the deployer's fault. A
+    ``BaseException``, so that a deployer's ``except Exception`` retry loop cannot swallow it."""
+
+
+class _BudgetSpent(ReactionStopped):
+    """The :class:`ReactionStopped` desmon's own timer raises inside a deployer's code; a
+    ``ReactionStopped`` the deployer raises itself is its fault, not a budget."""
+
+#: why a command is refused when its type or its fields are not desmon's own plain ones
+_NOT_PLAIN = (
+    "yielded `{cmd}` ({kind}): yield the commands of desmon.deployment.ports themselves (Start, Stop, RaiseError), "
+    "their graph, platform and kind plain str, not a subclass of either"
+)
+
+
+def _own_copy(cmd: object, graphs: frozenset[str], platforms: frozenset[str]) -> tuple[Any, str]:
+    """(desmon's own copy of ``cmd``, why it is not a command this model can execute or "").
+
+    The fields are read once, here, and the engine acts on the copy: a command object
+    whose fields change after this read (a property, a mutable subclass, a later
+    ``object.__setattr__``) cannot make desmon act on something else than it checked."""
+    kind = type(cmd)
+    if kind is Start or kind is Stop:
+        g, p = cmd.graph, cmd.platform  # type: ignore[union-attr]
+        if type(g) is str and type(p) is str and g in graphs and p in platforms:
+            return kind(g, p), ""
+    elif kind is RaiseError:
+        k, g, p, detail = cmd.kind, cmd.graph, cmd.platform, cmd.detail  # type: ignore[union-attr]
+        if type(k) is str and type(g) is str and (p is None or type(p) is str):
+            copy = RaiseError(k, g, p, detail)
+            return copy, _check_command(copy, graphs, platforms)
+    why = _check_command(cmd, graphs, platforms)
+    return cmd, why or _NOT_PLAIN.format(cmd=_safe_str(cmd), kind=kind.__name__)
+
+
+def _safe_str(obj: object) -> str:
+    try:
+        return str(obj)[:200]
+    except Exception:  # a user's __str__ may fail
+        return f"a {type(obj).__name__}"
 
 
 def _close(reaction: Any) -> None:
@@ -233,8 +272,15 @@ class Guard:
         self.inside = 0
         #: when the deployer's code was last entered (the deadline's clock)
         self.since = 0.0
+        #: the seconds the deployer's own code ran in the current reaction before ``since``
+        self.used = 0.0
         #: whether a deadline timer is armed (:meth:`deadline`)
         self.armed = False
+        #: the SIGINTs counted while a run is watched (:meth:`_counting_interrupts`)
+        self.interrupts = 0
+        #: told (since, used) as the deployer's code starts and stops running where a deadline
+        #: is armed (the supervising process's view of the clock: desmon.cli.supervise), or None
+        self.beacon: Callable[[float, float], None] | None = None
 
     def __repr__(self) -> str:
         return f"Guard(max_commands={self.max_commands}, max_reaction_seconds={self.max_reaction_seconds})"
@@ -244,32 +290,43 @@ class Guard:
         deadline is armed and it is not already running."""
         if self.armed and not self.inside:
             self.since = time.monotonic()
+            if self.beacon is not None:
+                self.beacon(self.since, self.used)
         self.inside += 1
+
+    def _leave(self) -> None:
+        """The deployer's code yielded, returned or raised: the time it ran counts in its
+        reaction's (where a deadline is armed)."""
+        self.inside -= 1
+        if self.armed and not self.inside:
+            self.used += time.monotonic() - self.since
+            if self.beacon is not None:
+                self.beacon(0.0, self.used)
 
     @contextlib.contextmanager
     def deadline(self) -> Iterator[None]:
         """Within it, a deployer's code that runs for more than ``max_reaction_seconds``
-        without yielding a command or returning is stopped by a timer signal (every
+        in one reaction (its own code's time, summed over its commands) without returning is stopped by a timer signal (every
         :data:`TICK` s) and reported as its fault: a reaction that never ends, in a command
         without a ``--timeout`` of its own. The timer is used only in the main thread,
         where SIGALRM is not otherwise taken (a search started inside it then asks its
         budget between commands only). Without a limit it does nothing."""
         seconds = self.max_reaction_seconds
-        if seconds is None or not _timer_free():
+        if seconds is None or (not _timer_free() and self.beacon is None):
             yield
             return
 
         def tick(signum: int, frame: Any) -> None:
-            if self.inside > 0 and time.monotonic() - self.since > seconds:
-                self.since = time.monotonic()  # once
+            if self.inside > 0 and self.used + time.monotonic() - self.since > seconds:
+                self.since, self.used = time.monotonic(), 0.0  # once
                 raise RanAway(
-                    f"its code ran for over {seconds:g} s without yielding a command or returning, so it never ends; "
+                    f"its code ran for over {seconds:g} s in one reaction without returning, so it never ends; "
                     "a reaction must return (--max-reaction-seconds S sets the limit)"
                 )
 
         self.armed = True
         try:
-            with _timer(tick):
+            with (_timer(tick) if _timer_free() else contextlib.nullcontext()), self._counting_interrupts():
                 yield
         finally:
             self.armed = False
@@ -293,13 +350,53 @@ class Guard:
             if self.inside > 0 and os.getpid() == pid:
                 why = urgent()
                 if why:
-                    raise ReactionStopped(why)
+                    raise _BudgetSpent(why)
 
         try:
-            with _timer(tick) if _timer_free() else contextlib.nullcontext():
+            with (_timer(tick) if _timer_free() else contextlib.nullcontext()), self._counting_interrupts():
                 yield
         finally:
             self.watch = previous
+
+    @contextlib.contextmanager
+    def _counting_interrupts(self) -> Iterator[None]:
+        """Within it (main thread only), every SIGINT is counted before the handler in
+        place takes it: a ``KeyboardInterrupt`` out of a deployer's code is a real Ctrl-C
+        only once one was counted; before that, the deployer raised it itself (its fault)."""
+        if threading.current_thread() is not threading.main_thread():
+            yield
+            return
+        handler = signal.getsignal(signal.SIGINT)
+
+        def count(signum: int, frame: Any) -> None:
+            self.interrupts += 1
+            if callable(handler):
+                handler(signum, frame)
+            elif handler != signal.SIG_IGN:
+                signal.default_int_handler(signum, frame)
+
+        signal.signal(signal.SIGINT, count)
+        try:
+            yield
+        finally:
+            if signal.getsignal(signal.SIGINT) is count:
+                signal.signal(signal.SIGINT, handler)
+
+    def _desmons(self, exc: BaseException) -> bool:
+        """Whether ``exc``, out of a deployer's code, is desmon's own: the budget this
+        guard's timer raised (:class:`ReactionStopped`) or a real Ctrl-C; anything else
+        the deployer raised itself (``KeyboardInterrupt``, ``ReactionStopped`` and every
+        other ``BaseException`` included) is its fault."""
+        if isinstance(exc, ReactionStopped):
+            return isinstance(exc, _BudgetSpent)
+        return isinstance(exc, KeyboardInterrupt) and self.interrupts > 0
+
+    @staticmethod
+    def _forked(pid: int) -> None:
+        """A process the deployer forked inside its reaction ends here, silently: only
+        the process that started the reaction goes on (and reports)."""
+        if os.getpid() != pid:
+            os._exit(0)
 
     def guarded(
         self, name: str, make: Callable[[], Any], stimulus: Any, graphs: frozenset[str], platforms: frozenset[str],
@@ -316,15 +413,21 @@ class Guard:
         (``before(cmd)`` as each is yielded, ``after(cmd, outcome)`` once its outcome came
         back), without a generator of their own."""
         watch = self.watch
+        if not self.inside:  # a reaction starts (not one nested in another's code): its own code's clock
+            self.used = 0.0
         self._enter()
+        pid = os.getpid()
         try:
             reaction = make()
-        except (ReactionStopped, KeyboardInterrupt, CheckerError):
+        except CheckerError:
             raise
-        except (Exception, SystemExit) as exc:  # sys.exit() in a reaction must not end desmon (with exit 0, say)
+        except BaseException as exc:  # sys.exit() in a reaction must not end desmon (with exit 0, say)
+            self._forked(pid)
+            if self._desmons(exc):
+                raise
             raise _fault(name, reacting(), _raised(exc), stimulus, exc) from None
         finally:
-            self.inside -= 1
+            self._leave()
         if type(reaction) is not GeneratorType:
             raise _fault(
                 name, reacting(), f"its reaction returned {type(reaction).__name__}, not a generator; "
@@ -344,21 +447,18 @@ class Guard:
             try:
                 cmd = send(outcome)
             except StopIteration:
+                self._forked(pid)
                 return
-            except (ReactionStopped, KeyboardInterrupt, CheckerError):
-                raise  # the budget, Ctrl-C, an engine's own signal (the table engine's unobserved read)
-            except (Exception, SystemExit) as exc:  # sys.exit() in a reaction must not end desmon (with exit 0, say)
-                if isinstance(exc, DeployerFault) and exc.stimulus is not None:
-                    raise  # a nested deployer's (a mutant's) fault, already named
+            except CheckerError:
+                raise  # an engine's own signal (the table engine's unobserved read)
+            except BaseException as exc:  # sys.exit() in a reaction must not end desmon (with exit 0, say)
+                self._forked(pid)
+                if self._desmons(exc) or (isinstance(exc, DeployerFault) and exc.stimulus is not None):
+                    raise  # the budget, Ctrl-C; a nested deployer's (a mutant's) fault, already named
                 raise _fault(name, reacting(), _raised(exc), stimulus, exc) from None
             finally:
-                self.inside -= 1
-            kind = type(cmd)
-            try:  # the common case first, without a call
-                ok = (kind is Start or kind is Stop) and cmd.graph in graphs and cmd.platform in platforms  # type: ignore[union-attr]
-            except TypeError:  # an unhashable graph or platform
-                ok = False
-            why = "" if ok else _check_command(cmd, graphs, platforms)
+                self._leave()
+            cmd, why = _own_copy(cmd, graphs, platforms)
             if why:
                 _close(reaction)
                 raise _fault(name, reacting(), why, stimulus)

@@ -21,13 +21,14 @@ import time
 from typing import Any, Iterable, Protocol, Sequence
 
 from desmon.deployment.deployer import Deployer
-from desmon.deployment.guard import Guard, ReactionStopped
+from desmon.deployment.guard import CRASH, Guard, ReactionStopped
 from desmon.deployment.run import RunContext
 from desmon.errors import CheckerError, TableUnsupported
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds
 from desmon.verify.direct import DirectSearch, Pool
 from desmon.verify.engines import AUTO, load, names
+from desmon.verify.memory import check_memory
 from desmon.verify.search import HOLDS, Budget, CheckResult, Exploration, ctrl_c, finish, paused_gc, resident_mb
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
@@ -238,6 +239,8 @@ def _search(system: TransitionSystem, engine: str, res: CheckResult, budget: Bud
 
 def _finished(res: CheckResult, system: TransitionSystem, run: Exploration, budget: Budget) -> CheckResult:
     res.explored = run.explored
+    if not run.incomplete and CRASH not in run.found:  # a user's deployer: every reaction again, in a fresh instance
+        check_memory(system)
     return finish(res, system, run.found, run.incomplete, run.depth, budget)
 
 

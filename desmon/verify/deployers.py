@@ -32,7 +32,7 @@ import inspect
 import os
 import sys
 from pathlib import Path
-from types import ModuleType
+from types import FunctionType, ModuleType
 from typing import Any, Iterator
 
 from desmon.deployment.deployer import DEPLOYERS, Deployer
@@ -40,7 +40,7 @@ from desmon.errors import ModelError
 from desmon.paths import script_folder_on_path
 from desmon.verify.mutants import MUTANTS
 
-__all__ = ["resolve_deployer", "portable_spec", "deployer_file", "DEPLOYER_FORMS", "MUTANT_PREFIX"]
+__all__ = ["resolve_deployer", "portable_spec", "deployer_file", "DEPLOYER_FORMS", "MUTANT_PREFIX", "users_spec", "fresh_deployer", "deployer_state"]
 
 MUTANT_PREFIX = "mutant"
 
@@ -86,6 +86,67 @@ def resolve_deployer(spec: str | Deployer) -> Deployer:
         raise _refuse(spec, f"name the deployer after the colon, e.g. {source}:DEPLOYER")
     module = _load_file(spec, source) if _is_file(source) else _import(spec, source)
     return _as_deployer(spec, module, source, name)
+
+
+def users_spec(spec: object) -> bool:
+    """Whether ``spec`` names a user's file or module (``path/to/file.py:NAME``, ``module:NAME``)."""
+    if not isinstance(spec, str):
+        return False
+    source, colon, _name = spec.rpartition(":")
+    return bool(colon and source and source != MUTANT_PREFIX)
+
+
+def fresh_deployer(spec: str) -> Deployer:
+    """The deployer a user's ``spec`` names, from its module imported *again*: a fresh
+    instance, its globals, caches and counters as they were before it first ran."""
+    source, _colon, name = spec.rpartition(":")
+    if _is_file(source):
+        return _as_deployer(spec, _load_file(spec, source), source, name)
+    sys.modules.pop(source, None)
+    return _as_deployer(spec, _import(spec, source), source, name)
+
+
+def _text(value: Any) -> str:
+    """What ``value`` holds, as text ("" where it cannot say)."""
+    try:
+        held = vars(value) if hasattr(value, "__dict__") and not isinstance(value, type) else None
+        return repr(value) + (f" {held!r}" if held else "")
+    except Exception:  # a user's __repr__ may fail: nothing to compare
+        return ""
+
+
+def _function_state(fn: Any) -> str:
+    cells = []
+    for cell in getattr(fn, "__closure__", None) or ():
+        try:
+            cells.append(cell.cell_contents)
+        except ValueError:  # an empty cell
+            cells.append(None)
+    return _text((fn.__defaults__, fn.__kwdefaults__, vars(fn), [c for c in cells if not callable(c)]))
+
+
+def deployer_state(spec: str, module: ModuleType | None = None) -> tuple[ModuleType | None, dict[str, str]]:
+    """(the module a user's ``spec`` loaded, the state it keeps as text): every global of
+    its own (a function or a class by what it holds: a function's defaults, attributes and
+    closure cells, a class's plain attributes). ``module``: that module, taken earlier
+    (the spec's module may since have been imported again)."""
+    if module is None:
+        module = sys.modules.get(spec.rpartition(":")[0])
+    out: dict[str, str] = {}
+    for name, value in list(vars(module).items()) if module is not None else ():
+        if name.startswith("__") or isinstance(value, ModuleType):
+            continue
+        if isinstance(value, (FunctionType, type)) and getattr(value, "__module__", None) != module.__name__:
+            continue  # imported (desmon's own code is fingerprinted elsewhere: desmon.deployment.integrity)
+        if isinstance(value, FunctionType):
+            out[name] = _function_state(value)
+        elif isinstance(value, type):
+            for attr, item in list(vars(value).items()):
+                if not attr.startswith("__") and not callable(item) and not isinstance(item, (property, staticmethod, classmethod)):
+                    out[f"{name}.{attr}"] = _text(item)
+        else:
+            out[name] = _text(value)
+    return module, out
 
 
 def deployer_file(spec: object) -> str | None:

@@ -32,6 +32,7 @@ from desmon.errors import CheckerError, NondeterminismError
 from desmon.model.events import Event, event_kind
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds, bounds_of
+from desmon.verify.deployers import deployer_state, users_spec
 from desmon.verify.environment import enabled_events
 from desmon.verify.replay import initial_reaction
 from desmon.verify.search import NOT_CHECKED, Record, Segment
@@ -104,6 +105,8 @@ class TransitionSystem:
         self.store = StateStore(self.model, self.run_context.checks)
         self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), deployer, run=self.run_context)
         self.deployer_name = self.core.deployer.name
+        # a user's deployer: its reactions (key, event, prefix, commands, instant) and state (desmon.verify.memory)
+        self.reactions, self.deployer_state = ([], deployer_state(self.deployer_name)) if users_spec(self.deployer_name) else (None, None)
         self.store.watch = self.instant
         self.store.watch_check = self._instant_check
         self._instant_memo: dict[tuple, list[tuple[str, str]]] = {}
@@ -142,10 +145,9 @@ class TransitionSystem:
         self.store.watch_check = self._instant_check
 
     def twin(self, store: StateStore, query: Any, instant_memo: dict) -> "TransitionSystem":
-        """This system (scenario, deployer, invariants, bounds) on another ``store`` whose
-        Query port, as the core sees it, is ``query`` (the table engine's recording runs);
-        ``instant_memo`` memoises the instantaneous invariants (one that never remembers
-        makes every check run)."""
+        """This system (scenario, deployer, invariants, bounds) on another ``store`` whose Query port, as the
+        core sees it, is ``query`` (the table engine's recording runs); ``instant_memo`` memoises the
+        instantaneous invariants (one that never remembers makes every check run)."""
         twin = object.__new__(type(self))
         twin.__dict__.update(self.__dict__)
         twin.store = store
@@ -207,12 +209,9 @@ class TransitionSystem:
         return r
 
     def run_one(self, key: Key, event: Event, prefix: tuple[bool, ...]):  # type: ignore[no-untyped-def]
-        """One transition: ``event`` and the complete reaction (the real core) applied to
-        ``key``, starts following ``prefix`` and succeeding beyond it.
-
-        Returns (next key, start outcomes, StepLog, instantaneous violation or None); the
-        store is left in the next state.
-        """
+        """One transition: ``event`` and the complete reaction (the real core) applied to ``key``, starts
+        following ``prefix`` and succeeding beyond it: (next key, start outcomes, StepLog, instantaneous
+        violation or None); the store is left in the next state."""
         return self._transition(key, event, prefix)
 
     def _transition(self, key: Key, event: Event, prefix: tuple[bool, ...]) -> tuple[Key, tuple[bool, ...], StepLog, Any]:
@@ -274,6 +273,8 @@ class TransitionSystem:
         while pending:
             prefix = pending.pop(0)
             nkey, outcomes, log, instant = run_one(key, event, prefix)
+            if self.reactions is not None:  # (a user's deployer: re-run at the end in a fresh instance)
+                self.reactions.append((key, event, prefix, log.commands, instant))
             self._runs += 1
             if self._runs <= RECHECK_FIRST or not self._runs % RECHECK_EVERY:  # nondeterminism: run it again, compare
                 same_again(self, key, event, prefix, (nkey, outcomes, log, instant))
@@ -377,17 +378,27 @@ def same_again(system: "TransitionSystem", key: Key, event: Event, prefix: tuple
     was, now = [str(c) for c, _ok in first[2].commands], [str(c) for c, _ok in log.commands]
     same = [command_key(c) for c, _ok in first[2].commands] == [command_key(c) for c, _ok in log.commands]
     if not same or again[0] != first[0] or again[3] != first[3]:
-        raise nondeterminism(system.deployer_name, event, was, now, same)
+        crashed = (first[3], again[3]) if any(i is not None and i[0] == CRASH for i in (first[3], again[3])) else (None, None)
+        raise nondeterminism(system.deployer_name, event, was, now, same, crashed)
 
 
-def nondeterminism(deployer: str, event: Event, was: list[str], now: list[str], same: bool = False) -> NondeterminismError:
+def nondeterminism(
+    deployer: str, event: Event, was: list[str], now: list[str], same: bool = False, failed: tuple[Any, Any] = (None, None),
+    note: str = "",
+) -> NondeterminismError:
     """The error of ``deployer`` reacting twice to ``event`` in one state: commands ``was``,
-    then ``now`` (``same``: the same commands, which reached another state)."""
-    def listing(cmds: list[str]) -> str:
-        return "[" + ", ".join(cmds) + "]" if cmds else "[no command]"
+    then ``now`` (``same``: the same commands, which reached another state; ``failed``:
+    the two runs' instantaneous violations, a :data:`CRASH` one naming how that run failed)."""
+    def listing(cmds: list[str], instant: Any) -> str:
+        shown = "[" + ", ".join(cmds) + "]" if cmds else "[no command]"
+        return f"{shown} and failed ({instant[1]})" if instant is not None and instant[0] == CRASH else shown
 
-    diff = f"first {listing(was)}, then {listing(now)}" if not same else f"the same commands {listing(was)} reached another state"
+    if same and failed == (None, None):
+        diff = f"the same commands {listing(was, None)} reached another state"
+    else:
+        diff = f"first {listing(was, failed[0])}, then {listing(now, failed[1])}"
     return NondeterminismError(
         f"deployer {deployer} is nondeterministic (not a function of what it reads through its ports): reacting twice to {event} in the same state it issued {diff}; "
+        + (f"{note}; " if note else "") +
         "a reaction must be a function of its readings (no randomness, clock or state kept between calls: docs/deployers.md)"
     )

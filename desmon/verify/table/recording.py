@@ -327,7 +327,9 @@ class Recorder:
         else:
             (stimulus, log, nkey, outcomes, instant) = out
             if self.records <= RECHECK_FIRST or not self.records % RECHECK_EVERY:
-                self._same_commands(key, event, prefix, log)
+                self._same_commands(key, event, prefix, log, instant)
+            if self.checker.reactions is not None:  # a user's deployer: re-run at the end in a fresh instance
+                self.checker.reactions.append((key, event, prefix, log.commands, instant))
         if stimulus is None:
             got = stim
         elif stimulus.context_changed:
@@ -345,13 +347,15 @@ class Recorder:
         leaf = eng.trees.leaf(("r", eng.system(nkey.deployments, nkey.standing), outcomes, fails, names, inst))
         eng.trees.insert(root, obs, leaf)
 
-    def _same_commands(self, key: Key, event: Event, prefix: tuple[bool, ...], log: Any) -> None:
-        """The recorded reaction run again on the direct engine's store: other commands are
-        the deployer's nondeterminism (refused with both lists, as the direct engine does)."""
-        _n, _o, again, _i = self.checker.run_one(key, event, prefix)
-        if [command_key(c) for c, _ok in log.commands] != [command_key(c) for c, _ok in again.commands]:
+    def _same_commands(self, key: Key, event: Event, prefix: tuple[bool, ...], log: Any, instant: Any) -> None:
+        """The recorded reaction run again on the direct engine's store: other commands, or
+        a failure in one run only, are the deployer's nondeterminism (refused with both
+        lists, as the direct engine does; a failure of the re-run is named, never lost)."""
+        _n, _o, again, crash = self.checker.run_one(key, event, prefix)
+        failed = [i is not None and i[0] == CRASH for i in (instant, crash)]
+        if failed[0] != failed[1] or [command_key(c) for c, _ok in log.commands] != [command_key(c) for c, _ok in again.commands]:
             was, now = [str(command_key(c)[0]) for c, _ok in log.commands], [str(c) for c, _ok in again.commands]
-            raise nondeterminism(self.checker.deployer_name, event, was, now)
+            raise nondeterminism(self.checker.deployer_name, event, was, now, failed=(instant, crash))
 
     def record_invariants(self, key: Key, root: int) -> None:
         """Check the invariants of ``key`` for real and add the path under ``root``."""

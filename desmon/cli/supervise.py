@@ -1,0 +1,244 @@
+"""A user's deployer runs in a worker process that desmon supervises.
+
+When ``desmon`` is the program and ``--deployer`` names a user's file or module
+(``path/to/file.py:NAME``, ``module:NAME``), the command runs in a child process forked
+before the deployer's module is imported; the parent (:func:`supervise`) keeps what the
+deployer must not touch:
+
+* **the exit.** The child writes its exit code to a page shared with the parent just
+  before it ends. A child that ends in any other way (``os._exit``, a signal, a thread
+  sending SIGALRM) ends the command CRASHED (exit 4), one line saying how it ended;
+* **the output.** The child's stdout goes to a file the parent copies out only then
+  (dropped when the child refuses its own result, :class:`Tamper`); its stderr is the
+  parent's own (a progress line stays on the terminal);
+* **the budget.** ``verify --timeout T``: the child is killed at T + 1 s if it has not
+  ended (a deployer that took the timer signal, swallowed desmon's stop or sleeps in a
+  C call), INCOMPLETE (exit 3). Where a reaction has a limit (``--max-reaction-seconds``,
+  60 s unless given), the guard publishes on the shared page how long the deployer's own
+  code has run in the current reaction; past the limit + 1 s the child is killed,
+  CRASHED (exit 4);
+* **the right to kill.** The child is the leader of its own process group: when the
+  command ends, the whole group is killed (threads the deployer left running, processes
+  it forked). A Ctrl-C is forwarded to the child; a second one, or 2 s without an end,
+  kills it (exit 130).
+
+Built-in deployers and mutants run in process, as does every command a program runs
+through :func:`desmon.cli.main` with its own arguments. docs/deployers.md, "What
+desmon's isolation catches", says what this catches and what it costs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import struct
+import sys
+import tempfile
+import time
+from typing import Any, Callable
+
+__all__ = ["supervise", "Tamper", "Beacon", "GRACE"]
+
+#: how long past a budget (seconds) the parent waits before it kills the child
+GRACE = 1.0
+#: the shared page: the deployer's clock (since, used), then the child's pid and exit code
+_LAYOUT = struct.Struct("ddqq")
+#: desmon's modules each command runs in, fingerprinted before the deployer is imported
+_PRELOAD = {
+    "verify": ("desmon.verify.checker", "desmon.verify.direct", "desmon.verify.table", "desmon.verify.table.recording"),
+    "run": ("desmon.sim.world", "desmon.sim.driver"),
+    "fuzz": ("desmon.verify.fuzz", "desmon.verify.checker"),
+}
+
+
+class Beacon:
+    """The child's side of the shared page: the guard's clock of the deployer's code, and
+    whether the child refused its own result (its stdout is then dropped)."""
+
+    def __init__(self, page: Any) -> None:
+        self.page = page
+        self.refused = False
+
+    def clock(self, since: float, used: float) -> None:
+        """The deployer's code runs since ``since`` (0: it does not run now), after ``used`` seconds in this reaction."""
+        struct.pack_into("dd", self.page, 0, since, used)
+
+    def done(self, code: int) -> None:
+        struct.pack_into("qq", self.page, 16, os.getpid(), 1000 + code if self.refused else code)
+
+
+class Tamper:
+    """The fingerprints of desmon's code and of the model (:mod:`desmon.deployment.integrity`),
+    taken before the deployer's module is imported; :meth:`refusal` compares them after the work."""
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        from desmon.deployment.integrity import code_fingerprint
+
+        self.args = args
+        self.code = code_fingerprint(("desmon.deployment.core",) + _PRELOAD.get(getattr(args, "command", ""), ()))
+
+    def refusal(self) -> str:
+        """One line naming what the deployer changed, or ""."""
+        from desmon.deployment.integrity import changed, code_fingerprint, model_fingerprint
+
+        spec = self.args.deployer
+        spec = getattr(spec, "name", spec)
+        what = changed(self.code, code_fingerprint())
+        if what:
+            return (
+                f"deployer {spec} changed desmon's own code while it ran ({what}), so no result of this run can be trusted; "
+                "a deployer reads through its ports and yields commands, it never changes desmon (docs/deployers.md)"
+            )
+        model = getattr(self.args, "model_fingerprint", None)
+        what = changed(model[1], model_fingerprint(model[0])) if model else ""
+        if what:
+            return (
+                f"deployer {spec} changed the model it was handed while it ran ({what}), so no result of this run can be "
+                "trusted; a deployer reads the model, it never changes it (docs/deployers.md)"
+            )
+        return ""
+
+
+def _limits(args: argparse.Namespace) -> tuple[float | None, float | None]:
+    """(when the command's --timeout ends, on the perf_counter clock; the reaction limit), None where none."""
+    timeout = getattr(args, "timeout", None)
+    end = getattr(args, "_started", time.perf_counter()) + timeout if isinstance(timeout, (int, float)) else None
+    if not hasattr(args, "max_reaction_seconds"):
+        return end, None
+    from desmon.deployment.guard import MAX_REACTION_SECONDS
+
+    return end, float(args.max_reaction_seconds or MAX_REACTION_SECONDS)
+
+
+def supervise(args: argparse.Namespace, work: Callable[[Beacon], int]) -> int:
+    """``work(beacon)`` in a forked child process, supervised (see the module docstring); its exit code."""
+    import mmap
+
+    page = mmap.mmap(-1, _LAYOUT.size)
+    out = tempfile.TemporaryFile()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child (its coverage is the command's)
+        _child(page, out, work)
+    notes: list[tuple[Any, str]] = []
+    try:
+        code = _watch(args, pid, page, notes)
+    finally:
+        _kill(pid)
+    _copy_out(out, code)
+    for stream, line in notes:  # after the child's own output: how desmon ended it
+        print(line, file=sys.stdout if stream == "out" else sys.stderr, flush=True)
+    return code - 1000 if code >= 1000 else code
+
+
+def _child(page: Any, out: Any, work: Callable[[Beacon], int]) -> None:  # pragma: no cover
+    os.setpgid(0, 0)
+    os.dup2(out.fileno(), 1)  # (stderr is the parent's own: a progress line stays on the terminal)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    beacon = Beacon(page)
+    code = 4
+    try:
+        code = work(beacon)
+    except BaseException as exc:  # whatever escaped the command's own handling: the deployer's doing
+        print(f"desmon: CRASHED: {type(exc).__name__} {' '.join(str(exc).split())[:300]}", file=sys.stderr)
+    finally:
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except Exception:  # a stream the deployer closed: its output is lost, the verdict is not
+                pass
+        beacon.done(code)
+        os._exit(code)
+
+
+def _kill(pid: int) -> None:
+    """The child's whole process group killed (threads and forks the deployer left), the child reaped."""
+    for target in (lambda: os.killpg(pid, signal.SIGKILL), lambda: os.kill(pid, signal.SIGKILL)):
+        try:
+            target()
+        except (ProcessLookupError, PermissionError):
+            pass
+    try:
+        os.waitpid(pid, 0)
+    except ChildProcessError:
+        pass
+
+
+def _watch(args: argparse.Namespace, pid: int, page: Any, notes: list[tuple[Any, str]]) -> int:
+    """Wait for the child: its exit code, or the code of how desmon ended it (and in
+    ``notes`` the line that says so, ("out" or "err", line))."""
+    end, limit = _limits(args)
+    interrupts: list[float] = []
+    previous = signal.signal(signal.SIGINT, lambda s, f: interrupts.append(time.monotonic()) or _forward(pid))
+    try:
+        while True:
+            time.sleep(0.05)
+            done, status = os.waitpid(pid, os.WNOHANG)
+            since, used, who, code = _LAYOUT.unpack_from(page)
+            if who == pid:  # the child's verdict: it is done, whatever it leaves running
+                return int(code)
+            if done:
+                return _no_verdict(args, status, notes)
+            why = _overrun(args, (end, limit), since, used, interrupts, notes)
+            if why is not None:
+                return why
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _forward(pid: int) -> None:
+    try:
+        os.kill(pid, signal.SIGINT)
+    except ProcessLookupError:
+        pass
+
+
+def _overrun(
+    args: argparse.Namespace, limits: tuple[float | None, float | None], since: float, used: float, interrupts: list[float],
+    notes: list[tuple[Any, str]],
+) -> int | None:
+    """The exit code if the child ran past a budget by more than :data:`GRACE` (it is then killed), else None."""
+    spec, (end, limit) = args.deployer, limits
+    if interrupts and (len(interrupts) > 1 or time.monotonic() - interrupts[0] > 2.0):
+        notes.append(("err", "desmon: interrupted"))
+        return 130
+    if end is not None and time.perf_counter() > end + GRACE:
+        notes.append(("out", (
+            f"verdict: INCOMPLETE (timeout {args.timeout:g}s): deployer {spec} did not let the search stop at its budget, "
+            "so desmon killed its worker process"
+        )))
+        return 3
+    if limit is not None and since > 0 and used + time.monotonic() - since > limit + GRACE:
+        notes.append(("err", (
+            f"desmon: CRASHED: deployer {spec}: its code ran for over {limit:g} s in one reaction without returning and did not "
+            "let desmon stop it, so desmon killed its worker process; a reaction must return (--max-reaction-seconds S sets the limit)"
+        )))
+        return 4
+    return None
+
+
+def _no_verdict(args: argparse.Namespace, status: int, notes: list[tuple[Any, str]]) -> int:
+    """The child ended without writing its exit code: the deployer ended desmon's process."""
+    code = os.waitstatus_to_exitcode(status)
+    how = f"killed by signal {signal.Signals(-code).name}" if code < 0 else f"ended with status {code}"
+    notes.append(("err", (
+        f"desmon: CRASHED: deployer {args.deployer} ended desmon's worker process without a verdict ({how}): "
+        "a reaction returns, it never exits the process, kills it or sends it signals (docs/deployers.md)"
+    )))
+    return 4
+
+
+def _copy_out(out: Any, code: int) -> None:
+    """The child's stdout, copied to ours unless the child refused its own result (``code`` >= 1000)."""
+    if code >= 1000:
+        return
+    out.seek(0)
+    data = out.read()
+    if data:
+        if hasattr(sys.stdout, "buffer"):
+            sys.stdout.buffer.write(data)
+        else:
+            sys.stdout.write(data.decode(errors="replace"))
+    sys.stdout.flush()
