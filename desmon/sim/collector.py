@@ -27,8 +27,8 @@ from typing import Iterator
 __all__ = ["collector_relaxed"]
 
 #: the objects runs left behind since the last full collection: this process's collector
-#: bookkeeping, as the collector's own counts are
-_LEFT = {"objects": 0}
+#: bookkeeping, as the collector's own counts are (one number, in a list)
+_LEFT = [0]
 #: a full collection once the objects left reach this fraction of the frozen heap
 FULL_AFTER = 1 / 8
 
@@ -62,8 +62,8 @@ def _collect_after_run() -> None:
     scans: memory would grow run after run)."""
     gc.collect()
     heap = gc.get_freeze_count()
-    _LEFT["objects"] += len(gc.get_objects())  # what the run made and kept: the frozen heap is not listed
+    _LEFT[0] += len(gc.get_objects())  # what the run made and kept: the frozen heap is not listed
     gc.unfreeze()
-    if _LEFT["objects"] >= FULL_AFTER * heap:
+    if _LEFT[0] >= FULL_AFTER * heap:
         gc.collect()
-        _LEFT["objects"] = 0
+        _LEFT[0] = 0
