@@ -9,6 +9,7 @@ import json
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -74,6 +75,21 @@ def test_a_stiff_chain_stops_at_the_timeout_exit_3_with_nothing_written(tmp_path
     out = tmp_path / "a.json"
     done = _desmon(tmp_path, {"HB": "1e-3"}, "--timeout", "6", "--json", str(out))
     assert done.returncode == 3 and "INCOMPLETE: timeout 6s" in done.stderr, done.stderr
+    assert not out.exists()
+
+
+def test_the_detection_trials_stop_at_the_timeout_too(tmp_path):
+    """100,000 trials per rate take many minutes: the timeout ends them between two
+    batches of slips, exit 3, nothing written."""
+    out = tmp_path / "a.json"
+    t0 = time.monotonic()
+    done = subprocess.run(
+        [sys.executable, "-m", "desmon", "analyze", "scenarios/coffee_shift.py", "--trials", "100000", "--timeout", "5", "--json", str(out)],
+        capture_output=True, text=True, timeout=120,
+    )
+    took = time.monotonic() - t0
+    assert done.returncode == 3 and "INCOMPLETE: timeout 5s" in done.stderr, done.stderr
+    assert took < 60, took  # one batch past the budget at most (about 6 s here), never the whole evaluation
     assert not out.exists()
 
 

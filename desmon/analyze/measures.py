@@ -69,7 +69,7 @@ def detector_start_catch(
     return _rates(scenario, phases, trials, seed)[1]
 
 
-def _rates(scenario: Scenario, phases: int, trials: int, seed: int) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, dict[float, float]]]]:
+def _rates(scenario: Scenario, phases: int, trials: int, seed: int, budget: Callable[..., None] | None = None) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, dict[float, float]]]]:
     """The watching miss and the starting catch of every graph in every risky action:
     the evaluation's trials for the built-in the action is like, its steps
     Erlang-``phases`` with the action's mean step duration (as the chain times them),
@@ -98,7 +98,7 @@ def _rates(scenario: Scenario, phases: int, trials: int, seed: int) -> tuple[dic
         for lat in latencies:
             rates[(action, lat)] = detection_rates(
                 like, round(sum(durations) / len(durations), 6), direction, kind, grasp=grasp, phases=phases, trials=trials,
-                seed=seed, recognition=world.recognition_delay, latency=lat, warmups=warmups,
+                seed=seed, recognition=world.recognition_delay, latency=lat, warmups=warmups, budget=budget,
             )
     miss: dict[str, dict[str, float]] = {}
     start: dict[str, dict[str, dict[float, float]]] = {}
@@ -276,7 +276,7 @@ def analyze(
     check_rates(mw, float(T))
     _check_trials(trials)
     if miss is None:
-        miss, start_catch = _rates(scenario, phases, trials, 0) if start_catch is None else (detector_miss(scenario, phases=phases, trials=trials), start_catch)
+        miss, start_catch = _rates(scenario, phases, trials, 0, None if budget is no_budget else budget) if start_catch is None else (detector_miss(scenario, phases=phases, trials=trials), start_catch)
     chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch, guard=guard, budget=budget)
     t0 = time.perf_counter()
     Q, _exit = chain.generator()

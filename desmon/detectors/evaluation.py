@@ -316,6 +316,7 @@ def _lengths(mean: float, phases: int, biased: bool) -> list[float]:
 def detection_rates(
     action: str, duration: float, direction: str, kind: str, *, grasp: float = 2.0, phases: int = 0, trials: int = 200,
     seed: int = 0, recognition: float = 0.0, latency: float = 0.0, warmups: tuple[tuple[str, float], ...] = (),
+    budget: Callable[[], None] | None = None,
 ) -> dict[str, tuple[float, float]]:
     """Each detector's probability of catching a slip in a step of ``action`` (a built-in
     with an object in the hand), as (while it watches, while it starts): the weighted
@@ -338,7 +339,8 @@ def detection_rates(
     each group's slips fall in the start, the rest after it, each weighted by the time
     it stands for. The step is followed by 1.5 s of ``hold`` (nothing after a
     ``release``: the object is handed over), so that a late slip has its whole
-    detection window."""
+    detection window. ``budget()``, if given, is called before each batch of slips (it
+    raises once the caller's time or memory is spent)."""
     steps = _lengths(duration, phases, True)
     grasps = _lengths(grasp, phases, False)
     recognitions = _lengths(recognition, phases, False) if recognition > 0 else [0.0] * RATE_GROUPS
@@ -365,6 +367,8 @@ def detection_rates(
         parts = [(request, ready, n - 3 * n // 4), (ready, end, 3 * n // 4)] if ready < end else [(request, ready, n)]
         for k, (lo, hi, m) in enumerate(parts):
             if m and hi > lo:
+                if budget is not None:
+                    budget()
                 b = simulate_batch(timeline, m, _rng(seed, 4 + k, gi), slip_window=(lo, hi), slip_direction=direction, slip_kind=kind)
                 _count_catches(b, request, ready - max(warm.values()), warm, (hi - lo) / m / length, hit, weight)
     return {d: tuple(hit[d][c] / weight[d][c] if weight[d][c] else 0.0 for c in (0, 1)) for d in DETECTORS}  # type: ignore[misc]
