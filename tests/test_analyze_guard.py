@@ -93,6 +93,23 @@ def test_the_detection_trials_stop_at_the_timeout_too(tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.slow
+def test_the_simulated_seeds_stop_at_the_timeout_too(tmp_path):
+    """--simulate runs one hour per seed once the chain is solved (about 12 s here): the
+    timeout ends the thousand runs between two of them."""
+    out = tmp_path / "a.json"
+    t0 = time.monotonic()
+    done = subprocess.run(
+        [sys.executable, "-m", "desmon", "analyze", "scenarios/coffee_shift.py", "-p", "hours=1", "--simulate", "1000", "--timeout", "40",
+         "--json", str(out)],
+        capture_output=True, text=True, timeout=300,
+    )
+    took = time.monotonic() - t0
+    assert done.returncode == 3 and "INCOMPLETE: timeout 40s" in done.stderr, done.stderr
+    assert took < 70, took
+    assert not out.exists()
+
+
 def test_a_memory_budget_stops_the_analysis_exit_3(tmp_path):
     done = _desmon(tmp_path, {}, "--horizon", "60", "--max-memory", "1")
     assert done.returncode == 3 and "memory budget 1 MB reached" in done.stderr, done.stderr

@@ -37,15 +37,18 @@ def markov_scenario(scenario: Scenario, *, phases: int = 1, timing: str = "expon
 def simulated_exposure(
     scenario: Scenario, deployer: Any, seeds: Sequence[int], horizon: float, *, phases: int = 1, timing: str = "exponential",
     start_failure_p: float | None = None, progress: Callable[[int], None] | None = None, cause: str | None = None,
-    guard: Any = None,
+    guard: Any = None, budget: Callable[[], None] | None = None,
 ) -> list[float]:
     """Unmonitored seconds in ``[0, horizon]`` of one simulated run per seed (with
-    ``cause``: only those of that cause, one of :data:`desmon.deployment.exposure.CAUSES`)."""
+    ``cause``: only those of that cause, one of :data:`desmon.deployment.exposure.CAUSES`);
+    ``budget()``, if given, is called before each run (it raises once spent)."""
     from desmon.sim.engine import simulate
 
     sc = markov_scenario(scenario, phases=phases, timing=timing, start_failure_p=start_failure_p)
     out = []
     for i, seed in enumerate(seeds):
+        if budget is not None:
+            budget()
         r = simulate(sc, deployer, seed=seed, until=horizon, guard=guard)
         m = r.metrics
         out.append(float(m["unmonitored_exposure_s"] if cause is None else m["unmonitored_by_cause_s"][cause]))

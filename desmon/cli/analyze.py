@@ -121,10 +121,14 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_INCOMPLETE
     agree = None
     if args.simulate:
-        values = simulated_exposure(
-            scenario, args.deployer, range(args.simulate), result.horizon_s, phases=args.phases, start_failure_p=args.start_failure_p,
-            guard=args.guard,
-        )
+        try:
+            values = simulated_exposure(
+                scenario, args.deployer, range(args.simulate), result.horizon_s, phases=args.phases, start_failure_p=args.start_failure_p,
+                guard=args.guard, budget=budget,
+            )
+        except BudgetExceeded as exc:
+            err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
+            return EXIT_INCOMPLETE
         agree = agreement(result.exposure_s_per_mission or 0.0, values)
     gap = None
     if args.placements:
