@@ -78,7 +78,6 @@ def add_parser(sub: Subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from desmon.analyze import BudgetExceeded, analyze
-    from desmon.analyze.agreement import agreement, simulated_exposure
     from desmon.paths import replacing
 
     budget = _budget(args)
@@ -119,17 +118,11 @@ def run(args: argparse.Namespace) -> int:
     except BudgetExceeded as exc:
         err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
         return EXIT_INCOMPLETE
-    agree = None
-    if args.simulate:
-        try:
-            values = simulated_exposure(
-                scenario, args.deployer, range(args.simulate), result.horizon_s, phases=args.phases, start_failure_p=args.start_failure_p,
-                guard=args.guard, budget=budget,
-            )
-        except BudgetExceeded as exc:
-            err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
-            return EXIT_INCOMPLETE
-        agree = agreement(result.exposure_s_per_mission or 0.0, values)
+    try:
+        agree = _simulation(args, scenario, result, budget)
+    except BudgetExceeded as exc:
+        err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
+        return EXIT_INCOMPLETE
     gap = None
     if args.placements:
         from desmon.analyze.mdp import optimality_gap
@@ -160,6 +153,19 @@ def run(args: argparse.Namespace) -> int:
     sys.stdout.write(format_cross_check(cross))
     _say_written(files, args.export if gap is not None else None)
     return EXIT_VIOLATED if (agree is not None and not agree.inside) or _disagree(cross) else EXIT_OK
+
+
+def _simulation(args: argparse.Namespace, scenario: Any, result: Any, budget: Any) -> Any:
+    """``--simulate``'s agreement of the exact exposure with that many simulated runs, or None."""
+    if not args.simulate:
+        return None
+    from desmon.analyze.agreement import agreement, simulated_exposure
+
+    values = simulated_exposure(
+        scenario, args.deployer, range(args.simulate), result.horizon_s, phases=args.phases, start_failure_p=args.start_failure_p,
+        guard=args.guard, budget=budget,
+    )
+    return agreement(result.exposure_s_per_mission or 0.0, values)
 
 
 def _budget(args: argparse.Namespace) -> Any:
