@@ -30,13 +30,14 @@ desmon's isolation catches", says what this catches and what it costs.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import signal
 import struct
 import sys
 import tempfile
 import time
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 __all__ = ["supervise", "Tamper", "Beacon", "GRACE"]
 
@@ -64,6 +65,18 @@ class Beacon:
         """The deployer's code runs since ``since`` (0: it does not run now), after ``used`` seconds in this reaction."""
         struct.pack_into("dd", self.page, 0, since, used)
 
+    @contextlib.contextmanager
+    def importing(self, limited: bool) -> Iterator[None]:
+        """The deployer's module imported on the reaction clock where a reaction has a limit: an
+        import that never ends is killed as a reaction that never returns is."""
+        if limited:
+            self.clock(time.monotonic(), 0.0)
+        try:
+            yield
+        finally:
+            if limited:
+                self.clock(0.0, 0.0)
+
     def done(self, code: int) -> None:
         struct.pack_into("qq", self.page, 16, os.getpid(), 1000 + code if self.refused else code)
 
@@ -77,13 +90,20 @@ class Tamper:
 
         self.args = args
         self.code = code_fingerprint(("desmon.deployment.core",) + _PRELOAD.get(getattr(args, "command", ""), ()))
+        self.stdout = _file_of(1)
 
-    def refusal(self) -> str:
-        """One line naming what the deployer changed, or ""."""
+    def refusal(self, stdout_kept: bool = True) -> str:
+        """One line naming what the deployer changed, or "". ``stdout_kept``: whether
+        ``sys.stdout`` was still desmon's own when the command's report was written."""
         from desmon.deployment.integrity import changed, code_fingerprint, model_fingerprint
 
         spec = self.args.deployer
         spec = getattr(spec, "name", spec)
+        if not stdout_kept or _file_of(1) != self.stdout:
+            return (
+                f"deployer {spec} redirected desmon's standard output while it ran, so its report is lost and no result of "
+                "this run can be trusted; a deployer reads through its ports and yields commands (docs/deployers.md)"
+            )
         what = changed(self.code, code_fingerprint())
         if what:
             return (
@@ -98,6 +118,15 @@ class Tamper:
                 "trusted; a deployer reads the model, it never changes it (docs/deployers.md)"
             )
         return ""
+
+
+def _file_of(fd: int) -> tuple[int, int] | None:
+    """The file descriptor ``fd`` refers to (device, inode), or None where it is closed."""
+    try:
+        st = os.fstat(fd)
+    except OSError:
+        return None
+    return st.st_dev, st.st_ino
 
 
 def _limits(args: argparse.Namespace) -> tuple[float | None, float | None]:
@@ -127,9 +156,14 @@ def supervise(args: argparse.Namespace, work: Callable[[Beacon], int]) -> int:
         code = _watch(args, pid, page, notes)
     finally:
         _kill(pid)
-    _copy_out(out, code)
-    for stream, line in notes:  # after the child's own output: how desmon ended it
-        print(line, file=sys.stdout if stream == "out" else sys.stderr, flush=True)
+    try:
+        _copy_out(out, code)
+        for stream, line in notes:  # after the child's own output: how desmon ended it
+            print(line, file=sys.stdout if stream == "out" else sys.stderr, flush=True)
+    except OSError as exc:  # a reader that left (a closed pipe): as in desmon's own process, one line
+        os.dup2(os.open(os.devnull, os.O_WRONLY), 1)  # (Python's own flush at exit must not fail again)
+        print(f"desmon: error: cannot read or write: {exc.strerror or exc}; check the path", file=sys.stderr)
+        return 2
     return code - 1000 if code >= 1000 else code
 
 
@@ -212,7 +246,7 @@ def _overrun(
         return 3
     if limit is not None and since > 0 and used + time.monotonic() - since > limit + GRACE:
         notes.append(("err", (
-            f"desmon: CRASHED: deployer {spec}: its code ran for over {limit:g} s in one reaction without returning and did not "
+            f"desmon: CRASHED: deployer {spec}: its code ran for over {limit:g} s in one reaction (or while imported) without returning and did not "
             "let desmon stop it, so desmon killed its worker process; a reaction must return (--max-reaction-seconds S sets the limit)"
         )))
         return 4

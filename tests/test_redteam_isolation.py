@@ -1,0 +1,128 @@
+"""Adversarial deployers the isolation (docs/deployers.md, "What desmon's isolation catches")
+must not let through: one that takes desmon's standard output, where the report goes, and
+one whose import never ends in a command with a reaction limit. Each runs ``desmon`` as the
+program, in a process of its own with a timeout, so a hang fails the test."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+COFFEE = str(ROOT / "scenarios" / "coffee_handover.py")
+
+NOTHING = """
+def nothing(q, slots, changed, context_changed):
+    return
+    yield
+"""
+
+#: heads of deployer modules that deploy nothing (VIOLATED on coffee_handover), each misbehaving in one way
+HEADS = {
+    "dup2_over_stdout": "import os\nos.dup2(os.open(os.devnull, os.O_WRONLY), 1)\n",
+    "replaces_stdout_in_a_reaction": (
+        "import io, sys\n"
+        "def nothing(q, slots, changed, context_changed):\n"
+        "    sys.stdout = io.StringIO()\n"
+        "    return\n"
+        "    yield\n"
+    ),
+    "imports_forever": "import time\nwhile True:\n    time.sleep(0.1)\n",
+}
+
+
+def _desmon(*args: str, timeout: float = 60) -> tuple[int, float, str, str]:
+    t0 = time.monotonic()
+    try:
+        proc = subprocess.run([sys.executable, "-m", "desmon", *args], capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"desmon {' '.join(args)} hung")
+    return proc.returncode, time.monotonic() - t0, proc.stdout, proc.stderr
+
+
+def _spec(tmp_path: Path, name: str) -> str:
+    path = tmp_path / f"{name}.py"
+    path.write_text(HEADS[name] + ("" if "def nothing" in HEADS[name] else NOTHING))
+    return f"{path}:nothing"
+
+
+@pytest.mark.parametrize("command", [["verify", COFFEE, "--no-progress"], ["run", COFFEE]])
+@pytest.mark.parametrize("name", ["dup2_over_stdout", "replaces_stdout_in_a_reaction"])
+def test_a_deployer_taking_desmons_standard_output_is_refused_never_a_silent_exit(tmp_path, command, name):
+    """Without the fix: exit 1 (VIOLATED) with no verdict printed anywhere."""
+    code, _took, out, err = _desmon(*command, "--deployer", _spec(tmp_path, name))
+    assert code == 2 and "redirected desmon's standard output while it ran" in err, (code, out, err)
+    assert "verdict:" not in out and "Traceback" not in err
+
+
+@pytest.mark.parametrize("command", [["run", COFFEE], ["fuzz", COFFEE, "--examples", "5", "--seed", "1"]])
+def test_a_deployer_whose_import_never_ends_is_crashed_at_the_reaction_limit(tmp_path, command):
+    code, took, out, err = _desmon(*command, "--max-reaction-seconds", "2", "--deployer", _spec(tmp_path, "imports_forever"))
+    assert code == 4 and "(or while imported)" in err and took < 20, (code, took, out, err)
+
+
+#: a module that swaps the check of every invariant record in desmon's registry for one that finds nothing
+RECORDS = (
+    "def _never(view):\n"
+    "    return None\n"
+    "def _patch():\n"
+    "    import importlib\n"
+    "    for inv in importlib.import_module('desmon.deployment.invariants').INVARIANTS.values():\n"
+    "        object.__setattr__(inv, 'check', _never)\n"
+    "_patch()\n"
+    "del _patch\n"
+)
+
+
+@pytest.mark.parametrize(
+    "command",
+    [["verify", COFFEE, "--no-progress", "--invariant", "coverage"], ["verify", COFFEE, "--no-progress", "--invariant", "coverage", "--engine", "direct"], ["run", COFFEE]],
+)
+def test_a_deployer_changing_the_invariant_records_is_refused_never_holds(tmp_path, command):
+    """Without the fix: verify says HOLDS (exit 0) for a deployer that deploys nothing."""
+    path = tmp_path / "records.py"
+    path.write_text(RECORDS + NOTHING)
+    code, _took, out, err = _desmon(*command, "--deployer", f"{path}:nothing")
+    assert code == 2 and "changed desmon's own code while it ran (desmon.deployment.invariants.INVARIANTS[" in err, (code, out, err)
+    assert "HOLDS" not in out
+
+
+def _ended(proc: subprocess.Popen, timeout: float = 60) -> tuple[int, str]:
+    try:
+        _out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        pytest.fail("desmon hung")
+    return proc.returncode, err
+
+
+@pytest.mark.parametrize("deployer", ["desmon", "user"])
+def test_a_reader_that_left_is_one_line_never_a_traceback(tmp_path, deployer):
+    """Standard output a pipe whose reader closed it before the report: exit 2, one line,
+    as desmon's own process says it (without the fix, the supervisor's copy raised BrokenPipeError)."""
+    (tmp_path / "plain.py").write_text(NOTHING)
+    spec = "desmon" if deployer == "desmon" else f"{tmp_path / 'plain.py'}:nothing"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "desmon", "verify", COFFEE, "--no-progress", "--deployer", spec], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    proc.stdout.close()  # the reader leaves at once
+    code, err = _ended(proc)
+    assert code == 2 and "cannot read or write: Broken pipe" in err and "Traceback" not in err, (code, err)
+
+
+@pytest.mark.parametrize("deployer", ["desmon", "user"])
+def test_standard_output_closed_at_the_start_is_one_line_never_a_traceback(tmp_path, deployer):
+    """``desmon ... >&-``: without the fix, an AttributeError traceback and exit 1, which reads as VIOLATED."""
+    (tmp_path / "plain.py").write_text(NOTHING)
+    spec = "desmon" if deployer == "desmon" else f"{tmp_path / 'plain.py'}:nothing"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "desmon", "verify", COFFEE, "--no-progress", "--deployer", spec], stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: __import__("os").close(1),
+    )
+    code, err = _ended(proc)
+    assert code == 2 and "standard output is closed" in err and "Traceback" not in err, (code, err)
