@@ -126,3 +126,56 @@ def test_standard_output_closed_at_the_start_is_one_line_never_a_traceback(tmp_p
     )
     code, err = _ended(proc)
     assert code == 2 and "standard output is closed" in err and "Traceback" not in err, (code, err)
+
+
+def test_a_deployer_changing_the_working_directory_is_refused(tmp_path):
+    """Without the fix: exit 1, and the --json the user asked for written in the directory the deployer chose."""
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (tmp_path / "moves.py").write_text(f"import os\nos.chdir({str(elsewhere)!r})\n" + NOTHING)
+    work = tmp_path / "work"
+    work.mkdir()
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-m", "desmon", "verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'moves.py'}:nothing", "--json", "cex.json"],
+            capture_output=True, text=True, cwd=work, timeout=60,
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail("desmon hung")
+    assert proc.returncode == 2 and "changed desmon's working directory while it ran" in proc.stderr, (proc.returncode, proc.stderr)
+    assert "verdict:" not in proc.stdout
+
+
+#: a module whose trace function empties the list check_invariants returns: no violation is ever seen
+TRACES = '''
+import sys
+def _calls(frame, event, arg):
+    return _returns if frame.f_code.co_name == "check_invariants" else None
+def _returns(frame, event, arg):
+    if event == "return":
+        frame.f_locals["out"].clear()
+    return _returns
+sys.settrace(_calls)
+def nothing(q, slots, changed, context_changed):
+    sys.settrace(_calls)
+    return
+    yield
+'''
+
+
+@pytest.mark.parametrize("command", [["verify", COFFEE, "--no-progress", "--invariant", "coverage", "--engine", "direct"], ["run", COFFEE]])
+def test_a_deployer_installing_a_trace_function_is_refused_never_holds(tmp_path, command):
+    """Without the fix: verify says HOLDS (exit 0) for a deployer that deploys nothing."""
+    (tmp_path / "traces.py").write_text(TRACES)
+    code, _took, out, err = _desmon(*command, "--deployer", f"{tmp_path / 'traces.py'}:nothing")
+    assert code == 2 and "installed a trace, profile or monitoring function while it ran" in err, (code, out, err)
+    assert "HOLDS" not in out
+
+
+@pytest.mark.parametrize("engine", ["table", "direct"])
+def test_a_fork_while_imported_leaves_one_report_and_the_verdict(tmp_path, engine):
+    """Without the fix: the forked copy went on with desmon's work (and, in the memory check's
+    fresh import, forked again): four reports, and an exit 4 when a copy wrote its exit code last."""
+    (tmp_path / "forks.py").write_text("import os\nos.fork()\n" + NOTHING)
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--engine", engine, "--deployer", f"{tmp_path / 'forks.py'}:nothing")
+    assert code == 1 and out.count("verdict: VIOLATED") == 1 and out.count("coffee_handover -- deployer") == 1, (code, out, err)

@@ -91,6 +91,8 @@ class Tamper:
         self.args = args
         self.code = code_fingerprint(("desmon.deployment.core",) + _PRELOAD.get(getattr(args, "command", ""), ()))
         self.stdout = _file_of(1)
+        self.cwd = _cwd()
+        self.hooks = _hooks()
 
     def refusal(self, stdout_kept: bool = True) -> str:
         """One line naming what the deployer changed, or "". ``stdout_kept``: whether
@@ -103,6 +105,16 @@ class Tamper:
             return (
                 f"deployer {spec} redirected desmon's standard output while it ran, so its report is lost and no result of "
                 "this run can be trusted; a deployer reads through its ports and yields commands (docs/deployers.md)"
+            )
+        if _hooks() != self.hooks:
+            return (
+                f"deployer {spec} installed a trace, profile or monitoring function while it ran (sys.settrace, sys.setprofile, "
+                "sys.monitoring), which can change what desmon's checks compute, so no result of this run can be trusted (docs/deployers.md)"
+            )
+        if _cwd() != self.cwd:
+            return (
+                f"deployer {spec} changed desmon's working directory while it ran (from {self.cwd} to {_cwd()}), so the "
+                "outputs went elsewhere and no result of this run can be trusted; a deployer never changes directory (docs/deployers.md)"
             )
         what = changed(self.code, code_fingerprint())
         if what:
@@ -127,6 +139,21 @@ def _file_of(fd: int) -> tuple[int, int] | None:
     except OSError:
         return None
     return st.st_dev, st.st_ino
+
+
+def _hooks() -> tuple[Any, ...]:
+    """The process's trace and profile functions and its monitoring tools: what can reach into a running frame."""
+    monitoring = getattr(sys, "monitoring", None)
+    tools = tuple(monitoring.get_tool(i) for i in range(6)) if monitoring is not None else ()
+    return sys.gettrace(), sys.getprofile(), tools
+
+
+def _cwd() -> str | None:
+    """The working directory, or None where it is gone."""
+    try:
+        return os.getcwd()
+    except OSError:
+        return None
 
 
 def _limits(args: argparse.Namespace) -> tuple[float | None, float | None]:
