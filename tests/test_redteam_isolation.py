@@ -179,3 +179,25 @@ def test_a_fork_while_imported_leaves_one_report_and_the_verdict(tmp_path, engin
     (tmp_path / "forks.py").write_text("import os\nos.fork()\n" + NOTHING)
     code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--engine", engine, "--deployer", f"{tmp_path / 'forks.py'}:nothing")
     assert code == 1 and out.count("verdict: VIOLATED") == 1 and out.count("coffee_handover -- deployer") == 1, (code, out, err)
+
+
+def test_a_process_that_left_desmons_process_group_is_killed_too(tmp_path):
+    """A deployer whose module forks a process that leaves the group (os.setsid) and sleeps
+    holding desmon's standard error: without the fix, a caller reading desmon's output
+    waited 30 s for it after desmon had ended."""
+    marker = tmp_path / "left.pid"
+    (tmp_path / "leaves.py").write_text(
+        "import os, time\n"
+        "if os.fork() == 0:\n"
+        "    os.setsid()\n"
+        "    if os.fork() == 0:\n"
+        f"        open({str(marker)!r}, 'w').write(str(os.getpid()))\n"
+        "        time.sleep(30)\n"
+        "    os._exit(0)\n" + NOTHING
+    )
+    code, took, out, err = _desmon("verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'leaves.py'}:nothing", timeout=25)
+    assert code == 1 and "verdict: VIOLATED" in out and took < 15, (code, took, out, err)
+    left = int(marker.read_text())
+    time.sleep(0.2)
+    stat = Path(f"/proc/{left}/stat")
+    assert not stat.exists() or stat.read_text().rsplit(")", 1)[1].split()[0] == "Z", "the process that left the group still runs"

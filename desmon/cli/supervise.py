@@ -175,6 +175,7 @@ def supervise(args: argparse.Namespace, work: Callable[[Beacon], int]) -> int:
     out = tempfile.TemporaryFile()
     sys.stdout.flush()
     sys.stderr.flush()
+    _subreaper()
     pid = os.fork()
     if pid == 0:  # pragma: no cover - the child (its coverage is the command's)
         _child(page, out, work)
@@ -225,6 +226,35 @@ def _kill(pid: int) -> None:
         os.waitpid(pid, 0)
     except ChildProcessError:
         pass
+    for _ in range(50):  # processes that left the group (os.setsid): orphaned, they are ours (_subreaper)
+        left = _children()
+        for child in left:
+            with contextlib.suppress(OSError):
+                os.kill(child, signal.SIGKILL)
+                os.waitpid(child, os.WNOHANG)
+        if not left:
+            return
+        time.sleep(0.01)
+
+
+def _subreaper() -> None:
+    """Make this process the one an orphaned descendant is handed to (Linux), so that none escapes :func:`_kill`."""
+    with contextlib.suppress(OSError, AttributeError):
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0)  # PR_SET_CHILD_SUBREAPER
+
+
+def _children() -> list[int]:
+    """The pids of this process's children (from /proc; none where it cannot be read)."""
+    me, out = os.getpid(), []
+    with contextlib.suppress(OSError):
+        for entry in os.listdir("/proc"):
+            if entry.isdigit():
+                with contextlib.suppress(OSError, ValueError, IndexError), open(f"/proc/{entry}/stat", "rb") as fh:
+                    if int(fh.read().rsplit(b")", 1)[1].split()[1]) == me:
+                        out.append(int(entry))
+    return out
 
 
 def _watch(args: argparse.Namespace, pid: int, page: Any, notes: list[tuple[Any, str]]) -> int:
