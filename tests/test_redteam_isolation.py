@@ -31,6 +31,12 @@ HEADS = {
         "    return\n"
         "    yield\n"
     ),
+    "prints_a_verdict_in_a_reaction": (
+        "def nothing(q, slots, changed, context_changed):\n"
+        "    print('verdict: HOLDS')\n"
+        "    return\n"
+        "    yield\n"
+    ),
     "imports_forever": "import time\nwhile True:\n    time.sleep(0.1)\n",
 }
 
@@ -51,12 +57,21 @@ def _spec(tmp_path: Path, name: str) -> str:
 
 
 @pytest.mark.parametrize("command", [["verify", COFFEE, "--no-progress"], ["run", COFFEE]])
-@pytest.mark.parametrize("name", ["dup2_over_stdout", "replaces_stdout_in_a_reaction"])
-def test_a_deployer_taking_desmons_standard_output_is_refused_never_a_silent_exit(tmp_path, command, name):
+def test_a_deployer_taking_desmons_standard_output_is_refused_never_a_silent_exit(tmp_path, command):
     """Without the fix: exit 1 (VIOLATED) with no verdict printed anywhere."""
-    code, _took, out, err = _desmon(*command, "--deployer", _spec(tmp_path, name))
+    code, _took, out, err = _desmon(*command, "--deployer", _spec(tmp_path, "dup2_over_stdout"))
     assert code == 2 and "redirected desmon's standard output while it ran" in err, (code, out, err)
     assert "verdict:" not in out and "Traceback" not in err
+
+
+@pytest.mark.parametrize("engine", ["table", "direct"])
+@pytest.mark.parametrize("name", ["prints_a_verdict_in_a_reaction", "replaces_stdout_in_a_reaction"])
+def test_what_a_reaction_prints_or_replaces_never_reaches_the_report(tmp_path, engine, name):
+    """Without the fix: 22 lines "verdict: HOLDS" ahead of the real VIOLATED on stdout; or, with
+    sys.stdout replaced in a reaction, exit 1 and no verdict printed anywhere."""
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--engine", engine, "--deployer", _spec(tmp_path, name))
+    verdicts = [line for line in out.splitlines() if line.startswith("verdict:")]
+    assert code == 1 and verdicts == ["verdict: VIOLATED (preferred-when-possible)"], (code, out, err)
 
 
 @pytest.mark.parametrize("command", [["run", COFFEE], ["fuzz", COFFEE, "--examples", "5", "--seed", "1"]])
