@@ -216,3 +216,35 @@ def test_a_process_that_left_desmons_process_group_is_killed_too(tmp_path):
     time.sleep(0.2)
     stat = Path(f"/proc/{left}/stat")
     assert not stat.exists() or stat.read_text().rsplit(")", 1)[1].split()[0] == "Z", "the process that left the group still runs"
+
+
+def test_desmon_ended_by_a_signal_leaves_no_worker_running(tmp_path):
+    """``timeout 60 desmon ...`` ends desmon with SIGTERM; without the fix its worker process
+    (a process group of its own) went on spinning in the deployer's reaction for ever."""
+    marker = tmp_path / "worker.pid"
+    (tmp_path / "spins.py").write_text(
+        f"import os\nopen({str(marker)!r}, 'w').write(str(os.getpid()))\n"
+        "def nothing(q, slots, changed, context_changed):\n"
+        "    while True:\n"
+        "        pass\n"
+        "    yield\n"
+    )
+    proc = subprocess.Popen([sys.executable, "-m", "desmon", "verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'spins.py'}:nothing"])
+    try:
+        for _ in range(200):
+            if marker.exists() and marker.read_text():
+                break
+            time.sleep(0.05)
+        worker = int(marker.read_text())
+        time.sleep(0.5)
+        proc.terminate()
+        proc.wait(timeout=10)
+    finally:
+        proc.kill()
+    stat = Path(f"/proc/{worker}/stat")
+    for _ in range(40):
+        if not stat.exists() or stat.read_text().rsplit(")", 1)[1].split()[0] == "Z":
+            return
+        time.sleep(0.05)
+    __import__("os").kill(worker, 9)
+    pytest.fail("desmon's worker process still runs after desmon was ended")

@@ -176,8 +176,10 @@ def supervise(args: argparse.Namespace, work: Callable[[Beacon], int]) -> int:
     sys.stdout.flush()
     sys.stderr.flush()
     _subreaper()
+    parent = os.getpid()
     pid = os.fork()
     if pid == 0:  # pragma: no cover - the child (its coverage is the command's)
+        _dies_with(parent)
         _child(page, out, work)
     notes: list[tuple[Any, str]] = []
     try:
@@ -235,6 +237,16 @@ def _kill(pid: int) -> None:
         if not left:
             return
         time.sleep(0.01)
+
+
+def _dies_with(parent: int) -> None:  # pragma: no cover - the child
+    """The child killed as the parent dies (Linux): desmon ended by a signal (a ``timeout``) leaves no worker running."""
+    with contextlib.suppress(OSError, AttributeError):
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG
+    if os.getppid() != parent:  # the parent died before that
+        os._exit(4)
 
 
 def _subreaper() -> None:
