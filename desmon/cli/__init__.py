@@ -67,6 +67,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     # a budget (verify --timeout) counts from the start of the command: from the process's
     # start when desmon is the program (argv None), from this call when a caller runs it
     started = time.perf_counter() - (_process_age() if argv is None else 0.0)
+    if sys.stdout is None:  # started with its standard output closed (>&-): no verdict could be read
+        if sys.stderr is not None:
+            print("desmon: error: standard output is closed, where desmon writes its report; redirect it (> out.txt)", file=sys.stderr)
+        return EXIT_USAGE
     parser = build_parser()
     try:
         args, extra = parser.parse_known_args(argv)
@@ -98,11 +102,13 @@ def _dispatch(args: argparse.Namespace, beacon: Beacon | None = None) -> int:
         args.guard = Guard(getattr(args, "max_commands", None) or MAX_COMMANDS, deadline)  # (verify: its --timeout instead)
         args.guard.beacon = beacon.clock if beacon is not None else None
         tamper = Tamper(args) if users_deployer(getattr(args, "deployer", None)) else None  # before its module is imported
-        preflight(args)  # inputs, numbers, windows and output paths, before any long work
+        with beacon.importing(deadline is not None) if beacon is not None else contextlib.nullcontext():  # (its import is its code)
+            preflight(args)  # inputs, numbers, windows and output paths, before any long work
         run_of(args)  # this command's run context: its guard and its planned outputs (each engine adds its own memoised checks)
-        with args.guard.deadline(), contextlib.redirect_stdout(WholeWrites(sys.stdout)):  # (printed whole under the timer)
+        with args.guard.deadline(), contextlib.redirect_stdout(WholeWrites(sys.stdout)) as out:  # (printed whole under the timer)
             code = int(args.handler(args))
-        return code if tamper is None else _untampered(tamper, code, beacon)
+            kept = sys.stdout is out  # (a deployer that replaced it took the report)
+        return code if tamper is None else _untampered(tamper, code, beacon, kept)
     except DeployerFault as exc:
         # (SimPy re-raises a process's exception as a copy caused by the original)
         if exc.initial or getattr(exc.__cause__, "initial", False):  # the deployer cannot run at all: bad input
@@ -122,9 +128,9 @@ def _dispatch(args: argparse.Namespace, beacon: Beacon | None = None) -> int:
         return 130
 
 
-def _untampered(tamper: Tamper, code: int, beacon: Beacon | None) -> int:
-    """``code``, or the refusal (exit 2, one line) of a run whose deployer changed desmon's code or the model."""
-    why = tamper.refusal()
+def _untampered(tamper: Tamper, code: int, beacon: Beacon | None, stdout_kept: bool = True) -> int:
+    """``code``, or the refusal (exit 2, one line) of a run whose deployer changed desmon's code, the model or its output."""
+    why = tamper.refusal(stdout_kept)
     if not why:
         return code
     print(f"desmon: error: {one_line(why)}", file=sys.stderr)

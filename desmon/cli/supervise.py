@@ -30,13 +30,14 @@ desmon's isolation catches", says what this catches and what it costs.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import signal
 import struct
 import sys
 import tempfile
 import time
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 __all__ = ["supervise", "Tamper", "Beacon", "GRACE"]
 
@@ -64,6 +65,18 @@ class Beacon:
         """The deployer's code runs since ``since`` (0: it does not run now), after ``used`` seconds in this reaction."""
         struct.pack_into("dd", self.page, 0, since, used)
 
+    @contextlib.contextmanager
+    def importing(self, limited: bool) -> Iterator[None]:
+        """The deployer's module imported on the reaction clock where a reaction has a limit: an
+        import that never ends is killed as a reaction that never returns is."""
+        if limited:
+            self.clock(time.monotonic(), 0.0)
+        try:
+            yield
+        finally:
+            if limited:
+                self.clock(0.0, 0.0)
+
     def done(self, code: int) -> None:
         struct.pack_into("qq", self.page, 16, os.getpid(), 1000 + code if self.refused else code)
 
@@ -77,13 +90,32 @@ class Tamper:
 
         self.args = args
         self.code = code_fingerprint(("desmon.deployment.core",) + _PRELOAD.get(getattr(args, "command", ""), ()))
+        self.stdout = _file_of(1)
+        self.cwd = _cwd()
+        self.hooks = _hooks()
 
-    def refusal(self) -> str:
-        """One line naming what the deployer changed, or ""."""
+    def refusal(self, stdout_kept: bool = True) -> str:
+        """One line naming what the deployer changed, or "". ``stdout_kept``: whether
+        ``sys.stdout`` was still desmon's own when the command's report was written."""
         from desmon.deployment.integrity import changed, code_fingerprint, model_fingerprint
 
         spec = self.args.deployer
         spec = getattr(spec, "name", spec)
+        if not stdout_kept or _file_of(1) != self.stdout:
+            return (
+                f"deployer {spec} redirected desmon's standard output while it ran, so its report is lost and no result of "
+                "this run can be trusted; a deployer reads through its ports and yields commands (docs/deployers.md)"
+            )
+        if _hooks() != self.hooks:
+            return (
+                f"deployer {spec} installed a trace, profile or monitoring function while it ran (sys.settrace, sys.setprofile, "
+                "sys.monitoring), which can change what desmon's checks compute, so no result of this run can be trusted (docs/deployers.md)"
+            )
+        if _cwd() != self.cwd:
+            return (
+                f"deployer {spec} changed desmon's working directory while it ran (from {self.cwd} to {_cwd()}), so the "
+                "outputs went elsewhere and no result of this run can be trusted; a deployer never changes directory (docs/deployers.md)"
+            )
         what = changed(self.code, code_fingerprint())
         if what:
             return (
@@ -98,6 +130,30 @@ class Tamper:
                 "trusted; a deployer reads the model, it never changes it (docs/deployers.md)"
             )
         return ""
+
+
+def _file_of(fd: int) -> tuple[int, int] | None:
+    """The file descriptor ``fd`` refers to (device, inode), or None where it is closed."""
+    try:
+        st = os.fstat(fd)
+    except OSError:
+        return None
+    return st.st_dev, st.st_ino
+
+
+def _hooks() -> tuple[Any, ...]:
+    """The process's trace and profile functions and its monitoring tools: what can reach into a running frame."""
+    monitoring = getattr(sys, "monitoring", None)
+    tools = tuple(monitoring.get_tool(i) for i in range(6)) if monitoring is not None else ()
+    return sys.gettrace(), sys.getprofile(), tools
+
+
+def _cwd() -> str | None:
+    """The working directory, or None where it is gone."""
+    try:
+        return os.getcwd()
+    except OSError:
+        return None
 
 
 def _limits(args: argparse.Namespace) -> tuple[float | None, float | None]:
@@ -119,17 +175,25 @@ def supervise(args: argparse.Namespace, work: Callable[[Beacon], int]) -> int:
     out = tempfile.TemporaryFile()
     sys.stdout.flush()
     sys.stderr.flush()
+    _subreaper()
+    parent = os.getpid()
     pid = os.fork()
     if pid == 0:  # pragma: no cover - the child (its coverage is the command's)
+        _dies_with(parent)
         _child(page, out, work)
     notes: list[tuple[Any, str]] = []
     try:
         code = _watch(args, pid, page, notes)
     finally:
         _kill(pid)
-    _copy_out(out, code)
-    for stream, line in notes:  # after the child's own output: how desmon ended it
-        print(line, file=sys.stdout if stream == "out" else sys.stderr, flush=True)
+    try:
+        _copy_out(out, code)
+        for stream, line in notes:  # after the child's own output: how desmon ended it
+            print(line, file=sys.stdout if stream == "out" else sys.stderr, flush=True)
+    except OSError as exc:  # a reader that left (a closed pipe): as in desmon's own process, one line
+        os.dup2(os.open(os.devnull, os.O_WRONLY), 1)  # (Python's own flush at exit must not fail again)
+        print(f"desmon: error: cannot read or write: {exc.strerror or exc}; check the path", file=sys.stderr)
+        return 2
     return code - 1000 if code >= 1000 else code
 
 
@@ -164,6 +228,45 @@ def _kill(pid: int) -> None:
         os.waitpid(pid, 0)
     except ChildProcessError:
         pass
+    for _ in range(50):  # processes that left the group (os.setsid): orphaned, they are ours (_subreaper)
+        left = _children()
+        for child in left:
+            with contextlib.suppress(OSError):
+                os.kill(child, signal.SIGKILL)
+                os.waitpid(child, os.WNOHANG)
+        if not left:
+            return
+        time.sleep(0.01)
+
+
+def _dies_with(parent: int) -> None:  # pragma: no cover - the child
+    """The child killed as the parent dies (Linux): desmon ended by a signal (a ``timeout``) leaves no worker running."""
+    with contextlib.suppress(OSError, AttributeError):
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG
+    if os.getppid() != parent:  # the parent died before that
+        os._exit(4)
+
+
+def _subreaper() -> None:
+    """Make this process the one an orphaned descendant is handed to (Linux), so that none escapes :func:`_kill`."""
+    with contextlib.suppress(OSError, AttributeError):
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0)  # PR_SET_CHILD_SUBREAPER
+
+
+def _children() -> list[int]:
+    """The pids of this process's children (from /proc; none where it cannot be read)."""
+    me, out = os.getpid(), []
+    with contextlib.suppress(OSError):
+        for entry in os.listdir("/proc"):
+            if entry.isdigit():
+                with contextlib.suppress(OSError, ValueError, IndexError), open(f"/proc/{entry}/stat", "rb") as fh:
+                    if int(fh.read().rsplit(b")", 1)[1].split()[1]) == me:
+                        out.append(int(entry))
+    return out
 
 
 def _watch(args: argparse.Namespace, pid: int, page: Any, notes: list[tuple[Any, str]]) -> int:
@@ -212,7 +315,7 @@ def _overrun(
         return 3
     if limit is not None and since > 0 and used + time.monotonic() - since > limit + GRACE:
         notes.append(("err", (
-            f"desmon: CRASHED: deployer {spec}: its code ran for over {limit:g} s in one reaction without returning and did not "
+            f"desmon: CRASHED: deployer {spec}: its code ran for over {limit:g} s in one reaction (or while imported) without returning and did not "
             "let desmon stop it, so desmon killed its worker process; a reaction must return (--max-reaction-seconds S sets the limit)"
         )))
         return 4

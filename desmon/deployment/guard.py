@@ -39,6 +39,7 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import sys
 import threading
 import time
 import traceback
@@ -281,6 +282,8 @@ class Guard:
         #: told (since, used) as the deployer's code starts and stops running where a deadline
         #: is armed (the supervising process's view of the clock: desmon.cli.supervise), or None
         self.beacon: Callable[[float, float], None] | None = None
+        #: while a user's deployer's code runs (where a beacon is set), its stdout redirected to stderr
+        self.stdout: Any = None
 
     def __repr__(self) -> str:
         return f"Guard(max_commands={self.max_commands}, max_reaction_seconds={self.max_reaction_seconds})"
@@ -292,12 +295,18 @@ class Guard:
             self.since = time.monotonic()
             if self.beacon is not None:
                 self.beacon(self.since, self.used)
+        if self.beacon is not None and not self.inside:  # (a user's deployer, supervised)
+            self.stdout = contextlib.redirect_stdout(sys.stderr)  # what it prints never reads as the report's own lines
+            self.stdout.__enter__()
         self.inside += 1
 
     def _leave(self) -> None:
         """The deployer's code yielded, returned or raised: the time it ran counts in its
         reaction's (where a deadline is armed)."""
         self.inside -= 1
+        if self.beacon is not None and not self.inside and self.stdout is not None:
+            self.stdout.__exit__(None, None, None)
+            self.stdout = None
         if self.armed and not self.inside:
             self.used += time.monotonic() - self.since
             if self.beacon is not None:

@@ -10,7 +10,7 @@ work is done, a difference refuses the result with one line naming what changed
 * :func:`code_fingerprint`: for every loaded ``desmon`` module, the identity of each of
   its attributes; of a function, its code, defaults and closure too; of a class, every
   entry of its namespace (methods' code included); of a tuple, frozenset or dict, its
-  items; of a frozen record (an invariant), its fields. Replacing an invariant function,
+  items, and of a frozen record among them (an invariant), its fields. Replacing an invariant function,
   wrapping a port's method or swapping a function's ``__code__`` changes it.
 * :func:`model_fingerprint`: the text of every field of the model, each platform on its
   own (raising a platform's capacities through ``object.__setattr__`` changes it).
@@ -61,13 +61,18 @@ def _parts(value: Any) -> Iterator[tuple[str, int]]:
                 yield f".{name}{suffix}", ident
     elif isinstance(value, (tuple, frozenset)):
         for i, item in enumerate(value if isinstance(value, tuple) else sorted(value, key=repr)):
-            yield f"[{i}]", id(item)
-            if dataclasses.is_dataclass(item):
-                for f in dataclasses.fields(item):
-                    yield f"[{i}].{f.name}", id(getattr(item, f.name, None))
+            yield from _item(f"[{i}]", item)
     elif isinstance(value, dict):
         for key, item in list(value.items()):
-            yield f"[{key!r}]", id(item)
+            yield from _item(f"[{key!r}]", item)
+
+
+def _item(name: str, item: Any) -> Iterator[tuple[str, int]]:
+    """An item of a tuple, frozenset or dict: its identity, and a record's fields (an invariant's check)."""
+    yield name, id(item)
+    if dataclasses.is_dataclass(item):
+        for f in dataclasses.fields(item):
+            yield f"{name}.{f.name}", id(getattr(item, f.name, None))
 
 
 def code_fingerprint(preload: tuple[str, ...] = ()) -> dict[str, int]:

@@ -71,8 +71,9 @@ def check_name(what: str, name: object, *, error: Error = ModelError) -> str:
 
 
 #: a name: letters and digits of any script, '_', '-' and '.' (no space, no other
-#: punctuation, no control, format or markup character)
-_NAME = re.compile(r"(?:[^\W]|[-.])+")
+#: punctuation, no control, format or markup character, and none of the Hangul fillers:
+#: letters that show as blank space)
+_NAME = re.compile(r"(?:(?![\u115f\u1160\u3164\uffa0])[^\W]|[-.])+")
 
 
 def is_plain_name(name: object) -> bool:

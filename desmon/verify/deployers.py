@@ -171,11 +171,17 @@ def portable_spec(spec: str) -> str:
 
 @contextlib.contextmanager
 def _loading(spec: str, source: str, rerun: str, module: str | None = None) -> Iterator[None]:
-    """Run a user's module: what it prints goes to stderr; whatever it raises is one line.
+    """Run a user's module: what it prints goes to stderr; whatever it raises is one line; a
+    process it forked ends there, silently (only desmon's own process goes on with the work).
     ``module``: the module being imported by name (its absence is "not found", not a failure)."""
+    pid = os.getpid()
     try:
         with contextlib.redirect_stdout(sys.stderr):
-            yield
+            try:
+                yield
+            finally:
+                if os.getpid() != pid:
+                    os._exit(0)
     except KeyboardInterrupt:
         raise  # a real Ctrl-C (desmon reports it as interrupted)
     except ModuleNotFoundError as exc:

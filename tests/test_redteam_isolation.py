@@ -1,0 +1,250 @@
+"""Adversarial deployers the isolation (docs/deployers.md, "What desmon's isolation catches")
+must not let through: one that takes desmon's standard output, where the report goes, and
+one whose import never ends in a command with a reaction limit. Each runs ``desmon`` as the
+program, in a process of its own with a timeout, so a hang fails the test."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+COFFEE = str(ROOT / "scenarios" / "coffee_handover.py")
+
+NOTHING = """
+def nothing(q, slots, changed, context_changed):
+    return
+    yield
+"""
+
+#: heads of deployer modules that deploy nothing (VIOLATED on coffee_handover), each misbehaving in one way
+HEADS = {
+    "dup2_over_stdout": "import os\nos.dup2(os.open(os.devnull, os.O_WRONLY), 1)\n",
+    "replaces_stdout_in_a_reaction": (
+        "import io, sys\n"
+        "def nothing(q, slots, changed, context_changed):\n"
+        "    sys.stdout = io.StringIO()\n"
+        "    return\n"
+        "    yield\n"
+    ),
+    "prints_a_verdict_in_a_reaction": (
+        "def nothing(q, slots, changed, context_changed):\n"
+        "    print('verdict: HOLDS')\n"
+        "    return\n"
+        "    yield\n"
+    ),
+    "imports_forever": "import time\nwhile True:\n    time.sleep(0.1)\n",
+}
+
+
+def _desmon(*args: str, timeout: float = 60) -> tuple[int, float, str, str]:
+    t0 = time.monotonic()
+    try:
+        proc = subprocess.run([sys.executable, "-m", "desmon", *args], capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"desmon {' '.join(args)} hung")
+    return proc.returncode, time.monotonic() - t0, proc.stdout, proc.stderr
+
+
+def _spec(tmp_path: Path, name: str) -> str:
+    path = tmp_path / f"{name}.py"
+    path.write_text(HEADS[name] + ("" if "def nothing" in HEADS[name] else NOTHING))
+    return f"{path}:nothing"
+
+
+@pytest.mark.parametrize("command", [["verify", COFFEE, "--no-progress"], ["run", COFFEE]])
+def test_a_deployer_taking_desmons_standard_output_is_refused_never_a_silent_exit(tmp_path, command):
+    """Without the fix: exit 1 (VIOLATED) with no verdict printed anywhere."""
+    code, _took, out, err = _desmon(*command, "--deployer", _spec(tmp_path, "dup2_over_stdout"))
+    assert code == 2 and "redirected desmon's standard output while it ran" in err, (code, out, err)
+    assert "verdict:" not in out and "Traceback" not in err
+
+
+@pytest.mark.parametrize("engine", ["table", "direct"])
+@pytest.mark.parametrize("name", ["prints_a_verdict_in_a_reaction", "replaces_stdout_in_a_reaction"])
+def test_what_a_reaction_prints_or_replaces_never_reaches_the_report(tmp_path, engine, name):
+    """Without the fix: 22 lines "verdict: HOLDS" ahead of the real VIOLATED on stdout; or, with
+    sys.stdout replaced in a reaction, exit 1 and no verdict printed anywhere."""
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--engine", engine, "--deployer", _spec(tmp_path, name))
+    verdicts = [line for line in out.splitlines() if line.startswith("verdict:")]
+    assert code == 1 and verdicts == ["verdict: VIOLATED (preferred-when-possible)"], (code, out, err)
+
+
+@pytest.mark.parametrize("command", [["run", COFFEE], ["fuzz", COFFEE, "--examples", "5", "--seed", "1"]])
+def test_a_deployer_whose_import_never_ends_is_crashed_at_the_reaction_limit(tmp_path, command):
+    code, took, out, err = _desmon(*command, "--max-reaction-seconds", "2", "--deployer", _spec(tmp_path, "imports_forever"))
+    assert code == 4 and "(or while imported)" in err and took < 20, (code, took, out, err)
+
+
+#: a module that swaps the check of every invariant record in desmon's registry for one that finds nothing
+RECORDS = (
+    "def _never(view):\n"
+    "    return None\n"
+    "def _patch():\n"
+    "    import importlib\n"
+    "    for inv in importlib.import_module('desmon.deployment.invariants').INVARIANTS.values():\n"
+    "        object.__setattr__(inv, 'check', _never)\n"
+    "_patch()\n"
+    "del _patch\n"
+)
+
+
+@pytest.mark.parametrize(
+    "command",
+    [["verify", COFFEE, "--no-progress", "--invariant", "coverage"], ["verify", COFFEE, "--no-progress", "--invariant", "coverage", "--engine", "direct"], ["run", COFFEE]],
+)
+def test_a_deployer_changing_the_invariant_records_is_refused_never_holds(tmp_path, command):
+    """Without the fix: verify says HOLDS (exit 0) for a deployer that deploys nothing."""
+    path = tmp_path / "records.py"
+    path.write_text(RECORDS + NOTHING)
+    code, _took, out, err = _desmon(*command, "--deployer", f"{path}:nothing")
+    assert code == 2 and "changed desmon's own code while it ran (desmon.deployment.invariants.INVARIANTS[" in err, (code, out, err)
+    assert "HOLDS" not in out
+
+
+def _ended(proc: subprocess.Popen, timeout: float = 60) -> tuple[int, str]:
+    try:
+        _out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        pytest.fail("desmon hung")
+    return proc.returncode, err
+
+
+@pytest.mark.parametrize("deployer", ["desmon", "user"])
+def test_a_reader_that_left_is_one_line_never_a_traceback(tmp_path, deployer):
+    """Standard output a pipe whose reader closed it before the report: exit 2, one line,
+    as desmon's own process says it (without the fix, the supervisor's copy raised BrokenPipeError)."""
+    (tmp_path / "plain.py").write_text(NOTHING)
+    spec = "desmon" if deployer == "desmon" else f"{tmp_path / 'plain.py'}:nothing"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "desmon", "verify", COFFEE, "--no-progress", "--deployer", spec], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    proc.stdout.close()  # the reader leaves at once
+    code, err = _ended(proc)
+    assert code == 2 and "cannot read or write: Broken pipe" in err and "Traceback" not in err, (code, err)
+
+
+@pytest.mark.parametrize("deployer", ["desmon", "user"])
+def test_standard_output_closed_at_the_start_is_one_line_never_a_traceback(tmp_path, deployer):
+    """``desmon ... >&-``: without the fix, an AttributeError traceback and exit 1, which reads as VIOLATED."""
+    (tmp_path / "plain.py").write_text(NOTHING)
+    spec = "desmon" if deployer == "desmon" else f"{tmp_path / 'plain.py'}:nothing"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "desmon", "verify", COFFEE, "--no-progress", "--deployer", spec], stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: __import__("os").close(1),
+    )
+    code, err = _ended(proc)
+    assert code == 2 and "standard output is closed" in err and "Traceback" not in err, (code, err)
+
+
+def test_a_deployer_changing_the_working_directory_is_refused(tmp_path):
+    """Without the fix: exit 1, and the --json the user asked for written in the directory the deployer chose."""
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (tmp_path / "moves.py").write_text(f"import os\nos.chdir({str(elsewhere)!r})\n" + NOTHING)
+    work = tmp_path / "work"
+    work.mkdir()
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-m", "desmon", "verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'moves.py'}:nothing", "--json", "cex.json"],
+            capture_output=True, text=True, cwd=work, timeout=60,
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail("desmon hung")
+    assert proc.returncode == 2 and "changed desmon's working directory while it ran" in proc.stderr, (proc.returncode, proc.stderr)
+    assert "verdict:" not in proc.stdout
+
+
+#: a module whose trace function empties the list check_invariants returns: no violation is ever seen
+TRACES = '''
+import sys
+def _calls(frame, event, arg):
+    return _returns if frame.f_code.co_name == "check_invariants" else None
+def _returns(frame, event, arg):
+    if event == "return":
+        frame.f_locals["out"].clear()
+    return _returns
+sys.settrace(_calls)
+def nothing(q, slots, changed, context_changed):
+    sys.settrace(_calls)
+    return
+    yield
+'''
+
+
+@pytest.mark.parametrize("command", [["verify", COFFEE, "--no-progress", "--invariant", "coverage", "--engine", "direct"], ["run", COFFEE]])
+def test_a_deployer_installing_a_trace_function_is_refused_never_holds(tmp_path, command):
+    """Without the fix: verify says HOLDS (exit 0) for a deployer that deploys nothing."""
+    (tmp_path / "traces.py").write_text(TRACES)
+    code, _took, out, err = _desmon(*command, "--deployer", f"{tmp_path / 'traces.py'}:nothing")
+    assert code == 2 and "installed a trace, profile or monitoring function while it ran" in err, (code, out, err)
+    assert "HOLDS" not in out
+
+
+@pytest.mark.parametrize("engine", ["table", "direct"])
+def test_a_fork_while_imported_leaves_one_report_and_the_verdict(tmp_path, engine):
+    """Without the fix: the forked copy went on with desmon's work (and, in the memory check's
+    fresh import, forked again): four reports, and an exit 4 when a copy wrote its exit code last."""
+    (tmp_path / "forks.py").write_text("import os\nos.fork()\n" + NOTHING)
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--engine", engine, "--deployer", f"{tmp_path / 'forks.py'}:nothing")
+    assert code == 1 and out.count("verdict: VIOLATED") == 1 and out.count("coffee_handover -- deployer") == 1, (code, out, err)
+
+
+def test_a_process_that_left_desmons_process_group_is_killed_too(tmp_path):
+    """A deployer whose module forks a process that leaves the group (os.setsid) and sleeps
+    holding desmon's standard error: without the fix, a caller reading desmon's output
+    waited 30 s for it after desmon had ended."""
+    marker = tmp_path / "left.pid"
+    (tmp_path / "leaves.py").write_text(
+        "import os, time\n"
+        "if os.fork() == 0:\n"
+        "    os.setsid()\n"
+        "    if os.fork() == 0:\n"
+        f"        open({str(marker)!r}, 'w').write(str(os.getpid()))\n"
+        "        time.sleep(30)\n"
+        "    os._exit(0)\n" + NOTHING
+    )
+    code, took, out, err = _desmon("verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'leaves.py'}:nothing", timeout=25)
+    assert code == 1 and "verdict: VIOLATED" in out and took < 15, (code, took, out, err)
+    left = int(marker.read_text())
+    time.sleep(0.2)
+    stat = Path(f"/proc/{left}/stat")
+    assert not stat.exists() or stat.read_text().rsplit(")", 1)[1].split()[0] == "Z", "the process that left the group still runs"
+
+
+def test_desmon_ended_by_a_signal_leaves_no_worker_running(tmp_path):
+    """``timeout 60 desmon ...`` ends desmon with SIGTERM; without the fix its worker process
+    (a process group of its own) went on spinning in the deployer's reaction for ever."""
+    marker = tmp_path / "worker.pid"
+    (tmp_path / "spins.py").write_text(
+        f"import os\nopen({str(marker)!r}, 'w').write(str(os.getpid()))\n"
+        "def nothing(q, slots, changed, context_changed):\n"
+        "    while True:\n"
+        "        pass\n"
+        "    yield\n"
+    )
+    proc = subprocess.Popen([sys.executable, "-m", "desmon", "verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'spins.py'}:nothing"])
+    try:
+        for _ in range(200):
+            if marker.exists() and marker.read_text():
+                break
+            time.sleep(0.05)
+        worker = int(marker.read_text())
+        time.sleep(0.5)
+        proc.terminate()
+        proc.wait(timeout=10)
+    finally:
+        proc.kill()
+    stat = Path(f"/proc/{worker}/stat")
+    for _ in range(40):
+        if not stat.exists() or stat.read_text().rsplit(")", 1)[1].split()[0] == "Z":
+            return
+        time.sleep(0.05)
+    __import__("os").kill(worker, 9)
+    pytest.fail("desmon's worker process still runs after desmon was ended")
