@@ -347,6 +347,11 @@ class ScalarChecks:
     chose, never a global switch.
     """
 
+    #: its answers are :data:`DEFAULT_CHECKS`' own, so a deployer's worker process may
+    #: compute them itself (:mod:`desmon.verify.isolation`); a port that must see every
+    #: question (the table engine's recording checks) does not say so
+    answers_as_default = True
+
     def compute(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
         """The answer of :meth:`validity` (implementations refine this)."""
         return loop_validity(reqs, states, graph, reasons)

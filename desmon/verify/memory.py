@@ -64,8 +64,8 @@ def check_memory(system: TransitionSystem) -> None:
     if system.reactions is None:
         return
     rerun_fresh(system)
-    module, before = system.deployer_state or (None, {})
-    _module, after = deployer_state(system.deployer_name, module)
+    before = system.deployer_state or {}
+    after = deployer_state(system.core.deployer)
     for name, was in before.items():
         now = after.get(name)
         if now != was:
@@ -85,7 +85,7 @@ def rerun_fresh(system: TransitionSystem) -> int:
         return 0
     run = dataclasses.replace(system.run_context, checks=None)
     fresh = TransitionSystem(
-        system.scenario, fresh_deployer(system.deployer_name), invariants=[i.name for i in system.invariants],
+        system.scenario, fresh_deployer(system.core.deployer), invariants=[i.name for i in system.invariants],
         bounds=system.bounds, run=run,
     )
     for key, event, prefix, commands, instant in reversed(kept):

@@ -106,7 +106,7 @@ class TransitionSystem:
         self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), deployer, run=self.run_context)
         self.deployer_name = self.core.deployer.name
         # a user's deployer: its reactions (key, event, prefix, commands, instant) and state (desmon.verify.memory)
-        self.reactions, self.deployer_state = ([], deployer_state(self.deployer_name)) if users_spec(self.deployer_name) else (None, None)
+        self.reactions, self.deployer_state = ([], deployer_state(self.core.deployer)) if users_spec(self.deployer_name) else (None, None)
         self.store.watch = self.instant
         self.store.watch_check = self._instant_check
         self._instant_memo: dict[tuple, list[tuple[str, str]]] = {}
