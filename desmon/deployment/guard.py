@@ -126,6 +126,10 @@ def describe_stimulus(stimulus: Any, context: Any = None, cause: object = None) 
     return f"{what} (context {context})" if context is not None else what
 
 
+#: the folder of desmon's side of a deployer's worker process: no line of the deployer's
+_ISOLATION = os.path.join("desmon", "verify", "isolation") + os.sep
+
+
 class RaisedElsewhere(Exception):
     """What a deployer's reaction did where desmon cannot see its traceback (its worker
     process: :mod:`desmon.verify.isolation`), already in the guard's words (``what``)."""
@@ -138,7 +142,10 @@ class RaisedElsewhere(Exception):
 def _where(exc: BaseException, skip: tuple[str, ...] = ()) -> str:
     """``file:line`` of the innermost frame of ``exc``'s traceback outside desmon's guard (and ``skip``), or ""."""
     own = (os.path.abspath(__file__), os.path.join(os.path.dirname(os.path.abspath(__file__)), "core.py"), *map(os.path.abspath, skip))
-    frames = [f for f in traceback.extract_tb(exc.__traceback__) if os.path.abspath(f.filename) not in own]
+    frames = [
+        f for f in traceback.extract_tb(exc.__traceback__)
+        if os.path.abspath(f.filename) not in own and _ISOLATION not in os.path.abspath(f.filename)
+    ]
     if not frames:  # raised by the call itself (react called with the wrong arguments): no line of the deployer's
         return ""
     f = frames[-1]

@@ -228,6 +228,8 @@ class Budget:
         self.memory = 0.0  # the last resident memory read (MB; the workers' shares included)
         #: the worker processes whose memory counts (set by the direct engine's pool)
         self.pids: Callable[[], Iterable[int]] = tuple
+        #: other processes whose memory counts: a user's deployer's worker (:mod:`desmon.verify.isolation`)
+        self.others: Callable[[], Iterable[int]] = tuple
         #: (states, transitions, depth) of the search so far, for the progress line
         self.status: Callable[[], tuple[int, int, int]] = lambda: (0, 0, 0)
         self._next_look = t0
@@ -258,14 +260,14 @@ class Budget:
             elif time.perf_counter() > self.deadline:
                 self.reason = f"timeout {self.timeout:g}s"
             elif self.max_memory is not None:
-                mb = self.measure(list(self.pids()))
+                mb = self.measure([*self.pids(), *self.others()])
                 if mb > self.max_memory:
                     self.memory = mb
                     self.reason = f"memory budget {self.max_memory:g} MB reached: {mb:,.0f} MB resident"
         return self.reason
 
     def _look(self, now: float) -> None:
-        pids = list(self.pids())
+        pids = [*self.pids(), *self.others()]
         self._next_look = now + (MEMORY_EVERY_WORKERS if pids else MEMORY_EVERY)
         if self.max_memory is not None or self.progress:
             self.memory = self.measure(pids)

@@ -57,7 +57,7 @@ from desmon.verify.isolation.wire import (
     BLOBS, DEFAULT, Blob, Decoder, Handle, Handles, Method, encode, one_line, plain_class, recv_message, send_message,
 )
 
-__all__ = ["isolated", "RemoteReact", "Worker", "WorkerGone", "ALLOWED", "ReactionRaised", "Loader", "IMPORT_SECONDS"]
+__all__ = ["isolated", "worker_pids", "RemoteReact", "Worker", "WorkerGone", "ALLOWED", "ReactionRaised", "Loader", "IMPORT_SECONDS"]
 
 #: What a handle of each role may read: the ports' methods and a platform's or an
 #: answer's public fields. Nothing else, and no private name, is served.
@@ -392,3 +392,10 @@ def isolated(spec: str, ports: Loader, import_seconds: float | None = None) -> D
         spec, str(info.get("description", spec)), RemoteReact(spec, ports, worker),
         fallbacks=bool(info.get("fallbacks", True)), stale_errors=bool(info.get("stale_errors", False)),
     )
+
+
+def worker_pids(deployer: Deployer) -> list[int]:
+    """The process id of ``deployer``'s worker where it runs isolated and its worker lives (in this process's keeping)."""
+    react = deployer.react
+    w = react.worker if isinstance(react, RemoteReact) else None
+    return [w.pid] if w is not None and w.alive and w.owner == os.getpid() else []
