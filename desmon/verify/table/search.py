@@ -14,9 +14,8 @@ from typing import Any, NamedTuple, Sequence
 import numpy as np
 import numpy.ma  # noqa: F401  (np.unique imports it on first use, leaving cyclic garbage: not during a search)
 
-from desmon.deployment.guard import ReactionStopped
 from desmon.errors import TableUnsupported
-from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Trail, final_status as _final_status
+from desmon.verify.search import BreadthFirst, Budget, CheckResult, Trail
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 from desmon.verify.table.hashing import Interned, IntTable
@@ -109,7 +108,7 @@ class Units(NamedTuple):
     code: np.ndarray  # the state it reaches
 
 
-class TableEngine:
+class TableEngine(BreadthFirst):
     """The table engine for one :class:`~desmon.verify.system.TransitionSystem` (see :mod:`desmon.verify.table`)."""
 
     def __init__(self, checker: TransitionSystem) -> None:
@@ -199,42 +198,16 @@ class TableEngine:
         there is dropped whole: nothing of it is counted yet), and every
         :data:`LOOK_EVERY` new states (the batch is then cut after the current
         transition, as ``max_states`` cuts it)."""
-        self.budget, self.res, self.max_states = budget, res, max_states
+        self.budget, self.res, self.max_states, self.max_depth = budget, res, max_states, max_depth
         ch = self.checker
         init = ch.initial()
         env = self._encode(init)
         # states: code = env << SYS_BITS | system
-        codes = self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
-        trail = self.trail = Trail(ch, self.key_of, keep_going)
+        self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
+        self.trail = Trail(ch, self.key_of, keep_going)
         self.seen = IntTable(values=False)  # the codes of the states numbered before this batch
-        self.seen.add(np.array([codes[0]], dtype=np.int64))
-        for name, msg in ch.violations(init):
-            trail.record(name, msg, 0)
-        self.any_found = bool(trail.found)
-        self.depth = 0
-        self.incomplete = ""
-        self.transitions = 0
-        budget.status = lambda: (len(codes), self.transitions, self.depth)
-        try:
-            frontier = np.array([0], dtype=np.int64)
-            while len(frontier) and not self._finished() and not self.incomplete:
-                if max_depth is not None and self.depth >= max_depth:
-                    self.incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
-                    break
-                nxt = self._level(frontier)
-                if nxt:
-                    self.depth += 1
-                frontier = np.frombuffer(nxt, dtype=np.int64)
-        except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
-            self.incomplete = INTERRUPTED
-            trail.truncate(codes)
-        except ReactionStopped as stop:  # the budget ran out inside a deployer's reaction
-            self.incomplete = budget.reason or str(stop)
-            trail.truncate(codes)
-        res.transitions = self.transitions
-        res.states = len(codes)
-        budget.status = _final_status(len(codes), self.transitions, self.depth)  # (the search's closure let go)
-        return trail.found, self.incomplete, self.depth
+        self.seen.add(np.array([self.codes[0]], dtype=np.int64))
+        return self._search(self.codes, ch.violations(init))
 
     def _encode(self, init: Key) -> Env:
         """The environment code, events, answer tables, trees and recorder of the search from
@@ -253,11 +226,9 @@ class TableEngine:
         self.events = Events(self.bounds, env, self.tables.platform_index)
         return env
 
-    def _finished(self) -> bool:
-        return self.any_found and self.trail.done()
-
-    def _level(self, frontier: np.ndarray) -> array:  # type: ignore[type-arg]
+    def _level(self, frontier: Sequence[int]) -> np.ndarray:
         """One BFS level, batch by batch; returns the next level."""
+        frontier = np.asarray(frontier, dtype=np.int64)
         nxt = array("q")
         for lo in range(0, len(frontier), CHUNK_STATES):
             if self.budget.spent():
@@ -265,7 +236,7 @@ class TableEngine:
                 break
             if self._batch(frontier[lo: lo + CHUNK_STATES], nxt):
                 break
-        return nxt
+        return np.frombuffer(nxt, dtype=np.int64)
 
     def _batch(self, ids: np.ndarray, nxt: array) -> bool:  # type: ignore[type-arg]
         """Expand the states ``ids`` (one numpy batch); True if the search stops in it."""
@@ -387,8 +358,7 @@ class TableEngine:
         e = int(tr.ev[t])
         self.trail.add(int(units.ids[tr.pos[t]]), (e, lf[3]), (ev.events[e], lf[3]))
         self.res.new_states[ev.kinds[ev.kind_of[e]]] += 1
-        if self.max_states is not None and len(codes) >= self.max_states:
-            self.incomplete = f"max states {self.max_states:,} reached"
+        self._capped(len(codes))
         if bad:
             for name, msg in self.checker.violations(self.key_of(ni)):
                 self.trail.record(name, msg, ni)
