@@ -17,9 +17,10 @@ determinism of a reaction, is in docs/design.md ("Why the table engine is sound"
 Symmetry reduction is left to the direct engine.
 """
 
+from desmon.deployment.ports import QUERY_METHODS
 from desmon.errors import TableUnsupported, UnobservedRead
-from desmon.verify.table.recording import QUERY_METHODS
-from desmon.verify.table.search import CHUNK_STATES, MAX_DIGITS, TableEngine, table_unsupported
+from desmon.verify.table.encoding import MAX_DIGITS
+from desmon.verify.table.search import CHUNK_STATES, TableEngine, table_unsupported
 
 __all__ = ["TableEngine", "TableUnsupported", "UnobservedRead", "table_unsupported", "CHUNK_STATES", "MAX_DIGITS", "QUERY_METHODS"]
 

@@ -19,16 +19,14 @@ from desmon.verify.search import BreadthFirst, Budget, CheckResult, Trail
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 from desmon.verify.table.hashing import Interned, IntTable
-from desmon.verify.table.encoding import ROOT_CTX, ROOT_PREFIX, ROOT_STIM, SYS_BITS, SYS_MASK, Env, Events, Transitions, layout, root_key
+from desmon.verify.table.encoding import ROOT_PREFIX, SYS_BITS, SYS_MASK, Env, Events, Transitions, layout, root_key
 from desmon.verify.table.recording import Recorder
 from desmon.verify.table.tables import AnswerTables
 from desmon.verify.table.tree import DecisionTrees
 from desmon.verify.trace import Counterexample
 
-__all__ = ["TableEngine", "table_unsupported", "CHUNK_STATES", "MAX_DIGITS"]
+__all__ = ["TableEngine", "table_unsupported", "CHUNK_STATES"]
 
-#: combinations of one platform's facts the engine tabulates answers for (beyond: direct engine)
-MAX_DIGITS = 4096
 #: frontier states expanded per numpy batch (bounds the memory of one batch; a search capped by
 #: max_states walks, and records, the units of the whole batch that reaches the cap)
 CHUNK_STATES = 4_096
@@ -84,16 +82,10 @@ def table_unsupported(checker: TransitionSystem) -> str | None:
     """Why the table engine cannot run ``checker``'s search, or None."""
     if checker.symmetry is not None:
         return "symmetry reduction runs on the direct engine"
-    names = [p.name for p in checker.model.platforms]
     try:
-        downs, devices, levels = layout(checker.bounds, names, {d.name: d.platform for d in checker.model.devices})
+        layout(checker.bounds, checker.model)
     except TableUnsupported as exc:
         return str(exc).removeprefix("table engine: ").removesuffix("; run with --engine direct")
-    for p in checker.model.platforms:
-        digits = (2 if p.name in downs else 1) * (1 << len(devices[p.name])) * len(levels.get(p.name, (0,)))
-        if digits > MAX_DIGITS:
-            return (f"platform {p.name} has {digits:,} combinations of facts (its bounded devices, up/down and load levels); "
-                    f"the table engine tabulates at most {MAX_DIGITS:,} per platform")
     return None
 
 
@@ -213,16 +205,9 @@ class TableEngine(BreadthFirst):
         """The environment code, events, answer tables, trees and recorder of the search from
         ``init`` (or why the engine cannot run it)."""
         env = self.env = Env(self.checker, init)
-        if env.G > 1 << ROOT_CTX or self.P + 3 + len(env.vgraphs) > 1 << ROOT_STIM:
-            raise TableUnsupported(
-                f"table engine: {env.C} contexts, {env.G // env.C} combinations of requirements and {self.P} platforms do not fit "
-                "its tree keys; run with --engine direct"
-            )
-        if env.space.bit_length() + SYS_BITS > 62:
-            raise TableUnsupported(f"table engine: the environment has {env.space:,} combinations, too many to encode; run with --engine direct")
         self.tables = AnswerTables(self.model, env)
         self.trees = DecisionTrees(self.tables, self.P, self._go_on)
-        self.recorder = Recorder(self)
+        self.recorder = Recorder(self.checker, env, self.tables, self.trees, self.system)
         self.events = Events(self.bounds, env, self.tables.platform_index)
         return env
 
