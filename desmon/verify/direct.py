@@ -138,35 +138,21 @@ class DirectSearch(BreadthFirst):
         fails, ckey, moved, names, repaired, bad = rec
         self.transitions += 1
         self.count_names(names)
-        trail = self.trail
-        if repaired is not None and repaired[0] not in trail.found:
-            trail.record(repaired[0], repaired[1], ki, repaired[2], (event, fails))
-            self.any_found = True
-            if trail.done():
-                return True
+        if repaired is not None and repaired[0] not in self.trail.found and self._record_repaired(repaired, ki, (event, fails)):
+            return True
         if moved:
             self.res.changed[kind] += 1
         if ckey is None or ckey in self.index:
             return False
-        ni = self._add(ckey, ki, (event, fails), kind)
-        if bad:
-            for name, msg in bad:
-                trail.record(name, msg, ni)
-            self.any_found = True  # do not explore beyond a violation
-        else:
-            nxt.append(ni)
+        self._add_state(self._add(ckey), ki, (event, fails), (event, fails), kind, bad, nxt)
         return False
 
-    def _add(self, ckey: Any, parent: int, label: tuple[Event, tuple[int, ...]], kind: str) -> int:
-        """A new state (a Key, or the plain tuple a worker sends for one), its parent and label."""
-        keys = self.keys
-        ni = len(keys)
+    def _add(self, ckey: Any) -> int:
+        """The number of a new state (a Key, or the plain tuple a worker sends for one)."""
+        ni = len(self.keys)
         ckey = self._intern(ckey)
         self.index[ckey] = ni
-        keys.append(ckey)
-        self.trail.add(parent, label, label)
-        self.res.new_states[kind] += 1
-        self._capped(len(keys))
+        self.keys.append(ckey)
         return ni
 
     def _intern(self, k: tuple) -> Key:

@@ -476,10 +476,29 @@ class BreadthFirst:
     def _finished(self) -> bool:
         return self.any_found and self.trail.done()
 
-    def _capped(self, states: int) -> None:
-        """Stop at ``max_states`` (looked at after each new state)."""
-        if self.max_states is not None and states >= self.max_states:
+    def _add_state(self, ni: int, parent: int, lookup: Any, label: Label, kind: str, bad: Iterable[tuple[str, str]], nxt: Any) -> None:
+        """State number ``ni`` is new, reached from ``parent`` by ``label`` (numbered under
+        ``lookup``: :meth:`Trail.label_id`) and counted under its event's ``kind``; one
+        that violates invariants (``bad``: (name, message) pairs) is recorded and not
+        explored, another is queued in ``nxt``."""
+        self.trail.add(parent, lookup, label)
+        self.res.new_states[kind] += 1
+        if self.max_states is not None and ni + 1 >= self.max_states:
             self.incomplete = f"max states {self.max_states:,} reached"
+        if bad:
+            for name, msg in bad:
+                self.trail.record(name, msg, ni)
+            self.any_found = True  # do not explore beyond a violation
+        else:
+            nxt.append(ni)
+
+    def _record_repaired(self, violation: tuple[str, str, str], state: int, label: Label) -> bool:
+        """Record an instantaneous ``violation`` (invariant, message, command) repaired
+        before quiescence in the transition ``label`` out of ``state``; True if the
+        search then has what it looks for."""
+        self.trail.record(violation[0], violation[1], state, violation[2], label)
+        self.any_found = True
+        return self.trail.done()
 
 
 def final_status(states: int, transitions: int, depth: int) -> Callable[[], tuple[int, int, int]]:

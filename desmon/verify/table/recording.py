@@ -24,7 +24,7 @@ from desmon.verify.state import Key, StateStore
 from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key, nondeterminism
 from desmon.verify.table.observed import Acceptable, Check, ObservedValidity, Ranked, Reasons
 from desmon.verify.table.tables import AnswerTables, score_keys
-from desmon.verify.trace import KEPT_BRANCH, branch_name
+from desmon.verify.trace import branch_names
 
 if TYPE_CHECKING:
     from desmon.verify.table.encoding import Env
@@ -314,9 +314,9 @@ class Recorder:
         if got != stim or expect != nkey:
             raise TableUnsupported(f"table engine: {event} on {key} gave {nkey} (stimulus {stimulus}), the encoding expected {expect}")  # pragma: no cover
         fails = tuple(i for i, ok in enumerate(outcomes) if not ok)
-        names = tuple(branch_name(c, ok) for c, ok in log.commands) if log.commands else KEPT_BRANCH
         inst = instant[0] if instant is not None else None
-        self.trees.insert(root, obs, self.trees.leaf(("r", self.system(nkey.deployments, nkey.standing), outcomes, fails, names, inst)))
+        leaf = ("r", self.system(nkey.deployments, nkey.standing), outcomes, fails, branch_names(log.commands), inst)
+        self.trees.insert(root, obs, self.trees.leaf(leaf))
 
     def _same_commands(self, key: Key, event: Event, prefix: tuple[bool, ...], log: Any, instant: Any) -> None:
         """The recorded reaction run again on the direct engine's store: other commands, or

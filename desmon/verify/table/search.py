@@ -17,7 +17,7 @@ import numpy.ma  # noqa: F401  (np.unique imports it on first use, leaving cycli
 from desmon.errors import TableUnsupported
 from desmon.verify.search import BreadthFirst, Budget, CheckResult, Trail
 from desmon.verify.state import Key
-from desmon.verify.system import TransitionSystem
+from desmon.verify.system import TransitionSystem, opened
 from desmon.verify.table.hashing import Interned, IntTable
 from desmon.verify.table.encoding import ROOT_PREFIX, SYS_BITS, SYS_MASK, Env, Events, Transitions, layout, root_key
 from desmon.verify.table.recording import Recorder
@@ -323,33 +323,21 @@ class TableEngine(BreadthFirst):
         the search then has what it looks for."""
         tr = units.tr
         ch = self.checker
-        nkey = self.env.key(int(tr.env2[t]), self.systems[lf[1]])
-        if lf[5] in {v for v, _m in ch.violations(nkey)}:
+        if not ch.repaired(lf[5], self.env.key(int(tr.env2[t]), self.systems[lf[1]])):
             return False
         here = int(units.ids[tr.pos[t]])
         event = self.events.events[int(tr.ev[t])]
         _n, _o, _log, instant = ch.run_one(self.key_of(here), event, self.prefixes[int(units.pre[u])])
-        self.trail.record(instant[0], instant[1], here, instant[2], (event, lf[3]))
-        self.any_found = True
-        return self.trail.done()
+        return self._record_repaired(instant, here, (event, lf[3]))
 
     def _new_state(self, units: "Units", u: int, t: int, lf: tuple, bad: tuple, nxt: array) -> None:  # type: ignore[type-arg]
         """Unit ``u`` reached a new state: number it, label it, and record what it violates."""
         tr, ev = units.tr, self.events
-        c = int(units.code[u])
-        codes = self.codes
-        ni = len(codes)
-        codes.append(c)
+        ni = len(self.codes)
+        self.codes.append(int(units.code[u]))
         e = int(tr.ev[t])
-        self.trail.add(int(units.ids[tr.pos[t]]), (e, lf[3]), (ev.events[e], lf[3]))
-        self.res.new_states[ev.kinds[ev.kind_of[e]]] += 1
-        self._capped(len(codes))
-        if bad:
-            for name, msg in self.checker.violations(self.key_of(ni)):
-                self.trail.record(name, msg, ni)
-            self.any_found = True
-        else:
-            nxt.append(ni)
+        violations = self.checker.violations(self.key_of(ni)) if bad else ()
+        self._add_state(ni, int(units.ids[tr.pos[t]]), (e, lf[3]), (ev.events[e], lf[3]), ev.kinds[ev.kind_of[e]], violations, nxt)
 
     def explored(self) -> "_Explored":
         return _Explored(self)
@@ -369,12 +357,10 @@ def _opened(engine: "TableEngine", u_t: np.ndarray, u_pre: np.ndarray, leaf: np.
     flat: list[int] = []
     count = np.zeros(len(up), dtype=np.int64)
     for k, pv in enumerate(up.tolist()):
-        pre, lf = engine.prefixes[pv // n_leaves], engine.trees.leaves[pv % n_leaves]
-        outcomes, fails = lf[2], lf[3]
-        if len(fails) < bound:
-            kids = [engine.prefixes(outcomes[:i] + (False,)) for i in range(len(pre), len(outcomes))]
-            flat += kids
-            count[k] = len(kids)
+        lf = engine.trees.leaves[pv % n_leaves]
+        kids = [engine.prefixes(p) for p in opened(engine.prefixes[pv // n_leaves], lf[2], lf[3], bound)]
+        flat += kids
+        count[k] = len(kids)
     reps = count[pinv]
     order = np.flatnonzero(reps)
     if not len(order):
