@@ -1,12 +1,8 @@
 """Recording one run of the real core: what it observes of the platforms, and nothing else.
 
-While the table engine records a reaction (or an invariants check), the core runs on a
-:class:`~desmon.verify.state.StateStore` whose platform states are opaque
-:class:`~desmon.deployment.ports.PlatformHandle` objects made by :class:`RecordingChecks`,
-the run's Checks port: the only way to learn a platform's facts is to ask a requirement
-check, whose use is recorded. A read of a fact anywhere else raises
-:class:`~desmon.errors.UnobservedRead`, and the core's Query port (:class:`RecordingQuery`)
-offers only the QueryPort methods.
+The recorded run's store hands out opaque platform handles whose facts only its Checks
+port (:class:`RecordingChecks`) reads, and its Query port (:class:`RecordingQuery`) offers
+only the QueryPort methods: docs/findings.md ("Why it is sound, and how that is checked").
 """
 
 from __future__ import annotations
@@ -187,13 +183,9 @@ def _query(name: str) -> Callable[..., Any]:
 
 
 class RecordingQuery:
-    """The recording core's Query port: the store's QueryPort methods and nothing else.
-
-    Any other attribute of the store (its fact tuples, its helpers) would let a reaction
-    read platform facts unobserved: asking for one stops the recording. One the store
-    lacks raises AttributeError, as the store would. Its ``checks`` are the recording
-    checks; it memoises no validity answer (every check is asked of them, and observed where it is used).
-    """
+    """The recording core's Query port: the store's QueryPort methods and nothing else
+    (another attribute of the store, its facts or helpers, stops the recording; one the
+    store lacks raises AttributeError, as the store would). It memoises no validity answer."""
 
     __slots__ = ("_store", "checks")
     validity_memo = None
@@ -263,14 +255,10 @@ class Recorder:
         self.records = 0  # real runs of the core (reactions and invariant checks)
 
     def _recording(self, run: Callable[[], Any], plain: Callable[[], Any]) -> tuple[Any, list[tuple[tuple, int]]]:
-        """``run()`` on the recording twin: (its result, the observations).
-
-        A ``TypeError`` or ``AttributeError`` may be the deployer's own bug or a check's
-        result used as what its wrapper is not (a ``str`` for ``str.join``...): ``plain()``,
-        the same run on the direct engine's store, tells them apart. Its error is the
-        deployer's and is raised as it is; if it succeeds, the table engine bows out. A
-        read of a fact outside the checks is refused, naming the code that read it.
-        """
+        """``run()`` on the recording twin: (its result, the observations). A read of a fact
+        outside the checks is refused, naming the code that read it; a ``TypeError`` or
+        ``AttributeError`` is told from a check's result used as what its wrapper is not by
+        ``plain()``, the same run on the direct engine's store (docs/design.md)."""
         rec = self.checks
         rec.begin()
         try:

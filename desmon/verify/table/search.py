@@ -183,13 +183,9 @@ class TableEngine(BreadthFirst):
     def run(self, res: "CheckResult", *, max_states: int | None, max_depth: int | None, keep_going: bool,
             budget: Budget) -> tuple[dict[str, Counterexample], str, int]:
         """The BFS of the direct engine (:mod:`desmon.verify.direct`), counting into ``res``;
-        returns (counterexamples found, why incomplete or "", depth).
-
-        ``budget`` (time, memory, Ctrl-C) is looked at before each batch, between two
-        recorded runs of the core and two rounds of a tree walk (a batch that runs out
-        there is dropped whole: nothing of it is counted yet), and every
-        :data:`LOOK_EVERY` new states (the batch is then cut after the current
-        transition, as ``max_states`` cuts it)."""
+        returns (counterexamples found, why incomplete or "", depth). A ``budget`` spent
+        inside a batch (:class:`~desmon.verify.search.Budget`) drops it whole, or past its
+        :data:`LOOK_EVERY`-th new state cuts it after the current transition."""
         self.budget, self.res, self.max_states, self.max_depth = budget, res, max_states, max_depth
         ch = self.checker
         init = ch.initial()

@@ -1,12 +1,9 @@
 """The table engine's answer tables: every requirement check's answer per platform digit.
 
-A reaction observes requirement checks; each observation is a question about a few
-platforms. :class:`AnswerTables` computes, once per (check, platform, deployments on
-it), the answer for every value of that platform's digit (the combinations of its
-facts the environment can give), with the same requirement code the core runs
-(:func:`~desmon.deployment.validity.platform_failures`), and numbers the answers:
-"ok" (1/0), "why" (the failures, numbered in order of first appearance) and "rank"
-(the score key with preferences). A decision tree's walk reads them as one array.
+:class:`AnswerTables` computes, once per (check, platform, deployments on it), the
+answer for every value of that platform's digit with the requirement code the core runs
+(:func:`~desmon.deployment.validity.platform_failures`), numbered as :meth:`AnswerTables.block`
+says; a decision tree's walk reads them all as one array.
 """
 
 from __future__ import annotations
