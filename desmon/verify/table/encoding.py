@@ -302,8 +302,8 @@ class Events:
     one event per state), so the enabled events come out in the order of
     :func:`~desmon.verify.environment.enabled_events`."""
 
-    def __init__(self, bounds: "Bounds", env: Env, platform_index: dict[str, int]) -> None:
-        self.env, self.bounds, self.P = env, bounds, len(platform_index)
+    def __init__(self, bounds: "Bounds", env: Env) -> None:
+        self.env, self.bounds, self.P = env, bounds, env.P
         self.events: Interned = Interned()
         #: per slot: (weight, radix, stimulus, platform column or -1, unit, to, event ids, needs room)
         self.slots: list[tuple] = []

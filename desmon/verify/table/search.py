@@ -204,7 +204,7 @@ class TableEngine(BreadthFirst):
         self.tables = AnswerTables(self.model, env)
         self.trees = DecisionTrees(self.tables, self.P, self._go_on)
         self.recorder = Recorder(self.checker, env, self.tables, self.trees, self.system)
-        self.events = Events(self.bounds, env, self.tables.platform_index)
+        self.events = Events(self.bounds, env)
         return env
 
     def _level(self, frontier: Sequence[int]) -> np.ndarray:

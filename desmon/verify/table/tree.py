@@ -35,9 +35,7 @@ class _Walk:
     def _root_nodes(self, roots: np.ndarray, record: Callable[[int], None]) -> np.ndarray:
         """The root node of each unit, recording a run for each root met for the first time
         (in order of root key, with its first unit)."""
-        if self._new_roots:
-            self.root_nodes.add(np.fromiter(self._new_roots, dtype=np.int64), np.fromiter(self._new_roots.values(), dtype=np.int64))
-            self._new_roots = {}
+        self._add_new_roots()
         node = self.root_nodes.get(roots)
         missing = np.flatnonzero(node < 0)
         if missing.size:
@@ -45,10 +43,15 @@ class _Walk:
             for u in missing[first].tolist():
                 self.go_on()
                 record(u)
-            self.root_nodes.add(np.fromiter(self._new_roots, dtype=np.int64), np.fromiter(self._new_roots.values(), dtype=np.int64))
-            self._new_roots = {}
+            self._add_new_roots()
             node[missing] = self.root_nodes.get(roots[missing])
         return node
+
+    def _add_new_roots(self) -> None:
+        """Enter the roots the inserts made since the last walk in the roots' hash table."""
+        if self._new_roots:
+            self.root_nodes.add(np.fromiter(self._new_roots, dtype=np.int64), np.fromiter(self._new_roots.values(), dtype=np.int64))
+            self._new_roots = {}
 
     def walk(self, roots: np.ndarray, rows: np.ndarray, loc: np.ndarray, record: Callable[[int], None]) -> np.ndarray:
         """Leaf ids for units with root keys ``roots`` and platform digits ``loc[rows]``;
