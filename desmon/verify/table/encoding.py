@@ -113,12 +113,9 @@ def _variants(model: Any, changes: Sequence[RequirementChange], init: Key) -> di
 
 
 class Env:
-    """Environment facts <-> one int: a context digit, a digit per changed graph (its
-    current requirements), then one digit per platform (down or absent, failed devices,
-    load level): the facts the variables move (:meth:`VariableKind.digits
-    <desmon.verify.environment.VariableKind.digits>`). The context and requirement digits
-    together are the *global* digit (``env % G``): what a reaction may read besides the
-    deployments and the platforms."""
+    """Environment facts <-> one int: the *global* digit (``env % G``: the context and each
+    changed graph's current requirements), then one digit per platform (down or absent,
+    failed devices, load level), as docs/design.md describes it."""
 
     def __init__(self, checker: Any, init: Key) -> None:
         model, b = checker.model, checker.bounds

@@ -33,14 +33,12 @@ _ANSWERS_LIMIT = 1 << 16
 
 
 class RecordingChecks:
-    """The Checks port of a recorded run (see the module doc): it makes the handles the
-    recording store hands out (:meth:`handle`, the store's ``make_state``), keeps each
-    one's real facts, and answers each check with the real result wrapped as
-    :mod:`~desmon.verify.table.observed` says, so that the run's *use* of it is recorded.
-    The real answers are computed once per platform's facts (a
-    :class:`~desmon.deployment.validity.PlatformMemoChecks`), and the wrapped answer of a
-    question about handles is kept: a wrapper holds no state of a run, so a run that asks
-    again gets the same wrapper, and its every use observes again, into that run.
+    """The Checks port of a recorded run: it makes the handles the recording store hands
+    out (:meth:`handle`, the store's ``make_state``), keeps their real facts, and answers
+    each check with the real result wrapped as :mod:`~desmon.verify.table.observed` says.
+    The real answers are computed once per platform's facts; the wrapped answer of a
+    question about handles is kept, since a wrapper holds no state of a run (each use
+    observes afresh, into the run that uses it).
     """
 
     def __init__(self, tables: AnswerTables) -> None:

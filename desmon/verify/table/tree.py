@@ -55,11 +55,8 @@ class _Walk:
 
     def walk(self, roots: np.ndarray, rows: np.ndarray, loc: np.ndarray, record: Callable[[int], None]) -> np.ndarray:
         """Leaf ids for units with root keys ``roots`` and platform digits ``loc[rows]``;
-        ``record(unit)`` runs the real core for a unit whose answers leave the trees.
-
-        The units move by walk codes (:meth:`_step`): a unit's code says where its check's
-        digit table starts and which platform it asks about, so a step reads the unit's
-        digit and one shortcut (``jump_code``), which is the next check's code or the leaf's."""
+        ``record(unit)`` runs the real core for a unit whose answers leave the trees. Each
+        unit moves by its walk code (docs/design.md), one step per check (:meth:`_step`)."""
         go_on = self.go_on  # the budget, between two recorded runs and two rounds
         node = self._root_nodes(roots, record)  # (it may record runs: the arrays below grow)
         out = np.take(self.node_code.a, node)
