@@ -74,6 +74,12 @@ def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice],
     return labels, None
 
 
+def _end_progress(progress: bool, calls: int) -> None:
+    """The end of fuzz's progress line (shown from the 50th sequence on)."""
+    if progress and calls >= 50:
+        print("", file=sys.stderr, flush=True)
+
+
 class _NeverEnds(BaseException):
     """A sequence whose reaction never ended (the reaction limit stopped it): not shrunk."""
 
@@ -140,10 +146,6 @@ def fuzz(
             raise _NeverEnds  # (each try of a shrink would wait out the reaction limit again: the sequence as found)
         return failed
 
-    def end_progress() -> None:
-        if progress and calls[0] >= 50:
-            print("", file=sys.stderr, flush=True)
-
     cfg = settings(
         max_examples=examples,
         database=None,
@@ -159,17 +161,17 @@ def fuzz(
             if ctrl_c[0]:  # noted after the last sequence: the search ended on its own
                 raise KeyboardInterrupt
     except NoSuchExample:
-        end_progress()
+        _end_progress(progress, calls[0])
         return FuzzOutcome(
             f"{head}\npassed: {calls[0]} sequences (up to {max_size} events each), no invariant violated\n",
             0,
             calls[0],
         )
     except _NeverEnds:
-        end_progress()
+        _end_progress(progress, calls[0])
         seq = smallest[0]
     except KeyboardInterrupt:  # Ctrl-C: what was found so far
-        end_progress()
+        _end_progress(progress, calls[0])
         if not smallest:
             return FuzzOutcome(
                 f"{head}\nverdict: INCOMPLETE (interrupted)\n"
@@ -180,7 +182,7 @@ def fuzz(
             )
         seq, interrupted = smallest[0], True
     else:
-        end_progress()
+        _end_progress(progress, calls[0])
     return _violation(scenario, deployer, enabler, seq, head=head, sequences=calls[0], interrupted=interrupted, rederive_up_to=rederive_up_to)
 
 
