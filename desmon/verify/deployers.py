@@ -42,7 +42,7 @@ from desmon.verify.mutants import MUTANTS
 
 __all__ = [
     "resolve_deployer", "portable_spec", "deployer_file", "DEPLOYER_FORMS", "MUTANT_PREFIX", "users_spec", "fresh_deployer",
-    "deployer_state", "load_in_process", "module_state",
+    "deployer_state", "load_in_process", "module_state", "worker_state",
 ]
 
 MUTANT_PREFIX = "mutant"
@@ -153,10 +153,10 @@ def _function_state(fn: Any) -> str:
 
 
 def deployer_state(deployer: Deployer) -> dict[str, str]:
-    """The state a user's ``deployer``'s module keeps, as text (:func:`module_state`),
+    """The state a user's ``deployer``'s module keeps now, as text (:func:`module_state`),
     asked of its worker process where it runs isolated."""
     if _isolated(deployer):
-        return deployer.react.state()  # type: ignore[attr-defined,no-any-return]
+        return deployer.react.state()[1]  # type: ignore[attr-defined,no-any-return]
     found = getattr(deployer.react, "__globals__", None)  # (the module it was loaded from, even where it was loaded again since)
     return module_state(found if isinstance(found, dict) else _namespace(deployer.name))
 
@@ -164,6 +164,13 @@ def deployer_state(deployer: Deployer) -> dict[str, str]:
 def _namespace(spec: str) -> dict[str, Any] | None:
     module = sys.modules.get(spec.rpartition(":")[0])
     return vars(module) if module is not None else None
+
+
+def worker_state(deployer: Deployer) -> tuple[dict[str, str], dict[str, str]] | None:
+    """(as imported, now) of the state a user's ``deployer``'s module keeps in its worker
+    process (one worker's own: a worker started again imports it again), or None where it
+    does not run isolated."""
+    return deployer.react.state() if _isolated(deployer) else None  # type: ignore[attr-defined,no-any-return]
 
 
 def _spec_state(spec: str) -> dict[str, str]:

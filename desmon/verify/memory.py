@@ -35,7 +35,7 @@ from typing import Any
 
 from desmon.deployment.guard import CRASH
 from desmon.errors import NondeterminismError
-from desmon.verify.deployers import deployer_state, fresh_deployer, users_spec
+from desmon.verify.deployers import deployer_state, fresh_deployer, users_spec, worker_state
 from desmon.verify.system import TransitionSystem, command_key, nondeterminism
 
 __all__ = ["remembers", "rerun_fresh", "check_memory", "FRESH_NOTE"]
@@ -64,8 +64,8 @@ def check_memory(system: TransitionSystem) -> None:
     if system.reactions is None:
         return
     rerun_fresh(system)
-    before = system.deployer_state or {}
-    after = deployer_state(system.core.deployer)
+    pair = worker_state(system.core.deployer)  # (its worker's own: as imported there, and now)
+    before, after = pair if pair is not None else (system.deployer_state or {}, deployer_state(system.core.deployer))
     for name, was in before.items():
         now = after.get(name)
         if now != was:

@@ -190,10 +190,19 @@ class Worker:
         """The answer to one read of the child (a message to send back)."""
         try:
             return ("value", self._answer(kind, body))
-        except CheckerError:
-            raise  # an engine's own signal (the table engine's unobserved read): it ends the reaction desmon's side
+        except CheckerError as exc:  # an engine's own signal (the table engine's unobserved read): it ends the reaction desmon's side
+            exc.reader = self._reader()  # type: ignore[attr-defined]
+            raise
         except Exception as exc:  # what desmon's code raised for the deployer's read: the deployer's to handle
             return ("error", (type(exc).__name__, " ".join(str(exc).split())[:500]))
+
+    def _reader(self) -> str:
+        """The module of the deployer's code that made the read being served, as its worker names it ("?" if it does not)."""
+        with contextlib.suppress(WorkerGone):
+            kind, name = self.exchange(("who", None))
+            if kind == "reader" and type(name) is str and name.isprintable():
+                return name[:200]
+        return "?"
 
     def _answer(self, kind: str, body: Any) -> Any:
         if type(body) is not tuple or len(body) != 4:
@@ -295,12 +304,17 @@ class RemoteReact:
             if not clean:  # stopped in the middle (a budget, a fault, the table engine's own signal): a fresh worker next
                 w.close()
 
-    def state(self) -> dict[str, str]:
-        """The state the deployer's module holds, as text (:func:`desmon.verify.deployers.deployer_state`), asked of its worker."""
+    def state(self) -> tuple[dict[str, str], dict[str, str]]:
+        """The state the deployer's module holds, as text (:func:`desmon.verify.deployers.module_state`):
+        (as its worker imported it, now), asked of its worker."""
         kind, body = self.current().exchange(("state", None))
-        if kind != "state" or type(body) is not dict or not all(type(k) is str and type(v) is str for k, v in body.items()):
+        if kind != "state" or type(body) is not tuple or len(body) != 2 or not all(_texts(d) for d in body):
             raise WorkerGone("its worker process sent what desmon does not accept (not its module's state)")
-        return body
+        return body  # type: ignore[no-any-return]
+
+
+def _texts(d: Any) -> bool:
+    return type(d) is dict and all(type(k) is str and type(v) is str for k, v in d.items())
 
 
 def _checks_answer(checks: Any) -> Any:

@@ -242,7 +242,24 @@ class _Link:
             return value
         if answer == "error":
             raise _rebuilt(*value)
+        if answer == "who":
+            self.send("reader", _reader())
         raise _Abandoned()
+
+
+#: modules that read on their caller's behalf: the reader of a fact is the code that called them
+_HELPERS = ("desmon.", "dataclasses", "reprlib", "pprint", "copy", "copyreg", "logging")
+
+
+def _reader() -> str:
+    """The module of the innermost frame of the deployer's own code on this stack (not desmon's, not a helper's)."""
+    frame = sys._getframe(1)
+    while frame is not None:
+        name = str(frame.f_globals.get("__name__", "?"))
+        if not name.startswith(_HELPERS):
+            return name
+        frame = frame.f_back  # type: ignore[assignment]
+    return "?"
 
 
 class _Abandoned(BaseException):
@@ -280,6 +297,7 @@ def serve(sock: socket.socket, spec: str, ports: Any, parent: int, quiet: bool) 
                 link.send("refused", f"--deployer {spec}: {raised_text(exc)} while imported")
                 os._exit(0)
         imported = [(str(n), m.__file__) for n, m in list(sys.modules.items()) if n not in before and isinstance(getattr(m, "__file__", None), str)]
+        initial = ports.state(spec)  # (its module's state as imported here: what the memory check compares with)
         link.send("ready", {"description": str(deployer.description), "fallbacks": bool(deployer.fallbacks),
                             "stale_errors": bool(deployer.stale_errors), "modules": imported})
         while True:
@@ -287,7 +305,7 @@ def serve(sock: socket.socket, spec: str, ports: Any, parent: int, quiet: bool) 
             if kind == "react":
                 _run_reaction(link, deployer, body, me)
             elif kind == "state":
-                link.send("state", ports.state(spec))
+                link.send("state", (initial, ports.state(spec)))
     except BaseException:  # desmon ended the conversation (or the deployer broke this process): end quietly
         code = 0
     os._exit(code)

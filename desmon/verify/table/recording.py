@@ -263,7 +263,7 @@ class Recorder:
             out = run()
         except UnobservedRead as exc:
             if exc.fact:
-                raise exc.named(_reader(exc.__traceback__)) from None
+                raise exc.named(getattr(exc, "reader", None) or _reader(exc.__traceback__)) from None
             raise
         except (TypeError, AttributeError) as exc:
             out = plain()  # the deployer's own error: raised here, as the direct engine would
