@@ -130,6 +130,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             gap = optimality_gap(
                 scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, max_states=args.max_states, guard=args.guard,
+                budget=budget,
             )
         except BudgetExceeded as exc:
             err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
