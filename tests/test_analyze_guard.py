@@ -188,3 +188,19 @@ def test_the_placement_mdp_stops_at_the_budget_while_built_or_solved(spent_after
     with pytest.raises(BudgetExceeded):
         optimality_gap(scenario, "desmon", budget=budget)
     assert looks[0] == spent_after + 1
+
+
+def test_a_library_call_the_budget_cannot_interrupt_is_killed_at_the_timeout():
+    """``--engine storm``'s solvers are one call desmon cannot interrupt between its steps:
+    ``Budget.within`` runs it in a forked process, killed once the time is spent (exit 3);
+    a result, or an error, comes back as if it ran in desmon's process."""
+    from desmon.analyze.markov import Budget, BudgetExceeded
+
+    budget = Budget(timeout=1.0)
+    assert budget.within(lambda: {"pi": [0.25, 0.75]}, "a solver") == {"pi": [0.25, 0.75]}
+    with pytest.raises(AnalysisError, match="a solver: ZeroDivisionError"):
+        budget.within(lambda: 1 / 0, "a solver")
+    t0 = time.monotonic()
+    with pytest.raises(BudgetExceeded, match="timeout 1s reached while a solver ran"):
+        budget.within(lambda: time.sleep(30), "a solver")
+    assert time.monotonic() - t0 < 5
