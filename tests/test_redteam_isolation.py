@@ -266,3 +266,17 @@ def test_desmon_ended_by_a_signal_leaves_no_worker_running(tmp_path):
         time.sleep(0.05)
     __import__("os").kill(worker, 9)
     pytest.fail("desmon's worker process still runs after desmon was ended")
+
+
+def test_a_deployer_used_from_python_is_isolated_too(tmp_path):
+    """``desmon.check`` with a user's spec runs it in a worker process as the command line
+    does: a module that replaces desmon's invariant check while imported leaves the
+    caller's desmon untouched, and the verdict is VIOLATED (it deploys nothing)."""
+    import desmon
+    import desmon.deployment.invariants as invariants
+
+    before = invariants.check_invariants
+    path = tmp_path / "patches.py"
+    path.write_text("import desmon.deployment.invariants as inv\ninv.check_invariants = lambda view, invariants=None: []\n" + NOTHING)
+    result = desmon.check(COFFEE, deployer=f"{path}:nothing", invariants=["coverage"])
+    assert result.verdict == "VIOLATED" and invariants.check_invariants is before
