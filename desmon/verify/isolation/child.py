@@ -127,17 +127,22 @@ class _RemoteQuery(_Remote):
             return method
         if name == "checks":
             if name not in self._methods:
-                self._methods[name] = _own_checks(super().__getattr__(name))
+                self._methods[name] = _own_checks(super().__getattr__(name), self._link)
             return self._methods[name]
         return super().__getattr__(name)
 
 
-def _own_checks(checks: Any) -> Any:
-    """The checks the child asks: its own default ones where desmon said so (:data:`DEFAULT`)."""
+def _own_checks(checks: Any, link: "_Link") -> Any:
+    """The checks the child asks: where desmon said its answers are the default ones
+    (:data:`DEFAULT`), the worker's own, memoised for the worker's life (the same facts
+    recur from reaction to reaction, as in desmon's own memoised checks)."""
     if type(checks) is DefaultChecks:
-        from desmon.deployment.validity import DEFAULT_CHECKS
+        if link.checks is None:
+            from desmon.deployment.memo import MemoChecks
+            from desmon.deployment.validity import DEFAULT_CHECKS
 
-        return DEFAULT_CHECKS
+            link.checks = MemoChecks(DEFAULT_CHECKS)
+        return link.checks
     return checks
 
 
@@ -202,6 +207,8 @@ class _Link:
         self.methods: set[tuple[str, str]] = set()
         #: the Query port's answers until the next command, and until the reaction's end
         self.cache: tuple[dict, dict] = ({}, {})
+        #: the worker's own memoised default checks (:func:`_own_checks`), made on first use
+        self.checks: Any = None
         #: the platform states decoded, by their encoding (:class:`Blob`)
         self.blobs: dict[bytes, Any] = {}
 
@@ -213,7 +220,7 @@ class _Link:
             self.cache[1].clear()
         for (name, args), value in reads.items():
             if name == "checks":
-                q._methods[name] = _own_checks(value)
+                q._methods[name] = _own_checks(value, self)
                 continue
             if type(value) is Blob:
                 value = self._decoded(value)
