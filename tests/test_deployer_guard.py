@@ -295,7 +295,7 @@ def test_a_deployer_failing_only_in_the_no_flapping_re_run_is_one_line(deployers
 
 # -- isolation: a deployer cannot change what desmon checks, nor its signals, timers, threads or exit ------------------
 # (docs/deployers.md, "What desmon's isolation catches"). Every case runs `desmon` as the program, as a user runs it:
-# the deployer then runs in the worker process desmon supervises (desmon/cli/supervise.py).
+# the deployer then runs in a worker process of its own, behind the ports (desmon/verify/isolation/).
 
 #: deployers that misbehave once the robot grasps (reachable in one step), each in one way
 ISOLATION_PY = """
@@ -571,7 +571,7 @@ def test_a_thread_the_deployer_leaves_running_does_not_hold_desmon(isolation, co
 def test_a_deployer_fighting_the_timer_ends_at_the_timeout(isolation, engine, name):
     """SIGALRM ignored or the interval timer cancelled inside a reaction, every exception
     swallowed, a no-op command every 0.5 s: verify --timeout 5 ends INCOMPLETE (exit 3)
-    within the timeout plus 2 s (the supervisor kills the worker if it must)."""
+    within the timeout plus 2 s (desmon's timers run in its own process, not the worker's)."""
     code, took, out, err = _desmon(
         str(isolation), "verify", COFFEE, "--deployer", _spec(isolation, name), "--engine", engine, "--timeout", "5", "--no-progress",
     )

@@ -136,7 +136,7 @@ def _ended(proc: subprocess.Popen, timeout: float = 60) -> tuple[int, str]:
 @pytest.mark.parametrize("deployer", ["desmon", "user"])
 def test_a_reader_that_left_is_one_line_never_a_traceback(tmp_path, deployer):
     """Standard output a pipe whose reader closed it before the report: exit 2, one line,
-    as desmon's own process says it (without the fix, the supervisor's copy raised BrokenPipeError)."""
+    as desmon's own process says it."""
     (tmp_path / "plain.py").write_text(NOTHING)
     spec = "desmon" if deployer == "desmon" else f"{tmp_path / 'plain.py'}:nothing"
     proc = subprocess.Popen(
