@@ -119,24 +119,7 @@ def run(args: argparse.Namespace) -> int:
         err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
         return EXIT_INCOMPLETE
     try:
-        agree = _simulation(args, scenario, result, budget)
-    except BudgetExceeded as exc:
-        err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
-        return EXIT_INCOMPLETE
-    gap = None
-    if args.placements:
-        from desmon.analyze.mdp import optimality_gap
-
-        try:
-            gap = optimality_gap(
-                scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, max_states=args.max_states, guard=args.guard,
-                budget=budget,
-            )
-        except BudgetExceeded as exc:
-            err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
-            return EXIT_INCOMPLETE
-    try:
-        cross = budget.within(lambda: _cross_check(stormpy, result, gap), "Storm") if stormpy is not None else None  # before any file is written
+        agree, gap, cross = _checks_beside(args, scenario, result, budget, stormpy)
     except BudgetExceeded as exc:
         err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
         return EXIT_INCOMPLETE
@@ -158,6 +141,23 @@ def run(args: argparse.Namespace) -> int:
     sys.stdout.write(format_cross_check(cross))
     _say_written(files, args.export if gap is not None else None)
     return EXIT_VIOLATED if (agree is not None and not agree.inside) or _disagree(cross) else EXIT_OK
+
+
+def _checks_beside(args: argparse.Namespace, scenario: Any, result: Any, budget: Any, stormpy: Any) -> tuple[Any, Any, Any]:
+    """What the analysis is checked against, each within ``budget`` (BudgetExceeded once it
+    is spent): ``--simulate``'s agreement, ``--placements``' optimality gap and ``--engine
+    storm``'s cross-check (each None where not asked), before any file is written."""
+    agree = _simulation(args, scenario, result, budget)
+    gap = None
+    if args.placements:
+        from desmon.analyze.mdp import optimality_gap
+
+        gap = optimality_gap(
+            scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, max_states=args.max_states, guard=args.guard,
+            budget=budget,
+        )
+    cross = budget.within(lambda: _cross_check(stormpy, result, gap), "Storm") if stormpy is not None else None
+    return agree, gap, cross
 
 
 def _simulation(args: argparse.Namespace, scenario: Any, result: Any, budget: Any) -> Any:

@@ -94,7 +94,7 @@ class Worker:
 
     def __init__(self, spec: str, ports: "Loader", quiet: bool = False, import_seconds: float | None = None) -> None:
         self.spec = spec
-        self.modules_at_start = len(sys.modules)
+        self.kinds_at_start = _kinds()
         parent_sock, child_sock = socket.socketpair()
         sys.stdout.flush()
         sys.stderr.flush()
@@ -266,9 +266,10 @@ class RemoteReact:
 
     def current(self) -> Worker:
         """The worker of this process, started (again) where there is none, it was ended,
-        or desmon has loaded modules since it started (a scenario's own requirement kinds)."""
+        or a scenario registered requirement kinds of its own since it started (their
+        records cross by value: the worker must know their classes)."""
         w = self.worker
-        if w is not None and w.alive and w.owner == os.getpid() and (self.restarted or len(sys.modules) == w.modules_at_start):
+        if w is not None and w.alive and w.owner == os.getpid() and (self.restarted or _kinds() == w.kinds_at_start):
             return w
         if w is not None and w.owner == os.getpid():
             w.close()
@@ -311,6 +312,12 @@ class RemoteReact:
         if kind != "state" or type(body) is not tuple or len(body) != 2 or not all(_texts(d) for d in body):
             raise WorkerGone("its worker process sent what desmon does not accept (not its module's state)")
         return body  # type: ignore[no-any-return]
+
+
+def _kinds() -> int:
+    from desmon.model.kinds import requirement_classes
+
+    return len(requirement_classes())
 
 
 def _texts(d: Any) -> bool:

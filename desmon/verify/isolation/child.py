@@ -16,10 +16,11 @@ import pickle
 import signal
 import socket
 import sys
+import traceback
 from types import GeneratorType
 from typing import Any, Iterator
 
-from desmon.deployment.guard import plain_command, raised_text
+from desmon.deployment.guard import plain_command, raised_text, uncallable
 from desmon.errors import ModelError
 from desmon.verify.isolation.wire import BLOBS, Blob, DefaultChecks, Method, recv_message, send_message
 
@@ -250,23 +251,26 @@ class _Link:
         if answer == "error":
             raise _rebuilt(*value)
         if answer == "who":
-            self.send("reader", _reader())
+            raise _Who()  # (its traceback, caught where the reaction runs, names the module that read)
         raise _Abandoned()
+
+
+class _Who(BaseException):
+    """desmon asks which module of the deployer's made the read it refused: raised where the read was made."""
 
 
 #: modules that read on their caller's behalf: the reader of a fact is the code that called them
 _HELPERS = ("desmon.", "dataclasses", "reprlib", "pprint", "copy", "copyreg", "logging")
 
 
-def _reader() -> str:
-    """The module of the innermost frame of the deployer's own code on this stack (not desmon's, not a helper's)."""
-    frame = sys._getframe(1)
-    while frame is not None:
+def _reader(tb: Any) -> str:
+    """The module of the innermost frame of ``tb`` that is the deployer's own code (not desmon's, not a helper's)."""
+    found = "?"
+    for frame, _line in traceback.walk_tb(tb):
         name = str(frame.f_globals.get("__name__", "?"))
         if not name.startswith(_HELPERS):
-            return name
-        frame = frame.f_back  # type: ignore[assignment]
-    return "?"
+            found = name
+    return found
 
 
 class _Abandoned(BaseException):
@@ -303,6 +307,9 @@ def serve(sock: socket.socket, spec: str, ports: Any, parent: int, quiet: bool) 
             except BaseException as exc:
                 link.send("refused", f"--deployer {spec}: {raised_text(exc)} while imported")
                 os._exit(0)
+        if not callable(deployer.react):  # (as the guard says it in desmon's process: the deployer cannot run at all)
+            link.send("refused", str(uncallable(spec, deployer.react)))
+            os._exit(0)
         imported = [(str(n), m.__file__) for n, m in list(sys.modules.items()) if n not in before and isinstance(getattr(m, "__file__", None), str)]
         initial = ports.state(spec)  # (its module's state as imported here: what the memory check compares with)
         link.send("ready", {"description": str(deployer.description), "fallbacks": bool(deployer.fallbacks),
@@ -385,6 +392,9 @@ def _run_reaction(link: _Link, deployer: Any, body: Any, me: int) -> None:  # pr
                 raise _Abandoned()
             outcome, reads = sent
             link.fill(reads, whole=False)  # (the command changed the deployments)
+    except _Who as who:
+        link.send("reader", _reader(who.__traceback__))
+        raise _Abandoned() from None
     except _Abandoned:
         raise
     except BaseException as exc:
