@@ -28,11 +28,12 @@ from typing import Any, Callable
 from desmon.deployment.exposure import CAUSES
 from desmon.deployment.guard import EXIT_CRASHED, DeployerFault
 from desmon.errors import DesmonError
+from desmon.sim.metrics import RUN_FIGURES, run_figures
 from desmon.sweep.grid import JOBS, Axis, Run, SweepError
 
 __all__ = ["check_points", 
     "JOBS", "JobSpec", "run_point", "check_values", "signal_parameters", "EXIT_TIMEOUT", "EXIT_CRASH", "EXIT_KILLED",
-    "EXIT_BAD_VALUE", "EXIT_INCOMPLETE", "METRICS",
+    "EXIT_BAD_VALUE", "EXIT_INCOMPLETE", "METRICS", "scenario_at",
 ]
 
 EXIT_BAD_VALUE, EXIT_TIMEOUT, EXIT_CRASH, EXIT_KILLED = 2, 124, 125, 137
@@ -41,11 +42,7 @@ EXIT_INCOMPLETE = 3
 
 #: each job's figures, in table order (run adds memory_peak_mb_<platform> and errors_<kind>)
 METRICS: dict[str, tuple[str, ...]] = {
-    "run": (
-        "exposure_s", "risky_time_s", "excluded_s", *(f"{c}_s" for c in CAUSES), "switches", "blind_time_per_switch_s", "blind_time_max_s", "starts", "start_failures",
-        "stops", "migrations", "upgrades", "upgrades_failed", "errors", "slips_injected", "slips_detected", "slips_missed",
-        "false_alarms", "latency_median_s", "latency_p95_s", "violations",
-    ),
+    "run": RUN_FIGURES,
     "verify": ("verdict", "states", "transitions", "depth", "counterexamples", "violated"),
     "fuzz": ("verdict", "sequences", "violated", "counterexample_steps"),
     "evaluate": (
@@ -59,9 +56,6 @@ METRICS: dict[str, tuple[str, ...]] = {
         "top_state", "top_state_s_per_hour",
     ),
 }
-_RUN_RENAMED = {"exposure_s": "unmonitored_exposure_s"}
-#: run metrics present only when the world has run-time changes or a lease
-_RUNTIME_CHANGES = ("requirement_changes", "leases", "leased_s")
 
 
 @dataclass(frozen=True, slots=True)
@@ -133,7 +127,7 @@ def _worker_cache() -> ScenarioCache | None:
     return cache
 
 
-def _scenario(path: str, values: tuple[tuple[str, str], ...]) -> Any:
+def scenario_at(path: str, values: tuple[tuple[str, str], ...]) -> Any:
     """The scenario at ``path`` with ``values``, loaded once per worker (it is immutable)."""
     cache = _worker_cache()
     if cache is None:
@@ -155,22 +149,9 @@ def _deployer(spec: str) -> Any:
 def _job_run(spec: JobSpec, run: Run) -> dict[str, Any]:
     from desmon.sim.engine import SimWorld
 
-    scenario = _scenario(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
     result = SimWorld(scenario, deployer=_deployer(spec.deployer), seed=run.seed, until=spec.setting("until")).run()
-    m = result.metrics
-    row: dict[str, Any] = {k: m.get(_RUN_RENAMED.get(k, k)) for k in METRICS["run"] if k not in ("errors", "violations")}
-    for c in CAUSES:  # the exposure's causes (desmon.deployment.exposure), beside the figure
-        row[f"{c}_s"] = m["unmonitored_by_cause_s"][c]
-    errors = dict(m.get("errors") or {})
-    row["errors"] = sum(errors.values())
-    row["violations"] = len(result.violations)
-    for kind, n in errors.items():
-        row[f"errors_{kind}"] = n
-    for platform, mb in (m.get("memory_peak_mb") or {}).items():
-        row[f"memory_peak_mb_{platform}"] = mb
-    for key in _RUNTIME_CHANGES:  # only worlds with run-time changes or a lease report them
-        if key in m:
-            row[key] = m[key]
+    row = run_figures(result.metrics, len(result.violations))
     row["exit_code"] = 1 if result.violations else 0
     return row
 
@@ -178,7 +159,7 @@ def _job_run(spec: JobSpec, run: Run) -> dict[str, Any]:
 def _job_verify(spec: JobSpec, run: Run) -> dict[str, Any]:
     from desmon.verify import Checker
 
-    scenario = _scenario(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
     checker = Checker(scenario, _deployer(spec.deployer))
     try:
         res = checker.run(max_states=spec.setting("max_states"), progress=False)
@@ -197,7 +178,7 @@ def _job_verify(spec: JobSpec, run: Run) -> dict[str, Any]:
 def _job_fuzz(spec: JobSpec, run: Run) -> dict[str, Any]:
     from desmon.verify.fuzz import fuzz
 
-    scenario = _scenario(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
     out = fuzz(scenario, _deployer(spec.deployer), examples=spec.setting("examples"), seed=run.seed)
     return {
         "verdict": "VIOLATED" if out.invariant else "HOLDS",
@@ -244,7 +225,7 @@ def _job_analyze(spec: JobSpec, run: Run) -> dict[str, Any]:
     """``desmon analyze`` at the point: its exact measures (the seed plays no part)."""
     from desmon.analyze import BudgetExceeded, analyze
 
-    scenario = _scenario(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
     try:
         a = analyze(
             scenario, _deployer(spec.deployer), phases=spec.setting("phases") or 1, horizon=spec.setting("horizon"),
