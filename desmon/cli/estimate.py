@@ -22,16 +22,14 @@ __all__ = ["add_parser", "run", "format_estimate", "parse_within", "parse_confid
 
 
 def parse_within(text: str) -> tuple[float, bool]:
-    """``60`` -> (60.0, absolute); ``1%`` -> (0.01, relative)."""
-    relative = text.strip().endswith("%")
-    number = text.strip().removesuffix("%")
+    """``60`` -> (60.0, absolute); ``1%`` -> (0.01, relative): :func:`desmon.estimate.loop.parse_within` for argparse."""
+    from desmon.errors import EstimateError
+    from desmon.estimate.loop import parse_within as parse
+
     try:
-        v = float(number)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a half-width, absolute (60) or relative to the estimate (1%), got {text!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive half-width, absolute (60) or relative to the estimate (1%), got {text}")
-    return (v / 100.0, True) if relative else (v, False)
+        return parse(text)
+    except EstimateError:
+        raise argparse.ArgumentTypeError(f"must be a positive half-width, absolute (60) or relative to the estimate (1%), got {text}") from None
 
 
 def parse_confidence(text: str) -> float:

@@ -20,7 +20,7 @@ from desmon.errors import EstimateError
 from desmon.estimate.measures import DEFAULT_METRIC, check_metric, natural_range, value_of
 from desmon.stats import BettingSequence, Interval, ProportionSequence, WaldTest, clopper_pearson, normal_interval
 
-__all__ = ["Question", "Estimate", "estimate", "run_seed", "run_value", "serial_values", "is_look", "world_horizon", "Tracker", "with_world"]
+__all__ = ["Question", "Estimate", "estimate", "run_seed", "run_value", "serial_values", "is_look", "world_horizon", "Tracker", "with_world", "parse_within"]
 
 #: ``status`` of an estimation: done as asked, or INCOMPLETE (exit 3) at the run budget or the time limit
 PRECISE, DECIDED, MAX_RUNS, TIMEOUT = "precise", "decided", "max-runs", "timeout"
@@ -34,6 +34,19 @@ def run_seed(seed: int, index: int) -> int:
     import numpy as np
 
     return int(np.random.SeedSequence([int(seed), int(index), 0x65737469]).generate_state(1)[0])
+
+
+def parse_within(text: str) -> tuple[float, bool]:
+    """``--within``: ``"60"`` -> (60.0, absolute); ``"1%"`` -> (0.01, relative to the estimate); else an EstimateError."""
+    t = str(text).strip()
+    relative = t.endswith("%")
+    try:
+        v = float(t.removesuffix("%"))
+    except ValueError:
+        raise EstimateError(f"--within {text!r}: give a half-width, absolute (60) or relative to the estimate (1%)") from None
+    if not (math.isfinite(v) and v > 0):
+        raise EstimateError(f"--within {text}: give a positive half-width, absolute (60) or relative to the estimate (1%)")
+    return (v / 100.0, True) if relative else (v, False)
 
 
 def is_look(n: int) -> bool:

@@ -55,6 +55,7 @@ METRICS: dict[str, tuple[str, ...]] = {
         "p_exposure_within_T", "long_run_unmonitored_fraction", "horizon_s", "states", "transitions",
         "top_state", "top_state_s_per_hour",
     ),
+    "estimate": ("estimate", "low", "high", "half_width", "runs", "status", "method", "normal_low", "normal_high", "min_value", "max_value"),
 }
 
 
@@ -246,8 +247,32 @@ def _job_analyze(spec: JobSpec, run: Run) -> dict[str, Any]:
     }
 
 
+def _job_estimate(spec: JobSpec, run: Run) -> dict[str, Any]:
+    """``desmon estimate`` at the point: one estimation, its runs' seeds derived from the run's
+    seed; exit code 0 once precise enough, 3 INCOMPLETE at ``max_runs`` (with the interval so far)."""
+    from desmon.estimate import Question, estimate
+    from desmon.estimate.loop import parse_within
+
+    scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    within, relative = parse_within(spec.setting("within"))
+    question = Question(
+        metric=spec.setting("metric"), within=within, relative=relative, confidence=spec.setting("confidence"),
+        max_runs=spec.setting("max_runs"),
+    )
+    e = estimate(scenario, question, deployer=_deployer(spec.deployer), seed=run.seed, until=spec.setting("until"))
+    iv, ap = e.interval, e.approximation
+    return {
+        "estimate": iv.estimate, "low": iv.low, "high": iv.high, "half_width": iv.half_width, "runs": e.runs, "status": e.status,
+        "method": iv.method, "normal_low": ap.low, "normal_high": ap.high, "min_value": e.low_value, "max_value": e.high_value,
+        "exit_code": 0 if e.complete else EXIT_INCOMPLETE,
+        # (as analyze's: an INCOMPLETE row counts as failed; it keeps the interval of its runs)
+        "error": None if e.complete else f"INCOMPLETE: --max-runs {question.max_runs} reached at half-width {iv.half_width:.6g}",
+    }
+
+
 _JOBS: dict[str, Callable[[JobSpec, Run], dict[str, Any]]] = {
     "run": _job_run, "verify": _job_verify, "fuzz": _job_fuzz, "evaluate": _job_evaluate, "analyze": _job_analyze,
+    "estimate": _job_estimate,
 }
 
 
@@ -394,7 +419,7 @@ def check_points(
         except DesmonError:
             continue  # its rows say why (exit code 2)
         where = f"at {point.text}" if point.values else ""
-        if job == "run" and is_fleet(loaded):
+        if job in ("run", "estimate") and is_fleet(loaded):
             raise SweepError(
                 f"{scenario}: a fleet of robots (world is a Fleet){' ' + where if where else ''}: desmon sweep runs one robot per "
                 f"run; simulate the fleet with desmon run {scenario}, or sweep a single-robot scenario"
@@ -403,7 +428,7 @@ def check_points(
             _markov_world(loaded, dict(settings or {}), where)
         if deployer is not None:
             _first_reaction(loaded, deployer, where)
-        if job == "run" and setting is not None:  # (the other jobs take no --until)
+        if job in ("run", "estimate") and setting is not None:  # (the other jobs take no --until)
             from desmon.sim.world import world_of
 
             horizon = float(world_of(loaded).horizon)

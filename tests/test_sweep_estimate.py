@@ -1,0 +1,61 @@
+"""desmon sweep --job estimate: one whole estimation per grid point, its guaranteed interval a
+row of the table (docs/estimate.md). The runs are handed over in this process (a stand-in
+for the Dask cluster, as tests/test_sweep_analyze.py does)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+pd = pytest.importorskip("pandas")
+pytest.importorskip("distributed")
+
+from desmon.cli import main  # noqa: E402
+from desmon.estimate import Question, estimate  # noqa: E402
+from desmon.loader import load_scenario  # noqa: E402
+from desmon.sweep import core  # noqa: E402
+from desmon.sweep.jobs import run_point  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+PLATFORM_CRASH = str(ROOT / "scenarios" / "platform_crash.py")
+
+
+def _in_process(spec, runs, on_row, **kw):  # type: ignore[no-untyped-def]
+    for run in runs:
+        on_row(run, run_point(spec, run))
+    return 1
+
+
+@pytest.fixture
+def local(monkeypatch):
+    monkeypatch.setattr(core, "execute", _in_process)
+
+
+def test_each_point_gets_the_interval_desmon_estimate_gives_with_its_seed(tmp_path, local, capsys):
+    out = tmp_path / "est.csv"
+    argv = ["sweep", PLATFORM_CRASH, "--job", "estimate", "-p", "stochastic=False,True", "--within", "40%", "--max-runs", "30",
+            "--until", "20", "--no-progress", "-o", str(out)]
+    code = main(argv)
+    df = pd.read_csv(out)
+    assert len(df) == 2 and set(df["within"]) == {"40%"} and set(df["metric"]) == {"exposure_s"}
+    for row in df.to_dict("records"):
+        assert row["low"] <= row["estimate"] <= row["high"] and row["runs"] <= 30
+        assert row["exit_code"] == (0 if row["status"] == "precise" else 3)
+        assert (row["exit_code"] == 3) == str(row["error"]).startswith("INCOMPLETE: --max-runs 30 reached")
+        params = {"stochastic": str(row["stochastic"])}
+        e = estimate(load_scenario(PLATFORM_CRASH, params), Question(within=0.4, max_runs=30), seed=int(row["seed"]), until=20)
+        assert (e.interval.low, e.interval.high, e.runs) == pytest.approx((row["low"], row["high"], row["runs"]))
+    assert code == (1 if (df["exit_code"] != 0).any() else 0)
+
+
+@pytest.mark.parametrize("extra, says", [
+    (["--within", "-2"], "--within must be a positive half-width"),
+    (["--confidence", "2"], "--confidence must be a confidence strictly between 0 and 1"),
+    (["--job", "run", "--within", "5%"], "--within applies to --job estimate, not --job run; drop it"),
+])
+def test_what_estimate_cannot_do_is_refused_in_one_line(tmp_path, capsys, extra, says):
+    argv = ["sweep", PLATFORM_CRASH, "--job", "estimate", *extra, "-o", str(tmp_path / "x.csv")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert says in err and len(err.strip().splitlines()) == 1
