@@ -20,7 +20,16 @@ In one run it measures:
   on a local cluster of 1, then 2 worker processes, each started and warmed up (one run
   per worker) before the clock starts; the two estimates are checked equal.
 
-Last line ``RESULT robot_day_runs_per_min_core=... coffee_shift_runs_per_min_core=...
+``--coverage``: instead, the coverage self-test's figures (tests/test_estimate_coverage.py):
+on each analysable shipped scenario over 300 s, ``--estimations`` independent estimations
+of ``--coverage-runs`` runs each on the Markov world ``desmon analyze`` solves, and how
+many of them hold the chain's exact expected exposure -- the guaranteed interval, that
+interval narrowed by 20 % and by half, the normal interval and the normal interval
+narrowed by 20 % -- each judged by :func:`desmon.estimate.coverage.fails`. Last line
+``RESULT scenarios=... estimations=... runs=... guaranteed_passed=... guaranteed_held_min=...
+normal_held_min=... narrowed_normal_failed=... halved_failed=...``.
+
+Otherwise the last line is ``RESULT robot_day_runs_per_min_core=... coffee_shift_runs_per_min_core=...
 runs_needed_1pct_99=... clt_runs_needed=... floor_runs=... minutes_2_cores=...
 speedup=... one_worker_s=... two_workers_s=...``.
 """
@@ -107,6 +116,50 @@ def _dask(workers: int, runs: int, until: float) -> tuple[float, object]:
         cluster.close()
 
 
+#: the analysable shipped scenarios (as tests/test_estimate_coverage.py), and the horizon of their runs
+ANALYSABLE = (("coffee_shift.py", {"hours": "1"}), ("platform_crash.py", {"stochastic": "True"}), ("cloud_offload.py", {"stochastic": "True"}))
+COVERAGE_HORIZON = 300.0
+
+
+def _narrowed(pick, share: float):  # type: ignore[no-untyped-def]
+    def narrowed(e):  # type: ignore[no-untyped-def]
+        low, high = pick(e)
+        centre, half = (low + high) / 2, (high - low) / 2 * share
+        return centre - half, centre + half
+
+    return narrowed
+
+
+def _coverage(count: int, runs: int, names: tuple[str, ...] | None = None) -> int:
+    from desmon.analyze import analyze
+    from desmon.analyze.agreement import markov_scenario
+    from desmon.estimate import Question
+    from desmon.estimate.coverage import coverage, estimations, guaranteed
+    from desmon.loader import load_scenario
+
+    normal = lambda e: (e.approximation.low, e.approximation.high)  # noqa: E731
+    kinds = {"guaranteed": guaranteed, "guaranteed x0.8": _narrowed(guaranteed, 0.8), "guaranteed x0.5": _narrowed(guaranteed, 0.5),
+             "normal": normal, "normal x0.8": _narrowed(normal, 0.8)}
+    cases = [c for c in ANALYSABLE if names is None or c[0] in names]
+    held: dict[str, list[int]] = {k: [] for k in kinds}
+    failed: dict[str, int] = dict.fromkeys(kinds, 0)
+    for name, params in cases:
+        scenario = load_scenario(ROOT / "scenarios" / name, params)
+        exact = analyze(scenario, miss={}, horizon=COVERAGE_HORIZON, steady=False).exposure_s_per_mission
+        found = estimations(markov_scenario(scenario), Question(within=0.5, confidence=0.95, max_runs=runs), count=count, until=COVERAGE_HORIZON)
+        for kind, pick in kinds.items():
+            c = coverage(found, exact, pick)
+            held[kind].append(c.inside)
+            failed[kind] += c.failed
+            print(f"{name} {params}: {kind:<16} {c}")
+    print(
+        f"RESULT scenarios={len(cases)} estimations={count} runs={runs} guaranteed_passed={len(cases) - failed['guaranteed']} "
+        f"guaranteed_held_min={min(held['guaranteed'])} narrowed_held_min={min(held['guaranteed x0.8'])} "
+        f"normal_held_min={min(held['normal'])} narrowed_normal_failed={failed['normal x0.8']} halved_failed={failed['guaranteed x0.5']}"
+    )
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m bench.bench_estimate")
     ap.add_argument("--quick", action="store_true", help="a smoke run: 3 runs of 10 min per scenario, 8 Dask runs of 10 min")
@@ -115,7 +168,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--draws", type=int, default=5, help="projections of the runs needed")
     ap.add_argument("--dask-runs", type=int, default=60, help="runs of the Dask comparison")
     ap.add_argument("--dask-until", type=float, default=3600.0, help="simulated seconds per run of the Dask comparison")
+    ap.add_argument("--coverage", action="store_true", help="instead, the coverage self-test's figures")
+    ap.add_argument("--estimations", type=int, default=200, help="--coverage: estimations per scenario")
+    ap.add_argument("--coverage-runs", type=int, default=4, help="--coverage: runs per estimation")
+    ap.add_argument("--scenario", action="append", default=None, help="--coverage: only this analysable scenario (repeatable)")
     args = ap.parse_args(argv)
+    if args.coverage:
+        return _coverage(args.estimations, args.coverage_runs, tuple(args.scenario) if args.scenario else None)
     if args.quick:
         args.runs, args.until, args.draws, args.dask_runs, args.dask_until = 3, 600.0, 1, 8, 600.0
     rates = {}

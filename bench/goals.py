@@ -99,6 +99,10 @@ RESULT_KEYS: dict[str, tuple[str, ...]] = {
         "robot_day_runs_per_min_core", "coffee_shift_runs_per_min_core", "runs_needed_1pct_99", "clt_runs_needed", "floor_runs",
         "minutes_2_cores", "speedup", "one_worker_s", "two_workers_s",
     ),
+    "bench_estimate --coverage": (
+        "scenarios", "estimations", "runs", "guaranteed_passed", "guaranteed_held_min", "narrowed_held_min", "normal_held_min",
+        "narrowed_normal_failed", "halved_failed",
+    ),
     "bench_fleet": (
         "seconds", "realtime_ratio", "peak_mb", "robots", "edges", "hours", "per_robot_vs_alone", "reactions_per_s", "violations", "events",
         "bare_s", "ratio_bare",

@@ -59,3 +59,27 @@ def test_what_estimate_cannot_do_is_refused_in_one_line(tmp_path, capsys, extra,
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert says in err and len(err.strip().splitlines()) == 1
+
+
+def test_sweep_plot_draws_each_points_estimate_with_its_guaranteed_interval(tmp_path, local, monkeypatch):
+    pytest.importorskip("matplotlib")
+    from desmon.sweep import plot
+
+    out, png = tmp_path / "est.csv", tmp_path / "est.png"
+    coffee = str(ROOT / "scenarios" / "coffee_shift.py")
+    main(["sweep", coffee, "--job", "estimate", "-p", "hours=0.01,0.02", "--within", "40%", "--max-runs", "12", "--no-progress", "-o", str(out)])
+    drawn = {}
+    real = plot._estimates
+
+    def spy(ax, df, params, x):  # type: ignore[no-untyped-def]
+        drawn["rows"] = len(df)
+        method = real(ax, df, params, x)
+        drawn["bands"] = [c.get_paths()[0].vertices[:, 1] for c in ax.collections]
+        return method
+
+    monkeypatch.setattr(plot, "_estimates", spy)
+    assert main(["sweep-plot", str(out), "-x", "hours", "-y", "estimate", "-o", str(png)]) == 0
+    df = pd.read_csv(out)
+    assert png.stat().st_size > 0 and drawn["rows"] == len(df) == 2  # INCOMPLETE points drawn too
+    (band,) = drawn["bands"]
+    assert min(band) == pytest.approx(df["low"].min()) and max(band) == pytest.approx(df["high"].max())

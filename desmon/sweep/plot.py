@@ -10,6 +10,10 @@
 Rows with an error are left out (the title says how many). ``log_x`` draws the x axis
 on a log scale (values that span decades: an MTTF of 15 min to 4 h). A table of
 ``--job analyze`` holds one exact value per point, not a mean over seeds: the title says so.
+A table of ``--job estimate`` holds one estimation per point: ``-y estimate`` draws it
+with its guaranteed interval (the ``low`` and ``high`` columns) as the band, the title
+naming the method; rows INCOMPLETE at their run budget are drawn too (their interval
+is still guaranteed), marked hollow.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ __all__ = ["plot_sweep", "pareto_front", "summarise"]
 
 _NOT_PARAMETERS = {
     "point", "seed_index", "seed", "scenario", "job", "deployer", "until", "max_states", "examples", "trials", "phases", "horizon",
+    "metric", "within", "confidence", "max_runs",
     "exit_code", "error",
 }
 
@@ -86,11 +91,14 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
         what = "the seeds a point's runs were given" if x in ("seed", "seed_index") else "not a swept parameter"
         listing = f"the swept parameters are {', '.join(params)}" if params else "this sweep swept no parameter (no -p): draw --pareto, or sweep one"
         raise SweepError(f"-x {x}: {what}; -x takes a swept parameter ({listing})")
-    ok = df[df["error"].isna()]
+    kept = df["error"].isna()
+    if "job" in df.columns and "exit_code" in df.columns:  # an estimation INCOMPLETE at its run budget keeps a guaranteed interval
+        kept |= (df["job"] == "estimate") & (df["exit_code"] == 3)
+    ok = df[kept]
     ok = ok[ok[y].notna()]
     if ok.empty:
         raise SweepError(f"{table}: no run without an error has a value of {y}; nothing to draw")
-    return ok, int(df["error"].notna().sum())
+    return ok, int((~kept).sum())
 
 
 def _against(ax: Any, ok: Any, params: list[str], x: str, y: str) -> None:
@@ -120,6 +128,29 @@ def _pareto(ax: Any, ok: Any, params: list[str], pareto: str, y: str) -> int:
         ax.annotate(label, (costs[i], means[i]), textcoords="offset points", xytext=(4, 6), fontsize=7)
     ax.set_xlabel(f"cost: {pareto}")
     return len(s)
+
+
+def _estimates(ax: Any, df: Any, params: list[str], x: str) -> str:
+    """``--job estimate``'s estimates against ``x``, each point's guaranteed interval as the band;
+    the method, for the title."""
+    others = [p for p in params if p != x and df[p].nunique() > 1]
+    groups = df.sort_values(x).groupby(others, sort=True) if others else [((), df.sort_values(x))]
+    for label, part in groups:
+        label = label if isinstance(label, tuple) else (label,)
+        name = ", ".join(f"{k}={v}" for k, v in zip(others, label)) or "estimate"
+        line = ax.plot(part[x], part["estimate"], marker="o", label=name)[0]
+        ax.fill_between(part[x], part["low"], part["high"], alpha=0.2, color=line.get_color())
+        cut = part[part["status"] != "precise"]
+        if len(cut):
+            ax.plot(cut[x], cut["estimate"], "o", markerfacecolor="white", color=line.get_color())
+    ax.set_xlabel(x)
+    methods = sorted(set(df["method"].dropna()))
+    return "; ".join(m.split(" (")[0] for m in methods)
+
+
+def _estimated(ok: Any, x: str | None, y: str) -> bool:
+    """Whether to draw ``--job estimate``'s estimates with their intervals (``-y estimate`` against a parameter)."""
+    return y == "estimate" and x is not None and "job" in ok.columns and bool((ok["job"] == "estimate").all())
 
 
 def _check_log_x(ok: Any, column: str) -> None:
@@ -162,7 +193,12 @@ def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | 
     fig, ax = plt.subplots(figsize=(7.5, 4.8), dpi=120)
     seeds = int(ok.groupby(params or ["job"])["seed"].count().max())
     note = f"{len(ok)} runs" + (f", {failed} failed runs left out" if failed else "")
-    if x is not None and _exact(ok):
+    if x is not None and _estimated(ok, x, y):
+        method = _estimates(ax, ok, params, x)
+        cut = int((ok["status"] != "precise").sum())
+        ax.set_title(f"estimate vs {x}: band = guaranteed {100 * float(ok['confidence'].iloc[0]):g} % interval ({method}); "
+                     f"{len(ok)} points" + (f", {cut} INCOMPLETE (hollow)" if cut else ""), fontsize=8)
+    elif x is not None and _exact(ok):
         _against(ax, ok, params, x, y)
         ax.set_title(f"{y} vs {x}: exact (desmon analyze), {len(ok)} points" + (f", {failed} failed left out" if failed else ""),
                      fontsize=9)
