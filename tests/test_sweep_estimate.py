@@ -83,3 +83,40 @@ def test_sweep_plot_draws_each_points_estimate_with_its_guaranteed_interval(tmp_
     assert png.stat().st_size > 0 and drawn["rows"] == len(df) == 2  # INCOMPLETE points drawn too
     (band,) = drawn["bands"]
     assert min(band) == pytest.approx(df["low"].min()) and max(band) == pytest.approx(df["high"].max())
+
+
+def test_sweep_plot_bars_each_mean_with_the_guaranteed_interval_of_a_figure_in_seconds(tmp_path, local, monkeypatch):
+    pytest.importorskip("matplotlib")
+    from desmon.sweep import plot
+
+    out = tmp_path / "runs.csv"
+    coffee = str(ROOT / "scenarios" / "coffee_shift.py")
+    main(["sweep", coffee, "-p", "hours=0.01,0.02", "--seeds", "3", "--no-progress", "-o", str(out)])
+    asked = []
+    real = plot.mean_interval
+
+    def spy(values, value_range):  # type: ignore[no-untyped-def]
+        got = real(values, value_range)
+        asked.append((len(values), value_range, got))
+        return got
+
+    monkeypatch.setattr(plot, "mean_interval", spy)
+    assert main(["sweep-plot", str(out), "-x", "hours", "-y", "exposure_s", "-o", str(tmp_path / "a.png")]) == 0
+    # each point's 3 seeds; its range: [0, the point's horizon] (hours x 3600 s), read from the scenario
+    assert [(n, r) for n, r, _got in asked] == [(3, (0.0, 36.0)), (3, (0.0, 72.0))]
+    df = pd.read_csv(out)
+    for (_n, _r, (low, high, method)), (_h, part) in zip(asked, df.groupby("hours")):
+        assert method == "guaranteed" and low <= part["exposure_s"].mean() <= high
+    asked.clear()
+    assert main(["sweep-plot", str(out), "-x", "hours", "-y", "starts", "-o", str(tmp_path / "b.png")]) == 0
+    assert {(r, got[2]) for _n, r, got in asked} == {(None, "normal approximation, not guaranteed")}  # a count: no known range
+
+
+def test_mean_interval_is_the_betting_sequence_in_a_known_range_else_the_normal_one():
+    from desmon.sweep.plot import mean_interval
+    from desmon.stats import normal_interval
+
+    low, high, method = mean_interval([10.0, 12.0, 11.0], (0.0, 100.0))
+    assert method == "guaranteed" and 0.0 <= low <= 11.0 <= high <= 100.0
+    iv = normal_interval([10.0, 12.0, 11.0], 0.05)
+    assert mean_interval([10.0, 12.0, 11.0], None) == (iv.low, iv.high, "normal approximation, not guaranteed")
