@@ -29,6 +29,10 @@ def parse_within(text: str) -> tuple[float, bool]:
     try:
         return parse(text)
     except EstimateError:
+        try:
+            float(text.strip().removesuffix("%"))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a half-width, absolute (60) or relative to the estimate (1%), got {text!r}") from None
         raise argparse.ArgumentTypeError(f"must be a positive half-width, absolute (60) or relative to the estimate (1%), got {text}") from None
 
 
