@@ -150,9 +150,10 @@ def run(args: argparse.Namespace) -> int:
     line = StatusLine(sys.stderr)
 
     def progress(tracker: Any) -> None:
-        n = len(tracker.values)
+        n, iv = len(tracker.values), tracker.last
         if show and (n <= 10 or n % 10 == 0):
-            line.show(f"desmon estimate: {n:,} runs")
+            now = f", {_n(iv.estimate)} in [{_n(iv.low)}, {_n(iv.high)}] at run {iv.n:,}" if iv is not None else ""
+            line.show(f"desmon estimate: {n:,} runs{now}")
 
     try:
         result = estimate(

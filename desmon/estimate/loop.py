@@ -227,6 +227,11 @@ class Tracker:
             if self.test is not None:
                 self.test.add(hit)
 
+    @property
+    def last(self) -> Interval | None:
+        """The interval at the latest look (None before the first)."""
+        return self._last
+
     def interval(self) -> Interval:
         seq = self.mean if self.mean is not None else self.share
         assert seq is not None
