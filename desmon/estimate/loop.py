@@ -322,9 +322,10 @@ def _consume(tracker: Tracker, source: Iterable[float], progress: Callable[[Trac
     try:
         for n, value in enumerate(it, 1):
             tracker.add(value)
+            done = (tracker.test is not None or is_look(n)) and tracker.stop()
             if progress is not None:
                 progress(tracker)
-            if (tracker.test is not None or is_look(n)) and tracker.stop():
+            if done:
                 status = DECIDED if q.below is not None else PRECISE
                 break
             if n >= q.max_runs:
