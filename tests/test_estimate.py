@@ -105,3 +105,22 @@ def test_two_dask_workers_print_the_same_bytes_as_this_process(capsys):
     here = _estimate(capsys, *args)
     on_dask = _estimate(capsys, *args, "--workers", "2")
     assert here[0] == on_dask[0] == 0 and here[1] == on_dask[1]
+
+
+def test_the_longest_unmonitored_stretch_joins_intervals_that_touch():
+    from desmon.estimate.measures import longest_exposure
+
+    assert longest_exposure([]) == 0.0
+    assert longest_exposure([(0.0, 5.0, "grasp"), (5.0, 12.0, "carry"), (20.0, 26.0, "carry")]) == 12.0
+    assert longest_exposure([(0.0, 5.0, "grasp"), (6.0, 12.0, "carry")]) == 6.0
+
+
+def test_the_chance_of_a_long_unmonitored_stretch_is_estimated_from_the_runs(capsys):
+    from desmon.estimate.loop import run_value
+
+    scenario = load_scenario(VARIED)
+    longest = [run_value(scenario, "desmon", run_seed(0, i), None, "longest_exposure_s") for i in range(3)]
+    total = [run_value(scenario, "desmon", run_seed(0, i), None, "exposure_s") for i in range(3)]
+    assert all(0 < lo <= t for lo, t in zip(longest, total))
+    code, out, _err = _estimate(capsys, VARIED, "--metric", "longest_exposure_s", "--at-least", "5", "--within", "0.2", "--json")
+    assert code == 0 and _strict(out)["question"]["metric"] == "longest_exposure_s"

@@ -63,13 +63,14 @@ def add_parser(sub: Subparsers) -> None:
     scenario_arg(p)
     deployer_arg(p)
     p.add_argument("--metric", default="exposure_s", help="the run figure, as desmon sweep names it: exposure_s, risky_time_s, "
-                   "slips_missed, false_alarms, errors_<kind>, ... (a wrong name lists them all)")
+                   "slips_missed, false_alarms, errors_<kind>, ..., or longest_exposure_s (a wrong name lists them all)")
     p.add_argument("--within", type=parse_within, default="5%", metavar="EPS",
                    help="stop once the guaranteed interval's half-width is at most EPS: absolute (60) or relative to the estimate (1%%); "
                    "with --below, the indifference around the threshold")
     p.add_argument("--confidence", type=parse_confidence, default=0.95, metavar="1-DELTA", help="the interval's confidence, e.g. 0.99")
     p.add_argument("--at-least", type=_number, default=None, metavar="X",
-                   help="estimate the probability that the figure is X or more in a run (e.g. --at-least 60: any 60 s unmonitored), not its mean")
+                   help="estimate the probability that the figure is X or more in a run, not its mean (--metric longest_exposure_s "
+                   "--at-least 60: 60 s or more unmonitored at a stretch)")
     p.add_argument("--below", type=_number, default=None, metavar="X",
                    help="answer yes or no: is the mean (with --at-least: the probability) below X? Wald's test for a probability")
     p.add_argument("--alpha", type=_number, default=None, help="--below: the chance of a wrong yes (unset: 1 - confidence)")

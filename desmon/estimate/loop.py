@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass
 from typing import Any, Callable, Iterable, Iterator
 
 from desmon.errors import EstimateError
-from desmon.estimate.measures import DEFAULT_METRIC, check_metric, natural_range, value_of
+from desmon.estimate.measures import DEFAULT_METRIC, LONGEST, check_metric, longest_exposure, natural_range, value_of
 from desmon.stats import BettingSequence, Interval, ProportionSequence, WaldTest, clopper_pearson, normal_interval
 
 __all__ = ["Question", "Estimate", "estimate", "run_seed", "run_value", "serial_values", "is_look", "world_horizon", "Tracker", "with_world", "parse_within"]
@@ -300,8 +300,11 @@ def run_value(scenario: Any, deployer: Any, seed: int, until: float | None, metr
     from desmon.sim.engine import SimWorld
     from desmon.sim.metrics import run_figures
 
-    result = SimWorld(scenario, deployer=deployer, seed=seed, until=until, guard=guard).run()
-    return value_of(run_figures(result.metrics, len(result.violations)), metric)
+    world = SimWorld(scenario, deployer=deployer, seed=seed, until=until, guard=guard)
+    result = world.run()
+    figures = run_figures(result.metrics, len(result.violations))
+    figures[LONGEST] = longest_exposure(world.exposure.intervals)
+    return value_of(figures, metric)
 
 
 def serial_values(scenario: Any, deployer: Any, seed: int, until: float | None, metric: str, guard: Any = None) -> Iterator[float]:
