@@ -110,17 +110,18 @@ def check_output_file(
     return p
 
 
-def check_outputs_spare_modules(outputs: Iterable[tuple[str, str]]) -> None:
+def check_outputs_spare_modules(outputs: Iterable[tuple[str, str]], elsewhere: Iterable[tuple[str, str]] = ()) -> None:
     """A PathError if one of ``outputs`` ((flag, path) each) that the running command will
-    write is the file of a module loaded in this process: one the scenario or the
-    deployer imported (a helper beside it), which the output would overwrite. Called
-    after a scenario or a deployer has been loaded; only outputs that exist are looked
-    at (a module's file exists)."""
+    write is the file of a module loaded in this process, or of one of ``elsewhere``
+    ((name, file) of the modules a deployer's worker process imported): one the scenario
+    or the deployer imported (a helper beside it), which the output would overwrite.
+    Called after a scenario or a deployer has been loaded; only outputs that exist are
+    looked at (a module's file exists)."""
     existing = [(flag, out, os.stat(out)) for flag, out in outputs if os.path.isfile(out)]
     if not existing:
         return
-    for name, module in list(sys.modules.items()):
-        source = getattr(module, "__file__", None)
+    loaded = [(name, getattr(module, "__file__", None)) for name, module in list(sys.modules.items())]
+    for name, source in loaded + list(elsewhere):
         if not isinstance(source, str):
             continue
         try:

@@ -166,3 +166,41 @@ def test_closed_classes_with_different_exposure_are_refused_with_what_to_ask_ins
         steady_state(TWO_ENDS, _name, ends=(P0, np.array([0.0, 0.0, 1.0, 0.0])))
     msg = str(e.value)
     assert "2 closed classes" in msg and "state 1 (s1)" in msg and "--transient-only" in msg and "\n" not in msg
+
+
+@pytest.mark.parametrize("spent_after", [1, 200])
+def test_the_placement_mdp_stops_at_the_budget_while_built_or_solved(spent_after):
+    """``--placements`` asks the analysis budget as it builds the MDP and between the
+    solver's steps: a budget spent after 1 look (while built) or 200 (while solved; 633 in all) ends it
+    with BudgetExceeded (exit 3 on the command line), not after the whole optimisation."""
+    from desmon.analyze.markov import BudgetExceeded
+    from desmon.analyze.mdp import optimality_gap
+    from desmon.loader import load_scenario
+
+    looks = [0]
+
+    def budget(*_ignored: object) -> None:
+        looks[0] += 1
+        if looks[0] > spent_after:
+            raise BudgetExceeded("timeout")
+
+    scenario = load_scenario(str(SHIFT), {"faults": "False"})
+    with pytest.raises(BudgetExceeded):
+        optimality_gap(scenario, "desmon", budget=budget)
+    assert looks[0] == spent_after + 1
+
+
+def test_a_library_call_the_budget_cannot_interrupt_is_killed_at_the_timeout():
+    """``--engine storm``'s solvers are one call desmon cannot interrupt between its steps:
+    ``Budget.within`` runs it in a forked process, killed once the time is spent (exit 3);
+    a result, or an error, comes back as if it ran in desmon's process."""
+    from desmon.analyze.markov import Budget, BudgetExceeded
+
+    budget = Budget(timeout=1.0)
+    assert budget.within(lambda: {"pi": [0.25, 0.75]}, "a solver") == {"pi": [0.25, 0.75]}
+    with pytest.raises(AnalysisError, match="a solver: ZeroDivisionError"):
+        budget.within(lambda: 1 / 0, "a solver")
+    t0 = time.monotonic()
+    with pytest.raises(BudgetExceeded, match="timeout 1s reached while a solver ran"):
+        budget.within(lambda: time.sleep(30), "a solver")
+    assert time.monotonic() - t0 < 5

@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import sys
@@ -211,13 +212,18 @@ def test_one_ctrl_c_stops_a_spinning_reaction(deployers):
 
 
 def test_timeout_stops_a_worker_process_stuck_in_a_reaction(tmp_path):
+    """A reaction that never returns only where it runs for a --workers process (whose own
+    deployer worker's parent is that process, not desmon): --timeout still ends the search."""
     path = tmp_path / "stuck.py"
     path.write_text(
         "import os\n"
         "from desmon.deployment.deployer import DEPLOYERS\n"
-        "PARENT = os.getpid()  # the worker processes are forked from the process that imported this\n"
+        f"CALLER = {os.getpid()}  # the test: desmon's parent\n"
+        "def _parent_of(pid):\n"
+        "    with open(f'/proc/{pid}/stat') as fh:\n"
+        "        return int(fh.read().rsplit(')', 1)[1].split()[1])\n"
         "def stuck_in_workers(q, slots, changed, context_changed):\n"
-        "    while os.getpid() != PARENT:\n"
+        "    while _parent_of(os.getppid()) != CALLER:  # this worker was started by a --workers process\n"
         "        pass\n"
         "    yield from DEPLOYERS['desmon'].react(q, slots, changed, context_changed)\n"
     )
@@ -289,7 +295,7 @@ def test_a_deployer_failing_only_in_the_no_flapping_re_run_is_one_line(deployers
 
 # -- isolation: a deployer cannot change what desmon checks, nor its signals, timers, threads or exit ------------------
 # (docs/deployers.md, "What desmon's isolation catches"). Every case runs `desmon` as the program, as a user runs it:
-# the deployer then runs in the worker process desmon supervises (desmon/cli/supervise.py).
+# the deployer then runs in a worker process of its own, behind the ports (desmon/verify/isolation/).
 
 #: deployers that misbehave once the robot grasps (reachable in one step), each in one way
 ISOLATION_PY = """
@@ -540,11 +546,12 @@ def test_whatever_a_deployer_raises_or_yields_is_its_crash_not_desmons(isolation
 @pytest.mark.parametrize("command", [["verify", "--no-progress"], ["verify", "--no-progress", "--engine", "direct"], ["run"], ["fuzz", "--examples", "5", "--seed", "1"], ["analyze", "--scenario-for-analyze"]])
 @pytest.mark.parametrize("name", ["exit0", "exit1", "thread_sends_alarm"])
 def test_a_deployer_that_ends_the_process_is_crashed_never_a_verdict(isolation, command, name):
-    """os._exit(0) or (1) in a reaction, a thread that sends SIGALRM once desmon's handler is
-    gone: the worker ends without a verdict, and desmon says CRASHED (exit 4)."""
+    """os._exit(0) or (1) in a reaction, a thread that sends SIGALRM: the deployer's worker
+    process ends inside a reaction, and desmon says so: CRASHED (exit 4), or, where it ends in
+    the first reaction (the thread), a deployer that cannot run at all (exit 2)."""
     code, took, out, err = _desmon(str(isolation), *_command(command), "--deployer", _spec(isolation, name), timeout=_slow(command))
-    assert code == 4 and "desmon: CRASHED: deployer" in err and "ended desmon's worker process without a verdict" in err, out + err
-    assert "HOLDS" not in out and not _verdict_line(out) or "CRASHED" in out
+    assert code in (2, 4) and "ended its worker process inside its reaction (" in out + err, out + err
+    assert (code == 2) == (name == "thread_sends_alarm") and "HOLDS" not in out and "Traceback" not in err
 
 
 @pytest.mark.parametrize("engine", ["table", "direct"])
@@ -564,7 +571,7 @@ def test_a_thread_the_deployer_leaves_running_does_not_hold_desmon(isolation, co
 def test_a_deployer_fighting_the_timer_ends_at_the_timeout(isolation, engine, name):
     """SIGALRM ignored or the interval timer cancelled inside a reaction, every exception
     swallowed, a no-op command every 0.5 s: verify --timeout 5 ends INCOMPLETE (exit 3)
-    within the timeout plus 2 s (the supervisor kills the worker if it must)."""
+    within the timeout plus 2 s (desmon's timers run in its own process, not the worker's)."""
     code, took, out, err = _desmon(
         str(isolation), "verify", COFFEE, "--deployer", _spec(isolation, name), "--engine", engine, "--timeout", "5", "--no-progress",
     )
@@ -588,19 +595,32 @@ def test_a_deployer_ignoring_the_timer_signal_from_import_ends_within_the_budget
 
 @pytest.mark.parametrize("command", [["verify", "--no-progress"], ["verify", "--no-progress", "--engine", "direct"], ["run"], ["fuzz", "--examples", "5", "--seed", "1"], ["analyze", "--scenario-for-analyze"]])
 @pytest.mark.parametrize("module", ["patches_invariants", "wraps_the_query_port"])
-def test_a_deployer_changing_desmons_code_at_import_is_refused(isolation, command, module):
+def test_a_deployer_changing_desmons_code_at_import_changes_nothing_desmon_computes(isolation, command, module):
     """A module that replaces desmon's invariant functions or wraps a port while it is
-    imported (and deploys nothing) never gets HOLDS: one line naming what it changed, exit 2."""
-    code, _took, out, err = _desmon(str(isolation), *_command(command), "--deployer", _spec(isolation, "deploys_nothing", module), timeout=_slow(command))
-    assert code == 2 and "changed desmon's own code while it ran (desmon.deployment." in err, out + err
-    assert "HOLDS" not in out and err.strip().splitlines()[-1].startswith("desmon: error: deployer ")
+    imported (and deploys nothing) patches its own worker process: desmon reports exactly what
+    it reports for a module that deploys nothing and patches nothing (never HOLDS)."""
+    (isolation / "plain.py").write_text(IMPORT_TAIL)
+    spec, plain = _spec(isolation, "deploys_nothing", module), _spec(isolation, "deploys_nothing", "plain")
+    code, _took, out, err = _desmon(str(isolation), *_command(command), "--deployer", spec, timeout=_slow(command))
+    code2, _took2, out2, _err2 = _desmon(str(isolation), *_command(command), "--deployer", plain, timeout=_slow(command))
+
+    def norm(text: str, name: str) -> list[str]:
+        return [line.replace(name, "SPEC") for line in text.splitlines() if "time:" not in line and "s wall" not in line]
+
+    assert (code, norm(out, spec)) == (code2, norm(out2, plain)), out + err
+    assert "HOLDS" not in out and (code == 1 or command[0] == "analyze")
 
 
-@pytest.mark.parametrize("command", [["verify", "--no-progress"], ["verify", "--no-progress", "--engine", "direct"], ["run"], ["fuzz", "--examples", "5", "--seed", "1"], ["analyze", "--scenario-for-analyze"]])
-def test_a_deployer_raising_the_platforms_capacities_is_refused(isolation, command):
+@pytest.mark.parametrize("command", [["verify", "--no-progress"], ["verify", "--no-progress", "--engine", "direct"]])
+def test_a_deployer_raising_the_platforms_capacities_never_holds(isolation, command):
+    """It raises the capacities of the platform records it is handed: copies in its own worker
+    process. desmon's checks read the model's capacities, so its starts on a platform without
+    room are VIOLATED; and since its copies keep the raised values, its decisions change with
+    its history, which the determinism checks refuse (exit 2). Never HOLDS. (run, fuzz and
+    analyze judge its decisions on the model's capacities too; a run or five sequences need
+    not meet a start without room.)"""
     code, _took, out, err = _desmon(str(isolation), *_command(command), "--deployer", _spec(isolation, "raises_capacities"), timeout=_slow(command))
-    assert code == 2 and "changed the model it was handed while it ran (platform " in err, out + err
-    assert "HOLDS" not in out
+    assert code in (1, 2) and "HOLDS" not in out and "Traceback" not in err, out + err
 
 
 def test_a_command_changed_after_it_was_yielded_is_acted_on_as_read(isolation):
@@ -685,7 +705,7 @@ def test_a_deployer_fighting_the_timer_is_crashed_at_the_reaction_limit_in_fuzz_
         str(isolation), *_command(command), "--deployer", _spec(isolation, "ignores_alarm_and_spins"), "--max-reaction-seconds", "2",
         timeout=_slow(command),
     )
-    assert code == 4 and "desmon: CRASHED: " in err and "ran for over 2 s in one reaction" in err and "Traceback" not in err, out + err
+    assert code == 4 and "CRASHED" in out + err and "ran for over 2 s in one reaction" in out + err and "Traceback" not in err, out + err
 
 
 PEEKS_PY = """

@@ -46,7 +46,7 @@ import math
 import resource
 import time
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Callable
 
 from desmon.errors import DesmonError
 from desmon.model.checks import check_number
@@ -96,6 +96,52 @@ class Budget:
             mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
             if mb > self.max_memory:
                 raise BudgetExceeded(f"memory budget {self.max_memory:g} MB reached: {mb:,.0f} MB resident; raise --max-memory, or analyze a smaller chain")
+
+
+    def within(self, work: Callable[[], Any], what: str) -> Any:
+        """``work()``, a library call this budget cannot interrupt between its steps (Storm's
+        solvers): where a ``--timeout`` is set, run in a forked process that is killed once the
+        time is spent (:class:`BudgetExceeded`); its result comes back pickled. ``what``
+        names it in the refusal."""
+        if self.deadline == math.inf:
+            return work()
+        import os
+        import pickle
+        import select
+        import signal
+
+        read, write = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # pragma: no cover - the child
+            os.close(read)
+            try:
+                data = pickle.dumps(("ok", work()))
+            except BaseException as exc:  # its error, raised again in desmon's process
+                data = pickle.dumps(("error", AnalysisError(f"{what}: {type(exc).__name__}: {' '.join(str(exc).split())[:300]}")))
+            with os.fdopen(write, "wb") as fh:
+                fh.write(data)
+            os._exit(0)
+        os.close(write)
+        chunks: list[bytes] = []
+        try:
+            while True:
+                left = self.deadline - time.perf_counter()
+                if left <= 0 or not select.select([read], [], [], left)[0]:
+                    os.kill(pid, signal.SIGKILL)
+                    raise BudgetExceeded(f"timeout {self.timeout:g}s reached while {what} ran: raise --timeout, or analyze a smaller chain")
+                chunk = os.read(read, 1 << 20)
+                if not chunk:
+                    break
+                chunks.append(chunk)
+        finally:
+            os.close(read)
+            os.waitpid(pid, 0)
+        if not chunks:
+            raise AnalysisError(f"{what} ended without a result")
+        kind, value = pickle.loads(b"".join(chunks))
+        if kind == "error":
+            raise value
+        return value
 
 
 def no_budget(*_ignored: Any) -> None:

@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from desmon.analyze.chain import BudgetExceeded, Builder, ChainState, recognised, rewards
-from desmon.analyze.markov import AnalysisError, MarkovWorld, markov_world
+from desmon.analyze.markov import AnalysisError, MarkovWorld, markov_world, no_budget
 from desmon.analyze.solve import one_blas_thread, steady_state
 from desmon.deployment.control import ControlRules
 from desmon.model.events import ActionChange
@@ -128,7 +128,9 @@ class _MDP:
     """States, and per state its races; a race's alternatives are the distinct outcome
     distributions of the deployer under each platform order (index 0: the declared one)."""
 
-    def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld, max_states: int | None, guard: Any = None) -> None:
+    def __init__(self, scenario: Scenario, deployer: Any, mw: MarkovWorld, max_states: int | None, guard: Any = None,
+                 budget: Any = no_budget) -> None:
+        self.budget = budget
         names = tuple(p.name for p in scenario.model.platforms)
         if math.factorial(len(names)) > MAX_ORDERS:  # a cut list of orders would make "best" a lie
             raise AnalysisError(
@@ -170,6 +172,7 @@ class _MDP:
         self._id(s0)
         i = 0
         while i < len(self.states):
+            self.budget()
             s = self.states[i]
             per_builder = [list(b.slots(s)) for b in self.builders]
             races, which = [], []
@@ -207,12 +210,13 @@ def _generator(mdp: _MDP, policy: list[list[int]]):  # type: ignore[no-untyped-d
 
 
 @one_blas_thread
-def _evaluate(Q, r: np.ndarray, describe, blocks: np.ndarray, with_pi: bool = False):  # type: ignore[no-untyped-def]
+def _evaluate(Q, r: np.ndarray, describe, blocks: np.ndarray, with_pi: bool = False, budget: Any = no_budget):  # type: ignore[no-untyped-def]
     """The gain (long-run reward per second) and a bias vector of the policy's chain
-    (and its steady state, ``with_pi``)."""
+    (and its steady state, ``with_pi``); ``budget()`` is asked between the solver's steps."""
     import scipy.sparse.linalg as sla
 
-    pi, _res, _m = steady_state(Q, describe, blocks)
+    pi, _res, _m = steady_state(Q, describe, blocks, budget=budget)
+    budget()
     g = float(pi @ r)
     ref = int(np.argmax(pi))
     keep = np.flatnonzero(np.arange(Q.shape[0]) != ref)
@@ -245,17 +249,19 @@ def _improve(mdp: _MDP, policy: list[list[int]], h: np.ndarray, sign: float) -> 
 def _optimise(mdp: _MDP, r: np.ndarray, sign: float, describe, blocks: np.ndarray) -> tuple[float, list[list[int]], np.ndarray, int]:  # type: ignore[no-untyped-def]
     policy = [[0] * len(races) for races in mdp.races]
     for it in range(1, 100):
-        g, h = _evaluate(_generator(mdp, policy), r, describe, blocks)
+        g, h = _evaluate(_generator(mdp, policy), r, describe, blocks, budget=mdp.budget)
         if not _improve(mdp, policy, h, sign):
             return g, policy, h, it
     raise AnalysisError("policy iteration did not settle in 100 rounds")
 
 
 def optimality_gap(scenario: Scenario, deployer: Any = "desmon", *, phases: int = 1, start_failure_p: float | None = None,
-                   max_states: int | None = None, guard: Any = None) -> Gap:
-    """The deployer's long-run exposure between the best and worst placements (module docstring)."""
+                   max_states: int | None = None, guard: Any = None, budget: Any = no_budget) -> Gap:
+    """The deployer's long-run exposure between the best and worst placements (module
+    docstring); ``budget()`` (:class:`~desmon.analyze.markov.Budget`) is asked while the MDP
+    is built and between the solver's steps, and raises once the time or memory is spent."""
     mw = markov_world(scenario, phases=phases, start_failure_p=start_failure_p)
-    mdp = _MDP(scenario, deployer, mw, max_states, guard)
+    mdp = _MDP(scenario, deployer, mw, max_states, guard, budget)
     mdp.build()
     # rewards of the MDP's states (the chain's definition)
     from desmon.analyze.chain import Chain
@@ -269,7 +275,7 @@ def optimality_gap(scenario: Scenario, deployer: Any = "desmon", *, phases: int 
 
     blocks = holder.blocks()
     own = [[0] * len(races) for races in mdp.races]
-    g_own, _h, d_own = _evaluate(_generator(mdp, own), r, describe, blocks, with_pi=True)
+    g_own, _h, d_own = _evaluate(_generator(mdp, own), r, describe, blocks, with_pi=True, budget=budget)
     g_min, best, h_min, it1 = _optimise(mdp, r, 1.0, describe, blocks)
     g_max, _worst, _h, it2 = _optimise(mdp, r, -1.0, describe, blocks)
     differs = None
@@ -285,7 +291,7 @@ def optimality_gap(scenario: Scenario, deployer: Any = "desmon", *, phases: int 
         if differs is not None:
             break
     largest, unobservable, total = _shares(mdp, best, h_min, d_own, g_own - g_min, describe)
-    orders = [_evaluate(_generator(mdp, [[w[b] for w in which] for which in mdp.which]), r, describe, blocks)[0] for b in range(len(mdp.orders))]
+    orders = [_evaluate(_generator(mdp, [[w[b] for w in which] for which in mdp.which]), r, describe, blocks, budget=budget)[0] for b in range(len(mdp.orders))]
     b = int(np.argmin(orders))
     return Gap(
         mdp.main.system.deployer_name, len(mdp.states), g_own * 3600.0, g_min * 3600.0, g_max * 3600.0, it1 + it2, differs,

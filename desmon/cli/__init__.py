@@ -20,9 +20,8 @@ import sys
 from typing import Sequence
 
 from desmon.cli import analyze, estimate, evaluate, explain, explore, fuzz, plot, replay, run, show, sweep, sweep_plot, verify
-from desmon.cli.common import EXIT_USAGE, Parser, one_line, run_of, usage_error, users_deployer
+from desmon.cli.common import EXIT_USAGE, Parser, one_line, run_of, usage_error
 from desmon.cli.options import preflight
-from desmon.cli.supervise import Beacon, Tamper, supervise
 from desmon.errors import DesmonError
 from desmon.paths import WholeWrites
 
@@ -85,30 +84,23 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         print(f"desmon: error: no command given; choose one of {', '.join(args.commands)} (desmon COMMAND --help)", file=sys.stderr)
         return EXIT_USAGE
-    if argv is None and users_deployer(getattr(args, "deployer", None)):  # a user's deployer: in a supervised worker process
-        return supervise(args, lambda beacon: _dispatch(args, beacon))
     return _dispatch(args)
 
 
-def _dispatch(args: argparse.Namespace, beacon: Beacon | None = None) -> int:
+def _dispatch(args: argparse.Namespace) -> int:
     """Check the parsed arguments, run the command's handler; a DesmonError is one line.
-    A user's deployer is fingerprinted around it (:class:`~desmon.cli.supervise.Tamper`);
-    ``beacon``: the supervising process's view of it (:func:`~desmon.cli.supervise.supervise`)."""
+    A user's deployer (``--deployer FILE.py:NAME``) runs in a worker process of its own
+    (:mod:`desmon.verify.isolation`), started as the option is resolved."""
     from desmon.deployment.guard import EXIT_CRASHED, MAX_COMMANDS, MAX_REACTION_SECONDS, DeployerFault, Guard
 
     try:
         # this command's guard around the deployer: its limits, handed to every engine it runs
         deadline = (args.max_reaction_seconds or MAX_REACTION_SECONDS) if hasattr(args, "max_reaction_seconds") else None
         args.guard = Guard(getattr(args, "max_commands", None) or MAX_COMMANDS, deadline)  # (verify: its --timeout instead)
-        args.guard.beacon = beacon.clock if beacon is not None else None
-        tamper = Tamper(args) if users_deployer(getattr(args, "deployer", None)) else None  # before its module is imported
-        with beacon.importing(deadline is not None) if beacon is not None else contextlib.nullcontext():  # (its import is its code)
-            preflight(args)  # inputs, numbers, windows and output paths, before any long work
+        preflight(args)  # inputs, numbers, windows and output paths, before any long work (then the deployer's import)
         run_of(args)  # this command's run context: its guard and its planned outputs (each engine adds its own memoised checks)
-        with args.guard.deadline(), contextlib.redirect_stdout(WholeWrites(sys.stdout)) as out:  # (printed whole under the timer)
-            code = int(args.handler(args))
-            kept = sys.stdout is out  # (a deployer that replaced it took the report)
-        return code if tamper is None else _untampered(tamper, code, beacon, kept)
+        with args.guard.deadline(), contextlib.redirect_stdout(WholeWrites(sys.stdout)):  # (printed whole under the timer)
+            return int(args.handler(args))
     except DeployerFault as exc:
         # (SimPy re-raises a process's exception as a copy caused by the original)
         if exc.initial or getattr(exc.__cause__, "initial", False):  # the deployer cannot run at all: bad input
@@ -126,17 +118,6 @@ def _dispatch(args: argparse.Namespace, beacon: Beacon | None = None) -> int:
     except KeyboardInterrupt:
         print("desmon: interrupted", file=sys.stderr)
         return 130
-
-
-def _untampered(tamper: Tamper, code: int, beacon: Beacon | None, stdout_kept: bool = True) -> int:
-    """``code``, or the refusal (exit 2, one line) of a run whose deployer changed desmon's code, the model or its output."""
-    why = tamper.refusal(stdout_kept)
-    if not why:
-        return code
-    print(f"desmon: error: {one_line(why)}", file=sys.stderr)
-    if beacon is not None:
-        beacon.refused = True  # its output is dropped
-    return EXIT_USAGE
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -130,11 +130,16 @@ def run(args: argparse.Namespace) -> int:
         try:
             gap = optimality_gap(
                 scenario, args.deployer, phases=args.phases, start_failure_p=args.start_failure_p, max_states=args.max_states, guard=args.guard,
+                budget=budget,
             )
         except BudgetExceeded as exc:
             err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
             return EXIT_INCOMPLETE
-    cross = _cross_check(stormpy, result, gap)  # before any file is written
+    try:
+        cross = budget.within(lambda: _cross_check(stormpy, result, gap), "Storm") if stormpy is not None else None  # before any file is written
+    except BudgetExceeded as exc:
+        err.write(f"desmon analyze: INCOMPLETE: {exc}\n")
+        return EXIT_INCOMPLETE
     doc = result.to_json()
     if agree is not None:
         doc["simulation"] = agree.to_json()

@@ -11,6 +11,7 @@ import argparse
 import math
 import re
 import sys
+import time
 from typing import TYPE_CHECKING, Any, NoReturn, TypeAlias
 
 from desmon.cli.options import HelpFormatter, add_input, add_resolved, positive_int, positive_seconds
@@ -78,10 +79,17 @@ def scenario_arg(p: argparse.ArgumentParser, help: str = "scenario file, e.g. sc
     )
 
 
-def _resolve_deployer(spec: str) -> object:
+def _resolve_deployer(spec: str, args: argparse.Namespace) -> object:
+    """``--deployer spec``; a user's module imported in its worker process within the command's
+    reaction limit (``--max-reaction-seconds``, or what is left of ``--timeout``)."""
+    from desmon.deployment.guard import MAX_REACTION_SECONDS
     from desmon.verify.deployers import resolve_deployer
 
-    return resolve_deployer(spec)
+    seconds = getattr(args, "max_reaction_seconds", None) or MAX_REACTION_SECONDS
+    timeout = getattr(args, "timeout", None)
+    if isinstance(timeout, (int, float)):
+        seconds = max(0.5, timeout - (time.perf_counter() - getattr(args, "_started", time.perf_counter())))
+    return resolve_deployer(spec, import_seconds=seconds)
 
 
 #: ``--deployer mutant:NAME``: the prefix and the names of :data:`desmon.verify.mutants.MUTANTS`,
@@ -132,10 +140,6 @@ def load_scenario_of(args: argparse.Namespace) -> Scenario:
     from desmon.paths import PathError, check_outputs_spare_modules
 
     scenario = load_scenario(args.scenario, parse_assignments(getattr(args, "param", None)))
-    if users_deployer(getattr(getattr(args, "deployer", None), "name", None)) and not hasattr(args, "model_fingerprint"):
-        from desmon.deployment.integrity import model_fingerprint  # the model as loaded: the deployer must leave it alone
-
-        args.model_fingerprint = (scenario.model, model_fingerprint(scenario.model))
     try:
         check_outputs_spare_modules(getattr(args, "outputs", ()))  # an output must not overwrite a module the script imported
     except PathError as exc:

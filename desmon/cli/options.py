@@ -138,7 +138,7 @@ class Resolved:
     into it before the command runs, raising a one-line DesmonError for a bad name."""
 
     dest: str
-    resolve: Callable[[str], object]
+    resolve: Callable[[str, argparse.Namespace], object]
 
 
 class HelpFormatter(argparse.HelpFormatter):
@@ -176,8 +176,8 @@ def add_output(
     _declare(p, "_outputs", Output(action.dest, flags[0], suffixes, formats, default_format=default_format))
 
 
-def add_resolved(p: argparse.ArgumentParser, *flags: str, resolve: Callable[[str], object], **kwargs: Any) -> None:
-    """An option naming an object; :func:`preflight` replaces its text by ``resolve(text)``."""
+def add_resolved(p: argparse.ArgumentParser, *flags: str, resolve: Callable[[str, argparse.Namespace], object], **kwargs: Any) -> None:
+    """An option naming an object; :func:`preflight` replaces its text by ``resolve(text, args)``."""
     action = p.add_argument(*flags, **kwargs)
     _declare(p, "_resolved", Resolved(action.dest, resolve))
 
@@ -257,8 +257,10 @@ def preflight(args: argparse.Namespace) -> None:
                 raise PathError(f"{o.flag} {value}: {flag} writes the same file; give each output its own name")
         written.append((o.flag, value))
     args.outputs = tuple(written)  # this command's outputs: looked at again once the scenario and the deployer are loaded
+    imported: list[tuple[str, str]] = []
     for r in getattr(args, "_resolved", ()):
         value = getattr(args, r.dest, None)
         if isinstance(value, str):
-            setattr(args, r.dest, r.resolve(value))
-    check_outputs_spare_modules(args.outputs)  # a module the deployer imported is an input too
+            setattr(args, r.dest, value := r.resolve(value, args))
+        imported.extend(getattr(getattr(value, "react", None), "modules", ()))  # (a deployer's worker process: what it imported)
+    check_outputs_spare_modules(args.outputs, imported)  # a module the deployer imported is an input too

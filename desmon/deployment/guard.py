@@ -51,7 +51,8 @@ from desmon.errors import CheckerError, ModelError
 
 __all__ = [
     "DeployerFault", "ReactionStopped", "Guard", "check_max_commands", "MAX_COMMANDS", "TICK", "CRASH",
-    "describe_stimulus", "uncallable", "EXIT_CRASHED", "MAX_REACTION_SECONDS", "RanAway",
+    "describe_stimulus", "uncallable", "EXIT_CRASHED", "MAX_REACTION_SECONDS", "RanAway", "RaisedElsewhere", "raised_text",
+    "plain_command",
 ]
 
 #: the exit code of every command whose deployer failed in a reachable state (not the first reaction)
@@ -125,10 +126,26 @@ def describe_stimulus(stimulus: Any, context: Any = None, cause: object = None) 
     return f"{what} (context {context})" if context is not None else what
 
 
-def _where(exc: BaseException) -> str:
-    """``file:line`` of the innermost frame of ``exc``'s traceback, or ""."""
-    own = (os.path.abspath(__file__), os.path.join(os.path.dirname(os.path.abspath(__file__)), "core.py"))
-    frames = [f for f in traceback.extract_tb(exc.__traceback__) if os.path.abspath(f.filename) not in own]
+#: the folder of desmon's side of a deployer's worker process: no line of the deployer's
+_ISOLATION = os.path.join("desmon", "verify", "isolation") + os.sep
+
+
+class RaisedElsewhere(Exception):
+    """What a deployer's reaction did where desmon cannot see its traceback (its worker
+    process: :mod:`desmon.verify.isolation`), already in the guard's words (``what``)."""
+
+    def __init__(self, what: str) -> None:
+        super().__init__(what)
+        self.what = what
+
+
+def _where(exc: BaseException, skip: tuple[str, ...] = ()) -> str:
+    """``file:line`` of the innermost frame of ``exc``'s traceback outside desmon's guard (and ``skip``), or ""."""
+    own = (os.path.abspath(__file__), os.path.join(os.path.dirname(os.path.abspath(__file__)), "core.py"), *map(os.path.abspath, skip))
+    frames = [
+        f for f in traceback.extract_tb(exc.__traceback__)
+        if os.path.abspath(f.filename) not in own and _ISOLATION not in os.path.abspath(f.filename)
+    ]
     if not frames:  # raised by the call itself (react called with the wrong arguments): no line of the deployer's
         return ""
     f = frames[-1]
@@ -152,13 +169,17 @@ def uncallable(name: str, react: object) -> DeployerFault:
     return fault
 
 
-def _raised(exc: BaseException) -> str:
+def raised_text(exc: BaseException, skip: tuple[str, ...] = ()) -> str:
+    """What a deployer's reaction did by raising ``exc``, in the guard's words (``skip``:
+    files of desmon's whose frames do not count as where it was raised)."""
+    if isinstance(exc, RaisedElsewhere):
+        return exc.what
     if isinstance(exc, SystemExit):
         code = "" if exc.code is None else repr(exc.code)
-        where = _where(exc)
+        where = _where(exc, skip)
         return f"called sys.exit({code}) inside its reaction" + (f" (at {where})" if where else "") + "; a reaction returns, it never exits"
     detail = " ".join(str(exc).split())[:300]
-    where = _where(exc)
+    where = _where(exc, skip)
     return f"raised {type(exc).__name__}{': ' + detail if detail else ''}" + (f" (at {where})" if where else "")
 
 
@@ -221,6 +242,21 @@ def _own_copy(cmd: object, graphs: frozenset[str], platforms: frozenset[str]) ->
     return cmd, why or _NOT_PLAIN.format(cmd=_safe_str(cmd), kind=kind.__name__)
 
 
+class _Every(frozenset):
+    """Every name (a model's graphs and platforms where the model is not known)."""
+
+    def __contains__(self, item: object) -> bool:
+        return True
+
+
+def plain_command(cmd: object) -> object:
+    """``cmd`` as desmon's own plain command, or ``("bad", why)``: the check of
+    :func:`_own_copy` that needs no model (a deployer's worker process makes it before it
+    sends a command; desmon checks the names against its model when it reads it)."""
+    copy, why = _own_copy(cmd, _Every(), _Every())
+    return ("bad", why) if why else copy
+
+
 def _safe_str(obj: object) -> str:
     try:
         return str(obj)[:200]
@@ -279,11 +315,6 @@ class Guard:
         self.armed = False
         #: the SIGINTs counted while a run is watched (:meth:`_counting_interrupts`)
         self.interrupts = 0
-        #: told (since, used) as the deployer's code starts and stops running where a deadline
-        #: is armed (the supervising process's view of the clock: desmon.cli.supervise), or None
-        self.beacon: Callable[[float, float], None] | None = None
-        #: while a user's deployer's code runs (where a beacon is set), its stdout redirected to stderr
-        self.stdout: Any = None
 
     def __repr__(self) -> str:
         return f"Guard(max_commands={self.max_commands}, max_reaction_seconds={self.max_reaction_seconds})"
@@ -293,24 +324,14 @@ class Guard:
         deadline is armed and it is not already running."""
         if self.armed and not self.inside:
             self.since = time.monotonic()
-            if self.beacon is not None:
-                self.beacon(self.since, self.used)
-        if self.beacon is not None and not self.inside:  # (a user's deployer, supervised)
-            self.stdout = contextlib.redirect_stdout(sys.stderr)  # what it prints never reads as the report's own lines
-            self.stdout.__enter__()
         self.inside += 1
 
     def _leave(self) -> None:
         """The deployer's code yielded, returned or raised: the time it ran counts in its
         reaction's (where a deadline is armed)."""
         self.inside -= 1
-        if self.beacon is not None and not self.inside and self.stdout is not None:
-            self.stdout.__exit__(None, None, None)
-            self.stdout = None
         if self.armed and not self.inside:
             self.used += time.monotonic() - self.since
-            if self.beacon is not None:
-                self.beacon(0.0, self.used)
 
     @contextlib.contextmanager
     def deadline(self) -> Iterator[None]:
@@ -321,7 +342,7 @@ class Guard:
         where SIGALRM is not otherwise taken (a search started inside it then asks its
         budget between commands only). Without a limit it does nothing."""
         seconds = self.max_reaction_seconds
-        if seconds is None or (not _timer_free() and self.beacon is None):
+        if seconds is None or not _timer_free():
             yield
             return
 
@@ -335,7 +356,7 @@ class Guard:
 
         self.armed = True
         try:
-            with (_timer(tick) if _timer_free() else contextlib.nullcontext()), self._counting_interrupts():
+            with _timer(tick), self._counting_interrupts():
                 yield
         finally:
             self.armed = False
@@ -434,7 +455,7 @@ class Guard:
             self._forked(pid)
             if self._desmons(exc):
                 raise
-            raise _fault(name, reacting(), _raised(exc), stimulus, exc) from None
+            raise _fault(name, reacting(), raised_text(exc), stimulus, exc) from None
         finally:
             self._leave()
         if type(reaction) is not GeneratorType:
@@ -464,7 +485,7 @@ class Guard:
                 self._forked(pid)
                 if self._desmons(exc) or (isinstance(exc, DeployerFault) and exc.stimulus is not None):
                     raise  # the budget, Ctrl-C; a nested deployer's (a mutant's) fault, already named
-                raise _fault(name, reacting(), _raised(exc), stimulus, exc) from None
+                raise _fault(name, reacting(), raised_text(exc), stimulus, exc) from None
             finally:
                 self._leave()
             cmd, why = _own_copy(cmd, graphs, platforms)

@@ -40,6 +40,7 @@ __all__ = [
     "STOPPING_FAILED",
     "ERROR_KINDS",
     "QueryPort",
+    "QUERY_METHODS",
     "ChecksPort",
     "PlatformHandle",
     "ControlPort",
@@ -302,6 +303,10 @@ class QueryPort(Protocol):
 
     def context(self) -> str | None:
         """The robot's current action context."""
+
+
+#: the QueryPort's methods, in declaration order (what a port that offers exactly them lists)
+QUERY_METHODS = tuple(name for name, value in vars(QueryPort).items() if callable(value) and not name.startswith("_"))
 
 
 class ControlPort(Protocol):

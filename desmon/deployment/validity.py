@@ -32,7 +32,7 @@ _TUPLES = 1 << 12
 #: (filled as failures are reported: a requirement object describes itself alike each time).
 _Question = tuple[tuple[int, ...], list[tuple[Any, "Requirement"]], bool, dict[int, str]]
 
-__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "ScalarChecks", "PlatformMemoChecks", "DEFAULT_CHECKS", "checks_for", "reads_fixed_facts", "unreadable", "spec_validity", "input_failures"]
+__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "is_ranked", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "ScalarChecks", "PlatformMemoChecks", "DEFAULT_CHECKS", "checks_for", "reads_fixed_facts", "unreadable", "spec_validity", "input_failures"]
 
 
 def requirement_holds(req: Constraint, state: PlatformState, graph: Placing) -> str | None:
@@ -319,7 +319,7 @@ def _assemble(
         else:
             acceptable.append(state)
     if ranked is None:
-        ranked = _ranked(reqs)
+        ranked = is_ranked(reqs)
     if not ranked:
         return Validity(tuple([s.name for s in acceptable]), tuple(rejected))
     scored = sorted(((score(s), s) for s in acceptable), key=lambda x: -x[0])  # stable
@@ -327,7 +327,7 @@ def _assemble(
     return Validity(tuple(s.name for _v, s in scored), tuple(rejected), tuple(v for v, _s in scored), breakdown)
 
 
-def _ranked(reqs: tuple[Requirement, ...]) -> bool:
+def is_ranked(reqs: tuple[Requirement, ...]) -> bool:
     """Does ``reqs`` hold a preference (whose scores order the acceptable platforms)?"""
     for r in reqs:
         if type(r) is Preference:
@@ -346,6 +346,11 @@ class ScalarChecks:
     states a memo would hold. Memoisation is a property of the instance its caller
     chose, never a global switch.
     """
+
+    #: its answers are :data:`DEFAULT_CHECKS`' own, so a deployer's worker process may
+    #: compute them itself (:mod:`desmon.verify.isolation`); a port that must see every
+    #: question (the table engine's recording checks) does not say so
+    answers_as_default = True
 
     def compute(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
         """The answer of :meth:`validity` (implementations refine this)."""
@@ -408,7 +413,7 @@ class PlatformMemoChecks(ScalarChecks):
         if found is None:
             if len(self._lookups) > self._size:
                 self._lookups.clear()
-            found = self._lookups[ids] = (reqs, (ids, _checks(reqs), _ranked(reqs), {}))
+            found = self._lookups[ids] = (reqs, (ids, _checks(reqs), is_ranked(reqs), {}))
         if len(tuples) > _TUPLES:
             tuples.clear()
         tuples[id(reqs)] = (reqs, found[1])

@@ -28,6 +28,7 @@ from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds
 from desmon.verify.direct import DirectSearch, Pool
 from desmon.verify.engines import AUTO, load, names
+from desmon.verify.isolation import worker_pids
 from desmon.verify.memory import check_memory
 from desmon.verify.search import HOLDS, Budget, CheckResult, Exploration, ctrl_c, finish, paused_gc, resident_mb
 from desmon.verify.state import Key
@@ -184,6 +185,7 @@ def check(
     budget = Budget(
         t0, timeout=timeout, timeout_spent=timeout_spent, max_memory=max_memory, progress=progress, progress_after=progress_after, progress_every=progress_every, out=out,
     )
+    budget.others = lambda: worker_pids(system.core.deployer)  # (a user's deployer's memory counts too)
     search = dict(max_states=max_states, max_depth=max_depth, keep_going=keep_going, budget=budget, workers=workers)
     try:
         with ctrl_c(budget), system.guard.watching(budget.spent, budget.urgent):

@@ -40,7 +40,10 @@ from desmon.errors import ModelError
 from desmon.paths import script_folder_on_path
 from desmon.verify.mutants import MUTANTS
 
-__all__ = ["resolve_deployer", "portable_spec", "deployer_file", "DEPLOYER_FORMS", "MUTANT_PREFIX", "users_spec", "fresh_deployer", "deployer_state"]
+__all__ = [
+    "resolve_deployer", "portable_spec", "deployer_file", "DEPLOYER_FORMS", "MUTANT_PREFIX", "users_spec", "fresh_deployer",
+    "deployer_state", "load_in_process", "module_state", "worker_state",
+]
 
 MUTANT_PREFIX = "mutant"
 
@@ -62,10 +65,13 @@ def _is_file(source: str) -> bool:
     return source.endswith(".py") or "/" in source or os.sep in source
 
 
-def resolve_deployer(spec: str | Deployer) -> Deployer:
+def resolve_deployer(spec: str | Deployer, *, isolate: bool = True, import_seconds: float | None = None) -> Deployer:
     """The deployer ``spec`` names (see the module docstring), named ``spec``.
 
-    A :class:`Deployer` is returned as it is. Raises :class:`ModelError` (one line) for
+    A user's deployer is imported and run in a worker process of its own
+    (:mod:`desmon.verify.isolation`; ``isolate=False``: in this process, as
+    :func:`load_in_process`); its import may take ``import_seconds`` (None: 60 s). A
+    :class:`Deployer` is returned as it is. Raises :class:`ModelError` (one line) for
     an unknown name, a missing file or module, a missing attribute, an object of the
     wrong type, or a module that raises (anything, ``SystemExit`` included) while it
     is imported.
@@ -84,6 +90,17 @@ def resolve_deployer(spec: str | Deployer) -> Deployer:
         return dataclasses.replace(MUTANTS[name], name=spec)
     if not name:
         raise _refuse(spec, f"name the deployer after the colon, e.g. {source}:DEPLOYER")
+    if isolate:
+        from desmon.verify.isolation import Loader, isolated
+
+        return isolated(spec, Loader(load_in_process, _spec_state), import_seconds)
+    return load_in_process(spec)
+
+
+def load_in_process(spec: str) -> Deployer:
+    """A user's ``spec`` (``path/to/file.py:NAME``, ``module:NAME``) imported and resolved
+    in this process: what a deployer's worker process runs (:func:`resolve_deployer`)."""
+    source, _colon, name = spec.rpartition(":")
     module = _load_file(spec, source) if _is_file(source) else _import(spec, source)
     return _as_deployer(spec, module, source, name)
 
@@ -96,14 +113,24 @@ def users_spec(spec: object) -> bool:
     return bool(colon and source and source != MUTANT_PREFIX)
 
 
-def fresh_deployer(spec: str) -> Deployer:
-    """The deployer a user's ``spec`` names, from its module imported *again*: a fresh
-    instance, its globals, caches and counters as they were before it first ran."""
+def fresh_deployer(deployer: Deployer) -> Deployer:
+    """A fresh instance of a user's ``deployer``: its module imported *again* (in a new
+    worker process where it runs isolated), its globals, caches and counters as they were
+    before it first ran."""
+    spec = deployer.name
+    if _isolated(deployer):
+        return resolve_deployer(spec)
     source, _colon, name = spec.rpartition(":")
     if _is_file(source):
         return _as_deployer(spec, _load_file(spec, source), source, name)
     sys.modules.pop(source, None)
     return _as_deployer(spec, _import(spec, source), source, name)
+
+
+def _isolated(deployer: Deployer) -> bool:
+    from desmon.verify.isolation import RemoteReact
+
+    return isinstance(deployer.react, RemoteReact)
 
 
 def _text(value: Any) -> str:
@@ -125,19 +152,43 @@ def _function_state(fn: Any) -> str:
     return _text((fn.__defaults__, fn.__kwdefaults__, vars(fn), [c for c in cells if not callable(c)]))
 
 
-def deployer_state(spec: str, module: ModuleType | None = None) -> tuple[ModuleType | None, dict[str, str]]:
-    """(the module a user's ``spec`` loaded, the state it keeps as text): every global of
-    its own (a function or a class by what it holds: a function's defaults, attributes and
-    closure cells, a class's plain attributes). ``module``: that module, taken earlier
-    (the spec's module may since have been imported again)."""
-    if module is None:
-        module = sys.modules.get(spec.rpartition(":")[0])
+def deployer_state(deployer: Deployer) -> dict[str, str]:
+    """The state a user's ``deployer``'s module keeps now, as text (:func:`module_state`),
+    asked of its worker process where it runs isolated."""
+    if _isolated(deployer):
+        return deployer.react.state()[1]  # type: ignore[attr-defined,no-any-return]
+    found = getattr(deployer.react, "__globals__", None)  # (the module it was loaded from, even where it was loaded again since)
+    return module_state(found if isinstance(found, dict) else _namespace(deployer.name))
+
+
+def _namespace(spec: str) -> dict[str, Any] | None:
+    module = sys.modules.get(spec.rpartition(":")[0])
+    return vars(module) if module is not None else None
+
+
+def worker_state(deployer: Deployer) -> tuple[dict[str, str], dict[str, str]] | None:
+    """(as imported, now) of the state a user's ``deployer``'s module keeps in its worker
+    process (one worker's own: a worker started again imports it again), or None where it
+    does not run isolated."""
+    return deployer.react.state() if _isolated(deployer) else None  # type: ignore[attr-defined,no-any-return]
+
+
+def _spec_state(spec: str) -> dict[str, str]:
+    """:func:`module_state` of the module a user's ``spec`` loaded in this process."""
+    return module_state(_namespace(spec))
+
+
+def module_state(namespace: dict[str, Any] | None) -> dict[str, str]:
+    """The state a user's deployer module keeps, as text (``namespace``: its globals): every
+    global of its own (a function or a class by what it holds: a function's defaults,
+    attributes and closure cells, a class's plain attributes)."""
     out: dict[str, str] = {}
-    for name, value in list(vars(module).items()) if module is not None else ():
+    own = namespace.get("__name__") if namespace is not None else None
+    for name, value in list(namespace.items()) if namespace is not None else ():
         if name.startswith("__") or isinstance(value, ModuleType):
             continue
-        if isinstance(value, (FunctionType, type)) and getattr(value, "__module__", None) != module.__name__:
-            continue  # imported (desmon's own code is fingerprinted elsewhere: desmon.deployment.integrity)
+        if isinstance(value, (FunctionType, type)) and getattr(value, "__module__", None) != own:
+            continue  # imported from elsewhere
         if isinstance(value, FunctionType):
             out[name] = _function_state(value)
         elif isinstance(value, type):
@@ -146,7 +197,7 @@ def deployer_state(spec: str, module: ModuleType | None = None) -> tuple[ModuleT
                     out[f"{name}.{attr}"] = _text(item)
         else:
             out[name] = _text(value)
-    return module, out
+    return out
 
 
 def deployer_file(spec: object) -> str | None:

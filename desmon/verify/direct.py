@@ -14,9 +14,8 @@ from __future__ import annotations
 
 from typing import Any, Callable, Iterable, Protocol
 
-from desmon.deployment.guard import ReactionStopped
 from desmon.model.events import Event
-from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Record, Segment, Trail, final_status, paused_gc
+from desmon.verify.search import BreadthFirst, Budget, CheckResult, Record, Segment, Trail, paused_gc
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 from desmon.verify.trace import Counterexample
@@ -39,7 +38,7 @@ class Pool(Protocol):
     def close(self) -> float: ...
 
 
-class DirectSearch:
+class DirectSearch(BreadthFirst):
     """One search of ``system`` on the direct engine, counting into ``res``.
 
     ``pool(system, workers)`` starts the worker processes the first time a level of
@@ -66,46 +65,17 @@ class DirectSearch:
 
     def run(self) -> tuple[dict[str, Counterexample], str, int]:
         """The search: (counterexamples found, why incomplete or "", depth)."""
-        system, trail = self.system, self.trail
+        system = self.system
         init = system.initial()
         if system.symmetry is not None:
             init = system.symmetry.canon(init)
         self.index[init] = 0
         self.keys.append(init)
-        self.budget.status = lambda: (len(self.keys), self.transitions, self.depth)
-        for name, msg in system.violations(init):
-            trail.record(name, msg, 0)
-        self.any_found = bool(trail.found)
         with paused_gc():
             try:
-                self._levels([0])
-            except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
-                self.incomplete = INTERRUPTED
-                trail.truncate(self.keys)
-            except ReactionStopped as stop:  # the budget ran out inside a deployer's reaction
-                self.incomplete = self.budget.reason or str(stop)
-                trail.truncate(self.keys)
+                return self._search(self.keys, system.violations(init))
             finally:
                 self._close_pool()
-        # the status closure points back at this search: let it go (no reference cycle is left behind)
-        self.budget.status = final_status(len(self.keys), self.transitions, self.depth)
-        self.res.states = len(self.keys)
-        self.res.transitions = self.transitions
-        return trail.found, self.incomplete, self.depth
-
-    def _finished(self) -> bool:
-        return self.any_found and self.trail.done()
-
-    def _levels(self, frontier: list[int]) -> None:
-        max_depth = self.max_depth
-        while frontier and not self._finished() and not self.incomplete:
-            if max_depth is not None and self.depth >= max_depth:
-                self.incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
-                break
-            nxt = self._level(frontier)
-            if nxt:
-                self.depth += 1
-            frontier = nxt
 
     def _expansions(self, frontier: list[int]) -> Iterable[list[list[Segment]]]:
         keys = self.keys
@@ -168,36 +138,21 @@ class DirectSearch:
         fails, ckey, moved, names, repaired, bad = rec
         self.transitions += 1
         self.count_names(names)
-        trail = self.trail
-        if repaired is not None and repaired[0] not in trail.found:
-            trail.record(repaired[0], repaired[1], ki, repaired[2], (event, fails))
-            self.any_found = True
-            if trail.done():
-                return True
+        if repaired is not None and repaired[0] not in self.trail.found and self._record_repaired(repaired, ki, (event, fails)):
+            return True
         if moved:
             self.res.changed[kind] += 1
         if ckey is None or ckey in self.index:
             return False
-        ni = self._add(ckey, ki, (event, fails), kind)
-        if bad:
-            for name, msg in bad:
-                trail.record(name, msg, ni)
-            self.any_found = True  # do not explore beyond a violation
-        else:
-            nxt.append(ni)
+        self._add_state(self._add(ckey), ki, (event, fails), (event, fails), kind, bad, nxt)
         return False
 
-    def _add(self, ckey: Any, parent: int, label: tuple[Event, tuple[int, ...]], kind: str) -> int:
-        """A new state (a Key, or the plain tuple a worker sends for one), its parent and label."""
-        keys = self.keys
-        ni = len(keys)
+    def _add(self, ckey: Any) -> int:
+        """The number of a new state (a Key, or the plain tuple a worker sends for one)."""
+        ni = len(self.keys)
         ckey = self._intern(ckey)
         self.index[ckey] = ni
-        keys.append(ckey)
-        self.trail.add(parent, label, label)
-        self.res.new_states[kind] += 1
-        if self.max_states is not None and len(keys) >= self.max_states:
-            self.incomplete = f"max states {self.max_states:,} reached"
+        self.keys.append(ckey)
         return ni
 
     def _intern(self, k: tuple) -> Key:

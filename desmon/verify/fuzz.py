@@ -23,7 +23,7 @@ from typing import Any, Iterator
 from hypothesis import HealthCheck, Phase, find, settings
 from hypothesis.errors import NoSuchExample
 
-from desmon.deployment.guard import CRASH, EXIT_CRASHED, DeployerFault, Guard, ReactionStopped
+from desmon.deployment.guard import CRASH, EXIT_CRASHED, DeployerFault, Guard, RanAway, ReactionStopped
 from desmon.deployment.deployer import Deployer
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import bounds_of
@@ -47,8 +47,9 @@ class FuzzOutcome:
     interrupted: bool = False  # Ctrl-C ended it: the text is the partial result
 
 
-def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice], enabler: Checker):  # type: ignore[no-untyped-def]
-    """Run ``seq``; returns (labels up to the first violation, first violation or None)."""
+def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice], enabler: Checker, faults: list | None = None):  # type: ignore[no-untyped-def]
+    """Run ``seq``; returns (labels up to the first violation, first violation or None).
+    ``faults``: where the deployer's fault is noted, if it failed."""
     run = RepositoryRun(scenario, deployer, enabler.bounds, enabler.system.guard)
     labels: list[Label] = []
     bad = run.violations()
@@ -63,12 +64,24 @@ def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice],
             run.step(event, fails)
         except DeployerFault as fault:  # the deployer failed in a reachable state: that is what was found
             labels.append((event, tuple(i for i in fails if i < run.control.n)))
+            if faults is not None:
+                faults.append(fault)
             return labels, (CRASH, fault.what)
         labels.append((event, tuple(i for i in fails if i < run.control.n)))
         bad = run.violations()
         if bad:
             return labels, bad[0]
     return labels, None
+
+
+def _end_progress(progress: bool, calls: int) -> None:
+    """The end of fuzz's progress line (shown from the 50th sequence on)."""
+    if progress and calls >= 50:
+        print("", file=sys.stderr, flush=True)
+
+
+class _NeverEnds(BaseException):
+    """A sequence whose reaction never ended (the reaction limit stopped it): not shrunk."""
 
 
 @contextlib.contextmanager
@@ -120,19 +133,18 @@ def fuzz(
         calls[0] += 1
         if progress and calls[0] % 50 == 0:
             print(f"\r  {calls[0]} sequences", end="", file=sys.stderr, flush=True)
+        faults: list[DeployerFault] = []
         try:
-            failed = run_choices(scenario, deployer, seq, enabler)[1] is not None
+            failed = run_choices(scenario, deployer, seq, enabler, faults)[1] is not None
         except ReactionStopped:  # Ctrl-C while a reaction ran on without yielding
             raise KeyboardInterrupt from None
         if not failed:
             passed[0] += 1
         elif not smallest or len(seq) <= len(smallest[0]):
             smallest[:] = [list(seq)]
+        if any(isinstance(f.cause, RanAway) for f in faults):
+            raise _NeverEnds  # (each try of a shrink would wait out the reaction limit again: the sequence as found)
         return failed
-
-    def end_progress() -> None:
-        if progress and calls[0] >= 50:
-            print("", file=sys.stderr, flush=True)
 
     cfg = settings(
         max_examples=examples,
@@ -149,14 +161,17 @@ def fuzz(
             if ctrl_c[0]:  # noted after the last sequence: the search ended on its own
                 raise KeyboardInterrupt
     except NoSuchExample:
-        end_progress()
+        _end_progress(progress, calls[0])
         return FuzzOutcome(
             f"{head}\npassed: {calls[0]} sequences (up to {max_size} events each), no invariant violated\n",
             0,
             calls[0],
         )
+    except _NeverEnds:
+        _end_progress(progress, calls[0])
+        seq = smallest[0]
     except KeyboardInterrupt:  # Ctrl-C: what was found so far
-        end_progress()
+        _end_progress(progress, calls[0])
         if not smallest:
             return FuzzOutcome(
                 f"{head}\nverdict: INCOMPLETE (interrupted)\n"
@@ -167,7 +182,7 @@ def fuzz(
             )
         seq, interrupted = smallest[0], True
     else:
-        end_progress()
+        _end_progress(progress, calls[0])
     return _violation(scenario, deployer, enabler, seq, head=head, sequences=calls[0], interrupted=interrupted, rederive_up_to=rederive_up_to)
 
 

@@ -35,7 +35,7 @@ from typing import Any
 
 from desmon.deployment.guard import CRASH
 from desmon.errors import NondeterminismError
-from desmon.verify.deployers import deployer_state, fresh_deployer, users_spec
+from desmon.verify.deployers import deployer_state, fresh_deployer, users_spec, worker_state
 from desmon.verify.system import TransitionSystem, command_key, nondeterminism
 
 __all__ = ["remembers", "rerun_fresh", "check_memory", "FRESH_NOTE"]
@@ -64,8 +64,8 @@ def check_memory(system: TransitionSystem) -> None:
     if system.reactions is None:
         return
     rerun_fresh(system)
-    module, before = system.deployer_state or (None, {})
-    _module, after = deployer_state(system.deployer_name, module)
+    pair = worker_state(system.core.deployer)  # (its worker's own: as imported there, and now)
+    before, after = pair if pair is not None else (system.deployer_state or {}, deployer_state(system.core.deployer))
     for name, was in before.items():
         now = after.get(name)
         if now != was:
@@ -85,7 +85,7 @@ def rerun_fresh(system: TransitionSystem) -> int:
         return 0
     run = dataclasses.replace(system.run_context, checks=None)
     fresh = TransitionSystem(
-        system.scenario, fresh_deployer(system.deployer_name), invariants=[i.name for i in system.invariants],
+        system.scenario, fresh_deployer(system.core.deployer), invariants=[i.name for i in system.invariants],
         bounds=system.bounds, run=run,
     )
     for key, event, prefix, commands, instant in reversed(kept):

@@ -11,6 +11,7 @@ a search is measured by and ends with, whichever engine runs it:
 * the search tree (:class:`Trail`: parent pointers and transition labels of the
   states, counterexamples rebuilt by replaying their labels through the real
   deployment core, and when the search has found what it looks for);
+* the level-by-level loop both engines run (:class:`BreadthFirst`);
 * what a transition reports to a search loop (:data:`Record`, :data:`Segment`).
 
 State keys are :class:`desmon.verify.state.Key`; counterexample steps are in
@@ -33,7 +34,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Protocol, Sequence, TextIO
 
-from desmon.deployment.guard import CRASH, EXIT_CRASHED
+from desmon.deployment.guard import CRASH, EXIT_CRASHED, ReactionStopped
 from desmon.progress import StatusLine
 from desmon.verify.state import Key
 from desmon.verify.trace import Counterexample, Label, Step
@@ -44,7 +45,7 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "Exploration",
     "HOLDS", "VIOLATED", "INCOMPLETE", "CRASHED", "EXIT_CRASHED", "INTERRUPTED", "EXIT_INTERRUPTED", "NOT_CHECKED", "Record", "Segment",
-    "CheckResult", "Budget", "Replayable", "Trail", "finish", "final_status", "ctrl_c", "paused_gc", "resident_mb", "proportional_mb", "peak_mb",
+    "CheckResult", "Budget", "Replayable", "Trail", "BreadthFirst", "finish", "final_status", "ctrl_c", "paused_gc", "resident_mb", "proportional_mb", "peak_mb",
     "MEMORY_EVERY", "MEMORY_EVERY_WORKERS",
 ]
 
@@ -228,6 +229,8 @@ class Budget:
         self.memory = 0.0  # the last resident memory read (MB; the workers' shares included)
         #: the worker processes whose memory counts (set by the direct engine's pool)
         self.pids: Callable[[], Iterable[int]] = tuple
+        #: other processes whose memory counts: a user's deployer's worker (:mod:`desmon.verify.isolation`)
+        self.others: Callable[[], Iterable[int]] = tuple
         #: (states, transitions, depth) of the search so far, for the progress line
         self.status: Callable[[], tuple[int, int, int]] = lambda: (0, 0, 0)
         self._next_look = t0
@@ -258,14 +261,14 @@ class Budget:
             elif time.perf_counter() > self.deadline:
                 self.reason = f"timeout {self.timeout:g}s"
             elif self.max_memory is not None:
-                mb = self.measure(list(self.pids()))
+                mb = self.measure([*self.pids(), *self.others()])
                 if mb > self.max_memory:
                     self.memory = mb
                     self.reason = f"memory budget {self.max_memory:g} MB reached: {mb:,.0f} MB resident"
         return self.reason
 
     def _look(self, now: float) -> None:
-        pids = list(self.pids())
+        pids = [*self.pids(), *self.others()]
         self._next_look = now + (MEMORY_EVERY_WORKERS if pids else MEMORY_EVERY)
         if self.max_memory is not None or self.progress:
             self.memory = self.measure(pids)
@@ -422,6 +425,82 @@ class Trail:
         """Drop a state half-added when a second Ctrl-C came (``states``: the engine's list of them)."""
         n = min(len(states), len(self.parent), len(self.label))
         del states[n:], self.parent[n:], self.label[n:]
+
+
+class BreadthFirst:
+    """The search loop of both engines: BFS level by level from state 0 until the search
+    has what it looks for, hits a cap or its budget, or Ctrl-C. An engine sets ``trail``,
+    ``budget``, ``res``, ``max_states`` and ``max_depth``, and expands a level in
+    :meth:`_level`."""
+
+    trail: Trail
+    budget: Budget
+    res: CheckResult
+    max_states: int | None
+    max_depth: int | None
+
+    def _level(self, frontier: Any) -> Any:
+        """Expand the states numbered in ``frontier``; returns the next level's numbers."""
+        raise NotImplementedError
+
+    def _search(self, states: list | array, violations: list[tuple[str, str]]) -> tuple[dict[str, Counterexample], str, int]:  # type: ignore[type-arg]
+        """The BFS from state 0, whose invariant ``violations`` are given; ``states`` is the
+        engine's list of them (their count, and what a second Ctrl-C truncates). Returns
+        (counterexamples found, why incomplete or "", depth), and counts the states and
+        transitions into ``res``."""
+        trail, budget = self.trail, self.budget
+        self.depth = self.transitions = 0
+        self.incomplete = ""
+        budget.status = lambda: (len(states), self.transitions, self.depth)
+        for name, msg in violations:
+            trail.record(name, msg, 0)
+        self.any_found = bool(trail.found)
+        frontier: Any = [0]
+        try:
+            while len(frontier) and not self._finished() and not self.incomplete:
+                if self.max_depth is not None and self.depth >= self.max_depth:
+                    self.incomplete = f"max depth {self.max_depth} reached with {len(frontier)} states unexplored"
+                    break
+                frontier = self._level(frontier)
+                if len(frontier):
+                    self.depth += 1
+        except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
+            self.incomplete = INTERRUPTED
+            trail.truncate(states)
+        except ReactionStopped as stop:  # the budget ran out inside a deployer's reaction
+            self.incomplete = budget.reason or str(stop)
+            trail.truncate(states)
+        # the status closure points back at this search: let it go (no reference cycle is left behind)
+        budget.status = final_status(len(states), self.transitions, self.depth)
+        self.res.states, self.res.transitions = len(states), self.transitions
+        return trail.found, self.incomplete, self.depth
+
+    def _finished(self) -> bool:
+        return self.any_found and self.trail.done()
+
+    def _add_state(self, ni: int, parent: int, lookup: Any, label: Label, kind: str, bad: Iterable[tuple[str, str]], nxt: Any) -> None:
+        """State number ``ni`` is new, reached from ``parent`` by ``label`` (numbered under
+        ``lookup``: :meth:`Trail.label_id`) and counted under its event's ``kind``; one
+        that violates invariants (``bad``: (name, message) pairs) is recorded and not
+        explored, another is queued in ``nxt``."""
+        self.trail.add(parent, lookup, label)
+        self.res.new_states[kind] += 1
+        if self.max_states is not None and ni + 1 >= self.max_states:
+            self.incomplete = f"max states {self.max_states:,} reached"
+        if bad:
+            for name, msg in bad:
+                self.trail.record(name, msg, ni)
+            self.any_found = True  # do not explore beyond a violation
+        else:
+            nxt.append(ni)
+
+    def _record_repaired(self, violation: tuple[str, str, str], state: int, label: Label) -> bool:
+        """Record an instantaneous ``violation`` (invariant, message, command) repaired
+        before quiescence in the transition ``label`` out of ``state``; True if the
+        search then has what it looks for."""
+        self.trail.record(violation[0], violation[1], state, violation[2], label)
+        self.any_found = True
+        return self.trail.done()
 
 
 def final_status(states: int, transitions: int, depth: int) -> Callable[[], tuple[int, int, int]]:

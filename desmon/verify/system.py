@@ -37,9 +37,9 @@ from desmon.verify.environment import enabled_events
 from desmon.verify.replay import initial_reaction
 from desmon.verify.search import NOT_CHECKED, Record, Segment
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore, StoreInsert
-from desmon.verify.trace import KEPT_BRANCH, WHOLE_REACTION, Label, Step, branch_name, initial_step, make_step
+from desmon.verify.trace import WHOLE_REACTION, Label, Step, branch_names, initial_step, make_step
 
-__all__ = ["TransitionSystem", "Reduction", "command_key", "nondeterminism", "same_again", "RECHECK_FIRST", "RECHECK_EVERY"]
+__all__ = ["TransitionSystem", "Reduction", "command_key", "nondeterminism", "opened", "same_again", "RECHECK_FIRST", "RECHECK_EVERY"]
 
 #: Nondeterminism detection: the first RECHECK_FIRST transitions a search runs, and every
 #: RECHECK_EVERY-th after them, are run twice and compared (:meth:`TransitionSystem.successors`).
@@ -106,7 +106,7 @@ class TransitionSystem:
         self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), deployer, run=self.run_context)
         self.deployer_name = self.core.deployer.name
         # a user's deployer: its reactions (key, event, prefix, commands, instant) and state (desmon.verify.memory)
-        self.reactions, self.deployer_state = ([], deployer_state(self.deployer_name)) if users_spec(self.deployer_name) else (None, None)
+        self.reactions, self.deployer_state = ([], deployer_state(self.core.deployer)) if users_spec(self.deployer_name) else (None, None)
         self.store.watch = self.instant
         self.store.watch_check = self._instant_check
         self._instant_memo: dict[tuple, list[tuple[str, str]]] = {}
@@ -279,9 +279,7 @@ class TransitionSystem:
             if self._runs <= RECHECK_FIRST or not self._runs % RECHECK_EVERY:  # nondeterminism: run it again, compare
                 same_again(self, key, event, prefix, (nkey, outcomes, log, instant))
             fails = tuple(i for i, ok in enumerate(outcomes) if not ok) if False in outcomes else ()
-            if len(fails) < bound:
-                for i in range(len(prefix), len(outcomes)):
-                    pending.append(outcomes[:i] + (False,))
+            pending += opened(prefix, outcomes, fails, bound)
             yield fails, nkey, log, instant
 
     def view(self, standing: frozenset[str], context: str | None) -> SystemView:
@@ -293,6 +291,11 @@ class TransitionSystem:
     def violations(self, key: Key) -> list[tuple[str, str]]:
         self.store.load(key)
         return check_invariants(self.view(self._standing(key.standing), key.context), self.invariants)
+
+    def repaired(self, invariant: str, key: Key) -> bool:
+        """Whether ``invariant``, broken inside the reaction that reached ``key``, was
+        repaired before quiescence (``key`` does not violate it)."""
+        return invariant not in {v for v, _m in self.violations(key)}
 
     # -- the transitions as a search loop consumes them ----------------------------------
     def expand(self, key: Key, known: "Container[Key]") -> list[list[Segment]]:
@@ -316,13 +319,10 @@ class TransitionSystem:
             n = moved = 0
             names: list[str] = []
             for fails, nkey, log, instant in self.successors(key, event):
-                commands = log.commands
-                here = [branch_name(cmd, ok) for cmd, ok in commands] if commands else KEPT_BRANCH
-                repaired = None
+                here = branch_names(log.commands)
                 # (checked even when the search has already recorded this invariant:
                 # expand knows nothing of the search, and it costs only on violations)
-                if instant is not None and instant[0] not in {v for v, _m in self.violations(nkey)}:
-                    repaired = instant  # broken inside the reaction, repaired before quiescence
+                repaired = instant if instant is not None and self.repaired(instant[0], nkey) else None
                 ckey = canon(nkey) if canon is not None else nkey
                 if ckey in known or ckey in fresh:
                     if repaired is None:
@@ -330,12 +330,12 @@ class TransitionSystem:
                         moved += nkey != key
                         names += here
                         continue
-                    rec: Record = (fails, None, nkey != key, tuple(here), repaired, ())
+                    rec: Record = (fails, None, nkey != key, here, repaired, ())
                 else:
                     fresh.add(ckey)
                     st.load(ckey)
                     view = self.view(self._standing(ckey.standing), ckey.context)
-                    rec = (fails, ckey, nkey != key, tuple(here), repaired, tuple(check_invariants(view, invariants)))
+                    rec = (fails, ckey, nkey != key, here, repaired, tuple(check_invariants(view, invariants)))
                 segments.append((n, moved, tuple(names), rec))
                 n = moved = 0
                 names = []
@@ -365,6 +365,12 @@ class TransitionSystem:
             st = self.store  # left in the step's next state: the Control rules' refusals there tell refused starts from chosen failures
             steps.append(make_step(i, prev, event, key, log, fails, lambda g, p: st.rules.start_refusal(g, p, st.platform_state)))
         return steps
+
+
+def opened(prefix: tuple[bool, ...], outcomes: tuple[bool, ...], fails: tuple[int, ...], bound: int) -> list[tuple[bool, ...]]:
+    """The outcome prefixes a run with ``prefix`` opens (:meth:`TransitionSystem.successors`):
+    each start it issued beyond the prefix, failing, while fewer than ``bound`` failed."""
+    return [outcomes[:i] + (False,) for i in range(len(prefix), len(outcomes))] if len(fails) < bound else []
 
 
 def same_again(system: "TransitionSystem", key: Key, event: Event, prefix: tuple[bool, ...], first: tuple) -> None:

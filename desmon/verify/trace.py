@@ -17,7 +17,7 @@ from desmon.model.events import Event
 from desmon.verify.state import Key
 
 __all__ = [
-    "Label", "Step", "Counterexample", "KEPT_BRANCH", "CHOSEN", "WHOLE_REACTION", "branch_name", "describe_state", "diff",
+    "Label", "Step", "Counterexample", "KEPT_BRANCH", "CHOSEN", "WHOLE_REACTION", "branch_name", "branch_names", "describe_state", "diff",
     "failed_starts", "rule_of", "where_in_reaction",
 ]
 
@@ -58,6 +58,11 @@ def branch_name(cmd: Any, ok: bool | None) -> str:
     if t is Stop:
         return "stop ok" if ok else "stop failed"
     return f"error {cmd.kind}"
+
+
+def branch_names(commands: Any) -> tuple[str, ...]:
+    """The deployer branches of a reaction's (command, ok) pairs (:data:`KEPT_BRANCH`: none)."""
+    return tuple([branch_name(cmd, ok) for cmd, ok in commands]) if commands else KEPT_BRANCH
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ from desmon.verify.table.hashing import Interned
 if TYPE_CHECKING:
     from desmon.verify.bounds import Bounds
 
-__all__ = ["SYS_BITS", "SYS_MASK", "ROOT_CTX", "ROOT_STIM", "ROOT_PREFIX", "root_key", "layout", "Env", "Events", "Transitions"]
+__all__ = ["SYS_BITS", "SYS_MASK", "ROOT_CTX", "ROOT_STIM", "ROOT_PREFIX", "MAX_DIGITS", "root_key", "layout", "Env", "Events", "Transitions"]
 
 #: bits of a state code that hold the interned system part (deployments, standing)
 SYS_BITS = 24
@@ -30,6 +30,8 @@ SYS_MASK = (1 << SYS_BITS) - 1
 #: a decision tree's root key packs (system part, context digit, stimulus, prefix) into
 #: one int64: 24 + 10 + 13 + 16 bits (each limit is checked where its part is made)
 ROOT_CTX, ROOT_STIM, ROOT_PREFIX = 10, 13, 16
+#: combinations of one platform's facts the engine tabulates answers for (beyond: direct engine)
+MAX_DIGITS = 4096
 #: the facts of a state the encoding has digits for (:class:`~desmon.verify.environment.Digit`)
 _FACTS = ("context", "requirements", "down", "device", "load")
 
@@ -45,13 +47,15 @@ def root_key(system: np.ndarray, ctx: np.ndarray, stim: np.ndarray | int, prefix
     return key
 
 
-def layout(b: Any, platforms: Sequence[str], platform_of: dict[str, str]) -> tuple[frozenset[str], dict[str, list[str]], dict[str, tuple[float, ...]]]:
+def layout(b: Any, model: Any) -> tuple[frozenset[str], dict[str, list[str]], dict[str, tuple[float, ...]]]:
     """The platform facts the variables move (:meth:`VariableKind.digits
     <desmon.verify.environment.VariableKind.digits>`): the platforms that may be down or
     absent, each platform's devices that may fail (in variable order) and each loaded
-    platform's levels."""
+    platform's levels; a platform with more than :data:`MAX_DIGITS` combinations of them
+    is refused."""
+    platform_of = {d.name: d.platform for d in model.devices}
     downs: set[str] = set()
-    devices: dict[str, list[str]] = {p: [] for p in platforms}
+    devices: dict[str, list[str]] = {p.name: [] for p in model.platforms}
     levels: dict[str, tuple[float, ...]] = {}
     for v in variables(b):
         digits = variable_kind(v.kind).digits(b, v.subject)  # type: ignore[union-attr]
@@ -64,6 +68,13 @@ def layout(b: Any, platforms: Sequence[str], platform_of: dict[str, str]) -> tup
                 devices[platform_of[d.subject]].append(d.subject)
             elif d.fact == "load" and levels.setdefault(d.subject, d.levels) != d.levels:
                 raise TableUnsupported(f"table engine: two kinds of variable move the load of {d.subject} over different levels; run with --engine direct")
+    for name, devs in devices.items():
+        combinations = (2 if name in downs else 1) * (1 << len(devs)) * len(levels.get(name, (0,)))
+        if combinations > MAX_DIGITS:
+            raise TableUnsupported(
+                f"table engine: platform {name} has {combinations:,} combinations of facts (its bounded devices, up/down and load "
+                f"levels); the table engine tabulates at most {MAX_DIGITS:,} per platform; run with --engine direct"
+            )
     return frozenset(downs), devices, levels
 
 
@@ -102,12 +113,9 @@ def _variants(model: Any, changes: Sequence[RequirementChange], init: Key) -> di
 
 
 class Env:
-    """Environment facts <-> one int: a context digit, a digit per changed graph (its
-    current requirements), then one digit per platform (down or absent, failed devices,
-    load level): the facts the variables move (:meth:`VariableKind.digits
-    <desmon.verify.environment.VariableKind.digits>`). The context and requirement digits
-    together are the *global* digit (``env % G``): what a reaction may read besides the
-    deployments and the platforms."""
+    """Environment facts <-> one int: the *global* digit (``env % G``: the context and each
+    changed graph's current requirements), then one digit per platform (down or absent,
+    failed devices, load level), as docs/design.md describes it."""
 
     def __init__(self, checker: Any, init: Key) -> None:
         model, b = checker.model, checker.bounds
@@ -128,7 +136,7 @@ class Env:
         self.G = v
         self.res = b.load_resource
         self.joins = frozenset(b.joins)
-        self.downs, self.vdev, self.levels = layout(b, self.plats, self.platform_of)
+        self.downs, self.vdev, self.levels = layout(b, model)
         moved = {d for ds in self.vdev.values() for d in ds}
         self.const_failed = tuple(d for d in init.failed if d not in moved)
         self.const_down = tuple(p for p in init.down if p not in self.downs)
@@ -155,6 +163,13 @@ class Env:
             for p in range(P)
         ]
         self.const_failures = len(self.const_failed) + len(self.const_down)
+        if self.G > 1 << ROOT_CTX or P + 3 + len(self.vgraphs) > 1 << ROOT_STIM:
+            raise TableUnsupported(
+                f"table engine: {self.C} contexts, {self.G // self.C} combinations of requirements and {P} platforms do not fit "
+                "its tree keys; run with --engine direct"
+            )
+        if self.space.bit_length() + SYS_BITS > 62:
+            raise TableUnsupported(f"table engine: the environment has {self.space:,} combinations, too many to encode; run with --engine direct")
 
     def _digits(self, name: str, vd: list[str], U: int, init: Key) -> list[tuple[bool, tuple[str, ...], tuple[tuple[str, float], ...]]]:
         """Platform ``name``'s facts (down, failed devices, load items) for each value of its
@@ -219,6 +234,16 @@ class Env:
         return Key(ctx, tuple(sorted(failed)), tuple(sorted(down)), tuple(loads), system[0], system[1],
                    self.specs(env) if self.vgraphs else ())
 
+    def stimulus(self, stimulus: Any) -> int:
+        """The number of what a reaction's stimulus changed (a tree root's part): 0 the
+        context, 1 + p platform p, P + 1 nothing, P + 3 + g changed graph g (P + 2 is an
+        invariants root's)."""
+        if stimulus.context_changed:
+            return 0
+        if stimulus.specs_changed:
+            return self.P + 3 + self.vgraphs.index(stimulus.specs_changed[0])
+        return self.plats.index(stimulus.changed_platforms[0]) + 1 if stimulus.changed_platforms else self.P + 1
+
     def values(self, digit: Digit) -> Sequence[Any]:
         """The values of ``digit`` in the order the code numbers them."""
         if digit.fact == "context":
@@ -260,7 +285,7 @@ class Transitions(NamedTuple):
     pos: np.ndarray  # the state's position in the batch
     env2: np.ndarray  # the environment code after the event
     ev: np.ndarray  # the event's number (:attr:`Events.events`)
-    stim: np.ndarray  # what the event changed: 0 context, 1 + platform, P + 1 nothing
+    stim: np.ndarray  # what the event changed (:meth:`Env.stimulus`)
     sys: np.ndarray  # the state's system part
     loc: np.ndarray  # the platform digits after the event, one row per transition (Events.loc_width wide)
     ctx: np.ndarray  # the context digit of each state of the batch
@@ -274,8 +299,8 @@ class Events:
     one event per state), so the enabled events come out in the order of
     :func:`~desmon.verify.environment.enabled_events`."""
 
-    def __init__(self, bounds: "Bounds", env: Env, platform_index: dict[str, int]) -> None:
-        self.env, self.bounds, self.P = env, bounds, len(platform_index)
+    def __init__(self, bounds: "Bounds", env: Env) -> None:
+        self.env, self.bounds, self.P = env, bounds, env.P
         self.events: Interned = Interned()
         #: per slot: (weight, radix, stimulus, platform column or -1, unit, to, event ids, needs room)
         self.slots: list[tuple] = []

@@ -1,12 +1,7 @@
-"""The table engine's stores: a numpy hash table of non-negative int64 keys, looked up
-and filled a batch at a time, and the growing arrays and numberings it keeps beside it.
-
-:class:`IntTable` is the seen-state set, the decision-tree roots and edges: open
-addressing with linear probing in two int64 arrays (keys, values), at most half full. A
-state costs 16 bytes of it (8 at worst-case half load, 32 just after doubling) where a
-Python set of ints costs about 90; a batch lookup is a few array passes instead of a
-sort or a Python loop. :class:`Grow` is a numpy array with amortised appends;
-:class:`Interned` numbers distinct values in order of first appearance.
+"""The table engine's stores: :class:`IntTable`, a numpy hash table of int64 keys looked
+up and filled a batch at a time (the seen states, the decision trees' roots and edges:
+what a state costs in it is in docs/design.md), and beside it :class:`Grow` and
+:class:`Interned`.
 """
 
 from __future__ import annotations
@@ -24,7 +19,9 @@ _MUL = np.uint64(0x9E3779B97F4A7C15)  # Fibonacci hashing: the high bits of key 
 
 
 class IntTable:
-    """Non-negative int64 keys -> int64 values (``values=False``: a set)."""
+    """Non-negative int64 keys -> int64 values (``values=False``: a set): open addressing
+    with linear probing in two arrays, at most half full, so that a batch lookup is a few
+    array passes instead of a sort or a Python loop."""
 
     def __init__(self, bits: int = 10, values: bool = True) -> None:
         self._bits = bits
@@ -107,12 +104,9 @@ class Grow:
         self.fill = fill
 
     def append(self, row: Any) -> int:
-        if self.n == len(self.a):
-            more = np.full(self.a.shape, self.fill, dtype=np.int64)
-            self.a = np.concatenate([self.a, more])
-        self.a[self.n] = row
-        self.n += 1
-        return self.n - 1
+        i = self.extend(1)
+        self.a[i] = row
+        return i
 
     def extend(self, k: int) -> int:
         """Append ``k`` fill values; returns the index of the first."""

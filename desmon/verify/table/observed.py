@@ -1,12 +1,8 @@
 """What a recorded run uses of a requirement check's answer, observed as it is used.
 
 :class:`~desmon.verify.table.recording.RecordingChecks` answers each check with the real
-result wrapped in these: asking whether one platform is acceptable observes that
-platform's answer only; iterating, truth-testing or indexing the acceptable platforms
-observes them one by one in preference order (up to where the code stops); anything
-else (length, slicing, comparing, the rejected platforms and their reasons) observes
-every answer, down to the failure texts when those are read; an explanation is
-observed only where its text is used.
+result wrapped in these; which use observes what is listed in docs/findings.md ("How the
+table engine works", Recording), and on each class below.
 """
 
 from __future__ import annotations

@@ -1,51 +1,44 @@
 """Recording one run of the real core: what it observes of the platforms, and nothing else.
 
-While the table engine records a reaction (or an invariants check), the core runs on a
-:class:`~desmon.verify.state.StateStore` whose platform states are opaque
-:class:`~desmon.deployment.ports.PlatformHandle` objects made by :class:`RecordingChecks`,
-the run's Checks port: the only way to learn a platform's facts is to ask a requirement
-check, whose use is recorded. A read of a fact anywhere else raises
-:class:`~desmon.errors.UnobservedRead`, and the core's Query port (:class:`RecordingQuery`)
-offers only the QueryPort methods.
+The recorded run's store hands out opaque platform handles whose facts only its Checks
+port (:class:`RecordingChecks`) reads, and its Query port (:class:`RecordingQuery`) offers
+only the QueryPort methods: docs/findings.md ("Why it is sound, and how that is checked").
 """
 
 from __future__ import annotations
 
 import traceback
-from typing import TYPE_CHECKING, Any, Callable, Protocol, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from desmon.deployment.guard import CRASH
-from desmon.deployment.ports import PlatformHandle
-from desmon.deployment.validity import PlatformMemoChecks, order_platforms
+from desmon.deployment.ports import QUERY_METHODS, PlatformHandle
+from desmon.deployment.validity import PlatformMemoChecks, is_ranked, order_platforms
 from desmon.errors import TableUnsupported, UnobservedRead
 from desmon.model.events import Event
-from desmon.model.requirements import Preference
-from desmon.model.system import PlatformState, SystemModel
+from desmon.model.system import PlatformState
 from desmon.verify.state import Key, StateStore
 from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key, nondeterminism
 from desmon.verify.table.observed import Acceptable, Check, ObservedValidity, Ranked, Reasons
-from desmon.verify.table.tables import AnswerTables, score_key
-from desmon.verify.trace import KEPT_BRANCH, branch_name
+from desmon.verify.table.tables import AnswerTables, score_keys
+from desmon.verify.trace import branch_names
 
 if TYPE_CHECKING:
     from desmon.verify.table.encoding import Env
     from desmon.verify.table.tree import DecisionTrees
 
-__all__ = ["RecordingChecks", "RecordingQuery", "Recorder", "RecordedEngine", "QUERY_METHODS", "PlainRun"]
+__all__ = ["RecordingChecks", "RecordingQuery", "Recorder", "PlainRun"]
 
 #: Wrapped answers :class:`RecordingChecks` keeps before it forgets them all.
 _ANSWERS_LIMIT = 1 << 16
 
 
 class RecordingChecks:
-    """The Checks port of a recorded run (see the module doc): it makes the handles the
-    recording store hands out (:meth:`handle`, the store's ``make_state``), keeps each
-    one's real facts, and answers each check with the real result wrapped as
-    :mod:`~desmon.verify.table.observed` says, so that the run's *use* of it is recorded.
-    The real answers are computed once per platform's facts (a
-    :class:`~desmon.deployment.validity.PlatformMemoChecks`), and the wrapped answer of a
-    question about handles is kept: a wrapper holds no state of a run, so a run that asks
-    again gets the same wrapper, and its every use observes again, into that run.
+    """The Checks port of a recorded run: it makes the handles the recording store hands
+    out (:meth:`handle`, the store's ``make_state``), keeps their real facts, and answers
+    each check with the real result wrapped as :mod:`~desmon.verify.table.observed` says.
+    The real answers are computed once per platform's facts; the wrapped answer of a
+    question about handles is kept, since a wrapper holds no state of a run (each use
+    observes afresh, into the run that uses it).
     """
 
     def __init__(self, tables: AnswerTables) -> None:
@@ -125,8 +118,8 @@ class RecordingChecks:
         real = computed.compute(reqs, real_states, graph, reasons)  # loop_validity's answer (the same parts)
         at = {id(st): i for i, st in enumerate(real_states)}
         order = [at[id(st)] for st in order_platforms(real_states)]
-        ranked = any(type(r) is Preference for r in reqs)
-        scored = [None if f else score_key(reqs, st, graph) for f, st in zip(fails, real_states)] if ranked else None
+        ranked = is_ranked(reqs)
+        scored = score_keys(reqs, graph, fails, real_states) if ranked else None
         check = Check(self, reqs, graph, first_only, parts, fails, [st.platform.name for st in real_states], scored)
         acceptable = Acceptable(check, real.acceptable, order)
         if not ranked:
@@ -181,11 +174,6 @@ class RecordingChecks:
         return tuple((index[s.platform.name], tables.intern_deployed(s.deployed)) for s in states)
 
 
-#: the QueryPort's methods (desmon.deployment.ports.QueryPort)
-QUERY_METHODS = ("deployment_information", "fixed_platform", "constraints", "platform_states", "deployed_on",
-                 "active_deployments", "deployments", "perception_graph", "context")
-
-
 def _query(name: str) -> Callable[..., Any]:
     """The QueryPort method ``name`` of the store, looked up per call (the store rebinds
     some of them per deployment set)."""
@@ -193,13 +181,9 @@ def _query(name: str) -> Callable[..., Any]:
 
 
 class RecordingQuery:
-    """The recording core's Query port: the store's QueryPort methods and nothing else.
-
-    Any other attribute of the store (its fact tuples, its helpers) would let a reaction
-    read platform facts unobserved: asking for one stops the recording. One the store
-    lacks raises AttributeError, as the store would. Its ``checks`` are the recording
-    checks; it memoises no validity answer (every check is asked of them, and observed where it is used).
-    """
+    """The recording core's Query port: the store's QueryPort methods and nothing else
+    (another attribute of the store, its facts or helpers, stops the recording; one the
+    store lacks raises AttributeError, as the store would). It memoises no validity answer."""
 
     __slots__ = ("_store", "checks")
     validity_memo = None
@@ -252,53 +236,34 @@ def _reader(tb: Any) -> str:
     return "?"  # pragma: no cover - a refusal always has a reader
 
 
-class RecordedEngine(Protocol):
-    """What a :class:`Recorder` needs of the table engine it records for
-    (:class:`~desmon.verify.table.search.TableEngine` is the one): the transition system
-    and its model, the number of platforms, the encoding's environment, answer tables and
-    decision trees, and the numbering of deployment states."""
-
-    checker: TransitionSystem
-    model: SystemModel
-    P: int
-    env: Env
-    tables: AnswerTables
-    trees: DecisionTrees
-
-    def system(self, deployments: tuple, standing: tuple) -> int:
-        """The number of the system part (deployments, standing)."""
-
-
 class Recorder:
     """The recorded runs of one table-engine search: each runs the real core on the
-    recording twin of the system, then adds its path to the decision trees."""
+    recording twin of ``checker``, checks what it did against the encoding ``env``, and
+    adds its path to the decision ``trees`` (``system(deployments, standing)`` numbers
+    a next system part)."""
 
-    def __init__(self, engine: RecordedEngine) -> None:
-        self.engine = engine
-        self.checker = engine.checker
-        self.checks = RecordingChecks(engine.tables)
-        store = StateStore(engine.model, self.checks, self.checks.handle)
+    def __init__(self, checker: TransitionSystem, env: Env, tables: AnswerTables, trees: DecisionTrees,
+                 system: Callable[[tuple, tuple], int]) -> None:
+        self.checker, self.env, self.trees, self.system = checker, env, trees, system
+        self.checks = RecordingChecks(tables)
+        store = StateStore(checker.model, self.checks, self.checks.handle)
         self.checks.store = store
         store.validity_memo = None  # type: ignore[assignment]
-        self.rc = engine.checker.twin(store, RecordingQuery(store, self.checks), _NoMemo())
+        self.rc = checker.twin(store, RecordingQuery(store, self.checks), _NoMemo())
         self.records = 0  # real runs of the core (reactions and invariant checks)
 
     def _recording(self, run: Callable[[], Any], plain: Callable[[], Any]) -> tuple[Any, list[tuple[tuple, int]]]:
-        """``run()`` on the recording twin: (its result, the observations).
-
-        A ``TypeError`` or ``AttributeError`` may be the deployer's own bug or a check's
-        result used as what its wrapper is not (a ``str`` for ``str.join``...): ``plain()``,
-        the same run on the direct engine's store, tells them apart. Its error is the
-        deployer's and is raised as it is; if it succeeds, the table engine bows out. A
-        read of a fact outside the checks is refused, naming the code that read it.
-        """
+        """``run()`` on the recording twin: (its result, the observations). A read of a fact
+        outside the checks is refused, naming the code that read it; a ``TypeError`` or
+        ``AttributeError`` is told from a check's result used as what its wrapper is not by
+        ``plain()``, the same run on the direct engine's store (docs/design.md)."""
         rec = self.checks
         rec.begin()
         try:
             out = run()
         except UnobservedRead as exc:
             if exc.fact:
-                raise exc.named(_reader(exc.__traceback__)) from None
+                raise exc.named(getattr(exc, "reader", None) or _reader(exc.__traceback__)) from None
             raise
         except (TypeError, AttributeError) as exc:
             out = plain()  # the deployer's own error: raised here, as the direct engine would
@@ -314,7 +279,7 @@ class Recorder:
 
     def record_reaction(self, key: Key, event: Event, prefix: tuple[bool, ...], root: int, env2: int, stim: int) -> None:
         """Run ``event``'s reaction on ``key`` (with ``prefix``) for real and add its path under ``root``."""
-        rc, eng = self.rc, self.engine
+        rc, env = self.rc, self.env
 
         def run() -> tuple:  # the system's own transition, on the recording twin (a fault: the instant CRASH)
             stimulus, nkey, outcomes, log, instant = rc.transition(key, event, prefix, recording=True)
@@ -330,22 +295,14 @@ class Recorder:
                 self._same_commands(key, event, prefix, log, instant)
             if self.checker.reactions is not None:  # a user's deployer: re-run at the end in a fresh instance
                 self.checker.reactions.append((key, event, prefix, log.commands, instant))
-        if stimulus is None:
-            got = stim
-        elif stimulus.context_changed:
-            got = 0
-        elif stimulus.specs_changed:
-            got = eng.P + 3 + eng.env.vgraphs.index(stimulus.specs_changed[0])
-        else:
-            got = eng.tables.platform_index[stimulus.changed_platforms[0]] + 1 if stimulus.changed_platforms else eng.P + 1
-        expect = eng.env.key(env2, (nkey.deployments, nkey.standing))
+        got = stim if stimulus is None else env.stimulus(stimulus)
+        expect = env.key(env2, (nkey.deployments, nkey.standing))
         if got != stim or expect != nkey:
             raise TableUnsupported(f"table engine: {event} on {key} gave {nkey} (stimulus {stimulus}), the encoding expected {expect}")  # pragma: no cover
         fails = tuple(i for i, ok in enumerate(outcomes) if not ok)
-        names = tuple(branch_name(c, ok) for c, ok in log.commands) if log.commands else KEPT_BRANCH
         inst = instant[0] if instant is not None else None
-        leaf = eng.trees.leaf(("r", eng.system(nkey.deployments, nkey.standing), outcomes, fails, names, inst))
-        eng.trees.insert(root, obs, leaf)
+        leaf = ("r", self.system(nkey.deployments, nkey.standing), outcomes, fails, branch_names(log.commands), inst)
+        self.trees.insert(root, obs, self.trees.leaf(leaf))
 
     def _same_commands(self, key: Key, event: Event, prefix: tuple[bool, ...], log: Any, instant: Any) -> None:
         """The recorded reaction run again on the direct engine's store: other commands, or
@@ -360,4 +317,4 @@ class Recorder:
     def record_invariants(self, key: Key, root: int) -> None:
         """Check the invariants of ``key`` for real and add the path under ``root``."""
         bad, obs = self._recording(lambda: self.rc.violations(key), lambda: self.checker.violations(key))
-        self.engine.trees.insert(root, obs, self.engine.trees.leaf(("v", tuple(n for n, _m in bad))))
+        self.trees.insert(root, obs, self.trees.leaf(("v", tuple(n for n, _m in bad))))

@@ -14,22 +14,19 @@ from typing import Any, NamedTuple, Sequence
 import numpy as np
 import numpy.ma  # noqa: F401  (np.unique imports it on first use, leaving cyclic garbage: not during a search)
 
-from desmon.deployment.guard import ReactionStopped
 from desmon.errors import TableUnsupported
-from desmon.verify.search import INTERRUPTED, Budget, CheckResult, Trail, final_status as _final_status
+from desmon.verify.search import BreadthFirst, Budget, CheckResult, Trail
 from desmon.verify.state import Key
-from desmon.verify.system import TransitionSystem
+from desmon.verify.system import TransitionSystem, opened
 from desmon.verify.table.hashing import Interned, IntTable
-from desmon.verify.table.encoding import ROOT_CTX, ROOT_PREFIX, ROOT_STIM, SYS_BITS, SYS_MASK, Env, Events, Transitions, layout, root_key
+from desmon.verify.table.encoding import ROOT_PREFIX, SYS_BITS, SYS_MASK, Env, Events, Transitions, layout, root_key
 from desmon.verify.table.recording import Recorder
 from desmon.verify.table.tables import AnswerTables
 from desmon.verify.table.tree import DecisionTrees
 from desmon.verify.trace import Counterexample
 
-__all__ = ["TableEngine", "table_unsupported", "CHUNK_STATES", "MAX_DIGITS"]
+__all__ = ["TableEngine", "table_unsupported", "CHUNK_STATES"]
 
-#: combinations of one platform's facts the engine tabulates answers for (beyond: direct engine)
-MAX_DIGITS = 4096
 #: frontier states expanded per numpy batch (bounds the memory of one batch; a search capped by
 #: max_states walks, and records, the units of the whole batch that reaches the cap)
 CHUNK_STATES = 4_096
@@ -85,16 +82,10 @@ def table_unsupported(checker: TransitionSystem) -> str | None:
     """Why the table engine cannot run ``checker``'s search, or None."""
     if checker.symmetry is not None:
         return "symmetry reduction runs on the direct engine"
-    names = [p.name for p in checker.model.platforms]
     try:
-        downs, devices, levels = layout(checker.bounds, names, {d.name: d.platform for d in checker.model.devices})
+        layout(checker.bounds, checker.model)
     except TableUnsupported as exc:
         return str(exc).removeprefix("table engine: ").removesuffix("; run with --engine direct")
-    for p in checker.model.platforms:
-        digits = (2 if p.name in downs else 1) * (1 << len(devices[p.name])) * len(levels.get(p.name, (0,)))
-        if digits > MAX_DIGITS:
-            return (f"platform {p.name} has {digits:,} combinations of facts (its bounded devices, up/down and load levels); "
-                    f"the table engine tabulates at most {MAX_DIGITS:,} per platform")
     return None
 
 
@@ -109,7 +100,7 @@ class Units(NamedTuple):
     code: np.ndarray  # the state it reaches
 
 
-class TableEngine:
+class TableEngine(BreadthFirst):
     """The table engine for one :class:`~desmon.verify.system.TransitionSystem` (see :mod:`desmon.verify.table`)."""
 
     def __init__(self, checker: TransitionSystem) -> None:
@@ -192,72 +183,33 @@ class TableEngine:
     def run(self, res: "CheckResult", *, max_states: int | None, max_depth: int | None, keep_going: bool,
             budget: Budget) -> tuple[dict[str, Counterexample], str, int]:
         """The BFS of the direct engine (:mod:`desmon.verify.direct`), counting into ``res``;
-        returns (counterexamples found, why incomplete or "", depth).
-
-        ``budget`` (time, memory, Ctrl-C) is looked at before each batch, between two
-        recorded runs of the core and two rounds of a tree walk (a batch that runs out
-        there is dropped whole: nothing of it is counted yet), and every
-        :data:`LOOK_EVERY` new states (the batch is then cut after the current
-        transition, as ``max_states`` cuts it)."""
-        self.budget, self.res, self.max_states = budget, res, max_states
+        returns (counterexamples found, why incomplete or "", depth). A ``budget`` spent
+        inside a batch (:class:`~desmon.verify.search.Budget`) drops it whole, or past its
+        :data:`LOOK_EVERY`-th new state cuts it after the current transition."""
+        self.budget, self.res, self.max_states, self.max_depth = budget, res, max_states, max_depth
         ch = self.checker
         init = ch.initial()
         env = self._encode(init)
         # states: code = env << SYS_BITS | system
-        codes = self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
-        trail = self.trail = Trail(ch, self.key_of, keep_going)
+        self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
+        self.trail = Trail(ch, self.key_of, keep_going)
         self.seen = IntTable(values=False)  # the codes of the states numbered before this batch
-        self.seen.add(np.array([codes[0]], dtype=np.int64))
-        for name, msg in ch.violations(init):
-            trail.record(name, msg, 0)
-        self.any_found = bool(trail.found)
-        self.depth = 0
-        self.incomplete = ""
-        self.transitions = 0
-        budget.status = lambda: (len(codes), self.transitions, self.depth)
-        try:
-            frontier = np.array([0], dtype=np.int64)
-            while len(frontier) and not self._finished() and not self.incomplete:
-                if max_depth is not None and self.depth >= max_depth:
-                    self.incomplete = f"max depth {max_depth} reached with {len(frontier)} states unexplored"
-                    break
-                nxt = self._level(frontier)
-                if nxt:
-                    self.depth += 1
-                frontier = np.frombuffer(nxt, dtype=np.int64)
-        except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
-            self.incomplete = INTERRUPTED
-            trail.truncate(codes)
-        except ReactionStopped as stop:  # the budget ran out inside a deployer's reaction
-            self.incomplete = budget.reason or str(stop)
-            trail.truncate(codes)
-        res.transitions = self.transitions
-        res.states = len(codes)
-        budget.status = _final_status(len(codes), self.transitions, self.depth)  # (the search's closure let go)
-        return trail.found, self.incomplete, self.depth
+        self.seen.add(np.array([self.codes[0]], dtype=np.int64))
+        return self._search(self.codes, ch.violations(init))
 
     def _encode(self, init: Key) -> Env:
         """The environment code, events, answer tables, trees and recorder of the search from
         ``init`` (or why the engine cannot run it)."""
         env = self.env = Env(self.checker, init)
-        if env.G > 1 << ROOT_CTX or self.P + 3 + len(env.vgraphs) > 1 << ROOT_STIM:
-            raise TableUnsupported(
-                f"table engine: {env.C} contexts, {env.G // env.C} combinations of requirements and {self.P} platforms do not fit "
-                "its tree keys; run with --engine direct"
-            )
-        if env.space.bit_length() + SYS_BITS > 62:
-            raise TableUnsupported(f"table engine: the environment has {env.space:,} combinations, too many to encode; run with --engine direct")
         self.tables = AnswerTables(self.model, env)
         self.trees = DecisionTrees(self.tables, self.P, self._go_on)
-        self.recorder = Recorder(self)
-        self.events = Events(self.bounds, env, self.tables.platform_index)
+        self.recorder = Recorder(self.checker, env, self.tables, self.trees, self.system)
+        self.events = Events(self.bounds, env)
         return env
 
-    def _finished(self) -> bool:
-        return self.any_found and self.trail.done()
-
-    def _level(self, frontier: np.ndarray) -> array:  # type: ignore[type-arg]
+    def _level(self, frontier: Sequence[int]) -> np.ndarray:
         """One BFS level, batch by batch; returns the next level."""
+        frontier = np.asarray(frontier, dtype=np.int64)
         nxt = array("q")
         for lo in range(0, len(frontier), CHUNK_STATES):
             if self.budget.spent():
@@ -265,7 +217,7 @@ class TableEngine:
                 break
             if self._batch(frontier[lo: lo + CHUNK_STATES], nxt):
                 break
-        return nxt
+        return np.frombuffer(nxt, dtype=np.int64)
 
     def _batch(self, ids: np.ndarray, nxt: array) -> bool:  # type: ignore[type-arg]
         """Expand the states ``ids`` (one numpy batch); True if the search stops in it."""
@@ -367,34 +319,21 @@ class TableEngine:
         the search then has what it looks for."""
         tr = units.tr
         ch = self.checker
-        nkey = self.env.key(int(tr.env2[t]), self.systems[lf[1]])
-        if lf[5] in {v for v, _m in ch.violations(nkey)}:
+        if not ch.repaired(lf[5], self.env.key(int(tr.env2[t]), self.systems[lf[1]])):
             return False
         here = int(units.ids[tr.pos[t]])
         event = self.events.events[int(tr.ev[t])]
         _n, _o, _log, instant = ch.run_one(self.key_of(here), event, self.prefixes[int(units.pre[u])])
-        self.trail.record(instant[0], instant[1], here, instant[2], (event, lf[3]))
-        self.any_found = True
-        return self.trail.done()
+        return self._record_repaired(instant, here, (event, lf[3]))
 
     def _new_state(self, units: "Units", u: int, t: int, lf: tuple, bad: tuple, nxt: array) -> None:  # type: ignore[type-arg]
         """Unit ``u`` reached a new state: number it, label it, and record what it violates."""
         tr, ev = units.tr, self.events
-        c = int(units.code[u])
-        codes = self.codes
-        ni = len(codes)
-        codes.append(c)
+        ni = len(self.codes)
+        self.codes.append(int(units.code[u]))
         e = int(tr.ev[t])
-        self.trail.add(int(units.ids[tr.pos[t]]), (e, lf[3]), (ev.events[e], lf[3]))
-        self.res.new_states[ev.kinds[ev.kind_of[e]]] += 1
-        if self.max_states is not None and len(codes) >= self.max_states:
-            self.incomplete = f"max states {self.max_states:,} reached"
-        if bad:
-            for name, msg in self.checker.violations(self.key_of(ni)):
-                self.trail.record(name, msg, ni)
-            self.any_found = True
-        else:
-            nxt.append(ni)
+        violations = self.checker.violations(self.key_of(ni)) if bad else ()
+        self._add_state(ni, int(units.ids[tr.pos[t]]), (e, lf[3]), (ev.events[e], lf[3]), ev.kinds[ev.kind_of[e]], violations, nxt)
 
     def explored(self) -> "_Explored":
         return _Explored(self)
@@ -414,12 +353,10 @@ def _opened(engine: "TableEngine", u_t: np.ndarray, u_pre: np.ndarray, leaf: np.
     flat: list[int] = []
     count = np.zeros(len(up), dtype=np.int64)
     for k, pv in enumerate(up.tolist()):
-        pre, lf = engine.prefixes[pv // n_leaves], engine.trees.leaves[pv % n_leaves]
-        outcomes, fails = lf[2], lf[3]
-        if len(fails) < bound:
-            kids = [engine.prefixes(outcomes[:i] + (False,)) for i in range(len(pre), len(outcomes))]
-            flat += kids
-            count[k] = len(kids)
+        lf = engine.trees.leaves[pv % n_leaves]
+        kids = [engine.prefixes(p) for p in opened(engine.prefixes[pv // n_leaves], lf[2], lf[3], bound)]
+        flat += kids
+        count[k] = len(kids)
     reps = count[pinv]
     order = np.flatnonzero(reps)
     if not len(order):

@@ -1,17 +1,14 @@
 """The table engine's answer tables: every requirement check's answer per platform digit.
 
-A reaction observes requirement checks; each observation is a question about a few
-platforms. :class:`AnswerTables` computes, once per (check, platform, deployments on
-it), the answer for every value of that platform's digit (the combinations of its
-facts the environment can give), with the same requirement code the core runs
-(:func:`~desmon.deployment.validity.platform_failures`), and numbers the answers:
-"ok" (1/0), "why" (the failures, numbered in order of first appearance) and "rank"
-(the score key with preferences). A decision tree's walk reads them as one array.
+:class:`AnswerTables` computes, once per (check, platform, deployments on it), the
+answer for every value of that platform's digit with the requirement code the core runs
+(:func:`~desmon.deployment.validity.platform_failures`), numbered as :meth:`AnswerTables.block`
+says; a decision tree's walk reads them all as one array.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Sequence
 
 from desmon.deployment.validity import platform_failures, platform_score, score_breakdown
 from desmon.errors import CheckerError
@@ -21,13 +18,14 @@ from desmon.verify.table.hashing import Grow, Interned
 if TYPE_CHECKING:
     from desmon.verify.table.encoding import Env
 
-__all__ = ["AnswerTables", "score_key"]
+__all__ = ["AnswerTables", "score_keys"]
 
 
-def score_key(reqs: tuple, state: PlatformState, graph: Any) -> tuple:
-    """What the preferences make of one acceptable platform: its score and the weighted
-    terms it is the sum of (what ``Validity.breakdown`` shows)."""
-    return (platform_score(reqs, state, graph), score_breakdown(reqs, state, graph))
+def score_keys(reqs: tuple, graph: Any, failures: Sequence[tuple], states: Sequence[PlatformState]) -> list[tuple | None]:
+    """What the preferences make of each platform: None where it is rejected (it has
+    ``failures``), else its score and the weighted terms it is the sum of (what
+    ``Validity.breakdown`` shows)."""
+    return [None if f else (platform_score(reqs, st, graph), score_breakdown(reqs, st, graph)) for f, st in zip(failures, states)]
 
 
 class AnswerTables:
@@ -79,12 +77,6 @@ class AnswerTables:
             out = self._fails[k] = [platform_failures(reqs, st, graph, first_only) for st in self._states(p, dep)]
         return out
 
-    def _score_keys(self, table: int, p: int, dep: int) -> list[tuple | None]:
-        """The score key (:func:`_score_key`) of check ``table`` on platform ``p`` with
-        deployments ``dep`` per platform digit, None where the platform is rejected."""
-        reqs, graph = self._table_args[table]
-        return [None if f else score_key(reqs, st, graph) for f, st in zip(self._failures(table, True, p, dep), self._states(p, dep))]
-
     def block(self, mode: str, table: int, first_only: bool | None, p: int, dep: int) -> tuple[int, int]:
         """(offset, radix) of the answers of a check per platform digit: 1/0 for "ok", for
         "why" the failures and for "rank" the score keys (0: rejected) numbered in order of
@@ -99,7 +91,10 @@ class AnswerTables:
         else:
             ids: dict[Any, int] = {None: 0} if mode == "rank" else {}
             self._ids[k] = ids
-            answers = self._score_keys(table, p, dep) if mode == "rank" else self._failures(table, bool(first_only), p, dep)
+            if mode == "rank":
+                answers = score_keys(*self._table_args[table], self._failures(table, True, p, dep), self._states(p, dep))
+            else:
+                answers = self._failures(table, bool(first_only), p, dep)
             values = [ids.setdefault(a, len(ids)) for a in answers]
             radix = len(ids)
         for v in values:

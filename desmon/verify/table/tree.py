@@ -1,12 +1,10 @@
 """The table engine's decision trees: what a reaction did, per answer to what it observed.
 
-One tree per root (system part, global digit, stimulus, failed-start prefix). A node
-is an observation (a requirement check over some platforms), with one branch per
-answer code; a leaf is what the reaction did (next system part, start outcomes,
-deployer branches, an instantaneous violation) or, for an invariants root, which
-invariants the state violates. :meth:`DecisionTrees.walk` resolves a whole batch of
-units at once with numpy, calling back to record a real run where the trees have no
-branch yet; :meth:`DecisionTrees.insert` adds a recorded run's path.
+One tree per root (system part, global digit, stimulus, failed-start prefix), a node
+per observation and a leaf per outcome (docs/findings.md, "How the table engine
+works"); for an invariants root a leaf is which invariants the state violates.
+:meth:`DecisionTrees.walk` resolves a batch of units with numpy, calling back to record
+a real run where the trees have no branch yet; :meth:`DecisionTrees.insert` adds its path.
 """
 
 from __future__ import annotations
@@ -37,9 +35,7 @@ class _Walk:
     def _root_nodes(self, roots: np.ndarray, record: Callable[[int], None]) -> np.ndarray:
         """The root node of each unit, recording a run for each root met for the first time
         (in order of root key, with its first unit)."""
-        if self._new_roots:
-            self.root_nodes.add(np.fromiter(self._new_roots, dtype=np.int64), np.fromiter(self._new_roots.values(), dtype=np.int64))
-            self._new_roots = {}
+        self._add_new_roots()
         node = self.root_nodes.get(roots)
         missing = np.flatnonzero(node < 0)
         if missing.size:
@@ -47,18 +43,20 @@ class _Walk:
             for u in missing[first].tolist():
                 self.go_on()
                 record(u)
-            self.root_nodes.add(np.fromiter(self._new_roots, dtype=np.int64), np.fromiter(self._new_roots.values(), dtype=np.int64))
-            self._new_roots = {}
+            self._add_new_roots()
             node[missing] = self.root_nodes.get(roots[missing])
         return node
 
+    def _add_new_roots(self) -> None:
+        """Enter the roots the inserts made since the last walk in the roots' hash table."""
+        if self._new_roots:
+            self.root_nodes.add(np.fromiter(self._new_roots, dtype=np.int64), np.fromiter(self._new_roots.values(), dtype=np.int64))
+            self._new_roots = {}
+
     def walk(self, roots: np.ndarray, rows: np.ndarray, loc: np.ndarray, record: Callable[[int], None]) -> np.ndarray:
         """Leaf ids for units with root keys ``roots`` and platform digits ``loc[rows]``;
-        ``record(unit)`` runs the real core for a unit whose answers leave the trees.
-
-        The units move by walk codes (:meth:`_step`): a unit's code says where its check's
-        digit table starts and which platform it asks about, so a step reads the unit's
-        digit and one shortcut (``jump_code``), which is the next check's code or the leaf's."""
+        ``record(unit)`` runs the real core for a unit whose answers leave the trees. Each
+        unit moves by its walk code (docs/design.md), one step per check (:meth:`_step`)."""
         go_on = self.go_on  # the budget, between two recorded runs and two rounds
         node = self._root_nodes(roots, record)  # (it may record runs: the arrays below grow)
         out = np.take(self.node_code.a, node)
@@ -291,15 +289,10 @@ class DecisionTrees(_Walk):
         self._rejump_path(path)
 
     def _rejump_path(self, path: list[tuple[int, bool]]) -> None:
-        """Bring the shortcuts (``digit_jump``, ``jump_code``) of an insert's path up to
-        date, deepest first.
-
-        A check about one platform branches on that platform's digit ``d``; when the child
-        for ``d`` checks the same platform again, its branch is again the one for ``d``, so
-        the walk takes it in the same step. An insert changes the branches of its path's
-        nodes only (a new branch's shortcut is its child, set by :meth:`_digit_branch`), so
-        a node's shortcuts can change only where its child on the path checks the same
-        platform and that child's branches or shortcuts changed."""
+        """Bring the shortcuts (``digit_jump``, ``jump_code``: docs/design.md) of an insert's
+        path up to date, deepest first: a node's can change only where its child on the
+        path checks the same platform and that child's branches or shortcuts changed (a
+        new branch's shortcut is its child, set by :meth:`_digit_branch`)."""
         below = False  # the shortcuts of the node below on the path changed
         base, p0 = self.digit_base.a, self.node_p0.a
         for i in range(len(path) - 1, -1, -1):

@@ -1,0 +1,214 @@
+"""The wire between desmon and a deployer's worker process: messages, and what may cross.
+
+Each message is a pickle, framed by its length. desmon's side writes plain data and
+frozen records by value and any other object as a handle (:class:`Encoder`); it reads the
+child's messages with :class:`Decoder`, which builds nothing but plain data, frozen
+records of desmon's (or of a requirement kind a scenario registered) and the handles it
+gave out. The child trusts desmon and reads with pickle's own rules, answering handles
+with its proxies (:mod:`desmon.verify.isolation.child`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import pickle
+import socket
+import struct
+import sys
+import types
+from typing import Any
+
+from desmon.deployment.ports import PlatformHandle, Validity
+
+__all__ = [
+    "send_message", "recv_message", "recv_exact", "Encoder", "Decoder", "Handles", "Handle", "Method", "DefaultChecks", "DEFAULT",
+    "Blob", "BLOBS", "plain_class", "one_line", "encode", "handle", "MAX_MESSAGE",
+]
+HEADER = struct.Struct("!I")
+#: the largest message either side accepts (a deployer cannot make desmon allocate more)
+MAX_MESSAGE = 64 << 20
+
+
+def plain_class(cls: type) -> bool:
+    """Whether instances of ``cls`` cross by value: desmon's frozen records (and those of a kind a scenario registered)."""
+    params = cls.__dict__.get("__dataclass_params__")  # (a subclass that is not a dataclass of its own is not plain)
+    return params is not None and params.frozen
+
+
+SCALARS = (type(None), bool, int, float, complex, str, bytes)
+CONTAINERS = (tuple, list, frozenset, set, dict)
+BY_NAME = (types.FunctionType, types.BuiltinFunctionType)
+
+
+def role_of(obj: object) -> str:
+    if isinstance(obj, PlatformHandle):
+        return "state"
+    if isinstance(obj, Validity):
+        return "validity"
+    return "object"
+
+
+def send_message(sock: socket.socket, data: bytes) -> None:
+    if len(data) > MAX_MESSAGE:
+        raise ValueError(f"a message of {len(data):,} bytes, more than {MAX_MESSAGE:,}")
+    sock.sendall(HEADER.pack(len(data)) + data)
+
+
+def recv_exact(sock: socket.socket, n: int) -> bytes:
+    chunks, left = [], n
+    while left:
+        chunk = sock.recv(min(left, 1 << 20))
+        if not chunk:
+            raise EOFError("the conversation ended")
+        chunks.append(chunk)
+        left -= len(chunk)
+    return b"".join(chunks)
+
+
+def recv_message(sock: socket.socket) -> bytes:
+    """One message (the conversation is turn by turn: nothing follows it until this side answers)."""
+    first = sock.recv(1 << 16)
+    if not first:
+        raise EOFError("the conversation ended")
+    if len(first) < HEADER.size:
+        first += recv_exact(sock, HEADER.size - len(first))
+    (n,) = HEADER.unpack_from(first)
+    if n > MAX_MESSAGE:
+        raise ValueError(f"a message of {n:,} bytes, more than {MAX_MESSAGE:,}")
+    body = first[HEADER.size:]
+    return body if len(body) >= n else body + recv_exact(sock, n - len(body))
+
+
+class Encoder(pickle.Pickler):
+    """desmon's side: plain data and frozen records by value, anything else as a handle in
+    ``handles`` (written as a call of :func:`handle`, which the child's decoder answers
+    with its proxy). ``plain``: the worker's memo of which classes are plain."""
+
+    def __init__(self, out: io.BytesIO, handles: "Handles", plain: dict[type, bool]) -> None:
+        super().__init__(out, protocol=5)
+        self.handles, self.plain = handles, plain
+
+    def reducer_override(self, obj: Any) -> Any:  # (pickle calls it for no builtin scalar or container)
+        kind = type(obj)
+        plain = self.plain.get(kind)
+        if plain is None:
+            plain = self.plain[kind] = plain_class(kind) or issubclass(kind, type) or kind is complex
+        if plain or (kind in BY_NAME and "<" not in obj.__qualname__):
+            return NotImplemented  # (a record by value, a class or a module's function by its name)
+        if kind is Handle:
+            return handle, self.handles.give(obj.obj, obj.role)
+        return handle, self.handles.give(obj)
+
+
+def handle(n: int, role: str) -> Any:  # pragma: no cover - never called: the child's decoder answers it
+    raise pickle.UnpicklingError("a handle outside a conversation")
+
+
+class Decoder(pickle.Unpickler):
+    """desmon's side, reading the child: plain data, frozen records of desmon's (or of a
+    registered kind's) classes, and handles desmon gave out; nothing else is built."""
+
+    def __init__(self, data: bytes, handles: "Handles") -> None:
+        super().__init__(io.BytesIO(data))
+        self.handles = handles
+
+    def find_class(self, module: str, name: str) -> Any:
+        if module == "builtins" and name in ("frozenset", "set", "complex"):
+            return {"frozenset": frozenset, "set": set, "complex": complex}[name]
+        found = sys.modules.get(module)
+        cls = getattr(found, name, None) if found is not None and "." not in name else None
+        if isinstance(cls, type) and plain_class(cls) and (module.startswith("desmon.") or registered(cls)):
+            return cls
+        raise pickle.UnpicklingError(f"{module}.{name} is not data desmon accepts from a deployer")
+
+    def persistent_load(self, pid: Any) -> Any:
+        return self.handles.take(pid)
+
+
+def registered(cls: type) -> bool:
+    from desmon.model.kinds import requirement_classes
+
+    return cls in requirement_classes()
+
+
+class Handles:
+    """The objects desmon handed to the child as handles in this reaction. Their numbers
+    grow over the worker's life, so a handle kept from an earlier reaction is refused."""
+
+    def __init__(self) -> None:
+        self.base = 0
+        self.objects: list[Any] = []
+        self.roles: list[str] = []
+        self.ids: dict[int, int] = {}
+
+    def give(self, obj: Any, role: str | None = None) -> tuple[int, str]:
+        n = self.ids.get(id(obj))
+        if n is None or self.objects[n] is not obj:
+            n = len(self.objects)
+            self.objects.append(obj)
+            self.roles.append(role or role_of(obj))
+            self.ids[id(obj)] = n
+        return self.base + n, self.roles[n]
+
+    def role(self, obj: Any) -> str:
+        n = self.ids.get(id(obj))
+        return self.roles[n] if n is not None and self.objects[n] is obj else "object"
+
+    def take(self, pid: Any) -> Any:
+        if type(pid) is not tuple or len(pid) != 2 or type(pid[0]) is not int or not 0 <= pid[0] - self.base < len(self.objects):
+            raise pickle.UnpicklingError("a handle this reaction did not hand out (one kept from an earlier reaction?)")
+        return self.objects[pid[0] - self.base]
+
+    def clear(self) -> None:
+        self.base += len(self.objects)
+        self.objects.clear()
+        self.roles.clear()
+        self.ids.clear()
+
+
+def encode(obj: Any, handles: Handles, plain: dict[type, bool]) -> bytes:
+    out = io.BytesIO()
+    Encoder(out, handles, plain).dump(obj)
+    return out.getvalue()
+
+
+@dataclasses.dataclass(frozen=True)
+class Method:
+    """Sent back for a method read: the child calls it by name."""
+
+    name: str
+
+
+@dataclasses.dataclass(frozen=True)
+class DefaultChecks:
+    """Sent back for a Query port's ``checks`` whose answers are desmon's default checks':
+    the child asks its own (a copy of the same code, on copies of the same facts)."""
+
+
+DEFAULT = DefaultChecks()
+
+
+@dataclasses.dataclass(frozen=True)
+class Blob:
+    """Platform states already encoded: the same facts recur from reaction to reaction (the
+    checker's store hands out one tuple per facts), so each side encodes and decodes them once."""
+
+    data: bytes
+
+
+#: the most encoded platform state tuples a worker keeps (each side)
+BLOBS = 4096
+
+
+class Handle:
+    """An object desmon hands out by reference, with the role that says what may be read of it."""
+
+    __slots__ = ("obj", "role")
+
+    def __init__(self, obj: Any, role: str | None = None) -> None:
+        self.obj, self.role = obj, role
+
+
+def one_line(text: str) -> str:
+    return " ".join(text.split())[:1000]
