@@ -2,7 +2,7 @@
 
 :class:`BettingSequence` is the hedged betting confidence sequence of Waudby-Smith and
 Ramdas ("Estimating means of bounded random variables by betting", JRSS-B 86(1), 2024,
-Theorem 3 with their predictable plug-in bets). For values in ``[low, high]`` with an
+their hedged capital process with predictable plug-in bets). For values in ``[low, high]`` with an
 unknown mean ``mu``, rescaled to ``[0, 1]``, two gamblers bet on each new value, one
 that the mean is above a candidate ``m``, one that it is below::
 

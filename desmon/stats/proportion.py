@@ -6,7 +6,7 @@ independently with the same unknown probability ``p``.
 * :class:`ProportionSequence` is the beta-binomial mixture confidence sequence (Robbins,
   "Statistical methods related to the law of the iterated logarithm", Ann. Math. Statist.
   41, 1970; Howard, Ramdas, McAuliffe and Sekhon, "Time-uniform, nonparametric,
-  nonasymptotic confidence sequences", Ann. Statist. 49, 2021, section 3.2): after ``n``
+  nonasymptotic confidence sequences", Ann. Statist. 49, 2021): after ``n``
   runs with ``s`` yes, the likelihood ratio of a Beta(1/2, 1/2) mixture against ``p``,
   ``B(1/2 + s, 1/2 + n - s) / B(1/2, 1/2) / (p^s (1-p)^(n-s))``, is a nonnegative
   martingale under ``p``; by Ville's inequality it reaches ``1/delta`` with chance at
