@@ -69,6 +69,7 @@ def test_the_run_budget_ends_incomplete_with_the_interval_of_the_runs_made(capsy
 def test_a_threshold_question_answers_yes_or_no_with_its_error_probability(capsys, below, code, word):
     got, out, _err = _estimate(capsys, QUICK, "--below", below, "--within", "0.2", "--alpha", "0.01")
     assert got == code and word in out and "wrong with probability at most 0.01" in out
+    assert "99 % interval" in out  # the sequence that answers is at confidence 1 - alpha
 
 
 def test_a_probability_comes_with_clopper_pearson_beside_its_sequence(capsys):

@@ -184,7 +184,7 @@ def _n(x: float) -> str:
 def format_estimate(e: Any) -> str:
     """The text report of ``desmon estimate``."""
     q, iv, ap = e.question, e.interval, e.approximation
-    pct = f"{100 * q.confidence:g} %"
+    pct = f"{100 * q.interval_confidence:g} %"
     what = f"P({q.metric} >= {q.at_least:g}) per run" if q.kind == "probability" else f"mean {q.metric} per run"
     out = [f"desmon estimate: {e.scenario} (deployer {e.deployer}), {what} of {_n(e.horizon)} s simulated, seed {e.seed}"]
     rel = f" = {100 * iv.half_width / abs(iv.estimate):.2f} % of the estimate" if iv.estimate else ""

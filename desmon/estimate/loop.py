@@ -88,6 +88,11 @@ class Question:
     def delta(self) -> float:
         return 1.0 - self.confidence
 
+    @property
+    def interval_confidence(self) -> float:
+        """The confidence of the guaranteed interval: ``confidence``, or ``1 - alpha`` when it answers a mean's threshold."""
+        return 1.0 - self.alpha if (self.below is not None and self.kind == "mean" and self.alpha is not None) else self.confidence
+
     def check(self) -> None:
         """Every field's value, or a one-line EstimateError naming the flag and the fix."""
         check_metric(self.metric)
@@ -180,7 +185,8 @@ class Estimate:
         return {
             "scenario": self.scenario, "deployer": self.deployer, "seed": self.seed, "horizon_s": self.horizon,
             "question": q.to_json(), "kind": q.kind, "status": self.status, "complete": self.complete, "runs": self.runs,
-            "estimate": iv.estimate, "low": iv.low, "high": iv.high, "half_width": iv.half_width, "method": iv.method,
+            "estimate": iv.estimate, "low": iv.low, "high": iv.high, "half_width": iv.half_width, "confidence": q.interval_confidence,
+            "method": iv.method,
             "approximation": {"low": _finite(ap.low), "high": _finite(ap.high), "method": ap.method},
             "range": list(self.range) if self.range is not None else None,
             "answer": self.answer, "test_method": self.test_method,
@@ -210,8 +216,7 @@ class Tracker:
         else:
             assert value_range is not None
             # a mean's threshold: the sequence at confidence 1 - alpha answers it
-            delta = q.alpha if (q.below is not None and q.alpha is not None) else q.delta
-            self.mean = BettingSequence(value_range[0], value_range[1], delta)
+            self.mean = BettingSequence(value_range[0], value_range[1], 1.0 - q.interval_confidence)
         self.values: list[float] = []
         self.answer: str | None = None
         self._last: Interval | None = None
