@@ -18,7 +18,9 @@ In one run it measures:
 * 2 Dask workers against 1: the same estimation of ``R`` one-hour coffee-shift runs
   (``--within`` too small to stop early) through :func:`desmon.sweep.estimate.dask_values`
   on a local cluster of 1, then 2 worker processes, each started and warmed up (one run
-  per worker) before the clock starts; the two estimates are checked equal.
+  per worker) before the clock starts, ``--rounds`` turns each in the order 1, 2, 2, 1
+  (so that a load that drifts weighs on both; means reported); every turn's estimate is
+  checked equal.
 
 ``--coverage``: instead, the coverage self-test's figures (tests/test_estimate_coverage.py):
 on each analysable shipped scenario over 300 s, ``--estimations`` independent estimations
@@ -168,6 +170,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--draws", type=int, default=5, help="projections of the runs needed")
     ap.add_argument("--dask-runs", type=int, default=60, help="runs of the Dask comparison")
     ap.add_argument("--dask-until", type=float, default=3600.0, help="simulated seconds per run of the Dask comparison")
+    ap.add_argument("--rounds", type=int, default=2, help="turns of each cluster size, in the order 1, 2, 2, 1 (means reported)")
     ap.add_argument("--coverage", action="store_true", help="instead, the coverage self-test's figures")
     ap.add_argument("--estimations", type=int, default=200, help="--coverage: estimations per scenario")
     ap.add_argument("--coverage-runs", type=int, default=4, help="--coverage: runs per estimation")
@@ -176,7 +179,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.coverage:
         return _coverage(args.estimations, args.coverage_runs, tuple(args.scenario) if args.scenario else None)
     if args.quick:
-        args.runs, args.until, args.draws, args.dask_runs, args.dask_until = 3, 600.0, 1, 8, 600.0
+        args.runs, args.until, args.draws, args.dask_runs, args.dask_until, args.rounds = 3, 600.0, 1, 8, 600.0, 1
     rates = {}
     for name in SCENARIOS:
         rate, values, horizon = _rate(name, args.runs, args.until)
@@ -193,10 +196,17 @@ def main(argv: list[str] | None = None) -> int:
     minutes = projected / rates["coffee_shift"] / 2
     print(f"coffee_shift +-1 % at 99 %: {projected:,} runs projected (range {min(needed):,}..{max(needed):,} over {args.draws} draws), "
           f"{minutes:.1f} min on 2 cores; the normal interval would need {clt:,}; floor on [0, {horizon:g}] {floor:,}")
-    one, e1 = _dask(1, args.dask_runs, args.dask_until)
-    two, e2 = _dask(2, args.dask_runs, args.dask_until)
-    assert e1.to_json() == e2.to_json(), "1 and 2 workers gave different estimates"
-    print(f"Dask, {args.dask_runs} runs of {args.dask_until:g} s: 1 worker {one:.2f} s, 2 workers {two:.2f} s, speed-up {one / two:.2f}x (same estimate)")
+    times: dict[int, list[float]] = {1: [], 2: []}
+    estimates = []
+    for workers in [1, 2, 2, 1] * (args.rounds // 2) + [1, 2] * (args.rounds % 2):  # ABBA: a load that drifts weighs on both
+        seconds, e = _dask(workers, args.dask_runs, args.dask_until)
+        times[workers].append(seconds)
+        estimates.append(e.to_json())
+    assert all(e == estimates[0] for e in estimates), "1 and 2 workers gave different estimates"
+    one, two = statistics.mean(times[1]), statistics.mean(times[2])
+    print(f"Dask, {args.dask_runs} runs of {args.dask_until:g} s, {args.rounds} turn(s) each: 1 worker {one:.2f} s "
+          f"({', '.join(f'{t:.2f}' for t in times[1])}), 2 workers {two:.2f} s ({', '.join(f'{t:.2f}' for t in times[2])}), "
+          f"speed-up {one / two:.2f}x (the same estimate every turn)")
     print(
         f"RESULT robot_day_runs_per_min_core={rates['robot_day']:.2f} coffee_shift_runs_per_min_core={rates['coffee_shift']:.2f} "
         f"runs_needed_1pct_99={projected} clt_runs_needed={clt} floor_runs={floor} minutes_2_cores={minutes:.1f} "
