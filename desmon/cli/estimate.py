@@ -153,7 +153,10 @@ def run(args: argparse.Namespace) -> int:
     def progress(tracker: Any) -> None:
         n, iv = len(tracker.values), tracker.last
         if show and (n <= 10 or n % 10 == 0):
-            now = f", {_n(iv.estimate)} in [{_n(iv.low)}, {_n(iv.high)}] at run {iv.n:,}" if iv is not None else ""
+            now = ""
+            if iv is not None:
+                goal = f" (goal {_n(question.half_width_goal(iv.estimate))})" if question.below is None else ""
+                now = f", {_n(iv.estimate)} in [{_n(iv.low)}, {_n(iv.high)}], half-width {_n(iv.half_width)}{goal} at run {iv.n:,}"
             line.show(f"desmon estimate: {n:,} runs{now}")
 
     try:
