@@ -48,6 +48,10 @@ GOALS: dict[str, tuple[Goal, ...]] = {
         Goal("states_per_s", ">=", 100_000, "the fallback-heavy model at 100,000 states/s on one core"),
         Goal("bytes_per_state", "<=", 150, "at most 150 bytes of resident memory per state"),
     ),
+    "bench_estimate": (
+        Goal("minutes_2_cores", "<=", 5, "the coffee shift's exposure to +-1 % at 99 %, guaranteed, on 2 cores"),
+        Goal("speedup", ">=", 1.8, "2 Dask workers vs 1 on 2 idle cores"),
+    ),
     "bench_sweep": (
         Goal("speedup", ">=", 1.8, "2 Dask workers vs 1 on 2 idle cores"),
         Goal("overhead", "<", 0.05, "Dask vs the bare loop"),
@@ -62,6 +66,7 @@ GOALS: dict[str, tuple[Goal, ...]] = {
 QUICK: dict[str, tuple[str, ...]] = {
     "bench_analyze": ("--quick",),
     "bench_detectors": ("--trials", "10", "--hours", "0.02"),
+    "bench_estimate": ("--quick",),
     "bench_fleet": ("--robots", "3", "--edges", "1", "--hours", "0.1"),
     "bench_preferences": ("--quick",),
     "bench_sim": ("--until", "600"),
@@ -90,6 +95,14 @@ RESULT_KEYS: dict[str, tuple[str, ...]] = {
     "bench_analyze --agreement": ("scenarios", "inside", "seeds"),
     "bench_analyze --undetected": ("scenarios", "inside", "seeds", "trials"),
     "bench_detectors": ("trials_per_s", "eval_ratio", "missions_per_s", "detectors_us_per_sim_s"),
+    "bench_estimate": (
+        "robot_day_runs_per_min_core", "coffee_shift_runs_per_min_core", "runs_needed_1pct_99", "clt_runs_needed", "floor_runs",
+        "minutes_2_cores", "speedup", "one_worker_s", "two_workers_s",
+    ),
+    "bench_estimate --coverage": (
+        "scenarios", "estimations", "runs", "guaranteed_passed", "guaranteed_held_min", "narrowed_held_min", "normal_held_min",
+        "narrowed_normal_failed", "halved_failed",
+    ),
     "bench_fleet": (
         "seconds", "realtime_ratio", "peak_mb", "robots", "edges", "hours", "per_robot_vs_alone", "reactions_per_s", "violations", "events",
         "bare_s", "ratio_bare",

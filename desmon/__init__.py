@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from desmon.errors import (
         CheckerError,
         DesmonError,
+        EstimateError,
         ModelError,
         NondeterminismError,
         QueryError,
@@ -44,6 +45,7 @@ _EXPORTS = {
     "check_validity": "desmon.deployment",
     "CheckerError": "desmon.errors",
     "DesmonError": "desmon.errors",
+    "EstimateError": "desmon.errors",
     "ModelError": "desmon.errors",
     "NondeterminismError": "desmon.errors",
     "QueryError": "desmon.errors",

@@ -12,7 +12,8 @@ errors also derive from the builtin a caller would naturally catch::
      ├── SignalError (ValueError)         bad signal-model / detector parameters
      ├── CheckerError                     the checker cannot run as asked
      │    └── NondeterminismError         a replay did not reproduce a stored state
-     └── SimulationError                  the SimPy world reached an impossible state
+     ├── SimulationError                  the SimPy world reached an impossible state
+     └── EstimateError (ValueError)       an estimate asked for what its method cannot give
 
 Messages name the offender and say what would fix it; the CLI prints them as one
 line, without a traceback.
@@ -29,6 +30,7 @@ __all__ = [
     "CheckerError",
     "NondeterminismError",
     "SimulationError",
+    "EstimateError",
 ]
 
 
@@ -87,3 +89,8 @@ class UnobservedRead(TableUnsupported):
 
 class SimulationError(DesmonError):
     """The simulation reached a state its own bookkeeping forbids."""
+
+
+class EstimateError(DesmonError, ValueError):
+    """An estimate (``desmon estimate``, :mod:`desmon.stats`) asked for what its method cannot give:
+    a confidence outside (0, 1), a precision that is no positive number, a run's value outside the range declared for it."""

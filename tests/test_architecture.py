@@ -146,6 +146,7 @@ LAYERS = {
     "desmon.errors": 0,  # the DesmonError tree
     "desmon.progress": 0,  # the one in-place progress line
     "desmon.paths": 1,  # input and output files checked before any work
+    "desmon.stats": 1,  # guaranteed statistics over independent runs: confidence sequences, sequential tests
     "desmon.model": 2,  # vocabulary and the DSL
     "desmon.repository": 3,  # the labelled property graph
     "desmon.detectors": 3,  # signal models and slip detectors
@@ -155,6 +156,7 @@ LAYERS = {
     "desmon.verify": 6,  # engines: checker and fuzzer
     "desmon.loader": 7,  # a scenario file run as a script (its checker bounds validated)
     "desmon.analyze": 7,  # engine: the Markov chain of the checker's transitions, solved exactly
+    "desmon.estimate": 7,  # independent runs of the SimPy world until a guaranteed interval is narrow enough
     "desmon.sweep": 8,  # Dask sweeps over the engines
     "desmon.cli.options": 9,  # command-line options shared by the commands
     "desmon.api": 9,  # the public verbs check() and simulate() over the engines

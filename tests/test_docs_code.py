@@ -115,7 +115,7 @@ def test_the_sweeps_cluster_recipe_starts_single_threaded_workers_without_malloc
 #: the pages whose every block says what it is (docs/design.md's module listing is not yet in this form)
 TYPED = (
     "README.md", "docs/tutorial.md", "docs/deployers.md", "docs/scenarios.md", "docs/detectors.md", "docs/sweeps.md",
-    "docs/fleet.md", "docs/findings.md",
+    "docs/fleet.md", "docs/findings.md", "docs/estimate.md",
 )
 
 

@@ -6,7 +6,7 @@ import desmon
 
 PUBLIC = {
     "__version__", "DEPLOYERS", "INVARIANTS", "DeploymentCore", "check_validity", "CheckerError", "DesmonError",
-    "ModelError", "NondeterminismError", "QueryError", "ScenarioError", "SignalError", "SimulationError",
+    "ModelError", "NondeterminismError", "QueryError", "ScenarioError", "SignalError", "SimulationError", "EstimateError",
     "load_scenario", "RobotBuilder", "RuleTable", "SystemModel", "Scenario", "TimedEvent", "Repository",
     "RepositoryQuery", "check", "simulate",
 }

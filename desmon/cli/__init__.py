@@ -19,7 +19,7 @@ import contextlib
 import sys
 from typing import Sequence
 
-from desmon.cli import analyze, evaluate, explain, explore, fuzz, plot, replay, run, show, sweep, sweep_plot, verify
+from desmon.cli import analyze, estimate, evaluate, explain, explore, fuzz, plot, replay, run, show, sweep, sweep_plot, verify
 from desmon.cli.common import EXIT_USAGE, Parser, one_line, run_of, usage_error
 from desmon.cli.options import preflight
 from desmon.errors import DesmonError
@@ -28,7 +28,7 @@ from desmon.paths import WholeWrites
 __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: the commands, in the order ``desmon --help`` lists them (sweep adds sweep and sweep-plot)
-COMMANDS = (replay, explain, show, evaluate, run, plot, verify, analyze, fuzz, explore, sweep, sweep_plot)
+COMMANDS = (replay, explain, show, evaluate, run, estimate, plot, verify, analyze, fuzz, explore, sweep, sweep_plot)
 
 
 def build_parser() -> argparse.ArgumentParser:

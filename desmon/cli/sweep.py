@@ -1,4 +1,4 @@
-"""``desmon sweep``: a grid of parameters x seeds (run, verify, fuzz, evaluate or analyze) on Dask,
+"""``desmon sweep``: a grid of parameters x seeds (run, verify, fuzz, evaluate, analyze or estimate) on Dask,
 one table row per run (docs/sweeps.md); ``desmon sweep-plot`` is :mod:`desmon.cli.sweep_plot`.
 
 Importing this module imports neither Dask nor pandas: a missing ``sweep`` extra is
@@ -22,15 +22,34 @@ EXIT_OK, EXIT_FAILED_ROWS = 0, 1
 DEFAULT_SEEDS = 10
 _SETTING_FLAGS = {
     "until": "--until", "max_states": "--max-states", "examples": "--examples", "trials": "--trials", "phases": "--phases",
-    "horizon": "--horizon",
+    "horizon": "--horizon", "metric": "--metric", "within": "--within", "confidence": "--confidence", "max_runs": "--max-runs",
 }
-_SETTING_DEFAULTS = {"until": None, "max_states": 2_000_000, "examples": 200, "trials": 100, "phases": 1, "horizon": None}
+_SETTING_DEFAULTS = {
+    "until": None, "max_states": 2_000_000, "examples": 200, "trials": 100, "phases": 1, "horizon": None,
+    "metric": "exposure_s", "within": "5%", "confidence": 0.95, "max_runs": 10_000,
+}
 #: the jobs that use no seed: one run per point, --seeds above 1 refused
 _EXACT = {"verify": "the check is exhaustive", "analyze": "the analysis is exact"}
+#: the jobs whose run is one whole estimation: one per point unless --seeds says otherwise
+_ONE_PER_POINT = ("verify", "analyze", "estimate")
+
+
+def _within(text: str) -> str:
+    """``--within`` as written (a table column), once it parses."""
+    from desmon.cli.estimate import parse_within
+
+    parse_within(text)
+    return text.strip()
+
+
+def _confidence(text: str) -> float:
+    from desmon.cli.estimate import parse_confidence
+
+    return parse_confidence(text)
 
 
 def add_parser(sub: Subparsers) -> None:
-    p = sub.add_parser("sweep", help="run a grid of parameters x seeds (run, verify, fuzz, evaluate or analyze) on Dask; one table row per run")
+    p = sub.add_parser("sweep", help="run a grid of parameters x seeds (run, verify, fuzz, evaluate, analyze or estimate) on Dask; one table row per run")
     add_input(p, "scenario", SCENARIO_FILE, nargs="?", default=None,
               help="scenario file, e.g. scenarios/robot_day.py (not with --job evaluate)")
     p.add_argument(
@@ -38,9 +57,11 @@ def add_parser(sub: Subparsers) -> None:
         help="sweep a parameter the scenario declares over these values, e.g. -p hand_memory=256,384 (repeatable; "
         "every combination is a point). With --job evaluate: a signal-model parameter, e.g. -p noise_counts=2,4,8",
     )
-    p.add_argument("--job", choices=JOBS, default="run", help="what each run does: desmon run / verify / fuzz / evaluate / analyze")
+    p.add_argument("--job", choices=JOBS, default="run", help="what each run does: desmon run / verify / fuzz / evaluate / analyze / "
+                   "estimate (one whole estimation per point: its interval)")
     p.add_argument("--seeds", type=positive_int, default=None, metavar="N",
-                   help="runs per point, each with its own derived seed (default: 10; --job verify and analyze: 1, they use no seed)")
+                   help="runs per point, each with its own derived seed (default: 10; --job verify and analyze: 1, they use no seed; "
+                   "--job estimate: 1, an estimation makes its own runs)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="the sweep seed every run's seed is derived from")
     p.add_argument("--deployer", default="desmon", metavar="SPEC", help="the deployer, as for desmon run (docs/deployers.md)")
     p.add_argument("--until", type=positive_seconds, default=None, help="--job run: simulated seconds (default: each point's horizon)")
@@ -52,6 +73,12 @@ def add_parser(sub: Subparsers) -> None:
                    help="--job analyze: Erlang phases per task step (default: 1, exponential; at most 64)")
     p.add_argument("--horizon", type=positive_seconds, default=None, metavar="T",
                    help="--job analyze: mission length in seconds for the per-mission measures (default: each point's horizon)")
+    p.add_argument("--metric", default=None, help="--job estimate: the run figure (default: exposure_s; desmon estimate --help)")
+    p.add_argument("--within", type=_within, default=None, metavar="EPS",
+                   help="--job estimate: the half-width each point's estimation stops at, absolute or relative (default: 5%%)")
+    p.add_argument("--confidence", type=_confidence, default=None, metavar="1-DELTA", help="--job estimate: the intervals' confidence (default: 0.95)")
+    p.add_argument("--max-runs", type=positive_int, default=None, metavar="N",
+                   help="--job estimate: runs per point at most; a point that needs more is INCOMPLETE, exit code 3 (default: 10,000)")
     add_output(p, "-o", "--output", suffixes=(".parquet", ".csv"), required=True, metavar="FILE",
                help="the table: FILE.parquet or FILE.csv (finished rows also go to FILE.journal.jsonl while it runs)")
     p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
@@ -96,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
             f"--seeds {args.seeds} with --job {args.job}: {_EXACT[args.job]} and uses no seed, so every seed gives the same "
             f"row; drop --seeds (one {'check' if args.job == 'verify' else 'analysis'} per point)"
         )
-    seeds = args.seeds if args.seeds is not None else 1 if args.job in _EXACT else DEFAULT_SEEDS
+    seeds = args.seeds if args.seeds is not None else 1 if args.job in _ONE_PER_POINT else DEFAULT_SEEDS
     axes = parse_axes(args.param)
     if args.scheduler is not None:
         probe_scheduler(args.scheduler)  # a few seconds at most: not a Dask scheduler is one line, not a hang

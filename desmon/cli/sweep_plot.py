@@ -1,5 +1,5 @@
 """``desmon sweep-plot``: draw a sweep table (docs/sweeps.md): a figure against a parameter
-(mean, min-max over the seeds), or a Pareto front. pandas is imported when it runs.
+(mean, min-max and the mean's 95 % interval over the seeds), or a Pareto front. pandas is imported when it runs.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ TABLE_FILE = ("sweep table", "write one with: desmon sweep SCENARIO -p NAME=V1,V
 
 
 def add_parser(sub: Subparsers) -> None:
-    p = sub.add_parser("sweep-plot", help="draw a sweep table: a figure vs a parameter (mean, min-max over seeds), or a Pareto front")
+    p = sub.add_parser("sweep-plot", help="draw a sweep table: a figure vs a parameter (mean, min-max and 95 %% interval over seeds), or a Pareto front")
     add_input(p, "table", TABLE_FILE, help="table written by desmon sweep (.parquet or .csv)")
     p.add_argument("-x", default=None, metavar="COLUMN", help="the parameter on the x axis, e.g. hand_memory")
     p.add_argument("-y", required=True, metavar="COLUMN", help="the figure on the y axis, e.g. exposure_s")

@@ -37,7 +37,7 @@ from desmon.deployment.exposure import CAUSES, Needs
 from desmon.detectors.base import Alarm, merge_alarms
 from desmon.sim.world import Slip
 
-__all__ = ["Exposure", "MemoryMeter", "slip_metrics", "percentile"]
+__all__ = ["Exposure", "MemoryMeter", "slip_metrics", "percentile", "RUN_FIGURES", "RENAMED", "RUNTIME_CHANGES", "run_figures"]
 
 DETECT_BEFORE = 0.3
 DETECT_AFTER = 1.0
@@ -265,3 +265,36 @@ def slip_metrics(slips: Iterable[Slip], alarms: Iterable[Alarm]) -> dict[str, An
 
 def _r(x: float | None) -> float | None:
     return None if x is None else round(x, 6)
+
+
+#: a run's figures, in table order, as ``desmon sweep`` and ``desmon estimate`` name them
+#: (:func:`run_figures` adds ``errors_<kind>``, ``memory_peak_mb_<platform>`` and, where the
+#: world has them, :data:`RUNTIME_CHANGES`)
+RUN_FIGURES: tuple[str, ...] = (
+    "exposure_s", "risky_time_s", "excluded_s", *(f"{c}_s" for c in CAUSES), "switches", "blind_time_per_switch_s", "blind_time_max_s",
+    "starts", "start_failures", "stops", "migrations", "upgrades", "upgrades_failed", "errors", "slips_injected", "slips_detected",
+    "slips_missed", "false_alarms", "latency_median_s", "latency_p95_s", "violations",
+)
+#: figures whose name differs from the run's metric
+RENAMED = {"exposure_s": "unmonitored_exposure_s"}
+#: run metrics present only when the world has run-time changes or a lease
+RUNTIME_CHANGES = ("requirement_changes", "leases", "leased_s")
+
+
+def run_figures(m: Mapping[str, Any], violations: int) -> dict[str, Any]:
+    """The figures of one run (:data:`RUN_FIGURES` and the per-kind, per-platform ones) from
+    its ``metrics`` and its number of invariant violations."""
+    row: dict[str, Any] = {k: m.get(RENAMED.get(k, k)) for k in RUN_FIGURES if k not in ("errors", "violations")}
+    for c in CAUSES:  # the exposure's causes (desmon.deployment.exposure), beside the figure
+        row[f"{c}_s"] = m["unmonitored_by_cause_s"][c]
+    errors = dict(m.get("errors") or {})
+    row["errors"] = sum(errors.values())
+    row["violations"] = violations
+    for kind, n in errors.items():
+        row[f"errors_{kind}"] = n
+    for platform, mb in (m.get("memory_peak_mb") or {}).items():
+        row[f"memory_peak_mb_{platform}"] = mb
+    for key in RUNTIME_CHANGES:  # only worlds with run-time changes or a lease report them
+        if key in m:
+            row[key] = m[key]
+    return row

@@ -25,11 +25,13 @@ __all__ = ["SweepResult", "run_sweep", "SETTINGS", "JOB_SETTINGS"]
 JOB_SETTINGS: dict[str, tuple[str, ...]] = {
     "run": ("until",), "verify": ("max_states",), "fuzz": ("examples",), "evaluate": ("trials",),
     "analyze": ("phases", "horizon", "max_states"),
+    "estimate": ("until", "metric", "within", "confidence", "max_runs"),
 }
 #: the first setting of each job (the only one but for analyze): :func:`run_sweep`'s ``setting``
 SETTINGS = {job: names[0] for job, names in JOB_SETTINGS.items()}
 #: a setting's value when the sweep leaves it out, where None would not do
-_DEFAULTS = {("analyze", "phases"): 1}
+_DEFAULTS = {("analyze", "phases"): 1, ("estimate", "metric"): "exposure_s", ("estimate", "within"): "5%",
+             ("estimate", "confidence"): 0.95, ("estimate", "max_runs"): 10_000}
 
 
 @dataclass(frozen=True, slots=True)

@@ -29,7 +29,7 @@ from desmon.errors import DesmonError
 __all__ = ["SweepError", "Axis", "Point", "Run", "Grid", "parse_axes", "derive_seed", "MAX_RUNS", "JOBS"]
 
 #: what a sweep's runs can do: desmon run / verify / fuzz / evaluate / analyze (desmon.sweep.jobs runs each)
-JOBS = ("run", "verify", "fuzz", "evaluate", "analyze")
+JOBS = ("run", "verify", "fuzz", "evaluate", "analyze", "estimate")
 #: the most runs one sweep may hold (a typo such as --seeds 1000000 is refused, not started)
 MAX_RUNS = 10_000_000
 _TRUE = ("true", "yes", "on")

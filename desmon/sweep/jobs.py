@@ -28,11 +28,12 @@ from typing import Any, Callable
 from desmon.deployment.exposure import CAUSES
 from desmon.deployment.guard import EXIT_CRASHED, DeployerFault
 from desmon.errors import DesmonError
+from desmon.sim.metrics import RUN_FIGURES, run_figures
 from desmon.sweep.grid import JOBS, Axis, Run, SweepError
 
 __all__ = ["check_points", 
     "JOBS", "JobSpec", "run_point", "check_values", "signal_parameters", "EXIT_TIMEOUT", "EXIT_CRASH", "EXIT_KILLED",
-    "EXIT_BAD_VALUE", "EXIT_INCOMPLETE", "METRICS",
+    "EXIT_BAD_VALUE", "EXIT_INCOMPLETE", "METRICS", "scenario_at",
 ]
 
 EXIT_BAD_VALUE, EXIT_TIMEOUT, EXIT_CRASH, EXIT_KILLED = 2, 124, 125, 137
@@ -41,11 +42,7 @@ EXIT_INCOMPLETE = 3
 
 #: each job's figures, in table order (run adds memory_peak_mb_<platform> and errors_<kind>)
 METRICS: dict[str, tuple[str, ...]] = {
-    "run": (
-        "exposure_s", "risky_time_s", "excluded_s", *(f"{c}_s" for c in CAUSES), "switches", "blind_time_per_switch_s", "blind_time_max_s", "starts", "start_failures",
-        "stops", "migrations", "upgrades", "upgrades_failed", "errors", "slips_injected", "slips_detected", "slips_missed",
-        "false_alarms", "latency_median_s", "latency_p95_s", "violations",
-    ),
+    "run": RUN_FIGURES,
     "verify": ("verdict", "states", "transitions", "depth", "counterexamples", "violated"),
     "fuzz": ("verdict", "sequences", "violated", "counterexample_steps"),
     "evaluate": (
@@ -58,10 +55,8 @@ METRICS: dict[str, tuple[str, ...]] = {
         "p_exposure_within_T", "long_run_unmonitored_fraction", "horizon_s", "states", "transitions",
         "top_state", "top_state_s_per_hour",
     ),
+    "estimate": ("estimate", "low", "high", "half_width", "runs", "status", "method", "normal_low", "normal_high", "min_value", "max_value"),
 }
-_RUN_RENAMED = {"exposure_s": "unmonitored_exposure_s"}
-#: run metrics present only when the world has run-time changes or a lease
-_RUNTIME_CHANGES = ("requirement_changes", "leases", "leased_s")
 
 
 @dataclass(frozen=True, slots=True)
@@ -133,7 +128,7 @@ def _worker_cache() -> ScenarioCache | None:
     return cache
 
 
-def _scenario(path: str, values: tuple[tuple[str, str], ...]) -> Any:
+def scenario_at(path: str, values: tuple[tuple[str, str], ...]) -> Any:
     """The scenario at ``path`` with ``values``, loaded once per worker (it is immutable)."""
     cache = _worker_cache()
     if cache is None:
@@ -155,22 +150,9 @@ def _deployer(spec: str) -> Any:
 def _job_run(spec: JobSpec, run: Run) -> dict[str, Any]:
     from desmon.sim.engine import SimWorld
 
-    scenario = _scenario(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
     result = SimWorld(scenario, deployer=_deployer(spec.deployer), seed=run.seed, until=spec.setting("until")).run()
-    m = result.metrics
-    row: dict[str, Any] = {k: m.get(_RUN_RENAMED.get(k, k)) for k in METRICS["run"] if k not in ("errors", "violations")}
-    for c in CAUSES:  # the exposure's causes (desmon.deployment.exposure), beside the figure
-        row[f"{c}_s"] = m["unmonitored_by_cause_s"][c]
-    errors = dict(m.get("errors") or {})
-    row["errors"] = sum(errors.values())
-    row["violations"] = len(result.violations)
-    for kind, n in errors.items():
-        row[f"errors_{kind}"] = n
-    for platform, mb in (m.get("memory_peak_mb") or {}).items():
-        row[f"memory_peak_mb_{platform}"] = mb
-    for key in _RUNTIME_CHANGES:  # only worlds with run-time changes or a lease report them
-        if key in m:
-            row[key] = m[key]
+    row = run_figures(result.metrics, len(result.violations))
     row["exit_code"] = 1 if result.violations else 0
     return row
 
@@ -178,7 +160,7 @@ def _job_run(spec: JobSpec, run: Run) -> dict[str, Any]:
 def _job_verify(spec: JobSpec, run: Run) -> dict[str, Any]:
     from desmon.verify import Checker
 
-    scenario = _scenario(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
     checker = Checker(scenario, _deployer(spec.deployer))
     try:
         res = checker.run(max_states=spec.setting("max_states"), progress=False)
@@ -197,7 +179,7 @@ def _job_verify(spec: JobSpec, run: Run) -> dict[str, Any]:
 def _job_fuzz(spec: JobSpec, run: Run) -> dict[str, Any]:
     from desmon.verify.fuzz import fuzz
 
-    scenario = _scenario(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
     out = fuzz(scenario, _deployer(spec.deployer), examples=spec.setting("examples"), seed=run.seed)
     return {
         "verdict": "VIOLATED" if out.invariant else "HOLDS",
@@ -244,7 +226,7 @@ def _job_analyze(spec: JobSpec, run: Run) -> dict[str, Any]:
     """``desmon analyze`` at the point: its exact measures (the seed plays no part)."""
     from desmon.analyze import BudgetExceeded, analyze
 
-    scenario = _scenario(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
     try:
         a = analyze(
             scenario, _deployer(spec.deployer), phases=spec.setting("phases") or 1, horizon=spec.setting("horizon"),
@@ -265,8 +247,32 @@ def _job_analyze(spec: JobSpec, run: Run) -> dict[str, Any]:
     }
 
 
+def _job_estimate(spec: JobSpec, run: Run) -> dict[str, Any]:
+    """``desmon estimate`` at the point: one estimation, its runs' seeds derived from the run's
+    seed; exit code 0 once precise enough, 3 INCOMPLETE at ``max_runs`` (with the interval so far)."""
+    from desmon.estimate import Question, estimate
+    from desmon.estimate.loop import parse_within
+
+    scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
+    within, relative = parse_within(spec.setting("within"))
+    question = Question(
+        metric=spec.setting("metric"), within=within, relative=relative, confidence=spec.setting("confidence"),
+        max_runs=spec.setting("max_runs"),
+    )
+    e = estimate(scenario, question, deployer=_deployer(spec.deployer), seed=run.seed, until=spec.setting("until"))
+    iv, ap = e.interval, e.approximation
+    return {
+        "estimate": iv.estimate, "low": iv.low, "high": iv.high, "half_width": iv.half_width, "runs": e.runs, "status": e.status,
+        "method": iv.method, "normal_low": ap.low, "normal_high": ap.high, "min_value": e.low_value, "max_value": e.high_value,
+        "exit_code": 0 if e.complete else EXIT_INCOMPLETE,
+        # (as analyze's: an INCOMPLETE row counts as failed; it keeps the interval of its runs)
+        "error": None if e.complete else f"INCOMPLETE: --max-runs {question.max_runs} reached at half-width {iv.half_width:.6g}",
+    }
+
+
 _JOBS: dict[str, Callable[[JobSpec, Run], dict[str, Any]]] = {
     "run": _job_run, "verify": _job_verify, "fuzz": _job_fuzz, "evaluate": _job_evaluate, "analyze": _job_analyze,
+    "estimate": _job_estimate,
 }
 
 
@@ -413,7 +419,7 @@ def check_points(
         except DesmonError:
             continue  # its rows say why (exit code 2)
         where = f"at {point.text}" if point.values else ""
-        if job == "run" and is_fleet(loaded):
+        if job in ("run", "estimate") and is_fleet(loaded):
             raise SweepError(
                 f"{scenario}: a fleet of robots (world is a Fleet){' ' + where if where else ''}: desmon sweep runs one robot per "
                 f"run; simulate the fleet with desmon run {scenario}, or sweep a single-robot scenario"
@@ -422,7 +428,7 @@ def check_points(
             _markov_world(loaded, dict(settings or {}), where)
         if deployer is not None:
             _first_reaction(loaded, deployer, where)
-        if job == "run" and setting is not None:  # (the other jobs take no --until)
+        if job in ("run", "estimate") and setting is not None:  # (the other jobs take no --until)
             from desmon.sim.world import world_of
 
             horizon = float(world_of(loaded).horizon)

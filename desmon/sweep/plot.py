@@ -1,8 +1,11 @@
 """``desmon sweep-plot``: a figure of a sweep table against a parameter, or a Pareto view.
 
 * ``-x PARAM -y FIGURE``: per value of ``PARAM`` the mean of ``FIGURE`` over the seeds
-  (a line) and its min-max band; one line per combination of the other parameters that
-  vary in the table.
+  (a line), its min-max band, and the 95 % confidence interval of the mean as bars: for a
+  figure in seconds of the run, which lies in ``[0, horizon]``, the guaranteed betting
+  interval of ``desmon estimate`` (:mod:`desmon.stats`); for a count, whose range is not
+  known, the normal approximation, labelled so; one line per combination of the other
+  parameters that vary in the table.
 * ``--pareto COST -y FIGURE``: every point's mean ``FIGURE`` against its ``COST``
   (say ``hand_memory``), min-max bars over the seeds, and the Pareto front: the points
   no other point beats on both (lower cost and lower figure).
@@ -10,18 +13,27 @@
 Rows with an error are left out (the title says how many). ``log_x`` draws the x axis
 on a log scale (values that span decades: an MTTF of 15 min to 4 h). A table of
 ``--job analyze`` holds one exact value per point, not a mean over seeds: the title says so.
+A table of ``--job estimate`` holds one estimation per point: ``-y estimate`` draws it
+with its guaranteed interval (the ``low`` and ``high`` columns) as the band, the title
+naming the method; rows INCOMPLETE at their run budget are drawn too (their interval
+is still guaranteed), marked hollow.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from desmon.sweep.grid import SweepError
 
-__all__ = ["plot_sweep", "pareto_front", "summarise"]
+__all__ = ["plot_sweep", "pareto_front", "summarise", "mean_interval", "CONFIDENCE"]
+
+#: the confidence of the intervals drawn over a point's seeds
+CONFIDENCE = 0.95
 
 _NOT_PARAMETERS = {
     "point", "seed_index", "seed", "scenario", "job", "deployer", "until", "max_states", "examples", "trials", "phases", "horizon",
+    "metric", "within", "confidence", "max_runs",
     "exit_code", "error",
 }
 
@@ -86,23 +98,83 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
         what = "the seeds a point's runs were given" if x in ("seed", "seed_index") else "not a swept parameter"
         listing = f"the swept parameters are {', '.join(params)}" if params else "this sweep swept no parameter (no -p): draw --pareto, or sweep one"
         raise SweepError(f"-x {x}: {what}; -x takes a swept parameter ({listing})")
-    ok = df[df["error"].isna()]
+    kept = df["error"].isna()
+    if "job" in df.columns and "exit_code" in df.columns:  # an estimation INCOMPLETE at its run budget keeps a guaranteed interval
+        kept |= (df["job"] == "estimate") & (df["exit_code"] == 3)
+    ok = df[kept]
     ok = ok[ok[y].notna()]
     if ok.empty:
         raise SweepError(f"{table}: no run without an error has a value of {y}; nothing to draw")
-    return ok, int(df["error"].notna().sum())
+    return ok, int((~kept).sum())
 
 
-def _against(ax: Any, ok: Any, params: list[str], x: str, y: str) -> None:
+def mean_interval(values: list[float], value_range: tuple[float, float] | None) -> tuple[float, float, str]:
+    """(low, high, method) of the :data:`CONFIDENCE` interval of the mean of ``values``: the
+    betting confidence sequence when every value is known to lie in ``value_range``, else the
+    normal approximation (not guaranteed; none below 2 values)."""
+    from desmon.stats import BettingSequence, normal_interval
+
+    if value_range is not None:
+        cs = BettingSequence(value_range[0], value_range[1], 1.0 - CONFIDENCE)
+        for v in values:
+            cs.add(v)
+        iv = cs.interval()
+        return iv.low, iv.high, "guaranteed"
+    iv = normal_interval(values, 1.0 - CONFIDENCE)
+    if len(values) < 2:  # no spread to go by: no bar
+        return math.nan, math.nan, "normal approximation, not guaranteed"
+    return iv.low, iv.high, "normal approximation, not guaranteed"
+
+
+def _range_of(ok: Any, params: list[str], y: str) -> Any:
+    """``key -> (0, horizon)`` of each point's runs when ``y`` is in seconds of the run (else ``key -> None``);
+    the horizon is the table's ``until``, or the point's scenario's."""
+    from desmon.estimate.measures import SECONDS
+
+    if y not in SECONDS or "scenario" not in ok.columns:
+        return lambda row: None
+    cache: dict[tuple[Any, ...], tuple[float, float]] = {}
+
+    def range_of(row: Any) -> tuple[float, float]:
+        until = row.get("until") if "until" in ok.columns else None
+        if until is not None and until == until:  # (not NaN)
+            return 0.0, float(until)
+        key = (row["scenario"], *(row[p] for p in params))
+        if key not in cache:
+            from desmon.loader import load_scenario
+            from desmon.sim.world import world_of
+
+            scenario = load_scenario(str(row["scenario"]), {p: str(row[p]) for p in params})
+            cache[key] = (0.0, float(world_of(scenario).horizon))
+        return cache[key]
+
+    return range_of
+
+
+def _against(ax: Any, ok: Any, params: list[str], x: str, y: str, intervals: bool = False) -> str:
+    """``y``'s mean against ``x``, the min-max band, and (``intervals``) each mean's interval as bars;
+    the interval's method, for the title."""
     others = [p for p in params if p != x and ok[p].nunique() > 1]
     s = summarise(ok, [*others, x], y)
+    method = ""
+    if intervals:
+        range_of = _range_of(ok, params, y)
+        bounds = []
+        for _key, part in ok.groupby([*others, x], sort=True):
+            low, high, method = mean_interval([float(v) for v in part[y]], range_of(part.iloc[0]))
+            bounds.append((low, high))
+        s["low"], s["high"] = [b[0] for b in bounds], [b[1] for b in bounds]
     groups = s.groupby(others, sort=True) if others else [((), s)]
     for label, part in groups:
         label = label if isinstance(label, tuple) else (label,)
         name = ", ".join(f"{k}={v}" for k, v in zip(others, label)) or y
         line = ax.plot(part[x], part["mean"], marker="o", label=name)[0]
         ax.fill_between(part[x], part["min"], part["max"], alpha=0.2, color=line.get_color())
+        if intervals:
+            ax.errorbar(part[x], part["mean"], yerr=[part["mean"] - part["low"], part["high"] - part["mean"]], fmt="none",
+                        ecolor=line.get_color(), capsize=3)
     ax.set_xlabel(x)
+    return method
 
 
 def _pareto(ax: Any, ok: Any, params: list[str], pareto: str, y: str) -> int:
@@ -120,6 +192,29 @@ def _pareto(ax: Any, ok: Any, params: list[str], pareto: str, y: str) -> int:
         ax.annotate(label, (costs[i], means[i]), textcoords="offset points", xytext=(4, 6), fontsize=7)
     ax.set_xlabel(f"cost: {pareto}")
     return len(s)
+
+
+def _estimates(ax: Any, df: Any, params: list[str], x: str) -> str:
+    """``--job estimate``'s estimates against ``x``, each point's guaranteed interval as the band;
+    the method, for the title."""
+    others = [p for p in params if p != x and df[p].nunique() > 1]
+    groups = df.sort_values(x).groupby(others, sort=True) if others else [((), df.sort_values(x))]
+    for label, part in groups:
+        label = label if isinstance(label, tuple) else (label,)
+        name = ", ".join(f"{k}={v}" for k, v in zip(others, label)) or "estimate"
+        line = ax.plot(part[x], part["estimate"], marker="o", label=name)[0]
+        ax.fill_between(part[x], part["low"], part["high"], alpha=0.2, color=line.get_color())
+        cut = part[part["status"] != "precise"]
+        if len(cut):
+            ax.plot(cut[x], cut["estimate"], "o", markerfacecolor="white", color=line.get_color())
+    ax.set_xlabel(x)
+    methods = sorted(set(df["method"].dropna()))
+    return "; ".join(m.split(" (")[0] for m in methods)
+
+
+def _estimated(ok: Any, x: str | None, y: str) -> bool:
+    """Whether to draw ``--job estimate``'s estimates with their intervals (``-y estimate`` against a parameter)."""
+    return y == "estimate" and x is not None and "job" in ok.columns and bool((ok["job"] == "estimate").all())
 
 
 def _check_log_x(ok: Any, column: str) -> None:
@@ -162,13 +257,19 @@ def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | 
     fig, ax = plt.subplots(figsize=(7.5, 4.8), dpi=120)
     seeds = int(ok.groupby(params or ["job"])["seed"].count().max())
     note = f"{len(ok)} runs" + (f", {failed} failed runs left out" if failed else "")
-    if x is not None and _exact(ok):
+    if x is not None and _estimated(ok, x, y):
+        method = _estimates(ax, ok, params, x)
+        cut = int((ok["status"] != "precise").sum())
+        ax.set_title(f"estimate vs {x}: band = guaranteed {100 * float(ok['confidence'].iloc[0]):g} % interval ({method}); "
+                     f"{len(ok)} points" + (f", {cut} INCOMPLETE (hollow)" if cut else ""), fontsize=8)
+    elif x is not None and _exact(ok):
         _against(ax, ok, params, x, y)
         ax.set_title(f"{y} vs {x}: exact (desmon analyze), {len(ok)} points" + (f", {failed} failed left out" if failed else ""),
                      fontsize=9)
     elif x is not None:
-        _against(ax, ok, params, x, y)
-        ax.set_title(f"{y} vs {x}: mean and min-max over up to {seeds} seeds ({note})", fontsize=9)
+        method = _against(ax, ok, params, x, y, intervals=seeds > 1)
+        bars = f"; bars: {100 * CONFIDENCE:g} % interval of the mean, {method}" if method else ""
+        ax.set_title(f"{y} vs {x}: mean and min-max over up to {seeds} seeds{bars} ({note})", fontsize=8)
     else:
         assert pareto is not None
         points = _pareto(ax, ok, params, pareto, y)

@@ -28,7 +28,7 @@ from desmon.progress import StatusLine
 from desmon.sweep.grid import Run, SweepError
 from desmon.sweep.jobs import EXIT_KILLED, JobSpec, run_point
 
-__all__ = ["Progress", "execute", "check_scheduler_address", "probe_scheduler", "EXTRA_HINT", "require_extra"]
+__all__ = ["Progress", "execute", "check_scheduler_address", "probe_scheduler", "EXTRA_HINT", "require_extra", "dask_client"]
 
 EXTRA_HINT = "pip install 'desmon[sweep]'"
 #: how long to wait for a --scheduler to answer
@@ -179,7 +179,7 @@ def dask_settings(retries: int = 0) -> dict[str, Any]:
 
 
 @contextlib.contextmanager
-def _client(scheduler: str | None, workers: int | None, retries: int) -> Iterator[Any]:
+def dask_client(scheduler: str | None, workers: int | None, retries: int) -> Iterator[Any]:
     """A Dask client: connected to ``scheduler``, or to a LocalCluster of ``workers`` processes."""
     import dask
     from distributed import Client, LocalCluster
@@ -248,7 +248,7 @@ def execute(
     """
     from distributed import as_completed
 
-    with _client(scheduler, workers, retries) as client:
+    with dask_client(scheduler, workers, retries) as client:
         info = client.scheduler_info()
         nworkers = len(info.get("workers", {}))
         threads = sum(w.get("nthreads", 1) for w in info.get("workers", {}).values()) or 1

@@ -31,11 +31,12 @@ __all__ = [
 FORMAT = 1
 TABLE_SUFFIXES = (".parquet", ".csv")
 _HEAD = ("point", "seed_index", "seed")
-_STR_METRICS = {"verdict", "violated", "error", "top_state"}
+_STR_METRICS = {"verdict", "violated", "error", "top_state", "status", "method"}
 #: analyze's figures that are numbers with a fraction but whose names do not say so
 _FLOAT_METRICS = {
     "exposure_s_per_hour", "exposure_s_per_mission", "undetected_slips_per_hour", "p_exposure_within_T",
     "long_run_unmonitored_fraction", "top_state_s_per_hour",
+    "estimate", "low", "high", "half_width", "normal_low", "normal_high", "min_value", "max_value",  # estimate's
 }
 
 

@@ -1,0 +1,221 @@
+"""``desmon estimate``: a figure of the simulated world with a guaranteed confidence interval,
+from as many independent runs as the precision asked for needs (:mod:`desmon.estimate`).
+
+Exit codes: 0 the interval is as narrow as asked (or the threshold question's answer is
+yes), 1 the answer is no (or the value cannot be told apart from the threshold within
+the indifference), 2 bad input (one line), 3 INCOMPLETE: ``--max-runs`` or ``--timeout``
+came first (the interval of the runs made is printed all the same).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from typing import Any
+
+from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg
+from desmon.cli.options import non_negative_int, positive_int, positive_seconds, worker_count
+
+__all__ = ["add_parser", "run", "format_estimate", "parse_within", "parse_confidence"]
+
+
+def parse_within(text: str) -> tuple[float, bool]:
+    """``60`` -> (60.0, absolute); ``1%`` -> (0.01, relative): :func:`desmon.estimate.loop.parse_within` for argparse."""
+    from desmon.errors import EstimateError
+    from desmon.estimate.loop import parse_within as parse
+
+    try:
+        return parse(text)
+    except EstimateError:
+        try:
+            float(text.strip().removesuffix("%"))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a half-width, absolute (60) or relative to the estimate (1%), got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"must be a positive half-width, absolute (60) or relative to the estimate (1%), got {text}") from None
+
+
+def parse_confidence(text: str) -> float:
+    """A confidence strictly between 0 and 1 (``0.99``; ``99%`` too)."""
+    t = text.strip()
+    try:
+        v = float(t.removesuffix("%")) / (100.0 if t.endswith("%") else 1.0)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a confidence between 0 and 1, e.g. 0.99, got {text!r}") from None
+    if not (math.isfinite(v) and 0.0 < v < 1.0):
+        raise argparse.ArgumentTypeError(f"must be a confidence strictly between 0 and 1, e.g. 0.99, got {text}")
+    return v
+
+
+def _number(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
+    return v
+
+
+def add_parser(sub: Subparsers) -> None:
+    p = sub.add_parser("estimate", help="a run figure's mean (or probability) with a guaranteed confidence interval, from as many runs as needed")
+    scenario_arg(p)
+    deployer_arg(p)
+    p.add_argument("--metric", default="exposure_s", help="the run figure, as desmon sweep names it: exposure_s, risky_time_s, "
+                   "slips_missed, false_alarms, errors_<kind>, ..., or longest_exposure_s (a wrong name lists them all)")
+    p.add_argument("--within", type=parse_within, default="5%", metavar="EPS",
+                   help="stop once the guaranteed interval's half-width is at most EPS: absolute (60) or relative to the estimate (1%%); "
+                   "with --below, the indifference around the threshold")
+    p.add_argument("--confidence", type=parse_confidence, default=0.95, metavar="1-DELTA", help="the interval's confidence, e.g. 0.99")
+    p.add_argument("--at-least", type=_number, default=None, metavar="X",
+                   help="estimate the probability that the figure is X or more in a run, not its mean (--metric longest_exposure_s "
+                   "--at-least 60: 60 s or more unmonitored at a stretch)")
+    p.add_argument("--below", type=_number, default=None, metavar="X",
+                   help="answer yes or no: is the mean (with --at-least: the probability) below X? Wald's test for a probability")
+    p.add_argument("--alpha", type=_number, default=None, help="--below: the chance of a wrong yes (unset: 1 - confidence)")
+    p.add_argument("--beta", type=_number, default=None, help="--below with --at-least: the chance of a wrong no (unset: 1 - confidence)")
+    p.add_argument("--range", type=_number, nargs=2, default=None, metavar=("LOW", "HIGH"),
+                   help="the range every run's value lies in (seconds: [0, horizon] unless given; a count's mean needs one)")
+    p.add_argument("--max-runs", type=positive_int, default=10_000, metavar="N", help="stop INCOMPLETE (exit 3) after N runs")
+    p.add_argument("--timeout", type=positive_seconds, default=None, metavar="S", help="stop INCOMPLETE (exit 3) after S wall seconds (unset: no limit)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="the seed every run's seed is derived from")
+    p.add_argument("--until", type=positive_seconds, default=None, help="simulated seconds per run (unset: the scenario's horizon)")
+    p.add_argument("--timing", choices=("fixed", "exponential"), default=None,
+                   help="exponential: the Markov world desmon analyze solves (random step durations with the given means)")
+    p.add_argument("--no-signals", action="store_true", help="simulate no sensor signals (exposure counts running, ready detectors)")
+    p.add_argument("--workers", type=worker_count, default=None, metavar="N",
+                   help="run in batches on a local Dask cluster of N worker processes (unset: in this process); the output is the same")
+    p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT", help="run in batches on this existing Dask cluster")
+    p.add_argument("--json", action="store_true", help="print the estimate as JSON")
+    p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
+    p.set_defaults(handler=run)
+
+
+def _question(args: argparse.Namespace) -> Any:
+    from desmon.estimate import Question
+    from desmon.estimate.measures import check_metric
+
+    within, relative = args.within
+    q = Question(
+        metric=check_metric(args.metric), within=within, relative=relative, confidence=args.confidence, at_least=args.at_least,
+        below=args.below, alpha=args.alpha, beta=args.beta, range=tuple(args.range) if args.range else None,
+        max_runs=args.max_runs, timeout=args.timeout,
+    )
+    q.check()
+    return q
+
+
+def _world_changes(args: argparse.Namespace) -> dict[str, Any]:
+    changes: dict[str, Any] = {}
+    if args.timing is not None:
+        changes["timing"] = args.timing
+    if args.no_signals:
+        changes["signals"] = False
+    return changes
+
+
+def _dask_source(args: argparse.Namespace, question: Any) -> Any:
+    """The runs' values computed on Dask (``--workers``, ``--scheduler``), or None: in this process."""
+    if args.workers is None and args.scheduler is None:
+        return None
+    import os
+
+    from desmon.errors import EstimateError
+    from desmon.model.params import parse_assignments
+    from desmon.sweep.estimate import BatchSpec, dask_values
+    from desmon.sweep.runner import check_scheduler_address, probe_scheduler, require_extra
+
+    require_extra("estimate --workers", ("distributed",))
+    if args.scheduler is not None:
+        check_scheduler_address(args.scheduler)
+        if args.workers is not None:
+            raise EstimateError("--workers sets the size of the local cluster; with --scheduler the cluster has its own workers: drop it")
+        probe_scheduler(args.scheduler)
+    params = tuple(sorted(parse_assignments(args.param).items()))
+    spec = BatchSpec(
+        os.path.abspath(args.scenario), params, getattr(args.deployer, "name", str(args.deployer)), args.seed, args.until,
+        question.metric, tuple(sorted(_world_changes(args).items())),
+    )
+    return dask_values(spec, scheduler=args.scheduler, workers=args.workers)
+
+
+def run(args: argparse.Namespace) -> int:
+    from desmon.estimate import estimate
+    from desmon.estimate.loop import with_world
+    from desmon.progress import StatusLine
+
+    question = _question(args)
+    scenario = with_world(load_scenario_of(args), _world_changes(args))
+    show = not args.no_progress and not args.json and sys.stderr.isatty()
+    line = StatusLine(sys.stderr)
+
+    def progress(tracker: Any) -> None:
+        n, iv = len(tracker.values), tracker.last
+        if show and (n <= 10 or n % 10 == 0):
+            now = ""
+            if iv is not None:
+                goal = f" (goal {_n(question.half_width_goal(iv.estimate))})" if question.below is None else ""
+                now = f", {_n(iv.estimate)} in [{_n(iv.low)}, {_n(iv.high)}], half-width {_n(iv.half_width)}{goal} at run {iv.n:,}"
+            line.show(f"desmon estimate: {n:,} runs{now}")
+
+    try:
+        result = estimate(
+            scenario, question, deployer=args.deployer, seed=args.seed, until=args.until, values=_dask_source(args, question),
+            progress=progress, guard=args.guard,
+        )
+    finally:
+        line.close()
+    if args.json:
+        sys.stdout.write(json.dumps(result.to_json(), indent=2, allow_nan=False) + "\n")
+    else:
+        sys.stdout.write(format_estimate(result))
+    if not result.complete:
+        why = f"--max-runs {question.max_runs} reached" if result.status == "max-runs" else f"--timeout {question.timeout:g} s passed"
+        print(f"desmon estimate: INCOMPLETE: {why} before the question was answered; the interval above is that of the {result.runs:,} runs made",
+              file=sys.stderr)
+        return EXIT_INCOMPLETE
+    return EXIT_VIOLATED if result.answer in ("no", "indifferent") else EXIT_OK
+
+
+def _n(x: float) -> str:
+    if not math.isfinite(x):
+        return "-"
+    return f"{x:,.0f}" if abs(x) >= 1000 else f"{x:,.4g}"
+
+
+def format_estimate(e: Any) -> str:
+    """The text report of ``desmon estimate``."""
+    q, iv, ap = e.question, e.interval, e.approximation
+    pct = f"{100 * q.interval_confidence:g} %"
+    what = f"P({q.metric} >= {q.at_least:g}) per run" if q.kind == "probability" else f"mean {q.metric} per run"
+    out = [f"desmon estimate: {e.scenario} (deployer {e.deployer}), {what} of {_n(e.horizon)} s simulated, seed {e.seed}"]
+    rel = f" = {100 * iv.half_width / abs(iv.estimate):.2f} % of the estimate" if iv.estimate else ""
+    out.append(f"  estimate {_n(iv.estimate)}, {pct} interval [{_n(iv.low)}, {_n(iv.high)}] (half-width {_n(iv.half_width)}{rel}), guaranteed")
+    out.append(f"    method: {iv.method}" + (f"; every run's value assumed in [{_n(e.range[0])}, {_n(e.range[1])}]" if e.range else ""))
+    out.append(f"  {ap.method}: [{_n(ap.low)}, {_n(ap.high)}]")
+    out.append(f"  runs: {e.runs:,} (seeds derived from --seed {e.seed}); values {_n(e.low_value)} .. {_n(e.high_value)}")
+    if q.below is not None:
+        out.append(_answer_line(e))
+    elif e.complete:
+        goal = f"{100 * q.within:g} % of the estimate" if q.relative else f"{q.within:g}"
+        out.append(f"  stopped: the half-width reached {goal}")
+    return "\n".join(out) + "\n"
+
+
+def _answer_line(e: Any) -> str:
+    q = e.question
+    subject = f"P({q.metric} >= {q.at_least:g})" if q.kind == "probability" else f"the mean {q.metric}"
+    eps = q.indifference()
+    if e.answer is None:
+        return f"  below {q.below:g}? not decided ({e.test_method})"
+    if q.kind == "probability":
+        a = q.alpha if q.alpha is not None else q.delta
+        b = q.beta if q.beta is not None else q.delta
+        errors = f"a wrong yes at most {a:g} if it is {q.below + eps:g} or more, a wrong no at most {b:g} if it is {q.below - eps:g} or less"
+    else:
+        a = q.alpha if q.alpha is not None else q.delta
+        errors = f"wrong with probability at most {a:g}"
+    words = {"yes": f"YES, {subject} is below {q.below:g}", "no": f"NO, {subject} is not below {q.below:g}",
+             "indifferent": f"CANNOT TELL: {subject} is within +-{eps:g} of {q.below:g}"}
+    return f"  below {q.below:g}? {words[e.answer]} ({e.test_method}: {errors})"

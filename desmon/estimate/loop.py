@@ -1,0 +1,384 @@
+"""The estimation loop: independent runs of the SimPy world, one seed each, until the
+guaranteed interval is as narrow as asked (or a yes/no answer is reached), the run
+budget is spent or the time is up.
+
+Run ``i`` (counted from 0) of an estimation with seed ``s`` runs the world with the seed
+:func:`run_seed` ``(s, i)``; the runs' values are taken in that order, whoever computed
+them (this process, or Dask workers in batches: :mod:`desmon.sweep.estimate`), and the
+stopping rule is applied at fixed looks (:func:`is_look`), so an estimation's output
+depends on its seed and its question only, not on the number of workers.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass
+from typing import Any, Callable, Iterable, Iterator
+
+from desmon.errors import EstimateError
+from desmon.estimate.measures import DEFAULT_METRIC, LONGEST, check_metric, longest_exposure, natural_range, value_of
+from desmon.stats import BettingSequence, Interval, ProportionSequence, WaldTest, clopper_pearson, normal_interval
+
+__all__ = ["Question", "Estimate", "estimate", "run_seed", "run_value", "serial_values", "is_look", "world_horizon", "Tracker", "with_world", "parse_within"]
+
+#: ``status`` of an estimation: done as asked, or INCOMPLETE (exit 3) at the run budget or the time limit
+PRECISE, DECIDED, MAX_RUNS, TIMEOUT = "precise", "decided", "max-runs", "timeout"
+#: runs up to which the stopping rule looks after every run; past it, every n // LOOKS_DENSE runs
+LOOKS_DENSE = 64
+
+
+def run_seed(seed: int, index: int) -> int:
+    """The world seed of run ``index`` of an estimation with ``seed`` (independent streams, so two
+    estimations with different seeds share no run)."""
+    import numpy as np
+
+    return int(np.random.SeedSequence([int(seed), int(index), 0x65737469]).generate_state(1)[0])
+
+
+def parse_within(text: str) -> tuple[float, bool]:
+    """``--within``: ``"60"`` -> (60.0, absolute); ``"1%"`` -> (0.01, relative to the estimate); else an EstimateError."""
+    t = str(text).strip()
+    relative = t.endswith("%")
+    try:
+        v = float(t.removesuffix("%"))
+    except ValueError:
+        raise EstimateError(f"--within {text!r}: give a half-width, absolute (60) or relative to the estimate (1%)") from None
+    if not (math.isfinite(v) and v > 0):
+        raise EstimateError(f"--within {text}: give a positive half-width, absolute (60) or relative to the estimate (1%)")
+    return (v / 100.0, True) if relative else (v, False)
+
+
+def is_look(n: int) -> bool:
+    """Whether the stopping rule is applied after run ``n`` (1-based): after each of the first
+    :data:`LOOKS_DENSE`, then every ``n // LOOKS_DENSE`` runs (about every 1.6 %)."""
+    return n <= LOOKS_DENSE or n % (n // LOOKS_DENSE) == 0
+
+
+@dataclass(frozen=True)
+class Question:
+    """What to estimate and when to stop (docs/estimate.md).
+
+    ``metric``: a run figure (:data:`desmon.estimate.measures.METRICS`). Its mean, or with
+    ``at_least`` the probability that it reaches that value. ``within``: the half-width to
+    reach, absolute or (``relative``) a fraction of the estimate; with ``below`` the
+    question is a threshold ("is it below X?") and ``within`` the indifference half-width
+    around X (relative: a fraction of X). ``confidence``: 1 - delta; ``alpha`` and ``beta``:
+    the threshold test's error probabilities (1 - confidence each, unless given). ``range``:
+    the range every run's value lies in (seconds: ``[0, horizon]`` unless given; counts
+    need one for their mean). ``max_runs``, ``timeout`` (wall seconds): the budget."""
+
+    metric: str = DEFAULT_METRIC
+    within: float = 0.05
+    relative: bool = True
+    confidence: float = 0.95
+    at_least: float | None = None
+    below: float | None = None
+    alpha: float | None = None
+    beta: float | None = None
+    range: tuple[float, float] | None = None
+    max_runs: int = 10_000
+    timeout: float | None = None
+
+    @property
+    def kind(self) -> str:
+        return "probability" if self.at_least is not None else "mean"
+
+    @property
+    def delta(self) -> float:
+        return 1.0 - self.confidence
+
+    @property
+    def interval_confidence(self) -> float:
+        """The confidence of the guaranteed interval: ``confidence``, or ``1 - alpha`` when it answers a mean's threshold."""
+        return 1.0 - self.alpha if (self.below is not None and self.kind == "mean" and self.alpha is not None) else self.confidence
+
+    def check(self) -> None:
+        """Every field's value, or a one-line EstimateError naming the flag and the fix."""
+        check_metric(self.metric)
+        c = self.confidence
+        if isinstance(c, bool) or not (isinstance(c, (int, float)) and math.isfinite(c) and 0.0 < c < 1.0):
+            raise EstimateError(f"--confidence {c!r}: give a confidence strictly between 0 and 1, e.g. 0.99 (or 0.95)")
+        w = self.within
+        if isinstance(w, bool) or not (isinstance(w, (int, float)) and math.isfinite(w) and w > 0):
+            raise EstimateError(f"--within {w!r}: give a positive half-width, absolute (--within 60) or relative to the estimate (--within 1%)")
+        if isinstance(self.max_runs, bool) or not isinstance(self.max_runs, int) or self.max_runs < 2:
+            raise EstimateError(f"--max-runs {self.max_runs!r}: give a whole number of runs, 2 or more")
+        if self.timeout is not None and not (math.isfinite(self.timeout) and self.timeout > 0):
+            raise EstimateError(f"--timeout {self.timeout!r}: give a positive number of seconds")
+        for flag, v in (("--at-least", self.at_least), ("--below", self.below)):
+            if v is not None and not math.isfinite(v):
+                raise EstimateError(f"{flag} {v!r}: give a finite number")
+        self._check_test()
+        self._check_range()
+
+    def _check_test(self) -> None:
+        if self.below is None:
+            for flag, v in (("--alpha", self.alpha), ("--beta", self.beta)):
+                if v is not None:
+                    raise EstimateError(f"{flag} {v:g} sets an error probability of the threshold test: add --below X, or drop {flag}")
+            return
+        for flag, v in (("--alpha", self.alpha), ("--beta", self.beta)):
+            if v is not None and not (math.isfinite(v) and 0.0 < v < 0.5):
+                raise EstimateError(f"{flag} {v!r}: give an error probability above 0 and below 0.5, e.g. 0.01")
+        if self.beta is not None and self.kind == "mean":
+            raise EstimateError(
+                "--beta applies to Wald's test of a probability (with --at-least); a mean's threshold is tested with its "
+                "confidence sequence, whose one error probability is --alpha: drop --beta"
+            )
+        if self.kind == "probability" and not 0.0 < self.below < 1.0:
+            raise EstimateError(f"--below {self.below:g}: a probability's threshold lies strictly between 0 and 1, e.g. --below 0.05")
+
+    def _check_range(self) -> None:
+        if self.range is None:
+            return
+        if self.kind == "probability":
+            raise EstimateError("--range bounds a mean's values; with --at-least each run counts as yes or no: drop --range")
+        lo, hi = self.range
+        if not (math.isfinite(lo) and math.isfinite(hi) and hi > lo):
+            raise EstimateError(f"--range {lo:g} {hi:g}: give two finite numbers, the lower first, e.g. --range 0 50")
+
+    def half_width_goal(self, estimate: float) -> float:
+        """The half-width at which the estimation stops (``within``, or that share of ``|estimate|``)."""
+        return self.within * abs(estimate) if self.relative else self.within
+
+    def indifference(self) -> float:
+        """The threshold test's indifference half-width around ``below``."""
+        assert self.below is not None
+        return self.within * abs(self.below) if self.relative else self.within
+
+    def to_json(self) -> dict[str, Any]:
+        out = asdict(self)
+        out["range"] = list(self.range) if self.range is not None else None
+        return out
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """An estimation's outcome: the point estimate, the guaranteed interval and its method,
+    the approximation beside it, the runs used, why it stopped, and the threshold's answer."""
+
+    scenario: str
+    deployer: str
+    seed: int
+    horizon: float
+    question: Question
+    interval: Interval
+    approximation: Interval
+    status: str
+    range: tuple[float, float] | None = None
+    answer: str | None = None
+    test_method: str | None = None
+    low_value: float = math.nan
+    high_value: float = math.nan
+
+    @property
+    def runs(self) -> int:
+        return self.interval.n
+
+    @property
+    def complete(self) -> bool:
+        return self.status in (PRECISE, DECIDED)
+
+    def to_json(self) -> dict[str, Any]:
+        q, iv, ap = self.question, self.interval, self.approximation
+        return {
+            "scenario": self.scenario, "deployer": self.deployer, "seed": self.seed, "horizon_s": self.horizon,
+            "question": q.to_json(), "kind": q.kind, "status": self.status, "complete": self.complete, "runs": self.runs,
+            "estimate": iv.estimate, "low": iv.low, "high": iv.high, "half_width": iv.half_width, "confidence": q.interval_confidence,
+            "method": iv.method,
+            "approximation": {"low": _finite(ap.low), "high": _finite(ap.high), "method": ap.method},
+            "range": list(self.range) if self.range is not None else None,
+            "answer": self.answer, "test_method": self.test_method,
+            "min_value": self.low_value, "max_value": self.high_value,
+        }
+
+
+def _finite(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
+class Tracker:
+    """The question's statistics over the runs so far: :meth:`add` a run's value, :meth:`stop`
+    at a look (whether the question is answered), :meth:`result` the intervals."""
+
+    def __init__(self, question: Question, value_range: tuple[float, float] | None) -> None:
+        q = self.question = question
+        self.test: WaldTest | None = None
+        self.mean: BettingSequence | None = None
+        self.share: ProportionSequence | None = None
+        if q.kind == "probability":
+            self.share = ProportionSequence(q.delta)
+            if q.below is not None:
+                a = q.alpha if q.alpha is not None else q.delta
+                b = q.beta if q.beta is not None else q.delta
+                self.test = WaldTest(q.below, q.indifference(), a, b)
+        else:
+            assert value_range is not None
+            # a mean's threshold: the sequence at confidence 1 - alpha answers it
+            self.mean = BettingSequence(value_range[0], value_range[1], 1.0 - q.interval_confidence)
+        self.values: list[float] = []
+        self.answer: str | None = None
+        self._last: Interval | None = None
+
+    def add(self, value: float) -> None:
+        self.values.append(value)
+        if self.mean is not None:
+            self.mean.add(value)
+        else:
+            assert self.share is not None and self.question.at_least is not None
+            hit = value >= self.question.at_least
+            self.share.add(hit)
+            if self.test is not None:
+                self.test.add(hit)
+
+    @property
+    def last(self) -> Interval | None:
+        """The interval at the latest look (None before the first)."""
+        return self._last
+
+    def interval(self) -> Interval:
+        seq = self.mean if self.mean is not None else self.share
+        assert seq is not None
+        self._last = seq.interval()
+        return self._last
+
+    def stop(self) -> bool:
+        """At a look: whether the question is answered (the answer kept in ``answer``)."""
+        q = self.question
+        if self.test is not None:
+            self.answer = self.test.answer
+            if self.answer is not None:
+                self.interval()
+            return self.answer is not None
+        iv = self.interval()
+        if q.below is not None:
+            eps = q.indifference()
+            if iv.high < q.below:
+                self.answer = "yes"
+            elif iv.low >= q.below:
+                self.answer = "no"
+            elif q.below - eps <= iv.low and iv.high <= q.below + eps:
+                self.answer = "indifferent"
+            return self.answer is not None
+        return iv.half_width <= q.half_width_goal(iv.estimate)
+
+    def result(self) -> tuple[Interval, Interval]:
+        """The guaranteed interval at the last run, and the approximation printed beside it."""
+        iv = self._last if self._last is not None and self._last.n == len(self.values) else self.interval()
+        if self.share is not None:
+            return iv, clopper_pearson(self.share.yes, self.share.n, self.question.delta)
+        return iv, normal_interval(self.values, self.question.delta)
+
+
+def world_horizon(scenario: Any, until: float | None) -> float:
+    """The simulated seconds of each run: ``until``, or the scenario's horizon (a fleet and an
+    ``until`` past the horizon refused, as desmon run refuses them)."""
+    from desmon.sim.fleet import is_fleet
+    from desmon.sim.world import world_of
+
+    if is_fleet(scenario):
+        raise EstimateError(
+            f"{scenario.name!r} is a fleet of robots: desmon estimate runs one robot per run; estimate a single-robot scenario"
+        )
+    horizon = float(world_of(scenario).horizon)
+    if until is not None:
+        if not (math.isfinite(until) and 0 < until <= horizon):
+            raise EstimateError(f"--until {until:g}: give a positive number of simulated seconds, at most the horizon of {horizon:g} s")
+        return float(until)
+    return horizon
+
+
+def with_world(scenario: Any, changes: dict[str, Any]) -> Any:
+    """``scenario`` with these fields of its World replaced (``timing``, ``phases``, ``signals``); unchanged without any."""
+    if not changes:
+        return scenario
+    from dataclasses import replace
+
+    from desmon.sim.world import world_of
+
+    return replace(scenario, world=replace(world_of(scenario), **changes))
+
+
+def run_value(scenario: Any, deployer: Any, seed: int, until: float | None, metric: str, guard: Any = None) -> float:
+    """``metric`` of one run of ``scenario`` in the SimPy world with world seed ``seed``."""
+    from desmon.sim.engine import SimWorld
+    from desmon.sim.metrics import run_figures
+
+    world = SimWorld(scenario, deployer=deployer, seed=seed, until=until, guard=guard)
+    result = world.run()
+    figures = run_figures(result.metrics, len(result.violations))
+    figures[LONGEST] = longest_exposure(world.exposure.intervals)
+    return value_of(figures, metric)
+
+
+def serial_values(scenario: Any, deployer: Any, seed: int, until: float | None, metric: str, guard: Any = None) -> Iterator[float]:
+    """The runs' values in seed order, computed here one after the other."""
+    i = 0
+    while True:
+        yield run_value(scenario, deployer, run_seed(seed, i), until, metric, guard)
+        i += 1
+
+
+def _consume(tracker: Tracker, source: Iterable[float], progress: Callable[[Tracker], None] | None, clock: Callable[[], float]) -> str:
+    """Feed ``tracker`` the values of ``source`` until the question is answered or the budget is
+    spent; the status (the source is closed then, which ends the runs in flight)."""
+    q = tracker.question
+    status = MAX_RUNS
+    started = clock()
+    it = iter(source)
+    try:
+        for n, value in enumerate(it, 1):
+            tracker.add(value)
+            done = (tracker.test is not None or is_look(n)) and tracker.stop()
+            if progress is not None:
+                progress(tracker)
+            if done:
+                status = DECIDED if q.below is not None else PRECISE
+                break
+            if n >= q.max_runs:
+                break
+            if q.timeout is not None and clock() - started >= q.timeout:
+                status = TIMEOUT
+                break
+    finally:
+        close = getattr(it, "close", None)
+        if close is not None:
+            close()
+    if not tracker.values:
+        raise EstimateError("no run was made: the values' source gave none")
+    return status
+
+
+def estimate(
+    scenario: Any, question: Question | None = None, *, deployer: Any = "desmon", seed: int = 0, until: float | None = None,
+    values: Iterable[float] | None = None, progress: Callable[[Tracker], None] | None = None, guard: Any = None,
+    clock: Callable[[], float] = time.monotonic,
+) -> Estimate:
+    """Estimate ``question`` (a :class:`Question`; the mean exposure to +-5 % at 95 % unless
+    given) over independent runs of ``scenario`` in the SimPy world (module docstring).
+
+    ``values``: the runs' values in seed order if computed elsewhere (Dask batches); else
+    the runs are made here. ``progress(tracker)`` is called after every run. The result's
+    ``status`` says whether it stopped as asked or INCOMPLETE (``max-runs``, ``timeout``),
+    with the interval of the runs made so far."""
+    q = question if question is not None else Question()
+    q.check()
+    horizon = world_horizon(scenario, until)
+    value_range = q.range or natural_range(q.metric, horizon)
+    if q.kind == "mean" and value_range is None:
+        raise EstimateError(
+            f"--metric {q.metric} is a count with no bound known in advance, which a guaranteed interval of its mean needs: "
+            "declare the range every run's count lies in (--range 0 50), or estimate a probability (--at-least 1)"
+        )
+    tracker = Tracker(q, value_range if q.kind == "mean" else None)
+    source = values if values is not None else serial_values(scenario, deployer, seed, until, q.metric, guard)
+    status = _consume(tracker, source, progress, clock)
+    iv, approx = tracker.result()
+    return Estimate(
+        scenario=scenario.name, deployer=getattr(deployer, "name", str(deployer)), seed=seed, horizon=horizon, question=q,
+        interval=iv, approximation=approx, status=status, range=value_range if q.kind == "mean" else None,
+        answer=tracker.answer if status in (PRECISE, DECIDED) else None,
+        test_method=(tracker.test.METHOD if tracker.test is not None else "confidence sequence excludes the threshold") if q.below is not None else None,
+        low_value=min(tracker.values), high_value=max(tracker.values),
+    )

@@ -1,0 +1,169 @@
+"""The mean of a bounded quantity: a confidence sequence by betting, and the normal interval beside it.
+
+:class:`BettingSequence` is the hedged betting confidence sequence of Waudby-Smith and
+Ramdas ("Estimating means of bounded random variables by betting", JRSS-B 86(1), 2024,
+their hedged capital process with predictable plug-in bets). For values in ``[low, high]`` with an
+unknown mean ``mu``, rescaled to ``[0, 1]``, two gamblers bet on each new value, one
+that the mean is above a candidate ``m``, one that it is below::
+
+    K+_t(m) = prod_i (1 + l+_i(m) (y_i - m)),   K-_t(m) = prod_i (1 - l-_i(m) (y_i - m))
+
+with bets ``l+_i(m) = min(L_i, c/m)`` and ``l-_i(m) = min(L_i, c/(1-m))``, where ``L_i``
+depends on the values before run ``i`` only (a predictable plug-in of their variance)
+and ``c = 0.9`` (:data:`TRUNCATION`). At the true mean both capitals are nonnegative martingales starting at
+1, so by Ville's inequality the chance that either ever reaches ``2/delta`` is at most
+``delta``: the candidates ``m`` where neither has are a ``1 - delta`` confidence interval
+*at every run at once* -- valid however the number of runs was chosen (stopping once
+it is narrow enough, at a deadline, or never), not only at a number fixed in advance.
+``K+`` falls and ``K-`` rises with ``m``, so that set is an interval, found by bisection
+and intersected with the intervals of the earlier looks.
+
+Assumptions: the runs are independent and identically distributed (independent seeds
+of the same world), and every value lies in ``[low, high]`` (checked: a value outside
+is refused, since the guarantee would not hold). No other assumption on the
+distribution.
+
+:func:`normal_interval` is the textbook interval ``mean +- z s / sqrt(n)``: it assumes
+the central limit theorem has taken hold at this ``n`` and a number of runs fixed in
+advance; it is printed beside the guaranteed one, labelled as an approximation.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from desmon.errors import EstimateError
+
+__all__ = ["BettingSequence", "Interval", "normal_interval", "check_delta", "BISECTIONS"]
+
+#: bisection steps per bound: the interval is found to 2**-48 of the range
+BISECTIONS = 48
+#: the largest bet as a share of the candidate's distance to the range's end (any value below 1 keeps the guarantee;
+#: Waudby-Smith and Ramdas suggest 1/2 or 3/4, but a run's value is usually far from the range's upper end
+#: (a shift's exposure against its horizon), and there the bet against a too-high candidate is capped by
+#: this share: the closer to 1, the fewer runs a narrow interval needs when no run comes near that end)
+TRUNCATION = 0.9
+
+
+def check_delta(delta: float, what: str = "delta") -> float:
+    """``delta`` (an error probability: 1 - the confidence), or an EstimateError naming ``what``."""
+    if isinstance(delta, bool) or not (isinstance(delta, (int, float)) and math.isfinite(delta) and 0.0 < delta < 1.0):
+        raise EstimateError(f"{what} {delta!r}: give an error probability strictly between 0 and 1, e.g. 0.01")
+    return float(delta)
+
+
+@dataclass(frozen=True, slots=True)
+class Interval:
+    """A two-sided interval ``[low, high]`` around ``estimate`` from ``n`` runs, and how it was made."""
+
+    estimate: float
+    low: float
+    high: float
+    n: int
+    method: str
+
+    @property
+    def half_width(self) -> float:
+        return (self.high - self.low) / 2.0
+
+    def contains(self, value: float) -> bool:
+        return self.low <= value <= self.high
+
+
+class BettingSequence:
+    """The hedged betting confidence sequence (see the module docstring) for values in
+    ``[low, high]`` at confidence ``1 - delta``: :meth:`add` each run's value in seed
+    order, :meth:`interval` at any run."""
+
+    METHOD = "betting confidence sequence (Waudby-Smith & Ramdas 2024), valid at every run"
+
+    def __init__(self, low: float, high: float, delta: float) -> None:
+        if not (math.isfinite(low) and math.isfinite(high) and high > low):
+            raise EstimateError(f"range [{low:g}, {high:g}]: give a finite range whose upper end is above its lower end")
+        self.low, self.high, self.delta = float(low), float(high), check_delta(delta)
+        self._y: list[float] = []  # the values rescaled to [0, 1]
+        self._bets: list[float] = []  # L_i, fixed before value i was seen
+        self._sum = 0.0
+        self._sq = 0.0  # sum of (y_i - mean after i)^2: the plug-in variance
+        self._raw: list[float] = []
+        self._lo, self._hi = 0.0, 1.0  # the intersection of the looks so far, rescaled
+        self._log_level = math.log(2.0 / self.delta)
+
+    @property
+    def n(self) -> int:
+        return len(self._y)
+
+    @property
+    def values(self) -> tuple[float, ...]:
+        return tuple(self._raw)
+
+    def add(self, value: float) -> None:
+        """One more run's value; outside ``[low, high]`` is an EstimateError (the guarantee needs the range)."""
+        x = float(value)
+        if not (math.isfinite(x) and self.low <= x <= self.high):
+            raise EstimateError(
+                f"run {self.n + 1} gave {value!r}, outside the range [{self.low:g}, {self.high:g}] the interval's guarantee assumes; "
+                "declare a range that holds every run's value (--range LOW HIGH)"
+            )
+        t = self.n + 1
+        variance = (0.25 + self._sq) / t  # the plug-in variance of the values before this one
+        self._bets.append(math.sqrt(2.0 * self._log_level / (variance * t * math.log1p(t))))
+        y = (x - self.low) / (self.high - self.low)
+        self._y.append(y)
+        self._raw.append(x)
+        self._sum += y
+        mean = (0.5 + self._sum) / (t + 1)
+        self._sq += (y - mean) ** 2
+
+    def _log_capital(self, m: float, sign: int, y: np.ndarray, bets: np.ndarray) -> float:
+        """log K+(m) (``sign`` +1) or log K-(m) (-1) over the values so far."""
+        room = m if sign > 0 else 1.0 - m
+        lam = bets if room <= 0.0 else np.minimum(bets, TRUNCATION / room)
+        return float(np.sum(np.log1p(sign * lam * (y - m))))
+
+    def _bound(self, sign: int, y: np.ndarray, bets: np.ndarray) -> float:
+        """The lower (``sign`` +1) or upper (-1) end, rescaled: the last candidate known rejected
+        on that side (so the interval holds every candidate not rejected)."""
+        rejected, kept = (0.0, 1.0) if sign > 0 else (1.0, 0.0)
+        if self._log_capital(rejected, sign, y, bets) < self._log_level:
+            return rejected
+        for _ in range(BISECTIONS):
+            mid = (rejected + kept) / 2.0
+            if self._log_capital(mid, sign, y, bets) >= self._log_level:
+                rejected = mid
+            else:
+                kept = mid
+        return rejected
+
+    def interval(self) -> Interval:
+        """The interval at this run: the candidates no bet has rejected, intersected with the earlier looks'."""
+        n = self.n
+        if n == 0:
+            return Interval(math.nan, self.low, self.high, 0, self.METHOD)
+        y, bets = np.asarray(self._y), np.asarray(self._bets)
+        lo, hi = self._bound(+1, y, bets), self._bound(-1, y, bets)
+        if max(lo, self._lo) <= min(hi, self._hi):  # (empty only where the guarantee failed: keep this look's)
+            lo, hi = max(lo, self._lo), min(hi, self._hi)
+        self._lo, self._hi = lo, hi
+        span = self.high - self.low
+        return Interval(math.fsum(self._raw) / n, self.low + lo * span, self.low + hi * span, n, self.METHOD)
+
+
+def normal_interval(values: list[float] | tuple[float, ...], delta: float) -> Interval:
+    """``mean +- z_{1-delta/2} s / sqrt(n)`` (Student's t quantile below 30 runs): the CLT
+    approximation, not guaranteed (module docstring). Needs 2 runs or more."""
+    from scipy.stats import norm, t as student
+
+    n = len(values)
+    mean = math.fsum(values) / n if n else math.nan
+    if n < 2:
+        return Interval(mean, -math.inf, math.inf, n, NORMAL_METHOD)
+    sd = math.sqrt(math.fsum((v - mean) ** 2 for v in values) / (n - 1))
+    q = float(student.ppf(1 - delta / 2, n - 1)) if n < 30 else float(norm.ppf(1 - delta / 2))
+    return Interval(mean, mean - q * sd / math.sqrt(n), mean + q * sd / math.sqrt(n), n, NORMAL_METHOD)
+
+
+NORMAL_METHOD = "normal approximation (CLT), not guaranteed"

@@ -1,0 +1,127 @@
+"""desmon estimate: as a user runs it -- stops once precise enough, INCOMPLETE (exit 3) with the
+interval so far, threshold answers with their exit codes, strict JSON, the same bytes for
+the same seed, in this process or on Dask workers."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from desmon.cli import main
+from desmon.estimate import Question, estimate
+from desmon.estimate.loop import is_look, run_seed
+from desmon.loader import load_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+#: a 7 s task whose runs take a few hundredths of a second
+QUICK = str(ROOT / "scenarios" / "two_detectors.py")
+#: a scenario whose exposure varies from seed to seed under exponential timing
+VARIED = str(ROOT / "scenarios" / "coffee_handover.py")
+
+
+def _strict(text: str) -> dict:
+    def refuse(name: str) -> None:
+        raise AssertionError(f"not strict JSON: {name}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def _estimate(capsys, *args: str) -> tuple[int, str, str]:
+    code = main(["estimate", *args, "--no-progress"])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_it_stops_once_the_guaranteed_interval_is_as_narrow_as_asked(capsys):
+    code, out, err = _estimate(capsys, VARIED, "--timing", "exponential", "--within", "25%", "--json")
+    doc = _strict(out)
+    assert code == 0 and doc["status"] == "precise" and doc["complete"] is True
+    assert doc["half_width"] <= 0.25 * doc["estimate"] and doc["low"] <= doc["estimate"] <= doc["high"]
+    assert 2 <= doc["runs"] < 10_000 and doc["min_value"] < doc["max_value"]  # the runs differ
+    assert "valid at every run" in doc["method"] and "not guaranteed" in doc["approximation"]["method"]
+    assert doc["range"] == [0.0, doc["horizon_s"]]
+
+
+def test_the_same_seed_gives_the_same_bytes_and_another_seed_other_runs(capsys):
+    args = (VARIED, "--timing", "exponential", "--within", "40%")
+    first, second = _estimate(capsys, *args, "--seed", "4")[1], _estimate(capsys, *args, "--seed", "4")[1]
+    other = _estimate(capsys, *args, "--seed", "5")[1]
+    assert first == second and first != other
+    assert "guaranteed" in first and "normal approximation (CLT), not guaranteed" in first and "seed 4" in first
+    assert len({run_seed(4, i) for i in range(100)} | {run_seed(5, i) for i in range(100)}) == 200  # no run shared
+
+
+def test_the_run_budget_ends_incomplete_with_the_interval_of_the_runs_made(capsys):
+    code, out, err = _estimate(capsys, QUICK, "--within", "0.1%", "--max-runs", "4", "--json")
+    doc = _strict(out)
+    assert code == 3 and doc["status"] == "max-runs" and doc["runs"] == 4 and doc["complete"] is False
+    assert doc["low"] <= doc["estimate"] <= doc["high"]
+    assert err.strip().splitlines() == [
+        "desmon estimate: INCOMPLETE: --max-runs 4 reached before the question was answered; the interval above is that of the 4 runs made"
+    ]
+    code, out, err = _estimate(capsys, QUICK, "--within", "0.1%", "--timeout", "0.001")
+    assert code == 3 and "--timeout 0.001 s passed" in err and "runs: 1 " in out
+
+
+@pytest.mark.parametrize("below, code, word", [("6", 0, "YES, the mean exposure_s is below 6"), ("0.5", 1, "NO, the mean exposure_s is not below 0.5")])
+def test_a_threshold_question_answers_yes_or_no_with_its_error_probability(capsys, below, code, word):
+    got, out, _err = _estimate(capsys, QUICK, "--below", below, "--within", "0.2", "--alpha", "0.01")
+    assert got == code and word in out and "wrong with probability at most 0.01" in out
+    assert "99 % interval" in out  # the sequence that answers is at confidence 1 - alpha
+
+
+def test_a_probability_comes_with_clopper_pearson_beside_its_sequence(capsys):
+    code, out, _err = _estimate(capsys, QUICK, "--at-least", "1", "--within", "0.1", "--json")
+    doc = _strict(out)
+    assert code == 0 and doc["kind"] == "probability" and doc["estimate"] == 1.0 and doc["high"] == 1.0
+    assert doc["half_width"] <= 0.1 and doc["range"] is None
+    assert "Robbins" in doc["method"] and "Clopper-Pearson" in doc["approximation"]["method"]
+    assert doc["approximation"]["low"] > doc["low"]  # the fixed-n interval is narrower: it may not be stopped on
+
+
+def test_walds_test_answers_a_probability_threshold(capsys):
+    code, out, _err = _estimate(capsys, QUICK, "--at-least", "1", "--below", "0.5", "--within", "0.1")
+    assert code == 1 and "NO, P(exposure_s >= 1) is not below 0.5" in out and "Wald's sequential probability ratio test" in out
+
+
+def test_the_api_takes_a_question_and_calls_progress_after_every_run():
+    seen = []
+    e = estimate(load_scenario(QUICK), Question(within=0.3, confidence=0.9), seed=2, progress=lambda t: seen.append(len(t.values)))
+    assert e.complete and seen == list(range(1, e.runs + 1))
+    assert e.to_json()["question"]["confidence"] == 0.9
+
+
+def test_the_stopping_rule_looks_after_every_early_run_then_every_sixty_fourth_of_them():
+    looks = [n for n in range(1, 400) if is_look(n)]
+    assert looks[:64] == list(range(1, 65)) and 130 in looks and 131 not in looks
+    assert all(b - a <= max(1, a // 64) + 1 for a, b in zip(looks, looks[1:]))
+
+
+@pytest.mark.slow
+def test_two_dask_workers_print_the_same_bytes_as_this_process(capsys):
+    pytest.importorskip("distributed")
+    args = (VARIED, "--timing", "exponential", "--within", "30%", "--seed", "7")
+    here = _estimate(capsys, *args)
+    on_dask = _estimate(capsys, *args, "--workers", "2")
+    assert here[0] == on_dask[0] == 0 and here[1] == on_dask[1]
+
+
+def test_the_longest_unmonitored_stretch_joins_intervals_that_touch():
+    from desmon.estimate.measures import longest_exposure
+
+    assert longest_exposure([]) == 0.0
+    assert longest_exposure([(0.0, 5.0, "grasp"), (5.0, 12.0, "carry"), (20.0, 26.0, "carry")]) == 12.0
+    assert longest_exposure([(0.0, 5.0, "grasp"), (6.0, 12.0, "carry")]) == 6.0
+
+
+def test_the_chance_of_a_long_unmonitored_stretch_is_estimated_from_the_runs(capsys):
+    from desmon.estimate.loop import run_value
+
+    scenario = load_scenario(VARIED)
+    longest = [run_value(scenario, "desmon", run_seed(0, i), None, "longest_exposure_s") for i in range(3)]
+    total = [run_value(scenario, "desmon", run_seed(0, i), None, "exposure_s") for i in range(3)]
+    assert all(0 < lo <= t for lo, t in zip(longest, total))
+    code, out, _err = _estimate(capsys, VARIED, "--metric", "longest_exposure_s", "--at-least", "5", "--within", "0.2", "--json")
+    assert code == 0 and _strict(out)["question"]["metric"] == "longest_exposure_s"

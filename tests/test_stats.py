@@ -1,0 +1,143 @@
+"""desmon.stats: the guaranteed intervals hold the true value as often as promised, at every
+run; the approximations beside them are what they say; Wald's test keeps its error bounds."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.stats import beta as beta_dist
+
+from desmon.errors import EstimateError
+from desmon.estimate.coverage import fails
+from desmon.stats import BettingSequence, ProportionSequence, WaldTest, clopper_pearson, normal_interval
+
+
+def _skewed(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Values in [0, 1] shaped like a shift's exposure: often 0, a long right tail (mean 0.7 * 0.1)."""
+    return np.where(rng.random(n) < 0.3, 0.0, np.minimum(rng.gamma(2.0, 0.05, n), 1.0))
+
+
+SKEWED_MEAN = 0.7 * 0.1  # (the gamma's mass above 1 is below 1e-40)
+
+
+def test_the_betting_sequence_holds_the_mean_at_every_look_as_often_as_promised():
+    rng = np.random.default_rng(11)
+    delta, reps, n = 0.1, 150, 120
+    ever_out = 0
+    for _ in range(reps):
+        cs = BettingSequence(0.0, 1.0, delta)
+        out = False
+        for i, x in enumerate(_skewed(rng, n), 1):
+            cs.add(float(x))
+            if i in (10, 30, 60, 120):  # several looks: the guarantee is for all of them at once
+                out |= not cs.interval().contains(SKEWED_MEAN)
+        ever_out += out
+    assert not fails(ever_out, reps, delta), ever_out
+
+
+def test_the_betting_sequence_narrows_keeps_to_the_range_and_refuses_a_value_outside_it():
+    rng = np.random.default_rng(3)
+    cs = BettingSequence(10.0, 20.0, 0.05)
+    widths = []
+    for i, x in enumerate(10.0 + 10.0 * _skewed(rng, 400), 1):
+        cs.add(float(x))
+        if i % 50 == 0:
+            iv = cs.interval()
+            assert 10.0 <= iv.low <= iv.estimate <= iv.high <= 20.0
+            widths.append(iv.half_width)
+    assert widths == sorted(widths, reverse=True) and widths[-1] < widths[0] / 3  # the looks' intersection only narrows
+    assert iv.estimate == pytest.approx(float(np.mean(cs.values)))
+    with pytest.raises(EstimateError, match=r"run 401 gave 20.5, outside the range \[10, 20\].*--range LOW HIGH"):
+        cs.add(20.5)
+    with pytest.raises(EstimateError, match="range"):
+        BettingSequence(1.0, 1.0, 0.05)
+    with pytest.raises(EstimateError, match="between 0 and 1"):
+        BettingSequence(0.0, 1.0, 1.5)
+
+
+def test_a_constant_value_gives_an_interval_around_it_that_shrinks_like_one_over_n():
+    # the range term of any distribution-free interval: only runs can rule out a rare value far off
+    cs = BettingSequence(0.0, 1.0, 0.05)
+    for _ in range(200):
+        cs.add(0.25)
+    a = cs.interval()
+    for _ in range(200):
+        cs.add(0.25)
+    b = cs.interval()
+    assert a.low <= 0.25 <= a.high and b.low <= 0.25 <= b.high
+    assert b.half_width < 0.6 * a.half_width
+
+
+def test_the_normal_interval_is_the_textbook_one():
+    values = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0] * 4
+    iv = normal_interval(values, 0.05)
+    half = 1.959964 * np.std(values, ddof=1) / math.sqrt(40)
+    assert iv.low == pytest.approx(5.5 - half, rel=1e-6) and iv.high == pytest.approx(5.5 + half, rel=1e-6)
+    assert "not guaranteed" in iv.method
+
+
+def test_clopper_pearson_is_the_exact_binomial_interval():
+    iv = clopper_pearson(0, 10, 0.05)
+    assert iv.low == 0.0 and iv.high == pytest.approx(1 - 0.025 ** (1 / 10))
+    iv = clopper_pearson(7, 20, 0.1)
+    assert iv.low == pytest.approx(beta_dist.ppf(0.05, 7, 14)) and iv.high == pytest.approx(beta_dist.ppf(0.95, 8, 13))
+
+
+def test_the_proportion_sequence_holds_p_at_every_look_and_is_wider_than_clopper_pearson():
+    rng = np.random.default_rng(5)
+    delta, reps, p = 0.1, 300, 0.2
+    ever_out = 0
+    for _ in range(reps):
+        cs = ProportionSequence(delta)
+        out = False
+        for i, hit in enumerate(rng.random(200) < p, 1):
+            cs.add(bool(hit))
+            if i in (20, 50, 100, 200):
+                out |= not cs.interval().contains(p)
+        ever_out += out
+    assert not fails(ever_out, reps, delta), ever_out
+    iv, cp = cs.interval(), clopper_pearson(cs.yes, cs.n, delta)
+    assert iv.low < cp.low and cp.high < iv.high  # the price of looking at every run
+    assert iv.low <= cs.yes / cs.n <= iv.high
+
+
+def test_the_coverage_judge_fails_a_method_that_misses_more_often_than_promised():
+    assert not fails(10, 200, 0.05) and not fails(0, 200, 0.05)
+    assert fails(31, 200, 0.05)  # the normal interval's 84.5 % at 10 runs of a skewed figure
+    assert fails(6, 20, 0.05) and not fails(5, 20, 0.05)  # P(Binomial(20, 0.05) >= 6) = 0.0003, >= 5: 0.0026
+
+
+@pytest.mark.parametrize("p, expected", [(0.02, "yes"), (0.15, "no")])
+def test_wald_answers_a_threshold_question_well_outside_the_indifference(p, expected):
+    rng = np.random.default_rng(2)
+    answers = []
+    for _ in range(40):
+        test = WaldTest(0.08, 0.03, 0.05, 0.05)
+        for hit in rng.random(5000) < p:
+            if test.add(bool(hit)).answer is not None:
+                break
+        answers.append(test.answer)
+    assert answers.count(expected) >= 38
+
+
+def test_walds_error_probabilities_hold_at_the_edge_of_the_indifference():
+    # at p = p0 = threshold + indifference a yes is the wrong answer: at most alpha of the time
+    rng = np.random.default_rng(9)
+    alpha, reps = 0.1, 300
+    wrong = 0
+    for _ in range(reps):
+        test = WaldTest(0.3, 0.1, alpha, 0.1)
+        for hit in rng.random(10_000) < 0.4:
+            if test.add(bool(hit)).answer is not None:
+                break
+        wrong += test.answer == "yes"
+    assert not fails(wrong, reps, alpha), wrong
+
+
+def test_wald_refuses_a_threshold_whose_indifference_leaves_0_1():
+    with pytest.raises(EstimateError, match=r"weighs -0.01 against 0.05.*strictly between 0 and 1"):
+        WaldTest(0.02, 0.03, 0.05, 0.05)
+    with pytest.raises(EstimateError, match="--alpha"):
+        WaldTest(0.5, 0.1, 0.0, 0.05)

@@ -1,0 +1,122 @@
+"""desmon sweep --job estimate: one whole estimation per grid point, its guaranteed interval a
+row of the table (docs/estimate.md). The runs are handed over in this process (a stand-in
+for the Dask cluster, as tests/test_sweep_analyze.py does)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+pd = pytest.importorskip("pandas")
+pytest.importorskip("distributed")
+
+from desmon.cli import main  # noqa: E402
+from desmon.estimate import Question, estimate  # noqa: E402
+from desmon.loader import load_scenario  # noqa: E402
+from desmon.sweep import core  # noqa: E402
+from desmon.sweep.jobs import run_point  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+PLATFORM_CRASH = str(ROOT / "scenarios" / "platform_crash.py")
+
+
+def _in_process(spec, runs, on_row, **kw):  # type: ignore[no-untyped-def]
+    for run in runs:
+        on_row(run, run_point(spec, run))
+    return 1
+
+
+@pytest.fixture
+def local(monkeypatch):
+    monkeypatch.setattr(core, "execute", _in_process)
+
+
+def test_each_point_gets_the_interval_desmon_estimate_gives_with_its_seed(tmp_path, local, capsys):
+    out = tmp_path / "est.csv"
+    argv = ["sweep", PLATFORM_CRASH, "--job", "estimate", "-p", "stochastic=False,True", "--within", "40%", "--max-runs", "30",
+            "--until", "20", "--no-progress", "-o", str(out)]
+    code = main(argv)
+    df = pd.read_csv(out)
+    assert len(df) == 2 and set(df["within"]) == {"40%"} and set(df["metric"]) == {"exposure_s"}
+    for row in df.to_dict("records"):
+        assert row["low"] <= row["estimate"] <= row["high"] and row["runs"] <= 30
+        assert row["exit_code"] == (0 if row["status"] == "precise" else 3)
+        assert (row["exit_code"] == 3) == str(row["error"]).startswith("INCOMPLETE: --max-runs 30 reached")
+        params = {"stochastic": str(row["stochastic"])}
+        e = estimate(load_scenario(PLATFORM_CRASH, params), Question(within=0.4, max_runs=30), seed=int(row["seed"]), until=20)
+        assert (e.interval.low, e.interval.high, e.runs) == pytest.approx((row["low"], row["high"], row["runs"]))
+    assert code == (1 if (df["exit_code"] != 0).any() else 0)
+
+
+@pytest.mark.parametrize("extra, says", [
+    (["--within", "-2"], "--within must be a positive half-width"),
+    (["--confidence", "2"], "--confidence must be a confidence strictly between 0 and 1"),
+    (["--job", "run", "--within", "5%"], "--within applies to --job estimate, not --job run; drop it"),
+])
+def test_what_estimate_cannot_do_is_refused_in_one_line(tmp_path, capsys, extra, says):
+    argv = ["sweep", PLATFORM_CRASH, "--job", "estimate", *extra, "-o", str(tmp_path / "x.csv")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert says in err and len(err.strip().splitlines()) == 1
+
+
+def test_sweep_plot_draws_each_points_estimate_with_its_guaranteed_interval(tmp_path, local, monkeypatch):
+    pytest.importorskip("matplotlib")
+    from desmon.sweep import plot
+
+    out, png = tmp_path / "est.csv", tmp_path / "est.png"
+    coffee = str(ROOT / "scenarios" / "coffee_shift.py")
+    main(["sweep", coffee, "--job", "estimate", "-p", "hours=0.01,0.02", "--within", "40%", "--max-runs", "12", "--no-progress", "-o", str(out)])
+    drawn = {}
+    real = plot._estimates
+
+    def spy(ax, df, params, x):  # type: ignore[no-untyped-def]
+        drawn["rows"] = len(df)
+        method = real(ax, df, params, x)
+        drawn["bands"] = [c.get_paths()[0].vertices[:, 1] for c in ax.collections]
+        return method
+
+    monkeypatch.setattr(plot, "_estimates", spy)
+    assert main(["sweep-plot", str(out), "-x", "hours", "-y", "estimate", "-o", str(png)]) == 0
+    df = pd.read_csv(out)
+    assert png.stat().st_size > 0 and drawn["rows"] == len(df) == 2  # INCOMPLETE points drawn too
+    (band,) = drawn["bands"]
+    assert min(band) == pytest.approx(df["low"].min()) and max(band) == pytest.approx(df["high"].max())
+
+
+def test_sweep_plot_bars_each_mean_with_the_guaranteed_interval_of_a_figure_in_seconds(tmp_path, local, monkeypatch):
+    pytest.importorskip("matplotlib")
+    from desmon.sweep import plot
+
+    out = tmp_path / "runs.csv"
+    coffee = str(ROOT / "scenarios" / "coffee_shift.py")
+    main(["sweep", coffee, "-p", "hours=0.01,0.02", "--seeds", "3", "--no-progress", "-o", str(out)])
+    asked = []
+    real = plot.mean_interval
+
+    def spy(values, value_range):  # type: ignore[no-untyped-def]
+        got = real(values, value_range)
+        asked.append((len(values), value_range, got))
+        return got
+
+    monkeypatch.setattr(plot, "mean_interval", spy)
+    assert main(["sweep-plot", str(out), "-x", "hours", "-y", "exposure_s", "-o", str(tmp_path / "a.png")]) == 0
+    # each point's 3 seeds; its range: [0, the point's horizon] (hours x 3600 s), read from the scenario
+    assert [(n, r) for n, r, _got in asked] == [(3, (0.0, 36.0)), (3, (0.0, 72.0))]
+    df = pd.read_csv(out)
+    for (_n, _r, (low, high, method)), (_h, part) in zip(asked, df.groupby("hours")):
+        assert method == "guaranteed" and low <= part["exposure_s"].mean() <= high
+    asked.clear()
+    assert main(["sweep-plot", str(out), "-x", "hours", "-y", "starts", "-o", str(tmp_path / "b.png")]) == 0
+    assert {(r, got[2]) for _n, r, got in asked} == {(None, "normal approximation, not guaranteed")}  # a count: no known range
+
+
+def test_mean_interval_is_the_betting_sequence_in_a_known_range_else_the_normal_one():
+    from desmon.sweep.plot import mean_interval
+    from desmon.stats import normal_interval
+
+    low, high, method = mean_interval([10.0, 12.0, 11.0], (0.0, 100.0))
+    assert method == "guaranteed" and 0.0 <= low <= 11.0 <= high <= 100.0
+    iv = normal_interval([10.0, 12.0, 11.0], 0.05)
+    assert mean_interval([10.0, 12.0, 11.0], None) == (iv.low, iv.high, "normal approximation, not guaranteed")
