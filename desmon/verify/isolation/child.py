@@ -191,10 +191,13 @@ class _ChildDecoder(pickle.Unpickler):
             return self.proxy
         return super().find_class(module, name)
 
-    def proxy(self, n: int, role: str) -> "_Remote":
+    def proxy(self, n: int, role: str, fields: dict | None = None) -> "_Remote":
+        """The proxy of desmon's handle ``n``; ``fields``: what it sent with it of the object's immutable fields."""
         made = self.link.proxies.get(n)
         if made is None:
             made = self.link.proxies[n] = (_RemoteQuery if role == "query" else _Remote)(self.link, (n, role))
+            if fields:
+                made._methods.update(fields)
         return made
 
 

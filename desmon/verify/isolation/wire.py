@@ -98,10 +98,13 @@ class Encoder(pickle.Pickler):
             return NotImplemented  # (a record by value, a class or a module's function by its name)
         if kind is Handle:
             return handle, self.handles.give(obj.obj, obj.role)
-        return handle, self.handles.give(obj)
+        n, role = self.handles.give(obj)
+        if kind is PlatformHandle:  # (what a reaction may read of it freely, and that never changes: sent with it)
+            return handle, (n, role, {"platform": obj.platform, "deployed": obj.deployed, "name": obj.platform.name})
+        return handle, (n, role)
 
 
-def handle(n: int, role: str) -> Any:  # pragma: no cover - never called: the child's decoder answers it
+def handle(n: int, role: str, fields: dict | None = None) -> Any:  # pragma: no cover - never called: the child's decoder answers it
     raise pickle.UnpicklingError("a handle outside a conversation")
 
 
