@@ -250,6 +250,20 @@ def _check_trials(trials: object) -> None:
         raise AnalysisError(f"--trials {trials!r} must be a whole number from 1 to {MAX_TRIALS:,}: pass e.g. --trials 2000")
 
 
+def _detection(
+    scenario: Scenario, phases: int, trials: int, start_catch: dict[str, Any] | None, budget: Callable[..., None],
+    out: list[tuple[dict[str, Any], dict[str, Any]]],
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The default ``miss`` and ``start_catch`` of :func:`analyze` (a given ``start_catch``
+    kept), also appended to ``out``."""
+    if start_catch is None:
+        rates = _rates(scenario, phases, trials, 0, None if budget is no_budget else budget)
+    else:
+        rates = (detector_miss(scenario, phases=phases, trials=trials), start_catch)
+    out.append(rates)
+    return rates
+
+
 def analyze(
     scenario: Scenario,
     deployer: Any = "desmon",
@@ -275,9 +289,13 @@ def analyze(
     check_number("--horizon", T, error=AnalysisError, positive=True, unit=" of seconds")
     check_rates(mw, float(T))
     _check_trials(trials)
-    if miss is None:
-        miss, start_catch = _rates(scenario, phases, trials, 0, None if budget is no_budget else budget) if start_catch is None else (detector_miss(scenario, phases=phases, trials=trials), start_catch)
-    chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch, guard=guard, budget=budget)
+    trials_run: list[tuple[dict[str, Any], dict[str, Any]]] = []  # the detection trials, run once the chain is built
+    chain = build_chain(
+        scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch, guard=guard, budget=budget,
+        detection=None if miss is not None else lambda: _detection(scenario, phases, trials, start_catch, budget, trials_run),
+    )
+    if trials_run:
+        miss, start_catch = trials_run[0]
     t0 = time.perf_counter()
     Q, _exit = chain.generator()
     p0 = _p0(chain)

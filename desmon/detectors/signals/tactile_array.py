@@ -311,22 +311,45 @@ def render_pad_moments(
         s = sup.size
         frame = pos // s if s else pos
         cell = sup[pos % s] if s else pos
+        mu_on = mu.reshape(-1)[pos]
+    elif p.deadband > 0.0:
+        frame, cell, mu_on = _moving_cells(amp, yc, xc, sy, sx, rows, p)
     else:
         ey = np.exp(-((ii - yc[..., None]) ** 2) / (2.0 * sy[:, None, None] ** 2))
         ex = np.exp(-((jj - xc[..., None]) ** 2) / (2.0 * sx[:, None, None] ** 2))
         mu = amp[..., None, None] * (ey[..., :, None] * ex[..., None, :])
-        mask = mu >= p.deadband
-        pos = np.flatnonzero(mask)
+        pos = np.flatnonzero(mu >= p.deadband)
         frame = pos // cells
         cell = pos % cells
-    mu_on = mu.reshape(-1)[pos]
-    vals = np.clip(np.rint(mu_on + p.noise_counts * normals(pos.size)), 0.0, FULL_SCALE)
+        mu_on = mu.reshape(-1)[pos]
+    vals = np.clip(np.rint(mu_on + p.noise_counts * normals(mu_on.size)), 0.0, FULL_SCALE)
     nk = n * k
     s_sum = np.bincount(frame, weights=vals, minlength=nk).reshape(n, k)
     s_i = np.bincount(frame, weights=vals * (cell // PAD_COLS), minlength=nk).reshape(n, k)
     s_j = np.bincount(frame, weights=vals * (cell % PAD_COLS), minlength=nk).reshape(n, k)
     extra = (frame * cells + cell, vals) if want_values else None
     return s_sum, s_i, s_j, extra
+
+
+def _moving_cells(amp: Arr, yc: Arr, xc: Arr, sy: Arr, sx: Arr, rows: int, p: SignalParams) -> tuple[Arr, Arr, Arr]:
+    """The cells of :func:`render_pad_moments` that reach a positive dead-band, where the
+    centre may move: ``(frame, cell, mu)`` in C order over (frame, row, column), frames
+    flat over ``(n, K)``. The same values as evaluating every cell of every frame
+    (``mu = amp * (ey_i * ex_j)``, each factor from the same expression), on fewer cells:
+    ``ey_i, ex_j <= 1`` and rounding is monotone, so ``mu <= amp * ey_i <= amp``, and a
+    frame whose amplitude, or a row whose ``amp * ey_i``, lies below the dead-band
+    has no cell that reaches it."""
+    k = amp.shape[1]
+    flat = amp.reshape(-1)
+    live = np.flatnonzero(flat >= p.deadband)  # frames, ascending
+    trial = live // k
+    a = flat[live]
+    ey = np.exp(-((_II[:rows] - yc.reshape(-1)[live][:, None]) ** 2) / (2.0 * sy ** 2)[trial][:, None])
+    ex = np.exp(-((_JJ - xc.reshape(-1)[live][:, None]) ** 2) / (2.0 * sx ** 2)[trial][:, None])
+    lf, row = np.nonzero(a[:, None] * ey >= p.deadband)  # (frame, row) pairs in C order
+    mu = a[lf][:, None] * (ey[lf, row][:, None] * ex[lf])
+    pair, col = np.nonzero(mu >= p.deadband)
+    return live[lf[pair]], row[pair] * PAD_COLS + col, mu[pair, col]
 
 
 def render_rows(
