@@ -272,8 +272,7 @@ def analyze(
     start_failure_p: float | None = None,
     horizon: float | None = None,
     steady: bool = True, max_states: int | None = None,
-    miss: dict[str, float] | None = None,
-    start_catch: dict[str, Any] | None = None,
+    miss: dict[str, float] | None = None, start_catch: dict[str, Any] | None = None,
     trials: int = 200, guard: Any = None,
     progress: Callable[[int], None] | None = None, status: Callable[[str], None] | None = None,
     budget: Callable[..., None] = no_budget,
@@ -289,13 +288,10 @@ def analyze(
     check_number("--horizon", T, error=AnalysisError, positive=True, unit=" of seconds")
     check_rates(mw, float(T))
     _check_trials(trials)
-    trials_run: list[tuple[dict[str, Any], dict[str, Any]]] = []  # the detection trials, run once the chain is built
-    chain = build_chain(
-        scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch, guard=guard, budget=budget,
-        detection=None if miss is not None else lambda: _detection(scenario, phases, trials, start_catch, budget, trials_run),
-    )
-    if trials_run:
-        miss, start_catch = trials_run[0]
+    ran: list[tuple[dict[str, Any], dict[str, Any]]] = []  # the detection trials, run once the chain is built (a crash ends it first)
+    chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch, guard=guard,
+                        budget=budget, detection=None if miss is not None else lambda: _detection(scenario, phases, trials, start_catch, budget, ran))
+    miss, start_catch = ran[0] if ran else (miss, start_catch)
     t0 = time.perf_counter()
     Q, _exit = chain.generator()
     p0 = _p0(chain)
