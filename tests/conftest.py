@@ -272,7 +272,6 @@ LONGEST = (
     "test_exposure_definition.py::test_leaving_out_the_no_rule_time_or_the_warm_up_falls_outside_the_interval",
     "test_analyze.py::test_a_wrong_lease_start_up_falls_outside_the_interval",
     "test_deployer_guard.py::test_timeout_stops_a_worker_process_stuck_in_a_reaction",
-    "test_analyze.py::test_a_chain_past_max_states_is_incomplete_exit_3_with_nothing_written",
     "test_sim_fuzz.py::test_random_fault_schedules_keep_the_invariants",
 )
 
