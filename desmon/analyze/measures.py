@@ -255,9 +255,13 @@ def _detection(
     out: list[tuple[dict[str, Any], dict[str, Any]]],
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """The default ``miss`` and ``start_catch`` of :func:`analyze` (a given ``start_catch``
-    kept), also appended to ``out``."""
+    kept), also appended to ``out``. A budget without a limit (a
+    :class:`~desmon.analyze.markov.Budget` with neither a timeout nor a memory limit)
+    never raises: the trials do not ask it, so a process that analyses the same task
+    again finds them in :func:`~desmon.detectors.evaluation.detection_rates`'s cache."""
     if start_catch is None:
-        rates = _rates(scenario, phases, trials, 0, None if budget is no_budget else budget)
+        unlimited = budget is no_budget or (getattr(budget, "timeout", 0) is None and getattr(budget, "max_memory", 0) is None)
+        rates = _rates(scenario, phases, trials, 0, None if unlimited else budget)
     else:
         rates = (detector_miss(scenario, phases=phases, trials=trials), start_catch)
     out.append(rates)

@@ -169,15 +169,11 @@ def _simulation(args: argparse.Namespace, scenario: Any, result: Any, budget: An
 
 
 def _budget(args: argparse.Namespace) -> Any:
-    """``--timeout`` (counted from the command's start, as desmon verify's) and ``--max-memory``;
-    without either, :func:`~desmon.analyze.markov.no_budget` (so the detection trials are
-    the cached ones of an earlier analysis in the same process)."""
-    from desmon.analyze.markov import Budget, no_budget
+    """``--timeout`` (counted from the command's start, as desmon verify's) and ``--max-memory``."""
+    from desmon.analyze.markov import Budget
     from desmon.cli.verify import check_megabytes
 
     check_megabytes("--max-memory", args.max_memory)
-    if args.timeout is None and args.max_memory is None:
-        return no_budget
     return Budget(args.timeout, args.max_memory, getattr(args, "_started", None))
 
 
