@@ -94,19 +94,30 @@ def test_the_detection_trials_stop_at_the_timeout_too(tmp_path):
 
 
 @pytest.mark.slow
-def test_the_simulated_seeds_stop_at_the_timeout_too(tmp_path):
-    """--simulate runs one hour per seed once the chain is solved (about 12 s here): the
-    timeout ends the thousand runs between two of them."""
+def test_the_simulated_seeds_stop_at_the_timeout_too(tmp_path, monkeypatch, capsys):
+    """--simulate runs one hour per seed once the chain is solved (this small chain, the
+    shift without faults and one trial per rate, in about a second): the timeout ends the
+    thousand runs (a minute of them) between two of them."""
+    import desmon.sim.engine as engine
+    from desmon.cli import main
+
+    runs: list[float] = []
+    simulate = engine.simulate
+
+    def counted(*args, **kwargs):  # type: ignore[no-untyped-def]
+        runs.append(time.monotonic())
+        return simulate(*args, **kwargs)
+
+    monkeypatch.setattr(engine, "simulate", counted)
     out = tmp_path / "a.json"
     t0 = time.monotonic()
-    done = subprocess.run(
-        [sys.executable, "-m", "desmon", "analyze", "scenarios/coffee_shift.py", "-p", "hours=1", "--simulate", "1000", "--timeout", "40",
-         "--json", str(out)],
-        capture_output=True, text=True, timeout=300,
-    )
+    code = main(["analyze", str(SHIFT), "-p", "hours=1", "-p", "faults=False", "--trials", "1", "--simulate", "1000", "--timeout", "6",
+                 "--json", str(out), "--no-progress"])
     took = time.monotonic() - t0
-    assert done.returncode == 3 and "INCOMPLETE: timeout 40s" in done.stderr, done.stderr
-    assert took < 70, took
+    err = capsys.readouterr().err
+    assert code == 3 and "INCOMPLETE: timeout 6s" in err, err
+    assert 1 <= len(runs) < 1000, len(runs)  # the runs began once the chain was solved, and the timeout ended them
+    assert took < 6 + 10, took  # one run past the budget at most (a fraction of a second here)
     assert not out.exists()
 
 

@@ -294,6 +294,7 @@ def test_with_a_given_rate_the_exact_undetected_slips_and_exposure_lie_in_the_in
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("rates-platform_crash-cloud_offload")  # the same detection trials (one task), run once per process
 @pytest.mark.parametrize("path", ["scenarios/platform_crash.py", "scenarios/cloud_offload.py"])
 def test_the_other_analysable_scenarios_agree_on_undetected_slips_and_risky_time(path):
     """Signals on, 40 runs of an hour under the chain's timing (the exposure itself:

@@ -511,11 +511,15 @@ def build_chain(
     scenario: Scenario, deployer: Any, mw: MarkovWorld, *, max_states: int | None = None,
     progress: Callable[[int], None] | None = None, miss: dict[str, Any] | None = None,
     start_catch: dict[str, Any] | None = None, guard: Any = None, budget: Callable[[], None] = no_budget,
+    detection: Callable[[], tuple[dict[str, Any], dict[str, Any]]] | None = None,
 ) -> Chain:
     """Every chain state reachable from the initial ones, with its rates and rewards;
     ``miss`` is each graph's probability of missing a slip while it watches (1 where
     not given), ``start_catch`` of catching one while it starts (graph -> action ->
-    start latency -> p; 0 where not given); ``guard``: the run's guard around the deployer
+    start latency -> p; 0 where not given); ``detection()``, if given, returns both
+    instead, called once every state is found (a deployer that crashes, or a chain past
+    ``max_states``, ends the build before its detection trials run; their time is not
+    counted in ``build_s``); ``guard``: the run's guard around the deployer
     (:mod:`desmon.deployment.guard`); ``budget()`` raises :class:`BudgetExceeded` once the
     time or memory budget is spent (:class:`~desmon.analyze.markov.Budget`)."""
     t0 = time.perf_counter()
@@ -562,8 +566,13 @@ def build_chain(
             progress(i)
     chain = Chain(states, np.frombuffer(rows, dtype=np.int64), np.frombuffer(cols, dtype=np.int64), np.frombuffer(rates, dtype=float), mw, b.system)
     chain.initial = tuple(sorted(initial.items()))
+    trials_s = 0.0
+    if detection is not None:
+        t1 = time.perf_counter()
+        miss, start_catch = detection()
+        trials_s = time.perf_counter() - t1
     rewards(chain, b.rules, dict(miss or {}), dict(start_catch or {}))
-    chain.build_s = time.perf_counter() - t0
+    chain.build_s = time.perf_counter() - t0 - trials_s
     chain.reactions = b.reactions
     return chain
 

@@ -250,6 +250,24 @@ def _check_trials(trials: object) -> None:
         raise AnalysisError(f"--trials {trials!r} must be a whole number from 1 to {MAX_TRIALS:,}: pass e.g. --trials 2000")
 
 
+def _detection(
+    scenario: Scenario, phases: int, trials: int, start_catch: dict[str, Any] | None, budget: Callable[..., None],
+    out: list[tuple[dict[str, Any], dict[str, Any]]],
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The default ``miss`` and ``start_catch`` of :func:`analyze` (a given ``start_catch``
+    kept), also appended to ``out``. A budget without a limit (a
+    :class:`~desmon.analyze.markov.Budget` with neither a timeout nor a memory limit)
+    never raises: the trials do not ask it, so a process that analyses the same task
+    again finds them in :func:`~desmon.detectors.evaluation.detection_rates`'s cache."""
+    if start_catch is None:
+        unlimited = budget is no_budget or (getattr(budget, "timeout", 0) is None and getattr(budget, "max_memory", 0) is None)
+        rates = _rates(scenario, phases, trials, 0, None if unlimited else budget)
+    else:
+        rates = (detector_miss(scenario, phases=phases, trials=trials), start_catch)
+    out.append(rates)
+    return rates
+
+
 def analyze(
     scenario: Scenario,
     deployer: Any = "desmon",
@@ -258,8 +276,7 @@ def analyze(
     start_failure_p: float | None = None,
     horizon: float | None = None,
     steady: bool = True, max_states: int | None = None,
-    miss: dict[str, float] | None = None,
-    start_catch: dict[str, Any] | None = None,
+    miss: dict[str, float] | None = None, start_catch: dict[str, Any] | None = None,
     trials: int = 200, guard: Any = None,
     progress: Callable[[int], None] | None = None, status: Callable[[str], None] | None = None,
     budget: Callable[..., None] = no_budget,
@@ -275,9 +292,10 @@ def analyze(
     check_number("--horizon", T, error=AnalysisError, positive=True, unit=" of seconds")
     check_rates(mw, float(T))
     _check_trials(trials)
-    if miss is None:
-        miss, start_catch = _rates(scenario, phases, trials, 0, None if budget is no_budget else budget) if start_catch is None else (detector_miss(scenario, phases=phases, trials=trials), start_catch)
-    chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch, guard=guard, budget=budget)
+    ran: list[tuple[dict[str, Any], dict[str, Any]]] = []  # the detection trials, run once the chain is built (a crash ends it first)
+    chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch, guard=guard,
+                        budget=budget, detection=None if miss is not None else lambda: _detection(scenario, phases, trials, start_catch, budget, ran))
+    miss, start_catch = ran[0] if ran else (miss, start_catch)
     t0 = time.perf_counter()
     Q, _exit = chain.generator()
     p0 = _p0(chain)

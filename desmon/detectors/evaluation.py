@@ -312,7 +312,7 @@ def _lengths(mean: float, phases: int, biased: bool) -> list[float]:
     return [float(gamma.ppf((i + 0.5) / RATE_GROUPS, shape, scale=mean / phases)) for i in range(RATE_GROUPS)]
 
 
-@functools.lru_cache(maxsize=64)
+@functools.lru_cache(maxsize=256)
 def detection_rates(
     action: str, duration: float, direction: str, kind: str, *, grasp: float = 2.0, phases: int = 0, trials: int = 200,
     seed: int = 0, recognition: float = 0.0, latency: float = 0.0, warmups: tuple[tuple[str, float], ...] = (),

@@ -299,34 +299,60 @@ def render_pad_moments(
     ii = np.arange(rows, dtype=float)
     jj = np.arange(PAD_COLS, dtype=float)
     cells = rows * PAD_COLS
-    static = bool(np.all(yc == yc[:, :1])) and bool(np.all(xc == xc[:, :1])) and n == 1
-    if static:
-        ey = np.exp(-((ii - yc[0, 0]) ** 2) / (2.0 * sy[0] ** 2))
-        ex = np.exp(-((jj - xc[0, 0]) ** 2) / (2.0 * sx[0] ** 2))
-        tmpl = (ey[:, None] * ex[None, :]).ravel()
-        sup = np.flatnonzero(tmpl * amp.max() >= p.deadband)
-        mu = amp[..., None] * tmpl[sup]  # (n, K, s)
-        mask = mu >= p.deadband
-        pos = np.flatnonzero(mask)
-        s = sup.size
-        frame = pos // s if s else pos
-        cell = sup[pos % s] if s else pos
+    static = n == 1 and bool(np.all(yc == yc[:, :1])) and bool(np.all(xc == xc[:, :1]))
+    if not static and p.deadband > 0.0:
+        frame, ci, cj, mu_on = _moving_cells(amp, yc, xc, sy, sx, rows, p)
     else:
-        ey = np.exp(-((ii - yc[..., None]) ** 2) / (2.0 * sy[:, None, None] ** 2))
-        ex = np.exp(-((jj - xc[..., None]) ** 2) / (2.0 * sx[:, None, None] ** 2))
-        mu = amp[..., None, None] * (ey[..., :, None] * ex[..., None, :])
-        mask = mu >= p.deadband
-        pos = np.flatnonzero(mask)
-        frame = pos // cells
-        cell = pos % cells
-    mu_on = mu.reshape(-1)[pos]
-    vals = np.clip(np.rint(mu_on + p.noise_counts * normals(pos.size)), 0.0, FULL_SCALE)
+        if static:
+            ey = np.exp(-((ii - yc[0, 0]) ** 2) / (2.0 * sy[0] ** 2))
+            ex = np.exp(-((jj - xc[0, 0]) ** 2) / (2.0 * sx[0] ** 2))
+            tmpl = (ey[:, None] * ex[None, :]).ravel()
+            sup = np.flatnonzero(tmpl * amp.max() >= p.deadband)
+            mu = amp[..., None] * tmpl[sup]  # (n, K, s)
+            pos = np.flatnonzero(mu >= p.deadband)
+            s = sup.size
+            frame = pos // s if s else pos
+            cell = sup[pos % s] if s else pos
+        else:
+            ey = np.exp(-((ii - yc[..., None]) ** 2) / (2.0 * sy[:, None, None] ** 2))
+            ex = np.exp(-((jj - xc[..., None]) ** 2) / (2.0 * sx[:, None, None] ** 2))
+            mu = amp[..., None, None] * (ey[..., :, None] * ex[..., None, :])
+            pos = np.flatnonzero(mu >= p.deadband)
+            frame = pos // cells
+            cell = pos % cells
+        mu_on = mu.reshape(-1)[pos]
+        ci, cj = cell // PAD_COLS, cell % PAD_COLS
+    vals = np.clip(np.rint(mu_on + p.noise_counts * normals(mu_on.size)), 0.0, FULL_SCALE)
     nk = n * k
     s_sum = np.bincount(frame, weights=vals, minlength=nk).reshape(n, k)
-    s_i = np.bincount(frame, weights=vals * (cell // PAD_COLS), minlength=nk).reshape(n, k)
-    s_j = np.bincount(frame, weights=vals * (cell % PAD_COLS), minlength=nk).reshape(n, k)
-    extra = (frame * cells + cell, vals) if want_values else None
+    s_i = np.bincount(frame, weights=vals * ci, minlength=nk).reshape(n, k)
+    s_j = np.bincount(frame, weights=vals * cj, minlength=nk).reshape(n, k)
+    extra = (frame * cells + ci * PAD_COLS + cj, vals) if want_values else None
     return s_sum, s_i, s_j, extra
+
+
+def _moving_cells(amp: Arr, yc: Arr, xc: Arr, sy: Arr, sx: Arr, rows: int, p: SignalParams) -> tuple[Arr, Arr, Arr, Arr]:
+    """The cells of :func:`render_pad_moments` that reach a positive dead-band, where the
+    centre may move: ``(frame, row, column, mu)`` in C order over (frame, row, column),
+    frames flat over ``(n, K)``. The same values as evaluating every cell of every frame
+    (``mu = amp * (ey_i * ex_j)``, each factor from the same expression), on fewer cells:
+    ``ey_i, ex_j <= 1`` and rounding is monotone, so ``mu <= amp * ey_i <= amp``, and a
+    frame whose amplitude, or a row whose ``amp * ey_i``, lies below the dead-band
+    has no cell that reaches it."""
+    k = amp.shape[1]
+    flat = amp.reshape(-1)
+    live = np.flatnonzero(flat >= p.deadband)  # frames, ascending
+    trial = live // k
+    a = flat[live]
+    ey = np.exp(-((_II[:rows] - yc.reshape(-1)[live][:, None]) ** 2) / (2.0 * sy ** 2)[trial][:, None])
+    ex = np.exp(-((_JJ - xc.reshape(-1)[live][:, None]) ** 2) / (2.0 * sx ** 2)[trial][:, None])
+    kept = np.flatnonzero(a[:, None] * ey >= p.deadband)  # (frame, row) pairs in C order
+    lf = kept // rows
+    row = kept - lf * rows
+    mu = a.take(lf)[:, None] * (ey.take(kept)[:, None] * ex.take(lf, axis=0))
+    on = np.flatnonzero(mu >= p.deadband)
+    pair = on // PAD_COLS
+    return live.take(lf.take(pair)), row.take(pair), on - pair * PAD_COLS, mu.take(on)
 
 
 def render_rows(
