@@ -308,9 +308,14 @@ class RemoteReact:
     def state(self) -> tuple[dict[str, str], dict[str, str]]:
         """The state the deployer's module holds, as text (:func:`desmon.verify.deployers.module_state`):
         (as its worker imported it, now), asked of its worker."""
-        kind, body = self.current().exchange(("state", None))
-        if kind != "state" or type(body) is not tuple or len(body) != 2 or not all(_texts(d) for d in body):
-            raise WorkerGone("its worker process sent what desmon does not accept (not its module's state)")
+        w = self.current()
+        try:
+            kind, body = w.exchange(("state", None))
+            if kind != "state" or type(body) is not tuple or len(body) != 2 or not all(_texts(d) for d in body):
+                raise WorkerGone("its worker process sent what desmon does not accept (not its module's state)")
+        except WorkerGone as exc:  # (outside a reaction, where no guard turns it into the deployer's fault: one line)
+            w.close()
+            raise ModelError(f"deployer {self.spec}, asked after the search for the state its module keeps: {exc.what}") from None
         return body  # type: ignore[no-any-return]
 
 

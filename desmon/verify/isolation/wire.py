@@ -23,7 +23,7 @@ from desmon.deployment.ports import PlatformHandle, Validity
 
 __all__ = [
     "send_message", "recv_message", "recv_exact", "Encoder", "Decoder", "Handles", "Handle", "Method", "DefaultChecks", "DEFAULT",
-    "Blob", "BLOBS", "plain_class", "one_line", "encode", "handle", "MAX_MESSAGE",
+    "Blob", "BLOBS", "Token", "resolve", "plain_class", "one_line", "encode", "handle", "MAX_MESSAGE",
 ]
 HEADER = struct.Struct("!I")
 #: the largest message either side accepts (a deployer cannot make desmon allocate more)
@@ -123,7 +123,75 @@ class Decoder(pickle.Unpickler):
         raise pickle.UnpicklingError(f"{module}.{name} is not data desmon accepts from a deployer")
 
     def persistent_load(self, pid: Any) -> Any:
-        return self.handles.take(pid)
+        self.handles.take(pid)  # (refused here where it is not one of this reaction's)
+        return Token(pid[0])  # (inert: what the pickle does to it -- BUILD, REDUCE, APPENDS, SETITEMS -- reaches no object of desmon's)
+
+    def load(self) -> Any:
+        """The message, each handle in it (a :class:`Token` while it was read) the object desmon gave out."""
+        return resolve(super().load(), self.handles, {})
+
+
+class Token:
+    """A handle while the child's pickle is read: it can be neither called nor built nor
+    added to, so the pickle's opcodes touch none of desmon's objects (:func:`resolve`
+    puts the objects in place once the message is read)."""
+
+    __slots__ = ("n",)
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+
+    def __setstate__(self, state: Any) -> None:
+        raise pickle.UnpicklingError("a handle is not built")
+
+
+def resolve(obj: Any, handles: "Handles", seen: dict[int, Any]) -> Any:
+    """``obj`` with each :class:`Token` in it (in containers and in the records the message
+    built) replaced by the object desmon gave out; ``seen``: the containers and records
+    done (a message may share or nest them). Deep nesting is a RecursionError."""
+    kind = type(obj)
+    if kind is Token:
+        return handles.take((obj.n, None))
+    if kind in SCALARS or kind is type or kind in BY_NAME:
+        return obj
+    done = seen.get(id(obj))
+    if done is not None:
+        return done
+    if kind is tuple:
+        out = seen[id(obj)] = tuple(resolve(x, handles, seen) for x in obj)
+        return out
+    seen[id(obj)] = obj
+    if kind is list:
+        obj[:] = [resolve(x, handles, seen) for x in obj]
+    elif kind is dict:
+        items = [(resolve(k, handles, seen), resolve(v, handles, seen)) for k, v in obj.items()]
+        obj.clear()
+        obj.update(items)
+    elif kind is set:
+        items = [resolve(x, handles, seen) for x in obj]
+        obj.clear()
+        obj.update(items)
+    elif kind is frozenset:
+        out = seen[id(obj)] = frozenset(resolve(x, handles, seen) for x in obj)
+        return out
+    elif plain_class(kind):  # a record this message built (a fresh object: its fields are set in place)
+        for name, value in record_fields(obj).items():
+            object.__setattr__(obj, name, resolve(value, handles, seen))
+    return obj
+
+
+def record_fields(obj: Any) -> dict[str, Any]:
+    """The attributes a record the child's message built holds in its ``__dict__``: each of
+    its fields, and no name its class defines otherwise (one would hide a method of desmon's)."""
+    held = getattr(obj, "__dict__", None)
+    if held is None:
+        return {}
+    kind = type(obj)
+    names = {f.name for f in dataclasses.fields(kind)}
+    odd = [k for k in held if type(k) is not str or (k not in names and hasattr(kind, k))]
+    if odd or not names <= held.keys():
+        raise pickle.UnpicklingError(f"a {kind.__name__} record whose attributes are not its fields")
+    return dict(held)
 
 
 def registered(cls: type) -> bool:
