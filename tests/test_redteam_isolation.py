@@ -338,3 +338,29 @@ def test_a_message_out_of_turn_is_one_line_never_a_traceback(tmp_path):
     (tmp_path / "ahead.py").write_text(OUT_OF_TURN)
     code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'ahead.py'}:nothing")
     assert code in (1, 2, 4) and "Traceback" not in err and (code != 1 or "verdict: VIOLATED" in out), (code, out, err)
+
+
+#: a command whose graph is 80 tuples each holding the one before twice: a few hundred bytes
+#: of pickle that unfold into 2**80 objects, which desmon's guard hashes (in C: no signal runs)
+UNFOLDS = RAW + '''
+import pickle
+from desmon.deployment.ports import Start
+def nothing(q, slots, changed, context_changed):
+    graph = ("g",)
+    for _ in range(80):
+        graph = (graph, graph)
+    cmd = object.__new__(Start)
+    object.__setattr__(cmd, "graph", graph)
+    object.__setattr__(cmd, "platform", "p")
+    _send(pickle.dumps(("yield", cmd), protocol=5))
+    return
+    yield
+'''
+
+
+def test_a_message_that_unfolds_into_too_much_is_refused_never_a_hang(tmp_path):
+    """Without the fix: desmon hashed the command's graph for ever (past --timeout: the budget's
+    timer signal never runs inside a C hash), killed by the test's timeout; now one line, exit 2."""
+    (tmp_path / "unfolds.py").write_text(UNFOLDS)
+    code, took, out, err = _desmon("verify", COFFEE, "--no-progress", "--timeout", "5", "--deployer", f"{tmp_path / 'unfolds.py'}:nothing", timeout=30)
+    assert code == 2 and "objects (unfolded)" in err and took < 7, (code, took, out, err)

@@ -44,6 +44,7 @@ import socket
 import sys
 import time
 import weakref
+from collections.abc import Sequence
 from typing import Any, Callable, Iterator
 
 from desmon.deployment.deployer import Deployer
@@ -218,7 +219,11 @@ class Worker:
                 return Handle(iter(obj))
             if name == "__next__":
                 return next(obj)
-            return getattr(obj, name)(*args, **kwargs) if name in ("index", "count") else _operate(obj, name, args)
+            if name in ("index", "count"):  # (a sequence's own: no other object's method of that name is called)
+                if not isinstance(obj, Sequence):
+                    raise AttributeError(f"{type(obj).__name__} is not a sequence: it has no {name} a deployer may ask")
+                return getattr(obj, name)(*args, **kwargs)
+            return _operate(obj, name, args)
         if name.startswith("_") or name not in ALLOWED[role]:
             raise AttributeError(f"{type(obj).__name__} has no attribute {name!r} a deployer may read")
         value = getattr(obj, name)
