@@ -358,9 +358,23 @@ def nothing(q, slots, changed, context_changed):
 '''
 
 
-def test_a_message_that_unfolds_into_too_much_is_refused_never_a_hang(tmp_path):
-    """Without the fix: desmon hashed the command's graph for ever (past --timeout: the budget's
-    timer signal never runs inside a C hash), killed by the test's timeout; now one line, exit 2."""
-    (tmp_path / "unfolds.py").write_text(UNFOLDS)
+#: the same, written by hand inside a frozenset: the decoder itself hashes it while it reads the message
+UNFOLDS_WHILE_READ = RAW + """
+def nothing(q, slots, changed, context_changed):
+    graph = _s("g") + b"\\x85\\x94"
+    for i in range(80):
+        graph += b"h" + bytes([i]) + b"h" + bytes([i]) + b"\\x86\\x94"
+    _send(b"\\x80\\x05" + _s("get") + b"(" + _handle(q) + _s("context") + b"((" + graph + b"\\x91\\x85}t\\x86.")
+    os.read(_sock(), 1 << 16)
+    return
+    yield
+"""
+
+
+@pytest.mark.parametrize("deployer", [UNFOLDS, UNFOLDS_WHILE_READ])
+def test_a_message_that_unfolds_into_too_much_is_refused_never_a_hang(tmp_path, deployer):
+    """Without the fix: desmon hashed the graph for ever (past --timeout: the budget's timer
+    signal never runs inside a C hash), killed by the test's timeout; now one line, exit 2."""
+    (tmp_path / "unfolds.py").write_text(deployer)
     code, took, out, err = _desmon("verify", COFFEE, "--no-progress", "--timeout", "5", "--deployer", f"{tmp_path / 'unfolds.py'}:nothing", timeout=30)
-    assert code == 2 and "objects (unfolded)" in err and took < 7, (code, took, out, err)
+    assert code == 2 and "used again (BINGET)" in err and took < 7, (code, took, out, err)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import pickle
+import pickletools
 import socket
 import struct
 import sys
@@ -23,7 +24,7 @@ from desmon.deployment.ports import PlatformHandle, Validity
 
 __all__ = [
     "send_message", "recv_message", "recv_exact", "Encoder", "Decoder", "Handles", "Handle", "Method", "DefaultChecks", "DEFAULT",
-    "Blob", "BLOBS", "Token", "resolve", "plain_class", "one_line", "encode", "handle", "MAX_MESSAGE", "MAX_NODES", "Resolve", "weight",
+    "Blob", "BLOBS", "Token", "resolve", "plain_class", "one_line", "encode", "handle", "MAX_MESSAGE", "MAX_NODES", "Resolve", "weight", "SHARING",
 ]
 HEADER = struct.Struct("!I")
 #: the largest message either side accepts (a deployer cannot make desmon allocate more)
@@ -111,7 +112,7 @@ class Decoder(pickle.Unpickler):
 
     def __init__(self, data: bytes, handles: "Handles") -> None:
         super().__init__(io.BytesIO(data))
-        self.handles = handles
+        self.data, self.handles = data, handles
 
     def find_class(self, module: str, name: str) -> Any:
         if module == "builtins" and name in ("frozenset", "set", "complex"):
@@ -127,8 +128,18 @@ class Decoder(pickle.Unpickler):
         return Token(pid[0])  # (inert: what the pickle does to it -- BUILD, REDUCE, APPENDS, SETITEMS -- reaches no object of desmon's)
 
     def load(self) -> Any:
-        """The message, each handle in it (a :class:`Token` while it was read) the object desmon gave out."""
+        """The message, each handle in it (a :class:`Token` while it was read) the object desmon
+        gave out. It holds no object twice (:data:`SHARING`): the child writes each where it
+        occurs (its pickler's ``fast`` mode), so what desmon hashes or compares of it is no
+        larger than the message."""
+        for op, _arg, _at in pickletools.genops(self.data):
+            if op.name in SHARING:
+                raise pickle.UnpicklingError(f"an object written once and used again ({op.name}): the child writes each where it occurs")
         return resolve(super().load(), self.handles)
+
+
+#: the opcodes that use an object again (a few nest into more than desmon could hash in a lifetime)
+SHARING = frozenset({"GET", "BINGET", "LONG_BINGET", "DUP"})
 
 
 class Token:
