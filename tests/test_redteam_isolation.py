@@ -378,3 +378,35 @@ def test_a_message_that_unfolds_into_too_much_is_refused_never_a_hang(tmp_path, 
     (tmp_path / "unfolds.py").write_text(deployer)
     code, took, out, err = _desmon("verify", COFFEE, "--no-progress", "--timeout", "5", "--deployer", f"{tmp_path / 'unfolds.py'}:nothing", timeout=30)
     assert code == 2 and "used again (BINGET)" in err and took < 7, (code, took, out, err)
+
+
+#: a command whose detail (or, written by hand, whose graph) is an int too long to write as text
+LONG_DETAIL = '''
+from desmon.deployment.ports import RaiseError
+def nothing(q, slots, changed, context_changed):
+    for graph in (g for slot in slots for g in slot):
+        yield RaiseError("deployment_failed", graph, None, 10 ** 5000)
+        return
+'''
+
+LONG_GRAPH = RAW + '''
+import pickle
+from desmon.deployment.ports import Start
+def nothing(q, slots, changed, context_changed):
+    cmd = object.__new__(Start)
+    object.__setattr__(cmd, "graph", 10 ** 5000)
+    object.__setattr__(cmd, "platform", "p")
+    _send(pickle.dumps(("yield", cmd), protocol=5).replace(b"\\\\x94", b""))
+    os.read(_sock(), 1 << 16)
+    return
+    yield
+'''
+
+
+@pytest.mark.parametrize("deployer", [LONG_DETAIL, LONG_GRAPH])
+def test_a_command_field_that_cannot_be_written_is_the_deployers_fault_never_a_traceback(tmp_path, deployer):
+    """Without the fix: the guard's message wrote the field, str() of the int raised
+    ValueError (Exceeds the limit (4300 digits)): a traceback, exit 1 with no report."""
+    (tmp_path / "long.py").write_text(deployer)
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'long.py'}:nothing")
+    assert code in (2, 4) and "Traceback" not in err and "HOLDS" not in out, (code, out, err)
