@@ -280,3 +280,133 @@ def test_a_deployer_used_from_python_is_isolated_too(tmp_path):
     path.write_text("import desmon.deployment.invariants as inv\ninv.check_invariants = lambda view, invariants=None: []\n" + NOTHING)
     result = desmon.check(COFFEE, deployer=f"{path}:nothing", invariants=["coverage"])
     assert result.verdict == "VIOLATED" and invariants.check_invariants is before
+
+
+#: what a deployer needs to write raw messages on its socket to desmon (a pickle by hand)
+RAW = '''
+import os, stat, struct, time
+def _sock():
+    return next(fd for fd in range(3, 1024) if _is_sock(fd))
+def _is_sock(fd):
+    try:
+        return stat.S_ISSOCK(os.fstat(fd).st_mode)
+    except OSError:
+        return False
+def _s(text):
+    return b"\\x8c" + bytes([len(text)]) + text.encode()
+def _send(body):
+    os.write(_sock(), struct.pack("!I", len(body)) + body)
+def _handle(q):
+    n, role = q._pid
+    return b"J" + struct.pack("<i", n) + _s(role) + b"\\x86Q"
+'''
+
+#: a read of ``context`` whose pickle BUILDs desmon's own Query port with ``deployed = 7``
+BUILDS_THE_PORT = RAW + '''
+def nothing(q, slots, changed, context_changed):
+    state = b"}" + _s("deployed") + b"J" + struct.pack("<i", 7) + b"s"
+    _send(b"\\x80\\x05" + _s("get") + b"(" + _handle(q) + state + b"b" + _s("context") + b")}t\\x86.")
+    os.read(_sock(), 1 << 16)
+    return
+    yield
+'''
+
+
+@pytest.mark.parametrize("engine", ["table", "direct"])
+def test_a_pickle_building_a_handle_reaches_no_object_of_desmons(tmp_path, engine):
+    """The BUILD opcode on a handle: without the fix, desmon's decoder set the attributes
+    of desmon's own Query port (the direct engine's state store: a TypeError traceback,
+    exit 1 with no report); now the message is refused, one line."""
+    (tmp_path / "builds.py").write_text(BUILDS_THE_PORT)
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--engine", engine, "--deployer", f"{tmp_path / 'builds.py'}:nothing")
+    assert code == 2 and "a handle is not built" in err and "Traceback" not in err, (code, out, err)
+
+
+#: a reaction that sends its "return" ahead of its turn: every later message is one behind
+OUT_OF_TURN = RAW + '''
+def nothing(q, slots, changed, context_changed):
+    _send(b"\\x80\\x05" + _s("return") + b"N\\x86.")
+    time.sleep(0.2)
+    return
+    yield
+'''
+
+
+def test_a_message_out_of_turn_is_one_line_never_a_traceback(tmp_path):
+    """Without the fix: the answer to desmon's question for the module's state (the memory
+    check, after the search) was a stale "return": a WorkerGone traceback, exit 1, no report."""
+    (tmp_path / "ahead.py").write_text(OUT_OF_TURN)
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'ahead.py'}:nothing")
+    assert code in (1, 2, 4) and "Traceback" not in err and (code != 1 or "verdict: VIOLATED" in out), (code, out, err)
+
+
+#: a command whose graph is 80 tuples each holding the one before twice: a few hundred bytes
+#: of pickle that unfold into 2**80 objects, which desmon's guard hashes (in C: no signal runs)
+UNFOLDS = RAW + '''
+import pickle
+from desmon.deployment.ports import Start
+def nothing(q, slots, changed, context_changed):
+    graph = ("g",)
+    for _ in range(80):
+        graph = (graph, graph)
+    cmd = object.__new__(Start)
+    object.__setattr__(cmd, "graph", graph)
+    object.__setattr__(cmd, "platform", "p")
+    _send(pickle.dumps(("yield", cmd), protocol=5))
+    return
+    yield
+'''
+
+
+#: the same, written by hand inside a frozenset: the decoder itself hashes it while it reads the message
+UNFOLDS_WHILE_READ = RAW + """
+def nothing(q, slots, changed, context_changed):
+    graph = _s("g") + b"\\x85\\x94"
+    for i in range(80):
+        graph += b"h" + bytes([i]) + b"h" + bytes([i]) + b"\\x86\\x94"
+    _send(b"\\x80\\x05" + _s("get") + b"(" + _handle(q) + _s("context") + b"((" + graph + b"\\x91\\x85}t\\x86.")
+    os.read(_sock(), 1 << 16)
+    return
+    yield
+"""
+
+
+@pytest.mark.parametrize("deployer", [UNFOLDS, UNFOLDS_WHILE_READ])
+def test_a_message_that_unfolds_into_too_much_is_refused_never_a_hang(tmp_path, deployer):
+    """Without the fix: desmon hashed the graph for ever (past --timeout: the budget's timer
+    signal never runs inside a C hash), killed by the test's timeout; now one line, exit 2."""
+    (tmp_path / "unfolds.py").write_text(deployer)
+    code, took, out, err = _desmon("verify", COFFEE, "--no-progress", "--timeout", "5", "--deployer", f"{tmp_path / 'unfolds.py'}:nothing", timeout=30)
+    assert code == 2 and "used again (BINGET)" in err and took < 7, (code, took, out, err)
+
+
+#: a command whose detail (or, written by hand, whose graph) is an int too long to write as text
+LONG_DETAIL = '''
+from desmon.deployment.ports import RaiseError
+def nothing(q, slots, changed, context_changed):
+    for graph in (g for slot in slots for g in slot):
+        yield RaiseError("deployment_failed", graph, None, 10 ** 5000)
+        return
+'''
+
+LONG_GRAPH = RAW + '''
+import pickle
+from desmon.deployment.ports import Start
+def nothing(q, slots, changed, context_changed):
+    cmd = object.__new__(Start)
+    object.__setattr__(cmd, "graph", 10 ** 5000)
+    object.__setattr__(cmd, "platform", "p")
+    _send(pickle.dumps(("yield", cmd), protocol=5).replace(b"\\\\x94", b""))
+    os.read(_sock(), 1 << 16)
+    return
+    yield
+'''
+
+
+@pytest.mark.parametrize("deployer", [LONG_DETAIL, LONG_GRAPH])
+def test_a_command_field_that_cannot_be_written_is_the_deployers_fault_never_a_traceback(tmp_path, deployer):
+    """Without the fix: the guard's message wrote the field, str() of the int raised
+    ValueError (Exceeds the limit (4300 digits)): a traceback, exit 1 with no report."""
+    (tmp_path / "long.py").write_text(deployer)
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'long.py'}:nothing")
+    assert code in (2, 4) and "Traceback" not in err and "HOLDS" not in out, (code, out, err)

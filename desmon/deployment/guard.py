@@ -235,11 +235,27 @@ def _own_copy(cmd: object, graphs: frozenset[str], platforms: frozenset[str]) ->
             return kind(g, p), ""
     elif kind is RaiseError:
         k, g, p, detail = cmd.kind, cmd.graph, cmd.platform, cmd.detail  # type: ignore[union-attr]
-        if type(k) is str and type(g) is str and (p is None or type(p) is str):
+        if type(k) is str and type(g) is str and (p is None or type(p) is str) and not _unwritable(detail):
             copy = RaiseError(k, g, p, detail)
             return copy, _check_command(copy, graphs, platforms)
-    why = _check_command(cmd, graphs, platforms)
+    try:
+        why = _check_command(cmd, graphs, platforms)
+    except Exception:  # a field that cannot be written as text (a user's __str__, an int of 5000 digits): said below
+        why = ""
     return cmd, why or _NOT_PLAIN.format(cmd=_safe_str(cmd), kind=kind.__name__)
+
+
+def _unwritable(detail: object) -> bool:
+    """Whether ``detail`` is plain data that cannot be written as text (an int of 5,000 digits, in
+    a tuple or not): the counterexample writes a RaiseError's detail. Any other object (a recorded
+    run's lazy explanation) is left unread."""
+    if type(detail) not in (int, tuple, list, dict, set, frozenset):
+        return False
+    try:
+        str(detail)
+    except Exception:
+        return True
+    return False
 
 
 class _Every(frozenset):

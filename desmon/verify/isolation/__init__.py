@@ -44,6 +44,7 @@ import socket
 import sys
 import time
 import weakref
+from collections.abc import Sequence
 from typing import Any, Callable, Iterator
 
 from desmon.deployment.deployer import Deployer
@@ -218,7 +219,11 @@ class Worker:
                 return Handle(iter(obj))
             if name == "__next__":
                 return next(obj)
-            return getattr(obj, name)(*args, **kwargs) if name in ("index", "count") else _operate(obj, name, args)
+            if name in ("index", "count"):  # (a sequence's own: no other object's method of that name is called)
+                if not isinstance(obj, Sequence):
+                    raise AttributeError(f"{type(obj).__name__} is not a sequence: it has no {name} a deployer may ask")
+                return getattr(obj, name)(*args, **kwargs)
+            return _operate(obj, name, args)
         if name.startswith("_") or name not in ALLOWED[role]:
             raise AttributeError(f"{type(obj).__name__} has no attribute {name!r} a deployer may read")
         value = getattr(obj, name)
@@ -308,9 +313,14 @@ class RemoteReact:
     def state(self) -> tuple[dict[str, str], dict[str, str]]:
         """The state the deployer's module holds, as text (:func:`desmon.verify.deployers.module_state`):
         (as its worker imported it, now), asked of its worker."""
-        kind, body = self.current().exchange(("state", None))
-        if kind != "state" or type(body) is not tuple or len(body) != 2 or not all(_texts(d) for d in body):
-            raise WorkerGone("its worker process sent what desmon does not accept (not its module's state)")
+        w = self.current()
+        try:
+            kind, body = w.exchange(("state", None))
+            if kind != "state" or type(body) is not tuple or len(body) != 2 or not all(_texts(d) for d in body):
+                raise WorkerGone("its worker process sent what desmon does not accept (not its module's state)")
+        except WorkerGone as exc:  # (outside a reaction, where no guard turns it into the deployer's fault: one line)
+            w.close()
+            raise ModelError(f"deployer {self.spec}, asked after the search for the state its module keeps: {exc.what}") from None
         return body  # type: ignore[no-any-return]
 
 

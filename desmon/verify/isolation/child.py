@@ -240,7 +240,9 @@ class _Link:
 
     def send(self, kind: str, body: Any) -> None:
         out = io.BytesIO()
-        _ChildEncoder(out, protocol=5).dump((kind, body))
+        encoder = _ChildEncoder(out, protocol=5)
+        encoder.fast = True  # (no memo: desmon accepts no object used twice in a message, wire.SHARING)
+        encoder.dump((kind, body))
         send_message(self.sock, out.getvalue())
 
     def receive(self) -> tuple[str, Any]:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import pickle
+import pickletools
 import socket
 import struct
 import sys
@@ -23,7 +24,7 @@ from desmon.deployment.ports import PlatformHandle, Validity
 
 __all__ = [
     "send_message", "recv_message", "recv_exact", "Encoder", "Decoder", "Handles", "Handle", "Method", "DefaultChecks", "DEFAULT",
-    "Blob", "BLOBS", "plain_class", "one_line", "encode", "handle", "MAX_MESSAGE",
+    "Blob", "BLOBS", "Token", "resolve", "plain_class", "one_line", "encode", "handle", "MAX_MESSAGE", "MAX_NODES", "Resolve", "weight", "SHARING",
 ]
 HEADER = struct.Struct("!I")
 #: the largest message either side accepts (a deployer cannot make desmon allocate more)
@@ -114,7 +115,7 @@ class Decoder(pickle.Unpickler):
 
     def __init__(self, data: bytes, handles: "Handles") -> None:
         super().__init__(io.BytesIO(data))
-        self.handles = handles
+        self.data, self.handles = data, handles
 
     def find_class(self, module: str, name: str) -> Any:
         if module == "builtins" and name in ("frozenset", "set", "complex"):
@@ -126,7 +127,130 @@ class Decoder(pickle.Unpickler):
         raise pickle.UnpicklingError(f"{module}.{name} is not data desmon accepts from a deployer")
 
     def persistent_load(self, pid: Any) -> Any:
-        return self.handles.take(pid)
+        self.handles.take(pid)  # (refused here where it is not one of this reaction's)
+        return Token(pid[0])  # (inert: what the pickle does to it -- BUILD, REDUCE, APPENDS, SETITEMS -- reaches no object of desmon's)
+
+    def load(self) -> Any:
+        """The message, each handle in it (a :class:`Token` while it was read) the object desmon
+        gave out. It holds no object twice (:data:`SHARING`): the child writes each where it
+        occurs (its pickler's ``fast`` mode), so what desmon hashes or compares of it is no
+        larger than the message."""
+        for op, _arg, _at in pickletools.genops(self.data):
+            if op.name in SHARING:
+                raise pickle.UnpicklingError(f"an object written once and used again ({op.name}): the child writes each where it occurs")
+        return resolve(super().load(), self.handles)
+
+
+#: the opcodes that use an object again (a few nest into more than desmon could hash in a lifetime)
+SHARING = frozenset({"GET", "BINGET", "LONG_BINGET", "DUP"})
+
+
+class Token:
+    """A handle while the child's pickle is read: it can be neither called nor built nor
+    added to, so the pickle's opcodes touch none of desmon's objects (:func:`resolve`
+    puts the objects in place once the message is read)."""
+
+    __slots__ = ("n",)
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+
+    def __setstate__(self, state: Any) -> None:
+        raise pickle.UnpicklingError("a handle is not built")
+
+
+#: the most objects a message of the child's may hold, each shared one counted as often as it is
+#: reached (a few shared tuples nest into more than desmon could hash or compare in a lifetime;
+#: a long text or number counts as many: :func:`weight`)
+MAX_NODES = 1 << 20
+
+
+def resolve(obj: Any, handles: "Handles") -> Any:
+    """``obj`` with each :class:`Token` in it (in containers and in the records the message
+    built) replaced by the object desmon gave out. A message that
+    unfolds into more than :data:`MAX_NODES` objects, or nests deeper than Python recurses,
+    is refused."""
+    walk = Resolve(handles)
+    out = walk(obj)
+    if walk.sizes.get(id(obj), 1) > MAX_NODES:
+        raise pickle.UnpicklingError(f"a message of more than {MAX_NODES:,} objects (unfolded)")
+    return out
+
+
+def weight(obj: Any) -> int:
+    """What a scalar counts for in :data:`MAX_NODES`: a long text or number as many objects as
+    its length in 256s of bytes (shared, it is hashed, compared and printed as often as reached)."""
+    kind = type(obj)
+    if kind in (str, bytes):
+        return 1 + len(obj) // 256
+    return 1 + obj.bit_length() // 2048 if kind is int else 1
+
+
+class Resolve:
+    """:func:`resolve`'s walk: ``done`` the containers and records met (a message may share
+    or nest them) as (object, how many objects it unfolds into), by identity."""
+
+    def __init__(self, handles: "Handles") -> None:
+        self.handles = handles
+        self.done: dict[int, Any] = {}
+        self.sizes: dict[int, int] = {}
+        self.keep: list[Any] = []  # (the objects met stay alive: their ids stay theirs)
+
+    def __call__(self, obj: Any) -> Any:
+        kind = type(obj)
+        if kind is Token:
+            return self.handles.take((obj.n, None))
+        if kind in SCALARS or kind is type or kind in BY_NAME:
+            return obj
+        key = id(obj)
+        if key in self.done:
+            return self.done[key]
+        self.keep.append(obj)
+        self.done[key], self.sizes[key] = obj, 1  # (met again inside itself: counted once)
+        out, parts = self.rebuilt(obj, kind)
+        self.done[key] = out
+        self.sizes[key] = size = 1 + sum(self.sizes.get(id(p)) or weight(p) for p in parts)
+        if size > MAX_NODES:
+            raise pickle.UnpicklingError(f"a message of more than {MAX_NODES:,} objects (unfolded)")
+        return out
+
+    def rebuilt(self, obj: Any, kind: type) -> tuple[Any, list[Any]]:
+        """``obj`` with its parts resolved (a fresh tuple or frozenset, else in place), and its parts as met."""
+        if kind is dict:
+            parts = [p for item in obj.items() for p in item]
+            items = [(self(k), self(v)) for k, v in obj.items()]
+            obj.clear()
+            obj.update(items)
+            return obj, parts
+        if kind in (tuple, list, set, frozenset):
+            parts = list(obj)
+            done = [self(x) for x in parts]
+            if kind is list:
+                obj[:] = done
+            elif kind is set:
+                obj.clear()
+                obj.update(done)
+            return (obj if kind in (list, set) else kind(done)), parts
+        if plain_class(kind):  # a record this message built (a fresh object: its fields are set in place)
+            fields = record_fields(obj)
+            for name, value in fields.items():
+                object.__setattr__(obj, name, self(value))
+            return obj, list(fields.values())
+        return obj, []
+
+
+def record_fields(obj: Any) -> dict[str, Any]:
+    """The attributes a record the child's message built holds: each of its fields, and (in its
+    ``__dict__``) no name its class defines otherwise (one would hide a method of desmon's)."""
+    kind = type(obj)
+    names = {f.name for f in dataclasses.fields(kind)}
+    held = getattr(obj, "__dict__", None)
+    if held is None:  # (a record of slots: each of its fields, an AttributeError where one was not set)
+        return {name: getattr(obj, name) for name in names}
+    odd = [k for k in held if type(k) is not str or (k not in names and hasattr(kind, k))]
+    if odd or not names <= held.keys():
+        raise pickle.UnpicklingError(f"a {kind.__name__} record whose attributes are not its fields")
+    return dict(held)
 
 
 def registered(cls: type) -> bool:
