@@ -149,9 +149,9 @@ class Worker:
         try:
             message = Decoder(data, self.handles).load()
         except Exception as exc:
-            raise WorkerGone(f"its worker process sent what desmon does not accept ({one_line(str(exc))[:200]})") from None
+            raise WorkerGone(f"sent desmon, through its worker process, what desmon does not accept ({one_line(str(exc))[:200]})") from None
         if type(message) is not tuple or len(message) != 2 or type(message[0]) is not str:
-            raise WorkerGone("its worker process sent what desmon does not accept (not a message)")
+            raise WorkerGone("sent desmon, through its worker process, what desmon does not accept (not a message)")
         return message
 
     def _gone(self) -> str:
@@ -304,7 +304,7 @@ class RemoteReact:
                     clean = True
                     raise ReactionRaised(one_line(str(body)))
                 else:
-                    raise WorkerGone("its worker process sent what desmon does not accept (an unknown message)")
+                    raise WorkerGone("sent desmon, through its worker process, what desmon does not accept (an unknown message)")
         finally:
             w._end_reaction()
             if not clean:  # stopped in the middle (a budget, a fault, the table engine's own signal): a fresh worker next
@@ -317,7 +317,7 @@ class RemoteReact:
         try:
             kind, body = w.exchange(("state", None))
             if kind != "state" or type(body) is not tuple or len(body) != 2 or not all(_texts(d) for d in body):
-                raise WorkerGone("its worker process sent what desmon does not accept (not its module's state)")
+                raise WorkerGone("sent desmon, through its worker process, what desmon does not accept (not its module's state)")
         except WorkerGone as exc:  # (outside a reaction, where no guard turns it into the deployer's fault: one line)
             w.close()
             raise ModelError(f"deployer {self.spec}, asked after the search for the state its module keeps: {exc.what}") from None
@@ -393,7 +393,7 @@ def _command(body: Any) -> Any:
         return body
     if type(body) is tuple and len(body) == 2 and body[0] == "bad" and type(body[1]) is str:
         raise ReactionRaised(one_line(body[1]))
-    raise WorkerGone("its worker process sent what desmon does not accept (not a command)")
+    raise WorkerGone("sent desmon, through its worker process, what desmon does not accept (not a command)")
 
 
 @dataclasses.dataclass(frozen=True)
