@@ -410,3 +410,33 @@ def test_a_command_field_that_cannot_be_written_is_the_deployers_fault_never_a_t
     (tmp_path / "long.py").write_text(deployer)
     code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'long.py'}:nothing")
     assert code in (2, 4) and "Traceback" not in err and "HOLDS" not in out, (code, out, err)
+
+
+SIGNALS = """
+import os, signal
+def stops_desmon(q, slots, changed, context_changed):
+    os.kill(os.getppid(), signal.SIGSTOP)
+    return
+    yield
+def ends_desmon(q, slots, changed, context_changed):
+    try:
+        os.kill(os.getppid(), signal.SIGTERM)
+        os.killpg(os.getpgid(os.getppid()), signal.SIGKILL)
+    except PermissionError:
+        pass
+    return
+    yield
+"""
+
+
+@pytest.mark.skipif(__import__("platform").machine() != "x86_64", reason="the worker's seccomp filter is x86-64 only")
+@pytest.mark.parametrize("name, code", [("stops_desmon", 2), ("ends_desmon", 1)])
+def test_a_deployer_cannot_signal_desmon(tmp_path, name, code):
+    """SIGSTOP to desmon (a hang), SIGTERM or SIGKILL to it or its group (no report): the
+    worker's seccomp filter makes the call fail with PermissionError in the deployer's
+    code. Uncaught, it is the deployer's failure (exit 2 in the first reaction); caught,
+    the deployer deploys nothing and desmon reports it VIOLATED."""
+    (tmp_path / "signals.py").write_text(SIGNALS)
+    code_, took, out, err = _desmon("verify", COFFEE, "--no-progress", "--timeout", "20", "--deployer", f"{tmp_path / 'signals.py'}:{name}", timeout=40)
+    assert code_ == code and took < 20, (code_, took, out, err)
+    assert ("raised PermissionError" in err) if code == 2 else ("verdict: VIOLATED" in out), (out, err)

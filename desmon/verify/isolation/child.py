@@ -22,6 +22,7 @@ from typing import Any, Iterator
 
 from desmon.deployment.guard import plain_command, raised_text, uncallable
 from desmon.errors import ModelError
+from desmon.verify.isolation.seccomp import deny_signals
 from desmon.verify.isolation.wire import BLOBS, Blob, DefaultChecks, Method, recv_message, send_message
 
 __all__ = ["serve"]
@@ -331,7 +332,8 @@ def serve(sock: socket.socket, spec: str, ports: Any, parent: int, quiet: bool) 
 
 
 def _become_worker(parent: int, sock: socket.socket) -> None:  # pragma: no cover - the child
-    """The child's process: its own group, dies with desmon, stdout to stderr, no stdin, no other open file of desmon's."""
+    """The child's process: its own group, dies with desmon, sends no signal
+    (:mod:`~desmon.verify.isolation.seccomp`), stdout to stderr, no stdin, no other open file of desmon's."""
     with contextlib.suppress(OSError):
         os.setpgid(0, 0)
     with contextlib.suppress(OSError, AttributeError):
@@ -340,6 +342,7 @@ def _become_worker(parent: int, sock: socket.socket) -> None:  # pragma: no cove
         ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG
     if os.getppid() != parent:
         os._exit(0)
+    deny_signals()  # (Linux x86-64: no signal to desmon, or to anyone, from the worker or what it starts)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C is desmon's: it ends the worker
     for sig in (signal.SIGALRM, signal.SIGTERM):
         signal.signal(sig, signal.SIG_DFL)
