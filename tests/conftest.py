@@ -39,6 +39,21 @@ def tutorial_run(root: Path, tmp_path_factory: pytest.TempPathFactory):  # type:
     return work, run_commands(root, work, "tutorial.md", env=environment(scratch / "mplconfig"), keep_going=True, jobs=2)
 
 
+@pytest.fixture
+def local(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Sweeps run without a Dask cluster: every run in this process, in order (the sweep and
+    sweep-estimate tests; what they check is the table, not the scheduler)."""
+    from desmon.sweep import core
+    from desmon.sweep.jobs import run_point
+
+    def in_process(spec, runs, on_row, **kw):  # type: ignore[no-untyped-def]
+        for run in runs:
+            on_row(run, run_point(spec, run))
+        return 1
+
+    monkeypatch.setattr(core, "execute", in_process)
+
+
 def refused(error: type[DesmonError], build: Callable[[], object]) -> str:
     """The message of the ``error`` that ``build()`` raises; it must be one line."""
     with pytest.raises(error) as info:

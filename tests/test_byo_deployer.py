@@ -172,3 +172,14 @@ def test_a_bad_deployer_is_one_line_with_exit_2_before_any_work(case, tmp_path, 
 def test_the_python_api_raises_a_model_error():
     with pytest.raises(ModelError, match="not a deployer"):
         resolve_deployer("fast")
+
+
+@pytest.mark.parametrize("seconds", [-1, 0, float("nan"), float("inf"), "5", True])
+def test_an_import_limit_that_is_no_positive_number_is_one_line(seconds):
+    """``resolve_deployer(spec, import_seconds=...)``: how long the deployer's module may take
+    to import in its worker process; anything but a finite number above 0 (or None) is refused."""
+    from desmon.errors import ModelError
+    from desmon.verify.deployers import resolve_deployer
+
+    with pytest.raises(ModelError, match=r"import_seconds=.*: give the seconds its import may take, a number above 0, or None"):
+        resolve_deployer(str(ROOT / "docs" / "examples" / "first_fit.py") + ":FIRST_FIT", import_seconds=seconds)

@@ -20,10 +20,8 @@ pytest.importorskip("pyarrow")
 from desmon.analyze import analyze  # noqa: E402
 from desmon.cli import main  # noqa: E402
 from desmon.loader import load_scenario  # noqa: E402
-from desmon.sweep import core  # noqa: E402
 from desmon.sweep.core import run_sweep  # noqa: E402
 from desmon.sweep.grid import SweepError, parse_axes  # noqa: E402
-from desmon.sweep.jobs import run_point  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 COFFEE = str(ROOT / "scenarios" / "coffee_shift.py")
@@ -32,18 +30,6 @@ FIGURES = (
     "exposure_s_per_hour", "exposure_s_per_mission", "undetected_slips_per_hour", "mean_time_to_exposure_s",
     "p_exposure_within_T", "long_run_unmonitored_fraction", "horizon_s",
 )
-
-
-def _in_process(spec, runs, on_row, **kw):  # type: ignore[no-untyped-def]
-    """A stand-in for the Dask cluster: every run in this process, in order."""
-    for run in runs:
-        on_row(run, run_point(spec, run))
-    return 1
-
-
-@pytest.fixture
-def local(monkeypatch):
-    monkeypatch.setattr(core, "execute", _in_process)
 
 
 def test_a_sweep_on_dask_tabulates_what_desmon_analyze_computes_at_each_point(tmp_path, capsys):

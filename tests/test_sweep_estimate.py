@@ -14,22 +14,9 @@ pytest.importorskip("distributed")
 from desmon.cli import main  # noqa: E402
 from desmon.estimate import Question, estimate  # noqa: E402
 from desmon.loader import load_scenario  # noqa: E402
-from desmon.sweep import core  # noqa: E402
-from desmon.sweep.jobs import run_point  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 PLATFORM_CRASH = str(ROOT / "scenarios" / "platform_crash.py")
-
-
-def _in_process(spec, runs, on_row, **kw):  # type: ignore[no-untyped-def]
-    for run in runs:
-        on_row(run, run_point(spec, run))
-    return 1
-
-
-@pytest.fixture
-def local(monkeypatch):
-    monkeypatch.setattr(core, "execute", _in_process)
 
 
 def test_each_point_gets_the_interval_desmon_estimate_gives_with_its_seed(tmp_path, local, capsys):

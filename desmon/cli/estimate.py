@@ -16,7 +16,7 @@ import sys
 from typing import Any
 
 from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg
-from desmon.cli.options import non_negative_int, positive_int, positive_seconds, worker_count
+from desmon.cli.options import finite_number, non_negative_int, positive_int, positive_seconds, worker_count
 
 __all__ = ["add_parser", "run", "format_estimate", "parse_within", "parse_confidence"]
 
@@ -48,16 +48,6 @@ def parse_confidence(text: str) -> float:
     return v
 
 
-def _number(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
-    if not math.isfinite(v):
-        raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
-    return v
-
-
 def add_parser(sub: Subparsers) -> None:
     p = sub.add_parser("estimate", help="a run figure's mean (or probability) with a guaranteed confidence interval, from as many runs as needed")
     scenario_arg(p)
@@ -68,14 +58,14 @@ def add_parser(sub: Subparsers) -> None:
                    help="stop once the guaranteed interval's half-width is at most EPS: absolute (60) or relative to the estimate (1%%); "
                    "with --below, the indifference around the threshold")
     p.add_argument("--confidence", type=parse_confidence, default=0.95, metavar="1-DELTA", help="the interval's confidence, e.g. 0.99")
-    p.add_argument("--at-least", type=_number, default=None, metavar="X",
+    p.add_argument("--at-least", type=finite_number, default=None, metavar="X",
                    help="estimate the probability that the figure is X or more in a run, not its mean (--metric longest_exposure_s "
                    "--at-least 60: 60 s or more unmonitored at a stretch)")
-    p.add_argument("--below", type=_number, default=None, metavar="X",
+    p.add_argument("--below", type=finite_number, default=None, metavar="X",
                    help="answer yes or no: is the mean (with --at-least: the probability) below X? Wald's test for a probability")
-    p.add_argument("--alpha", type=_number, default=None, help="--below: the chance of a wrong yes (unset: 1 - confidence)")
-    p.add_argument("--beta", type=_number, default=None, help="--below with --at-least: the chance of a wrong no (unset: 1 - confidence)")
-    p.add_argument("--range", type=_number, nargs=2, default=None, metavar=("LOW", "HIGH"),
+    p.add_argument("--alpha", type=finite_number, default=None, help="--below: the chance of a wrong yes (unset: 1 - confidence)")
+    p.add_argument("--beta", type=finite_number, default=None, help="--below with --at-least: the chance of a wrong no (unset: 1 - confidence)")
+    p.add_argument("--range", type=finite_number, nargs=2, default=None, metavar=("LOW", "HIGH"),
                    help="the range every run's value lies in (seconds: [0, horizon] unless given; a count's mean needs one)")
     p.add_argument("--max-runs", type=positive_int, default=10_000, metavar="N", help="stop INCOMPLETE (exit 3) after N runs")
     p.add_argument("--timeout", type=positive_seconds, default=None, metavar="S", help="stop INCOMPLETE (exit 3) after S wall seconds (unset: no limit)")

@@ -24,6 +24,7 @@ __all__ = [
     "non_negative_int",
     "worker_count",
     "positive_seconds",
+    "finite_number",
     "window_time",
     "Input",
     "Output",
@@ -70,19 +71,20 @@ def non_negative_int(text: str) -> int:
     return n
 
 
-def _finite(text: str) -> float:
+def finite_number(text: str, what: str = "number") -> float:
+    """A finite number (``what`` names it in the refusal: "number of seconds")."""
     try:
         x = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number of seconds, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"must be a {what}, got {text!r}") from None
     if not math.isfinite(x):
-        raise argparse.ArgumentTypeError(f"must be a finite number of seconds, got {text}")
+        raise argparse.ArgumentTypeError(f"must be a finite {what}, got {text}")
     return x
 
 
 def positive_seconds(text: str) -> float:
     """A duration: finite and above 0."""
-    x = _finite(text)
+    x = finite_number(text, "number of seconds")
     if x <= 0:
         raise argparse.ArgumentTypeError(f"must be positive (seconds above 0), got {text}")
     return x

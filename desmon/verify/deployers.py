@@ -29,6 +29,7 @@ import dataclasses
 import importlib
 import importlib.util
 import inspect
+import math
 import os
 import sys
 from pathlib import Path
@@ -92,6 +93,10 @@ def resolve_deployer(spec: str | Deployer, *, isolate: bool = True, import_secon
         raise _refuse(spec, f"name the deployer after the colon, e.g. {source}:DEPLOYER")
     if isolate:
         from desmon.verify.isolation import Loader, isolated
+
+        if import_seconds is not None and (isinstance(import_seconds, bool) or not isinstance(import_seconds, (int, float))
+                                           or not math.isfinite(import_seconds) or import_seconds <= 0):
+            raise _refuse(spec, f"import_seconds={import_seconds!r}: give the seconds its import may take, a number above 0, or None")
 
         return isolated(spec, Loader(load_in_process, _spec_state), import_seconds)
     return load_in_process(spec)

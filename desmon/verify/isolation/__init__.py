@@ -256,7 +256,8 @@ class RemoteReact:
     def __init__(self, spec: str, ports: "Loader", worker: Worker | None = None) -> None:
         self.spec, self.ports = spec, ports
         self.worker = worker
-        self.restarted = False
+        #: whether the worker was checked against the requirement kinds registered since it started (once is enough)
+        self.settled = False
 
     def __reduce__(self) -> Any:
         return (RemoteReact, (self.spec, self.ports))  # (its worker is this process's own)
@@ -274,12 +275,13 @@ class RemoteReact:
         or a scenario registered requirement kinds of its own since it started (their
         records cross by value: the worker must know their classes)."""
         w = self.worker
-        if w is not None and w.alive and w.owner == os.getpid() and (self.restarted or _kinds() == w.kinds_at_start):
+        if w is not None and w.alive and w.owner == os.getpid() and (self.settled or _kinds() == w.kinds_at_start):
+            self.settled = True
             return w
         if w is not None and w.owner == os.getpid():
             w.close()
         self.worker = w = Worker(self.spec, self.ports, quiet=True)
-        self.restarted = True
+        self.settled = True
         return w
 
     def __call__(self, q: Any, slots: Any, changed: Any, context_changed: Any) -> Iterator[Any]:
