@@ -59,6 +59,33 @@ def test_bench_runs_small_and_reports_its_figures(name):
     assert unexpected_keys(result_mode(name, QUICK[name]), figures) == []  # the keys the docs' figure markers may name
 
 
+#: benches outside ``python -m bench`` (no goal, not named bench_*), each with its small configuration and the
+#: keys its RESULT line carries (the docs quote them)
+OTHER_BENCHES = {
+    "isolation_cost": (("--quick",), ("cpu_ratio_coffee_handover_table", "cpu_ratio_coffee_handover_direct", "cpu_ratio_coffee_handover_run")),
+    "sizes": ((), ("largest_file_lines", "largest_class_lines", "files", "classes")),
+}
+#: modules of bench/ that print a RESULT line but are tools with tests of their own, not benches
+TOOLS = {"compare_outputs", "figures", "goals", "timers"}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(OTHER_BENCHES))
+def test_a_bench_outside_python_m_bench_runs_small_and_reports_its_figures(name):
+    options, keys = OTHER_BENCHES[name]
+    proc = subprocess.run([sys.executable, "-m", f"bench.{name}", *options], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    figures = parse_result(proc.stdout)
+    assert sorted(figures) == sorted(keys)
+    assert all(isinstance(v, float) and v > 0 for v in figures.values()), figures
+
+
+def test_every_bench_with_a_result_line_is_run_by_a_test():
+    reporting = {p.stem for p in (ROOT / "bench").glob("*.py") if not p.stem.startswith(("bench_", "_")) and "RESULT " in p.read_text()}
+    missing = reporting - TOOLS - set(OTHER_BENCHES)
+    assert not missing, f"benches no test runs (add each to OTHER_BENCHES with its small configuration): {sorted(missing)}"
+
+
 def test_bench_timers_times_named_functions_and_refuses_an_unknown_one():
     cmd = [sys.executable, "-m", "bench.timers", "--until", "600", "--days", "1", "desmon.sim.sensors:SensorBank.tactile_read"]
     proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
