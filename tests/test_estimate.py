@@ -5,6 +5,7 @@ the same seed, in this process or on Dask workers."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -125,3 +126,23 @@ def test_the_chance_of_a_long_unmonitored_stretch_is_estimated_from_the_runs(cap
     assert all(0 < lo <= t for lo, t in zip(longest, total))
     code, out, _err = _estimate(capsys, VARIED, "--metric", "longest_exposure_s", "--at-least", "5", "--within", "0.2", "--json")
     assert code == 0 and _strict(out)["question"]["metric"] == "longest_exposure_s"
+
+
+def _decimals(number: str) -> int:
+    return len(number.partition(".")[2])
+
+
+def test_the_estimate_and_both_ends_of_each_interval_print_with_the_decimals_of_its_half_width(capsys):
+    from desmon.stats import decimals_for
+
+    code, out, _err = _estimate(capsys, VARIED, "--timing", "exponential", "--within", "40%")
+    assert code == 0, out
+    line = next(x for x in out.splitlines() if x.startswith("  estimate "))
+    m = re.match(r"  estimate (\S+), 95 % interval \[(\S+), (\S+)\] \(half-width (\S+) =", line)
+    normal = re.search(r"not guaranteed: \[(\S+), (\S+)\]", out)
+    values = re.search(r"values (\S+) \.\. (\S+)", out)
+    assert m and normal and values, out
+    numbers = [*m.groups(), *normal.groups(), *values.groups()]
+    half_width = float(m.group(4).replace(",", ""))
+    assert {_decimals(n) for n in numbers} == {decimals_for(half_width)}, numbers
+    assert 10 <= half_width / 10 ** -decimals_for(half_width) < 100  # two significant digits of the half-width

@@ -215,6 +215,53 @@ def test_a_sweep_gives_mission_figures_as_mean_and_range(sweep: Sweep) -> None:
     assert all(f"{rules}: {n}/2 seeds" in text for rules, n in oracle.rule_picks.items())
 
 
+def test_a_sweep_gives_each_cells_mean_rate_the_exact_interval_of_its_pooled_trials(sweep: Sweep) -> None:
+    from desmon.cli.evaluate import CONFIDENCE, cell_interval
+    from desmon.stats import clopper_pearson
+
+    text = render_sweep(sweep)
+    assert "95% interval: of the rate the mean estimates, Clopper-Pearson on the 2 seeds' 40 trials pooled" in text
+    for c in sweep.cells:
+        iv = cell_interval(c)
+        assert iv == clopper_pearson(sum(c.counts), 40, 1 - CONFIDENCE)
+        assert iv.low <= c.rate.mean <= iv.high
+        assert f"[{100 * iv.low:.1f}, {100 * iv.high:.1f}]" in next(x for x in text.splitlines() if x.startswith(f"{c.action:<11}{c.detector:<9}"))
+
+
+def test_a_sweep_gives_each_mission_mean_its_interval_and_method(sweep: Sweep) -> None:
+    from desmon.cli.evaluate import CONFIDENCE, mission_intervals
+    from desmon.stats import clopper_pearson, normal_interval
+
+    text = render_sweep(sweep)
+    assert "95% interval of each figure above (its mean over the 2 seeds):" in text
+    assert "Clopper-Pearson on the missions of every seed pooled (40 slip-free, 120 with a slip" in text
+    assert "normal approximation over the 2 seeds' values, not guaranteed" in text
+    for i, m in enumerate(sweep.missions):
+        per = [r.missions[i] for r in sweep.runs]
+        iv = mission_intervals(sweep, i)
+        assert iv["p_any_fa"] == clopper_pearson(sum(round(x.p_any_fa * 20) for x in per), 40, 1 - CONFIDENCE)
+        caught = sum(round(x.tpr[c] * 20) for x in per for c in x.tpr)
+        assert iv["mean_tpr"] == clopper_pearson(caught, 120, 1 - CONFIDENCE)
+        assert iv["miss_rate"].low == pytest.approx(1 - iv["mean_tpr"].high) and iv["miss_rate"].high == pytest.approx(1 - iv["mean_tpr"].low)
+        for key in ("p_any_fa", "mean_tpr", "miss_rate"):
+            assert iv[key].low <= getattr(m, key).mean <= iv[key].high
+        normal = normal_interval([x.fa_per_mission for x in per], 1 - CONFIDENCE)
+        assert iv["fa_per_mission"].high == normal.high and iv["fa_per_mission"].low == max(normal.low, 0.0)  # no mean below 0
+
+
+def test_one_seeds_mission_table_gives_its_proportions_an_interval_and_says_why_the_others_have_none() -> None:
+    from desmon.cli.evaluate import mission_intervals
+    from desmon.detectors.evaluation import sweep_of
+
+    ev = evaluate(20, 3)
+    text = render_table(ev)
+    assert "95% interval of each figure above (slips caught: 100 % - miss):" in text
+    assert "Clopper-Pearson on the seed's missions (20 slip-free, 60 with a slip" in text
+    assert "FA/mission, lat med, blind s: none from one seed (give --seeds N" in text
+    iv = mission_intervals(sweep_of([ev]), 0)
+    assert iv["fa_per_mission"] is None and iv["p_any_fa"] is not None
+
+
 def test_spread_skips_seeds_without_the_figure() -> None:
     assert Spread.of([None, 0.2, 0.4]) == Spread(pytest.approx(0.3), 0.2, 0.4, 2)  # type: ignore[arg-type]
     assert Spread.of([None, None]) is None

@@ -211,6 +211,21 @@ def test_desmon_run_prints_the_fleet_metrics(capsys: pytest.CaptureFixture[str])
         assert what in out
 
 
+def test_the_fleet_summary_gives_the_mean_exposure_per_robot_its_interval_and_method() -> None:
+    from desmon.cli.run import format_fleet_summary
+    from desmon.stats import normal_interval
+
+    result = simulate_fleet(fleet(4, 2, 0.25), seed=3)
+    values = [m["unmonitored_exposure_s"] for m in result.robots.values()]
+    iv = normal_interval(values, 0.05)
+    text = format_fleet_summary(result)
+    line = next(x for x in text.splitlines() if "interval of the mean" in x)
+    assert f"(95 % interval of the mean: [{max(iv.low, 0.0):.1f}, {iv.high:.1f}], normal approximation over the 4 robots, not guaranteed" in line
+    assert min(values) < max(values) and iv.low < sum(values) / 4 < iv.high
+    alone = format_fleet_summary(simulate_fleet(fleet(1, 1, 0.1)))
+    assert "(95 % interval of the mean: none from one robot)" in alone
+
+
 def test_desmon_run_json_gives_every_robots_metrics(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["run", str(FLEET), "-p", "robots=2", "-p", "edges=1", "-p", "hours=0.2", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)

@@ -11,7 +11,7 @@ from scipy.stats import beta as beta_dist
 
 from desmon.errors import EstimateError
 from desmon.estimate.coverage import fails
-from desmon.stats import BettingSequence, ProportionSequence, WaldTest, clopper_pearson, normal_interval
+from desmon.stats import BettingSequence, ProportionSequence, WaldTest, clopper_pearson, decimals_for, mean_interval, normal_interval
 
 
 def _skewed(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -76,6 +76,25 @@ def test_the_normal_interval_is_the_textbook_one():
     half = 1.959964 * np.std(values, ddof=1) / math.sqrt(40)
     assert iv.low == pytest.approx(5.5 - half, rel=1e-6) and iv.high == pytest.approx(5.5 + half, rel=1e-6)
     assert "not guaranteed" in iv.method
+
+
+def test_a_mean_over_seeds_takes_the_betting_interval_when_the_range_is_known_else_the_normal_one():
+    values = [3.0, 5.0, 4.5, 6.0, 2.5, 4.0]
+    cs = BettingSequence(0.0, 10.0, 0.05)
+    for v in values:
+        cs.add(v)
+    assert mean_interval(values, 0.05, (0.0, 10.0)) == cs.interval()
+    assert mean_interval(values, 0.05) == normal_interval(values, 0.05)
+    with pytest.raises(EstimateError, match="outside the range"):  # a range that does not hold the values is refused
+        mean_interval(values, 0.05, (0.0, 5.0))
+    one = mean_interval([4.0], 0.05)
+    assert math.isinf(one.low) and math.isinf(one.high)  # no spread to go by
+
+
+@pytest.mark.parametrize("half_width, decimals", [(42.86, 0), (2.18, 1), (0.05, 3), (0.0123, 3), (9.99, 1), (10.0, 0), (1234.5, 0),
+                                                  (0.0, 0), (math.inf, 0), (math.nan, 0)])
+def test_an_interval_prints_two_significant_digits_of_its_half_width(half_width, decimals):
+    assert decimals_for(half_width) == decimals
 
 
 def test_clopper_pearson_is_the_exact_binomial_interval():

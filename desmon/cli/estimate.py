@@ -134,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
     from desmon.estimate import estimate
     from desmon.estimate.loop import with_world
     from desmon.progress import StatusLine
+    from desmon.stats import decimals_for
 
     question = _question(args)
     scenario = with_world(load_scenario_of(args), _world_changes(args))
@@ -146,7 +147,8 @@ def run(args: argparse.Namespace) -> int:
             now = ""
             if iv is not None:
                 goal = f" (goal {_n(question.half_width_goal(iv.estimate))})" if question.below is None else ""
-                now = f", {_n(iv.estimate)} in [{_n(iv.low)}, {_n(iv.high)}], half-width {_n(iv.half_width)}{goal} at run {iv.n:,}"
+                d = decimals_for(iv.half_width)
+                now = f", {_fixed(iv.estimate, d)} in [{_fixed(iv.low, d)}, {_fixed(iv.high, d)}], half-width {_fixed(iv.half_width, d)}{goal} at run {iv.n:,}"
             line.show(f"desmon estimate: {n:,} runs{now}")
 
     try:
@@ -174,17 +176,30 @@ def _n(x: float) -> str:
     return f"{x:,.0f}" if abs(x) >= 1000 else f"{x:,.4g}"
 
 
+def _fixed(x: float, decimals: int) -> str:
+    """``x`` with ``decimals`` decimals and thousands separators (``-`` if not finite; no ``-0.0``)."""
+    if not math.isfinite(x):
+        return "-"
+    return f"{round(x, decimals) + 0.0:,.{decimals}f}"
+
+
 def format_estimate(e: Any) -> str:
-    """The text report of ``desmon estimate``."""
+    """The text report of ``desmon estimate``: the estimate, both intervals' ends, the half-width
+    and the values' extremes all with the decimals the guaranteed interval's half-width calls for
+    (:func:`desmon.stats.decimals_for`)."""
+    from desmon.stats import decimals_for
+
     q, iv, ap = e.question, e.interval, e.approximation
+    d = decimals_for(iv.half_width)
+    f = lambda x: _fixed(x, d)  # noqa: E731
     pct = f"{100 * q.interval_confidence:g} %"
     what = f"P({q.metric} >= {q.at_least:g}) per run" if q.kind == "probability" else f"mean {q.metric} per run"
     out = [f"desmon estimate: {e.scenario} (deployer {e.deployer}), {what} of {_n(e.horizon)} s simulated, seed {e.seed}"]
     rel = f" = {100 * iv.half_width / abs(iv.estimate):.2f} % of the estimate" if iv.estimate else ""
-    out.append(f"  estimate {_n(iv.estimate)}, {pct} interval [{_n(iv.low)}, {_n(iv.high)}] (half-width {_n(iv.half_width)}{rel}), guaranteed")
+    out.append(f"  estimate {f(iv.estimate)}, {pct} interval [{f(iv.low)}, {f(iv.high)}] (half-width {f(iv.half_width)}{rel}), guaranteed")
     out.append(f"    method: {iv.method}" + (f"; every run's value assumed in [{_n(e.range[0])}, {_n(e.range[1])}]" if e.range else ""))
-    out.append(f"  {ap.method}: [{_n(ap.low)}, {_n(ap.high)}]")
-    out.append(f"  runs: {e.runs:,} (seeds derived from --seed {e.seed}); values {_n(e.low_value)} .. {_n(e.high_value)}")
+    out.append(f"  {ap.method}: [{f(ap.low)}, {f(ap.high)}]")
+    out.append(f"  runs: {e.runs:,} (seeds derived from --seed {e.seed}); values {f(e.low_value)} .. {f(e.high_value)}")
     if q.below is not None:
         out.append(_answer_line(e))
     elif e.complete:

@@ -9,7 +9,9 @@ and :class:`~desmon.detectors.evaluation.Sweep` objects.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
+import math
 import os
 import sys
 import time
@@ -19,9 +21,13 @@ from desmon.cli.common import Subparsers
 from desmon.cli.options import non_negative_int, positive_int
 
 if TYPE_CHECKING:
-    from desmon.detectors.evaluation import Evaluation, Spread, Sweep
+    from desmon.detectors.evaluation import CellSweep, Evaluation, Spread, Sweep
+    from desmon.stats import Interval
 
-__all__ = ["add_parser", "run", "run_evaluate", "render_table", "render_sweep"]
+__all__ = ["add_parser", "run", "run_evaluate", "render_table", "render_sweep", "cell_interval", "mission_intervals", "CONFIDENCE"]
+
+#: the confidence of the intervals of the means over the seeds (as desmon sweep-plot's)
+CONFIDENCE = 0.95
 
 
 def add_parser(sub: Subparsers) -> None:
@@ -73,7 +79,7 @@ def _powerless(cells: Sequence[Any]) -> int:
 
 def render_table(ev: Evaluation) -> str:
     """The readable report of one seed."""
-    from desmon.detectors.evaluation import MISSION_CONTEXTS, rules_text
+    from desmon.detectors.evaluation import MISSION_CONTEXTS, rules_text, sweep_of
 
     lines = [
         f"desmon evaluate: {ev.trials} trials per action, seed {ev.seed}; paper = Sanchez et al. 2016 Tables 1-2 (k/60)",
@@ -114,6 +120,7 @@ def render_table(ev: Evaluation) -> str:
                 f"{_ms(m.latency_median):>9}{_ms(m.latency_p95):>7}{_ms(m.latency_load_median):>9}{m.switches:9.0f}"
                 f"{m.blind_time:9.2f}  {rules_text(m.rules)}"
             )
+        lines += _mission_interval_table(sweep_of([ev]))
     return "\n".join(lines) + "\n"
 
 
@@ -152,17 +159,21 @@ def render_sweep(sw: Sweep) -> str:
         f"paper = Sanchez et al. 2016 Tables 1-2 (k/60)",
         _test_line() + "; one test per seed",
         "",
-        f"{'action':<11}{'det':<9}{'':4}{'paper':>6}  {'sim rate % mean [min..max]':<28}{'p min':>7}{'p median':>10}{'passes':>9}",
+        f"{'action':<11}{'det':<9}{'':4}{'paper':>6}  {'sim rate % mean [min..max]':<28}{f'{100 * CONFIDENCE:g}% interval':<16}"
+        f"{'p min':>7}{'p median':>10}{'passes':>9}",
     ]
     for c in sw.cells:
         lines.append(
             f"{c.action:<11}{c.detector:<9}{c.kind:<4}{f'{c.paper_count}/{c.paper_trials}':>6}  {_range(c.rate, _p1):<28}"
-            f"{c.p_min:7.3f}{c.p_median:10.3f}{f'{c.passes}/{c.seeds}':>9}" + ("" if c.holds else "  FAILS on most seeds")
+            f"{_ends(cell_interval(c), _p1):<16}{c.p_min:7.3f}{c.p_median:10.3f}{f'{c.passes}/{c.seeds}':>9}"
+            + ("" if c.holds else "  FAILS on most seeds")
         )
     every = sum(c.passes == c.seeds for c in sw.cells)
     most = sum(c.holds for c in sw.cells)
     tests = sum(c.passes for c in sw.cells)
     lines += [
+        f"{100 * CONFIDENCE:g}% interval: of the rate the mean estimates, Clopper-Pearson on the {n} seeds' "
+        f"{n * sw.trials:,} trials pooled (k of n; guaranteed: their number is fixed in advance by --trials and --seeds)",
         "",
         f"cells passing on every seed: {every}/{len(sw.cells)}; on more than half of the seeds: {most}/{len(sw.cells)}; "
         f"tests passed: {tests}/{len(sw.cells) * n}" + ("" if sw.all_hold else "  (FAIL)"),
@@ -184,11 +195,85 @@ def render_sweep(sw: Sweep) -> str:
                 f"{_range(m.mean_tpr, _p1):<22}{_range(m.miss_rate, _p1):<22}{tp:<21}{_range(m.latency_median, _ms0):<20}"
                 f"{_range(m.blind_time, _f2):<20}{rules}"
             )
+        lines += _mission_interval_table(sw)
         oracle = next((m for m in sw.missions if m.strategy == "oracle"), None)
         if oracle is not None:
             lines += ["", "oracle's rules (per context the detector with the best TPR - FPR in that seed's run):"]
             lines += [f"  {rules}: {count}/{n} seeds" for rules, count in oracle.rule_picks.items()]
     return "\n".join(lines) + "\n"
+
+
+def _ends(iv: Interval | None, fmt: Callable[[float], str]) -> str:
+    """``[low, high]`` of ``iv`` in the format of its mean's column; ``-`` for none (below 2 seeds)."""
+    if iv is None or not (math.isfinite(iv.low) and math.isfinite(iv.high)):
+        return "-"
+    return f"[{fmt(iv.low)}, {fmt(iv.high)}]"
+
+
+def cell_interval(c: CellSweep) -> Interval:
+    """The :data:`CONFIDENCE` interval of a cell's rate: Clopper-Pearson on its trials over every
+    seed pooled (the mean of the seeds' rates is their pooled rate: every seed has as many trials)."""
+    from desmon.stats import clopper_pearson
+
+    return clopper_pearson(sum(c.counts), c.trials * c.seeds, 1.0 - CONFIDENCE)
+
+
+def mission_intervals(sw: Sweep, index: int) -> dict[str, Interval | None]:
+    """The :data:`CONFIDENCE` intervals of mission strategy ``index``'s means over the seeds, by
+    figure: the missions' proportions (``p_any_fa``, ``mean_tpr``, ``miss_rate``) by
+    Clopper-Pearson on the missions of every seed pooled; the figures whose range is not known
+    in advance (``fa_per_mission``, ``latency_median``, ``blind_time``) by the normal
+    approximation over the seeds' values, as ``desmon sweep-plot`` draws such a figure, cut
+    at 0 for a count or a duration (None where fewer than 2 seeds have it)."""
+    from desmon.detectors.evaluation import MISSION_CONTEXTS
+    from desmon.stats import clopper_pearson, mean_interval
+
+    delta = 1.0 - CONFIDENCE
+    per = [(ev.missions[index], ev.mission_trials or ev.trials) for ev in sw.runs]
+    missions = sum(m for _, m in per)
+    false_alarmed = sum(round(r.p_any_fa * m) for r, m in per)
+    caught = sum(round(r.tpr[c] * m) for r, m in per for c in MISSION_CONTEXTS)
+    slips = missions * len(MISSION_CONTEXTS)
+    tpr = clopper_pearson(caught, slips, delta)
+    out: dict[str, Interval | None] = {
+        "p_any_fa": clopper_pearson(false_alarmed, missions, delta),
+        "mean_tpr": tpr,
+        "miss_rate": dataclasses.replace(tpr, estimate=1.0 - tpr.estimate, low=1.0 - tpr.high, high=1.0 - tpr.low),
+    }
+    for field, floor in (("fa_per_mission", 0.0), ("latency_median", -math.inf), ("blind_time", 0.0)):
+        values = [getattr(r, field) for r, _ in per if getattr(r, field) is not None]
+        iv = mean_interval(values, delta) if len(values) >= 2 else None
+        out[field] = None if iv is None else dataclasses.replace(iv, low=max(iv.low, floor))  # no mean below what a value can be
+    return out
+
+
+def _mission_interval_table(sw: Sweep) -> list[str]:
+    """The mission table's second part: each figure's :data:`CONFIDENCE` interval, and how it was
+    made (from one seed, the proportions' only)."""
+    n, pct = len(sw.seeds), f"{100 * CONFIDENCE:g}%"
+    missions = sum(ev.mission_trials or ev.trials for ev in sw.runs)
+    columns: list[tuple[str, str, Callable[[float], str], int]] = [
+        ("P(FA>=1) %", "p_any_fa", _p1, 16), ("FA/mission", "fa_per_mission", _f3, 18), ("slips caught %", "mean_tpr", _p1, 16),
+        ("miss %", "miss_rate", _p1, 16), ("lat med ms", "latency_median", _ms0, 14), ("blind s", "blind_time", _f2, 0),
+    ]
+    pooled = f"the missions of every seed pooled ({missions:,} slip-free" if n > 1 else f"the seed's missions ({missions:,} slip-free"
+    lines = [
+        "",
+        f"{pct} interval of each figure above" + (f" (its mean over the {n} seeds):" if n > 1 else " (slips caught: 100 % - miss):"),
+        f"  P(FA>=1), slips caught, miss: Clopper-Pearson on {pooled}, {3 * missions:,} with a slip; "
+        "guaranteed: their number is fixed in advance)",
+        f"  FA/mission, lat med, blind s: normal approximation over the {n} seeds' values, not guaranteed "
+        "(their range is not known in advance; as desmon sweep-plot)" if n > 1 else
+        "  FA/mission, lat med, blind s: none from one seed (give --seeds N: the normal approximation over the seeds)",
+        "  oracle: its rules are picked on the same missions, so its intervals are not guaranteed either",
+    ]
+    if n == 1:
+        columns = [c for c in columns if c[1] in ("p_any_fa", "mean_tpr", "miss_rate")]
+    lines.append((f"{'strategy':<20}" + "".join(f"{head:<{width}}" for head, _, _, width in columns)).rstrip())
+    for i, m in enumerate(sw.missions):
+        iv = mission_intervals(sw, i)
+        lines.append((f"{m.strategy:<20}" + "".join(f"{_ends(iv[key], fmt):<{width}}" for _, key, fmt, width in columns)).rstrip())
+    return lines
 
 
 class _Progress:

@@ -644,6 +644,7 @@ class Evaluation:
     seed: int
     cells: tuple[CellResult, ...]
     missions: tuple[MissionResult, ...]
+    mission_trials: int | None = None  # missions per batch (slip-free, and per slip context); None: ``trials``
 
     @property
     def all_pass(self) -> bool:
@@ -701,7 +702,7 @@ def evaluate(
     cells = evaluate_actions(trials, seed, params=params, progress=progress)
     mt = trials if mission_trials is None else _check_args(mission_trials, seed)[0]
     ms = evaluate_missions(mt, seed, params=params, progress=progress) if missions else []
-    return Evaluation(trials, seed, tuple(cells), tuple(ms))
+    return Evaluation(trials, seed, tuple(cells), tuple(ms), mt)
 
 
 # --------------------------------------------------------------------------- several seeds

@@ -26,6 +26,10 @@ distribution.
 :func:`normal_interval` is the textbook interval ``mean +- z s / sqrt(n)``: it assumes
 the central limit theorem has taken hold at this ``n`` and a number of runs fixed in
 advance; it is printed beside the guaranteed one, labelled as an approximation.
+
+:func:`mean_interval` is the choice every table of a mean over seeds makes between the
+two: the betting interval when each value's range is known in advance, else the normal
+one. :func:`decimals_for` is how many decimals a printed interval shows.
 """
 
 from __future__ import annotations
@@ -37,7 +41,7 @@ import numpy as np
 
 from desmon.errors import EstimateError
 
-__all__ = ["BettingSequence", "Interval", "normal_interval", "check_delta", "BISECTIONS"]
+__all__ = ["BettingSequence", "Interval", "normal_interval", "mean_interval", "decimals_for", "check_delta", "BISECTIONS"]
 
 #: bisection steps per bound: the interval is found to 2**-48 of the range
 BISECTIONS = 48
@@ -167,3 +171,24 @@ def normal_interval(values: list[float] | tuple[float, ...], delta: float) -> In
 
 
 NORMAL_METHOD = "normal approximation (CLT), not guaranteed"
+
+
+def mean_interval(values: list[float] | tuple[float, ...], delta: float, value_range: tuple[float, float] | None = None) -> Interval:
+    """The ``1 - delta`` interval of the mean of independent runs' ``values``, as a table of a mean
+    over seeds prints it: the betting confidence sequence (guaranteed) when every value is known to
+    lie in ``value_range``, else :func:`normal_interval` (an approximation; infinite ends below 2 values)."""
+    if value_range is None:
+        return normal_interval(list(values), delta)
+    cs = BettingSequence(value_range[0], value_range[1], delta)
+    for v in values:
+        cs.add(v)
+    return cs.interval()
+
+
+def decimals_for(half_width: float, digits: int = 2) -> int:
+    """How many decimals an interval of ``half_width`` prints with: enough for ``digits``
+    significant digits of its half-width, the same for its estimate and both its ends
+    (``[9.5, 13.9]``, not ``[9.539, 13.9]``); 0 for a half-width that is zero or not finite."""
+    if not (math.isfinite(half_width) and half_width > 0.0):
+        return 0
+    return max(0, digits - 1 - math.floor(math.log10(half_width)))

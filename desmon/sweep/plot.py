@@ -109,18 +109,14 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
 
 
 def mean_interval(values: list[float], value_range: tuple[float, float] | None) -> tuple[float, float, str]:
-    """(low, high, method) of the :data:`CONFIDENCE` interval of the mean of ``values``: the
-    betting confidence sequence when every value is known to lie in ``value_range``, else the
-    normal approximation (not guaranteed; none below 2 values)."""
-    from desmon.stats import BettingSequence, normal_interval
+    """(low, high, method) of the :data:`CONFIDENCE` interval of the mean of ``values``
+    (:func:`desmon.stats.mean_interval`): the betting confidence sequence when every value is
+    known to lie in ``value_range``, else the normal approximation (not guaranteed; none below 2 values)."""
+    from desmon.stats import mean_interval as interval_of
 
+    iv = interval_of(values, 1.0 - CONFIDENCE, value_range)
     if value_range is not None:
-        cs = BettingSequence(value_range[0], value_range[1], 1.0 - CONFIDENCE)
-        for v in values:
-            cs.add(v)
-        iv = cs.interval()
         return iv.low, iv.high, "guaranteed"
-    iv = normal_interval(values, 1.0 - CONFIDENCE)
     if len(values) < 2:  # no spread to go by: no bar
         return math.nan, math.nan, "normal approximation, not guaranteed"
     return iv.low, iv.high, "normal approximation, not guaranteed"
