@@ -185,8 +185,8 @@ def _fixed(x: float, decimals: int) -> str:
 
 def format_estimate(e: Any) -> str:
     """The text report of ``desmon estimate``: the estimate, both intervals' ends, the half-width
-    and the values' extremes all with the decimals the guaranteed interval's half-width calls for
-    (:func:`desmon.stats.decimals_for`)."""
+    and (for a mean) the values' extremes all with the decimals the guaranteed interval's
+    half-width calls for (:func:`desmon.stats.decimals_for`)."""
     from desmon.stats import decimals_for
 
     q, iv, ap = e.question, e.interval, e.approximation
@@ -199,7 +199,8 @@ def format_estimate(e: Any) -> str:
     out.append(f"  estimate {f(iv.estimate)}, {pct} interval [{f(iv.low)}, {f(iv.high)}] (half-width {f(iv.half_width)}{rel}), guaranteed")
     out.append(f"    method: {iv.method}" + (f"; every run's value assumed in [{_n(e.range[0])}, {_n(e.range[1])}]" if e.range else ""))
     out.append(f"  {ap.method}: [{f(ap.low)}, {f(ap.high)}]")
-    out.append(f"  runs: {e.runs:,} (seeds derived from --seed {e.seed}); values {f(e.low_value)} .. {f(e.high_value)}")
+    v = _n if q.kind == "probability" else f  # a probability's runs give values of another figure (seconds, counts)
+    out.append(f"  runs: {e.runs:,} (seeds derived from --seed {e.seed}); values {v(e.low_value)} .. {v(e.high_value)}")
     if q.below is not None:
         out.append(_answer_line(e))
     elif e.complete:

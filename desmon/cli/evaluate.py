@@ -265,7 +265,7 @@ def _mission_interval_table(sw: Sweep) -> list[str]:
         f"  FA/mission, lat med, blind s: normal approximation over the {n} seeds' values, not guaranteed "
         "(their range is not known in advance; as desmon sweep-plot)" if n > 1 else
         "  FA/mission, lat med, blind s: none from one seed (give --seeds N: the normal approximation over the seeds)",
-        "  oracle: its rules are picked on the same missions, so its intervals are not guaranteed either",
+        "  oracle: its rules are picked on the same missions, so its intervals are not guaranteed",
     ]
     if n == 1:
         columns = [c for c in columns if c[1] in ("p_any_fa", "mean_tpr", "miss_rate")]
