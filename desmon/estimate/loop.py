@@ -301,11 +301,12 @@ def with_world(scenario: Any, changes: dict[str, Any]) -> Any:
 
 
 def run_value(scenario: Any, deployer: Any, seed: int, until: float | None, metric: str, guard: Any = None) -> float:
-    """``metric`` of one run of ``scenario`` in the SimPy world with world seed ``seed``."""
+    """``metric`` of one run of ``scenario`` in the SimPy world with world seed ``seed`` (the
+    world told that only ``metric`` is read: it skips the work no other output needs)."""
     from desmon.sim.engine import SimWorld
     from desmon.sim.metrics import run_figures
 
-    world = SimWorld(scenario, deployer=deployer, seed=seed, until=until, guard=guard)
+    world = SimWorld(scenario, deployer=deployer, seed=seed, until=until, guard=guard, reads=(metric,))
     result = world.run()
     figures = run_figures(result.metrics, len(result.violations))
     figures[LONGEST] = longest_exposure(world.exposure.intervals)

@@ -30,7 +30,7 @@ the core; no decision is made here.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Iterable
 
 import simpy
 
@@ -50,6 +50,7 @@ from desmon.repository.store import ADD_EDGE, REMOVE_EDGE, RELABEL_EDGE, UPDATE_
 from desmon.sim.accounting import audit, robot_metrics
 from desmon.sim.collector import collector_relaxed
 from desmon.sim.facts import SLIP_WINDOW, Instance
+from desmon.sim.metrics import AUDIT, SIGNALS, TRACE, work_read
 from desmon.sim.parts import RobotParts, robot_parts, start_processes
 from desmon.sim.processes import OBSERVATION, apply_initial, progress
 from desmon.sim.trace import Trace, declared_actions, graph_resources, initial_loads, platform_resources
@@ -96,6 +97,7 @@ class SimWorld:
         render_ahead: bool | None = None,
         guard: Guard | None = None,
         run: RunContext | None = None,
+        reads: Iterable[str] | None = None,
     ) -> None:
         self.scenario = scenario
         #: the run this world belongs to (:mod:`desmon.deployment.run`): its guard, and its
@@ -113,8 +115,16 @@ class SimWorld:
         self.world = world_of(scenario)
         self.seed = int(seed)
         self.horizon = float(until if until is not None else self.world.horizon)
-        self.signals_on = self.world.signals if signals is None else bool(signals)
-        self.trace = trace if trace is not None else Trace()
+        #: the run figures (:data:`~desmon.sim.metrics.RUN_FIGURES`) the caller reads, or None:
+        #: every output. A run read for some figures only skips the work no output it has
+        #: needs (:func:`~desmon.sim.metrics.work_read`): the signals and detectors when no
+        #: figure of the alarms is read, the audit when the violations are not, the trace's
+        #: records when no trace is given. The figures read are the same either way.
+        self.reads = None if reads is None else frozenset(reads)
+        needed = work_read(self.reads)
+        self.signals_on = (self.world.signals if signals is None else bool(signals)) and SIGNALS in needed
+        self._audited = AUDIT in needed or on_quiescent is not None
+        self.trace = trace if trace is not None else Trace(keep=TRACE in needed)
         self.progress = progress
         self.env = simpy.Environment()
         env = self.env
@@ -207,7 +217,7 @@ class SimWorld:
     def run(self) -> RunResult:
         parts = self.parts
         self._trace_header()
-        start_processes(parts, self._audit)
+        start_processes(parts, self._audit if self._audited else _unread)
         if self.progress is not None:
             self.env.process(progress(parts, self.progress))
         ahead = self.bank.signals if self._ahead_wanted() and self.bank is not None else None
@@ -232,6 +242,10 @@ class SimWorld:
             self.scenario, self.world, self.deployer_name, self.seed, self.horizon, self.trace, self.repo, metrics,
             books.decisions, books.errors, books.violations, self.slips, self.infra.alarms,
         )
+
+
+def _unread() -> None:
+    """The audit of a run nobody reads the violations of: none."""
 
 
 def simulate(scenario: Scenario, deployer: str = "desmon", seed: int = 0, **kw: Any) -> RunResult:

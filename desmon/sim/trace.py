@@ -105,7 +105,8 @@ def _clean(v: Any) -> Any:
 
 
 class Trace:
-    """Collects records; streams them to ``out`` (a text file) when given."""
+    """Collects records (``keep``); streams them to ``out`` (a text file) when given. With
+    neither, a record is only counted."""
 
     def __init__(self, out: IO[str] | None = None, keep: bool = True) -> None:
         self.out = out
@@ -126,6 +127,9 @@ class Trace:
         return r
 
     def emit(self, t: float, type_: str, **fields: Any) -> None:
+        self.count += 1
+        if not self.keep and self.out is None:  # nobody sees the record: counted only
+            return
         rec: dict[str, Any] = {"t": self.rounded(t), "type": type_}
         for k, v in fields.items():
             kind = type(v)
@@ -136,7 +140,6 @@ class Trace:
                 rec[k] = self.rounded(v)
             else:
                 rec[k] = _clean(v)
-        self.count += 1
         if self.keep:
             self.records.append(rec)
         if self.out is not None:
