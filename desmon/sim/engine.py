@@ -50,7 +50,7 @@ from desmon.repository.store import ADD_EDGE, REMOVE_EDGE, RELABEL_EDGE, UPDATE_
 from desmon.sim.accounting import audit, robot_metrics
 from desmon.sim.collector import collector_relaxed
 from desmon.sim.facts import SLIP_WINDOW, Instance
-from desmon.sim.metrics import AUDIT, SIGNALS, TRACE, work_read
+from desmon.sim.metrics import AUDIT, RECORDS, SIGNALS, work_read
 from desmon.sim.parts import RobotParts, robot_parts, start_processes
 from desmon.sim.processes import OBSERVATION, apply_initial, progress
 from desmon.sim.trace import Trace, declared_actions, graph_resources, initial_loads, platform_resources
@@ -118,13 +118,14 @@ class SimWorld:
         #: the run figures (:data:`~desmon.sim.metrics.RUN_FIGURES`) the caller reads, or None:
         #: every output. A run read for some figures only skips the work no output it has
         #: needs (:func:`~desmon.sim.metrics.work_read`): the signals and detectors when no
-        #: figure of the alarms is read, the audit when the violations are not, the trace's
-        #: records when no trace is given. The figures read are the same either way.
+        #: figure of the alarms is read, the audit when the violations are not, the records
+        #: (the decisions, and the trace's when no trace is given). The figures read are the
+        #: same either way.
         self.reads = None if reads is None else frozenset(reads)
         needed = work_read(self.reads)
         self.signals_on = (self.world.signals if signals is None else bool(signals)) and SIGNALS in needed
         self._audited = AUDIT in needed or on_quiescent is not None
-        self.trace = trace if trace is not None else Trace(keep=TRACE in needed)
+        self.trace = trace if trace is not None else Trace(keep=RECORDS in needed)
         self.progress = progress
         self.env = simpy.Environment()
         env = self.env
@@ -134,7 +135,7 @@ class SimWorld:
         #: the parts the processes share (facts, infrastructure, books, inbox, ...)
         self.parts: RobotParts = robot_parts(
             scenario, self.world, env=env, repo=self.repo, query=self.query, deployer=deployer, seed=self.seed,
-            horizon=self.horizon, signals=self.signals_on, trace=self.trace, run=self.run_context,
+            horizon=self.horizon, signals=self.signals_on, trace=self.trace, run=self.run_context, keep_decisions=RECORDS in needed,
         )
         self.core = self.parts.core
         self.deployer_name = self.core.deployer.name

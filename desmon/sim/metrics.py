@@ -39,7 +39,7 @@ from desmon.sim.world import Slip
 
 __all__ = [
     "Exposure", "MemoryMeter", "slip_metrics", "percentile", "RUN_FIGURES", "RENAMED", "RUNTIME_CHANGES", "run_figures",
-    "ALARM_FIGURES", "SIGNALS", "AUDIT", "TRACE", "work_read",
+    "ALARM_FIGURES", "SIGNALS", "AUDIT", "RECORDS", "work_read",
 ]
 
 DETECT_BEFORE = 0.3
@@ -307,17 +307,18 @@ def run_figures(m: Mapping[str, Any], violations: int) -> dict[str, Any]:
 #: change (an alarm is recorded and counted, and nothing in the world reacts to it)
 ALARM_FIGURES: frozenset[str] = frozenset({"slips_detected", "slips_missed", "false_alarms", "latency_median_s", "latency_p95_s"})
 #: the work of a run that only some outputs read (:func:`work_read`): rendering the signals
-#: and running the detectors on them, auditing the invariants, keeping the trace's records
-SIGNALS, AUDIT, TRACE = "signals", "audit", "trace"
+#: and running the detectors on them, auditing the invariants, keeping the records (the
+#: decisions, the trace's records)
+SIGNALS, AUDIT, RECORDS = "signals", "audit", "records"
 
 
 def work_read(figures: frozenset[str] | None) -> frozenset[str]:
-    """The work (:data:`SIGNALS`, :data:`AUDIT`, :data:`TRACE`) whose results a caller reading
-    ``figures`` of a run sees (None: every output, so all of it). The alarms feed only
-    :data:`ALARM_FIGURES`, the audit only ``violations``; the trace's records only a reader
-    of the trace. Every other figure comes out the same without them."""
+    """The work (:data:`SIGNALS`, :data:`AUDIT`, :data:`RECORDS`) whose results a caller
+    reading ``figures`` of a run sees (None: every output, so all of it). The alarms feed
+    only :data:`ALARM_FIGURES`, the audit only ``violations``, the records no figure.
+    Every other figure comes out the same without them."""
     if figures is None:
-        return frozenset({SIGNALS, AUDIT, TRACE})
+        return frozenset({SIGNALS, AUDIT, RECORDS})
     return frozenset(
         ({SIGNALS} if figures & ALARM_FIGURES else set()) | ({AUDIT} if "violations" in figures else set())
     )
