@@ -97,7 +97,8 @@ RESULT_KEYS: dict[str, tuple[str, ...]] = {
     "bench_detectors": ("trials_per_s", "eval_ratio", "missions_per_s", "detectors_us_per_sim_s"),
     "bench_estimate": (
         "robot_day_runs_per_min_core", "coffee_shift_runs_per_min_core", "runs_needed_1pct_99", "clt_runs_needed", "floor_runs",
-        "minutes_2_cores", "speedup", "one_worker_s", "two_workers_s",
+        "minutes_2_cores", "speedup", "one_worker_s", "two_workers_s", "coffee_shift_full_s", "coffee_shift_read_s", "coffee_shift_read_ratio",
+        "robot_day_full_s", "robot_day_read_s", "robot_day_read_ratio",
     ),
     "bench_estimate --coverage": (
         "scenarios", "estimations", "runs", "guaranteed_passed", "guaranteed_held_min", "narrowed_held_min", "normal_held_min",

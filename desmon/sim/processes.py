@@ -45,7 +45,7 @@ if TYPE_CHECKING:
     from desmon.sim.robot import RobotParts
 
 __all__ = [
-    "OBSERVATION", "apply_initial", "robot", "recognise", "insert", "notice", "fault", "scripted_faults", "stochastic_faults",
+    "OBSERVATION", "apply_initial", "robot", "recognise", "recognise_later", "insert", "notice", "fault", "scripted_faults", "stochastic_faults",
     "set_load", "scripted_loads", "load_walk", "change", "follow_consumption", "scripted_changes", "random_changes",
     "maybe_lease", "lease", "markov_lease", "load_steps", "progress",
 ]
@@ -92,6 +92,8 @@ def robot(parts: RobotParts):  # type: ignore[no-untyped-def]
             if "context" not in parts.noticing:
                 parts.noticing.add("context")
                 env.process(recognise_latest(parts))
+        elif parts.world.recognition_delay:
+            recognise_later(parts, seg.context)
         else:
             env.process(recognise(parts, seg.context))
 
@@ -106,6 +108,16 @@ def recognise(parts: RobotParts, action: str):  # type: ignore[no-untyped-def]
     if parts.world.recognition_delay:
         yield parts.env.timeout(parts.world.recognition_delay)
     insert(parts, ActionChange(recognised_context(action)))
+
+
+def recognise_later(parts: RobotParts, action: str) -> None:
+    """:func:`recognise` for a positive recognition delay, as a timeout whose callback
+    inserts: no process of its own. Called from the robot's step, which a process made
+    there would follow at once (its start is urgent), so the timeout is scheduled in the
+    same order among the other events as the process's timeout would be; the process's
+    end, which nobody waits for, is not an event any more."""
+    action = recognised_context(action)
+    parts.env.timeout(parts.world.recognition_delay).callbacks.append(lambda _ev: insert(parts, ActionChange(action)))
 
 
 def recognise_latest(parts: RobotParts):  # type: ignore[no-untyped-def]
