@@ -302,7 +302,19 @@ def with_world(scenario: Any, changes: dict[str, Any]) -> Any:
 
 def run_value(scenario: Any, deployer: Any, seed: int, until: float | None, metric: str, guard: Any = None) -> float:
     """``metric`` of one run of ``scenario`` in the SimPy world with world seed ``seed`` (the
-    world told that only ``metric`` is read: it skips the work no other output needs)."""
+    world told that only ``metric`` is read: it skips the work no other output needs).
+
+    The world is built, run and dropped within one :func:`~desmon.sim.collector.collector_relaxed`:
+    the collection at its end scans the run's garbage only, the caller's heap frozen out of it
+    (collected inside the run, the world would still be alive, and a full collection of the
+    whole heap would follow to free it)."""
+    from desmon.sim.collector import collector_relaxed
+
+    with collector_relaxed(collect=False):
+        return _figure(scenario, deployer, seed, until, metric, guard)
+
+
+def _figure(scenario: Any, deployer: Any, seed: int, until: float | None, metric: str, guard: Any) -> float:
     from desmon.sim.engine import SimWorld
     from desmon.sim.metrics import run_figures
 
