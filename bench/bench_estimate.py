@@ -7,9 +7,11 @@ In one run it measures:
   this process, CPU seconds of this process and of the render-ahead workers it forks;
 * what the runs ``desmon estimate`` makes save: CPU seconds per run of each scenario, the
   whole world (every output: signals rendered ahead and detectors, audit, trace records,
-  as ``desmon run`` computes it) against a run told it is read for ``exposure_s`` alone
-  (what ``desmon estimate`` runs: :class:`desmon.sim.engine.SimWorld`'s ``reads``), the
-  same seeds, ``--turns`` turns alternating, best of the turns, and their ratio;
+  as ``desmon run`` computes it) against the run ``desmon estimate`` makes for
+  ``exposure_s`` (:func:`desmon.estimate.run_value`: the world told it is read for that
+  figure alone, :class:`desmon.sim.engine.SimWorld`'s ``reads``, and collected once it is
+  dropped), the same seeds, ``--full-runs`` runs each way per turn, ``--turns`` turns
+  alternating, the best turn of each, and their ratio;
 * the runs ``desmon estimate scenarios/coffee_shift.py --within 1% --confidence 0.99``
   needs, projected from the spread of those ``M`` runs: the betting confidence sequence
   (the code ``desmon estimate`` runs, with its looks) fed values drawn from the ``M``
@@ -77,22 +79,24 @@ def _rate(name: str, runs: int, until: float | None) -> tuple[float, list[float]
 
 
 def _against_full(name: str, runs: int, until: float | None, turns: int) -> tuple[float, float]:
-    """(CPU s per run of the whole world, CPU s per run read for ``exposure_s`` alone) of
-    ``name``: ``runs`` runs each way per turn, alternating, the best turn of each."""
-    from desmon.estimate import run_seed
+    """(CPU s per run of the whole world, CPU s per run of :func:`desmon.estimate.run_value`
+    for ``exposure_s``) of ``name``: ``runs`` runs each way per turn, alternating, the best
+    turn of each."""
+    from desmon.estimate import run_seed, run_value
     from desmon.loader import load_scenario
     from desmon.sim.engine import SimWorld
 
     scenario = load_scenario(SCENARIOS[name])
-    reads = {"full": None, "read": ("exposure_s",)}
+    ways = {
+        "full": lambda seed: SimWorld(scenario, seed=seed, until=until).run().metrics["unmonitored_exposure_s"],
+        "read": lambda seed: run_value(scenario, "desmon", seed, until, "exposure_s"),
+    }
     best = {"full": math.inf, "read": math.inf}
     values: dict[str, list[float]] = {}
     for _ in range(turns):
-        for mode, read in reads.items():
+        for mode, way in ways.items():
             c0 = _cpu()
-            values[mode] = [
-                SimWorld(scenario, seed=run_seed(0, i), until=until, reads=read).run().metrics["unmonitored_exposure_s"] for i in range(runs)
-            ]
+            values[mode] = [way(run_seed(0, i)) for i in range(runs)]
             best[mode] = min(best[mode], (_cpu() - c0) / runs)
     assert values["full"] == values["read"], "the run read for exposure_s gave another exposure"
     return best["full"], best["read"]
