@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-fast bench clean
+.PHONY: demo test test-fast test-estimate-coverage bench clean
 
 # The first run installs into .venv and shows pip's own output; later runs skip it.
 $(STAMP): pyproject.toml
@@ -45,6 +45,11 @@ FAST_FILES = $(shell $(BIN)/python -c "import sys; sys.path.insert(0, 'tests'); 
 test-fast: $(STAMP)
 	@echo "==> the fast subset, under a minute: every layer touched; make test runs everything"
 	$(BIN)/python -m pytest -m fast -q $(FAST_FILES)
+
+# The coverage self-test's full count (tests/test_estimate_coverage.py, docs/estimate.md):
+# 200 estimations on each analysable scenario, where make test runs the first 40.
+test-estimate-coverage: $(STAMP)
+	DESMON_COVERAGE_ESTIMATIONS=200 $(BIN)/python -m pytest -q tests/test_estimate_coverage.py
 
 bench: $(STAMP)
 	$(BIN)/python -m bench
