@@ -47,7 +47,6 @@ labelled excluded instead.
 
 from __future__ import annotations
 
-import functools
 import time
 from array import array
 from dataclasses import dataclass, field, replace
@@ -61,20 +60,11 @@ from desmon.deployment.guard import CRASH, DeployerFault
 from desmon.deployment.lease import lease_choice
 from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, RaiseError, Start, Stop
 from desmon.errors import CheckerError
-from desmon.model.events import (
-    ActionChange,
-    DeviceFail,
-    DeviceRepair,
-    Event,
-    LoadChange,
-    PlatformDown,
-    PlatformJoin,
-    PlatformLeave,
-    PlatformUp,
-)
+from desmon.model.events import DeviceEvent, Event, PlatformEvent
 from desmon.model.scenario import Scenario
 from desmon.model.system import PlatformState
 from desmon.sim.processes import recognised_context
+from desmon.verify.environment import variable_kind
 from desmon.verify.state import Key
 from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, same_again
 
@@ -213,8 +203,22 @@ class Builder:
         self.reactions = 0
         devices = {d.name for d in self.model.devices}
         self.faults = tuple((c, c in devices, 1.0 / f, 1.0 / r) for c, _k, f, r in mw.faults)
+        # (kind, subject, value) -> the event that moves the variable there: one object per event
+        self._events: dict[tuple[str, Any, Any], Event] = {}
+        # the variables of kinds the chain times by their rates: (kind, subject, event -> rate)
+        self.timed = tuple((variable_kind(k), subject, dict(rates)) for k, subject, rates in mw.timed)
         self.latency = {p.name: mw.latency_of(p.name) for p in self.model.platforms}
         self.warm = dict(mw.warmup)  # graph -> mean warm-up s
+
+    def event(self, kind: str, subject: Any, value: Any) -> Event:
+        """The event that moves the ``kind`` variable of ``subject`` to ``value``
+        (:meth:`~desmon.verify.environment.VariableKind.event_to`): the world's task step,
+        fault, load step or lease made a checker event."""
+        k = (kind, subject, value)
+        e = self._events.get(k)
+        if e is None:
+            e = self._events[k] = variable_kind(kind).event_to(self.system.bounds, subject, value)  # type: ignore[union-attr]
+        return e
 
     # -- reactions -----------------------------------------------------------------------
     def react(self, key: Key, event: Event, world: tuple | None = None) -> list[tuple[float, Key, tuple, tuple[str, ...]]]:
@@ -375,7 +379,7 @@ class Builder:
         if mw.recognition_delay > 0:
             ctx = recognised(mw.steps[s.pos][0])
             if ctx != s.key.context:
-                yield self._deliver(s, _action(ctx), 1.0 / mw.recognition_delay)
+                yield self._deliver(s, self.event("action", None, ctx), 1.0 / mw.recognition_delay)
         yield from self._faults(s)
         for pair in s.starting:
             lat = self.latency[pair[1]]
@@ -394,6 +398,7 @@ class Builder:
         yield from self._loads(s)
         if self.leased:
             yield from self._lease(s)
+        yield from self._timed(s)
 
     def _deliver(self, s: ChainState, event: Event, rate: float) -> Slot:
         key = s.key
@@ -431,7 +436,7 @@ class Builder:
             i = levels.index(dict(loads.get(p, ())).get(r, 0))
             nbrs = [levels[j] for j in (i - 1, i + 1) if 0 <= j < len(levels)]
             for level in nbrs:
-                yield self._deliver(s, _load(p, level, r), rate / len(nbrs))
+                yield self._deliver(s, self.event("load", p, level), rate / len(nbrs))
 
     def _lease(self, s: ChainState) -> Iterator[Slot]:
         """Leased platforms joining, leaving after an idle time (Erlang-``phases``, its
@@ -455,9 +460,9 @@ class Builder:
             if flip is not None:
                 rate, ns = flip
                 ns = self._rewarm(s, ns)
-                yield (rate, None, ((1.0, ns, ()),)) if hb > 0 else self._deliver(ns, _join_event(p, absent), rate)
+                yield (rate, None, ((1.0, ns, ()),)) if hb > 0 else self._deliver(ns, self.event("join", p, not absent), rate)
             if hb > 0 and absent != (p in s.key.down):
-                yield self._deliver(s, _join_event(p, not absent), 1.0 / hb)
+                yield self._deliver(s, self.event("join", p, absent), 1.0 / hb)
 
     def _task(self, s: ChainState) -> Iterator[Slot]:
         mw = self.mw
@@ -470,12 +475,13 @@ class Builder:
         if mw.recognition_delay > 0:
             yield rate, None, ((1.0, nxt, ()),)
         else:
-            yield self._deliver(nxt, _action(recognised(mw.steps[nxt.pos][0])), rate)
+            yield self._deliver(nxt, self.event("action", None, recognised(mw.steps[nxt.pos][0])), rate)
 
     def _faults(self, s: ChainState) -> Iterator[Slot]:
         hb = self.mw.heartbeat_timeout
         known_failed, known_down = set(s.key.failed), set(s.key.down)
         for c, is_dev, fail, repair in self.faults:
+            kind = "device" if is_dev else "platform"
             phys = s.phys_failed if is_dev else s.phys_down
             broken = c in phys
             flipped = tuple(sorted(set(phys) - {c})) if broken else tuple(sorted((*phys, c)))
@@ -485,26 +491,32 @@ class Builder:
             if hb > 0:
                 yield rate, None, ((1.0, ns, ()),)
             else:
-                yield self._deliver(ns, _event(c, is_dev, not broken), rate)
+                yield self._deliver(ns, self.event(kind, c, not broken), rate)
             if hb > 0 and broken != (c in (known_failed if is_dev else known_down)):
-                yield self._deliver(s, _event(c, is_dev, broken), 1.0 / hb)
+                yield self._deliver(s, self.event(kind, c, broken), 1.0 / hb)
+
+    def _timed(self, s: ChainState) -> Iterator[Slot]:
+        """The events of the variables of kinds the chain times by their rates
+        (:meth:`~desmon.verify.environment.VariableKind.rates`): each enabled one at its
+        rate, in the world and known at once (no failure budget: ``room``)."""
+        b = self.system.bounds
+        for kind, subject, rates in self.timed:
+            for event in kind.enabled(b, s.key, subject, True):
+                rate = rates.get(event)
+                if rate:
+                    yield self._deliver(self._rewarm(s, _physically(s, event)), event, rate)
 
 
-# events are frozen and check their names when built: one object per event
-_action = functools.lru_cache(maxsize=None)(ActionChange)
-_load = functools.lru_cache(maxsize=None)(LoadChange)
-
-
-@functools.lru_cache(maxsize=None)
-def _join_event(platform: str, joins: bool) -> Event:
-    return PlatformJoin(platform) if joins else PlatformLeave(platform)
-
-
-@functools.lru_cache(maxsize=None)
-def _event(component: str, is_device: bool, broken: bool) -> Event:
-    if is_device:
-        return DeviceFail(component) if broken else DeviceRepair(component)
-    return PlatformDown(component) if broken else PlatformUp(component)
+def _physically(s: ChainState, event: Event) -> ChainState:
+    """``s`` with the world moved by ``event`` (a device that stops or starts working, a
+    platform that goes down or comes up; any other event moves only what is known)."""
+    if isinstance(event, DeviceEvent):
+        failed = set(s.phys_failed) - {event.device} if event.working else set(s.phys_failed) | {event.device}
+        return s._replace(phys_failed=tuple(sorted(failed)))
+    if isinstance(event, PlatformEvent):
+        down = set(s.phys_down) - {event.platform} if event.up else set(s.phys_down) | {event.platform}
+        return s._replace(phys_down=tuple(sorted(down)))
+    return s
 
 
 def build_chain(
@@ -531,7 +543,7 @@ def build_chain(
     s0 = ChainState(key0, 0, 0, (), tuple(sorted(key0.down)), ())
     start = [(1.0, s0)]
     if mw.recognition_delay == 0:  # the monitor sees the first step at once: its reaction's outcomes
-        start = [(p, t) for p, t, _c in b._deliver(s0, ActionChange(recognised(mw.steps[0][0])), 1.0)[2]]
+        start = [(p, t) for p, t, _c in b._deliver(s0, b.event("action", None, recognised(mw.steps[0][0])), 1.0)[2]]
     index: dict[ChainState, int] = {}
     states: list[ChainState] = []
     initial: dict[int, float] = {}

@@ -28,7 +28,11 @@ The chain (:mod:`desmon.analyze.chain`) lets the environment do what the scenari
 * with ``World.lease``, a reaction that raises *no acceptable platform* for a graph
   requests the on-demand platform :func:`~desmon.deployment.lease.lease_choice` names
   (the simulation's own choice); it joins after an exponential start-up of mean its
-  ``startup_s``, and leaves at rate 1/``idle_s`` while it hosts nothing.
+  ``startup_s``, and leaves at rate 1/``idle_s`` while it hosts nothing;
+* the variables of any other kind (one that is not
+  :attr:`~desmon.verify.environment.VariableKind.timed_by_chain`) move by their
+  kind's :meth:`~desmon.verify.environment.VariableKind.rates`: each event at its rate
+  whenever the state enables it, in the world and known to the repository at once.
 
 Every event the bounds let the checker choose needs a rate here (each kind of variable
 names what gives its events one: :attr:`desmon.verify.environment.VariableKind.rate`),
@@ -50,11 +54,11 @@ from typing import Any, Callable
 
 from desmon.errors import DesmonError
 from desmon.model.checks import check_number
-from desmon.model.events import LoadChange, RequirementChange
+from desmon.model.events import Event, LoadChange, RequirementChange
 from desmon.model.scenario import Scenario
 from desmon.sim.world import World, can_detect, detector_plans, world_of
 from desmon.verify.bounds import Bounds, bounds_of
-from desmon.verify.environment import variable_kind, variables
+from desmon.verify.environment import VariableKind, variable_kind, variables
 
 __all__ = ["AnalysisError", "MarkovWorld", "markov_world", "MAX_PHASES", "RATE_RATIO", "check_rates", "named_rates", "BudgetExceeded", "Budget", "no_budget"]
 
@@ -177,13 +181,15 @@ class MarkovWorld:
     warmup: tuple[tuple[str, float], ...] = ()
     #: graphs that cannot detect a slip (an input without a signal model): never watching
     blind: tuple[str, ...] = ()
+    #: (kind, subject, ((event, rate), ...)) of each variable the chain times by its kind's rates
+    timed: tuple[tuple[str, Any, tuple[tuple[Event, float], ...]], ...] = ()
 
     def latency_of(self, platform: str) -> float:
         return dict(self.latency).get(platform, 0.0)
 
     def to_json(self) -> dict[str, Any]:
         """The rates used, as ``desmon analyze --json`` writes them (per second)."""
-        return {
+        out = {
             "task_steps": [{"action": a, "mean_s": d, "rate_per_s": 1.0 / d} for a, d in self.steps],
             "phases": self.phases,
             "faults": [
@@ -209,6 +215,12 @@ class MarkovWorld:
                 "idle_phases": self.phases,
             },
         }
+        if self.timed:
+            out["timed_variables"] = [
+                {"kind": k, "subject": str(subject), "events": [{"event": str(e), "rate_per_s": r} for e, r in rates]}
+                for k, subject, rates in self.timed
+            ]
+        return out
 
 
 def _refuse(scenario: Scenario, msg: str) -> AnalysisError:
@@ -251,6 +263,12 @@ def _check_matching(scenario: Scenario, world: World, b: Bounds) -> None:
                 scenario,
                 f"the checker bounds let the {v.kind} variable {v.subject!r} change, but nothing gives its events a rate "
                 f"(its kind of variable names none): drop it from the bounds' variables to analyze the rest",
+            )
+        if not kind.timed_by_chain and not _rates(kind, world, b, v.subject):
+            raise _refuse(
+                scenario,
+                f"the checker bounds let the {v.kind} variable {v.subject!r} change, but its kind of variable gives its events "
+                f"no rates ({kind.rate}): give them rates, or drop it from the bounds' variables to analyze the rest",
             )
     rated = {m.component for m in world.stochastic_faults}
     for what, names in (("device", b.devices), ("platform", b.platforms)):
@@ -399,7 +417,26 @@ def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float 
         lease_idle_s=world.lease.idle_s if world.lease is not None and b.joins else 0.0,
         warmup=tuple((g, plan.warmup) for g, plan in plans.items() if plan is not None and plan.warmup > 0),
         blind=tuple(g for g, detects in can_detect(world, plans).items() if not detects),
+        timed=tuple(
+            (v.kind, v.subject, tuple((e, float(r)) for e, r in kind.rates(world, b, v.subject)))
+            for v in variables(b) if not (kind := _kind(v.kind)).timed_by_chain
+        ),
     )
+
+
+def _rates(kind: VariableKind, world: World, b: Bounds, subject: Any) -> tuple[tuple[Event, float], ...]:
+    """The rates ``kind`` gives the events of its variable of ``subject`` (none if it gives none)."""
+    try:
+        return tuple(kind.rates(world, b, subject))
+    except NotImplementedError:
+        return ()
+
+
+def _kind(name: str) -> VariableKind:
+    """The kind of variable ``name`` (:func:`_check_matching` has refused an unknown one)."""
+    kind = variable_kind(name)
+    assert kind is not None
+    return kind
 
 
 def chain_bounds(scenario: Scenario, mw: MarkovWorld) -> Bounds:
@@ -433,6 +470,7 @@ def named_rates(mw: MarkovWorld, horizon: float) -> list[tuple[float, str]]:
     out += [(mw.phases / w, f"warm-up of {g!r} {w:g} s") for g, w in mw.warmup]
     out += [(r, f"random requirement change {c.label or c} every {1.0 / r:g} s") for c, r in mw.changes]
     out += [(r, f"load steps of {p!r} every {1.0 / r:g} s") for p, _r, _lv, r in mw.loads]
+    out += [(r, f"{e} (a {k} variable) at {r:g} per s") for k, _s, rates in mw.timed for e, r in rates]
     out.append((1.0 / horizon, f"the horizon {horizon:g} s (--horizon)"))
     return out
 

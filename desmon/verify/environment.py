@@ -16,8 +16,14 @@ everything the checker's parts need of it:
   :class:`desmon.verify.table.encoding.Events` turns into numpy operations);
 * its symmetry rule (:attr:`VariableKind.symmetric`, :meth:`VariableKind.rename`:
   :mod:`desmon.verify.symmetry`);
+* every event of one variable whatever the state (:meth:`VariableKind.every_event`:
+  the raw events :func:`desmon.verify.strategies.events` draws from);
+* the event that moves one variable to a value (:meth:`VariableKind.event_to`: the
+  events of ``desmon analyze``'s timed world, :mod:`desmon.analyze.chain`);
 * what gives its events a rate in ``desmon analyze`` (:attr:`VariableKind.rate`:
-  :mod:`desmon.analyze.markov` refuses a variable without one).
+  :mod:`desmon.analyze.markov` refuses a variable without one) and, for a kind the
+  chain does not time with a part of its own (:attr:`VariableKind.timed_by_chain`),
+  the rates themselves (:meth:`VariableKind.rates`).
 
 Defining a subclass that sets ``name`` registers the kind (after the built-in ones, in
 definition order); its subjects are the bounds' ``variables[name]`` unless it reads
@@ -91,9 +97,10 @@ class VariableKind:
     """The definition of one kind of checker variable (see the module docstring).
 
     A subclass sets ``name`` (which registers it), ``events`` and, where they apply,
-    ``symmetric`` and ``rate``; it implements :meth:`enabled`, and :meth:`digits` and
-    :meth:`moves` for the table engine (without them the table engine refuses the
-    search and ``--engine auto`` runs the direct engine).
+    ``symmetric`` and ``rate``; it implements :meth:`enabled` and :meth:`every_event`,
+    :meth:`digits` and :meth:`moves` for the table engine (without them the table engine
+    refuses the search and ``--engine auto`` runs the direct engine), and :meth:`rates`
+    if it has a ``rate``.
     """
 
     #: the kind's name (the key of ``Bounds.variables`` for a kind without a field of its own)
@@ -104,6 +111,10 @@ class VariableKind:
     symmetric: ClassVar[bool] = False
     #: what gives its events a rate in ``desmon analyze`` (None: nothing, analyze refuses it)
     rate: ClassVar[str | None] = None
+    #: whether ``desmon analyze``'s chain times its events with a part of its own (the
+    #: built-in kinds: the task cycle, faults and the monitor's heartbeat, load walks, the
+    #: lease, random changes); the chain times any other kind by its :meth:`rates`
+    timed_by_chain: ClassVar[bool] = False
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -128,6 +139,27 @@ class VariableKind:
         """The events of the variable of ``subject`` enabled in ``key`` (``room``: another
         failure fits under ``max_failures``)."""
         raise NotImplementedError
+
+    def every_event(self, b: Any, subject: Any) -> tuple[Event, ...]:
+        """Every event of the variable of ``subject``, whatever the state (the raw events
+        :func:`desmon.verify.strategies.events` draws from)."""
+        raise NotImplementedError(f"kind of variable {self.name!r} lists no events of a variable (VariableKind.every_event)")
+
+    def event_to(self, b: Any, subject: Any, value: Any) -> Event:
+        """The event that moves the variable of ``subject`` to ``value``, a value of its
+        digit as :meth:`moves` numbers them (an action for the context, True for a device
+        failed, a platform down or an on-demand platform absent, a load level; a
+        requirement change is its own event whatever the value)."""
+        raise NotImplementedError(f"kind of variable {self.name!r} names no event for a value (VariableKind.event_to)")
+
+    def rates(self, world: Any, b: Any, subject: Any) -> tuple[tuple[Event, float], ...]:
+        """For ``desmon analyze``, a kind with a ``rate`` that the chain does not time
+        itself (:attr:`timed_by_chain` False): each event of the variable of ``subject``
+        with its rate per second in ``world`` (the scenario's
+        :class:`desmon.sim.world.World`). The chain lets each happen at its rate whenever
+        the state enables it (:meth:`enabled`); the world and the repository both see it
+        at once."""
+        raise NotImplementedError(f"kind of variable {self.name!r} gives its events no rates (VariableKind.rates)")
 
     def digits(self, b: Any, subject: Any) -> tuple[Digit, ...] | None:
         """The parts of the state its events move (None: no array operations)."""
@@ -202,9 +234,16 @@ class ActionVariable(VariableKind):
     events = (ActionChange,)
     symmetric = True
     rate = "the World's task steps (each step's duration)"
+    timed_by_chain = True
 
     def subjects(self, b: Any) -> tuple[Any, ...]:
         return (None,)
+
+    def every_event(self, b: Any, subject: Any) -> tuple[Event, ...]:
+        return tuple(ActionChange(a) for a in tuple(b.actions) or tuple(b.task or ()))
+
+    def event_to(self, b: Any, subject: Any, value: str) -> Event:
+        return ActionChange(value)
 
     def enabled(self, b: Any, key: Key, subject: Any, room: bool) -> list[Event]:
         return [ActionChange(a) for a in b.action_moves(key.context)]
@@ -229,9 +268,16 @@ class DeviceVariable(VariableKind):
     events = (DeviceFail, DeviceRepair)
     symmetric = True
     rate = "World.stochastic_faults (the device's MTTF and MTTR)"
+    timed_by_chain = True
 
     def subjects(self, b: Any) -> tuple[Any, ...]:
         return tuple(b.devices)
+
+    def every_event(self, b: Any, d: str) -> tuple[Event, ...]:
+        return (DeviceFail(d), DeviceRepair(d))
+
+    def event_to(self, b: Any, d: str, failed: bool) -> Event:
+        return DeviceFail(d) if failed else DeviceRepair(d)
 
     def enabled(self, b: Any, key: Key, d: str, room: bool) -> list[Event]:
         if d in key.failed:
@@ -255,9 +301,16 @@ class PlatformVariable(VariableKind):
     events = (PlatformDown, PlatformUp)
     symmetric = True
     rate = "World.stochastic_faults (the platform's MTTF and MTTR)"
+    timed_by_chain = True
 
     def subjects(self, b: Any) -> tuple[Any, ...]:
         return tuple(b.platforms)
+
+    def every_event(self, b: Any, p: str) -> tuple[Event, ...]:
+        return (PlatformDown(p), PlatformUp(p))
+
+    def event_to(self, b: Any, p: str, down: bool) -> Event:
+        return PlatformDown(p) if down else PlatformUp(p)
 
     def enabled(self, b: Any, key: Key, p: str, room: bool) -> list[Event]:
         if p in key.down:
@@ -281,9 +334,16 @@ class LoadVariable(VariableKind):
     events = (LoadChange,)
     symmetric = True
     rate = "World.load_steps (the walk's mean interval)"
+    timed_by_chain = True
 
     def subjects(self, b: Any) -> tuple[Any, ...]:
         return tuple(b.loads)
+
+    def every_event(self, b: Any, p: str) -> tuple[Event, ...]:
+        return tuple(LoadChange(p, a, b.load_resource) for a in b.loads[p])
+
+    def event_to(self, b: Any, p: str, level: float) -> Event:
+        return LoadChange(p, level, b.load_resource)
 
     def enabled(self, b: Any, key: Key, p: str, room: bool) -> list[Event]:
         lv = b.loads[p]
@@ -318,9 +378,16 @@ class JoinVariable(VariableKind):
     name = "join"
     events = (PlatformJoin, PlatformLeave)
     rate = "World.lease (the platform's startup_s, and idle_s while it hosts nothing)"
+    timed_by_chain = True
 
     def subjects(self, b: Any) -> tuple[Any, ...]:
         return tuple(b.joins)
+
+    def every_event(self, b: Any, p: str) -> tuple[Event, ...]:
+        return (PlatformJoin(p), PlatformLeave(p))
+
+    def event_to(self, b: Any, p: str, absent: bool) -> Event:
+        return PlatformLeave(p) if absent else PlatformJoin(p)
 
     def enabled(self, b: Any, key: Key, p: str, room: bool) -> list[Event]:
         return [PlatformJoin(p) if p in key.down else PlatformLeave(p)]
@@ -338,9 +405,16 @@ class RequirementsVariable(VariableKind):
     name = "requirements"
     events = (RequirementChange,)
     rate = "World.random_changes (their mean interval)"
+    timed_by_chain = True
 
     def subjects(self, b: Any) -> tuple[Any, ...]:
         return tuple(b.requirement_changes)
+
+    def every_event(self, b: Any, change: RequirementChange) -> tuple[Event, ...]:
+        return (change,)
+
+    def event_to(self, b: Any, change: RequirementChange, value: Any) -> Event:
+        return change
 
     def enabled(self, b: Any, key: Key, change: RequirementChange, room: bool) -> list[Event]:
         return [change]

@@ -17,9 +17,9 @@ from __future__ import annotations
 
 from hypothesis import strategies as st
 
-from desmon.model.events import ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds, bounds_of
+from desmon.verify.environment import variable_kinds, variables
 
 __all__ = ["Choice", "choice", "choices", "events", "event_sequences", "start_failures"]
 
@@ -45,24 +45,16 @@ def choices(scenario: Scenario, *, max_size: int = 12, bounds: Bounds | None = N
 
 
 def events(scenario: Scenario, bounds: Bounds | None = None) -> st.SearchStrategy:
-    """Any single environment event the bounds mention (not filtered by the current state)."""
+    """Any single environment event the bounds mention (not filtered by the current
+    state): a kind of variable, one of its variables, then one of that variable's events
+    (:meth:`~desmon.verify.environment.VariableKind.every_event`), so every registered
+    kind is drawn from."""
     b = bounds or bounds_of(scenario)
     parts = []
-    acts = tuple(b.actions) or tuple(b.task or ())
-    if acts:
-        parts.append(st.sampled_from(acts).map(ActionChange))
-    if b.devices:
-        parts.append(st.sampled_from(b.devices).flatmap(lambda d: st.sampled_from((DeviceFail(d), DeviceRepair(d)))))
-    if b.platforms:
-        parts.append(st.sampled_from(b.platforms).flatmap(lambda p: st.sampled_from((PlatformDown(p), PlatformUp(p)))))
-    if b.loads:
-        parts.append(
-            st.sampled_from(sorted(b.loads)).flatmap(lambda p: st.sampled_from(b.loads[p]).map(lambda a, p=p: LoadChange(p, a, b.load_resource)))
-        )
-    if b.joins:
-        parts.append(st.sampled_from(b.joins).flatmap(lambda p: st.sampled_from((PlatformJoin(p), PlatformLeave(p)))))
-    if b.requirement_changes:
-        parts.append(st.sampled_from(b.requirement_changes))
+    for kind in variable_kinds():
+        each = tuple(evs for v in variables(b) if v.kind == kind.name and (evs := kind.every_event(b, v.subject)))
+        if each:
+            parts.append(st.sampled_from(each).flatmap(st.sampled_from))
     if not parts:
         return st.nothing()
     return st.one_of(parts)
