@@ -5,10 +5,13 @@ plugged back in) are :class:`~desmon.model.events.DeviceEvent` classes; the vari
 kind ``socket`` (:class:`~desmon.verify.environment.VariableKind`) makes each device
 listed in ``Bounds(variables={"socket": (...)})`` a variable of the checker: unplugged
 at any time (no failure budget), plugged back at any time (``repair`` does not apply).
-Nothing else is written for them: the direct engine and the table engine explore them
-with the same result, the symmetry reduction renames them, ``desmon analyze`` refuses
-them in one line (their kind names no rate), and the simulation runs them in a
-timeline, reacting as the checker's transitions do.
+Its kind also lists every event of a socket (the fuzzer's raw events draw them) and
+gives each a rate (a socket is unplugged after a mean of ``PLUGGED_S`` and plugged back
+after ``UNPLUGGED_S``). Nothing else is written for them: the direct engine and the
+table engine explore them with the same result, the symmetry reduction renames them,
+the simulation runs them in a timeline, reacting as the checker's transitions do,
+``desmon fuzz`` and the strategies draw them, and ``desmon analyze``'s chain times them
+(without rates it refuses them in one line).
 """
 
 from __future__ import annotations
@@ -28,6 +31,8 @@ from desmon.verify.environment import Digit, Move, VariableKind, alphabet, event
 from desmon.verify.state import Key
 
 GRAPH = "overheat_detector"
+#: mean seconds a socket stays plugged in, and unplugged
+PLUGGED_S, UNPLUGGED_S = 600.0, 60.0
 
 
 def _robot() -> RobotBuilder:
@@ -70,6 +75,7 @@ def socket() -> Iterator[tuple[type[Event], type[Event]]]:
         name = "socket"
         events = (DeviceUnplugged, DevicePlugged)
         symmetric = True
+        rate = "PLUGGED_S and UNPLUGGED_S (the socket's means)"
 
         def problem(self, subjects: tuple[Any, ...], scenario: Any) -> str | None:
             devices = [d.name for d in scenario.model.devices]
@@ -78,6 +84,15 @@ def socket() -> Iterator[tuple[type[Event], type[Event]]]:
 
         def enabled(self, b: Any, key: Key, d: str, room: bool) -> list[Event]:
             return [DevicePlugged(d) if d in key.failed else DeviceUnplugged(d)]
+
+        def every_event(self, b: Any, d: str) -> tuple[Event, ...]:
+            return (DeviceUnplugged(d), DevicePlugged(d))
+
+        def event_to(self, b: Any, d: str, unplugged: bool) -> Event:
+            return DeviceUnplugged(d) if unplugged else DevicePlugged(d)
+
+        def rates(self, world: Any, b: Any, d: str) -> tuple[tuple[Event, float], ...]:
+            return ((DeviceUnplugged(d), 1.0 / PLUGGED_S), (DevicePlugged(d), 1.0 / UNPLUGGED_S))
 
         def digits(self, b: Any, d: str) -> tuple[Digit, ...]:
             return (Digit("device", d),)
@@ -145,13 +160,100 @@ def test_bounds_refuse_an_unknown_kind_or_subject(socket):  # type: ignore[no-un
         Scenario(name="kiln", model=_robot().build(), checker=Bounds(actions=(HOLD,), variables={"socket": ("thermos",)}))
 
 
-def test_analyze_refuses_it_in_one_line(socket):  # type: ignore[no-untyped-def]
-    from desmon.analyze.markov import AnalysisError, markov_world
+def _analysable(**bounds: Any) -> Scenario:
     from desmon.sim.world import Step, World
 
-    scenario = replace(_scenario(), world=World(task=(Step(HOLD, 10.0), Step(GRASP, 5.0)), horizon=60.0, repeat=True))
+    return replace(_scenario(**bounds), world=World(task=(Step(HOLD, 10.0), Step(GRASP, 5.0)), horizon=60.0, repeat=True))
+
+
+def test_analyze_times_it_by_its_rates(socket):  # type: ignore[no-untyped-def]
+    from desmon.analyze.chain import build_chain
+    from desmon.analyze.markov import markov_world
+    from desmon.analyze.solve import steady_state
+
+    unplugged, plugged = socket
+    mw = markov_world(_analysable())
+    assert [(k, s, [str(e) for e, _r in rates]) for k, s, rates in mw.timed] == [
+        ("socket", "thermo", ["device thermo unplugged", "device thermo plugged in"]),
+        ("socket", "thermo2", ["device thermo2 unplugged", "device thermo2 plugged in"]),
+    ]
+    chain = build_chain(_analysable(), "desmon", mw)
+    # the world and the repository see an unplug at once: a state's physical and known sockets agree
+    assert all(s.phys_failed == s.key.failed for s in chain.states)
+    assert {s.phys_failed for s in chain.states} == {(), ("thermo",), ("thermo2",), ("thermo", "thermo2")}
+    Q, _exit = chain.generator()
+    pi, _residual, _method = steady_state(Q, chain.describe)
+    out = sum(p for p, s in zip(pi, chain.states) if "thermo" in s.phys_failed)
+    # each socket alone is a two-state chain: unplugged for UNPLUGGED_S out of every PLUGGED_S + UNPLUGGED_S
+    assert out == pytest.approx(UNPLUGGED_S / (PLUGGED_S + UNPLUGGED_S), rel=1e-9)
+    both = sum(p for p, s in zip(pi, chain.states) if len(s.phys_failed) == 2)
+    assert both == pytest.approx(out**2, rel=1e-9)  # the two sockets move independently
+    assert any(g == GRAPH and p == "spare_pc" for s in chain.states for g, p in s.key.deployments if "thermo" in s.phys_failed)
+
+
+def test_analyze_refuses_it_in_one_line_without_rates(socket, monkeypatch):  # type: ignore[no-untyped-def]
+    from desmon.analyze.markov import AnalysisError, markov_world
+
+    kind = type(variable_kind("socket"))
+    monkeypatch.setattr(kind, "rates", lambda self, world, b, d: ())
+    with pytest.raises(AnalysisError, match=r"the socket variable 'thermo' change, but its kind of variable gives its events no rates \(PLUGGED_S"):
+        markov_world(_analysable())
+    monkeypatch.setattr(kind, "rate", None)
     with pytest.raises(AnalysisError, match="the socket variable 'thermo' change, but nothing gives its events a rate"):
-        markov_world(scenario)
+        markov_world(_analysable())
+
+
+def test_fuzzing_draws_it(socket):  # type: ignore[no-untyped-def]
+    from hypothesis import find, settings
+
+    from desmon.verify.fuzz import fuzz, run_choices
+    from desmon.verify.strategies import event_sequences, events
+
+    unplugged, plugged = socket
+    scenario = _scenario()
+    # the raw events: every event of every kind's variables
+    assert find(events(scenario), lambda e: e == plugged("thermo2"), settings=settings(database=None)) == plugged("thermo2")
+    assert find(event_sequences(scenario), lambda seq: unplugged("thermo") in seq and ActionChange(GRASP) in seq, settings=settings(database=None))
+    # the fuzzer's sequences pick among the enabled events, the socket's among them
+    checker = Checker(scenario)
+    enabled = checker.enabled(checker.system.initial())
+    pick = enabled.index(unplugged("thermo"))
+    labels, bad = run_choices(scenario, "desmon", [(pick, ()), (enabled.index(unplugged("thermo2")), ())], checker)
+    assert bad is None and [e for e, _f in labels] == [unplugged("thermo"), unplugged("thermo2")]
+    outcome = fuzz(scenario, examples=40, seed=1)
+    assert outcome.exit_code == 0 and outcome.passed == 40, outcome.text
+
+
+def test_the_table_moves_agree_with_event_to_on_every_kind(socket):  # type: ignore[no-untyped-def]
+    """Each array operation moves a variable to a value by the event its kind names for that value."""
+    from desmon.loader import load_scenario
+    from desmon.verify.bounds import bounds_of
+    from desmon.verify.environment import variables
+    from pathlib import Path
+
+    scenarios = [_scenario()] + [load_scenario(p) for p in sorted((Path(__file__).resolve().parent.parent / "scenarios").glob("*.py"))]
+    seen = set()
+    for scenario in scenarios:
+        b = bounds_of(scenario)
+        contexts = [None, *(tuple(b.actions) or tuple(b.task or ()))]
+        for v in variables(b):
+            kind = variable_kind(v.kind)
+            assert kind is not None
+            digits = kind.digits(b, v.subject)
+            if v.kind == "requirements" or digits is None:
+                continue
+
+            def values(d: Digit) -> list[Any]:
+                return contexts if d.fact == "context" else list(d.levels) if d.fact == "load" else [False, True]
+
+            for move in kind.moves(b, v.subject, values):
+                vals = values(move.digit)
+                for to, event in zip(move.to, move.events):
+                    if to >= 0:
+                        assert event == kind.event_to(b, v.subject, vals[to]), (scenario.name, v, vals[to])
+                        assert event in kind.every_event(b, v.subject)
+                        seen.add(v.kind)
+    assert seen == {"action", "device", "platform", "load", "join", "socket"}
 
 
 def test_the_simulation_reacts_as_the_checker_transitions(socket):  # type: ignore[no-untyped-def]

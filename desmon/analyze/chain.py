@@ -201,24 +201,10 @@ class Builder:
         self._hosts = {d.name: d.platform for d in scenario.model.devices}
         self.leased = dict(mw.lease)  # on-demand platform -> mean start-up
         self.reactions = 0
-        devices = {d.name for d in self.model.devices}
-        self.faults = tuple((c, c in devices, 1.0 / f, 1.0 / r) for c, _k, f, r in mw.faults)
-        # (kind, subject, value) -> the event that moves the variable there: one object per event
-        self._events: dict[tuple[str, Any, Any], Event] = {}
-        # the variables of kinds the chain times by their rates: (kind, subject, event -> rate)
-        self.timed = tuple((variable_kind(k), subject, dict(rates)) for k, subject, rates in mw.timed)
+        self.faults = tuple((c, k, 1.0 / f, 1.0 / r) for c, k, f, r in mw.faults)  # k: "device" or "platform"
+        self.event = WorldEvents(self.system.bounds, mw)
         self.latency = {p.name: mw.latency_of(p.name) for p in self.model.platforms}
         self.warm = dict(mw.warmup)  # graph -> mean warm-up s
-
-    def event(self, kind: str, subject: Any, value: Any) -> Event:
-        """The event that moves the ``kind`` variable of ``subject`` to ``value``
-        (:meth:`~desmon.verify.environment.VariableKind.event_to`): the world's task step,
-        fault, load step or lease made a checker event."""
-        k = (kind, subject, value)
-        e = self._events.get(k)
-        if e is None:
-            e = self._events[k] = variable_kind(kind).event_to(self.system.bounds, subject, value)  # type: ignore[union-attr]
-        return e
 
     # -- reactions -----------------------------------------------------------------------
     def react(self, key: Key, event: Event, world: tuple | None = None) -> list[tuple[float, Key, tuple, tuple[str, ...]]]:
@@ -398,7 +384,8 @@ class Builder:
         yield from self._loads(s)
         if self.leased:
             yield from self._lease(s)
-        yield from self._timed(s)
+        for event, rate, moved in self.event.timed(s):  # the variables of other kinds
+            yield self._deliver(self._rewarm(s, moved), event, rate)
 
     def _deliver(self, s: ChainState, event: Event, rate: float) -> Slot:
         key = s.key
@@ -466,8 +453,7 @@ class Builder:
 
     def _task(self, s: ChainState) -> Iterator[Slot]:
         mw = self.mw
-        action, dur = mw.steps[s.pos]
-        rate = mw.phases / dur
+        rate = mw.phases / mw.steps[s.pos][1]
         if s.phase + 1 < mw.phases:
             yield rate, None, ((1.0, s._replace(phase=s.phase + 1), ()),)
             return
@@ -480,13 +466,12 @@ class Builder:
     def _faults(self, s: ChainState) -> Iterator[Slot]:
         hb = self.mw.heartbeat_timeout
         known_failed, known_down = set(s.key.failed), set(s.key.down)
-        for c, is_dev, fail, repair in self.faults:
-            kind = "device" if is_dev else "platform"
+        for c, kind, fail, repair in self.faults:
+            is_dev = kind == "device"
             phys = s.phys_failed if is_dev else s.phys_down
             broken = c in phys
             flipped = tuple(sorted(set(phys) - {c})) if broken else tuple(sorted((*phys, c)))
-            ns = s._replace(phys_failed=flipped) if is_dev else s._replace(phys_down=flipped)
-            ns = self._rewarm(s, ns)
+            ns = self._rewarm(s, s._replace(phys_failed=flipped) if is_dev else s._replace(phys_down=flipped))
             rate = repair if broken else fail
             if hb > 0:
                 yield rate, None, ((1.0, ns, ()),)
@@ -495,16 +480,36 @@ class Builder:
             if hb > 0 and broken != (c in (known_failed if is_dev else known_down)):
                 yield self._deliver(s, self.event(kind, c, broken), 1.0 / hb)
 
-    def _timed(self, s: ChainState) -> Iterator[Slot]:
-        """The events of the variables of kinds the chain times by their rates
-        (:meth:`~desmon.verify.environment.VariableKind.rates`): each enabled one at its
-        rate, in the world and known at once (no failure budget: ``room``)."""
-        b = self.system.bounds
-        for kind, subject, rates in self.timed:
-            for event in kind.enabled(b, s.key, subject, True):
+
+class WorldEvents:
+    """The checker events of the chain's world. Called with (kind, subject, value): the
+    event that moves the ``kind`` variable of ``subject`` to ``value``
+    (:meth:`~desmon.verify.environment.VariableKind.event_to`), one object per event: a
+    task step, a fault, a load step or a lease made a checker event. :meth:`timed`: the
+    moves of the variables of the kinds the chain times by their rates."""
+
+    def __init__(self, bounds: Any, mw: MarkovWorld) -> None:
+        self.bounds = bounds
+        self._memo: dict[tuple[str, Any, Any], Event] = {}
+        #: (kind, subject, event -> rate) of each variable timed by its kind's rates
+        self.variables = tuple((variable_kind(k), subject, dict(rates)) for k, subject, rates in mw.timed)
+
+    def __call__(self, kind: str, subject: Any, value: Any) -> Event:
+        k = (kind, subject, value)
+        e = self._memo.get(k)
+        if e is None:
+            e = self._memo[k] = variable_kind(kind).event_to(self.bounds, subject, value)  # type: ignore[union-attr]
+        return e
+
+    def timed(self, s: ChainState) -> Iterator[tuple[Event, float, ChainState]]:
+        """(event, rate, ``s`` with the world moved by it) of each event the timed
+        variables enable in ``s`` (:meth:`~desmon.verify.environment.VariableKind.rates`):
+        in the world and known at once, with no failure budget (``room``)."""
+        for kind, subject, rates in self.variables:
+            for event in kind.enabled(self.bounds, s.key, subject, True):
                 rate = rates.get(event)
                 if rate:
-                    yield self._deliver(self._rewarm(s, _physically(s, event)), event, rate)
+                    yield event, rate, _physically(s, event)
 
 
 def _physically(s: ChainState, event: Event) -> ChainState:

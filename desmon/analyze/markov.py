@@ -254,8 +254,9 @@ def _check_unrated(scenario: Scenario, world: World) -> None:
         raise _refuse(scenario, f"World start failure script ({g} on {p}, attempt {n}) is scripted: give StartFailure(probability=...) instead")
 
 
-def _check_matching(scenario: Scenario, world: World, b: Bounds) -> None:
-    """An event of the bounds without a rate, or a rate without an event: one line."""
+def _check_variables(scenario: Scenario, world: World, b: Bounds) -> None:
+    """Every variable of the bounds has a kind that names what gives its events a rate,
+    and a kind the chain does not time itself gives them rates."""
     for v in variables(b):
         kind = variable_kind(v.kind)
         if kind is None or kind.rate is None:
@@ -270,6 +271,11 @@ def _check_matching(scenario: Scenario, world: World, b: Bounds) -> None:
                 f"the checker bounds let the {v.kind} variable {v.subject!r} change, but its kind of variable gives its events "
                 f"no rates ({kind.rate}): give them rates, or drop it from the bounds' variables to analyze the rest",
             )
+
+
+def _check_matching(scenario: Scenario, world: World, b: Bounds) -> None:
+    """An event of the bounds without a rate, or a rate without an event: one line."""
+    _check_variables(scenario, world, b)
     rated = {m.component for m in world.stochastic_faults}
     for what, names in (("device", b.devices), ("platform", b.platforms)):
         for n in names:
@@ -417,11 +423,19 @@ def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float 
         lease_idle_s=world.lease.idle_s if world.lease is not None and b.joins else 0.0,
         warmup=tuple((g, plan.warmup) for g, plan in plans.items() if plan is not None and plan.warmup > 0),
         blind=tuple(g for g, detects in can_detect(world, plans).items() if not detects),
-        timed=tuple(
-            (v.kind, v.subject, tuple((e, float(r)) for e, r in kind.rates(world, b, v.subject)))
-            for v in variables(b) if not (kind := _kind(v.kind)).timed_by_chain
-        ),
+        timed=_timed_variables(world, b),
     )
+
+
+def _timed_variables(world: World, b: Bounds) -> tuple[tuple[str, Any, tuple[tuple[Event, float], ...]], ...]:
+    """(kind, subject, ((event, rate), ...)) of each variable of a kind the chain does not
+    time itself (:func:`_check_variables` has refused one without rates)."""
+    out = []
+    for v in variables(b):
+        kind = variable_kind(v.kind)
+        if kind is not None and not kind.timed_by_chain:
+            out.append((v.kind, v.subject, tuple((e, float(r)) for e, r in _rates(kind, world, b, v.subject))))
+    return tuple(out)
 
 
 def _rates(kind: VariableKind, world: World, b: Bounds, subject: Any) -> tuple[tuple[Event, float], ...]:
@@ -430,13 +444,6 @@ def _rates(kind: VariableKind, world: World, b: Bounds, subject: Any) -> tuple[t
         return tuple(kind.rates(world, b, subject))
     except NotImplementedError:
         return ()
-
-
-def _kind(name: str) -> VariableKind:
-    """The kind of variable ``name`` (:func:`_check_matching` has refused an unknown one)."""
-    kind = variable_kind(name)
-    assert kind is not None
-    return kind
 
 
 def chain_bounds(scenario: Scenario, mw: MarkovWorld) -> Bounds:
