@@ -1,7 +1,7 @@
 """Module state of desmon: a run's state lives on the run (its Guard, its arguments, its
 engine's objects), never in a module global. What a module may keep across runs is
-listed here, each with why: registries of kinds (filled when a kind is defined) and the
-one slot through which a worker process finds its own object. A memo lives on the run
+listed here, each with why: registries of kinds (filled when a kind is defined), and
+nothing else. A memo lives on the run
 (a MemoChecks, a ColumnMemo, an engine object), never in a module. A new module-level
 container written at run time fails this test."""
 
@@ -20,11 +20,6 @@ ALLOWED = {
     ("desmon/verify/environment.py", "_KINDS"): "registry: the checker's kinds of variable, filled as each is defined",
     ("desmon/sim/streams.py", "_STREAMS"): "registry: the signal streams, filled as each is defined",
     ("desmon/sim/streams.py", "_FUSIONS"): "registry: the fusion detectors, filled as each is defined",
-    ("desmon/sim/collector.py", "_LEFT"): "the process's collector bookkeeping (objects runs left since its last full collection), as the collector's own counts are",
-    ("desmon/verify/parallel.py", "_WORKER"): (
-        "the one slot of a forked checker worker process, set as it starts: a process pool's task is a "
-        "module-level function, so the process's own object (its system and known keys) is found through its module"
-    ),
 }
 
 _MUTATORS = {"append", "extend", "add", "update", "clear", "pop", "popitem", "setdefault", "discard", "remove", "insert", "move_to_end"}

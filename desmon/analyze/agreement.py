@@ -42,14 +42,16 @@ def simulated_exposure(
     """Unmonitored seconds in ``[0, horizon]`` of one simulated run per seed (with
     ``cause``: only those of that cause, one of :data:`desmon.deployment.exposure.CAUSES`);
     ``budget()``, if given, is called before each run (it raises once spent)."""
+    from desmon.sim.collector import Collector
     from desmon.sim.engine import simulate
 
     sc = markov_scenario(scenario, phases=phases, timing=timing, start_failure_p=start_failure_p)
     out = []
+    collector = Collector()  # the runs' garbage is collected once it adds up, not after each
     for i, seed in enumerate(seeds):
         if budget is not None:
             budget()
-        r = simulate(sc, deployer, seed=seed, until=horizon, guard=guard)
+        r = simulate(sc, deployer, seed=seed, until=horizon, guard=guard, collector=collector)
         m = r.metrics
         out.append(float(m["unmonitored_exposure_s"] if cause is None else m["unmonitored_by_cause_s"][cause]))
         if progress is not None:

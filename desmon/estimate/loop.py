@@ -300,17 +300,18 @@ def with_world(scenario: Any, changes: dict[str, Any]) -> Any:
     return replace(scenario, world=replace(world_of(scenario), **changes))
 
 
-def run_value(scenario: Any, deployer: Any, seed: int, until: float | None, metric: str, guard: Any = None) -> float:
+def run_value(scenario: Any, deployer: Any, seed: int, until: float | None, metric: str, guard: Any = None, collector: Any = None) -> float:
     """``metric`` of one run of ``scenario`` in the SimPy world with world seed ``seed`` (the
     world told that only ``metric`` is read: it skips the work no other output needs).
 
     The world is built, run and dropped within one :func:`~desmon.sim.collector.collector_relaxed`:
     the collection at its end scans the run's garbage only, the caller's heap frozen out of it
     (collected inside the run, the world would still be alive, and a full collection of the
-    whole heap would follow to free it)."""
+    whole heap would follow to free it); ``collector``: the
+    :class:`~desmon.sim.collector.Collector` it shares with the caller's other runs."""
     from desmon.sim.collector import collector_relaxed
 
-    with collector_relaxed(collect=False):
+    with collector_relaxed(collector, collect=False):
         return _figure(scenario, deployer, seed, until, metric, guard)
 
 
@@ -327,9 +328,12 @@ def _figure(scenario: Any, deployer: Any, seed: int, until: float | None, metric
 
 def serial_values(scenario: Any, deployer: Any, seed: int, until: float | None, metric: str, guard: Any = None) -> Iterator[float]:
     """The runs' values in seed order, computed here one after the other."""
+    from desmon.sim.collector import Collector
+
     i = 0
+    collector = Collector()  # the runs' garbage is collected once it adds up, not after each
     while True:
-        yield run_value(scenario, deployer, run_seed(seed, i), until, metric, guard)
+        yield run_value(scenario, deployer, run_seed(seed, i), until, metric, guard, collector)
         i += 1
 
 

@@ -13,6 +13,9 @@ scans only what the run made. The run's world becomes garbage only when the call
 it, later; it is collected by a full collection once the objects the runs left since the
 last one reach an eighth of the heap they were frozen out of, so a process with a large
 heap (a sweep worker, a test process) walks it once per many runs instead of after each.
+The count lives on a :class:`Collector` the runs share: a caller that runs many
+simulations in one process hands the same one to each (``desmon analyze --simulate``'s
+runs, ``desmon estimate``'s serial runs); a run given none counts alone.
 20 runs of the coffee handover beside 6 million objects took 2.6 CPU s where a full
 collection after each took 17.0 (6.5x; ``python -m bench.bench_sim --collector``, one run
 on the project's 2-core machine at load 2 to 4).
@@ -24,46 +27,59 @@ import contextlib
 import gc
 from typing import Iterator
 
-__all__ = ["collector_relaxed"]
+__all__ = ["Collector", "collector_relaxed", "FULL_AFTER"]
 
-#: the objects runs left behind since the last full collection: this process's collector
-#: bookkeeping, as the collector's own counts are (one number, in a list)
-_LEFT = [0]
 #: a full collection once the objects left reach this fraction of the frozen heap
 FULL_AFTER = 1 / 8
 
 
-@contextlib.contextmanager
-def collector_relaxed(*, collect: bool = True) -> Iterator[None]:
-    """Run with the objects built so far frozen out of the collector's scans (after a
-    full collection first, if ``collect``) and its young-generation threshold raised;
-    restored afterwards."""
-    threshold = gc.get_threshold()
-    # a caller that froze objects itself keeps them frozen: then nothing is frozen here
-    # (an unfreeze would thaw the caller's objects too), only the threshold is raised
-    freeze = gc.get_freeze_count() == 0
-    if collect and freeze:
-        gc.collect()
-    if freeze:
-        gc.freeze()
-    gc.set_threshold(100_000, 50, 100)
-    try:
-        yield
-    finally:
-        gc.set_threshold(*threshold)
+class Collector:
+    """The collector's bookkeeping of the runs that share this object: the objects they
+    left behind since its last full collection (``left``), and the fraction of the heap at
+    which a full collection runs (``full_after``). A caller running many simulations in
+    one process hands them one (``SimWorld(collector=...)``); a run given none has its own."""
+
+    __slots__ = ("left", "full_after")
+
+    def __init__(self, full_after: float = FULL_AFTER) -> None:
+        self.left = 0
+        self.full_after = full_after
+
+    @contextlib.contextmanager
+    def relaxed(self, *, collect: bool = True) -> Iterator[None]:
+        """Run with the objects built so far frozen out of the collector's scans (after a
+        full collection first, if ``collect``) and its young-generation threshold raised;
+        restored afterwards."""
+        threshold = gc.get_threshold()
+        # a caller that froze objects itself keeps them frozen: then nothing is frozen here
+        # (an unfreeze would thaw the caller's objects too), only the threshold is raised
+        freeze = gc.get_freeze_count() == 0
+        if collect and freeze:
+            gc.collect()
         if freeze:
-            _collect_after_run()
+            gc.freeze()
+        gc.set_threshold(100_000, 50, 100)
+        try:
+            yield
+        finally:
+            gc.set_threshold(*threshold)
+            if freeze:
+                self._collect_after_run()
 
-
-def _collect_after_run() -> None:
-    """The run's own garbage now, with the caller's objects frozen out of the scan; then,
-    thawed, a full collection once the runs' leftovers reach :data:`FULL_AFTER` of the
-    heap (their cyclic garbage sits in the oldest generation, which the collector rarely
-    scans: memory would grow run after run)."""
-    gc.collect()
-    heap = gc.get_freeze_count()
-    _LEFT[0] += len(gc.get_objects())  # what the run made and kept: the frozen heap is not listed
-    gc.unfreeze()
-    if _LEFT[0] >= FULL_AFTER * heap:
+    def _collect_after_run(self) -> None:
+        """The run's own garbage now, with the caller's objects frozen out of the scan; then,
+        thawed, a full collection once the runs' leftovers reach :attr:`full_after` of the
+        heap (their cyclic garbage sits in the oldest generation, which the collector rarely
+        scans: memory would grow run after run)."""
         gc.collect()
-        _LEFT[0] = 0
+        heap = gc.get_freeze_count()
+        self.left += len(gc.get_objects())  # what the run made and kept: the frozen heap is not listed
+        gc.unfreeze()
+        if self.left >= self.full_after * heap:
+            gc.collect()
+            self.left = 0
+
+
+def collector_relaxed(collector: Collector | None = None, *, collect: bool = True) -> "contextlib.AbstractContextManager[None]":
+    """:meth:`Collector.relaxed` of ``collector`` (None: a new one, for this run alone)."""
+    return (collector if collector is not None else Collector()).relaxed(collect=collect)

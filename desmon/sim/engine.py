@@ -48,7 +48,7 @@ from desmon.repository.facts import load_model
 from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import ADD_EDGE, REMOVE_EDGE, RELABEL_EDGE, UPDATE_NODE, Repository
 from desmon.sim.accounting import audit, robot_metrics
-from desmon.sim.collector import collector_relaxed
+from desmon.sim.collector import Collector, collector_relaxed
 from desmon.sim.facts import SLIP_WINDOW, Instance
 from desmon.sim.metrics import AUDIT, RECORDS, SIGNALS, work_read
 from desmon.sim.parts import RobotParts, robot_parts, start_processes
@@ -98,8 +98,11 @@ class SimWorld:
         guard: Guard | None = None,
         run: RunContext | None = None,
         reads: Iterable[str] | None = None,
+        collector: Collector | None = None,
     ) -> None:
         self.scenario = scenario
+        #: the collector's bookkeeping this run shares with the caller's other runs (None: its own)
+        self.collector = collector
         #: the run this world belongs to (:mod:`desmon.deployment.run`): its guard, and its
         #: Checks port (each platform's part memoised, no whole answer: a robot's facts
         #: change one platform at a time)
@@ -225,7 +228,7 @@ class SimWorld:
         if ahead is not None:
             ahead.start_ahead(tactile_flow=flow_ahead)
         try:
-            with collector_relaxed(collect=False):  # the world built so far stays out of the collector's scans
+            with collector_relaxed(self.collector, collect=False):  # the world built so far stays out of the collector's scans
                 self.env.run(until=self.horizon)
         finally:
             if ahead is not None:

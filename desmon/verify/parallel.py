@@ -8,13 +8,15 @@ consumes the records chunk by chunk *in frontier order*, exactly as it consumes 
 own expansions. Which state is new, its parent, its label, every counter and every
 counterexample are therefore the same for any number of workers.
 
-Each worker remembers the keys it has already sent or been given (a bounded set,
-cleared when it outgrows :data:`WORKER_MEMORY`) and sends those back as ``None``
-instead of the key. That is sound because the parent has consumed everything the
-worker sent before (a worker takes its chunks in increasing order and the parent
-consumes them in that order), so such a key is in the parent's index already; and it
-keeps the traffic to roughly the new states, since most transitions lead to states
-seen before.
+Each worker process runs its own :class:`_Worker` (forked with it, never pickled): the
+workers take the chunks from one pipe in the order the parent sent them, and each sends
+its records back on a pipe of its own. A worker remembers the keys it has already sent
+or been given (a bounded set, cleared when it outgrows :data:`WORKER_MEMORY`) and sends
+those back as ``None`` instead of the key. That is sound because the parent has
+consumed everything the worker sent before (a worker takes its chunks in increasing
+order and the parent consumes them in that order), so such a key is in the parent's
+index already; and it keeps the traffic to roughly the new states, since most
+transitions lead to states seen before.
 """
 
 from __future__ import annotations
@@ -24,10 +26,8 @@ import gc
 import multiprocessing
 import resource
 import signal
-from collections import deque
-from concurrent.futures import Future, ProcessPoolExecutor
-from concurrent.futures.process import BrokenProcessPool
-from typing import TYPE_CHECKING, Callable, Iterator
+from multiprocessing.connection import Connection, wait
+from typing import TYPE_CHECKING, Any, Callable, Iterator
 
 from desmon.deployment.guard import ReactionStopped
 from desmon.errors import CheckerError
@@ -78,28 +78,34 @@ class _Worker:
             out.append(per_event)
         return out, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
-
-#: The one slot of a worker process: its :class:`_Worker`, set by :func:`_start_worker`
-#: as the process starts (a pool's task is a module-level function, so the process's
-#: object must be found through its module). Never set in the parent.
-_WORKER: list[_Worker] = []
-
-
-def _start_worker(checker: "TransitionSystem") -> None:
-    """Worker initializer: the checker arrives through fork (never pickled); the parent
-    pauses its cyclic collector for the search, and so does the worker. Ctrl-C reaches
-    every process of the terminal's group: a worker ignores it (no traceback of its own)
-    and finishes its chunk; the parent stops the search and reports it."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _WORKER[:] = [_Worker(checker)]
-    gc.disable()
-
-
-def _expand_chunk(chunk: "list[Key]") -> "tuple[list[list[list[Segment]]], float]":
-    """The expansions of ``chunk``'s states by this process's worker (see :class:`_Worker`)."""
-    if not _WORKER:  # pragma: no cover - a worker not started by ExpansionPool
-        raise CheckerError("internal error: a checker worker started without its checker")
-    return _WORKER[0].expand(chunk)
+    def serve(self, tasks: Connection, take: Any, results: Connection) -> None:
+        """The worker process: expand the chunks read from ``tasks`` (``take`` held while
+        reading) until told to stop (None), and send each one's number, records, peak
+        resident size and error (or None) on ``results``. The parent pauses its cyclic
+        collector for the search, and so does the worker. Ctrl-C reaches every process of
+        the terminal's group: a worker ignores it (no traceback of its own) and finishes
+        its chunk; the parent stops the search and reports it."""
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        gc.disable()
+        while True:
+            with take:
+                try:
+                    task = tasks.recv()
+                except (EOFError, OSError):
+                    return
+            if task is None:
+                return
+            n, chunk = task
+            try:
+                reply = (n, *self.expand(chunk), None)
+            except BaseException as exc:  # raised again in the parent, as the search's own expansion raises it
+                reply = (n, None, 0.0, exc)
+            try:
+                results.send(reply)
+            except (EOFError, OSError):  # the parent has gone
+                return
+            except Exception as exc:  # an error that does not pickle: its text
+                results.send((n, None, 0.0, CheckerError(f"a checker worker failed: {type(exc).__name__}: {exc}")))
 
 
 class ExpansionPool:
@@ -119,69 +125,120 @@ class ExpansionPool:
         self.workers = workers
         self.levels = 0  # BFS levels handed to the workers
         self.peak_mb = 0.0  # the largest worker's peak resident size
-        self._pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_start_worker, initargs=(checker,))
         #: why the search must stop now, or "" (the search's budget): asked while waiting on a
         #: worker, so that a worker stuck in a deployer's reaction cannot hold the search
         self.should_stop: Callable[[], str] = lambda: ""
         self._abandoned = False
+        self._procs: list[Any] = []
+        self._results: list[Connection] = []  # one per worker, its records
+        self._done: dict[int, tuple] = {}  # chunk number -> (records, peak MB, error) received, not yet consumed
+        self._sent = self._taken = 0  # chunks sent; the next chunk to consume
+        tasks, self._tasks = ctx.Pipe(duplex=False)
+        take = ctx.Lock()  # one worker reads the next chunk at a time
+        try:
+            for _ in range(workers):
+                results, mine = ctx.Pipe(duplex=False)
+                proc = ctx.Process(target=_Worker(checker).serve, args=(tasks, take, mine))
+                proc.start()
+                mine.close()
+                self._procs.append(proc)
+                self._results.append(results)
+        except OSError as exc:  # fork failed: too many processes, not enough memory
+            self._abandon()
+            raise CheckerError(f"cannot start {workers} worker processes ({exc.strerror or exc}): use fewer --workers") from None
+        finally:
+            tasks.close()
 
     def expand(self, frontier: "list[Key]") -> Iterator["list[list[Segment]]"]:
         """The expansions of ``frontier``'s states, in frontier order.
 
-        Chunks are submitted as the parent consumes them, at most ``IN_FLIGHT`` per
-        worker ahead, so a search that stops early (a violation, ``max_states``) wastes
-        little speculative work.
+        Chunks are sent as the parent consumes them, at most ``IN_FLIGHT`` per worker
+        ahead, so a search that stops early (a violation, ``max_states``) wastes little
+        speculative work.
         """
         self.levels += 1
         size = max(1, min(CHUNK, len(frontier) // (self.workers * IN_FLIGHT)))
-        window: deque[Future] = deque()
-        for i in range(0, len(frontier), size):
-            window.append(self._submit(frontier[i : i + size]))
-            if len(window) >= self.workers * IN_FLIGHT:
-                yield from self._result(window.popleft())
-        while window:
-            yield from self._result(window.popleft())
+        starts = range(0, len(frontier), size)
+        first, ahead = self._sent, self.workers * IN_FLIGHT
+        self._taken = first  # records of chunks a stopped level left are dropped
+        for i in range(len(starts)):
+            while self._sent - first < min(len(starts), i + ahead):
+                k = starts[self._sent - first]
+                self._send(frontier[k : k + size])
+            yield from self._result(first + i)
 
     def pids(self) -> list[int]:
         """The worker processes' ids (their memory counts in the search's budget)."""
-        return list(getattr(self._pool, "_processes", None) or ())
+        return [p.pid for p in self._procs if p.pid is not None]
 
-    def _submit(self, chunk: "list[Key]") -> Future:
+    def _send(self, chunk: "list[Key]") -> None:
         try:
-            return self._pool.submit(_expand_chunk, chunk)
-        except BrokenProcessPool:
+            self._tasks.send((self._sent, chunk))
+        except OSError:
             raise _died() from None
-        except OSError as exc:  # fork failed: too many processes, not enough memory
-            raise CheckerError(f"cannot start {self.workers} worker processes ({exc.strerror or exc}): use fewer --workers") from None
+        self._sent += 1
 
-    def _result(self, future: Future) -> "list[list[list[Segment]]]":
-        while True:
-            try:
-                out, peak = future.result(timeout=WAIT_LOOK)
-                break
-            except TimeoutError:  # the chunk is still running: is the budget spent meanwhile?
+    def _result(self, n: int) -> "list[list[list[Segment]]]":
+        """The records of chunk ``n``, waiting for them (and reading whatever else arrives)."""
+        while n not in self._done:
+            if not self._receive(WAIT_LOOK):  # the chunk is still running: is the budget spent meanwhile?
                 why = self.should_stop()
                 if why:
                     self._abandon()
-                    raise ReactionStopped(why) from None
-            except BrokenProcessPool:
-                raise _died() from None
+                    raise ReactionStopped(why)
+        out, peak, error = self._done.pop(n)
+        self._taken = n + 1
+        if error is not None:
+            raise error
         if peak > self.peak_mb:
             self.peak_mb = peak
         return out
+
+    def _receive(self, timeout: float) -> bool:
+        """Read the records every worker has sent, waiting up to ``timeout`` for any;
+        whether any arrived. A worker that has ended (it ends only when closed) ends the
+        search."""
+        ready = wait([*self._results, *(p.sentinel for p in self._procs)], timeout)
+        got = False
+        for r in ready:
+            if not isinstance(r, Connection):
+                raise _died()
+            try:
+                n, out, peak, error = r.recv()
+            except (EOFError, OSError):
+                raise _died() from None
+            if n >= self._taken:
+                self._done[n] = (out, peak, error)
+            got = True
+        return got
 
     def _abandon(self) -> None:
         """Stop the workers now, whatever they are on (the search stops, and a worker may
         be stuck in a deployer's reaction that never returns)."""
         self._abandoned = True
-        for proc in list((getattr(self._pool, "_processes", None) or {}).values()):
+        for proc in self._procs:
             with contextlib.suppress(Exception):
                 proc.terminate()
 
     def close(self) -> float:
-        """Stop the workers (after the chunks they are on, unless abandoned); returns the
-        largest worker's peak resident size in MB."""
-        self._pool.shutdown(wait=not self._abandoned, cancel_futures=True)
+        """Stop the workers (after the chunks they are on, unless abandoned: the chunks
+        sent and not consumed are dropped); returns the largest worker's peak resident
+        size in MB."""
+        if not self._abandoned:
+            if self._sent > self._taken:  # speculative chunks of a search that stopped early
+                self._abandon()
+            else:
+                for _ in self._procs:
+                    with contextlib.suppress(OSError):
+                        self._tasks.send(None)
+        for proc in self._procs:
+            proc.join(None if not self._abandoned else 5.0)
+            if proc.is_alive():  # pragma: no cover - a worker that ignores SIGTERM
+                proc.kill()
+                proc.join()
+        for conn in (self._tasks, *self._results):
+            conn.close()
+        self._done.clear()
         return self.peak_mb
 
 
