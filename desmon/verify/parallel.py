@@ -26,6 +26,8 @@ import gc
 import multiprocessing
 import resource
 import signal
+import threading
+import time
 from multiprocessing.connection import Connection, wait
 from typing import TYPE_CHECKING, Any, Callable, Iterator
 
@@ -108,6 +110,74 @@ class _Worker:
                 results.send((n, None, 0.0, CheckerError(f"a checker worker failed: {type(exc).__name__}: {exc}")))
 
 
+class _Records:
+    """The parent's side of the workers' record pipes: a thread reads every record as it
+    arrives (so no worker waits to hand one over while the parent consumes another) and
+    keeps it until the parent takes it, by chunk number."""
+
+    def __init__(self, pipes: "list[Connection]", procs: list[Any]) -> None:
+        self._cond = threading.Condition()
+        self._done: dict[int, tuple] = {}  # chunk number -> (records, peak MB, error)
+        #: a worker ended (or its records could not be read) before it was told to stop
+        self.broken = ""
+        self.closing = False
+        self._thread = threading.Thread(target=self._read, args=(list(pipes), procs), name="desmon-worker-records", daemon=True)
+        self._thread.start()
+
+    def _read(self, pipes: "list[Connection]", procs: list[Any]) -> None:
+        ends = {p.sentinel: p for p in procs}
+        while pipes:
+            for r in wait([*pipes, *ends], None):
+                if r in ends:  # a worker ended: its last records are read first, then the pipe ends
+                    del ends[r]
+                    continue
+                try:
+                    n, out, peak, error = r.recv()  # type: ignore[union-attr]
+                except (EOFError, OSError):
+                    pipes.remove(r)  # type: ignore[arg-type]
+                    self._note("" if self.closing else "died")
+                    continue
+                except Exception as exc:  # records that do not unpickle
+                    n, out, peak, error = -1, None, 0.0, CheckerError(f"a checker worker's records could not be read: {type(exc).__name__}: {exc}")
+                with self._cond:
+                    if n < 0:
+                        self.broken = self.broken or str(error)
+                    self._done[n] = (out, peak, error)
+                    self._cond.notify_all()
+
+    def _note(self, why: str) -> None:
+        if why:
+            with self._cond:
+                self.broken = self.broken or why
+                self._cond.notify_all()
+
+    def take(self, n: int, timeout: float) -> tuple | None:
+        """The records of chunk ``n`` (None: not within ``timeout`` seconds); a worker that
+        has died ends the search."""
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while n not in self._done and not self.broken:
+                left = deadline - time.monotonic()
+                if left <= 0 or not self._cond.wait(left):
+                    break
+            if n in self._done:
+                return self._done.pop(n)
+            if self.broken == "died":
+                raise _died()
+            if self.broken:
+                raise CheckerError(self.broken)
+            return None
+
+    def drop_before(self, n: int) -> None:
+        """Forget the records of chunks before ``n`` (those a stopped level left)."""
+        with self._cond:
+            for k in [k for k in self._done if k < n]:
+                del self._done[k]
+
+    def join(self, timeout: float | None = None) -> None:
+        self._thread.join(timeout)
+
+
 class ExpansionPool:
     """``workers`` forked processes expanding chunks of a BFS level in order.
 
@@ -130,24 +200,24 @@ class ExpansionPool:
         self.should_stop: Callable[[], str] = lambda: ""
         self._abandoned = False
         self._procs: list[Any] = []
-        self._results: list[Connection] = []  # one per worker, its records
-        self._done: dict[int, tuple] = {}  # chunk number -> (records, peak MB, error) received, not yet consumed
+        pipes: list[Connection] = []  # one per worker, its records
         self._sent = self._taken = 0  # chunks sent; the next chunk to consume
         tasks, self._tasks = ctx.Pipe(duplex=False)
         take = ctx.Lock()  # one worker reads the next chunk at a time
         try:
             for _ in range(workers):
-                results, mine = ctx.Pipe(duplex=False)
+                records, mine = ctx.Pipe(duplex=False)
                 proc = ctx.Process(target=_Worker(checker).serve, args=(tasks, take, mine))
+                pipes.append(records)
                 proc.start()
                 mine.close()
                 self._procs.append(proc)
-                self._results.append(results)
         except OSError as exc:  # fork failed: too many processes, not enough memory
             self._abandon()
             raise CheckerError(f"cannot start {workers} worker processes ({exc.strerror or exc}): use fewer --workers") from None
         finally:
             tasks.close()
+        self._records = _Records(pipes, self._procs)
 
     def expand(self, frontier: "list[Key]") -> Iterator["list[list[Segment]]"]:
         """The expansions of ``frontier``'s states, in frontier order.
@@ -160,7 +230,7 @@ class ExpansionPool:
         size = max(1, min(CHUNK, len(frontier) // (self.workers * IN_FLIGHT)))
         starts = range(0, len(frontier), size)
         first, ahead = self._sent, self.workers * IN_FLIGHT
-        self._taken = first  # records of chunks a stopped level left are dropped
+        self._records.drop_before(first)  # records of chunks a stopped level left
         for i in range(len(starts)):
             while self._sent - first < min(len(starts), i + ahead):
                 k = starts[self._sent - first]
@@ -179,38 +249,22 @@ class ExpansionPool:
         self._sent += 1
 
     def _result(self, n: int) -> "list[list[list[Segment]]]":
-        """The records of chunk ``n``, waiting for them (and reading whatever else arrives)."""
-        while n not in self._done:
-            if not self._receive(WAIT_LOOK):  # the chunk is still running: is the budget spent meanwhile?
-                why = self.should_stop()
-                if why:
-                    self._abandon()
-                    raise ReactionStopped(why)
-        out, peak, error = self._done.pop(n)
+        """The records of chunk ``n``, waiting for them."""
+        while True:
+            got = self._records.take(n, WAIT_LOOK)
+            if got is not None:
+                break
+            why = self.should_stop()  # the chunk is still running: is the budget spent meanwhile?
+            if why:
+                self._abandon()
+                raise ReactionStopped(why)
+        out, peak, error = got
         self._taken = n + 1
         if error is not None:
             raise error
         if peak > self.peak_mb:
             self.peak_mb = peak
         return out
-
-    def _receive(self, timeout: float) -> bool:
-        """Read the records every worker has sent, waiting up to ``timeout`` for any;
-        whether any arrived. A worker that has ended (it ends only when closed) ends the
-        search."""
-        ready = wait([*self._results, *(p.sentinel for p in self._procs)], timeout)
-        got = False
-        for r in ready:
-            if not isinstance(r, Connection):
-                raise _died()
-            try:
-                n, out, peak, error = r.recv()
-            except (EOFError, OSError):
-                raise _died() from None
-            if n >= self._taken:
-                self._done[n] = (out, peak, error)
-            got = True
-        return got
 
     def _abandon(self) -> None:
         """Stop the workers now, whatever they are on (the search stops, and a worker may
@@ -224,6 +278,7 @@ class ExpansionPool:
         """Stop the workers (after the chunks they are on, unless abandoned: the chunks
         sent and not consumed are dropped); returns the largest worker's peak resident
         size in MB."""
+        self._records.closing = True
         if not self._abandoned:
             if self._sent > self._taken:  # speculative chunks of a search that stopped early
                 self._abandon()
@@ -236,9 +291,8 @@ class ExpansionPool:
             if proc.is_alive():  # pragma: no cover - a worker that ignores SIGTERM
                 proc.kill()
                 proc.join()
-        for conn in (self._tasks, *self._results):
-            conn.close()
-        self._done.clear()
+        self._records.join(5.0)
+        self._tasks.close()
         return self.peak_mb
 
 
