@@ -15,7 +15,8 @@ last one reach an eighth of the heap they were frozen out of, so a process with 
 heap (a sweep worker, a test process) walks it once per many runs instead of after each.
 The count lives on a :class:`Collector` the runs share: a caller that runs many
 simulations in one process hands the same one to each (``desmon analyze --simulate``'s
-runs, ``desmon estimate``'s serial runs); a run given none counts alone.
+runs, ``desmon estimate``'s serial runs and batches, the runs of a sweep's Dask worker);
+a run given none counts alone.
 20 runs of the coffee handover beside 6 million objects took 2.6 CPU s where a full
 collection after each took 17.0 (6.5x; ``python -m bench.bench_sim --collector``, one run
 on the project's 2-core machine at load 2 to 4).

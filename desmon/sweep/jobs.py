@@ -33,7 +33,7 @@ from desmon.sweep.grid import JOBS, Axis, Run, SweepError
 
 __all__ = ["check_points", 
     "JOBS", "JobSpec", "run_point", "check_values", "signal_parameters", "EXIT_TIMEOUT", "EXIT_CRASH", "EXIT_KILLED",
-    "EXIT_BAD_VALUE", "EXIT_INCOMPLETE", "METRICS", "scenario_at",
+    "EXIT_BAD_VALUE", "EXIT_INCOMPLETE", "METRICS", "scenario_at", "worker_collector",
 ]
 
 EXIT_BAD_VALUE, EXIT_TIMEOUT, EXIT_CRASH, EXIT_KILLED = 2, 124, 125, 137
@@ -107,9 +107,9 @@ class ScenarioCache:
         return scenario
 
 
-def _worker_cache() -> ScenarioCache | None:
-    """The scenario cache of the Dask worker running this task, made on its first task
-    (the worker object owns it); None outside a Dask worker (each call loads afresh)."""
+def _worker_owned(attr: str, make: Callable[[], Any]) -> Any:
+    """The object ``attr`` of the Dask worker running this task, made by ``make`` on its
+    first task (the worker object owns it); None outside a Dask worker."""
     import sys
 
     if "distributed" not in sys.modules:  # no Dask in this process: not a worker
@@ -121,11 +121,25 @@ def _worker_cache() -> ScenarioCache | None:
     except ValueError:  # not in a worker's task
         return None
     with _LOCK:
-        cache = getattr(worker, "desmon_scenarios", None)
-        if cache is None:
-            cache = ScenarioCache()
-            worker.desmon_scenarios = cache
-    return cache
+        owned = getattr(worker, attr, None)
+        if owned is None:
+            owned = make()
+            setattr(worker, attr, owned)
+    return owned
+
+
+def _worker_cache() -> ScenarioCache | None:
+    """The scenario cache of the Dask worker running this task; None outside a Dask
+    worker (each call loads afresh)."""
+    return _worker_owned("desmon_scenarios", ScenarioCache)
+
+
+def worker_collector() -> Any:
+    """The :class:`~desmon.sim.collector.Collector` the runs of the Dask worker running this
+    task share (None outside a Dask worker: each run counts alone)."""
+    from desmon.sim.collector import Collector
+
+    return _worker_owned("desmon_collector", Collector)
 
 
 def scenario_at(path: str, values: tuple[tuple[str, str], ...]) -> Any:
@@ -151,7 +165,7 @@ def _job_run(spec: JobSpec, run: Run) -> dict[str, Any]:
     from desmon.sim.engine import SimWorld
 
     scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
-    result = SimWorld(scenario, deployer=_deployer(spec.deployer), seed=run.seed, until=spec.setting("until")).run()
+    result = SimWorld(scenario, deployer=_deployer(spec.deployer), seed=run.seed, until=spec.setting("until"), collector=worker_collector()).run()
     row = run_figures(result.metrics, len(result.violations))
     row["exit_code"] = 1 if result.violations else 0
     return row
