@@ -10,8 +10,9 @@ seconds (estimated from the growth of the last two N: its states times the last
 seconds per state); a search that the time limit cuts is reported as incomplete.
 
 The last line ``RESULT platforms=<largest N searched completely> states=... transitions=...
-seconds=... states_per_s=... bytes_per_state=... growth=<states of N over N-1>`` carries
-that N's figures. Figures and their discussion: docs/findings.md ("The checker at scale").
+seconds=... cpu_seconds=... states_per_s=... bytes_per_state=... growth=<states of N over N-1>``
+carries that N's figures (CPU seconds beside the wall-clock ones: on a shared machine
+the search waits for a core). Figures and their discussion: docs/findings.md ("The checker at scale").
 """
 
 from __future__ import annotations
@@ -32,10 +33,12 @@ def one(platforms: int, engine: str, timeout: float | None) -> dict[str, object]
     from desmon.verify.checker import Checker
 
     scenario = load_scenario(SCENARIO, {"platforms": str(platforms)})
+    cpu0 = time.process_time()
     res = Checker(scenario, "desmon").run(engine=engine, max_states=None, timeout=timeout)
+    cpu = time.process_time() - cpu0
     return {
         "platforms": platforms, "verdict": res.verdict, "incomplete": res.incomplete, "states": res.states, "transitions": res.transitions,
-        "seconds": round(res.seconds, 3), "bytes_per_state": round(res.bytes_per_state, 1), "peak_mb": round(res.peak_mb, 1), "engine": res.engine,
+        "seconds": round(res.seconds, 3), "cpu_seconds": round(cpu, 3), "bytes_per_state": round(res.bytes_per_state, 1), "peak_mb": round(res.peak_mb, 1), "engine": res.engine,
     }
 
 
@@ -51,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--min-platforms", type=int, default=2, help="the smallest N (2 to 12)")
     ap.add_argument("--max-platforms", type=int, default=6, help="the largest N (2 to 12)")
-    ap.add_argument("--time-limit", type=float, default=600.0, help="seconds for the whole run")
+    ap.add_argument("--time-limit", type=float, default=1800.0, help="seconds for the whole run")
     ap.add_argument("--engine", choices=("table", "direct"), default="table", help="the checker engine")
     ap.add_argument("--one", type=int, help=argparse.SUPPRESS)  # a child: one N, its figures as JSON
     args = ap.parse_args(argv)
@@ -65,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     rows: list[dict] = []
     print(f"scale family ({SCENARIO.name}), engine {args.engine}, time limit {args.time_limit:g} s")
-    print(f"  {'N':>2} {'states':>13} {'transitions':>15} {'seconds':>9} {'states/s':>10} {'B/state':>8}  verdict", flush=True)
+    print(f"  {'N':>2} {'states':>13} {'transitions':>15} {'seconds':>9} {'CPU s':>9} {'states/s':>10} {'B/state':>8}  verdict", flush=True)
     for n in range(args.min_platforms, args.max_platforms + 1):
         left = args.time_limit - (time.perf_counter() - t0)
         if len(rows) >= 2 and rows[-1]["verdict"] != "INCOMPLETE":
@@ -80,14 +83,14 @@ def main(argv: list[str] | None = None) -> int:
         rows.append(r)
         rate = r["states"] / r["seconds"] if r["seconds"] else 0.0
         why = f" ({r['incomplete']})" if r["incomplete"] else ""
-        print(f"  {n:>2} {r['states']:>13,} {r['transitions']:>15,} {r['seconds']:>9.2f} {rate:>10,.0f} {r['bytes_per_state']:>8.1f}  {r['verdict']}{why}", flush=True)
+        print(f"  {n:>2} {r['states']:>13,} {r['transitions']:>15,} {r['seconds']:>9.2f} {r['cpu_seconds']:>9.2f} {rate:>10,.0f} {r['bytes_per_state']:>8.1f}  {r['verdict']}{why}", flush=True)
     done = [r for r in rows if r["verdict"] != "INCOMPLETE"]
     if not done:
         raise SystemExit("bench_scale: no N was searched completely within the time limit")
     last = done[-1]
     growth = last["states"] / done[-2]["states"] if len(done) >= 2 else 0.0
     result = {
-        "platforms": last["platforms"], "states": last["states"], "transitions": last["transitions"], "seconds": last["seconds"],
+        "platforms": last["platforms"], "states": last["states"], "transitions": last["transitions"], "seconds": last["seconds"], "cpu_seconds": last["cpu_seconds"],
         "states_per_s": round(last["states"] / last["seconds"]) if last["seconds"] else 0, "bytes_per_state": last["bytes_per_state"],
         "growth": round(growth, 2),
     }

@@ -1,6 +1,6 @@
 """A family of deployment models with a size parameter: N platforms, for the checker at scale.
 
-Each of the ``platforms`` (N, default 4) PCs has 512 MB, a background load that moves in
+Each of the ``platforms`` (N) PCs has 512 MB, a background load that moves in
 100 MB steps between 0 and 300 MB, and its own failing devices: a wrench on the even
 ones, a pair of tactile pads on the odd ones (one pad of each pair may fail and be
 repaired). Three detectors watch the robot's actions, each slot with a fallback
@@ -13,7 +13,7 @@ the state count grows about tenfold per platform.
     desmon verify scenarios/scale_family.py -p platforms=4 --stats
     python -m bench.bench_scale --max-platforms 6      # states, seconds and bytes/state per N
 
-Parameters: ``platforms`` (N, 2 to 12).
+Parameters: ``platforms`` (N, 2 to 12, default 3).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from desmon.model.params import parameters
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.verify.bounds import Bounds, levels
 
-p = parameters(platforms=4)
+p = parameters(platforms=3)
 if not isinstance(p.platforms, int) or not 2 <= p.platforms <= 12:
     raise ScenarioError(f"platforms = {p.platforms!r}: give a whole number of platforms in [2, 12]")
 

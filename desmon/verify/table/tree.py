@@ -14,7 +14,7 @@ from typing import Callable
 import numpy as np
 
 from desmon.errors import NondeterminismError, TableUnsupported
-from desmon.verify.table.hashing import Grow, Interned, IntTable
+from desmon.verify.arrays import Grow, Interned, IntTable
 from desmon.verify.table.tables import AnswerTables
 
 __all__ = ["DecisionTrees", "DENSE_ANSWERS", "SMALL_DIGITS"]
@@ -205,12 +205,8 @@ class DecisionTrees(_Walk):
 
     def _node(self) -> int:
         n = self.node_leaf.n
-        if n == len(self.node_leaf.a):  # (the per-node arrays grow together)
-            for g in self._per_node:
-                g.extend(1)  # (their fill values)
-        else:
-            for g in self._per_node:
-                g.n = n + 1
+        for g in self._per_node:  # (their fill values)
+            g.extend(1)
         self.node_desc.append(None)
         if n >= 1 << 22:
             raise TableUnsupported("table engine: more than 4 million decision nodes; run with --engine direct")
