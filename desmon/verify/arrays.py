@@ -104,7 +104,7 @@ class CodeSet:
     the codes (the old slots freed first) at :attr:`SPARSE` when it grows: a state costs
     4/FULL to 4/SPARSE bytes, and growing never holds two tables."""
 
-    FULL, SPARSE = 0.75, 0.5
+    FULL, SPARSE = 0.8, 0.65
     #: codes re-added per pass of a rebuild
     CHUNK = 1 << 20
 
@@ -169,11 +169,11 @@ class CodeSet:
 
 
 class Grow:
-    """A numpy array with amortised appends. Its rows past the used ones are never
-    written (nor read): their pages take no resident memory."""
+    """A numpy array (int64, or ``dtype``) with amortised appends. Its rows past the used
+    ones are never written (nor read): their pages take no resident memory."""
 
-    def __init__(self, shape: tuple[int, ...], fill: int = 0) -> None:
-        self.a = np.empty(shape, dtype=np.int64)
+    def __init__(self, shape: tuple[int, ...], fill: int = 0, dtype: Any = np.int64) -> None:
+        self.a = np.empty(shape, dtype=dtype)
         self.n = 0
         self.fill = fill
 
@@ -185,7 +185,7 @@ class Grow:
     def extend(self, k: int) -> int:
         """Append ``k`` fill values; returns the index of the first."""
         if self.n + k > len(self.a):
-            a = np.empty((max(2 * len(self.a), self.n + k), *self.a.shape[1:]), dtype=np.int64)
+            a = np.empty((max(2 * len(self.a), self.n + k), *self.a.shape[1:]), dtype=self.a.dtype)
             a[: self.n] = self.a[: self.n]
             self.a = a
         self.a[self.n: self.n + k] = self.fill
