@@ -105,8 +105,8 @@ class CodeSet:
     4/FULL to 4/SPARSE bytes, and growing never holds two tables."""
 
     FULL, SPARSE = 0.8, 0.65
-    #: codes re-added per pass of a rebuild
-    CHUNK = 1 << 20
+    #: codes re-added per pass of a rebuild (its temporary arrays are a few of this many int64s)
+    CHUNK = 1 << 16
 
     def __init__(self) -> None:
         self.slots = np.zeros(1024, dtype=np.uint32)

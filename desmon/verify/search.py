@@ -234,6 +234,10 @@ class Budget:
         self.others: Callable[[], Iterable[int]] = tuple
         #: (states, transitions, depth) of the search so far, for the progress line
         self.status: Callable[[], tuple[int, int, int]] = lambda: (0, 0, 0)
+        #: the sizes of the BFS levels explored so far (the growth the progress line and a
+        #: spent memory budget report), and the resident memory when the search began (MB)
+        self.levels: Callable[[], Sequence[int]] = tuple
+        self.start_mb = 0.0
         self._next_look = t0
         self._last_progress = -math.inf
         self._line = StatusLine(self.out)
@@ -274,7 +278,7 @@ class Budget:
         if self.max_memory is not None or self.progress:
             self.memory = self.measure(pids)
         if self.max_memory is not None and self.memory > self.max_memory:
-            self.reason = f"memory budget {self.max_memory:g} MB reached: {self.memory:,.0f} MB resident"
+            self.reason = f"memory budget {self.max_memory:g} MB reached: {self.memory:,.0f} MB resident" + self.growth()
         elif self.progress and now - self.t0 >= self.progress_after and now - self._last_progress >= self.progress_every:
             self._last_progress = now
             self.show(now)
@@ -299,8 +303,18 @@ class Budget:
         rate = states / elapsed if elapsed > 0 else 0.0
         memory = f"{self.memory:,.0f} MB" + (f" of {self.max_memory:g}" if self.max_memory is not None else "")
         clock = f"{elapsed + self.before:,.0f}s" + (f" of {self.timeout:g}s" if self.timeout is not None else "")
-        line = f"  {states:,} states  {rate:,.0f} states/s  depth {depth}  {transitions:,} transitions  memory {memory}  time {clock}"
-        self._line.show(line)
+        per_state = f"  {(self.memory - self.start_mb) * 2**20 / states:,.0f} B/state" if states and self.memory else ""
+        line = f"  {states:,} states  {rate:,.0f} states/s  depth {depth}  {transitions:,} transitions  memory {memory}{per_state}  time {clock}"
+        self._line.show(line + self.growth())
+
+    def growth(self) -> str:
+        """How the BFS levels were still growing ("" before two levels): the last one's size
+        over the one before, and the next two levels' sizes if they keep that rate."""
+        sizes = self.levels()
+        if len(sizes) < 2 or not sizes[-2]:
+            return ""
+        rate = sizes[-1] / sizes[-2]
+        return f"; levels growing {rate:.2f}x: about {sizes[-1] * rate:,.0f} and {sizes[-1] * rate * rate:,.0f} states next"
 
     def close(self) -> None:
         """End the progress line (if one was shown) before the report."""
@@ -485,6 +499,8 @@ class BreadthFirst:
         self.depth = self.transitions = 0
         self.incomplete = ""
         budget.status = lambda: (len(states), self.transitions, self.depth)
+        sizes: list[int] = [1]
+        budget.levels = lambda: sizes
         for name, msg in violations:
             trail.record(name, msg, 0)
         self.any_found = bool(trail.found)
@@ -497,6 +513,7 @@ class BreadthFirst:
                 frontier = self._level(frontier)
                 if len(frontier):
                     self.depth += 1
+                    sizes.append(len(frontier))
         except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
             self.incomplete = INTERRUPTED
             trail.truncate(states)
