@@ -44,6 +44,7 @@ GOALS: dict[str, tuple[Goal, ...]] = {
         Goal("ratio_bare", "<=", 100, "at most 100x the bare SimPy cost of the same events"),
         Goal("signals_off_s", "<", 1.5, "the day with signals off under 1.5 s"),
     ),
+    "bench_scale": (Goal("bytes_per_state", "<=", 24, "the scale family's largest N (6 by default) at most 24 bytes of resident memory per state"),),
     "bench_verify": (
         Goal("states_per_s", ">=", 100_000, "the fallback-heavy model at 100,000 states/s on one core"),
         Goal("bytes_per_state", "<=", 150, "at most 150 bytes of resident memory per state"),
@@ -69,6 +70,7 @@ QUICK: dict[str, tuple[str, ...]] = {
     "bench_estimate": ("--quick",),
     "bench_fleet": ("--robots", "3", "--edges", "1", "--hours", "0.1"),
     "bench_preferences": ("--quick",),
+    "bench_scale": ("--max-platforms", "3", "--time-limit", "120"),
     "bench_sim": ("--until", "600"),
     "bench_sweep": ("--hours", "0.02", "--seeds", "1"),
     "bench_table_prefs": ("--quick", "--repeat", "1"),
@@ -112,6 +114,7 @@ RESULT_KEYS: dict[str, tuple[str, ...]] = {
     "bench_sim": (
         "x_real_time", "ratio_bare", "signals_off_s", "wall_s", "bare_s", "events", "until_s", "serial_s", "serial_ratio_bare", "cpu_s", "sim_cpu_s", "ahead_blocks",
     ),
+    "bench_scale": ("platforms", "states", "transitions", "seconds", "cpu_seconds", "states_per_s", "bytes_per_state", "growth"),
     "bench_sweep": ("speedup", "overhead", "runs", "hours", "bare_s", "one_worker_s", "two_workers_s"),
     "bench_sweep --scheduler": ("per_task_ratio", "in_task_ratio", "cpu_ratio", "runs", "hours", "rounds", "workers", "threads"),
     "bench_table_prefs": ("cloud_ratio", "cloud_wide_ratio", "pref_median_ratio"),

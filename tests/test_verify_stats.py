@@ -10,7 +10,7 @@ import pytest
 from desmon.cli import main
 from desmon.loader import load_scenario
 from desmon.verify import Checker
-from desmon.verify.table.hashing import IntTable
+from desmon.verify.arrays import IntTable
 
 SCENARIO = str(Path(__file__).resolve().parents[1] / "scenarios" / "fallbacks.py")
 

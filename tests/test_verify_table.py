@@ -468,9 +468,10 @@ def test_the_walks_shortcuts_land_where_the_same_platforms_branches_lead(name):
     _the_walk_codes_are_the_shortcuts(trees)
     # platforms with many digits recompute them with numpy: the same shortcuts, children first
     python_made, python_codes = trees.digit_jump.a.copy(), trees.jump_code.a.copy()
-    trees.digit_jump.a[:] = trees.digit_kids.a  # (each shortcut its branch, then the skips)
-    kids = trees.digit_kids.a
-    trees.jump_code.a[:] = np.where(kids >= 0, trees.node_code.a[kids], -1)
+    n = trees.digit_kids.n  # (the rows in use)
+    trees.digit_jump.a[:n] = trees.digit_kids.a[:n]  # (each shortcut its branch, then the skips)
+    kids = trees.digit_kids.a[:n]
+    trees.jump_code.a[:n] = np.where(kids >= 0, trees.node_code.a[kids], -1)
     trees.small_digits = 0
     for node in range(trees.node_leaf.n - 1, -1, -1):  # (a child is numbered after its parent)
         db = int(trees.digit_base.a[node])
@@ -487,9 +488,9 @@ def test_the_walks_shortcuts_land_where_the_same_platforms_branches_lead(name):
 @given(hst.lists(hst.integers(0, 12), max_size=60), hst.integers(0, 1 << 40))
 def test_firsts_are_the_first_occurrences_of_each_value_in_order(small, offset):
     # the batch's candidate new states: the first unit reaching each code (np.unique's index)
-    from desmon.verify.table.search import _firsts
+    from desmon.verify.arrays import firsts
 
     values = np.array([offset + 97 * v for v in small], dtype=np.int64)
     want = np.sort(np.unique(values, return_index=True)[1]) if len(values) else np.zeros(0, dtype=np.int64)
-    got = _firsts(values)
+    got = firsts(values)
     assert got.tolist() == want.tolist() and got.dtype == np.int64

@@ -32,7 +32,7 @@ _TUPLES = 1 << 12
 #: (filled as failures are reported: a requirement object describes itself alike each time).
 _Question = tuple[tuple[int, ...], list[tuple[Any, "Requirement"]], bool, dict[int, str]]
 
-__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "is_ranked", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "ScalarChecks", "PlatformMemoChecks", "DEFAULT_CHECKS", "checks_for", "reads_fixed_facts", "unreadable", "spec_validity", "input_failures"]
+__all__ = ["Failure", "Validity", "check_validity", "check_platform", "requirement_holds", "preference_term", "platform_score", "score_breakdown", "score_keys", "is_ranked", "order_platforms", "acceptable_platforms", "validity_for", "deployment_valid", "clear_memos", "ScalarChecks", "PlatformMemoChecks", "DEFAULT_CHECKS", "checks_for", "reads_fixed_facts", "unreadable", "spec_validity", "input_failures"]
 
 
 def requirement_holds(req: Constraint, state: PlatformState, graph: Placing) -> str | None:
@@ -80,6 +80,13 @@ def score_breakdown(reqs: Iterable[Constraint], state: PlatformState, graph: Pla
 def platform_score(reqs: Iterable[Constraint], state: PlatformState, graph: Placing) -> float:
     """The preference score of ``state``: the sum of weight x term (0 without preferences)."""
     return sum(p.weight * preference_term(p, state, graph) for p in reqs if isinstance(p, Preference))
+
+
+def score_keys(reqs: tuple, graph: Placing, failures: Sequence[tuple], states: Sequence[PlatformState]) -> list[tuple | None]:
+    """What the preferences make of each platform: None where it is rejected (it has
+    ``failures``), else its score and the weighted terms it is the sum of (what
+    ``Validity.breakdown`` shows)."""
+    return [None if f else (platform_score(reqs, st, graph), score_breakdown(reqs, st, graph)) for f, st in zip(failures, states)]
 
 
 _DOWN = "platform is down"

@@ -186,6 +186,7 @@ def check(
         t0, timeout=timeout, timeout_spent=timeout_spent, max_memory=max_memory, progress=progress, progress_after=progress_after, progress_every=progress_every, out=out,
     )
     budget.others = lambda: worker_pids(system.core.deployer)  # (a user's deployer's memory counts too)
+    budget.start_mb = res.start_mb
     search = dict(max_states=max_states, max_depth=max_depth, keep_going=keep_going, budget=budget, workers=workers)
     try:
         with ctrl_c(budget), system.guard.watching(budget.spent, budget.urgent):

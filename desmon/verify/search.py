@@ -11,7 +11,8 @@ a search is measured by and ends with, whichever engine runs it:
 * the search tree (:class:`Trail`: parent pointers and transition labels of the
   states, counterexamples rebuilt by replaying their labels through the real
   deployment core, and when the search has found what it looks for);
-* the level-by-level loop both engines run (:class:`BreadthFirst`);
+* the level-by-level loop both engines run (:class:`BreadthFirst`), and a level kept as a
+  range of state numbers (:class:`Queue`);
 * what a transition reports to a search loop (:data:`Record`, :data:`Segment`).
 
 State keys are :class:`desmon.verify.state.Key`; counterexample steps are in
@@ -45,7 +46,7 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "Exploration",
     "HOLDS", "VIOLATED", "INCOMPLETE", "CRASHED", "EXIT_CRASHED", "INTERRUPTED", "EXIT_INTERRUPTED", "NOT_CHECKED", "Record", "Segment",
-    "CheckResult", "Budget", "Replayable", "Trail", "BreadthFirst", "finish", "final_status", "ctrl_c", "paused_gc", "resident_mb", "proportional_mb", "peak_mb",
+    "CheckResult", "Budget", "Replayable", "Trail", "Queue", "BreadthFirst", "finish", "final_status", "ctrl_c", "paused_gc", "resident_mb", "proportional_mb", "peak_mb",
     "MEMORY_EVERY", "MEMORY_EVERY_WORKERS",
 ]
 
@@ -233,6 +234,10 @@ class Budget:
         self.others: Callable[[], Iterable[int]] = tuple
         #: (states, transitions, depth) of the search so far, for the progress line
         self.status: Callable[[], tuple[int, int, int]] = lambda: (0, 0, 0)
+        #: the sizes of the BFS levels explored so far (the growth the progress line and a
+        #: spent memory budget report), and the resident memory when the search began (MB)
+        self.levels: Callable[[], Sequence[int]] = tuple
+        self.start_mb = 0.0
         self._next_look = t0
         self._last_progress = -math.inf
         self._line = StatusLine(self.out)
@@ -273,7 +278,7 @@ class Budget:
         if self.max_memory is not None or self.progress:
             self.memory = self.measure(pids)
         if self.max_memory is not None and self.memory > self.max_memory:
-            self.reason = f"memory budget {self.max_memory:g} MB reached: {self.memory:,.0f} MB resident"
+            self.reason = f"memory budget {self.max_memory:g} MB reached: {self.memory:,.0f} MB resident" + self.growth()
         elif self.progress and now - self.t0 >= self.progress_after and now - self._last_progress >= self.progress_every:
             self._last_progress = now
             self.show(now)
@@ -298,8 +303,18 @@ class Budget:
         rate = states / elapsed if elapsed > 0 else 0.0
         memory = f"{self.memory:,.0f} MB" + (f" of {self.max_memory:g}" if self.max_memory is not None else "")
         clock = f"{elapsed + self.before:,.0f}s" + (f" of {self.timeout:g}s" if self.timeout is not None else "")
-        line = f"  {states:,} states  {rate:,.0f} states/s  depth {depth}  {transitions:,} transitions  memory {memory}  time {clock}"
-        self._line.show(line)
+        per_state = f"  {(self.memory - self.start_mb) * 2**20 / states:,.0f} B/state" if states and self.memory else ""
+        line = f"  {states:,} states  {rate:,.0f} states/s  depth {depth}  {transitions:,} transitions  memory {memory}{per_state}  time {clock}"
+        self._line.show(line + self.growth())
+
+    def growth(self) -> str:
+        """How the BFS levels were still growing ("" before two levels): the last one's size
+        over the one before, and the next two levels' sizes if they keep that rate."""
+        sizes = self.levels()
+        if len(sizes) < 2 or not sizes[-2]:
+            return ""
+        rate = sizes[-1] / sizes[-2]
+        return f"; levels growing {rate:.2f}x: about {sizes[-1] * rate:,.0f} and {sizes[-1] * rate * rate:,.0f} states next"
 
     def close(self) -> None:
         """End the progress line (if one was shown) before the report."""
@@ -364,12 +379,15 @@ class Trail:
     under the engine's ``lookup`` key for it.
     """
 
-    def __init__(self, system: Replayable, key_of: Callable[[int], Key], keep_going: bool) -> None:
+    def __init__(self, system: Replayable, key_of: Callable[[int], Key], keep_going: bool, label_of: Callable[[int], Label] | None = None) -> None:
         self.system = system
         self.key_of = key_of
         self.keep_going = keep_going
         self.parent = array("i", [-1])  # (4 bytes a state: at most 2**31 states)
-        self.label = array("i", [-1])
+        #: with ``label_of`` (the label of the transition from state i's parent to i, found
+        #: again when a path is rebuilt) no label is stored: a state costs its parent only
+        self.label_of = label_of
+        self.label = array("i", [-1] if label_of is None else [])
         self.labels: list[Label] = []
         self._label_ids: dict[Any, int] = {}
         self.found: dict[str, Counterexample] = {}
@@ -385,22 +403,25 @@ class Trail:
     def add(self, parent: int, lookup: Any, label: Label) -> None:
         """The next state's parent and label."""
         self.parent.append(parent)
-        self.label.append(self.label_id(lookup, label))
+        if self.label_of is None:
+            self.label.append(self.label_id(lookup, label))
 
     def extend(self, parents: Any, label_ids: Any) -> None:
         """The next states' parents and label numbers (numpy arrays of :meth:`label_id`)."""
         self.parent.frombytes(parents.astype("int32").tobytes())
-        self.label.frombytes(label_ids.astype("int32").tobytes())
+        if self.label_of is None:
+            self.label.frombytes(label_ids.astype("int32").tobytes())
 
     def path(self, i: int) -> tuple[list[Label], list[Key]]:
         """The labels from the initial state to state ``i``, and the states on the way."""
         ls: list[Label] = []
         ks: list[Key] = []
-        parent, label, labels, key_of = self.parent, self.label, self.labels, self.key_of
+        parent, key_of = self.parent, self.key_of
+        label_of = self.label_of or (lambda j: self.labels[self.label[j]])
         while i >= 0:
             ks.append(key_of(i))
-            if label[i] >= 0:
-                ls.append(labels[label[i]])
+            if parent[i] >= 0:
+                ls.append(label_of(i))
             i = parent[i]
         ls.reverse()
         ks.reverse()
@@ -423,8 +444,34 @@ class Trail:
 
     def truncate(self, states: list | array) -> None:  # type: ignore[type-arg]
         """Drop a state half-added when a second Ctrl-C came (``states``: the engine's list of them)."""
-        n = min(len(states), len(self.parent), len(self.label))
+        n = min(len(states), len(self.parent), len(self.label) if self.label_of is None else len(self.parent))
         del states[n:], self.parent[n:], self.label[n:]
+
+
+class Queue:
+    """The next level of a BFS that numbers its states in order: the range of numbers it
+    queues, and those in that range it skipped (a state that violates an invariant is not
+    explored); no array of state numbers is kept (the table engine's frontier)."""
+
+    def __init__(self, first: int) -> None:
+        self.first = self.end = first
+        self.skipped: list[int] = []
+
+    def extend(self, lo: int, hi: int) -> None:
+        """Queue the states numbered ``lo`` to ``hi`` (excluded), the next ones numbered."""
+        self.skipped.extend(range(self.end, lo))
+        self.end = hi
+
+    def append(self, i: int) -> None:
+        self.extend(i, i + 1)
+
+    def states(self) -> Sequence[int]:
+        """The queued state numbers, ascending."""
+        if not self.skipped:
+            return range(self.first, self.end)
+        import numpy as np  # (only an engine with arrays keeps a Queue: the CLI loads no numpy)
+
+        return np.setdiff1d(np.arange(self.first, self.end, dtype=np.int64), np.array(self.skipped, dtype=np.int64))
 
 
 class BreadthFirst:
@@ -452,6 +499,8 @@ class BreadthFirst:
         self.depth = self.transitions = 0
         self.incomplete = ""
         budget.status = lambda: (len(states), self.transitions, self.depth)
+        sizes: list[int] = [1]
+        budget.levels = lambda: sizes
         for name, msg in violations:
             trail.record(name, msg, 0)
         self.any_found = bool(trail.found)
@@ -464,6 +513,7 @@ class BreadthFirst:
                 frontier = self._level(frontier)
                 if len(frontier):
                     self.depth += 1
+                    sizes.append(len(frontier))
         except KeyboardInterrupt:  # a second Ctrl-C (or one the handler could not catch)
             self.incomplete = INTERRUPTED
             trail.truncate(states)

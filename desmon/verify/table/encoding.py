@@ -17,7 +17,7 @@ from desmon.errors import CheckerError, TableUnsupported
 from desmon.model.events import RequirementChange, event_kind
 from desmon.verify.environment import Digit, event_kinds, variable_kind, variables
 from desmon.verify.state import Key
-from desmon.verify.table.hashing import Interned
+from desmon.verify.arrays import Interned
 
 if TYPE_CHECKING:
     from desmon.verify.bounds import Bounds

@@ -12,14 +12,14 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from desmon.deployment.guard import CRASH
 from desmon.deployment.ports import QUERY_METHODS, PlatformHandle
-from desmon.deployment.validity import PlatformMemoChecks, is_ranked, order_platforms
+from desmon.deployment.validity import PlatformMemoChecks, is_ranked, order_platforms, score_keys
 from desmon.errors import TableUnsupported, UnobservedRead
 from desmon.model.events import Event
 from desmon.model.system import PlatformState
 from desmon.verify.state import Key, StateStore
 from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key, nondeterminism
 from desmon.verify.table.observed import Acceptable, Check, ObservedValidity, Ranked, Reasons
-from desmon.verify.table.tables import AnswerTables, score_keys
+from desmon.verify.table.tables import AnswerTables
 from desmon.verify.trace import branch_names
 
 if TYPE_CHECKING:

@@ -15,15 +15,15 @@ import numpy as np
 import numpy.ma  # noqa: F401  (np.unique imports it on first use, leaving cyclic garbage: not during a search)
 
 from desmon.errors import TableUnsupported
-from desmon.verify.search import BreadthFirst, Budget, CheckResult, Trail
+from desmon.verify.arrays import CodeSet, Interned, count_into, firsts, grouped
+from desmon.verify.search import BreadthFirst, Budget, CheckResult, Queue, Trail
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem, opened
-from desmon.verify.table.hashing import Interned, IntTable
 from desmon.verify.table.encoding import ROOT_PREFIX, SYS_BITS, SYS_MASK, Env, Events, Transitions, layout, root_key
 from desmon.verify.table.recording import Recorder
 from desmon.verify.table.tables import AnswerTables
 from desmon.verify.table.tree import DecisionTrees
-from desmon.verify.trace import Counterexample
+from desmon.verify.trace import Counterexample, Label
 
 __all__ = ["TableEngine", "table_unsupported", "CHUNK_STATES"]
 
@@ -32,45 +32,14 @@ __all__ = ["TableEngine", "table_unsupported", "CHUNK_STATES"]
 CHUNK_STATES = 4_096
 #: new states added between two looks at the search's budget (time, memory, Ctrl-C)
 LOOK_EVERY = 64
-#: values below which :func:`_grouped` numbers distinct values with an array, not a sort
-DENSE_GROUPS = 1 << 20
 
 
-def _count(counter: Any, names: Sequence[Any], values: np.ndarray, size: int) -> None:
-    """Add the occurrences of each number in ``values`` to ``counter`` under its name."""
-    for k, n in enumerate(np.bincount(values, minlength=size).tolist()):
-        if n:
-            counter[names[k]] += n
-
-
-def _grouped(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``np.unique(values, return_inverse=True)`` of non-negative ints, without a sort
-    when they are small."""
-    top = int(values.max()) + 1 if len(values) else 0
-    if top > DENSE_GROUPS:
-        return np.unique(values, return_inverse=True)
-    present = np.zeros(top, dtype=bool)
-    present[values] = True
-    up = np.flatnonzero(present)
-    number = np.zeros(top, dtype=np.int64)
-    number[up] = np.arange(len(up))
-    return up, number[values]
-
-
-def _firsts(values: np.ndarray) -> np.ndarray:
-    """The positions of the first occurrence of each distinct value, ascending (what
-    ``np.sort(np.unique(values, return_index=True)[1])`` gives, by a quicksort of the values
-    and the least position of each run of equal ones: a stable sort is several times slower)."""
-    if not len(values):
-        return np.zeros(0, dtype=np.int64)
-    order = np.argsort(values)
-    ordered = values.take(order)
-    starts = np.empty(len(values), dtype=bool)
-    starts[0] = True
-    np.not_equal(ordered[1:], ordered[:-1], out=starts[1:])
-    first = np.minimum.reduceat(order, np.flatnonzero(starts))
-    first.sort()
-    return first
+def _numbered(numbers: Interned, value: Any, limit: int, what: str) -> int:
+    """``value``'s number in ``numbers``; past ``limit`` values the engine bows out."""
+    i = numbers(value)
+    if i >= limit:
+        raise TableUnsupported(f"table engine: more than {limit:,} {what}; run with --engine direct")
+    return i
 
 
 class _Spent(Exception):
@@ -108,8 +77,8 @@ class TableEngine(BreadthFirst):
         self.model = checker.model
         self.bounds = checker.bounds
         self.P = len(self.model.platforms)
-        self.systems = Interned(1 << SYS_BITS, "distinct deployment states")  # (deployments, standing)
-        self.prefixes = Interned(1 << ROOT_PREFIX, "failed-start prefixes")
+        self.systems = Interned()  # (deployments, standing)
+        self.prefixes = Interned()
         self.prefixes(())
         self.budget = Budget(0.0)  # the search's (set by run)
         self.recorder: Recorder | None = None  # made with the encoding (:meth:`_encode`)
@@ -125,7 +94,7 @@ class TableEngine(BreadthFirst):
             raise _Spent
 
     def system(self, deployments: tuple, standing: tuple) -> int:
-        return self.systems((deployments, standing))
+        return _numbered(self.systems, (deployments, standing), 1 << SYS_BITS, "distinct deployment states")
 
     # -- the search ---------------------------------------------------------------------
     def key_of(self, i: int) -> Key:
@@ -192,9 +161,9 @@ class TableEngine(BreadthFirst):
         env = self._encode(init)
         # states: code = env << SYS_BITS | system
         self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
-        self.trail = Trail(ch, self.key_of, keep_going)
-        self.seen = IntTable(values=False)  # the codes of the states numbered before this batch
-        self.seen.add(np.array([self.codes[0]], dtype=np.int64))
+        self.trail = Trail(ch, self.key_of, keep_going, label_of=self._label_of)
+        self.seen = CodeSet()  # the states numbered before this batch
+        self.seen.add(self._codes(), 0, 1)
         return self._search(self.codes, ch.violations(init))
 
     def _encode(self, init: Key) -> Env:
@@ -207,24 +176,43 @@ class TableEngine(BreadthFirst):
         self.events = Events(self.bounds, env)
         return env
 
-    def _level(self, frontier: Sequence[int]) -> np.ndarray:
-        """One BFS level, batch by batch; returns the next level."""
-        frontier = np.asarray(frontier, dtype=np.int64)
-        nxt = array("q")
+    def _codes(self) -> np.ndarray:
+        """The states' codes by number (a view: dropped before the next state is added)."""
+        return np.frombuffer(self.codes, dtype=np.int64)
+
+    def _level(self, frontier: Sequence[int]) -> Sequence[int]:
+        """One BFS level, batch by batch; returns the next level: the states it numbered
+        (a range of numbers) but those that violate an invariant."""
+        nxt = Queue(len(self.codes))
         for lo in range(0, len(frontier), CHUNK_STATES):
             if self.budget.spent():
                 self.incomplete = self.budget.reason
                 break
-            if self._batch(frontier[lo: lo + CHUNK_STATES], nxt):
+            if self._batch(np.asarray(frontier[lo: lo + CHUNK_STATES], dtype=np.int64), nxt):
                 break
-        return np.frombuffer(nxt, dtype=np.int64)
+        return nxt.states()
 
-    def _batch(self, ids: np.ndarray, nxt: array) -> bool:  # type: ignore[type-arg]
+    def _label_of(self, i: int) -> Label:
+        """The label of the transition that numbered state ``i``: the first of its parent's
+        units that reaches it (the parent is expanded again, the budget set aside)."""
+        ids = np.array([self.trail.parent[i]], dtype=np.int64)
+        budget, self.budget = self.budget, Budget(0.0)
+        try:
+            tr = self.events.enabled(self._codes()[ids])
+            U_t, _pre, U_leaf = self._units(ids, tr)
+        finally:
+            self.budget = budget
+        U_code = tr.env2.take(U_t) << SYS_BITS
+        U_code |= np.array(self.trees.leaf_sys, dtype=np.int64).take(U_leaf)
+        u = int(np.flatnonzero(U_code == self.codes[i])[0])
+        return self.events.events[int(tr.ev[U_t[u]])], self.trees.leaves[int(U_leaf[u])][3]
+
+    def _batch(self, ids: np.ndarray, nxt: Queue) -> bool:
         """Expand the states ``ids`` (one numpy batch); True if the search stops in it."""
-        sc = np.frombuffer(self.codes, dtype=np.int64)[ids]
+        sc = self._codes()[ids]
         tr = self.events.enabled(sc)
         if not len(tr.env2):  # no state of this batch enables an event
-            _count(self.res.rules, self.env.ctxs, tr.ctx, self.env.C)
+            count_into(self.res.rules, self.env.ctxs, tr.ctx, self.env.C)
             return False
         try:
             U_t, U_pre, U_leaf = self._units(ids, tr)
@@ -232,8 +220,8 @@ class TableEngine(BreadthFirst):
             U_code = tr.env2.take(U_t) << SYS_BITS
             U_code |= leaf_sys.take(U_leaf)
             # candidate new states: first occurrence in this batch, not seen before
-            fresh = np.flatnonzero(~self.seen.contains(U_code))
-            cand = fresh[_firsts(U_code.take(fresh))]
+            fresh = np.flatnonzero(~self.seen.contains(U_code, self._codes()))
+            cand = fresh[firsts(U_code.take(fresh))]
             bad = self._violated(U_t[cand], leaf_sys[U_leaf[cand]], tr)
         except _Spent:  # between two recorded runs or walk rounds: the batch is dropped
             self.incomplete = self.budget.reason
@@ -244,7 +232,7 @@ class TableEngine(BreadthFirst):
             cut_t, stop_unit = self._consume_all(units, cand, nxt)
         else:
             cut_t, stop_unit = self._consume(units, cand, dict(zip(cand.tolist(), bad.tolist())), nxt)
-        self.seen.add(np.frombuffer(self.codes, dtype=np.int64)[n0:].copy())
+        self.seen.add(self._codes(), n0, len(self.codes))
         _count_batch(self, units, sc, cut_t, stop_unit)
         return cut_t < len(tr.env2)
 
@@ -259,7 +247,7 @@ class TableEngine(BreadthFirst):
             and not np.array(self.trees.leaf_inst, dtype=bool)[units.leaf].any()
         )
 
-    def _consume_all(self, units: "Units", cand: np.ndarray, nxt: array) -> tuple[int, int]:  # type: ignore[type-arg]
+    def _consume_all(self, units: "Units", cand: np.ndarray, nxt: Queue) -> tuple[int, int]:
         """:meth:`_consume` of a plain batch (:meth:`_plain`), as array operations: every
         candidate becomes a new state (numbered, labelled, queued), unless the budget is
         spent, where the direct engine's loop would see it first: after the transition
@@ -276,20 +264,12 @@ class TableEngine(BreadthFirst):
         e = tr.ev[t]
         ni = len(self.codes)
         self.codes.frombytes(units.code[cand].tobytes())
-        # each new state's label: its event and the start failures of its reaction
-        n_leaves = len(self.trees.leaves)
-        pairs, inv = _grouped(e * n_leaves + units.leaf[cand])
-        lids = np.array([self._label(pv // n_leaves, pv % n_leaves) for pv in pairs.tolist()], dtype=np.int64)
-        self.trail.extend(units.ids[tr.pos[t]], lids[inv])
-        _count(self.res.new_states, self.events.kinds, self.events.kind_of[e], len(self.events.kinds))
-        nxt.frombytes(np.arange(ni, ni + len(cand), dtype=np.int64).tobytes())
+        self.trail.extend(units.ids[tr.pos[t]], None)  # (no labels: :meth:`_label_of`)
+        count_into(self.res.new_states, self.events.kinds, self.events.kind_of[e], len(self.events.kinds))
+        nxt.extend(ni, ni + len(cand))
         return cut_t, -1
 
-    def _label(self, e: int, leaf: int) -> int:
-        fails = self.trees.leaves[leaf][3]
-        return self.trail.label_id((e, fails), (self.events.events[e], fails))
-
-    def _consume(self, units: "Units", cand: np.ndarray, bad_of: dict[int, int], nxt: array) -> tuple[int, int]:  # type: ignore[type-arg]
+    def _consume(self, units: "Units", cand: np.ndarray, bad_of: dict[int, int], nxt: Queue) -> tuple[int, int]:
         """The records in order, as the direct engine's search loop meets them: it stops
         after the event that found what it looked for or reached the cap, or at once when
         a repaired instantaneous violation completes the search. Returns (the last
@@ -326,7 +306,7 @@ class TableEngine(BreadthFirst):
         _n, _o, _log, instant = ch.run_one(self.key_of(here), event, self.prefixes[int(units.pre[u])])
         return self._record_repaired(instant, here, (event, lf[3]))
 
-    def _new_state(self, units: "Units", u: int, t: int, lf: tuple, bad: tuple, nxt: array) -> None:  # type: ignore[type-arg]
+    def _new_state(self, units: "Units", u: int, t: int, lf: tuple, bad: tuple, nxt: Queue) -> None:
         """Unit ``u`` reached a new state: number it, label it, and record what it violates."""
         tr, ev = units.tr, self.events
         ni = len(self.codes)
@@ -349,12 +329,12 @@ def _opened(engine: "TableEngine", u_t: np.ndarray, u_pre: np.ndarray, leaf: np.
     """The next generation's units: the failed-start prefixes each unit's start outcomes
     open (in the units' order, each unit's in order of its outcomes)."""
     n_leaves = len(engine.trees.leaves)
-    up, pinv = _grouped(u_pre * n_leaves + leaf)
+    up, pinv = grouped(u_pre * n_leaves + leaf)
     flat: list[int] = []
     count = np.zeros(len(up), dtype=np.int64)
     for k, pv in enumerate(up.tolist()):
         lf = engine.trees.leaves[pv % n_leaves]
-        kids = [engine.prefixes(p) for p in opened(engine.prefixes[pv // n_leaves], lf[2], lf[3], bound)]
+        kids = [_numbered(engine.prefixes, p, 1 << ROOT_PREFIX, "failed-start prefixes") for p in opened(engine.prefixes[pv // n_leaves], lf[2], lf[3], bound)]
         flat += kids
         count[k] = len(kids)
     reps = count[pinv]
@@ -386,11 +366,11 @@ def _count_batch(engine: "TableEngine", units: "Units", sc: np.ndarray, cut_t: i
     t = U_t[:n_moved]
     kind_of_t = ev.kind_of.take(tr.ev)  # each transition's event kind
     changed = U_code[:n_moved] != sc.take(tr.pos).take(t)
-    _count(res.changed, ev.kinds, kind_of_t.take(t)[changed], len(ev.kinds))
+    count_into(res.changed, ev.kinds, kind_of_t.take(t)[changed], len(ev.kinds))
     last_t = min(cut_t, T - 1)
-    _count(res.enabled, ev.kinds, kind_of_t[: last_t + 1], len(ev.kinds))
+    count_into(res.enabled, ev.kinds, kind_of_t[: last_t + 1], len(ev.kinds))
     n_states = int(tr.pos[last_t]) + 1 if cut_t < T else len(units.ids)
-    _count(res.rules, env.ctxs, tr.ctx[:n_states], env.C)
+    count_into(res.rules, env.ctxs, tr.ctx[:n_states], env.C)
 
 
 class _Explored(Sequence[Key]):

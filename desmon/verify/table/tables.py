@@ -10,22 +10,15 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any, Sequence
 
-from desmon.deployment.validity import platform_failures, platform_score, score_breakdown
+from desmon.deployment.validity import platform_failures, score_keys
 from desmon.errors import CheckerError
 from desmon.model.system import PlatformState, SystemModel
-from desmon.verify.table.hashing import Grow, Interned
+from desmon.verify.arrays import Grow, Interned
 
 if TYPE_CHECKING:
     from desmon.verify.table.encoding import Env
 
-__all__ = ["AnswerTables", "score_keys"]
-
-
-def score_keys(reqs: tuple, graph: Any, failures: Sequence[tuple], states: Sequence[PlatformState]) -> list[tuple | None]:
-    """What the preferences make of each platform: None where it is rejected (it has
-    ``failures``), else its score and the weighted terms it is the sum of (what
-    ``Validity.breakdown`` shows)."""
-    return [None if f else (platform_score(reqs, st, graph), score_breakdown(reqs, st, graph)) for f, st in zip(failures, states)]
+__all__ = ["AnswerTables"]
 
 
 class AnswerTables:

@@ -14,7 +14,7 @@ from typing import Callable
 import numpy as np
 
 from desmon.errors import NondeterminismError, TableUnsupported
-from desmon.verify.table.hashing import Grow, Interned, IntTable
+from desmon.verify.arrays import Grow, Interned, IntTable
 from desmon.verify.table.tables import AnswerTables
 
 __all__ = ["DecisionTrees", "DENSE_ANSWERS", "SMALL_DIGITS"]
@@ -170,16 +170,16 @@ class DecisionTrees(_Walk):
         # a check node about one platform: its child per digit of that platform (the answer
         # table and the answer's branch in one), digit_kids[digit_base[node] + digit]
         self.digit_base = Grow((1024,), -1)
-        self.digit_kids = Grow((1024,), -1)
+        self.digit_kids = Grow((1024,), -1, np.int32)
         # the walk's shortcut beside digit_kids: where the child for a digit checks the same
         # platform again and has a branch for that digit, the node that branch leads to
         # (repeatedly); else the child itself (:meth:`_rejump`)
-        self.digit_jump = Grow((1024,), -1)
+        self.digit_jump = Grow((1024,), -1, np.int32)
         # the walk's view of the same shortcuts: digit_jump's targets as walk codes
         # (:meth:`_code`), so that a step reads one array; kept by :meth:`_recode`
         self.jump_code = Grow((1024,), -1)
         self.node_code = Grow((1024,), -1)  # each node's walk code (-1: open)
-        self.digit_node = Grow((1024,), -1)  # the node whose digit table starts at an offset
+        self.digit_node = Grow((1024,), -1, np.int32)  # the node whose digit table starts at an offset
         self.code_bits = max(1, (platforms - 1).bit_length())  # the low bits of a check's code: its platform
         self.small_digits = SMALL_DIGITS
         self.node_p0 = Grow((1024,))
@@ -205,12 +205,8 @@ class DecisionTrees(_Walk):
 
     def _node(self) -> int:
         n = self.node_leaf.n
-        if n == len(self.node_leaf.a):  # (the per-node arrays grow together)
-            for g in self._per_node:
-                g.extend(1)  # (their fill values)
-        else:
-            for g in self._per_node:
-                g.n = n + 1
+        for g in self._per_node:  # (their fill values)
+            g.extend(1)
         self.node_desc.append(None)
         if n >= 1 << 22:
             raise TableUnsupported("table engine: more than 4 million decision nodes; run with --engine direct")

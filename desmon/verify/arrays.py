@@ -1,0 +1,246 @@
+"""Containers a search fills a batch of numpy arrays at a time: :class:`IntTable`, a hash
+table of int64 keys (the table engine's decision trees: roots and edges), :class:`CodeSet`,
+a seen set of states stored as their 4-byte numbers (what a state costs: docs/design.md),
+:class:`Grow`, a numpy array with appends, and :class:`Interned`, values numbered in
+order of first appearance; and the array operations a batch of units needs
+(:func:`grouped`, :func:`firsts`, :func:`count_into`).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+__all__ = ["IntTable", "CodeSet", "Grow", "Interned", "count_into", "grouped", "firsts", "DENSE_GROUPS"]
+
+#: values below which :func:`grouped` numbers distinct values with an array, not a sort
+DENSE_GROUPS = 1 << 20
+_EMPTY = -1
+_MUL = np.uint64(0x9E3779B97F4A7C15)  # Fibonacci hashing: the high bits of key * 2^64/phi
+
+
+class IntTable:
+    """Non-negative int64 keys -> int64 values (``values=False``: a set): open addressing
+    with linear probing in two arrays, at most half full, so that a batch lookup is a few
+    array passes instead of a sort or a Python loop."""
+
+    def __init__(self, bits: int = 10, values: bool = True) -> None:
+        self._bits = bits
+        self.keys = np.full(1 << bits, _EMPTY, dtype=np.int64)
+        self.vals = np.zeros(1 << bits, dtype=np.int64) if values else None
+        self.n = 0
+
+    def __len__(self) -> int:
+        return self.n
+
+    def _probe(self, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The slot of each key (where it is, or the empty slot its probe ends at) and the
+        key held there (the key itself if present, else empty)."""
+        h = np.multiply(keys.astype(np.int64, copy=False).view(np.uint64), _MUL)  # (non-negative keys: the view is astype's value)
+        h >>= np.uint64(64 - self._bits)
+        pos = h.view(np.int64)
+        table, mask = self.keys, (1 << self._bits) - 1
+        k = table.take(pos)
+        other = k != keys
+        other &= k != _EMPTY
+        pending = np.flatnonzero(other)
+        while pending.size:
+            p = pos.take(pending)
+            p += 1
+            p &= mask
+            pos[pending] = p
+            kp = table.take(p)
+            k[pending] = kp
+            pending = pending[(kp != keys.take(pending)) & (kp != _EMPTY)]
+        return pos, k
+
+    def contains(self, keys: np.ndarray) -> np.ndarray:
+        """Whether each key is in the table."""
+        if not len(keys):
+            return np.zeros(0, dtype=bool)
+        return self._probe(keys)[1] == keys
+
+    def get(self, keys: np.ndarray) -> np.ndarray:
+        """The value of each key, -1 where it is absent."""
+        if not len(keys):
+            return np.full(0, -1, dtype=np.int64)
+        pos, k = self._probe(keys)
+        return np.where(k == keys, self.vals.take(pos), -1)  # type: ignore[union-attr]
+
+    def add(self, keys: np.ndarray, vals: np.ndarray | None = None) -> None:
+        """Add ``keys`` (distinct, absent) with ``vals``."""
+        if not len(keys):
+            return
+        if 2 * (self.n + len(keys)) > len(self.keys):
+            self._grow(self.n + len(keys))
+        self.n += len(keys)
+        while len(keys):
+            pos = self._probe(keys)[0]  # where each key is, or the empty slot its probe ends at
+            self.keys[pos] = keys  # keys that probe to the same empty slot: one of them wins it
+            won = self.keys[pos] == keys
+            if vals is not None:
+                self.vals[pos[won]] = vals[won]  # type: ignore[index]
+                vals = vals[~won]
+            keys = keys[~won]
+
+    def _grow(self, n: int) -> None:
+        old_keys, old_vals = self.keys, self.vals
+        while 2 * n > 1 << self._bits:
+            self._bits += 1
+        self.keys = np.full(1 << self._bits, _EMPTY, dtype=np.int64)
+        self.vals = None if old_vals is None else np.zeros(1 << self._bits, dtype=np.int64)
+        full = np.flatnonzero(old_keys != _EMPTY)
+        self.n = 0
+        keys = old_keys[full]
+        del old_keys
+        self.add(keys, None if old_vals is None else old_vals[full])
+
+
+class CodeSet:
+    """The seen set of a search whose states are int64 codes numbered in an array: open
+    addressing with linear probing over 4-byte slots that hold a state's number + 1 (0:
+    empty); a slot's key is read from the codes. At most :attr:`FULL` full, rebuilt from
+    the codes (the old slots freed first) at :attr:`SPARSE` when it grows: a state costs
+    4/FULL to 4/SPARSE bytes, and growing never holds two tables."""
+
+    FULL, SPARSE = 0.8, 0.65
+    #: codes re-added per pass of a rebuild (its temporary arrays are a few of this many int64s)
+    CHUNK = 1 << 16
+
+    def __init__(self) -> None:
+        self.slots = np.zeros(1024, dtype=np.uint32)
+        self.n = 0
+
+    def __len__(self) -> int:
+        return self.n
+
+    def _probe(self, keys: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The slot of each key (where it is, or the empty slot its probe ends at) and whether it is there."""
+        size = len(self.slots)
+        h = np.multiply(keys.view(np.uint64), _MUL)  # (non-negative keys)
+        h >>= np.uint64(32)
+        h *= np.uint64(size)  # the high 32 bits of the hash scaled to the table: any size
+        h >>= np.uint64(32)
+        pos = h.view(np.int64)
+        slots = self.slots
+        s = slots.take(pos).astype(np.int64)
+        found = codes.take(s - 1) == keys  # (slot 0 reads the last code: masked below)
+        found &= s != 0
+        pending = np.flatnonzero((s != 0) & ~found)
+        while pending.size:
+            p = pos.take(pending)
+            p += 1
+            p[p == size] = 0
+            pos[pending] = p
+            sp = slots.take(p).astype(np.int64)
+            hit = codes.take(sp - 1) == keys.take(pending)
+            hit &= sp != 0
+            found[pending[hit]] = True
+            pending = pending[(sp != 0) & ~hit]
+        return pos, found
+
+    def contains(self, keys: np.ndarray, codes: np.ndarray) -> np.ndarray:
+        """Whether each key is the code of a state in the set (``codes``: the codes by state number)."""
+        if not len(keys) or not self.n:
+            return np.zeros(len(keys), dtype=bool)
+        return self._probe(keys, codes)[1]
+
+    def add(self, codes: np.ndarray, lo: int, hi: int) -> None:
+        """Add the states numbered ``lo`` to ``hi`` (excluded), whose codes are distinct and absent."""
+        if hi <= lo:
+            return
+        if hi > self.FULL * len(self.slots):
+            self.slots = np.zeros(0, dtype=np.uint32)  # (freed before the larger table is made)
+            self.slots = np.zeros(max(1024, int(hi / self.SPARSE)), dtype=np.uint32)
+            self.n, lo = 0, 0
+        for a in range(lo, hi, self.CHUNK):
+            self._insert(codes, a, min(hi, a + self.CHUNK))
+        self.n += hi - lo
+
+    def _insert(self, codes: np.ndarray, lo: int, hi: int) -> None:
+        numbers = np.arange(lo + 1, hi + 1, dtype=np.uint32)
+        keys = codes[lo:hi]
+        while len(keys):
+            pos = self._probe(keys, codes)[0]  # the empty slot each probe ends at
+            self.slots[pos] = numbers  # keys that probe to the same empty slot: one of them wins it
+            won = self.slots.take(pos) == numbers
+            keys, numbers = keys[~won], numbers[~won]
+
+
+class Grow:
+    """A numpy array (int64, or ``dtype``) with amortised appends. Its rows past the used
+    ones are never written (nor read): their pages take no resident memory."""
+
+    def __init__(self, shape: tuple[int, ...], fill: int = 0, dtype: Any = np.int64) -> None:
+        self.a = np.empty(shape, dtype=dtype)
+        self.n = 0
+        self.fill = fill
+
+    def append(self, row: Any) -> int:
+        i = self.extend(1)
+        self.a[i] = row
+        return i
+
+    def extend(self, k: int) -> int:
+        """Append ``k`` fill values; returns the index of the first."""
+        if self.n + k > len(self.a):
+            a = np.empty((max(2 * len(self.a), self.n + k), *self.a.shape[1:]), dtype=self.a.dtype)
+            a[: self.n] = self.a[: self.n]
+            self.a = a
+        self.a[self.n: self.n + k] = self.fill
+        self.n += k
+        return self.n - k
+
+
+class Interned(list):
+    """Distinct values numbered in order of first appearance: ``numbers(x)`` is x's number,
+    ``numbers[i]`` the value numbered i."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._ids: dict[Any, int] = {}
+
+    def __call__(self, value: Any) -> int:
+        i = self._ids.get(value)
+        if i is None:
+            i = self._ids[value] = len(self)
+            self.append(value)
+        return i
+
+
+def count_into(counter: Any, names: Sequence[Any], values: np.ndarray, size: int) -> None:
+    """Add the occurrences of each number in ``values`` to ``counter`` under its name."""
+    for k, n in enumerate(np.bincount(values, minlength=size).tolist()):
+        if n:
+            counter[names[k]] += n
+
+
+def grouped(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(values, return_inverse=True)`` of non-negative ints, without a sort
+    when they are small."""
+    top = int(values.max()) + 1 if len(values) else 0
+    if top > DENSE_GROUPS:
+        return np.unique(values, return_inverse=True)
+    present = np.zeros(top, dtype=bool)
+    present[values] = True
+    up = np.flatnonzero(present)
+    number = np.zeros(top, dtype=np.int64)
+    number[up] = np.arange(len(up))
+    return up, number[values]
+
+
+def firsts(values: np.ndarray) -> np.ndarray:
+    """The positions of the first occurrence of each distinct value, ascending (what
+    ``np.sort(np.unique(values, return_index=True)[1])`` gives, by a quicksort of the values
+    and the least position of each run of equal ones: a stable sort is several times slower)."""
+    if not len(values):
+        return np.zeros(0, dtype=np.int64)
+    order = np.argsort(values)
+    ordered = values.take(order)
+    starts = np.empty(len(values), dtype=bool)
+    starts[0] = True
+    np.not_equal(ordered[1:], ordered[:-1], out=starts[1:])
+    first = np.minimum.reduceat(order, np.flatnonzero(starts))
+    first.sort()
+    return first
