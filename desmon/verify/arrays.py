@@ -109,6 +109,8 @@ class CodeSet:
     FULL, SPARSE = 0.8, 0.65
     #: codes re-added per pass of a rebuild (its temporary arrays are a few of this many int64s)
     CHUNK = 1 << 16
+    #: slots a pass of probes reads at most (its temporary arrays are a few of this many)
+    WINDOW = 1 << 17
 
     def __init__(self) -> None:
         self.n = 0
@@ -166,7 +168,7 @@ class CodeSet:
             go[np.flatnonzero(sw == 0) // w] = False  # an empty slot ends a probe
             pending, at = pending[go], at[go]
             at += w
-            w *= 2
+            w = self._wider(w, len(pending))
         return found
 
     def _match(self, s: np.ndarray, tag: np.ndarray, key_of: np.ndarray, w: int, keys: np.ndarray, codes: np.ndarray,
@@ -198,8 +200,12 @@ class CodeSet:
             out[pending[there]] = pos[there]
             pending, at = pending[~there], at[~there]
             at += w
-            w *= 2
+            w = self._wider(w, len(pending))
         return out
+
+    def _wider(self, w: int, pending: int) -> int:
+        """The next pass's window: twice as wide, but at most :attr:`WINDOW` slots in all."""
+        return max(1, min(2 * w, self.WINDOW // max(pending, 1)))
 
     def add(self, codes: np.ndarray, lo: int, hi: int) -> None:
         """Add the states numbered ``lo`` to ``hi`` (excluded), whose codes are distinct and absent."""
