@@ -11,7 +11,7 @@ from hypothesis import strategies as hst
 
 from desmon.loader import load_scenario
 from desmon.verify import Checker
-from desmon.verify.arrays import CodeSet
+from desmon.verify.arrays import CodeSet, Grow
 from desmon.verify.mutants import MUTANTS
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -52,3 +52,16 @@ def test_a_counterexample_is_labelled_by_expanding_its_states_again_as_the_direc
         res = Checker(scenario, MUTANTS["stale-errors"]).run(engine=engine, keep_going=True)
         got[engine] = [(c.invariant, [(s.title(), s.key) for s in c.steps]) for c in res.counterexamples]
     assert got["table"] == got["direct"] and got["table"]
+
+
+@settings(max_examples=40, deadline=None)
+@given(hst.lists(hst.integers(1, 1500), max_size=12), hst.integers(-3, 3))
+def test_a_growing_array_reads_its_fill_value_in_every_row_appended_and_keeps_the_rows_written(sizes, fill):
+    g, expected = Grow((4, 2), fill), []
+    for k, size in enumerate(sizes):
+        first = g.extend(size)
+        assert first == len(expected) and g.n == first + size
+        assert (g.a[first: g.n] == fill).all()  # (across the array's reallocations too)
+        g.a[first] = k
+        expected += [[k, k]] + [[fill, fill]] * (size - 1)
+    assert g.a[: g.n].tolist() == expected

@@ -99,82 +99,148 @@ class IntTable:
 
 class CodeSet:
     """The seen set of a search whose states are int64 codes numbered in an array: open
-    addressing with linear probing over 4-byte slots that hold a state's number + 1 (0:
-    empty); a slot's key is read from the codes. At most :attr:`FULL` full, rebuilt from
+    addressing with linear probing over 4-byte slots (0: empty) that hold a state's number
+    + 1 in their low bits and, in the bits the numbers leave free, a tag: more bits of the
+    code's hash. A slot's key is read from the codes only where the tag matches, so that a
+    probe passing other keys' slots reads no code. At most :attr:`FULL` full, rebuilt from
     the codes (the old slots freed first) at :attr:`SPARSE` when it grows: a state costs
     4/FULL to 4/SPARSE bytes, and growing never holds two tables."""
 
     FULL, SPARSE = 0.8, 0.65
     #: codes re-added per pass of a rebuild (its temporary arrays are a few of this many int64s)
     CHUNK = 1 << 16
+    #: slots a pass of probes reads at most (its temporary arrays are a few of this many)
+    WINDOW = 1 << 17
 
     def __init__(self) -> None:
-        self.slots = np.zeros(1024, dtype=np.uint32)
         self.n = 0
+        self._make(1024)
 
     def __len__(self) -> int:
         return self.n
 
-    def _probe(self, keys: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The slot of each key (where it is, or the empty slot its probe ends at) and whether it is there."""
-        size = len(self.slots)
+    def _make(self, size: int) -> None:
+        """Empty slots for ``size`` (the old ones freed first); a number takes the low
+        ``bits`` bits of a slot, the tag the others."""
+        self.slots = np.zeros(0, dtype=np.uint32)
+        self.slots = np.zeros(size, dtype=np.uint32)
+        bits = int(self.FULL * size).bit_length()  # (a number + 1 is at most FULL * size)
+        self._number = np.uint32((1 << bits) - 1)
+        self._tag = np.uint64(0xFFFFFFFF ^ ((1 << bits) - 1))
+
+    def _home(self, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each key's home slot (the high 32 bits of its hash scaled to the table) and tag
+        (the bits of that product below the home, where a slot holds its tag)."""
         h = np.multiply(keys.view(np.uint64), _MUL)  # (non-negative keys)
         h >>= np.uint64(32)
-        h *= np.uint64(size)  # the high 32 bits of the hash scaled to the table: any size
-        h >>= np.uint64(32)
-        pos = h.view(np.int64)
-        slots = self.slots
-        s = slots.take(pos).astype(np.int64)
-        found = codes.take(s - 1) == keys  # (slot 0 reads the last code: masked below)
-        found &= s != 0
-        pending = np.flatnonzero((s != 0) & ~found)
-        while pending.size:
-            p = pos.take(pending)
-            p += 1
-            p[p == size] = 0
-            pos[pending] = p
-            sp = slots.take(p).astype(np.int64)
-            hit = codes.take(sp - 1) == keys.take(pending)
-            hit &= sp != 0
-            found[pending[hit]] = True
-            pending = pending[(sp != 0) & ~hit]
-        return pos, found
+        h *= np.uint64(len(self.slots))
+        home = (h >> np.uint64(32)).view(np.int64)
+        h &= self._tag
+        return home, h.astype(np.uint32)
+
+    def _window(self, at: np.ndarray, w: int) -> np.ndarray:
+        """The ``w`` slots from each position (a row each, wrapping around the end)."""
+        size = len(self.slots)
+        idx = np.add.outer(at, np.arange(w))
+        if int(at.max()) + w > size:
+            idx[idx >= size] -= size
+        return self.slots.take(idx)
 
     def contains(self, keys: np.ndarray, codes: np.ndarray) -> np.ndarray:
         """Whether each key is the code of a state in the set (``codes``: the codes by state number)."""
+        found = np.zeros(len(keys), dtype=bool)
         if not len(keys) or not self.n:
-            return np.zeros(len(keys), dtype=bool)
-        return self._probe(keys, codes)[1]
+            return found
+        home, tag = self._home(keys)
+        s = self.slots.take(home)
+        self._match(s, tag, np.arange(len(keys)), 1, keys, codes, found)
+        full = s != 0
+        full &= ~found
+        pending = np.flatnonzero(full)  # a key not found where a probe goes on: the next slots, w at a time
+        at = home.take(pending)
+        at += 1
+        size, w = len(self.slots), 2
+        while pending.size:
+            at[at >= size] -= size
+            sw = self._window(at, w).ravel()
+            go = np.ones(len(pending), dtype=bool)
+            go[self._match(sw, np.repeat(tag.take(pending), w), pending, w, keys, codes, found)] = False
+            go[np.flatnonzero(sw == 0) // w] = False  # an empty slot ends a probe
+            pending, at = pending[go], at[go]
+            at += w
+            w = self._wider(w, len(pending))
+        return found
+
+    def _match(self, s: np.ndarray, tag: np.ndarray, key_of: np.ndarray, w: int, keys: np.ndarray, codes: np.ndarray,
+               found: np.ndarray) -> np.ndarray:
+        """Mark in ``found`` the keys whose code is in one of the slots ``s`` (``w`` a key,
+        whose tags are ``tag``, of keys ``key_of``); returns the rows (of ``w`` slots) that hit."""
+        m = s & ~self._number
+        flat = np.flatnonzero(m == tag)
+        number = (s.take(flat) & self._number).astype(np.int64)
+        rows = flat // w if w > 1 else flat
+        k = key_of.take(rows)
+        hit = codes.take(number - 1) == keys.take(k)  # (an empty slot reads the last code: masked below)
+        hit &= number != 0
+        found[k[hit]] = True
+        return rows[hit]
+
+    def _empty_from(self, at: np.ndarray) -> np.ndarray:
+        """The first empty slot at or after each position."""
+        out = np.empty_like(at)
+        pending = np.arange(len(at))
+        size, w = len(self.slots), 1
+        while pending.size:
+            at[at >= size] -= size
+            empty = self._window(at, w) == 0
+            first = empty.argmax(axis=1)
+            there = empty[np.arange(len(first)), first]
+            pos = at + first
+            pos[pos >= size] -= size
+            out[pending[there]] = pos[there]
+            pending, at = pending[~there], at[~there]
+            at += w
+            w = self._wider(w, len(pending))
+        return out
+
+    def _wider(self, w: int, pending: int) -> int:
+        """The next pass's window: twice as wide, but at most :attr:`WINDOW` slots in all."""
+        return max(1, min(2 * w, self.WINDOW // max(pending, 1)))
 
     def add(self, codes: np.ndarray, lo: int, hi: int) -> None:
         """Add the states numbered ``lo`` to ``hi`` (excluded), whose codes are distinct and absent."""
         if hi <= lo:
             return
         if hi > self.FULL * len(self.slots):
-            self.slots = np.zeros(0, dtype=np.uint32)  # (freed before the larger table is made)
-            self.slots = np.zeros(max(1024, int(hi / self.SPARSE)), dtype=np.uint32)
+            self._make(max(1024, int(hi / self.SPARSE)))
             self.n, lo = 0, 0
         for a in range(lo, hi, self.CHUNK):
             self._insert(codes, a, min(hi, a + self.CHUNK))
         self.n += hi - lo
 
     def _insert(self, codes: np.ndarray, lo: int, hi: int) -> None:
-        numbers = np.arange(lo + 1, hi + 1, dtype=np.uint32)
-        keys = codes[lo:hi]
-        while len(keys):
-            pos = self._probe(keys, codes)[0]  # the empty slot each probe ends at
-            self.slots[pos] = numbers  # keys that probe to the same empty slot: one of them wins it
-            won = self.slots.take(pos) == numbers
-            keys, numbers = keys[~won], numbers[~won]
+        at, slot = self._home(codes[lo:hi])  # (absent codes: each takes the first empty slot of its probe)
+        slot |= np.arange(lo + 1, hi + 1, dtype=np.uint32)
+        size = len(self.slots)
+        while len(slot):
+            at = self._empty_from(at)
+            self.slots[at] = slot  # slots that probe to the same empty slot: one of them wins it
+            lost = self.slots.take(at) != slot
+            slot, at = slot[lost], at[lost]
+            at += 1
+            at[at == size] = 0
 
 
 class Grow:
-    """A numpy array (int64, or ``dtype``) with amortised appends. Its rows past the used
-    ones are never written (nor read): their pages take no resident memory."""
+    """A numpy array (int64, or ``dtype``) with amortised appends. Its rows are written with
+    the fill value a block of :attr:`BLOCK` at a time, ahead of the used ones: the rows past
+    that are never written (nor read), and their pages take no resident memory."""
+
+    BLOCK = 1024
 
     def __init__(self, shape: tuple[int, ...], fill: int = 0, dtype: Any = np.int64) -> None:
         self.a = np.empty(shape, dtype=dtype)
-        self.n = 0
+        self.n = self.ready = 0  # rows used; rows holding the fill value or used
         self.fill = fill
 
     def append(self, row: Any) -> int:
@@ -184,13 +250,21 @@ class Grow:
 
     def extend(self, k: int) -> int:
         """Append ``k`` fill values; returns the index of the first."""
-        if self.n + k > len(self.a):
-            a = np.empty((max(2 * len(self.a), self.n + k), *self.a.shape[1:]), dtype=self.a.dtype)
+        n = self.n + k
+        if n > self.ready:
+            self._fill(n)
+        self.n = n
+        return n - k
+
+    def _fill(self, n: int) -> None:
+        """Fill rows up to ``n`` at least, growing the array if it has fewer."""
+        if n > len(self.a):
+            a = np.empty((max(2 * len(self.a), n), *self.a.shape[1:]), dtype=self.a.dtype)
             a[: self.n] = self.a[: self.n]
-            self.a = a
-        self.a[self.n: self.n + k] = self.fill
-        self.n += k
-        return self.n - k
+            self.a, self.ready = a, self.n
+        end = min(len(self.a), max(n, self.ready + self.BLOCK))
+        self.a[self.ready: end] = self.fill
+        self.ready = end
 
 
 class Interned(list):
