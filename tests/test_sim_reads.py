@@ -83,3 +83,15 @@ def test_a_trace_that_keeps_and_writes_nothing_counts_its_records():  # type: ig
     trace.emit(1.0, "action", action="grasp", duration=2.0)
     trace.emit(2.5, "fact", fact="x")
     assert trace.count == 2 and trace.records == []
+
+
+def test_a_misspelt_figure_is_refused_not_read_off_a_run_without_detectors():  # type: ignore[no-untyped-def]
+    """A name that is no run figure would make the run skip the detectors and report 0 for
+    the figure meant: it is refused, naming it and the closest figure."""
+    from desmon.errors import SimulationError
+
+    scenario = load_scenario(ROOT / "scenarios" / "coffee_shift.py", {})
+    with pytest.raises(SimulationError, match=r"reads='slip_missed' is no run figure \(did you mean 'slips_missed'\?\)"):
+        SimWorld(scenario, seed=0, until=60.0, reads=("slip_missed",))
+    for name in METRICS:  # every figure desmon estimate takes is one a run can be read for
+        SimWorld(scenario, seed=0, until=60.0, reads=(name,))

@@ -18,7 +18,7 @@ from typing import Any, Iterable, Mapping
 
 from desmon.deployment.ports import ERROR_KINDS
 from desmon.errors import EstimateError
-from desmon.sim.metrics import RUN_FIGURES, RUNTIME_CHANGES
+from desmon.sim.metrics import LONGEST_EXPOSURE, RUN_FIGURES, RUNTIME_CHANGES
 
 __all__ = ["METRICS", "SECONDS", "LONGEST", "check_metric", "natural_range", "value_of", "longest_exposure", "DEFAULT_METRIC"]
 
@@ -27,7 +27,7 @@ DEFAULT_METRIC = "exposure_s"
 _UNDEFINED = ("latency_median_s", "latency_p95_s")
 #: the longest stretch of unmonitored exposure in a run (touching intervals joined): read from the
 #: run itself, beyond desmon sweep's figures ("any 60 s unmonitored at once": --at-least 60)
-LONGEST = "longest_exposure_s"
+LONGEST = LONGEST_EXPOSURE
 #: every figure desmon estimate takes, in the order of desmon sweep's table
 METRICS: tuple[str, ...] = (
     *(m for m in RUN_FIGURES if m not in _UNDEFINED), LONGEST, *(f"errors_{k}" for k in ERROR_KINDS), *RUNTIME_CHANGES,

@@ -29,12 +29,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from difflib import get_close_matches
 from typing import Any, Callable, Iterable, Mapping
 
 import numpy as np
 
 from desmon.deployment.exposure import CAUSES, Needs
+from desmon.deployment.ports import ERROR_KINDS
 from desmon.detectors.base import Alarm, merge_alarms
+from desmon.errors import SimulationError
 from desmon.sim.world import Slip
 
 __all__ = [
@@ -282,6 +285,8 @@ RUN_FIGURES: tuple[str, ...] = (
 RENAMED = {"exposure_s": "unmonitored_exposure_s"}
 #: run metrics present only when the world has run-time changes or a lease
 RUNTIME_CHANGES = ("requirement_changes", "leases", "leased_s")
+#: the longest stretch of unmonitored exposure in a run (its intervals' longest)
+LONGEST_EXPOSURE = "longest_exposure_s"
 
 
 def run_figures(m: Mapping[str, Any], violations: int) -> dict[str, Any]:
@@ -310,6 +315,11 @@ ALARM_FIGURES: frozenset[str] = frozenset({"slips_detected", "slips_missed", "fa
 #: and running the detectors on them, auditing the invariants, keeping the records (the
 #: decisions, the trace's records)
 SIGNALS, AUDIT, RECORDS = "signals", "audit", "records"
+#: the names a caller may read of a run (``SimWorld(reads=...)``): the run figures, the
+#: longest exposure, the errors per kind and the run-time changes
+READABLE: frozenset[str] = frozenset(
+    (*RUN_FIGURES, LONGEST_EXPOSURE, *(f"errors_{k}" for k in ERROR_KINDS), *RUNTIME_CHANGES)
+)
 
 
 def work_read(figures: frozenset[str] | None) -> frozenset[str]:
@@ -319,6 +329,11 @@ def work_read(figures: frozenset[str] | None) -> frozenset[str]:
     Every other figure comes out the same without them."""
     if figures is None:
         return frozenset({SIGNALS, AUDIT, RECORDS})
+    unknown = sorted(f for f in figures if f not in READABLE)
+    if unknown:  # (a misspelt alarm figure would otherwise be read off a run without detectors: 0)
+        close = get_close_matches(unknown[0], sorted(READABLE), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise SimulationError(f"reads={unknown[0]!r} is no run figure{hint}: name figures of desmon.sim.metrics.READABLE")
     return frozenset(
         ({SIGNALS} if figures & ALARM_FIGURES else set()) | ({AUDIT} if "violations" in figures else set())
     )
