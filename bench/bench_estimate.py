@@ -210,6 +210,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--coverage-runs", type=int, default=4, help="--coverage: runs per estimation")
     ap.add_argument("--scenario", action="append", default=None, help="--coverage: only this analysable scenario (repeatable)")
     args = ap.parse_args(argv)
+    counts = ("runs", "draws", "dask_runs", "rounds", "turns", "full_runs", "estimations", "coverage_runs")
+    for name in counts:
+        if getattr(args, name) < 1:
+            ap.error(f"--{name.replace('_', '-')} {getattr(args, name)}: give a whole number, 1 or more")
+    for name in ("until", "dask_until"):
+        value = getattr(args, name)
+        if value is not None and not (math.isfinite(value) and value > 0):
+            ap.error(f"--{name.replace('_', '-')} {value}: give a positive number of simulated seconds")
     if args.coverage:
         return _coverage(args.estimations, args.coverage_runs, tuple(args.scenario) if args.scenario else None)
     if args.quick:

@@ -25,6 +25,7 @@ import math
 import statistics
 from pathlib import Path
 
+from desmon.errors import DesmonError
 from desmon.loader import load_scenario
 from desmon.sim.fleet import simulate_fleet
 from desmon.stats import mean_interval
@@ -45,7 +46,12 @@ def main(argv: list[str] | None = None) -> None:
         args.robots, args.edges, args.hours, args.seeds = 4, 2, 0.25, 3
     if args.robots < 2 or args.seeds < 2:
         ap.error("give --robots 2 or more and --seeds 2 or more: an interval over the robots, a spread over the seeds")
-    scenario = load_scenario(str(SCENARIO), {"robots": str(args.robots), "edges": str(args.edges), "hours": str(args.hours)})
+    if args.edges < 1 or not (math.isfinite(args.hours) and args.hours > 0):
+        ap.error(f"--edges {args.edges} / --hours {args.hours}: give 1 or more edge servers and a positive number of hours")
+    try:
+        scenario = load_scenario(str(SCENARIO), {"robots": str(args.robots), "edges": str(args.edges), "hours": str(args.hours)})
+    except DesmonError as exc:  # (what the fleet scenario refuses: its limits are its own)
+        ap.error(str(exc))
     delta = 1.0 - CONFIDENCE
     runs = []
     for seed in range(args.seeds):

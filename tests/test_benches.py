@@ -98,3 +98,16 @@ def test_bench_timers_times_named_functions_and_refuses_an_unknown_one():
     for neg_cmd in ([*cmd, "--seed", "-1"], [sys.executable, "-m", "bench.bench_sim", "--seed", "-1"]):
         neg = subprocess.run(neg_cmd, cwd=ROOT, capture_output=True, text=True)
         assert neg.returncode == 2 and "--seed -1: give a seed of 0 or more" in neg.stderr and "Traceback" not in neg.stderr
+
+
+@pytest.mark.parametrize("args, says", [
+    (["bench.bench_estimate", "--turns", "0"], "--turns 0: give a whole number, 1 or more"),
+    (["bench.bench_estimate", "--until", "nan"], "--until nan: give a positive number of simulated seconds"),
+    (["bench.fleet_interval", "--hours", "-1"], "--hours -1.0: give 1 or more edge servers and a positive number of hours"),
+    (["bench.fleet_interval", "--edges", "500"], "edges = 500: give a whole number of edge servers in [1, 200]"),
+    (["bench.bench_scale", "--time-limit", "nan"], "--time-limit nan: give a positive number of seconds"),
+])
+def test_a_bench_refuses_a_number_it_cannot_use_in_one_line(args, says):
+    proc = subprocess.run([sys.executable, "-m", *args], cwd=ROOT, capture_output=True, text=True)
+    assert proc.returncode == 2 and says in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+    assert proc.stdout == "", proc.stdout

@@ -31,7 +31,14 @@ HORIZON = 300.0
 #: the estimations per analysable scenario: 40 in ``make test`` (at least 38 must hold the
 #: exact value, and the intervals narrowed to half their width must fail the judge), 200 in
 #: the full count (``make test-estimate-coverage``)
-ESTIMATIONS = int(os.environ.get("DESMON_COVERAGE_ESTIMATIONS", "40"))
+def _estimations_asked() -> int:
+    text = os.environ.get("DESMON_COVERAGE_ESTIMATIONS", "40").strip()
+    if not (text.isdigit() and int(text) >= 20):
+        raise pytest.UsageError(f"DESMON_COVERAGE_ESTIMATIONS={text!r}: give a whole number of estimations, 20 or more (200: the full count)")
+    return int(text)
+
+
+ESTIMATIONS = _estimations_asked()
 
 
 def _narrowed(pick, share: float):
