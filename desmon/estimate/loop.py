@@ -309,17 +309,18 @@ def run_value(scenario: Any, deployer: Any, seed: int, until: float | None, metr
     (collected inside the run, the world would still be alive, and a full collection of the
     whole heap would follow to free it); ``collector``: the
     :class:`~desmon.sim.collector.Collector` it shares with the caller's other runs."""
-    from desmon.sim.collector import collector_relaxed
+    from desmon.sim.collector import Collector
 
-    with collector_relaxed(collector, collect=False):
-        return _figure(scenario, deployer, seed, until, metric, guard)
+    collector = collector if collector is not None else Collector()
+    with collector.relaxed(collect=False):
+        return _figure(scenario, deployer, seed, until, metric, guard, collector)
 
 
-def _figure(scenario: Any, deployer: Any, seed: int, until: float | None, metric: str, guard: Any) -> float:
+def _figure(scenario: Any, deployer: Any, seed: int, until: float | None, metric: str, guard: Any, collector: Any) -> float:
     from desmon.sim.engine import SimWorld
     from desmon.sim.metrics import run_figures
 
-    world = SimWorld(scenario, deployer=deployer, seed=seed, until=until, guard=guard, reads=(metric,))
+    world = SimWorld(scenario, deployer=deployer, seed=seed, until=until, guard=guard, reads=(metric,), collector=collector)
     result = world.run()
     figures = run_figures(result.metrics, len(result.violations))
     figures[LONGEST] = longest_exposure(world.exposure.intervals)

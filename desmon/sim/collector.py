@@ -38,31 +38,52 @@ class Collector:
     """The collector's bookkeeping of the runs that share this object: the objects they
     left behind since its last full collection (``left``), and the fraction of the heap at
     which a full collection runs (``full_after``). A caller running many simulations in
-    one process hands them one (``SimWorld(collector=...)``); a run given none has its own."""
+    one process hands them one (``SimWorld(collector=...)``); a run given none has its own.
 
-    __slots__ = ("left", "full_after")
+    Counting the frozen heap walks all of it (``gc.get_freeze_count`` is linear in the
+    frozen objects: about 10 ms per million), so a shared Collector counts it once and
+    again only after each full collection: between two, the heap it compares ``left`` with
+    is the one it counted then (it has grown since by no more than the leftovers, so a full
+    collection comes at most an eighth sooner). A run inside another of the same
+    Collector (a world run within ``desmon estimate``'s run) neither freezes nor counts."""
+
+    __slots__ = ("left", "full_after", "heap", "depth")
 
     def __init__(self, full_after: float = FULL_AFTER) -> None:
         self.left = 0
         self.full_after = full_after
+        #: the frozen heap counted after the last full collection (None: count at the next run)
+        self.heap: int | None = None
+        #: how many of this Collector's relaxed runs enclose the code running now
+        self.depth = 0
 
     @contextlib.contextmanager
     def relaxed(self, *, collect: bool = True) -> Iterator[None]:
         """Run with the objects built so far frozen out of the collector's scans (after a
         full collection first, if ``collect``) and its young-generation threshold raised;
         restored afterwards."""
+        if self.depth:  # inside a run of this Collector: already frozen and raised
+            self.depth += 1
+            try:
+                yield
+            finally:
+                self.depth -= 1
+            return
         threshold = gc.get_threshold()
         # a caller that froze objects itself keeps them frozen: then nothing is frozen here
-        # (an unfreeze would thaw the caller's objects too), only the threshold is raised
+        # (an unfreeze would thaw the caller's objects too), only the threshold is raised.
+        # With nothing frozen the count is at once: the walk is over an empty list
         freeze = gc.get_freeze_count() == 0
         if collect and freeze:
             gc.collect()
         if freeze:
             gc.freeze()
         gc.set_threshold(100_000, 50, 100)
+        self.depth = 1
         try:
             yield
         finally:
+            self.depth = 0
             gc.set_threshold(*threshold)
             if freeze:
                 self._collect_after_run()
@@ -73,12 +94,14 @@ class Collector:
         heap (their cyclic garbage sits in the oldest generation, which the collector rarely
         scans: memory would grow run after run)."""
         gc.collect()
-        heap = gc.get_freeze_count()
+        if self.heap is None:
+            self.heap = gc.get_freeze_count()
         self.left += len(gc.get_objects())  # what the run made and kept: the frozen heap is not listed
         gc.unfreeze()
-        if self.left >= self.full_after * heap:
+        if self.left >= self.full_after * self.heap:
             gc.collect()
             self.left = 0
+            self.heap = None
 
 
 def collector_relaxed(collector: Collector | None = None, *, collect: bool = True) -> "contextlib.AbstractContextManager[None]":
