@@ -126,6 +126,7 @@ def fuzz(
     calls = [0]
     passed = [0]  # sequences run to their end without a violation
     smallest: list[list[Choice]] = []  # the smallest failing sequence met so far (hypothesis shrinks it)
+    found: list[Any] = []  # (labels, violation) of that sequence: the deployer is a function of what it reads, so a re-run finds the same
 
     def fails(seq: list[Choice]) -> bool:
         if ctrl_c[0]:
@@ -135,13 +136,14 @@ def fuzz(
             print(f"\r  {calls[0]} sequences", end="", file=sys.stderr, flush=True)
         faults: list[DeployerFault] = []
         try:
-            failed = run_choices(scenario, deployer, seq, enabler, faults)[1] is not None
+            outcome = run_choices(scenario, deployer, seq, enabler, faults)
         except ReactionStopped:  # Ctrl-C while a reaction ran on without yielding
             raise KeyboardInterrupt from None
+        failed = outcome[1] is not None
         if not failed:
             passed[0] += 1
         elif not smallest or len(seq) <= len(smallest[0]):
-            smallest[:] = [list(seq)]
+            smallest[:], found[:] = [list(seq)], [outcome]
         if any(isinstance(f.cause, RanAway) for f in faults):
             raise _NeverEnds  # (each try of a shrink would wait out the reaction limit again: the sequence as found)
         return failed
@@ -153,7 +155,7 @@ def fuzz(
         suppress_health_check=list(HealthCheck),
         phases=(Phase.generate, Phase.shrink),
     )
-    interrupted = False
+    interrupted = never_ends = False
     ctrl_c = [False]
     try:
         with _ctrl_c_noted() as ctrl_c, guard.watching(lambda: INTERRUPTED if ctrl_c[0] else ""):
@@ -169,7 +171,7 @@ def fuzz(
         )
     except _NeverEnds:
         _end_progress(progress, calls[0])
-        seq = smallest[0]
+        seq, never_ends = smallest[0], True
     except KeyboardInterrupt:  # Ctrl-C: what was found so far
         _end_progress(progress, calls[0])
         if not smallest:
@@ -183,19 +185,25 @@ def fuzz(
         seq, interrupted = smallest[0], True
     else:
         _end_progress(progress, calls[0])
-    return _violation(scenario, deployer, enabler, seq, head=head, sequences=calls[0], interrupted=interrupted, rederive_up_to=rederive_up_to)
+    outcome = found[0] if found and seq == smallest[0] else run_choices(scenario, deployer, seq, enabler)
+    return _violation(scenario, deployer, enabler, outcome, head=head, sequences=calls[0], interrupted=interrupted,
+                      rederive_up_to=0 if never_ends else rederive_up_to, never_ends=never_ends)
 
 
 def _violation(
-    scenario: Scenario, deployer: str | Deployer, enabler: Checker, seq: list[Choice], *, head: str, sequences: int,
-    interrupted: bool, rederive_up_to: int,
+    scenario: Scenario, deployer: str | Deployer, enabler: Checker, outcome: Any, *, head: str, sequences: int,
+    interrupted: bool, rederive_up_to: int, never_ends: bool = False,
 ) -> FuzzOutcome:
-    """The outcome of a failing sequence: its trace, and the checker's shortest
-    counterexample of the same invariant when the sequence is short enough."""
+    """The outcome of a failing sequence (``outcome``: its labels and violation, as
+    :func:`run_choices` gives them): its trace, and the checker's shortest counterexample
+    of the same invariant when the sequence is short enough. A reaction that never ends
+    is neither shrunk nor re-derived: each try would wait out the reaction limit again."""
     bounds = enabler.bounds
-    labels, (inv, msg) = run_choices(scenario, deployer, seq, enabler)  # type: ignore[misc]
+    labels, (inv, msg) = outcome
     steps = enabler.replay(labels)
-    how = "interrupted while hypothesis shrank it: maybe not the smallest" if interrupted else "shrunk by hypothesis"
+    how = ("interrupted while hypothesis shrank it: maybe not the smallest" if interrupted
+           else "as found, not shrunk: a reaction that never ends would wait out the reaction limit at each try" if never_ends
+           else "shrunk by hypothesis")
     crashed = inv == CRASH
     lines = [
         head,
@@ -214,6 +222,8 @@ def _violation(
         elif res.interrupted:
             lines += ["", f"the checker's re-derivation was interrupted ({res.states:,} states explored)"]
             interrupted = True
+    if never_ends and not interrupted:
+        lines += ["", "the checker's shortest path to it is not re-derived here, for the same reason: desmon verify finds it"]
     if interrupted:
         lines += ["", f"verdict: {'CRASHED' if crashed else 'VIOLATED'} (interrupted)"]
     elif crashed:
