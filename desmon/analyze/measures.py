@@ -222,7 +222,7 @@ def _within(chain: Chain, Q: Any, p0: np.ndarray, horizon: float, budget: Callab
     :data:`~desmon.analyze.solve.SETTLED` (the answer is then exact to that)."""
     import scipy.sparse as sp
 
-    from desmon.analyze.solve import FIRST_CHUNK, SETTLED, UNIFORM_STEPS, expv
+    from desmon.analyze.solve import SETTLED, UNIFORM_STEPS, krylov_steps
 
     target = chain.unmonitored > 0
     if not target.any():
@@ -234,14 +234,8 @@ def _within(chain: Chain, Q: Any, p0: np.ndarray, horizon: float, budget: Callab
         tr = transient(Qa, p0, horizon, np.zeros((1, chain.n)), method="uniformisation", budget=budget)
         return float(min(1.0, tr.at[target].sum()))
     A = Qa.T.tocsr()
-    v = p0.astype(float)
-    t, chunk = 0.0, FIRST_CHUNK
-    while t < horizon:
-        span = min(chunk, horizon - t)
-        v, _err, _steps = expv(span, A, v, tol=KRYLOV_TOL, budget=budget)
-        t, chunk = t + span, chunk * 2
-        if float(v[~target].sum()) < SETTLED:
-            break
+    v, _err, _steps, _t = krylov_steps(horizon, A, p0.astype(float), tol=KRYLOV_TOL, budget=budget,
+                                       stop=lambda w: float(w[~target].sum()) < SETTLED)
     return float(min(1.0, max(0.0, 1.0 - v[~target].sum())))
 
 

@@ -40,7 +40,7 @@ from threadpoolctl import threadpool_limits
 
 from desmon.analyze.markov import AnalysisError, no_budget
 
-__all__ = ["steady_state", "transient", "mean_time_to", "expv", "Transient", "EPS", "UNIFORM_STEPS"]
+__all__ = ["steady_state", "transient", "mean_time_to", "expv", "krylov_steps", "Transient", "EPS", "UNIFORM_STEPS"]
 
 #: the truncation error of uniformisation: the Poisson mass left out
 EPS = 1e-10
@@ -59,10 +59,15 @@ def one_blas_thread(fn: F) -> F:
     gains little there on an idle machine and, on a busy one, its threads wait for each
     other: in one measurement on a loaded 2-core machine (``np.linalg.norm`` of 45,000
     numbers, 2,000 calls, ``OPENBLAS_NUM_THREADS`` unset against 1) a norm took 8 ms
-    with OpenBLAS's default threads against 60 us on one."""
+    with OpenBLAS's default threads against 60 us on one. scipy's BLAS is a library of
+    its own: a limit covers only the libraries loaded when it is set, so scipy.linalg
+    is loaded first (else each small ``expm`` of the Krylov steps woke idle threads that
+    then spun: twice the CPU time of the solution on a 2-core machine)."""
 
     @functools.wraps(fn)
     def run(*args: Any, **kwargs: Any) -> Any:
+        import scipy.linalg  # noqa: F401  (its own BLAS, loaded before the limit is set, so that the limit covers it too)
+
         with threadpool_limits(limits=1, user_api="blas"):
             return fn(*args, **kwargs)
 
@@ -286,10 +291,10 @@ def transient(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, *, method:
     row of ``rewards`` (k x n) accumulated (see the module docstring).
 
     ``limit``, the distribution the chain tends to (its steady state, or the absorbed
-    mass of an absorbing chain), lets the Krylov solution stop early: it advances in
-    doubling chunks, and once the distribution is within :data:`SETTLED` of ``limit``
-    (in total variation, which never grows again) the rest of the horizon is accumulated
-    at the limit's rates, with an error of at most the distance times the rest."""
+    mass of an absorbing chain), lets the Krylov solution stop early: after each of its
+    steps it measures the distance to ``limit`` (total variation, which never grows
+    again), and once that is within :data:`SETTLED` the rest of the horizon is
+    accumulated at the limit's rates, with an error of at most the distance times the rest."""
     rewards = np.atleast_2d(rewards)
     exit_ = -Q.diagonal()
     lam = float(exit_.max()) * 1.02 if exit_.size and exit_.max() > 0 else 1.0
@@ -303,8 +308,6 @@ SETTLED = 1e-9
 #: the Krylov exponential's tolerance per step (see the module docstring: at 1e-10 a shift's
 #: accumulated reward moved by 1e-4 of itself between two machines)
 KRYLOV_TOL = 1e-12
-#: the first chunk of the early-stopping Krylov solution (s); each next one doubles
-FIRST_CHUNK = 60.0
 #: the Krylov basis size of :func:`expv`. On the coffee shift's 8 h transient (48,820
 #: states with two force sensors) 40 vectors took 273 steps where 30 took 446, and the
 #: shift's figures agreed to 12 digits; 50 saved little more and its error estimate grew
@@ -313,27 +316,23 @@ KRYLOV_DIM = 40
 
 def _krylov(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, limit: np.ndarray | None,  # type: ignore[no-untyped-def]
             budget: Callable[..., None] = no_budget) -> Transient:
-    """d/dt [p, c] = [p Q, p R^T]: Krylov exponentials of the augmented matrix, in
-    doubling chunks when a ``limit`` is known (see :func:`transient`)."""
+    """d/dt [p, c] = [p Q, p R^T]: the Krylov exponential of the augmented matrix, stopped
+    once the distribution has settled when a ``limit`` is known (see :func:`transient`)."""
     import scipy.sparse as sp
 
     n = Q.shape[0]
     k = rewards.shape[0]
     B = sp.bmat([[Q.T, None], [sp.csr_matrix(rewards), sp.csr_matrix((k, k))]], format="csr")
     y = np.concatenate([p0.astype(float), np.zeros(k)])
-    t, chunk, err, steps, note = 0.0, FIRST_CHUNK, 0.0, 0, ""
-    while t < horizon:
-        span = horizon - t if limit is None else min(chunk, horizon - t)
-        y, e, st = expv(span, B, y, tol=KRYLOV_TOL, budget=budget)
-        t, chunk, err, steps = t + span, chunk * 2, err + e, steps + st
-        if limit is not None and t < horizon:
-            distance = 0.5 * float(np.abs(y[:n] - limit).sum())
-            if distance < SETTLED:
-                rest = horizon - t
-                y = np.concatenate([limit, y[n:] + rest * (rewards @ limit)])
-                err += distance * rest * float(np.abs(rewards).max(initial=0.0))
-                note = f", settled at {t:g} s"
-                break
+    note = ""
+    settled = None if limit is None else (lambda w: 0.5 * float(np.abs(w[:n] - limit).sum()) < SETTLED)
+    y, err, steps, t = krylov_steps(horizon, B, y, tol=KRYLOV_TOL, budget=budget, stop=settled)
+    if t < horizon:
+        distance = 0.5 * float(np.abs(y[:n] - limit).sum())
+        rest = horizon - t
+        y = np.concatenate([limit, y[n:] + rest * (rewards @ limit)])
+        err += distance * rest * float(np.abs(rewards).max(initial=0.0))
+        note = f", settled at {t:.0f} s"
     at = np.clip(y[:n], 0.0, None)
     defect = abs(1.0 - float(y[:n].sum()))
     return Transient(at, y[n:], max(err, defect), f"Krylov exponential ({steps} steps{note})")
@@ -369,6 +368,15 @@ def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV_DIM,  #
     """``exp(t A) v`` by Krylov subspace projection with adaptive time steps and a
     local error estimate per step (after Sidje's Expokit ``expv``); returns the vector,
     the summed error estimate and the number of steps."""
+    w, s_err, steps, _t = krylov_steps(t, A, v, tol, m, budget)
+    return w, s_err, steps
+
+
+def krylov_steps(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV_DIM,  # type: ignore[no-untyped-def]
+                 budget: Callable[..., None] = no_budget,
+                 stop: Callable[[np.ndarray], bool] | None = None) -> tuple[np.ndarray, float, int, float]:
+    """:func:`expv`, asking ``stop(w)`` after each step: once it is true the solution ends
+    there. Returns the vector, the summed error estimate, the steps and the time reached."""
     from scipy.linalg import expm
 
     n = v.shape[0]
@@ -377,7 +385,7 @@ def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV_DIM,  #
     w = np.array(v, dtype=float)
     beta = float(np.linalg.norm(w))
     if beta == 0 or t == 0:
-        return w, 0.0, 0
+        return w, 0.0, 0, t
     fact = ((m + 1) / math.e) ** (m + 1) * math.sqrt(2 * math.pi * (m + 1))
     t_new = (1.0 / anorm) * ((fact * tol) / (4.0 * beta * anorm)) ** (1.0 / m)
     t_now, s_err, steps = 0.0, 0.0, 0
@@ -403,8 +411,10 @@ def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV_DIM,  #
         t_new = 0.9 * t_step * (t_step * tol / max(err, 1e-300)) ** xm
         s_err += max(err, anorm * np.finfo(float).eps)
         if beta == 0:
+            return w, s_err, steps, t
+        if stop is not None and t_now < t and stop(w):
             break
-    return w, s_err, steps
+    return w, s_err, steps, min(t_now, t)
 
 
 def _arnoldi(A, v: np.ndarray, m: int):  # type: ignore[no-untyped-def]

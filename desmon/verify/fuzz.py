@@ -107,6 +107,47 @@ def _ctrl_c_noted() -> Iterator[list[bool]]:
         signal.signal(signal.SIGINT, previous)
 
 
+class _Sequences:
+    """hypothesis's test of one sequence (:meth:`fails`), and what the search met: the
+    sequences run and passed, the smallest failing one and its outcome (labels and
+    violation, as :func:`run_choices` gives them: the deployer is a function of what it
+    reads, so a re-run finds the same)."""
+
+    def __init__(self, scenario: Scenario, deployer: str | Deployer, enabler: Checker, progress: bool) -> None:
+        self.scenario, self.deployer, self.enabler, self.progress = scenario, deployer, enabler, progress
+        self.calls = 0
+        self.passed = 0  # sequences run to their end without a violation
+        self.smallest: list[Choice] | None = None
+        self.outcome: Any = None
+        self.ctrl_c = [False]
+
+    def fails(self, seq: list[Choice]) -> bool:
+        if self.ctrl_c[0]:
+            raise KeyboardInterrupt
+        self.calls += 1
+        if self.progress and self.calls % 50 == 0:
+            print(f"\r  {self.calls} sequences", end="", file=sys.stderr, flush=True)
+        faults: list[DeployerFault] = []
+        try:
+            outcome = run_choices(self.scenario, self.deployer, seq, self.enabler, faults)
+        except ReactionStopped:  # Ctrl-C while a reaction ran on without yielding
+            raise KeyboardInterrupt from None
+        failed = outcome[1] is not None
+        if not failed:
+            self.passed += 1
+        elif self.smallest is None or len(seq) <= len(self.smallest):
+            self.smallest, self.outcome = list(seq), outcome
+        if any(isinstance(f.cause, RanAway) for f in faults):
+            raise _NeverEnds  # (each try of a shrink would wait out the reaction limit again: the sequence as found)
+        return failed
+
+    def outcome_of(self, seq: list[Choice]) -> Any:
+        """(labels, violation) of the failing ``seq``: kept where it is the smallest met."""
+        if seq == self.smallest:
+            return self.outcome
+        return run_choices(self.scenario, self.deployer, seq, self.enabler)
+
+
 def fuzz(
     scenario: Scenario,
     deployer: str | Deployer = "desmon",
@@ -121,33 +162,8 @@ def fuzz(
     bounds = bounds_of(scenario)
     guard = guard if guard is not None else Guard()
     enabler = Checker(scenario, deployer, bounds=bounds, guard=guard)
-    name = enabler.deployer_name
-    head = f"{scenario.name} -- deployer {name} -- fuzz seed {seed}"
-    calls = [0]
-    passed = [0]  # sequences run to their end without a violation
-    smallest: list[list[Choice]] = []  # the smallest failing sequence met so far (hypothesis shrinks it)
-    found: list[Any] = []  # (labels, violation) of that sequence: the deployer is a function of what it reads, so a re-run finds the same
-
-    def fails(seq: list[Choice]) -> bool:
-        if ctrl_c[0]:
-            raise KeyboardInterrupt
-        calls[0] += 1
-        if progress and calls[0] % 50 == 0:
-            print(f"\r  {calls[0]} sequences", end="", file=sys.stderr, flush=True)
-        faults: list[DeployerFault] = []
-        try:
-            outcome = run_choices(scenario, deployer, seq, enabler, faults)
-        except ReactionStopped:  # Ctrl-C while a reaction ran on without yielding
-            raise KeyboardInterrupt from None
-        failed = outcome[1] is not None
-        if not failed:
-            passed[0] += 1
-        elif not smallest or len(seq) <= len(smallest[0]):
-            smallest[:], found[:] = [list(seq)], [outcome]
-        if any(isinstance(f.cause, RanAway) for f in faults):
-            raise _NeverEnds  # (each try of a shrink would wait out the reaction limit again: the sequence as found)
-        return failed
-
+    head = f"{scenario.name} -- deployer {enabler.deployer_name} -- fuzz seed {seed}"
+    search = _Sequences(scenario, deployer, enabler, progress)
     cfg = settings(
         max_examples=examples,
         database=None,
@@ -156,38 +172,37 @@ def fuzz(
         phases=(Phase.generate, Phase.shrink),
     )
     interrupted = never_ends = False
-    ctrl_c = [False]
     try:
         with _ctrl_c_noted() as ctrl_c, guard.watching(lambda: INTERRUPTED if ctrl_c[0] else ""):
-            seq = find(choices(scenario, max_size=max_size, bounds=bounds), fails, settings=cfg, random=random.Random(seed))
+            search.ctrl_c = ctrl_c
+            seq = find(choices(scenario, max_size=max_size, bounds=bounds), search.fails, settings=cfg, random=random.Random(seed))
             if ctrl_c[0]:  # noted after the last sequence: the search ended on its own
                 raise KeyboardInterrupt
     except NoSuchExample:
-        _end_progress(progress, calls[0])
+        _end_progress(progress, search.calls)
         return FuzzOutcome(
-            f"{head}\npassed: {calls[0]} sequences (up to {max_size} events each), no invariant violated\n",
+            f"{head}\npassed: {search.calls} sequences (up to {max_size} events each), no invariant violated\n",
             0,
-            calls[0],
+            search.calls,
         )
     except _NeverEnds:
-        _end_progress(progress, calls[0])
-        seq, never_ends = smallest[0], True
+        _end_progress(progress, search.calls)
+        seq, never_ends = search.smallest, True  # type: ignore[assignment]
     except KeyboardInterrupt:  # Ctrl-C: what was found so far
-        _end_progress(progress, calls[0])
-        if not smallest:
+        _end_progress(progress, search.calls)
+        if search.smallest is None:
             return FuzzOutcome(
                 f"{head}\nverdict: INCOMPLETE (interrupted)\n"
-                f"passed: {passed[0]} sequences (up to {max_size} events each) before Ctrl-C, no invariant violated so far\n",
+                f"passed: {search.passed} sequences (up to {max_size} events each) before Ctrl-C, no invariant violated so far\n",
                 EXIT_INTERRUPTED,
-                passed[0],
+                search.passed,
                 interrupted=True,
             )
-        seq, interrupted = smallest[0], True
+        seq, interrupted = search.smallest, True
     else:
-        _end_progress(progress, calls[0])
-    outcome = found[0] if found and seq == smallest[0] else run_choices(scenario, deployer, seq, enabler)
-    return _violation(scenario, deployer, enabler, outcome, head=head, sequences=calls[0], interrupted=interrupted,
-                      rederive_up_to=0 if never_ends else rederive_up_to, never_ends=never_ends)
+        _end_progress(progress, search.calls)
+    return _violation(scenario, deployer, enabler, search.outcome_of(seq), head=head, sequences=search.calls,
+                      interrupted=interrupted, rederive_up_to=0 if never_ends else rederive_up_to, never_ends=never_ends)
 
 
 def _violation(
@@ -198,7 +213,6 @@ def _violation(
     :func:`run_choices` gives them): its trace, and the checker's shortest counterexample
     of the same invariant when the sequence is short enough. A reaction that never ends
     is neither shrunk nor re-derived: each try would wait out the reaction limit again."""
-    bounds = enabler.bounds
     labels, (inv, msg) = outcome
     steps = enabler.replay(labels)
     how = ("interrupted while hypothesis shrank it: maybe not the smallest" if interrupted
@@ -214,14 +228,8 @@ def _violation(
         f"  => the deployer {msg}" if crashed else f"  => {inv}: {msg}",
     ]
     if not interrupted and len(labels) <= rederive_up_to and inv != "history":
-        res = Checker(scenario, deployer, bounds=bounds, invariants=None if crashed else [inv], guard=enabler.system.guard).run(max_states=200_000, timeout=30)
-        found = [c for c in res.counterexamples if c.invariant == inv]
-        if found:
-            c = found[0]
-            lines += ["", f"the checker's shortest counterexample ({res.states:,} states explored):", format_counterexample(c)]
-        elif res.interrupted:
-            lines += ["", f"the checker's re-derivation was interrupted ({res.states:,} states explored)"]
-            interrupted = True
+        more, interrupted = _rederived(scenario, deployer, enabler, inv)
+        lines += more
     if never_ends and not interrupted:
         lines += ["", "the checker's shortest path to it is not re-derived here, for the same reason: desmon verify finds it"]
     if interrupted:
@@ -230,3 +238,16 @@ def _violation(
         lines += ["", "verdict: CRASHED"]
     code = EXIT_INTERRUPTED if interrupted else EXIT_CRASHED if crashed else 1
     return FuzzOutcome("\n".join(lines) + "\n", code, sequences, labels, inv, interrupted)
+
+
+def _rederived(scenario: Scenario, deployer: str | Deployer, enabler: Checker, inv: str) -> tuple[list[str], bool]:
+    """The lines of the checker's shortest counterexample of ``inv`` (a crash: of any), and
+    whether its search was interrupted."""
+    crashed = inv == CRASH
+    res = Checker(scenario, deployer, bounds=enabler.bounds, invariants=None if crashed else [inv], guard=enabler.system.guard).run(max_states=200_000, timeout=30)
+    found = [c for c in res.counterexamples if c.invariant == inv]
+    if found:
+        return ["", f"the checker's shortest counterexample ({res.states:,} states explored):", format_counterexample(found[0])], False
+    if res.interrupted:
+        return ["", f"the checker's re-derivation was interrupted ({res.states:,} states explored)"], True
+    return [], False
