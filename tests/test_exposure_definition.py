@@ -24,6 +24,7 @@ from desmon.deployment.exposure import CAUSES, Needs, cause, needs, no_rule_seco
 from desmon.errors import ModelError
 from desmon.loader import load_scenario
 from desmon.model.actions import Action
+from desmon.sim.collector import Collector
 from desmon.sim.engine import simulate
 from desmon.sim.world import world_of
 
@@ -146,14 +147,20 @@ def _simulated(path: str, hours: str, signals: bool) -> dict[str, tuple[float, .
     sc = _scenario(path, hours)
     sc = replace(sc, world=replace(world_of(sc), timing="exponential", phases=1, signals=signals))
     out: dict[str, list[float]] = {"exposure": [], "risky": [], "missed_per_h": [], "no_rule": [], "starting": []}
+    collector = Collector()  # the runs share one: the heap is counted once per full collection
     for seed in SHIFTS if signals else SEEDS:
-        m = simulate(sc, "desmon", seed=seed).metrics
+        m = simulate(sc, "desmon", seed=seed, reads=READS, collector=collector).metrics
         out["exposure"].append(m["unmonitored_exposure_s"])
         out["risky"].append(m["risky_time_s"])
         out["no_rule"].append(m["unmonitored_by_cause_s"]["no_rule"])
         out["starting"].append(m["unmonitored_by_cause_s"]["starting"])
         out["missed_per_h"].append(m.get("slips_missed", 0) * 3600.0 / sc.world.horizon)
     return {k: tuple(v) for k, v in out.items()}
+
+
+#: the run figures these comparisons read: the world skips the audit and the trace records
+#: (the same figures: tests/test_sim_reads.py)
+READS = ("exposure_s", "risky_time_s", "no_rule_s", "starting_s", "slips_missed")
 
 
 def _inside(exact: float, values) -> bool:
@@ -287,7 +294,8 @@ def test_with_a_given_rate_the_exact_undetected_slips_and_exposure_lie_in_the_in
     sc = load_scenario(PICK, {"hours": "8", "camera_rate": "0.8"})
     a = analyze(sc, trials=TRIALS)
     run = replace(sc, world=replace(world_of(sc), timing="exponential", phases=1, signals=True))
-    ms = [simulate(run, "desmon", seed=seed).metrics for seed in SHIFTS]
+    collector = Collector()
+    ms = [simulate(run, "desmon", seed=seed, reads=READS, collector=collector).metrics for seed in SHIFTS]
     missed = [m["slips_missed"] * 3600.0 / run.world.horizon for m in ms]
     assert _inside(a.undetected_slips_per_hour, missed), (a.undetected_slips_per_hour, confidence(missed))
     assert _inside(a.exposure_s_per_mission, [m["unmonitored_exposure_s"] for m in ms])
@@ -302,7 +310,8 @@ def test_the_other_analysable_scenarios_agree_on_undetected_slips_and_risky_time
     sc = load_scenario(path, {"stochastic": "True"})
     a = analyze(sc, horizon=3600.0)
     run = replace(sc, world=replace(world_of(sc), timing="exponential", phases=1, signals=True))
-    ms = [simulate(run, "desmon", seed=seed, until=3600.0).metrics for seed in range(40)]
+    collector = Collector()
+    ms = [simulate(run, "desmon", seed=seed, until=3600.0, reads=READS, collector=collector).metrics for seed in range(40)]
     missed = [m["slips_missed"] for m in ms]
     assert _inside(a.undetected_slips_per_hour, missed), (a.undetected_slips_per_hour, confidence(missed))
     assert _inside(a.risky_s_per_mission, [m["risky_time_s"] for m in ms])
