@@ -229,13 +229,13 @@ def test_timeout_stops_a_worker_process_stuck_in_a_reaction(tmp_path):
         "        time.sleep(60)\n"
         "    yield from DEPLOYERS['desmon'].react(q, slots, changed, context_changed)\n"
     )
-    scenario = str(ROOT / "scenarios" / "symmetric_platforms.py")  # levels of 256 states and more: they go to the workers
+    scenario = str(ROOT / "scenarios" / "scale_family.py")  # levels of 256 states and more: they go to the workers
     code, took, out, err = _desmon(
-        str(path), "verify", scenario, "--deployer", f"{path}:stuck_in_workers", "--engine", "direct", "--workers", "2",
-        "--timeout", "20", "--no-progress",
-    )  # (20 s: the first level of 256 states comes after about 500 states, which took over 8 s at load 9)
-    assert code == 3 and "verdict: INCOMPLETE (timeout 20s)" in out and "+ 2 workers" in out, out + err
-    assert took < 20 + 2, f"--timeout 20 took {took:.1f} s"
+        str(path), "verify", scenario, "-p", "platforms=4", "--deployer", f"{path}:stuck_in_workers", "--engine", "direct",
+        "--workers", "2", "--timeout", "6", "--no-progress",
+    )  # (6 s: with four platforms the third level, the first of 256 states, comes after about 70 states)
+    assert code == 3 and "verdict: INCOMPLETE (timeout 6s)" in out and "+ 2 workers" in out, out + err
+    assert took < 6 + 2, f"--timeout 6 took {took:.1f} s"
 
 
 def test_max_memory_stops_a_reaction_that_hoards_memory(deployers):
