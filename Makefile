@@ -20,13 +20,15 @@ demo: $(STAMP)
 	@$(BIN)/desmon run scenarios/coffee_handover.py
 	@echo "==> done. To type plain 'desmon ...' in this shell: . $(BIN)/activate"
 
-# The whole suite in one pytest run on $(JOBS) processes (pytest-xdist; JOBS: the cores this
-# process may use, at most 4; make test JOBS=1 for one). The longest tests start first
+# The whole suite in one pytest run on $(JOBS) processes (pytest-xdist; JOBS: one more than the
+# cores this process may use, at most 4 of them: a test waiting for a command, a timeout or a
+# Dask worker leaves its core to the extra process (2 cores: 1.64 of them busy on average with
+# 2 processes, 1.9 with 3); make test JOBS=1 for one). The longest tests start first
 # (tests/conftest.py's LONGEST, then the other tests marked slow), --dist loadgroup hands
 # each process its next test as it finishes one (an xdist_group stays in one process), and
 # --no-loadscope-reorder keeps that order. One dot per test, a line with its name and time
 # for each slow test as it ends, the ten slowest at the end; the target fails if a test did.
-JOBS ?= $(shell $(PY) -c "import os; n = len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else os.cpu_count(); print(max(1, min(4, n or 1)))" 2>/dev/null || echo 2)
+JOBS ?= $(shell $(PY) -c "import os; n = len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else os.cpu_count(); print(max(1, min(4, n or 1)) + 1)" 2>/dev/null || echo 3)
 
 # The suite starts a few hundred Python processes (the docs' commands, the benches, Dask's
 # workers): they load desmon's compiled bytecode (__pycache__, which git ignores) instead of
