@@ -41,8 +41,8 @@ class Collector:
     one process hands them one (``SimWorld(collector=...)``); a run given none has its own.
 
     Counting the frozen heap walks all of it (``gc.get_freeze_count`` is linear in the
-    frozen objects: about 10 ms per million), so a shared Collector counts it once and
-    again only after each full collection: between two, the heap it compares ``left`` with
+    frozen objects: 32 ms for 2 million on a loaded 2-core machine), so a shared Collector
+    counts it once and again only after each full collection: between two, the heap it compares ``left`` with
     is the one it counted then (it has grown since by no more than the leftovers, so a full
     collection comes at most an eighth sooner). A run inside another of the same
     Collector (a world run within ``desmon estimate``'s run) neither freezes nor counts."""
