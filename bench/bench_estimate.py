@@ -22,8 +22,9 @@ In one run it measures:
   runs, a world that adds a rare run near the horizon, raising the mean by twice the
   half-width, would show no such run with chance above delta, so no valid interval can
   exclude it), and the wall minutes the projected runs take on 2 cores at the measured rate;
-* 2 Dask workers against 1: the same estimation of ``R`` one-hour coffee-shift runs
-  (``--within`` too small to stop early) through :func:`desmon.sweep.estimate.dask_values`
+* 2 Dask workers against 1: the same estimation of ``R`` one-hour coffee-shift runs (1,000
+  unless given: about 30 s on one worker, so that the last batch, about 1 s, weighs little;
+  ``--within`` too small to stop early) through :func:`desmon.sweep.estimate.dask_values`
   on a local cluster of 1, then 2 worker processes, each started and warmed up (one run
   per worker) before the clock starts, ``--rounds`` turns each in the order 1, 2, 2, 1
   (so that a load that drifts weighs on both; means reported); every turn's estimate is
@@ -200,7 +201,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--runs", type=int, default=20, help="runs per scenario for the rate and the spread")
     ap.add_argument("--until", type=float, default=None, help="simulated seconds per run (unset: each scenario's 8 h)")
     ap.add_argument("--draws", type=int, default=5, help="projections of the runs needed")
-    ap.add_argument("--dask-runs", type=int, default=60, help="runs of the Dask comparison")
+    ap.add_argument("--dask-runs", type=int, default=1000, help="runs of the Dask comparison (1,000 one-hour runs: about 30 s on one worker, so that the last batch of 1 s weighs little)")
     ap.add_argument("--dask-until", type=float, default=3600.0, help="simulated seconds per run of the Dask comparison")
     ap.add_argument("--rounds", type=int, default=2, help="turns of each cluster size, in the order 1, 2, 2, 1 (means reported)")
     ap.add_argument("--turns", type=int, default=3, help="turns of the whole world against the run read for exposure_s (best taken)")
