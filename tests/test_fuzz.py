@@ -61,3 +61,35 @@ def test_state_machine_finds_paper_bug():
         run_state_machine_as_test(
             machine, settings=settings(max_examples=100, stateful_step_count=10, deadline=None, database=None, suppress_health_check=list(HealthCheck))
         )
+
+
+def test_a_search_stopped_by_a_reaction_that_never_ends_keeps_the_smallest_failure_and_its_outcome(monkeypatch):
+    """hypothesis's search ends at the first reaction that never ends (each try of a shrink
+    would wait out the reaction limit): the smaller failure met before it is reported, as
+    found, with the outcome of its own run, and is not marked as never ending itself."""
+    import desmon.verify.fuzz as fz
+    from desmon.deployment.guard import CRASH, DeployerFault, RanAway
+
+    ran: list[int] = []
+
+    def scripted(scenario, deployer, seq, enabler, faults=None):  # type: ignore[no-untyped-def]
+        ran.append(len(seq))
+        if len(seq) == 1:
+            return ["a"], ("coverage", "nothing watches")
+        fault = DeployerFault("never ends")
+        fault.cause = RanAway("its code ran for over 2 s in one reaction")
+        if faults is not None:
+            faults.append(fault)
+        return ["a", "b", "c"], (CRASH, "raised RanAway")
+
+    monkeypatch.setattr(fz, "run_choices", scripted)
+    search = fz._Sequences(None, "desmon", None, progress=False)  # type: ignore[arg-type]
+    assert search.fails([(0, ())]) is True and search.smallest == [(0, ())] and not search.smallest_never_ends
+    with pytest.raises(fz._NeverEnds):
+        search.fails([(1, ()), (2, ()), (3, ())])
+    assert search.smallest == [(0, ())] and not search.smallest_never_ends  # the smaller failure stays the one reported
+    assert search.outcome_of([(0, ())]) == (["a"], ("coverage", "nothing watches")) and ran == [1, 3]  # not run again
+    alone = fz._Sequences(None, "desmon", None, progress=False)  # type: ignore[arg-type]
+    with pytest.raises(fz._NeverEnds):
+        alone.fails([(1, ()), (2, ()), (3, ())])
+    assert alone.smallest_never_ends and alone.outcome_of([(1, ()), (2, ()), (3, ())])[1][0] == CRASH

@@ -119,6 +119,7 @@ class _Sequences:
         self.passed = 0  # sequences run to their end without a violation
         self.smallest: list[Choice] | None = None
         self.outcome: Any = None
+        self.smallest_never_ends = False  # whether the smallest's last reaction ran away (the reaction limit stopped it)
         self.ctrl_c = [False]
 
     def fails(self, seq: list[Choice]) -> bool:
@@ -135,9 +136,10 @@ class _Sequences:
         failed = outcome[1] is not None
         if not failed:
             self.passed += 1
-        elif self.smallest is None or len(seq) <= len(self.smallest):
-            self.smallest, self.outcome = list(seq), outcome
-        if any(isinstance(f.cause, RanAway) for f in faults):
+        ran_away = any(isinstance(f.cause, RanAway) for f in faults)
+        if failed and (self.smallest is None or len(seq) <= len(self.smallest)):
+            self.smallest, self.outcome, self.smallest_never_ends = list(seq), outcome, ran_away
+        if ran_away:
             raise _NeverEnds  # (each try of a shrink would wait out the reaction limit again: the sequence as found)
         return failed
 
@@ -171,7 +173,7 @@ def fuzz(
         suppress_health_check=list(HealthCheck),
         phases=(Phase.generate, Phase.shrink),
     )
-    interrupted = never_ends = False
+    interrupted = stopped = never_ends = False
     try:
         with _ctrl_c_noted() as ctrl_c, guard.watching(lambda: INTERRUPTED if ctrl_c[0] else ""):
             search.ctrl_c = ctrl_c
@@ -187,7 +189,7 @@ def fuzz(
         )
     except _NeverEnds:
         _end_progress(progress, search.calls)
-        seq, never_ends = search.smallest, True  # type: ignore[assignment]
+        seq, stopped, never_ends = search.smallest, True, search.smallest_never_ends  # type: ignore[assignment]
     except KeyboardInterrupt:  # Ctrl-C: what was found so far
         _end_progress(progress, search.calls)
         if search.smallest is None:
@@ -202,12 +204,12 @@ def fuzz(
     else:
         _end_progress(progress, search.calls)
     return _violation(scenario, deployer, enabler, search.outcome_of(seq), head=head, sequences=search.calls,
-                      interrupted=interrupted, rederive_up_to=0 if never_ends else rederive_up_to, never_ends=never_ends)
+                      interrupted=interrupted, rederive_up_to=0 if never_ends else rederive_up_to, never_ends=never_ends, stopped=stopped)
 
 
 def _violation(
     scenario: Scenario, deployer: str | Deployer, enabler: Checker, outcome: Any, *, head: str, sequences: int,
-    interrupted: bool, rederive_up_to: int, never_ends: bool = False,
+    interrupted: bool, rederive_up_to: int, never_ends: bool = False, stopped: bool = False,
 ) -> FuzzOutcome:
     """The outcome of a failing sequence (``outcome``: its labels and violation, as
     :func:`run_choices` gives them): its trace, and the checker's shortest counterexample
@@ -217,6 +219,8 @@ def _violation(
     steps = enabler.replay(labels)
     how = ("interrupted while hypothesis shrank it: maybe not the smallest" if interrupted
            else "as found, not shrunk: a reaction that never ends would wait out the reaction limit at each try" if never_ends
+           else "as found, not shrunk: the search stopped at a reaction that never ends, which would wait out the reaction limit at each try"
+           if stopped
            else "shrunk by hypothesis")
     crashed = inv == CRASH
     lines = [
