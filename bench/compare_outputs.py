@@ -11,9 +11,10 @@ code, stdout and stderr, and every file the command writes (``--json``, ``--trac
 (:func:`mask`) and written to ``DIR/base/`` and ``DIR/head/``, then compared.
 
 Masked, and nothing else: the measured wall time and the figures derived from it (JSON
-``seconds``, ``wall_s``, ``realtime_ratio``; the text ``time: 0.12s  2,447 states/s
-16,778 transitions/s``, ``in 12.07 s wall``, ``(3164.4x real time)``, the sweep's ``in 4.8 s``
-and its ``wall_s`` column), the process's measured peak memory (JSON ``peak_mb``,
+``seconds``, ``wall_s``, ``realtime_ratio``, ``analyze``'s ``build_s`` and ``solve_s``; the
+text ``time: 0.12s  2,447 states/s 16,778 transitions/s``, ``in 12.07 s wall``, ``(3164.4x
+real time)``, the sweep's ``in 4.8 s`` and its ``wall_s`` column, ``analyze``'s ``built in
+0.1 s`` and ``solved in 0.2 s``), the process's measured peak memory (JSON ``peak_mb``,
 ``peak_rss_mb``; text ``peak memory: 57 MB``, ``peak memory (RSS, MB)``, ``each at most
 N MB``), and the two trees' and the output directories' own paths (``<TREE>``, ``<OUT>``).
 Simulated times and memory (``memory_peak_mb``, ``blind_time``, trace ``t``) are behaviour
@@ -46,7 +47,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 #: JSON keys whose number is a measurement of the process (wall time, peak memory)
-TIMING_KEYS = ("seconds", "wall_s", "realtime_ratio", "peak_mb", "peak_rss_mb")
+TIMING_KEYS = ("seconds", "wall_s", "realtime_ratio", "peak_mb", "peak_rss_mb", "build_s", "solve_s")
 MASK = "<masked>"
 _NUMBER = r"-?(?:\d[\d,]*(?:\.\d*)?(?:[eE][-+]?\d+)?|inf|Infinity|NaN|nan)"
 _JSON_NUMBER = r"-?(?:\d+(?:\.\d*)?(?:[eE][-+]?\d+)?|Infinity|NaN)"
@@ -61,6 +62,8 @@ TEXT_TIMING = (
     (re.compile(r"\(" + _NUMBER + r"(x real time\))"), r"(<R>\g<1>"),  # desmon run of a fleet
     (re.compile(r"(peak memory \(RSS, MB\)\s+)" + _NUMBER), r"\g<1><M>"),
     (re.compile(r"(failed, in )" + _NUMBER + "( s )"), r"\g<1><T>\g<2>"),  # desmon sweep
+    (re.compile(r"(built in )" + _NUMBER + "( s from )"), r"\g<1><T>\g<2>"),  # desmon analyze
+    (re.compile(r"(solved in )" + _NUMBER + r"( s\))"), r"\g<1><T>\g<2>"),
 )
 
 
@@ -145,6 +148,11 @@ def _simulations() -> list[Command]:
 
 def _other_commands() -> list[Command]:
     return [
+        _c("analyze-crash", "analyze scenarios/platform_crash.py -p stochastic=True --trials 20 --no-progress --json {out}/analyze-crash.json",
+           ("analyze-crash.json",)),
+        _c("analyze-crash-simulate", "analyze scenarios/platform_crash.py -p stochastic=True --trials 20 --simulate 5 --no-progress", quick=False),
+        _c("estimate-coffee", "estimate scenarios/coffee_handover.py --timing exponential --within 20% --json"),
+        _c("estimate-coffee-below", "estimate scenarios/coffee_handover.py --timing exponential --below 20 --no-progress", quick=False),
         _c("evaluate-20", "evaluate --trials 20 --seed 1 --no-progress"),
         _c("evaluate-20-json", "evaluate --trials 20 --seed 2 --json --no-progress", quick=False),
         _c("evaluate-60", "evaluate --trials 60 --seed 1 --no-progress", quick=False),
