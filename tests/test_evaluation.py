@@ -160,6 +160,14 @@ def test_run_evaluate_writes_json_and_returns_zero_when_all_cells_pass() -> None
     assert run_evaluate(trials=40, seed=1, as_json=True, progress=False, out=out) == 0
     data = json.loads(out.getvalue())
     assert data["all_pass"] is True and len(data["cells"]) == 21 and data["missions"]
+    # the intervals the table prints: the missions' proportions (Clopper-Pearson), none for a count from one seed
+    intervals = data["intervals"]
+    assert intervals["confidence"] == 0.95 and "cells" not in intervals
+    assert [m["strategy"] for m in intervals["missions"]] == [m["strategy"] for m in data["missions"]]
+    for iv, m in zip(intervals["missions"], data["missions"]):
+        assert iv["p_any_fa"]["low"] <= m["p_any_fa"] <= iv["p_any_fa"]["high"]
+        assert iv["miss_rate"]["low"] <= m["miss_rate"] <= iv["miss_rate"]["high"]
+        assert iv["fa_per_mission"] is None and "Clopper-Pearson" in iv["mean_tpr"]["method"]
 
 
 def test_run_evaluate_writes_a_readable_table() -> None:
@@ -276,6 +284,12 @@ def test_run_evaluate_with_seeds_writes_json_and_its_exit_status_says_whether_ev
     assert all(set(c) >= {"counts", "p_values", "passes", "seeds", "holds", "rate"} for c in data["cells"])
     assert {"p_any_fa", "fa_per_mission", "mean_tpr", "miss_rate", "rule_picks"} <= set(data["missions"][0])
     assert rc == (0 if data["all_hold"] else 1) and data["all_hold"] is all(c["holds"] for c in data["cells"])
+    # each cell's rate and each mission figure carry the interval the tables print
+    cells = data["intervals"]["cells"]
+    assert [(c["action"], c["detector"]) for c in cells] == [(c["action"], c["detector"]) for c in data["cells"]]
+    assert all(iv["rate"]["low"] <= c["rate"]["mean"] <= iv["rate"]["high"] for iv, c in zip(cells, data["cells"]))
+    first = data["intervals"]["missions"][0]
+    assert first["fa_per_mission"] is not None and "normal" in first["fa_per_mission"]["method"]
 
 
 def test_same_seeds_give_the_same_sweep_report_byte_for_byte() -> None:

@@ -247,6 +247,25 @@ def mission_intervals(sw: Sweep, index: int) -> dict[str, Interval | None]:
     return out
 
 
+def _interval_json(iv: Interval | None) -> dict[str, object] | None:
+    return None if iv is None else {"low": iv.low, "high": iv.high, "method": iv.method}
+
+
+def intervals_json(sw: Sweep) -> dict[str, object]:
+    """The :data:`CONFIDENCE` intervals the tables print, for ``--json``: each mission
+    strategy's figures (:func:`mission_intervals`; null where a figure has none, as for the
+    counts and durations of one seed), and with several seeds each cell's rate
+    (:func:`cell_interval`)."""
+    out: dict[str, object] = {
+        "confidence": CONFIDENCE,
+        "missions": [{"strategy": m.strategy, **{k: _interval_json(iv) for k, iv in mission_intervals(sw, i).items()}}
+                     for i, m in enumerate(sw.missions)],
+    }
+    if len(sw.seeds) > 1:
+        out["cells"] = [{"action": c.action, "detector": c.detector, "rate": _interval_json(cell_interval(c))} for c in sw.cells]
+    return out
+
+
 def _mission_interval_table(sw: Sweep) -> list[str]:
     """The mission table's second part: each figure's :data:`CONFIDENCE` interval, and how it was
     made (from one seed, the proportions' only)."""
@@ -304,7 +323,7 @@ def run_evaluate(trials: int, seed: int, as_json: bool, progress: bool, out: Tex
     The progress bar goes to stderr when ``progress`` is true and stderr is a terminal
     (or ``DESMON_PROGRESS=1`` forces it).
     """
-    from desmon.detectors.evaluation import MISSION_CONTEXTS, P1_ACTIONS, checked_inputs, evaluate, evaluate_seeds
+    from desmon.detectors.evaluation import MISSION_CONTEXTS, P1_ACTIONS, checked_inputs, evaluate, evaluate_seeds, sweep_of
 
     trials, seed, n_seeds = checked_inputs(trials, seed, seeds)
     cb: _Progress | None = None
@@ -312,7 +331,7 @@ def run_evaluate(trials: int, seed: int, as_json: bool, progress: bool, out: Tex
         cb = _Progress(trials * (len(P1_ACTIONS) + 1 + len(MISSION_CONTEXTS)) * n_seeds, sys.stderr)
     if seeds is None:
         ev = evaluate(trials, seed, progress=cb)
-        _emit(ev.to_json() if as_json else None, lambda: render_table(ev), out)
+        _emit({**ev.to_json(), "intervals": intervals_json(sweep_of([ev]))} if as_json else None, lambda: render_table(ev), out)
         return 0 if ev.all_pass else 1
 
     def on_seed(i: int, s: int) -> None:
@@ -320,7 +339,7 @@ def run_evaluate(trials: int, seed: int, as_json: bool, progress: bool, out: Tex
             cb.label = f"  seed {s} ({i + 1}/{n_seeds})"
 
     sw = evaluate_seeds(trials, seed, n_seeds, progress=cb, on_seed=on_seed)
-    _emit(sw.to_json() if as_json else None, lambda: render_sweep(sw), out)
+    _emit({**sw.to_json(), "intervals": intervals_json(sw)} if as_json else None, lambda: render_sweep(sw), out)
     return 0 if sw.all_hold else 1
 
 
