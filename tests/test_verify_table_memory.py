@@ -17,11 +17,27 @@ from desmon.verify.mutants import MUTANTS
 ROOT = Path(__file__).resolve().parent.parent
 
 
+class Untagged(CodeSet):
+    """A seen set whose slots leave no bit for a tag, as in a table of over 2**31 slots."""
+
+    def _make(self, size: int) -> None:
+        super()._make(size)
+        self._number, self._tag = CodeSet.masks(int(2**32 / self.FULL) - 1)
+
+
+def test_a_table_of_over_two_billion_slots_leaves_no_bit_for_a_tag_and_never_more_than_32_for_a_number():
+    number, tag = CodeSet.masks(1024)
+    assert int(number) == (1 << 10) - 1 and int(tag) == 0xFFFFFFFF ^ int(number)
+    most = int(2**31 / CodeSet.SPARSE)  # the table a search of 2**31 states grows to (its parents are 4-byte numbers)
+    assert CodeSet.masks(most) == (np.uint32(0xFFFFFFFF), np.uint64(0))
+
+
 @settings(max_examples=60, deadline=None)
-@given(hst.lists(hst.lists(hst.integers(0, (1 << 62) - 1), max_size=400), max_size=12), hst.lists(hst.integers(0, (1 << 62) - 1), max_size=200))
-def test_the_seen_set_holds_exactly_the_codes_added_as_it_grows(batches, others):
+@given(hst.lists(hst.lists(hst.integers(0, (1 << 62) - 1), max_size=400), max_size=12), hst.lists(hst.integers(0, (1 << 62) - 1), max_size=200),
+       hst.sampled_from([CodeSet, Untagged]))
+def test_the_seen_set_holds_exactly_the_codes_added_as_it_grows(batches, others, kind):
     codes = np.zeros(0, dtype=np.int64)
-    seen, added = CodeSet(), set()
+    seen, added = kind(), set()
     for batch in batches:
         fresh = list(dict.fromkeys(c for c in batch if c not in added))
         lo = len(codes)

@@ -124,9 +124,16 @@ class CodeSet:
         ``bits`` bits of a slot, the tag the others."""
         self.slots = np.zeros(0, dtype=np.uint32)
         self.slots = np.zeros(size, dtype=np.uint32)
-        bits = int(self.FULL * size).bit_length()  # (a number + 1 is at most FULL * size)
-        self._number = np.uint32((1 << bits) - 1)
-        self._tag = np.uint64(0xFFFFFFFF ^ ((1 << bits) - 1))
+        self._number, self._tag = self.masks(size)
+
+    @classmethod
+    def masks(cls, size: int) -> tuple[np.uint32, np.uint64]:
+        """The bits of a slot of a table of ``size`` slots that hold a number (its low bits:
+        a number + 1 is at most FULL * size) and those left for the tag. Past 2**31 numbers
+        no bit is left: every probe then reads the codes of the slots it passes (a search
+        numbers at most 2**31 states, so the numbers never need more than 32 bits)."""
+        bits = int(cls.FULL * size).bit_length()
+        return np.uint32((1 << bits) - 1), np.uint64(0xFFFFFFFF ^ ((1 << bits) - 1))
 
     def _home(self, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each key's home slot (the high 32 bits of its hash scaled to the table) and tag
