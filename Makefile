@@ -22,8 +22,9 @@ demo: $(STAMP)
 
 # The whole suite in one pytest run on $(JOBS) processes (pytest-xdist; JOBS: one more than the
 # cores this process may use, at most 4 of them: a test waiting for a command, a timeout or a
-# Dask worker leaves its core to the extra process (2 cores: 1.64 of them busy on average with
-# 2 processes, 1.9 with 3); make test JOBS=1 for one). The longest tests start first
+# Dask worker leaves its core to the extra process (on 2 cores, one fresh-clone run each: the
+# tests' CPU seconds summed by DESMON_TEST_CPU over make test's wall time were 1.64 cores with
+# 2 processes, 1.91 with 3); make test JOBS=1 for one). The longest tests start first
 # (tests/conftest.py's LONGEST, then the other tests marked slow), --dist loadgroup hands
 # each process its next test as it finishes one (an xdist_group stays in one process), and
 # --no-loadscope-reorder keeps that order. One dot per test, a line with its name and time

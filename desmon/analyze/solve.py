@@ -20,7 +20,7 @@
   :data:`UNIFORM_STEPS`) by uniformisation: Poisson-weighted powers of ``P = I +
   Q / Lambda``, truncated where the Poisson tail is below :data:`EPS`. Longer ones (a
   stiff chain: fast recognition and start latencies, slow faults, an 8 h shift) by the
-  Krylov exponential :func:`expv` on the generator augmented with the reward
+  Krylov exponential :func:`krylov_steps` on the generator augmented with the reward
   (tolerance :data:`KRYLOV_TOL` per step); :attr:`Transient.error` is the solver's own
   estimate of its error, not a bound: at 1e-10 per step the 8 h shift of
   ``scenarios/coffee_shift.py -p force_sensors=2`` printed 1520.402 s on one machine and
@@ -40,7 +40,7 @@ from threadpoolctl import threadpool_limits
 
 from desmon.analyze.markov import AnalysisError, no_budget
 
-__all__ = ["steady_state", "transient", "mean_time_to", "expv", "krylov_steps", "Transient", "EPS", "UNIFORM_STEPS"]
+__all__ = ["steady_state", "transient", "mean_time_to", "krylov_steps", "Transient", "EPS", "UNIFORM_STEPS"]
 
 #: the truncation error of uniformisation: the Poisson mass left out
 EPS = 1e-10
@@ -61,8 +61,8 @@ def one_blas_thread(fn: F) -> F:
     numbers, 2,000 calls, ``OPENBLAS_NUM_THREADS`` unset against 1) a norm took 8 ms
     with OpenBLAS's default threads against 60 us on one. scipy's BLAS is a library of
     its own: a limit covers only the libraries loaded when it is set, so scipy.linalg
-    is loaded first (else each small ``expm`` of the Krylov steps woke idle threads that
-    then spun: twice the CPU time of the solution on a 2-core machine)."""
+    is loaded first (else the first small ``expm`` of the Krylov steps loaded it inside
+    the limit, and its idle threads spun beside every later step)."""
 
     @functools.wraps(fn)
     def run(*args: Any, **kwargs: Any) -> Any:
@@ -308,9 +308,11 @@ SETTLED = 1e-9
 #: the Krylov exponential's tolerance per step (see the module docstring: at 1e-10 a shift's
 #: accumulated reward moved by 1e-4 of itself between two machines)
 KRYLOV_TOL = 1e-12
-#: the Krylov basis size of :func:`expv`. On the coffee shift's 8 h transient (48,820
-#: states with two force sensors) 40 vectors took 273 steps where 30 took 446, and the
-#: shift's figures agreed to 12 digits; 50 saved little more and its error estimate grew
+#: the Krylov basis size of :func:`krylov_steps`. On the coffee shift's 8 h transient (48,820
+#: states with two force sensors; the step count is in the method line of ``desmon analyze
+#: scenarios/coffee_shift.py -p force_sensors=2``) 40 vectors take 198 steps; in one run each
+#: on one machine 30 took 338 and 50 took 135, with about the same CPU time (18.5 and 16.2 s
+#: against 16.8 s), and the shift's figures agreed to 10 digits
 KRYLOV_DIM = 40
 
 
@@ -363,20 +365,13 @@ def _uniformisation(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, lam:
 
 
 @one_blas_thread
-def expv(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV_DIM,  # type: ignore[no-untyped-def]
-         budget: Callable[..., None] = no_budget) -> tuple[np.ndarray, float, int]:
-    """``exp(t A) v`` by Krylov subspace projection with adaptive time steps and a
-    local error estimate per step (after Sidje's Expokit ``expv``); returns the vector,
-    the summed error estimate and the number of steps."""
-    w, s_err, steps, _t = krylov_steps(t, A, v, tol, m, budget)
-    return w, s_err, steps
-
-
 def krylov_steps(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV_DIM,  # type: ignore[no-untyped-def]
                  budget: Callable[..., None] = no_budget,
                  stop: Callable[[np.ndarray], bool] | None = None) -> tuple[np.ndarray, float, int, float]:
-    """:func:`expv`, asking ``stop(w)`` after each step: once it is true the solution ends
-    there. Returns the vector, the summed error estimate, the steps and the time reached."""
+    """``exp(t A) v`` by Krylov subspace projection with adaptive time steps and a
+    local error estimate per step (after Sidje's Expokit ``expv``), asking ``stop(w)``
+    after each step if given: once it is true the solution ends there. Returns the
+    vector, the summed error estimate, the number of steps and the time reached."""
     from scipy.linalg import expm
 
     n = v.shape[0]

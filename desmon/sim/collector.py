@@ -41,11 +41,12 @@ class Collector:
     one process hands them one (``SimWorld(collector=...)``); a run given none has its own.
 
     Counting the frozen heap walks all of it (``gc.get_freeze_count`` is linear in the
-    frozen objects: 32 ms for 2 million on a loaded 2-core machine), so a shared Collector
-    counts it once and again only after each full collection: between two, the heap it compares ``left`` with
-    is the one it counted then (it has grown since by no more than the leftovers, so a full
-    collection comes at most an eighth sooner). A run inside another of the same
-    Collector (a world run within ``desmon estimate``'s run) neither freezes nor counts."""
+    frozen objects), so a shared Collector counts it once and again only after each full
+    collection: between two, the heap it compares ``left`` with is the one it counted then.
+    The heap has only grown since (the leftovers, and what the caller kept), so a full
+    collection comes sooner than a fresh count would make it, never later. A run inside
+    another of the same Collector (a world run within ``desmon estimate``'s run) neither
+    freezes nor counts."""
 
     __slots__ = ("left", "full_after", "heap", "depth")
 
