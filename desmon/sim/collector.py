@@ -43,8 +43,8 @@ class Collector:
     Counting the frozen heap walks all of it (``gc.get_freeze_count`` is linear in the
     frozen objects), so a shared Collector counts it once and again only after each full
     collection: between two, the heap it compares ``left`` with is the one it counted then.
-    The heap has only grown since (the leftovers, and what the caller kept), so a full
-    collection comes sooner than a fresh count would make it, never later. A run inside
+    It differs from a fresh count by what the runs left (which makes the collection come
+    sooner, not later) and by what the caller kept or freed in between. A run inside
     another of the same Collector (a world run within ``desmon estimate``'s run) neither
     freezes nor counts."""
 
