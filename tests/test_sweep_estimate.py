@@ -99,6 +99,24 @@ def test_sweep_plot_bars_each_mean_with_the_guaranteed_interval_of_a_figure_in_s
     assert {(r, got[2]) for _n, r, got in asked} == {(None, "normal approximation, not guaranteed")}  # a count: no known range
 
 
+def test_sweep_plot_bars_evaluates_rates_and_cells_passed_with_the_guaranteed_interval_of_their_known_range(tmp_path, local, monkeypatch):
+    """A rate of ``--job evaluate`` lies in [0, 1] and the cells passed in [0, cells] whatever
+    the seed: their bars are guaranteed, as those of a figure in seconds are."""
+    pytest.importorskip("matplotlib")
+    from desmon.sweep import plot
+
+    out = tmp_path / "ev.csv"
+    assert main(["sweep", "--job", "evaluate", "--trials", "10", "-p", "noise_counts=2,8", "--seeds", "3", "--no-progress",
+                 "-o", str(out)]) in (0, 1)
+    asked = []
+    real = plot.mean_interval
+    monkeypatch.setattr(plot, "mean_interval", lambda values, value_range: asked.append(value_range) or real(values, value_range))
+    for y in ("tp_rate_tactile", "fp_rate_force", "cells_passed"):
+        assert main(["sweep-plot", str(out), "-x", "noise_counts", "-y", y, "-o", str(tmp_path / f"{y}.png")]) == 0
+    cells = float(pd.read_csv(out)["cells"].iloc[0])
+    assert asked == [(0.0, 1.0)] * 4 + [(0.0, cells)] * 2 and cells > 0
+
+
 def test_mean_interval_is_the_betting_sequence_in_a_known_range_else_the_normal_one():
     from desmon.sweep.plot import mean_interval
     from desmon.stats import normal_interval

@@ -23,7 +23,7 @@ import threading
 import time
 from collections import OrderedDict
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 from desmon.deployment.exposure import CAUSES
 from desmon.deployment.guard import EXIT_CRASHED, DeployerFault
@@ -57,6 +57,18 @@ METRICS: dict[str, tuple[str, ...]] = {
     ),
     "estimate": ("estimate", "low", "high", "half_width", "runs", "status", "method", "normal_low", "normal_high", "min_value", "max_value"),
 }
+#: ``--job evaluate``'s rates: each the mean over the cells of a share of trials
+EVALUATE_RATES: tuple[str, ...] = tuple(m for m in METRICS["evaluate"] if "_rate_" in m)
+
+
+def evaluate_range(column: str, row: Mapping[str, Any]) -> tuple[float, float] | None:
+    """The range a ``--job evaluate`` row's ``column`` lies in whatever the seed, known without
+    running: ``[0, 1]`` for a rate, ``[0, cells]`` for the cells passed; None for another column."""
+    if column in EVALUATE_RATES:
+        return 0.0, 1.0
+    if column == "cells_passed":
+        return 0.0, float(row["cells"])
+    return None
 
 
 @dataclass(frozen=True, slots=True)

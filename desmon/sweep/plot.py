@@ -2,10 +2,12 @@
 
 * ``-x PARAM -y FIGURE``: per value of ``PARAM`` the mean of ``FIGURE`` over the seeds
   (a line), its min-max band, and the 95 % confidence interval of the mean as bars: for a
-  figure in seconds of the run, which lies in ``[0, horizon]``, the guaranteed betting
-  interval of ``desmon estimate`` (:mod:`desmon.stats`); for a count, whose range is not
-  known, the normal approximation, labelled so; one line per combination of the other
-  parameters that vary in the table.
+  figure whose range is known without running (a figure in seconds of the run lies in
+  ``[0, horizon]``; ``--job evaluate``'s rates in ``[0, 1]``, its cells passed in
+  ``[0, cells]``), the guaranteed betting interval of ``desmon estimate``
+  (:mod:`desmon.stats`); for a count, whose range is not known, the normal
+  approximation, labelled so; one line per combination of the other parameters that
+  vary in the table.
 * ``--pareto COST -y FIGURE``: every point's mean ``FIGURE`` against its ``COST``
   (say ``hand_memory``), min-max bars over the seeds, and the Pareto front: the points
   no other point beats on both (lower cost and lower figure).
@@ -123,10 +125,16 @@ def mean_interval(values: list[float], value_range: tuple[float, float] | None) 
 
 
 def _range_of(ok: Any, params: list[str], y: str) -> Any:
-    """``key -> (0, horizon)`` of each point's runs when ``y`` is in seconds of the run (else ``key -> None``);
-    the horizon is the table's ``until``, or the point's scenario's."""
+    """``row -> range`` every run of the row's point has ``y`` in, where it is known without running
+    (else ``row -> None``): ``(0, horizon)`` when ``y`` is in seconds of the run, the horizon being
+    the table's ``until`` or the point's scenario's; for ``--job evaluate``, ``(0, 1)`` for a rate and
+    ``(0, cells)`` for the cells passed (:func:`desmon.sweep.jobs.evaluate_range`)."""
     from desmon.estimate.measures import SECONDS
 
+    if "job" in ok.columns and bool((ok["job"] == "evaluate").all()):
+        from desmon.sweep.jobs import evaluate_range
+
+        return lambda row: evaluate_range(y, row)
     if y not in SECONDS or "scenario" not in ok.columns:
         return lambda row: None
     cache: dict[tuple[Any, ...], tuple[float, float]] = {}
