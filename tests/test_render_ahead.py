@@ -213,6 +213,18 @@ def test_automatic_rendering_ahead_needs_a_long_run_and_a_lone_thread() -> None:
         th.join()
 
 
+def test_automatic_rendering_ahead_needs_a_graph_that_reads_the_tactile_frames(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A model whose graphs read only the wrench and a camera reads no tactile frame: a worker
+    rendering them unasked would take a core for nothing. Asked, it still renders (the same bytes)."""
+    import desmon.sim.engine as engine
+
+    monkeypatch.setattr(engine, "fork_safe", lambda: True)  # as in a lone-thread process on 2 cores (not a test worker)
+    pick = load_scenario(ROOT / "scenarios" / "pick_place_camera.py")
+    assert not SimWorld(pick)._ahead_wanted()
+    assert SimWorld(pick, render_ahead=True)._ahead_wanted()
+    assert SimWorld(load_scenario(ROOT / "scenarios" / "coffee_shift.py"))._ahead_wanted()
+
+
 @pytest.mark.parametrize("value", ["yes", 1, 0.0, "auto"])
 def test_render_ahead_takes_true_false_or_none(value: object) -> None:
     sc = load_scenario(ROOT / "scenarios" / "coffee_handover.py")

@@ -53,6 +53,7 @@ from desmon.sim.facts import SLIP_WINDOW, Instance
 from desmon.sim.metrics import AUDIT, RECORDS, SIGNALS, work_read
 from desmon.sim.parts import RobotParts, robot_parts, start_processes
 from desmon.sim.processes import OBSERVATION, apply_initial, progress
+from desmon.sim.streams import TactileStream
 from desmon.sim.trace import Trace, declared_actions, graph_resources, initial_loads, platform_resources
 from desmon.sim.world import Slip, World, world_of
 
@@ -210,13 +211,20 @@ class SimWorld:
             trace.emit(s.time, "slip", direction=s.direction, kind=s.kind)
 
     def _ahead_wanted(self) -> bool:
-        """Whether this run renders its signals ahead in forked workers (``render_ahead``)."""
+        """Whether this run renders its signals ahead in forked workers (``render_ahead``);
+        unasked, only where a graph of the model reads the tactile frames the worker would
+        render (a model without one reads none of them)."""
         bank = self.bank
         if bank is None or self.render_ahead is False:
             return False
         if self.render_ahead:
             return True
-        return fork_safe() and holding_seconds(bank.signals.tactile_array.episodes, self.horizon) >= AHEAD_MIN_S
+        return (fork_safe() and self._reads_tactile()
+                and holding_seconds(bank.signals.tactile_array.episodes, self.horizon) >= AHEAD_MIN_S)
+
+    def _reads_tactile(self) -> bool:
+        """Whether some graph's detector reads the tactile stream (its plan: :attr:`Infrastructure.plans`)."""
+        return any(plan is not None and TactileStream in plan.streams for plan in self.infra.plans.values())
 
     def run(self) -> RunResult:
         parts = self.parts
