@@ -117,6 +117,31 @@ def test_sweep_plot_bars_evaluates_rates_and_cells_passed_with_the_guaranteed_in
     assert asked == [(0.0, 1.0)] * 4 + [(0.0, cells)] * 2 and cells > 0
 
 
+@pytest.mark.parametrize("column, value, y, says", [
+    ("tp_rate_force", "1.5", "tp_rate_force", "-y tp_rate_force: a row has 1.5, outside [0, 1]"),
+    ("cells", "", "cells_passed", "-y cells_passed: the range of its values, [0, nan], is not a range"),
+    ("cells", None, "cells_passed", "-y cells_passed: the row has no number of cells"),
+])
+def test_sweep_plot_refuses_an_edited_table_whose_values_leave_their_known_range(tmp_path, local, capsys, column, value, y, says):
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "ev.csv"
+    assert main(["sweep", "--job", "evaluate", "--trials", "5", "-p", "noise_counts=2,8", "--seeds", "2", "--no-progress",
+                 "-o", str(out)]) in (0, 1)
+    df = pd.read_csv(out)
+    if value is None:
+        df = df.drop(columns=[column])
+    else:
+        df[column] = df[column].astype(object)
+        df.loc[0, column] = float(value) if value else float("nan")
+    df.to_csv(out, index=False)
+    capsys.readouterr()
+    png = tmp_path / "p.png"
+    assert main(["sweep-plot", str(out), "-x", "noise_counts", "-y", y, "-o", str(png)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and says in err[0] and "write it again with desmon sweep" in err[0], err
+    assert not png.exists()
+
+
 def test_mean_interval_is_the_betting_sequence_in_a_known_range_else_the_normal_one():
     from desmon.sweep.plot import mean_interval
     from desmon.stats import normal_interval

@@ -67,7 +67,11 @@ def evaluate_range(column: str, row: Mapping[str, Any]) -> tuple[float, float] |
     if column in EVALUATE_RATES:
         return 0.0, 1.0
     if column == "cells_passed":
-        return 0.0, float(row["cells"])
+        cells = row.get("cells")
+        if cells is None or isinstance(cells, str):
+            raise SweepError(f"-y cells_passed: the row has no number of cells ({cells!r}); a table of --job evaluate "
+                             "has one in its cells column: write it again with desmon sweep")
+        return 0.0, float(cells)
     return None
 
 

@@ -155,6 +155,21 @@ def _range_of(ok: Any, params: list[str], y: str) -> Any:
     return range_of
 
 
+def _checked(value_range: tuple[float, float] | None, values: list[float], y: str) -> tuple[float, float] | None:
+    """``value_range`` if every value lies in it (the guarantee assumes so), else a SweepError
+    naming the value: the table was edited, or not written by desmon sweep."""
+    if value_range is None:
+        return None
+    lo, hi = value_range
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise SweepError(f"-y {y}: the range of its values, [{lo:g}, {hi:g}], is not a range; the table was edited or not written by desmon sweep: write it again with desmon sweep")
+    for v in values:
+        if not lo <= v <= hi:
+            raise SweepError(f"-y {y}: a row has {v:g}, outside [{lo:g}, {hi:g}], the range every run's value lies in; "
+                             "the table was edited or not written by desmon sweep: write it again with desmon sweep")
+    return value_range
+
+
 def _against(ax: Any, ok: Any, params: list[str], x: str, y: str, intervals: bool = False) -> str:
     """``y``'s mean against ``x``, the min-max band, and (``intervals``) each mean's interval as bars;
     the interval's method, for the title."""
@@ -165,7 +180,8 @@ def _against(ax: Any, ok: Any, params: list[str], x: str, y: str, intervals: boo
         range_of = _range_of(ok, params, y)
         bounds = []
         for _key, part in ok.groupby([*others, x], sort=True):
-            low, high, method = mean_interval([float(v) for v in part[y]], range_of(part.iloc[0]))
+            values = [float(v) for v in part[y]]
+            low, high, method = mean_interval(values, _checked(range_of(part.iloc[0]), values, y))
             bounds.append((low, high))
         s["low"], s["high"] = [b[0] for b in bounds], [b[1] for b in bounds]
     groups = s.groupby(others, sort=True) if others else [((), s)]
