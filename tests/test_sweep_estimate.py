@@ -89,8 +89,13 @@ def test_sweep_plot_bars_each_mean_with_the_guaranteed_interval_of_a_figure_in_s
 
     monkeypatch.setattr(plot, "mean_interval", spy)
     assert main(["sweep-plot", str(out), "-x", "hours", "-y", "exposure_s", "-o", str(tmp_path / "a.png")]) == 0
-    # each point's 3 seeds; its range: [0, the point's horizon] (hours x 3600 s), read from the scenario
-    assert [(n, r) for n, r, _got in asked] == [(3, (0.0, 36.0)), (3, (0.0, 72.0))]
+    # each point's 3 seeds; its range: the one desmon estimate takes at the point, read from the
+    # scenario (the task plays out the same in every run: within [0, hours x 3600 s], narrower)
+    from desmon.estimate.measures import natural_range
+
+    expected = [natural_range("exposure_s", h * 3600.0, load_scenario(coffee, {"hours": str(h)})) for h in (0.01, 0.02)]
+    assert [(n, r) for n, r, _got in asked] == [(3, expected[0]), (3, expected[1])]
+    assert all(0.0 <= lo < hi <= h * 3600.0 and (lo, hi) != (0.0, h * 3600.0) for (lo, hi), h in zip(expected, (0.01, 0.02)))
     df = pd.read_csv(out)
     for (_n, _r, (low, high, method)), (_h, part) in zip(asked, df.groupby("hours")):
         assert method == "guaranteed" and low <= part["exposure_s"].mean() <= high
@@ -140,6 +145,16 @@ def test_sweep_plot_refuses_an_edited_table_whose_values_leave_their_known_range
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and says in err[0] and "write it again with desmon sweep" in err[0], err
     assert not png.exists()
+
+
+def test_a_table_whose_scenario_cannot_be_read_keeps_the_runs_own_length_as_the_range(tmp_path):
+    from desmon.errors import ScenarioError
+    from desmon.sweep.plot import _seconds_range
+
+    gone = str(tmp_path / "moved.py")
+    assert _seconds_range(gone, {}, 60.0, "exposure_s") == (0.0, 60.0)
+    with pytest.raises(ScenarioError, match="no such scenario file"):
+        _seconds_range(gone, {}, None, "exposure_s")
 
 
 def test_mean_interval_is_the_betting_sequence_in_a_known_range_else_the_normal_one():

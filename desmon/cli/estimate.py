@@ -66,7 +66,7 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--alpha", type=finite_number, default=None, help="--below: the chance of a wrong yes (unset: 1 - confidence)")
     p.add_argument("--beta", type=finite_number, default=None, help="--below with --at-least: the chance of a wrong no (unset: 1 - confidence)")
     p.add_argument("--range", type=finite_number, nargs=2, default=None, metavar=("LOW", "HIGH"),
-                   help="the range every run's value lies in (seconds: [0, horizon] unless given; a count's mean needs one)")
+                   help="the range every run's value lies in (seconds: [0, horizon] unless given, narrower where fixed timing fixes the task's seconds; a count's mean needs one)")
     p.add_argument("--max-runs", type=positive_int, default=10_000, metavar="N", help="stop INCOMPLETE (exit 3) after N runs")
     p.add_argument("--timeout", type=positive_seconds, default=None, metavar="S", help="stop INCOMPLETE (exit 3) after S wall seconds (unset: no limit)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="the seed every run's seed is derived from")
@@ -198,6 +198,8 @@ def format_estimate(e: Any) -> str:
     rel = f" = {100 * iv.half_width / abs(iv.estimate):.2f} % of the estimate" if iv.estimate else ""
     out.append(f"  estimate {f(iv.estimate)}, {pct} interval [{f(iv.low)}, {f(iv.high)}] (half-width {f(iv.half_width)}{rel}), guaranteed")
     out.append(f"    method: {iv.method}" + (f"; every run's value assumed in [{_n(e.range[0])}, {_n(e.range[1])}]" if e.range else ""))
+    if e.range_basis:
+        out.append(f"    range: {e.range_basis}")
     out.append(f"  {ap.method}: [{f(ap.low)}, {f(ap.high)}]")
     v = _n if q.kind == "probability" else f  # a probability's runs give values of another figure (seconds, counts)
     out.append(f"  runs: {e.runs:,} (seeds derived from --seed {e.seed}); values {v(e.low_value)} .. {v(e.high_value)}")

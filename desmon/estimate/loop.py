@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass
 from typing import Any, Callable, Iterable, Iterator
 
 from desmon.errors import EstimateError
-from desmon.estimate.measures import DEFAULT_METRIC, LONGEST, check_metric, longest_exposure, natural_range, value_of
+from desmon.estimate.measures import DEFAULT_METRIC, LONGEST, check_metric, longest_exposure, natural_range, range_basis, value_of
 from desmon.stats import BettingSequence, Interval, ProportionSequence, WaldTest, clopper_pearson, normal_interval
 
 __all__ = ["Question", "Estimate", "estimate", "run_seed", "run_value", "serial_values", "is_look", "world_horizon", "Tracker", "with_world", "parse_within"]
@@ -167,6 +167,8 @@ class Estimate:
     approximation: Interval
     status: str
     range: tuple[float, float] | None = None
+    #: why the range is narrower than ``[0, horizon]`` (:func:`~desmon.estimate.measures.range_basis`), if it is
+    range_basis: str | None = None
     answer: str | None = None
     test_method: str | None = None
     low_value: float = math.nan
@@ -188,7 +190,7 @@ class Estimate:
             "estimate": iv.estimate, "low": iv.low, "high": iv.high, "half_width": iv.half_width, "confidence": q.interval_confidence,
             "method": iv.method,
             "approximation": {"low": _finite(ap.low), "high": _finite(ap.high), "method": ap.method},
-            "range": list(self.range) if self.range is not None else None,
+            "range": list(self.range) if self.range is not None else None, "range_basis": self.range_basis,
             "answer": self.answer, "test_method": self.test_method,
             "min_value": self.low_value, "max_value": self.high_value,
         }
@@ -383,7 +385,8 @@ def estimate(
     q = question if question is not None else Question()
     q.check()
     horizon = world_horizon(scenario, until)
-    value_range = q.range or natural_range(q.metric, horizon)
+    value_range = q.range or natural_range(q.metric, horizon, scenario)
+    basis = range_basis(q.metric, horizon, scenario) if q.range is None and q.kind == "mean" else None
     if q.kind == "mean" and value_range is None:
         raise EstimateError(
             f"--metric {q.metric} is a count with no bound known in advance, which a guaranteed interval of its mean needs: "
@@ -395,7 +398,7 @@ def estimate(
     iv, approx = tracker.result()
     return Estimate(
         scenario=scenario.name, deployer=getattr(deployer, "name", str(deployer)), seed=seed, horizon=horizon, question=q,
-        interval=iv, approximation=approx, status=status, range=value_range if q.kind == "mean" else None,
+        interval=iv, approximation=approx, status=status, range=value_range if q.kind == "mean" else None, range_basis=basis,
         answer=tracker.answer if status in (PRECISE, DECIDED) else None,
         test_method=(tracker.test.METHOD if tracker.test is not None else "confidence sequence excludes the threshold") if q.below is not None else None,
         low_value=min(tracker.values), high_value=max(tracker.values),

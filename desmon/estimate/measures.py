@@ -3,6 +3,8 @@ writes), each with the range its values are known to lie in.
 
 Seconds of the run (unmonitored exposure, its longest stretch, risky time, the exposure's
 causes, blind time) lie in ``[0, horizon]``: the guaranteed interval of their mean needs nothing else.
+Where the task plays out the same in every run (fixed timing), the exposure figures lie in
+a narrower range the task fixes (:func:`natural_range`, :func:`task_seconds`).
 Counts (switches, starts, slips missed, false alarms, errors by kind) have no bound
 known in advance: their mean needs a declared range (``--range``), which every run's
 value is then checked against; the probability that a count reaches a value
@@ -14,13 +16,18 @@ from __future__ import annotations
 
 import difflib
 import math
+from dataclasses import dataclass
 from typing import Any, Iterable, Mapping
 
+from desmon.deployment.exposure import CAUSES
 from desmon.deployment.ports import ERROR_KINDS
 from desmon.errors import EstimateError
 from desmon.sim.metrics import LONGEST_EXPOSURE, RUN_FIGURES, RUNTIME_CHANGES
 
-__all__ = ["METRICS", "SECONDS", "LONGEST", "check_metric", "natural_range", "value_of", "longest_exposure", "DEFAULT_METRIC"]
+__all__ = [
+    "METRICS", "SECONDS", "LONGEST", "check_metric", "natural_range", "range_basis", "task_seconds", "TaskSeconds", "value_of", "longest_exposure",
+    "DEFAULT_METRIC",
+]
 
 DEFAULT_METRIC = "exposure_s"
 #: per-run statistics that a run may lack (no slip detected): not estimable as a mean over runs
@@ -50,10 +57,91 @@ def check_metric(name: str) -> str:
     raise EstimateError(f"--metric {name!r}: no such run metric; {hint}choose one of {', '.join(METRICS)}")
 
 
-def natural_range(metric: str, horizon: float) -> tuple[float, float] | None:
+@dataclass(frozen=True)
+class TaskSeconds:
+    """The seconds of a task that plays out the same in every run, up to the run's end: with
+    an object in the hand (``risky``), of them in an action no rule covers (``no_rule``) and
+    in one excluded on purpose (``excluded``), as the exposure meter counts them."""
+
+    risky: float
+    no_rule: float
+    excluded: float
+
+
+def task_seconds(scenario: Any, horizon: float) -> TaskSeconds | None:
+    """:class:`TaskSeconds` of ``scenario``'s runs of ``horizon`` seconds where the World's
+    timing is fixed (each step lasts its duration, so every seed plays the same steps at the
+    same times), None where the steps vary with the seed. Each step's need lasts until the
+    next step begins, and the last one's until the run ends (the meter's rule)."""
+    from desmon.deployment.exposure import needs_table
+    from desmon.sim.world import expand_task, world_of
+
+    world = world_of(scenario)
+    if world.timing != "fixed":
+        return None
+    steps = expand_task(world, world.horizon)
+    table = needs_table(scenario.model)
+    risky = no_rule = excluded = 0.0
+    for i, step in enumerate(steps):
+        a = min(step.start, horizon)
+        b = min(steps[i + 1].start if i + 1 < len(steps) else horizon, horizon)
+        need = table[step.context]
+        if b <= a or not (need.counted or need.excluded):
+            continue
+        risky += b - a
+        if need.excluded:
+            excluded += b - a
+        elif not need.slots:
+            no_rule += b - a
+    return TaskSeconds(risky, no_rule, excluded)
+
+
+def natural_range(metric: str, horizon: float, scenario: Any = None) -> tuple[float, float] | None:
     """The range every run's ``metric`` lies in, known without running: ``[0, horizon]`` for
-    seconds of the run, None for counts (a range must then be declared)."""
-    return (0.0, float(horizon)) if metric in SECONDS else None
+    seconds of the run, None for counts (a range must then be declared). Given the
+    ``scenario``, a task that plays out the same in every run (:func:`task_seconds`) narrows
+    the exposure figures to what it fixes: the exposure lies between the seconds no rule
+    covers and the risky seconds not excluded, each of its other causes below their
+    difference, the risky, no-rule and excluded seconds at their values (each end widened
+    by :data:`TASK_SLACK` of the horizon for the meter's rounding)."""
+    if metric not in SECONDS:
+        return None
+    full = (0.0, float(horizon))
+    fixed = task_seconds(scenario, horizon) if scenario is not None and metric in _TASK_BOUNDED else None
+    if fixed is None:
+        return full
+    watched = fixed.risky - fixed.excluded
+    lo, hi = {
+        "exposure_s": (fixed.no_rule, watched),
+        LONGEST: (0.0, watched),
+        "risky_time_s": (fixed.risky, fixed.risky),
+        "excluded_s": (fixed.excluded, fixed.excluded),
+        "no_rule_s": (fixed.no_rule, fixed.no_rule),
+    }.get(metric, (0.0, watched - fixed.no_rule))
+    slack = TASK_SLACK * max(1.0, float(horizon))
+    return max(0.0, lo - slack), min(float(horizon), hi + slack)
+
+
+def range_basis(metric: str, horizon: float, scenario: Any) -> str | None:
+    """Why :func:`natural_range` gives ``metric`` a range narrower than ``[0, horizon]``
+    (None where it does not): what the fixed task holds, for the report."""
+    fixed = task_seconds(scenario, horizon) if metric in _TASK_BOUNDED else None
+    if fixed is None:
+        return None
+    parts = [f"{fixed.risky:,.6g} s with an object in the hand"]
+    if fixed.no_rule:
+        parts.append(f"{fixed.no_rule:,.6g} s of them in actions no rule covers")
+    if fixed.excluded:
+        parts.append(f"{fixed.excluded:,.6g} s in actions excluded on purpose")
+    return f"the task plays out the same in every run (fixed timing): {', '.join(parts)}"
+
+
+#: how far a range from :func:`task_seconds` is widened at each end, as a share of the horizon:
+#: the meter sums a run's seconds piece by piece and rounds them to 1e-6 s
+TASK_SLACK = 1e-9
+#: the figures a fixed task bounds more tightly than the horizon does (the exposure, its
+#: causes and longest stretch, the risky and excluded seconds)
+_TASK_BOUNDED = frozenset({"exposure_s", LONGEST, "risky_time_s", "excluded_s", *(f"{c}_s" for c in CAUSES)})
 
 
 def value_of(figures: Mapping[str, Any], metric: str) -> float:

@@ -3,7 +3,8 @@
 * ``-x PARAM -y FIGURE``: per value of ``PARAM`` the mean of ``FIGURE`` over the seeds
   (a line), its min-max band, and the 95 % confidence interval of the mean as bars: for a
   figure whose range is known without running (a figure in seconds of the run lies in
-  ``[0, horizon]``; ``--job evaluate``'s rates in ``[0, 1]``, its cells passed in
+  ``[0, horizon]``, or in the narrower range ``desmon estimate`` takes where the task plays
+  out the same in every run; ``--job evaluate``'s rates in ``[0, 1]``, its cells passed in
   ``[0, cells]``), the guaranteed betting interval of ``desmon estimate``
   (:mod:`desmon.stats`); for a count, whose range is not known, the normal
   approximation, labelled so; one line per combination of the other parameters that
@@ -126,9 +127,12 @@ def mean_interval(values: list[float], value_range: tuple[float, float] | None) 
 
 def _range_of(ok: Any, params: list[str], y: str) -> Any:
     """``row -> range`` every run of the row's point has ``y`` in, where it is known without running
-    (else ``row -> None``): ``(0, horizon)`` when ``y`` is in seconds of the run, the horizon being
-    the table's ``until`` or the point's scenario's; for ``--job evaluate``, ``(0, 1)`` for a rate and
-    ``(0, cells)`` for the cells passed (:func:`desmon.sweep.jobs.evaluate_range`)."""
+    (else ``row -> None``): for a figure in seconds of the run, the one ``desmon estimate`` takes
+    (:func:`desmon.estimate.measures.natural_range`: ``(0, horizon)``, narrower where the task
+    plays out the same in every run), the horizon being the table's ``until`` or the point's
+    scenario's (a table whose scenario file cannot be read keeps ``(0, until)``); for ``--job
+    evaluate``, ``(0, 1)`` for a rate and ``(0, cells)`` for the cells passed
+    (:func:`desmon.sweep.jobs.evaluate_range`)."""
     from desmon.estimate.measures import SECONDS
 
     if "job" in ok.columns and bool((ok["job"] == "evaluate").all()):
@@ -137,22 +141,34 @@ def _range_of(ok: Any, params: list[str], y: str) -> Any:
         return lambda row: evaluate_range(y, row)
     if y not in SECONDS or "scenario" not in ok.columns:
         return lambda row: None
-    cache: dict[tuple[Any, ...], tuple[float, float]] = {}
+    cache: dict[tuple[Any, ...], tuple[float, float] | None] = {}
 
-    def range_of(row: Any) -> tuple[float, float]:
+    def range_of(row: Any) -> tuple[float, float] | None:
         until = row.get("until") if "until" in ok.columns else None
-        if until is not None and until == until:  # (not NaN)
-            return 0.0, float(until)
-        key = (row["scenario"], *(row[p] for p in params))
+        until = float(until) if until is not None and until == until else None  # (NaN: not given)
+        key = (row["scenario"], until, *(row[p] for p in params))
         if key not in cache:
-            from desmon.loader import load_scenario
-            from desmon.sim.world import world_of
-
-            scenario = load_scenario(str(row["scenario"]), {p: str(row[p]) for p in params})
-            cache[key] = (0.0, float(world_of(scenario).horizon))
+            cache[key] = _seconds_range(str(row["scenario"]), {p: str(row[p]) for p in params}, until, y)
         return cache[key]
 
     return range_of
+
+
+def _seconds_range(path: str, values: dict[str, str], until: float | None, y: str) -> tuple[float, float] | None:
+    """:func:`~desmon.estimate.measures.natural_range` of ``y`` over the runs of the scenario at
+    ``path`` with parameter ``values``, ``until`` seconds long (its horizon if None)."""
+    from desmon.errors import DesmonError
+    from desmon.estimate.measures import natural_range
+    from desmon.loader import load_scenario
+    from desmon.sim.world import world_of
+
+    try:
+        scenario = load_scenario(path, values)
+    except DesmonError:
+        if until is None:
+            raise
+        return 0.0, until  # the rows' own length: all that is known without the scenario
+    return natural_range(y, until if until is not None else float(world_of(scenario).horizon), scenario)
 
 
 def _checked(value_range: tuple[float, float] | None, values: list[float], y: str) -> tuple[float, float] | None:
