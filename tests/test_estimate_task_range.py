@@ -66,6 +66,18 @@ def test_the_last_steps_need_lasts_until_the_run_ends_when_the_task_is_shorter_t
     _check_runs(longer, task_end + 30.0)
 
 
+def test_steps_whose_seconds_the_meter_rounds_still_lie_in_their_range():
+    """Durations that are no whole number of microseconds: the run's figures, rounded to
+    1e-6 s, stay inside the range (each end is widened by the rounding step)."""
+    sc = load_scenario(ROOT / "scenarios" / "coffee_handover.py")
+    world = world_of(sc)
+    odd = tuple(replace(step, duration=step.duration + 1.0 / 3.0 + 1.1e-7 * i) for i, step in enumerate(world.task))
+    task_end = sum(step.duration for step in odd)
+    sc = replace(sc, world=replace(world, task=odd, horizon=task_end, repeat=False))
+    _check_runs(sc, task_end)
+    _check_runs(sc, round(task_end * 0.61, 7))
+
+
 def test_an_action_excluded_on_purpose_leaves_the_exposures_range_and_keeps_the_risky_time():
     sc = load_scenario(ROOT / "scenarios" / "coffee_shift.py", {"hours": "1"})
     sc = replace(sc, model=replace(sc.model, declared_actions=(*sc.model.declared_actions, Action("hold", watched=False))))

@@ -103,7 +103,7 @@ def natural_range(metric: str, horizon: float, scenario: Any = None) -> tuple[fl
     the exposure figures to what it fixes: the exposure lies between the seconds no rule
     covers and the risky seconds not excluded, each of its other causes below their
     difference, the risky, no-rule and excluded seconds at their values (each end widened
-    by :data:`TASK_SLACK` of the horizon for the meter's rounding)."""
+    by :data:`ROUNDING_S` and :data:`TASK_SLACK` of the horizon for the meter's rounding)."""
     if metric not in SECONDS:
         return None
     full = (0.0, float(horizon))
@@ -118,7 +118,7 @@ def natural_range(metric: str, horizon: float, scenario: Any = None) -> tuple[fl
         "excluded_s": (fixed.excluded, fixed.excluded),
         "no_rule_s": (fixed.no_rule, fixed.no_rule),
     }.get(metric, (0.0, watched - fixed.no_rule))
-    slack = TASK_SLACK * max(1.0, float(horizon))
+    slack = ROUNDING_S + TASK_SLACK * float(horizon)
     return max(0.0, lo - slack), min(float(horizon), hi + slack)
 
 
@@ -136,8 +136,10 @@ def range_basis(metric: str, horizon: float, scenario: Any) -> str | None:
     return f"the task plays out the same in every run (fixed timing): {', '.join(parts)}"
 
 
-#: how far a range from :func:`task_seconds` is widened at each end, as a share of the horizon:
-#: the meter sums a run's seconds piece by piece and rounds them to 1e-6 s
+#: how far a range from :func:`task_seconds` is widened at each end: the step a run's
+#: figures in seconds are rounded to (``desmon.sim.accounting``), and a share of the horizon
+#: for the meter's sums of many pieces
+ROUNDING_S = 1e-6
 TASK_SLACK = 1e-9
 #: the figures a fixed task bounds more tightly than the horizon does (the exposure, its
 #: causes and longest stretch, the risky and excluded seconds)
