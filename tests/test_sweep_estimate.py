@@ -33,6 +33,7 @@ def test_each_point_gets_the_interval_desmon_estimate_gives_with_its_seed(tmp_pa
         params = {"stochastic": str(row["stochastic"])}
         e = estimate(load_scenario(PLATFORM_CRASH, params), Question(within=0.4, max_runs=30), seed=int(row["seed"]), until=20)
         assert (e.interval.low, e.interval.high, e.runs) == pytest.approx((row["low"], row["high"], row["runs"]))
+        assert (row["range_low"], row["range_high"]) == pytest.approx(e.range)  # the range its guarantee assumed
     assert code == (1 if (df["exit_code"] != 0).any() else 0)
 
 

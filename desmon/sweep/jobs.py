@@ -55,7 +55,10 @@ METRICS: dict[str, tuple[str, ...]] = {
         "p_exposure_within_T", "long_run_unmonitored_fraction", "horizon_s", "states", "transitions",
         "top_state", "top_state_s_per_hour",
     ),
-    "estimate": ("estimate", "low", "high", "half_width", "runs", "status", "method", "normal_low", "normal_high", "min_value", "max_value"),
+    "estimate": (
+        "estimate", "low", "high", "half_width", "runs", "status", "method", "normal_low", "normal_high", "min_value", "max_value",
+        "range_low", "range_high",
+    ),
 }
 #: ``--job evaluate``'s rates: each the mean over the cells of a share of trials
 EVALUATE_RATES: tuple[str, ...] = tuple(m for m in METRICS["evaluate"] if "_rate_" in m)
@@ -294,6 +297,8 @@ def _job_estimate(spec: JobSpec, run: Run) -> dict[str, Any]:
     return {
         "estimate": iv.estimate, "low": iv.low, "high": iv.high, "half_width": iv.half_width, "runs": e.runs, "status": e.status,
         "method": iv.method, "normal_low": ap.low, "normal_high": ap.high, "min_value": e.low_value, "max_value": e.high_value,
+        # the range the guarantee assumed every run's value in (desmon.estimate.measures.natural_range)
+        "range_low": e.range[0] if e.range else None, "range_high": e.range[1] if e.range else None,
         "exit_code": 0 if e.complete else EXIT_INCOMPLETE,
         # (as analyze's: an INCOMPLETE row counts as failed; it keeps the interval of its runs)
         "error": None if e.complete else f"INCOMPLETE: --max-runs {question.max_runs} reached at half-width {iv.half_width:.6g}",

@@ -36,7 +36,7 @@ _STR_METRICS = {"verdict", "violated", "error", "top_state", "status", "method"}
 _FLOAT_METRICS = {
     "exposure_s_per_hour", "exposure_s_per_mission", "undetected_slips_per_hour", "p_exposure_within_T",
     "long_run_unmonitored_fraction", "top_state_s_per_hour",
-    "estimate", "low", "high", "half_width", "normal_low", "normal_high", "min_value", "max_value",  # estimate's
+    "estimate", "low", "high", "half_width", "normal_low", "normal_high", "min_value", "max_value", "range_low", "range_high",  # estimate's
 }
 
 
