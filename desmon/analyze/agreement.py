@@ -94,14 +94,14 @@ class Agreement:
 
 def confidence(values: Sequence[float], level: float = 0.99) -> tuple[float, float, float]:
     """(mean, low, high): the two-sided ``level`` interval of the mean (Student's t)."""
-    from scipy.stats import t as student
+    from scipy.special import stdtrit  # Student's t quantile (scipy.stats.t.ppf's own), without importing scipy.stats
 
     n = len(values)
     if n < MIN_SEEDS:
         raise AnalysisError(f"--simulate {n}: a confidence interval needs at least {MIN_SEEDS} seeds")
     mean = sum(values) / n
     var = sum((v - mean) ** 2 for v in values) / (n - 1)
-    half = float(student.ppf(0.5 + level / 2, n - 1)) * math.sqrt(var / n)
+    half = float(stdtrit(n - 1, 0.5 + level / 2)) * math.sqrt(var / n)
     return mean, mean - half, mean + half
 
 

@@ -159,14 +159,14 @@ class BettingSequence:
 def normal_interval(values: list[float] | tuple[float, ...], delta: float) -> Interval:
     """``mean +- z_{1-delta/2} s / sqrt(n)`` (Student's t quantile below 30 runs): the CLT
     approximation, not guaranteed (module docstring). Needs 2 runs or more."""
-    from scipy.stats import norm, t as student
+    from scipy.special import ndtri, stdtrit  # the quantiles of scipy.stats' norm and t, without importing scipy.stats
 
     n = len(values)
     mean = math.fsum(values) / n if n else math.nan
     if n < 2:
         return Interval(mean, -math.inf, math.inf, n, NORMAL_METHOD)
     sd = math.sqrt(math.fsum((v - mean) ** 2 for v in values) / (n - 1))
-    q = float(student.ppf(1 - delta / 2, n - 1)) if n < 30 else float(norm.ppf(1 - delta / 2))
+    q = float(stdtrit(n - 1, 1 - delta / 2)) if n < 30 else float(ndtri(1 - delta / 2))
     return Interval(mean, mean - q * sd / math.sqrt(n), mean + q * sd / math.sqrt(n), n, NORMAL_METHOD)
 
 
