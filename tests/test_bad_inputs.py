@@ -25,12 +25,11 @@ from __future__ import annotations
 
 import shlex
 import shutil
-import subprocess
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
+import warm
 
 from desmon.cli import main
 
@@ -106,9 +105,7 @@ def test_bad_input_ends_in_one_line_with_its_exit_code(path: Path, tmp_path: Pat
 
     monkeypatch.chdir(work)
     if case.subprocess:
-        proc = subprocess.run(
-            [sys.executable, "-m", "desmon", *argv], capture_output=True, text=True, cwd=work, timeout=120
-        )
+        proc = warm.run(argv, cwd=work, timeout=120)
         code, out, err = proc.returncode, proc.stdout, proc.stderr
     else:
         code = main(argv)

@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 
 import pytest
+import warm
 
 from desmon.cli import main
 from desmon.deployment.deployer import DEPLOYERS, Deployer
@@ -164,13 +165,18 @@ def test_fuzz_reports_a_crash_as_crashed_with_the_checkers_shortest_path(deploye
     assert "the checker's shortest counterexample" in out
 
 
-def _desmon(deployers: str, *args: str, interrupt_after: float | None = None, timeout: float = 60) -> tuple[int, float, str, str]:
-    """``desmon ARGS`` in a process of its own: (exit code, seconds it took, stdout, stderr);
-    one that takes over ``timeout`` seconds fails the test (it hung)."""
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "desmon", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # a shell's background job ignores it
-    )
+def _desmon(deployers: str, *args: str, interrupt_after: float | None = None, timeout: float = 60,
+            child: bool = False) -> tuple[int, float, str, str]:
+    """``desmon ARGS`` in a process of its own (tests/warm.py; ``child``: started by this
+    process, its parent): (exit code, seconds it took, stdout, stderr); one that takes over
+    ``timeout`` seconds fails the test (it hung)."""
+    if child:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "desmon", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # a shell's background job ignores it
+        )
+    else:  # with Python's SIGINT handler, as a program started with SIGINT at its default gets
+        proc = warm.WarmProcess(args)
     t0 = time.monotonic()
     if interrupt_after is not None:
         time.sleep(interrupt_after)
@@ -232,7 +238,7 @@ def test_timeout_stops_a_worker_process_stuck_in_a_reaction(tmp_path):
     scenario = str(ROOT / "scenarios" / "scale_family.py")  # levels of 256 states and more: they go to the workers
     code, took, out, err = _desmon(
         str(path), "verify", scenario, "-p", "platforms=4", "--deployer", f"{path}:stuck_in_workers", "--engine", "direct",
-        "--workers", "2", "--timeout", "6", "--no-progress",
+        "--workers", "2", "--timeout", "6", "--no-progress", child=True,
     )  # (6 s: with four platforms the third level, the first of 256 states, comes after about 70 states)
     assert code == 3 and "verdict: INCOMPLETE (timeout 6s)" in out and "+ 2 workers" in out, out + err
     assert took < 6 + 2, f"--timeout 6 took {took:.1f} s"

@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 import pytest
+import warm
 
 ROOT = Path(__file__).resolve().parent.parent
 COFFEE = str(ROOT / "scenarios" / "coffee_handover.py")
@@ -46,7 +47,7 @@ HEADS = {
 def _desmon(*args: str, timeout: float = 60) -> tuple[int, float, str, str]:
     t0 = time.monotonic()
     try:
-        proc = subprocess.run([sys.executable, "-m", "desmon", *args], capture_output=True, text=True, timeout=timeout)
+        proc = warm.run(args, timeout=timeout)
     except subprocess.TimeoutExpired:
         pytest.fail(f"desmon {' '.join(args)} hung")
     return proc.returncode, time.monotonic() - t0, proc.stdout, proc.stderr
@@ -169,9 +170,8 @@ def test_a_deployer_changing_the_working_directory_changes_desmons_outputs_nowhe
     work = tmp_path / "work"
     work.mkdir()
     try:
-        proc = subprocess.run(
-            [sys.executable, "-m", "desmon", "verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'moves.py'}:nothing", "--json", "cex.json"],
-            capture_output=True, text=True, cwd=work, timeout=60,
+        proc = warm.run(
+            ["verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'moves.py'}:nothing", "--json", "cex.json"], cwd=work, timeout=60,
         )
     except subprocess.TimeoutExpired:
         pytest.fail("desmon hung")

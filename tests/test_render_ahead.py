@@ -7,13 +7,13 @@ import json
 import os
 import signal
 import subprocess
-import sys
 import threading
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+import warm
 from conftest import deliveries
 
 from desmon.detectors.signals import MissionSignals, SlipEvent, ahead
@@ -234,10 +234,7 @@ def test_render_ahead_takes_true_false_or_none(value: object) -> None:
 
 def test_cli_render_ahead_is_checked_and_changes_no_output(tmp_path: Path) -> None:
     def run(*extra: str) -> subprocess.CompletedProcess[str]:
-        return subprocess.run(
-            [sys.executable, "-m", "desmon", "run", str(ROOT / "scenarios" / "robot_day.py"), "--until", "900", "--no-progress", "--json", *extra],
-            capture_output=True, text=True, cwd=ROOT, timeout=300,
-        )
+        return warm.run(["run", str(ROOT / "scenarios" / "robot_day.py"), "--until", "900", "--no-progress", "--json", *extra], cwd=ROOT, timeout=300)
 
     on = run("--render-ahead", "on", "--trace", str(tmp_path / "on.jsonl"))
     off = run("--render-ahead", "off", "--trace", str(tmp_path / "off.jsonl"))
@@ -250,10 +247,7 @@ def test_cli_render_ahead_is_checked_and_changes_no_output(tmp_path: Path) -> No
     assert on.stderr == off.stderr and on.stderr.startswith("desmon: warning: risky action 'hold'") and on.stderr.count("\n") == 1
     bad = run("--render-ahead", "sometimes")
     assert bad.returncode == 2 and "invalid choice: 'sometimes'" in bad.stderr and "Traceback" not in bad.stderr
-    fleet = subprocess.run(
-        [sys.executable, "-m", "desmon", "run", str(ROOT / "scenarios" / "fleet.py"), "--render-ahead", "on", "--no-progress"],
-        capture_output=True, text=True, cwd=ROOT, timeout=300,
-    )
+    fleet = warm.run(["run", str(ROOT / "scenarios" / "fleet.py"), "--render-ahead", "on", "--no-progress"], cwd=ROOT, timeout=300)
     assert fleet.returncode == 2 and "drop --render-ahead" in fleet.stderr and "Traceback" not in fleet.stderr
     quiet = run("--render-ahead", "on", "--no-signals")
     assert quiet.returncode == 2 and "drop --render-ahead" in quiet.stderr and quiet.stderr.count("\n") == 1

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+import warm
 
 from desmon.loader import load_scenario
 from desmon.repository import labels as L
@@ -184,7 +184,7 @@ def test_robot_day_trace_deterministic_and_seed_sensitive(tmp_path: Path) -> Non
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "desmon", *args], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    return warm.run(args, cwd=ROOT, timeout=120)
 
 
 @pytest.mark.slow

@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 
 import pytest
+import warm
 
 EXIT = re.compile(r"#\s*exit\s+(\d+)\s*$")
 #: The documents whose sh blocks the suite executes.
@@ -113,9 +114,12 @@ def _run_block(cmds: list[tuple[str, int]], work: Path, env: dict[str, str], kee
     ran: Ran = []
     for cmd, expected in cmds:
         argv = shlex.split(cmd)
-        if argv[0] == "python":
-            argv[0] = sys.executable
-        proc = subprocess.run(argv, cwd=work, env=env, capture_output=True, text=True, timeout=600)
+        if argv[0] == "desmon":  # the installed script, in a process of its own (tests/warm.py)
+            proc = warm.run(argv[1:], cwd=work, env=env, timeout=600, script=True)
+        else:
+            if argv[0] == "python":
+                argv[0] = sys.executable
+            proc = subprocess.run(argv, cwd=work, env=env, capture_output=True, text=True, timeout=600)
         ran.append((cmd, expected, proc))
         if proc.returncode != expected and not keep_going:
             break
