@@ -10,15 +10,17 @@ STAMP := $(VENV)/.installed
 # byte-compiles what it installs on one core; here compileall does it on every core instead
 # (the same bytecode; in a fresh clone on 2 cores, pip's warm download cache, one run each:
 # pip install -e '.[test,sweep]' 24.8 s, with --no-compile 8.4 s, then compileall 8.7 s),
-# desmon's own modules included. As with pip, a
-# file that does not compile is left to be compiled at import, and the install goes on.
+# desmon's own modules included, the installed packages' own test folders and the
+# installers (pip, setuptools) left out: nothing imports them (5.0 s instead of 8.3 s, one
+# run each). As with pip, a file that does not compile, or is imported after all, is
+# compiled at import, and the install goes on.
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || { echo "==> creating $(VENV) with $$($(PY) --version)"; $(PY) -m venv $(VENV); }
 	@echo "==> installing desmon and its test and sweep extras into $(VENV) (first run only; pip's output follows)"
 	@$(BIN)/python -m pip install --upgrade pip
 	@$(BIN)/python -m pip install --no-compile -e '.[test,sweep]'
 	@echo "==> byte-compiling the installed packages and desmon on every core"
-	@$(BIN)/python -m compileall -q -j 0 $(VENV)/lib desmon || true
+	@$(BIN)/python -m compileall -q -j 0 -x '/tests?/|/site-packages/(pip|setuptools|pkg_resources|_distutils_hack)/' $(VENV)/lib desmon || true
 	@touch $(STAMP)
 	@echo "==> installed: $(BIN)/desmon"
 

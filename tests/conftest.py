@@ -1,4 +1,6 @@
+import functools
 import json
+import sys
 from pathlib import Path
 from typing import Callable
 
@@ -151,6 +153,7 @@ class XdistGroups:
 
     def pytest_configure_node(self, node) -> None:  # type: ignore[no-untyped-def]
         node.workerinput[self.KEY] = self.folder
+        node.workerinput[SharedTrials.KEY] = self.folder
 
     @pytest.hookimpl(tryfirst=True)  # before xdist's own choice of scheduler
     def pytest_xdist_make_scheduler(self, config, log):  # type: ignore[no-untyped-def]
@@ -192,8 +195,59 @@ def _write_groups(config, items) -> None:  # type: ignore[no-untyped-def]
     (Path(folder) / f"{config.workerinput['workerid']}.json").write_text(json.dumps(groups))
 
 
+class SharedTrials:
+    """In each process of ``make test``: desmon's detection trials computed once for all the
+    processes. :func:`desmon.detectors.evaluation.detection_rates` (what ``analyze`` reads
+    its detection rates from) is memoised in each process; the processes of one run share
+    their answers through the run's folder (:class:`XdistGroups`), one file per question
+    (its arguments), the first process to ask computing it while the others wait for it.
+    The trials are deterministic for their arguments (a seed among them), so every
+    process gets the numbers it would have computed; a question with a ``budget`` (a
+    timeout) is computed where it is asked. Measured with DESMON_TEST_CPU: the suite's
+    processes spent 31 CPU-seconds in trials, 13 of them on distinct questions."""
+
+    KEY = "desmon_shared_trials"
+
+    def __init__(self, folder: str) -> None:
+        import desmon.detectors.evaluation as evaluation
+
+        self.folder = Path(folder)
+        self.own = evaluation.detection_rates
+        rates = self.rates
+
+        @functools.wraps(self.own)
+        def shared(*args, **kw):  # type: ignore[no-untyped-def]
+            return rates(*args, **kw)
+
+        shared.cache_clear, shared.cache_info = self.own.cache_clear, self.own.cache_info  # type: ignore[attr-defined]
+        evaluation.detection_rates = shared
+
+    def rates(self, *args, **kw):  # type: ignore[no-untyped-def]
+        import fcntl
+        import hashlib
+        import os
+        import pickle
+
+        if kw.get("budget") is not None:
+            return self.own(*args, **kw)
+        key = hashlib.sha256(repr((args, sorted(kw.items()))).encode()).hexdigest()
+        path = self.folder / f"trials-{key}.pickle"
+        with open(self.folder / f"trials-{key}.lock", "a") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # released as the file closes
+            if path.exists():
+                return pickle.loads(path.read_bytes())
+            rates = self.own(*args, **kw)
+            part = path.with_suffix(f".{os.getpid()}")
+            part.write_bytes(pickle.dumps(rates))
+            os.replace(part, path)
+            return rates
+
+
 @pytest.hookimpl(trylast=True)  # after the terminal reporter is registered
 def pytest_configure(config) -> None:  # type: ignore[no-untyped-def]
+    shared = getattr(config, "workerinput", {}).get(SharedTrials.KEY)
+    if shared is not None and sys.platform.startswith("linux"):
+        SharedTrials(shared)
     reporter = config.pluginmanager.get_plugin("terminalreporter")
     if reporter is not None and config.get_verbosity() <= 0 and not hasattr(config, "workerinput"):
         config.pluginmanager.register(SlowLines(reporter), "desmon-slow-lines")
