@@ -116,7 +116,7 @@ def _projected(values: list[float], value_range: tuple[float, float], draws: int
     rng = np.random.default_rng(0)
     out = []
     for _ in range(draws):
-        cs = BettingSequence(value_range[0], value_range[1], 1.0 - confidence)
+        cs = BettingSequence(value_range[0], value_range[1], 1.0 - confidence, goal=lambda m: within * abs(m))  # as desmon estimate bets
         n = 0
         while True:
             cs.add(float(values[rng.integers(len(values))]))

@@ -37,6 +37,53 @@ def test_the_betting_sequence_holds_the_mean_at_every_look_as_often_as_promised(
     assert not fails(ever_out, reps, delta), ever_out
 
 
+@pytest.mark.parametrize("goal", [lambda m: 0.1 * abs(m), lambda m: 0.002], ids=["relative", "absolute"])
+def test_bets_sized_for_a_goal_hold_the_mean_at_every_look_as_often_as_promised(goal):
+    """desmon estimate sizes its bets for the half-width it stops at: still a guarantee at every look."""
+    rng = np.random.default_rng(12)
+    delta, reps, n = 0.1, 150, 120
+    ever_out = 0
+    for _ in range(reps):
+        cs = BettingSequence(0.0, 1.0, delta, goal=goal)
+        out = False
+        for i, x in enumerate(_skewed(rng, n), 1):
+            cs.add(float(x))
+            if i in (10, 30, 60, 120):
+                out |= not cs.interval().contains(SKEWED_MEAN)
+        ever_out += out
+    assert not fails(ever_out, reps, delta), ever_out
+
+
+def test_a_bet_is_fixed_before_its_value_is_seen_goal_or_not():
+    """The guarantee's one condition on the bets: run i's bet depends on the runs before it only."""
+    rng = np.random.default_rng(5)
+    head = [float(x) for x in _skewed(rng, 30)]
+    for goal in (None, lambda m: 0.05 * abs(m)):
+        a, b = BettingSequence(0.0, 1.0, 0.05, goal=goal), BettingSequence(0.0, 1.0, 0.05, goal=goal)
+        for x in head:
+            a.add(x)
+            b.add(x)
+        a.add(0.0)
+        b.add(1.0)
+        assert a._bets == b._bets  # the 31st bet was fixed before the 31st value, different in a and b
+
+
+def test_bets_sized_for_the_goal_reach_it_in_fewer_runs():
+    """The same values, one sequence sized for a half-width of 2 % of the mean, one not: the
+    sized one gets there first (the coffee shift's own: python -m bench.bench_estimate)."""
+    rng = np.random.default_rng(8)
+    values = 0.2 + 0.05 * rng.gamma(4.0, 1.0, 20_000) / 4.0  # mean 0.25, skewed, far from the range's ends
+    reached = {}
+    for name, goal in (("unsized", None), ("sized", lambda m: 0.02 * abs(m))):
+        cs = BettingSequence(0.0, 1.0, 0.01, goal=goal)
+        for i, x in enumerate(values, 1):
+            cs.add(float(x))
+            if i % 100 == 0 and cs.interval().half_width <= 0.02 * cs.interval().estimate:
+                reached[name] = i
+                break
+    assert reached["sized"] < 0.95 * reached["unsized"], reached
+
+
 def test_the_betting_sequence_narrows_keeps_to_the_range_and_refuses_a_value_outside_it():
     rng = np.random.default_rng(3)
     cs = BettingSequence(10.0, 20.0, 0.05)

@@ -217,8 +217,10 @@ class Tracker:
                 self.test = WaldTest(q.below, q.indifference(), a, b)
         else:
             assert value_range is not None
-            # a mean's threshold: the sequence at confidence 1 - alpha answers it
-            self.mean = BettingSequence(value_range[0], value_range[1], 1.0 - q.interval_confidence)
+            # a mean's threshold: the sequence at confidence 1 - alpha answers it, its bets sized for
+            # the indifference half-width; an estimate's, for the half-width it stops at
+            goal = q.half_width_goal if q.below is None else (lambda _estimate: q.indifference())
+            self.mean = BettingSequence(value_range[0], value_range[1], 1.0 - q.interval_confidence, goal=goal)
         self.values: list[float] = []
         self.answer: str | None = None
         self._last: Interval | None = None
