@@ -18,6 +18,7 @@ In one run it measures:
   takes (the task's: :func:`desmon.estimate.measures.natural_range`) fed values drawn
   from the ``M`` runs with replacement until its half-width is 1 % of the estimate, median
   of ``--draws`` projections (their range printed); beside it the same on ``[0, horizon]``,
+  the same with bets sized for no particular run (docs/estimate.md, "A bounded mean"),
   the runs the normal (CLT) interval would need, ``(z s / (0.01 mean))**2``, the floor of
   any distribution-free interval on that range ``[low, high]``
   (``(high - mean) ln(1/delta) / (0.02 mean)``: in fewer runs, a world that adds a rare
@@ -42,7 +43,7 @@ narrowed by 20 % -- each judged by :func:`desmon.estimate.coverage.fails`. Last 
 normal_held_min=... narrowed_normal_failed=... halved_failed=...``.
 
 Otherwise the last line is ``RESULT robot_day_runs_per_min_core=... coffee_shift_runs_per_min_core=...
-runs_needed_1pct_99=... runs_needed_horizon_range=... clt_runs_needed=... floor_runs=... minutes_2_cores=...
+runs_needed_1pct_99=... runs_needed_horizon_range=... runs_needed_unsized_bets=... clt_runs_needed=... floor_runs=... minutes_2_cores=...
 speedup=... one_worker_s=... two_workers_s=... coffee_shift_full_s=... coffee_shift_read_s=...
 coffee_shift_read_ratio=... robot_day_full_s=... robot_day_read_s=... robot_day_read_ratio=...``.
 """
@@ -106,8 +107,9 @@ def _against_full(name: str, runs: int, until: float | None, turns: int) -> tupl
 
 
 def _projected(values: list[float], value_range: tuple[float, float], draws: int, confidence: float = 0.99,
-               within: float = 0.01) -> list[int]:
-    """Runs the betting sequence on ``value_range`` needs to reach ``within`` of the estimate, fed draws from ``values``."""
+               within: float = 0.01, sized: bool = True) -> list[int]:
+    """Runs the betting sequence on ``value_range`` needs to reach ``within`` of the estimate, fed draws from ``values``;
+    its bets sized for that half-width as ``desmon estimate`` sizes them (``sized``), or for no particular run."""
     import numpy as np
 
     from desmon.estimate.loop import is_look
@@ -116,7 +118,8 @@ def _projected(values: list[float], value_range: tuple[float, float], draws: int
     rng = np.random.default_rng(0)
     out = []
     for _ in range(draws):
-        cs = BettingSequence(value_range[0], value_range[1], 1.0 - confidence, goal=lambda m: within * abs(m))  # as desmon estimate bets
+        goal = (lambda m: within * abs(m)) if sized else None
+        cs = BettingSequence(value_range[0], value_range[1], 1.0 - confidence, goal=goal)
         n = 0
         while True:
             cs.add(float(values[rng.integers(len(values))]))
@@ -248,12 +251,14 @@ def main(argv: list[str] | None = None) -> int:
     needed = _projected(values, (low, high), args.draws)
     projected = int(statistics.median(needed))
     horizon_needed = int(statistics.median(_projected(values, (0.0, horizon), args.draws)))
+    unsized = int(statistics.median(_projected(values, (low, high), args.draws, sized=False)))
     clt = math.ceil((float(norm.ppf(0.995)) * sd / (0.01 * mean)) ** 2)
     floor = math.ceil((high - mean) * math.log(1 / 0.01) / (0.02 * mean))
     minutes = projected / rates["coffee_shift"] / 2
     print(f"coffee_shift +-1 % at 99 %: {projected:,} runs projected on the task's range [{low:,.0f}, {high:,.0f}] (range "
           f"{min(needed):,}..{max(needed):,} over {args.draws} draws), {minutes:.1f} min on 2 cores; on [0, {horizon:,.0f}] "
-          f"{horizon_needed:,}; the normal interval would need {clt:,}; floor on the task's range {floor:,}")
+          f"{horizon_needed:,}; with bets sized for no particular run {unsized:,}; the normal interval would need {clt:,}; "
+          f"floor on the task's range {floor:,}")
     times: dict[int, list[float]] = {1: [], 2: []}
     estimates = []
     for workers in [1, 2, 2, 1] * (args.rounds // 2) + [1, 2] * (args.rounds % 2):  # ABBA: a load that drifts weighs on both
@@ -267,7 +272,7 @@ def main(argv: list[str] | None = None) -> int:
           f"speed-up {one / two:.2f}x (the same estimate every turn)")
     print(
         f"RESULT robot_day_runs_per_min_core={rates['robot_day']:.2f} coffee_shift_runs_per_min_core={rates['coffee_shift']:.2f} "
-        f"runs_needed_1pct_99={projected} runs_needed_horizon_range={horizon_needed} clt_runs_needed={clt} floor_runs={floor} "
+        f"runs_needed_1pct_99={projected} runs_needed_horizon_range={horizon_needed} runs_needed_unsized_bets={unsized} clt_runs_needed={clt} floor_runs={floor} "
         f"minutes_2_cores={minutes:.1f} "
         f"speedup={one / two:.2f} one_worker_s={one:.2f} two_workers_s={two:.2f} "
         + " ".join(f"{n}_full_s={f:.3f} {n}_read_s={r:.3f} {n}_read_ratio={f / r:.2f}" for n, (f, r) in against.items())

@@ -98,7 +98,7 @@ RESULT_KEYS: dict[str, tuple[str, ...]] = {
     "bench_analyze --undetected": ("scenarios", "inside", "seeds", "trials"),
     "bench_detectors": ("trials_per_s", "eval_ratio", "missions_per_s", "detectors_us_per_sim_s"),
     "bench_estimate": (
-        "robot_day_runs_per_min_core", "coffee_shift_runs_per_min_core", "runs_needed_1pct_99", "runs_needed_horizon_range", "clt_runs_needed",
+        "robot_day_runs_per_min_core", "coffee_shift_runs_per_min_core", "runs_needed_1pct_99", "runs_needed_horizon_range", "runs_needed_unsized_bets", "clt_runs_needed",
         "floor_runs",
         "minutes_2_cores", "speedup", "one_worker_s", "two_workers_s", "coffee_shift_full_s", "coffee_shift_read_s", "coffee_shift_read_ratio",
         "robot_day_full_s", "robot_day_read_s", "robot_day_read_ratio",
