@@ -146,3 +146,22 @@ def test_the_estimate_and_both_ends_of_each_interval_print_with_the_decimals_of_
     half_width = float(m.group(4).replace(",", ""))
     assert {_decimals(n) for n in numbers} == {decimals_for(half_width)}, numbers
     assert 10 <= half_width / 10 ** -decimals_for(half_width) < 100  # two significant digits of the half-width
+
+
+@pytest.mark.slow
+def test_the_estimate_docs_quote_is_what_the_command_prints(capsys, monkeypatch):
+    """docs/estimate.md's output block is the whole output of the command above it (146 runs of a robot hour)."""
+    import shlex
+
+    from docblocks import check_quote, quotes
+
+    found = quotes((ROOT / "docs" / "estimate.md").read_text())
+    assert found
+    monkeypatch.chdir(ROOT)
+    for q in found:
+        argv = shlex.split(q.command.split("#")[0])
+        assert argv[0] == "desmon"
+        code = main([*argv[1:], "--no-progress"])
+        out, err = capsys.readouterr()
+        assert code == 0, err
+        check_quote(q, out + err)
