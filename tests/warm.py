@@ -4,12 +4,14 @@ A test that runs ``python -m desmon ...`` or the ``desmon`` script wants what a 
 a process of its own (a deployer that patches desmon, changes directory, forks or ends its
 process touches nothing of the test), its exit code, its standard output and error, a
 timeout that ends it and its workers. Starting Python and importing desmon, numpy and
-networkx for each such command costs about 0.3 CPU-seconds, the same every time; the suite
-runs a few hundred of them.
+networkx is the same work for every such command, and the suite runs a few hundred of
+them: ``desmon verify scenarios/coffee_handover.py`` took 0.48 CPU-seconds as a process of
+its own and 0.16 forked from the server (ten of each, the server's children's CPU read
+from ``/proc``).
 
 :func:`run` gives the same with the import done once per test process: a server (this
-file as a program) imports ``desmon.cli``, as ``python -m desmon`` does before it reads
-its arguments, and forks a child for each command. The child takes the command's
+file as a program) imports :data:`PRELOADED`, ``desmon.cli`` first, and forks a child
+for each command. The child takes the command's
 directory, environment, ``sys.argv`` and ``sys.path[0]`` (the directory ``python -m``
 or the script puts there), its standard input from ``/dev/null`` and its output into the
 caller's files, a process group of its own, Python's own SIGINT handler, then runs
@@ -18,9 +20,12 @@ non-daemon threads joined, buffers flushed).
 
 What a forked child cannot take from its environment falls back to a real process
 (:func:`needs_fresh`): a ``PYTHON*`` variable other than the server's (a hash seed,
-``-X`` options, a path) or an interpreter option. ``DESMON_TEST_COLD=1`` runs every
-command in a real process (the same tests, the same assertions: the harness itself is
-checked by ``tests/test_warm.py``)."""
+``-X`` options, a path). The commands of one test process share the server's hash seed,
+so a test that wants two commands under different hash seeds gives them
+``PYTHONHASHSEED`` (``tests/test_explore.py`` does); a test that needs an interpreter
+option, or the test itself as the command's parent, starts the process itself.
+``DESMON_TEST_COLD=1`` runs every command in a real process (the same tests, the same
+assertions: the harness itself is checked by ``tests/test_warm.py``)."""
 
 from __future__ import annotations
 
