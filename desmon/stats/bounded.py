@@ -17,11 +17,13 @@ a goal relative to the estimate: :class:`BettingSequence`'s ``goal``), the bets 
 the sample-size-tuned bets Waudby-Smith and Ramdas give for a number of runs known in
 advance, ``L_i = sqrt(2 log(2/delta) / (s2 n_i))``, with that number projected from the
 runs before: ``n_i = max(i, 2 s2 log(2/delta) / (g e)^2)``, the run where a half-width of
-``g e`` is expected (``g`` = :data:`GOAL_REACH`), so ``L_i = g e / s2`` until then. Each ``L_i``, goal or not, is fixed before value ``i`` is seen, and each bet keeps
-the capital above 0 whatever the value, so at the true mean both capitals are
-nonnegative martingales starting at 1, so by Ville's inequality the chance that either ever reaches ``2/delta`` is at most
-``delta``: the candidates ``m`` where neither has are a ``1 - delta`` confidence interval
-*at every run at once* -- valid however the number of runs was chosen (stopping once
+``g e`` is expected (``g`` = :data:`GOAL_REACH`), so ``L_i = g e / s2`` until then.
+
+Each ``L_i``, goal or not, is fixed before value ``i`` is seen, and each bet keeps the
+capital above 0 whatever the value: at the true mean both capitals are nonnegative
+martingales starting at 1, and by Ville's inequality the chance that either ever
+reaches ``2/delta`` is at most ``delta``: the candidates ``m`` where neither has are a
+``1 - delta`` confidence interval *at every run at once* -- valid however the number of runs was chosen (stopping once
 it is narrow enough, at a deadline, or never), not only at a number fixed in advance.
 ``K+`` falls and ``K-`` rises with ``m``, so that set is an interval, found by bisection
 and intersected with the intervals of the earlier looks.
@@ -60,8 +62,8 @@ BISECTIONS = 48
 #: this share: the closer to 1, the fewer runs a narrow interval needs when no run comes near that end)
 TRUNCATION = 0.9
 #: with a goal ``e``, the bets are sized for the run where a half-width of ``GOAL_REACH * e``
-#: is projected (module docstring). Any value keeps the guarantee; 2 took the fewest runs of
-#: 1, 1.5 and 2 on the three estimations docs/estimate.md measures them on
+#: is projected (module docstring). Any value keeps the guarantee; of 1, 1.5 and 2, 2 took the
+#: fewest runs on the robot day, the coffee handover and the coffee shift (CHANGELOG.md has the counts)
 GOAL_REACH = 2.0
 
 
