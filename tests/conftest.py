@@ -203,8 +203,9 @@ class SharedTrials:
     (its arguments), the first process to ask computing it while the others wait for it.
     The trials are deterministic for their arguments (a seed among them), so every
     process gets the numbers it would have computed; a question with a ``budget`` (a
-    timeout) is computed where it is asked. Measured with DESMON_TEST_CPU: the suite's
-    processes spent 31 CPU-seconds in trials, 13 of them on distinct questions."""
+    timeout) is computed where it is asked. Measured by logging every question and its CPU
+    seconds in one ``make test``-style run: the processes spent 31 CPU-seconds in trials,
+    13 of them on distinct questions."""
 
     KEY = "desmon_shared_trials"
 
@@ -397,9 +398,9 @@ def pytest_collection_modifyitems(config, items) -> None:  # type: ignore[no-unt
 class CpuPerTest:
     """``DESMON_TEST_CPU=FILE``: each process appends one line per test to FILE, the CPU
     seconds (user and system) that test used, its subprocesses' included (those it waited
-    for, and its commands run by tests/warm.py's server), and its wall seconds: ``cpu wall nodeid``. ``sort -rn FILE | head`` lists the
-    tests that cost the suite the most CPU; wall time alone does not (a test waiting on a
-    timeout takes wall time, not CPU)."""
+    for, and its commands run by tests/warm.py's server), and its wall seconds: ``cpu wall
+    nodeid``. ``sort -rn FILE | head`` lists the tests that cost the suite the most CPU;
+    wall time alone does not (a test waiting on a timeout takes wall time, not CPU)."""
 
     def __init__(self, path: str) -> None:
         self.path = path
