@@ -211,16 +211,24 @@ def _serve(address: str):  # type: ignore[no-untyped-def]
                 return json.loads(message), fds
             for fd in fds:
                 os.close(fd)
-            conn.sendall(str(pid).encode())
             waiting[pid] = conn
+            _tell(conn, str(pid))
         while waiting:
             pid, status, usage = os.wait4(-1, os.WNOHANG)
             if pid == 0:
                 break
             conn = waiting.pop(pid, None)
             if conn is not None:  # its exit code and CPU seconds (its own and its waited-for children's)
-                conn.sendall(f"{os.waitstatus_to_exitcode(status)} {usage.ru_utime + usage.ru_stime:.6f}".encode())
+                _tell(conn, f"{os.waitstatus_to_exitcode(status)} {usage.ru_utime + usage.ru_stime:.6f}")
                 conn.close()
+
+
+def _tell(conn: socket.socket, text: str) -> None:
+    """Send ``text`` to a client; one that has gone (its test process ended) is not waited for."""
+    try:
+        conn.sendall(text.encode())
+    except OSError:
+        pass
 
 
 def _become(request: dict, fds: list[int]) -> None:  # type: ignore[type-arg]
