@@ -92,11 +92,15 @@ class _Server:
             return cls._running
 
     def close(self) -> None:
+        """End the server (its standard input closed) and remove its folder."""
+        import shutil
+
         try:
             self.proc.stdin.close()  # type: ignore[union-attr]
             self.proc.wait(timeout=10)
         except (OSError, subprocess.TimeoutExpired):
             self.proc.kill()
+        shutil.rmtree(self.folder, ignore_errors=True)
 
 
 class WarmProcess:
