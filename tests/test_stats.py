@@ -54,6 +54,11 @@ def test_bets_sized_for_a_goal_hold_the_mean_at_every_look_as_often_as_promised(
     assert not fails(ever_out, reps, delta), ever_out
 
 
+def test_a_goal_that_is_not_a_function_is_refused_in_one_line():
+    with pytest.raises(EstimateError, match=r"goal 0.01: give the half-width as a function of the estimate"):
+        BettingSequence(0.0, 1.0, 0.05, goal=0.01)  # type: ignore[arg-type]
+
+
 def test_a_bet_is_fixed_before_its_value_is_seen_goal_or_not():
     """The guarantee's one condition on the bets: run i's bet depends on the runs before it only."""
     rng = np.random.default_rng(5)

@@ -112,6 +112,8 @@ class BettingSequence:
         self._raw: list[float] = []
         self._lo, self._hi = 0.0, 1.0  # the intersection of the looks so far, rescaled
         self._log_level = math.log(2.0 / self.delta)
+        if goal is not None and not callable(goal):
+            raise EstimateError(f"goal {goal!r}: give the half-width as a function of the estimate (e.g. lambda m: 0.01 * abs(m)), or None")
         self.goal = goal
 
     @property
