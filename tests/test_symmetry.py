@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 from pathlib import Path
 
 import pytest
@@ -28,6 +29,8 @@ def test_same_verdicts_fewer_states_and_exactly_the_orbits(deployer):
     assert b.states * 3 < a.states  # three interchangeable boxes: close to 3! orbits collapse
     # the reduced state space is exactly the set of orbits of the full one
     assert {red.symmetry.canon(k) for k in full.explored} == set(red.explored)
+    # and its orbits, counted with their sizes, are the full search's states
+    assert b.unreduced_states == a.states
     if deployer == "desmon":
         want = SYM.expected["verify"]
         assert (a.verdict, a.states) == (want["desmon"]["verdict"], want["desmon"]["states"])
@@ -49,6 +52,16 @@ def test_canonical_form_renames_devices_with_platforms():
     # components sorted (up before down, empty before busy), given back in declaration order
     assert sym.canon(a).deployments == (("vision_slip_detector", "e2"),) and sym.canon(a).down == ("e3",)
     assert sym.canon(k._replace(failed=("cam_1",))).failed == ("cam_3",)
+
+
+def test_an_orbit_counts_each_distinct_renaming_once():
+    sym = Checker(SYM, symmetry=True).symmetry
+    k = Checker(SYM).initial()._replace(deployments=(), down=())
+    assert sym.orbit_size(k) == 1  # three empty, running boxes: every renaming is the same state
+    assert sym.orbit_size(k._replace(down=("e2",))) == 3  # which of the three is down
+    busy = k._replace(down=("e1",), deployments=(("vision_slip_detector", "e2"),))
+    assert sym.orbit_size(busy) == 6  # one down, one busy, one idle: all three distinct
+    assert sym.orbit_size(sym.canon(busy)) == sym.orbit_size(busy)
 
 
 @pytest.mark.parametrize(
@@ -77,11 +90,16 @@ def test_capacity_sharing_is_refused():
         Checker(both, symmetry=True)
 
 
-def test_cli_symmetry(capsys):
+def test_cli_symmetry(capsys, tmp_path):
     path = str(SCENARIOS / "symmetric_platforms.py")
-    assert main(["verify", path, "--symmetry", "--no-progress"]) == 0
+    assert main(["verify", path, "--symmetry", "--no-progress", "--json", str(tmp_path / "r.json")]) == 0
     out = capsys.readouterr().out
-    assert "symmetry reduction" in out and "states: 475" in out
+    assert "symmetry reduction" in out and "states: 475 (orbits of 1,748 states)" in out
+    saved = json.loads((tmp_path / "r.json").read_text())
+    assert (saved["states"], saved["symmetry"], saved["unreduced_states"]) == (475, True, 1748)
+    assert main(["verify", path, "--no-progress", "--json", str(tmp_path / "full.json")]) == 0
+    assert "unreduced_states" not in json.loads((tmp_path / "full.json").read_text())
+    capsys.readouterr()
     assert main(["verify", path, "--symmetry", "--deployer", "paper", "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("desmon: error: --symmetry refused") and err.count("\n") == 1

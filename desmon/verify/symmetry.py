@@ -53,8 +53,10 @@ a mismatch would be a soundness bug and is reported as a refusal, not as a verdi
 
 from __future__ import annotations
 
+import math
+from collections import Counter
 from itertools import combinations
-from typing import Any
+from typing import Any, Iterable
 
 from desmon.deployment.validity import check_platform
 from desmon.errors import CheckerError
@@ -219,6 +221,26 @@ class Symmetry:
 
     def canon(self, key: Key) -> Key:
         return self.rename(key, self.permutation(key))
+
+    def orbit_size(self, key: Key) -> int:
+        """How many states ``key`` stands for: the distinct states its group renamings
+        make, per group ``n! / (k1! k2! ...)`` for ``n`` platforms whose components come in
+        runs of ``k1, k2, ...`` equal ones (platforms with equal components swap into
+        the same state), multiplied over the groups."""
+        size = 1
+        for grp in self.groups:
+            size *= math.factorial(len(grp))
+            for k in Counter(self._component(key, p) for p in grp).values():
+                size //= math.factorial(k)
+        return size
+
+    def unreduced_states(self, explored: Iterable[Key]) -> int:
+        """The states the canonical ``explored`` stand for: the sum of their orbit sizes.
+        For a complete search, the states reachable from the initial state or any group
+        renaming of it: the unreduced search's count whenever each renaming of the initial
+        state is reachable from it (then every orbit lies whole in its reachable states),
+        as in ``scenarios/symmetric_platforms.py``."""
+        return sum(self.orbit_size(k) for k in explored)
 
     def rename_event(self, event: Event, perm: dict[str, str]) -> Event:
         """``event`` with the platforms of ``perm`` renamed, by its kind of variable's rule."""
