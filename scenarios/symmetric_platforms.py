@@ -11,12 +11,18 @@ argument is in :mod:`desmon.verify.symmetry`).
 
 Run it: ``python scenarios/symmetric_platforms.py [--symmetry]`` or
 ``desmon verify scenarios/symmetric_platforms.py --symmetry``.
+
+Parameters (``-p NAME=VALUE``): ``edges``, the number of edge computers (2 to 12, default 3), and
+``max_failures``, how many faults may be present at once (default 2): ``-p edges=5 -p
+max_failures=3`` makes a larger model of the same shape.
 """
 
 from __future__ import annotations
 
+from desmon.errors import ScenarioError
 from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
 from desmon.model.events import ActionChange, LoadChange
+from desmon.model.params import parameters
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.verify.bounds import Bounds, levels
 
@@ -24,7 +30,10 @@ FORCE = "force_slip_detector"
 TACTILE = "tactile_slip_detector"
 VISION = "vision_slip_detector"
 MODEL = "slip_model"
-EDGES = ("e1", "e2", "e3")
+p = parameters(edges=3, max_failures=2)
+if not 2 <= p.edges <= 12:
+    raise ScenarioError(f"edges = {p.edges}: give a whole number of edge computers in [2, 12] (interchangeable needs two)")
+EDGES = tuple(f"e{i}" for i in range(1, p.edges + 1))
 
 robot = RobotBuilder("care-o-bot-3")
 robot.platform("arm_pc", memory=512).device("wrench", kind="force_sensor")
@@ -55,7 +64,7 @@ scenario = Scenario(
         platforms=("arm_pc", *EDGES),
         loads={"arm_pc": levels(0, 400, 100)},
         start_failures=1,
-        max_failures=2,
+        max_failures=p.max_failures,
         interchangeable=(EDGES,),
     ),
     expected={

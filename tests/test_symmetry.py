@@ -30,7 +30,7 @@ def test_same_verdicts_fewer_states_and_exactly_the_orbits(deployer):
     # the reduced state space is exactly the set of orbits of the full one
     assert {red.symmetry.canon(k) for k in full.explored} == set(red.explored)
     # and its orbits, counted with their sizes, are the full search's states
-    assert b.unreduced_states == a.states
+    assert b.states_covered == a.states
     if deployer == "desmon":
         want = SYM.expected["verify"]
         assert (a.verdict, a.states) == (want["desmon"]["verdict"], want["desmon"]["states"])
@@ -94,11 +94,11 @@ def test_cli_symmetry(capsys, tmp_path):
     path = str(SCENARIOS / "symmetric_platforms.py")
     assert main(["verify", path, "--symmetry", "--no-progress", "--json", str(tmp_path / "r.json")]) == 0
     out = capsys.readouterr().out
-    assert "symmetry reduction" in out and "states: 475 (orbits of 1,748 states)" in out
+    assert "symmetry reduction" in out and "states: 475 (orbits covering 1,748 states)" in out
     saved = json.loads((tmp_path / "r.json").read_text())
-    assert (saved["states"], saved["symmetry"], saved["unreduced_states"]) == (475, True, 1748)
+    assert (saved["states"], saved["symmetry"], saved["states_covered"]) == (475, True, 1748)
     assert main(["verify", path, "--no-progress", "--json", str(tmp_path / "full.json")]) == 0
-    assert "unreduced_states" not in json.loads((tmp_path / "full.json").read_text())
+    assert "states_covered" not in json.loads((tmp_path / "full.json").read_text())
     capsys.readouterr()
     assert main(["verify", path, "--symmetry", "--deployer", "paper", "--no-progress"]) == 2
     err = capsys.readouterr().err

@@ -43,7 +43,7 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--symmetry", action="store_true", help="canonicalise interchangeable platforms")
     p.add_argument(
         "--workers", type=worker_count, default=1, metavar="N",
-        help="direct engine only (--engine direct, --symmetry): expand its BFS levels of 256 states or more in N forked "
+        help="direct engine only (--engine direct): expand its BFS levels of 256 states or more in N forked "
         "processes, same result for any N; it can pay only on levels of thousands of states with N idle cores. "
         "With --engine auto the table engine runs, in one process (faster on every model measured: docs/deployers.md), "
         "and --workers is not used",
@@ -116,11 +116,11 @@ def check_megabytes(flag: str, value: float | None) -> None:
 
 def workers_for(args: argparse.Namespace) -> int:
     """The worker processes the search gets: ``--workers`` runs the *direct* engine in
-    parallel, so under ``--engine auto`` without ``--symmetry`` (the table engine, one
-    process) it is not used and a one-line note says so: the table engine was faster than
+    parallel, so under ``--engine auto`` (the table engine, one process, with or without
+    ``--symmetry``) it is not used and a one-line note says so: the table engine was faster than
     the direct engine with 2 workers on every model measured (docs/deployers.md, "--workers")."""
     workers = getattr(args, "workers", 1)
-    if workers > 1 and getattr(args, "engine", "auto") == "auto" and not getattr(args, "symmetry", False):
+    if workers > 1 and getattr(args, "engine", "auto") == "auto":
         print(
             f"desmon verify: note: --workers {workers} not used: --engine auto runs the table engine, in one process, which "
             f"beat the direct engine in {workers} processes on every model measured; to run the direct engine in parallel "

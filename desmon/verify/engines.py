@@ -22,7 +22,7 @@ AUTO = "auto"
 #: engine name -> (``module:attribute`` of its Engine class, what it does), in the order ``auto`` tries them
 REGISTRY = {
     "table": ("desmon.verify.checker:TableEngineChoice", "run the real core once per distinct reading of a reaction and replay it "
-              "(fast; not with --symmetry or --workers, nor for a deployer that reads platform facts outside the requirement checks)"),
+              "(fast; not with --workers, nor for a deployer that reads platform facts outside the requirement checks)"),
     "direct": ("desmon.verify.checker:DirectEngine", "run it on every transition"),
 }
 

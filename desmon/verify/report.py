@@ -42,9 +42,9 @@ def format_counterexample(c: Counterexample) -> str:
     return f"{head}:\n{format_trace(c.steps)}\n  => {c.invariant}: {c.message}"
 
 
-def _unreduced(r: CheckResult) -> str:
-    """How many states the symmetry-reduced ones stand for, as the states line says it."""
-    return f" (orbits of {r.unreduced_states:,} states)" if r.symmetry and r.unreduced_states is not None else ""
+def _covered(r: CheckResult) -> str:
+    """How many states the orbits of a symmetry-reduced search cover, as the states line says it."""
+    return f" (orbits covering {r.states_covered:,} states)" if r.symmetry and r.states_covered is not None else ""
 
 
 def format_result(r: CheckResult) -> str:
@@ -57,7 +57,7 @@ def format_result(r: CheckResult) -> str:
     verdict = r.verdict + (f" ({r.reason})" if r.reason else "")
     lines.append(f"verdict: {verdict}")
     lines.append(
-        f"states: {r.states:,}{_unreduced(r)}  transitions: {r.transitions:,}  depth: {r.depth}  time: {r.seconds:.2f}s  "
+        f"states: {r.states:,}{_covered(r)}  transitions: {r.transitions:,}  depth: {r.depth}  time: {r.seconds:.2f}s  "
         f"{r.states_per_second:,.0f} states/s  {r.transitions_per_second:,.0f} transitions/s  peak memory: {r.peak_mb:.0f} MB"
         + (f" (+ {r.workers} workers, each at most {r.peak_workers_mb:.0f} MB)" if r.worker_levels else "")
     )
@@ -159,7 +159,7 @@ def result_to_json(r: CheckResult, params: dict[str, str] | None = None) -> dict
         "verdict": r.verdict,
         "reason": r.reason,
         "states": r.states,
-        **({"symmetry": True, "unreduced_states": r.unreduced_states} if r.symmetry else {}),
+        **({"symmetry": True, "states_covered": r.states_covered} if r.symmetry else {}),
         "transitions": r.transitions,
         "depth": r.depth,
         "seconds": round(r.seconds, 3),

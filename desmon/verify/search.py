@@ -109,9 +109,9 @@ class CheckResult:
     rules: Counter = field(default_factory=Counter)
     branches: Counter = field(default_factory=Counter)
     symmetry: bool = False
-    #: under ``symmetry``: the states the explored orbits stand for (their sizes summed:
-    #: :meth:`Symmetry.unreduced_states <desmon.verify.symmetry.Symmetry.unreduced_states>`)
-    unreduced_states: int | None = None
+    #: under ``symmetry``: the states the explored orbits hold (their sizes summed:
+    #: :meth:`Symmetry.states_covered <desmon.verify.symmetry.Symmetry.states_covered>`)
+    states_covered: int | None = None
     not_checked: tuple[str, ...] = ()  # invariants left to the sim audit and the fuzzer (NOT_CHECKED)
     workers: int = 1
     peak_workers_mb: float = 0.0  # the largest worker process's peak resident size (workers > 1)

@@ -234,12 +234,12 @@ class Symmetry:
                 size //= math.factorial(k)
         return size
 
-    def unreduced_states(self, explored: Iterable[Key]) -> int:
-        """The states the canonical ``explored`` stand for: the sum of their orbit sizes.
-        For a complete search, the states reachable from the initial state or any group
-        renaming of it: the unreduced search's count whenever each renaming of the initial
-        state is reachable from it (then every orbit lies whole in its reachable states),
-        as in ``scenarios/symmetric_platforms.py``."""
+    def states_covered(self, explored: Iterable[Key]) -> int:
+        """The states the orbits of the canonical ``explored`` hold: the sum of their orbit
+        sizes. The verdict holds for each of them (the invariants read no platform's name).
+        For a complete search they are the states reachable from the initial state or a
+        group renaming of it: the unreduced search's states and, where a renaming of the
+        initial state is not reachable from it, more."""
         return sum(self.orbit_size(k) for k in explored)
 
     def rename_event(self, event: Event, perm: dict[str, str]) -> Event:

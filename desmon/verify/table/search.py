@@ -15,6 +15,7 @@ import numpy as np
 import numpy.ma  # noqa: F401  (np.unique imports it on first use, leaving cyclic garbage: not during a search)
 
 from desmon.errors import TableUnsupported
+from desmon.verify.orbits import CodeOrbits
 from desmon.verify.arrays import CodeSet, Interned, count_into, firsts, grouped
 from desmon.verify.search import BreadthFirst, Budget, CheckResult, Queue, Trail
 from desmon.verify.state import Key
@@ -49,8 +50,6 @@ class _Spent(Exception):
 
 def table_unsupported(checker: TransitionSystem) -> str | None:
     """Why the table engine cannot run ``checker``'s search, or None."""
-    if checker.symmetry is not None:
-        return "symmetry reduction runs on the direct engine"
     try:
         layout(checker.bounds, checker.model)
     except TableUnsupported as exc:
@@ -66,7 +65,8 @@ class Units(NamedTuple):
     t: np.ndarray  # each unit's transition
     pre: np.ndarray  # its failed-start prefix
     leaf: np.ndarray  # its reaction leaf
-    code: np.ndarray  # the state it reaches
+    code: np.ndarray  # the state it reaches (canonical under symmetry)
+    raw: np.ndarray  # the state it reaches before the renaming (what "changed" compares)
 
 
 class TableEngine(BreadthFirst):
@@ -82,6 +82,7 @@ class TableEngine(BreadthFirst):
         self.prefixes(())
         self.budget = Budget(0.0)  # the search's (set by run)
         self.recorder: Recorder | None = None  # made with the encoding (:meth:`_encode`)
+        self.orbits: CodeOrbits | None = None  # under symmetry: canonical codes (made with the encoding)
 
     @property
     def records(self) -> int:
@@ -157,7 +158,7 @@ class TableEngine(BreadthFirst):
         :data:`LOOK_EVERY`-th new state cuts it after the current transition."""
         self.budget, self.res, self.max_states, self.max_depth = budget, res, max_states, max_depth
         ch = self.checker
-        init = ch.initial()
+        init = ch.initial() if ch.symmetry is None else ch.symmetry.canon(ch.initial())
         env = self._encode(init)
         # states: code = env << SYS_BITS | system
         self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
@@ -174,6 +175,7 @@ class TableEngine(BreadthFirst):
         self.trees = DecisionTrees(self.tables, self.P, self._go_on)
         self.recorder = Recorder(self.checker, env, self.tables, self.trees, self.system)
         self.events = Events(self.bounds, env)
+        self.orbits = None if self.checker.symmetry is None else CodeOrbits(self.checker.symmetry, env, self.systems, self.system, SYS_BITS)
         return env
 
     def _codes(self) -> np.ndarray:
@@ -204,7 +206,7 @@ class TableEngine(BreadthFirst):
             self.budget = budget
         U_code = tr.env2.take(U_t) << SYS_BITS
         U_code |= np.array(self.trees.leaf_sys, dtype=np.int64).take(U_leaf)
-        u = int(np.flatnonzero(U_code == self.codes[i])[0])
+        u = int(np.flatnonzero(self._canon(U_code) == self.codes[i])[0])
         return self.events.events[int(tr.ev[U_t[u]])], self.trees.leaves[int(U_leaf[u])][3]
 
     def _batch(self, ids: np.ndarray, nxt: Queue) -> bool:
@@ -217,8 +219,9 @@ class TableEngine(BreadthFirst):
         try:
             U_t, U_pre, U_leaf = self._units(ids, tr)
             leaf_sys = np.array(self.trees.leaf_sys, dtype=np.int64)
-            U_code = tr.env2.take(U_t) << SYS_BITS
-            U_code |= leaf_sys.take(U_leaf)
+            raw = tr.env2.take(U_t) << SYS_BITS
+            raw |= leaf_sys.take(U_leaf)
+            U_code = self._canon(raw)
             # candidate new states: first occurrence in this batch, not seen before
             fresh = np.flatnonzero(~self.seen.contains(U_code, self._codes()))
             cand = fresh[firsts(U_code.take(fresh))]
@@ -226,7 +229,7 @@ class TableEngine(BreadthFirst):
         except _Spent:  # between two recorded runs or walk rounds: the batch is dropped
             self.incomplete = self.budget.reason
             return True
-        units = Units(ids, tr, U_t, U_pre, U_leaf, U_code)
+        units = Units(ids, tr, U_t, U_pre, U_leaf, U_code, raw)
         n0 = len(self.codes)
         if self._plain(units, cand, bad):
             cut_t, stop_unit = self._consume_all(units, cand, nxt)
@@ -235,6 +238,10 @@ class TableEngine(BreadthFirst):
         self.seen.add(self._codes(), n0, len(self.codes))
         _count_batch(self, units, sc, cut_t, stop_unit)
         return cut_t < len(tr.env2)
+
+    def _canon(self, codes: np.ndarray) -> np.ndarray:
+        """``codes`` made canonical under the symmetry reduction (:mod:`desmon.verify.orbits`), if any."""
+        return codes if self.orbits is None else self.orbits.canon(codes)
 
     def _plain(self, units: "Units", cand: np.ndarray, bad: np.ndarray) -> bool:
         """Whether the batch's candidates are all new states that violate nothing, no unit
@@ -350,7 +357,7 @@ def _opened(engine: "TableEngine", u_t: np.ndarray, u_pre: np.ndarray, leaf: np.
 def _count_batch(engine: "TableEngine", units: "Units", sc: np.ndarray, cut_t: int, stop_unit: int) -> None:
     """Count into the engine's result what the direct engine counts of a batch, up to the cut."""
     res, tr, ev, env, trees = engine.res, units.tr, engine.events, engine.env, engine.trees
-    U_t, U_leaf, U_code = units.t, units.leaf, units.code
+    U_t, U_leaf, U_code = units.t, units.leaf, units.raw
     T = len(tr.env2)
     if stop_unit >= 0:
         n_inc = stop_unit + 1
@@ -381,6 +388,11 @@ class _Explored(Sequence[Key]):
 
     def release(self) -> None:
         self._e.release()
+
+    def states_covered(self) -> int | None:
+        """Under symmetry, the states these orbits hold (:mod:`desmon.verify.orbits`)."""
+        e = self._e
+        return None if e.orbits is None else e.orbits.states_covered(e._codes())
 
     def __len__(self) -> int:
         return len(self._e.codes)
