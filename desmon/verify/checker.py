@@ -146,8 +146,8 @@ def check(
     ``"table"`` runs the real core once per distinct reading of a reaction and
     replays it elsewhere (:mod:`desmon.verify.table`, one process, numpy);
     ``"direct"`` runs the real core on every transition (``workers`` > 1 applies to
-    it); ``"auto"`` (default) takes the table engine unless symmetry reduction or
-    ``workers`` > 1 is asked for, and falls back to the direct engine (saying why in
+    it); ``"auto"`` (default) takes the table engine (with or without symmetry
+    reduction) unless ``workers`` > 1 is asked for, and falls back to the direct engine (saying why in
     :attr:`CheckResult.engine_note`) when the table engine cannot run the search: the
     deployer reads platform facts outside the requirement checks, uses a check's
     result as what it is not, or the model exceeds the engine's limits. The time of

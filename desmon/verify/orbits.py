@@ -20,7 +20,24 @@ import numpy as np
 from desmon.errors import TableUnsupported
 from desmon.verify.state import Key
 
-__all__ = ["CodeOrbits"]
+__all__ = ["CodeOrbits", "orbits_for"]
+
+
+class _NoOrbits:
+    """No symmetry reduction: every code is its own canonical code."""
+
+    @staticmethod
+    def canon(codes: np.ndarray) -> np.ndarray:
+        return codes
+
+    @staticmethod
+    def states_covered(codes: np.ndarray) -> None:
+        return None
+
+
+def orbits_for(symmetry: Any, env: Any, systems: Any, system: Callable[[tuple, tuple], int], sys_bits: int) -> "CodeOrbits | _NoOrbits":
+    """The table engine's canonical codes under ``symmetry`` (:class:`CodeOrbits`), or the codes themselves without one."""
+    return _NoOrbits() if symmetry is None else CodeOrbits(symmetry, env, systems, system, sys_bits)
 
 
 class CodeOrbits:

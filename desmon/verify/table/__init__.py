@@ -7,7 +7,7 @@ asks about), keeps each run as a path of a decision tree and walks the trees for
 other transition, a batch of a BFS level at a time with numpy. Its result is the direct
 engine's (``tests/test_verify_table.py``). How it works: docs/findings.md ("How the table
 engine works"); why it is sound: docs/design.md ("Why the table engine is sound").
-Symmetry reduction is left to the direct engine.
+Under ``--symmetry`` it stores canonical codes (:mod:`desmon.verify.orbits`).
 """
 
 from desmon.deployment.ports import QUERY_METHODS

@@ -15,7 +15,7 @@ import numpy as np
 import numpy.ma  # noqa: F401  (np.unique imports it on first use, leaving cyclic garbage: not during a search)
 
 from desmon.errors import TableUnsupported
-from desmon.verify.orbits import CodeOrbits
+from desmon.verify.orbits import orbits_for
 from desmon.verify.arrays import CodeSet, Interned, count_into, firsts, grouped
 from desmon.verify.search import BreadthFirst, Budget, CheckResult, Queue, Trail
 from desmon.verify.state import Key
@@ -82,7 +82,6 @@ class TableEngine(BreadthFirst):
         self.prefixes(())
         self.budget = Budget(0.0)  # the search's (set by run)
         self.recorder: Recorder | None = None  # made with the encoding (:meth:`_encode`)
-        self.orbits: CodeOrbits | None = None  # under symmetry: canonical codes (made with the encoding)
 
     @property
     def records(self) -> int:
@@ -175,7 +174,7 @@ class TableEngine(BreadthFirst):
         self.trees = DecisionTrees(self.tables, self.P, self._go_on)
         self.recorder = Recorder(self.checker, env, self.tables, self.trees, self.system)
         self.events = Events(self.bounds, env)
-        self.orbits = None if self.checker.symmetry is None else CodeOrbits(self.checker.symmetry, env, self.systems, self.system, SYS_BITS)
+        self.orbits = orbits_for(self.checker.symmetry, env, self.systems, self.system, SYS_BITS)  # canonical codes, or the codes
         return env
 
     def _codes(self) -> np.ndarray:
@@ -206,7 +205,7 @@ class TableEngine(BreadthFirst):
             self.budget = budget
         U_code = tr.env2.take(U_t) << SYS_BITS
         U_code |= np.array(self.trees.leaf_sys, dtype=np.int64).take(U_leaf)
-        u = int(np.flatnonzero(self._canon(U_code) == self.codes[i])[0])
+        u = int(np.flatnonzero(self.orbits.canon(U_code) == self.codes[i])[0])
         return self.events.events[int(tr.ev[U_t[u]])], self.trees.leaves[int(U_leaf[u])][3]
 
     def _batch(self, ids: np.ndarray, nxt: Queue) -> bool:
@@ -221,7 +220,7 @@ class TableEngine(BreadthFirst):
             leaf_sys = np.array(self.trees.leaf_sys, dtype=np.int64)
             raw = tr.env2.take(U_t) << SYS_BITS
             raw |= leaf_sys.take(U_leaf)
-            U_code = self._canon(raw)
+            U_code = self.orbits.canon(raw)
             # candidate new states: first occurrence in this batch, not seen before
             fresh = np.flatnonzero(~self.seen.contains(U_code, self._codes()))
             cand = fresh[firsts(U_code.take(fresh))]
@@ -238,10 +237,6 @@ class TableEngine(BreadthFirst):
         self.seen.add(self._codes(), n0, len(self.codes))
         _count_batch(self, units, sc, cut_t, stop_unit)
         return cut_t < len(tr.env2)
-
-    def _canon(self, codes: np.ndarray) -> np.ndarray:
-        """``codes`` made canonical under the symmetry reduction (:mod:`desmon.verify.orbits`), if any."""
-        return codes if self.orbits is None else self.orbits.canon(codes)
 
     def _plain(self, units: "Units", cand: np.ndarray, bad: np.ndarray) -> bool:
         """Whether the batch's candidates are all new states that violate nothing, no unit
@@ -391,8 +386,7 @@ class _Explored(Sequence[Key]):
 
     def states_covered(self) -> int | None:
         """Under symmetry, the states these orbits hold (:mod:`desmon.verify.orbits`)."""
-        e = self._e
-        return None if e.orbits is None else e.orbits.states_covered(e._codes())
+        return self._e.orbits.states_covered(self._e._codes())
 
     def __len__(self) -> int:
         return len(self._e.codes)
