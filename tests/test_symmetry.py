@@ -11,6 +11,7 @@ import pytest
 from desmon.cli import main
 from desmon.errors import CheckerError
 from desmon.loader import load_scenario
+from desmon.model.events import DeviceFail
 from desmon.verify import HOLDS, VIOLATED, Checker
 from desmon.verify.mutants import get_mutant
 
@@ -70,6 +71,7 @@ def test_an_orbit_counts_each_distinct_renaming_once():
         (lambda s: dataclasses.replace(s), "paper deployer"),
         (lambda s: dataclasses.replace(s, checker=dataclasses.replace(s.checker, devices=("cam_1",))), "device cam_1 of e1 may fail"),
         (lambda s: dataclasses.replace(s, checker=dataclasses.replace(s.checker, platforms=("e1",))), "only some of them go down"),
+        (lambda s: dataclasses.replace(s, initial=(*s.initial, DeviceFail("cam_2"))), "device cam_2 of e2 starts failed"),
         (lambda s: dataclasses.replace(s, checker=dataclasses.replace(s.checker, interchangeable=(("hand_pc", "e1"),))), "differ in capacities"),
         (lambda s: dataclasses.replace(s, checker=dataclasses.replace(s.checker, interchangeable=(("e1", "e3"),))), "not declared one after the other"),
     ],

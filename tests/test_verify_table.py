@@ -349,6 +349,17 @@ def test_under_symmetry_the_table_engine_gives_the_direct_engines_result(deploye
     assert (rt.verdict, rt.states) == (("VIOLATED", 7) if deployer != "desmon" else ("INCOMPLETE", 127))  # the last: max_depth 3
 
 
+def test_a_group_platform_down_for_the_whole_search_leaves_symmetry_to_the_direct_engine():
+    """Its code holds no digit for that platform's down: auto says why and runs the direct engine."""
+    sc = load_scenario(SCENARIOS / "symmetric_platforms.py")
+    sc = dataclasses.replace(sc, initial=(*sc.initial, PlatformDown("e2")), checker=dataclasses.replace(sc.checker, platforms=("arm_pc",)))
+    auto, direct = Checker(sc, symmetry=True).run(), Checker(sc, symmetry=True).run(engine="direct")
+    assert auto.engine == "direct" and "stays down or failed for the whole search" in auto.engine_note
+    assert (auto.verdict, auto.states, auto.states_covered) == (direct.verdict, direct.states, direct.states_covered)
+    with pytest.raises(TableUnsupported, match="run with --engine direct"):
+        Checker(sc, symmetry=True).run(engine="table")
+
+
 def test_symmetry_runs_on_the_table_engine_unless_asked_otherwise(capsys):
     path = str(SCENARIOS / "symmetric_platforms.py")
     assert main(["verify", path, "--no-progress", "--symmetry"]) == 0

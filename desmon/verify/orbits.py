@@ -54,7 +54,7 @@ class CodeOrbits:
         members = [p for grp in symmetry.groups for p in grp]
         fixed = [f for f in (*env.const_down, *env.const_failed) if f in members or env.platform_of.get(f) in members]
         if fixed:
-            raise TableUnsupported(f"table engine: {fixed[0]} stays failed on a group platform under --symmetry; run with --engine direct")
+            raise TableUnsupported(f"table engine: {fixed[0]} stays down or failed for the whole search, on a group platform of --symmetry; run with --engine direct")
         self.at = [env.plats.index(p) for p in members]  # the group platforms' digit positions
         self.weight = np.array([env.W[p] for p in self.at], dtype=np.int64)
         self.radix = np.array([env.R[p] for p in self.at], dtype=np.int64)

@@ -34,7 +34,7 @@ guarantee it, and :class:`Symmetry` refuses (exit 2, one line) where they fail:
    preference, device kinds/vendors/versions in order) and contiguous in declaration
    order; no deployment is fixed (EXECUTABLE_ON) to one of them;
 2. the bounds treat them alike: all or none of them may go down; none of their devices
-   may fail; no background load is bounded or initially set on them (their only
+   may fail or start failed; no background load is bounded or initially set on them (their only
    changing facts are up/down and the deployments they host);
 3. each can host at most one graph at a time (every two graphs that could run on it
    exceed one of its capacities together) -- so an acceptable group platform for ``g``
@@ -60,7 +60,7 @@ from typing import Any, Iterable
 
 from desmon.deployment.validity import check_platform
 from desmon.errors import CheckerError
-from desmon.model.events import Event, LoadChange
+from desmon.model.events import DeviceFail, Event, LoadChange
 from desmon.model.system import PlatformState
 from desmon.verify.environment import variable_kind, variable_kinds, variables
 from desmon.verify.state import Key
@@ -166,6 +166,9 @@ class Symmetry:
         initial = {ev.platform: ev.amount for ev in c.scenario.initial if isinstance(ev, LoadChange) and ev.platform in grp and ev.amount}
         if initial:
             self._refuse(f"{', '.join(initial)} start with a background load")
+        for ev in c.scenario.initial:
+            if isinstance(ev, DeviceFail) and model.device(ev.device).platform in grp:
+                self._refuse(f"device {ev.device} of {model.device(ev.device).platform} starts failed, so acceptable group platforms can differ in working devices")
 
     def _refuse_unless_one_graph_each(self, grp: tuple[str, ...]) -> None:
         """(3) at most one graph per group platform."""
