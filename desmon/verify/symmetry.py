@@ -226,8 +226,8 @@ class Symmetry:
         return self.rename(key, self.permutation(key))
 
     def orbit_size(self, key: Key) -> int:
-        """How many states ``key`` stands for: the distinct states its group renamings
-        make, per group ``n! / (k1! k2! ...)`` for ``n`` platforms whose components come in
+        """How many states the orbit of ``key`` holds: the distinct states its group
+        renamings make, per group ``n! / (k1! k2! ...)`` for ``n`` platforms whose components come in
         runs of ``k1, k2, ...`` equal ones (platforms with equal components swap into
         the same state), multiplied over the groups."""
         size = 1
