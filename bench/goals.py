@@ -116,6 +116,7 @@ RESULT_KEYS: dict[str, tuple[str, ...]] = {
         "x_real_time", "ratio_bare", "signals_off_s", "wall_s", "bare_s", "events", "until_s", "serial_s", "serial_ratio_bare", "cpu_s", "sim_cpu_s", "ahead_blocks",
     ),
     "bench_scale": ("platforms", "states", "transitions", "seconds", "cpu_seconds", "states_per_s", "bytes_per_state", "growth"),
+    "bench_scale --breakdown": ("platforms", "seconds", "walk_s", "recording_s", "seen_s", "events_s", "serial_share", "two_workers_bound"),
     "bench_sweep": ("speedup", "overhead", "runs", "hours", "bare_s", "one_worker_s", "two_workers_s"),
     "bench_sweep --scheduler": ("per_task_ratio", "in_task_ratio", "cpu_ratio", "runs", "hours", "rounds", "workers", "threads"),
     "bench_table_prefs": ("cloud_ratio", "cloud_wide_ratio", "pref_median_ratio"),

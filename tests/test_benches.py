@@ -81,6 +81,19 @@ def test_a_bench_outside_python_m_bench_runs_small_and_reports_its_figures(name)
     assert all(isinstance(v, float) and v >= 0 for v in figures.values()), figures
 
 
+def test_the_scale_breakdown_splits_one_search_and_bounds_two_workers():
+    proc = subprocess.run([sys.executable, "-m", "bench.bench_scale", "--breakdown", "4"], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    figures = parse_result(proc.stdout)
+    assert unexpected_keys(result_mode("bench_scale", ["--breakdown"]), figures) == []
+    parts = figures["walk_s"] - figures["recording_s"] + figures["seen_s"] + figures["events_s"]
+    assert 0 < figures["recording_s"] < figures["walk_s"] and 0 < parts < figures["seconds"]
+    assert figures["serial_share"] == pytest.approx(1 - parts / figures["seconds"], abs=0.02)  # (the figures are rounded to 0.01 s)
+    assert 1 < figures["two_workers_bound"] < 2
+    bad = subprocess.run([sys.executable, "-m", "bench.bench_scale", "--breakdown", "1"], cwd=ROOT, capture_output=True, text=True)
+    assert bad.returncode == 2 and "--breakdown 1: give a number of platforms from 2 to 12" in bad.stderr
+
+
 def test_every_bench_with_a_result_line_is_run_by_a_test():
     reporting = {p.stem for p in (ROOT / "bench").glob("*.py") if not p.stem.startswith(("bench_", "_")) and "RESULT " in p.read_text()}
     missing = reporting - TOOLS - set(OTHER_BENCHES)
