@@ -337,7 +337,7 @@ def test_engine_table_with_workers_is_a_one_line_usage_error(capsys):
 
 @pytest.mark.parametrize("deployer", ["desmon", "no-recheck"])
 def test_under_symmetry_the_table_engine_gives_the_direct_engines_result(deployer):
-    """The same orbits, in the same order, the same counts, counterexamples and states they stand for."""
+    """The same orbits, in the same order, the same counts, counterexamples and states they cover."""
     scenario = load_scenario(SCENARIOS / "symmetric_platforms.py")
     dep = deployer if deployer == "desmon" else MUTANTS[deployer]
     for kw in OPTIONS:
