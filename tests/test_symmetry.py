@@ -83,6 +83,13 @@ def test_refusals(change, reason):
         Checker(scenario, deployer, symmetry=True)
 
 
+@pytest.mark.parametrize("value", ["1", "13", "abc", "2.5"])
+def test_the_number_of_edge_computers_is_a_whole_number_from_2_to_12(capsys, value):
+    assert main(["verify", str(SCENARIOS / "symmetric_platforms.py"), "-p", f"edges={value}", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "edges" in err and "Traceback" not in err
+
+
 def test_capacity_sharing_is_refused():
     mig = load_scenario(SCENARIOS / "migration.py")
     with pytest.raises(CheckerError, match="declares no interchangeable"):
