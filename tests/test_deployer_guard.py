@@ -237,9 +237,9 @@ def test_timeout_stops_a_worker_process_stuck_in_a_reaction(tmp_path):
     )
     scenario = str(ROOT / "scenarios" / "scale_family.py")  # levels of 256 states and more: they go to the workers
     code, took, out, err = _desmon(
-        str(path), "verify", scenario, "-p", "platforms=4", "--deployer", f"{path}:stuck_in_workers", "--engine", "direct",
+        str(path), "verify", scenario, "-p", "platforms=6", "--deployer", f"{path}:stuck_in_workers", "--engine", "direct",
         "--workers", "2", "--timeout", "6", "--no-progress", child=True,
-    )  # (6 s: with four platforms the third level, the first of 256 states, comes after about 70 states)
+    )  # (six platforms: the second level, 288 states, is the first of 256 or more; it comes after 26 states, about 0.7 s)
     assert code == 3 and "verdict: INCOMPLETE (timeout 6s)" in out and "+ 2 workers" in out, out + err
     assert took < 6 + 2, f"--timeout 6 took {took:.1f} s"
 
