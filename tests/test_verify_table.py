@@ -25,7 +25,7 @@ from desmon.model.scenario import Scenario, TimedEvent
 from desmon.verify import Bounds, Checker
 from desmon.verify.mutants import MUTANTS
 from desmon.verify.table.tree import LEAF, WIDE
-from desmon.verify.table import TableUnsupported, UnobservedRead
+from desmon.errors import TableUnsupported, UnobservedRead
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 NAMES = sorted(p.stem for p in SCENARIOS.glob("*.py"))
@@ -256,7 +256,7 @@ def test_a_platform_with_too_many_fact_combinations_runs_on_the_direct_engine():
 
 def test_the_recording_port_offers_exactly_the_query_port_methods():
     from desmon.deployment.ports import QueryPort
-    from desmon.verify.table import QUERY_METHODS as _QUERY_METHODS
+    from desmon.deployment.ports import QUERY_METHODS as _QUERY_METHODS
 
     protocol = {n for n, v in vars(QueryPort).items() if callable(v) and not n.startswith("_")}
     assert set(_QUERY_METHODS) == protocol

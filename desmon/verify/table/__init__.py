@@ -10,10 +10,7 @@ engine works"); why it is sound: docs/design.md ("Why the table engine is sound"
 Under ``--symmetry`` it stores canonical codes (:mod:`desmon.verify.orbits`).
 """
 
-from desmon.deployment.ports import QUERY_METHODS
-from desmon.errors import TableUnsupported, UnobservedRead
-from desmon.verify.table.encoding import MAX_DIGITS
 from desmon.verify.table.search import CHUNK_STATES, TableEngine, table_unsupported
 
-__all__ = ["TableEngine", "TableUnsupported", "UnobservedRead", "table_unsupported", "CHUNK_STATES", "MAX_DIGITS", "QUERY_METHODS"]
+__all__ = ["TableEngine", "table_unsupported", "CHUNK_STATES"]
 

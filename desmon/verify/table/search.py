@@ -278,7 +278,7 @@ class TableEngine(BreadthFirst):
         transition counted, the unit the search stopped at or -1)."""
         U_t, U_leaf = units.t, units.leaf
         inst_units = np.flatnonzero(np.array(self.trees.leaf_inst, dtype=bool)[U_leaf])
-        cut_t, stop_unit = len(units.tr.env2), -1
+        cut_t = len(units.tr.env2)
         spent = self.budget.spent
         for n_looked, u in enumerate(np.union1d(cand, inst_units).tolist(), 1):
             t = int(U_t[u])
@@ -293,7 +293,7 @@ class TableEngine(BreadthFirst):
                 self._new_state(units, u, t, lf, self.trees.leaves[bad_of[u]][1], nxt)
             if self._finished() or self.incomplete:
                 cut_t = t
-        return cut_t, stop_unit
+        return cut_t, -1
 
     def _repaired(self, units: "Units", u: int, t: int, lf: tuple) -> bool:
         """Unit ``u`` broke instantaneous invariant ``lf[5]`` inside its reaction: if it was
@@ -354,10 +354,8 @@ def _count_batch(engine: "TableEngine", units: "Units", sc: np.ndarray, cut_t: i
     res, tr, ev, env, trees = engine.res, units.tr, engine.events, engine.env, engine.trees
     U_t, U_leaf, U_code = units.t, units.leaf, units.raw
     T = len(tr.env2)
-    if stop_unit >= 0:
-        n_inc = stop_unit + 1
-    else:
-        n_inc = int(np.searchsorted(U_t, cut_t, side="right"))  # (units are in transition order)
+    # the units up to the stopping unit, or up to the cut (units are in transition order)
+    n_inc = stop_unit + 1 if stop_unit >= 0 else int(np.searchsorted(U_t, cut_t, side="right"))
     engine.transitions += n_inc
     leaf_counts = np.bincount(U_leaf[:n_inc], minlength=len(trees.leaves))
     for lf_id in np.flatnonzero(leaf_counts).tolist():

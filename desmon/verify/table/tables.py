@@ -31,8 +31,7 @@ class AnswerTables:
         self._table_args = Interned()  # (requirements, graph) of a requirement check
         self.ok = Grow((4096,))
         # the answers of unused check positions: a block of zeros as long as any platform's digit range
-        for _ in range(max(env.R)):
-            self.ok.append(0)
+        self.ok.extend(max(env.R))
         self._blocks: dict[tuple, tuple[int, int]] = {}
         self._fails: dict[tuple, list[tuple]] = {}
         self._plat_states: dict[tuple[int, int], list[PlatformState]] = {}
@@ -90,8 +89,8 @@ class AnswerTables:
                 answers = self._failures(table, bool(first_only), p, dep)
             values = [ids.setdefault(a, len(ids)) for a in answers]
             radix = len(ids)
-        for v in values:
-            self.ok.append(v)
+        self.ok.extend(len(values))
+        self.ok.a[off: self.ok.n] = values
         self._blocks[k] = (off, radix)
         return off, radix
 
