@@ -191,6 +191,28 @@ def test_uniformisation_and_the_krylov_exponential_agree():
     assert np.abs(a.at - b.at).max() < 1e-6
 
 
+@pytest.mark.parametrize("horizon", [60.0, 2 * 3600.0])
+def test_given_the_steady_state_the_krylov_exponential_of_the_deviation_gives_the_same_transient(horizon):
+    """With the steady state as its limit the solution follows p0's deviation from it and
+    stops once that has settled (within the 2 h horizon, not the minute): the figures of the whole distribution's
+    exponential (and of uniformisation), to the error estimates."""
+    sc = _shift(faults="False")
+    chain = build_chain(sc, "desmon", markov_world(sc))
+    Q, _ = chain.generator()
+    p0 = np.zeros(chain.n)
+    p0[0] = 1.0
+    pi, _residual, _method = steady_state(Q, chain.describe)
+    rewards = np.vstack([chain.unmonitored, chain.risky])
+    whole = transient(Q, p0, horizon, rewards, method="krylov")
+    deviation = transient(Q, p0, horizon, rewards, method="krylov", limit=pi)
+    assert ("settled at" in deviation.method) == (horizon > 60.0), deviation.method
+    assert np.abs(deviation.accumulated - whole.accumulated).max() < 1e-6 * horizon
+    assert np.abs(deviation.at - whole.at).max() < 1e-8
+    if horizon == 60.0:
+        uniform = transient(Q, p0, horizon, rewards, method="uniformisation")
+        assert np.abs(deviation.accumulated - uniform.accumulated).max() < 1e-6 * horizon
+
+
 def test_the_long_run_is_the_per_mission_rate_of_a_long_mission():
     a = analyze(_shift(faults="False"), miss=NO_MISS, horizon=20 * 3600.0)
     assert a.exposure_s_per_mission / 20 == pytest.approx(a.exposure_s_per_hour, rel=2e-3)

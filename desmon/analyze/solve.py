@@ -290,9 +290,10 @@ def transient(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, *, method:
     """From ``p0`` over ``[0, horizon]``: the distribution at the horizon and each reward
     row of ``rewards`` (k x n) accumulated (see the module docstring).
 
-    ``limit``, the distribution the chain tends to (its steady state, or the absorbed
-    mass of an absorbing chain), lets the Krylov solution stop early: after each of its
-    steps it measures the distance to ``limit`` (total variation, which never grows
+    ``limit``, the distribution the chain tends to (a stationary one: ``limit Q = 0``), lets
+    the Krylov solution follow only the deviation ``p0 - limit`` (from ``limit`` the chain
+    stays put, accumulating ``t (rewards @ limit)``) and stop early: after each step it
+    measures the deviation (total variation distance to ``limit``, which never grows
     again), and once that is within :data:`SETTLED` the rest of the horizon is
     accumulated at the limit's rates, with an error of at most the distance times the rest."""
     rewards = np.atleast_2d(rewards)
@@ -310,34 +311,36 @@ SETTLED = 1e-9
 KRYLOV_TOL = 1e-12
 #: the Krylov basis size of :func:`krylov_steps`. On the coffee shift's 8 h transient (48,820
 #: states with two force sensors; the step count is in the method line of ``desmon analyze
-#: scenarios/coffee_shift.py -p force_sensors=2``) 40 vectors take 198 steps; in one run each
-#: on one machine 30 took 338 and 50 took 135, with about the same CPU time (18.5 and 16.2 s
-#: against 16.8 s), and the shift's figures agreed to 10 digits
+#: scenarios/coffee_shift.py -p force_sensors=2``) 40 vectors take 146 steps; in one run each
+#: on one machine 30 took 242 and 50 took 99, with about the same CPU time (16.7 and 15.3 s
+#: against 15.4 s), and the shift's figures agreed to 10 digits
 KRYLOV_DIM = 40
 
 
 def _krylov(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, limit: np.ndarray | None,  # type: ignore[no-untyped-def]
             budget: Callable[..., None] = no_budget) -> Transient:
-    """d/dt [p, c] = [p Q, p R^T]: the Krylov exponential of the augmented matrix, stopped
-    once the distribution has settled when a ``limit`` is known (see :func:`transient`)."""
+    """d/dt [p, c] = [p Q, p R^T]: the Krylov exponential of the augmented matrix; given a
+    ``limit``, of the deviation from it, stopped once that has settled (see :func:`transient`)."""
     import scipy.sparse as sp
 
     n = Q.shape[0]
     k = rewards.shape[0]
     B = sp.bmat([[Q.T, None], [sp.csr_matrix(rewards), sp.csr_matrix((k, k))]], format="csr")
-    y = np.concatenate([p0.astype(float), np.zeros(k)])
+    if limit is None:
+        y, err, steps, t = krylov_steps(horizon, B, np.concatenate([p0.astype(float), np.zeros(k)]), tol=KRYLOV_TOL, budget=budget)
+        return Transient(np.clip(y[:n], 0.0, None), y[n:], max(err, abs(1.0 - float(y[:n].sum()))), f"Krylov exponential ({steps} steps)")
+    # limit Q = 0: from the limit the chain stays there, accumulating t (rewards @ limit); only
+    # the deviation p0 - limit moves, decaying, so the exponential is of that small vector
+    y, err, steps, t = krylov_steps(horizon, B, np.concatenate([p0 - limit, np.zeros(k)]), tol=KRYLOV_TOL, budget=budget,
+                                    stop=lambda w: 0.5 * float(np.abs(w[:n]).sum()) < SETTLED)
     note = ""
-    settled = None if limit is None else (lambda w: 0.5 * float(np.abs(w[:n] - limit).sum()) < SETTLED)
-    y, err, steps, t = krylov_steps(horizon, B, y, tol=KRYLOV_TOL, budget=budget, stop=settled)
-    if t < horizon:
-        distance = 0.5 * float(np.abs(y[:n] - limit).sum())
-        rest = horizon - t
-        y = np.concatenate([limit, y[n:] + rest * (rewards @ limit)])
-        err += distance * rest * float(np.abs(rewards).max(initial=0.0))
+    if t < horizon:  # settled: the rest of the horizon at the limit, the deviation left counted as error
+        err += 0.5 * float(np.abs(y[:n]).sum()) * (horizon - t) * float(np.abs(rewards).max(initial=0.0))
+        y[:n] = 0.0
         note = f", settled at {t:.0f} s"
-    at = np.clip(y[:n], 0.0, None)
-    defect = abs(1.0 - float(y[:n].sum()))
-    return Transient(at, y[n:], max(err, defect), f"Krylov exponential ({steps} steps{note})")
+    at = limit + y[:n]
+    defect = abs(float(y[:n].sum())) + abs(1.0 - float(limit.sum()))
+    return Transient(np.clip(at, 0.0, None), y[n:] + horizon * (rewards @ limit), max(err, defect), f"Krylov exponential ({steps} steps{note})")
 
 
 def _uniformisation(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, lam: float,  # type: ignore[no-untyped-def]
