@@ -30,14 +30,24 @@ the 1,000-hour comparison docs/analyze.md quotes.
 unless ``--steady-only``, of its 1 h transient; ``peak_mb`` is the process's peak
 resident memory.
 
+``--methods``: instead, the two transient solutions side by side: on the chains of the
+three analysable shipped scenarios (``coffee_shift`` 1 h, ``platform_crash -p
+stochastic=True``, ``cloud_offload -p stochastic=True``; detection not modelled) and
+horizons of 500 to 16,000 expected jumps (``Lambda T``), the CPU seconds of
+uniformisation and of the Krylov exponential (best of two), their ratio and the largest
+difference of the accumulated rewards. ``crossover_jumps`` is the fewest jumps tried from
+which the Krylov exponential was the faster on every chain (``desmon.analyze.solve``'s
+``UNIFORM_STEPS`` chooses between them). With ``--quick``, ``platform_crash`` alone.
+
 ``--agreement``: instead, the exact exposure of the three analysable shipped
 scenarios (``coffee_shift`` 1 h, ``platform_crash -p stochastic=True`` and
 ``cloud_offload -p stochastic=True``, 1 h each) beside their simulations over
 ``--seeds`` seeds; the last line counts those inside the 99 % interval.
 
-Run: ``python -m bench.bench_analyze [--quick] [--seeds N] [--phases-error] [--agreement] [--undetected [--trials N]] [--large K [--steady-only]]``.
+Run: ``python -m bench.bench_analyze [--quick] [--seeds N] [--phases-error] [--agreement] [--undetected [--trials N]] [--large K [--steady-only]] [--methods]``.
 ``--phases-error`` ends ``RESULT phases_error_most=...`` (the largest error at each
-scenario's most phases); ``--agreement`` and ``--undetected`` end ``RESULT scenarios=...
+scenario's most phases); ``--methods`` ``RESULT chains=... crossover_jumps=...
+krylov_speedup_at_4000=... krylov_speedup_at_16000=... max_difference=...`` (the speedups: the smallest over the chains); ``--agreement`` and ``--undetected`` end ``RESULT scenarios=...
 inside=... seeds=...``. Otherwise the last line is
 ``RESULT states=... build_s=... explore_s=... build_ratio=... steady_s=... transient_s=... exact_s=... sim_mean_s=... sim_ci_low=... sim_ci_high=...``,
 then ``storm_steady_s=... storm_transient_s=...`` when stormpy is installed (Storm's
@@ -49,6 +59,7 @@ Figures vary with the machine's load: compare the ratios.
 from __future__ import annotations
 
 import argparse
+import math
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -76,7 +87,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--agreement", action="store_true", help="exact against simulated for the three analysable scenarios")
     ap.add_argument("--undetected", action="store_true", help="exact against simulated undetected slips per hour, signals on")
     ap.add_argument("--trials", type=int, default=200, help="with --undetected: evaluation slips behind each detection rate (default 200)")
+    ap.add_argument("--methods", action="store_true", help="uniformisation against the Krylov exponential, by expected jumps in T")
     args = ap.parse_args(argv)
+    if args.methods:
+        return _methods(args.quick)
     if args.undetected:
         return _undetected(args.seeds or 20, args.trials)
     if args.phases_error:
@@ -121,6 +135,47 @@ def main(argv: list[str] | None = None) -> int:
         f"transient_s={trans:.3f} exact_s={exact:.4f} sim_mean_s={ag.mean:.4f} sim_ci_low={ag.low:.4f} sim_ci_high={ag.high:.4f}"
         + (f" storm_steady_s={storm.steady_s:.3f} storm_transient_s={storm.transient_s:.3f}" if storm else "")
     )
+    return 0
+
+
+#: the horizons of ``--methods``, in expected jumps (Lambda T)
+METHOD_JUMPS = (500, 1000, 2000, 4000, 16000)
+
+
+def _methods(quick: bool = False) -> int:
+    from desmon.analyze import build_chain, markov_world
+    from desmon.analyze.solve import transient
+    from desmon.loader import load_scenario
+
+    cases = [("coffee_shift.py", {"hours": "1"}), ("platform_crash.py", {"stochastic": "True"}), ("cloud_offload.py", {"stochastic": "True"})]
+    cases = cases[1:2] if quick else cases
+    ratios: dict[int, list[float]] = {j: [] for j in METHOD_JUMPS}
+    worst = 0.0
+    for name, params in cases:
+        sc = load_scenario(ROOT / "scenarios" / name, params=params)
+        chain = build_chain(sc, "desmon", markov_world(sc), miss={})
+        Q, _ = chain.generator()
+        p0 = np.zeros(chain.n)
+        for i, p in chain.initial:
+            p0[i] = p
+        rewards = np.vstack([chain.unmonitored, chain.risky])
+        lam = float((-Q.diagonal()).max()) * 1.02
+        for jumps in METHOD_JUMPS:
+            took, acc = {}, {}
+            for method in ("uniformisation", "krylov"):
+                took[method] = math.inf
+                for _ in range(2):
+                    c0 = time.process_time()
+                    acc[method] = transient(Q, p0, jumps / lam, rewards, method=method).accumulated
+                    took[method] = min(took[method], time.process_time() - c0)
+            diff = float(np.abs(acc["uniformisation"] - acc["krylov"]).max())
+            worst = max(worst, diff)
+            ratios[jumps].append(took["uniformisation"] / took["krylov"])
+            print(f"{name} {params}: {chain.n:,} states, {jumps:,} jumps (T = {jumps / lam:.1f} s): uniformisation "
+                  f"{took['uniformisation']:.3f} s, Krylov {took['krylov']:.3f} s ({ratios[jumps][-1]:.2f}x), difference {diff:.1e}")
+    crossover = next((j for j in METHOD_JUMPS if all(min(ratios[k]) > 1.0 for k in METHOD_JUMPS if k >= j)), 0)
+    print(f"RESULT chains={len(cases)} crossover_jumps={crossover} krylov_speedup_at_4000={min(ratios[4000]):.2f} "
+          f"krylov_speedup_at_16000={min(ratios[16000]):.2f} max_difference={worst:.1e}")
     return 0
 
 

@@ -95,6 +95,7 @@ RESULT_KEYS: dict[str, tuple[str, ...]] = {
     "bench_analyze --large": ("states", "build_s", "steady_s", "transient_s", "solve_s", "peak_mb"),
     "bench_analyze --phases-error": ("phases_error_most",),
     "bench_analyze --agreement": ("scenarios", "inside", "seeds"),
+    "bench_analyze --methods": ("chains", "crossover_jumps", "krylov_speedup_at_4000", "krylov_speedup_at_16000", "max_difference"),
     "bench_analyze --undetected": ("scenarios", "inside", "seeds", "trials"),
     "bench_detectors": ("trials_per_s", "eval_ratio", "missions_per_s", "detectors_us_per_sim_s"),
     "bench_estimate": (

@@ -527,6 +527,21 @@ def _five_platforms():
 
 
 # -- the bench's other configurations run (their figures are python -m bench.bench_analyze's) -------
+def test_the_methods_bench_times_both_transients_and_they_agree(capsys):
+    """``--methods --quick`` (platform_crash's chain) runs, reports where the Krylov
+    exponential took over (its timings are the bench's figures, not asserted here), and
+    the two solutions agree at every horizon it tries."""
+    from bench.bench_analyze import METHOD_JUMPS, main as bench_main
+    from bench.goals import parse_result
+
+    assert bench_main(["--methods", "--quick"]) == 0
+    out = capsys.readouterr().out
+    figures = parse_result(out)
+    assert figures["chains"] == 1.0 and figures["max_difference"] < 1e-6
+    assert figures["crossover_jumps"] in (0, *METHOD_JUMPS) and out.count(" jumps (T = ") == len(METHOD_JUMPS)
+
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("argv", [["--agreement", "--seeds", "3"], ["--large", "1", "--steady-only"]], ids=["agreement", "large"])
 def test_the_analyze_bench_modes_end_with_their_result_line(argv):

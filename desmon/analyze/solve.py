@@ -44,8 +44,10 @@ __all__ = ["steady_state", "transient", "mean_time_to", "krylov_steps", "Transie
 
 #: the truncation error of uniformisation: the Poisson mass left out
 EPS = 1e-10
-#: the most expected uniformisation steps (Lambda * T) before the Krylov exponential takes over
-UNIFORM_STEPS = 20_000
+#: the most expected uniformisation steps (Lambda * T) before the Krylov exponential takes over:
+#: from 2,000 the Krylov exponential was the faster on each analysable shipped scenario's chain,
+#: 1.1-1.8x there, 1.5-3.0x at 4,000 (``python -m bench.bench_analyze --methods``, one run)
+UNIFORM_STEPS = 2_000
 #: the largest closed class the direct sparse LU solve is tried on
 DIRECT_MAX = 30_000
 
