@@ -47,6 +47,8 @@ def check_input_file(path: str | os.PathLike[str], what: str, example: str) -> P
     """
     if "\x00" in str(path):
         raise PathError(f"{str(path)!r}: a path cannot hold a NUL byte; {example}")
+    if str(path) == "":
+        raise PathError(f"{str(path)!r}: the path of the {what} is empty; {example}")
     p = Path(path)
     if p.is_dir():
         raise PathError(f"{path}: is a directory, not a {what}; {example}")

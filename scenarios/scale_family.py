@@ -13,7 +13,18 @@ states by about 13 (``desmon verify scenarios/scale_family.py -p platforms=N`` f
     desmon verify scenarios/scale_family.py -p platforms=4 --stats
     python -m bench.bench_scale --max-platforms 6      # states, seconds and bytes/state per N
 
-Parameters: ``platforms`` (N, 2 to 12; 2 unless set, so that the tests running every shipped scenario stay quick). Figures: docs/findings.md ("The checker at scale").
+``stochastic=True`` adds the world ``desmon analyze`` solves (the chain at scale): the
+task repeats (grasp 2 s, hold 8 s, carry 20 s, release 2 s), every platform goes down
+(MTTF 1 h, MTTR 60 s) and every failing device breaks (MTTF 30 min, MTTR 120 s) at
+random, each load walks over its three levels (a step every 10 min on average), and 2 %
+of the starts fail:
+
+    desmon analyze scenarios/scale_family.py -p platforms=3 -p stochastic=True
+    python -m bench.bench_analyze --scale          # chain states and seconds per N
+
+Parameters: ``platforms`` (N, 2 to 12; 2 unless set, so that the tests running every
+shipped scenario stay quick), ``stochastic`` (False), ``hours`` (the stochastic world's
+horizon, 1). Figures: docs/findings.md ("The checker at scale").
 """
 
 from __future__ import annotations
@@ -23,9 +34,10 @@ from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
 from desmon.model.events import ActionChange, LoadChange
 from desmon.model.params import parameters
 from desmon.model.scenario import Scenario, TimedEvent
+from desmon.sim.world import MTTF, LoadSteps, StartFailure, Step, World
 from desmon.verify.bounds import Bounds, levels
 
-p = parameters(platforms=2)
+p = parameters(platforms=2, stochastic=False, hours=1.0)
 if not isinstance(p.platforms, int) or not 2 <= p.platforms <= 12:
     raise ScenarioError(f"platforms = {p.platforms!r}: give a whole number of platforms in [2, 12]")
 
@@ -53,12 +65,27 @@ robot.depsl.deployment_specification("tactile").add_constraint("quantity", "tact
 robot.depsl.deployment_specification("combined").add_constraint("capacity", "memory", 250)
 robot.rules({action: [alternatives] for action, alternatives in SLOTS.items()})
 
+#: the world of ``stochastic=True``: every fault the checker bounds allow, at a rate
+STOCHASTIC = World(
+    task=(Step(GRASP, 2.0), Step(HOLD, 8.0), Step(MOVE_BASE, 20.0), Step(RELEASE, 2.0)),
+    repeat=True,
+    horizon=3600.0 * p.hours,
+    slip_rate=1.0 / 600.0,
+    stochastic_faults=tuple(MTTF(name, mttf=3600.0, mttr=60.0) for name in PLATFORMS) + tuple(MTTF(d, mttf=1800.0, mttr=120.0) for d in failing),
+    load_steps=tuple(LoadSteps(name, levels=(0, 150, 300), start=0, mean_interval=600.0) for name in PLATFORMS),
+    start_failure=StartFailure(probability=0.02),
+    start_latency=0.5,
+    recognition_delay=0.2,
+    heartbeat_timeout=1.0,
+)
+
 scenario = Scenario(
     name=f"scale_family_{p.platforms}p",
     description=f"{p.platforms} loaded platforms with failing devices, three detectors with fallbacks",
     model=robot.build(),
     initial=tuple(LoadChange(name, 0) for name in PLATFORMS),
     timeline=(TimedEvent(0.0, ActionChange(HOLD), "t0"),),
+    world=STOCHASTIC if p.stochastic else None,
     checker=Bounds(
         actions=(HOLD, GRASP, MOVE_BASE, RELEASE),
         devices=tuple(failing),

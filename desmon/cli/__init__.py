@@ -111,6 +111,11 @@ def _dispatch(args: argparse.Namespace) -> int:
     except DesmonError as exc:
         print(f"desmon: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
+    except BrokenPipeError:  # the reader of the output went away (desmon ... | head): end quietly, as a pipe's writer does
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # (the interpreter's final flush then has nowhere to fail)
+        return 128 + 13  # SIGPIPE's exit status
     except OSError as exc:  # an output file that cannot be written, a directory that does not exist
         where = f"{exc.filename}: " if exc.filename else ""
         print(f"desmon: error: {one_line(f'{where}cannot read or write: {exc.strerror or exc}; check the path')}", file=sys.stderr)

@@ -42,6 +42,17 @@ def _probability(text: str) -> float:
     return v
 
 
+#: the most seeds --simulate runs (each a whole run of the horizon: a million are days of CPU already)
+MAX_SIMULATED = 1_000_000
+
+
+def _seed_count(text: str) -> int:
+    n = positive_int(text)
+    if n > MAX_SIMULATED:
+        raise argparse.ArgumentTypeError(f"must be at most {MAX_SIMULATED:,} seeds (each one a whole simulated run), got {text}")
+    return n
+
+
 def add_parser(sub: Subparsers) -> None:
     p = sub.add_parser("analyze", help="exact unmonitored exposure from the Markov chain of the real deployer")
     scenario_arg(p, help="scenario file whose World gives rates, e.g. scenarios/coffee_shift.py")
@@ -64,7 +75,8 @@ def add_parser(sub: Subparsers) -> None:
         "--placements", action="store_true",
         help="also the optimality gap: the best and worst long-run exposure over the deployer's placement choices (an MDP) and its first differing decision",
     )
-    p.add_argument("--simulate", type=positive_int, default=None, metavar="N", help="also simulate the Markov world with N seeds (0..N-1) and compare")
+    p.add_argument("--simulate", type=_seed_count, default=None, metavar="N",
+                   help=f"also simulate the Markov world with N seeds (0..N-1, at most {MAX_SIMULATED:,}) and compare")
     add_output(p, "--json", suffixes=(".json",), default=None, metavar="FILE.json", help="write the measures and the rates used as JSON")
     add_output(p, "--export", suffixes=(".drn", ".tra"), default=None, metavar="FILE", help="write the chain: FILE.drn (Storm) or FILE.tra (PRISM explicit, with .sta .lab .srew)")
     p.add_argument(
@@ -304,7 +316,7 @@ def format_analysis(a: Any, agree: Any = None) -> str:
     ]
     w = a.world
     timing = "exponential" if w.phases == 1 else f"Erlang-{w.phases}"
-    out.append(f"  task steps {timing}; start failure p = {w.start_failure_p:g}; recognition {w.recognition_delay:g} s; heartbeat {w.heartbeat_timeout:g} s")
+    out.append(f"  task steps {timing}; start failure p = {w.start_failure_p:.10g}; recognition {w.recognition_delay:g} s; heartbeat {w.heartbeat_timeout:g} s")
     if a.long_run_unmonitored_fraction is not None:
         out.append(
             f"Long run, per hour: {a.risky_s_per_hour:.3f} s risky (an object in the hand), of which {a.exposure_s_per_hour:.3f} s "

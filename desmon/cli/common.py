@@ -49,6 +49,10 @@ def one_line(text: object) -> str:
     return " ".join(str(text).split())
 
 
+#: an argument that is a negative number (desmon has no option that looks like one)
+NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+
+
 class Parser(argparse.ArgumentParser):
     """argparse, but a usage error is one line: ``desmon: error: COMMAND: ...; see: desmon COMMAND --help``,
     ``--help`` shows every option's default (:class:`~desmon.cli.options.HelpFormatter`), and an
@@ -58,6 +62,9 @@ class Parser(argparse.ArgumentParser):
         kwargs.setdefault("formatter_class", HelpFormatter)
         kwargs.setdefault("allow_abbrev", False)  # --time is not silently --timeout
         super().__init__(*args, **kwargs)
+        # a value that reads as a negative number is a value, exponents and infinities included
+        # (argparse's own pattern takes "-1e3" and "-inf" for options, and the flag "expected one argument")
+        self._negative_number_matcher = NEGATIVE_NUMBER
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_USAGE, usage_error(self.prog, message))
@@ -197,7 +204,7 @@ def resolve_times(scenario: Scenario, spec: str | None) -> list[tuple[str, float
             out.append((f"{part} (t={labels[part]:g}s)", labels[part]))
             continue
         try:
-            t = float(part)
+            t = float(part) + 0.0  # (-0 is 0)
         except ValueError:
             raise ScenarioError(
                 f"--at {part!r} is neither a time in seconds nor a timeline label ({', '.join(labels) or 'none'})"

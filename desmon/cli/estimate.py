@@ -16,7 +16,7 @@ import sys
 from typing import Any
 
 from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg
-from desmon.cli.options import finite_number, non_negative_int, positive_int, positive_seconds, worker_count
+from desmon.cli.options import finite_number, non_negative_int, positive_int, positive_seconds, run_count, worker_count
 
 __all__ = ["add_parser", "run", "format_estimate", "parse_within", "parse_confidence"]
 
@@ -67,7 +67,7 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--beta", type=finite_number, default=None, help="--below with --at-least: the chance of a wrong no (unset: 1 - confidence)")
     p.add_argument("--range", type=finite_number, nargs=2, default=None, metavar=("LOW", "HIGH"),
                    help="the range every run's value lies in (seconds: [0, horizon] unless given, narrower where fixed timing fixes the task's seconds; a count's mean needs one)")
-    p.add_argument("--max-runs", type=positive_int, default=10_000, metavar="N", help="stop INCOMPLETE (exit 3) after N runs")
+    p.add_argument("--max-runs", type=run_count, default=10_000, metavar="N", help="stop INCOMPLETE (exit 3) after N runs")
     p.add_argument("--timeout", type=positive_seconds, default=None, metavar="S", help="stop INCOMPLETE (exit 3) after S wall seconds (unset: no limit)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="the seed every run's seed is derived from")
     p.add_argument("--until", type=positive_seconds, default=None, help="simulated seconds per run (unset: the scenario's horizon)")
@@ -122,10 +122,15 @@ def _dask_source(args: argparse.Namespace, question: Any) -> Any:
         if args.workers is not None:
             raise EstimateError("--workers sets the size of the local cluster; with --scheduler the cluster has its own workers: drop it")
         probe_scheduler(args.scheduler)
+    if getattr(args, "max_reaction_seconds", None) is not None:
+        raise EstimateError(
+            f"--max-reaction-seconds {args.max_reaction_seconds:g}: its timer stops a reaction in this process only; runs on Dask "
+            "workers are bounded by --max-commands: drop --max-reaction-seconds, or drop --workers/--scheduler"
+        )
     params = tuple(sorted(parse_assignments(args.param).items()))
     spec = BatchSpec(
         os.path.abspath(args.scenario), params, getattr(args.deployer, "name", str(args.deployer)), args.seed, args.until,
-        question.metric, tuple(sorted(_world_changes(args).items())),
+        question.metric, tuple(sorted(_world_changes(args).items())), max_commands=getattr(args, "max_commands", None),
     )
     return dask_values(spec, scheduler=args.scheduler, workers=args.workers)
 
@@ -192,7 +197,7 @@ def format_estimate(e: Any) -> str:
     q, iv, ap = e.question, e.interval, e.approximation
     d = decimals_for(iv.half_width)
     f = lambda x: _fixed(x, d)  # noqa: E731
-    pct = f"{100 * q.interval_confidence:g} %"
+    pct = f"{100 * q.interval_confidence:.10g} %"  # (every digit given: 0.9999999 is not 100 %)
     what = f"P({q.metric} >= {q.at_least:g}) per run" if q.kind == "probability" else f"mean {q.metric} per run"
     out = [f"desmon estimate: {e.scenario} (deployer {e.deployer}), {what} of {_n(e.horizon)} s simulated, seed {e.seed}"]
     rel = f" = {100 * iv.half_width / abs(iv.estimate):.2f} % of the estimate" if iv.estimate else ""

@@ -54,6 +54,14 @@ def positive_int(text: str) -> int:
     return n
 
 
+def run_count(text: str) -> int:
+    """A number of runs an interval is computed from: 2 or more."""
+    n = _integer(text)
+    if n < 2:
+        raise argparse.ArgumentTypeError(f"must be a whole number of runs, 2 or more (an interval needs two), got {text}")
+    return n
+
+
 def worker_count(text: str) -> int:
     """A number of forked processes: 1 up to 4 per CPU (more only thrash, and thousands would exhaust the machine)."""
     n = positive_int(text)

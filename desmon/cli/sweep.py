@@ -12,7 +12,7 @@ import sys
 from typing import Any
 
 from desmon.cli.common import Subparsers
-from desmon.cli.options import add_input, add_output, non_negative_int, positive_int, positive_seconds, worker_count
+from desmon.cli.options import add_input, add_output, non_negative_int, positive_int, positive_seconds, run_count, worker_count
 from desmon.paths import SCENARIO_FILE
 from desmon.sweep.grid import JOBS
 
@@ -77,7 +77,7 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--within", type=_within, default=None, metavar="EPS",
                    help="--job estimate: the half-width each point's estimation stops at, absolute or relative (default: 5%%)")
     p.add_argument("--confidence", type=_confidence, default=None, metavar="1-DELTA", help="--job estimate: the intervals' confidence (default: 0.95)")
-    p.add_argument("--max-runs", type=positive_int, default=None, metavar="N",
+    p.add_argument("--max-runs", type=run_count, default=None, metavar="N",
                    help="--job estimate: runs per point at most; a point that needs more is INCOMPLETE, exit code 3 (default: 10,000)")
     add_output(p, "-o", "--output", suffixes=(".parquet", ".csv"), required=True, metavar="FILE",
                help="the table: FILE.parquet or FILE.csv (finished rows also go to FILE.journal.jsonl while it runs)")
@@ -106,6 +106,24 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
     return {name: _SETTING_DEFAULTS[name] if getattr(args, name) is None else getattr(args, name) for name in mine}
 
 
+def _check_estimate(settings: dict[str, Any]) -> None:
+    """The question each point's estimation asks, checked before any cluster starts or any file is
+    written (a mistake is one line, as desmon estimate gives it, not a table of failed rows)."""
+    from desmon.estimate import Question
+    from desmon.estimate.loop import parse_within
+    from desmon.estimate.measures import SECONDS
+    from desmon.sweep.grid import SweepError
+
+    within, relative = parse_within(settings["within"])
+    Question(metric=settings["metric"], within=within, relative=relative, confidence=settings["confidence"], max_runs=settings["max_runs"]).check()
+    if settings["metric"] not in SECONDS:
+        raise SweepError(
+            f"--metric {settings['metric']} is a count, and a guaranteed interval of a count's mean needs the range every run's "
+            "count lies in, which desmon sweep does not take: estimate it with desmon estimate --range LOW HIGH, or sweep a "
+            "figure in seconds (e.g. --metric exposure_s)"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     from desmon.paths import PathError, check_output_file
     from desmon.sweep.grid import SweepError, parse_axes
@@ -118,6 +136,8 @@ def run(args: argparse.Namespace) -> int:
         if args.workers is not None:
             raise SweepError("--workers sets the size of the local cluster; with --scheduler the cluster has its own workers: drop it")
     settings = _settings(args)
+    if args.job == "estimate":
+        _check_estimate(settings)
     if args.job in _EXACT and args.seeds is not None and args.seeds > 1:
         raise SweepError(
             f"--seeds {args.seeds} with --job {args.job}: {_EXACT[args.job]} and uses no seed, so every seed gives the same "

@@ -37,6 +37,8 @@ The simulation (:mod:`desmon.sim.metrics`), ``desmon analyze``
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 from typing import Callable, Final, Iterable
 
@@ -134,17 +136,21 @@ def no_rule_seconds(model: object, steps: Iterable[tuple[str, float]], horizon: 
     ``steps`` ((action, duration) pairs) played from 0 to ``horizon`` (repeating if
     ``repeat``), with every step its given duration."""
     steps = tuple(steps)
+    uncovered = {action for action, _d in steps if needs(model, action).no_rule}
+    cycle = sum(duration for _a, duration in steps)
+    # the whole cycles in closed form (a horizon of a billion cycles takes no longer), then the rest
+    full = math.floor(horizon / cycle) if repeat and cycle > 0 else 0
     out: dict[str, float] = {}
-    t = 0.0
-    while t < horizon and steps:
-        for action, duration in steps:
-            if t >= horizon:
-                break
-            if needs(model, action).no_rule:
-                out[action] = out.get(action, 0.0) + min(duration, horizon - t)
-            t += duration
-        if not repeat:
+    for action, duration in steps:
+        if action in uncovered and full:
+            out[action] = out.get(action, 0.0) + full * duration
+    t = full * cycle
+    for action, duration in steps:
+        if t >= horizon:
             break
+        if action in uncovered:
+            out[action] = out.get(action, 0.0) + min(duration, horizon - t)
+        t += duration
     return out
 
 

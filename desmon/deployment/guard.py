@@ -52,7 +52,7 @@ from desmon.errors import CheckerError, ModelError
 __all__ = [
     "DeployerFault", "ReactionStopped", "Guard", "check_max_commands", "MAX_COMMANDS", "TICK", "CRASH",
     "describe_stimulus", "uncallable", "EXIT_CRASHED", "MAX_REACTION_SECONDS", "RanAway", "RaisedElsewhere", "raised_text",
-    "plain_command",
+    "plain_command", "exception_text",
 ]
 
 #: the exit code of every command whose deployer failed in a reachable state (not the first reaction)
@@ -169,6 +169,16 @@ def uncallable(name: str, react: object) -> DeployerFault:
     return fault
 
 
+def exception_text(exc: BaseException) -> str:
+    """``str(exc)``, or a note that it cannot be had: a deployer's exception whose ``__str__``
+    raises (or returns no string) still gets reported as what it is."""
+    try:
+        text = str(exc)
+    except BaseException:  # noqa: BLE001 (its own __str__ failed: that is the deployer's, not ours)
+        return "(its message could not be printed: its __str__ raised)"
+    return text if isinstance(text, str) else "(its message could not be printed)"
+
+
 def raised_text(exc: BaseException, skip: tuple[str, ...] = ()) -> str:
     """What a deployer's reaction did by raising ``exc``, in the guard's words (``skip``:
     files of desmon's whose frames do not count as where it was raised)."""
@@ -178,7 +188,7 @@ def raised_text(exc: BaseException, skip: tuple[str, ...] = ()) -> str:
         code = "" if exc.code is None else repr(exc.code)
         where = _where(exc, skip)
         return f"called sys.exit({code}) inside its reaction" + (f" (at {where})" if where else "") + "; a reaction returns, it never exits"
-    detail = " ".join(str(exc).split())[:300]
+    detail = " ".join(exception_text(exc).split())[:300]
     where = _where(exc, skip)
     return f"raised {type(exc).__name__}{': ' + detail if detail else ''}" + (f" (at {where})" if where else "")
 

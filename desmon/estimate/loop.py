@@ -99,9 +99,16 @@ class Question:
         c = self.confidence
         if isinstance(c, bool) or not (isinstance(c, (int, float)) and math.isfinite(c) and 0.0 < c < 1.0):
             raise EstimateError(f"--confidence {c!r}: give a confidence strictly between 0 and 1, e.g. 0.99 (or 0.95)")
+        if not 0.0 < 1.0 - c < 1.0:
+            raise EstimateError(f"--confidence {c!r}: so close to 0 that 1 - confidence rounds to 1; give a confidence such as 0.9, 0.95 or 0.99")
         w = self.within
         if isinstance(w, bool) or not (isinstance(w, (int, float)) and math.isfinite(w) and w > 0):
             raise EstimateError(f"--within {w!r}: give a positive half-width, absolute (--within 60) or relative to the estimate (--within 1%)")
+        if self.kind == "probability" and not self.relative and w >= 0.5:
+            raise EstimateError(
+                f"--within {w:g}: a probability lies in [0, 1], so a half-width of 0.5 or more is reached at once; give a smaller one "
+                "(e.g. --within 0.01) or one relative to the estimate (--within 5%)"
+            )
         if isinstance(self.max_runs, bool) or not isinstance(self.max_runs, int) or self.max_runs < 2:
             raise EstimateError(f"--max-runs {self.max_runs!r}: give a whole number of runs, 2 or more")
         if self.timeout is not None and not (math.isfinite(self.timeout) and self.timeout > 0):
@@ -121,6 +128,12 @@ class Question:
         for flag, v in (("--alpha", self.alpha), ("--beta", self.beta)):
             if v is not None and not (math.isfinite(v) and 0.0 < v < 0.5):
                 raise EstimateError(f"{flag} {v!r}: give an error probability above 0 and below 0.5, e.g. 0.01")
+        unset = [flag for flag, v in (("--alpha", self.alpha), ("--beta", self.beta if self.kind == "probability" else 0.1)) if v is None]
+        if unset and not self.delta < 0.5:
+            raise EstimateError(
+                f"--confidence {self.confidence:.10g} leaves the threshold test an error probability of 1 - confidence = {self.delta:.10g}, "
+                f"0.5 or more, no better than a coin: give a confidence above 0.5 (e.g. 0.95) or set {' and '.join(unset)}"
+            )
         if self.beta is not None and self.kind == "mean":
             raise EstimateError(
                 "--beta applies to Wald's test of a probability (with --at-least); a mean's threshold is tested with its "
@@ -137,6 +150,8 @@ class Question:
         lo, hi = self.range
         if not (math.isfinite(lo) and math.isfinite(hi) and hi > lo):
             raise EstimateError(f"--range {lo:g} {hi:g}: give two finite numbers, the lower first, e.g. --range 0 50")
+        if not math.isfinite(hi - lo):
+            raise EstimateError(f"--range {lo:g} {hi:g}: a range this wide has no finite width in double precision; give a narrower one")
 
     def half_width_goal(self, estimate: float) -> float:
         """The half-width at which the estimation stops (``within``, or that share of ``|estimate|``)."""
@@ -402,6 +417,22 @@ def estimate(
         scenario=scenario.name, deployer=getattr(deployer, "name", str(deployer)), seed=seed, horizon=horizon, question=q,
         interval=iv, approximation=approx, status=status, range=value_range if q.kind == "mean" else None, range_basis=basis,
         answer=tracker.answer if status in (PRECISE, DECIDED) else None,
-        test_method=(tracker.test.METHOD if tracker.test is not None else "confidence sequence excludes the threshold") if q.below is not None else None,
+        test_method=_test_method(tracker, status) if q.below is not None else None,
         low_value=min(tracker.values), high_value=max(tracker.values),
     )
+
+
+#: how a mean's threshold question was (or was not yet) answered by its confidence sequence, by answer
+_SEQUENCE_BASIS = {
+    "yes": "confidence sequence excludes the threshold", "no": "confidence sequence excludes the threshold",
+    "indifferent": "confidence sequence within the indifference band around the threshold",
+    None: "confidence sequence still holds the threshold",
+}
+
+
+def _test_method(tracker: Tracker, status: str) -> str:
+    """The basis of a threshold question's answer: Wald's test (a probability), or what the
+    confidence sequence showed at the last look (a mean)."""
+    if tracker.test is not None:
+        return tracker.test.METHOD
+    return _SEQUENCE_BASIS[tracker.answer if status in (PRECISE, DECIDED) else None]

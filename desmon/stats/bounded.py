@@ -148,8 +148,9 @@ class BettingSequence:
         if self.goal is not None:
             span = self.high - self.low
             e = self.goal(self.low + span * (0.5 + self._sum) / t) / span  # at the plug-in mean of the values before
-            if math.isfinite(e) and e > 0.0:
-                runs = max(float(t), 2.0 * variance * self._log_level / (GOAL_REACH * e) ** 2)
+            reach = (GOAL_REACH * e) ** 2 if math.isfinite(e) else 0.0
+            if reach > 0.0:  # (a goal so small that its square underflows sizes no bet: the default sizing)
+                runs = max(float(t), 2.0 * variance * self._log_level / reach)
         return math.sqrt(2.0 * self._log_level / (variance * runs))
 
     def _log_capital(self, m: float, sign: int, y: np.ndarray, bets: np.ndarray) -> float:

@@ -41,11 +41,14 @@ class BatchSpec:
     until: float | None
     metric: str
     world: tuple[tuple[str, Any], ...] = ()  # World fields replaced (timing, phases, signals)
+    #: the guard's limit on one reaction's commands (``--max-commands``), as in this process
+    max_commands: int | None = None
 
 
 def run_batch(spec: BatchSpec, start: int, count: int) -> tuple[list[float], float]:
     """In a worker: the values of runs ``start`` .. ``start + count - 1`` and the wall seconds they took.
     A DesmonError (a value outside the declared range, a deployer that fails) reaches the caller."""
+    from desmon.deployment.guard import MAX_COMMANDS, Guard
     from desmon.sim.collector import Collector
     from desmon.sweep.jobs import scenario_at, worker_collector
     from desmon.verify.deployers import resolve_deployer
@@ -53,8 +56,9 @@ def run_batch(spec: BatchSpec, start: int, count: int) -> tuple[list[float], flo
     t0 = time.perf_counter()
     scenario = with_world(scenario_at(spec.scenario, spec.params), dict(spec.world))
     deployer = resolve_deployer(spec.deployer)
+    guard = Guard(spec.max_commands or MAX_COMMANDS)
     collector = worker_collector() or Collector()  # the batch's runs share one (the worker's, on Dask)
-    values = [run_value(scenario, deployer, run_seed(spec.seed, i), spec.until, spec.metric, None, collector) for i in range(start, start + count)]
+    values = [run_value(scenario, deployer, run_seed(spec.seed, i), spec.until, spec.metric, guard, collector) for i in range(start, start + count)]
     return values, time.perf_counter() - t0
 
 

@@ -234,10 +234,15 @@ def _estimates(ax: Any, df: Any, params: list[str], x: str) -> str:
     """``--job estimate``'s estimates against ``x``, each point's guaranteed interval as the band;
     the method, for the title."""
     others = [p for p in params if p != x and df[p].nunique() > 1]
-    groups = df.sort_values(x).groupby(others, sort=True) if others else [((), df.sort_values(x))]
+    # several estimations of a point (--seeds N): each its own line, never one line through all
+    df = df.assign(_estimation=df.groupby(params or ["job"])["seed"].rank(method="first").astype(int))
+    several = int(df["_estimation"].max()) > 1
+    keys = others + (["_estimation"] if several else [])
+    groups = df.sort_values(x).groupby(keys, sort=True) if keys else [((), df.sort_values(x))]
     for label, part in groups:
         label = label if isinstance(label, tuple) else (label,)
-        name = ", ".join(f"{k}={v}" for k, v in zip(others, label)) or "estimate"
+        names = [f"{k}={v}" for k, v in zip(others, label)] + ([f"estimation {label[-1]}"] if several else [])
+        name = ", ".join(names) or "estimate"
         line = ax.plot(part[x], part["estimate"], marker="o", label=name)[0]
         ax.fill_between(part[x], part["low"], part["high"], alpha=0.2, color=line.get_color())
         cut = part[part["status"] != "precise"]
@@ -296,8 +301,11 @@ def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | 
     if x is not None and _estimated(ok, x, y):
         method = _estimates(ax, ok, params, x)
         cut = int((ok["status"] != "precise").sum())
-        ax.set_title(f"estimate vs {x}: band = guaranteed {100 * float(ok['confidence'].iloc[0]):g} % interval ({method}); "
-                     f"{len(ok)} points" + (f", {cut} INCOMPLETE (hollow)" if cut else ""), fontsize=8)
+        points = ok.groupby(params or ["job"]).ngroups
+        each = f" x {seeds} estimations" if seeds > 1 else ""
+        ax.set_title(f"estimate vs {x}: band = guaranteed {100 * float(ok['confidence'].iloc[0]):.10g} % interval ({method}); "
+                     f"{points} points{each}" + (f", {cut} INCOMPLETE (hollow)" if cut else "") + (f", {failed} failed left out" if failed else ""),
+                     fontsize=8)
     elif x is not None and _exact(ok):
         _against(ax, ok, params, x, y)
         ax.set_title(f"{y} vs {x}: exact (desmon analyze), {len(ok)} points" + (f", {failed} failed left out" if failed else ""),

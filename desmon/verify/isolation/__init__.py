@@ -48,7 +48,7 @@ from collections.abc import Sequence
 from typing import Any, Callable, Iterator
 
 from desmon.deployment.deployer import Deployer
-from desmon.deployment.guard import DeployerFault, RaisedElsewhere
+from desmon.deployment.guard import DeployerFault, RaisedElsewhere, exception_text
 from desmon.deployment.ports import RaiseError, Start, Stop
 from desmon.errors import CheckerError, ModelError
 from desmon.model.system import PlatformState
@@ -195,7 +195,7 @@ class Worker:
             exc.reader = self._reader()  # type: ignore[attr-defined]
             raise
         except Exception as exc:  # what desmon's code raised for the deployer's read: the deployer's to handle
-            return ("error", (type(exc).__name__, " ".join(str(exc).split())[:500]))
+            return ("error", (type(exc).__name__, " ".join(exception_text(exc).split())[:500]))
 
     def _reader(self) -> str:
         """The module of the deployer's code that made the read being served, as its worker names it ("?" if it does not)."""
