@@ -191,3 +191,15 @@ def test_workers_under_the_auto_engine_runs_the_table_engine_with_a_note(root, c
     note, *warnings = err.splitlines()  # the note, then the scenario's warnings (its 'hold' has no rule)
     assert "--workers 2 not used" in note and "--engine direct --workers 2" in note
     assert warnings == [w for w in warnings if w.startswith("desmon: warning: risky action")]
+
+
+def test_a_reader_that_stops_early_ends_the_command_quietly(root, tmp_path):
+    """``desmon run ... | head``: the pipe's reader goes away (here at once), and desmon ends as a
+    pipe's writer does (SIGPIPE's status), with no error line about a file it could not write."""
+    err = tmp_path / "err.txt"
+    done = subprocess.run(
+        f"{sys.executable} -m desmon run scenarios/coffee_handover.py --no-progress 2>{err} | true",
+        shell=True, cwd=root, capture_output=True, text=True, timeout=120,
+    )
+    assert done.returncode == 0
+    assert "error" not in err.read_text() and "Traceback" not in err.read_text(), err.read_text()

@@ -51,6 +51,17 @@ def raises_on_grasp(q, slots, changed, context_changed):
         raise ValueError("no grasp plan")
 
 
+class Unprintable(Exception):
+    def __str__(self):
+        raise RuntimeError("no text for this one")
+
+
+def unprintable_on_grasp(q, slots, changed, context_changed):
+    yield from _desmon(q, slots, changed, context_changed)
+    if q.context() == "grasp":
+        raise Unprintable()
+
+
 def wrong_kind_on_grasp(q, slots, changed, context_changed):
     yield from _desmon(q, slots, changed, context_changed)
     if q.context() == "grasp":
@@ -115,6 +126,7 @@ def deployers(tmp_path: Path) -> str:
     "name, says",
     [
         ("raises_on_grasp", "raised ValueError: no grasp plan (at "),
+        ("unprintable_on_grasp", "raised Unprintable: (its message could not be printed: its __str__ raised) (at "),
         ("wrong_kind_on_grasp", "yielded RaiseError('totally_broken', 'combined_slip_detector'): no error kind 'totally_broken'"),
         ("restarts_forever_on_grasp", "issued more than 10,000 commands in one reaction"),
     ],

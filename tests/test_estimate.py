@@ -109,6 +109,52 @@ def test_two_dask_workers_print_the_same_bytes_as_this_process(capsys):
     assert here[0] == on_dask[0] == 0 and here[1] == on_dask[1]
 
 
+@pytest.mark.slow
+def test_dask_workers_hold_the_deployer_to_the_same_command_limit(capsys):
+    """--max-commands bounds every run's reactions on the workers too: the same CRASHED line
+    as in this process, not an ordinary estimate."""
+    pytest.importorskip("distributed")
+    args = (VARIED, "--within", "50%", "--max-runs", "5", "--max-commands", "1")
+    here = _estimate(capsys, *args)
+    on_dask = _estimate(capsys, *args, "--workers", "1")
+    assert here[0] == on_dask[0] == 4 and here[2] == on_dask[2] and "issued more than 1 commands in one reaction" in here[2]
+    code, _out, err = _estimate(capsys, *args, "--workers", "1", "--max-reaction-seconds", "5")
+    assert code == 2 and "--max-reaction-seconds 5: its timer stops a reaction in this process only" in err
+
+
+@pytest.mark.parametrize("extra, says", [
+    (["--range", "-1e308", "1e308", "--metric", "starts"], "--range -1e+308 1e+308: a range this wide has no finite width"),
+    (["--confidence", "1e-300"], "--confidence 1e-300: so close to 0 that 1 - confidence rounds to 1"),
+    (["--below", "3", "--confidence", "0.2"], "leaves the threshold test an error probability of 1 - confidence = 0.8"),
+    (["--at-least", "1", "--below", "0.5", "--confidence", "0.4", "--alpha", "0.1"], "or set --beta"),
+    (["--at-least", "1", "--within", "5"], "--within 5: a probability lies in [0, 1]"),
+    (["--max-runs", "1"], "--max-runs must be a whole number of runs, 2 or more"),
+])
+def test_questions_that_cannot_be_answered_as_asked_are_refused_in_one_line(capsys, extra, says):
+    code, out, err = _estimate(capsys, QUICK, *extra)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and says in err, err
+
+
+def test_extreme_but_valid_questions_run_and_print_what_was_asked(capsys):
+    # a goal too small to size a bet for: the runs go on to the budget (no division by zero)
+    code, out, _err = _estimate(capsys, QUICK, "--within", "1e-200", "--max-runs", "3")
+    assert code == 3 and "runs: 3 " in out
+    # every digit of the confidence (not "100 %")
+    code, out, _err = _estimate(capsys, QUICK, "--within", "50%", "--confidence", "0.9999999", "--max-runs", "3")
+    assert "99.99999 % interval" in out
+    # a negative number in exponent form is a value, not an option
+    code, out, _err = _estimate(capsys, QUICK, "--metric", "starts", "--range", "-1e1", "1e3", "--within", "50%", "--max-runs", "3")
+    assert "assumed in [-10, 1,000]" in out
+
+
+def test_a_threshold_answer_names_what_the_sequence_showed(capsys):
+    """Within the indifference band the answer is CANNOT TELL, and its basis says so (the
+    sequence did not exclude the threshold)."""
+    code, out, _err = _estimate(capsys, QUICK, "--below", "3", "--within", "100%", "--max-runs", "50")
+    line = next(x for x in out.splitlines() if x.strip().startswith("below 3?"))
+    assert code == 1 and "CANNOT TELL" in line and "within the indifference band" in line and "excludes" not in line
+
+
 def test_the_longest_unmonitored_stretch_joins_intervals_that_touch():
     from desmon.estimate.measures import longest_exposure
 

@@ -57,6 +57,15 @@ def test_the_cause_is_the_first_uncovered_slot_and_its_member_closest_to_watchin
     assert cause(need, {"a": "watching", "b": "watching", "c": "not_deployed"}.__getitem__) is None
 
 
+def test_the_no_rule_seconds_of_a_long_horizon_are_whole_cycles_and_the_rest():
+    sc = load_scenario(SHIFT)
+    steps = (("grasp", 2.0), ("hold", 13.0), ("move_base", 21.0), ("hold", 4.0))  # a 40 s cycle, 17 s of it 'hold'
+    assert no_rule_seconds(sc.model, steps, 100.0, True) == {"hold": pytest.approx(17.0 + 17.0 + 13.0)}
+    assert no_rule_seconds(sc.model, steps, 100.0, False) == {"hold": pytest.approx(17.0)}
+    # a trillion seconds: 2.5e10 cycles, counted without playing them one by one
+    assert no_rule_seconds(sc.model, steps, 1e12, True)["hold"] == pytest.approx(17.0 * 1e12 / 40.0)
+
+
 def test_a_builtin_action_can_only_be_excluded_and_keeps_its_own_risk():
     assert Action("hold", watched=False).like == "hold"
     with pytest.raises(ModelError, match="is built in"):

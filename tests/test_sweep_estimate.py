@@ -49,6 +49,26 @@ def test_what_estimate_cannot_do_is_refused_in_one_line(tmp_path, capsys, extra,
     assert says in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize("extra, says", [
+    (["--metric", "bogus"], "--metric 'bogus': no such run metric"),
+    (["--metric", "latency_median_s"], "its mean over runs is not defined"),
+    (["--metric", "starts"], "--metric starts is a count"),
+    (["--max-runs", "1"], "--max-runs must be a whole number of runs, 2 or more"),
+    (["--confidence", "1e-300"], "--confidence 1e-300: so close to 0"),
+])
+def test_each_points_question_is_checked_before_any_run_and_the_table_is_kept(tmp_path, capsys, extra, says):
+    """A question no point could answer is one line (exit 2) before a cluster starts, not a
+    table of failed rows written over the one -o names."""
+    table = tmp_path / "kept.csv"
+    table.write_text("a table from before\n")
+    argv = ["sweep", PLATFORM_CRASH, "--job", "estimate", "--no-progress", *extra, "-o", str(table)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert says in err and len(err.strip().splitlines()) == 1, err
+    assert table.read_text() == "a table from before\n"
+    assert not list(tmp_path.glob("*.journal.jsonl"))
+
+
 def test_sweep_plot_draws_each_points_estimate_with_its_guaranteed_interval(tmp_path, local, monkeypatch):
     pytest.importorskip("matplotlib")
     from desmon.sweep import plot
@@ -71,6 +91,33 @@ def test_sweep_plot_draws_each_points_estimate_with_its_guaranteed_interval(tmp_
     assert png.stat().st_size > 0 and drawn["rows"] == len(df) == 2  # INCOMPLETE points drawn too
     (band,) = drawn["bands"]
     assert min(band) == pytest.approx(df["low"].min()) and max(band) == pytest.approx(df["high"].max())
+
+
+def test_sweep_plot_draws_each_estimation_of_a_point_as_a_line_of_its_own(tmp_path, local, monkeypatch):
+    """With --seeds 2 a point has two estimations: two lines, each with its own band, never
+    one line zig-zagging between them; the title counts points and estimations."""
+    pytest.importorskip("matplotlib")
+    from desmon.sweep import plot
+
+    out, png = tmp_path / "est2.csv", tmp_path / "est2.png"
+    coffee = str(ROOT / "scenarios" / "coffee_shift.py")
+    main(["sweep", coffee, "--job", "estimate", "-p", "hours=0.01,0.02", "--seeds", "2", "--within", "40%", "--max-runs", "12",
+          "--no-progress", "-o", str(out)])
+    seen = {}
+    real = plot._estimates
+
+    def spy(ax, df, params, x):  # type: ignore[no-untyped-def]
+        method = real(ax, df, params, x)
+        seen["lines"] = [(line.get_label(), list(line.get_ydata())) for line in ax.lines if not line.get_label().startswith("_")]
+        return method
+
+    monkeypatch.setattr(plot, "_estimates", spy)
+    assert main(["sweep-plot", str(out), "-x", "hours", "-y", "estimate", "-o", str(png)]) == 0
+    df = pd.read_csv(out).sort_values(["hours", "seed"])
+    assert [label for label, _y in seen["lines"]] == ["estimation 1", "estimation 2"]
+    for k, (_label, ys) in enumerate(seen["lines"]):
+        expected = [float(part.sort_values("seed")["estimate"].iloc[k]) for _h, part in df.groupby("hours")]
+        assert ys == pytest.approx(expected)
 
 
 def test_sweep_plot_bars_each_mean_with_the_guaranteed_interval_of_a_figure_in_seconds(tmp_path, local, monkeypatch):
