@@ -249,6 +249,38 @@ def test_a_sweep_runs_on_a_real_dask_scheduler_and_worker(tmp_path):
             p.wait(timeout=30)
 
 
+def test_a_scheduler_without_workers_is_one_line_not_a_hang(tmp_path, capsys, monkeypatch):
+    """Tasks sent to a cluster with no workers would wait for ever: the sweep and the estimate
+    refuse once no worker has joined within the connection timeout, and leave no journal."""
+    monkeypatch.setattr("desmon.sweep.runner.CONNECT_TIMEOUT", 1.0)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    dask = str(Path(sys.executable).parent / "dask")
+    scheduler = subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+                                 cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        give_up = time.monotonic() + 60  # (listening before the 1-s connection timeout starts to count)
+        while True:
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                assert time.monotonic() < give_up, "the dask scheduler never listened"
+                time.sleep(0.2)
+        out = tmp_path / "r.csv"
+        for argv in (["sweep", str(ROBOT_DAY), "-p", "hours=0.02", "--scheduler", address, "-o", str(out), "--no-progress"],
+                     ["estimate", str(ROBOT_DAY), "-p", "hours=0.02", "--scheduler", address, "--no-progress"]):
+            assert main(argv) == 2, argv
+            err = capsys.readouterr().err.strip().splitlines()
+            assert len(err) == 1 and "the cluster has no workers" in err[0], err
+        assert not list(tmp_path.glob("r.csv*"))
+    finally:
+        scheduler.kill()
+        scheduler.wait(timeout=30)
+
+
 def test_an_address_where_no_scheduler_answers_is_one_line(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr("desmon.sweep.runner.CONNECT_TIMEOUT", 1.0)
     with socket.socket() as s:

@@ -191,12 +191,19 @@ def dask_client(scheduler: str | None, workers: int | None, retries: int) -> Ite
         if scheduler is not None:
             try:
                 client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s", set_as_default=False)
-            except (OSError, TimeoutError) as exc:
+            except Exception as exc:  # (also a server that greets like a scheduler and then speaks something else)
                 raise SweepError(
-                    f"--scheduler {scheduler}: no Dask scheduler answered ({' '.join(str(exc).split())[:160]}); "
+                    f"--scheduler {scheduler}: no Dask scheduler answered ({type(exc).__name__}: {' '.join(str(exc).split())[:160]}); "
                     "start one (dask-scheduler, then dask-worker ADDRESS on each machine) or leave --scheduler out"
                 ) from None
             try:
+                try:  # a cluster without workers would take the tasks and never run them
+                    client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)
+                except TimeoutError:
+                    raise SweepError(
+                        f"--scheduler {scheduler}: the cluster has no workers (none joined within {CONNECT_TIMEOUT:g} s); "
+                        f"start one (dask-worker {scheduler}) or leave --scheduler out"
+                    ) from None
                 yield client
             finally:
                 client.close()
