@@ -19,8 +19,7 @@ task repeats (grasp 2 s, hold 8 s, carry 20 s, release 2 s), every platform goes
 random, each load walks over its three levels (a step every 10 min on average), and 2 %
 of the starts fail:
 
-    desmon analyze scenarios/scale_family.py -p platforms=3 -p stochastic=True
-    python -m bench.bench_analyze --scale          # chain states and seconds per N
+    desmon analyze scenarios/scale_family.py -p platforms=2 -p stochastic=True
 
 Parameters: ``platforms`` (N, 2 to 12; 2 unless set, so that the tests running every
 shipped scenario stay quick), ``stochastic`` (False), ``hours`` (the stochastic world's
