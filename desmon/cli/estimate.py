@@ -16,7 +16,7 @@ import sys
 from typing import Any
 
 from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg
-from desmon.cli.options import finite_number, non_negative_int, positive_int, positive_seconds, run_count, worker_count
+from desmon.cli.options import finite_number, non_negative_int, positive_seconds, run_count, worker_count
 
 __all__ = ["add_parser", "run", "format_estimate", "parse_within", "parse_confidence"]
 
