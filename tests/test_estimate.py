@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import re
+import time
 from pathlib import Path
 
 import pytest
@@ -62,8 +63,20 @@ def test_the_run_budget_ends_incomplete_with_the_interval_of_the_runs_made(capsy
     assert err.strip().splitlines() == [
         "desmon estimate: INCOMPLETE: --max-runs 4 reached before the question was answered; the interval above is that of the 4 runs made"
     ]
-    code, out, err = _estimate(capsys, QUICK, "--within", "0.1%", "--timeout", "0.001")
-    assert code == 3 and "--timeout 0.001 s passed" in err and "runs: 1 " in out
+    code, out, err = _estimate(capsys, QUICK, "--within", "0.1%", "--timeout", "0.3")
+    runs = int(re.search(r"runs: (\d+) ", out).group(1))
+    assert code == 3 and "--timeout 0.3 s passed" in err and runs >= 1
+
+
+def test_the_time_limit_stops_a_long_run_under_way_and_a_horizon_of_years_is_refused(capsys):
+    coffee = str(ROOT / "scenarios" / "coffee_shift.py")
+    started = time.monotonic()
+    # the run under way is stopped at its next reaction and left out: with no run ended, no interval
+    code, out, err = _estimate(capsys, coffee, "-p", "hours=2000", "--timeout", "2")
+    assert code == 2 and out == "" and "--timeout 2: the time was up before the first run ended" in err
+    assert time.monotonic() - started < 60  # (the run alone would take many minutes)
+    code, _out, err = _estimate(capsys, coffee, "-p", "hours=1e5")
+    assert code == 2 and "more than the 10,000,000 a run holds" in err and len(err.strip().splitlines()) == 1
 
 
 @pytest.mark.parametrize("below, code, word", [("6", 0, "YES, the mean exposure_s is below 6"), ("0.5", 1, "NO, the mean exposure_s is not below 0.5")])

@@ -357,15 +357,23 @@ def serial_values(scenario: Any, deployer: Any, seed: int, until: float | None, 
         i += 1
 
 
-def _consume(tracker: Tracker, source: Iterable[float], progress: Callable[[Tracker], None] | None, clock: Callable[[], float]) -> str:
+def _consume(tracker: Tracker, source: Iterable[float], progress: Callable[[Tracker], None] | None, clock: Callable[[], float],
+             started: float | None = None) -> str:
     """Feed ``tracker`` the values of ``source`` until the question is answered or the budget is
-    spent; the status (the source is closed then, which ends the runs in flight)."""
+    spent; the status (the source is closed then, which ends the runs in flight). A run the
+    time limit stopped under way (:class:`~desmon.deployment.guard.ReactionStopped` out of
+    the source) counts as the time limit reached, the run left out."""
+    from desmon.deployment.guard import ReactionStopped
+
     q = tracker.question
     status = MAX_RUNS
-    started = clock()
+    started = clock() if started is None else started
     it = iter(source)
     try:
-        for n, value in enumerate(it, 1):
+        for n, value in _stoppable(enumerate(it, 1), ReactionStopped):
+            if value is None:
+                status = TIMEOUT
+                break
             tracker.add(value)
             done = (tracker.test is not None or is_look(n)) and tracker.stop()
             if progress is not None:
@@ -383,8 +391,30 @@ def _consume(tracker: Tracker, source: Iterable[float], progress: Callable[[Trac
         if close is not None:
             close()
     if not tracker.values:
+        if status == TIMEOUT:
+            raise EstimateError(
+                f"--timeout {q.timeout:g}: the time was up before the first run ended, so there is no interval; give a longer "
+                "--timeout, or shorter runs (--until S)"
+            )
         raise EstimateError("no run was made: the values' source gave none")
     return status
+
+
+def _stoppable(pairs: Iterator[tuple[int, float]], stopped: type[BaseException]) -> Iterator[tuple[int, float | None]]:
+    """``pairs`` as they come; ``(n, None)`` in place of the run the time limit stopped under way
+    (the exception itself, or SimPy's copy of it caused by it), then no more."""
+    n = 0
+    while True:
+        try:
+            n, value = next(pairs)
+        except StopIteration:
+            return
+        except BaseException as exc:
+            if isinstance(exc, stopped) or isinstance(exc.__cause__, stopped):
+                yield n + 1, None
+                return
+            raise
+        yield n, value
 
 
 def estimate(
@@ -410,8 +440,16 @@ def estimate(
             "declare the range every run's count lies in (--range 0 50), or estimate a probability (--at-least 1)"
         )
     tracker = Tracker(q, value_range if q.kind == "mean" else None)
-    source = values if values is not None else serial_values(scenario, deployer, seed, until, q.metric, guard)
-    status = _consume(tracker, source, progress, clock)
+    if values is not None or q.timeout is None:
+        source = values if values is not None else serial_values(scenario, deployer, seed, until, q.metric, guard)
+        status = _consume(tracker, source, progress, clock)
+    else:  # runs made here: the time limit also stops a run under way, at its next reaction
+        from desmon.deployment.guard import Guard
+
+        guard = guard if guard is not None else Guard()
+        started = clock()
+        with guard.watching(lambda: TIMEOUT if clock() - started >= q.timeout else ""):  # type: ignore[operator]
+            status = _consume(tracker, serial_values(scenario, deployer, seed, until, q.metric, guard), progress, clock, started)
     iv, approx = tracker.result()
     return Estimate(
         scenario=scenario.name, deployer=getattr(deployer, "name", str(deployer)), seed=seed, horizon=horizon, question=q,

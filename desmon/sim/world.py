@@ -675,11 +675,24 @@ def _check_start_script(world: World, where: str, graphs: list[str], platforms: 
             )
 
 
+#: the most task steps a run plays: a horizon that needs more (years of a task of seconds) is
+#: refused in one line instead of filling the memory with them before the run starts
+MAX_TASK_STEPS = 10_000_000
+
+
 def expand_task(world: World, horizon: float, seed: int = 0) -> tuple[Segment, ...]:
     """The ground-truth segments up to ``horizon`` (the task once, or repeated); each
     segment's ``context`` is the step's action. Under exponential timing the task
     repeats and each step lasts an Erlang-``phases`` time of mean its duration, drawn
-    from ``seed``."""
+    from ``seed``. More than :data:`MAX_TASK_STEPS` of them are refused (a ScenarioError)."""
+    if world.repeat or world.timing == "exponential":
+        cycle = sum(step.duration for step in world.task)
+        steps = horizon / cycle * len(world.task) if cycle > 0 else math.inf
+        if steps > MAX_TASK_STEPS:
+            raise ScenarioError(
+                f"world: a run of {horizon:,.6g} s would play about {steps:,.3g} steps of its task ({cycle:g} s a cycle), more than "
+                f"the {MAX_TASK_STEPS:,} a run holds: simulate a shorter horizon (--until S, or the scenario's own length)"
+            )
     if world.timing == "exponential":
         rng = random.Random(f"{seed}:task")
         k = world.phases
