@@ -96,11 +96,7 @@ class Question:
     def check(self) -> None:
         """Every field's value, or a one-line EstimateError naming the flag and the fix."""
         check_metric(self.metric)
-        c = self.confidence
-        if isinstance(c, bool) or not (isinstance(c, (int, float)) and math.isfinite(c) and 0.0 < c < 1.0):
-            raise EstimateError(f"--confidence {c!r}: give a confidence strictly between 0 and 1, e.g. 0.99 (or 0.95)")
-        if not 0.0 < 1.0 - c < 1.0:
-            raise EstimateError(f"--confidence {c!r}: so close to 0 that 1 - confidence rounds to 1; give a confidence such as 0.9, 0.95 or 0.99")
+        self._check_confidence()
         w = self.within
         if isinstance(w, bool) or not (isinstance(w, (int, float)) and math.isfinite(w) and w > 0):
             raise EstimateError(f"--within {w!r}: give a positive half-width, absolute (--within 60) or relative to the estimate (--within 1%)")
@@ -118,6 +114,13 @@ class Question:
                 raise EstimateError(f"{flag} {v!r}: give a finite number")
         self._check_test()
         self._check_range()
+
+    def _check_confidence(self) -> None:
+        c = self.confidence
+        if isinstance(c, bool) or not (isinstance(c, (int, float)) and math.isfinite(c) and 0.0 < c < 1.0):
+            raise EstimateError(f"--confidence {c!r}: give a confidence strictly between 0 and 1, e.g. 0.99 (or 0.95)")
+        if not 0.0 < 1.0 - c < 1.0:
+            raise EstimateError(f"--confidence {c!r}: so close to 0 that 1 - confidence rounds to 1; give a confidence such as 0.9, 0.95 or 0.99")
 
     def _check_test(self) -> None:
         if self.below is None:

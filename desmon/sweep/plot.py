@@ -253,6 +253,16 @@ def _estimates(ax: Any, df: Any, params: list[str], x: str) -> str:
     return "; ".join(m.split(" (")[0] for m in methods)
 
 
+def _estimates_title(ok: Any, method: str, params: list[str], x: str, seeds: int, failed: int) -> str:
+    """The title over ``--job estimate``'s estimates: the band's confidence and method, the
+    points (and estimations of each), the INCOMPLETE ones and the failed rows left out."""
+    cut = int((ok["status"] != "precise").sum())
+    points = ok.groupby(params or ["job"]).ngroups
+    each = f" x {seeds} estimations" if seeds > 1 else ""
+    return (f"estimate vs {x}: band = guaranteed {100 * float(ok['confidence'].iloc[0]):.10g} % interval ({method}); "
+            f"{points} points{each}" + (f", {cut} INCOMPLETE (hollow)" if cut else "") + (f", {failed} failed left out" if failed else ""))
+
+
 def _estimated(ok: Any, x: str | None, y: str) -> bool:
     """Whether to draw ``--job estimate``'s estimates with their intervals (``-y estimate`` against a parameter)."""
     return y == "estimate" and x is not None and "job" in ok.columns and bool((ok["job"] == "estimate").all())
@@ -299,13 +309,7 @@ def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | 
     seeds = int(ok.groupby(params or ["job"])["seed"].count().max())
     note = f"{len(ok)} runs" + (f", {failed} failed runs left out" if failed else "")
     if x is not None and _estimated(ok, x, y):
-        method = _estimates(ax, ok, params, x)
-        cut = int((ok["status"] != "precise").sum())
-        points = ok.groupby(params or ["job"]).ngroups
-        each = f" x {seeds} estimations" if seeds > 1 else ""
-        ax.set_title(f"estimate vs {x}: band = guaranteed {100 * float(ok['confidence'].iloc[0]):.10g} % interval ({method}); "
-                     f"{points} points{each}" + (f", {cut} INCOMPLETE (hollow)" if cut else "") + (f", {failed} failed left out" if failed else ""),
-                     fontsize=8)
+        ax.set_title(_estimates_title(ok, _estimates(ax, ok, params, x), params, x, seeds, failed), fontsize=8)
     elif x is not None and _exact(ok):
         _against(ax, ok, params, x, y)
         ax.set_title(f"{y} vs {x}: exact (desmon analyze), {len(ok)} points" + (f", {failed} failed left out" if failed else ""),
