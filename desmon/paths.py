@@ -168,11 +168,13 @@ def replacing(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:  #
             yield fh
         os.chmod(tmp, _mode_for(target))
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         try:
             os.unlink(tmp)
         except FileNotFoundError:
             pass
+        if isinstance(exc, OSError) and exc.filename is None and exc.errno is not None:  # (a write to the temporary file: name the user's)
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from None
         raise
 
 

@@ -203,3 +203,24 @@ def test_a_reader_that_stops_early_ends_the_command_quietly(root, tmp_path):
     )
     assert done.returncode == 0
     assert "error" not in err.read_text() and "Traceback" not in err.read_text(), err.read_text()
+
+
+def test_an_output_that_cannot_be_written_whole_leaves_the_file_there_was(root, tmp_path):
+    """``verify --json``, ``--pytest`` and ``--plot`` write a temporary file and rename it: a
+    write that fails half-way (here the file-size limit of the process) names the file and
+    leaves the earlier one byte for byte."""
+    import resource
+
+    for flag, name in (("--json", "out.json"), ("--pytest", "test_out.py"), ("--plot", "out.png")):
+        (tmp_path / flag[2:]).mkdir()
+        target = tmp_path / flag[2:] / name
+        target.write_text("the earlier file\n")
+        done = subprocess.run(
+            [sys.executable, "-m", "desmon", "verify", str(root / "scenarios" / "coffee_handover.py"), "--no-progress",
+             "--deployer", "mutant:no-recheck", flag, str(target)],
+            capture_output=True, text=True, timeout=120, cwd=tmp_path,
+            preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_FSIZE, (2048, 2048)),
+        )
+        err = done.stderr.strip().splitlines()
+        assert done.returncode == 2 and err[-1] == f"desmon: error: {target}: cannot read or write: File too large; check the path", done.stderr
+        assert target.read_text() == "the earlier file\n" and [p.name for p in target.parent.iterdir()] == [name]

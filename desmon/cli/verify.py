@@ -170,6 +170,7 @@ def _search(args: argparse.Namespace) -> int:
 def _report(args: argparse.Namespace, result: Any) -> None:
     """The search's report, and ``--json``."""
     from desmon.model.params import parse_assignments
+    from desmon.paths import replacing
     from desmon.verify.report import format_result, format_stats, result_to_json, stats_to_json
 
     print(format_result(result), end="", flush=True)
@@ -180,7 +181,8 @@ def _report(args: argparse.Namespace, result: Any) -> None:
         out = result_to_json(result, parse_assignments(getattr(args, "param", None)))
         if stats:
             out["stats"] = stats_to_json(result)
-        Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
+        with replacing(args.json) as fh:  # (a write that fails leaves the file there was)
+            fh.write(json.dumps(out, indent=2) + "\n")
         print(f"wrote {args.json}")
 
 
@@ -204,11 +206,13 @@ def _write_outputs(args: argparse.Namespace, scenario: Any, result: Any, deploye
     if args.pytest and not crashed:
         if result.counterexamples:
             from desmon.model.params import parse_assignments
+            from desmon.paths import replacing
             from desmon.verify.report import counterexample_pytest
 
             path = str(Path(args.scenario).resolve())
             params = parse_assignments(getattr(args, "param", None))
-            Path(args.pytest).write_text(counterexample_pytest(result, path, bounds.start_action(scenario), params))
+            with replacing(args.pytest) as fh:
+                fh.write(counterexample_pytest(result, path, bounds.start_action(scenario), params))
             print(f"wrote {args.pytest}")
         else:
             print(f"no counterexample: {args.pytest} not written")

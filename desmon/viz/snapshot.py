@@ -12,6 +12,7 @@ from typing import Sequence
 
 import networkx as nx
 
+from desmon.paths import replacing
 from desmon.viz.common import COLORS, require_matplotlib
 
 __all__ = ["layout", "draw_snapshot", "draw_snapshots", "snapshot_figure"]
@@ -121,8 +122,11 @@ def draw_snapshots(
     plt = require_matplotlib()
     fig = snapshot_figure(panels, full=full, columns=columns)
     out = Path(path)
-    fig.savefig(out, dpi=110, format="png")  # exactly this file, whatever its name
-    plt.close(fig)
+    try:
+        with replacing(out, "wb") as fh:  # exactly this file, whatever its name; a failed write leaves the one there was
+            fig.savefig(fh, dpi=110, format="png")
+    finally:
+        plt.close(fig)
     return out
 
 

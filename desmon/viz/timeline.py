@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from desmon.errors import ScenarioError
-from desmon.paths import TRACE_FILE, check_input_file
+from desmon.paths import TRACE_FILE, check_input_file, replacing
 from desmon.viz.common import require_matplotlib
 
 __all__ = ["read_trace", "check_window", "Timeline", "build_timeline", "plot_timeline", "timeline_figure", "action_colors"]
@@ -608,8 +608,11 @@ def plot_timeline(tl: Timeline, path: str | Path) -> Path:
     plt = require_matplotlib()
     fig = timeline_figure(tl)
     out = Path(path)
-    fig.savefig(out, dpi=DPI, bbox_inches="tight", format="png")  # exactly this file, whatever its name
-    plt.close(fig)
+    try:
+        with replacing(out, "wb") as fh:  # exactly this file, whatever its name; a failed write leaves the one there was
+            fig.savefig(fh, dpi=DPI, bbox_inches="tight", format="png")
+    finally:
+        plt.close(fig)
     return out
 
 
