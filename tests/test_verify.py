@@ -272,3 +272,14 @@ def test_a_transition_property_is_reported_as_broken_by_the_reaction_as_a_whole(
     assert where_in_reaction(WHOLE_REACTION) == "by the reaction as a whole"
     assert where_in_reaction("start x on p") == "during the reaction, right after `start x on p`"
     assert where_in_reaction(None) == ""
+
+
+def test_a_generated_pytest_replays_a_violation_of_the_initial_state(tmp_path, capsys):
+    """A counterexample of 0 steps (the initial reaction already violates): the generated
+    test checks the initial state and passes while the bug is there."""
+    py = tmp_path / "test_initial.py"
+    rc = main(["verify", str(SCENARIOS / "symmetric_platforms.py"), "--deployer", "paper", "--pytest", str(py), "--no-progress"])
+    out = capsys.readouterr().out
+    assert rc == 1 and "after 0 steps" in out, out
+    res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(py)], capture_output=True, text=True, cwd=tmp_path)
+    assert res.returncode == 0 and "1 passed" in res.stdout, res.stdout + res.stderr

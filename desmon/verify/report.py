@@ -379,7 +379,7 @@ INITIAL_ACTION = {initial_action!r}
 
 
 def replay(steps, after_command=None):
-    """The states after each step; ``after_command(run)`` is called after every Start/Stop."""
+    """The initial state and the state after each step; ``after_command(run)`` is called after every Start/Stop."""
     run = RepositoryRun(load_scenario(SCENARIO, PARAMS), resolve_deployer(DEPLOYER))
     assert run.bounds.start_action(run.scenario) == INITIAL_ACTION, "not the checker's initial state"
     if after_command is not None:
@@ -396,7 +396,7 @@ def replay(steps, after_command=None):
             return ok
 
         control.start, control.stop = audited_start, audited_stop
-    views = []
+    views = [run.view()]  # (a counterexample of 0 steps: the initial state itself)
     for event, fails in steps:
         run.step(event, fails)
         if after_command is not None:
