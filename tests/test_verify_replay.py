@@ -142,6 +142,9 @@ def test_a_replay_that_leaves_the_recorded_states_names_the_step_on_one_line_and
         ("fail_indices", lambda c: c["states"][1].update(fail_indices=[10**30], failed_starts=[])),
         ("fail_indices", lambda c: c["states"][1].update(fail_indices=[0, 0], failed_starts=["a", "b"])),
         ("states[0].event", lambda c: c["states"][0].update(event=c["states"][1]["event"])),
+        ("length", lambda c: c.update(states=c["states"][:-1])),  # its last state cut: not a shorter path "fixed"
+        ("length", lambda c: c.update(length=c["length"] + 3)),
+        ("states[1].step", lambda c: c["states"][1].update(step=7)),
     ],
 )
 def test_a_hand_edited_bad_field_is_refused_on_one_line_naming_the_field(saved, tmp_path, capsys, field, edit):

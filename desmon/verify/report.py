@@ -254,6 +254,7 @@ def read_counterexample(path: str | Path, number: int | None = None) -> SavedCou
     if during is not None and not isinstance(during, str):
         raise CheckerError(f"{where}.during = {during!r} is neither null nor the command text it was violated after")
     labels = labels_from_json(c, where=where)
+    _check_numbering(where, c)
     states = tuple(
         _field(f"{where}.states[{i}]", json_object(f"{where}.states[{i}]", s, '{"event": ..., "state": {...}}'), "state", dict)
         for i, s in enumerate(c["states"])
@@ -262,6 +263,25 @@ def read_counterexample(path: str | Path, number: int | None = None) -> SavedCou
         src, n, len(top["counterexamples"]), scenario, deployer, None if params is None else tuple(sorted(params.items())),
         checked, invariant, _field(where, c, "message", str), during, labels, states,
     )
+
+
+def _check_numbering(where: str, c: dict[str, Any]) -> None:
+    """The counterexample's ``length`` and its states' ``step`` numbers agree with its list of
+    states (a file cut or edited by hand would otherwise replay as a shorter path, "fixed")."""
+    states = c.get("states")
+    if not isinstance(states, list):
+        return  # (labels_from_json names it)
+    length = c.get("length")
+    if length is not None and (isinstance(length, bool) or length != len(states) - 1):
+        raise CheckerError(
+            f"{where}.length = {length!r}, but it lists {len(states)} states (the initial one and {len(states) - 1} "
+            f"step{'' if len(states) == 2 else 's'}): "
+            f"the file was cut or edited; {_WRITE_ONE}"
+        )
+    for i, state in enumerate(states):
+        step = state.get("step", i) if isinstance(state, dict) else i
+        if isinstance(step, bool) or step != i:
+            raise CheckerError(f"{where}.states[{i}].step = {step!r}, not {i}: the states are out of order or cut; {_WRITE_ONE}")
 
 
 def _read_json(path: str | Path) -> object:
