@@ -10,6 +10,7 @@ cluster once.
 from __future__ import annotations
 
 import os
+import re
 import socket
 import subprocess
 import sys
@@ -361,3 +362,16 @@ def test_sweep_plot_draws_a_png_against_a_parameter_and_a_pareto_view(tmp_path, 
         png = tmp_path / f"{extra[0].strip('-')}.png"
         assert main(["sweep-plot", str(out), "-y", "exposure_s", *extra, "-o", str(png)]) == 0
         assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_a_fuzz_row_counts_the_sequences_desmon_fuzz_prints_for_its_seed(tmp_path, local, capsys):
+    out = tmp_path / "fz.csv"
+    scenario = str(ROOT / "scenarios" / "fallbacks.py")
+    main(["sweep", scenario, "--job", "fuzz", "--examples", "50", "--seeds", "2", "--deployer", "mutant:stale-errors", "--no-progress", "-o", str(out)])
+    capsys.readouterr()
+    rows = pd.read_csv(out)
+    assert (rows["verdict"] == "VIOLATED").any()
+    for row in rows.to_dict("records"):
+        main(["fuzz", scenario, "--examples", "50", "--seed", str(row["seed"]), "--deployer", "mutant:stale-errors", "--no-progress"])
+        printed = capsys.readouterr().out
+        assert re.search(rf"\b{row['sequences']} sequences", printed), (row["sequences"], printed)

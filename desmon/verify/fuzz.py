@@ -41,6 +41,8 @@ __all__ = ["FuzzOutcome", "fuzz", "run_choices"]
 class FuzzOutcome:
     text: str
     exit_code: int
+    #: the sequences run (the report's count: with a violation, the failing one and the
+    #: shrinking's included; after Ctrl-C without one, those that passed)
     passed: int
     labels: list[Label] | None = None
     invariant: str | None = None
