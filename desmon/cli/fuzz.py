@@ -8,17 +8,21 @@ from __future__ import annotations
 import argparse
 
 from desmon.cli.common import Subparsers, deployer_arg, load_scenario_of, scenario_arg
-from desmon.cli.options import non_negative_int, positive_int
+from desmon.cli.options import bounded_count, non_negative_int, positive_int
 from desmon.errors import CheckerError
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "run", "MAX_EXAMPLES"]
+
+#: the most sequences one fuzz run generates (a million take hours already)
+MAX_EXAMPLES = 1_000_000
 
 
 def add_parser(sub: Subparsers) -> None:
     p = sub.add_parser("fuzz", help="hypothesis-generated failure sequences, shrunk on failure")
     scenario_arg(p)
     deployer_arg(p)
-    p.add_argument("--examples", type=positive_int, default=200, help="failure sequences to generate")
+    p.add_argument("--examples", type=bounded_count(MAX_EXAMPLES, "sequences"), default=200,
+                   help=f"failure sequences to generate (at most {MAX_EXAMPLES:,})")
     p.add_argument("--seed", type=non_negative_int, default=0, help="hypothesis seed (the same seed draws the same sequences)")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(handler=run)

@@ -62,6 +62,19 @@ def run_count(text: str) -> int:
     return n
 
 
+def bounded_count(most: int, what: str):  # type: ignore[no-untyped-def]
+    """A count from 1 to ``most`` (``what`` names the unit in the refusal): a number past it
+    would run for days, or overflow what Dask or hypothesis can carry."""
+
+    def parse(text: str) -> int:
+        n = positive_int(text)
+        if n > most:
+            raise argparse.ArgumentTypeError(f"must be at most {most:,} {what}, got {text}")
+        return n
+
+    return parse
+
+
 def worker_count(text: str) -> int:
     """A number of forked processes: 1 up to 4 per CPU (more only thrash, and thousands would exhaust the machine)."""
     n = positive_int(text)

@@ -12,7 +12,8 @@ import sys
 from typing import Any
 
 from desmon.cli.common import Subparsers
-from desmon.cli.options import add_input, add_output, non_negative_int, positive_int, positive_seconds, run_count, worker_count
+from desmon.cli.fuzz import MAX_EXAMPLES
+from desmon.cli.options import add_input, add_output, bounded_count, non_negative_int, positive_int, positive_seconds, run_count, worker_count
 from desmon.paths import SCENARIO_FILE
 from desmon.sweep.grid import JOBS
 
@@ -42,6 +43,17 @@ def _within(text: str) -> str:
     return text.strip()
 
 
+#: the most retries of a task (Dask carries the number in a 64-bit message field)
+MAX_RETRIES = 100
+
+
+def _retries(text: str) -> int:
+    n = non_negative_int(text)
+    if n > MAX_RETRIES:
+        raise argparse.ArgumentTypeError(f"must be at most {MAX_RETRIES} (a task whose worker died that often will not run), got {text}")
+    return n
+
+
 def _confidence(text: str) -> float:
     from desmon.cli.estimate import parse_confidence
 
@@ -67,8 +79,9 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--until", type=positive_seconds, default=None, help="--job run: simulated seconds (default: each point's horizon)")
     p.add_argument("--max-states", type=positive_int, default=None, help="--job verify and analyze: stop INCOMPLETE after this "
                    f"many states (default: {_SETTING_DEFAULTS['max_states']:,})")
-    p.add_argument("--examples", type=positive_int, default=None, help=f"--job fuzz: sequences per run (default: {_SETTING_DEFAULTS['examples']})")
-    p.add_argument("--trials", type=positive_int, default=None, help=f"--job evaluate: trials per cell (default: {_SETTING_DEFAULTS['trials']})")
+    p.add_argument("--examples", type=bounded_count(MAX_EXAMPLES, "sequences"), default=None,
+                   help=f"--job fuzz: sequences per run (default: {_SETTING_DEFAULTS['examples']}; at most {MAX_EXAMPLES:,})")
+    p.add_argument("--trials", type=bounded_count(1_000_000, "trials per cell"), default=None, help=f"--job evaluate: trials per cell (default: {_SETTING_DEFAULTS['trials']})")
     p.add_argument("--phases", type=positive_int, default=None, metavar="K",
                    help="--job analyze: Erlang phases per task step (default: 1, exponential; at most 64)")
     p.add_argument("--horizon", type=positive_seconds, default=None, metavar="T",
@@ -86,7 +99,7 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--workers", type=worker_count, default=None, metavar="N", help="local cluster: worker processes (default: one per core)")
     p.add_argument("--task-timeout", type=positive_seconds, default=None, metavar="S",
                    help="a run taking longer becomes an error row (exit code 124) (default: no limit)")
-    p.add_argument("--retries", type=non_negative_int, default=3, metavar="N",
+    p.add_argument("--retries", type=_retries, default=3, metavar="N",
                    help="run a task again when the worker running it dies, up to N times")
     p.add_argument("--resume", action="store_true", help="keep the rows already in -o (and its journal); run only the others")
     p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
@@ -142,6 +155,11 @@ def run(args: argparse.Namespace) -> int:
         raise SweepError(
             f"--seeds {args.seeds} with --job {args.job}: {_EXACT[args.job]} and uses no seed, so every seed gives the same "
             f"row; drop --seeds (one {'check' if args.job == 'verify' else 'analysis'} per point)"
+        )
+    if args.job in _EXACT and args.seed != 0:
+        raise SweepError(
+            f"--seed {args.seed} with --job {args.job}: {_EXACT[args.job]} and uses no seed, so it would only rename the "
+            "rows (and a --resume would then refuse the same sweep); drop --seed"
         )
     seeds = args.seeds if args.seeds is not None else 1 if args.job in _ONE_PER_POINT else DEFAULT_SEEDS
     axes = parse_axes(args.param)
