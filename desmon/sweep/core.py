@@ -67,6 +67,9 @@ def _previous(
     done: dict[tuple[str, int], dict[str, Any]] = {}
     if output.exists():
         df = read_table(output)
+        missing = [c for c in ("point", "seed_index", "seed", "job", "exit_code") if c not in df.columns]
+        if missing:
+            raise SweepError(f"--resume: {output} is not a desmon sweep table (no column {', '.join(missing)}); name another -o")
         rows = df.astype(object).where(df.notna(), None).to_dict("records")
         done.update(check_same_sweep(str(output), rows, grid, identity, settings))
     if journal.exists():

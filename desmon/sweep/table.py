@@ -200,6 +200,12 @@ def _check_identity(where: str, row: dict[str, Any], names: set[str], grid: Grid
     if any(row.get(c, "") is None for c in ("point", "seed_index", "seed", "job", "deployer", "exit_code", "wall_s")):
         raise SweepError(f"--resume: {where} holds a row cut short (its last column, wall_s, or its job, seed or exit code is "
                          "empty: the file was cut off while written?); delete the incomplete line(s), or name another -o")
+    for column in ("seed_index", "seed", "exit_code"):
+        value = row.get(column)
+        if isinstance(value, bool) or not (isinstance(value, int) or (isinstance(value, float) and value.is_integer())
+                                           or (isinstance(value, str) and value.strip().lstrip("-").isdigit())):
+            raise SweepError(f"--resume: {where} holds {column} {value!r} in a row, not a whole number: the table was edited; "
+                             "name another -o")
     stored = {c for c in row if c in names}
     if stored != names:
         raise SweepError(f"--resume: {where} sweeps other parameters than -p {', '.join(grid.names) or '(none)'}; "
