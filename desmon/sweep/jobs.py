@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextvars
 import ctypes
 import dataclasses
+import math
 import os
 import threading
 import time
@@ -387,6 +388,25 @@ def _is_value_error(message: str, name: str | None) -> bool:
     return name is not None and f"-p {name}=" in message
 
 
+def _check_bounds_pairs(axes: tuple[Axis, ...], known: dict[str, object]) -> None:
+    """A ``<name>_lo`` never above its ``<name>_hi`` at any point of the grid (each taken from
+    its axis, or its default where not swept): the model draws between the two."""
+    values = {a.name: [float(v) for v in a.values] for a in axes}
+    for lo_name in known:
+        if not lo_name.endswith("_lo"):
+            continue
+        hi_name = lo_name[:-3] + "_hi"
+        if hi_name not in known or (lo_name not in values and hi_name not in values):
+            continue
+        lo = max(values.get(lo_name, [float(known[lo_name])]))  # type: ignore[arg-type]
+        hi = min(values.get(hi_name, [float(known[hi_name])]))  # type: ignore[arg-type]
+        if lo > hi:
+            raise SweepError(
+                f"-p {lo_name} / {hi_name}: a point of the grid would have {lo_name} {lo:g} above {hi_name} {hi:g}; "
+                f"the model draws between them: keep every {lo_name} at most every {hi_name}"
+            )
+
+
 def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> None:
     """Refuse, before any work, a ``-p`` name the job does not know or a value that does not
     parse as its parameter's type (one line). A value that parses but makes the scenario
@@ -410,8 +430,12 @@ def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> None
                 except ValueError:
                     what = "a number" if kind is float else "a whole number"
                     raise SweepError(f"-p {axis.name}={v}: {axis.name} is {what} (default {known[axis.name]})") from None
-                if number < 0:
-                    raise SweepError(f"-p {axis.name}={v}: {axis.name} cannot be negative (default {known[axis.name]})")
+                if not math.isfinite(number):
+                    raise SweepError(f"-p {axis.name}={v}: {axis.name} must be a finite number (default {known[axis.name]})")
+                if number < 0 or (number == 0 and axis.name.endswith("_rate")):
+                    least = "above 0 (samples per second)" if axis.name.endswith("_rate") else "0 or more"
+                    raise SweepError(f"-p {axis.name}={v}: {axis.name} must be {least} (default {known[axis.name]})")
+        _check_bounds_pairs(axes, known)
         return
     from desmon.loader import load_scenario
 
