@@ -375,3 +375,29 @@ def test_a_fuzz_row_counts_the_sequences_desmon_fuzz_prints_for_its_seed(tmp_pat
         main(["fuzz", scenario, "--examples", "50", "--seed", str(row["seed"]), "--deployer", "mutant:stale-errors", "--no-progress"])
         printed = capsys.readouterr().out
         assert re.search(rf"\b{row['sequences']} sequences", printed), (row["sequences"], printed)
+
+
+def test_sweep_plot_says_what_it_left_out_and_refuses_an_edited_parameter_cell(tmp_path, local, capsys, monkeypatch):
+    """A run without a value of the figure is left out and counted in the title (a long title
+    on two lines); a successful run with no parameter value is an edited table, refused."""
+    pytest.importorskip("matplotlib")
+    from desmon.sweep import plot
+
+    out = tmp_path / "r.csv"
+    main(["sweep", str(ROBOT_DAY), "-p", "hand_memory=256,384", "-p", "hours=0.02", "--seeds", "2", "--no-progress", "-o", str(out)])
+    df = pd.read_csv(out)
+    df.loc[0, "exposure_s"] = float("nan")
+    df.to_csv(out, index=False)
+    titles = []
+    real = plot._wrapped
+    monkeypatch.setattr(plot, "_wrapped", lambda t: titles.append(real(t)) or titles[-1])
+    assert main(["sweep-plot", str(out), "-x", "hand_memory", "-y", "exposure_s", "-o", str(tmp_path / "a.png")]) == 0
+    assert "(3 runs, 1 without a value of exposure_s left out)" in titles[-1].replace("\n", " ")
+    assert all(len(line) <= plot.TITLE_WIDTH for line in titles[-1].splitlines())
+    df.loc[1, "hand_memory"] = float("nan")
+    df.to_csv(out, index=False)
+    capsys.readouterr()
+    assert main(["sweep-plot", str(out), "-x", "hand_memory", "-y", "exposure_s", "-o", str(tmp_path / "b.png")]) == 2
+    err = capsys.readouterr().err
+    assert "hand_memory is empty in 1 run(s) without an error" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "b.png").exists()

@@ -137,6 +137,22 @@ def _check_estimate(settings: dict[str, Any]) -> None:
         )
 
 
+def _check_seeds(args: argparse.Namespace) -> None:
+    """``--seeds`` and ``--seed`` only where the job uses seeds (not an exact check or analysis)."""
+    from desmon.sweep.grid import SweepError
+
+    if args.job in _EXACT and args.seeds is not None and args.seeds > 1:
+        raise SweepError(
+            f"--seeds {args.seeds} with --job {args.job}: {_EXACT[args.job]} and uses no seed, so every seed gives the same "
+            f"row; drop --seeds (one {'check' if args.job == 'verify' else 'analysis'} per point)"
+        )
+    if args.job in _EXACT and args.seed != 0:
+        raise SweepError(
+            f"--seed {args.seed} with --job {args.job}: {_EXACT[args.job]} and uses no seed, so it would only rename the "
+            "rows (and a --resume would then refuse the same sweep); drop --seed"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     from desmon.paths import PathError, check_output_file
     from desmon.sweep.grid import SweepError, parse_axes
@@ -151,16 +167,7 @@ def run(args: argparse.Namespace) -> int:
     settings = _settings(args)
     if args.job == "estimate":
         _check_estimate(settings)
-    if args.job in _EXACT and args.seeds is not None and args.seeds > 1:
-        raise SweepError(
-            f"--seeds {args.seeds} with --job {args.job}: {_EXACT[args.job]} and uses no seed, so every seed gives the same "
-            f"row; drop --seeds (one {'check' if args.job == 'verify' else 'analysis'} per point)"
-        )
-    if args.job in _EXACT and args.seed != 0:
-        raise SweepError(
-            f"--seed {args.seed} with --job {args.job}: {_EXACT[args.job]} and uses no seed, so it would only rename the "
-            "rows (and a --resume would then refuse the same sweep); drop --seed"
-        )
+    _check_seeds(args)
     seeds = args.seeds if args.seeds is not None else 1 if args.job in _ONE_PER_POINT else DEFAULT_SEEDS
     axes = parse_axes(args.param)
     if args.scheduler is not None:

@@ -388,6 +388,35 @@ def _is_value_error(message: str, name: str | None) -> bool:
     return name is not None and f"-p {name}=" in message
 
 
+def _check_signal_values(axes: tuple[Axis, ...]) -> None:
+    """``--job evaluate``'s ``-p``: names of the signal model's numeric parameters, finite values
+    of their type, not negative (a rate above 0), no point with a ``_lo`` above its ``_hi``."""
+    known = signal_parameters()
+    for axis in axes:
+        if axis.name not in known:
+            import difflib
+
+            close = [k for k in known if k.startswith(axis.name)] or difflib.get_close_matches(axis.name, known, n=1, cutoff=0.5)
+            hint = f"did you mean {close[0]}? " if close else ""
+            raise SweepError(
+                f"-p {axis.name}: --job evaluate sweeps the signal model, which has no parameter {axis.name!r}; "
+                f"{hint}its numeric parameters are {', '.join(known)}"
+            )
+        kind = type(known[axis.name])
+        for v in axis.values:
+            try:
+                number = float(v) if kind is float else int(v)
+            except ValueError:
+                what = "a number" if kind is float else "a whole number"
+                raise SweepError(f"-p {axis.name}={v}: {axis.name} is {what} (default {known[axis.name]})") from None
+            if not math.isfinite(number):
+                raise SweepError(f"-p {axis.name}={v}: {axis.name} must be a finite number (default {known[axis.name]})")
+            if number < 0 or (number == 0 and axis.name.endswith("_rate")):
+                least = "above 0 (samples per second)" if axis.name.endswith("_rate") else "0 or more"
+                raise SweepError(f"-p {axis.name}={v}: {axis.name} must be {least} (default {known[axis.name]})")
+    _check_bounds_pairs(axes, known)
+
+
 def _check_bounds_pairs(axes: tuple[Axis, ...], known: dict[str, object]) -> None:
     """A ``<name>_lo`` never above its ``<name>_hi`` at any point of the grid (each taken from
     its axis, or its default where not swept): the model draws between the two."""
@@ -412,30 +441,7 @@ def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> None
     parse as its parameter's type (one line). A value that parses but makes the scenario
     invalid (say ``hours=-1``) is not refused here: its points become error rows."""
     if job == "evaluate":
-        known = signal_parameters()
-        for axis in axes:
-            if axis.name not in known:
-                import difflib
-
-                close = [k for k in known if k.startswith(axis.name)] or difflib.get_close_matches(axis.name, known, n=1, cutoff=0.5)
-                hint = f"did you mean {close[0]}? " if close else ""
-                raise SweepError(
-                    f"-p {axis.name}: --job evaluate sweeps the signal model, which has no parameter {axis.name!r}; "
-                    f"{hint}its numeric parameters are {', '.join(known)}"
-                )
-            kind = type(known[axis.name])
-            for v in axis.values:
-                try:
-                    number = float(v) if kind is float else int(v)
-                except ValueError:
-                    what = "a number" if kind is float else "a whole number"
-                    raise SweepError(f"-p {axis.name}={v}: {axis.name} is {what} (default {known[axis.name]})") from None
-                if not math.isfinite(number):
-                    raise SweepError(f"-p {axis.name}={v}: {axis.name} must be a finite number (default {known[axis.name]})")
-                if number < 0 or (number == 0 and axis.name.endswith("_rate")):
-                    least = "above 0 (samples per second)" if axis.name.endswith("_rate") else "0 or more"
-                    raise SweepError(f"-p {axis.name}={v}: {axis.name} must be {least} (default {known[axis.name]})")
-        _check_bounds_pairs(axes, known)
+        _check_signal_values(axes)
         return
     from desmon.loader import load_scenario
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from desmon.paths import replacing
 from desmon.sweep.grid import SweepError
 
 __all__ = ["plot_sweep", "pareto_front", "summarise", "mean_interval", "CONFIDENCE"]
@@ -83,8 +84,9 @@ def pareto_front(costs: list[float], values: list[float]) -> list[int]:
     return front
 
 
-def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, int]:
-    """The rows to draw (runs without an error that have ``y``) and how many failed."""
+def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, int, int]:
+    """The rows to draw (runs without an error that have ``y``), how many failed and how
+    many (without an error) have no value of ``y``."""
     from desmon.sweep.table import read_table
 
     if (x is None) == (pareto is None):
@@ -105,10 +107,17 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
     if "job" in df.columns and "exit_code" in df.columns:  # an estimation INCOMPLETE at its run budget keeps a guaranteed interval
         kept |= (df["job"] == "estimate") & (df["exit_code"] == 3)
     ok = df[kept]
-    ok = ok[ok[y].notna()]
+    valued = ok[y].notna()  # (a figure a run may lack, such as a latency with no slip detected)
+    ok, unvalued = ok[valued], int((~valued).sum())
     if ok.empty:
         raise SweepError(f"{table}: no run without an error has a value of {y}; nothing to draw")
-    return ok, int((~kept).sum())
+    where = x or pareto
+    if ok[where].isna().any():  # type: ignore[index]
+        raise SweepError(
+            f"{table}: {where} is empty in {int(ok[where].isna().sum())} run(s) without an error, which desmon sweep never "  # type: ignore[index]
+            "writes: the table was edited; draw it as desmon sweep wrote it"
+        )
+    return ok, int((~kept).sum()), unvalued
 
 
 def mean_interval(values: list[float], value_range: tuple[float, float] | None) -> tuple[float, float, str]:
@@ -253,14 +262,14 @@ def _estimates(ax: Any, df: Any, params: list[str], x: str) -> str:
     return "; ".join(m.split(" (")[0] for m in methods)
 
 
-def _estimates_title(ok: Any, method: str, params: list[str], x: str, seeds: int, failed: int) -> str:
+def _estimates_title(ok: Any, method: str, params: list[str], x: str, seeds: int, left: str) -> str:
     """The title over ``--job estimate``'s estimates: the band's confidence and method, the
     points (and estimations of each), the INCOMPLETE ones and the failed rows left out."""
     cut = int((ok["status"] != "precise").sum())
     points = ok.groupby(params or ["job"]).ngroups
     each = f" x {seeds} estimations" if seeds > 1 else ""
     return (f"estimate vs {x}: band = guaranteed {100 * float(ok['confidence'].iloc[0]):.10g} % interval ({method}); "
-            f"{points} points{each}" + (f", {cut} INCOMPLETE (hollow)" if cut else "") + (f", {failed} failed left out" if failed else ""))
+            f"{points} points{each}" + (f", {cut} INCOMPLETE (hollow)" if cut else "") + left)
 
 
 def _estimated(ok: Any, x: str | None, y: str) -> bool:
@@ -293,7 +302,8 @@ def _exact(ok: Any) -> bool:
 def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None = None, log_x: bool = False) -> None:
     """Draw ``table`` to ``output`` (PNG): ``y`` against ``x``, or against ``pareto`` with the front
     (``log_x``: the x axis on a log scale)."""
-    ok, failed = _rows(table, x, y, pareto)
+    ok, failed, unvalued = _rows(table, x, y, pareto)
+    left = (f", {failed} failed left out" if failed else "") + (f", {unvalued} without a value of {y} left out" if unvalued else "")
     if log_x:
         _check_log_x(ok, x or pareto)  # type: ignore[arg-type]
     params = [p for p in _parameters(ok)]
@@ -307,26 +317,39 @@ def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | 
 
     fig, ax = plt.subplots(figsize=(7.5, 4.8), dpi=120)
     seeds = int(ok.groupby(params or ["job"])["seed"].count().max())
-    note = f"{len(ok)} runs" + (f", {failed} failed runs left out" if failed else "")
+    note = f"{len(ok)} runs{left}"
     if x is not None and _estimated(ok, x, y):
-        ax.set_title(_estimates_title(ok, _estimates(ax, ok, params, x), params, x, seeds, failed), fontsize=8)
+        ax.set_title(_wrapped(_estimates_title(ok, _estimates(ax, ok, params, x), params, x, seeds, left)), fontsize=8)
     elif x is not None and _exact(ok):
         _against(ax, ok, params, x, y)
-        ax.set_title(f"{y} vs {x}: exact (desmon analyze), {len(ok)} points" + (f", {failed} failed left out" if failed else ""),
-                     fontsize=9)
+        ax.set_title(_wrapped(f"{y} vs {x}: exact (desmon analyze), {len(ok)} points{left}"), fontsize=9)
     elif x is not None:
         method = _against(ax, ok, params, x, y, intervals=seeds > 1)
         bars = f"; bars: {100 * CONFIDENCE:g} % interval of the mean, {method}" if method else ""
-        ax.set_title(f"{y} vs {x}: mean and min-max over up to {seeds} seeds{bars} ({note})", fontsize=8)
+        ax.set_title(_wrapped(f"{y} vs {x}: mean and min-max over up to {seeds} seeds{bars} ({note})"), fontsize=8)
     else:
         assert pareto is not None
         points = _pareto(ax, ok, params, pareto, y)
-        ax.set_title(f"{y} vs {pareto}: Pareto front of {points} points ({note})", fontsize=9)
+        ax.set_title(_wrapped(f"{y} vs {pareto}: Pareto front of {points} points ({note})"), fontsize=9)
     ax.set_ylabel(y)
     if log_x:
         _log_axis(ax, sorted({float(v) for v in ok[x or pareto]}))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(output)
-    plt.close(fig)
+    try:
+        with replacing(output, "wb") as fh:  # (a failed write leaves the file there was)
+            fig.savefig(fh, format="png")
+    finally:
+        plt.close(fig)
+
+
+#: the longest title line the figure shows whole (7.5 in at font size 8 to 9)
+TITLE_WIDTH = 120
+
+
+def _wrapped(title: str) -> str:
+    """``title`` on as many lines as it needs to be read whole (a line per TITLE_WIDTH characters)."""
+    import textwrap
+
+    return title if len(title) <= TITLE_WIDTH else "\n".join(textwrap.wrap(title, TITLE_WIDTH))
