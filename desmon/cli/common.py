@@ -182,9 +182,12 @@ def load_scripted(args: argparse.Namespace) -> Scenario:
     path = args.scenario
     scenario = load_scenario_of(args)
     if not scenario.timeline:
+        from desmon.sim.fleet import is_fleet
+
+        plot = "" if is_fleet(scenario) else " (and desmon plot run.jsonl)"  # (a fleet's trace is not drawn)
         raise ScenarioError(
             f"{path}: scenario {scenario.name!r} has no scripted timeline, so there is no moment to replay; "
-            f"simulate it with: desmon run {path} --trace run.jsonl (and desmon plot run.jsonl)"
+            f"simulate it with: desmon run {path} --trace run.jsonl{plot}"
         )
     return scenario
 

@@ -138,8 +138,15 @@ def with_timing(scenario: Scenario, args: Any) -> Scenario:
         return scenario
     from dataclasses import replace
 
+    from desmon.sim.fleet import is_fleet
     from desmon.sim.world import world_of
 
+    if is_fleet(scenario):
+        given = [f for f, v in (("--timing", timing), ("--phases", phases), ("--no-signals", no_signals)) if v]
+        raise ScenarioError(
+            f"{' and '.join(given)} {'sets' if len(given) == 1 else 'set'} one robot's World; {scenario.name!r} is a fleet, each robot with a World of its own: "
+            f"drop {' and '.join(given)}, or set them in the fleet's scenario file"
+        )
     if phases is not None and timing != "exponential":
         raise ScenarioError(f"--phases {phases}: phases shape the exponential timing's step durations; add --timing exponential")
     world = world_of(scenario)

@@ -98,6 +98,11 @@ def read_trace(path: str | Path) -> list[dict[str, Any]]:
     if not out:
         raise ScenarioError(f"{path}: is empty; {_HOW}")
     if out[0].get("type") != "run":
+        if "robot" in out[0]:  # (every record of a fleet's trace names its robot)
+            raise ScenarioError(
+                f"{path}: a fleet's trace (its records name their robots): desmon plot draws one robot's run; write one with: "
+                "desmon run SCENARIO --trace run.jsonl on a single-robot scenario"
+            )
         raise ScenarioError(f"{path}: does not start with a 'run' record; is it a desmon run trace? {_HOW}")
     _check_platforms(path, out, lines)
     return out
