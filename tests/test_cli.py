@@ -224,3 +224,14 @@ def test_an_output_that_cannot_be_written_whole_leaves_the_file_there_was(root, 
         err = done.stderr.strip().splitlines()
         assert done.returncode == 2 and err[-1] == f"desmon: error: {target}: cannot read or write: File too large; check the path", done.stderr
         assert target.read_text() == "the earlier file\n" and [p.name for p in target.parent.iterdir()] == [name]
+
+
+def test_fuzz_leaves_nothing_in_the_working_directory(root, tmp_path):
+    """Hypothesis's own cache (.hypothesis/) goes to a temporary folder while desmon fuzz runs."""
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k != "HYPOTHESIS_STORAGE_DIRECTORY"}
+    done = subprocess.run([sys.executable, "-m", "desmon", "fuzz", str(root / "scenarios" / "migration.py"), "--examples", "5", "--no-progress"],
+                          capture_output=True, text=True, timeout=120, cwd=tmp_path, env=env)
+    assert done.returncode == 0 and "passed: 5 sequences" in done.stdout, done.stdout + done.stderr
+    assert list(tmp_path.iterdir()) == []
