@@ -24,7 +24,7 @@ import sys
 from typing import Any
 
 from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered
-from desmon.cli.options import add_output, positive_int, positive_seconds
+from desmon.cli.options import add_output, megabytes, positive_int, positive_seconds
 
 __all__ = ["add_parser", "run", "format_analysis", "format_cross_check", "DEFAULT_MAX_STATES"]
 
@@ -64,7 +64,7 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--max-states", type=positive_int, default=DEFAULT_MAX_STATES, help="stop (exit 3) past this many chain states")
     p.add_argument("--timeout", type=positive_seconds, default=None, help="stop INCOMPLETE (exit 3) after this many seconds (unset: no limit)")
     p.add_argument(
-        "--max-memory", type=float, default=None, metavar="MB",
+        "--max-memory", type=megabytes, default=None, metavar="MB",
         help="memory budget: stop INCOMPLETE (exit 3) once the resident memory exceeds it (unset: no limit)",
     )
     p.add_argument(

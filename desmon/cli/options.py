@@ -62,6 +62,17 @@ def run_count(text: str) -> int:
     return n
 
 
+def megabytes(text: str) -> float:
+    """A memory budget: a finite number of MB above 0 (refused as the user wrote it)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a memory budget in MB, e.g. 2000, got {text!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number of MB above 0, e.g. 2000, got {text}")
+    return v
+
+
 def bounded_count(most: int, what: str):  # type: ignore[no-untyped-def]
     """A count from 1 to ``most`` (``what`` names the unit in the refusal): a number past it
     would run for days, or overflow what Dask or hypothesis can carry."""

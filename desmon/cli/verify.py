@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered, run_of
-from desmon.cli.options import Input, add_output, positive_int, positive_seconds, worker_count
+from desmon.cli.options import Input, add_output, megabytes, positive_int, positive_seconds, worker_count
 from desmon.errors import CheckerError
 from desmon.verify import engines
 
@@ -84,7 +84,7 @@ def _add_limits(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-depth", type=positive_int, default=None, help="explore at most this many events deep (default: no limit)")
     p.add_argument("--timeout", type=positive_seconds, default=None, help="stop INCOMPLETE (exit 3) after this many seconds (default: no limit)")
     p.add_argument(
-        "--max-memory", type=float, default=None, metavar="MB",
+        "--max-memory", type=megabytes, default=None, metavar="MB",
         help="memory budget: stop INCOMPLETE (exit 3) once the search's resident memory (workers included) exceeds it",
     )
 
