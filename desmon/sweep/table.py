@@ -244,8 +244,8 @@ def _run_of(where: str, row: dict[str, Any], grid: Grid, runs: dict[tuple[str, i
                 f"decimal value among them makes every value a decimal ({run.point.text}), and a point's seeds derive from its "
                 "text, so they differ: resume with the whole-number values only (sweep the decimals with another -o)"
             )
-        raise SweepError(f"--resume: {where} was made with another --seed (its seeds differ): give the sweep's own --seed, "
-                         "or name another -o")
+        raise SweepError(f"--resume: {where} was made with another --seed, or with its -p options in another order (a point's "
+                         "seeds derive from the sweep seed and the point's text): give the sweep's own --seed and -p order, or name another -o")
     return key
 
 
