@@ -24,7 +24,7 @@ import sys
 from typing import Any
 
 from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered
-from desmon.cli.options import add_output, megabytes, positive_int, positive_seconds
+from desmon.cli.options import add_output, bounded_count, megabytes, positive_int, positive_seconds
 
 __all__ = ["add_parser", "run", "format_analysis", "format_cross_check", "DEFAULT_MAX_STATES"]
 
@@ -44,13 +44,6 @@ def _probability(text: str) -> float:
 
 #: the most seeds --simulate runs (each a whole run of the horizon: a million are days of CPU already)
 MAX_SIMULATED = 1_000_000
-
-
-def _seed_count(text: str) -> int:
-    n = positive_int(text)
-    if n > MAX_SIMULATED:
-        raise argparse.ArgumentTypeError(f"must be at most {MAX_SIMULATED:,} seeds (each one a whole simulated run), got {text}")
-    return n
 
 
 def add_parser(sub: Subparsers) -> None:
@@ -75,7 +68,7 @@ def add_parser(sub: Subparsers) -> None:
         "--placements", action="store_true",
         help="also the optimality gap: the best and worst long-run exposure over the deployer's placement choices (an MDP) and its first differing decision",
     )
-    p.add_argument("--simulate", type=_seed_count, default=None, metavar="N",
+    p.add_argument("--simulate", type=bounded_count(MAX_SIMULATED, "seeds (each one a whole simulated run)"), default=None, metavar="N",
                    help=f"also simulate the Markov world with N seeds (0..N-1, at most {MAX_SIMULATED:,}) and compare")
     add_output(p, "--json", suffixes=(".json",), default=None, metavar="FILE.json", help="write the measures and the rates used as JSON")
     add_output(p, "--export", suffixes=(".drn", ".tra"), default=None, metavar="FILE", help="write the chain: FILE.drn (Storm) or FILE.tra (PRISM explicit, with .sta .lab .srew)")

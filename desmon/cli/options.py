@@ -73,12 +73,12 @@ def megabytes(text: str) -> float:
     return v
 
 
-def bounded_count(most: int, what: str):  # type: ignore[no-untyped-def]
-    """A count from 1 to ``most`` (``what`` names the unit in the refusal): a number past it
-    would run for days, or overflow what Dask or hypothesis can carry."""
+def bounded_count(most: int, what: str, least: int = 1):  # type: ignore[no-untyped-def]
+    """A count from ``least`` (1, or 0) to ``most`` (``what`` names the unit in the refusal): a
+    number past it would run for days, or overflow what Dask or hypothesis can carry."""
 
     def parse(text: str) -> int:
-        n = positive_int(text)
+        n = non_negative_int(text) if least == 0 else positive_int(text)
         if n > most:
             raise argparse.ArgumentTypeError(f"must be at most {most:,} {what}, got {text}")
         return n

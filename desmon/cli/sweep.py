@@ -47,13 +47,6 @@ def _within(text: str) -> str:
 MAX_RETRIES = 100
 
 
-def _retries(text: str) -> int:
-    n = non_negative_int(text)
-    if n > MAX_RETRIES:
-        raise argparse.ArgumentTypeError(f"must be at most {MAX_RETRIES} (a task whose worker died that often will not run), got {text}")
-    return n
-
-
 def _confidence(text: str) -> float:
     from desmon.cli.estimate import parse_confidence
 
@@ -99,7 +92,7 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--workers", type=worker_count, default=None, metavar="N", help="local cluster: worker processes (default: one per core)")
     p.add_argument("--task-timeout", type=positive_seconds, default=None, metavar="S",
                    help="a run taking longer becomes an error row (exit code 124) (default: no limit)")
-    p.add_argument("--retries", type=_retries, default=3, metavar="N",
+    p.add_argument("--retries", type=bounded_count(MAX_RETRIES, "retries (a task whose worker died that often will not run)", least=0), default=3, metavar="N",
                    help="run a task again when the worker running it dies, up to N times")
     p.add_argument("--resume", action="store_true", help="keep the rows already in -o (and its journal); run only the others")
     p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")

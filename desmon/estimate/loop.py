@@ -131,7 +131,8 @@ class Question:
         for flag, v in (("--alpha", self.alpha), ("--beta", self.beta)):
             if v is not None and not (math.isfinite(v) and 0.0 < v < 0.5):
                 raise EstimateError(f"{flag} {v!r}: give an error probability above 0 and below 0.5, e.g. 0.01")
-        unset = [flag for flag, v in (("--alpha", self.alpha), ("--beta", self.beta if self.kind == "probability" else 0.1)) if v is None]
+        used = (("--alpha", self.alpha), ("--beta", self.beta)) if self.kind == "probability" else (("--alpha", self.alpha),)
+        unset = [flag for flag, v in used if v is None]  # (these take 1 - confidence)
         if unset and not self.delta < 0.5:
             raise EstimateError(
                 f"--confidence {self.confidence:.10g} leaves the threshold test an error probability of 1 - confidence = {self.delta:.10g}, "
