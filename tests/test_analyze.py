@@ -566,3 +566,23 @@ def test_a_leases_idle_time_in_erlang_phases_is_the_worlds_under_the_same_phases
     assert a.states > _analysis("cloud_offload").states  # analyze(sc, miss=NO_MISS, horizon=HOUR, steady=False), solved once
     ag = agreement(a.exposure_s_per_mission, simulated_exposure(sc, "desmon", range(140), HOUR, phases=2))
     assert ag.inside, ag.to_json()
+
+
+@pytest.mark.parametrize("name", ["coffee_shift", "cloud_offload"])
+def test_the_shortcut_for_reactions_that_start_and_stop_nothing_builds_the_same_chain(name, monkeypatch):
+    """Most reactions start and stop nothing; the chain keeps what a state has starting,
+    warming up and idle without working it out again. With that shortcut turned off (every
+    reaction's bookkeeping done in full) the chain is the same: states, their order, rates
+    and labels. cloud_offload leases a platform that idles; the coffee shift warms up."""
+    import desmon.analyze.chain as chain_module
+
+    sc = _scenario(name)
+    mw = markov_world(sc, phases=2)
+    fast = build_chain(sc, "desmon", mw, miss=NO_MISS)
+    monkeypatch.setattr(chain_module, "_unchanged_by", lambda s, live: False)
+    full = build_chain(sc, "desmon", mw, miss=NO_MISS)
+    assert fast.states == full.states and fast.initial == full.initial
+    assert any(s.starting for s in full.states) and any(s.warming for s in full.states)
+    assert name != "cloud_offload" or any(s.idle for s in full.states)
+    for a, b in ((fast.rows, full.rows), (fast.cols, full.cols), (fast.rates, full.rates), (fast.unmonitored, full.unmonitored)):
+        assert np.array_equal(a, b)

@@ -89,6 +89,29 @@ class ChainState(NamedTuple):
     idle: tuple[tuple[str, int], ...] = ()  # (leased platform, Erlang phases of idle time passed), sorted
 
 
+def _physical(model: Any, rules: Any, failed: tuple[str, ...], down: tuple[str, ...]) -> Callable[[str, str], str | None]:
+    """The Control rules' refusal of a start on the physical facts."""
+    gone, broken = set(down), set(failed)
+    states = {
+        p.name: PlatformState(p, p.name not in gone, tuple(d for d in model.devices_on(p.name) if d.name not in broken))
+        for p in model.platforms
+    }
+    return lambda g, pl: rules.start_refusal(g, pl, states.__getitem__)
+
+
+def _unchanged_by(s: ChainState, live: tuple[tuple[str, str], ...]) -> bool:
+    """Whether :meth:`Builder._starting_after` of a reaction that starts and stops nothing
+    and leaves the deployments ``live`` gives back ``s``'s own starting, warming and idle
+    parts: each still deployed (an idle platform hosting nothing), each part in its order."""
+    if s.starting and (not all(pair in live for pair in s.starting) or s.starting != tuple(sorted(set(s.starting)))):
+        return False
+    if s.warming:
+        pairs = {(g, p) for g, p, _k in s.warming}
+        if len(pairs) != len(s.warming) or not all(pair in live for pair in pairs) or s.warming != tuple(sorted(s.warming)):
+            return False
+    return not s.idle or not any(p == q for p, _k in s.idle for _g, q in live)
+
+
 #: the context the monitor reports for the true action: the simulation's own rule
 recognised = recognised_context
 
@@ -222,7 +245,7 @@ class Builder:
         # the physical facts change the reaction only if they refuse a start it tries:
         # up to such a start both runs see the same answers (the rules read the graph's
         # requirements after the event: the store is loaded with an outcome's key)
-        physical = self._physical_memo.get(world) or self._physical_memo.setdefault(world, self._physical(*world))
+        physical = self._physical_memo.get(world) or self._physical_memo.setdefault(world, _physical(self.model, self.system.store.rules, *world))
         tried = self._tried[(key, event)]
         if not tried:
             return known
@@ -244,17 +267,6 @@ class Builder:
             self._tried[(key, event)] = tried
         self._react_memo[(key, event, world)] = out
         return out
-
-    def _physical(self, failed: tuple[str, ...], down: tuple[str, ...]) -> Callable[[str, str], str | None]:
-        """The Control rules' refusal of a start on the physical facts."""
-        model = self.model
-        gone, broken = set(down), set(failed)
-        states = {
-            p.name: PlatformState(p, p.name not in gone, tuple(d for d in model.devices_on(p.name) if d.name not in broken))
-            for p in model.platforms
-        }
-        rules = self.system.store.rules
-        return lambda g, pl: rules.start_refusal(g, pl, states.__getitem__)
 
     def _run_outcomes(self, key: Key, event: Event, p: float, pending: list, out: list) -> frozenset[tuple[str, str]]:
         """Run every outcome of the reaction into ``out``; the (graph, platform) of every
@@ -287,6 +299,8 @@ class Builder:
     def _starting_after(self, s: ChainState, cmds: tuple, nkey: Key) -> ChainState:
         """``s`` with ``nkey`` and the detectors still starting or warming up after a
         reaction's successful starts and stops (a start with no latency warms up at once)."""
+        if not cmds and nkey.deployments == s.key.deployments and _unchanged_by(s, nkey.deployments):
+            return s._replace(key=nkey)  # most reactions start and stop nothing: what starts and warms stays
         deployed = set(s.key.deployments)
         starting = set(s.starting)
         warming = {(g, p): k for g, p, k in s.warming}
