@@ -47,6 +47,8 @@ class Axis:
     name: str
     values: tuple[str, ...]
     kind: str  # "int", "float", "bool" or "str": the column's type
+    #: the values as the user wrote them (stripped), in the same order: what a refusal names
+    given: tuple[str, ...] = ()
 
     def typed(self, text: str) -> object:
         """``text`` (one of :attr:`values`) as the column's type."""
@@ -113,8 +115,8 @@ def _axis(name: str, raw: Sequence[str]) -> Axis:
     for kind, canon in (("int", _int_text), ("float", _float_text), ("bool", _bool_text)):
         texts = [canon(v) for v in raw]
         if all(t is not None for t in texts):
-            return Axis(name, _unique(name, [t for t in texts if t is not None]), kind)
-    return Axis(name, _unique(name, [v.strip() for v in raw]), "str")
+            return Axis(name, _unique(name, [t for t in texts if t is not None]), kind, tuple(v.strip() for v in raw))
+    return Axis(name, _unique(name, [v.strip() for v in raw]), "str", tuple(v.strip() for v in raw))
 
 
 def _unique(name: str, values: list[str]) -> tuple[str, ...]:

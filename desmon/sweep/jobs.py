@@ -451,7 +451,10 @@ def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> None
     except DesmonError as exc:
         raise SweepError(f"{_one_line(exc)} (with the scenario's defaults, before sweeping it)") from None
     for axis in axes:
-        for v in axis.values:
+        # each value as the user wrote it first, so that a refusal names the value that is
+        # wrong (in -p n=256,1.5 the axis holds 256.0 and 1.5: for a whole-number parameter
+        # the offender is 1.5), then as the sweep passes it, where that differs
+        for v in dict.fromkeys((*axis.given, *axis.values)):
             try:
                 load_scenario(scenario, {axis.name: v})
             except DesmonError as exc:
