@@ -15,7 +15,7 @@ from desmon.model.params import overriding
 from desmon.model.scenario import Scenario
 from desmon.paths import SCENARIO_FILE, PathError, check_input_file, script_folder_on_path
 
-__all__ = ["load_scenario"]
+__all__ = ["load_scenario", "load_with_parameters"]
 
 
 def load_scenario(path: str | Path, params: Mapping[str, str] | None = None) -> Scenario:
@@ -31,11 +31,18 @@ def load_scenario(path: str | Path, params: Mapping[str, str] | None = None) -> 
     an error too: only a real Ctrl-C while it runs propagates as ``KeyboardInterrupt``.
     Whatever the script prints goes to stderr, so desmon's own output stays clean.
     """
+    return load_with_parameters(path, params)[0]
+
+
+def load_with_parameters(path: str | Path, params: Mapping[str, str] | None = None) -> tuple[Scenario, dict[str, object]]:
+    """:func:`load_scenario`, and every parameter the script declares with its default
+    (whose type is the parameter's: a text parameter takes ``-p`` values as written)."""
     try:
         p = check_input_file(path, *SCENARIO_FILE)
     except PathError as exc:
         raise ScenarioError(str(exc)) from None
-    module = _run_script(path, p, params or {})
+    declared: dict[str, object] = {}
+    module = _run_script(path, p, params or {}, declared)
     found = _scenario_of(path, module)
     if isinstance(found.checker, Mapping):  # bounds as a dict: checked now, as a Bounds is when built
         from desmon.errors import CheckerError
@@ -45,12 +52,13 @@ def load_scenario(path: str | Path, params: Mapping[str, str] | None = None) -> 
             bounds_of(found)
         except CheckerError as exc:
             raise ScenarioError(f"{path}: invalid scenario: {exc}") from None
-    return found
+    return found, declared
 
 
-def _run_script(path: str | Path, p: Path, params: Mapping[str, str]) -> ModuleType:
-    """Execute the script at ``p`` (stdout to stderr) as a throw-away module and return it;
-    any way it fails but a real Ctrl-C becomes one ScenarioError (:func:`_script_error`)."""
+def _run_script(path: str | Path, p: Path, params: Mapping[str, str], declared: dict[str, object]) -> ModuleType:
+    """Execute the script at ``p`` (stdout to stderr) as a throw-away module and return it,
+    the parameters it declares (with their defaults) put into ``declared``; any way it
+    fails but a real Ctrl-C becomes one ScenarioError (:func:`_script_error`)."""
     name = f"desmon_scenario_{abs(hash(str(p.resolve())))}"
     spec = importlib.util.spec_from_file_location(name, p)
     if spec is None or spec.loader is None:
@@ -59,8 +67,9 @@ def _run_script(path: str | Path, p: Path, params: Mapping[str, str]) -> ModuleT
     sys.modules[name] = module
     script_folder_on_path(p)
     try:
-        with overriding(params, str(path)), _real_ctrl_c() as interrupted, contextlib.redirect_stdout(sys.stderr):
+        with overriding(params, str(path)) as found, _real_ctrl_c() as interrupted, contextlib.redirect_stdout(sys.stderr):
             spec.loader.exec_module(module)
+        declared.update(found)
     except KeyboardInterrupt:
         if interrupted:
             raise

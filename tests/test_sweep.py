@@ -401,3 +401,25 @@ def test_sweep_plot_says_what_it_left_out_and_refuses_an_edited_parameter_cell(t
     err = capsys.readouterr().err
     assert "hand_memory is empty in 1 run(s) without an error" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "b.png").exists()
+
+
+def test_a_text_parameter_is_swept_with_its_values_as_written(tmp_path, cluster):
+    """``-p tag=01,1.10`` on a parameter whose default is text: each point's scenario reads
+    "01" and "1.10", and the table's column holds them so (read as numbers they would be 1
+    and 1.1, and this scenario fails on any other text)."""
+    path = tmp_path / "tagged.py"
+    path.write_text(
+        "from desmon.loader import load_scenario\nfrom desmon.model.params import parameters\n\n"
+        "p = parameters(tag='a')\n"
+        "if p.tag not in ('a', '01', '1.10'):\n"
+        "    raise RuntimeError(f'tag read as {p.tag!r}')\n"
+        f"scenario = load_scenario({str(ROBOT_DAY)!r}, {{'hours': '0.02'}})\n"
+    )
+    result, out = sweep(tmp_path, str(path), ["tag=01,1.10"], 1, cluster)
+    t = table(out)
+    assert list(t["tag"]) == ["01", "1.10"] and not t["error"].fillna("").any(), t.to_dict("records")
+    # a CSV table resumes with them too (its reader would take 01 for the number 1)
+    sweep(tmp_path, str(path), ["tag=01,1.10"], 1, cluster, name="r.csv")
+    ran = []
+    result, out = sweep(tmp_path, str(path), ["tag=01,1.10,a"], 1, cluster, name="r.csv", resume=True, on_row=ran.append)
+    assert result.resumed == 2 and len(ran) == 1 and list(table(out)["tag"].astype(str)) == ["01", "1.10", "a"]

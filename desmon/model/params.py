@@ -37,7 +37,7 @@ class _Pending:
     """What the loader asked for (name -> text) and which names the script declared."""
 
     values: dict[str, str]
-    declared: tuple[str, ...] | None = None
+    declared: dict[str, object] | None = None  # name -> default (its type is the parameter's)
 
 
 _PENDING: contextvars.ContextVar[_Pending | None] = contextvars.ContextVar("desmon_parameters", default=None)
@@ -107,7 +107,7 @@ def parameters(**declared: object) -> Parameters:
             raise ModelError(f"scenario parameter {name}={default!r}: the default must be a finite number")
     values = dict(declared)
     if pending is not None:
-        pending.declared = tuple(declared)
+        pending.declared = dict(declared)
         for name, text in pending.values.items():
             if name in declared:
                 values[name] = _parse(name, text, declared[name])
@@ -130,16 +130,19 @@ def parse_assignments(items: list[str] | tuple[str, ...] | None) -> dict[str, st
 
 
 @contextlib.contextmanager
-def overriding(values: Mapping[str, str], where: str) -> Iterator[None]:
+def overriding(values: Mapping[str, str], where: str) -> Iterator[dict[str, object]]:
     """While a scenario script runs: ``parameters()`` takes ``values``. On exit, a name
-    the script did not declare is refused (naming ``where``, the scenario file)."""
+    the script did not declare is refused (naming ``where``, the scenario file). Yields a
+    dict that holds, once the script has run, every parameter it declared with its default."""
     pending = _Pending(dict(values))
     token = _PENDING.set(pending)
+    declared: dict[str, object] = {}
     try:
-        yield
+        yield declared
     finally:
         _PENDING.reset(token)
+    declared.update(pending.declared or {})
     unknown = [n for n in values if n not in (pending.declared or ())]
     if unknown:
-        declared = ", ".join(pending.declared) if pending.declared else "none (it does not call parameters(...))"
-        raise ModelError(f"{where}: unknown parameter {', '.join(unknown)}; the scenario declares {declared}")
+        names = ", ".join(pending.declared) if pending.declared else "none (it does not call parameters(...))"
+        raise ModelError(f"{where}: unknown parameter {', '.join(unknown)}; the scenario declares {names}")

@@ -66,7 +66,7 @@ def _previous(
         return {}
     done: dict[tuple[str, int], dict[str, Any]] = {}
     if output.exists():
-        df = read_table(output)
+        df = read_table(output, tuple(a.name for a in grid.axes if a.kind == "str"))
         missing = [c for c in ("point", "seed_index", "seed", "job", "exit_code") if c not in df.columns]
         if missing:
             raise SweepError(f"--resume: {output} is not a desmon sweep table (no column {', '.join(missing)}); name another -o")
@@ -84,8 +84,9 @@ def _previous(
     return done
 
 
-def _checked(job: str, scenario: str | None, axes: tuple[Axis, ...], deployer: str) -> str:
-    """Refuse a bad request before any work; the deployer spec as the workers must read it."""
+def _checked(job: str, scenario: str | None, axes: tuple[Axis, ...], deployer: str) -> tuple[str, tuple[Axis, ...]]:
+    """Refuse a bad request before any work; the deployer spec as the workers must read
+    it, and the axes to sweep (:func:`~desmon.sweep.jobs.check_values`)."""
     from desmon.verify.deployers import resolve_deployer
 
     if job not in JOBS:
@@ -97,12 +98,12 @@ def _checked(job: str, scenario: str | None, axes: tuple[Axis, ...], deployer: s
         )
     if job != "evaluate" and scenario is None:
         raise SweepError(f"--job {job} needs a scenario file, e.g. desmon sweep scenarios/robot_day.py -p hours=1 -o results.parquet")
-    check_values(job, scenario, axes)
+    axes = check_values(job, scenario, axes)
     resolve_deployer(deployer)  # a bad --deployer: one line, before any work
     source, colon, name = deployer.rpartition(":")
     if colon and os.path.isfile(source):
-        return f"{os.path.abspath(source)}:{name}"  # the workers may run in another folder
-    return deployer
+        return f"{os.path.abspath(source)}:{name}", axes  # the workers may run in another folder
+    return deployer, axes
 
 
 def _settings_of(job: str, setting: Any, more: dict[str, Any] | None) -> dict[str, Any]:
@@ -199,8 +200,9 @@ def run_sweep(
     """
     import sys
 
+    Grid(axes, seeds, sweep_seed)  # a grid too large: refused before the scenario is loaded
+    deployer, axes = _checked(job, scenario, axes, deployer)
     grid = Grid(axes, seeds, sweep_seed)
-    deployer = _checked(job, scenario, axes, deployer)
     settings = _settings_of(job, setting, settings)
     # every point, before a cluster starts
     check_points(job, scenario, grid.iter_points(), settings.get(SETTINGS.get(job, "")), deployer, settings=settings)

@@ -54,6 +54,11 @@ class Axis:
         """``text`` (one of :attr:`values`) as the column's type."""
         return _convert(self.kind, text)
 
+    def as_written(self) -> "Axis":
+        """This axis for a text parameter: its values as the user wrote them (``01`` stays
+        ``01``, ``1.10`` stays ``1.10``), a text column."""
+        return Axis(self.name, _unique(self.name, list(self.given)), "str", self.given)
+
 
 @dataclass(frozen=True, slots=True)
 class Point:

@@ -436,20 +436,22 @@ def _check_bounds_pairs(axes: tuple[Axis, ...], known: dict[str, object]) -> Non
             )
 
 
-def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> None:
+def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> tuple[Axis, ...]:
     """Refuse, before any work, a ``-p`` name the job does not know or a value that does not
     parse as its parameter's type (one line). A value that parses but makes the scenario
-    invalid (say ``hours=-1``) is not refused here: its points become error rows."""
+    invalid (say ``hours=-1``) is not refused here: its points become error rows. Returns
+    the axes to sweep: a text parameter's as the user wrote its values (:meth:`Axis.as_written`)."""
     if job == "evaluate":
         _check_signal_values(axes)
-        return
-    from desmon.loader import load_scenario
+        return axes
+    from desmon.loader import load_scenario, load_with_parameters
 
     assert scenario is not None
     try:
-        load_scenario(scenario)
+        _sc, declared = load_with_parameters(scenario)
     except DesmonError as exc:
         raise SweepError(f"{_one_line(exc)} (with the scenario's defaults, before sweeping it)") from None
+    axes = tuple(a.as_written() if type(declared.get(a.name)) is str and a.kind != "str" else a for a in axes)
     for axis in axes:
         # each value as the user wrote it first, so that a refusal names the value that is
         # wrong (in -p n=256,1.5 the axis holds 256.0 and 1.5: for a whole-number parameter
@@ -462,6 +464,7 @@ def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> None
                 if _is_value_error(message, axis.name):
                     raise SweepError(message.removeprefix(f"{scenario}: invalid scenario: ")) from None
                 # a value that parses but the scenario refuses: its points become error rows
+    return axes
 
 
 def check_points(

@@ -98,8 +98,9 @@ def write_table(df: Any, path: str | os.PathLike[str]) -> None:
             df.to_csv(fh, index=False, lineterminator="\n")
 
 
-def read_table(path: str | os.PathLike[str]) -> Any:
-    """A table written by ``desmon sweep`` (Parquet or CSV) as a DataFrame, or a SweepError."""
+def read_table(path: str | os.PathLike[str], text_columns: tuple[str, ...] = ()) -> Any:
+    """A table written by ``desmon sweep`` (Parquet or CSV) as a DataFrame, or a SweepError;
+    ``text_columns`` (a text parameter's) read from a CSV as written (``01`` not 1)."""
     import pandas as pd
 
     if not str(path).lower().endswith(TABLE_SUFFIXES):
@@ -107,7 +108,7 @@ def read_table(path: str | os.PathLike[str]) -> Any:
     try:
         if str(path).lower().endswith(".parquet"):
             return pd.read_parquet(path)
-        return pd.read_csv(path)
+        return pd.read_csv(path, dtype=dict.fromkeys(text_columns, str))
     except (OSError, ValueError) as exc:
         raise SweepError(f"{path}: cannot be read as a sweep table ({' '.join(str(exc).split())[:200]})") from None
     except Exception as exc:  # pyarrow's own errors (not a parquet file, a truncated one)
