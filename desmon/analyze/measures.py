@@ -69,6 +69,18 @@ def detector_start_catch(
     return _rates(scenario, phases, trials, seed)[1]
 
 
+def _trial_seconds(action: str, mean: float) -> float:
+    """A mean step duration as the detection trials take it: to the microsecond; a step
+    shorter than that (which the trials would render as no time at all) is refused."""
+    seconds = round(mean, 6)
+    if seconds <= 0:
+        raise AnalysisError(
+            f"World task: the {action} steps last {mean:g} s on average, under the microsecond the detection trials "
+            "time slips to: give them at least 1e-06 s"
+        )
+    return seconds
+
+
 def _rates(scenario: Scenario, phases: int, trials: int, seed: int, budget: Callable[..., None] | None = None) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, dict[float, float]]]]:
     """The watching miss and the starting catch of every graph in every risky action:
     the evaluation's trials for the built-in the action is like, its steps
@@ -89,7 +101,7 @@ def _rates(scenario: Scenario, phases: int, trials: int, seed: int, budget: Call
         if step.action in model.risky_actions:
             spans.setdefault(step.action, []).append(step.duration)
     grasps = [s.duration for s in world.task if model.like(s.action) == "grasp"]
-    grasp = round(sum(grasps) / len(grasps), 6) if grasps else 2.0
+    grasp = _trial_seconds("grasp", sum(grasps) / len(grasps)) if grasps else 2.0
     latencies = sorted({world.latency(p.name) for p in model.platforms} | {world.start_latency})
     rates: dict[tuple[str, float], dict[str, tuple[float, float]]] = {}
     for action, durations in spans.items():
@@ -97,7 +109,7 @@ def _rates(scenario: Scenario, phases: int, trials: int, seed: int, budget: Call
         direction, kind = slip_kind(world, like)
         for lat in latencies:
             rates[(action, lat)] = detection_rates(
-                like, round(sum(durations) / len(durations), 6), direction, kind, grasp=grasp, phases=phases, trials=trials,
+                like, _trial_seconds(action, sum(durations) / len(durations)), direction, kind, grasp=grasp, phases=phases, trials=trials,
                 seed=seed, recognition=world.recognition_delay, latency=lat, warmups=warmups, budget=budget,
             )
     miss: dict[str, dict[str, float]] = {}
