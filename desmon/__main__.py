@@ -1,5 +1,3 @@
-import sys
+from desmon.cli.program import run_program
 
-from desmon.cli import main
-
-sys.exit(main())
+run_program()
