@@ -26,6 +26,7 @@ pytest.importorskip("pyarrow")
 from desmon.cli import main  # noqa: E402
 from desmon.sweep.core import run_sweep  # noqa: E402
 from desmon.sweep.grid import Grid, SweepError, derive_seed, parse_axes  # noqa: E402
+from desmon.sweep.jobs import check_values  # noqa: E402
 from desmon.sweep.plot import pareto_front  # noqa: E402
 from desmon.sweep.table import journal_path  # noqa: E402
 
@@ -120,11 +121,40 @@ def test_another_sweep_seed_gives_other_run_seeds():
 
 @pytest.mark.parametrize(
     "items, fragment",
-    [(["hours"], "NAME=VALUE"), (["hours=1,,2"], "empty value"), (["hours=1", "hours=2"], "given twice"), (["hours=1,1.0"], "listed twice")],
+    [(["hours"], "NAME=VALUE"), (["hours=1,,2"], "empty value"), (["hours=1", "hours=2"], "given twice")],
 )
 def test_a_malformed_parameter_list_is_refused_in_one_line(items, fragment):
     with pytest.raises(SweepError, match=fragment):
         parse_axes(items)
+
+
+@pytest.mark.parametrize(
+    "item, message",
+    [
+        ("hours=1,1.0", "-p hours: values 1 and 1.0 are the same number; list each value once"),
+        ("force_sensors=1,01", "-p force_sensors: values 1 and 01 are the same whole number; list each value once"),
+        ("faults=1,true", "-p faults: values 1 and true are the same yes/no value; list each value once"),
+        ("faults=yes,yes", "-p faults: value yes is listed twice; list each value once"),
+        ("force_sensors=1,99999999999999999999", "-p force_sensors=99999999999999999999: a whole number a table holds"),
+    ],
+)
+def test_a_value_listed_twice_as_its_parameter_reads_it_is_refused_naming_both(item, message):
+    """Two values are the same when the parameter's type reads them so (the coffee shift
+    declares force_sensors whole, faults yes/no, hours a number)."""
+    with pytest.raises(SweepError) as exc:
+        check_values("run", str(ROOT / "scenarios" / "coffee_shift.py"), parse_axes([item]))
+    assert str(exc.value).startswith(message), exc.value
+
+
+def test_a_parameter_is_typed_as_the_scenario_declares_it():
+    """Whole numbers for a number parameter are numbers (a table holds 1e20 then), yes/no
+    written as 1 and 0 are true and false, and a text parameter takes its values as
+    written, spaces and all."""
+    shift = str(ROOT / "scenarios" / "coffee_shift.py")
+    (hours,) = check_values("run", shift, parse_axes(["hours=1,100000000000000000000"]))
+    assert (hours.kind, hours.values) == ("float", ("1.0", "1e+20"))
+    (faults,) = check_values("run", shift, parse_axes(["faults=1,0"]))
+    assert (faults.kind, faults.values) == ("bool", ("true", "false"))
 
 
 # ------------------------------------------------------------------------- the table
@@ -403,23 +433,44 @@ def test_sweep_plot_says_what_it_left_out_and_refuses_an_edited_parameter_cell(t
     assert not (tmp_path / "b.png").exists()
 
 
+TAGGED = (
+    "from desmon.loader import load_scenario\nfrom desmon.model.params import parameters\n\n"
+    "p = parameters(tag='a', n=1)\n"
+    "HOURS = {'a': '0.02', '01': '0.02', '1': '0.03', '1.10': '0.02', ' b ': '0.03', 'NA': '0.03'}\n"
+    f"scenario = load_scenario({str(ROBOT_DAY)!r}, {{'hours': HOURS[p.tag]}})  # (any other text: a KeyError)\n"
+)
+
+
 def test_a_text_parameter_is_swept_with_its_values_as_written(tmp_path, cluster):
-    """``-p tag=01,1.10`` on a parameter whose default is text: each point's scenario reads
-    "01" and "1.10", and the table's column holds them so (read as numbers they would be 1
-    and 1.1, and this scenario fails on any other text)."""
+    """``-p "tag=01,1,1.10, b "`` on a parameter whose default is text: each point's
+    scenario reads its text as written (read as numbers 01 and 1 would be one value, 1.10
+    would be 1.1, and this scenario fails on a text it does not know), and the table holds
+    them so."""
     path = tmp_path / "tagged.py"
-    path.write_text(
-        "from desmon.loader import load_scenario\nfrom desmon.model.params import parameters\n\n"
-        "p = parameters(tag='a')\n"
-        "if p.tag not in ('a', '01', '1.10'):\n"
-        "    raise RuntimeError(f'tag read as {p.tag!r}')\n"
-        f"scenario = load_scenario({str(ROBOT_DAY)!r}, {{'hours': '0.02'}})\n"
-    )
-    result, out = sweep(tmp_path, str(path), ["tag=01,1.10"], 1, cluster)
+    path.write_text(TAGGED)
+    tags = ["01", "1", "1.10", " b "]
+    result, out = sweep(tmp_path, str(path), ["tag=" + ",".join(tags)], 1, cluster)
     t = table(out)
-    assert list(t["tag"]) == ["01", "1.10"] and not t["error"].fillna("").any(), t.to_dict("records")
-    # a CSV table resumes with them too (its reader would take 01 for the number 1)
-    sweep(tmp_path, str(path), ["tag=01,1.10"], 1, cluster, name="r.csv")
+    assert list(t["tag"]) == tags and not t["error"].fillna("").any(), t.to_dict("records")
+    # a CSV table resumes with them too (its reader takes 01 for the number 1, NA for a missing value)
+    tags = ["01", "1", "NA"]
+    sweep(tmp_path, str(path), ["tag=" + ",".join(tags)], 1, cluster, name="r.csv")
     ran = []
-    result, out = sweep(tmp_path, str(path), ["tag=01,1.10,a"], 1, cluster, name="r.csv", resume=True, on_row=ran.append)
-    assert result.resumed == 2 and len(ran) == 1 and list(table(out)["tag"].astype(str)) == ["01", "1.10", "a"]
+    result, out = sweep(tmp_path, str(path), ["tag=" + ",".join([*tags, "a"])], 1, cluster, name="r.csv", resume=True, on_row=ran.append)
+    assert result.resumed == 3 and len(ran) == 1
+
+
+def test_sweep_plot_reads_a_text_parameter_of_a_csv_table_as_written(tmp_path, cluster, capsys):
+    """The figure of each point comes from the rows of its own text (a CSV reader's 01 and
+    1 would be one point, NA none): the CSV table and the Parquet table draw the same.
+    (In this scenario 01 runs 0.02 h, 1 and NA 0.03 h.)"""
+    path = tmp_path / "tagged.py"
+    path.write_text(TAGGED)
+    from desmon.sweep.plot import _rows
+
+    drawn = {}
+    for name in ("t.csv", "t.parquet"):
+        _, out = sweep(tmp_path, str(path), ["n=1,2", "tag=01,1,NA"], 2, cluster, name=name)
+        rows, failed, unvalued = _rows(str(out), "n", "risky_time_s", None)
+        drawn[name] = sorted((str(tag), float(v)) for tag, v in zip(rows["tag"], rows["risky_time_s"]))
+    assert drawn["t.csv"] == drawn["t.parquet"] and {t for t, _v in drawn["t.csv"]} == {"01", "1", "NA"}

@@ -25,11 +25,12 @@ from typing import Any, Iterator, Mapping
 
 from desmon.errors import ModelError
 
-__all__ = ["parameters", "Parameters", "parse_assignments", "overriding"]
+__all__ = ["parameters", "Parameters", "parse_assignments", "overriding", "TRUE_WORDS", "FALSE_WORDS"]
 
 _TYPES = (bool, int, float, str)
-_TRUE = ("true", "yes", "1", "on")
-_FALSE = ("false", "no", "0", "off")
+#: the words a yes/no parameter reads as true and as false (any case)
+TRUE_WORDS = ("true", "yes", "1", "on")
+FALSE_WORDS = ("false", "no", "0", "off")
 
 
 @dataclass(slots=True)
@@ -71,9 +72,9 @@ def _parse(name: str, text: str, default: object) -> object:
     kind = type(default)
     if kind is bool:
         low = text.strip().lower()
-        if low in _TRUE:
+        if low in TRUE_WORDS:
             return True
-        if low in _FALSE:
+        if low in FALSE_WORDS:
             return False
         raise ModelError(f"-p {name}={text}: {name} is a yes/no parameter; write {name}=true or {name}=false")
     if kind is int:

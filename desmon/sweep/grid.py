@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Iterator, Sequence
 
 from desmon.errors import DesmonError
+from desmon.model.params import FALSE_WORDS, TRUE_WORDS
 
 __all__ = ["SweepError", "Axis", "Point", "Run", "Grid", "parse_axes", "derive_seed", "MAX_RUNS", "JOBS"]
 
@@ -32,8 +33,6 @@ __all__ = ["SweepError", "Axis", "Point", "Run", "Grid", "parse_axes", "derive_s
 JOBS = ("run", "verify", "fuzz", "evaluate", "analyze", "estimate")
 #: the most runs one sweep may hold (a typo such as --seeds 1000000 is refused, not started)
 MAX_RUNS = 10_000_000
-_TRUE = ("true", "yes", "on")
-_FALSE = ("false", "no", "off")
 
 
 class SweepError(DesmonError, ValueError):
@@ -42,22 +41,47 @@ class SweepError(DesmonError, ValueError):
 
 @dataclass(frozen=True, slots=True)
 class Axis:
-    """One swept parameter: its name and its values (canonical text, in the order given)."""
+    """One swept parameter: its name and its values (canonical text, in the order given).
+
+    :func:`parse_axes` reads the type from the values themselves (``1,2`` whole numbers,
+    ``0.5,1`` numbers, ``yes,no`` true/false, else text); a sweep of a scenario then types
+    the axis as the parameter is declared (:meth:`typed_as`, called by
+    :func:`desmon.sweep.jobs.check_values`), which also refuses a value listed twice."""
 
     name: str
     values: tuple[str, ...]
     kind: str  # "int", "float", "bool" or "str": the column's type
-    #: the values as the user wrote them (stripped), in the same order: what a refusal names
+    #: the values as the user wrote them, in the same order: what a text parameter takes and a refusal names
     given: tuple[str, ...] = ()
 
     def typed(self, text: str) -> object:
         """``text`` (one of :attr:`values`) as the column's type."""
         return _convert(self.kind, text)
 
-    def as_written(self) -> "Axis":
-        """This axis for a text parameter: its values as the user wrote them (``01`` stays
-        ``01``, ``1.10`` stays ``1.10``), a text column."""
-        return Axis(self.name, _unique(self.name, list(self.given)), "str", self.given)
+    def typed_as(self, kind: str) -> "Axis":
+        """This axis with values of type ``kind`` (the parameter's: ``"str"`` takes them as
+        written, ``01`` stays ``01``); a value listed twice (``1,1.0`` as numbers, ``yes,on``
+        as true/false), or a whole number a table column cannot hold, is a SweepError.
+        Each written value must parse as ``kind`` (the scenario has checked it)."""
+        given = self.given or self.values
+        texts = list(given) if kind == "str" else [_CANONICAL[kind](v) for v in given]
+        if any(t is None for t in texts):
+            raise SweepError(f"-p {self.name}={','.join(given)}: not every value reads as its parameter's type ({kind})")
+        if kind == "int":
+            for v, t in zip(given, texts):
+                if not -(2**63) <= int(t) < 2**63:  # type: ignore[arg-type]
+                    raise SweepError(f"-p {self.name}={v.strip()}: a whole number a table holds lies within +-9.2e18; give a smaller one")
+        seen: dict[str, str] = {}
+        for v, t in zip(given, texts):
+            if t in seen:
+                what = f"value {v} is listed twice" if seen[t] == v else f"values {seen[t]} and {v} are the same {_NAMES[kind]}"
+                raise SweepError(f"-p {self.name}: {what}; list each value once")
+            seen[t] = v  # type: ignore[index]
+        return Axis(self.name, tuple(texts), kind, tuple(given))  # type: ignore[arg-type]
+
+    def inferred(self) -> "Axis":
+        """This axis typed as its values read (no scenario to say): a value listed twice is refused."""
+        return self.typed_as(self.kind)
 
 
 @dataclass(frozen=True, slots=True)
@@ -103,7 +127,7 @@ def _float_text(text: str) -> str | None:
 
 def _bool_text(text: str) -> str | None:
     low = text.strip().lower()
-    return "true" if low in _TRUE else "false" if low in _FALSE else None
+    return "true" if low in TRUE_WORDS else "false" if low in FALSE_WORDS else None
 
 
 def _convert(kind: str, text: str) -> object:
@@ -116,21 +140,19 @@ def _convert(kind: str, text: str) -> object:
     return text
 
 
+#: how a value of each type is called in a message
+_NAMES = {"int": "whole number", "float": "number", "bool": "yes/no value", "str": "text"}
+#: the canonical text of a value of each type, or None where it does not read as one
+_CANONICAL = {"int": lambda v: _int_text(v), "float": lambda v: _float_text(v), "bool": lambda v: _bool_text(v), "str": lambda v: v}
+
+
 def _axis(name: str, raw: Sequence[str]) -> Axis:
-    for kind, canon in (("int", _int_text), ("float", _float_text), ("bool", _bool_text)):
-        texts = [canon(v) for v in raw]
+    """The axis of the values ``raw`` as written, typed as they read (:class:`Axis`)."""
+    for kind in ("int", "float", "bool"):
+        texts = [_CANONICAL[kind](v) for v in raw]
         if all(t is not None for t in texts):
-            return Axis(name, _unique(name, [t for t in texts if t is not None]), kind, tuple(v.strip() for v in raw))
-    return Axis(name, _unique(name, [v.strip() for v in raw]), "str", tuple(v.strip() for v in raw))
-
-
-def _unique(name: str, values: list[str]) -> tuple[str, ...]:
-    seen: set[str] = set()
-    for v in values:
-        if v in seen:
-            raise SweepError(f"-p {name}: value {v} is listed twice; list each value once")
-        seen.add(v)
-    return tuple(values)
+            return Axis(name, tuple(texts), kind, tuple(raw))  # type: ignore[arg-type]
+    return Axis(name, tuple(v.strip() for v in raw), "str", tuple(raw))
 
 
 def parse_axes(items: Sequence[str] | None) -> tuple[Axis, ...]:

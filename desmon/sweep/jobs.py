@@ -437,11 +437,14 @@ def _check_bounds_pairs(axes: tuple[Axis, ...], known: dict[str, object]) -> Non
 
 
 def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> tuple[Axis, ...]:
-    """Refuse, before any work, a ``-p`` name the job does not know or a value that does not
-    parse as its parameter's type (one line). A value that parses but makes the scenario
-    invalid (say ``hours=-1``) is not refused here: its points become error rows. Returns
-    the axes to sweep: a text parameter's as the user wrote its values (:meth:`Axis.as_written`)."""
+    """Refuse, before any work, a ``-p`` name the job does not know, a value that does not
+    parse as its parameter's type, or a value listed twice (one line, naming the value as
+    written). A value that parses but makes the scenario invalid (say ``hours=-1``) is
+    not refused here: its points become error rows. Returns the axes to sweep, typed as
+    their parameters are declared (:meth:`Axis.typed_as`: a text parameter takes its
+    values as written)."""
     if job == "evaluate":
+        axes = tuple(a.inferred() for a in axes)
         _check_signal_values(axes)
         return axes
     from desmon.loader import load_scenario, load_with_parameters
@@ -451,12 +454,8 @@ def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> tupl
         _sc, declared = load_with_parameters(scenario)
     except DesmonError as exc:
         raise SweepError(f"{_one_line(exc)} (with the scenario's defaults, before sweeping it)") from None
-    axes = tuple(a.as_written() if type(declared.get(a.name)) is str and a.kind != "str" else a for a in axes)
     for axis in axes:
-        # each value as the user wrote it first, so that a refusal names the value that is
-        # wrong (in -p n=256,1.5 the axis holds 256.0 and 1.5: for a whole-number parameter
-        # the offender is 1.5), then as the sweep passes it, where that differs
-        for v in dict.fromkeys((*axis.given, *axis.values)):
+        for v in dict.fromkeys(axis.given or axis.values):  # as written: a refusal names what the user wrote
             try:
                 load_scenario(scenario, {axis.name: v})
             except DesmonError as exc:
@@ -464,7 +463,11 @@ def check_values(job: str, scenario: str | None, axes: tuple[Axis, ...]) -> tupl
                 if _is_value_error(message, axis.name):
                     raise SweepError(message.removeprefix(f"{scenario}: invalid scenario: ")) from None
                 # a value that parses but the scenario refuses: its points become error rows
-    return axes
+    return tuple(a.typed_as(_KINDS[type(declared[a.name])]) for a in axes)
+
+
+#: a parameter's column type, by the type of its default
+_KINDS = {int: "int", float: "float", bool: "bool", str: "str"}
 
 
 def check_points(

@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from desmon.errors import DesmonError
 from desmon.paths import replacing
 from desmon.sweep.grid import SweepError
 
@@ -93,6 +94,9 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
         raise SweepError("give either -x PARAMETER (a figure against a parameter) or --pareto COST (the Pareto view), not "
                          + ("both" if x is not None else "neither"))
     df = read_table(table)
+    texts = _text_parameters(df)
+    if texts:  # a CSV reads 01 as the number 1 and NA as missing: a text parameter's values as written
+        df = read_table(table, texts)
     for required in ("seed", "error"):
         if required not in df.columns:
             raise SweepError(f"{table}: not a table written by desmon sweep (no {required} column)")
@@ -118,6 +122,20 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
             "writes: the table was edited; draw it as desmon sweep wrote it"
         )
     return ok, int((~kept).sum()), unvalued
+
+
+def _text_parameters(df: Any) -> tuple[str, ...]:
+    """The swept parameters of ``df`` whose scenario declares them as text (none where the
+    table names no scenario, or its scenario cannot be loaded as it stands)."""
+    from desmon.loader import load_with_parameters
+
+    if "scenario" not in df.columns or df.empty or not isinstance(df["scenario"].iloc[0], str) or not df["scenario"].iloc[0]:
+        return ()
+    try:
+        _sc, declared = load_with_parameters(df["scenario"].iloc[0])
+    except DesmonError:
+        return ()
+    return tuple(p for p in _parameters(df) if isinstance(declared.get(p), str))
 
 
 def mean_interval(values: list[float], value_range: tuple[float, float] | None) -> tuple[float, float, str]:
@@ -166,7 +184,6 @@ def _range_of(ok: Any, params: list[str], y: str) -> Any:
 def _seconds_range(path: str, values: dict[str, str], until: float | None, y: str) -> tuple[float, float] | None:
     """:func:`~desmon.estimate.measures.natural_range` of ``y`` over the runs of the scenario at
     ``path`` with parameter ``values``, ``until`` seconds long (its horizon if None)."""
-    from desmon.errors import DesmonError
     from desmon.estimate.measures import natural_range
     from desmon.loader import load_scenario
     from desmon.sim.world import world_of

@@ -100,7 +100,8 @@ def write_table(df: Any, path: str | os.PathLike[str]) -> None:
 
 def read_table(path: str | os.PathLike[str], text_columns: tuple[str, ...] = ()) -> Any:
     """A table written by ``desmon sweep`` (Parquet or CSV) as a DataFrame, or a SweepError;
-    ``text_columns`` (a text parameter's) read from a CSV as written (``01`` not 1)."""
+    ``text_columns`` (a text parameter's) read from a CSV as written (``01``, not the
+    number 1; ``NA``, not a missing value)."""
     import pandas as pd
 
     if not str(path).lower().endswith(TABLE_SUFFIXES):
@@ -108,7 +109,13 @@ def read_table(path: str | os.PathLike[str], text_columns: tuple[str, ...] = ())
     try:
         if str(path).lower().endswith(".parquet"):
             return pd.read_parquet(path)
-        return pd.read_csv(path, dtype=dict.fromkeys(text_columns, str))
+        df = pd.read_csv(path)
+        texts = [c for c in text_columns if c in df.columns]
+        if texts:
+            raw = pd.read_csv(path, usecols=texts, dtype=str, keep_default_na=False)
+            for c in texts:
+                df[c] = raw[c]
+        return df
     except (OSError, ValueError) as exc:
         raise SweepError(f"{path}: cannot be read as a sweep table ({' '.join(str(exc).split())[:200]})") from None
     except Exception as exc:  # pyarrow's own errors (not a parquet file, a truncated one)
