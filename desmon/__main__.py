@@ -1,3 +1,5 @@
-from desmon.cli.program import run_program
+import sys
 
-run_program()
+from desmon.cli import main
+
+sys.exit(main())

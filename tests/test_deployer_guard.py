@@ -237,13 +237,13 @@ def test_timeout_stops_a_worker_process_stuck_in_a_reaction(tmp_path):
     path.write_text(
         "import os\n"
         "from desmon.deployment.deployer import DEPLOYERS\n"
-        f"CALLER = {os.getpid()}  # the test: the parent of the desmon program, which runs the command in a child\n"
+        f"CALLER = {os.getpid()}  # the test: desmon's parent\n"
         "def _parent_of(pid):\n"
         "    with open(f'/proc/{pid}/stat') as fh:\n"
         "        return int(fh.read().rsplit(')', 1)[1].split()[1])\n"
         "import time\n"
         "def stuck_in_workers(q, slots, changed, context_changed):\n"
-        "    while _parent_of(_parent_of(os.getppid())) != CALLER:  # started by a --workers process: it never returns\n"
+        "    while _parent_of(os.getppid()) != CALLER:  # this worker was started by a --workers process: it never returns\n"
         "        time.sleep(60)\n"
         "    yield from DEPLOYERS['desmon'].react(q, slots, changed, context_changed)\n"
     )

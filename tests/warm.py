@@ -15,9 +15,8 @@ for each command. The child takes the command's
 directory, environment, ``sys.argv`` and ``sys.path[0]`` (the directory ``python -m``
 or the script puts there), its standard input from ``/dev/null`` and its output into the
 caller's files, a process group of its own, Python's own SIGINT handler, then runs
-the ``desmon`` program (:func:`desmon.cli.program.run_program`: the command in a child
-it watches) and ends as a program ends (``sys.exit``: ``atexit`` handlers, non-daemon
-threads joined, buffers flushed).
+``desmon.cli.main`` and ends as a program ends (``sys.exit``: ``atexit`` handlers,
+non-daemon threads joined, buffers flushed).
 
 What a forked child cannot take from its environment falls back to a real process
 (:func:`needs_fresh`): a ``PYTHON*`` variable other than the server's (a hash seed,
@@ -253,6 +252,6 @@ def _become(request: dict, fds: list[int]) -> None:  # type: ignore[type-arg]
 if __name__ == "__main__":
     _request, _fds = _serve(sys.argv[1])
     _become(_request, _fds)
-    from desmon.cli.program import run_program
+    from desmon.cli import main
 
-    run_program()
+    sys.exit(main())

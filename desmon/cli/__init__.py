@@ -25,7 +25,7 @@ from desmon.cli.options import preflight
 from desmon.errors import DesmonError
 from desmon.paths import WholeWrites
 
-__all__ = ["main", "build_parser", "COMMANDS", "process_age"]
+__all__ = ["main", "build_parser", "COMMANDS"]
 
 #: the commands, in the order ``desmon --help`` lists them (sweep adds sweep and sweep-plot)
 COMMANDS = (replay, explain, show, evaluate, run, estimate, plot, verify, analyze, fuzz, explore, sweep, sweep_plot)
@@ -46,7 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def process_age() -> float:
+def _process_age() -> float:
     """Seconds since this process started (interpreter start-up and imports included), 0 where unknown."""
     import os
 
@@ -60,16 +60,12 @@ def process_age() -> float:
         return 0.0
 
 
-def main(argv: Sequence[str] | None = None, *, started: float | None = None) -> int:
-    """Run the command line ``argv`` (default: this process's) and return its exit code.
-
-    A budget (verify --timeout) counts from ``started`` (a ``time.perf_counter()`` value;
-    the ``desmon`` program passes its own start, :mod:`desmon.cli.program`), else from the
-    process's start when ``argv`` is None (desmon is the program), else from this call."""
+def main(argv: Sequence[str] | None = None) -> int:
     import time
 
-    if started is None:
-        started = time.perf_counter() - (process_age() if argv is None else 0.0)
+    # a budget (verify --timeout) counts from the start of the command: from the process's
+    # start when desmon is the program (argv None), from this call when a caller runs it
+    started = time.perf_counter() - (_process_age() if argv is None else 0.0)
     if sys.stdout is None:  # started with its standard output closed (>&-): no verdict could be read
         if sys.stderr is not None:
             print("desmon: error: standard output is closed, where desmon writes its report; redirect it (> out.txt)", file=sys.stderr)
