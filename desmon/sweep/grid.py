@@ -59,25 +59,28 @@ class Axis:
         return _convert(self.kind, text)
 
     def typed_as(self, kind: str) -> "Axis":
-        """This axis with values of type ``kind`` (the parameter's: ``"str"`` takes them as
-        written, ``01`` stays ``01``); a value listed twice (``1,1.0`` as numbers, ``yes,on``
-        as true/false), or a whole number a table column cannot hold, is a SweepError.
-        Each written value must parse as ``kind`` (the scenario has checked it)."""
+        """This axis as a column of type ``kind`` (the parameter's). A text parameter takes
+        its values as written (``01`` stays ``01``); the others keep the texts they read as
+        (a point's label, from which its seeds derive: ``hours=2`` stays ``hours=2`` for a
+        number). A value listed twice as ``kind`` reads it (``1,1.0`` as numbers, ``1,true``
+        as yes/no), or a whole number a table column cannot hold, is a SweepError. Each
+        written value must read as ``kind`` (the scenario has checked it)."""
         given = self.given or self.values
-        texts = list(given) if kind == "str" else [_CANONICAL[kind](v) for v in given]
-        if any(t is None for t in texts):
+        texts = list(given) if kind == "str" else list(self.values)
+        read = [v if kind == "str" else _CANONICAL[kind](v) for v in given]
+        if any(r is None for r in read):
             raise SweepError(f"-p {self.name}={','.join(given)}: not every value reads as its parameter's type ({kind})")
         if kind == "int":
-            for v, t in zip(given, texts):
-                if not -(2**63) <= int(t) < 2**63:  # type: ignore[arg-type]
+            for v, r in zip(given, read):
+                if not -(2**63) <= int(r) < 2**63:  # type: ignore[arg-type]
                     raise SweepError(f"-p {self.name}={v.strip()}: a whole number a table holds lies within +-9.2e18; give a smaller one")
         seen: dict[str, str] = {}
-        for v, t in zip(given, texts):
-            if t in seen:
-                what = f"value {v} is listed twice" if seen[t] == v else f"values {seen[t]} and {v} are the same {_NAMES[kind]}"
+        for v, r in zip(given, read):
+            if r in seen:
+                what = f"value {v} is listed twice" if seen[r] == v else f"values {seen[r]} and {v} are the same {_NAMES[kind]}"
                 raise SweepError(f"-p {self.name}: {what}; list each value once")
-            seen[t] = v  # type: ignore[index]
-        return Axis(self.name, tuple(texts), kind, tuple(given))  # type: ignore[arg-type]
+            seen[r] = v  # type: ignore[index]
+        return Axis(self.name, tuple(texts), kind, tuple(given))
 
     def inferred(self) -> "Axis":
         """This axis typed as its values read (no scenario to say): a value listed twice is refused."""
@@ -136,20 +139,20 @@ def _convert(kind: str, text: str) -> object:
     if kind == "float":
         return float(text)
     if kind == "bool":
-        return text == "true"
+        return text.strip().lower() in TRUE_WORDS
     return text
 
 
 #: how a value of each type is called in a message
 _NAMES = {"int": "whole number", "float": "number", "bool": "yes/no value", "str": "text"}
 #: the canonical text of a value of each type, or None where it does not read as one
-_CANONICAL = {"int": lambda v: _int_text(v), "float": lambda v: _float_text(v), "bool": lambda v: _bool_text(v), "str": lambda v: v}
+_CANONICAL = {"int": _int_text, "float": _float_text, "bool": _bool_text}
 
 
 def _axis(name: str, raw: Sequence[str]) -> Axis:
     """The axis of the values ``raw`` as written, typed as they read (:class:`Axis`)."""
     for kind in ("int", "float", "bool"):
-        texts = [_CANONICAL[kind](v) for v in raw]
+        texts = [_CANONICAL[kind](v) for v in raw]  # (the first type all read as: its canonical texts)
         if all(t is not None for t in texts):
             return Axis(name, tuple(texts), kind, tuple(raw))  # type: ignore[arg-type]
     return Axis(name, tuple(v.strip() for v in raw), "str", tuple(raw))
