@@ -474,3 +474,36 @@ def test_sweep_plot_reads_a_text_parameter_of_a_csv_table_as_written(tmp_path, c
         rows, failed, unvalued = _rows(str(out), "n", "risky_time_s", None)
         drawn[name] = sorted((str(tag), float(v)) for tag, v in zip(rows["tag"], rows["risky_time_s"]))
     assert drawn["t.csv"] == drawn["t.parquet"] and {t for t, _v in drawn["t.csv"]} == {"01", "1", "NA"}
+
+
+def test_a_ctrl_c_at_the_terminal_ends_a_local_sweep_without_a_traceback(tmp_path):
+    """SIGINT to the whole process group, as a terminal sends it, once rows arrive: desmon
+    writes the finished rows and exits 130 in one line; the Dask workers, which ignore it,
+    print nothing (each printed a KeyboardInterrupt traceback) and close with the cluster."""
+    import signal
+
+    out = tmp_path / "cc.csv"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "desmon", "sweep", str(ROBOT_DAY), "-p", "hours=2", "--seeds", "40", "--workers", "2", "-o", str(out)],
+        cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # (a background test run inherits it ignored)
+    )
+    try:
+        deadline = time.monotonic() + 120
+        journal = journal_path(out)  # its header, then a line per finished run
+        while (not journal.exists() or journal.read_text().count("\n") < 2) and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        os.killpg(proc.pid, signal.SIGINT)
+        _out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130 and "Traceback" not in err and "KeyboardInterrupt" not in err, err[-3000:]
+    assert "interrupted: wrote" in err and out.exists(), err[-3000:]
+    for _ in range(100):  # (a worker ends moments after the cluster closes)
+        left = subprocess.run(["ps", "-o", "pid=,stat=,args=", "-s", str(proc.pid)], capture_output=True, text=True).stdout.strip()
+        if not left:
+            break
+        time.sleep(0.1)
+    assert not left, f"processes of the sweep left running:\n{left}"

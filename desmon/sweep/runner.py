@@ -210,9 +210,10 @@ def dask_client(scheduler: str | None, workers: int | None, retries: int) -> Ite
             return
         n = workers or os.cpu_count() or 1
         try:
-            cluster = LocalCluster(
-                n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.CRITICAL,
-            )
+            with _sigint_held():  # the workers start ignoring Ctrl-C: it is desmon's to handle (they print no traceback)
+                cluster = LocalCluster(
+                    n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.CRITICAL,
+                )
         except BaseException:  # Ctrl-C while the cluster starts: no half-started cluster for Dask's exit hook to trip on
             _forget_clusters()
             raise
@@ -224,6 +225,26 @@ def dask_client(scheduler: str | None, workers: int | None, retries: int) -> Ite
                 client.close()
         finally:
             cluster.close()
+
+
+@contextlib.contextmanager
+def _sigint_held() -> Iterator[None]:
+    """SIGINT ignored while the block runs. The processes it starts keep ignoring it (an
+    ignored signal stays ignored across exec, and Python then installs no handler of its
+    own): a terminal's Ctrl-C reaches the whole process group, and Dask's worker processes
+    would each print a KeyboardInterrupt traceback while desmon closes them. A Ctrl-C
+    pressed in the second or so the block lasts is lost; the next one is desmon's."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 def _forget_clusters() -> None:
