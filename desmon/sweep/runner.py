@@ -233,7 +233,7 @@ def _sigint_held() -> Iterator[None]:
     ignored signal stays ignored across exec, and Python then installs no handler of its
     own): a terminal's Ctrl-C reaches the whole process group, and Dask's worker processes
     would each print a KeyboardInterrupt traceback while desmon closes them. A Ctrl-C
-    pressed in the second or so the block lasts is lost; the next one is desmon's."""
+    pressed while the block runs is lost; the next one is desmon's."""
     import signal
     import threading
 
