@@ -159,6 +159,24 @@ def test_every_tutorial_command_runs_as_documented(root, tutorial_run):
         assert made.read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow
+@pytest.mark.xdist_group("tutorial")
+def test_the_transient_method_line_docs_analyze_md_quotes_is_the_one_the_tutorial_command_prints(root, tutorial_run):
+    """docs/analyze.md quotes the exposure and the Krylov method line (steps, where the
+    deviation settled, the error estimate) of the tutorial's ``desmon analyze
+    scenarios/coffee_shift.py -p force_sensors=2``: the same words as that run prints."""
+    _work, commands = tutorial_run
+    command = "desmon analyze scenarios/coffee_shift.py -p force_sensors=2"
+    (out,) = [proc.stdout for cmd, _code, proc in commands if cmd == command]
+    method = re.search(r"\((Krylov exponential \(\d+ steps, settled at \d+ s\); error estimate [0-9.e+-]+)\)", out)
+    exposure = re.search(r"Per mission \(T = 28,800 s\): ([0-9.]+) s unmonitored", out)
+    assert method and exposure, out
+    doc = " ".join((root / "docs" / "analyze.md").read_text().split())
+    assert f'prints {exposure.group(1)} s unmonitored beside "{method.group(1)}"' in doc, (exposure.group(1), method.group(1))
+    estimate = method.group(1).rsplit(" ", 1)[1]
+    assert f"(here most of the {estimate} s)" in doc
+
+
 def test_deployers_md_quotes_its_example_deployer_verbatim(root):
     """Every python block of docs/deployers.md is a piece of docs/examples/first_fit.py."""
     text = (root / "docs" / "deployers.md").read_text()

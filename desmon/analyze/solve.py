@@ -321,9 +321,10 @@ SETTLED = 1e-9
 KRYLOV_TOL = 1e-12
 #: the Krylov basis size of :func:`krylov_steps`. On the coffee shift's 8 h transient (48,820
 #: states with two force sensors; the step count is in the method line of ``desmon analyze
-#: scenarios/coffee_shift.py -p force_sensors=2``) 40 vectors take 146 steps; in one run each
-#: on one machine 30 took 242 and 50 took 99, with about the same CPU time (16.7 and 15.3 s
-#: against 15.4 s), and the shift's figures agreed to 10 digits
+#: scenarios/coffee_shift.py -p force_sensors=2``, checked by tests/test_tutorial.py against
+#: docs/analyze.md) 40 vectors take 147 steps. Measured once on one machine, with a steady
+#: state that then gave 146 steps at 40 vectors: 30 took 242 and 50 took 99, with about the
+#: same CPU time (16.7 and 15.3 s against 15.4 s), and the shift's figures agreed to 10 digits
 KRYLOV_DIM = 40
 
 
