@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -131,6 +132,20 @@ def test_the_small_fleet_verifies() -> None:
     result = Checker(fleet(2, 1), "desmon").run(max_states=20_000)
     assert result.verdict == "HOLDS"
     assert result.states > 100
+
+
+def test_docs_fleet_md_gives_the_states_desmon_verify_prints_for_the_fleet(capsys: pytest.CaptureFixture[str]) -> None:
+    """docs/fleet.md: "It HOLDS (N states with the default 20 edge servers, M with
+    `-p edges=1`...)", the figures ``desmon verify scenarios/fleet.py`` prints."""
+    from desmon.cli import main
+
+    text = " ".join((FLEET.parent.parent / "docs" / "fleet.md").read_text().split())
+    quoted = re.search(r"It HOLDS \(([\d,]+) states with the default 20 edge servers, ([\d,]+) with `-p edges=1`", text)
+    assert quoted, "docs/fleet.md no longer quotes the fleet's state counts"
+    for extra, states in (([], quoted.group(1)), (["-p", "edges=1"], quoted.group(2))):
+        assert main(["verify", str(FLEET), *extra, "--no-progress"]) == 0
+        out = capsys.readouterr().out
+        assert "verdict: HOLDS" in out and f"states: {states} " in out, (extra, out[:400])
 
 
 def test_the_checker_still_finds_the_papers_deployer_wrong_on_the_small_fleet() -> None:
