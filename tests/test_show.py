@@ -86,3 +86,63 @@ def test_a_format_the_name_contradicts_is_refused_before_any_work(coffee, tmp_pa
     assert main(["show", coffee, "--format", "png", "-o", str(tmp_path / "fig.dot")]) == 2
     assert "names a dot file but --format is png" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+#: coffee_handover with the wrench repaired at the very time it fails (t3 and t4 both at 23 s)
+SAME_TIME = '''
+import importlib.util, sys
+from dataclasses import replace
+spec = importlib.util.spec_from_file_location("coffee", {coffee!r})
+coffee = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(coffee)
+from desmon.model.events import DeviceRepair
+from desmon.model.scenario import TimedEvent
+
+scenario = replace(coffee.scenario, name="same_time", timeline=coffee.scenario.timeline + (TimedEvent(23.0, DeviceRepair("lwr_wrench"), "t4"),),
+                   world=None, checker=None, expected={{}})
+'''
+
+
+@pytest.fixture
+def same_time(coffee, tmp_path):
+    path = tmp_path / "same_time.py"
+    path.write_text(SAME_TIME.format(coffee=coffee))
+    return str(path)
+
+
+def test_of_two_events_at_one_time_the_first_ones_label_shows_the_state_between_them(same_time, capsys):
+    """t3 (the wrench fails) and t4 (it is repaired) both at 23 s: t3's moment is the state
+    after t3 and before t4, in show, explain and replay alike; the time 23 is after both."""
+    assert main(["show", same_time, "--at", "t3", "--format", "json"]) == 0
+    t3 = json.loads(capsys.readouterr().out)
+    assert main(["show", same_time, "--at", "t4", "--format", "json"]) == 0
+    t4 = json.loads(capsys.readouterr().out)
+    assert main(["show", same_time, "--at", "23", "--format", "json"]) == 0
+    assert json.loads(capsys.readouterr().out) == t4
+
+    def force_on(snap):
+        return [e["target"] for e in snap["edges"] if e["label"] == "DEPLOYED_ON" and e["source"] == "Deployment:force_slip_detector"]
+
+    def wrench_attached(snap):
+        return any(e["label"] == "HAS_DEVICE" and e["target"] == "Device:lwr_wrench" for e in snap["edges"])
+
+    assert force_on(t3) == [] and not wrench_attached(t3)  # stopped: the wrench it reads is gone
+    assert force_on(t4) == ["Platform:arm_pc"] and wrench_attached(t4)
+    assert main(["explain", same_time, "force_slip_detector", "--at", "t3"]) == 0
+    assert "acceptable: (none)" in capsys.readouterr().out
+    assert main(["explain", same_time, "force_slip_detector", "--at", "t4"]) == 0
+    assert "acceptable: arm_pc" in capsys.readouterr().out
+    assert main(["replay", same_time]) == 0
+    out = capsys.readouterr().out
+    t3_block = out.split("t3 t=23s")[1].split("t4 t=23s")[0]
+    assert "Deployment:force_slip_detector -[DEPLOYED_ON]-> Platform:arm_pc" not in t3_block and "(no Device:lwr_wrench)" in t3_block
+
+
+def test_two_moments_a_title_tells_apart_are_titled_apart(coffee, capsys):
+    """--at 22.9999999 is before the wrench fails at 23 s: its title says so."""
+    assert main(["explain", coffee, "force_slip_detector", "--at", "22.9999999"]) == 0
+    before = capsys.readouterr().out
+    assert main(["explain", coffee, "force_slip_detector", "--at", "23"]) == 0
+    at = capsys.readouterr().out
+    assert "at t=22.9999999s" in before and "acceptable: arm_pc" in before
+    assert "at t=23s" in at and "acceptable: (none)" in at

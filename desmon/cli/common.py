@@ -192,19 +192,26 @@ def load_scripted(args: argparse.Namespace) -> Scenario:
     return scenario
 
 
-def resolve_times(scenario: Scenario, spec: str | None) -> list[tuple[str, float]]:
-    """``--at``: (title, seconds) of each comma-separated time or timeline label (None: the timeline's end)."""
+def resolve_times(scenario: Scenario, spec: str | None) -> list[tuple[str, float, int]]:
+    """``--at``: (title, seconds, steps) of each comma-separated time or timeline label
+    (None: the timeline's end). ``steps`` counts the timeline events the moment includes:
+    a label's own and those before it (of two events at one time, the first's label
+    excludes the second), a time's every event at or before it."""
+    import bisect
+
     from desmon.errors import ScenarioError
 
+    times = [te.time for te in scenario.timeline]
     if spec is None:
-        end = scenario.timeline[-1].time if scenario.timeline else 0.0
-        return [(f"t={end:g}s", end)]
-    labels = {te.label: te.time for te in scenario.timeline if te.label}
+        end = times[-1] if times else 0.0
+        return [(f"t={_seconds(end)}s", end, len(times))]
+    labels = {te.label: (te.time, i + 1) for i, te in enumerate(scenario.timeline) if te.label}
     out = []
     for part in spec.split(","):
         part = part.strip()
         if part in labels:
-            out.append((f"{part} (t={labels[part]:g}s)", labels[part]))
+            t, steps = labels[part]
+            out.append((f"{part} (t={_seconds(t)}s)", t, steps))
             continue
         try:
             t = float(part) + 0.0  # (-0 is 0)
@@ -217,8 +224,14 @@ def resolve_times(scenario: Scenario, spec: str | None) -> list[tuple[str, float
         first = scenario.timeline[0].time
         if t < first:
             raise ScenarioError(f"--at {part}: the timeline starts at t={first:g}s; give a time at or after it")
-        out.append((f"t={t:g}s", t))
+        out.append((f"t={_seconds(t)}s", t, bisect.bisect_right(times, t)))
     return out
+
+
+def _seconds(t: float) -> str:
+    """A moment's seconds as a title gives them: every digit a time has, up to 15 (two
+    moments a title tells apart are two moments), without trailing zeros."""
+    return f"{t:.15g}"
 
 
 def draw_trace(trace: str, out: str, start: float | None, end: float | None, flags: tuple[str, str] = ("--from", "--to")) -> None:

@@ -29,11 +29,11 @@ def run(args: argparse.Namespace) -> int:
     scenario = load_scripted(args)
     if "," in (args.at or ""):
         raise QueryError(f"--at {args.at!r}: explain answers for one moment; give one time or label")
-    [(when, at)] = resolve_times(scenario, args.at)
+    [(when, _at, steps)] = resolve_times(scenario, args.at)
     if scenario.model.spec(args.graph) is None:
         known = ", ".join(s.graph for s in scenario.model.specs)
         raise QueryError(f"{args.scenario}: no deployment specification for {args.graph!r}; known: {known}")
-    timeline = tuple(te for te in scenario.timeline if te.time <= at)
+    timeline = scenario.timeline[:steps]  # (a label's moment: not a later event of the same time)
     result = replay(replace(scenario, timeline=timeline), args.deployer, run=run_of(args))
     validity = acceptable_platforms(RepositoryQuery(result.repo), args.graph)
     fixed = scenario.model.spec(args.graph).fixed_platform  # type: ignore[union-attr]

@@ -32,13 +32,14 @@ def add_parser(sub: Subparsers) -> None:
     p.set_defaults(handler=run)
 
 
-def _snapshots(scenario: Any, result: Any, moments: list[tuple[str, float]]) -> list[tuple[str, Any]]:
-    """(title, repository snapshot) of each moment: the context then, and the errors raised then."""
+def _snapshots(scenario: Any, result: Any, moments: list[tuple[str, float, int]]) -> list[tuple[str, Any]]:
+    """(title, repository snapshot) of each moment: the context then, and the errors raised
+    then (by the moment's steps of its time: a label's, not a later event's of the same time)."""
     snaps = []
-    for title, t in moments:
-        snap = result.repo.snapshot(at=t)
+    for title, t, steps in moments:
+        snap = result.graph_after(steps)
         ctx = [d["name"] for n, d in snap.nodes(data=True) if d.get("label") == "Context" and any(True for _ in snap.in_edges(n))]
-        errors = [f"{e.kind}: {e.graph}" for step in result.steps if step.time == t for e in step.errors]
+        errors = [f"{e.kind}: {e.graph}" for step in result.steps[:steps] if step.time == t for e in step.errors]
         head = f"{scenario.name} {title}" + (f"  context: {ctx[0]}" if ctx else "")
         snaps.append((head + "".join(f"\nerror raised: {e}" for e in errors), snap))
     return snaps

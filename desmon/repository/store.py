@@ -379,10 +379,12 @@ class Repository:
         they got the label; not the graph's order)."""
         return list(self._label_index.get(label, ()))
 
-    def snapshot(self, at: float | None = None) -> nx.MultiDiGraph:
-        """The graph as it was at time ``at`` (all changes with time <= at); a copy."""
+    def snapshot(self, at: float | None = None, *, upto: int | None = None) -> nx.MultiDiGraph:
+        """The graph as it was at time ``at`` (all changes with time <= at), or after its
+        first ``upto`` changes (a :attr:`version`: of two events at one time, the state
+        between them); a copy."""
         g = nx.MultiDiGraph()
-        for change in self._log:
+        for change in self._log if upto is None else self._log[:upto]:
             if at is not None and change.time > at:
                 break
             _apply(g, change)

@@ -48,6 +48,9 @@ class ReplayStep:
     refused: tuple[tuple[tuple[str, str], str], ...] = ()
     #: the errors standing before the step
     standing_before: frozenset[str] = frozenset()
+    #: the repository's :attr:`~desmon.repository.store.Repository.version` after the step
+    #: (``repo.snapshot(upto=version)``: the graph then, before a later event of the same time)
+    version: int = 0
 
 
 @dataclass
@@ -57,6 +60,8 @@ class Replay:
     repo: Repository
     control: ImmediateControl
     steps: list[ReplayStep] = field(default_factory=list)
+    #: the repository's version before the first step (the model and the initial facts loaded)
+    start_version: int = 0
 
     @property
     def errors(self) -> list[ErrorRecord]:
@@ -65,6 +70,11 @@ class Replay:
     @property
     def violations(self) -> list[tuple[float, str, str]]:
         return [(s.time, n, m) for s in self.steps for n, m in s.violations]
+
+    def graph_after(self, steps: int) -> nx.MultiDiGraph:
+        """The repository graph after the first ``steps`` steps (0: before the first), as a
+        copy: of two events at one time, the first's graph does not show the second."""
+        return self.repo.snapshot(upto=self.steps[steps - 1].version if steps else self.start_version)
 
 
 def deployment_edges(g: nx.MultiDiGraph) -> set[tuple[str, str, str]]:
@@ -92,7 +102,7 @@ def replay(
     core = DeploymentCore(scenario.model, query, RepositoryInsert(repo, scenario.model.robot), deployer, run=context)
     for event in scenario.initial:
         core.observe(event)
-    result = Replay(scenario, core.deployer.name, repo, control)
+    result = Replay(scenario, core.deployer.name, repo, control, start_version=repo.version)
     for te in scenario.timeline:
         now[0] = te.time
         before = core.standing
@@ -125,6 +135,7 @@ def replay(
                 violations=tuple(check_invariants(view)),
                 refused=refused,
                 standing_before=before,
+                version=repo.version,
             )
         )
     return result
@@ -144,7 +155,7 @@ def format_replay(r: Replay) -> str:
     Control rules, with the rule's reason, or failed by the environment), the errors the
     reaction raised, the errors standing after it, deployment edges."""
     lines = [f"{r.scenario.name} -- deployer {r.deployer}", ""]
-    for step in r.steps:
+    for i, step in enumerate(r.steps, 1):
         head = f"{step.label + ' ' if step.label else ''}t={step.time:g}s  {step.event}"
         lines.append(head)
         for cmd, ok in step.commands:
@@ -157,7 +168,7 @@ def format_replay(r: Replay) -> str:
                 lines.append(f"        {reason}")
         if step.errors or step.standing != step.standing_before:
             lines.append("    standing errors: " + (", ".join(sorted(step.standing)) or "none"))
-        snap = r.repo.snapshot(at=step.time)
+        snap = r.graph_after(i)
         for s, label, t in sorted(deployment_edges(snap), key=lambda e: (e[1], e[0], e[2])):
             if label == L.HAS_DEVICE:
                 continue
