@@ -26,6 +26,7 @@ def test_plot_of_a_trace_without_platforms_draws_the_context_and_says_why_nothin
     trace.write_text(
         '{"t": 0.0, "type": "run", "scenario": "s", "deployer": "desmon", "horizon": 10.0, "platforms": {}, "graphs": {}}\n'
         '{"t": 0.0, "type": "action", "action": "idle", "duration": 10.0}\n'
+        '{"t": 10.0, "type": "end"}\n'
     )
     png = tmp_path / "bare.png"
     assert main(["plot", str(trace), "-o", str(png)]) == 0

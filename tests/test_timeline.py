@@ -26,6 +26,7 @@ RECORDS = [
     {"t": 6.3, "type": "decision", "command": "stop", "graph": "force", "platform": "pc1", "ok": True},
     {"t": 6.3, "type": "error", "kind": "no_acceptable_platforms", "graph": "force", "platform": None},
     {"t": 8.0, "type": "platform", "platform": "pc1", "up": True},
+    {"t": 10.0, "type": "end"},
 ]
 
 

@@ -236,10 +236,12 @@ def _seconds(t: float) -> str:
 
 def draw_trace(trace: str, out: str, start: float | None, end: float | None, flags: tuple[str, str] = ("--from", "--to")) -> None:
     """The timeline of a run's trace file drawn to the PNG ``out`` (``desmon plot``, ``desmon run --plot``)."""
-    from desmon.viz.timeline import build_timeline, plot_timeline, read_trace
+    from desmon.viz.timeline import build_timeline, check_whole, plot_timeline, read_trace
 
     records = read_trace(trace)
-    plot_timeline(build_timeline(records, start, end, flags=flags), out)
+    timeline = build_timeline(records, start, end, flags=flags)
+    check_whole(trace, records)
+    plot_timeline(timeline, out)
     print(f"wrote {out}", file=sys.stderr)
     if not records[0].get("platforms"):  # drawn, but say why the picture has no platform lanes
         print(f"desmon: note: {trace} declares no platforms in its run record: only the context lane is drawn", file=sys.stderr)

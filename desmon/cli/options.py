@@ -126,9 +126,12 @@ def window_time(text: str) -> float:
     """A plot window bound as written; its range is checked by :func:`desmon.viz.timeline.check_window`
     (one rule for the command line and the Python API)."""
     try:
-        return float(text)
+        x = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be a time in seconds, got {text!r}") from None
+    if not math.isfinite(x):  # (named as written: 1e400 reads as inf)
+        raise argparse.ArgumentTypeError(f"must be a finite time in seconds, 0 or more, got {text}")
+    return x
 
 
 @dataclass(frozen=True)

@@ -93,6 +93,11 @@ def read_trace(path: str | Path) -> list[dict[str, Any]]:
                 raise ScenarioError(
                     f"{path}:{n}: {shape}, not a record; a trace holds one JSON object per line (JSON Lines): {_HOW}"
                 )
+            if record.get("type") == "run" and out:
+                raise ScenarioError(
+                    f"{path}:{n}: a second 'run' record (the first is on line {lines[0]}): a trace holds one run; "
+                    f"are two traces joined? plot each on its own"
+                )
             out.append(record)
             lines.append(n)
     if not out:
@@ -105,6 +110,7 @@ def read_trace(path: str | Path) -> list[dict[str, Any]]:
             )
         raise ScenarioError(f"{path}: does not start with a 'run' record; is it a desmon run trace? {_HOW}")
     _check_platforms(path, out, lines)
+    _check_times(path, out, lines)
     return out
 
 
@@ -124,6 +130,32 @@ def _check_platforms(path: str | Path, records: list[dict[str, Any]], lines: lis
             )
 
 
+def _check_times(path: str | Path, records: list[dict[str, Any]], lines: list[int]) -> None:
+    """Every record's time lies within the run's ``[0, horizon]`` (a record outside it
+    would be dropped from the drawing without a word)."""
+    horizon = records[0].get("horizon")
+    if not (_finite(horizon) and horizon > 0):
+        return  # the run record's own check
+    for record, n in zip(records, lines):
+        t = record.get("t")
+        if _finite(t) and not -1e-6 <= t <= horizon + 1e-6:  # (times are rounded to the microsecond)
+            raise ScenarioError(
+                f"{path}:{n}: a {record.get('type')!r} record at t={t:g} s, outside the run's [0, {horizon:g}] s; "
+                f"is the trace edited or from another run? {_HOW}"
+            )
+
+
+def check_whole(path: str | Path, records: list[dict[str, Any]]) -> None:
+    """The trace holds its run's ``end`` record: ``desmon run`` writes the file only once
+    the run is complete, so a trace without one was cut short or edited, and a drawing of
+    it would show a run that stopped early as if it had not. (Asked after
+    :func:`build_timeline`, whose checks name a bad record first.)"""
+    if not any(r.get("type") == "end" for r in records):
+        last = records[-1].get("t")
+        at = f" after {len(records):,} records (the last at t={last:g} s)" if _finite(last) else ""
+        raise ScenarioError(f"{path}: no 'end' record{at}: the trace is cut short, and desmon run writes one whole; {_HOW}")
+
+
 def check_window(
     start: float | None, end: float | None, horizon: float | None = None, *, flags: tuple[str, str] = ("--from", "--to")
 ) -> None:
@@ -136,6 +168,8 @@ def check_window(
             raise ScenarioError(f"{flag} {v:g}: give a time in seconds, 0 or more" if _is_number(v) else f"{flag} {v!r}: give a time in seconds")
     if start is not None and end is not None and start >= end:
         raise ScenarioError(f"{flags[0]} {start:g} {flags[1]} {end:g}: an empty window; give {flags[1]} after {flags[0]}")
+    if start is None and end is not None and end <= 0:
+        raise ScenarioError(f"{flags[1]} {end:g}: an empty window (the run starts at 0 s); give {flags[1]} above 0")
     if horizon is not None:
         if start is not None and start >= horizon:
             raise ScenarioError(

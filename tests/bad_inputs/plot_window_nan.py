@@ -1,5 +1,5 @@
 # args: plot {data} -o {tmp}/t.png --from nan
 # exit: 2
-# expect: --from nan: give a time in seconds
+# expect: --from must be a finite time in seconds, 0 or more, got nan
 # untouched: {tmp}/t.png
 """A bad-input case: see tests/test_bad_inputs.py."""
