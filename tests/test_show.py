@@ -146,3 +146,11 @@ def test_two_moments_a_title_tells_apart_are_titled_apart(coffee, capsys):
     at = capsys.readouterr().out
     assert "at t=22.9999999s" in before and "acceptable: arm_pc" in before
     assert "at t=23s" in at and "acceptable: (none)" in at
+
+
+def test_a_dollar_sign_in_a_timeline_label_is_drawn_as_written(coffee, tmp_path, capsys):
+    path = tmp_path / "dollar.py"
+    path.write_text(SAME_TIME.format(coffee=coffee).replace('"t4"', '"t$x^$"'))
+    out = tmp_path / "d.png"
+    assert main(["show", str(path), "--at", "t$x^$", "-o", str(out)]) == 0
+    assert out.read_bytes()[:4] == b"\x89PNG"

@@ -86,3 +86,16 @@ def test_a_trace_with_wrongly_typed_fields_is_a_one_line_error(tmp_path, capsys)
 def test_a_window_after_the_trace_is_refused():
     with pytest.raises(ScenarioError, match="at or after the end of the run"):
         build_timeline(RECORDS, 100.0, 200.0)
+
+
+def test_dollar_signs_in_a_trace_are_drawn_as_written_not_as_math(tmp_path):
+    """matplotlib reads $...$ as math notation and fails on "$x^$": a scenario name or a
+    fault's text holding one is drawn as the characters it is."""
+    records = [dict(r) for r in RECORDS]
+    records[0]["scenario"] = "demo $x^$"
+    records[11]["event"] = "platform $\\frac{a$ down"
+    trace = tmp_path / "t.jsonl"
+    trace.write_text("".join(json.dumps(r) + "\n" for r in records))
+    out = tmp_path / "t.png"
+    assert main(["plot", str(trace), "-o", str(out)]) == 0
+    assert out.read_bytes()[:4] == b"\x89PNG"

@@ -318,7 +318,14 @@ def _exact(ok: Any) -> bool:
 
 def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None = None, log_x: bool = False) -> None:
     """Draw ``table`` to ``output`` (PNG): ``y`` against ``x``, or against ``pareto`` with the front
-    (``log_x``: the x axis on a log scale)."""
+    (``log_x``: the x axis on a log scale); its texts (columns, values) as written."""
+    from desmon.viz.common import plain_text
+
+    with plain_text():
+        _plot_sweep(table, output, x=x, y=y, pareto=pareto, log_x=log_x)
+
+
+def _plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None, log_x: bool) -> None:
     ok, failed, unvalued = _rows(table, x, y, pareto)
     left = (f", {failed} failed left out" if failed else "") + (f", {unvalued} without a value of {y} left out" if unvalued else "")
     if log_x:

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Any
+from contextlib import contextmanager
+from typing import Any, Iterator
 
 from desmon.errors import DesmonError
 
-__all__ = ["PlotUnavailable", "require_matplotlib", "COLORS"]
+__all__ = ["PlotUnavailable", "require_matplotlib", "plain_text", "COLORS"]
 
 
 class PlotUnavailable(DesmonError, ImportError):
@@ -25,6 +26,17 @@ def require_matplotlib() -> Any:
             "pictures need matplotlib: pip install 'desmon[plot]' (or: pip install matplotlib)"
         ) from None
     return plt
+
+
+@contextmanager
+def plain_text() -> Iterator[None]:
+    """Text made inside it is drawn as written: a ``$`` in a scenario's name, a timeline
+    label, a trace's event or a table's column is a dollar sign, never the start of
+    matplotlib's math notation (in which ``$x^$`` fails to draw at all)."""
+    import matplotlib
+
+    with matplotlib.rc_context({"text.parse_math": False}):
+        yield
 
 
 COLORS = {

@@ -13,7 +13,7 @@ from typing import Sequence
 import networkx as nx
 
 from desmon.paths import replacing
-from desmon.viz.common import COLORS, require_matplotlib
+from desmon.viz.common import COLORS, plain_text, require_matplotlib
 
 __all__ = ["layout", "draw_snapshot", "draw_snapshots", "snapshot_figure"]
 
@@ -133,7 +133,13 @@ def draw_snapshots(
 def snapshot_figure(
     panels: Sequence[tuple[str, nx.MultiDiGraph]], *, full: nx.MultiDiGraph | None = None, columns: int = 2
 ):  # type: ignore[no-untyped-def]
-    """The matplotlib figure :func:`draw_snapshots` saves (the caller closes it)."""
+    """The matplotlib figure :func:`draw_snapshots` saves (the caller closes it); its texts as written."""
+    require_matplotlib()
+    with plain_text():
+        return _snapshot_figure(panels, full=full, columns=columns)
+
+
+def _snapshot_figure(panels: Sequence[tuple[str, nx.MultiDiGraph]], *, full: nx.MultiDiGraph | None, columns: int):  # type: ignore[no-untyped-def]
     plt = require_matplotlib()
     full = full if full is not None else panels[-1][1]
     pos = layout(full)

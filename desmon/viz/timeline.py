@@ -29,7 +29,7 @@ from typing import Any, Iterable
 
 from desmon.errors import ScenarioError
 from desmon.paths import TRACE_FILE, check_input_file, replacing
-from desmon.viz.common import require_matplotlib
+from desmon.viz.common import plain_text, require_matplotlib
 
 __all__ = ["read_trace", "check_window", "Timeline", "build_timeline", "plot_timeline", "timeline_figure", "action_colors"]
 
@@ -585,7 +585,13 @@ def action_colors(tl: Timeline) -> dict[str, str]:
 
 
 def timeline_figure(tl: Timeline) -> Any:
-    """The matplotlib figure of ``tl`` (the caller saves and closes it)."""
+    """The matplotlib figure of ``tl`` (the caller saves and closes it); its texts as written."""
+    require_matplotlib()
+    with plain_text():
+        return _timeline_figure(tl)
+
+
+def _timeline_figure(tl: Timeline) -> Any:
     plt = require_matplotlib()
     from matplotlib.font_manager import FontProperties
 
