@@ -24,10 +24,11 @@ from __future__ import annotations
 
 import argparse
 import shlex
+import sys
 from dataclasses import replace
 from typing import Any
 
-from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg, run_of
+from desmon.cli.common import CEX_FILE, EXIT_INCOMPLETE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg, run_of
 from desmon.cli.options import Input, add_output, positive_int
 from desmon.errors import CheckerError, DesmonError, NondeterminismError, ScenarioError
 
@@ -242,7 +243,10 @@ def run(args: argparse.Namespace) -> int:
     if args.from_json is not None:
         frames, lines, banner = _saved(args, scenario)
     elif args.verify:
-        frames, lines, banner = _searched(args, scenario)
+        searched = _searched(args, scenario)
+        if searched is None:  # the budget ended the search before any counterexample: nothing to write
+            return EXIT_INCOMPLETE
+        frames, lines, banner = searched
     else:
         if not scenario.timeline:
             raise ScenarioError(
@@ -264,15 +268,23 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _searched(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str], str]:  # type: ignore[type-arg]
-    """``--verify``: the shortest counterexample of the search."""
+def _searched(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str], str] | None:  # type: ignore[type-arg]
+    """``--verify``: the shortest counterexample of the search; None (said on stderr) if a
+    budget ended the search before it found one."""
     from desmon.verify.checker import Checker
     from desmon.verify.deployers import resolve_deployer
 
     deployer = args.deployer if args.deployer is not None else resolve_deployer("desmon")
-    invariants = [args.invariant] if args.invariant else None
+    invariants = [args.invariant] if args.invariant is not None else None  # ('' is refused as verify refuses it)
     checker = Checker(scenario, deployer, invariants=invariants, run=run_of(args))
     result = checker.run(max_states=args.max_states or MAX_STATES, progress=not args.no_progress)
+    if not result.counterexamples and result.incomplete:
+        print(
+            f"desmon: {args.scenario} with deployer {deployer.name}: INCOMPLETE in {result.states:,} states ({result.incomplete}) "
+            f"before any counterexample; nothing written: search further (e.g. a larger --max-states)",
+            file=sys.stderr,
+        )
+        return None
     if not result.counterexamples:
         what = f"{result.verdict} in {result.states:,} states"
         if result.incomplete:
