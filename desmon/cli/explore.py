@@ -232,7 +232,8 @@ def _command_line(args: argparse.Namespace) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    """``desmon explore``: write the page; 0 once written, 2 on bad input."""
+    """``desmon explore``: write the page; 0 once written, 2 on bad input, 3 if a budget ended
+    ``--verify``'s search before any counterexample."""
     from desmon.paths import replacing
     from desmon.verify.deployers import resolve_deployer
     from desmon.viz.explore import render_page

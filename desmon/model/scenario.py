@@ -75,7 +75,8 @@ class Scenario:
         facts true before the first reaction, e.g. ``LoadChange("arm_pc", 300)``;
     ``timeline``
         scripted ``TimedEvent(time, event, label)`` s for ``desmon replay / explain / show``
-        (times >= 0, sorted, labels unique);
+        (times >= 0, sorted; labels unique, none reading as a number, holding a comma or
+        with outer spaces: each one an --at can name);
     ``world``
         a ``desmon.sim.world.World`` for ``desmon run`` (task steps, slips, faults,
         latencies, loads, horizon); without one, ``desmon run`` derives it from the timeline;
@@ -126,6 +127,13 @@ class Scenario:
                     raise ModelError(
                         f"{where}: timeline label {te.label!r} reads as a time: --at {te.label} would mean the label, "
                         f"not t={te.label} s; name the moment with a letter first, e.g. t{te.label}"
+                    )
+                if "," in te.label or te.label != te.label.strip():
+                    fix = te.label.strip().replace(",", "_") or "t1"
+                    flaw = "holds a comma" if "," in te.label else "begins or ends with a space"
+                    raise ModelError(
+                        f"{where}: timeline label {te.label!r} {flaw}: --at reads a comma-separated list of labels, each "
+                        f"without its outer spaces, so it could never name this moment; write e.g. {fix!r}"
                     )
                 if te.label in labels:
                     raise ModelError(f"{where}: timeline label {te.label!r} is used twice: labels name one moment each")
