@@ -152,6 +152,13 @@ def _mode_for(target: Path) -> int:
     return 0o666 & ~umask
 
 
+def _beside(target: Path) -> str:
+    """The name prefix of a temporary file next to ``target``: a hidden file named after it,
+    its name cut to 100 characters (with the random part and the suffix, a name of any
+    legal length stays within the 255 a file system allows)."""
+    return f".{target.name[:100]}."
+
+
 @contextmanager
 def replacing(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:  # type: ignore[type-arg]
     """Open a temporary file next to ``path``; it replaces ``path`` only if the block completes.
@@ -160,7 +167,7 @@ def replacing(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:  #
     """
     target = Path(path)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent or ".")
+        fd, tmp = tempfile.mkstemp(prefix=_beside(target), suffix=".part", dir=target.parent or ".")
     except OSError as exc:  # named as the user gave it, not as the temporary file beside it
         raise OSError(exc.errno, f"{exc.strerror or exc} (no file can be created in {target.parent or '.'})", str(target)) from None
     try:
@@ -191,7 +198,7 @@ def replacing_all(paths: Sequence[str | os.PathLike[str]]) -> Iterator[list[IO]]
     try:
         for t in targets:
             try:
-                fd, tmp = tempfile.mkstemp(prefix=f".{t.name}.", suffix=".part", dir=t.parent or ".")
+                fd, tmp = tempfile.mkstemp(prefix=_beside(t), suffix=".part", dir=t.parent or ".")
             except OSError as exc:
                 raise OSError(exc.errno, f"{exc.strerror or exc} (no file can be created in {t.parent or '.'})", str(t)) from None
             tmps.append(tmp)
@@ -249,7 +256,7 @@ def _keep(target: Path) -> str | None:
     ``target`` is no file."""
     if not target.is_file():
         return None
-    fd, keep = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".kept", dir=target.parent or ".")
+    fd, keep = tempfile.mkstemp(prefix=_beside(target), suffix=".kept", dir=target.parent or ".")
     os.close(fd)
     os.unlink(keep)
     try:

@@ -184,3 +184,16 @@ def test_the_files_of_a_set_replace_their_namesakes_together(tmp_path):
         files[1].write("new sta\n")
     assert [p.read_text() for p in names] == ["new tra\n", "new sta\n"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.sta", "a.tra"]
+
+
+def test_an_output_name_of_any_legal_length_is_written(tmp_path, capsys):
+    """A file system takes names of up to 255 bytes; the temporary file written beside
+    the output first must fit too, whatever the output's name."""
+    from desmon.cli import main
+
+    for length in (240, 255):
+        out = tmp_path / ("b" * (length - 4) + ".dot")
+        assert main(["show", str(Path(__file__).resolve().parent.parent / "scenarios" / "coffee_handover.py"), "--format", "dot", "-o", str(out)]) == 0
+        assert out.read_text().startswith("digraph")
+        assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+        capsys.readouterr()
