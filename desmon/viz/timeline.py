@@ -130,19 +130,36 @@ def _check_platforms(path: str | Path, records: list[dict[str, Any]], lines: lis
             )
 
 
+#: the records a run writes ahead of or behind their time (desmon.sim.trace): ground-truth
+#: slips all at the start, alarms when the detector consumes the samples
+_OUT_OF_ORDER = frozenset({"slip", "alarm"})
+
+
 def _check_times(path: str | Path, records: list[dict[str, Any]], lines: list[int]) -> None:
-    """Every record's time lies within the run's ``[0, horizon]`` (a record outside it
-    would be dropped from the drawing without a word)."""
+    """Every record's time lies within the run's ``[0, horizon]``, and the records a run
+    writes as they happen come in time order (a record outside the run would be dropped
+    from the drawing, and shuffled ones drawn as nonsense, without a word)."""
     horizon = records[0].get("horizon")
     if not (_finite(horizon) and horizon > 0):
         return  # the run record's own check
+    last, last_line = 0.0, lines[0]
     for record, n in zip(records, lines):
         t = record.get("t")
-        if _finite(t) and not -1e-6 <= t <= horizon + 1e-6:  # (times are rounded to the microsecond)
+        if not _finite(t):
+            continue  # build_timeline names it
+        if not -1e-6 <= t <= horizon + 1e-6:  # (times are rounded to the microsecond)
             raise ScenarioError(
                 f"{path}:{n}: a {record.get('type')!r} record at t={t:g} s, outside the run's [0, {horizon:g}] s; "
                 f"is the trace edited or from another run? {_HOW}"
             )
+        if record.get("type") in _OUT_OF_ORDER:
+            continue
+        if t < last - 1e-6:
+            raise ScenarioError(
+                f"{path}:{n}: a {record.get('type')!r} record at t={t:g} s after one at t={last:g} s (line {last_line}): "
+                f"a run writes its records in time order (slips and alarms aside); is the trace edited? {_HOW}"
+            )
+        last, last_line = t, n
 
 
 def check_whole(path: str | Path, records: list[dict[str, Any]]) -> None:
