@@ -77,6 +77,11 @@ def apply_initial(parts: RobotParts) -> None:
 
 
 # ---------------------------------------------------------------------- robot and context monitor
+#: the pending recognition of the action context among :attr:`RobotParts.noticing`'s notices
+#: (a component's is ("device" or "platform", its name): no name of a model can be it)
+_CONTEXT = ("context", "")
+
+
 def robot(parts: RobotParts):  # type: ignore[no-untyped-def]
     env = parts.env
     table = needs_table(parts.model)
@@ -89,8 +94,8 @@ def robot(parts: RobotParts):  # type: ignore[no-untyped-def]
         parts.trace.emit(env.now, "action", action=seg.context, duration=seg.duration)
         parts.exposure.set_need(env.now, table[seg.context])
         if parts.world.timing == "exponential":
-            if "context" not in parts.noticing:
-                parts.noticing.add("context")
+            if _CONTEXT not in parts.noticing:
+                parts.noticing.add(_CONTEXT)
                 env.process(recognise_latest(parts))
         elif parts.world.recognition_delay:
             recognise_later(parts, seg.context)
@@ -125,7 +130,7 @@ def recognise_latest(parts: RobotParts):  # type: ignore[no-untyped-def]
     the robot performs *then* (one recognition pending at a time)."""
     if parts.world.recognition_delay:
         yield parts.env.timeout(parts.markov.expovariate(1.0 / parts.world.recognition_delay))
-    parts.noticing.discard("context")
+    parts.noticing.discard(_CONTEXT)
     insert(parts, ActionChange(recognised_context(parts.exposure.context)))
 
 
@@ -142,14 +147,16 @@ def notice(parts: RobotParts, ev: Event):  # type: ignore[no-untyped-def]
     insert(parts, ev)
 
 
-def notice_latest(parts: RobotParts, component: str):  # type: ignore[no-untyped-def]
-    """Exponential timing: after an exponential delay the monitor reports the state
-    ``component`` is in *then* (one notice pending per component)."""
+def notice_latest(parts: RobotParts, pending: tuple[str, str]):  # type: ignore[no-untyped-def]
+    """Exponential timing: after an exponential delay the monitor reports the state the
+    component of ``pending`` ("device" or "platform", name) is in *then* (one notice
+    pending per component: a device and a platform of one name are two components)."""
     if parts.world.heartbeat_timeout:
         yield parts.env.timeout(parts.markov.expovariate(1.0 / parts.world.heartbeat_timeout))
-    parts.noticing.discard(component)
+    parts.noticing.discard(pending)
     facts = parts.facts
-    if component in facts.dev_ok:
+    kind, component = pending
+    if kind == "device":
         insert(parts, DeviceRepair(component) if facts.dev_ok[component] else DeviceFail(component))
     elif parts.model.platform(component).on_demand:
         insert(parts, PlatformJoin(component) if facts.up[component] else PlatformLeave(component))
@@ -187,10 +194,10 @@ def fault(parts: RobotParts, ev: Event, source: str) -> None:
     if not infra.flush_ready():  # a ready instance reported: its check was this one (nothing changed since)
         parts.exposure.check(now)
     if parts.world.timing == "exponential":
-        component = ev.device if isinstance(ev, DeviceEvent) else ev.platform
-        if component not in parts.noticing:
-            parts.noticing.add(component)
-            env.process(notice_latest(parts, component))
+        pending = ("device", ev.device) if isinstance(ev, DeviceEvent) else ("platform", ev.platform)
+        if pending not in parts.noticing:
+            parts.noticing.add(pending)
+            env.process(notice_latest(parts, pending))
     else:
         env.process(notice(parts, ev))
 

@@ -51,6 +51,7 @@ class RobotParts:
     books: Books
     inbox: Inbox
     #: exponential timing (World.timing): the delays' random stream, and what the
-    #: context monitor has a recognition or notice pending for ("context", components)
+    #: context monitor has a recognition or notice pending for (("context", ""), and
+    #: ("device" or "platform", name) of each component)
     markov: random.Random = field(default_factory=random.Random)
-    noticing: set[str] = field(default_factory=set)
+    noticing: set[tuple[str, str]] = field(default_factory=set)
