@@ -140,9 +140,12 @@ def test_capacity_needing_a_resource_no_platform_has_is_rejected():
         robot.build()
 
 
-def test_a_spec_consumes_the_sum_of_its_capacity_amounts():
-    spec = DeploymentSpec("g", (Capacity("memory", 100), Capacity("memory", 50), Attribute("os", "linux")))
-    assert spec.consumption() == (("memory", 150),)
+def test_a_spec_consumes_its_capacity_amounts_one_per_resource():
+    spec = DeploymentSpec("g", (Capacity("memory", 100), Capacity("gpu_memory", 50), Attribute("os", "linux")))
+    assert dict(spec.consumption()) == {"memory": 100, "gpu_memory": 50}
+    # two on one resource would be checked each alone by placement and summed by the run's books
+    with pytest.raises(ModelError, match="two Capacity requirements on 'memory'"):
+        DeploymentSpec("g", (Capacity("memory", 100), Capacity("memory", 50)))
 
 
 def test_a_bare_tuple_rule_is_refused_as_ambiguous():

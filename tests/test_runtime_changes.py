@@ -121,10 +121,17 @@ def test_a_change_removing_a_requirement_never_declared_is_refused_naming_it():
 
 
 def test_a_change_may_remove_what_another_change_adds():
-    add = RequirementChange("A", add=(BIG,))
-    drop = RequirementChange("A", remove=(BIG,))
+    add = RequirementChange("A", add=(BIG,), remove=(SMALL,))
+    drop = RequirementChange("A", add=(SMALL,), remove=(BIG,))
     rep = replay(Scenario(name="ok", model=robot().build(), timeline=timeline(ActionChange(GRASP), add, drop)))
     assert requirements(rep) == (SMALL,)
+
+
+def test_a_change_that_would_leave_two_capacities_on_one_resource_is_refused():
+    """A graph consumes one amount of a resource: placement and the run's books would read
+    two Capacity requirements on it differently (each alone, their sum)."""
+    with pytest.raises(ModelError, match="leaves 'A' with two Capacity requirements on 'memory'"):
+        Scenario(name="bad", model=robot().build(), timeline=timeline(ActionChange(GRASP), RequirementChange("A", add=(BIG,))))
 
 
 def test_a_change_naming_a_graph_without_specification_is_refused():

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterable, Protocol, T
 
 from desmon.errors import CheckerError, ModelError
 from desmon.model.checks import check_items, check_name, check_number, is_plain_name, strict_init, suggest
-from desmon.model.requirements import Constraint, constraint_types
+from desmon.model.requirements import Constraint, capacity_twice, constraint_types
 from desmon.model.system import action_problem, constraint_problem
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -396,6 +396,10 @@ class RequirementChange(Event):
             problem = constraint_problem(model, self.graph, r)
             if problem is not None:
                 return f"{self} adds {r.describe()} but {problem}"
+        twice = capacity_twice(self.apply(spec.requirements))
+        if twice is not None:
+            return (f"{self} leaves {self.graph!r} with two Capacity requirements on {twice!r}: a graph consumes one amount "
+                    f"of a resource; remove the one it has in the same change")
         return None
 
     @classmethod

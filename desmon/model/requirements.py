@@ -40,6 +40,7 @@ if TYPE_CHECKING:
     from desmon.model.state import PlatformState
 
 __all__ = [
+    "capacity_twice",
     "Quantity",
     "Capacity",
     "Minimum",
@@ -647,6 +648,18 @@ def make_requirement(kind: str, *args: object, **kwargs: object) -> Requirement:
     return cls.from_words(*args, **kwargs)
 
 
+def capacity_twice(requirements: Iterable[Constraint]) -> str | None:
+    """The resource two Capacity requirements of ``requirements`` name, if any: a graph
+    consumes one amount of each resource, so a specification has at most one."""
+    seen: set[str] = set()
+    for r in requirements:
+        if isinstance(r, Capacity):
+            if r.resource in seen:
+                return r.resource
+            seen.add(r.resource)
+    return None
+
+
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class DeploymentSpec:
@@ -675,6 +688,13 @@ class DeploymentSpec:
             example="(Capacity('memory', 150),) or add_constraint('capacity', 'memory', 150)",
         )
         object.__setattr__(self, "requirements", reqs)
+        twice = capacity_twice(reqs)
+        if twice is not None:
+            raise ModelError(
+                f"deployment specification of {self.graph!r} has two Capacity requirements on {twice!r}: a graph consumes "
+                f"one amount of a resource (placement would check each alone, and the run charge their sum); give one "
+                f"Capacity({twice!r}, TOTAL)"
+            )
         if self.fixed_platform is not None:
             check_name(f"fixed platform of {self.graph!r}", self.fixed_platform)
         if self.rebalance is not None:
@@ -716,7 +736,7 @@ class DeploymentSpec:
         return tuple(r for r in self.requirements if isinstance(r, Preference))
 
     def consumption(self) -> tuple[tuple[str, float], ...]:
-        """What a deployment of this spec consumes, per resource (sum of its Capacity amounts)."""
+        """What a deployment of this spec consumes, per resource (its Capacity amount of each resource: one per resource)."""
         use: dict[str, float] = {}
         for req in self.requirements:
             if isinstance(req, Capacity):
