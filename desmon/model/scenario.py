@@ -36,7 +36,6 @@ def event_problem(ev: Event, model: SystemModel, others: Iterable[Event] = ()) -
     return ev.problem(model, others)
 
 
-@strict_init(ModelError)
 def _looks_like_time(label: str) -> bool:
     try:
         float(label)
@@ -45,6 +44,7 @@ def _looks_like_time(label: str) -> bool:
     return True
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class TimedEvent:
     """``event`` happens at ``time`` seconds; ``label`` names the moment (e.g. ``t1``)."""
@@ -61,6 +61,8 @@ class TimedEvent:
             )
         check_number(f"time of {self.event}", self.time, unit=" of seconds (times are seconds >= 0)")
         check_text(f"label of {self.event} at t={self.time:g}", self.label)
+        if not self.label.isprintable():  # a newline would forge a line of desmon replay's report
+            raise ModelError(f"label {self.label!r} of {self.event} at t={self.time:g} is not one line of printable text: write e.g. 't1'")
 
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
