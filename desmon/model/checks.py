@@ -20,6 +20,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence, TypeVar
 from desmon.errors import DesmonError, ModelError
 
 __all__ = [
+    "PLATFORM_HAS",
     "suggest",
     "check_name",
     "is_plain_name",
@@ -38,6 +39,10 @@ __all__ = [
     "strict_call",
     "strict_init",
 ]
+
+#: The Attribute name that means "the platform has a working device of this kind" (R1),
+#: reserved: a platform's own attributes may not use it.
+PLATFORM_HAS = "platform_has"
 
 T = TypeVar("T")
 F = TypeVar("F", bound=Callable[..., Any])

@@ -17,7 +17,7 @@ from dataclasses import fields
 from typing import TYPE_CHECKING, Any, Callable, ClassVar
 
 from desmon.errors import ModelError
-from desmon.model.checks import suggest
+from desmon.model.checks import PLATFORM_HAS, suggest
 
 if TYPE_CHECKING:
     from desmon.model.platform import Device, Platform
@@ -28,8 +28,8 @@ __all__ = [
     "property_problem", "attribute_problem", "device_kind_problem", "others_using",
 ]
 
-#: The Attribute name that means "the platform has a working device of this kind" (R1).
-PLATFORM_HAS = "platform_has"
+# PLATFORM_HAS (desmon.model.checks, re-exported here): the Attribute name that means "the
+# platform has a working device of this kind" (R1); a platform's own attributes may not take it.
 
 #: The graph being placed, or a tuple (the graph, then graphs whose Capacity shares
 #: are to be treated as freed), or None (no graph: every deployed share counts).

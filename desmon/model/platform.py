@@ -6,7 +6,9 @@ from dataclasses import dataclass
 from typing import Mapping
 
 from desmon.errors import ModelError
-from desmon.model.checks import check_amount, check_flag, check_name, check_number, check_pairs, check_value, is_numeric_text, strict_call, strict_init
+from desmon.model.checks import (
+    PLATFORM_HAS, check_amount, check_flag, check_name, check_number, check_pairs, check_value, is_numeric_text, strict_call, strict_init,
+)
 
 __all__ = ["Device", "Platform", "check_name", "check_amount"]
 
@@ -79,6 +81,11 @@ class Platform:
         attrs = _pairs(f"{where} attributes", self.attributes, "{'os': 'linux'}")
         for key, value in attrs:
             check_value(f"{where} attribute {key!r}", value)
+            if key == PLATFORM_HAS:  # Attribute('platform_has', KIND) asks for a working attached device, never this
+                raise ModelError(
+                    f"{where} attribute {key!r} is the name Attribute({key!r}, KIND) reserves for an attached working "
+                    f"device: attach the device (platform(...).device(NAME, kind={value!r})) or name the attribute otherwise"
+                )
         props = _pairs(f"{where} properties", self.properties, "{'link_latency_ms': 2.0}")
         for prop, value in props:
             if isinstance(value, str) and not is_numeric_text(value):
