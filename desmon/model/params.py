@@ -89,6 +89,8 @@ def _parse(name: str, text: str, default: object) -> object:
             value = math.nan
         if not math.isfinite(value):
             raise ModelError(f"-p {name}={text}: {name} is a finite number (default {default:g}); write e.g. {name}={default:g}")
+        if value == 0 and any(c in "123456789" for c in text.strip().lower().split("e")[0]):
+            raise ModelError(f"-p {name}={text}: too small for a number to hold (it would read as 0); write 0, or a number of at least 1e-300")
         return value
     return text
 
