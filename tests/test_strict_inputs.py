@@ -494,6 +494,15 @@ def test_levels_with_nan_are_refused() -> None:
     assert "high = nan is not a number" in refused(CheckerError, lambda: levels(0, math.nan, 100))
 
 
+def test_levels_are_the_decimals_as_written_and_a_high_off_the_grid_is_refused() -> None:
+    assert levels(0.1, 0.3, 0.1) == (0.1, 0.2, 0.3)  # not 0.30000000000000004, which LoadChange(pc, 0.3) never equals
+    assert levels(0, 1, 0.1)[-1] == 1.0 and len(levels(0, 1, 0.1)) == 11
+    assert levels(600, 900, 100) == (600, 700, 800, 900) and all(type(v) is int for v in levels(600, 900, 100))
+    assert "250 is not 0 plus a whole number of steps of 100 (the levels would stop at 200" in refused(
+        CheckerError, lambda: levels(0, 250, 100)
+    )
+
+
 def test_a_scripted_slip_while_nothing_is_in_the_hand_is_refused() -> None:
     task = (Step("idle", 5.0), Step("grasp", 2.0), Step("hold", 3.0))
     msg = refused(ScenarioError, lambda: world(task=task, slips=(Slip(3.0),)))

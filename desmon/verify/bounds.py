@@ -29,11 +29,19 @@ def levels(low: float, high: float, step: float) -> tuple[float, ...]:
         check_number(f"levels({low!r}, {high!r}, {step!r}) {what}", v, error=CheckerError)
     if step <= 0 or high < low:
         raise CheckerError(f"load levels {low}..{high} step {step}: need low <= high and a positive step")
-    out, x = [], low
-    while x <= high + 1e-9:
-        out.append(x)
-        x += step
-    return tuple(out)
+    from decimal import Decimal
+
+    # counted in the decimals as written (0.1 + 0.2 is 0.3 here), high itself the last level
+    first, width = Decimal(repr(float(low))), Decimal(repr(float(step)))
+    steps = (Decimal(repr(float(high))) - first) / width
+    if steps != steps.to_integral_value():
+        below = float(first + int(steps) * width)
+        raise CheckerError(
+            f"levels({low!r}, {high!r}, {step!r}): {high!r} is not {low!r} plus a whole number of steps of {step!r} "
+            f"(the levels would stop at {below!r}); give a high on the grid, or another step"
+        )
+    kind = int if all(type(v) is int for v in (low, high, step)) else float  # (whole numbers stay whole)
+    return tuple(kind(first + i * width) for i in range(int(steps))) + (kind(high),)
 
 
 @strict_init(CheckerError)
