@@ -475,6 +475,21 @@ class World:
                     "(drop lease=, name other platforms in Lease(platforms=...), or drop its PlatformJoin / PlatformLeave)"
                 )
 
+    def _check_load_masters(self) -> None:
+        """A platform's load of a resource has one master: scripted LoadChanges, or a load
+        walk or load steps, not both (the walk's next step would overwrite a scripted load
+        at once, and the scripted one never take effect)."""
+        walked = {(w.platform, w.resource): "load walk" for w in self.load_walks}
+        walked.update({(w.platform, w.resource): "load steps" for w in self.load_steps})
+        for te in self.loads:
+            ev = te.event
+            what = walked.get((ev.platform, ev.resource))
+            if what is not None:
+                raise ScenarioError(
+                    f"world: the {ev.resource} load of {ev.platform!r} has two masters: a {what} and the scripted '{ev}' at "
+                    f"t={te.time:g} in loads=: let the {what} drive it, or script it, not both"
+                )
+
     def _check_stochastic(self) -> None:
         """MTTF entries (one per component) and load walks (one per platform and resource)."""
         err = ScenarioError
@@ -484,6 +499,12 @@ class World:
             if m.component in seen:
                 raise ScenarioError(f"world: two MTTF entries for {m.component!r}: give one per component")
             seen.add(m.component)
+            if 2 * self.horizon / (m.mttf + m.mttr) > MAX_RANDOM_CHANGES:  # a failure and a repair per cycle
+                raise ScenarioError(
+                    f"world: MTTF of {m.component!r} (mttf {m.mttf:g} s, mttr {m.mttr:g} s) gives about "
+                    f"{2 * self.horizon / (m.mttf + m.mttr):,.0f} failures and repairs over the horizon of {self.horizon:g} s, "
+                    f"more than the {MAX_RANDOM_CHANGES:,} a run simulates; give mttf + mttr at least {2 * self.horizon / MAX_RANDOM_CHANGES:.3g}"
+                )
         object.__setattr__(self, "stochastic_faults", mttfs)
         walks = check_items("world: load_walks", self.load_walks, LoadWalk, error=err, example="(LoadWalk('arm_pc', start=300, sigma=15, interval=30),)")
         walked: set[tuple[str, str]] = set()
@@ -491,6 +512,11 @@ class World:
             if (w.platform, w.resource) in walked:
                 raise ScenarioError(f"world: two load walks of {w.platform!r} {w.resource}: give one per platform and resource")
             walked.add((w.platform, w.resource))
+            if self.horizon / w.interval > MAX_RANDOM_CHANGES:
+                raise ScenarioError(
+                    f"world: load walk of {w.platform!r} every {w.interval:g} s over the horizon of {self.horizon:g} s is more "
+                    f"than the {MAX_RANDOM_CHANGES:,} steps a run simulates; give interval at least {self.horizon / MAX_RANDOM_CHANGES:.3g}"
+                )
         object.__setattr__(self, "load_walks", walks)
         steps = check_items("world: load_steps", self.load_steps, LoadSteps, error=err, example="(LoadSteps('torso_pc', levels=(600, 800), start=600, mean_interval=300),)")
         for w in steps:
@@ -503,6 +529,7 @@ class World:
                     f"are more than the {MAX_RANDOM_CHANGES:,} steps a run simulates; give mean_interval at least {self.horizon / MAX_RANDOM_CHANGES:.3g}"
                 )
         object.__setattr__(self, "load_steps", steps)
+        self._check_load_masters()
 
     def _check_slips(self, like: Callable[[str], str]) -> None:
         """A scripted slip needs an object in the hand (with signals off it would still
