@@ -196,6 +196,13 @@ class Bounds:
         where = f"scenario {scenario.name!r} checker bounds"
         self._validate_actions(where, m)
         self._validate_task(where)
+        start = self.start_action(scenario)
+        if self.task is not None and self.initial_action is None and start is not None and start not in self.task:
+            raise CheckerError(
+                f"{where}: the search starts in {start!r} (the timeline's first ActionChange; no initial_action given), "
+                f"which has no entry in the task, so the robot would never move: add {start!r}: (...) to the task, or give "
+                f"initial_action= one of {', '.join(self.task)}"
+            )
         devices = [d.name for d in m.devices]
         for d in self.devices:
             if d not in devices:
