@@ -378,9 +378,15 @@ def leaves_out(scenario: Scenario, mw: MarkovWorld, trials: int = 200) -> tuple[
     every figure of ``desmon analyze`` (docs/analyze.md explains each)."""
     lines = []
     timing = "exponential" if mw.phases == 1 else f"Erlang-{mw.phases}"
+    world = scenario.world
+    if world is not None and world.timing == "exponential":  # the World's own steps: what desmon run draws
+        own = "exponential" if world.phases == 1 else f"Erlang-{world.phases}"
+        theirs = f"the simulation's are {own} too" if world.phases == mw.phases else f"the simulation's are {own}: --phases {world.phases} matches them"
+    else:
+        theirs = "the simulation's are fixed: raise --phases to approach it"
     lines.append(
-        f"timing: task steps, warm-ups and lease idle times are {timing} with the given means (the simulation's are fixed: "
-        "raise --phases to approach it); start latency, recognition and heartbeat delays are exponential"
+        f"timing: task steps, warm-ups and lease idle times are {timing} with the given means ({theirs}); "
+        "start latency, recognition and heartbeat delays are exponential"
     )
     if mw.slip_rate > 0:
         lines.append(

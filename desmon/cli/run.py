@@ -153,6 +153,8 @@ def with_timing(scenario: Scenario, args: Any) -> Scenario:
     changes: dict[str, Any] = {}
     if timing is not None:
         changes["timing"] = timing
+        if timing != "exponential":
+            changes["phases"] = 1  # (a World's own Erlang phases time exponential steps only)
     if phases is not None:
         changes["phases"] = phases
     if no_signals:

@@ -399,6 +399,11 @@ class World:
         if self.timing not in TIMINGS:
             raise ScenarioError(f"world: timing = {self.timing!r}: give one of {', '.join(repr(t) for t in TIMINGS)}")
         check_number("world: phases", self.phases, error=err, positive=True, integer=True, high=MAX_PHASES)
+        if self.phases != 1 and self.timing != "exponential":
+            raise ScenarioError(
+                f"world: phases={self.phases} with timing={self.timing!r}: Erlang phases time the task steps under "
+                "timing='exponential' (fixed steps last their durations); set timing='exponential' or drop phases"
+            )
         _seconds("heartbeat timeout", self.heartbeat_timeout)
         _seconds("block", self.block, zero=False)
         _seconds("quiet block", self.quiet_block, zero=False)
@@ -503,7 +508,7 @@ class World:
                 raise ScenarioError(
                     f"world: MTTF of {m.component!r} (mttf {m.mttf:g} s, mttr {m.mttr:g} s) gives about "
                     f"{2 * self.horizon / (m.mttf + m.mttr):,.0f} failures and repairs over the horizon of {self.horizon:g} s, "
-                    f"more than the {MAX_RANDOM_CHANGES:,} a run simulates; give mttf + mttr at least {2 * self.horizon / MAX_RANDOM_CHANGES:.3g}"
+                    f"more than the {MAX_RANDOM_CHANGES:,} a run simulates; give a shorter horizon, or mttf + mttr of at least {2 * self.horizon / MAX_RANDOM_CHANGES:.3g} s"
                 )
         object.__setattr__(self, "stochastic_faults", mttfs)
         walks = check_items("world: load_walks", self.load_walks, LoadWalk, error=err, example="(LoadWalk('arm_pc', start=300, sigma=15, interval=30),)")
@@ -515,7 +520,7 @@ class World:
             if self.horizon / w.interval > MAX_RANDOM_CHANGES:
                 raise ScenarioError(
                     f"world: load walk of {w.platform!r} every {w.interval:g} s over the horizon of {self.horizon:g} s is more "
-                    f"than the {MAX_RANDOM_CHANGES:,} steps a run simulates; give interval at least {self.horizon / MAX_RANDOM_CHANGES:.3g}"
+                    f"than the {MAX_RANDOM_CHANGES:,} steps a run simulates; give a shorter horizon, or an interval of at least {self.horizon / MAX_RANDOM_CHANGES:.3g} s"
                 )
         object.__setattr__(self, "load_walks", walks)
         steps = check_items("world: load_steps", self.load_steps, LoadSteps, error=err, example="(LoadSteps('torso_pc', levels=(600, 800), start=600, mean_interval=300),)")

@@ -1,6 +1,6 @@
 # args: run {case}
 # exit: 2
-# expect: load walk of 'arm_pc' every 1e-06 s over the horizon of 10 s is more than the 100,000 steps a run simulates; give interval at least 0.0001
+# expect: load walk of 'arm_pc' every 1e-06 s over the horizon of 10 s is more than the 100,000 steps a run simulates; give a shorter horizon, or an interval of at least 0.0001 s
 """A bad-input case: see tests/test_bad_inputs.py. The run hung, growing past 800 MB."""
 from desmon.model.cob3 import care_o_bot
 from desmon.model.scenario import Scenario
