@@ -541,6 +541,14 @@ class World:
         count as injected); ``like`` maps each task action to the built-in it is like."""
         segments = expand_task(self, self.horizon)
         spans = in_hand(like_segments(segments, like))
+        held = sum(max(0.0, min(b, self.horizon) - a) for a, b, _ in spans)
+        if self.timing == "exponential" and held < self.horizon - 1e-9:
+            empty = next(seg.context for seg in segments if not any(a <= seg.start < b for a, b, _ in spans))
+            raise ScenarioError(
+                f"world: scripted slips under timing='exponential': the task's steps move with the seed and {empty!r} has "
+                "no object in the hand, so a slip at a fixed time may fall where nothing can slip; use slip_rate for "
+                "slips while an object is in the hand, or timing='fixed'"
+            )
         for slip in self.slips:
             if not any(a <= slip.time < b for a, b, _ in spans):
                 during = next((seg.context for seg in segments if seg.start <= slip.time < seg.end), "?")
