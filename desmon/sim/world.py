@@ -20,7 +20,7 @@ from typing import Callable, Iterable, Mapping, Sequence
 
 from desmon.detectors.signals import Segment  # the one ground-truth segment type (re-exported here)
 from desmon.errors import ScenarioError
-from desmon.model.actions import ACTIONS, GRASP, IDLE, MOVE_BASE, RELEASE
+from desmon.model.actions import ACTIONS, GRASP, IDLE, RELEASE
 from desmon.model.checks import (
     check_flag,
     check_items,
@@ -36,6 +36,7 @@ from desmon.model.events import Event, LoadChange, PlatformEvent, RequirementCha
 from desmon.model.graph import PerceptionGraph
 from desmon.model.scenario import Scenario, TimedEvent, event_problem
 from desmon.model.system import SystemModel, check_action
+from desmon.sim.slip_kinds import check_slip_kinds
 from desmon.sim.streams import DetectorPlan, default_signal_kinds, detector_plan, stream_names
 
 __all__ = [
@@ -363,7 +364,7 @@ class World:
         object.__setattr__(self, "task", task)
         self._check_scalars()
         self._check_scripted()
-        self._check_stochastic()
+        _check_stochastic(self)
         kinds = check_pairs("world: signal_kinds", self.signal_kinds, error=err, example="{'force_sensor': 'wrench'}")
         streams = stream_names()
         for kind, stream in kinds:
@@ -408,7 +409,7 @@ class World:
         _seconds("block", self.block, zero=False)
         _seconds("quiet block", self.quiet_block, zero=False)
         check_number("world: slip_rate", self.slip_rate, error=err, unit=" of slips per second of object-in-hand time")
-        object.__setattr__(self, "slip_kinds", _check_slip_kinds(self.slip_kinds))
+        object.__setattr__(self, "slip_kinds", check_slip_kinds(self.slip_kinds))
         if not isinstance(self.start_failure, StartFailure):
             raise ScenarioError(f"world: start_failure = {self.start_failure!r} is not a StartFailure: write StartFailure(probability=0.02)")
 
@@ -479,62 +480,6 @@ class World:
                     f"'{ev}' at t={te.time:g} in changes=: let the lease drive it, or script its joins, not both "
                     "(drop lease=, name other platforms in Lease(platforms=...), or drop its PlatformJoin / PlatformLeave)"
                 )
-
-    def _check_load_masters(self) -> None:
-        """A platform's load of a resource has one master: scripted LoadChanges, or a load
-        walk or load steps, not both (the walk's next step would overwrite a scripted load
-        at once, and the scripted one never take effect)."""
-        walked = {(w.platform, w.resource): "load walk" for w in self.load_walks}
-        walked.update({(w.platform, w.resource): "load steps" for w in self.load_steps})
-        for te in self.loads:
-            ev = te.event
-            what = walked.get((ev.platform, ev.resource))
-            if what is not None:
-                raise ScenarioError(
-                    f"world: the {ev.resource} load of {ev.platform!r} has two masters: a {what} and the scripted '{ev}' at "
-                    f"t={te.time:g} in loads=: let the {what} drive it, or script it, not both"
-                )
-
-    def _check_stochastic(self) -> None:
-        """MTTF entries (one per component) and load walks (one per platform and resource)."""
-        err = ScenarioError
-        mttfs = check_items("world: stochastic_faults", self.stochastic_faults, MTTF, error=err, example="(MTTF('lwr_wrench', mttf=3600, mttr=120),)")
-        seen: set[str] = set()
-        for m in mttfs:
-            if m.component in seen:
-                raise ScenarioError(f"world: two MTTF entries for {m.component!r}: give one per component")
-            seen.add(m.component)
-            if 2 * self.horizon / (m.mttf + m.mttr) > MAX_RANDOM_CHANGES:  # a failure and a repair per cycle
-                raise ScenarioError(
-                    f"world: MTTF of {m.component!r} (mttf {m.mttf:g} s, mttr {m.mttr:g} s) gives about "
-                    f"{2 * self.horizon / (m.mttf + m.mttr):,.0f} failures and repairs over the horizon of {self.horizon:g} s, "
-                    f"more than the {MAX_RANDOM_CHANGES:,} a run simulates; give a shorter horizon, or mttf + mttr of at least {2 * self.horizon / MAX_RANDOM_CHANGES:.3g} s"
-                )
-        object.__setattr__(self, "stochastic_faults", mttfs)
-        walks = check_items("world: load_walks", self.load_walks, LoadWalk, error=err, example="(LoadWalk('arm_pc', start=300, sigma=15, interval=30),)")
-        walked: set[tuple[str, str]] = set()
-        for w in walks:
-            if (w.platform, w.resource) in walked:
-                raise ScenarioError(f"world: two load walks of {w.platform!r} {w.resource}: give one per platform and resource")
-            walked.add((w.platform, w.resource))
-            if self.horizon / w.interval > MAX_RANDOM_CHANGES:
-                raise ScenarioError(
-                    f"world: load walk of {w.platform!r} every {w.interval:g} s over the horizon of {self.horizon:g} s is more "
-                    f"than the {MAX_RANDOM_CHANGES:,} steps a run simulates; give a shorter horizon, or an interval of at least {self.horizon / MAX_RANDOM_CHANGES:.3g} s"
-                )
-        object.__setattr__(self, "load_walks", walks)
-        steps = check_items("world: load_steps", self.load_steps, LoadSteps, error=err, example="(LoadSteps('torso_pc', levels=(600, 800), start=600, mean_interval=300),)")
-        for w in steps:
-            if (w.platform, w.resource) in walked:
-                raise ScenarioError(f"world: two load walks or load steps of {w.platform!r} {w.resource}: give one per platform and resource")
-            walked.add((w.platform, w.resource))
-            if self.horizon / w.mean_interval > MAX_RANDOM_CHANGES:
-                raise ScenarioError(
-                    f"world: load steps of {w.platform!r} every {w.mean_interval:g} s on average over the horizon of {self.horizon:g} s "
-                    f"are more than the {MAX_RANDOM_CHANGES:,} steps a run simulates; give mean_interval at least {self.horizon / MAX_RANDOM_CHANGES:.3g}"
-                )
-        object.__setattr__(self, "load_steps", steps)
-        self._check_load_masters()
 
     def _check_slips(self, like: Callable[[str], str]) -> None:
         """A scripted slip needs an object in the hand (with signals off it would still
@@ -622,6 +567,64 @@ class World:
                 raise ScenarioError(
                     f"{where}: signal_kinds maps {kind!r}, which no device is{suggest(kind, kinds)}: fix the kind (kinds: {', '.join(kinds)})"
                 )
+
+
+def _check_load_masters(world: World) -> None:
+    """A platform's load of a resource has one master: scripted LoadChanges, or a load
+    walk or load steps, not both (the walk's next step would overwrite a scripted load
+    at once, and the scripted one never take effect)."""
+    walked = {(w.platform, w.resource): "load walk" for w in world.load_walks}
+    walked.update({(w.platform, w.resource): "load steps" for w in world.load_steps})
+    for te in world.loads:
+        ev = te.event
+        what = walked.get((ev.platform, ev.resource))
+        if what is not None:
+            raise ScenarioError(
+                f"world: the {ev.resource} load of {ev.platform!r} has two masters: a {what} and the scripted '{ev}' at "
+                f"t={te.time:g} in loads=: let the {what} drive it, or script it, not both"
+            )
+
+
+def _check_stochastic(world: World) -> None:
+    """MTTF entries (one per component) and load walks (one per platform and resource)."""
+    err = ScenarioError
+    mttfs = check_items("world: stochastic_faults", world.stochastic_faults, MTTF, error=err, example="(MTTF('lwr_wrench', mttf=3600, mttr=120),)")
+    seen: set[str] = set()
+    for m in mttfs:
+        if m.component in seen:
+            raise ScenarioError(f"world: two MTTF entries for {m.component!r}: give one per component")
+        seen.add(m.component)
+        if 2 * world.horizon / (m.mttf + m.mttr) > MAX_RANDOM_CHANGES:  # a failure and a repair per cycle
+            raise ScenarioError(
+                f"world: MTTF of {m.component!r} (mttf {m.mttf:g} s, mttr {m.mttr:g} s) gives about "
+                f"{2 * world.horizon / (m.mttf + m.mttr):,.0f} failures and repairs over the horizon of {world.horizon:g} s, "
+                f"more than the {MAX_RANDOM_CHANGES:,} a run simulates; give a shorter horizon, or mttf + mttr of at least {2 * world.horizon / MAX_RANDOM_CHANGES:.3g} s"
+            )
+    object.__setattr__(world, "stochastic_faults", mttfs)
+    walks = check_items("world: load_walks", world.load_walks, LoadWalk, error=err, example="(LoadWalk('arm_pc', start=300, sigma=15, interval=30),)")
+    walked: set[tuple[str, str]] = set()
+    for w in walks:
+        if (w.platform, w.resource) in walked:
+            raise ScenarioError(f"world: two load walks of {w.platform!r} {w.resource}: give one per platform and resource")
+        walked.add((w.platform, w.resource))
+        if world.horizon / w.interval > MAX_RANDOM_CHANGES:
+            raise ScenarioError(
+                f"world: load walk of {w.platform!r} every {w.interval:g} s over the horizon of {world.horizon:g} s is more "
+                f"than the {MAX_RANDOM_CHANGES:,} steps a run simulates; give a shorter horizon, or an interval of at least {world.horizon / MAX_RANDOM_CHANGES:.3g} s"
+            )
+    object.__setattr__(world, "load_walks", walks)
+    steps = check_items("world: load_steps", world.load_steps, LoadSteps, error=err, example="(LoadSteps('torso_pc', levels=(600, 800), start=600, mean_interval=300),)")
+    for w in steps:
+        if (w.platform, w.resource) in walked:
+            raise ScenarioError(f"world: two load walks or load steps of {w.platform!r} {w.resource}: give one per platform and resource")
+        walked.add((w.platform, w.resource))
+        if world.horizon / w.mean_interval > MAX_RANDOM_CHANGES:
+            raise ScenarioError(
+                f"world: load steps of {w.platform!r} every {w.mean_interval:g} s on average over the horizon of {world.horizon:g} s "
+                f"are more than the {MAX_RANDOM_CHANGES:,} steps a run simulates; give mean_interval at least {world.horizon / MAX_RANDOM_CHANGES:.3g}"
+            )
+    object.__setattr__(world, "load_steps", steps)
+    _check_load_masters(world)
 
 
 def _check_rates(given: object) -> tuple[tuple[str, float], ...]:
@@ -790,45 +793,6 @@ def in_hand(segments: Sequence[Segment]) -> list[tuple[float, float, str]]:
             holding = False
         prev_end = s.end
     return out
-
-
-#: :attr:`World.slip_kinds` by default: (action, direction, kind) of a random slip
-DEFAULT_SLIP_KINDS: tuple[tuple[str, str, str], ...] = (
-    (GRASP, "down", "pulled"),
-    ("hold", "down", "pulled"),
-    (MOVE_BASE, "down", "gravitational"),
-    (RELEASE, "up", "pulled"),
-    ("rotate_ccw", "down", "pulled"),
-    ("rotate_cw", "down", "pulled"),
-)
-
-
-def _check_slip_kinds(given: object) -> tuple[tuple[str, str, str], ...]:
-    """``World.slip_kinds`` over the defaults: each entry (action, direction, kind) names
-    a risky built-in action once, a direction up/down and a kind pulled/gravitational."""
-    example = "slip_kinds=(('move_base', 'down', 'pulled'),)"
-    if not isinstance(given, (tuple, list)):
-        raise ScenarioError(f"world: slip_kinds = {given!r}: give (action, direction, kind) triples, e.g. {example}")
-    out = dict((a, (d, k)) for a, d, k in DEFAULT_SLIP_KINDS)
-    seen: set[str] = set()
-    for entry in given:
-        if not (isinstance(entry, (tuple, list)) and len(entry) == 3 and all(isinstance(x, str) for x in entry)):
-            raise ScenarioError(f"world: slip_kinds entry {entry!r} is not an (action, direction, kind) triple of names: write e.g. {example}")
-        a, d, k = entry
-        if a not in out:
-            raise ScenarioError(
-                f"world: slip_kinds names {a!r}{suggest(a, list(out))}, which is no built-in action with an object in the hand: "
-                f"use one of {', '.join(out)} (a model's own action slips like its like=)"
-            )
-        if a in seen:
-            raise ScenarioError(f"world: slip_kinds names {a!r} twice: give each action once")
-        seen.add(a)
-        if d not in ("up", "down") or k not in ("pulled", "gravitational"):
-            raise ScenarioError(
-                f"world: slip_kinds entry {tuple(entry)!r}: direction must be 'up' or 'down' and kind 'pulled' or 'gravitational'"
-            )
-        out[a] = (d, k)
-    return tuple((a, d, k) for a, (d, k) in out.items())
 
 
 def slip_kind(world: World, action: str) -> tuple[str, str]:
