@@ -213,3 +213,18 @@ def test_cli_run_names_only_a_trace_the_user_asked_for(tmp_path: Path) -> None:
     assert png.exists() and "Trace:" not in plotted.stdout  # the temporary trace is deleted: not named
     asked = _cli("run", "scenarios/coffee_handover.py", "--trace", str(tmp_path / "t.jsonl"))
     assert asked.returncode == 0 and f"Trace: {tmp_path / 't.jsonl'}" in asked.stdout
+
+
+@pytest.mark.parametrize("name", ["two_detectors", "symmetric_platforms"])
+def test_replay_reports_a_reactions_transition_properties_as_the_run_does(name):
+    """The paper's deployer leaves a slot it could serve unserved: replay names
+    preferred-when-possible beside coverage, as the run's audit does at the same moment."""
+    from desmon.sim.replay import replay
+
+    sc = load_scenario(ROOT / "scenarios" / f"{name}.py")
+    rep = replay(sc, "paper")
+    run = simulate(sc, "paper", seed=0)
+    replayed = {(t, n) for t, n, _m in rep.violations}
+    ran = {(t, n) for t, n, _m in run.violations}
+    assert any(n == "preferred-when-possible" for _t, n in replayed)
+    assert {n for _t, n in replayed} == {n for _t, n in ran}

@@ -1,7 +1,8 @@
 """Deterministic replay of a scenario's timeline, with no latency and no signals.
 
 The simplest engine: each timed event goes through the deployment core at once, on
-the networkx repository, and the named invariants are audited after every reaction.
+the networkx repository, and the named invariants are audited after every reaction (the
+reaction's transition properties, then the state it left, as ``desmon run`` audits them).
 The paper's t0..t3 walk-through is this replay of ``scenarios/coffee_handover.py``.
 """
 
@@ -132,7 +133,7 @@ def replay(
                 errors=tuple(stamp(e, te.time) for e in log.errors),
                 deployments=query.deployments(),
                 standing=core.standing,
-                violations=tuple(check_invariants(view)),
+                violations=(*core.findings, *check_invariants(view)),  # its transition properties first, as the run reports them
                 refused=refused,
                 standing_before=before,
                 version=repo.version,
