@@ -78,6 +78,16 @@ def test_a_chain_past_max_states_is_an_incomplete_row_exit_3(tmp_path, local, ca
     assert row["exit_code"] == 3 and row["error"].startswith("INCOMPLETE: ") and pd.isna(row["exposure_s_per_hour"])
 
 
+def test_a_search_past_max_states_is_an_incomplete_row_that_counts_as_failed_as_analyzes_does(tmp_path, local, capsys):
+    """A sweep must not call every point fine while a search stopped short of its end."""
+    out = tmp_path / "v.csv"
+    argv = ["sweep", COFFEE, "--job", "verify", "-p", "faults=True", "--max-states", "10", "--no-progress", "-o", str(out)]
+    assert main(argv) == 1
+    row = pd.read_csv(out).iloc[0]
+    assert row["exit_code"] == 3 and row["verdict"] == "INCOMPLETE" and row["error"] == "INCOMPLETE: max states 10 reached"
+    assert "1 run(s) failed" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     "extra, says",
     [

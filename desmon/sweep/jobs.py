@@ -207,6 +207,9 @@ def _job_verify(spec: JobSpec, run: Run) -> dict[str, Any]:
         "counterexamples": len(res.counterexamples),
         "violated": ";".join(sorted({c.invariant for c in res.counterexamples})) or None,
         "exit_code": res.exit_code,
+        # (as analyze's and estimate's: an INCOMPLETE row counts as failed, so a sweep never
+        # reports every point fine while some were not searched to the end)
+        "error": f"INCOMPLETE: {res.incomplete}" if res.exit_code == EXIT_INCOMPLETE else None,
     }
 
 
