@@ -396,6 +396,8 @@ def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float 
     _check_matching(scenario, world, b)
     _check_cycle(scenario, world)
     p = world.start_failure.probability if start_failure_p is None else float(start_failure_p)
+    if p >= 1.0:  # (the World's, as --start-failure-p's: one rule whichever gave it)
+        raise _refuse(scenario, "its World's StartFailure(probability=1) fails every start, so no detector ever runs; give a probability below 1")
     plans = detector_plans(world, scenario.model)
     latency = tuple((pl.name, world.latency(pl.name)) for pl in scenario.model.platforms)
     changes: tuple[tuple[RequirementChange, float], ...] = ()
