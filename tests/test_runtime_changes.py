@@ -372,3 +372,26 @@ def test_random_changes_refuse_a_change_listed_twice():
     change = RequirementChange("A", add=(BIG,), remove=(SMALL,))
     with pytest.raises(ScenarioError, match="twice"):
         RandomChanges(changes=(change, change), mean_interval=60.0)
+
+
+def test_a_run_without_a_world_plays_the_timelines_changes_and_initial_action_as_replay_does():
+    """The World desmon run derives from a timeline keeps its requirement changes and
+    joins (they were dropped: run started the detector and kept it, replay stopped it),
+    and starts from the scenario's initial action (it started idle)."""
+    r = RobotBuilder("r")
+    r.platform("arm_pc", memory=512).device("ft", kind="force_sensor")
+    r.platform("edge", memory=4096, on_demand=True, startup_s=5.0)
+    with r.rpsl.perception_graph("force") as g:
+        g.sensor("w", reads="force_sensor")
+    r.depsl.deployment_specification("force").add_constraint("capacity", "memory", 300)
+    r.rules({"hold": "force"})
+    grow = RequirementChange("force", add=(Capacity("memory", 1000),), remove=(Capacity("memory", 300),))
+    sc = Scenario(name="tl", model=r.build(), initial=(ActionChange(HOLD),),
+                  timeline=(TimedEvent(2.0, grow, "t1"), TimedEvent(4.0, PlatformJoin("edge"), "t2")))
+    rep = replay(sc)
+    replayed = [(str(c), ok) for s in rep.steps for c, ok in s.commands if ok is not None]
+    run = simulate(sc, "desmon", seed=0)
+    ran = [(f"{d['command']} {d['graph']} on {d['platform']}", d["ok"]) for d in run.decisions]
+    assert ran == replayed == [("start force on edge", True)], (ran, replayed)
+    assert [(e.time, e.kind) for e in run.errors] == [(s.time, e.kind) for s in rep.steps for e in s.errors] == [(2.0, "no_acceptable_platforms")]
+    assert run.metrics["risky_time_s"] == run.horizon  # holding from the start, as the initial action says

@@ -371,6 +371,15 @@ def _check_arguments(phases: int, start_failure_p: float | None) -> None:
             raise AnalysisError(f"--start-failure-p = {start_failure_p!r}: every start would fail and no detector ever runs; give a probability below 1")
 
 
+def _start_failure_p(scenario: Scenario, world: World, given: float | None) -> float:
+    """The probability a start fails: ``given`` (--start-failure-p, checked by
+    :func:`_check_arguments`), else the World's, under the same rule: below 1."""
+    p = world.start_failure.probability if given is None else float(given)
+    if p >= 1.0:
+        raise _refuse(scenario, "its World's StartFailure(probability=1) fails every start, so no detector ever runs; give a probability below 1")
+    return p
+
+
 def _check_cycle(scenario: Scenario, world: World) -> None:
     """The task must repeat (a chain is a cycle) and every step must have a rate."""
     if not world.repeat:
@@ -395,9 +404,7 @@ def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float 
     _check_unrated(scenario, world)
     _check_matching(scenario, world, b)
     _check_cycle(scenario, world)
-    p = world.start_failure.probability if start_failure_p is None else float(start_failure_p)
-    if p >= 1.0:  # (the World's, as --start-failure-p's: one rule whichever gave it)
-        raise _refuse(scenario, "its World's StartFailure(probability=1) fails every start, so no detector ever runs; give a probability below 1")
+    p = _start_failure_p(scenario, world, start_failure_p)
     plans = detector_plans(world, scenario.model)
     latency = tuple((pl.name, world.latency(pl.name)) for pl in scenario.model.platforms)
     changes: tuple[tuple[RequirementChange, float], ...] = ()

@@ -844,12 +844,14 @@ def can_detect(world: World, plans: dict[str, DetectorPlan | None]) -> dict[str,
 
 def world_from_timeline(scenario: Scenario) -> World:
     """A world that plays a scenario's scripted ``timeline``: action changes become task
-    steps, device / platform events become scripted faults, load changes scripted loads."""
+    steps (from the ``initial`` action, else idle), device / platform events scripted
+    faults, load changes scripted loads, requirement changes and joins run-time changes."""
     actions = [(te.time, te.event.action) for te in scenario.timeline if te.event.role == "action"]
     last = scenario.timeline[-1].time if scenario.timeline else 0.0
     horizon = last + 5.0
     if not actions or actions[0][0] > 0:
-        actions.insert(0, (0.0, IDLE))
+        first = [ev.action for ev in scenario.initial if ev.role == "action"]  # type: ignore[attr-defined]
+        actions.insert(0, (0.0, first[-1] if first else IDLE))
     steps = []
     for i, (t, a) in enumerate(actions):
         end = actions[i + 1][0] if i + 1 < len(actions) else horizon
@@ -857,7 +859,8 @@ def world_from_timeline(scenario: Scenario) -> World:
             steps.append(Step(a, end - t))
     faults = tuple(te for te in scenario.timeline if te.event.role == "fault")
     loads = tuple(te for te in scenario.timeline if te.event.role == "load")
-    return World(task=tuple(steps), horizon=horizon, faults=faults, loads=loads, signals=False)
+    changes = tuple(te for te in scenario.timeline if te.event.role == "change")
+    return World(task=tuple(steps), horizon=horizon, faults=faults, loads=loads, changes=changes, signals=False)
 
 
 def world_of(scenario: Scenario) -> World:
