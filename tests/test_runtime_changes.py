@@ -127,11 +127,15 @@ def test_a_change_may_remove_what_another_change_adds():
     assert requirements(rep) == (SMALL,)
 
 
-def test_a_change_that_would_leave_two_capacities_on_one_resource_is_refused():
-    """A graph consumes one amount of a resource: placement and the run's books would read
-    two Capacity requirements on it differently (each alone, their sum)."""
-    with pytest.raises(ModelError, match="leaves 'A' with two Capacity requirements on 'memory'"):
-        Scenario(name="bad", model=robot().build(), timeline=timeline(ActionChange(GRASP), RequirementChange("A", add=(BIG,))))
+def test_an_added_capacity_replaces_the_graphs_capacity_on_its_resource():
+    """A graph consumes one amount of a resource: a change that adds a Capacity on it
+    replaces the one the graph has then, whether the change removes it or not (in any
+    order the checker applies changes, no specification holds two)."""
+    bigger = RequirementChange("A", add=(BIG,))
+    rep = replay(Scenario(name="ok", model=robot().build(), timeline=timeline(ActionChange(GRASP), bigger)))
+    assert requirements(rep) == (BIG,)
+    least = Preference("least_loaded", ("memory",))
+    assert bigger.apply((SMALL, least)) == (least, BIG)
 
 
 def test_a_change_naming_a_graph_without_specification_is_refused():

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterable, Protocol, T
 
 from desmon.errors import CheckerError, ModelError
 from desmon.model.checks import check_items, check_name, check_number, is_plain_name, strict_init, suggest
-from desmon.model.requirements import Constraint, capacity_twice, constraint_types
+from desmon.model.requirements import Capacity, Constraint, constraint_types
 from desmon.model.system import action_problem, constraint_problem
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -337,8 +337,9 @@ class RequirementChange(Event):
     """The deployment requirements of ``graph`` change at run time: ``remove`` these
     requirements (or preferences), then ``add`` these. A change is a remove plus an add,
     e.g. ``RequirementChange("combined", add=(Capacity("memory", 350),),
-    remove=(Capacity("memory", 250),))`` when the robot speeds up. ``label`` names the
-    change in reports (default: the change itself)."""
+    remove=(Capacity("memory", 250),))`` when the robot speeds up (an added Capacity
+    replaces the graph's Capacity on its resource in any case: ``remove`` may leave it
+    out). ``label`` names the change in reports (default: the change itself)."""
 
     kind = "requirements"
     role = "change"
@@ -367,8 +368,11 @@ class RequirementChange(Event):
         object.__setattr__(self, "remove", remove)
 
     def apply(self, requirements: tuple[Constraint, ...]) -> tuple[Constraint, ...]:
-        """The requirements after this change (removed ones dropped, added ones appended once)."""
-        kept = tuple(r for r in requirements if r not in self.remove)
+        """The requirements after this change (removed ones dropped, added ones appended
+        once). An added Capacity replaces the one the graph has on its resource then,
+        removed or not: a graph consumes one amount of each resource."""
+        resized = {r.resource for r in self.add if isinstance(r, Capacity)}
+        kept = tuple(r for r in requirements if r not in self.remove and not (isinstance(r, Capacity) and r.resource in resized and r not in self.add))
         return kept + tuple(r for r in self.add if r not in kept)
 
     def __str__(self) -> str:
@@ -396,10 +400,6 @@ class RequirementChange(Event):
             problem = constraint_problem(model, self.graph, r)
             if problem is not None:
                 return f"{self} adds {r.describe()} but {problem}"
-        twice = capacity_twice(self.apply(spec.requirements))
-        if twice is not None:
-            return (f"{self} leaves {self.graph!r} with two Capacity requirements on {twice!r}: a graph consumes one amount "
-                    f"of a resource; remove the one it has in the same change")
         return None
 
     @classmethod

@@ -87,7 +87,7 @@ def change_requirements(repo: Repository, change: RequirementChange) -> tuple[st
     if new == spec.requirements:
         return None
     for rid in repo.successors(dep, L.REQUIRES):
-        if repo.graph.nodes[rid]["requirement"] in change.remove:
+        if repo.graph.nodes[rid]["requirement"] not in new:  # removed, or a Capacity an added one replaces
             repo.remove_edge(dep, rid, L.REQUIRES)
     for req in new:
         if req not in spec.requirements:
