@@ -126,6 +126,20 @@ def test_run_verify_and_analyze_warn_about_a_risky_action_no_rule_covers(capsys)
     assert "warning" not in capsys.readouterr().err
 
 
+def test_the_no_rule_warning_says_its_seconds_are_the_written_steps_where_the_figures_draw_theirs(capsys):
+    """Under exponential timing (a run's, the chain's) the steps' lengths are drawn and the
+    no-rule seconds beside the warning differ from its own, the task's as written."""
+    def warning(argv):
+        main(argv)
+        (line,) = [x for x in capsys.readouterr().err.splitlines() if "warning: risky action 'hold'" in x]
+        return line
+
+    assert "written lengths" not in warning(["run", SHIFT, "-p", "hours=0.25", "--no-progress"])
+    for argv in (["run", SHIFT, "-p", "hours=0.25", "--timing", "exponential", "--no-progress"],
+                 ["analyze", SHIFT, "-p", "faults=False", "-p", "hours=0.25", "--transient-only"]):
+        assert "its 48 s of the 900 s horizon at the steps' written lengths (the figures draw the lengths, so theirs differ)" in warning(argv)
+
+
 def test_every_report_prints_the_denominator_and_the_causes(capsys):
     assert main(["run", SHIFT, "-p", "hours=0.2"]) in (0, 1)
     out = capsys.readouterr().out

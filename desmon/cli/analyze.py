@@ -140,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
         with replacing(args.json) as fh:
             fh.write(text)
     sys.stdout.write(format_analysis(result, agree))
-    warn_uncovered(scenario, result.horizon_s)
+    warn_uncovered(scenario, result.horizon_s, drawn=True)  # (the chain's step lengths are exponential or Erlang)
     if gap is not None:
         sys.stdout.write(gap.text())
     sys.stdout.write(format_cross_check(cross))

@@ -154,10 +154,11 @@ def load_scenario_of(args: argparse.Namespace) -> Scenario:
     return scenario
 
 
-def warn_uncovered(scenario: Scenario, horizon: float | None = None) -> None:
+def warn_uncovered(scenario: Scenario, horizon: float | None = None, *, drawn: bool | None = None) -> None:
     """One warning line on stderr per risky action of ``scenario``'s task that no selector
     rule covers (``run``, ``verify`` and ``analyze``; a fleet's over its robots): its
-    seconds within ``horizon`` (the world's own if None) count as unmonitored."""
+    seconds within ``horizon`` (the world's own if None) count as unmonitored. ``drawn``:
+    whether the figures beside it draw the steps' lengths (None: the world's timing says)."""
     from desmon.deployment.exposure import fleet_no_rule_warnings, no_rule_warnings
     from desmon.sim.fleet import Fleet
     from desmon.sim.world import World, world_of
@@ -171,7 +172,8 @@ def warn_uncovered(scenario: Scenario, horizon: float | None = None) -> None:
     world = world_of(scenario) if isinstance(scenario.world, World) or scenario.world is None else None
     if world is None:
         return
-    for line in no_rule_warnings(scenario.model, ((s.action, s.duration) for s in world.task), world.horizon if horizon is None else horizon, world.repeat):
+    drawn = world.timing == "exponential" if drawn is None else drawn
+    for line in no_rule_warnings(scenario.model, ((s.action, s.duration) for s in world.task), world.horizon if horizon is None else horizon, world.repeat, drawn=drawn):
         print(f"desmon: {line}", file=sys.stderr)
 
 

@@ -154,15 +154,18 @@ def no_rule_seconds(model: object, steps: Iterable[tuple[str, float]], horizon: 
     return out
 
 
-def no_rule_warnings(model: object, steps: Iterable[tuple[str, float]], horizon: float, repeat: bool) -> list[str]:
+def no_rule_warnings(model: object, steps: Iterable[tuple[str, float]], horizon: float, repeat: bool, *, drawn: bool = False) -> list[str]:
     """One line per risky action that no selector rule covers: what it adds to the
     unmonitored exposure, and the two ways out (``run``, ``verify`` and ``analyze``
-    print them before their results)."""
+    print them before their results). The seconds are the task's with its steps as
+    written; ``drawn``: the figure they go with draws the steps' lengths (exponential
+    timing, the chain), and the line says that its own seconds differ."""
     lines = []
     for action, seconds in no_rule_seconds(model, steps, horizon, repeat).items():
+        at = " at the steps' written lengths (the figures draw the lengths, so theirs differ)" if drawn else ""
         lines.append(
             f"warning: risky action {action!r} has no selector rule, so nothing watches it: its {seconds:,.4g} s of the "
-            f"{horizon:,.0f} s horizon count as unmonitored (add a rule for {action!r}, or exclude it on purpose with "
+            f"{horizon:,.0f} s horizon{at} count as unmonitored (add a rule for {action!r}, or exclude it on purpose with "
             f"robot.action({action!r}, watched=False))"
         )
     return lines
