@@ -268,3 +268,14 @@ def test_a_fleet_run_memoises_no_validity_answer() -> None:
     assert not hasattr(world.checks.validity, "cache_info")
     # and the default checks, which remember nothing, stay what they are
     assert type(V.DEFAULT_CHECKS) is V.ScalarChecks
+
+
+def test_a_fleets_trace_holds_each_robots_ground_truth_slips(tmp_path, capsys) -> None:
+    """As a single robot's trace: one slip record per slip injected, tagged with its robot."""
+    from desmon.cli import main
+
+    out = tmp_path / "f.jsonl"
+    assert main(["run", str(FLEET), "-p", "robots=4", "-p", "edges=2", "-p", "hours=0.5", "--json", "--trace", str(out), "--no-progress"]) == 0
+    injected = json.loads(capsys.readouterr().out)["metrics"]["slips_injected"]
+    slips = [r for r in map(json.loads, out.read_text().splitlines()) if r["type"] == "slip"]
+    assert injected > 0 and len(slips) == injected and all(r["robot"].startswith("r") for r in slips)

@@ -486,6 +486,8 @@ class _Member:
         """The initial facts, silently, and the robot's processes (SimWorld.run without
         running the environment)."""
         apply_initial(self.parts)
+        for slip in self.parts.truth.slips:  # the ground truth, ahead of its time (as a robot's own trace has it)
+            self.parts.trace.emit(slip.time, "slip", direction=slip.direction, kind=slip.kind)
         start_processes(self.parts, self.audit)
 
     def audit(self) -> None:
