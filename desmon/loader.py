@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib.util
+import os
 import signal
 import sys
 from pathlib import Path
@@ -67,7 +68,8 @@ def _run_script(path: str | Path, p: Path, params: Mapping[str, str], declared: 
     sys.modules[name] = module
     script_folder_on_path(p)
     try:
-        with overriding(params, str(path)) as found, _real_ctrl_c() as interrupted, contextlib.redirect_stdout(sys.stderr):
+        with overriding(params, str(path)) as found, _real_ctrl_c() as interrupted, _process_kept(), \
+                contextlib.redirect_stdout(sys.stderr):
             spec.loader.exec_module(module)
         declared.update(found)
     except KeyboardInterrupt:
@@ -106,6 +108,12 @@ def _script_error(path: str | Path, exc: BaseException) -> ScenarioError:
             f"{path}: the script called sys.exit({'' if exc.code is None else repr(exc.code)}) while desmon loaded it; "
             "a scenario file must define 'scenario' and end (put script-only code under if __name__ == '__main__':)"
         )
+    if isinstance(exc, _ProcessEnd):
+        return ScenarioError(
+            f"{path}: the script called {exc} while desmon loaded it, which would end desmon without a word or "
+            "an exit code of its own; a scenario file must define 'scenario' and end "
+            "(put script-only code under if __name__ == '__main__':)"
+        )
     if isinstance(exc, RecursionError):
         return ScenarioError(f"{_failed(path)}: RecursionError (infinite recursion?); {_rerun(path)}")
     detail = " ".join(str(exc).split())[:300]
@@ -124,6 +132,49 @@ def _scenario_of(path: str | Path, module: ModuleType) -> Scenario:
             "(scenario = Scenario(name=..., model=...))"
         )
     return candidates[0]
+
+
+class _ProcessEnd(BaseException):
+    """A scenario script asked, while it loaded, to end or replace desmon's process; its
+    text is the call (``os._exit(0)``)."""
+
+
+#: the calls of the os module that end or replace the process at once: no exception, no
+#: exit handler, so desmon could report nothing and its exit code would be the script's (0
+#: reads as HOLDS). While a script loads they raise :class:`_ProcessEnd` instead.
+_PROCESS_ENDS = ("_exit", "execv", "execve")
+
+
+@contextlib.contextmanager
+def _process_kept() -> Iterator[None]:
+    """While the block runs, the calls of :data:`_PROCESS_ENDS` made in this process raise
+    :class:`_ProcessEnd`; a process the script forked still ends or execs as it asks, or
+    ends silently where the script comes back in it (only desmon's own process goes on
+    with the work, as for a deployer's module), and after the block every call is the
+    real one again (a reference the script kept included)."""
+    pid = os.getpid()
+    real = {name: getattr(os, name) for name in _PROCESS_ENDS}
+    loading = [True]
+
+    def guarded(name: str):  # type: ignore[no-untyped-def]
+        def call(*args: Any) -> Any:
+            if not loading or os.getpid() != pid:
+                return real[name](*args)
+            shown = ", ".join(repr(a) for a in args[:1]) + (", ..." if len(args) > 1 else "")
+            raise _ProcessEnd(f"os.{name}({shown})")
+
+        return call
+
+    for name in _PROCESS_ENDS:
+        setattr(os, name, guarded(name))
+    try:
+        yield
+    finally:
+        if os.getpid() != pid:  # a forked process came back from the script: it ends here, silently
+            real["_exit"](0)
+        loading.clear()
+        for name, function in real.items():
+            setattr(os, name, function)
 
 
 @contextlib.contextmanager

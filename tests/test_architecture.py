@@ -293,6 +293,11 @@ MAX_CLASS_LINES = 300
 #: assignments into another module that are the library's documented recipe, not wiring:
 #: importlib's "importing a source file directly" registers the module in sys.modules
 ALLOWED_FOREIGN_TARGETS = ("sys.modules[",)
+#: writes into another module that guard the process against a user's code, not wiring:
+#: while a scenario script loads in desmon's own process, the os calls that would end that
+#: process without an exception (os._exit, the exec family) raise instead, and are put back
+#: after it (desmon/loader.py's _process_kept; tests/test_scenario_script.py)
+ALLOWED_GUARDS = (("desmon/loader.py", "setattr(os, "),)
 #: methods that change the container they are called on
 MUTATORS = frozenset({
     "append", "extend", "insert", "update", "add", "clear", "pop", "popitem", "setdefault", "remove", "discard",
@@ -517,7 +522,8 @@ def _offenders(sources, rule) -> list[str]:  # type: ignore[no-untyped-def]
 
 
 def test_no_module_assigns_to_another_modules_globals(sources):
-    bad = _offenders(sources, foreign_writes)
+    bad = [b for b in _offenders(sources, foreign_writes)
+           if not any(b.startswith(f"{path}:") and b.split(" ", 1)[1].startswith(what) for path, what in ALLOWED_GUARDS)]
     assert not bad, "assignments into another module (pass the value as an argument or a port instead):\n" + "\n".join(bad)
 
 

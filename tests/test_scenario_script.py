@@ -1,0 +1,76 @@
+"""A scenario script runs inside desmon's own process while it loads: it may not end that
+process behind desmon's back, and a process it forks is its own."""
+
+from __future__ import annotations
+
+import os
+import posix
+from pathlib import Path
+
+import pytest
+
+from desmon.errors import ScenarioError
+from desmon.loader import load_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+
+FORKS = f"""
+import os, posix, sys
+child = os.fork()
+if child == 0:
+    try:
+        os._exit(7)  # the forked process ends as it asks
+    finally:
+        posix._exit(8)  # reached only if that call raised
+_, status = os.waitpid(child, 0)
+assert os.waitstatus_to_exitcode(status) == 7, status
+from os import _exit as KEPT
+sys.path.insert(0, {str(ROOT / "scenarios")!r})
+from coffee_handover import scenario
+"""
+
+
+def test_a_process_the_script_forks_ends_as_it_asks_and_the_scenario_loads(tmp_path: Path) -> None:
+    script = tmp_path / "forks.py"
+    script.write_text(FORKS)
+    sc = load_scenario(script)
+    assert sc.name == load_scenario(ROOT / "scenarios" / "coffee_handover.py").name
+    assert os._exit is posix._exit and os.execv is posix.execv  # the real calls again after loading
+
+
+def test_a_reference_to_os_exit_the_script_kept_is_the_real_call_after_loading(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    (tmp_path / "kept_calls.py").write_text("KEPT = []\n")
+    script = tmp_path / "keeps.py"
+    script.write_text("import kept_calls\n" + FORKS + "kept_calls.KEPT.append(KEPT)\n")
+    # in a process of its own: after loading, the kept call is the real os._exit and ends it with 5
+    program = (f"import sys; from desmon.loader import load_scenario; load_scenario({str(script)!r}); "
+               "sys.modules['kept_calls'].KEPT[0](5)")
+    proc = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 5, proc.stderr
+
+
+@pytest.mark.parametrize("call, shown", [("os._exit(0)", "os._exit(0)"), ("os._exit(3)", "os._exit(3)"),
+                                         ("os.execv('/bin/true', ['true'])", "os.execv('/bin/true', ...)")])
+def test_a_script_ending_desmons_process_while_it_loads_is_refused_naming_the_call(tmp_path: Path, call: str, shown: str) -> None:
+    script = tmp_path / "ends.py"
+    script.write_text(f"import os\n{call}\n")
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(script)
+    assert f"the script called {shown} while desmon loaded it" in str(info.value)
+    assert os._exit is posix._exit  # restored after a refusal too
+
+
+def test_a_process_the_script_forks_and_lets_return_ends_there_and_only_desmon_reports(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    script = tmp_path / "returns.py"
+    script.write_text(f"import os, sys\nos.fork()\nsys.path.insert(0, {str(ROOT / 'scenarios')!r})\n"
+                      "from coffee_handover import scenario\n")
+    proc = subprocess.run([sys.executable, "-m", "desmon", "verify", str(script), "--no-progress"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.count("HOLDS") == 1, proc.stdout  # one report: the forked copy ended after the script
