@@ -503,6 +503,19 @@ def test_levels_are_the_decimals_as_written_and_a_high_off_the_grid_is_refused()
     )
 
 
+def test_a_grid_of_more_load_levels_than_the_checker_takes_is_refused_at_once_not_built() -> None:
+    from desmon.verify.bounds import MAX_LEVELS
+
+    assert len(levels(1, MAX_LEVELS, 1)) == MAX_LEVELS  # the most it takes
+    assert "100,001 levels; the checker explores every one, so give at most 100,000 (a larger step)" in refused(
+        CheckerError, lambda: levels(0, MAX_LEVELS, 1)
+    )
+    # a step typed 1e-9 for 1e9: 10**18 levels, refused without building any (it never ended)
+    assert "1,000,000,000,000,000,001 levels" in refused(CheckerError, lambda: levels(0, 1e9, 1e-9))
+    # the same limit on levels written out
+    assert "has 100,001 load levels" in refused(CheckerError, lambda: Bounds(loads={"pc": tuple(range(MAX_LEVELS + 1))}))
+
+
 def test_a_scripted_slip_while_nothing_is_in_the_hand_is_refused() -> None:
     task = (Step("idle", 5.0), Step("grasp", 2.0), Step("hold", 3.0))
     msg = refused(ScenarioError, lambda: world(task=task, slips=(Slip(3.0),)))

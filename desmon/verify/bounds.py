@@ -23,8 +23,14 @@ __all__ = ["Bounds", "levels", "bounds_of", "INSTANT_INVARIANTS"]
 INSTANT_INVARIANTS = ("single-instance", "no-overcommit", "fixed")
 
 
+#: the most load levels one platform may have: the checker explores every level, and a
+#: grid finer than this is a typo in its step (``levels(0, 1e9, 1e-9)`` would never be built)
+MAX_LEVELS = 100_000
+
+
 def levels(low: float, high: float, step: float) -> tuple[float, ...]:
-    """``levels(0, 300, 100) == (0, 100, 200, 300)``: load levels for :class:`Bounds`."""
+    """``levels(0, 300, 100) == (0, 100, 200, 300)``: load levels for :class:`Bounds`
+    (at most :data:`MAX_LEVELS` of them)."""
     for what, v in (("low", low), ("high", high), ("step", step)):
         check_number(f"levels({low!r}, {high!r}, {step!r}) {what}", v, error=CheckerError)
     if step <= 0 or high < low:
@@ -39,6 +45,11 @@ def levels(low: float, high: float, step: float) -> tuple[float, ...]:
         raise CheckerError(
             f"levels({low!r}, {high!r}, {step!r}): {high!r} is not {low!r} plus a whole number of steps of {step!r} "
             f"(the levels would stop at {below!r}); give a high on the grid, or another step"
+        )
+    if steps + 1 > MAX_LEVELS:
+        raise CheckerError(
+            f"levels({low!r}, {high!r}, {step!r}): {int(steps) + 1:,} levels; the checker explores every one, "
+            f"so give at most {MAX_LEVELS:,} (a larger step)"
         )
     kind = int if all(type(v) is int for v in (low, high, step)) else float  # (whole numbers stay whole)
     return tuple(kind(first + i * width) for i in range(int(steps))) + (kind(high),)
@@ -151,6 +162,8 @@ class Bounds:
                 check_number(f"{w}: load level of {p!r}", x, error=err, unit=f" (write e.g. {example})")
             if not lv:
                 raise CheckerError(f"{w}: platform {p!r} has no load levels: write e.g. {example}")
+            if len(lv) > MAX_LEVELS:
+                raise CheckerError(f"{w}: platform {p!r} has {len(lv):,} load levels; the checker explores every one, so give at most {MAX_LEVELS:,}")
             if len(set(lv)) != len(lv):
                 raise CheckerError(f"{w}: load levels of {p!r} repeat a level ({list(lv)}); list each level once, e.g. levels(0, 300, 100)")
             if list(lv) != sorted(lv):
