@@ -46,7 +46,7 @@ def add_parser(sub: Subparsers) -> None:
     add_output(p, "-o", "--output", suffixes=(".html", ".htm"), default="explore.html", metavar="FILE.html", help="the page to write")
     p.add_argument("--verify", action="store_true", help="step through the shortest counterexample desmon verify finds instead of the timeline")
     p.add_argument("--invariant", default=None, metavar="NAME", help="with --verify: the shortest counterexample of this invariant")
-    p.add_argument("--max-states", type=positive_int, default=None, metavar="N", help=f"with --verify: search at most N states (default: {MAX_STATES})")
+    p.add_argument("--max-states", type=positive_int, default=None, metavar="N", help=f"with --verify: stop once N states are found, as verify's --max-states (default: {MAX_STATES})")
     p.add_argument("--from-json", default=None, metavar="FILE.json", help="step through a counterexample saved by desmon verify --json")
     p.add_argument("--counterexample", type=positive_int, default=None, metavar="N", help="with --from-json: the file's N-th counterexample (default: the first)")
     p.add_argument("--no-progress", action="store_true", help="with --verify: no progress line")

@@ -80,7 +80,7 @@ def add_parser(sub: Subparsers) -> None:
 
 def _add_limits(p: argparse.ArgumentParser) -> None:
     """The budgets after which ``desmon verify`` stops INCOMPLETE (exit 3)."""
-    p.add_argument("--max-states", type=positive_int, default=MAX_STATES, help="stop INCOMPLETE (exit 3) after this many states")
+    p.add_argument("--max-states", type=positive_int, default=MAX_STATES, help="stop INCOMPLETE (exit 3) once this many states are found (the state being expanded adds all its successors first, so the count printed may pass N)")
     p.add_argument("--max-depth", type=positive_int, default=None, help="explore at most this many events deep (default: no limit)")
     p.add_argument("--timeout", type=positive_seconds, default=None, help="stop INCOMPLETE (exit 3) after this many seconds (default: no limit)")
     p.add_argument(
