@@ -51,8 +51,11 @@ class FuzzOutcome:
 
 def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice], enabler: Checker, faults: list | None = None):  # type: ignore[no-untyped-def]
     """Run ``seq``; returns (labels up to the first violation, first violation or None).
-    ``faults``: where the deployer's fault is noted, if it failed."""
+    The checked invariants hold after each reaction, the instantaneous ones (the checker's
+    ``instant``) also after every start and stop inside it. ``faults``: where the
+    deployer's fault is noted, if it failed."""
     run = RepositoryRun(scenario, deployer, enabler.bounds, enabler.system.guard)
+    instant = enabler.system.instant
     labels: list[Label] = []
     bad = run.violations()
     if bad:
@@ -63,13 +66,15 @@ def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice],
             break
         event = enabled[pick % len(enabled)]
         try:
-            run.step(event, fails)
+            _result, during = run.step_watching(event, fails, instant)
         except DeployerFault as fault:  # the deployer failed in a reachable state: that is what was found
             labels.append((event, tuple(i for i in fails if i < run.control.n)))
             if faults is not None:
                 faults.append(fault)
             return labels, (CRASH, fault.what)
         labels.append((event, tuple(i for i in fails if i < run.control.n)))
+        if during is not None:  # broken inside the reaction, maybe repaired before it ended
+            return labels, (during[0], f"{during[1]} (during the reaction, right after `{during[2]}`)")
         bad = run.violations()
         if bad:
             return labels, bad[0]

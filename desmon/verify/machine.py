@@ -2,7 +2,8 @@
 
 Its rules are the checker's events (action change, device fail/repair, platform
 down/up, load step, each with optional start failures), its invariants the named
-invariants of docs/design.md §9 -- including ``history``, which here sees the
+invariants of docs/design.md §9 (the instantaneous ones also after every start and stop
+inside a reaction, as the checker watches them) -- including ``history``, which here sees the
 infrastructure's running list, its stop count and the DEPLOYMENT_HISTORY edges. It
 drives the same :class:`~desmon.deployment.core.DeploymentCore` as the checker.
 
@@ -48,7 +49,10 @@ def make_machine(scenario: Scenario, deployer: str | Deployer = "desmon", bounds
             event = data.draw(st.sampled_from(options), label="event")
             fails = data.draw(start_failures(b), label="failing starts")
             self.trace.append((event, fails))
-            self.run.step(event, fails)
+            _result, during = self.run.step_watching(event, fails, enabler.system.instant)
+            assert during is None, (  # an instantaneous invariant, broken inside the reaction (maybe repaired by its end)
+                f"{during[0]}: {during[1]} during the reaction, right after `{during[2]}`, after {[str(e) for e, _ in self.trace]}"
+            )
 
         @rule(data=st.data())
         def action(self, data) -> None:  # type: ignore[no-untyped-def]

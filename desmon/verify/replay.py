@@ -126,6 +126,25 @@ class RepositoryRun:
         self.control.arm(fails)
         return self.core.step(event, self.control)
 
+    def step_watching(self, event: Event, fails: tuple[int, ...], instant: tuple[Invariant, ...]):  # type: ignore[no-untyped-def]
+        """:meth:`step`, and the first violation of an ``instant`` invariant after a start or
+        stop inside its reaction, as ``(invariant, message, after what)``, or None (the
+        checker watches the same inside a reaction: :class:`~desmon.verify.bounds.Bounds`'
+        ``instantaneous``)."""
+        found: list[tuple[str, str, str]] = []
+
+        def audit(verb: str, graph: str, platform: str) -> None:
+            bad = [] if found else check_invariants(self.core.view(), instant)
+            if bad:
+                found.append((bad[0][0], bad[0][1], f"{verb} {graph} on {platform}"))
+
+        self.control.after = audit if instant else None
+        try:
+            result = self.step(event, fails)
+        finally:
+            self.control.after = None
+        return result, (found[0] if found else None)
+
     def key(self) -> Key:
         """The checker's key of the repository's current state (for cross-checks)."""
         return repository_key(self.repo, self.core)
@@ -157,18 +176,8 @@ class RepositoryRun:
         yield initial_step(self.key()), None
         for i, (event, fails) in enumerate(labels, start=1):
             prev = self.key()
-            found: list[tuple[str, str, str]] = []
-
-            def audit(verb: str, graph: str, platform: str) -> None:
-                bad = [] if found else check_invariants(self.core.view(), instant)
-                if bad:
-                    found.append((bad[0][0], bad[0][1], f"{verb} {graph} on {platform}"))
-
-            self.control.after = audit if instant else None
-            try:
-                _stim, log = self.step(event, fails)
-            finally:
-                self.control.after = None
+            (_stim, log), during = self.step_watching(event, fails, instant)
+            found = [during] if during is not None else []
             if fails and max(fails) >= self.control.n:  # a failing start the reaction no longer issues
                 raise CheckerError(
                     f"its fail_indices {list(fails)} fail start #{max(fails) + 1} of the reaction, which issues "
