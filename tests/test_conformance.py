@@ -70,7 +70,8 @@ def _prefix(fails: tuple[int, ...]) -> tuple[bool, ...]:
 
 
 def walk(system: TransitionSystem, rng: random.Random, steps: int, failures: bool) -> list[tuple[Any, tuple[int, ...], Any, Key]]:
-    """A random path of the checker: (event, failed start indices, StepLog, next key) per step."""
+    """A random path of the checker: (event, failed start indices, StepLog, next key,
+    instantaneous violation or None) per step."""
     key = system.initial()
     path = []
     for _ in range(steps):
@@ -79,8 +80,8 @@ def walk(system: TransitionSystem, rng: random.Random, steps: int, failures: boo
             break
         event = rng.choice(events)
         succ = list(system.successors(key, event))
-        fails, nkey, log, _instant = rng.choice(succ) if failures else succ[0]
-        path.append((event, fails, log, nkey))
+        fails, nkey, log, instant = rng.choice(succ) if failures else succ[0]
+        path.append((event, fails, log, nkey, instant))
         key = nkey
     return path
 
@@ -94,7 +95,7 @@ def _script(initial: Key, path: list) -> tuple[tuple[str, str, int], ...]:
         attempts[d] = 1
     running = set(initial.deployments)
     script = []
-    for _event, _fails, log, _nkey in path:
+    for _event, _fails, log, _nkey, _instant in path:
         for cmd, ok in log.commands:
             pair = (cmd.graph, getattr(cmd, "platform", None))
             kind = type(cmd).__name__
@@ -124,8 +125,10 @@ def compare(scenario: Scenario, deployer: str, seed: int, steps: int = 20, failu
     # what the checker says on each state of the path (and the reaction that led there)
     expected = []
     prev = init
-    for event, fails, _log, nkey in path:
+    for event, fails, _log, nkey, instant in path:
         found = _transition_findings(system, prev, event, fails)
+        if instant is not None:  # broken inside the reaction (the world audits there too)
+            found.add(instant[0])
         state = {name for name, _m in system.violations(nkey)}
         system.store.load(nkey)
         expected.append((nkey, state | found, validly_active(system.view(frozenset(nkey.standing), nkey.context))))

@@ -322,7 +322,8 @@ def format_summary(r: RunResult, wall: float | None = None) -> str:
         if len(r.violations) > 10:
             lines.append(f"  ... {len(r.violations) - 10} more")
     else:
-        lines.append("Invariants: all held at every quiescent point (after each reaction with no further stimulus pending).")
+        lines.append("Invariants: all held at every quiescent point (after each reaction with no further stimulus pending); "
+                     "single-instance, no-overcommit and fixed also after every start and stop.")
     return "\n".join(lines) + "\n"
 
 
@@ -457,7 +458,8 @@ def format_fleet_summary(r: FleetResult) -> str:
         if len(r.violations) > 10:
             lines.append(f"  ... {len(r.violations) - 10} more")
     else:
-        lines.append("Invariants: all held at every quiescent point of every robot (edge servers audited with every robot's load).")
+        lines.append("Invariants: all held at every quiescent point of every robot (edge servers audited with every robot's load); "
+                     "single-instance, no-overcommit and fixed also after every start and stop.")
     return "\n".join(lines) + "\n"
 
 

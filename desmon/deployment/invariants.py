@@ -21,7 +21,7 @@ from desmon.model.system import PlatformState
 
 __all__ = [
     "SystemView", "Invariant", "INVARIANTS", "view_of", "make_view", "check_invariants", "get_invariants", "validly_active", "validly_active_among",
-    "ReactionBook", "raise_problem", "judge_reaction", "TRANSITION_INVARIANTS",
+    "ReactionBook", "raise_problem", "judge_reaction", "TRANSITION_INVARIANTS", "INSTANT_INVARIANTS",
 ]
 
 
@@ -470,6 +470,12 @@ INVARIANTS: dict[str, Invariant] = {
         ),
     )
 }
+
+
+#: Invariants that are physical facts at every instant, not only when quiescent: every
+#: engine also evaluates them after each start and stop inside a reaction (the checker
+#: through ``Bounds.instantaneous``, the simulation's audit and the fuzzer).
+INSTANT_INVARIANTS = ("single-instance", "no-overcommit", "fixed")
 
 
 #: The invariants judged on a reaction, not on a state alone (their ``check`` of a view

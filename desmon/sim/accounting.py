@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from desmon.deployment.invariants import SystemView, check_invariants
+from desmon.deployment.invariants import INSTANT_INVARIANTS, SystemView, check_invariants, get_invariants
 from desmon.sim.books import Books
 from desmon.sim.metrics import slip_metrics
 
@@ -20,13 +20,24 @@ if TYPE_CHECKING:
 __all__ = ["Books", "audit", "robot_metrics"]
 
 
-def audit(parts: "RobotParts", view: SystemView) -> None:
-    """The named invariants on ``view`` (of the live repository), at a quiescent point."""
+def audit(parts: "RobotParts", view: SystemView, after: str = "", skip: frozenset[str] = frozenset()) -> tuple[str, ...]:
+    """The named invariants on ``view`` (of the live repository) at a quiescent point, each
+    violation booked unless its invariant is in ``skip`` (booked already in this reaction),
+    or, ``after`` a start or stop inside a reaction (``"start g on p"``), the first
+    violated of the instantaneous ones (:data:`~desmon.deployment.invariants.INSTANT_INVARIANTS`),
+    as the checker watches them. Returns the names booked."""
     books = parts.books
-    books.audits += 1
+    if not after:
+        books.audits += 1
     now = parts.env.now
-    for name, msg in check_invariants(view):
-        books.violation(now, name, msg)
+    booked: list[str] = []
+    for name, msg in check_invariants(view, get_invariants(INSTANT_INVARIANTS) if after else None):
+        if name not in skip:
+            books.violation(now, name, f"{msg} (during the reaction, right after `{after}`)" if after else msg)
+            booked.append(name)
+            if after:  # the reaction's first, as the checker reports one transition's
+                break
+    return tuple(booked)
 
 
 def robot_metrics(parts: "RobotParts") -> dict[str, Any]:

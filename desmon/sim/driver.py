@@ -4,9 +4,10 @@ The robot's :class:`~desmon.sim.inbox.Inbox` (re-exported here) collects what th
 repository's Notify subscription (or a fleet's router) reports and wakes the driver.
 :func:`deployer` takes it as a stimulus and drives ``core.reaction``: each
 ``Start`` is executed by the Control infrastructure (latency, outcome), ``Stop`` at
-once, ``RaiseError`` is stamped with ``env.now``. After every reaction ``core.settle``
-and, when no newer fact is pending, the named invariants are audited (``audit``). No
-decision is made here.
+once, ``RaiseError`` is stamped with ``env.now``. After every start and stop that
+succeeded the instantaneous invariants are audited, after every reaction ``core.settle``
+and, when no newer fact is pending, all the named invariants (``audit``). No decision is
+made here.
 """
 
 from __future__ import annotations
@@ -22,13 +23,18 @@ from desmon.sim.processes import maybe_lease
 if TYPE_CHECKING:
     from desmon.sim.robot import RobotParts
 
-__all__ = ["Inbox", "deployer"]
+__all__ = ["Inbox", "deployer", "Audit"]
+
+#: ``audit(after, skip)``: the named invariants at a quiescent point (``after`` empty), or
+#: the instantaneous ones after ``after`` (``"start g on p"``, inside a reaction), each
+#: booked unless in ``skip``; returns the names it booked (:func:`desmon.sim.accounting.audit`)
+Audit = Callable[[str, frozenset[str]], tuple[str, ...]]
 
 
 class _Reaction:
     """What the deployer process books during one reaction (a plain class: one per reaction)."""
 
-    __slots__ = ("slots", "raised", "stopped_here", "stopped_at", "tried")
+    __slots__ = ("slots", "raised", "stopped_here", "stopped_at", "tried", "broken")
 
     def __init__(self, slots: tuple[tuple[str, ...], ...]) -> None:
         self.slots = slots
@@ -36,10 +42,14 @@ class _Reaction:
         self.stopped_here: dict[str, str] = {}
         self.stopped_at: dict[str, float] = {}  # wanted slot members stopped in this reaction
         self.tried: set[str] = set()  # graphs whose start failed in this reaction
+        #: the instantaneous invariant booked inside this reaction: its first violation, after
+        #: which (as the checker) the reaction is not watched again
+        self.broken: frozenset[str] = frozenset()
 
 
-def deployer(parts: RobotParts, audit: Callable[[], None]):  # type: ignore[no-untyped-def]
-    """The deployer's process: one reaction per stimulus, ``audit`` at every quiescent point."""
+def deployer(parts: RobotParts, audit: Audit):  # type: ignore[no-untyped-def]
+    """The deployer's process: one reaction per stimulus, ``audit`` after every start and
+    stop and at every quiescent point."""
     env = parts.env
     inbox = parts.inbox
     books = parts.books
@@ -54,7 +64,7 @@ def deployer(parts: RobotParts, audit: Callable[[], None]):  # type: ignore[no-u
         ctx = parts.query.context()
         parts.trace.emit(env.now, "reaction", context=ctx, changed=list(stim.changed_platforms), context_changed=stim.context_changed)
         book = _Reaction(core.slots())  # what this reaction serves, even if the context moves on meanwhile
-        yield from _drive(parts, core.reaction(stim), book)
+        yield from _drive(parts, core.reaction(stim), book, audit)
         core.settle(book.raised)
         quiescent = not inbox.pending()
         for name, msg in core.findings:  # transition properties (no-flapping, errors-justified, ...)
@@ -62,11 +72,12 @@ def deployer(parts: RobotParts, audit: Callable[[], None]):  # type: ignore[no-u
             if name == "no-flapping" or quiescent:
                 books.violation(env.now, name, msg)
         if quiescent:
-            audit()
+            audit("", book.broken)
 
 
-def _drive(parts: RobotParts, reaction: Any, book: _Reaction):  # type: ignore[no-untyped-def]
-    """Execute the commands of one reaction, sending each outcome back."""
+def _drive(parts: RobotParts, reaction: Any, book: _Reaction, audit: Audit):  # type: ignore[no-untyped-def]
+    """Execute the commands of one reaction, sending each outcome back; ``audit`` the
+    instantaneous invariants after each start and stop that succeeded."""
     outcome: bool | None = None
     while True:
         try:
@@ -79,8 +90,12 @@ def _drive(parts: RobotParts, reaction: Any, book: _Reaction):  # type: ignore[n
             raise
         if isinstance(cmd, Start):
             outcome = yield from _command_start(parts, cmd, book)
+            if outcome and not book.broken:
+                book.broken = frozenset(audit(f"start {cmd.graph} on {cmd.platform}", book.broken))
         elif isinstance(cmd, Stop):
             outcome = _command_stop(parts, cmd, book)
+            if outcome and not book.broken:
+                book.broken = frozenset(audit(f"stop {cmd.graph} on {cmd.platform}", book.broken))
         elif isinstance(cmd, RaiseError):
             outcome = None
             _command_error(parts, cmd, book)

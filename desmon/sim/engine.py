@@ -182,12 +182,14 @@ class SimWorld:
         platform is up and every stream it reads has a readable device (warm-up aside)."""
         return self.facts.physically_valid(graph, platform)
 
-    def _audit(self) -> None:
-        """The named invariants on the live repository, then ``on_quiescent``."""
+    def _audit(self, after: str = "", skip: frozenset[str] = frozenset()) -> tuple[str, ...]:
+        """The named invariants on the live repository (:data:`~desmon.sim.driver.Audit`),
+        then, at a quiescent point, ``on_quiescent``."""
         running = tuple(sorted(self.instances))
-        audit(self.parts, self.core.view(running=running, stops=self.infra.stops, history=self.books.history_edges))
-        if self.on_quiescent is not None:
+        booked = audit(self.parts, self.core.view(running=running, stops=self.infra.stops, history=self.books.history_edges), after, skip)
+        if not after and self.on_quiescent is not None:
             self.on_quiescent(self)
+        return booked
 
     # ------------------------------------------------------------------ run
     def _trace_header(self) -> None:
@@ -256,8 +258,9 @@ class SimWorld:
         )
 
 
-def _unread() -> None:
+def _unread(after: str = "", skip: frozenset[str] = frozenset()) -> tuple[str, ...]:
     """The audit of a run nobody reads the violations of: none."""
+    return ()
 
 
 def simulate(scenario: Scenario, deployer: str = "desmon", seed: int = 0, **kw: Any) -> RunResult:

@@ -490,16 +490,17 @@ class _Member:
             self.parts.trace.emit(slip.time, "slip", direction=slip.direction, kind=slip.kind)
         start_processes(self.parts, self.audit)
 
-    def audit(self) -> None:
-        """The named invariants on this robot's view: its own deployments, judged on the
-        platforms' full facts (an edge server's capacity with every robot's detectors)."""
+    def audit(self, after: str = "", skip: frozenset[str] = frozenset()) -> tuple[str, ...]:
+        """The named invariants on this robot's view (:data:`~desmon.sim.driver.Audit`): its
+        own deployments, judged on the platforms' full facts (an edge server's capacity
+        with every robot's detectors)."""
         parts = self.parts
         core = parts.core
         view = _OwnView(
             self._audited_states(), core.specs(), core.standing, core.slots(), tuple(sorted(parts.facts.instances)),
             parts.infra.stops, parts.books.history_edges, core.guarded_react, self.query.checks,
         )
-        audit(parts, view)
+        return audit(parts, view, after, skip)
 
     def _audited_states(self) -> tuple[PlatformState, ...]:
         """The states the audit reads: the robot's own PCs and the edge servers where one of

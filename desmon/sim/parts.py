@@ -36,7 +36,7 @@ from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import Repository
 from desmon.sim import processes as P
 from desmon.sim.books import Books
-from desmon.sim.driver import deployer
+from desmon.sim.driver import Audit, deployer
 from desmon.sim.facts import GroundTruth, PhysicalFacts
 from desmon.sim.inbox import Inbox
 from desmon.sim.infrastructure import Infrastructure
@@ -83,7 +83,7 @@ def robot_parts(
     )
 
 
-def start_processes(parts: RobotParts, audit: Callable[[], None]) -> None:
+def start_processes(parts: RobotParts, audit: Audit) -> None:
     """Register the robot, the deployer (auditing with ``audit``) and the world's fault,
     load and change processes."""
     env = parts.env

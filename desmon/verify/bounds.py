@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
+from desmon.deployment.invariants import INSTANT_INVARIANTS
 from desmon.errors import CheckerError
 from desmon.model.checks import check_flag, check_items, check_name, check_names, check_number, strict_init, suggest
 from desmon.model.events import ActionChange, LoadChange, RequirementChange
@@ -18,9 +19,6 @@ from desmon.model.system import SystemModel, check_action
 
 __all__ = ["Bounds", "levels", "bounds_of", "INSTANT_INVARIANTS"]
 
-#: Invariants that are physical facts at every instant, not only when quiescent; the
-#: checker evaluates them after every Start/Stop inside a reaction as well.
-INSTANT_INVARIANTS = ("single-instance", "no-overcommit", "fixed")
 
 
 #: the most load levels one platform may have: the checker explores every level, and a
