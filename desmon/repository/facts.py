@@ -217,8 +217,17 @@ class ImmediateControl:
         self.stops = 0
         #: why the last start was refused ("" when it was not)
         self.refused = ""
+        #: called as ``after(verb, graph, platform)`` once a start or stop has succeeded
+        #: (None: not watched): the engines' audit of the instantaneous invariants
+        self.after: Callable[[str, str, str], None] | None = None
 
     def start(self, graph: str, platform: str) -> bool:
+        ok = self._start(graph, platform)
+        if ok and self.after is not None:
+            self.after("start", graph, platform)
+        return ok
+
+    def _start(self, graph: str, platform: str) -> bool:
         if (graph, platform) in self.running:
             return True
         why = self.refuse(graph, platform) if self.refuse is not None else None
@@ -237,4 +246,6 @@ class ImmediateControl:
         self.running.discard((graph, platform))
         self.stops += 1
         record_stop(self.repo, graph, platform)
+        if self.after is not None:
+            self.after("stop", graph, platform)
         return True

@@ -16,7 +16,7 @@ import networkx as nx
 from desmon.deployment.guard import DeployerFault, Guard
 from desmon.deployment.control import repository_control
 from desmon.deployment.core import DeploymentCore, stamp
-from desmon.deployment.invariants import check_invariants
+from desmon.deployment.invariants import INSTANT_INVARIANTS, check_invariants, get_invariants
 from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.monitor import Stimulus
 from desmon.deployment.validity import ScalarChecks
@@ -104,15 +104,26 @@ def replay(
     for event in scenario.initial:
         core.observe(event)
     result = Replay(scenario, core.deployer.name, repo, control, start_version=repo.version)
+    instant = get_invariants(INSTANT_INVARIANTS)
     for te in scenario.timeline:
         now[0] = te.time
         before = core.standing
+        during: list[tuple[str, str]] = []  # the reaction's first instantaneous violation, as the checker reports it
+
+        def watch(verb: str, graph: str, platform: str) -> None:
+            bad = [] if during else check_invariants(core.view(), instant)
+            if bad:
+                during.append((bad[0][0], f"{bad[0][1]} (during the reaction, right after `{verb} {graph} on {platform}`)"))
+
+        control.after = watch
         try:
             stim, log = core.step(te.event, control)
         except DeployerFault as fault:  # its first reaction: the deployer cannot run at all (exit 2), else CRASHED
             fault.initial = not result.steps
             fault.args = (f"at t={te.time:g} s ({te.label or te.event}), {fault.args[0]}",)
             raise
+        finally:
+            control.after = None
         # the Control rules read facts a reaction does not change: asked after it, they give
         # the reason each refused start of the reaction was refused for
         refuse = control.refuse
@@ -133,7 +144,9 @@ def replay(
                 errors=tuple(stamp(e, te.time) for e in log.errors),
                 deployments=query.deployments(),
                 standing=core.standing,
-                violations=(*core.findings, *check_invariants(view)),  # its transition properties first, as the run reports them
+                # its transition properties first, as the run reports them, then one broken
+                # inside the reaction (not again if its end state breaks it too)
+                violations=(*core.findings, *during, *[v for v in check_invariants(view) if all(v[0] != d for d, _m in during)]),
                 refused=refused,
                 standing_before=before,
                 version=repo.version,

@@ -10,7 +10,7 @@ verify --replay`` (:meth:`RepositoryRun.trace`) step a :class:`RepositoryRun` ev
 
 from __future__ import annotations
 
-from typing import Any, Callable, Container, Iterator, Sequence
+from typing import Any, Container, Iterator, Sequence
 
 from desmon.errors import CheckerError
 from desmon.deployment.control import repository_refusal
@@ -68,8 +68,6 @@ class ScriptedControl(ImmediateControl):
         super().__init__(repo, self._scripted_fail, repository_refusal(repo, model))
         self.fail_at: tuple[int, ...] = ()
         self.n = 0
-        #: called as ``after(verb, graph, platform)`` once a start or stop has succeeded (None: not watched)
-        self.after: Callable[[str, str, str], None] | None = None
 
     def arm(self, fails: tuple[int, ...]) -> None:
         self.fail_at, self.n = fails, 0
@@ -78,17 +76,6 @@ class ScriptedControl(ImmediateControl):
         i, self.n = self.n, self.n + 1
         return i in self.fail_at
 
-    def start(self, graph: str, platform: str) -> bool:
-        ok = super().start(graph, platform)
-        if ok and self.after is not None:
-            self.after("start", graph, platform)
-        return ok
-
-    def stop(self, graph: str, platform: str) -> bool:
-        ok = super().stop(graph, platform)
-        if ok and self.after is not None:
-            self.after("stop", graph, platform)
-        return ok
 
 
 def repository_key(repo: Repository, core: DeploymentCore) -> Key:

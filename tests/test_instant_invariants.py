@@ -1,0 +1,53 @@
+"""single-instance, no-overcommit and fixed are physical facts at every instant: every
+engine checks them after each start and stop inside a reaction, not only when the
+reaction has settled. make-before-break starts the new instance of a migrating detector
+before it stops the old one, so the state it settles in is fine and only an engine that
+watches inside the reaction sees the two instances."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+from desmon.loader import load_scenario
+from desmon.model.events import DeviceFail
+from desmon.model.scenario import TimedEvent
+from desmon.sim.engine import simulate
+from desmon.sim.replay import replay
+from desmon.verify.checker import Checker
+from desmon.verify.mutants import MUTANTS
+
+SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+MIGRATES = MUTANTS["make-before-break"]
+DURING = "(during the reaction, right after `start force_slip_detector on pc2`)"
+
+
+def _migration_with_a_failing_wrench():
+    sc = load_scenario(SCENARIOS / "migration.py")
+    return replace(sc, timeline=(*sc.timeline, TimedEvent(5.0, DeviceFail("wrench_1"), "t1")))
+
+
+def test_the_checker_finds_the_moment_with_two_instances():
+    r = Checker(load_scenario(SCENARIOS / "migration.py"), MIGRATES).run()
+    (cex,) = [c for c in r.counterexamples if c.invariant == "single-instance"]
+    assert cex.during == "start force_slip_detector on pc2" and cex.length == 1
+
+
+def test_replay_reports_it_once_naming_the_command_after_which_it_broke():
+    result = replay(_migration_with_a_failing_wrench(), MIGRATES)
+    assert [(t, n) for t, n, _m in result.violations] == [(5.0, "single-instance")]
+    assert result.violations[0][2].endswith(DURING)
+    # the corrected deployer stops first: nothing to report
+    assert replay(_migration_with_a_failing_wrench(), "desmon").violations == []
+
+
+def test_the_simulation_books_it_once_per_reaction_and_not_again_at_its_quiescent_point():
+    sc = _migration_with_a_failing_wrench()
+    sc = replace(sc, world=None)
+    from desmon.sim.world import world_from_timeline
+
+    sc = replace(sc, world=replace(world_from_timeline(sc), horizon=10.0))
+    run = simulate(sc, MIGRATES, seed=0)
+    assert [(round(t, 6), n) for t, n, _m in run.violations] == [(5.0, "single-instance")], run.violations
+    assert run.violations[0][2].endswith(DURING)
+    assert simulate(sc, "desmon", seed=0).violations == []
