@@ -484,13 +484,16 @@ TRANSITION_INVARIANTS = ("errors-justified", "preferred-when-possible")
 
 
 def get_invariants(names: list[str] | tuple[str, ...] | None = None) -> tuple[Invariant, ...]:
-    """The invariants called ``names`` (all if None); a ModelError lists the valid names."""
+    """The invariants called ``names`` (all if None), each named once; a ModelError lists
+    the valid names."""
     if not names:
         return tuple(INVARIANTS.values())
     out = []
     for n in names:
         if n not in INVARIANTS:
             raise ModelError(f"unknown invariant {n!r}: choose from {', '.join(INVARIANTS)}")
+        if INVARIANTS[n] in out:
+            raise ModelError(f"invariant {n!r} is named twice: name each invariant once")
         out.append(INVARIANTS[n])
     return tuple(out)
 
