@@ -283,3 +283,20 @@ def test_a_generated_pytest_replays_a_violation_of_the_initial_state(tmp_path, c
     assert rc == 1 and "after 0 steps" in out, out
     res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(py)], capture_output=True, text=True, cwd=tmp_path)
     assert res.returncode == 0 and "1 passed" in res.stdout, res.stdout + res.stderr
+
+
+def test_a_generated_pytest_compiles_and_names_its_scenario_whatever_characters_its_path_holds(tmp_path):
+    """The path is only in SCENARIO (a Python literal): a folder named with three double
+    quotes once ended the module's docstring, and the file did not compile."""
+    import ast
+    import shutil
+
+    folder = tmp_path / 'q"""d\\n'
+    folder.mkdir()
+    path = folder / "migration.py"
+    shutil.copy(SCENARIOS / "migration.py", path)
+    py = tmp_path / "test_odd.py"
+    assert main(["verify", str(path), "--deployer", "paper", "--pytest", str(py), "--no-progress"]) == 1
+    tree = ast.parse(py.read_text())  # a SyntaxError here: the path broke out of a string
+    (scenario,) = [ast.literal_eval(n.value) for n in tree.body if isinstance(n, ast.Assign) and n.targets[0].id == "SCENARIO"]
+    assert scenario == str(path)
