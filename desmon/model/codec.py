@@ -88,7 +88,9 @@ def json_object(where: str, d: object, example: str) -> dict[str, Any]:
     """``d`` if it is a JSON object (a dict), else a :class:`CheckerError` naming ``where``
     and showing ``example``."""
     if not isinstance(d, dict):
-        raise CheckerError(f"{where} = {d!r} is not a JSON object: write e.g. {example}")
+        shown = repr(d)
+        shown = shown if len(shown) <= 60 else f"{shown[:57]}..."  # (a whole file's list: one short line)
+        raise CheckerError(f"{where} = {shown} is not a JSON object: write e.g. {example}")
     return d
 
 
