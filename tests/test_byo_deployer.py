@@ -136,6 +136,42 @@ def test_a_generated_pytest_replays_a_file_deployer_from_any_directory(tmp_path,
     assert proc.returncode == 0, proc.stdout[-2000:]
 
 
+
+def test_a_generated_pytest_replays_a_module_deployer_from_any_directory(tmp_path, monkeypatch, capsys):
+    """A module:NAME deployer is looked up where desmon verify ran first: the generated test
+    looks there first again, wherever it runs."""
+    import subprocess
+
+    _write(tmp_path, "buggy_module.py", BUGGY)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "generated").mkdir()  # not beside the module (pytest puts a test's folder on the path)
+    test = tmp_path / "generated" / "test_cex.py"
+    assert main(["verify", COFFEE, "--deployer", "buggy_module:react", "--no-progress", "--pytest", str(test)]) == 1
+    capsys.readouterr()
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(test)], cwd=elsewhere, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout[-2000:]
+
+
+def test_a_saved_counterexample_of_a_file_deployer_replays_from_any_directory(tmp_path, monkeypatch, capsys):
+    """--json records the deployer's file by its absolute path: from another directory, the
+    same file named by another relative path replays it, and so does the path the refusal
+    of another deployer suggests."""
+    (tmp_path / "dep").mkdir()
+    _write(tmp_path / "dep", "buggy.py", BUGGY)
+    monkeypatch.chdir(tmp_path)
+    assert main(["verify", COFFEE, "--deployer", "dep/buggy.py:react", "--no-progress", "--json", "cex.json"]) == 1
+    assert json.loads((tmp_path / "cex.json").read_text())["deployer"] == f"{tmp_path / 'dep' / 'buggy.py'}:react"
+    capsys.readouterr()
+    monkeypatch.chdir(tmp_path / "dep")
+    assert main(["verify", COFFEE, "--deployer", "buggy.py:react", "--replay", "../cex.json"]) == 1
+    assert "the counterexample still holds" in capsys.readouterr().out
+    assert main(["verify", COFFEE, "--replay", "../cex.json"]) == 2
+    suggested = capsys.readouterr().err.split("pass --deployer ")[1].split(" ")[0]
+    assert main(["verify", COFFEE, "--deployer", suggested, "--replay", "../cex.json"]) == 1
+
+
 BAD = {
     "no_colon": (None, "foo", "not a deployer; give one of paper, desmon, desmon-keep-fallback, mutant:NAME"),
     "file_without_name": (None, "mine.py", "name it: mine.py:NAME"),

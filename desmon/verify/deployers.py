@@ -225,6 +225,17 @@ def portable_spec(spec: str) -> str:
     return spec
 
 
+def module_folder(spec: str) -> str | None:
+    """Where a ``module:NAME`` spec of the user's is looked up first: the current directory
+    (as ``python -m`` does; :func:`_import`), which a generated test puts first on its path
+    to import the same module from anywhere. None for a file, a built-in or a mutant."""
+    spec = portable_spec(spec)
+    source, colon, _name = spec.rpartition(":")
+    if not colon or not source or source == MUTANT_PREFIX or _is_file(source) or Path(source).is_absolute():
+        return None
+    return os.getcwd()
+
+
 @contextlib.contextmanager
 def _loading(spec: str, source: str, rerun: str, module: str | None = None) -> Iterator[None]:
     """Run a user's module: what it prints goes to stderr; whatever it raises is one line; a

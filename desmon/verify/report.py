@@ -152,9 +152,11 @@ def counterexample_to_json(c: Counterexample) -> dict[str, Any]:
 def result_to_json(r: CheckResult, params: dict[str, str] | None = None) -> dict[str, Any]:
     """The result as ``desmon verify --json`` writes it; ``params``: the run's ``-p NAME=VALUE``
     parameters (``desmon verify --replay`` refuses to replay it with other ones)."""
+    from desmon.verify.deployers import portable_spec
+
     return {
         "scenario": r.scenario,
-        "deployer": r.deployer,
+        "deployer": portable_spec(r.deployer),  # a file's path made absolute: --replay from any directory
         **({"params": dict(params)} if params is not None else {}),
         "verdict": r.verdict,
         "reason": r.reason,
@@ -385,6 +387,8 @@ the complete reaction of the DeploymentCore over the networkx repository
 FAILS fail. The test asserts the invariant is violated where the checker said.
 """
 
+import sys
+
 from desmon.deployment.invariants import TRANSITION_INVARIANTS, SystemView, check_invariants, get_invariants
 from desmon.loader import load_scenario
 {event_imports}
@@ -395,11 +399,16 @@ from desmon.verify.deployers import resolve_deployer
 SCENARIO = {scenario_path!r}
 PARAMS = {params!r}  # the -p NAME=VALUE parameters of the run that found it
 DEPLOYER = {deployer!r}
+#: the folder desmon verify ran in, where a module:NAME deployer was looked up first (None:
+#: a file or built-in deployer); looked up there first again, from wherever this test runs
+DEPLOYER_FOLDER = {folder!r}
 INITIAL_ACTION = {initial_action!r}
 
 
 def replay(steps, after_command=None):
     """The initial state and the state after each step; ``after_command(run)`` is called after every Start/Stop."""
+    if DEPLOYER_FOLDER is not None and DEPLOYER_FOLDER not in sys.path:
+        sys.path.insert(0, DEPLOYER_FOLDER)
     run = RepositoryRun(load_scenario(SCENARIO, PARAMS), resolve_deployer(DEPLOYER))
     assert run.bounds.start_action(run.scenario) == INITIAL_ACTION, "not the checker's initial state"
     if after_command is not None:
@@ -443,10 +452,11 @@ def test_{name}():
 def counterexample_pytest(
     r: CheckResult, scenario_path: str, initial_action: str | None, params: dict[str, str] | None = None
 ) -> str:
-    from desmon.verify.deployers import portable_spec
+    from desmon.verify.deployers import module_folder, portable_spec
 
     src = _PYTEST.format(
         scenario_path=scenario_path, params=dict(params or {}), deployer=portable_spec(r.deployer), initial_action=initial_action,
+        folder=module_folder(r.deployer),
         event_imports=_event_imports(), requirement_imports=_requirement_imports(),
     )
     for c in r.counterexamples:
