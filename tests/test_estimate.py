@@ -87,7 +87,8 @@ def test_a_threshold_question_answers_yes_or_no_with_its_error_probability(capsy
 
 
 def test_a_probability_comes_with_clopper_pearson_beside_its_sequence(capsys):
-    code, out, _err = _estimate(capsys, QUICK, "--at-least", "1", "--within", "0.1", "--json")
+    # exponential timing: a run's exposure is not known before it (fixed timing fixes it at 1 s or more)
+    code, out, _err = _estimate(capsys, VARIED, "--timing", "exponential", "--at-least", "1", "--within", "0.1", "--json")
     doc = _strict(out)
     assert code == 0 and doc["kind"] == "probability" and doc["estimate"] == 1.0 and doc["high"] == 1.0
     assert doc["half_width"] <= 0.1 and doc["range"] is None
@@ -95,8 +96,28 @@ def test_a_probability_comes_with_clopper_pearson_beside_its_sequence(capsys):
     assert doc["approximation"]["low"] > doc["low"]  # the fixed-n interval is narrower: it may not be stopped on
 
 
+def test_a_question_the_proven_range_answers_is_answered_without_a_run(capsys):
+    """Under fixed timing the task fixes two_detectors' no-rule seconds (every run: 1 s or
+    more unmonitored), and no run of coffee_handover lasts 100 s: no run could add to what
+    the range says, and a relative precision of a figure that is 0 is never reached."""
+    code, _out, err = _estimate(capsys, QUICK, "--at-least", "1")
+    assert code == 2 and "so the probability is 1 without a run; nothing to estimate" in err
+    code, _out, err = _estimate(capsys, VARIED, "--timing", "exponential", "--at-least", "100")
+    assert code == 2 and "exposure_s lies in [0, 28] in every run (runs of 28 s), so the probability is 0 without a run" in err
+    code, _out, err = _estimate(capsys, QUICK, "--metric", "leased_s")
+    assert code == 2 and "every run gives 0 s, known without a run: the World leases no platform" in err
+
+
+def test_a_range_narrower_than_the_one_desmon_proves_is_taken_and_said_to_rest_on_the_user(capsys):
+    code, out, _err = _estimate(capsys, VARIED, "--timing", "exponential", "--within", "40%", "--range", "0", "20", "--seed", "2")
+    assert code == 0 and "every run's value assumed in [0, 20]" in out
+    assert "range: --range as given, narrower than the [0, 28] desmon can prove for exposure_s" in out
+    code, out, _err = _estimate(capsys, VARIED, "--timing", "exponential", "--within", "40%", "--range", "0", "30", "--seed", "2")
+    assert code == 0 and "narrower" not in out
+
+
 def test_walds_test_answers_a_probability_threshold(capsys):
-    code, out, _err = _estimate(capsys, QUICK, "--at-least", "1", "--below", "0.5", "--within", "0.1")
+    code, out, _err = _estimate(capsys, VARIED, "--timing", "exponential", "--at-least", "1", "--below", "0.5", "--within", "0.1")
     assert code == 1 and "NO, P(exposure_s >= 1) is not below 0.5" in out and "Wald's sequential probability ratio test" in out
 
 

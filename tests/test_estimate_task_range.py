@@ -89,12 +89,32 @@ def test_an_action_excluded_on_purpose_leaves_the_exposures_range_and_keeps_the_
     assert natural_range("exposure_s", 3600.0, sc)[1] == pytest.approx(ts.risky - ts.excluded, abs=1e-3)
 
 
+def test_leased_seconds_sum_the_platforms_leased_at_once_so_their_range_is_the_horizon_times_those_platforms():
+    """Each leased platform adds its own seconds: two leased at once for a whole run give
+    twice the horizon, which [0, horizon] would refuse (or, were every run below it,
+    take as a guarantee resting on a false range)."""
+    from desmon.sim.engine import simulate
+    from desmon.sim.world import Lease
+
+    sc = load_scenario(ROOT / "scenarios" / "cloud_offload.py")
+    world = world_of(sc)
+    on_demand = [p.name for p in sc.model.platforms if p.on_demand]
+    assert on_demand and world.lease is not None
+    assert natural_range("leased_s", 100.0, sc) == (0.0, 100.0 * len(world.lease.platforms or on_demand))
+    one = replace(sc, world=replace(world, lease=Lease(platforms=(on_demand[0],))))
+    assert natural_range("leased_s", 100.0, one) == (0.0, 100.0)
+    assert natural_range("leased_s", 100.0) is None  # no scenario to ask: a range must be declared
+    run = simulate(sc, "desmon", seed=0).metrics
+    assert 0.0 <= run["leased_s"] <= natural_range("leased_s", world.horizon, sc)[1]
+
+
 def test_a_task_whose_steps_vary_with_the_seed_keeps_the_horizon_as_the_range():
     sc = load_scenario(ROOT / "scenarios" / "coffee_shift.py", {"hours": "1"})
     varied = replace(sc, world=replace(world_of(sc), timing="exponential"))
     assert task_seconds(varied, 3600.0) is None
-    assert all(natural_range(m, 3600.0, varied) == (0.0, 3600.0) for m in SECONDS)
+    assert all(natural_range(m, 3600.0, varied) == (0.0, 3600.0) for m in SECONDS if m != "leased_s")
     assert natural_range("exposure_s", 3600.0) == (0.0, 3600.0)  # no scenario: only the horizon is known
+    assert natural_range("leased_s", 3600.0, varied) == (0.0, 0.0)  # no lease: nothing is ever leased
     assert natural_range("starts", 3600.0, sc) is None  # a count: no range known in advance
 
 

@@ -17,7 +17,9 @@ from dataclasses import asdict, dataclass
 from typing import Any, Callable, Iterable, Iterator
 
 from desmon.errors import EstimateError
-from desmon.estimate.measures import DEFAULT_METRIC, LONGEST, check_metric, longest_exposure, natural_range, range_basis, value_of
+from desmon.estimate.measures import (
+    DEFAULT_METRIC, LONGEST, ROUNDING_S, TASK_SLACK, check_metric, longest_exposure, natural_range, range_basis, value_of,
+)
 from desmon.stats import BettingSequence, Interval, ProportionSequence, WaldTest, clopper_pearson, normal_interval
 
 __all__ = ["Question", "Estimate", "estimate", "run_seed", "run_value", "serial_values", "is_look", "world_horizon", "Tracker", "with_world", "parse_within"]
@@ -436,8 +438,14 @@ def estimate(
     q = question if question is not None else Question()
     q.check()
     horizon = world_horizon(scenario, until)
-    value_range = q.range or natural_range(q.metric, horizon, scenario)
+    known = natural_range(q.metric, horizon, scenario)
+    value_range = q.range or known
     basis = range_basis(q.metric, horizon, scenario) if q.range is None and q.kind == "mean" else None
+    if q.range is None and known is not None:
+        _refuse_known(q, known, horizon, basis or range_basis(q.metric, horizon, scenario))
+    if q.range is not None and known is not None and (q.range[0] > known[0] or q.range[1] < known[1]):
+        basis = (f"--range as given, narrower than the [{known[0]:,.6g}, {known[1]:,.6g}] desmon can prove for {q.metric}: "
+                 "the guarantee holds only if no run can fall outside the range given (a run that does is refused)")
     if q.kind == "mean" and value_range is None:
         raise EstimateError(
             f"--metric {q.metric} is a count with no bound known in advance, which a guaranteed interval of its mean needs: "
@@ -462,6 +470,31 @@ def estimate(
         test_method=_test_method(tracker, status) if q.below is not None else None,
         low_value=min(tracker.values), high_value=max(tracker.values),
     )
+
+
+def _refuse_known(q: Question, known: tuple[float, float], horizon: float, basis: str | None) -> None:
+    """An EstimateError where ``known`` (the range desmon proves for every run's figure)
+    answers the question without a run: a figure every run gives alike (up to the meter's
+    rounding), or a threshold no run can reach or every run reaches. Runs could not add
+    to it, and a relative precision of a figure that is 0 is never reached."""
+    why = basis or ("the World leases no platform" if q.metric == "leased_s" else f"runs of {horizon:,.6g} s")
+    lo, hi = known
+    if q.kind == "probability":
+        assert q.at_least is not None
+        p = 0 if q.at_least > hi else 1 if q.at_least <= lo else None
+        if p is not None:
+            raise EstimateError(
+                f"--at-least {q.at_least:g}: {q.metric} lies in [{lo:,.6g}, {hi:,.6g}] in every run ({why}), so the probability "
+                f"is {p} without a run; nothing to estimate"
+            )
+        return
+    slack = ROUNDING_S + TASK_SLACK * horizon  # how far natural_range widens a fixed value at each end
+    if hi - lo <= 2 * slack * (1 + 1e-9):
+        value = max(lo, hi - slack)
+        raise EstimateError(
+            f"--metric {q.metric}: every run gives {value:,.6g} s{f' (to within {slack:.2g} s)' if hi > lo else ''}, known without a run: {why}; "
+            "nothing to estimate"
+        )
 
 
 #: how a mean's threshold question was (or was not yet) answered by its confidence sequence, by answer

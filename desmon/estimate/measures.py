@@ -39,7 +39,8 @@ LONGEST = LONGEST_EXPOSURE
 METRICS: tuple[str, ...] = (
     *(m for m in RUN_FIGURES if m not in _UNDEFINED), LONGEST, *(f"errors_{k}" for k in ERROR_KINDS), *RUNTIME_CHANGES,
 )
-#: the figures in seconds of simulated time: in [0, horizon] in every run
+#: the figures in seconds of simulated time: in [0, horizon] in every run (``leased_s``, summed
+#: over the platforms leased at once, in [0, horizon x those platforms])
 SECONDS: frozenset[str] = frozenset(m for m in METRICS if m.endswith("_s"))
 
 
@@ -106,6 +107,9 @@ def natural_range(metric: str, horizon: float, scenario: Any = None) -> tuple[fl
     by :data:`ROUNDING_S` and :data:`TASK_SLACK` of the horizon for the meter's rounding)."""
     if metric not in SECONDS:
         return None
+    if metric == "leased_s":  # summed over the platforms leased at once: each adds at most the horizon
+        leasable = _leasable(scenario)
+        return None if leasable is None else (0.0, float(horizon) * leasable)
     full = (0.0, float(horizon))
     fixed = task_seconds(scenario, horizon) if scenario is not None and metric in _TASK_BOUNDED else None
     if fixed is None:
@@ -120,6 +124,19 @@ def natural_range(metric: str, horizon: float, scenario: Any = None) -> tuple[fl
     }.get(metric, (0.0, watched - fixed.no_rule))
     slack = ROUNDING_S + TASK_SLACK * float(horizon)
     return max(0.0, lo - slack), min(float(horizon), hi + slack)
+
+
+def _leasable(scenario: Any) -> int | None:
+    """How many platforms the World may lease at once (None without a scenario to ask): its
+    lease's platforms, or every on-demand platform of the model; 0 without a lease."""
+    if scenario is None:
+        return None
+    from desmon.sim.world import world_of
+
+    lease = world_of(scenario).lease
+    if lease is None:
+        return 0
+    return len(lease.platforms) if lease.platforms else sum(1 for p in scenario.model.platforms if p.on_demand)
 
 
 def range_basis(metric: str, horizon: float, scenario: Any) -> str | None:
