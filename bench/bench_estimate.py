@@ -139,6 +139,7 @@ def _dask(workers: int, runs: int, until: float) -> tuple[float, object]:
 
     from desmon.estimate import Question, estimate
     from desmon.loader import load_scenario
+    from desmon.estimate.loop import RunSeeds
     from desmon.sweep.estimate import BatchSpec, dask_values, run_batch
     from desmon.sweep.runner import dask_settings
 
@@ -148,7 +149,8 @@ def _dask(workers: int, runs: int, until: float) -> tuple[float, object]:
     try:
         with Client(cluster, set_as_default=False) as client:  # warm-up: one run on every worker
             addresses = list(client.scheduler_info()["workers"])
-            client.gather([client.submit(run_batch, spec, 10_000 + i, 1, workers=[a], pure=False) for i, a in enumerate(addresses)])
+            warm = RunSeeds(spec.seed).batch(10_000, len(addresses))
+            client.gather([client.submit(run_batch, spec, [warm[i]], workers=[a], pure=False) for i, a in enumerate(addresses)])
         t0 = time.perf_counter()
         q = Question(within=1e-9, relative=True, confidence=0.99, max_runs=runs)
         e = estimate(load_scenario(SCENARIOS["coffee_shift"]), q, until=until, values=dask_values(spec, scheduler=cluster.scheduler_address))

@@ -55,6 +55,18 @@ def test_the_same_seed_gives_the_same_bytes_and_another_seed_other_runs(capsys):
     assert len({run_seed(4, i) for i in range(100)} | {run_seed(5, i) for i in range(100)}) == 200  # no run shared
 
 
+def test_no_run_of_an_estimation_repeats_an_earlier_one_even_where_two_first_draws_coincide():
+    """Runs 487 and 804 of --seed 42 draw the same 32-bit seed first (found by search): run 804
+    takes its stream's next draw, every other run its first."""
+    from desmon.estimate.loop import RunSeeds
+
+    assert run_seed(42, 487) == run_seed(42, 804)
+    seeds = RunSeeds(42).batch(0, 805)
+    assert len(set(seeds)) == 805
+    assert [i for i in range(805) if seeds[i] != run_seed(42, i)] == [804]
+    assert RunSeeds(42).batch(800, 5) == seeds[800:]  # handed out in batches, the same seeds
+
+
 def test_the_run_budget_ends_incomplete_with_the_interval_of_the_runs_made(capsys):
     code, out, err = _estimate(capsys, QUICK, "--within", "0.1%", "--max-runs", "4", "--json")
     doc = _strict(out)

@@ -3,7 +3,9 @@ guaranteed interval is as narrow as asked (or a yes/no answer is reached), the r
 budget is spent or the time is up.
 
 Run ``i`` (counted from 0) of an estimation with seed ``s`` runs the world with the seed
-:func:`run_seed` ``(s, i)``; the runs' values are taken in that order, whoever computed
+:func:`run_seed` ``(s, i)``, or, should an earlier run have drawn that 32-bit seed already,
+the next draw no run took (:class:`RunSeeds`: no run is repeated); the runs' values are
+taken in that order, whoever computed
 them (this process, or Dask workers in batches: :mod:`desmon.sweep.estimate`), and the
 stopping rule is applied at fixed looks (:func:`is_look`), so an estimation's output
 depends on its seed and its question only, not on the number of workers.
@@ -22,7 +24,7 @@ from desmon.estimate.measures import (
 )
 from desmon.stats import BettingSequence, Interval, ProportionSequence, WaldTest, clopper_pearson, normal_interval
 
-__all__ = ["Question", "Estimate", "estimate", "run_seed", "run_value", "serial_values", "is_look", "world_horizon", "Tracker", "with_world", "parse_within"]
+__all__ = ["Question", "Estimate", "estimate", "run_seed", "RunSeeds", "run_value", "serial_values", "is_look", "world_horizon", "Tracker", "with_world", "parse_within"]
 
 #: ``status`` of an estimation: done as asked, or INCOMPLETE (exit 3) at the run budget or the time limit
 PRECISE, DECIDED, MAX_RUNS, TIMEOUT = "precise", "decided", "max-runs", "timeout"
@@ -30,12 +32,44 @@ PRECISE, DECIDED, MAX_RUNS, TIMEOUT = "precise", "decided", "max-runs", "timeout
 LOOKS_DENSE = 64
 
 
+#: a word of every run's seed sequence, so an estimation's streams are its own
+_ESTIMATE_TAG = 0x65737469
+
+
 def run_seed(seed: int, index: int) -> int:
-    """The world seed of run ``index`` of an estimation with ``seed`` (independent streams, so two
-    estimations with different seeds share no run)."""
+    """The first world seed drawn for run ``index`` of an estimation with ``seed`` (an
+    independent stream per run; :class:`RunSeeds` gives the one the run takes)."""
     import numpy as np
 
-    return int(np.random.SeedSequence([int(seed), int(index), 0x65737469]).generate_state(1)[0])
+    return int(np.random.SeedSequence([int(seed), int(index), _ESTIMATE_TAG]).generate_state(1)[0])
+
+
+class RunSeeds:
+    """The world seeds of an estimation's runs in index order, each one distinct: run ``i``
+    takes :func:`run_seed` ``(s, i)``, or, where an earlier run took that seed already, the
+    next 32-bit draw of run ``i``'s own sequence that none took. Two of 10,000 draws of 32
+    bits coincide with chance about 1 %, and a repeated seed repeats a whole run, which
+    independent runs must not do. Computed once, in order, by whoever hands the runs out."""
+
+    def __init__(self, seed: int) -> None:
+        self.seed = int(seed)
+        self._seeds: list[int] = []
+        self._taken: set[int] = set()
+
+    def batch(self, start: int, count: int) -> list[int]:
+        """The seeds of runs ``start`` .. ``start + count - 1``."""
+        import numpy as np
+
+        while len(self._seeds) < start + count:
+            draws = np.random.SeedSequence([self.seed, len(self._seeds), _ESTIMATE_TAG])
+            k = 1
+            s = int(draws.generate_state(1)[0])
+            while s in self._taken:  # (the first draws of generate_state(k) are those of a shorter k)
+                k += 1
+                s = int(draws.generate_state(k)[k - 1])
+            self._taken.add(s)
+            self._seeds.append(s)
+        return self._seeds[start:start + count]
 
 
 def parse_within(text: str) -> tuple[float, bool]:
@@ -358,8 +392,10 @@ def serial_values(scenario: Any, deployer: Any, seed: int, until: float | None, 
 
     i = 0
     collector = Collector()  # the runs' garbage is collected once it adds up, not after each
+    seeds = RunSeeds(seed)
     while True:
-        yield run_value(scenario, deployer, run_seed(seed, i), until, metric, guard, collector)
+        (s,) = seeds.batch(i, 1)
+        yield run_value(scenario, deployer, s, until, metric, guard, collector)
         i += 1
 
 

@@ -3,7 +3,8 @@ their values handed back in seed order.
 
 :func:`dask_values` is a drop-in for the loop's own serial runs
 (:func:`desmon.estimate.estimate`'s ``values``): batch ``k`` holds consecutive run indices,
-each run with its seed :func:`~desmon.estimate.run_seed` ``(seed, i)``; a few batches per
+each run with its seed from :class:`~desmon.estimate.loop.RunSeeds` (handed out here, in
+order, with the batch); a few batches per
 worker are in flight; their values are yielded in index order, so the stopping rule
 (applied by the loop between values) sees the same sequence whatever the number of
 workers. A batch is sized to take about ``batch_seconds`` on a worker (from the wall
@@ -20,7 +21,7 @@ import uuid
 from dataclasses import dataclass
 from typing import Any, Iterator
 
-from desmon.estimate.loop import run_seed, run_value, with_world
+from desmon.estimate.loop import RunSeeds, run_value, with_world
 
 __all__ = ["BatchSpec", "run_batch", "dask_values", "BATCH_SECONDS", "MAX_BATCH"]
 
@@ -45,8 +46,9 @@ class BatchSpec:
     max_commands: int | None = None
 
 
-def run_batch(spec: BatchSpec, start: int, count: int) -> tuple[list[float], float]:
-    """In a worker: the values of runs ``start`` .. ``start + count - 1`` and the wall seconds they took.
+def run_batch(spec: BatchSpec, seeds: list[int]) -> tuple[list[float], float]:
+    """In a worker: the values of the runs of world seeds ``seeds`` (a batch of consecutive runs,
+    :class:`~desmon.estimate.loop.RunSeeds`) and the wall seconds they took.
     A DesmonError (a value outside the declared range, a deployer that fails) reaches the caller."""
     from desmon.deployment.guard import MAX_COMMANDS, Guard
     from desmon.sim.collector import Collector
@@ -58,7 +60,7 @@ def run_batch(spec: BatchSpec, start: int, count: int) -> tuple[list[float], flo
     deployer = resolve_deployer(spec.deployer)
     guard = Guard(spec.max_commands or MAX_COMMANDS)
     collector = worker_collector() or Collector()  # the batch's runs share one (the worker's, on Dask)
-    values = [run_value(scenario, deployer, run_seed(spec.seed, i), spec.until, spec.metric, guard, collector) for i in range(start, start + count)]
+    values = [run_value(scenario, deployer, s, spec.until, spec.metric, guard, collector) for s in seeds]
     return values, time.perf_counter() - t0
 
 
@@ -79,10 +81,12 @@ def dask_values(
         token = uuid.uuid4().hex[:12]
         pending: list[tuple[int, int, Any]] = []  # (start, count, future), in index order
         next_start, size, per_run = 0, 1, math.nan
+        seeds = RunSeeds(spec.seed)  # handed out here, in order: each run's own, none repeated
         try:
             while True:
                 while len(pending) < 2 * threads:
-                    fut = client.submit(run_batch, spec, next_start, size, key=f"desmon-estimate-{token}-{next_start}", pure=False, retries=retries)
+                    fut = client.submit(run_batch, spec, seeds.batch(next_start, size), key=f"desmon-estimate-{token}-{next_start}",
+                                        pure=False, retries=retries)
                     pending.append((next_start, size, fut))
                     next_start += size
                 start, count, fut = pending.pop(0)
