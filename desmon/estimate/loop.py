@@ -474,6 +474,7 @@ def estimate(
     q = question if question is not None else Question()
     q.check()
     horizon = world_horizon(scenario, until)
+    _check_alarms_rendered(q.metric, scenario)
     known = natural_range(q.metric, horizon, scenario)
     value_range = q.range or known
     basis = range_basis(q.metric, horizon, scenario) if q.range is None and q.kind == "mean" else None
@@ -506,6 +507,19 @@ def estimate(
         test_method=_test_method(tracker, status) if q.below is not None else None,
         low_value=min(tracker.values), high_value=max(tracker.values),
     )
+
+
+def _check_alarms_rendered(metric: str, scenario: Any) -> None:
+    """An EstimateError for a figure of the detectors' alarms in a world that renders no
+    signals (``--no-signals``, or a World with ``signals=False``): no run could alarm."""
+    from desmon.sim.metrics import ALARM_FIGURES
+    from desmon.sim.world import world_of
+
+    if metric in ALARM_FIGURES and not world_of(scenario).signals:
+        raise EstimateError(
+            f"--metric {metric} counts the detectors' alarms, and this world renders no sensor signals (--no-signals, or the "
+            "World's signals=False), so no detector runs: drop --no-signals, or estimate a figure of the deployment"
+        )
 
 
 def _refuse_known(q: Question, known: tuple[float, float], horizon: float, basis: str | None) -> None:
