@@ -10,6 +10,7 @@ came first (the interval of the runs made is printed all the same).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -105,6 +106,18 @@ def _world_changes(args: argparse.Namespace) -> dict[str, Any]:
     return changes
 
 
+def _world_given(args: argparse.Namespace) -> tuple[str, ...]:
+    """How the command changes the scenario's world, in its own words (the report's ``world:`` line)."""
+    from desmon.model.params import parse_assignments
+
+    given = [f"-p {k}={v}" for k, v in sorted(parse_assignments(args.param).items())]
+    if args.timing is not None:
+        given.append(f"--timing {args.timing}")
+    if args.no_signals:
+        given.append("--no-signals")
+    return tuple(given)
+
+
 def _dask_source(args: argparse.Namespace, question: Any) -> Any:
     """The runs' values computed on Dask (``--workers``, ``--scheduler``), or None: in this process."""
     if args.workers is None and args.scheduler is None:
@@ -163,6 +176,7 @@ def run(args: argparse.Namespace) -> int:
         )
     finally:
         line.close()
+    result = dataclasses.replace(result, world=_world_given(args))
     if args.json:
         sys.stdout.write(json.dumps(result.to_json(), indent=2, allow_nan=False) + "\n")
     else:
@@ -200,6 +214,8 @@ def format_estimate(e: Any) -> str:
     pct = f"{100 * q.interval_confidence:.10g} %"  # (every digit given: 0.9999999 is not 100 %)
     what = f"P({q.metric} >= {q.at_least:g}) per run" if q.kind == "probability" else f"mean {q.metric} per run"
     out = [f"desmon estimate: {e.scenario} (deployer {e.deployer}), {what} of {_n(e.horizon)} s simulated, seed {e.seed}"]
+    if e.world:
+        out.append(f"  world: the scenario's, with {' '.join(e.world)}")
     rel = f" = {100 * iv.half_width / abs(iv.estimate):.2f} % of the estimate" if iv.estimate else ""
     out.append(f"  estimate {f(iv.estimate)}, {pct} interval [{f(iv.low)}, {f(iv.high)}] (half-width {f(iv.half_width)}{rel}), guaranteed")
     out.append(f"    method: {iv.method}" + (f"; every run's value assumed in [{_n(e.range[0])}, {_n(e.range[1])}]" if e.range else ""))

@@ -228,6 +228,9 @@ class Estimate:
     test_method: str | None = None
     low_value: float = math.nan
     high_value: float = math.nan
+    #: how the runs' world differs from the scenario file as written, as given on the command
+    #: line (``-p hours=0.1``, ``--timing exponential``, ``--no-signals``; empty: not at all)
+    world: tuple[str, ...] = ()
 
     @property
     def runs(self) -> int:
@@ -247,7 +250,7 @@ class Estimate:
             "approximation": {"low": _finite(ap.low), "high": _finite(ap.high), "method": ap.method},
             "range": list(self.range) if self.range is not None else None, "range_basis": self.range_basis,
             "answer": self.answer, "test_method": self.test_method,
-            "min_value": self.low_value, "max_value": self.high_value,
+            "min_value": self.low_value, "max_value": self.high_value, "world": list(self.world),
         }
 
 
