@@ -128,6 +128,17 @@ def test_a_range_narrower_than_the_one_desmon_proves_is_taken_and_said_to_rest_o
     assert code == 0 and "narrower" not in out
 
 
+def test_the_report_says_how_the_command_changed_the_scenarios_world(capsys):
+    """The Markov abstraction's timing and the world as written give different estimates:
+    the report names the changes, the scenario's own world shows no such line."""
+    code, out, _err = _estimate(capsys, VARIED, "--timing", "exponential", "--no-signals", "--within", "40%")
+    assert code == 0 and out.splitlines()[1] == "  world: the scenario's, with --timing exponential --no-signals"
+    code, out, _err = _estimate(capsys, VARIED, "--timing", "exponential", "--no-signals", "--within", "40%", "--json")
+    assert _strict(out)["world"] == ["--timing exponential", "--no-signals"]
+    code, out, _err = _estimate(capsys, QUICK, "--within", "40%")
+    assert code == 0 and "world:" not in out
+
+
 def test_walds_test_answers_a_probability_threshold(capsys):
     code, out, _err = _estimate(capsys, VARIED, "--timing", "exponential", "--at-least", "1", "--below", "0.5", "--within", "0.1")
     assert code == 1 and "NO, P(exposure_s >= 1) is not below 0.5" in out and "Wald's sequential probability ratio test" in out
