@@ -586,3 +586,19 @@ def test_the_shortcut_for_reactions_that_start_and_stop_nothing_builds_the_same_
     assert name != "cloud_offload" or any(s.idle for s in full.states)
     for a, b in ((fast.rows, full.rows), (fast.cols, full.cols), (fast.rates, full.rates), (fast.unmonitored, full.unmonitored)):
         assert np.array_equal(a, b)
+
+
+def test_a_device_failed_from_the_start_is_physically_failed_in_the_chain_as_in_the_world():
+    """coffee_shift with its wrench failed at the start and slow repairs: the chain's first
+    state has the wrench physically failed (the world applies the initial failure), so no
+    repair is noticed that never happened, and the exact figure lies in the world's interval."""
+    from desmon.model.events import DeviceFail
+
+    sc = load_scenario(SHIFT, {"faults": "True"})
+    world = replace(sc.world, stochastic_faults=tuple(replace(m, mttr=3000.0) for m in sc.world.stochastic_faults))
+    broken = replace(sc, initial=(*sc.initial, DeviceFail("lwr_wrench")), world=world)
+    chain = build_chain(broken, "desmon", markov_world(broken), miss={})
+    firsts = [chain.states[i] for i, _p in chain.initial]
+    assert firsts and all(s.phys_failed == ("lwr_wrench",) and s.key.failed == ("lwr_wrench",) for s in firsts)
+    exact = analyze(broken, miss={}, horizon=600.0, steady=False).exposure_s_per_mission
+    assert agreement(exact, simulated_exposure(broken, "desmon", range(40), 600.0)).inside

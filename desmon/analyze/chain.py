@@ -559,7 +559,7 @@ def build_chain(
         key0 = b.system.initial()
     except CheckerError as exc:
         raise AnalysisError(str(exc)) from None
-    s0 = ChainState(key0, 0, 0, (), tuple(sorted(key0.down)), ())
+    s0 = ChainState(key0, 0, 0, tuple(sorted(key0.failed)), tuple(sorted(key0.down)), ())  # what fails at the start is physically failed
     start = [(1.0, s0)]
     if mw.recognition_delay == 0:  # the monitor sees the first step at once: its reaction's outcomes
         start = [(p, t) for p, t, _c in b._deliver(s0, b.event("action", None, recognised(mw.steps[0][0])), 1.0)[2]]
