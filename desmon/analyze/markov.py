@@ -252,6 +252,12 @@ def _check_unrated(scenario: Scenario, world: World) -> None:
     if world.start_failure.script:
         g, p, n = world.start_failure.script[0]
         raise _refuse(scenario, f"World start failure script ({g} on {p}, attempt {n}) is scripted: give StartFailure(probability=...) instead")
+    if world.slips:
+        raise _refuse(
+            scenario,
+            f"World slips are scripted (a slip at {world.slips[0].time:g} s): a Markov chain counts slips by their rate, and "
+            "would leave these out of its undetected slips; give slip_rate=... (slips per second of object-in-hand time) instead",
+        )
 
 
 def _check_variables(scenario: Scenario, world: World, b: Bounds) -> None:
