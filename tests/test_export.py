@@ -83,6 +83,21 @@ def test_several_initial_states_carry_their_probabilities(crash, tmp_path):
     assert s.exposure_s_per_mission == pytest.approx(_exposure(chain, p0), rel=1e-6)
 
 
+def test_a_prism_export_of_several_initial_states_says_it_cannot_carry_their_probabilities(crash, tmp_path):
+    """The .lab file marks both states init alike: a PRISM solver reading the files cannot
+    know the chain starts in state 3 three times as often as in state 0."""
+    from desmon.analyze.export import prism_initial_note
+
+    chain = replace(crash.chain, initial=((0, 0.25), (3, 0.75)))
+    files = export_all(chain, str(tmp_path / "i.tra"))
+    marked = [line.split(":")[0] for line in Path(files[2]).read_text().splitlines()[1:] if "0" in line.split(":")[1].split()]
+    assert marked == ["0", "3"]  # both "init", no probability anywhere
+    note = prism_initial_note(chain, str(tmp_path / "i.tra"))
+    assert note is not None and "starts in 2 states (state 0 0.25, state 3 0.75)" in note and "export FILE.drn" in note
+    assert prism_initial_note(chain, str(tmp_path / "i.drn")) is None  # the DRN header states the distribution
+    assert prism_initial_note(crash.chain, str(tmp_path / "one.tra")) is None  # one initial state: nothing lost
+
+
 def test_an_export_is_all_of_its_files_or_none(tmp_path, monkeypatch, capsys):
     out = tmp_path / "c.drn"
     beside = tmp_path / "c-placements.drn"

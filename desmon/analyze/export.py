@@ -126,6 +126,18 @@ def initial_distribution(path: str | Path) -> tuple[tuple[int, float], ...] | No
 _INITIAL = "// initial distribution:"
 
 
+def prism_initial_note(chain: Chain, path: str) -> str | None:
+    """What a PRISM export of ``chain`` cannot say (None where it says it all): the
+    probabilities of several initial states, which its ``.lab`` file marks ``init`` alike."""
+    init = [(i, p) for i, p in chain.initial if p > 0]
+    if path.lower().endswith(".drn") or len(init) < 2:
+        return None
+    shown = ", ".join(f"state {i} {p:.6g}" for i, p in init[:4]) + (", ..." if len(init) > 4 else "")
+    return (f"(the chain starts in {len(init)} states ({shown}): the .lab file marks each 'init', and PRISM's explicit "
+            "files cannot carry their probabilities, so a solver reading them gives figures per initial state or for "
+            "another start, not the ones above; export FILE.drn for a file that states the distribution)")
+
+
 def placements_path(path: str) -> str | None:
     """Where ``--export path`` writes the placement MDP (None: ``path``'s format has no MDPs)."""
     return path[: -len(".drn")] + "-placements.drn" if path.lower().endswith(".drn") else None

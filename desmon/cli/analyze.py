@@ -145,6 +145,12 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write(gap.text())
     sys.stdout.write(format_cross_check(cross))
     _say_written(files, args.export if gap is not None else None)
+    if files:
+        from desmon.analyze.export import prism_initial_note
+
+        note = prism_initial_note(result.chain, args.export)
+        if note:
+            sys.stdout.write(note + "\n")
     return EXIT_VIOLATED if (agree is not None and not agree.inside) or _disagree(cross) else EXIT_OK
 
 
