@@ -602,3 +602,26 @@ def test_a_device_failed_from_the_start_is_physically_failed_in_the_chain_as_in_
     assert firsts and all(s.phys_failed == ("lwr_wrench",) and s.key.failed == ("lwr_wrench",) for s in firsts)
     exact = analyze(broken, miss={}, horizon=600.0, steady=False).exposure_s_per_mission
     assert agreement(exact, simulated_exposure(broken, "desmon", range(40), 600.0)).inside
+
+
+def test_a_krylov_step_whose_exponential_overflows_is_taken_again_shorter():
+    """coffee_shift with a 0.1 us idle step: rates 1e7 apart (well within double precision)
+    let a step's error estimate fall so low that the next step's length overflowed exp(t H);
+    the step is now retried shorter, and the figure is the one a 3 us idle step gives."""
+    from desmon.sim.world import Step
+
+    sc = load_scenario(SHIFT)
+
+    def idle_for(seconds: float):
+        return replace(sc, world=replace(sc.world, task=(Step(sc.world.task[0].action, seconds), *sc.world.task[1:])))
+
+    import time
+
+    ends = time.monotonic() + 120.0
+
+    def budget(*_args: object) -> None:  # (before the fix the steps of NaN length never ended)
+        if time.monotonic() > ends:
+            raise TimeoutError("the transient did not end within 120 s")
+
+    brief = analyze(idle_for(1e-7), miss={}, horizon=60.0, steady=False, budget=budget).exposure_s_per_mission
+    assert math.isfinite(brief) and brief == pytest.approx(analyze(idle_for(3e-6), miss={}, horizon=60.0, steady=False).exposure_s_per_mission, rel=1e-5)

@@ -248,7 +248,10 @@ def _within(chain: Chain, Q: Any, p0: np.ndarray, horizon: float, budget: Callab
     A = Qa.T.tocsr()
     v, _err, _steps, _t = krylov_steps(horizon, A, p0.astype(float), tol=KRYLOV_TOL, budget=budget,
                                        stop=lambda w: float(w[~target].sum()) < SETTLED)
-    return float(min(1.0, max(0.0, 1.0 - v[~target].sum())))
+    left = float(v[~target].sum())
+    if not math.isfinite(left):  # a failed solution stays NaN: the report's check refuses it, where [0, 1] would hide it
+        return math.nan
+    return float(min(1.0, max(0.0, 1.0 - left)))
 
 
 def _check_trials(trials: object) -> None:

@@ -378,6 +378,11 @@ def _uniformisation(Q, p0: np.ndarray, horizon: float, rewards: np.ndarray, lam:
     return Transient(at, rewards @ occ, EPS * max(1.0, horizon), f"uniformisation ({kmax} steps)")
 
 
+#: how often one Krylov step is tried again shorter (its error too large, or its exponential
+#: overflowed) before the step is taken as it is
+MAX_REJECTIONS = 11
+
+
 @one_blas_thread
 def krylov_steps(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV_DIM,  # type: ignore[no-untyped-def]
                  budget: Callable[..., None] = no_budget,
@@ -403,14 +408,17 @@ def krylov_steps(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV
         steps += 1
         t_step = min(t - t_now, t_new)
         V, H, mb, happy, avnorm = _arnoldi(A, w / beta, m)
-        for _reject in range(11):
+        for _reject in range(MAX_REJECTIONS):
             if happy:
                 F = _quiet(expm, t_step * H[:mb, :mb])
                 err, xm = tol * t_step * 1e-3, 1.0 / m  # an invariant subspace: exact up to rounding
-                break
-            F = _quiet(expm, t_step * H)
-            err, xm = _local_error(beta, F, avnorm, m)
-            if err <= 1.2 * t_step * tol:
+            else:
+                F = _quiet(expm, t_step * H)
+                err, xm = _local_error(beta, F, avnorm, m)
+            if not (math.isfinite(err) and np.isfinite(F).all()):  # exp(t H) overflowed: a step far too long
+                t_step *= 0.1
+                continue
+            if happy or err <= 1.2 * t_step * tol:
                 break
             t_step = 0.9 * t_step * (t_step * tol / err) ** xm
         k = mb if happy else m + 1
