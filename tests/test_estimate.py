@@ -268,3 +268,40 @@ def test_the_estimate_docs_quote_is_what_the_command_prints(capsys, monkeypatch)
         out, err = capsys.readouterr()
         assert code == 0, err
         check_quote(q, out + err)
+
+
+SPINS = '''
+from desmon.deployment.deployer import make_desmon_react
+
+_corrected = make_desmon_react()
+_reactions = [0]
+
+
+def react(q, slots, changed, context_changed):
+    """the corrected deployer, but its 5th reaction never ends (and issues no command)"""
+    _reactions[0] += 1
+    if _reactions[0] == 5:
+        while True:
+            pass
+    yield from _corrected(q, slots, changed, context_changed)
+'''
+
+
+@pytest.mark.parametrize("where", [(), ("--workers", "1")], ids=["in-process", "dask"])
+def test_the_time_limit_stops_a_reaction_that_never_ends_in_process_and_on_dask(tmp_path, where):
+    """--timeout is the command's wall-clock limit: a deployer's reaction that spins without
+    a command is stopped at it, in this process (where the 60 s reaction limit had held the
+    timer) and on Dask (where the estimation waited for the batch for ever)."""
+    import subprocess
+    import sys
+
+    (tmp_path / "spins.py").write_text(SPINS)
+    t0 = time.monotonic()
+    done = subprocess.run(
+        [sys.executable, "-m", "desmon", "estimate", str(VARIED), "--deployer", str(tmp_path / "spins.py") + ":react",
+         "--timeout", "3", "--no-progress", *where],
+        capture_output=True, text=True, timeout=120, cwd=tmp_path,
+    )
+    elapsed = time.monotonic() - t0
+    assert done.returncode == 3 and "INCOMPLETE: --timeout 3 s passed" in done.stderr, done.stderr[-2000:]
+    assert elapsed < 40, elapsed  # the limit, the start and end of a local cluster; not the 60 s reaction limit

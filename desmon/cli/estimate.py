@@ -14,6 +14,7 @@ import dataclasses
 import json
 import math
 import sys
+import time
 from typing import Any
 
 from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg
@@ -145,7 +146,8 @@ def _dask_source(args: argparse.Namespace, question: Any) -> Any:
         os.path.abspath(args.scenario), params, getattr(args.deployer, "name", str(args.deployer)), args.seed, args.until,
         question.metric, tuple(sorted(_world_changes(args).items())), max_commands=getattr(args, "max_commands", None),
     )
-    return dask_values(spec, scheduler=args.scheduler, workers=args.workers)
+    deadline = None if question.timeout is None else time.monotonic() + question.timeout
+    return dask_values(spec, scheduler=args.scheduler, workers=args.workers, deadline=deadline)
 
 
 def run(args: argparse.Namespace) -> int:

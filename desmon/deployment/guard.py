@@ -341,6 +341,9 @@ class Guard:
         self.armed = False
         #: the SIGINTs counted while a run is watched (:meth:`_counting_interrupts`)
         self.interrupts = 0
+        #: the running search's urgent check, asked by the deadline's timer where that timer
+        #: holds the signal a search's own would need (:meth:`watching` inside :meth:`deadline`)
+        self.urgent: Callable[[], str] | None = None
 
     def __repr__(self) -> str:
         return f"Guard(max_commands={self.max_commands}, max_reaction_seconds={self.max_reaction_seconds})"
@@ -373,6 +376,10 @@ class Guard:
             return
 
         def tick(signum: int, frame: Any) -> None:
+            if self.inside > 0 and self.urgent is not None:
+                why = self.urgent()
+                if why:
+                    raise _BudgetSpent(why)
             if self.inside > 0 and self.used + time.monotonic() - self.since > seconds:
                 self.since, self.used = time.monotonic(), 0.0  # once
                 raise RanAway(
@@ -394,10 +401,10 @@ class Guard:
         :data:`TICK` seconds by a timer signal while a deployer's own code runs (one that
         computes or sleeps without yielding), so that the time limit, the memory budget
         and Ctrl-C stop the search. The timer is used only in the main thread, where
-        SIGALRM is not otherwise taken; the timer asks ``urgent`` (default ``check``),
-        which must not print. A forked worker process does not ask the parent's check
+        SIGALRM is not otherwise taken, or, inside this guard's :meth:`deadline`, by the
+        deadline's timer; the timer asks ``urgent`` (default ``check``), which must not print. A forked worker process does not ask the parent's check
         (its reactions are bounded by the command limit)."""
-        previous = self.watch
+        previous, previous_urgent = self.watch, self.urgent
         pid = os.getpid()
         self.watch = lambda: check() if os.getpid() == pid else ""
         urgent = urgent or check
@@ -408,11 +415,14 @@ class Guard:
                 if why:
                     raise _BudgetSpent(why)
 
+        own_timer = _timer_free()
+        if not own_timer and self.armed:  # this guard's deadline holds the timer: its tick asks the search's check too
+            self.urgent = lambda: urgent() if os.getpid() == pid else ""
         try:
-            with (_timer(tick) if _timer_free() else contextlib.nullcontext()), self._counting_interrupts():
+            with (_timer(tick) if own_timer else contextlib.nullcontext()), self._counting_interrupts():
                 yield
         finally:
-            self.watch = previous
+            self.watch, self.urgent = previous, previous_urgent
 
     @contextlib.contextmanager
     def _counting_interrupts(self) -> Iterator[None]:

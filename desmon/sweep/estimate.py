@@ -66,11 +66,15 @@ def run_batch(spec: BatchSpec, seeds: list[int]) -> tuple[list[float], float]:
 
 def dask_values(
     spec: BatchSpec, *, scheduler: str | None = None, workers: int | None = None, batch_seconds: float = BATCH_SECONDS,
-    retries: int = 3, on_workers: Any = None,
+    retries: int = 3, on_workers: Any = None, deadline: float | None = None,
 ) -> Iterator[float]:
     """The runs' values in seed order, computed in batches on Dask (module docstring);
-    ``on_workers(n)`` is told the cluster's number of workers once it is up. Closing the
-    generator cancels what is in flight and shuts a local cluster down."""
+    ``on_workers(n)`` is told the cluster's number of workers once it is up. Waiting for a
+    batch past ``deadline`` (``time.monotonic()``; ``--timeout``) raises
+    :class:`~desmon.deployment.guard.ReactionStopped`, which the estimation counts as its
+    time limit reached, also where a run never ends. Closing the generator cancels what
+    is in flight and shuts a local cluster down."""
+    from desmon.deployment.guard import ReactionStopped
     from desmon.sweep.runner import dask_client
 
     with dask_client(scheduler, workers, retries) as client:
@@ -90,7 +94,10 @@ def dask_values(
                     pending.append((next_start, size, fut))
                     next_start += size
                 start, count, fut = pending.pop(0)
-                values, wall = fut.result()  # (a DesmonError of the worker is raised here)
+                try:  # (a DesmonError of the worker is raised here)
+                    values, wall = fut.result(timeout=None if deadline is None else max(0.0, deadline - time.monotonic()))
+                except TimeoutError:  # (dask's, asyncio's and the builtin are one class on Python 3.11)
+                    raise ReactionStopped("the time limit passed while a batch of runs was still under way") from None
                 fut.release()
                 per_run = wall / max(1, count) if math.isnan(per_run) else 0.5 * per_run + 0.5 * wall / max(1, count)
                 size = int(min(MAX_BATCH, max(1, math.ceil(batch_seconds / per_run)))) if per_run > 0 else MAX_BATCH
