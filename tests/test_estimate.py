@@ -305,3 +305,24 @@ def test_the_time_limit_stops_a_reaction_that_never_ends_in_process_and_on_dask(
     elapsed = time.monotonic() - t0
     assert done.returncode == 3 and "INCOMPLETE: --timeout 3 s passed" in done.stderr, done.stderr[-2000:]
     assert elapsed < 40, elapsed  # the limit, the start and end of a local cluster; not the 60 s reaction limit
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda sc: estimate(sc, Question(within=0.4, max_runs=3), seed=1.5), "--seed 1.5: give a whole number, 0 or more"),
+    (lambda sc: estimate(sc, Question(within=0.4, max_runs=3), seed=True), "--seed True: give a whole number"),
+    (lambda sc: estimate(sc, Question(within=0.4, max_runs=3), seed=-1), "--seed -1: give a whole number, 0 or more"),
+    (lambda sc: estimate(sc, Question(within=0.4, max_runs=3), until="5"), "--until = '5' is a string, not a number"),
+    (lambda sc: estimate(sc, Question(at_least="1")), "--at-least = '1' is a string, not a number"),
+    (lambda sc: estimate(sc, Question(range=(0, 1, 2))), "--range (0, 1, 2): give two numbers"),
+    (lambda sc: estimate(sc, Question(relative="no")), "relative = 'no': give True"),
+    (lambda sc: estimate(sc, Question(metric=None)), "--metric None: give a run figure's name"),
+    (lambda sc: estimate(sc, Question(range=(0.0, 100.0)), values=iter([1.0, float("nan")])), "a run gave nan for exposure_s, which is no finite number"),
+], ids=["seed-float", "seed-bool", "seed-negative", "until-text", "at-least-text", "range-triple", "relative-text", "metric-none", "value-nan"])
+def test_the_python_api_checks_what_the_command_line_checks(call, message):
+    """A float seed ran seed 1 and reported 1.5; a text threshold, a NaN value and the rest
+    failed with a bare TypeError or were taken as something else."""
+    from desmon.errors import EstimateError
+
+    with pytest.raises(EstimateError) as info:
+        call(load_scenario(VARIED))
+    assert message in str(info.value)

@@ -22,6 +22,7 @@ from desmon.errors import EstimateError
 from desmon.estimate.measures import (
     DEFAULT_METRIC, LONGEST, ROUNDING_S, TASK_SLACK, check_metric, longest_exposure, natural_range, range_basis, value_of,
 )
+from desmon.model.checks import check_number
 from desmon.stats import BettingSequence, Interval, ProportionSequence, WaldTest, clopper_pearson, normal_interval
 
 __all__ = ["Question", "Estimate", "estimate", "run_seed", "RunSeeds", "run_value", "serial_values", "is_look", "world_horizon", "Tracker", "with_world", "parse_within"]
@@ -131,7 +132,10 @@ class Question:
 
     def check(self) -> None:
         """Every field's value, or a one-line EstimateError naming the flag and the fix."""
+        if not isinstance(self.metric, str):
+            raise EstimateError(f"--metric {self.metric!r}: give a run figure's name, e.g. exposure_s")
         check_metric(self.metric)
+        self._check_types()
         self._check_confidence()
         w = self.within
         if isinstance(w, bool) or not (isinstance(w, (int, float)) and math.isfinite(w) and w > 0):
@@ -150,6 +154,21 @@ class Question:
                 raise EstimateError(f"{flag} {v!r}: give a finite number")
         self._check_test()
         self._check_range()
+
+    def _check_types(self) -> None:
+        """The Python API's fields of the types the command line gives (a text "5" or a
+        bool is no number here), and ``range`` a pair."""
+        for flag, v in (("--at-least", self.at_least), ("--below", self.below), ("--alpha", self.alpha), ("--beta", self.beta),
+                        ("--timeout", self.timeout)):
+            if v is not None:
+                check_number(flag, v, error=EstimateError, low=None, infinite=True)
+        if not isinstance(self.relative, bool):
+            raise EstimateError(f"relative = {self.relative!r}: give True (--within 5%) or False (--within 60)")
+        if self.range is not None:
+            if not isinstance(self.range, (tuple, list)) or len(self.range) != 2:
+                raise EstimateError(f"--range {self.range!r}: give two numbers, the lower first, e.g. --range 0 50")
+            for v in self.range:
+                check_number("--range", v, error=EstimateError, low=None, infinite=True)
 
     def _check_confidence(self) -> None:
         c = self.confidence
@@ -284,6 +303,8 @@ class Tracker:
         self._last: Interval | None = None
 
     def add(self, value: float) -> None:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise EstimateError(f"a run gave {value!r} for {self.question.metric}, which is no finite number: nothing can be estimated from it")
         self.values.append(value)
         if self.mean is not None:
             self.mean.add(value)
@@ -345,6 +366,7 @@ def world_horizon(scenario: Any, until: float | None) -> float:
         )
     horizon = float(world_of(scenario).horizon)
     if until is not None:
+        check_number("--until", until, error=EstimateError, low=None, infinite=True)
         if not (math.isfinite(until) and 0 < until <= horizon):
             raise EstimateError(f"--until {until:g}: give a positive number of simulated seconds, at most the horizon of {horizon:g} s")
         return float(until)
@@ -476,6 +498,8 @@ def estimate(
     with the interval of the runs made so far."""
     q = question if question is not None else Question()
     q.check()
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise EstimateError(f"--seed {seed!r}: give a whole number, 0 or more")
     horizon = world_horizon(scenario, until)
     _check_alarms_rendered(q.metric, scenario)
     known = natural_range(q.metric, horizon, scenario)
