@@ -502,19 +502,7 @@ def estimate(
         raise EstimateError(f"--seed {seed!r}: give a whole number, 0 or more")
     horizon = world_horizon(scenario, until)
     _check_alarms_rendered(q.metric, scenario)
-    known = natural_range(q.metric, horizon, scenario)
-    value_range = q.range or known
-    basis = range_basis(q.metric, horizon, scenario) if q.range is None and q.kind == "mean" else None
-    if q.range is None and known is not None:
-        _refuse_known(q, known, horizon, basis or range_basis(q.metric, horizon, scenario))
-    if q.range is not None and known is not None and (q.range[0] > known[0] or q.range[1] < known[1]):
-        basis = (f"--range as given, narrower than the [{known[0]:,.6g}, {known[1]:,.6g}] desmon can prove for {q.metric}: "
-                 "the guarantee holds only if no run can fall outside the range given (a run that does is refused)")
-    if q.kind == "mean" and value_range is None:
-        raise EstimateError(
-            f"--metric {q.metric} is a count with no bound known in advance, which a guaranteed interval of its mean needs: "
-            "declare the range every run's count lies in (--range 0 50), or estimate a probability (--at-least 1)"
-        )
+    value_range, basis = _value_range(q, horizon, scenario)
     tracker = Tracker(q, value_range if q.kind == "mean" else None)
     if values is not None or q.timeout is None:
         source = values if values is not None else serial_values(scenario, deployer, seed, until, q.metric, guard)
@@ -534,6 +522,26 @@ def estimate(
         test_method=_test_method(tracker, status) if q.below is not None else None,
         low_value=min(tracker.values), high_value=max(tracker.values),
     )
+
+
+def _value_range(q: Question, horizon: float, scenario: Any) -> tuple[tuple[float, float] | None, str | None]:
+    """The range every run's value is taken to lie in, and why where it is not the
+    horizon's or is the user's narrower one; an EstimateError where the range desmon
+    proves answers the question without a run, or a mean has no range."""
+    known = natural_range(q.metric, horizon, scenario)
+    value_range = q.range or known
+    basis = range_basis(q.metric, horizon, scenario) if q.range is None and q.kind == "mean" else None
+    if q.range is None and known is not None:
+        _refuse_known(q, known, horizon, basis or range_basis(q.metric, horizon, scenario))
+    if q.range is not None and known is not None and (q.range[0] > known[0] or q.range[1] < known[1]):
+        basis = (f"--range as given, narrower than the [{known[0]:,.6g}, {known[1]:,.6g}] desmon can prove for {q.metric}: "
+                 "the guarantee holds only if no run can fall outside the range given (a run that does is refused)")
+    if q.kind == "mean" and value_range is None:
+        raise EstimateError(
+            f"--metric {q.metric} is a count with no bound known in advance, which a guaranteed interval of its mean needs: "
+            "declare the range every run's count lies in (--range 0 50), or estimate a probability (--at-least 1)"
+        )
+    return value_range, basis
 
 
 def _check_alarms_rendered(metric: str, scenario: Any) -> None:
