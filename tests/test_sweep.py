@@ -53,7 +53,8 @@ if p.fail:
     raise RuntimeError("this point fails on purpose")
 if p.crash_once and not os.path.exists(p.crash_once) and in_worker():
     open(p.crash_once, "w").close()
-    os._exit(3)
+    import signal
+    os.kill(os.getpid(), signal.SIGKILL)  # the worker dies (os._exit while a scenario loads raises instead)
 time.sleep(p.sleep)
 scenario = load_scenario({str(ROBOT_DAY)!r}, {{"hand_memory": str(p.hand_memory), "hours": str(p.hours)}})
 '''

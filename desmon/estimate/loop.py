@@ -552,8 +552,8 @@ def _check_alarms_rendered(metric: str, scenario: Any) -> None:
 
     if metric in ALARM_FIGURES and not world_of(scenario).signals:
         raise EstimateError(
-            f"--metric {metric} counts the detectors' alarms, and this world renders no sensor signals (--no-signals, or the "
-            "World's signals=False), so no detector runs: drop --no-signals, or estimate a figure of the deployment"
+            f"--metric {metric} counts the detectors' alarms, and this world renders no sensor signals, so no detector runs: "
+            "drop --no-signals (or give the scenario's World signals=True), or estimate a figure of the deployment"
         )
 
 
