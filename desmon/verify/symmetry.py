@@ -103,7 +103,9 @@ class Symmetry:
         c = self.checker
         if c.deployer_name not in SYMMETRIC_DEPLOYERS:
             self._refuse(
-                f"the {c.deployer_name} deployer can run a graph on two platforms and keeps one by name, a tie-break that is not symmetric"
+                f"the reduction is proven only for deployers that never run a graph twice and choose among equal platforms "
+                f"by nothing but their facts ({', '.join(SYMMETRIC_DEPLOYERS)}); the {c.deployer_name} deployer is not shown "
+                "to be one (the paper's runs a graph on two platforms and keeps one by name, a tie-break that is not symmetric)"
             )
         if any(spec.preferences for spec in c.model.specs) or c.bounds.joins or c.bounds.requirement_changes:
             self._refuse(
