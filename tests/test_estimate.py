@@ -326,3 +326,10 @@ def test_the_python_api_checks_what_the_command_line_checks(call, message):
     with pytest.raises(EstimateError) as info:
         call(load_scenario(VARIED))
     assert message in str(info.value)
+
+
+def test_values_that_run_out_before_the_budget_say_so_not_that_the_budget_was_spent():
+    e = estimate(load_scenario(VARIED), Question(range=(0.0, 100.0), max_runs=100), values=iter([1.0, 2.0]))
+    assert e.status == "values-ended" and not e.complete and e.runs == 2
+    e = estimate(load_scenario(VARIED), Question(range=(0.0, 100.0), max_runs=3), values=iter([1.0, 2.0, 3.0, 4.0]))
+    assert e.status == "max-runs" and e.runs == 3

@@ -184,7 +184,12 @@ def run(args: argparse.Namespace) -> int:
     else:
         sys.stdout.write(format_estimate(result))
     if not result.complete:
-        why = f"--max-runs {question.max_runs} reached" if result.status == "max-runs" else f"--timeout {question.timeout:g} s passed"
+        if result.status == "max-runs":
+            why = f"--max-runs {question.max_runs} reached"
+        elif result.status == "timeout":
+            why = f"--timeout {question.timeout:g} s passed"
+        else:
+            why = "the runs' values ran out"
         print(f"desmon estimate: INCOMPLETE: {why} before the question was answered; the interval above is that of the {result.runs:,} runs made",
               file=sys.stderr)
         return EXIT_INCOMPLETE

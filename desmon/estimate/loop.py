@@ -27,8 +27,9 @@ from desmon.stats import BettingSequence, Interval, ProportionSequence, WaldTest
 
 __all__ = ["Question", "Estimate", "estimate", "run_seed", "RunSeeds", "run_value", "serial_values", "is_look", "world_horizon", "Tracker", "with_world", "parse_within"]
 
-#: ``status`` of an estimation: done as asked, or INCOMPLETE (exit 3) at the run budget or the time limit
-PRECISE, DECIDED, MAX_RUNS, TIMEOUT = "precise", "decided", "max-runs", "timeout"
+#: ``status`` of an estimation: done as asked, or INCOMPLETE (exit 3) at the run budget or the time
+#: limit, or where the ``values`` given to :func:`estimate` ran out first (the Python API)
+PRECISE, DECIDED, MAX_RUNS, TIMEOUT, VALUES_ENDED = "precise", "decided", "max-runs", "timeout", "values-ended"
 #: runs up to which the stopping rule looks after every run; past it, every n // LOOKS_DENSE runs
 LOOKS_DENSE = 64
 
@@ -433,7 +434,7 @@ def _consume(tracker: Tracker, source: Iterable[float], progress: Callable[[Trac
     from desmon.deployment.guard import ReactionStopped
 
     q = tracker.question
-    status = MAX_RUNS
+    status = VALUES_ENDED  # unless the loop below ends otherwise
     started = clock() if started is None else started
     it = iter(source)
     try:
@@ -449,6 +450,7 @@ def _consume(tracker: Tracker, source: Iterable[float], progress: Callable[[Trac
                 status = DECIDED if q.below is not None else PRECISE
                 break
             if n >= q.max_runs:
+                status = MAX_RUNS
                 break
             if q.timeout is not None and clock() - started >= q.timeout:
                 status = TIMEOUT
