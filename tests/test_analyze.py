@@ -625,3 +625,16 @@ def test_a_krylov_step_whose_exponential_overflows_is_taken_again_shorter():
 
     brief = analyze(idle_for(1e-7), miss={}, horizon=60.0, steady=False, budget=budget).exposure_s_per_mission
     assert math.isfinite(brief) and brief == pytest.approx(analyze(idle_for(3e-6), miss={}, horizon=60.0, steady=False).exposure_s_per_mission, rel=1e-5)
+
+
+def test_a_steady_state_whose_last_state_is_all_but_never_visited_is_solved_directly():
+    """Under 32 Erlang phases the chain's last state has a long-run share of about 1e-78:
+    pinned to 1, it made every other share overflow the scale, and the solver fell back to
+    the power method (110 s). The state pinned instead is the likeliest one of the failed
+    solution, and the sparse LU solves it in about a second."""
+    sc = load_scenario(SHIFT, {"faults": "False"})
+    chain = build_chain(sc, "desmon", markov_world(sc, phases=32), miss={})
+    Q, _ = chain.generator()
+    pi, residual, method = steady_state(Q, chain.describe)
+    assert method == "sparse LU", method
+    assert residual <= 1e-11 * float(abs(Q.diagonal()).max()) and pi.min() >= 0 and pi.sum() == pytest.approx(1.0)

@@ -207,10 +207,42 @@ def _solve_closed(A, budget: Callable[..., None] = no_budget) -> tuple[np.ndarra
     if pi is not None:
         return pi, "BiCGSTAB"
     if m <= DIRECT_MAX:
-        pi = done(sla.spsolve(M, b, permc_spec="MMD_AT_PLUS_A"))
+        x = sla.spsolve(M, b, permc_spec="MMD_AT_PLUS_A")
+        pi = done(x)
+        if pi is not None:
+            return pi, "sparse LU"
+        pi = _pinned_elsewhere(A, x, scale)
         if pi is not None:
             return pi, "sparse LU"
     return _power(A, budget), "power method"
+
+
+def _pinned_elsewhere(A, x: np.ndarray, scale: float) -> np.ndarray | None:  # type: ignore[no-untyped-def]
+    """The sparse LU solution with another state's probability pinned, where pinning the
+    last one failed because that state is all but never visited (its share 1e-78 under
+    many Erlang phases: every other share then overflows the scale). The state pinned is
+    the largest in magnitude of the failed solution where it is finite (the most likely,
+    up to the rounding that spoilt the rest), else the one the chain leaves most slowly;
+    None if that fails too."""
+    import scipy.sparse.linalg as sla
+
+    m = A.shape[0]
+    k = int(np.argmax(np.abs(np.append(x, 1.0)))) if np.all(np.isfinite(x)) else int(np.argmin(np.abs(A.diagonal())))
+    if k == m - 1:
+        return None
+    keep = np.flatnonzero(np.arange(m) != k)
+    A = A.tocsc()
+    M = A[keep][:, keep].tocsc()
+    b = -A[keep][:, [k]].toarray().ravel()
+    with np.errstate(all="ignore"):
+        y = sla.spsolve(M, b, permc_spec="MMD_AT_PLUS_A")
+    if not np.all(np.isfinite(y)):
+        return None
+    pi = np.empty(m)
+    pi[keep], pi[k] = y, 1.0
+    pi = np.clip(pi, 0.0, None)
+    pi /= pi.sum()
+    return pi if float(np.abs(A @ pi).max()) <= 1e-11 * scale else None
 
 
 def _iad(Q, blocks: np.ndarray, budget: Callable[..., None] = no_budget, sweeps: int = 200, tol: float = 1e-13) -> np.ndarray | None:  # type: ignore[no-untyped-def]
