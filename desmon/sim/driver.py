@@ -34,7 +34,7 @@ Audit = Callable[[str, frozenset[str]], tuple[str, ...]]
 class _Reaction:
     """What the deployer process books during one reaction (a plain class: one per reaction)."""
 
-    __slots__ = ("slots", "raised", "stopped_here", "stopped_at", "tried", "broken")
+    __slots__ = ("slots", "raised", "stopped_here", "stopped_at", "tried", "broken", "audited")
 
     def __init__(self, slots: tuple[tuple[str, ...], ...]) -> None:
         self.slots = slots
@@ -45,6 +45,7 @@ class _Reaction:
         #: the instantaneous invariant booked inside this reaction: its first violation, after
         #: which (as the checker) the reaction is not watched again
         self.broken: frozenset[str] = frozenset()
+        self.audited = False  # whether an audit inside this reaction found them holding (or booked one)
 
 
 def deployer(parts: RobotParts, audit: Audit):  # type: ignore[no-untyped-def]
@@ -92,10 +93,14 @@ def _drive(parts: RobotParts, reaction: Any, book: _Reaction, audit: Audit):  # 
             outcome = yield from _command_start(parts, cmd, book)
             if outcome and not book.broken:
                 book.broken = frozenset(audit(f"start {cmd.graph} on {cmd.platform}", book.broken))
+                book.audited = True
         elif isinstance(cmd, Stop):
             outcome = _command_stop(parts, cmd, book)
-            if outcome and not book.broken:
+            # a stop breaks none of them (fewer instances, less consumed): once one audit of
+            # the reaction found them holding, a stop leaves them holding
+            if outcome and not book.broken and not book.audited:
                 book.broken = frozenset(audit(f"stop {cmd.graph} on {cmd.platform}", book.broken))
+                book.audited = True
         elif isinstance(cmd, RaiseError):
             outcome = None
             _command_error(parts, cmd, book)
