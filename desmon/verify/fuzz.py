@@ -2,7 +2,8 @@
 
 A sequence (:func:`desmon.verify.strategies.choices`) is run event by event through a
 :class:`~desmon.verify.replay.RepositoryRun`; after each reaction the named invariants
-are checked. hypothesis searches (``--examples``, ``--seed``: same seed, same output)
+are checked, the instantaneous ones also after every start and stop inside it (as the
+checker watches them). hypothesis searches (``--examples``, ``--seed``: same seed, same output)
 and shrinks the first failing sequence, which is printed in the checker's trace format;
 when it is short, the checker re-derives the shortest counterexample for that invariant.
 
