@@ -122,31 +122,17 @@ def test_every_command_takes_a_file_deployer_and_names_it(tmp_path, capsys):
     assert f"-- deployer {spec} --" in capsys.readouterr().out
 
 
-def test_a_generated_pytest_replays_a_file_deployer_from_any_directory(tmp_path, monkeypatch, capsys):
+@pytest.mark.parametrize("source, spec", [("buggy.py", "buggy.py:react"), ("buggy_module.py", "buggy_module:react")], ids=["file", "module"])
+def test_a_generated_pytest_replays_a_users_deployer_from_any_directory(tmp_path, monkeypatch, capsys, source, spec):
+    """A file deployer is recorded by its absolute path; a module:NAME deployer is looked up
+    where desmon verify ran first, and the generated test looks there first again."""
     import subprocess
 
-    _write(tmp_path, "buggy.py", BUGGY)
+    _write(tmp_path, source, BUGGY)
     monkeypatch.chdir(tmp_path)
-    test = tmp_path / "test_cex.py"
-    assert main(["verify", COFFEE, "--deployer", "buggy.py:react", "--no-progress", "--pytest", str(test)]) == 1
-    capsys.readouterr()
-    elsewhere = tmp_path / "elsewhere"
-    elsewhere.mkdir()
-    proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(test)], cwd=elsewhere, capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stdout[-2000:]
-
-
-
-def test_a_generated_pytest_replays_a_module_deployer_from_any_directory(tmp_path, monkeypatch, capsys):
-    """A module:NAME deployer is looked up where desmon verify ran first: the generated test
-    looks there first again, wherever it runs."""
-    import subprocess
-
-    _write(tmp_path, "buggy_module.py", BUGGY)
-    monkeypatch.chdir(tmp_path)
-    (tmp_path / "generated").mkdir()  # not beside the module (pytest puts a test's folder on the path)
+    (tmp_path / "generated").mkdir()  # not beside the deployer (pytest puts a test's folder on the path)
     test = tmp_path / "generated" / "test_cex.py"
-    assert main(["verify", COFFEE, "--deployer", "buggy_module:react", "--no-progress", "--pytest", str(test)]) == 1
+    assert main(["verify", COFFEE, "--deployer", spec, "--no-progress", "--pytest", str(test)]) == 1
     capsys.readouterr()
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
