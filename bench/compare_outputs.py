@@ -11,10 +11,10 @@ code, stdout and stderr, and every file the command writes (``--json``, ``--trac
 (:func:`mask`) and written to ``DIR/base/`` and ``DIR/head/``, then compared.
 
 Masked, and nothing else: the measured wall time and the figures derived from it (JSON
-``seconds``, ``wall_s``, ``realtime_ratio``, ``analyze``'s ``build_s`` and ``solve_s``; the
+``seconds``, ``wall_s``, ``realtime_ratio``, ``analyze``'s ``build_s``, ``trials_s`` and ``solve_s``; the
 text ``time: 0.12s  2,447 states/s 16,778 transitions/s``, ``in 12.07 s wall``, ``(3164.4x
 real time)``, the sweep's ``in 4.8 s`` and its ``wall_s`` column, ``analyze``'s ``built in
-0.1 s`` and ``solved in 0.2 s``), the process's measured peak memory (JSON ``peak_mb``,
+0.1 s``, ``detection trials in 3.2 s;`` and ``solved in 0.2 s``), the process's measured peak memory (JSON ``peak_mb``,
 ``peak_rss_mb``; text ``peak memory: 57 MB``, ``peak memory (RSS, MB)``, ``each at most
 N MB``), and the two trees' and the output directories' own paths (``<TREE>``, ``<OUT>``).
 Simulated times and memory (``memory_peak_mb``, ``blind_time``, trace ``t``) are behaviour
@@ -47,7 +47,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 #: JSON keys whose number is a measurement of the process (wall time, peak memory)
-TIMING_KEYS = ("seconds", "wall_s", "realtime_ratio", "peak_mb", "peak_rss_mb", "build_s", "solve_s")
+TIMING_KEYS = ("seconds", "wall_s", "realtime_ratio", "peak_mb", "peak_rss_mb", "build_s", "trials_s", "solve_s")
 MASK = "<masked>"
 _NUMBER = r"-?(?:\d[\d,]*(?:\.\d*)?(?:[eE][-+]?\d+)?|inf|Infinity|NaN|nan)"
 _JSON_NUMBER = r"-?(?:\d+(?:\.\d*)?(?:[eE][-+]?\d+)?|Infinity|NaN)"
@@ -64,6 +64,7 @@ TEXT_TIMING = (
     (re.compile(r"(failed, in )" + _NUMBER + "( s )"), r"\g<1><T>\g<2>"),  # desmon sweep
     (re.compile(r"(built in )" + _NUMBER + "( s from )"), r"\g<1><T>\g<2>"),  # desmon analyze
     (re.compile(r"(solved in )" + _NUMBER + r"( s\))"), r"\g<1><T>\g<2>"),
+    (re.compile(r"(detection trials in )" + _NUMBER + "( s;)"), r"\g<1><T>\g<2>"),
 )
 
 

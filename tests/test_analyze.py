@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -136,12 +137,29 @@ def test_each_solution_step_is_announced_before_it_runs():
     said: list[str] = []
     a = analyze(_shift(faults="False"), miss=NO_MISS, horizon=600.0, status=said.append)
     assert said == [
-        f"the steady state of {a.states:,} states", "the exposure over 600 s",
-        "the probability of any exposure within 600 s", "the mean time to the first exposure",
+        f"solving the steady state of {a.states:,} states", "solving the exposure over 600 s",
+        "solving the probability of any exposure within 600 s", "solving the mean time to the first exposure",
     ]
     said.clear()
     analyze(_shift(faults="False"), miss=NO_MISS, horizon=600.0, steady=False, status=said.append)
-    assert said[0] == "the exposure over 600 s" and len(said) == 3
+    assert said[0] == "solving the exposure over 600 s" and len(said) == 3
+    assert a.trials_s == 0.0  # the miss rates were given: no trials ran
+
+
+def test_the_detection_trials_are_announced_batch_by_batch_and_timed_apart_from_the_build(capsys):
+    """Each risky action's trials at each start latency are announced before they run
+    (they can take most of the command), and their seconds are reported beside the build's."""
+    said: list[str] = []
+    a = analyze(_shift(faults="False"), horizon=600.0, steady=False, trials=24, status=said.append)
+    trials = [w for w in said if w.startswith("the detection trials: 24 slips in ")]
+    assert trials and said[: len(trials)] == trials  # all of them before the first solution step
+    n = len(trials)
+    assert [w.rsplit("(", 1)[1] for w in trials] == [f"{k} of {n})" for k in range(1, n + 1)]
+    assert {w.split(" slips in ")[1].split(" after")[0] for w in trials} == set(a.start_catch["force_slip_detector"])
+    assert a.trials_s > 0 and a.to_json()["trials_s"] == round(a.trials_s, 3)
+    main(["analyze", SHIFT, "-p", "faults=False", "-p", "hours=0.1", "--transient-only", "--trials", "24"])
+    first = capsys.readouterr().out.splitlines()[0]
+    assert re.search(r"\(built in [0-9.]+ s from [0-9,]+ runs of the real reaction; detection trials in [0-9.]+ s; solved in [0-9.]+ s\)$", first), first
 
 
 def test_the_checkers_budgets_are_dropped_and_said():

@@ -143,11 +143,11 @@ def test_the_command_list_covers_every_scenario_and_each_command_once(root):
 
 def test_analyze_loses_its_build_and_solve_times_and_keeps_its_counts():
     line = ("desmon analyze: platform_crash (deployer desmon): 1,407 states, 9,051 transitions "
-            "(built in 0.1 s from 475 runs of the real reaction; solved in 0.2 s)\n")
+            "(built in 0.1 s from 475 runs of the real reaction; detection trials in 4.2 s; solved in 0.2 s)\n")
     masked = mask_text(line, {})
-    assert masked == line.replace("built in 0.1 s", "built in <T> s").replace("solved in 0.2 s", "solved in <T> s")
-    assert mask_text(line.replace("0.1 s", "12.5 s").replace("0.2 s", "3 s"), {}) == masked
+    assert masked == line.replace("built in 0.1 s", "built in <T> s").replace("solved in 0.2 s", "solved in <T> s").replace("trials in 4.2 s", "trials in <T> s")
+    assert mask_text(line.replace("0.1 s", "12.5 s").replace("0.2 s", "3 s").replace("4.2 s", "61.0 s"), {}) == masked
     assert mask_text(line.replace("475 runs", "476 runs"), {}) != masked  # a count beside it is behaviour
-    doc = {"states": 1407, "build_s": 0.086, "solve_s": 0.232, "transient_method": "Krylov exponential (46 steps)"}
-    again = dict(doc, build_s=1.5, solve_s=9.0)
+    doc = {"states": 1407, "build_s": 0.086, "trials_s": 4.2, "solve_s": 0.232, "transient_method": "Krylov exponential (46 steps)"}
+    again = dict(doc, build_s=1.5, trials_s=0.5, solve_s=9.0)
     assert mask("a.json", json.dumps(doc)) == mask("a.json", json.dumps(again))

@@ -138,6 +138,8 @@ class Chain:
     #: the initial distribution: (state index, probability)
     initial: tuple[tuple[int, float], ...] = ((0, 1.0),)
     build_s: float = 0.0
+    #: the wall seconds of the detection trials (``build_chain``'s ``detection``), apart from ``build_s``
+    trials_s: float = 0.0
     reactions: int = 0
 
     @property
@@ -604,6 +606,7 @@ def build_chain(
         trials_s = time.perf_counter() - t1
     rewards(chain, b.rules, dict(miss or {}), dict(start_catch or {}))
     chain.build_s = time.perf_counter() - t0 - trials_s
+    chain.trials_s = trials_s
     chain.reactions = b.reactions
     return chain
 

@@ -81,14 +81,17 @@ def _trial_seconds(action: str, mean: float) -> float:
     return seconds
 
 
-def _rates(scenario: Scenario, phases: int, trials: int, seed: int, budget: Callable[..., None] | None = None) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, dict[float, float]]]]:
+def _rates(
+    scenario: Scenario, phases: int, trials: int, seed: int, budget: Callable[..., None] | None = None, say: Callable[[str], None] | None = None,
+) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, dict[float, float]]]]:
     """The watching miss and the starting catch of every graph in every risky action:
     the evaluation's trials for the built-in the action is like, its steps
     Erlang-``phases`` with the action's mean step duration (as the chain times them),
     after a grasp of the task's mean grasp duration, recognised after the world's
     recognition delay and started with each platform's start latency (the watching
     miss: the world's default latency), with the slip direction and kind
-    ``World.slip_kinds`` gives there (``trials`` slips, ``seed``)."""
+    ``World.slip_kinds`` gives there (``trials`` slips, ``seed``); ``say(what)`` before
+    each action's trials at each start latency."""
     from desmon.detectors.evaluation import detection_rates
     from desmon.sim.world import detector_plans, slip_kind, world_of
 
@@ -108,6 +111,9 @@ def _rates(scenario: Scenario, phases: int, trials: int, seed: int, budget: Call
         like = model.like(action)
         direction, kind = slip_kind(world, like)
         for lat in latencies:
+            if say is not None:
+                say(f"the detection trials: {trials:,} slips in {action} after a start latency of {lat:g} s "
+                    f"({len(rates) + 1} of {len(spans) * len(latencies)})")
             rates[(action, lat)] = detection_rates(
                 like, _trial_seconds(action, sum(durations) / len(durations)), direction, kind, grasp=grasp, phases=phases, trials=trials,
                 seed=seed, recognition=world.recognition_delay, latency=lat, warmups=warmups, budget=budget,
@@ -163,6 +169,8 @@ class Analysis:
     method: str = ""
     transient_error: float = 0.0
     build_s: float = 0.0
+    #: wall seconds of the detection trials behind ``miss`` and ``start_catch`` (0 where given)
+    trials_s: float = 0.0
     solve_s: float = 0.0
     reactions: int = 0
     chain: Chain | None = None
@@ -205,6 +213,7 @@ class Analysis:
             "transient_error_estimate": self.transient_error,
             "rates": self.world.to_json(),
             "build_s": round(self.build_s, 3),
+            "trials_s": round(self.trials_s, 3),
             "solve_s": round(self.solve_s, 3),
             "reactions_run": self.reactions,
         }
@@ -261,7 +270,7 @@ def _check_trials(trials: object) -> None:
 
 def _detection(
     scenario: Scenario, phases: int, trials: int, start_catch: dict[str, Any] | None, budget: Callable[..., None],
-    out: list[tuple[dict[str, Any], dict[str, Any]]],
+    out: list[tuple[dict[str, Any], dict[str, Any]]], say: Callable[[str], None] | None = None,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """The default ``miss`` and ``start_catch`` of :func:`analyze` (a given ``start_catch``
     kept), also appended to ``out``. A budget without a limit (a
@@ -270,7 +279,7 @@ def _detection(
     again finds them in :func:`~desmon.detectors.evaluation.detection_rates`'s cache."""
     if start_catch is None:
         unlimited = budget is no_budget or (getattr(budget, "timeout", 0) is None and getattr(budget, "max_memory", 0) is None)
-        rates = _rates(scenario, phases, trials, 0, None if unlimited else budget)
+        rates = _rates(scenario, phases, trials, 0, None if unlimited else budget, say)
     else:
         rates = (detector_miss(scenario, phases=phases, trials=trials), start_catch)
     out.append(rates)
@@ -292,7 +301,8 @@ def analyze(
 ) -> Analysis:
     """Build the chain of ``scenario`` under ``deployer`` and compute its measures;
     ``progress(n)`` is called as states are explored, ``status(what)`` before each
-    solution step. ``miss`` and ``start_catch`` default to :func:`detector_miss` and
+    batch of detection trials and each solution step (``what``: a phrase such as "solving
+    the steady state of 10,420 states"). ``miss`` and ``start_catch`` default to :func:`detector_miss` and
     :func:`detector_start_catch` over ``trials`` slips (a given ``miss`` alone: none caught while starting);
     ``budget()``, called as the chain grows and in every solver iteration, raises once spent."""
     say = status or (lambda _what: None)
@@ -303,7 +313,7 @@ def analyze(
     _check_trials(trials)
     ran: list[tuple[dict[str, Any], dict[str, Any]]] = []  # the detection trials, run once the chain is built (a crash ends it first)
     chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch, guard=guard,
-                        budget=budget, detection=None if miss is not None else lambda: _detection(scenario, phases, trials, start_catch, budget, ran))
+                        budget=budget, detection=None if miss is not None else lambda: _detection(scenario, phases, trials, start_catch, budget, ran, status))
     miss, start_catch = ran[0] if ran else (miss, start_catch)
     t0 = time.perf_counter()
     Q, _exit = chain.generator()
@@ -311,9 +321,9 @@ def analyze(
     frac = slips = residual = pi = None
     rows: list[tuple[float, str]] = []  # (a Budget raises BudgetExceeded past --timeout or --max-memory)
     if steady:
-        say(f"the steady state of {chain.n:,} states")
+        say(f"solving the steady state of {chain.n:,} states")
         frac, slips, residual, rows, pi = _long_run(chain, Q, budget)
-    say(f"the exposure over {T:,.0f} s")
+    say(f"solving the exposure over {T:,.0f} s")
     rewards = np.vstack([chain.unmonitored, chain.undetected, chain.risky, chain.excluded, *(chain.causes[c] for c in CAUSES)])
     tr = transient(Q, p0, T, rewards, limit=pi, budget=budget)
     per_mission = float(tr.accumulated[0])
@@ -328,9 +338,9 @@ def analyze(
         extra["excluded_s_per_hour"] = float(pi @ chain.excluded) * 3600.0
         extra["causes_s_per_hour"] = {c: float(pi @ chain.causes[c]) * 3600.0 for c in CAUSES}
         extra["mean_unmonitored_interval_s"] = _mean_interval(Q, pi, chain.unmonitored > 0)
-    say(f"the probability of any exposure within {T:,.0f} s")
+    say(f"solving the probability of any exposure within {T:,.0f} s")
     within = _within(chain, Q, p0, T, budget)
-    say("the mean time to the first exposure")
+    say("solving the mean time to the first exposure")
     mtte = mean_time_to(Q, chain.unmonitored > 0, p0, budget)
     return Analysis(
         scenario=scenario.name,
@@ -352,6 +362,7 @@ def analyze(
         method=tr.method,
         transient_error=tr.error,
         build_s=chain.build_s,
+        trials_s=chain.trials_s,
         solve_s=time.perf_counter() - t0,
         reactions=chain.reactions,
         chain=chain,

@@ -109,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
 
     def status(what: str) -> None:
         if show:
-            line.show(f"desmon analyze: solving {what}")
+            line.show(f"desmon analyze: {what}")
 
     try:
         try:
@@ -307,11 +307,16 @@ def _n(x: float) -> str:
     return f"{x:,.0f}" if x == int(x) else f"{x:,.4g}"
 
 
+def _trials_time(a: Any) -> str:
+    """The detection trials' seconds in the report's first line, where they ran."""
+    return f" detection trials in {a.trials_s:.1f} s;" if a.trials_s else ""
+
+
 def format_analysis(a: Any, agree: Any = None) -> str:
     """The text report of ``desmon analyze``."""
     out = [
         f"desmon analyze: {a.scenario} (deployer {a.deployer}): {a.states:,} states, {a.transitions:,} transitions "
-        f"(built in {a.build_s:.1f} s from {a.reactions:,} runs of the real reaction; solved in {a.solve_s:.1f} s)"
+        f"(built in {a.build_s:.1f} s from {a.reactions:,} runs of the real reaction;{_trials_time(a)} solved in {a.solve_s:.1f} s)"
     ]
     w = a.world
     timing = "exponential" if w.phases == 1 else f"Erlang-{w.phases}"
