@@ -90,6 +90,25 @@ def test_resume_says_why_whole_numbers_that_became_decimals_have_other_seeds(tmp
     assert table.read_bytes() == before
 
 
+@pytest.mark.parametrize("given, kind", [("hours=1,2", "float"), ("faults=1,0", "bool")])
+def test_resume_takes_back_its_own_table_where_the_column_spells_a_value_otherwise(tmp_path, capsys, given, kind):
+    """A decimal parameter given whole numbers is stored as 1.0, a yes/no one given 1 as
+    true: the sweep that wrote the table still resumes it (before, every such row was
+    refused as "not in this grid", its journal's too, and the sweep could not go on)."""
+    scenario = str(ROOT / "scenarios" / "coffee_shift.py")
+    axes = tuple(a.typed_as(kind) for a in parse_axes([given]))
+    grid = Grid(axes, 2, 0)
+    rows = [{"point": r.point.index, "seed_index": r.seed_index, "seed": r.seed, **grid.typed(r.point), "scenario": scenario,
+             "job": "run", "deployer": "desmon", "until": 60.0, "exit_code": 0, "error": None, "exposure_s": 1.5, "wall_s": 0.5}
+            for r in grid.runs()]
+    table = tmp_path / "t.parquet"
+    write_table(frame(rows, axes, "run", ["until"]), table)
+    assert {type(v) for v in pd.read_parquet(table)[given.split("=")[0]]} == {float if kind == "float" else bool}
+    assert main(["sweep", scenario, "-p", given, "--seeds", "2", "--until", "60", "-o", str(table), "--resume", "--no-progress"]) == 0
+    assert "4 kept from before), 0 failed" in capsys.readouterr().out
+    assert len(pd.read_parquet(table)) == 4
+
+
 def _interrupted_after(n: int):  # type: ignore[no-untyped-def]
     """A stand-in for the cluster: hands over ``n`` rows, then Ctrl-C."""
     def execute(spec, runs, on_row, **kw):  # type: ignore[no-untyped-def]

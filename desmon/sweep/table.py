@@ -197,9 +197,21 @@ def _same_setting(stored: Any, value: Any) -> bool:
     return bool(norm(stored) == norm(value))
 
 
+def _point_value(axis: Axis, value: Any) -> str:
+    """A stored value as the grid writes it in a point's text: the axis's own text of the
+    value it reads as (a decimal column holds ``4.0`` where the sweep was given ``hours=4``,
+    a yes/no column ``true`` where it was given ``faults=1``), else its canonical text."""
+    text = _canonical(axis, value)
+    wanted = axis.typed(text)
+    for v in axis.values:
+        if axis.typed(v) == wanted:
+            return v
+    return text
+
+
 def key_of_row(row: dict[str, Any], axes: Sequence[Axis]) -> tuple[str, int]:
-    """The (point text, seed index) of a stored row, in the grid's canonical text."""
-    text = ",".join(f"{a.name}={_canonical(a, row[a.name])}" for a in axes)
+    """The (point text, seed index) of a stored row, in the grid's own text."""
+    text = ",".join(f"{a.name}={_point_value(a, row[a.name])}" for a in axes)
     return (text, int(row["seed_index"]))
 
 
