@@ -130,6 +130,37 @@ def test_ctrl_c_never_replaces_an_earlier_table(tmp_path, monkeypatch, finished)
     assert journal_path(table).exists() == (finished > 0)  # the finished rows are kept for --resume
 
 
+def _finishing():  # type: ignore[no-untyped-def]
+    """A stand-in for the cluster that hands over every run it is given."""
+    def execute(spec, runs, on_row, **kw):  # type: ignore[no-untyped-def]
+        for run in runs:
+            on_row(run, {"exit_code": 0, "error": None, "exposure_s": 2.0, "wall_s": 0.1})
+        return 1
+
+    return execute
+
+
+def test_resume_finishes_a_sweep_interrupted_over_another_sweeps_table_and_replaces_it_only_then(tmp_path, monkeypatch):
+    """Ctrl-C over an earlier table leaves it and says "pass --resume": the resume takes the
+    journal's rows, not the other sweep's table (which it had refused as "not this
+    sweep"), leaves that table alone if interrupted again, and replaces it once complete."""
+    table = tmp_path / "t.csv"
+    before = _earlier_table(table, ["hours=0.05"], 1)  # another sweep's table: another grid
+    sweep = dict(job="run", scenario=CLOUD, axes=parse_axes(["hours=0.05,0.1"]), seeds=3, output=str(table), sweep_seed=5)
+    monkeypatch.setattr(core, "execute", _interrupted_after(2))
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(**sweep)
+    with pytest.raises(KeyboardInterrupt):  # resumed, interrupted again: 2 more rows, the table still the other sweep's
+        run_sweep(**sweep, resume=True)
+    assert table.read_bytes() == before and len(journal_path(table).read_text().splitlines()) == 1 + 4
+    monkeypatch.setattr(core, "execute", _finishing())
+    result = run_sweep(**sweep, resume=True)
+    assert (result.rows, result.resumed) == (6, 4)
+    df = pd.read_csv(table)
+    assert sorted(zip(df["hours"], df["seed_index"])) == [(h, i) for h in (0.05, 0.1) for i in range(3)]
+    assert not journal_path(table).exists()
+
+
 def test_ctrl_c_writes_the_finished_rows_where_no_table_was(tmp_path, monkeypatch):
     table = tmp_path / "t.csv"
     monkeypatch.setattr(core, "execute", _interrupted_after(2))

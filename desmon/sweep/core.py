@@ -54,18 +54,23 @@ class SweepResult:
 
 def _previous(
     output: Path, journal: Path, grid: Grid, identity: dict[str, Any], settings: dict[str, Any], resume: bool
-) -> dict[tuple[str, int], dict[str, Any]]:
-    """The rows ``--resume`` keeps: those of the output table and the journal, checked to be of this sweep.
-    Without ``resume``, a journal left by an interrupted sweep is refused, not overwritten."""
+) -> tuple[dict[tuple[str, int], dict[str, Any]], bool]:
+    """The rows ``--resume`` keeps: those of the output table and the journal, checked to be
+    of this sweep; and whether the table at ``output`` is another sweep's, which this one
+    replaces only once complete (it was there when this sweep started without ``--resume``:
+    its journal says so, and its rows are not read). Without ``resume``, a journal left
+    by an interrupted sweep is refused, not overwritten."""
     if not resume:
         if journal.exists():
             raise SweepError(
                 f"-o {output}: {journal} holds the rows of an interrupted sweep; pass --resume to finish it, "
                 "or delete the journal to start again"
             )
-        return {}
+        return {}, output.exists()
     done: dict[tuple[str, int], dict[str, Any]] = {}
-    if output.exists():
+    header = read_journal(journal)[0] if journal.exists() else {}
+    over = bool(header.get("over_table")) and output.exists()
+    if output.exists() and not over:
         df = read_table(output, tuple(a.name for a in grid.axes if a.kind == "str"))
         missing = [c for c in ("point", "seed_index", "seed", "job", "exit_code") if c not in df.columns]
         if missing:
@@ -81,7 +86,7 @@ def _previous(
                     "it is not this sweep: name another -o, or delete the journal"
                 )
         done.update(check_same_sweep(str(journal), rows, grid, identity, settings))
-    return done
+    return done, over
 
 
 def _checked(job: str, scenario: str | None, axes: tuple[Axis, ...], deployer: str) -> tuple[str, tuple[Axis, ...]]:
@@ -142,18 +147,18 @@ class _Rows:
 
 
 def _finish(rows: _Rows, out: Path, journal: Path, total: int, axes: tuple[Axis, ...], job: str, settings: dict[str, Any],
-            interrupted: bool, err: IO[str], had_table: bool, resume: bool) -> None:
+            interrupted: bool, err: IO[str], had_table: bool, over: bool) -> None:
     """Write the table of every finished row; drop the journal once complete.
 
     A complete table replaces ``out`` (atomically: :func:`write_table`). An incomplete one
     (Ctrl-C, a failure) is written only where it loses nothing: when there was no table
-    at ``out`` before, or with ``--resume`` (its rows are among those kept). A table of an
-    earlier sweep is never replaced by a part of this one: the finished rows stay in the
-    journal, and ``--resume`` finishes the sweep."""
+    at ``out`` before, or where that table is this sweep's own (``--resume``: its rows are
+    among those kept). A table of another sweep (``over``) is never replaced by a part of
+    this one: the finished rows stay in the journal, and ``--resume`` finishes the sweep."""
     rows.bar.close()
     rows.journal.close()
     complete = len(rows.kept) == total
-    partial_ok = rows.new > 0 and (not had_table or resume)
+    partial_ok = rows.new > 0 and (not had_table or not over)
     if complete or partial_ok:
         write_table(frame(rows.kept, axes, job, list(settings)), out)
     if complete:
@@ -213,7 +218,8 @@ def run_sweep(
     out = Path(output)
     journal = journal_path(out)
     had_table = out.exists()
-    done = _previous(out, journal, grid, identity, settings, resume)
+    done, over = _previous(out, journal, grid, identity, settings, resume)
+    identity["over_table"] = over  # (the journal's header: a --resume of it leaves that table alone too)
     spec = JobSpec(job, scenario and os.path.abspath(scenario), deployer, tuple(settings.items()), task_timeout)
     all_runs = list(grid.runs())
     # earlier rows, renumbered by this grid (it may have grown)
@@ -236,7 +242,7 @@ def run_sweep(
             journal.unlink(missing_ok=True)
         raise
     finally:
-        _finish(rows, out, journal, len(all_runs), axes, job, settings, interrupted, err, had_table, resume)
+        _finish(rows, out, journal, len(all_runs), axes, job, settings, interrupted, err, had_table, over)
     return SweepResult(
         output=str(output), rows=len(kept), total=len(all_runs), failed=sum(1 for r in kept if r.get("error")),
         resumed=len(done), workers=workers_seen, seconds=time.perf_counter() - started,
