@@ -290,9 +290,7 @@ def analyze(
     scenario: Scenario,
     deployer: Any = "desmon",
     *,
-    phases: int = 1,
-    start_failure_p: float | None = None,
-    horizon: float | None = None,
+    phases: int = 1, start_failure_p: float | None = None, horizon: float | None = None,
     steady: bool = True, max_states: int | None = None,
     miss: dict[str, float] | None = None, start_catch: dict[str, Any] | None = None,
     trials: int = 200, guard: Any = None,
@@ -300,9 +298,8 @@ def analyze(
     budget: Callable[..., None] = no_budget,
 ) -> Analysis:
     """Build the chain of ``scenario`` under ``deployer`` and compute its measures;
-    ``progress(n)`` is called as states are explored, ``status(what)`` before each
-    batch of detection trials and each solution step (``what``: a phrase such as "solving
-    the steady state of 10,420 states"). ``miss`` and ``start_catch`` default to :func:`detector_miss` and
+    ``progress(n)`` is called as states are explored, ``status(what)`` (a phrase) before
+    each batch of detection trials and each solution step. ``miss`` and ``start_catch`` default to :func:`detector_miss` and
     :func:`detector_start_catch` over ``trials`` slips (a given ``miss`` alone: none caught while starting);
     ``budget()``, called as the chain grows and in every solver iteration, raises once spent."""
     say = status or (lambda _what: None)
