@@ -70,3 +70,13 @@ def test_corrected_deployer_raises_the_error_instead(tmp_path: Path) -> None:
     r = simulate(load_scenario(path), "desmon")
     assert [(e.kind, e.graph) for e in r.errors] == [("no_acceptable_platforms", "b_detector")]
     assert r.metrics["memory_peak_mb"] == {"pc": 150} and r.metrics["overcommit_s"] == {}
+
+
+def test_a_platform_of_0_mb_counts_its_background_load_as_over_capacity() -> None:
+    """A declared capacity of 0 is a capacity (its load is all over it), not "none declared"
+    (the meter had read 0 as unbounded: 0 s over capacity beside a 100 MB load)."""
+    sc = load_scenario(Path(__file__).resolve().parent.parent / "scenarios" / "robot_day.py", {"hand_memory": "0", "hours": "0.05"})
+    m = simulate(sc, "desmon").metrics
+    assert m["memory_peak_mb"]["hand_pc"] > 0 and m["overcommit_s"]["hand_pc"] == 180.0  # the whole run
+    one = simulate(load_scenario(Path(__file__).resolve().parent.parent / "scenarios" / "robot_day.py", {"hand_memory": "1", "hours": "0.05"}), "desmon")
+    assert one.metrics["overcommit_s"]["hand_pc"] == 180.0

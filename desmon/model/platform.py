@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Mapping
 
@@ -141,6 +142,11 @@ class Platform:
             if res == resource:
                 return amount
         return None
+
+    def capacity_or_unbounded(self, resource: str) -> float:
+        """:meth:`capacity`, infinite where the platform declares none (a declared 0 stays 0)."""
+        amount = self.capacity(resource)
+        return math.inf if amount is None else amount
 
     def attribute(self, name: str) -> object | None:
         for key, value in self.attributes:

@@ -627,7 +627,7 @@ class FleetWorld:
         for e in edges:
             self._owners[e] = list(self.members)
         first = self.fleet.robots[0].model
-        self.edge_meter = _EdgeMeter({e: first.platform(e).capacity("memory") or math.inf for e in edges})
+        self.edge_meter = _EdgeMeter({e: first.platform(e).capacity_or_unbounded("memory") for e in edges})
         self._edge_ids = {node_id(L.PLATFORM, e): e for e in edges}
         self._consumes = {g: mem for mb in self.members for g, mem in mb.consumes.items()}
         self.deployer_name = self.members[0].deployer_name
@@ -708,8 +708,9 @@ class FleetWorld:
                 errors[k] = errors.get(k, 0) + n
         em = self.edge_meter
         h = self.horizon
-        share = {e: (em.integral[e] / h / em.capacity[e] if math.isfinite(em.capacity[e]) else 0.0) for e in em.capacity}
-        peak = {e: (em.peak[e] / em.capacity[e] if math.isfinite(em.capacity[e]) else 0.0) for e in em.capacity}
+        # (a share of no capacity declared, or of a declared 0 MB, which nothing that needs memory fits: 0)
+        share = {e: (em.integral[e] / h / em.capacity[e] if 0 < em.capacity[e] < math.inf else 0.0) for e in em.capacity}
+        peak = {e: (em.peak[e] / em.capacity[e] if 0 < em.capacity[e] < math.inf else 0.0) for e in em.capacity}
         total = lambda key: sum(m[key] for m in robots.values())  # noqa: E731
         out: dict[str, Any] = {
             "robots": len(robots),

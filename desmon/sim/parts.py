@@ -19,7 +19,6 @@ trace and the audit.
 
 from __future__ import annotations
 
-import math
 import random
 from typing import Any, Callable
 
@@ -72,7 +71,7 @@ def robot_parts(
         return cause(need, lambda g: facts.member_state(g, env.now))
 
     exposure = Exposure(facts.valid_from, emit_exposure, facts.valid_times, cause_of)
-    memory = MemoryMeter({p.name: p.capacity("memory") or math.inf for p in model.platforms})
+    memory = MemoryMeter({p.name: p.capacity_or_unbounded("memory") for p in model.platforms})
     infra = Infrastructure(
         env, world, repo, trace, facts, truth, rules(control) if rules is not None else control, exposure, memory,
         seed=seed, signals=signals,
