@@ -363,3 +363,19 @@ def test_a_fleet_warns_once_per_uncovered_action_and_prints_its_excluded_time(ca
     (line,) = err.splitlines()
     assert line.startswith("desmon: warning: risky action 'hold' has no selector rule on 3 of the 3 robots")
     assert f"{per_robot:,.4g} s per such robot of the 720 s horizon" in line
+
+
+def test_after_a_task_played_once_the_hand_is_empty_until_the_horizon():
+    """World(repeat=False) with a horizon past the task's end: the seconds after it are
+    neither risky nor unmonitored (the slips and the signals already had the hand empty
+    there; the exposure meter had kept the last action's need until the horizon)."""
+    sc = load_scenario("scenarios/coffee_handover.py")
+    w = world_of(sc)
+    assert not w.repeat and w.horizon == sum(s.duration for s in w.task) == 28.0
+    longer = replace(sc, world=replace(w, horizon=40.0))
+    m28, m40 = simulate(sc, "desmon", seed=0).metrics, simulate(longer, "desmon", seed=0).metrics
+    assert m40["risky_time_s"] == m28["risky_time_s"] == 28.0
+    assert m40["unmonitored_exposure_s"] == pytest.approx(m28["unmonitored_exposure_s"])
+    assert m40["unmonitored_by_cause_s"] == pytest.approx(m28["unmonitored_by_cause_s"])
+    steps = [(s.action, s.duration) for s in w.task]
+    assert m40["unmonitored_by_cause_s"]["no_rule"] == pytest.approx(no_rule_seconds(sc.model, steps, 40.0, False)["hold"])

@@ -101,6 +101,13 @@ def robot(parts: RobotParts):  # type: ignore[no-untyped-def]
             recognise_later(parts, seg.context)
         else:
             env.process(recognise(parts, seg.context))
+    segments = parts.truth.segments
+    end = segments[-1].start + segments[-1].duration if segments else 0.0
+    if end < parts.horizon:  # a task played once (World(repeat=False)) ends before the horizon:
+        # the hand is empty from then on, as the slips and the signals have it (nothing is
+        # risky or unmonitored); the monitor sees nothing new, so the deployment stays
+        yield env.timeout(end - env.now)
+        parts.exposure.set_need(env.now, table[IDLE])
 
 
 def recognised_context(action: str) -> str:
