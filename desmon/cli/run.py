@@ -19,6 +19,7 @@ from typing import IO, TYPE_CHECKING, Any, Callable, Iterator
 from desmon.cli.common import EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, draw_trace, load_scenario_of, scenario_arg, warn_uncovered, run_of
 from desmon.cli.options import add_output, add_window, non_negative_int, positive_int, positive_seconds
 from desmon.errors import ScenarioError
+from desmon.model.checks import exact
 from desmon.paths import replacing
 from desmon.progress import StatusLine
 
@@ -112,7 +113,7 @@ def run_command(
         raise ScenarioError(f"--render-ahead on renders sensor signals, and {scenario.name!r} runs without them (--no-signals or its world): drop --render-ahead")
     if args.until is not None and args.until > horizon:
         raise ScenarioError(
-            f"--until {args.until:g}: the scenario's task ends at its horizon of {horizon:g} s; "
+            f"--until {exact(args.until)}: the scenario's task ends at its horizon of {exact(horizon)} s; "
             "give --until at most that (past it the last action would go on forever)"
         )
     if before_run is not None:
@@ -194,7 +195,7 @@ def _run_fleet(args: Any, scenario: Scenario, out: IO[str], err: IO[str], show: 
         raise ScenarioError(f"--plot draws one robot's timeline; {scenario.name!r} is a fleet of {len(fleet.robots)}: drop --plot")
     if args.until is not None and args.until > fleet.horizon:
         raise ScenarioError(
-            f"--until {args.until:g}: the fleet's shift ends at its horizon of {fleet.horizon:g} s; give --until at most that"
+            f"--until {exact(args.until)}: the fleet's shift ends at its horizon of {exact(fleet.horizon)} s; give --until at most that"
         )
     with _status_line(err) as line:  # ended before the summary, or before an error's message
         progress = _reporter(line, time.perf_counter()) if show else None

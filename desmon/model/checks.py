@@ -22,6 +22,7 @@ from desmon.errors import DesmonError, ModelError
 __all__ = [
     "PLATFORM_HAS",
     "suggest",
+    "exact",
     "check_name",
     "is_plain_name",
     "visible",
@@ -48,6 +49,13 @@ T = TypeVar("T")
 F = TypeVar("F", bound=Callable[..., Any])
 C = TypeVar("C", bound=type)
 Error = type[DesmonError]
+
+
+def exact(x: float) -> str:
+    """``x`` as short as ``:g`` writes it where that is ``x`` itself, else every digit:
+    a refusal quotes the value the user gave (``--until 28.0000001``, not ``28``)."""
+    short = f"{x:g}"
+    return short if float(short) == x else repr(float(x))
 
 
 def suggest(name: object, choices: Iterable[str]) -> str:

@@ -29,6 +29,7 @@ from typing import Any, Callable, Mapping
 from desmon.deployment.exposure import CAUSES
 from desmon.deployment.guard import EXIT_CRASHED, DeployerFault
 from desmon.errors import DesmonError
+from desmon.model.checks import exact
 from desmon.sim.metrics import RUN_FIGURES, run_figures
 from desmon.sweep.grid import JOBS, Axis, Run, SweepError
 
@@ -511,7 +512,7 @@ def check_points(
             horizon = float(world_of(loaded).horizon)
             if setting > horizon:
                 raise SweepError(
-                    f"--until {setting:g}: the scenario's task ends at its horizon of {horizon:g} s{' ' + where if where else ''}; "
+                    f"--until {exact(setting)}: the scenario's task ends at its horizon of {exact(horizon)} s{' ' + where if where else ''}; "
                     "give --until at most that, or leave it out to run each point to its own horizon"
                 )
 
