@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import numpy as np
 import pytest
 
@@ -227,3 +228,18 @@ def test_wrench_by_index_in_any_order_across_blocks() -> None:
     got = ms.wrench_at(k)
     one_by_one = np.array([ms.wrench_at(np.array([i])).values[0] for i in k])
     assert got.index.tolist() == k.tolist() and got.values.tobytes() == one_by_one.tobytes()
+
+
+@pytest.mark.parametrize("field, value, says", [
+    ("peak_lo", 0.0, "must be above 0"), ("creep_tau", 0.0, "must be above 0"), ("tactile_rate", -30.0, "must be 0 or more"),
+    ("slip_jerks", 0, "whole number of jerks"), ("base_settle_p", 5.0, "at most 1 (a probability)"),
+    ("noise_counts", float("nan"), "finite"), ("peak_lo", 700.0, "at most peak_hi, 600.0"), ("grasp_on", (0.6, 0.2), "low at most high"),
+])
+def test_signal_parameters_the_model_cannot_take_are_refused_by_name(field, value, says):
+    """One rule for every engine: the sweep's -p check builds the same object."""
+    from desmon.detectors.signals import SignalParams
+    from desmon.errors import SignalError
+
+    with pytest.raises(SignalError, match=f"signal parameter {field} .*{re.escape(says)}"):
+        SignalParams(**{field: value})
+    SignalParams()  # the defaults hold

@@ -393,9 +393,15 @@ def _is_value_error(message: str, name: str | None) -> bool:
 
 
 def _check_signal_values(axes: tuple[Axis, ...]) -> None:
-    """``--job evaluate``'s ``-p``: names of the signal model's numeric parameters, finite values
-    of their type, not negative (a rate above 0), no point with a ``_lo`` above its ``_hi``."""
+    """``--job evaluate``'s ``-p``: names of the signal model's numeric parameters, values of
+    their type that the model takes (:class:`~desmon.detectors.signals.SignalParams`' own
+    rules, each value beside the others' defaults, a ``_lo`` beside the largest swept
+    ``_hi`` and the other way round), no point with a ``_lo`` above its ``_hi``."""
+    from desmon.detectors.signals import SignalParams
+    from desmon.errors import SignalError
+
     known = signal_parameters()
+    swept = {a.name: a for a in axes}
     for axis in axes:
         if axis.name not in known:
             import difflib
@@ -413,11 +419,16 @@ def _check_signal_values(axes: tuple[Axis, ...]) -> None:
             except ValueError:
                 what = "a number" if kind is float else "a whole number"
                 raise SweepError(f"-p {axis.name}={v}: {axis.name} is {what} (default {known[axis.name]})") from None
-            if not math.isfinite(number):
-                raise SweepError(f"-p {axis.name}={v}: {axis.name} must be a finite number (default {known[axis.name]})")
-            if number < 0 or (number == 0 and axis.name.endswith("_rate")):
-                least = "above 0 (samples per second)" if axis.name.endswith("_rate") else "0 or more"
-                raise SweepError(f"-p {axis.name}={v}: {axis.name} must be {least} (default {known[axis.name]})")
+            values: dict[str, float | int] = {axis.name: number}
+            for mine, other, pick in (("_lo", "_hi", max), ("_hi", "_lo", min)):
+                pair = axis.name[: -len(mine)] + other if axis.name.endswith(mine) else None
+                if pair in swept:
+                    values[pair] = pick(float(x) for x in swept[pair].values)  # type: ignore[index]
+            try:
+                SignalParams(**values)
+            except SignalError as exc:
+                problem = str(exc).removeprefix(f"signal parameter {axis.name} ").rsplit(", not ", 1)[0]
+                raise SweepError(f"-p {axis.name}={v}: {axis.name} {problem} (default {known[axis.name]})") from None
     _check_bounds_pairs(axes, known)
 
 

@@ -96,6 +96,38 @@ class SignalParams:
     slip_extra: tuple[float, float] = (0.0, 0.15)
     object_mass: tuple[float, float] = (0.3, 0.6)
 
+    def __post_init__(self) -> None:
+        for name in self.__slots__:  # type: ignore[attr-defined]
+            problem = _param_problem(name, getattr(self, name), self)
+            if problem is not None:
+                raise SignalError(f"signal parameter {name} {problem}, not {getattr(self, name)!r}")
+
+
+#: the parameters the model divides by or takes the logarithm of: above 0
+_POSITIVE: Final = frozenset({"tactile_rate", "peak_lo", "peak_hi", "creep_tau"})
+
+
+def _param_problem(name: str, value: object, params: SignalParams) -> str | None:
+    """What is wrong with one parameter of ``params`` (None if nothing): every number finite
+    and not negative; a rate, a peak or a time constant above 0; ``slip_jerks`` a whole
+    number from 1; a ``_p`` a probability; each range pair and ``_lo`` at most its ``_hi``."""
+    numbers = value if isinstance(value, tuple) else (value,)
+    if any(isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) for x in numbers):
+        return "must be a finite number" + (" pair (low, high)" if isinstance(value, tuple) else "")
+    if any(x < 0 for x in numbers):  # type: ignore[operator]
+        return "must be 0 or more"
+    if name in _POSITIVE and value == 0:
+        return "must be above 0 (the model divides by it or takes its logarithm)"
+    if name == "slip_jerks" and (not isinstance(value, int) or value < 1):
+        return "must be a whole number of jerks, 1 or more"
+    if name.endswith("_p") and value > 1:  # type: ignore[operator]
+        return "must be at most 1 (a probability)"
+    if isinstance(value, tuple) and (len(value) != 2 or value[0] > value[1]):
+        return "must be a range (low, high) with low at most high"
+    if name.endswith("_lo") and value > getattr(params, name[:-3] + "_hi", math.inf):  # type: ignore[operator]
+        return f"must be at most {name[:-3]}_hi, {getattr(params, name[:-3] + '_hi')!r} (the model draws between the two)"
+    return None
+
 
 DEFAULT_PARAMS: Final = SignalParams()
 
