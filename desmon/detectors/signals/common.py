@@ -116,6 +116,11 @@ def _param_problem(name: str, value: object, params: SignalParams) -> str | None
         return "must be a finite number" + (" pair (low, high)" if isinstance(value, tuple) else "")
     if any(x < 0 for x in numbers):  # type: ignore[operator]
         return "must be 0 or more"
+    return _bound_problem(name, value, params)
+
+
+def _bound_problem(name: str, value: object, params: SignalParams) -> str | None:
+    """:func:`_param_problem` of a finite number (or pair) of 0 or more."""
     if name in _POSITIVE and value == 0:
         return "must be above 0 (the model divides by it or takes its logarithm)"
     if name == "slip_jerks" and (not isinstance(value, int) or value < 1):
