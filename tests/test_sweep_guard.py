@@ -130,11 +130,11 @@ def test_ctrl_c_never_replaces_an_earlier_table(tmp_path, monkeypatch, finished)
     assert journal_path(table).exists() == (finished > 0)  # the finished rows are kept for --resume
 
 
-def _finishing():  # type: ignore[no-untyped-def]
+def _finishing(exposure_s: float = 2.0):  # type: ignore[no-untyped-def]
     """A stand-in for the cluster that hands over every run it is given."""
     def execute(spec, runs, on_row, **kw):  # type: ignore[no-untyped-def]
         for run in runs:
-            on_row(run, {"exit_code": 0, "error": None, "exposure_s": 2.0, "wall_s": 0.1})
+            on_row(run, {"exit_code": 0, "error": None, "exposure_s": exposure_s, "wall_s": 0.1})
         return 1
 
     return execute
@@ -159,6 +159,18 @@ def test_resume_finishes_a_sweep_interrupted_over_another_sweeps_table_and_repla
     df = pd.read_csv(table)
     assert sorted(zip(df["hours"], df["seed_index"])) == [(h, i) for h in (0.05, 0.1) for i in range(3)]
     assert not journal_path(table).exists()
+
+
+def test_a_table_names_its_scenario_by_its_absolute_path_so_it_plots_and_resumes_from_any_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(ROOT)
+    monkeypatch.setattr(core, "execute", _finishing(50.0))  # (within the range of exposure at both points)
+    table = tmp_path / "t.csv"
+    sweep = dict(job="run", scenario="scenarios/cloud_offload.py", axes=parse_axes(["hours=0.05,0.1"]), seeds=2, output=str(table))
+    run_sweep(**sweep)
+    assert set(pd.read_csv(table)["scenario"]) == {CLOUD}  # (a relative path had been stored as typed)
+    monkeypatch.chdir(tmp_path)  # elsewhere: "scenarios/cloud_offload.py" names no file here
+    assert main(["sweep-plot", str(table), "-x", "hours", "-y", "exposure_s", "-o", str(tmp_path / "p.png")]) == 0, capsys.readouterr().err
+    assert run_sweep(**(sweep | {"scenario": CLOUD, "seeds": 3}), resume=True).resumed == 4
 
 
 def test_ctrl_c_writes_the_finished_rows_where_no_table_was(tmp_path, monkeypatch):

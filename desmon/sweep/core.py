@@ -52,6 +52,12 @@ class SweepResult:
         return self.rows == self.total
 
 
+def _same_file(a: object, b: object) -> bool:
+    """Two scenario paths of a journal and a sweep name one file (a journal written before
+    scenarios were recorded by their absolute path holds one relative to its folder)."""
+    return bool(a) and bool(b) and Path(str(a)).resolve() == Path(str(b)).resolve()
+
+
 def _previous(
     output: Path, journal: Path, grid: Grid, identity: dict[str, Any], settings: dict[str, Any], resume: bool
 ) -> tuple[dict[tuple[str, int], dict[str, Any]], bool]:
@@ -80,7 +86,7 @@ def _previous(
     if journal.exists():
         header, rows = read_journal(journal)
         for key in ("job", "scenario", "deployer", "sweep_seed"):
-            if str(header.get(key)) != str(identity[key]):
+            if str(header.get(key)) != str(identity[key]) and not (key == "scenario" and _same_file(header.get(key), identity[key])):
                 raise SweepError(
                     f"--resume: {journal} is the journal of a sweep with {key} {header.get(key)}, not {identity[key]}; "
                     "it is not this sweep: name another -o, or delete the journal"
@@ -211,8 +217,11 @@ def run_sweep(
     settings = _settings_of(job, setting, settings)
     # every point, before a cluster starts
     check_points(job, scenario, grid.iter_points(), settings.get(SETTINGS.get(job, "")), deployer, settings=settings)
+    # the scenario by its absolute path, in the table and the journal (as the workers get it):
+    # sweep-plot and --resume read the table from any folder
+    where = os.path.abspath(scenario) if scenario else ""
     identity = {
-        "job": job, "scenario": scenario or "", "deployer": deployer, "sweep_seed": sweep_seed,
+        "job": job, "scenario": where, "deployer": deployer, "sweep_seed": sweep_seed,
         "axes": {a.name: a.kind for a in axes}, "settings": settings,
     }
     out = Path(output)
@@ -220,7 +229,7 @@ def run_sweep(
     had_table = out.exists()
     done, over = _previous(out, journal, grid, identity, settings, resume)
     identity["over_table"] = over  # (the journal's header: a --resume of it leaves that table alone too)
-    spec = JobSpec(job, scenario and os.path.abspath(scenario), deployer, tuple(settings.items()), task_timeout)
+    spec = JobSpec(job, where or None, deployer, tuple(settings.items()), task_timeout)
     all_runs = list(grid.runs())
     # earlier rows, renumbered by this grid (it may have grown)
     kept = [{**done[run.key], "point": run.point.index} for run in all_runs if run.key in done]
@@ -228,7 +237,7 @@ def run_sweep(
     err = err or sys.stderr
     bar = Progress(len(all_runs), done=len(kept), failed=sum(1 for r in kept if r.get("error")), enabled=progress, out=err)
     started = time.perf_counter()
-    fixed = {"scenario": scenario or "", "job": job, "deployer": deployer, **settings}
+    fixed = {"scenario": where, "job": job, "deployer": deployer, **settings}
     rows = _Rows(grid, kept, fixed, Journal(journal, identity, kept), bar, on_row)
     interrupted = False
     workers_seen = 0
