@@ -173,6 +173,20 @@ def test_a_table_names_its_scenario_by_its_absolute_path_so_it_plots_and_resumes
     assert run_sweep(**(sweep | {"scenario": CLOUD, "seeds": 3}), resume=True).resumed == 4
 
 
+def test_sweep_plot_draws_a_figure_whose_range_is_a_single_value(tmp_path, capsys):
+    """Without a lease, leased_s lies in [0, 0]: its mean is known exactly, not a sign of an
+    edited table (the plot had been refused so)."""
+    axes = tuple(a.typed_as(k) for a, k in zip(parse_axes(["lease=false", "hours=0.05,0.1"]), ("bool", "float")))
+    grid = Grid(axes, 2, 0)
+    rows = [{"point": r.point.index, "seed_index": r.seed_index, "seed": r.seed, **grid.typed(r.point), "scenario": CLOUD,
+             "job": "run", "deployer": "desmon", "until": None, "exit_code": 0, "error": None, "leased_s": 0.0, "wall_s": 0.5}
+            for r in grid.runs()]
+    table = tmp_path / "t.csv"
+    write_table(frame(rows, axes, "run", ["until"]), table)
+    assert main(["sweep-plot", str(table), "-x", "hours", "-y", "leased_s", "-o", str(tmp_path / "p.png")]) == 0, capsys.readouterr().err
+    assert (tmp_path / "p.png").stat().st_size > 10_000
+
+
 def test_ctrl_c_writes_the_finished_rows_where_no_table_was(tmp_path, monkeypatch):
     table = tmp_path / "t.csv"
     monkeypatch.setattr(core, "execute", _interrupted_after(2))

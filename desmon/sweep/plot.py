@@ -144,6 +144,8 @@ def mean_interval(values: list[float], value_range: tuple[float, float] | None) 
     known to lie in ``value_range``, else the normal approximation (not guaranteed; none below 2 values)."""
     from desmon.stats import mean_interval as interval_of
 
+    if value_range is not None and value_range[0] == value_range[1]:  # known without a run (leased_s where nothing leases)
+        return value_range[0], value_range[1], "guaranteed"
     iv = interval_of(values, 1.0 - CONFIDENCE, value_range)
     if value_range is not None:
         return iv.low, iv.high, "guaranteed"
@@ -203,7 +205,7 @@ def _checked(value_range: tuple[float, float] | None, values: list[float], y: st
     if value_range is None:
         return None
     lo, hi = value_range
-    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
         raise SweepError(f"-y {y}: the range of its values, [{lo:g}, {hi:g}], is not a range; the table was edited or not written by desmon sweep: write it again with desmon sweep")
     for v in values:
         if not lo <= v <= hi:
