@@ -187,6 +187,23 @@ def test_sweep_plot_draws_a_figure_whose_range_is_a_single_value(tmp_path, capsy
     assert (tmp_path / "p.png").stat().st_size > 10_000
 
 
+def test_a_pareto_view_of_a_sweep_without_parameters_says_its_dots_are_runs_not_points(tmp_path, monkeypatch):
+    from desmon.sweep import plot
+
+    grid = Grid((), 4, 0)
+    rows = [{"point": r.point.index, "seed_index": r.seed_index, "seed": r.seed, "scenario": CLOUD, "job": "run",
+             "deployer": "desmon", "until": 60.0, "exit_code": 0, "error": None, "exposure_s": 1.0 + r.seed_index,
+             "memory_peak_mb_pc": 100.0 + 10 * r.seed_index, "wall_s": 0.5} for r in grid.runs()]
+    table = tmp_path / "t.csv"
+    write_table(frame(rows, (), "run", ["until"]), table)
+    titles: list[str] = []
+    real = plot._wrapped
+    monkeypatch.setattr(plot, "_wrapped", lambda t: titles.append(real(t)) or titles[-1])
+    assert main(["sweep-plot", str(table), "--pareto", "memory_peak_mb_pc", "-y", "exposure_s", "-o", str(tmp_path / "p.png")]) == 0
+    title = " ".join(titles[-1].split())
+    assert "Pareto front of 4 values of memory_peak_mb_pc among the runs of the one point (no swept parameter)" in title, title
+
+
 def test_ctrl_c_writes_the_finished_rows_where_no_table_was(tmp_path, monkeypatch):
     table = tmp_path / "t.csv"
     monkeypatch.setattr(core, "execute", _interrupted_after(2))

@@ -247,7 +247,8 @@ def _pareto(ax: Any, ok: Any, params: list[str], pareto: str, y: str) -> int:
     costs, means = [float(c) for c in s["_cost"]], [float(m) for m in s["mean"]]
     front = pareto_front(costs, means)
     ax.errorbar(costs, means, yerr=[[m - lo for m, lo in zip(means, s["min"])], [hi - m for m, hi in zip(means, s["max"])]],
-                fmt="o", color="0.6", ecolor="0.8", capsize=3, label="point (mean, min-max over seeds)")
+                fmt="o", color="0.6", ecolor="0.8", capsize=3,
+                label="point (mean, min-max over seeds)" if params else f"runs of one {pareto} (mean, min-max)")
     ax.step([costs[i] for i in front], [means[i] for i in front], where="post", color="C3", marker="o", zorder=3,
             label="Pareto front")
     varying = [p for p in by if p != pareto and ok[p].nunique() > 1]
@@ -356,7 +357,9 @@ def _plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str |
     else:
         assert pareto is not None
         points = _pareto(ax, ok, params, pareto, y)
-        ax.set_title(_wrapped(f"{y} vs {pareto}: Pareto front of {points} points ({note})"), fontsize=9)
+        # without a swept parameter the table is one point: its runs, grouped by their own cost
+        what = "points" if params else f"values of {pareto} among the runs of the one point (no swept parameter)"
+        ax.set_title(_wrapped(f"{y} vs {pareto}: Pareto front of {points} {what} ({note})"), fontsize=9)
     ax.set_ylabel(y)
     if log_x:
         _log_axis(ax, sorted({float(v) for v in ok[x or pareto]}))
