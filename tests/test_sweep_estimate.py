@@ -113,10 +113,10 @@ def test_sweep_plot_draws_each_estimation_of_a_point_as_a_line_of_its_own(tmp_pa
 
     monkeypatch.setattr(plot, "_estimates", spy)
     assert main(["sweep-plot", str(out), "-x", "hours", "-y", "estimate", "-o", str(png)]) == 0
-    df = pd.read_csv(out).sort_values(["hours", "seed"])
+    df = pd.read_csv(out)
     assert [label for label, _y in seen["lines"]] == ["estimation 1", "estimation 2"]
-    for k, (_label, ys) in enumerate(seen["lines"]):
-        expected = [float(part.sort_values("seed")["estimate"].iloc[k]) for _h, part in df.groupby("hours")]
+    for k, (_label, ys) in enumerate(seen["lines"]):  # estimation k+1: seed index k at every point (not the k-th smallest seed)
+        expected = [float(part[part["seed_index"] == k]["estimate"].iloc[0]) for _h, part in df.groupby("hours")]
         assert ys == pytest.approx(expected)
 
 

@@ -263,8 +263,10 @@ def _estimates(ax: Any, df: Any, params: list[str], x: str) -> str:
     """``--job estimate``'s estimates against ``x``, each point's guaranteed interval as the band;
     the method, for the title."""
     others = [p for p in params if p != x and df[p].nunique() > 1]
-    # several estimations of a point (--seeds N): each its own line, never one line through all
-    df = df.assign(_estimation=df.groupby(params or ["job"])["seed"].rank(method="first").astype(int))
+    # several estimations of a point (--seeds N): each its own line, never one line through all;
+    # estimation k is the k-th seed index of every point (the seeds themselves differ from point to point)
+    order = "seed_index" if "seed_index" in df.columns else "seed"
+    df = df.assign(_estimation=df.groupby(params or ["job"])[order].rank(method="first").astype(int))
     several = int(df["_estimation"].max()) > 1
     keys = others + (["_estimation"] if several else [])
     groups = df.sort_values(x).groupby(keys, sort=True) if keys else [((), df.sort_values(x))]
