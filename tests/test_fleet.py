@@ -222,7 +222,7 @@ def test_desmon_run_prints_the_fleet_metrics(capsys: pytest.CaptureFixture[str])
     code = main(["run", str(FLEET), "-p", "robots=2", "-p", "edges=1", "-p", "hours=0.2", "--no-progress"])
     out = capsys.readouterr().out
     assert code == 0
-    for what in ("2 robots, 1 edge servers", "unmonitored exposure (s)", "memory share, peak", "Errors by kind", "x real time", "peak memory"):
+    for what in ("2 robots, 1 edge server,", "unmonitored exposure (s)", "memory share, peak", "Errors by kind", "x real time", "peak memory"):
         assert what in out
 
 

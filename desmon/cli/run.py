@@ -417,13 +417,17 @@ def _fleet_exposure_interval(r: FleetResult) -> str:
             "they share the edge servers)")
 
 
+def _count(n: int, what: str) -> str:
+    return f"{n} {what}" if n == 1 else f"{n} {what}s"
+
+
 def format_fleet_summary(r: FleetResult) -> str:
     """The human-readable report of ``desmon run`` on a fleet scenario."""
     from desmon.deployment.exposure import CAUSE_TEXT
 
     m = r.metrics
     lines = [
-        f"{r.scenario.name} -- SimPy fleet, {m['robots']} robots, {m['edges']} edge servers, deployer {r.deployer}, "
+        f"{r.scenario.name} -- SimPy fleet, {_count(m['robots'], 'robot')}, {_count(m['edges'], 'edge server')}, deployer {r.deployer}, "
         f"seed {r.seed}, {r.horizon:g} s simulated in {m['wall_s']:.2f} s wall ({m['realtime_ratio']:g}x real time)",
         "Signals: off: no detector is simulated; a running, warmed-up valid deployment counts as monitoring.",
         "",

@@ -182,8 +182,16 @@ def fleet_no_rule_warnings(robots: Iterable[tuple[object, Iterable[tuple[str, fl
         for action, v in no_rule_seconds(model, steps, horizon, repeat).items():
             seconds.setdefault(action, []).append(v)
     return [
-        f"warning: risky action {action!r} has no selector rule on {len(vs)} of the {n} robots, so nothing watches it there: "
-        f"{sum(vs) / len(vs):,.4g} s per such robot of the {horizon:,.0f} s horizon count as unmonitored (add a rule for "
+        f"warning: risky action {action!r} has no selector rule on {f'{len(vs)} of the {n} robots' if n > 1 else 'the one robot'}, "
+        f"so nothing watches it there: {_per_robot(vs)} of the {horizon:,.0f} s horizon count as unmonitored (add a rule for "
         f"{action!r}, or exclude it on purpose with robot.action({action!r}, watched=False))"
         for action, vs in seconds.items()
     ]
+
+
+def _per_robot(seconds: list[float]) -> str:
+    """The no-rule seconds of the robots a warning names: one figure where they agree, else the mean and the range."""
+    low, high, mean = min(seconds), max(seconds), sum(seconds) / len(seconds)
+    if f"{low:,.4g}" == f"{high:,.4g}":
+        return f"{mean:,.4g} s per such robot"
+    return f"{mean:,.4g} s per such robot on average ({low:,.4g} to {high:,.4g} s)"
