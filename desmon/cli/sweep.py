@@ -107,8 +107,8 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
     mine = JOB_SETTINGS[args.job]
     for name, flag in _SETTING_FLAGS.items():
         if name not in mine and getattr(args, name) is not None:
-            owner = next(j for j, names in JOB_SETTINGS.items() if name in names)
-            raise SweepError(f"{flag} applies to --job {owner}, not --job {args.job}; drop it")
+            owners = [j for j, names in JOB_SETTINGS.items() if name in names]
+            raise SweepError(f"{flag} applies to --job {' and '.join(owners)}, not --job {args.job}; drop it")
     return {name: _SETTING_DEFAULTS[name] if getattr(args, name) is None else getattr(args, name) for name in mine}
 
 

@@ -51,6 +51,10 @@ def _parameters(df: Any) -> list[str]:
     return []
 
 
+#: the columns that say which run a row is: no figure to draw (-y)
+_BOOKKEEPING = ("point", "seed_index", "seed")
+
+
 def _column(df: Any, flag: str, name: str, numeric: bool = True) -> None:
     if name not in df.columns:
         import difflib
@@ -101,6 +105,8 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
         if required not in df.columns:
             raise SweepError(f"{table}: not a table written by desmon sweep (no {required} column)")
     _column(df, "-y", y)
+    if y in _BOOKKEEPING:
+        raise SweepError(f"-y {y}: a run's bookkeeping ({', '.join(_BOOKKEEPING)}), not a figure of the run; plot a figure such as exposure_s")
     _column(df, "-x" if x is not None else "--pareto", x or pareto)  # type: ignore[arg-type]
     if x is not None and x not in _parameters(df):
         params = _parameters(df)
