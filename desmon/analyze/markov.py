@@ -405,6 +405,11 @@ def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float 
     _check_arguments(phases, start_failure_p)
     if scenario.world is None:
         raise _refuse(scenario, "it declares no World, so the chain has no rates: give it Scenario(world=World(task=..., stochastic_faults=...))")
+    from desmon.sim.fleet import is_fleet
+
+    if is_fleet(scenario):
+        raise _refuse(scenario, "a fleet of robots (world is a Fleet); the chain is one robot's: analyze a single-robot "
+                                "scenario, or simulate the fleet with desmon run")
     world = world_of(scenario)
     b = bounds_of(scenario)
     _check_unrated(scenario, world)
