@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 from desmon.cli import main
 from desmon.detectors.evaluation import ALPHA, fisher_exact
 
@@ -32,3 +35,10 @@ def test_plot_of_a_trace_without_platforms_draws_the_context_and_says_why_nothin
     assert main(["plot", str(trace), "-o", str(png)]) == 0
     assert png.read_bytes()[:4] == b"\x89PNG"
     assert "declares no platforms in its run record: only the context lane is drawn" in capsys.readouterr().err
+
+
+def test_a_figure_under_a_thousandth_of_a_second_is_not_printed_as_0(capsys):
+    """A run of 0.4 ms: its risky time is 0.0004 s, not "0" beside "100.0 % of the risky time"."""
+    assert main(["run", str(Path(__file__).resolve().parent.parent / "scenarios" / "coffee_handover.py"), "--until", "0.0004", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"risky time \(s\)\s+0\.0004 ", out) and re.search(r"unmonitored exposure \(s\)\s+0\.0004 = 100\.0 %", out), out

@@ -240,6 +240,8 @@ def _fmt(v: Any) -> str:
     if v is None:
         return "-"
     if isinstance(v, float):
+        if 0 < abs(v) < 0.0005:  # (three decimals would print a figure that is not 0 as 0)
+            return f"{v:.3g}"
         return f"{v:.3f}".rstrip("0").rstrip(".") if v != int(v) else f"{v:g}"
     if isinstance(v, dict):
         return ", ".join(f"{k} {_fmt(x)}" for k, x in v.items()) or "-"
