@@ -126,3 +126,20 @@ def test_robot_day_records_are_consistent() -> None:
     downs = [x for x in recs if x["type"] == "fault" and x["event"].startswith("platform") and x["event"].endswith("down")]
     assert len([x for x in plat if not x["up"]]) == len(downs)
     assert all(a["t"] <= b["t"] for a, b in zip(recs[1:], recs[2:]) if a["type"] not in ("slip", "alarm") and b["type"] not in ("slip", "alarm"))
+
+
+def test_every_record_type_a_run_writes_is_in_the_trace_schema(tmp_path) -> None:
+    """The schema in desmon/sim/trace.py is what a user reads a trace by: a lease and a
+    requirement change (cloud_offload has both) are in it too."""
+    import re
+
+    import desmon.sim.trace as trace_module
+    from desmon.cli import main
+
+    documented = set(re.findall(r"^``([a-z_]+)``", trace_module.__doc__ or "", re.M))
+    out = tmp_path / "t.jsonl"
+    root = Path(__file__).resolve().parent.parent
+    assert main(["run", str(root / "scenarios" / "cloud_offload.py"), "-p", "hours=1", "--trace", str(out), "--no-progress"]) in (0, 1)
+    written = {json.loads(line)["type"] for line in out.read_text().splitlines()}
+    assert {"lease", "change"} <= written
+    assert written <= documented, written - documented

@@ -51,6 +51,12 @@ Schema (keys in this order after ``t`` and ``type``)
 ``platform``   ``platform, up`` (bool): the platform crashed (false) or came back (true).
 ``fault``      ``event, source``: the fault injector changed a device or platform
                (``source``: a script label, "script", "mttf" or "mttr").
+``lease``      ``platform, graph``: no platform was acceptable for ``graph``, so the world
+               (``World.lease``) asked for on-demand ``platform``, which joins after its
+               start-up time and leaves once idle (its join and leave are written as
+               ``fault`` records, with source "lease").
+``change``     ``event, source``: a run-time requirement change (scripted, or a random
+               one of ``World.changes``) the context monitor wrote into the repository.
 ``alarm``      ``detector, platform, direction`` (up/down/null): at ``t`` (the sample time)
                a running detector reported a slip.
 ``violation``  ``invariant, message``: an audited invariant failed after a reaction.
