@@ -55,16 +55,17 @@ def test_every_run_under_fixed_timing_has_the_tasks_seconds_and_an_exposure_in_i
     sc = load_scenario(path)
     assert not is_fleet(sc)
     horizon = world_of(sc).horizon
-    # a cut within a step, and the whole horizon where it is short (the last step's need lasts to the end)
+    # a cut within a step, and the whole horizon where it is short
     for until in ([round(horizon * 0.37, 3)] + ([horizon] if horizon <= 3600 else [])):
         _check_runs(sc, until)
 
 
-def test_the_last_steps_need_lasts_until_the_run_ends_when_the_task_is_shorter_than_the_horizon():
+def test_after_a_task_played_once_the_range_has_the_hand_empty_as_the_run_has_it():
     sc = load_scenario(ROOT / "scenarios" / "coffee_handover.py")
     world = world_of(sc)
     task_end = sum(step.duration for step in world.task)
     longer = replace(sc, world=replace(world, horizon=task_end + 30.0, repeat=False))
+    assert task_seconds(longer, task_end + 30.0) == task_seconds(sc, task_end)  # nothing risky after the task
     _check_runs(longer, task_end + 30.0)
 
 

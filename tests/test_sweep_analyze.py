@@ -92,7 +92,7 @@ def test_a_search_past_max_states_is_an_incomplete_row_that_counts_as_failed_as_
     "extra, says",
     [
         (["--seeds", "3"], "--seeds 3 with --job analyze: the analysis is exact and uses no seed"),
-        (["--until", "60"], "--until applies to --job run, not --job analyze; drop it"),
+        (["--until", "60"], "--until applies to --job run and estimate, not --job analyze; drop it"),
         (["--examples", "5"], "--examples applies to --job fuzz, not --job analyze; drop it"),
         (["--phases", "65"], "--phases = 65 is above 64"),
     ],

@@ -73,7 +73,8 @@ def task_seconds(scenario: Any, horizon: float) -> TaskSeconds | None:
     """:class:`TaskSeconds` of ``scenario``'s runs of ``horizon`` seconds where the World's
     timing is fixed (each step lasts its duration, so every seed plays the same steps at the
     same times), None where the steps vary with the seed. Each step's need lasts until the
-    next step begins, and the last one's until the run ends (the meter's rule)."""
+    step ends (the next one begins then); after a task played once the hand is empty (the
+    meter's rule)."""
     from desmon.deployment.exposure import needs_table
     from desmon.sim.world import expand_task, world_of
 
@@ -85,7 +86,7 @@ def task_seconds(scenario: Any, horizon: float) -> TaskSeconds | None:
     risky = no_rule = excluded = 0.0
     for i, step in enumerate(steps):
         a = min(step.start, horizon)
-        b = min(steps[i + 1].start if i + 1 < len(steps) else horizon, horizon)
+        b = min(steps[i + 1].start if i + 1 < len(steps) else step.start + step.duration, horizon)
         need = table[step.context]
         if b <= a or not (need.counted or need.excluded):
             continue
