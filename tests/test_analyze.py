@@ -656,3 +656,43 @@ def test_a_steady_state_whose_last_state_is_all_but_never_visited_is_solved_dire
     pi, residual, method = steady_state(Q, chain.describe)
     assert method == "sparse LU", method
     assert residual <= 1e-11 * float(abs(Q.diagonal()).max()) and pi.min() >= 0 and pi.sum() == pytest.approx(1.0)
+
+
+BROKEN_AT_START = '''
+from desmon.model import RobotBuilder
+from desmon.model.events import DeviceFail, PlatformDown
+from desmon.model.params import parameters
+from desmon.model.scenario import Scenario
+from desmon.sim.world import MTTF, Step, World
+from desmon.verify.bounds import Bounds
+
+p = parameters(platform=False)
+robot = RobotBuilder("r")
+robot.platform("a", memory=512).device("ft", kind="force_sensor")
+with robot.rpsl.perception_graph("fsd") as g:
+    g.sensor("w", reads="force_sensor")
+robot.depsl.deployment_specification("fsd").add_constraint("capacity", "memory", 100)
+robot.rules({"hold": "fsd"})
+broken = "a" if p.platform else "ft"
+scenario = Scenario(
+    name="broken_at_start", model=robot.build(),
+    initial=(PlatformDown("a") if p.platform else DeviceFail("ft"),),
+    world=World(task=(Step("idle", 5.0), Step("hold", 55.0)), horizon=600.0, repeat=True, signals=False,
+                stochastic_faults=(MTTF(broken, mttf=3600.0, mttr=10.0),)),
+    checker=Bounds(actions=("idle", "hold"), **({"platforms": ("a",)} if p.platform else {"devices": ("ft",)})),
+)
+'''
+
+
+@pytest.mark.parametrize("platform", ["False", "True"], ids=["device", "platform"])
+def test_a_component_broken_from_the_start_is_first_repaired_in_the_world_as_in_the_chain(tmp_path, platform):
+    """``initial`` breaks it and an MTTF repairs it after a time of mean MTTR: the world had
+    first waited a time to failure (mean MTTF, an hour here), so its runs were ~40 times
+    more exposed than the chain."""
+    path = tmp_path / "broken_at_start.py"
+    path.write_text(BROKEN_AT_START)
+    sc = load_scenario(path, {"platform": platform})
+    exact = analyze(sc, miss={"fsd": {"hold": 0.0}}, steady=False).exposure_s_per_mission
+    runs = simulated_exposure(sc, "desmon", range(20), 600.0)
+    assert agreement(exact, runs).inside, (exact, runs)
+    assert max(runs) < 100.0  # the sensor is back within seconds, not after the hour's failure
