@@ -625,6 +625,22 @@ def _check_stochastic(world: World) -> None:
             )
     object.__setattr__(world, "load_steps", steps)
     _check_load_masters(world)
+    _check_fault_masters(world)
+
+
+def _check_fault_masters(world: World) -> None:
+    """A component's failures have one master: scripted faults, or an MTTF, not both (the
+    MTTF's next failure or repair would cut a scripted outage short, or the scripted
+    failure fall on a component already failed)."""
+    governed = {m.component for m in world.stochastic_faults}
+    for te in world.faults:
+        ev = te.event
+        component = getattr(ev, "device", None) or getattr(ev, "platform", None)
+        if component in governed:
+            raise ScenarioError(
+                f"world: {component!r} has two masters of its failures: an MTTF and the scripted '{ev}' at t={te.time:g} in "
+                "faults=: let the MTTF drive it, or script it, not both"
+            )
 
 
 def _check_rates(given: object) -> tuple[tuple[str, float], ...]:
