@@ -409,6 +409,12 @@ class World:
         _seconds("block", self.block, zero=False)
         _seconds("quiet block", self.quiet_block, zero=False)
         check_number("world: slip_rate", self.slip_rate, error=err, unit=" of slips per second of object-in-hand time")
+        if self.slip_rate * self.horizon > MAX_RANDOM_CHANGES:  # (the hand may hold something all the time)
+            raise ScenarioError(
+                f"world: slip_rate {self.slip_rate:g} slips per second of object-in-hand time gives up to "
+                f"{self.slip_rate * self.horizon:,.0f} slips over the horizon of {self.horizon:g} s, more than the "
+                f"{MAX_RANDOM_CHANGES:,} a run simulates: the rate is per second (one slip every 900 s is 1/900)"
+            )
         object.__setattr__(self, "slip_kinds", check_slip_kinds(self.slip_kinds))
         if not isinstance(self.start_failure, StartFailure):
             raise ScenarioError(f"world: start_failure = {self.start_failure!r} is not a StartFailure: write StartFailure(probability=0.02)")
