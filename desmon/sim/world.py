@@ -38,6 +38,7 @@ from desmon.model.scenario import Scenario, TimedEvent, event_problem
 from desmon.model.system import SystemModel, check_action
 from desmon.sim.slip_kinds import check_slip_kinds
 from desmon.sim.streams import DetectorPlan, default_signal_kinds, detector_plan, stream_names
+from desmon.sim.world_components import check_components, check_initial_loads
 
 __all__ = [
     "Step",
@@ -565,7 +566,8 @@ class World:
             if problem is not None:
                 raise ScenarioError(f"{where}: at t={te.time:g}: {problem}")
         _check_runtime_changes(self, model, where, changes)
-        _check_components(self, scenario, where)
+        check_components(self, scenario, where)
+        check_initial_loads(self, scenario, where)
         _check_rates_against(self, model, where)
         kinds = sorted({d.kind for d in model.devices})
         for kind, stream in self.signal_kinds:
@@ -693,52 +695,6 @@ def _check_runtime_changes(world: World, model: SystemModel, where: str, changes
     for p in world.lease.platforms:
         if p not in on_demand:
             raise ScenarioError(f"{where}: lease names {p!r}, which is no on-demand platform{suggest(p, on_demand)} (on demand: {', '.join(on_demand)})")
-
-def _check_components(world: World, scenario: Scenario, where: str) -> None:
-    """The devices, platforms and graphs named by MTTFs, load walks, start latencies and
-    the start failure script exist in the scenario's model."""
-    model = scenario.model
-    devices = [d.name for d in model.devices]
-    platforms = [p.name for p in model.platforms]
-    for m in world.stochastic_faults:
-        if m.component not in devices and m.component not in platforms:
-            raise ScenarioError(
-                f"{where}: MTTF for unknown component {m.component!r}{suggest(m.component, devices + platforms)} "
-                f"(devices {sorted(devices)}, platforms {sorted(platforms)})"
-            )
-        if m.component in platforms and model.platform(m.component).on_demand:
-            raise ScenarioError(f"{where}: MTTF for on-demand platform {m.component!r}: it joins and leaves; script PlatformJoin / PlatformLeave in changes= instead")
-        if m.component in devices and m.component in platforms:
-            raise ScenarioError(
-                f"{where}: MTTF for {m.component!r} is ambiguous: it names both a device and a platform; rename one of them"
-            )
-    for w in world.load_walks:
-        problem = event_problem(LoadChange(w.platform, w.low, w.resource), model)
-        if problem is not None:
-            raise ScenarioError(f"{where}: load walk: {problem}")
-    for st in world.load_steps:
-        problem = event_problem(LoadChange(st.platform, st.start, st.resource), model)
-        if problem is not None:
-            raise ScenarioError(f"{where}: load steps: {problem}")
-    for p, _v in world.platform_latency:
-        if p not in platforms:
-            raise ScenarioError(f"{where}: start latency for unknown platform {p!r}{suggest(p, platforms)} (platforms: {', '.join(platforms)})")
-    _check_start_script(world, where, [g.name for g in model.graphs], platforms)
-
-def _check_start_script(world: World, where: str, graphs: list[str], platforms: list[str]) -> None:
-    """Each (graph, platform, n) of the start failure script names a known graph and platform."""
-    for graph, platform, n in world.start_failure.script:
-        if graph not in graphs:
-            raise ScenarioError(
-                f"{where}: start failure script ({graph!r}, {platform!r}, {n}) names unknown perception graph "
-                f"{graph!r}{suggest(graph, graphs)} (graphs: {', '.join(graphs)})"
-            )
-        if platform not in platforms:
-            raise ScenarioError(
-                f"{where}: start failure script ({graph!r}, {platform!r}, {n}) names unknown platform "
-                f"{platform!r}{suggest(platform, platforms)} (platforms: {', '.join(platforms)})"
-            )
-
 
 #: the most task steps a run plays: a horizon that needs more (years of a task of seconds) is
 #: refused in one line instead of filling the memory with them before the run starts
