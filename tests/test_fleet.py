@@ -279,3 +279,23 @@ def test_a_fleets_trace_holds_each_robots_ground_truth_slips(tmp_path, capsys) -
     injected = json.loads(capsys.readouterr().out)["metrics"]["slips_injected"]
     slips = [r for r in map(json.loads, out.read_text().splitlines()) if r["type"] == "slip"]
     assert injected > 0 and len(slips) == injected and all(r["robot"].startswith("r") for r in slips)
+
+
+EDGE_MASTERS = 'from desmon.model import RobotBuilder\nfrom desmon.model.events import LoadChange, PlatformDown, PlatformUp\nfrom desmon.model.params import parameters\nfrom desmon.model.scenario import Scenario, TimedEvent\nfrom desmon.sim.fleet import Fleet\nfrom desmon.sim.world import MTTF, Step, World, LoadWalk\n\np = parameters(variant=0)  # 1: one robot scripts it; 2: two initial loads; 3: two MTTFs; 4: two walks; 5: the same initial load\n\ndef model(rid):\n    r = RobotBuilder(rid)\n    r.platform(f"{rid}.pc", memory=100).device(f"{rid}.ft", kind="force_sensor")\n    r.platform("edge", memory=300, attributes={"host": "edge"})\n    with r.rpsl.perception_graph(f"{rid}.fsd") as g:\n        g.sensor("w", reads="force_sensor")\n    r.depsl.deployment_specification(f"{rid}.fsd").add_constraint("capacity", "memory", 200)\n    r.rules({"hold": f"{rid}.fsd"})\n    return r.build()\n\ndef robot(i):\n    rid = f"r{i}"\n    kw = {}\n    init = ()\n    if p.variant == 1 and i == 0:\n        kw = dict(faults=(TimedEvent(5.0, PlatformDown("edge")),))\n    if p.variant == 2:\n        init = (LoadChange("edge", 0 if i == 0 else 250),)\n    if p.variant == 3:\n        kw = dict(stochastic_faults=(MTTF("edge", mttf=20.0, mttr=5.0),))\n    if p.variant == 5:\n        init = (LoadChange("edge", 100),)\n    if p.variant == 4:\n        kw = dict(load_walks=(LoadWalk("edge", start=0 if i == 0 else 250, sigma=1.0, interval=1.0, low=0, high=300),))\n    return Scenario(name=rid, model=model(rid), initial=init,\n        world=World(task=(Step("idle", 1.0), Step("hold", 20.0)), horizon=60.0, repeat=True, signals=False, **kw))\n\nrobots = tuple(robot(i) for i in range(2))\nscenario = Scenario(name="fl", model=robots[0].model, world=Fleet(robots=robots, edges=("edge",)))\n'
+
+
+@pytest.mark.parametrize("variant, says", [
+    ("2", "robot 'r0' sets it (the initial 'load edge memory=0') and robot 'r1' too (the initial 'load edge memory=250')"),
+    ("3", "robot 'r0' sets it (an MTTF) and robot 'r1' too (an MTTF)"),
+    ("4", "robot 'r0' sets it (a load walk) and robot 'r1' too (a load walk)"),
+])
+def test_an_edge_servers_failures_and_load_are_set_by_one_robot(tmp_path, capsys, variant, says):
+    """Two robots' MTTFs had failed the shared edge server twice as often as either said, and
+    of two initial loads one was silently unused."""
+    path = tmp_path / "fl.py"
+    path.write_text(EDGE_MASTERS)
+    assert main(["run", str(path), "-p", f"variant={variant}", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert f"fleet: edge server 'edge' is one machine, but {says}" in err and len(err.strip().splitlines()) == 1
+    for fine in ("1", "5"):  # one robot scripts it; every robot states the same initial load
+        assert main(["run", str(path), "-p", f"variant={fine}", "--no-progress"]) in (0, 1)

@@ -33,7 +33,7 @@ import resource
 import sys
 import time
 from dataclasses import dataclass, field
-from typing import IO, Any, Callable, Iterable
+from typing import IO, Any, Callable, Iterable, Sequence
 
 import simpy
 
@@ -116,6 +116,7 @@ class Fleet:
                     why = "does not declare it" if mine is None else "declares it differently"
                     raise ScenarioError(f"fleet: robot {name!r} {why} edge server {e!r}: every robot declares the same edge servers")
             _claim_names(sc.model, shared, owner)
+        _check_edge_masters(self.robots, set(self.edges))
 
     def _shared_platforms(self) -> dict[str, Platform]:
         """The edge servers as the first robot declares them (always there, not on demand)."""
@@ -563,6 +564,32 @@ class FleetResult:
     metrics: dict[str, Any]
     violations: list[tuple[float, str, str, str]] = field(default_factory=list)  # (t, robot, invariant, message)
     wall_s: float = 0.0
+
+
+def _edge_sources(sc: Scenario, edges: set[str]) -> list[tuple[str, str]]:
+    """What in robot scenario ``sc`` sets a shared edge server's presence or load: (edge, what)."""
+    w = sc.world
+    named = [(m.component, "an MTTF") for m in w.stochastic_faults]
+    named += [(getattr(te.event, "platform", None), f"the scripted '{te.event}'") for te in (*w.faults, *w.loads)]
+    named += [(x.platform, "a load walk") for x in w.load_walks] + [(x.platform, "load steps") for x in w.load_steps]
+    named += [(getattr(ev, "platform", None), f"the initial '{ev}'") for ev in sc.initial if getattr(ev, "role", "") in ("fault", "load")]
+    return [(e, what) for e, what in named if e in edges]
+
+
+def _check_edge_masters(robots: Sequence[Scenario], edges: set[str]) -> None:
+    """An edge server is one machine: its failures and its load are set in one robot's
+    scenario, not in several (two MTTFs would fail it twice as often as either says, two
+    initial loads would leave one of them silently unused). Robots that state the same
+    initial fact of it agree: that is one fact."""
+    first: dict[str, tuple[str, str]] = {}
+    for sc in robots:
+        for e, what in _edge_sources(sc, edges):
+            robot, before = first.setdefault(e, (sc.model.robot, what))
+            if robot != sc.model.robot and not (what == before and what.startswith("the initial")):
+                raise ScenarioError(
+                    f"fleet: edge server {e!r} is one machine, but robot {robot!r} sets it ({before}) and robot "
+                    f"{sc.model.robot!r} too ({what}): give its failures and loads in one robot's scenario"
+                )
 
 
 def robot_seed(seed: int, robot: str) -> int:
