@@ -393,6 +393,9 @@ class Selection(Requirement):
         object.__setattr__(self, "options", options)
         if not self.options:
             raise ModelError("Selection has no options: list at least one alternative, e.g. 'tactile_pad@weiss'")
+        twice = [o for i, o in enumerate(self.options) if o in self.options[:i]]
+        if twice:  # (it would count twice towards at_least)
+            raise ModelError(f"Selection lists the option {twice[0].describe()} twice: list each alternative once")
         check_number("Selection at_least", self.at_least, integer=True)
         if self.at_least < 1:
             raise ModelError("Selection at_least = 0 always holds: give at_least >= 1 or drop the requirement")
