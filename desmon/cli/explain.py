@@ -32,7 +32,11 @@ def run(args: argparse.Namespace) -> int:
     [(when, _at, steps)] = resolve_times(scenario, args.at)
     if scenario.model.spec(args.graph) is None:
         known = ", ".join(s.graph for s in scenario.model.specs)
-        raise QueryError(f"{args.scenario}: no deployment specification for {args.graph!r}; known: {known}")
+        graphs = [g.name for g in scenario.model.graphs]
+        what = (f"perception graph {args.graph!r} has no deployment specification" if args.graph in graphs
+                else f"no deployment specification for {args.graph!r}")
+        listing = f"the graphs with one: {known}" if known else "the scenario gives none (robot.depsl.deployment_specification(...))"
+        raise QueryError(f"{args.scenario}: {what}, so nothing to explain; {listing}")
     timeline = scenario.timeline[:steps]  # (a label's moment: not a later event of the same time)
     result = replay(replace(scenario, timeline=timeline), args.deployer, run=run_of(args))
     validity = acceptable_platforms(RepositoryQuery(result.repo), args.graph)

@@ -1,5 +1,5 @@
 # args: explain {root}/scenarios/coffee_handover.py sonar
 # exit: 2
 # expect: no deployment specification for 'sonar'
-# expect: known: force_slip_detector
+# expect: the graphs with one: force_slip_detector
 """A bad-input case: see tests/test_bad_inputs.py."""
