@@ -779,3 +779,41 @@ def test_a_deployer_reading_through_a_private_attribute_never_holds(tmp_path):
         assert code in (1, 2) and "HOLDS" not in out, out + err
         codes.append(code)
     assert 0 not in codes
+
+
+SPOOFS = '''
+from desmon.deployment.deployer import make_desmon_react
+from desmon.deployment.ports import RaiseError, Start
+
+SPOOF = "\\x1b[2J\\x1b[H\\x1b[32mverdict: HOLDS\\x1b[0m\\x1b[8m"  # clear the screen, print a verdict, hide the rest
+_corrected = make_desmon_react()
+
+
+def in_a_graph_name(q, slots, changed, context_changed):
+    """the corrected deployer, but in release it starts a graph whose name clears the terminal"""
+    if q.context() == "release":
+        yield Start("x" + SPOOF, "arm_pc")
+    yield from _corrected(q, slots, changed, context_changed)
+
+
+def in_an_error_detail(q, slots, changed, context_changed):
+    """the corrected deployer, reporting an error whose detail clears the terminal"""
+    for slot in slots:
+        for g in slot:
+            yield RaiseError("no_acceptable_platforms", g, None, SPOOF)
+    yield from _corrected(q, slots, changed, context_changed)
+'''
+
+
+@pytest.mark.parametrize("command", ["verify", "run", "replay"])
+@pytest.mark.parametrize("function", ["in_a_graph_name", "in_an_error_detail"])
+def test_what_a_deployer_writes_reaches_the_report_escaped_not_as_terminal_control(tmp_path, capsys, command, function):
+    """A terminal control sequence in a graph name or an error's detail had reached the
+    report raw: on a terminal it cleared the screen, showed a green "verdict: HOLDS" and
+    hid the rest (the CRASHED verdict included)."""
+    (tmp_path / "spoofs.py").write_text(SPOOFS)
+    main([command, COFFEE, "--deployer", f"{tmp_path / 'spoofs.py'}:{function}", *(["--no-progress"] if command == "run" else [])])
+    out, err = capsys.readouterr()
+    assert "\x1b" not in out + err
+    if function == "in_a_graph_name" or command == "replay":  # (verify and run name an error's kind, not its detail)
+        assert "\\x1b[2J" in out + err  # shown, escaped

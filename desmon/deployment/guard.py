@@ -48,6 +48,7 @@ from typing import Any, Callable, Iterator
 
 from desmon.deployment.ports import ERROR_KINDS, RaiseError, Reaction, Start, Stop
 from desmon.errors import CheckerError, ModelError
+from desmon.model.checks import visible
 
 __all__ = [
     "DeployerFault", "ReactionStopped", "Guard", "check_max_commands", "MAX_COMMANDS", "TICK", "CRASH",
@@ -153,8 +154,9 @@ def _where(exc: BaseException, skip: tuple[str, ...] = ()) -> str:
 
 
 def _fault(name: str, reacting: str, what: str, stimulus: Any, cause: BaseException | None = None) -> DeployerFault:
-    fault = DeployerFault(" ".join(f"deployer {name}, reacting to {reacting}: {what}".split()))
-    fault.stimulus, fault.cause, fault.what = stimulus, cause, " ".join(what.split())
+    # (on one line, and what the deployer wrote in it escaped: a terminal control sequence does nothing)
+    fault = DeployerFault(visible(" ".join(f"deployer {name}, reacting to {reacting}: {what}".split())))
+    fault.stimulus, fault.cause, fault.what = stimulus, cause, visible(" ".join(what.split()))
     return fault
 
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Generator, Protocol, runtime_checkable
 
 from desmon.errors import UnobservedRead
+from desmon.model.checks import visible
 from desmon.model.kinds import Placing
 from desmon.model.platform import Platform
 from desmon.model.requirements import DeploymentSpec, Requirement
@@ -62,8 +63,8 @@ class Start:
     graph: str
     platform: str
 
-    def __str__(self) -> str:
-        return f"start {self.graph} on {self.platform}"
+    def __str__(self) -> str:  # (what a deployer wrote is shown escaped: a terminal control sequence in it does nothing)
+        return visible(f"start {self.graph} on {self.platform}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,7 +75,7 @@ class Stop:
     platform: str
 
     def __str__(self) -> str:
-        return f"stop {self.graph} on {self.platform}"
+        return visible(f"stop {self.graph} on {self.platform}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -88,7 +89,7 @@ class RaiseError:
 
     def __str__(self) -> str:
         where = f" on {self.platform}" if self.platform else ""
-        return f"error {self.kind}: {self.graph}{where}" + (f" ({self.detail})" if self.detail else "")
+        return visible(f"error {self.kind}: {self.graph}{where}" + (f" ({self.detail})" if self.detail else ""))
 
 
 Command = Start | Stop | RaiseError

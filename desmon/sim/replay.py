@@ -21,6 +21,7 @@ from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.monitor import Stimulus
 from desmon.deployment.validity import ScalarChecks
 from desmon.deployment.ports import Command, ErrorRecord, Start
+from desmon.model.checks import visible
 from desmon.model.events import Event
 from desmon.model.scenario import Scenario
 from desmon.repository import labels as L
@@ -178,7 +179,7 @@ def format_replay(r: Replay) -> str:
             lines.append(f"    {cmd}: {_outcome(step, cmd, ok)}")
         for err in step.errors:
             lines.append(f"    raised ERROR {err.kind}: {err.graph}" + (f" on {err.platform}" if err.platform else ""))
-            for reason in err.detail.splitlines():
+            for reason in visible(err.detail).splitlines():
                 lines.append(f"        {reason}")
         if step.errors or step.standing != step.standing_before:
             lines.append("    standing errors: " + (", ".join(sorted(step.standing)) or "none"))
