@@ -736,6 +736,18 @@ def test_a_deployer_without_memory_still_holds(memory):
         assert code == 0 and "verdict: HOLDS" in out, out + err
 
 
+@pytest.mark.parametrize("engine", ["table", "direct"])
+def test_a_reaction_that_never_ends_is_crashed_at_the_reaction_limit_in_verify_without_a_timeout(isolation, engine):
+    """Without --timeout, verify had waited for it for ever; now the reaction limit holds
+    there as in every other command."""
+    code, took, out, err = _desmon(
+        str(isolation), "verify", COFFEE, "--deployer", _spec(isolation, "ignores_alarm_and_spins"), "--engine", engine,
+        "--max-reaction-seconds", "2", "--no-progress", timeout=60,
+    )
+    assert code == 4 and "verdict: CRASHED" in out and "ran for over 2 s in one reaction" in out + err and "Traceback" not in err, out + err
+    assert took < 4 * 2 + 10, f"verify took {took:.1f} s"
+
+
 @pytest.mark.parametrize("command", [["fuzz", "--examples", "5", "--seed", "1"], ["analyze", "--scenario-for-analyze"]])
 def test_a_deployer_fighting_the_timer_is_crashed_at_the_reaction_limit_in_fuzz_and_analyze(isolation, command):
     code, took, out, err = _desmon(

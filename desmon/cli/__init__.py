@@ -96,7 +96,7 @@ def _dispatch(args: argparse.Namespace) -> int:
     try:
         # this command's guard around the deployer: its limits, handed to every engine it runs
         deadline = (args.max_reaction_seconds or MAX_REACTION_SECONDS) if hasattr(args, "max_reaction_seconds") else None
-        args.guard = Guard(getattr(args, "max_commands", None) or MAX_COMMANDS, deadline)  # (verify: its --timeout instead)
+        args.guard = Guard(getattr(args, "max_commands", None) or MAX_COMMANDS, deadline)
         preflight(args)  # inputs, numbers, windows and output paths, before any long work (then the deployer's import)
         run_of(args)  # this command's run context: its guard and its planned outputs (each engine adds its own memoised checks)
         with args.guard.deadline(), contextlib.redirect_stdout(WholeWrites(sys.stdout)):  # (printed whole under the timer)

@@ -115,7 +115,7 @@ def users_deployer(spec: object) -> bool:
     return bool(colon and source and source != MUTANT_PREFIX)
 
 
-def deployer_arg(p: argparse.ArgumentParser, *, deadline: bool = True, default_note: str = "") -> None:
+def deployer_arg(p: argparse.ArgumentParser, *, default_note: str = "") -> None:
     """``--deployer`` and the limits of one reaction of the deployer's code; ``default_note``
     is appended to the ``--deployer`` help."""
     add_resolved(
@@ -130,12 +130,11 @@ def deployer_arg(p: argparse.ArgumentParser, *, deadline: bool = True, default_n
         help="the most commands one reaction of the deployer may issue; more is a reaction that never ends, "
         "reported as the deployer's failure (default: 10000)",
     )
-    if deadline:  # (verify has --timeout: its budget stops a reaction that runs too long)
-        p.add_argument(
-            "--max-reaction-seconds", type=positive_seconds, default=None, metavar="S",
-            help="the longest the deployer's own code may run in one reaction (summed over its commands); longer is a "
-            "reaction that never ends, reported as the deployer's failure (default: 60)",
-        )
+    p.add_argument(
+        "--max-reaction-seconds", type=positive_seconds, default=None, metavar="S",
+        help="the longest the deployer's own code may run in one reaction (summed over its commands); longer is a "
+        "reaction that never ends, reported as the deployer's failure (default: 60)",
+    )
 
 
 def load_scenario_of(args: argparse.Namespace) -> Scenario:

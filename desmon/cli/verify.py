@@ -36,7 +36,7 @@ SEARCH_OPTIONS = {
 def add_parser(sub: Subparsers) -> None:
     p = sub.add_parser("verify", help="explore every interleaving of events and check the invariants")
     scenario_arg(p)
-    deployer_arg(p, deadline=False)
+    deployer_arg(p)
     p.add_argument("--invariant", action="append", default=None, help="check only this invariant (repeatable)")
     p.add_argument("--continue", dest="keep_going", action="store_true", help="collect the first counterexample of each invariant")
     _add_limits(p)

@@ -71,9 +71,8 @@ WATCH_EVERY = 255
 TICK = 0.2
 
 #: The longest (seconds) a deployer's own code may run without yielding a command or
-#: returning, in the commands that have no ``--timeout`` of their own (run, replay, fuzz,
-#: explain, show, explore): past it the reaction is judged never to end, a
-#: :class:`DeployerFault`. ``--max-reaction-seconds S`` sets it (:meth:`Guard.deadline`).
+#: returning, in every command that runs a deployer: past it the reaction is judged never
+#: to end, a :class:`DeployerFault`. ``--max-reaction-seconds S`` sets it (:meth:`Guard.deadline`).
 MAX_REACTION_SECONDS = 60.0
 
 #: The name under which the checker records a deployer's fault (its outcome is CRASHED).
