@@ -704,6 +704,23 @@ def raises_once_when_asked_again(q, slots, changed, context_changed):
     yield from _desmon(q, slots, changed, context_changed)
 
 
+def _ticks():
+    n = 0
+    while True:
+        n += 1
+        yield n
+
+
+TICKS = _ticks()  # (its count lives in the suspended generator's frame: its repr shows only an address)
+
+
+def tires_counting_in_a_generator(q, slots, changed, context_changed):
+    '''Works for 1,000 reactions (more than the search runs), then does nothing.'''
+    if next(TICKS) > 1000:
+        return
+    yield from _desmon(q, slots, changed, context_changed)
+
+
 def stateless(q, slots, changed, context_changed):
     yield from _desmon(q, slots, changed, context_changed)
 """
@@ -717,7 +734,7 @@ def memory(tmp_path: Path) -> str:
 
 
 @pytest.mark.parametrize("engine", ["table", "direct"])
-@pytest.mark.parametrize("name", ["tires", "tires_early", "raises_once_when_asked_again"])
+@pytest.mark.parametrize("name", ["tires", "tires_early", "raises_once_when_asked_again", "tires_counting_in_a_generator"])
 def test_a_deployer_with_memory_is_caught_never_holds(memory, engine, name):
     """A deployer that counts its calls and stops after some (even more than the search
     ran: the state its module keeps changed), or raises once in a re-run: refused, exit 2."""

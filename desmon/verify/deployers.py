@@ -33,7 +33,7 @@ import math
 import os
 import sys
 from pathlib import Path
-from types import FunctionType, ModuleType
+from types import FunctionType, GeneratorType, ModuleType
 from typing import Any, Iterator
 
 from desmon.deployment.deployer import DEPLOYERS, Deployer
@@ -139,8 +139,12 @@ def _isolated(deployer: Deployer) -> bool:
 
 
 def _text(value: Any) -> str:
-    """What ``value`` holds, as text ("" where it cannot say)."""
+    """What ``value`` holds, as text ("" where it cannot say); a generator by the variables
+    of its suspended frame (a counter kept in one: its repr shows only its address)."""
     try:
+        if isinstance(value, GeneratorType):
+            frame = value.gi_frame
+            return f"generator {value.__qualname__} " + (repr(frame.f_locals) if frame is not None else "(finished)")
         held = vars(value) if hasattr(value, "__dict__") and not isinstance(value, type) else None
         return repr(value) + (f" {held!r}" if held else "")
     except Exception:  # a user's __repr__ may fail: nothing to compare
@@ -154,7 +158,8 @@ def _function_state(fn: Any) -> str:
             cells.append(cell.cell_contents)
         except ValueError:  # an empty cell
             cells.append(None)
-    return _text((fn.__defaults__, fn.__kwdefaults__, vars(fn), [c for c in cells if not callable(c)]))
+    kept = [_text(c) if isinstance(c, GeneratorType) else c for c in cells if not callable(c)]
+    return _text((fn.__defaults__, fn.__kwdefaults__, vars(fn), kept))
 
 
 def deployer_state(deployer: Deployer) -> dict[str, str]:

@@ -18,7 +18,7 @@ failure), and at its end (:func:`check_memory`)
    when the search's system was built, is compared with what it holds now: a change is
    state kept between reactions, refused (exit 2) naming it, even where it changed no
    answer within the search (a counter that would stop the deployer after more
-   reactions than the search ran).
+   reactions than the search ran; a generator's by the variables of its frame).
 
 What it does not see: state kept outside the deployer's module (in another module it
 imports, in a file, in an object its globals do not reach) whose effect does not show
