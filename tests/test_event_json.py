@@ -213,6 +213,7 @@ def _fast_cloud(tmp_path: Path, root: Path) -> Path:
         "scenario = dataclasses.replace(\n"
         "    base, initial=base.initial + (LoadChange('torso_pc', 700),),\n"
         "    checker=dataclasses.replace(base.checker, loads={}, devices=()),\n"
+        "    world=dataclasses.replace(base.world, load_steps=(), load_walks=()),  # (the load stays at 700: no walk starts elsewhere)\n"
         ")\n"
     )
     return path

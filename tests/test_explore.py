@@ -179,6 +179,20 @@ def test_a_counterexample_found_by_verify_and_the_same_one_read_from_json(root, 
     assert "single-instance VIOLATED" in sa.steps["1"]["text"]
 
 
+def test_a_counterexample_of_one_invariant_shows_no_other_as_violated_inside_a_reaction(root, tmp_path, capsys):
+    """With --invariant errors-justified (not one watched inside reactions), the page had
+    watched every invariant after each start and stop (an empty list read as all) and
+    shown coverage and errors-current VIOLATED, which verify says hold."""
+    fallbacks = str(root / "scenarios" / "fallbacks.py")
+    assert main(["verify", fallbacks, "--deployer", "mutant:stale-errors", "--invariant", "coverage", "--no-progress"]) == 0
+    assert main(["explore", fallbacks, "--deployer", "mutant:stale-errors", "--verify", "--invariant", "errors-justified",
+                 "--no-progress", "-o", str(tmp_path / "a.html")]) == 0
+    capsys.readouterr()
+    page = unescape((tmp_path / "a.html").read_text())
+    assert "errors-justified VIOLATED" in page
+    assert "coverage VIOLATED" not in page and "errors-current VIOLATED" not in page
+
+
 @pytest.mark.parametrize(
     "args, fragment",
     [

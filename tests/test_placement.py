@@ -78,7 +78,7 @@ requirements = st.one_of(
     st.builds(Maximum, st.sampled_from(("lat", "cores")), st.sampled_from((-1, 0, 0.5, 1, 2, 4))),
     st.builds(Attribute, st.sampled_from(("os", "arch")), st.sampled_from(ATTR_VALUES)),
     st.builds(Attribute, st.just("platform_has"), st.sampled_from(KINDS)),
-    st.lists(options, min_size=1, max_size=3).flatmap(
+    st.lists(options, min_size=1, max_size=3, unique=True).flatmap(  # (an option listed twice is refused)
         lambda opts: st.builds(Selection, st.just(tuple(opts)), st.integers(1, len(opts)))
     ),
     # what a graph's inputs require (its own half: a hosting platform needs a working device)

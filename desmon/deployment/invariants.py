@@ -484,9 +484,9 @@ TRANSITION_INVARIANTS = ("errors-justified", "preferred-when-possible")
 
 
 def get_invariants(names: list[str] | tuple[str, ...] | None = None) -> tuple[Invariant, ...]:
-    """The invariants called ``names`` (all if None), each named once; a ModelError lists
-    the valid names."""
-    if not names:
+    """The invariants called ``names`` (all if None; none if empty), each named once; a
+    ModelError lists the valid names."""
+    if names is None:
         return tuple(INVARIANTS.values())
     out = []
     for n in names:

@@ -410,12 +410,6 @@ class World:
         _seconds("block", self.block, zero=False)
         _seconds("quiet block", self.quiet_block, zero=False)
         check_number("world: slip_rate", self.slip_rate, error=err, unit=" of slips per second of object-in-hand time")
-        if self.slip_rate * self.horizon > MAX_RANDOM_CHANGES:  # (the hand may hold something all the time)
-            raise ScenarioError(
-                f"world: slip_rate {self.slip_rate:g} slips per second of object-in-hand time gives up to "
-                f"{self.slip_rate * self.horizon:,.0f} slips over the horizon of {self.horizon:g} s, more than the "
-                f"{MAX_RANDOM_CHANGES:,} a run simulates: the rate is per second (one slip every 900 s is 1/900)"
-            )
         object.__setattr__(self, "slip_kinds", check_slip_kinds(self.slip_kinds))
         if not isinstance(self.start_failure, StartFailure):
             raise ScenarioError(f"world: start_failure = {self.start_failure!r} is not a StartFailure: write StartFailure(probability=0.02)")
@@ -791,8 +785,16 @@ def draw_slips(world: World, segments: Sequence[Segment], seed: int) -> tuple[Sl
     :attr:`World.slip_kinds` gives for the action it falls in."""
     slips = list(world.slips)
     if world.slip_rate > 0:
+        held = in_hand(segments)
+        seconds = sum(end - start for start, end, _a in held)
+        if world.slip_rate * seconds > MAX_RANDOM_CHANGES:
+            raise ScenarioError(
+                f"world: slip_rate {world.slip_rate:g} slips per second of object-in-hand time over {seconds:,.6g} s with an "
+                f"object in the hand gives about {world.slip_rate * seconds:,.0f} slips, more than the {MAX_RANDOM_CHANGES:,} a run "
+                "simulates: the rate is per second (one slip every 900 s is 1/900), or simulate a shorter horizon"
+            )
         rng = random.Random(f"{seed}:slips")
-        for start, end, action in in_hand(segments):
+        for start, end, action in held:
             direction, kind = slip_kind(world, action)
             t = start + rng.expovariate(world.slip_rate)
             while t < end:

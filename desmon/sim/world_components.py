@@ -74,6 +74,6 @@ def check_initial_loads(world: Any, scenario: Scenario, where: str) -> None:
             given = initial.get((w.platform, w.resource))
             if given is not None and float(given) != float(w.start):
                 raise ScenarioError(
-                    f"{where}: the {kind} of {w.platform!r} {w.resource} start at {w.start:g}, but the scenario's initial "
+                    f"{where}: the {kind} of {w.platform!r} {w.resource} {'start' if kind == 'load steps' else 'starts'} at {w.start:g}, but the scenario's initial "
                     f"'{LoadChange(w.platform, given, w.resource)}' puts it at {given:g}: give them the same value, or one of them"
                 )

@@ -143,8 +143,9 @@ def _text(value: Any) -> str:
     of its suspended frame (a counter kept in one: its repr shows only its address)."""
     try:
         if isinstance(value, GeneratorType):
-            frame = value.gi_frame
-            return f"generator {value.__qualname__} " + (repr(frame.f_locals) if frame is not None else "(finished)")
+            import inspect
+
+            return f"generator {value.__qualname__} {inspect.getgeneratorstate(value)} {inspect.getgeneratorlocals(value)!r}"
         held = vars(value) if hasattr(value, "__dict__") and not isinstance(value, type) else None
         return repr(value) + (f" {held!r}" if held else "")
     except Exception:  # a user's __repr__ may fail: nothing to compare

@@ -1,6 +1,6 @@
 # args: run {case}
 # exit: 2
-# expect: world: slip_rate 900 slips per second of object-in-hand time gives up to 540,000 slips over the horizon of 600 s
+# expect: world: slip_rate 900 slips per second of object-in-hand time over 600 s with an object in the hand gives about 540,000 slips
 """A bad-input case: see tests/test_bad_inputs.py. A rate meant as "one every 900 s" ran out of
 time and memory (1.25 GB after 2 minutes), where every other random generator is capped."""
 from desmon.model.cob3 import care_o_bot
