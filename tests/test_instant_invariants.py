@@ -51,3 +51,39 @@ def test_the_simulation_books_it_once_per_reaction_and_not_again_at_its_quiescen
     assert [(round(t, 6), n) for t, n, _m in run.violations] == [(5.0, "single-instance")], run.violations
     assert run.violations[0][2].endswith(DURING)
     assert simulate(sc, "desmon", seed=0).violations == []
+
+
+def test_the_initial_reaction_is_judged_as_every_reaction_and_shortest_paths_may_have_0_steps(tmp_path, capsys):
+    """The checker had judged only the initial *state*: a deployer whose first reaction
+    raises a needless error, or breaks single-instance and repairs it, got HOLDS on a
+    scenario whose bounds leave nothing to vary, while desmon run reported both at t=0."""
+    from desmon.cli import main
+
+    base = (Path(__file__).resolve().parent.parent / "scenarios" / "migration.py").read_text()
+    lines = base.split("checker=Bounds(", 1)
+    still = lines[0] + "checker=Bounds(actions=(HOLD,), devices=(), platforms=(), loads={}),\n)\n"
+    (tmp_path / "still.py").write_text(still.replace("from desmon.verify.bounds import Bounds, levels", "from desmon.verify.bounds import Bounds"))
+    (tmp_path / "dbl.py").write_text(DBL)
+    for deployer, says in (("mutant:raise-instead", "VIOLATED errors-justified after 0 steps (shortest), by the reaction as a whole"),
+                           (f"{tmp_path / 'dbl.py'}:react", "VIOLATED single-instance after 0 steps (shortest), during the reaction, right after `start force_slip_detector on pc2`")):
+        for engine in ("table", "direct"):
+            assert main(["verify", str(tmp_path / "still.py"), "--deployer", deployer, "--engine", engine, "--no-progress"]) == 1
+            out = capsys.readouterr().out
+            assert says in out, out
+        assert main(["run", str(tmp_path / "still.py"), "--deployer", deployer, "--no-progress"]) == 1  # the world agrees
+        assert "t=0.000s" in capsys.readouterr().out
+
+
+DBL = '''
+from desmon.deployment.deployer import DESMON
+from desmon.deployment.ports import Start, Stop
+
+
+def react(q, slots, changed, context_changed):
+    """desmon's, but entering hold it starts the force detector on both platforms, then stops the second"""
+    if context_changed and q.context() == "hold" and not q.deployed_on("force_slip_detector"):
+        yield Start("force_slip_detector", "pc1")
+        if (yield Start("force_slip_detector", "pc2")):
+            yield Stop("force_slip_detector", "pc2")
+    yield from DESMON.react(q, slots, changed, context_changed)
+'''

@@ -281,8 +281,10 @@ def test_a_generated_pytest_replays_a_violation_of_the_initial_state(tmp_path, c
     rc = main(["verify", str(SCENARIOS / "symmetric_platforms.py"), "--deployer", "paper", "--pytest", str(py), "--no-progress"])
     out = capsys.readouterr().out
     assert rc == 1 and "after 0 steps" in out, out
+    found = out.count(" after 0 steps (shortest)")  # the state's coverage, and what the initial reaction as a whole broke
+    assert found == 2 and "preferred-when-possible after 0 steps (shortest), by the reaction as a whole" in out, out
     res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(py)], capture_output=True, text=True, cwd=tmp_path)
-    assert res.returncode == 0 and "1 passed" in res.stdout, res.stdout + res.stderr
+    assert res.returncode == 0 and f"{found} passed" in res.stdout, res.stdout + res.stderr
 
 
 def test_a_generated_pytest_compiles_and_names_its_scenario_whatever_characters_its_path_holds(tmp_path):

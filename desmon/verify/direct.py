@@ -73,7 +73,7 @@ class DirectSearch(BreadthFirst):
         self.keys.append(init)
         with paused_gc():
             try:
-                return self._search(self.keys, system.violations(init))
+                return self._search(self.keys, system.initial_violations(init))
             finally:
                 self._close_pool()
 

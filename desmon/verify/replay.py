@@ -17,7 +17,7 @@ from desmon.deployment.control import repository_refusal
 from desmon.deployment.core import DeploymentCore, run_sync
 from desmon.deployment.guard import DeployerFault, Guard
 from desmon.deployment.deployer import Deployer
-from desmon.deployment.invariants import INVARIANTS, Invariant, check_invariants
+from desmon.deployment.invariants import INVARIANTS, Invariant, check_invariants, get_invariants
 from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.monitor import Stimulus
 from desmon.deployment.validity import ScalarChecks
@@ -106,7 +106,28 @@ class RepositoryRun:
         self.query = RepositoryQuery(self.repo, self.run_context.checks)  # the run's memoised checks
         self.control = ScriptedControl(self.repo, scenario.model)
         self.core = DeploymentCore(scenario.model, self.query, RepositoryInsert(self.repo, scenario.model.robot), deployer, run=self.run_context)
-        initial_reaction(self.core, scenario, self.bounds, self.control)
+        #: the first instantaneous invariant the initial reaction broke after a start or stop, as
+        #: ``(invariant, message, after what)``, or None (the checker judges it as any reaction)
+        self.initial_instant: tuple[str, str, str] | None = None
+        found = self._watch(get_invariants(list(self.bounds.instantaneous)) if self.bounds.instantaneous else ())
+        try:
+            initial_reaction(self.core, scenario, self.bounds, self.control)
+        finally:
+            self.control.after = None
+        self.initial_instant = found[0] if found else None
+
+    def _watch(self, instant: tuple[Invariant, ...]) -> list[tuple[str, str, str]]:
+        """Audit ``instant`` after every start and stop from now on: the first violation is
+        appended to the list returned (the caller sets ``control.after`` back to None)."""
+        found: list[tuple[str, str, str]] = []
+
+        def audit(verb: str, graph: str, platform: str) -> None:
+            bad = [] if found else check_invariants(self.core.view(), instant)
+            if bad:
+                found.append((bad[0][0], bad[0][1], f"{verb} {graph} on {platform}"))
+
+        self.control.after = audit if instant else None
+        return found
 
     def step(self, event: Event, fails: tuple[int, ...] = ()):  # type: ignore[no-untyped-def]
         """``event`` and the complete reaction; the ``fails``-th real starts of it fail."""
@@ -118,14 +139,7 @@ class RepositoryRun:
         stop inside its reaction, as ``(invariant, message, after what)``, or None (the
         checker watches the same inside a reaction: :class:`~desmon.verify.bounds.Bounds`'
         ``instantaneous``)."""
-        found: list[tuple[str, str, str]] = []
-
-        def audit(verb: str, graph: str, platform: str) -> None:
-            bad = [] if found else check_invariants(self.core.view(), instant)
-            if bad:
-                found.append((bad[0][0], bad[0][1], f"{verb} {graph} on {platform}"))
-
-        self.control.after = audit if instant else None
+        found = self._watch(instant)
         try:
             result = self.step(event, fails)
         finally:
@@ -159,8 +173,11 @@ class RepositoryRun:
         invariant after a start or stop inside its reaction, or the reaction's first broken
         transition property among ``transitions`` (``no-flapping``, ``errors-justified``,
         ``preferred-when-possible``), as ``(invariant, message, after what)``;
-        else None. The checker watches the same (:class:`~desmon.verify.bounds.Bounds`' ``instantaneous``)."""
-        yield initial_step(self.key()), None
+        else None. The checker watches the same (:class:`~desmon.verify.bounds.Bounds`' ``instantaneous``);
+        step 0 carries what the initial reaction broke (call this on a run that has not stepped yet)."""
+        first = self.initial_instant if self.initial_instant is not None and self.initial_instant[0] in {i.name for i in instant} else None
+        whole = self.core.finding(transitions) if first is None and transitions else None
+        yield initial_step(self.key()), (first if first is not None else (whole[0], whole[1], WHOLE_REACTION) if whole is not None else None)
         for i, (event, fails) in enumerate(labels, start=1):
             prev = self.key()
             (_stim, log), during = self.step_watching(event, fails, instant)

@@ -425,6 +425,8 @@ def replay(steps, after_command=None):
             return ok
 
         control.start, control.stop = audited_start, audited_stop
+        if not steps:  # a counterexample of 0 steps: the initial reaction, judged as a whole
+            after_command(run)
     views = [run.view()]  # (a counterexample of 0 steps: the initial state itself)
     for event, fails in steps:
         run.step(event, fails)
@@ -504,6 +506,9 @@ def test_{name}():
     bad = []
 
     def audit(run):
+        if not steps and run.initial_instant is not None and run.initial_instant[0] == {invariant!r}:
+            bad.append(run.initial_instant[:2])  # broken inside the initial reaction, after a start or stop
+            return
         if {invariant!r} == "no-flapping" or {invariant!r} in TRANSITION_INVARIANTS:  # judged on the reaction
             bad.extend(run.violations(get_invariants([{invariant!r}])))
             return

@@ -504,8 +504,8 @@ class BreadthFirst:
         budget.status = lambda: (len(states), self.transitions, self.depth)
         sizes: list[int] = [1]
         budget.levels = lambda: sizes
-        for name, msg in violations:
-            trail.record(name, msg, 0)
+        for name, msg, *during in violations:  # (the initial reaction's own findings say where in it)
+            trail.record(name, msg, 0, during[0] if during else None)
         self.any_found = bool(trail.found)
         frontier: Any = [0]
         try:

@@ -31,6 +31,7 @@ from desmon.deployment.invariants import Invariant, SystemView, check_invariants
 from desmon.errors import CheckerError, NondeterminismError
 from desmon.model.events import Event, event_kind
 from desmon.model.scenario import Scenario
+from desmon.model.system import SystemModel
 from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.deployers import deployer_state, users_spec
 from desmon.verify.environment import enabled_events
@@ -65,6 +66,26 @@ class Reduction(Protocol):
     def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]: ...
 
 
+def _with_platforms(scenario: Scenario) -> SystemModel:
+    """``scenario``'s model, refused (a CheckerError) where it has no platform to check."""
+    if not scenario.model.platforms:
+        raise CheckerError(
+            f"scenario {scenario.name!r}: its model has no platform (SystemModel(platforms=())), so no monitor can run "
+            "and there is nothing to check; declare one, e.g. platforms=(Platform.make('pc', memory=512),)"
+        )
+    return scenario.model
+
+
+def reaction_findings(instant: tuple[str, str, str] | None, whole: tuple[str, str] | None) -> tuple[tuple[str, str, str], ...]:
+    """What one reaction broke on its way, judged as every transition's is: the first
+    instantaneous invariant after a start or stop (``instant``), then its first broken
+    transition property as a whole (``whole``, where not the same invariant)."""
+    found = [instant] if instant is not None else []
+    if whole is not None and whole[0] not in {v[0] for v in found}:
+        found.append((whole[0], whole[1], WHOLE_REACTION))
+    return tuple(found)
+
+
 class TransitionSystem:
     """A scenario's bounded environment and the real core's reactions, as states and transitions.
 
@@ -75,25 +96,15 @@ class TransitionSystem:
     """
 
     def __init__(
-        self,
-        scenario: Scenario,
-        deployer: str | Deployer = "desmon",
-        *,
-        invariants: Iterable[str] | None = None,
-        bounds: Bounds | None = None,
-        reduction: "Callable[[TransitionSystem], Reduction] | None" = None,
+        self, scenario: Scenario, deployer: str | Deployer = "desmon", *, invariants: Iterable[str] | None = None,
+        bounds: Bounds | None = None, reduction: "Callable[[TransitionSystem], Reduction] | None" = None,
         guard: Guard | None = None, run: RunContext | None = None,
     ) -> None:
         self.scenario = scenario
         #: its searches' run (:mod:`desmon.deployment.run`): the guard and the memoised Checks port
         self.run_context = run_context(run, guard).with_checks(ScalarChecks)
         self.guard = self.run_context.guard
-        self.model = scenario.model
-        if not self.model.platforms:
-            raise CheckerError(
-                f"scenario {scenario.name!r}: its model has no platform (SystemModel(platforms=())), so no monitor can run "
-                "and there is nothing to check; declare one, e.g. platforms=(Platform.make('pc', memory=512),)"
-            )
+        self.model = _with_platforms(scenario)
         self.bounds = bounds if bounds is not None else bounds_of(scenario)
         if bounds is not None:
             bounds.validate(scenario)
@@ -131,6 +142,7 @@ class TransitionSystem:
             )
         self.invariants = tuple(i for i in requested if i.name not in NOT_CHECKED)
         self._checked = frozenset(i.name for i in self.invariants)
+        self.initial_findings: tuple[tuple[str, str, str], ...] = ()  # what the last initial reaction broke (:meth:`initial`)
         #: the invariants of a default (all) run that the checker leaves to the audit and fuzzer
         self.not_checked = () if invariants else tuple(n for n in NOT_CHECKED)
 
@@ -172,7 +184,14 @@ class TransitionSystem:
         self.core.standing = frozenset()
         st.begin(())
         initial_reaction(self.core, self.scenario, self.bounds, st)  # the same as RepositoryRun's
+        self.initial_findings = reaction_findings(st.instant, self.core.finding(self._checked) if self.core.findings else None)
         return st.key(self.core.standing)
+
+    def initial_violations(self, key: Key) -> list[tuple[str, ...]]:
+        """The invariants the initial state ``key`` violates, then those its reaction broke on
+        the way (:meth:`initial` must have just built ``key``): ``(invariant, message[, after what])``."""
+        bad: list[tuple[str, ...]] = list(self.violations(key))
+        return bad + [v for v in self.initial_findings if v[0] not in {b[0] for b in bad}]
 
     def enabled(self, key: Key) -> list[Event]:
         return [e for e, _k in self.enabled_kinds(key)]

@@ -164,7 +164,7 @@ class TableEngine(BreadthFirst):
         self.trail = Trail(ch, self.key_of, keep_going, label_of=self._label_of)
         self.seen = CodeSet()  # the states numbered before this batch
         self.seen.add(self._codes(), 0, 1)
-        return self._search(self.codes, ch.violations(init))
+        return self._search(self.codes, ch.initial_violations(init))
 
     def _encode(self, init: Key) -> Env:
         """The environment code, events, answer tables, trees and recorder of the search from
