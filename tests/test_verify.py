@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -302,3 +303,36 @@ def test_a_generated_pytest_compiles_and_names_its_scenario_whatever_characters_
     tree = ast.parse(py.read_text())  # a SyntaxError here: the path broke out of a string
     (scenario,) = [ast.literal_eval(n.value) for n in tree.body if isinstance(n, ast.Assign) and n.targets[0].id == "SCENARIO"]
     assert scenario == str(path)
+
+
+EARLY = '''
+from desmon.deployment.deployer import DESMON
+from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, RaiseError
+
+
+def react(q, slots, changed, context_changed):
+    """desmon's, except that on entering move_base it gives up on everything (a bug of step 1 only)"""
+    if context_changed and q.context() == "move_base":
+        for slot in slots:
+            for g in slot:
+                yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g)
+        return
+    yield from DESMON.react(q, slots, changed, context_changed)
+'''
+
+
+def test_a_generated_test_of_a_transition_property_judges_the_step_the_checker_named(tmp_path, capsys):
+    """The paper's errors-justified counterexample on migration is 2 steps long: its test
+    must fail for a deployer that breaks the property at step 1 only (the audit had
+    gathered findings of every step and passed)."""
+    py = tmp_path / "test_mig.py"
+    assert main(["verify", str(SCENARIOS / "migration.py"), "--deployer", "paper", "--continue", "--pytest", str(py), "--no-progress"]) == 1
+    out = capsys.readouterr().out
+    assert "VIOLATED errors-justified after 2 steps" in out, out
+    (tmp_path / "early.py").write_text(EARLY)
+    early = tmp_path / "test_early.py"
+    early.write_text(re.sub(r"^DEPLOYER = .*$", f"DEPLOYER = {str(tmp_path / 'early.py') + ':react'!r}", py.read_text(), flags=re.M))
+    run = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-k", "errors_justified"]
+    assert subprocess.run([*run, str(py)], capture_output=True, text=True, cwd=tmp_path).returncode == 0  # the paper's bug: there
+    res = subprocess.run([*run, str(early)], capture_output=True, text=True, cwd=tmp_path)
+    assert res.returncode == 1 and "no longer violates errors-justified" in res.stdout, res.stdout

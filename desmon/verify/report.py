@@ -428,7 +428,8 @@ def replay(steps, after_command=None):
         if not steps:  # a counterexample of 0 steps: the initial reaction, judged as a whole
             after_command(run)
     views = [run.view()]  # (a counterexample of 0 steps: the initial state itself)
-    for event, fails in steps:
+    for i, (event, fails) in enumerate(steps, 1):
+        run.at_step = i  # (an audit judges the step the checker named, not an earlier one)
         run.step(event, fails)
         if after_command is not None:
             after_command(run)  # the reaction's moves are judged once it is complete, too
@@ -506,6 +507,8 @@ def test_{name}():
     bad = []
 
     def audit(run):
+        if getattr(run, "at_step", 0) != len(steps):  # an earlier step: the checker named the last one
+            return
         if not steps and run.initial_instant is not None and run.initial_instant[0] == {invariant!r}:
             bad.append(run.initial_instant[:2])  # broken inside the initial reaction, after a start or stop
             return
