@@ -29,6 +29,7 @@ the core; no decision is made here.
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable
 
@@ -42,6 +43,8 @@ from desmon.detectors.base import Alarm
 from desmon.detectors.signals.ahead import AHEAD_MIN_S, check_render_ahead, fork_safe
 from desmon.detectors.signals.tactile_array import holding_seconds
 from desmon.detectors.tactile import flow_ahead
+from desmon.errors import ScenarioError
+from desmon.model.checks import check_number
 from desmon.model.scenario import Scenario
 from desmon.repository import labels as L
 from desmon.repository.facts import load_model
@@ -117,7 +120,11 @@ class SimWorld:
         self.on_quiescent = on_quiescent
         self.model = scenario.model
         self.world = world_of(scenario)
+        if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:  # (the API's; the CLI's is argparse's)
+            raise ScenarioError(f"seed {seed!r}: give a whole number, 0 or more")
         self.seed = int(seed)
+        if until is not None:
+            check_number("until", until, error=ScenarioError, positive=True, unit=" of simulated seconds")
         self.horizon = float(until if until is not None else self.world.horizon)
         #: the run figures (:data:`~desmon.sim.metrics.RUN_FIGURES`) the caller reads, or None:
         #: every output. A run read for some figures only skips the work no output it has

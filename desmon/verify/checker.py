@@ -112,9 +112,13 @@ class TableEngineChoice:
         return Exploration(found, incomplete, depth, table.explored())
 
 
+def _whole(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
 def _check_run_arguments(workers: int, engine: str, timeout: float | None, max_memory: float | None) -> None:
-    if workers < 1:
-        raise CheckerError(f"--workers must be at least 1, got {workers}")
+    if not _whole(workers) or workers < 1:
+        raise CheckerError(f"--workers must be a whole number, at least 1, got {workers!r}")
     if engine not in ENGINES:
         raise CheckerError(f"unknown engine {engine!r}: choose one of {', '.join(ENGINES)}")
     for name, value in (("timeout", timeout), ("max-memory", max_memory)):
@@ -177,6 +181,11 @@ def check(
     if out is None:
         out = sys.stderr
     _check_run_arguments(workers, engine, timeout, max_memory)
+    for name, value in (("max-states", max_states), ("max-depth", max_depth)):  # (the API's: the CLI's are argparse's)
+        if value is not None and not (_whole(value) and value >= 1):
+            raise CheckerError(f"--{name} {value!r}: give a whole number, 1 or more, or none for no limit")
+    if not isinstance(keep_going, bool):
+        raise CheckerError(f"keep_going {keep_going!r}: give True or False")
     if engine != "direct":
         import desmon.verify.table  # noqa: F401  (it imports numpy: before the search's clock starts)
     t0 = time.perf_counter()

@@ -79,6 +79,8 @@ def resolve_deployer(spec: str | Deployer, *, isolate: bool = True, import_secon
     """
     if isinstance(spec, Deployer):
         return spec
+    if not isinstance(spec, str):
+        raise ModelError(f"deployer {spec!r} ({type(spec).__name__}): give a deployer's name or spec, e.g. 'desmon', or a Deployer")
     if spec in DEPLOYERS:
         return DEPLOYERS[spec]
     source, colon, name = spec.rpartition(":")

@@ -105,6 +105,8 @@ class TransitionSystem:
         self.run_context = run_context(run, guard).with_checks(ScalarChecks)
         self.guard = self.run_context.guard
         self.model = _with_platforms(scenario)
+        if bounds is not None and not isinstance(bounds, Bounds):
+            raise CheckerError(f"bounds {bounds!r} ({type(bounds).__name__}): give a desmon.verify.bounds.Bounds, or none for the scenario's")
         self.bounds = bounds if bounds is not None else bounds_of(scenario)
         if bounds is not None:
             bounds.validate(scenario)
