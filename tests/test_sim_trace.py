@@ -143,3 +143,6 @@ def test_every_record_type_a_run_writes_is_in_the_trace_schema(tmp_path) -> None
     written = {json.loads(line)["type"] for line in out.read_text().splitlines()}
     assert {"lease", "change"} <= written
     assert written <= documented, written - documented
+    from desmon.viz.timeline import RECORD_TYPES  # what desmon plot accepts: the schema, no more
+
+    assert RECORD_TYPES == documented

@@ -111,7 +111,47 @@ def read_trace(path: str | Path) -> list[dict[str, Any]]:
         raise ScenarioError(f"{path}: does not start with a 'run' record; is it a desmon run trace? {_HOW}")
     _check_platforms(path, out, lines)
     _check_times(path, out, lines)
+    _check_records(path, out, lines)
     return out
+
+
+#: every type of record a run writes (desmon.sim.trace's schema)
+RECORD_TYPES = frozenset({
+    "run", "load", "consumption", "slip", "action", "exposure", "fact", "reaction", "decision", "error", "ready",
+    "no_signal", "invalid", "platform", "fault", "lease", "change", "alarm", "violation", "end",
+})
+
+
+def _check_records(path: str | Path, records: list[dict[str, Any]], lines: list[int]) -> None:
+    """Every record is of a type a run writes, none follows the ``end`` record, and a
+    detector is stopped, ready or invalid only where a start put it (a record removed by
+    hand had left a stop drawn below the platform's own load, without a word)."""
+    running: set[tuple[Any, Any]] = set()
+    ended = False
+    for record, n in zip(records, lines):
+        kind = record.get("type")
+        if kind not in RECORD_TYPES or ended:
+            what = f"a record of type {kind!r}, which a run never writes" if not ended else f"a {kind!r} record after the 'end' record"
+            raise ScenarioError(f"{path}:{n}: {what}; is the trace edited or from another program? {_HOW}")
+        ended = kind == "end"
+        pair = (record.get("graph"), record.get("platform"))
+        if kind == "decision" and record.get("ok"):
+            if record.get("command") == "start":
+                running.add(pair)
+            elif pair in running:
+                running.discard(pair)
+            else:
+                _unstarted(path, n, record)
+        elif kind in ("ready", "invalid", "no_signal") and pair not in running:
+            _unstarted(path, n, record)
+
+
+def _unstarted(path: str | Path, n: int, record: dict[str, Any]) -> None:
+    what = record.get("command", record.get("type"))
+    raise ScenarioError(
+        f"{path}:{n}: a {what!r} of {record.get('graph')!r} on {record.get('platform')!r}, which no earlier record started; "
+        f"is the trace edited? {_HOW}"
+    )
 
 
 def _check_platforms(path: str | Path, records: list[dict[str, Any]], lines: list[int]) -> None:
