@@ -42,3 +42,10 @@ def test_a_figure_under_a_thousandth_of_a_second_is_not_printed_as_0(capsys):
     assert main(["run", str(Path(__file__).resolve().parent.parent / "scenarios" / "coffee_handover.py"), "--until", "0.0004", "--no-progress"]) == 0
     out = capsys.readouterr().out
     assert re.search(r"risky time \(s\)\s+0\.0004 ", out) and re.search(r"unmonitored exposure \(s\)\s+0\.0004 = 100\.0 %", out), out
+
+
+def test_evaluate_over_seeds_says_too_when_its_passes_mean_nothing(capsys):
+    """With --seeds the note had been left out: "21/21 ... tests passed: 63/63" at 2 trials."""
+    assert main(["evaluate", "--trials", "2", "--seeds", "3", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "note: with 2 trials per action, 11 of these cells would pass on every seed whatever the simulation counted" in out

@@ -65,16 +65,26 @@ def _test_line() -> str:
             f"null: {NULL_HYPOTHESIS}; pass if p >= alpha = {ALPHA}")
 
 
-def _powerless(cells: Sequence[Any]) -> int:
-    """How many ``cells`` the test could not fail at their number of trials: neither 0 nor
-    all of their trials (the most extreme counts) would be rejected against the paper's."""
+def _powerless(cells: Sequence[Any], trials: int) -> int:
+    """How many ``cells`` the test could not fail at ``trials`` per test: neither 0 nor all
+    of them (the most extreme counts) would be rejected against the paper's count."""
     from desmon.detectors.evaluation import ALPHA, fisher_exact
 
     return sum(
         1 for c in cells
-        if fisher_exact(0, c.trials, c.paper_count, c.paper_trials) >= ALPHA
-        and fisher_exact(c.trials, c.trials, c.paper_count, c.paper_trials) >= ALPHA
+        if fisher_exact(0, trials, c.paper_count, c.paper_trials) >= ALPHA
+        and fisher_exact(trials, trials, c.paper_count, c.paper_trials) >= ALPHA
     )
+
+
+def _powerless_note(blind: int, trials: int, what: str) -> list[str]:
+    """The note under a table whose test could not fail ``blind`` cells at ``trials`` per test."""
+    if not blind:
+        return []
+    return [
+        f"  note: with {trials} trial{'s' if trials != 1 else ''} per action, {blind} of these cells would pass {what}whatever "
+        "the simulation counted (no count k of n is rejected): their pass says nothing; run more --trials (e.g. 60, the paper's)"
+    ]
 
 
 def render_table(ev: Evaluation) -> str:
@@ -100,12 +110,7 @@ def render_table(ev: Evaluation) -> str:
         )
     n_pass = sum(c.passed for c in ev.cells)
     lines += ["", f"{n_pass}/{len(ev.cells)} cells pass" + ("" if ev.all_pass else "  (FAIL)")]
-    blind = _powerless(ev.cells)
-    if blind:
-        lines.append(
-            f"  note: with {ev.trials} trial{'s' if ev.trials != 1 else ''} per action, {blind} of these cells would pass whatever "
-            "the simulation counted (no count k of n is rejected): their pass says nothing; run more --trials (e.g. 60, the paper's)"
-        )
+    lines += _powerless_note(_powerless(ev.cells, ev.trials), ev.trials, "")
     if ev.missions:
         lines += [
             "",
@@ -177,6 +182,7 @@ def render_sweep(sw: Sweep) -> str:
         "",
         f"cells passing on every seed: {every}/{len(sw.cells)}; on more than half of the seeds: {most}/{len(sw.cells)}; "
         f"tests passed: {tests}/{len(sw.cells) * n}" + ("" if sw.all_hold else "  (FAIL)"),
+        *_powerless_note(_powerless(sw.cells, sw.trials), sw.trials, "on every seed "),
     ]
     if sw.missions:
         lines += [
