@@ -342,3 +342,16 @@ def test_a_counterexample_page_loads_in_headless_chromium(browser, root, tmp_pat
     assert view["key"] == "1" and "VIOLATED" in view["text"]
     assert not browser.find_element(By.ID, "next").is_enabled()
     assert _console_errors(browser) == []
+
+
+def test_the_banner_says_where_in_the_reaction_in_verifys_words_and_counts_steps_in_english(root, tmp_path, capsys):
+    fallbacks = str(root / "scenarios" / "fallbacks.py")
+    assert main(["explore", fallbacks, "--deployer", "mutant:stale-errors", "--verify", "--invariant", "errors-justified",
+                 "--no-progress", "-o", str(tmp_path / "a.html")]) == 0
+    migration = str(root / "scenarios" / "migration.py")
+    assert main(["verify", migration, "--deployer", "paper", "--no-progress", "--json", str(tmp_path / "cex.json")]) == 1
+    assert main(["explore", migration, "--from-json", str(tmp_path / "cex.json"), "-o", str(tmp_path / "b.html")]) == 0
+    capsys.readouterr()
+    assert "errors-justified VIOLATED after 3 steps (by the reaction as a whole)" in unescape((tmp_path / "a.html").read_text())
+    b = unescape((tmp_path / "b.html").read_text())
+    assert "VIOLATED after 1 step:" in b and "after 1 steps" not in b

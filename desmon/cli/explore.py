@@ -35,6 +35,10 @@ from desmon.errors import CheckerError, DesmonError, NondeterminismError, Scenar
 __all__ = ["add_parser", "run", "timeline_frames", "counterexample_frames"]
 
 
+def _steps(n: int) -> str:
+    return f"{n} step" if n == 1 else f"{n} steps"
+
+
 def add_parser(sub: Subparsers) -> None:
     p = sub.add_parser(
         "explore",
@@ -308,8 +312,10 @@ def _searched(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str],
     ]
     if others:
         lines.append(f"also violated (explore with --invariant NAME): {', '.join(others)}")
-    where = f" (inside the reaction, after {c.during})" if c.during else ""
-    banner = f"{c.invariant} VIOLATED after {c.length} step{'s' if c.length != 1 else ''}{where}: {c.message}"
+    from desmon.verify.trace import where_in_reaction
+
+    where = f" ({where_in_reaction(c.during)})" if c.during else ""  # (in verify's words)
+    banner = f"{c.invariant} VIOLATED after {_steps(c.length)}{where}: {c.message}"
     return frames, lines, banner
 
 
@@ -351,7 +357,7 @@ def _saved(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str], st
     ]
     still = dict(final).get(saved.invariant)
     if still is not None:
-        banner = f"{saved.invariant} VIOLATED after {len(saved.labels)} steps: {still}"
+        banner = f"{saved.invariant} VIOLATED after {_steps(len(saved.labels))}: {still}"
     else:
         banner = f"{saved.invariant} no longer violated on the replay (the file said: {saved.message})"
     if diverged is not None:
