@@ -114,7 +114,8 @@ def test_a_counterexample_replayed_as_recorded_without_its_violation_exits_0_say
     relabelled = _edited(path, tmp_path / "relabelled.json", lambda d: d["counterexamples"][0].update(invariant="fixed"))
     assert _replay(relabelled) == 0
     out = capsys.readouterr().out
-    assert "verdict: the counterexample no longer violates fixed: fixed? (every state as recorded)" in out
+    assert "verdict: the counterexample no longer violates fixed: fixed? (every state as recorded: the deployer did the same, " in out
+    assert "so it is the check of fixed that changed since" in out and "or the file was edited)" in out
     assert "diverges" not in out
 
 

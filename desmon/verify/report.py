@@ -373,7 +373,8 @@ def format_replay_verdict(
     elif changed:
         verdict = f"the counterexample no longer violates {x}: fixed? But {changed}: re-run desmon verify to check every state"
     else:
-        verdict = f"the counterexample no longer violates {x}: fixed? (every state as recorded)"
+        verdict = (f"the counterexample no longer violates {x}: fixed? (every state as recorded: the deployer did the same, "
+                   f"so it is the check of {x} that changed since {saved.source} was written, or the file was edited)")
     lines.append(f"verdict: {verdict}")
     return "\n".join(lines) + "\n", still
 
