@@ -265,3 +265,29 @@ def test_ctrl_c_during_fuzz_prints_the_sequences_passed(tmp_path):  # type: igno
     passed = int(out.split("passed: ")[1].split()[0])
     assert passed >= 49  # the 50th was running when the progress line showed it
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+
+
+def test_a_first_ctrl_c_asks_the_search_to_stop_also_under_the_reaction_limit():
+    """verify arms the reaction limit, whose guard counts Ctrl-Cs in a handler of its own:
+    the search's Ctrl-C handling (stop at the next check and report) had then stood aside,
+    so the first Ctrl-C interrupted at once, once through a half-grown state array
+    (BufferError). It stands in for the counted handler and gives it back after."""
+    from desmon.deployment.guard import Guard
+    from desmon.verify.search import Budget, ctrl_c
+
+    guard = Guard(max_reaction_seconds=60.0)
+    with guard.deadline():
+        counted = signal.getsignal(signal.SIGINT)
+        assert counted is not signal.default_int_handler
+        budget = Budget(time.perf_counter())
+        with ctrl_c(budget):
+            try:
+                os.kill(os.getpid(), signal.SIGINT)  # the first: asks, raises nothing
+                time.sleep(0.2)
+            except KeyboardInterrupt:
+                pytest.fail("the first Ctrl-C interrupted at once: the search's handler stood aside")
+            assert budget.interrupted
+            with pytest.raises(KeyboardInterrupt):  # the second: at once
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(1)
+        assert signal.getsignal(signal.SIGINT) is counted

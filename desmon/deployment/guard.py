@@ -442,6 +442,8 @@ class Guard:
             elif handler != signal.SIG_IGN:
                 signal.default_int_handler(signum, frame)
 
+        # (Python's own handler, counted: a search's Ctrl-C handling may stand in for it)
+        count.python_own = handler is signal.default_int_handler  # type: ignore[attr-defined]
         signal.signal(signal.SIGINT, count)
         try:
             yield

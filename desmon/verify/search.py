@@ -329,20 +329,24 @@ def ctrl_c(budget: Budget) -> Iterator[None]:
     """While a search runs, a first Ctrl-C asks it to stop at its next check (and report
     what it explored); a second one interrupts at once (``KeyboardInterrupt``, which the
     engines also turn into an interrupted result). Only in the main thread, and only
-    where Python's own handler is installed (a program's own handler is left alone)."""
-    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+    where Python's own handler is installed, or the guard's count of it (the reaction
+    limit's: :meth:`~desmon.deployment.guard.Guard.deadline`), which it restores after;
+    a program's own handler is left alone."""
+    previous = signal.getsignal(signal.SIGINT)
+    python_own = previous is signal.default_int_handler or getattr(previous, "python_own", False)
+    if threading.current_thread() is not threading.main_thread() or not python_own:
         yield
         return
 
     def stop(signum: int, frame: Any) -> None:
         budget.interrupted = True
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGINT, previous)
 
     signal.signal(signal.SIGINT, stop)
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGINT, previous)
 
 
 @contextlib.contextmanager
