@@ -31,7 +31,7 @@ from desmon.repository.query import RepositoryQuery
 from desmon.repository.store import Repository
 from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.state import Key
-from desmon.verify.trace import WHOLE_REACTION, Label, Step, initial_step, make_step
+from desmon.verify.trace import Label, Step, initial_step, make_step, reaction_findings
 
 __all__ = ["initial_reaction", "first_reaction_fault", "ScriptedControl", "RepositoryRun", "repository_key"]
 
@@ -106,15 +106,14 @@ class RepositoryRun:
         self.query = RepositoryQuery(self.repo, self.run_context.checks)  # the run's memoised checks
         self.control = ScriptedControl(self.repo, scenario.model)
         self.core = DeploymentCore(scenario.model, self.query, RepositoryInsert(self.repo, scenario.model.robot), deployer, run=self.run_context)
-        #: the first instantaneous invariant the initial reaction broke after a start or stop, as
-        #: ``(invariant, message, after what)``, or None (the checker judges it as any reaction)
-        self.initial_instant: tuple[str, str, str] | None = None
-        found = self._watch(get_invariants(list(self.bounds.instantaneous)) if self.bounds.instantaneous else ())
+        found = self._watch(get_invariants(list(self.bounds.instantaneous)))
         try:
             initial_reaction(self.core, scenario, self.bounds, self.control)
         finally:
             self.control.after = None
-        self.initial_instant = found[0] if found else None
+        #: the first instantaneous invariant the initial reaction broke after a start or stop, as
+        #: ``(invariant, message, after what)``, or None (the checker judges it as any reaction)
+        self.initial_instant: tuple[str, str, str] | None = found[0] if found else None
 
     def _watch(self, instant: tuple[Invariant, ...]) -> list[tuple[str, str, str]]:
         """Audit ``instant`` after every start and stop from now on: the first violation is
@@ -175,19 +174,17 @@ class RepositoryRun:
         ``preferred-when-possible``), as ``(invariant, message, after what)``;
         else None. The checker watches the same (:class:`~desmon.verify.bounds.Bounds`' ``instantaneous``);
         step 0 carries what the initial reaction broke (call this on a run that has not stepped yet)."""
-        first = self.initial_instant if self.initial_instant is not None and self.initial_instant[0] in {i.name for i in instant} else None
-        whole = self.core.finding(transitions) if first is None and transitions else None
-        yield initial_step(self.key()), (first if first is not None else (whole[0], whole[1], WHOLE_REACTION) if whole is not None else None)
+        watched = {i.name for i in instant}
+        first = self.initial_instant if self.initial_instant is not None and self.initial_instant[0] in watched else None
+        found = reaction_findings(first, self.core.finding(transitions) if transitions else None)
+        yield initial_step(self.key()), (found[0] if found else None)
         for i, (event, fails) in enumerate(labels, start=1):
             prev = self.key()
             (_stim, log), during = self.step_watching(event, fails, instant)
-            found = [during] if during is not None else []
             if fails and max(fails) >= self.control.n:  # a failing start the reaction no longer issues
                 raise CheckerError(
                     f"its fail_indices {list(fails)} fail start #{max(fails) + 1} of the reaction, which issues "
                     f"{self.control.n} real start{'s' if self.control.n != 1 else ''} now"
                 )
-            transition = self.core.finding(transitions) if not found and transitions else None
-            if transition is not None:
-                found.append((transition[0], transition[1], WHOLE_REACTION))
+            found = reaction_findings(during, self.core.finding(transitions) if transitions else None)
             yield make_step(i, prev, event, self.key(), log, fails, self.control.refuse), (found[0] if found else None)

@@ -38,7 +38,7 @@ from desmon.verify.environment import enabled_events
 from desmon.verify.replay import initial_reaction
 from desmon.verify.search import NOT_CHECKED, Record, Segment
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore, StoreInsert
-from desmon.verify.trace import WHOLE_REACTION, Label, Step, branch_names, initial_step, make_step
+from desmon.verify.trace import WHOLE_REACTION, Label, Step, branch_names, initial_step, make_step, reaction_findings
 
 __all__ = ["TransitionSystem", "Reduction", "command_key", "nondeterminism", "opened", "same_again", "RECHECK_FIRST", "RECHECK_EVERY"]
 
@@ -74,16 +74,6 @@ def _with_platforms(scenario: Scenario) -> SystemModel:
             "and there is nothing to check; declare one, e.g. platforms=(Platform.make('pc', memory=512),)"
         )
     return scenario.model
-
-
-def reaction_findings(instant: tuple[str, str, str] | None, whole: tuple[str, str] | None) -> tuple[tuple[str, str, str], ...]:
-    """What one reaction broke on its way, judged as every transition's is: the first
-    instantaneous invariant after a start or stop (``instant``), then its first broken
-    transition property as a whole (``whole``, where not the same invariant)."""
-    found = [instant] if instant is not None else []
-    if whole is not None and whole[0] not in {v[0] for v in found}:
-        found.append((whole[0], whole[1], WHOLE_REACTION))
-    return tuple(found)
 
 
 class TransitionSystem:

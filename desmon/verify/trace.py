@@ -18,7 +18,7 @@ from desmon.verify.state import Key
 
 __all__ = [
     "Label", "Step", "Counterexample", "KEPT_BRANCH", "CHOSEN", "WHOLE_REACTION", "branch_name", "branch_names", "describe_state", "diff",
-    "failed_starts", "rule_of", "where_in_reaction",
+    "failed_starts", "reaction_findings", "rule_of", "where_in_reaction",
 ]
 
 #: A transition label: the event and the indices of the Control.start calls that failed.
@@ -99,6 +99,17 @@ class Step:
 #: ``preferred-when-possible``, ``no-flapping``'s moves): the reaction as a whole broke it,
 #: not one of its commands. Saved as is in ``verify --json``.
 WHOLE_REACTION = "the reaction"
+
+
+def reaction_findings(instant: tuple[str, str, str] | None, whole: tuple[str, str] | None) -> tuple[tuple[str, str, str], ...]:
+    """What one reaction broke on its way, judged as every engine judges a transition: the
+    first instantaneous invariant after a start or stop (``instant``: invariant, message,
+    after what), then its first broken transition property as a whole (``whole``, where
+    not the same invariant)."""
+    found = [instant] if instant is not None else []
+    if whole is not None and whole[0] not in {v[0] for v in found}:
+        found.append((whole[0], whole[1], WHOLE_REACTION))
+    return tuple(found)
 
 
 def where_in_reaction(during: str | None) -> str:
