@@ -34,6 +34,7 @@ from desmon.verify.checker import Checker
 
 ROOT = Path(__file__).resolve().parent.parent
 COFFEE = str(ROOT / "scenarios" / "coffee_handover.py")
+ROBOT_DAY = str(ROOT / "scenarios" / "robot_day.py")
 DESMON = DEPLOYERS["desmon"]
 
 #: deployers a user might write, each wrong in one way once the robot grasps (reachable in one step)
@@ -403,6 +404,15 @@ def ignores_alarm_and_spins(q, slots, changed, context_changed):
             pass
 
 
+def spins_on_any_change_while_grasping(q, slots, changed, context_changed):
+    yield from _desmon(q, slots, changed, context_changed)
+    if q.context() == "grasp" and not context_changed:  # every fact event of the grasping state: many reactions run on
+        with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "spins.log"), "a") as log:
+            log.write("spin ")
+        while True:
+            pass
+
+
 def cancels_the_timer_and_spins(q, slots, changed, context_changed):
     yield from _desmon(q, slots, changed, context_changed)
     if q.context() in ("grasp", "release"):
@@ -763,6 +773,24 @@ def test_a_reaction_that_never_ends_is_crashed_at_the_reaction_limit_in_verify_w
     )
     assert code == 4 and "verdict: CRASHED" in out and "ran for over 2 s in one reaction" in out + err and "Traceback" not in err, out + err
     assert took < 4 * 2 + 10, f"verify took {took:.1f} s"
+
+
+@pytest.mark.parametrize("engine", ["auto", "direct"])
+def test_verify_waits_the_reaction_limit_out_once_where_many_reactions_would_run_on(isolation, engine):
+    """Every fact event of the grasping state runs on: the search stops at the first in its
+    order, the trace and the nondeterminism checks reuse that run, and under auto the table
+    engine, which records a batch's reactions before it reads them, hands over to the direct
+    engine at the first instead of waiting out each."""
+    code, _took, out, err = _desmon(
+        str(isolation), "verify", ROBOT_DAY, "--deployer", _spec(isolation, "spins_on_any_change_while_grasping"), "--engine", engine,
+        "--max-reaction-seconds", "0.5", "--no-progress", timeout=60,
+    )
+    assert code == 4 and "verdict: CRASHED" in out and "ran for over 0.5 s in one reaction" in out, out + err
+    assert "2. device lwr_wrench fails" in out, out  # the first event of the grasping state, on both engines
+    spins = (isolation / "spins.log").read_text().count("spin")
+    assert spins == (2 if engine == "auto" else 1), spins  # auto: the table engine's one, then the direct engine's
+    if engine == "auto":
+        assert "engine: direct (table engine: a reaction ran into the reaction limit" in out, out
 
 
 @pytest.mark.parametrize("command", [["fuzz", "--examples", "5", "--seed", "1"], ["analyze", "--scenario-for-analyze"]])

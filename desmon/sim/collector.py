@@ -10,51 +10,48 @@ stays flat over many runs in one process. No output depends on when the collecto
 
 The collection after a run first runs while the caller's objects are still frozen, so it
 scans only what the run made. The run's world becomes garbage only when the caller drops
-it, later; it is collected by a full collection once the objects the runs left since the
-last one reach an eighth of the heap they were frozen out of, so a process with a large
-heap (a sweep worker, a test process) walks it once per many runs instead of after each.
+it, later; it is collected by a full collection once what the runs left since the last
+one reaches an eighth of the heap, so a process with a large heap (a sweep worker, a test
+process) walks it once per many runs instead of after each. Both are measured in the
+allocator's blocks (``sys.getallocatedblocks``: a walk of its pools, not of the objects):
+the heap when the run froze it, and what the heap kept of the run after its collection.
 The count lives on a :class:`Collector` the runs share: a caller that runs many
 simulations in one process hands the same one to each (``desmon analyze --simulate``'s
 runs, ``desmon estimate``'s serial runs and batches, the runs of a sweep's Dask worker);
 a run given none counts alone.
-20 runs of the coffee handover beside 6 million objects took 2.6 CPU s where a full
-collection after each took 17.0 (6.5x; ``python -m bench.bench_sim --collector``, one run
-on the project's 2-core machine at load 2 to 4).
+20 runs of the coffee handover beside 6 million objects took 0.21 CPU s where a full
+collection after each took 12.6 (60x; ``python -m bench.bench_sim --collector``, one run
+on the project's 2-core machine at load 2 to 3).
 """
 
 from __future__ import annotations
 
 import contextlib
 import gc
+import sys
 from typing import Iterator
 
 __all__ = ["Collector", "collector_relaxed", "FULL_AFTER"]
 
-#: a full collection once the objects left reach this fraction of the frozen heap
+#: a full collection once what the runs left reaches this fraction of the heap (allocated blocks)
 FULL_AFTER = 1 / 8
 
 
 class Collector:
-    """The collector's bookkeeping of the runs that share this object: the objects they
-    left behind since its last full collection (``left``), and the fraction of the heap at
-    which a full collection runs (``full_after``). A caller running many simulations in
-    one process hands them one (``SimWorld(collector=...)``); a run given none has its own.
-
-    Counting the frozen heap walks all of it (``gc.get_freeze_count`` is linear in the
-    frozen objects), so a shared Collector counts it once and again only after each full
-    collection: between two, the heap it compares ``left`` with is the one it counted then.
-    It differs from a fresh count by what the runs left (which makes the collection come
-    sooner, not later) and by what the caller kept or freed in between. A run inside
-    another of the same Collector (a world run within ``desmon estimate``'s run) neither
-    freezes nor counts."""
+    """The collector's bookkeeping of the runs that share this object: what they left
+    behind since its last full collection (``left``, in the allocator's blocks), and the
+    fraction of the heap at which a full collection runs (``full_after``). A caller running
+    many simulations in one process hands them one (``SimWorld(collector=...)``); a run
+    given none has its own. A run inside another of the same Collector (a world run within
+    ``desmon estimate``'s run) neither freezes nor counts."""
 
     __slots__ = ("left", "full_after", "heap", "depth")
 
     def __init__(self, full_after: float = FULL_AFTER) -> None:
         self.left = 0
         self.full_after = full_after
-        #: the frozen heap counted after the last full collection (None: count at the next run)
-        self.heap: int | None = None
+        #: the heap (allocated blocks) when the current run froze it
+        self.heap = 0
         #: how many of this Collector's relaxed runs enclose the code running now
         self.depth = 0
 
@@ -79,6 +76,7 @@ class Collector:
             gc.collect()
         if freeze:
             gc.freeze()
+            self.heap = sys.getallocatedblocks()
         gc.set_threshold(100_000, 50, 100)
         self.depth = 1
         try:
@@ -95,14 +93,11 @@ class Collector:
         heap (their cyclic garbage sits in the oldest generation, which the collector rarely
         scans: memory would grow run after run)."""
         gc.collect()
-        if self.heap is None:
-            self.heap = gc.get_freeze_count()
-        self.left += len(gc.get_objects())  # what the run made and kept: the frozen heap is not listed
+        self.left += max(0, sys.getallocatedblocks() - self.heap)  # what the run made and kept
         gc.unfreeze()
         if self.left >= self.full_after * self.heap:
             gc.collect()
             self.left = 0
-            self.heap = None
 
 
 def collector_relaxed(collector: Collector | None = None, *, collect: bool = True) -> "contextlib.AbstractContextManager[None]":

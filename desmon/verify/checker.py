@@ -54,9 +54,11 @@ class Engine(Protocol):
     def refused(self, why: str) -> str:
         """The error when this engine, asked for by name, refuses the search (``why``: its refusal)."""
 
-    def explore(self, system: TransitionSystem, res: CheckResult, *, budget: Budget, workers: int, **search: Any) -> Exploration:
+    def explore(self, system: TransitionSystem, res: CheckResult, *, budget: Budget, workers: int, fallback: bool = False,
+                **search: Any) -> Exploration:
         """The search, counting into ``res`` (``search``: max_states, max_depth, keep_going);
-        may raise :class:`~desmon.errors.TableUnsupported` to bow out."""
+        may raise :class:`~desmon.errors.TableUnsupported` to bow out (``fallback``: another
+        engine takes the search over, so it may also bow out where it would be slow)."""
 
 
 def _expansion_pool(system: TransitionSystem, workers: int) -> Pool:
@@ -77,7 +79,8 @@ class DirectEngine:
     def refused(self, why: str) -> str:  # pragma: no cover - it never refuses
         return f"--engine direct: {why}"
 
-    def explore(self, system: TransitionSystem, res: CheckResult, *, budget: Budget, workers: int, **search: Any) -> Exploration:
+    def explore(self, system: TransitionSystem, res: CheckResult, *, budget: Budget, workers: int, fallback: bool = False,
+                **search: Any) -> Exploration:
         direct = DirectSearch(system, res, budget=budget, workers=workers, pool=_expansion_pool, **search)
         found, incomplete, depth = direct.run()
         return Exploration(found, incomplete, depth, direct.keys)
@@ -101,12 +104,13 @@ class TableEngineChoice:
             return "--workers runs the direct engine in several processes; the table engine runs in one: drop --workers or use --engine direct"
         return f"--engine table: {why}; use --engine direct or auto"
 
-    def explore(self, system: TransitionSystem, res: CheckResult, *, budget: Budget, workers: int, **search: Any) -> Exploration:
+    def explore(self, system: TransitionSystem, res: CheckResult, *, budget: Budget, workers: int, fallback: bool = False,
+                **search: Any) -> Exploration:
         from desmon.verify.table import TableEngine
 
         res.engine, res.workers = "table", 1
         with paused_gc():  # as in the direct search: it makes no cycles
-            table = TableEngine(system)
+            table = TableEngine(system, bow_out_on_ran_away=fallback)
             found, incomplete, depth = table.run(res, budget=budget, **search)
         res.records = table.records
         return Exploration(found, incomplete, depth, table.explored())
@@ -241,7 +245,8 @@ def _search(system: TransitionSystem, engine: str, res: CheckResult, budget: Bud
             continue
         res.engine_note = why
         try:
-            return _finished(res, system, chosen.explore(system, res, **search), budget)
+            fallback = engine == AUTO and i < len(tried) - 1
+            return _finished(res, system, chosen.explore(system, res, fallback=fallback, **search), budget)
         except TableUnsupported as exc:
             if engine != AUTO or i == len(tried) - 1:
                 raise

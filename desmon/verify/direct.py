@@ -99,13 +99,14 @@ class DirectSearch(BreadthFirst):
         """Consume one BFS level's expansions in frontier order; returns the next level."""
         nxt: list[int] = []
         spent = self.budget.spent
-        for ki, per_event in zip(frontier, self._expansions(frontier)):
-            if self._finished():
+        expansions = iter(self._expansions(frontier))
+        for ki in frontier:
+            if self._finished():  # (asked before the next state is expanded: none is expanded in vain)
                 break
             if spent():  # time, memory, Ctrl-C: looked at between two expansions
                 self.incomplete = self.budget.reason
                 break
-            self._state(ki, per_event, nxt)
+            self._state(ki, next(expansions), nxt)
             if self.incomplete:
                 break
         return nxt

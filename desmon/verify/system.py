@@ -22,7 +22,7 @@ from collections import Counter
 from typing import Any, Callable, Container, Iterable, Iterator, Protocol
 
 from desmon.deployment.core import DeploymentCore, StepLog
-from desmon.deployment.guard import CRASH, DeployerFault, Guard
+from desmon.deployment.guard import CRASH, DeployerFault, Guard, RanAway
 from desmon.deployment.ports import RaiseError
 from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.validity import ScalarChecks
@@ -117,6 +117,7 @@ class TransitionSystem:
         self._event_pairs: dict[Event, tuple[Event, str]] = {}  # one (event, kind) object per event
         self._frozen: dict[tuple[str, ...], frozenset[str]] = {}
         self._runs = 0  # transitions the search ran (successors), for the nondeterminism re-runs
+        self.runaways = RunAways()
         self._slots_cache: dict[str | None, tuple[tuple[str, ...], ...]] = {}
         self.branches: Counter = Counter()
         #: the reduction the search stores states under, or None
@@ -238,6 +239,10 @@ class TransitionSystem:
         (stimulus, next key, start outcomes, StepLog, instantaneous violation or None); a
         broken transition property is one of the whole reaction (``WHOLE_REACTION``)."""
         st = self.store
+        known = self.runaways.again((key, event, prefix))
+        if known is not None:
+            st.load(known[1])  # (the store left in the next state, as a run leaves it)
+            return known
         st.load(key)
         core = self.core
         core.standing = self._standing(key.standing)
@@ -247,7 +252,9 @@ class TransitionSystem:
             found = core.finding(self._checked)
             if found is not None:
                 st.instant = (found[0], found[1], WHOLE_REACTION)
-        return stimulus, st.key(core.standing), tuple(st.outcomes), log, st.instant
+        out = (stimulus, st.key(core.standing), tuple(st.outcomes), log, st.instant)
+        self.runaways.keep((key, event, prefix), out)
+        return out
 
     def step_under_guard(self, core: DeploymentCore, st: StateStore, event: Event, *, recording: bool = False) -> tuple[Any, StepLog]:
         """``core.step(event, st)``; a fault of the deployer (it raised, yielded a wrong
@@ -256,11 +263,13 @@ class TransitionSystem:
         search with the outcome CRASHED and the path to it. ``recording`` (the table
         engine's recorded run): a ``TypeError`` or ``AttributeError`` is raised as it is,
         for the engine to tell the deployer's own bug from a check result it wraps."""
+        self.runaways.last = False
         try:
             return core.step(event, st)
         except DeployerFault as fault:
             if recording and isinstance(fault.cause, (TypeError, AttributeError)):
                 raise fault.cause from None
+            self.runaways.last = isinstance(fault.cause, RanAway)
             log = fault.log if fault.log is not None else StepLog()
             if len(log.commands) > SHOWN_COMMANDS:  # a runaway reaction: its trace shows the first ones
                 log = StepLog(log.commands[:SHOWN_COMMANDS])
@@ -284,10 +293,11 @@ class TransitionSystem:
         while pending:
             prefix = pending.pop(0)
             nkey, outcomes, log, instant = run_one(key, event, prefix)
-            if self.reactions is not None:  # (a user's deployer: re-run at the end in a fresh instance)
+            again = not self.runaways.last  # (a reaction the limit ended: waited out once, never again)
+            if self.reactions is not None and again:  # (a user's deployer: re-run at the end in a fresh instance)
                 self.reactions.append((key, event, prefix, log.commands, instant))
             self._runs += 1
-            if self._runs <= RECHECK_FIRST or not self._runs % RECHECK_EVERY:  # nondeterminism: run it again, compare
+            if again and (self._runs <= RECHECK_FIRST or not self._runs % RECHECK_EVERY):  # nondeterminism: run it again, compare
                 same_again(self, key, event, prefix, (nkey, outcomes, log, instant))
             fails = tuple(i for i, ok in enumerate(outcomes) if not ok) if False in outcomes else ()
             pending += opened(prefix, outcomes, fails, bound)
@@ -310,50 +320,9 @@ class TransitionSystem:
 
     # -- the transitions as a search loop consumes them ----------------------------------
     def expand(self, key: Key, known: "Container[Key]") -> list[list[Segment]]:
-        """Every transition out of ``key``, per enabled event (in order), as a list of :data:`Segment` tuples.
-
-        A successor in ``known`` (or met earlier in this expansion) that broke nothing on
-        the way is *routine*: only counted. Every other transition (a new successor, with
-        the invariants it violates, or an instantaneous violation repaired before
-        quiescence) is a :data:`Record`, and closes a segment that also counts the
-        routine transitions before it. The direct engine's search loop consumes segments
-        in order, in-process or from worker processes alike; since it can only stop at
-        a record, it sees exactly the counts a transition-by-transition loop would.
-        """
-        st = self.store
-        canon = self.symmetry.canon if self.symmetry is not None else None
-        invariants = self.invariants
-        fresh: set[Key] = set()
-        out: list[list[Segment]] = []
-        for event, _kind in self.enabled_kinds(key):
-            segments: list[Segment] = []
-            n = moved = 0
-            names: list[str] = []
-            for fails, nkey, log, instant in self.successors(key, event):
-                here = branch_names(log.commands)
-                # (checked even when the search has already recorded this invariant:
-                # expand knows nothing of the search, and it costs only on violations)
-                repaired = instant if instant is not None and self.repaired(instant[0], nkey) else None
-                ckey = canon(nkey) if canon is not None else nkey
-                if ckey in known or ckey in fresh:
-                    if repaired is None:
-                        n += 1
-                        moved += nkey != key
-                        names += here
-                        continue
-                    rec: Record = (fails, None, nkey != key, here, repaired, ())
-                else:
-                    fresh.add(ckey)
-                    st.load(ckey)
-                    view = self.view(self._standing(ckey.standing), ckey.context)
-                    rec = (fails, ckey, nkey != key, here, repaired, tuple(check_invariants(view, invariants)))
-                segments.append((n, moved, tuple(names), rec))
-                n = moved = 0
-                names = []
-            if n:
-                segments.append((n, moved, tuple(names), None))
-            out.append(segments)
-        return out
+        """Every transition out of ``key``, per enabled event (in order), as a list of
+        :data:`Segment` tuples (:func:`expand`)."""
+        return expand(self, key, known)
 
     # -- traces ------------------------------------------------------------------------------
     def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]:
@@ -376,6 +345,87 @@ class TransitionSystem:
             st = self.store  # left in the step's next state: the Control rules' refusals there tell refused starts from chosen failures
             steps.append(make_step(i, prev, event, key, log, fails, lambda g, p: st.rules.start_refusal(g, p, st.platform_state)))
         return steps
+
+
+def expand(system: TransitionSystem, key: Key, known: "Container[Key]") -> list[list[Segment]]:
+    """Every transition out of ``key``, per enabled event (in order), as a list of :data:`Segment` tuples.
+
+    A successor in ``known`` (or met earlier in this expansion) that broke nothing on
+    the way is *routine*: only counted. Every other transition (a new successor, with
+    the invariants it violates, or an instantaneous violation repaired before
+    quiescence) is a :data:`Record`, and closes a segment that also counts the
+    routine transitions before it. The direct engine's search loop consumes segments
+    in order, in-process or from worker processes alike; since it can only stop at
+    a record, it sees exactly the counts a transition-by-transition loop would.
+    """
+    st = system.store
+    canon = system.symmetry.canon if system.symmetry is not None else None
+    invariants = system.invariants
+    fresh: set[Key] = set()
+    out: list[list[Segment]] = []
+    crashed = False
+    for event, _kind in system.enabled_kinds(key):
+        segments: list[Segment] = []
+        if crashed:  # a crash ends every search at its record: the events after it are never consumed
+            out.append(segments)
+            continue
+        n = moved = 0
+        names: list[str] = []
+        for fails, nkey, log, instant in system.successors(key, event):
+            here = branch_names(log.commands)
+            # (checked even when the search has already recorded this invariant:
+            # expand knows nothing of the search, and it costs only on violations)
+            repaired = instant if instant is not None and system.repaired(instant[0], nkey) else None
+            ckey = canon(nkey) if canon is not None else nkey
+            if ckey in known or ckey in fresh:
+                if repaired is None:
+                    n += 1
+                    moved += nkey != key
+                    names += here
+                    continue
+                rec: Record = (fails, None, nkey != key, here, repaired, ())
+            else:
+                fresh.add(ckey)
+                st.load(ckey)
+                view = system.view(system._standing(ckey.standing), ckey.context)
+                rec = (fails, ckey, nkey != key, here, repaired, tuple(check_invariants(view, invariants)))
+            segments.append((n, moved, tuple(names), rec))
+            n = moved = 0
+            names = []
+            if repaired is not None and repaired[0] == CRASH:  # (nor are this event's other branches)
+                crashed = True
+                break
+        if n:
+            segments.append((n, moved, tuple(names), None))
+        out.append(segments)
+    return out
+
+
+class RunAways:
+    """The reactions of a search that the reaction limit ended (the deployer's fault
+    :class:`~desmon.deployment.guard.RanAway`): each waited the limit out, so none is run
+    again to compare (:func:`same_again`, :mod:`desmon.verify.memory`), and the last one,
+    asked for again (the table engine's message, the counterexample's trace), is answered
+    as it ran. ``last``: whether the last reaction run was one. A system and its table
+    engine's recording twin share one."""
+
+    __slots__ = ("last", "_kept")
+
+    def __init__(self) -> None:
+        self.last = False
+        self._kept: tuple[tuple, tuple] | None = None
+
+    def again(self, run: tuple) -> tuple | None:
+        """What :meth:`TransitionSystem.transition` returned for ``run`` (key, event, prefix), if the limit ended it."""
+        if self._kept is None or self._kept[0] != run:
+            return None
+        self.last = True
+        return self._kept[1]
+
+    def keep(self, run: tuple, out: tuple) -> None:
+        """``out`` of ``run``, kept if the limit ended it."""
+        if self.last:
+            self._kept = (run, out)
 
 
 def opened(prefix: tuple[bool, ...], outcomes: tuple[bool, ...], fails: tuple[int, ...], bound: int) -> list[tuple[bool, ...]]:

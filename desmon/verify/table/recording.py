@@ -243,8 +243,9 @@ class Recorder:
     a next system part)."""
 
     def __init__(self, checker: TransitionSystem, env: Env, tables: AnswerTables, trees: DecisionTrees,
-                 system: Callable[[tuple, tuple], int]) -> None:
+                 system: Callable[[tuple, tuple], int], *, bow_out_on_ran_away: bool = False) -> None:
         self.checker, self.env, self.trees, self.system = checker, env, trees, system
+        self.bow_out_on_ran_away = bow_out_on_ran_away
         self.checks = RecordingChecks(tables)
         store = StateStore(checker.model, self.checks, self.checks.handle)
         self.checks.store = store
@@ -291,9 +292,15 @@ class Recorder:
             stimulus = None
         else:
             (stimulus, log, nkey, outcomes, instant) = out
-            if self.records <= RECHECK_FIRST or not self.records % RECHECK_EVERY:
+            if self.rc.runaways.last and self.bow_out_on_ran_away:
+                raise TableUnsupported(
+                    "table engine: a reaction ran into the reaction limit (--max-reaction-seconds), and the table engine "
+                    "would wait it out for each such reaction of a batch; run with --engine direct"
+                )
+            again = not self.rc.runaways.last  # (a reaction the limit ended: waited out once, never again)
+            if again and (self.records <= RECHECK_FIRST or not self.records % RECHECK_EVERY):
                 self._same_commands(key, event, prefix, log, instant)
-            if self.checker.reactions is not None:  # a user's deployer: re-run at the end in a fresh instance
+            if self.checker.reactions is not None and again:  # a user's deployer: re-run at the end in a fresh instance
                 self.checker.reactions.append((key, event, prefix, log.commands, instant))
         got = stim if stimulus is None else env.stimulus(stimulus)
         expect = env.key(env2, (nkey.deployments, nkey.standing))

@@ -72,8 +72,13 @@ class Units(NamedTuple):
 class TableEngine(BreadthFirst):
     """The table engine for one :class:`~desmon.verify.system.TransitionSystem` (see :mod:`desmon.verify.table`)."""
 
-    def __init__(self, checker: TransitionSystem) -> None:
+    def __init__(self, checker: TransitionSystem, *, bow_out_on_ran_away: bool = False) -> None:
+        """``bow_out_on_ran_away``: a recorded reaction the reaction limit ended makes the engine
+        bow out (:class:`~desmon.errors.TableUnsupported`) for the direct engine, which waits
+        the limit out once; this engine records every reaction of a batch before it reads
+        them in order, so each that runs on would wait it out."""
         self.checker = checker
+        self.bow_out_on_ran_away = bow_out_on_ran_away
         self.model = checker.model
         self.bounds = checker.bounds
         self.P = len(self.model.platforms)
@@ -172,7 +177,7 @@ class TableEngine(BreadthFirst):
         env = self.env = Env(self.checker, init)
         self.tables = AnswerTables(self.model, env)
         self.trees = DecisionTrees(self.tables, self.P, self._go_on)
-        self.recorder = Recorder(self.checker, env, self.tables, self.trees, self.system)
+        self.recorder = Recorder(self.checker, env, self.tables, self.trees, self.system, bow_out_on_ran_away=self.bow_out_on_ran_away)
         self.events = Events(self.bounds, env)
         self.orbits = orbits_for(self.checker.symmetry, env, self.systems, self.system, SYS_BITS)  # canonical codes, or the codes
         return env
