@@ -104,7 +104,7 @@ def test_the_no_hysteresis_mutant_is_still_caught_moving_the_fallback_on_the_upg
 @given(preference_scenarios(), hst.sampled_from(["desmon", "desmon-keep-fallback"]), hst.integers(1, 2))
 def test_the_corrected_deployers_never_flap_on_generated_models_with_fallbacks_and_failing_starts(scenario, deployer, failures):
     scenario = dataclasses.replace(scenario, checker=dataclasses.replace(scenario.checker, start_failures=failures))
-    r = Checker(scenario, deployer).run(engine="direct", max_states=3000)
+    r = Checker(scenario, deployer).run(engine="auto", max_states=3000)
     assert not [c.message for c in r.counterexamples if c.invariant == "no-flapping"]
 
 
