@@ -212,7 +212,8 @@ COLLECTOR_RUNS, COLLECTOR_HEAP = 20, 3_000_000
 def collector_bench() -> int:
     """CPU seconds of :data:`COLLECTOR_RUNS` runs of the coffee handover in this process
     once :data:`COLLECTOR_HEAP` dicts (and as many lists) exist: with desmon's collector
-    policy, and with a full collection after every run (the baseline, measured here too)."""
+    policy, the runs sharing one Collector and each given none (a caller of one run), and
+    with a full collection after every run (the baseline, measured here too)."""
     import desmon.sim.collector as collector
     from desmon.sim.engine import simulate
 
@@ -220,16 +221,19 @@ def collector_bench() -> int:
     simulate(sc, "desmon", seed=0)  # imports and caches settle
     heap = [{"a": [i]} for i in range(COLLECTOR_HEAP)]
     cpu = {}
-    for name, full_after in (("every_run", 0.0), ("policy", collector.FULL_AFTER)):
-        shared = collector.Collector(full_after)  # the runs' bookkeeping, as a caller of many runs shares it
+    for name, full_after in (("every_run", 0.0), ("policy", collector.FULL_AFTER), ("unshared", None)):
+        # the runs' bookkeeping, as a caller of many runs shares it (unshared: each run its own)
+        shared = collector.Collector(full_after) if full_after is not None else None
         t0 = time.process_time()
         for seed in range(COLLECTOR_RUNS):
             simulate(sc, "desmon", seed=seed, collector=shared)
         cpu[name] = time.process_time() - t0
     print(f"{COLLECTOR_RUNS} runs of the coffee handover beside {2 * len(heap):,} objects: "
-          f"{cpu['policy']:.2f} CPU s, {cpu['every_run']:.2f} CPU s with a full collection after each run")
+          f"{cpu['policy']:.2f} CPU s sharing a Collector, {cpu['unshared']:.2f} CPU s each with its own, "
+          f"{cpu['every_run']:.2f} CPU s with a full collection after each run")
     print(f"RESULT runs={COLLECTOR_RUNS} heap_objects={2 * len(heap)} policy_cpu_s={cpu['policy']:.3f} "
-          f"every_run_cpu_s={cpu['every_run']:.3f} ratio={cpu['every_run'] / max(cpu['policy'], 1e-9):.1f}")
+          f"unshared_cpu_s={cpu['unshared']:.3f} every_run_cpu_s={cpu['every_run']:.3f} "
+          f"ratio={cpu['every_run'] / max(cpu['policy'], 1e-9):.1f}")
     return 0
 
 

@@ -19,9 +19,10 @@ The count lives on a :class:`Collector` the runs share: a caller that runs many
 simulations in one process hands the same one to each (``desmon analyze --simulate``'s
 runs, ``desmon estimate``'s serial runs and batches, the runs of a sweep's Dask worker);
 a run given none counts alone.
-20 runs of the coffee handover beside 6 million objects took 0.21 CPU s where a full
-collection after each took 12.6 (60x; ``python -m bench.bench_sim --collector``, one run
-on the project's 2-core machine at load 2 to 3).
+20 runs of the coffee handover beside 6 million objects took 0.21 CPU s sharing a
+Collector, 0.20 each with its own, where a full collection after each took 12.7 (60x;
+``python -m bench.bench_sim --collector``, one run on the project's 2-core machine at
+load 2 to 3).
 """
 
 from __future__ import annotations
