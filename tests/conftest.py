@@ -398,9 +398,11 @@ def pytest_collection_modifyitems(config, items) -> None:  # type: ignore[no-unt
 class CpuPerTest:
     """``DESMON_TEST_CPU=FILE``: each process appends one line per test to FILE, the CPU
     seconds (user and system) that test used, its subprocesses' included (those it waited
-    for, and its commands run by tests/warm.py's server), and its wall seconds: ``cpu wall
-    nodeid``. ``sort -rn FILE | head`` lists the tests that cost the suite the most CPU;
-    wall time alone does not (a test waiting on a timeout takes wall time, not CPU)."""
+    for, and its commands run by tests/warm.py's server), its wall seconds, its node id,
+    and when it ended (Unix time) in which process: ``cpu wall nodeid end pid``. ``sort -rn
+    FILE | head`` lists the tests that cost the suite the most CPU (wall time alone does
+    not: a test waiting on a timeout takes wall time, not CPU); the last two columns give
+    each process's timeline (how long one ran alone at the end)."""
 
     def __init__(self, path: str) -> None:
         self.path = path
@@ -416,11 +418,12 @@ class CpuPerTest:
 
     @pytest.hookimpl(hookwrapper=True)
     def pytest_runtest_protocol(self, item, nextitem):  # type: ignore[no-untyped-def]
+        import os
         import time
 
         cpu, wall = self.cpu(), time.perf_counter()
         yield
-        line = f"{self.cpu() - cpu:.2f} {time.perf_counter() - wall:.2f} {item.nodeid}\n"
+        line = f"{self.cpu() - cpu:.2f} {time.perf_counter() - wall:.2f} {item.nodeid} {time.time():.2f} {os.getpid()}\n"
         with open(self.path, "a") as f:
             f.write(line)
 

@@ -60,6 +60,28 @@ def test_a_run_read_for_an_alarm_figure_renders_and_detects(figure):  # type: ig
     assert everything["slips_detected"] > 0  # the figures compared are the detectors' own
 
 
+#: the alarm figures that read only the alarms near a slip (not ``false_alarms``)
+NEAR_SLIPS = ("slips_detected", "slips_missed", "latency_median_s", "latency_p95_s")
+
+
+@pytest.mark.parametrize("name,params,until", [*CASES, ("platform_crash.py", {"stochastic": "True"}, 1800.0)])
+@pytest.mark.parametrize("seed", [1, 6])
+def test_a_run_read_for_the_slips_alone_runs_the_detectors_near_them_and_detects_as_the_full_run(name, params, until, seed):  # type: ignore[no-untyped-def]
+    """A detector's alarms near a slip depend on what it read since it was last activated:
+    the spans far from every slip are run before the next near one, or never if the
+    activation ends first. The slip figures and each latency are the full run's, on far
+    fewer samples; reading ``false_alarms`` too runs every span."""
+    full_world, full, everything = _run(name, params, until, seed)
+    lean_world, lean, read = _run(name, params, until, seed, reads=NEAR_SLIPS)
+    for m in NEAR_SLIPS:
+        assert read[m] == everything[m], m
+    assert lean.metrics["latencies"] == full.metrics["latencies"]
+    assert everything["slips_injected"] > 0 and lean_world.bank is not None
+    assert sum(lean_world.bank.samples.values()) < 0.7 * sum(full_world.bank.samples.values())
+    every_world, _e, _f = _run(name, params, until, seed, reads=(*NEAR_SLIPS, "false_alarms"))
+    assert every_world.bank.samples == full_world.bank.samples
+
+
 def test_a_run_read_for_its_violations_is_audited():  # type: ignore[no-untyped-def]
     full_world, full, everything = _run("fallbacks.py", {}, 1200.0, 1, deployer="paper")
     world, result, read = _run("fallbacks.py", {}, 1200.0, 1, deployer="paper", reads=("violations",))

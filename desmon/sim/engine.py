@@ -53,7 +53,7 @@ from desmon.repository.store import ADD_EDGE, REMOVE_EDGE, RELABEL_EDGE, UPDATE_
 from desmon.sim.accounting import audit, robot_metrics
 from desmon.sim.collector import Collector, collector_relaxed
 from desmon.sim.facts import SLIP_WINDOW, Instance
-from desmon.sim.metrics import AUDIT, RECORDS, SIGNALS, work_read
+from desmon.sim.metrics import AUDIT, EVERY_ALARM, RECORDS, SIGNALS, work_read
 from desmon.sim.parts import RobotParts, robot_parts, start_processes
 from desmon.sim.processes import OBSERVATION, apply_initial, progress
 from desmon.sim.streams import TactileStream
@@ -130,8 +130,8 @@ class SimWorld:
         #: every output. A run read for some figures only skips the work no output it has
         #: needs (:func:`~desmon.sim.metrics.work_read`): the signals and detectors when no
         #: figure of the alarms is read, the audit when the violations are not, the records
-        #: (the decisions, and the trace's when no trace is given). The figures read are the
-        #: same either way.
+        #: (the decisions, and the trace's when no trace is given), the detectors far from
+        #: every slip unless ``false_alarms`` is read. The figures read are the same either way.
         self.reads = None if reads is None else frozenset(reads)
         needed = work_read(self.reads)
         self.signals_on = (self.world.signals if signals is None else bool(signals)) and SIGNALS in needed
@@ -147,6 +147,7 @@ class SimWorld:
         self.parts: RobotParts = robot_parts(
             scenario, self.world, env=env, repo=self.repo, query=self.query, deployer=deployer, seed=self.seed,
             horizon=self.horizon, signals=self.signals_on, trace=self.trace, run=self.run_context, keep_decisions=RECORDS in needed,
+            every_alarm=EVERY_ALARM in needed or trace is not None,
         )
         self.core = self.parts.core
         self.deployer_name = self.core.deployer.name

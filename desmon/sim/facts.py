@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import bisect
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from desmon.deployment.exposure import best_state
@@ -48,6 +48,9 @@ class Instance:
     proc: Any = None
     gen: int = 0  # activations so far (a warm-up end of an older one is ignored)
     ready_at: float = 0.0  # exponential timing: when its start latency has passed (never valid before)
+    #: the spans ``(t0, t1)`` of this activation not yet run through its detector, far from every slip
+    #: (a run that reads no alarm outside the slips' windows: Infrastructure.feed)
+    deferred: list[tuple[float, float]] = field(default_factory=list)
 
 
 class _Readability(dict):  # type: ignore[type-arg]
@@ -218,6 +221,13 @@ class GroundTruth:
         self.bank: SensorBank | None = None
         if signals:
             self.bank = SensorBank(physical, self.slips, seed, [(d, s) for d, s in devs if s is not None])
+
+    def near_slip(self, t0: float, t1: float) -> bool:
+        """Whether ``[t0, t1]`` meets a slip's window (:data:`SLIP_WINDOW` around its onset:
+        wider than the window in which an alarm detects it)."""
+        lo, hi = self._busy
+        i = bisect.bisect_left(hi, t0)
+        return i < len(lo) and lo[i] <= t1
 
     def next_wake(self, now: float) -> float:
         """The next detector wake-up after ``now``: the next ``block`` grid point while a

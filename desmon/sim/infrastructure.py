@@ -47,7 +47,7 @@ class Infrastructure:
 
     def __init__(
         self, env: simpy.Environment, world: World, repo: Repository, trace: Trace, facts: PhysicalFacts, truth: GroundTruth,
-        rules: Any, exposure: Exposure, memory: MemoryMeter, *, seed: int, signals: bool,
+        rules: Any, exposure: Exposure, memory: MemoryMeter, *, seed: int, signals: bool, every_alarm: bool = True,
     ) -> None:
         self.env = env
         self.world = world
@@ -60,6 +60,9 @@ class Infrastructure:
         self.exposure = exposure
         self.memory = memory
         self.signals = signals
+        #: False: the detectors run only on the spans of an activation up to one near a slip
+        #: (:meth:`feed`), where an alarm could detect it; none reads the alarms elsewhere
+        self.every_alarm = every_alarm
         self.starts = self.start_failures = self.stops = 0
         self.attempts: dict[tuple[str, str], int] = {}
         self.rng_start = random.Random(f"{seed}:start")
@@ -256,6 +259,7 @@ class Infrastructure:
     # ------------------------------------------------------------------ detector instances
     def activate(self, inst: Instance, now: float) -> None:
         inst.fed = now
+        inst.deferred.clear()  # (the detector forgets them: no slip was near)
         if not self.facts.detects.get(inst.graph, True):
             # what the graph reads has no signal model (World.no_signal_model): it runs
             # and uses memory, yet cannot detect a slip, so it never becomes valid and
@@ -317,7 +321,10 @@ class Infrastructure:
             return
 
     def feed(self, inst: Instance, t1: float) -> None:
-        """Feed ``inst`` the samples of its devices up to ``t1``; record its alarms."""
+        """Feed ``inst`` the samples of its devices up to ``t1``; record its alarms. Without
+        :attr:`every_alarm`, a span far from every slip is kept (``inst.deferred``) and run,
+        in order and with its bounds, before the activation's next span near one (the same
+        state there, the same alarms); an activation that ends first never runs it."""
         t0 = inst.fed
         if t1 <= t0:
             return
@@ -325,10 +332,21 @@ class Infrastructure:
         bank = self.truth.bank
         if inst.halted or inst.adapter is None or bank is None or not self.facts.up[inst.platform]:
             return
-        alarms = inst.adapter.feed(bank, t0, t1, inst.streams)
-        for a in alarms:
-            self.alarms.append(a)
-            self.trace.emit(a.time, "alarm", detector=inst.graph, platform=inst.platform, direction=a.direction)
+        if not self.every_alarm:
+            if not self.truth.near_slip(t0, t1):
+                inst.deferred.append((t0, t1))
+                return
+            for a, b in inst.deferred:
+                _run_detector(self, inst, bank, a, b)
+            inst.deferred.clear()
+        _run_detector(self, inst, bank, t0, t1)
+
+
+def _run_detector(infra: Infrastructure, inst: Instance, bank: Any, t0: float, t1: float) -> None:
+    """Run ``inst``'s detector on its samples in ``[t0, t1)``; record its alarms."""
+    for a in inst.adapter.feed(bank, t0, t1, inst.streams):  # type: ignore[union-attr]
+        infra.alarms.append(a)
+        infra.trace.emit(a.time, "alarm", detector=inst.graph, platform=inst.platform, direction=a.direction)
 
 
 def _given_alarms(infra: Infrastructure, inst: Instance, rate: float):  # type: ignore[no-untyped-def]

@@ -42,7 +42,7 @@ from desmon.sim.world import Slip
 
 __all__ = [
     "Exposure", "MemoryMeter", "slip_metrics", "percentile", "RUN_FIGURES", "RENAMED", "RUNTIME_CHANGES", "run_figures",
-    "ALARM_FIGURES", "SIGNALS", "AUDIT", "RECORDS", "work_read",
+    "ALARM_FIGURES", "SIGNALS", "AUDIT", "RECORDS", "EVERY_ALARM", "work_read",
 ]
 
 DETECT_BEFORE = 0.3
@@ -313,8 +313,9 @@ def run_figures(m: Mapping[str, Any], violations: int) -> dict[str, Any]:
 ALARM_FIGURES: frozenset[str] = frozenset({"slips_detected", "slips_missed", "false_alarms", "latency_median_s", "latency_p95_s"})
 #: the work of a run that only some outputs read (:func:`work_read`): rendering the signals
 #: and running the detectors on them, auditing the invariants, keeping the records (the
-#: decisions, the trace's records)
-SIGNALS, AUDIT, RECORDS = "signals", "audit", "records"
+#: decisions, the trace's records), and running the detectors far from every slip
+#: (``EVERY_ALARM``: only ``false_alarms`` counts the alarms there)
+SIGNALS, AUDIT, RECORDS, EVERY_ALARM = "signals", "audit", "records", "every_alarm"
 #: the names a caller may read of a run (``SimWorld(reads=...)``): the run figures, the
 #: longest exposure, the errors per kind and the run-time changes
 READABLE: frozenset[str] = frozenset(
@@ -323,12 +324,13 @@ READABLE: frozenset[str] = frozenset(
 
 
 def work_read(figures: frozenset[str] | None) -> frozenset[str]:
-    """The work (:data:`SIGNALS`, :data:`AUDIT`, :data:`RECORDS`) whose results a caller
-    reading ``figures`` of a run sees (None: every output, so all of it). The alarms feed
-    only :data:`ALARM_FIGURES`, the audit only ``violations``, the records no figure.
-    Every other figure comes out the same without them."""
+    """The work (:data:`SIGNALS`, :data:`AUDIT`, :data:`RECORDS`, :data:`EVERY_ALARM`) whose
+    results a caller reading ``figures`` of a run sees (None: every output, so all of it).
+    The alarms feed only :data:`ALARM_FIGURES`, and of those only ``false_alarms`` reads
+    an alarm outside every slip's detection window; the audit feeds only ``violations``,
+    the records no figure. Every other figure comes out the same without them."""
     if figures is None:
-        return frozenset({SIGNALS, AUDIT, RECORDS})
+        return frozenset({SIGNALS, AUDIT, RECORDS, EVERY_ALARM})
     unknown = sorted(f for f in figures if f not in READABLE)
     if unknown:  # (a misspelt alarm figure would otherwise be read off a run without detectors: 0)
         close = get_close_matches(unknown[0], sorted(READABLE), n=1)
@@ -336,4 +338,5 @@ def work_read(figures: frozenset[str] | None) -> frozenset[str]:
         raise SimulationError(f"reads={unknown[0]!r} is no run figure{hint}: name figures of desmon.sim.metrics.READABLE")
     return frozenset(
         ({SIGNALS} if figures & ALARM_FIGURES else set()) | ({AUDIT} if "violations" in figures else set())
+        | ({EVERY_ALARM} if "false_alarms" in figures else set())
     )

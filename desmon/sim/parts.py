@@ -50,12 +50,14 @@ __all__ = ["RobotParts", "robot_parts", "start_processes"]
 def robot_parts(
     scenario: Scenario, world: World, *, env: simpy.Environment, repo: Repository, query: RepositoryQuery, deployer: Any,
     seed: int, horizon: float, signals: bool, trace: Trace, rules: Callable[[ControlRules], Any] | None = None,
-    keep_decisions: bool = True, guard: Guard | None = None, run: RunContext | None = None,
+    keep_decisions: bool = True, guard: Guard | None = None, run: RunContext | None = None, every_alarm: bool = True,
 ) -> RobotParts:
     """The parts of ``scenario``'s robot on ``env`` and ``repo`` (read through ``query``).
 
     ``rules`` wraps the Control rules (a fleet's edge servers add their admission
-    control); ``keep_decisions`` False: decisions go to the trace only; ``guard``: the
+    control); ``keep_decisions`` False: decisions go to the trace only; ``every_alarm``
+    False: the detectors run only where an alarm could fall in a slip's detection window
+    (:class:`~desmon.sim.infrastructure.Infrastructure`); ``guard``: the
     run's guard around the deployer (:mod:`desmon.deployment.guard`), or ``run``: the
     whole run context (:mod:`desmon.deployment.run`)."""
     model = scenario.model
@@ -74,7 +76,7 @@ def robot_parts(
     memory = MemoryMeter({p.name: p.capacity_or_unbounded("memory") for p in model.platforms})
     infra = Infrastructure(
         env, world, repo, trace, facts, truth, rules(control) if rules is not None else control, exposure, memory,
-        seed=seed, signals=signals,
+        seed=seed, signals=signals, every_alarm=every_alarm,
     )
     return RobotParts(
         scenario, model, world, seed, horizon, signals, env, repo, query, core, trace, facts, truth, exposure, memory, infra,
