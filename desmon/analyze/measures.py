@@ -81,6 +81,13 @@ def _trial_seconds(action: str, mean: float) -> float:
     return seconds
 
 
+def _trials_said(trials: int, watching: bool, action: str, latency: float, k: int, n: int) -> str:
+    """The announcement of the ``k``-th of ``n`` batches of detection trials (``watching``
+    False: only the slips that begin while a detector starts are drawn)."""
+    which = f"{trials:,} slips" if watching else f"the slips that begin while a detector starts, of {trials:,}"
+    return f"the detection trials: {which} in {action} after a start latency of {latency:g} s ({k} of {n})"
+
+
 def _rates(
     scenario: Scenario, phases: int, trials: int, seed: int, budget: Callable[..., None] | None = None, say: Callable[[str], None] | None = None,
 ) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, dict[float, float]]]]:
@@ -111,12 +118,12 @@ def _rates(
         like = model.like(action)
         direction, kind = slip_kind(world, like)
         for lat in latencies:
+            watching = lat == world.start_latency  # (elsewhere only the starting catch is read)
             if say is not None:
-                say(f"the detection trials: {trials:,} slips in {action} after a start latency of {lat:g} s "
-                    f"({len(rates) + 1} of {len(spans) * len(latencies)})")
+                say(_trials_said(trials, watching, action, lat, len(rates) + 1, len(spans) * len(latencies)))
             rates[(action, lat)] = detection_rates(
                 like, _trial_seconds(action, sum(durations) / len(durations)), direction, kind, grasp=grasp, phases=phases, trials=trials,
-                seed=seed, recognition=world.recognition_delay, latency=lat, warmups=warmups, budget=budget,
+                seed=seed, recognition=world.recognition_delay, latency=lat, warmups=warmups, budget=budget, watching=watching,
             )
     miss: dict[str, dict[str, float]] = {}
     start: dict[str, dict[str, dict[float, float]]] = {}

@@ -317,7 +317,7 @@ def _lengths(mean: float, phases: int, biased: bool) -> list[float]:
 def detection_rates(
     action: str, duration: float, direction: str, kind: str, *, grasp: float = 2.0, phases: int = 0, trials: int = 200,
     seed: int = 0, recognition: float = 0.0, latency: float = 0.0, warmups: tuple[tuple[str, float], ...] = (),
-    budget: Callable[[], None] | None = None,
+    budget: Callable[[], None] | None = None, watching: bool = True,
 ) -> dict[str, tuple[float, float]]:
     """Each detector's probability of catching a slip in a step of ``action`` (a built-in
     with an object in the hand), as (while it watches, while it starts): the weighted
@@ -341,7 +341,10 @@ def detection_rates(
     it stands for. The step is followed by 1.5 s of ``hold`` (nothing after a
     ``release``: the object is handed over), so that a late slip has its whole
     detection window. ``budget()``, if given, is called before each batch of slips (it
-    raises once the caller's time or memory is spent)."""
+    raises once the caller's time or memory is spent). ``watching`` False: only the
+    slips before the detectors watch are drawn (each part of the step draws its own, so
+    the starting catch is the same) and the watching catch is that of those alone, a
+    part of its slips: read only the starting catch then."""
     steps = _lengths(duration, phases, True)
     grasps = _lengths(grasp, phases, False)
     recognitions = _lengths(recognition, phases, False) if recognition > 0 else [0.0] * RATE_GROUPS
@@ -366,7 +369,7 @@ def detection_rates(
         if action != RELEASE:
             timeline.append(Segment(HOLD, end, 1.5))
         parts = [(request, ready, n - 3 * n // 4), (ready, end, 3 * n // 4)] if ready < end else [(request, ready, n)]
-        for k, (lo, hi, m) in enumerate(parts):
+        for k, (lo, hi, m) in enumerate(parts[: 1 + int(watching)]):  # (not watching: the start's part alone)
             if m and hi > lo:
                 if budget is not None:
                     budget()
