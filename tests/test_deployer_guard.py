@@ -595,27 +595,27 @@ def test_a_thread_the_deployer_leaves_running_does_not_hold_desmon(isolation, co
 @pytest.mark.parametrize("name", ["ignores_alarm_and_spins", "cancels_the_timer_and_spins", "swallows_everything", "no_op_every_half_second"])
 def test_a_deployer_fighting_the_timer_ends_at_the_timeout(isolation, engine, name):
     """SIGALRM ignored or the interval timer cancelled inside a reaction, every exception
-    swallowed, a no-op command every 0.5 s: verify --timeout 2 ends INCOMPLETE (exit 3)
+    swallowed, a no-op command every 0.5 s: verify --timeout 1 ends INCOMPLETE (exit 3)
     within the timeout plus 2 s (desmon's timers run in its own process, not the worker's)."""
     code, took, out, err = _desmon(
-        str(isolation), "verify", COFFEE, "--deployer", _spec(isolation, name), "--engine", engine, "--timeout", "2", "--no-progress",
+        str(isolation), "verify", COFFEE, "--deployer", _spec(isolation, name), "--engine", engine, "--timeout", "1", "--no-progress",
     )
-    assert code == 3 and "verdict: INCOMPLETE (timeout 2s" in out and "Traceback" not in err, out + err
-    assert took < 2 + 2, f"--timeout 2 took {took:.1f} s"
+    assert code == 3 and "verdict: INCOMPLETE (timeout 1s" in out and "Traceback" not in err, out + err
+    assert took < 1 + 2, f"--timeout 1 took {took:.1f} s"
 
 
 @pytest.mark.parametrize("name", ["ignores_alarm_and_spins", "cancels_the_timer_and_spins", "swallows_everything", "no_op_every_half_second"])
 def test_a_deployer_fighting_the_timer_is_crashed_at_the_reaction_limit_in_run(isolation, name):
-    code, took, out, err = _desmon(str(isolation), "run", COFFEE, "--deployer", _spec(isolation, name), "--max-reaction-seconds", "2")
-    assert code == 4 and "desmon: CRASHED: " in err and "ran for over 2 s in one reaction" in err and "Traceback" not in err, out + err
+    code, took, out, err = _desmon(str(isolation), "run", COFFEE, "--deployer", _spec(isolation, name), "--max-reaction-seconds", "1")
+    assert code == 4 and "desmon: CRASHED: " in err and "ran for over 1 s in one reaction" in err and "Traceback" not in err, out + err
     assert took < 30, f"run took {took:.1f} s"
 
 
-@pytest.mark.parametrize("command", [["verify", "--timeout", "2", "--no-progress"], ["run", "--max-reaction-seconds", "2"]])
+@pytest.mark.parametrize("command", [["verify", "--timeout", "1", "--no-progress"], ["run", "--max-reaction-seconds", "1"]])
 def test_a_deployer_ignoring_the_timer_signal_from_import_ends_within_the_budget(isolation, command):
     code, took, out, err = _desmon(str(isolation), *_command(command), "--deployer", _spec(isolation, "spins_on_grasp", "ignores_alarm_at_import"))
     assert code in (3, 4) and "Traceback" not in err, out + err
-    assert took < 2 + 2 + 5, f"{command[0]} took {took:.1f} s"
+    assert took < 1 + 2 + 5, f"{command[0]} took {took:.1f} s"
 
 
 @pytest.fixture(scope="session")
@@ -769,10 +769,10 @@ def test_a_reaction_that_never_ends_is_crashed_at_the_reaction_limit_in_verify_w
     there as in every other command."""
     code, took, out, err = _desmon(
         str(isolation), "verify", COFFEE, "--deployer", _spec(isolation, "ignores_alarm_and_spins"), "--engine", engine,
-        "--max-reaction-seconds", "2", "--no-progress", timeout=60,
+        "--max-reaction-seconds", "1", "--no-progress", timeout=60,
     )
-    assert code == 4 and "verdict: CRASHED" in out and "ran for over 2 s in one reaction" in out + err and "Traceback" not in err, out + err
-    assert took < 4 * 2 + 10, f"verify took {took:.1f} s"
+    assert code == 4 and "verdict: CRASHED" in out and "ran for over 1 s in one reaction" in out + err and "Traceback" not in err, out + err
+    assert took < 4 * 1 + 10, f"verify took {took:.1f} s"
 
 
 @pytest.mark.parametrize("engine", ["auto", "direct"])
@@ -796,13 +796,13 @@ def test_verify_waits_the_reaction_limit_out_once_where_many_reactions_would_run
 @pytest.mark.parametrize("command", [["fuzz", "--examples", "5", "--seed", "1"], ["analyze", "--scenario-for-analyze"]])
 def test_a_deployer_fighting_the_timer_is_crashed_at_the_reaction_limit_in_fuzz_and_analyze(isolation, command):
     code, took, out, err = _desmon(
-        str(isolation), *_command(command), "--deployer", _spec(isolation, "ignores_alarm_and_spins"), "--max-reaction-seconds", "2",
+        str(isolation), *_command(command), "--deployer", _spec(isolation, "ignores_alarm_and_spins"), "--max-reaction-seconds", "1",
         timeout=_slow(command),
     )
-    assert code == 4 and "CRASHED" in out + err and "ran for over 2 s in one reaction" in out + err and "Traceback" not in err, out + err
+    assert code == 4 and "CRASHED" in out + err and "ran for over 1 s in one reaction" in out + err and "Traceback" not in err, out + err
     if command[0] == "fuzz":  # the limit waited out once to find it and once to print its trace, not at each shrink or re-derivation
         assert "as found, not shrunk" in out and "is not re-derived here" in out, out
-        assert took < 4 * 2 + 5, f"fuzz took {took:.1f} s"
+        assert took < 4 * 1 + 5, f"fuzz took {took:.1f} s"
 
 
 PEEKS_PY = """
