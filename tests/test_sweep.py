@@ -485,7 +485,7 @@ def test_a_ctrl_c_at_the_terminal_ends_a_local_sweep_without_a_traceback(tmp_pat
 
     out = tmp_path / "cc.csv"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "desmon", "sweep", str(ROBOT_DAY), "-p", "hours=2", "--seeds", "40", "--workers", "2", "-o", str(out)],
+        [sys.executable, "-m", "desmon", "sweep", str(ROBOT_DAY), "-p", "hours=0.5", "--seeds", "40", "--workers", "2", "-o", str(out)],
         cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # (a background test run inherits it ignored)
     )
