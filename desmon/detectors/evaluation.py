@@ -369,7 +369,7 @@ def detection_rates(
         if action != RELEASE:
             timeline.append(Segment(HOLD, end, 1.5))
         parts = [(request, ready, n - 3 * n // 4), (ready, end, 3 * n // 4)] if ready < end else [(request, ready, n)]
-        for k, (lo, hi, m) in enumerate(parts[: 1 + int(watching)]):  # (not watching: the start's part alone)
+        for k, (lo, hi, m) in enumerate(parts[: 1 + bool(watching)]):  # (not watching: the start's part alone)
             if m and hi > lo:
                 if budget is not None:
                     budget()

@@ -239,7 +239,8 @@ class TransitionSystem:
         (stimulus, next key, start outcomes, StepLog, instantaneous violation or None); a
         broken transition property is one of the whole reaction (``WHOLE_REACTION``)."""
         st = self.store
-        known = self.runaways.again((key, event, prefix))
+        ran = self.runaways
+        known = ran.again((key, event, prefix)) if ran.kept is not None else None  # (no tuple per transition otherwise)
         if known is not None:
             st.load(known[1])  # (the store left in the next state, as a run leaves it)
             return known
@@ -253,7 +254,8 @@ class TransitionSystem:
             if found is not None:
                 st.instant = (found[0], found[1], WHOLE_REACTION)
         out = (stimulus, st.key(core.standing), tuple(st.outcomes), log, st.instant)
-        self.runaways.keep((key, event, prefix), out)
+        if ran.last:
+            ran.kept = ((key, event, prefix), out)
         return out
 
     def step_under_guard(self, core: DeploymentCore, st: StateStore, event: Event, *, recording: bool = False) -> tuple[Any, StepLog]:
@@ -409,23 +411,19 @@ class RunAways:
     as it ran. ``last``: whether the last reaction run was one. A system and its table
     engine's recording twin share one."""
 
-    __slots__ = ("last", "_kept")
+    __slots__ = ("last", "kept")
 
     def __init__(self) -> None:
         self.last = False
-        self._kept: tuple[tuple, tuple] | None = None
+        #: the last reaction the limit ended: ((key, event, prefix), what the transition returned)
+        self.kept: tuple[tuple, tuple] | None = None
 
     def again(self, run: tuple) -> tuple | None:
         """What :meth:`TransitionSystem.transition` returned for ``run`` (key, event, prefix), if the limit ended it."""
-        if self._kept is None or self._kept[0] != run:
+        if self.kept is None or self.kept[0] != run:
             return None
         self.last = True
-        return self._kept[1]
-
-    def keep(self, run: tuple, out: tuple) -> None:
-        """``out`` of ``run``, kept if the limit ended it."""
-        if self.last:
-            self._kept = (run, out)
+        return self.kept[1]
 
 
 def opened(prefix: tuple[bool, ...], outcomes: tuple[bool, ...], fails: tuple[int, ...], bound: int) -> list[tuple[bool, ...]]:
