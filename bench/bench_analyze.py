@@ -188,7 +188,7 @@ def _agreement(seeds: int) -> int:
     inside = 0
     for name, params in cases:
         sc = load_scenario(ROOT / "scenarios" / name, params=params)
-        a = analyze(sc, miss={}, horizon=3600.0, steady=False)
+        a = analyze(sc, miss={}, horizon=3600.0)
         ag = agreement(a.exposure_s_per_mission or 0.0, simulated_exposure(sc, "desmon", range(seeds), 3600.0))
         inside += ag.inside
         print(f"{name} {params}: {a.chain.n:,} states; exact {ag.exact:.3f} s in 1 h; simulated mean {ag.mean:.3f} s, "

@@ -198,9 +198,9 @@ ONE_HOUR = [pytest.param(path, marks=pytest.mark.xdist_group(f"simulated-1h-{pat
 
 @functools.lru_cache(maxsize=None)
 def _one_hour_analysis(path: str):
-    """``analyze(_scenario(path, "1"), steady=False)``, solved once per process (the tests of
+    """``analyze(_scenario(path, "1"))``, solved once per process (the tests of
     :data:`ONE_HOUR` only read it)."""
-    return analyze(_scenario(path, "1"), steady=False)
+    return analyze(_scenario(path, "1"))
 
 
 @pytest.mark.parametrize("path", ONE_HOUR)
@@ -280,7 +280,7 @@ def test_under_fixed_timing_more_phases_bring_the_chain_to_the_simulation():
 
     sc = load_scenario(SHIFT, {"faults": "False", "hours": "1"})
     fixed = simulated_exposure(sc, "desmon", SEEDS, 3600.0, timing="fixed")
-    exact = {k: analyze(sc, miss={}, phases=k, horizon=3600.0, steady=False).exposure_s_per_mission for k in (1, 4, 16)}
+    exact = {k: analyze(sc, miss={}, phases=k, horizon=3600.0).exposure_s_per_mission for k in (1, 4, 16)}
     gaps = [abs(exact[k] - np.mean(fixed)) for k in (1, 4, 16)]
     assert gaps[0] > gaps[1] > gaps[2]
     assert _inside(exact[16], fixed)  # the 16-phase chain (4,800 states) solved once, not again for this line
