@@ -435,11 +435,12 @@ def krylov_steps(t: float, A, v: np.ndarray, tol: float = 1e-10, m: int = KRYLOV
     fact = ((m + 1) / math.e) ** (m + 1) * math.sqrt(2 * math.pi * (m + 1))
     t_new = (1.0 / anorm) * ((fact * tol) / (4.0 * beta * anorm)) ** (1.0 / m)
     t_now, s_err, steps = 0.0, 0.0, 0
+    basis = np.empty((m + 1, n))  # every step's basis, written over: no fresh pages to fault in and zero each step
     while t_now < t:
         budget()
         steps += 1
         t_step = min(t - t_now, t_new)
-        V, H, mb, happy, avnorm = _arnoldi(A, w / beta, m)
+        V, H, mb, happy, avnorm = _arnoldi(A, w / beta, m, basis)
         for _reject in range(MAX_REJECTIONS):
             if happy:
                 F = _quiet(expm, t_step * H[:mb, :mb])
@@ -473,12 +474,12 @@ def _quiet(fn: Callable[..., np.ndarray], *args: Any) -> np.ndarray:
         return fn(*args)
 
 
-def _arnoldi(A, v: np.ndarray, m: int):  # type: ignore[no-untyped-def]
+def _arnoldi(A, v: np.ndarray, m: int, B: np.ndarray):  # type: ignore[no-untyped-def]
     """The Krylov basis V (as columns) and Hessenberg H (with the extra row and column of
     the error estimate), its size, whether it broke down happily, and ``|A v_{m+1}|``.
-    Classical Gram-Schmidt in matrix products, repeated where cancellation calls for it."""
-    n = v.shape[0]
-    B = np.zeros((m + 1, n))  # basis vectors as rows: contiguous
+    Classical Gram-Schmidt in matrix products, repeated where cancellation calls for it.
+    ``B`` ((m + 1) x n) receives the basis vectors as rows (contiguous); only the rows
+    written here are read (V is a view of it, valid until the next call)."""
     H = np.zeros((m + 2, m + 2))
     B[0] = v
     for j in range(m):
