@@ -196,6 +196,38 @@ def test_the_edge_index_agrees_with_the_graph_after_any_changes(world):
     assert len(RepositoryQuery(repo).history()) == 5
 
 
+def _as_built(g: nx.MultiDiGraph) -> tuple:
+    """A graph as a value, orders included: its nodes with their attributes, its edges
+    with keys and attributes, in the graph's own order."""
+    return list(g.nodes(data=True)), list(g.edges(keys=True, data=True))
+
+
+def test_the_graph_read_at_any_moment_holds_every_change_so_far_in_the_replayed_order():
+    """The networkx graph takes an edge change when it is next read (a simulation that
+    reads only the Query port never pays for it): whenever it is read -- by a Notify
+    subscriber in the middle of a run, or after it -- it is the graph the change log
+    replays to, node and edge order included."""
+    from pathlib import Path
+
+    from desmon.loader import load_scenario
+    from desmon.sim.engine import SimWorld
+
+    root = Path(__file__).resolve().parents[1]
+    world = SimWorld(load_scenario(root / "scenarios" / "robot_day.py", {"hours": "0.25"}), seed=3, reads=("exposure_s",))
+    repo = world.repo
+    read = []
+
+    def compare(change):  # every 5th change: the graph read from inside a change's notification
+        if change.seq % 5 == 0:
+            read.append(change.seq)
+            assert _as_built(repo.graph) == _as_built(repo.snapshot(upto=change.seq + 1)), change.describe()
+
+    repo.subscribe(compare)
+    world.run()
+    assert len(read) > 50 and any(c.op == "relabel_edge" for c in repo.log)  # starts, stops and their history edges
+    assert _as_built(repo.graph) == _as_built(repo.snapshot())
+
+
 def test_query_memos_follow_every_change_they_read(world):
     from desmon.repository.facts import record_start, record_stop
 

@@ -68,7 +68,7 @@ def _add_requirement(repo: Repository, dep: str, graph: str, req: object) -> Non
     """A REQUIREMENT node ``graph#i`` (the first free i: removed requirements keep their
     nodes, as history) and the REQUIRES edge to it."""
     i = 0
-    while node_id(L.REQUIREMENT, f"{graph}#{i}") in repo.graph:
+    while node_id(L.REQUIREMENT, f"{graph}#{i}") in repo.node_data:
         i += 1
     rid = repo.add_node(L.REQUIREMENT, f"{graph}#{i}", kind=type(req).__name__, description=req.describe(), requirement=req)  # type: ignore[attr-defined]
     repo.add_edge(dep, rid, L.REQUIRES)
@@ -80,21 +80,21 @@ def change_requirements(repo: Repository, change: RequirementChange) -> tuple[st
     node's specification (what a deployment consumes) follows. Returns the platforms the
     graph is deployed on (so they are re-checked), or None if nothing changed."""
     dep = node_id(L.DEPLOYMENT, change.graph)
-    if dep not in repo.graph:
+    if dep not in repo.node_data:
         raise QueryError(f"{change}: no deployment specification for {change.graph!r} in the repository")
-    spec: DeploymentSpec = repo.graph.nodes[dep]["spec"]
+    spec: DeploymentSpec = repo.node_data[dep]["spec"]
     new = change.apply(spec.requirements)
     if new == spec.requirements:
         return None
     for rid in repo.successors(dep, L.REQUIRES):
-        if repo.graph.nodes[rid]["requirement"] not in new:  # removed, or a Capacity an added one replaces
+        if repo.node_data[rid]["requirement"] not in new:  # removed, or a Capacity an added one replaces
             repo.remove_edge(dep, rid, L.REQUIRES)
     for req in new:
         if req not in spec.requirements:
             _add_requirement(repo, dep, change.graph, req)
     repo.update_node(dep, spec=DeploymentSpec(change.graph, new, spec.fixed_platform, spec.rebalance, spec.reads))
     repo.specs_version += 1
-    return tuple(repo.graph.nodes[p]["name"] for p in repo.successors(dep, L.DEPLOYED_ON))
+    return tuple(repo.node_data[p]["name"] for p in repo.successors(dep, L.DEPLOYED_ON))
 
 
 def set_context(repo: Repository, robot: str, context: str) -> bool:
@@ -104,7 +104,7 @@ def set_context(repo: Repository, robot: str, context: str) -> bool:
     current = repo.successors(rid, L.IN_CONTEXT)  # indexed: no scan of the robot's other edges
     if current == [cid]:
         return False
-    if cid not in repo.graph:
+    if cid not in repo.node_data:
         repo.add_node(L.CONTEXT, context)
     for t in current:
         repo.remove_edge(rid, t, L.IN_CONTEXT)
@@ -114,27 +114,27 @@ def set_context(repo: Repository, robot: str, context: str) -> bool:
 
 def _device_home(repo: Repository, device: str) -> tuple[str, str]:
     did = node_id(L.DEVICE, device)
-    if did not in repo.graph:
+    if did not in repo.node_data:
         raise QueryError(f"unknown device {device!r}: it is not in the repository")
-    return did, node_id(L.PLATFORM, repo.graph.nodes[did]["device"].platform)
+    return did, node_id(L.PLATFORM, repo.node_data[did]["device"].platform)
 
 
 def set_device_working(repo: Repository, device: str, working: bool) -> str | None:
     """Remove (failure) or restore (repair) the HAS_DEVICE edge; returns the changed platform."""
     did, pid = _device_home(repo, device)
-    if repo.graph.nodes[did]["working"] == working:
+    if repo.node_data[did]["working"] == working:
         return None
     repo.update_node(did, working=working)
     if working:
         repo.add_edge(pid, did, L.HAS_DEVICE)
     else:
         repo.remove_edge(pid, did, L.HAS_DEVICE)
-    return repo.graph.nodes[pid]["name"]
+    return repo.node_data[pid]["name"]
 
 
 def _platform(repo: Repository, platform: str) -> str:
     pid = node_id(L.PLATFORM, platform)
-    if pid not in repo.graph:
+    if pid not in repo.node_data:
         raise QueryError(f"unknown platform {platform!r}: it is not in the repository")
     return pid
 
@@ -142,7 +142,7 @@ def _platform(repo: Repository, platform: str) -> str:
 def set_platform_up(repo: Repository, platform: str, up: bool) -> bool:
     """Record a platform crash (``up=False``) or reboot; False if nothing changed."""
     pid = _platform(repo, platform)
-    if repo.graph.nodes[pid]["up"] == up:
+    if repo.node_data[pid]["up"] == up:
         return False
     repo.update_node(pid, up=up)
     return True
@@ -151,7 +151,7 @@ def set_platform_up(repo: Repository, platform: str, up: bool) -> bool:
 def set_load(repo: Repository, platform: str, resource: str, amount: float) -> bool:
     """Record the background (non-monitor) consumption of ``resource``; False if unchanged."""
     pid = _platform(repo, platform)
-    load = with_load(repo.graph.nodes[pid]["load"], resource, amount)
+    load = with_load(repo.node_data[pid]["load"], resource, amount)
     if load is None:
         return False
     repo.update_node(pid, load=load)

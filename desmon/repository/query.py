@@ -80,7 +80,7 @@ class PlatformStateReader:
         facts); its devices and its deployments are re-read only when its HAS_DEVICE /
         DEPLOYED_ON edges or a device / deployment node changed."""
         repo = self.repo
-        nodes = repo.graph.nodes
+        nodes = repo.node_data
         data = nodes[pid]
         edges, updated = repo.edge_touched, repo.label_updated
         parts = self._state_parts.get(pid)
@@ -125,7 +125,7 @@ class PlatformStateReader:
 
     def _consumption(self, dep: str) -> tuple[tuple[str, float], ...]:
         """``spec.consumption()`` of deployment node ``dep`` (() without a spec), kept per spec object."""
-        spec = self.repo.graph.nodes[dep].get("spec")
+        spec = self.repo.node_data[dep].get("spec")
         if spec is None:
             return ()
         uses = self._uses
@@ -171,7 +171,13 @@ class RepositoryQuery:
 
     @property
     def _g(self):  # type: ignore[no-untyped-def]
+        """The networkx graph, every change applied (for its edges: the questions it alone answers)."""
         return self.repo.graph
+
+    @property
+    def _nodes(self):  # type: ignore[no-untyped-def]
+        """Every node's attributes, by id (no edge change applied for it)."""
+        return self.repo.node_data
 
     def _out(self, nid: str, label: str) -> list[str]:
         return self.repo.successors(nid, label)
@@ -197,7 +203,7 @@ class RepositoryQuery:
         if hit is not None and self._spec_key(hit[3]) == hit[4]:
             return hit[2]
         gid = node_id(L.PERCEPTION_GRAPH, graph)
-        if gid not in self._g:
+        if gid not in self._nodes:
             return None
         deps = self._in(gid, L.RESOLVES)
         if not deps:
@@ -206,7 +212,7 @@ class RepositoryQuery:
         touched = repo.touched
         reqs = self._out(dep, L.REQUIRES)
         key = (dep, tuple(reqs), tuple([touched[r] for r in reqs]), tuple(self._out(dep, L.EXECUTABLE_ON)))
-        declared = self._g.nodes[dep].get("spec")
+        declared = self._nodes[dep].get("spec")
         if hit is not None and hit[0] == key and hit[1] is declared:
             spec = hit[2]
         else:
@@ -226,13 +232,13 @@ class RepositoryQuery:
 
     def _read_spec(self, graph: str, dep: str) -> DeploymentSpec:
         reqs = tuple(
-            self._g.nodes[r]["requirement"] for r in sorted(self._out(dep, L.REQUIRES), key=lambda r: self._g.nodes[r]["order"])
+            self._nodes[r]["requirement"] for r in sorted(self._out(dep, L.REQUIRES), key=lambda r: self._nodes[r]["order"])
         )
         fixed = self._out(dep, L.EXECUTABLE_ON)
-        declared = self._g.nodes[dep].get("spec")
+        declared = self._nodes[dep].get("spec")
         rebalance = declared.rebalance if declared is not None else None
         reads = declared.reads if declared is not None else ()
-        return DeploymentSpec(graph, reqs, self._g.nodes[fixed[0]]["name"] if fixed else None, rebalance, reads)
+        return DeploymentSpec(graph, reqs, self._nodes[fixed[0]]["name"] if fixed else None, rebalance, reads)
 
     def has_fixed_deployment(self, spec: DeploymentSpec) -> bool:
         return self.fixed_platform(spec) is not None
@@ -244,7 +250,7 @@ class RepositoryQuery:
         if hit is not None and hit[0] == stamp:
             return hit[1]
         fixed = self._out(dep, L.EXECUTABLE_ON)
-        name = self._g.nodes[fixed[0]]["name"] if fixed else None
+        name = self._nodes[fixed[0]]["name"] if fixed else None
         self._fixed_memo[dep] = (stamp, name)
         return name
 
@@ -258,7 +264,7 @@ class RepositoryQuery:
         if hit is not None and hit[0] == key:
             return hit[1]
         reqs = tuple(
-            self._g.nodes[r]["requirement"] for r in sorted(self._out(dep, L.REQUIRES), key=lambda r: self._g.nodes[r]["order"])
+            self._nodes[r]["requirement"] for r in sorted(self._out(dep, L.REQUIRES), key=lambda r: self._nodes[r]["order"])
         )
         self._constraints_memo[dep] = (key, reqs)
         return reqs
@@ -281,7 +287,7 @@ class RepositoryQuery:
         ids = self.repo.node_ids(L.PLATFORM)
         known = self._platforms
         if known[0] != ids:
-            nodes = self._g.nodes
+            nodes = self._nodes
             known = self._platforms = (ids, tuple((pid, nodes[pid]["name"]) for pid in ids))
         state_of = self._state_of
         states = tuple([state_of(pid, name) for pid, name in known[1]])
@@ -313,7 +319,7 @@ class RepositoryQuery:
         on = current.get(graph)
         if on is None:
             dep = node_id(L.DEPLOYMENT, graph)
-            on = current[graph] = tuple(sorted(self._g.nodes[p]["name"] for p in self._out(dep, L.DEPLOYED_ON))) if dep in self._g else ()
+            on = current[graph] = tuple(sorted(self._nodes[p]["name"] for p in self._out(dep, L.DEPLOYED_ON))) if dep in self._nodes else ()
         return on
 
     def is_deployed(self, graph: str, platforms: tuple[str, ...] | None = None) -> bool:
@@ -327,19 +333,19 @@ class RepositoryQuery:
         on = current.get(question)  # type: ignore[call-overload]
         if on is None:
             pid = node_id(L.PLATFORM, platform)
-            if pid not in self._g:
+            if pid not in self._nodes:
                 raise QueryError(f"unknown platform {platform!r}")
-            on = current[question] = tuple(sorted(self._g.nodes[d]["name"] for d in self._in(pid, L.DEPLOYED_ON)))  # type: ignore[index]
+            on = current[question] = tuple(sorted(self._nodes[d]["name"] for d in self._in(pid, L.DEPLOYED_ON)))  # type: ignore[index]
         return on  # type: ignore[no-any-return]
 
     def perception_graph(self, deployment: str) -> str:
         dep = node_id(L.DEPLOYMENT, deployment)
-        if dep not in self._g:
+        if dep not in self._nodes:
             raise QueryError(f"unknown deployment {deployment!r}")
         graphs = self._out(dep, L.RESOLVES)
         if not graphs:
             raise QueryError(f"deployment {deployment!r} resolves no perception graph")
-        return str(self._g.nodes[graphs[0]]["name"])
+        return str(self._nodes[graphs[0]]["name"])
 
     def context(self) -> str | None:
         """The robot's current context; memoised while no robot node is touched (its
@@ -352,7 +358,7 @@ class RepositoryQuery:
         ctx: str | None = None
         for nid in self.repo.node_ids(L.ROBOT):
             out = self._out(nid, L.IN_CONTEXT)
-            ctx = str(self._g.nodes[out[0]]["name"]) if out else None
+            ctx = str(self._nodes[out[0]]["name"]) if out else None
             break
         self._stamped[_CONTEXT] = (stamp, ctx)
         return ctx
@@ -362,13 +368,13 @@ class RepositoryQuery:
         current = self._deployed_memo()
         out = current.get(_DEPLOYMENTS)  # type: ignore[call-overload]
         if out is None:
-            nodes = self._g.nodes
+            nodes = self._nodes
             out = current[_DEPLOYMENTS] = tuple(sorted((nodes[s]["name"], nodes[t]["name"]) for s, t, _k in self.repo.labelled(L.DEPLOYED_ON)))  # type: ignore[index]
         return out  # type: ignore[return-value]
 
     def history(self) -> tuple[tuple[str, str, float, float], ...]:
         """Every stopped deployment as (graph, platform, start, stop), in stop order."""
-        nodes, edges = self._g.nodes, self._g.edges
+        nodes, edges = self._nodes, self._g.edges
         rows = []
         for s, t, k in self.repo.labelled(L.DEPLOYMENT_HISTORY):
             d = edges[s, t, k]
@@ -390,9 +396,9 @@ class RepositoryQuery:
         for s, t, d in self._g.edges(data=True):
             if edge_label is not None and d.get("label") != edge_label:
                 continue
-            if source_label is not None and self._g.nodes[s].get("label") != source_label:
+            if source_label is not None and self._nodes[s].get("label") != source_label:
                 continue
-            if target_label is not None and self._g.nodes[t].get("label") != target_label:
+            if target_label is not None and self._nodes[t].get("label") != target_label:
                 continue
             if any(d.get(k) != v for k, v in where.items()):
                 continue

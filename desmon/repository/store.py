@@ -2,8 +2,12 @@
 
 Insert
     ``add_node`` / ``update_node`` / ``add_edge`` / ``remove_edge`` / ``relabel_edge``.
-    Every change is applied to the live graph and appended to an append-only change
-    log with its time; :meth:`Repository.snapshot` replays the log up to a time.
+    Every change is appended to an append-only change log with its time and applied to
+    the live graph: a node change at once, an edge change when :attr:`Repository.graph`
+    is next read (the Query port and the Insert port's own reads use the repository's
+    indexes and :attr:`Repository.node_data`, so a simulation that reads the graph no
+    other way never pays for networkx's edge bookkeeping); :meth:`Repository.snapshot`
+    replays the log up to a time.
 Notify
     ``subscribe(callback, ops=..., labels=..., where=...)``: after each change the
     matching subscribers receive the frozen :class:`Change` record.
@@ -157,7 +161,11 @@ class Repository:
     """Insert / Query / Notify over a labelled property graph, with a change log."""
 
     def __init__(self, clock: Callable[[], float] | None = None) -> None:
-        self.graph: nx.MultiDiGraph = nx.MultiDiGraph()
+        self._graph: nx.MultiDiGraph = nx.MultiDiGraph()
+        #: the edge changes not applied to ``_graph`` yet, in order (:attr:`graph` applies them)
+        self._unapplied: list[Change] = []
+        #: node id -> its attributes (networkx's live node view: node changes apply at once)
+        self.node_data = self._graph.nodes
         self._log: list[Change] = []
         self._subs: list[Subscription] = []
         self._clock = clock or (lambda: 0.0)
@@ -196,6 +204,18 @@ class Repository:
         # change, in subscription order (rebuilt after every subscribe)
         self._routes: dict[tuple[str, str, str | None], list[Subscription]] = {}
 
+    @property
+    def graph(self) -> nx.MultiDiGraph:
+        """The labelled property graph (networkx), every change applied: the edge changes
+        since the last read are applied now, in their order."""
+        unapplied = self._unapplied
+        if unapplied:
+            g = self._graph
+            for change in unapplied:
+                _apply(g, change)
+            unapplied.clear()
+        return self._graph
+
     # -- clock and log ---------------------------------------------------------------
     def set_clock(self, clock: Callable[[], float]) -> None:
         self._clock = clock
@@ -220,21 +240,18 @@ class Repository:
     ) -> Change:
         log = self._log
         seq = len(log)
-        if attrs:
-            change = _change(seq, self.now, op, label, node, source, target, key, old_label, tuple(attrs.items()))
-            _apply(self.graph, change, attrs)
-        else:
-            change = _change(seq, self.now, op, label, node, source, target, key, old_label, ())
-            _apply(self.graph, change, {})
+        change = _change(seq, self.now, op, label, node, source, target, key, old_label, tuple(attrs.items()) if attrs else ())
         touched = self.touched
         stamps = self.label_touched
         if node is not None:
+            _apply(self._graph, change, attrs or {})  # (a node change: at once)
             if op == ADD_NODE and node not in touched:
                 self._nodes_of.setdefault(label, {})[node] = None
                 self._label_of[node] = label
             touched[node] = self.node_updated[node] = seq
             stamps[label] = self.label_updated[label] = seq  # a node change carries the node's label
         else:
+            self._unapplied.append(change)  # (an edge change: when the graph is next read)
             self._index(change)
             touched[source] = touched[target] = seq  # type: ignore[index]
             label_of = self._label_of
@@ -289,7 +306,7 @@ class Repository:
     def add_node(self, label: str, name: str, **attrs: Any) -> str:
         """Create node ``label:name`` (or overwrite its attributes if it exists)."""
         nid = node_id(label, name)
-        if nid in self.graph:
+        if nid in self._graph:
             self.update_node(nid, **attrs)
             return nid
         self._order += 1
@@ -353,13 +370,13 @@ class Repository:
     # -- reading -----------------------------------------------------------------------
     def node_label(self, nid: str) -> str:
         try:
-            return str(self.graph.nodes[nid]["label"])
+            return str(self.node_data[nid]["label"])
         except KeyError:
             raise QueryError(f"the repository has no node {nid!r}") from None
 
     def nodes(self, label: str) -> Iterator[tuple[str, dict[str, Any]]]:
         """(id, attributes) of every node with ``label``, in insertion order."""
-        nodes = self.graph.nodes
+        nodes = self.node_data
         for nid in list(self._nodes_of.get(label, ())):
             yield nid, nodes[nid]
 

@@ -36,9 +36,9 @@ class Inbox:
         if change.label == L.IN_CONTEXT:
             self.context = True
         elif change.label == L.HAS_DEVICE:
-            self.platforms[self.repo.graph.nodes[change.source]["name"]] = None
+            self.platforms[self.repo.node_data[change.source]["name"]] = None
         elif change.label == L.PLATFORM and change.op == UPDATE_NODE:
-            self.platforms[self.repo.graph.nodes[change.node]["name"]] = None
+            self.platforms[self.repo.node_data[change.node]["name"]] = None
         self._wake()
 
     def add(self, platforms: Iterable[str], specs: Iterable[str]) -> None:
