@@ -311,7 +311,7 @@ class RobotView(RepositoryQuery):
         if memo[0] == stamp:
             return memo[1]
         ctx = self.repo.successors(self._robot_id, L.IN_CONTEXT)
-        name = str(self.repo.graph.nodes[ctx[0]]["name"]) if ctx else None
+        name = str(self.repo.node_data[ctx[0]]["name"]) if ctx else None
         self._context = (stamp, name)
         return name
 
