@@ -51,7 +51,7 @@ scenario = Scenario(
             "desmon": {"verdict": "HOLDS", "states": 6, "counterexamples": {}},
             "paper": {
                 "verdict": "VIOLATED",
-                "states": 6,
+                "states": 8,
                 "counterexamples": {"valid-or-error": 1, "single-instance": 1, "coverage": 1, "fixed": 1},
             },
         },

@@ -59,9 +59,9 @@ scenario = Scenario(
             "desmon": {"verdict": "HOLDS", "states": 54, "counterexamples": {}},
             "paper": {
                 "verdict": "VIOLATED",
-                "states": 153,
+                "states": 189,
                 "counterexamples": {
-                    "valid-or-error": 1, "no-overcommit": 4, "single-instance": 1, "coverage": 2,
+                    "valid-or-error": 1, "no-overcommit": 2, "single-instance": 1, "coverage": 2,
                     "errors-justified": 2, "preferred-when-possible": 2,
                 },
             },

@@ -457,8 +457,9 @@ class Trail:
 
 class Queue:
     """The next level of a BFS that numbers its states in order: the range of numbers it
-    queues, and those in that range it skipped (a state that violates an invariant is not
-    explored); no array of state numbers is kept (the table engine's frontier)."""
+    queues, and those in that range it skipped (a state that violates an invariant, where
+    the search stops at the first); no array of state numbers is kept (the table engine's
+    frontier)."""
 
     def __init__(self, first: int) -> None:
         self.first = self.end = first
@@ -537,9 +538,11 @@ class BreadthFirst:
 
     def _add_state(self, ni: int, parent: int, lookup: Any, label: Label, kind: str, bad: Iterable[tuple[str, str]], nxt: Any) -> None:
         """State number ``ni`` is new, reached from ``parent`` by ``label`` (numbered under
-        ``lookup``: :meth:`Trail.label_id`) and counted under its event's ``kind``; one
-        that violates invariants (``bad``: (name, message) pairs) is recorded and not
-        explored, another is queued in ``nxt``."""
+        ``lookup``: :meth:`Trail.label_id`) and counted under its event's ``kind``, and
+        queued in ``nxt``; one that violates invariants (``bad``: (name, message) pairs) is
+        recorded, and explored only by a search that collects every invariant's
+        counterexample (``keep_going``): a shorter path to another invariant's violation
+        may lead through it, and the BFS finds each one's shortest only if it goes on."""
         self.trail.add(parent, lookup, label)
         self.res.new_states[kind] += 1
         if self.max_states is not None and ni + 1 >= self.max_states:
@@ -547,9 +550,10 @@ class BreadthFirst:
         if bad:
             for name, msg in bad:
                 self.trail.record(name, msg, ni)
-            self.any_found = True  # do not explore beyond a violation
-        else:
-            nxt.append(ni)
+            self.any_found = True
+            if not self.trail.keep_going:  # the search ends with this level: nothing beyond it is explored
+                return
+        nxt.append(ni)
 
     def _record_repaired(self, violation: tuple[str, str, str], state: int, label: Label) -> bool:
         """Record an instantaneous ``violation`` (invariant, message, command) repaired
