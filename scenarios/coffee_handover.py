@@ -67,7 +67,7 @@ scenario = Scenario(
         # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
         "verify": {
             "desmon": {"verdict": "HOLDS", "states": 693, "counterexamples": {}},
-            "paper": {"verdict": "VIOLATED", "states": 747, "counterexamples": {"valid-or-error": 2, "coverage": 2, "errors-justified": 2}},
+            "paper": {"verdict": "VIOLATED", "states": 747, "counterexamples": {"valid-or-error": 2, "coverage": 2, "errors-justified": 2, "preferred-when-possible": 2}},
         },
         # The deployment edges of Fig. 5a-d (HAS_DEVICE edges other than the force sensor's omitted).
         "t0": {"DEPLOYED_ON": [], "DEPLOYMENT_HISTORY": [], "force_sensor_attached": True},

@@ -79,7 +79,7 @@ scenario = Scenario(
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
             "desmon": {"verdict": "HOLDS", "states": 68, "counterexamples": {}},
-            "paper": {"verdict": "VIOLATED", "states": 64, "counterexamples": {"valid-or-error": 2, "coverage": 2, "errors-justified": 2}},
+            "paper": {"verdict": "VIOLATED", "states": 64, "counterexamples": {"valid-or-error": 2, "coverage": 2, "errors-justified": 2, "preferred-when-possible": 2}},
             "desmon-keep-fallback": {"verdict": "VIOLATED", "states": 68, "counterexamples": {"preferred-when-possible": 2}},
         },
         # desmon run --until 7200 --seed 0, per deployer (tests/test_scenarios_sim.py)

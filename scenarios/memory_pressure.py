@@ -71,7 +71,7 @@ scenario = Scenario(
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
             "desmon": {"verdict": "HOLDS", "states": 52, "counterexamples": {}},
-            "paper": {"verdict": "VIOLATED", "states": 76, "counterexamples": {"valid-or-error": 3, "single-instance": 3, "errors-justified": 1}},
+            "paper": {"verdict": "VIOLATED", "states": 76, "counterexamples": {"valid-or-error": 3, "single-instance": 3, "errors-justified": 1, "preferred-when-possible": 2}},
         },
     },
 )

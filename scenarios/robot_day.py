@@ -65,7 +65,7 @@ scenario = Scenario(
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
             "desmon": {"verdict": "HOLDS", "states": 294, "counterexamples": {}},
-            "paper": {"verdict": "VIOLATED", "states": 458, "counterexamples": {"valid-or-error": 2, "single-instance": 2, "coverage": 2, "errors-justified": 1}},
+            "paper": {"verdict": "VIOLATED", "states": 458, "counterexamples": {"valid-or-error": 2, "single-instance": 2, "coverage": 2, "errors-justified": 1, "preferred-when-possible": 2}},
         },
         # desmon deployer, seed 0, --until 1800 (asserted by tests/test_scenarios_sim.py)
         "first_30_min": {

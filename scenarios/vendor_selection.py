@@ -57,7 +57,7 @@ scenario = Scenario(
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
             "desmon": {"verdict": "HOLDS", "states": 45, "counterexamples": {}},
-            "paper": {"verdict": "VIOLATED", "states": 61, "counterexamples": {"valid-or-error": 2, "single-instance": 2, "coverage": 3, "errors-justified": 1}},
+            "paper": {"verdict": "VIOLATED", "states": 61, "counterexamples": {"valid-or-error": 2, "single-instance": 2, "coverage": 3, "errors-justified": 1, "preferred-when-possible": 2}},
         },
         # desmon run (SimPy world), seed 0, per deployer: asserted exactly by tests/test_scenarios_sim.py
         "desmon": {"violated": [], "errors": {}, "placements": [(TACTILE, "hand_pc"), (TACTILE, "wrist_pc")], "migrations": 1, "slips_detected": 3},

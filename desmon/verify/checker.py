@@ -22,6 +22,7 @@ from typing import Any, Iterable, Protocol, Sequence
 
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.guard import CRASH, Guard, ReactionStopped
+from desmon.deployment.invariants import INSTANT_INVARIANTS, TRANSITION_INVARIANTS
 from desmon.deployment.run import RunContext
 from desmon.errors import CheckerError, TableUnsupported
 from desmon.model.scenario import Scenario
@@ -30,11 +31,11 @@ from desmon.verify.direct import DirectSearch, Pool
 from desmon.verify.engines import AUTO, load, names
 from desmon.verify.isolation import worker_pids
 from desmon.verify.memory import check_memory
-from desmon.verify.search import HOLDS, Budget, CheckResult, Exploration, ctrl_c, finish, paused_gc, resident_mb
+from desmon.verify.search import HOLDS, VIOLATED, Budget, CheckResult, Exploration, ctrl_c, finish, paused_gc, resident_mb
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 
-__all__ = ["Checker", "ENGINES", "Engine", "Exploration", "check", "release", "system_of"]
+__all__ = ["Checker", "ENGINES", "Engine", "Exploration", "check", "release", "system_of", "masked", "ONE_PER_REACTION"]
 
 #: why ``--engine auto`` runs the direct engine when ``workers`` > 1 is asked for
 _WORKERS_NOTE = "--workers runs the direct engine"
@@ -203,11 +204,62 @@ def check(
     search = dict(max_states=max_states, max_depth=max_depth, keep_going=keep_going, budget=budget, workers=workers)
     try:
         with ctrl_c(budget), system.guard.watching(budget.spent, budget.urgent):
-            return _search(system, engine, res, budget, search)
+            res = _search(system, engine, res, budget, search)
+            return _check_masked(system, engine, res, budget, search) if keep_going else res
     except ReactionStopped as stop:  # in the initial reaction, before the search loop
         return finish(res, system, {}, budget.reason or str(stop), 0, budget)
     finally:
         budget.close()
+
+
+#: the invariants a transition carries one finding of, the first broken: those a reaction
+#: breaks within it (after a start or stop) or as a whole, not in the state it ends in
+ONE_PER_REACTION = (*INSTANT_INVARIANTS, *TRANSITION_INVARIANTS)
+
+
+def masked(system: TransitionSystem, res: CheckResult) -> list[str]:
+    """The checked invariants of :data:`ONE_PER_REACTION` a search that collected every
+    invariant's counterexample (``keep_going``) may have missed: a transition that broke
+    one of them carries that one (an instantaneous violation not repaired is also the
+    next state's), and another broken in the same reaction went unseen unless found
+    elsewhere. None where the search found nothing (a transition that breaks one of them
+    always leaves a counterexample: no reaction hid another) or stopped early."""
+    if res.verdict != VIOLATED or res.incomplete:
+        return []
+    found = {c.invariant for c in res.counterexamples}
+    return [i.name for i in system.invariants if i.name in ONE_PER_REACTION and i.name not in found]
+
+
+def _check_masked(system: TransitionSystem, engine: str, res: CheckResult, budget: Budget, search: dict[str, Any]) -> CheckResult:
+    """``res`` with each invariant :func:`masked` searched for again alone (:func:`_check_alone`)."""
+    for name in masked(system, res):
+        try:
+            _check_alone(system, name, engine, res, budget, search)
+        except ReactionStopped as stop:  # (in its initial reaction: the budget ran out there)
+            res.alone += ((name, None, budget.reason or str(stop), 0.0),)
+            res.reason += f" ({name} checked alone: search incomplete: {budget.reason or stop})"
+    return res
+
+
+def _check_alone(system: TransitionSystem, name: str, engine: str, res: CheckResult, budget: Budget, search: dict[str, Any]) -> None:
+    """Search again for invariant ``name`` alone (as ``--invariant NAME``: then no other
+    finding of a reaction hides it), under what is left of the budget; its counterexample,
+    if any, joins ``res`` in the invariants' order, and ``res.alone`` says what it found."""
+    t0 = time.perf_counter()
+    with system.checking_only(name):
+        one = _search(system, engine, _fresh_result(system, search["workers"], res.timeout, res.max_memory, res.start_mb), budget,
+                      {**search, "keep_going": False})
+    order = [i.name for i in system.invariants]
+    res.counterexamples = sorted(res.counterexamples + one.counterexamples, key=lambda c: order.index(c.invariant))
+    res.alone += ((name, one.counterexamples[0].length if one.counterexamples else None, one.incomplete, time.perf_counter() - t0),)
+    res.reason = ", ".join(c.invariant for c in res.counterexamples)
+    res.reason += "".join(f" ({n} checked alone: search incomplete: {why})" for n, _l, why, _s in res.alone if why)
+    res.depth = max([res.depth] + [c.length for c in res.counterexamples])
+    res.worker_levels += one.worker_levels  # (its levels went to worker processes too)
+    res.peak_workers_mb = max(res.peak_workers_mb, one.peak_workers_mb)
+    drop = getattr(one.explored, "release", None)
+    if drop is not None:  # (its trees, tables and states freed now, not left to the collector)
+        drop()
 
 
 def _fresh_result(system: TransitionSystem, workers: int, timeout: float | None, max_memory: float | None, start_mb: float) -> CheckResult:

@@ -18,6 +18,7 @@ under test.
 
 from __future__ import annotations
 
+import contextlib
 from collections import Counter
 from typing import Any, Callable, Container, Iterable, Iterator, Protocol
 
@@ -138,6 +139,21 @@ class TransitionSystem:
         self.initial_findings: tuple[tuple[str, str, str], ...] = ()  # what the last initial reaction broke (:meth:`initial`)
         #: the invariants of a default (all) run that the checker leaves to the audit and fuzzer
         self.not_checked = () if invariants else tuple(n for n in NOT_CHECKED)
+
+    @contextlib.contextmanager
+    def checking_only(self, name: str) -> Iterator[None]:
+        """The searches in the block check invariant ``name`` alone (as if the system were
+        built with ``invariants=[name]``), on this system's store, core and memos; restored after."""
+        saved = (self.invariants, self._checked, self.instant, self._instant_memo, self.initial_findings)
+        self.invariants = tuple(i for i in self.invariants if i.name == name)
+        self._checked = frozenset({name}) & self._checked
+        self.instant = self.store.watch = tuple(i for i in self.instant if i.name == name)
+        self._instant_memo = {}  # (what the watched invariants say of the facts: other invariants now)
+        try:
+            yield
+        finally:
+            self.invariants, self._checked, self.instant, self._instant_memo, self.initial_findings = saved
+            self.store.watch = self.instant
 
     def forget(self) -> None:
         """Drop every memo and start a fresh store and core (the next search starts cold)."""

@@ -253,6 +253,17 @@ class Recorder:
         self.rc = checker.twin(store, RecordingQuery(store, self.checks), _NoMemo())
         self.records = 0  # real runs of the core (reactions and invariant checks)
 
+    def release(self) -> None:
+        """Break the recording's reference cycles, so that reference counting frees it: the
+        answers and handles it keeps point back at its checks, and its store's Control rules
+        and invariant watch at the store and the twin. The recorder is unusable after."""
+        checks = self.checks
+        store = checks.__dict__.get("store")
+        if store is not None:
+            store.__dict__.clear()  # (its Control rules point back at it, its watch at the twin)
+        checks.__dict__.clear()  # (its answers and its handles point back at it)
+        self.__dict__.clear()
+
     def _recording(self, run: Callable[[], Any], plain: Callable[[], Any]) -> tuple[Any, list[tuple[tuple, int]]]:
         """``run()`` on the recording twin: (its result, the observations). A read of a fact
         outside the checks is refused, naming the code that read it; a ``TypeError`` or

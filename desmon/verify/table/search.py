@@ -329,6 +329,9 @@ class TableEngine(BreadthFirst):
         """Drop the trees, tables and states (see :meth:`Checker.release
         <desmon.verify.checker.Checker.release>`): freed now by reference counting, not
         by the cyclic collector (the recorder and the recording twin point back)."""
+        recorder = self.__dict__.get("recorder")
+        if recorder is not None:
+            recorder.release()
         self.__dict__.clear()
 
 
