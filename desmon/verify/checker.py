@@ -205,7 +205,7 @@ def check(
     try:
         with ctrl_c(budget), system.guard.watching(budget.spent, budget.urgent):
             res = _search(system, engine, res, budget, search)
-            return _check_masked(system, engine, res, budget, search) if keep_going else res
+            return _check_masked(system, engine, res, budget, {**search, "keep_going": False}) if keep_going else res
     except ReactionStopped as stop:  # in the initial reaction, before the search loop
         return finish(res, system, {}, budget.reason or str(stop), 0, budget)
     finally:
@@ -231,35 +231,55 @@ def masked(system: TransitionSystem, res: CheckResult) -> list[str]:
 
 
 def _check_masked(system: TransitionSystem, engine: str, res: CheckResult, budget: Budget, search: dict[str, Any]) -> CheckResult:
-    """``res`` with each invariant :func:`masked` searched for again alone (:func:`_check_alone`)."""
-    for name in masked(system, res):
-        try:
-            _check_alone(system, name, engine, res, budget, search)
-        except ReactionStopped as stop:  # (in its initial reaction: the budget ran out there)
+    """``res`` with each invariant :func:`masked` searched for again, without the invariants
+    found: one search checks the rest together (what it finds nothing of holds: a
+    reaction that breaks one of them reports one); each one it finds is searched for
+    alone (as ``--invariant NAME``) for its shortest counterexample, and the others again
+    (a reaction may have reported only the first of two), until a search finds none."""
+    rest = masked(system, res)
+    try:
+        while rest:
+            t0 = time.perf_counter()
+            together = _search_for(system, rest, engine, res, budget, {**search, "keep_going": True})
+            found = [c.invariant for c in together.counterexamples]
+            if together.incomplete or not found:  # (nothing of them found: they hold, or the budget ran out)
+                for i, name in enumerate(rest):
+                    res.alone += ((name, None, together.incomplete, 0.0 if i else time.perf_counter() - t0),)
+                break
+            for name in found:
+                _note(res, name, _search_for(system, [name], engine, res, budget, search), time.perf_counter() - t0)
+                t0 = time.perf_counter()
+            rest = [n for n in rest if n not in found]
+    except ReactionStopped as stop:  # (in a search's initial reaction: the budget ran out there)
+        for name in (n for n in rest if n not in {a[0] for a in res.alone}):
             res.alone += ((name, None, budget.reason or str(stop), 0.0),)
-            res.reason += f" ({name} checked alone: search incomplete: {budget.reason or stop})"
+    res.reason = ", ".join(c.invariant for c in res.counterexamples)
+    res.reason += "".join(f" ({n} checked again: search incomplete: {why})" for n, _l, why, _s in res.alone if why)
     return res
 
 
-def _check_alone(system: TransitionSystem, name: str, engine: str, res: CheckResult, budget: Budget, search: dict[str, Any]) -> None:
-    """Search again for invariant ``name`` alone (as ``--invariant NAME``: then no other
-    finding of a reaction hides it), under what is left of the budget; its counterexample,
-    if any, joins ``res`` in the invariants' order, and ``res.alone`` says what it found."""
-    t0 = time.perf_counter()
-    with system.checking_only(name):
-        one = _search(system, engine, _fresh_result(system, search["workers"], res.timeout, res.max_memory, res.start_mb), budget,
-                      {**search, "keep_going": False})
-    order = [i.name for i in system.invariants]
-    res.counterexamples = sorted(res.counterexamples + one.counterexamples, key=lambda c: order.index(c.invariant))
-    res.alone += ((name, one.counterexamples[0].length if one.counterexamples else None, one.incomplete, time.perf_counter() - t0),)
-    res.reason = ", ".join(c.invariant for c in res.counterexamples)
-    res.reason += "".join(f" ({n} checked alone: search incomplete: {why})" for n, _l, why, _s in res.alone if why)
-    res.depth = max([res.depth] + [c.length for c in res.counterexamples])
-    res.worker_levels += one.worker_levels  # (its levels went to worker processes too)
+def _search_for(system: TransitionSystem, names: list[str], engine: str, res: CheckResult, budget: Budget, search: dict[str, Any]) -> CheckResult:
+    """A search of ``system`` checking ``names`` only, under what is left of ``res``'s budget
+    (its levels that went to worker processes counted in ``res``; its states, trees and tables
+    freed at once, not left to the collector)."""
+    with system.checking_only(names):
+        one = _search(system, engine, _fresh_result(system, search["workers"], res.timeout, res.max_memory, res.start_mb), budget, search)
+    res.worker_levels += one.worker_levels
     res.peak_workers_mb = max(res.peak_workers_mb, one.peak_workers_mb)
     drop = getattr(one.explored, "release", None)
-    if drop is not None:  # (its trees, tables and states freed now, not left to the collector)
+    if drop is not None:
         drop()
+    return one
+
+
+def _note(res: CheckResult, name: str, one: CheckResult, seconds: float) -> None:
+    """What searching for ``name`` again found (``one``: a search that checked it), in ``res``:
+    its counterexample, in the invariants' order, and an entry of ``res.alone``."""
+    mine = [c for c in one.counterexamples if c.invariant == name]
+    order = list(res.invariants)
+    res.counterexamples = sorted(res.counterexamples + mine, key=lambda c: order.index(c.invariant))
+    res.alone += ((name, mine[0].length if mine else None, "" if mine else one.incomplete, seconds),)
+    res.depth = max([res.depth] + [c.length for c in mine])
 
 
 def _fresh_result(system: TransitionSystem, workers: int, timeout: float | None, max_memory: float | None, start_mb: float) -> CheckResult:

@@ -48,15 +48,15 @@ def _covered(r: CheckResult) -> str:
 
 
 def _alone_line(r: CheckResult) -> str:
-    """What the searches for one invariant alone found after a ``--continue`` search (a
-    reaction that breaks several of these reports the first: :func:`~desmon.verify.checker.masked`)."""
+    """What searching again, without the invariants found, found after a ``--continue`` search
+    (a reaction that breaks several of these reports the first: :func:`~desmon.verify.checker.masked`)."""
     def outcome(n: str, length: int | None, why: str) -> str:
         if length is not None:
             return f"{n} VIOLATED after {length} step{'s' if length != 1 else ''}"
         return f"{n} {'INCOMPLETE' if why else 'HOLDS'}"
 
     found = ", ".join(outcome(n, length, why) for n, length, why, _s in r.alone)
-    return f"checked alone in {sum(a[3] for a in r.alone):.2f}s more, as a reaction reports only the first it breaks of these: {found}"
+    return f"checked again without the invariants found, in {sum(a[3] for a in r.alone):.2f}s more (a reaction reports the first it breaks of these): {found}"
 
 
 def format_result(r: CheckResult) -> str:
@@ -192,7 +192,7 @@ def result_to_json(r: CheckResult, params: dict[str, str] | None = None) -> dict
         "invariants": list(r.invariants),
         "not_checked": {n: NOT_CHECKED.get(n, "") for n in r.not_checked},
         "counterexamples": [counterexample_to_json(c) for c in r.counterexamples],
-        **({"checked_alone": {n: {"length": length, "incomplete": why, "seconds": round(sec, 3)} for n, length, why, sec in r.alone}} if r.alone else {}),
+        **({"checked_again": {n: {"length": length, "incomplete": why, "seconds": round(sec, 3)} for n, length, why, sec in r.alone}} if r.alone else {}),
     }
 
 

@@ -120,9 +120,9 @@ class CheckResult:
     records: int = 0  # table engine: real runs of the core it recorded (reactions and invariant checks)
     engine_note: str = ""  # why engine "auto" ran the direct engine
     incomplete: str = ""  # why the search stopped early ("" if it did not), whatever the verdict
-    #: with keep_going: the invariants searched for again alone, as (name, length of its
-    #: counterexample or None, why that search stopped early or "", its seconds): see
-    #: checker.masked (``states``, ``transitions`` and ``seconds`` are the first search's)
+    #: with keep_going: the invariants searched for again without those found, as (name,
+    #: length of its shortest counterexample or None, why the search stopped early or "",
+    #: seconds): see checker.masked (``states``, ``transitions`` and ``seconds`` are the first search's)
     alone: tuple[tuple[str, int | None, str, float], ...] = ()
     timeout: float | None = None  # the time limit it ran under (seconds)
     max_memory: float | None = None  # the memory budget it ran under (MB)

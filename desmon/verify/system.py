@@ -141,13 +141,14 @@ class TransitionSystem:
         self.not_checked = () if invariants else tuple(n for n in NOT_CHECKED)
 
     @contextlib.contextmanager
-    def checking_only(self, name: str) -> Iterator[None]:
-        """The searches in the block check invariant ``name`` alone (as if the system were
-        built with ``invariants=[name]``), on this system's store, core and memos; restored after."""
+    def checking_only(self, names: Container[str]) -> Iterator[None]:
+        """The searches in the block check the invariants ``names`` only (as if the system
+        were built with ``invariants=names``), on this system's store, core and memos;
+        restored after."""
         saved = (self.invariants, self._checked, self.instant, self._instant_memo, self.initial_findings)
-        self.invariants = tuple(i for i in self.invariants if i.name == name)
-        self._checked = frozenset({name}) & self._checked
-        self.instant = self.store.watch = tuple(i for i in self.instant if i.name == name)
+        self.invariants = tuple(i for i in self.invariants if i.name in names)
+        self._checked = frozenset(i.name for i in self.invariants)
+        self.instant = self.store.watch = tuple(i for i in self.instant if i.name in names)
         self._instant_memo = {}  # (what the watched invariants say of the facts: other invariants now)
         try:
             yield
