@@ -237,6 +237,8 @@ def _check_masked(system: TransitionSystem, engine: str, res: CheckResult, budge
     alone (as ``--invariant NAME``) for its shortest counterexample, and the others again
     (a reaction may have reported only the first of two), until a search finds none."""
     rest = masked(system, res)
+    if not rest:  # (a search that stopped early keeps its reason: nothing is searched again)
+        return res
     try:
         while rest:
             t0 = time.perf_counter()
