@@ -145,7 +145,9 @@ class TransitionSystem:
         """The searches in the block check the invariants ``names`` only (as if the system
         were built with ``invariants=names``), on this system's store, core and memos;
         restored after."""
-        saved = (self.invariants, self._checked, self.instant, self._instant_memo, self.initial_findings)
+        saved = (self.invariants, self._checked, self.instant, self._instant_memo, self.initial_findings, self.reactions)
+        if self.reactions is not None:  # (a user's deployer: the block's own reactions are re-run fresh at its search's end)
+            self.reactions = []
         self.invariants = tuple(i for i in self.invariants if i.name in names)
         self._checked = frozenset(i.name for i in self.invariants)
         self.instant = self.store.watch = tuple(i for i in self.instant if i.name in names)
@@ -153,7 +155,7 @@ class TransitionSystem:
         try:
             yield
         finally:
-            self.invariants, self._checked, self.instant, self._instant_memo, self.initial_findings = saved
+            self.invariants, self._checked, self.instant, self._instant_memo, self.initial_findings, self.reactions = saved
             self.store.watch = self.instant
 
     def forget(self) -> None:
