@@ -64,7 +64,7 @@ def test_continue_cut_by_a_budget_says_so_and_searches_nothing_again():
     """A ``--continue`` search that a budget ends early keeps its reason (what it found is
     not all there is) and searches nothing again: its list is partial, and says so."""
     r = Checker(load_scenario(SCENARIOS / "coffee_handover.py"), "paper").run(keep_going=True, max_states=300)
-    assert r.verdict == VIOLATED and r.incomplete and r.alone == ()
+    assert r.verdict == VIOLATED and r.incomplete and r.checked_again == ()
     assert r.reason.endswith("(search incomplete: max states 300 reached)"), r.reason
 
 

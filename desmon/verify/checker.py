@@ -243,20 +243,20 @@ def _check_masked(system: TransitionSystem, engine: str, res: CheckResult, budge
         while rest:
             t0 = time.perf_counter()
             together = _search_for(system, rest, engine, res, budget, {**search, "keep_going": True})
-            found = [c.invariant for c in together.counterexamples]
+            found = [c.invariant for c in together.counterexamples if c.invariant in rest]
             if together.incomplete or not found:  # (nothing of them found: they hold, or the budget ran out)
                 for i, name in enumerate(rest):
-                    res.alone += ((name, None, together.incomplete, 0.0 if i else time.perf_counter() - t0),)
+                    res.checked_again += ((name, None, together.incomplete, 0.0 if i else time.perf_counter() - t0),)
                 break
             for name in found:
                 _note(res, name, _search_for(system, [name], engine, res, budget, search), time.perf_counter() - t0)
                 t0 = time.perf_counter()
             rest = [n for n in rest if n not in found]
     except ReactionStopped as stop:  # (in a search's initial reaction: the budget ran out there)
-        for name in (n for n in rest if n not in {a[0] for a in res.alone}):
-            res.alone += ((name, None, budget.reason or str(stop), 0.0),)
+        for name in (n for n in rest if n not in {a[0] for a in res.checked_again}):
+            res.checked_again += ((name, None, budget.reason or str(stop), 0.0),)
     res.reason = ", ".join(c.invariant for c in res.counterexamples)
-    res.reason += "".join(f" ({n} checked again: search incomplete: {why})" for n, _l, why, _s in res.alone if why)
+    res.reason += "".join(f" ({n} checked again: search incomplete: {why})" for n, _l, why, _s in res.checked_again if why)
     return res
 
 
@@ -276,11 +276,11 @@ def _search_for(system: TransitionSystem, names: list[str], engine: str, res: Ch
 
 def _note(res: CheckResult, name: str, one: CheckResult, seconds: float) -> None:
     """What searching for ``name`` again found (``one``: a search that checked it), in ``res``:
-    its counterexample, in the invariants' order, and an entry of ``res.alone``."""
+    its counterexample, in the invariants' order, and an entry of ``res.checked_again``."""
     mine = [c for c in one.counterexamples if c.invariant == name]
     order = list(res.invariants)
     res.counterexamples = sorted(res.counterexamples + mine, key=lambda c: order.index(c.invariant))
-    res.alone += ((name, mine[0].length if mine else None, "" if mine else one.incomplete, seconds),)
+    res.checked_again += ((name, mine[0].length if mine else None, "" if mine else one.incomplete, seconds),)
     res.depth = max([res.depth] + [c.length for c in mine])
 
 

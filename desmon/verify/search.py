@@ -123,7 +123,7 @@ class CheckResult:
     #: with keep_going: the invariants searched for again without those found, as (name,
     #: length of its shortest counterexample or None, why the search stopped early or "",
     #: seconds): see checker.masked (``states``, ``transitions`` and ``seconds`` are the first search's)
-    alone: tuple[tuple[str, int | None, str, float], ...] = ()
+    checked_again: tuple[tuple[str, int | None, str, float], ...] = ()
     timeout: float | None = None  # the time limit it ran under (seconds)
     max_memory: float | None = None  # the memory budget it ran under (MB)
     #: the distinct (canonical) states the search explored, in BFS order (not part of the report)
