@@ -245,8 +245,7 @@ def _check_masked(system: TransitionSystem, engine: str, res: CheckResult, budge
             together = _search_for(system, rest, engine, res, budget, {**search, "keep_going": True})
             found = [c.invariant for c in together.counterexamples if c.invariant in rest]
             if together.incomplete or not found:  # (nothing of them found: they hold, or the budget ran out)
-                for i, name in enumerate(rest):
-                    res.checked_again += ((name, None, together.incomplete, 0.0 if i else time.perf_counter() - t0),)
+                _none_found(res, rest, together.incomplete, time.perf_counter() - t0)
                 break
             for name in found:
                 _note(res, name, _search_for(system, [name], engine, res, budget, search), time.perf_counter() - t0)
@@ -258,6 +257,13 @@ def _check_masked(system: TransitionSystem, engine: str, res: CheckResult, budge
     res.reason = ", ".join(c.invariant for c in res.counterexamples)
     res.reason += "".join(f" ({n} checked again: search incomplete: {why})" for n, _l, why, _s in res.checked_again if why)
     return res
+
+
+def _none_found(res: CheckResult, rest: list[str], incomplete: str, seconds: float) -> None:
+    """The invariants ``rest``, of which a search checking them together found nothing: they
+    hold, or (``incomplete``) nobody knows; the search's ``seconds`` on the first."""
+    for i, name in enumerate(rest):
+        res.checked_again += ((name, None, incomplete, 0.0 if i else seconds),)
 
 
 def _search_for(system: TransitionSystem, names: list[str], engine: str, res: CheckResult, budget: Budget, search: dict[str, Any]) -> CheckResult:
