@@ -274,10 +274,16 @@ def _search_for(system: TransitionSystem, names: list[str], engine: str, res: Ch
         one = _search(system, engine, _fresh_result(system, search["workers"], res.timeout, res.max_memory, res.start_mb), budget, search)
     res.worker_levels += one.worker_levels
     res.peak_workers_mb = max(res.peak_workers_mb, one.peak_workers_mb)
-    drop = getattr(one.explored, "release", None)
+    _drop_states(one)
+    return one
+
+
+def _drop_states(result: CheckResult) -> None:
+    """Free ``result``'s states (and an engine's trees and tables) now, by reference counting."""
+    drop = getattr(result.explored, "release", None)
     if drop is not None:
         drop()
-    return one
+    result.explored = ()
 
 
 def _note(res: CheckResult, name: str, one: CheckResult, seconds: float) -> None:
@@ -372,10 +378,7 @@ def release(system: TransitionSystem, result: CheckResult | None = None) -> None
     in the cyclic garbage collector walking millions of memoised tuples. The system
     stays usable (its next search starts cold)."""
     if result is not None:
-        drop = getattr(result.explored, "release", None)
-        if drop is not None:
-            drop()
-        result.explored = ()
+        _drop_states(result)
     system.store.checks.clear()
     system.forget()
 
