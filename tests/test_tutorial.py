@@ -164,17 +164,26 @@ def test_every_tutorial_command_runs_as_documented(root, tutorial_run):
 def test_the_transient_method_line_docs_analyze_md_quotes_is_the_one_the_tutorial_command_prints(root, tutorial_run):
     """docs/analyze.md quotes the exposure and the Krylov method line (steps, where the
     deviation settled, the error estimate) of the tutorial's ``desmon analyze
-    scenarios/coffee_shift.py -p force_sensors=2``: the same words as that run prints."""
+    scenarios/coffee_shift.py -p force_sensors=2``: the exposure and the steps are what
+    this run prints; where it settled and its estimate lie within the spread the page
+    states between processors (the BLAS kernels round by CPU), widened by 2 %."""
     _work, commands = tutorial_run
     command = "desmon analyze scenarios/coffee_shift.py -p force_sensors=2"
     (out,) = [proc.stdout for cmd, _code, proc in commands if cmd == command]
-    method = re.search(r"\((Krylov exponential \(\d+ steps, settled at \d+ s\); error estimate [0-9.e+-]+)\)", out)
+    method = re.search(r"\(Krylov exponential \((\d+) steps, settled at (\d+) s\); error estimate ([0-9.e+-]+)\)", out)
     exposure = re.search(r"Per mission \(T = 28,800 s\): ([0-9.]+) s unmonitored", out)
     assert method and exposure, out
     doc = " ".join((root / "docs" / "analyze.md").read_text().split())
-    assert f'prints {exposure.group(1)} s unmonitored beside "{method.group(1)}"' in doc, (exposure.group(1), method.group(1))
-    estimate = method.group(1).rsplit(" ", 1)[1]
-    assert f"(here most of the {estimate} s)" in doc
+    quoted = re.search(
+        r'prints ([0-9.]+) s unmonitored beside "Krylov exponential \((\d+) steps, settled at (\d+) s\); error estimate ([0-9.e+-]+)"', doc
+    )
+    spread = re.search(r"printed (\d+) s and ([0-9.e+-]+) on an .*? and (\d+) s and ([0-9.e+-]+) on another", doc)
+    assert quoted and spread, "docs/analyze.md no longer quotes the method line and its spread"
+    assert (exposure.group(1), method.group(1)) == (quoted.group(1), quoted.group(2)), (exposure.group(0), method.group(0))
+    assert (quoted.group(3), quoted.group(4)) == spread.group(1, 2)  # the line quoted is one of the two machines'
+    for got, a, b in ((method.group(2), spread.group(1), spread.group(3)), (method.group(3), spread.group(2), spread.group(4))):
+        lo, hi = sorted((float(a), float(b)))
+        assert lo / 1.02 <= float(got) <= hi * 1.02, (method.group(0), (a, b))
 
 
 def test_deployers_md_quotes_its_example_deployer_verbatim(root):
