@@ -56,7 +56,7 @@ import numpy as np
 
 from desmon.deployment.control import ControlRules
 from desmon.deployment.exposure import CAUSES, WATCHING, best_state, cause, needs_table
-from desmon.deployment.guard import CRASH, DeployerFault
+from desmon.deployment.guard import DeployerFault
 from desmon.deployment.lease import lease_choice
 from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, RaiseError, Start, Stop
 from desmon.errors import CheckerError
@@ -66,7 +66,7 @@ from desmon.model.system import PlatformState
 from desmon.sim.processes import recognised_context
 from desmon.verify.environment import variable_kind
 from desmon.verify.state import Key
-from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, same_again
+from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, crash_of, same_again
 
 from desmon.analyze.markov import AnalysisError, BudgetExceeded, MarkovWorld, chain_bounds, no_budget
 
@@ -279,9 +279,10 @@ class Builder:
             first = self.system.run_one(key, event, prefix)
             nkey, outcomes, log, instant = first
             self.reactions += 1
-            if instant is not None and instant[0] == CRASH:  # exit 4, as desmon verify's CRASHED
+            crash = crash_of(instant)
+            if crash is not None:  # exit 4, as desmon verify's CRASHED
                 raise DeployerFault(
-                    f"deployer {self.system.deployer_name} crashed reacting to {event} in a state the chain reached: {instant[1]}; "
+                    f"deployer {self.system.deployer_name} crashed reacting to {event} in a state the chain reached: {crash[1]}; "
                     f"{self.where} (a crashing deployer has no exposure to compute)"
                 )
             if self.reactions <= RECHECK_FIRST or not self.reactions % RECHECK_EVERY:  # desmon verify's nondeterminism check

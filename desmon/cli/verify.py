@@ -39,8 +39,7 @@ def add_parser(sub: Subparsers) -> None:
     deployer_arg(p)
     p.add_argument("--invariant", action="append", default=None, help="check only this invariant (repeatable)")
     p.add_argument("--continue", dest="keep_going", action="store_true", help="collect the shortest counterexample of each invariant broken, as --invariant NAME for each would: the "
-                   "search goes on past the states that break one, then searches again, without the invariants found, for those "
-                   "judged within or on a reaction (a reaction reports the first it breaks of those)")
+                   "search goes on past the states that break one, and a reaction that breaks several inside it reports each")
     _add_limits(p)
     p.add_argument("--symmetry", action="store_true", help="canonicalise interchangeable platforms")
     p.add_argument(

@@ -204,13 +204,16 @@ class DeploymentCore:
             return self._audit_moves(reaction)
         return reaction
 
-    def finding(self, names: "Container[str]") -> tuple[str, str] | None:
+    def findings_of(self, names: "Container[str]", every: bool = False) -> list[tuple[str, str]]:
         """The last reaction's first broken transition property among ``names``, as
-        (invariant, message), or None."""
+        (invariant, message), or with ``every`` the first of each; [] if none."""
+        out: list[tuple[str, str]] = []
         for found in self.findings:
-            if found[0] in names:
-                return found
-        return None
+            if found[0] in names and all(found[0] != o[0] for o in out):
+                out.append(found)
+                if not every:
+                    break
+        return out
 
     def _judge(self, book: ReactionBook) -> Callable[[Command], None]:
         """What the guard calls before each command of a reaction, with ``after=book.note``:

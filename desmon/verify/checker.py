@@ -15,6 +15,7 @@ states of its last check.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import sys
 import time
@@ -22,7 +23,6 @@ from typing import Any, Iterable, Protocol, Sequence
 
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.guard import CRASH, Guard, ReactionStopped
-from desmon.deployment.invariants import INSTANT_INVARIANTS, TRANSITION_INVARIANTS
 from desmon.deployment.run import RunContext
 from desmon.errors import CheckerError, TableUnsupported
 from desmon.model.scenario import Scenario
@@ -31,11 +31,11 @@ from desmon.verify.direct import DirectSearch, Pool
 from desmon.verify.engines import AUTO, load, names
 from desmon.verify.isolation import worker_pids
 from desmon.verify.memory import check_memory
-from desmon.verify.search import HOLDS, VIOLATED, Budget, CheckResult, Exploration, ctrl_c, finish, paused_gc, resident_mb
+from desmon.verify.search import HOLDS, Budget, CheckResult, Exploration, ctrl_c, finish, paused_gc, resident_mb
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 
-__all__ = ["Checker", "ENGINES", "Engine", "Exploration", "check", "release", "system_of", "masked", "ONE_PER_REACTION"]
+__all__ = ["Checker", "ENGINES", "Engine", "Exploration", "check", "release", "system_of"]
 
 #: why ``--engine auto`` runs the direct engine when ``workers`` > 1 is asked for
 _WORKERS_NOTE = "--workers runs the direct engine"
@@ -203,79 +203,12 @@ def check(
     budget.start_mb = res.start_mb
     search = dict(max_states=max_states, max_depth=max_depth, keep_going=keep_going, budget=budget, workers=workers)
     try:
-        with ctrl_c(budget), system.guard.watching(budget.spent, budget.urgent):
-            res = _search(system, engine, res, budget, search)
-            return _check_masked(system, engine, res, budget, {**search, "keep_going": False}) if keep_going else res
+        with ctrl_c(budget), system.guard.watching(budget.spent, budget.urgent), system.finding_every() if keep_going else contextlib.nullcontext():
+            return _search(system, engine, res, budget, search)
     except ReactionStopped as stop:  # in the initial reaction, before the search loop
         return finish(res, system, {}, budget.reason or str(stop), 0, budget)
     finally:
         budget.close()
-
-
-#: the invariants a transition carries one finding of, the first broken: those a reaction
-#: breaks within it (after a start or stop) or as a whole, not in the state it ends in
-ONE_PER_REACTION = (*INSTANT_INVARIANTS, *TRANSITION_INVARIANTS)
-
-
-def masked(system: TransitionSystem, res: CheckResult) -> list[str]:
-    """The checked invariants of :data:`ONE_PER_REACTION` a search that collected every
-    invariant's counterexample (``keep_going``) may have missed: a transition that broke
-    one of them carries that one (an instantaneous violation not repaired is also the
-    next state's), and another broken in the same reaction went unseen unless found
-    elsewhere. None where the search found nothing (a transition that breaks one of them
-    always leaves a counterexample: no reaction hid another) or stopped early."""
-    if res.verdict != VIOLATED or res.incomplete:
-        return []
-    found = {c.invariant for c in res.counterexamples}
-    return [i.name for i in system.invariants if i.name in ONE_PER_REACTION and i.name not in found]
-
-
-def _check_masked(system: TransitionSystem, engine: str, res: CheckResult, budget: Budget, search: dict[str, Any]) -> CheckResult:
-    """``res`` with each invariant :func:`masked` searched for again, without the invariants
-    found: one search checks the rest together (what it finds nothing of holds: a
-    reaction that breaks one of them reports one); each one it finds is searched for
-    alone (as ``--invariant NAME``) for its shortest counterexample, and the others again
-    (a reaction may have reported only the first of two), until a search finds none."""
-    rest = masked(system, res)
-    if not rest:  # (a search that stopped early keeps its reason: nothing is searched again)
-        return res
-    try:
-        while rest:
-            t0 = time.perf_counter()
-            together = _search_for(system, rest, engine, res, budget, {**search, "keep_going": True})
-            found = [c.invariant for c in together.counterexamples if c.invariant in rest]
-            if together.incomplete or not found:  # (nothing of them found: they hold, or the budget ran out)
-                _none_found(res, rest, together.incomplete, time.perf_counter() - t0)
-                break
-            for name in found:
-                _note(res, name, _search_for(system, [name], engine, res, budget, search), time.perf_counter() - t0)
-                t0 = time.perf_counter()
-            rest = [n for n in rest if n not in found]
-    except ReactionStopped as stop:  # (in a search's initial reaction: the budget ran out there)
-        for name in (n for n in rest if n not in {a[0] for a in res.checked_again}):
-            res.checked_again += ((name, None, budget.reason or str(stop), 0.0),)
-    res.reason = ", ".join(c.invariant for c in res.counterexamples)
-    res.reason += "".join(f" ({n} checked again: search incomplete: {why})" for n, _l, why, _s in res.checked_again if why)
-    return res
-
-
-def _none_found(res: CheckResult, rest: list[str], incomplete: str, seconds: float) -> None:
-    """The invariants ``rest``, of which a search checking them together found nothing: they
-    hold, or (``incomplete``) nobody knows; the search's ``seconds`` on the first."""
-    for i, name in enumerate(rest):
-        res.checked_again += ((name, None, incomplete, 0.0 if i else seconds),)
-
-
-def _search_for(system: TransitionSystem, names: list[str], engine: str, res: CheckResult, budget: Budget, search: dict[str, Any]) -> CheckResult:
-    """A search of ``system`` checking ``names`` only, under what is left of ``res``'s budget
-    (its levels that went to worker processes counted in ``res``; its states, trees and tables
-    freed at once, not left to the collector)."""
-    with system.checking_only(names):
-        one = _search(system, engine, _fresh_result(system, search["workers"], res.timeout, res.max_memory, res.start_mb), budget, search)
-    res.worker_levels += one.worker_levels
-    res.peak_workers_mb = max(res.peak_workers_mb, one.peak_workers_mb)
-    _drop_states(one)
-    return one
 
 
 def _drop_states(result: CheckResult) -> None:
@@ -284,16 +217,6 @@ def _drop_states(result: CheckResult) -> None:
     if drop is not None:
         drop()
     result.explored = ()
-
-
-def _note(res: CheckResult, name: str, one: CheckResult, seconds: float) -> None:
-    """What searching for ``name`` again found (``one``: a search that checked it), in ``res``:
-    its counterexample, in the invariants' order, and an entry of ``res.checked_again``."""
-    mine = [c for c in one.counterexamples if c.invariant == name]
-    order = list(res.invariants)
-    res.counterexamples = sorted(res.counterexamples + mine, key=lambda c: order.index(c.invariant))
-    res.checked_again += ((name, mine[0].length if mine else None, "" if mine else one.incomplete, seconds),)
-    res.depth = max([res.depth] + [c.length for c in mine])
 
 
 def _fresh_result(system: TransitionSystem, workers: int, timeout: float | None, max_memory: float | None, start_mb: float) -> CheckResult:

@@ -139,7 +139,7 @@ class DirectSearch(BreadthFirst):
         fails, ckey, moved, names, repaired, bad = rec
         self.transitions += 1
         self.count_names(names)
-        if repaired is not None and repaired[0] not in self.trail.found and self._record_repaired(repaired, ki, (event, fails)):
+        if repaired and self._record_each(repaired, {f[0] for f in repaired}, ki, (event, fails)):
             return True
         if moved:
             self.res.changed[kind] += 1

@@ -31,12 +31,10 @@ processes ran (each keeps its own, not sent back).
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
 
-from desmon.deployment.guard import CRASH
 from desmon.errors import NondeterminismError
 from desmon.verify.deployers import deployer_state, fresh_deployer, users_spec, worker_state
-from desmon.verify.system import TransitionSystem, command_key, nondeterminism
+from desmon.verify.system import TransitionSystem, command_key, crash_of, nondeterminism
 
 __all__ = ["remembers", "rerun_fresh", "check_memory", "FRESH_NOTE"]
 
@@ -50,10 +48,6 @@ FRESH_NOTE = (
 def remembers(deployer_name: str) -> bool:
     """Whether a search of this deployer keeps its reactions for :func:`rerun_fresh` (a user's spec)."""
     return users_spec(deployer_name)
-
-
-def _crashed(instant: Any) -> bool:
-    return instant is not None and instant[0] == CRASH
 
 
 def check_memory(system: TransitionSystem) -> None:
@@ -91,7 +85,8 @@ def rerun_fresh(system: TransitionSystem) -> int:
     for key, event, prefix, commands, instant in reversed(kept):
         _nkey, _outcomes, log, again = fresh.run_one(key, event, prefix)
         same = [command_key(c) for c, _ok in commands] == [command_key(c) for c, _ok in log.commands]
-        if not same or _crashed(instant) != _crashed(again):
+        crashed = (crash_of(instant), crash_of(again))
+        if not same or (crashed[0] is None) != (crashed[1] is None):
             was, now = [str(c) for c, _ok in commands], [str(c) for c, _ok in log.commands]
-            raise nondeterminism(system.deployer_name, event, was, now, failed=(instant, again), note=FRESH_NOTE)
+            raise nondeterminism(system.deployer_name, event, was, now, failed=crashed, note=FRESH_NOTE)
     return len(kept)

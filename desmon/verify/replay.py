@@ -176,7 +176,7 @@ class RepositoryRun:
         step 0 carries what the initial reaction broke (call this on a run that has not stepped yet)."""
         watched = {i.name for i in instant}
         first = self.initial_instant if self.initial_instant is not None and self.initial_instant[0] in watched else None
-        found = reaction_findings(first, self.core.finding(transitions) if transitions else None)
+        found = reaction_findings((first,) if first is not None else (), self.core.findings_of(transitions) if transitions else [])
         yield initial_step(self.key()), (found[0] if found else None)
         for i, (event, fails) in enumerate(labels, start=1):
             prev = self.key()
@@ -186,5 +186,5 @@ class RepositoryRun:
                     f"its fail_indices {list(fails)} fail start #{max(fails) + 1} of the reaction, which issues "
                     f"{self.control.n} real start{'s' if self.control.n != 1 else ''} now"
                 )
-            found = reaction_findings(during, self.core.finding(transitions) if transitions else None)
+            found = reaction_findings((during,) if during is not None else (), self.core.findings_of(transitions) if transitions else [])
             yield make_step(i, prev, event, self.key(), log, fails, self.control.refuse), (found[0] if found else None)

@@ -47,18 +47,6 @@ def _covered(r: CheckResult) -> str:
     return f" (orbits covering {r.states_covered:,} states)" if r.symmetry and r.states_covered is not None else ""
 
 
-def _checked_again_line(r: CheckResult) -> str:
-    """What searching again, without the invariants found, found after a ``--continue`` search
-    (a reaction that breaks several of these reports the first: :func:`~desmon.verify.checker.masked`)."""
-    def outcome(n: str, length: int | None, why: str) -> str:
-        if length is not None:
-            return f"{n} VIOLATED after {length} step{'s' if length != 1 else ''}"
-        return f"{n} {'INCOMPLETE' if why else 'HOLDS'}"
-
-    found = ", ".join(outcome(n, length, why) for n, length, why, _s in r.checked_again)
-    return f"checked again without the invariants found, in {sum(a[3] for a in r.checked_again):.2f}s more (a reaction reports the first it breaks of these): {found}"
-
-
 def format_result(r: CheckResult) -> str:
     blind = "".join(f" (not {n}: {NOT_CHECKED.get(n, 'not checked here')})" for n in r.not_checked)
     lines = [f"{r.scenario} -- deployer {r.deployer} -- invariants: {', '.join(r.invariants)}{blind}" + (" -- symmetry reduction" if r.symmetry else "")]
@@ -68,8 +56,6 @@ def format_result(r: CheckResult) -> str:
     lines.append("")
     verdict = r.verdict + (f" ({r.reason})" if r.reason else "")
     lines.append(f"verdict: {verdict}")
-    if r.checked_again:
-        lines.append(_checked_again_line(r))
     lines.append(
         f"states: {r.states:,}{_covered(r)}  transitions: {r.transitions:,}  depth: {r.depth}  time: {r.seconds:.2f}s  "
         f"{r.states_per_second:,.0f} states/s  {r.transitions_per_second:,.0f} transitions/s  peak memory: {r.peak_mb:.0f} MB"
@@ -192,7 +178,6 @@ def result_to_json(r: CheckResult, params: dict[str, str] | None = None) -> dict
         "invariants": list(r.invariants),
         "not_checked": {n: NOT_CHECKED.get(n, "") for n in r.not_checked},
         "counterexamples": [counterexample_to_json(c) for c in r.counterexamples],
-        **({"checked_again": {n: {"length": length, "incomplete": why, "seconds": round(sec, 3)} for n, length, why, sec in r.checked_again}} if r.checked_again else {}),
     }
 
 

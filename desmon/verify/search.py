@@ -33,7 +33,7 @@ import time
 from array import array
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Protocol, Sequence, TextIO
+from typing import TYPE_CHECKING, Any, Callable, Container, Iterable, Iterator, Protocol, Sequence, TextIO
 
 from desmon.deployment.guard import CRASH, EXIT_CRASHED, ReactionStopped
 from desmon.progress import StatusLine
@@ -67,9 +67,10 @@ NOT_CHECKED = {"history": "sim audit and fuzz only"}
 #: One transition as :meth:`TransitionSystem.expand <desmon.verify.system.TransitionSystem.expand>`
 #: reports it to the search loop: (failed start indices, the successor's canonical key or
 #: None if already known, whether the state moved, the reaction's branch names, an
-#: instantaneous violation repaired before quiescence or None, the invariants a new
+#: invariants its reaction broke and repaired before quiescence (invariant, message, after
+#: what; an instantaneous one after a start or stop, or the reaction as a whole), the invariants a new
 #: successor violates).
-Record = tuple[tuple[int, ...], "Key | None", bool, tuple[str, ...], "tuple[str, str, str] | None", tuple[tuple[str, str], ...]]
+Record = tuple[tuple[int, ...], "Key | None", bool, tuple[str, ...], tuple[tuple[str, str, str], ...], tuple[tuple[str, str], ...]]
 
 #: A run of routine transitions (only counted: how many, how many moved the state, their
 #: branch names) followed by one :data:`Record`, or by None at the end of an event.
@@ -120,10 +121,6 @@ class CheckResult:
     records: int = 0  # table engine: real runs of the core it recorded (reactions and invariant checks)
     engine_note: str = ""  # why engine "auto" ran the direct engine
     incomplete: str = ""  # why the search stopped early ("" if it did not), whatever the verdict
-    #: with keep_going: the invariants searched for again without those found, as (name,
-    #: length of its shortest counterexample or None, why the search stopped early or "",
-    #: seconds): see checker.masked (``states``, ``transitions`` and ``seconds`` are the first search's)
-    checked_again: tuple[tuple[str, int | None, str, float], ...] = ()
     timeout: float | None = None  # the time limit it ran under (seconds)
     max_memory: float | None = None  # the memory budget it ran under (MB)
     #: the distinct (canonical) states the search explored, in BFS order (not part of the report)
@@ -559,13 +556,19 @@ class BreadthFirst:
                 return
         nxt.append(ni)
 
-    def _record_repaired(self, violation: tuple[str, str, str], state: int, label: Label) -> bool:
-        """Record an instantaneous ``violation`` (invariant, message, command) repaired
-        before quiescence in the transition ``label`` out of ``state``; True if the
+    def _record_each(self, found: Iterable[tuple[str, str, str]], repaired: Container[str], state: int, label: Label) -> bool:
+        """Record what the transition ``label`` out of ``state`` broke inside its reaction
+        (``found``: invariant, message, after what) and repaired before quiescence (the
+        invariants ``repaired``), each not found yet, in order; True (at once) if the
         search then has what it looks for."""
-        self.trail.record(violation[0], violation[1], state, violation[2], label)
-        self.any_found = True
-        return self.trail.done()
+        trail = self.trail
+        for name, msg, during in found:
+            if name in repaired and name not in trail.found:
+                trail.record(name, msg, state, during, label)
+                self.any_found = True
+                if trail.done():
+                    return True
+        return False
 
 
 def final_status(states: int, transitions: int, depth: int) -> Callable[[], tuple[int, int, int]]:

@@ -144,7 +144,10 @@ class StateStore:
         #: ``() -> [(invariant, message)]`` for the instantaneous invariants (set by the checker)
         self.watch_check: Callable[[], list[tuple[str, str]]] | None = None
         self.watch_view: "Callable[[], SystemView] | None" = None  # fallback: a view to check self.watch on
-        self.instant: tuple[str, str, str] | None = None  # (invariant, message, after command)
+        #: what the reaction broke so far, as (invariant, message, after command): the first
+        #: watched invariant it broke, or with ``every`` the first violation of each
+        self.instant: tuple[tuple[str, str, str], ...] = ()
+        self.every = False
 
     # -- state --------------------------------------------------------------------------
     def load(self, key: Key) -> None:
@@ -184,7 +187,7 @@ class StateStore:
         """Start executing a reaction: starts follow ``prefix``, then succeed."""
         self.prefix = prefix
         self.outcomes = []
-        self.instant = None
+        self.instant = ()
 
     # -- QueryPort ----------------------------------------------------------------------
     def _current(self, graph: str) -> DeploymentSpec | None:
@@ -362,7 +365,8 @@ class StateStore:
         return True
 
     def _watch(self, verb: str, pair: tuple[str, str]) -> None:
-        if not self.watch or self.instant is not None:
+        found = self.instant
+        if not self.watch or (found and (not self.every or len(found) == len(self.watch))):
             return
         if self.watch_check is not None:
             bad = self.watch_check()
@@ -373,7 +377,9 @@ class StateStore:
         else:
             return
         if bad:
-            self.instant = (bad[0][0], bad[0][1], f"{verb} {pair[0]} on {pair[1]}")
+            known = {f[0] for f in found}
+            new = [(name, msg, f"{verb} {pair[0]} on {pair[1]}") for name, msg in bad if name not in known]
+            self.instant = found + tuple(new if self.every else new[:1])
 
 
 

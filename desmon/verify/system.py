@@ -41,7 +41,7 @@ from desmon.verify.search import NOT_CHECKED, Record, Segment
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore, StoreInsert
 from desmon.verify.trace import WHOLE_REACTION, Label, Step, branch_names, initial_step, make_step, reaction_findings
 
-__all__ = ["TransitionSystem", "Reduction", "command_key", "nondeterminism", "opened", "same_again", "RECHECK_FIRST", "RECHECK_EVERY"]
+__all__ = ["TransitionSystem", "Reduction", "command_key", "crash_of", "nondeterminism", "opened", "same_again", "RECHECK_FIRST", "RECHECK_EVERY"]
 
 #: Nondeterminism detection: the first RECHECK_FIRST transitions a search runs, and every
 #: RECHECK_EVERY-th after them, are run twice and compared (:meth:`TransitionSystem.successors`).
@@ -141,31 +141,26 @@ class TransitionSystem:
         self.not_checked = () if invariants else tuple(n for n in NOT_CHECKED)
 
     @contextlib.contextmanager
-    def checking_only(self, names: Container[str]) -> Iterator[None]:
-        """The searches in the block check the invariants ``names`` only (as if the system
-        were built with ``invariants=names``), on this system's store, core and memos;
-        restored after."""
-        saved = (self.invariants, self._checked, self.instant, self._instant_memo, self.initial_findings, self.reactions)
-        if self.reactions is not None:  # (a user's deployer: the block's own reactions are re-run fresh at its search's end)
-            self.reactions = []
-        self.invariants = tuple(i for i in self.invariants if i.name in names)
-        self._checked = frozenset(i.name for i in self.invariants)
-        self.instant = self.store.watch = tuple(i for i in self.instant if i.name in names)
-        self._instant_memo = {}  # (what the watched invariants say of the facts: other invariants now)
+    def finding_every(self) -> Iterator[None]:
+        """In the block a transition carries the first violation of each checked invariant
+        its reaction breaks inside it (after a start or stop, or as a whole), not only the
+        first it breaks: a search that collects every invariant's counterexample
+        (``--continue``) then sees each one where it first breaks. Restored after."""
+        saved, self.store.every = self.store.every, True
         try:
             yield
         finally:
-            self.invariants, self._checked, self.instant, self._instant_memo, self.initial_findings, self.reactions = saved
-            self.store.watch = self.instant
+            self.store.every = saved
 
     def forget(self) -> None:
         """Drop every memo and start a fresh store and core (the next search starts cold)."""
         self._instant_memo.clear()
         self._enabled_memo.clear()
         self.run_context.checks.clear()  # type: ignore[union-attr]
+        every = self.store.every
         self.store = StateStore(self.model, self.run_context.checks)
         self.core = DeploymentCore(self.model, self.store, StoreInsert(self.store), self.core.deployer, run=self.run_context)
-        self.store.watch = self.instant
+        self.store.watch, self.store.every = self.instant, every
         self.store.watch_check = self._instant_check
 
     def twin(self, store: StateStore, query: Any, instant_memo: dict) -> "TransitionSystem":
@@ -176,7 +171,7 @@ class TransitionSystem:
         twin.__dict__.update(self.__dict__)
         twin.store = store
         twin.core = DeploymentCore(self.model, query, StoreInsert(store), self.core.deployer, run=self.run_context)
-        store.watch = self.instant
+        store.watch, store.every = self.instant, self.store.every
         store.watch_check = twin._instant_check
         twin._instant_memo = instant_memo
         return twin
@@ -196,7 +191,7 @@ class TransitionSystem:
         self.core.standing = frozenset()
         st.begin(())
         initial_reaction(self.core, self.scenario, self.bounds, st)  # the same as RepositoryRun's
-        self.initial_findings = reaction_findings(st.instant, self.core.finding(self._checked) if self.core.findings else None)
+        self.initial_findings = reaction_findings(st.instant, self.core.findings_of(self._checked, st.every))
         return st.key(self.core.standing)
 
     def initial_violations(self, key: Key) -> list[tuple[str, ...]]:
@@ -268,10 +263,8 @@ class TransitionSystem:
         core.standing = self._standing(key.standing)
         st.begin(prefix)
         stimulus, log = self.step_under_guard(core, st, event, recording=recording)
-        if core.findings and st.instant is None:
-            found = core.finding(self._checked)
-            if found is not None:
-                st.instant = (found[0], found[1], WHOLE_REACTION)
+        if core.findings and (st.every or not st.instant):
+            st.instant = reaction_findings(st.instant, core.findings_of(self._checked, st.every))
         out = (stimulus, st.key(core.standing), tuple(st.outcomes), log, st.instant)
         if ran.last:
             ran.kept = ((key, event, prefix), out)
@@ -297,8 +290,8 @@ class TransitionSystem:
             # no branching on the starts of a failed reaction (the search ends at it): its
             # starts beyond the prefix are no choice points, and its label fails no start
             st.outcomes = list(st.prefix) if False in st.prefix else []
-            if st.instant is None or st.instant[0] != CRASH:
-                st.instant = (CRASH, fault.what, str(log.commands[-1][0]) if log.commands else "")
+            if not st.instant or st.instant[0][0] != CRASH:
+                st.instant = ((CRASH, fault.what, str(log.commands[-1][0]) if log.commands else ""),)
             return fault.stimulus, log
 
     def successors(self, key: Key, event: Event) -> Iterator[tuple[tuple[int, ...], Key, Any, tuple[str, str, str] | None]]:
@@ -334,10 +327,11 @@ class TransitionSystem:
         self.store.load(key)
         return check_invariants(self.view(self._standing(key.standing), key.context), self.invariants)
 
-    def repaired(self, invariant: str, key: Key) -> bool:
-        """Whether ``invariant``, broken inside the reaction that reached ``key``, was
-        repaired before quiescence (``key`` does not violate it)."""
-        return invariant not in {v for v, _m in self.violations(key)}
+    def repaired(self, found: tuple[tuple[str, ...], ...], key: Key) -> tuple[tuple[str, ...], ...]:
+        """Of ``found`` (what the reaction that reached ``key`` broke inside it: invariant
+        first), those repaired before quiescence (``key`` does not violate them)."""
+        bad = {v for v, _m in self.violations(key)}
+        return tuple(f for f in found if f[0] not in bad)
 
     # -- the transitions as a search loop consumes them ----------------------------------
     def expand(self, key: Key, known: "Container[Key]") -> list[list[Segment]]:
@@ -396,10 +390,10 @@ def expand(system: TransitionSystem, key: Key, known: "Container[Key]") -> list[
             here = branch_names(log.commands)
             # (checked even when the search has already recorded this invariant:
             # expand knows nothing of the search, and it costs only on violations)
-            repaired = instant if instant is not None and system.repaired(instant[0], nkey) else None
+            repaired = system.repaired(instant, nkey) if instant else ()
             ckey = canon(nkey) if canon is not None else nkey
             if ckey in known or ckey in fresh:
-                if repaired is None:
+                if not repaired:
                     n += 1
                     moved += nkey != key
                     names += here
@@ -413,7 +407,7 @@ def expand(system: TransitionSystem, key: Key, known: "Container[Key]") -> list[
             segments.append((n, moved, tuple(names), rec))
             n = moved = 0
             names = []
-            if repaired is not None and repaired[0] == CRASH:  # (nor are this event's other branches)
+            if repaired and repaired[0][0] == CRASH:  # (nor are this event's other branches)
                 crashed = True
                 break
         if n:
@@ -462,8 +456,12 @@ def same_again(system: "TransitionSystem", key: Key, event: Event, prefix: tuple
     was, now = [str(c) for c, _ok in first[2].commands], [str(c) for c, _ok in log.commands]
     same = [command_key(c) for c, _ok in first[2].commands] == [command_key(c) for c, _ok in log.commands]
     if not same or again[0] != first[0] or again[3] != first[3]:
-        crashed = (first[3], again[3]) if any(i is not None and i[0] == CRASH for i in (first[3], again[3])) else (None, None)
-        raise nondeterminism(system.deployer_name, event, was, now, same, crashed)
+        raise nondeterminism(system.deployer_name, event, was, now, same, (crash_of(first[3]), crash_of(again[3])))
+
+
+def crash_of(found: tuple[tuple[str, str, str], ...]) -> tuple[str, str, str] | None:
+    """The :data:`CRASH` among what a reaction broke (``found``: a transition's findings), or None."""
+    return found[0] if found and found[0][0] == CRASH else None
 
 
 def nondeterminism(
@@ -472,10 +470,10 @@ def nondeterminism(
 ) -> NondeterminismError:
     """The error of ``deployer`` reacting twice to ``event`` in one state: commands ``was``,
     then ``now`` (``same``: the same commands, which reached another state; ``failed``:
-    the two runs' instantaneous violations, a :data:`CRASH` one naming how that run failed)."""
-    def listing(cmds: list[str], instant: Any) -> str:
+    each run's :data:`CRASH` finding, naming how that run failed, or None: :func:`crash_of`)."""
+    def listing(cmds: list[str], crash: Any) -> str:
         shown = "[" + ", ".join(cmds) + "]" if cmds else "[no command]"
-        return f"{shown} and failed ({instant[1]})" if instant is not None and instant[0] == CRASH else shown
+        return f"{shown} and failed ({crash[1]})" if crash is not None else shown
 
     if same and failed == (None, None):
         diff = f"the same commands {listing(was, None)} reached another state"

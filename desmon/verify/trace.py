@@ -101,14 +101,15 @@ class Step:
 WHOLE_REACTION = "the reaction"
 
 
-def reaction_findings(instant: tuple[str, str, str] | None, whole: tuple[str, str] | None) -> tuple[tuple[str, str, str], ...]:
+def reaction_findings(instant: tuple[tuple[str, str, str], ...], whole: list[tuple[str, str]]) -> tuple[tuple[str, str, str], ...]:
     """What one reaction broke on its way, judged as every engine judges a transition: the
-    first instantaneous invariant after a start or stop (``instant``: invariant, message,
-    after what), then its first broken transition property as a whole (``whole``, where
-    not the same invariant)."""
-    found = [instant] if instant is not None else []
-    if whole is not None and whole[0] not in {v[0] for v in found}:
-        found.append((whole[0], whole[1], WHOLE_REACTION))
+    instantaneous invariants it broke after a start or stop (``instant``: invariant,
+    message, after what), then the transition properties it broke as a whole (``whole``:
+    invariant, message), each where not the same invariant."""
+    found = list(instant)
+    for name, msg in whole:
+        if all(name != f[0] for f in found):
+            found.append((name, msg, WHOLE_REACTION))
     return tuple(found)
 
 

@@ -10,14 +10,13 @@ from __future__ import annotations
 import traceback
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
-from desmon.deployment.guard import CRASH
 from desmon.deployment.ports import QUERY_METHODS, PlatformHandle
 from desmon.deployment.validity import PlatformMemoChecks, is_ranked, order_platforms, score_keys
 from desmon.errors import TableUnsupported, UnobservedRead
 from desmon.model.events import Event
 from desmon.model.system import PlatformState
 from desmon.verify.state import Key, StateStore
-from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key, nondeterminism
+from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, command_key, crash_of, nondeterminism
 from desmon.verify.table.observed import Acceptable, Check, ObservedValidity, Ranked, Reasons
 from desmon.verify.table.tables import AnswerTables
 from desmon.verify.trace import branch_names
@@ -279,7 +278,7 @@ class Recorder:
             raise
         except (TypeError, AttributeError) as exc:
             out = plain()  # the deployer's own error: raised here, as the direct engine would
-            if isinstance(out, tuple) and len(out) == 4 and out[3] is not None and out[3][0] == CRASH:
+            if isinstance(out, tuple) and len(out) == 4 and crash_of(out[3]) is not None:
                 self.records += 1  # the deployer's own fault (the direct run fails too): its CRASH, as recorded so far
                 return PlainRun(out), rec.obs
             raise TableUnsupported(
@@ -318,8 +317,8 @@ class Recorder:
         if got != stim or expect != nkey:
             raise TableUnsupported(f"table engine: {event} on {key} gave {nkey} (stimulus {stimulus}), the encoding expected {expect}")  # pragma: no cover
         fails = tuple(i for i, ok in enumerate(outcomes) if not ok)
-        inst = instant[0] if instant is not None else None
-        leaf = ("r", self.system(nkey.deployments, nkey.standing), outcomes, fails, branch_names(log.commands), inst)
+        broke = tuple(f[0] for f in instant)
+        leaf = ("r", self.system(nkey.deployments, nkey.standing), outcomes, fails, branch_names(log.commands), broke)
         self.trees.insert(root, obs, self.trees.leaf(leaf))
 
     def _same_commands(self, key: Key, event: Event, prefix: tuple[bool, ...], log: Any, instant: Any) -> None:
@@ -327,10 +326,10 @@ class Recorder:
         a failure in one run only, are the deployer's nondeterminism (refused with both
         lists, as the direct engine does; a failure of the re-run is named, never lost)."""
         _n, _o, again, crash = self.checker.run_one(key, event, prefix)
-        failed = [i is not None and i[0] == CRASH for i in (instant, crash)]
-        if failed[0] != failed[1] or [command_key(c) for c, _ok in log.commands] != [command_key(c) for c, _ok in again.commands]:
+        failed = (crash_of(instant), crash_of(crash))
+        if (failed[0] is None) != (failed[1] is None) or [command_key(c) for c, _ok in log.commands] != [command_key(c) for c, _ok in again.commands]:
             was, now = [str(command_key(c)[0]) for c, _ok in log.commands], [str(c) for c, _ok in again.commands]
-            raise nondeterminism(self.checker.deployer_name, event, was, now, failed=(instant, crash))
+            raise nondeterminism(self.checker.deployer_name, event, was, now, failed=failed)
 
     def record_invariants(self, key: Key, root: int) -> None:
         """Check the invariants of ``key`` for real and add the path under ``root``."""

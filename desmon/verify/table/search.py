@@ -292,7 +292,7 @@ class TableEngine(BreadthFirst):
             if not n_looked % LOOK_EVERY and not self.incomplete and spent():
                 self.incomplete, cut_t = self.budget.reason, t  # cut after this transition, as max_states does
             lf = self.trees.leaves[int(U_leaf[u])]
-            if lf[5] is not None and lf[5] not in self.trail.found and self._repaired(units, u, t, lf):
+            if lf[5] and self._repaired(units, u, t, lf):
                 return t, u
             if u in bad_of:
                 self._new_state(units, u, t, lf, self.trees.leaves[bad_of[u]][1], nxt)
@@ -301,17 +301,21 @@ class TableEngine(BreadthFirst):
         return cut_t, -1
 
     def _repaired(self, units: "Units", u: int, t: int, lf: tuple) -> bool:
-        """Unit ``u`` broke instantaneous invariant ``lf[5]`` inside its reaction: if it was
-        repaired before quiescence, record it (the real run gives the message). True if
+        """Unit ``u`` broke the invariants ``lf[5]`` inside its reaction: those repaired before
+        quiescence and not yet found are recorded (the real run gives the messages). True if
         the search then has what it looks for."""
+        found = self.trail.found
+        if all(name in found for name in lf[5]):
+            return False
         tr = units.tr
         ch = self.checker
-        if not ch.repaired(lf[5], self.env.key(int(tr.env2[t]), self.systems[lf[1]])):
+        repaired = {f[0] for f in ch.repaired(tuple((name,) for name in lf[5]), self.env.key(int(tr.env2[t]), self.systems[lf[1]]))}
+        if all(name in found for name in repaired):
             return False
         here = int(units.ids[tr.pos[t]])
         event = self.events.events[int(tr.ev[t])]
         _n, _o, _log, instant = ch.run_one(self.key_of(here), event, self.prefixes[int(units.pre[u])])
-        return self._record_repaired(instant, here, (event, lf[3]))
+        return self._record_each(instant, repaired, here, (event, lf[3]))
 
     def _new_state(self, units: "Units", u: int, t: int, lf: tuple, bad: tuple, nxt: Queue) -> None:
         """Unit ``u`` reached a new state: number it, label it, and record what it violates."""

@@ -189,18 +189,19 @@ class DecisionTrees(_Walk):
         self.root_nodes = IntTable()
         self.leaves = Interned()
         self.leaf_sys: list[int] = []  # a reaction leaf's next system part (-1: an invariants leaf)
-        self.leaf_inst: list[bool] = []  # a reaction leaf with an instantaneous violation
+        self.leaf_inst: list[bool] = []  # a reaction leaf that broke an invariant inside its reaction
         self.width = 1
         self._per_node = (self.node_leaf, self.kid_base, self.digit_base, self.node_p0, self.node_base, self.node_plat,
                           self.node_mult, self.node_code, self.node_len)
 
     def leaf(self, value: tuple) -> int:
-        """The number of leaf ``value``: ("r", system, outcomes, fails, branch names, instant) or ("v", violated)."""
+        """The number of leaf ``value``: ("r", system, outcomes, fails, branch names, the invariants
+        it broke inside its reaction) or ("v", violated)."""
         n = len(self.leaves)
         i = self.leaves(value)
         if i == n:  # a new leaf
             self.leaf_sys.append(value[1] if value[0] == "r" else -1)
-            self.leaf_inst.append(value[0] == "r" and value[5] is not None)
+            self.leaf_inst.append(value[0] == "r" and bool(value[5]))
         return i
 
     def _node(self) -> int:
