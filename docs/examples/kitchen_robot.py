@@ -125,7 +125,7 @@ scenario = Scenario(
             "desmon": {"verdict": "HOLDS", "states": 235, "counterexamples": {}},
             "paper": {
                 "verdict": "VIOLATED", "states": 270,
-                "counterexamples": {"valid-or-error": 4, "coverage": 3, "errors-justified": 2, "preferred-when-possible": 3},
+                "counterexamples": {"valid-or-error": 4, "coverage": 3, "errors-justified": 2, "preferred-when-possible": 2},
             },
         },
         # desmon run, seed 0, default parameters
