@@ -6,6 +6,8 @@ watches inside the reaction sees the two instances."""
 
 from __future__ import annotations
 
+import html
+import json
 from dataclasses import replace
 from pathlib import Path
 
@@ -87,3 +89,51 @@ def react(q, slots, changed, context_changed):
             yield Stop("force_slip_detector", "pc2")
     yield from DESMON.react(q, slots, changed, context_changed)
 '''
+
+
+TWO_AT_ONCE = '''
+from desmon.deployment.deployer import DEPLOYERS
+from desmon.deployment.ports import Start, Stop
+
+_desmon = DEPLOYERS["desmon"].react
+
+
+def starts_it_off_its_platform_on_release(q, slots, changed, context_changed):
+    yield from _desmon(q, slots, changed, context_changed)
+    if q.context() == "release":
+        for g, p in list(q.deployments()):
+            if p == "arm_pc":
+                yield Start(g, "wrist_pc")  # two instances, one off its EXECUTABLE_ON platform
+                yield Stop(g, "wrist_pc")  # both repaired before the reaction settles
+'''
+
+
+def test_two_invariants_broken_by_one_command_are_each_found_and_each_replays(tmp_path, capsys):
+    """One start breaks single-instance and fixed at once, one stop repairs both. Checking
+    each alone finds it after 1 step; --continue lists both at that length, and replaying
+    either saved counterexample (verify --replay, explore --from-json) says it still
+    holds, not that it was fixed: the replay looks for its own invariant among all the
+    reaction broke, not only the first."""
+    from desmon.cli import main
+
+    path = tmp_path / "mine.py"
+    path.write_text(TWO_AT_ONCE)
+    deployer = f"{path}:starts_it_off_its_platform_on_release"
+    fixed = str(SCENARIOS / "fixed_platform.py")
+    js = tmp_path / "cex.json"
+    assert main(["verify", fixed, "--deployer", deployer, "--continue", "--json", str(js), "--no-progress"]) == 1
+    out = capsys.readouterr().out
+    where = "during the reaction, right after `start force_slip_detector on wrist_pc`"
+    for name in ("single-instance", "fixed"):
+        assert f"VIOLATED {name} after 1 step (shortest), {where}" in out, out
+    names = [c["invariant"] for c in json.loads(js.read_text())["counterexamples"]]
+    assert names == ["single-instance", "fixed"]
+    for k, name in enumerate(names, 1):
+        code = main(["verify", fixed, "--deployer", deployer, "--replay", str(js), "--counterexample", str(k), "--no-progress"])
+        out = capsys.readouterr().out
+        assert code == 1 and f"verdict: VIOLATED {name}: the counterexample still holds" in out, out
+        assert f"  {name}" in out and "VIOLATED during the reaction, right after `start force_slip_detector on wrist_pc`" in out
+        page = tmp_path / f"{k}.html"
+        assert main(["explore", fixed, "--deployer", deployer, "--from-json", str(js), "--counterexample", str(k), "-o", str(page)]) == 0
+        capsys.readouterr()
+        assert f"{name} VIOLATED after 1 step:" in html.unescape(page.read_text())

@@ -124,11 +124,10 @@ def _outcomes(log: Any) -> tuple[str, ...]:
     return tuple(f"{c}: {'ok' if ok else 'FAILED'}" for c, ok in (log.commands if log is not None else ()) if ok is not None)
 
 
-def _with_instant(violations: list[tuple[str, str]], found: tuple[str, str, str] | None) -> tuple[tuple[str, str], ...]:
-    """The state's violations and, if not among them, one seen inside the reaction."""
-    if found is None or found[0] in dict(violations):
-        return tuple(violations)
-    return (*violations, (found[0], f"{found[1]} (inside the reaction, after {found[2]})"))
+def _with_instant(violations: list[tuple[str, str]], found: tuple[tuple[str, str, str], ...]) -> tuple[tuple[str, str], ...]:
+    """The state's violations and those seen inside the reaction (``found``) not among them."""
+    bad = dict(violations)
+    return (*violations, *((f[0], f"{f[1]} (inside the reaction, after {f[2]})") for f in found if f[0] not in bad))
 
 
 def _differs(key: Any, recorded: tuple[dict, ...] | None, index: int) -> bool:  # type: ignore[type-arg]
@@ -201,8 +200,8 @@ def counterexample_frames(
                 reasons=capture_reasons(run.query, graphs),
             )
         )
-        if found is not None and s.index == len(labels):
-            final = [*final, (found[0], found[1])]
+        if s.index == len(labels):
+            final = [*final, *((f[0], f[1]) for f in found)]
     return frames, final, diverged
 
 

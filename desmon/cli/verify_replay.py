@@ -40,7 +40,7 @@ def replay_counterexample(args: argparse.Namespace) -> int:
     run = RepositoryRun(scenario, args.deployer, run=run_of(args))
     instant = get_invariants([n for n in run.bounds.instantaneous if n in saved.invariants])
     print(format_replay_head(saved))
-    diverged, last, steps = None, None, []
+    diverged, last, steps = None, (), []
     trace = run.trace(saved.labels, instant, transitions=frozenset(saved.invariants))
     for (step, last), recorded in zip(_stepping(trace, saved), saved.states):
         print(format_trace([step]), flush=True)
@@ -53,7 +53,7 @@ def replay_counterexample(args: argparse.Namespace) -> int:
     text, still = format_replay_verdict(saved, final, last, diverged)
     print(text, end="")
     if args.plot:
-        _plot_replay(args, scenario, run, saved, steps, final, last if still else None)
+        _plot_replay(args, scenario, run, saved, steps, final, last if still else ())
     return 1 if still or diverged is not None else 0
 
 
@@ -102,15 +102,16 @@ def _stepping(trace, saved):  # type: ignore[no-untyped-def]
         i += 1
 
 
-def _plot_replay(args, scenario, run, saved, steps, final, instant) -> None:  # type: ignore[no-untyped-def]
+def _plot_replay(args, scenario, run, saved, steps, final, found) -> None:  # type: ignore[no-untyped-def]
     """``--plot`` with ``--replay``: the replayed counterexample as repository snapshots, if it still violates."""
     from desmon.verify.plot import plot_counterexample
     from desmon.verify.trace import Counterexample
 
-    message = dict(final).get(saved.invariant) or (instant[1] if instant else None)
+    inside = {f[0]: f for f in found}.get(saved.invariant)
+    message = dict(final).get(saved.invariant) or (inside[1] if inside else None)
     if message is None:
         print(f"no violation: {args.plot} not written")
         return
-    c = Counterexample(saved.invariant, message, tuple(steps), instant[2] if instant and saved.invariant not in dict(final) else None)
+    c = Counterexample(saved.invariant, message, tuple(steps), inside[2] if inside and saved.invariant not in dict(final) else None)
     out = plot_counterexample(scenario, args.deployer, run.bounds, c, args.plot)
     print(f"wrote {out} ({saved.invariant}, {c.length} step{'s' if c.length != 1 else ''}, replayed)")

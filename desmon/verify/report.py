@@ -347,23 +347,24 @@ def format_divergence(saved: SavedCounterexample, index: int, replayed: dict[str
 
 
 def format_replay_verdict(
-    saved: SavedCounterexample, final: list[tuple[str, str]], instant: tuple[str, str, str] | None, diverged: int | None
+    saved: SavedCounterexample, final: list[tuple[str, str]], found: tuple[tuple[str, str, str], ...], diverged: int | None
 ) -> tuple[str, bool]:
     """The invariants' verdicts on the replayed final state (``final``: the violated ones;
-    ``instant``: one violated inside the last reaction), and the verdict; with whether the
-    counterexample still violates its invariant."""
+    ``found``: those the last reaction broke inside it, invariant first), and the verdict;
+    with whether the counterexample still violates its invariant."""
     bad = dict(final)
+    inside = {f[0]: f for f in found}
     lines = ["invariants after the replay (on its final state; an instantaneous one also inside its last reaction):"]
     width = max(len(n) for n in saved.invariants)
     for name in saved.invariants:
         if name in bad:
             lines.append(f"  {name:<{width}}  VIOLATED: {bad[name]}")
-        elif instant is not None and instant[0] == name:
-            lines.append(f"  {name:<{width}}  VIOLATED {where_in_reaction(instant[2])}: {instant[1]}")
+        elif name in inside:
+            lines.append(f"  {name:<{width}}  VIOLATED {where_in_reaction(inside[name][2])}: {inside[name][1]}")
         else:
             lines.append(f"  {name:<{width}}  holds")
     x = saved.invariant
-    still = x in bad or (instant is not None and instant[0] == x)
+    still = x in bad or x in inside
     changed = (
         f"the replay diverged from the recorded run at step {diverged} (the scenario, the deployer or desmon changed since "
         f"{saved.source} was written)" if diverged is not None else ""
@@ -510,8 +511,8 @@ def test_{name}():
     def audit(run):
         if getattr(run, "at_step", 0) != len(steps):  # an earlier step: the checker named the last one
             return
-        if not steps and run.initial_instant is not None and run.initial_instant[0] == {invariant!r}:
-            bad.append(run.initial_instant[:2])  # broken inside the initial reaction, after a start or stop
+        if not steps and any(f[0] == {invariant!r} for f in run.initial_found):
+            bad.extend(f[:2] for f in run.initial_found if f[0] == {invariant!r})  # broken inside the initial reaction, after a start or stop
             return
         if {invariant!r} == "no-flapping" or {invariant!r} in TRANSITION_INVARIANTS:  # judged on the reaction
             bad.extend(run.violations(get_invariants([{invariant!r}])))
