@@ -236,8 +236,8 @@ class TransitionSystem:
 
     def run_one(self, key: Key, event: Event, prefix: tuple[bool, ...]):  # type: ignore[no-untyped-def]
         """One transition: ``event`` and the complete reaction (the real core) applied to ``key``, starts
-        following ``prefix`` and succeeding beyond it: (next key, start outcomes, StepLog, instantaneous
-        violation or None); the store is left in the next state."""
+        following ``prefix`` and succeeding beyond it: (next key, start outcomes, StepLog, what the
+        reaction broke inside it: :meth:`transition`); the store is left in the next state."""
         return self._transition(key, event, prefix)
 
     def _transition(self, key: Key, event: Event, prefix: tuple[bool, ...]) -> tuple[Key, tuple[bool, ...], StepLog, Any]:
@@ -250,8 +250,11 @@ class TransitionSystem:
     ) -> tuple[Any, Key, tuple[bool, ...], StepLog, Any]:
         """``event`` and its reaction on ``key`` in the store, as every engine runs it (the
         table engine on its recording twin, ``recording``: :meth:`step_under_guard`):
-        (stimulus, next key, start outcomes, StepLog, instantaneous violation or None); a
-        broken transition property is one of the whole reaction (``WHOLE_REACTION``)."""
+        (stimulus, next key, start outcomes, StepLog, what the reaction broke inside it). That
+        is a tuple of (invariant, message, after what): the first invariant it broke, or in
+        :meth:`finding_every` the first violation of each, an instantaneous one after a start
+        or stop, a transition property by the whole reaction (``WHOLE_REACTION``); a
+        failing deployer's :data:`CRASH` alone; () if it broke none."""
         st = self.store
         ran = self.runaways
         known = ran.again((key, event, prefix)) if ran.kept is not None else None  # (no tuple per transition otherwise)
@@ -294,8 +297,8 @@ class TransitionSystem:
                 st.instant = ((CRASH, fault.what, str(log.commands[-1][0]) if log.commands else ""),)
             return fault.stimulus, log
 
-    def successors(self, key: Key, event: Event) -> Iterator[tuple[tuple[int, ...], Key, Any, tuple[str, str, str] | None]]:
-        """Every (failed start indices, next key, StepLog, instantaneous violation) of ``event``.
+    def successors(self, key: Key, event: Event) -> Iterator[tuple[tuple[int, ...], Key, Any, tuple[tuple[str, str, str], ...]]]:
+        """Every (failed start indices, next key, StepLog, what its reaction broke inside it) of ``event``.
 
         The one implementation of a transition's branching: the reaction is first run with
         every start succeeding; each start it issued beyond the current prefix is a choice
@@ -367,8 +370,8 @@ def expand(system: TransitionSystem, key: Key, known: "Container[Key]") -> list[
 
     A successor in ``known`` (or met earlier in this expansion) that broke nothing on
     the way is *routine*: only counted. Every other transition (a new successor, with
-    the invariants it violates, or an instantaneous violation repaired before
-    quiescence) is a :data:`Record`, and closes a segment that also counts the
+    the invariants it violates, or one whose reaction broke invariants inside it and
+    repaired them before quiescence) is a :data:`Record`, and closes a segment that also counts the
     routine transitions before it. The direct engine's search loop consumes segments
     in order, in-process or from worker processes alike; since it can only stop at
     a record, it sees exactly the counts a transition-by-transition loop would.

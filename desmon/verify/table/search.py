@@ -279,7 +279,7 @@ class TableEngine(BreadthFirst):
     def _consume(self, units: "Units", cand: np.ndarray, bad_of: dict[int, int], nxt: Queue) -> tuple[int, int]:
         """The records in order, as the direct engine's search loop meets them: it stops
         after the event that found what it looked for or reached the cap, or at once when
-        a repaired instantaneous violation completes the search. Returns (the last
+        a violation inside a reaction, repaired, completes the search. Returns (the last
         transition counted, the unit the search stopped at or -1)."""
         U_t, U_leaf = units.t, units.leaf
         inst_units = np.flatnonzero(np.array(self.trees.leaf_inst, dtype=bool)[U_leaf])
