@@ -71,7 +71,12 @@ def _prefix(fails: tuple[int, ...]) -> tuple[bool, ...]:
 
 def walk(system: TransitionSystem, rng: random.Random, steps: int, failures: bool) -> list[tuple[Any, tuple[int, ...], Any, Key]]:
     """A random path of the checker: (event, failed start indices, StepLog, next key,
-    instantaneous violation or None) per step."""
+    what the reaction broke inside it, every invariant's first violation) per step."""
+    with system.finding_every():
+        return _walk(system, rng, steps, failures)
+
+
+def _walk(system: TransitionSystem, rng: random.Random, steps: int, failures: bool) -> list[tuple[Any, tuple[int, ...], Any, Key]]:
     key = system.initial()
     path = []
     for _ in range(steps):

@@ -12,7 +12,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from desmon.loader import load_scenario
-from desmon.model.events import DeviceFail
+from desmon.model.events import ActionChange, DeviceFail
 from desmon.model.scenario import TimedEvent
 from desmon.sim.engine import simulate
 from desmon.sim.replay import replay
@@ -137,3 +137,22 @@ def test_two_invariants_broken_by_one_command_are_each_found_and_each_replays(tm
         assert main(["explore", fixed, "--deployer", deployer, "--from-json", str(js), "--counterexample", str(k), "-o", str(page)]) == 0
         capsys.readouterr()
         assert f"{name} VIOLATED after 1 step:" in html.unescape(page.read_text())
+
+
+def test_the_simulation_books_both_invariants_one_command_breaks():
+    """The SimPy world and the timeline replay audit after each start as the checker
+    watches: the start that breaks single-instance and fixed at once is booked under both
+    (the world had booked the first and stopped watching the reaction)."""
+    from desmon.deployment.deployer import Deployer
+
+    space: dict = {}
+    exec(TWO_AT_ONCE, space)
+    deployer = Deployer("off-platform", "starts its fixed detector off its platform on release", space["starts_it_off_its_platform_on_release"])
+    sc = load_scenario(SCENARIOS / "fixed_platform.py")
+    sc = replace(sc, timeline=(*sc.timeline, TimedEvent(2.0, ActionChange("release"), "t1")))
+    where = "(during the reaction, right after `start force_slip_detector on wrist_pc`)"
+    world = simulate(sc, deployer, seed=0)
+    assert [(t, n) for t, n, _m in world.violations] == [(2.0, "single-instance"), (2.0, "fixed")]
+    assert all(m.endswith(where) for _t, _n, m in world.violations)
+    steps = replay(sc, deployer).steps
+    assert [[n for n, _m in s.violations] for s in steps] == [[], ["single-instance", "fixed"]]

@@ -23,9 +23,9 @@ __all__ = ["Books", "audit", "robot_metrics"]
 def audit(parts: "RobotParts", view: SystemView, after: str = "", skip: frozenset[str] = frozenset()) -> tuple[str, ...]:
     """The named invariants on ``view`` (of the live repository) at a quiescent point, each
     violation booked unless its invariant is in ``skip`` (booked already in this reaction),
-    or, ``after`` a start or stop inside a reaction (``"start g on p"``), the first
-    violated of the instantaneous ones (:data:`~desmon.deployment.invariants.INSTANT_INVARIANTS`),
-    as the checker watches them. Returns the names booked."""
+    or, ``after`` a start or stop inside a reaction (``"start g on p"``), the instantaneous
+    ones (:data:`~desmon.deployment.invariants.INSTANT_INVARIANTS`), as the checker watches
+    them. Returns the names booked."""
     books = parts.books
     if not after:
         books.audits += 1
@@ -35,8 +35,6 @@ def audit(parts: "RobotParts", view: SystemView, after: str = "", skip: frozense
         if name not in skip:
             books.violation(now, name, f"{msg} (during the reaction, right after `{after}`)" if after else msg)
             booked.append(name)
-            if after:  # the reaction's first, as the checker reports one transition's
-                break
     return tuple(booked)
 
 

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from desmon.deployment.core import not_a_command, stamp
 from desmon.deployment.guard import DeployerFault
+from desmon.deployment.invariants import INSTANT_INVARIANTS
 from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, RaiseError, Start, Stop
 from desmon.sim.inbox import Inbox
 from desmon.sim.processes import maybe_lease
@@ -42,8 +43,8 @@ class _Reaction:
         self.stopped_here: dict[str, str] = {}
         self.stopped_at: dict[str, float] = {}  # wanted slot members stopped in this reaction
         self.tried: set[str] = set()  # graphs whose start failed in this reaction
-        #: the instantaneous invariant booked inside this reaction: its first violation, after
-        #: which (as the checker) the reaction is not watched again
+        #: the instantaneous invariants booked inside this reaction, each at its first
+        #: violation (the checker's transition carries the same with ``verify --continue``)
         self.broken: frozenset[str] = frozenset()
         self.audited = False  # whether an audit inside this reaction found them holding (or booked one)
 
@@ -91,15 +92,15 @@ def _drive(parts: RobotParts, reaction: Any, book: _Reaction, audit: Audit):  # 
             raise
         if isinstance(cmd, Start):
             outcome = yield from _command_start(parts, cmd, book)
-            if outcome and not book.broken:
-                book.broken = frozenset(audit(f"start {cmd.graph} on {cmd.platform}", book.broken))
+            if outcome and len(book.broken) < len(INSTANT_INVARIANTS):
+                book.broken |= frozenset(audit(f"start {cmd.graph} on {cmd.platform}", book.broken))
                 book.audited = True
         elif isinstance(cmd, Stop):
             outcome = _command_stop(parts, cmd, book)
             # a stop breaks none of them (fewer instances, less consumed): once one audit of
             # the reaction found them holding, a stop leaves them holding
-            if outcome and not book.broken and not book.audited:
-                book.broken = frozenset(audit(f"stop {cmd.graph} on {cmd.platform}", book.broken))
+            if outcome and not book.audited:
+                book.broken |= frozenset(audit(f"stop {cmd.graph} on {cmd.platform}", book.broken))
                 book.audited = True
         elif isinstance(cmd, RaiseError):
             outcome = None

@@ -109,12 +109,15 @@ def replay(
     for te in scenario.timeline:
         now[0] = te.time
         before = core.standing
-        during: list[tuple[str, str]] = []  # the reaction's first instantaneous violation, as the checker reports it
+        during: list[tuple[str, str]] = []  # the reaction's instantaneous violations, the first of each, as the checker reports them
 
         def watch(verb: str, graph: str, platform: str) -> None:
-            bad = [] if during else check_invariants(core.view(), instant)
-            if bad:
-                during.append((bad[0][0], f"{bad[0][1]} (during the reaction, right after `{verb} {graph} on {platform}`)"))
+            if len(during) == len(instant):
+                return
+            seen = {d for d, _m in during}
+            for name, msg in check_invariants(core.view(), instant):
+                if name not in seen:
+                    during.append((name, f"{msg} (during the reaction, right after `{verb} {graph} on {platform}`)"))
 
         control.after = watch
         try:
@@ -145,8 +148,8 @@ def replay(
                 errors=tuple(stamp(e, te.time) for e in log.errors),
                 deployments=query.deployments(),
                 standing=core.standing,
-                # its transition properties first, as the run reports them, then one broken
-                # inside the reaction (not again if its end state breaks it too)
+                # its transition properties first, as the run reports them, then those broken
+                # inside the reaction (not again if its end state breaks them too)
                 violations=(*core.findings, *during, *[v for v in check_invariants(view) if all(v[0] != d for d, _m in during)]),
                 refused=refused,
                 standing_before=before,
