@@ -46,7 +46,7 @@ JOBS ?= $(shell $(PY) -c "import os; n = len(os.sched_getaffinity(0)) if hasattr
 test test-fast: export PYTHONDONTWRITEBYTECODE :=
 
 test: $(STAMP)
-	@echo "==> the whole test suite on $(JOBS) processes, about 7 min on 2 cores, more at a busy hour (README.md): one dot per test, a line for each slow test as it ends, the ten slowest at the end"
+	@echo "==> the whole test suite on $(JOBS) processes, 7 to 13 min on 2 cores by the machine, more at a busy hour (README.md): one dot per test, a line for each slow test as it ends, the ten slowest at the end"
 	$(BIN)/python -m pytest -n $(JOBS) --dist loadgroup --no-loadscope-reorder --durations=10
 
 # The maintainer's loop: the tests marked fast (tests/conftest.py's FAST list; pytest -m fast
