@@ -126,6 +126,8 @@ def test_two_invariants_broken_by_one_command_are_each_found_and_each_replays(tm
     where = "during the reaction, right after `start force_slip_detector on wrist_pc`"
     for name in ("single-instance", "fixed"):
         assert f"VIOLATED {name} after 1 step (shortest), {where}" in out, out
+        assert main(["verify", fixed, "--deployer", deployer, "--invariant", name, "--no-progress"]) == 1
+        assert f"VIOLATED {name} after 1 step (shortest), {where}" in capsys.readouterr().out
     names = [c["invariant"] for c in json.loads(js.read_text())["counterexamples"]]
     assert names == ["single-instance", "fixed"]
     for k, name in enumerate(names, 1):
