@@ -186,6 +186,7 @@ def test_dask_workers_hold_the_deployer_to_the_same_command_limit(capsys):
     (["--at-least", "1", "--below", "0.5", "--confidence", "0.4", "--alpha", "0.1"], "or set --beta"),
     (["--at-least", "1", "--within", "5"], "--within 5: a probability lies in [0, 1]"),
     (["--max-runs", "1"], "--max-runs must be a whole number of runs, 2 or more"),
+    (["--metric", "blind_time_per_switch_s"], "a run with no switch has no blind time per switch, so its mean over runs is not defined"),
 ])
 def test_questions_that_cannot_be_answered_as_asked_are_refused_in_one_line(capsys, extra, says):
     code, out, err = _estimate(capsys, QUICK, *extra)
@@ -338,3 +339,19 @@ def test_values_that_run_out_before_the_budget_say_so_not_that_the_budget_was_sp
     assert e.status == "values-ended" and not e.complete and e.runs == 2
     e = estimate(load_scenario(VARIED), Question(range=(0.0, 100.0), max_runs=3), values=iter([1.0, 2.0, 3.0, 4.0]))
     assert e.status == "max-runs" and e.runs == 3
+
+
+def test_a_run_with_no_switch_has_no_blind_time_per_switch_and_no_blind_time(capsys):
+    """0 blind seconds over 0 switches is no mean at all: the run reports none (JSON null,
+    ``-`` in its summary), as it reports no latency without a detected slip, and no sum
+    over runs reads it as a switch that cost nothing; the longest blind time is 0."""
+    from desmon.sim.engine import simulate
+
+    sc = load_scenario(str(ROOT / "scenarios" / "coffee_shift.py"))
+    none = simulate(sc, "desmon", seed=0, until=10.0).metrics  # the robot has not taken the mug yet
+    assert none["switches"] == 0 and none["blind_time_per_switch_s"] is None and none["blind_time_max_s"] == 0.0
+    some = simulate(sc, "desmon", seed=0, until=600.0).metrics
+    assert some["switches"] > 0 and 0.0 < some["blind_time_per_switch_s"] <= some["blind_time_max_s"]
+    assert main(["run", str(ROOT / "scenarios" / "coffee_shift.py"), "--until", "10"]) == 0
+    shown = [line.split() for line in capsys.readouterr().out.splitlines() if "blind time per switch" in line]
+    assert shown == [["blind", "time", "per", "switch", "(s)", "-"]]

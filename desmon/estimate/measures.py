@@ -8,8 +8,9 @@ a narrower range the task fixes (:func:`natural_range`, :func:`task_seconds`).
 Counts (switches, starts, slips missed, false alarms, errors by kind) have no bound
 known in advance: their mean needs a declared range (``--range``), which every run's
 value is then checked against; the probability that a count reaches a value
-(``--at-least``) needs none. The detection latencies are left out: a run that detects
-no slip has none, so their mean over runs is not defined.
+(``--at-least``) needs none. The detection latencies and the blind time per switch are
+left out: a run that detects no slip has no latency, one with no switch no blind time per
+switch, so their mean over runs is not defined.
 """
 
 from __future__ import annotations
@@ -30,8 +31,13 @@ __all__ = [
 ]
 
 DEFAULT_METRIC = "exposure_s"
-#: per-run statistics that a run may lack (no slip detected): not estimable as a mean over runs
-_UNDEFINED = ("latency_median_s", "latency_p95_s")
+#: per-run statistics that a run may lack (no slip detected, no switch), each with what to
+#: estimate instead: not estimable as a mean over runs
+_UNDEFINED = {
+    "latency_median_s": ("a run that detects no slip has no detection latency", "slips_missed or the probability of a late detection"),
+    "latency_p95_s": ("a run that detects no slip has no detection latency", "slips_missed or the probability of a late detection"),
+    "blind_time_per_switch_s": ("a run with no switch has no blind time per switch", "blind_time_max_s (0 in a run with no switch) or starting_s"),
+}
 #: the longest stretch of unmonitored exposure in a run (touching intervals joined): read from the
 #: run itself, beyond desmon sweep's figures ("any 60 s unmonitored at once": --at-least 60)
 LONGEST = LONGEST_EXPOSURE
@@ -49,9 +55,10 @@ def check_metric(name: str) -> str:
     if name in METRICS:
         return name
     if name in _UNDEFINED:
+        why, instead = _UNDEFINED[name]
         raise EstimateError(
-            f"--metric {name}: a run that detects no slip has no detection latency, so its mean over runs is not defined; "
-            f"estimate slips_missed or the probability of a late detection instead; the metrics are: {', '.join(METRICS)}"
+            f"--metric {name}: {why}, so its mean over runs is not defined; "
+            f"estimate {instead} instead; the metrics are: {', '.join(METRICS)}"
         )
     close = difflib.get_close_matches(name, METRICS, n=1, cutoff=0.6)
     hint = f"did you mean {close[0]}? " if close else ""

@@ -53,7 +53,9 @@ def robot_metrics(parts: "RobotParts") -> dict[str, Any]:
         "unmonitored_by_cause_s": {c: round(v, 6) for c, v in ex.by_cause.items()},
         "excluded_s": round(ex.excluded, 6),
         "switches": ex.switches,
-        "blind_time_per_switch_s": round(sum(ex.blind) / len(ex.blind), 6) if ex.blind else 0.0,
+        # a run with no switch has no blind time per switch (None, as a latency with no slip
+        # detected); its longest blind time is 0: no switch left the robot blind
+        "blind_time_per_switch_s": round(sum(ex.blind) / len(ex.blind), 6) if ex.blind else None,
         "blind_time_max_s": round(max(ex.blind), 6) if ex.blind else 0.0,
         "reactions": books.reactions,
         "starts": infra.starts,
