@@ -24,7 +24,7 @@ from desmon.deployment.ports import PlatformHandle, Validity
 
 __all__ = [
     "send_message", "recv_message", "recv_exact", "Encoder", "Decoder", "Handles", "Handle", "Method", "DefaultChecks", "DEFAULT",
-    "Blob", "BLOBS", "Token", "resolve", "plain_class", "one_line", "encode", "handle", "MAX_MESSAGE", "MAX_NODES", "Resolve", "weight", "SHARING",
+    "Blob", "BLOBS", "Token", "resolve", "plain_class", "one_line", "encode", "handle", "MAX_MESSAGE", "MAX_NODES", "Resolve", "weight", "SHARING", "shared_opcode",
 ]
 HEADER = struct.Struct("!I")
 #: the largest message either side accepts (a deployer cannot make desmon allocate more)
@@ -135,15 +135,91 @@ class Decoder(pickle.Unpickler):
         gave out. It holds no object twice (:data:`SHARING`): the child writes each where it
         occurs (its pickler's ``fast`` mode), so what desmon hashes or compares of it is no
         larger than the message."""
-        for op, _arg, _at in pickletools.genops(self.data):
-            if op.name in SHARING:
-                raise pickle.UnpicklingError(f"an object written once and used again ({op.name}): the child writes each where it occurs")
+        shared = shared_opcode(self.data)
+        if shared is not None:
+            raise pickle.UnpicklingError(f"an object written once and used again ({shared}): the child writes each where it occurs")
         return resolve(super().load(), self.handles)
 
 
 #: the opcodes that use an object again (a few nest into more than desmon could hash in a lifetime)
 SHARING = frozenset({"GET", "BINGET", "LONG_BINGET", "DUP"})
 
+#: how :func:`shared_opcode` passes an opcode: a fixed number of argument bytes; a length of 1
+#: byte, of 4 or 8 bytes (unsigned) or of 4 bytes (signed) before them; the end; one of
+#: :data:`SHARING`; an argument up to a newline (protocols 0 and 1: left to pickletools)
+_FIXED, _SHORT, _LONG, _SIGNED, _STOP, _SHARES, _LINE = range(7)
+_LENGTHS = {
+    pickletools.TAKEN_FROM_ARGUMENT1: (_SHORT, 1), pickletools.TAKEN_FROM_ARGUMENT4: (_SIGNED, 4),
+    pickletools.TAKEN_FROM_ARGUMENT4U: (_LONG, 4), pickletools.TAKEN_FROM_ARGUMENT8U: (_LONG, 8),
+}
+
+
+def _pass(op: pickletools.OpcodeInfo) -> tuple[int, int, bool, str]:
+    """(how, bytes, whether the bytes are UTF-8 text, name) of one opcode (:data:`_OPCODES`)."""
+    arg = op.arg
+    n = 0 if arg is None else arg.n
+    if n == pickletools.UP_TO_NEWLINE:  # (GET among them)
+        return _LINE, 0, False, op.name
+    if op.name in SHARING or op.name == "STOP":
+        return (_SHARES if op.name in SHARING else _STOP), n, False, op.name
+    if n >= 0:
+        return _FIXED, n, False, op.name
+    how, size = _LENGTHS[n]
+    return how, size, arg.name.startswith("unicodestring"), op.name  # type: ignore[union-attr]
+
+
+#: every opcode byte's :func:`_pass` (None: no opcode)
+_OPCODES: tuple[tuple[int, int, bool, str] | None, ...] = tuple(
+    map({op.code.encode("latin-1")[0]: _pass(op) for op in pickletools.opcodes}.get, range(256))
+)
+
+
+def shared_opcode(data: bytes) -> str | None:
+    """The name of the first opcode of the pickle ``data`` (up to its STOP) that uses an object
+    again (:data:`SHARING`), or None: :func:`pickletools.genops`' answer. One pass over the
+    opcodes, each argument skipped by its length (a text decoded, as genops does); where
+    that cannot tell (an argument up to a newline, bytes that are no pickle), genops
+    reads them, and raises what it raises."""
+    found = _skim(data)
+    if found is not _UNSURE:
+        return found
+    for op, _arg, _at in pickletools.genops(data):
+        if op.name in SHARING:
+            return op.name
+    return None
+
+
+#: :func:`_skim`'s answer where it cannot tell
+_UNSURE = "?"
+
+
+def _skim(data: bytes) -> str | None:
+    """:func:`shared_opcode`'s answer for a binary pickle, :data:`_UNSURE` where it cannot tell."""
+    i, end, table = 0, len(data), _OPCODES
+    while i < end:
+        entry = table[data[i]]
+        if entry is None:
+            return _UNSURE
+        how, n, text, name = entry
+        i += 1
+        if how == _FIXED:
+            i += n
+        elif how <= _SIGNED:  # a length, then that many bytes
+            size = data[i] if how == _SHORT and i < end else int.from_bytes(data[i:i + n], "little", signed=how == _SIGNED)
+            i += n
+            if i > end or size < 0 or i + size > end:
+                return _UNSURE
+            if text:
+                try:
+                    str(data[i:i + size], "utf-8", "surrogatepass")
+                except UnicodeDecodeError:
+                    return _UNSURE
+            i += size
+        elif how == _SHARES:
+            return name if i + n <= end else _UNSURE
+        else:
+            return None if how == _STOP else _UNSURE
+    return _UNSURE
 
 class Token:
     """A handle while the child's pickle is read: it can be neither called nor built nor
