@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from desmon.cli import main
+from desmon.errors import EstimateError
 from desmon.estimate import Question, estimate
 from desmon.estimate.loop import is_look, run_seed
 from desmon.loader import load_scenario
@@ -187,6 +188,7 @@ def test_dask_workers_hold_the_deployer_to_the_same_command_limit(capsys):
     (["--at-least", "1", "--within", "5"], "--within 5: a probability lies in [0, 1]"),
     (["--max-runs", "1"], "--max-runs must be a whole number of runs, 2 or more"),
     (["--metric", "blind_time_per_switch_s"], "a run with no switch has no blind time per switch, so its mean over runs is not defined"),
+    (["--below", "3", "--alpha", "0.01", "--confidence", "0.5"], "--confidence 0.5 and --alpha 0.01 both set the confidence of a mean's threshold test"),
 ])
 def test_questions_that_cannot_be_answered_as_asked_are_refused_in_one_line(capsys, extra, says):
     code, out, err = _estimate(capsys, QUICK, *extra)
@@ -355,3 +357,30 @@ def test_a_run_with_no_switch_has_no_blind_time_per_switch_and_no_blind_time(cap
     assert main(["run", str(ROOT / "scenarios" / "coffee_shift.py"), "--until", "10"]) == 0
     shown = [line.split() for line in capsys.readouterr().out.splitlines() if "blind time per switch" in line]
     assert shown == [["blind", "time", "per", "switch", "(s)", "-"]]
+
+
+def test_a_means_threshold_prints_both_intervals_at_the_confidence_its_test_keeps():
+    """With --below on a mean and --alpha 0.01, the guaranteed interval is at 99 %: the normal
+    one printed under it is too (it was at 1 - confidence, 95 %, under the same heading)."""
+    from desmon.stats import normal_interval
+
+    sc = load_scenario(QUICK)
+    values = [3.0 + (i % 7) * 0.5 for i in range(400)]
+    e = estimate(sc, Question(below=4.0, alpha=0.01, within=0.1, relative=False), values=values)
+    assert e.question.interval_confidence == 0.99
+    assert e.approximation == normal_interval(values[: e.runs], 0.01)
+    with pytest.raises(EstimateError, match="both set the confidence of a mean's threshold test"):
+        Question(below=4.0, alpha=0.01, confidence=0.5).check()
+
+
+def test_thresholds_and_confidences_print_as_given_never_rounded_into_another_question(capsys):
+    """32.0999999 and 32.1000001 are two thresholds with two answers: each is printed as given,
+    not both as 32.1; a confidence of 0.9999999999999999 is not printed as 100 %."""
+    from desmon.cli.estimate import given, percent
+
+    assert given(32.0999999) == "32.0999999" and given(32.1000001) == "32.1000001" and given(600.0) == "600"
+    assert percent(0.95) == "95" and percent(0.9999999) == "99.99999" and float(percent(0.9999999999999999)) < 100
+    code, out, _err = _estimate(capsys, QUICK, "--at-least", "3.0000001", "--max-runs", "3")
+    assert code == 3 and "P(exposure_s >= 3.0000001) per run" in out
+    code, out, _err = _estimate(capsys, QUICK, "--within", "50%", "--confidence", "0.9999999999999999", "--max-runs", "3")
+    assert " 99.99999999999999 % interval [" in out

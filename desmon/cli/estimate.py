@@ -20,7 +20,7 @@ from typing import Any
 from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg
 from desmon.cli.options import finite_number, non_negative_int, positive_seconds, run_count, worker_count
 
-__all__ = ["add_parser", "run", "format_estimate", "parse_within", "parse_confidence"]
+__all__ = ["add_parser", "run", "format_estimate", "parse_within", "parse_confidence", "given", "percent"]
 
 
 def parse_within(text: str) -> tuple[float, bool]:
@@ -59,7 +59,7 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--within", type=parse_within, default="5%", metavar="EPS",
                    help="stop once the guaranteed interval's half-width is at most EPS: absolute (60) or relative to the estimate (1%%); "
                    "with --below, the indifference around the threshold")
-    p.add_argument("--confidence", type=parse_confidence, default=0.95, metavar="1-DELTA", help="the interval's confidence, e.g. 0.99")
+    p.add_argument("--confidence", type=parse_confidence, default=None, metavar="1-DELTA", help="the interval's confidence, e.g. 0.99 (unset: 0.95)")
     p.add_argument("--at-least", type=finite_number, default=None, metavar="X",
                    help="estimate the probability that the figure is X or more in a run, not its mean (--metric longest_exposure_s "
                    "--at-least 60: 60 s or more unmonitored at a stretch)")
@@ -85,12 +85,19 @@ def add_parser(sub: Subparsers) -> None:
 
 
 def _question(args: argparse.Namespace) -> Any:
+    from desmon.errors import EstimateError
     from desmon.estimate import Question
     from desmon.estimate.measures import check_metric
 
     within, relative = args.within
+    if args.confidence is not None and args.alpha is not None and args.below is not None and args.at_least is None:
+        raise EstimateError(
+            f"--confidence {args.confidence:.10g} and --alpha {args.alpha:.10g} both set the confidence of a mean's threshold test, "
+            "whose interval is at 1 - alpha: give one of them"
+        )
     q = Question(
-        metric=check_metric(args.metric), within=within, relative=relative, confidence=args.confidence, at_least=args.at_least,
+        metric=check_metric(args.metric), within=within, relative=relative,
+        confidence=0.95 if args.confidence is None else args.confidence, at_least=args.at_least,
         below=args.below, alpha=args.alpha, beta=args.beta, range=tuple(args.range) if args.range else None,
         max_runs=args.max_runs, timeout=args.timeout,
     )
@@ -209,6 +216,23 @@ def _fixed(x: float, decimals: int) -> str:
     return f"{round(x, decimals) + 0.0:,.{decimals}f}"
 
 
+def given(x: float) -> str:
+    """A number the user gave (a threshold), shortly where that is the same number, else every
+    digit: 32.0999999 and 32.1000001 are not both 32.1."""
+    short = f"{x:g}"
+    return short if float(short) == x else repr(float(x))
+
+
+def percent(confidence: float) -> str:
+    """``confidence`` in percent, with every digit it needs: 0.9999999 is not 100 %, nor is
+    0.9999999999999999."""
+    pct = 100.0 * confidence
+    short = f"{pct:.10g}"
+    if float(short) != pct and (float(short) >= 100.0) != (confidence >= 1.0):
+        return repr(pct)
+    return short
+
+
 def format_estimate(e: Any) -> str:
     """The text report of ``desmon estimate``: the estimate, both intervals' ends, the half-width
     and (for a mean) the values' extremes all with the decimals the guaranteed interval's
@@ -218,8 +242,8 @@ def format_estimate(e: Any) -> str:
     q, iv, ap = e.question, e.interval, e.approximation
     d = decimals_for(iv.half_width)
     f = lambda x: _fixed(x, d)  # noqa: E731
-    pct = f"{100 * q.interval_confidence:.10g} %"  # (every digit given: 0.9999999 is not 100 %)
-    what = f"P({q.metric} >= {q.at_least:g}) per run" if q.kind == "probability" else f"mean {q.metric} per run"
+    pct = f"{percent(q.interval_confidence)} %"
+    what = f"P({q.metric} >= {given(q.at_least)}) per run" if q.kind == "probability" else f"mean {q.metric} per run"
     out = [f"desmon estimate: {e.scenario} (deployer {e.deployer}), {what} of {_n(e.horizon)} s simulated, seed {e.seed}"]
     if e.world:
         out.append(f"  world: the scenario's, with {' '.join(e.world)}")
@@ -241,10 +265,10 @@ def format_estimate(e: Any) -> str:
 
 def _answer_line(e: Any) -> str:
     q = e.question
-    subject = f"P({q.metric} >= {q.at_least:g})" if q.kind == "probability" else f"the mean {q.metric}"
+    subject = f"P({q.metric} >= {given(q.at_least)})" if q.kind == "probability" else f"the mean {q.metric}"
     eps = q.indifference()
     if e.answer is None:
-        return f"  below {q.below:g}? not decided ({e.test_method})"
+        return f"  below {given(q.below)}? not decided ({e.test_method})"
     if q.kind == "probability":
         a = q.alpha if q.alpha is not None else q.delta
         b = q.beta if q.beta is not None else q.delta
@@ -252,6 +276,7 @@ def _answer_line(e: Any) -> str:
     else:
         a = q.alpha if q.alpha is not None else q.delta
         errors = f"wrong with probability at most {a:g}"
-    words = {"yes": f"YES, {subject} is below {q.below:g}", "no": f"NO, {subject} is not below {q.below:g}",
-             "indifferent": f"CANNOT TELL: {subject} is within +-{eps:g} of {q.below:g}"}
-    return f"  below {q.below:g}? {words[e.answer]} ({e.test_method}: {errors})"
+    below = given(q.below)
+    words = {"yes": f"YES, {subject} is below {below}", "no": f"NO, {subject} is not below {below}",
+             "indifferent": f"CANNOT TELL: {subject} is within +-{eps:g} of {below}"}
+    return f"  below {below}? {words[e.answer]} ({e.test_method}: {errors})"

@@ -194,6 +194,11 @@ class Question:
                 f"--confidence {self.confidence:.10g} leaves the threshold test an error probability of 1 - confidence = {self.delta:.10g}, "
                 f"0.5 or more, no better than a coin: give a confidence above 0.5 (e.g. 0.95) or set {' and '.join(unset)}"
             )
+        if self.kind == "mean" and self.alpha is not None and self.confidence != Question.confidence:
+            raise EstimateError(
+                f"confidence {self.confidence:.10g} and alpha {self.alpha:.10g} both set the confidence of a mean's threshold test, "
+                "whose interval is at 1 - alpha: give one of them"
+            )
         if self.beta is not None and self.kind == "mean":
             raise EstimateError(
                 "--beta applies to Wald's test of a probability (with --at-least); a mean's threshold is tested with its "
@@ -352,7 +357,7 @@ class Tracker:
         iv = self._last if self._last is not None and self._last.n == len(self.values) else self.interval()
         if self.share is not None:
             return iv, clopper_pearson(self.share.yes, self.share.n, self.question.delta)
-        return iv, normal_interval(self.values, self.question.delta)
+        return iv, normal_interval(self.values, 1.0 - self.question.interval_confidence)  # (at the guaranteed one's confidence)
 
 
 def world_horizon(scenario: Any, until: float | None) -> float:
