@@ -33,7 +33,7 @@ def _earlier_table(path: Path, params: list[str], seeds: int, until: float | Non
     grid = Grid(axes, seeds, 0)
     rows = [
         {"point": r.point.index, "seed_index": r.seed_index, "seed": r.seed, **grid.typed(r.point), "scenario": CLOUD,
-         "job": "run", "deployer": "desmon", "until": until, "exit_code": 0, "error": None, "exposure_s": 1.5, "wall_s": 0.5}
+         "scenario_digest": core.scenario_digest(CLOUD), "job": "run", "deployer": "desmon", "until": until, "exit_code": 0, "error": None, "exposure_s": 1.5, "wall_s": 0.5}
         for r in grid.runs()
     ]
     write_table(frame(rows, axes, "run", ["until"]), path)
@@ -71,6 +71,32 @@ def test_sweep_plot_takes_only_a_swept_parameter_as_x(tmp_path, capsys):
     assert not (tmp_path / "p.png").exists()
 
 
+def _every_run(spec, runs, on_row, **kw):  # type: ignore[no-untyped-def]
+    """A stand-in for the cluster: hands over a row for every run."""
+    for run in list(runs):
+        on_row(run, {"exit_code": 0, "error": None, "exposure_s": 2.0, "wall_s": 0.1})
+    return 1
+
+
+def test_resume_keeps_no_row_of_an_earlier_version_of_the_scenario_file(tmp_path, capsys, monkeypatch):
+    """Rows made before the scenario file was edited are of another world: --resume refuses
+    them (one line, the table left as it was) instead of mixing both worlds in one table."""
+    monkeypatch.setattr(core, "execute", _every_run)
+    scenario = tmp_path / "cloud.py"
+    scenario.write_bytes(Path(CLOUD).read_bytes())
+    table = tmp_path / "t.csv"
+    argv = ["sweep", str(scenario), "-p", "hours=0.05", "--until", "60", "-o", str(table), "--no-progress"]
+    assert main([*argv, "--seeds", "1"]) == 0
+    assert main([*argv, "--seeds", "2", "--resume"]) == 0  # the same file: its row is kept
+    assert "1 kept from before" in capsys.readouterr().out
+    scenario.write_text(scenario.read_text() + "\n# edited\n")
+    before = table.read_bytes()
+    assert main([*argv, "--seeds", "3", "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert "was made from another version of" in err and len(err.strip().splitlines()) == 1, err
+    assert table.read_bytes() == before
+
+
 def test_resume_names_a_row_cut_short(tmp_path, capsys):
     table = tmp_path / "t.csv"
     before = _earlier_table(table, ["hours=0.05,0.1"], 2, cut=True)
@@ -99,7 +125,7 @@ def test_resume_takes_back_its_own_table_where_the_column_spells_a_value_otherwi
     axes = tuple(a.typed_as(kind) for a in parse_axes([given]))
     grid = Grid(axes, 2, 0)
     rows = [{"point": r.point.index, "seed_index": r.seed_index, "seed": r.seed, **grid.typed(r.point), "scenario": scenario,
-             "job": "run", "deployer": "desmon", "until": 60.0, "exit_code": 0, "error": None, "exposure_s": 1.5, "wall_s": 0.5}
+             "scenario_digest": core.scenario_digest(scenario), "job": "run", "deployer": "desmon", "until": 60.0, "exit_code": 0, "error": None, "exposure_s": 1.5, "wall_s": 0.5}
             for r in grid.runs()]
     table = tmp_path / "t.parquet"
     write_table(frame(rows, axes, "run", ["until"]), table)

@@ -8,6 +8,7 @@ when the sweep ends, is interrupted (Ctrl-C) or fails, so no finished row is los
 
 from __future__ import annotations
 
+import hashlib
 import os
 import time
 from dataclasses import dataclass
@@ -50,6 +51,18 @@ class SweepResult:
     @property
     def complete(self) -> bool:
         return self.rows == self.total
+
+
+def scenario_digest(path: str) -> str:
+    """What the scenario file held when the sweep ran (``sha256:`` and 16 hex digits of its
+    bytes; "" without a scenario): ``--resume`` keeps no row of an earlier version of it."""
+    if not path:
+        return ""
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise SweepError(f"{path}: cannot read the scenario file ({exc.strerror or exc})") from None
+    return "sha256:" + hashlib.sha256(data).hexdigest()[:16]
 
 
 def _same_file(a: object, b: object) -> bool:
@@ -220,8 +233,9 @@ def run_sweep(
     # the scenario by its absolute path, in the table and the journal (as the workers get it):
     # sweep-plot and --resume read the table from any folder
     where = os.path.abspath(scenario) if scenario else ""
+    digest = scenario_digest(where)
     identity = {
-        "job": job, "scenario": where, "deployer": deployer, "sweep_seed": sweep_seed,
+        "job": job, "scenario": where, "scenario_digest": digest, "deployer": deployer, "sweep_seed": sweep_seed,
         "axes": {a.name: a.kind for a in axes}, "settings": settings,
     }
     out = Path(output)
@@ -237,7 +251,7 @@ def run_sweep(
     err = err or sys.stderr
     bar = Progress(len(all_runs), done=len(kept), failed=sum(1 for r in kept if r.get("error")), enabled=progress, out=err)
     started = time.perf_counter()
-    fixed = {"scenario": where, "job": job, "deployer": deployer, **settings}
+    fixed = {"scenario": where, "scenario_digest": digest, "job": job, "deployer": deployer, **settings}
     rows = _Rows(grid, kept, fixed, Journal(journal, identity, kept), bar, on_row)
     interrupted = False
     workers_seen = 0

@@ -37,7 +37,7 @@ __all__ = ["plot_sweep", "pareto_front", "summarise", "mean_interval", "CONFIDEN
 CONFIDENCE = 0.95
 
 _NOT_PARAMETERS = {
-    "point", "seed_index", "seed", "scenario", "job", "deployer", "until", "max_states", "examples", "trials", "phases", "horizon",
+    "point", "seed_index", "seed", "scenario", "scenario_digest", "job", "deployer", "until", "max_states", "examples", "trials", "phases", "horizon",
     "metric", "within", "confidence", "max_runs",
     "exit_code", "error",
 }

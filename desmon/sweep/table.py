@@ -53,7 +53,7 @@ def _is_float(column: str) -> bool:
 def columns_of(axes: Sequence[Axis], job: str, settings: Sequence[str], rows: Iterable[dict[str, Any]]) -> list[str]:
     """The table's columns: the fixed ones in order, then the per-run ones (errors_<kind>,
     memory_peak_mb_<platform>) sorted, then ``wall_s``."""
-    fixed = [*_HEAD, *(a.name for a in axes), "scenario", "job", "deployer", *settings, "exit_code", "error", *METRICS[job]]
+    fixed = [*_HEAD, *(a.name for a in axes), "scenario", "scenario_digest", "job", "deployer", *settings, "exit_code", "error", *METRICS[job]]
     extra = sorted({k for r in rows for k in r} - set(fixed) - {"wall_s"})
     return [*fixed, *extra, "wall_s"]
 
@@ -71,7 +71,7 @@ def frame(rows: Sequence[dict[str, Any]], axes: Sequence[Axis], job: str, settin
             df[c] = df[c].astype("int64")
         elif c in kinds:
             df[c] = df[c].astype({"int": "int64", "float": "float64", "bool": "bool", "str": "object"}[kinds[c]])
-        elif c in ("scenario", "job", "deployer") or c in _STR_METRICS:
+        elif c in ("scenario", "scenario_digest", "job", "deployer") or c in _STR_METRICS:
             df[c] = df[c].astype("object")
         elif c in settings:
             continue
@@ -236,6 +236,12 @@ def _check_identity(where: str, row: dict[str, Any], names: set[str], grid: Grid
                              "it is not this sweep; name another -o")
     if identity["job"] != "evaluate" and Path(str(row.get("scenario"))).resolve() != Path(str(identity["scenario"])).resolve():
         raise SweepError(f"--resume: {where} sweeps scenario {row.get('scenario')}, not {identity['scenario']}; name another -o")
+    if identity["job"] != "evaluate" and str(row.get("scenario_digest") or "") != identity["scenario_digest"]:
+        raise SweepError(
+            f"--resume: {where} was made from another version of {identity['scenario']} (its content has changed since, "
+            f"{row.get('scenario_digest') or 'not recorded'} then, {identity['scenario_digest']} now): its rows are of the "
+            "old world; sweep again without --resume to another -o"
+        )
     for name, value in settings.items():
         if not _same_setting(row.get(name), value):
             raise SweepError(f"--resume: {where} was made with {name} {row.get(name)}, not {value}: it is not this sweep; "
