@@ -118,6 +118,12 @@ def test_sweep_plot_draws_each_estimation_of_a_point_as_a_line_of_its_own(tmp_pa
     for k, (_label, ys) in enumerate(seen["lines"]):  # estimation k+1: seed index k at every point (not the k-th smallest seed)
         expected = [float(part[part["seed_index"] == k]["estimate"].iloc[0]) for _h, part in df.groupby("hours")]
         assert ys == pytest.approx(expected)
+    # another column of the table: a row is an estimation of many runs, never called a run
+    titles = []
+    monkeypatch.setattr(plot, "_wrapped", lambda t: titles.append(t) or t)
+    assert main(["sweep-plot", str(out), "-x", "hours", "-y", "half_width", "-o", str(png)]) == 0
+    assert "over up to 2 estimations" in titles[-1] and f"({len(df)} estimations" in titles[-1] and " runs" not in titles[-1]
+    assert plot._what_rows_are(df, 2, "", "estimate")[2] == "estimate (exposure_s)"
 
 
 def test_sweep_plot_bars_each_mean_with_the_guaranteed_interval_of_a_figure_in_seconds(tmp_path, local, monkeypatch):

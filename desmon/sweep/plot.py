@@ -19,7 +19,9 @@ on a log scale (values that span decades: an MTTF of 15 min to 4 h). A table of
 A table of ``--job estimate`` holds one estimation per point: ``-y estimate`` draws it
 with its guaranteed interval (the ``low`` and ``high`` columns) as the band, the title
 naming the method; rows INCOMPLETE at their run budget are drawn too (their interval
-is still guaranteed), marked hollow.
+is still guaranteed), marked hollow. Another column of that table (``-y half_width``) is
+drawn as a figure over the estimations of each point, and the title counts estimations
+(and the INCOMPLETE ones), not runs.
 """
 
 from __future__ import annotations
@@ -352,7 +354,7 @@ def _plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str |
 
     fig, ax = plt.subplots(figsize=(7.5, 4.8), dpi=120)
     seeds = int(ok.groupby(params or ["job"])["seed"].count().max())
-    note = f"{len(ok)} runs{left}"
+    note, over, ylabel = _what_rows_are(ok, seeds, left, y)
     if x is not None and _estimated(ok, x, y):
         ax.set_title(_wrapped(_estimates_title(ok, _estimates(ax, ok, params, x), params, x, seeds, left)), fontsize=8)
     elif x is not None and _exact(ok):
@@ -361,14 +363,14 @@ def _plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str |
     elif x is not None:
         method = _against(ax, ok, params, x, y, intervals=seeds > 1)
         bars = f"; bars: {100 * CONFIDENCE:g} % interval of the mean, {method}" if method else ""
-        ax.set_title(_wrapped(f"{y} vs {x}: mean and min-max over up to {seeds} seeds{bars} ({note})"), fontsize=8)
+        ax.set_title(_wrapped(f"{y} vs {x}: mean and min-max over up to {over}{bars} ({note})"), fontsize=8)
     else:
         assert pareto is not None
         points = _pareto(ax, ok, params, pareto, y)
         # without a swept parameter the table is one point: its runs, grouped by their own cost
         what = "points" if params else f"values of {pareto} among the runs of the one point (no swept parameter)"
         ax.set_title(_wrapped(f"{y} vs {pareto}: Pareto front of {points} {what} ({note})"), fontsize=9)
-    ax.set_ylabel(y)
+    ax.set_ylabel(ylabel)
     if log_x:
         _log_axis(ax, sorted({float(v) for v in ok[x or pareto]}))
     ax.grid(alpha=0.3)
@@ -379,6 +381,18 @@ def _plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str |
             fig.savefig(fh, format="png")
     finally:
         plt.close(fig)
+
+
+def _what_rows_are(ok: Any, seeds: int, left: str, y: str) -> tuple[str, str, str]:
+    """(how many rows are drawn, what a point's spread is over, the y axis's label): a row of
+    ``--job estimate``'s table is an estimation of many runs (INCOMPLETE ones counted), not a run,
+    and its ``estimate`` column is of the metric its ``metric`` column names."""
+    if not ("job" in ok.columns and bool((ok["job"] == "estimate").all())):
+        return f"{len(ok)} runs{left}", f"{seeds} seeds", y
+    cut = int((ok["exit_code"] == 3).sum()) if "exit_code" in ok.columns else 0
+    metrics = sorted({str(m) for m in ok["metric"].dropna()}) if "metric" in ok.columns else []
+    label = f"{y} ({', '.join(metrics)})" if y in ("estimate", "low", "high", "half_width") and metrics else y
+    return f"{len(ok)} estimations" + (f", {cut} INCOMPLETE" if cut else "") + left, f"{seeds} estimations", label
 
 
 #: the longest title line the figure shows whole (7.5 in at font size 8 to 9)
