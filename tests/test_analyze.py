@@ -432,6 +432,15 @@ def test_run_under_exponential_timing_is_the_markov_world(capsys):
     assert m["metrics"]["unmonitored_exposure_s"] == pytest.approx(values[0])
 
 
+def test_the_simulated_line_names_the_timing_its_seeds_ran_under(capsys):
+    """With --phases 2 the seeds of --simulate run Erlang-2 steps, as the chain times them:
+    the line says so (it said "exponential timing" whatever the phases)."""
+    assert main(["analyze", SHIFT, "-p", "faults=False", "-p", "hours=0.05", "--phases", "2", "--trials", "10", "--simulate", "3",
+                 "--no-progress"]) == 0
+    (line,) = [x for x in capsys.readouterr().out.splitlines() if x.startswith("Simulated")]
+    assert line.startswith("Simulated (Erlang-2 timing, 3 seeds): mean ")
+
+
 def test_a_world_refuses_an_unknown_timing():
     from desmon.errors import ScenarioError
 

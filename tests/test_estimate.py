@@ -384,3 +384,6 @@ def test_thresholds_and_confidences_print_as_given_never_rounded_into_another_qu
     assert code == 3 and "P(exposure_s >= 3.0000001) per run" in out
     code, out, _err = _estimate(capsys, QUICK, "--within", "50%", "--confidence", "0.9999999999999999", "--max-runs", "3")
     assert " 99.99999999999999 % interval [" in out
+    # a range narrower than the digits a range prints: every digit of its ends
+    code, out, _err = _estimate(capsys, QUICK, "--range", "2.5", "2.5000001", "--max-runs", "3")
+    assert code == 3 and "every run's value assumed in [2.5, 2.5000001]" in out

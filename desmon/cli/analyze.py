@@ -69,7 +69,7 @@ def add_parser(sub: Subparsers) -> None:
         help="also the optimality gap: the best and worst long-run exposure over the deployer's placement choices (an MDP) and its first differing decision",
     )
     p.add_argument("--simulate", type=bounded_count(MAX_SIMULATED, "seeds (each one a whole simulated run)"), default=None, metavar="N",
-                   help=f"also simulate the Markov world with N seeds (0..N-1, at most {MAX_SIMULATED:,}) and compare")
+                   help=f"also simulate the Markov world with N seeds (0..N-1, 3 to {MAX_SIMULATED:,}) and compare")
     add_output(p, "--json", suffixes=(".json",), default=None, metavar="FILE.json", help="write the measures and the rates used as JSON")
     add_output(p, "--export", suffixes=(".drn", ".tra"), default=None, metavar="FILE", help="write the chain: FILE.drn (Storm) or FILE.tra (PRISM explicit, with .sta .lab .srew)")
     p.add_argument(
@@ -345,7 +345,7 @@ def format_analysis(a: Any, agree: Any = None) -> str:
     if agree is not None:
         verdict = "inside" if agree.inside else "OUTSIDE"
         out.append(
-            f"Simulated (exponential timing, {agree.seeds} seeds): mean {agree.mean:.3f} s, 99 % CI "
+            f"Simulated ({timing} timing, {agree.seeds} seeds): mean {agree.mean:.3f} s, 99 % CI "
             f"[{agree.low:.3f}, {agree.high:.3f}] (range {min(agree.values):.3f}..{max(agree.values):.3f}): exact value {verdict}"
         )
     if a.contributions:

@@ -249,7 +249,10 @@ def format_estimate(e: Any) -> str:
         out.append(f"  world: the scenario's, with {' '.join(e.world)}")
     rel = f" = {100 * iv.half_width / abs(iv.estimate):.2f} % of the estimate" if iv.estimate else ""
     out.append(f"  estimate {f(iv.estimate)}, {pct} interval [{f(iv.low)}, {f(iv.high)}] (half-width {f(iv.half_width)}{rel}), guaranteed")
-    out.append(f"    method: {iv.method}" + (f"; every run's value assumed in [{_n(e.range[0])}, {_n(e.range[1])}]" if e.range else ""))
+    ends = [_n(x) for x in e.range] if e.range else []
+    if len(set(ends)) == 1:  # (a range narrower than the digits shown: every digit, not [32.1, 32.1])
+        ends = [given(x) for x in e.range]
+    out.append(f"    method: {iv.method}" + (f"; every run's value assumed in [{ends[0]}, {ends[1]}]" if e.range else ""))
     if e.range_basis:
         out.append(f"    range: {e.range_basis}")
     out.append(f"  {ap.method}: [{f(ap.low)}, {f(ap.high)}]")

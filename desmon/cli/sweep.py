@@ -69,7 +69,7 @@ def add_parser(sub: Subparsers) -> None:
                    "--job estimate: 1, an estimation makes its own runs)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="the sweep seed every run's seed is derived from")
     p.add_argument("--deployer", default="desmon", metavar="SPEC", help="the deployer, as for desmon run (docs/deployers.md)")
-    p.add_argument("--until", type=positive_seconds, default=None, help="--job run: simulated seconds (default: each point's horizon)")
+    p.add_argument("--until", type=positive_seconds, default=None, help="--job run and estimate: simulated seconds of each run (default: each point's horizon)")
     p.add_argument("--max-states", type=positive_int, default=None, help="--job verify and analyze: stop INCOMPLETE after this "
                    f"many states (default: {_SETTING_DEFAULTS['max_states']:,})")
     p.add_argument("--examples", type=bounded_count(MAX_EXAMPLES, "sequences"), default=None,
