@@ -387,3 +387,6 @@ def test_thresholds_and_confidences_print_as_given_never_rounded_into_another_qu
     # a range narrower than the digits a range prints: every digit of its ends
     code, out, _err = _estimate(capsys, QUICK, "--range", "2.5", "2.5000001", "--max-runs", "3")
     assert code == 0 and "every run's value assumed in [2.5, 2.5000001]" in out
+    # an error probability takes a percentage as the confidence does
+    one_percent = [_estimate(capsys, QUICK, "--below", "3", "--within", "0.2", "--alpha", a) for a in ("1%", "0.01")]
+    assert one_percent[0] == one_percent[1] and "wrong with probability at most 0.01" in one_percent[0][1]

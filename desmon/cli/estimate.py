@@ -38,6 +38,19 @@ def parse_within(text: str) -> tuple[float, bool]:
         raise argparse.ArgumentTypeError(f"must be a positive half-width, absolute (60) or relative to the estimate (1%), got {text}") from None
 
 
+def parse_error_probability(text: str) -> float:
+    """An error probability (``0.01``; ``1%`` too, as ``--confidence`` takes ``99%``); its
+    bounds are the question's to check (:meth:`~desmon.estimate.Question.check`)."""
+    t = text.strip()
+    try:
+        v = float(t.removesuffix("%")) / (100.0 if t.endswith("%") else 1.0)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an error probability, e.g. 0.01 or 1%, got {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"must be a finite error probability, e.g. 0.01 or 1%, got {text}")
+    return v
+
+
 def parse_confidence(text: str) -> float:
     """A confidence strictly between 0 and 1 (``0.99``; ``99%`` too)."""
     t = text.strip()
@@ -65,8 +78,8 @@ def add_parser(sub: Subparsers) -> None:
                    "--at-least 60: 60 s or more unmonitored at a stretch)")
     p.add_argument("--below", type=finite_number, default=None, metavar="X",
                    help="answer yes or no: is the mean (with --at-least: the probability) below X? Wald's test for a probability")
-    p.add_argument("--alpha", type=finite_number, default=None, help="--below: the chance of a wrong yes (unset: 1 - confidence)")
-    p.add_argument("--beta", type=finite_number, default=None, help="--below with --at-least: the chance of a wrong no (unset: 1 - confidence)")
+    p.add_argument("--alpha", type=parse_error_probability, default=None, help="--below: the chance of a wrong yes (unset: 1 - confidence)")
+    p.add_argument("--beta", type=parse_error_probability, default=None, help="--below with --at-least: the chance of a wrong no (unset: 1 - confidence)")
     p.add_argument("--range", type=finite_number, nargs=2, default=None, metavar=("LOW", "HIGH"),
                    help="the range every run's value lies in (seconds: [0, horizon] unless given, narrower where fixed timing fixes the task's seconds; a count's mean needs one)")
     p.add_argument("--max-runs", type=run_count, default=10_000, metavar="N", help="stop INCOMPLETE (exit 3) after N runs")
