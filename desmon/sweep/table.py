@@ -234,18 +234,24 @@ def _check_identity(where: str, row: dict[str, Any], names: set[str], grid: Grid
         if str(row.get(column)) != str(identity[column]):
             raise SweepError(f"--resume: {where} was made with --{column} {row.get(column)}, not {identity[column]}: "
                              "it is not this sweep; name another -o")
-    if identity["job"] != "evaluate" and Path(str(row.get("scenario"))).resolve() != Path(str(identity["scenario"])).resolve():
+    if identity["job"] != "evaluate":
+        _check_scenario(where, row, identity)
+    for name, value in settings.items():
+        if not _same_setting(row.get(name), value):
+            raise SweepError(f"--resume: {where} was made with {name} {row.get(name)}, not {value}: it is not this sweep; "
+                             "name another -o")
+
+
+def _check_scenario(where: str, row: dict[str, Any], identity: dict[str, Any]) -> None:
+    """A stored row was made from this sweep's scenario file, as it reads now."""
+    if Path(str(row.get("scenario"))).resolve() != Path(str(identity["scenario"])).resolve():
         raise SweepError(f"--resume: {where} sweeps scenario {row.get('scenario')}, not {identity['scenario']}; name another -o")
-    if identity["job"] != "evaluate" and str(row.get("scenario_digest") or "") != identity["scenario_digest"]:
+    if str(row.get("scenario_digest") or "") != identity["scenario_digest"]:
         raise SweepError(
             f"--resume: {where} was made from another version of {identity['scenario']} (its content has changed since, "
             f"{row.get('scenario_digest') or 'not recorded'} then, {identity['scenario_digest']} now): its rows are of the "
             "old world; sweep again without --resume to another -o"
         )
-    for name, value in settings.items():
-        if not _same_setting(row.get(name), value):
-            raise SweepError(f"--resume: {where} was made with {name} {row.get(name)}, not {value}: it is not this sweep; "
-                             "name another -o")
 
 
 def _run_of(where: str, row: dict[str, Any], grid: Grid, runs: dict[tuple[str, int], Run]) -> tuple[str, int]:
