@@ -78,6 +78,14 @@ def _every_run(spec, runs, on_row, **kw):  # type: ignore[no-untyped-def]
     return 1
 
 
+def test_sweep_plot_refuses_the_error_column_as_text_even_where_no_run_failed(tmp_path, capsys):
+    table = tmp_path / "t.csv"
+    _earlier_table(table, ["hours=0.05,0.1"], 2)  # no failed run: its error column reads as empty numbers
+    assert main(["sweep-plot", str(table), "-x", "hours", "-y", "error", "-o", str(tmp_path / "p.png")]) == 2
+    assert "-y error: the column holds text or yes/no values, not numbers" in capsys.readouterr().err
+    assert not (tmp_path / "p.png").exists()
+
+
 def test_resume_keeps_no_row_of_an_earlier_version_of_the_scenario_file(tmp_path, capsys, monkeypatch):
     """Rows made before the scenario file was edited are of another world: --resume refuses
     them (one line, the table left as it was) instead of mixing both worlds in one table."""

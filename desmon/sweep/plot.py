@@ -68,7 +68,8 @@ def _column(df: Any, flag: str, name: str, numeric: bool = True) -> None:
     if numeric:
         import pandas as pd
 
-        if not pd.api.types.is_numeric_dtype(df[name]) or pd.api.types.is_bool_dtype(df[name]):
+        # (the error column of a table with no failed run reads as empty numbers: it is text all the same)
+        if name == "error" or not pd.api.types.is_numeric_dtype(df[name]) or pd.api.types.is_bool_dtype(df[name]):
             raise SweepError(f"{flag} {name}: the column holds text or yes/no values, not numbers; plot a numeric column")
 
 
