@@ -1,5 +1,7 @@
 """Specification of the deployer variants: where the paper's early returns bite, and the corrections."""
 
+import re
+
 import pytest
 
 from desmon.deployment import DeploymentCore, check_invariants, get_deployer
@@ -255,3 +257,19 @@ def test_an_upgrade_the_infrastructure_would_refuse_is_never_planned_and_comes_w
         ("start combined_slip_detector on torso_pc", True),
     ]
     assert run.query.deployments() == (("combined_slip_detector", "torso_pc"),)
+
+
+@pytest.mark.parametrize("field, value, says", [
+    ("fallbacks", "no", "Deployer(...) fallbacks = 'no' is not True or False"),  # (a text "no" is true: the other variant)
+    ("stale_errors", 1, "Deployer(...) stale_errors = 1 is not True or False"),
+    ("name", "", "give a non-empty name on one line"),
+    ("name", "two\nlines", "give a non-empty name on one line"),
+    ("description", 5, "Deployer(...) description = 5 is not a string"),
+])
+def test_a_deployers_fields_are_of_their_types_never_read_as_another_variant(field, value, says):
+    from desmon.deployment.deployer import DESMON, Deployer
+    from desmon.errors import ModelError
+
+    fields = {"name": "mine", "description": "a variant", "react": DESMON.react, field: value}
+    with pytest.raises(ModelError, match=re.escape(says)):
+        Deployer(**fields)

@@ -37,6 +37,7 @@ from desmon.deployment.ports import (
 )
 from desmon.deployment.validity import check_validity, spec_validity, validity_for
 from desmon.errors import ModelError
+from desmon.model.checks import check_flag, check_text
 from desmon.model.requirements import DeploymentSpec
 
 __all__ = [
@@ -221,6 +222,15 @@ class Deployer:
     #: stands for a graph while it is wanted and not validly active, even when another
     #: alternative serves its slot (see :func:`desmon.deployment.core.standing_after`).
     stale_errors: bool = False
+
+    def __post_init__(self) -> None:
+        """Each field of its type: a flag given as text (``fallbacks="no"``, which is true)
+        would silently mean the other variant."""
+        if not isinstance(self.name, str) or not self.name.strip() or not self.name.isprintable():
+            raise ModelError(f"Deployer(...) name {self.name!r}: give a non-empty name on one line, e.g. 'my-deployer'")
+        check_text("Deployer(...) description", self.description)
+        check_flag("Deployer(...) fallbacks", self.fallbacks)
+        check_flag("Deployer(...) stale_errors", self.stale_errors)
 
     def requested(self, slots: tuple[tuple[str, ...], ...]) -> tuple[tuple[str, ...], ...]:
         """The slots as this variant's selector requests them."""
