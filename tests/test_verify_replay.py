@@ -110,13 +110,30 @@ def test_a_fix_in_the_deployer_shows_as_no_longer_violated_but_diverged_and_exit
 
 def test_a_counterexample_replayed_as_recorded_without_its_violation_exits_0_saying_fixed(saved, tmp_path, capsys):
     path, _report = saved
-    # as if the invariant's check had been corrected: the recorded run, judged by an invariant it meets
-    relabelled = _edited(path, tmp_path / "relabelled.json", lambda d: d["counterexamples"][0].update(invariant="fixed"))
+
+    def relabel(d: dict[str, Any]) -> None:  # as if the check of its invariant had been corrected: the run meets it
+        d["counterexamples"][0].update(invariant="fixed")
+        d["invariants"] = ["fixed"]
+
+    relabelled = _edited(path, tmp_path / "relabelled.json", relabel)
     assert _replay(relabelled) == 0
     out = capsys.readouterr().out
     assert "verdict: the counterexample no longer violates fixed: fixed? (every state as recorded: the deployer did the same, " in out
     assert "so it is the check of fixed that changed since" in out and "or the file was edited)" in out
     assert "diverges" not in out
+
+
+def test_a_replay_that_no_longer_violates_its_invariant_but_breaks_another_exits_1_naming_it(saved, tmp_path, capsys):
+    """A file naming another invariant than its run breaks (edited): the replay's table shows
+    the invariants it does break, and the verdict names them, exit 1 (it was "fixed?", exit 0)."""
+    path, _report = saved
+    broken = json.loads(path.read_text())["counterexamples"][0]["invariant"]
+    relabelled = _edited(path, tmp_path / "relabelled.json", lambda d: d["counterexamples"][0].update(invariant="fixed"))
+    assert _replay(relabelled) == 1
+    out = capsys.readouterr().out
+    verdict = next(line for line in out.splitlines() if line.startswith("verdict: "))
+    assert verdict.startswith("verdict: VIOLATED ") and broken in verdict and "no longer violates fixed, but its replay violates" in verdict
+    assert "fixed?" not in verdict
 
 
 def test_a_replay_that_leaves_the_recorded_states_names_the_step_on_one_line_and_exits_1(saved, tmp_path, capsys):

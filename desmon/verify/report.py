@@ -351,7 +351,9 @@ def format_replay_verdict(
 ) -> tuple[str, bool]:
     """The invariants' verdicts on the replayed final state (``final``: the violated ones;
     ``found``: those the last reaction broke inside it, invariant first), and the verdict;
-    with whether the counterexample still violates its invariant."""
+    with whether the replay still violates an invariant: its own, or (it no longer does)
+    another one the file checked, which the verdict then names (no "fixed?" over a
+    table of violations)."""
     bad = dict(final)
     inside = {f[0]: f for f in found}
     lines = ["invariants after the replay (on its final state; an instantaneous one also inside its last reaction):"]
@@ -369,15 +371,19 @@ def format_replay_verdict(
         f"the replay diverged from the recorded run at step {diverged} (the scenario, the deployer or desmon changed since "
         f"{saved.source} was written)" if diverged is not None else ""
     )
+    others = [n for n in saved.invariants if n != x and (n in bad or n in inside)]
     if still:
         verdict = f"VIOLATED {x}: the counterexample still holds" + (f", although {changed}" if changed else ", every state as recorded")
+    elif others:
+        verdict = (f"VIOLATED {', '.join(others)}: the counterexample no longer violates {x}, but its replay violates "
+                   + ("those" if len(others) > 1 else "that") + f" ({changed or 'every state as recorded: the file names another invariant than its run breaks, or was edited'})")
     elif changed:
         verdict = f"the counterexample no longer violates {x}: fixed? But {changed}: re-run desmon verify to check every state"
     else:
         verdict = (f"the counterexample no longer violates {x}: fixed? (every state as recorded: the deployer did the same, "
                    f"so it is the check of {x} that changed since {saved.source} was written, or the file was edited)")
     lines.append(f"verdict: {verdict}")
-    return "\n".join(lines) + "\n", still
+    return "\n".join(lines) + "\n", still or bool(others)
 
 
 # -- generated pytest -------------------------------------------------------------------------
