@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import builtins
 import contextlib
 import importlib.util
 import os
@@ -68,7 +69,7 @@ def _run_script(path: str | Path, p: Path, params: Mapping[str, str], declared: 
     sys.modules[name] = module
     script_folder_on_path(p)
     try:
-        with overriding(params, str(path)) as found, _real_ctrl_c() as interrupted, _process_kept(), \
+        with overriding(params, str(path)) as found, _real_ctrl_c() as interrupted, _process_kept(), _folder_and_builtins_kept(), \
                 contextlib.redirect_stdout(sys.stderr):
             spec.loader.exec_module(module)
         declared.update(found)
@@ -175,6 +176,34 @@ def _process_kept() -> Iterator[None]:
         loading.clear()
         for name, function in real.items():
             setattr(os, name, function)
+
+
+@contextlib.contextmanager
+def _folder_and_builtins_kept() -> Iterator[None]:
+    """The working folder and Python's builtins given back as they were once the block ends:
+    a script that changes folder (to read its data files, say) or replaces a builtin
+    (``print``) changes neither what the paths on the command line name (an output written
+    elsewhere, over another file) nor desmon's own output. A name it added to the builtins
+    stays (a library it imported may use it)."""
+    try:
+        folder: str | None = os.getcwd()
+    except OSError:  # (the folder was removed under desmon: nothing to give back)
+        folder = None
+    held = dict(vars(builtins))
+    try:
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            if folder is not None and os.getcwd() != folder:
+                os.chdir(folder)
+        now = vars(builtins)
+        for name, value in held.items():
+            if now.get(name, _GONE) is not value:
+                now[name] = value
+
+
+#: a builtin's value where the script deleted it
+_GONE = object()
 
 
 @contextlib.contextmanager

@@ -74,3 +74,27 @@ def test_a_process_the_script_forks_and_lets_return_ends_there_and_only_desmon_r
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.count("HOLDS") == 1, proc.stdout  # one report: the forked copy ended after the script
+
+
+def test_a_script_that_changes_folder_or_a_builtin_leaves_desmon_its_own(tmp_path: Path, monkeypatch, capsys) -> None:
+    """A scenario that moves to another folder (to read its data files) or replaces print:
+    the paths on the command line still name what the user typed (an output written
+    elsewhere, over another file, before), and desmon still prints its report (a traceback
+    and exit 1, before)."""
+    from desmon.cli import main
+
+    elsewhere = tmp_path / "elsewhere"
+    (elsewhere / "out").mkdir(parents=True)
+    (elsewhere / "out" / "cex.json").write_text("another file\n")
+    script = tmp_path / "moves.py"
+    script.write_text(
+        f"import builtins, os, sys\nos.chdir({str(elsewhere)!r})\nbuiltins.print = None\n"
+        f"sys.path.insert(0, {str(ROOT / 'scenarios')!r})\nfrom migration import scenario\n"
+    )
+    here = tmp_path / "here"
+    (here / "out").mkdir(parents=True)
+    monkeypatch.chdir(here)
+    assert main(["verify", str(script), "--deployer", "paper", "--json", "out/cex.json", "--no-progress"]) == 1
+    assert "verdict: VIOLATED" in capsys.readouterr().out
+    assert (here / "out" / "cex.json").exists() and (elsewhere / "out" / "cex.json").read_text() == "another file\n"
+    assert os.getcwd() == str(here) and print is not None
