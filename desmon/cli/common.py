@@ -143,13 +143,15 @@ def load_scenario_of(args: argparse.Namespace) -> Scenario:
     from desmon.errors import ScenarioError
     from desmon.loader import load_scenario
     from desmon.model.params import parse_assignments
-    from desmon.paths import PathError, check_outputs_spare_modules
+    from desmon.paths import PathError, check_outputs_spare_modules, check_written_before
 
     scenario = load_scenario(args.scenario, parse_assignments(getattr(args, "param", None)))
     try:
         check_outputs_spare_modules(getattr(args, "outputs", ()))  # an output must not overwrite a module the script imported
     except PathError as exc:
         raise ScenarioError(str(exc)) from None
+    for flag, path, head in getattr(args, "written_heads", ()):  # nor another file desmon did not write (a script of the user's)
+        check_written_before(path, flag, head)
     return scenario
 
 

@@ -157,6 +157,9 @@ class Output:
     formats: Mapping[str, tuple[str, ...]] | None = None
     format_dest: str = "format"
     default_format: str = ""
+    #: the first characters of every file this output writes (a generated test's docstring):
+    #: an existing file that does not begin so is not overwritten (a script of the user's)
+    written_head: str = ""
 
 
 @dataclass(frozen=True)
@@ -207,10 +210,11 @@ def add_output(
     suffixes: tuple[str, ...] = (),
     formats: Mapping[str, tuple[str, ...]] | None = None,
     default_format: str = "",
+    written_head: str = "",
     **kwargs: Any,
 ) -> None:
     action = p.add_argument(*flags, **kwargs)
-    _declare(p, "_outputs", Output(action.dest, flags[0], suffixes, formats, default_format=default_format))
+    _declare(p, "_outputs", Output(action.dest, flags[0], suffixes, formats, default_format=default_format, written_head=written_head))
 
 
 def add_resolved(p: argparse.ArgumentParser, *flags: str, resolve: Callable[[str, argparse.Namespace], object], **kwargs: Any) -> None:
@@ -252,6 +256,32 @@ def _resolve_format(args: argparse.Namespace, o: Output, value: str | None) -> t
     return o.formats[chosen]
 
 
+def _checked_outputs(args: argparse.Namespace, inputs: list[str]) -> tuple[tuple[str, str], ...]:
+    """(flag, path) of each output the command line names, each checked (:func:`preflight`);
+    ``args.written_heads`` the ones a file must begin with to be written over, looked at
+    once the scenario is loaded (a module it imports is named as such first)."""
+    written: list[tuple[str, str]] = []
+    heads: list[tuple[str, str, str]] = []
+    for o in getattr(args, "_outputs", ()):
+        value = getattr(args, o.dest, None)
+        suffixes = _resolve_format(args, o, value) if o.formats is not None else o.suffixes
+        if ".png" in suffixes and (value is not None or o.formats is not None):
+            from desmon.viz.common import require_matplotlib
+
+            require_matplotlib()  # before the work, not after it
+        if value is None:
+            continue
+        check_output_file(value, o.flag, suffixes, inputs)
+        if o.written_head:
+            heads.append((o.flag, value, o.written_head))
+        for flag, other in written:
+            if same_file(value, other):
+                raise PathError(f"{o.flag} {value}: {flag} writes the same file; give each output its own name")
+        written.append((o.flag, value))
+    args.written_heads = tuple(heads)
+    return tuple(written)
+
+
 def preflight(args: argparse.Namespace) -> None:
     """Check the inputs, windows and outputs the parser declared for ``args``' command,
     then resolve its named objects (a deployer's module may run the user's code: last).
@@ -278,22 +308,7 @@ def preflight(args: argparse.Namespace) -> None:
             given = w.flags[0] if start is not None else w.flags[1]
             raise PathError(f"{given} sets the window of the timeline plot: also give {w.needs[1]} FILE.png")
         check_window(start, end, None, flags=w.flags)
-    written: list[tuple[str, str]] = []
-    for o in getattr(args, "_outputs", ()):
-        value = getattr(args, o.dest, None)
-        suffixes = _resolve_format(args, o, value) if o.formats is not None else o.suffixes
-        if ".png" in suffixes and (value is not None or o.formats is not None):
-            from desmon.viz.common import require_matplotlib
-
-            require_matplotlib()  # before the work, not after it
-        if value is None:
-            continue
-        check_output_file(value, o.flag, suffixes, inputs)
-        for flag, other in written:
-            if same_file(value, other):
-                raise PathError(f"{o.flag} {value}: {flag} writes the same file; give each output its own name")
-        written.append((o.flag, value))
-    args.outputs = tuple(written)  # this command's outputs: looked at again once the scenario and the deployer are loaded
+    args.outputs = _checked_outputs(args, inputs)  # this command's outputs: looked at again once the scenario and the deployer are loaded
     imported: list[tuple[str, str]] = []
     for r in getattr(args, "_resolved", ()):
         value = getattr(args, r.dest, None)

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from desmon.cli.common import CEX_FILE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered, run_of
+from desmon.paths import GENERATED_TEST_HEAD
 from desmon.cli.options import Input, add_output, megabytes, positive_int, positive_seconds, worker_count
 from desmon.errors import CheckerError
 from desmon.verify import engines
@@ -54,7 +55,8 @@ def add_parser(sub: Subparsers) -> None:
         help=engines.described(),
     )
     add_output(p, "--json", suffixes=(".json",), default=None, metavar="FILE.json", help="write the counterexample(s) as JSON states")
-    add_output(p, "--pytest", suffixes=(".py",), default=None, metavar="FILE.py", help="write a pytest replaying the counterexample")
+    add_output(p, "--pytest", suffixes=(".py",), default=None, metavar="FILE.py", written_head=GENERATED_TEST_HEAD,
+               help="write a pytest replaying the counterexample (over a file only if desmon wrote it)")
     add_output(
         p, "--plot", suffixes=(".png",), default=None, metavar="FILE.png",
         help="draw the shortest counterexample as repository snapshots (with --replay: the replayed one)",
