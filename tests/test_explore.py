@@ -202,6 +202,9 @@ def test_a_counterexample_of_one_invariant_shows_no_other_as_violated_inside_a_r
         (["scenarios/coffee_handover.py", "-o", "{tmp}/dir.html"], "directory"),
         (["scenarios/fallbacks.py", "-o", "{tmp}/x.html"], "no scripted timeline"),
         (["scenarios/coffee_handover.py", "--verify", "--no-progress", "-o", "{tmp}/x.html"], "no counterexample to explore"),
+        # one invariant holding is named as such, not as the deployer's verdict
+        (["scenarios/migration.py", "--verify", "--deployer", "paper", "--invariant", "fixed", "--no-progress", "-o", "{tmp}/x.html"],
+         "with deployer paper: fixed HOLDS in 189 states, no counterexample to explore"),
         (["scenarios/coffee_handover.py", "--invariant", "coverage", "-o", "{tmp}/x.html"], "also give --verify"),
         (["scenarios/coffee_handover.py", "--counterexample", "2", "-o", "{tmp}/x.html"], "also give --from-json"),
         (["scenarios/coffee_handover.py", "--from-json", "{tmp}/none.json", "-o", "{tmp}/x.html"], "no such counterexample file"),

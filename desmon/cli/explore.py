@@ -290,7 +290,8 @@ def _searched(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str],
         )
         return None
     if not result.counterexamples:
-        what = f"{result.verdict} in {result.states:,} states"
+        checked = f"{args.invariant} " if args.invariant is not None else ""  # (one invariant holding is not the deployer's verdict)
+        what = f"{checked}{result.verdict} in {result.states:,} states"
         if result.incomplete:
             what += f" ({result.incomplete})"
         hints = [f"step through its timeline with: desmon explore {args.scenario}"] if scenario.timeline else []
