@@ -54,7 +54,9 @@ def initial_reaction(core: DeploymentCore, scenario: Scenario, bounds: Bounds, c
 
 def first_reaction_fault(name: str, where: str, fault: DeployerFault) -> DeployerFault:
     """``fault`` of the initial reaction, said as what it means: the deployer cannot run at all."""
-    out = DeployerFault(f"deployer {name} cannot run at all: reacting to the initial state ({where}), it {fault.what or fault}")
+    what = str(fault.what or fault)
+    said = what if what.startswith("its ") else f"it {what}"  # ("it its reaction returned ...": its own subject)
+    out = DeployerFault(f"deployer {name} cannot run at all: reacting to the initial state ({where}), {said}")
     out.stimulus, out.log, out.cause, out.what = fault.stimulus, fault.log, fault.cause, fault.what
     out.initial = True
     return out
