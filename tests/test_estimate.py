@@ -376,9 +376,10 @@ def test_a_means_threshold_prints_both_intervals_at_the_confidence_its_test_keep
 def test_thresholds_and_confidences_print_as_given_never_rounded_into_another_question(capsys):
     """32.0999999 and 32.1000001 are two thresholds with two answers: each is printed as given,
     not both as 32.1; a confidence of 0.9999999999999999 is not printed as 100 %."""
-    from desmon.cli.estimate import given, percent
+    from desmon.cli.estimate import percent
+    from desmon.model.checks import exact
 
-    assert given(32.0999999) == "32.0999999" and given(32.1000001) == "32.1000001" and given(600.0) == "600"
+    assert exact(32.0999999) == "32.0999999" and exact(32.1000001) == "32.1000001" and exact(600.0) == "600"
     assert percent(0.95) == "95" and percent(0.9999999) == "99.99999" and float(percent(0.9999999999999999)) < 100
     code, out, _err = _estimate(capsys, QUICK, "--at-least", "3.0000001", "--max-runs", "3")
     assert code == 3 and "P(exposure_s >= 3.0000001) per run" in out

@@ -18,9 +18,10 @@ import time
 from typing import Any
 
 from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg
+from desmon.model.checks import exact
 from desmon.cli.options import finite_number, non_negative_int, positive_seconds, run_count, worker_count
 
-__all__ = ["add_parser", "run", "format_estimate", "parse_within", "parse_confidence", "given", "percent"]
+__all__ = ["add_parser", "run", "format_estimate", "parse_within", "parse_confidence", "percent"]
 
 
 def parse_within(text: str) -> tuple[float, bool]:
@@ -229,13 +230,6 @@ def _fixed(x: float, decimals: int) -> str:
     return f"{round(x, decimals) + 0.0:,.{decimals}f}"
 
 
-def given(x: float) -> str:
-    """A number the user gave (a threshold), shortly where that is the same number, else every
-    digit: 32.0999999 and 32.1000001 are not both 32.1."""
-    short = f"{x:g}"
-    return short if float(short) == x else repr(float(x))
-
-
 def percent(confidence: float) -> str:
     """``confidence`` in percent, with every digit it needs: 0.9999999 is not 100 %, nor is
     0.9999999999999999."""
@@ -256,7 +250,7 @@ def format_estimate(e: Any) -> str:
     d = decimals_for(iv.half_width)
     f = lambda x: _fixed(x, d)  # noqa: E731
     pct = f"{percent(q.interval_confidence)} %"
-    what = f"P({q.metric} >= {given(q.at_least)}) per run" if q.kind == "probability" else f"mean {q.metric} per run"
+    what = f"P({q.metric} >= {exact(q.at_least)}) per run" if q.kind == "probability" else f"mean {q.metric} per run"
     out = [f"desmon estimate: {e.scenario} (deployer {e.deployer}), {what} of {_n(e.horizon)} s simulated, seed {e.seed}"]
     if e.world:
         out.append(f"  world: the scenario's, with {' '.join(e.world)}")
@@ -264,7 +258,7 @@ def format_estimate(e: Any) -> str:
     out.append(f"  estimate {f(iv.estimate)}, {pct} interval [{f(iv.low)}, {f(iv.high)}] (half-width {f(iv.half_width)}{rel}), guaranteed")
     ends = [_n(x) for x in e.range] if e.range else []
     if len(set(ends)) == 1:  # (a range narrower than the digits shown: every digit, not [32.1, 32.1])
-        ends = [given(x) for x in e.range]
+        ends = [exact(x) for x in e.range]
     out.append(f"    method: {iv.method}" + (f"; every run's value assumed in [{ends[0]}, {ends[1]}]" if e.range else ""))
     if e.range_basis:
         out.append(f"    range: {e.range_basis}")
@@ -281,10 +275,10 @@ def format_estimate(e: Any) -> str:
 
 def _answer_line(e: Any) -> str:
     q = e.question
-    subject = f"P({q.metric} >= {given(q.at_least)})" if q.kind == "probability" else f"the mean {q.metric}"
+    subject = f"P({q.metric} >= {exact(q.at_least)})" if q.kind == "probability" else f"the mean {q.metric}"
     eps = q.indifference()
     if e.answer is None:
-        return f"  below {given(q.below)}? not decided ({e.test_method})"
+        return f"  below {exact(q.below)}? not decided ({e.test_method})"
     if q.kind == "probability":
         a = q.alpha if q.alpha is not None else q.delta
         b = q.beta if q.beta is not None else q.delta
@@ -292,7 +286,7 @@ def _answer_line(e: Any) -> str:
     else:
         a = q.alpha if q.alpha is not None else q.delta
         errors = f"wrong with probability at most {a:g}"
-    below = given(q.below)
+    below = exact(q.below)
     words = {"yes": f"YES, {subject} is below {below}", "no": f"NO, {subject} is not below {below}",
              "indifferent": f"CANNOT TELL: {subject} is within +-{eps:g} of {below}"}
     return f"  below {below}? {words[e.answer]} ({e.test_method}: {errors})"

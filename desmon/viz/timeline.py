@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from desmon.errors import ScenarioError
+from desmon.model.checks import exact
 from desmon.paths import TRACE_FILE, check_input_file, replacing
 from desmon.viz.common import plain_text, require_matplotlib
 
@@ -230,11 +231,12 @@ def check_window(
     if horizon is not None:
         if start is not None and start >= horizon:
             raise ScenarioError(
-                f"{flags[0]} {start:g}: at or after the end of the run ({horizon:g} s), nothing to draw; give {flags[0]} below {horizon:g}"
+                f"{flags[0]} {exact(start)}: at or after the end of the run ({exact(horizon)} s), nothing to draw; "
+                f"give {flags[0]} below {exact(horizon)}"
             )
         if end is not None and end > horizon:
             raise ScenarioError(
-                f"{flags[1]} {end:g}: past the end of the run ({horizon:g} s); give {flags[1]} at most {horizon:g}, or leave it out"
+                f"{flags[1]} {exact(end)}: past the end of the run ({exact(horizon)} s); give {flags[1]} at most {exact(horizon)}, or leave it out"
             )
 
 
