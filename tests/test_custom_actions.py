@@ -74,8 +74,8 @@ def test_a_declared_action_is_accepted_in_a_rule() -> None:
 
 
 def test_a_declared_action_is_accepted_in_an_action_change() -> None:
-    s = Scenario("s", model(), timeline=(TimedEvent(0.0, ActionChange("pour")),), initial=(ActionChange("wipe"),))
-    assert s.timeline[0].event == ActionChange("pour")
+    s = Scenario("s", model(), timeline=(TimedEvent(0.0, ActionChange("pour")), TimedEvent(1.0, ActionChange("wipe"))))
+    assert [te.event for te in s.timeline] == [ActionChange("pour"), ActionChange("wipe")]
 
 
 def test_a_declared_action_is_accepted_in_a_world_step() -> None:

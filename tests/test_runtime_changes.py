@@ -390,12 +390,12 @@ def test_a_run_without_a_world_plays_the_timelines_changes_and_initial_action_as
     r.depsl.deployment_specification("force").add_constraint("capacity", "memory", 300)
     r.rules({"hold": "force"})
     grow = RequirementChange("force", add=(Capacity("memory", 1000),), remove=(Capacity("memory", 300),))
-    sc = Scenario(name="tl", model=r.build(), initial=(ActionChange(HOLD),),
-                  timeline=(TimedEvent(2.0, grow, "t1"), TimedEvent(4.0, PlatformJoin("edge"), "t2")))
+    sc = Scenario(name="tl", model=r.build(),
+                  timeline=(TimedEvent(0.0, ActionChange(HOLD), "t0"), TimedEvent(2.0, grow, "t1"), TimedEvent(4.0, PlatformJoin("edge"), "t2")))
     rep = replay(sc)
     replayed = [(str(c), ok) for s in rep.steps for c, ok in s.commands if ok is not None]
     run = simulate(sc, "desmon", seed=0)
     ran = [(f"{d['command']} {d['graph']} on {d['platform']}", d["ok"]) for d in run.decisions]
-    assert ran == replayed == [("start force on edge", True)], (ran, replayed)
+    assert ran == replayed == [("start force on arm_pc", True), ("stop force on arm_pc", True), ("start force on edge", True)], (ran, replayed)
     assert [(e.time, e.kind) for e in run.errors] == [(s.time, e.kind) for s in rep.steps for e in s.errors] == [(2.0, "no_acceptable_platforms")]
     assert run.metrics["risky_time_s"] == run.horizon  # holding from the start, as the initial action says

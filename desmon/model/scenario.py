@@ -15,7 +15,7 @@ from typing import Any, Iterable, Mapping
 from desmon.errors import ModelError
 from desmon.model.checks import check_items, check_name, check_number, check_text, strict_init
 
-from desmon.model.events import Event, event_types
+from desmon.model.events import ActionChange, Event, event_types
 from desmon.model.system import SystemModel
 
 __all__ = ["TimedEvent", "Scenario", "EVENT_TYPES", "event_problem"]
@@ -119,6 +119,11 @@ class Scenario:
             raise ModelError(f"{where}: expected = {self.expected!r} is not a mapping: write expected={{'desmon': {{...}}}}")
         events = list(initial) + [te.event for te in timeline]
         for ev in initial:
+            if isinstance(ev, ActionChange):  # (set silently, no reaction would follow it: run and replay judged no deployment)
+                raise ModelError(
+                    f"{where} initial: {ev!r}: the robot's action is not a silent fact; begin the timeline with it, "
+                    f"timeline=(TimedEvent(0.0, ActionChange({ev.action!r}), 't0'), ...), or set the checker's initial_action"
+                )
             self._check_event(ev, events)
         last = 0.0
         labels: set[str] = set()

@@ -824,14 +824,13 @@ def can_detect(world: World, plans: dict[str, DetectorPlan | None]) -> dict[str,
 
 def world_from_timeline(scenario: Scenario) -> World:
     """A world that plays a scenario's scripted ``timeline``: action changes become task
-    steps (from the ``initial`` action, else idle), device / platform events scripted
+    steps (idle until the first; a scenario's ``initial`` holds no action), device / platform events scripted
     faults, load changes scripted loads, requirement changes and joins run-time changes."""
     actions = [(te.time, te.event.action) for te in scenario.timeline if te.event.role == "action"]
     last = scenario.timeline[-1].time if scenario.timeline else 0.0
     horizon = last + 5.0
     if not actions or actions[0][0] > 0:
-        first = [ev.action for ev in scenario.initial if ev.role == "action"]  # type: ignore[attr-defined]
-        actions.insert(0, (0.0, first[-1] if first else IDLE))
+        actions.insert(0, (0.0, IDLE))
     steps = []
     for i, (t, a) in enumerate(actions):
         end = actions[i + 1][0] if i + 1 < len(actions) else horizon
