@@ -160,6 +160,16 @@ def test_run_evaluate_writes_json_and_returns_zero_when_all_cells_pass() -> None
     assert run_evaluate(trials=40, seed=1, as_json=True, progress=False, out=out) == 0
     data = json.loads(out.getvalue())
     assert data["all_pass"] is True and len(data["cells"]) == 21 and data["missions"]
+    assert data["cells_that_cannot_fail"] == 0  # at 40 trials every cell's test could fail
+
+
+def test_the_json_says_how_many_cells_pass_whatever_was_counted() -> None:
+    """At 1 trial per action no count is rejected: all_pass is true and says nothing, which
+    the text's note said and the JSON did not."""
+    out = io.StringIO()
+    assert run_evaluate(trials=1, seed=1, as_json=True, progress=False, out=out) == 0
+    data = json.loads(out.getvalue())
+    assert data["all_pass"] is True and data["cells_that_cannot_fail"] == len(data["cells"]) == 21
     # the intervals the table prints: the missions' proportions (Clopper-Pearson), none for a count from one seed
     intervals = data["intervals"]
     assert intervals["confidence"] == 0.95 and "cells" not in intervals

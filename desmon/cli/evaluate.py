@@ -65,18 +65,6 @@ def _test_line() -> str:
             f"null: {NULL_HYPOTHESIS}; pass if p >= alpha = {ALPHA}")
 
 
-def _powerless(cells: Sequence[Any], trials: int) -> int:
-    """How many ``cells`` the test could not fail at ``trials`` per test: neither 0 nor all
-    of them (the most extreme counts) would be rejected against the paper's count."""
-    from desmon.detectors.evaluation import ALPHA, fisher_exact
-
-    return sum(
-        1 for c in cells
-        if fisher_exact(0, trials, c.paper_count, c.paper_trials) >= ALPHA
-        and fisher_exact(trials, trials, c.paper_count, c.paper_trials) >= ALPHA
-    )
-
-
 def _powerless_note(blind: int, trials: int, what: str) -> list[str]:
     """The note under a table whose test could not fail ``blind`` cells at ``trials`` per test."""
     if not blind:
@@ -89,7 +77,7 @@ def _powerless_note(blind: int, trials: int, what: str) -> list[str]:
 
 def render_table(ev: Evaluation) -> str:
     """The readable report of one seed."""
-    from desmon.detectors.evaluation import MISSION_CONTEXTS, rules_text, sweep_of
+    from desmon.detectors.evaluation import MISSION_CONTEXTS, cells_that_cannot_fail, rules_text, sweep_of
 
     lines = [
         f"desmon evaluate: {ev.trials} trials per action, seed {ev.seed}; paper = Sanchez et al. 2016 Tables 1-2 (k/60)",
@@ -110,7 +98,7 @@ def render_table(ev: Evaluation) -> str:
         )
     n_pass = sum(c.passed for c in ev.cells)
     lines += ["", f"{n_pass}/{len(ev.cells)} cells pass" + ("" if ev.all_pass else "  (FAIL)")]
-    lines += _powerless_note(_powerless(ev.cells, ev.trials), ev.trials, "")
+    lines += _powerless_note(cells_that_cannot_fail(ev.cells, ev.trials), ev.trials, "")
     if ev.missions:
         lines += [
             "",
@@ -156,7 +144,7 @@ def _seed_span(seeds: Sequence[int]) -> str:
 
 def render_sweep(sw: Sweep) -> str:
     """The readable report over several seeds: per-cell pass counts, mission figures as mean [min..max]."""
-    from desmon.detectors.evaluation import MISSION_CONTEXTS
+    from desmon.detectors.evaluation import MISSION_CONTEXTS, cells_that_cannot_fail
 
     n = len(sw.seeds)
     lines = [
@@ -182,7 +170,7 @@ def render_sweep(sw: Sweep) -> str:
         "",
         f"cells passing on every seed: {every}/{len(sw.cells)}; on more than half of the seeds: {most}/{len(sw.cells)}; "
         f"tests passed: {tests}/{len(sw.cells) * n}" + ("" if sw.all_hold else "  (FAIL)"),
-        *_powerless_note(_powerless(sw.cells, sw.trials), sw.trials, "on every seed "),
+        *_powerless_note(cells_that_cannot_fail(sw.cells, sw.trials), sw.trials, "on every seed "),
     ]
     if sw.missions:
         lines += [

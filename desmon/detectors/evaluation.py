@@ -640,6 +640,17 @@ NULL_HYPOTHESIS: Final = "the simulated and the published sample come from the s
 MAX_SEEDS: Final = 1000
 
 
+def cells_that_cannot_fail(cells: Sequence[Any], trials: int) -> int:
+    """How many ``cells`` the test could not fail at ``trials`` per test: neither 0 nor all
+    of them (the most extreme counts) would be rejected against the paper's count, so
+    their pass says nothing."""
+    return sum(
+        1 for c in cells
+        if fisher_exact(0, trials, c.paper_count, c.paper_trials) >= ALPHA
+        and fisher_exact(trials, trials, c.paper_count, c.paper_trials) >= ALPHA
+    )
+
+
 @dataclass(frozen=True, slots=True)
 class Evaluation:
     """Everything ``desmon evaluate`` reports for one seed."""
@@ -662,6 +673,8 @@ class Evaluation:
             "null": NULL_HYPOTHESIS,
             "alpha": ALPHA,
             "all_pass": self.all_pass,
+            # (cells that pass whatever was counted: at few trials, all_pass says nothing of them)
+            "cells_that_cannot_fail": cells_that_cannot_fail(self.cells, self.trials),
             "cells": [asdict(c) for c in self.cells],
             "missions": [asdict(m) for m in self.missions],
         }
@@ -808,6 +821,7 @@ class Sweep:
             "null": NULL_HYPOTHESIS,
             "alpha": ALPHA,
             "all_hold": self.all_hold,
+            "cells_that_cannot_fail": cells_that_cannot_fail(self.cells, self.trials),
             "cells": [{**asdict(c), "seeds": c.seeds, "holds": c.holds} for c in self.cells],
             "missions": [asdict(m) for m in self.missions],
             "per_seed": [ev.to_json() for ev in self.runs],
