@@ -113,7 +113,7 @@ class Fleet:
             for e, plat in shared.items():
                 mine = next((p for p in sc.model.platforms if p.name == e), None)
                 if mine != plat:
-                    why = "does not declare it" if mine is None else "declares it differently"
+                    why = "does not declare" if mine is None else "declares otherwise than the first robot"
                     raise ScenarioError(f"fleet: robot {name!r} {why} edge server {e!r}: every robot declares the same edge servers")
             _claim_names(sc.model, shared, owner)
         _check_edge_masters(self.robots, set(self.edges))
