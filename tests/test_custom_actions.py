@@ -241,3 +241,12 @@ def test_every_engine_runs_a_model_with_a_declared_action(scenario_file: Path, c
     code = main([command[0], str(scenario_file), *command[1:]])
     out = capsys.readouterr().out
     assert code == 0 and expected in out, out
+
+
+def test_an_action_that_differs_from_a_built_in_only_in_case_is_refused() -> None:
+    """``robot.action("Hold")`` made a new action beside ``hold``, with no rule of its own: a
+    slip of the shift key that read as an unwatched action."""
+    with pytest.raises(ModelError, match="differs from the built-in 'hold' only in case: write 'hold'"):
+        Action("Hold")
+    with pytest.raises(ModelError, match="differs from the built-in 'move_base' only in case"):
+        RobotBuilder("r").action("Move_Base")

@@ -70,6 +70,12 @@ class Action:
                 f"action {self.name!r} is built in: use it without declaring it, or give the new action another name "
                 f"(built-in: {', '.join(ACTIONS)})"
             )
+        twin = next((a for a in ACTIONS if a.casefold() == self.name.casefold()), None)
+        if twin is not None:  # (a new action beside the built-in, with no rule of its: a slip of the shift key)
+            raise ModelError(
+                f"action {self.name!r} differs from the built-in {twin!r} only in case: write {twin!r}, or give the new action "
+                "a name of its own"
+            )
         check_flag(f"action {self.name!r} risky", self.risky)
         like = self.like if self.like is not None else (HOLD if self.risky else IDLE)
         if not isinstance(like, str) or like not in ACTIONS:
