@@ -6,6 +6,7 @@ as pickletools' own reading of the opcodes does."""
 
 from __future__ import annotations
 
+import io
 import pickle
 import pickletools
 
@@ -54,12 +55,9 @@ def test_on_pickles_of_every_protocol_the_scan_finds_what_pickletools_finds(valu
     whole = (value, value) if share else value  # (written twice: a memo reference where the value is a container)
     data = pickle.dumps(whole, protocol=protocol)
     assert _scanned(data) == _by_genops(data)
-    fast = pickle.Pickler.__new__(pickle.Pickler)  # the worker writes in fast mode: nothing is used again
-    import io
-
     out = io.BytesIO()
-    fast.__init__(out, protocol=protocol)
-    fast.fast = True
+    fast = pickle.Pickler(out, protocol=protocol)
+    fast.fast = True  # the worker writes in fast mode: nothing is used again
     try:
         fast.dump(whole)
     except ValueError:  # (fast mode refuses a self-referencing value; these have none, but stay safe)

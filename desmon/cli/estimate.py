@@ -39,12 +39,17 @@ def parse_within(text: str) -> tuple[float, bool]:
         raise argparse.ArgumentTypeError(f"must be a positive half-width, absolute (60) or relative to the estimate (1%), got {text}") from None
 
 
+def _fraction(text: str) -> float:
+    """``text`` as a number, a percentage (``99%``) as its fraction; ValueError if it is neither."""
+    t = text.strip()
+    return float(t.removesuffix("%")) / (100.0 if t.endswith("%") else 1.0)
+
+
 def parse_error_probability(text: str) -> float:
     """An error probability (``0.01``; ``1%`` too, as ``--confidence`` takes ``99%``); its
     bounds are the question's to check (:meth:`~desmon.estimate.Question.check`)."""
-    t = text.strip()
     try:
-        v = float(t.removesuffix("%")) / (100.0 if t.endswith("%") else 1.0)
+        v = _fraction(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be an error probability, e.g. 0.01 or 1%, got {text!r}") from None
     if not math.isfinite(v):
@@ -54,9 +59,8 @@ def parse_error_probability(text: str) -> float:
 
 def parse_confidence(text: str) -> float:
     """A confidence strictly between 0 and 1 (``0.99``; ``99%`` too)."""
-    t = text.strip()
     try:
-        v = float(t.removesuffix("%")) / (100.0 if t.endswith("%") else 1.0)
+        v = _fraction(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be a confidence between 0 and 1, e.g. 0.99, got {text!r}") from None
     if not (math.isfinite(v) and 0.0 < v < 1.0):

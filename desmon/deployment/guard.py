@@ -329,10 +329,13 @@ class Guard:
 
     def __init__(self, max_commands: int = MAX_COMMANDS, max_reaction_seconds: float | None = None) -> None:
         self.max_commands = check_max_commands(max_commands)
-        if max_reaction_seconds is not None and not max_reaction_seconds >= TICK:  # (NaN too)
+        if max_reaction_seconds is not None and (
+            isinstance(max_reaction_seconds, bool) or not isinstance(max_reaction_seconds, (int, float)) or not max_reaction_seconds >= TICK
+        ):  # (NaN too)
+            shown = f"{max_reaction_seconds:g}" if isinstance(max_reaction_seconds, float) else repr(max_reaction_seconds)
             raise ModelError(
-                f"--max-reaction-seconds {max_reaction_seconds:g}: the timer that stops a reaction looks every {TICK:g} s, so a "
-                f"shorter limit could not be kept; give {TICK:g} or more"
+                f"--max-reaction-seconds {shown}: the timer that stops a reaction looks every {TICK:g} s, so a "
+                f"shorter limit could not be kept; give a number of seconds, {TICK:g} or more"
             )
         self.max_reaction_seconds = max_reaction_seconds
         #: the budget check the running search installed (:meth:`watching`), or None
