@@ -114,8 +114,9 @@ def test_a_detector_that_cannot_detect_never_watches_signals_on_or_off():
         assert m["unmonitored_by_cause_s"]["cannot_detect"] > 0
 
 
-def test_run_verify_and_analyze_warn_about_a_risky_action_no_rule_covers(capsys):
+def test_run_verify_fuzz_and_analyze_warn_about_a_risky_action_no_rule_covers(capsys):
     for argv in (["run", PICK, "-p", "hours=0.1"], ["verify", PICK, "--max-states", "50"],
+                 ["fuzz", PICK, "--examples", "2", "--no-progress"],
                  ["analyze", PICK, "--horizon", "60", "--transient-only"]):
         main(argv)
         err = capsys.readouterr().err

@@ -130,6 +130,23 @@ def test_the_normal_interval_is_the_textbook_one():
     assert "not guaranteed" in iv.method
 
 
+def test_the_normal_interval_stays_inside_the_range_every_value_is_known_to_lie_in():
+    values = [0.0, 0.0, 0.0, 0.0, 10.0]  # mean 2, s = 4.47: the textbook ends are -3.55 and 7.55
+    free, kept = normal_interval(values, 0.05), normal_interval(values, 0.05, (0.0, 10.0))
+    assert free.low < 0.0 and kept.low == 0.0 and kept.high == free.high and kept.estimate == free.estimate == 2.0
+    assert normal_interval(values, 0.05, (0.0, 5.0)).high == 5.0
+
+
+def test_an_estimates_normal_interval_beside_the_guaranteed_one_stays_inside_the_proven_range():
+    from desmon.estimate.loop import Question, Tracker
+
+    t = Tracker(Question(metric="exposure_s", within=0.5), (0.0, 10.0))
+    for v in [0.0, 0.0, 0.0, 0.0, 10.0]:
+        t.add(v)
+    _guaranteed, normal = t.result()
+    assert normal.low == 0.0 and normal.high < 10.0
+
+
 def test_a_mean_over_seeds_takes_the_betting_interval_when_the_range_is_known_else_the_normal_one():
     values = [3.0, 5.0, 4.5, 6.0, 2.5, 4.0]
     cs = BettingSequence(0.0, 10.0, 0.05)

@@ -456,6 +456,8 @@ def test_a_device_kind_is_not_guessed_from_its_name() -> None:
         ({"start_failures": True}, "start_failures = True is not a number"),
         ({"max_failures": -1}, "max_failures = -1 is negative"),
         ({"max_failures": "2"}, "max_failures = '2' is a string"),
+        ({"max_failures": 0, "devices": ("ft",)}, "max_failures=0 lets none of the listed devices and platforms (ft) fail"),
+        ({"max_failures": 0, "platforms": ("pc",)}, "raise max_failures (e.g. max_failures=1) or drop them"),
         ({"loads": {"pc": (0, math.nan)}}, "load level of 'pc' = nan is not a number"),
         ({"loads": {"pc": (0, math.inf)}}, "load level of 'pc' = inf is not finite"),
         ({"loads": {"pc": 100}}, "load levels of 'pc' must be a sequence"),

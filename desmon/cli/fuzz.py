@@ -9,7 +9,7 @@ import argparse
 import contextlib
 from typing import Iterator
 
-from desmon.cli.common import Subparsers, deployer_arg, load_scenario_of, scenario_arg
+from desmon.cli.common import Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered
 from desmon.cli.options import bounded_count, non_negative_int, positive_int
 from desmon.errors import CheckerError
 
@@ -39,6 +39,7 @@ def run(args: argparse.Namespace) -> int:
     with _scratch_hypothesis_home():
         outcome = fuzz(scenario, args.deployer, examples=args.examples, seed=args.seed, progress=not args.no_progress, guard=args.guard)
     print(outcome.text, end="")
+    warn_uncovered(scenario)  # as verify does: a risky action no rule covers is unmonitored whatever the sequence
     return outcome.exit_code
 
 

@@ -357,7 +357,9 @@ class Tracker:
         iv = self._last if self._last is not None and self._last.n == len(self.values) else self.interval()
         if self.share is not None:
             return iv, clopper_pearson(self.share.yes, self.share.n, self.question.delta)
-        return iv, normal_interval(self.values, 1.0 - self.question.interval_confidence)  # (at the guaranteed one's confidence)
+        assert self.mean is not None
+        # at the guaranteed one's confidence, inside the proven range
+        return iv, normal_interval(self.values, 1.0 - self.question.interval_confidence, (self.mean.low, self.mean.high))
 
 
 def world_horizon(scenario: Any, until: float | None) -> float:

@@ -187,9 +187,11 @@ class BettingSequence:
         return Interval(math.fsum(self._raw) / n, self.low + lo * span, self.low + hi * span, n, self.METHOD)
 
 
-def normal_interval(values: list[float] | tuple[float, ...], delta: float) -> Interval:
+def normal_interval(values: list[float] | tuple[float, ...], delta: float, value_range: tuple[float, float] | None = None) -> Interval:
     """``mean +- z_{1-delta/2} s / sqrt(n)`` (Student's t quantile below 30 runs): the CLT
-    approximation, not guaranteed (module docstring). Needs 2 runs or more."""
+    approximation, not guaranteed (module docstring). Needs 2 runs or more. With the
+    ``value_range`` every value is known to lie in, its ends are kept inside it (a mean of
+    values in ``[a, b]`` lies in ``[a, b]``: an end beyond it only says less)."""
     from scipy.special import ndtri, stdtrit  # the quantiles of scipy.stats' norm and t, without importing scipy.stats
 
     n = len(values)
@@ -198,7 +200,10 @@ def normal_interval(values: list[float] | tuple[float, ...], delta: float) -> In
         return Interval(mean, -math.inf, math.inf, n, NORMAL_METHOD)
     sd = math.sqrt(math.fsum((v - mean) ** 2 for v in values) / (n - 1))
     q = float(stdtrit(n - 1, 1 - delta / 2)) if n < 30 else float(ndtri(1 - delta / 2))
-    return Interval(mean, mean - q * sd / math.sqrt(n), mean + q * sd / math.sqrt(n), n, NORMAL_METHOD)
+    low, high = mean - q * sd / math.sqrt(n), mean + q * sd / math.sqrt(n)
+    if value_range is not None:
+        low, high = max(low, value_range[0]), min(high, value_range[1])
+    return Interval(mean, low, high, n, NORMAL_METHOD)
 
 
 NORMAL_METHOD = "normal approximation (CLT), not guaranteed"

@@ -174,6 +174,12 @@ class Bounds:
         check_number(f"{w} start_failures", self.start_failures, error=err, integer=True)
         if self.max_failures is not None:
             check_number(f"{w} max_failures", self.max_failures, error=err, integer=True)
+            failing = (*self.devices, *self.platforms)
+            if self.max_failures == 0 and failing:
+                raise CheckerError(
+                    f"{w} max_failures=0 lets none of the listed devices and platforms ({', '.join(failing)}) fail or go down, "
+                    "so listing them checks nothing: raise max_failures (e.g. max_failures=1) or drop them from devices= and platforms="
+                )
         groups = check_items(
             f"{w} interchangeable", self.interchangeable, (tuple, list), error=err, example="interchangeable=(('e1', 'e2', 'e3'),)"
         )
