@@ -277,6 +277,60 @@ def test_a_selection_vendor_no_device_is_made_by_is_refused_at_build() -> None:
     assert "no tactile_array device is made by 'wiess' (did you mean 'weiss'?), so it can never hold: fix the vendor" in msg
 
 
+@pytest.mark.parametrize(
+    "constraints, expected",
+    [
+        ([("quantity", "force_sensor", 2)], "pc: Quantity(force_sensor >= 2) fails: 1 working force_sensor device(s), needs 2; hand: "),
+        ([("capacity", "memory", 600)], "pc: Capacity(memory >= 600 MB) fails: 512 MB free"),
+        ([("minimum", "cores", 6)], "pc: Minimum(cores >= 6) fails: cores is 4; hand: Minimum(cores >= 6) fails: has no property 'cores'"),
+        ([("minimum", "cores", 3), ("maximum", "cores", 2)], "pc: Maximum(cores <= 2) fails: cores is 4; hand: Minimum(cores >= 3) fails"),
+        ([("attribute", "os", "linux"), ("quantity", "tactile_array", 1)],
+         "pc: Quantity(tactile_array >= 1) fails: 0 working tactile_array device(s), needs 1; hand: Attribute(os = linux) fails: has no attribute 'os'"),
+        ([("selection", "tactile_array", "os=linux", "force_sensor", "at_least", 2)], None),
+    ],
+    ids=["count", "amount", "bound", "two-bounds", "fact-and-device", "selection-reachable"],
+)
+def test_a_specification_no_platform_could_ever_meet_is_named_with_each_platforms_failing_requirements(
+    constraints: list[tuple[Any, ...]], expected: str | None
+) -> None:
+    r = robot()
+    spec = r.depsl.deployment_specification("force")
+    for c in constraints:
+        if "at_least" in c:
+            spec.add_constraint(*c[:-2], at_least=c[-1])
+        else:
+            spec.add_constraint(*c)
+    lines = r.build().never_placed()
+    if expected is None:
+        assert lines == ()
+    else:
+        (line,) = lines
+        assert line.startswith("deployment of 'force' can never be placed: no platform meets its requirements") and expected in line, line
+        assert line.endswith("fix the requirements or the platforms")
+
+
+def test_a_specification_some_platform_meets_or_fixed_to_one_that_cannot_is_judged_on_that_platform_alone() -> None:
+    r = robot()
+    spec = r.depsl.deployment_specification("force").add_constraint("capacity", "memory", 300)
+    assert r.build().never_placed() == ()  # pc has 512 MB
+    spec.executable_on("hand")
+    (line,) = r.build().never_placed()
+    assert "its fixed platform hand meets its requirements" in line and "hand: Capacity(memory >= 300 MB) fails: 256 MB free" in line
+    assert "pc:" not in line
+
+
+def test_every_command_warns_once_about_a_specification_that_could_never_be_placed(root: Path, capsys) -> None:
+    nine = str(root / "docs" / "examples" / "nine_pads.py")
+    for argv in (["replay", nine], ["show", nine, "--at", "t0"], ["verify", nine, "--max-states", "20", "--no-progress"]):
+        main(argv)
+        err = capsys.readouterr().err
+        warnings = [ln for ln in err.splitlines() if "can never be placed" in ln]
+        assert len(warnings) == 1 and warnings[0].startswith("desmon: warning: deployment of 'tactile_slip_detector'"), (argv, err)
+        assert "hand_pc: Quantity(tactile_pad >= 9) fails: 6 working tactile_pad device(s), needs 9" in warnings[0]
+    main(["replay", str(root / "scenarios" / "coffee_handover.py")])
+    assert "can never be placed" not in capsys.readouterr().err
+
+
 def test_a_requirement_naming_a_declared_fact_still_builds() -> None:
     model = with_spec("selection", "tactile_array@weiss", "os=linux")()
     assert model.spec("force") is not None  # type: ignore[attr-defined]

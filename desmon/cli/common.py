@@ -22,7 +22,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "EXIT_OK", "EXIT_VIOLATED", "EXIT_USAGE", "EXIT_INCOMPLETE", "MAX_STATES", "CEX_FILE", "MUTANT_PREFIX", "MUTANT_NAMES", "Parser", "Subparsers",
-    "one_line", "usage_error", "scenario_arg", "deployer_arg", "load_scenario_of", "load_scripted", "warn_uncovered", "resolve_times",
+    "one_line", "usage_error", "scenario_arg", "deployer_arg", "load_scenario_of", "load_scripted", "warn_uncovered", "warn_never_placed", "resolve_times",
     "draw_trace", "run_of", "users_deployer",
 ]
 
@@ -152,7 +152,23 @@ def load_scenario_of(args: argparse.Namespace) -> Scenario:
         raise ScenarioError(str(exc)) from None
     for flag, path, head in getattr(args, "written_heads", ()):  # nor another file desmon did not write (a script of the user's)
         check_written_before(path, flag, head)
+    warn_never_placed(scenario)
     return scenario
+
+
+def warn_never_placed(scenario: Scenario) -> None:
+    """One warning line on stderr per deployment specification of ``scenario`` (a fleet's: of
+    each robot's model) that no platform could ever meet
+    (:meth:`~desmon.model.system.SystemModel.never_placed`), as it loads."""
+    from desmon.sim.fleet import Fleet
+
+    models = [r.model for r in scenario.world.robots] if isinstance(scenario.world, Fleet) else [scenario.model]
+    seen: set[str] = set()
+    for model in models:
+        for line in model.never_placed():
+            if line not in seen:
+                seen.add(line)
+                print(f"desmon: warning: {line}", file=sys.stderr)
 
 
 def warn_uncovered(scenario: Scenario, horizon: float | None = None, *, drawn: bool | None = None) -> None:

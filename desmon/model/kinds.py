@@ -74,6 +74,12 @@ class Constraint:
         """Does only a platform's working devices decide it (the Control rules' device rule)?"""
         return False
 
+    def best_state_decides(self) -> bool:
+        """Does it hold on a platform in some state only if it holds there in the platform's
+        best one (up, every device working, no load, nothing deployed)? Then a requirement no
+        platform meets in its best state can never hold (the model's build refuses it)."""
+        return self.reads_fixed_facts() or self.device_only()
+
     def platform_problem(self, platforms: "tuple[Platform, ...]") -> str | None:
         """Why it names a platform fact (capacity, property, attribute, attribute value) no
         platform declares -- it can never hold, almost surely a typo -- or None."""

@@ -152,6 +152,9 @@ class Capacity(Requirement):
         parts.append(f"load {_fmt(load)}")
         return f"{_fmt(free)}{unit} free ({', '.join(parts)})"
 
+    def best_state_decides(self) -> bool:
+        return True  # loads and other graphs only take from the capacity
+
     def platform_problem(self, platforms: "tuple[Platform, ...]") -> str | None:
         declared = sorted({r for p in platforms for r, _ in p.capacities})
         if self.resource in declared:
@@ -428,6 +431,9 @@ class Selection(Requirement):
 
     def reads_fixed_facts(self) -> bool:
         return all(o.attribute is not None for o in self.options)
+
+    def best_state_decides(self) -> bool:
+        return True  # each option reads a fixed attribute or the working devices
 
     def device_only(self) -> bool:
         return all(o.attribute is None for o in self.options)

@@ -167,6 +167,35 @@ class SystemModel:
         self._check_rules(graphs)
         object.__setattr__(self, "specs", tuple(self._with_reads(s) for s in self.specs))
 
+    def never_placed(self) -> tuple[str, ...]:
+        """Why each specification whose graph could never be placed cannot be, one line each:
+        no platform meets its requirements in its best state (up, every device working, no
+        load, nothing deployed), counting the requirements that state decides
+        (:meth:`~desmon.model.kinds.Constraint.best_state_decides`). A count, an amount or two
+        bounds out of reach is almost surely a slip, but a model may show one on purpose (the
+        deployer then raises no_acceptable_platforms whenever the graph is selected), so the
+        commands warn instead of refusing."""
+        lines = []
+        for spec in self.specs:
+            reqs = [r for r in spec.requirements if not isinstance(r, Preference) and r.best_state_decides()]
+            candidates = [p for p in self.platforms if spec.fixed_platform in (None, p.name)]
+            failing: list[str] = []
+            for p in candidates if reqs else ():
+                best = PlatformState(p, True, tuple(d for d in self.devices if d.platform == p.name))
+                reasons = [f"{r.describe()} fails: {why}" for r in reqs if (why := r.holds(best, spec.graph)) is not None]
+                if not reasons:
+                    break
+                failing.append(f"{p.name}: {'; '.join(reasons)}")
+            else:
+                if failing:
+                    shown = "; ".join(failing[:3]) + (f"; and {len(failing) - 3} more platforms" if len(failing) > 3 else "")
+                    where = f"its fixed platform {spec.fixed_platform}" if spec.fixed_platform is not None else "no platform"
+                    lines.append(
+                        f"deployment of {spec.graph!r} can never be placed: {where} meets its requirements even when up, "
+                        f"with every device working and nothing else on it ({shown}); fix the requirements or the platforms"
+                    )
+        return tuple(lines)
+
     def _with_reads(self, spec: DeploymentSpec) -> DeploymentSpec:
         """``spec`` with what its graph's inputs require (:class:`Reads`, one per device kind
         its sensor components read that some device provides; a kind no device provides
