@@ -321,7 +321,7 @@ def test_a_specification_some_platform_meets_or_fixed_to_one_that_cannot_is_judg
 
 def test_every_command_warns_once_about_a_specification_that_could_never_be_placed(root: Path, capsys) -> None:
     nine = str(root / "docs" / "examples" / "nine_pads.py")
-    for argv in (["replay", nine], ["show", nine, "--at", "t0"], ["verify", nine, "--max-states", "20", "--no-progress"]):
+    for argv in (["replay", nine], ["show", nine, "--at", "t0", "--format", "json"], ["verify", nine, "--max-states", "20", "--no-progress"]):
         main(argv)
         err = capsys.readouterr().err
         warnings = [ln for ln in err.splitlines() if "can never be placed" in ln]
