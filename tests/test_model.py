@@ -109,6 +109,15 @@ def test_a_selection_needing_more_than_its_options_is_rejected():
         make_requirement("selection", "tactile_pad@weiss", "tactile_pad@schunk", at_least=3)
 
 
+def test_a_selection_counting_one_device_twice_toward_at_least_is_rejected():
+    """'tactile_pad' and 'tactile_pad@weiss' both hold where one Weiss pad is: at_least=2 read
+    as two pads would be met by one."""
+    with pytest.raises(ModelError, match=r"one tactile_pad@weiss device meets both, so at_least = 2 counts it twice"):
+        make_requirement("selection", "tactile_pad", "tactile_pad@weiss", at_least=2)
+    make_requirement("selection", "tactile_pad", "tactile_pad@weiss")  # at_least 1: one of them, whichever
+    make_requirement("selection", "tactile_pad@schunk", "tactile_pad@weiss", at_least=2)  # two vendors: two devices
+
+
 def test_wrong_arity_names_the_expected_form():
     with pytest.raises(ModelError, match=r"write \('capacity', resource, amount\)"):
         make_requirement("capacity", 250)

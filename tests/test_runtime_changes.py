@@ -155,12 +155,13 @@ def test_a_change_adding_a_requirement_on_an_unknown_resource_is_refused():
         ({}, "adds and removes nothing"),
         ({"add": (SMALL,), "remove": (SMALL,)}, "both adds and removes"),
         ({"add": (SMALL, SMALL)}, "adds Capacity(memory >= 100 MB) twice"),
+        ({"add": (SMALL, Capacity("memory", 50))}, "adds two Capacity requirements on 'memory': a graph consumes one amount"),
         ({"add": SMALL}, "trailing comma"),
         ({"add": ("capacity",)}, "is not a Quantity"),
         ({"add": (SMALL,), "label": "a\nb"}, "not one line of text"),
         ({"ad": (SMALL,)}, "did you mean 'add'"),
     ],
-    ids=["nothing", "both", "twice", "no-tuple", "not-a-requirement", "label-newline", "keyword-typo"],
+    ids=["nothing", "both", "twice", "two-amounts", "no-tuple", "not-a-requirement", "label-newline", "keyword-typo"],
 )
 def test_a_malformed_requirement_change_is_refused_with_one_line(kwargs, fragment):
     with pytest.raises(ModelError) as info:

@@ -61,6 +61,8 @@ def test_capacity_blind_mutant_overcommits_and_the_run_audit_reports_it(tmp_path
     assert r.metrics["start_failures"] == 0
     assert r.metrics["memory_peak_mb"] == {"pc": 300} and r.metrics["overcommit_s"] == {"pc": 5.0}
     assert {n for _t, n, _m in r.violations} >= {"no-overcommit"}
+    # the summary names the resource its seconds over capacity count (memory, not every capacity)
+    assert [ln.split() for ln in text.splitlines() if "over capacity (s)" in ln] == [["memory", "over", "capacity", "(s)", "[1]", "pc", "5"]]
 
 
 def test_corrected_deployer_raises_the_error_instead(tmp_path: Path) -> None:

@@ -315,8 +315,48 @@ def test_a_specification_some_platform_meets_or_fixed_to_one_that_cannot_is_judg
     assert r.build().never_placed() == ()  # pc has 512 MB
     spec.executable_on("hand")
     (line,) = r.build().never_placed()
-    assert "its fixed platform hand meets its requirements" in line and "hand: Capacity(memory >= 300 MB) fails: 256 MB free" in line
+    assert "its fixed platform hand does not meet its requirements" in line and "hand: Capacity(memory >= 300 MB) fails: 256 MB free" in line
     assert "pc:" not in line
+    assert r.build().never_placed(changed={"force"}) == ()  # a run-time change may relax it: not judged
+
+
+def test_a_graph_a_rule_selects_without_a_deployment_specification_is_named_once_with_its_rules() -> None:
+    r = robot()
+    r.rules({"hold": "force", "grasp": "force"})
+    (line,) = r.build().never_placed()
+    assert line.startswith("the rules for 'hold', 'grasp' select 'force', which has no deployment specification")
+    assert line.endswith("add robot.depsl.deployment_specification('force')")
+    r.depsl.deployment_specification("force")
+    assert r.build().never_placed() == ()
+
+
+RELAXED_LATER = """
+from desmon.model import RobotBuilder
+from desmon.model.events import ActionChange, RequirementChange
+from desmon.model.requirements import Capacity
+from desmon.model.scenario import Scenario, TimedEvent
+from desmon.sim.world import Step, World
+
+LIGHT = RequirementChange("fd", add=(Capacity("memory", 100),), remove=(Capacity("memory", 600),), label="light")
+robot = RobotBuilder("r")
+robot.platform("pc1", memory=512).device("ft", kind="force_sensor")
+with robot.rpsl.perception_graph("fd") as g:
+    g.sensor("w", reads="force_sensor")
+    g.processing("th", inputs=["w"])
+robot.depsl.deployment_specification("fd").add_constraint("capacity", "memory", 600)
+robot.rules({"hold": "fd"})
+scenario = Scenario(name="rc", model=robot.build(), timeline=(TimedEvent(0.0, ActionChange("hold"), "t0"), TEMPLATE),
+    world=World(task=(Step("hold", 20.0),), horizon=20.0, signals=False))
+"""
+
+
+@pytest.mark.parametrize("later", ["TimedEvent(5.0, LIGHT, 't1')", "TimedEvent(5.0, ActionChange('idle'), 't1')"], ids=["relaxed", "not"])
+def test_no_warning_for_a_specification_a_change_of_the_scenario_may_relax(tmp_path: Path, capsys, later: str) -> None:
+    path = tmp_path / "relaxed.py"
+    path.write_text(RELAXED_LATER.replace("TEMPLATE", later))
+    main(["replay", str(path)])
+    warned = "deployment of 'fd' can never be placed" in capsys.readouterr().err
+    assert warned == (later.endswith("ActionChange('idle'), 't1')"))
 
 
 def test_every_command_warns_once_about_a_specification_that_could_never_be_placed(root: Path, capsys) -> None:
@@ -548,6 +588,8 @@ def test_a_task_that_ends_explicitly_is_accepted() -> None:
 
 def test_levels_with_nan_are_refused() -> None:
     assert "high = nan is not a number" in refused(CheckerError, lambda: levels(0, math.nan, 100))
+    for step in (-1, 0):  # one rule for both, and its fix says what is wanted
+        assert f"step = {step} is not positive: give a positive number" in refused(CheckerError, lambda: levels(0, 10, step))
 
 
 def test_levels_are_the_decimals_as_written_and_a_high_off_the_grid_is_refused() -> None:
@@ -576,6 +618,9 @@ def test_a_scripted_slip_while_nothing_is_in_the_hand_is_refused() -> None:
     task = (Step("idle", 5.0), Step("grasp", 2.0), Step("hold", 3.0))
     msg = refused(ScenarioError, lambda: world(task=task, slips=(Slip(3.0),)))
     assert "slip at t=3 falls in 'idle', when no object is in the hand" in msg
+    # the time as given, not rounded into one the rule accepts (a slip at 5.0 falls in grasp)
+    msg = refused(ScenarioError, lambda: world(task=task, slips=(Slip(4.9999999),)))
+    assert "slip at t=4.9999999 falls in 'idle'" in msg
 
 
 def test_a_scripted_slip_while_holding_is_accepted() -> None:

@@ -157,18 +157,33 @@ def load_scenario_of(args: argparse.Namespace) -> Scenario:
 
 
 def warn_never_placed(scenario: Scenario) -> None:
-    """One warning line on stderr per deployment specification of ``scenario`` (a fleet's: of
-    each robot's model) that no platform could ever meet
-    (:meth:`~desmon.model.system.SystemModel.never_placed`), as it loads."""
+    """One warning line on stderr per graph a rule of ``scenario`` (a fleet's: of each robot)
+    selects that could never be deployed
+    (:meth:`~desmon.model.system.SystemModel.never_placed`), as it loads; a graph whose
+    requirements a RequirementChange of the scenario may change (its initial facts,
+    timeline, world or checker bounds) is not judged."""
     from desmon.sim.fleet import Fleet
 
-    models = [r.model for r in scenario.world.robots] if isinstance(scenario.world, Fleet) else [scenario.model]
+    robots = list(scenario.world.robots) if isinstance(scenario.world, Fleet) else [scenario]
     seen: set[str] = set()
-    for model in models:
-        for line in model.never_placed():
+    for robot in robots:
+        for line in robot.model.never_placed(changed=_changed_graphs(robot)):
             if line not in seen:
                 seen.add(line)
                 print(f"desmon: warning: {line}", file=sys.stderr)
+
+
+def _changed_graphs(scenario: Scenario) -> set[str]:
+    """The graphs whose requirements a RequirementChange anywhere in ``scenario`` may change."""
+    from desmon.model.events import RequirementChange
+
+    events: list[object] = [*scenario.initial, *(te.event for te in scenario.timeline)]
+    world = scenario.world
+    events += [te.event for te in getattr(world, "changes", ())]
+    random = getattr(world, "random_changes", None)
+    events += list(random.changes) if random is not None else []
+    events += list(getattr(scenario.checker, "requirement_changes", ()))
+    return {e.graph for e in events if isinstance(e, RequirementChange)}
 
 
 def warn_uncovered(scenario: Scenario, horizon: float | None = None, *, drawn: bool | None = None) -> None:

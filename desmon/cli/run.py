@@ -294,7 +294,7 @@ def format_summary(r: RunResult, wall: float | None = None) -> str:
         ("detection latency median (s) [2]", "latency_median_s"),
         ("detection latency p95 (s) [2]", "latency_p95_s"),
         ("memory peak (MB) [1]", "memory_peak_mb"),
-        ("over capacity (s) [1]", "overcommit_s"),
+        ("memory over capacity (s) [1]", "overcommit_s"),
         ("reactions / audits", None),
     ]
     for label, key in order:

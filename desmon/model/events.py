@@ -359,6 +359,13 @@ class RequirementChange(Event):
             twice = [r.describe() for i, r in enumerate(items) if r in items[:i]]
             if twice:
                 raise ModelError(f"RequirementChange({self.graph!r}) {what} {twice[0]} twice: give it once")
+        resources = [r.resource for r in add if isinstance(r, Capacity)]
+        twice_on = sorted({x for x in resources if resources.count(x) > 1})
+        if twice_on:  # (the graph would end with both: a graph consumes one amount of a resource)
+            raise ModelError(
+                f"RequirementChange({self.graph!r}) adds two Capacity requirements on {twice_on[0]!r}: a graph consumes one "
+                f"amount of a resource; give one Capacity({twice_on[0]!r}, TOTAL)"
+            )
         both = [r.describe() for r in add if r in remove]
         if both:
             raise ModelError(f"RequirementChange({self.graph!r}) both adds and removes {', '.join(both)}: give it once")

@@ -402,6 +402,15 @@ class Selection(Requirement):
         check_number("Selection at_least", self.at_least, integer=True)
         if self.at_least < 1:
             raise ModelError("Selection at_least = 0 always holds: give at_least >= 1 or drop the requirement")
+        if self.at_least > 1:  # one device of kind K by vendor V meets both 'K' and 'K@V'
+            for o in self.options:
+                wider = next((w for w in self.options if w.device_kind == o.device_kind and o.vendor and w.vendor is None), None)
+                if o.device_kind is not None and wider is not None:
+                    raise ModelError(
+                        f"Selection lists {wider.describe()!r} and {o.describe()!r}: one {o.describe()} device meets both, so "
+                        f"at_least = {self.at_least} counts it twice; to ask for several devices write "
+                        f"('quantity', {o.device_kind!r}, N), else drop one of the two"
+                    )
         if self.at_least > len(self.options):
             raise ModelError(
                 f"Selection at_least = {self.at_least} but only {len(self.options)} options "

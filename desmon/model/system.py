@@ -8,7 +8,7 @@ builds on them), re-exported here.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Mapping
+from typing import Iterable, Mapping
 
 from desmon.errors import DesmonError, ModelError
 from desmon.model.actions import ACTIONS, RISKY_ACTIONS, Action
@@ -167,34 +167,56 @@ class SystemModel:
         self._check_rules(graphs)
         object.__setattr__(self, "specs", tuple(self._with_reads(s) for s in self.specs))
 
-    def never_placed(self) -> tuple[str, ...]:
-        """Why each specification whose graph could never be placed cannot be, one line each:
-        no platform meets its requirements in its best state (up, every device working, no
-        load, nothing deployed), counting the requirements that state decides
-        (:meth:`~desmon.model.kinds.Constraint.best_state_decides`). A count, an amount or two
-        bounds out of reach is almost surely a slip, but a model may show one on purpose (the
-        deployer then raises no_acceptable_platforms whenever the graph is selected), so the
-        commands warn instead of refusing."""
+    def never_placed(self, changed: "Iterable[str]" = ()) -> tuple[str, ...]:
+        """Why each graph a rule selects could never be deployed, one line each: it has no
+        deployment specification (the deployer raises deployment_information_missing), or no
+        platform meets its specification's requirements in its best state (up, every device
+        working, no load, nothing deployed), counting the requirements that state decides
+        (:meth:`~desmon.model.kinds.Constraint.best_state_decides`). A specification of a
+        graph in ``changed`` (one a run-time RequirementChange of the scenario may change) is
+        not judged. A count, an amount or two bounds out of reach is almost surely a slip,
+        but a model may show one on purpose, so the commands warn instead of refusing."""
         lines = []
+        specified = {spec.graph for spec in self.specs}
+        unspecified: dict[str, list[str]] = {}
+        for rule in self.rules.rules:
+            for g in dict.fromkeys(rule.graphs):
+                if g not in specified:
+                    unspecified.setdefault(g, []).append(repr(rule.context))
+        for g, contexts in unspecified.items():
+            rules = f"the rule for {contexts[0]} selects" if len(contexts) == 1 else f"the rules for {', '.join(contexts)} select"
+            lines.append(
+                f"{rules} {g!r}, which has no deployment specification, so it is never deployed (the deployer raises "
+                f"deployment_information_missing): add robot.depsl.deployment_specification({g!r})"
+            )
+        skip = set(changed)
         for spec in self.specs:
-            reqs = [r for r in spec.requirements if not isinstance(r, Preference) and r.best_state_decides()]
-            candidates = [p for p in self.platforms if spec.fixed_platform in (None, p.name)]
-            failing: list[str] = []
-            for p in candidates if reqs else ():
-                best = PlatformState(p, True, tuple(d for d in self.devices if d.platform == p.name))
-                reasons = [f"{r.describe()} fails: {why}" for r in reqs if (why := r.holds(best, spec.graph)) is not None]
-                if not reasons:
-                    break
-                failing.append(f"{p.name}: {'; '.join(reasons)}")
-            else:
-                if failing:
-                    shown = "; ".join(failing[:3]) + (f"; and {len(failing) - 3} more platforms" if len(failing) > 3 else "")
-                    where = f"its fixed platform {spec.fixed_platform}" if spec.fixed_platform is not None else "no platform"
-                    lines.append(
-                        f"deployment of {spec.graph!r} can never be placed: {where} meets its requirements even when up, "
-                        f"with every device working and nothing else on it ({shown}); fix the requirements or the platforms"
-                    )
+            if spec.graph not in skip:
+                line = self._never_placed(spec)
+                if line is not None:
+                    lines.append(line)
         return tuple(lines)
+
+    def _never_placed(self, spec: DeploymentSpec) -> str | None:
+        reqs = [r for r in spec.requirements if not isinstance(r, Preference) and r.best_state_decides()]
+        if not reqs:
+            return None
+        failing: list[str] = []
+        for p in self.platforms:
+            if spec.fixed_platform not in (None, p.name):
+                continue
+            best = PlatformState(p, True, tuple(d for d in self.devices if d.platform == p.name))
+            reasons = [f"{r.describe()} fails: {why}" for r in reqs if (why := r.holds(best, spec.graph)) is not None]
+            if not reasons:
+                return None
+            failing.append(f"{p.name}: {'; '.join(reasons)}")
+        shown = "; ".join(failing[:3]) + (f"; and {len(failing) - 3} more platforms" if len(failing) > 3 else "")
+        who = (f"its fixed platform {spec.fixed_platform} does not meet its requirements" if spec.fixed_platform is not None
+               else "no platform meets its requirements")
+        return (
+            f"deployment of {spec.graph!r} can never be placed: {who} even when up, with every device working and "
+            f"nothing else on it ({shown}); fix the requirements or the platforms"
+        )
 
     def _with_reads(self, spec: DeploymentSpec) -> DeploymentSpec:
         """``spec`` with what its graph's inputs require (:class:`Reads`, one per device kind

@@ -28,6 +28,7 @@ from desmon.model.checks import (
     check_names,
     check_number,
     check_pairs,
+    exact,
     check_text,
     strict_init,
     suggest,
@@ -499,7 +500,7 @@ class World:
             if not any(a <= slip.time < b for a, b, _ in spans):
                 during = next((seg.context for seg in segments if seg.start <= slip.time < seg.end), "?")
                 raise ScenarioError(
-                    f"world: slip at t={slip.time:g} falls in {during!r}, when no object is in the hand: "
+                    f"world: slip at t={exact(slip.time)} falls in {during!r}, when no object is in the hand: "
                     "place slips between a grasp and its release"
                 )
 

@@ -30,7 +30,7 @@ def levels(low: float, high: float, step: float) -> tuple[float, ...]:
     """``levels(0, 300, 100) == (0, 100, 200, 300)``: load levels for :class:`Bounds`
     (at most :data:`MAX_LEVELS` of them)."""
     for what, v in (("low", low), ("high", high), ("step", step)):
-        check_number(f"levels({low!r}, {high!r}, {step!r}) {what}", v, error=CheckerError)
+        check_number(f"levels({low!r}, {high!r}, {step!r}) {what}", v, error=CheckerError, positive=what == "step")
     if step <= 0 or high < low:
         raise CheckerError(f"load levels {low}..{high} step {step}: need low <= high and a positive step")
     from decimal import Decimal
@@ -148,29 +148,7 @@ class Bounds:
             check_name(f"{w} initial_action", self.initial_action, error=err)
         check_flag(f"{w} repair", self.repair, error=err)
         check_name(f"{w} load_resource", self.load_resource, error=err)
-        if not isinstance(self.loads, Mapping):
-            raise CheckerError(f"{w} loads = {self.loads!r} is not a mapping: write loads={{'arm_pc': levels(0, 300, 100)}}")
-        loads = {}
-        for p, lv in self.loads.items():
-            check_name(f"{w} loads platform", p, error=err)
-            example = f"loads={{{p!r}: levels(0, 300, 100)}}"
-            if isinstance(lv, (str, bytes)) or not isinstance(lv, (tuple, list)):
-                raise CheckerError(f"{w}: load levels of {p!r} must be a sequence of non-negative numbers, got {lv!r}; write e.g. levels(0, 300, 100)")
-            for x in lv:
-                check_number(f"{w}: load level of {p!r}", x, error=err, unit=f" (write e.g. {example})")
-            if not lv:
-                raise CheckerError(f"{w}: platform {p!r} has no load levels: write e.g. {example}")
-            if len(lv) > MAX_LEVELS:
-                raise CheckerError(f"{w}: platform {p!r} has {len(lv):,} load levels; the checker explores every one, so give at most {MAX_LEVELS:,}")
-            if len(set(lv)) != len(lv):
-                raise CheckerError(f"{w}: load levels of {p!r} repeat a level ({list(lv)}); list each level once, e.g. levels(0, 300, 100)")
-            if list(lv) != sorted(lv):
-                raise CheckerError(
-                    f"{w}: load levels of {p!r} are not in rising order ({list(lv)}): the load steps between neighbours "
-                    f"in the list, so write them sorted, e.g. {sorted(lv)}"
-                )
-            loads[p] = tuple(lv)
-        object.__setattr__(self, "loads", loads)
+        object.__setattr__(self, "loads", self._checked_loads())
         check_number(f"{w} start_failures", self.start_failures, error=err, integer=True)
         if self.max_failures is not None:
             check_number(f"{w} max_failures", self.max_failures, error=err, integer=True)
@@ -193,6 +171,34 @@ class Bounds:
             self, "interchangeable",
             tuple(check_names(f"{w} interchangeable group", g, each=f"{w} interchangeable platform", error=err, example="('e1', 'e2')") for g in groups),
         )
+
+    def _checked_loads(self) -> dict[str, tuple[float, ...]]:
+        """``loads`` checked: a mapping of platform names to rising, distinct, finite levels."""
+        err = CheckerError
+        w = "checker bounds"
+        if not isinstance(self.loads, Mapping):
+            raise CheckerError(f"{w} loads = {self.loads!r} is not a mapping: write loads={{'arm_pc': levels(0, 300, 100)}}")
+        loads = {}
+        for p, lv in self.loads.items():
+            check_name(f"{w} loads platform", p, error=err)
+            example = f"loads={{{p!r}: levels(0, 300, 100)}}"
+            if isinstance(lv, (str, bytes)) or not isinstance(lv, (tuple, list)):
+                raise CheckerError(f"{w}: load levels of {p!r} must be a sequence of non-negative numbers, got {lv!r}; write e.g. levels(0, 300, 100)")
+            for x in lv:
+                check_number(f"{w}: load level of {p!r}", x, error=err, unit=f" (write e.g. {example})")
+            if not lv:
+                raise CheckerError(f"{w}: platform {p!r} has no load levels: write e.g. {example}")
+            if len(lv) > MAX_LEVELS:
+                raise CheckerError(f"{w}: platform {p!r} has {len(lv):,} load levels; the checker explores every one, so give at most {MAX_LEVELS:,}")
+            if len(set(lv)) != len(lv):
+                raise CheckerError(f"{w}: load levels of {p!r} repeat a level ({list(lv)}); list each level once, e.g. levels(0, 300, 100)")
+            if list(lv) != sorted(lv):
+                raise CheckerError(
+                    f"{w}: load levels of {p!r} are not in rising order ({list(lv)}): the load steps between neighbours "
+                    f"in the list, so write them sorted, e.g. {sorted(lv)}"
+                )
+            loads[p] = tuple(lv)
+        return loads
 
     def action_moves(self, current: str | None) -> tuple[str, ...]:
         if self.task is not None:
