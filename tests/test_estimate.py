@@ -391,3 +391,17 @@ def test_thresholds_and_confidences_print_as_given_never_rounded_into_another_qu
     # an error probability takes a percentage as the confidence does
     one_percent = [_estimate(capsys, QUICK, "--below", "3", "--within", "0.2", "--alpha", a) for a in ("1%", "0.01")]
     assert one_percent[0] == one_percent[1] and "wrong with probability at most 0.01" in one_percent[0][1]
+
+
+def test_a_yes_below_x_never_prints_an_interval_that_reaches_x(capsys):
+    """The ends are rounded to the half-width's digits: an upper end of 10.998 printed as 11.0
+    beside "below 11? YES (the sequence excludes the threshold)". They now take the digits that
+    keep each end on its own side of the threshold."""
+    argv = ["estimate", str(ROOT / "scenarios" / "coffee_handover.py"), "--timing", "exponential", "--below", "11",
+            "--within", "10%", "--max-runs", "400", "--no-progress"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    low, high = (float(x) for x in re.search(r"interval \[([0-9.]+), ([0-9.]+)\]", out).groups())
+    assert "below 11? YES" in out and high < 11.0 and 10.9 < high, out  # (10.998 here; 11.0 at one decimal)
+    assert main([*argv, "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["high"] < 11.0

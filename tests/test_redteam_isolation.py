@@ -441,3 +441,128 @@ def test_a_deployer_cannot_signal_desmon(tmp_path, name, code):
     code_, took, out, err = _desmon("verify", COFFEE, "--no-progress", "--timeout", "20", "--deployer", f"{tmp_path / 'signals.py'}:{name}", timeout=40)
     assert code_ == code and took < 20, (code_, took, out, err)
     assert ("raised PermissionError" in err) if code == 2 else ("verdict: VIOLATED" in out), (out, err)
+
+
+#: the corrected deployer, leaving ``release`` unwatched while hand_pc is down; it learns that
+#: without reading ``up``, from whether a requirement check raises (a down platform fails
+#: "platform up" before any requirement is evaluated)
+LEARNS_FROM_AN_EXCEPTION = '''
+from desmon.deployment.deployer import DEPLOYERS
+from desmon.model.requirements import Capacity
+
+_desmon = DEPLOYERS["desmon"].react
+_BOGUS = object.__new__(Capacity)
+object.__setattr__(_BOGUS, "resource", "memory")
+object.__setattr__(_BOGUS, "amount", "not a number")
+
+def _up(q, name):
+    for s in q.platform_states():
+        if s.name == name:
+            try:
+                q.checks.platform((_BOGUS,), s, None, True)
+            except TypeError:
+                return True
+            return False
+    return True
+
+def hidden(q, slots, changed, context_changed):
+    if context_changed and q.context() == "release" and not _up(q, "hand_pc"):
+        return
+    yield from _desmon(q, slots, changed, context_changed)
+'''
+
+
+def test_a_deployer_learning_a_fact_from_a_check_that_raises_is_not_verified_by_the_table_engine(tmp_path):
+    """Without the fix: HOLDS on the table engine (it recorded nothing of the check that raised,
+    so every 'hand_pc down, then release' reaction replayed one recorded with hand_pc up), while
+    the direct engine found the unwatched release."""
+    (tmp_path / "hidden.py").write_text(LEARNS_FROM_AN_EXCEPTION)
+    spec = f"{tmp_path / 'hidden.py'}:hidden"
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--deployer", spec)
+    assert code == 1 and "verdict: VIOLATED" in out and "engine: direct (a requirement check raised TypeError" in out, (out, err)
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--engine", "table", "--deployer", spec)
+    assert code == 2 and "HOLDS" not in out and err.startswith("desmon: error: a requirement check raised TypeError"), (code, out, err)
+
+
+#: the corrected deployer; one global of its module answers repr once (at import) and never again
+STATE_NEVER_SHOWN = '''
+import time
+from desmon.deployment.deployer import DEPLOYERS
+_desmon = DEPLOYERS["desmon"].react
+
+class _Shy:
+    def __repr__(self):
+        if getattr(_Shy, "_asked", False):
+            while True:
+                time.sleep(1)
+        type.__setattr__(_Shy, "_asked", True)
+        return "shy"
+
+SHY = _Shy()
+
+def shy(q, slots, changed, context_changed):
+    yield from _desmon(q, slots, changed, context_changed)
+'''
+
+
+def test_a_module_whose_state_never_shows_ends_within_the_reaction_limit(tmp_path):
+    """Without the fix: desmon waited for ever for the worker's answer to "the state your
+    module keeps" after the search (a blocking read, no limit): killed by the test's timeout."""
+    (tmp_path / "shy.py").write_text(STATE_NEVER_SHOWN)
+    code, took, out, err = _desmon("verify", COFFEE, "--no-progress", "--max-reaction-seconds", "2", "--deployer", f"{tmp_path / 'shy.py'}:shy", timeout=60)
+    assert code == 2 and "HOLDS" not in out and took < 20, (code, took, out, err)
+    assert "asked after the search for the state its module keeps: it did not answer within 2 s" in err
+
+
+FORGED_READY = RAW + '''
+import pickle
+_body = pickle.dumps(("ready", {"description": 10 ** 5000, "fallbacks": True, "stale_errors": False, "modules": []}), protocol=5)
+_send(_body)
+
+def nothing(q, slots, changed, context_changed):
+    return
+    yield
+'''
+
+
+def test_a_forged_first_message_is_one_line_never_a_traceback(tmp_path):
+    """Without the fix: str() of the 5,000-digit description raised ValueError: a traceback, exit 1 (read as VIOLATED)."""
+    (tmp_path / "forged.py").write_text(FORGED_READY)
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--deployer", f"{tmp_path / 'forged.py'}:nothing")
+    assert code == 2 and "Traceback" not in err and "announced the deployer with fields desmon does not accept" in err, (code, out, err)
+
+
+DETAILS = '''
+from desmon.deployment.deployer import DEPLOYERS
+from desmon.deployment.ports import RaiseError
+_desmon = DEPLOYERS["desmon"].react
+
+def _with(make):
+    def react(q, slots, changed, context_changed):
+        reaction = _desmon(q, slots, changed, context_changed)
+        out = None
+        while True:
+            try:
+                cmd = reaction.send(out)
+            except StopIteration:
+                return
+            if isinstance(cmd, RaiseError):
+                cmd = RaiseError(cmd.kind, cmd.graph, cmd.platform, make(q))
+            out = yield cmd
+    return react
+
+number = _with(lambda q: 7)
+raw = _with(lambda q: b"no room")
+port = _with(lambda q: q)
+'''
+
+
+@pytest.mark.parametrize("command", [["replay", COFFEE], ["run", COFFEE, "--json"], ["verify", COFFEE, "--no-progress"]])
+@pytest.mark.parametrize("name, kind", [("number", "int"), ("raw", "bytes"), ("port", "_RemoteQuery")])
+def test_an_error_detail_that_is_not_text_is_the_deployers_fault_never_a_traceback(tmp_path, command, name, kind):
+    """Without the fix: replay's listing called a str method of it, and run --json could not
+    write it: AttributeError or TypeError tracebacks, exit 1."""
+    (tmp_path / "details.py").write_text(DETAILS)
+    code, _took, out, err = _desmon(*command, "--deployer", f"{tmp_path / 'details.py'}:{name}")
+    text = out + err
+    assert code == 4 and "Traceback" not in err and f"with a detail of type {kind}: give the detail as text (a str)" in text, (code, out, err)

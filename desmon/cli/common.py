@@ -88,14 +88,14 @@ def scenario_arg(p: argparse.ArgumentParser, help: str = "scenario file, e.g. sc
 
 def _resolve_deployer(spec: str, args: argparse.Namespace) -> object:
     """``--deployer spec``; a user's module imported in its worker process within the command's
-    reaction limit (``--max-reaction-seconds``, or what is left of ``--timeout``)."""
+    reaction limit (``--max-reaction-seconds``, or what is left of ``--timeout`` if that is less)."""
     from desmon.deployment.guard import MAX_REACTION_SECONDS
     from desmon.verify.deployers import resolve_deployer
 
     seconds = getattr(args, "max_reaction_seconds", None) or MAX_REACTION_SECONDS
     timeout = getattr(args, "timeout", None)
     if isinstance(timeout, (int, float)):
-        seconds = max(0.5, timeout - (time.perf_counter() - getattr(args, "_started", time.perf_counter())))
+        seconds = min(seconds, max(0.5, timeout - (time.perf_counter() - getattr(args, "_started", time.perf_counter()))))
     return resolve_deployer(spec, import_seconds=seconds)
 
 

@@ -234,6 +234,14 @@ def _fixed(x: float, decimals: int) -> str:
     return f"{round(x, decimals) + 0.0:,.{decimals}f}"
 
 
+def _apart(decimals: int, ends: tuple[float, float], threshold: float) -> int:
+    """``decimals``, or more where fewer would print an end on the other side of ``threshold``
+    (or on it): an interval that answers "below X?" never reads as reaching X when it does not."""
+    while decimals < 17 and any(math.isfinite(x) and (round(x, decimals) < threshold) != (x < threshold) for x in ends):
+        decimals += 1
+    return decimals
+
+
 def percent(confidence: float) -> str:
     """``confidence`` in percent, with every digit it needs: 0.9999999 is not 100 %, nor is
     0.9999999999999999."""
@@ -252,13 +260,16 @@ def format_estimate(e: Any) -> str:
 
     q, iv, ap = e.question, e.interval, e.approximation
     d = decimals_for(iv.half_width)
+    if q.below is not None and q.kind != "probability":  # each end printed on its own side of the threshold
+        d = _apart(d, (iv.low, iv.high), q.below)
     f = lambda x: _fixed(x, d)  # noqa: E731
     pct = f"{percent(q.interval_confidence)} %"
     what = f"P({q.metric} >= {exact(q.at_least)}) per run" if q.kind == "probability" else f"mean {q.metric} per run"
     out = [f"desmon estimate: {e.scenario} (deployer {e.deployer}), {what} of {_n(e.horizon)} s simulated, seed {e.seed}"]
     if e.world:
         out.append(f"  world: the scenario's, with {' '.join(e.world)}")
-    rel = f" = {100 * iv.half_width / abs(iv.estimate):.2f} % of the estimate" if iv.estimate else ""
+    share = 100 * iv.half_width / abs(iv.estimate) if iv.estimate else math.nan
+    rel = f" = {share:.2f} % of the estimate" if math.isfinite(share) else ""
     out.append(f"  estimate {f(iv.estimate)}, {pct} interval [{f(iv.low)}, {f(iv.high)}] (half-width {f(iv.half_width)}{rel}), guaranteed")
     ends = [_n(x) for x in e.range] if e.range else []
     if len(set(ends)) == 1:  # (a range narrower than the digits shown: every digit, not [32.1, 32.1])

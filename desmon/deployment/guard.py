@@ -46,7 +46,7 @@ import traceback
 from types import GeneratorType
 from typing import Any, Callable, Iterator
 
-from desmon.deployment.ports import ERROR_KINDS, RaiseError, Reaction, Start, Stop
+from desmon.deployment.ports import ERROR_KINDS, LAZY_TEXT_TYPES, RaiseError, Reaction, Start, Stop
 from desmon.errors import CheckerError, ModelError
 from desmon.model.checks import visible
 
@@ -233,12 +233,15 @@ _NOT_PLAIN = (
 )
 
 
-def _own_copy(cmd: object, graphs: frozenset[str], platforms: frozenset[str]) -> tuple[Any, str]:
+def _own_copy(cmd: object, graphs: frozenset[str], platforms: frozenset[str], proxies: tuple[type, ...] = ()) -> tuple[Any, str]:
     """(desmon's own copy of ``cmd``, why it is not a command this model can execute or "").
 
     The fields are read once, here, and the engine acts on the copy: a command object
     whose fields change after this read (a property, a mutable subclass, a later
-    ``object.__setattr__``) cannot make desmon act on something else than it checked."""
+    ``object.__setattr__``) cannot make desmon act on something else than it checked.
+    A RaiseError's detail is a str or desmon's own lazy text (:data:`LAZY_TEXT_TYPES`), or,
+    in a deployer's worker process, a proxy of an object desmon handed out (``proxies``:
+    desmon checks what it stands for when it reads the command)."""
     kind = type(cmd)
     if kind is Start or kind is Stop:
         g, p = cmd.graph, cmd.platform  # type: ignore[union-attr]
@@ -246,7 +249,10 @@ def _own_copy(cmd: object, graphs: frozenset[str], platforms: frozenset[str]) ->
             return kind(g, p), ""
     elif kind is RaiseError:
         k, g, p, detail = cmd.kind, cmd.graph, cmd.platform, cmd.detail  # type: ignore[union-attr]
-        if type(k) is str and type(g) is str and (p is None or type(p) is str) and not _unwritable(detail):
+        if type(k) is str and type(g) is str and (p is None or type(p) is str):
+            if type(detail) is not str and type(detail) not in LAZY_TEXT_TYPES and type(detail) not in proxies:  # (written as text)
+                return cmd, (f"yielded RaiseError({k!r}, {g!r}) with a detail of type {type(detail).__name__}: "
+                             "give the detail as text (a str), e.g. detail=str(x)")
             copy = RaiseError(k, g, p, detail)
             return copy, _check_command(copy, graphs, platforms)
     try:
@@ -256,19 +262,6 @@ def _own_copy(cmd: object, graphs: frozenset[str], platforms: frozenset[str]) ->
     return cmd, why or _NOT_PLAIN.format(cmd=_safe_str(cmd), kind=kind.__name__)
 
 
-def _unwritable(detail: object) -> bool:
-    """Whether ``detail`` is plain data that cannot be written as text (an int of 5,000 digits, in
-    a tuple or not): the counterexample writes a RaiseError's detail. Any other object (a recorded
-    run's lazy explanation) is left unread."""
-    if type(detail) not in (int, tuple, list, dict, set, frozenset):
-        return False
-    try:
-        str(detail)
-    except Exception:
-        return True
-    return False
-
-
 class _Every(frozenset):
     """Every name (a model's graphs and platforms where the model is not known)."""
 
@@ -276,11 +269,12 @@ class _Every(frozenset):
         return True
 
 
-def plain_command(cmd: object) -> object:
+def plain_command(cmd: object, proxies: tuple[type, ...] = ()) -> object:
     """``cmd`` as desmon's own plain command, or ``("bad", why)``: the check of
     :func:`_own_copy` that needs no model (a deployer's worker process makes it before it
-    sends a command; desmon checks the names against its model when it reads it)."""
-    copy, why = _own_copy(cmd, _Every(), _Every())
+    sends a command, its ``proxies`` of desmon's objects allowed as a detail; desmon checks
+    the names against its model, and what a proxy stands for, when it reads it)."""
+    copy, why = _own_copy(cmd, _Every(), _Every(), proxies)
     return ("bad", why) if why else copy
 
 

@@ -27,6 +27,7 @@ from desmon.model.requirements import DeploymentSpec, Requirement
 from desmon.model.system import PlatformState
 
 __all__ = [
+    "LAZY_TEXT_TYPES",
     "Start",
     "Stop",
     "RaiseError",
@@ -78,9 +79,15 @@ class Stop:
         return visible(f"stop {self.graph} on {self.platform}")
 
 
+#: the types besides ``str`` a RaiseError's detail may have: desmon's own texts computed when
+#: read (a recorded run's explanation registers its type here); a deployer's detail is a str
+LAZY_TEXT_TYPES: set[type] = set()
+
+
 @dataclass(frozen=True, slots=True)
 class RaiseError:
-    """An Error-port report; the engine stamps it with the time into an :class:`ErrorRecord`."""
+    """An Error-port report; the engine stamps it with the time into an :class:`ErrorRecord`.
+    ``detail`` is text (a ``str``)."""
 
     kind: str
     graph: str

@@ -125,8 +125,8 @@ def fresh_deployer(deployer: Deployer) -> Deployer:
     worker process where it runs isolated), its globals, caches and counters as they were
     before it first ran."""
     spec = deployer.name
-    if _isolated(deployer):
-        return resolve_deployer(spec)
+    if _isolated(deployer):  # (its import within the first one's limit)
+        return resolve_deployer(spec, import_seconds=deployer.react.import_seconds)  # type: ignore[attr-defined]
     source, _colon, name = spec.rpartition(":")
     if _is_file(source):
         return _as_deployer(spec, _load_file(spec, source), source, name)

@@ -81,6 +81,12 @@ _OPERATIONS = frozenset({
 
 
 
+#: how long (seconds) a deployer's module may take to import where no limit is given
+IMPORT_SECONDS = 60.0
+#: a worker's silence past the socket's timeout, as :class:`WorkerGone` says it
+_LATE = "it did not answer in time"
+
+
 class WorkerGone(RaisedElsewhere):
     """The deployer's worker process ended, or broke the conversation, inside a reaction."""
 
@@ -130,7 +136,7 @@ class Worker:
             if not isinstance(exc.__context__, TimeoutError):
                 raise ModelError(f"--deployer {self.spec}: {exc.what}") from None
             fault = DeployerFault(
-                f"deployer {self.spec}, while desmon imported it: its module ran for over {seconds:g} s without returning, "
+                f"deployer {self.spec}, while desmon imported it: its module ran for over {round(seconds, 1):g} s without returning, "
                 "so desmon ended it; a module defines its deployer and returns (--max-reaction-seconds S sets the limit)"
             )
             raise fault from None
@@ -143,7 +149,7 @@ class Worker:
         try:
             data = recv_message(self.sock)
         except TimeoutError:
-            raise WorkerGone("it did not answer in time")
+            raise WorkerGone(_LATE)
         except (EOFError, OSError, ValueError):
             raise WorkerGone(self._gone()) from None
         try:
@@ -253,14 +259,17 @@ class RemoteReact:
     """A user's reaction, run in a :class:`Worker`: called as a reaction function is, it
     returns a generator that holds the conversation of one reaction (module docstring)."""
 
-    def __init__(self, spec: str, ports: "Loader", worker: Worker | None = None) -> None:
+    def __init__(self, spec: str, ports: "Loader", worker: Worker | None = None, import_seconds: float | None = None) -> None:
         self.spec, self.ports = spec, ports
         self.worker = worker
+        #: how long the module's import may take in a worker started again, and its worker's
+        #: answer to :meth:`state` (None: :data:`IMPORT_SECONDS`)
+        self.import_seconds = import_seconds
         #: whether the worker was checked against the requirement kinds registered since it started (once is enough)
         self.settled = False
 
     def __reduce__(self) -> Any:
-        return (RemoteReact, (self.spec, self.ports))  # (its worker is this process's own)
+        return (RemoteReact, (self.spec, self.ports, None, self.import_seconds))  # (its worker is this process's own)
 
     @property
     def modules(self) -> list[tuple[str, str]]:
@@ -280,7 +289,7 @@ class RemoteReact:
             return w
         if w is not None and w.owner == os.getpid():
             w.close()
-        self.worker = w = Worker(self.spec, self.ports, quiet=True)
+        self.worker = w = Worker(self.spec, self.ports, quiet=True, import_seconds=self.import_seconds)
         self.settled = True
         return w
 
@@ -316,13 +325,18 @@ class RemoteReact:
         """The state the deployer's module holds, as text (:func:`desmon.verify.deployers.module_state`):
         (as its worker imported it, now), asked of its worker."""
         w = self.current()
+        seconds = self.import_seconds or IMPORT_SECONDS
         try:
+            w.sock.settimeout(seconds)  # (no guard's timer runs here: a module whose state never comes out of repr is ended)
             kind, body = w.exchange(("state", None))
             if kind != "state" or type(body) is not tuple or len(body) != 2 or not all(_texts(d) for d in body):
                 raise WorkerGone("sent desmon, through its worker process, what desmon does not accept (not its module's state)")
         except WorkerGone as exc:  # (outside a reaction, where no guard turns it into the deployer's fault: one line)
             w.close()
-            raise ModelError(f"deployer {self.spec}, asked after the search for the state its module keeps: {exc.what}") from None
+            what = f"it did not answer within {round(seconds, 1):g} s (--max-reaction-seconds S sets the limit)" if exc.what == _LATE else exc.what
+            raise ModelError(f"deployer {self.spec}, asked after the search for the state its module keeps: {what}") from None
+        if w.alive:
+            w.sock.settimeout(None)
         return body  # type: ignore[no-any-return]
 
 
@@ -408,8 +422,6 @@ class Loader:
     state: Callable[[str], dict[str, str]]
 
 
-#: how long (seconds) a deployer's module may take to import where no limit is given
-IMPORT_SECONDS = 60.0
 
 
 def isolated(spec: str, ports: Loader, import_seconds: float | None = None) -> Deployer:
@@ -421,10 +433,14 @@ def isolated(spec: str, ports: Loader, import_seconds: float | None = None) -> D
     new worker where the process forked."""
     worker = Worker(spec, ports, import_seconds=import_seconds)
     info = worker.info
-    return Deployer(
-        spec, str(info.get("description", spec)), RemoteReact(spec, ports, worker),
-        fallbacks=bool(info.get("fallbacks", True)), stale_errors=bool(info.get("stale_errors", False)),
-    )
+    description, fallbacks, stale = info.get("description", spec), info.get("fallbacks", True), info.get("stale_errors", False)
+    if type(description) is not str or type(fallbacks) is not bool or type(stale) is not bool:  # (a message forged in the worker)
+        worker.close()
+        raise ModelError(
+            f"--deployer {spec}: its worker process announced the deployer with fields desmon does not accept "
+            "(a description that is text, flags that are True or False)"
+        )
+    return Deployer(spec, description, RemoteReact(spec, ports, worker, import_seconds), fallbacks=fallbacks, stale_errors=stale)
 
 
 def worker_pids(deployer: Deployer) -> list[int]:

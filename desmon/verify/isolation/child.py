@@ -394,7 +394,7 @@ def _run_reaction(link: _Link, deployer: Any, body: Any, me: int) -> None:  # pr
                 link.send("return", None)
                 return
             _forked(me)
-            link.send("yield", plain_command(cmd))
+            link.send("yield", plain_command(cmd, proxies=(_Remote,)))
             answer, sent = link.receive()
             if answer != "sent":
                 raise _Abandoned()

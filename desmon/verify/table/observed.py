@@ -10,6 +10,7 @@ from __future__ import annotations
 import operator
 from typing import TYPE_CHECKING, Any, Callable, Iterator, Protocol, Sequence
 
+from desmon.deployment.ports import LAZY_TEXT_TYPES
 from desmon.deployment.validity import Validity
 
 if TYPE_CHECKING:
@@ -155,6 +156,9 @@ class _Text(_Observed):
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._all(), name)
+
+
+LAZY_TEXT_TYPES.add(_Text)  # a RaiseError may carry it as its detail
 
 
 class Acceptable(_Observed):

@@ -60,6 +60,26 @@ class RecordingChecks:
         """A new recorded run: no observation yet."""
         self.obs = []
         self.made = set()
+        self.raised = ""
+
+    #: why a requirement check of this run raised ("" if none did): what the exception tells
+    #: the reaction (that a platform got as far as the failing requirement, say) is not
+    #: observed, so the run is the table engine's to refuse, even where the reaction caught it
+    raised = ""
+
+    def _computing(self, compute: Callable[[], Any]) -> Any:
+        """``compute()``, the real answer to a check; where it raises, the run is refused
+        (:attr:`raised`, and a :class:`TableUnsupported` into the reaction)."""
+        try:
+            return compute()
+        except TableUnsupported:
+            raise
+        except Exception as exc:
+            self.raised = (
+                f"a requirement check raised {type(exc).__name__} inside a reaction ({' '.join(str(exc).split())[:200]}); "
+                "the table engine cannot observe what the exception reveals of the platform's facts; run with --engine direct"
+            )
+            raise TableUnsupported(self.raised) from None
 
     def handle(self, platform: Any, up: bool, devices: tuple, load: tuple, deployed: tuple) -> PlatformHandle:
         """The handle of a platform with these facts (the recording store's ``make_state``)."""
@@ -104,7 +124,7 @@ class RecordingChecks:
         if found is not None:
             return found
         real_states = self._reals(states)
-        answer = self._validity(reqs, real_states, graph, reasons)
+        answer = self._computing(lambda: self._validity(reqs, real_states, graph, reasons))
         if type(states) is tuple and all(type(s) is PlatformHandle for s in states):  # handles' facts never change
             self._keep(key, reqs, states, answer)
         return answer
@@ -135,7 +155,7 @@ class RecordingChecks:
             return found
         (real,) = self._reals((state,))
         parts = self._parts((real,))
-        fails = self._computed.platform(reqs, real, graph, first_only)  # platform_failures' answer
+        fails = self._computing(lambda: self._computed.platform(reqs, real, graph, first_only))  # platform_failures' answer
         answer = Reasons(Check(self, reqs, graph, first_only, parts, [fails], [real.platform.name]), fails, single=True)
         if type(state) is PlatformHandle:  # a handle's facts never change
             self._keep(key, reqs, state, answer)
@@ -272,6 +292,8 @@ class Recorder:
         rec.begin()
         try:
             out = run()
+            if rec.raised:  # (the reaction caught it)
+                raise TableUnsupported(rec.raised)
         except UnobservedRead as exc:
             if exc.fact:
                 raise exc.named(getattr(exc, "reader", None) or _reader(exc.__traceback__)) from None
