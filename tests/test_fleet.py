@@ -239,6 +239,16 @@ def test_the_fleet_summary_gives_the_mean_exposure_per_robot_its_interval_and_me
     assert min(values) < max(values) and iv.low < sum(values) / 4 < iv.high
     alone = format_fleet_summary(simulate_fleet(fleet(1, 1, 0.1)))
     assert "(95 % interval of the mean: none from one robot)" in alone
+    # the JSON gives the same interval, with its confidence and method (it gave the mean, min and max alone)
+    given = result.metrics["exposure_per_robot_s"]["interval"]
+    assert (given["low"], given["high"], given["confidence"]) == (pytest.approx(max(iv.low, 0.0)), pytest.approx(iv.high), 0.95)
+    assert given["method"] == "normal approximation over the 4 robots, not guaranteed: they share the edge servers"
+    # the exposure's causes sit under the exposure they add up to, above the risky time
+    lines = text.splitlines()
+    at = next(i for i, x in enumerate(lines) if x.startswith("  unmonitored exposure (s)"))
+    risky = next(i for i, x in enumerate(lines) if x.startswith("  risky time (s)"))
+    causes = [x for x in lines[at + 2:risky]]
+    assert causes and all(x.startswith("    ") for x in causes)
 
 
 def test_desmon_run_json_gives_every_robots_metrics(capsys: pytest.CaptureFixture[str]) -> None:

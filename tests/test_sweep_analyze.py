@@ -111,6 +111,16 @@ def test_the_analyze_settings_are_refused_with_another_job(tmp_path, capsys):
         assert f"{flag} applies to --job analyze, not --job run; drop it" in capsys.readouterr().err
 
 
+def test_a_deployer_given_to_the_evaluate_job_is_refused_not_written_into_its_table(tmp_path, capsys):
+    """Its detectors run on their signals alone: --deployer changed no figure, yet the table's
+    deployer column said paper (and --resume then refused the same sweep without it)."""
+    out = tmp_path / "e.csv"
+    assert main(["sweep", "--job", "evaluate", "--deployer", "paper", "-p", "noise_counts=2", "--trials", "5", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "--deployer: --job evaluate runs the detectors on their signals alone, with no deployer: drop it" in err
+    assert len(err.strip().splitlines()) == 1 and not out.exists()
+
+
 def test_a_world_the_chain_cannot_be_built_from_is_refused_with_the_point(tmp_path, capsys):
     out = tmp_path / "t.csv"
     assert main(["sweep", ROBOT_DAY, "--job", "analyze", "-p", "hours=1", "-o", str(out)]) == 2

@@ -87,7 +87,7 @@ class Agreement:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "exact_s": self.exact, "simulated_mean_s": self.mean, "ci99_low_s": self.low, "ci99_high_s": self.high,
+            "exact_s": self.exact, "simulated_mean_s": self.mean, "ci99_low_s": self.low, "ci99_high_s": self.high, "ci99_method": METHOD,
             "seeds": self.seeds, "inside": self.inside, "min_s": min(self.values), "max_s": max(self.values),
         }
 
@@ -105,6 +105,15 @@ def confidence(values: Sequence[float], level: float = 0.99) -> tuple[float, flo
     return mean, mean - half, mean + half
 
 
-def agreement(exact: float, values: Sequence[float]) -> Agreement:
+#: how :func:`confidence` makes its interval, as the reports name it
+METHOD = "Student's t, not guaranteed"
+
+
+def agreement(exact: float, values: Sequence[float], value_range: tuple[float, float] | None = None) -> Agreement:
+    """The exact value beside the 99 % interval of the mean of the simulated ``values``
+    (:func:`confidence`), its ends kept inside the ``value_range`` every value lies in (the
+    mission's ``[0, T]`` seconds: an end beyond it only says less)."""
     mean, low, high = confidence(values)
+    if value_range is not None:
+        low, high = max(low, value_range[0]), min(high, value_range[1])
     return Agreement(exact, mean, low, high, len(values), tuple(values))

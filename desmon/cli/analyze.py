@@ -181,7 +181,7 @@ def _simulation(args: argparse.Namespace, scenario: Any, result: Any, budget: An
         scenario, args.deployer, range(args.simulate), result.horizon_s, phases=args.phases, start_failure_p=args.start_failure_p,
         guard=args.guard, budget=budget,
     )
-    return agreement(result.exposure_s_per_mission or 0.0, values)
+    return agreement(result.exposure_s_per_mission or 0.0, values, (0.0, result.horizon_s))  # (seconds of a mission)
 
 
 def _budget(args: argparse.Namespace) -> Any:
@@ -343,10 +343,12 @@ def format_analysis(a: Any, agree: Any = None) -> str:
         out.append("  an unmonitored moment within T is certain (to 6 digits)")
     out.append(f"  ({a.method}; error estimate {a.transient_error:.1e})")
     if agree is not None:
+        from desmon.analyze.agreement import METHOD
+
         verdict = "inside" if agree.inside else "OUTSIDE"
         out.append(
-            f"Simulated ({timing} timing, {agree.seeds} seeds): mean {agree.mean:.3f} s, 99 % CI "
-            f"[{agree.low:.3f}, {agree.high:.3f}] (range {min(agree.values):.3f}..{max(agree.values):.3f}): exact value {verdict}"
+            f"Simulated ({timing} timing, {agree.seeds} seeds): mean {agree.mean:.3f} s, 99 % interval "
+            f"[{agree.low:.3f}, {agree.high:.3f}] ({METHOD}; range {min(agree.values):.3f}..{max(agree.values):.3f}): exact value {verdict}"
         )
     if a.contributions:
         out.append("Where the unmonitored time comes from (s per hour, long run):")

@@ -399,24 +399,16 @@ def _fmt_spread(s: dict[str, float], unit: str = "", scale: float = 1.0, digits:
     return f"{f(s['mean'])}{unit} [{f(s['min'])}-{f(s['max'])}]"
 
 
-#: the confidence of the interval of a fleet's mean exposure per robot (as desmon sweep-plot's)
-FLEET_CONFIDENCE = 0.95
-
-
 def _fleet_exposure_interval(r: FleetResult) -> str:
-    """The line under a fleet's mean exposure per robot: its interval over the robots. The normal
-    approximation (not the betting interval, though the values lie in ``[0, horizon]``): that one's
-    guarantee needs independent, alike runs, and a fleet's robots share the edge servers and differ
-    in their idle times."""
-    from desmon.stats import mean_interval
+    """The line under a fleet's mean exposure per robot: its interval over the robots
+    (:func:`desmon.sim.fleet.FleetResult`'s metrics, as ``--json`` gives it)."""
+    from desmon.sim.fleet import FLEET_CONFIDENCE
 
-    values = [m["unmonitored_exposure_s"] for m in r.robots.values()]
+    iv = r.metrics["exposure_per_robot_s"]["interval"]
     head = f"    ({100 * FLEET_CONFIDENCE:g} % interval of the mean: "
-    if len(values) < 2:
+    if iv is None:
         return head + "none from one robot)"
-    iv = mean_interval(values, 1.0 - FLEET_CONFIDENCE)
-    return (f"{head}[{max(iv.low, 0.0):.1f}, {iv.high:.1f}], normal approximation over the {len(values)} robots, not guaranteed: "
-            "they share the edge servers)")
+    return f"{head}[{iv['low']:.1f}, {iv['high']:.1f}], {iv['method']})"
 
 
 def _count(n: int, what: str) -> str:
@@ -436,8 +428,8 @@ def format_fleet_summary(r: FleetResult) -> str:
         "Per robot, mean [min-max] over the robots:",
         f"  unmonitored exposure (s)       {_fmt_spread(m['exposure_per_robot_s'])}",
         _fleet_exposure_interval(r),
-        f"  risky time (s)                 {_fmt_spread(m['risky_time_per_robot_s'])}",
         *(f"    {CAUSE_TEXT[c]:<31} {_fmt_spread(v)}" for c, v in m["exposure_by_cause_per_robot_s"].items() if v["max"] > 0),
+        f"  risky time (s)                 {_fmt_spread(m['risky_time_per_robot_s'])}",
         *([f"  excluded on purpose (s)        {_fmt_spread(m['excluded_per_robot_s'])}   (watched=False: risky, never unmonitored)"]
           if m["excluded_per_robot_s"]["max"] > 0 else []),
         "Edge servers, mean [min-max] over the servers:",

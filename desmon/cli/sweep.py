@@ -68,7 +68,8 @@ def add_parser(sub: Subparsers) -> None:
                    help="runs per point, each with its own derived seed (default: 10; --job verify and analyze: 1, they use no seed; "
                    "--job estimate: 1, an estimation makes its own runs)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="the sweep seed every run's seed is derived from")
-    p.add_argument("--deployer", default="desmon", metavar="SPEC", help="the deployer, as for desmon run (docs/deployers.md)")
+    p.add_argument("--deployer", default=None, metavar="SPEC",
+                   help="the deployer, as for desmon run (docs/deployers.md; not --job evaluate, whose detectors run alone) (default: desmon)")
     p.add_argument("--until", type=positive_seconds, default=None, help="--job run and estimate: simulated seconds of each run (default: each point's horizon)")
     p.add_argument("--max-states", type=positive_int, default=None, help="--job verify and analyze: stop INCOMPLETE after this "
                    f"many states (default: {_SETTING_DEFAULTS['max_states']:,})")
@@ -158,6 +159,9 @@ def run(args: argparse.Namespace) -> int:
         if args.workers is not None:
             raise SweepError("--workers sets the size of the local cluster; with --scheduler the cluster has its own workers: drop it")
     settings = _settings(args)
+    if args.job == "evaluate" and args.deployer is not None:
+        raise SweepError("--deployer: --job evaluate runs the detectors on their signals alone, with no deployer: drop it")
+    deployer = args.deployer if args.deployer is not None else "desmon"
     if args.job == "estimate":
         _check_estimate(settings)
     _check_seeds(args)
@@ -174,7 +178,7 @@ def run(args: argparse.Namespace) -> int:
 
     result = run_sweep(
         job=args.job, scenario=args.scenario, axes=axes, seeds=seeds, output=args.output, sweep_seed=args.seed,
-        deployer=args.deployer, settings=settings, task_timeout=args.task_timeout, scheduler=args.scheduler,
+        deployer=deployer, settings=settings, task_timeout=args.task_timeout, scheduler=args.scheduler,
         workers=args.workers, retries=args.retries, resume=args.resume, progress=not args.no_progress,
     )
     points = result.total // seeds

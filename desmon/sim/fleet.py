@@ -743,7 +743,7 @@ class FleetWorld:
             "robots": len(robots),
             "edges": len(em.capacity),
             "horizon_s": h,
-            "exposure_per_robot_s": _spread(exposure),
+            "exposure_per_robot_s": {**_spread(exposure), "interval": _mean_interval(exposure, h)},
             "risky_time_per_robot_s": _spread(risky),
             "exposure_by_cause_per_robot_s": {c: _spread([m["unmonitored_by_cause_s"][c] for m in robots.values()]) for c in CAUSES},
             "excluded_per_robot_s": _spread([m.get("excluded_s", 0.0) for m in robots.values()]),
@@ -774,6 +774,26 @@ def _spread(values: list[float]) -> dict[str, float]:
     if not values:
         return {"mean": 0.0, "min": 0.0, "max": 0.0}
     return {"mean": round(sum(values) / len(values), 6), "min": round(min(values), 6), "max": round(max(values), 6)}
+
+
+#: the confidence of the interval of a fleet's mean exposure per robot (as desmon sweep-plot's)
+FLEET_CONFIDENCE = 0.95
+
+
+def _mean_interval(values: list[float], horizon: float) -> dict[str, Any] | None:
+    """The interval of the mean of the robots' ``values`` (None from fewer than 2): the normal
+    approximation inside ``[0, horizon]``, not the betting interval, though the values lie in
+    that range: its guarantee needs independent, alike runs, and a fleet's robots share the
+    edge servers and differ in their idle times."""
+    if len(values) < 2:
+        return None
+    from desmon.stats import normal_interval
+
+    iv = normal_interval(values, 1.0 - FLEET_CONFIDENCE, (0.0, horizon))
+    return {
+        "low": round(iv.low, 6), "high": round(iv.high, 6), "confidence": FLEET_CONFIDENCE,
+        "method": f"normal approximation over the {len(values)} robots, not guaranteed: they share the edge servers",
+    }
 
 
 def peak_rss_mb() -> float:
