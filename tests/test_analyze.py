@@ -46,6 +46,9 @@ def _shift(**params: str):
     ("scenario", "params", "says"),
     [
         ("coffee_handover.py", None, "World faults are scripted (device lwr_wrench fails at 23 s)"),
+        # the fix names the component the script fails, not one of another scenario
+        ("platform_crash.py", None, "(platform torso_pc down at 8 s): a Markov chain needs rates, not times; give stochastic_faults=(MTTF('torso_pc',"),
+        ("vendor_selection.py", None, "give stochastic_faults=(MTTF('weiss_array', mttf=3600, mttr=120),) or the like"),
         ("robot_day.py", None, "World load walk of 'torso_pc' is a Gaussian walk"),
         ("cloud_offload.py", None, "World load walk of 'torso_pc' is a Gaussian walk"),
     ],
@@ -727,3 +730,24 @@ def test_the_simulated_interval_stays_inside_the_missions_seconds_and_names_its_
     found = json.loads((tmp_path / "a.json").read_text())
     simulated = next(v for v in found.values() if isinstance(v, dict) and "ci99_method" in v)
     assert simulated["ci99_method"] == "Student's t, not guaranteed" and simulated["ci99_low_s"] >= 0.0
+
+
+def test_a_detector_starting_on_a_platform_that_went_down_has_lost_its_input_and_catches_nothing():
+    """The simulation asks "is its platform up, its input readable?" before "is it still
+    starting?"; the chain asked the other way round, and counted such a detector's time as
+    starting and its start-up catch against the undetected slips."""
+    from types import SimpleNamespace
+
+    from desmon.analyze.chain import _member_states, start_catch_of
+
+    state = SimpleNamespace(
+        key=SimpleNamespace(deployments=(("force", "arm"), ("force", "torso"), ("tactile", "hand"))),
+        starting={("force", "arm"), ("force", "torso")}, warming=(("tactile", "hand", 1),), phys_down={"arm"}, phys_failed=set(),
+    )
+    members, starting = _member_states(state, set(), {}, lambda g, p: ())
+    assert members == {"force": ["input_lost", "starting"], "tactile": ["starting"]}
+    assert starting == {("force", "torso"), ("tactile", "hand")}
+    world = SimpleNamespace(latency_of=lambda p: {"arm": 1.0, "torso": 2.0, "hand": 1.0}[p])
+    assert start_catch_of(world, "force", starting, {1.0: 0.9, 2.0: 0.4}) == 0.4  # not the dead arm's 0.9
+    blind, _ = _member_states(state, {"tactile"}, {}, lambda g, p: ())
+    assert blind["tactile"] == ["cannot_detect"]  # a detector that cannot detect here, warming up or not

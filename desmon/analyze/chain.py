@@ -612,34 +612,41 @@ def build_chain(
     return chain
 
 
-def _member_states(s: Any, blind: set[str], hosts: dict[str, str], inputs: Callable[[str, str], tuple]) -> dict[str, list[str]]:
+def _member_states(
+    s: Any, blind: set[str], hosts: dict[str, str], inputs: Callable[[str, str], tuple]
+) -> tuple[dict[str, list[str]], set[tuple[str, str]]]:
     """The state of every deployed instance in chain state ``s``, per graph (one of
-    :data:`~desmon.deployment.exposure.MEMBER_STATES`)."""
+    :data:`~desmon.deployment.exposure.MEMBER_STATES`), in the order the simulation's
+    :meth:`~desmon.sim.facts.PhysicalFacts.member_state` asks: an instance on a platform that is
+    down, or whose input has no readable device, has lost its input, starting or not; and
+    the (graph, platform) of the instances that are starting (in their start latency or
+    warm-up) on a live platform."""
     warming = {(g, p) for g, p, _k in s.warming}
     state: dict[str, list[str]] = {}
+    starting: set[tuple[str, str]] = set()
     for g, p in s.key.deployments:
-        if (g, p) in s.starting:
-            st = "starting"
-        elif p in s.phys_down or not all(any(d not in s.phys_failed and hosts[d] not in s.phys_down for d in devs) for devs in inputs(g, p)):
+        if p in s.phys_down or not all(any(d not in s.phys_failed and hosts[d] not in s.phys_down for d in devs) for devs in inputs(g, p)):
             st = "input_lost"
         elif g in blind:
             st = "cannot_detect"
-        elif (g, p) in warming:
+        elif (g, p) in s.starting or (g, p) in warming:
             st = "starting"
+            starting.add((g, p))
         else:
             st = WATCHING
         state.setdefault(g, []).append(st)
-    return state
+    return state, starting
 
 
-def start_catch_of(mw: Any, s: Any, g: str, catch: dict[float, float]) -> float:
-    """The probability that graph ``g``, starting or warming up in chain state ``s``,
-    catches a slip that begins now: ``catch`` by the start latency of its platform
-    (:func:`~desmon.analyze.measures.detector_start_catch`), the best of its instances."""
-    warming = {(wg, wp) for wg, wp, _k in s.warming}
+def start_catch_of(mw: Any, g: str, starting: set[tuple[str, str]], catch: dict[float, float]) -> float:
+    """The probability that graph ``g``, starting or warming up (``starting``: its instances
+    that are, on live platforms, from :func:`_member_states`), catches a slip that begins now:
+    ``catch`` by the start latency of its platform
+    (:func:`~desmon.analyze.measures.detector_start_catch`), the best of its instances. An
+    instance on a platform that went down, or without its input, raises no alarm."""
     best = 0.0
-    for dg, p in s.key.deployments:
-        if dg == g and ((g, p) in s.starting or (g, p) in warming):
+    for dg, p in starting:
+        if dg == g:
             best = max(best, catch.get(mw.latency_of(p), 0.0))
     return best
 
@@ -678,7 +685,7 @@ def rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any], start_catch
         risky[i] = 1.0
         if need.excluded:
             excluded[i] = 1.0
-        state = _member_states(s, blind, hosts, inputs)
+        state, starting = _member_states(s, blind, hosts, inputs)
         why = cause(need, lambda g: best_state(state.get(g, ())))
         if why is not None:
             unmon[i] = 1.0
@@ -692,7 +699,7 @@ def rewards(chain: Chain, rules: ControlRules, miss: dict[str, Any], start_catch
             if WATCHING in sts:
                 m *= mg
             elif "starting" in sts and g in catching:
-                m *= 1.0 - start_catch_of(mw, s, g, catching[g].get(action, {}))
+                m *= 1.0 - start_catch_of(mw, g, starting, catching[g].get(action, {}))
         undetected[i] = mw.slip_rate * m
     chain.unmonitored, chain.risky, chain.undetected = unmon, risky, undetected
     chain.causes, chain.excluded = by_cause, excluded

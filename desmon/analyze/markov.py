@@ -229,8 +229,9 @@ def _refuse(scenario: Scenario, msg: str) -> AnalysisError:
 
 def _check_unrated(scenario: Scenario, world: World) -> None:
     """Scripted parts of the world have times, not rates."""
+    first_fault = next((getattr(te.event, "device", None) or getattr(te.event, "platform", None) for te in world.faults), None)
     scripted = [
-        ("faults", world.faults, "stochastic_faults=(MTTF('lwr_wrench', mttf=3600, mttr=120),)"),
+        ("faults", world.faults, f"stochastic_faults=(MTTF({first_fault or 'lwr_wrench'!r}, mttf=3600, mttr=120),) or the like"),
         ("loads", world.loads, "no scripted loads"),
         ("changes", world.changes, "random_changes=RandomChanges(...)"),
     ]

@@ -209,7 +209,13 @@ def cell_interval(c: CellSweep) -> Interval:
     seed pooled (the mean of the seeds' rates is their pooled rate: every seed has as many trials)."""
     from desmon.stats import clopper_pearson
 
-    return clopper_pearson(sum(c.counts), c.trials * c.seeds, 1.0 - CONFIDENCE)
+    return dataclasses.replace(clopper_pearson(sum(c.counts), c.trials * c.seeds, 1.0 - CONFIDENCE), method=FIXED_TRIALS)
+
+
+#: the method of a Clopper-Pearson interval here, whose number of trials --trials and --seeds fix in advance
+FIXED_TRIALS = "Clopper-Pearson, guaranteed: the number of trials is fixed in advance by --trials and --seeds"
+#: the oracle's: its rules are picked on the very missions the interval counts
+PICKED_ON_THEM = "Clopper-Pearson, not guaranteed: the oracle's rules are picked on the same missions"
 
 
 def mission_intervals(sw: Sweep, index: int) -> dict[str, Interval | None]:
@@ -228,9 +234,10 @@ def mission_intervals(sw: Sweep, index: int) -> dict[str, Interval | None]:
     false_alarmed = sum(round(r.p_any_fa * m) for r, m in per)
     caught = sum(round(r.tpr[c] * m) for r, m in per for c in MISSION_CONTEXTS)
     slips = missions * len(MISSION_CONTEXTS)
-    tpr = clopper_pearson(caught, slips, delta)
+    method = PICKED_ON_THEM if sw.missions[index].strategy == "oracle" else FIXED_TRIALS
+    tpr = dataclasses.replace(clopper_pearson(caught, slips, delta), method=method)
     out: dict[str, Interval | None] = {
-        "p_any_fa": clopper_pearson(false_alarmed, missions, delta),
+        "p_any_fa": dataclasses.replace(clopper_pearson(false_alarmed, missions, delta), method=method),
         "mean_tpr": tpr,
         "miss_rate": dataclasses.replace(tpr, estimate=1.0 - tpr.estimate, low=1.0 - tpr.high, high=1.0 - tpr.low),
     }
