@@ -167,7 +167,8 @@ def test_a_counterexample_found_by_verify_and_the_same_one_read_from_json(root, 
     assert main(["verify", migration, "--deployer", "paper", "--no-progress", "--json", str(tmp_path / "cex.json")]) == 1
     # the file names its deployer: --deployer may be left out
     assert main(["explore", migration, "--from-json", str(tmp_path / "cex.json"), "-o", str(tmp_path / "b.html")]) == 0
-    capsys.readouterr()
+    # both count the counterexample's steps, as its page does (its initial state is no step)
+    assert capsys.readouterr().out.count("(1 step; open it in a browser)") == 2
     a, b = ((tmp_path / f"{n}.html").read_text() for n in "ab")
     sa, sb = parse(a), parse(b)
     assert sa.order == sb.order == ["0", "1"]

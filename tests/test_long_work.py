@@ -245,10 +245,12 @@ def _interrupt(argv: list[str], ready: str, tmp_path: Path, *, timeout: float = 
 
 @pytest.mark.parametrize("extra", [[], ["--engine", "direct", "--workers", "2"]], ids=["table", "direct-2-workers"])
 def test_ctrl_c_during_verify_prints_the_partial_result_and_writes_json(big_path, tmp_path, extra):  # type: ignore[no-untyped-def]
-    js = tmp_path / "partial.json"
-    code, out, err, took = _interrupt(["verify", str(big_path), "--json", str(js), *extra], "states/s", tmp_path)
+    js, test = tmp_path / "partial.json", tmp_path / "test_partial.py"
+    code, out, err, took = _interrupt(["verify", str(big_path), "--json", str(js), "--pytest", str(test), *extra], "states/s", tmp_path)
     assert code == EXIT_INTERRUPTED, (out, err)
     assert "verdict: INCOMPLETE (interrupted)" in out and f"wrote {js}" in out, out
+    # the outputs it leaves unwritten it names (it said nothing of them)
+    assert f"interrupted: {test} not written (run again without Ctrl-C to write them)" in out and not test.exists(), out
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
     assert took < 5, took
     j = json.loads(js.read_text())

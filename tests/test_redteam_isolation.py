@@ -566,3 +566,26 @@ def test_an_error_detail_that_is_not_text_is_the_deployers_fault_never_a_traceba
     code, _took, out, err = _desmon(*command, "--deployer", f"{tmp_path / 'details.py'}:{name}")
     text = out + err
     assert code == 4 and "Traceback" not in err and f"with a detail of type {kind}: give the detail as text (a str)" in text, (code, out, err)
+
+
+#: the corrected deployer; in move_base it stops watching when a platform state's text says the arm PC is down
+READS_THE_TEXT = '''
+from desmon.deployment.deployer import DEPLOYERS
+_desmon = DEPLOYERS["desmon"].react
+
+def reads_text(q, slots, changed, context_changed):
+    if q.context() == "move_base" and any(s.name == "arm_pc" and "up=False" in repr(s) for s in q.platform_states()):
+        return
+    yield from _desmon(q, slots, changed, context_changed)
+'''
+
+
+def test_a_deployer_branching_on_a_platform_states_text_is_never_verified_by_the_table_engine(tmp_path):
+    """Without the fix: HOLDS on the table engine (a recorded handle's repr is not a state's, so
+    the branch never fired there), VIOLATED on the direct engine, with no word of the difference."""
+    (tmp_path / "text.py").write_text(READS_THE_TEXT)
+    spec = f"{tmp_path / 'text.py'}:reads_text"
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--deployer", spec)
+    direct, _took, out_direct, _err = _desmon("verify", COFFEE, "--no-progress", "--engine", "direct", "--deployer", spec)
+    assert code == direct == 1 and "verdict: VIOLATED" in out and "verdict: VIOLATED" in out_direct, (out, err)
+    assert "read the facts (its repr or str) of platform arm_pc outside the requirement checks" in out

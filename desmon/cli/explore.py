@@ -268,7 +268,9 @@ def run(args: argparse.Namespace) -> int:
     page = render_page(f"desmon explore: {scenario.name}", lines, frames, banner=banner, command=_command_line(args))
     with replacing(args.output) as fh:
         fh.write(page)
-    print(f"wrote {args.output} ({len(frames)} step{'s' if len(frames) != 1 else ''}; open it in a browser)")
+    # a counterexample's frames begin with its initial state (step 0); a timeline's are its events
+    steps = len(frames) - 1 if args.from_json is not None or args.verify else len(frames)
+    print(f"wrote {args.output} ({steps} step{'s' if steps != 1 else ''}; open it in a browser)")
     return 0
 
 

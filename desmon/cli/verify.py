@@ -165,6 +165,10 @@ def _search(args: argparse.Namespace) -> int:
         warn_uncovered(scenario)
         if not result.interrupted:  # Ctrl-C: the partial result and its JSON, and nothing slower
             _write_outputs(args, scenario, result, system.core.deployer, system.bounds)
+        else:
+            skipped = [o for o in (getattr(args, "plot", None), args.pytest) if o]
+            if skipped:
+                print(f"interrupted: {' and '.join(skipped)} not written (run again without Ctrl-C to write them)")
     finally:
         release(system, result)  # the process exits next: free the memos now, not in a slow final collection
     return result.exit_code

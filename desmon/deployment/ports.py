@@ -217,7 +217,8 @@ class PlatformHandle:
     It carries what a reaction may read freely -- the platform's declaration and what is
     deployed on it (both part of what the table engine keys a reaction on) -- and the
     Checks port that alone can read its run-time facts. Reading ``up``, ``devices`` or
-    ``load`` raises :class:`~desmon.errors.UnobservedRead`: the guard holds by
+    ``load``, or the handle's text (``repr``, ``str``, a format), raises
+    :class:`~desmon.errors.UnobservedRead`: the guard holds by
     construction, since the handle holds no such facts. Handles compare and hash by
     identity (one handle per platform facts and deployments in a recording).
     """
@@ -266,7 +267,9 @@ class PlatformHandle:
     __hash__ = object.__hash__
 
     def __repr__(self) -> str:
-        return f"PlatformHandle({self.platform.name!r})"
+        # a platform state's text shows its run-time facts: a handle's text would show other
+        # words in the same state (a reaction that tests "up=False" in it branches unobserved)
+        raise self._refuse("the facts (its repr or str)")
 
 
 @runtime_checkable
