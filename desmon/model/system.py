@@ -190,8 +190,9 @@ class SystemModel:
                 f"deployment_information_missing): add robot.depsl.deployment_specification({g!r})"
             )
         skip = set(changed)
+        selected = {g for rule in self.rules.rules for g in rule.graphs}  # (a graph no rule wants is never placed anyway)
         for spec in self.specs:
-            if spec.graph not in skip:
+            if spec.graph in selected and spec.graph not in skip:
                 line = self._never_placed(spec)
                 if line is not None:
                     lines.append(line)
