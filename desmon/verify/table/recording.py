@@ -10,6 +10,7 @@ from __future__ import annotations
 import traceback
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
+from desmon.deployment.guard import exception_text
 from desmon.deployment.ports import QUERY_METHODS, PlatformHandle
 from desmon.deployment.validity import PlatformMemoChecks, is_ranked, order_platforms, score_keys
 from desmon.errors import TableUnsupported, UnobservedRead
@@ -76,7 +77,7 @@ class RecordingChecks:
             raise
         except Exception as exc:
             self.raised = (
-                f"a requirement check raised {type(exc).__name__} inside a reaction ({' '.join(str(exc).split())[:200]}); "
+                f"a requirement check raised {type(exc).__name__} inside a reaction ({' '.join(exception_text(exc).split())[:200]}); "
                 "the table engine cannot observe what the exception reveals of the platform's facts; run with --engine direct"
             )
             raise TableUnsupported(self.raised) from None
