@@ -23,6 +23,7 @@ from desmon.model.events import (
 )
 from desmon.model.requirements import (
     PLATFORM_HAS, PREFERENCE_KINDS, Attribute, Capacity, Constraint, Maximum, Minimum, Option, Preference, Quantity, Selection,
+    overlapping_options,
 )
 from desmon.verify.environment import event_kinds
 from desmon.verify.report import event_from_json, event_to_json, key_to_json, labels_from_json
@@ -59,7 +60,8 @@ constraints: st.SearchStrategy[Constraint] = st.one_of(
     st.builds(Attribute, names, values),
     st.builds(lambda kind: Attribute(PLATFORM_HAS, kind), names),
     st.lists(options, min_size=1, max_size=4, unique=True).flatmap(
-        lambda opts: st.integers(1, len(opts)).map(lambda n: Selection(tuple(opts), n))
+        # (one device counted twice toward at_least above 1 is refused)
+        lambda opts: st.integers(1, 1 if overlapping_options(opts) else len(opts)).map(lambda n: Selection(tuple(opts), n))
     ),
     *(_preference(k) for k in PREFERENCE_KINDS),
 )

@@ -10,7 +10,7 @@ from desmon.deployment.memo import ColumnMemo
 from desmon.deployment.placement import ChangeLogColumns, PlatformColumns
 from desmon.errors import ModelError, QueryError
 from desmon.model import Device, Platform, PlatformState, RobotBuilder, make_requirement as req
-from desmon.model.requirements import Attribute, Capacity, Maximum, Minimum, Option, Quantity, Reads, Selection
+from desmon.model.requirements import Attribute, Capacity, Maximum, Minimum, Option, Quantity, Reads, Selection, overlapping_options
 from desmon.repository import Repository, RepositoryQuery, load_model, set_device_working, set_load, set_platform_up
 from desmon.repository.facts import record_start, record_stop
 
@@ -79,7 +79,7 @@ requirements = st.one_of(
     st.builds(Attribute, st.sampled_from(("os", "arch")), st.sampled_from(ATTR_VALUES)),
     st.builds(Attribute, st.just("platform_has"), st.sampled_from(KINDS)),
     st.lists(options, min_size=1, max_size=3, unique=True).flatmap(  # (an option listed twice is refused)
-        lambda opts: st.builds(Selection, st.just(tuple(opts)), st.integers(1, len(opts)))
+        lambda opts: st.builds(Selection, st.just(tuple(opts)), st.integers(1, 1 if overlapping_options(opts) else len(opts)))
     ),
     # what a graph's inputs require (its own half: a hosting platform needs a working device)
     st.builds(Reads, st.sampled_from(KINDS), st.lists(st.tuples(st.just("dev"), st.sampled_from([f"p{i}" for i in range(12)])), min_size=1, max_size=3).map(tuple)),

@@ -16,7 +16,7 @@ specification accepts) is read from that registry.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
-from typing import TYPE_CHECKING, Any, Callable, Iterable
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Sequence
 
 from desmon.errors import CheckerError, ModelError
 from desmon.model.checks import check_items, check_keywords, check_name, check_number, check_value, strict_init, suggest
@@ -47,6 +47,7 @@ __all__ = [
     "Maximum",
     "Attribute",
     "Selection",
+    "overlapping_options",
     "Option",
     "Requirement",
     "REQUIREMENT_KINDS",
@@ -379,6 +380,18 @@ class Option:
         return any(d.matches(self.device_kind or "", self.vendor) for d in state.devices)
 
 
+def overlapping_options(options: Sequence["Option"]) -> "tuple[Option, Option] | None":
+    """``(K, K@V)``: a device kind and the same kind by a vendor, both among ``options`` (one
+    such device meets both, so a Selection with ``at_least`` above 1 would count it twice),
+    or None."""
+    for o in options:
+        if o.device_kind is not None and o.vendor:
+            wider = next((w for w in options if w.device_kind == o.device_kind and w.vendor is None), None)
+            if wider is not None:
+                return wider, o
+    return None
+
+
 @strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Selection(Requirement):
@@ -402,15 +415,14 @@ class Selection(Requirement):
         check_number("Selection at_least", self.at_least, integer=True)
         if self.at_least < 1:
             raise ModelError("Selection at_least = 0 always holds: give at_least >= 1 or drop the requirement")
-        if self.at_least > 1:  # one device of kind K by vendor V meets both 'K' and 'K@V'
-            for o in self.options:
-                wider = next((w for w in self.options if w.device_kind == o.device_kind and o.vendor and w.vendor is None), None)
-                if o.device_kind is not None and wider is not None:
-                    raise ModelError(
-                        f"Selection lists {wider.describe()!r} and {o.describe()!r}: one {o.describe()} device meets both, so "
-                        f"at_least = {self.at_least} counts it twice; to ask for several devices write "
-                        f"('quantity', {o.device_kind!r}, N), else drop one of the two"
-                    )
+        both = overlapping_options(self.options) if self.at_least > 1 else None
+        if both is not None:
+            wider, o = both
+            raise ModelError(
+                f"Selection lists {wider.describe()!r} and {o.describe()!r}: one {o.describe()} device meets both, so "
+                f"at_least = {self.at_least} counts it twice; to ask for several devices write "
+                f"('quantity', {o.device_kind!r}, N), else drop one of the two"
+            )
         if self.at_least > len(self.options):
             raise ModelError(
                 f"Selection at_least = {self.at_least} but only {len(self.options)} options "

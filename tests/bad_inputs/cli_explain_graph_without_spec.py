@@ -13,7 +13,6 @@ with robot.rpsl.perception_graph("fsd") as g:
     g.sensor("w", reads="force_sensor")
     g.processing("t", inputs=["w"])
 
-robot.rules({"grasp": "fsd", "hold": "fsd"})
 scenario = Scenario(
     name="base", model=robot.build(),
     timeline=(TimedEvent(0.0, ActionChange("grasp"), "t0"), TimedEvent(1.0, ActionChange("hold"), "t1")),
