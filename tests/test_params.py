@@ -72,6 +72,10 @@ def test_assignments_must_be_name_equals_value_once_each() -> None:
         parse_assignments(["4"])
     with pytest.raises(ModelError, match="given twice"):
         parse_assignments(["n=4", "n=5"])
+    # an empty value is refused, as desmon sweep refuses one in its list (run took -p tag= as "")
+    for item in ("tag=", "tag=  "):
+        with pytest.raises(ModelError, match="tag has an empty value; give it one"):
+            parse_assignments([item])
 
 
 def test_the_generated_pytest_replays_the_counterexample_with_the_same_parameters(tmp_path: Path) -> None:

@@ -509,3 +509,18 @@ def test_a_ctrl_c_at_the_terminal_ends_a_local_sweep_without_a_traceback(tmp_pat
             break
         time.sleep(0.1)
     assert not left, "processes of the sweep left running:\n" + "\n".join(left)
+
+
+def test_a_sweeps_fuzz_job_leaves_nothing_in_the_working_directory(tmp_path):
+    """Hypothesis kept its cache in ./.hypothesis of the worker and warned that the global random
+    state moved while it drew (the Dask worker's threads use it); desmon fuzz leaves nothing."""
+    import os
+
+    import warm
+
+    env = {k: v for k, v in os.environ.items() if k != "HYPOTHESIS_STORAGE_DIRECTORY"}
+    proc = warm.run(["sweep", str(ROOT / "scenarios" / "robot_day.py"), "-p", "hours=0.1", "--job", "fuzz", "--examples", "10",
+                     "--seeds", "1", "--workers", "1", "--deployer", "paper", "-o", "g.csv", "--no-progress"], cwd=tmp_path, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["g.csv"]
+    assert "random` module inside strategies" not in proc.stderr

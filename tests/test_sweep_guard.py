@@ -6,6 +6,8 @@ runs of an interrupted sweep are handed over by a stand-in for the cluster.
 
 from __future__ import annotations
 
+import hashlib
+
 import socket
 import threading
 from pathlib import Path
@@ -103,6 +105,32 @@ def test_resume_keeps_no_row_of_an_earlier_version_of_the_scenario_file(tmp_path
     err = capsys.readouterr().err
     assert "was made from another version of" in err and len(err.strip().splitlines()) == 1, err
     assert table.read_bytes() == before
+
+
+@pytest.mark.parametrize("edited", ["helper", "deployer"])
+def test_resume_keeps_no_row_made_before_a_module_the_scenario_imports_or_the_deployers_file_changed(tmp_path, capsys, monkeypatch, edited):
+    """The digest was of the scenario file alone: rows of an earlier helper module beside it, or of
+    an earlier deployer file, were kept beside the new ones, two worlds averaged in one table."""
+    monkeypatch.setattr(core, "execute", _every_run)
+    scenario = tmp_path / "cloud.py"
+    scenario.write_text(Path(CLOUD).read_text() + "\nimport helper  # noqa: E402\n")
+    helper = tmp_path / "helper.py"
+    helper.write_text("SLIP = 1.0 / 600.0\n")
+    deployer = tmp_path / "mine.py"
+    deployer.write_bytes((Path(CLOUD).parents[1] / "docs" / "examples" / "first_fit.py").read_bytes())
+    table = tmp_path / "t.csv"
+    argv = ["sweep", str(scenario), "-p", "hours=0.05", "--until", "60", "--deployer", f"{deployer}:FIRST_FIT", "-o", str(table), "--no-progress"]
+    assert main([*argv, "--seeds", "1"]) == 0
+    assert main([*argv, "--seeds", "2", "--resume"]) == 0 and "1 kept from before" in capsys.readouterr().out
+    changed = helper if edited == "helper" else deployer
+    changed.write_text(changed.read_text() + "\n# edited\n")
+    before = table.read_bytes()
+    assert main([*argv, "--seeds", "3", "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert "of a module beside it that it imports, or of the deployer's file" in err and len(err.strip().splitlines()) == 1, err
+    assert table.read_bytes() == before
+    # a scenario importing nothing beside it, run by a built-in deployer: the digest of its bytes alone (as tables already hold)
+    assert core.scenario_digest(CLOUD, "desmon") == "sha256:" + hashlib.sha256(Path(CLOUD).read_bytes()).hexdigest()[:16]
 
 
 def test_resume_names_a_row_cut_short(tmp_path, capsys):
@@ -236,6 +264,27 @@ def test_a_pareto_view_of_a_sweep_without_parameters_says_its_dots_are_runs_not_
     assert main(["sweep-plot", str(table), "--pareto", "memory_peak_mb_pc", "-y", "exposure_s", "-o", str(tmp_path / "p.png")]) == 0
     title = " ".join(titles[-1].split())
     assert "Pareto front of 4 values of memory_peak_mb_pc among the runs of the one point (no swept parameter)" in title, title
+
+
+def test_a_pareto_cost_some_runs_lack_leaves_those_runs_out_and_says_so(tmp_path, monkeypatch):
+    """A memory peak of a platform only some points have (or a latency without a detected slip) is
+    empty in the rows desmon sweep wrote: sweep-plot called the table edited (exit 2), and with one
+    point left it failed with a KeyError traceback."""
+    from desmon.sweep import plot
+
+    axes = parse_axes(["force_sensors=1,2"])
+    grid = Grid(axes, 2, 0)
+    rows = [{"point": r.point.index, "seed_index": r.seed_index, "seed": r.seed, **grid.typed(r.point), "scenario": CLOUD,
+             "job": "run", "deployer": "desmon", "until": 60.0, "exit_code": 0, "error": None, "exposure_s": 1.0 + r.seed_index,
+             "memory_peak_mb_wrist_pc": 25.0 if r.point.values[0][1] == "2" else None, "wall_s": 0.5} for r in grid.runs()]
+    table = tmp_path / "t.csv"
+    write_table(frame(rows, axes, "run", ["until"]), table)
+    titles: list[str] = []
+    real = plot._wrapped
+    monkeypatch.setattr(plot, "_wrapped", lambda t: titles.append(real(t)) or titles[-1])
+    assert main(["sweep-plot", str(table), "--pareto", "memory_peak_mb_wrist_pc", "-y", "exposure_s", "-o", str(tmp_path / "p.png")]) == 0
+    title = " ".join(titles[-1].split())
+    assert "Pareto front of 1 point (" in title and "2 without a value of exposure_s or memory_peak_mb_wrist_pc left out" in title, title
 
 
 def test_ctrl_c_writes_the_finished_rows_where_no_table_was(tmp_path, monkeypatch):

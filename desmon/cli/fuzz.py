@@ -6,8 +6,6 @@ Ctrl-C ends it with its partial result, exit 130, without a traceback.
 from __future__ import annotations
 
 import argparse
-import contextlib
-from typing import Iterator
 
 from desmon.cli.common import Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered
 from desmon.cli.options import bounded_count, non_negative_int, positive_int
@@ -31,35 +29,13 @@ def add_parser(sub: Subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from desmon.verify.fuzz import fuzz
+    from desmon.verify.fuzz import fuzz, scratch_hypothesis_home
 
     if args.examples <= 0:
         raise CheckerError(f"--examples must be positive, got {args.examples}")
     scenario = load_scenario_of(args)
-    with _scratch_hypothesis_home():
+    with scratch_hypothesis_home():
         outcome = fuzz(scenario, args.deployer, examples=args.examples, seed=args.seed, progress=not args.no_progress, guard=args.guard)
     print(outcome.text, end="")
     warn_uncovered(scenario)  # as verify does: a risky action no rule covers is unmonitored whatever the sequence
     return outcome.exit_code
-
-
-@contextlib.contextmanager
-def _scratch_hypothesis_home() -> Iterator[None]:
-    """Hypothesis keeps what it learns in ``.hypothesis/`` of the working directory (its
-    examples are not saved here, but it still caches a module's constants there): while the
-    command fuzzes, that goes to a temporary folder, so the user's directory gets nothing
-    they did not ask for (HYPOTHESIS_STORAGE_DIRECTORY, if set, is left to Hypothesis)."""
-    import os
-    import tempfile
-
-    if os.getenv("HYPOTHESIS_STORAGE_DIRECTORY"):
-        yield
-        return
-    from hypothesis.configuration import set_hypothesis_home_dir
-
-    with tempfile.TemporaryDirectory(prefix="desmon-fuzz-") as home:
-        set_hypothesis_home_dir(home)
-        try:
-            yield
-        finally:
-            set_hypothesis_home_dir(None)

@@ -119,7 +119,7 @@ def parameters(**declared: object) -> Parameters:
 
 def parse_assignments(items: list[str] | tuple[str, ...] | None) -> dict[str, str]:
     """``["N=4", "memory=512"]`` -> ``{"N": "4", "memory": "512"}``; malformed or repeated
-    names are refused."""
+    names, and empty values, are refused."""
     out: dict[str, str] = {}
     for item in items or ():
         name, eq, value = item.partition("=")
@@ -128,6 +128,8 @@ def parse_assignments(items: list[str] | tuple[str, ...] | None) -> dict[str, st
             raise ModelError(f"-p {item!r}: write -p NAME=VALUE, e.g. -p hand_memory=384")
         if name in out:
             raise ModelError(f"-p {name} is given twice ({name}={out[name]}, {name}={value}): give each parameter once")
+        if not value.strip():  # (as desmon sweep refuses an empty value in its list: one rule)
+            raise ModelError(f"-p {item!r}: {name} has an empty value; give it one, e.g. -p {name}=VALUE, or leave -p {name} out for its default")
         out[name] = value
     return out
 

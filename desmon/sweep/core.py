@@ -53,16 +53,51 @@ class SweepResult:
         return self.rows == self.total
 
 
-def scenario_digest(path: str) -> str:
-    """What the scenario file held when the sweep ran (``sha256:`` and 16 hex digits of its
-    bytes; "" without a scenario): ``--resume`` keeps no row of an earlier version of it."""
+def scenario_digest(path: str, deployer: str = "") -> str:
+    """What the code of the sweep's world held when it ran (``sha256:`` and 16 hex digits; ""
+    without a scenario): the scenario file's bytes, and those of the modules beside it that it
+    imports and, for a user's ``path/to/file.py:NAME`` deployer, of that file and the modules
+    beside it that it imports (:func:`_sources`). ``--resume`` keeps no row of an earlier
+    version of any of them. A scenario that imports nothing beside it, run by a built-in
+    deployer, has the digest of its bytes alone."""
     if not path:
         return ""
     try:
         data = Path(path).read_bytes()
     except OSError as exc:
         raise SweepError(f"{path}: cannot read the scenario file ({exc.strerror or exc})") from None
-    return "sha256:" + hashlib.sha256(data).hexdigest()[:16]
+    source, colon, _name = deployer.rpartition(":")
+    extra = _sources(Path(path), data)
+    if colon and source.endswith(".py") and Path(source).is_file():
+        mine = Path(source).resolve()
+        extra += [(str(mine), mine.read_bytes()), *_sources(mine, mine.read_bytes())]
+    if not extra:
+        return "sha256:" + hashlib.sha256(data).hexdigest()[:16]
+    h = hashlib.sha256(data)
+    for name, body in sorted(dict(extra).items()):
+        h.update(b"\0" + name.encode() + b"\0" + body)
+    return "sha256:" + h.hexdigest()[:16]
+
+
+def _sources(path: Path, data: bytes) -> list[tuple[str, bytes]]:
+    """(file, bytes) of each module in ``path``'s folder that the Python source ``data``
+    imports by name (``import helper``, ``from helper import x``: ``helper.py`` or the
+    ``helper/`` package's ``__init__.py``), one level deep."""
+    import ast
+
+    try:
+        tree = ast.parse(data)
+    except (SyntaxError, ValueError):
+        return []  # (the loader says what is wrong with it)
+    names = {a.name.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    names |= {n.module.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module and not n.level}
+    folder = path.resolve().parent
+    out = []
+    for name in sorted(names):
+        for candidate in (folder / f"{name}.py", folder / name / "__init__.py"):
+            if candidate.is_file() and candidate != path.resolve():
+                out.append((str(candidate), candidate.read_bytes()))
+    return out
 
 
 def _same_file(a: object, b: object) -> bool:
@@ -233,7 +268,7 @@ def run_sweep(
     # the scenario by its absolute path, in the table and the journal (as the workers get it):
     # sweep-plot and --resume read the table from any folder
     where = os.path.abspath(scenario) if scenario else ""
-    digest = scenario_digest(where)
+    digest = scenario_digest(where, deployer if isinstance(deployer, str) else "")
     identity = {
         "job": job, "scenario": where, "scenario_digest": digest, "deployer": deployer, "sweep_seed": sweep_seed,
         "axes": {a.name: a.kind for a in axes}, "settings": settings,

@@ -22,6 +22,7 @@ import math
 import os
 import threading
 import time
+import warnings
 from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping
@@ -215,10 +216,15 @@ def _job_verify(spec: JobSpec, run: Run) -> dict[str, Any]:
 
 
 def _job_fuzz(spec: JobSpec, run: Run) -> dict[str, Any]:
-    from desmon.verify.fuzz import fuzz
+    from desmon.verify.fuzz import fuzz, scratch_hypothesis_home
 
     scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
-    out = fuzz(scenario, _deployer(spec.deployer), examples=spec.setting("examples"), seed=run.seed)
+    # nothing left in the worker's working directory, as desmon fuzz leaves nothing; and no
+    # warning that the global random state moved while Hypothesis drew: the Dask worker's own
+    # threads use it (desmon's draws come from a Random of the run's seed, so the rows are the same)
+    with scratch_hypothesis_home(), warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Do not use the `random` module inside strategies")
+        out = fuzz(scenario, _deployer(spec.deployer), examples=spec.setting("examples"), seed=run.seed)
     return {
         "verdict": "VIOLATED" if out.invariant else "HOLDS",
         "sequences": out.passed,  # (the sequences run, the failing one and those shrinking it included: what desmon fuzz prints)

@@ -93,8 +93,8 @@ def pareto_front(costs: list[float], values: list[float]) -> list[int]:
 
 
 def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, int, int]:
-    """The rows to draw (runs without an error that have ``y``), how many failed and how
-    many (without an error) have no value of ``y``."""
+    """The rows to draw (runs without an error that have ``y``, and the ``pareto`` cost), how
+    many failed and how many (without an error) have no value of ``y`` or of the cost."""
     from desmon.sweep.table import read_table
 
     if (x is None) == (pareto is None):
@@ -121,13 +121,14 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
         kept |= (df["job"] == "estimate") & (df["exit_code"] == 3)
     ok = df[kept]
     valued = ok[y].notna()  # (a figure a run may lack, such as a latency with no slip detected)
+    if pareto is not None:  # the cost is a figure too (a memory peak of a platform some points lack, a latency)
+        valued &= ok[pareto].notna()
     ok, unvalued = ok[valued], int((~valued).sum())
     if ok.empty:
-        raise SweepError(f"{table}: no run without an error has a value of {y}; nothing to draw")
-    where = x or pareto
-    if ok[where].isna().any():  # type: ignore[index]
+        raise SweepError(f"{table}: no run without an error has a value of {y}" + (f" and of {pareto}" if pareto else "") + "; nothing to draw")
+    if x is not None and ok[x].isna().any():
         raise SweepError(
-            f"{table}: {where} is empty in {int(ok[where].isna().sum())} run(s) without an error, which desmon sweep never "  # type: ignore[index]
+            f"{table}: {x} is empty in {int(ok[x].isna().sum())} run(s) without an error, which desmon sweep never "
             "writes: the table was edited; draw it as desmon sweep wrote it"
         )
     return ok, int((~kept).sum()), unvalued
@@ -262,7 +263,7 @@ def _pareto(ax: Any, ok: Any, params: list[str], pareto: str, y: str) -> int:
             label="Pareto front")
     varying = [p for p in by if p != pareto and ok[p].nunique() > 1]
     for i in front:
-        label = ", ".join(f"{p}={s.iloc[i][p]}" for p in varying) or f"{pareto}={s.iloc[i][pareto]}"
+        label = ", ".join(f"{p}={s.iloc[i][p]}" for p in varying) or f"{pareto}={costs[i]:g}"
         ax.annotate(label, (costs[i], means[i]), textcoords="offset points", xytext=(4, 6), fontsize=7)
     ax.set_xlabel(f"cost: {pareto}")
     return len(s)
@@ -341,7 +342,8 @@ def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | 
 
 def _plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None, log_x: bool) -> None:
     ok, failed, unvalued = _rows(table, x, y, pareto)
-    left = (f", {failed} failed left out" if failed else "") + (f", {unvalued} without a value of {y} left out" if unvalued else "")
+    of = f"{y} or {pareto}" if pareto else y
+    left = (f", {failed} failed left out" if failed else "") + (f", {unvalued} without a value of {of} left out" if unvalued else "")
     if log_x:
         _check_log_x(ok, x or pareto)  # type: ignore[arg-type]
     params = [p for p in _parameters(ok)]
@@ -369,7 +371,7 @@ def _plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str |
         assert pareto is not None
         points = _pareto(ax, ok, params, pareto, y)
         # without a swept parameter the table is one point: its runs, grouped by their own cost
-        what = "points" if params else f"values of {pareto} among the runs of the one point (no swept parameter)"
+        what = ("point" if points == 1 else "points") if params else f"values of {pareto} among the runs of the one point (no swept parameter)"
         ax.set_title(_wrapped(f"{y} vs {pareto}: Pareto front of {points} {what} ({note})"), fontsize=9)
     ax.set_ylabel(ylabel)
     if log_x:

@@ -248,7 +248,8 @@ def _check_scenario(where: str, row: dict[str, Any], identity: dict[str, Any]) -
         raise SweepError(f"--resume: {where} sweeps scenario {row.get('scenario')}, not {identity['scenario']}; name another -o")
     if str(row.get("scenario_digest") or "") != identity["scenario_digest"]:
         raise SweepError(
-            f"--resume: {where} was made from another version of {identity['scenario']} (its content has changed since, "
+            f"--resume: {where} was made from another version of {identity['scenario']}, of a module beside it that it "
+            f"imports, or of the deployer's file (their content has changed since, "
             f"{row.get('scenario_digest') or 'not recorded'} then, {identity['scenario_digest']} now): its rows are of the "
             "old world; sweep again without --resume to another -o"
         )

@@ -35,7 +35,7 @@ from desmon.verify.replay import RepositoryRun
 from desmon.verify.report import format_counterexample, format_trace
 from desmon.verify.strategies import Choice, choices
 
-__all__ = ["FuzzOutcome", "fuzz", "run_choices"]
+__all__ = ["FuzzOutcome", "fuzz", "run_choices", "scratch_hypothesis_home"]
 
 
 @dataclass
@@ -263,3 +263,26 @@ def _rederived(scenario: Scenario, deployer: str | Deployer, enabler: Checker, i
     if res.interrupted:
         return ["", f"the checker's re-derivation was interrupted ({res.states:,} states explored)"], True
     return [], False
+
+
+@contextlib.contextmanager
+def scratch_hypothesis_home() -> Iterator[None]:
+    """Hypothesis keeps what it learns in ``.hypothesis/`` of the working directory (its
+    examples are not saved here, but it still caches a module's constants there): while
+    desmon fuzzes (``desmon fuzz``, a sweep's fuzz job), that goes to a temporary folder, so
+    the user's directory gets nothing they did not ask for (HYPOTHESIS_STORAGE_DIRECTORY, if
+    set, is left to Hypothesis)."""
+    import os
+    import tempfile
+
+    if os.getenv("HYPOTHESIS_STORAGE_DIRECTORY"):
+        yield
+        return
+    from hypothesis.configuration import set_hypothesis_home_dir
+
+    with tempfile.TemporaryDirectory(prefix="desmon-fuzz-") as home:
+        set_hypothesis_home_dir(home)
+        try:
+            yield
+        finally:
+            set_hypothesis_home_dir(None)
