@@ -263,7 +263,8 @@ def _pareto(ax: Any, ok: Any, params: list[str], pareto: str, y: str) -> int:
             label="Pareto front")
     varying = [p for p in by if p != pareto and ok[p].nunique() > 1]
     for i in front:
-        label = ", ".join(f"{p}={s.iloc[i][p]}" for p in varying) or f"{pareto}={costs[i]:g}"
+        value = s.iloc[i][pareto] if pareto in s.columns else f"{costs[i]:g}"  # (the cost is a swept parameter, or a figure)
+        label = ", ".join(f"{p}={s.iloc[i][p]}" for p in varying) or f"{pareto}={value}"
         ax.annotate(label, (costs[i], means[i]), textcoords="offset points", xytext=(4, 6), fontsize=7)
     ax.set_xlabel(f"cost: {pareto}")
     return len(s)
