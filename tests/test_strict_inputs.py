@@ -323,6 +323,25 @@ def test_a_specification_some_platform_meets_or_fixed_to_one_that_cannot_is_judg
     assert r.build().never_placed(changed={"force"}) == ()  # a run-time change may relax it: not judged
 
 
+def test_a_requirement_kind_of_ones_own_that_fails_in_the_best_state_leaves_its_specification_unjudged() -> None:
+    from dataclasses import replace
+
+    from desmon.model.requirements import Quantity
+
+    class Broken(Quantity):
+        __slots__ = ()
+
+        def holds(self, state, graph):  # type: ignore[no-untyped-def]
+            raise RuntimeError("a kind of the user's")
+
+    r = robot()
+    r.rules({"hold": "force"})
+    r.depsl.deployment_specification("force")
+    model = r.build()
+    spec = replace(model.spec("force"), requirements=(Broken("force_sensor", 1),))  # type: ignore[arg-type]
+    assert replace(model, specs=(spec,)).never_placed() == ()  # (it raised out of every command's load)
+
+
 def test_a_graph_a_rule_selects_without_a_deployment_specification_is_named_once_with_its_rules() -> None:
     r = robot()
     r.rules({"hold": "force", "grasp": "force"})

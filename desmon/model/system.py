@@ -207,7 +207,10 @@ class SystemModel:
             if spec.fixed_platform not in (None, p.name):
                 continue
             best = PlatformState(p, True, tuple(d for d in self.devices if d.platform == p.name))
-            reasons = [f"{r.describe()} fails: {why}" for r in reqs if (why := r.holds(best, spec.graph)) is not None]
+            try:
+                reasons = [f"{r.describe()} fails: {why}" for r in reqs if (why := r.holds(best, spec.graph)) is not None]
+            except Exception:  # a requirement kind of the user's that fails here: not judged (a run says what it does)
+                return None
             if not reasons:
                 return None
             failing.append(f"{p.name}: {'; '.join(reasons)}")

@@ -96,7 +96,10 @@ def _sources(path: Path, data: bytes) -> list[tuple[str, bytes]]:
     for name in sorted(names):
         for candidate in (folder / f"{name}.py", folder / name / "__init__.py"):
             if candidate.is_file() and candidate != path.resolve():
-                out.append((str(candidate), candidate.read_bytes()))
+                try:
+                    out.append((str(candidate), candidate.read_bytes()))
+                except OSError:  # (one the scenario cannot import either: its load says so)
+                    continue
     return out
 
 
