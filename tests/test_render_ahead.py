@@ -225,6 +225,23 @@ def test_automatic_rendering_ahead_needs_a_graph_that_reads_the_tactile_frames(m
     assert SimWorld(load_scenario(ROOT / "scenarios" / "coffee_shift.py"))._ahead_wanted()
 
 
+def test_automatic_rendering_ahead_waits_for_a_run_whose_detectors_read_every_frame(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A run read only for figures no alarm far from a slip changes (the missed slips, the
+    exposure) runs its detectors near the slips only: a worker rendering every second of
+    holding would spend a core on blocks nobody takes. Asked, it still renders; the figures
+    are the same either way."""
+    import desmon.sim.engine as engine
+
+    monkeypatch.setattr(engine, "fork_safe", lambda: True)  # as in a lone-thread process on 2 cores (not a test worker)
+    shift = load_scenario(ROOT / "scenarios" / "coffee_shift.py")
+    assert SimWorld(shift, reads=("false_alarms",))._ahead_wanted()
+    assert not SimWorld(shift, reads=("slips_missed", "exposure_s"))._ahead_wanted()
+    assert SimWorld(shift, reads=("slips_missed",), render_ahead=True)._ahead_wanted()
+    reads = ("slips_missed", "exposure_s")
+    figures = [SimWorld(shift, seed=3, until=2400.0, reads=reads, render_ahead=how).run().metrics for how in (None, True)]
+    assert figures[0]["slips_missed"] == figures[1]["slips_missed"] and figures[0]["unmonitored_exposure_s"] == figures[1]["unmonitored_exposure_s"]
+
+
 @pytest.mark.parametrize("value", ["yes", 1, 0.0, "auto"])
 def test_render_ahead_takes_true_false_or_none(value: object) -> None:
     sc = load_scenario(ROOT / "scenarios" / "coffee_handover.py")
