@@ -133,6 +133,28 @@ def test_resume_keeps_no_row_made_before_a_module_the_scenario_imports_or_the_de
     assert core.scenario_digest(CLOUD, "desmon") == "sha256:" + hashlib.sha256(Path(CLOUD).read_bytes()).hexdigest()[:16]
 
 
+def test_the_digest_covers_a_deployer_named_as_a_module_found_as_import_finds_it(tmp_path, monkeypatch):
+    """``--deployer pkg.mine:NAME`` (a module, not a file): an edit of its file, or of a module
+    beside it that it imports, changes the digest, so ``--resume`` keeps no row of the earlier
+    version; finding the file runs none of the package's code."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "__init__.py").write_text("raise SystemExit('the package ran')\n")
+    mine = tmp_path / "pkg" / "mine.py"
+    mine.write_bytes((Path(CLOUD).parents[1] / "docs" / "examples" / "first_fit.py").read_bytes() + b"\nimport rules  # noqa\n")
+    (tmp_path / "pkg" / "rules.py").write_text("LIMIT = 1\n")
+    (tmp_path / "flat.py").write_text("X = 1\n")
+    digests = {spec: core.scenario_digest(CLOUD, spec) for spec in ("pkg.mine:FIRST_FIT", "flat:NAME")}
+    alone = core.scenario_digest(CLOUD, "desmon")
+    assert all(d != alone for d in digests.values())
+    for path, spec in ((mine, "pkg.mine:FIRST_FIT"), (tmp_path / "pkg" / "rules.py", "pkg.mine:FIRST_FIT"), (tmp_path / "flat.py", "flat:NAME")):
+        path.write_text(path.read_text() + "\n# edited\n")
+        assert core.scenario_digest(CLOUD, spec) != digests[spec], path
+        digests[spec] = core.scenario_digest(CLOUD, spec)
+    # a built-in's prefix and a module nowhere to be found: the scenario's bytes alone
+    assert core.scenario_digest(CLOUD, "mutant:stale-errors") == alone == core.scenario_digest(CLOUD, "nowhere.to_be:found")
+
+
 def test_resume_names_a_row_cut_short(tmp_path, capsys):
     table = tmp_path / "t.csv"
     before = _earlier_table(table, ["hours=0.05,0.1"], 2, cut=True)

@@ -8,8 +8,10 @@ when the sweep ends, is interrupted (Ctrl-C) or fails, so no finished row is los
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -56,8 +58,8 @@ class SweepResult:
 def scenario_digest(path: str, deployer: str = "") -> str:
     """What the code of the sweep's world held when it ran (``sha256:`` and 16 hex digits; ""
     without a scenario): the scenario file's bytes, and those of the modules beside it that it
-    imports and, for a user's ``path/to/file.py:NAME`` deployer, of that file and the modules
-    beside it that it imports (:func:`_sources`). ``--resume`` keeps no row of an earlier
+    imports and, for a user's deployer (``path/to/file.py:NAME`` or ``module:NAME``), of its
+    file (:func:`_deployer_file`) and the modules beside it that it imports (:func:`_sources`). ``--resume`` keeps no row of an earlier
     version of any of them. A scenario that imports nothing beside it, run by a built-in
     deployer, has the digest of its bytes alone."""
     if not path:
@@ -68,15 +70,43 @@ def scenario_digest(path: str, deployer: str = "") -> str:
         raise SweepError(f"{path}: cannot read the scenario file ({exc.strerror or exc})") from None
     source, colon, _name = deployer.rpartition(":")
     extra = _sources(Path(path), data)
-    if colon and source.endswith(".py") and Path(source).is_file():
-        mine = Path(source).resolve()
-        extra += [(str(mine), mine.read_bytes()), *_sources(mine, mine.read_bytes())]
+    mine = _deployer_file(source) if colon else None
+    if mine is not None:
+        with contextlib.suppress(OSError):  # (one the deployer's import cannot read either: its load says so)
+            extra += [(str(mine), mine.read_bytes()), *_sources(mine, mine.read_bytes())]
     if not extra:
         return "sha256:" + hashlib.sha256(data).hexdigest()[:16]
     h = hashlib.sha256(data)
     for name, body in sorted(dict(extra).items()):
         h.update(b"\0" + name.encode() + b"\0" + body)
     return "sha256:" + h.hexdigest()[:16]
+
+
+def _deployer_file(source: str) -> Path | None:
+    """The Python file of a user's deployer named ``source:NAME``: ``source`` itself where it
+    is a ``.py`` file, else the module ``source`` as ``import`` would find it from the
+    working folder and ``sys.path`` (a package's ``__init__.py``), found without running
+    any of its code; None for a built-in's prefix (``mutant``) or a module not found."""
+    import importlib.machinery
+
+    from desmon.verify.deployers import MUTANT_PREFIX
+
+    if source.endswith(".py"):
+        return Path(source).resolve() if Path(source).is_file() else None
+    if not source or source == MUTANT_PREFIX or not all(part.isidentifier() for part in source.split(".")):
+        return None
+    search: list[str] | None = [os.getcwd(), *sys.path]  # (the import of module:NAME puts the working folder first)
+    spec = None
+    parts = source.split(".")
+    for i in range(len(parts)):
+        spec = importlib.machinery.PathFinder.find_spec(".".join(parts[: i + 1]), search)
+        if spec is None:
+            return None
+        search = list(spec.submodule_search_locations or [])
+        if i < len(parts) - 1 and not search:
+            return None
+    origin = spec.origin if spec is not None else None
+    return Path(origin).resolve() if isinstance(origin, str) and origin.endswith(".py") and Path(origin).is_file() else None
 
 
 def _sources(path: Path, data: bytes) -> list[tuple[str, bytes]]:
