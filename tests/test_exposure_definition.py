@@ -141,6 +141,22 @@ def test_the_no_rule_warning_says_its_seconds_are_the_written_steps_where_the_fi
         assert "its 48 s of the 900 s horizon at the steps' written lengths (the figures draw the lengths, so theirs differ)" in warning(argv)
 
 
+def test_a_start_waiting_out_its_latency_on_a_crashed_computer_is_platform_down_not_starting():
+    """Under fixed timing a start waits out its latency with no instance yet. When its computer
+    crashes meanwhile, that wait is "platform down or input lost", as the chain asks an
+    instance (alive, able to detect, then starting), never "starting"."""
+    from desmon.model.events import PlatformDown, PlatformUp
+    from desmon.model.scenario import TimedEvent
+
+    sc = load_scenario("scenarios/platform_crash.py")  # torso_pc takes the combined detector after 0.3 s of latency
+    crash = (TimedEvent(0.2, PlatformDown("torso_pc"), "crash"), TimedEvent(15.0, PlatformUp("torso_pc"), "reboot"))
+    runs = {at: simulate(replace(sc, world=replace(sc.world, faults=crash[:1] if at else (), slips=())), "desmon", seed=0).metrics
+            for at in (True, False)}
+    crashed, calm = (runs[k]["unmonitored_by_cause_s"] for k in (True, False))
+    assert crashed["input_lost"] == pytest.approx(0.2) and calm["input_lost"] == 0.0  # from the crash at 0.2 s to the latency's end at 0.4 s
+    assert sum(crashed.values()) == pytest.approx(runs[True]["unmonitored_exposure_s"])
+
+
 def test_every_report_prints_the_denominator_and_the_causes(capsys):
     assert main(["run", SHIFT, "-p", "hours=0.2"]) in (0, 1)
     out = capsys.readouterr().out

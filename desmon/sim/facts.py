@@ -16,7 +16,7 @@ from __future__ import annotations
 import bisect
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Mapping
 
 from desmon.deployment.exposure import best_state
 from desmon.detectors.signals import Segment
@@ -110,8 +110,9 @@ class PhysicalFacts:
         self.host = {d.name: d.platform for d in model.devices}
         self.hosted = {p.name: model.devices_on(p.name) for p in model.platforms}
         self.instances: dict[tuple[str, str], Instance] = {}
-        #: (graph, platform) started and waiting out its start latency (fixed timing)
-        self.pending: set[tuple[str, str]] = set()
+        #: (graph, platform) started and waiting out its start latency (fixed timing) -> the
+        #: devices it will read (stream -> device names, as an instance's ``streams``)
+        self.pending: dict[tuple[str, str], Mapping[str, tuple[str, ...]]] = {}
         #: graph -> whether it can detect a slip (its inputs have a signal model); set by
         #: the world's assembly (:func:`desmon.sim.world.detector_plans`)
         self.detects: dict[str, bool] = {}
@@ -184,7 +185,14 @@ class PhysicalFacts:
     def member_state(self, graph: str, now: float) -> str:
         """The state of ``graph`` as a slot member at ``now`` (the best over its instances
         and pending starts): one of :data:`desmon.deployment.exposure.MEMBER_STATES`."""
-        states = ["starting" for g, _p in self.pending if g == graph]
+        states = []
+        for (g, platform), streams in self.pending.items():  # asked as an instance is: alive, able to detect, then starting
+            if g != graph:
+                continue
+            if not (self.up[platform] and all(any(self.readable(d) for d in devs) for devs in streams.values())):
+                states.append("input_lost")
+            else:
+                states.append("starting" if self.detects.get(graph, True) else "cannot_detect")
         for inst in self.instances.values():
             if inst.graph != graph:
                 continue

@@ -175,12 +175,12 @@ class Infrastructure:
             ready_at += self.rng_latency.expovariate(1.0 / latency)
         elif latency:
             self.exposure.advance(env.now)
-            self.facts.pending.add((graph, platform))
+            self.facts.pending[(graph, platform)] = self.devices_for(graph, platform)
             try:
                 yield env.timeout(latency)
             finally:
                 self.exposure.advance(env.now)
-                self.facts.pending.discard((graph, platform))
+                self.facts.pending.pop((graph, platform), None)
         reason = self._refusal(graph, platform, n)
         if reason:
             self.start_failures += 1
