@@ -202,13 +202,13 @@ def test_sweep_plot_refuses_an_edited_table_whose_values_leave_their_known_range
 
 
 def test_a_table_whose_scenario_cannot_be_read_keeps_the_runs_own_length_as_the_range(tmp_path):
-    from desmon.errors import ScenarioError
+    from desmon.sweep.grid import SweepError
     from desmon.sweep.plot import _seconds_range
 
     gone = str(tmp_path / "moved.py")
     assert _seconds_range(gone, {}, 60.0, "exposure_s") == (0.0, 60.0)
-    with pytest.raises(ScenarioError, match="no such scenario file"):
-        _seconds_range(gone, {}, None, "exposure_s")
+    with pytest.raises(SweepError, match="t.csv: the guaranteed interval of exposure_s takes its range from the scenario the table's scenario column names, which cannot be loaded now .*no such scenario file"):
+        _seconds_range(gone, {}, None, "exposure_s", "t.csv")
 
 
 def test_mean_interval_is_the_betting_sequence_in_a_known_range_else_the_normal_one():

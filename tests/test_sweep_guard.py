@@ -257,6 +257,75 @@ def test_a_table_names_its_scenario_by_its_absolute_path_so_it_plots_and_resumes
     assert run_sweep(**(sweep | {"scenario": CLOUD, "seeds": 3}), resume=True).resumed == 4
 
 
+def _joined(tmp_path: Path, *tables: Path) -> Path:
+    """``tables`` joined by hand: the header of the first, the rows of all."""
+    joined = tmp_path / ("+".join(t.stem for t in tables) + ".csv")
+    texts = [t.read_text().splitlines() for t in tables]
+    joined.write_text("\n".join([texts[0][0], *(line for text in texts for line in text[1:])]) + "\n")
+    return joined
+
+
+def test_sweep_plot_refuses_two_sweeps_joined_by_hand_or_a_run_written_twice(tmp_path, monkeypatch, capsys):
+    """Two tables of two deployers joined into one were drawn as one mean per point, the runs of
+    both pooled under a "guaranteed" interval; a run written twice counted twice in it."""
+    monkeypatch.setattr(core, "execute", _finishing(50.0))
+    tables = {}
+    for deployer in ("desmon", "paper"):
+        tables[deployer] = tmp_path / f"{deployer}.csv"
+        run_sweep(job="run", scenario=CLOUD, axes=parse_axes(["hours=0.05,0.1"]), seeds=2, output=str(tables[deployer]), deployer=deployer)
+    plot = ["-x", "hours", "-y", "exposure_s", "-o", str(tmp_path / "p.png")]
+    assert main(["sweep-plot", str(tables["desmon"]), *plot]) == 0
+    capsys.readouterr()
+    for joined, says in ((_joined(tmp_path, tables["desmon"], tables["paper"]), "rows of more than one sweep (deployer: desmon, paper)"),
+                         (_joined(tmp_path, tables["desmon"], tables["desmon"]), "4 row(s) repeat a run (the same point and seed)")):
+        assert main(["sweep-plot", str(joined), *plot]) == 2
+        err = capsys.readouterr().err
+        assert says in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "p.png").exists() or (tmp_path / "p.png").stat().st_size > 0
+
+
+def test_sweep_plot_takes_no_range_from_a_scenario_edited_since_the_runs(tmp_path, monkeypatch, capsys):
+    """The guaranteed interval's range comes from the scenario (its horizon, its task): one edited
+    since the sweep gave another range to the same runs. With the runs' length known (--until)
+    the plot keeps [0, until]; without it, it names the table and the fix."""
+    monkeypatch.setattr(core, "execute", _finishing(50.0))
+    scenario = tmp_path / "cloud.py"
+    scenario.write_text(Path(CLOUD).read_text())
+    tables = {}
+    for until in (None, 150.0):
+        tables[until] = tmp_path / f"t{until}.csv"
+        run_sweep(job="run", scenario=str(scenario), axes=parse_axes(["hours=0.05,0.1"]), seeds=2, output=str(tables[until]), setting=until)
+    plot = ["-x", "hours", "-y", "exposure_s", "-o", str(tmp_path / "p.png")]
+    scenario.write_text(scenario.read_text() + "\n# edited\n")
+    assert main(["sweep-plot", str(tables[150.0]), *plot]) == 0, capsys.readouterr().err
+    assert main(["sweep-plot", str(tables[None]), *plot]) == 2
+    err = capsys.readouterr().err
+    assert "its runs were made from another version of" in err and str(tables[None]) in err and len(err.strip().splitlines()) == 1, err
+    scenario.unlink()  # gone: the table's scenario column names it, and the message says so
+    assert main(["sweep-plot", str(tables[None]), *plot]) == 2
+    err = capsys.readouterr().err
+    assert "the table's scenario column names, which cannot be loaded now" in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_journal_that_cannot_be_written_names_its_file_and_keeps_its_rows(tmp_path):
+    from desmon.sweep.table import Journal
+
+    class Full:
+        def write(self, text: str) -> int:
+            raise OSError(28, "No space left on device")
+
+        def close(self) -> None:
+            raise OSError(28, "No space left on device")
+
+    path = tmp_path / "t.csv.journal"
+    journal = Journal(path, {"job": "run"}, [{"point": 0}])
+    journal._fh.close()
+    journal._fh = Full()  # type: ignore[assignment]
+    with pytest.raises(SweepError, match="t.csv.journal: cannot write the sweep's journal .No space left on device.; the rows it holds are kept"):
+        journal.append({"point": 1})
+    assert path.read_text().count("\n") == 2  # the header and the row written before
+
+
 def test_sweep_plot_draws_a_figure_whose_range_is_a_single_value(tmp_path, capsys):
     """Without a lease, leased_s lies in [0, 0]: its mean is known exactly, not a sign of an
     edited table (the plot had been refused so)."""

@@ -107,6 +107,7 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
     for required in ("seed", "error"):
         if required not in df.columns:
             raise SweepError(f"{table}: not a table written by desmon sweep (no {required} column)")
+    _one_sweep(df, table)
     _column(df, "-y", y)
     if y in _BOOKKEEPING:
         raise SweepError(f"-y {y}: a run's bookkeeping ({', '.join(_BOOKKEEPING)}), not a figure of the run; plot a figure such as exposure_s")
@@ -124,6 +125,10 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
     if pareto is not None:  # the cost is a figure too (a memory peak of a platform some points lack, a latency)
         valued &= ok[pareto].notna()
     ok, unvalued = ok[valued], int((~valued).sum())
+    for column in (y, pareto):
+        if column is not None and not ok.empty and not all(math.isfinite(float(v)) for v in ok[column]):
+            raise SweepError(f"{table}: {column} holds an infinite value, which desmon sweep never writes: the table was edited; "
+                             "draw it as desmon sweep wrote it")
     if ok.empty:
         raise SweepError(f"{table}: no run without an error has a value of {y}" + (f" and of {pareto}" if pareto else "") + "; nothing to draw")
     if x is not None and ok[x].isna().any():
@@ -132,6 +137,31 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
             "writes: the table was edited; draw it as desmon sweep wrote it"
         )
     return ok, int((~kept).sum()), unvalued
+
+
+#: the columns that say which sweep a row belongs to: one value in a table sweep-plot draws
+_ONE_SWEEP = ("scenario", "scenario_digest", "job", "deployer", "until", "max_states", "examples", "trials", "phases", "horizon",
+              "metric", "within", "confidence", "max_runs")
+
+
+def _one_sweep(df: Any, table: str) -> None:
+    """A SweepError unless ``df`` holds the rows of one sweep, each run once: one scenario (and
+    version of its code), job, deployer and settings, and no point run twice with one seed
+    (two tables joined by hand would be drawn as one mean, the runs of both pooled, and a
+    run written twice would count twice in its point's interval)."""
+    for column in _ONE_SWEEP:
+        if column in df.columns and df[column].nunique(dropna=False) > 1:
+            shown = ", ".join(sorted({"(empty)" if v != v else str(v) for v in df[column].unique()}))
+            raise SweepError(
+                f"{table}: rows of more than one sweep ({column}: {shown[:160]}); sweep-plot draws one sweep: plot each "
+                "sweep's table on its own (desmon sweep --resume --seeds N adds runs to one)"
+            )
+    repeated = df.duplicated(subset=[*_parameters(df), "seed"])
+    if bool(repeated.any()):
+        raise SweepError(
+            f"{table}: {int(repeated.sum())} row(s) repeat a run (the same point and seed), which would count twice in the "
+            "point's mean and interval; desmon sweep writes each run once: draw the table as it wrote it"
+        )
 
 
 def _text_parameters(df: Any) -> tuple[str, ...]:
@@ -164,12 +194,14 @@ def mean_interval(values: list[float], value_range: tuple[float, float] | None) 
     return iv.low, iv.high, "normal approximation, not guaranteed"
 
 
-def _range_of(ok: Any, params: list[str], y: str) -> Any:
+def _range_of(ok: Any, params: list[str], y: str, table: str = "") -> Any:
     """``row -> range`` every run of the row's point has ``y`` in, where it is known without running
     (else ``row -> None``): for a figure in seconds of the run, the one ``desmon estimate`` takes
     (:func:`desmon.estimate.measures.natural_range`: ``(0, horizon)``, narrower where the task
     plays out the same in every run), the horizon being the table's ``until`` or the point's
-    scenario's (a table whose scenario file cannot be read keeps ``(0, until)``); for ``--job
+    scenario's (a table whose scenario file cannot be read, or holds other code than the runs'
+    ``scenario_digest`` says they ran, keeps ``(0, until)``; without ``until``, a SweepError naming
+    the table: the horizon is the scenario's as it ran); for ``--job
     evaluate``, ``(0, 1)`` for a rate and ``(0, cells)`` for the cells passed
     (:func:`desmon.sweep.jobs.evaluate_range`)."""
     from desmon.estimate.measures import SECONDS
@@ -187,25 +219,49 @@ def _range_of(ok: Any, params: list[str], y: str) -> Any:
         until = float(until) if until is not None and until == until else None  # (NaN: not given)
         key = (row["scenario"], until, *(row[p] for p in params))
         if key not in cache:
-            cache[key] = _seconds_range(str(row["scenario"]), {p: str(row[p]) for p in params}, until, y)
+            ran = _ran(row, "scenario_digest"), _ran(row, "deployer")
+            cache[key] = _seconds_range(str(row["scenario"]), {p: str(row[p]) for p in params}, until, y, table, *ran)
         return cache[key]
 
     return range_of
 
 
-def _seconds_range(path: str, values: dict[str, str], until: float | None, y: str) -> tuple[float, float] | None:
+def _ran(row: Any, column: str) -> str:
+    """A text column of the row ("" where the table has none)."""
+    value = row.get(column)
+    return value if isinstance(value, str) else ""
+
+
+def _seconds_range(path: str, values: dict[str, str], until: float | None, y: str, table: str = "", digest: str = "",
+                   deployer: str = "") -> tuple[float, float] | None:
     """:func:`~desmon.estimate.measures.natural_range` of ``y`` over the runs of the scenario at
-    ``path`` with parameter ``values``, ``until`` seconds long (its horizon if None)."""
+    ``path`` with parameter ``values``, ``until`` seconds long (its horizon if None), the
+    scenario's code the one the runs' ``digest`` names (:func:`~desmon.sweep.core.scenario_digest`
+    with ``deployer``; "": not recorded). Where the scenario cannot be loaded, or its code
+    changed since, only ``(0, until)`` is known; without ``until``, nothing: a SweepError."""
     from desmon.estimate.measures import natural_range
     from desmon.loader import load_scenario
     from desmon.sim.world import world_of
+    from desmon.sweep.core import scenario_digest
 
     try:
         scenario = load_scenario(path, values)
-    except DesmonError:
+        now = scenario_digest(path, deployer) if digest else ""
+    except DesmonError as exc:
         if until is None:
-            raise
+            raise SweepError(
+                f"{table}: the guaranteed interval of {y} takes its range from the scenario the table's scenario column names, "
+                f"which cannot be loaded now ({' '.join(str(exc).split())[:300]}); put it back as the sweep ran it, or sweep again"
+            ) from None
         return 0.0, until  # the rows' own length: all that is known without the scenario
+    if now != digest:
+        if until is not None:
+            return 0.0, until
+        raise SweepError(
+            f"{table}: its runs were made from another version of {path} than the one there now (scenario_digest {digest}, "
+            f"now {now}: the scenario, a module beside it that it imports, or the deployer's file was edited since), and the "
+            f"guaranteed interval of {y} takes its range from the scenario as it ran: put that version back, or sweep again"
+        )
     return natural_range(y, until if until is not None else float(world_of(scenario).horizon), scenario)
 
 
@@ -224,14 +280,14 @@ def _checked(value_range: tuple[float, float] | None, values: list[float], y: st
     return value_range
 
 
-def _against(ax: Any, ok: Any, params: list[str], x: str, y: str, intervals: bool = False) -> str:
+def _against(ax: Any, ok: Any, params: list[str], x: str, y: str, intervals: bool = False, table: str = "") -> str:
     """``y``'s mean against ``x``, the min-max band, and (``intervals``) each mean's interval as bars;
     the interval's method, for the title."""
     others = [p for p in params if p != x and ok[p].nunique() > 1]
     s = summarise(ok, [*others, x], y)
     method = ""
     if intervals:
-        range_of = _range_of(ok, params, y)
+        range_of = _range_of(ok, params, y, table)
         bounds = []
         for _key, part in ok.groupby([*others, x], sort=True):
             values = [float(v) for v in part[y]]
@@ -365,7 +421,7 @@ def _plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str |
         _against(ax, ok, params, x, y)
         ax.set_title(_wrapped(f"{y} vs {x}: exact (desmon analyze), {len(ok)} points{left}"), fontsize=9)
     elif x is not None:
-        method = _against(ax, ok, params, x, y, intervals=seeds > 1)
+        method = _against(ax, ok, params, x, y, intervals=seeds > 1, table=table)
         bars = f"; bars: {100 * CONFIDENCE:g} % interval of the mean, {method}" if method else ""
         ax.set_title(_wrapped(f"{y} vs {x}: mean and min-max over up to {over}{bars} ({note})"), fontsize=8)
     else:

@@ -144,13 +144,25 @@ class Journal:
 
     def append(self, row: dict[str, Any]) -> None:
         assert self._fh is not None
-        self._fh.write(json.dumps(row, sort_keys=True) + "\n")
-        self._fh.flush()
+        try:
+            self._fh.write(json.dumps(row, sort_keys=True) + "\n")
+            self._fh.flush()
+        except OSError as exc:  # (a full disk: the file object's error names no file)
+            raise self._unwritable(exc) from None
 
     def close(self) -> None:
         if self._fh is not None:
-            self._fh.close()
-            self._fh = None
+            fh, self._fh = self._fh, None
+            try:
+                fh.close()
+            except OSError as exc:
+                raise self._unwritable(exc) from None
+
+    def _unwritable(self, exc: OSError) -> SweepError:
+        return SweepError(
+            f"{self.path}: cannot write the sweep's journal ({exc.strerror or exc}); the rows it holds are kept: "
+            "make room, then run the same sweep again with --resume"
+        )
 
 
 def read_journal(path: Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
