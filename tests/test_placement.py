@@ -20,7 +20,8 @@ GRAPHS = ("g0", "g1", "g2", "g3")
 RESOURCES = ("memory", "cpu")
 # amounts chosen so that sums land exactly on, or one rounding step beside, the thresholds
 AMOUNTS = (0, 0.1, 0.2, 0.3, 0.5, 1, 1.5, 100, 150, 250, 256, 400, 512)
-ATTR_VALUES = ("linux", "qnx", "1", 1, 1.0, 2)
+# "None": the text of what a platform without the attribute has, which meets no value
+ATTR_VALUES = ("linux", "qnx", "1", 1, 1.0, 2, "None")
 
 
 def scalar(reqs, states, graph, reasons):
@@ -85,6 +86,18 @@ requirements = st.one_of(
     st.builds(Reads, st.sampled_from(KINDS), st.lists(st.tuples(st.just("dev"), st.sampled_from([f"p{i}" for i in range(12)])), min_size=1, max_size=3).map(tuple)),
 )
 placings = st.none() | st.sampled_from((*GRAPHS, "g9")) | st.lists(st.sampled_from(GRAPHS), min_size=1, max_size=3).map(tuple)
+
+
+def test_a_selection_option_naming_the_value_none_is_not_met_by_a_platform_without_the_attribute():
+    """``Selection("gpu=None")`` held on a platform with no ``gpu`` attribute (its value read as
+    the text "None"), where ``Attribute("gpu", "None")`` and the numpy columns said it fails."""
+    bare = PlatformState(Platform("bare"), up=True)
+    declared = PlatformState(Platform("declared", attributes=(("gpu", "None"),)), up=True)
+    states = (bare, declared)
+    for r in (Selection((Option.parse("gpu=None"),)), Attribute("gpu", "None")):
+        want = scalar([r], states, "g0", True)
+        assert want.acceptable == ("declared",), r
+        assert PlatformColumns(states).validity([r], "g0", reasons=True) == want
 
 
 # -- exactness -------------------------------------------------------------------------------------

@@ -375,8 +375,9 @@ class Option:
         return f"{self.device_kind}@{self.vendor}" if self.vendor else str(self.device_kind)
 
     def holds(self, state: "PlatformState") -> bool:
-        if self.attribute is not None:
-            return str(state.platform.attribute(self.attribute)) == str(self.value)
+        if self.attribute is not None:  # (a platform without the attribute meets no value of it, "None" included, as Attribute says)
+            actual = state.platform.attribute(self.attribute)
+            return actual is not None and str(actual) == str(self.value)
         return any(d.matches(self.device_kind or "", self.vendor) for d in state.devices)
 
 
