@@ -100,6 +100,46 @@ def test_a_selection_option_naming_the_value_none_is_not_met_by_a_platform_witho
         assert PlatformColumns(states).validity([r], "g0", reasons=True) == want
 
 
+@pytest.mark.parametrize("second, fits_too", [(0.8, True), (0.8 + 1e-6, False)])
+def test_decimal_capacities_add_up_as_written_in_every_engine(second, fits_too):
+    """1.2 GB holds 0.4 and 0.8 GB: in binary 1.2 - 0.4 is 0.7999999999999999, which had
+    rejected the second graph ("0.8 free" as the reason for needing 0.8), while 0.4 + 0.8 is
+    1.2000000000000002, which the no-overcommit invariant would have called an overcommit.
+    The requirement, its columns, the invariant and the simulation agree; a millionth more does not fit."""
+    from desmon.model.scenario import Scenario
+    from desmon.sim.engine import simulate
+    from desmon.sim.world import Step, World
+
+    gpu = Platform("gpu_pc", capacities=(("vram_gb", 1.2),))
+    state = PlatformState(gpu, up=True, deployed=(("seg", (("vram_gb", 0.4),)),))
+    want = scalar([Capacity("vram_gb", second)], (state,), "det", True)
+    assert want.acceptable == (("gpu_pc",) if fits_too else ())
+    assert PlatformColumns((state,)).validity([Capacity("vram_gb", second)], "det", reasons=True) == want
+    r = RobotBuilder("gb")
+    r.platform("gpu_pc", memory=512, capacities={"vram_gb": 1.2}).device("ft", kind="force_sensor")
+    for g, need in (("seg", 0.4), ("det", second)):
+        with r.rpsl.perception_graph(g) as gb:
+            gb.sensor("w", reads="force_sensor")
+        r.depsl.deployment_specification(g).add_constraint("capacity", "vram_gb", need)
+    r.rules({"hold": [("seg",), ("det",)]})
+    sc = Scenario(name="gb", description="decimals", model=r.build(), world=World(task=(Step("hold", 10.0),), horizon=10.0, signals=False))
+    run = simulate(sc, "desmon", seed=0)
+    assert sorted(g for g, _p in RepositoryQuery(run.repo).deployments()) == (["det", "seg"] if fits_too else ["seg"])
+    assert run.violations == [] and ({e.kind for e in run.errors} == {"no_acceptable_platforms"}) == (not fits_too)
+    both = PlatformState(gpu, up=True, deployed=(("seg", (("vram_gb", 0.4),)), ("det", (("vram_gb", second),))))
+    assert overcommitted(both) == (not fits_too)
+
+
+def overcommitted(state: PlatformState) -> bool:
+    """Whether the no-overcommit invariant finds ``state`` overcommitted."""
+    from desmon.deployment.invariants import _no_overcommit
+
+    class View:
+        states = (state,)
+
+    return _no_overcommit(View()) is not None  # type: ignore[arg-type]
+
+
 # -- exactness -------------------------------------------------------------------------------------
 @pytest.mark.slow
 @given(fleets(), st.lists(requirements, max_size=4), placings, st.booleans())

@@ -16,7 +16,7 @@ from desmon.deployment.ports import (
 )
 from desmon.deployment.validity import Failure, deployment_valid, validity_for
 from desmon.errors import ModelError
-from desmon.model.requirements import DeploymentSpec
+from desmon.model.requirements import DeploymentSpec, fits
 from desmon.model.system import PlatformState
 
 __all__ = [
@@ -190,7 +190,7 @@ def _no_overcommit(v: SystemView) -> str | None:
         for res, cap in capacities:
             used = s.used_by(res) if deployed else []
             total = sum(a for _g, a in used)
-            if total > cap:
+            if not fits(total, cap):
                 who = ", ".join(f"{g} {a:g}" for g, a in used)
                 return f"{s.name}: deployments consume {total:g} {res} ({who}) but the capacity is {cap:g}"
     return None

@@ -69,7 +69,7 @@ from desmon.deployment.columns import FactColumns, inexact
 from desmon.deployment.memo import ColumnMemo
 from desmon.deployment.ports import PlatformHandle
 from desmon.errors import ModelError, QueryError
-from desmon.model.requirements import Capacity, Option
+from desmon.model.requirements import CAPACITY_SLACK, Capacity, Option
 from desmon.model.system import PlatformState
 from desmon.repository import labels as _L
 from desmon.repository.store import ADD_NODE
@@ -338,7 +338,7 @@ class PlatformColumns:
                 counted = (sh.graphs >= 0) & ~np.isin(sh.graphs, excluded if excluded is not None else [])
         load = self.facts.loads.get(req.resource)
         free = cap - used - (load if load is not None else 0.0)
-        ok = free >= req.amount
+        ok = req.amount - free <= CAPACITY_SLACK * np.maximum(1.0, np.abs(cap))  # (Capacity.holds, elementwise: the same floats)
         if counted is not None:
             for i in np.flatnonzero(counted.sum(axis=1) >= 3).tolist():
                 ok[i] = _validity.requirement_holds(req, self.states[i], graph) is None

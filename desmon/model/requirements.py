@@ -63,11 +63,33 @@ __all__ = [
     "Constraint",
     "Reads",
     "Placing",
+    "fits",
+    "slack",
+    "CAPACITY_SLACK",
 ]
 
 
 def _fmt(x: float) -> str:
     return f"{x:g}"
+
+
+#: how far a sum of amounts may pass a capacity and still fit, per unit of the capacity (at
+#: least 1): amounts a user writes in decimals add up in binary with rounding (1.2 - 0.4 is
+#: 0.7999999999999999, 0.4 + 0.8 is 1.2000000000000002), and a rule that fits 0.4 and 0.8
+#: into 1.2 must not hang on the last bit. Every engine compares capacities through
+#: :func:`fits` and :func:`slack`: the Capacity requirement, its numpy columns, the
+#: ``no-overcommit`` invariant, the memory over capacity, a fleet's admission, symmetry.
+CAPACITY_SLACK = 1e-9
+
+
+def slack(capacity: float) -> float:
+    """What a sum of amounts may pass ``capacity`` by and still fit (:data:`CAPACITY_SLACK`)."""
+    return CAPACITY_SLACK * max(1.0, abs(capacity))
+
+
+def fits(used: float, capacity: float) -> bool:
+    """Whether ``used``, a sum of amounts, stays within ``capacity`` (up to :func:`slack`)."""
+    return used - capacity <= slack(capacity)
 
 
 @strict_init(ModelError)
@@ -145,7 +167,7 @@ class Capacity(Requirement):
         others = others_using(self.resource, state, graph)
         load = state.load_of(self.resource)
         free = cap - sum(a for _g, a in others) - load
-        if free >= self.amount:
+        if self.amount - free <= slack(cap):  # (free >= amount, up to the rounding of the sums: fits)
             return None
         unit = " MB" if self.resource == "memory" else ""
         parts = [f"capacity {_fmt(cap)}"]

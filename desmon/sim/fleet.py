@@ -46,7 +46,7 @@ from desmon.model.scenario import Scenario
 from desmon.deployment.memo import MemoChecks
 from desmon.deployment.placement import PlatformMemoColumnChecks
 from desmon.deployment.validity import check_platform, reads_fixed_facts
-from desmon.model.requirements import Capacity, DeploymentSpec, Requirement
+from desmon.model.requirements import Capacity, DeploymentSpec, Requirement, fits
 from desmon.model.system import PlatformState, Rule, RuleTable, SystemModel
 from desmon.repository import labels as L
 from desmon.repository.facts import load_model
@@ -433,7 +433,7 @@ class _Admission:
                 if cap is None:
                     continue
                 used = state.load_of(req.resource) + sum(a for _g, a in state.used_by(req.resource, excluding=graph))
-                if used + req.amount > cap + 1e-9:
+                if not fits(used + req.amount, cap):
                     return f"{EDGE_FULL}: {cap - used:g} {req.resource} free, {graph} needs {req.amount:g}"
         return None
 

@@ -38,6 +38,7 @@ from desmon.deployment.exposure import CAUSES, Needs
 from desmon.deployment.ports import ERROR_KINDS
 from desmon.detectors.base import Alarm, merge_alarms
 from desmon.errors import SimulationError
+from desmon.model.requirements import fits
 from desmon.sim.world import Slip
 
 __all__ = [
@@ -225,7 +226,7 @@ class MemoryMeter:
         prev = self.used.get(platform, 0.0)
         since = self.last.get(platform, 0.0)
         cap = self.capacity.get(platform, math.inf)
-        if prev > cap:
+        if not fits(prev, cap):
             self.over[platform] = self.over.get(platform, 0.0) + (now - since)
         self.used[platform] = amount
         self.last[platform] = now

@@ -61,6 +61,7 @@ from typing import Any, Iterable
 from desmon.deployment.validity import check_platform
 from desmon.errors import CheckerError
 from desmon.model.events import DeviceFail, Event, LoadChange
+from desmon.model.requirements import fits
 from desmon.model.system import PlatformState
 from desmon.verify.environment import variable_kind, variable_kinds, variables
 from desmon.verify.state import Key
@@ -290,4 +291,4 @@ def _exceeds(s1: Any, s2: Any, platform: Any) -> bool:
     use: dict[str, float] = dict(s1.consumption())
     for r, amount in s2.consumption():
         use[r] = use.get(r, 0.0) + amount
-    return any((platform.capacity(r) or 0.0) < amount for r, amount in use.items())
+    return any(not fits(amount, platform.capacity(r) or 0.0) for r, amount in use.items())
