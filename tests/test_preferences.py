@@ -46,6 +46,19 @@ def test_equal_scores_keep_declaration_order():
     assert v.acceptable == ("c", "a", "b")
 
 
+def test_scores_the_users_numbers_make_equal_tie_whatever_the_float_rounding():
+    """0.3 against 0.1 + 0.2 (0.30000000000000004 in binary) had put the later platform first."""
+    a = state("a", attributes={"fast": "yes"})
+    b = state("b", attributes={"quiet": "yes", "cool": "yes"})
+    prefs = [pref("attribute", "fast", "yes", weight=0.3), pref("attribute", "quiet", "yes", weight=0.1), pref("attribute", "cool", "yes", weight=0.2)]
+    v = check_validity(prefs, [a, b])
+    assert v.acceptable == ("a", "b") and v.scores[0] == v.scores[1] and v.gain("b") == 0.0
+    # a gain of 0.4 - 0.3 is 0.1 (not 0.10000000000000003): not above a min_gain of 0.1
+    c = state("c", attributes={"fast": "yes", "quiet": "yes"})
+    v = check_validity([pref("attribute", "fast", "yes", weight=0.3), pref("attribute", "quiet", "yes", weight=0.1)], [a, c])
+    assert v.acceptable == ("c", "a") and v.gain("a") == 0.1 and not v.gain("a") > 0.1
+
+
 def test_equal_scores_keep_the_platform_preference_before_declaration_order():
     low, high = state("low", preference=0.0), state("high", preference=5.0)
     assert check_validity([pref("spread")], [low, high]).acceptable == ("high", "low")

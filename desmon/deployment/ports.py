@@ -150,6 +150,13 @@ class Failure:
         return f"{self.platform}: {self.requirement} fails: {self.reason}"
 
 
+#: the decimals a preference score and a gain are kept to. A score adds weight x term in
+#: binary floats (0.1 + 0.2 is 0.30000000000000004), so platforms the user's numbers score
+#: alike must still tie (the declaration order decides) and a gain equal to a rebalance's
+#: ``min_gain`` must not count as above it; a difference under 5e-13 is no difference
+SCORE_DIGITS = 12
+
+
 @dataclass(frozen=True, slots=True)
 class Validity:
     """Result of :func:`~desmon.deployment.validity.check_validity`: acceptable platforms
@@ -181,7 +188,7 @@ class Validity:
         """How much the best acceptable platform scores above ``platform`` (0 if it is the best)."""
         if not self.scores or not self.acceptable:
             return 0.0
-        return self.scores[0] - self.score(platform)
+        return round(self.scores[0] - self.score(platform), SCORE_DIGITS)
 
     def explain(self) -> str:
         lines = [f"acceptable: {', '.join(self.acceptable) or '(none)'}"]

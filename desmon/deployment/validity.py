@@ -15,7 +15,7 @@ from desmon.model.requirements import PLATFORM_HAS, Attribute, Constraint, Deplo
 from desmon.model.system import PlatformState
 
 from desmon.deployment.memo import MemoChecks
-from desmon.deployment.ports import Failure, PlatformHandle, Validity  # Failure, Validity: the Checks port's answers (re-exported)
+from desmon.deployment.ports import SCORE_DIGITS, Failure, PlatformHandle, Validity  # Failure, Validity: the Checks port's answers (re-exported)
 
 if TYPE_CHECKING:
     from desmon.deployment.ports import ChecksPort, QueryPort
@@ -78,8 +78,10 @@ def score_breakdown(reqs: Iterable[Constraint], state: PlatformState, graph: Pla
 
 
 def platform_score(reqs: Iterable[Constraint], state: PlatformState, graph: Placing) -> float:
-    """The preference score of ``state``: the sum of weight x term (0 without preferences)."""
-    return sum(p.weight * preference_term(p, state, graph) for p in reqs if isinstance(p, Preference))
+    """The preference score of ``state``: the sum of weight x term (0 without preferences), to
+    :data:`~desmon.deployment.ports.SCORE_DIGITS` decimals (scores the user's numbers make
+    equal tie, whatever the order the terms were added in)."""
+    return round(sum(p.weight * preference_term(p, state, graph) for p in reqs if isinstance(p, Preference)), SCORE_DIGITS)
 
 
 def score_keys(reqs: tuple, graph: Placing, failures: Sequence[tuple], states: Sequence[PlatformState]) -> list[tuple | None]:
