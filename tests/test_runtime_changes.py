@@ -268,6 +268,21 @@ def test_the_world_leases_the_on_demand_platform_when_nothing_on_board_fits():
     assert any(d["command"] == "start" and d["platform"] == "edge" for d in r.trace.of("decision"))
 
 
+def test_no_lease_for_a_graph_whose_input_no_platform_gives():
+    """pc1 holds the only force sensor and is down: the edge server would join for nothing, A
+    could not read its input there (the lease had asked the requirements alone, and leased
+    it again after each idle time)."""
+    from dataclasses import replace
+
+    from desmon.model.events import PlatformDown
+
+    huge = RequirementChange("A", add=(Capacity("memory", 1500),), remove=(SMALL,))
+    scenario = _world_scenario(changes=(TimedEvent(50.0, huge),), lease=Lease(idle_s=30.0))
+    r = simulate(replace(scenario, initial=(PlatformDown("pc1"),)), seed=0)
+    assert r.metrics["leases"] == 0 and r.metrics["leased_s"] == 0
+    assert {e.kind for e in r.errors} == {"no_acceptable_platforms"}
+
+
 def test_without_a_lease_an_on_demand_platform_never_joins():
     huge = RequirementChange("A", add=(Capacity("memory", 1500),), remove=(SMALL,))
     r = simulate(_world_scenario(changes=(TimedEvent(50.0, huge),)), seed=0)

@@ -16,7 +16,7 @@ from dataclasses import replace
 from typing import Iterable
 
 from desmon.deployment.ports import QueryPort
-from desmon.deployment.validity import check_validity
+from desmon.deployment.validity import spec_validity
 
 __all__ = ["lease_choice"]
 
@@ -29,11 +29,11 @@ def lease_choice(q: QueryPort, graph: str, absent: Iterable[str]) -> str | None:
         return None
     wanted = set(absent)
     fixed = q.fixed_platform(spec)
-    joined = tuple(
-        replace(s, up=True) for s in q.platform_states()
-        if s.name in wanted and s.platform.on_demand and (fixed is None or s.name == fixed)
-    )
+    world = tuple(replace(s, up=True) if s.name in wanted and s.platform.on_demand else s for s in q.platform_states())
+    joined = tuple(s for s in world if s.name in wanted and s.platform.on_demand and (fixed is None or s.name == fixed))
     if not joined:
         return None
-    acceptable = check_validity(q.constraints(spec), joined, graph, reasons=False, checks=q.checks).acceptable
+    # what the deployer would ask once it joined (validity_for): the requirements and the graph's
+    # inputs, read where they are (a server never leased for a graph whose input no platform gives)
+    acceptable = spec_validity(q.constraints(spec), spec.reads, joined, world, graph, reasons=False, checks=q.checks).acceptable
     return acceptable[0] if acceptable else None
