@@ -263,6 +263,8 @@ def test_a_deployment_fixed_to_two_platforms_is_refused() -> None:
         (("attribute", "os", 4), "no platform has os = 4"),
         (("minimum", "corse", 2), "no platform declares a property 'corse' (did you mean 'cores'?)"),
         (("maximum", "latency_ms", 2), "no platform declares a property 'latency_ms'"),
+        (("minimum", "memory", 256), "'memory' is a capacity the deployments consume, not a property: write ('capacity', 'memory', amount)"),
+        (("attribute", "cores", 4), "'cores' is a number the platforms declare as a property, not an attribute: write ('minimum', 'cores', value)"),
         (("selection", "gpu=yes", "force_sensor"), "option 'gpu=yes': no platform declares an attribute 'gpu'"),
         (("selection", "tactile_aray", "force_sensor"), "no device is of kind 'tactile_aray' (did you mean 'tactile_array'?)"),
     ],
@@ -270,6 +272,18 @@ def test_a_deployment_fixed_to_two_platforms_is_refused() -> None:
 )
 def test_a_requirement_on_a_fact_no_platform_or_device_has_is_refused_at_build(args: tuple[Any, ...], expected: str) -> None:
     assert expected in refused(ModelError, with_spec(*args))
+
+
+def test_a_requirement_given_twice_is_refused() -> None:
+    spec = robot().depsl.deployment_specification("force").add_constraint("capacity", "memory", 5)
+    assert "requires Capacity(memory >= 5 MB) twice: give it once" in refused(ModelError, lambda: spec.add_constraint("capacity", "memory", 5))
+
+
+def test_a_whole_count_written_as_a_float_is_the_count() -> None:
+    from desmon.model.requirements import Quantity, Selection
+
+    assert Quantity("pad", 2.0) == Quantity("pad", 2) and Quantity("pad", 2.0).describe() == "Quantity(pad >= 2)"
+    assert Selection((Option.parse("pad"), Option.parse("cam")), at_least=2.0).at_least == 2
 
 
 def test_a_selection_vendor_no_device_is_made_by_is_refused_at_build() -> None:

@@ -103,8 +103,7 @@ class SpecBuilder:
 
     def add_constraint(self, kind: str, *args: object, **kwargs: object) -> "SpecBuilder":
         """``add_constraint("attribute", "platform_has", "force_sensor")``; kinds as in DepSL."""
-        self._requirements.append(make_requirement(kind, *args, **kwargs))
-        return self
+        return self.require(make_requirement(kind, *args, **kwargs))
 
     def prefer(self, kind: str, *args: object, **kwargs: object) -> "SpecBuilder":
         """A soft preference with a weight: ``prefer("vendor", "tactile_pad", "weiss", weight=2)``.
@@ -142,6 +141,8 @@ class SpecBuilder:
                 f"deployment specification of {self.graph!r}: require({requirement!r}) is not a requirement: "
                 "pass Capacity('memory', 150) and the like, or use add_constraint('capacity', 'memory', 150)"
             )
+        if requirement in self._requirements:  # (it would be checked, and explained, twice)
+            raise ModelError(f"deployment specification of {self.graph!r} requires {requirement.describe()} twice: give it once")
         self._requirements.append(requirement)
         return self
 

@@ -210,6 +210,8 @@ def attribute_problem(name: str, value: object, platforms: "tuple[Platform, ...]
     """Why no platform has attribute ``name`` equal to ``value`` as text (None if one does)."""
     declared = sorted({k for p in platforms for k, _ in p.attributes})
     if name not in declared:
+        if any(k == name for p in platforms for k, _ in p.properties):
+            return f"{name!r} is a number the platforms declare as a property, not an attribute: write ('minimum', {name!r}, value) or ('maximum', {name!r}, value)"
         return (
             f"no platform declares an attribute {name!r}{suggest(name, declared)}: "
             f"add attributes={{{name!r}: ...}} to the platforms or fix the name (attributes: {', '.join(declared) or 'none'})"
@@ -230,6 +232,8 @@ def property_problem(prop: str, platforms: "tuple[Platform, ...]") -> str | None
     declared = sorted({k for p in platforms for k, _ in p.properties})
     if prop in declared:
         return None
+    if any(k == prop for p in platforms for k, _ in p.capacities):
+        return f"{prop!r} is a capacity the deployments consume, not a property: write ('capacity', {prop!r}, amount) for what the graph needs free"
     return (
         f"no platform declares a property {prop!r}{suggest(prop, declared)}: "
         f"add properties={{{prop!r}: ...}} to the platforms or fix the name (properties: {', '.join(declared) or 'none'})"

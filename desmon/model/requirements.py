@@ -106,6 +106,7 @@ class Quantity(Requirement):
     def __post_init__(self) -> None:
         check_name("Quantity device kind", self.device_kind)
         check_number(f"Quantity({self.device_kind}) count", self.count, integer=True)
+        object.__setattr__(self, "count", int(self.count))  # (2.0 is the count 2, and reads so)
         if self.count < 1:
             raise ModelError(f"Quantity({self.device_kind}) count = {self.count!r} always holds: give a count >= 1 or drop the requirement")
 
@@ -436,6 +437,7 @@ class Selection(Requirement):
         if twice:  # (it would count twice towards at_least)
             raise ModelError(f"Selection lists the option {twice[0].describe()} twice: list each alternative once")
         check_number("Selection at_least", self.at_least, integer=True)
+        object.__setattr__(self, "at_least", int(self.at_least))
         if self.at_least < 1:
             raise ModelError("Selection at_least = 0 always holds: give at_least >= 1 or drop the requirement")
         both = overlapping_options(self.options) if self.at_least > 1 else None
