@@ -125,6 +125,13 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
     if pareto is not None:  # the cost is a figure too (a memory peak of a platform some points lack, a latency)
         valued &= ok[pareto].notna()
     ok, unvalued = ok[valued], int((~valued).sum())
+    _check_drawable(ok, table, x, y, pareto)
+    return ok, int((~kept).sum()), unvalued
+
+
+def _check_drawable(ok: Any, table: str, x: str | None, y: str, pareto: str | None) -> None:
+    """A SweepError unless the rows ``ok`` have something to draw and hold what desmon sweep writes:
+    finite values of ``y`` and the cost, and ``x`` in every row."""
     for column in (y, pareto):
         if column is not None and not ok.empty and not all(math.isfinite(float(v)) for v in ok[column]):
             raise SweepError(f"{table}: {column} holds an infinite value, which desmon sweep never writes: the table was edited; "
@@ -136,7 +143,6 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
             f"{table}: {x} is empty in {int(ok[x].isna().sum())} run(s) without an error, which desmon sweep never "
             "writes: the table was edited; draw it as desmon sweep wrote it"
         )
-    return ok, int((~kept).sum()), unvalued
 
 
 #: the columns that say which sweep a row belongs to: one value in a table sweep-plot draws
