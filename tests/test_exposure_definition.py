@@ -357,6 +357,21 @@ def test_the_other_analysable_scenarios_agree_on_undetected_slips_and_risky_time
     assert _inside(a.risky_s_per_mission, [m["risky_time_s"] for m in ms])
 
 
+def test_the_chain_names_a_detector_the_rules_keep_across_a_step_change():
+    """The trials start a detector afresh at each step; in the world one the rules keep from
+    the step before goes on with its tare, and misses fewer slips: the report says so where
+    that happens (pick_place_camera's force detector, carry -> place), never elsewhere."""
+    from desmon.analyze.markov import markov_world
+    from desmon.analyze.measures import leaves_out
+
+    def line(path: str) -> list[str]:
+        sc = load_scenario(path)
+        return [x for x in leaves_out(sc, markov_world(sc)) if x.startswith("a detector the rules keep")]
+
+    assert line(PICK) and "force_slip_detector: carry -> place" in line(PICK)[0]
+    assert line(SHIFT) == []
+
+
 def test_analyze_takes_its_trials_from_the_user_and_refuses_a_bad_count(capsys, tmp_path):
     out = tmp_path / "a.json"
     assert main(["analyze", PICK, "-p", "hours=0.1", "--transient-only", "--trials", "32", "--json", str(out)]) == 0

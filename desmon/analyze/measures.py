@@ -391,6 +391,22 @@ def _mean_interval(Q: Any, pi: np.ndarray, target: np.ndarray) -> float | None:
     return float(pi[target].sum()) / into
 
 
+def kept_across_steps(scenario: Scenario, mw: MarkovWorld, skip: set[str] = set()) -> tuple[str, ...]:  # noqa: B006 (read only)
+    """``graph: a -> b`` for each graph (not in ``skip``) that a rule wants in two consecutive
+    steps ``a``, ``b`` of the chain's task (the last step followed by the first): the
+    deployer keeps it running across the step change."""
+    rules = scenario.model.rules
+    actions = [a for a, _d in mw.steps]
+    pairs = list(zip(actions, actions[1:] + actions[:1])) if len(actions) > 1 else []
+    out: dict[str, list[str]] = {}
+    for a, b in pairs:
+        both = {g for slot in rules.slots_for(a) for g in slot} & {g for slot in rules.slots_for(b) for g in slot}
+        for g in sorted(both - skip):
+            if f"{a} -> {b}" not in out.setdefault(g, []):
+                out[g].append(f"{a} -> {b}")
+    return tuple(f"{g}: {', '.join(steps)}" for g, steps in sorted(out.items()))
+
+
 def leaves_out(scenario: Scenario, mw: MarkovWorld, trials: int = 200) -> tuple[str, ...]:
     """What the chain leaves out of the world it stands for, one line each: printed with
     every figure of ``desmon analyze`` (docs/analyze.md explains each)."""
@@ -427,6 +443,14 @@ def leaves_out(scenario: Scenario, mw: MarkovWorld, trials: int = 200) -> tuple[
         )
     if mw.blind:
         lines.append("cannot detect (an input without a signal model): " + ", ".join(mw.blind) + " (never counted as watching)")
+    kept = kept_across_steps(scenario, mw, skip=set(mw.blind) | {g for g, _p in given})
+    if mw.slip_rate > 0 and kept:
+        lines.append(
+            "a detector the rules keep from one step to the next (" + "; ".join(kept) + ") goes on in the world with what it "
+            "learned in the step before (a force detector keeps its tare); the trials start it afresh at each step, so the "
+            "chain counts that step's misses at a fresh start's rate, which may be higher than the world's (desmon estimate "
+            "--metric slips_missed gives the world's)"
+        )
     excluded = sorted(scenario.model.unwatched_actions)
     if excluded:
         lines.append("excluded on purpose (watched=False): " + ", ".join(excluded) + " (their seconds are reported apart)")
