@@ -142,6 +142,16 @@ def test_fallback_day_first_two_hours_pinned_per_upgrade_policy(deployer: str) -
     assert {k: r.metrics[k] for k in want} == want
 
 
+def test_a_run_cut_short_is_the_start_of_the_whole_run_signals_and_alarms_included() -> None:
+    """``--until`` had drawn the slips' signal parameters after fewer steps' from one stream,
+    so a slip the whole run detects at 497.6 s went unseen in the same seed's first half hour."""
+    sc = load_scenario(ROOT / "scenarios" / "coffee_shift.py", {"hours": "1"})
+    whole, cut = simulate(sc, "desmon", seed=2), simulate(sc, "desmon", seed=2, until=1800.0)
+    before = [(a.time, a.detector) for a in whole.alarms if a.time < 1700.0]
+    assert before and [(a.time, a.detector) for a in cut.alarms if a.time < 1700.0] == before
+    assert [s for s in whole.slips if s.time < 1800.0] == list(cut.slips)
+
+
 def test_robot_day_first_hour_pinned() -> None:
     sc = load("robot_day")
     r = simulate(sc, "desmon", until=1800.0)

@@ -20,6 +20,7 @@ from typing import Any, Mapping
 
 from desmon.deployment.exposure import best_state
 from desmon.detectors.signals import Segment
+from desmon.errors import ScenarioError
 from desmon.model.system import PlatformState, SystemModel
 from desmon.sim.sensors import DetectorAdapter, SensorBank
 from desmon.sim.world import Slip, World, draw_slips, expand_task, like_segments
@@ -228,7 +229,8 @@ class GroundTruth:
         self.stream_of = {d.name: s for d, s in devs}
         self.bank: SensorBank | None = None
         if signals:
-            self.bank = SensorBank(physical, self.slips, seed, [(d, s) for d, s in devs if s is not None])
+            whole, whole_slips = _whole_run(world, model, horizon, seed, physical, self.slips)
+            self.bank = SensorBank(whole, whole_slips, seed, [(d, s) for d, s in devs if s is not None])
 
     def near_slip(self, t0: float, t1: float) -> bool:
         """Whether ``[t0, t1]`` meets a slip's window (:data:`SLIP_WINDOW` around its onset:
@@ -255,6 +257,22 @@ class GroundTruth:
                 return nxt
             return max(nxt, math.floor(lo[i] / block + 1e-9) * block)
         return far
+
+
+def _whole_run(world: World, model: SystemModel, horizon: float, seed: int, physical: tuple[Segment, ...],
+               slips: tuple[Slip, ...]) -> tuple[tuple[Segment, ...], tuple[Slip, ...]]:
+    """The segments (as the signals see them) and slips of the whole run the World describes,
+    for the signals of a run cut short before its horizon (``--until``): the signals draw each
+    step's and each slip's parameters in turn from one stream, so only signals drawn for the
+    whole run make a shorter run's first seconds those of the whole one. A World too long to
+    expand whole keeps the short run's own (``physical``, ``slips``)."""
+    if horizon >= world.horizon:
+        return physical, slips
+    try:
+        whole = like_segments(expand_task(world, world.horizon, seed), model.like)
+        return whole, tuple(s for s in draw_slips(world, whole, seed) if s.time < world.horizon)
+    except ScenarioError:  # (more steps or slips than a run holds: the cut run's are all there is)
+        return physical, slips
 
 
 def _merge_windows(ws: list[tuple[float, float]]) -> tuple[list[float], list[float]]:
