@@ -393,6 +393,25 @@ def test_thresholds_and_confidences_print_as_given_never_rounded_into_another_qu
     assert one_percent[0] == one_percent[1] and "wrong with probability at most 0.01" in one_percent[0][1]
 
 
+def test_the_printed_guaranteed_interval_holds_the_one_computed(capsys):
+    """Its ends were rounded to the nearest digit: [399, 484] for a computed [398.6, 484.2]
+    left out what the guarantee covers. They are rounded outward."""
+    argv = ["estimate", str(ROOT / "scenarios" / "coffee_handover.py"), "--timing", "exponential", "--within", "20%", "--no-progress"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    low, high = (float(x.replace(",", "")) for x in re.search(r"interval \[([0-9.,]+), ([0-9.,]+)\] \(half", out).groups())
+    assert main([*argv, "--json"]) == 0
+    computed = json.loads(capsys.readouterr().out)
+    assert low <= computed["low"] and computed["high"] <= high, (out, computed)
+    assert {_outward_text(x) for x in ((1.25, 1, False), (1.21, 1, True), (-0.004, 2, True))} == {"1.2", "1.3", "0.00"}
+
+
+def _outward_text(args) -> str:  # type: ignore[no-untyped-def]
+    from desmon.cli.estimate import _end
+
+    return _end(*args)
+
+
 def test_a_yes_below_x_never_prints_an_interval_that_reaches_x(capsys):
     """The ends are rounded to the half-width's digits: an upper end of 10.998 printed as 11.0
     beside "below 11? YES (the sequence excludes the threshold)". They now take the digits that

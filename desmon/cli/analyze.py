@@ -151,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
         note = prism_initial_note(result.chain, args.export)
         if note:
             sys.stdout.write(note + "\n")
-    return EXIT_VIOLATED if (agree is not None and not agree.inside) or _disagree(cross) else EXIT_OK
+    return EXIT_VIOLATED if (agree is not None and agree.disagrees) or _disagree(cross) else EXIT_OK
 
 
 def _checks_beside(args: argparse.Namespace, scenario: Any, result: Any, budget: Any, stormpy: Any) -> tuple[Any, Any, Any]:
@@ -350,6 +350,10 @@ def format_analysis(a: Any, agree: Any = None) -> str:
             f"Simulated ({timing} timing, {agree.seeds} seeds): mean {agree.mean:.3f} s, 99 % interval "
             f"[{agree.low:.3f}, {agree.high:.3f}] ({METHOD}; range {min(agree.values):.3f}..{max(agree.values):.3f}): exact value {verdict}"
         )
+        if agree.sure is not None:
+            sure = "OUTSIDE: the chain disagrees with the world" if agree.disagrees else "inside"
+            out.append(f"  guaranteed 99 % interval [{math.floor(agree.sure[0] * 1000) / 1000:.3f}, "
+                       f"{math.ceil(agree.sure[1] * 1000) / 1000:.3f}] (every run in [0, T]): exact value {sure}")
     if a.contributions:
         out.append("Where the unmonitored time comes from (s per hour, long run):")
         out += [f"  {v:9.3f}  {d}" for v, d in a.contributions]

@@ -15,6 +15,7 @@ import json
 import math
 import sys
 import time
+from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
 from typing import Any
 
 from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg
@@ -193,7 +194,7 @@ def run(args: argparse.Namespace) -> int:
             if iv is not None:
                 goal = f" (goal {_n(question.half_width_goal(iv.estimate))})" if question.below is None else ""
                 d = decimals_for(iv.half_width)
-                now = f", {_fixed(iv.estimate, d)} in [{_fixed(iv.low, d)}, {_fixed(iv.high, d)}], half-width {_fixed(iv.half_width, d)}{goal} at run {iv.n:,}"
+                now = f", {_fixed(iv.estimate, d)} in [{_end(iv.low, d, False)}, {_end(iv.high, d, True)}], half-width {_fixed(iv.half_width, d)}{goal} at run {iv.n:,}"
             line.show(f"desmon estimate: {n:,} runs{now}")
 
     try:
@@ -234,10 +235,30 @@ def _fixed(x: float, decimals: int) -> str:
     return f"{round(x, decimals) + 0.0:,.{decimals}f}"
 
 
+def _outward(x: float, decimals: int, up: bool) -> Decimal | None:
+    """``x`` to ``decimals`` decimals, rounded up (``up``) or down: a guaranteed interval's ends
+    are printed outward, so the interval printed holds the one computed (None if not finite)."""
+    if not math.isfinite(x):
+        return None
+    q = Decimal(x).quantize(Decimal(1).scaleb(-decimals), rounding=ROUND_CEILING if up else ROUND_FLOOR)
+    return abs(q) if q == 0 else q  # (no -0.00)
+
+
+def _end(x: float, decimals: int, up: bool) -> str:
+    """An interval's end as :func:`_fixed` prints a number, rounded outward (:func:`_outward`)."""
+    q = _outward(x, decimals, up)
+    return "-" if q is None else f"{q:,.{decimals}f}"
+
+
 def _apart(decimals: int, ends: tuple[float, float], threshold: float) -> int:
-    """``decimals``, or more where fewer would print an end on the other side of ``threshold``
-    (or on it): an interval that answers "below X?" never reads as reaching X when it does not."""
-    while decimals < 17 and any(math.isfinite(x) and (round(x, decimals) < threshold) != (x < threshold) for x in ends):
+    """``decimals``, or more where fewer would print an end (rounded outward) on the other side
+    of ``threshold`` (or on it): an interval that answers "below X?" never reads as reaching X
+    when it does not."""
+    def crosses(x: float, up: bool) -> bool:
+        q = _outward(x, decimals, up)
+        return q is not None and (q < Decimal(threshold)) != (x < threshold)
+
+    while decimals < 17 and (crosses(ends[0], False) or crosses(ends[1], True)):
         decimals += 1
     return decimals
 
@@ -270,7 +291,8 @@ def format_estimate(e: Any) -> str:
         out.append(f"  world: the scenario's, with {' '.join(e.world)}")
     share = 100 * iv.half_width / abs(iv.estimate) if iv.estimate else math.nan
     rel = f" = {share:.2f} % of the estimate" if math.isfinite(share) else ""
-    out.append(f"  estimate {f(iv.estimate)}, {pct} interval [{f(iv.low)}, {f(iv.high)}] (half-width {f(iv.half_width)}{rel}), guaranteed")
+    out.append(f"  estimate {f(iv.estimate)}, {pct} interval [{_end(iv.low, d, False)}, {_end(iv.high, d, True)}] "
+               f"(half-width {f(iv.half_width)}{rel}), guaranteed")
     ends = [_n(x) for x in e.range] if e.range else []
     if len(set(ends)) == 1:  # (a range narrower than the digits shown: every digit, not [32.1, 32.1])
         ends = [exact(x) for x in e.range]

@@ -792,7 +792,8 @@ def _mean_interval(values: list[float], horizon: float) -> dict[str, Any] | None
     iv = normal_interval(values, 1.0 - FLEET_CONFIDENCE, (0.0, horizon))
     return {
         "low": round(iv.low, 6), "high": round(iv.high, 6), "confidence": FLEET_CONFIDENCE,
-        "method": f"normal approximation over the {len(values)} robots, not guaranteed: they share the edge servers",
+        "method": f"normal approximation over the {len(values)} robots, not guaranteed: they share the edge servers, and a rare "
+                  "long exposure of a few robots can leave the fleet's mean outside it (docs/fleet.md)",
     }
 
 
