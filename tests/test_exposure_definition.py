@@ -357,6 +357,32 @@ def test_the_other_analysable_scenarios_agree_on_undetected_slips_and_risky_time
     assert _inside(a.risky_s_per_mission, [m["risky_time_s"] for m in ms])
 
 
+def test_a_robot_whose_detectors_all_have_given_rates_runs_no_detection_trials_and_claims_none():
+    """Every detector a camera with the user's rate: the trials (1.7 s) were run for nothing, and
+    the report said its rates were "measured by desmon's detection trials"."""
+    from desmon.model import RobotBuilder
+    from desmon.model.scenario import Scenario
+    from desmon.sim.world import Step, World
+
+    robot = RobotBuilder("cam_arm")
+    robot.platform("vision_pc", memory=2048).device("cam", kind="camera")
+    with robot.rpsl.perception_graph("camera_slip_detector") as g:
+        g.sensor("image", reads="camera")
+    robot.depsl.deployment_specification("camera_slip_detector").add_constraint("capacity", "memory", 600)
+    robot.action("carry", like="move_base")
+    robot.rules({"grasp": "camera_slip_detector", "carry": "camera_slip_detector"})
+    world = World(task=(Step("idle", 10.0), Step("grasp", 3.0), Step("carry", 20.0)), repeat=True, horizon=600.0,
+                  slip_rate=1 / 60, start_latency=0.5, recognition_delay=0.2, heartbeat_timeout=1.0,
+                  detection_rates={"camera_slip_detector": 0.5})
+    from desmon.verify.bounds import Bounds
+
+    bounds = Bounds(task={"idle": ("grasp",), "grasp": ("carry",), "carry": ("idle",)}, initial_action="idle")
+    a = analyze(Scenario(name="cam", model=robot.build(), world=world, checker=bounds))
+    assert a.trials_s < 0.05 and not any("detection trials" in line for line in a.leaves_out), (a.trials_s, a.leaves_out)
+    assert any(line.startswith("given detection rates") for line in a.leaves_out)
+    assert all(m == pytest.approx(0.5) for m in a.miss["camera_slip_detector"].values())
+
+
 def test_the_chain_names_a_detector_the_rules_keep_across_a_step_change():
     """The trials start a detector afresh at each step; in the world one the rules keep from
     the step before goes on with its tare, and misses fewer slips: the report says so where

@@ -114,7 +114,7 @@ def _rates(
     grasp = _trial_seconds("grasp", sum(grasps) / len(grasps)) if grasps else 2.0
     latencies = sorted({world.latency(p.name) for p in model.platforms} | {world.start_latency})
     rates: dict[tuple[str, float], dict[str, tuple[float, float]]] = {}
-    for action, durations in spans.items():
+    for action, durations in spans.items() if warmups else ():  # (no graph with a signal model: no trial would be read)
         like = model.like(action)
         direction, kind = slip_kind(world, like)
         for lat in latencies:
@@ -422,7 +422,10 @@ def leaves_out(scenario: Scenario, mw: MarkovWorld, trials: int = 200) -> tuple[
         f"timing: task steps, warm-ups and lease idle times are {timing} with the given means ({theirs}); "
         "start latency, recognition and heartbeat delays are exponential"
     )
-    if mw.slip_rate > 0:
+    from desmon.sim.world import detector_plans, world_of
+
+    measured = any(p is not None and p.kind in _EVALUATED for p in detector_plans(world_of(scenario), scenario.model).values())
+    if mw.slip_rate > 0 and measured:  # (no graph with a signal model: no rate was measured, the given ones are named below)
         lines.append(
             "slip detection: each detector catches a slip with its rate for the action, one while it watches and one while "
             f"it starts, measured by desmon's detection trials ({trials:,} slips per action, not the run's own signals: "
@@ -432,8 +435,6 @@ def leaves_out(scenario: Scenario, mw: MarkovWorld, trials: int = 200) -> tuple[
         )
     if mw.dropped:
         lines.append("checker budgets dropped: " + ", ".join(f"{k}={v}" for k, v in mw.dropped) + " (any number of faults may overlap)")
-    from desmon.sim.world import world_of
-
     given = world_of(scenario).detection_rates
     if given:
         lines.append(
