@@ -108,3 +108,89 @@ def test_a_search_stopped_by_a_reaction_that_never_ends_keeps_the_smallest_failu
     with pytest.raises(fz._NeverEnds):
         alone.fails([(1, ()), (2, ()), (3, ())])
     assert alone.smallest_never_ends and alone.outcome_of([(1, ()), (2, ()), (3, ())])[1][0] == CRASH
+
+
+# -- what a sequence can reach ------------------------------------------------------------------
+def _wanting(graphs: list[str], devices: int = 1):  # type: ignore[no-untyped-def]
+    """One PC of 4 GB with ``devices`` force sensors; grasp wants every graph of ``graphs`` at once."""
+    from desmon.model import GRASP, HOLD, RobotBuilder
+    from desmon.model.scenario import Scenario
+    from desmon.verify import Bounds
+
+    r = RobotBuilder("r")
+    names = [f"d{i:02d}" for i in range(devices)]
+    r.platform("pc", memory=4000).devices(names, kind="force_sensor")
+    for g in graphs:
+        with r.rpsl.perception_graph(g) as gb:
+            gb.sensor("s", reads="force_sensor")
+        r.depsl.deployment_specification(g).add_constraint("capacity", "memory", 100)
+    r.rules({GRASP: graphs, HOLD: graphs[:1]})
+    failing = {"devices": tuple(names), "max_failures": 1} if devices > 1 else {"start_failures": 1}
+    return Scenario(name="r", model=r.build(), checker=Bounds(actions=(HOLD, GRASP), initial_action=HOLD, **failing))
+
+
+def _first_fit_but(odd):  # type: ignore[no-untyped-def]
+    """desmon's deployer, with ``odd(q, slots)`` run first in every reaction (it may yield commands)."""
+    from desmon.deployment.deployer import DESMON, Deployer
+
+    plain = DESMON
+
+    def react(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+        yield from odd(q, slots)
+        yield from plain.react(q, slots, changed, context_changed)
+
+    return Deployer("odd", "desmon's, with an odd first step", react)
+
+
+def test_fuzz_checks_what_the_first_reaction_breaks_inside_it():
+    """A second instance started and stopped again within the initial reaction: verify found it
+    in 0 steps, fuzz passed every sequence (it judged the state the reaction left)."""
+    from desmon.deployment.ports import Start, Stop
+
+    def twice(q, slots):  # type: ignore[no-untyped-def]
+        if not q.deployments():
+            yield Start("g0", "pc")
+            yield Start("g0", "pc2")
+            yield Stop("g0", "pc2")
+
+    from desmon.model import HOLD, RobotBuilder
+    from desmon.model.scenario import Scenario
+    from desmon.verify import Bounds
+
+    r = RobotBuilder("r")
+    r.platform("pc", memory=4000).device("ft", kind="force_sensor")
+    r.platform("pc2", memory=4000)
+    with r.rpsl.perception_graph("g0") as gb:
+        gb.sensor("s", reads="force_sensor")
+    r.depsl.deployment_specification("g0").add_constraint("capacity", "memory", 100)
+    r.rules({HOLD: "g0"})
+    sc = Scenario(name="r", model=r.build(), checker=Bounds(actions=(HOLD, "grasp"), initial_action=HOLD))
+    out = fuzz(sc, _first_fit_but(twice), examples=20, seed=0)
+    assert out.exit_code == 1 and out.invariant == "single-instance" and out.labels == [], out.text
+
+
+def test_fuzz_reaches_the_fifth_start_of_a_reaction_and_the_65th_enabled_event():
+    """Failing starts were drawn among a reaction's first 4, and events by a pick below 64: a
+    deployer that ignored the 5th start's failure, or broke after the 70th device failed,
+    passed every sequence where verify found it in one step."""
+    from desmon.deployment.deployer import Deployer, ensure_deployed
+    from desmon.deployment.ports import Start
+
+    def quiet_g4(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+        for (g,) in slots:
+            if g != "g4":
+                yield from ensure_deployed(g, q)
+            elif not q.deployed_on(g):
+                yield Start(g, "pc")  # its failure raises no error: coverage breaks
+
+    five = fuzz(_wanting([f"g{i}" for i in range(5)]), Deployer("quiet_g4", "g4's failed start unsaid", quiet_g4), examples=300, seed=0)
+    assert five.exit_code == 1 and five.invariant == "coverage", five.text
+
+    def last_device(q, slots):  # type: ignore[no-untyped-def]
+        if "d69" not in {d.name for s in q.platform_states() for d in s.devices}:
+            raise RuntimeError("d69 is gone")
+        return
+        yield
+
+    many = fuzz(_wanting(["g0"], devices=70), _first_fit_but(last_device), examples=500, seed=0)
+    assert many.exit_code == 4 and "d69 is gone" in many.text, many.text

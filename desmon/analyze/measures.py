@@ -99,8 +99,7 @@ def _rates(
     miss: the world's default latency), with the slip direction and kind
     ``World.slip_kinds`` gives there (``trials`` slips, ``seed``); ``say(what)`` before
     each action's trials at each start latency."""
-    from desmon.detectors.evaluation import detection_rates
-    from desmon.sim.world import detector_plans, slip_kind, world_of
+    from desmon.sim.world import detector_plans, world_of
 
     world = world_of(scenario)
     model = scenario.model
@@ -115,16 +114,22 @@ def _rates(
     latencies = sorted({world.latency(p.name) for p in model.platforms} | {world.start_latency})
     rates: dict[tuple[str, float], dict[str, tuple[float, float]]] = {}
     for action, durations in spans.items() if warmups else ():  # (no graph with a signal model: no trial would be read)
-        like = model.like(action)
-        direction, kind = slip_kind(world, like)
         for lat in latencies:
             watching = lat == world.start_latency  # (elsewhere only the starting catch is read)
             if say is not None:
                 say(_trials_said(trials, watching, action, lat, len(rates) + 1, len(spans) * len(latencies)))
-            rates[(action, lat)] = detection_rates(
-                like, _trial_seconds(action, sum(durations) / len(durations)), direction, kind, grasp=grasp, phases=phases, trials=trials,
-                seed=seed, recognition=world.recognition_delay, latency=lat, warmups=warmups, budget=budget, watching=watching,
+            rates[(action, lat)] = _trial_rates(
+                model, world, action, sum(durations) / len(durations), lat, watching,
+                dict(grasp=grasp, phases=phases, trials=trials, seed=seed, warmups=warmups, budget=budget),
             )
+    return _per_graph(model, plans, world, list(spans), latencies, rates)
+
+
+def _per_graph(model: Any, plans: dict[str, Any], world: Any, actions: list[str], latencies: list[float],
+               rates: dict[tuple[str, float], dict[str, tuple[float, float]]]) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, dict[float, float]]]]:
+    """:func:`_rates`' answer, graph by graph: the trials' ``rates`` of the detector kind each
+    graph runs, or the rate the World gives it (none: it cannot detect)."""
+    spans = actions
     miss: dict[str, dict[str, float]] = {}
     start: dict[str, dict[str, dict[float, float]]] = {}
     for g in model.graphs:
@@ -140,6 +145,18 @@ def _rates(
                 miss[g.name][action] = 1.0 - rates[(action, world.start_latency)][name][0]
                 start[g.name][action] = {lat: rates[(action, lat)][name][1] for lat in latencies}
     return miss, start
+
+
+def _trial_rates(model: Any, world: Any, action: str, duration: float, latency: float, watching: bool, kw: dict[str, Any]) -> dict[str, tuple[float, float]]:
+    """:func:`~desmon.detectors.evaluation.detection_rates` of ``action`` (of mean ``duration``)
+    after a start latency of ``latency``, with the slip kind the World gives there."""
+    from desmon.detectors.evaluation import detection_rates
+    from desmon.sim.world import slip_kind
+
+    like = model.like(action)
+    direction, kind = slip_kind(world, like)
+    return detection_rates(like, _trial_seconds(action, duration), direction, kind, recognition=world.recognition_delay, latency=latency,
+                           watching=watching, **kw)
 
 
 @dataclass

@@ -58,6 +58,10 @@ def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice],
     run = RepositoryRun(scenario, deployer, enabler.bounds, enabler.system.guard)
     instant = enabler.system.instant
     labels: list[Label] = []
+    watched = {i.name for i in instant}
+    first = [f for f in run.initial_found if f[0] in watched]  # broken inside the initial reaction, after a start or stop
+    if first:
+        return labels, (first[0][0], f"{first[0][1]} (during the reaction, right after `{first[0][2]}`)")
     bad = run.violations()
     if bad:
         return labels, bad[0]

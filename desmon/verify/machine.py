@@ -24,7 +24,7 @@ from desmon.model.events import DeviceEvent, Event, PlatformEvent
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.replay import RepositoryRun, ScriptedControl
-from desmon.verify.strategies import start_failures
+from desmon.verify.strategies import LAST_START, reach, start_failures
 
 __all__ = ["ScriptedControl", "RepositoryRun", "make_machine"]
 
@@ -35,19 +35,24 @@ def make_machine(scenario: Scenario, deployer: str | Deployer = "desmon", bounds
     from desmon.verify.checker import Checker
 
     enabler = Checker(scenario, deployer, bounds=b)  # only its enabled() is used: the bounds' event rules
+    _events, last_start = reach(scenario, b)
+    failing = start_failures(b, max_index=max(LAST_START, last_start))
+    watched = {i.name for i in enabler.system.instant}
 
     class DeploymentMachine(RuleBasedStateMachine):
         @initialize()
         def start(self) -> None:
             self.run = RepositoryRun(scenario, deployer, b)
             self.trace: list[tuple[Event, tuple[int, ...]]] = []
+            first = [f for f in self.run.initial_found if f[0] in watched]
+            assert not first, f"{first[0][0]}: {first[0][1]} during the initial reaction, right after `{first[0][2]}`"
 
         def _do(self, data, family: Callable[[Event], bool]) -> None:  # type: ignore[no-untyped-def]
             options = [e for e in enabler.enabled(self.run.key()) if family(e)]
             if not options:
                 return
             event = data.draw(st.sampled_from(options), label="event")
-            fails = data.draw(start_failures(b), label="failing starts")
+            fails = data.draw(failing, label="failing starts")
             self.trace.append((event, fails))
             _result, during = self.run.step_watching(event, fails, enabler.system.instant)
             assert during is None, (  # an instantaneous invariant, broken inside the reaction (maybe repaired by its end)

@@ -21,27 +21,48 @@ from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.environment import variable_kinds, variables
 
-__all__ = ["Choice", "choice", "choices", "events", "event_sequences", "start_failures"]
+__all__ = ["Choice", "choice", "choices", "events", "event_sequences", "start_failures", "reach"]
 
 #: (index into the enabled events, indices of failing starts)
 Choice = tuple[int, tuple[int, ...]]
 
 
-def start_failures(bounds: Bounds, *, max_index: int = 3) -> st.SearchStrategy[tuple[int, ...]]:
+#: the picks drawn at least (``pick % len(enabled)``: any of up to this many enabled events)
+PICKS = 64
+#: the index of the last start a reaction's failing starts are drawn among at least
+LAST_START = 3
+
+
+def start_failures(bounds: Bounds, *, max_index: int = LAST_START) -> st.SearchStrategy[tuple[int, ...]]:
     """Indices of the Control.start calls that fail in one reaction (at most ``bounds.start_failures``)."""
     if bounds.start_failures <= 0:
         return st.just(())
     return st.lists(st.integers(0, max_index), max_size=bounds.start_failures, unique=True).map(lambda xs: tuple(sorted(xs)))
 
 
-def choice(bounds: Bounds) -> st.SearchStrategy[Choice]:
-    return st.tuples(st.integers(0, 63), start_failures(bounds))
+def choice(bounds: Bounds, *, picks: int = PICKS, max_index: int = LAST_START) -> st.SearchStrategy[Choice]:
+    """One :data:`Choice`: a pick among ``picks`` (enough for every event the bounds may
+    enable at once) and the failing starts among the first ``max_index + 1`` of the reaction."""
+    return st.tuples(st.integers(0, max(PICKS, picks) - 1), start_failures(bounds, max_index=max(LAST_START, max_index)))
+
+
+def reach(scenario: Scenario, bounds: Bounds) -> tuple[int, int]:
+    """(the most events the bounds may enable at once, the index of the last start a reaction
+    may issue): every event of every variable, and one start per graph a rule wants at once
+    (its slots' alternatives counted: a failed start tries the next), so that no enabled
+    event and no start of a reaction is out of a sequence's reach."""
+    b = bounds
+    events = sum(len(kind.every_event(b, v.subject)) for kind in variable_kinds() for v in variables(b) if v.kind == kind.name)
+    rules = getattr(scenario.model.rules, "rules", ())
+    starts = max((sum(len(slot) for slot in rule.slots) for rule in rules), default=0)
+    return events, starts - 1
 
 
 def choices(scenario: Scenario, *, max_size: int = 12, bounds: Bounds | None = None) -> st.SearchStrategy[list[Choice]]:
     """Failure sequences for ``scenario`` within its checker bounds."""
     b = bounds or bounds_of(scenario)
-    return st.lists(choice(b), max_size=max_size)
+    events, last_start = reach(scenario, b)
+    return st.lists(choice(b, picks=events, max_index=last_start), max_size=max_size)
 
 
 def events(scenario: Scenario, bounds: Bounds | None = None) -> st.SearchStrategy:
