@@ -22,7 +22,7 @@ import time
 from typing import Any, Iterable, Protocol, Sequence
 
 from desmon.deployment.deployer import Deployer
-from desmon.deployment.guard import CRASH, Guard, ReactionStopped
+from desmon.deployment.guard import Guard, ReactionStopped
 from desmon.deployment.run import RunContext
 from desmon.errors import CheckerError, TableUnsupported
 from desmon.model.scenario import Scenario
@@ -268,9 +268,16 @@ def _finished(res: CheckResult, system: TransitionSystem, run: Exploration, budg
     if system.symmetry is not None:  # (the table engine counts its codes with array operations)
         count = getattr(run.explored, "states_covered", None)
         res.states_covered = count() if count is not None else system.symmetry.states_covered(run.explored)
-    if not run.incomplete and CRASH not in run.found:  # a user's deployer: every reaction again, in a fresh instance
-        check_memory(system)
+    if _bounded_only(run.incomplete):  # a user's deployer: every reaction again, in a fresh instance
+        check_memory(system)  # (also before a crash or violation it found: a deployer with memory gives neither)
     return finish(res, system, run.found, run.incomplete, run.depth, budget)
+
+
+def _bounded_only(incomplete: str) -> bool:
+    """Whether a search that ended so may still re-run its reactions in a fresh instance: it
+    ended complete or at a state or depth cap, not at the clock, the memory budget or a Ctrl-C
+    (whose time or room is spent)."""
+    return not incomplete or incomplete.startswith(("max depth ", "max states "))
 
 
 def system_of(
