@@ -90,6 +90,21 @@ def test_the_number_of_edge_computers_is_a_whole_number_from_2_to_12(capsys, val
     assert err.count("\n") == 1 and "edges" in err and "Traceback" not in err
 
 
+def test_a_requirement_change_among_the_initial_events_is_refused():
+    """The refusal looked at the bounds' requirement changes only: one among the scenario's
+    initial events (a graph shrunk to fit beside another on one edge) was reduced, and orbits
+    were reached at other depths than without the reduction."""
+    from desmon.model.events import RequirementChange
+    from desmon.model.requirements import Capacity
+
+    sc = load_scenario(SCENARIOS / "symmetric_platforms.py")
+    graph = sc.model.specs[0].graph
+    shrunk = dataclasses.replace(sc, initial=(*sc.initial, RequirementChange(graph, add=(Capacity("memory", 1),), label="small")))
+    Checker(sc, symmetry=True)
+    with pytest.raises(CheckerError, match="requirement changes .among its checker bounds or its initial events."):
+        Checker(shrunk, symmetry=True)
+
+
 def test_capacity_sharing_is_refused():
     mig = load_scenario(SCENARIOS / "migration.py")
     with pytest.raises(CheckerError, match="declares no interchangeable"):

@@ -60,7 +60,7 @@ from typing import Any, Iterable
 
 from desmon.deployment.validity import check_platform
 from desmon.errors import CheckerError
-from desmon.model.events import DeviceFail, Event, LoadChange
+from desmon.model.events import DeviceFail, Event, LoadChange, RequirementChange
 from desmon.model.requirements import fits
 from desmon.model.system import PlatformState
 from desmon.verify.environment import variable_kind, variable_kinds, variables
@@ -108,9 +108,11 @@ class Symmetry:
                 f"by nothing but their facts ({', '.join(SYMMETRIC_DEPLOYERS)}); the {c.deployer_name} deployer is not shown "
                 "to be one (the paper's runs a graph on two platforms and keeps one by name, a tie-break that is not symmetric)"
             )
-        if any(spec.preferences for spec in c.model.specs) or c.bounds.joins or c.bounds.requirement_changes:
+        initial_changes = any(isinstance(e, RequirementChange) for e in getattr(c.scenario, "initial", ()))
+        if any(spec.preferences for spec in c.model.specs) or c.bounds.joins or c.bounds.requirement_changes or initial_changes:
             self._refuse(
-                "the model has preferences, joining platforms or requirement changes; the soundness argument of the "
+                "the model has preferences, joining platforms or requirement changes (among its checker bounds or its "
+                "initial events); the soundness argument of the "
                 "reduction covers neither score ties nor platforms that come and go"
             )
         other = [v.kind for v in variables(c.bounds) if not getattr(variable_kind(v.kind), "symmetric", False)]
