@@ -610,6 +610,8 @@ def test_bounds_of_the_wrong_type_are_refused_when_built(kwargs: dict[str, Any],
         ({"task": {"idle": ("grasp",), "grasp": ("idle",)}, "initial_action": "hold"}, "initial_action 'hold' has no entry in the task"),
         ({"actions": ("hold", "gasp")}, "unknown action 'gasp' (did you mean 'grasp'?)"),
         ({"instantaneous": ("fixd",)}, "unknown invariant 'fixd' (did you mean 'fixed'?)"),
+        ({"instantaneous": ("single-instance", "coverage")}, "'coverage' in instantaneous is not a fact of every instant"),
+        ({"instantaneous": ("history",)}, "'history' in instantaneous is not a fact of every instant"),
     ],
     ids=lambda x: str(x)[:30],
 )

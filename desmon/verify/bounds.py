@@ -88,7 +88,9 @@ class Bounds:
         ``RequirementChange`` events the environment may apply, in any order and any
         number of times (one that changes nothing is a no-op);
     ``instantaneous``
-        invariants also checked after every command inside a reaction;
+        invariants also checked after every command inside a reaction: some of
+        ``single-instance``, ``no-overcommit`` and ``fixed`` (the facts of every instant,
+        which the simulation's audit and the fuzzer check there too);
     ``variables``
         ``{kind: subjects}`` for the kinds of variable registered beyond the built-in ones
         (:class:`~desmon.verify.environment.VariableKind`), each subject a variable of that kind.
@@ -237,11 +239,16 @@ class Bounds:
         self._validate_loads(where, scenario)
         self._validate_runtime_changes(where, scenario)
         self._validate_variables(where, scenario)
-        from desmon.deployment.invariants import INVARIANTS
+        from desmon.deployment.invariants import INSTANT_INVARIANTS, INVARIANTS
 
         for n in self.instantaneous:
             if n not in INVARIANTS:
                 raise CheckerError(f"{where}: unknown invariant {n!r}{suggest(n, INVARIANTS)} in instantaneous (invariants: {', '.join(INVARIANTS)})")
+            if n not in INSTANT_INVARIANTS:  # (the simulation's audit and the fuzzer check those; coverage fails between a correct reaction's starts)
+                raise CheckerError(
+                    f"{where}: {n!r} in instantaneous is not a fact of every instant (it may not hold between two commands of a "
+                    f"correct reaction, or the checker's states cannot judge it): instantaneous takes {', '.join(INSTANT_INVARIANTS)}"
+                )
 
     def _validate_runtime_changes(self, where: str, scenario: Scenario) -> None:
         """``joins`` are exactly the model's on-demand platforms (which never go down and up);
