@@ -125,11 +125,11 @@ def _rates(
     return _per_graph(model, plans, world, list(spans), latencies, rates)
 
 
-def _per_graph(model: Any, plans: dict[str, Any], world: Any, actions: list[str], latencies: list[float],
+def _per_graph(model: Any, plans: dict[str, Any], world: Any, spans: list[str], latencies: list[float],
                rates: dict[tuple[str, float], dict[str, tuple[float, float]]]) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, dict[float, float]]]]:
-    """:func:`_rates`' answer, graph by graph: the trials' ``rates`` of the detector kind each
-    graph runs, or the rate the World gives it (none: it cannot detect)."""
-    spans = actions
+    """:func:`_rates`' answer, graph by graph over the risky actions ``spans``: the trials'
+    ``rates`` of the detector kind each graph runs, or the rate the World gives it (none: it
+    cannot detect)."""
     miss: dict[str, dict[str, float]] = {}
     start: dict[str, dict[str, dict[float, float]]] = {}
     for g in model.graphs:

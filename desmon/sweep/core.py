@@ -99,7 +99,10 @@ def _deployer_file(source: str) -> Path | None:
     spec = None
     parts = source.split(".")
     for i in range(len(parts)):
-        spec = importlib.machinery.PathFinder.find_spec(".".join(parts[: i + 1]), search)
+        try:
+            spec = importlib.machinery.PathFinder.find_spec(".".join(parts[: i + 1]), search)
+        except (ImportError, ValueError, OSError):  # (an odd entry of sys.path: as not found; the load says what it finds)
+            return None
         if spec is None:
             return None
         search = list(spec.submodule_search_locations or [])
