@@ -207,7 +207,8 @@ def test_an_import_limit_that_is_no_positive_number_is_one_line(seconds):
         resolve_deployer(str(ROOT / "docs" / "examples" / "first_fit.py") + ":FIRST_FIT", import_seconds=seconds)
 
 
-def test_a_deployer_whose_state_makes_it_crash_is_refused_as_keeping_state_not_reported_crashed(tmp_path, capsys):
+@pytest.mark.parametrize("says", ["call", "so it never ends"])  # (the second, the words of desmon's own limits)
+def test_a_deployer_whose_state_makes_it_crash_is_refused_as_keeping_state_not_reported_crashed(tmp_path, capsys, says):
     """Its 150th reaction raises because of a counter it keeps: the direct engine reported
     CRASHED (at a state cap, and a VIOLATED at a depth cap whose replay said "fixed?"), with a
     path that does not crash again. The fresh re-run that refuses state kept between reactions now runs before
@@ -218,9 +219,9 @@ def test_a_deployer_whose_state_makes_it_crash_is_refused_as_keeping_state_not_r
         def counting(q, slots, changed, context_changed):
             CALLS[0] += 1
             if CALLS[0] == 150:  # (past the first transitions, each of which the search runs twice)
-                raise RuntimeError(f"call {CALLS[0]}")
+                raise RuntimeError(f"SAYS {CALLS[0]}")
             yield from DESMON.react(q, slots, changed, context_changed)
-    '''))
+    ''').replace("SAYS", says))
     path = str(ROOT / "scenarios" / "coffee_handover.py")
     code = main(["verify", path, "--deployer", f"{tmp_path / 'counting.py'}:counting", "--engine", "direct", "--max-states", "100", "--no-progress"])
     err = capsys.readouterr().err

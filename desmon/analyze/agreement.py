@@ -84,18 +84,19 @@ class Agreement:
         """Whether the exact value lies in the interval (one that every seed's run agrees
         on exactly, such as a task that always holds an object, has no width: then to
         rounding, 1e-9 relative)."""
+        return self._holds(self.low, self.high)
+
+    def _holds(self, low: float, high: float) -> bool:
+        """Whether the exact value lies in ``[low, high]``, to rounding (1e-9 of the mean)."""
         slack = 1e-9 * max(1.0, abs(self.mean))
-        return self.low - slack <= self.exact <= self.high + slack
+        return low - slack <= self.exact <= high + slack
 
     @property
     def disagrees(self) -> bool:
         """Whether the simulation shows the exact value wrong: it lies outside the guaranteed
         interval (which excludes a true mean in at most 1 of 100 such comparisons, however
         skewed the runs); without one, outside the Student's t interval."""
-        if self.sure is None:
-            return not self.inside
-        slack = 1e-9 * max(1.0, abs(self.mean))
-        return not self.sure[0] - slack <= self.exact <= self.sure[1] + slack
+        return not (self.inside if self.sure is None else self._holds(*self.sure))
 
     @property
     def gap(self) -> float:

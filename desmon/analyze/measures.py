@@ -408,7 +408,7 @@ def _mean_interval(Q: Any, pi: np.ndarray, target: np.ndarray) -> float | None:
     return float(pi[target].sum()) / into
 
 
-def kept_across_steps(scenario: Scenario, mw: MarkovWorld, skip: set[str] = set()) -> tuple[str, ...]:  # noqa: B006 (read only)
+def kept_across_steps(scenario: Scenario, mw: MarkovWorld, skip: frozenset[str] | set[str] = frozenset()) -> tuple[str, ...]:
     """``graph: a -> b`` for each graph (not in ``skip``) that a rule wants in two consecutive
     steps ``a``, ``b`` of the chain's task (the last step followed by the first): the
     deployer keeps it running across the step change."""

@@ -50,10 +50,6 @@ from desmon.deployment.ports import ERROR_KINDS, LAZY_TEXT_TYPES, RaiseError, Re
 from desmon.errors import CheckerError, ModelError
 from desmon.model.checks import visible
 
-#: what the fault of a reaction stopped at a limit (its commands, its time) says: run again, it
-#: would take as long again (the fresh re-run of :mod:`desmon.verify.memory` leaves it out)
-NEVER_ENDS = "so it never ends"
-
 __all__ = [
     "DeployerFault", "ReactionStopped", "Guard", "check_max_commands", "MAX_COMMANDS", "TICK", "CRASH",
     "describe_stimulus", "uncallable", "EXIT_CRASHED", "MAX_REACTION_SECONDS", "RanAway", "RaisedElsewhere", "raised_text",
@@ -390,7 +386,7 @@ class Guard:
             if self.inside > 0 and self.used + time.monotonic() - self.since > seconds:
                 self.since, self.used = time.monotonic(), 0.0  # once
                 raise RanAway(
-                    f"its code ran for over {seconds:g} s in one reaction without returning, {NEVER_ENDS}; "
+                    f"its code ran for over {seconds:g} s in one reaction without returning, so it never ends; "
                     "a reaction must return (--max-reaction-seconds S sets the limit)"
                 )
 
@@ -541,7 +537,7 @@ class Guard:
             if n > limit:
                 _close(reaction)
                 raise _fault(
-                    name, reacting(), f"issued more than {limit:,} commands in one reaction (the last: `{cmd}`), {NEVER_ENDS}; "
+                    name, reacting(), f"issued more than {limit:,} commands in one reaction (the last: `{cmd}`), so it never ends; "
                     "a reaction must return. If it really needs more, raise the limit with --max-commands N", stimulus,
                 )
             before(cmd)

@@ -226,8 +226,8 @@ class SimWorld:
         render (a model without one reads none of them) and its detectors read every frame:
         a run read for figures that never see an alarm far from a slip runs its detectors
         near the slips only (:data:`~desmon.sim.metrics.EVERY_ALARM`), and the worker would
-        render every second of holding for the few blocks the run takes (the coffee shift
-        read for its missed slips, 8 h: 0.5 CPU-s more per run of 0.7, and no faster)."""
+        render every second of holding for the few blocks the run takes (docs/design.md,
+        "Rendering ahead", gives what it cost)."""
         bank = self.bank
         if bank is None or self.render_ahead is False:
             return False

@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import dataclasses
 
-from desmon.deployment.guard import NEVER_ENDS
 from desmon.errors import NondeterminismError
 from desmon.verify.deployers import deployer_state, fresh_deployer, users_spec, worker_state
 from desmon.verify.system import TransitionSystem, command_key, crash_of, nondeterminism
@@ -84,9 +83,6 @@ def rerun_fresh(system: TransitionSystem) -> int:
         bounds=system.bounds, run=run,
     )
     for key, event, prefix, commands, instant in reversed(kept):
-        crash = crash_of(instant)
-        if crash is not None and NEVER_ENDS in crash[1]:
-            continue  # (stopped at a limit: run again, it would take its limit again)
         _nkey, _outcomes, log, again = fresh.run_one(key, event, prefix)
         same = [command_key(c) for c, _ok in commands] == [command_key(c) for c, _ok in log.commands]
         crashed = (crash_of(instant), crash_of(again))
