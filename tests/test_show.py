@@ -154,3 +154,26 @@ def test_a_dollar_sign_in_a_timeline_label_is_drawn_as_written(coffee, tmp_path,
     out = tmp_path / "d.png"
     assert main(["show", str(path), "--at", "t$x^$", "-o", str(out)]) == 0
     assert out.read_bytes()[:4] == b"\x89PNG"
+
+
+#: coffee_handover with the wrench repaired at 3 x 8.0333... s after the start of its failure,
+#: a time binary floating point cannot hold: the replay titles it with 15 digits
+REPAIRED_AT_A_FLOAT = SAME_TIME.replace("TimedEvent(23.0, DeviceRepair", "TimedEvent(24.1 * 3 / 3, DeviceRepair")
+
+
+def test_a_time_as_a_title_prints_it_selects_that_moment(coffee, tmp_path, capsys):
+    """The repair at ``24.1 * 3 / 3`` (24.100000000000005 in binary) is titled t=24.1s by
+    replay; ``--at 24.1`` is that moment, the repair included, in show and explain alike."""
+    path = tmp_path / "repaired.py"
+    path.write_text(REPAIRED_AT_A_FLOAT.format(coffee=coffee))
+    assert main(["replay", str(path)]) == 0
+    assert "t4 t=24.1s" in capsys.readouterr().out
+    assert main(["explain", str(path), "force_slip_detector", "--at", "24.1"]) == 0
+    out = capsys.readouterr().out
+    assert "at t=24.1s" in out and "acceptable: arm_pc" in out
+    assert main(["show", str(path), "--at", "24.1", "--format", "json"]) == 0
+    at = json.loads(capsys.readouterr().out)
+    assert main(["show", str(path), "--at", "t4", "--format", "json"]) == 0
+    assert json.loads(capsys.readouterr().out) == at
+    assert main(["explain", str(path), "force_slip_detector", "--at", "24.09999999"]) == 0
+    assert "acceptable: (none)" in capsys.readouterr().out  # a time a title tells apart is still before it

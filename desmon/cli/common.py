@@ -230,7 +230,9 @@ def resolve_times(scenario: Scenario, spec: str | None) -> list[tuple[str, float
     """``--at``: (title, seconds, steps) of each comma-separated time or timeline label
     (None: the timeline's end). ``steps`` counts the timeline events the moment includes:
     a label's own and those before it (of two events at one time, the first's label
-    excludes the second), a time's every event at or before it."""
+    excludes the second), a time's every event at or before it, where "at" compares the
+    15 digits titles print: a moment titled t=0.3s (an event at ``0.1 * 3``) is what
+    ``--at 0.3`` selects."""
     import bisect
 
     from desmon.errors import ScenarioError
@@ -255,6 +257,7 @@ def resolve_times(scenario: Scenario, spec: str | None) -> list[tuple[str, float
             ) from None
         if not math.isfinite(t):
             raise ScenarioError(f"--at {part}: give a finite time in seconds or a timeline label ({', '.join(labels) or 'none'})")
+        t = max((x for x in times if _seconds(x) == _seconds(t)), default=t)  # as titles print it: 0.1 * 3 is 0.3
         first = scenario.timeline[0].time
         if t < first:
             raise ScenarioError(f"--at {part}: the timeline starts at t={first:g}s; give a time at or after it")
