@@ -49,3 +49,32 @@ def test_evaluate_over_seeds_says_too_when_its_passes_mean_nothing(capsys):
     assert main(["evaluate", "--trials", "2", "--seeds", "3", "--no-progress"]) == 0
     out = capsys.readouterr().out
     assert "note: with 2 trials per action, 11 of these cells would pass on every seed whatever the simulation counted" in out
+
+
+#: two_detectors whose checker bounds let nothing happen
+NOTHING_ENABLED = '''
+import importlib.util
+from dataclasses import replace
+from desmon.verify.bounds import Bounds
+spec = importlib.util.spec_from_file_location("base", {base!r})
+base = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(base)
+scenario = replace(base.scenario, name="nothing_enabled", checker=Bounds())
+'''
+
+
+def test_bounds_that_enable_no_event_say_the_verdict_covers_the_initial_state_alone(root, tmp_path, capsys):
+    """HOLDS over one state, and fuzz's passed sequences that applied no event, are not
+    a check of the deployment: both say so; bounds that enable events print no such line."""
+    path = tmp_path / "nothing_enabled.py"
+    path.write_text(NOTHING_ENABLED.format(base=str(root / "scenarios" / "two_detectors.py")))
+    assert main(["verify", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "verdict: HOLDS" in out and "states: 1 " in out
+    assert "no event was ever enabled, so HOLDS covers the initial state alone" in out and "checker=Bounds(...)" in out
+    assert main(["fuzz", str(path), "--examples", "5"]) == 0
+    assert "no event was ever enabled, so every sequence checked the initial state alone" in capsys.readouterr().out
+    for command in (["verify", str(root / "scenarios" / "two_detectors.py"), "--deployer", "paper", "--invariant", "single-instance"],
+                    ["fuzz", str(root / "scenarios" / "coffee_handover.py"), "--examples", "5"]):
+        main(command)
+        assert "no event was ever enabled" not in capsys.readouterr().out

@@ -32,7 +32,7 @@ from desmon.verify.checker import Checker
 from desmon.verify.search import EXIT_INTERRUPTED, INTERRUPTED
 from desmon.verify.trace import Label
 from desmon.verify.replay import RepositoryRun
-from desmon.verify.report import format_counterexample, format_trace
+from desmon.verify.report import NOTHING_ENABLED_FIX, format_counterexample, format_trace
 from desmon.verify.strategies import Choice, choices
 
 __all__ = ["FuzzOutcome", "fuzz", "run_choices", "scratch_hypothesis_home"]
@@ -129,6 +129,7 @@ class _Sequences:
         self.scenario, self.deployer, self.enabler, self.progress = scenario, deployer, enabler, progress
         self.calls = 0
         self.passed = 0  # sequences run to their end without a violation
+        self.longest = 0  # the most events a sequence applied (fewer than drawn where none was enabled)
         self.smallest: list[Choice] | None = None
         self.outcome: Any = None
         self.smallest_never_ends = False  # whether the smallest's last reaction ran away (the reaction limit stopped it)
@@ -146,6 +147,7 @@ class _Sequences:
         except ReactionStopped:  # Ctrl-C while a reaction ran on without yielding
             raise KeyboardInterrupt from None
         failed = outcome[1] is not None
+        self.longest = max(self.longest, len(outcome[0]))
         if not failed:
             self.passed += 1
         ran_away = any(isinstance(f.cause, RanAway) for f in faults)
@@ -194,8 +196,9 @@ def fuzz(
                 raise KeyboardInterrupt
     except NoSuchExample:
         _end_progress(progress, search.calls)
+        idle = "" if search.longest else f"warning: no event was ever enabled, so every sequence checked the initial state alone: {NOTHING_ENABLED_FIX}\n"
         return FuzzOutcome(
-            f"{head}\npassed: {search.calls} sequences (up to {max_size} events each), no invariant violated\n",
+            f"{head}\npassed: {search.calls} sequences (up to {max_size} events each), no invariant violated\n{idle}",
             0,
             search.calls,
         )

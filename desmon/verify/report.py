@@ -48,6 +48,13 @@ def _covered(r: CheckResult) -> str:
     return f" (orbits covering {r.states_covered:,} states)" if r.symmetry and r.states_covered is not None else ""
 
 
+#: what a scenario whose bounds enable no event lacks (verify's and fuzz's warning)
+NOTHING_ENABLED_FIX = (
+    "list what the environment may change (actions, devices, platforms, loads, joins, requirement_changes) "
+    "in the scenario's checker=Bounds(...)"
+)
+
+
 def format_result(r: CheckResult) -> str:
     blind = "".join(f" (not {n}: {NOT_CHECKED.get(n, 'not checked here')})" for n in r.not_checked)
     lines = [f"{r.scenario} -- deployer {r.deployer} -- invariants: {', '.join(r.invariants)}{blind}" + (" -- symmetry reduction" if r.symmetry else "")]
@@ -72,6 +79,8 @@ def format_result(r: CheckResult) -> str:
         dead = [k for k in kinds if not r.changed[k]]
         if dead and r.verdict == "HOLDS":
             lines.append("  warning: dead event kinds (never changed the state; a scenario bug?): " + ", ".join(dead))
+    elif r.verdict == "HOLDS" and not r.incomplete:
+        lines.append(f"warning: no event was ever enabled, so HOLDS covers the initial state alone: {NOTHING_ENABLED_FIX}")
     if r.rules:
         lines.append("selector contexts exercised: " + ", ".join(f"{c or '(none)'} {n:,}" for c, n in sorted(r.rules.items(), key=lambda x: str(x[0]))))
     if r.branches:
