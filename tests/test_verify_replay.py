@@ -163,6 +163,7 @@ def test_a_replay_that_leaves_the_recorded_states_names_the_step_on_one_line_and
         ("length", lambda c: c.update(states=c["states"][:-1])),  # its last state cut: not a shorter path "fixed"
         ("length", lambda c: c.update(length=c["length"] + 3)),
         ("states[1].step", lambda c: c["states"][1].update(step=7)),
+        ("length = missing", lambda c: (c.pop("length"), c.update(states=c["states"][:-1]))),  # cut, its length dropped
     ],
 )
 def test_a_hand_edited_bad_field_is_refused_on_one_line_naming_the_field(saved, tmp_path, capsys, field, edit):
@@ -205,6 +206,17 @@ def test_other_scenario_parameters_than_the_files_are_refused_naming_both(tmp_pa
     err = _one_error_line(capsys)
     assert "-p hand_memory=512" in err and "no -p parameters" in err
     assert _replay(out, "-p", "hand_memory=512", scenario=robot_day) == 1
+
+
+def test_a_file_without_its_parameters_is_refused_not_replayed_unchecked(saved, tmp_path, capsys):
+    """Without the "params" the run wrote, no -p given here could be checked against the
+    file's: it is refused as edited, whatever -p the command gives."""
+    path, _report = saved
+    bare = _edited(path, tmp_path / "bare.json", lambda d: d.pop("params"))
+    for given in ((), ("-p", "hand_memory=512")):
+        assert _replay(bare, *given) == 2
+        err = _one_error_line(capsys)
+        assert str(bare) in err and "params = missing" in err
 
 
 def test_a_file_without_counterexamples_is_refused_as_nothing_to_replay(tmp_path, capsys):

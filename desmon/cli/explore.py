@@ -341,10 +341,7 @@ def _saved(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str], st
             f"{saved.source} was written with --deployer {saved.deployer}, not {deployer.name}: "
             f"drop --deployer (or pass --deployer {saved.deployer})"
         )
-    params = tuple(sorted(parse_assignments(args.param).items()))
-    if saved.params is not None and params != saved.params:
-        shown = " ".join(f"-p {k}={v}" for k, v in saved.params) or "no -p parameters"
-        raise CheckerError(f"{saved.source} was written with {shown}: pass the same -p NAME=VALUE to explore it")
+    saved.refuse_other_params(parse_assignments(args.param), to="explore it")
     try:
         frames, final, diverged = counterexample_frames(
             scenario, deployer, saved.labels, tuple(saved.invariants), recorded=tuple(saved.states), guard=args.guard,

@@ -71,15 +71,7 @@ def _saved_counterexample(args: argparse.Namespace):  # type: ignore[no-untyped-
             f"{saved.source} was written with --deployer {saved.deployer}, this command replays with --deployer {given}: "
             f"pass --deployer {saved.deployer} to replay it (to check {given} itself: desmon verify {args.scenario} --deployer {given})"
         )
-    params = tuple(sorted(parse_assignments(args.param).items()))
-    if saved.params is not None and params != saved.params:
-        def shown(ps: tuple[tuple[str, str], ...]) -> str:
-            return " ".join(f"-p {k}={v}" for k, v in ps) or "no -p parameters"
-
-        raise CheckerError(
-            f"{saved.source} was written with {shown(saved.params)}, this command gives {shown(params)}: "
-            "pass the same -p NAME=VALUE to replay it"
-        )
+    saved.refuse_other_params(parse_assignments(args.param), to="replay it")
     return saved
 
 

@@ -159,7 +159,7 @@ def counterexample_to_json(c: Counterexample) -> dict[str, Any]:
     }
 
 
-def result_to_json(r: CheckResult, params: dict[str, str] | None = None) -> dict[str, Any]:
+def result_to_json(r: CheckResult, params: dict[str, str]) -> dict[str, Any]:
     """The result as ``desmon verify --json`` writes it; ``params``: the run's ``-p NAME=VALUE``
     parameters (``desmon verify --replay`` refuses to replay it with other ones)."""
     from desmon.verify.deployers import portable_spec
@@ -167,7 +167,7 @@ def result_to_json(r: CheckResult, params: dict[str, str] | None = None) -> dict
     return {
         "scenario": r.scenario,
         "deployer": portable_spec(r.deployer),  # a file's path made absolute: --replay from any directory
-        **({"params": dict(params)} if params is not None else {}),
+        "params": dict(params),
         "verdict": r.verdict,
         "reason": r.reason,
         "states": r.states,
@@ -223,7 +223,20 @@ class SavedCounterexample:
     count: int  # how many the file holds
     scenario: str  # the scenario's name
     deployer: str  # the deployer's name (its --deployer spec)
-    params: tuple[tuple[str, str], ...] | None  # the -p NAME=VALUE of the run (None: the file predates them)
+    params: tuple[tuple[str, str], ...]  # the -p NAME=VALUE of the run
+
+    def refuse_other_params(self, given: dict[str, str], to: str) -> None:
+        """A one-line CheckerError if ``given`` (a command's ``-p``) are not the parameters
+        the file was written with; ``to``: what the command does with it ("replay it")."""
+        params = tuple(sorted(given.items()))
+        if params != self.params:
+            def shown(ps: tuple[tuple[str, str], ...]) -> str:
+                return " ".join(f"-p {k}={v}" for k, v in ps) or "no -p parameters"
+
+            raise CheckerError(
+                f"{self.source} was written with {shown(self.params)}, this command gives {shown(params)}: "
+                f"pass the same -p NAME=VALUE to {to}"
+            )
     invariants: tuple[str, ...]  # the invariants the run checked
     invariant: str
     message: str
@@ -241,8 +254,8 @@ def read_counterexample(path: str | Path, number: int | None = None) -> SavedCou
     src = str(path)
     top = json_object(src, _read_json(path), '{"scenario": ..., "deployer": ..., "counterexamples": [...]}')
     scenario, deployer = (_field(src, top, k, str) for k in ("scenario", "deployer"))
-    params = top.get("params")
-    if params is not None and not (isinstance(params, dict) and all(isinstance(v, str) for v in params.values())):
+    params = _field(src, top, "params", dict)
+    if not all(isinstance(v, str) for v in params.values()):
         raise CheckerError(f"{src}: params = {params!r} is not an object of NAME: VALUE texts, e.g. {{\"hand_memory\": \"256\"}}")
     checked = tuple(map(str, _field(src, top, "invariants", list)))
     twice = sorted({n for n in checked if checked.count(n) > 1})
@@ -272,7 +285,7 @@ def read_counterexample(path: str | Path, number: int | None = None) -> SavedCou
         for i, s in enumerate(c["states"])
     )
     return SavedCounterexample(
-        src, n, len(top["counterexamples"]), scenario, deployer, None if params is None else tuple(sorted(params.items())),
+        src, n, len(top["counterexamples"]), scenario, deployer, tuple(sorted(params.items())),
         checked, invariant, _field(where, c, "message", str), during, labels, states,
     )
 
@@ -284,9 +297,9 @@ def _check_numbering(where: str, c: dict[str, Any]) -> None:
     if not isinstance(states, list):
         return  # (labels_from_json names it)
     length = c.get("length")
-    if length is not None and (isinstance(length, bool) or length != len(states) - 1):
+    if isinstance(length, bool) or length != len(states) - 1:
         raise CheckerError(
-            f"{where}.length = {length!r}, but it lists {len(states)} states (the initial one and {len(states) - 1} "
+            f"{where}.length = {'missing' if 'length' not in c else repr(length)}, but it lists {len(states)} states (the initial one and {len(states) - 1} "
             f"step{'' if len(states) == 2 else 's'}): "
             f"the file was cut or edited; {_WRITE_ONE}"
         )
