@@ -81,6 +81,16 @@ def test_the_run_budget_ends_incomplete_with_the_interval_of_the_runs_made(capsy
     assert code == 3 and "--timeout 2 s passed" in err and runs >= 1
 
 
+def test_a_relative_precision_of_an_estimate_of_0_says_no_run_reaches_it_and_names_an_absolute_one(capsys):
+    code, out, err = _estimate(capsys, QUICK, "--metric", "violations", "--range", "0", "10", "--within", "5%", "--max-runs", "4")
+    assert code == 3 and re.search(r"estimate 0(\.0)?,", out)
+    [line] = err.strip().splitlines()
+    assert "--within 5% of an estimate of 0 is a half-width of 0, which no number of runs reaches" in line
+    absolute = float(re.search(r"e\.g\. --within ([\d.]+)$", line).group(1))
+    code, out, err = _estimate(capsys, QUICK, "--metric", "violations", "--range", "0", "10", "--within", str(absolute))
+    assert code == 0 and re.search(r"estimate 0(\.0)?,", out) and err == ""  # the absolute half-width named is reached
+
+
 def test_the_time_limit_stops_a_long_run_under_way_and_a_horizon_of_years_is_refused(capsys):
     coffee = str(ROOT / "scenarios" / "coffee_shift.py")
     started = time.monotonic()

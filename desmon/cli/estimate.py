@@ -216,7 +216,11 @@ def run(args: argparse.Namespace) -> int:
             why = f"--timeout {question.timeout:g} s passed"
         else:
             why = "the runs' values ran out"
-        print(f"desmon estimate: INCOMPLETE: {why} before the question was answered; the interval above is that of the {result.runs:,} runs made",
+        zero = ""
+        if question.relative and question.below is None and result.interval.estimate == 0:  # its goal: a half-width of 0
+            zero = (f"; --within {question.within * 100:g}% of an estimate of 0 is a half-width of 0, which no number of runs reaches: "
+                    f"give an absolute half-width, e.g. --within {_n(result.interval.half_width / 2)}")
+        print(f"desmon estimate: INCOMPLETE: {why} before the question was answered; the interval above is that of the {result.runs:,} runs made{zero}",
               file=sys.stderr)
         return EXIT_INCOMPLETE
     return EXIT_VIOLATED if result.answer in ("no", "indifferent") else EXIT_OK
