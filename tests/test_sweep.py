@@ -352,6 +352,25 @@ def test_an_unknown_parameter_is_refused_before_any_run(tmp_path, capsys):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("job, name, what", [
+    ("run", "seed", "a column every sweep's table has"),
+    ("run", "exposure_s", "a figure of --job run"),
+    ("run", "errors_deployment_failed", "a figure of --job run"),
+    ("run", "until", "a column every sweep's table has"),
+    ("verify", "states", "a figure of --job verify"),
+])
+def test_a_parameter_named_like_a_column_of_the_table_is_refused_before_any_run(tmp_path, capsys, job, name, what):
+    """Its swept value would be written over by the run's seed or figure (silently in a CSV)."""
+    scenario = tmp_path / "clash.py"
+    scenario.write_text(f"from desmon.model.params import parameters\np = parameters({name}=0)\n"
+                        f"from desmon.loader import load_scenario\nscenario = load_scenario({str(ROBOT_DAY)!r}, {{'hours': '0.02'}})\n")
+    out = tmp_path / "r.csv"
+    code = main(["sweep", str(scenario), "--job", job, "-p", f"{name}=1,2", "-o", str(out), "--no-progress"])
+    [line] = capsys.readouterr().err.splitlines()
+    assert code == 2 and f"-p {name}: the scenario's parameter {name!r} has the name of {what}" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["clash.py"]  # no table, no journal
+
+
 def test_without_the_extra_the_sweep_says_how_to_install_it(tmp_path, capsys, monkeypatch):
     import importlib.util
 

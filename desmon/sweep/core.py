@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import IO, Any, Callable, Sequence
 
 from desmon.sweep.grid import Axis, Grid, Run, SweepError
-from desmon.sweep.jobs import JOBS, JobSpec, check_points, check_values, run_point
+from desmon.sweep.jobs import JOBS, METRICS, JobSpec, check_points, check_values, run_point
 from desmon.sweep.runner import Progress, execute
 from desmon.sweep.table import Journal, check_same_sweep, frame, journal_path, read_journal, read_table, write_table
 
@@ -201,6 +201,28 @@ def _checked(job: str, scenario: str | None, axes: tuple[Axis, ...], deployer: s
     return deployer, axes
 
 
+#: the columns every sweep's table has besides its parameters, its settings and its job's figures
+FIXED_COLUMNS: tuple[str, ...] = ("point", "seed_index", "seed", "scenario", "scenario_digest", "job", "deployer", "exit_code", "error", "wall_s")
+#: the run job's figures named at run time, by prefix (a platform's, an error kind's)
+_RUN_PREFIXES: tuple[str, ...] = ("memory_peak_mb_", "errors_")
+
+
+def _check_columns(job: str, axes: tuple[Axis, ...], settings: dict[str, Any]) -> None:
+    """Refuse, before any work, a swept parameter named like another column of the table:
+    its value would be written over (a ``seed`` parameter by the run's seed, ``states``
+    by verify's count), silently in a CSV."""
+    for axis in axes:
+        name = axis.name
+        if name in FIXED_COLUMNS or name in settings:
+            what = "a column every sweep's table has"
+        elif name in METRICS.get(job, ()) or (job == "run" and name.startswith(_RUN_PREFIXES)):
+            what = f"a figure of --job {job}"
+        else:
+            continue
+        raise SweepError(f"-p {name}: the scenario's parameter {name!r} has the name of {what}, whose value the table would write "
+                         f"over the swept one: rename the parameter in the scenario's parameters(...) (e.g. {name}_value) to sweep it")
+
+
 def _settings_of(job: str, setting: Any, more: dict[str, Any] | None) -> dict[str, Any]:
     """Every setting of ``job`` (:data:`JOB_SETTINGS`), by name: ``setting`` is the first,
     ``more`` any of them by name; one left out (or None) is None, or its default."""
@@ -299,6 +321,7 @@ def run_sweep(
     deployer, axes = _checked(job, scenario, axes, deployer)
     grid = Grid(axes, seeds, sweep_seed)
     settings = _settings_of(job, setting, settings)
+    _check_columns(job, axes, settings)
     # every point, before a cluster starts
     check_points(job, scenario, grid.iter_points(), settings.get(SETTINGS.get(job, "")), deployer, settings=settings)
     # the scenario by its absolute path, in the table and the journal (as the workers get it):
