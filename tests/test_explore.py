@@ -10,6 +10,7 @@ reason that the end of the test run prints on one line (tests/conftest.py); with
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
@@ -56,9 +57,11 @@ class _Steps(HTMLParser):
         if tag == "section" and "step" in (a.get("class") or "").split():
             self.current = a["data-key"]
             self.order.append(self.current)
-            self.steps[self.current] = {"edges": set(), "nodes": {}, "text": []}
+            self.steps[self.current] = {"edges": set(), "drawn": [], "nodes": {}, "text": []}
         elif self.current is not None and tag == "g" and "edge" in (a.get("class") or "").split():
-            self.steps[self.current]["edges"].add((a["data-source"], a["data-label"], a["data-target"], a["data-change"]))
+            edge = (a["data-source"], a["data-label"], a["data-target"], a["data-change"])
+            self.steps[self.current]["edges"].add(edge)
+            self.steps[self.current]["drawn"].append(edge)  # (two edges alike drawn twice)
         elif self.current is not None and tag == "g" and a.get("class") == "node":
             self.steps[self.current]["nodes"][a["data-node"]] = set((a.get("data-state") or "").split())
 
@@ -132,6 +135,41 @@ def test_the_page_shows_the_reasons_desmon_explain_gives_at_each_step(root, coff
             for platform, failures in validity.rejected:
                 for f in failures:
                     assert " ".join(str(f).removeprefix(f"{platform}: ").split()) in text
+
+
+#: four action changes at one instant: the same deployment recorded twice, both at t=5 s
+AT_ONE_INSTANT = """
+from desmon.model import HOLD, MOVE_BASE, RELEASE
+from desmon.model.cob3 import LOADS, care_o_bot
+from desmon.model.events import ActionChange, LoadChange
+from desmon.model.scenario import Scenario, TimedEvent
+
+scenario = Scenario(
+    name="one_instant", model=care_o_bot().build(), initial=tuple(LoadChange(p, mb) for p, mb in LOADS.items()),
+    timeline=tuple(TimedEvent(5.0, ActionChange(a), f"t{i}") for i, a in enumerate((HOLD, MOVE_BASE, RELEASE, MOVE_BASE, RELEASE))),
+)
+"""
+
+
+def test_history_records_alike_are_each_drawn_and_only_the_new_one_marked_new(tmp_path, capsys):
+    """Each step draws as many deployment history edges as the repository holds then (show
+    --at lists them), however many share a source, target and start time, and marks as
+    new exactly those the step added."""
+    scenario = tmp_path / "one_instant.py"
+    scenario.write_text(AT_ONE_INSTANT)
+    out = tmp_path / "page.html"
+    assert main(["explore", str(scenario), "-o", str(out)]) == 0
+    capsys.readouterr()
+    steps = parse(out.read_text(encoding="utf-8")).steps
+    before = 0
+    for label in ("t0", "t1", "t2", "t3", "t4"):
+        assert main(["show", str(scenario), "--at", label, "--format", "json"]) == 0
+        history = [e for e in json.loads(capsys.readouterr().out)["edges"] if e["label"] == "DEPLOYMENT_HISTORY"]
+        drawn = [e for e in steps[label]["drawn"] if e[1] == "DEPLOYMENT_HISTORY"]
+        assert len(drawn) == len(history), label
+        assert sum(e[3] == "added" for e in drawn) == len(history) - before, label
+        before = len(history)
+    assert before >= 3  # one deployment recorded twice at t=5 s
 
 
 def test_the_page_is_self_contained(coffee):

@@ -156,24 +156,31 @@ def test_a_dollar_sign_in_a_timeline_label_is_drawn_as_written(coffee, tmp_path,
     assert out.read_bytes()[:4] == b"\x89PNG"
 
 
-#: coffee_handover with the wrench repaired at 3 x 8.0333... s after the start of its failure,
-#: a time binary floating point cannot hold: the replay titles it with 15 digits
-REPAIRED_AT_A_FLOAT = SAME_TIME.replace("TimedEvent(23.0, DeviceRepair", "TimedEvent(24.1 * 3 / 3, DeviceRepair")
+#: coffee_handover with the wrench repaired at ``24.1 * 3 / 3`` s, 24.100000000000005 in
+#: binary, and again at 24.1 s: two moments a shorter title would print alike
+REPAIRED_AT_A_FLOAT = SAME_TIME.replace(
+    "TimedEvent(23.0, DeviceRepair(\"lwr_wrench\"), \"t4\"),",
+    "TimedEvent(24.1, DeviceRepair(\"lwr_wrench\"), \"t4\"), TimedEvent(24.1 * 3 / 3, DeviceFail(\"lwr_wrench\"), \"t5\"),",
+).replace("import DeviceRepair", "import DeviceFail, DeviceRepair")
 
 
-def test_a_time_as_a_title_prints_it_selects_that_moment(coffee, tmp_path, capsys):
-    """The repair at ``24.1 * 3 / 3`` (24.100000000000005 in binary) is titled t=24.1s by
-    replay; ``--at 24.1`` is that moment, the repair included, in show and explain alike."""
+def test_a_time_a_title_prints_is_that_moment_and_two_moments_are_titled_apart(coffee, tmp_path, capsys):
+    """Replay titles a moment with every digit its time has: t5 at 24.100000000000005 s is
+    not titled as t4 at 24.1 s, and either title's time given to --at is that moment, in
+    show and explain alike."""
     path = tmp_path / "repaired.py"
     path.write_text(REPAIRED_AT_A_FLOAT.format(coffee=coffee))
     assert main(["replay", str(path)]) == 0
-    assert "t4 t=24.1s" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "t4 t=24.1s" in out and "t5 t=24.100000000000005s" in out
     assert main(["explain", str(path), "force_slip_detector", "--at", "24.1"]) == 0
     out = capsys.readouterr().out
-    assert "at t=24.1s" in out and "acceptable: arm_pc" in out
-    assert main(["show", str(path), "--at", "24.1", "--format", "json"]) == 0
-    at = json.loads(capsys.readouterr().out)
-    assert main(["show", str(path), "--at", "t4", "--format", "json"]) == 0
-    assert json.loads(capsys.readouterr().out) == at
-    assert main(["explain", str(path), "force_slip_detector", "--at", "24.09999999"]) == 0
-    assert "acceptable: (none)" in capsys.readouterr().out  # a time a title tells apart is still before it
+    assert "at t=24.1s" in out and "acceptable: arm_pc" in out  # repaired, not yet failed again
+    assert main(["explain", str(path), "force_slip_detector", "--at", "24.100000000000005"]) == 0
+    out = capsys.readouterr().out
+    assert "at t=24.100000000000005s" in out and "acceptable: (none)" in out
+    for label, at in (("t4", "24.1"), ("t5", "24.100000000000005")):
+        assert main(["show", str(path), "--at", at, "--format", "json"]) == 0
+        by_time = json.loads(capsys.readouterr().out)
+        assert main(["show", str(path), "--at", label, "--format", "json"]) == 0
+        assert json.loads(capsys.readouterr().out) == by_time

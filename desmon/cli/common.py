@@ -15,6 +15,7 @@ import time
 from typing import TYPE_CHECKING, Any, NoReturn, TypeAlias
 
 from desmon.cli.options import HelpFormatter, add_input, add_resolved, positive_int, positive_seconds
+from desmon.model.checks import seconds_text
 from desmon.paths import SCENARIO_FILE
 
 if TYPE_CHECKING:
@@ -230,9 +231,9 @@ def resolve_times(scenario: Scenario, spec: str | None) -> list[tuple[str, float
     """``--at``: (title, seconds, steps) of each comma-separated time or timeline label
     (None: the timeline's end). ``steps`` counts the timeline events the moment includes:
     a label's own and those before it (of two events at one time, the first's label
-    excludes the second), a time's every event at or before it, where "at" compares the
-    15 digits titles print: a moment titled t=0.3s (an event at ``0.1 * 3``) is what
-    ``--at 0.3`` selects."""
+    excludes the second), a time's every event at or before it. Titles print a time with
+    every digit it has (:func:`~desmon.model.checks.seconds_text`): a title's time given
+    to ``--at`` is that moment."""
     import bisect
 
     from desmon.errors import ScenarioError
@@ -240,14 +241,14 @@ def resolve_times(scenario: Scenario, spec: str | None) -> list[tuple[str, float
     times = [te.time for te in scenario.timeline]
     if spec is None:
         end = times[-1] if times else 0.0
-        return [(f"t={_seconds(end)}s", end, len(times))]
+        return [(f"t={seconds_text(end)}s", end, len(times))]
     labels = {te.label: (te.time, i + 1) for i, te in enumerate(scenario.timeline) if te.label}
     out = []
     for part in spec.split(","):
         part = part.strip()
         if part in labels:
             t, steps = labels[part]
-            out.append((f"{part} (t={_seconds(t)}s)", t, steps))
+            out.append((f"{part} (t={seconds_text(t)}s)", t, steps))
             continue
         try:
             t = float(part) + 0.0  # (-0 is 0)
@@ -257,18 +258,11 @@ def resolve_times(scenario: Scenario, spec: str | None) -> list[tuple[str, float
             ) from None
         if not math.isfinite(t):
             raise ScenarioError(f"--at {part}: give a finite time in seconds or a timeline label ({', '.join(labels) or 'none'})")
-        t = max((x for x in times if _seconds(x) == _seconds(t)), default=t)  # as titles print it: 0.1 * 3 is 0.3
         first = scenario.timeline[0].time
         if t < first:
-            raise ScenarioError(f"--at {part}: the timeline starts at t={first:g}s; give a time at or after it")
-        out.append((f"t={_seconds(t)}s", t, bisect.bisect_right(times, t)))
+            raise ScenarioError(f"--at {part}: the timeline starts at t={seconds_text(first)}s; give a time at or after it")
+        out.append((f"t={seconds_text(t)}s", t, bisect.bisect_right(times, t)))
     return out
-
-
-def _seconds(t: float) -> str:
-    """A moment's seconds as a title gives them: every digit a time has, up to 15 (two
-    moments a title tells apart are two moments), without trailing zeros."""
-    return f"{t:.15g}"
 
 
 def draw_trace(trace: str, out: str, start: float | None, end: float | None, flags: tuple[str, str] = ("--from", "--to")) -> None:

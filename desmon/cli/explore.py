@@ -31,6 +31,7 @@ from typing import Any
 from desmon.cli.common import CEX_FILE, EXIT_INCOMPLETE, MAX_STATES, Subparsers, deployer_arg, load_scenario_of, scenario_arg, run_of
 from desmon.cli.options import Input, add_output, positive_int
 from desmon.errors import CheckerError, DesmonError, NondeterminismError, ScenarioError
+from desmon.model.checks import seconds_text
 
 __all__ = ["add_parser", "run", "timeline_frames", "counterexample_frames"]
 
@@ -76,11 +77,11 @@ def timeline_frames(scenario: Any, deployer: Any, guard: Any = None) -> list:  #
         for e in step.errors:
             head = f"{e.kind}: {e.graph}" + (f" on {e.platform}" if e.platform else "")
             raised.append((head, e.detail))
-            latest[e.graph] = f"{head} (raised at {step.label + ' ' if step.label else ''}t={e.time:g}s)"
+            latest[e.graph] = f"{head} (raised at {step.label + ' ' if step.label else ''}t={seconds_text(e.time)}s)"
         frames.append(
             Frame(
                 key=step.label or str(i),
-                title=f"{step.label + ' ' if step.label else ''}t={step.time:g}s  {step.event}",
+                title=f"{step.label + ' ' if step.label else ''}t={seconds_text(step.time)}s  {step.event}",
                 event=str(step.event),
                 time=step.time,
                 commands=tuple(f"{cmd}: {'ok' if ok else 'FAILED'}" for cmd, ok in step.commands if ok is not None),

@@ -96,6 +96,14 @@ def is_plain_name(name: object) -> bool:
     return type(name) is str and _NAME.fullmatch(name) is not None
 
 
+def seconds_text(t: float) -> str:
+    """A moment in seconds as desmon prints it: the shortest digits that read back as the
+    same float (``5``, ``0.3``, and ``0.30000000000000004`` for ``0.1 + 0.2``), so a time
+    copied from a title into ``--at`` is that moment, and two moments are never printed alike."""
+    text = repr(float(t) + 0.0)  # (-0 is 0)
+    return text[:-2] if text.endswith(".0") else text
+
+
 def visible(text: str) -> str:
     """``text`` with every character that is not printable (a control, format, separator
     or unassigned one; a newline and a tab stay) written as its Python escape

@@ -12,7 +12,7 @@ from typing import Any
 
 import networkx as nx
 
-from desmon.model.checks import visible
+from desmon.model.checks import seconds_text, visible
 from desmon.repository.store import OBJECT_ATTRS, jsonable
 
 __all__ = ["graph_to_dot", "graph_to_cypher", "FORMATS"]
@@ -65,7 +65,7 @@ def graph_to_dot(g: nx.MultiDiGraph, title: str = "") -> str:
         lines.append(f"  {_dot_quote(n)} [shape={_SHAPES.get(label, 'box')}, label={text}];")
     for s, t, _k, d in sorted(g.edges(keys=True, data=True), key=lambda e: (e[0], e[1], str(e[2]))):
         label = d.get("label", "")
-        extra = [f"{a}={d[a]:g}" for a in ("start", "stop") if isinstance(d.get(a), (int, float))]
+        extra = [f"{a}={seconds_text(d[a])}" for a in ("start", "stop") if isinstance(d.get(a), (int, float))]
         style = _EDGE_STYLE.get(label, 'color="#444444"')
         lines.append(f"  {_dot_quote(s)} -> {_dot_quote(t)} [label={_dot_quote(str(label), *extra)}, {style}];")
     lines.append("}")

@@ -21,7 +21,7 @@ from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.monitor import Stimulus
 from desmon.deployment.validity import ScalarChecks
 from desmon.deployment.ports import Command, ErrorRecord, Start
-from desmon.model.checks import visible
+from desmon.model.checks import seconds_text, visible
 from desmon.model.events import Event
 from desmon.model.scenario import Scenario
 from desmon.repository import labels as L
@@ -174,7 +174,7 @@ def format_replay(r: Replay) -> str:
     reaction raised, the errors standing after it, deployment edges."""
     lines = [f"{r.scenario.name} -- deployer {r.deployer}", ""]
     for i, step in enumerate(r.steps, 1):
-        head = f"{step.label + ' ' if step.label else ''}t={step.time:g}s  {step.event}"
+        head = f"{step.label + ' ' if step.label else ''}t={seconds_text(step.time)}s  {step.event}"
         lines.append(head)
         for cmd, ok in step.commands:
             if ok is None:

@@ -24,7 +24,7 @@ from typing import Any, Iterable, Sequence
 
 import networkx as nx
 
-from desmon.model.checks import visible
+from desmon.model.checks import seconds_text, visible
 from desmon.repository import labels as L
 
 __all__ = ["Reasons", "Frame", "capture_reasons", "render_page", "FIG5_EDGES", "COLUMNS"]
@@ -267,13 +267,23 @@ def layout(frames: Sequence[Frame]) -> tuple[dict[str, _Box], dict[str, float], 
 
 
 # --------------------------------------------------------------------------- SVG of one frame
-def _edge_id(s: str, t: str, d: dict[str, Any]) -> tuple[str, str, str, str]:
-    start = d.get("start")
-    return (s, str(d.get("label")), t, "" if start is None else f"{start:g}")
+#: an edge of a frame, as the next frame finds it again: source, label, target, its start
+#: with every digit, and which of the edges alike it is (two history records of one
+#: deployment started at the same instant are two edges)
+EdgeId = tuple[str, str, str, str, int]
 
 
-def _edges(g: nx.MultiDiGraph) -> dict[tuple[str, str, str, str], dict[str, Any]]:
-    return {_edge_id(s, t, d): d for s, t, d in g.edges(data=True) if d.get("label") in FIG5_EDGES}
+def _edges(g: nx.MultiDiGraph) -> dict[EdgeId, dict[str, Any]]:
+    out: dict[EdgeId, dict[str, Any]] = {}
+    for s, t, d in g.edges(data=True):
+        if d.get("label") in FIG5_EDGES:
+            start = d.get("start")
+            alike = (s, str(d.get("label")), t, "" if start is None else repr(start))
+            n = 0
+            while (*alike, n) in out:
+                n += 1
+            out[(*alike, n)] = d
+    return out
 
 
 def _node_state(g: nx.MultiDiGraph, n: str) -> tuple:  # type: ignore[type-arg]
@@ -364,11 +374,11 @@ def _label_svg(lab: _Label, shift: float) -> str:
 
 
 def _svg_edge(
-    boxes: dict[str, _Box], key: tuple[str, str, str, str], d: dict[str, Any], change: str, rank: int, timed: bool = True
+    boxes: dict[str, _Box], key: EdgeId, d: dict[str, Any], change: str, rank: int, timed: bool = True
 ) -> tuple[str, "_Label | None"]:
     """The edge's SVG and its label (drawn over the nodes; None for none). Without ``timed``
     (a counterexample: its repository has no clock) the labels leave out start and stop."""
-    s, label, t, _start = key
+    s, label, t, _start, _nth = key
     a, b = boxes[s], boxes[t]
     x1, y1 = _anchor(a, b)
     x2, y2 = _anchor(b, a)
@@ -388,7 +398,7 @@ def _svg_edge(
         color, dash, width = "#d73027", ' stroke-dasharray="2 4"', 1.6
     marker = "removed" if change == "removed" else label
     start, stop = (d.get(k) if timed else None for k in ("start", "stop"))
-    times = "".join(f" {k}={d[k]:g}s" for k in ("start", "stop") if timed and isinstance(d.get(k), (int, float)))
+    times = "".join(f" {k}={seconds_text(d[k])}s" for k in ("start", "stop") if timed and isinstance(d.get(k), (int, float)))
     title = f"{s} -[{label}]-> {t}{times}" + {"added": " (new at this step)", "removed": " (removed at this step)"}.get(change, "")
     path = f"M{_n(x1)},{_n(y1)} Q{_n(mx)},{_n(my)} {_n(x2)},{_n(y2)}"
     attrs = f'data-label="{_e(label)}" data-source="{_e(s)}" data-target="{_e(t)}" data-change="{change}"'
@@ -406,9 +416,9 @@ def _svg_edge(
         text = _Label(lx, ly, (f"✗ {label}", "removed"), color, "edge-label removed")
     elif change != "removed" and label in (L.DEPLOYED_ON, L.DEPLOYMENT_HISTORY, L.EXECUTABLE_ON):
         if isinstance(start, (int, float)) and isinstance(stop, (int, float)):
-            span = f"{start:g}s – {stop:g}s"
+            span = f"{seconds_text(start)}s – {seconds_text(stop)}s"
         elif isinstance(start, (int, float)):
-            span = f"since {start:g}s"
+            span = f"since {seconds_text(start)}s"
         else:
             span = ""
         text = _Label(lx, ly, (label, span) if span else (label,), color, "edge-label")
@@ -467,7 +477,7 @@ def _edge_layer(frame: Frame, prev: Frame | None, boxes: dict[str, _Box], timed:
     out: list[str] = []
     labels: list[_Label] = []
     for key, d, change in items:
-        s, label, t, _start = key
+        s, label, t, _start, _nth = key
         if s not in boxes or t not in boxes:
             continue
         rank = pairs.get((s, t), 0) if label == L.DEPLOYMENT_HISTORY else 0
@@ -482,7 +492,7 @@ def _edge_layer(frame: Frame, prev: Frame | None, boxes: dict[str, _Box], timed:
 
 def _node_layer(frame: Frame, prev: Frame | None, boxes: dict[str, _Box]) -> list[str]:
     g = frame.graph
-    active = {s for s, label, _t, _st in _edges(g) if label == L.DEPLOYED_ON}
+    active = {s for s, label, _t, _st, _nth in _edges(g) if label == L.DEPLOYED_ON}
     standing = {graph for graph, _text in frame.standing}
     out = []
     for n in sorted((n for n in g.nodes if n in boxes), key=lambda n: (boxes[n].y, boxes[n].x, n)):
@@ -540,7 +550,7 @@ def _svg_timeline(frames: Sequence[Frame], graphs: Sequence[str], platforms: Seq
         deployed = _deployed(f.graph)
         out.append(f'<g class="tl-col" data-goto="{i}" data-key="{_e(f.key)}"><title>{_e(f.title)}</title>')
         out.append(f'<rect class="tl-bg" x="{_n(x)}" y="0" width="{_n(cell)}" height="{_n(height)}" fill="transparent"/>')
-        when = f.key if f.time is None else f"{f.key} · {f.time:g}s"
+        when = f.key if f.time is None else f"{f.key} · {seconds_text(f.time)}s"
         out.append(f'<text x="{_n(x + cell / 2)}" y="18" font-size="11" font-weight="700" text-anchor="middle" fill="#222">{_e(when)}</text>')
         ev = f.event if len(f.event) <= 17 else f.event[:16] + "…"
         out.append(f'<text x="{_n(x + cell / 2)}" y="{_n(30 + 15)}" font-size="9.5" text-anchor="middle" fill="#333">{_e(ev)}</text>')

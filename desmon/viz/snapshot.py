@@ -12,6 +12,7 @@ from typing import Sequence
 
 import networkx as nx
 
+from desmon.model.checks import seconds_text
 from desmon.paths import replacing
 from desmon.viz.common import COLORS, plain_text, require_matplotlib
 
@@ -93,7 +94,7 @@ def _draw(ax, g: nx.MultiDiGraph, pos: dict[str, tuple[float, float]], title: st
                             shrinkA=0, shrinkB=2, connectionstyle=f"arc3,rad={rad}"),
         )
         if label in ("DEPLOYED_ON", "DEPLOYMENT_HISTORY", "EXECUTABLE_ON"):
-            times = "".join(f" {a}={d[a]:g}s" for a in ("start", "stop") if isinstance(d.get(a), (int, float)))
+            times = "".join(f" {a}={seconds_text(d[a])}s" for a in ("start", "stop") if isinstance(d.get(a), (int, float)))
             mx, my = (x1 + x2) / 2, (y1 + y2) / 2 + (0.32 if label == "EXECUTABLE_ON" else 0.0)
             ax.text(mx, my, f"{label}{times}", fontsize=7, color=COLORS[label], ha="center", va="center", zorder=3,
                     bbox=dict(boxstyle="round,pad=0.2", fc="white", ec=COLORS[label], lw=0.5))
