@@ -443,6 +443,71 @@ def test_a_deployer_cannot_signal_desmon(tmp_path, name, code):
     assert ("raised PermissionError" in err) if code == 2 else ("verdict: VIOLATED" in out), (out, err)
 
 
+#: a deployer module that, while imported, tries every way into desmon's process the kernel
+#: offers a process of the same user, writes what each attempt did to REACHED, and deploys nothing
+REACHES_INTO_DESMON = '''
+import ctypes, errno, fcntl, os, socket, struct
+libc = ctypes.CDLL(None, use_errno=True)
+desmon = os.getppid()
+tried = {}
+
+def attempt(name, call):
+    try:
+        result = call()
+        tried[name] = "done" if result in (None, 0) or (isinstance(result, int) and result > 0) else f"errno {ctypes.get_errno()}"
+    except OSError as exc:
+        tried[name] = f"errno {exc.errno}"
+
+def ptrace_attach():
+    r = libc.ptrace(16, desmon, 0, 0)  # PTRACE_ATTACH
+    if r == 0:
+        libc.ptrace(17, desmon, 0, 0)  # (PTRACE_DETACH: the test must not leave desmon stopped)
+    return r
+
+def vm_write():
+    buf = ctypes.create_string_buffer(8)
+    local = struct.pack("PN", ctypes.addressof(buf), 8)
+    return libc.syscall(311, desmon, ctypes.c_char_p(local), 1, ctypes.c_char_p(local), 1, 0)
+
+def mem():
+    os.close(os.open(f"/proc/{desmon}/mem", os.O_RDWR))
+
+def stdout():
+    os.close(os.open(f"/proc/{desmon}/fd/1", os.O_WRONLY))
+
+def owner():
+    a, b = socket.socketpair()
+    return fcntl.fcntl(a.fileno(), fcntl.F_SETOWN, desmon)
+
+attempt("ptrace", lambda: -1 if ptrace_attach() != 0 else 0)
+attempt("process_vm_writev", lambda: vm_write())
+attempt("proc_mem", mem)
+attempt("proc_fd", stdout)
+attempt("f_setown", owner)
+with open(REACHED, "w") as fh:
+    fh.write(repr(tried))
+
+def nothing(q, slots, changed, context_changed):
+    return
+    yield
+'''
+
+
+@pytest.mark.skipif(__import__("platform").machine() != "x86_64", reason="the worker's seccomp filter is x86-64 only")
+def test_a_deployer_cannot_reach_into_desmons_process(tmp_path):
+    """Attaching to desmon as a debugger (and making it exit 0 with a forged report),
+    writing its memory, opening its standard output through /proc, or having the kernel
+    signal it on its socket's traffic: each fails in the deployer's code, also when desmon
+    runs as root, and desmon reports the deployer that deploys nothing VIOLATED."""
+    reached = tmp_path / "reached.txt"
+    (tmp_path / "reaches.py").write_text(f"REACHED = {str(reached)!r}\n" + REACHES_INTO_DESMON)
+    code, took, out, err = _desmon("verify", COFFEE, "--no-progress", "--timeout", "20", "--deployer", f"{tmp_path / 'reaches.py'}:nothing", timeout=40)
+    assert code == 1 and "verdict: VIOLATED" in out, (code, out, err)
+    tried = eval(reached.read_text())
+    assert set(tried) == {"ptrace", "process_vm_writev", "proc_mem", "proc_fd", "f_setown"}
+    assert all(outcome.startswith("errno ") for outcome in tried.values()), tried
+
+
 #: the corrected deployer, leaving ``release`` unwatched while hand_pc is down; it learns that
 #: without reading ``up``, from whether a requirement check raises (a down platform fails
 #: "platform up" before any requirement is evaluated)

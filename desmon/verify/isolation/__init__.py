@@ -54,6 +54,7 @@ from desmon.errors import CheckerError, ModelError
 from desmon.model.system import PlatformState
 from desmon.verify.isolation.child import serve
 from desmon.verify.isolation.process import end_worker, subreaper
+from desmon.verify.isolation.seccomp import close_to_workers
 from desmon.verify.isolation.wire import (
     BLOBS, DEFAULT, Blob, Decoder, Handle, Handles, Method, encode, one_line, plain_class, recv_message, send_message,
 )
@@ -106,6 +107,7 @@ class Worker:
         sys.stdout.flush()
         sys.stderr.flush()
         subreaper()
+        close_to_workers()  # (Linux: the worker cannot open this process's /proc/PID/mem or /proc/PID/fd)
         parent = os.getpid()
         pid = os.fork()
         if pid == 0:  # pragma: no cover - the child (its coverage is the deployer's)

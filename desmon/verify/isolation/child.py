@@ -22,7 +22,7 @@ from typing import Any, Iterator
 
 from desmon.deployment.guard import plain_command, raised_text, uncallable
 from desmon.errors import ModelError
-from desmon.verify.isolation.seccomp import deny_signals
+from desmon.verify.isolation.seccomp import deny_signals, drop_capabilities
 from desmon.verify.isolation.wire import BLOBS, Blob, DefaultChecks, Method, recv_message, send_message
 
 __all__ = ["serve"]
@@ -342,7 +342,8 @@ def _become_worker(parent: int, sock: socket.socket) -> None:  # pragma: no cove
         ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG
     if os.getppid() != parent:
         os._exit(0)
-    deny_signals()  # (Linux x86-64: no signal to desmon, or to anyone, from the worker or what it starts)
+    drop_capabilities()  # (a worker of root's: no CAP_SYS_PTRACE to open desmon's /proc files)
+    deny_signals()  # (Linux x86-64: no signal to desmon, or to anyone, and no reach into it, from the worker or what it starts)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C is desmon's: it ends the worker
     for sig in (signal.SIGALRM, signal.SIGTERM):
         signal.signal(sig, signal.SIG_DFL)
