@@ -508,6 +508,82 @@ def test_a_deployer_cannot_reach_into_desmons_process(tmp_path):
     assert all(outcome.startswith("errno ") for outcome in tried.values()), tried
 
 
+#: pick_place_camera whose starts never fail
+NO_START_FAILS = '''
+import dataclasses, importlib.util
+spec = importlib.util.spec_from_file_location("base", {base!r})
+base = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(base)
+scenario = dataclasses.replace(base.scenario, name="no_start_fails", checker=dataclasses.replace(base.scenario.checker, start_failures=0))
+'''
+
+#: a wrong deployer (it keeps force_slip_detector on wrist_pc after wrist_ft fails, and raises
+#: no error) that decides with a copy of the requirements whose Reads has its derived
+#: ``hosts`` emptied: equal to the real one (equality leaves derived fields out), it
+#: reached the table engine's tables before desmon's own checks asked the same question
+FORGED_READS = '''
+import copy
+
+from desmon.deployment.ports import DEPLOYMENT_FAILED, NO_ACCEPTABLE_PLATFORMS, STOPPING_FAILED, RaiseError, Start, Stop
+from desmon.deployment.validity import check_platform
+
+
+def _forged(spec):
+    reads = []
+    for r in spec.reads:
+        f = copy.copy(r)
+        object.__setattr__(f, "hosts", ())  # (compare=False: still == r, same hash)
+        reads.append(f)
+    return tuple(spec.requirements) + tuple(reads)
+
+
+def react(q, slots, changed, context_changed):
+    """on its sensor's own platform; decides with a requirement copy whose sensor never fails"""
+    wanted = {g for slot in slots for g in slot}
+    for g, p in q.deployments():
+        if g not in wanted:
+            if not (yield Stop(g, p)):
+                yield RaiseError(STOPPING_FAILED, g, p)
+    states = q.platform_states()
+    for slot in slots:
+        for g in slot:
+            spec = q.deployment_information(g)
+            reqs = _forged(spec)
+            hosts = {p for r in spec.reads for _d, p in r.devices}
+            ok = [s.name for s in states if s.name in hosts and not check_platform(reqs, s, spec.graph, checks=q.checks)]  # next to its sensor only
+            running = [p for p in q.deployed_on(g)]
+            keep = next((p for p in running if p in ok), None)
+            for p in running:
+                if p != keep:
+                    yield Stop(g, p)
+            if keep is not None:
+                break
+            placed = False
+            for p in ok:
+                if (yield Start(g, p)):
+                    placed = True
+                    break
+                yield RaiseError(DEPLOYMENT_FAILED, g, p)
+            if placed:
+                break
+            if not ok:
+                yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g)
+'''
+
+
+@pytest.mark.parametrize("engine", ["auto", "table", "direct"])
+def test_a_requirement_forged_in_a_derived_field_never_holds(tmp_path, engine):
+    """desmon derives a record's derived fields again from the fields the worker gave: the
+    forged Reads checks as the real one in desmon's process, so no engine verifies the
+    deployer (VIOLATED, or refused as behaving unlike itself)."""
+    (tmp_path / "scenario.py").write_text(NO_START_FAILS.format(base=str(ROOT / "scenarios" / "pick_place_camera.py")))
+    (tmp_path / "forged.py").write_text(FORGED_READS)
+    code, _took, out, err = _desmon("verify", str(tmp_path / "scenario.py"), "--no-progress", "--engine", engine,
+                                    "--deployer", f"{tmp_path / 'forged.py'}:react", timeout=120)
+    assert code in (1, 2) and "verdict: HOLDS" not in out, (code, out, err)
+    assert "verdict: VIOLATED" in out if code == 1 else "nondeterministic" in err
+
+
 #: the corrected deployer, leaving ``release`` unwatched while hand_pc is down; it learns that
 #: without reading ``up``, from whether a requirement check raises (a down platform fails
 #: "platform up" before any requirement is evaluated)

@@ -311,8 +311,32 @@ class Resolve:
             fields = record_fields(obj)
             for name, value in fields.items():
                 object.__setattr__(obj, name, self(value))
+            derive(obj, kind)
             return obj, list(fields.values())
         return obj, []
+
+
+def derive(obj: Any, kind: type) -> None:
+    """The fields of a record the child built that are not its to give (``init=False``:
+    derived from the others, as ``Reads.hosts`` from its devices) computed again by desmon:
+    equal records (equality leaves derived fields out) then behave alike in desmon's checks
+    and tables. A record its class cannot derive them for is refused."""
+    derived = [f for f in dataclasses.fields(kind) if not f.init]
+    if not derived:
+        return
+    computed = False
+    for f in derived:
+        if f.default is not dataclasses.MISSING:
+            object.__setattr__(obj, f.name, f.default)
+        elif f.default_factory is not dataclasses.MISSING:
+            object.__setattr__(obj, f.name, f.default_factory())
+        else:
+            computed = True  # (its class's __post_init__ computes it)
+    if computed:
+        try:
+            obj.__post_init__()
+        except Exception as exc:  # (ModelError, TypeError, ValueError of a record built of odd fields)
+            raise pickle.UnpicklingError(f"a {kind.__name__} record whose fields desmon cannot derive the rest from ({type(exc).__name__})") from None
 
 
 def record_fields(obj: Any) -> dict[str, Any]:
