@@ -740,6 +740,46 @@ def tires_counting_in_a_generator(q, slots, changed, context_changed):
     yield from _desmon(q, slots, changed, context_changed)
 
 
+def _hidden_in_an_inner_function():
+    def tick():
+        tick.calls += 1  # (an attribute of a function held only in the closure below)
+        return tick.calls
+    tick.calls = 0
+
+    def tires_counting_in_an_inner_function(q, slots, changed, context_changed):
+        '''Works for 1,000 reactions, then does nothing.'''
+        if tick() > 1000:
+            return
+        yield from _desmon(q, slots, changed, context_changed)
+    return tires_counting_in_an_inner_function
+
+
+tires_counting_in_an_inner_function = _hidden_in_an_inner_function()
+
+
+class _Counter:
+    __slots__ = ("n",)
+
+    def __init__(self):
+        self.n = 0
+
+    def __repr__(self):
+        return "a counter"  # (the same text whatever it holds)
+
+
+def _hidden_in_slots(counter=_Counter()):
+    def tires_counting_in_slots(q, slots, changed, context_changed):
+        '''Works for 1,000 reactions, then does nothing.'''
+        counter.n += 1
+        if counter.n > 1000:
+            return
+        yield from _desmon(q, slots, changed, context_changed)
+    return tires_counting_in_slots
+
+
+tires_counting_in_slots = _hidden_in_slots()
+
+
 def stateless(q, slots, changed, context_changed):
     yield from _desmon(q, slots, changed, context_changed)
 """
@@ -753,7 +793,8 @@ def memory(tmp_path: Path) -> str:
 
 
 @pytest.mark.parametrize("engine", ["table", "direct"])
-@pytest.mark.parametrize("name", ["tires", "tires_early", "raises_once_when_asked_again", "tires_counting_in_a_generator"])
+@pytest.mark.parametrize("name", ["tires", "tires_early", "raises_once_when_asked_again", "tires_counting_in_a_generator",
+                                  "tires_counting_in_an_inner_function", "tires_counting_in_slots"])
 def test_a_deployer_with_memory_is_caught_never_holds(memory, engine, name):
     """A deployer that counts its calls and stops after some (even more than the search
     ran: the state its module keeps changed), or raises once in a re-run: refused, exit 2."""

@@ -33,7 +33,7 @@ import math
 import os
 import sys
 from pathlib import Path
-from types import FunctionType, GeneratorType, ModuleType
+from types import FunctionType, GeneratorType, MethodType, ModuleType
 from typing import Any, Iterator
 
 from desmon.deployment.deployer import DEPLOYERS, Deployer
@@ -148,21 +148,53 @@ def _text(value: Any) -> str:
             import inspect
 
             return f"generator {value.__qualname__} {inspect.getgeneratorstate(value)} {inspect.getgeneratorlocals(value)!r}"
-        held = vars(value) if hasattr(value, "__dict__") and not isinstance(value, type) else None
+        held = _attributes(value) if not isinstance(value, type) else None
         return repr(value) + (f" {held!r}" if held else "")
     except Exception:  # a user's __repr__ may fail: nothing to compare
         return ""
 
 
-def _function_state(fn: Any) -> str:
+def _attributes(value: Any) -> dict[str, Any]:
+    """An object's own attributes: its ``__dict__`` and its slots (a repr that never
+    changes shows neither)."""
+    held = dict(vars(value)) if hasattr(value, "__dict__") else {}
+    for kind in type(value).__mro__:
+        slots = kind.__dict__.get("__slots__", ())
+        for name in (slots,) if isinstance(slots, str) else slots:
+            if name not in ("__dict__", "__weakref__") and name not in held:
+                with contextlib.suppress(AttributeError):
+                    held[name] = getattr(value, name)
+    return held
+
+
+def _function_state(fn: Any, seen: set[int] | None = None) -> str:
+    """What a function of the deployer's module holds: its defaults, attributes and
+    closure cells, a function in a cell (a counter in an inner function's attribute) by
+    what it holds in turn, a bound method by its object's attributes."""
+    seen = set() if seen is None else seen
+    if id(fn) in seen:
+        return "(met before)"
+    seen.add(id(fn))
     cells = []
     for cell in getattr(fn, "__closure__", None) or ():
         try:
             cells.append(cell.cell_contents)
         except ValueError:  # an empty cell
             cells.append(None)
-    kept = [_text(c) if isinstance(c, GeneratorType) else c for c in cells if not callable(c)]
-    return _text((fn.__defaults__, fn.__kwdefaults__, vars(fn), kept))
+    defaults = [_held(d, seen) for d in fn.__defaults__ or ()]
+    keywords = {k: _held(v, seen) for k, v in (fn.__kwdefaults__ or {}).items()}
+    return _text((defaults, keywords, {k: _held(v, seen) for k, v in vars(fn).items()}, [_held(c, seen) for c in cells]))
+
+
+def _held(value: Any, seen: set[int]) -> Any:
+    """A value a function holds (a default, an attribute, a closure cell) as :func:`_function_state` compares it."""
+    if isinstance(value, FunctionType):
+        return _function_state(value, seen)
+    if isinstance(value, MethodType):
+        return (_held(value.__func__, seen), _text(_attributes(value.__self__)))
+    if isinstance(value, type):
+        return value.__qualname__
+    return _text(value)  # (an object by its repr and its own attributes, slots included)
 
 
 def deployer_state(deployer: Deployer) -> dict[str, str]:
@@ -206,7 +238,11 @@ def module_state(namespace: dict[str, Any] | None) -> dict[str, str]:
             out[name] = _function_state(value)
         elif isinstance(value, type):
             for attr, item in list(vars(value).items()):
-                if not attr.startswith("__") and not callable(item) and not isinstance(item, (property, staticmethod, classmethod)):
+                if isinstance(item, (staticmethod, classmethod)):
+                    item = item.__func__
+                if isinstance(item, FunctionType):
+                    out[f"{name}.{attr}"] = _function_state(item)
+                elif not attr.startswith("__") and not callable(item) and not isinstance(item, property):
                     out[f"{name}.{attr}"] = _text(item)
         else:
             out[name] = _text(value)
