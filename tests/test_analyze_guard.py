@@ -233,3 +233,34 @@ def test_an_exponential_that_overflows_is_taken_again_shorter_without_numpys_war
         assert done.returncode == 0 and done.stderr == "", done.stderr
         printed[duration] = [line for line in done.stdout.splitlines() if line.startswith("Per mission")]
     assert printed["1e-6"] == printed["1e-5"] and printed["1e-6"]
+
+
+#: the repository's first fit that does nothing after LIMIT reactions: a counter in a module global
+TIRES = '''
+import importlib.util
+spec = importlib.util.spec_from_file_location("first_fit", {first_fit!r})
+first_fit = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(first_fit)
+CALLS = [0]
+
+def tires(q, slots, changed, context_changed):
+    CALLS[0] += 1
+    if CALLS[0] > {limit}:
+        return
+    yield from first_fit.first_fit(q, slots, changed, context_changed)
+'''
+
+
+@pytest.mark.parametrize("limit", [300, 10**6])
+def test_analyze_refuses_a_deployer_that_keeps_state_as_verify_does(tmp_path, limit):
+    """The chain of a deployer that counts its reactions is the chain of no deployer at
+    all: refused in one line (exit 2), as desmon verify refuses it, whether or not the
+    counter ran out while the chain was built; the stateless first fit is analysed."""
+    (tmp_path / "tires.py").write_text(TIRES.format(first_fit=str(ROOT / "docs" / "examples" / "first_fit.py"), limit=limit))
+    scenario = str(ROOT / "scenarios" / "pick_place_camera.py")
+    done = warm.run(["analyze", scenario, "--trials", "1", "--deployer", f"{tmp_path / 'tires.py'}:tires"], timeout=120)
+    [line] = done.stderr.strip().splitlines()[-1:]
+    assert done.returncode == 2 and "keeps state between reactions: its module's CALLS changed" in line, done.stdout + done.stderr
+    assert "Per mission" not in done.stdout
+    done = warm.run(["analyze", scenario, "--trials", "1", "--deployer", f"{ROOT / 'docs' / 'examples' / 'first_fit.py'}:FIRST_FIT"], timeout=120)
+    assert done.returncode == 0 and "Long run, per hour" in done.stdout, done.stderr

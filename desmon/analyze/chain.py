@@ -66,6 +66,7 @@ from desmon.model.system import PlatformState
 from desmon.sim.processes import recognised_context
 from desmon.verify.environment import variable_kind
 from desmon.verify.state import Key
+from desmon.verify.memory import check_module_state
 from desmon.verify.system import RECHECK_EVERY, RECHECK_FIRST, TransitionSystem, crash_of, same_again
 
 from desmon.analyze.markov import AnalysisError, BudgetExceeded, MarkovWorld, chain_bounds, no_budget
@@ -609,6 +610,7 @@ def build_chain(
     chain.build_s = time.perf_counter() - t0 - trials_s
     chain.trials_s = trials_s
     chain.reactions = b.reactions
+    check_module_state(b.system)  # (a user's deployer: refused if its module kept state between reactions, as desmon verify refuses it)
     return chain
 
 

@@ -36,7 +36,7 @@ from desmon.errors import NondeterminismError
 from desmon.verify.deployers import deployer_state, fresh_deployer, users_spec, worker_state
 from desmon.verify.system import TransitionSystem, command_key, crash_of, nondeterminism
 
-__all__ = ["remembers", "rerun_fresh", "check_memory", "FRESH_NOTE"]
+__all__ = ["remembers", "rerun_fresh", "check_memory", "check_module_state", "FRESH_NOTE"]
 
 #: what the refusal of a reaction that differed in the fresh instance adds
 FRESH_NOTE = (
@@ -58,6 +58,16 @@ def check_memory(system: TransitionSystem) -> None:
     if system.reactions is None:
         return
     rerun_fresh(system)
+    check_module_state(system)
+
+
+def check_module_state(system: TransitionSystem) -> None:
+    """The state a user's deployer's module keeps now compared with what it kept just after
+    it was imported (``system.deployer_state``; in its worker, that worker's own); a change
+    is refused (:class:`~desmon.errors.NondeterminismError`). ``desmon analyze`` asks this
+    of the deployer that built its chain, ``desmon verify`` after its fresh re-run."""
+    if system.deployer_state is None:
+        return
     pair = worker_state(system.core.deployer)  # (its worker's own: as imported there, and now)
     before, after = pair if pair is not None else (system.deployer_state or {}, deployer_state(system.core.deployer))
     for name, was in before.items():
