@@ -238,3 +238,44 @@ def test_replay_reports_a_reactions_transition_properties_as_the_run_does(name):
     ran = {(t, n) for t, n, _m in run.violations}
     assert any(n == "preferred-when-possible" for _t, n in replayed)
     assert {n for _t, n in replayed} == {n for _t, n in ran}
+
+
+#: a model that declares no device: a pure platform study, whose graph reads a kind nothing provides
+PLATFORM_STUDY = '''
+from desmon.model import RobotBuilder
+from desmon.model.scenario import Scenario
+from desmon.sim.world import Step, World
+from desmon.verify.bounds import Bounds
+
+robot = RobotBuilder("study")
+robot.platform("pc1", memory=512)
+with robot.rpsl.perception_graph("fd") as g:
+    g.sensor("w", reads="force_sensor")
+    g.processing("thr", inputs=["w"])
+robot.depsl.deployment_specification("fd").add_constraint("capacity", "memory", 100)
+robot.rules({"grasp": "fd", "hold": "fd", "release": "fd"})
+scenario = Scenario(
+    name="study", model=robot.build(),
+    world=World(task=(Step("idle", 5.0), Step("grasp", 2.0), Step("hold", 5.0), Step("release", 2.0)), repeat=True, horizon=140.0, signals=False),
+    checker=Bounds(task={"idle": ("grasp",), "grasp": ("hold",), "hold": ("release",), "release": ("idle",)}, initial_action="idle"),
+)
+'''
+
+
+def test_in_a_pure_platform_study_no_engine_counts_an_input_as_lost(tmp_path):
+    """No device is declared, so the graph's input imposes nothing: placement finds pc1
+    acceptable, and neither the run nor the chain counts unmonitored time to a lost input
+    (before, both counted every risky second so)."""
+    path = tmp_path / "study.py"
+    path.write_text(PLATFORM_STUDY)
+    from desmon.sim.metrics import run_figures
+
+    result = simulate(load_scenario(str(path)), seed=1)
+    figures = run_figures(result.metrics, len(result.violations))
+    assert figures["risky_time_s"] > 0 and figures["input_lost_s"] == 0
+    assert figures["exposure_s"] < 0.2 * figures["risky_time_s"]
+    out = tmp_path / "a.json"
+    done = warm.run(["analyze", str(path), "--json", str(out)], timeout=120)
+    assert done.returncode == 0, done.stderr
+    causes = json.loads(out.read_text())["unmonitored_by_cause_s_per_hour"]
+    assert causes["input_lost"] == 0 and causes["starting"] > 0

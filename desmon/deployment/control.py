@@ -81,7 +81,9 @@ class ControlRules:
     def input_devices(self, graph: str, platform: str) -> tuple[tuple[str, tuple[Device, ...]], ...]:
         """``(kind, devices)`` per device kind ``graph`` reads when it runs on ``platform``:
         the platform's own devices of that kind if it has any, else every device of that
-        kind (in declaration order). The SimPy world wires a detector's inputs this way."""
+        kind (in declaration order); a kind no device provides is left out, as rule 3
+        leaves it (a pure platform study: nothing to read, so no input to lose). The SimPy
+        world wires a detector's inputs this way, and desmon analyze its chain's."""
         key = (graph, platform)
         found = self._wiring.get(key)
         if found is None:
@@ -89,7 +91,9 @@ class ControlRules:
             out = []
             for kind in model.graph(graph).device_kinds:
                 local = tuple(d for d in model.devices if d.kind == kind and d.platform == platform)
-                out.append((kind, local or tuple(d for d in model.devices if d.kind == kind)))
+                devices = local or tuple(d for d in model.devices if d.kind == kind)
+                if devices:
+                    out.append((kind, devices))
             found = self._wiring[key] = tuple(out)
         return found
 
