@@ -68,6 +68,7 @@ def _run_script(path: str | Path, p: Path, params: Mapping[str, str], declared: 
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
     script_folder_on_path(p)
+    imported = set(sys.modules)
     try:
         with overriding(params, str(path)) as found, _real_ctrl_c() as interrupted, _process_kept(), _folder_and_builtins_kept(), \
                 contextlib.redirect_stdout(sys.stderr):
@@ -83,7 +84,27 @@ def _run_script(path: str | Path, p: Path, params: Mapping[str, str], declared: 
         raise _script_error(path, exc) from None
     finally:
         sys.modules.pop(name, None)
+        _forget_helpers(p.resolve().parent, imported)
     return module
+
+
+def _forget_helpers(folder: Path, before: set[str]) -> None:
+    """Drop from ``sys.modules`` the modules the script imported from its own folder (or
+    below it): the next load of a scenario imports them afresh, so what one load changed
+    in a helper (a list it appended to, the parameters it declared) never reaches the
+    next (a sweep loads many points in one process). desmon's own modules and installed
+    packages stay, wherever the folder is (a script beside a virtual environment)."""
+    new = [n for n in sys.modules if n not in before and n != "desmon" and not n.startswith("desmon.")]
+    if not new:
+        return
+    kept = [Path(p).resolve() for p in {sys.prefix, sys.base_prefix, sys.exec_prefix, str(Path(__file__).parent)}]
+    for name in new:
+        file = getattr(sys.modules.get(name), "__file__", None)
+        if isinstance(file, str):
+            with contextlib.suppress(OSError, ValueError):
+                where = Path(file).resolve()
+                if where.is_relative_to(folder) and not any(where.is_relative_to(k) for k in kept):
+                    sys.modules.pop(name, None)
 
 
 def _failed(path: str | Path) -> str:

@@ -42,9 +42,11 @@ def test_a_reference_to_os_exit_the_script_kept_is_the_real_call_after_loading(t
     import subprocess
     import sys
 
-    (tmp_path / "kept_calls.py").write_text("KEPT = []\n")
-    script = tmp_path / "keeps.py"
-    script.write_text("import kept_calls\n" + FORKS + "kept_calls.KEPT.append(KEPT)\n")
+    (tmp_path / "lib").mkdir()
+    (tmp_path / "lib" / "kept_calls.py").write_text("KEPT = []\n")  # (outside the script's folder: it stays imported)
+    (tmp_path / "scenario").mkdir()
+    script = tmp_path / "scenario" / "keeps.py"
+    script.write_text(f"import sys\nsys.path.insert(0, {str(tmp_path / 'lib')!r})\nimport kept_calls\n" + FORKS + "kept_calls.KEPT.append(KEPT)\n")
     # in a process of its own: after loading, the kept call is the real os._exit and ends it with 5
     program = (f"import sys; from desmon.loader import load_scenario; load_scenario({str(script)!r}); "
                "sys.modules['kept_calls'].KEPT[0](5)")
@@ -98,3 +100,49 @@ def test_a_script_that_changes_folder_or_a_builtin_leaves_desmon_its_own(tmp_pat
     assert "verdict: VIOLATED" in capsys.readouterr().out
     assert (here / "out" / "cex.json").exists() and (elsewhere / "out" / "cex.json").read_text() == "another file\n"
     assert os.getcwd() == str(here) and print is not None
+
+
+#: a scenario whose task grows a list its helper module beside it holds, and whose parameters the helper declares
+GROWS = '''
+from helper import STEPS, knobs
+from desmon.model.cob3 import care_o_bot
+from desmon.model.scenario import Scenario
+from desmon.sim.world import Step, World
+
+p = knobs()
+STEPS.append(Step("grasp", 2.0))
+STEPS.append(Step("move_base", p.carry))
+scenario = Scenario(name="grows", model=care_o_bot().build(), world=World(task=tuple(STEPS), horizon=60.0, signals=False))
+'''
+HELPER = '''
+from desmon.model.params import parameters
+STEPS = []
+
+def knobs():
+    return parameters(carry=5.0)
+'''
+
+
+def test_each_load_imports_the_helpers_beside_the_script_afresh(tmp_path: Path) -> None:
+    """Loads of several points in one process (a sweep's) are the loads of separate runs:
+    what one load appended to a helper's list, or the parameters a helper declared, does
+    not carry into the next."""
+    (tmp_path / "grows.py").write_text(GROWS)
+    (tmp_path / "helper.py").write_text(HELPER)
+    first = load_scenario(str(tmp_path / "grows.py"), {"carry": "5"})
+    again = load_scenario(str(tmp_path / "grows.py"), {"carry": "10"})
+    assert [s.duration for s in first.world.task] == [2.0, 5.0]
+    assert [s.duration for s in again.world.task] == [2.0, 10.0]
+
+
+def test_the_shared_background_loads_cannot_be_changed_by_one_scenario(tmp_path: Path) -> None:
+    """``desmon.model.cob3.LOADS`` is read-only: a script that writes into it (and so into
+    every later load in the process) is refused in one line, and one that writes its own
+    copy loads."""
+    from desmon.model.cob3 import LOADS
+
+    before = dict(LOADS)
+    (tmp_path / "writes.py").write_text("from desmon.model.cob3 import LOADS\nLOADS['hand_pc'] = 250\n")
+    with pytest.raises(ScenarioError, match="does not support item assignment"):
+        load_scenario(str(tmp_path / "writes.py"))
+    assert dict(LOADS) == before

@@ -8,6 +8,7 @@ release -> force); a scenario may add platforms or devices before ``build()``.
 
 from __future__ import annotations
 
+from types import MappingProxyType
 from typing import Mapping
 
 from desmon.model import GRASP, MOVE_BASE, RELEASE, RobotBuilder
@@ -18,7 +19,9 @@ FORCE = "force_slip_detector"
 TACTILE = "tactile_slip_detector"
 COMBINED = "combined_slip_detector"
 PADS = ("thumb_prox", "thumb_dist", "f1_prox", "f1_dist", "f2_prox", "f2_dist")
-LOADS = {"torso_pc": 600, "arm_pc": 300, "hand_pc": 100}
+#: the background memory load of each platform in MB (read-only: a scenario that wants other
+#: loads writes its own, ``{**LOADS, "hand_pc": 250}``, rather than changing every later load's)
+LOADS: Mapping[str, int] = MappingProxyType({"torso_pc": 600, "arm_pc": 300, "hand_pc": 100})
 
 
 def graphs(robot: RobotBuilder, tactile_kind: str = "tactile_pad") -> None:
