@@ -187,3 +187,16 @@ def test_the_timeline_raises_the_record_error_itself_not_a_wrapper(tmp_path):
     with pytest.raises(ScenarioError) as info:
         build_timeline(records)
     assert str(info.value).startswith("trace record 5 (")
+
+
+def test_an_initial_join_of_a_platform_the_lease_drives_is_refused():
+    """The simulation kept an initially joined platform for good, while desmon analyze's
+    chain leased and released it: two meanings of one scenario (the exact value then fell
+    outside the simulated interval). One master of a platform's presence, as in changes=."""
+    from desmon.loader import load_scenario
+
+    base = load_scenario(str(Path(__file__).resolve().parents[1] / "scenarios" / "cloud_offload.py"))
+    assert base.world.lease is not None
+    with pytest.raises(ScenarioError, match="platform 'edge' has two masters of its presence: .* in the scenario's initial="):
+        dataclasses.replace(base, initial=base.initial + (PlatformJoin("edge"),))
+    dataclasses.replace(base, initial=base.initial)  # (without the join: accepted)

@@ -33,7 +33,7 @@ from desmon.model.checks import (
     strict_init,
     suggest,
 )
-from desmon.model.events import Event, LoadChange, PlatformEvent, RequirementChange, event_types
+from desmon.model.events import Event, LoadChange, PlatformEvent, PlatformJoin, PlatformLeave, RequirementChange, event_types
 from desmon.model.graph import PerceptionGraph
 from desmon.model.scenario import Scenario, TimedEvent, event_problem
 from desmon.model.system import SystemModel, check_action
@@ -462,24 +462,25 @@ class World:
             )
         if self.lease is not None and not isinstance(self.lease, Lease):
             raise ScenarioError(f"world: lease = {self.lease!r} is not a Lease: write Lease(idle_s=60)")
-        self._check_one_master(changes)
+        self._check_one_master([(f"at t={te.time:g} in changes=", te.event) for te in changes])
 
-    def _check_one_master(self, changes: tuple[TimedEvent, ...]) -> None:
-        """A platform's presence has one master: the lease, or scripted joins and leaves.
+    def _check_one_master(self, events: list[tuple[str, object]]) -> None:
+        """A platform's presence has one master: the lease, or scripted joins and leaves
+        (``events``: each with where it is written).
 
         Both at once give a run nobody can reason about (the script joins what the lease
-        would release, or leaves what the lease hosts on). A lease without platforms
+        would release, or leaves what the lease hosts on; an initial join the simulation
+        keeps for good, where the Markov chain leases it). A lease without platforms
         leases every on-demand platform, and only on-demand platforms join and leave.
         """
         if self.lease is None:
             return
-        for te in changes:
-            ev = te.event
+        for where, ev in events:
             if isinstance(ev, PlatformEvent) and (not self.lease.platforms or ev.platform in self.lease.platforms):
                 leased = f"lease=Lease(platforms={self.lease.platforms!r})" if self.lease.platforms else "lease=Lease() (every on-demand platform)"
                 raise ScenarioError(
                     f"world: platform {ev.platform!r} has two masters of its presence: {leased} and the scripted "
-                    f"'{ev}' at t={te.time:g} in changes=: let the lease drive it, or script its joins, not both "
+                    f"'{ev}' {where}: let the lease drive it, or script its joins, not both "
                     "(drop lease=, name other platforms in Lease(platforms=...), or drop its PlatformJoin / PlatformLeave)"
                 )
 
@@ -561,6 +562,7 @@ class World:
             if problem is not None:
                 raise ScenarioError(f"{where}: at t={te.time:g}: {problem}")
         _check_runtime_changes(self, model, where, changes)
+        self._check_one_master([("in the scenario's initial=", ev) for ev in scenario.initial if isinstance(ev, (PlatformJoin, PlatformLeave))])
         check_components(self, scenario, where)
         check_initial_loads(self, scenario, where)
         _check_rates_against(self, model, where)
