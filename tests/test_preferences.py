@@ -226,8 +226,11 @@ def test_rebalance_is_refused_without_a_preference():
         (lambda s: s.prefer("spread", wieght=2), "did you mean 'weight'"),
         (lambda s: s.prefer("spread").rebalance(-1), "min_gain of 'g' = -1 is negative"),
         (lambda s: s.prefer("spread").rebalance(math.inf), "is not finite"),
+        (lambda s: s.prefer("spread", weight=1e308), "weight 1e+308: over 1000, a score keeps none of the 12 decimals"),
+        (lambda s: s.prefer("spread", weight=1000.5), "scale every weight of the specification down alike"),
     ],
-    ids=["kind-typo", "no-resource", "weight-nan", "weight-zero", "weight-text", "keyword-typo", "rebalance-negative", "rebalance-inf"],
+    ids=["kind-typo", "no-resource", "weight-nan", "weight-zero", "weight-text", "keyword-typo", "rebalance-negative", "rebalance-inf",
+         "weight-overflows", "weight-past-the-decimals"],
 )
 def test_a_bad_preference_is_refused_with_one_line_naming_it(call, fragment):
     with pytest.raises(ModelError) as info:

@@ -582,6 +582,9 @@ class Reads(Requirement):
 REQUIREMENT_KINDS = requirement_kinds()
 
 
+#: the largest preference weight: a score of weights above it keeps none of its decimals
+MAX_WEIGHT = 1e3
+
 #: Soft preference kinds and their arguments (see :class:`Preference`).
 PREFERENCE_KINDS = ("vendor", "attribute", "most_free", "least_loaded", "colocate", "spread")
 _PREFERENCE_USAGE = {
@@ -646,6 +649,12 @@ class Preference(Constraint):
                 check_name(f"preference {self.kind!r} argument", a)
         object.__setattr__(self, "args", tuple(str(a) for a in args))
         check_number(f"preference {self.kind!r} weight", self.weight, positive=True)
+        if self.weight > MAX_WEIGHT:
+            raise ModelError(
+                f"preference {self.kind!r} weight {self.weight:g}: over {MAX_WEIGHT:g}, a score keeps none of the 12 decimals "
+                "scores are compared to (double precision holds about 16 digits) and near 1e308 it overflows, so platforms "
+                "would tie by accident: scale every weight of the specification down alike"
+            )
 
     def describe(self) -> str:
         inner = {
