@@ -666,6 +666,15 @@ def test_a_scripted_slip_while_holding_is_accepted() -> None:
     assert world(task=task, slips=(Slip(8.0),)).slips == (Slip(8.0),)
 
 
+def test_two_scripted_slips_at_one_moment_are_refused() -> None:
+    """Three slips at t=8 (one of them up) counted three injected and three detected from
+    one moment's alarm; slips a moment apart are two slips."""
+    task = (Step("idle", 5.0), Step("grasp", 2.0), Step("hold", 3.0))
+    msg = refused(ScenarioError, lambda: world(task=task, slips=(Slip(8.0), Slip(8.5), Slip(8.0, "up"), Slip(8.0))))
+    assert "world: slips lists 3 slips at t=8: the object in the hand starts to slip once at a moment" in msg
+    assert len(world(task=task, slips=(Slip(8.0), Slip(8.5))).slips) == 2
+
+
 def test_a_rule_that_selects_nothing_is_refused() -> None:
     assert "rule for context 'grasp' selects nothing" in refused(ModelError, lambda: robot().rules({"grasp": []}))
 

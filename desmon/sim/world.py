@@ -421,6 +421,13 @@ class World:
         slips = check_items("world: slips", self.slips, Slip, error=err, example="slips=(Slip(10.0, 'down', 'pulled'),)")
         for slip in slips:
             self._before_horizon(f"slip at t={slip.time:g}", slip.time)
+        times = [s.time for s in slips]
+        twice = sorted({t for t in times if times.count(t) > 1})
+        if twice:
+            raise ScenarioError(
+                f"world: slips lists {times.count(twice[0])} slips at t={twice[0]:g}: the object in the hand starts to slip once "
+                "at a moment (each would count as injected, and one alarm detect them all); give each slip its own time"
+            )
         object.__setattr__(self, "slips", slips)
         if slips and all(step.action in ACTIONS for step in self.task):
             # with a model's own actions in the task this waits for check_against (the model says what they are like)
