@@ -141,6 +141,26 @@ def test_the_no_rule_warning_says_its_seconds_are_the_written_steps_where_the_fi
         assert "its 48 s of the 900 s horizon at the steps' written lengths (the figures draw the lengths, so theirs differ)" in warning(argv)
 
 
+def test_the_no_rule_warning_counts_a_task_exponential_timing_repeats(tmp_path, capsys):
+    """World(repeat=False) runs the task once under fixed timing, but exponential timing
+    repeats it (its task is the chain's cycle): the warning's seconds follow the run's."""
+    path = tmp_path / "once.py"
+    path.write_text(
+        "from desmon.model.cob3 import care_o_bot\nfrom desmon.model.scenario import Scenario\n"
+        "from desmon.sim.world import Step, World\n"
+        "scenario = Scenario(name='once', model=care_o_bot().build(), world=World(task=(Step('idle', 10.0), Step('grasp', 2.0), "
+        "Step('hold', 8.0), Step('release', 2.0)), horizon=220.0, signals=False))\n"
+    )
+
+    def warning(argv):
+        main(argv)
+        (line,) = [x for x in capsys.readouterr().err.splitlines() if "warning: risky action 'hold'" in x]
+        return line
+
+    assert "its 8 s of the 220 s horizon count" in warning(["run", str(path)])
+    assert "its 80 s of the 220 s horizon at the steps' written lengths" in warning(["run", str(path), "--timing", "exponential"])
+
+
 def test_a_start_waiting_out_its_latency_on_a_crashed_computer_is_platform_down_not_starting():
     """Under fixed timing a start waits out its latency with no instance yet. When its computer
     crashes meanwhile, that wait is "platform down or input lost", as the chain asks an

@@ -198,7 +198,7 @@ def warn_uncovered(scenario: Scenario, horizon: float | None = None, *, drawn: b
 
     if isinstance(scenario.world, Fleet):  # every robot's task, over the fleet's one horizon
         fleet = scenario.world
-        robots = [(r.model, [(s.action, s.duration) for s in world_of(r).task], world_of(r).repeat) for r in fleet.robots]
+        robots = [(r.model, [(s.action, s.duration) for s in world_of(r).task], world_of(r).repeats) for r in fleet.robots]
         for line in fleet_no_rule_warnings(robots, fleet.horizon if horizon is None else horizon):
             print(f"desmon: {line}", file=sys.stderr)
         return
@@ -206,7 +206,7 @@ def warn_uncovered(scenario: Scenario, horizon: float | None = None, *, drawn: b
     if world is None:
         return
     drawn = world.timing == "exponential" if drawn is None else drawn
-    for line in no_rule_warnings(scenario.model, ((s.action, s.duration) for s in world.task), world.horizon if horizon is None else horizon, world.repeat, drawn=drawn):
+    for line in no_rule_warnings(scenario.model, ((s.action, s.duration) for s in world.task), world.horizon if horizon is None else horizon, world.repeats, drawn=drawn):
         print(f"desmon: {line}", file=sys.stderr)
 
 

@@ -386,6 +386,12 @@ class World:
                     "or use --until to stop a run early"
                 )
 
+    @property
+    def repeats(self) -> bool:
+        """Whether a run repeats the task: ``repeat=True``, or exponential timing (its task
+        is the Markov world's cycle, whatever ``repeat`` says)."""
+        return self.repeat or self.timing == "exponential"
+
     def _check_scalars(self) -> None:
         """The horizon, flags, description, latencies, delays, blocks, slip rate and start failure."""
         err = ScenarioError
@@ -710,7 +716,7 @@ def expand_task(world: World, horizon: float, seed: int = 0) -> tuple[Segment, .
     segment's ``context`` is the step's action. Under exponential timing the task
     repeats and each step lasts an Erlang-``phases`` time of mean its duration, drawn
     from ``seed``. More than :data:`MAX_TASK_STEPS` of them are refused (a ScenarioError)."""
-    if world.repeat or world.timing == "exponential":
+    if world.repeats:
         cycle = sum(step.duration for step in world.task)
         steps = horizon / cycle * len(world.task) if cycle > 0 else math.inf
         if steps > MAX_TASK_STEPS:
@@ -736,7 +742,7 @@ def expand_task(world: World, horizon: float, seed: int = 0) -> tuple[Segment, .
             d = duration(step)
             out.append(Segment(step.action, float(t), float(d)))
             t += d
-        if not world.repeat and world.timing != "exponential":
+        if not world.repeats:
             break
     return tuple(out)
 
