@@ -666,6 +666,12 @@ def test_a_scripted_slip_while_holding_is_accepted() -> None:
     assert world(task=task, slips=(Slip(8.0),)).slips == (Slip(8.0),)
 
 
+def test_a_task_whose_steps_add_up_past_double_precision_is_refused_naming_it() -> None:
+    """Two steps of 2**1023 s: an OverflowError naming no field before."""
+    msg = refused(ScenarioError, lambda: world(task=(Step("grasp", 2**1023), Step("hold", 2**1023)), horizon=1e308))
+    assert "the task's steps add up past 1e308 s" in msg
+
+
 def test_two_scripted_slips_at_one_moment_are_refused() -> None:
     """Three slips at t=8 (one of them up) counted three injected and three detected from
     one moment's alarm; slips a moment apart are two slips."""

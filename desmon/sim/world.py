@@ -378,7 +378,9 @@ class World:
         object.__setattr__(self, "signal_kinds", kinds)
         object.__setattr__(self, "detection_rates", _check_rates(self.detection_rates))
         if not self.repeat:
-            length = sum(s.duration for s in task)
+            length = sum(float(s.duration) for s in task)  # (in floats: whole numbers past 1e308 would not print)
+            if not math.isfinite(length):
+                raise ScenarioError("world: the task's steps add up past 1e308 s, more than double precision counts: shorten its steps")
             if length > self.horizon + 1e-9:
                 raise ScenarioError(
                     f"world: the task lasts {length:g} s but the horizon is {self.horizon:g} s, so its steps after "
