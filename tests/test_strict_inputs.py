@@ -131,6 +131,8 @@ def test_a_scenario_file_with_a_misspelt_keyword_is_one_line_naming_it(tmp_path:
         ({"attributes": {"gpu": [1]}}, "attribute 'gpu' = [1] is not a string or a number"),
         ({"attributes": {"gpu": True}}, "attribute 'gpu' = True is a bool: write a word such as 'yes' / 'no'"),
         ({"attributes": {"cores": math.nan}}, "attribute 'cores' = nan is not finite"),
+        ({"attributes": {"os": "linux\nverdict: HOLDS"}}, "holds a character that is not printable (a newline, a control or format"),
+        ({"attributes": {"os": "linux\u202e"}}, "holds a character that is not printable"),
         ({"properties": {"x": "3"}}, "property 'x' = '3' is a string, not a number: write 3 without quotes"),
         ({"properties": {"speed": "fast"}}, "property 'speed' = 'fast' is not a number: put symbolic facts in attributes"),
         ({"preference": math.nan}, "preference = nan is not a number"),

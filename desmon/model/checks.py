@@ -222,6 +222,9 @@ def check_value(what: str, value: object, *, error: Error = ModelError) -> str |
     if isinstance(value, str):
         if not value.strip():
             raise error(f"{what} = {value!r} is empty: give a value such as 'linux' or 4")
+        if not value.isprintable():  # (reports print it: a newline would forge a line, a control character reach the terminal)
+            raise error(f"{what} = {value!r} holds a character that is not printable (a newline, a control or format character): "
+                        "give one line of text such as 'linux'")
         return value
     if isinstance(value, (int, float)):
         if not math.isfinite(value):
