@@ -172,6 +172,35 @@ def test_history_records_alike_are_each_drawn_and_only_the_new_one_marked_new(tm
     assert before >= 3  # one deployment recorded twice at t=5 s
 
 
+def test_an_edited_counterexample_gets_verifys_replay_verdict_and_a_bad_step_names_the_file(root, tmp_path, capsys):
+    """A file whose invariant was renamed to one its run does not break: the page's banner
+    is desmon verify --replay's verdict on it, word for word; a failing start the reaction
+    does not issue is one line naming the file."""
+    migration = str(root / "scenarios" / "migration.py")
+    cex = tmp_path / "cex.json"
+    assert main(["verify", migration, "--deployer", "paper", "--json", str(cex), "--no-progress"]) == 1
+    doc = json.loads(cex.read_text())
+    first = doc["counterexamples"][0]
+    other = next(n for n in doc["invariants"] if n != first["invariant"])
+    first["invariant"] = other
+    edited = tmp_path / "edited.json"
+    edited.write_text(json.dumps(doc))
+    capsys.readouterr()
+    main(["verify", migration, "--deployer", "paper", "--replay", str(edited)])
+    verdict = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("verdict: ")).removeprefix("verdict: ")
+    page = tmp_path / "page.html"
+    assert main(["explore", migration, "--from-json", str(edited), "-o", str(page)]) == 0
+    banner = unescape(re.search(r'class="banner">([^<]*)<', page.read_text(encoding="utf-8")).group(1))
+    assert verdict in banner
+    first["invariant"] = json.loads(cex.read_text())["counterexamples"][0]["invariant"]
+    first["states"][1]["fail_indices"], first["states"][1]["failed_starts"] = [7], ["a start"]
+    edited.write_text(json.dumps(doc))
+    capsys.readouterr()
+    assert main(["explore", migration, "--from-json", str(edited), "-o", str(page)]) == 2
+    [line] = capsys.readouterr().err.strip().splitlines()
+    assert line.startswith(f"desmon: error: {edited}: ") and "fail_indices [7]" in line
+
+
 def test_the_page_is_self_contained(coffee):
     page = coffee[1]
     steps = parse(page)
@@ -383,6 +412,23 @@ def test_a_counterexample_page_loads_in_headless_chromium(browser, root, tmp_pat
     view = _shown(browser)
     assert view["key"] == "1" and "VIOLATED" in view["text"]
     assert not browser.find_element(By.ID, "next").is_enabled()
+    assert _console_errors(browser) == []
+
+
+@pytest.mark.xdist_group("browser")  # one process starts Chromium (the module's browser fixture) for both
+def test_a_link_to_a_step_opens_it_and_a_malformed_one_opens_the_first(browser, coffee):
+    """``page.html#t2`` opens step t2; a fragment that is no URI escape (``#100%``) opens
+    the first step, with the buttons working, not a page whose script stopped."""
+    from selenium.webdriver.common.by import By
+
+    browser.get(coffee[0].resolve().as_uri() + "#t2")
+    assert _shown(browser)["key"] == "t2"
+    for fragment in ("#100%", "#%E0%A4%A"):
+        browser.get("about:blank")
+        browser.get(coffee[0].resolve().as_uri() + fragment)
+        assert _shown(browser)["key"] == "t0"
+        browser.find_element(By.ID, "next").click()
+        assert _shown(browser)["key"] == "t1"
     assert _console_errors(browser) == []
 
 

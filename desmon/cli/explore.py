@@ -326,7 +326,7 @@ def _saved(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str], st
     """``--from-json``: a counterexample of a ``desmon verify --json`` file."""
     from desmon.model.params import parse_assignments
     from desmon.verify.deployers import portable_spec, resolve_deployer
-    from desmon.verify.report import read_counterexample
+    from desmon.verify.report import read_counterexample, replay_verdict
 
     saved = read_counterexample(args.from_json, args.counterexample)
     if scenario.name != saved.scenario:
@@ -347,19 +347,15 @@ def _saved(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str], st
         frames, final, diverged = counterexample_frames(
             scenario, deployer, saved.labels, tuple(saved.invariants), recorded=tuple(saved.states), guard=args.guard,
         )
-    except CheckerError:
-        raise
+    except CheckerError as exc:  # (a step the file gives that cannot be taken: an edit)
+        raise CheckerError(f"{saved.source}: {' '.join(str(exc).split())}") from None
     except DesmonError as exc:
         raise CheckerError(f"{saved.source}: cannot be replayed: {' '.join(str(exc).split())}; the scenario changed since the file was written") from None
     lines = [
         f"counterexample {saved.number} of {saved.count} of {saved.source} (deployer {deployer.name}), "
         "replayed through the real deployment core on the repository",
     ]
+    verdict, _violated = replay_verdict(saved, final, (), diverged)  # (as desmon verify --replay words it)
     still = dict(final).get(saved.invariant)
-    if still is not None:
-        banner = f"{saved.invariant} VIOLATED after {_steps(len(saved.labels))}: {still}"
-    else:
-        banner = f"{saved.invariant} no longer violated on the replay (the file said: {saved.message})"
-    if diverged is not None:
-        banner += f"; the replay left the recorded states at step {diverged}"
+    banner = f"{saved.invariant} VIOLATED after {_steps(len(saved.labels))}: {still}; {verdict}" if still is not None else verdict
     return frames, lines, banner

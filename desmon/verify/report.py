@@ -388,6 +388,18 @@ def format_replay_verdict(
             lines.append(f"  {name:<{width}}  VIOLATED {where_in_reaction(inside[name][2])}: {inside[name][1]}")
         else:
             lines.append(f"  {name:<{width}}  holds")
+    verdict, still = replay_verdict(saved, final, found, diverged)
+    lines.append(f"verdict: {verdict}")
+    return "\n".join(lines) + "\n", still
+
+
+def replay_verdict(
+    saved: SavedCounterexample, final: list[tuple[str, str]], found: tuple[tuple[str, str, str], ...], diverged: int | None
+) -> tuple[str, bool]:
+    """The verdict on a replayed counterexample (the words of ``verify --replay`` and of
+    ``explore --from-json``'s banner), and whether the replay still violates an invariant."""
+    bad = dict(final)
+    inside = {f[0]: f for f in found}
     x = saved.invariant
     still = x in bad or x in inside
     changed = (
@@ -405,8 +417,7 @@ def format_replay_verdict(
     else:
         verdict = (f"the counterexample no longer violates {x}: fixed? (every state as recorded: the deployer did the same, "
                    f"so it is the check of {x} that changed since {saved.source} was written, or the file was edited)")
-    lines.append(f"verdict: {verdict}")
-    return "\n".join(lines) + "\n", still or bool(others)
+    return verdict, still or bool(others)
 
 
 # -- generated pytest -------------------------------------------------------------------------

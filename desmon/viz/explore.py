@@ -715,7 +715,8 @@ JS = """
     var k = {ArrowLeft: current - 1, ArrowRight: current + 1, Home: 0, End: steps.length - 1}[ev.key];
     if (k !== undefined) { stop(); show(k); ev.preventDefault(); }
   });
-  var wanted = decodeURIComponent((location.hash || "").slice(1)), start = 0;
+  var wanted = (location.hash || "").slice(1), start = 0;
+  try { wanted = decodeURIComponent(wanted); } catch (e) { /* a malformed fragment (#100%): the first step */ }
   steps.forEach(function (s, j) { if (s.getAttribute("data-key") === wanted || s.id === wanted) { start = j; } });
   show(start);
 }());
