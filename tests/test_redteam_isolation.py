@@ -508,6 +508,76 @@ def test_a_deployer_cannot_reach_into_desmons_process(tmp_path):
     assert all(outcome.startswith("errno ") for outcome in tried.values()), tried
 
 
+#: the repository's first fit, written with a list's index and a text's + and replace on
+#: what the requirement checks answer (MODE): a correct deployer
+ORDINARY_OPERATIONS = '''
+from desmon.deployment.deployer import Deployer
+from desmon.deployment.ports import DEPLOYMENT_FAILED, DEPLOYMENT_INFORMATION_MISSING, NO_ACCEPTABLE_PLATFORMS, STOPPING_FAILED, RaiseError, Start, Stop
+from desmon.deployment.validity import validity_for
+import os
+MODE = os.environ.get("MODE", "index")
+
+def stop(q, g):
+    for p in q.deployed_on(g):
+        if not (yield Stop(g, p)):
+            yield RaiseError(STOPPING_FAILED, g, p)
+
+def place(q, g):
+    spec = q.deployment_information(g)
+    if spec is None:
+        yield RaiseError(DEPLOYMENT_INFORMATION_MISSING, g)
+        return False
+    v = validity_for(q, spec)
+    acceptable = v.acceptable
+    keep = next((p for p in q.deployed_on(g) if p in acceptable), None)
+    for p in q.deployed_on(g):
+        if p != keep:
+            if not (yield Stop(g, p)):
+                yield RaiseError(STOPPING_FAILED, g, p)
+    if keep is not None:
+        return True
+    if not acceptable:
+        if MODE == "concat":
+            detail = "no platform: " + v.explain()
+        elif MODE == "method":
+            detail = v.explain().replace("\\n", "; ")
+        else:
+            detail = str(v.explain())
+        yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, None, detail)
+        return False
+    order = sorted(acceptable, key=acceptable.index) if MODE == "index" else list(acceptable)
+    for p in order:
+        if (yield Start(g, p)):
+            return True
+        yield RaiseError(DEPLOYMENT_FAILED, g, p)
+    return False
+
+def react(q, slots, changed, context_changed):
+    """first fit"""
+    wanted = {g for slot in slots for g in slot}
+    for g in sorted({g for g, _p in q.deployments()} - wanted):
+        yield from stop(q, g)
+    for slot in slots:
+        for i, g in enumerate(slot):
+            if (yield from place(q, g)):
+                for fallback in slot[i + 1:]:
+                    yield from stop(q, fallback)
+                break
+'''
+
+
+@pytest.mark.parametrize("mode", ["index", "concat", "method"])
+def test_a_correct_deployer_using_its_answers_as_plain_values_holds_not_refused_as_nondeterministic(tmp_path, mode):
+    """The table engine hands a worker handles that serve fewer operations than the direct
+    engine's copies (no index on the acceptable platforms, no + on a text): a reaction
+    that fails on them only leaves the search to the direct engine, never a verdict that
+    the deployer is nondeterministic."""
+    (tmp_path / "ordinary.py").write_text(f"import os\nos.environ['MODE'] = {mode!r}\n" + ORDINARY_OPERATIONS)
+    two_detectors = str(ROOT / "scenarios" / "two_detectors.py")
+    code, _took, out, err = _desmon("verify", two_detectors, "--no-progress", "--deployer", f"{tmp_path / 'ordinary.py'}:react", timeout=120)
+    assert code == 0 and "verdict: HOLDS" in out and "engine: direct (the reaction failed on the table engine's handles" in out, (out, err)
+
+
 #: pick_place_camera whose starts never fail
 NO_START_FAILS = '''
 import dataclasses, importlib.util
