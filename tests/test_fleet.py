@@ -148,6 +148,36 @@ def test_docs_fleet_md_gives_the_states_desmon_verify_prints_for_the_fleet(capsy
         assert "verdict: HOLDS" in out and f"states: {states} " in out, (extra, out[:400])
 
 
+#: the shipped fleet of two robots, r000's wrench failing at t1 while r001's works
+WRENCH_FAILS = """
+import dataclasses
+from desmon.loader import load_scenario
+from desmon.model.events import ActionChange, DeviceFail
+from desmon.model.scenario import TimedEvent
+base = load_scenario({fleet!r}, {{"robots": "2", "edges": "1"}})
+scenario = dataclasses.replace(base, timeline=(TimedEvent(0.0, ActionChange("grasp"), "t0"), TimedEvent(10.0, DeviceFail("r000.lwr_wrench"), "t1")))
+"""
+
+
+def test_in_the_checkers_model_a_robots_detector_reads_its_own_robots_sensors_only(tmp_path, capsys) -> None:
+    """The fleet run wires each robot's detectors to its own devices; the one model verify,
+    explain and replay see did so too, not to the other robot's wrench: with r000's
+    wrench failed, r000's combined detector has no acceptable platform (the run raises
+    no_acceptable_platforms there), though r001's wrench works."""
+    from desmon.deployment.control import ControlRules
+
+    model = fleet(2, 1).model
+    assert [d for r in model.spec("r000.force_slip_detector").reads for d, _p in r.devices] == ["r000.lwr_wrench"]
+    wired = ControlRules(model).input_devices("r000.combined_slip_detector", "edge00")
+    assert {d.name.split(".")[0] for _kind, devices in wired for d in devices} == {"r000"}
+    path = tmp_path / "wrench_fails.py"
+    path.write_text(WRENCH_FAILS.format(fleet=str(FLEET)))
+    assert main(["explain", str(path), "r000.combined_slip_detector", "--at", "t1"]) == 0
+    assert "acceptable: (none)" in capsys.readouterr().out
+    assert main(["explain", str(path), "r001.combined_slip_detector", "--at", "t1"]) == 0
+    assert "acceptable: (none)" not in capsys.readouterr().out
+
+
 def test_the_checker_still_finds_the_papers_deployer_wrong_on_the_small_fleet() -> None:
     result = Checker(fleet(2, 1), "paper").run(max_states=20_000)
     assert result.verdict == "VIOLATED"

@@ -90,8 +90,8 @@ class ControlRules:
             model = self.model
             out = []
             for kind in model.graph(graph).device_kinds:
-                local = tuple(d for d in model.devices if d.kind == kind and d.platform == platform)
-                devices = local or tuple(d for d in model.devices if d.kind == kind)
+                readable = model.readable(graph, kind)  # (a fleet's merged model: its own robot's)
+                devices = tuple(d for d in readable if d.platform == platform) or readable
                 if devices:
                     out.append((kind, devices))
             found = self._wiring[key] = tuple(out)

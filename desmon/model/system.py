@@ -12,7 +12,7 @@ from typing import Iterable, Mapping
 
 from desmon.errors import DesmonError, ModelError
 from desmon.model.actions import ACTIONS, RISKY_ACTIONS, Action
-from desmon.model.checks import check_items, check_name, check_names, strict_init, suggest
+from desmon.model.checks import check_items, check_name, check_names, check_pairs, strict_init, suggest
 from desmon.model.graph import PerceptionGraph
 from desmon.model.platform import Device, Platform
 from desmon.model.kinds import attribute_problem
@@ -143,10 +143,16 @@ class SystemModel:
     rules: RuleTable = field(default_factory=lambda: RuleTable(()))
     robot: str = "robot"
     declared_actions: tuple[Action, ...] = ()
+    #: where one model holds several robots (:func:`desmon.sim.fleet.merged_model`): the
+    #: robot each graph and device belongs to, as ``(name, robot)`` pairs. A graph reads
+    #: only the devices of its own robot and those no robot owns (:meth:`readable`), as
+    #: each robot's run wires it; without owners it reads every device of the kind.
+    owners: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self) -> None:
         check_name("robot", self.robot)
         self._check_field_types()
+        self._check_owners()
         _unique("platform", [p.name for p in self.platforms])
         _unique("device", [d.name for d in self.devices])
         _unique("perception graph", [g.name for g in self.graphs])
@@ -224,14 +230,32 @@ class SystemModel:
 
     def _with_reads(self, spec: DeploymentSpec) -> DeploymentSpec:
         """``spec`` with what its graph's inputs require (:class:`Reads`, one per device kind
-        its sensor components read that some device provides; a kind no device provides
-        imposes nothing: a model without devices is a pure platform study)."""
-        reads = tuple(
-            Reads(kind, tuple((d.name, d.platform) for d in self.devices if d.kind == kind))
-            for kind in self.graph(spec.graph).device_kinds
-            if any(d.kind == kind for d in self.devices)
-        )
+        its sensor components read that some device it may read provides (:meth:`readable`);
+        a kind no device provides imposes nothing: a model without devices is a pure
+        platform study)."""
+        wired = ((kind, self.readable(spec.graph, kind)) for kind in self.graph(spec.graph).device_kinds)
+        reads = tuple(Reads(kind, tuple((d.name, d.platform) for d in devices)) for kind, devices in wired if devices)
         return spec if reads == spec.reads else replace(spec, reads=reads)
+
+    def readable(self, graph: str, kind: str) -> tuple[Device, ...]:
+        """The devices of ``kind`` that ``graph`` may read, in declaration order: every one,
+        or where the model holds several robots (:attr:`owners`) those of the graph's own
+        robot and those no robot owns."""
+        if not self.owners:
+            return tuple(d for d in self.devices if d.kind == kind)
+        owner = dict(self.owners)
+        mine = owner.get(graph)
+        return tuple(d for d in self.devices if d.kind == kind and (mine is None or owner.get(d.name, mine) == mine))
+
+    def _check_owners(self) -> None:
+        """``owners``: (name, robot) pairs, each naming a graph or a device of the model."""
+        pairs = check_pairs("system model owners", self.owners, example="(('r1.force_slip_detector', 'r1'),)")
+        known = {g.name for g in self.graphs} | {d.name for d in self.devices}
+        for name, robot in pairs:
+            check_name(f"system model owner of {name!r}", robot)
+            if name not in known:
+                raise ModelError(f"system model owners name {name!r}{suggest(name, known)}, which is no graph or device of the model")
+        object.__setattr__(self, "owners", tuple((str(n), str(r)) for n, r in pairs))
 
     def _check_field_types(self) -> None:
         """Every tuple field holds items of its type (normalised to a tuple); rules is a RuleTable."""

@@ -210,6 +210,8 @@ def merged_model(robots: Iterable[SystemModel], edges: Iterable[str], robot: str
         rules=RuleTable(tuple(Rule(c, tuple(s)) for c, s in slots.items())),
         robot=robot,
         declared_actions=models[0].declared_actions if models else (),
+        # each robot's graphs read its own devices only, as in the fleet run
+        owners=tuple((x.name, m.robot) for m in models for x in (*m.graphs, *m.devices)),
     )
 
 

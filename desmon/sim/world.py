@@ -423,10 +423,9 @@ class World:
         if not isinstance(self.start_failure, StartFailure):
             raise ScenarioError(f"world: start_failure = {self.start_failure!r} is not a StartFailure: write StartFailure(probability=0.02)")
 
-    def _check_scripted(self) -> None:
-        """Scripted slips, faults and loads: the right types, before the horizon, in time order."""
-        err = ScenarioError
-        slips = check_items("world: slips", self.slips, Slip, error=err, example="slips=(Slip(10.0, 'down', 'pulled'),)")
+    def _check_scripted_slips(self) -> None:
+        """Scripted slips: of the right type, before the horizon, one at a moment, in the hand."""
+        slips = check_items("world: slips", self.slips, Slip, error=ScenarioError, example="slips=(Slip(10.0, 'down', 'pulled'),)")
         for slip in slips:
             self._before_horizon(f"slip at t={slip.time:g}", slip.time)
         times = [s.time for s in slips]
@@ -440,6 +439,11 @@ class World:
         if slips and all(step.action in ACTIONS for step in self.task):
             # with a model's own actions in the task this waits for check_against (the model says what they are like)
             self._check_slips(_builtin)
+
+    def _check_scripted(self) -> None:
+        """Scripted slips, faults and loads: the right types, before the horizon, in time order."""
+        err = ScenarioError
+        self._check_scripted_slips()
         example = "faults=(TimedEvent(20.0, DeviceFail('lwr_wrench')),)"
         faults = check_items("world: faults", self.faults, TimedEvent, error=err, example=example)
         for te in faults:

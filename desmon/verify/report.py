@@ -73,19 +73,27 @@ def format_result(r: CheckResult) -> str:
         lines.append(f"engine: table ({r.records:,} recorded runs of the core and the invariants, replayed for the rest)")
     else:
         lines.append("engine: direct" + (f" ({r.engine_note})" if r.engine_note else ""))
-    kinds = sorted(set(r.enabled) | set(r.new_states))
-    if kinds:
-        lines.append("events (enabled / new states): " + ", ".join(f"{k} {r.enabled[k]:,}/{r.new_states[k]:,}" for k in kinds))
-        dead = [k for k in kinds if not r.changed[k]]
-        if dead and r.verdict == "HOLDS":
-            lines.append("  warning: dead event kinds (never changed the state; a scenario bug?): " + ", ".join(dead))
-    elif r.verdict == "HOLDS" and not r.incomplete:
-        lines.append(f"warning: no event was ever enabled, so HOLDS covers the initial state alone: {NOTHING_ENABLED_FIX}")
+    lines += _event_lines(r)
     if r.rules:
         lines.append("selector contexts exercised: " + ", ".join(f"{c or '(none)'} {n:,}" for c, n in sorted(r.rules.items(), key=lambda x: str(x[0]))))
     if r.branches:
         lines.append("deployer branches: " + ", ".join(f"{b} {n:,}" for b, n in sorted(r.branches.items())))
     return "\n".join(lines) + "\n"
+
+
+def _event_lines(r: CheckResult) -> list[str]:
+    """The events the search enabled, with a warning where some never changed the state,
+    or where none was ever enabled (HOLDS then covers the initial state alone)."""
+    kinds = sorted(set(r.enabled) | set(r.new_states))
+    if not kinds:
+        if r.verdict == "HOLDS" and not r.incomplete:
+            return [f"warning: no event was ever enabled, so HOLDS covers the initial state alone: {NOTHING_ENABLED_FIX}"]
+        return []
+    lines = ["events (enabled / new states): " + ", ".join(f"{k} {r.enabled[k]:,}/{r.new_states[k]:,}" for k in kinds)]
+    dead = [k for k in kinds if not r.changed[k]]
+    if dead and r.verdict == "HOLDS":
+        lines.append("  warning: dead event kinds (never changed the state; a scenario bug?): " + ", ".join(dead))
+    return lines
 
 
 # -- JSON ------------------------------------------------------------------------------------

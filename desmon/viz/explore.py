@@ -716,7 +716,7 @@ JS = """
     if (k !== undefined) { stop(); show(k); ev.preventDefault(); }
   });
   var wanted = (location.hash || "").slice(1), start = 0;
-  try { wanted = decodeURIComponent(wanted); } catch (e) { /* a malformed fragment (#100%): the first step */ }
+  try { wanted = decodeURIComponent(wanted); } catch (e) { /* a fragment that is no URI escape (a percent sign alone): the first step */ }
   steps.forEach(function (s, j) { if (s.getAttribute("data-key") === wanted || s.id === wanted) { start = j; } });
   show(start);
 }());
