@@ -128,6 +128,7 @@ def test_a_scenario_file_with_a_misspelt_keyword_is_one_line_naming_it(tmp_path:
         ({"capacities": {"memory": [1]}}, "capacity 'memory' = [1] is not a number"),
         ({"memory": math.nan}, "capacity 'memory' = nan is not a number"),
         ({"memory": math.inf}, "capacity 'memory' = inf is not finite"),
+        ({"memory": __import__("numpy").int64(512)}, "capacity 'memory' = np.int64(512) is a numpy.int64, not a Python number: write int(...) of it"),
         ({"attributes": {"gpu": [1]}}, "attribute 'gpu' = [1] is not a string or a number"),
         ({"attributes": {"gpu": True}}, "attribute 'gpu' = True is a bool: write a word such as 'yes' / 'no'"),
         ({"attributes": {"cores": math.nan}}, "attribute 'cores' = nan is not finite"),

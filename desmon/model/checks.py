@@ -14,6 +14,7 @@ import difflib
 import functools
 import inspect
 import math
+import numbers
 import re
 from typing import Any, Callable, Iterable, Mapping, Sequence, TypeVar
 
@@ -175,6 +176,9 @@ def _not_a_float(what: str, value: object, error: Error) -> str | None:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         if isinstance(value, str) and is_numeric_text(value):
             raise error(f"{what} = {value!r} is a string, not a number: write {value.strip()} without quotes")
+        if isinstance(value, numbers.Real) and not isinstance(value, bool):  # (numpy's: not written into desmon's files as they are)
+            kind = "int" if isinstance(value, numbers.Integral) else "float"
+            raise error(f"{what} = {value!r} is a {type(value).__module__}.{type(value).__name__}, not a Python number: write {kind}(...) of it")
         return f"{value!r} is not a number"
     if isinstance(value, int) and value.bit_length() > 1000:
         try:

@@ -142,6 +142,11 @@ class Scenario:
                         f"{where}: timeline label {te.label!r} {flaw}: --at reads a comma-separated list of labels, each "
                         f"without its outer spaces, so it could never name this moment; write e.g. {fix!r}"
                     )
+                if te.label.startswith("-"):
+                    raise ModelError(
+                        f"{where}: timeline label {te.label!r} begins with '-': the command line reads --at {te.label} as "
+                        f"another option, so it could never name this moment; write e.g. {te.label.lstrip('-') or 't1'!r}"
+                    )
                 if te.label in labels:
                     raise ModelError(f"{where}: timeline label {te.label!r} is used twice: labels name one moment each")
                 labels.add(te.label)
