@@ -130,25 +130,7 @@ class Scenario:
         for te in timeline:
             self._check_event(te.event, events)
             if te.label:
-                if _looks_like_time(te.label):
-                    raise ModelError(
-                        f"{where}: timeline label {te.label!r} reads as a time: --at {te.label} would mean the label, "
-                        f"not t={te.label} s; name the moment with a letter first, e.g. t{te.label}"
-                    )
-                if "," in te.label or te.label != te.label.strip():
-                    fix = te.label.strip().replace(",", "_") or "t1"
-                    flaw = "holds a comma" if "," in te.label else "begins or ends with a space"
-                    raise ModelError(
-                        f"{where}: timeline label {te.label!r} {flaw}: --at reads a comma-separated list of labels, each "
-                        f"without its outer spaces, so it could never name this moment; write e.g. {fix!r}"
-                    )
-                if te.label.startswith("-"):
-                    raise ModelError(
-                        f"{where}: timeline label {te.label!r} begins with '-': the command line reads --at {te.label} as "
-                        f"another option, so it could never name this moment; write e.g. {te.label.lstrip('-') or 't1'!r}"
-                    )
-                if te.label in labels:
-                    raise ModelError(f"{where}: timeline label {te.label!r} is used twice: labels name one moment each")
+                _check_label(where, te.label, labels)
                 labels.add(te.label)
             if te.time < last:
                 raise ModelError(f"{where}: timeline event {te.event} at t={te.time} comes before t={last}: sort the timeline")
@@ -171,3 +153,27 @@ class Scenario:
         problem = event_problem(ev, self.model, others)
         if problem is not None:
             raise ModelError(f"scenario {self.name!r}: {problem}")
+
+
+def _check_label(where: str, label: str, labels: set[str]) -> None:
+    """A timeline label ``--at`` can name: no time, comma, outer space or leading ``-``,
+    and none of ``labels`` (those before it)."""
+    if _looks_like_time(label):
+        raise ModelError(
+            f"{where}: timeline label {label!r} reads as a time: --at {label} would mean the label, "
+            f"not t={label} s; name the moment with a letter first, e.g. t{label}"
+        )
+    if "," in label or label != label.strip():
+        fix = label.strip().replace(",", "_") or "t1"
+        flaw = "holds a comma" if "," in label else "begins or ends with a space"
+        raise ModelError(
+            f"{where}: timeline label {label!r} {flaw}: --at reads a comma-separated list of labels, each "
+            f"without its outer spaces, so it could never name this moment; write e.g. {fix!r}"
+        )
+    if label.startswith("-"):
+        raise ModelError(
+            f"{where}: timeline label {label!r} begins with '-': the command line reads --at {label} as "
+            f"another option, so it could never name this moment; write e.g. {label.lstrip('-') or 't1'!r}"
+        )
+    if label in labels:
+        raise ModelError(f"{where}: timeline label {label!r} is used twice: labels name one moment each")

@@ -428,13 +428,7 @@ class World:
         slips = check_items("world: slips", self.slips, Slip, error=ScenarioError, example="slips=(Slip(10.0, 'down', 'pulled'),)")
         for slip in slips:
             self._before_horizon(f"slip at t={slip.time:g}", slip.time)
-        times = [s.time for s in slips]
-        twice = sorted({t for t in times if times.count(t) > 1})
-        if twice:
-            raise ScenarioError(
-                f"world: slips lists {times.count(twice[0])} slips at t={twice[0]:g}: the object in the hand starts to slip once "
-                "at a moment (each would count as injected, and one alarm detect them all); give each slip its own time"
-            )
+        _one_slip_at_a_moment(slips)
         object.__setattr__(self, "slips", slips)
         if slips and all(step.action in ACTIONS for step in self.task):
             # with a model's own actions in the task this waits for check_against (the model says what they are like)
@@ -591,6 +585,16 @@ class World:
                 raise ScenarioError(
                     f"{where}: signal_kinds maps {kind!r}, which no device is{suggest(kind, kinds)}: fix the kind (kinds: {', '.join(kinds)})"
                 )
+
+
+def _one_slip_at_a_moment(slips: tuple[Slip, ...]) -> None:
+    times = [s.time for s in slips]
+    twice = sorted({t for t in times if times.count(t) > 1})
+    if twice:
+        raise ScenarioError(
+            f"world: slips lists {times.count(twice[0])} slips at t={twice[0]:g}: the object in the hand starts to slip once "
+            "at a moment (each would count as injected, and one alarm detect them all); give each slip its own time"
+        )
 
 
 def _check_load_masters(world: World) -> None:
