@@ -18,6 +18,8 @@ from desmon.estimate.loop import is_look, run_seed
 from desmon.loader import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
+#: the case study, fixed timing: every run alike
+QUICK_COFFEE = str(ROOT / "scenarios" / "coffee_handover.py")
 #: a 7 s task whose runs take a few hundredths of a second
 QUICK = str(ROOT / "scenarios" / "two_detectors.py")
 #: a scenario whose exposure varies from seed to seed under exponential timing
@@ -231,6 +233,14 @@ def test_the_longest_unmonitored_stretch_joins_intervals_that_touch():
     assert longest_exposure([]) == 0.0
     assert longest_exposure([(0.0, 5.0, "grasp"), (5.0, 12.0, "carry"), (20.0, 26.0, "carry")]) == 12.0
     assert longest_exposure([(0.0, 5.0, "grasp"), (6.0, 12.0, "carry")]) == 6.0
+    assert longest_exposure([(0.0, 5.0, "hold"), (5.0, 5.45, "move_base")]) == 5.45  # (5.449999999999999 in floats)
+
+
+def test_a_threshold_equal_to_the_longest_stretch_counts_every_run_that_reaches_it(capsys):
+    """coffee_handover's longest unmonitored stretch is 5.0 s of hold and 0.45 s of
+    move_base in every run: P(longest >= 5.45) is 1, as P(exposure >= its value) is."""
+    code, out, _err = _estimate(capsys, QUICK_COFFEE, "--metric", "longest_exposure_s", "--at-least", "5.45", "--max-runs", "20")
+    assert "values 5.45 .. 5.45" in out and "estimate 1.00," in out, out
 
 
 def test_the_chance_of_a_long_unmonitored_stretch_is_estimated_from_the_runs(capsys):

@@ -185,11 +185,13 @@ def value_of(figures: Mapping[str, Any], metric: str) -> float:
 def longest_exposure(intervals: Iterable[tuple[float, float, str]]) -> float:
     """The longest unmonitored stretch of a run, from its exposure intervals (start, end, action)
     in time order: an interval that starts where the previous one ended (the action changed,
-    the exposure went on) continues it. 0 without any."""
+    the exposure went on) continues it. 0 without any. Rounded to :data:`ROUNDING_S`, as a
+    run's other figures in seconds are (a stretch of 5.0 + 0.45 s is 5.45 s, not
+    5.449999999999999, which ``--at-least 5.45`` would not count)."""
     longest, start, end = 0.0, None, None
     for a, b, _action in intervals:
         if start is None or end is None or a > end:
             start = a
         end = b
         longest = max(longest, end - start)
-    return longest
+    return round(longest, 6)
