@@ -415,3 +415,21 @@ def test_a_run_without_a_world_plays_the_timelines_changes_and_initial_action_as
     assert ran == replayed == [("start force on arm_pc", True), ("stop force on arm_pc", True), ("start force on edge", True)], (ran, replayed)
     assert [(e.time, e.kind) for e in run.errors] == [(s.time, e.kind) for s in rep.steps for e in s.errors] == [(2.0, "no_acceptable_platforms")]
     assert run.metrics["risky_time_s"] == run.horizon  # holding from the start, as the initial action says
+
+
+def test_scripted_joins_are_no_leased_time_as_estimate_and_sweep_plot_take_it():
+    """cloud_offload without its lease, the edge server joining at 25 s and leaving at
+    200 s by script: leased time counts the lease's joins only, so the run says 0 (it
+    said 175 s), as desmon estimate knows without a run for a World that leases nothing."""
+    import dataclasses
+    from pathlib import Path
+
+    from desmon.sim.metrics import run_figures
+
+    path = Path(__file__).resolve().parents[1] / "scenarios" / "cloud_offload.py"
+    base = load_scenario(str(path), {"lease": "False", "hours": "0.1"})
+    joins = (TimedEvent(25.0, PlatformJoin("edge")), TimedEvent(200.0, PlatformLeave("edge")))
+    scenario = dataclasses.replace(base, world=dataclasses.replace(base.world, changes=joins))
+    result = simulate(scenario, seed=1)
+    figures = run_figures(result.metrics, len(result.violations))
+    assert figures["leases"] == 0 and figures["leased_s"] == 0.0

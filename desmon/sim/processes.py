@@ -277,13 +277,16 @@ def load_steps(parts: RobotParts, i: int):  # type: ignore[no-untyped-def]
 
 
 # ---------------------------------------------------------------------- run-time changes and leases
-def change(parts: RobotParts, ev: Event, source: str) -> None:
+def change(parts: RobotParts, ev: Event, source: str, leased: bool = False) -> None:
     """A scripted or random run-time change: a requirement change is written by the
     context monitor at once (it is a decision of the robot's software, not a fault to
-    be noticed); a platform joins or leaves like a platform that comes up or goes down."""
+    be noticed); a platform joins or leaves like a platform that comes up or goes down.
+    Leased time counts the lease's own joins (``leased``), not scripted ones."""
     now = parts.env.now
     if isinstance(ev, PlatformEvent):
         fault(parts, ev, source)
+        if not leased:
+            return
         if ev.up:
             parts.books.lease_joined(ev.platform, now)
         else:
@@ -343,7 +346,7 @@ def lease(parts: RobotParts, platform: str):  # type: ignore[no-untyped-def]
     idle = parts.world.lease.idle_s  # type: ignore[union-attr]
     last_busy = parts.infra.last_busy
     yield env.timeout(parts.model.platform(platform).startup_s)
-    change(parts, PlatformJoin(platform), "lease")
+    change(parts, PlatformJoin(platform), "lease", leased=True)
     last_busy[platform] = env.now
     while True:
         busy = any(p == platform for _g, p in parts.facts.instances)
@@ -351,7 +354,7 @@ def lease(parts: RobotParts, platform: str):  # type: ignore[no-untyped-def]
         if not busy and wait <= 0:
             break
         yield env.timeout(max(wait, 1e-6))
-    change(parts, PlatformLeave(platform), "lease")
+    change(parts, PlatformLeave(platform), "lease", leased=True)
     parts.books.lease_requested.discard(platform)
 
 
@@ -368,7 +371,7 @@ def markov_lease(parts: RobotParts, platform: str):  # type: ignore[no-untyped-d
     rng = random.Random(f"{parts.seed}:lease:{platform}:{parts.books.leases}")
     startup = parts.model.platform(platform).startup_s
     yield env.timeout(rng.expovariate(1.0 / startup) if startup > 0 else 0.0)
-    change(parts, PlatformJoin(platform), "lease")
+    change(parts, PlatformJoin(platform), "lease", leased=True)
     last_busy = parts.infra.last_busy
     phase, tick = 0, env.now
     while phase < k:
@@ -380,7 +383,7 @@ def markov_lease(parts: RobotParts, platform: str):  # type: ignore[no-untyped-d
         else:
             phase += 1
         tick = env.now
-    change(parts, PlatformLeave(platform), "lease")
+    change(parts, PlatformLeave(platform), "lease", leased=True)
     parts.books.lease_requested.discard(platform)
 
 
