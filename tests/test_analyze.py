@@ -765,3 +765,25 @@ def test_a_detector_starting_on_a_platform_that_went_down_has_lost_its_input_and
     assert start_catch_of(world, "force", starting, {1.0: 0.9, 2.0: 0.4}) == 0.4  # not the dead arm's 0.9
     blind, _ = _member_states(state, {"tactile"}, {}, lambda g, p: ())
     assert blind["tactile"] == ["cannot_detect"]  # a detector that cannot detect here, warming up or not
+
+
+#: the coffee shift whose World times its steps Erlang-4 (exponential timing, 4 phases)
+ERLANG_WORLD = '''
+import dataclasses
+from desmon.loader import load_scenario
+base = load_scenario({shift!r}, {{"faults": "False", "hours": "0.1"}})
+scenario = dataclasses.replace(base, world=dataclasses.replace(base.world, timing="exponential", phases=4))
+'''
+
+
+def test_the_chain_times_the_steps_as_the_world_does_unless_phases_is_given(tmp_path, capsys):
+    """A World with Erlang-4 steps is analysed as an Erlang-4 chain (and --simulate runs
+    that World), as desmon run simulates it; --phases 1 asks for the exponential one."""
+    from desmon.cli import main
+
+    path = tmp_path / "erlang.py"
+    path.write_text(ERLANG_WORLD.format(shift=str(ROOT / "scenarios" / "coffee_shift.py")))
+    assert main(["analyze", str(path), "--trials", "1", "--transient-only", "--no-progress"]) == 0
+    assert "task steps Erlang-4;" in capsys.readouterr().out
+    assert main(["analyze", str(path), "--trials", "1", "--transient-only", "--no-progress", "--phases", "1"]) == 0
+    assert "task steps exponential;" in capsys.readouterr().out

@@ -60,7 +60,7 @@ from desmon.sim.world import World, can_detect, detector_plans, world_of
 from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.environment import VariableKind, variable_kind, variables
 
-__all__ = ["AnalysisError", "MarkovWorld", "markov_world", "MAX_PHASES", "RATE_RATIO", "check_rates", "named_rates", "BudgetExceeded", "Budget", "no_budget"]
+__all__ = ["AnalysisError", "MarkovWorld", "markov_world", "world_phases", "MAX_PHASES", "RATE_RATIO", "check_rates", "named_rates", "BudgetExceeded", "Budget", "no_budget"]
 
 #: the most Erlang phases a task step may take (``--phases``)
 MAX_PHASES = 64
@@ -400,9 +400,20 @@ def _check_cycle(scenario: Scenario, world: World) -> None:
             raise _refuse(scenario, f"World task step {i + 1} ({step.action}) lasts 0 s, which has no rate: give it a positive duration")
 
 
-def markov_world(scenario: Scenario, *, phases: int = 1, start_failure_p: float | None = None) -> MarkovWorld:
+def world_phases(scenario: Scenario, phases: int | None) -> int:
+    """The Erlang phases of a task step in the chain: ``phases`` (``--phases``), else the
+    World's where it times its steps so (``timing="exponential", phases=K``), else 1."""
+    if phases is not None:
+        return phases
+    world = scenario.world
+    return world.phases if getattr(world, "timing", None) == "exponential" else 1
+
+
+def markov_world(scenario: Scenario, *, phases: int | None = None, start_failure_p: float | None = None) -> MarkovWorld:
     """The rates of ``scenario``'s World, matched against its checker bounds (see the
-    module docstring); :class:`AnalysisError` names the first mismatch."""
+    module docstring); :class:`AnalysisError` names the first mismatch. ``phases``:
+    :func:`world_phases`."""
+    phases = world_phases(scenario, phases)
     _check_arguments(phases, start_failure_p)
     if scenario.world is None:
         raise _refuse(scenario, "it declares no World, so the chain has no rates: give it Scenario(world=World(task=..., stochastic_faults=...))")

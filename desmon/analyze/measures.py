@@ -29,7 +29,7 @@ from typing import Any, Callable
 import numpy as np
 
 from desmon.analyze.chain import Chain, build_chain
-from desmon.analyze.markov import AnalysisError, MarkovWorld, check_rates, markov_world, no_budget
+from desmon.analyze.markov import AnalysisError, MarkovWorld, check_rates, markov_world, no_budget, world_phases
 from desmon.analyze.solve import KRYLOV_TOL, mean_time_to, one_blas_thread, steady_state, transient
 from desmon.deployment.exposure import CAUSES
 from desmon.model.checks import check_number
@@ -314,7 +314,7 @@ def analyze(
     scenario: Scenario,
     deployer: Any = "desmon",
     *,
-    phases: int = 1, start_failure_p: float | None = None, horizon: float | None = None,
+    phases: int | None = None, start_failure_p: float | None = None, horizon: float | None = None,
     steady: bool = True, max_states: int | None = None,
     miss: dict[str, float] | None = None, start_catch: dict[str, Any] | None = None,
     trials: int = 200, guard: Any = None,
@@ -325,8 +325,10 @@ def analyze(
     ``progress(n)`` is called as states are explored, ``status(what)`` (a phrase) before
     each batch of detection trials and each solution step. ``miss`` and ``start_catch`` default to :func:`detector_miss` and
     :func:`detector_start_catch` over ``trials`` slips (a given ``miss`` alone: none caught while starting);
-    ``budget()``, called as the chain grows and in every solver iteration, raises once spent."""
+    ``budget()``, called as the chain grows and in every solver iteration, raises once spent.
+    ``phases``: Erlang phases of a task step (None: the World's, :func:`~desmon.analyze.markov.world_phases`)."""
     say = status or (lambda _what: None)
+    phases = world_phases(scenario, phases)
     mw = markov_world(scenario, phases=phases, start_failure_p=start_failure_p)
     T = scenario.world.horizon if horizon is None else horizon
     check_number("--horizon", T, error=AnalysisError, positive=True, unit=" of seconds")

@@ -50,7 +50,9 @@ def add_parser(sub: Subparsers) -> None:
     p = sub.add_parser("analyze", help="exact unmonitored exposure from the Markov chain of the real deployer")
     scenario_arg(p, help="scenario file whose World gives rates, e.g. scenarios/coffee_shift.py")
     deployer_arg(p)  # --max-reaction-seconds: a deployer that never yields is stopped, not waited for
-    p.add_argument("--phases", type=positive_int, default=1, metavar="K", help="Erlang phases per task step (1: exponential; at most 64)")
+    p.add_argument("--phases", type=positive_int, default=None, metavar="K",
+                   help="Erlang phases per task step (1: exponential; at most 64; default: the World's phases under its "
+                        "exponential timing, else 1)")
     p.add_argument("--start-failure-p", type=_probability, default=None, metavar="P", help="probability a start fails (default: the World's)")
     p.add_argument("--horizon", type=positive_seconds, default=None, metavar="T", help="mission length in seconds (default: the World's horizon)")
     p.add_argument("--transient-only", action="store_true", help="per-mission measures only (no steady state: for a chain with a trap)")
@@ -88,6 +90,9 @@ def run(args: argparse.Namespace) -> int:
     budget = _budget(args)
 
     scenario = load_scenario_of(args)
+    from desmon.analyze.markov import world_phases
+
+    args.phases = world_phases(scenario, args.phases)  # (the chain's, its trials' and --simulate's)
     err = sys.stderr
     stormpy = _stormpy(args.engine)  # before any work: a missing stormpy is one line at once
     if args.simulate is not None and args.simulate < 3:

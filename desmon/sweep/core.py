@@ -33,7 +33,7 @@ JOB_SETTINGS: dict[str, tuple[str, ...]] = {
 #: the first setting of each job (the only one but for analyze): :func:`run_sweep`'s ``setting``
 SETTINGS = {job: names[0] for job, names in JOB_SETTINGS.items()}
 #: a setting's value when the sweep leaves it out, where None would not do
-_DEFAULTS = {("analyze", "phases"): 1, ("estimate", "metric"): "exposure_s", ("estimate", "within"): "5%",
+_DEFAULTS = {("analyze", "phases"): None, ("estimate", "metric"): "exposure_s", ("estimate", "within"): "5%",
              ("estimate", "confidence"): 0.95, ("estimate", "max_runs"): 10_000}
 
 
@@ -321,6 +321,11 @@ def run_sweep(
     deployer, axes = _checked(job, scenario, axes, deployer)
     grid = Grid(axes, seeds, sweep_seed)
     settings = _settings_of(job, setting, settings)
+    if job == "analyze" and settings.get("phases") is None:  # as desmon analyze: the World's (at the scenario's defaults)
+        from desmon.analyze.markov import world_phases
+        from desmon.loader import load_scenario
+
+        settings["phases"] = world_phases(load_scenario(scenario), None)
     _check_columns(job, axes, settings)
     # every point, before a cluster starts
     check_points(job, scenario, grid.iter_points(), settings.get(SETTINGS.get(job, "")), deployer, settings=settings)

@@ -273,7 +273,7 @@ def _job_analyze(spec: JobSpec, run: Run) -> dict[str, Any]:
     scenario = scenario_at(spec.scenario, run.point.values)  # type: ignore[arg-type]
     try:
         a = analyze(
-            scenario, _deployer(spec.deployer), phases=spec.setting("phases") or 1, horizon=spec.setting("horizon"),
+            scenario, _deployer(spec.deployer), phases=spec.setting("phases"), horizon=spec.setting("horizon"),
             max_states=spec.setting("max_states"),
         )
     except BudgetExceeded as exc:  # as desmon analyze: INCOMPLETE, exit 3, no measure
@@ -555,6 +555,6 @@ def _markov_world(scenario: Any, settings: dict[str, Any], where: str) -> None:
     from desmon.analyze import AnalysisError, markov_world
 
     try:
-        markov_world(scenario, phases=settings.get("phases") or 1)
+        markov_world(scenario, phases=settings.get("phases"))
     except AnalysisError as exc:
         raise SweepError(f"{_one_line(exc)}{' ' + where if where else ''}") from None
