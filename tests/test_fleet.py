@@ -87,6 +87,10 @@ def test_without_admission_concurrent_starts_over_commit_the_edge_and_the_audit_
     result = simulate_fleet(racy)
     assert any(name == "no-overcommit" and "edge00" in msg for _t, _robot, name, msg in result.violations)
     assert result.metrics["edge_memory_share_peak"]["max"] > 1.0
+    # a robot's figures name its own PCs only: its meter never saw the other robots' detectors on an edge server
+    for m in result.robots.values():
+        assert not any(p.startswith("edge") for p in m["memory_peak_mb"]) and not any(p.startswith("edge") for p in m["overcommit_s"])
+        assert any(p.endswith("torso_pc") for p in m["memory_peak_mb"])
 
 
 def test_admission_refuses_a_start_that_no_longer_fits_on_the_edge(contended) -> None:  # type: ignore[no-untyped-def]

@@ -520,6 +520,10 @@ class _Member:
         parts.memory.close(now)
         m = robot_metrics(parts)
         m["audits"] = parts.books.audits
+        # a robot's meter sees its own detectors only: an edge server's peak and time over
+        # capacity are the fleet's (edge_memory_share_peak, the no-overcommit audit), not its
+        for key in ("memory_peak_mb", "overcommit_s"):
+            m[key] = {p: v for p, v in m[key].items() if p not in self.edges}
         return m
 
 
