@@ -578,6 +578,50 @@ def test_a_correct_deployer_using_its_answers_as_plain_values_holds_not_refused_
     assert code == 0 and "verdict: HOLDS" in out and "engine: direct (the reaction failed on the table engine's handles" in out, (out, err)
 
 
+#: the repository's first fit, whose worker writes one message of its own on its socket
+#: while grasping: a dict of 300,000 int keys that all hash alike (k * (2**61 - 1)), which
+#: a C decoder would build in hours, deaf to every timer
+COLLIDING_KEYS = '''
+import os, struct, time
+import importlib.util
+spec = importlib.util.spec_from_file_location("first_fit", {first_fit!r})
+first_fit = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(first_fit)
+
+def message(n=300_000, m=2 ** 61 - 1):
+    out = [b"\\x80\\x05", b"}}", b"("]
+    for i in range(1, n + 1):
+        out.append(b"\\x8a\\x0c" + (i * m).to_bytes(12, "little", signed=True) + b"N")
+    out.append(b"u.")
+    return b"".join(out)
+
+def the_socket():
+    for fd in os.listdir("/proc/self/fd"):
+        try:
+            if os.readlink(f"/proc/self/fd/{{fd}}").startswith("socket:"):
+                return int(fd)
+        except OSError:
+            pass
+
+def react(q, slots, changed, context_changed):
+    if q.context() == "grasp":
+        data = message()
+        os.write(the_socket(), struct.pack("!I", len(data)) + data)
+        time.sleep(10 ** 6)
+    yield from first_fit.first_fit(q, slots, changed, context_changed)
+'''
+
+
+def test_a_message_of_numbers_that_hash_alike_is_refused_before_it_is_built_never_a_hang(tmp_path):
+    """desmon counts a message's numbers before its C decoder builds anything: a dict of keys
+    chosen to collide is the deployer's crash within seconds, not hours past --timeout."""
+    (tmp_path / "collide.py").write_text(COLLIDING_KEYS.format(first_fit=str(ROOT / "docs" / "examples" / "first_fit.py")))
+    code, took, out, err = _desmon("verify", COFFEE, "--no-progress", "--timeout", "20", "--max-reaction-seconds", "5",
+                                   "--deployer", f"{tmp_path / 'collide.py'}:react", timeout=60)
+    assert code == 4 and "verdict: CRASHED" in out and "a message of 300,000 numbers, more than the 4,096" in out, (code, out, err)
+    assert took < 20, took
+
+
 #: pick_place_camera whose starts never fail
 NO_START_FAILS = '''
 import dataclasses, importlib.util

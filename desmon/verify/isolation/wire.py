@@ -135,14 +135,24 @@ class Decoder(pickle.Unpickler):
         gave out. It holds no object twice (:data:`SHARING`): the child writes each where it
         occurs (its pickler's ``fast`` mode), so what desmon hashes or compares of it is no
         larger than the message."""
-        shared = shared_opcode(self.data)
+        shared, numbers = scan(self.data)
         if shared is not None:
             raise pickle.UnpicklingError(f"an object written once and used again ({shared}): the child writes each where it occurs")
+        if numbers > MAX_NUMBERS:  # (before the C code builds it: nothing stops that code, not even desmon's timer)
+            raise pickle.UnpicklingError(
+                f"a message of {numbers:,} numbers, more than the {MAX_NUMBERS:,} desmon reads in one (numbers chosen to hash "
+                "alike would make building a set or dict of them take hours)"
+            )
         return resolve(super().load(), self.handles)
 
 
 #: the opcodes that use an object again (a few nest into more than desmon could hash in a lifetime)
 SHARING = frozenset({"GET", "BINGET", "LONG_BINGET", "DUP"})
+#: the opcodes that build a number (ints and floats may be chosen to hash alike; texts may not)
+NUMBERS = frozenset({"INT", "BININT", "BININT1", "BININT2", "LONG", "LONG1", "LONG4", "FLOAT", "BINFLOAT"})
+#: the most numbers a message of the child's may hold: a deployer's commands and questions
+#: hold a few dozen; 4,096 keys that hash alike take desmon's C decoder a fraction of a second
+MAX_NUMBERS = 4096
 
 #: how :func:`shared_opcode` passes an opcode: a fixed number of argument bytes; a length of 1
 #: byte, of 4 or 8 bytes (unsigned) or of 4 bytes (signed) before them; the end; one of
@@ -176,31 +186,40 @@ _OPCODES: tuple[tuple[int, int, bool, str] | None, ...] = tuple(
 
 def shared_opcode(data: bytes) -> str | None:
     """The name of the first opcode of the pickle ``data`` (up to its STOP) that uses an object
-    again (:data:`SHARING`), or None: :func:`pickletools.genops`' answer. One pass over the
-    opcodes, each argument skipped by its length (a text decoded, as genops does); where
-    that cannot tell (an argument up to a newline, bytes that are no pickle), genops
-    reads them, and raises what it raises."""
-    found = _skim(data)
+    again (:data:`SHARING`), or None (:func:`scan`)."""
+    return scan(data)[0]
+
+
+def scan(data: bytes) -> tuple[str | None, int]:
+    """The name of the first opcode of the pickle ``data`` (up to its STOP) that uses an object
+    again (:data:`SHARING`), or None, and how many numbers it builds before (:data:`NUMBERS`):
+    :func:`pickletools.genops`' answers. One pass over the opcodes, each argument skipped by
+    its length (a text decoded, as genops does); where that cannot tell (an argument up to a
+    newline, bytes that are no pickle), genops reads them, and raises what it raises."""
+    found, numbers = _skim(data)
     if found is not _UNSURE:
-        return found
+        return found, numbers
+    numbers = 0
     for op, _arg, _at in pickletools.genops(data):
         if op.name in SHARING:
-            return op.name
-    return None
+            return op.name, numbers
+        numbers += op.name in NUMBERS
+    return None, numbers
 
 
 #: :func:`_skim`'s answer where it cannot tell
 _UNSURE = "?"
 
 
-def _skim(data: bytes) -> str | None:
-    """:func:`shared_opcode`'s answer for a binary pickle, :data:`_UNSURE` where it cannot tell."""
-    i, end, table = 0, len(data), _OPCODES
+def _skim(data: bytes) -> tuple[str | None, int]:
+    """:func:`scan`'s answer for a binary pickle, :data:`_UNSURE` first where it cannot tell."""
+    i, end, table, numbers = 0, len(data), _OPCODES, 0
     while i < end:
         entry = table[data[i]]
         if entry is None:
-            return _UNSURE
+            return _UNSURE, numbers
         how, n, text, name = entry
+        numbers += name in NUMBERS
         i += 1
         if how == _FIXED:
             i += n
@@ -208,18 +227,18 @@ def _skim(data: bytes) -> str | None:
             size = data[i] if how == _SHORT and i < end else int.from_bytes(data[i:i + n], "little", signed=how == _SIGNED)
             i += n
             if i > end or size < 0 or i + size > end:
-                return _UNSURE
+                return _UNSURE, numbers
             if text:
                 try:
                     str(data[i:i + size], "utf-8", "surrogatepass")
                 except UnicodeDecodeError:
-                    return _UNSURE
+                    return _UNSURE, numbers
             i += size
         elif how == _SHARES:
-            return name if i + n <= end else _UNSURE
+            return (name if i + n <= end else _UNSURE), numbers
         else:
-            return None if how == _STOP else _UNSURE
-    return _UNSURE
+            return (None if how == _STOP else _UNSURE), numbers
+    return _UNSURE, numbers
 
 class Token:
     """A handle while the child's pickle is read: it can be neither called nor built nor
