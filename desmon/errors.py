@@ -29,6 +29,7 @@ __all__ = [
     "SignalError",
     "CheckerError",
     "NondeterminismError",
+    "ObservationConflict",
     "SimulationError",
     "EstimateError",
 ]
@@ -60,6 +61,12 @@ class CheckerError(DesmonError):
 
 class NondeterminismError(CheckerError):
     """Replaying a trace did not reproduce the state the search stored."""
+
+
+class ObservationConflict(NondeterminismError):
+    """The table engine recorded two runs that read the same facts and did otherwise: the
+    deployer is nondeterministic, or it learned a fact the engine did not observe
+    (``--engine auto`` hands the search to the direct engine, which decides)."""
 
 
 class TableUnsupported(CheckerError):

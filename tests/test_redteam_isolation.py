@@ -7,6 +7,7 @@ fails the test."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 import time
@@ -620,6 +621,161 @@ def test_a_message_of_numbers_that_hash_alike_is_refused_before_it_is_built_neve
                                    "--deployer", f"{tmp_path / 'collide.py'}:react", timeout=60)
     assert code == 4 and "verdict: CRASHED" in out and "a message of 300,000 numbers, more than the 4,096" in out, (code, out, err)
     assert took < 20, took
+
+
+#: one PC; a small vision detector wanted while holding, and a big detector no rule selects
+BIG_ROOM = '''"""A robot with one PC: a small vision detector wanted while holding, and a big detector
+no rule selects. main_pc's background load moves between 100 and 0 MB."""
+from desmon.model import HOLD, IDLE, RobotBuilder
+from desmon.model.events import LoadChange
+from desmon.model.scenario import Scenario
+from desmon.verify.bounds import Bounds, levels
+
+VISION = "vision_slip_detector"
+BIG = "big_detector"
+
+robot = RobotBuilder("bot")
+robot.platform("main_pc", memory=400, attributes={"gpu": "yes"}).device("camera", kind="camera")
+with robot.rpsl.perception_graph(VISION) as g:
+    g.sensor("cam", reads="camera")
+    g.processing("flow", inputs=["cam"])
+with robot.rpsl.perception_graph(BIG) as g:
+    g.sensor("cam", reads="camera")
+    g.processing("deep", inputs=["cam"])
+robot.depsl.deployment_specification(VISION).add_constraint("capacity", "memory", 100)
+robot.depsl.deployment_specification(BIG).add_constraint("capacity", "memory", 250).prefer("most_free", "memory")
+robot.rules({HOLD: VISION})
+
+scenario = Scenario(
+    name="big_room",
+    description="one PC; a big detector no rule selects",
+    model=robot.build(),
+    initial=(LoadChange("main_pc", 100),),
+    checker=Bounds(actions=(IDLE, HOLD), initial_action=IDLE, loads={"main_pc": levels(0, 100, 100)}),
+)
+'''
+
+#: first fit, except that on an action change with room for the big detector (its validity's
+#: breakdown is not empty) it stops the vision detector, leaving its slot unserved: wrong
+ROOM_FOR_BIG = '''from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, DEPLOYMENT_FAILED, STOPPING_FAILED, RaiseError, Start, Stop
+from desmon.deployment.validity import validity_for
+
+
+def room_for_big(q):
+    """Whether the big detector would find a platform (its validity's breakdown lists the candidates)."""
+    spec = q.deployment_information("big_detector")
+    return bool(validity_for(q, spec).breakdown)
+
+
+def react(q, slots, changed, context_changed):
+    """first fit; but with room for the big detector, on an action change, it stops the vision detector (a bug)"""
+    wanted = {g for slot in slots for g in slot}
+    for g, p in q.deployments():
+        if g not in wanted:
+            if not (yield Stop(g, p)):
+                yield RaiseError(STOPPING_FAILED, g, p)
+    for slot in slots:
+        g = slot[0]
+        spec = q.deployment_information(g)
+        v = validity_for(q, spec)
+        acceptable = v.acceptable
+        if any(p in acceptable for p in q.deployed_on(g)):
+            continue
+        for p in q.deployed_on(g):
+            yield Stop(g, p)
+        if not acceptable:
+            yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, None, "none")
+            continue
+        for p in acceptable:
+            if (yield Start(g, p)):
+                break
+            yield RaiseError(DEPLOYMENT_FAILED, g, p)
+    if context_changed and slots and room_for_big(q):
+        for p in q.deployed_on("vision_slip_detector"):
+            yield Stop("vision_slip_detector", p)   # the bug: the slot is left unserved, no error
+'''
+
+#: a correct first fit that takes a graph with preferences to its best-scoring platform,
+#: read from its validity's breakdown
+BEST_SCORE = '''"""First fit, except that a graph with preferences goes to its best-scoring platform,
+read from its validity's breakdown (docs/deployers.md: `breakdown` is each acceptable
+platform's weighted terms, best first). A correct deployer."""
+from desmon.deployment.ports import (
+    DEPLOYMENT_FAILED, DEPLOYMENT_INFORMATION_MISSING, NO_ACCEPTABLE_PLATFORMS, STOPPING_FAILED, RaiseError, Start, Stop,
+)
+from desmon.deployment.validity import validity_for
+
+
+def candidates(v):
+    if v.breakdown:                       # ranked: the scored platforms, best first
+        return [name for name, _terms in v.breakdown]
+    return list(v.acceptable)
+
+
+def place(q, g):
+    spec = q.deployment_information(g)
+    if spec is None:
+        yield RaiseError(DEPLOYMENT_INFORMATION_MISSING, g)
+        return False
+    v = validity_for(q, spec)
+    order = candidates(v)
+    keep = next((p for p in q.deployed_on(g) if p in order), None)
+    for p in q.deployed_on(g):
+        if p != keep:
+            if not (yield Stop(g, p)):
+                yield RaiseError(STOPPING_FAILED, g, p)
+    if keep is not None:
+        return True
+    if not order:
+        yield RaiseError(NO_ACCEPTABLE_PLATFORMS, g, None, "no acceptable platform")
+        return False
+    for p in order:
+        if (yield Start(g, p)):
+            return True
+        yield RaiseError(DEPLOYMENT_FAILED, g, p)
+    return False
+
+
+def react(q, slots, changed, context_changed):
+    """first fit, best-scoring platform first"""
+    wanted = {g for slot in slots for g in slot}
+    for g in sorted({g for g, _p in q.deployments()} - wanted):
+        for p in q.deployed_on(g):
+            if not (yield Stop(g, p)):
+                yield RaiseError(STOPPING_FAILED, g, p)
+    for slot in slots:
+        for i, g in enumerate(slot):
+            if (yield from place(q, g)):
+                for f in slot[i + 1:]:
+                    for p in q.deployed_on(f):
+                        if not (yield Stop(f, p)):
+                            yield RaiseError(STOPPING_FAILED, f, p)
+                break
+'''
+
+
+@pytest.mark.parametrize("engine", ["auto", "table", "direct"])
+def test_whether_a_breakdown_is_empty_is_observed_by_the_table_engine(tmp_path, engine):
+    """A ranked validity's breakdown is empty exactly when no platform is acceptable: the
+    table engine observes that read too, so a deployer branching on it is VIOLATED on
+    every engine (the table engine had replayed an unobserved branch: HOLDS)."""
+    (tmp_path / "big_room.py").write_text(BIG_ROOM)
+    (tmp_path / "room.py").write_text(ROOM_FOR_BIG)
+    code, _took, out, err = _desmon("verify", str(tmp_path / "big_room.py"), "--no-progress", "--engine", engine,
+                                    "--deployer", f"{tmp_path / 'room.py'}:react")
+    assert code == 1 and "verdict: VIOLATED (coverage)" in out, (out, err)
+
+
+def test_a_correct_deployer_reading_the_breakdown_holds_on_the_default_engine_as_on_the_direct_one(tmp_path):
+    """It was refused (exit 2) as "not a function of what it reads": the table engine had
+    recorded an empty breakdown without observing it."""
+    (tmp_path / "best.py").write_text(BEST_SCORE)
+    cloud = str(ROOT / "scenarios" / "cloud_offload.py")
+    results = [_desmon("verify", cloud, "--no-progress", "--engine", e, "--deployer", f"{tmp_path / 'best.py'}:react") for e in ("auto", "direct")]
+    for code, _took, out, err in results:
+        assert code == 0 and "verdict: HOLDS" in out, (out, err)
+    states = [re.search(r"states: ([\d,]+) ", out).group(1) for _c, _t, out, _e in results]
+    assert states[0] == states[1]
 
 
 #: pick_place_camera whose starts never fail

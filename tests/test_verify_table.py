@@ -529,3 +529,22 @@ def test_firsts_are_the_first_occurrences_of_each_value_in_order(small, offset):
     want = np.sort(np.unique(values, return_index=True)[1]) if len(values) else np.zeros(0, dtype=np.int64)
     got = firsts(values)
     assert got.tolist() == want.tolist() and got.dtype == np.int64
+
+
+def test_observations_that_conflict_hand_the_search_to_the_direct_engine_under_auto_and_stop_table(monkeypatch):
+    """Two recorded runs that read the same facts and did otherwise: the deployer is
+    nondeterministic, or it learned a fact the table engine did not observe. Under auto the
+    direct engine decides (here: HOLDS, with the reason in its note); --engine table stops."""
+    from desmon.errors import ObservationConflict
+    from desmon.verify.table import TableEngine
+
+    def conflicting(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+        raise ObservationConflict("the deployment core reacted differently to states with the same readings")
+
+    monkeypatch.setattr(TableEngine, "run", conflicting)
+    sc = load_scenario(str(SCENARIOS / "coffee_handover.py"))
+    result = Checker(sc, "desmon").run(max_states=20_000)
+    assert result.verdict == "HOLDS" and result.engine == "direct"
+    assert "reacted differently to states with the same readings" in result.engine_note
+    with pytest.raises(ObservationConflict):
+        Checker(sc, "desmon").run(max_states=20_000, engine="table")

@@ -24,7 +24,7 @@ from typing import Any, Iterable, Protocol, Sequence
 from desmon.deployment.deployer import Deployer
 from desmon.deployment.guard import Guard, ReactionStopped
 from desmon.deployment.run import RunContext
-from desmon.errors import CheckerError, TableUnsupported
+from desmon.errors import CheckerError, ObservationConflict, TableUnsupported
 from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds
 from desmon.verify.direct import DirectSearch, Pool
@@ -112,7 +112,12 @@ class TableEngineChoice:
         res.engine, res.workers = "table", 1
         with paused_gc():  # as in the direct search: it makes no cycles
             table = TableEngine(system, bow_out_on_ran_away=fallback)
-            found, incomplete, depth = table.run(res, budget=budget, **search)
+            try:
+                found, incomplete, depth = table.run(res, budget=budget, **search)
+            except ObservationConflict as exc:
+                if not fallback:
+                    raise
+                raise TableUnsupported(f"{exc} (as the table engine observed it; the direct engine decides)") from None
         res.records = table.records
         return Exploration(found, incomplete, depth, table.explored())
 

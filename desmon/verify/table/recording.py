@@ -146,7 +146,7 @@ class RecordingChecks:
             return ObservedValidity(acceptable, Reasons(check, real.rejected))  # type: ignore[arg-type]
         # with preferences the order of the acceptable platforms, their scores and the
         # breakdown are observed as the scores of every platform ("rank")
-        breakdown = Ranked(check, real.breakdown, acceptable) if real.breakdown else ()
+        breakdown = Ranked(check, real.breakdown, acceptable)  # (empty too: whether any platform is acceptable is read through it)
         return ObservedValidity(acceptable, Reasons(check, real.rejected), Ranked(check, real.scores, acceptable), breakdown)  # type: ignore[arg-type]
 
     def platform(self, reqs: tuple, state: Any, graph: str | None, first_only: bool) -> Any:

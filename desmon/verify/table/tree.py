@@ -13,7 +13,7 @@ from typing import Callable
 
 import numpy as np
 
-from desmon.errors import NondeterminismError, TableUnsupported
+from desmon.errors import ObservationConflict, TableUnsupported
 from desmon.verify.arrays import Grow, Interned, IntTable
 from desmon.verify.table.tables import AnswerTables
 
@@ -253,7 +253,7 @@ class DecisionTrees(_Walk):
             if state == -2:
                 self._open(node, desc)
             elif state != -1 or self.node_desc[node] != desc:
-                raise NondeterminismError(
+                raise ObservationConflict(
                     "the deployment core checked different requirements on a state with the same readings: "
                     "it is not a function of what it reads through its ports"
                 )
@@ -277,7 +277,7 @@ class DecisionTrees(_Walk):
             self.node_leaf.a[node] = leaf
             self.node_code.a[node] = LEAF | leaf
         elif state != leaf:
-            raise NondeterminismError(
+            raise ObservationConflict(
                 "the deployment core reacted differently to states with the same readings: "
                 "it is not a function of what it reads through its ports"
             )
