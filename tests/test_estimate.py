@@ -188,8 +188,32 @@ def test_dask_workers_hold_the_deployer_to_the_same_command_limit(capsys):
     here = _estimate(capsys, *args)
     on_dask = _estimate(capsys, *args, "--workers", "1")
     assert here[0] == on_dask[0] == 4 and here[2] == on_dask[2] and "issued more than 1 commands in one reaction" in here[2]
-    code, _out, err = _estimate(capsys, *args, "--workers", "1", "--max-reaction-seconds", "5")
-    assert code == 2 and "--max-reaction-seconds 5: its timer stops a reaction in this process only" in err
+
+
+#: the repository's first fit, asleep for good once the robot moves
+SLEEPS = """
+import importlib.util, time
+spec = importlib.util.spec_from_file_location("first_fit", {first_fit!r})
+first_fit = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(first_fit)
+
+def react(q, slots, changed, context_changed):
+    if q.context() == "move_base":
+        time.sleep(10 ** 6)
+    yield from first_fit.first_fit(q, slots, changed, context_changed)
+"""
+
+
+@pytest.mark.slow
+def test_a_reaction_that_never_ends_on_a_dask_worker_is_crashed_at_the_reaction_limit(tmp_path, capsys):
+    """No timer runs in a Dask task: each wait for the deployer's next message is bounded by
+    --max-reaction-seconds instead, and the crash comes back once, not retried (it hung)."""
+    pytest.importorskip("distributed")
+    (tmp_path / "sleeps.py").write_text(SLEEPS.format(first_fit=str(ROOT / "docs" / "examples" / "first_fit.py")))
+    t0 = time.monotonic()
+    code, _out, err = _estimate(capsys, VARIED, "--deployer", f"{tmp_path / 'sleeps.py'}:react", "--workers", "1", "--max-reaction-seconds", "3")
+    assert code == 4 and "CRASHED" in err and "reacting to a context change (context move_base)" in err and "ran for over 3 s" in err, err
+    assert time.monotonic() - t0 < 60
 
 
 @pytest.mark.parametrize("extra, says", [

@@ -480,11 +480,26 @@ def owner():
     a, b = socket.socketpair()
     return fcntl.fcntl(a.fileno(), fcntl.F_SETOWN, desmon)
 
+def limit():
+    import resource
+    now = resource.prlimit(desmon, resource.RLIMIT_CORE)
+    resource.prlimit(desmon, resource.RLIMIT_CORE, now)  # (desmon's limit as it is: harmless, were it allowed)
+
+def terminal_modes():
+    import termios
+    _master, slave = os.openpty()  # (a terminal of its own: TOSTOP on desmon's would stop it at its next write)
+    try:
+        termios.tcsetattr(slave, termios.TCSANOW, termios.tcgetattr(slave))
+    except termios.error as exc:
+        raise OSError(exc.args[0], exc.args[1]) from None
+
 attempt("ptrace", lambda: -1 if ptrace_attach() != 0 else 0)
 attempt("process_vm_writev", lambda: vm_write())
 attempt("proc_mem", mem)
 attempt("proc_fd", stdout)
 attempt("f_setown", owner)
+attempt("prlimit", limit)
+attempt("tcsets", terminal_modes)
 with open(REACHED, "w") as fh:
     fh.write(repr(tried))
 
@@ -497,15 +512,17 @@ def nothing(q, slots, changed, context_changed):
 @pytest.mark.skipif(__import__("platform").machine() != "x86_64", reason="the worker's seccomp filter is x86-64 only")
 def test_a_deployer_cannot_reach_into_desmons_process(tmp_path):
     """Attaching to desmon as a debugger (and making it exit 0 with a forged report),
-    writing its memory, opening its standard output through /proc, or having the kernel
-    signal it on its socket's traffic: each fails in the deployer's code, also when desmon
-    runs as root, and desmon reports the deployer that deploys nothing VIOLATED."""
+    writing its memory, opening its standard output through /proc, having the kernel
+    signal it on its socket's traffic, lowering its resource limits (the kernel would kill
+    it) or setting a terminal's modes (TOSTOP on desmon's would stop it): each fails in the
+    deployer's code, also when desmon runs as root, and desmon reports the deployer that
+    deploys nothing VIOLATED."""
     reached = tmp_path / "reached.txt"
     (tmp_path / "reaches.py").write_text(f"REACHED = {str(reached)!r}\n" + REACHES_INTO_DESMON)
     code, took, out, err = _desmon("verify", COFFEE, "--no-progress", "--timeout", "20", "--deployer", f"{tmp_path / 'reaches.py'}:nothing", timeout=40)
     assert code == 1 and "verdict: VIOLATED" in out, (code, out, err)
     tried = eval(reached.read_text())
-    assert set(tried) == {"ptrace", "process_vm_writev", "proc_mem", "proc_fd", "f_setown"}
+    assert set(tried) == {"ptrace", "process_vm_writev", "proc_mem", "proc_fd", "f_setown", "prlimit", "tcsets"}
     assert all(outcome.startswith("errno ") for outcome in tried.values()), tried
 
 

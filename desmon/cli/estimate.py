@@ -162,15 +162,11 @@ def _dask_source(args: argparse.Namespace, question: Any) -> Any:
         if args.workers is not None:
             raise EstimateError("--workers sets the size of the local cluster; with --scheduler the cluster has its own workers: drop it")
         probe_scheduler(args.scheduler)
-    if getattr(args, "max_reaction_seconds", None) is not None:
-        raise EstimateError(
-            f"--max-reaction-seconds {args.max_reaction_seconds:g}: its timer stops a reaction in this process only; runs on Dask "
-            "workers are bounded by --max-commands: drop --max-reaction-seconds, or drop --workers/--scheduler"
-        )
     params = tuple(sorted(parse_assignments(args.param).items()))
     spec = BatchSpec(
         os.path.abspath(args.scenario), params, getattr(args.deployer, "name", str(args.deployer)), args.seed, args.until,
         question.metric, tuple(sorted(_world_changes(args).items())), max_commands=getattr(args, "max_commands", None),
+        max_reaction_seconds=getattr(args, "max_reaction_seconds", None),
     )
     deadline = None if question.timeout is None else time.monotonic() + question.timeout
     return dask_values(spec, scheduler=args.scheduler, workers=args.workers, deadline=deadline)

@@ -44,23 +44,32 @@ class BatchSpec:
     world: tuple[tuple[str, Any], ...] = ()  # World fields replaced (timing, phases, signals)
     #: the guard's limit on one reaction's commands (``--max-commands``), as in this process
     max_commands: int | None = None
+    #: the longest a user's deployer may keep a worker waiting for its next message
+    #: (``--max-reaction-seconds``; None: desmon's default): no timer runs in a Dask task
+    max_reaction_seconds: float | None = None
 
 
-def run_batch(spec: BatchSpec, seeds: list[int]) -> tuple[list[float], float]:
+def run_batch(spec: BatchSpec, seeds: list[int]) -> tuple[list[float], float] | tuple[str, str, bool]:
     """In a worker: the values of the runs of world seeds ``seeds`` (a batch of consecutive runs,
     :class:`~desmon.estimate.loop.RunSeeds`) and the wall seconds they took.
-    A DesmonError (a value outside the declared range, a deployer that fails) reaches the caller."""
-    from desmon.deployment.guard import MAX_COMMANDS, Guard
+    A DesmonError (a value outside the declared range) reaches the caller; a deployer that
+    fails comes back as ``("fault", its message, whether in its first reaction)``, which
+    :func:`dask_values` raises: Dask would retry an exception, and a reaction that never
+    ends would be waited out once per try."""
+    from desmon.deployment.guard import MAX_COMMANDS, DeployerFault, Guard
     from desmon.sim.collector import Collector
     from desmon.sweep.jobs import scenario_at, worker_collector
     from desmon.verify.deployers import resolve_deployer
 
     t0 = time.perf_counter()
     scenario = with_world(scenario_at(spec.scenario, spec.params), dict(spec.world))
-    deployer = resolve_deployer(spec.deployer)
+    deployer = resolve_deployer(spec.deployer, import_seconds=spec.max_reaction_seconds)
     guard = Guard(spec.max_commands or MAX_COMMANDS)
     collector = worker_collector() or Collector()  # the batch's runs share one (the worker's, on Dask)
-    values = [run_value(scenario, deployer, s, spec.until, spec.metric, guard, collector) for s in seeds]
+    try:
+        values = [run_value(scenario, deployer, s, spec.until, spec.metric, guard, collector) for s in seeds]
+    except DeployerFault as fault:
+        return "fault", str(fault), bool(fault.initial)
     return values, time.perf_counter() - t0
 
 
@@ -74,7 +83,7 @@ def dask_values(
     :class:`~desmon.deployment.guard.ReactionStopped`, which the estimation counts as its
     time limit reached, also where a run never ends. Closing the generator cancels what
     is in flight and shuts a local cluster down."""
-    from desmon.deployment.guard import ReactionStopped
+    from desmon.deployment.guard import DeployerFault, ReactionStopped
     from desmon.sweep.runner import dask_client
 
     with dask_client(scheduler, workers, retries) as client:
@@ -95,9 +104,14 @@ def dask_values(
                     next_start += size
                 start, count, fut = pending.pop(0)
                 try:  # (a DesmonError of the worker is raised here)
-                    values, wall = fut.result(timeout=None if deadline is None else max(0.0, deadline - time.monotonic()))
+                    done = fut.result(timeout=None if deadline is None else max(0.0, deadline - time.monotonic()))
                 except TimeoutError:  # (dask's, asyncio's and the builtin are one class on Python 3.11)
                     raise ReactionStopped("the time limit passed while a batch of runs was still under way") from None
+                if done[0] == "fault":  # the deployer failed in a run: as in this process, its crash
+                    fault = DeployerFault(done[1])
+                    fault.initial = done[2]
+                    raise fault
+                values, wall = done
                 fut.release()
                 per_run = wall / max(1, count) if math.isnan(per_run) else 0.5 * per_run + 0.5 * wall / max(1, count)
                 size = int(min(MAX_BATCH, max(1, math.ceil(batch_seconds / per_run)))) if per_run > 0 else MAX_BATCH

@@ -42,6 +42,7 @@ import pickle
 import signal
 import socket
 import sys
+import threading
 import time
 import weakref
 from collections.abc import Sequence
@@ -301,6 +302,10 @@ class RemoteReact:
     def _react(self, q: Any, slots: Any, changed: Any, context_changed: Any) -> Iterator[Any]:
         w = self.current()
         clean = False
+        # outside the main thread (a Dask worker's task) no guard's timer runs: each wait for
+        # the worker's next message is bounded by the reaction limit instead
+        limit = None if threading.current_thread() is threading.main_thread() else self.import_seconds or IMPORT_SECONDS
+        w.sock.settimeout(limit)
         try:
             kind, body = w.exchange(("react", (Handle(q, "query"), slots, changed, context_changed, _reads(q, slots, True, w.blobs))))
             while True:
@@ -318,6 +323,10 @@ class RemoteReact:
                     raise ReactionRaised(one_line(str(body)))
                 else:
                     raise WorkerGone("sent desmon, through its worker process, what desmon does not accept (an unknown message)")
+        except WorkerGone as exc:
+            if limit is not None and exc.what == _LATE:
+                raise WorkerGone(f"its code ran for over {limit:g} s without a word to desmon (the reaction limit: --max-reaction-seconds)") from None
+            raise
         finally:
             w._end_reaction()
             if not clean:  # stopped in the middle (a budget, a fault, the table engine's own signal): a fresh worker next

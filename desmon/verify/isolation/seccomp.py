@@ -37,20 +37,33 @@ import ctypes
 import platform
 import struct
 
-__all__ = ["deny_signals", "drop_capabilities", "close_to_workers", "SIGNAL_SYSCALLS", "REACH_SYSCALLS", "OWNER_COMMANDS"]
+__all__ = ["deny_signals", "drop_capabilities", "close_to_workers", "SIGNAL_SYSCALLS", "REACH_SYSCALLS", "OWNER_COMMANDS", "SELF_ONLY_SYSCALLS"]
 
 #: x86-64 numbers of the system calls that send a signal
 SIGNAL_SYSCALLS = (62, 200, 234, 129, 297, 424)  # kill, tkill, tgkill, rt_sigqueueinfo, rt_tgsigqueueinfo, pidfd_send_signal
 #: x86-64 numbers of the system calls that reach into another process
 REACH_SYSCALLS = (101, 310, 311, 438)  # ptrace, process_vm_readv, process_vm_writev, pidfd_getfd
-#: the commands of ``fcntl`` (72) and ``ioctl`` (16) that name a process the kernel then signals
-OWNER_COMMANDS = {72: (8, 10, 15), 16: (0x8901, 0x8902)}  # F_SETOWN, F_SETSIG, F_SETOWN_EX; FIOSETOWN, SIOCSPGRP
+#: the commands of ``fcntl`` (72) and ``ioctl`` (16) that name a process the kernel then
+#: signals, or that take desmon's terminal: make the worker's group the foreground one (the
+#: kernel then stops desmon at its next write), set the terminal's modes (TOSTOP), push
+#: input into it, take it as a controlling terminal
+OWNER_COMMANDS = {
+    72: (8, 10, 15),  # F_SETOWN, F_SETSIG, F_SETOWN_EX
+    16: (0x8901, 0x8902,  # FIOSETOWN, SIOCSPGRP
+         0x5410, 0x5412, 0x540E,  # TIOCSPGRP, TIOCSTI, TIOCSCTTY
+         0x5402, 0x5403, 0x5404, 0x5406, 0x5407, 0x5408,  # TCSETS, TCSETSW, TCSETSF, TCSETA, TCSETAW, TCSETAF
+         0x402C542B, 0x402C542C, 0x402C542D),  # TCSETS2, TCSETSW2, TCSETSF2
+}
+#: x86-64 numbers of the system calls allowed on the calling process alone (their first
+#: argument a process id, 0 for the caller): ``prlimit64`` (a lowered CPU or memory limit
+#: of desmon's would have the kernel kill it, or starve it)
+SELF_ONLY_SYSCALLS = (302,)
 
 _AUDIT_ARCH_X86_64 = 0xC000003E
 _X32 = 0x40000000
 _LD_W_ABS, _JEQ_K, _JGE_K, _RET_K = 0x20, 0x15, 0x35, 0x06
 _ALLOW, _EPERM = 0x7FFF0000, 0x00050000 | 1
-_ARCH, _NR, _ARG1 = 4, 0, 24  # offsets in struct seccomp_data (the low half of args[1]: a command is an unsigned int)
+_ARCH, _NR, _ARG0, _ARG1 = 4, 0, 16, 24  # offsets in struct seccomp_data (the low half of args[1]: a command is an unsigned int)
 _PR_SET_NO_NEW_PRIVS, _PR_SET_SECCOMP, _SECCOMP_MODE_FILTER = 38, 22, 2
 _PR_SET_DUMPABLE, _PR_CAPBSET_DROP = 4, 24
 _CAPABILITY_VERSION_3, _CAPSET = 0x20080522, 126
@@ -66,9 +79,13 @@ def _program() -> list[tuple[int, int, int, int]]:
         (_JGE_K, "deny", 0, _X32),  # an x32 number: denied
         *((_JEQ_K, "deny", 0, nr) for nr in (*SIGNAL_SYSCALLS, *REACH_SYSCALLS)),
         *((_JEQ_K, f"commands {nr}", 0, nr) for nr in OWNER_COMMANDS),
+        *((_JEQ_K, "self only", 0, nr) for nr in SELF_ONLY_SYSCALLS),
         (_RET_K, 0, 0, _ALLOW),
     ]
-    labels: dict[str, int] = {}
+    labels: dict[str, int] = {"self only": len(code)}
+    code += [  # a process id of 0 (both halves of args[0]): the caller itself
+        (_LD_W_ABS, 0, 0, _ARG0), (_JEQ_K, 0, "deny", 0), (_LD_W_ABS, 0, 0, _ARG0 + 4), (_JEQ_K, 0, "deny", 0), (_RET_K, 0, 0, _ALLOW),
+    ]
     for nr, commands in OWNER_COMMANDS.items():
         labels[f"commands {nr}"] = len(code)
         code += [(_LD_W_ABS, 0, 0, _ARG1), *((_JEQ_K, "deny", 0, c) for c in commands), (_RET_K, 0, 0, _ALLOW)]
