@@ -29,7 +29,7 @@ from typing import Any, Callable
 import numpy as np
 
 from desmon.analyze.chain import Chain, build_chain
-from desmon.analyze.markov import AnalysisError, MarkovWorld, check_rates, markov_world, no_budget, world_phases
+from desmon.analyze.markov import AnalysisError, MarkovWorld, check_rates, markov_world, no_budget
 from desmon.analyze.solve import KRYLOV_TOL, mean_time_to, one_blas_thread, steady_state, transient
 from desmon.deployment.exposure import CAUSES
 from desmon.model.checks import check_number
@@ -328,7 +328,6 @@ def analyze(
     ``budget()``, called as the chain grows and in every solver iteration, raises once spent.
     ``phases``: Erlang phases of a task step (None: the World's, :func:`~desmon.analyze.markov.world_phases`)."""
     say = status or (lambda _what: None)
-    phases = world_phases(scenario, phases)
     mw = markov_world(scenario, phases=phases, start_failure_p=start_failure_p)
     T = scenario.world.horizon if horizon is None else horizon
     check_number("--horizon", T, error=AnalysisError, positive=True, unit=" of seconds")
@@ -336,7 +335,7 @@ def analyze(
     _check_trials(trials)
     ran: list[tuple[dict[str, Any], dict[str, Any]]] = []  # the detection trials, run once the chain is built (a crash ends it first)
     chain = build_chain(scenario, deployer, mw, max_states=max_states, progress=progress, miss=miss, start_catch=start_catch, guard=guard,
-                        budget=budget, detection=None if miss is not None else lambda: _detection(scenario, phases, trials, start_catch, budget, ran, status))
+                        budget=budget, detection=None if miss is not None else lambda: _detection(scenario, mw.phases, trials, start_catch, budget, ran, status))
     miss, start_catch = ran[0] if ran else (miss, start_catch)
     t0 = time.perf_counter()
     Q, _exit = chain.generator()

@@ -223,9 +223,10 @@ def _check_columns(job: str, axes: tuple[Axis, ...], settings: dict[str, Any]) -
                          f"over the swept one: rename the parameter in the scenario's parameters(...) (e.g. {name}_value) to sweep it")
 
 
-def _settings_of(job: str, setting: Any, more: dict[str, Any] | None) -> dict[str, Any]:
+def _settings_of(job: str, setting: Any, more: dict[str, Any] | None, scenario: str | None = None) -> dict[str, Any]:
     """Every setting of ``job`` (:data:`JOB_SETTINGS`), by name: ``setting`` is the first,
-    ``more`` any of them by name; one left out (or None) is None, or its default."""
+    ``more`` any of them by name; one left out (or None) is None, or its default (analyze's
+    ``phases``: as desmon analyze's, the World's of ``scenario`` at its defaults)."""
     if job not in JOB_SETTINGS:
         return {}  # refused by _checked
     names = JOB_SETTINGS[job]
@@ -236,6 +237,11 @@ def _settings_of(job: str, setting: Any, more: dict[str, Any] | None) -> dict[st
     if setting is not None or len(names) == 1:
         values[names[0]] = setting
     values.update({n: v for n, v in (more or {}).items() if v is not None})
+    if job == "analyze" and values.get("phases") is None and scenario is not None:
+        from desmon.analyze.markov import world_phases
+        from desmon.loader import load_scenario
+
+        values["phases"] = world_phases(load_scenario(scenario), None)
     return values
 
 
@@ -320,12 +326,7 @@ def run_sweep(
     Grid(axes, seeds, sweep_seed)  # a grid too large: refused before the scenario is loaded
     deployer, axes = _checked(job, scenario, axes, deployer)
     grid = Grid(axes, seeds, sweep_seed)
-    settings = _settings_of(job, setting, settings)
-    if job == "analyze" and settings.get("phases") is None:  # as desmon analyze: the World's (at the scenario's defaults)
-        from desmon.analyze.markov import world_phases
-        from desmon.loader import load_scenario
-
-        settings["phases"] = world_phases(load_scenario(scenario), None)
+    settings = _settings_of(job, setting, settings, scenario)
     _check_columns(job, axes, settings)
     # every point, before a cluster starts
     check_points(job, scenario, grid.iter_points(), settings.get(SETTINGS.get(job, "")), deployer, settings=settings)
