@@ -5,15 +5,18 @@ A deployer's worker runs as the user who runs desmon. Without these it could sto
 (SIGSTOP: a hang), end it with no report (SIGTERM, SIGKILL), or reach into desmon's
 process through the kernel: attach to it as a debugger (``ptrace``) and make it exit 0,
 write its memory (``process_vm_writev``, ``/proc/PID/mem``), take or write its open
-files (``pidfd_getfd``, ``/proc/PID/fd/1``: a forged report line), or have the kernel
+files (``pidfd_getfd``, ``/proc/PID/fd/1``: a forged report line), have the kernel
 signal it on its own socket's traffic (``fcntl`` ``F_SETOWN``/``F_SETSIG``, the
-``FIOSETOWN``/``SIOCSPGRP`` ioctls).
+``FIOSETOWN``/``SIOCSPGRP`` ioctls) or stop it through its terminal (the worker's group
+made the foreground one, ``TOSTOP`` set), or lower its resource limits (``prlimit64``:
+the kernel then kills it).
 
 * The filter makes each such system call fail with EPERM in the worker and in every
   process it starts: those that send a signal (``kill``, ``tkill``, ``tgkill``,
   ``rt_sigqueueinfo``, ``rt_tgsigqueueinfo``, ``pidfd_send_signal``), ``ptrace``,
-  ``process_vm_readv``, ``process_vm_writev``, ``pidfd_getfd``, and ``fcntl`` and
-  ``ioctl`` with the commands that name a process to signal. It refuses the 32-bit and
+  ``process_vm_readv``, ``process_vm_writev``, ``pidfd_getfd``, ``fcntl`` and ``ioctl``
+  with the commands that name a process to signal or take or set a terminal
+  (:data:`OWNER_COMMANDS`), and ``prlimit64`` on any process but the caller. It refuses the 32-bit and
   x32 system call entries, which it does not number. Python raises ``PermissionError``
   where the deployer's code makes one of them. desmon ends the worker from its own
   process, so the worker never needs them.
