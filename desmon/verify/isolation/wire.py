@@ -11,6 +11,7 @@ with its proxies (:mod:`desmon.verify.isolation.child`).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import io
 import pickle
 import pickletools
@@ -335,12 +336,18 @@ class Resolve:
         return obj, []
 
 
+@functools.lru_cache(maxsize=None)
+def _derived(kind: type) -> tuple[dataclasses.Field, ...]:  # type: ignore[type-arg]
+    """The fields of a record class that are not given to it (``init=False``), once per class."""
+    return tuple(f for f in dataclasses.fields(kind) if not f.init)
+
+
 def derive(obj: Any, kind: type) -> None:
     """The fields of a record the child built that are not its to give (``init=False``:
     derived from the others, as ``Reads.hosts`` from its devices) computed again by desmon:
     equal records (equality leaves derived fields out) then behave alike in desmon's checks
     and tables. A record its class cannot derive them for is refused."""
-    derived = [f for f in dataclasses.fields(kind) if not f.init]
+    derived = _derived(kind)
     if not derived:
         return
     computed = False
