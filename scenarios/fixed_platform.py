@@ -51,8 +51,10 @@ scenario = Scenario(
             "desmon": {"verdict": "HOLDS", "states": 6, "counterexamples": {}},
             "paper": {
                 "verdict": "VIOLATED",
-                "states": 8,
-                "counterexamples": {"valid-or-error": 1, "single-instance": 1, "coverage": 1, "fixed": 1},
+                "states": 12,
+                "counterexamples": {
+                    "valid-or-error": 1, "single-instance": 1, "coverage": 1, "fixed": 1, "errors-justified": 2, "preferred-when-possible": 2,
+                },
             },
         },
     },

@@ -61,8 +61,8 @@ scenario = Scenario(
                 "verdict": "VIOLATED",
                 "states": 189,
                 "counterexamples": {
-                    "valid-or-error": 1, "no-overcommit": 2, "single-instance": 1, "coverage": 2,
-                    "errors-justified": 2, "preferred-when-possible": 2,
+                    "valid-or-error": 1, "no-overcommit": 2, "single-instance": 1, "coverage": 1,
+                    "errors-justified": 0, "preferred-when-possible": 1,
                 },
             },
         },

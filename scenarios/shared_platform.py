@@ -50,7 +50,7 @@ scenario = Scenario(
         "verify": {
             # desmon verify --continue: verdict, distinct states, shortest counterexample lengths
             "desmon": {"verdict": "HOLDS", "states": 26, "counterexamples": {}},
-            "paper": {"verdict": "VIOLATED", "states": 41, "counterexamples": {"valid-or-error": 2, "coverage": 2, "errors-justified": 2, "preferred-when-possible": 2}},
+            "paper": {"verdict": "VIOLATED", "states": 41, "counterexamples": {"valid-or-error": 2, "coverage": 1, "errors-justified": 1, "preferred-when-possible": 1}},
         },
     },
 )

@@ -116,7 +116,7 @@ def test_each_control_rule_is_named(remote):
 
 
 def test_a_step_that_raises_an_error_says_which_errors_stand_after_it(capsys):
-    assert main(["verify", MIGRATION, "--deployer", "paper", "--continue", "--no-progress"]) == 1
+    assert main(["verify", COFFEE, "--deployer", "paper", "--continue", "--no-progress"]) == 1
     lines = _step_lines(capsys.readouterr().out)
     raising = [line for line in lines if "; raised " in line]
     assert raising

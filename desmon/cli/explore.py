@@ -151,9 +151,11 @@ def counterexample_frames(
     keys: tuple[Any, ...] | None = None,
     recorded: tuple[dict, ...] | None = None,  # type: ignore[type-arg]
     guard: Any = None,
+    initial_fails: tuple[int, ...] = (),
 ) -> tuple[list, list[tuple[str, str]], int | None]:  # type: ignore[type-arg]
-    """Frames of a counterexample: the initial state, then one per label (event and the
-    starts the checker made fail), stepped through the real core on the repository.
+    """Frames of a counterexample: the initial state (its first reaction failing the starts
+    at ``initial_fails``), then one per label (event and the starts the checker made fail),
+    stepped through the real core on the repository.
 
     ``invariants`` are the checked ones (audited on every state; an instantaneous one
     also inside each reaction). ``keys``: the checker's states, which the replay must
@@ -165,7 +167,7 @@ def counterexample_frames(
     from desmon.viz.explore import Frame, capture_reasons
 
     graphs = [s.graph for s in scenario.model.specs]
-    run = RepositoryRun(scenario, deployer, guard=guard)
+    run = RepositoryRun(scenario, deployer, guard=guard, initial_fails=initial_fails)
     checked = get_invariants(list(invariants))
     instant = get_invariants([n for n in run.bounds.instantaneous if n in invariants])
     recorder = _Recorder(run)
@@ -307,6 +309,7 @@ def _searched(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str],
     c = min(result.counterexamples, key=lambda c: c.length)
     frames, _final, _d = counterexample_frames(
         scenario, deployer, c.events, tuple(result.invariants), keys=tuple(s.key for s in c.steps), guard=args.guard,
+        initial_fails=c.initial_fails,
     )
     others = [x.invariant for x in result.counterexamples if x is not c]
     lines = [
@@ -346,6 +349,7 @@ def _saved(args: argparse.Namespace, scenario: Any) -> tuple[list, list[str], st
     try:
         frames, final, diverged = counterexample_frames(
             scenario, deployer, saved.labels, tuple(saved.invariants), recorded=tuple(saved.states), guard=args.guard,
+            initial_fails=saved.initial_fails,
         )
     except CheckerError as exc:  # (a step the file gives that cannot be taken: an edit)
         raise CheckerError(f"{saved.source}: {' '.join(str(exc).split())}") from None

@@ -37,7 +37,10 @@ def replay_counterexample(args: argparse.Namespace) -> int:
             f"{saved.source} holds a counterexample of scenario {saved.scenario!r}, but {args.scenario} is scenario "
             f"{scenario.name!r}: give the scenario file of {saved.scenario!r}"
         )
-    run = RepositoryRun(scenario, args.deployer, run=run_of(args))
+    try:
+        run = RepositoryRun(scenario, args.deployer, run=run_of(args), initial_fails=saved.initial_fails)
+    except CheckerError as exc:  # a failing start the initial reaction no longer issues
+        raise CheckerError(f"{saved.source}: the initial state cannot be replayed: {exc}; the scenario changed since the file was written") from None
     instant = get_invariants([n for n in run.bounds.instantaneous if n in saved.invariants])
     print(format_replay_head(saved))
     diverged, last, steps = None, (), []

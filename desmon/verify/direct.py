@@ -17,7 +17,7 @@ from typing import Any, Callable, Iterable, Protocol
 from desmon.model.events import Event
 from desmon.verify.search import BreadthFirst, Budget, CheckResult, Record, Segment, Trail, paused_gc
 from desmon.verify.state import Key
-from desmon.verify.system import TransitionSystem
+from desmon.verify.system import TransitionSystem, initial_states
 from desmon.verify.trace import Counterexample
 
 __all__ = ["DirectSearch", "PARALLEL_LEVEL", "Pool"]
@@ -65,15 +65,14 @@ class DirectSearch(BreadthFirst):
 
     def run(self) -> tuple[dict[str, Counterexample], str, int]:
         """The search: (counterexamples found, why incomplete or "", depth)."""
-        system = self.system
-        init = system.initial()
-        if system.symmetry is not None:
-            init = system.symmetry.canon(init)
-        self.index[init] = 0
-        self.keys.append(init)
+        roots = initial_states(self.system)
+        for _fails, init, _bad in roots:
+            self.index[init] = len(self.keys)
+            self.keys.append(init)
+        self.trail.set_roots([fails for fails, _init, _bad in roots])
         with paused_gc():
             try:
-                return self._search(self.keys, system.initial_violations(init))
+                return self._search(self.keys, [bad for _fails, _init, bad in roots])
             finally:
                 self._close_pool()
 

@@ -33,7 +33,7 @@ from desmon.verify.search import EXIT_INTERRUPTED, INTERRUPTED
 from desmon.verify.trace import Label
 from desmon.verify.replay import RepositoryRun
 from desmon.verify.report import NOTHING_ENABLED_FIX, format_counterexample, format_trace
-from desmon.verify.strategies import Choice, choices
+from desmon.verify.strategies import Choice, Run, runs
 
 __all__ = ["FuzzOutcome", "fuzz", "run_choices", "scratch_hypothesis_home"]
 
@@ -50,21 +50,33 @@ class FuzzOutcome:
     interrupted: bool = False  # Ctrl-C ended it: the text is the partial result
 
 
-def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice], enabler: Checker, faults: list | None = None):  # type: ignore[no-untyped-def]
-    """Run ``seq``; returns (labels up to the first violation, first violation or None).
-    The checked invariants hold after each reaction, the instantaneous ones (the checker's
-    ``instant``) also after every start and stop inside it. ``faults``: where the
-    deployer's fault is noted, if it failed."""
-    run = RepositoryRun(scenario, deployer, enabler.bounds, enabler.system.guard)
+def run_choices(  # type: ignore[no-untyped-def]
+    scenario: Scenario, deployer: str | Deployer, seq: list[Choice], enabler: Checker, faults: list | None = None, initial: tuple[int, ...] = (),
+):
+    """Run ``seq`` from the initial state whose first reaction fails the starts at
+    ``initial`` (those of them it issues); returns (labels up to the first violation, first
+    violation or None). The checked invariants hold after each reaction, the instantaneous
+    ones (the checker's ``instant``) also after every start and stop inside it. ``faults``:
+    where the deployer's fault is noted, if it failed."""
+    labels, bad, _initial = _run(scenario, deployer, seq, enabler, faults, initial)
+    return labels, bad
+
+
+def _run(  # type: ignore[no-untyped-def]
+    scenario: Scenario, deployer: str | Deployer, seq: list[Choice], enabler: Checker, faults: list | None, initial: tuple[int, ...],
+):
+    """:func:`run_choices`, and the failing starts of the first reaction it issued."""
+    run = RepositoryRun(scenario, deployer, enabler.bounds, enabler.system.guard, initial_fails=initial, unissued_fails_drop=True)
+    initial = run.initial_fails
     instant = enabler.system.instant
     labels: list[Label] = []
     watched = {i.name for i in instant}
     first = [f for f in run.initial_found if f[0] in watched]  # broken inside the initial reaction, after a start or stop
     if first:
-        return labels, (first[0][0], f"{first[0][1]} (during the reaction, right after `{first[0][2]}`)")
+        return labels, (first[0][0], f"{first[0][1]} (during the reaction, right after `{first[0][2]}`)"), initial
     bad = run.violations()
     if bad:
-        return labels, bad[0]
+        return labels, bad[0], initial
     for pick, fails in seq:
         enabled = enabler.enabled(run.key())
         if not enabled:
@@ -76,14 +88,14 @@ def run_choices(scenario: Scenario, deployer: str | Deployer, seq: list[Choice],
             labels.append((event, tuple(i for i in fails if i < run.control.n)))
             if faults is not None:
                 faults.append(fault)
-            return labels, (CRASH, fault.what)
+            return labels, (CRASH, fault.what), initial
         labels.append((event, tuple(i for i in fails if i < run.control.n)))
         if during is not None:  # broken inside the reaction, maybe repaired before it ended
-            return labels, (during[0], f"{during[1]} (during the reaction, right after `{during[2]}`)")
+            return labels, (during[0], f"{during[1]} (during the reaction, right after `{during[2]}`)"), initial
         bad = run.violations()
         if bad:
-            return labels, bad[0]
-    return labels, None
+            return labels, bad[0], initial
+    return labels, None, initial
 
 
 def _end_progress(progress: bool, calls: int) -> None:
@@ -130,12 +142,12 @@ class _Sequences:
         self.calls = 0
         self.passed = 0  # sequences run to their end without a violation
         self.longest = 0  # the most events a sequence applied (fewer than drawn where none was enabled)
-        self.smallest: list[Choice] | None = None
+        self.smallest: Run | None = None
         self.outcome: Any = None
         self.smallest_never_ends = False  # whether the smallest's last reaction ran away (the reaction limit stopped it)
         self.ctrl_c = [False]
 
-    def fails(self, seq: list[Choice]) -> bool:
+    def fails(self, drawn: Run) -> bool:
         if self.ctrl_c[0]:
             raise KeyboardInterrupt
         self.calls += 1
@@ -143,7 +155,7 @@ class _Sequences:
             print(f"\r  {self.calls} sequences", end="", file=sys.stderr, flush=True)
         faults: list[DeployerFault] = []
         try:
-            outcome = run_choices(self.scenario, self.deployer, seq, self.enabler, faults)
+            outcome = _run(self.scenario, self.deployer, drawn[1], self.enabler, faults, drawn[0])
         except ReactionStopped:  # Ctrl-C while a reaction ran on without yielding
             raise KeyboardInterrupt from None
         failed = outcome[1] is not None
@@ -151,17 +163,18 @@ class _Sequences:
         if not failed:
             self.passed += 1
         ran_away = any(isinstance(f.cause, RanAway) for f in faults)
-        if failed and (self.smallest is None or len(seq) <= len(self.smallest)):
-            self.smallest, self.outcome, self.smallest_never_ends = list(seq), outcome, ran_away
+        if failed and (self.smallest is None or len(drawn[1]) <= len(self.smallest[1])):
+            self.smallest, self.outcome, self.smallest_never_ends = (drawn[0], list(drawn[1])), outcome, ran_away
         if ran_away:
             raise _NeverEnds  # (each try of a shrink would wait out the reaction limit again: the sequence as found)
         return failed
 
-    def outcome_of(self, seq: list[Choice]) -> Any:
-        """(labels, violation) of the failing ``seq``: kept where it is the smallest met."""
-        if seq == self.smallest:
+    def outcome_of(self, drawn: Run) -> Any:
+        """(labels, violation, failing starts of the first reaction) of the failing run
+        ``drawn``: kept where it is the smallest met."""
+        if drawn == self.smallest:
             return self.outcome
-        return run_choices(self.scenario, self.deployer, seq, self.enabler)
+        return _run(self.scenario, self.deployer, drawn[1], self.enabler, None, drawn[0])
 
 
 def fuzz(
@@ -191,7 +204,7 @@ def fuzz(
     try:
         with _ctrl_c_noted() as ctrl_c, guard.watching(lambda: INTERRUPTED if ctrl_c[0] else ""):
             search.ctrl_c = ctrl_c
-            seq = find(choices(scenario, max_size=max_size, bounds=bounds), search.fails, settings=cfg, random=random.Random(seed))
+            drawn = find(runs(scenario, max_size=max_size, bounds=bounds), search.fails, settings=cfg, random=random.Random(seed))
             if ctrl_c[0]:  # noted after the last sequence: the search ended on its own
                 raise KeyboardInterrupt
     except NoSuchExample:
@@ -204,7 +217,7 @@ def fuzz(
         )
     except _NeverEnds:
         _end_progress(progress, search.calls)
-        seq, stopped, never_ends = search.smallest, True, search.smallest_never_ends  # type: ignore[assignment]
+        drawn, stopped, never_ends = search.smallest, True, search.smallest_never_ends  # type: ignore[assignment]
     except KeyboardInterrupt:  # Ctrl-C: what was found so far
         _end_progress(progress, search.calls)
         if search.smallest is None:
@@ -215,10 +228,10 @@ def fuzz(
                 search.passed,
                 interrupted=True,
             )
-        seq, interrupted = search.smallest, True
+        drawn, interrupted = search.smallest, True
     else:
         _end_progress(progress, search.calls)
-    return _violation(scenario, deployer, enabler, search.outcome_of(seq), head=head, sequences=search.calls,
+    return _violation(scenario, deployer, enabler, search.outcome_of(drawn), head=head, sequences=search.calls,
                       interrupted=interrupted, rederive_up_to=0 if never_ends else rederive_up_to, never_ends=never_ends, stopped=stopped)
 
 
@@ -230,8 +243,8 @@ def _violation(
     :func:`run_choices` gives them): its trace, and the checker's shortest counterexample
     of the same invariant when the sequence is short enough. A reaction that never ends
     is neither shrunk nor re-derived: each try would wait out the reaction limit again."""
-    labels, (inv, msg) = outcome
-    steps = enabler.replay(labels)
+    labels, (inv, msg), initial = outcome
+    steps = enabler.replay(labels, initial=initial)
     how = ("interrupted while hypothesis shrank it: maybe not the smallest" if interrupted
            else "as found, not shrunk: a reaction that never ends would wait out the reaction limit at each try" if never_ends
            else "as found, not shrunk: the search stopped at a reaction that never ends, which would wait out the reaction limit at each try"

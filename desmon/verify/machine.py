@@ -1,7 +1,7 @@
 """A hypothesis ``RuleBasedStateMachine`` over the networkx repository.
 
 Its rules are the checker's events (action change, device fail/repair, platform
-down/up, load step, each with optional start failures), its invariants the named
+down/up, load step, each with optional start failures, as the initial reaction), its invariants the named
 invariants of docs/design.md §9 (the instantaneous ones also after every start and stop
 inside a reaction, as the checker watches them) -- including ``history``, which here sees the
 infrastructure's running list, its stop count and the DEPLOYMENT_HISTORY edges. It
@@ -40,12 +40,14 @@ def make_machine(scenario: Scenario, deployer: str | Deployer = "desmon", bounds
     watched = {i.name for i in enabler.system.instant}
 
     class DeploymentMachine(RuleBasedStateMachine):
-        @initialize()
-        def start(self) -> None:
-            self.run = RepositoryRun(scenario, deployer, b)
+        @initialize(initial=failing)
+        def start(self, initial: tuple[int, ...]) -> None:
+            self.run = RepositoryRun(scenario, deployer, b, initial_fails=initial, unissued_fails_drop=True)
             self.trace: list[tuple[Event, tuple[int, ...]]] = []
             first = [f for f in self.run.initial_found if f[0] in watched]
-            assert not first, f"{first[0][0]}: {first[0][1]} during the initial reaction, right after `{first[0][2]}`"
+            assert not first, (
+                f"{first[0][0]}: {first[0][1]} during the initial reaction (failing starts {list(self.run.initial_fails)}), right after `{first[0][2]}`"
+            )
 
         def _do(self, data, family: Callable[[Event], bool]) -> None:  # type: ignore[no-untyped-def]
             options = [e for e in enabler.enabled(self.run.key()) if family(e)]

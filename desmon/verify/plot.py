@@ -38,11 +38,11 @@ def _title(head: str, lines: tuple[str, ...] | list[str], width: int = TITLE_WID
 
 def snapshot_panels(scenario: Any, deployer: Any, bounds: Any, c: Counterexample) -> tuple[list[tuple[str, Any]], Any]:
     """(title, snapshot) after the initial state and after each step; and the final graph."""
-    run = RepositoryRun(scenario, deployer, bounds)
+    run = RepositoryRun(scenario, deployer, bounds, initial_fails=c.initial_fails)
     if run.key() != c.steps[0].key:
         raise NondeterminismError(f"--plot: the repository's initial state {run.key()} is not the checker's {c.steps[0].key}")
     first = c.steps[0]
-    panels = [(_title("0. initial", describe_state(first.key)[:3]), run.repo.snapshot())]
+    panels = [(_title(f"0. {first.title()}", describe_state(first.key)[:3]), run.repo.snapshot())]
     for s in c.steps[1:]:
         run.step(s.event, s.fail_indices)  # type: ignore[arg-type]
         if run.key() != s.key:

@@ -36,20 +36,26 @@ from desmon.verify.trace import Label, Step, initial_step, make_step, reaction_f
 __all__ = ["initial_reaction", "first_reaction_fault", "ScriptedControl", "RepositoryRun", "repository_key"]
 
 
-def initial_reaction(core: DeploymentCore, scenario: Scenario, bounds: Bounds, control: ControlPort) -> None:
-    """The scenario's initial facts, then the system's first reaction (no start fails)."""
+def initial_reaction(core: DeploymentCore, scenario: Scenario, bounds: Bounds, control: ControlPort, fails: tuple[int, ...] = ()) -> Any:
+    """The scenario's initial facts, then the system's first reaction through ``control``
+    (whose starts fail as it decides: ``fails``, the indices of the starts the Control rules
+    allow that fail, only names them in the message of a deployer that cannot react);
+    returns the reaction's StepLog."""
     for ev in scenario.initial:
         core.observe(ev)
     act = bounds.start_action(scenario)
     try:
         if act is not None:
-            core.step(ActionChange(act), control, force=True)
-        else:
-            log = run_sync(core.reaction(Stimulus(context_changed=True)), control)
-            core.settle(e.graph for e in log.errors)
+            return core.step(ActionChange(act), control, force=True)[1]
+        log = run_sync(core.reaction(Stimulus(context_changed=True)), control)
+        core.settle(e.graph for e in log.errors)
+        return log
     except DeployerFault as fault:  # no state to show a path to: the deployer cannot run at all (exit 2)
         context = core.query.context()
-        raise first_reaction_fault(core.deployer.name, f"action {act}" if act is not None else f"context {context}", fault) from None
+        where = f"action {act}" if act is not None else f"context {context}"
+        if fails:
+            where += ", with " + ", ".join(f"start #{i + 1}" for i in fails) + " failing"
+        raise first_reaction_fault(core.deployer.name, where, fault) from None
 
 
 def first_reaction_fault(name: str, where: str, fault: DeployerFault) -> DeployerFault:
@@ -60,6 +66,14 @@ def first_reaction_fault(name: str, where: str, fault: DeployerFault) -> Deploye
     out.stimulus, out.log, out.cause, out.what = fault.stimulus, fault.log, fault.cause, fault.what
     out.initial = True
     return out
+
+
+def _unissued(whose: str, fails: tuple[int, ...], issued: int) -> str:
+    """Why a replay's failing start indices no longer apply: the reaction issues fewer real starts."""
+    return (
+        f"{whose} fail_indices {list(fails)} fail start #{max(fails) + 1} of the reaction, which issues "
+        f"{issued} real start{'s' if issued != 1 else ''} now"
+    )
 
 
 class ScriptedControl(ImmediateControl):
@@ -94,11 +108,15 @@ def repository_key(repo: Repository, core: DeploymentCore) -> Key:
 
 class RepositoryRun:
     """The deployment core on a fresh networkx repository, stepped event by event (under
-    ``guard``, or the whole ``run`` context: :mod:`desmon.deployment.run`)."""
+    ``guard``, or the whole ``run`` context: :mod:`desmon.deployment.run`), from the initial
+    state whose first reaction failed the starts at ``initial_fails`` (indices among those
+    the Control rules allow: the checker's choice). Indices beyond the starts that reaction
+    issues are refused (a saved trace the scenario no longer matches), or dropped with
+    ``unissued_fails_drop`` (a fuzzer's draw)."""
 
     def __init__(
         self, scenario: Scenario, deployer: str | Deployer = "desmon", bounds: Bounds | None = None, guard: Guard | None = None,
-        run: RunContext | None = None,
+        run: RunContext | None = None, initial_fails: tuple[int, ...] = (), unissued_fails_drop: bool = False,
     ) -> None:
         self.scenario = scenario
         self.run_context = run_context(run, guard).with_checks(ScalarChecks)
@@ -109,10 +127,17 @@ class RepositoryRun:
         self.control = ScriptedControl(self.repo, scenario.model)
         self.core = DeploymentCore(scenario.model, self.query, RepositoryInsert(self.repo, scenario.model.robot), deployer, run=self.run_context)
         found = self._watch(get_invariants(list(self.bounds.instantaneous)))
+        #: the starts the first reaction failed by the checker's choice (indices among those the rules allow)
+        self.initial_fails = tuple(initial_fails)
+        self.control.arm(self.initial_fails)
         try:
-            initial_reaction(self.core, scenario, self.bounds, self.control)
+            self.initial_log = initial_reaction(self.core, scenario, self.bounds, self.control, self.initial_fails)
         finally:
             self.control.after = None
+        if self.initial_fails and max(self.initial_fails) >= self.control.n:  # (a fuzz draw: dropped; a saved trace: refused)
+            if not unissued_fails_drop:
+                raise CheckerError(_unissued("the initial reaction's", self.initial_fails, self.control.n))
+            self.initial_fails = tuple(i for i in self.initial_fails if i < self.control.n)
         #: the instantaneous invariants the initial reaction broke after a start or stop, the
         #: first violation of each, as ``(invariant, message, after what)`` (the checker
         #: judges them as any reaction's)
@@ -192,14 +217,12 @@ class RepositoryRun:
         run that has not stepped yet)."""
         watched = {i.name for i in instant}
         first = tuple(f for f in self.initial_found if f[0] in watched)
-        yield initial_step(self.key()), reaction_findings(first, self.core.findings_of(transitions, True) if transitions else [])
+        step0 = initial_step(self.key(), self.initial_log, self.initial_fails, self.control.refuse)
+        yield step0, reaction_findings(first, self.core.findings_of(transitions, True) if transitions else [])
         for i, (event, fails) in enumerate(labels, start=1):
             prev = self.key()
             (_stim, log), during = self._step_finding_each(event, fails, instant)
             if fails and max(fails) >= self.control.n:  # a failing start the reaction no longer issues
-                raise CheckerError(
-                    f"its fail_indices {list(fails)} fail start #{max(fails) + 1} of the reaction, which issues "
-                    f"{self.control.n} real start{'s' if self.control.n != 1 else ''} now"
-                )
+                raise CheckerError(_unissued("its", fails, self.control.n))
             found = reaction_findings(during, self.core.findings_of(transitions, True) if transitions else [])
             yield make_step(i, prev, event, self.key(), log, fails, self.control.refuse), found

@@ -18,7 +18,7 @@ from desmon.verify.state import Key
 
 __all__ = [
     "format_result", "format_stats", "stats_to_json", "format_trace", "result_to_json", "counterexample_pytest", "event_to_json", "event_from_json",
-    "constraint_to_json", "constraint_from_json", "labels_from_json", "key_to_json",
+    "constraint_to_json", "constraint_from_json", "labels_from_json", "initial_fails_from_json", "key_to_json",
     "SavedCounterexample", "read_counterexample", "format_replay_head", "format_divergence", "format_replay_verdict",
 ]
 
@@ -116,25 +116,39 @@ def labels_from_json(counterexample: object, *, where: str = "counterexample") -
         at = f"{where}.states[{i}]"
         s = json_object(at, state, '{"event": {...}, "fail_indices": []}')
         event = event_from_json(s.get("event"), where=f"{at}.event")
-        fails = s.get("fail_indices")
-        if fails is None and not s.get("failed_starts"):
-            fails = []  # written before fail_indices, with no failing start: nothing is lost
-        if fails is None:
-            raise CheckerError(f"{at} lists failed starts but no fail_indices (written by an older desmon): re-run desmon verify --json")
-        if not isinstance(fails, list) or any(isinstance(x, bool) or not isinstance(x, int) or x < 0 for x in fails):
-            raise CheckerError(f"{at}.fail_indices = {fails!r} is not a list of non-negative integers (the failing Control.start calls)")
-        if fails != sorted(set(fails)):
-            raise CheckerError(f"{at}.fail_indices = {fails!r}: give each failing Control.start call once, in increasing order")
-        listed = s.get("failed_starts")
-        # before refused_starts, failed_starts listed the refused starts too: it may be longer
-        older = "refused_starts" not in s
-        if isinstance(listed, list) and (len(listed) < len(fails) if older else len(listed) != len(fails)):
-            raise CheckerError(
-                f"{at}: fail_indices names {len(fails)} failing start(s) but failed_starts lists {len(listed)}: "
-                "a hand edit? re-run desmon verify --json"
-            )
-        out.append((event, tuple(fails)))
+        out.append((event, _fails_from_json(at, s)))
     return tuple(out)
+
+
+def initial_fails_from_json(counterexample: object, *, where: str = "counterexample") -> tuple[int, ...]:
+    """The starts of the first reaction that failed by the checker's choice, as a
+    counterexample written by ``desmon verify --json`` gives them (its ``states[0]``;
+    :func:`labels_from_json` has checked its shape): what :class:`RepositoryRun
+    <desmon.verify.replay.RepositoryRun>` takes as ``initial_fails``."""
+    first = json_object(f"{where}.states[0]", json_object(where, counterexample, '{"states": [...]}')["states"][0], '{"event": null, ...}')
+    return _fails_from_json(f"{where}.states[0]", first)
+
+
+def _fails_from_json(at: str, s: dict[str, Any]) -> tuple[int, ...]:
+    """A saved state's ``fail_indices``, checked against its ``failed_starts``."""
+    fails = s.get("fail_indices")
+    if fails is None and not s.get("failed_starts"):
+        fails = []  # written before fail_indices, with no failing start: nothing is lost
+    if fails is None:
+        raise CheckerError(f"{at} lists failed starts but no fail_indices (written by an older desmon): re-run desmon verify --json")
+    if not isinstance(fails, list) or any(isinstance(x, bool) or not isinstance(x, int) or x < 0 for x in fails):
+        raise CheckerError(f"{at}.fail_indices = {fails!r} is not a list of non-negative integers (the failing Control.start calls)")
+    if fails != sorted(set(fails)):
+        raise CheckerError(f"{at}.fail_indices = {fails!r}: give each failing Control.start call once, in increasing order")
+    listed = s.get("failed_starts")
+    # before refused_starts, failed_starts listed the refused starts too: it may be longer
+    older = "refused_starts" not in s
+    if isinstance(listed, list) and (len(listed) < len(fails) if older else len(listed) != len(fails)):
+        raise CheckerError(
+            f"{at}: fail_indices names {len(fails)} failing start(s) but failed_starts lists {len(listed)}: "
+            "a hand edit? re-run desmon verify --json"
+        )
+    return tuple(fails)
 
 
 def key_to_json(k: Key) -> dict[str, Any]:
@@ -251,6 +265,7 @@ class SavedCounterexample:
     during: str | None
     labels: tuple[Label, ...]  # the steps after the initial state
     states: tuple[dict[str, Any], ...]  # the recorded key of each state (key_to_json), the initial one first
+    initial_fails: tuple[int, ...] = ()  # the starts of the first reaction that failed by the checker's choice
 
 
 def read_counterexample(path: str | Path, number: int | None = None) -> SavedCounterexample:
@@ -294,7 +309,7 @@ def read_counterexample(path: str | Path, number: int | None = None) -> SavedCou
     )
     return SavedCounterexample(
         src, n, len(top["counterexamples"]), scenario, deployer, tuple(sorted(params.items())),
-        checked, invariant, _field(where, c, "message", str), during, labels, states,
+        checked, invariant, _field(where, c, "message", str), during, labels, states, initial_fails_from_json(c, where=where),
     )
 
 
@@ -433,8 +448,8 @@ _PYTEST = GENERATED_TEST_HEAD + ''': replays the shortest counterexample(s) thro
 
 The scenario and the deployer are SCENARIO and DEPLOYER below. Each step is one environment event and
 the complete reaction of the DeploymentCore over the networkx repository
-(desmon.verify.RepositoryRun, from the checker's initial reaction); the starts listed in
-FAILS fail. The test asserts the invariant is violated where the checker said.
+(desmon.verify.RepositoryRun, from the checker's initial reaction, whose starts at
+INITIAL_FAILS fail); the starts listed in a step's fails fail. The test asserts the invariant is violated where the checker said.
 """
 
 import sys
@@ -455,11 +470,11 @@ DEPLOYER_FOLDER = {folder!r}
 INITIAL_ACTION = {initial_action!r}
 
 
-def replay(steps, after_command=None):
+def replay(steps, after_command=None, initial_fails=()):
     """The initial state and the state after each step; ``after_command(run)`` is called after every Start/Stop."""
     if DEPLOYER_FOLDER is not None and DEPLOYER_FOLDER not in sys.path:
         sys.path.insert(0, DEPLOYER_FOLDER)
-    run = RepositoryRun(load_scenario(SCENARIO, PARAMS), resolve_deployer(DEPLOYER))
+    run = RepositoryRun(load_scenario(SCENARIO, PARAMS), resolve_deployer(DEPLOYER), initial_fails=initial_fails)
     assert run.bounds.start_action(run.scenario) == INITIAL_ACTION, "not the checker's initial state"
     if after_command is not None:
         control, start, stop = run.control, run.control.start, run.control.stop
@@ -494,7 +509,7 @@ def test_{name}():
     steps = [
 {steps}
     ]
-    views = replay(steps)
+    views = replay(steps, initial_fails={initial_fails!r})
     bad = check_invariants(views[-1], get_invariants([{invariant!r}]))
     assert bad, "the counterexample no longer violates {invariant}"
     for view in views[:-1]:
@@ -518,11 +533,11 @@ def counterexample_pytest(
             fails = _fail_indices(s)
             steps.append(f"        ({s.event!r}, {fails!r}),{_step_comment(s)}")
         during = f" (during the reaction, after {c.during})" if c.during else ""
-        if c.during:
-            # an instantaneous violation: the final stable state may have repaired it
-            src += _CASE_DURING.format(name=c.invariant.replace("-", "_"), invariant=c.invariant, length=c.length, during=during, steps="\n".join(steps))
-        else:
-            src += _CASE.format(name=c.invariant.replace("-", "_"), invariant=c.invariant, length=c.length, during=during, steps="\n".join(steps))
+        case = _CASE_DURING if c.during else _CASE  # (during: an instantaneous violation the final stable state may have repaired)
+        src += case.format(
+            name=c.invariant.replace("-", "_"), invariant=c.invariant, length=c.length, during=during, steps="\n".join(steps),
+            initial_fails=c.initial_fails,
+        )
     return src
 
 
@@ -568,7 +583,7 @@ def test_{name}():
         view = SystemView(run.query.platform_states(), run.core.specs(), frozenset(), ())
         bad.extend(check_invariants(view, get_invariants([{invariant!r}])))
 
-    replay(steps, after_command=audit)
+    replay(steps, after_command=audit, initial_fails={initial_fails!r})
     assert bad, "the counterexample no longer violates {invariant}"
 '''
 

@@ -373,7 +373,7 @@ class Replayable(Protocol):
     @property
     def invariants(self) -> tuple[Invariant, ...]: ...
 
-    def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]: ...
+    def replay(self, labels: list[Label], expect: list[Key] | None = None, initial: tuple[int, ...] = ()) -> list[Step]: ...
 
 
 class Trail:
@@ -392,6 +392,8 @@ class Trail:
         self.key_of = key_of
         self.keep_going = keep_going
         self.parent = array("i", [-1])  # (4 bytes a state: at most 2**31 states)
+        #: the initial states, numbered first: the failed start indices of each one's first reaction
+        self.roots: list[tuple[int, ...]] = [()]
         #: with ``label_of`` (the label of the transition from state i's parent to i, found
         #: again when a path is rebuilt) no label is stored: a state costs its parent only
         self.label_of = label_of
@@ -400,6 +402,13 @@ class Trail:
         self._label_ids: dict[Any, int] = {}
         self.found: dict[str, Counterexample] = {}
         self.wanted = {i.name for i in system.invariants}
+
+    def set_roots(self, fails: list[tuple[int, ...]]) -> None:
+        """The initial states are numbered 0 to ``len(fails) - 1``; each one's first reaction failed the starts at its ``fails``."""
+        self.roots = list(fails)
+        self.parent = array("i", [-1] * len(fails))
+        if self.label_of is None:
+            self.label = array("i", [-1] * len(fails))
 
     def label_id(self, lookup: Any, label: Label) -> int:
         li = self._label_ids.get(lookup)
@@ -420,30 +429,31 @@ class Trail:
         if self.label_of is None:
             self.label.frombytes(label_ids.astype("int32").tobytes())
 
-    def path(self, i: int) -> tuple[list[Label], list[Key]]:
-        """The labels from the initial state to state ``i``, and the states on the way."""
+    def path(self, i: int) -> tuple[list[Label], list[Key], tuple[int, ...]]:
+        """The labels from an initial state to state ``i``, the states on the way, and the
+        starts that initial state's first reaction failed."""
         ls: list[Label] = []
         ks: list[Key] = []
         parent, key_of = self.parent, self.key_of
         label_of = self.label_of or (lambda j: self.labels[self.label[j]])
-        while i >= 0:
+        while parent[i] >= 0:
             ks.append(key_of(i))
-            if parent[i] >= 0:
-                ls.append(label_of(i))
+            ls.append(label_of(i))
             i = parent[i]
+        ks.append(key_of(i))
         ls.reverse()
         ks.reverse()
-        return ls, ks
+        return ls, ks, self.roots[i]
 
     def record(self, name: str, msg: str, i: int, during: str | None = None, extra: Label | None = None) -> None:
         """A violation of ``name`` in state ``i`` (or, with ``extra``, during the transition
         ``extra`` out of it): its counterexample, unless the invariant has one already."""
         if name in self.found:
             return
-        ls, ks = self.path(i)
+        ls, ks, initial = self.path(i)
         if extra is not None:
             ls.append(extra)
-        self.found[name] = Counterexample(name, msg, tuple(self.system.replay(ls, expect=ks)), during)
+        self.found[name] = Counterexample(name, msg, tuple(self.system.replay(ls, expect=ks, initial=initial)), during)
 
     def done(self) -> bool:
         """Whether the search has what it looks for: a counterexample (or one of each
@@ -499,21 +509,25 @@ class BreadthFirst:
         """Expand the states numbered in ``frontier``; returns the next level's numbers."""
         raise NotImplementedError
 
-    def _search(self, states: list | array, violations: list[tuple[str, str]]) -> tuple[dict[str, Counterexample], str, int]:  # type: ignore[type-arg]
-        """The BFS from state 0, whose invariant ``violations`` are given; ``states`` is the
-        engine's list of them (their count, and what a second Ctrl-C truncates). Returns
+    def _search(self, states: list | array, violations: list[list[tuple[str, ...]]]) -> tuple[dict[str, Counterexample], str, int]:  # type: ignore[type-arg]
+        """The BFS from the initial states, numbered 0 to ``len(violations) - 1`` (the trail's
+        roots), whose invariant ``violations`` are given, each initial state's; ``states`` is
+        the engine's list of them (their count, and what a second Ctrl-C truncates). Returns
         (counterexamples found, why incomplete or "", depth), and counts the states and
         transitions into ``res``."""
         trail, budget = self.trail, self.budget
         self.depth = self.transitions = 0
         self.incomplete = ""
         budget.status = lambda: (len(states), self.transitions, self.depth)
-        sizes: list[int] = [1]
+        sizes: list[int] = [len(violations)]
         budget.levels = lambda: sizes
-        for name, msg, *during in violations:  # (the initial reaction's own findings say where in it)
-            trail.record(name, msg, 0, during[0] if during else None)
+        frontier: Any = []
+        for root, bad in enumerate(violations):
+            for name, msg, *during in bad:  # (the initial reaction's own findings say where in it)
+                trail.record(name, msg, root, during[0] if during else None)
+            if not bad or trail.keep_going:  # (as any state that violates an invariant: :meth:`_add_state`)
+                frontier.append(root)
         self.any_found = bool(trail.found)
-        frontier: Any = [0]
         try:
             while len(frontier) and not self._finished() and not self.incomplete:
                 if self.max_depth is not None and self.depth >= self.max_depth:

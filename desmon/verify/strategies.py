@@ -21,10 +21,13 @@ from desmon.model.scenario import Scenario
 from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.environment import variable_kinds, variables
 
-__all__ = ["Choice", "choice", "choices", "events", "event_sequences", "start_failures", "reach"]
+__all__ = ["Choice", "Run", "choice", "choices", "runs", "events", "event_sequences", "start_failures", "reach"]
 
 #: (index into the enabled events, indices of failing starts)
 Choice = tuple[int, tuple[int, ...]]
+
+#: a whole run: the indices of the failing starts of the first reaction, then the sequence
+Run = tuple[tuple[int, ...], list[Choice]]
 
 
 #: the picks drawn at least (``pick % len(enabled)``: any of up to this many enabled events)
@@ -63,6 +66,15 @@ def choices(scenario: Scenario, *, max_size: int = 12, bounds: Bounds | None = N
     b = bounds or bounds_of(scenario)
     events, last_start = reach(scenario, b)
     return st.lists(choice(b, picks=events, max_index=last_start), max_size=max_size)
+
+
+def runs(scenario: Scenario, *, max_size: int = 12, bounds: Bounds | None = None) -> st.SearchStrategy[Run]:
+    """Whole runs for ``scenario`` within its checker bounds (what ``desmon fuzz`` draws):
+    the failing starts of the first reaction (none where the bounds let no start fail),
+    then a failure sequence (:func:`choices`)."""
+    b = bounds or bounds_of(scenario)
+    _events, last_start = reach(scenario, b)
+    return st.tuples(start_failures(b, max_index=max(LAST_START, last_start)), choices(scenario, max_size=max_size, bounds=b))
 
 
 def events(scenario: Scenario, bounds: Bounds | None = None) -> st.SearchStrategy:

@@ -66,7 +66,7 @@ from desmon.model.system import PlatformState
 from desmon.verify.environment import variable_kind, variable_kinds, variables
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
-from desmon.verify.trace import Label, Step, initial_step, make_step
+from desmon.verify.trace import Label, Step, initial_step, make_step, outcome_prefix
 
 __all__ = ["Symmetry", "SYMMETRIC_DEPLOYERS"]
 
@@ -263,27 +263,27 @@ class Symmetry:
         return kind.rename(event, lambda p: perm.get(p, p), device)
 
     # -- traces ------------------------------------------------------------------------------
-    def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]:
-        """A *concrete* trace: each stored (canonical) label is mapped back through the
-        permutation of the concrete state it applies to; every step must land in the
-        stored orbit."""
+    def replay(self, labels: list[Label], expect: list[Key] | None = None, initial: tuple[int, ...] = ()) -> list[Step]:
+        """A *concrete* trace from the initial state whose first reaction failed the starts at
+        ``initial``: each stored (canonical) label is mapped back through the permutation of
+        the concrete state it applies to; every step must land in the stored orbit."""
         c = self.checker
-        key = c.initial()
+        key = c.initial(initial)
         if expect and self.canon(key) != expect[0]:
             raise CheckerError(f"--symmetry: the initial state {key} is not in the stored orbit {expect[0]}")
-        steps = [initial_step(key)]
+        st = c.store
+        steps = [initial_step(key, c.initial_log, initial, lambda g, p: st.rules.start_refusal(g, p, st.platform_state))]
         for i, (event, fails) in enumerate(labels, 1):
             perm = self.permutation(key)  # concrete -> canonical
             back = {v: k for k, v in perm.items()}
             concrete = self.rename_event(event, back)
-            prefix = tuple(j not in fails for j in range(max(fails) + 1)) if fails else ()
             prev = key
-            key, _outcomes, log, _instant = c.run_one(prev, concrete, prefix)
+            key, _outcomes, log, _instant = c.run_one(prev, concrete, outcome_prefix(fails))
             if expect is not None and i < len(expect) and self.canon(key) != expect[i]:
                 raise CheckerError(
                     f"--symmetry refused: replaying step {i} ({concrete}) left the stored orbit, the reduction is not sound for this scenario"
                 )
-            st = c.store  # left in the step's next state: the Control rules' refusals there tell refused starts from chosen failures
+            # (the store is left in the step's next state: the Control rules' refusals there tell refused starts from chosen failures)
             steps.append(make_step(i, prev, concrete, key, log, fails, lambda g, p: st.rules.start_refusal(g, p, st.platform_state)))
         return steps
 

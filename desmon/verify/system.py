@@ -39,9 +39,9 @@ from desmon.verify.environment import enabled_events
 from desmon.verify.replay import initial_reaction
 from desmon.verify.search import NOT_CHECKED, Record, Segment
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore, StoreInsert
-from desmon.verify.trace import WHOLE_REACTION, Label, Step, branch_names, initial_step, make_step, reaction_findings
+from desmon.verify.trace import WHOLE_REACTION, Label, Step, branch_names, initial_step, make_step, outcome_prefix, reaction_findings
 
-__all__ = ["TransitionSystem", "Reduction", "command_key", "crash_of", "nondeterminism", "opened", "same_again", "RECHECK_FIRST", "RECHECK_EVERY"]
+__all__ = ["TransitionSystem", "initial_states", "Reduction", "command_key", "crash_of", "nondeterminism", "opened", "same_again", "RECHECK_FIRST", "RECHECK_EVERY"]
 
 #: Nondeterminism detection: the first RECHECK_FIRST transitions a search runs, and every
 #: RECHECK_EVERY-th after them, are run twice and compared (:meth:`TransitionSystem.successors`).
@@ -64,7 +64,7 @@ class Reduction(Protocol):
 
     def canon(self, key: Key) -> Key: ...
 
-    def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]: ...
+    def replay(self, labels: list[Label], expect: list[Key] | None = None, initial: tuple[int, ...] = ()) -> list[Step]: ...
 
 
 def _with_platforms(scenario: Scenario) -> SystemModel:
@@ -183,14 +183,16 @@ class TransitionSystem:
             s = self._slots_cache[context] = self.core.deployer.requested(self.model.rules.slots_for(context))
         return s
 
-    def initial(self) -> Key:
-        """The scenario's initial facts, then the system's first reaction (no start fails)."""
+    def initial(self, fails: tuple[int, ...] = ()) -> Key:
+        """The scenario's initial facts, then the system's first reaction, with the starts at
+        ``fails`` (indices among those the Control rules allow) failing: by default none."""
         st = self.store
         absent = tuple(sorted(p.name for p in self.model.platforms if p.on_demand))  # until they join
         st.load(Key(None, (), absent, (), (), ()))
         self.core.standing = frozenset()
-        st.begin(())
-        initial_reaction(self.core, self.scenario, self.bounds, st)  # the same as RepositoryRun's
+        st.begin(outcome_prefix(fails))
+        self.initial_log = initial_reaction(self.core, self.scenario, self.bounds, st, fails)  # the same as RepositoryRun's
+        self.initial_outcomes = tuple(st.outcomes)
         self.initial_findings = reaction_findings(st.instant, self.core.findings_of(self._checked, st.every))
         return st.key(self.core.standing)
 
@@ -343,26 +345,51 @@ class TransitionSystem:
         return expand(self, key, known)
 
     # -- traces ------------------------------------------------------------------------------
-    def replay(self, labels: list[Label], expect: list[Key] | None = None) -> list[Step]:
-        """Rebuild the states of ``labels`` from the initial state (the trace); checks determinism."""
-        key = self.initial()
+    def replay(self, labels: list[Label], expect: list[Key] | None = None, initial: tuple[int, ...] = ()) -> list[Step]:
+        """Rebuild the states of ``labels`` from the initial state whose first reaction failed
+        the starts at ``initial`` (the trace); checks determinism."""
         if self.symmetry is not None:
-            return self.symmetry.replay(labels, expect)
+            return self.symmetry.replay(labels, expect, initial)
+        key = self.initial(initial)
         if expect and key != expect[0]:
             raise NondeterminismError(f"the initial reaction is not deterministic: got {key}, stored {expect[0]}")
-        steps = [initial_step(key)]
+        st = self.store
+        steps = [initial_step(key, self.initial_log, initial, lambda g, p: st.rules.start_refusal(g, p, st.platform_state))]
         for i, (event, fails) in enumerate(labels, 1):
-            prefix = tuple(j not in fails for j in range(max(fails) + 1)) if fails else ()
             prev = key
-            key, _outcomes, log, _instant = self.run_one(prev, event, prefix)
+            key, _outcomes, log, _instant = self.run_one(prev, event, outcome_prefix(fails))
             if expect is not None and i < len(expect) and key != expect[i]:
                 raise NondeterminismError(
                     f"replaying step {i} ({event}) did not reproduce the stored state: the system under test is nondeterministic\n"
                     f"  stored:   {expect[i]}\n  replayed: {key}"
                 )
-            st = self.store  # left in the step's next state: the Control rules' refusals there tell refused starts from chosen failures
+            # (the store is left in the step's next state: the Control rules' refusals there tell refused starts from chosen failures)
             steps.append(make_step(i, prev, event, key, log, fails, lambda g, p: st.rules.start_refusal(g, p, st.platform_state)))
         return steps
+
+
+def initial_states(system: TransitionSystem) -> list[tuple[tuple[int, ...], Key, list[tuple[str, ...]]]]:
+    """Every initial state of ``system``, as (failed start indices, key, its
+    :meth:`~TransitionSystem.initial_violations`): the first reaction branches on its starts
+    as every reaction does (:meth:`~TransitionSystem.successors`), each start it issued
+    failing while fewer than ``start_failures`` failed; a state reached again is listed
+    once, under the first choice that reached it (all starts succeeding first). Under a
+    symmetry reduction the keys are canonical."""
+    bound = system.bounds.start_failures
+    canon = system.symmetry.canon if system.symmetry is not None else None
+    out: list[tuple[tuple[int, ...], Key, list[tuple[str, ...]]]] = []
+    seen: set[Key] = set()
+    pending: list[tuple[bool, ...]] = [()]
+    while pending:
+        prefix = pending.pop(0)
+        fails = tuple(i for i, ok in enumerate(prefix) if not ok)
+        key = system.initial(fails)
+        pending += opened(prefix, system.initial_outcomes, fails, bound)
+        ckey = canon(key) if canon is not None else key
+        if ckey not in seen:
+            seen.add(ckey)
+            out.append((fails, ckey, system.initial_violations(ckey)))
+    return out
 
 
 def expand(system: TransitionSystem, key: Key, known: "Container[Key]") -> list[list[Segment]]:

@@ -18,7 +18,7 @@ from desmon.verify.state import Key
 
 __all__ = [
     "Label", "Step", "Counterexample", "KEPT_BRANCH", "CHOSEN", "WHOLE_REACTION", "branch_name", "branch_names", "describe_state", "diff",
-    "failed_starts", "reaction_findings", "rule_of", "where_in_reaction",
+    "failed_starts", "outcome_prefix", "reaction_findings", "rule_of", "where_in_reaction",
 ]
 
 #: A transition label: the event and the indices of the Control.start calls that failed.
@@ -88,9 +88,9 @@ class Step:
     raised: tuple[str, ...] = ()
 
     def title(self) -> str:
-        if self.event is None:
-            return "initial"
         extra = "".join(f" [{s} {CHOSEN}]" for s in self.failed_starts)
+        if self.event is None:  # (the first reaction: the starts it failed by choice; step 0 lists no refusal)
+            return f"initial{extra}"
         extra += "".join(f" [{s} refused: {why}]" for s, why in self.refused)
         return f"{self.event}{extra}"
 
@@ -139,6 +139,11 @@ class Counterexample:
     def events(self) -> tuple[Label, ...]:
         return tuple((s.event, s.fail_indices) for s in self.steps[1:])  # type: ignore[misc]
 
+    @property
+    def initial_fails(self) -> tuple[int, ...]:
+        """The starts of the first reaction that failed by the checker's choice (indices)."""
+        return self.steps[0].fail_indices
+
 
 def failed_starts(log: Any, fails: tuple[int, ...], refuse: Refuse | None) -> tuple[tuple[str, ...], tuple[tuple[str, str], ...]]:
     """(the starts of ``log`` that failed by the checker's choice, the refused ones with
@@ -175,8 +180,21 @@ def _raised(c: RaiseError) -> str:
     return f"{c.kind}: {c.graph}" + (f" on {c.platform}" if c.platform else "")
 
 
-def initial_step(key: Key) -> Step:
-    return Step(0, None, (), describe_state(key), key)
+def initial_step(key: Key, log: Any = None, fails: tuple[int, ...] = (), refuse: Refuse | None = None) -> Step:
+    """Step 0: the initial state ``key``, reached by the first reaction (``log``) with the
+    starts at ``fails`` failing by the checker's choice (``refuse`` as for :func:`make_step`).
+    Its commands are listed where a start failed by choice (the states are what it shows otherwise)."""
+    if log is None or not fails:
+        return Step(0, None, (), describe_state(key), key)
+    chosen, refused = failed_starts(log, fails, refuse)
+    cmds = tuple(f"{c}: {'ok' if ok else 'FAILED'}" if ok is not None else str(c).splitlines()[0] for c, ok in log.commands)
+    raised = tuple(_raised(c) for c, _ok in log.commands if type(c) is RaiseError)
+    return Step(0, None, chosen, describe_state(key), key, cmds, tuple(fails), refused, raised)
+
+
+def outcome_prefix(fails: tuple[int, ...]) -> tuple[bool, ...]:
+    """The outcome prefix that fails the starts at ``fails`` (a label's) and no other before them."""
+    return tuple(j not in fails for j in range(max(fails) + 1)) if fails else ()
 
 
 def describe_state(key: Key) -> tuple[str, ...]:

@@ -19,7 +19,7 @@ from desmon.verify.orbits import orbits_for
 from desmon.verify.arrays import CodeSet, Interned, count_into, firsts, grouped
 from desmon.verify.search import BreadthFirst, Budget, CheckResult, Queue, Trail
 from desmon.verify.state import Key
-from desmon.verify.system import TransitionSystem, opened
+from desmon.verify.system import TransitionSystem, initial_states, opened
 from desmon.verify.table.encoding import ROOT_PREFIX, SYS_BITS, SYS_MASK, Env, Events, Transitions, layout, root_key
 from desmon.verify.table.recording import Recorder
 from desmon.verify.table.tables import AnswerTables
@@ -162,14 +162,15 @@ class TableEngine(BreadthFirst):
         :data:`LOOK_EVERY`-th new state cuts it after the current transition."""
         self.budget, self.res, self.max_states, self.max_depth = budget, res, max_states, max_depth
         ch = self.checker
-        init = ch.initial() if ch.symmetry is None else ch.symmetry.canon(ch.initial())
-        env = self._encode(init)
+        roots = initial_states(ch)  # (they differ in deployments and standing errors only: one environment code)
+        env = self._encode(roots[0][1])
         # states: code = env << SYS_BITS | system
-        self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing)])
+        self.codes = array("q", [env.encode(init) << SYS_BITS | self.system(init.deployments, init.standing) for _f, init, _b in roots])
         self.trail = Trail(ch, self.key_of, keep_going, label_of=self._label_of)
+        self.trail.set_roots([fails for fails, _init, _bad in roots])
         self.seen = CodeSet()  # the states numbered before this batch
-        self.seen.add(self._codes(), 0, 1)
-        return self._search(self.codes, ch.initial_violations(init))
+        self.seen.add(self._codes(), 0, len(roots))
+        return self._search(self.codes, [bad for _fails, _init, bad in roots])
 
     def _encode(self, init: Key) -> Env:
         """The environment code, events, answer tables, trees and recorder of the search from
