@@ -10,6 +10,7 @@ from hypothesis.stateful import run_state_machine_as_test
 
 from desmon.cli import main
 from desmon.loader import load_scenario
+from desmon.verify.checker import Checker
 from desmon.verify.fuzz import fuzz
 from desmon.verify.machine import make_machine
 from desmon.verify.mutants import MUTANTS
@@ -20,7 +21,9 @@ SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 def test_fuzz_finds_paper_bug_and_rederives_shortest():
     out = fuzz(load_scenario(SCENARIOS / "migration.py"), "paper", examples=100, seed=1)
     assert out.exit_code == 1
-    assert "VIOLATED" in out.text and " 1. " in out.text
+    # the paper's deployer raises an error when a start fails, without trying the other PC:
+    # in the first reaction already (its start drawn to fail)
+    assert "VIOLATED errors-justified after 0 steps" in out.text and " 0. initial [start force_slip_detector on pc1 fails" in out.text
     assert "the checker's shortest counterexample" in out.text
 
 
@@ -39,8 +42,11 @@ def test_fuzz_passes_on_desmon(capsys):
 
 
 def test_fuzz_catches_a_mutant():
-    out = fuzz(load_scenario(SCENARIOS / "coffee_handover.py"), MUTANTS["no-recheck"], examples=200, seed=0)
-    assert out.exit_code == 1 and out.invariant in ("valid-or-error", "coverage")
+    scenario = load_scenario(SCENARIOS / "coffee_handover.py")
+    out = fuzz(scenario, MUTANTS["no-recheck"], examples=200, seed=0)
+    assert out.exit_code == 1 and out.invariant in ("valid-or-error", "coverage", "errors-justified")
+    assert Checker(scenario, MUTANTS["no-recheck"], invariants=[out.invariant]).run().verdict == "VIOLATED"
+    assert Checker(scenario, "desmon", invariants=[out.invariant]).run().verdict == "HOLDS"
 
 
 def test_fuzz_and_the_state_machine_catch_an_invariant_broken_inside_a_reaction_and_repaired_by_its_end():
@@ -87,27 +93,28 @@ def test_a_search_stopped_by_a_reaction_that_never_ends_keeps_the_smallest_failu
 
     ran: list[int] = []
 
-    def scripted(scenario, deployer, seq, enabler, faults=None):  # type: ignore[no-untyped-def]
+    def scripted(scenario, deployer, seq, enabler, faults, initial):  # type: ignore[no-untyped-def]
         ran.append(len(seq))
         if len(seq) == 1:
-            return ["a"], ("coverage", "nothing watches")
+            return ["a"], ("coverage", "nothing watches"), initial
         fault = DeployerFault("never ends")
         fault.cause = RanAway("its code ran for over 2 s in one reaction")
         if faults is not None:
             faults.append(fault)
-        return ["a", "b", "c"], (CRASH, "raised RanAway")
+        return ["a", "b", "c"], (CRASH, "raised RanAway"), initial
 
-    monkeypatch.setattr(fz, "run_choices", scripted)
+    monkeypatch.setattr(fz, "_run", scripted)
     search = fz._Sequences(None, "desmon", None, progress=False)  # type: ignore[arg-type]
-    assert search.fails([(0, ())]) is True and search.smallest == [(0, ())] and not search.smallest_never_ends
+    one, three = ((), [(0, ())]), ((), [(1, ()), (2, ()), (3, ())])
+    assert search.fails(one) is True and search.smallest == one and not search.smallest_never_ends
     with pytest.raises(fz._NeverEnds):
-        search.fails([(1, ()), (2, ()), (3, ())])
-    assert search.smallest == [(0, ())] and not search.smallest_never_ends  # the smaller failure stays the one reported
-    assert search.outcome_of([(0, ())]) == (["a"], ("coverage", "nothing watches")) and ran == [1, 3]  # not run again
+        search.fails(three)
+    assert search.smallest == one and not search.smallest_never_ends  # the smaller failure stays the one reported
+    assert search.outcome_of(one) == (["a"], ("coverage", "nothing watches"), ()) and ran == [1, 3]  # not run again
     alone = fz._Sequences(None, "desmon", None, progress=False)  # type: ignore[arg-type]
     with pytest.raises(fz._NeverEnds):
-        alone.fails([(1, ()), (2, ()), (3, ())])
-    assert alone.smallest_never_ends and alone.outcome_of([(1, ()), (2, ()), (3, ())])[1][0] == CRASH
+        alone.fails(three)
+    assert alone.smallest_never_ends and alone.outcome_of(three)[1][0] == CRASH
 
 
 # -- what a sequence can reach ------------------------------------------------------------------

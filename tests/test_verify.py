@@ -354,13 +354,19 @@ def react(q, slots, changed, context_changed):
 
 
 def test_a_generated_test_of_a_transition_property_judges_the_step_the_checker_named(tmp_path, capsys):
-    """The paper's errors-justified counterexample on migration is 2 steps long: its test
-    must fail for a deployer that breaks the property at step 1 only (the audit had
-    gathered findings of every step and passed)."""
-    py = tmp_path / "test_mig.py"
-    assert main(["verify", str(SCENARIOS / "migration.py"), "--deployer", "paper", "--continue", "--pytest", str(py), "--no-progress"]) == 1
+    """The paper's errors-justified counterexample on migration without start failures is
+    3 steps long, entering move_base at step 1: its test must fail for a deployer that
+    breaks the property at step 1 only (the audit had gathered findings of every step and
+    passed)."""
+    py, scenario = tmp_path / "test_mig.py", tmp_path / "migration_no_start_failures.py"
+    scenario.write_text(
+        "import dataclasses, runpy\n"
+        f"_s = runpy.run_path({str(SCENARIOS / 'migration.py')!r})['scenario']\n"
+        "scenario = dataclasses.replace(_s, checker=dataclasses.replace(_s.checker, start_failures=0))\n"
+    )
+    assert main(["verify", str(scenario), "--deployer", "paper", "--continue", "--pytest", str(py), "--no-progress"]) == 1
     out = capsys.readouterr().out
-    assert "VIOLATED errors-justified after 2 steps" in out, out
+    assert "VIOLATED errors-justified after 3 steps" in out and "   1. action move_base" in out, out
     (tmp_path / "early.py").write_text(EARLY)
     early = tmp_path / "test_early.py"
     early.write_text(re.sub(r"^DEPLOYER = .*$", f"DEPLOYER = {str(tmp_path / 'early.py') + ':react'!r}", py.read_text(), flags=re.M))

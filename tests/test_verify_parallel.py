@@ -47,7 +47,7 @@ def _summary(r, c):  # type: ignore[no-untyped-def]
 @pytest.mark.parametrize(
     "name, deployer, kw",
     [
-        ("migration", "paper", {}),  # stops at the first violation, mid-level
+        ("coffee_handover", "paper", {}),  # stops at the first violation, mid-level
         ("migration", "paper", {"keep_going": True}),  # four invariants
         ("migration", "make-before-break", {}),  # a violation inside a reaction, repaired before quiescence
         ("robot_day", "make-before-break", {"keep_going": True}),

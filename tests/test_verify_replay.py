@@ -104,7 +104,7 @@ def test_a_fix_in_the_deployer_shows_as_no_longer_violated_but_diverged_and_exit
     capsys.readouterr()
     assert _replay(out, deployer=spec) == 1
     text = capsys.readouterr().out
-    assert "! step 1 diverges from" in text
+    assert "! step 0 diverges from" in text  # (the fix tries pc2 when the first reaction's start on pc1 fails)
     assert f"the counterexample no longer violates {c['invariant']}: fixed? But the replay diverged" in text
 
 

@@ -347,7 +347,7 @@ def test_under_symmetry_the_table_engine_gives_the_direct_engines_result(deploye
         assert (rd.engine, rt.engine, rt.symmetry) == ("direct", "table", True)
         assert _everything(rt, table) == _everything(rd, direct), kw
         assert rt.states_covered == rd.states_covered
-    assert (rt.verdict, rt.states) == (("VIOLATED", 7) if deployer != "desmon" else ("INCOMPLETE", 127))  # the last: max_depth 3
+    assert (rt.verdict, rt.states) == (("VIOLATED", 8) if deployer != "desmon" else ("INCOMPLETE", 147))  # the last: max_depth 3
 
 
 def test_a_group_platform_down_for_the_whole_search_leaves_symmetry_to_the_direct_engine():
