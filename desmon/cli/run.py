@@ -326,7 +326,7 @@ def format_summary(r: RunResult, wall: float | None = None) -> str:
             lines.append(f"  ... {len(r.violations) - 10} more")
     else:
         lines.append("Invariants: all held at every quiescent point (after each reaction with no further stimulus pending); "
-                     "single-instance, no-overcommit and fixed also after every start and stop.")
+                     "single-instance, no-overcommit and fixed also after every start.")
     return "\n".join(lines) + "\n"
 
 
@@ -458,7 +458,7 @@ def format_fleet_summary(r: FleetResult) -> str:
             lines.append(f"  ... {len(r.violations) - 10} more")
     else:
         lines.append("Invariants: all held at every quiescent point of every robot (edge servers audited with every robot's load); "
-                     "single-instance, no-overcommit and fixed also after every start and stop.")
+                     "single-instance, no-overcommit and fixed also after every start.")
     return "\n".join(lines) + "\n"
 
 

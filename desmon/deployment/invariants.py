@@ -7,7 +7,7 @@ or the checker's compact state) by :func:`view_of`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Container
 
 from desmon.deployment.deployer import fits_if_freed, upgrade_due
@@ -21,7 +21,7 @@ from desmon.model.system import PlatformState
 
 __all__ = [
     "SystemView", "Invariant", "INVARIANTS", "view_of", "make_view", "check_invariants", "get_invariants", "validly_active", "validly_active_among",
-    "ReactionBook", "raise_problem", "judge_reaction", "TRANSITION_INVARIANTS", "INSTANT_INVARIANTS",
+    "ReactionBook", "raise_problem", "judge_reaction", "TRANSITION_INVARIANTS", "INSTANT_INVARIANTS", "start_findings",
 ]
 
 
@@ -166,11 +166,16 @@ Check = Callable[[SystemView], str | None]
 
 @dataclass(frozen=True, slots=True)
 class Invariant:
-    """A named ``always`` property: ``check(view)`` returns None or what is wrong."""
+    """A named ``always`` property: ``check(view)`` returns None or what is wrong.
+
+    ``at_start``: what a start inside a reaction can break of it, judged right after the
+    start (:func:`start_findings`): ``"graph"`` (the started graph's own instances),
+    ``"platform"`` (the platform it started on), or None (the whole view)."""
 
     name: str
     description: str
     check: Check
+    at_start: str | None = None
 
 
 def _valid_or_error(v: SystemView) -> str | None:
@@ -441,8 +446,8 @@ INVARIANTS: dict[str, Invariant] = {
     inv.name: inv
     for inv in (
         Invariant("valid-or-error", "every active deployment runs on an up platform meeting all its requirements, or an error stands for its graph", _valid_or_error),
-        Invariant("no-overcommit", "on every platform the Capacity consumed by active deployments stays within the capacity", _no_overcommit),
-        Invariant("single-instance", "no perception graph is active on two platforms", _single_instance),
+        Invariant("no-overcommit", "on every platform the Capacity consumed by active deployments stays within the capacity", _no_overcommit, "platform"),
+        Invariant("single-instance", "no perception graph is active on two platforms", _single_instance, "graph"),
         Invariant(
             "coverage",
             "after each reaction every graph the selector wants is active on a valid platform, or an error explains why not "
@@ -452,7 +457,7 @@ INVARIANTS: dict[str, Invariant] = {
         ),
         Invariant("errors-current", "a standing error describes the present: its graph is wanted, not validly active, and either active on an invalid platform or in a slot no alternative serves", _errors_current),
         Invariant("history", "every stop leaves one DEPLOYMENT_HISTORY edge; every DEPLOYED_ON edge matches a running detector", _history),
-        Invariant("fixed", "a fixed deployment runs only on its EXECUTABLE_ON platform", _fixed),
+        Invariant("fixed", "a fixed deployment runs only on its EXECUTABLE_ON platform", _fixed, "graph"),
         Invariant(
             "errors-justified",
             "every error is true when raised (no_acceptable_platforms: no platform is acceptable; deployment_failed / stopping_failed: the graph's last start / stop just failed; deployment_information_missing: no specification), and an error stands after a reaction only while every platform acceptable for its graph was tried in that reaction",
@@ -473,8 +478,10 @@ INVARIANTS: dict[str, Invariant] = {
 
 
 #: Invariants that are physical facts at every instant, not only when quiescent: every
-#: engine also evaluates them after each start and stop inside a reaction (the checker
-#: through ``Bounds.instantaneous``, the simulation's audit and the fuzzer).
+#: engine also evaluates them after each start that succeeds inside a reaction, on what
+#: the start changed (:func:`start_findings`: the checker through ``Bounds.instantaneous``,
+#: the simulation's audit, the fuzzer and every replay). A stop breaks none of them (it
+#: leaves fewer instances and less consumed), so none is judged after a stop.
 INSTANT_INVARIANTS = ("single-instance", "no-overcommit", "fixed")
 
 
@@ -496,6 +503,39 @@ def get_invariants(names: list[str] | tuple[str, ...] | None = None) -> tuple[In
             raise ModelError(f"invariant {n!r} is named twice: name each invariant once")
         out.append(INVARIANTS[n])
     return tuple(out)
+
+
+def start_findings(view: SystemView, invariants: tuple[Invariant, ...], graph: str, platform: str) -> list[tuple[str, str]]:
+    """(name, message) of each of ``invariants`` the start of ``graph`` on ``platform``
+    breaks, ``view`` being the state right after it. Each is judged on what a start
+    changes (its :attr:`Invariant.at_start`): the started graph's own instances
+    (``single-instance``, ``fixed``) or the platform it started on (``no-overcommit``). A
+    violation elsewhere was there before the start (the environment's, such as a
+    requirement change that raised a running graph's consumption, or an earlier
+    command's, judged at that command) and is not charged to it; the state a reaction
+    ends in is judged whole. Every engine audits a reaction's starts with this function."""
+    out: list[tuple[str, str]] = []
+    scoped: dict[str | None, SystemView] = {}
+    for inv in invariants:
+        v = scoped.get(inv.at_start)
+        if v is None:
+            v = scoped[inv.at_start] = _start_scope(view, inv.at_start, graph, platform)
+        msg = inv.check(v)
+        if msg is not None:
+            out.append((inv.name, msg))
+    return out
+
+
+def _start_scope(view: SystemView, scope: str | None, graph: str, platform: str) -> SystemView:
+    """``view`` narrowed to what a start of ``graph`` on ``platform`` changed (``scope``:
+    :attr:`Invariant.at_start`)."""
+    if scope == "platform":
+        return replace(view, states=tuple(s for s in view.states if s.name == platform))
+    if scope == "graph":  # (the same facts, with the started graph's instances as the deployments)
+        own = replace(view)
+        object.__setattr__(own, "_deployments", tuple(d for d in view.deployments if d[0] == graph))
+        return own
+    return view
 
 
 def check_invariants(view: SystemView, invariants: tuple[Invariant, ...] | None = None) -> list[tuple[str, str]]:

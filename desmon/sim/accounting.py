@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from desmon.deployment.invariants import INSTANT_INVARIANTS, SystemView, check_invariants, get_invariants
+from desmon.deployment.invariants import INSTANT_INVARIANTS, SystemView, check_invariants, get_invariants, start_findings
 from desmon.sim.books import Books
 from desmon.sim.metrics import slip_metrics
 
@@ -20,18 +20,22 @@ if TYPE_CHECKING:
 __all__ = ["Books", "audit", "robot_metrics"]
 
 
-def audit(parts: "RobotParts", view: SystemView, after: str = "", skip: frozenset[str] = frozenset()) -> tuple[str, ...]:
+def audit(
+    parts: "RobotParts", view: SystemView, after: str = "", skip: frozenset[str] = frozenset(), started: tuple[str, str] | None = None,
+) -> tuple[str, ...]:
     """The named invariants on ``view`` (of the live repository) at a quiescent point, each
     violation booked unless its invariant is in ``skip`` (booked already in this reaction),
-    or, ``after`` a start or stop inside a reaction (``"start g on p"``), the instantaneous
-    ones (:data:`~desmon.deployment.invariants.INSTANT_INVARIANTS`), as the checker watches
-    them. Returns the names booked."""
+    or, ``after`` a start inside a reaction (``"start g on p"``, ``started``: (g, p)), the instantaneous ones
+    (:data:`~desmon.deployment.invariants.INSTANT_INVARIANTS`) that start broke, as the
+    checker watches them (:func:`~desmon.deployment.invariants.start_findings`). Returns
+    the names booked."""
     books = parts.books
     if not after:
         books.audits += 1
     now = parts.env.now
     booked: list[str] = []
-    for name, msg in check_invariants(view, get_invariants(INSTANT_INVARIANTS) if after else None):
+    found = start_findings(view, get_invariants(INSTANT_INVARIANTS), *started) if started is not None else check_invariants(view)
+    for name, msg in found:
         if name not in skip:
             books.violation(now, name, f"{msg} (during the reaction, right after `{after}`)" if after else msg)
             booked.append(name)

@@ -4,8 +4,8 @@ The robot's :class:`~desmon.sim.inbox.Inbox` (re-exported here) collects what th
 repository's Notify subscription (or a fleet's router) reports and wakes the driver.
 :func:`deployer` takes it as a stimulus and drives ``core.reaction``: each
 ``Start`` is executed by the Control infrastructure (latency, outcome), ``Stop`` at
-once, ``RaiseError`` is stamped with ``env.now``. After every start and stop that
-succeeded the instantaneous invariants are audited, after every reaction ``core.settle``
+once, ``RaiseError`` is stamped with ``env.now``. After every start that succeeded the
+instantaneous invariants are audited (on what it changed), after every reaction ``core.settle``
 and, when no newer fact is pending, all the named invariants (``audit``). No decision is
 made here.
 """
@@ -26,16 +26,17 @@ if TYPE_CHECKING:
 
 __all__ = ["Inbox", "deployer", "Audit"]
 
-#: ``audit(after, skip)``: the named invariants at a quiescent point (``after`` empty), or
-#: the instantaneous ones after ``after`` (``"start g on p"``, inside a reaction), each
-#: booked unless in ``skip``; returns the names it booked (:func:`desmon.sim.accounting.audit`)
-Audit = Callable[[str, frozenset[str]], tuple[str, ...]]
+#: ``audit(after, skip, started)``: the named invariants at a quiescent point (``after``
+#: empty, ``started`` None), or the instantaneous ones the start of ``started`` (graph,
+#: platform) broke inside a reaction (``after``: ``"start g on p"``), each booked unless in
+#: ``skip``; returns the names it booked (:func:`desmon.sim.accounting.audit`)
+Audit = Callable[[str, frozenset[str], "tuple[str, str] | None"], tuple[str, ...]]
 
 
 class _Reaction:
     """What the deployer process books during one reaction (a plain class: one per reaction)."""
 
-    __slots__ = ("slots", "raised", "stopped_here", "stopped_at", "tried", "broken", "audited")
+    __slots__ = ("slots", "raised", "stopped_here", "stopped_at", "tried", "broken")
 
     def __init__(self, slots: tuple[tuple[str, ...], ...]) -> None:
         self.slots = slots
@@ -46,12 +47,11 @@ class _Reaction:
         #: the instantaneous invariants booked inside this reaction, each at its first
         #: violation (the checker's transition carries the same with ``verify --continue``)
         self.broken: frozenset[str] = frozenset()
-        self.audited = False  # whether an audit inside this reaction found them holding (or booked one)
 
 
 def deployer(parts: RobotParts, audit: Audit):  # type: ignore[no-untyped-def]
-    """The deployer's process: one reaction per stimulus, ``audit`` after every start and
-    stop and at every quiescent point."""
+    """The deployer's process: one reaction per stimulus, ``audit`` after every start that
+    succeeds and at every quiescent point."""
     env = parts.env
     inbox = parts.inbox
     books = parts.books
@@ -74,12 +74,13 @@ def deployer(parts: RobotParts, audit: Audit):  # type: ignore[no-untyped-def]
             if name == "no-flapping" or quiescent:
                 books.violation(env.now, name, msg)
         if quiescent:
-            audit("", book.broken)
+            audit("", book.broken, None)
 
 
 def _drive(parts: RobotParts, reaction: Any, book: _Reaction, audit: Audit):  # type: ignore[no-untyped-def]
     """Execute the commands of one reaction, sending each outcome back; ``audit`` the
-    instantaneous invariants after each start and stop that succeeded."""
+    instantaneous invariants after each start that succeeded (a stop breaks none of them:
+    :func:`~desmon.deployment.invariants.start_findings`)."""
     outcome: bool | None = None
     while True:
         try:
@@ -93,15 +94,9 @@ def _drive(parts: RobotParts, reaction: Any, book: _Reaction, audit: Audit):  # 
         if isinstance(cmd, Start):
             outcome = yield from _command_start(parts, cmd, book)
             if outcome and len(book.broken) < len(INSTANT_INVARIANTS):
-                book.broken |= frozenset(audit(f"start {cmd.graph} on {cmd.platform}", book.broken))
-                book.audited = True
+                book.broken |= frozenset(audit(f"start {cmd.graph} on {cmd.platform}", book.broken, (cmd.graph, cmd.platform)))
         elif isinstance(cmd, Stop):
             outcome = _command_stop(parts, cmd, book)
-            # a stop breaks none of them (fewer instances, less consumed): once one audit of
-            # the reaction found them holding, a stop leaves them holding
-            if outcome and not book.audited:
-                book.broken |= frozenset(audit(f"stop {cmd.graph} on {cmd.platform}", book.broken))
-                book.audited = True
         elif isinstance(cmd, RaiseError):
             outcome = None
             _command_error(parts, cmd, book)

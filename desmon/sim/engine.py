@@ -190,11 +190,11 @@ class SimWorld:
         platform is up and every stream it reads has a readable device (warm-up aside)."""
         return self.facts.physically_valid(graph, platform)
 
-    def _audit(self, after: str = "", skip: frozenset[str] = frozenset()) -> tuple[str, ...]:
+    def _audit(self, after: str = "", skip: frozenset[str] = frozenset(), started: tuple[str, str] | None = None) -> tuple[str, ...]:
         """The named invariants on the live repository (:data:`~desmon.sim.driver.Audit`),
         then, at a quiescent point, ``on_quiescent``."""
         running = tuple(sorted(self.instances))
-        booked = audit(self.parts, self.core.view(running=running, stops=self.infra.stops, history=self.books.history_edges), after, skip)
+        booked = audit(self.parts, self.core.view(running=running, stops=self.infra.stops, history=self.books.history_edges), after, skip, started)
         if not after and self.on_quiescent is not None:
             self.on_quiescent(self)
         return booked
@@ -270,7 +270,7 @@ class SimWorld:
         )
 
 
-def _unread(after: str = "", skip: frozenset[str] = frozenset()) -> tuple[str, ...]:
+def _unread(after: str = "", skip: frozenset[str] = frozenset(), started: tuple[str, str] | None = None) -> tuple[str, ...]:
     """The audit of a run nobody reads the violations of: none."""
     return ()
 

@@ -493,7 +493,7 @@ class _Member:
             self.parts.trace.emit(slip.time, "slip", direction=slip.direction, kind=slip.kind)
         start_processes(self.parts, self.audit)
 
-    def audit(self, after: str = "", skip: frozenset[str] = frozenset()) -> tuple[str, ...]:
+    def audit(self, after: str = "", skip: frozenset[str] = frozenset(), started: tuple[str, str] | None = None) -> tuple[str, ...]:
         """The named invariants on this robot's view (:data:`~desmon.sim.driver.Audit`): its
         own deployments, judged on the platforms' full facts (an edge server's capacity
         with every robot's detectors)."""
@@ -503,7 +503,7 @@ class _Member:
             self._audited_states(), core.specs(), core.standing, core.slots(), tuple(sorted(parts.facts.instances)),
             parts.infra.stops, parts.books.history_edges, core.guarded_react, self.query.checks,
         )
-        return audit(parts, view, after, skip)
+        return audit(parts, view, after, skip, started)
 
     def _audited_states(self) -> tuple[PlatformState, ...]:
         """The states the audit reads: the robot's own PCs and the edge servers where one of

@@ -16,7 +16,7 @@ import networkx as nx
 from desmon.deployment.guard import DeployerFault, Guard
 from desmon.deployment.control import repository_control
 from desmon.deployment.core import DeploymentCore, stamp
-from desmon.deployment.invariants import INSTANT_INVARIANTS, check_invariants, get_invariants
+from desmon.deployment.invariants import INSTANT_INVARIANTS, check_invariants, get_invariants, start_findings
 from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.monitor import Stimulus
 from desmon.deployment.validity import ScalarChecks
@@ -112,10 +112,10 @@ def replay(
         during: list[tuple[str, str]] = []  # the reaction's instantaneous violations, the first of each, as the checker reports them
 
         def watch(verb: str, graph: str, platform: str) -> None:
-            if len(during) == len(instant):
+            if len(during) == len(instant) or verb != "start":  # (a stop breaks none of them)
                 return
             seen = {d for d, _m in during}
-            for name, msg in check_invariants(core.view(), instant):
+            for name, msg in start_findings(core.view(), instant, graph, platform):
                 if name not in seen:
                     during.append((name, f"{msg} (during the reaction, right after `{verb} {graph} on {platform}`)"))
 

@@ -1,8 +1,9 @@
 """``desmon fuzz``: hypothesis failure sequences through the core on the networkx repository.
 
-A sequence (:func:`desmon.verify.strategies.choices`) is run event by event through a
+A run (:func:`desmon.verify.strategies.runs`: the first reaction's failing starts, then a
+sequence of choices) is run event by event through a
 :class:`~desmon.verify.replay.RepositoryRun`; after each reaction the named invariants
-are checked, the instantaneous ones also after every start and stop inside it (as the
+are checked, the instantaneous ones also after every start inside it (as the
 checker watches them). hypothesis searches (``--examples``, ``--seed``: same seed, same output)
 and shrinks the first failing sequence, which is printed in the checker's trace format;
 when it is short, the checker re-derives the shortest counterexample for that invariant.
@@ -56,7 +57,7 @@ def run_choices(  # type: ignore[no-untyped-def]
     """Run ``seq`` from the initial state whose first reaction fails the starts at
     ``initial`` (those of them it issues); returns (labels up to the first violation, first
     violation or None). The checked invariants hold after each reaction, the instantaneous
-    ones (the checker's ``instant``) also after every start and stop inside it. ``faults``:
+    ones (the checker's ``instant``) also after every start inside it. ``faults``:
     where the deployer's fault is noted, if it failed."""
     labels, bad, _initial = _run(scenario, deployer, seq, enabler, faults, initial)
     return labels, bad

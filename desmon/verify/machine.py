@@ -2,7 +2,7 @@
 
 Its rules are the checker's events (action change, device fail/repair, platform
 down/up, load step, each with optional start failures, as the initial reaction), its invariants the named
-invariants of docs/design.md §9 (the instantaneous ones also after every start and stop
+invariants of docs/design.md §9 (the instantaneous ones also after every start
 inside a reaction, as the checker watches them) -- including ``history``, which here sees the
 infrastructure's running list, its stop count and the DEPLOYMENT_HISTORY edges. It
 drives the same :class:`~desmon.deployment.core.DeploymentCore` as the checker.

@@ -17,7 +17,7 @@ from desmon.deployment.control import repository_refusal
 from desmon.deployment.core import DeploymentCore, run_sync
 from desmon.deployment.guard import DeployerFault, Guard
 from desmon.deployment.deployer import Deployer
-from desmon.deployment.invariants import INVARIANTS, Invariant, check_invariants, get_invariants
+from desmon.deployment.invariants import INVARIANTS, Invariant, check_invariants, get_invariants, start_findings
 from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.monitor import Stimulus
 from desmon.deployment.validity import ScalarChecks
@@ -146,16 +146,16 @@ class RepositoryRun:
         self.initial_instant: tuple[str, str, str] | None = found[0] if found else None
 
     def _watch(self, instant: tuple[Invariant, ...]) -> list[tuple[str, str, str]]:
-        """Audit ``instant`` after every start and stop from now on: the first violation of
-        each is appended to the list returned, in order (the caller sets ``control.after``
-        back to None)."""
+        """Audit ``instant`` after every start from now on (:func:`~desmon.deployment.invariants.start_findings`):
+        the first violation of each is appended to the list returned, in order (the caller
+        sets ``control.after`` back to None)."""
         found: list[tuple[str, str, str]] = []
 
         def audit(verb: str, graph: str, platform: str) -> None:
-            if len(found) == len(instant):
+            if len(found) == len(instant) or verb != "start":  # (a stop breaks none of them)
                 return
             seen = {f[0] for f in found}
-            for name, msg in check_invariants(self.core.view(), instant):
+            for name, msg in start_findings(self.core.view(), instant, graph, platform):
                 if name not in seen:
                     found.append((name, msg, f"{verb} {graph} on {platform}"))
 

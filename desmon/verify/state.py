@@ -141,8 +141,8 @@ class StateStore:
         self.prefix: tuple[bool, ...] = ()
         self.outcomes: list[bool] = []
         self.watch: tuple[Invariant, ...] = ()
-        #: ``() -> [(invariant, message)]`` for the instantaneous invariants (set by the checker)
-        self.watch_check: Callable[[], list[tuple[str, str]]] | None = None
+        #: ``(graph, platform) -> [(invariant, message)]``: the instantaneous invariants a start broke (set by the checker)
+        self.watch_check: Callable[[str, str], list[tuple[str, str]]] | None = None  # (graph, platform) started
         self.watch_view: "Callable[[], SystemView] | None" = None  # fallback: a view to check self.watch on
         #: what the reaction broke so far, as (invariant, message, after command): the first
         #: watched invariant it broke, or with ``every`` the first violation of each
@@ -351,7 +351,7 @@ class StateStore:
             self.deployed = tuple(sorted(self.deployed + (pair,)))
             self._touch(platform)
             self._set_index()
-            self._watch("start", pair)
+            self._watch(pair)
         return ok
 
     def stop(self, graph: str, platform: str) -> bool:
@@ -361,24 +361,24 @@ class StateStore:
         self.deployed = tuple(d for d in self.deployed if d != pair)
         self._touch(platform)
         self._set_index()
-        self._watch("stop", pair)
-        return True
+        return True  # (a stop breaks no instantaneous invariant: desmon.deployment.invariants.start_findings)
 
-    def _watch(self, verb: str, pair: tuple[str, str]) -> None:
+    def _watch(self, pair: tuple[str, str]) -> None:
+        """The watched invariants the start of ``pair`` broke (:func:`~desmon.deployment.invariants.start_findings`)."""
         found = self.instant
         if not self.watch or (found and (not self.every or len(found) == len(self.watch))):
             return
         if self.watch_check is not None:
-            bad = self.watch_check()
+            bad = self.watch_check(*pair)
         elif self.watch_view is not None:
-            from desmon.deployment.invariants import check_invariants
+            from desmon.deployment.invariants import start_findings
 
-            bad = check_invariants(self.watch_view(), self.watch)
+            bad = start_findings(self.watch_view(), self.watch, *pair)
         else:
             return
         if bad:
             known = {f[0] for f in found}
-            new = [(name, msg, f"{verb} {pair[0]} on {pair[1]}") for name, msg in bad if name not in known]
+            new = [(name, msg, f"start {pair[0]} on {pair[1]}") for name, msg in bad if name not in known]
             self.instant = found + tuple(new if self.every else new[:1])
 
 

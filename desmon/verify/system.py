@@ -28,7 +28,7 @@ from desmon.deployment.ports import RaiseError
 from desmon.deployment.run import RunContext, run_context
 from desmon.deployment.validity import ScalarChecks
 from desmon.deployment.deployer import Deployer
-from desmon.deployment.invariants import Invariant, SystemView, check_invariants, get_invariants
+from desmon.deployment.invariants import Invariant, SystemView, check_invariants, get_invariants, start_findings
 from desmon.errors import CheckerError, NondeterminismError
 from desmon.model.events import Event, event_kind
 from desmon.model.scenario import Scenario
@@ -223,17 +223,18 @@ class TransitionSystem:
             f = self._frozen[standing] = frozenset(standing)
         return f
 
-    def _instant_check(self) -> list[tuple[str, str]]:
-        """The instantaneous invariants on the store's current facts (memoised on them)."""
+    def _instant_check(self, graph: str, platform: str) -> list[tuple[str, str]]:
+        """The instantaneous invariants the start of ``graph`` on ``platform`` broke, on the
+        store's current facts (:func:`~desmon.deployment.invariants.start_findings`; memoised on them)."""
         st = self.store
         standing = self.core.standing
-        mk = (st.failed, st.down, st.loads, st.deployed, standing, st.ctx, st.specs_now)
+        mk = (st.failed, st.down, st.loads, st.deployed, standing, st.ctx, st.specs_now, graph, platform)
         r = self._instant_memo.get(mk)
         if r is None:
             view = self.view(standing, st.ctx)
             if len(self._instant_memo) > MEMO_LIMIT:
                 self._instant_memo.clear()
-            r = self._instant_memo[mk] = check_invariants(view, self.instant)
+            r = self._instant_memo[mk] = start_findings(view, self.instant, graph, platform)
         return r
 
     def run_one(self, key: Key, event: Event, prefix: tuple[bool, ...]):  # type: ignore[no-untyped-def]

@@ -1,0 +1,35 @@
+"""A requirement change raises a running graph's Capacity above its platform's capacity:
+the platform is over-committed by the environment, before the deployer reacts. Its
+reaction stops both graphs of the platform, one after the other; ``-p other=NAME``
+names the second graph, which decides the order of the stops.
+"""
+
+from desmon.model import RobotBuilder
+from desmon.model.events import ActionChange, RequirementChange
+from desmon.model.params import parameters
+from desmon.model.requirements import Capacity
+from desmon.model.scenario import Scenario, TimedEvent
+from desmon.sim.world import Step, World
+from desmon.verify.bounds import Bounds
+
+p = parameters(other="a_graph")
+
+robot = RobotBuilder("r")
+robot.platform("pc", memory=384)
+robot.platform("arm", memory=10).device("ft", kind="force_sensor")
+for name in ("m_graph", p.other):
+    with robot.rpsl.perception_graph(name) as graph:
+        graph.sensor("s", reads="force_sensor")
+        graph.processing("p", inputs=["s"])
+robot.depsl.deployment_specification("m_graph").add_constraint("capacity", "memory", 100)
+robot.depsl.deployment_specification(p.other).add_constraint("capacity", "memory", 200)
+UP = RequirementChange("m_graph", add=(Capacity("memory", 400),), remove=(Capacity("memory", 100),), label="up")
+robot.rules({"hold": ["m_graph", p.other]})
+
+scenario = Scenario(
+    name="raised_capacity",
+    model=robot.build(),
+    timeline=(TimedEvent(0.0, ActionChange("hold"), "t0"),),
+    world=World(task=(Step("hold", 10.0),), horizon=10.0, signals=False, changes=(TimedEvent(2.0, UP),)),
+    checker=Bounds(actions=("hold",), requirement_changes=(UP,)),
+)
