@@ -45,9 +45,10 @@ from desmon.sim.world import StartFailure, world_from_timeline
 from desmon.verify.bounds import Bounds, bounds_of
 from desmon.verify.replay import repository_key
 from desmon.verify.state import Key
-from desmon.verify.system import TransitionSystem
+from desmon.verify.system import TransitionSystem, initial_states
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+FIRST_START_FAILS = str(Path(__file__).resolve().parent / "data" / "first_start_fails.py")
 #: the event kinds a scripted simulation world plays: on its timeline, and as run-time changes
 SIM_KINDS = (ActionChange, DeviceFail, DeviceRepair, PlatformDown, PlatformUp, LoadChange)
 CHANGE_KINDS = (RequirementChange, PlatformJoin, PlatformLeave)
@@ -63,6 +64,7 @@ class Report:
     steps: int = 0  # walk steps
     invalid_seen: int = 0  # running detectors the world counted as unable to monitor
     unmonitored_seen: int = 0  # slots the world left unmonitored
+    first_fails: tuple[int, ...] = ()  # the starts of the first reaction the walk failed
 
 
 def _prefix(fails: tuple[int, ...]) -> tuple[bool, ...]:
@@ -70,15 +72,20 @@ def _prefix(fails: tuple[int, ...]) -> tuple[bool, ...]:
 
 
 def walk(system: TransitionSystem, rng: random.Random, steps: int, failures: bool) -> list[tuple[Any, tuple[int, ...], Any, Key]]:
-    """A random path of the checker: (event, failed start indices, StepLog, next key,
-    what the reaction broke inside it, every invariant's first violation) per step."""
+    """A random path of the checker from a random initial state (its first reaction's
+    failing starts chosen as a step's are, with ``failures``): the first reaction as
+    (None, failed start indices, StepLog, initial key, ()), then (event, failed start
+    indices, StepLog, next key, what the reaction broke inside it, every invariant's first
+    violation) per step."""
     with system.finding_every():
         return _walk(system, rng, steps, failures)
 
 
 def _walk(system: TransitionSystem, rng: random.Random, steps: int, failures: bool) -> list[tuple[Any, tuple[int, ...], Any, Key]]:
-    key = system.initial()
-    path = []
+    roots = initial_states(system)
+    first = rng.choice(roots)[0] if failures else ()
+    key = system.initial(first)
+    path = [(None, first, system.initial_log, key, ())]
     for _ in range(steps):
         events = [e for e in system.enabled(key) if isinstance(e, SIM_KINDS + CHANGE_KINDS)]
         if not events:
@@ -91,14 +98,13 @@ def _walk(system: TransitionSystem, rng: random.Random, steps: int, failures: bo
     return path
 
 
-def _script(initial: Key, path: list) -> tuple[tuple[str, str, int], ...]:
-    """The world's start-failure script for the path: the n-th attempt of a graph on a
-    platform fails where the checker chose that start to fail (attempts counted as the
-    world counts them: every start of an instance that is not running)."""
+def _script(path: list) -> tuple[tuple[str, str, int], ...]:
+    """The world's start-failure script for the path, its first reaction included: the
+    n-th attempt of a graph on a platform fails where the checker chose that start to fail
+    (attempts counted as the world counts them: every start of an instance that is not
+    running, a refused one too)."""
     attempts: dict[tuple[str, str], int] = {}
-    for d in initial.deployments:
-        attempts[d] = 1
-    running = set(initial.deployments)
+    running: set[tuple[str, str]] = set()
     script = []
     for _event, _fails, log, _nkey, _instant in path:
         for cmd, ok in log.commands:
@@ -125,10 +131,15 @@ def compare(scenario: Scenario, deployer: str, seed: int, steps: int = 20, failu
     bounds = bounds_of(scenario)
     system = TransitionSystem(scenario, deployer)
     rng = random.Random(seed)
-    init = system.initial()
-    path = walk(system, rng, steps, failures and bounds.start_failures > 0)
-    # what the checker says on each state of the path (and the reaction that led there)
-    expected = []
+    first_reaction, *path = walk(system, rng, steps, failures and bounds.start_failures > 0)
+    init = first_reaction[3]
+    # what the checker says on each state of the path (and the reaction that led there),
+    # the initial state (its first reaction's failing starts as the walk chose them) first
+    with system.finding_every():
+        system.initial(first_reaction[1])
+        names = {v[0] for v in system.initial_violations(init)}
+    system.store.load(init)
+    expected = [(init, names, validly_active(system.view(frozenset(init.standing), init.context)))]
     prev = init
     for event, fails, _log, nkey, instant in path:
         found = _transition_findings(system, prev, event, fails)
@@ -145,7 +156,7 @@ def compare(scenario: Scenario, deployer: str, seed: int, steps: int = 20, failu
     changes = tuple(TimedEvent(GAP * (i + 1), e) for i, (e, *_r) in enumerate(path) if isinstance(e, CHANGE_KINDS))
     sim_scenario = dataclasses.replace(scenario, world=None, timeline=tuple(timeline))
     world = dataclasses.replace(
-        world_from_timeline(sim_scenario), horizon=GAP * (len(path) + 1), start_failure=StartFailure(script=_script(init, path)), changes=changes,
+        world_from_timeline(sim_scenario), horizon=GAP * (len(path) + 1), start_failure=StartFailure(script=_script([first_reaction, *path])), changes=changes,
     )
     sim_scenario = dataclasses.replace(sim_scenario, world=world)
 
@@ -159,15 +170,16 @@ def compare(scenario: Scenario, deployer: str, seed: int, steps: int = 20, failu
 
     sim = SimWorld(sim_scenario, deployer=deployer, seed=seed, on_quiescent=on_quiescent)
     result = sim.run()
-    report = Report(steps=len(path))
+    report = Report(steps=len(path), first_fails=first_reaction[1])
     slots_of = system.slots
     for i, (nkey, names, valid) in enumerate(expected):
-        lo, hi = GAP * (i + 1), GAP * (i + 2)
+        lo, hi = GAP * i, GAP * (i + 1)
         here = [s for s in seen if lo <= s[0] < hi]
         if not here:
             continue  # the event changed nothing the deployer reacts to: no reaction, no audit
         t, key, physical = here[-1]
-        where = f"{scenario.name}, {deployer}, seed {seed}, after step {i + 1} ({path[i][0]}, failed starts {path[i][1]}) at t={t:g}"
+        step = [first_reaction, *path][i]
+        where = f"{scenario.name}, {deployer}, seed {seed}, after step {i} ({step[0] or 'the first reaction'}, failed starts {step[1]}) at t={t:g}"
         assert key == nkey, f"{where}: the world is in {key}, the checker in {nkey}"
         got = {name for (tv, name, _m) in result.violations if lo <= tv < hi and name != "history"}
         assert got == names, f"{where}: the world's audit reports {sorted(got)}, the checker {sorted(names)}"
@@ -254,6 +266,19 @@ def remote_input_scenarios(draw):  # type: ignore[no-untyped-def]
 @given(remote_input_scenarios(), hst.sampled_from(["desmon", "desmon-keep-fallback", "paper"]), hst.integers(0, 2**16))
 def test_simulation_and_checker_agree_on_generated_models_with_remote_inputs(scenario, deployer, seed):
     compare(scenario, deployer, seed, steps=15, failures=deployer != "paper")
+
+
+@pytest.mark.parametrize("deployer", ["desmon", "desmon-keep-fallback", f"{FIRST_START_FAILS}:silent"])
+def test_simulation_and_checker_agree_after_a_first_reaction_whose_start_failed(deployer: str) -> None:
+    """The walk starts from an initial state whose first reaction failed a start, as the
+    world's script fails it at t=0: both agree on the state and on what each deployer
+    breaks there (preferred-when-possible for the one that keeps its fallback, coverage for
+    the one that ignores the failure)."""
+    from desmon.verify.deployers import resolve_deployer
+
+    scenario = load_scenario(FIRST_START_FAILS)
+    firsts = {compare(scenario, resolve_deployer(deployer), seed).first_fails for seed in range(6)}
+    assert firsts == {(), (0,)}
 
 
 def test_conformance_fails_when_validity_ignores_inputs(monkeypatch: pytest.MonkeyPatch) -> None:

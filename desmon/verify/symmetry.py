@@ -245,9 +245,10 @@ class Symmetry:
     def states_covered(self, explored: Iterable[Key]) -> int:
         """The states the orbits of the canonical ``explored`` hold: the sum of their orbit
         sizes. The verdict holds for each of them (the invariants read no platform's name).
-        For a complete search they are the states reachable from the initial state or a
-        group renaming of it: the unreduced search's states and, where a renaming of the
-        initial state is not reachable from it, more."""
+        They are the renamings of the states reached: every state the unreduced search
+        reaches, and more where a renaming of a reachable state is not reachable itself (a
+        renaming of the initial state, or a placement the deployer never makes because it
+        goes by the platforms' names)."""
         return sum(self.orbit_size(k) for k in explored)
 
     def rename_event(self, event: Event, perm: dict[str, str]) -> Event:
