@@ -95,3 +95,37 @@ def test_fuzz_draws_the_failure_of_a_first_start(capsys):
     assert main(["fuzz", SCENARIO, "--deployer", SILENT, "--examples", "50"]) == 1
     out = capsys.readouterr().out
     assert "VIOLATED coverage after 0 steps" in out and f"0. {FIRST}" in out
+
+
+def test_what_a_failing_choice_breaks_inside_the_first_reaction_counts_where_it_ends_as_another_did():
+    """``doubles`` ends its first reaction with g2 on b whether its start there fails or
+    not; only the failing choice runs g2 twice on the way, and both engines report it."""
+    scenario = load_scenario(SCENARIO)
+    for engine in ("table", "direct"):
+        res = Checker(scenario, resolve_deployer(f"{SCENARIO}:doubles"), invariants=["single-instance"]).run(engine=engine)
+        assert res.verdict == "VIOLATED", engine
+        c = res.counterexamples[0]
+        assert (c.length, c.initial_fails, c.during) == (0, (0,), "start g2 on b"), engine
+    assert len(initial_states(Checker(scenario, resolve_deployer(f"{SCENARIO}:doubles")).system)) == 1  # one initial state
+
+
+def test_a_deployer_that_fails_only_when_a_first_start_fails_crashed_in_a_reachable_state(tmp_path, capsys):
+    """It runs with every start succeeding, so it is no bad input (exit 2) but CRASHED (exit
+    4) with the path to it, in verify, fuzz, explore and the world alike."""
+    crashes = f"{SCENARIO}:crashes"
+    assert main(["verify", SCENARIO, "--deployer", crashes, "--no-progress"]) == 4
+    out = capsys.readouterr().out
+    assert "CRASHED in the reaction of step 0" in out and f"0. {FIRST}" in out and "the deployer failed in step 0" in out
+    assert main(["fuzz", SCENARIO, "--deployer", crashes, "--examples", "30", "--no-progress"]) == 4
+    assert f"0. {FIRST}" in capsys.readouterr().out
+    assert main(["explore", SCENARIO, "--deployer", crashes, "--verify", "--no-progress", "-o", str(tmp_path / "c.html")]) == 4
+    assert "with start #1 failing): raised RuntimeError: a start failed" in capsys.readouterr().err
+    assert main(["run", SCENARIO, "--deployer", crashes]) == 4  # (the world's script fails that start at t=0)
+    assert "desmon: CRASHED: at t=0 s" in capsys.readouterr().err
+
+
+def test_the_explorer_shows_what_the_first_reaction_did(tmp_path, capsys):
+    page = tmp_path / "p.html"
+    assert main(["explore", SCENARIO, "--deployer", SILENT, "--verify", "--no-progress", "-o", str(page)]) == 0
+    text = page.read_text(encoding="utf-8")
+    assert "start g1 on a: FAILED" in text

@@ -52,3 +52,14 @@ def test_the_order_of_the_stops_the_environment_forced_decides_no_verdict(other,
     main(["run", RAISED, "-p", f"other={other}"])
     assert "INVARIANTS VIOLATED" not in capsys.readouterr().out
     assert main(["fuzz", RAISED, "-p", f"other={other}", "--examples", "30", "--no-progress"]) == 0
+
+
+def test_a_start_of_an_instance_already_running_changes_nothing_and_is_charged_with_nothing(capsys):
+    """Re-issuing Start for the running instances before repairing: no-ops, so the
+    environment's over-commit is no more theirs in the world and the fuzzer than in the checker."""
+    deployer = f"{RAISED}:restarts_first"
+    assert main(["verify", RAISED, "--deployer", deployer, "--no-progress"]) == 0
+    capsys.readouterr()
+    main(["run", RAISED, "--deployer", deployer])
+    assert "INVARIANTS VIOLATED" not in capsys.readouterr().out
+    assert main(["fuzz", RAISED, "--deployer", deployer, "--examples", "30", "--no-progress"]) == 0

@@ -182,7 +182,7 @@ def counterexample_frames(
         if diverged is None and _differs(s.key, recorded, s.index):
             diverged = s.index
             notes.append("the replay left the state the file recorded here: the scenario or deployer changed since it was written")
-        log = recorder.logs[-1] if s.index > 0 else None
+        log = recorder.logs[-1] if s.index > 0 else run.initial_log  # (step 0: the first reaction)
         final = run.violations(checked)
         violations = _with_instant(final, found)
         notes += [f"the checker chose this failure: {f} fails" for f in s.failed_starts]

@@ -217,13 +217,15 @@ class ImmediateControl:
         self.stops = 0
         #: why the last start was refused ("" when it was not)
         self.refused = ""
-        #: called as ``after(verb, graph, platform)`` once a start or stop has succeeded
-        #: (None: not watched): the engines' audit of the instantaneous invariants
+        #: called as ``after(verb, graph, platform)`` once a start of an instance that was not
+        #: running or a stop has succeeded (None: not watched): the engines' audit of the
+        #: instantaneous invariants
         self.after: Callable[[str, str, str], None] | None = None
 
     def start(self, graph: str, platform: str) -> bool:
+        restart = (graph, platform) in self.running  # (a no-op: it changes nothing to audit)
         ok = self._start(graph, platform)
-        if ok and self.after is not None:
+        if ok and not restart and self.after is not None:
             self.after("start", graph, platform)
         return ok
 

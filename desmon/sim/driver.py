@@ -19,6 +19,7 @@ from desmon.deployment.guard import DeployerFault
 from desmon.deployment.invariants import INSTANT_INVARIANTS
 from desmon.deployment.ports import NO_ACCEPTABLE_PLATFORMS, RaiseError, Start, Stop
 from desmon.sim.inbox import Inbox
+from desmon.sim.infrastructure import RANDOM_FAILURE, SCRIPTED_FAILURE
 from desmon.sim.processes import maybe_lease
 
 if TYPE_CHECKING:
@@ -36,7 +37,7 @@ Audit = Callable[[str, frozenset[str], "tuple[str, str] | None"], tuple[str, ...
 class _Reaction:
     """What the deployer process books during one reaction (a plain class: one per reaction)."""
 
-    __slots__ = ("slots", "raised", "stopped_here", "stopped_at", "tried", "broken")
+    __slots__ = ("slots", "raised", "stopped_here", "stopped_at", "tried", "broken", "start_failed")
 
     def __init__(self, slots: tuple[tuple[str, ...], ...]) -> None:
         self.slots = slots
@@ -47,6 +48,7 @@ class _Reaction:
         #: the instantaneous invariants booked inside this reaction, each at its first
         #: violation (the checker's transition carries the same with ``verify --continue``)
         self.broken: frozenset[str] = frozenset()
+        self.start_failed = False  # whether a start the Control rules allowed failed in this reaction (the start-failure model)
 
 
 def deployer(parts: RobotParts, audit: Audit):  # type: ignore[no-untyped-def]
@@ -87,13 +89,15 @@ def _drive(parts: RobotParts, reaction: Any, book: _Reaction, audit: Audit):  # 
             cmd = reaction.send(outcome)
         except StopIteration:
             return
-        except DeployerFault as fault:  # where in the run: the first reaction means it cannot run at all
-            fault.initial = parts.books.reactions == 1
+        except DeployerFault as fault:  # where in the run: the first reaction means it cannot run at all,
+            # unless a start of it had failed (then it failed in a state the run reached, as the checker says)
+            fault.initial = parts.books.reactions == 1 and not book.start_failed
             fault.args = (f"at t={parts.env.now:g} s, {fault.args[0]}",)
             raise
         if isinstance(cmd, Start):
+            restart = (cmd.graph, cmd.platform) in parts.facts.instances  # (a no-op: it changes nothing to audit)
             outcome = yield from _command_start(parts, cmd, book)
-            if outcome and len(book.broken) < len(INSTANT_INVARIANTS):
+            if outcome and not restart and len(book.broken) < len(INSTANT_INVARIANTS):
                 book.broken |= frozenset(audit(f"start {cmd.graph} on {cmd.platform}", book.broken, (cmd.graph, cmd.platform)))
         elif isinstance(cmd, Stop):
             outcome = _command_stop(parts, cmd, book)
@@ -118,6 +122,7 @@ def _command_start(parts: RobotParts, cmd: Start, book: _Reaction):  # type: ign
         books.count_upgrade(cmd.graph, instances[(cmd.graph, cmd.platform)].valid_from, book.slots, book.stopped_at, book.tried)
     elif not outcome:
         book.tried.add(cmd.graph)
+        book.start_failed = book.start_failed or str(res) in (SCRIPTED_FAILURE, RANDOM_FAILURE)
     books.decision(parts.env.now, "start", cmd.graph, cmd.platform, outcome, issued, "" if outcome else str(res))
     return outcome
 

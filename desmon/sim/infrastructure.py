@@ -35,7 +35,12 @@ from desmon.sim.sensors import DetectorAdapter
 from desmon.sim.trace import Trace
 from desmon.sim.world import World, can_detect, detector_plans
 
-__all__ = ["Infrastructure"]
+__all__ = ["Infrastructure", "SCRIPTED_FAILURE", "RANDOM_FAILURE"]
+
+#: why a start the Control rules allowed failed: the world's start-failure model (scripted,
+#: or at random), the environment's doing as the checker's ``start_failures`` choices are
+SCRIPTED_FAILURE = "scripted start failure"
+RANDOM_FAILURE = "start failed"
 
 
 #: seconds from a slip's onset to the alarm of a detector with a given rate
@@ -212,9 +217,9 @@ class Infrastructure:
             return reason
         failure = self.world.start_failure
         if (graph, platform, n) in failure.script:
-            return "scripted start failure"
+            return SCRIPTED_FAILURE
         if failure.probability and self.rng_start.random() < failure.probability:
-            return "start failed"
+            return RANDOM_FAILURE
         return ""
 
     def _rules_refusal(self, graph: str, platform: str) -> str:

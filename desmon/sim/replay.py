@@ -123,7 +123,8 @@ def replay(
         try:
             stim, log = core.step(te.event, control)
         except DeployerFault as fault:  # its first reaction: the deployer cannot run at all (exit 2), else CRASHED
-            fault.initial = not result.steps
+            # (its first reaction with a start failed: a state the run reached, as the checker says)
+            fault.initial = not result.steps and not any(ok is False for c, ok in (fault.log.commands if fault.log else ()) if type(c) is Start)
             fault.args = (f"at t={te.time:g} s ({te.label or te.event}), {fault.args[0]}",)
             raise
         finally:

@@ -67,7 +67,9 @@ def _run(  # type: ignore[no-untyped-def]
     scenario: Scenario, deployer: str | Deployer, seq: list[Choice], enabler: Checker, faults: list | None, initial: tuple[int, ...],
 ):
     """:func:`run_choices`, and the failing starts of the first reaction it issued."""
-    run = RepositoryRun(scenario, deployer, enabler.bounds, enabler.system.guard, initial_fails=initial, unissued_fails_drop=True)
+    run, crashed = _first_reaction(scenario, deployer, enabler, faults, initial)
+    if run is None:
+        return crashed
     initial = run.initial_fails
     instant = enabler.system.instant
     labels: list[Label] = []
@@ -97,6 +99,27 @@ def _run(  # type: ignore[no-untyped-def]
         if bad:
             return labels, bad[0], initial
     return labels, None, initial
+
+
+def _first_reaction(  # type: ignore[no-untyped-def]
+    scenario: Scenario, deployer: str | Deployer, enabler: Checker, faults: list | None, initial: tuple[int, ...],
+):
+    """(the RepositoryRun after the first reaction, None), or (None, the outcome of a first
+    reaction the deployer failed in because a start of it failed: a reachable crash). With
+    no start failing, its fault is raised: the deployer cannot run at all (exit 2)."""
+    try:
+        return RepositoryRun(scenario, deployer, enabler.bounds, enabler.system.guard, initial_fails=initial, unissued_fails_drop=True), None
+    except DeployerFault as fault:
+        if not initial:
+            raise
+        system = enabler.system
+        system.initial(initial)  # (the checker's run of the same: the starts it issued before the fault)
+        issued = tuple(i for i in initial if i < len(system.store.outcomes))
+        if not issued:  # none of the drawn failures came: it fails with every start succeeding (exit 2)
+            RepositoryRun(scenario, deployer, enabler.bounds, enabler.system.guard)
+        if faults is not None:
+            faults.append(fault)
+        return None, ([], (CRASH, str(fault.what)), issued)
 
 
 def _end_progress(progress: bool, calls: int) -> None:

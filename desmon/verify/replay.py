@@ -39,8 +39,9 @@ __all__ = ["initial_reaction", "first_reaction_fault", "ScriptedControl", "Repos
 def initial_reaction(core: DeploymentCore, scenario: Scenario, bounds: Bounds, control: ControlPort, fails: tuple[int, ...] = ()) -> Any:
     """The scenario's initial facts, then the system's first reaction through ``control``
     (whose starts fail as it decides: ``fails``, the indices of the starts the Control rules
-    allow that fail, only names them in the message of a deployer that cannot react);
-    returns the reaction's StepLog."""
+    allow that fail); returns the reaction's StepLog. A deployer that fails in it cannot
+    run at all when no start failed (a DeployerFault marked ``initial``: exit 2); with
+    ``fails`` it failed in a reachable state (a DeployerFault naming them: CRASHED)."""
     for ev in scenario.initial:
         core.observe(ev)
     act = bounds.start_action(scenario)
@@ -50,12 +51,16 @@ def initial_reaction(core: DeploymentCore, scenario: Scenario, bounds: Bounds, c
         log = run_sync(core.reaction(Stimulus(context_changed=True)), control)
         core.settle(e.graph for e in log.errors)
         return log
-    except DeployerFault as fault:  # no state to show a path to: the deployer cannot run at all (exit 2)
+    except DeployerFault as fault:
         context = core.query.context()
         where = f"action {act}" if act is not None else f"context {context}"
-        if fails:
-            where += ", with " + ", ".join(f"start #{i + 1}" for i in fails) + " failing"
-        raise first_reaction_fault(core.deployer.name, where, fault) from None
+        if not fails:  # no state to show a path to: the deployer cannot run at all (exit 2)
+            raise first_reaction_fault(core.deployer.name, where, fault) from None
+        # it failed only because a start the checker chose failed: a reachable state (CRASHED)
+        where += ", with " + ", ".join(f"start #{i + 1}" for i in fails) + " failing"
+        out = DeployerFault(f"deployer {core.deployer.name}, reacting to the initial state ({where}): {fault.what or fault}")
+        out.stimulus, out.log, out.cause, out.what = fault.stimulus, fault.log, fault.cause, fault.what
+        raise out from None
 
 
 def first_reaction_fault(name: str, where: str, fault: DeployerFault) -> DeployerFault:

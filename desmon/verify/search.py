@@ -445,12 +445,17 @@ class Trail:
         ks.reverse()
         return ls, ks, self.roots[i]
 
-    def record(self, name: str, msg: str, i: int, during: str | None = None, extra: Label | None = None) -> None:
+    def record(
+        self, name: str, msg: str, i: int, during: str | None = None, extra: Label | None = None, initial: tuple[int, ...] | None = None,
+    ) -> None:
         """A violation of ``name`` in state ``i`` (or, with ``extra``, during the transition
-        ``extra`` out of it): its counterexample, unless the invariant has one already."""
+        ``extra`` out of it; with ``initial``, during the first reaction that failed those
+        starts and reached the initial state ``i``): its counterexample, unless the invariant
+        has one already."""
         if name in self.found:
             return
-        ls, ks, initial = self.path(i)
+        ls, ks, root = self.path(i)
+        initial = root if initial is None else initial
         if extra is not None:
             ls.append(extra)
         self.found[name] = Counterexample(name, msg, tuple(self.system.replay(ls, expect=ks, initial=initial)), during)
@@ -509,7 +514,7 @@ class BreadthFirst:
         """Expand the states numbered in ``frontier``; returns the next level's numbers."""
         raise NotImplementedError
 
-    def _search(self, states: list | array, violations: list[list[tuple[str, ...]]]) -> tuple[dict[str, Counterexample], str, int]:  # type: ignore[type-arg]
+    def _search(self, states: list | array, violations: list[list[tuple[Any, ...]]]) -> tuple[dict[str, Counterexample], str, int]:  # type: ignore[type-arg]
         """The BFS from the initial states, numbered 0 to ``len(violations) - 1`` (the trail's
         roots), whose invariant ``violations`` are given, each initial state's; ``states`` is
         the engine's list of them (their count, and what a second Ctrl-C truncates). Returns
@@ -523,8 +528,8 @@ class BreadthFirst:
         budget.levels = lambda: sizes
         frontier: Any = []
         for root, bad in enumerate(violations):
-            for name, msg, *during in bad:  # (the initial reaction's own findings say where in it)
-                trail.record(name, msg, root, during[0] if during else None)
+            for name, msg, *where in bad:  # (the initial reaction's own findings say where in it, and another choice's which)
+                trail.record(name, msg, root, where[0] if where else None, initial=where[1] if len(where) > 1 else None)
             if not bad or trail.keep_going:  # (as any state that violates an invariant: :meth:`_add_state`)
                 frontier.append(root)
         self.any_found = bool(trail.found)

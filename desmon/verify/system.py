@@ -41,7 +41,7 @@ from desmon.verify.search import NOT_CHECKED, Record, Segment
 from desmon.verify.state import MEMO_LIMIT, Key, StateStore, StoreInsert
 from desmon.verify.trace import WHOLE_REACTION, Label, Step, branch_names, initial_step, make_step, outcome_prefix, reaction_findings
 
-__all__ = ["TransitionSystem", "initial_states", "Reduction", "command_key", "crash_of", "nondeterminism", "opened", "same_again", "RECHECK_FIRST", "RECHECK_EVERY"]
+__all__ = ["TransitionSystem", "initial_states", "replay_trace", "Reduction", "command_key", "crash_of", "nondeterminism", "opened", "same_again", "RECHECK_FIRST", "RECHECK_EVERY"]
 
 #: Nondeterminism detection: the first RECHECK_FIRST transitions a search runs, and every
 #: RECHECK_EVERY-th after them, are run twice and compared (:meth:`TransitionSystem.successors`).
@@ -185,20 +185,37 @@ class TransitionSystem:
 
     def initial(self, fails: tuple[int, ...] = ()) -> Key:
         """The scenario's initial facts, then the system's first reaction, with the starts at
-        ``fails`` (indices among those the Control rules allow) failing: by default none."""
+        ``fails`` (indices among those the Control rules allow) failing: by default none.
+
+        A deployer that fails in the first reaction with every start succeeding cannot run
+        at all (the DeployerFault is raised: exit 2). One that fails only when a start the
+        checker chose fails has failed in a reachable state, as in any later reaction: the
+        state is the one it left, its finding :data:`CRASH` (:meth:`step_under_guard`)."""
         st = self.store
         absent = tuple(sorted(p.name for p in self.model.platforms if p.on_demand))  # until they join
         st.load(Key(None, (), absent, (), (), ()))
         self.core.standing = frozenset()
         st.begin(outcome_prefix(fails))
-        self.initial_log = initial_reaction(self.core, self.scenario, self.bounds, st, fails)  # the same as RepositoryRun's
+        try:
+            self.initial_log = initial_reaction(self.core, self.scenario, self.bounds, st, fails)  # the same as RepositoryRun's
+        except DeployerFault as fault:
+            if not fails:
+                raise
+            log = self.initial_log = fault.log if fault.log is not None else StepLog()
+            self.initial_outcomes = tuple(st.prefix)  # (no branching on the starts of a failed reaction)
+            self.initial_findings = ((CRASH, str(fault.what), str(log.commands[-1][0]) if log.commands else ""),)
+            return st.key(self.core.standing)
         self.initial_outcomes = tuple(st.outcomes)
         self.initial_findings = reaction_findings(st.instant, self.core.findings_of(self._checked, st.every))
         return st.key(self.core.standing)
 
     def initial_violations(self, key: Key) -> list[tuple[str, ...]]:
         """The invariants the initial state ``key`` violates, then those its reaction broke on
-        the way (:meth:`initial` must have just built ``key``): ``(invariant, message[, after what])``."""
+        the way (:meth:`initial` must have just built ``key``): ``(invariant, message[, after what])``;
+        a reaction the deployer failed in: its :data:`CRASH` alone (the search ends there, as
+        at a later reaction's)."""
+        if self.initial_findings and self.initial_findings[0][0] == CRASH:
+            return list(self.initial_findings)
         bad: list[tuple[str, ...]] = list(self.violations(key))
         return bad + [v for v in self.initial_findings if v[0] not in {b[0] for b in bad}]
 
@@ -348,38 +365,49 @@ class TransitionSystem:
     # -- traces ------------------------------------------------------------------------------
     def replay(self, labels: list[Label], expect: list[Key] | None = None, initial: tuple[int, ...] = ()) -> list[Step]:
         """Rebuild the states of ``labels`` from the initial state whose first reaction failed
-        the starts at ``initial`` (the trace); checks determinism."""
+        the starts at ``initial`` (the trace); checks determinism (:func:`replay_trace`)."""
         if self.symmetry is not None:
             return self.symmetry.replay(labels, expect, initial)
-        key = self.initial(initial)
-        if expect and key != expect[0]:
-            raise NondeterminismError(f"the initial reaction is not deterministic: got {key}, stored {expect[0]}")
-        st = self.store
-        steps = [initial_step(key, self.initial_log, initial, lambda g, p: st.rules.start_refusal(g, p, st.platform_state))]
-        for i, (event, fails) in enumerate(labels, 1):
-            prev = key
-            key, _outcomes, log, _instant = self.run_one(prev, event, outcome_prefix(fails))
-            if expect is not None and i < len(expect) and key != expect[i]:
-                raise NondeterminismError(
-                    f"replaying step {i} ({event}) did not reproduce the stored state: the system under test is nondeterministic\n"
-                    f"  stored:   {expect[i]}\n  replayed: {key}"
-                )
-            # (the store is left in the step's next state: the Control rules' refusals there tell refused starts from chosen failures)
-            steps.append(make_step(i, prev, event, key, log, fails, lambda g, p: st.rules.start_refusal(g, p, st.platform_state)))
-        return steps
+        return replay_trace(self, labels, expect, initial)
 
 
-def initial_states(system: TransitionSystem) -> list[tuple[tuple[int, ...], Key, list[tuple[str, ...]]]]:
-    """Every initial state of ``system``, as (failed start indices, key, its
-    :meth:`~TransitionSystem.initial_violations`): the first reaction branches on its starts
-    as every reaction does (:meth:`~TransitionSystem.successors`), each start it issued
-    failing while fewer than ``start_failures`` failed; a state reached again is listed
-    once, under the first choice that reached it (all starts succeeding first). Under a
-    symmetry reduction the keys are canonical."""
+def replay_trace(system: TransitionSystem, labels: list[Label], expect: list[Key] | None = None, initial: tuple[int, ...] = ()) -> list[Step]:
+    """:meth:`TransitionSystem.replay` without a reduction: the steps of ``labels`` from the
+    initial state whose first reaction failed the starts at ``initial``, each checked
+    against ``expect`` (the stored states) where given."""
+    key = system.initial(initial)
+    if expect and key != expect[0]:
+        raise NondeterminismError(f"the initial reaction is not deterministic: got {key}, stored {expect[0]}")
+    st = system.store
+    steps = [initial_step(key, system.initial_log, initial, lambda g, p: st.rules.start_refusal(g, p, st.platform_state))]
+    for i, (event, fails) in enumerate(labels, 1):
+        prev = key
+        key, _outcomes, log, _instant = system.run_one(prev, event, outcome_prefix(fails))
+        if expect is not None and i < len(expect) and key != expect[i]:
+            raise NondeterminismError(
+                f"replaying step {i} ({event}) did not reproduce the stored state: the system under test is nondeterministic\n"
+                f"  stored:   {expect[i]}\n  replayed: {key}"
+            )
+        # (the store is left in the step's next state: the Control rules' refusals there tell refused starts from chosen failures)
+        steps.append(make_step(i, prev, event, key, log, fails, lambda g, p: st.rules.start_refusal(g, p, st.platform_state)))
+    return steps
+
+
+def initial_states(system: TransitionSystem) -> list[tuple[tuple[int, ...], Key, list[tuple[Any, ...]]]]:
+    """Every initial state of ``system``, as (failed start indices, key, violations): the
+    first reaction branches on its starts as every reaction does
+    (:meth:`~TransitionSystem.successors`), each start it issued failing while fewer than
+    ``start_failures`` failed. A state reached again is listed once, under the first choice
+    that reached it (all starts succeeding first). Its violations are
+    :meth:`~TransitionSystem.initial_violations` ``(invariant, message[, after what])``, then
+    what another choice that reached it broke inside its reaction (a violation repaired
+    before the reaction ended), as ``(invariant, message, after what, that choice's failed
+    start indices)``: a later reaction's transitions each carry theirs, and so do these.
+    Under a symmetry reduction the keys are canonical."""
     bound = system.bounds.start_failures
     canon = system.symmetry.canon if system.symmetry is not None else None
-    out: list[tuple[tuple[int, ...], Key, list[tuple[str, ...]]]] = []
-    seen: set[Key] = set()
+    out: list[tuple[tuple[int, ...], Key, list[tuple[Any, ...]]]] = []
+    index: dict[Key, int] = {}
     pending: list[tuple[bool, ...]] = [()]
     while pending:
         prefix = pending.pop(0)
@@ -387,9 +415,13 @@ def initial_states(system: TransitionSystem) -> list[tuple[tuple[int, ...], Key,
         key = system.initial(fails)
         pending += opened(prefix, system.initial_outcomes, fails, bound)
         ckey = canon(key) if canon is not None else key
-        if ckey not in seen:
-            seen.add(ckey)
+        at = index.get(ckey)
+        if at is None:
+            index[ckey] = len(out)
             out.append((fails, ckey, system.initial_violations(ckey)))
+            continue
+        known = {v[0] for v in out[at][2]}
+        out[at][2].extend((*f, fails) for f in system.initial_findings if f[0] not in known)
     return out
 
 

@@ -65,3 +65,37 @@ def _silent(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
 
 
 silent = Deployer("silent", "first fit that ignores a failed start", _silent)
+
+
+def _crashes_on_a_failed_start(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    """desmon's reaction, except that it raises when a start fails (the bug)."""
+    from desmon.deployment.deployer import DESMON
+
+    reaction = DESMON.react(q, slots, changed, context_changed)
+    outcome = None
+    while True:
+        try:
+            cmd = reaction.send(outcome)
+        except StopIteration:
+            return
+        outcome = yield cmd
+        if isinstance(cmd, Start) and outcome is False:
+            raise RuntimeError("a start failed")
+
+
+crashes = Deployer("crashes", "desmon's, raising when a start fails", _crashes_on_a_failed_start)
+
+
+def _doubles(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    """Starts g2 on b; when that fails, on a, then on b again, then stops it on a: the
+    same state as when the first start works, through two instances (the bug)."""
+    if q.deployed_on("g2"):
+        return
+    ok = yield Start("g2", "b")
+    if not ok:
+        yield Start("g2", "a")
+        yield Start("g2", "b")
+        yield Stop("g2", "a")
+
+
+doubles = Deployer("doubles", "runs g2 twice for a moment after a failed start", _doubles)

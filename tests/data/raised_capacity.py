@@ -33,3 +33,22 @@ scenario = Scenario(
     world=World(task=(Step("hold", 10.0),), horizon=10.0, signals=False, changes=(TimedEvent(2.0, UP),)),
     checker=Bounds(actions=("hold",), requirement_changes=(UP,)),
 )
+
+
+def _restarts_first(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    """Re-issues a Start for every running instance (a no-op), then desmon's reaction."""
+    from desmon.deployment.deployer import DESMON
+    from desmon.deployment.ports import Start
+
+    for g, platform in q.deployments():
+        yield Start(g, platform)
+    yield from DESMON.react(q, slots, changed, context_changed)
+
+
+def _deployer():  # type: ignore[no-untyped-def]
+    from desmon.deployment.deployer import Deployer
+
+    return Deployer("restarts-first", "re-issues the starts of running instances first", _restarts_first)
+
+
+restarts_first = _deployer()
