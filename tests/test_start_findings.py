@@ -1,6 +1,6 @@
 """Inside a reaction, the instantaneous invariants (single-instance, no-overcommit, fixed)
 are charged to the start that breaks them, judged on what that start changed: the graph's
-own instances, the platform it started on. A stop breaks none of them, and what the
+own instances, the capacities of the platform it started on that it took over. A stop breaks none of them, and what the
 environment had broken before the reaction (a requirement change that raised a running
 graph's consumption) is no command's: the state the reaction ends in is judged whole.
 Every engine audits with one function, :func:`desmon.deployment.invariants.start_findings`.
@@ -32,9 +32,14 @@ def test_a_start_is_charged_with_what_it_breaks_on_its_platform_and_its_graph_no
     # pc over capacity before the start (the environment's doing); g started on pc2
     view = SystemView((_state("pc", 384, ("m", 400)), _state("pc2", 512, ("g", 100))), (), frozenset(), ())
     assert start_findings(view, INSTANT, "g", "pc2") == []
-    # the same start on the over-committed platform is charged
-    on_pc = SystemView((_state("pc", 384, ("m", 400), ("g", 100)),), (), frozenset(), ())
-    assert [n for n, _m in start_findings(on_pc, INSTANT, "g", "pc")] == ["no-overcommit"]
+    # nor on pc itself: it was over its capacity before the start (a graph that consumes
+    # nothing, or more on top: the state the reaction ends in is judged whole)
+    for amount in (0, 100):
+        on_pc = SystemView((_state("pc", 384, ("m", 400), ("g", amount)),), (), frozenset(), ())
+        assert start_findings(on_pc, INSTANT, "g", "pc") == []
+    # a start that takes a platform from within its capacity to over it is charged
+    over = SystemView((_state("pc", 384, ("m", 300), ("g", 100)),), (), frozenset(), ())
+    assert [n for n, _m in start_findings(over, INSTANT, "g", "pc")] == ["no-overcommit"]
     # a second instance of the started graph is charged; another graph's is not this start's
     twice = SystemView((_state("pc", 384, ("g", 100), ("h", 10)), _state("pc2", 512, ("g", 100), ("h", 10))), (), frozenset(), ())
     assert [n for n, _m in start_findings(twice, INSTANT, "g", "pc2")] == ["single-instance"]

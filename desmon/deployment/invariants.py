@@ -168,14 +168,14 @@ Check = Callable[[SystemView], str | None]
 class Invariant:
     """A named ``always`` property: ``check(view)`` returns None or what is wrong.
 
-    ``at_start``: what a start inside a reaction can break of it, judged right after the
-    start (:func:`start_findings`): ``"graph"`` (the started graph's own instances),
-    ``"platform"`` (the platform it started on), or None (the whole view)."""
+    ``at_start(view, graph, platform)``: what the start of ``graph`` on ``platform`` broke of
+    it, ``view`` being the state right after the start (:func:`start_findings`); None: the
+    property is judged on the whole view there."""
 
     name: str
     description: str
     check: Check
-    at_start: str | None = None
+    at_start: Callable[[SystemView, str, str], str | None] | None = None
 
 
 def _valid_or_error(v: SystemView) -> str | None:
@@ -199,6 +199,34 @@ def _no_overcommit(v: SystemView) -> str | None:
                 who = ", ".join(f"{g} {a:g}" for g, a in used)
                 return f"{s.name}: deployments consume {total:g} {res} ({who}) but the capacity is {cap:g}"
     return None
+
+
+def _overcommit_by_start(v: SystemView, graph: str, platform: str) -> str | None:
+    """``no-overcommit`` as the start of ``graph`` on ``platform`` broke it: a capacity of that
+    platform the deployments fitted before the start and exceed after it. An over-commit
+    that stood before (a requirement change raised a running graph's Capacity) is not the
+    start's, nor one of another platform."""
+    for s in v.states:
+        if s.name != platform:
+            continue
+        for res, cap in s.platform.capacities:
+            used = s.used_by(res)
+            total = sum(a for _g, a in used)
+            if not fits(total, cap) and fits(sum(a for g, a in used if g != graph), cap):
+                who = ", ".join(f"{g} {a:g}" for g, a in used)
+                return f"{s.name}: deployments consume {total:g} {res} ({who}) but the capacity is {cap:g}"
+    return None
+
+
+def _of_started_graph(check: Check) -> Callable[[SystemView, str, str], str | None]:
+    """``check`` on the started graph's own instances (``single-instance``, ``fixed``): the
+    same facts, with that graph's deployments as the view's (a derived field, set here)."""
+    def at_start(v: SystemView, graph: str, platform: str) -> str | None:
+        own = replace(v)
+        object.__setattr__(own, "_deployments", tuple(d for d in v.deployments if d[0] == graph))
+        return check(own)
+
+    return at_start
 
 
 def _single_instance(v: SystemView) -> str | None:
@@ -446,8 +474,11 @@ INVARIANTS: dict[str, Invariant] = {
     inv.name: inv
     for inv in (
         Invariant("valid-or-error", "every active deployment runs on an up platform meeting all its requirements, or an error stands for its graph", _valid_or_error),
-        Invariant("no-overcommit", "on every platform the Capacity consumed by active deployments stays within the capacity", _no_overcommit, "platform"),
-        Invariant("single-instance", "no perception graph is active on two platforms", _single_instance, "graph"),
+        Invariant(
+            "no-overcommit", "on every platform the Capacity consumed by active deployments stays within the capacity", _no_overcommit,
+            _overcommit_by_start,
+        ),
+        Invariant("single-instance", "no perception graph is active on two platforms", _single_instance, _of_started_graph(_single_instance)),
         Invariant(
             "coverage",
             "after each reaction every graph the selector wants is active on a valid platform, or an error explains why not "
@@ -457,7 +488,7 @@ INVARIANTS: dict[str, Invariant] = {
         ),
         Invariant("errors-current", "a standing error describes the present: its graph is wanted, not validly active, and either active on an invalid platform or in a slot no alternative serves", _errors_current),
         Invariant("history", "every stop leaves one DEPLOYMENT_HISTORY edge; every DEPLOYED_ON edge matches a running detector", _history),
-        Invariant("fixed", "a fixed deployment runs only on its EXECUTABLE_ON platform", _fixed, "graph"),
+        Invariant("fixed", "a fixed deployment runs only on its EXECUTABLE_ON platform", _fixed, _of_started_graph(_fixed)),
         Invariant(
             "errors-justified",
             "every error is true when raised (no_acceptable_platforms: no platform is acceptable; deployment_failed / stopping_failed: the graph's last start / stop just failed; deployment_information_missing: no specification), and an error stands after a reaction only while every platform acceptable for its graph was tried in that reaction",
@@ -507,35 +538,19 @@ def get_invariants(names: list[str] | tuple[str, ...] | None = None) -> tuple[In
 
 def start_findings(view: SystemView, invariants: tuple[Invariant, ...], graph: str, platform: str) -> list[tuple[str, str]]:
     """(name, message) of each of ``invariants`` the start of ``graph`` on ``platform``
-    breaks, ``view`` being the state right after it. Each is judged on what a start
-    changes (its :attr:`Invariant.at_start`): the started graph's own instances
-    (``single-instance``, ``fixed``) or the platform it started on (``no-overcommit``). A
-    violation elsewhere was there before the start (the environment's, such as a
+    broke, ``view`` being the state right after it: each judged on what a start changes
+    (its :attr:`Invariant.at_start`): the started graph's own instances (``single-instance``,
+    ``fixed``), the capacities of the platform it started on that it took from within to
+    over (``no-overcommit``). A violation that stood before (the environment's, such as a
     requirement change that raised a running graph's consumption, or an earlier
-    command's, judged at that command) and is not charged to it; the state a reaction
-    ends in is judged whole. Every engine audits a reaction's starts with this function."""
+    command's, judged at that command) is not charged to it; the state a reaction ends in
+    is judged whole. Every engine audits a reaction's starts with this function."""
     out: list[tuple[str, str]] = []
-    scoped: dict[str | None, SystemView] = {}
     for inv in invariants:
-        v = scoped.get(inv.at_start)
-        if v is None:
-            v = scoped[inv.at_start] = _start_scope(view, inv.at_start, graph, platform)
-        msg = inv.check(v)
+        msg = inv.at_start(view, graph, platform) if inv.at_start is not None else inv.check(view)
         if msg is not None:
             out.append((inv.name, msg))
     return out
-
-
-def _start_scope(view: SystemView, scope: str | None, graph: str, platform: str) -> SystemView:
-    """``view`` narrowed to what a start of ``graph`` on ``platform`` changed (``scope``:
-    :attr:`Invariant.at_start`)."""
-    if scope == "platform":
-        return replace(view, states=tuple(s for s in view.states if s.name == platform))
-    if scope == "graph":  # (the same facts, with the started graph's instances as the deployments)
-        own = replace(view)
-        object.__setattr__(own, "_deployments", tuple(d for d in view.deployments if d[0] == graph))
-        return own
-    return view
 
 
 def check_invariants(view: SystemView, invariants: tuple[Invariant, ...] | None = None) -> list[tuple[str, str]]:
