@@ -35,11 +35,36 @@ def audit(
     now = parts.env.now
     booked: list[str] = []
     found = start_findings(view, get_invariants(INSTANT_INVARIANTS), *started) if started is not None else check_invariants(view)
+    stale: list[str] | None = None
     for name, msg in found:
         if name not in skip:
-            books.violation(now, name, f"{msg} (during the reaction, right after `{after}`)" if after else msg)
+            if stale is None:
+                stale = unnoticed(parts, view)
+            where = f" (during the reaction, right after `{after}`)" if after else ""
+            if stale:  # (the checker notices every change at once: it has no such state)
+                where += f" (while the monitor had not yet noticed: {', '.join(stale)}; docs/design.md §6)"
+            books.violation(now, name, msg + where)
             booked.append(name)
     return tuple(booked)
+
+
+def unnoticed(parts: "RobotParts", view: SystemView) -> list[str]:
+    """The changes of the world the monitor has not noticed yet (its ``heartbeat_timeout``):
+    each platform of ``view`` (the repository's facts) up or down in fact but not in the
+    repository, each device of them working or failed in fact but not there."""
+    facts = parts.facts
+    out: list[str] = []
+    working: dict[str, set[str]] = {}
+    for s in view.states:
+        up = facts.up.get(s.name)
+        if up is not None and up != s.up:
+            out.append(f"platform {s.name} {'up' if up else 'down'}")
+        working[s.name] = {d.name for d in s.devices}
+    for device, ok in facts.dev_ok.items():
+        believed = working.get(facts.host[device])
+        if believed is not None and ok != (device in believed):
+            out.append(f"device {device} {'repaired' if ok else 'failed'}")
+    return out
 
 
 def robot_metrics(parts: "RobotParts") -> dict[str, Any]:

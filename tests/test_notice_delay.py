@@ -1,0 +1,33 @@
+"""What the world's notice delay (``heartbeat_timeout``) lets happen that the checker,
+which notices every change at once, cannot reach: a reaction decided on facts the monitor
+has not updated yet, whose start succeeds on the facts as they are (docs/design.md §6).
+The world says so on each violation it books in such a window.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from desmon.cli import main
+
+SCENARIO = str(Path(__file__).resolve().parent / "data" / "notice_delay.py")
+
+
+def _violations(capsys, *args: str) -> list[str]:  # type: ignore[no-untyped-def]
+    main(["run", SCENARIO, *args])
+    out = capsys.readouterr().out
+    below = out.split("INVARIANTS VIOLATED", 1)[1].splitlines()[1:] if "INVARIANTS VIOLATED" in out else []
+    return [line.strip() for line in below if line.strip().startswith("t=")]
+
+
+def test_a_violation_inside_the_notice_delay_says_what_the_monitor_had_not_noticed(capsys):
+    found = _violations(capsys, "--deployer", "paper")
+    assert found and found[0].startswith("t=10.200s single-instance: g is active on 2 platforms: p0, p1")
+    assert found[0].endswith("(while the monitor had not yet noticed: platform p0 up; docs/design.md §6)")
+    assert main(["verify", SCENARIO, "--deployer", "paper", "--no-progress"]) == 0  # (no state of it has the window)
+
+
+def test_without_the_delay_or_with_a_deployer_that_stops_what_it_believes_down_the_world_agrees(capsys):
+    assert _violations(capsys, "--deployer", "paper", "-p", "heartbeat=0") == []
+    assert _violations(capsys, "--deployer", "desmon") == []
+    assert main(["verify", SCENARIO, "--no-progress"]) == 0
