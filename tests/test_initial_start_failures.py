@@ -129,3 +129,13 @@ def test_the_explorer_shows_what_the_first_reaction_did(tmp_path, capsys):
     assert main(["explore", SCENARIO, "--deployer", SILENT, "--verify", "--no-progress", "-o", str(page)]) == 0
     text = page.read_text(encoding="utf-8")
     assert "start g1 on a: FAILED" in text
+
+
+def test_a_deployer_that_fails_on_a_refused_first_start_cannot_run_at_all_in_every_command(capsys):
+    """A refused start is no choice and no failure of the world's: failing on it in the
+    first reaction is bad input (exit 2) for verify, run and replay alike."""
+    path = str(ROOT / "tests" / "data" / "refused_first_start.py")
+    for command in ("verify", "run", "replay"):
+        assert main([command, path, "--deployer", f"{path}:raises"]) == 2, command
+        err = capsys.readouterr().err
+        assert err.startswith("desmon: error: ") and "RuntimeError: a start did not work" in err, (command, err)

@@ -203,16 +203,17 @@ def _no_overcommit(v: SystemView) -> str | None:
 
 def _overcommit_by_start(v: SystemView, graph: str, platform: str) -> str | None:
     """``no-overcommit`` as the start of ``graph`` on ``platform`` broke it: a capacity of that
-    platform the deployments fitted before the start and exceed after it. An over-commit
-    that stood before (a requirement change raised a running graph's Capacity) is not the
-    start's, nor one of another platform."""
+    platform the deployments exceed after the start, of a resource the started graph
+    consumes (it put more on it). A capacity exceeded only by what ran before (a
+    requirement change raised a running graph's Capacity) is not the start's, nor one of
+    another platform."""
     for s in v.states:
         if s.name != platform:
             continue
         for res, cap in s.platform.capacities:
             used = s.used_by(res)
             total = sum(a for _g, a in used)
-            if not fits(total, cap) and fits(sum(a for g, a in used if g != graph), cap):
+            if not fits(total, cap) and any(g == graph for g, _a in used):
                 who = ", ".join(f"{g} {a:g}" for g, a in used)
                 return f"{s.name}: deployments consume {total:g} {res} ({who}) but the capacity is {cap:g}"
     return None
@@ -540,11 +541,11 @@ def start_findings(view: SystemView, invariants: tuple[Invariant, ...], graph: s
     """(name, message) of each of ``invariants`` the start of ``graph`` on ``platform``
     broke, ``view`` being the state right after it: each judged on what a start changes
     (its :attr:`Invariant.at_start`): the started graph's own instances (``single-instance``,
-    ``fixed``), the capacities of the platform it started on that it took from within to
-    over (``no-overcommit``). A violation that stood before (the environment's, such as a
-    requirement change that raised a running graph's consumption, or an earlier
-    command's, judged at that command) is not charged to it; the state a reaction ends in
-    is judged whole. Every engine audits a reaction's starts with this function."""
+    ``fixed``), the capacities of the platform it started on that are exceeded after it in
+    a resource it consumes (``no-overcommit``). A violation it did not add to (the
+    environment's, such as a requirement change that raised a running graph's
+    consumption, or another platform's) is not charged to it; the state a reaction ends
+    in is judged whole. Every engine audits a reaction's starts with this function."""
     out: list[tuple[str, str]] = []
     for inv in invariants:
         msg = inv.at_start(view, graph, platform) if inv.at_start is not None else inv.check(view)

@@ -9,7 +9,7 @@ The paper's t0..t3 walk-through is this replay of ``scenarios/coffee_handover.py
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Any, Callable
 
 import networkx as nx
 
@@ -84,6 +84,13 @@ def deployment_edges(g: nx.MultiDiGraph) -> set[tuple[str, str, str]]:
     return {(s, d["label"], t) for s, t, d in g.edges(data=True) if d["label"] in L.DEPLOYMENT_EDGES}
 
 
+def _start_failed(fault: DeployerFault, control: Any) -> bool:
+    """Whether a start of the failed reaction failed, not refused by the Control rules (then
+    a first reaction that failed is a state the run reached, as the checker says)."""
+    failed = [c for c, ok in (fault.log.commands if fault.log else ()) if type(c) is Start and ok is False]
+    return any(control.refuse(c.graph, c.platform) is None for c in failed)
+
+
 def replay(
     scenario: Scenario,
     deployer: str = "desmon",
@@ -123,8 +130,7 @@ def replay(
         try:
             stim, log = core.step(te.event, control)
         except DeployerFault as fault:  # its first reaction: the deployer cannot run at all (exit 2), else CRASHED
-            # (its first reaction with a start failed: a state the run reached, as the checker says)
-            fault.initial = not result.steps and not any(ok is False for c, ok in (fault.log.commands if fault.log else ()) if type(c) is Start)
+            fault.initial = not result.steps and not _start_failed(fault, control)
             fault.args = (f"at t={te.time:g} s ({te.label or te.event}), {fault.args[0]}",)
             raise
         finally:

@@ -88,7 +88,7 @@ class Bounds:
         ``RequirementChange`` events the environment may apply, in any order and any
         number of times (one that changes nothing is a no-op);
     ``instantaneous``
-        invariants also checked after every command inside a reaction: some of
+        invariants also checked after every start inside a reaction (on what it changed): some of
         ``single-instance``, ``no-overcommit`` and ``fixed`` (the facts of every instant,
         which the simulation's audit and the fuzzer check there too);
     ``variables``

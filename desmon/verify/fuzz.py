@@ -74,7 +74,7 @@ def _run(  # type: ignore[no-untyped-def]
     instant = enabler.system.instant
     labels: list[Label] = []
     watched = {i.name for i in instant}
-    first = [f for f in run.initial_found if f[0] in watched]  # broken inside the initial reaction, after a start or stop
+    first = [f for f in run.initial_found if f[0] in watched]  # broken inside the initial reaction, after a start
     if first:
         return labels, (first[0][0], f"{first[0][1]} (during the reaction, right after `{first[0][2]}`)"), initial
     bad = run.violations()
@@ -115,8 +115,8 @@ def _first_reaction(  # type: ignore[no-untyped-def]
         system = enabler.system
         system.initial(initial)  # (the checker's run of the same: the starts it issued before the fault)
         issued = tuple(i for i in initial if i < len(system.store.outcomes))
-        if not issued:  # none of the drawn failures came: it fails with every start succeeding (exit 2)
-            RepositoryRun(scenario, deployer, enabler.bounds, enabler.system.guard)
+        # with every start succeeding it fails too (or none of the drawn failures came): it cannot run at all (exit 2)
+        RepositoryRun(scenario, deployer, enabler.bounds, enabler.system.guard)
         if faults is not None:
             faults.append(fault)
         return None, ([], (CRASH, str(fault.what)), issued)

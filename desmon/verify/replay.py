@@ -143,7 +143,7 @@ class RepositoryRun:
             if not unissued_fails_drop:
                 raise CheckerError(_unissued("the initial reaction's", self.initial_fails, self.control.n))
             self.initial_fails = tuple(i for i in self.initial_fails if i < self.control.n)
-        #: the instantaneous invariants the initial reaction broke after a start or stop, the
+        #: the instantaneous invariants the initial reaction broke after a start, the
         #: first violation of each, as ``(invariant, message, after what)`` (the checker
         #: judges them as any reaction's)
         self.initial_found: tuple[tuple[str, str, str], ...] = tuple(found)
@@ -215,7 +215,7 @@ class RepositoryRun:
         """The current state as step 0, then each label stepped, as the checker's
         counterexample shows it. With each step, what its reaction broke inside it, as
         ``(invariant, message, after what)``, the first violation of each: the ``instant``
-        invariants after a start or stop, then the transition properties among
+        invariants after a start, then the transition properties among
         ``transitions`` (``no-flapping``, ``errors-justified``, ``preferred-when-possible``)
         it broke as a whole. The checker watches the same (:class:`~desmon.verify.bounds.Bounds`'
         ``instantaneous``); step 0 carries what the initial reaction broke (call this on a

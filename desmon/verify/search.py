@@ -68,7 +68,7 @@ NOT_CHECKED = {"history": "sim audit and fuzz only"}
 #: reports it to the search loop: (failed start indices, the successor's canonical key or
 #: None if already known, whether the state moved, the reaction's branch names, an
 #: invariants its reaction broke and repaired before quiescence (invariant, message, after
-#: what; an instantaneous one after a start or stop, or the reaction as a whole), the invariants a new
+#: what; an instantaneous one after a start, or the reaction as a whole), the invariants a new
 #: successor violates).
 Record = tuple[tuple[int, ...], "Key | None", bool, tuple[str, ...], tuple[tuple[str, str, str], ...], tuple[tuple[str, str], ...]]
 

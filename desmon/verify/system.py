@@ -8,7 +8,7 @@ The only other branching is Control.start failing, bounded per transition: the
 reaction is re-run with an outcome prefix, and every start beyond the prefix is a
 choice point (:meth:`TransitionSystem.successors`). The invariants are evaluated on a
 state's :class:`~desmon.deployment.invariants.SystemView` (:meth:`TransitionSystem.violations`);
-the instantaneous ones are watched inside a reaction, after every command.
+the instantaneous ones are watched inside a reaction, after every start.
 
 Engines differ only in how they compute and store transitions; a counterexample is
 always rebuilt by :meth:`TransitionSystem.replay` through the real core, and a replay
@@ -143,7 +143,7 @@ class TransitionSystem:
     @contextlib.contextmanager
     def finding_every(self) -> Iterator[None]:
         """In the block a transition carries the first violation of each checked invariant
-        its reaction breaks inside it (after a start or stop, or as a whole), not only the
+        its reaction breaks inside it (after a start, or as a whole), not only the
         first it breaks: a search that collects every invariant's counterexample
         (``--continue``) then sees each one where it first breaks. Restored after."""
         saved, self.store.every = self.store.every, True
@@ -201,7 +201,10 @@ class TransitionSystem:
         except DeployerFault as fault:
             if not fails:
                 raise
-            log = self.initial_log = fault.log if fault.log is not None else StepLog()
+            log = fault.log if fault.log is not None else StepLog()
+            if len(log.commands) > SHOWN_COMMANDS:  # a runaway reaction: its trace shows the first ones (as step_under_guard's)
+                log = StepLog(log.commands[:SHOWN_COMMANDS])
+            self.initial_log = log
             self.initial_outcomes = tuple(st.prefix)  # (no branching on the starts of a failed reaction)
             self.initial_findings = ((CRASH, str(fault.what), str(log.commands[-1][0]) if log.commands else ""),)
             return st.key(self.core.standing)

@@ -103,7 +103,7 @@ WHOLE_REACTION = "the reaction"
 
 def reaction_findings(instant: tuple[tuple[str, str, str], ...], whole: list[tuple[str, str]]) -> tuple[tuple[str, str, str], ...]:
     """What one reaction broke on its way, judged as every engine judges a transition: the
-    instantaneous invariants it broke after a start or stop (``instant``: invariant,
+    instantaneous invariants it broke after a start (``instant``: invariant,
     message, after what), then the transition properties it broke as a whole (``whole``:
     invariant, message), each where not the same invariant."""
     found = list(instant)

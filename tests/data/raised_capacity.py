@@ -52,3 +52,25 @@ def _deployer():  # type: ignore[no-untyped-def]
 
 
 restarts_first = _deployer()
+
+
+def _tries_the_arm_first(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+    """Once pc is over-committed, tries the other graph on the arm's computer (over its
+    capacity for a moment: the bug), stops it there, then desmon's reaction."""
+    from desmon.deployment.deployer import DESMON
+    from desmon.deployment.ports import Start, Stop
+
+    if any(g == "m_graph" and dict(use).get("memory", 0) > 384 for s in q.platform_states() for g, use in s.deployed):
+        other = next(g for g, _p in q.deployments() if g != "m_graph")
+        if (yield Start(other, "arm")):
+            yield Stop(other, "arm")
+    yield from DESMON.react(q, slots, changed, context_changed)
+
+
+def _arm_deployer():  # type: ignore[no-untyped-def]
+    from desmon.deployment.deployer import Deployer
+
+    return Deployer("tries-the-arm-first", "over-commits the arm's computer for a moment", _tries_the_arm_first)
+
+
+tries_the_arm_first = _arm_deployer()
