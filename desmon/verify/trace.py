@@ -9,7 +9,7 @@ repository-terms text of a step (:func:`describe_state`, :func:`diff`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable
 
 from desmon.deployment.ports import RaiseError, Start, Stop
@@ -186,10 +186,7 @@ def initial_step(key: Key, log: Any = None, fails: tuple[int, ...] = (), refuse:
     Its commands are listed where a start failed by choice (the states are what it shows otherwise)."""
     if log is None or not fails:
         return Step(0, None, (), describe_state(key), key)
-    chosen, refused = failed_starts(log, fails, refuse)
-    cmds = tuple(f"{c}: {'ok' if ok else 'FAILED'}" if ok is not None else str(c).splitlines()[0] for c, ok in log.commands)
-    raised = tuple(_raised(c) for c, _ok in log.commands if type(c) is RaiseError)
-    return Step(0, None, chosen, describe_state(key), key, cmds, tuple(fails), refused, raised)
+    return replace(make_step(0, key, None, key, log, fails, refuse), changes=describe_state(key))  # type: ignore[arg-type]
 
 
 def outcome_prefix(fails: tuple[int, ...]) -> tuple[bool, ...]:

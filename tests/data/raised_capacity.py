@@ -4,6 +4,8 @@ reaction stops both graphs of the platform, one after the other; ``-p other=NAME
 names the second graph, which decides the order of the stops.
 """
 
+from desmon.deployment.deployer import DESMON, Deployer
+from desmon.deployment.ports import Start, Stop
 from desmon.model import RobotBuilder
 from desmon.model.events import ActionChange, RequirementChange
 from desmon.model.params import parameters
@@ -37,29 +39,17 @@ scenario = Scenario(
 
 def _restarts_first(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
     """Re-issues a Start for every running instance (a no-op), then desmon's reaction."""
-    from desmon.deployment.deployer import DESMON
-    from desmon.deployment.ports import Start
-
     for g, platform in q.deployments():
         yield Start(g, platform)
     yield from DESMON.react(q, slots, changed, context_changed)
 
 
-def _deployer():  # type: ignore[no-untyped-def]
-    from desmon.deployment.deployer import Deployer
-
-    return Deployer("restarts-first", "re-issues the starts of running instances first", _restarts_first)
-
-
-restarts_first = _deployer()
+restarts_first = Deployer("restarts-first", "re-issues the starts of running instances first", _restarts_first)
 
 
 def _tries_the_arm_first(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
     """Once pc is over-committed, tries the other graph on the arm's computer (over its
     capacity for a moment: the bug), stops it there, then desmon's reaction."""
-    from desmon.deployment.deployer import DESMON
-    from desmon.deployment.ports import Start, Stop
-
     if any(g == "m_graph" and dict(use).get("memory", 0) > 384 for s in q.platform_states() for g, use in s.deployed):
         other = next(g for g, _p in q.deployments() if g != "m_graph")
         if (yield Start(other, "arm")):
@@ -67,10 +57,4 @@ def _tries_the_arm_first(q, slots, changed, context_changed):  # type: ignore[no
     yield from DESMON.react(q, slots, changed, context_changed)
 
 
-def _arm_deployer():  # type: ignore[no-untyped-def]
-    from desmon.deployment.deployer import Deployer
-
-    return Deployer("tries-the-arm-first", "over-commits the arm's computer for a moment", _tries_the_arm_first)
-
-
-tries_the_arm_first = _arm_deployer()
+tries_the_arm_first = Deployer("tries-the-arm-first", "over-commits the arm's computer for a moment", _tries_the_arm_first)
