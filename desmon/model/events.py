@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any, Callable, ClassVar, Iterable, Protocol, T
 
 from desmon.errors import CheckerError, ModelError
 from desmon.model.checks import check_items, check_name, check_number, is_plain_name, strict_init, suggest
-from desmon.model.requirements import Capacity, Constraint, constraint_types
+from desmon.model.requirements import Capacity, Constraint, constraint_types, declared_order
 from desmon.model.system import action_problem, constraint_problem
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -374,13 +374,16 @@ class RequirementChange(Event):
         object.__setattr__(self, "add", add)
         object.__setattr__(self, "remove", remove)
 
-    def apply(self, requirements: tuple[Constraint, ...]) -> tuple[Constraint, ...]:
-        """The requirements after this change (removed ones dropped, added ones appended
-        once). An added Capacity replaces the one the graph has on its resource then,
-        removed or not: a graph consumes one amount of each resource."""
+    def apply(self, requirements: tuple[Constraint, ...], declared: tuple[Constraint, ...]) -> tuple[Constraint, ...]:
+        """The requirements after this change: removed ones dropped, added ones kept once.
+        An added Capacity replaces the one the graph has on its resource then, removed or
+        not: a graph consumes one amount of each resource. ``declared`` is what the graph
+        declared: the result is in :func:`declared_order`, so one set of requirements is one
+        tuple however the changes that led to it came (a change and its reverse give back
+        the declared tuple, and the checker counts one state for it)."""
         resized = {r.resource for r in self.add if isinstance(r, Capacity)}
         kept = tuple(r for r in requirements if r not in self.remove and not (isinstance(r, Capacity) and r.resource in resized and r not in self.add))
-        return kept + tuple(r for r in self.add if r not in kept)
+        return declared_order(kept + tuple(r for r in self.add if r not in kept), declared)
 
     def __str__(self) -> str:
         if self.label:

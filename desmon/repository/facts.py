@@ -55,7 +55,7 @@ def load_model(repo: Repository, model: SystemModel) -> None:
             reads=list(g.device_kinds),
         )
     for spec in model.specs:
-        dep = repo.add_node(L.DEPLOYMENT, spec.graph, spec=spec)
+        dep = repo.add_node(L.DEPLOYMENT, spec.graph, spec=spec, declared=spec)
         repo.add_edge(dep, node_id(L.PERCEPTION_GRAPH, spec.graph), L.RESOLVES)
         for req in spec.requirements:
             _add_requirement(repo, dep, spec.graph, req)
@@ -83,7 +83,7 @@ def change_requirements(repo: Repository, change: RequirementChange) -> tuple[st
     if dep not in repo.node_data:
         raise QueryError(f"{change}: no deployment specification for {change.graph!r} in the repository")
     spec: DeploymentSpec = repo.node_data[dep]["spec"]
-    new = change.apply(spec.requirements)
+    new = change.apply(spec.requirements, repo.node_data[dep]["declared"].requirements)
     if new == spec.requirements:
         return None
     for rid in repo.successors(dep, L.REQUIRES):

@@ -9,7 +9,7 @@ from __future__ import annotations
 from typing import Any, Iterator
 
 from desmon.errors import QueryError
-from desmon.model.requirements import DeploymentSpec, Requirement
+from desmon.model.requirements import DeploymentSpec, Requirement, declared_order
 from desmon.model.system import PlatformState, new_platform_state
 from desmon.repository import labels as L
 from desmon.repository.store import Repository, node_id
@@ -231,9 +231,7 @@ class RepositoryQuery:
         )
 
     def _read_spec(self, graph: str, dep: str) -> DeploymentSpec:
-        reqs = tuple(
-            self._nodes[r]["requirement"] for r in sorted(self._out(dep, L.REQUIRES), key=lambda r: self._nodes[r]["order"])
-        )
+        reqs = self._required(dep)
         fixed = self._out(dep, L.EXECUTABLE_ON)
         declared = self._nodes[dep].get("spec")
         rebalance = declared.rebalance if declared is not None else None
@@ -263,11 +261,18 @@ class RepositoryQuery:
         hit = self._constraints_memo.get(dep)
         if hit is not None and hit[0] == key:
             return hit[1]
-        reqs = tuple(
-            self._nodes[r]["requirement"] for r in sorted(self._out(dep, L.REQUIRES), key=lambda r: self._nodes[r]["order"])
-        )
+        reqs = self._required(dep)
         self._constraints_memo[dep] = (key, reqs)
         return reqs
+
+    def _required(self, dep: str) -> tuple[Requirement, ...]:
+        """What deployment node ``dep`` REQUIRES, in :func:`~desmon.model.requirements.declared_order`
+        of the specification it was inserted with (in insertion order without one): one set of
+        requirements reads as one tuple, whatever changes led to it."""
+        nodes = self._nodes
+        found = [nodes[r]["requirement"] for r in sorted(self._out(dep, L.REQUIRES), key=lambda r: nodes[r]["order"])]
+        declared = nodes[dep].get("declared")
+        return declared_order(found, declared.requirements) if declared is not None else tuple(found)
 
     def platform_state(self, platform: str) -> PlatformState:
         """The run-time facts of ``platform``; memoised while no change touched its node,

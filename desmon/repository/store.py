@@ -425,7 +425,7 @@ def jsonable(value: Any) -> Any:
 
 
 #: Node attributes that hold the model objects themselves; exports show their flattened fields.
-OBJECT_ATTRS = frozenset({"platform", "device", "spec", "requirement"})
+OBJECT_ATTRS = frozenset({"platform", "device", "spec", "declared", "requirement"})
 
 
 def graph_to_json(g: nx.MultiDiGraph) -> dict[str, Any]:

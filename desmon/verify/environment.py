@@ -424,4 +424,5 @@ class RequirementsVariable(VariableKind):
 
     def moves(self, b: Any, change: RequirementChange, values: Callable[[Digit], Sequence[Any]]) -> list[Move]:
         vs = list(values(Digit("requirements", change.graph)))
-        return [Move(Digit("requirements", change.graph), tuple(vs.index(change.apply(r)) for r in vs), (change,) * len(vs), (False,) * len(vs))]
+        declared = vs[0]  # (the declared requirements are the first variant: table.encoding)
+        return [Move(Digit("requirements", change.graph), tuple(vs.index(change.apply(r, declared)) for r in vs), (change,) * len(vs), (False,) * len(vs))]

@@ -448,7 +448,7 @@ class StoreInsert:
             raise QueryError(f"{change}: no deployment specification for {change.graph!r} in the repository")
         current = self.store._current(change.graph)
         assert current is not None
-        new = change.apply(current.requirements)
+        new = change.apply(current.requirements, declared.requirements)
         if new == current.requirements:
             return None
         others = tuple((g, r) for g, r in self.store.specs_now if g != change.graph)

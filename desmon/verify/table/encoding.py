@@ -102,7 +102,7 @@ def _variants(model: Any, changes: Sequence[RequirementChange], init: Key) -> di
             found.append(initial[spec.graph])
         while i < len(found):
             for c in mine:
-                nxt = c.apply(found[i])
+                nxt = c.apply(found[i], spec.requirements)
                 if nxt not in found:
                     found.append(nxt)
                     if len(found) > 1 << ROOT_CTX:
