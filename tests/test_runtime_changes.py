@@ -174,6 +174,63 @@ def test_a_change_and_its_reverse_give_back_the_declared_requirements_in_the_wor
     assert after(mod.DROP, mod.ADD_MIN, mod.BACK) == (mod.CAP, mod.ATTR, mod.MIN)
 
 
+def test_the_explorer_lists_a_deployments_requirements_in_the_order_every_reader_sees(root):
+    from desmon.viz.explore import _node_lines
+
+    sc = load_scenario(str(root / "tests" / "data" / "requirement_order.py"))
+    drop, back = (e for e in sc.checker.requirement_changes if e.label in ("drop the capacity", "the capacity back"))
+    rep = replay(Scenario(name="order", model=sc.model, timeline=timeline(ActionChange("hold"), drop, back)))
+    _title, lines, _flags = _node_lines(rep.repo.snapshot(), node_id(L.DEPLOYMENT, "g"))
+    assert lines == [r.describe() for r in requirements(rep, "g")] == ["Capacity(memory >= 100 MB)", "Attribute(os = linux)"]
+
+
+def test_an_attribute_value_written_another_way_is_another_requirement_only_when_it_means_another():
+    """A platform's attribute is compared as text: ``gen=1.0`` is not ``1``. Two Attributes
+    (and two Selection options) are equal when they mean the same, so a change that swaps
+    one for the other is a change in every engine, and ``1`` and ``"1"`` are one requirement."""
+    from desmon.model.requirements import Attribute, Option
+    from desmon.verify import Checker
+    from desmon.verify.bounds import Bounds
+
+    assert Attribute("gen", 1) != Attribute("gen", 1.0) and Attribute("gen", 1) == Attribute("gen", "1")
+    assert len({Attribute("gen", 1), Attribute("gen", "1"), Attribute("gen", 1.0)}) == 2
+    assert Option.parse("gen=1") == Option(attribute="gen", value=1) != Option(attribute="gen", value=1.0)
+    one, one_point_zero = Attribute("gen", 1), Attribute("gen", 1.0)
+    drop = RequirementChange("g", remove=(one,), label="drop gen=1")
+    add = RequirementChange("g", add=(one_point_zero,), label="need gen=1.0")
+    r = RobotBuilder("r")
+    r.platform("a", memory=512, attributes={"gen": 1}).device("ft", kind="force_sensor")
+    r.platform("b", memory=512, attributes={"gen": 1.0}).device("ft2", kind="force_sensor")
+    with r.rpsl.perception_graph("g") as g:
+        g.sensor("s", reads="force_sensor")
+    r.depsl.deployment_specification("g").require(Capacity("memory", 100)).require(one)
+    r.rules({HOLD: ["g"]})
+    model = r.build()
+    rep = replay(Scenario(name="attr", model=model, timeline=timeline(ActionChange(HOLD), drop, add)))
+    assert rep.steps[-1].deployments == (("g", "b"),)  # gen=1.0 holds on b only
+    sc = Scenario(name="attr", model=model, checker=Bounds(initial_action=HOLD, requirement_changes=(drop, add)))
+    direct, table = Checker(sc).run(engine="direct"), Checker(sc).run(engine="table")
+    assert direct.verdict == table.verdict == "HOLDS"
+    # on a: declared, and without gen; on b: gen=1.0 instead of 1; nowhere (an error): both, which no platform has
+    assert direct.states == table.states == 4
+
+
+def test_a_world_change_may_remove_what_only_an_initial_change_adds_as_the_checker_allows(root):
+    from desmon.model.requirements import Minimum
+    from desmon.verify import Checker
+    from desmon.verify.bounds import Bounds
+
+    sc = load_scenario(str(root / "tests" / "data" / "requirement_order.py"))
+    (add_min,) = (e for e in sc.checker.requirement_changes if e.label == "a minimum")
+    drop_min = RequirementChange("g", remove=(Minimum("cores", 2),), label="no minimum")
+    world = World(task=(Step(HOLD, 20.0),), horizon=20.0, signals=False, changes=(TimedEvent(10.0, drop_min),))
+    both = Scenario(name="initial_add", model=sc.model, initial=(add_min,), world=world,
+                    checker=Bounds(initial_action=HOLD, requirement_changes=(drop_min,)))
+    assert Checker(both).run().verdict == "HOLDS"
+    result = simulate(both, "desmon", seed=0)
+    assert result.metrics["requirement_changes"] == 1 and not result.violations
+
+
 def test_a_change_naming_a_graph_without_specification_is_refused():
     with pytest.raises(ModelError, match="names graph 'B' with no deployment specification"):
         Scenario(name="bad", model=robot().build(), timeline=timeline(RequirementChange("B", add=(SMALL,))))

@@ -280,15 +280,24 @@ class Maximum(_PropertyBound):
 
 
 @strict_init(ModelError)
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, eq=False)
 class Attribute(Requirement):
     """The platform has attribute ``name`` equal to ``value``.
 
     ``Attribute("platform_has", kind)`` means: a working device of that kind is attached (R1).
+    A value is compared as text (a platform's ``gen=1.0`` is not ``1``), and so are two
+    Attributes: ``Attribute("gen", 1)`` and ``Attribute("gen", 1.0)`` are two requirements,
+    ``Attribute("gen", 1)`` and ``Attribute("gen", "1")`` one.
     """
 
     name: str
     value: str
+
+    def __eq__(self, other: object) -> bool:
+        return type(other) is type(self) and self.name == other.name and str(self.value) == str(other.value)  # type: ignore[attr-defined]
+
+    def __hash__(self) -> int:
+        return hash((Attribute, self.name, str(self.value)))
 
     word = "attribute"
     usage = "write ('attribute', name, value)"
@@ -347,17 +356,28 @@ class Attribute(Requirement):
 
 
 @strict_init(ModelError)
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, eq=False)
 class Option:
     """One alternative of a Selection: a device (kind, optionally vendor) or an attribute value.
 
-    Parsed from ``"tactile_pad"``, ``"tactile_pad@weiss"`` or ``"os=linux"``.
+    Parsed from ``"tactile_pad"``, ``"tactile_pad@weiss"`` or ``"os=linux"``. An attribute's
+    value is compared as text, as :class:`Attribute`'s is (two options are equal when they
+    mean the same).
     """
 
     device_kind: str | None = None
     vendor: str | None = None
     attribute: str | None = None
     value: str | None = None
+
+    def _meaning(self) -> tuple:
+        return (self.device_kind, self.vendor, self.attribute, None if self.attribute is None else str(self.value))
+
+    def __eq__(self, other: object) -> bool:
+        return type(other) is type(self) and self._meaning() == other._meaning()  # type: ignore[attr-defined]
+
+    def __hash__(self) -> int:
+        return hash((Option, self._meaning()))
 
     def __post_init__(self) -> None:
         if (self.device_kind is None) == (self.attribute is None):

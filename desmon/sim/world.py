@@ -570,6 +570,7 @@ class World:
         if self.slips:
             self._check_slips(model.like)
         changes = [te.event for te in self.changes] + list(self.random_changes.changes if self.random_changes else ())
+        changes += [ev for ev in scenario.initial if isinstance(ev, RequirementChange)]  # (what a change may remove, as Bounds takes it)
         for te in self.faults + self.loads + self.changes:
             problem = event_problem(te.event, model, changes)
             if problem is not None:

@@ -143,8 +143,10 @@ def _node_lines(g: nx.MultiDiGraph, n: str) -> tuple[str, list[str], list[str]]:
         if reads:
             lines.append("reads " + ", ".join(map(str, reads)))
     elif label == L.DEPLOYMENT:
+        spec = d.get("spec")  # (the current specification lists them in the order every reader sees)
+        place = {r: i for i, r in enumerate(getattr(spec, "requirements", ()))}
         reqs = sorted(
-            (g.nodes[t].get("order", 0), str(g.nodes[t].get("description", t)))
+            ((place.get(g.nodes[t].get("requirement"), len(place)), g.nodes[t].get("order", 0)), str(g.nodes[t].get("description", t)))
             for _s, t, ed in g.out_edges(n, data=True) if ed.get("label") == L.REQUIRES and t in g
         )
         lines.extend(text for _o, text in reqs)
