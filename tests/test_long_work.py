@@ -126,7 +126,9 @@ def test_the_memory_of_workers_counts(big, monkeypatch):  # type: ignore[no-unty
 
     monkeypatch.setattr(Budget, "measure", staticmethod(spy))
     budget = resident_mb() + 20
-    r = Checker(big).run(max_memory=budget, workers=2, engine="direct", timeout=20, max_states=None)
+    # (the timeout only guards against a budget never reached: on a busy machine the direct
+    # engine's workers take over 20 s to grow by 20 MB, and the search would end on it)
+    r = Checker(big).run(max_memory=budget, workers=2, engine="direct", timeout=90, max_states=None)
     assert r.verdict == INCOMPLETE and "memory budget" in r.reason and r.worker_levels >= 1
     assert any(len(p) == 2 for p in seen), "the two workers were never measured"
 
