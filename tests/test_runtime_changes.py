@@ -213,6 +213,12 @@ def test_an_attribute_value_written_another_way_is_another_requirement_only_when
     assert direct.verdict == table.verdict == "HOLDS"
     # on a: declared, and without gen; on b: gen=1.0 instead of 1; nowhere (an error): both, which no platform has
     assert direct.states == table.states == 4
+    # equal requirements written either way sort alike: one set, one tuple
+    gen_one, gen_two = RequirementChange("g", add=(Attribute("gen", "1"),)), RequirementChange("g", add=(Attribute("gen", "2"),))
+    start = (Capacity("memory", 100),)
+    via_number = gen_two.apply(RequirementChange("g", add=(Attribute("gen", 1),)).apply(start, start), start)
+    via_text = gen_two.apply(gen_one.apply(start, start), start)
+    assert [r.describe() for r in via_number] == [r.describe() for r in via_text] == ["Capacity(memory >= 100 MB)", "Attribute(gen = 1)", "Attribute(gen = 2)"]
 
 
 def test_a_world_change_may_remove_what_only_an_initial_change_adds_as_the_checker_allows(root):

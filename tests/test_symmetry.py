@@ -105,6 +105,21 @@ def test_a_requirement_change_among_the_initial_events_is_refused():
         Checker(shrunk, symmetry=True)
 
 
+@pytest.mark.parametrize("e2_gen", ["int", "float", "str"])
+def test_platforms_whose_attributes_are_written_differently_are_not_interchangeable(e2_gen):
+    """Requirements compare attributes as text, where gen=1.0 is not gen=1 though the numbers
+    are equal: such platforms are refused (a reduction had given a false VIOLATED), and so,
+    to be safe, is gen="1"; written alike, the reduction keeps the verdict."""
+    sc = load_scenario(Path(__file__).parent / "data" / "attribute_spelling.py", {"e2_gen": e2_gen})
+    plain = Checker(sc).run(keep_going=True)
+    if e2_gen != "int":
+        with pytest.raises(CheckerError, match="differ in capacities, attributes"):
+            Checker(sc, symmetry=True)
+        return
+    reduced = Checker(sc, symmetry=True).run(keep_going=True)
+    assert plain.verdict == reduced.verdict == HOLDS and reduced.states < plain.states
+
+
 def test_capacity_sharing_is_refused():
     mig = load_scenario(SCENARIOS / "migration.py")
     with pytest.raises(CheckerError, match="declares no interchangeable"):

@@ -748,12 +748,22 @@ def capacity_twice(requirements: Iterable[Constraint]) -> str | None:
 def declared_order(requirements: Iterable[Constraint], declared: tuple[Constraint, ...]) -> tuple[Constraint, ...]:
     """``requirements`` in the one order their set has: those in ``declared`` (a graph's
     declared requirements) in their declared order, then the others by kind name and
-    ``repr`` (their fields). Requirements and preferences alike; the order changes no
-    decision (a preference's score is a sum, rounded), only the order reasons are listed in."""
+    description (what they mean: ``Attribute("gen", 1)`` and ``Attribute("gen", "1")`` sort
+    alike, as they are equal), then ``repr``. Requirements and preferences alike; the order
+    changes no decision (a preference's score is a sum, rounded), only the order reasons
+    are listed in."""
     have = tuple(requirements)
     first = tuple(r for r in declared if r in have)
-    rest = sorted((r for r in have if r not in declared), key=lambda r: (type(r).__name__, repr(r)))
+    rest = sorted((r for r in have if r not in declared), key=lambda r: (type(r).__name__, _description(r), repr(r)))
     return first + tuple(rest)
+
+
+def _description(r: Constraint) -> str:
+    """``r.describe()``, or "" for a kind of the user's that describes nothing."""
+    try:
+        return str(r.describe())
+    except Exception:
+        return ""
 
 
 @strict_init(ModelError)

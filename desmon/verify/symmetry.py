@@ -137,7 +137,9 @@ class Symmetry:
         """(1) identical platforms and devices, no deployment fixed to one of them."""
         model = self.checker.model
         plats = [model.platform(p) for p in grp]
-        sig = {(p.capacities, p.attributes, p.properties, p.preference, p.on_demand, p.startup_s) for p in plats}
+        # (attributes as written: a requirement compares them as text, where gen=1 and gen=1.0
+        # differ though Python's numbers are equal)
+        sig = {(p.capacities, tuple((k, repr(v)) for k, v in p.attributes), p.properties, p.preference, p.on_demand, p.startup_s) for p in plats}
         if len(sig) != 1:
             self._refuse(f"{'/'.join(grp)} differ in capacities, attributes, properties or preference")
         devs = {tuple((d.kind, d.vendor, d.version) for d in model.devices_on(p)) for p in grp}
