@@ -794,6 +794,9 @@ class DeploymentSpec:
             example="(Capacity('memory', 150),) or add_constraint('capacity', 'memory', 150)",
         )
         object.__setattr__(self, "requirements", reqs)
+        again = next((r for i, r in enumerate(reqs) if r in reqs[:i]), None)
+        if again is not None:  # (as the DSL's require() refuses it: it would be checked, and explained, twice)
+            raise ModelError(f"deployment specification of {self.graph!r} lists {again.describe()} twice: give it once")
         twice = capacity_twice(reqs)
         if twice is not None:
             raise ModelError(
