@@ -153,33 +153,33 @@ def test_the_checker_counts_one_state_per_requirement_set_whatever_order_the_cha
     assert (res.verdict, res.states) == ("HOLDS", 8)
 
 
+def _order_changes(root):  # type: ignore[no-untyped-def]
+    """tests/data/requirement_order.py and its changes by label."""
+    sc = load_scenario(str(root / "tests" / "data" / "requirement_order.py"))
+    return sc, {c.label: c for c in sc.checker.requirement_changes}
+
+
 def test_a_change_and_its_reverse_give_back_the_declared_requirements_in_the_world(root):
-    mod_path = root / "tests" / "data" / "requirement_order.py"
-    sc = load_scenario(str(mod_path))
-    import importlib.util
+    sc, by = _order_changes(root)
+    cap, attr = sc.model.spec("g").requirements
+    (minimum,), (maximum,) = by["a minimum"].add, by["a maximum"].add
 
-    spec = importlib.util.spec_from_file_location("requirement_order", mod_path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)  # type: ignore[union-attr]
-    declared = sc.model.spec("g").requirements
-
-    def after(*changes):  # type: ignore[no-untyped-def]
-        rep = replay(Scenario(name="order", model=sc.model, timeline=timeline(ActionChange("hold"), *changes)))
+    def after(*labels):  # type: ignore[no-untyped-def]
+        rep = replay(Scenario(name="order", model=sc.model, timeline=timeline(ActionChange("hold"), *(by[x] for x in labels))))
         node = rep.repo.node_data[node_id(L.DEPLOYMENT, "g")]["spec"].requirements  # what the deployment node holds
         assert requirements(rep, "g") == node  # and what a query reads off its REQUIRES edges
         return node
 
-    assert after(mod.DROP, mod.BACK) == declared == (mod.CAP, mod.ATTR)
-    assert after(mod.ADD_MIN, mod.ADD_MAX) == after(mod.ADD_MAX, mod.ADD_MIN) == (mod.CAP, mod.ATTR, mod.MAX, mod.MIN)
-    assert after(mod.DROP, mod.ADD_MIN, mod.BACK) == (mod.CAP, mod.ATTR, mod.MIN)
+    assert after("drop the capacity", "the capacity back") == (cap, attr)
+    assert after("a minimum", "a maximum") == after("a maximum", "a minimum") == (cap, attr, maximum, minimum)
+    assert after("drop the capacity", "a minimum", "the capacity back") == (cap, attr, minimum)
 
 
 def test_the_explorer_lists_a_deployments_requirements_in_the_order_every_reader_sees(root):
     from desmon.viz.explore import _node_lines
 
-    sc = load_scenario(str(root / "tests" / "data" / "requirement_order.py"))
-    drop, back = (e for e in sc.checker.requirement_changes if e.label in ("drop the capacity", "the capacity back"))
-    rep = replay(Scenario(name="order", model=sc.model, timeline=timeline(ActionChange("hold"), drop, back)))
+    sc, by = _order_changes(root)
+    rep = replay(Scenario(name="order", model=sc.model, timeline=timeline(ActionChange("hold"), by["drop the capacity"], by["the capacity back"])))
     _title, lines, _flags = _node_lines(rep.repo.snapshot(), node_id(L.DEPLOYMENT, "g"))
     assert lines == [r.describe() for r in requirements(rep, "g")] == ["Capacity(memory >= 100 MB)", "Attribute(os = linux)"]
 
@@ -195,10 +195,6 @@ def test_an_attribute_value_written_another_way_is_another_requirement_only_when
     assert Attribute("gen", 1) != Attribute("gen", 1.0) and Attribute("gen", 1) == Attribute("gen", "1")
     assert len({Attribute("gen", 1), Attribute("gen", "1"), Attribute("gen", 1.0)}) == 2
     assert Option.parse("gen=1") == Option(attribute="gen", value=1) != Option(attribute="gen", value=1.0)
-    from desmon.model.requirements import DeploymentSpec
-
-    with pytest.raises(ModelError, match=r"lists Attribute\(gen = 1\) twice: give it once"):
-        DeploymentSpec("g", (Attribute("gen", 1), Attribute("gen", "1")))  # (as the DSL refuses it)
     one, one_point_zero = Attribute("gen", 1), Attribute("gen", 1.0)
     drop = RequirementChange("g", remove=(one,), label="drop gen=1")
     add = RequirementChange("g", add=(one_point_zero,), label="need gen=1.0")
@@ -225,13 +221,22 @@ def test_an_attribute_value_written_another_way_is_another_requirement_only_when
     assert [r.describe() for r in via_number] == [r.describe() for r in via_text] == ["Capacity(memory >= 100 MB)", "Attribute(gen = 1)", "Attribute(gen = 2)"]
 
 
+def test_a_specification_built_in_python_refuses_a_requirement_listed_twice_as_the_dsl_does():
+    from desmon.model.requirements import Attribute, DeploymentSpec
+
+    with pytest.raises(ModelError, match=r"lists Attribute\(gen = 1\) twice: give it once"):
+        DeploymentSpec("g", (Attribute("gen", 1), Capacity("memory", 1), Attribute("gen", "1")))
+    with pytest.raises(ModelError, match=r"lists Capacity\(memory >= 1 MB\) twice"):
+        DeploymentSpec("g", (Capacity("memory", 1), Capacity("memory", 1)))
+
+
 def test_a_world_change_may_remove_what_only_an_initial_change_adds_as_the_checker_allows(root):
     from desmon.model.requirements import Minimum
     from desmon.verify import Checker
     from desmon.verify.bounds import Bounds
 
-    sc = load_scenario(str(root / "tests" / "data" / "requirement_order.py"))
-    (add_min,) = (e for e in sc.checker.requirement_changes if e.label == "a minimum")
+    sc, by = _order_changes(root)
+    add_min = by["a minimum"]
     drop_min = RequirementChange("g", remove=(Minimum("cores", 2),), label="no minimum")
     world = World(task=(Step(HOLD, 20.0),), horizon=20.0, signals=False, changes=(TimedEvent(10.0, drop_min),))
     both = Scenario(name="initial_add", model=sc.model, initial=(add_min,), world=world,
