@@ -195,6 +195,10 @@ def test_an_attribute_value_written_another_way_is_another_requirement_only_when
     assert Attribute("gen", 1) != Attribute("gen", 1.0) and Attribute("gen", 1) == Attribute("gen", "1")
     assert len({Attribute("gen", 1), Attribute("gen", "1"), Attribute("gen", 1.0)}) == 2
     assert Option.parse("gen=1") == Option(attribute="gen", value=1) != Option(attribute="gen", value=1.0)
+    from desmon.model.requirements import declared_order
+
+    (kept,) = declared_order((Attribute("gen", "1"),), (Attribute("gen", 1),))
+    assert kept.value == "1"  # the requirement given, in the declared one's place
     one, one_point_zero = Attribute("gen", 1), Attribute("gen", 1.0)
     drop = RequirementChange("g", remove=(one,), label="drop gen=1")
     add = RequirementChange("g", add=(one_point_zero,), label="need gen=1.0")

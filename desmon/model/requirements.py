@@ -753,7 +753,7 @@ def declared_order(requirements: Iterable[Constraint], declared: tuple[Constrain
     changes no decision (a preference's score is a sum, rounded), only the order reasons
     are listed in."""
     have = tuple(requirements)
-    first = tuple(r for r in declared if r in have)
+    first = tuple(next(h for h in have if h == r) for r in declared if r in have)  # (the objects given, in declared order)
     rest = sorted((r for r in have if r not in declared), key=lambda r: (type(r).__name__, _description(r), repr(r)))
     return first + tuple(rest)
 
@@ -796,7 +796,7 @@ class DeploymentSpec:
         object.__setattr__(self, "requirements", reqs)
         again = next((r for i, r in enumerate(reqs) if r in reqs[:i]), None)
         if again is not None:  # (as the DSL's require() refuses it: it would be checked, and explained, twice)
-            raise ModelError(f"deployment specification of {self.graph!r} lists {again.describe()} twice: give it once")
+            raise ModelError(f"deployment specification of {self.graph!r} lists {_description(again) or repr(again)} twice: give it once")
         twice = capacity_twice(reqs)
         if twice is not None:
             raise ModelError(
