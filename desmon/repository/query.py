@@ -159,7 +159,7 @@ class RepositoryQuery:
         self._platforms: tuple[tuple[str, ...], tuple[tuple[str, str], ...]] = ((), ())
         # ids of the states of a platform_states answer -> the tuple of them handed out
         self._tuples: dict[tuple[int, ...], tuple[PlatformState, ...]] = {}
-        # graph -> (what its spec was read from, the declared spec object, the spec, (graph
+        # graph -> (what its spec was read from, the node's spec object, the spec, (graph
         # node, deployment node), the stamps of what it read: see _spec_key)
         self._spec_memo: dict[str, tuple[tuple[Any, ...], Any, DeploymentSpec, tuple[str, str], tuple[int | None, ...]]] = {}
         # answers that hold while no node of some labels is touched: {question: (stamps, answer)}
@@ -195,7 +195,7 @@ class RepositoryQuery:
         """The deployment node RESOLVING ``graph`` as a spec, or None (Alg. 1 line 3).
 
         Memoised on what it reads: the RESOLVES edges of the graph's node, the deployment
-        node's attributes (its declared spec) and its REQUIRES and EXECUTABLE_ON edges, and
+        node's attributes (its spec object) and its REQUIRES and EXECUTABLE_ON edges, and
         the requirement nodes' attributes; the same spec object comes back while none of
         them changed (and while the spec read from them is equal)."""
         repo = self.repo
@@ -212,12 +212,12 @@ class RepositoryQuery:
         touched = repo.touched
         reqs = self._out(dep, L.REQUIRES)
         key = (dep, tuple(reqs), tuple([touched[r] for r in reqs]), tuple(self._out(dep, L.EXECUTABLE_ON)))
-        declared = self._nodes[dep].get("spec")
-        if hit is not None and hit[0] == key and hit[1] is declared:
+        node_spec = self._nodes[dep].get("spec")
+        if hit is not None and hit[0] == key and hit[1] is node_spec:
             spec = hit[2]
         else:
             spec = self._read_spec(graph, dep)
-        self._spec_memo[graph] = (key, declared, spec, (gid, dep), self._spec_key((gid, dep)))
+        self._spec_memo[graph] = (key, node_spec, spec, (gid, dep), self._spec_key((gid, dep)))
         return spec
 
     def _spec_key(self, nodes: tuple[str, str]) -> tuple[int | None, ...]:
@@ -233,9 +233,9 @@ class RepositoryQuery:
     def _read_spec(self, graph: str, dep: str) -> DeploymentSpec:
         reqs = self._required(dep)
         fixed = self._out(dep, L.EXECUTABLE_ON)
-        declared = self._nodes[dep].get("spec")
-        rebalance = declared.rebalance if declared is not None else None
-        reads = declared.reads if declared is not None else ()
+        node_spec = self._nodes[dep].get("spec")
+        rebalance = node_spec.rebalance if node_spec is not None else None
+        reads = node_spec.reads if node_spec is not None else ()
         return DeploymentSpec(graph, reqs, self._nodes[fixed[0]]["name"] if fixed else None, rebalance, reads)
 
     def has_fixed_deployment(self, spec: DeploymentSpec) -> bool:
