@@ -226,3 +226,32 @@ def test_a_deployer_whose_state_makes_it_crash_is_refused_as_keeping_state_not_r
     code = main(["verify", path, "--deployer", f"{tmp_path / 'counting.py'}:counting", "--engine", "direct", "--max-states", "100", "--no-progress"])
     err = capsys.readouterr().err
     assert code == 2 and "is nondeterministic" in err and "CRASHED" not in capsys.readouterr().out, err
+
+
+def test_the_errors_a_reaction_raises_cost_no_round_trip_and_change_no_answer(tmp_path, monkeypatch, capsys):
+    """A reaction's RaiseError is sent to desmon without waiting for an answer (its outcome
+    is always None and the error is booked when the reaction ends), so only Start and Stop
+    are answered; errors sent in a row, and a reaction's end right behind them, are read in
+    order: the corrected deployer run from a file gives the built-in one's search exactly."""
+    from desmon.verify.isolation import Worker
+
+    answered: list[object] = []
+    send = Worker.send
+
+    def counting(self, message):  # type: ignore[no-untyped-def]
+        if message[0] == "sent":
+            answered.append(message[1][0])  # the outcome desmon sends back
+        return send(self, message)
+
+    monkeypatch.setattr(Worker, "send", counting)
+    spec = _write(tmp_path, "mine.py", CORRECT) + ":MINE"
+    assert main(["verify", TWO, "--deployer", spec, "--engine", "direct", "--no-progress"]) == 0
+    mine = capsys.readouterr().out
+    assert main(["verify", TWO, "--engine", "direct", "--no-progress"]) == 0
+    built_in = capsys.readouterr().out
+
+    def search(out: str) -> list[str]:
+        return [line.split("  time:")[0] for line in out.splitlines() if line.startswith(("verdict", "states:", "events", "selector", "deployer branches"))]
+
+    assert search(mine) == search(built_in) and "error no_acceptable_platforms" in mine
+    assert answered and all(type(outcome) is bool for outcome in answered)  # a Start's or a Stop's, never an error's

@@ -10,7 +10,11 @@ Each reaction is a conversation over a socket:
 * the child runs the deployer's generator there. Each read through the port is a
   request that desmon answers from its own state; each command yielded is sent to
   desmon, which acts on it under guard (:mod:`desmon.deployment.guard`) and sends back
-  the outcome; the end of the reaction (or what it raised, as text) ends it.
+  the outcome; the end of the reaction (or what it raised, as text) ends it. A
+  ``RaiseError`` is sent without waiting for an answer: its outcome is always None and
+  the error is booked when the reaction ends, so no answer of the Query port changes
+  (desmon reads the child's messages in order: the error is acted on before the next
+  read is served);
 
 What crosses, and how:
 
@@ -116,6 +120,8 @@ class Worker:
             serve(child_sock, spec, ports, parent, quiet)
         child_sock.close()
         self.pid, self.sock, self.owner = pid, parent_sock, parent
+        #: what was received past the last message (the child sends a RaiseError without waiting for an answer)
+        self.pending = bytearray()
         self.handles = Handles()
         self.plain: dict[type, bool] = {}
         self.blobs: dict[int, tuple[Any, Blob]] = {}
@@ -150,7 +156,7 @@ class Worker:
     def _receive(self) -> tuple[Any, Any]:
         """The child's next message, decoded as desmon accepts it."""
         try:
-            data = recv_message(self.sock)
+            data = recv_message(self.sock, self.pending)
         except TimeoutError:
             raise WorkerGone(_LATE)
         except (EOFError, OSError, ValueError):
@@ -315,6 +321,11 @@ class RemoteReact:
                     cmd = _command(body)
                     outcome = yield cmd  # (the guard checks its names against the model)
                     kind, body = w.exchange(("sent", (outcome, _reads(q, slots, False, w.blobs))))
+                elif kind == "raise":  # (a RaiseError, sent without waiting: the child went on with outcome None)
+                    if type(body) is not RaiseError:
+                        raise WorkerGone("sent desmon, through its worker process, what desmon does not accept (not an error)")
+                    yield body
+                    kind, body = w._receive()
                 elif kind == "return":
                     clean = True
                     return

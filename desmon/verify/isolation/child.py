@@ -21,6 +21,7 @@ from types import GeneratorType
 from typing import Any, Iterator
 
 from desmon.deployment.guard import plain_command, raised_text, uncallable
+from desmon.deployment.ports import RaiseError
 from desmon.errors import ModelError
 from desmon.verify.isolation.seccomp import deny_signals, drop_capabilities
 from desmon.verify.isolation.wire import BLOBS, Blob, DefaultChecks, Method, recv_message, send_message
@@ -395,7 +396,12 @@ def _run_reaction(link: _Link, deployer: Any, body: Any, me: int) -> None:  # pr
                 link.send("return", None)
                 return
             _forked(me)
-            link.send("yield", plain_command(cmd, proxies=(_Remote,)))
+            command = plain_command(cmd, proxies=(_Remote,))
+            if type(command) is RaiseError:  # (its outcome is None, and it changes no answer of the Query port: no need to wait)
+                link.send("raise", command)
+                outcome = None
+                continue
+            link.send("yield", command)
             answer, sent = link.receive()
             if answer != "sent":
                 raise _Abandoned()

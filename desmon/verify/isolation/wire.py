@@ -68,8 +68,12 @@ def recv_exact(sock: socket.socket, n: int) -> bytes:
     return b"".join(chunks)
 
 
-def recv_message(sock: socket.socket) -> bytes:
-    """One message (the conversation is turn by turn: nothing follows it until this side answers)."""
+def recv_message(sock: socket.socket, pending: bytearray | None = None) -> bytes:
+    """One message. Without ``pending`` the conversation is turn by turn (nothing follows a
+    message until this side answers); with it, the peer may send several in a row: it
+    holds what was received past the last message, and keeps what follows this one."""
+    if pending is not None:
+        return _buffered(sock, pending)
     first = sock.recv(1 << 16)
     if not first:
         raise EOFError("the conversation ended")
@@ -80,6 +84,27 @@ def recv_message(sock: socket.socket) -> bytes:
         raise ValueError(f"a message of {n:,} bytes, more than {MAX_MESSAGE:,}")
     body = first[HEADER.size:]
     return body if len(body) >= n else body + recv_exact(sock, n - len(body))
+
+
+def _buffered(sock: socket.socket, pending: bytearray) -> bytes:
+    while len(pending) < HEADER.size:
+        _fill(sock, pending, HEADER.size - len(pending))
+    (n,) = HEADER.unpack_from(pending)
+    if n > MAX_MESSAGE:
+        raise ValueError(f"a message of {n:,} bytes, more than {MAX_MESSAGE:,}")
+    end = HEADER.size + n
+    while len(pending) < end:
+        _fill(sock, pending, end - len(pending))
+    body = bytes(memoryview(pending)[HEADER.size:end])
+    del pending[:end]
+    return body
+
+
+def _fill(sock: socket.socket, pending: bytearray, missing: int) -> None:
+    chunk = sock.recv(max(1 << 16, min(missing, 1 << 20)))
+    if not chunk:
+        raise EOFError("the conversation ended")
+    pending += chunk
 
 
 class Encoder(pickle.Pickler):
