@@ -25,6 +25,25 @@ def test_a_violation_inside_the_notice_delay_says_what_the_monitor_had_not_notic
     assert found and found[0].startswith("t=10.200s single-instance: g is active on 2 platforms: p0, p1")
     assert found[0].endswith("(while the monitor had not yet noticed: platform p0 up; docs/design.md §6)")
     assert main(["verify", SCENARIO, "--deployer", "paper", "--no-progress"]) == 0  # (no state of it has the window)
+    out = capsys.readouterr().out  # ... and its HOLDS says what it leaves out
+    assert "what this verdict leaves out of the World (docs/design.md §6):\n  - the monitor's notice delay (World.heartbeat_timeout 0.5 s)" in out
+
+
+def test_a_verdict_names_the_delays_of_the_world_it_leaves_out_and_only_those(capsys, tmp_path):
+    """The notice delay where the bounds fail or repair something, a start's latency where
+    they change a requirement or a load; none of them in a world without the delay. The
+    JSON result carries the same lines."""
+    import json
+
+    assert main(["verify", SCENARIO, "--no-progress", "-p", "heartbeat=0"]) == 0
+    assert "leaves out" not in capsys.readouterr().out
+    cloud = str(Path(__file__).resolve().parent.parent / "scenarios" / "cloud_offload.py")
+    assert main(["verify", cloud, "--no-progress", "--json", str(tmp_path / "r.json")]) == 0
+    lines = json.loads((tmp_path / "r.json").read_text())["unmodelled"]
+    assert [line.split(" (")[0] for line in lines] == ["the monitor's notice delay", "a start's latency"], lines
+    assert "a requirement change and a load step may come while a start waits" in lines[1]
+    out = capsys.readouterr().out
+    assert all(f"  - {line}" in out for line in lines)
 
 
 def test_without_the_delay_or_with_a_deployer_that_stops_what_it_believes_down_the_world_agrees(capsys):

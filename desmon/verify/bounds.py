@@ -17,7 +17,7 @@ from desmon.model.events import ActionChange, LoadChange, RequirementChange
 from desmon.model.scenario import Scenario, event_problem
 from desmon.model.system import SystemModel, check_action
 
-__all__ = ["Bounds", "levels", "bounds_of", "INSTANT_INVARIANTS"]
+__all__ = ["Bounds", "levels", "bounds_of", "unmodelled", "INSTANT_INVARIANTS"]
 
 
 
@@ -358,3 +358,34 @@ def bounds_of(scenario: Scenario) -> Bounds:
         raise CheckerError(f"scenario {scenario.name!r}: checker must be a desmon.verify.Bounds, got {type(b).__name__}")
     b.validate(scenario)
     return b
+
+
+def unmodelled(scenario: Scenario, b: Bounds) -> tuple[str, ...]:
+    """What the checker's model of ``scenario`` leaves out of its World that can change a
+    verdict (docs/design.md §6), one line each; empty where nothing does. The checker
+    notices a failure or repair at once and completes a start before the next event:
+
+    * with a ``heartbeat_timeout`` and bounds that fail or repair a platform or device (or
+      let one join or leave), the world notices such a change only after the timeout, and a
+      reaction in between decides on the facts before it while its starts meet the facts
+      after it;
+    * with a start latency and bounds that change a requirement or a load, the world may
+      change one while a start waits, and the instance comes up on the facts after it."""
+    world = scenario.world
+    if world is None:
+        return ()
+    out: list[str] = []
+    notice = float(getattr(world, "heartbeat_timeout", 0.0) or 0.0)
+    if notice > 0 and (b.platforms or b.devices or b.joins):
+        out.append(
+            f"the monitor's notice delay (World.heartbeat_timeout {notice:g} s): here every failure and repair is noticed at once; "
+            "in the world a reaction within the delay decides on the facts before the change while its starts meet the facts after it"
+        )
+    latency = max((float(world.latency(p.name)) for p in scenario.model.platforms), default=0.0)
+    if latency > 0 and (b.requirement_changes or b.loads):
+        changes = " and ".join(w for w, on in (("a requirement change", b.requirement_changes), ("a load step", b.loads)) if on)
+        out.append(
+            f"a start's latency (up to {latency:g} s in the World): here each start completes before the next event; "
+            f"in the world {changes} may come while a start waits, and the instance comes up on the facts after it"
+        )
+    return tuple(out)

@@ -26,7 +26,7 @@ from desmon.deployment.guard import Guard, ReactionStopped
 from desmon.deployment.run import RunContext
 from desmon.errors import CheckerError, ObservationConflict, TableUnsupported
 from desmon.model.scenario import Scenario
-from desmon.verify.bounds import Bounds
+from desmon.verify.bounds import Bounds, unmodelled
 from desmon.verify.direct import DirectSearch, Pool
 from desmon.verify.engines import AUTO, load, names
 from desmon.verify.isolation import worker_pids
@@ -228,7 +228,7 @@ def _fresh_result(system: TransitionSystem, workers: int, timeout: float | None,
     """A result before any search: HOLDS, nothing counted."""
     return CheckResult(
         system.scenario.name, system.deployer_name, tuple(i.name for i in system.invariants), HOLDS,
-        symmetry=system.symmetry is not None, not_checked=system.not_checked, workers=workers,
+        symmetry=system.symmetry is not None, not_checked=system.not_checked, unmodelled=unmodelled(system.scenario, system.bounds), workers=workers,
         timeout=timeout, max_memory=max_memory, start_mb=start_mb,
     )
 

@@ -78,6 +78,9 @@ def format_result(r: CheckResult) -> str:
         lines.append("selector contexts exercised: " + ", ".join(f"{c or '(none)'} {n:,}" for c, n in sorted(r.rules.items(), key=lambda x: str(x[0]))))
     if r.branches:
         lines.append("deployer branches: " + ", ".join(f"{b} {n:,}" for b, n in sorted(r.branches.items())))
+    if r.unmodelled:
+        lines.append("what this verdict leaves out of the World (docs/design.md §6):")
+        lines += [f"  - {line}" for line in r.unmodelled]
     return "\n".join(lines) + "\n"
 
 
@@ -209,6 +212,7 @@ def result_to_json(r: CheckResult, params: dict[str, str]) -> dict[str, Any]:
         "records": r.records,
         "invariants": list(r.invariants),
         "not_checked": {n: NOT_CHECKED.get(n, "") for n in r.not_checked},
+        "unmodelled": list(r.unmodelled),
         "counterexamples": [counterexample_to_json(c) for c in r.counterexamples],
     }
 

@@ -114,6 +114,9 @@ class CheckResult:
     #: :meth:`Symmetry.states_covered <desmon.verify.symmetry.Symmetry.states_covered>`)
     states_covered: int | None = None
     not_checked: tuple[str, ...] = ()  # invariants left to the sim audit and the fuzzer (NOT_CHECKED)
+    #: what the model leaves out of the scenario's World that can change the verdict
+    #: (:func:`desmon.verify.bounds.unmodelled`), one line each
+    unmodelled: tuple[str, ...] = ()
     workers: int = 1
     peak_workers_mb: float = 0.0  # the largest worker process's peak resident size (workers > 1)
     worker_levels: int = 0  # BFS levels the workers expanded (levels under PARALLEL_LEVEL states stay in-process)
