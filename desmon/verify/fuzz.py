@@ -28,12 +28,12 @@ from hypothesis.errors import NoSuchExample
 from desmon.deployment.guard import CRASH, EXIT_CRASHED, DeployerFault, Guard, RanAway, ReactionStopped
 from desmon.deployment.deployer import Deployer
 from desmon.model.scenario import Scenario
-from desmon.verify.bounds import bounds_of
+from desmon.verify.bounds import bounds_of, unmodelled
 from desmon.verify.checker import Checker
 from desmon.verify.search import EXIT_INTERRUPTED, INTERRUPTED
 from desmon.verify.trace import Label
 from desmon.verify.replay import RepositoryRun
-from desmon.verify.report import NOTHING_ENABLED_FIX, format_counterexample, format_trace
+from desmon.verify.report import NOTHING_ENABLED_FIX, format_counterexample, format_trace, unmodelled_lines
 from desmon.verify.strategies import Choice, Run, runs
 
 __all__ = ["FuzzOutcome", "fuzz", "run_choices", "scratch_hypothesis_home"]
@@ -234,8 +234,9 @@ def fuzz(
     except NoSuchExample:
         _end_progress(progress, search.calls)
         idle = "" if search.longest else f"warning: no event was ever enabled, so every sequence checked the initial state alone: {NOTHING_ENABLED_FIX}\n"
+        left = "".join(f"{line}\n" for line in unmodelled_lines(unmodelled(scenario, bounds), "what these sequences leave out"))
         return FuzzOutcome(
-            f"{head}\npassed: {search.calls} sequences (up to {max_size} events each), no invariant violated\n{idle}",
+            f"{head}\npassed: {search.calls} sequences (up to {max_size} events each), no invariant violated\n{idle}{left}",
             0,
             search.calls,
         )

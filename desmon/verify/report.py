@@ -17,7 +17,7 @@ from desmon.verify.trace import Counterexample, Label, Step, rule_of, where_in_r
 from desmon.verify.state import Key
 
 __all__ = [
-    "format_result", "format_stats", "stats_to_json", "format_trace", "result_to_json", "counterexample_pytest", "event_to_json", "event_from_json",
+    "format_result", "unmodelled_lines", "format_stats", "stats_to_json", "format_trace", "result_to_json", "counterexample_pytest", "event_to_json", "event_from_json",
     "constraint_to_json", "constraint_from_json", "labels_from_json", "initial_fails_from_json", "key_to_json",
     "SavedCounterexample", "read_counterexample", "format_replay_head", "format_divergence", "format_replay_verdict",
 ]
@@ -78,10 +78,16 @@ def format_result(r: CheckResult) -> str:
         lines.append("selector contexts exercised: " + ", ".join(f"{c or '(none)'} {n:,}" for c, n in sorted(r.rules.items(), key=lambda x: str(x[0]))))
     if r.branches:
         lines.append("deployer branches: " + ", ".join(f"{b} {n:,}" for b, n in sorted(r.branches.items())))
-    if r.unmodelled:
-        lines.append("what this verdict leaves out of the World (docs/design.md §6):")
-        lines += [f"  - {line}" for line in r.unmodelled]
+    lines += unmodelled_lines(r.unmodelled)
     return "\n".join(lines) + "\n"
+
+
+def unmodelled_lines(unmodelled: tuple[str, ...], what: str = "what this verdict leaves out") -> list[str]:
+    """The block under a verdict (or a fuzz's pass: ``what``) naming what its model leaves
+    out of the scenario's World (:func:`desmon.verify.bounds.unmodelled`); none if nothing."""
+    if not unmodelled:
+        return []
+    return [f"{what} of the World (docs/design.md §6):", *(f"  - {line}" for line in unmodelled)]
 
 
 def _event_lines(r: CheckResult) -> list[str]:
