@@ -372,16 +372,18 @@ def unmodelled(scenario: Scenario, b: Bounds) -> tuple[str, ...]:
     * with a start latency and bounds that change a requirement or a load, the world may
       change one while a start waits, and the instance comes up on the facts after it."""
     world = scenario.world
-    if world is None:
+    worlds = [r.world for r in world.robots] if hasattr(world, "robots") else [world]  # (a fleet: each robot's World)
+    worlds = [w for w in worlds if hasattr(w, "heartbeat_timeout") and hasattr(w, "latency")]
+    if not worlds:
         return ()
     out: list[str] = []
-    notice = float(getattr(world, "heartbeat_timeout", 0.0) or 0.0)
+    notice = max(float(w.heartbeat_timeout or 0.0) for w in worlds)
     if notice > 0 and (b.platforms or b.devices or b.joins):
         out.append(
             f"the monitor's notice delay (World.heartbeat_timeout {notice:g} s): here every failure and repair is noticed at once; "
             "in the world a reaction within the delay decides on the facts before the change while its starts meet the facts after it"
         )
-    latency = max((float(world.latency(p.name)) for p in scenario.model.platforms), default=0.0)
+    latency = max((float(w.latency(p.name)) for w in worlds for p in scenario.model.platforms), default=0.0)
     if latency > 0 and (b.requirement_changes or b.loads):
         changes = " and ".join(w for w, on in (("a requirement change", b.requirement_changes), ("a load step", b.loads)) if on)
         out.append(
