@@ -342,6 +342,26 @@ def test_a_message_out_of_turn_is_one_line_never_a_traceback(tmp_path):
     assert code in (1, 2, 4) and "Traceback" not in err and (code != 1 or "verdict: VIOLATED" in out), (code, out, err)
 
 
+#: a reaction that ends twice: a forged "return" written ahead, then its own
+ENDS_TWICE = RAW + '''
+def nothing(q, slots, changed, context_changed):
+    _send(b"\\x80\\x05" + _s("return") + b"N\\x86.")
+    return
+    yield
+'''
+
+
+@pytest.mark.parametrize("engine", ["table", "direct"])
+def test_a_message_left_over_from_a_reaction_is_never_read_as_the_next_ones(tmp_path, engine):
+    """desmon reads the worker's messages through a buffer (an error is sent without waiting
+    for an answer): what is left unread when a reaction ends, or arrives between two, is
+    the worker breaking the conversation, never the next reaction's first message."""
+    (tmp_path / "twice.py").write_text(ENDS_TWICE)
+    code, _took, out, err = _desmon("verify", COFFEE, "--no-progress", "--engine", engine, "--deployer", f"{tmp_path / 'twice.py'}:nothing")
+    assert "a message between two reactions, when nothing was asked" in out + err and "Traceback" not in err, (code, out, err)
+    assert code in (2, 4) and "HOLDS" not in out, (code, out, err)
+
+
 #: a command whose graph is 80 tuples each holding the one before twice: a few hundred bytes
 #: of pickle that unfold into 2**80 objects, which desmon's guard hashes (in C: no signal runs)
 UNFOLDS = RAW + '''

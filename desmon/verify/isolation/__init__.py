@@ -191,6 +191,16 @@ class Worker:
         except OSError:
             raise WorkerGone(self._gone()) from None
 
+    def unasked(self) -> bool:
+        """Whether the child sent anything that is not yet read (between two reactions: more than it was asked)."""
+        if self.pending:
+            return True
+        import select
+
+        with contextlib.suppress(OSError, ValueError):
+            return bool(select.select([self.sock], [], [], 0)[0])
+        return False
+
     def exchange(self, message: Any) -> tuple[Any, Any]:
         self.send(message)
         return self._receive()
@@ -313,6 +323,8 @@ class RemoteReact:
         limit = None if threading.current_thread() is threading.main_thread() else self.import_seconds or IMPORT_SECONDS
         w.sock.settimeout(limit)
         try:
+            if w.unasked():
+                raise WorkerGone("sent desmon, through its worker process, a message between two reactions, when nothing was asked")
             kind, body = w.exchange(("react", (Handle(q, "query"), slots, changed, context_changed, _reads(q, slots, True, w.blobs))))
             while True:
                 if kind in ("get", "call", "op"):
