@@ -57,6 +57,7 @@ GOALS: dict[str, tuple[Goal, ...]] = {
         Goal("speedup", ">=", 1.8, "2 Dask workers vs 1 on 2 idle cores"),
         Goal("overhead", "<", 0.05, "Dask vs the bare loop"),
     ),
+    "bench_suite": (Goal("tests_min", "<=", 6, "make test, from a clean clone, in at most 6 minutes of tests on 2 cores"),),
     "bench_validity": (
         Goal("seconds", "<", 1.0, "acceptable sets of every spec"),
         Goal("reasons_max_ms", "<", 50.0, "every reason for the slowest spec"),
@@ -72,6 +73,7 @@ QUICK: dict[str, tuple[str, ...]] = {
     "bench_preferences": ("--quick",),
     "bench_scale": ("--max-platforms", "3", "--time-limit", "120"),
     "bench_sim": ("--until", "600"),
+    "bench_suite": ("--quick",),
     "bench_sweep": ("--hours", "0.02", "--seeds", "1"),
     "bench_table_prefs": ("--quick", "--repeat", "1"),
     "bench_upgrade": ("--seeds", "1", "--hours", "0.2"),
@@ -118,6 +120,7 @@ RESULT_KEYS: dict[str, tuple[str, ...]] = {
     ),
     "bench_scale": ("platforms", "states", "transitions", "seconds", "cpu_seconds", "states_per_s", "bytes_per_state", "growth"),
     "bench_scale --breakdown": ("platforms", "seconds", "walk_s", "recording_s", "seen_s", "events_s", "serial_share", "two_workers_bound"),
+    "bench_suite": ("passed", "skipped", "failed", "total_min", "tests_min", "install_min", "cpu_min", "test_cpu_s"),
     "bench_sweep": ("speedup", "overhead", "runs", "hours", "bare_s", "one_worker_s", "two_workers_s"),
     "bench_sweep --scheduler": ("per_task_ratio", "in_task_ratio", "cpu_ratio", "runs", "hours", "rounds", "workers", "threads"),
     "bench_table_prefs": ("cloud_ratio", "cloud_wide_ratio", "pref_median_ratio"),

@@ -124,3 +124,23 @@ def test_a_bench_refuses_a_number_it_cannot_use_in_one_line(args, says):
     proc = subprocess.run([sys.executable, "-m", *args], cwd=ROOT, capture_output=True, text=True)
     assert proc.returncode == 2 and says in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
     assert proc.stdout == "", proc.stdout
+
+
+def test_the_suite_bench_reads_ci_output_and_refuses_output_without_its_figures():
+    """``python -m bench.bench_suite`` reads pytest's last summary and bash's ``time`` (the
+    README's suite figures come from it): failures and errors count as failed, the install
+    is what the command took beyond pytest's own time, and output lacking either part is no
+    figure at all."""
+    from bench.bench_suite import figures
+
+    out = (
+        "==> installing\n..F.\n= 2 failed, 2590 passed, 11 skipped, 1 error in 522.50s (0:08:42) =\n"
+        "make: *** [Makefile:50: test] Error 1\n\nreal\t9m12.500s\nuser\t16m1.000s\nsys\t1m39.000s\n"
+    )
+    got = figures(out, ["1.50 2.00 tests/a.py::t 1 2\n", "0.25 0.50 tests/b.py::u 1 2\n"])
+    assert (got["passed"], got["skipped"], got["failed"]) == (2590, 11, 3)
+    assert (got["total_min"], got["tests_min"], got["install_min"], got["cpu_min"], got["test_cpu_s"]) == (9.208, 8.708, 0.5, 17.667, 1.8)
+    assert figures("29 passed in 2.75s\nreal\t0m3.48s\nuser\t0m3.55s\nsys\t0m0.13s\n")["passed"] == 29
+    for broken in (out.split("real")[0], out.replace("= 2 failed", "2 failed").replace(" in 522.50s (0:08:42) =", "")):
+        with pytest.raises(ValueError):
+            figures(broken)

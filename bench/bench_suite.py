@@ -1,0 +1,126 @@
+"""The test suite's time, as CI takes it: ``python -m bench.bench_suite [--quick] [--log FILE]``.
+
+Without options it clones this repository's last commit into a temporary folder and runs
+``time ./.ci/run`` there (what CI runs on a clean clone: Chromium and its driver from apt
+where they are missing, then the README's ``make test``, its virtual environment
+installed first), with ``DESMON_TEST_CPU`` set, and reads off its output:
+
+* ``total_min``: the wall minutes of the whole command (bash's ``time``: real);
+* ``tests_min``: the wall minutes pytest reports (its collection included), and
+  ``install_min`` the rest (the environment's install);
+* ``passed``, ``skipped``, ``failed``: pytest's counts (``failed`` counts errors too);
+* ``cpu_min``: the CPU minutes of the whole command, user and system, its processes
+  included (bash's ``time``);
+* ``test_cpu_s``: the CPU seconds of the tests, summed test by test (``DESMON_TEST_CPU``:
+  tests/conftest.py).
+
+``--log FILE`` reads the output of such a run that was saved instead of running one (the
+last line of ``time``'s report and pytest's summary line must be in it; ``test_cpu_s``
+is then 0 unless ``--cpu FILE`` gives the run's ``DESMON_TEST_CPU`` file).
+``--quick``: the same figures of one small test file run in place (a smoke run of the
+bench, seconds). The last line is ``RESULT key=value ...``; the exit code is 1 when a test
+failed or the command did, so that a figure of a failed run is never taken for the suite's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+#: pytest's last summary line, e.g. ``==== 2601 passed, 11 skipped in 522.66s (0:08:42) ====`` (with -q: no ``=``)
+SUMMARY = re.compile(
+    r"^(?:=+ )?(?P<counts>\d+ (?:passed|failed|skipped|errors?|deselected|xfailed|xpassed|warnings?)[^=\n]*?) "
+    r"in (?P<seconds>[\d.]+)s(?: \([\d:]+\))?(?: =+)?$", re.M,
+)
+COUNT = re.compile(r"(\d+) (passed|skipped|failed|errors?|xfailed|xpassed|deselected|warnings?)")
+#: bash's ``time``: ``real\t9m11.552s``
+TIMES = re.compile(r"^(real|user|sys)\s+(\d+)m([\d.]+)s$", re.M)
+#: the small configuration: one file of fast tests, run in place
+QUICK_TESTS = ("tests/test_stats.py",)
+
+
+def figures(output: str, cpu_lines: list[str] | None = None) -> dict[str, float]:
+    """The figures of one run's output (module docstring); ValueError when a part is missing."""
+    summaries = list(SUMMARY.finditer(output))
+    if not summaries:
+        raise ValueError("no pytest summary line (=== N passed ... in S s ===) in the output")
+    last = summaries[-1]
+    counts = {"passed": 0, "skipped": 0, "failed": 0}
+    for n, what in COUNT.findall(last["counts"]):
+        key = "failed" if what.startswith(("failed", "error")) else what
+        if key in counts:
+            counts[key] += int(n)
+    times = {name: int(m) * 60 + float(s) for name, m, s in TIMES.findall(output)}
+    if set(times) != {"real", "user", "sys"}:
+        raise ValueError("no real, user and sys lines of bash's time in the output")
+    tests_s = float(last["seconds"])
+    cpu = sum(float(line.split()[0]) for line in cpu_lines or () if line.strip())
+    return dict(
+        passed=float(counts["passed"]), skipped=float(counts["skipped"]), failed=float(counts["failed"]),
+        total_min=round(times["real"] / 60, 3), tests_min=round(tests_s / 60, 3),
+        install_min=round(max(0.0, times["real"] - tests_s) / 60, 3),
+        cpu_min=round((times["user"] + times["sys"]) / 60, 3), test_cpu_s=round(cpu, 1),
+    )
+
+
+def _timed(command: str, cwd: Path, cpu_file: Path) -> tuple[int, str]:
+    """(exit code, stdout and stderr) of ``time COMMAND`` in bash, in ``cwd``."""
+    env = dict(os.environ, DESMON_TEST_CPU=str(cpu_file))
+    proc = subprocess.run(["bash", "-c", f"time {command}"], cwd=cwd, env=env, capture_output=True, text=True)
+    return proc.returncode, proc.stdout + proc.stderr
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m bench.bench_suite", description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="one small test file, in place (a smoke run)")
+    ap.add_argument("--log", type=Path, help="read the saved output of a `time ./.ci/run` instead of running one")
+    ap.add_argument("--cpu", type=Path, help="with --log: that run's DESMON_TEST_CPU file")
+    args = ap.parse_args(argv)
+    with tempfile.TemporaryDirectory(prefix="desmon-suite-") as tmp:
+        cpu_file = Path(tmp) / "cpu.txt"
+        if args.log is not None:
+            try:
+                code, out = 0, args.log.read_text()
+                cpu_file = args.cpu if args.cpu is not None else cpu_file
+            except OSError as exc:
+                print(f"bench_suite: --log {args.log}: {exc.strerror}", file=sys.stderr)
+                return 2
+        elif args.quick:
+            code, out = _timed(shlex.join([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *QUICK_TESTS]), ROOT, cpu_file)
+        else:
+            clone = Path(tmp) / "clone"
+            subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
+            print(f"bench_suite: time ./.ci/run in a clean clone of {ROOT} at {_head()} (about 10 minutes on 2 cores)", flush=True)
+            code, out = _timed("./.ci/run", clone, cpu_file)
+            shutil.rmtree(clone, ignore_errors=True)
+        try:
+            lines = cpu_file.read_text().splitlines() if cpu_file.exists() else []
+            found = figures(out, lines)
+        except (OSError, ValueError) as exc:
+            print(out[-3000:], file=sys.stderr)
+            print(f"bench_suite: {exc}", file=sys.stderr)
+            return 1
+    print(
+        f"{found['passed']:,.0f} passed, {found['skipped']:,.0f} skipped, {found['failed']:,.0f} failed; "
+        f"{found['total_min']:.1f} min in all, {found['tests_min']:.1f} min of tests, {found['cpu_min']:.1f} CPU-minutes"
+        + (f", {found['test_cpu_s']:,.0f} CPU-s summed test by test" if found["test_cpu_s"] else "")
+    )
+    print("RESULT " + " ".join(f"{k}={v:g}" for k, v in found.items()))
+    return 1 if code != 0 or found["failed"] else 0
+
+
+def _head() -> str:
+    proc = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True)
+    return proc.stdout.strip() or "?"
+
+
+if __name__ == "__main__":
+    sys.exit(main())
