@@ -63,9 +63,10 @@ def run_for_docs(root: Path, results: Path, broken: list[str]) -> int:
     return 1 if broken else 0
 
 
-def rewrite_docs(root: Path, results: Path) -> int:
-    """``--update-docs``: every marked figure from the saved runs; 2 (nothing written) on a missing one."""
-    changes, errors = docs.update_docs(root, results)
+def rewrite_docs(root: Path, results: Path, only: frozenset[str] | None = None) -> int:
+    """``--update-docs``: every marked figure from the saved runs (``only``: those of these
+    benches); 2 (nothing written) on a missing one."""
+    changes, errors = docs.update_docs(root, results, only=only)
     if errors:
         print("\n".join(errors), file=sys.stderr)
         print("--update-docs: a marked figure cannot be produced (above); nothing written", file=sys.stderr)
@@ -78,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m bench", description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="each bench in its small configuration (goals shown, not judged)")
     ap.add_argument("names", nargs="*", metavar="NAME", help=f"benches to run (default: all of {', '.join(BENCHES)})")
-    ap.add_argument("--update-docs", action="store_true", help="rewrite the figures marked in README.md and docs/*.md from the saved runs (after the runs asked for; alone, none)")
+    ap.add_argument("--update-docs", action="store_true", help="rewrite the figures marked in README.md and docs/*.md from the saved runs (after the benches named: only their figures; alone: every figure, no bench run)")
     ap.add_argument("--docs-runs", action="store_true", help="run each command the docs' figure markers name and save it")
     ap.add_argument("--results", type=Path, default=docs.RESULTS, help="the saved runs (default bench/results.json)")
     ap.add_argument("--root", type=Path, default=docs.ROOT, help=argparse.SUPPRESS)  # the tests' copy of the docs
@@ -94,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.update_docs and broken:
         print("--update-docs: a bench broke in this run; no figure rewritten", file=sys.stderr)
     elif args.update_docs:
-        return rewrite_docs(args.root, args.results) or status
+        return rewrite_docs(args.root, args.results, frozenset(args.names) or None) or status
     return status
 
 

@@ -176,10 +176,13 @@ def new_figure(m: Marker, runs: dict[str, dict], results: Path) -> tuple[str | N
     return format(float(value), m.fmt), None
 
 
-def update_docs(root: Path = ROOT, results: Path = RESULTS, write: bool = True) -> tuple[list[str], list[str]]:
-    """Rewrite every marked figure from the saved runs: (changes, errors). With an error
-    nothing is written; otherwise every changed file is replaced at once."""
+def update_docs(root: Path = ROOT, results: Path = RESULTS, write: bool = True, only: frozenset[str] | None = None) -> tuple[list[str], list[str]]:
+    """Rewrite every marked figure from the saved runs (``only``: the figures of these
+    benches): (changes, errors). With an error nothing is written; otherwise every changed
+    file is replaced at once."""
     markers, errors = all_markers(root)
+    if only is not None:
+        markers = [m for m in markers if m.bench in only]
     runs = load_results(results)
     changes: list[str] = []
     texts: dict[Path, str] = {}

@@ -115,6 +115,16 @@ def test_update_docs_writes_nothing_when_one_figure_cannot_be_produced(tmp_path,
     assert _files(root) == before  # the good markers were not rewritten either, and no temporary file is left
 
 
+def test_update_docs_after_named_benches_rewrites_their_figures_only(tmp_path, capsys):
+    """``python -m bench NAME --update-docs``: NAME's figures, whatever the other benches' saved runs."""
+    root, saved = _copy(tmp_path, {"bench_sim": RESULTS["bench_sim"]})
+    changes, errors = figures.update_docs(root, saved, only=frozenset({"bench_sim"}))
+    assert errors == [] and len(changes) == 2
+    text = (root / "docs" / "findings.md").read_text()
+    assert "-->5,412<!-- /bench -->x real time" in text and "-->+31.0<!-- /bench --> s." in text  # bench_upgrade's kept
+    assert figures.update_docs(root, saved)[1]  # every figure: bench_analyze's and bench_upgrade's runs are missing
+
+
 def test_the_saved_runs_keep_one_entry_per_command(tmp_path):
     saved = tmp_path / "results.json"
     figures.save_run("bench_analyze", [], {"states": 9920.0}, saved)
