@@ -14,9 +14,9 @@ installed first), with ``DESMON_TEST_CPU`` set, and reads off its output:
 * ``test_cpu_s``: the CPU seconds of the tests, summed test by test (``DESMON_TEST_CPU``:
   tests/conftest.py).
 
-``--log FILE`` reads the output of such a run that was saved instead of running one (the
-last line of ``time``'s report and pytest's summary line must be in it; ``test_cpu_s``
-is then 0 unless ``--cpu FILE`` gives the run's ``DESMON_TEST_CPU`` file).
+``--log FILE`` reads the output of such a run that was saved instead of running one
+(bash's ``time`` report and pytest's summary line must be in it; ``test_cpu_s`` is then 0
+unless ``--cpu FILE`` gives the run's ``DESMON_TEST_CPU`` file).
 ``--quick``: the same figures of one small test file run in place (a smoke run of the
 bench, seconds). The last line is ``RESULT key=value ...``; the exit code is 1 when a test
 failed or the command did, so that a figure of a failed run is never taken for the suite's.
@@ -62,7 +62,10 @@ def figures(output: str, cpu_lines: list[str] | None = None) -> dict[str, float]
     if set(times) != {"real", "user", "sys"}:
         raise ValueError("no real, user and sys lines of bash's time in the output")
     tests_s = float(last["seconds"])
-    cpu = sum(float(line.split()[0]) for line in cpu_lines or () if line.strip())
+    try:
+        cpu = sum(float(line.split()[0]) for line in cpu_lines or () if line.strip())
+    except ValueError:
+        raise ValueError("the DESMON_TEST_CPU file has a line that does not start with CPU seconds") from None
     return dict(
         passed=float(counts["passed"]), skipped=float(counts["skipped"]), failed=float(counts["failed"]),
         total_min=round(times["real"] / 60, 3), tests_min=round(tests_s / 60, 3),
@@ -84,27 +87,36 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--log", type=Path, help="read the saved output of a `time ./.ci/run` instead of running one")
     ap.add_argument("--cpu", type=Path, help="with --log: that run's DESMON_TEST_CPU file")
     args = ap.parse_args(argv)
+    if args.cpu is not None and args.log is None:
+        print("bench_suite: --cpu FILE reads the CPU of a saved run: give its output too (--log FILE)", file=sys.stderr)
+        return 2
     with tempfile.TemporaryDirectory(prefix="desmon-suite-") as tmp:
         cpu_file = Path(tmp) / "cpu.txt"
         if args.log is not None:
-            try:
-                code, out = 0, args.log.read_text()
-                cpu_file = args.cpu if args.cpu is not None else cpu_file
-            except OSError as exc:
-                print(f"bench_suite: --log {args.log}: {exc.strerror}", file=sys.stderr)
-                return 2
+            for flag, path in (("--log", args.log), ("--cpu", args.cpu)):
+                if path is not None and not path.is_file():
+                    print(f"bench_suite: {flag} {path}: no such file; give the file a `time ./.ci/run` run wrote", file=sys.stderr)
+                    return 2
+            code, out = 0, args.log.read_text(errors="replace")
+            cpu_file = args.cpu if args.cpu is not None else cpu_file
         elif args.quick:
             code, out = _timed(shlex.join([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *QUICK_TESTS]), ROOT, cpu_file)
         else:
             clone = Path(tmp) / "clone"
-            subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
+            cloned = subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], capture_output=True, text=True)
+            if cloned.returncode != 0:
+                print(f"bench_suite: git clone {ROOT} failed: {' '.join(cloned.stderr.split())[:300]}", file=sys.stderr)
+                return 2
             print(f"bench_suite: time ./.ci/run in a clean clone of {ROOT} at {_head()} (about 10 minutes on 2 cores)", flush=True)
             code, out = _timed("./.ci/run", clone, cpu_file)
             shutil.rmtree(clone, ignore_errors=True)
+        lines = cpu_file.read_text(errors="replace").splitlines() if cpu_file.exists() else []
+        if args.cpu is not None and not all(_starts_with_seconds(line) for line in lines):
+            print(f"bench_suite: --cpu {args.cpu}: a line does not start with CPU seconds; give the file DESMON_TEST_CPU wrote", file=sys.stderr)
+            return 2
         try:
-            lines = cpu_file.read_text().splitlines() if cpu_file.exists() else []
             found = figures(out, lines)
-        except (OSError, ValueError) as exc:
+        except ValueError as exc:
             print(out[-3000:], file=sys.stderr)
             print(f"bench_suite: {exc}", file=sys.stderr)
             return 1
@@ -115,6 +127,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     print("RESULT " + " ".join(f"{k}={v:g}" for k, v in found.items()))
     return 1 if code != 0 or found["failed"] else 0
+
+
+def _starts_with_seconds(line: str) -> bool:
+    try:
+        return not line.strip() or float(line.split()[0]) >= 0
+    except ValueError:
+        return False
 
 
 def _head() -> str:

@@ -119,6 +119,9 @@ def test_bench_timers_times_named_functions_and_refuses_an_unknown_one():
     (["bench.fleet_interval", "--hours", "-1"], "--hours -1.0: give 1 or more edge servers and a positive number of hours"),
     (["bench.fleet_interval", "--edges", "500"], "edges = 500: give a whole number of edge servers in [1, 200]"),
     (["bench.bench_scale", "--time-limit", "nan"], "--time-limit nan: give a positive number of seconds"),
+    (["bench.bench_suite", "--log", "no/such.log"], "--log no/such.log: no such file"),
+    (["bench.bench_suite", "--cpu", "cpu.txt"], "--cpu FILE reads the CPU of a saved run: give its output too (--log FILE)"),
+    (["bench.bench_suite", "--log", "README.md", "--cpu", "README.md"], "--cpu README.md: a line does not start with CPU seconds"),
 ])
 def test_a_bench_refuses_a_number_it_cannot_use_in_one_line(args, says):
     proc = subprocess.run([sys.executable, "-m", *args], cwd=ROOT, capture_output=True, text=True)
