@@ -25,6 +25,7 @@ failed or the command did, so that a figure of a failed run is never taken for t
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import re
 import shlex
@@ -58,9 +59,9 @@ def figures(output: str, cpu_lines: list[str] | None = None) -> dict[str, float]
         key = "failed" if what.startswith(("failed", "error")) else what
         if key in counts:
             counts[key] += int(n)
-    times = {name: int(m) * 60 + float(s) for name, m, s in TIMES.findall(output)}
+    times = {name: int(m) * 60 + float(s) for name, m, s in TIMES.findall(output, last.end())}
     if set(times) != {"real", "user", "sys"}:
-        raise ValueError("no real, user and sys lines of bash's time in the output")
+        raise ValueError("no real, user and sys lines of bash's time after pytest's last summary")
     tests_s = float(last["seconds"])
     try:
         cpu = sum(float(line.split()[0]) for line in cpu_lines or () if line.strip())
@@ -90,12 +91,16 @@ def main(argv: list[str] | None = None) -> int:
     if args.cpu is not None and args.log is None:
         print("bench_suite: --cpu FILE reads the CPU of a saved run: give its output too (--log FILE)", file=sys.stderr)
         return 2
+    if args.quick and args.log is not None:
+        print("bench_suite: --quick runs a small suite, --log reads a run's output: give one of them", file=sys.stderr)
+        return 2
     with tempfile.TemporaryDirectory(prefix="desmon-suite-") as tmp:
         cpu_file = Path(tmp) / "cpu.txt"
         if args.log is not None:
             for flag, path in (("--log", args.log), ("--cpu", args.cpu)):
                 if path is not None and not path.is_file():
-                    print(f"bench_suite: {flag} {path}: no such file; give the file a `time ./.ci/run` run wrote", file=sys.stderr)
+                    what = "not a regular file" if path.exists() else "no such file"
+                    print(f"bench_suite: {flag} {path}: {what}; give the file a `time ./.ci/run` run wrote", file=sys.stderr)
                     return 2
             code, out = 0, args.log.read_text(errors="replace")
             cpu_file = args.cpu if args.cpu is not None else cpu_file
@@ -111,13 +116,16 @@ def main(argv: list[str] | None = None) -> int:
             code, out = _timed("./.ci/run", clone, cpu_file)
             shutil.rmtree(clone, ignore_errors=True)
         lines = cpu_file.read_text(errors="replace").splitlines() if cpu_file.exists() else []
-        if args.cpu is not None and not all(_starts_with_seconds(line) for line in lines):
-            print(f"bench_suite: --cpu {args.cpu}: a line does not start with CPU seconds; give the file DESMON_TEST_CPU wrote", file=sys.stderr)
+        if args.cpu is not None and not (any(line.strip() for line in lines) and all(_starts_with_seconds(line) for line in lines)):
+            print(f"bench_suite: --cpu {args.cpu}: not a line per test starting with its CPU seconds; give the file DESMON_TEST_CPU wrote", file=sys.stderr)
             return 2
         try:
             found = figures(out, lines)
         except ValueError as exc:
-            print(out[-3000:], file=sys.stderr)
+            if args.log is not None:  # (the user's file: one line)
+                print(f"bench_suite: --log {args.log}: {exc}; give the output a `time ./.ci/run` run wrote", file=sys.stderr)
+                return 2
+            print(out[-3000:], file=sys.stderr)  # (a run of ours that printed no figures: what it printed)
             print(f"bench_suite: {exc}", file=sys.stderr)
             return 1
     print(
@@ -131,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _starts_with_seconds(line: str) -> bool:
     try:
-        return not line.strip() or float(line.split()[0]) >= 0
+        return not line.strip() or 0 <= float(line.split()[0]) < math.inf
     except ValueError:
         return False
 

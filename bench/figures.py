@@ -110,12 +110,14 @@ def check_marker(m: Marker) -> list[str]:
     return []
 
 
-def all_markers(root: Path = ROOT) -> tuple[list[Marker], list[str]]:
-    """Every marker of the README and docs/*.md, and every problem a marker has on its own."""
+def all_markers(root: Path = ROOT, only: frozenset[str] | None = None) -> tuple[list[Marker], list[str]]:
+    """Every marker of the README and docs/*.md (``only``: of these benches), and every
+    problem a marker has on its own (a malformed one, which names no bench, always)."""
     markers: list[Marker] = []
     problems: list[str] = []
     for path in doc_files(root):
         found, bad = parse_markers(path.read_text(encoding="utf-8"), path.relative_to(root).as_posix())
+        found = [m for m in found if only is None or m.bench in only]
         markers += found
         problems += bad + [p for m in found for p in check_marker(m)]
     return markers, problems
@@ -180,9 +182,7 @@ def update_docs(root: Path = ROOT, results: Path = RESULTS, write: bool = True, 
     """Rewrite every marked figure from the saved runs (``only``: the figures of these
     benches): (changes, errors). With an error nothing is written; otherwise every changed
     file is replaced at once."""
-    markers, errors = all_markers(root)
-    if only is not None:
-        markers = [m for m in markers if m.bench in only]
+    markers, errors = all_markers(root, only)
     runs = load_results(results)
     changes: list[str] = []
     texts: dict[Path, str] = {}

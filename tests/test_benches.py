@@ -121,7 +121,10 @@ def test_bench_timers_times_named_functions_and_refuses_an_unknown_one():
     (["bench.bench_scale", "--time-limit", "nan"], "--time-limit nan: give a positive number of seconds"),
     (["bench.bench_suite", "--log", "no/such.log"], "--log no/such.log: no such file"),
     (["bench.bench_suite", "--cpu", "cpu.txt"], "--cpu FILE reads the CPU of a saved run: give its output too (--log FILE)"),
-    (["bench.bench_suite", "--log", "README.md", "--cpu", "README.md"], "--cpu README.md: a line does not start with CPU seconds"),
+    (["bench.bench_suite", "--log", "README.md", "--cpu", "README.md"], "--cpu README.md: not a line per test starting with its CPU seconds"),
+    (["bench.bench_suite", "--log", "README.md"], "--log README.md: no pytest summary line"),
+    (["bench.bench_suite", "--log", "docs"], "--log docs: not a regular file"),
+    (["bench.bench_suite", "--log", "README.md", "--quick"], "give one of them"),
 ])
 def test_a_bench_refuses_a_number_it_cannot_use_in_one_line(args, says):
     proc = subprocess.run([sys.executable, "-m", *args], cwd=ROOT, capture_output=True, text=True)
@@ -144,6 +147,7 @@ def test_the_suite_bench_reads_ci_output_and_refuses_output_without_its_figures(
     assert (got["passed"], got["skipped"], got["failed"]) == (2590, 11, 3)
     assert (got["total_min"], got["tests_min"], got["install_min"], got["cpu_min"], got["test_cpu_s"]) == (9.208, 8.708, 0.5, 17.667, 1.8)
     assert figures("29 passed in 2.75s\nreal\t0m3.48s\nuser\t0m3.55s\nsys\t0m0.13s\n")["passed"] == 29
-    for broken in (out.split("real")[0], out.replace("= 2 failed", "2 failed").replace(" in 522.50s (0:08:42) =", "")):
+    second = out + "==== 5 passed in 1.00s ====\n"  # a second run's summary with no time of its own
+    for broken in (out.split("real")[0], out.replace("= 2 failed", "2 failed").replace(" in 522.50s (0:08:42) =", ""), second):
         with pytest.raises(ValueError):
             figures(broken)

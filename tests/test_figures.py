@@ -123,6 +123,8 @@ def test_update_docs_after_named_benches_rewrites_their_figures_only(tmp_path, c
     text = (root / "docs" / "findings.md").read_text()
     assert "-->5,412<!-- /bench -->x real time" in text and "-->+31.0<!-- /bench --> s." in text  # bench_upgrade's kept
     assert figures.update_docs(root, saved)[1]  # every figure: bench_analyze's and bench_upgrade's runs are missing
+    (root / "README.md").write_text("x <!-- bench_upgrade: exposure_diff_mean +.1f -->31<!-- /bench -->\n")  # another bench's bad marker
+    assert figures.update_docs(root, saved, only=frozenset({"bench_sim"}))[1] == []
 
 
 def test_the_saved_runs_keep_one_entry_per_command(tmp_path):

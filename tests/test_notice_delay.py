@@ -26,7 +26,7 @@ def test_a_violation_inside_the_notice_delay_says_what_the_monitor_had_not_notic
     assert found[0].endswith("(while the monitor had not yet noticed: platform p0 up; docs/design.md §6)")
     assert main(["verify", SCENARIO, "--deployer", "paper", "--no-progress"]) == 0  # (no state of it has the window)
     out = capsys.readouterr().out  # ... and its HOLDS says what it leaves out
-    assert "what this verdict leaves out of the World (docs/design.md §6):\n  - the monitor's notice delay (World.heartbeat_timeout 0.5 s)" in out
+    assert "what this verdict leaves out of the World (docs/design.md §6):\n  - the monitor's notice delay (World.heartbeat_timeout up to 0.5 s)" in out
 
 
 def test_a_verdict_names_the_delays_of_the_world_it_leaves_out_and_only_those(capsys, tmp_path):
@@ -54,3 +54,33 @@ def test_without_the_delay_or_with_a_deployer_that_stops_what_it_believes_down_t
     assert _violations(capsys, "--deployer", "paper", "-p", "heartbeat=0") == []
     assert _violations(capsys, "--deployer", "desmon") == []
     assert main(["verify", SCENARIO, "--no-progress"]) == 0
+
+
+DATA = Path(__file__).resolve().parent / "data"
+
+
+def _left_out(capsys, scenario: Path, *params: str) -> list[str]:  # type: ignore[no-untyped-def]
+    assert main(["verify", str(scenario), "--no-progress", *params]) == 0
+    return [line[4:].split(" (")[0] for line in capsys.readouterr().out.splitlines() if line.startswith("  - ")]
+
+
+def test_a_start_latency_is_left_out_only_where_a_start_waits(capsys):
+    """Fixed timing: a requirement change inside a start's latency over-commits the
+    platform in the world (no-overcommit booked right after the start), which the checker
+    cannot reach, and its verdict says so. Exponential timing decides a start at once:
+    nothing to leave out."""
+    scenario = DATA / "start_latency.py"
+    main(["run", str(scenario)])
+    assert "no-overcommit: p0: deployments consume 105 memory (g 45, h 60) but the capacity is 100 (during the reaction, right after `start h on p0`)" in capsys.readouterr().out
+    assert _left_out(capsys, scenario) == ["a start's latency"]
+    assert _left_out(capsys, scenario, "-p", "timing=exponential") == []
+
+
+def test_a_fleets_delays_are_each_robots_own_and_only_the_checked_robots(capsys):
+    """A fleet's robots notice with their own World's delay: a failure of ``b``'s camera is
+    noticed at once when ``b`` has no delay (``a``'s 2 s does not apply), after ``a``'s 2 s
+    for ``a``'s camera; a robot outside the checked model adds nothing."""
+    scenario = DATA / "fleet_delays.py"
+    assert _left_out(capsys, scenario) == []
+    assert _left_out(capsys, scenario, "-p", "failing=a") == ["the monitor's notice delay"]
+    assert _left_out(capsys, scenario, "-p", "hb_a=0", "-p", "with_c=True") == []

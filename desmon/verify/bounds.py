@@ -363,27 +363,35 @@ def bounds_of(scenario: Scenario) -> Bounds:
 def unmodelled(scenario: Scenario, b: Bounds) -> tuple[str, ...]:
     """What the checker's model of ``scenario`` leaves out of its World that can change a
     verdict (docs/design.md §6), one line each; empty where nothing does. The checker
-    notices a failure or repair at once and completes a start before the next event:
+    notices a change at once and completes a start before the next event:
 
-    * with a ``heartbeat_timeout`` and bounds that fail or repair a platform or device (or
-      let one join or leave), the world notices such a change only after the timeout, and a
-      reaction in between decides on the facts before it while its starts meet the facts
-      after it;
-    * with a start latency and bounds that change a requirement or a load, the world may
-      change one while a start waits, and the instance comes up on the facts after it."""
-    world = scenario.world
-    worlds = [r.world for r in world.robots] if hasattr(world, "robots") else [world]  # (a fleet: each robot's World)
-    worlds = [w for w in worlds if hasattr(w, "heartbeat_timeout") and hasattr(w, "latency")]
-    if not worlds:
+    * with a ``heartbeat_timeout`` on a component the bounds fail, repair, let join or
+      leave, the world notices such a change only after the timeout, and a reaction in
+      between decides on the facts before it while its starts meet the facts after it;
+    * with a start latency (fixed timing: an exponential World decides a start at once)
+      and bounds that change a requirement or a load, the world may change one while a
+      start waits, and the instance comes up on the facts after it.
+
+    A fleet's robots each have their World: a component counts with the Worlds of the
+    robots of the checked model that have it."""
+    model = scenario.model
+    platforms = {p.name for p in model.platforms}
+    owners = _worlds_by_component(scenario.world, model)
+    if not owners:
         return ()
     out: list[str] = []
-    notice = max(float(w.heartbeat_timeout or 0.0) for w in worlds)
-    if notice > 0 and (b.platforms or b.devices or b.joins):
+    noticed = [c for c in (*b.platforms, *b.devices, *b.joins) if c in owners]
+    notice = max((float(w.heartbeat_timeout or 0.0) for c in noticed for w in owners[c]), default=0.0)
+    if notice > 0:
+        kinds = " and ".join(k for k, on in (
+            ("failure" + (" and repair" if b.repair else ""), b.platforms or b.devices), ("join and leave", b.joins)) if on)
         out.append(
-            f"the monitor's notice delay (World.heartbeat_timeout {notice:g} s): here every failure and repair is noticed at once; "
+            f"the monitor's notice delay (World.heartbeat_timeout up to {notice:g} s): here every {kinds} is noticed at once; "
             "in the world a reaction within the delay decides on the facts before the change while its starts meet the facts after it"
         )
-    latency = max((float(w.latency(p.name)) for w in worlds for p in scenario.model.platforms), default=0.0)
+    latency = max(
+        (float(w.latency(p)) for p in platforms for w in owners.get(p, ()) if getattr(w, "timing", "fixed") != "exponential"), default=0.0,
+    )
     if latency > 0 and (b.requirement_changes or b.loads):
         changes = " and ".join(w for w, on in (("a requirement change", b.requirement_changes), ("a load step", b.loads)) if on)
         out.append(
@@ -391,3 +399,19 @@ def unmodelled(scenario: Scenario, b: Bounds) -> tuple[str, ...]:
             f"in the world {changes} may come while a start waits, and the instance comes up on the facts after it"
         )
     return tuple(out)
+
+
+def _worlds_by_component(world: Any, model: SystemModel) -> dict[str, list[Any]]:
+    """Each platform and device name -> the Worlds that run it: the scenario's World, or a
+    fleet's robots' (only the robots whose platforms are all in the checked ``model``)."""
+    checked = {p.name for p in model.platforms}
+    if hasattr(world, "robots"):
+        runs = [(r.world, r.model) for r in world.robots if all(p.name in checked for p in r.model.platforms)]
+    else:
+        runs = [(world, model)]
+    out: dict[str, list[Any]] = {}
+    for w, own in runs:
+        if hasattr(w, "heartbeat_timeout") and hasattr(w, "latency"):
+            for name in (*(p.name for p in own.platforms), *(d.name for d in own.devices)):
+                out.setdefault(name, []).append(w)
+    return out
