@@ -133,6 +133,9 @@ def main(argv: list[str] | None = None) -> int:
         f"{found['total_min']:.1f} min in all, {found['tests_min']:.1f} min of tests, {found['cpu_min']:.1f} CPU-minutes"
         + (f", {found['test_cpu_s']:,.0f} CPU-s summed test by test" if found["test_cpu_s"] else "")
     )
+    failed = [line for line in out.splitlines() if line.startswith(("FAILED ", "ERROR "))]
+    if failed:  # (which tests: the clone and its log are gone once this returns)
+        print("\n".join(dict.fromkeys(failed)), file=sys.stderr)
     print("RESULT " + " ".join(f"{k}={v:g}" for k, v in found.items()))
     return 1 if code != 0 or found["failed"] else 0
 

@@ -374,31 +374,40 @@ def unmodelled(scenario: Scenario, b: Bounds) -> tuple[str, ...]:
 
     A fleet's robots each have their World: a component counts with the Worlds of the
     robots of the checked model that have it."""
-    model = scenario.model
-    platforms = {p.name for p in model.platforms}
-    owners = _worlds_by_component(scenario.world, model)
-    if not owners:
-        return ()
-    out: list[str] = []
+    owners = _worlds_by_component(scenario.world, scenario.model)
+    lines = (_notice_line(owners, b), _latency_line(owners, {p.name for p in scenario.model.platforms}, b))
+    return tuple(line for line in lines if line)
+
+
+def _notice_line(owners: dict[str, list[Any]], b: Bounds) -> str:
+    """The notice delay's line of :func:`unmodelled` ("" where the bounds meet none)."""
     noticed = [c for c in (*b.platforms, *b.devices, *b.joins) if c in owners]
     notice = max((float(w.heartbeat_timeout or 0.0) for c in noticed for w in owners[c]), default=0.0)
-    if notice > 0:
-        kinds = " and ".join(k for k, on in (
-            ("failure" + (" and repair" if b.repair else ""), b.platforms or b.devices), ("join and leave", b.joins)) if on)
-        out.append(
-            f"the monitor's notice delay (World.heartbeat_timeout up to {notice:g} s): here every {kinds} is noticed at once; "
-            "in the world a reaction within the delay decides on the facts before the change while its starts meet the facts after it"
-        )
+    if notice <= 0:
+        return ""
+    kinds = " and ".join(k for k, on in (
+        ("failure" + (" and repair" if b.repair else ""), b.platforms or b.devices), ("join and leave", b.joins)) if on)
+    return (
+        f"the monitor's notice delay (World.heartbeat_timeout up to {notice:g} s): here every {kinds} is noticed at once; "
+        "in the world a reaction within the delay decides on the facts before the change while its starts meet the facts after it"
+    )
+
+
+def _latency_line(owners: dict[str, list[Any]], platforms: set[str], b: Bounds) -> str:
+    """A start's latency's line of :func:`unmodelled` ("" where the bounds meet none): over
+    the ``platforms`` a start may go to, each with the Worlds that start there."""
+    if not (b.requirement_changes or b.loads):
+        return ""
     latency = max(
         (float(w.latency(p)) for p in platforms for w in owners.get(p, ()) if getattr(w, "timing", "fixed") != "exponential"), default=0.0,
     )
-    if latency > 0 and (b.requirement_changes or b.loads):
-        changes = " and ".join(w for w, on in (("a requirement change", b.requirement_changes), ("a load step", b.loads)) if on)
-        out.append(
-            f"a start's latency (up to {latency:g} s in the World): here each start completes before the next event; "
-            f"in the world {changes} may come while a start waits, and the instance comes up on the facts after it"
-        )
-    return tuple(out)
+    if latency <= 0:
+        return ""
+    changes = " and ".join(w for w, on in (("a requirement change", b.requirement_changes), ("a load step", b.loads)) if on)
+    return (
+        f"a start's latency (up to {latency:g} s in the World): here each start completes before the next event; "
+        f"in the world {changes} may come while a start waits, and the instance comes up on the facts after it"
+    )
 
 
 def _worlds_by_component(world: Any, model: SystemModel) -> dict[str, list[Any]]:
