@@ -14,7 +14,7 @@ Each reaction is a conversation over a socket:
   ``RaiseError`` is sent without waiting for an answer: its outcome is always None and
   the error is booked when the reaction ends, so no answer of the Query port changes
   (desmon reads the child's messages in order: the error is acted on before the next
-  read is served);
+  read is served).
 
 What crosses, and how:
 
