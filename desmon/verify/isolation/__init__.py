@@ -43,6 +43,7 @@ import contextlib
 import dataclasses
 import os
 import pickle
+import select
 import signal
 import socket
 import sys
@@ -195,8 +196,6 @@ class Worker:
         """Whether the child sent anything that is not yet read (between two reactions: more than it was asked)."""
         if self.pending:
             return True
-        import select
-
         with contextlib.suppress(OSError, ValueError):
             return bool(select.select([self.sock], [], [], 0)[0])
         return False
