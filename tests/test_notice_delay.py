@@ -6,6 +6,7 @@ The world says so on each violation it books in such a window.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from desmon.cli import main
@@ -41,7 +42,7 @@ def test_a_verdict_names_the_delays_of_the_world_it_leaves_out_and_only_those(ca
     assert main(["verify", cloud, "--no-progress", "--json", str(tmp_path / "r.json")]) == 0
     lines = json.loads((tmp_path / "r.json").read_text())["unmodelled"]
     assert [line.split(" (")[0] for line in lines] == ["the monitor's notice delay", "a start's latency"], lines
-    assert "a requirement change and a load step may come while a start waits" in lines[1]
+    assert "the changes that come while a start waits are answered together, by one reaction, and a requirement change and a load step among them meet the instance" in lines[1]
     out = capsys.readouterr().out
     assert all(f"  - {line}" in out for line in lines)
     # a fuzz that finds nothing says the same of its sequences
@@ -81,6 +82,64 @@ def test_a_fleets_delays_are_each_robots_own_and_only_the_checked_robots(capsys)
     noticed at once when ``b`` has no delay (``a``'s 2 s does not apply), after ``a``'s 2 s
     for ``a``'s camera; a robot outside the checked model adds nothing."""
     scenario = DATA / "fleet_delays.py"
+    assert _left_out(capsys, scenario) == [ROBOTS_AS_ONE]
+    assert _left_out(capsys, scenario, "-p", "failing=a") == ["the monitor's notice delay", ROBOTS_AS_ONE]
+    assert _left_out(capsys, scenario, "-p", "hb_a=0", "-p", "with_c=True") == [ROBOTS_AS_ONE]
+
+
+#: the line of a fleet whose checked model holds two robots or more
+ROBOTS_AS_ONE = "the robots as one"
+
+
+COMBINED = str(DATA / "combined_stimulus.py")
+
+
+def test_changes_at_one_instant_are_one_reaction_of_the_world_and_the_desmon_deployer_serves_them_both(capsys, tmp_path):
+    """At 10 s the robot starts to hold and B crashes: the world's deployer answers both in
+    one reaction, which frees A (``u`` is no longer wanted) before it re-checks ``g`` on B,
+    so ``g`` moves to A instead of leaving its slot to the fallback. The verdict names the
+    instant; parted by a millisecond, the changes are two reactions and nothing is named."""
+    trace = tmp_path / "t.jsonl"
+    assert main(["run", COMBINED, "--trace", str(trace)]) == 0
+    out = capsys.readouterr().out
+    reactions = [r for r in map(json.loads, trace.read_text().splitlines()) if r["type"] == "reaction" and r["t"] == 10.0]
+    assert [(r["context_changed"], r["changed"]) for r in reactions] == [(True, ["B"])]  # one reaction took both
+    assert "start g on A: ok" in out and "start f on C" not in out
+    assert "Invariants: all held" in out
+    assert _left_out(capsys, Path(COMBINED)) == ["changes at one instant"]
+    assert _left_out(capsys, Path(COMBINED), "-p", "t_fault=10.001") == []
+
+
+def test_every_start_latency_under_fixed_timing_is_named_for_the_changes_it_gathers(capsys):
+    """A start's wait gathers the changes that come meanwhile into one reaction: named with
+    or without requirement changes or loads in the bounds, never under exponential timing."""
+    assert _left_out(capsys, Path(COMBINED), "-p", "latency=0.5") == ["a start's latency", "changes at one instant"]
+    assert _left_out(capsys, Path(COMBINED), "-p", "latency=0.5", "-p", "t_fault=10.001") == ["a start's latency"]
+
+
+def test_a_step_the_monitor_may_skip_under_exponential_timing_is_named_unless_the_task_has_the_move(capsys, tmp_path):
+    """Exponential timing with a recognition delay: the monitor reports the action of the
+    moment its delay ends, so the context may go from idle to hold; the bounds' task that
+    lists only the task's own moves leaves that out, one that also lists it does not."""
+    text = (DATA / "combined_stimulus.py").read_text()
+    scenario = tmp_path / "skipping.py"
+    scenario.write_text(text.replace(
+        "task=(Step(\"grasp\", 10.0), Step(\"hold\", 10.0)), horizon=20.0,",
+        "task=(Step(\"idle\", 5.0), Step(\"grasp\", 1.0), Step(\"hold\", 10.0)), horizon=20.0, timing=\"exponential\", recognition_delay=0.5,",
+    ).replace(
+        'checker=Bounds(task={"grasp": ("hold",), "hold": ()}, initial_action="grasp"',
+        'checker=Bounds(task={"idle": ("grasp",), "grasp": ("hold",), "hold": ("idle",)}, initial_action="grasp"',
+    ))
+    found = _left_out(capsys, scenario)
+    assert found == ["a step the monitor does not see"]
+    out_line = [line for line in _left_lines(capsys, scenario) if line.startswith("a step")][0]
+    assert "may move from 'idle' to 'hold'" in out_line
+    every = scenario.read_text().replace('"idle": ("grasp",)', '"idle": ("grasp", "hold")').replace('"grasp": ("hold",)', '"grasp": ("hold", "idle")')
+    every = every.replace('"hold": ("idle",)', '"hold": ("idle", "grasp")')
+    scenario.write_text(every)
     assert _left_out(capsys, scenario) == []
-    assert _left_out(capsys, scenario, "-p", "failing=a") == ["the monitor's notice delay"]
-    assert _left_out(capsys, scenario, "-p", "hb_a=0", "-p", "with_c=True") == []
+
+
+def _left_lines(capsys, scenario: Path) -> list[str]:  # type: ignore[no-untyped-def]
+    assert main(["verify", str(scenario), "--no-progress"]) == 0
+    return [line[4:] for line in capsys.readouterr().out.splitlines() if line.startswith("  - ")]

@@ -395,9 +395,9 @@ def make_desmon_react(
 ) -> Callable[[QueryPort, tuple[tuple[str, ...], ...], tuple[str, ...], bool], Reaction]:
     """Build the corrected reaction (``make_before_break`` exists for the checker's seeded mutant).
 
-    Corrected Algorithm 2 first: every deployment on a changed platform is re-checked
-    (kept if still valid, else migrated break-before-make, else stopped with an error);
-    then what the context no longer wants is stopped; then corrected Algorithm 1 places
+    What the context no longer wants is stopped first (its room may be needed); then
+    corrected Algorithm 2: every deployment on a changed platform is re-checked (kept if
+    still valid, else migrated break-before-make, else stopped with an error); then corrected Algorithm 1 places
     one graph of every slot (the first alternative that can be placed), each graph
     decided once per reaction; unneeded fallbacks are stopped last.
 
@@ -429,13 +429,14 @@ def make_desmon_react(
         q: QueryPort, slots: tuple[tuple[str, ...], ...], changed: tuple[str, ...], context_changed: bool, placed: dict[str, bool]
     ) -> Reaction:
         triggers = None if context_changed else frozenset(changed)  # what a rebalancing move may answer
-        if changed:
-            yield from _recheck(q, changed, placed, make_before_break, triggers)
         wanted = _wanted_by(slots, q)
-        # Free what the context no longer wants first: its capacity may be needed.
+        # Free what the context no longer wants first: its capacity may be needed, by the
+        # re-checked graphs too (one reaction may answer a context change and a platform's)
         unwanted = [g for g in _active_graphs(q) if g not in wanted]
         if unwanted:
             yield from _stop_graphs(unwanted, q)
+        if changed:
+            yield from _recheck(q, changed, placed, make_before_break, triggers)
         chosen = yield from _place_slots(q, slots, changed, placed, make_before_break, upgrading, triggers, context_changed)
         # Fallbacks that are no longer needed (a better alternative is placed again).
         unneeded = [g for g in _active_graphs(q) if g in wanted and g not in chosen]

@@ -336,10 +336,30 @@ class Bounds:
                 raise CheckerError(
                     f"{where}: initial {self.load_resource} load {initial_load.get(p, 0):g} of {p!r} is not one of its levels {list(lv)}"
                 )
+        _check_walk_starts(where, scenario)
 
     def check_against(self, scenario: Scenario) -> None:
         """What :class:`~desmon.model.scenario.Scenario` calls when it is built: :meth:`validate`."""
         self.validate(scenario)
+
+
+def _check_walk_starts(where: str, scenario: Scenario) -> None:
+    """A load walk or load steps that start above 0 start where the scenario's ``initial``
+    puts that load: the checker starts from ``initial`` (no LoadChange: no load), the
+    run from the walk's start (the World refuses the two when they differ)."""
+    world = scenario.world
+    runs = [(r.world, r) for r in world.robots] if hasattr(world, "robots") else [(world, scenario)]
+    for w, own in runs:
+        given = {(ev.platform, ev.resource) for ev in own.initial if isinstance(ev, LoadChange)}
+        for kind, walks in (("load walk", getattr(w, "load_walks", ())), ("load steps", getattr(w, "load_steps", ()))):
+            for walk in walks:
+                if float(walk.start) != 0.0 and (walk.platform, walk.resource) not in given:
+                    raise CheckerError(
+                        f"{where}: the World's {kind} of {walk.platform!r} {walk.resource} {'start' if kind == 'load steps' else 'starts'} at {walk.start:g}, but the scenario's "
+                        f"initial gives {walk.platform!r} no {walk.resource} load, so the checker would start from 0 and the run from "
+                        f"{walk.start:g}: add LoadChange({walk.platform!r}, {walk.start:g}"
+                        + ("" if walk.resource == "memory" else f", {walk.resource!r}") + ") to the scenario's initial"
+                    )
 
 
 def bounds_of(scenario: Scenario) -> Bounds:
@@ -368,14 +388,26 @@ def unmodelled(scenario: Scenario, b: Bounds) -> tuple[str, ...]:
     * with a ``heartbeat_timeout`` on a component the bounds fail, repair, let join or
       leave, the world notices such a change only after the timeout, and a reaction in
       between decides on the facts before it while its starts meet the facts after it;
-    * with a start latency (fixed timing: an exponential World decides a start at once)
-      and bounds that change a requirement or a load, the world may change one while a
-      start waits, and the instance comes up on the facts after it.
+    * with a start latency (fixed timing: an exponential World decides a start at once),
+      the world answers the changes that come while a start waits together, in one
+      reaction, and a requirement change or a load step among them meets the instance on
+      the facts after it;
+    * with two of the World's timed changes at one instant, the world answers them in one
+      reaction;
+    * under exponential timing with a recognition delay, the monitor reports the action the
+      robot performs when the delay ends: the context may skip a step, a move the bounds'
+      task may not have;
+    * the robots of a fleet share one context here and react one at a time.
 
     A fleet's robots each have their World: a component counts with the Worlds of the
     robots of the checked model that have it."""
     owners = _worlds_by_component(scenario.world, scenario.model)
-    lines = (_notice_line(owners, b), _latency_line(owners, {p.name for p in scenario.model.platforms}, b))
+    platforms = {p.name for p in scenario.model.platforms}
+    worlds = list({id(w): w for ws in owners.values() for w in ws}.values())
+    lines = (
+        _notice_line(owners, b), _latency_line(owners, platforms, b), _together_line(worlds),
+        _skipping_line(worlds, b), _fleet_line(scenario.world, len(worlds)),
+    )
     return tuple(line for line in lines if line)
 
 
@@ -393,20 +425,118 @@ def _notice_line(owners: dict[str, list[Any]], b: Bounds) -> str:
     )
 
 
-def _latency_line(owners: dict[str, list[Any]], platforms: set[str], b: Bounds) -> str:
-    """A start's latency's line of :func:`unmodelled` ("" where the bounds meet none): over
-    the ``platforms`` a start may go to, each with the Worlds that start there."""
-    if not (b.requirement_changes or b.loads):
-        return ""
-    latency = max(
+def _waits(owners: dict[str, list[Any]], platforms: set[str]) -> float:
+    """The longest start latency a start waits out in the World (fixed timing: an
+    exponential World decides a start at once) over the ``platforms`` a start may go to,
+    each with the Worlds that start there."""
+    return max(
         (float(w.latency(p)) for p in platforms for w in owners.get(p, ()) if getattr(w, "timing", "fixed") != "exponential"), default=0.0,
     )
+
+
+def _latency_line(owners: dict[str, list[Any]], platforms: set[str], b: Bounds) -> str:
+    """A start's latency's line of :func:`unmodelled` ("" where no start waits): the
+    changes that come while a start waits are answered together by the next reaction,
+    and a requirement change or a load step among them meets the instance on the facts
+    after it."""
+    latency = _waits(owners, platforms)
     if latency <= 0:
         return ""
     changes = " and ".join(w for w, on in (("a requirement change", b.requirement_changes), ("a load step", b.loads)) if on)
     return (
-        f"a start's latency (up to {latency:g} s in the World): here each start completes before the next event; "
-        f"in the world {changes} may come while a start waits, and the instance comes up on the facts after it"
+        f"a start's latency (up to {latency:g} s in the World): here each start completes before the next event; in the world "
+        "the changes that come while a start waits are answered together, by one reaction"
+        + (f", and {changes} among them {'meet' if ' and ' in changes else 'meets'} the instance, which comes up on the facts after it"
+           if changes else "")
+    )
+
+
+def _together_line(worlds: list[Any]) -> str:
+    """Changes at one instant: the line of :func:`unmodelled` ("" where the Worlds time
+    none together). The World's deployer takes every change that came since its last
+    reaction: timed changes of one instant make one reaction."""
+    together = [t for t in map(_first_coincidence, worlds) if t is not None]
+    if not together:
+        return ""
+    return (
+        f"changes at one instant (first at t={min(together):g} s in the World): here every change has a reaction of its own; "
+        "in the world the changes of one instant are answered together, by one reaction"
+    )
+
+
+#: how many timed changes of a World :func:`_first_coincidence` compares (beyond: taken to meet)
+_MAX_TIMES = 200_000
+
+
+def _first_coincidence(w: Any) -> float | None:
+    """The first instant at which two of World ``w``'s timed changes reach its deployer
+    together (the monitor's reports of the task's steps under fixed timing, scripted
+    faults, changes and loads, the steps of its load walks), or None."""
+    if not hasattr(w, "task"):
+        return None
+    horizon = float(w.horizon)
+    times: list[float] = []
+    if getattr(w, "timing", "fixed") != "exponential":  # (exponential steps never meet a timed change)
+        t, delay, before = 0.0, float(w.recognition_delay or 0.0), None
+        while t < horizon and len(times) < _MAX_TIMES:
+            for step in w.task:
+                if t >= horizon:
+                    break
+                if step.action != before:  # a report that changes the context
+                    times.append(t + delay)
+                before = step.action
+                t += float(step.duration)
+            if not w.repeat:
+                break
+    notice = float(w.heartbeat_timeout or 0.0)
+    times += [ev.time + notice for ev in w.faults]
+    times += [ev.time for ev in (*w.changes, *w.loads)]
+    for walk in w.load_walks:
+        times += [k * float(walk.interval) for k in range(1, min(int(horizon / float(walk.interval)), _MAX_TIMES) + 1)]
+    if len(times) >= _MAX_TIMES:
+        return 0.0
+    seen: set[float] = set()
+    for t in sorted(round(x, 9) for x in times if x < horizon):
+        if t in seen:
+            return t
+        seen.add(t)
+    return None
+
+
+def _skipping_line(worlds: list[Any], b: Bounds) -> str:
+    """A step the monitor does not see: the line of :func:`unmodelled` ("" where none).
+    Under exponential timing with a recognition delay the World's monitor reports the
+    action the robot performs when the delay ends, so the context may move from any step
+    of the task to any later one (any other one, for a repeated task)."""
+    for w in worlds:
+        if getattr(w, "timing", "fixed") != "exponential" or not float(getattr(w, "recognition_delay", 0.0) or 0.0) > 0:
+            continue
+        acts = [step.action for step in w.task]
+        for i, a in enumerate(acts):
+            for c in (acts[i + 2:] + (acts[:i] if w.repeats else [])):
+                if c != a and not _moves(b, a, c):
+                    return (
+                        f"a step the monitor does not see (exponential timing, recognition delay {float(w.recognition_delay):g} s in the "
+                        f"World): here the context moves as the bounds' task says; in the world the monitor reports the action the robot "
+                        f"performs when its delay ends, so the context may move from {a!r} to {c!r}: add that move to the task to check it"
+                    )
+    return ""
+
+
+def _moves(b: Bounds, a: str, c: str) -> bool:
+    """Whether the bounds let the context move from ``a`` to ``c``."""
+    if b.task is not None:
+        return c in b.task.get(a, ())
+    return a in b.actions and c in b.actions
+
+
+def _fleet_line(world: Any, checked: int) -> str:
+    """The fleet's line of :func:`unmodelled` ("" for one robot, or one checked)."""
+    if not hasattr(world, "robots") or checked < 2:
+        return ""
+    return (
+        f"the robots as one ({checked} robots checked; docs/fleet.md): here they share one context and their deployers react one "
+        "at a time; in the world each robot has its own context, and one robot's start may wait while another robot's deployer decides"
     )
 
 
