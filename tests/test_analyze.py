@@ -787,3 +787,31 @@ def test_the_chain_times_the_steps_as_the_world_does_unless_phases_is_given(tmp_
     assert "task steps Erlang-4;" in capsys.readouterr().out
     assert main(["analyze", str(path), "--trials", "1", "--transient-only", "--no-progress", "--phases", "1"]) == 0
     assert "task steps exponential;" in capsys.readouterr().out
+
+
+def test_a_start_the_world_allows_before_the_repository_has_noticed_a_reboot_succeeds_in_the_chain_too():
+    """The Control rules judge a start on the facts as they are, in the chain as in the
+    simulation: a deployer that starts on ``p0`` while the repository still believes it
+    down (rebooted, not yet noticed) gets the instance, and the exact exposure lies in the
+    simulation's interval (judged on the repository's facts, the chain refused those
+    starts and gave about 105 s per mission against the world's 88)."""
+    from desmon.deployment.deployer import Deployer
+
+    path = Path(__file__).resolve().parent / "data" / "pinned_after_repair.py"
+    sc = load_scenario(str(path))
+    namespace: dict = {}
+    exec(compile(path.read_text(), str(path), "exec"), namespace)
+    pinned = Deployer("pinned", "starts on p0 whatever the repository says", namespace["pinned"])
+    chain = build_chain(sc, pinned, markov_world(sc))
+    here = {s: i for i, s in enumerate(chain.states)}
+    after_reboot = [
+        i for i, s in enumerate(chain.states)
+        if "p0" in s.key.down and "p0" not in s.phys_down and ("g", "p0") not in s.key.deployments
+    ]
+    started = {int(j) for i, j in zip(chain.rows.tolist(), chain.cols.tolist()) if i in set(after_reboot)
+               if ("g", "p0") in chain.states[j].key.deployments}
+    assert after_reboot and started, "no start on the rebooted p0 before the monitor noticed it"
+    assert all(j in here.values() for j in started)
+    a = analyze(sc, pinned, miss={}, steady=False)
+    sim = simulated_exposure(sc, pinned, range(200), a.horizon_s)
+    assert agreement(a.exposure_s_per_mission, sim).inside, (a.exposure_s_per_mission, np.mean(sim))

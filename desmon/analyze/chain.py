@@ -33,9 +33,9 @@ Rates and what they do (:mod:`desmon.analyze.markov`):
   nothing, leaves (1/idle_s); the monitor notices joins and leaves like repairs and
   breakdowns.
 
-Where the world differs from what the repository knows (a platform gone or a device
-broken, not yet noticed), a start the Control rules refuse on the *physical* facts
-fails, as in the simulation, whatever the repository says.
+Where the world differs from what the repository knows (a platform gone, back or a
+device broken, repaired, not yet noticed), the Control rules judge a start on the
+*physical* facts, as in the simulation, whatever the repository says.
 
 A state is **unmonitored** by the one definition of :mod:`desmon.deployment.exposure`,
 which the simulation counts by too: the true action is risky and no rule covers it, or
@@ -237,23 +237,26 @@ class Builder:
         """(probability, next key, commands, graphs with no acceptable platform) of each
         outcome of ``event`` on ``key``: the real reaction, every start a coin of
         ``start_failure_p``. ``world``: the physically (failed devices, down platforms)
-        where they differ from what ``key`` knows; a start on a platform that is gone,
-        or whose inputs are, fails there (the Control rules on the physical facts, as in
-        the simulation), and is no coin."""
+        where they differ from what ``key`` knows; the Control rules judge a start on
+        them, as in the simulation: one they refuse (its platform or inputs gone) fails
+        there and is no coin, one they allow is a coin even where the repository believes
+        its platform down."""
         known = self._react_memo.get((key, event, None))
         if known is None:
             known = self._react(key, event, None)
         if world is None:
             return known
-        # the physical facts change the reaction only if they refuse a start it tries:
+        # the physical facts change the reaction only if they judge a start it tries
+        # otherwise than the known ones (refuse what they allow, or allow what they refuse):
         # up to such a start both runs see the same answers (the rules read the graph's
         # requirements after the event: the store is loaded with an outcome's key)
         physical = self._physical_memo.get(world) or self._physical_memo.setdefault(world, _physical(self.model, self.system.store.rules, *world))
         tried = self._tried[(key, event)]
         if not tried:
             return known
-        self.system.store.load(known[0][1] if known else key)
-        if not any(physical(g, pl) for g, pl in tried):
+        store = self.system.store
+        store.load(known[0][1] if known else key)
+        if all((physical(g, pl) is None) == (store.rules.start_refusal(g, pl, store.platform_state) is None) for g, pl in tried):
             return known
         out = self._react_memo.get((key, event, world))
         return out if out is not None else self._react(key, event, world, physical)

@@ -337,10 +337,12 @@ class StateStore:
         if pair in self.deployed:
             return True
         # a start the rules refuse is no choice point: it fails in every branch, and does
-        # not take a position of the outcome prefix (desmon.deployment.control)
-        why = self.rules.start_refusal(graph, platform, self.platform_state)
-        if why is None and self.physical is not None:
-            why = self.physical(graph, platform)
+        # not take a position of the outcome prefix (desmon.deployment.control). The rules
+        # read the world's facts: the physical ones where they are given (desmon analyze's
+        # chain, whose repository may not have noticed a failure or a repair yet), as the
+        # simulation's infrastructure does; else the store's own
+        physical = self.physical
+        why = self.rules.start_refusal(graph, platform, self.platform_state) if physical is None else physical(graph, platform)
         self.refused = why or ""
         if why is not None:
             return False
