@@ -811,6 +811,8 @@ def test_a_start_the_world_allows_before_the_repository_has_noticed_a_reboot_suc
     started = {int(j) for i, j in zip(chain.rows.tolist(), chain.cols.tolist()) if i in set(after_reboot)
                if ("g", "p0") in chain.states[j].key.deployments}
     assert after_reboot and started, "no start on the rebooted p0 before the monitor noticed it"
+    # the report's lines tell such a state from the one where p0 is still down
+    assert all("up again, not yet noticed p0" in chain.describe(i) for i in after_reboot)
     assert all(j in here.values() for j in started)
     a = analyze(sc, pinned, miss={}, steady=False)
     sim = simulated_exposure(sc, pinned, range(200), a.horizon_s)

@@ -185,6 +185,10 @@ class Chain:
         unseen = [c for c in (*s.phys_failed, *s.phys_down) if c not in known]
         if unseen:
             parts.append("not yet noticed " + ", ".join(unseen))
+        physical = set(s.phys_failed) | set(s.phys_down)
+        back = [c for c in (*s.key.failed, *s.key.down) if c not in physical]
+        if back:
+            parts.append("up again, not yet noticed " + ", ".join(back))
         if s.key.standing:
             parts.append("errors for " + ", ".join(s.key.standing))
         return "; ".join(parts)

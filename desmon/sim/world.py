@@ -733,7 +733,7 @@ def expand_task(world: World, horizon: float, seed: int = 0) -> tuple[Segment, .
         if steps > MAX_TASK_STEPS:
             raise ScenarioError(
                 f"world: a run of {horizon:,.6g} s would play about {steps:,.3g} steps of its task ({cycle:g} s a cycle), more than "
-                f"the {MAX_TASK_STEPS:,} a run holds: simulate a shorter horizon (--until S, or the scenario's own length)"
+                f"the {MAX_TASK_STEPS:,} a run holds: simulate a shorter horizon (--until S; desmon analyze: --horizon S; or the scenario's own length)"
             )
     if world.timing == "exponential":
         rng = random.Random(f"{seed}:task")
