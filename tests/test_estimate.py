@@ -468,3 +468,29 @@ def test_a_yes_below_x_never_prints_an_interval_that_reaches_x(capsys):
     assert "below 11? YES" in out and high < 11.0 and 10.9 < high, out  # (10.998 here; 11.0 at one decimal)
     assert main([*argv, "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["high"] < 11.0
+
+
+def test_a_half_width_too_large_to_square_is_met_at_once_not_a_crash(capsys):
+    """A goal whose square overflows a double sizes the bets for the runs so far; the
+    interval is the one the values give (it was an OverflowError out of the bet's sizing)."""
+    from desmon.stats import BettingSequence
+
+    seq = BettingSequence(0.0, 1.0, 0.05, goal=lambda _m: 1e300)
+    seq.add(0.5)
+    assert seq.interval().contains(0.5)
+    assert main(["estimate", SHIFT, "--until", "600", "--no-progress", "--max-runs", "2", "--within", "3e156"]) == 0
+    assert "stopped: the half-width reached" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("until", ["600", "1000", "3600", None])
+@pytest.mark.parametrize("metric", ["risky_time_s", "no_rule_s"])
+def test_a_figure_every_run_gives_alike_is_refused_whatever_the_horizon(capsys, metric, until):
+    """The coffee shift's task is the same in every run: its risky and no-rule seconds are
+    known without a run, at any horizon (the test of the known range's width was at the
+    mercy of its ends' rounding, and let some horizons run)."""
+    extra = ["--until", until] if until else []
+    assert main(["estimate", SHIFT, "--metric", metric, *extra, "--no-progress", "--max-runs", "2"]) == 2
+    assert "nothing to estimate" in capsys.readouterr().err
+
+
+SHIFT = str(ROOT / "scenarios" / "coffee_shift.py")

@@ -72,7 +72,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     parser = build_parser()
     try:
-        args, extra = parser.parse_known_args(argv)
+        args, extra = parser.parse_known_args(_signed_fractions(sys.argv[1:] if argv is None else list(argv)))
     except SystemExit as exc:  # --help (0) or a one-line usage error (2)
         return exc.code if isinstance(exc.code, int) else EXIT_USAGE
     if extra:  # named with the command they were given to, unlike argparse's own message
@@ -85,6 +85,27 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"desmon: error: no command given; choose one of {', '.join(args.commands)} (desmon COMMAND --help)", file=sys.stderr)
         return EXIT_USAGE
     return _dispatch(args)
+
+
+#: the options whose value may be written as a percentage (``5%``): argparse takes a value
+#: such as ``-5%`` for an option of its own, since it is no plain negative number
+_FRACTION_OPTIONS = frozenset({"--within", "--confidence", "--alpha", "--beta"})
+
+
+def _signed_fractions(argv: list[str]) -> list[str]:
+    """``argv`` with ``--within -5%`` (and the other :data:`_FRACTION_OPTIONS`) written
+    ``--within=-5%``: the option's own check then refuses the value, naming the fix."""
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        token = argv[i]
+        if token in _FRACTION_OPTIONS and i + 1 < len(argv) and argv[i + 1][:2] in {f"-{c}" for c in "0123456789."}:
+            out.append(f"{token}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(token)
+        i += 1
+    return out
 
 
 def _dispatch(args: argparse.Namespace) -> int:

@@ -65,7 +65,8 @@ def parse_confidence(text: str) -> float:
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be a confidence between 0 and 1, e.g. 0.99, got {text!r}") from None
     if not (math.isfinite(v) and 0.0 < v < 1.0):
-        raise argparse.ArgumentTypeError(f"must be a confidence strictly between 0 and 1, e.g. 0.99, got {text}")
+        read = f" (read as {v:g}: more digits than a double holds)" if v in (0.0, 1.0) and text.strip().rstrip("%") not in ("0", "1", "100") else ""
+        raise argparse.ArgumentTypeError(f"must be a confidence strictly between 0 and 1, e.g. 0.99, got {text}{read}")
     return v
 
 

@@ -583,7 +583,7 @@ def _refuse_known(q: Question, known: tuple[float, float], horizon: float, basis
             )
         return
     slack = ROUNDING_S + TASK_SLACK * horizon  # how far natural_range widens a fixed value at each end
-    if hi - lo <= 2 * slack * (1 + 1e-9):
+    if hi - lo <= 2 * slack + 8 * math.ulp(max(abs(lo), abs(hi), 1.0)):  # (the ends' own rounding: a few units of their last place)
         value = max(lo, hi - slack)
         raise EstimateError(
             f"--metric {q.metric}: every run gives {value:,.6g} s{f' (to within {slack:.2g} s)' if hi > lo else ''}, known without a run: {why}; "

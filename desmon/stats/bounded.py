@@ -148,8 +148,10 @@ class BettingSequence:
         if self.goal is not None:
             span = self.high - self.low
             e = self.goal(self.low + span * (0.5 + self._sum) / t) / span  # at the plug-in mean of the values before
-            reach = (GOAL_REACH * e) ** 2 if math.isfinite(e) else 0.0
-            if reach > 0.0:  # (a goal so small that its square underflows sizes no bet: the default sizing)
+            g = GOAL_REACH * e
+            reach = g * g if math.isfinite(e) else 0.0  # (a float product overflows to inf, where ** raises)
+            if reach > 0.0:  # (a goal so small that its square underflows sizes no bet: the default sizing; one so
+                # large that it overflows sizes them for the runs so far)
                 runs = max(float(t), 2.0 * variance * self._log_level / reach)
         return math.sqrt(2.0 * self._log_level / (variance * runs))
 
