@@ -19,7 +19,7 @@ from hypothesis import given, settings, strategies as st
 from desmon.errors import CheckerError
 from desmon.model.events import (
     ActionChange, DeviceFail, DeviceRepair, Event, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp, RequirementChange,
-    event_kind,
+    Together, event_kind,
 )
 from desmon.model.requirements import (
     PLATFORM_HAS, PREFERENCE_KINDS, Attribute, Capacity, Constraint, Maximum, Minimum, Option, Preference, Quantity, Selection,
@@ -89,6 +89,8 @@ EVENTS: dict[str, st.SearchStrategy[Event]] = {
     "platform_leave": st.builds(PlatformLeave, names),
     "requirements": requirement_changes(),
 }
+#: two changes of one reaction: any two of the kinds above (a requirement change inside one too)
+EVENTS["together"] = st.builds(Together, st.one_of(*EVENTS.values()), st.one_of(*EVENTS.values()))
 
 
 def through_json_text(e: Event) -> Event:
@@ -187,6 +189,11 @@ def test_a_hand_edited_requirement_change_is_refused_in_one_line_naming_the_fiel
         ({"kind": "platform_join", "platform": "edge", "at": 3}, "event: unknown key 'at'"),
         ({"kind": ["action"], "action": "grasp"}, "event.kind = ['action'] is not an event kind"),
         ("action grasp", "event = 'action grasp' is not a JSON object"),
+        ({"kind": "together", "first": 3, "second": {"kind": "action", "action": "hold"}}, "event.first = 3 is not an event: write e.g."),
+        ({"kind": "together", "first": {"kind": "nope"}, "second": {"kind": "action", "action": "hold"}}, "event.first.kind = 'nope' is not an event kind"),
+        ({"kind": "together", "first": {"kind": "action", "action": "hold"}}, "event: missing 'second'"),
+        ({"kind": "together", "second": {"kind": "action", "action": "a"}, "first": {"kind": "together", "first": {"kind": "action", "action": "a"},
+          "second": {"kind": "action", "action": "b"}}}, "give an environment event of one variable"),
     ],
 )
 def test_a_hand_edited_event_of_another_kind_is_refused_in_one_line(edited, expected):  # type: ignore[no-untyped-def]

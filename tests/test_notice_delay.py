@@ -143,3 +143,57 @@ def test_a_step_the_monitor_may_skip_under_exponential_timing_is_named_unless_th
 def _left_lines(capsys, scenario: Path) -> list[str]:  # type: ignore[no-untyped-def]
     assert main(["verify", str(scenario), "--no-progress"]) == 0
     return [line[4:] for line in capsys.readouterr().out.splitlines() if line.startswith("  - ")]
+
+
+def test_together_the_checker_answers_two_changes_in_one_reaction_as_the_world_does(capsys, tmp_path):
+    """``--together`` (``Bounds(together=True)``) explores two changes of different
+    variables answered by one reaction. The ``recheck-first`` mutant (the re-check before
+    the stop of what the context no longer wants) HOLDS one change a reaction, is VIOLATED
+    in one step of two changes, and the world, where those two changes meet at 10 s,
+    books the same violation; the desmon deployer holds both ways, and with the pair
+    explored the verdict no longer names the instant."""
+    mutant = ["--deployer", "mutant:recheck-first"]
+    assert main(["verify", COMBINED, *mutant, "--no-progress"]) == 0
+    capsys.readouterr()
+    cex = tmp_path / "cex.json"
+    assert main(["verify", COMBINED, *mutant, "--together", "--no-progress", "--json", str(cex)]) == 1
+    out = capsys.readouterr().out
+    assert "VIOLATED preferred-when-possible after 1 step (shortest)" in out
+    assert "   1. action hold + platform B down -> " in out
+    assert "engine: direct (no array operations for the environment's together events)" in out
+    assert main(["run", COMBINED, *mutant]) == 1
+    assert "t=10.000s preferred-when-possible: g would be acceptable on A with f stopped" in capsys.readouterr().out
+    # the counterexample's JSON holds the pair, and replays
+    assert json.loads(cex.read_text())["counterexamples"][0]["states"][1]["event"] == {
+        "kind": "together", "first": {"kind": "action", "action": "hold"}, "second": {"kind": "platform_down", "platform": "B"}}
+    assert main(["verify", COMBINED, *mutant, "--replay", str(cex)]) == 1
+    assert "the counterexample still holds" in capsys.readouterr().out
+    # the fuzzer draws pairs too
+    assert main(["fuzz", COMBINED, *mutant, "--together", "--examples", "50", "--no-progress"]) == 1
+    assert "1. action hold + platform B down" in capsys.readouterr().out
+    assert _left_lines(capsys, Path(COMBINED)) and main(["verify", COMBINED, "--together", "--no-progress"]) == 0
+    assert "leaves out" not in capsys.readouterr().out
+
+
+def test_together_pairs_stay_within_the_failure_budget_and_the_engines_that_cannot_take_them_say_so(capsys):
+    """Two failures together take two of ``max_failures``; the table engine and the
+    symmetry reduction have no rule for pairs and refuse them in one line."""
+    from desmon.model.events import ActionChange, DeviceFail, PlatformDown, Together
+    from desmon.verify.bounds import Bounds
+    from desmon.verify.environment import enabled_events
+    from desmon.verify.state import Key
+
+    key = Key("hold", (), (), (), (), ())
+    one = Bounds(actions=("hold", "grasp"), platforms=("A", "B"), devices=("cam",), max_failures=1, together=True)
+    pairs = [e for e in enabled_events(one, key) if isinstance(e, Together)]
+    assert pairs == [Together(ActionChange("grasp"), DeviceFail("cam")), Together(ActionChange("grasp"), PlatformDown("A")),
+                     Together(ActionChange("grasp"), PlatformDown("B"))]  # (the action with each failure; no two failures)
+    assert not [e for e in pairs if isinstance(e.first, (DeviceFail, PlatformDown)) and isinstance(e.second, (DeviceFail, PlatformDown))]
+    two = Bounds(actions=("hold", "grasp"), platforms=("A", "B"), devices=("cam",), max_failures=2, together=True)
+    assert Together(PlatformDown("A"), PlatformDown("B")) in enabled_events(two, key)
+    assert not [e for e in enabled_events(Bounds(actions=("hold", "grasp"), platforms=("A", "B")), key) if isinstance(e, Together)]
+    assert main(["verify", COMBINED, "--together", "--engine", "table", "--no-progress"]) == 2
+    assert "no array operations for the environment's together events" in capsys.readouterr().err
+    symmetric = str(Path(__file__).resolve().parent.parent / "scenarios" / "symmetric_platforms.py")
+    assert main(["verify", symmetric, "--together", "--symmetry", "--no-progress"]) == 2
+    assert "together variables have no symmetry rule" in capsys.readouterr().err

@@ -423,7 +423,7 @@ def markov_world(scenario: Scenario, *, phases: int | None = None, start_failure
         raise _refuse(scenario, "a fleet of robots (world is a Fleet); the chain is one robot's: analyze a single-robot "
                                 "scenario, or simulate the fleet with desmon run")
     world = world_of(scenario)
-    b = bounds_of(scenario)
+    b = replace(bounds_of(scenario), together=False)  # (the chain times one change at a time: no two meet)
     _check_unrated(scenario, world)
     _check_matching(scenario, world, b)
     _check_cycle(scenario, world)
@@ -482,7 +482,7 @@ def chain_bounds(scenario: Scenario, mw: MarkovWorld) -> Bounds:
     """The checker bounds the chain's transition system runs under: no failure budget,
     every start a choice while ``start_failure_p`` > 0, no initial action (the context
     monitor recognises the task's first step like any other)."""
-    b = bounds_of(scenario)
+    b = replace(bounds_of(scenario), together=False)  # (the chain times one change at a time: no two meet)
     return replace(b, max_failures=None, start_failures=10**6 if mw.start_failure_p > 0 else 0, initial_action=None)
 
 

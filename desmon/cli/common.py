@@ -105,7 +105,7 @@ def _resolve_deployer(spec: str, args: argparse.Namespace) -> object:
 #: which building the parser must not (``desmon verify --help`` stays light);
 #: tests/test_cli_imports.py checks that they agree.
 MUTANT_PREFIX = "mutant"
-MUTANT_NAMES = ("no-recheck", "capacity-blind", "make-before-break", "stale-errors", "raise-instead", "no-hysteresis")
+MUTANT_NAMES = ("no-recheck", "capacity-blind", "make-before-break", "stale-errors", "raise-instead", "no-hysteresis", "recheck-first")
 
 
 def users_deployer(spec: object) -> bool:
@@ -154,6 +154,12 @@ def load_scenario_of(args: argparse.Namespace) -> Scenario:
     for flag, path, head in getattr(args, "written_heads", ()):  # nor another file desmon did not write (a script of the user's)
         check_written_before(path, flag, head)
     warn_never_placed(scenario)
+    if getattr(args, "together", False):  # verify/fuzz --together: the bounds explore two changes a reaction too
+        from dataclasses import replace
+
+        from desmon.verify.bounds import bounds_of
+
+        scenario = replace(scenario, checker=replace(bounds_of(scenario), together=True))
     return scenario
 
 

@@ -24,6 +24,8 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("--examples", type=bounded_count(MAX_EXAMPLES, "sequences"), default=200,
                    help=f"failure sequences to generate (at most {MAX_EXAMPLES:,})")
     p.add_argument("--seed", type=non_negative_int, default=0, help="hypothesis seed (the same seed draws the same sequences)")
+    p.add_argument("--together", action="store_true",
+                   help="also draw two changes answered by one reaction (the scenario's Bounds(together=True))")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(handler=run)
 

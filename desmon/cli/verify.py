@@ -43,6 +43,9 @@ def add_parser(sub: Subparsers) -> None:
                    "search goes on past the states that break one, and a reaction that breaks several inside it reports each")
     _add_limits(p)
     p.add_argument("--symmetry", action="store_true", help="canonicalise interchangeable platforms")
+    p.add_argument("--together", action="store_true",
+                   help="also explore two changes answered by one reaction, as the world answers the changes of one instant "
+                        "(the scenario's Bounds(together=True); the direct engine)")
     p.add_argument(
         "--workers", type=worker_count, default=1, metavar="N",
         help="direct engine only (--engine direct): expand its BFS levels of 256 states or more in N forked "

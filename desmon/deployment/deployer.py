@@ -391,9 +391,10 @@ def upgrade_due(spec: DeploymentSpec, fits: tuple[str, ...], changed: tuple[str,
 
 
 def make_desmon_react(
-    *, make_before_break: bool = False, upgrade: str = BREAK_BEFORE_MAKE
+    *, make_before_break: bool = False, upgrade: str = BREAK_BEFORE_MAKE, free_first: bool = True
 ) -> Callable[[QueryPort, tuple[tuple[str, ...], ...], tuple[str, ...], bool], Reaction]:
-    """Build the corrected reaction (``make_before_break`` exists for the checker's seeded mutant).
+    """Build the corrected reaction (``make_before_break`` and ``free_first=False`` exist
+    for the checker's seeded mutants).
 
     What the context no longer wants is stopped first (its room may be needed); then
     corrected Algorithm 2: every deployment on a changed platform is re-checked (kept if
@@ -430,12 +431,14 @@ def make_desmon_react(
     ) -> Reaction:
         triggers = None if context_changed else frozenset(changed)  # what a rebalancing move may answer
         wanted = _wanted_by(slots, q)
+        if changed and not free_first:
+            yield from _recheck(q, changed, placed, make_before_break, triggers)
         # Free what the context no longer wants first: its capacity may be needed, by the
         # re-checked graphs too (one reaction may answer a context change and a platform's)
         unwanted = [g for g in _active_graphs(q) if g not in wanted]
         if unwanted:
             yield from _stop_graphs(unwanted, q)
-        if changed:
+        if changed and free_first:
             yield from _recheck(q, changed, placed, make_before_break, triggers)
         chosen = yield from _place_slots(q, slots, changed, placed, make_before_break, upgrading, triggers, context_changed)
         # Fallbacks that are no longer needed (a better alternative is placed again).

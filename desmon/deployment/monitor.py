@@ -97,6 +97,19 @@ class Stimuli(Effects):
     def specs_changed(self, hosts: tuple[str, ...], graph: str) -> Stimulus:
         return Stimulus(changed_platforms=hosts, specs_changed=(graph,))
 
+    def merged(self, first: Stimulus, second: Stimulus) -> Stimulus:
+        """One stimulus for both (:class:`~desmon.model.events.Together`): the platforms and
+        specifications of either, in order, and a context change if either has one."""
+        if second.empty:
+            return first
+        if first.empty:
+            return second
+        return Stimulus(
+            tuple(dict.fromkeys((*first.changed_platforms, *second.changed_platforms))),
+            first.context_changed or second.context_changed,
+            tuple(dict.fromkeys((*first.specs_changed, *second.specs_changed))),
+        )
+
 
 _PLAIN = Stimuli()
 

@@ -49,8 +49,16 @@ def event_from_json(data: object, *, where: str = "event") -> Event:
         raise CheckerError(f"{where}.kind = {kind!r} is not an event kind{suggest(kind, kinds)}: use one of {', '.join(kinds)}")
     required, optional = cls.json_keys()
     _check_keys(where, d, ("kind", *required), optional)
-    args = cls.json_args({k: d[k] for k in (*required, *optional) if k in d}, constraint_from_json, where)
+    args = cls.json_args({k: d[k] for k in (*required, *optional) if k in d}, _value_from_json, where)
     return _build(where, cls, args)  # type: ignore[return-value]
+
+
+def _value_from_json(data: object, *, where: str) -> object:
+    """A model value an event's JSON holds: an event (a JSON object with a ``kind``, as a
+    :class:`~desmon.model.events.Together` holds two), else a requirement."""
+    if isinstance(data, dict) and "kind" in data:
+        return event_from_json(data, where=where)
+    return constraint_from_json(data, where=where)
 
 
 def constraint_from_json(data: object, *, where: str = "requirement") -> Constraint:

@@ -32,7 +32,7 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "Event", "DeviceEvent", "PlatformEvent", "Effects", "InsertPort",
     "ActionChange", "DeviceFail", "DeviceRepair", "PlatformDown", "PlatformUp", "LoadChange",
-    "RequirementChange", "PlatformJoin", "PlatformLeave", "event_kind", "event_types",
+    "RequirementChange", "PlatformJoin", "PlatformLeave", "Together", "event_kind", "event_types",
 ]
 
 S = TypeVar("S")
@@ -53,6 +53,10 @@ class Effects:
         raise NotImplementedError
 
     def specs_changed(self, hosts: tuple[str, ...], graph: str) -> Any:  # pragma: no cover - a port
+        raise NotImplementedError
+
+    def merged(self, first: Any, second: Any) -> Any:  # pragma: no cover - a port
+        """What two writes together mean: one stimulus for one reaction (:class:`Together`)."""
         raise NotImplementedError
 
 
@@ -463,3 +467,40 @@ class PlatformLeave(PlatformEvent):
 
     def __str__(self) -> str:
         return f"platform {self.platform} leaves"
+
+
+@dataclass(frozen=True, slots=True)
+class Together(Event):
+    """Two changes of different variables that one reaction answers: the world's deployer
+    takes every change that came since its last reaction (two at one instant, or those
+    that came while a start waited), which the checker explores with
+    ``Bounds(together=True)``. It writes both and stimulates what either does."""
+
+    kind = "together"
+    first: Event
+    second: Event
+
+    def __post_init__(self) -> None:
+        for name in ("first", "second"):
+            part = getattr(self, name)
+            if not isinstance(part, Event) or isinstance(part, Together):
+                raise ModelError(f"Together {name} {part!r}: give an environment event of one variable (an action, a fault, a load, ...)")
+
+    def __str__(self) -> str:
+        return f"{self.first} + {self.second}"
+
+    def write(self, store: "InsertPort", effects: Effects) -> Any:
+        return effects.merged(self.first.write(store, effects), self.second.write(store, effects))
+
+    def problem(self, model: "SystemModel", others: Iterable[Event] = ()) -> str | None:
+        return self.first.problem(model, others) or self.second.problem(model, others)
+
+    def to_json(self, value_to_json: Callable[[Any], Any]) -> dict[str, Any]:
+        return {"kind": self.kind, "first": self.first.to_json(value_to_json), "second": self.second.to_json(value_to_json)}
+
+    @classmethod
+    def json_args(cls, args: dict[str, Any], value_from_json: Callable[..., Any], where: str) -> dict[str, Any]:
+        for k in ("first", "second"):
+            if not (isinstance(args[k], dict) and "kind" in args[k]):
+                raise CheckerError(f'{where}.{k} = {args[k]!r} is not an event: write e.g. {{"kind": "action", "action": "grasp"}}')
+        return {k: value_from_json(args[k], where=f"{where}.{k}") for k in ("first", "second")}

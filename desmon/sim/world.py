@@ -33,7 +33,7 @@ from desmon.model.checks import (
     strict_init,
     suggest,
 )
-from desmon.model.events import Event, LoadChange, PlatformEvent, PlatformJoin, PlatformLeave, RequirementChange, event_types
+from desmon.model.events import Event, LoadChange, PlatformEvent, PlatformJoin, PlatformLeave, RequirementChange, Together, event_types
 from desmon.model.graph import PerceptionGraph
 from desmon.model.scenario import Scenario, TimedEvent, event_problem
 from desmon.model.system import SystemModel, check_action
@@ -852,8 +852,14 @@ def can_detect(world: World, plans: dict[str, DetectorPlan | None]) -> dict[str,
 def world_from_timeline(scenario: Scenario) -> World:
     """A world that plays a scenario's scripted ``timeline``: action changes become task
     steps (idle until the first; a scenario's ``initial`` holds no action), device / platform events scripted
-    faults, load changes scripted loads, requirement changes and joins run-time changes."""
-    actions = [(te.time, te.event.action) for te in scenario.timeline if te.event.role == "action"]
+    faults, load changes scripted loads, requirement changes and joins run-time changes;
+    the two changes of a :class:`~desmon.model.events.Together` both at its time (the
+    world's deployer answers them in one reaction)."""
+    timeline = tuple(
+        TimedEvent(te.time, part, te.label) for te in scenario.timeline
+        for part in ((te.event.first, te.event.second) if isinstance(te.event, Together) else (te.event,))
+    )
+    actions = [(te.time, te.event.action) for te in timeline if te.event.role == "action"]
     last = scenario.timeline[-1].time if scenario.timeline else 0.0
     horizon = last + 5.0
     if not actions or actions[0][0] > 0:
@@ -863,9 +869,9 @@ def world_from_timeline(scenario: Scenario) -> World:
         end = actions[i + 1][0] if i + 1 < len(actions) else horizon
         if end > t:
             steps.append(Step(a, end - t))
-    faults = tuple(te for te in scenario.timeline if te.event.role == "fault")
-    loads = tuple(te for te in scenario.timeline if te.event.role == "load")
-    changes = tuple(te for te in scenario.timeline if te.event.role == "change")
+    faults = tuple(te for te in timeline if te.event.role == "fault")
+    loads = tuple(te for te in timeline if te.event.role == "load")
+    changes = tuple(te for te in timeline if te.event.role == "change")
     return World(task=tuple(steps), horizon=horizon, faults=faults, loads=loads, changes=changes, signals=False)
 
 

@@ -93,7 +93,12 @@ class Bounds:
         which the simulation's audit and the fuzzer check there too);
     ``variables``
         ``{kind: subjects}`` for the kinds of variable registered beyond the built-in ones
-        (:class:`~desmon.verify.environment.VariableKind`), each subject a variable of that kind.
+        (:class:`~desmon.verify.environment.VariableKind`), each subject a variable of that kind;
+    ``together``
+        also explore two changes of different variables answered by one reaction
+        (:class:`~desmon.model.events.Together`), as the world's deployer answers the
+        changes of one instant or those that came while a start waited (``verify
+        --together``; the direct engine, without ``--symmetry``).
     """
 
     actions: tuple[str, ...] = ()
@@ -111,6 +116,7 @@ class Bounds:
     joins: tuple[str, ...] = ()
     requirement_changes: tuple[RequirementChange, ...] = ()
     variables: Mapping[str, tuple[Any, ...]] = field(default_factory=dict)
+    together: bool = False
 
     def __post_init__(self) -> None:
         """Types and ranges; names are checked against a scenario by :meth:`validate`."""
@@ -149,6 +155,7 @@ class Bounds:
         if self.initial_action is not None:
             check_name(f"{w} initial_action", self.initial_action, error=err)
         check_flag(f"{w} repair", self.repair, error=err)
+        check_flag(f"{w} together", self.together, error=err)
         check_name(f"{w} load_resource", self.load_resource, error=err)
         object.__setattr__(self, "loads", self._checked_loads())
         check_number(f"{w} start_failures", self.start_failures, error=err, integer=True)
@@ -405,7 +412,7 @@ def unmodelled(scenario: Scenario, b: Bounds) -> tuple[str, ...]:
     platforms = {p.name for p in scenario.model.platforms}
     worlds = list({id(w): w for ws in owners.values() for w in ws}.values())
     lines = (
-        _notice_line(owners, b), _latency_line(owners, platforms, b), _together_line(worlds),
+        _notice_line(owners, b), _latency_line(owners, platforms, b), _together_line(worlds, 3 if b.together else 2),
         _skipping_line(worlds, b), _fleet_line(scenario.world, len(worlds)),
     )
     return tuple(line for line in lines if line)
@@ -451,16 +458,18 @@ def _latency_line(owners: dict[str, list[Any]], platforms: set[str], b: Bounds) 
     )
 
 
-def _together_line(worlds: list[Any]) -> str:
+def _together_line(worlds: list[Any], at_least: int) -> str:
     """Changes at one instant: the line of :func:`unmodelled` ("" where the Worlds time
-    none together). The World's deployer takes every change that came since its last
-    reaction: timed changes of one instant make one reaction."""
-    together = [t for t in map(_first_coincidence, worlds) if t is not None]
+    fewer than ``at_least`` together: 2, or 3 where the bounds explore two changes a
+    reaction). The World's deployer takes every change that came since its last reaction:
+    timed changes of one instant make one reaction."""
+    together = [t for t in (_first_coincidence(w, at_least) for w in worlds) if t is not None]
     if not together:
         return ""
+    here = "every change has a reaction of its own" if at_least == 2 else "a reaction answers at most two changes (together)"
     return (
-        f"changes at one instant (first at t={min(together):g} s in the World): here every change has a reaction of its own; "
-        "in the world the changes of one instant are answered together, by one reaction"
+        f"changes at one instant (first at t={min(together):g} s in the World): here {here}; "
+        f"in the world the {'' if at_least == 2 else f'{at_least} or more '}changes of one instant are answered together, by one reaction"
     )
 
 
@@ -468,10 +477,10 @@ def _together_line(worlds: list[Any]) -> str:
 _MAX_TIMES = 200_000
 
 
-def _first_coincidence(w: Any) -> float | None:
-    """The first instant at which two of World ``w``'s timed changes reach its deployer
-    together (the monitor's reports of the task's steps under fixed timing, scripted
-    faults, changes and loads, the steps of its load walks), or None."""
+def _first_coincidence(w: Any, at_least: int = 2) -> float | None:
+    """The first instant at which ``at_least`` of World ``w``'s timed changes reach its
+    deployer together (the monitor's reports of the task's steps under fixed timing,
+    scripted faults, changes and loads, the steps of its load walks), or None."""
     if not hasattr(w, "task"):
         return None
     horizon = float(w.horizon)
@@ -495,11 +504,11 @@ def _first_coincidence(w: Any) -> float | None:
         times += [k * float(walk.interval) for k in range(1, min(int(horizon / float(walk.interval)), _MAX_TIMES) + 1)]
     if len(times) >= _MAX_TIMES:
         return 0.0
-    seen: set[float] = set()
+    seen: dict[float, int] = {}
     for t in sorted(round(x, 9) for x in times if x < horizon):
-        if t in seen:
+        seen[t] = seen.get(t, 0) + 1
+        if seen[t] >= at_least:
             return t
-        seen.add(t)
     return None
 
 

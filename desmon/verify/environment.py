@@ -48,6 +48,7 @@ from desmon.model.events import (
     PlatformLeave,
     PlatformUp,
     RequirementChange,
+    Together,
 )
 from desmon.verify.state import Key
 
@@ -204,11 +205,11 @@ def variables(b: Any) -> tuple[Variable, ...]:
     return tuple(Variable(kind.name, s) for kind in _KINDS.values() for s in kind.subjects(b))
 
 
-def can_fail(b: Any, key: Key) -> bool:
+def can_fail(b: Any, key: Key, more: int = 0) -> bool:
     """Whether ``key`` has room for another failure under ``b.max_failures`` (absent
-    on-demand platforms are not failures)."""
+    on-demand platforms are not failures), after ``more`` failures already on their way."""
     down = len(key.down) - sum(1 for p in b.joins if p in key.down) if b.joins else len(key.down)
-    return b.max_failures is None or len(key.failed) + down < b.max_failures
+    return b.max_failures is None or len(key.failed) + down + more < b.max_failures
 
 
 def enabled_events(b: Any, key: Key) -> list[Event]:
@@ -426,3 +427,40 @@ class RequirementsVariable(VariableKind):
         vs = list(values(Digit("requirements", change.graph)))
         declared = vs[0]  # (the declared requirements are the first variant: table.encoding)
         return [Move(Digit("requirements", change.graph), tuple(vs.index(change.apply(r, declared)) for r in vs), (change,) * len(vs), (False,) * len(vs))]
+
+
+class TogetherVariable(VariableKind):
+    """Two changes one reaction answers (``Bounds(together=True)``): a subject is a pair of
+    the other variables, in :func:`variables` order, and its events every pair of their
+    events enabled together (the second within the failure room the first leaves). The
+    world's deployer takes what came since its last reaction at once, in the order it
+    came; the checker writes the pair in variable order. No array operations (the table
+    engine leaves it to the direct engine), no symmetry rule, no rate (``desmon analyze``
+    times one change at a time)."""
+
+    name = "together"
+    events = (Together,)
+
+    def subjects(self, b: Any) -> tuple[Any, ...]:
+        if not getattr(b, "together", False):
+            return ()
+        single = [Variable(k.name, s) for k in _KINDS.values() if k is not self for s in k.subjects(b)]
+        return tuple((v, w) for i, v in enumerate(single) for w in single[i + 1:])
+
+    def every_event(self, b: Any, pair: tuple[Variable, Variable]) -> tuple[Event, ...]:
+        v, w = pair
+        return tuple(Together(e, f) for e in _KINDS[v.kind].every_event(b, v.subject) for f in _KINDS[w.kind].every_event(b, w.subject))
+
+    def enabled(self, b: Any, key: Key, pair: tuple[Variable, Variable], room: bool) -> list[Event]:
+        v, w = pair
+        out: list[Event] = []
+        for e in _KINDS[v.kind].enabled(b, key, v.subject, room):
+            after = room and can_fail(b, key, 1 if _fails(e) else 0)
+            out += [Together(e, f) for f in _KINDS[w.kind].enabled(b, key, w.subject, after)]
+        return out
+
+
+def _fails(event: Event) -> bool:
+    """Whether ``event`` takes a failure's room under ``max_failures`` (a device failing, a
+    platform going down; an on-demand platform leaving is no failure)."""
+    return isinstance(event, DeviceFail) or (isinstance(event, PlatformDown) and not isinstance(event, PlatformLeave))

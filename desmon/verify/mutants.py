@@ -24,7 +24,12 @@ code (``make_desmon_react`` and ``ensure_deployed``), changed in one place:
     rebalances without hysteresis: a valid deployment of a graph that rebalances moves
     to a better platform on any positive score gain, not only above the graph's
     ``min_gain`` (a QueryPort wrapper that shows the deployer every ``rebalance``
-    threshold as 0; ``no-flapping`` catches the move).
+    threshold as 0; ``no-flapping`` catches the move);
+``recheck-first``
+    re-checks the changed platforms before it stops what the context no longer wants:
+    in a reaction to a context change and a platform's together, a re-checked graph finds
+    no room that the stop then frees, and its slot falls back (``preferred-when-possible``
+    catches it, under ``Bounds(together=True)``: one change a reaction never shows it).
 """
 
 from __future__ import annotations
@@ -113,6 +118,10 @@ MUTANTS: dict[str, Deployer] = {
         ),
         Deployer("raise-instead", "mutant: raises no_acceptable_platforms for every wanted graph instead of deploying", _raise_instead),
         Deployer("no-hysteresis", "mutant: a rebalancing graph moves on any positive score gain, ignoring its min_gain", _no_hysteresis),
+        Deployer(
+            "recheck-first", "mutant: re-checks the changed platforms before it stops what the context no longer wants",
+            make_desmon_react(free_first=False),
+        ),
     )
 }
 

@@ -15,7 +15,7 @@ from desmon.model.scenario import Scenario, TimedEvent
 from desmon.sim.world import Step, World
 from desmon.verify.bounds import Bounds
 
-p = parameters(t_fault=10.0, latency=0.0)
+p = parameters(t_fault=10.0, latency=0.0, together=False)
 
 robot = RobotBuilder("r")
 robot.platform("A", memory=100, attributes={"big": "yes"})
@@ -38,5 +38,5 @@ scenario = Scenario(
         task=(Step("grasp", 10.0), Step("hold", 10.0)), horizon=20.0, signals=False, start_latency=p.latency,
         faults=(TimedEvent(p.t_fault, PlatformDown("B")), TimedEvent(15.0, PlatformUp("B"))),
     ),
-    checker=Bounds(task={"grasp": ("hold",), "hold": ()}, initial_action="grasp", platforms=("B",)),
+    checker=Bounds(task={"grasp": ("hold",), "hold": ()}, initial_action="grasp", platforms=("B",), together=p.together),
 )
