@@ -37,7 +37,7 @@ from desmon.deployment.invariants import TRANSITION_INVARIANTS, validly_active
 from desmon.loader import load_scenario
 from desmon.model import GRASP, HOLD, MOVE_BASE, RELEASE, RobotBuilder
 from desmon.model.events import (
-    ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp, RequirementChange,
+    ActionChange, DeviceFail, DeviceRepair, LoadChange, PlatformDown, PlatformJoin, PlatformLeave, PlatformUp, RequirementChange, Together,
 )
 from desmon.model.scenario import Scenario, TimedEvent
 from desmon.sim.engine import SimWorld
@@ -65,6 +65,7 @@ class Report:
     invalid_seen: int = 0  # running detectors the world counted as unable to monitor
     unmonitored_seen: int = 0  # slots the world left unmonitored
     first_fails: tuple[int, ...] = ()  # the starts of the first reaction the walk failed
+    together: int = 0  # steps of two changes at one instant
 
 
 def _prefix(fails: tuple[int, ...]) -> tuple[bool, ...]:
@@ -87,7 +88,7 @@ def _walk(system: TransitionSystem, rng: random.Random, steps: int, failures: bo
     key = system.initial(first)
     path = [(None, first, system.initial_log, key, ())]
     for _ in range(steps):
-        events = [e for e in system.enabled(key) if isinstance(e, SIM_KINDS + CHANGE_KINDS)]
+        events = [e for e in system.enabled(key) if all(isinstance(p, SIM_KINDS + CHANGE_KINDS) for p in _parts(e))]
         if not events:
             break
         event = rng.choice(events)
@@ -96,6 +97,11 @@ def _walk(system: TransitionSystem, rng: random.Random, steps: int, failures: bo
         path.append((event, fails, log, nkey, instant))
         key = nkey
     return path
+
+
+def _parts(event: Any) -> tuple[Any, ...]:
+    """The changes of a step: a :class:`Together`'s two (played at one instant), else the event."""
+    return (event.first, event.second) if isinstance(event, Together) else (event,)
 
 
 def _script(path: list) -> tuple[tuple[str, str, int], ...]:
@@ -126,8 +132,13 @@ def _transition_findings(system: TransitionSystem, key: Key, event: Any, fails: 
     return {name for name, _m in system.core.findings if name in TRANSITION_INVARIANTS or name == "no-flapping"}
 
 
-def compare(scenario: Scenario, deployer: str, seed: int, steps: int = 20, failures: bool = True) -> Report:
-    """Walk the checker, play the walk to the world, compare them at every quiescent point."""
+def compare(scenario: Scenario, deployer: str, seed: int, steps: int = 20, failures: bool = True, together: bool = False,
+            apart: float = 0.0) -> Report:
+    """Walk the checker, play the walk to the world, compare them at every quiescent point
+    (``together``: the walk takes two changes a step too, which the world plays at one
+    instant, or ``apart`` seconds apart: a world that answers them one at a time)."""
+    if together:
+        scenario = dataclasses.replace(scenario, checker=dataclasses.replace(bounds_of(scenario), together=True))
     bounds = bounds_of(scenario)
     system = TransitionSystem(scenario, deployer)
     rng = random.Random(seed)
@@ -152,8 +163,12 @@ def compare(scenario: Scenario, deployer: str, seed: int, steps: int = 20, failu
     # a checker without an initial action starts with no context; the world's robot is idle
     first = bounds.initial_action or init.context
     start = [TimedEvent(0.0, ActionChange(first))] if first else []
-    timeline = start + [TimedEvent(GAP * (i + 1), e) for i, (e, *_r) in enumerate(path) if isinstance(e, SIM_KINDS)]
-    changes = tuple(TimedEvent(GAP * (i + 1), e) for i, (e, *_r) in enumerate(path) if isinstance(e, CHANGE_KINDS))
+    timeline = start + [
+        TimedEvent(GAP * (i + 1) + apart * j, p) for i, (e, *_r) in enumerate(path) for j, p in enumerate(_parts(e)) if isinstance(p, SIM_KINDS)
+    ]
+    changes = tuple(
+        TimedEvent(GAP * (i + 1) + apart * j, p) for i, (e, *_r) in enumerate(path) for j, p in enumerate(_parts(e)) if isinstance(p, CHANGE_KINDS)
+    )
     sim_scenario = dataclasses.replace(scenario, world=None, timeline=tuple(timeline))
     world = dataclasses.replace(
         world_from_timeline(sim_scenario), horizon=GAP * (len(path) + 1), start_failure=StartFailure(script=_script([first_reaction, *path])), changes=changes,
@@ -164,13 +179,15 @@ def compare(scenario: Scenario, deployer: str, seed: int, steps: int = 20, failu
 
     def on_quiescent(w: SimWorld) -> None:
         key = repository_key(w.repo, w.core)
-        if key.context == "idle" and first is None and not any(isinstance(e, ActionChange) for e, *_r in path[: int(w.env.now // GAP)]):
+        if key.context == "idle" and first is None and not any(
+            isinstance(p, ActionChange) for e, *_r in path[: int(w.env.now // GAP)] for p in _parts(e)
+        ):
             key = key._replace(context=None)  # the checker's "no action yet" (nothing is wanted in either)
         seen.append((w.env.now, key, {d: w.physically_valid(*d) for d in key.deployments}))
 
     sim = SimWorld(sim_scenario, deployer=deployer, seed=seed, on_quiescent=on_quiescent)
     result = sim.run()
-    report = Report(steps=len(path), first_fails=first_reaction[1])
+    report = Report(steps=len(path), first_fails=first_reaction[1], together=sum(isinstance(e, Together) for e, *_r in path))
     slots_of = system.slots
     for i, (nkey, names, valid) in enumerate(expected):
         lo, hi = GAP * i, GAP * (i + 1)
@@ -215,6 +232,32 @@ def test_simulation_and_checker_agree_on_every_quiescent_point(name: str, deploy
         total.points += r.points
         total.steps += r.steps
     assert total.points >= total.steps // 2, f"{name}: only {total.points} of {total.steps} steps met a quiescent point"
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_two_changes_of_one_instant_are_one_reaction_in_the_world_as_in_the_checker(name: str) -> None:
+    """``Bounds(together=True)``: a walk that also takes two changes a step, played to the
+    world at one instant, where its deployer answers them in one reaction."""
+    scenario = load_scenario(SCENARIOS / f"{name}.py")
+    r = compare(scenario, "desmon", 0, failures=True, together=True)
+    assert r.points >= r.steps // 2, f"{name}: only {r.points} of {r.steps} steps met a quiescent point"
+    assert r.together >= r.steps // 4, f"{name}: only {r.together} of {r.steps} steps were two changes"
+
+
+def test_the_world_plays_two_changes_of_one_step_as_one_reaction_or_the_comparison_fails() -> None:
+    """The comparison can fail: the recheck-first mutant's reaction to the robot's next step
+    and a crash together breaks preferred-when-possible, its two reactions one after the
+    other do not (tests/data/combined_stimulus.py). The world that plays the pair at one
+    instant agrees with the checker; one that plays them a second apart does not."""
+    from desmon.verify.mutants import MUTANTS
+
+    scenario = load_scenario(Path(__file__).resolve().parent / "data" / "combined_stimulus.py")
+    mutant = MUTANTS["recheck-first"]
+    seeds = range(8)
+    assert sum(compare(scenario, mutant, s, steps=2, failures=False, together=True).together for s in seeds) > 0  # type: ignore[arg-type]
+    with pytest.raises(AssertionError, match=r"after step 1 \(action hold \+ platform B down.*the world is in .*\('g', 'A'\).*the checker in .*\('f', 'C'\)"):
+        for seed in seeds:
+            compare(scenario, mutant, seed, steps=2, failures=False, together=True, apart=1.0)  # type: ignore[arg-type]
 
 
 # -- generated models: detectors reading devices on other platforms, fallbacks, failing starts --
