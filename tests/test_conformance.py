@@ -247,11 +247,11 @@ def test_two_changes_of_one_instant_are_one_reaction_in_the_world_as_in_the_chec
 def test_the_world_plays_two_changes_of_one_step_as_one_reaction_or_the_comparison_fails() -> None:
     """The comparison can fail: the recheck-first mutant's reaction to the robot's next step
     and a crash together breaks preferred-when-possible, its two reactions one after the
-    other do not (tests/data/combined_stimulus.py). The world that plays the pair at one
+    other do not (docs/examples/one_instant.py). The world that plays the pair at one
     instant agrees with the checker; one that plays them a second apart does not."""
     from desmon.verify.mutants import MUTANTS
 
-    scenario = load_scenario(Path(__file__).resolve().parent / "data" / "combined_stimulus.py")
+    scenario = load_scenario(Path(__file__).resolve().parent.parent / "docs" / "examples" / "one_instant.py")
     mutant = MUTANTS["recheck-first"]
     seeds = range(8)
     assert sum(compare(scenario, mutant, s, steps=2, failures=False, together=True).together for s in seeds) > 0  # type: ignore[arg-type]

@@ -91,7 +91,9 @@ def test_a_fleets_delays_are_each_robots_own_and_only_the_checked_robots(capsys)
 ROBOTS_AS_ONE = "the robots as one"
 
 
-COMBINED = str(DATA / "combined_stimulus.py")
+#: a step of the task and a crash at one instant (a shipped example: docs/deployers.md runs it)
+EXAMPLE = Path(__file__).resolve().parent.parent / "docs" / "examples" / "one_instant.py"
+COMBINED = str(EXAMPLE)
 
 
 def test_changes_at_one_instant_are_one_reaction_of_the_world_and_the_desmon_deployer_serves_them_both(capsys, tmp_path):
@@ -121,7 +123,7 @@ def test_a_step_the_monitor_may_skip_under_exponential_timing_is_named_unless_th
     """Exponential timing with a recognition delay: the monitor reports the action of the
     moment its delay ends, so the context may go from idle to hold; the bounds' task that
     lists only the task's own moves leaves that out, one that also lists it does not."""
-    text = (DATA / "combined_stimulus.py").read_text()
+    text = EXAMPLE.read_text()
     scenario = tmp_path / "skipping.py"
     scenario.write_text(text.replace(
         "task=(Step(\"grasp\", 10.0), Step(\"hold\", 10.0)), horizon=20.0,",

@@ -5,7 +5,11 @@ slot. ``u`` and ``g`` need 100 MB each, so they run on ``A`` and ``B``; the fall
 ``f`` fits on ``C`` only. At 10 s the robot starts to hold *and* ``B`` crashes, at the
 same instant (``-p t_fault=10.001`` parts them): the world's deployer takes both in one
 reaction, with ``context_changed`` and ``changed=("B",)``. The checker's transitions
-carry one change each, and its verdict says so.
+carry one change each, and its verdict says so; ``desmon verify --together`` (or ``-p
+together=True``) also explores two changes answered by one reaction.
+
+    desmon run docs/examples/one_instant.py --deployer mutant:recheck-first      # exit 1
+    desmon verify docs/examples/one_instant.py --deployer mutant:recheck-first --together
 """
 
 from desmon.model import RobotBuilder
