@@ -199,3 +199,47 @@ def test_together_pairs_stay_within_the_failure_budget_and_the_engines_that_cann
     symmetric = str(Path(__file__).resolve().parent.parent / "scenarios" / "symmetric_platforms.py")
     assert main(["verify", symmetric, "--together", "--symmetry", "--no-progress"]) == 2
     assert "together variables have no symmetry rule" in capsys.readouterr().err
+
+
+def test_a_repair_and_a_failure_at_one_instant_share_the_failure_budget_as_the_world_has_them(capsys):
+    """Under ``max_failures=1``, ``A`` back and ``B`` down at one instant leave one platform
+    down, as before: the pair is explored (it was refused for the failure's room, counted
+    before the repair), and the make-before-break mutant is VIOLATED at the step the world
+    takes at 10 s; one change a reaction it HOLDS."""
+    swap = str(DATA / "swap_at_one_instant.py")
+    mutant = ["--deployer", "mutant:make-before-break"]
+    assert main(["verify", swap, *mutant, "--no-progress"]) == 0
+    capsys.readouterr()
+    assert main(["verify", swap, *mutant, "--together", "--no-progress"]) == 1
+    assert "   2. platform A up + platform B down -> " in capsys.readouterr().out
+    assert main(["run", swap, *mutant]) == 1
+    assert "t=10.000s single-instance: g is active on 2 platforms: A, B" in capsys.readouterr().out
+
+
+def test_the_instants_a_world_times_are_compared_in_bounded_time_and_late_notices_counted(tmp_path):
+    """A World of more timed changes than the rule compares says so instead of walking
+    them all (a billion one-second steps of one action took minutes); a join or leave of
+    the scripted changes reaches the deployer after the heartbeat, as a fault does."""
+    import time
+
+    from desmon.loader import load_scenario
+    from desmon.verify.bounds import bounds_of, unmodelled
+
+    text = EXAMPLE.read_text()
+    long = tmp_path / "long.py"
+    long.write_text(text.replace("task=(Step(\"grasp\", 10.0), Step(\"hold\", 10.0)), horizon=20.0,",
+                                 "task=(Step(\"grasp\", 1.0),), repeat=True, horizon=1e9,"))
+    sc = load_scenario(str(long))
+    t0 = time.process_time()
+    lines = unmodelled(sc, bounds_of(sc))
+    assert time.process_time() - t0 < 5
+    assert any("too many to compare: taken to meet" in line for line in lines)
+    leaves = tmp_path / "leaves.py"
+    leaves.write_text(text.replace('robot.platform("B", memory=100, attributes={"big": "yes"})',
+                                   'robot.platform("B", memory=100, attributes={"big": "yes"}, on_demand=True, startup_s=0.0)').replace(
+        "faults=(TimedEvent(p.t_fault, PlatformDown(\"B\")), TimedEvent(15.0, PlatformUp(\"B\"))),",
+        "heartbeat_timeout=0.5, changes=(TimedEvent(1.0, PlatformJoin(\"B\")), TimedEvent(p.t_fault, PlatformLeave(\"B\"))),").replace(
+        'platforms=("B",)', 'joins=("B",)').replace("PlatformDown, PlatformUp", "PlatformJoin, PlatformLeave"))
+    for t_leave, meets in (("9.5", True), ("10", False)):  # noticed at 10 s, with the step to hold; at 10.5 s, alone
+        sc = load_scenario(str(leaves), {"t_fault": t_leave})
+        assert any(line.startswith("changes at one instant (first at t=10 s") for line in unmodelled(sc, bounds_of(sc))) == meets, t_leave

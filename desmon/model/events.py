@@ -485,6 +485,12 @@ class Together(Event):
             part = getattr(self, name)
             if not isinstance(part, Event) or isinstance(part, Together):
                 raise ModelError(f"Together {name} {part!r}: give an environment event of one variable (an action, a fault, a load, ...)")
+        one = _variable_of(self.first)
+        if one is not None and one == _variable_of(self.second):
+            raise ModelError(
+                f"Together of '{self.first}' and '{self.second}': both change {' '.join(map(str, one))}, and one reaction's two "
+                "changes are of different variables (the later one alone would stand): give them to two reactions"
+            )
 
     def __str__(self) -> str:
         return f"{self.first} + {self.second}"
@@ -504,3 +510,17 @@ class Together(Event):
             if not (isinstance(args[k], dict) and "kind" in args[k]):
                 raise CheckerError(f'{where}.{k} = {args[k]!r} is not an event: write e.g. {{"kind": "action", "action": "grasp"}}')
         return {k: value_from_json(args[k], where=f"{where}.{k}") for k in ("first", "second")}
+
+
+def _variable_of(event: Event) -> tuple[str, ...] | None:
+    """What ``event`` changes, for the built-in kinds (None for another kind): the context,
+    a device, a platform, or a platform's load of one resource."""
+    if isinstance(event, ActionChange):
+        return ("the context",)
+    if isinstance(event, DeviceEvent):
+        return ("device", event.device)
+    if isinstance(event, PlatformEvent):
+        return ("platform", event.platform)
+    if isinstance(event, LoadChange):
+        return ("the load of", event.platform, event.resource)
+    return None

@@ -463,12 +463,15 @@ def _together_line(worlds: list[Any], at_least: int) -> str:
     fewer than ``at_least`` together: 2, or 3 where the bounds explore two changes a
     reaction). The World's deployer takes every change that came since its last reaction:
     timed changes of one instant make one reaction."""
-    together = [t for t in (_first_coincidence(w, at_least) for w in worlds) if t is not None]
-    if not together:
+    found = [t for t in (_first_coincidence(w, at_least) for w in worlds) if t is not None]
+    if not found:
         return ""
+    known = [t for t in found if t >= 0]
+    when = (f"first at t={min(known):g} s in the World" if known else
+            f"the World times more than {_MAX_TIMES:,} changes, too many to compare: taken to meet")
     here = "every change has a reaction of its own" if at_least == 2 else "a reaction answers at most two changes (together)"
     return (
-        f"changes at one instant (first at t={min(together):g} s in the World): here {here}; "
+        f"changes at one instant ({when}): here {here}; "
         f"in the world the {'' if at_least == 2 else f'{at_least} or more '}changes of one instant are answered together, by one reaction"
     )
 
@@ -479,37 +482,51 @@ _MAX_TIMES = 200_000
 
 def _first_coincidence(w: Any, at_least: int = 2) -> float | None:
     """The first instant at which ``at_least`` of World ``w``'s timed changes reach its
-    deployer together (the monitor's reports of the task's steps under fixed timing,
-    scripted faults, changes and loads, the steps of its load walks), or None."""
-    if not hasattr(w, "task"):
-        return None
-    horizon = float(w.horizon)
-    times: list[float] = []
-    if getattr(w, "timing", "fixed") != "exponential":  # (exponential steps never meet a timed change)
-        t, delay, before = 0.0, float(w.recognition_delay or 0.0), None
-        while t < horizon and len(times) < _MAX_TIMES:
-            for step in w.task:
-                if t >= horizon:
-                    break
-                if step.action != before:  # a report that changes the context
-                    times.append(t + delay)
-                before = step.action
-                t += float(step.duration)
-            if not w.repeat:
-                break
-    notice = float(w.heartbeat_timeout or 0.0)
-    times += [ev.time + notice for ev in w.faults]
-    times += [ev.time for ev in (*w.changes, *w.loads)]
-    for walk in w.load_walks:
-        times += [k * float(walk.interval) for k in range(1, min(int(horizon / float(walk.interval)), _MAX_TIMES) + 1)]
-    if len(times) >= _MAX_TIMES:
-        return 0.0
+    deployer together, or None; -1 where they are more than :data:`_MAX_TIMES` (taken to
+    meet). The timed changes: the monitor's reports of the task's steps under fixed timing,
+    scripted faults and the joins and leaves among the scripted changes (noticed after the
+    heartbeat), the other changes and loads, the steps of its load walks."""
+    times = _timed_changes(w) if hasattr(w, "task") else []
+    if times is None:
+        return -1.0
     seen: dict[float, int] = {}
-    for t in sorted(round(x, 9) for x in times if x < horizon):
+    for t in sorted(round(x, 9) for x in times if x < float(w.horizon)):
         seen[t] = seen.get(t, 0) + 1
         if seen[t] >= at_least:
             return t
     return None
+
+
+def _timed_changes(w: Any) -> list[float] | None:
+    """The instants :func:`_first_coincidence` compares, or None beyond :data:`_MAX_TIMES`
+    (the task's steps walked count, reported or not)."""
+    horizon = float(w.horizon)
+    times: list[float] = []
+    if getattr(w, "timing", "fixed") != "exponential":  # (exponential steps never meet a timed change)
+        t, delay, before, walked = 0.0, float(w.recognition_delay or 0.0), None, 0
+        while t < horizon:
+            for step in w.task:
+                if t >= horizon:
+                    break
+                walked += 1
+                if walked > _MAX_TIMES:
+                    return None
+                if step.action != before:  # a report that changes the context
+                    times.append(t + delay)
+                before = step.action
+                t += float(step.duration)
+            if not w.repeat or not any(float(step.duration) > 0 for step in w.task):
+                break
+    notice = float(w.heartbeat_timeout or 0.0)
+    times += [ev.time + notice for ev in w.faults]
+    times += [ev.time + (notice if getattr(ev.event, "on_demand", False) else 0.0) for ev in w.changes]
+    times += [ev.time for ev in w.loads]
+    for walk in w.load_walks:
+        steps = int(horizon / float(walk.interval))
+        if len(times) + steps > _MAX_TIMES:
+            return None
+        times += [k * float(walk.interval) for k in range(1, steps + 1)]
+    return times if len(times) <= _MAX_TIMES else None
 
 
 def _skipping_line(worlds: list[Any], b: Bounds) -> str:

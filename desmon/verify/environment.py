@@ -54,7 +54,7 @@ from desmon.verify.state import Key
 
 __all__ = [
     "Digit", "Move", "Variable", "VariableKind", "variable_kinds", "variable_kind", "alphabet", "event_kinds",
-    "variables", "can_fail", "enabled_events",
+    "variables", "failures", "can_fail", "enabled_events",
 ]
 
 #: kind name -> its definition, filled by :meth:`VariableKind.__init_subclass__` (in definition order)
@@ -205,11 +205,16 @@ def variables(b: Any) -> tuple[Variable, ...]:
     return tuple(Variable(kind.name, s) for kind in _KINDS.values() for s in kind.subjects(b))
 
 
-def can_fail(b: Any, key: Key, more: int = 0) -> bool:
-    """Whether ``key`` has room for another failure under ``b.max_failures`` (absent
-    on-demand platforms are not failures), after ``more`` failures already on their way."""
+def failures(b: Any, key: Key) -> int:
+    """The failures standing in ``key``: failed devices and platforms down (absent
+    on-demand platforms are not failures)."""
     down = len(key.down) - sum(1 for p in b.joins if p in key.down) if b.joins else len(key.down)
-    return b.max_failures is None or len(key.failed) + down + more < b.max_failures
+    return len(key.failed) + down
+
+
+def can_fail(b: Any, key: Key) -> bool:
+    """Whether ``key`` has room for another failure under ``b.max_failures``."""
+    return b.max_failures is None or failures(b, key) < b.max_failures
 
 
 def enabled_events(b: Any, key: Key) -> list[Event]:
@@ -432,7 +437,7 @@ class RequirementsVariable(VariableKind):
 class TogetherVariable(VariableKind):
     """Two changes one reaction answers (``Bounds(together=True)``): a subject is a pair of
     the other variables, in :func:`variables` order, and its events every pair of their
-    events enabled together (the second within the failure room the first leaves). The
+    events enabled together whose result stays within ``max_failures``. The
     world's deployer takes what came since its last reaction at once, in the order it
     came; the checker writes the pair in variable order. No array operations (the table
     engine leaves it to the direct engine), no symmetry rule, no rate (``desmon analyze``
@@ -452,15 +457,26 @@ class TogetherVariable(VariableKind):
         return tuple(Together(e, f) for e in _KINDS[v.kind].every_event(b, v.subject) for f in _KINDS[w.kind].every_event(b, w.subject))
 
     def enabled(self, b: Any, key: Key, pair: tuple[Variable, Variable], room: bool) -> list[Event]:
+        """Each pair of the two variables' events whose result stays within ``max_failures``:
+        the two changes come at one instant, so a repair frees the room a failure beside
+        it takes (``room``, the state's own, does not bound a pair)."""
         v, w = pair
-        out: list[Event] = []
-        for e in _KINDS[v.kind].enabled(b, key, v.subject, room):
-            after = room and can_fail(b, key, 1 if _fails(e) else 0)
-            out += [Together(e, f) for f in _KINDS[w.kind].enabled(b, key, w.subject, after)]
-        return out
+        limit = b.max_failures
+        standing = failures(b, key) if limit is not None else 0
+        return [
+            Together(e, f)
+            for e in _KINDS[v.kind].enabled(b, key, v.subject, True)
+            for f in _KINDS[w.kind].enabled(b, key, w.subject, True)
+            if limit is None or standing + _failure_delta(e) + _failure_delta(f) <= limit
+        ]
 
 
-def _fails(event: Event) -> bool:
-    """Whether ``event`` takes a failure's room under ``max_failures`` (a device failing, a
-    platform going down; an on-demand platform leaving is no failure)."""
-    return isinstance(event, DeviceFail) or (isinstance(event, PlatformDown) and not isinstance(event, PlatformLeave))
+def _failure_delta(event: Event) -> int:
+    """How ``event`` changes the failures under ``max_failures``: +1 for a device failing or
+    a platform going down, -1 for a repair (on-demand platforms joining and leaving are no
+    failures), else 0."""
+    if isinstance(event, (DeviceFail, PlatformDown)):
+        return 1
+    if isinstance(event, (DeviceRepair, PlatformUp)):
+        return -1
+    return 0
