@@ -440,6 +440,13 @@ class World:
         self._check_scripted_slips()
         example = "faults=(TimedEvent(20.0, DeviceFail('lwr_wrench')),)"
         faults = check_items("world: faults", self.faults, TimedEvent, error=err, example=example)
+        for where, timed in (("faults", faults), ("loads", self.loads), ("changes", self.changes)):
+            for te in timed if isinstance(timed, (tuple, list)) else ():
+                if isinstance(getattr(te, "event", None), Together):
+                    raise ScenarioError(
+                        f"world: {where} holds '{te.event}' at t={te.time:g}: give its two changes as two timed events at that "
+                        "time (the world answers the changes of one instant in one reaction)"
+                    )
         for te in faults:
             if te.event.role != "fault":
                 raise ScenarioError(
