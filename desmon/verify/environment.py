@@ -454,21 +454,33 @@ class TogetherVariable(VariableKind):
 
     def every_event(self, b: Any, pair: tuple[Variable, Variable]) -> tuple[Event, ...]:
         v, w = pair
-        return tuple(Together(e, f) for e in _KINDS[v.kind].every_event(b, v.subject) for f in _KINDS[w.kind].every_event(b, w.subject))
+        return tuple(t for e in _KINDS[v.kind].every_event(b, v.subject) for f in _KINDS[w.kind].every_event(b, w.subject) for t in _orders(e, f))
 
     def enabled(self, b: Any, key: Key, pair: tuple[Variable, Variable], room: bool) -> list[Event]:
         """Each pair of the two variables' events whose result stays within ``max_failures``:
         the two changes come at one instant, so a repair frees the room a failure beside
-        it takes (``room``, the state's own, does not bound a pair)."""
+        it takes (``room``, the state's own, does not bound a pair); in both orders where
+        the order reaches the deployer (:func:`_orders`)."""
         v, w = pair
         limit = b.max_failures
         standing = failures(b, key) if limit is not None else 0
         return [
-            Together(e, f)
+            t
             for e in _KINDS[v.kind].enabled(b, key, v.subject, True)
             for f in _KINDS[w.kind].enabled(b, key, w.subject, True)
             if limit is None or standing + _failure_delta(e) + _failure_delta(f) <= limit
+            for t in _orders(e, f)
         ]
+
+
+def _orders(e: Event, f: Event) -> tuple[Together, ...]:
+    """The pair of ``e`` and ``f`` in each order the deployer can tell apart: both, where
+    each may name changed platforms (the order of the stimulus's platforms is the order
+    they came, which the world's deployer reads); one, where one is the context's (a
+    context change is a flag, not a position)."""
+    if isinstance(e, ActionChange) or isinstance(f, ActionChange):
+        return (Together(e, f),)
+    return (Together(e, f), Together(f, e))
 
 
 def _failure_delta(event: Event) -> int:
