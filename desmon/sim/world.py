@@ -39,7 +39,7 @@ from desmon.model.scenario import Scenario, TimedEvent, event_problem
 from desmon.model.system import SystemModel, check_action
 from desmon.sim.slip_kinds import check_slip_kinds
 from desmon.sim.streams import DetectorPlan, default_signal_kinds, detector_plan, stream_names
-from desmon.sim.world_components import check_components, check_initial_loads
+from desmon.sim.world_components import check_components, check_initial_loads, refuse_together
 
 __all__ = [
     "Step",
@@ -440,13 +440,7 @@ class World:
         self._check_scripted_slips()
         example = "faults=(TimedEvent(20.0, DeviceFail('lwr_wrench')),)"
         faults = check_items("world: faults", self.faults, TimedEvent, error=err, example=example)
-        for where, timed in (("faults", faults), ("loads", self.loads), ("changes", self.changes)):
-            for te in timed if isinstance(timed, (tuple, list)) else ():
-                if isinstance(getattr(te, "event", None), Together):
-                    raise ScenarioError(
-                        f"world: {where} holds '{te.event}' at t={te.time:g}: give its two changes as two timed events at that "
-                        "time (the world answers the changes of one instant in one reaction)"
-                    )
+        refuse_together(faults, self.loads, self.changes)
         for te in faults:
             if te.event.role != "fault":
                 raise ScenarioError(

@@ -11,10 +11,10 @@ from typing import Any
 
 from desmon.errors import ScenarioError
 from desmon.model.checks import suggest
-from desmon.model.events import LoadChange
+from desmon.model.events import LoadChange, Together
 from desmon.model.scenario import Scenario, event_problem
 
-__all__ = ["check_components", "check_initial_loads"]
+__all__ = ["check_components", "check_initial_loads", "refuse_together"]
 
 
 def check_components(world: Any, scenario: Scenario, where: str) -> None:
@@ -76,4 +76,17 @@ def check_initial_loads(world: Any, scenario: Scenario, where: str) -> None:
                 raise ScenarioError(
                     f"{where}: the {kind} of {w.platform!r} {w.resource} {'start' if kind == 'load steps' else 'starts'} at {w.start:g}, but the scenario's initial "
                     f"'{LoadChange(w.platform, given, w.resource)}' puts it at {given:g}: give them the same value, or one of them"
+                )
+
+
+def refuse_together(faults: Any, loads: Any, changes: Any) -> None:
+    """A :class:`~desmon.model.events.Together` (the checker's step of two changes) among a
+    World's timed events is refused: the World times each change, and answers those of
+    one instant in one reaction."""
+    for where, timed in (("faults", faults), ("loads", loads), ("changes", changes)):
+        for te in timed if isinstance(timed, (tuple, list)) else ():
+            if isinstance(getattr(te, "event", None), Together):
+                raise ScenarioError(
+                    f"world: {where} holds '{te.event}' at t={te.time:g}: give its two changes as two timed events at that "
+                    "time (the world answers the changes of one instant in one reaction)"
                 )
