@@ -469,6 +469,7 @@ class PlatformLeave(PlatformEvent):
         return f"platform {self.platform} leaves"
 
 
+@strict_init(ModelError)
 @dataclass(frozen=True, slots=True)
 class Together(Event):
     """Two changes of different variables that one reaction answers: the world's deployer

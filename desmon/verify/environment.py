@@ -439,7 +439,8 @@ class TogetherVariable(VariableKind):
     the other variables, in :func:`variables` order, and its events every pair of their
     events enabled together whose result stays within ``max_failures``. The
     world's deployer takes what came since its last reaction at once, in the order it
-    came; the checker writes the pair in variable order. No array operations (the table
+    came; the checker writes a pair in both orders where the deployer can tell them apart
+    (:func:`_orders`). No array operations (the table
     engine leaves it to the direct engine), no symmetry rule, no rate (``desmon analyze``
     times one change at a time)."""
 
