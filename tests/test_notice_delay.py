@@ -1,7 +1,9 @@
-"""What the world's notice delay (``heartbeat_timeout``) lets happen that the checker,
-which notices every change at once, cannot reach: a reaction decided on facts the monitor
-has not updated yet, whose start succeeds on the facts as they are (docs/design.md §6).
-The world says so on each violation it books in such a window.
+"""What the world does that the checker's transitions do not have, and what a verdict says
+of it (docs/design.md §6). The monitor's notice delay (``heartbeat_timeout``): a reaction
+decided on facts the monitor has not updated yet, whose start succeeds on the facts as
+they are; the world says so on each violation it books in such a window. One reaction
+for several changes (one instant, a start's wait), which ``--together`` explores; a step
+the monitor does not see; a fleet's robots checked as one.
 """
 
 from __future__ import annotations
