@@ -75,7 +75,7 @@ def check_initial_loads(world: Any, scenario: Scenario, where: str) -> None:
             if given is not None and float(given) != float(w.start):
                 raise ScenarioError(
                     f"{where}: the {kind} of {w.platform!r} {w.resource} {'start' if kind == 'load steps' else 'starts'} at {w.start:g}, but the scenario's initial "
-                    f"'{LoadChange(w.platform, given, w.resource)}' puts it at {given:g}: give them the same value, or one of them"
+                    f"'{LoadChange(w.platform, given, w.resource)}' puts it at {given:g}: give them the same value"
                 )
 
 
