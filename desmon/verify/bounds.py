@@ -540,20 +540,13 @@ def _skipping_line(worlds: list[Any], b: Bounds) -> str:
         acts = [step.action for step in w.task]
         for i, a in enumerate(acts):
             for c in (acts[i + 2:] + (acts[:i] if w.repeats else [])):
-                if c != a and not _moves(b, a, c):
+                if c != a and c not in b.action_moves(a):  # (the checker's own rule for the context's moves)
                     return (
                         f"a step the monitor does not see (exponential timing, recognition delay {float(w.recognition_delay):g} s in the "
                         f"World): here the context moves as the bounds' task says; in the world the monitor reports the action the robot "
                         f"performs when its delay ends, so the context may move from {a!r} to {c!r}: add that move to the task to check it"
                     )
     return ""
-
-
-def _moves(b: Bounds, a: str, c: str) -> bool:
-    """Whether the bounds let the context move from ``a`` to ``c``."""
-    if b.task is not None:
-        return c in b.task.get(a, ())
-    return a in b.actions and c in b.actions
 
 
 def _fleet_line(world: Any, checked: int) -> str:
