@@ -142,3 +142,63 @@ def test_cli_symmetry(capsys, tmp_path):
     assert main(["verify", path, "--symmetry", "--deployer", "paper", "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("desmon: error: --symmetry refused") and err.count("\n") == 1
+
+
+EDGE_BOXES = Path(__file__).resolve().parent / "data" / "interchangeable_edge_boxes.py"
+
+
+@pytest.mark.parametrize("engine", ["direct", "table"])
+def test_a_counterexample_under_symmetry_names_the_platforms_its_trace_shows(engine):
+    """The violation is found on a stored (canonical) state, whose platforms may be the
+    renamed ones; the message printed under the trace is judged on the state the trace
+    reaches, so both name the box that went down."""
+    sc = load_scenario(EDGE_BOXES)
+    mutant = get_mutant("no-recheck")
+    plain = Checker(sc, mutant).run(engine=engine)
+    reduced = Checker(sc, mutant, symmetry=True).run(engine=engine)
+    assert plain.verdict == reduced.verdict == VIOLATED
+    for res in (plain, reduced):
+        (cx,) = [c for c in res.counterexamples if c.invariant == "valid-or-error"]
+        down = cx.steps[-1].event.platform
+        assert f"vision is active on {down}," in cx.message, (down, cx.message)
+        assert f"vision on {down}" in cx.steps[0].changes[-1]
+
+
+@pytest.mark.parametrize(
+    "params, deployer, verdict, reason",
+    [
+        ({"owners": "true"}, "no-recheck", VIOLATED, "belong to different robots"),
+        ({"avoid": "true"}, "desmon", HOLDS, r"Avoid\(e2\) is of a kind \(Avoid\) that does not say it reads no platform's or device's name"),
+    ],
+)
+@pytest.mark.parametrize("engine", ["direct", "table"])
+def test_boxes_told_apart_by_their_devices_owners_or_a_requirement_reading_names_are_refused(params, deployer, verdict, reason, engine):
+    """Alike in every fact the refusals compared before, the boxes still differ: the cameras
+    belong to two robots (a graph reads its own robot's), or a requirement of the user's
+    kind reads the platform's name. Reduced, the no-recheck mutant's violation on e1
+    would be judged on e2 and missed (owners), or a violation made up (avoid)."""
+    sc = load_scenario(EDGE_BOXES, params)
+    chosen = get_mutant(deployer) if deployer != "desmon" else "desmon"
+    assert Checker(sc, chosen).run(engine=engine).verdict == verdict
+    with pytest.raises(CheckerError, match=reason):
+        Checker(sc, chosen, symmetry=True)
+
+
+def test_a_deployer_is_proven_symmetric_by_the_reaction_it_runs_not_by_its_name():
+    """Through the Python API a Deployer can carry the name ``desmon`` with a reaction of
+    its own (here one that ignores a change of e1 alone, a bug tied to a name): refused.
+    The same reaction under another name is accepted."""
+    from desmon.deployment.deployer import DESMON
+
+    def react(q, slots, changed, context_changed):  # type: ignore[no-untyped-def]
+        if not context_changed and tuple(changed) == ("e1",):
+            return
+        yield from DESMON.react(q, slots, changed, context_changed)
+
+    sc = load_scenario(EDGE_BOXES)
+    named_alike = dataclasses.replace(DESMON, react=react)
+    assert Checker(sc, named_alike).run().verdict == VIOLATED
+    with pytest.raises(CheckerError, match="told by the reaction they run, not by name"):
+        Checker(sc, named_alike, symmetry=True)
+    renamed = dataclasses.replace(DESMON, name="my-desmon")
+    assert Checker(sc, renamed, symmetry=True).run().verdict == HOLDS

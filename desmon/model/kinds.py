@@ -141,6 +141,11 @@ class Requirement(Constraint):
     usage: ClassVar[str] = ""
     #: The keyword arguments :meth:`from_words` takes.
     keywords: ClassVar[tuple[str, ...]] = ()
+    #: Whether its answer on a platform stays the same when interchangeable platforms and
+    #: their devices swap names: it reads facts, never a name (``desmon verify
+    #: --symmetry`` refuses a model with a requirement that does not say so). A kind of
+    #: your own that never reads ``state.platform.name`` or a device's name may set it True.
+    symmetric: ClassVar[bool] = False
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)

@@ -102,6 +102,7 @@ class Quantity(Requirement):
     count: int
 
     word = "quantity"
+    symmetric = True
     usage = "write ('quantity', device_kind, count)"
 
     def __post_init__(self) -> None:
@@ -151,6 +152,7 @@ class Capacity(Requirement):
     amount: float
 
     word = "capacity"
+    symmetric = True
     usage = "write ('capacity', resource, amount)"
     texts_read_graph = True  # the graph placed: its own share is left out
 
@@ -207,6 +209,7 @@ class _PropertyBound(Requirement):
     (``within`` says on which side of ``value`` a property holds)."""
 
     __slots__ = ()
+    symmetric = True
 
     def within(self, value: Any) -> Any:
         """Whether ``value`` (a number, or a column of them) meets the bound."""
@@ -300,6 +303,7 @@ class Attribute(Requirement):
         return hash((Attribute, self.name, str(self.value)))
 
     word = "attribute"
+    symmetric = True
     usage = "write ('attribute', name, value)"
 
     def __post_init__(self) -> None:
@@ -446,6 +450,7 @@ class Selection(Requirement):
     at_least: int = 1
 
     word = "selection"
+    symmetric = True
     usage = "write ('selection', option, option, ..., at_least=1)"
     keywords = ("at_least",)
 
@@ -570,6 +575,9 @@ class Reads(Requirement):
     platforms' facts (:func:`desmon.deployment.validity.unreadable_inputs`).
     """
 
+    #: (it reads a platform's name only to find the devices the platform hosts, which
+    #: interchangeable platforms carry alike and swap with their names)
+    symmetric = True
     kind: str
     devices: tuple[tuple[str, str], ...]
     #: The platforms hosting a device of this kind, in declaration order, without repeats

@@ -378,6 +378,8 @@ class Replayable(Protocol):
 
     def replay(self, labels: list[Label], expect: list[Key] | None = None, initial: tuple[int, ...] = ()) -> list[Step]: ...
 
+    def concrete(self, name: str, msg: str, during: str | None) -> tuple[str, str | None]: ...
+
 
 class Trail:
     """The search tree of a BFS: each state's parent and transition label, by state number,
@@ -461,7 +463,9 @@ class Trail:
         initial = root if initial is None else initial
         if extra is not None:
             ls.append(extra)
-        self.found[name] = Counterexample(name, msg, tuple(self.system.replay(ls, expect=ks, initial=initial)), during)
+        steps = tuple(self.system.replay(ls, expect=ks, initial=initial))
+        msg, during = self.system.concrete(name, msg, during)  # (found on a stored state: said of the trace's own)
+        self.found[name] = Counterexample(name, msg, steps, during)
 
     def done(self) -> bool:
         """Whether the search has what it looks for: a counterexample (or one of each

@@ -31,15 +31,18 @@ at the same moment always have identical facts*. The static conditions below
 guarantee it, and :class:`Symmetry` refuses (exit 2, one line) where they fail:
 
 1. the group's platforms are identical (capacities, attributes, properties,
-   preference, device kinds/vendors/versions in order) and contiguous in declaration
-   order; no deployment is fixed (EXECUTABLE_ON) to one of them;
+   preference, device kinds/vendors/versions and owning robots in order) and contiguous
+   in declaration order; no deployment is fixed (EXECUTABLE_ON) to one of them, and
+   every requirement is of a kind that reads no name (``Requirement.symmetric``: a
+   kind of the user's own that reads ``state.platform.name`` could tell them apart);
 2. the bounds treat them alike: all or none of them may go down; none of their devices
    may fail or start failed; no background load is bounded or initially set on them (their only
    changing facts are up/down and the deployments they host);
 3. each can host at most one graph at a time (every two graphs that could run on it
    exceed one of its capacities together) -- so an acceptable group platform for ``g``
    hosts nothing but possibly ``g`` itself;
-4. the deployer is ``desmon`` or its ``no-recheck`` mutant (both place through the
+4. the deployer is ``desmon`` or its ``no-recheck`` mutant, told by the reaction it runs
+   (a Deployer given one of their names with a reaction of its own is not) (both place through the
    corrected ``ensure_deployed``: a graph is never active twice and a start happens only
    when no instance is kept, so every acceptable group platform is up and empty: equal
    facts). ``paper`` and the ``make-before-break`` mutant can run a graph on two
@@ -47,28 +50,33 @@ guarantee it, and :class:`Symmetry` refuses (exit 2, one line) where they fail:
    box: both break the argument and are refused.
 
 The replay of a counterexample maps each stored event back through the permutation of
-the concrete state it applies to and checks that every step lands in the stored orbit;
-a mismatch would be a soundness bug and is reported as a refusal, not as a verdict.
+the concrete state it applies to and checks that every step lands in the stored orbit,
+and the violation is judged again on the concrete state it reaches (:meth:`Symmetry.judged`),
+whose message names the platforms the trace shows; a mismatch would be a soundness bug
+and is reported as a refusal, not as a verdict.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import Counter
 from itertools import combinations
 from typing import Any, Iterable
 
+from desmon.deployment.deployer import DESMON
 from desmon.deployment.validity import check_platform
 from desmon.errors import CheckerError
 from desmon.model.events import DeviceFail, Event, LoadChange, RequirementChange
 from desmon.model.requirements import fits
 from desmon.model.system import PlatformState
 from desmon.verify.environment import variable_kind, variable_kinds, variables
+from desmon.verify.mutants import MUTANTS
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
 from desmon.verify.trace import Label, Step, initial_step, make_step, outcome_prefix
 
-__all__ = ["Symmetry", "SYMMETRIC_DEPLOYERS"]
+__all__ = ["Symmetry", "SYMMETRIC_DEPLOYERS", "proven_deployer"]
 
 #: Deployers built on the corrected ``ensure_deployed`` (break-before-make, keep the
 #: valid instance, start only when none is kept): a graph is never active twice, which
@@ -102,11 +110,12 @@ class Symmetry:
     def _refuse_unless_symmetric(self) -> None:
         """Refuse (:class:`CheckerError`) unless conditions (1)-(4) of the module docstring hold."""
         c = self.checker
-        if c.deployer_name not in SYMMETRIC_DEPLOYERS:
+        if not proven_deployer(c.core.deployer):
             self._refuse(
                 f"the reduction is proven only for deployers that never run a graph twice and choose among equal platforms "
-                f"by nothing but their facts ({', '.join(SYMMETRIC_DEPLOYERS)}); the {c.deployer_name} deployer is not shown "
-                "to be one (the paper's runs a graph on two platforms and keeps one by name, a tie-break that is not symmetric)"
+                f"by nothing but their facts ({', '.join(SYMMETRIC_DEPLOYERS)}, told by the reaction they run, not by name); the "
+                f"{c.deployer_name} deployer is not shown to be one (the paper's runs a graph on two platforms and keeps one by "
+                "name, a tie-break that is not symmetric)"
             )
         initial_changes = any(isinstance(e, RequirementChange) for e in getattr(c.scenario, "initial", ()))
         if any(spec.preferences for spec in c.model.specs) or c.bounds.joins or c.bounds.requirement_changes or initial_changes:
@@ -145,9 +154,18 @@ class Symmetry:
         devs = {tuple((d.kind, d.vendor, d.version) for d in model.devices_on(p)) for p in grp}
         if len(devs) != 1:
             self._refuse(f"{'/'.join(grp)} carry different devices")
+        owner = dict(model.owners)
+        if len({tuple(owner.get(d.name) for d in model.devices_on(p)) for p in grp}) != 1:
+            self._refuse(f"the devices of {'/'.join(grp)} belong to different robots (the model's owners), so different graphs read them")
         for spec in model.specs:
             if spec.fixed_platform in grp:
                 self._refuse(f"{spec.graph} is fixed (EXECUTABLE_ON) to {spec.fixed_platform}")
+            blind = next((r for r in spec.requirements if not type(r).symmetric), None)
+            if blind is not None:
+                self._refuse(
+                    f"{spec.graph}'s requirement {blind.describe()} is of a kind ({type(blind).__name__}) that does not say it reads "
+                    "no platform's or device's name (its class's symmetric = True)"
+                )
 
     def _refuse_unless_alike_in_bounds(self, grp: tuple[str, ...]) -> None:
         """(2) all or none may go down, no device may fail, no load varies or is set at the
@@ -272,6 +290,7 @@ class Symmetry:
         the concrete state it applies to; every step must land in the stored orbit."""
         c = self.checker
         key = c.initial(initial)
+        self._last = (key, tuple(c.initial_findings))
         if expect and self.canon(key) != expect[0]:
             raise CheckerError(f"--symmetry: the initial state {key} is not in the stored orbit {expect[0]}")
         st = c.store
@@ -281,7 +300,8 @@ class Symmetry:
             back = {v: k for k, v in perm.items()}
             concrete = self.rename_event(event, back)
             prev = key
-            key, _outcomes, log, _instant = c.run_one(prev, concrete, outcome_prefix(fails))
+            key, _outcomes, log, instant = c.run_one(prev, concrete, outcome_prefix(fails))
+            self._last = (key, tuple(instant))
             if expect is not None and i < len(expect) and self.canon(key) != expect[i]:
                 raise CheckerError(
                     f"--symmetry refused: replaying step {i} ({concrete}) left the stored orbit, the reduction is not sound for this scenario"
@@ -289,6 +309,30 @@ class Symmetry:
             # (the store is left in the step's next state: the Control rules' refusals there tell refused starts from chosen failures)
             steps.append(make_step(i, prev, concrete, key, log, fails, lambda g, p: st.rules.start_refusal(g, p, st.platform_state)))
         return steps
+
+    def judged(self, name: str, during: str | None) -> tuple[str, str | None]:
+        """(message, after what) of invariant ``name`` on the concrete trace :meth:`replay` just
+        built: on the state it reached (``during`` None), else as its last reaction broke
+        it on the way (the stored message names the canonical state's platforms). A
+        concrete trace that does not violate ``name`` is a refusal, as a step that leaves
+        the orbit is."""
+        key, instant = self._last
+        if during is None:
+            found = [(n, m, None) for n, m in self.checker.violations(key)]
+        else:
+            found = [(f[0], f[1], f[2] if len(f) > 2 else during) for f in instant]
+        for n, msg, after in found:
+            if n == name:
+                return msg, after
+        raise CheckerError(
+            f"--symmetry refused: the concrete trace does not violate {name} where its orbit does, the reduction is not sound for this scenario"
+        )
+
+
+def proven_deployer(deployer: Any) -> bool:
+    """Whether ``deployer`` is one of :data:`SYMMETRIC_DEPLOYERS`, by what it runs, not by its
+    name: a Deployer of the same name with a reaction of its own is not."""
+    return any(dataclasses.replace(deployer, name=known.name) == known for known in (DESMON, MUTANTS["no-recheck"]))
 
 
 def _exceeds(s1: Any, s2: Any, platform: Any) -> bool:

@@ -66,6 +66,8 @@ class Reduction(Protocol):
 
     def replay(self, labels: list[Label], expect: list[Key] | None = None, initial: tuple[int, ...] = ()) -> list[Step]: ...
 
+    def judged(self, name: str, during: str | None) -> tuple[str, str | None]: ...
+
 
 def _with_platforms(scenario: Scenario) -> SystemModel:
     """``scenario``'s model, refused (a CheckerError) where it has no platform to check."""
@@ -372,6 +374,13 @@ class TransitionSystem:
         if self.symmetry is not None:
             return self.symmetry.replay(labels, expect, initial)
         return replay_trace(self, labels, expect, initial)
+
+    def concrete(self, name: str, msg: str, during: str | None) -> tuple[str, str | None]:
+        """(message, after what) of invariant ``name`` as the trace :meth:`replay` just built
+        shows it: the stored state's (``msg``, ``during``), or under symmetry the concrete
+        state's, whose platforms the trace names (:meth:`Symmetry.judged
+        <desmon.verify.symmetry.Symmetry.judged>`)."""
+        return (msg, during) if self.symmetry is None else self.symmetry.judged(name, during)
 
 
 def replay_trace(system: TransitionSystem, labels: list[Label], expect: list[Key] | None = None, initial: tuple[int, ...] = ()) -> list[Step]:
