@@ -376,10 +376,8 @@ class TransitionSystem:
         return replay_trace(self, labels, expect, initial)
 
     def concrete(self, name: str, msg: str, during: str | None) -> tuple[str, str | None]:
-        """(message, after what) of invariant ``name`` as the trace :meth:`replay` just built
-        shows it: the stored state's (``msg``, ``during``), or under symmetry the concrete
-        state's, whose platforms the trace names (:meth:`Symmetry.judged
-        <desmon.verify.symmetry.Symmetry.judged>`)."""
+        """(message, after what) of ``name`` as the trace :meth:`replay` just built shows it
+        (under symmetry on its concrete state: :meth:`~desmon.verify.symmetry.Symmetry.judged`)."""
         return (msg, during) if self.symmetry is None else self.symmetry.judged(name, during)
 
 
