@@ -202,3 +202,33 @@ def test_a_deployer_is_proven_symmetric_by_the_reaction_it_runs_not_by_its_name(
         Checker(sc, named_alike, symmetry=True)
     renamed = dataclasses.replace(DESMON, name="my-desmon")
     assert Checker(sc, renamed, symmetry=True).run().verdict == HOLDS
+
+
+def test_two_states_of_one_orbit_end_apart_after_a_failed_start_so_such_a_reaction_is_refused():
+    """Within a reaction the deployer does not start a graph again where its start failed:
+    a memory of platform names. A failed start leaves its box empty, like the other box, so
+    a later tie-break for another graph can take either, and the memory then tells the
+    renamed runs apart: the same event and failure branch from two states of one orbit
+    reach states of two orbits (``g`` placed, or an error). The search refuses such a
+    reaction (both engines), where it used to reduce by the proof that misses this."""
+    from desmon.model.events import ActionChange
+    from desmon.verify.state import Key
+
+    sc = load_scenario(Path(__file__).parent / "data" / "second_chance_memory.py")
+    plain, sym = Checker(sc), Checker(sc, symmetry=True).symmetry
+    held = Key("hold", (), (), (), (("fy", "a2"), ("z_fallback", "a1")), ("p",), ())
+    mate = sym.rename(held, {"a1": "a2", "a2": "a1"})
+    assert sym.canon(held) == sym.canon(mate)
+    ends = [{f: sym.canon(n) for f, n, *_ in plain.successors(k, ActionChange("grasp"))}[(0, 1)] for k in (held, mate)]
+    assert ends[0] != ends[1] and {e.standing for e in ends} == {(), ("g", "z_fallback")}
+    for engine in ("direct", "table"):
+        with pytest.raises(CheckerError, match="after a start of g on one of them failed.*memory of platform names"):
+            Checker(sc, symmetry=True).run(engine=engine)
+
+
+def test_a_second_graph_started_where_a_start_just_failed_is_refused_and_without_failing_starts_reduced():
+    sc = load_scenario(Path(__file__).parent / "data" / "attribute_spelling.py", {"start_failures": "1"})
+    with pytest.raises(CheckerError, match="starts det_b on e1 after a start of det_a on one of them failed"):
+        Checker(sc, symmetry=True).run()
+    sc = load_scenario(Path(__file__).parent / "data" / "attribute_spelling.py")
+    assert Checker(sc, symmetry=True).run().verdict == HOLDS

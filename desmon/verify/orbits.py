@@ -53,8 +53,12 @@ class CodeOrbits:
         self.sys_bits, self.sys_mask = sys_bits, (1 << sys_bits) - 1
         members = [p for grp in symmetry.groups for p in grp]
         fixed = [f for f in (*env.const_down, *env.const_failed) if f in members or env.platform_of.get(f) in members]
-        if fixed:
-            raise TableUnsupported(f"table engine: {fixed[0]} stays down or failed for the whole search, on a group platform of --symmetry; run with --engine direct")
+        if fixed:  # (named by its group: the encoding starts from the canonical state, whose names may be swapped)
+            at = env.platform_of.get(fixed[0], fixed[0])
+            group = "/".join(next(g for g in symmetry.groups if at in g))
+            raise TableUnsupported(
+                f"table engine: a platform of the --symmetry group {group} stays down or failed for the whole search; run with --engine direct"
+            )
         self.at = [env.plats.index(p) for p in members]  # the group platforms' digit positions
         self.weight = np.array([env.W[p] for p in self.at], dtype=np.int64)
         self.radix = np.array([env.R[p] for p in self.at], dtype=np.int64)

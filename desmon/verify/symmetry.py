@@ -49,6 +49,18 @@ guarantee it, and :class:`Symmetry` refuses (exit 2, one line) where they fail:
    platforms and then prefer one by name; ``capacity-blind`` can put two graphs on one
    box: both break the argument and are refused.
 
+One more condition is checked on every reaction the search runs (:meth:`Symmetry.check_reaction`),
+since it depends on what the reactions do: within a reaction the deployer remembers where
+each graph's start was issued and does not start it there again (``_second_chance``). A
+failed start leaves its platform empty, with the facts of an untried one, so a later
+tie-break for *another* graph between the two could swap them, and the first graph's
+memory would no longer follow the renaming. A reaction that starts a graph on a group
+platform after another graph's start on a group platform failed is therefore refused.
+A graph's own later starts are safe: its memory holds the platforms its own tie-breaks
+chose, which every renaming above maps along. Whether such a reaction exists is decided
+exactly by the search itself: two states of one orbit run corresponding reactions up to
+the first such start, so the canonical state's reaction meets it if any of its orbit does.
+
 The replay of a counterexample maps each stored event back through the permutation of
 the concrete state it applies to and checks that every step lands in the stored orbit,
 and the violation is judged again on the concrete state it reaches (:meth:`Symmetry.judged`),
@@ -65,6 +77,7 @@ from itertools import combinations
 from typing import Any, Iterable
 
 from desmon.deployment.deployer import DESMON
+from desmon.deployment.ports import Start
 from desmon.deployment.validity import check_platform
 from desmon.errors import CheckerError
 from desmon.model.events import DeviceFail, Event, LoadChange, RequirementChange
@@ -207,6 +220,24 @@ class Symmetry:
                     f"{s1.graph} and {s2.graph} fit on one of them together, so the first-by-declaration choice can pick "
                     "between platforms hosting different graphs"
                 )
+
+    def check_reaction(self, commands: Iterable[tuple[Any, bool | None]]) -> None:
+        """Refuse a reaction (its commands with their outcomes) that starts a graph on a group
+        platform after another graph's start on a group platform failed (the module
+        docstring: the deployer's memory of failed starts goes by platform name)."""
+        failed: list[str] = []
+        for cmd, ok in commands:
+            if type(cmd) is not Start or cmd.platform not in self._members:
+                continue
+            other = next((g for g in failed if g != cmd.graph), None)
+            if other is not None:
+                self._refuse(
+                    f"a reaction starts {cmd.graph} on {cmd.platform} after a start of {other} on one of them failed, and the deployer "
+                    f"does not start {other} again where its start failed within a reaction, a memory of platform names the "
+                    "reduction cannot rename"
+                )
+            if ok is False:
+                failed.append(cmd.graph)
 
     # -- canonical form --------------------------------------------------------------------
     def _component(self, key: Key, p: str) -> tuple:

@@ -103,9 +103,7 @@ class TransitionSystem:
         self.bounds = bounds if bounds is not None else bounds_of(scenario)
         if bounds is not None:
             bounds.validate(scenario)
-        self.invariants: tuple[Invariant, ...] = ()
-        self.not_checked: tuple[str, ...] = ()
-        self._choose_invariants(invariants)
+        self._choose_invariants(invariants)  # (self.invariants, self.not_checked)
         names = {i.name for i in self.invariants}
         self.instant = tuple(i for i in get_invariants(list(self.bounds.instantaneous)) if i.name in names) if self.bounds.instantaneous else ()
         self.store = StateStore(self.model, self.run_context.checks)
@@ -136,11 +134,11 @@ class TransitionSystem:
                 f"--invariant {blind[0]}: the checker cannot evaluate it (its states keep no running list, stop count or "
                 f"DEPLOYMENT_HISTORY edges); it is checked by the simulation audit (desmon run) and desmon fuzz"
             )
-        self.invariants = tuple(i for i in requested if i.name not in NOT_CHECKED)
+        self.invariants: tuple[Invariant, ...] = tuple(i for i in requested if i.name not in NOT_CHECKED)
         self._checked = frozenset(i.name for i in self.invariants)
         self.initial_findings: tuple[tuple[str, str, str], ...] = ()  # what the last initial reaction broke (:meth:`initial`)
         #: the invariants of a default (all) run that the checker leaves to the audit and fuzzer
-        self.not_checked = () if invariants else tuple(n for n in NOT_CHECKED)
+        self.not_checked: tuple[str, ...] = () if invariants else tuple(n for n in NOT_CHECKED)
 
     @contextlib.contextmanager
     def finding_every(self) -> Iterator[None]:
@@ -210,6 +208,8 @@ class TransitionSystem:
             self.initial_outcomes = tuple(st.prefix)  # (no branching on the starts of a failed reaction)
             self.initial_findings = ((CRASH, str(fault.what), str(log.commands[-1][0]) if log.commands else ""),)
             return st.key(self.core.standing)
+        if self.symmetry is not None:
+            self.symmetry.check_reaction(self.initial_log.commands)
         self.initial_outcomes = tuple(st.outcomes)
         self.initial_findings = reaction_findings(st.instant, self.core.findings_of(self._checked, st.every))
         return st.key(self.core.standing)
@@ -240,10 +240,7 @@ class TransitionSystem:
         return out
 
     def _standing(self, standing: tuple[str, ...]) -> frozenset[str]:
-        f = self._frozen.get(standing)
-        if f is None:
-            f = self._frozen[standing] = frozenset(standing)
-        return f
+        return self._frozen.get(standing) or self._frozen.setdefault(standing, frozenset(standing))  # (one object per standing)
 
     def _instant_check(self, graph: str, platform: str) -> list[tuple[str, str]]:
         """The instantaneous invariants the start of ``graph`` on ``platform`` broke, on the
@@ -293,6 +290,8 @@ class TransitionSystem:
         stimulus, log = self.step_under_guard(core, st, event, recording=recording)
         if core.findings and (st.every or not st.instant):
             st.instant = reaction_findings(st.instant, core.findings_of(self._checked, st.every))
+        if self.symmetry is not None:
+            self.symmetry.check_reaction(log.commands)
         out = (stimulus, st.key(core.standing), tuple(st.outcomes), log, st.instant)
         if ran.last:
             ran.kept = ((key, event, prefix), out)
@@ -376,8 +375,7 @@ class TransitionSystem:
         return replay_trace(self, labels, expect, initial)
 
     def concrete(self, name: str, msg: str, during: str | None) -> tuple[str, str | None]:
-        """(message, after what) of ``name`` as the trace :meth:`replay` just built shows it
-        (under symmetry on its concrete state: :meth:`~desmon.verify.symmetry.Symmetry.judged`)."""
+        """(message, after what) of ``name`` on the trace :meth:`replay` just built (:meth:`Symmetry.judged`)."""
         return (msg, during) if self.symmetry is None else self.symmetry.judged(name, during)
 
 
