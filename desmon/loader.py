@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import builtins
 import contextlib
+import hashlib
 import importlib.util
 import os
 import signal
@@ -61,7 +62,7 @@ def _run_script(path: str | Path, p: Path, params: Mapping[str, str], declared: 
     """Execute the script at ``p`` (stdout to stderr) as a throw-away module and return it,
     the parameters it declares (with their defaults) put into ``declared``; any way it
     fails but a real Ctrl-C becomes one ScenarioError (:func:`_script_error`)."""
-    name = f"desmon_scenario_{abs(hash(str(p.resolve())))}"
+    name = f"desmon_scenario_{hashlib.sha256(str(p.resolve()).encode()).hexdigest()[:16]}"  # (the same name in every process)
     spec = importlib.util.spec_from_file_location(name, p)
     if spec is None or spec.loader is None:
         raise ScenarioError(f"{path}: cannot be loaded as a Python module; give it a .py extension")

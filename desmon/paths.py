@@ -291,9 +291,13 @@ def _keep(target: Path) -> str | None:
 
 def script_folder_on_path(script: str | Path) -> None:
     """Let a user's script import the modules beside it, as ``python SCRIPT`` does: its
-    folder goes first on ``sys.path`` (once; it stays, for imports its code makes later)."""
+    folder goes first on ``sys.path`` (it stays, for imports its code makes later). A
+    folder already on the path moves to the front: after scripts of two folders that
+    both hold a ``helper.py``, each load imports its own folder's."""
     folder = str(Path(script).resolve().parent)
-    if folder not in sys.path:
+    if sys.path[:1] != [folder]:
+        while folder in sys.path:
+            sys.path.remove(folder)
         sys.path.insert(0, folder)
 
 

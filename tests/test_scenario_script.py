@@ -135,6 +135,45 @@ def test_each_load_imports_the_helpers_beside_the_script_afresh(tmp_path: Path) 
     assert [s.duration for s in again.world.task] == [2.0, 10.0]
 
 
+def test_two_folders_helpers_of_one_name_each_load_their_own_in_any_order(tmp_path: Path) -> None:
+    """Scripts in two folders each import their own ``helper.py`` (another task length):
+    loaded A, B, then A again in one process (the Python API, a sweep), each load gets its
+    own folder's helper, as it would alone."""
+    for folder, carry in (("a", 5.0), ("b", 9.0)):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "grows.py").write_text(GROWS)
+        (tmp_path / folder / "helper.py").write_text(HELPER.replace("carry=5.0", f"carry={carry}"))
+    carries = [load_scenario(str(tmp_path / f / "grows.py")).world.task[-1].duration for f in ("a", "b", "a", "b")]
+    assert carries == [5.0, 9.0, 5.0, 9.0]
+
+
+def test_an_error_naming_the_scripts_module_names_it_alike_in_every_process(tmp_path: Path) -> None:
+    """A requirement kind defined in two scripts clashes, and the message names the scripts'
+    modules: the same names whatever the process's hash seed (once a salted hash)."""
+    import subprocess
+    import sys
+
+    kind = (
+        "from dataclasses import dataclass\nfrom desmon.model.kinds import Requirement\n"
+        "@dataclass(frozen=True, slots=True)\nclass AlwaysOk(Requirement):\n    word = 'always_ok_twice'\n"
+        "    def describe(self): return 'ok'\n    def holds(self, state, graph): return None\n"
+        "from desmon.model.cob3 import care_o_bot\nfrom desmon.model.scenario import Scenario\n"
+        "scenario = Scenario(name='k', model=care_o_bot().build())\n"
+    )
+    for name in ("one.py", "two.py"):
+        (tmp_path / name).write_text(kind)
+    code = (
+        "import sys\nfrom desmon.loader import load_scenario\nload_scenario(sys.argv[1])\n"
+        "try:\n    load_scenario(sys.argv[2])\nexcept Exception as exc:\n    print(exc)\n"
+    )
+    said = {
+        subprocess.run([sys.executable, "-c", code, str(tmp_path / "one.py"), str(tmp_path / "two.py")], capture_output=True, text=True,
+                       env={**os.environ, "PYTHONHASHSEED": seed}, check=True).stdout
+        for seed in ("0", "1")
+    }
+    assert len(said) == 1 and "defined twice" in said.pop()
+
+
 def test_the_shared_background_loads_cannot_be_changed_by_one_scenario(tmp_path: Path) -> None:
     """``desmon.model.cob3.LOADS`` is read-only: a script that writes into it (and so into
     every later load in the process) is refused in one line, and one that writes its own
