@@ -232,3 +232,17 @@ def test_a_second_graph_started_where_a_start_just_failed_is_refused_and_without
         Checker(sc, symmetry=True).run()
     sc = load_scenario(Path(__file__).parent / "data" / "attribute_spelling.py")
     assert Checker(sc, symmetry=True).run().verdict == HOLDS
+
+
+def test_a_requirement_kind_says_it_is_symmetric_with_a_bool_only():
+    """``symmetric = "no"`` would read as yes and let --symmetry rename what the kind reads."""
+    from dataclasses import dataclass
+
+    from desmon.errors import ModelError
+    from desmon.model.kinds import Requirement
+
+    with pytest.raises(ModelError, match=r"requirement kind Spelled: symmetric = 'no'; give True or False"):
+
+        @dataclass(frozen=True, slots=True)
+        class Spelled(Requirement):
+            symmetric = "no"  # type: ignore[assignment]

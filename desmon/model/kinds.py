@@ -149,6 +149,8 @@ class Requirement(Constraint):
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
+        if type(cls.__dict__.get("symmetric", False)) is not bool:  # ("no" would read as yes)
+            raise ModelError(f"requirement kind {cls.__name__}: symmetric = {cls.__dict__['symmetric']!r}; give True or False")
         word = cls.__dict__.get("word")
         if word is None:
             return
