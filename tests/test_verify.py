@@ -320,6 +320,20 @@ def test_a_generated_pytest_replays_a_violation_of_the_initial_state(tmp_path, c
     assert res.returncode == 0 and f"{found} passed" in res.stdout, res.stdout + res.stderr
 
 
+def test_a_generated_pytest_runs_for_a_scenario_whose_script_defines_a_requirement_kind(tmp_path, capsys):
+    """A kind defined in the scenario script has no module a fresh process can import: the
+    generated test looks it up once the scenario is loaded. Another scenario's --pytest
+    made afterwards in this process does not ask for it either (it once imported every
+    kind ever registered, from modules that were gone)."""
+    edges = Path(__file__).parent / "data" / "interchangeable_edge_boxes.py"
+    for name, args in (("test_own_kind.py", [str(edges), "-p", "avoid=true", "--deployer", "mutant:no-recheck"]),
+                       ("test_after.py", [str(SCENARIOS / "symmetric_platforms.py"), "--deployer", "paper"])):
+        assert main(["verify", *args, "--pytest", str(tmp_path / name), "--no-progress"]) == 1
+        out = capsys.readouterr().out
+        res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", name], capture_output=True, text=True, cwd=tmp_path)
+        assert res.returncode == 0 and " passed" in res.stdout, out + res.stdout + res.stderr
+
+
 def test_a_generated_pytest_compiles_and_names_its_scenario_whatever_characters_its_path_holds(tmp_path):
     """The path is only in SCENARIO (a Python literal): a folder named with three double
     quotes once ended the module's docstring, and the file did not compile."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -478,7 +479,7 @@ DEPLOYER = {deployer!r}
 #: a file or built-in deployer); looked up there first again, from wherever this test runs
 DEPLOYER_FOLDER = {folder!r}
 INITIAL_ACTION = {initial_action!r}
-
+{script_kinds}
 
 def replay(steps, after_command=None, initial_fails=()):
     """The initial state and the state after each step; ``after_command(run, started)`` is
@@ -539,7 +540,7 @@ def counterexample_pytest(
     src = _PYTEST.format(
         scenario_path=scenario_path, params=dict(params or {}), deployer=portable_spec(r.deployer), initial_action=initial_action,
         folder=module_folder(r.deployer),
-        event_imports=_event_imports(), requirement_imports=_requirement_imports(),
+        event_imports=_event_imports(), requirement_imports=_requirement_imports(), script_kinds=_script_kinds(),
     )
     for c in r.counterexamples:
         steps = []
@@ -555,25 +556,49 @@ def counterexample_pytest(
     return src
 
 
+def _importable(cls: type) -> bool:
+    """Whether a fresh process imports ``cls`` from its module: not a class a scenario script (or a
+    helper beside it, dropped after the load) defined, whose module is gone once the script ran."""
+    return cls.__module__ in sys.modules
+
+
 def _event_imports() -> str:
-    """The import lines of every event class (the registry), by module, names sorted."""
+    """The import lines of every event class (the registry), by module, names sorted; an event
+    kind a scenario script defined is looked up once the scenario is loaded (:func:`_script_kinds`)."""
     modules: dict[str, list[str]] = {}
     for cls in Event.kinds():
-        modules.setdefault(cls.__module__, []).append(cls.__name__)
+        if _importable(cls):
+            modules.setdefault(cls.__module__, []).append(cls.__name__)
     return "\n".join(f"from {m} import (\n    {', '.join(sorted(names))},\n)" for m, names in modules.items())
 
 
 def _requirement_imports() -> str:
     """The import lines of the generated test for every requirement kind (the events'
     reprs name them), read from the registry: desmon's own kinds, Option and Preference
-    from :mod:`desmon.model.requirements`, a kind defined elsewhere from its module."""
+    from :mod:`desmon.model.requirements`, a kind defined elsewhere from its module (one a
+    scenario script defined: :func:`_script_kinds`)."""
     from desmon.model.kinds import requirement_class, requirement_kinds
 
     by_module: dict[str, set[str]] = {"desmon.model.requirements": {"Option", "Preference"}}
     for word in requirement_kinds():
         cls = requirement_class(word)
-        by_module.setdefault(cls.__module__, set()).add(cls.__name__)  # type: ignore[union-attr]
+        if _importable(cls):  # type: ignore[arg-type]
+            by_module.setdefault(cls.__module__, set()).add(cls.__name__)  # type: ignore[union-attr]
     return "\n".join(f"from {module} import {', '.join(sorted(names))}" for module, names in by_module.items())
+
+
+def _script_kinds() -> str:
+    """The lines that give the generated test the requirement and event kinds a scenario script
+    defined: no module of theirs to import, they are registered again when the scenario loads
+    (a kind of another script loaded in the same process is None there, and unused)."""
+    from desmon.model.kinds import requirement_class, requirement_kinds
+
+    lines = [f"{c.__name__} = requirement_class({w!r})" for w in requirement_kinds() if not _importable(c := requirement_class(w))]  # type: ignore[arg-type]
+    lines += [f"{c.__name__} = {{e.kind: e for e in Event.kinds()}}.get({c.kind!r})" for c in Event.kinds() if not _importable(c)]
+    if not lines:
+        return ""
+    head = "\nfrom desmon.model.events import Event\nfrom desmon.model.kinds import requirement_class\n\nload_scenario(SCENARIO, PARAMS)  # (registers the kinds its script defines)\n"
+    return head + "\n".join(lines) + "\n"
 
 
 _CASE_DURING = '''
