@@ -240,7 +240,8 @@ class TransitionSystem:
         return out
 
     def _standing(self, standing: tuple[str, ...]) -> frozenset[str]:
-        return self._frozen.get(standing) or self._frozen.setdefault(standing, frozenset(standing))  # (one object per standing)
+        f = self._frozen.get(standing)  # (one object per standing; the empty one is falsy)
+        return f if f is not None else self._frozen.setdefault(standing, frozenset(standing))
 
     def _instant_check(self, graph: str, platform: str) -> list[tuple[str, str]]:
         """The instantaneous invariants the start of ``graph`` on ``platform`` broke, on the
