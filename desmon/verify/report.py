@@ -594,7 +594,7 @@ def _script_kinds() -> str:
     from desmon.model.kinds import requirement_class, requirement_kinds
 
     lines = [f"{c.__name__} = requirement_class({w!r})" for w in requirement_kinds() if not _importable(c := requirement_class(w))]  # type: ignore[arg-type]
-    lines += [f"{c.__name__} = {{e.kind: e for e in Event.kinds()}}.get({c.kind!r})" for c in Event.kinds() if not _importable(c)]
+    lines += [f"{c.__name__} = Event.of_kind({c.kind!r})" for c in Event.kinds() if not _importable(c)]
     if not lines:
         return ""
     head = "\nfrom desmon.model.events import Event\nfrom desmon.model.kinds import requirement_class\n\nload_scenario(SCENARIO, PARAMS)  # (registers the kinds its script defines)\n"

@@ -84,6 +84,7 @@ from desmon.model.events import DeviceFail, Event, LoadChange, RequirementChange
 from desmon.model.requirements import fits
 from desmon.model.system import PlatformState
 from desmon.verify.environment import variable_kind, variable_kinds, variables
+from desmon.verify.deployers import portable_spec
 from desmon.verify.mutants import MUTANTS
 from desmon.verify.state import Key
 from desmon.verify.system import TransitionSystem
@@ -94,7 +95,10 @@ __all__ = ["Symmetry", "SYMMETRIC_DEPLOYERS", "proven_deployer"]
 #: Deployers built on the corrected ``ensure_deployed`` (break-before-make, keep the
 #: valid instance, start only when none is kept): a graph is never active twice, which
 #: condition (4) of the module docstring needs. ``no-recheck`` only skips re-checks.
-SYMMETRIC_DEPLOYERS = ("desmon", "no-recheck", "mutant:no-recheck")  # the last: as --deployer names it
+#: :func:`proven_deployer` tells them by what they run.
+SYMMETRIC_DEPLOYERS = (DESMON, MUTANTS["no-recheck"])
+#: their names as a refusal lists them (a mutant also as --deployer spells it)
+_PROVEN_NAMES = ", ".join(dict.fromkeys(n for d in SYMMETRIC_DEPLOYERS for n in (d.name, portable_spec(d.name))))
 
 
 class Symmetry:
@@ -113,6 +117,8 @@ class Symmetry:
         self._device_platform = {d.name: (d.platform, self._devices[d.platform].index(d.name)) for d in model.devices}
         self._order = {p.name: i for i, p in enumerate(model.platforms)}
         self._members = {p for g in groups for p in g}
+        #: the concrete state the last :meth:`replay` reached, and what its last reaction broke (:meth:`judged`)
+        self._last: tuple[Key, tuple] | None = None
         #: event class -> the kind of variable whose rule renames it
         self._kind_of = {cls: kind for kind in variable_kinds() for cls in kind.events}
 
@@ -126,7 +132,7 @@ class Symmetry:
         if not proven_deployer(c.core.deployer):
             self._refuse(
                 f"the reduction is proven only for deployers that never run a graph twice and choose among equal platforms "
-                f"by nothing but their facts ({', '.join(SYMMETRIC_DEPLOYERS)}, told by the reaction they run, not by name); the "
+                f"by nothing but their facts ({_PROVEN_NAMES}, told by the reaction they run, not by name); the "
                 f"{c.deployer_name} deployer is not shown to be one (the paper's runs a graph on two platforms and keeps one by "
                 "name, a tie-break that is not symmetric)"
             )
@@ -347,6 +353,7 @@ class Symmetry:
         it on the way (the stored message names the canonical state's platforms). A
         concrete trace that does not violate ``name`` is a refusal, as a step that leaves
         the orbit is."""
+        assert self._last is not None, "judged before a replay"
         key, instant = self._last
         if during is None:
             found = [(n, m, None) for n, m in self.checker.violations(key)]
@@ -363,7 +370,7 @@ class Symmetry:
 def proven_deployer(deployer: Any) -> bool:
     """Whether ``deployer`` is one of :data:`SYMMETRIC_DEPLOYERS`, by what it runs, not by its
     name: a Deployer of the same name with a reaction of its own is not."""
-    return any(dataclasses.replace(deployer, name=known.name) == known for known in (DESMON, MUTANTS["no-recheck"]))
+    return any(dataclasses.replace(deployer, name=known.name) == known for known in SYMMETRIC_DEPLOYERS)
 
 
 def _exceeds(s1: Any, s2: Any, platform: Any) -> bool:
