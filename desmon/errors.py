@@ -21,6 +21,9 @@ line, without a traceback.
 
 from __future__ import annotations
 
+import traceback
+from types import TracebackType
+
 __all__ = [
     "DesmonError",
     "ModelError",
@@ -32,6 +35,7 @@ __all__ = [
     "ObservationConflict",
     "SimulationError",
     "EstimateError",
+    "reading_module",
 ]
 
 
@@ -92,6 +96,19 @@ class UnobservedRead(TableUnsupported):
             fact=self.fact, platform=self.platform,
         )
         return out
+
+
+def reading_module(tb: TracebackType | None, helpers: tuple[str, ...]) -> str:
+    """The module that made a read, from the traceback of its refusal: the innermost frame
+    whose module name starts with none of ``helpers`` (modules that read on their caller's
+    behalf), or "?". Both the table engine and an isolated deployer's worker name the
+    reader of an :class:`UnobservedRead` by it."""
+    found = "?"
+    for frame, _line in traceback.walk_tb(tb):
+        name = str(frame.f_globals.get("__name__", "?"))
+        if not name.startswith(helpers):
+            found = name
+    return found
 
 
 class SimulationError(DesmonError):

@@ -54,7 +54,7 @@ from desmon.verify.state import Key
 
 __all__ = [
     "Digit", "Move", "Variable", "VariableKind", "variable_kinds", "variable_kind", "alphabet", "event_kinds",
-    "variables", "failures", "can_fail", "enabled_events",
+    "variables", "failures", "can_fail", "enabled_events", "FACTS", "Moved", "moved",
 ]
 
 #: kind name -> its definition, filled by :meth:`VariableKind.__init_subclass__` (in definition order)
@@ -203,6 +203,43 @@ def variables(b: Any) -> tuple[Variable, ...]:
     kinds). :func:`enabled_events` and the table engine's event encoding
     (:class:`desmon.verify.table.encoding.Events`) both walk this list."""
     return tuple(Variable(kind.name, s) for kind in _KINDS.values() for s in kind.subjects(b))
+
+
+#: the facts of a state a :class:`Digit` may name
+FACTS = ("context", "requirements", "down", "device", "load")
+
+
+class Moved(NamedTuple):
+    """What the bounded variables move of the platforms (:func:`moved`)."""
+
+    downs: frozenset[str]  # the platforms that may go down (or be absent)
+    devices: dict[str, list[str]]  # each platform's devices that may fail, in variable order
+    levels: dict[str, tuple[float, ...]]  # each loaded platform's levels, as the first variable moving it gives them
+    clash: str  # the first platform whose load two variables move over different levels ("" if none)
+    unknown: str  # the kind of a variable whose digits are not known, or name another fact; the reading stops there ("" if none)
+
+
+def moved(b: Any, model: Any) -> Moved:
+    """What the variables of ``b`` move of ``model``'s platforms, read off their
+    :meth:`VariableKind.digits`: one reading for the table engine's encoding and the
+    symmetry reduction's conditions."""
+    platform_of = {d.name: d.platform for d in model.devices}
+    downs: set[str] = set()
+    devices: dict[str, list[str]] = {p.name: [] for p in model.platforms}
+    levels: dict[str, tuple[float, ...]] = {}
+    clash = ""
+    for v in variables(b):
+        digits = _KINDS[v.kind].digits(b, v.subject)
+        if digits is None or any(d.fact not in FACTS for d in digits):
+            return Moved(frozenset(downs), devices, levels, clash, v.kind)
+        for d in digits:
+            if d.fact == "down":
+                downs.add(d.subject)
+            elif d.fact == "device" and d.subject not in devices[platform_of[d.subject]]:
+                devices[platform_of[d.subject]].append(d.subject)
+            elif d.fact == "load" and levels.setdefault(d.subject, d.levels) != d.levels:
+                clash = clash or d.subject
+    return Moved(frozenset(downs), devices, levels, clash, "")
 
 
 def failures(b: Any, key: Key) -> int:

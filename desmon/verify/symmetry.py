@@ -83,7 +83,7 @@ from desmon.errors import CheckerError
 from desmon.model.events import DeviceFail, Event, LoadChange, RequirementChange
 from desmon.model.requirements import fits
 from desmon.model.system import PlatformState
-from desmon.verify.environment import variable_kind, variable_kinds, variables
+from desmon.verify.environment import moved, variable_kind, variable_kinds, variables
 from desmon.verify.deployers import portable_spec
 from desmon.verify.mutants import MUTANTS
 from desmon.verify.state import Key
@@ -191,21 +191,18 @@ class Symmetry:
         start: what the variables move (:meth:`VariableKind.digits
         <desmon.verify.environment.VariableKind.digits>`)."""
         c = self.checker
-        model, b = c.model, c.bounds
-        moved: set[tuple[str, Any]] = set()
-        for v in variables(b):
-            digits = variable_kind(v.kind).digits(b, v.subject)  # type: ignore[union-attr]
-            if digits is None:
-                self._refuse(f"the bounds' {v.kind} variables do not say what they move")
-            moved.update((d.fact, d.subject) for d in digits)
-        inb = [("down", p) in moved for p in grp]
+        model = c.model
+        m = moved(c.bounds, model)
+        if m.unknown:
+            self._refuse(f"the bounds' {m.unknown} variables do not say what they move")
+        inb = [p in m.downs for p in grp]
         if any(inb) and not all(inb):
             self._refuse("the bounds let only some of them go down")
         for p in grp:
-            for d in model.devices_on(p):
-                if ("device", d.name) in moved:
-                    self._refuse(f"device {d.name} of {p} may fail, so acceptable group platforms can differ in working devices")
-            if ("load", p) in moved:
+            failing = [d.name for d in model.devices_on(p) if d.name in m.devices[p]]
+            if failing:
+                self._refuse(f"device {failing[0]} of {p} may fail, so acceptable group platforms can differ in working devices")
+            if p in m.levels:
                 self._refuse(f"the load of {p} varies, so acceptable group platforms can differ in load")
         initial = {ev.platform: ev.amount for ev in c.scenario.initial if isinstance(ev, LoadChange) and ev.platform in grp and ev.amount}
         if initial:

@@ -16,13 +16,12 @@ import pickle
 import signal
 import socket
 import sys
-import traceback
 from types import GeneratorType
 from typing import Any, Iterator
 
 from desmon.deployment.guard import plain_command, raised_text, uncallable
 from desmon.deployment.ports import RaiseError
-from desmon.errors import ModelError
+from desmon.errors import ModelError, reading_module
 from desmon.verify.isolation.seccomp import deny_signals, drop_capabilities
 from desmon.verify.isolation.wire import BLOBS, Blob, DefaultChecks, Method, recv_message, send_message
 
@@ -270,16 +269,6 @@ class _Who(BaseException):
 _HELPERS = ("desmon.", "dataclasses", "reprlib", "pprint", "copy", "copyreg", "logging")
 
 
-def _reader(tb: Any) -> str:
-    """The module of the innermost frame of ``tb`` that is the deployer's own code (not desmon's, not a helper's)."""
-    found = "?"
-    for frame, _line in traceback.walk_tb(tb):
-        name = str(frame.f_globals.get("__name__", "?"))
-        if not name.startswith(_HELPERS):
-            found = name
-    return found
-
-
 class _Abandoned(BaseException):
     """desmon abandoned the reaction: the worker is about to be ended."""
 
@@ -408,7 +397,7 @@ def _run_reaction(link: _Link, deployer: Any, body: Any, me: int) -> None:  # pr
             outcome, reads = sent
             link.fill(reads, whole=False)  # (the command changed the deployments)
     except _Who as who:
-        link.send("reader", _reader(who.__traceback__))
+        link.send("reader", reading_module(who.__traceback__, _HELPERS))
         raise _Abandoned() from None
     except _Abandoned:
         raise

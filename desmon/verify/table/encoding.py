@@ -15,7 +15,7 @@ import numpy as np
 
 from desmon.errors import CheckerError, TableUnsupported
 from desmon.model.events import RequirementChange, event_kind
-from desmon.verify.environment import Digit, event_kinds, variable_kind, variables
+from desmon.verify.environment import Digit, event_kinds, moved, variable_kind, variables
 from desmon.verify.state import Key
 from desmon.verify.arrays import Interned
 
@@ -32,8 +32,6 @@ SYS_MASK = (1 << SYS_BITS) - 1
 ROOT_CTX, ROOT_STIM, ROOT_PREFIX = 10, 13, 16
 #: combinations of one platform's facts the engine tabulates answers for (beyond: direct engine)
 MAX_DIGITS = 4096
-#: the facts of a state the encoding has digits for (:class:`~desmon.verify.environment.Digit`)
-_FACTS = ("context", "requirements", "down", "device", "load")
 
 
 def root_key(system: np.ndarray, ctx: np.ndarray, stim: np.ndarray | int, prefix: np.ndarray | int) -> np.ndarray:
@@ -48,34 +46,23 @@ def root_key(system: np.ndarray, ctx: np.ndarray, stim: np.ndarray | int, prefix
 
 
 def layout(b: Any, model: Any) -> tuple[frozenset[str], dict[str, list[str]], dict[str, tuple[float, ...]]]:
-    """The platform facts the variables move (:meth:`VariableKind.digits
-    <desmon.verify.environment.VariableKind.digits>`): the platforms that may be down or
-    absent, each platform's devices that may fail (in variable order) and each loaded
-    platform's levels; a platform with more than :data:`MAX_DIGITS` combinations of them
-    is refused."""
-    platform_of = {d.name: d.platform for d in model.devices}
-    downs: set[str] = set()
-    devices: dict[str, list[str]] = {p.name: [] for p in model.platforms}
-    levels: dict[str, tuple[float, ...]] = {}
-    for v in variables(b):
-        digits = variable_kind(v.kind).digits(b, v.subject)  # type: ignore[union-attr]
-        if digits is None or any(d.fact not in _FACTS for d in digits):
-            raise TableUnsupported(f"table engine: no array operations for the environment's {v.kind} events; run with --engine direct")
-        for d in digits:
-            if d.fact == "down":
-                downs.add(d.subject)
-            elif d.fact == "device" and d.subject not in devices[platform_of[d.subject]]:
-                devices[platform_of[d.subject]].append(d.subject)
-            elif d.fact == "load" and levels.setdefault(d.subject, d.levels) != d.levels:
-                raise TableUnsupported(f"table engine: two kinds of variable move the load of {d.subject} over different levels; run with --engine direct")
-    for name, devs in devices.items():
-        combinations = (2 if name in downs else 1) * (1 << len(devs)) * len(levels.get(name, (0,)))
+    """What the variables move of the platforms (:func:`~desmon.verify.environment.moved`):
+    the platforms that may be down or absent, each platform's devices that may fail and
+    each loaded platform's levels; refused where the encoding has no digits for it, or a
+    platform has more than :data:`MAX_DIGITS` combinations of them."""
+    m = moved(b, model)
+    if m.clash:
+        raise TableUnsupported(f"table engine: two kinds of variable move the load of {m.clash} over different levels; run with --engine direct")
+    if m.unknown:
+        raise TableUnsupported(f"table engine: no array operations for the environment's {m.unknown} events; run with --engine direct")
+    for name, devs in m.devices.items():
+        combinations = (2 if name in m.downs else 1) * (1 << len(devs)) * len(m.levels.get(name, (0,)))
         if combinations > MAX_DIGITS:
             raise TableUnsupported(
                 f"table engine: platform {name} has {combinations:,} combinations of facts (its bounded devices, up/down and load "
                 f"levels); the table engine tabulates at most {MAX_DIGITS:,} per platform; run with --engine direct"
             )
-    return frozenset(downs), devices, levels
+    return m.downs, m.devices, m.levels
 
 
 def _contexts(init: Key, b: Any) -> list[str | None]:

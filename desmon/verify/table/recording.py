@@ -7,13 +7,12 @@ only the QueryPort methods: docs/findings.md ("Why it is sound, and how that is 
 
 from __future__ import annotations
 
-import traceback
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from desmon.deployment.guard import exception_text
 from desmon.deployment.ports import QUERY_METHODS, PlatformHandle
 from desmon.deployment.validity import PlatformMemoChecks, is_ranked, order_platforms, score_keys
-from desmon.errors import TableUnsupported, UnobservedRead
+from desmon.errors import TableUnsupported, UnobservedRead, reading_module
 from desmon.model.events import Event
 from desmon.model.system import PlatformState
 from desmon.verify.state import Key, StateStore
@@ -238,22 +237,8 @@ class PlainRun(tuple):
 
 
 #: modules whose functions read a state on behalf of their caller (a refusal names the caller)
-_HELPERS = frozenset({
-    "desmon.deployment.ports", "desmon.model.system", "desmon.model.kinds", "desmon.model.requirements", "desmon.deployment.validity",
-    "dataclasses", "reprlib", "pprint",
-    "copy", "copyreg", "logging",
-})
-
-
-def _reader(tb: Any) -> str:
-    """The module that read a fact, from the traceback of the refusal: the innermost frame
-    outside the helpers that read on their caller's behalf."""
-    frames = [f for f, _line in traceback.walk_tb(tb)]
-    for frame in reversed(frames):
-        name = frame.f_globals.get("__name__", "?")
-        if name not in _HELPERS:
-            return str(name)
-    return "?"  # pragma: no cover - a refusal always has a reader
+_HELPERS = ("desmon.deployment.ports", "desmon.model.system", "desmon.model.kinds", "desmon.model.requirements",
+            "desmon.deployment.validity", "dataclasses", "reprlib", "pprint", "copy", "logging")
 
 
 class Recorder:
@@ -297,7 +282,7 @@ class Recorder:
                 raise TableUnsupported(rec.raised)
         except UnobservedRead as exc:
             if exc.fact:
-                raise exc.named(getattr(exc, "reader", None) or _reader(exc.__traceback__)) from None
+                raise exc.named(getattr(exc, "reader", None) or reading_module(exc.__traceback__, _HELPERS)) from None
             raise
         except (TypeError, AttributeError) as exc:
             out = plain()  # the deployer's own error: raised here, as the direct engine would
