@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any, Callable, Hashable, Sequence
 if TYPE_CHECKING:
     from desmon.deployment.ports import ChecksPort
 
-__all__ = ["MemoChecks", "ColumnMemo", "Interned", "MEMO_SIZE", "TUPLES", "INTERNED", "KEPT_COLUMNS", "memo_of"]
+__all__ = ["MemoChecks", "ColumnMemo", "Interned", "IdentityMemo", "MEMO_SIZE", "TUPLES", "INTERNED", "KEPT_COLUMNS", "memo_of"]
 
 #: Answers a :class:`MemoChecks` keeps per question kind (bounded, so long runs stay flat).
 MEMO_SIZE = 1 << 16
@@ -62,6 +62,31 @@ class Interned(dict):  # type: ignore[type-arg]
         return value
 
 
+class IdentityMemo(dict):  # type: ignore[type-arg]
+    """Values under keys made of object ids (of tuples too costly to hash, or that do not
+    hash): each entry holds the objects its key names, first the one :meth:`find`
+    compares, so that no id is reused while it is kept; past ``limit`` entries all are
+    forgotten. A hot path may read it as a dict: an entry is (held objects..., value)."""
+
+    __slots__ = ("limit",)
+
+    def __init__(self, limit: int) -> None:
+        super().__init__()
+        self.limit = limit
+
+    def find(self, key: Hashable, first: object) -> Any:
+        """The value under ``key`` if its entry holds ``first``, else None."""
+        hit = self.get(key)
+        return hit[-1] if hit is not None and hit[0] is first else None
+
+    def keep(self, key: Hashable, held: tuple, value: Any) -> Any:
+        """Keep ``value`` under ``key``, holding the objects ``held``; returns ``value``."""
+        if len(self) > self.limit:
+            self.clear()
+        self[key] = (*held, value)
+        return value
+
+
 class MemoChecks:
     """The Checks port ``inner``, memoised (see the module doc).
 
@@ -75,9 +100,8 @@ class MemoChecks:
         self.inner = inner
         self.answers = answers
         self.size = size
-        # (id of the requirements, id of the reads) -> (both tuples, their concatenation):
-        # the entry holds the tuples its key names, so the ids cannot be reused meanwhile
-        self._joined: dict[tuple[int, int], tuple[tuple, tuple, tuple]] = {}
+        # (id of the requirements, id of the reads) -> (both tuples, their concatenation)
+        self._joined = IdentityMemo(TUPLES)
         self._values: dict[str, Interned] = {}
         self.validity: Callable[..., Any]
         self.platform: Callable[..., Any]
@@ -106,11 +130,7 @@ class MemoChecks:
         hit = memo.get(key)
         if hit is not None and hit[0] is reqs and hit[1] is reads:
             return hit[2]
-        if len(memo) > TUPLES:
-            memo.clear()
-        joined = reqs + reads
-        memo[key] = (reqs, reads, joined)
-        return joined
+        return memo.keep(key, (reqs, reads), reqs + reads)
 
     def values(self, kind: str) -> Interned:
         """The table of interned values of ``kind`` (made empty on the first call): read

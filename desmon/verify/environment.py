@@ -54,7 +54,7 @@ from desmon.verify.state import Key
 
 __all__ = [
     "Digit", "Move", "Variable", "VariableKind", "variable_kinds", "variable_kind", "alphabet", "event_kinds",
-    "variables", "failures", "can_fail", "enabled_events", "FACTS", "Moved", "moved",
+    "variables", "failures", "can_fail", "enabled_events", "FACTS", "Moved", "moved", "contexts", "variants",
 ]
 
 #: kind name -> its definition, filled by :meth:`VariableKind.__init_subclass__` (in definition order)
@@ -240,6 +240,42 @@ def moved(b: Any, model: Any) -> Moved:
             elif d.fact == "load" and levels.setdefault(d.subject, d.levels) != d.levels:
                 clash = clash or d.subject
     return Moved(frozenset(downs), devices, levels, clash, "")
+
+
+def contexts(b: Any, init: Key) -> list[str | None]:
+    """The contexts a search from ``init`` can reach under ``b``, in the order the table
+    engine numbers them: the initial one, then the bounds' actions and the task's."""
+    ctxs: list[str | None] = [init.context]
+    for a in (*b.actions, *(b.task or {}), *(x for nxt in (b.task or {}).values() for x in nxt)):
+        if a not in ctxs:
+            ctxs.append(a)
+    return ctxs
+
+
+def variants(model: Any, changes: Sequence[RequirementChange], init: Key, limit: int) -> tuple[dict[str, list[tuple]], str]:
+    """The requirements each graph that ``changes`` or ``init`` changes can have: the
+    declared ones first, then the initial state's (the scenario's initial facts may change
+    them), then every variant the changes reach from those (in order of discovery); and
+    the first graph found with more than ``limit`` of them, where the reading stops ("" if none)."""
+    out: dict[str, list[tuple]] = {}
+    initial = dict(init.specs)
+    for spec in model.specs:
+        mine = [c for c in changes if c.graph == spec.graph]
+        if not mine and spec.graph not in initial:
+            continue
+        found, i = [spec.requirements], 0
+        if initial.get(spec.graph, spec.requirements) not in found:
+            found.append(initial[spec.graph])
+        while i < len(found):
+            for c in mine:
+                nxt = c.apply(found[i], spec.requirements)
+                if nxt not in found:
+                    found.append(nxt)
+                    if len(found) > limit:
+                        return out, spec.graph
+            i += 1
+        out[spec.graph] = found
+    return out, ""
 
 
 def failures(b: Any, key: Key) -> int:

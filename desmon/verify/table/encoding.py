@@ -14,8 +14,8 @@ from typing import TYPE_CHECKING, Any, NamedTuple, Sequence
 import numpy as np
 
 from desmon.errors import CheckerError, TableUnsupported
-from desmon.model.events import RequirementChange, event_kind
-from desmon.verify.environment import Digit, event_kinds, moved, variable_kind, variables
+from desmon.model.events import event_kind
+from desmon.verify.environment import Digit, contexts, event_kinds, moved, variable_kind, variables, variants
 from desmon.verify.state import Key
 from desmon.verify.arrays import Interned
 
@@ -65,40 +65,6 @@ def layout(b: Any, model: Any) -> tuple[frozenset[str], dict[str, list[str]], di
     return m.downs, m.devices, m.levels
 
 
-def _contexts(init: Key, b: Any) -> list[str | None]:
-    """The contexts a search from ``init`` can reach, numbered: the initial one, then the bounds' actions."""
-    ctxs: list[str | None] = [init.context]
-    for a in (*b.actions, *(b.task or {}), *(x for nxt in (b.task or {}).values() for x in nxt)):
-        if a not in ctxs:
-            ctxs.append(a)
-    return ctxs
-
-
-def _variants(model: Any, changes: Sequence[RequirementChange], init: Key) -> dict[str, list[tuple]]:
-    """The requirements each changed graph can have: the declared ones first, then the
-    initial state's (the scenario's initial facts may change them), then every variant the
-    listed changes reach from those (in order of discovery)."""
-    out: dict[str, list[tuple]] = {}
-    initial = dict(init.specs)
-    for spec in model.specs:
-        mine = [c for c in changes if c.graph == spec.graph]
-        if not mine and spec.graph not in initial:
-            continue
-        found, i = [spec.requirements], 0
-        if initial.get(spec.graph, spec.requirements) not in found:
-            found.append(initial[spec.graph])
-        while i < len(found):
-            for c in mine:
-                nxt = c.apply(found[i], spec.requirements)
-                if nxt not in found:
-                    found.append(nxt)
-                    if len(found) > 1 << ROOT_CTX:
-                        raise TableUnsupported(f"table engine: the requirement changes give {spec.graph} too many variants to encode; run with --engine direct")
-            i += 1
-        out[spec.graph] = found
-    return out
-
-
 class Env:
     """Environment facts <-> one int: the *global* digit (``env % G``: the context and each
     changed graph's current requirements), then one digit per platform (down or absent,
@@ -109,10 +75,12 @@ class Env:
         self.plats = [p.name for p in model.platforms]
         self.platform_of = {d.name: d.platform for d in model.devices}
         P = len(self.plats)
-        self.ctxs = _contexts(init, b)
+        self.ctxs = contexts(b, init)
         self.C = len(self.ctxs)
         # requirement variants: digit g of the global digit is graph g's variant number
-        self.variants = _variants(model, b.requirement_changes, init)
+        self.variants, crowded = variants(model, b.requirement_changes, init, 1 << ROOT_CTX)
+        if crowded:
+            raise TableUnsupported(f"table engine: the requirement changes give {crowded} too many variants to encode; run with --engine direct")
         self.vgraphs = sorted(self.variants)
         self.declared = {s.graph: s.requirements for s in model.specs}
         self.VW: list[int] = []  # the weight of each changed graph's digit in the env code
@@ -127,6 +95,23 @@ class Env:
         moved = {d for ds in self.vdev.values() for d in ds}
         self.const_failed = tuple(d for d in init.failed if d not in moved)
         self.const_down = tuple(p for p in init.down if p not in self.downs)
+        self.space = self._platform_digits(init)
+        self.P = P
+        self.failcount = [  # an absent on-demand platform is no failure
+            np.array([int(dn and self.U[p] == 2 and self.plats[p] not in self.joins) + len(f) for dn, f, _l in self.decoded[p]], dtype=np.int64)
+            for p in range(P)
+        ]
+        self.const_failures = len(self.const_failed) + len(self.const_down)
+        if self.G > 1 << ROOT_CTX or P + 3 + len(self.vgraphs) > 1 << ROOT_STIM:
+            raise TableUnsupported(
+                f"table engine: {self.C} contexts, {self.G // self.C} combinations of requirements and {P} platforms do not fit "
+                "its tree keys; run with --engine direct"
+            )
+        if self.space.bit_length() + SYS_BITS > 62:
+            raise TableUnsupported(f"table engine: the environment has {self.space:,} combinations, too many to encode; run with --engine direct")
+
+    def _platform_digits(self, init: Key) -> int:
+        """Lay out the platforms' digits after the global one; returns the number of codes."""
         self.U: list[int] = []
         self.K: list[int] = []
         self.R: list[int] = []
@@ -143,20 +128,7 @@ class Env:
             self.W.append(w)
             w *= len(table)
             self.decoded.append(table)
-        self.space = w
-        self.P = P
-        self.failcount = [  # an absent on-demand platform is no failure
-            np.array([int(dn and self.U[p] == 2 and self.plats[p] not in self.joins) + len(f) for dn, f, _l in self.decoded[p]], dtype=np.int64)
-            for p in range(P)
-        ]
-        self.const_failures = len(self.const_failed) + len(self.const_down)
-        if self.G > 1 << ROOT_CTX or P + 3 + len(self.vgraphs) > 1 << ROOT_STIM:
-            raise TableUnsupported(
-                f"table engine: {self.C} contexts, {self.G // self.C} combinations of requirements and {P} platforms do not fit "
-                "its tree keys; run with --engine direct"
-            )
-        if self.space.bit_length() + SYS_BITS > 62:
-            raise TableUnsupported(f"table engine: the environment has {self.space:,} combinations, too many to encode; run with --engine direct")
+        return w
 
     def _digits(self, name: str, vd: list[str], U: int, init: Key) -> list[tuple[bool, tuple[str, ...], tuple[tuple[str, float], ...]]]:
         """Platform ``name``'s facts (down, failed devices, load items) for each value of its

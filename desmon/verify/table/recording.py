@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from desmon.deployment.guard import exception_text
+from desmon.deployment.memo import IdentityMemo
 from desmon.deployment.ports import QUERY_METHODS, PlatformHandle
 from desmon.deployment.validity import PlatformMemoChecks, is_ranked, order_platforms, score_keys
 from desmon.errors import TableUnsupported, UnobservedRead, reading_module
@@ -27,17 +28,14 @@ if TYPE_CHECKING:
 
 __all__ = ["RecordingChecks", "RecordingQuery", "Recorder", "PlainRun"]
 
-#: Wrapped answers :class:`RecordingChecks` keeps before it forgets them all.
-_ANSWERS_LIMIT = 1 << 16
-
-
 class RecordingChecks:
     """The Checks port of a recorded run: it makes the handles the recording store hands
     out (:meth:`handle`, the store's ``make_state``), keeps their real facts, and answers
     each check with the real result wrapped as :mod:`~desmon.verify.table.observed` says.
     The real answers are computed once per platform's facts; the wrapped answer of a
     question about handles is kept, since a wrapper holds no state of a run (each use
-    observes afresh, into the run that uses it).
+    observes afresh, into the run that uses it): one wrapper serves every run that asks
+    the same question about the same handles.
     """
 
     def __init__(self, tables: AnswerTables) -> None:
@@ -52,9 +50,8 @@ class RecordingChecks:
         #: functions of the facts; every use of them is still observed, see :meth:`validity`)
         self._computed = PlatformMemoChecks()
         #: (ids of the requirement objects, id of the handles tuple or handle, graph,
-        #: reasons or first_only) -> (the requirements, the handles, the wrapped answer);
-        #: the entry holds the objects its key names (see :meth:`_answer`)
-        self._answers: dict[tuple, tuple[tuple, Any, Any]] = {}
+        #: reasons or first_only) -> (the handles, the requirements, the wrapped answer)
+        self._answers = IdentityMemo(1 << 16)
 
     def begin(self) -> None:
         """A new recorded run: no observation yet."""
@@ -102,31 +99,15 @@ class RecordingChecks:
             self.made.add(desc)
             self.obs.append((desc, code))
 
-    def _answer(self, key: tuple, states: Any) -> Any:
-        """The wrapped answer memoised under ``key`` (None: not yet). The wrappers hold no
-        state of a run (each use observes afresh, into the run's own observations), so one
-        wrapper serves every run that asks the same question about the same handles."""
-        hit = self._answers.get(key)
-        if hit is not None and hit[1] is states:
-            return hit[2]
-        return None
-
-    def _keep(self, key: tuple, reqs: tuple, states: Any, answer: Any) -> None:
-        """Keep ``answer`` under ``key`` (the entry holds ``reqs`` and ``states``, whose ids the key names)."""
-        answers = self._answers
-        if len(answers) > _ANSWERS_LIMIT:
-            answers.clear()
-        answers[key] = (reqs, states, answer)
-
     def validity(self, reqs: tuple, states: tuple, graph: str | None, reasons: bool) -> Any:
         key = (tuple(map(id, reqs)), id(states), graph, reasons)
-        found = self._answer(key, states)
+        found = self._answers.find(key, states)
         if found is not None:
             return found
         real_states = self._reals(states)
         answer = self._computing(lambda: self._validity(reqs, real_states, graph, reasons))
         if type(states) is tuple and all(type(s) is PlatformHandle for s in states):  # handles' facts never change
-            self._keep(key, reqs, states, answer)
+            self._answers.keep(key, (states, reqs), answer)
         return answer
 
     def _validity(self, reqs: tuple, real_states: tuple[PlatformState, ...], graph: str | None, reasons: bool) -> Any:
@@ -150,7 +131,7 @@ class RecordingChecks:
 
     def platform(self, reqs: tuple, state: Any, graph: str | None, first_only: bool) -> Any:
         key = (tuple(map(id, reqs)), id(state), graph, first_only)
-        found = self._answer(key, state)
+        found = self._answers.find(key, state)
         if found is not None:
             return found
         (real,) = self._reals((state,))
@@ -158,7 +139,7 @@ class RecordingChecks:
         fails = self._computing(lambda: self._computed.platform(reqs, real, graph, first_only))  # platform_failures' answer
         answer = Reasons(Check(self, reqs, graph, first_only, parts, [fails], [real.platform.name]), fails, single=True)
         if type(state) is PlatformHandle:  # a handle's facts never change
-            self._keep(key, reqs, state, answer)
+            self._answers.keep(key, (state, reqs), answer)
         return answer
 
     def _reals(self, states: Sequence[Any]) -> tuple[PlatformState, ...]:

@@ -8,7 +8,7 @@ says; a decision tree's walk reads them all as one array.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any
 
 from desmon.deployment.validity import platform_failures, score_keys
 from desmon.errors import CheckerError
