@@ -153,6 +153,18 @@ def test_the_symmetry_reduction_reads_its_rule(socket):  # type: ignore[no-untyp
     assert kind.rename(unplugged("thermo"), lambda p: swap.get(p, p), {"thermo": "thermo2"}.get) == unplugged("thermo2")
 
 
+def test_a_kind_moving_a_fact_the_checker_has_no_rule_for_is_refused_by_symmetry_and_the_table_engine(socket, monkeypatch):  # type: ignore[no-untyped-def]
+    # both read what the variables move in one place (environment.moved): a fact neither knows
+    # (here a made-up "socket" fact of the device) cannot be shown alike on interchangeable platforms
+    kind = type(variable_kind("socket"))
+    monkeypatch.setattr(kind, "digits", lambda self, b, d: (Digit("socket", d),))
+    grouped = Bounds(actions=(HOLD, GRASP), variables={"socket": ("thermo", "thermo2")}, interchangeable=(("body_pc", "spare_pc"),))
+    with pytest.raises(CheckerError, match="the bounds' socket variables do not say what they move"):
+        Checker(replace(_scenario(), checker=grouped), symmetry=True)
+    with pytest.raises(CheckerError, match="no array operations for the environment's socket events"):
+        Checker(_scenario()).run(engine="table")
+
+
 def test_bounds_refuse_an_unknown_kind_or_subject(socket):  # type: ignore[no-untyped-def]
     with pytest.raises(CheckerError, match="variables names 'sockets', which is no kind of variable read from there \\(did you mean 'socket'\\?\\)"):
         Scenario(name="kiln", model=_robot().build(), checker=Bounds(actions=(HOLD,), variables={"sockets": ("thermo",)}))
