@@ -37,7 +37,8 @@ guarantee it, and :class:`Symmetry` refuses (exit 2, one line) where they fail:
    kind of the user's own that reads ``state.platform.name`` could tell them apart);
 2. the bounds treat them alike: all or none of them may go down; none of their devices
    may fail or start failed; no background load is bounded or initially set on them (their only
-   changing facts are up/down and the deployments they host);
+   changing facts are up/down and the deployments they host); every kind of variable says
+   what it moves in facts these conditions know (:func:`~desmon.verify.environment.moved`);
 3. each can host at most one graph at a time (every two graphs that could run on it
    exceed one of its capacities together) -- so an acceptable group platform for ``g``
    hosts nothing but possibly ``g`` itself;
