@@ -133,6 +133,8 @@ def test_a_malformed_parameter_list_is_refused_in_one_line(items, fragment):
     "item, message",
     [
         ("hours=1,1.0", "-p hours: values 1 and 1.0 are the same number; list each value once"),
+        ("hours=0,-0", "-p hours: values 0 and -0 are the same number; list each value once"),
+        ("hours=-0.0,0", "-p hours: values -0.0 and 0 are the same number; list each value once"),
         ("force_sensors=1,01", "-p force_sensors: values 1 and 01 are the same whole number; list each value once"),
         ("faults=1,true", "-p faults: values 1 and true are the same yes/no value; list each value once"),
         ("faults=yes,yes", "-p faults: value yes is listed twice; list each value once"),

@@ -125,7 +125,7 @@ def _float_text(text: str) -> str | None:
         x = float(text.strip())
     except ValueError:
         return None
-    return repr(x) if math.isfinite(x) else None
+    return repr(x + 0.0) if math.isfinite(x) else None  # (+ 0.0: -0.0 reads as 0.0, the same number)
 
 
 def _bool_text(text: str) -> str | None:
