@@ -100,13 +100,14 @@ class UnobservedRead(TableUnsupported):
 
 def reading_module(tb: TracebackType | None, helpers: tuple[str, ...]) -> str:
     """The module that made a read, from the traceback of its refusal: the innermost frame
-    whose module name starts with none of ``helpers`` (modules that read on their caller's
-    behalf), or "?". Both the table engine and an isolated deployer's worker name the
-    reader of an :class:`UnobservedRead` by it."""
+    whose module is none of ``helpers`` (modules and packages that read on their caller's
+    behalf: ``copy`` is one, ``copycat_deployer`` is not), or "?". Both the table engine and
+    an isolated deployer's worker name the reader of an :class:`UnobservedRead` by it."""
+    inside = tuple(f"{h}." for h in helpers)
     found = "?"
     for frame, _line in traceback.walk_tb(tb):
         name = str(frame.f_globals.get("__name__", "?"))
-        if not name.startswith(helpers):
+        if name not in helpers and not name.startswith(inside):
             found = name
     return found
 

@@ -49,6 +49,17 @@ def test_it_stops_once_the_guaranteed_interval_is_as_narrow_as_asked(capsys):
     assert doc["range"] == [0.0, doc["horizon_s"]]
 
 
+def test_the_printed_interval_lies_inside_the_printed_range_of_the_values(capsys):
+    """The interval's ends print rounded outward; the range's ends (widened by the meter's
+    rounding slack) printed to the nearest showed [8, 112] inside [9, 111]. Where that would
+    happen the range prints outward too."""
+    _code, out, _err = _estimate(capsys, str(ROOT / "scenarios" / "robot_day.py"), "-p", "hours=0.05", "--max-runs", "10", "--seed", "7")
+    number = r"(-?[\d,.]+)"
+    low, high = (float(x.replace(",", "")) for x in re.search(rf"% interval \[{number}, {number}\]", out).groups())  # type: ignore[union-attr]
+    lo, hi = (float(x.replace(",", "")) for x in re.search(rf"assumed in \[{number}, {number}\]", out).groups())  # type: ignore[union-attr]
+    assert lo <= low <= high <= hi, out
+
+
 def test_the_same_seed_gives_the_same_bytes_and_another_seed_other_runs(capsys):
     args = (VARIED, "--timing", "exponential", "--within", "40%")
     first, second = _estimate(capsys, *args, "--seed", "4")[1], _estimate(capsys, *args, "--seed", "4")[1]

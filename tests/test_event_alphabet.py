@@ -287,3 +287,41 @@ def test_the_simulation_reacts_as_the_checker_transitions(socket):  # type: igno
         checked += [(type(c).__name__.lower(), c.graph, c.platform) for c, ok in log.commands if ok and type(c).__name__ in ("Start", "Stop")]
     assert simulated == checked
     assert key.deployments == ((GRAPH, "body_pc"),)
+
+
+def test_what_the_variables_move_is_read_in_order_up_to_the_first_thing_it_cannot_read():
+    """environment.moved, which the table engine's encoding and the symmetry conditions both
+    read: a load moved over two sets of levels ends the reading there (a later kind's
+    digits are not read), and so does a digit naming a device the model lacks."""
+    from desmon.errors import TableUnsupported
+    from desmon.loader import load_scenario
+    from desmon.verify.environment import moved
+    from desmon.verify.table.encoding import layout
+
+    class Surge(VariableKind):
+        name = "surge_levels"
+
+        def digits(self, b: Any, p: str) -> tuple[Digit, ...]:
+            return (Digit("load", p, (0.0, 999.0)),)
+
+    class Ghost(VariableKind):
+        name = "ghost_device"
+
+        def digits(self, b: Any, subject: str) -> tuple[Digit, ...]:
+            return (Digit("device", "no_such_device"),)
+
+    try:
+        sc = load_scenario("scenarios/coffee_handover.py")
+        b, model = Checker(sc).bounds, sc.model
+        p = model.platforms[0].name
+        clash = replace(b, loads={p: (0.0, 50.0)}, variables={"surge_levels": (p,), "ghost_device": ("x",)})
+        assert (moved(clash, model).clash, moved(clash, model).unknown) == (p, "")
+        with pytest.raises(TableUnsupported, match=f"two kinds of variable move the load of {p} over different levels"):
+            layout(clash, model)
+        ghost = replace(b, variables={"ghost_device": ("x",)})
+        assert (moved(ghost, model).clash, moved(ghost, model).unknown) == ("", "ghost_device")
+        with pytest.raises(TableUnsupported, match="no array operations for the environment's ghost_device events"):
+            layout(ghost, model)
+    finally:
+        Surge.unregister()
+        Ghost.unregister()

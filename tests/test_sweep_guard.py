@@ -450,3 +450,110 @@ def test_a_deployer_that_cannot_run_is_refused_before_the_cluster_starts(tmp_pat
     err = capsys.readouterr().err
     assert "cannot run at all" in err and "raised RuntimeError: not yet written" in err and "at hours=0.05" in err
     assert not out.exists() and not journal_path(out).exists()
+
+
+def _evaluate_table(path: Path, rates: list[float]) -> None:
+    """A table as desmon sweep --job evaluate writes it, one seed per value of noise_counts (rates made up)."""
+    axes = tuple(a.typed_as("int") for a in parse_axes([f"noise_counts={','.join(str(1 << i) for i in range(len(rates)))}"]))
+    grid = Grid(axes, 1, 0)
+    rows = [{"point": r.point.index, "seed_index": r.seed_index, "seed": r.seed, **grid.typed(r.point), "job": "evaluate",
+             "deployer": "desmon", "trials": 10, "exit_code": 0, "error": None, "cells_passed": 21, "cells": 21,
+             "tp_rate_tactile": rates[r.point.index], "fp_rate_tactile": 0.1, "wall_s": 0.1} for r in grid.runs()]
+    write_table(frame(rows, axes, "evaluate", ["trials"]), path)
+
+
+def test_the_pareto_front_of_a_detection_rate_keeps_the_best_rates_and_says_which_way_is_better(tmp_path, monkeypatch):
+    """A higher detection rate is better: the front of noise_counts 1, 2, 4, 8 with rates 0.825,
+    0.80, 0.95, 0.85 is the cheapest (1) and the best (4); it was 1 and 2, the two worst. The
+    legend says which way the front took the figure."""
+    from desmon.sweep import plot
+
+    table = tmp_path / "ev.csv"
+    _evaluate_table(table, [0.825, 0.80, 0.95, 0.85])
+    fronts: list[list[int]] = []
+    real = plot.pareto_front
+    monkeypatch.setattr(plot, "pareto_front", lambda c, v, higher=False: fronts.append(real(c, v, higher)) or fronts[-1])
+    labels: list[str] = []
+    import matplotlib.axes
+
+    step = matplotlib.axes.Axes.step
+    monkeypatch.setattr(matplotlib.axes.Axes, "step", lambda self, *a, **k: labels.append(k.get("label", "")) or step(self, *a, **k))
+    assert main(["sweep-plot", str(table), "--pareto", "noise_counts", "-y", "tp_rate_tactile", "-o", str(tmp_path / "p.png")]) == 0
+    assert fronts[-1] == [0, 2] and labels[-1] == "Pareto front (a higher tp_rate_tactile is better)"
+    # a false-alarm rate is better lower; the user may say otherwise for a column of their own reading
+    assert main(["sweep-plot", str(table), "--pareto", "noise_counts", "-y", "tp_rate_tactile", "--better", "lower", "-o", str(tmp_path / "q.png")]) == 0
+    assert fronts[-1] == [0, 1] and labels[-1] == "Pareto front (a lower tp_rate_tactile is better)"
+
+
+def test_a_pareto_front_of_a_figure_better_neither_way_asks_which_way(tmp_path, capsys):
+    table = tmp_path / "ev.csv"
+    _evaluate_table(table, [0.5, 0.6])
+    assert main(["sweep-plot", str(table), "--pareto", "noise_counts", "-y", "cells", "-o", str(tmp_path / "p.png")]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "desmon: error: --pareto: desmon does not know whether a higher or a lower cells is better; say which: --better lower or --better higher"
+    ]
+    assert main(["sweep-plot", str(table), "-x", "noise_counts", "-y", "tp_rate_tactile", "--better", "higher", "-o", str(tmp_path / "p.png")]) == 2
+    assert "--better higher: it says which way -y is better for the Pareto front (--pareto); -x draws no front: drop --better" in capsys.readouterr().err
+    assert not (tmp_path / "p.png").exists()
+
+
+def _estimate_table(path: Path) -> None:
+    """A table as desmon sweep --job estimate writes it (figures made up)."""
+    axes = tuple(a.typed_as("float") for a in parse_axes(["hours=0.25,0.5"]))
+    grid = Grid(axes, 1, 0)
+    rows = [{"point": r.point.index, "seed_index": r.seed_index, "seed": r.seed, **grid.typed(r.point), "scenario": CLOUD,
+             "job": "estimate", "deployer": "desmon", "until": None, "metric": "exposure_s", "within": "30%", "confidence": 0.95,
+             "max_runs": 10000, "exit_code": 0, "error": None, "estimate": 100.0, "low": 90.0, "high": 110.0, "half_width": 10.0,
+             "runs": 40, "status": "precise", "method": "betting confidence sequence", "wall_s": 1.0} for r in grid.runs()]
+    write_table(frame(rows, axes, "estimate", ["until", "metric", "within", "confidence", "max_runs"]), path)
+
+
+@pytest.mark.parametrize("edit, offender", [
+    (lambda df: df.drop(columns=["low"]), "no low column, which every table of desmon sweep --job estimate has"),
+    (lambda df: df.assign(low=[200.0, 90.0]), "estimation 1 holds low 200.0, estimate 100.0, high 110.0"),
+    (lambda df: df.assign(status=[None, "precise"]), "estimation 1 holds low 90.0, estimate 100.0, high 110.0, status nan"),
+    (lambda df: df.assign(exit_code=[0, 7]), "estimation 2 holds"),
+])
+def test_an_edited_estimate_table_is_refused_in_one_line_not_drawn_as_a_guaranteed_interval(tmp_path, capsys, edit, offender):
+    """sweep-plot titles the band a guaranteed interval: a table whose rows are not estimations as
+    desmon estimate gives them (a column gone: a KeyError traceback; an interval upside down:
+    drawn) is refused, exit 2."""
+    table = tmp_path / "e.csv"
+    _estimate_table(table)
+    assert main(["sweep-plot", str(table), "-x", "hours", "-y", "estimate", "-o", str(tmp_path / "p.png")]) == 0
+    capsys.readouterr()
+    edit(pd.read_csv(table)).to_csv(table, index=False)
+    assert main(["sweep-plot", str(table), "-x", "hours", "-y", "estimate", "-o", str(tmp_path / "q.png")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and offender in err[0] and err[0].endswith("write it again with desmon sweep"), err
+
+
+def test_a_table_of_only_its_header_is_refused_as_having_no_rows(tmp_path, capsys):
+    table = tmp_path / "e.csv"
+    _estimate_table(table)
+    table.write_text(table.read_text().splitlines()[0] + "\n")
+    assert main(["sweep-plot", str(table), "-x", "hours", "-y", "estimate", "-o", str(tmp_path / "p.png")]) == 2
+    assert "the table has no rows, only its header; nothing to draw" in capsys.readouterr().err
+
+
+def test_the_normal_interval_of_a_count_is_cut_at_zero_as_evaluates_mission_table_cuts_it(tmp_path, monkeypatch):
+    """False alarms 0, 0, 0 and 2 over four seeds: the normal approximation reaches below 0,
+    which no mean of counts can; the bar stops at 0 (a latency, which may be negative, is not cut)."""
+    from desmon.sweep import plot
+
+    axes = tuple(a.typed_as("float") for a in parse_axes(["hours=0.05,0.1"]))
+    grid = Grid(axes, 4, 0)
+    rows = [{"point": r.point.index, "seed_index": r.seed_index, "seed": r.seed, **grid.typed(r.point), "scenario": CLOUD,
+             "job": "run", "deployer": "desmon", "until": 60.0, "exit_code": 0, "error": None,
+             "false_alarms": 2 if r.seed_index == 3 else 0, "latency_median_s": -0.1 if r.seed_index == 3 else 0.2, "wall_s": 0.5}
+            for r in grid.runs()]
+    table = tmp_path / "t.csv"
+    write_table(frame(rows, axes, "run", ["until"]), table)
+    drawn: list[tuple[float, float, str]] = []
+    real = plot.mean_interval
+    monkeypatch.setattr(plot, "mean_interval", lambda *a: drawn.append(real(*a)) or drawn[-1])
+    assert main(["sweep-plot", str(table), "-x", "hours", "-y", "false_alarms", "-o", str(tmp_path / "p.png")]) == 0
+    assert len(drawn) == 2 and all(low == 0.0 < high for low, high, _m in drawn), drawn
+    assert real([0.0, 0.0, 0.0, 2.0], None)[0] < 0  # (what it drew before)
+    assert main(["sweep-plot", str(table), "-x", "hours", "-y", "latency_median_s", "-o", str(tmp_path / "q.png")]) == 0
+    assert all(low < -0.1 for low, _high, _m in drawn[2:]), drawn

@@ -251,6 +251,23 @@ def _end(x: float, decimals: int, up: bool) -> str:
     return "-" if q is None else f"{q:,.{decimals}f}"
 
 
+def _range_ends(value_range: tuple[float, float], interval: tuple[float, float], decimals: int) -> list[str]:
+    """The ends of the range every run's value is assumed in, as the report prints them: to
+    four significant digits; every digit where that shows one number twice ([32.1, 32.1]);
+    rounded outward with the interval's ``decimals`` where an end of the interval, itself
+    rounded outward, would otherwise print beyond them (the range's ends carry the meter's
+    rounding slack: an interval [8, 112] inside a range of [8.999998, 111.000002] is
+    printed inside [8, 112], not [9, 111])."""
+    ends = [_n(x) for x in value_range]
+    if len(set(ends)) == 1:
+        return [exact(x) for x in value_range]
+    low, high = _outward(interval[0], decimals, False), _outward(interval[1], decimals, True)
+    shown = [Decimal(x.replace(",", "")) for x in ends]
+    if (low is not None and low < shown[0]) or (high is not None and high > shown[1]):
+        return [_end(value_range[0], decimals, False), _end(value_range[1], decimals, True)]
+    return ends
+
+
 def _apart(decimals: int, ends: tuple[float, float], threshold: float) -> int:
     """``decimals``, or more where fewer would print an end (rounded outward) on the other side
     of ``threshold`` (or on it): an interval that answers "below X?" never reads as reaching X
@@ -294,9 +311,7 @@ def format_estimate(e: Any) -> str:
     rel = f" = {share:.2f} % of the estimate" if math.isfinite(share) else ""
     out.append(f"  estimate {f(iv.estimate)}, {pct} interval [{_end(iv.low, d, False)}, {_end(iv.high, d, True)}] "
                f"(half-width {f(iv.half_width)}{rel}), guaranteed")
-    ends = [_n(x) for x in e.range] if e.range else []
-    if len(set(ends)) == 1:  # (a range narrower than the digits shown: every digit, not [32.1, 32.1])
-        ends = [exact(x) for x in e.range]
+    ends = _range_ends(e.range, (iv.low, iv.high), d) if e.range else []
     out.append(f"    method: {iv.method}" + (f"; every run's value assumed in [{ends[0]}, {ends[1]}]" if e.range else ""))
     if e.range_basis:
         out.append(f"    range: {e.range_basis}")

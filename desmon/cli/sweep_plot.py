@@ -21,6 +21,9 @@ def add_parser(sub: Subparsers) -> None:
     p.add_argument("-y", required=True, metavar="COLUMN", help="the figure on the y axis, e.g. exposure_s")
     p.add_argument("--pareto", default=None, metavar="COST",
                    help="instead of -x: each point's mean -y against this cost column (e.g. hand_memory), with the Pareto front")
+    p.add_argument("--better", default=None, choices=("lower", "higher"),
+                   help="with --pareto: which way -y is better (default: desmon's own figures say: a lower exposure_s, a "
+                        "higher tp_rate_force; another column needs it)")
     p.add_argument("--log-x", action="store_true",
                    help="the x axis on a log scale, for values that span decades (an MTTF of 900 s to 4 h, say)")
     add_output(p, "-o", "--output", suffixes=(".png",), default="sweep.png", metavar="FILE.png", help="PNG file")
@@ -33,6 +36,6 @@ def run(args: argparse.Namespace) -> int:
 
     modules = ("pandas", "pyarrow") if args.table.lower().endswith(".parquet") else ("pandas",)
     require_extra("sweep-plot", modules)
-    plot_sweep(args.table, args.output, x=args.x, y=args.y, pareto=args.pareto, log_x=args.log_x)
+    plot_sweep(args.table, args.output, x=args.x, y=args.y, pareto=args.pareto, log_x=args.log_x, better=args.better)
     print(f"wrote {args.output}")
     return EXIT_OK

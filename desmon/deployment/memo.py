@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any, Callable, Hashable, Sequence
 if TYPE_CHECKING:
     from desmon.deployment.ports import ChecksPort
 
-__all__ = ["MemoChecks", "ColumnMemo", "Interned", "IdentityMemo", "MEMO_SIZE", "TUPLES", "INTERNED", "KEPT_COLUMNS", "memo_of"]
+__all__ = ["MemoChecks", "ColumnMemo", "Interned", "found", "kept", "MEMO_SIZE", "TUPLES", "INTERNED", "KEPT_COLUMNS", "memo_of"]
 
 #: Answers a :class:`MemoChecks` keeps per question kind (bounded, so long runs stay flat).
 MEMO_SIZE = 1 << 16
@@ -62,29 +62,25 @@ class Interned(dict):  # type: ignore[type-arg]
         return value
 
 
-class IdentityMemo(dict):  # type: ignore[type-arg]
-    """Values under keys made of object ids (of tuples too costly to hash, or that do not
-    hash): each entry holds the objects its key names, first the one :meth:`find`
-    compares, so that no id is reused while it is kept; past ``limit`` entries all are
-    forgotten. A hot path may read it as a dict: an entry is (held objects..., value)."""
+def found(memo: dict, key: Hashable, first: object) -> Any:  # type: ignore[type-arg]
+    """The value an identity memo keeps under ``key`` if its entry holds ``first``, else None.
 
-    __slots__ = ("limit",)
+    An identity memo is a plain dict (a hot path reads it with ``get`` at a plain dict's
+    speed) whose keys are made of object ids (of tuples too costly to hash, or that do not
+    hash), each entry ``(held objects..., value)`` holding the objects its key names, first
+    the one this compares, so that no id is reused while the entry lives; :func:`kept`
+    fills it and forgets every entry past its limit."""
+    hit = memo.get(key)
+    return hit[-1] if hit is not None and hit[0] is first else None
 
-    def __init__(self, limit: int) -> None:
-        super().__init__()
-        self.limit = limit
 
-    def find(self, key: Hashable, first: object) -> Any:
-        """The value under ``key`` if its entry holds ``first``, else None."""
-        hit = self.get(key)
-        return hit[-1] if hit is not None and hit[0] is first else None
-
-    def keep(self, key: Hashable, held: tuple, value: Any) -> Any:
-        """Keep ``value`` under ``key``, holding the objects ``held``; returns ``value``."""
-        if len(self) > self.limit:
-            self.clear()
-        self[key] = (*held, value)
-        return value
+def kept(memo: dict, limit: int, key: Hashable, held: tuple, value: Any) -> Any:  # type: ignore[type-arg]
+    """Keep ``value`` under ``key`` in the identity memo ``memo`` (:func:`found`), holding the
+    objects ``held``, after forgetting every entry if it has more than ``limit``; returns ``value``."""
+    if len(memo) > limit:
+        memo.clear()
+    memo[key] = (*held, value)
+    return value
 
 
 class MemoChecks:
@@ -100,8 +96,8 @@ class MemoChecks:
         self.inner = inner
         self.answers = answers
         self.size = size
-        # (id of the requirements, id of the reads) -> (both tuples, their concatenation)
-        self._joined = IdentityMemo(TUPLES)
+        # (id of the requirements, id of the reads) -> (both tuples, their concatenation): an identity memo (:func:`found`)
+        self._joined: dict[tuple[int, int], tuple[tuple, tuple, tuple]] = {}
         self._values: dict[str, Interned] = {}
         self.validity: Callable[..., Any]
         self.platform: Callable[..., Any]
@@ -130,7 +126,7 @@ class MemoChecks:
         hit = memo.get(key)
         if hit is not None and hit[0] is reqs and hit[1] is reads:
             return hit[2]
-        return memo.keep(key, (reqs, reads), reqs + reads)
+        return kept(memo, TUPLES, key, (reqs, reads), reqs + reads)
 
     def values(self, kind: str) -> Interned:
         """The table of interned values of ``kind`` (made empty on the first call): read

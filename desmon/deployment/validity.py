@@ -14,7 +14,7 @@ from desmon.model.kinds import Placing, others_using  # Placing: the graph being
 from desmon.model.requirements import PLATFORM_HAS, Attribute, Constraint, DeploymentSpec, Preference, Reads, Requirement
 from desmon.model.system import PlatformState
 
-from desmon.deployment.memo import IdentityMemo, MemoChecks
+from desmon.deployment.memo import MemoChecks, kept
 from desmon.deployment.ports import SCORE_DIGITS, Failure, PlatformHandle, Validity  # Failure, Validity: the Checks port's answers (re-exported)
 
 if TYPE_CHECKING:
@@ -397,16 +397,18 @@ class PlatformMemoChecks(ScalarChecks):
     def __init__(self, *, size: int = _MEMO_SIZE) -> None:
         # ids of a question's requirement objects -> (the requirements, (those ids, their
         # checks (_checks), whether one is a preference))
-        self._lookups = IdentityMemo(size)
+        self._size = size
+        # (each of these is an identity memo, :func:`desmon.deployment.memo.found`)
+        self._lookups: dict[tuple[int, ...], tuple[tuple[Requirement, ...], _Question]] = {}
         # id of a requirements tuple -> (the tuple, its _Question): the same lookup for a
         # caller that asks with the same tuple object again (bounded by _TUPLES)
-        self._tuples = IdentityMemo(_TUPLES)
+        self._tuples: dict[int, tuple[tuple[Requirement, ...], _Question]] = {}
         # (ids of the requirement objects, id of the state, graph, first_only or None for
         # the score) -> (the state, the requirements, its failures or score): the entry
         # holds the objects whose ids its key names
-        self._parts = IdentityMemo(size)
+        self._parts: dict[tuple[Any, ...], tuple[PlatformState, tuple[Requirement, ...], Any]] = {}
         # id of a states tuple -> (the tuple, its platforms in preference order)
-        self._orders = IdentityMemo(_TUPLES)
+        self._orders: dict[int, tuple[tuple[PlatformState, ...], list[PlatformState]]] = {}
 
     def _question(self, reqs: tuple[Requirement, ...]) -> "_Question":
         """(ids of the objects of ``reqs``, their checks, whether one is a preference, their
@@ -418,8 +420,8 @@ class PlatformMemoChecks(ScalarChecks):
             return hit[1]
         ids = tuple(map(id, reqs))
         found = self._lookups.get(ids)
-        question = found[1] if found is not None else self._lookups.keep(ids, (reqs,), (ids, _checks(reqs), is_ranked(reqs), {}))
-        return tuples.keep(id(reqs), (reqs,), question)  # type: ignore[no-any-return]
+        question = found[1] if found is not None else kept(self._lookups, self._size, ids, (reqs,), (ids, _checks(reqs), is_ranked(reqs), {}))
+        return kept(tuples, _TUPLES, id(reqs), (reqs,), question)  # type: ignore[no-any-return]
 
     def _part(self, key: tuple[Any, ...], state: PlatformState, reqs: tuple[Requirement, ...], fn: Callable[..., Any], *args: Any) -> Any:
         """The memoised part ``key`` names (``fn(*args)`` on a miss); ``key`` holds the ids of
@@ -428,7 +430,7 @@ class PlatformMemoChecks(ScalarChecks):
         hit = parts.get(key)
         if hit is not None and hit[0] is state:
             return hit[2]
-        return parts.keep(key, (state, reqs), fn(*args))
+        return kept(parts, self._size, key, (state, reqs), fn(*args))
 
     def platform(self, reqs: tuple[Requirement, ...], state: PlatformState, graph: Placing, first_only: bool) -> tuple[Failure, ...]:
         ids, lookups, _ranked_, texts = self._question(reqs)
@@ -453,7 +455,7 @@ class PlatformMemoChecks(ScalarChecks):
         hit = orders.get(id(states))
         if hit is not None and hit[0] is states:
             return hit[1]
-        return orders.keep(id(states), (states,), order_platforms(states))  # type: ignore[no-any-return]
+        return kept(orders, _TUPLES, id(states), (states,), order_platforms(states))  # type: ignore[no-any-return]
 
     def compute(self, reqs: tuple[Requirement, ...], states: tuple[PlatformState, ...], graph: Placing, reasons: bool) -> Validity:
         """:func:`loop_validity`, each platform's failures and score memoised."""

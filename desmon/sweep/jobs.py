@@ -36,7 +36,7 @@ from desmon.sweep.grid import JOBS, Axis, Run, SweepError
 
 __all__ = ["check_points", 
     "JOBS", "JobSpec", "run_point", "check_values", "signal_parameters", "EXIT_TIMEOUT", "EXIT_CRASH", "EXIT_KILLED",
-    "EXIT_BAD_VALUE", "EXIT_INCOMPLETE", "METRICS", "scenario_at", "worker_collector",
+    "EXIT_BAD_VALUE", "EXIT_INCOMPLETE", "METRICS", "scenario_at", "worker_collector", "better_direction", "least_value",
 ]
 
 EXIT_BAD_VALUE, EXIT_TIMEOUT, EXIT_CRASH, EXIT_KILLED = 2, 124, 125, 137
@@ -65,6 +65,42 @@ METRICS: dict[str, tuple[str, ...]] = {
 }
 #: ``--job evaluate``'s rates: each the mean over the cells of a share of trials
 EVALUATE_RATES: tuple[str, ...] = tuple(m for m in METRICS["evaluate"] if "_rate_" in m)
+
+
+#: which way a figure of desmon's tables is better (a Pareto front keeps the points no other
+#: point beats on both its cost and its figure): higher for what detects or keeps exposure
+#: away, lower for what exposes, fails, misses, raises or costs. A figure named here by a
+#: prefix ending in "_" covers its family (every detector's rate, every platform's memory);
+#: analyze's per-hour and per-mission figures go as their run figure. A figure not named
+#: (risky or excluded time, counts of starts, stops or switches, states) is better neither way
+HIGHER_IS_BETTER = ("tp_rate_", "cells_passed", "slips_detected", "mean_time_to_exposure_s")
+LOWER_IS_BETTER = (
+    "exposure_s", "longest_exposure_s", *(f"{c}_s" for c in CAUSES), "blind_time_", "start_failures", "upgrades_failed",
+    "errors", "errors_", "slips_missed", "false_alarms", "latency_", "violations", "fp_rate_", "undetected_slips_per_hour",
+    "p_exposure_within_T", "long_run_unmonitored_fraction", "memory_peak_mb_", "wall_s", "half_width",
+)
+
+
+def better_direction(figure: str) -> str | None:
+    """"higher" or "lower": which way ``figure`` is better (:data:`HIGHER_IS_BETTER`,
+    :data:`LOWER_IS_BETTER`), or None where desmon does not know."""
+    if figure != "undetected_slips_per_hour":
+        figure = figure.removesuffix("_per_hour").removesuffix("_per_mission")
+    for direction, names in (("higher", HIGHER_IS_BETTER), ("lower", LOWER_IS_BETTER)):
+        if any(figure == n or (n.endswith("_") and figure.startswith(n)) for n in names):
+            return direction
+    return None
+
+
+def least_value(figure: str) -> float:
+    """The least value a run's ``figure`` can take, known without running: 0 for a figure of
+    desmon's tables that counts, lasts, weighs or is a rate; no bound (-inf) for a detection
+    latency (an alarm may come just before the slip it answers), for an estimation's values of
+    its metric and for a column desmon does not write."""
+    known = {c for job, cols in METRICS.items() if job != "estimate" for c in cols} | {"half_width", "runs", "wall_s"}
+    if figure.startswith("latency_") or not (figure in known or figure.startswith(("memory_peak_mb_", "errors_"))):
+        return -math.inf
+    return 0.0
 
 
 def evaluate_range(column: str, row: Mapping[str, Any]) -> tuple[float, float] | None:

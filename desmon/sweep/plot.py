@@ -11,7 +11,10 @@
   vary in the table.
 * ``--pareto COST -y FIGURE``: every point's mean ``FIGURE`` against its ``COST``
   (say ``hand_memory``), min-max bars over the seeds, and the Pareto front: the points
-  no other point beats on both (lower cost and lower figure).
+  no other point beats on both (a lower cost and a better figure). Which way a figure is
+  better is desmon's to know for its own (:func:`desmon.sweep.jobs.better_direction`:
+  lower exposure, higher detection rate; an estimate goes as its metric) or the user's to
+  say (``better``); the legend says which it took.
 
 Rows with an error are left out (the title says how many). ``log_x`` draws the x axis
 on a log scale (values that span decades: an MTTF of 15 min to 4 h). A table of
@@ -79,17 +82,40 @@ def summarise(df: Any, by: list[str], y: str) -> Any:
     return g.agg(["mean", "min", "max", "count"]).reset_index()
 
 
-def pareto_front(costs: list[float], values: list[float]) -> list[int]:
-    """Indices of the points no other point beats on both (cost and value no higher, one lower),
-    by rising cost."""
-    order = sorted(range(len(costs)), key=lambda i: (costs[i], values[i]))
+def pareto_front(costs: list[float], values: list[float], higher: bool = False) -> list[int]:
+    """Indices of the points no other point beats on both (cost no higher and value no worse,
+    one of them strictly), by rising cost; a lower value is better, or a higher one if ``higher``."""
+    sign = -1.0 if higher else 1.0
+    order = sorted(range(len(costs)), key=lambda i: (costs[i], sign * values[i]))
     front: list[int] = []
     best = float("inf")
     for i in order:
-        if values[i] < best:
+        if sign * values[i] < best:
             front.append(i)
-            best = values[i]
+            best = sign * values[i]
     return front
+
+
+#: the columns of a ``--job estimate`` table that are values of its metric
+_OF_METRIC = ("estimate", "low", "high", "normal_low", "normal_high", "min_value", "max_value")
+
+
+def _direction(ok: Any, y: str, better: str | None, pareto: str | None) -> str:
+    """Which way ``y`` is better for the Pareto front of cost ``pareto`` ("" without one):
+    ``better`` if given, else desmon's own figure's way (an estimate's, its metric's); a
+    SweepError where desmon does not know it."""
+    if pareto is None or better is not None:
+        return better or ""
+    from desmon.sweep.jobs import better_direction
+
+    figure = y
+    if y in _OF_METRIC and "metric" in ok.columns and ok["metric"].nunique() == 1:
+        figure = str(ok["metric"].iloc[0])
+    found = better_direction(figure)
+    if found is None:
+        raise SweepError(f"--pareto: desmon does not know whether a higher or a lower {figure} is better; say which: "
+                         "--better lower or --better higher")
+    return found
 
 
 def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, int, int]:
@@ -107,6 +133,8 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
     for required in ("seed", "error"):
         if required not in df.columns:
             raise SweepError(f"{table}: not a table written by desmon sweep (no {required} column)")
+    if df.empty:
+        raise SweepError(f"{table}: the table has no rows, only its header; nothing to draw (desmon sweep writes a row per run)")
     _one_sweep(df, table)
     _column(df, "-y", y)
     if y in _BOOKKEEPING:
@@ -121,12 +149,52 @@ def _rows(table: str, x: str | None, y: str, pareto: str | None) -> tuple[Any, i
     if "job" in df.columns and "exit_code" in df.columns:  # an estimation INCOMPLETE at its run budget keeps a guaranteed interval
         kept |= (df["job"] == "estimate") & (df["exit_code"] == 3)
     ok = df[kept]
+    if "job" in ok.columns and bool((ok["job"] == "estimate").all()):
+        _check_estimates(ok, table)
     valued = ok[y].notna()  # (a figure a run may lack, such as a latency with no slip detected)
     if pareto is not None:  # the cost is a figure too (a memory peak of a platform some points lack, a latency)
         valued &= ok[pareto].notna()
     ok, unvalued = ok[valued], int((~valued).sum())
     _check_drawable(ok, table, x, y, pareto)
     return ok, int((~kept).sum()), unvalued
+
+
+#: what each estimation of a ``--job estimate`` table holds, as desmon sweep writes it
+_ESTIMATION = ("estimate", "low", "high", "status", "method", "confidence", "exit_code")
+
+
+def _check_estimates(ok: Any, table: str) -> None:
+    """A SweepError unless each estimation row ``ok`` (no error, or INCOMPLETE) holds what desmon
+    sweep writes: the columns of :data:`_ESTIMATION`, an interval (low no higher than high)
+    and an estimate, a status of desmon estimate's, a method, a confidence between 0 and 1 and an exit code of 0 or 3
+    (the title calls the band a guaranteed interval)."""
+    from desmon.estimate.loop import DECIDED, MAX_RUNS, PRECISE, TIMEOUT, VALUES_ENDED
+
+    edited = "the table was edited or not written by desmon sweep: write it again with desmon sweep"
+    missing = [c for c in _ESTIMATION if c not in ok.columns]
+    if missing:
+        raise SweepError(f"{table}: no {missing[0]} column, which every table of desmon sweep --job estimate has; {edited}")
+    for i, row in enumerate(ok[list(_ESTIMATION)].itertuples(index=False), 1):
+        est, low, high, status, method, confidence, code = row
+        numbers = [_number(v) for v in (low, est, high, confidence, code)]
+        if (None in numbers or not numbers[0] <= numbers[2] or not 0 < numbers[3] < 1  # type: ignore[operator]
+                or numbers[4] not in (0, 3) or status not in (PRECISE, DECIDED, MAX_RUNS, TIMEOUT, VALUES_ENDED)
+                or not isinstance(method, str) or not method.strip()):
+            raise SweepError(
+                f"{table}: estimation {i} holds low {low}, estimate {est}, high {high}, status {status}, confidence "
+                f"{confidence}, exit code {code}, not an estimation as desmon estimate gives one; {edited}"
+            )
+
+
+def _number(value: Any) -> float | None:
+    """``value`` as a finite number, or None (text, empty, infinite)."""
+    if isinstance(value, (bool, str)) or value is None:
+        return None
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        return None
+    return x if math.isfinite(x) else None
 
 
 def _check_drawable(ok: Any, table: str, x: str | None, y: str, pareto: str | None) -> None:
@@ -184,10 +252,12 @@ def _text_parameters(df: Any) -> tuple[str, ...]:
     return tuple(p for p in _parameters(df) if isinstance(declared.get(p), str))
 
 
-def mean_interval(values: list[float], value_range: tuple[float, float] | None) -> tuple[float, float, str]:
+def mean_interval(values: list[float], value_range: tuple[float, float] | None, least: float = -math.inf) -> tuple[float, float, str]:
     """(low, high, method) of the :data:`CONFIDENCE` interval of the mean of ``values``
     (:func:`desmon.stats.mean_interval`): the betting confidence sequence when every value is
-    known to lie in ``value_range``, else the normal approximation (not guaranteed; none below 2 values)."""
+    known to lie in ``value_range``, else the normal approximation (not guaranteed; none below
+    2 values), cut at ``least``, the least value a run's figure can take (no mean lies below
+    it: :func:`desmon.sweep.jobs.least_value`, as desmon evaluate's mission table cuts its)."""
     from desmon.stats import mean_interval as interval_of
 
     if value_range is not None and value_range[0] == value_range[1]:  # known without a run (leased_s where nothing leases)
@@ -197,7 +267,7 @@ def mean_interval(values: list[float], value_range: tuple[float, float] | None) 
         return iv.low, iv.high, "guaranteed"
     if len(values) < 2:  # no spread to go by: no bar
         return math.nan, math.nan, "normal approximation, not guaranteed"
-    return iv.low, iv.high, "normal approximation, not guaranteed"
+    return max(iv.low, least), iv.high, "normal approximation, not guaranteed"
 
 
 def _range_of(ok: Any, params: list[str], y: str, table: str = "") -> Any:
@@ -293,11 +363,13 @@ def _against(ax: Any, ok: Any, params: list[str], x: str, y: str, intervals: boo
     s = summarise(ok, [*others, x], y)
     method = ""
     if intervals:
-        range_of = _range_of(ok, params, y, table)
+        from desmon.sweep.jobs import least_value
+
+        range_of, least = _range_of(ok, params, y, table), least_value(y)
         bounds = []
         for _key, part in ok.groupby([*others, x], sort=True):
             values = [float(v) for v in part[y]]
-            low, high, method = mean_interval(values, _checked(range_of(part.iloc[0]), values, y))
+            low, high, method = mean_interval(values, _checked(range_of(part.iloc[0]), values, y), least)
             bounds.append((low, high))
         s["low"], s["high"] = [b[0] for b in bounds], [b[1] for b in bounds]
     groups = s.groupby(others, sort=True) if others else [((), s)]
@@ -313,16 +385,16 @@ def _against(ax: Any, ok: Any, params: list[str], x: str, y: str, intervals: boo
     return method
 
 
-def _pareto(ax: Any, ok: Any, params: list[str], pareto: str, y: str) -> int:
+def _pareto(ax: Any, ok: Any, params: list[str], pareto: str, y: str, better: str) -> int:
     by = params or [pareto]
     s = summarise(ok, by, y).join(ok.groupby(by, sort=True)[pareto].mean().rename("_cost"), on=by)
     costs, means = [float(c) for c in s["_cost"]], [float(m) for m in s["mean"]]
-    front = pareto_front(costs, means)
+    front = pareto_front(costs, means, higher=better == "higher")
     ax.errorbar(costs, means, yerr=[[m - lo for m, lo in zip(means, s["min"])], [hi - m for m, hi in zip(means, s["max"])]],
                 fmt="o", color="0.6", ecolor="0.8", capsize=3,
                 label="point (mean, min-max over seeds)" if params else f"runs of one {pareto} (mean, min-max)")
     ax.step([costs[i] for i in front], [means[i] for i in front], where="post", color="C3", marker="o", zorder=3,
-            label="Pareto front")
+            label=f"Pareto front (a {better} {y} is better)")
     varying = [p for p in by if p != pareto and ok[p].nunique() > 1]
     for i in front:
         value = s.iloc[i][pareto] if pareto in s.columns else f"{costs[i]:g}"  # (the cost is a swept parameter, or a figure)
@@ -394,17 +466,24 @@ def _exact(ok: Any) -> bool:
     return "job" in ok.columns and bool((ok["job"] == "analyze").all())
 
 
-def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None = None, log_x: bool = False) -> None:
+def plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None = None, log_x: bool = False,
+               better: str | None = None) -> None:
     """Draw ``table`` to ``output`` (PNG): ``y`` against ``x``, or against ``pareto`` with the front
-    (``log_x``: the x axis on a log scale); its texts (columns, values) as written."""
+    (``better``: "lower" or "higher", which way ``y`` is better; None: desmon's figure's own
+    way) (``log_x``: the x axis on a log scale); its texts (columns, values) as written."""
     from desmon.viz.common import plain_text
 
+    if better is not None and pareto is None:
+        raise SweepError(f"--better {better}: it says which way -y is better for the Pareto front (--pareto); -x draws no front: drop --better")
+    if better not in (None, "lower", "higher"):
+        raise SweepError(f"--better {better}: give lower or higher")
     with plain_text():
-        _plot_sweep(table, output, x=x, y=y, pareto=pareto, log_x=log_x)
+        _plot_sweep(table, output, x=x, y=y, pareto=pareto, log_x=log_x, better=better)
 
 
-def _plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None, log_x: bool) -> None:
+def _plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str | None, log_x: bool, better: str | None) -> None:
     ok, failed, unvalued = _rows(table, x, y, pareto)
+    direction = _direction(ok, y, better, pareto)
     of = f"{y} or {pareto}" if pareto else y
     left = (f", {failed} failed left out" if failed else "") + (f", {unvalued} without a value of {of} left out" if unvalued else "")
     if log_x:
@@ -432,7 +511,7 @@ def _plot_sweep(table: str, output: str, *, x: str | None, y: str, pareto: str |
         ax.set_title(_wrapped(f"{y} vs {x}: mean and min-max over up to {over}{bars} ({note})"), fontsize=8)
     else:
         assert pareto is not None
-        points = _pareto(ax, ok, params, pareto, y)
+        points = _pareto(ax, ok, params, pareto, y, direction)
         # without a swept parameter the table is one point: its runs, grouped by their own cost
         what = ("point" if points == 1 else "points") if params else f"values of {pareto} among the runs of the one point (no swept parameter)"
         ax.set_title(_wrapped(f"{y} vs {pareto}: Pareto front of {points} {what} ({note})"), fontsize=9)

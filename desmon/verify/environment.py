@@ -215,8 +215,8 @@ class Moved(NamedTuple):
     downs: frozenset[str]  # the platforms that may go down (or be absent)
     devices: dict[str, list[str]]  # each platform's devices that may fail, in variable order
     levels: dict[str, tuple[float, ...]]  # each loaded platform's levels, as the first variable moving it gives them
-    clash: str  # the first platform whose load two variables move over different levels ("" if none)
-    unknown: str  # the kind of a variable whose digits are not known, or name another fact; the reading stops there ("" if none)
+    clash: str  # a platform whose load two variables move over different levels; the reading stops there ("" if none)
+    unknown: str  # the kind of a variable whose digits are not known, or name another fact or a device the model lacks; the reading stops there ("" if none)
 
 
 def moved(b: Any, model: Any) -> Moved:
@@ -227,19 +227,18 @@ def moved(b: Any, model: Any) -> Moved:
     downs: set[str] = set()
     devices: dict[str, list[str]] = {p.name: [] for p in model.platforms}
     levels: dict[str, tuple[float, ...]] = {}
-    clash = ""
     for v in variables(b):
         digits = _KINDS[v.kind].digits(b, v.subject)
-        if digits is None or any(d.fact not in FACTS for d in digits):
-            return Moved(frozenset(downs), devices, levels, clash, v.kind)
+        if digits is None or any(d.fact not in FACTS or (d.fact == "device" and d.subject not in platform_of) for d in digits):
+            return Moved(frozenset(downs), devices, levels, "", v.kind)
         for d in digits:
             if d.fact == "down":
                 downs.add(d.subject)
             elif d.fact == "device" and d.subject not in devices[platform_of[d.subject]]:
                 devices[platform_of[d.subject]].append(d.subject)
             elif d.fact == "load" and levels.setdefault(d.subject, d.levels) != d.levels:
-                clash = clash or d.subject
-    return Moved(frozenset(downs), devices, levels, clash, "")
+                return Moved(frozenset(downs), devices, levels, d.subject, "")
+    return Moved(frozenset(downs), devices, levels, "", "")
 
 
 def contexts(b: Any, init: Key) -> list[str | None]:

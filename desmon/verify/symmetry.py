@@ -196,6 +196,8 @@ class Symmetry:
         m = moved(c.bounds, model)
         if m.unknown:
             self._refuse(f"the bounds' {m.unknown} variables do not say what they move")
+        if m.clash:
+            self._refuse(f"two kinds of variable move the load of {m.clash} over different levels")
         inb = [p in m.downs for p in grp]
         if any(inb) and not all(inb):
             self._refuse("the bounds let only some of them go down")

@@ -266,7 +266,7 @@ class _Who(BaseException):
 
 
 #: modules that read on their caller's behalf: the reader of a fact is the code that called them
-_HELPERS = ("desmon.", "dataclasses", "reprlib", "pprint", "copy", "copyreg", "logging")
+_HELPERS = ("desmon", "dataclasses", "reprlib", "pprint", "copy", "copyreg", "logging")
 
 
 class _Abandoned(BaseException):

@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from desmon.deployment.guard import exception_text
-from desmon.deployment.memo import IdentityMemo
+from desmon.deployment.memo import MEMO_SIZE, found, kept
 from desmon.deployment.ports import QUERY_METHODS, PlatformHandle
 from desmon.deployment.validity import PlatformMemoChecks, is_ranked, order_platforms, score_keys
 from desmon.errors import TableUnsupported, UnobservedRead, reading_module
@@ -51,7 +51,7 @@ class RecordingChecks:
         self._computed = PlatformMemoChecks()
         #: (ids of the requirement objects, id of the handles tuple or handle, graph,
         #: reasons or first_only) -> (the handles, the requirements, the wrapped answer)
-        self._answers = IdentityMemo(1 << 16)
+        self._answers: dict[tuple, tuple[Any, tuple, Any]] = {}  # an identity memo (:func:`~desmon.deployment.memo.found`)
 
     def begin(self) -> None:
         """A new recorded run: no observation yet."""
@@ -101,13 +101,13 @@ class RecordingChecks:
 
     def validity(self, reqs: tuple, states: tuple, graph: str | None, reasons: bool) -> Any:
         key = (tuple(map(id, reqs)), id(states), graph, reasons)
-        found = self._answers.find(key, states)
-        if found is not None:
-            return found
+        hit = found(self._answers, key, states)
+        if hit is not None:
+            return hit
         real_states = self._reals(states)
         answer = self._computing(lambda: self._validity(reqs, real_states, graph, reasons))
         if type(states) is tuple and all(type(s) is PlatformHandle for s in states):  # handles' facts never change
-            self._answers.keep(key, (states, reqs), answer)
+            kept(self._answers, MEMO_SIZE, key, (states, reqs), answer)
         return answer
 
     def _validity(self, reqs: tuple, real_states: tuple[PlatformState, ...], graph: str | None, reasons: bool) -> Any:
@@ -131,15 +131,15 @@ class RecordingChecks:
 
     def platform(self, reqs: tuple, state: Any, graph: str | None, first_only: bool) -> Any:
         key = (tuple(map(id, reqs)), id(state), graph, first_only)
-        found = self._answers.find(key, state)
-        if found is not None:
-            return found
+        hit = found(self._answers, key, state)
+        if hit is not None:
+            return hit
         (real,) = self._reals((state,))
         parts = self._parts((real,))
         fails = self._computing(lambda: self._computed.platform(reqs, real, graph, first_only))  # platform_failures' answer
         answer = Reasons(Check(self, reqs, graph, first_only, parts, [fails], [real.platform.name]), fails, single=True)
         if type(state) is PlatformHandle:  # a handle's facts never change
-            self._answers.keep(key, (state, reqs), answer)
+            kept(self._answers, MEMO_SIZE, key, (state, reqs), answer)
         return answer
 
     def _reals(self, states: Sequence[Any]) -> tuple[PlatformState, ...]:
@@ -219,7 +219,7 @@ class PlainRun(tuple):
 
 #: modules whose functions read a state on behalf of their caller (a refusal names the caller)
 _HELPERS = ("desmon.deployment.ports", "desmon.model.system", "desmon.model.kinds", "desmon.model.requirements",
-            "desmon.deployment.validity", "dataclasses", "reprlib", "pprint", "copy", "logging")
+            "desmon.deployment.validity", "dataclasses", "reprlib", "pprint", "copy", "copyreg", "logging")
 
 
 class Recorder:
