@@ -255,3 +255,15 @@ def test_fuzz_leaves_nothing_in_the_working_directory(root, tmp_path):
                           capture_output=True, text=True, timeout=120, cwd=tmp_path, env=env)
     assert done.returncode == 0 and "passed: 5 sequences" in done.stdout, done.stdout + done.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_run_json_records_how_the_command_line_changed_the_world(capsys):
+    """Two summaries of one scenario run under different settings are told apart by their
+    ``world`` (as desmon estimate's report records it), not only by figures that differ."""
+    import json
+
+    main(["run", "scenarios/cloud_offload.py", "-p", "hours=0.01", "--timing", "exponential", "--phases", "2", "--no-signals", "--json"])
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["world"] == ["-p hours=0.01", "--timing exponential", "--phases 2", "--no-signals"]
+    main(["run", "scenarios/cloud_offload.py", "-p", "hours=0.01", "--json"])
+    assert json.loads(capsys.readouterr().out)["world"] == ["-p hours=0.01"]

@@ -134,6 +134,19 @@ def test_cli_paper_json_and_generated_pytest(tmp_path, capsys):
     assert "from desmon.verify import RepositoryRun" in src and "ScriptedControl" not in src and "run_sync" not in src
 
 
+def test_the_json_holds_what_the_text_says_the_search_exercised(tmp_path, capsys):
+    """The events enabled and the new states per kind, the dead kinds, the selector contexts
+    and the deployer's branches: the text report's lines, written to the JSON too."""
+    js = tmp_path / "r.json"
+    main(["verify", str(SCENARIOS / "migration.py"), "--deployer", "paper", "--continue", "--json", str(js), "--no-progress"])
+    text, data = capsys.readouterr().out, json.loads(js.read_text())
+    events = ", ".join(f"{k} {v['enabled']:,}/{v['new_states']:,}" for k, v in data["events"].items())
+    assert f"events (enabled / new states): {events}\n" in text
+    assert "selector contexts exercised: " + ", ".join(f"{c} {n:,}" for c, n in data["contexts"]) in text
+    assert "deployer branches: " + ", ".join(f"{b} {n:,}" for b, n in data["branches"].items()) in text
+    assert data["dead_event_kinds"] == []  # (a VIOLATED search warns of none)
+
+
 @pytest.mark.slow
 def test_generated_pytest_replays_an_instantaneous_violation(tmp_path):
     """The make-before-break mutant breaks single-instance only inside the reaction: the

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 __all__ = [
     "EXIT_OK", "EXIT_VIOLATED", "EXIT_USAGE", "EXIT_INCOMPLETE", "MAX_STATES", "CEX_FILE", "MUTANT_PREFIX", "MUTANT_NAMES", "Parser", "Subparsers",
     "one_line", "usage_error", "scenario_arg", "deployer_arg", "load_scenario_of", "load_scripted", "warn_uncovered", "warn_never_placed", "resolve_times",
-    "draw_trace", "run_of", "users_deployer",
+    "draw_trace", "run_of", "users_deployer", "world_given",
 ]
 
 EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
@@ -136,6 +136,21 @@ def deployer_arg(p: argparse.ArgumentParser, *, default_note: str = "") -> None:
         help="the longest the deployer's own code may run in one reaction (summed over its commands); longer is a "
         "reaction that never ends, reported as the deployer's failure (default: 60)",
     )
+
+
+def world_given(args: argparse.Namespace) -> tuple[str, ...]:
+    """How a command line changes the scenario's world, in its own words: its ``-p``
+    parameters, ``--timing``, ``--phases`` and ``--no-signals`` (the ``world`` of
+    ``desmon run --json`` and ``desmon estimate``, its report's ``world:`` line)."""
+    from desmon.model.params import parse_assignments
+
+    given = [f"-p {k}={v}" for k, v in sorted(parse_assignments(getattr(args, "param", None)).items())]
+    for flag, value in (("--timing", getattr(args, "timing", None)), ("--phases", getattr(args, "phases", None))):
+        if value is not None:
+            given.append(f"{flag} {value}")
+    if getattr(args, "no_signals", False):
+        given.append("--no-signals")
+    return tuple(given)
 
 
 def load_scenario_of(args: argparse.Namespace) -> Scenario:

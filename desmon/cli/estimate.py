@@ -18,7 +18,7 @@ import time
 from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
 from typing import Any
 
-from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg
+from desmon.cli.common import EXIT_INCOMPLETE, EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, load_scenario_of, scenario_arg, world_given
 from desmon.model.checks import exact
 from desmon.cli.options import finite_number, non_negative_int, positive_seconds, run_count, worker_count
 
@@ -134,18 +134,6 @@ def _world_changes(args: argparse.Namespace) -> dict[str, Any]:
     return changes
 
 
-def _world_given(args: argparse.Namespace) -> tuple[str, ...]:
-    """How the command changes the scenario's world, in its own words (the report's ``world:`` line)."""
-    from desmon.model.params import parse_assignments
-
-    given = [f"-p {k}={v}" for k, v in sorted(parse_assignments(args.param).items())]
-    if args.timing is not None:
-        given.append(f"--timing {args.timing}")
-    if args.no_signals:
-        given.append("--no-signals")
-    return tuple(given)
-
-
 def _dask_source(args: argparse.Namespace, question: Any) -> Any:
     """The runs' values computed on Dask (``--workers``, ``--scheduler``), or None: in this process."""
     if args.workers is None and args.scheduler is None:
@@ -201,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
         )
     finally:
         line.close()
-    result = dataclasses.replace(result, world=_world_given(args))
+    result = dataclasses.replace(result, world=world_given(args))
     if args.json:
         sys.stdout.write(json.dumps(result.to_json(), indent=2, allow_nan=False) + "\n")
     else:

@@ -38,7 +38,8 @@ def add_parser(sub: Subparsers) -> None:
         "--seeds", type=positive_int, default=None, metavar="N",
         help="run seeds SEED..SEED+N-1: per cell how many seeds pass, mission figures as mean [min..max]",
     )
-    p.add_argument("--json", action="store_true", help="print JSON instead of tables")
+    p.add_argument("--json", action="store_true",
+                   help="print JSON instead of tables (times in seconds; with --seeds each figure's mean, min and max: docs/detectors.md)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(handler=run)
 

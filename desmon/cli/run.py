@@ -16,7 +16,7 @@ import tempfile
 import time
 from typing import IO, TYPE_CHECKING, Any, Callable, Iterator
 
-from desmon.cli.common import EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, draw_trace, load_scenario_of, scenario_arg, warn_uncovered, run_of
+from desmon.cli.common import EXIT_OK, EXIT_VIOLATED, Subparsers, deployer_arg, draw_trace, load_scenario_of, scenario_arg, warn_uncovered, run_of, world_given
 from desmon.cli.options import add_output, add_window, non_negative_int, positive_int, positive_seconds
 from desmon.errors import ScenarioError
 from desmon.model.checks import exact
@@ -122,7 +122,7 @@ def run_command(
     result = _simulate(args, scenario, err, show, t_wall)
     wall = time.perf_counter() - t_wall
     if args.json:
-        out.write(json.dumps(summary_json(result, wall), indent=2) + "\n")
+        out.write(json.dumps(summary_json(result, wall, world_given(args)), indent=2) + "\n")
     else:
         out.write(format_summary(result, wall))
         if args.trace and not getattr(args, "trace_is_temporary", False):
@@ -203,7 +203,7 @@ def _run_fleet(args: Any, scenario: Scenario, out: IO[str], err: IO[str], show: 
             fh = stack.enter_context(replacing(args.trace)) if args.trace else None
             result = simulate_fleet(scenario, deployer=args.deployer, seed=args.seed or 0, until=args.until, trace=fh, progress=progress, guard=args.guard)
     if args.json:
-        out.write(json.dumps(fleet_json(result), indent=2) + "\n")
+        out.write(json.dumps(fleet_json(result, world_given(args)), indent=2) + "\n")
     else:
         out.write(format_fleet_summary(result))
         if args.trace:
@@ -380,9 +380,12 @@ def _signal_status(r: RunResult) -> list[str]:
     ]
 
 
-def summary_json(r: RunResult, wall: float | None = None) -> dict[str, Any]:
+def summary_json(r: RunResult, wall: float | None = None, world: tuple[str, ...] = ()) -> dict[str, Any]:
+    """The ``desmon run --json`` summary of a run; ``world``: how the command line changed the
+    scenario's world (:func:`~desmon.cli.common.world_given`)."""
     return {
         "scenario": r.scenario.name,
+        "world": list(world),
         "deployer": r.deployer,
         "seed": r.seed,
         "horizon_s": r.horizon,
@@ -462,10 +465,11 @@ def format_fleet_summary(r: FleetResult) -> str:
     return "\n".join(lines) + "\n"
 
 
-def fleet_json(r: FleetResult) -> dict[str, Any]:
-    """The ``desmon run --json`` summary of a fleet run."""
+def fleet_json(r: FleetResult, world: tuple[str, ...] = ()) -> dict[str, Any]:
+    """The ``desmon run --json`` summary of a fleet run (``world``: as :func:`summary_json`'s)."""
     return {
         "scenario": r.scenario.name,
+        "world": list(world),
         "deployer": r.deployer,
         "seed": r.seed,
         "horizon_s": r.horizon,

@@ -220,7 +220,22 @@ def result_to_json(r: CheckResult, params: dict[str, str]) -> dict[str, Any]:
         "invariants": list(r.invariants),
         "not_checked": {n: NOT_CHECKED.get(n, "") for n in r.not_checked},
         "unmodelled": list(r.unmodelled),
+        **_exercised(r),
         "counterexamples": [counterexample_to_json(c) for c in r.counterexamples],
+    }
+
+
+def _exercised(r: CheckResult) -> dict[str, Any]:
+    """What the search exercised, as the text report's event, context and branch lines say it:
+    per event kind its events enabled over the states expanded and the new states they reached;
+    the dead kinds the text warns of; the visits per selector context (``null``: none yet); the
+    deployer's branches taken."""
+    kinds = sorted(set(r.enabled) | set(r.new_states))
+    return {
+        "events": {k: {"enabled": r.enabled[k], "new_states": r.new_states[k]} for k in kinds},
+        "dead_event_kinds": [k for k in kinds if not r.changed[k]] if r.verdict == "HOLDS" else [],
+        "contexts": [[c, n] for c, n in sorted(r.rules.items(), key=lambda x: str(x[0]))],
+        "branches": dict(sorted(r.branches.items())),
     }
 
 
