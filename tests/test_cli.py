@@ -267,3 +267,11 @@ def test_run_json_records_how_the_command_line_changed_the_world(capsys):
     assert summary["world"] == ["-p hours=0.01", "--timing exponential", "--phases 2", "--no-signals"]
     main(["run", "scenarios/cloud_offload.py", "-p", "hours=0.01", "--json"])
     assert json.loads(capsys.readouterr().out)["world"] == ["-p hours=0.01"]
+
+
+def test_fuzz_draws_its_count_of_sequences_on_a_terminal_only(root, tmp_path):
+    """Into a file or a pipe, stderr gets no run of carriage-return lines (as every other command)."""
+    done = subprocess.run([sys.executable, "-m", "desmon", "fuzz", str(root / "scenarios" / "migration.py"), "--examples", "100"],
+                          capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert done.returncode == 0 and "passed: 100 sequences" in done.stdout, done.stdout + done.stderr
+    assert "\r" not in done.stderr and "sequences" not in done.stderr, done.stderr

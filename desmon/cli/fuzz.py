@@ -6,6 +6,7 @@ Ctrl-C ends it with its partial result, exit 130, without a traceback.
 from __future__ import annotations
 
 import argparse
+import sys
 
 from desmon.cli.common import Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered
 from desmon.cli.options import bounded_count, non_negative_int, positive_int
@@ -37,7 +38,9 @@ def run(args: argparse.Namespace) -> int:
         raise CheckerError(f"--examples must be positive, got {args.examples}")
     scenario = load_scenario_of(args)
     with scratch_hypothesis_home():
-        outcome = fuzz(scenario, args.deployer, examples=args.examples, seed=args.seed, progress=not args.no_progress, guard=args.guard)
+        # (the count is drawn in place on a terminal; into a file it would be a run of \r lines)
+        progress = not args.no_progress and sys.stderr.isatty()
+        outcome = fuzz(scenario, args.deployer, examples=args.examples, seed=args.seed, progress=progress, guard=args.guard)
     print(outcome.text, end="")
     warn_uncovered(scenario)  # as verify does: a risky action no rule covers is unmonitored whatever the sequence
     return outcome.exit_code
