@@ -7,9 +7,17 @@ printed. What the line says is the caller's; how it is drawn lives here once.
 
 from __future__ import annotations
 
+import os
 from typing import IO
 
-__all__ = ["StatusLine"]
+__all__ = ["StatusLine", "drawn_on"]
+
+
+def drawn_on(stream: IO[str]) -> bool:
+    """Whether a progress display of ``desmon evaluate`` or ``desmon fuzz`` goes to ``stream``:
+    when it is a terminal, or always with ``DESMON_PROGRESS=1`` (into a file it is a run of
+    carriage-return lines)."""
+    return stream.isatty() or os.environ.get("DESMON_PROGRESS") == "1"
 
 
 class StatusLine:

@@ -270,7 +270,7 @@ def test_run_json_records_how_the_command_line_changed_the_world(capsys):
 
 
 def test_fuzz_draws_its_count_of_sequences_on_a_terminal_only(root, tmp_path):
-    """Into a file or a pipe, stderr gets no run of carriage-return lines (as every other command)."""
+    """Into a file or a pipe, stderr gets no run of carriage-return lines (as with desmon evaluate)."""
     done = subprocess.run([sys.executable, "-m", "desmon", "fuzz", str(root / "scenarios" / "migration.py"), "--examples", "100"],
                           capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert done.returncode == 0 and "passed: 100 sequences" in done.stdout, done.stdout + done.stderr

@@ -12,13 +12,13 @@ import argparse
 import dataclasses
 import json
 import math
-import os
 import sys
 import time
 from typing import TYPE_CHECKING, Any, Callable, Sequence, TextIO
 
 from desmon.cli.common import Subparsers
 from desmon.cli.options import non_negative_int, positive_int
+from desmon.progress import drawn_on
 
 if TYPE_CHECKING:
     from desmon.detectors.evaluation import CellSweep, Evaluation, Spread, Sweep
@@ -329,7 +329,7 @@ def run_evaluate(trials: int, seed: int, as_json: bool, progress: bool, out: Tex
 
     trials, seed, n_seeds = checked_inputs(trials, seed, seeds)
     cb: _Progress | None = None
-    if progress and (sys.stderr.isatty() or os.environ.get("DESMON_PROGRESS") == "1"):
+    if progress and drawn_on(sys.stderr):
         cb = _Progress(trials * (len(P1_ACTIONS) + 1 + len(MISSION_CONTEXTS)) * n_seeds, sys.stderr)
     if seeds is None:
         ev = evaluate(trials, seed, progress=cb)

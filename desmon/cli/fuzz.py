@@ -9,7 +9,7 @@ import argparse
 import sys
 
 from desmon.cli.common import Subparsers, deployer_arg, load_scenario_of, scenario_arg, warn_uncovered
-from desmon.cli.options import bounded_count, non_negative_int, positive_int
+from desmon.cli.options import bounded_count, non_negative_int
 from desmon.errors import CheckerError
 
 __all__ = ["add_parser", "run", "MAX_EXAMPLES"]
@@ -32,14 +32,14 @@ def add_parser(sub: Subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from desmon.progress import drawn_on
     from desmon.verify.fuzz import fuzz, scratch_hypothesis_home
 
     if args.examples <= 0:
         raise CheckerError(f"--examples must be positive, got {args.examples}")
     scenario = load_scenario_of(args)
     with scratch_hypothesis_home():
-        # (the count is drawn in place on a terminal; into a file it would be a run of \r lines)
-        progress = not args.no_progress and sys.stderr.isatty()
+        progress = not args.no_progress and drawn_on(sys.stderr)
         outcome = fuzz(scenario, args.deployer, examples=args.examples, seed=args.seed, progress=progress, guard=args.guard)
     print(outcome.text, end="")
     warn_uncovered(scenario)  # as verify does: a risky action no rule covers is unmonitored whatever the sequence
