@@ -444,3 +444,55 @@ def test_the_banner_says_where_in_the_reaction_in_verifys_words_and_counts_steps
     assert "errors-justified VIOLATED after 3 steps (by the reaction as a whole)" in unescape((tmp_path / "a.html").read_text())
     b = unescape((tmp_path / "b.html").read_text())
     assert "VIOLATED after 1 step:" in b and "after 1 steps" not in b
+
+
+def test_a_start_the_control_rules_refused_reads_refused_with_its_reason_as_in_desmon_replay(root):
+    """The paper's deployer starts the fixed tactile detector on pc2 after pc2 went down: the
+    Control rules refuse it. desmon replay said REFUSED (platform down) and the page FAILED,
+    which is what a start failure of the environment or the checker's choice reads as."""
+    from desmon.cli.explore import timeline_frames
+    from desmon.deployment.deployer import PAPER
+    from desmon.loader import load_scenario
+    from desmon.model import HOLD, MOVE_BASE
+    from desmon.model.events import ActionChange, PlatformDown
+    from desmon.model.scenario import TimedEvent
+    from desmon.sim.replay import format_replay, replay
+
+    down = replace(load_scenario(str(root / "scenarios" / "migration.py")), timeline=(
+        TimedEvent(0.0, ActionChange(HOLD), "t0"), TimedEvent(1.0, PlatformDown("pc2"), "t1"), TimedEvent(2.0, ActionChange(MOVE_BASE), "t2")))
+    frames = timeline_frames(down, PAPER)
+    said = "start tactile_slip_detector on pc2: REFUSED by the Control rules: platform down"
+    assert said in format_replay(replay(down, PAPER)) and said in frames[-1].commands, frames[-1].commands
+
+
+def test_the_first_reactions_refused_start_and_error_are_in_the_json_and_on_the_page(tmp_path, capsys):
+    """A deployer that starts its graph on the last platform unchecked: its first reaction's start
+    is refused (pc2 has no pad) and it raises an error. verify --json's step 0 listed neither
+    (``refused_starts`` and ``raised_errors`` empty), and the page read FAILED."""
+    (tmp_path / "blind.py").write_text(
+        "from desmon.deployment.ports import DEPLOYMENT_FAILED, RaiseError, Start\n\n"
+        "def blind(q, slots, changed, context_changed):\n"
+        "    last = [s.name for s in q.platform_states()][-1]\n"
+        "    for slot in slots:\n"
+        "        if last not in q.deployed_on(slot[0]) and not (yield Start(slot[0], last)):\n"
+        "            yield RaiseError(DEPLOYMENT_FAILED, slot[0], last)\n"
+    )
+    (tmp_path / "two_pcs.py").write_text(
+        "from desmon.model import RobotBuilder\nfrom desmon.model.events import ActionChange\n"
+        "from desmon.model.scenario import Scenario, TimedEvent\nfrom desmon.verify.bounds import Bounds\n\n"
+        "robot = RobotBuilder('r')\nrobot.platform('pc1', memory=400).device('pad', kind='tactile_pad')\nrobot.platform('pc2', memory=400)\n"
+        "with robot.rpsl.perception_graph('tac') as g:\n    g.sensor('pads', reads='tactile_pad')\n    g.processing('thr', inputs=['pads'])\n"
+        "robot.depsl.deployment_specification('tac').add_constraint('quantity', 'tactile_pad', 1)\n"
+        "robot.rules({'hold': ['tac'], 'grasp': ['tac']})\n"
+        "scenario = Scenario(name='two_pcs', model=robot.build(), timeline=(TimedEvent(0.0, ActionChange('hold'), 't0'),),\n"
+        "                    checker=Bounds(actions=('hold', 'grasp'), platforms=('pc1',)))\n"
+    )
+    js, page = tmp_path / "cex.json", tmp_path / "cex.html"
+    deployer = f"{tmp_path / 'blind.py'}:blind"
+    assert main(["verify", str(tmp_path / "two_pcs.py"), "--deployer", deployer, "--json", str(js), "--no-progress"]) == 1
+    step0 = json.loads(js.read_text())["counterexamples"][0]["states"][0]
+    assert [r["start"] for r in step0["refused_starts"]] == ["start tac on pc2"] and step0["raised_errors"] == ["deployment_failed: tac on pc2"]
+    assert main(["explore", str(tmp_path / "two_pcs.py"), "--deployer", deployer, "--from-json", str(js), "-o", str(page)]) == 0
+    capsys.readouterr()
+    text = parse(page.read_text(encoding="utf-8")).steps["0"]["text"]
+    assert "start tac on pc2: REFUSED by the Control rules: the devices of pc2" in text and "FAILED" not in text, text

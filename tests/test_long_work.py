@@ -198,7 +198,7 @@ def _interrupt(argv: list[str], ready: str, tmp_path: Path, *, timeout: float = 
     """Run ``desmon ARGV`` in its own process group, press Ctrl-C (SIGINT to the group, as a
     terminal does) once ``ready`` shows on stderr; (exit code, stdout, stderr, seconds to exit).
     A command that does not end is aborted with its stacks (faulthandler) in the failure."""
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env = dict(os.environ, PYTHONPATH=str(ROOT), DESMON_PROGRESS="1")  # (the progress line, into a pipe: the sign to press Ctrl-C)
     proc = subprocess.Popen(
         [sys.executable, "-X", "faulthandler", "-m", "desmon", *argv], cwd=tmp_path, env=env,
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,

@@ -136,8 +136,8 @@ def test_sweep_plot_bars_each_mean_with_the_guaranteed_interval_of_a_figure_in_s
     asked = []
     real = plot.mean_interval
 
-    def spy(values, value_range):  # type: ignore[no-untyped-def]
-        got = real(values, value_range)
+    def spy(values, value_range, least):  # type: ignore[no-untyped-def]
+        got = real(values, value_range, least)
         asked.append((len(values), value_range, got))
         return got
 
@@ -169,7 +169,7 @@ def test_sweep_plot_bars_evaluates_rates_and_cells_passed_with_the_guaranteed_in
                  "-o", str(out)]) in (0, 1)
     asked = []
     real = plot.mean_interval
-    monkeypatch.setattr(plot, "mean_interval", lambda values, value_range: asked.append(value_range) or real(values, value_range))
+    monkeypatch.setattr(plot, "mean_interval", lambda values, value_range, least: asked.append(value_range) or real(values, value_range, least))
     for y in ("tp_rate_tactile", "fp_rate_force", "cells_passed"):
         assert main(["sweep-plot", str(out), "-x", "noise_counts", "-y", y, "-o", str(tmp_path / f"{y}.png")]) == 0
     cells = float(pd.read_csv(out)["cells"].iloc[0])

@@ -84,7 +84,7 @@ def timeline_frames(scenario: Any, deployer: Any, guard: Any = None) -> list:  #
                 title=f"{step.label + ' ' if step.label else ''}t={seconds_text(step.time)}s  {step.event}",
                 event=str(step.event),
                 time=step.time,
-                commands=tuple(f"{cmd}: {'ok' if ok else 'FAILED'}" for cmd, ok in step.commands if ok is not None),
+                commands=_outcomes(step, dict(step.refused)),
                 raised=tuple(raised),
                 standing=_standing(step.standing, latest),
                 violations=tuple(step.violations),
@@ -120,9 +120,16 @@ def _raised(log: Any, index: int, latest: dict[str, str]) -> tuple[tuple[str, st
     return tuple(raised)
 
 
-def _outcomes(log: Any) -> tuple[str, ...]:
-    """The starts and stops of a reaction's log with their outcomes ("start x on p: ok")."""
-    return tuple(f"{c}: {'ok' if ok else 'FAILED'}" for c, ok in (log.commands if log is not None else ()) if ok is not None)
+def _outcomes(log: Any, refused: dict[Any, str]) -> tuple[str, ...]:
+    """The starts and stops of a reaction's log with their outcomes ("start x on p: ok"); a
+    failed start the Control rules refused (``refused``: its reason by (graph, platform) or
+    by the start's text) says so, as ``desmon replay`` does, apart from a failure the
+    environment or the checker chose."""
+    def outcome(c: Any, ok: bool) -> str:
+        why = refused.get((getattr(c, "graph", None), getattr(c, "platform", None)), refused.get(str(c))) if not ok else None
+        return "ok" if ok else f"REFUSED by the Control rules: {why}" if why is not None else "FAILED"
+
+    return tuple(f"{c}: {outcome(c, ok)}" for c, ok in (log.commands if log is not None else ()) if ok is not None)
 
 
 def _with_instant(violations: list[tuple[str, str]], found: tuple[tuple[str, str, str], ...]) -> tuple[tuple[str, str], ...]:
@@ -194,7 +201,7 @@ def counterexample_frames(
                 title=f"{s.index}. {s.title()}",
                 event="initial state" if s.event is None else str(s.event),
                 time=None,
-                commands=_outcomes(log),
+                commands=_outcomes(log, dict(s.refused)),
                 raised=_raised(log, s.index, latest),
                 standing=_standing(run.core.standing, latest),
                 violations=tuple(violations),

@@ -182,9 +182,10 @@ def _raised(c: RaiseError) -> str:
 
 def initial_step(key: Key, log: Any = None, fails: tuple[int, ...] = (), refuse: Refuse | None = None) -> Step:
     """Step 0: the initial state ``key``, reached by the first reaction (``log``) with the
-    starts at ``fails`` failing by the checker's choice (``refuse`` as for :func:`make_step`).
-    Its commands are listed where a start failed by choice (the states are what it shows otherwise)."""
-    if log is None or not fails:
+    starts at ``fails`` failing by the checker's choice (``refuse`` as for :func:`make_step`):
+    its commands, the starts the Control rules refused and the errors it raised, as any
+    step's; what it shows of the state is the state itself."""
+    if log is None:
         return Step(0, None, (), describe_state(key), key)
     return replace(make_step(0, key, None, key, log, fails, refuse), changes=describe_state(key))  # type: ignore[arg-type]
 
