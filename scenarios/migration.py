@@ -10,7 +10,9 @@ Paper bugs this shows (the checker finds the shortest runs):
   started on ``pc2`` and the instance on ``pc1`` is never stopped: ``single-instance``;
 * Algorithm 1 lines 5-8: a fixed deployment is started on its platform without checking
   its requirements: ``no-overcommit`` once the migrated force detector sits on ``pc2``;
-* Algorithm 2 ignores EXECUTABLE_ON: the fixed detector migrates away (``fixed``).
+* Algorithm 2 ignores EXECUTABLE_ON too, but here the fixed detector has nowhere to
+  go (only ``pc2`` has a tactile pad): ``fixed`` holds (``scenarios/fixed_platform.py``
+  shows that bug).
 
 Run it: ``python scenarios/migration.py [paper]``.
 """
