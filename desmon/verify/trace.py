@@ -184,9 +184,14 @@ def initial_step(key: Key, log: Any = None, fails: tuple[int, ...] = (), refuse:
     """Step 0: the initial state ``key``, reached by the first reaction (``log``) with the
     starts at ``fails`` failing by the checker's choice (``refuse`` as for :func:`make_step`):
     its commands, the starts the Control rules refused and the errors it raised, as any
-    step's; what it shows of the state is the state itself."""
+    step's; what it shows of the state is the state itself. Without ``fails`` no start
+    failed by choice: each failed start is a refused one (its reason ``refuse``'s where it
+    gives one)."""
     if log is None:
         return Step(0, None, (), describe_state(key), key)
+    if not fails:
+        given = refuse
+        refuse = lambda g, p: (given(g, p) if given is not None else None) or "refused by the Control rules"  # noqa: E731
     return replace(make_step(0, key, None, key, log, fails, refuse), changes=describe_state(key))  # type: ignore[arg-type]
 
 
