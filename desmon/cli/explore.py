@@ -64,6 +64,7 @@ def _standing(standing: frozenset[str], latest: dict[str, str]) -> tuple[tuple[s
 
 def timeline_frames(scenario: Any, deployer: Any, guard: Any = None) -> list:  # type: ignore[type-arg]
     """One frame per event of ``scenario``'s scripted timeline, as ``desmon replay`` runs it."""
+    from desmon.deployment.ports import Start
     from desmon.repository.query import RepositoryQuery
     from desmon.sim.replay import replay
     from desmon.viz.explore import Frame, capture_reasons
@@ -84,7 +85,7 @@ def timeline_frames(scenario: Any, deployer: Any, guard: Any = None) -> list:  #
                 title=f"{step.label + ' ' if step.label else ''}t={seconds_text(step.time)}s  {step.event}",
                 event=str(step.event),
                 time=step.time,
-                commands=_outcomes(step, dict(step.refused)),
+                commands=_outcomes(step, {str(Start(g, p)): why for (g, p), why in step.refused}),
                 raised=tuple(raised),
                 standing=_standing(step.standing, latest),
                 violations=tuple(step.violations),
@@ -120,14 +121,13 @@ def _raised(log: Any, index: int, latest: dict[str, str]) -> tuple[tuple[str, st
     return tuple(raised)
 
 
-def _outcomes(log: Any, refused: dict[Any, str]) -> tuple[str, ...]:
+def _outcomes(log: Any, refused: dict[str, str]) -> tuple[str, ...]:
     """The starts and stops of a reaction's log with their outcomes ("start x on p: ok"); a
-    failed start the Control rules refused (``refused``: its reason by (graph, platform) or
-    by the start's text) says so, as ``desmon replay`` does, apart from a failure the
-    environment or the checker chose."""
+    failed start the Control rules refused (``refused``: its reason by the start's text)
+    says so, as ``desmon replay`` does, apart from a failure the environment or the checker chose."""
     def outcome(c: Any, ok: bool) -> str:
-        why = refused.get((getattr(c, "graph", None), getattr(c, "platform", None)), refused.get(str(c))) if not ok else None
-        return "ok" if ok else f"REFUSED by the Control rules: {why}" if why is not None else "FAILED"
+        why = None if ok else refused.get(str(c))
+        return "ok" if ok else "FAILED" if why is None else f"REFUSED by the Control rules: {why}"
 
     return tuple(f"{c}: {outcome(c, ok)}" for c, ok in (log.commands if log is not None else ()) if ok is not None)
 
